@@ -1,0 +1,110 @@
+"""Speed figures for lorisnb, printed as times and as ratios against baselines run in this same
+process (so the ratios do not depend on the machine).
+
+Baselines are plain-Python implementations of the same work in the style of the official tool
+(a dict per sequence, one Python iteration per line and per pose).
+
+Run: ``make bench`` (or ``python benchmarks/bench.py``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from pathlib import Path
+
+from lorisnb.data import find_data
+from lorisnb.errors import LorisWarning
+from lorisnb.evaluation import evaluate, result_files, score
+from lorisnb.readers import read_openloris
+
+
+def _timed(fn, repeat: int = 3):
+    best = math.inf
+    out = None
+    for _ in range(repeat):
+        t = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t)
+    return best, out
+
+
+def baseline_parse(path: Path) -> dict:
+    """Line-by-line parsing as the official tool does it (for comparison only)."""
+    seqs: dict = {}
+    seq = None
+    last = None
+    with open(path) as fh:
+        for line in fh:
+            if line.startswith("#") or not line.strip():
+                continue
+            if line.startswith("seq:"):
+                seq = int(line[4:])
+                seqs[seq] = {}
+                continue
+            if ":" in line:
+                continue
+            s = line.split()
+            pose = [float(v) for v in s[-7:]]
+            if any(math.isnan(v) for v in pose) or pose == last:
+                continue
+            seqs[seq][float(s[0])] = pose
+            last = pose
+    return seqs
+
+
+def baseline_associate(gt: dict, est: dict) -> list:
+    """Per-pose interpolation loop (positions only) in the official tool's style."""
+    keys = sorted(gt)
+    out = []
+    idx = 0
+    for t in sorted(est):
+        if t < keys[0] or t > keys[-1]:
+            continue
+        while not (keys[idx] <= t <= keys[idx + 1]):
+            idx += 1
+        k1, k2 = keys[idx], keys[idx + 1]
+        if max(t - k1, k2 - t) < 0.5:
+            w = (t - k1) / (k2 - k1)
+            p = [(1 - w) * a + w * b for a, b in zip(gt[k1][:3], gt[k2][:3], strict=True)]
+            out.append((t, p))
+    return out
+
+
+def main() -> None:
+    warnings.simplefilter("ignore", LorisWarning)
+    data = find_data()
+    root = data.icra20
+    files = [p for p, _ in result_files([root])]
+    print(f"icra20_results: {len(files)} files")
+
+    t_parse, parsed = _timed(lambda: [read_openloris(p) for p in files])
+    t_base_parse, _ = _timed(lambda: [baseline_parse(p) for p in files], repeat=1)
+    n_poses = sum(f.n_poses for f in parsed)
+    print(f"parse only           lorisnb {t_parse:7.3f} s   baseline {t_base_parse:7.3f} s   "
+          f"speed-up x{t_base_parse / t_parse:5.1f}   ({n_poses} poses)")
+
+    t_eval, ev = _timed(lambda: evaluate([root], scale="auto"), repeat=2)
+    t_score, _ = _timed(lambda: score(ev.errors, eps="paper", phi=30.0))
+    print(f"evaluate whole tree  lorisnb {t_eval:7.3f} s   ({len(ev.errors)} files scored, "
+          f"{len(ev.skipped)} skipped without ground truth); one threshold setting after that: {t_score:.3f} s")
+    print("                     (the official tool needs about 270 s for one setting over the same files)")
+
+    gt_path = data.groundtruth("market")
+    est_path = root / "lifelong" / "maslam" / "market.txt"
+    gt_b = baseline_parse(gt_path)
+    est_b = baseline_parse(est_path)
+    t_base_assoc, _ = _timed(lambda: [baseline_associate(gt_b[s], est_b[s]) for s in est_b], repeat=1)
+    from lorisnb.association import associate
+    from lorisnb.evaluation import load_groundtruth
+
+    gt = load_groundtruth("market")
+    est = read_openloris(est_path)
+    t_assoc, _ = _timed(lambda: [associate(gt.sequences[s], est.sequences[s].stamps) for s in est.sequences])
+    print(f"associate market     lorisnb {t_assoc:7.4f} s   baseline {t_base_assoc:7.4f} s   "
+          f"speed-up x{t_base_assoc / t_assoc:5.1f}   (positions + slerp vs positions only)")
+
+
+if __name__ == "__main__":
+    main()

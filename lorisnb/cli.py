@@ -1,0 +1,174 @@
+"""The ``lorisnb`` command line.
+
+The command line is where lorisnb reports: tables on stdout, warnings and failures on stderr,
+a non-zero exit status when any input failed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .errors import LorisError, LorisWarning
+
+
+def parse_threshold(text: str, allow_paper: bool = False) -> float | str:
+    """A threshold from the command line: a number, ``inf`` or (for eps) ``paper``."""
+    t = text.strip().lower()
+    if allow_paper and t == "paper":
+        return "paper"
+    try:
+        v = float(t)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a threshold; expected a number, 'inf'" + (" or 'paper'" if allow_paper else "")
+        ) from None
+    if math.isnan(v) or v < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: a threshold must be >= 0")
+    return v
+
+
+def parse_list(text: str, allow_paper: bool = False) -> list:
+    """A comma-separated list of thresholds (``1,2,inf``; ``paper`` for eps)."""
+    return [parse_threshold(p, allow_paper) for p in text.split(",") if p.strip()]
+
+
+def parse_scale(text: str) -> bool | str:
+    t = text.lower()
+    if t in ("auto",):
+        return "auto"
+    if t in ("on", "yes", "true", "1", "sim3"):
+        return True
+    if t in ("off", "no", "false", "0", "se3"):
+        return False
+    raise argparse.ArgumentTypeError(f"{text!r}: expected auto, on or off")
+
+
+def add_evaluation_options(p: argparse.ArgumentParser) -> None:
+    """Options shared by ``evaluate`` and ``sweep`` (same names, same meaning)."""
+    p.add_argument("paths", nargs="+", metavar="FILE_OR_DIR",
+                   help="result files, or folders walked as <algorithm>/*.txt")
+    p.add_argument("--scale", nargs="?", const=True, default=False, type=parse_scale,
+                   help="align with Sim(3) (scale); 'auto': only for monocular algorithms (dso, svo)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--per-seq", dest="mode", action="store_const", const="per-seq",
+                   help="align every sequence on itself")
+    g.add_argument("--lifelong", dest="mode", action="store_const", const="lifelong",
+                   help="align on the first sequence and apply that to all (default for files "
+                        "with several seq: blocks)")
+    p.set_defaults(mode="auto")
+    p.add_argument("--official-interpolation", action="store_true",
+                   help="reproduce the official tool's orientation slips (AOE only)")
+    p.add_argument("--keep-repeated", action="store_true",
+                   help="keep poses identical to the previous one (the official tool drops them)")
+    p.add_argument("--data", default=None, metavar="DIR",
+                   help="data root (default: $LORISNB_DATA, else ../shared/data next to the project)")
+    p.add_argument("--csv", default=None, metavar="OUT", help="write one row per sequence to this CSV")
+    p.add_argument("--force", action="store_true", help="overwrite OUT if it exists")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _run_evaluation(args):
+    from .evaluation import evaluate
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        ev = evaluate(args.paths, mode=args.mode, scale=args.scale,
+                      official_interpolation=args.official_interpolation,
+                      remove_repeated=not args.keep_repeated, data_root=args.data,
+                      progress=not args.no_progress)
+    notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))
+    return ev, notes
+
+
+def write_csv_safely(df: pd.DataFrame, out: str | os.PathLike, force: bool = False) -> Path:
+    """Write a CSV through a temporary name and move it into place; refuse to replace an existing
+    file unless ``force``."""
+    out = Path(out)
+    if out.exists() and not force:
+        raise LorisError(f"{out} exists; choose another name or pass --force to replace it")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
+    df.to_csv(tmp, index=False)
+    os.replace(tmp, out)
+    return out
+
+
+def _report_problems(ev, notes: list[str]) -> None:
+    for n in notes:
+        print(f"warning: {n}", file=sys.stderr)
+    for f in ev.failures:
+        print(f"error: {f.error}", file=sys.stderr)
+    if ev.skipped:
+        reasons = sorted({f.error.split(":")[0] for f in ev.skipped})
+        print(f"skipped {len(ev.skipped)} file(s): " + "; ".join(reasons), file=sys.stderr)
+
+
+def _fmt(df: pd.DataFrame) -> str:
+    with pd.option_context("display.max_rows", 500, "display.width", 200, "display.max_columns", 30):
+        return df.to_string(index=False, float_format=lambda v: f"{v:.4f}")
+
+
+def cmd_evaluate(args) -> int:
+    from .evaluation import aggregate_scenes, score
+
+    ev, notes = _run_evaluation(args)
+    table = score(ev.errors, args.eps, args.phi, args.delta, args.tau)
+    if not table.empty:
+        cols = ["algorithm", "file", "seq", "poses", "matched", "ate_rmse", "c_ate_rmse", "aoe_rmse",
+                "cr", "cr_t", "cs_r"]
+        print(_fmt(table[cols]))
+        try:
+            scenes = aggregate_scenes(table, data_root=args.data)
+            print("\nper scene (CR over all ground-truth time of the scene; C-ATE RMSE weighted by "
+                  "correct poses):")
+            print(_fmt(scenes[["suite", "algorithm", "scene", "sequences", "cr", "cr_t", "c_ate_rmse",
+                               "cs_r_mean"]]))
+        except LorisError as exc:
+            print(f"warning: no scene aggregate: {exc}", file=sys.stderr)
+    if args.csv:
+        out = write_csv_safely(table, args.csv, args.force)
+        print(f"\nwrote {len(table)} rows to {out}", file=sys.stderr)
+    _report_problems(ev, notes)
+    print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.skipped)} skipped",
+          file=sys.stderr)
+    return 1 if ev.failures else 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="lorisnb", description="Lifelong SLAM evaluation (OpenLORIS-Scene metrics)")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("evaluate", help="score result files: ATE, AOE, CR, CR-T, CS-R, C-ATE, RPE")
+    add_evaluation_options(p)
+    p.add_argument("--eps", type=lambda s: parse_threshold(s, True), default=np.inf,
+                   help="ATE threshold in metres, 'inf' or 'paper' (1/3/5 m by scene); default inf")
+    p.add_argument("--phi", type=parse_threshold, default=np.inf, help="AOE threshold in degrees; default inf")
+    p.add_argument("--delta", type=parse_threshold, default=1.0, help="validity window of a pose, s; default 1")
+    p.add_argument("--tau", type=parse_threshold, default=60.0, help="re-localization time factor, s; default 60")
+    p.set_defaults(func=cmd_evaluate)
+
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except LorisError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

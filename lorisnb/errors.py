@@ -1,0 +1,42 @@
+"""lorisnb's own exception and warning types.
+
+Every error that lorisnb raises on bad input is a :class:`LorisError`; its message says what was
+wrong, where (file and line when there is one) and what to do. The core never prints: warnings
+are issued with :func:`warnings.warn` under a :class:`LorisWarning` category, so notebooks show
+them and the command line reports them.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class LorisError(Exception):
+    """Base class of every error lorisnb raises on purpose."""
+
+
+class ParseError(LorisError, ValueError):
+    """A file could not be read: names the file, the line (1-based) and what was expected."""
+
+    def __init__(self, path: str | Path, line: int | None, message: str):
+        self.path = str(path)
+        self.line = line
+        self.reason = message
+        where = f"{self.path}, line {line}" if line is not None else self.path
+        super().__init__(f"{where}: {message}")
+
+
+class DataNotFoundError(LorisError, FileNotFoundError):
+    """Data (ground truth, results, extrinsics) could not be found; lists where it looked."""
+
+
+class FrameError(LorisError, ValueError):
+    """An unknown sensor frame or scene, or no extrinsics for that pair."""
+
+
+class EvaluationError(LorisError, ValueError):
+    """An evaluation could not be carried out as asked (for example, nothing to align on)."""
+
+
+class LorisWarning(UserWarning):
+    """Something in the input deserves a look, but the evaluation went on."""

@@ -1,0 +1,96 @@
+"""Data location, shipped extrinsics, and the `lorisnb evaluate` command line."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from conftest import write
+
+from lorisnb.cli import main
+from lorisnb.data import find_data
+from lorisnb.errors import DataNotFoundError
+from lorisnb.evaluation import SEQUENCE_COLUMNS
+from lorisnb.frames import extrinsic
+
+
+def test_find_data_order_and_error(tmp_path, monkeypatch, data):
+    monkeypatch.setenv("LORISNB_DATA", str(data.root))
+    assert find_data().root == data.root
+    assert find_data(data.root).root == data.root
+    monkeypatch.setenv("LORISNB_DATA", str(tmp_path / "missing"))
+    # the environment variable is tried first, then ../shared/data next to the project
+    assert find_data().root == data.root
+    with pytest.raises(DataNotFoundError) as exc:
+        find_data(tmp_path / "nowhere")
+    msg = str(exc.value)
+    assert str(tmp_path / "nowhere") in msg and "LORISNB_DATA" in msg and "--data" in msg
+
+
+def test_missing_groundtruth_names_the_file(tmp_path):
+    (tmp_path / "openloris-scene" / "groundtruth").mkdir(parents=True)
+    with pytest.raises(DataNotFoundError, match="gt_cafe_1.txt"):
+        find_data(tmp_path).groundtruth("cafe")
+
+
+def test_shipped_extrinsics_equal_the_benchmark_json(data):
+    doc = json.loads(data.extrinsics_json.read_text())
+    n = 0
+    for robot in doc["robots"].values():
+        for tr in robot["transforms"]:
+            if tr["parent"] != "base_link":
+                continue
+            for scene in robot["scenes"]:
+                t, q = extrinsic(scene, tr["child"])
+                np.testing.assert_array_equal(t, tr["xyz"])
+                np.testing.assert_array_equal(q, tr["quat_xyzw"])
+                n += 1
+    assert n == 6 * 5
+
+
+@pytest.fixture
+def results_tree(tmp_path, icra20):
+    root = tmp_path / "results"
+    for rel in ["per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt", "per-seq/vins_mono_color_imu_with_loop/home-1-3.txt"]:
+        src = icra20 / rel
+        write(root, f"{src.parent.name}/{src.name}", src.read_bytes())
+    write(root, "broken/cafe 1 1 bad.txt", "scene: cafe\nframe: d400_color\nseq: 1\n1 2 3\n")
+    return root
+
+
+def test_evaluate_cli_reports_broken_file_and_writes_csv(results_tree, tmp_path, capsys):
+    out = tmp_path / "out.csv"
+    rc = main(["evaluate", str(results_tree), "--csv", str(out), "--no-progress"])
+    assert rc == 1  # one file failed
+    err = capsys.readouterr().err
+    assert "cafe 1 1 bad.txt, line 4:" in err and "expected 8 or 9 numbers" in err
+    df = pd.read_csv(out)
+    assert list(df.columns[: len(SEQUENCE_COLUMNS)]) == SEQUENCE_COLUMNS
+    assert set(df["algorithm"]) == {"orbslam2_rgbd", "vins_mono_color_imu_with_loop"}
+    row = df.set_index("algorithm").loc["vins_mono_color_imu_with_loop"]
+    assert row["file"] == "vins_mono_color_imu_with_loop/home-1-3.txt"
+    assert row["cr"] == pytest.approx(0.926380, abs=1e-6)
+    # an existing CSV is not replaced without --force
+    before = out.read_bytes()
+    assert main(["evaluate", str(results_tree), "--csv", str(out), "--no-progress"]) == 2
+    assert out.read_bytes() == before
+    assert "exists" in capsys.readouterr().err
+
+
+def test_evaluate_cli_paper_thresholds(icra20, tmp_path, capsys):
+    out = tmp_path / "ll.csv"
+    rc = main(["evaluate", str(icra20 / "lifelong/maslam/cafe.txt"), "--eps", "0.3", "--phi", "10",
+               "--csv", str(out), "--no-progress"])
+    assert rc == 0
+    df = pd.read_csv(out).set_index("seq")
+    assert df.loc[2, "cr"] == pytest.approx(0.137731, abs=1e-6)
+    assert (df["eps"] == 0.3).all() and (df["phi"] == 10).all()
+    assert "scene" in capsys.readouterr().out
+
+
+def test_cli_rejects_bad_threshold(capsys):
+    with pytest.raises(SystemExit):
+        main(["evaluate", "x.txt", "--eps", "big"])
+    assert "not a threshold" in capsys.readouterr().err

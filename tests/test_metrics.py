@@ -1,0 +1,121 @@
+"""Metric functions on hand-checkable inputs (equation numbers from the OpenLORIS-Scene paper)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from lorisnb import metrics
+from lorisnb.association import associate
+from lorisnb.geometry import official_slerp, ros_quaternion_from_matrix, umeyama
+from lorisnb.trajectory import Trajectory
+
+
+def test_correct_time_cr_crt_by_hand():
+    # ground truth spans 0..10 s; poses at 2, 2.5, 5, 9 s; the one at 5 s is wrong
+    stamps = np.array([2.0, 2.5, 5.0, 9.0])
+    correct = np.array([True, True, False, True])
+    # held times: min(0.5,1) + min(2.5,1) + 0 (wrong) + min(1, 1) [runs to t_max = 10]
+    ct = metrics.correct_time(stamps, correct, 10.0, 1.0)
+    assert ct == pytest.approx(0.5 + 1.0 + 1.0)
+    assert metrics.correct_rate(ct, 0.0, 10.0) == pytest.approx(0.25)          # Eq. 2
+    assert metrics.correct_rate_tracking(ct, 2.0, 10.0) == pytest.approx(2.5 / 8)  # Eq. 3
+    # delta broadcasts: a grid of three windows at once
+    np.testing.assert_allclose(metrics.correct_time(stamps, correct, 10.0, np.array([0.1, 1.0, 10.0])),
+                               [0.3, 2.5, 0.5 + 2.5 + 1.0])
+
+
+def test_relocalization_score_eq4():
+    assert metrics.relocalization_score(30.0, 0.0, True, 60.0) == pytest.approx(np.exp(-0.5))
+    assert metrics.relocalization_score(30.0, 0.0, False, 60.0) == 0.0
+    assert metrics.relocalization_score(-1.0, 0.0, True, 60.0) == 1.0  # estimate before GT start
+
+
+def test_correctness_eq1_inclusive_thresholds():
+    c = metrics.correctness(np.array([1.0, 1.0, 0.5]), np.array([30.0, 30.1, 0.0]), 1.0, 30.0)
+    assert c.tolist() == [True, False, True]
+
+
+def test_umeyama_recovers_similarity():
+    rng = np.random.default_rng(1)
+    src = rng.normal(size=(50, 3))
+    rot = Rotation.from_euler("xyz", [10, -20, 30], degrees=True)
+    dst = 2.5 * rot.apply(src) + [1, 2, 3]
+    sim = umeyama(src, dst, with_scale=True)
+    assert sim.scale == pytest.approx(2.5)
+    np.testing.assert_allclose(sim.rotation, rot.as_matrix(), atol=1e-12)
+    np.testing.assert_allclose(sim.apply(src), dst, atol=1e-12)
+    assert umeyama(src, dst, with_scale=False).scale == 1.0
+
+
+def _gt():
+    stamps = np.array([0.0, 0.4, 1.0, 1.3])
+    pos = np.array([[0, 0, 0], [4, 0, 0], [10, 0, 0], [13, 0, 0]], float)
+    rot = Rotation.from_euler("z", np.array([0, 40, 100, 130])[:, None], degrees=True)
+    return Trajectory(stamps, pos, rot.as_quat())
+
+
+def test_association_bracket_is_strict_and_interpolates():
+    gt = _gt()
+    # 0.2: bracket [0, .4]; 0.7: bracket [.4, 1] gap .3 ok; 1.3 = last stamp; -0.1 and 1.4 outside
+    a = associate(gt, np.array([-0.1, 0.2, 0.7, 1.3, 1.4]), max_gap=0.5)
+    np.testing.assert_array_equal(a.est_index, [1, 2, 3])
+    np.testing.assert_allclose(a.gt_positions[:, 0], [2.0, 7.0, 13.0])
+    np.testing.assert_allclose(a.gt_rotations.as_euler("xyz", degrees=True)[:, 2], [20.0, 70.0, 130.0])
+    # with a 0.3 s bracket, 0.7 is 0.3 from both ends: not matched (strict <)
+    b = associate(gt, np.array([0.2, 0.7]), max_gap=0.3)
+    np.testing.assert_array_equal(b.est_index, [0])
+
+
+def test_official_slerp_at_a_groundtruth_stamp_takes_the_interval_ending_there():
+    gt = _gt()
+    exact = associate(gt, np.array([0.4]), official=False)
+    off = associate(gt, np.array([0.4]), official=True)
+    # positions identical; the correct slerp gives 40 deg, the official one the start of [0, 0.4]
+    np.testing.assert_allclose(off.gt_positions, exact.gt_positions)
+    assert exact.gt_rotations.as_euler("xyz", degrees=True)[0, 2] == pytest.approx(40.0)
+    assert off.gt_rotations.as_euler("xyz", degrees=True)[0, 2] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_official_slerp_swaps_weights():
+    q1 = Rotation.from_euler("z", 0, degrees=True).as_quat()[None]
+    q2 = Rotation.from_euler("z", 90, degrees=True).as_quat()[None]
+    q = official_slerp(q1, q2, np.array([0.75]), np.array([0.25]))
+    # swapped weights: 1/4 of the way becomes 3/4 (the dot-product slip is harmless here: w1 = w2)
+    angle = Rotation.from_quat(q).as_euler("xyz", degrees=True)[0, 2]
+    assert angle != pytest.approx(22.5, abs=1.0)
+
+
+def test_ros_quaternion_from_matrix_matches_rotation_up_to_sign():
+    rot = Rotation.random(200, random_state=3)
+    q = ros_quaternion_from_matrix(rot.as_matrix())
+    np.testing.assert_allclose(np.abs(np.einsum("ij,ij->i", q, rot.as_quat())), 1.0, atol=1e-12)
+    trace_pos = np.trace(rot.as_matrix(), axis1=1, axis2=2) > 0
+    assert (q[trace_pos, 3] > 0).all()  # trace branch: w positive
+
+
+def test_rpe_zero_for_rigidly_moved_copy_and_pairs_by_unit():
+    rng = np.random.default_rng(0)
+    n = 100
+    stamps = np.arange(n) * 0.1
+    pos = np.cumsum(rng.normal(size=(n, 3)), axis=0)
+    rot = Rotation.random(n, random_state=1)
+    moved = Rotation.from_euler("z", 33, degrees=True)
+    est_pos = moved.apply(pos) + 5.0
+    est_rot = moved * rot
+    i, j = metrics.rpe_pairs(stamps, pos, 1.0, "s")
+    t, r = metrics.rpe(pos, rot, est_pos, est_rot, i, j)
+    assert t.max() < 1e-9 and r.max() < 1e-6
+    np.testing.assert_array_equal(j - i, 10)
+    assert len(i) == n - 10  # no pair whose target stamp lies past the end
+    i, j = metrics.rpe_pairs(stamps, pos, 5, "f", all_pairs=False)
+    np.testing.assert_array_equal(i, np.arange(0, 95, 5))
+
+
+def test_rpe_translation_by_hand():
+    pos = np.array([[0, 0, 0], [1, 0, 0]], float)
+    rot = Rotation.identity(2)
+    est = np.array([[0, 0, 0], [1.5, 0, 0]], float)
+    t, r = metrics.rpe(pos, rot, est, rot, np.array([0]), np.array([1]))
+    assert t[0] == pytest.approx(0.5) and r[0] == pytest.approx(0.0)

@@ -1,0 +1,134 @@
+"""Readers: real files, and each kind of bad input gets a clear error naming file and line."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from conftest import write
+
+from lorisnb.errors import LorisWarning, ParseError
+from lorisnb.readers import read_kitti, read_openloris, read_trajectory, read_tum
+
+HEAD = "scene: cafe\nframe: d400_color\n"
+
+
+def test_real_headers_with_odd_spacing(icra20):
+    f = read_openloris(icra20 / "per-seq/dso/cafe-1-1-all.txt")
+    assert f.header["slam"] == "ros_dso" and f.frame == "d400_color" and f.scene == "cafe"
+    f = read_openloris(icra20 / "lifelong/vins_mono_color_imu_with_loop/home-1.txt")
+    assert f.frame == "d400_imu" and sorted(f.sequences) == [1, 2, 3, 4, 5]
+    f = read_openloris(icra20 / "per-seq/ds-slam/ home-1-1.txt")  # a name starting with a space
+    assert f.scene == "home" and len(f.sequences[1]) == 38  # ds-slam lost track early here
+
+
+def test_nine_column_lines_use_the_last_seven(icra20):
+    f = read_openloris(icra20 / "lifelong/maslam/cafe.txt")
+    t = f.sequences[1]
+    assert t.stamps[0] == pytest.approx(1560004885.446172237)
+    np.testing.assert_allclose(t.quaternions[0], [0, 0, 0, 1])
+    assert f.seq_info[1]["aided_reloc"] == "false"
+
+
+def test_out_of_order_stamps_sorted_with_warning(tmp_path):
+    p = write(tmp_path, "r.txt", HEAD + "seq: 1\n2.0 1 0 0 0 0 0 1\n1.0 2 0 0 0 0 0 1\n2.0 3 0 0 0 0 0 1\n")
+    with pytest.warns(LorisWarning, match="not increasing"):
+        f = read_openloris(p)
+    t = f.sequences[1]
+    np.testing.assert_array_equal(t.stamps, [1.0, 2.0])
+    np.testing.assert_array_equal(t.positions[:, 0], [2.0, 3.0])  # the last pose of stamp 2.0 kept
+
+
+def test_repeats_dropped_across_seq_boundary_and_nan_skipped(tmp_path):
+    text = HEAD + "seq: 1\n1 1 2 3 0 0 0 1\n2 1 2 3 0 0 0 1\n3 nan 2 3 0 0 0 1\n4 5 5 5 0 0 0 1\nseq: 2\n5 5 5 5 0 0 0 1\n6 6 5 5 0 0 0 1\n"
+    p = write(tmp_path, "r.txt", text)
+    f = read_openloris(p)
+    assert len(f.sequences[1]) == 2 and f.removed_repeats[1] == 1
+    assert len(f.sequences[2]) == 1 and f.removed_repeats[2] == 1  # first pose of seq 2 repeats seq 1's last
+    g = read_openloris(p, remove_repeated=False)
+    assert len(g.sequences[1]) == 3 and len(g.sequences[2]) == 2
+
+
+def test_empty_block_and_key_values_inside_blocks(tmp_path):
+    p = write(tmp_path, "r.txt", HEAD + "seq: 1\nreloc_result: 1\n1 0 0 0 0 0 0 1\nseq: 2\n\n# nothing\n")
+    f = read_openloris(p)
+    assert len(f.sequences[2]) == 0 and f.seq_info[1]["reloc_result"] == "1"
+
+
+def test_windows_line_endings(tmp_path):
+    p = write(tmp_path, "r.txt", (HEAD + "seq: 1\n1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n").replace("\n", "\r\n"))
+    f = read_openloris(p)
+    assert f.frame == "d400_color" and len(f.sequences[1]) == 2
+
+
+@pytest.mark.parametrize("body, line, match", [
+    ("seq: 1\n1 0 0 0 0 0 1\n", 4, "has 7 fields; expected 8 or 9 numbers"),
+    ("seq: 1\n1 0 0 0 0 0 0 1\n2 0 0 x 0 0 0 1\n", 5, "'x' is not a number"),
+    ("seq: 1\n1 0 0 0 0 0 0 0\n", 4, "quaternion has zero norm"),
+    ("1 0 0 0 0 0 0 1\nseq: 1\n", 3, "pose line before any 'seq: N'"),
+    ("seq: one\n", 3, "expected 'seq: N' with an integer N"),
+    ("seq: 1\ninf 0 0 0 0 0 0 1\n", 4, "timestamp inf is not finite"),
+])
+def test_malformed_lines_name_file_and_line(tmp_path, body, line, match):
+    p = write(tmp_path, "bad.txt", HEAD + body)
+    with pytest.raises(ParseError, match=match) as exc:
+        read_openloris(p)
+    assert exc.value.line == line and exc.value.path == str(p)
+    assert f"bad.txt, line {line}:" in str(exc.value)
+
+
+def test_missing_scene_unknown_scene_unknown_frame(tmp_path):
+    f = read_openloris(write(tmp_path, "a.txt", "frame: base_link\nseq: 1\n"))
+    with pytest.raises(ParseError, match="no 'scene: NAME' header"):
+        _ = f.scene
+    f = read_openloris(write(tmp_path, "b.txt", "scene: garage\nframe: base_link\nseq: 1\n"))
+    with pytest.raises(ParseError, match="unknown scene 'garage'") as exc:
+        _ = f.scene
+    assert exc.value.line == 1
+    f = read_openloris(write(tmp_path, "c.txt", "scene: home\nframe: zed_left\nseq: 1\n"))
+    with pytest.raises(ParseError, match="unknown frame 'zed_left'; expected one of base_link") as exc:
+        _ = f.frame
+    assert exc.value.line == 2
+
+
+def test_missing_file_is_a_parse_error(tmp_path):
+    with pytest.raises(ParseError, match="file not found"):
+        read_openloris(tmp_path / "nope.txt")
+
+
+def test_tum_reader_real_and_bad(data, tmp_path):
+    gt = read_tum(data.tum / "fr2_desk_groundtruth.txt")
+    est = read_tum(data.tum / "fr2_desk_ORB.txt")
+    assert len(est) == 2893 and est.duration == pytest.approx(99, abs=1.5)
+    assert len(gt) > len(est)
+    p = write(tmp_path, "t.txt", "# c\n1,0,0,0,0,0,0,1\n2\t1 0 0 0 0 0 1\n")
+    assert len(read_tum(p)) == 2
+    with pytest.raises(ParseError, match=r"t2.txt, line 2: .*expected 8 numbers"):
+        read_tum(write(tmp_path, "t2.txt", "1 0 0 0 0 0 0 1\n1 0 0 0 0 0 1 2 3\n"))
+
+
+def test_kitti_through_evo_with_and_without_stamps(tmp_path):
+    rows = ["1 0 0 0 0 1 0 0 0 0 1 0", "0 -1 0 1 1 0 0 2 0 0 1 3"]
+    p = write(tmp_path, "k.txt", "\n".join(rows) + "\n")
+    t = read_kitti(p)
+    np.testing.assert_array_equal(t.stamps, [0, 1])
+    np.testing.assert_allclose(t.positions[1], [1, 2, 3])
+    np.testing.assert_allclose(t.rotations()[1].as_euler("xyz", degrees=True), [0, 0, 90], atol=1e-9)
+    times = write(tmp_path, "times.txt", "0.5\n0.6\n")
+    np.testing.assert_allclose(read_trajectory(p, "kitti", stamps=times).stamps, [0.5, 0.6])
+    with pytest.raises(ParseError, match="not a KITTI pose file"):
+        read_kitti(write(tmp_path, "bad.txt", "1 2 3\n"))
+
+
+def test_euroc_through_evo(tmp_path):
+    text = "#timestamp,p_x,p_y,p_z,q_w,q_x,q_y,q_z\n1000000000,1,2,3,1,0,0,0\n2000000000,2,2,3,1,0,0,0\n"
+    t = read_trajectory(write(tmp_path, "data.csv", text), "euroc")
+    np.testing.assert_allclose(t.stamps, [1.0, 2.0])
+    np.testing.assert_allclose(t.quaternions[0], [0, 0, 0, 1])
+
+
+def test_no_warning_on_clean_file(data):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", LorisWarning)
+        read_openloris(data.groundtruth("cafe"))
