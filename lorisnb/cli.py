@@ -142,6 +142,34 @@ def cmd_evaluate(args) -> int:
     return 1 if ev.failures else 0
 
 
+def _param_value(text: str):
+    """A -p value: JSON when it parses (numbers, true/false, null, lists), else the string."""
+    import json
+
+    low = text.strip().lower()
+    if low in ("inf", "+inf", "infinity"):
+        return float("inf")
+    try:
+        return json.loads(text)
+    except ValueError:
+        return text
+
+
+def cmd_report(args) -> int:
+    from .report import run_report
+
+    params = {k: _param_value(v) for k, v in (args.parameter or [])}
+    if args.data and "data_root" not in params:
+        params["data_root"] = args.data
+    run_dir, runs = run_report(args.out, params, args.notebooks, force=args.force,
+                               progress=not args.no_progress)
+    for r in runs:
+        line = f"{r.name:28s} {r.status:7s} {r.seconds:6.1f} s"
+        print(line + (f"  {r.error.splitlines()[0][:150]}" if r.error else ""))
+    print(f"report: {run_dir / 'index.html'}")
+    return 1 if any(r.status != "ok" for r in runs) else 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="lorisnb", description="Lifelong SLAM evaluation (OpenLORIS-Scene metrics)")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -155,6 +183,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tau", type=parse_threshold, default=60.0, help="re-localization time factor, s; default 60")
     p.set_defaults(func=cmd_evaluate)
 
+    p = sub.add_parser("report", help="run the notebooks with papermill into a report folder under results/")
+    p.add_argument("--out", default=None, help="run folder (default results/run-<date>-<time>)")
+    p.add_argument("-p", "--parameter", nargs=2, action="append", metavar=("NAME", "VALUE"),
+                   help="notebook parameter (repeatable); VALUE is JSON if it parses, else a string")
+    p.add_argument("--notebooks", nargs="+", default=None, help="notebooks to run (default: all, in report order)")
+    p.add_argument("--data", default=None, metavar="DIR", help="data root passed to the notebooks as data_root")
+    p.add_argument("--force", action="store_true", help="replace --out if it exists")
+    p.add_argument("--no-progress", action="store_true")
+    p.set_defaults(func=cmd_report)
     return parser
 
 

@@ -47,6 +47,12 @@ EXTRA_COLUMNS = [
     "c_rpe_rot_rmse", "rpe_pairs", "c_rpe_pairs", "official_interpolation",
 ]
 
+SCENE_COLUMNS = [
+    "suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "sequences", "scene_sequences", "matched",
+    "c_matched", "correct_time", "track_time", "scene_duration", "cr", "cr_t", "c_ate_rmse",
+    "c_ate_rmse_pooled", "ate_rmse", "cs_r_mean",
+]
+
 
 @dataclass
 class SequenceErrors:
@@ -357,7 +363,7 @@ def aggregate_scenes(sequences: pd.DataFrame, durations: pd.DataFrame | None = N
     Rows are grouped by ``suite``, ``algorithm``, ``scene`` and the thresholds.
     """
     if sequences.empty:
-        return pd.DataFrame()
+        return pd.DataFrame(columns=SCENE_COLUMNS)
     if durations is None:
         durations = scene_durations(sorted(sequences["scene"].unique()), data_root)
     total = durations.groupby("scene")["gt_duration"].sum()
@@ -388,7 +394,7 @@ def aggregate_scenes(sequences: pd.DataFrame, durations: pd.DataFrame | None = N
         out["c_ate_rmse_pooled"] = np.where(out["c_matched"] > 0, np.sqrt(out["_c_sq"] / out["c_matched"]), np.nan)
         out["ate_rmse"] = np.where(out["matched"] > 0, out["_a_w"] / out["matched"], np.nan)
     order = {s: i for i, s in enumerate(SCENES)}
-    out = out.drop(columns=["_c_sq", "_c_w", "_a_w"])
+    out = out.drop(columns=["_c_sq", "_c_w", "_a_w"])[SCENE_COLUMNS]
     out = out.sort_values(["suite", "algorithm", "scene"], key=lambda c: c.map(order) if c.name == "scene" else c)
     return out.reset_index(drop=True)
 
@@ -420,6 +426,14 @@ class Evaluation:
 
     def scenes(self, eps=np.inf, phi=np.inf, delta=1.0, tau=60.0, data_root=None) -> pd.DataFrame:
         return aggregate_scenes(self.sequences(eps, phi, delta, tau), data_root=data_root)
+
+    @property
+    def algorithms(self) -> list[str]:
+        return sorted({f.algorithm for f in self.errors})
+
+    def durations(self, data_root=None) -> pd.DataFrame:
+        """Ground-truth durations of every sequence of the scenes evaluated."""
+        return scene_durations(sorted({f.scene for f in self.errors}, key=SCENES.index), data_root)
 
     @property
     def warnings(self) -> list[str]:
@@ -460,6 +474,7 @@ def _labels(path: Path, root: Path | None) -> tuple[str, str, str]:
 def evaluate(paths: str | os.PathLike | Iterable[str | os.PathLike], *, mode: str = "auto",
              scale: bool | str = False, official_interpolation: bool = False,
              remove_repeated: bool = True, data_root: str | os.PathLike | None = None,
+             algorithms: Iterable[str] | None = None, scenes: Iterable[str] | None = None,
              progress: bool = False) -> Evaluation:
     """Evaluate result files and folders. A file that fails (bad line, unknown frame, ...) is
     recorded in ``failures`` with its reason and the rest go on; a file whose scene has no ground
@@ -467,11 +482,16 @@ def evaluate(paths: str | os.PathLike | Iterable[str | os.PathLike], *, mode: st
 
     Args:
         paths: files, or folders walked as ``<algorithm>/*.txt`` (see :func:`result_files`).
+        algorithms, scenes: evaluate only these (None: all).
         progress: show a progress bar over files (tqdm; notebook-aware).
         The other arguments are those of :func:`compute_errors`.
     """
     paths = [paths] if isinstance(paths, (str, os.PathLike)) else list(paths)
     items = result_files(paths)
+    if algorithms is not None:
+        wanted = set(algorithms)
+        items = [(p, r) for p, r in items if _labels(p, r)[0] in wanted]
+    scene_set = None if scenes is None else set(scenes)
     if progress:
         from tqdm.auto import tqdm
 
@@ -485,12 +505,16 @@ def evaluate(paths: str | os.PathLike | Iterable[str | os.PathLike], *, mode: st
     for path, root in items_iter:
         algorithm, rel, suite = _labels(path, root)
         try:
+            if scene_set is not None:
+                path = read_openloris(path, remove_repeated=remove_repeated, warn=False)
+                if path.scene not in scene_set:
+                    continue
             done.append(compute_errors(path, algorithm=algorithm, file=rel, suite=suite, mode=mode,
                                        scale=scale, official_interpolation=official_interpolation,
                                        remove_repeated=remove_repeated, data_root=data_root))
         except DataNotFoundError as exc:
-            skipped.append(Failure(path, str(exc), "no-groundtruth"))
+            skipped.append(Failure(getattr(path, "path", path), str(exc), "no-groundtruth"))
         except LorisError as exc:
-            failed.append(Failure(path, str(exc), type(exc).__name__))
+            failed.append(Failure(getattr(path, "path", path), str(exc), type(exc).__name__))
     root = Path(paths[0]) if len(paths) == 1 and Path(paths[0]).is_dir() else None
     return Evaluation(done, failed, root, skipped)

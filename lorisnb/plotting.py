@@ -1,0 +1,149 @@
+"""Figures (matplotlib/seaborn): the paper's timeline (Fig. 2 / Fig. 3), trajectories coloured by
+correctness, and helpers to save figures. Every function returns the Figure; none calls show().
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Iterable, Mapping, Sequence
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import seaborn as sns
+from matplotlib.collections import LineCollection
+from matplotlib.lines import Line2D
+
+from .evaluation import FileErrors, scene_eps
+from .metrics import correctness
+from .timeline import sequence_layout, timeline_table
+
+CORRECT = "#1f5fbf"
+WRONG = "#d62728"
+
+
+def _pct(v: float) -> str:
+    return "n/a" if v is None or not np.isfinite(v) else f"{100 * v:.1f}%"
+
+
+def plot_timeline(errors: Sequence[FileErrors], durations: pd.DataFrame, scene_table: pd.DataFrame,
+                  eps: float | str | Mapping[str, float] = np.inf, phi: float = np.inf,
+                  delta: float = 1.0, algorithms: Sequence[str] | None = None,
+                  labels: Mapping[str, str] | None = None, show_wrong: bool = True,
+                  title: str | None = None):
+    """The paper's timeline figure.
+
+    One row per algorithm, the scenes' sequences side by side on a shared time axis (each as long
+    as its ground truth; black dots mark sequence starts). Correct tracking is drawn as blue
+    segments, incorrect estimates as red ones (``show_wrong``, Fig. 3); the first pose of each
+    sequence is a blue dot if correct (initialization / correct re-localization) or a red cross.
+    Per scene, the CR is printed at the top left of each row and the C-ATE RMSE (metres) at the
+    bottom right, from ``scene_table`` (:func:`lorisnb.evaluation.aggregate_scenes`).
+    """
+    segments, firsts = timeline_table(errors, eps, phi, delta)
+    layout = sequence_layout(durations)
+    if algorithms is None:
+        algorithms = sorted({f.algorithm for f in errors})
+    labels = dict(labels or {})
+    n = len(algorithms)
+    width = max(8.0, 0.006 * (layout["offset"].iloc[-1] + layout["duration"].iloc[-1]) + 3) if len(layout) else 8
+    sns.set_theme(style="white", context="paper")
+    fig, ax = plt.subplots(figsize=(min(width, 20), 0.55 * n + 1.4))
+    off = {(r.scene, r.seq): r.offset for r in layout.itertuples()}
+    y_of = {a: n - i for i, a in enumerate(algorithms)}
+    top = n + 0.8
+    for scene, d in layout.groupby("scene", sort=False):
+        x0, x1 = d["offset"].min(), (d["offset"] + d["duration"]).max()
+        ax.plot([x0, x1], [top, top], "-k", lw=1)
+        ax.plot(d["offset"], np.full(len(d), top), "ok", ms=3)
+        ax.text((x0 + x1) / 2, top + 0.25, scene, ha="center", va="bottom", fontsize=9)
+        ax.axvline(x0, color="0.7", lw=0.6)
+        ax.axvline(x1, color="0.7", lw=0.6)
+    for correct_flag, color in ((True, CORRECT), (False, WRONG)):
+        if not show_wrong and not correct_flag:
+            continue
+        s = segments[(segments["correct"] == correct_flag) & segments["algorithm"].isin(algorithms)]
+        s = s[[(sc, q) in off for sc, q in zip(s["scene"], s["seq"], strict=True)]]
+        if s.empty:
+            continue
+        base = np.array([off[(sc, q)] for sc, q in zip(s["scene"], s["seq"], strict=True)])
+        y = s["algorithm"].map(y_of).to_numpy(float)
+        lines = np.stack([np.stack([base + s["start"], y], 1), np.stack([base + s["end"], y], 1)], 1)
+        ax.add_collection(LineCollection(lines, colors=color, linewidths=2.2))
+    f = firsts[firsts["algorithm"].isin(algorithms)]
+    f = f[[(sc, q) in off for sc, q in zip(f["scene"], f["seq"], strict=True)]]
+    if len(f):
+        x = np.array([off[(sc, q)] for sc, q in zip(f["scene"], f["seq"], strict=True)]) + f["t"].to_numpy()
+        y = f["algorithm"].map(y_of).to_numpy(float)
+        ok = f["correct"].to_numpy(bool)
+        ax.plot(x[ok], y[ok], "o", color=CORRECT, ms=4)
+        ax.plot(x[~ok], y[~ok], "x", color=WRONG, ms=6, mew=1.5)
+    for r in scene_table[scene_table["algorithm"].isin(algorithms)].itertuples():
+        d = layout[layout["scene"] == r.scene]
+        if d.empty:
+            continue
+        x0, x1 = d["offset"].min(), (d["offset"] + d["duration"]).max()
+        yy = y_of[r.algorithm]
+        ax.text(x0 + 2, yy + 0.12, _pct(r.cr), fontsize=7, ha="left", va="bottom")
+        rmse = r.c_ate_rmse
+        ax.text(x1 - 2, yy - 0.42, "N/A" if not np.isfinite(rmse) else f"{rmse:.3f}", fontsize=7,
+                ha="right", va="bottom")
+    ax.set_yticks([y_of[a] for a in algorithms], [labels.get(a, a) for a in algorithms])
+    ax.set_ylim(0.4, n + 1.5)
+    if len(layout):
+        ax.set_xlim(layout["offset"].min() - 5, (layout["offset"] + layout["duration"]).max() + 5)
+    ax.set_xticks([])
+    ax.set_xlabel("time (each sequence to scale; black dots mark sequence starts)")
+    sns.despine(ax=ax, left=True, bottom=True)
+    handles = [Line2D([], [], color=CORRECT, lw=2.2, label="correct pose estimates"),
+               Line2D([], [], color=CORRECT, marker="o", ls="", label="correct (re-)localization")]
+    if show_wrong:
+        handles += [Line2D([], [], color=WRONG, lw=2.2, label="incorrect pose estimates"),
+                    Line2D([], [], color=WRONG, marker="x", ls="", label="incorrect (re-)localization")]
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=len(handles),
+              frameon=False, fontsize=8)
+    if title:
+        ax.set_title(title, fontsize=10, pad=18)
+    fig.tight_layout()
+    return fig
+
+
+def plot_trajectories(errors: FileErrors, eps: float | str | Mapping[str, float] = np.inf,
+                      phi: float = np.inf, max_cols: int = 3):
+    """Top view (x-y, metres) of each sequence: interpolated ground truth in grey, the aligned
+    estimate as points coloured by correctness (blue correct, red wrong)."""
+    seqs = [e for e in errors.sequences if e.matched]
+    n = max(1, len(seqs))
+    cols = min(max_cols, n)
+    rows = int(np.ceil(n / cols))
+    sns.set_theme(style="whitegrid", context="paper")
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4.0 * rows), squeeze=False)
+    e_eps = scene_eps(eps, errors.scene)
+    for ax, e in zip(axes.flat, seqs, strict=False):
+        c = correctness(e.ate, e.aoe, e_eps, phi)
+        ax.plot(e.gt_positions[:, 0], e.gt_positions[:, 1], "-", color="0.6", lw=1.2, label="ground truth")
+        ax.scatter(e.est_positions[c, 0], e.est_positions[c, 1], s=3, color=CORRECT, label="estimate, correct")
+        ax.scatter(e.est_positions[~c, 0], e.est_positions[~c, 1], s=3, color=WRONG, label="estimate, wrong")
+        ax.set_title(f"{errors.scene}-{e.seq}: {c.mean():.0%} of {e.matched} poses correct", fontsize=9)
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_aspect("equal", adjustable="datalim")
+    for ax in list(axes.flat)[len(seqs):]:
+        ax.axis("off")
+    if seqs:
+        axes.flat[0].legend(fontsize=7, loc="best", markerscale=3)
+    fig.suptitle(f"{errors.algorithm}: {errors.file} ({errors.mode}, top view)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def save_figure(fig, out_dir: str | Path, name: str, formats: Iterable[str] = ("png", "svg")) -> list[Path]:
+    """Write a figure as ``name.png`` and ``name.svg`` in ``out_dir``; returns the paths."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for fmt in formats:
+        p = out_dir / f"{name}.{fmt}"
+        fig.savefig(p, dpi=150, bbox_inches="tight")
+        paths.append(p)
+    return paths

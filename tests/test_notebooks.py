@@ -1,0 +1,87 @@
+"""Execute every notebook with papermill (small parameters, Agg backend) and assert on what it
+recorded, in the style of pyhf's tests/test_notebooks.py. Reference values are the official
+tool's numbers quoted in issue #2."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import nbformat
+import pandas as pd
+import papermill as pm
+import pytest
+
+from lorisnb.report import NOTEBOOK_DIR, _kernel_env
+
+
+@pytest.fixture(scope="module", autouse=True)
+def kernel_env():
+    _kernel_env()
+
+
+def run(name: str, tmp_path: Path, **params) -> Path:
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    out = tmp_path / name
+    params.setdefault("quick", True)
+    params["output_dir"] = str(out)
+    pm.execute_notebook(str(NOTEBOOK_DIR / f"{name}.ipynb"), str(tmp_path / f"{name}.ipynb"),
+                        parameters=params, kernel_name="python3", progress_bar=False, cwd=str(tmp_path))
+    return out
+
+
+def test_notebooks_are_stored_without_outputs_and_have_one_parameters_cell():
+    for path in NOTEBOOK_DIR.glob("*.ipynb"):
+        nb = nbformat.read(str(path), as_version=4)
+        code = [c for c in nb.cells if c.cell_type == "code"]
+        assert all(not c.outputs and c.execution_count is None for c in code), path.name
+        tagged = [c for c in code if "parameters" in c.metadata.get("tags", [])]
+        assert len(tagged) == 1, path.name
+        assert "output_dir" in tagged[0].source and "quick" in tagged[0].source
+
+
+def test_per_sequence_benchmark(tmp_path):
+    out = run("per_sequence_benchmark", tmp_path)
+    seq = pd.read_csv(out / "sequences.csv")
+    assert set(seq["scene"]) == {"cafe", "home"}
+    row = seq[(seq["algorithm"] == "vins_mono_color_imu_with_loop") & (seq["scene"] == "home") & (seq["seq"] == 3)].iloc[0]
+    assert row["cr"] == pytest.approx(0.926380, abs=1e-6) and row["cs_r"] == pytest.approx(0.902318, abs=1e-6)
+    row = seq[(seq["algorithm"] == "orbslam2_rgbd") & (seq["scene"] == "cafe") & (seq["seq"] == 1)].iloc[0]
+    assert row["ate_rmse"] == pytest.approx(0.472544, abs=1e-6)
+    scenes = pd.read_csv(out / "scenes.csv")
+    assert len(scenes) == 3 * 2 and scenes["cr"].between(0, 1).all()
+    assert (scenes.loc[scenes["algorithm"] == "dso", "ate_rmse"] > 0).all()
+    assert (out / "timeline_per_sequence.png").stat().st_size > 10_000
+    assert (out / "timeline_per_sequence.svg").exists()
+
+
+def test_lifelong_benchmark(tmp_path):
+    out = run("lifelong_benchmark", tmp_path)
+    scenes = pd.read_csv(out / "scenes.csv").set_index(["algorithm", "scene"])
+    vins = scenes.loc[("vins_mono_color_imu_with_loop", "home")]
+    assert vins["cr"] == pytest.approx(0.335952, abs=1e-6)
+    assert vins["cr_t"] == pytest.approx(0.344192, abs=1e-6)
+    assert vins["c_ate_rmse"] == pytest.approx(0.712569, abs=1e-6)
+    csr = pd.read_csv(out / "cs_r.csv", index_col=0)
+    assert csr.loc["vins_mono_color_imu_with_loop", "home-1"] == pytest.approx(0.925928, abs=1e-6)
+    assert csr.loc["vins_mono_color_imu_with_loop", "home-2"] == 0.0
+    assert (out / "timeline_lifelong.png").exists()
+
+
+def test_lifelong_benchmark_with_other_thresholds(tmp_path):
+    out = run("lifelong_benchmark", tmp_path, eps=0.3, phi=10.0, algorithms=["maslam"], scenes=["cafe"])
+    seq = pd.read_csv(out / "sequences.csv").set_index("seq")
+    assert seq.loc[2, "cr"] == pytest.approx(0.137731, abs=1e-6)
+    assert seq.loc[2, "c_ate_rmse"] == pytest.approx(0.186973, abs=1e-6)
+
+
+def test_evaluate_my_results_default_and_broken_input(tmp_path, icra20):
+    out = run("evaluate_my_results", tmp_path)
+    seq = pd.read_csv(out / "sequences.csv").set_index("seq")
+    assert seq.loc[1, "cr"] == pytest.approx(0.961294, abs=1e-6)
+    assert (out / "trajectories_1.png").exists() and (out / "timeline.png").exists()
+    bad = tmp_path / "mine" / "my_slam" / "run.txt"
+    bad.parent.mkdir(parents=True)
+    bad.write_text("scene: cafe\nframe: d400_color\nseq: 1\n1 2 3\n")
+    out2 = run("evaluate_my_results", tmp_path / "b", path=str(tmp_path / "mine"))
+    errors = pd.read_csv(out2 / "input_errors.csv")
+    assert "line 4" in errors.loc[0, "error"]
