@@ -14,6 +14,8 @@ import time
 import warnings
 from pathlib import Path
 
+import numpy as np
+
 from lorisnb.data import find_data
 from lorisnb.errors import LorisWarning
 from lorisnb.evaluation import evaluate, result_files, score
@@ -90,6 +92,20 @@ def main() -> None:
     print(f"evaluate whole tree  lorisnb {t_eval:7.3f} s   ({len(ev.errors)} files scored, "
           f"{len(ev.skipped)} skipped without ground truth); one threshold setting after that: {t_score:.3f} s")
     print("                     (the official tool needs about 270 s for one setting over the same files)")
+
+    from lorisnb.sweep import sweep
+
+    grid = (np.geomspace(0.05, 50, 50), np.linspace(5, 180, 10), [0.1, 0.5, 1.0, 2.0, 5.0], [10, 30, 60, 120, 300])
+    ev.sequences()  # the threshold-free RPE pairs are computed once here, as in a session
+    t_cold = time.perf_counter()
+    table = sweep(ev.errors, *grid)
+    t_cold = time.perf_counter() - t_cold
+    del table
+    t_sweep, table = _timed(lambda: sweep(ev.errors, *grid))
+    n_set = 50 * 10 * 5 * 5
+    print(f"sweep 50x10x5x5      lorisnb {t_sweep:7.3f} s (first call {t_cold:.3f} s)   {len(table)} rows;"
+          f" one setting at a time: {t_score:.3f} s x {n_set} = {t_score * n_set:.0f} s  "
+          f"speed-up x{t_score * n_set / t_sweep:,.0f}")
 
     gt_path = data.groundtruth("market")
     est_path = root / "lifelong" / "maslam" / "market.txt"

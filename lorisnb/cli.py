@@ -142,6 +142,28 @@ def cmd_evaluate(args) -> int:
     return 1 if ev.failures else 0
 
 
+def cmd_sweep(args) -> int:
+    from .sweep import sweep, sweep_scenes
+
+    ev, notes = _run_evaluation(args)
+    table = sweep(ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
+                  columns="all")
+    print(f"{len(table)} rows: {len(ev.errors)} file(s) x {len(args.eps)} eps x {len(args.phi)} phi x "
+          f"{len(args.delta)} delta x {len(args.tau)} tau")
+    if not table.empty:
+        scenes = sweep_scenes(table, data_root=args.data)
+        view = scenes[["suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "cr", "cr_t", "c_ate_rmse"]]
+        print(_fmt(view.head(60)))
+        if len(view) > 60:
+            print(f"... {len(view) - 60} more scene rows (write them all with --csv)")
+    if args.csv:
+        keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
+        out = write_csv_safely(table if keep_label else table.drop(columns=["eps_value"]), args.csv, args.force)
+        print(f"wrote {len(table)} rows to {out}", file=sys.stderr)
+    _report_problems(ev, notes)
+    return 1 if ev.failures else 0
+
+
 def _param_value(text: str):
     """A -p value: JSON when it parses (numbers, true/false, null, lists), else the string."""
     import json
@@ -182,6 +204,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--delta", type=parse_threshold, default=1.0, help="validity window of a pose, s; default 1")
     p.add_argument("--tau", type=parse_threshold, default=60.0, help="re-localization time factor, s; default 60")
     p.set_defaults(func=cmd_evaluate)
+
+    p = sub.add_parser("sweep", help="every metric over grids of eps, phi, delta and tau (one row per sequence and setting)")
+    add_evaluation_options(p)
+    p.add_argument("--eps", type=lambda s: parse_list(s, True), default=[np.inf],
+                   help="comma-separated ATE thresholds in metres ('inf', 'paper' allowed)")
+    p.add_argument("--phi", type=parse_list, default=[np.inf], help="comma-separated AOE thresholds, degrees")
+    p.add_argument("--delta", type=parse_list, default=[1.0], help="comma-separated validity windows, s")
+    p.add_argument("--tau", type=parse_list, default=[60.0], help="comma-separated re-localization factors, s")
+    p.add_argument("--relative-to", choices=["extent", "length"], default=None,
+                   help="read --eps as fractions of each sequence's ground-truth extent or length")
+    p.set_defaults(func=cmd_sweep)
 
     p = sub.add_parser("report", help="run the notebooks with papermill into a report folder under results/")
     p.add_argument("--out", default=None, help="run folder (default results/run-<date>-<time>)")

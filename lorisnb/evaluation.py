@@ -79,10 +79,26 @@ class SequenceErrors:
     gt_rotations: Rotation | None
     gt_start: float
     gt_end: float
+    _rpe_cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def matched(self) -> int:
         return len(self.stamps)
+
+    def rpe(self, delta: float = 1.0, unit: str = "s") -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Relative pose error pairs (i, j) and errors (metres, degrees) over ``delta`` in ``unit``
+        (see :func:`lorisnb.metrics.rpe_pairs`); computed once per setting and kept."""
+        key = (float(delta), unit)
+        if key not in self._rpe_cache:
+            if self.matched < 2:
+                z = np.zeros(0, int)
+                self._rpe_cache[key] = (z, z, np.zeros(0), np.zeros(0))
+            else:
+                i, j = metrics.rpe_pairs(self.stamps, self.gt_positions, delta, unit)
+                tr, rr = metrics.rpe(self.gt_positions, self.gt_rotations, self.est_positions,
+                                     self.est_rotations, i, j)
+                self._rpe_cache[key] = (i, j, tr, rr)
+        return self._rpe_cache[key]
 
 
 @dataclass
@@ -256,11 +272,10 @@ def scene_eps(eps: float | str | Mapping[str, float], scene: str) -> float:
 
 def _rpe_rows(e: SequenceErrors, correct: np.ndarray, rpe_delta: float, rpe_unit: str) -> dict:
     nan = float("nan")
-    if e.matched < 2:
+    i, j, tr, rr = e.rpe(rpe_delta, rpe_unit)
+    if len(i) == 0:
         return dict(rpe_trans_rmse=nan, rpe_rot_rmse=nan, c_rpe_trans_rmse=nan, c_rpe_rot_rmse=nan,
                     rpe_pairs=0, c_rpe_pairs=0)
-    i, j = metrics.rpe_pairs(e.stamps, e.gt_positions, rpe_delta, rpe_unit)
-    tr, rr = metrics.rpe(e.gt_positions, e.gt_rotations, e.est_positions, e.est_rotations, i, j)
     both = correct[i] & correct[j] if len(i) else np.zeros(0, bool)
     return dict(rpe_trans_rmse=float(metrics.rmse(tr)), rpe_rot_rmse=float(metrics.rmse(rr)),
                 c_rpe_trans_rmse=float(metrics.rmse(tr, both)), c_rpe_rot_rmse=float(metrics.rmse(rr, both)),
@@ -369,12 +384,14 @@ def aggregate_scenes(sequences: pd.DataFrame, durations: pd.DataFrame | None = N
     total = durations.groupby("scene")["gt_duration"].sum()
     nseq = durations.groupby("scene")["seq"].count()
     keys = ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau"]
+    keys += [c for c in ("eps_value",) if c in sequences.columns]  # a sweep: eps as given
     dup = sequences.duplicated(subset=keys + ["seq"], keep=False)
     if dup.any():
         d = sequences[dup].iloc[0]
+        same = sequences[dup & (sequences["algorithm"] == d["algorithm"]) & (sequences["scene"] == d["scene"])
+                         & (sequences["seq"] == d["seq"])]["file"].astype(str).unique()
         raise EvaluationError(
-            f"several results for {d['algorithm']} {d['scene']}-{d['seq']} "
-            f"({', '.join(sequences[dup & (sequences['seq'] == d['seq'])]['file'].astype(str))}); "
+            f"several results for {d['algorithm']} {d['scene']}-{d['seq']} ({', '.join(same[:3])}); "
             "evaluate them in separate folders (suites)")
     df = sequences.copy()
     df["_c_sq"] = np.where(df["c_matched"] > 0, df["c_ate_rmse"] ** 2 * df["c_matched"], 0.0)
@@ -394,7 +411,7 @@ def aggregate_scenes(sequences: pd.DataFrame, durations: pd.DataFrame | None = N
         out["c_ate_rmse_pooled"] = np.where(out["c_matched"] > 0, np.sqrt(out["_c_sq"] / out["c_matched"]), np.nan)
         out["ate_rmse"] = np.where(out["matched"] > 0, out["_a_w"] / out["matched"], np.nan)
     order = {s: i for i, s in enumerate(SCENES)}
-    out = out.drop(columns=["_c_sq", "_c_w", "_a_w"])[SCENE_COLUMNS]
+    out = out.drop(columns=["_c_sq", "_c_w", "_a_w"])[SCENE_COLUMNS + keys[7:]]
     out = out.sort_values(["suite", "algorithm", "scene"], key=lambda c: c.map(order) if c.name == "scene" else c)
     return out.reset_index(drop=True)
 
