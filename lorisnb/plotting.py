@@ -147,3 +147,81 @@ def save_figure(fig, out_dir: str | Path, name: str, formats: Iterable[str] = ("
         fig.savefig(p, dpi=150, bbox_inches="tight")
         paths.append(p)
     return paths
+
+
+# --- threshold sensitivity -------------------------------------------------------------------
+
+def _mark(ax, x, label: str | None = None, axis: str = "x") -> None:
+    line = ax.axvline if axis == "x" else ax.axhline
+    line(x, color="0.25", ls="--", lw=1)
+    if label:
+        ax.annotate(label, xy=(x, 1.0), xycoords=("data", "axes fraction"), xytext=(3, -12),
+                    textcoords="offset points", fontsize=7, color="0.25")
+
+
+def plot_metric_vs_threshold(scenes: pd.DataFrame, x: str, y: str = "cr", marks: Mapping[str, float] | float | None = None,
+                             log: bool = True, hue: str = "algorithm", col: str = "scene", xlabel: str | None = None,
+                             ylabel: str | None = None, col_wrap: int = 4):
+    """Lines of a scene metric (``cr``, ``cr_t``, ``cs_r_mean``, ...) against one threshold, one
+    panel per scene, one line per algorithm; ``marks`` draws the paper's value (a number, or one
+    per scene) as a dashed line. ``scenes`` is a scene aggregate of a sweep."""
+    sns.set_theme(style="whitegrid", context="paper")
+    data = scenes.replace([np.inf], np.nan).dropna(subset=[x]) if log else scenes
+    g = sns.relplot(data=data, x=x, y=y, hue=hue, col=col, kind="line", marker="o", markersize=3,
+                    col_wrap=min(col_wrap, data[col].nunique()) if col else None, height=2.8, aspect=1.15,
+                    facet_kws={"sharey": True, "sharex": True})
+    for key, ax in g.axes_dict.items():
+        if log:
+            ax.set_xscale("log")
+        m = marks.get(key) if isinstance(marks, Mapping) else marks
+        if m is not None and np.isfinite(m):
+            _mark(ax, m, "paper")
+    g.set_axis_labels(xlabel or x, ylabel or y)
+    g.set_titles("{col_name}")
+    return g.figure
+
+
+def plot_cr_heatmaps(scenes: pd.DataFrame, scene: str, mark: tuple[float, float] | None = None,
+                     metric: str = "cr", max_cols: int = 3):
+    """Heatmaps of a scene metric over (eps, phi), one per algorithm, for one scene; ``mark``
+    outlines the cell of the paper's (eps, phi)."""
+    d = scenes[(scenes["scene"] == scene) & np.isfinite(scenes["eps"]) & np.isfinite(scenes["phi"])]
+    algs = sorted(d["algorithm"].unique())
+    cols = min(max_cols, max(1, len(algs)))
+    rows = int(np.ceil(len(algs) / cols)) or 1
+    sns.set_theme(style="white", context="paper")
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.6 * rows), squeeze=False)
+    for ax, alg in zip(axes.flat, algs, strict=False):
+        wide = d[d["algorithm"] == alg].pivot_table(index="phi", columns="eps", values=metric).sort_index(ascending=False)
+        sns.heatmap(wide, ax=ax, vmin=0, vmax=1, cmap="viridis", cbar=ax is axes.flat[cols - 1],
+                    xticklabels=[f"{v:.2g}" for v in wide.columns], yticklabels=[f"{v:.0f}" for v in wide.index])
+        ax.set_title(alg, fontsize=9)
+        ax.set_xlabel("eps (m)")
+        ax.set_ylabel("phi (deg)")
+        if mark is not None:
+            ci = int(np.argmin(np.abs(np.asarray(wide.columns, float) - mark[0])))
+            ri = int(np.argmin(np.abs(np.asarray(wide.index, float) - mark[1])))
+            ax.add_patch(plt.Rectangle((ci, ri), 1, 1, fill=False, edgecolor="red", lw=2))
+    for ax in list(axes.flat)[len(algs):]:
+        ax.axis("off")
+    fig.suptitle(f"{scene}: {metric.upper()} over ATE threshold eps and AOE threshold phi "
+                 "(red box: the paper's setting)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def plot_rank_stability(stability: pd.DataFrame):
+    """Kendall's tau between the ranking at each eps and at the reference (paper) eps, per scene."""
+    sns.set_theme(style="whitegrid", context="paper")
+    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    d = stability[np.isfinite(stability["eps"])]
+    sns.lineplot(data=d, x="eps", y="kendall_tau", hue="scene", marker="o", ax=ax)
+    for scene, ref in d.groupby("scene")["reference_eps"].first().items():
+        ax.axvline(ref, color=sns.color_palette()[list(d["scene"].unique()).index(scene) % 10], ls="--", lw=0.8)
+    ax.set_xscale("log")
+    ax.set_ylim(-1.05, 1.05)
+    ax.set_xlabel("eps (m)")
+    ax.set_ylabel("Kendall tau vs ranking at the paper's eps")
+    ax.set_title("How stable is the ranking of algorithms by CR? (dashed: paper's eps)", fontsize=10)
+    fig.tight_layout()
+    return fig

@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import nbformat
+import numpy as np
 import pandas as pd
 import papermill as pm
 import pytest
@@ -85,3 +86,21 @@ def test_evaluate_my_results_default_and_broken_input(tmp_path, icra20):
     out2 = run("evaluate_my_results", tmp_path / "b", path=str(tmp_path / "mine"))
     errors = pd.read_csv(out2 / "input_errors.csv")
     assert "line 4" in errors.loc[0, "error"]
+
+
+def test_threshold_sensitivity(tmp_path):
+    out = run("threshold_sensitivity", tmp_path)
+    curve = pd.read_csv(out / "cr_vs_eps.csv")
+    row = curve[(curve["algorithm"] == "vins_mono_color_imu_with_loop") & (curve["scene"] == "home") & (curve["eps"] == 3.0)]
+    assert row["cr"].iloc[0] == pytest.approx(0.335952, abs=1e-6)  # the paper's setting: issue #2's value
+    # CR never falls as eps grows
+    for _, g in curve.groupby(["algorithm", "scene"]):
+        assert (g.sort_values("eps")["cr"].diff().dropna() >= -1e-12).all()
+    stab = pd.read_csv(out / "rank_stability.csv")
+    ref = stab[stab["eps"] == stab["reference_eps"]]
+    assert len(ref) and np.allclose(ref["kendall_tau"], 1.0)
+    current = pd.read_csv(out / "explorer_current.csv").set_index("algorithm")
+    assert current.loc["vins_mono_color_imu_with_loop", "cr"] == pytest.approx(0.335952, abs=1e-6)  # home, eps 3
+    needed = pd.read_csv(out / "eps_for_cr50.csv").set_index(["algorithm", "scene"])
+    assert needed.loc[("vins_mono_color_imu_with_loop", "cafe"), "eps"] < 3.0
+    assert (out / "cr_heatmap_home.png").exists() and (out / "cs_r_vs_tau.png").exists()
