@@ -121,6 +121,70 @@ def main() -> None:
     print(f"associate market     lorisnb {t_assoc:7.4f} s   baseline {t_base_assoc:7.4f} s   "
           f"speed-up x{t_base_assoc / t_assoc:5.1f}   (positions + slerp vs positions only)")
 
+    bench_against_evo(data)
+
+
+def bench_against_evo(data, n: int = 50_000) -> None:
+    """lorisnb and evo on the same long trajectory: the TUM fr2/desk ground truth resampled to
+    ``n`` poses, and a noisy, rigidly moved copy as the estimate (identical pairs)."""
+    import copy
+
+    from evo.core import metrics as em
+    from scipy.spatial.transform import Rotation, Slerp
+
+    from lorisnb import metrics
+    from lorisnb.evo_bridge import to_evo
+    from lorisnb.geometry import umeyama
+    from lorisnb.readers import read_tum
+    from lorisnb.trajectory import Trajectory
+
+    gt0 = read_tum(data.tum / "fr2_desk_groundtruth.txt")
+    t = np.linspace(gt0.stamps[0], gt0.stamps[-1], n)
+    pos = np.stack([np.interp(t, gt0.stamps, gt0.positions[:, k]) for k in range(3)], 1)
+    rot = Slerp(gt0.stamps, gt0.rotations())(t)
+    rng = np.random.default_rng(0)
+    g = Rotation.from_euler("z", 30, degrees=True)
+    gt = Trajectory.from_rotations(t, pos, rot)
+    est = Trajectory.from_rotations(t, g.apply(pos + rng.normal(scale=0.01, size=pos.shape)) + 1.0,
+                                    g * rot * Rotation.from_rotvec(rng.normal(scale=0.01, size=(n, 3))))
+    ref_e, est_e = to_evo(gt), to_evo(est)
+    est_rot, gt_rot = est.rotations(), gt.rotations()
+
+    def ours_ate():
+        sim = umeyama(est.positions, gt.positions)
+        return metrics.rmse(metrics.ate(sim.apply(est.positions), gt.positions))
+
+    def evo_ape(relation):
+        e = copy.deepcopy(est_e)
+        e.align(ref_e)
+        m = em.APE(relation)
+        m.process_data((ref_e, e))
+        return m.get_statistic(em.StatisticsType.rmse)
+
+    def ours_aoe():
+        sim = umeyama(est.positions, gt.positions)
+        return metrics.rmse(metrics.aoe(Rotation.from_matrix(sim.rotation) * est_rot, gt_rot))
+
+    def ours_rpe():
+        i, j = metrics.rpe_pairs(t, pos, 10, "f")
+        tr, rr = metrics.rpe(gt.positions, gt_rot, est.positions, est_rot, i, j)
+        return metrics.rmse(tr)
+
+    def evo_rpe():
+        m = em.RPE(em.PoseRelation.translation_part, 10, em.Unit.frames, all_pairs=True)
+        m.process_data((ref_e, est_e))
+        return m.get_statistic(em.StatisticsType.rmse)
+
+    print(f"lorisnb vs evo on {n} poses (same process, same pairs):")
+    evo_ate = lambda: evo_ape(em.PoseRelation.translation_part)  # noqa: E731
+    evo_aoe = lambda: evo_ape(em.PoseRelation.rotation_angle_deg)  # noqa: E731
+    for name, ours, theirs in (("align + ATE", ours_ate, evo_ate), ("align + AOE", ours_aoe, evo_aoe),
+                               ("RPE 10 frames", ours_rpe, evo_rpe)):
+        t_o, v_o = _timed(ours)
+        t_e, v_e = _timed(theirs, repeat=1)
+        print(f"  {name:14s} lorisnb {t_o:7.4f} s   evo {t_e:7.4f} s   evo/lorisnb x{t_e / t_o:6.1f}   "
+              f"(values {v_o:.6f} / {v_e:.6f})")
+
 
 if __name__ == "__main__":
     main()

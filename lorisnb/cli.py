@@ -164,6 +164,33 @@ def cmd_sweep(args) -> int:
     return 1 if ev.failures else 0
 
 
+def cmd_crosscheck(args) -> int:
+    from .evo_bridge import crosscheck, crosscheck_openloris
+    from .readers import read_openloris, read_trajectory
+
+    deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
+    if args.format == "openloris":
+        gt = read_openloris(args.gt) if args.gt not in ("-", "auto") else None
+        table = crosscheck_openloris(args.est, args.seq, scale=args.scale, data_root=args.data, groundtruth=gt,
+                                     rpe_deltas=deltas)
+    else:
+        by_index = args.format == "kitti" and args.times is None
+        gt = read_trajectory(args.gt, args.format, stamps=args.times)
+        est = read_trajectory(args.est, args.format, stamps=args.times)
+        table = crosscheck(gt, est, scale=bool(args.scale), by_index=by_index, rpe_deltas=deltas,
+                           all_pairs=args.all_pairs)
+    from evo import __version__ as evo_version
+
+    with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"))
+    must = table["note"].str.startswith("identical pairs")
+    print(f"\nevo {evo_version}: {int(table.loc[must, 'agrees'].sum())} of {int(must.sum())} quantities computed "
+          "on identical pairs agree; other rows explain where the definitions differ", file=sys.stderr)
+    if args.csv:
+        write_csv_safely(table, args.csv, args.force)
+    return 0 if table.loc[must, "agrees"].all() else 1
+
+
 def _param_value(text: str):
     """A -p value: JSON when it parses (numbers, true/false, null, lists), else the string."""
     import json
@@ -215,6 +242,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--relative-to", choices=["extent", "length"], default=None,
                    help="read --eps as fractions of each sequence's ground-truth extent or length")
     p.set_defaults(func=cmd_sweep)
+
+    p = sub.add_parser("crosscheck", help="compare lorisnb with evo on one ground truth and one estimate")
+    p.add_argument("gt", help="ground truth (for --format openloris: gt_<scene>_1.txt, or 'auto' to find it)")
+    p.add_argument("est", help="estimate")
+    p.add_argument("--format", choices=["tum", "kitti", "euroc", "openloris"], default="tum")
+    p.add_argument("--scale", nargs="?", const=True, default=False, type=parse_scale,
+                   help="Sim(3) for the RPE and association rows ('auto' for openloris: by algorithm)")
+    p.add_argument("--times", default=None, help="KITTI: times file (one stamp per line) for both files; "
+                   "without it poses are paired by index, as evo does")
+    p.add_argument("--seq", type=int, default=None, help="openloris: the sequence (default: the first with poses)")
+    p.add_argument("--rpe-frames", type=int, default=1, help="RPE delta in frames (default 1)")
+    p.add_argument("--rpe-metres", type=float, default=1.0, help="RPE delta in metres (default 1)")
+    p.add_argument("--all-pairs", action="store_true", help="RPE over all pairs (evo's default: consecutive)")
+    p.add_argument("--data", default=None, metavar="DIR")
+    p.add_argument("--csv", default=None, metavar="OUT")
+    p.add_argument("--force", action="store_true")
+    p.set_defaults(func=cmd_crosscheck)
 
     p = sub.add_parser("report", help="run the notebooks with papermill into a report folder under results/")
     p.add_argument("--out", default=None, help="run folder (default results/run-<date>-<time>)")

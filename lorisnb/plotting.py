@@ -225,3 +225,23 @@ def plot_rank_stability(stability: pd.DataFrame):
     ax.set_title("How stable is the ranking of algorithms by CR? (dashed: paper's eps)", fontsize=10)
     fig.tight_layout()
     return fig
+
+
+def plot_crosscheck_scatter(per_pose: Mapping[str, pd.DataFrame]):
+    """lorisnb ATE against evo APE (and AOE against evo's rotation angle), per pose, one column
+    per dataset: points lie on the diagonal where the association coincides."""
+    n = len(per_pose)
+    sns.set_theme(style="whitegrid", context="paper")
+    fig, axes = plt.subplots(2, n, figsize=(3.6 * n, 6.6), squeeze=False)
+    for k, (name, df) in enumerate(per_pose.items()):
+        for r, (ours, theirs, unit) in enumerate((("ate_lorisnb", "ate_evo", "m"), ("aoe_lorisnb", "aoe_evo", "deg"))):
+            ax = axes[r, k]
+            ax.scatter(df[theirs], df[ours], s=4, alpha=0.5)
+            hi = float(max(df[theirs].max(), df[ours].max())) if len(df) else 1.0
+            ax.plot([0, hi], [0, hi], "--", color="0.3", lw=1)
+            ax.set_xlabel(f"evo APE ({unit})")
+            ax.set_ylabel(f"lorisnb {'ATE' if r == 0 else 'AOE'} ({unit})")
+            diff = np.max(np.abs(df[ours] - df[theirs])) if len(df) else np.nan
+            ax.set_title(f"{name}\nmax |difference| {diff:.1e} {unit}", fontsize=9)
+    fig.tight_layout()
+    return fig

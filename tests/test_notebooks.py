@@ -104,3 +104,17 @@ def test_threshold_sensitivity(tmp_path):
     needed = pd.read_csv(out / "eps_for_cr50.csv").set_index(["algorithm", "scene"])
     assert needed.loc[("vins_mono_color_imu_with_loop", "cafe"), "eps"] < 3.0
     assert (out / "cr_heatmap_home.png").exists() and (out / "cs_r_vs_tau.png").exists()
+
+
+def test_evo_crosscheck(tmp_path):
+    out = run("evo_crosscheck", tmp_path)
+    tum = pd.read_csv(out / "crosscheck_tum.csv")
+    same = tum[tum["note"].str.startswith("identical pairs")]
+    assert len(same) == 2 * 19 and same["agrees"].all()
+    ol = pd.read_csv(out / "crosscheck_openloris.csv")
+    assert ol[ol["note"].str.startswith("identical pairs")]["agrees"].all()
+    life = ol[ol["note"].str.contains("lifelong mode", na=False)]
+    assert life["lorisnb"].iloc[0] == pytest.approx(4.290224, abs=1e-6)
+    assert (out / "crosscheck_per_pose.png").exists()
+    html = (tmp_path / "evo_crosscheck.ipynb").read_text()
+    assert "evo version:" in html
