@@ -32,6 +32,7 @@ from .errors import DataNotFoundError, EvaluationError, LorisError, LorisWarning
 from .frames import PAPER_EPS, SCENES
 from .geometry import Sim3, ros_quaternion_from_matrix, umeyama
 from .readers import OpenLorisFile, read_openloris
+from .trajectory import Trajectory
 
 MODES = ("auto", "per-seq", "lifelong")
 
@@ -256,6 +257,22 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
             pos, a.gt_positions, rot, a.gt_rotations, a.gt_start, a.gt_end))
     return FileErrors(path, algorithm, file if file is not None else path.name, suite, scene, frame,
                       used_mode, alignment, aligned_on, official_interpolation, out, notes)
+
+
+def sequence_errors(gt: Trajectory, est: Trajectory, *, scale: bool = False, max_gap: float = MAX_GAP,
+                    official_interpolation: bool = False) -> SequenceErrors:
+    """Per-pose errors of one estimate against one ground truth in the same frame (TUM RGB-D,
+    ORDSLAM, a simulated estimate): association within ``max_gap`` seconds, alignment of the
+    estimate on itself (SE(3), or Sim(3) with ``scale``), ATE (m) and AOE (deg)."""
+    a = associate(gt, est.stamps, max_gap, official_interpolation)
+    if len(a) == 0:
+        return SequenceErrors(1, len(est), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros((0, 3)),
+                              np.zeros((0, 3)), None, None, a.gt_start, a.gt_end)
+    sim = umeyama(est.positions[a.est_index], a.gt_positions, scale)
+    pos, rot = _apply(sim, est.positions[a.est_index], Rotation.from_quat(est.quaternions[a.est_index]),
+                      official_interpolation)
+    return SequenceErrors(1, len(est), a.stamps, metrics.ate(pos, a.gt_positions), metrics.aoe(rot, a.gt_rotations),
+                          pos, a.gt_positions, rot, a.gt_rotations, a.gt_start, a.gt_end)
 
 
 def scene_eps(eps: float | str | Mapping[str, float], scene: str) -> float:

@@ -118,3 +118,34 @@ def test_evo_crosscheck(tmp_path):
     assert (out / "crosscheck_per_pose.png").exists()
     html = (tmp_path / "evo_crosscheck.ipynb").read_text()
     assert "evo version:" in html
+
+
+def test_indoor_vs_outdoor_published_only(tmp_path):
+    out = run("indoor_vs_outdoor", tmp_path)
+    side = pd.read_csv(out / "ate_pct_side_by_side.csv")
+    pub = side[side["source"].str.startswith("published")]
+    orb = pub[(pub["dataset"] == "ORDSLAM") & (pub["group"] == "difficult")]["ate_pct_length"].iloc[0]
+    assert orb == pytest.approx(100 * 0.102 / 12, abs=1e-9)  # median of 10.4, 9.1, 10.2 cm over 12 m
+    comp = side[side["source"].str.startswith("computed")].set_index("group")
+    assert set(comp.index) >= {"cafe", "home", "fr1/xyz", "fr2/desk"}
+    assert comp.loc["fr2/desk", "ate_pct_length"] < comp.loc["cafe", "ate_pct_length"]
+    nb = (tmp_path / "indoor_vs_outdoor.ipynb").read_text()
+    assert "No ORDSLAM data" in nb
+    assert not (out / "ordslam_motion_by_difficulty_and_light.csv").exists()
+
+
+def test_indoor_vs_outdoor_with_synthetic_ordslam_folder(tmp_path):
+    # the folder is synthetic: ORDSLAM-layout files derived from bundled OpenLORIS ground truth
+    from test_ordslam import make_synthetic_ordslam
+
+    from lorisnb.evaluation import load_groundtruth
+
+    gt = load_groundtruth("cafe").sequences[1]
+    seg = gt.subset(np.flatnonzero(gt.stamps - gt.stamps[0] < 60)[::3])
+    folder = make_synthetic_ordslam(tmp_path / "ordslam", seg)
+    out = run("indoor_vs_outdoor", tmp_path / "nb", ordslam_dir=str(folder))
+    motion = pd.read_csv(out / "ordslam_motion_by_difficulty_and_light.csv")
+    assert set(motion["group"]) == {"difficult", "very difficult"} and set(motion["light"]) == {"day", "night"}
+    assert motion["length_m"].iloc[0] == pytest.approx(seg.path_length)
+    by = pd.read_csv(out / "ordslam_difficulty_by_factor.csv").groupby("group")["ate_pct_length"].median()
+    assert by["very difficult"] > by["difficult"] > 0
