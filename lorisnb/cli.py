@@ -66,6 +66,8 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
     p.set_defaults(mode="auto")
     p.add_argument("--official-interpolation", action="store_true",
                    help="reproduce the official tool's orientation slips (AOE only)")
+    p.add_argument("--repair-stamps", action="store_true",
+                   help="read stamps written as nanoseconds without zero padding as such (off: as the official tool)")
     p.add_argument("--keep-repeated", action="store_true",
                    help="keep poses identical to the previous one (the official tool drops them)")
     p.add_argument("--data", default=None, metavar="DIR",
@@ -83,7 +85,7 @@ def _run_evaluation(args):
         ev = evaluate(args.paths, mode=args.mode, scale=args.scale,
                       official_interpolation=args.official_interpolation,
                       remove_repeated=not args.keep_repeated, data_root=args.data,
-                      progress=not args.no_progress)
+                      repair_stamps=args.repair_stamps, progress=not args.no_progress)
     notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))
     return ev, notes
 

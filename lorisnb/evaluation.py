@@ -25,11 +25,11 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation
 
-from . import metrics
+from . import metrics, plausibility
 from .association import MAX_GAP, associate, groundtruth_in_frame
 from .data import find_data
 from .errors import DataNotFoundError, EvaluationError, LorisError, LorisWarning, ParseError
-from .frames import PAPER_EPS, SCENES
+from .frames import FRAMES, PAPER_EPS, SCENES
 from .geometry import Sim3, ros_quaternion_from_matrix, umeyama
 from .readers import OpenLorisFile, read_openloris
 from .trajectory import Trajectory
@@ -157,7 +157,7 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
                    algorithm: str | None = None, file: str | None = None, suite: str = "",
                    mode: str = "auto", scale: bool | str = False,
                    official_interpolation: bool = False, remove_repeated: bool = True,
-                   max_gap: float = MAX_GAP,
+                   max_gap: float = MAX_GAP, repair_stamps: bool = False, checks: bool = True,
                    data_root: str | os.PathLike | None = None) -> FileErrors:
     """Per-pose errors of one OpenLORIS result file against its scene's ground truth.
 
@@ -176,6 +176,11 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
             algorithms (:func:`is_monocular`).
         official_interpolation: reproduce the official tool's orientation slips (AOE only).
         remove_repeated: drop repeated poses (estimate and ground truth) as the official tool.
+        repair_stamps: read unpadded nanosecond stamps as such (see :func:`read_openloris`).
+        checks: run the plausibility checks of :mod:`lorisnb.plausibility` (warnings only).
+
+    Everything noticed (reader notes, plausibility checks) is issued as LorisWarning and kept in
+    ``FileErrors.warnings``.
     """
     if mode not in MODES:
         raise ValueError(f"unknown mode {mode!r}; expected one of {MODES}")
@@ -183,7 +188,7 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
     if not isinstance(result, OpenLorisFile):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", LorisWarning)
-            result = read_openloris(result, remove_repeated=remove_repeated)
+            result = read_openloris(result, remove_repeated=remove_repeated, repair_stamps=repair_stamps)
         notes.extend(str(w.message) for w in caught)
     else:
         notes.extend(result.warnings)
@@ -210,6 +215,12 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
     for s in seqs:  # one iteration per sequence
         gt = groundtruth_in_frame(groundtruth.sequences[s], scene, frame, official_interpolation)
         assoc[s] = associate(gt, result.sequences[s].stamps, max_gap, official_interpolation)
+        if checks:
+            label = f"{path.name}, seq {s}"
+            notes.append(plausibility.groundtruth_gaps(label, groundtruth.sequences[s], max_gap))
+            if len(assoc[s]) == 0 and len(result.sequences[s]):
+                notes.append(plausibility.time_overlap(label, result.sequences[s].stamps, assoc[s].gt_start,
+                                                       assoc[s].gt_end, _other_spans(scene, s, groundtruth, data_root)))
 
     def fit(s: int) -> Sim3:
         a = assoc[s]
@@ -229,9 +240,9 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
                     f"{path}: sequence {seqs[0]} has no pose matched to ground truth, so the "
                     f"lifelong alignment was computed on sequence {aligned_on} (the official tool "
                     f"would apply no alignment at all)")
-        else:
-            notes.append(f"{path}: no pose of any sequence matches the ground truth in time; "
-                         f"nothing to align (is the scene or the clock right?)")
+        elif any(len(result.sequences[s]) for s in seqs):
+            notes.append(f"{path}: no pose of any sequence matches the ground truth in time; nothing to align "
+                         f"(see the time-span warnings; is the scene or the clock right?)")
         per_seq_align = {s: alignment for s in seqs}
     else:
         for s in seqs:
@@ -239,6 +250,17 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
         if len(seqs) == 1:
             alignment = per_seq_align[seqs[0]]
             aligned_on = seqs[0] if len(assoc[seqs[0]]) else None
+
+    if checks and not with_scale:
+        fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s]) > 2]
+        for s in fitted:
+            a = assoc[s]
+            p_est = result.sequences[s].positions[a.est_index]
+            sim, se3 = umeyama(p_est, a.gt_positions, True), umeyama(p_est, a.gt_positions, False)
+            notes.append(plausibility.scale_far_from_one(
+                f"{path.name}, seq {s}", sim.scale, float(metrics.rmse(metrics.ate(se3.apply(p_est), a.gt_positions))),
+                float(metrics.rmse(metrics.ate(sim.apply(p_est), a.gt_positions))),
+                float(np.linalg.norm(np.diff(a.gt_positions, axis=0), axis=1).sum())))
 
     out: list[SequenceErrors] = []
     for s in seqs:
@@ -255,8 +277,45 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
         out.append(SequenceErrors(
             s, len(traj), a.stamps, metrics.ate(pos, a.gt_positions), metrics.aoe(rot, a.gt_rotations),
             pos, a.gt_positions, rot, a.gt_rotations, a.gt_start, a.gt_end))
+    if checks:
+        first = next((e for e in out if e.matched > 10), None)
+        if first is not None and np.median(first.aoe) > 45.0:
+            notes.append(plausibility.frame_mismatch(
+                f"{path.name}, seq {first.seq}", frame,
+                _median_aoe_by_frame(result.sequences[first.seq], groundtruth.sequences[first.seq], scene,
+                                     with_scale, max_gap)))
+    notes = [n for n in dict.fromkeys(notes) if n]
+    for n in notes:
+        warnings.warn(n, LorisWarning, stacklevel=2)
     return FileErrors(path, algorithm, file if file is not None else path.name, suite, scene, frame,
                       used_mode, alignment, aligned_on, official_interpolation, out, notes)
+
+
+def _other_spans(scene: str, seq: int, groundtruth: OpenLorisFile, data_root) -> dict[str, tuple[float, float]]:
+    """Time spans of the other ground-truth sequences (this scene's, then other scenes' when their
+    ground truth is at hand), for the time-overlap check."""
+    spans = {f"{scene}-{k}": (float(t.stamps[0]), float(t.stamps[-1]))
+             for k, t in groundtruth.sequences.items() if k != seq and len(t)}
+    for other in SCENES:
+        if other == scene:
+            continue
+        try:
+            gt = load_groundtruth(other, data_root)
+        except LorisError:
+            continue
+        spans.update({f"{other}-{k}": (float(t.stamps[0]), float(t.stamps[-1])) for k, t in gt.sequences.items() if len(t)})
+    return spans
+
+
+def _median_aoe_by_frame(est: Trajectory, gt_base: Trajectory, scene: str, with_scale: bool,
+                         max_gap: float) -> dict[str, float]:
+    """Median AOE (deg) of one sequence with its ground truth moved to each sensor frame."""
+    out = {}
+    for fr in FRAMES:  # seven frames, on a suspicious sequence only
+        e = sequence_errors(groundtruth_in_frame(gt_base, scene, fr), est, scale=with_scale, max_gap=max_gap)
+        if e.matched:
+            out[fr] = float(np.median(e.aoe))
+    return out
 
 
 def sequence_errors(gt: Trajectory, est: Trajectory, *, scale: bool = False, max_gap: float = MAX_GAP,
@@ -509,7 +568,7 @@ def evaluate(paths: str | os.PathLike | Iterable[str | os.PathLike], *, mode: st
              scale: bool | str = False, official_interpolation: bool = False,
              remove_repeated: bool = True, data_root: str | os.PathLike | None = None,
              algorithms: Iterable[str] | None = None, scenes: Iterable[str] | None = None,
-             progress: bool = False) -> Evaluation:
+             repair_stamps: bool = False, progress: bool = False) -> Evaluation:
     """Evaluate result files and folders. A file that fails (bad line, unknown frame, ...) is
     recorded in ``failures`` with its reason and the rest go on; a file whose scene has no ground
     truth in the data (office, in the bundled data) is recorded in ``skipped``.
@@ -540,12 +599,13 @@ def evaluate(paths: str | os.PathLike | Iterable[str | os.PathLike], *, mode: st
         algorithm, rel, suite = _labels(path, root)
         try:
             if scene_set is not None:
-                path = read_openloris(path, remove_repeated=remove_repeated, warn=False)
+                path = read_openloris(path, remove_repeated=remove_repeated, warn=False, repair_stamps=repair_stamps)
                 if path.scene not in scene_set:
                     continue
             done.append(compute_errors(path, algorithm=algorithm, file=rel, suite=suite, mode=mode,
                                        scale=scale, official_interpolation=official_interpolation,
-                                       remove_repeated=remove_repeated, data_root=data_root))
+                                       remove_repeated=remove_repeated, repair_stamps=repair_stamps,
+                                       data_root=data_root))
         except DataNotFoundError as exc:
             skipped.append(Failure(getattr(path, "path", path), str(exc), "no-groundtruth"))
         except LorisError as exc:

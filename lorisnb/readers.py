@@ -48,6 +48,7 @@ class _Lines:
     ends: np.ndarray         # byte offset of each line's end (its newline excluded)
     line_of: np.ndarray      # line index of each byte
     first: np.ndarray        # first non-blank byte of each line, -1 for blank lines
+    first_pos: np.ndarray    # byte offset of that byte, -1 for blank lines
     has_colon: np.ndarray    # bool per line
     ntok: np.ndarray         # whitespace-separated tokens per line
 
@@ -91,14 +92,56 @@ def _scan(raw: bytes, separators: bytes = b"") -> _Lines:
     ws = _WS[buf]
     nonws = np.flatnonzero(~ws)
     first = np.full(nlines, -1, dtype=np.int16)
+    first_pos = np.full(nlines, -1, dtype=np.int64)
     if nonws.size:
         ln = line_of[nonws]
         run = np.concatenate(([True], ln[1:] != ln[:-1]))
         first[ln[run]] = buf[nonws[run]]
+        first_pos[ln[run]] = nonws[run]
     has_colon = np.bincount(line_of[buf == 58], minlength=nlines) > 0
     tok_start = ~ws & np.concatenate(([True], ws[:-1]))
     ntok = np.bincount(line_of[tok_start], minlength=nlines)
-    return _Lines(raw, buf, starts, ends, line_of, first, has_colon, ntok)
+    return _Lines(raw, buf, starts, ends, line_of, first, first_pos, has_colon, ntok)
+
+
+def _stamp_fractions(lines: _Lines, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For the first token (the stamp) of each line in ``rows``: the number of digits after its
+    decimal point (-1 if none) and those digits read as an integer. Vectorized over lines."""
+    if rows.size == 0:
+        return np.zeros(0, int), np.zeros(0, np.int64)
+    buf = lines.buf
+    start = lines.first_pos[rows]
+    ws = np.append(np.flatnonzero(_WS[buf]), buf.size)  # sentinels: a token or fraction ends at the end
+    end = ws[np.searchsorted(ws, start)]
+    dots = np.append(np.flatnonzero(buf == 46), buf.size)
+    dot = dots[np.searchsorted(dots, start)]
+    has = dot < end
+    ndig = np.where(has, end - dot - 1, -1)
+    n = np.where(has, ndig, 0)
+    # digit positions of every fraction, then their integer value by a segmented sum
+    total = int(n.sum())
+    value = np.zeros(rows.size, np.int64)
+    if total:
+        owner = np.repeat(np.arange(rows.size), n)
+        offs = np.arange(total) - np.repeat(np.cumsum(n) - n, n)
+        pos = np.repeat(dot + 1, n) + offs
+        digit = buf[pos].astype(np.int64) - 48
+        if ((digit < 0) | (digit > 9)).any():
+            return ndig, value  # not plain digits: no repair possible; numbers() reports the line
+        power = 10 ** (np.repeat(n, n) - 1 - offs)
+        np.add.at(value, owner, digit * power)
+    return ndig, value
+
+
+def _nanosecond_pattern(ndig: np.ndarray) -> np.ndarray:
+    """Lines whose stamp looks like ``secs.nanosecs`` printed without zero padding: most stamps of
+    the file have exactly 9 decimals and these have fewer (``1560000003.28307199`` for
+    ``.028307199``). Returns a boolean mask (all False when the file does not follow the pattern)."""
+    if ndig.size == 0:
+        return np.zeros(0, bool)
+    nine = np.mean(ndig == 9)
+    short = (ndig >= 1) & (ndig < 9)
+    return short if nine >= 0.5 and short.any() else np.zeros(ndig.size, bool)
 
 
 def _read_bytes(path: str | os.PathLike) -> bytes:
@@ -211,7 +254,7 @@ class OpenLorisFile:
 
 
 def read_openloris(path: str | os.PathLike, remove_repeated: bool = True,
-                   warn: bool = True) -> OpenLorisFile:
+                   warn: bool = True, repair_stamps: bool = False) -> OpenLorisFile:
     """Read an OpenLORIS result or ground-truth file (see the module docstring).
 
     Args:
@@ -219,6 +262,10 @@ def read_openloris(path: str | os.PathLike, remove_repeated: bool = True,
         remove_repeated: drop a pose identical (all 7 values) to the previous pose line of the
             file, also across ``seq:`` boundaries, as the official tool does by default.
         warn: issue what was noticed as LorisWarning (it is kept in ``.warnings`` either way).
+        repair_stamps: read stamps that look like nanoseconds printed without zero padding
+            (``1560000003.28307199`` for ``1560000003.028307199``, written by some ROS nodes) as
+            such. Off by default: the official tool uses the stamps as written, and so do its
+            numbers. When the pattern is seen and this is off, a warning says so.
 
     Raises:
         ParseError: malformed line, pose before any ``seq:``, zero-norm quaternion, ...
@@ -276,6 +323,23 @@ def read_openloris(path: str | os.PathLike, remove_repeated: bool = True,
     values = lines.numbers(pose_rows, spath, f"numbers '{POSE_FIELDS}'")
     offs = np.cumsum(ntok) - ntok
     stamps = values[offs]
+    ndig, frac = _stamp_fractions(lines, pose_rows)
+    unpadded = _nanosecond_pattern(ndig)
+    if unpadded.any():
+        i = int(np.flatnonzero(unpadded)[0])
+        tok = lines.raw[lines.first_pos[pose_rows[i]]:lines.first_pos[pose_rows[i]] + 11 + int(ndig[i])].split()[0]
+        secs = np.floor(stamps[unpadded])
+        if repair_stamps:
+            stamps = stamps.copy()
+            stamps[unpadded] = secs + frac[unpadded] * 1e-9
+            notes.append(f"{spath}: repaired {int(unpadded.sum())} stamps written as nanoseconds without zero "
+                         f"padding (line {pose_rows[i] + 1}: {tok.decode()} read as {secs[0]:.0f}.{int(frac[unpadded][0]):09d})")
+        else:
+            notes.append(
+                f"{spath}: {int(unpadded.sum())} of {len(stamps)} stamps look like nanoseconds written without zero "
+                f"padding (line {pose_rows[i] + 1}: {tok.decode()} probably means {secs[0]:.0f}.{int(frac[unpadded][0]):09d}); "
+                "as written they are out of order. Read with repair_stamps=True (command line --repair-stamps) to "
+                "fix them; off by default so that the official tool's numbers stay reproducible")
     poses = values[(offs + ntok - 7)[:, None] + np.arange(7)]
     line_no = pose_rows + 1
     keep = _check_rows(spath, stamps, poses, line_no, notes)
@@ -337,13 +401,25 @@ def read_tum(path: str | os.PathLike, warn: bool = True) -> Trajectory:
     return traj
 
 
-def _from_evo(traj, path: str) -> Trajectory:
+def _from_evo(traj, path: str, first_line: int = 1) -> Trajectory:
+    """A trajectory read by evo, checked: finite values and proper rotations (determinant 1);
+    pose k is reported at line ``first_line + k``."""
     from scipy.spatial.transform import Rotation
 
-    poses = np.asarray(traj.poses_se3)
+    poses = np.asarray(traj.poses_se3, dtype=float).reshape(-1, 4, 4)
     stamps = np.asarray(getattr(traj, "timestamps", np.arange(len(poses), dtype=float)), dtype=float)
-    rot = Rotation.from_matrix(poses[:, :3, :3])
-    return Trajectory(stamps, poses[:, :3, 3].copy(), rot.as_quat(), None, {"source": path})
+    with np.errstate(all="ignore"):
+        det = np.linalg.det(poses[:, :3, :3]) if len(poses) else np.zeros(0)
+        ortho = np.abs(np.einsum("nij,nkj->nik", poses[:, :3, :3], poses[:, :3, :3]) - np.eye(3)).max(axis=(1, 2)) \
+            if len(poses) else np.zeros(0)
+    bad = ~np.isfinite(poses).all(axis=(1, 2)) | ~np.isfinite(stamps) | (np.abs(det - 1) > 1e-3) | (ortho > 1e-3)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise ParseError(path, first_line + k, "not a rotation (non-finite values, or a rotation block that is not "
+                         "orthonormal with determinant 1); expected a pose")
+    rot = Rotation.from_matrix(poses[:, :3, :3]) if len(poses) else Rotation.identity(0)
+    return Trajectory(stamps, poses[:, :3, 3].copy(), rot.as_quat() if len(poses) else np.zeros((0, 4)), None,
+                      {"source": path})
 
 
 def read_kitti(path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike | None = None) -> Trajectory:
@@ -394,7 +470,7 @@ def read_euroc(path: str | os.PathLike) -> Trajectory:
     except Exception as exc:
         raise ParseError(path, None, f"not a EuRoC CSV (evo says: {exc}); expected "
                          "'#timestamp,p_x,p_y,p_z,q_w,q_x,q_y,q_z,...' rows") from None
-    return _from_evo(traj, str(path))
+    return _from_evo(traj, str(path), first_line=2)
 
 
 TRAJECTORY_FORMATS = ("tum", "kitti", "euroc", "openloris")

@@ -149,3 +149,25 @@ def test_indoor_vs_outdoor_with_synthetic_ordslam_folder(tmp_path):
     assert motion["length_m"].iloc[0] == pytest.approx(seg.path_length)
     by = pd.read_csv(out / "ordslam_difficulty_by_factor.csv").groupby("group")["ate_pct_length"].median()
     assert by["very difficult"] > by["difficult"] > 0
+
+
+def test_metrics_primer(tmp_path):
+    out = run("metrics_primer", tmp_path)
+    cases = pd.read_csv(out / "primer_cases.csv")
+    by = {(r.case, r.seq): r for r in cases.itertuples()}
+    noise = by[("noise 0.1 m", 1)]
+    assert noise.ate_rmse == pytest.approx(noise.expected, rel=0.05)          # 0.1 * sqrt(3)
+    lost = by[("lost 20 s", 1)]
+    assert lost.cr == pytest.approx(lost.expected, abs=2e-3) and lost.ate_rmse < 1e-9
+    late = by[("initialized after 30 s", 1)]
+    assert late.cs_r == pytest.approx(late.expected, abs=2e-3)                # exp(-30/60)
+    assert by[("initialized after 20 s", 1)].cr_t == pytest.approx(1.0)
+    wrong = by[("wrong re-localization in seq 2", 2)]
+    assert wrong.cs_r == 0.0 and wrong.cr == 0.0 and wrong.ate_rmse > 3.0
+    assert by[("one pose every 2 s", 1)].cr == pytest.approx(0.5, abs=0.02)
+    a, b = by[("A: drift, tracks all", 1)], by[("B: drift, lost after 15 s", 1)]
+    assert b.ate_rmse < a.ate_rmse and b.cr < a.cr                            # the paper's point
+    assert cases["algorithm"].str.startswith("simulated:").all()
+    real = pd.read_csv(out / "real_estimates.csv").set_index(["algorithm", "seq"])
+    assert real.loc[("vins_mono_color_imu_with_loop", 1), "cr"] == pytest.approx(0.961294, abs=1e-6)
+    assert (out / "primer_timeline.png").exists()

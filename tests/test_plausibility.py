@@ -1,0 +1,101 @@
+"""Each plausibility warning, with a real-looking file (issue #7)."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from lorisnb.errors import LorisWarning
+from lorisnb.evaluation import compute_errors, load_groundtruth
+from lorisnb.readers import OpenLorisFile, read_openloris
+from lorisnb.trajectory import Trajectory
+
+ORB_CAFE = "per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt"
+
+
+def _rewrite(src, dst, header=None, stamp=lambda t: t):
+    """A copy of a real result file with some header values replaced and stamps transformed."""
+    out = []
+    for line in src.read_text().splitlines():
+        key = line.split(":")[0].strip()
+        if header and ":" in line and key in header:
+            out.append(f"{key}: {header[key]}")
+        elif line[:1].isdigit():
+            parts = line.split()
+            out.append(" ".join([repr(stamp(float(parts[0])))] + parts[1:]))
+        else:
+            out.append(line)
+    dst.write_text("\n".join(out) + "\n")
+    return dst
+
+
+def _warned(path, **kw) -> list[str]:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        errors = compute_errors(path, **kw)
+    msgs = [str(w.message) for w in caught]
+    assert set(errors.warnings) <= set(msgs)
+    return msgs
+
+
+def test_nanosecond_stamps(icra20, tmp_path):
+    f = _rewrite(icra20 / ORB_CAFE, tmp_path / "ns.txt", stamp=lambda t: round(t * 1e9))
+    msgs = _warned(f)
+    assert any("look like nanoseconds; divide them by 1e+09" in m for m in msgs)
+
+
+def test_clock_offset_of_one_hour(icra20, tmp_path):
+    f = _rewrite(icra20 / ORB_CAFE, tmp_path / "tz.txt", stamp=lambda t: t + 3600.0)
+    msgs = _warned(f)
+    m = next(m for m in msgs if "no estimate stamp falls inside" in m)
+    assert "+3600" in m and "time-zone" in m and "1560004885.4" in m
+
+
+def test_stamps_of_another_scene(icra20, tmp_path):
+    f = _rewrite(icra20 / ORB_CAFE, tmp_path / "scene.txt", header={"scene": "home"})
+    msgs = _warned(f)
+    assert any("They fall in the span of cafe-1" in m for m in msgs)
+
+
+def test_unpadded_nanoseconds_and_repair(icra20):
+    f = icra20 / "lifelong/maslam/cafe.txt"
+    msgs = _warned(f)
+    assert any("nanoseconds written without zero padding" in m and "1560004886.013218880" in m for m in msgs)
+    repaired = _warned(f, repair_stamps=True)
+    assert not any("not increasing" in m for m in repaired)
+    assert all(np.all(np.diff(t.stamps) > 0) for t in read_openloris(f, repair_stamps=True).sequences.values())
+
+
+def test_frame_that_does_not_match(icra20, tmp_path):
+    f = _rewrite(icra20 / ORB_CAFE, tmp_path / "frame.txt", header={"frame": "base_link"})
+    msgs = _warned(f)
+    assert any("header says frame 'base_link', but the orientations fit 'd400_" in m for m in msgs)
+    assert not any("orientations fit" in m for m in _warned(icra20 / ORB_CAFE))
+
+
+def test_scale_far_from_one_without_scale(icra20):
+    msgs = _warned(icra20 / "per-seq/dso/corridor-1-1-all.txt", scale=False)
+    assert any("best-fitting scale is 4.0" in m and "--scale" in m for m in msgs)
+    assert not any("best-fitting scale" in m for m in _warned(icra20 / "per-seq/dso/corridor-1-1-all.txt", scale="auto"))
+
+
+def test_groundtruth_gap_longer_than_bracket(icra20):
+    gt = load_groundtruth("cafe")
+    t = gt.sequences[1]
+    rel = t.stamps - t.stamps[0]
+    keep = ~((rel > 20) & (rel < 22.5))
+    holed = OpenLorisFile(gt.path, gt.header, gt.header_lines, {**gt.sequences, 1: t.subset(keep)})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        compute_errors(icra20 / ORB_CAFE, holed)
+    msgs = [str(w.message) for w in caught]
+    assert any("1 gap(s) longer than the 0.5 s association bracket (longest 2.5" in m for m in msgs)
+    assert isinstance(t, Trajectory)
+
+
+@pytest.mark.parametrize("f", [ORB_CAFE, "lifelong/vins_mono_color_imu_with_loop/home-1.txt"])
+def test_clean_files_raise_no_plausibility_warning(icra20, f):
+    msgs = _warned(icra20 / f)
+    assert not any(k in m for m in msgs for k in ("nanoseconds", "time span", "orientations fit", "best-fitting", "gap"))
