@@ -245,3 +245,21 @@ def plot_crosscheck_scatter(per_pose: Mapping[str, pd.DataFrame]):
             ax.set_title(f"{name}\nmax |difference| {diff:.1e} {unit}", fontsize=9)
     fig.tight_layout()
     return fig
+
+
+def plot_normalized_accuracy(measures: pd.DataFrame, published: pd.DataFrame):
+    """ATE RMSE as % of the distance travelled: computed sequences as points (one row per
+    dataset, coloured by scene or sequence), published values as black diamonds on their own rows."""
+    sns.set_theme(style="whitegrid", context="paper")
+    fig, ax = plt.subplots(figsize=(8, 3.8))
+    pts = measures.dropna(subset=["ate_pct_length"])
+    sns.stripplot(data=pts, y="dataset", x="ate_pct_length", hue="group", dodge=False, alpha=0.6, ax=ax, size=4)
+    rows = [f"{d} (published)" for d in published["dataset"]]
+    ax.scatter(published["ate_pct_length"], rows, marker="D", color="black", label="published values")
+    ax.set_xscale("log")
+    ax.set_xlabel("ATE RMSE, % of the distance travelled (log scale)")
+    ax.set_ylabel("")
+    ax.legend(fontsize=7, bbox_to_anchor=(1.01, 1), loc="upper left")
+    ax.set_title("Accuracy normalized by path length: computed sequences and published values", fontsize=10)
+    fig.tight_layout()
+    return fig

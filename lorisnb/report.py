@@ -159,7 +159,7 @@ def run_notebook(name: str, out_dir: Path, parameters: Mapping[str, object], tim
     declared = _declared_parameters(src)
     params = {k: v for k, v in parameters.items() if k in declared}
     if "output_dir" in declared:
-        params["output_dir"] = str(nb_dir)
+        params["output_dir"] = "."  # papermill runs the notebook in its own folder of the run
     run = NotebookRun(stem, parameters=params)
     t = time.perf_counter()
     target = nb_dir / f"{stem}.ipynb"
