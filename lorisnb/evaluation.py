@@ -67,6 +67,7 @@ class SequenceErrors:
         est_positions, gt_positions: (M, 3) aligned estimate and interpolated ground truth, metres.
         est_rotations, gt_rotations: the matching orientations (scipy Rotation, or None if M = 0).
         gt_start, gt_end: ground-truth time span of the sequence, seconds.
+        scale: the scale of the alignment applied to this sequence (1 for SE(3)).
     """
 
     seq: int
@@ -80,6 +81,7 @@ class SequenceErrors:
     gt_rotations: Rotation | None
     gt_start: float
     gt_end: float
+    scale: float = 1.0
     _rpe_cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
@@ -256,7 +258,7 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
         for s in fitted:
             a = assoc[s]
             p_est = result.sequences[s].positions[a.est_index]
-            sim, se3 = umeyama(p_est, a.gt_positions, True), umeyama(p_est, a.gt_positions, False)
+            sim, se3 = umeyama(p_est, a.gt_positions, True), per_seq_align[s]
             notes.append(plausibility.scale_far_from_one(
                 f"{path.name}, seq {s}", sim.scale, float(metrics.rmse(metrics.ate(se3.apply(p_est), a.gt_positions))),
                 float(metrics.rmse(metrics.ate(sim.apply(p_est), a.gt_positions))),
@@ -276,7 +278,7 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
                           official_interpolation)
         out.append(SequenceErrors(
             s, len(traj), a.stamps, metrics.ate(pos, a.gt_positions), metrics.aoe(rot, a.gt_rotations),
-            pos, a.gt_positions, rot, a.gt_rotations, a.gt_start, a.gt_end))
+            pos, a.gt_positions, rot, a.gt_rotations, a.gt_start, a.gt_end, per_seq_align[s].scale))
     if checks:
         first = next((e for e in out if e.matched > 10), None)
         if first is not None and np.median(first.aoe) > 45.0:
@@ -331,7 +333,7 @@ def sequence_errors(gt: Trajectory, est: Trajectory, *, scale: bool = False, max
     pos, rot = _apply(sim, est.positions[a.est_index], Rotation.from_quat(est.quaternions[a.est_index]),
                       official_interpolation)
     return SequenceErrors(1, len(est), a.stamps, metrics.ate(pos, a.gt_positions), metrics.aoe(rot, a.gt_rotations),
-                          pos, a.gt_positions, rot, a.gt_rotations, a.gt_start, a.gt_end)
+                          pos, a.gt_positions, rot, a.gt_rotations, a.gt_start, a.gt_end, sim.scale)
 
 
 def scene_eps(eps: float | str | Mapping[str, float], scene: str) -> float:
@@ -381,7 +383,7 @@ def score(errors: FileErrors | Iterable[FileErrors], eps: float | str | Mapping[
             row = dict(algorithm=f.algorithm, file=f.file, scene=f.scene, seq=e.seq, frame=f.frame,
                        poses=e.poses, matched=e.matched, eps=e_scene, phi=float(phi), delta=float(delta),
                        tau=float(tau), suite=f.suite, mode=f.mode, aligned_on=f.aligned_on,
-                       scale=f.alignment.scale, gt_start=e.gt_start, gt_end=e.gt_end,
+                       scale=e.scale, gt_start=e.gt_start, gt_end=e.gt_end,
                        gt_duration=e.gt_end - e.gt_start, official_interpolation=f.official_interpolation)
             if e.matched == 0:
                 row.update(ate_rmse=np.nan, aoe_rmse=np.nan, c_ate_rmse=np.nan, c_aoe_rmse=np.nan,

@@ -171,7 +171,7 @@ def sweep(errors: FileErrors | Iterable[FileErrors], eps: Sequence = (np.inf,), 
             blocks.append(_sequence_grid(f, e, g, relative_to, rpe_delta, rpe_unit, columns == "all"))
             seq_meta.append(dict(algorithm=f.algorithm, file=f.file, scene=f.scene, seq=e.seq, frame=f.frame,
                                  poses=e.poses, matched=e.matched, suite=f.suite, mode=f.mode,
-                                 aligned_on=f.aligned_on, scale=f.alignment.scale, gt_start=e.gt_start,
+                                 aligned_on=f.aligned_on, scale=e.scale, gt_start=e.gt_start,
                                  gt_end=e.gt_end, gt_duration=e.gt_end - e.gt_start,
                                  official_interpolation=f.official_interpolation))
     cols = SEQUENCE_COLUMNS + EXTRA_COLUMNS + ["eps_value"] if columns == "all" else METRIC_COLUMNS

@@ -83,3 +83,17 @@ def test_scale_auto_uses_sim3_for_dso_only(icra20):
     orb = compute_errors(icra20 / "per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt", scale="auto")
     assert dso.alignment.scale != 1.0
     assert orb.alignment.scale == 1.0
+
+
+def test_per_sequence_scale_is_reported_for_each_sequence(tmp_path, icra20):
+    """Two DSO sequences in one file aligned per sequence: each row reports its own Sim(3) scale."""
+    a = (icra20 / "per-seq/dso/home-1-2-all.txt").read_text().splitlines()
+    b = (icra20 / "per-seq/dso/home-1-3-all.txt").read_text().splitlines()
+    body_b = b[b.index(next(x for x in b if x.startswith("seq:"))):]
+    f = tmp_path / "dso" / "home-two.txt"
+    f.parent.mkdir()
+    f.write_text("\n".join(a + body_b) + "\n")
+    table = score(compute_errors(f, mode="per-seq", scale=True)).set_index("seq")
+    alone = {s: score(compute_errors(icra20 / f"per-seq/dso/home-1-{s}-all.txt", scale=True))["scale"].iloc[0] for s in (2, 3)}
+    assert table.loc[2, "scale"] == pytest.approx(alone[2]) and table.loc[3, "scale"] == pytest.approx(alone[3])
+    assert alone[2] != pytest.approx(alone[3])
