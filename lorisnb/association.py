@@ -14,26 +14,32 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from .frames import extrinsic
+from .frames import extrinsic, relative_extrinsic
 from .geometry import official_slerp, ros_quaternion_from_matrix
 from .trajectory import Trajectory
 
 MAX_GAP = 0.5  # seconds; the official tool's bracket
 
 
-def groundtruth_in_frame(gt: Trajectory, scene: str, frame: str, official: bool = False) -> Trajectory:
-    """Ground-truth poses of ``base_link`` moved to sensor ``frame``: ``world_T_base @ T_base_frame``.
+def groundtruth_in_frame(gt: Trajectory, scene: str, frame: str, official: bool = False,
+                         gt_frame: str = "base_link") -> Trajectory:
+    """Ground-truth poses of ``gt_frame`` (``base_link`` in OpenLORIS) moved to sensor ``frame``:
+    ``world_T_gt @ T_gt_frame``.
 
     With ``official=True`` the quaternions are computed as the official tool computes them (ROS
     tf's ``quaternion_from_matrix``), whose signs decide its interpolation slip; otherwise they are
-    scipy's. ``base_link`` returns ``gt`` unchanged (raw quaternions, as read).
+    scipy's. The same frame returns ``gt`` unchanged (raw quaternions, as read).
     """
-    if frame == "base_link":
+    if frame == gt_frame:
         return gt
-    t_off, q_off = extrinsic(scene, frame)
+    if gt_frame == "base_link":
+        t_off, q_off = extrinsic(scene, frame)
+        r_off = Rotation.from_quat(q_off)
+    else:
+        t_off, r_off = relative_extrinsic(scene, gt_frame, frame)
     rot = gt.rotations()
     positions = gt.positions + rot.apply(t_off)
-    new_rot = rot * Rotation.from_quat(q_off)
+    new_rot = rot * r_off
     if official:
         quats = ros_quaternion_from_matrix(new_rot.as_matrix())
     else:

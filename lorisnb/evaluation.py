@@ -212,10 +212,14 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
                          f"(it has {', '.join(map(str, sorted(groundtruth.sequences)))})")
     lifelong = mode == "lifelong" or (mode == "auto" and len(seqs) > 1)
     used_mode = "lifelong" if lifelong else "per-seq"
+    gt_frame = groundtruth.header.get("frame", "base_link")
+    if gt_frame not in FRAMES:
+        raise ParseError(groundtruth.path, groundtruth.header_lines.get("frame"),
+                         f"unknown ground-truth frame {gt_frame!r}; expected one of {', '.join(FRAMES)}")
 
     assoc = {}
     for s in seqs:  # one iteration per sequence
-        gt = groundtruth_in_frame(groundtruth.sequences[s], scene, frame, official_interpolation)
+        gt = groundtruth_in_frame(groundtruth.sequences[s], scene, frame, official_interpolation, gt_frame)
         assoc[s] = associate(gt, result.sequences[s].stamps, max_gap, official_interpolation)
         if checks:
             label = f"{path.name}, seq {s}"
@@ -285,7 +289,7 @@ def compute_errors(result: OpenLorisFile | str | os.PathLike,
             notes.append(plausibility.frame_mismatch(
                 f"{path.name}, seq {first.seq}", frame,
                 _median_aoe_by_frame(result.sequences[first.seq], groundtruth.sequences[first.seq], scene,
-                                     with_scale, max_gap)))
+                                     with_scale, max_gap, gt_frame)))
     notes = [n for n in dict.fromkeys(notes) if n]
     for n in notes:
         warnings.warn(n, LorisWarning, stacklevel=2)
@@ -310,11 +314,12 @@ def _other_spans(scene: str, seq: int, groundtruth: OpenLorisFile, data_root) ->
 
 
 def _median_aoe_by_frame(est: Trajectory, gt_base: Trajectory, scene: str, with_scale: bool,
-                         max_gap: float) -> dict[str, float]:
+                         max_gap: float, gt_frame: str = "base_link") -> dict[str, float]:
     """Median AOE (deg) of one sequence with its ground truth moved to each sensor frame."""
     out = {}
     for fr in FRAMES:  # seven frames, on a suspicious sequence only
-        e = sequence_errors(groundtruth_in_frame(gt_base, scene, fr), est, scale=with_scale, max_gap=max_gap)
+        e = sequence_errors(groundtruth_in_frame(gt_base, scene, fr, gt_frame=gt_frame), est, scale=with_scale,
+                            max_gap=max_gap)
         if e.matched:
             out[fr] = float(np.median(e.aoe))
     return out

@@ -105,3 +105,13 @@ def extrinsic_rotation(scene: str, frame: str) -> tuple[np.ndarray, Rotation]:
     """Like :func:`extrinsic` but with the rotation as a scipy ``Rotation``."""
     t, q = extrinsic(scene, frame)
     return t, Rotation.from_quat(q)
+
+
+def relative_extrinsic(scene: str, from_frame: str, to_frame: str) -> tuple[np.ndarray, Rotation]:
+    """``T_from_to`` = ``T_base_from^-1 @ T_base_to`` for the robot of ``scene``: (translation in
+    metres, rotation). Ground truth reported in ``from_frame`` is moved to ``to_frame`` by
+    composing it on the right with this transform."""
+    t_a, r_a = extrinsic_rotation(scene, from_frame)
+    t_b, r_b = extrinsic_rotation(scene, to_frame)
+    inv = r_a.inv()
+    return inv.apply(t_b - t_a), inv * r_b

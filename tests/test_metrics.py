@@ -119,3 +119,14 @@ def test_rpe_translation_by_hand():
     est = np.array([[0, 0, 0], [1.5, 0, 0]], float)
     t, r = metrics.rpe(pos, rot, est, rot, np.array([0]), np.array([1]))
     assert t[0] == pytest.approx(0.5) and r[0] == pytest.approx(0.0)
+
+
+def test_groundtruth_in_another_frame_composes_extrinsics():
+    from lorisnb.association import groundtruth_in_frame
+
+    gt = _gt()
+    via_base = groundtruth_in_frame(gt, "cafe", "t265_fisheye1")
+    in_color = groundtruth_in_frame(gt, "cafe", "d400_color")
+    again = groundtruth_in_frame(in_color, "cafe", "t265_fisheye1", gt_frame="d400_color")
+    np.testing.assert_allclose(again.positions, via_base.positions, atol=1e-12)
+    np.testing.assert_allclose((again.rotations().inv() * via_base.rotations()).magnitude(), 0, atol=1e-12)
