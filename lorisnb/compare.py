@@ -97,3 +97,12 @@ def ordslam_difficulty(folder: OrdslamFolder, fps: float | None = None, max_gap:
                              algorithm=alg, scenario=info["scenario"], time=info["time"], light=info["light"],
                              depth_mode=info["depth_mode"], **difficulty_measures(e, gt, eps_fraction, rpe_metres, relative_to=relative_to)))
     return pd.DataFrame(rows), problems
+
+
+def headline(measures: pd.DataFrame, published_ate: pd.DataFrame) -> dict:
+    """The numbers the comparison's conclusions rest on: median ATE as % of path per computed
+    dataset, the range of the published ORDSLAM and TUM values, median share of time tracked."""
+    pub = published_ate.groupby("dataset")["ate_pct_length"]
+    return dict(computed_ate_pct=measures.groupby("dataset")["ate_pct_length"].median().to_dict(),
+                published_ate_pct_range={k: (float(v.min()), float(v.max())) for k, v in pub},
+                tracked_share=measures.groupby("dataset")["tracked_share"].median().to_dict())

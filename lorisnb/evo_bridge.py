@@ -16,9 +16,7 @@ note``.
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -281,16 +279,19 @@ def crosscheck_poses(gt: Trajectory, est: Trajectory, *, scale: bool = False, by
                          "aoe_evo": _evo_ape(ref, e, "r")})
 
 
-def crosscheck_openloris(result_path: str | os.PathLike, seq: int | None = None, *, scale: bool | str = False,
+def crosscheck_openloris(result, seq: int | None = None, *, scale: bool | str = False,
                          data_root=None, groundtruth=None, rpe_deltas=((1, "f"), (1.0, "m"))) -> pd.DataFrame:
     """Cross-check one sequence of an OpenLORIS result file (ground truth moved to its frame), plus
     the OpenLORIS-specific differences: lifelong alignment on the first sequence against evo's
     alignment of the sequence on itself, dropped repeated poses, and the official interpolation.
+
+    ``result`` is the file's path or the file already read (:func:`lorisnb.readers.read_openloris`).
     """
     from .evaluation import compute_errors, is_monocular, load_groundtruth, score
-    from .readers import read_openloris
+    from .readers import OpenLorisFile, read_openloris
 
-    res = read_openloris(result_path)
+    res = result if isinstance(result, OpenLorisFile) else read_openloris(result)
+    result_path = res.path
     scene, frame = res.scene, res.frame
     gt_file = groundtruth if groundtruth is not None else load_groundtruth(scene, data_root)
     seqs = [s for s in res.sequences if len(res.sequences[s])]
@@ -300,7 +301,7 @@ def crosscheck_openloris(result_path: str | os.PathLike, seq: int | None = None,
     if s not in res.sequences or s not in gt_file.sequences:
         raise EvaluationError(f"{result_path}: sequence {s} is not in both the result ({sorted(res.sequences)}) "
                               f"and the ground truth ({sorted(gt_file.sequences)})")
-    with_scale = is_monocular(Path(result_path).parent.name) if scale == "auto" else bool(scale)
+    with_scale = is_monocular(result_path.parent.name) if scale == "auto" else bool(scale)
     gt = groundtruth_in_frame(gt_file.sequences[s], scene, frame)
     table = crosscheck(gt, res.sequences[s], scale=with_scale, rpe_deltas=rpe_deltas)
     extra = []

@@ -168,3 +168,14 @@ def test_ordslam_folder_measures(tmp_path, segment):
     assert problems == [] and len(table) == 4
     by = table.groupby("group")["ate_rmse_m"].median()
     assert by["very difficult"] > by["difficult"]
+
+
+def test_headline_numbers(data):
+    from lorisnb.compare import headline, tum_difficulty
+
+    meas = tum_difficulty(data)
+    h = headline(meas, published_ate())
+    assert h["computed_ate_pct"]["TUM RGB-D"] == pytest.approx(meas["ate_pct_length"].median())
+    lo, hi = h["published_ate_pct_range"]["ORDSLAM"]
+    assert lo == pytest.approx(100 * 0.091 / 12) and hi == pytest.approx(100 * 0.132 / 12)
+    assert 0 < h["tracked_share"]["TUM RGB-D"] <= 1
