@@ -7,12 +7,12 @@ STAMP := $(VENV)/.installed-stamp
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND ?= Agg
 
-.PHONY: report test evaluate bench lint clean-venv
+.PHONY: report test test-fast test-slow lint format evaluate bench clean-venv
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade pip
-	$(BIN)/python -m pip install -e '.[dev]'
+	$(BIN)/python -m pip install -e '.[all,dev]'
 	touch $(STAMP)
 
 report: $(STAMP)
@@ -21,14 +21,28 @@ report: $(STAMP)
 evaluate: $(STAMP)
 	$(BIN)/lorisnb evaluate --scale auto --csv results/evaluate.csv $(or $(DATA),../shared/data)/openloris-scene/icra20_results
 
+# everything: fast tests, then the slow ones (notebooks, reports, the installed wheel)
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
 
-bench: $(STAMP)
-	$(BIN)/python benchmarks/bench.py
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest -q -m "not slow"
+
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -q -m slow
 
 lint: $(STAMP)
-	$(BIN)/ruff check lorisnb tests benchmarks
+	$(BIN)/ruff check lorisnb tests benchmarks notebooks
+	$(BIN)/ruff format --check lorisnb tests benchmarks notebooks
+	$(BIN)/mypy
+	$(BIN)/lint-imports
+
+format: $(STAMP)
+	$(BIN)/ruff format lorisnb tests benchmarks notebooks
+	$(BIN)/ruff check --fix lorisnb tests benchmarks notebooks
+
+bench: $(STAMP)
+	$(BIN)/python benchmarks/bench.py
 
 clean-venv:
 	rm -rf $(VENV)

@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from lorisnb.data import find_data
+from lorisnb.core import score
 from lorisnb.errors import LorisWarning
-from lorisnb.evaluation import evaluate, result_files, score
-from lorisnb.readers import read_openloris
+from lorisnb.io import find_data, read_openloris
+from lorisnb.tools.evaluate import evaluate, result_files
 
 
 def _timed(fn, repeat: int = 3):
@@ -84,16 +84,20 @@ def main() -> None:
     t_parse, parsed = _timed(lambda: [read_openloris(p) for p in files])
     t_base_parse, _ = _timed(lambda: [baseline_parse(p) for p in files], repeat=1)
     n_poses = sum(f.n_poses for f in parsed)
-    print(f"parse only           lorisnb {t_parse:7.3f} s   baseline {t_base_parse:7.3f} s   "
-          f"speed-up x{t_base_parse / t_parse:5.1f}   ({n_poses} poses)")
+    print(
+        f"parse only           lorisnb {t_parse:7.3f} s   baseline {t_base_parse:7.3f} s   "
+        f"speed-up x{t_base_parse / t_parse:5.1f}   ({n_poses} poses)"
+    )
 
     t_eval, ev = _timed(lambda: evaluate([root], scale="auto"), repeat=2)
     t_score, _ = _timed(lambda: score(ev.errors, eps="paper", phi=30.0))
-    print(f"evaluate whole tree  lorisnb {t_eval:7.3f} s   ({len(ev.errors)} files scored, "
-          f"{len(ev.skipped)} skipped without ground truth); one threshold setting after that: {t_score:.3f} s")
+    print(
+        f"evaluate whole tree  lorisnb {t_eval:7.3f} s   ({len(ev.errors)} files scored, "
+        f"{len(ev.skipped)} skipped without ground truth); one threshold setting after that: {t_score:.3f} s"
+    )
     print("                     (the official tool needs about 270 s for one setting over the same files)")
 
-    from lorisnb.sweep import sweep
+    from lorisnb.core.sweep import sweep
 
     grid = (np.geomspace(0.05, 50, 50), np.linspace(5, 180, 10), [0.1, 0.5, 1.0, 2.0, 5.0], [10, 30, 60, 120, 300])
     ev.sequences()  # the threshold-free RPE pairs are computed once here, as in a session
@@ -103,23 +107,27 @@ def main() -> None:
     del table
     t_sweep, table = _timed(lambda: sweep(ev.errors, *grid))
     n_set = 50 * 10 * 5 * 5
-    print(f"sweep 50x10x5x5      lorisnb {t_sweep:7.3f} s (first call {t_cold:.3f} s)   {len(table)} rows;"
-          f" one setting at a time: {t_score:.3f} s x {n_set} = {t_score * n_set:.0f} s  "
-          f"speed-up x{t_score * n_set / t_sweep:,.0f}")
+    print(
+        f"sweep 50x10x5x5      lorisnb {t_sweep:7.3f} s (first call {t_cold:.3f} s)   {len(table)} rows;"
+        f" one setting at a time: {t_score:.3f} s x {n_set} = {t_score * n_set:.0f} s  "
+        f"speed-up x{t_score * n_set / t_sweep:,.0f}"
+    )
 
     gt_path = data.groundtruth("market")
     est_path = root / "lifelong" / "maslam" / "market.txt"
     gt_b = baseline_parse(gt_path)
     est_b = baseline_parse(est_path)
     t_base_assoc, _ = _timed(lambda: [baseline_associate(gt_b[s], est_b[s]) for s in est_b], repeat=1)
-    from lorisnb.association import associate
-    from lorisnb.evaluation import load_groundtruth
+    from lorisnb.core.association import associate
+    from lorisnb.io import load_groundtruth
 
     gt = load_groundtruth("market")
     est = read_openloris(est_path)
     t_assoc, _ = _timed(lambda: [associate(gt.sequences[s], est.sequences[s].stamps) for s in est.sequences])
-    print(f"associate market     lorisnb {t_assoc:7.4f} s   baseline {t_base_assoc:7.4f} s   "
-          f"speed-up x{t_base_assoc / t_assoc:5.1f}   (positions + slerp vs positions only)")
+    print(
+        f"associate market     lorisnb {t_assoc:7.4f} s   baseline {t_base_assoc:7.4f} s   "
+        f"speed-up x{t_base_assoc / t_assoc:5.1f}   (positions + slerp vs positions only)"
+    )
 
     bench_against_evo(data)
 
@@ -132,11 +140,11 @@ def bench_against_evo(data, n: int = 50_000) -> None:
     from evo.core import metrics as em
     from scipy.spatial.transform import Rotation, Slerp
 
-    from lorisnb import metrics
-    from lorisnb.evo_bridge import to_evo
-    from lorisnb.geometry import umeyama
-    from lorisnb.readers import read_tum
-    from lorisnb.trajectory import Trajectory
+    from lorisnb.core import metrics
+    from lorisnb.core.geometry import umeyama
+    from lorisnb.core.trajectory import Trajectory
+    from lorisnb.io import read_tum
+    from lorisnb.tools.evo_bridge import to_evo
 
     gt0 = read_tum(data.tum / "fr2_desk_groundtruth.txt")
     t = np.linspace(gt0.stamps[0], gt0.stamps[-1], n)
@@ -145,8 +153,11 @@ def bench_against_evo(data, n: int = 50_000) -> None:
     rng = np.random.default_rng(0)
     g = Rotation.from_euler("z", 30, degrees=True)
     gt = Trajectory.from_rotations(t, pos, rot)
-    est = Trajectory.from_rotations(t, g.apply(pos + rng.normal(scale=0.01, size=pos.shape)) + 1.0,
-                                    g * rot * Rotation.from_rotvec(rng.normal(scale=0.01, size=(n, 3))))
+    est = Trajectory.from_rotations(
+        t,
+        g.apply(pos + rng.normal(scale=0.01, size=pos.shape)) + 1.0,
+        g * rot * Rotation.from_rotvec(rng.normal(scale=0.01, size=(n, 3))),
+    )
     ref_e, est_e = to_evo(gt), to_evo(est)
     est_rot, gt_rot = est.rotations(), gt.rotations()
 
@@ -178,12 +189,17 @@ def bench_against_evo(data, n: int = 50_000) -> None:
     print(f"lorisnb vs evo on {n} poses (same process, same pairs):")
     evo_ate = lambda: evo_ape(em.PoseRelation.translation_part)  # noqa: E731
     evo_aoe = lambda: evo_ape(em.PoseRelation.rotation_angle_deg)  # noqa: E731
-    for name, ours, theirs in (("align + ATE", ours_ate, evo_ate), ("align + AOE", ours_aoe, evo_aoe),
-                               ("RPE 10 frames", ours_rpe, evo_rpe)):
+    for name, ours, theirs in (
+        ("align + ATE", ours_ate, evo_ate),
+        ("align + AOE", ours_aoe, evo_aoe),
+        ("RPE 10 frames", ours_rpe, evo_rpe),
+    ):
         t_o, v_o = _timed(ours)
         t_e, v_e = _timed(theirs, repeat=1)
-        print(f"  {name:14s} lorisnb {t_o:7.4f} s   evo {t_e:7.4f} s   evo/lorisnb x{t_e / t_o:6.1f}   "
-              f"(values {v_o:.6f} / {v_e:.6f})")
+        print(
+            f"  {name:14s} lorisnb {t_o:7.4f} s   evo {t_e:7.4f} s   evo/lorisnb x{t_e / t_o:6.1f}   "
+            f"(values {v_o:.6f} / {v_e:.6f})"
+        )
 
 
 if __name__ == "__main__":

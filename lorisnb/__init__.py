@@ -1,31 +1,57 @@
 """lorisnb: evaluate SLAM the way lifelong robots need it (OpenLORIS-Scene metrics).
 
-The core (``readers``, ``frames``, ``association``, ``geometry``, ``metrics``, ``evaluation``) is
-pure functions on arrays and dataclasses; files, figures and reports sit at the edge.
+Layers (enforced by an import contract, see the README's Layout section): :mod:`lorisnb.core`
+holds pure functions on arrays and dataclasses; :mod:`lorisnb.io` reads and writes files and finds
+the data; :mod:`lorisnb.tools` evaluates folders and makes figures, widgets and reports;
+:mod:`lorisnb.cli` is the command line. The names below are the public API.
 """
 
-from .data import find_data
-from .errors import DataNotFoundError, EvaluationError, FrameError, LorisError, LorisWarning, ParseError
-from .evaluation import (
-    Evaluation,
+from ._version import __version__
+from .core import (
+    PAPER_EPS,
+    PAPER_PHI,
+    SCENES,
     FileErrors,
+    OpenLorisFile,
+    ResultFile,
     SequenceErrors,
+    Trajectory,
     aggregate_scenes,
     compute_errors,
-    evaluate,
-    load_groundtruth,
     pose_table,
     score,
+    sequence_errors,
+    sweep,
 )
-from .frames import PAPER_EPS, PAPER_PHI, SCENES
-from .readers import read_kitti, read_openloris, read_trajectory, read_tum
-from .trajectory import Trajectory
-
-__version__ = "0.1.0"
+from .errors import (
+    DataNotFoundError,
+    EvaluationError,
+    FrameError,
+    LorisError,
+    LorisWarning,
+    MissingDependencyError,
+    OutputError,
+    ParseError,
+    ValidationError,
+)
+from .io import (
+    find_data,
+    load_groundtruth,
+    read_euroc,
+    read_kitti,
+    read_openloris,
+    read_ordslam,
+    read_trajectory,
+    read_tum,
+    write_openloris,
+)
+from .tools import Evaluation, evaluate, setup
 
 __all__ = [
-    "DataNotFoundError", "EvaluationError", "Evaluation", "FileErrors", "FrameError", "LorisError",
-    "LorisWarning", "PAPER_EPS", "PAPER_PHI", "ParseError", "SCENES", "SequenceErrors", "Trajectory",
-    "aggregate_scenes", "compute_errors", "evaluate", "find_data", "load_groundtruth", "pose_table",
-    "read_kitti", "read_openloris", "read_trajectory", "read_tum", "score",
-]
+    "DataNotFoundError", "EvaluationError", "Evaluation", "FileErrors", "FrameError", "LorisError", "LorisWarning",
+    "MissingDependencyError", "OpenLorisFile", "OutputError", "PAPER_EPS", "PAPER_PHI", "ParseError",
+    "ResultFile", "SCENES", "SequenceErrors", "Trajectory", "ValidationError", "__version__", "aggregate_scenes",
+    "compute_errors", "evaluate", "find_data", "load_groundtruth", "pose_table", "read_euroc", "read_kitti",
+    "read_openloris", "read_ordslam", "read_trajectory", "read_tum", "score", "sequence_errors", "setup", "sweep",
+    "write_openloris",
+]  # fmt: skip

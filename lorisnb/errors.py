@@ -8,7 +8,7 @@ them and the command line reports them.
 
 from __future__ import annotations
 
-from pathlib import Path
+import os
 
 
 class LorisError(Exception):
@@ -18,7 +18,7 @@ class LorisError(Exception):
 class ParseError(LorisError, ValueError):
     """A file could not be read: names the file, the line (1-based) and what was expected."""
 
-    def __init__(self, path: str | Path, line: int | None, message: str):
+    def __init__(self, path: str | os.PathLike[str], line: int | None, message: str):
         self.path = str(path)
         self.line = line
         self.reason = message
@@ -36,6 +36,21 @@ class FrameError(LorisError, ValueError):
 
 class EvaluationError(LorisError, ValueError):
     """An evaluation could not be carried out as asked (for example, nothing to align on)."""
+
+
+class OutputError(LorisError, OSError):
+    """An output could not be written where asked (it exists, it is an input, a folder, or the
+    place is not writable); says what to do instead."""
+
+
+class ValidationError(LorisError, ValueError):
+    """A user value (argument, option, notebook parameter, widget value) is not acceptable; says
+    which value, what was given and what is expected."""
+
+
+class MissingDependencyError(LorisError, ImportError):
+    """An optional part of lorisnb needs a package that is not installed; names the extra to
+    install (``pip install 'lorisnb[notebooks]'``)."""
 
 
 class LorisWarning(UserWarning):

@@ -11,8 +11,8 @@ import pytest
 
 matplotlib.use("Agg")
 
-from lorisnb.data import find_data  # noqa: E402
 from lorisnb.errors import LorisWarning  # noqa: E402
+from lorisnb.io import find_data  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -30,16 +30,6 @@ def _quiet_lorisnb_warnings():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", LorisWarning)
         yield
-
-
-def write(tmp_path: Path, name: str, text: str | bytes) -> Path:
-    p = tmp_path / name
-    p.parent.mkdir(parents=True, exist_ok=True)
-    if isinstance(text, bytes):
-        p.write_bytes(text)
-    else:
-        p.write_text(text)
-    return p
 
 
 os.environ.setdefault("MPLBACKEND", "Agg")

@@ -7,13 +7,13 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import write
+from helpers import write
 
 from lorisnb.cli import main
-from lorisnb.data import find_data
+from lorisnb.core.frames import extrinsic
+from lorisnb.core.model import SEQUENCE_COLUMNS
 from lorisnb.errors import DataNotFoundError
-from lorisnb.evaluation import SEQUENCE_COLUMNS
-from lorisnb.frames import extrinsic
+from lorisnb.io import find_data
 
 
 def test_find_data_order_and_error(tmp_path, monkeypatch, data):
@@ -53,7 +53,10 @@ def test_shipped_extrinsics_equal_the_benchmark_json(data):
 @pytest.fixture
 def results_tree(tmp_path, icra20):
     root = tmp_path / "results"
-    for rel in ["per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt", "per-seq/vins_mono_color_imu_with_loop/home-1-3.txt"]:
+    for rel in [
+        "per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt",
+        "per-seq/vins_mono_color_imu_with_loop/home-1-3.txt",
+    ]:
         src = icra20 / rel
         write(root, f"{src.parent.name}/{src.name}", src.read_bytes())
     write(root, "broken/cafe 1 1 bad.txt", "scene: cafe\nframe: d400_color\nseq: 1\n1 2 3\n")
@@ -81,8 +84,19 @@ def test_evaluate_cli_reports_broken_file_and_writes_csv(results_tree, tmp_path,
 
 def test_evaluate_cli_paper_thresholds(icra20, tmp_path, capsys):
     out = tmp_path / "ll.csv"
-    rc = main(["evaluate", str(icra20 / "lifelong/maslam/cafe.txt"), "--eps", "0.3", "--phi", "10",
-               "--csv", str(out), "--no-progress"])
+    rc = main(
+        [
+            "evaluate",
+            str(icra20 / "lifelong/maslam/cafe.txt"),
+            "--eps",
+            "0.3",
+            "--phi",
+            "10",
+            "--csv",
+            str(out),
+            "--no-progress",
+        ]
+    )
     assert rc == 0
     df = pd.read_csv(out).set_index("seq")
     assert df.loc[2, "cr"] == pytest.approx(0.137731, abs=1e-6)
@@ -93,4 +107,4 @@ def test_evaluate_cli_paper_thresholds(icra20, tmp_path, capsys):
 def test_cli_rejects_bad_threshold(capsys):
     with pytest.raises(SystemExit):
         main(["evaluate", "x.txt", "--eps", "big"])
-    assert "not a threshold" in capsys.readouterr().err
+    assert "is not a number" in capsys.readouterr().err

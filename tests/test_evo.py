@@ -7,16 +7,18 @@ import pandas as pd
 import pytest
 from evo.core import metrics as em
 from evo.core import sync
+from helpers import errors_of
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.evaluation import compute_errors, load_groundtruth, score
-from lorisnb.evo_bridge import CROSSCHECK_COLUMNS, crosscheck, crosscheck_openloris, evo_result_table, from_evo, to_evo
-from lorisnb.readers import read_openloris
-from lorisnb.trajectory import Trajectory
+from lorisnb.core import score
+from lorisnb.core.trajectory import Trajectory
+from lorisnb.io import load_groundtruth, read_openloris
+from lorisnb.tools.crosscheck import crosscheck, crosscheck_openloris
+from lorisnb.tools.evo_bridge import CROSSCHECK_COLUMNS, evo_result_table, from_evo, to_evo
 
 
 def _evo_ape(ref, est, rel):
@@ -43,7 +45,7 @@ def test_stamps_on_groundtruth_stamps_equal_evo_ape(tmp_path, with_scale):
     est_rot = motion * gt.rotations()[idx] * noise_r
     f = tmp_path / "est.txt"
     _write_openloris(f, "cafe", gt.stamps[idx], est_pos, est_rot.as_quat())
-    errors = compute_errors(f, scale=with_scale, algorithm="synthetic")
+    errors = errors_of(f, scale=with_scale, algorithm="synthetic")
     e = errors.sequences[0]
     assert e.matched == len(idx)
     # evo on the same stamps: the ground truth poses themselves, read back from the file we wrote
@@ -59,7 +61,7 @@ def test_stamps_on_groundtruth_stamps_equal_evo_ape(tmp_path, with_scale):
     ok = (ate_evo <= 0.08) & (aoe_evo <= 5.0)
     assert 0 < ok.sum() < len(ok)
     assert row["c_ate_rmse"] == pytest.approx(np.sqrt(np.mean(ate_evo[ok] ** 2)), abs=1e-9)
-    assert row["ate_rmse"] == pytest.approx(np.sqrt(np.mean(ate_evo ** 2)), abs=1e-9)
+    assert row["ate_rmse"] == pytest.approx(np.sqrt(np.mean(ate_evo**2)), abs=1e-9)
     # RPE on identical pairs: lorisnb's frame pairs are evo's pairs
     i, j, tr, rr = e.rpe(2, "f")
     for rel, ours in ((em.PoseRelation.translation_part, tr), (em.PoseRelation.rotation_angle_deg, rr)):
@@ -121,8 +123,13 @@ def test_conversion_both_ways_and_result_table(data):
 
 
 @settings(max_examples=40, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
-@given(n=st.integers(8, 60), seed=st.integers(0, 2**31 - 1), scale=st.floats(0.2, 5.0),
-       with_scale=st.booleans(), noise=st.sampled_from([0.0, 0.01, 0.3]))
+@given(
+    n=st.integers(8, 60),
+    seed=st.integers(0, 2**31 - 1),
+    scale=st.floats(0.2, 5.0),
+    with_scale=st.booleans(),
+    noise=st.sampled_from([0.0, 0.01, 0.3]),
+)
 def test_property_random_trajectories_agree_with_evo(n, seed, scale, with_scale, noise):
     rng = np.random.default_rng(seed)
     stamps = np.cumsum(rng.uniform(0.02, 0.2, n))
@@ -132,8 +139,11 @@ def test_property_random_trajectories_agree_with_evo(n, seed, scale, with_scale,
     g = Rotation.random(random_state=(seed + 1) % 1000)
     s = scale if with_scale else 1.0
     t = rng.normal(scale=10, size=3)
-    est = Trajectory.from_rotations(stamps, s * g.apply(pos + rng.normal(scale=noise, size=pos.shape)) + t,
-                                    g * rot * Rotation.from_rotvec(rng.normal(scale=noise, size=(n, 3))))
+    est = Trajectory.from_rotations(
+        stamps,
+        s * g.apply(pos + rng.normal(scale=noise, size=pos.shape)) + t,
+        g * rot * Rotation.from_rotvec(rng.normal(scale=noise, size=(n, 3))),
+    )
     table = crosscheck(gt, est, scale=with_scale, rpe_deltas=((1, "f"),))
     same = table[table["note"].str.startswith("identical pairs")]
     assert same["agrees"].all(), same[~same["agrees"]]
@@ -145,13 +155,22 @@ def test_property_random_trajectories_agree_with_evo(n, seed, scale, with_scale,
 
 def test_crosscheck_cli(data, tmp_path):
     out = tmp_path / "cc.csv"
-    rc = main(["crosscheck", str(data.tum / "freiburg1_xyz-groundtruth.txt"), str(data.tum / "freiburg1_xyz-rgbdslam.txt"),
-               "--csv", str(out)])
+    rc = main(
+        [
+            "crosscheck",
+            str(data.tum / "freiburg1_xyz-groundtruth.txt"),
+            str(data.tum / "freiburg1_xyz-rgbdslam.txt"),
+            "--csv",
+            str(out),
+        ]
+    )
     assert rc == 0
     df = pd.read_csv(out)
     assert list(df.columns) == CROSSCHECK_COLUMNS
     assert set(df["alignment"]) <= {"se3", "sim3", "none"}
-    assert {"ate_rmse", "ate_mean", "ate_median", "ate_max", "aoe_rmse", "rpe_trans_rmse", "rpe_rot_rmse"} <= set(df["quantity"])
+    assert {"ate_rmse", "ate_mean", "ate_median", "ate_max", "aoe_rmse", "rpe_trans_rmse", "rpe_rot_rmse"} <= set(
+        df["quantity"]
+    )
 
 
 def test_kitti_pairs_by_index(tmp_path):

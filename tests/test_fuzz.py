@@ -9,19 +9,39 @@ import warnings
 
 import numpy as np
 import pytest
+from helpers import errors_of
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from lorisnb.errors import LorisError, LorisWarning, ParseError
-from lorisnb.evaluation import compute_errors, load_groundtruth
-from lorisnb.ordslam import read_ordslam
-from lorisnb.readers import read_euroc, read_kitti, read_openloris, read_times, read_tum
+from lorisnb.io import load_groundtruth, read_euroc, read_kitti, read_openloris, read_times, read_tum
+from lorisnb.io.ordslam import read_ordslam
 
-FUZZ = settings(max_examples=200, deadline=None, derandomize=True,
-                suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+FUZZ = settings(
+    max_examples=200,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 
-BAD_TOKENS = [b"abc", b"1.2.3", b"nan", b"NaN", b"inf", b"-inf", b"1e999", b"0x10", b"--1", b"", b"1e308",
-              b"-1560000000.5", b"99999999999999999999", b"\xff\xfe", b"1,5", b"\xc3\xa9"]
+BAD_TOKENS = [
+    b"abc",
+    b"1.2.3",
+    b"nan",
+    b"NaN",
+    b"inf",
+    b"-inf",
+    b"1e999",
+    b"0x10",
+    b"--1",
+    b"",
+    b"1e308",
+    b"-1560000000.5",
+    b"99999999999999999999",
+    b"\xff\xfe",
+    b"1,5",
+    b"\xc3\xa9",
+]
 
 
 def _base_openloris(n: int = 12) -> list[bytes]:
@@ -46,8 +66,23 @@ def _base_tum(n: int = 10) -> list[bytes]:
 def mutated(draw, base):
     lines = list(base)
     for _ in range(draw(st.integers(0, 6))):
-        op = draw(st.sampled_from(["truncate", "extra", "token", "dup", "swap", "delete", "empty_seq", "garbage",
-                                   "huge", "negative", "blank"]))
+        op = draw(
+            st.sampled_from(
+                [
+                    "truncate",
+                    "extra",
+                    "token",
+                    "dup",
+                    "swap",
+                    "delete",
+                    "empty_seq",
+                    "garbage",
+                    "huge",
+                    "negative",
+                    "blank",
+                ]
+            )
+        )
         if not lines:
             lines.append(b"")
         i = draw(st.integers(0, len(lines) - 1))
@@ -111,7 +146,7 @@ def test_openloris_reader_and_evaluation(tmp_path_factory, cafe_gt, data):
     p.write_bytes(data)
     f = _run(read_openloris, p)
     if f is not None:
-        _run(lambda q: compute_errors(q, cafe_gt, algorithm="fuzz"), p)
+        _run(lambda q: errors_of(q, cafe_gt, algorithm="fuzz"), p)
 
 
 @FUZZ
@@ -146,7 +181,7 @@ def test_missing_headers_and_empty_file(tmp_path, cafe_gt):
     p = tmp_path / "empty.txt"
     p.write_bytes(b"")
     with pytest.raises(ParseError, match="no 'scene: NAME' header"):
-        compute_errors(p, cafe_gt)
+        errors_of(p, cafe_gt)
     p.write_bytes(b"seq: 1\n1 0 0 0 0 0 0 1\n")
     with pytest.raises(ParseError, match="no 'scene: NAME' header line"):
-        compute_errors(p, cafe_gt)
+        errors_of(p, cafe_gt)

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from lorisnb import metrics
-from lorisnb.association import associate
-from lorisnb.geometry import official_slerp, ros_quaternion_from_matrix, umeyama
-from lorisnb.trajectory import Trajectory
+from lorisnb.core import metrics
+from lorisnb.core.association import associate
+from lorisnb.core.geometry import official_slerp, ros_quaternion_from_matrix, umeyama
+from lorisnb.core.trajectory import Trajectory
 
 
 def test_correct_time_cr_crt_by_hand():
@@ -19,11 +19,12 @@ def test_correct_time_cr_crt_by_hand():
     # held times: min(0.5,1) + min(2.5,1) + 0 (wrong) + min(1, 1) [runs to t_max = 10]
     ct = metrics.correct_time(stamps, correct, 10.0, 1.0)
     assert ct == pytest.approx(0.5 + 1.0 + 1.0)
-    assert metrics.correct_rate(ct, 0.0, 10.0) == pytest.approx(0.25)          # Eq. 2
+    assert metrics.correct_rate(ct, 0.0, 10.0) == pytest.approx(0.25)  # Eq. 2
     assert metrics.correct_rate_tracking(ct, 2.0, 10.0) == pytest.approx(2.5 / 8)  # Eq. 3
     # delta broadcasts: a grid of three windows at once
-    np.testing.assert_allclose(metrics.correct_time(stamps, correct, 10.0, np.array([0.1, 1.0, 10.0])),
-                               [0.3, 2.5, 0.5 + 2.5 + 1.0])
+    np.testing.assert_allclose(
+        metrics.correct_time(stamps, correct, 10.0, np.array([0.1, 1.0, 10.0])), [0.3, 2.5, 0.5 + 2.5 + 1.0]
+    )
 
 
 def test_relocalization_score_eq4():
@@ -122,7 +123,7 @@ def test_rpe_translation_by_hand():
 
 
 def test_groundtruth_in_another_frame_composes_extrinsics():
-    from lorisnb.association import groundtruth_in_frame
+    from lorisnb.core.association import groundtruth_in_frame
 
     gt = _gt()
     via_base = groundtruth_in_frame(gt, "cafe", "t265_fisheye1")

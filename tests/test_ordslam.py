@@ -12,13 +12,14 @@ from evo.core import metrics as em
 from scipy.spatial.transform import Rotation
 
 import lorisnb as ln
-from lorisnb.compare import TUM_PAIRS
-from lorisnb.difficulty import difficulty_measures, trajectory_stats
+from lorisnb.core import sequence_errors
+from lorisnb.core.difficulty import difficulty_measures, trajectory_stats
 from lorisnb.errors import ParseError
-from lorisnb.evaluation import load_groundtruth, sequence_errors
-from lorisnb.evo_bridge import to_evo
-from lorisnb.ordslam import SCENARIOS, describe_sequence, find_ordslam, light_period, read_ordslam, scenario
-from lorisnb.published import ordslam_table3, ordslam_table4_tum, published_ate
+from lorisnb.io import load_groundtruth
+from lorisnb.io.ordslam import SCENARIOS, describe_sequence, find_ordslam, light_period, read_ordslam, scenario
+from lorisnb.io.published import ordslam_table3, ordslam_table4_tum, published_ate
+from lorisnb.tools.compare import TUM_PAIRS
+from lorisnb.tools.evo_bridge import to_evo
 
 
 @pytest.fixture(scope="module")
@@ -43,7 +44,12 @@ def test_layouts_are_detected(tmp_path, segment):
     mats = np.concatenate([segment.rotations().as_matrix(), segment.positions[:, :, None]], axis=2).reshape(-1, 12)
     files = {
         "tum": _write(tmp_path / "a.txt", np.column_stack([segment.stamps, segment.positions, q])),
-        "index": _write(tmp_path / "b.txt", np.column_stack([frames, segment.positions, q]), header="frame,x,y,z,qx,qy,qz,qw", sep=","),
+        "index": _write(
+            tmp_path / "b.txt",
+            np.column_stack([frames, segment.positions, q]),
+            header="frame,x,y,z,qx,qy,qz,qw",
+            sep=",",
+        ),
         "pose": _write(tmp_path / "c.txt", np.column_stack([segment.positions, q]), sep="\t"),
         "kitti": _write(tmp_path / "d.txt", mats),
         "index-kitti": _write(tmp_path / "e.txt", np.column_stack([frames, mats]), sep=";"),
@@ -58,7 +64,9 @@ def test_layouts_are_detected(tmp_path, segment):
 
 
 def test_layout_errors(tmp_path, segment):
-    frames_file = _write(tmp_path / "f.txt", np.column_stack([np.arange(5), np.zeros((5, 3)), np.tile([0, 0, 0, 1], (5, 1))]))
+    frames_file = _write(
+        tmp_path / "f.txt", np.column_stack([np.arange(5), np.zeros((5, 3)), np.tile([0, 0, 0, 1], (5, 1))])
+    )
     with pytest.raises(ParseError, match="pass fps="):
         read_ordslam(frames_file)
     with pytest.raises(ParseError, match=r"10 numbers per line; expected an ORDSLAM trajectory layout"):
@@ -76,10 +84,22 @@ def test_catalog_lookups():
     assert scenario(4, numbering="paper") == SCENARIOS[5]  # the paper's 'difficult' is the page's scenario 5
     with pytest.raises(KeyError, match="no ORDSLAM scenario 6 in the paper numbering"):
         scenario(6, numbering="paper")
-    assert [light_period(t) for t in ("08:30", "13:00", "17:00", "20:00", "22:30", 7)] == \
-        ["day", "day", "dusk", "night", "night", "day"]
+    assert [light_period(t) for t in ("08:30", "13:00", "17:00", "20:00", "22:30", 7)] == [
+        "day",
+        "day",
+        "dusk",
+        "night",
+        "night",
+        "day",
+    ]
     d = describe_sequence("ordslam/s6_22-30_fill.txt")
-    assert (d["scenario"], d["difficulty"], d["time"], d["light"], d["depth_mode"]) == (6, "very difficult", "22:30", "night", "fill")
+    assert (d["scenario"], d["difficulty"], d["time"], d["light"], d["depth_mode"]) == (
+        6,
+        "very difficult",
+        "22:30",
+        "night",
+        "fill",
+    )
     d = describe_sequence("scenario2/13h/standard.txt")
     assert (d["scenario"], d["time"], d["depth_mode"]) == (2, "13:00", "standard")
     cat = pd.DataFrame([dict(file="x.txt", scenario=4, time="16:30", depth_mode="standard")])
@@ -157,7 +177,7 @@ def make_synthetic_ordslam(root, segment):
 
 
 def test_ordslam_folder_measures(tmp_path, segment):
-    from lorisnb.compare import ordslam_difficulty, ordslam_stats
+    from lorisnb.tools.compare import ordslam_difficulty, ordslam_stats
 
     folder = find_ordslam(make_synthetic_ordslam(tmp_path, segment))
     assert len(folder.groundtruth) == 4 and list(folder.estimates) == ["synthetic_slam"]
@@ -171,7 +191,7 @@ def test_ordslam_folder_measures(tmp_path, segment):
 
 
 def test_headline_numbers(data):
-    from lorisnb.compare import headline, tum_difficulty
+    from lorisnb.tools.compare import headline, tum_difficulty
 
     meas = tum_difficulty(data)
     h = headline(meas, published_ate())

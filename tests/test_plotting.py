@@ -13,9 +13,9 @@ import pytest  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
 import lorisnb as ln  # noqa: E402
-from lorisnb import plotting  # noqa: E402
-from lorisnb.sweep import rank_stability, sweep, sweep_scenes  # noqa: E402
-from lorisnb.timeline import pose_segments, sequence_layout, timeline_table  # noqa: E402
+from lorisnb.core.sweep import rank_stability, sweep, sweep_scenes  # noqa: E402
+from lorisnb.core.timeline import pose_segments, sequence_layout, timeline_table  # noqa: E402
+from lorisnb.tools import plotting  # noqa: E402
 
 
 def test_pose_segments_by_hand():
@@ -30,7 +30,9 @@ def test_pose_segments_by_hand():
 
 @pytest.fixture(scope="module")
 def ev(icra20):
-    return ln.evaluate(icra20 / "lifelong", algorithms=["vins_mono_color_imu_with_loop", "maslam"], scenes=["home", "cafe"])
+    return ln.evaluate(
+        icra20 / "lifelong", algorithms=["vins_mono_color_imu_with_loop", "maslam"], scenes=["home", "cafe"]
+    )
 
 
 def test_timeline_draws_every_segment_and_first_pose(ev):
@@ -57,7 +59,7 @@ def test_trajectories_and_sensitivity_figures(ev):
     fig = plotting.plot_trajectories(f, 3.0, 30.0)
     assert len([a for a in fig.axes if a.has_data()]) == len(f.sequences)
     plt.close(fig)
-    scenes = sweep_scenes(sweep(ev.errors, [0.3, 1, 3, 10], [10, 30, 180]))
+    scenes = sweep_scenes(sweep(ev.errors, [0.3, 1, 3, 10], [10, 30, 180]), ev.durations())
     fig = plotting.plot_metric_vs_threshold(scenes[scenes["phi"] == 30], "eps", "cr", marks=ln.PAPER_EPS)
     assert len(fig.axes) == 2 and all(ax.get_xscale() == "log" for ax in fig.axes)
     plt.close(fig)
@@ -69,7 +71,9 @@ def test_trajectories_and_sensitivity_figures(ev):
 
 
 def test_crosscheck_scatter_and_normalized_accuracy():
-    df = pd.DataFrame({"ate_lorisnb": [0.1, 0.2], "ate_evo": [0.1, 0.2], "aoe_lorisnb": [1.0, 2.0], "aoe_evo": [1.0, 2.0]})
+    df = pd.DataFrame(
+        {"ate_lorisnb": [0.1, 0.2], "ate_evo": [0.1, 0.2], "aoe_lorisnb": [1.0, 2.0], "aoe_evo": [1.0, 2.0]}
+    )
     fig = plotting.plot_crosscheck_scatter({"a": df})
     assert "max |difference| 0.0e+00 m" in fig.axes[0].get_title()
     plt.close(fig)

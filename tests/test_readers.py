@@ -6,10 +6,10 @@ import warnings
 
 import numpy as np
 import pytest
-from conftest import write
+from helpers import write
 
 from lorisnb.errors import LorisWarning, ParseError
-from lorisnb.readers import read_kitti, read_openloris, read_trajectory, read_tum
+from lorisnb.io import read_kitti, read_openloris, read_trajectory, read_tum
 
 HEAD = "scene: cafe\nframe: d400_color\n"
 
@@ -41,7 +41,10 @@ def test_out_of_order_stamps_sorted_with_warning(tmp_path):
 
 
 def test_repeats_dropped_across_seq_boundary_and_nan_skipped(tmp_path):
-    text = HEAD + "seq: 1\n1 1 2 3 0 0 0 1\n2 1 2 3 0 0 0 1\n3 nan 2 3 0 0 0 1\n4 5 5 5 0 0 0 1\nseq: 2\n5 5 5 5 0 0 0 1\n6 6 5 5 0 0 0 1\n"
+    text = (
+        HEAD
+        + "seq: 1\n1 1 2 3 0 0 0 1\n2 1 2 3 0 0 0 1\n3 nan 2 3 0 0 0 1\n4 5 5 5 0 0 0 1\nseq: 2\n5 5 5 5 0 0 0 1\n6 6 5 5 0 0 0 1\n"
+    )
     p = write(tmp_path, "r.txt", text)
     f = read_openloris(p)
     assert len(f.sequences[1]) == 2 and f.removed_repeats[1] == 1
@@ -62,14 +65,17 @@ def test_windows_line_endings(tmp_path):
     assert f.frame == "d400_color" and len(f.sequences[1]) == 2
 
 
-@pytest.mark.parametrize("body, line, match", [
-    ("seq: 1\n1 0 0 0 0 0 1\n", 4, "has 7 fields; expected 8 or 9 numbers"),
-    ("seq: 1\n1 0 0 0 0 0 0 1\n2 0 0 x 0 0 0 1\n", 5, "'x' is not a number"),
-    ("seq: 1\n1 0 0 0 0 0 0 0\n", 4, "quaternion has zero norm"),
-    ("1 0 0 0 0 0 0 1\nseq: 1\n", 3, "pose line before any 'seq: N'"),
-    ("seq: one\n", 3, "expected 'seq: N' with an integer N"),
-    ("seq: 1\ninf 0 0 0 0 0 0 1\n", 4, "timestamp inf is not finite"),
-])
+@pytest.mark.parametrize(
+    "body, line, match",
+    [
+        ("seq: 1\n1 0 0 0 0 0 1\n", 4, "has 7 fields; expected 8 or 9 numbers"),
+        ("seq: 1\n1 0 0 0 0 0 0 1\n2 0 0 x 0 0 0 1\n", 5, "'x' is not a number"),
+        ("seq: 1\n1 0 0 0 0 0 0 0\n", 4, "quaternion has zero norm"),
+        ("1 0 0 0 0 0 0 1\nseq: 1\n", 3, "pose line before any 'seq: N'"),
+        ("seq: one\n", 3, "expected 'seq: N' with an integer N"),
+        ("seq: 1\ninf 0 0 0 0 0 0 1\n", 4, "timestamp inf is not finite"),
+    ],
+)
 def test_malformed_lines_name_file_and_line(tmp_path, body, line, match):
     p = write(tmp_path, "bad.txt", HEAD + body)
     with pytest.raises(ParseError, match=match) as exc:
@@ -108,7 +114,9 @@ def test_tum_reader_real_and_bad(data, tmp_path):
         read_tum(write(tmp_path, "t2.txt", "1 0 0 0 0 0 0 1\n1 0 0 0 0 0 1 2 3\n"))
 
 
-def test_kitti_through_evo_with_and_without_stamps(tmp_path):
+def test_kitti_with_and_without_stamps_equals_evo(tmp_path):
+    from evo.tools import file_interface
+
     rows = ["1 0 0 0 0 1 0 0 0 0 1 0", "0 -1 0 1 1 0 0 2 0 0 1 3"]
     p = write(tmp_path, "k.txt", "\n".join(rows) + "\n")
     t = read_kitti(p)
@@ -117,11 +125,14 @@ def test_kitti_through_evo_with_and_without_stamps(tmp_path):
     np.testing.assert_allclose(t.rotations()[1].as_euler("xyz", degrees=True), [0, 0, 90], atol=1e-9)
     times = write(tmp_path, "times.txt", "0.5\n0.6\n")
     np.testing.assert_allclose(read_trajectory(p, "kitti", stamps=times).stamps, [0.5, 0.6])
-    with pytest.raises(ParseError, match="not a KITTI pose file"):
+    ref = file_interface.read_kitti_poses_file(str(p))
+    np.testing.assert_allclose(t.positions, ref.positions_xyz, atol=1e-15)
+    np.testing.assert_allclose(np.abs(t.rotations().as_quat()[:, [3, 0, 1, 2]]), np.abs(ref.orientations_quat_wxyz))
+    with pytest.raises(ParseError, match="line 1: .* has 3 fields; expected 12 numbers"):
         read_kitti(write(tmp_path, "bad.txt", "1 2 3\n"))
 
 
-def test_euroc_through_evo(tmp_path):
+def test_euroc_equals_evo(tmp_path):
     text = "#timestamp,p_x,p_y,p_z,q_w,q_x,q_y,q_z\n1000000000,1,2,3,1,0,0,0\n2000000000,2,2,3,1,0,0,0\n"
     t = read_trajectory(write(tmp_path, "data.csv", text), "euroc")
     np.testing.assert_allclose(t.stamps, [1.0, 2.0])

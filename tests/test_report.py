@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import nbformat
 import pytest
-from conftest import write
+from helpers import write
 
 from lorisnb.cli import main
 from lorisnb.errors import LorisError
-from lorisnb.report import run_report
+from lorisnb.tools.report import run_report
+
+pytestmark = pytest.mark.slow
 
 
 @pytest.fixture
@@ -28,8 +30,9 @@ def test_report_with_broken_input_and_failing_notebook(tmp_path, tree):
     nb.cells = [nbformat.v4.new_code_cell("raise RuntimeError('deliberate failure')")]
     nbformat.write(nb, failing)
     out = tmp_path / "run"
-    run_dir, runs = run_report(out, {"results_dir": str(tree), "quick": False}, ["per_sequence_benchmark", str(failing)],
-                               progress=False)
+    run_dir, runs = run_report(
+        out, {"results_dir": str(tree), "quick": False}, ["per_sequence_benchmark", str(failing)], progress=False
+    )
     assert run_dir == out
     status = {r.name: r.status for r in runs}
     assert status == {"per_sequence_benchmark": "ok", "failing": "failed"}
@@ -37,8 +40,13 @@ def test_report_with_broken_input_and_failing_notebook(tmp_path, tree):
     assert "deliberate failure" in index
     assert "cafe-1-2.txt" in index and "quaternion has zero norm" in index
     nbdir = out / "per_sequence_benchmark"
-    for name in ("per_sequence_benchmark.ipynb", "per_sequence_benchmark.html", "sequences.csv", "scenes.csv",
-                 "timeline_per_sequence.png"):
+    for name in (
+        "per_sequence_benchmark.ipynb",
+        "per_sequence_benchmark.html",
+        "sequences.csv",
+        "scenes.csv",
+        "timeline_per_sequence.png",
+    ):
         assert (nbdir / name).exists(), name
         assert f"per_sequence_benchmark/{name}" in index or name.endswith("ipynb") or name.endswith("html")
     assert "sequences.csv" in index and "timeline_per_sequence.png" in index
@@ -52,9 +60,26 @@ def test_report_with_broken_input_and_failing_notebook(tmp_path, tree):
 
 def test_report_cli_parameters(tmp_path, tree, capsys):
     out = tmp_path / "cli-run"
-    rc = main(["report", "--out", str(out), "--notebooks", "per_sequence_benchmark", "-p", "results_dir", str(tree),
-               "-p", "eps", "inf", "-p", "delta", "0.5", "--no-progress"])
-    assert rc == 0
-    assert "per_sequence_benchmark" in capsys.readouterr().out
+    rc = main(
+        [
+            "report",
+            "--out",
+            str(out),
+            "--notebooks",
+            "per_sequence_benchmark",
+            "-p",
+            "results_dir",
+            str(tree),
+            "-p",
+            "eps",
+            "inf",
+            "-p",
+            "delta",
+            "0.5",
+            "--no-progress",
+        ]
+    )
+    assert rc == 1  # the tree holds one broken input: the terminal says so, as index.html does
+    assert "per_sequence_benchmark       ok, 1 input file(s) failed" in capsys.readouterr().out
     params = (out / "parameters.json").read_text()
     assert '"delta": 0.5' in params

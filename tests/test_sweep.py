@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from helpers import durations_of
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.evaluation import aggregate_scenes, score
-from lorisnb.sweep import eps_at_cr, rank_stability, rank_swaps, sequence_size, sweep, sweep_scenes
+from lorisnb.core import aggregate_scenes, score
+from lorisnb.core.sweep import eps_at_cr, rank_stability, rank_swaps, sequence_size, sweep, sweep_scenes
 
 EPS = [0.1, 0.3, 1.0, 3.0, 10.0, np.inf]
 PHI = [5.0, 30.0, np.inf]
@@ -39,8 +40,16 @@ def grid(ev):
     return sweep(ev.errors, EPS, PHI, DELTA, TAU, columns="all")
 
 
-@pytest.mark.parametrize("point", [(0.3, 30.0, 1.0, 60.0), (3.0, 5.0, 0.2, 10.0), (np.inf, np.inf, 5.0, 60.0),
-                                   (10.0, 30.0, 0.2, 60.0), (0.1, np.inf, 1.0, 10.0)])
+@pytest.mark.parametrize(
+    "point",
+    [
+        (0.3, 30.0, 1.0, 60.0),
+        (3.0, 5.0, 0.2, 10.0),
+        (np.inf, np.inf, 5.0, 60.0),
+        (10.0, 30.0, 0.2, 60.0),
+        (0.1, np.inf, 1.0, 10.0),
+    ],
+)
 def test_every_checked_grid_point_equals_direct_evaluation(ev, grid, point):
     e, p, d, t = point
     direct = score(ev.errors, e, p, d, t)
@@ -51,7 +60,9 @@ def test_every_checked_grid_point_equals_direct_evaluation(ev, grid, point):
 def test_lean_table_has_the_same_values(ev, grid):
     lean = sweep(ev.errors, EPS, PHI, DELTA, TAU)
     _same(grid[lean.columns], lean, lean.columns)
-    assert len(lean) == len(grid) == sum(len(f.sequences) for f in ev.errors) * len(EPS) * len(PHI) * len(DELTA) * len(TAU)
+    assert (
+        len(lean) == len(grid) == sum(len(f.sequences) for f in ev.errors) * len(EPS) * len(PHI) * len(DELTA) * len(TAU)
+    )
 
 
 def test_paper_eps_in_a_grid(ev):
@@ -61,8 +72,8 @@ def test_paper_eps_in_a_grid(ev):
 
 
 def test_scene_aggregates_of_a_sweep_equal_direct_aggregates(ev, grid):
-    scenes = sweep_scenes(grid)
-    direct = aggregate_scenes(score(ev.errors, 3.0, 30.0, 1.0, 60.0))
+    scenes = sweep_scenes(grid, ev.durations())
+    direct = aggregate_scenes(score(ev.errors, 3.0, 30.0, 1.0, 60.0), ev.durations())
     sub = scenes[(scenes["eps"] == 3.0) & (scenes["phi"] == 30.0) & (scenes["delta"] == 1.0) & (scenes["tau"] == 60.0)]
     _same(direct, sub, ["suite", "algorithm", "scene", "cr", "cr_t", "c_ate_rmse", "c_ate_rmse_pooled"])
 
@@ -81,18 +92,23 @@ def test_relative_eps_uses_each_sequence_size(ev):
 
 def test_eps_at_cr_is_exact(ev):
     files = [f for f in ev.errors if f.suite == "lifelong" and f.algorithm == "vins_mono_color_imu_with_loop"]
-    res = eps_at_cr(files, 0.3, phi=30.0).set_index("scene")
+    durations = durations_of(*files)
+    res = eps_at_cr(files, 0.3, durations, phi=30.0).set_index("scene")
     for scene, row in res.iterrows():
         if not np.isfinite(row["eps"]):
             continue
-        at = aggregate_scenes(score(files, row["eps"], 30.0)).set_index("scene").loc[scene, "cr"]
-        below = aggregate_scenes(score(files, np.nextafter(row["eps"], 0), 30.0)).set_index("scene").loc[scene, "cr"]
+        at = aggregate_scenes(score(files, row["eps"], 30.0), durations).set_index("scene").loc[scene, "cr"]
+        below = (
+            aggregate_scenes(score(files, np.nextafter(row["eps"], 0), 30.0), durations)
+            .set_index("scene")
+            .loc[scene, "cr"]
+        )
         assert at >= 0.3 - 1e-12 and below < 0.3
 
 
 def test_rank_stability_and_swaps(ev):
     files = [f for f in ev.errors if f.suite == "per-seq"]
-    scenes = sweep_scenes(sweep(files, [0.1, 0.3, 1.0, 3.0, 5.0, 10.0, 100.0], [np.inf]))
+    scenes = sweep_scenes(sweep(files, [0.1, 0.3, 1.0, 3.0, 5.0, 10.0, 100.0], [np.inf]), durations_of(*files))
     stab = rank_stability(scenes)
     at_ref = stab[stab["eps"] == stab["reference_eps"]]
     assert len(at_ref) > 0
@@ -104,8 +120,26 @@ def test_rank_stability_and_swaps(ev):
 
 def test_sweep_cli_row_equals_evaluate_cli_row(icra20, tmp_path):
     f = str(icra20 / "lifelong" / "maslam" / "cafe.txt")
-    assert main(["sweep", f, "--eps", "0.3,1,inf", "--phi", "10,inf", "--delta", "1", "--tau", "60",
-                 "--csv", str(tmp_path / "s.csv"), "--no-progress"]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                f,
+                "--eps",
+                "0.3,1,inf",
+                "--phi",
+                "10,inf",
+                "--delta",
+                "1",
+                "--tau",
+                "60",
+                "--csv",
+                str(tmp_path / "s.csv"),
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     assert main(["evaluate", f, "--eps", "0.3", "--phi", "10", "--csv", str(tmp_path / "e.csv"), "--no-progress"]) == 0
     s = pd.read_csv(tmp_path / "s.csv")
     e = pd.read_csv(tmp_path / "e.csv")

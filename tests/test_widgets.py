@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 import lorisnb as ln
-from lorisnb.evaluation import load_groundtruth
-from lorisnb.widgets import FaultExplorer, ThresholdExplorer
+from lorisnb.io import load_groundtruth
+from lorisnb.tools.widgets import FaultExplorer, ThresholdExplorer
 
 
 def _sliders(box):

@@ -1,0 +1,116 @@
+"""The ``lorisnb`` command line: ``evaluate``, ``sweep``, ``crosscheck`` and ``report``.
+
+The command line is where lorisnb reports: tables on stdout, warnings and failures on stderr,
+a non-zero exit status when any input failed (2 for a usage or output error, 130 on Ctrl-C).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import numpy as np
+
+from ..errors import LorisError
+from .commands import cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
+from .options import add_evaluation_options, add_scale_option, threshold_list_type, threshold_type
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="lorisnb", description="Lifelong SLAM evaluation (OpenLORIS-Scene metrics)")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("evaluate", help="score result files: ATE, AOE, CR, CR-T, CS-R, C-ATE, RPE")
+    add_evaluation_options(p)
+    p.add_argument(
+        "--eps",
+        type=threshold_type("eps"),
+        default=np.inf,
+        help="ATE threshold in metres, 'inf' or 'paper' (1/3/5 m by scene); default inf",
+    )
+    p.add_argument("--phi", type=threshold_type("phi"), default=np.inf, help="AOE threshold in degrees; default inf")
+    p.add_argument("--delta", type=threshold_type("delta"), default=1.0, help="validity window of a pose, s; default 1")
+    p.add_argument("--tau", type=threshold_type("tau"), default=60.0, help="re-localization time factor, s; default 60")
+    p.set_defaults(func=cmd_evaluate)
+
+    p = sub.add_parser(
+        "sweep", help="every metric over grids of eps, phi, delta and tau (one row per sequence and setting)"
+    )
+    add_evaluation_options(p)
+    p.add_argument(
+        "--eps",
+        type=threshold_list_type("eps"),
+        default=[np.inf],
+        help="comma-separated ATE thresholds in metres ('inf', 'paper' allowed)",
+    )
+    p.add_argument(
+        "--phi", type=threshold_list_type("phi"), default=[np.inf], help="comma-separated AOE thresholds, degrees"
+    )
+    p.add_argument(
+        "--delta", type=threshold_list_type("delta"), default=[1.0], help="comma-separated validity windows, s"
+    )
+    p.add_argument(
+        "--tau", type=threshold_list_type("tau"), default=[60.0], help="comma-separated re-localization factors, s"
+    )
+    p.add_argument(
+        "--relative-to",
+        choices=["extent", "length"],
+        default=None,
+        help="read --eps as fractions of each sequence's ground-truth extent or length",
+    )
+    p.set_defaults(func=cmd_sweep)
+
+    p = sub.add_parser("crosscheck", help="compare lorisnb with evo on one ground truth and one estimate")
+    p.add_argument("gt", help="ground truth (for --format openloris: gt_<scene>_1.txt, or 'auto' to find it)")
+    p.add_argument("est", help="estimate")
+    p.add_argument("--format", choices=["tum", "kitti", "euroc", "openloris"], default="tum")
+    add_scale_option(p, "Sim(3) for the RPE and association rows ('auto' for openloris: by algorithm)")
+    p.add_argument(
+        "--times",
+        default=None,
+        help="KITTI: times file (one stamp per line) for both files; without it poses are paired by index, as evo does",
+    )
+    p.add_argument("--seq", type=int, default=None, help="openloris: the sequence (default: the first with poses)")
+    p.add_argument("--rpe-frames", type=int, default=1, help="RPE delta in frames (default 1)")
+    p.add_argument("--rpe-metres", type=float, default=1.0, help="RPE delta in metres (default 1)")
+    p.add_argument("--all-pairs", action="store_true", help="RPE over all pairs (evo's default: consecutive)")
+    p.add_argument("--data", default=None, metavar="DIR")
+    p.add_argument("--csv", default=None, metavar="OUT")
+    p.add_argument("--force", action="store_true")
+    p.set_defaults(func=cmd_crosscheck)
+
+    p = sub.add_parser("report", help="run the notebooks with papermill into a report folder under results/")
+    p.add_argument("--out", default=None, help="run folder (default results/run-<date>-<time>)")
+    p.add_argument(
+        "-p",
+        "--parameter",
+        nargs=2,
+        action="append",
+        metavar=("NAME", "VALUE"),
+        help="notebook parameter (repeatable); VALUE is JSON if it parses, else a string",
+    )
+    p.add_argument("--notebooks", nargs="+", default=None, help="notebooks to run (default: all, in report order)")
+    p.add_argument("--data", default=None, metavar="DIR", help="data root passed to the notebooks as data_root")
+    p.add_argument(
+        "--notebooks-dir",
+        default=None,
+        metavar="DIR",
+        help="folder of the notebooks (default: those shipped with lorisnb)",
+    )
+    p.add_argument("--force", action="store_true", help="replace --out if it is an earlier lorisnb run folder")
+    p.add_argument("--no-progress", action="store_true")
+    p.set_defaults(func=cmd_report)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except LorisError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130

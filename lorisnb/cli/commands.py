@@ -1,0 +1,180 @@
+"""The commands: ``evaluate``, ``sweep``, ``crosscheck``, ``report``. Tables go to stdout,
+warnings and failures to stderr; the exit status is non-zero when any input failed."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ..errors import LorisError, LorisWarning
+from .options import check_output, param_value
+
+
+def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
+    from ..tools.evaluate import evaluate
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        ev = evaluate(
+            args.paths,
+            mode=args.mode,
+            scale=args.scale,
+            official_interpolation=args.official_interpolation,
+            remove_repeated=not args.keep_repeated,
+            data_root=args.data,
+            repair_stamps=args.repair_stamps,
+            progress=not args.no_progress,
+        )
+    notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))
+    return ev, notes
+
+
+def _report_problems(ev: Any, notes: list[str]) -> None:
+    for n in notes:
+        print(f"warning: {n}", file=sys.stderr)
+    for f in ev.failures:
+        print(f"error: {f.error}", file=sys.stderr)
+    if ev.skipped:
+        reasons = sorted({f.error.split(":")[0] for f in ev.skipped})
+        print(f"skipped {len(ev.skipped)} file(s): " + "; ".join(reasons), file=sys.stderr)
+
+
+def _fmt(df: pd.DataFrame) -> str:
+    with pd.option_context("display.max_rows", 500, "display.width", 200, "display.max_columns", 30):
+        return df.to_string(index=False, float_format=lambda v: f"{v:.4f}")
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from ..core.aggregate import aggregate_scenes
+    from ..core.scoring import score
+    from ..io.writers import write_csv
+
+    check_output(args.csv, args.paths, args.force)
+    ev, notes = _run_evaluation(args)
+    table = score(ev.errors, args.eps, args.phi, args.delta, args.tau)
+    if not table.empty:
+        cols = [
+            "algorithm",
+            "file",
+            "seq",
+            "poses",
+            "matched",
+            "ate_rmse",
+            "c_ate_rmse",
+            "aoe_rmse",
+            "cr",
+            "cr_t",
+            "cs_r",
+        ]
+        print(_fmt(table[cols]))
+        try:
+            scenes = aggregate_scenes(table, ev.durations())
+            print("\nper scene (CR over all ground-truth time of the scene; C-ATE RMSE weighted by correct poses):")
+            print(_fmt(scenes[["suite", "algorithm", "scene", "sequences", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]))
+        except LorisError as exc:
+            print(f"warning: no scene aggregate: {exc}", file=sys.stderr)
+    if args.csv:
+        out = write_csv(table, args.csv, args.force)
+        print(f"\nwrote {len(table)} rows to {out}", file=sys.stderr)
+    _report_problems(ev, notes)
+    print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.skipped)} skipped", file=sys.stderr)
+    return 1 if ev.failures else 0
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from ..core.sweep import sweep, sweep_scenes
+    from ..io.writers import write_csv
+
+    check_output(args.csv, args.paths, args.force)
+    ev, notes = _run_evaluation(args)
+    table = sweep(ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all")
+    print(
+        f"{len(table)} rows: {len(ev.errors)} file(s) x {len(args.eps)} eps x {len(args.phi)} phi x "
+        f"{len(args.delta)} delta x {len(args.tau)} tau"
+    )
+    if not table.empty:
+        scenes = sweep_scenes(table, ev.durations())
+        view = scenes[["suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "cr", "cr_t", "c_ate_rmse"]]
+        print(_fmt(view.head(60)))
+        if len(view) > 60:
+            print(f"... {len(view) - 60} more scene rows (write them all with --csv)")
+    if args.csv:
+        keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
+        out = write_csv(table if keep_label else table.drop(columns=["eps_value"]), args.csv, args.force)
+        print(f"wrote {len(table)} rows to {out}", file=sys.stderr)
+    _report_problems(ev, notes)
+    return 1 if ev.failures else 0
+
+
+def cmd_crosscheck(args: argparse.Namespace) -> int:
+    from ..io.formats import read_trajectory
+    from ..io.openloris import read_openloris
+    from ..io.writers import write_csv
+    from ..tools.crosscheck import crosscheck, crosscheck_openloris
+
+    check_output(args.csv, [args.gt, args.est], args.force)
+
+    deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
+    if args.format == "openloris":
+        gt_file = read_openloris(args.gt) if args.gt not in ("-", "auto") else None
+        table = crosscheck_openloris(
+            args.est, args.seq, scale=args.scale, data_root=args.data, groundtruth=gt_file, rpe_deltas=deltas
+        )
+    else:
+        by_index = args.format == "kitti" and args.times is None
+        gt = read_trajectory(args.gt, args.format, stamps=args.times)
+        est = read_trajectory(args.est, args.format, stamps=args.times)
+        table = crosscheck(
+            gt, est, scale=bool(args.scale), by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs
+        )
+    from ..tools import require
+
+    evo_version = require("evo").__version__
+
+    with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"))
+    must = table["note"].str.startswith("identical pairs")
+    print(
+        f"\nevo {evo_version}: {int(table.loc[must, 'agrees'].sum())} of {int(must.sum())} quantities computed "
+        "on identical pairs agree; other rows explain where the definitions differ",
+        file=sys.stderr,
+    )
+    if args.csv:
+        write_csv(table, args.csv, args.force)
+    return 0 if table.loc[must, "agrees"].all() else 1
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    from ..io.data import find_data
+    from ..tools.report import run_report
+
+    params = {k: param_value(v) for k, v in (args.parameter or [])}
+    if args.data and "data_root" not in params:
+        params["data_root"] = args.data
+    protect = [str(find_data(params.get("data_root")).root)]
+    protect += [str(v) for k, v in params.items() if k in ("results_dir", "path", "ordslam_dir") and v]
+    wanted = Path(args.out).resolve() if args.out else None
+    run_dir, runs = run_report(
+        args.out,
+        params,
+        args.notebooks,
+        force=args.force,
+        progress=not args.no_progress,
+        notebooks_dir=args.notebooks_dir,
+        protect=protect,
+    )
+    for r in runs:
+        status = r.status if r.status != "ok" or not r.input_errors else f"ok, {r.input_errors} input file(s) failed"
+        line = f"{r.name:28s} {status:7s} {r.seconds:6.1f} s"
+        print(line + (f"  {r.error.splitlines()[0][:150]}" if r.error else ""))
+    if wanted is not None and run_dir.resolve() != wanted:
+        print(
+            f"note: {args.out} appeared while this report ran (another run?); this run is in {run_dir}", file=sys.stderr
+        )
+    print(f"report: {run_dir / 'index.html'}")
+    return 1 if any(r.status != "ok" or r.input_errors for r in runs) else 0

@@ -1,0 +1,118 @@
+"""Command-line option types and checks: every value goes through :mod:`lorisnb.core.validate`,
+the same rules as the Python API, notebook parameters and widgets."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from ..core import validate
+from ..errors import OutputError, ValidationError
+
+
+def arg_type(func: Callable[[str], Any]) -> Callable[[str], Any]:
+    """An argparse type from a validator of :mod:`lorisnb.core.validate` (same rules as Python)."""
+
+    def parse(text: str) -> Any:
+        try:
+            return func(text)
+        except ValidationError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    parse.__name__ = getattr(func, "__name__", "value")
+    return parse
+
+
+def threshold_type(name: str) -> Callable[[str], Any]:
+    return arg_type(lambda t: validate.eps_value(t) if name == "eps" else validate.threshold(name, t))
+
+
+def threshold_list_type(name: str) -> Callable[[str], Any]:
+    return arg_type(lambda t: validate.threshold_list(name, t))
+
+
+def add_scale_option(p: argparse.ArgumentParser, help: str) -> None:
+    """``--scale [auto|on|off|...]``: the words of :func:`lorisnb.core.validate.scale_value`."""
+    p.add_argument("--scale", nargs="?", const=True, default=False, type=arg_type(validate.scale_value), help=help)
+
+
+def add_evaluation_options(p: argparse.ArgumentParser) -> None:
+    """Options shared by ``evaluate`` and ``sweep`` (same names, same meaning)."""
+    p.add_argument(
+        "paths", nargs="+", metavar="FILE_OR_DIR", help="result files, or folders walked as <algorithm>/*.txt"
+    )
+    add_scale_option(p, "align with Sim(3) (scale); 'auto': only for monocular algorithms (dso, svo)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument(
+        "--per-seq", dest="mode", action="store_const", const="per-seq", help="align every sequence on itself"
+    )
+    g.add_argument(
+        "--lifelong",
+        dest="mode",
+        action="store_const",
+        const="lifelong",
+        help="align on the first sequence and apply that to all (default for files with several seq: blocks)",
+    )
+    p.set_defaults(mode="auto")
+    p.add_argument(
+        "--official-interpolation",
+        action="store_true",
+        help="reproduce the official tool's orientation slips (AOE only)",
+    )
+    p.add_argument(
+        "--repair-stamps",
+        action="store_true",
+        help="read stamps written as nanoseconds without zero padding as such (off: as the official tool)",
+    )
+    p.add_argument(
+        "--keep-repeated",
+        action="store_true",
+        help="keep poses identical to the previous one (the official tool drops them)",
+    )
+    p.add_argument(
+        "--data",
+        default=None,
+        metavar="DIR",
+        help="data root (default: $LORISNB_DATA, else ../shared/data next to the project)",
+    )
+    p.add_argument("--csv", default=None, metavar="OUT", help="write one row per sequence to this CSV")
+    p.add_argument("--force", action="store_true", help="overwrite OUT if it exists")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def check_output(out: str | None, inputs: list[str], force: bool) -> None:
+    """Refuse an output before any work: an input of the command, a folder, an existing file
+    without --force, or a place that cannot be written."""
+    if out is None:
+        return
+    if str(out).strip() == "":
+        raise OutputError("--csv: an empty path; expected a file name")
+    target = Path(out).resolve()
+    for i in inputs:
+        src = Path(i).resolve()
+        if target == src:
+            raise OutputError(f"{out} is an input of this command; choose another output file")
+    if target.is_dir():
+        raise OutputError(f"{out} is a folder; expected a file name for the CSV")
+    if target.exists() and not force:
+        raise OutputError(f"{out} exists; choose another name or pass --force to replace it")
+    parent = target.parent
+    while not parent.exists():
+        parent = parent.parent
+    if not os.access(parent, os.W_OK):
+        raise OutputError(f"cannot write {out}: {parent} is not writable; choose another place")
+
+
+def param_value(text: str) -> Any:
+    """A -p value: JSON when it parses (numbers, true/false, null, lists), else the string."""
+    low = text.strip().lower()
+    if low in ("inf", "+inf", "infinity"):
+        return float("inf")
+    try:
+        return json.loads(text)
+    except ValueError:
+        return text

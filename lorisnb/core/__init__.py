@@ -1,0 +1,33 @@
+"""The core: pure functions on arrays and dataclasses (trajectories, geometry, frames,
+association, the paper's metrics, the pipeline, scoring, sweeps, the simulator). Nothing here
+reads files, looks up data, draws or prints; :mod:`lorisnb.io` and :mod:`lorisnb.tools` do."""
+
+from .aggregate import aggregate_scenes, durations_table
+from .association import MAX_GAP, Association, associate, groundtruth_in_frame
+from .frames import FRAMES, PAPER_EPS, PAPER_PHI, SCENES
+from .geometry import Sim3, umeyama
+from .model import (
+    EXTRA_COLUMNS,
+    SCENE_COLUMNS,
+    SEQUENCE_COLUMNS,
+    FileErrors,
+    OpenLorisFile,
+    ResultFile,
+    SequenceErrors,
+    is_monocular,
+    scene_eps,
+)
+from .pipeline import compute_errors, sequence_errors
+from .scoring import pose_table, score, sequence_grid
+from .simulate import Faults, simulate, simulated_errors, simulated_result
+from .sweep import eps_at_cr, rank_stability, rank_swaps, sweep, sweep_scenes
+from .trajectory import Trajectory, extent, path_length
+
+__all__ = [
+    "EXTRA_COLUMNS", "FRAMES", "MAX_GAP", "PAPER_EPS", "PAPER_PHI", "SCENES", "SCENE_COLUMNS", "SEQUENCE_COLUMNS",
+    "Association", "Faults", "FileErrors", "OpenLorisFile", "ResultFile", "SequenceErrors", "Sim3", "Trajectory",
+    "aggregate_scenes", "associate", "compute_errors", "durations_table", "eps_at_cr", "extent",
+    "groundtruth_in_frame", "is_monocular", "path_length", "pose_table", "rank_stability", "rank_swaps",
+    "scene_eps", "score", "sequence_errors", "sequence_grid", "simulate", "simulated_errors", "simulated_result",
+    "sweep", "sweep_scenes", "umeyama",
+]  # fmt: skip

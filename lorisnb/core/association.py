@@ -1,0 +1,109 @@
+"""Sensor frames and time association of an estimate with interpolated ground truth.
+
+Association (OpenLORIS-Scene paper Sec. V-A; official tool ``associate_with_interpolation``): an
+estimate stamp t inside the ground-truth time span is matched when its two bracketing
+ground-truth stamps k1 <= t <= k2 satisfy ``max(t - k1, k2 - t) < max_gap`` (0.5 s). The
+ground-truth position is interpolated linearly and the orientation by slerp. Unmatched estimates
+are ignored (not counted wrong).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
+
+from .frames import extrinsic, relative_extrinsic
+from .geometry import official_slerp, ros_quaternion_from_matrix
+from .trajectory import Trajectory
+
+MAX_GAP = 0.5  # seconds; the official tool's bracket
+
+
+def groundtruth_in_frame(
+    gt: Trajectory, scene: str, frame: str, official: bool = False, gt_frame: str = "base_link"
+) -> Trajectory:
+    """Ground-truth poses of ``gt_frame`` (``base_link`` in OpenLORIS) moved to sensor ``frame``:
+    ``world_T_gt @ T_gt_frame``.
+
+    With ``official=True`` the quaternions are computed as the official tool computes them (ROS
+    tf's ``quaternion_from_matrix``), whose signs decide its interpolation slip; otherwise they are
+    scipy's. The same frame returns ``gt`` unchanged (raw quaternions, as read).
+    """
+    if frame == gt_frame:
+        return gt
+    if gt_frame == "base_link":
+        t_off, q_off = extrinsic(scene, frame)
+        r_off = Rotation.from_quat(q_off)
+    else:
+        t_off, r_off = relative_extrinsic(scene, gt_frame, frame)
+    rot = gt.rotations()
+    positions = gt.positions + rot.apply(t_off)
+    new_rot = rot * r_off
+    if official:
+        quats = ros_quaternion_from_matrix(new_rot.as_matrix())
+    else:
+        quats = new_rot.as_quat()
+    return Trajectory(gt.stamps, positions, quats, gt.lines, dict(gt.meta))
+
+
+@dataclass(frozen=True)
+class Association:
+    """Matched estimate poses and the ground truth interpolated at their stamps.
+
+    Attributes:
+        est_index: (M,) indices of the matched poses in the estimate.
+        stamps: (M,) their stamps, seconds, increasing.
+        gt_positions: (M, 3) interpolated ground-truth positions, metres.
+        gt_rotations: interpolated ground-truth orientations (scipy Rotation of length M).
+        gt_start, gt_end: first and last ground-truth stamp of the sequence, seconds.
+    """
+
+    est_index: np.ndarray
+    stamps: np.ndarray
+    gt_positions: np.ndarray
+    gt_rotations: Rotation | None
+    gt_start: float
+    gt_end: float
+
+    def __len__(self) -> int:
+        return len(self.stamps)
+
+
+def associate(gt: Trajectory, est_stamps: np.ndarray, max_gap: float = MAX_GAP, official: bool = False) -> Association:
+    """Match estimate stamps to the ground truth by interpolation (see the module docstring).
+
+    Args:
+        gt: ground truth in the estimate's frame, stamps strictly increasing.
+        est_stamps: (N,) estimate stamps, seconds, strictly increasing.
+        max_gap: the bracket in seconds (strict: ``max(t - k1, k2 - t) < max_gap``).
+        official: interpolate orientations as the official tool does (slip (a): see
+            :func:`lorisnb.geometry.official_slerp`; at a stamp equal to a ground-truth stamp it
+            uses the interval ending there). Positions are the same either way.
+    """
+    g = gt.stamps
+    t = np.asarray(est_stamps, float)
+    gt_start = float(g[0]) if len(g) else np.nan
+    gt_end = float(g[-1]) if len(g) else np.nan
+    if len(g) < 2 or len(t) == 0:
+        return Association(np.zeros(0, int), np.zeros(0), np.zeros((0, 3)), None, gt_start, gt_end)
+    i = np.clip(np.searchsorted(g, t, side="left") - 1, 0, len(g) - 2)
+    k1, k2 = g[i], g[i + 1]
+    ok = (t >= g[0]) & (t <= g[-1]) & (np.maximum(t - k1, k2 - t) < max_gap)
+    idx = np.flatnonzero(ok)
+    if idx.size == 0:
+        return Association(idx, np.zeros(0), np.zeros((0, 3)), None, gt_start, gt_end)
+    t, i = t[idx], i[idx]
+    w2 = (t - g[i]) / (g[i + 1] - g[i])
+    w1 = 1.0 - w2
+    p = gt.positions
+    pos = w1[:, None] * p[i] + w2[:, None] * p[i + 1]
+    if official:
+        q = gt.quaternions
+        rot = Rotation.from_quat(official_slerp(q[i], q[i + 1], w1, w2))
+    else:
+        # Slerp over the bracketing ground-truth poses only (adjacent knots keep their interval)
+        knots = np.unique(np.concatenate((i, i + 1)))
+        rot = Slerp(g[knots], Rotation.from_quat(gt.quaternions[knots]))(t)
+    return Association(idx, t, pos, rot, gt_start, gt_end)

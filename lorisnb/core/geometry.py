@@ -1,0 +1,148 @@
+"""Pure geometry on arrays: rigid/similarity alignment, pose composition, and the two
+orientation slips of the official OpenLORIS-Scene tool (reproduced only on request).
+
+All functions are vectorized over poses. Positions are metres, angles degrees unless stated.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+
+@dataclass(frozen=True)
+class Sim3:
+    """A similarity transform ``x -> scale * rotation @ x + translation``."""
+
+    rotation: np.ndarray  # (3, 3)
+    translation: np.ndarray  # (3,)
+    scale: float = 1.0
+
+    @classmethod
+    def identity(cls) -> "Sim3":
+        return cls(np.eye(3), np.zeros(3), 1.0)
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        """Transform (N, 3) points."""
+        return self.scale * points @ self.rotation.T + self.translation
+
+    def matrix(self) -> np.ndarray:
+        """4x4 homogeneous matrix (scale folded into the rotation block)."""
+        m = np.eye(4)
+        m[:3, :3] = self.scale * self.rotation
+        m[:3, 3] = self.translation
+        return m
+
+
+def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False) -> Sim3:
+    """Least-squares Sim(3)/SE(3) with ``target ~ s R source + t`` (Umeyama 1991; Horn's method
+    without scale).
+
+    Args:
+        source: (N, 3) points to move (estimated positions), metres.
+        target: (N, 3) reference points (ground truth), metres.
+        with_scale: estimate the scale s (Sim(3)); otherwise s = 1 (SE(3)).
+    """
+    source = np.asarray(source, float)
+    target = np.asarray(target, float)
+    if source.shape != target.shape or source.ndim != 2 or source.shape[1] != 3:
+        raise ValueError(f"umeyama needs two (N, 3) arrays, got {source.shape} and {target.shape}")
+    n = len(source)
+    if n == 0:
+        raise ValueError("umeyama needs at least one point pair")
+    mu_s = source.mean(axis=0)
+    mu_t = target.mean(axis=0)
+    xs = source - mu_s
+    xt = target - mu_t
+    cov = xt.T @ xs / n
+    u, d, vt = np.linalg.svd(cov)
+    s_mat = np.eye(3)
+    if np.linalg.det(u) * np.linalg.det(vt) < 0.0:
+        s_mat[2, 2] = -1.0
+    rot = u @ s_mat @ vt
+    scale = 1.0
+    if with_scale:
+        var_s = np.einsum("ij,ij->", xs, xs) / n
+        scale = float(np.trace(np.diag(d) @ s_mat) / var_s) if var_s > 0 else 1.0
+    trans = mu_t - scale * rot @ mu_s
+    return Sim3(rot, trans, scale)
+
+
+def compose_positions(positions: np.ndarray, rotations: Rotation, offset: np.ndarray) -> np.ndarray:
+    """Positions of ``pose @ T`` for poses (p, R) and a fixed offset translation t: ``p + R t``."""
+    return positions + rotations.apply(offset)
+
+
+def ros_quaternion_from_matrix(blocks: np.ndarray) -> np.ndarray:
+    """Quaternions ``xyzw`` from (N, 3, 3) rotation blocks, exactly as ROS tf's
+    ``transformations.quaternion_from_matrix`` computes them on a 4x4 matrix with ``M[3, 3] = 1``
+    (trace branch when the trace of the block is positive, else Shepperd's largest-diagonal
+    branch). The block may carry a scale, as in the official tool with Sim(3): then the result is
+    neither unit nor the rotation's quaternion, which is slip (b) of the official tool.
+
+    Only used to reproduce the official tool; lorisnb's own results never depend on the sign or
+    scale this returns.
+    """
+    m = np.asarray(blocks, float).reshape(-1, 3, 3)
+    n = len(m)
+    q = np.empty((n, 4))
+    tr = m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2] + 1.0  # trace of the 4x4 matrix
+    t_pos = tr > 1.0
+    t = np.empty(n)
+    a = t_pos
+    q[a, 3] = tr[a]
+    q[a, 2] = m[a, 1, 0] - m[a, 0, 1]
+    q[a, 1] = m[a, 0, 2] - m[a, 2, 0]
+    q[a, 0] = m[a, 2, 1] - m[a, 1, 2]
+    t[a] = tr[a]
+    b = ~t_pos
+    if b.any():
+        mb = m[b]
+        d = np.stack([mb[:, 0, 0], mb[:, 1, 1], mb[:, 2, 2]], axis=1)
+        i = np.zeros(len(mb), dtype=int)
+        i[d[:, 1] > d[:, 0]] = 1
+        i = np.where(d[:, 2] > d[np.arange(len(mb)), i], 2, i)
+        j = (i + 1) % 3
+        k = (i + 2) % 3
+        r = np.arange(len(mb))
+        tb = mb[r, i, i] - (mb[r, j, j] + mb[r, k, k]) + 1.0
+        qb = np.empty((len(mb), 4))
+        qb[r, i] = tb
+        qb[r, j] = mb[r, i, j] + mb[r, j, i]
+        qb[r, k] = mb[r, k, i] + mb[r, i, k]
+        qb[:, 3] = mb[r, k, j] - mb[r, j, k]
+        q[b] = qb
+        t[b] = tb
+    q *= (0.5 / np.sqrt(t))[:, None]
+    return q
+
+
+def official_slerp(q1: np.ndarray, q2: np.ndarray, w1: np.ndarray, w2: np.ndarray) -> np.ndarray:
+    """The OpenLORIS tool's quaternion interpolation, slip (a), vectorized.
+
+    Its dot product uses ``q2.w * q2.w`` instead of ``q1.w * q2.w``, and its spherical weights are
+    swapped (``sin(w2 theta)`` multiplies q1). The result is not normalized. Quaternions ``xyzw``;
+    ``w1 = 1 - w2`` is the weight of q1.
+    """
+    q1 = np.asarray(q1, float)
+    q2 = np.asarray(q2, float).copy()
+    w1 = np.asarray(w1, float)
+    w2 = np.asarray(w2, float)
+    dot = q1[:, 0] * q2[:, 0] + q1[:, 1] * q2[:, 1] + q1[:, 2] * q2[:, 2] + q2[:, 3] * q2[:, 3]
+    neg = dot < 0.0
+    q2[neg] *= -1.0
+    dot = np.where(neg, -dot, dot)
+    near = dot > 0.99999
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sin_theta = np.sqrt(1.0 - dot * dot)
+        theta = np.arctan2(sin_theta, dot)
+        k1 = np.where(near, w1, np.sin(w2 * theta) / sin_theta)
+        k2 = np.where(near, w2, np.sin(w1 * theta) / sin_theta)
+    return k1[:, None] * q1 + k2[:, None] * q2
+
+
+def angle_deg(rotations: Rotation) -> np.ndarray:
+    """Rotation angle of each rotation, degrees in [0, 180]."""
+    return np.degrees(rotations.magnitude())

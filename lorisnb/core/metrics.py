@@ -1,0 +1,165 @@
+"""The OpenLORIS-Scene metrics as pure functions on arrays.
+
+Equation numbers refer to Shi et al., "Are We Ready for Service Robots? The OpenLORIS-Scene
+Datasets for Lifelong SLAM", ICRA 2020 (``../shared/papers/openloris-scene-2020.md``).
+
+Every threshold argument broadcasts: pass arrays of eps / phi / delta / tau shaped for a grid and
+get the grid back (that is how :mod:`lorisnb.sweep` evaluates thousands of settings at once).
+Units: metres, degrees, seconds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .geometry import angle_deg
+
+
+def ate(est_positions: np.ndarray, gt_positions: np.ndarray) -> np.ndarray:
+    """Absolute trajectory error of each pose: position distance, metres."""
+    return np.linalg.norm(np.asarray(est_positions) - np.asarray(gt_positions), axis=-1)
+
+
+def aoe(est_rotations: Rotation, gt_rotations: Rotation) -> np.ndarray:
+    """Absolute orientation error of each pose: angle of ``R_gt^-1 R_est``, degrees in [0, 180]."""
+    return angle_deg(gt_rotations.inv() * est_rotations)
+
+
+def correctness(ate_m: np.ndarray, aoe_deg: np.ndarray, eps, phi) -> np.ndarray:
+    """Eq. (1): c = (ATE <= eps) and (AOE <= phi). Broadcasts over thresholds."""
+    return (np.asarray(ate_m) <= eps) & (np.asarray(aoe_deg) <= phi)
+
+
+def valid_intervals(stamps: np.ndarray, t_end: float) -> np.ndarray:
+    """``t_{k+1} - t_k`` for each matched pose, with ``t_{N+1} = t_end`` (Eq. 2), seconds."""
+    stamps = np.asarray(stamps, float)
+    if stamps.size == 0:
+        return stamps
+    return np.diff(np.append(stamps, t_end))
+
+
+def correct_time(stamps: np.ndarray, correct: np.ndarray, t_end: float, delta) -> np.ndarray:
+    """Numerator of Eq. (2)/(3): sum over poses of ``min(t_{k+1} - t_k, delta) * c_k``, seconds.
+
+    ``correct`` may carry leading grid axes (``(..., N)``); ``delta`` broadcasts against them.
+    """
+    dt = valid_intervals(stamps, t_end)
+    delta = np.asarray(delta, float)
+    held = np.minimum(dt, delta[..., None]) if delta.ndim else np.minimum(dt, delta)
+    return np.sum(np.where(correct, held, 0.0), axis=-1)
+
+
+def correct_rate(correct_seconds, t_min: float, t_max: float) -> np.ndarray:
+    """Eq. (2): CR = correct time / (t_max - t_min)."""
+    span = t_max - t_min
+    return np.asarray(correct_seconds, float) / span if span > 0 else np.zeros_like(correct_seconds, float)
+
+
+def correct_rate_tracking(correct_seconds, t0: float, t_max: float) -> np.ndarray:
+    """Eq. (3): CR-T = correct time / (t_max - t0), t0 the first matched estimate (0 if t0 = t_max)."""
+    span = t_max - t0
+    return np.asarray(correct_seconds, float) / span if span > 0 else np.zeros_like(correct_seconds, float)
+
+
+def relocalization_time(t0: float, t_min: float) -> float:
+    """Time to (re-)localize: ``max(0, t0 - t_min)``, seconds."""
+    return max(0.0, float(t0 - t_min))
+
+
+def relocalization_score(t0: float, t_min: float, first_correct, tau) -> np.ndarray:
+    """Eq. (4): CS-R = exp(-(t0 - t_min) / tau) * c(p_0). Broadcasts over ``tau`` and
+    ``first_correct``."""
+    return np.where(first_correct, np.exp(-relocalization_time(t0, t_min) / np.asarray(tau, float)), 0.0)
+
+
+def rmse(values: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+    """Root mean square over the last axis (of the entries where ``mask`` is true); NaN if empty."""
+    v = np.asarray(values, float)
+    if mask is None:
+        return np.sqrt(np.mean(v * v, axis=-1)) if v.shape[-1] else np.full(v.shape[:-1], np.nan)
+    m = np.asarray(mask, bool)
+    n = m.sum(axis=-1)
+    s = np.sum(np.where(m, v * v, 0.0), axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, np.sqrt(s / np.maximum(n, 1)), np.nan)
+
+
+RPE_UNITS = ("s", "f", "m")
+
+
+def rpe_pairs(
+    stamps: np.ndarray, gt_positions: np.ndarray, delta: float, unit: str = "s", all_pairs: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs (i, j) for the relative pose error over ``delta``.
+
+    Units: ``s`` seconds (j is the pose whose stamp is closest to ``t_i + delta``, as the TUM
+    RGB-D tool does; starts whose ``t_i + delta`` lies past the last stamp are left out), ``f`` frames (``j = i + delta``), ``m`` metres travelled along the ground
+    truth (j is the first pose at least ``delta`` metres further along the path).
+
+    ``all_pairs`` uses every i (TUM's definition); otherwise only every ``delta``-th start, as
+    evo does by default.
+    """
+    n = len(stamps)
+    if n < 2:
+        return np.zeros(0, int), np.zeros(0, int)
+    if unit == "f":
+        step = int(delta)
+        if step < 1:
+            raise ValueError(f"RPE delta in frames must be a positive integer, got {delta}")
+        i = np.arange(0, n - step) if all_pairs else np.arange(0, n - step, step)
+        return i, i + step
+    if unit == "s":
+        target = stamps + delta
+        j = np.clip(np.searchsorted(stamps, target), 1, n - 1)
+        closer_left = np.abs(stamps[j - 1] - target) <= np.abs(stamps[j] - target)
+        j = np.where(closer_left, j - 1, j)
+        i = np.arange(n)
+        keep = (j > i) & (target <= stamps[-1] + 1e-9)
+        i, j = i[keep], j[keep]
+    elif unit == "m":
+        dist = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(gt_positions, axis=0), axis=1))))
+        j = np.searchsorted(dist, dist + delta, side="left")
+        i = np.arange(n)
+        keep = j < n
+        i, j = i[keep], j[keep]
+    else:
+        raise ValueError(f"unknown RPE unit {unit!r}; expected one of {RPE_UNITS}")
+    if not all_pairs and i.size:
+        # non-overlapping: chain from the first start
+        chosen = []
+        nxt = np.full(n, -1)
+        nxt[i] = j
+        k = int(i[0])
+        while 0 <= k < n and nxt[k] >= 0:  # walks segments, not poses: at most n / step steps
+            chosen.append(k)
+            k = int(nxt[k])
+        i = np.array(chosen, dtype=int)
+        j = nxt[i]
+    return i, j
+
+
+def rpe(
+    gt_positions: np.ndarray,
+    gt_rotations: Rotation,
+    est_positions: np.ndarray,
+    est_rotations: Rotation,
+    i: np.ndarray,
+    j: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Relative pose error of pairs (i, j), TUM definition:
+    ``E = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)`` with Q ground truth, P estimate.
+
+    Returns (translational error in metres, rotational error in degrees) per pair.
+    """
+    if len(i) == 0:
+        return np.zeros(0), np.zeros(0)
+    gi, gj = gt_rotations[i], gt_rotations[j]
+    ei, ej = est_rotations[i], est_rotations[j]
+    rel_g_rot = gi.inv() * gj
+    rel_g_t = gi.inv().apply(gt_positions[j] - gt_positions[i])
+    rel_e_rot = ei.inv() * ej
+    rel_e_t = ei.inv().apply(est_positions[j] - est_positions[i])
+    err_t = rel_g_rot.inv().apply(rel_e_t - rel_g_t)
+    err_r = rel_g_rot.inv() * rel_e_rot
+    return np.linalg.norm(err_t, axis=1), angle_deg(err_r)

@@ -1,0 +1,212 @@
+"""The data model of an evaluation: a parsed result file, per-pose errors, and table schemas.
+
+Plain dataclasses; readers (:mod:`lorisnb.io`) build :class:`ResultFile`, the pipeline
+(:mod:`lorisnb.core.pipeline`) builds :class:`SequenceErrors` and :class:`FileErrors`, scoring
+(:mod:`lorisnb.core.scoring`) turns them into tables with the columns defined here.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..errors import ParseError
+from . import metrics
+from .frames import FRAMES, PAPER_EPS, SCENES, match_scene
+from .geometry import Sim3
+from .trajectory import Trajectory
+
+#: Columns of the per-sequence table (``lorisnb evaluate --csv``); scripts rely on these names.
+SEQUENCE_COLUMNS = [
+    "algorithm", "file", "scene", "seq", "frame", "poses", "matched", "ate_rmse", "aoe_rmse",
+    "c_ate_rmse", "c_aoe_rmse", "correct_time", "cr", "cr_t", "reloc_time", "cs_r",
+    "eps", "phi", "delta", "tau",
+]  # fmt: skip
+#: Further columns of the per-sequence table, after :data:`SEQUENCE_COLUMNS`.
+EXTRA_COLUMNS = [
+    "suite", "mode", "aligned_on", "scale", "c_matched", "gt_start", "gt_end", "gt_duration",
+    "t0", "track_time", "first_correct", "rpe_trans_rmse", "rpe_rot_rmse", "c_rpe_trans_rmse",
+    "c_rpe_rot_rmse", "rpe_pairs", "c_rpe_pairs", "official_interpolation",
+]  # fmt: skip
+#: Columns of the per-scene table (:func:`lorisnb.core.aggregate.aggregate_scenes`).
+SCENE_COLUMNS = [
+    "suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "sequences", "scene_sequences", "matched",
+    "c_matched", "correct_time", "track_time", "scene_duration", "cr", "cr_t", "c_ate_rmse",
+    "c_ate_rmse_pooled", "ate_rmse", "cs_r_mean",
+]  # fmt: skip
+#: Columns of the per-pose table (:func:`lorisnb.core.scoring.pose_table`).
+POSE_COLUMNS = ["algorithm", "file", "suite", "scene", "seq", "stamp", "t_rel", "ate", "aoe", "correct"]
+
+#: Evaluation modes: per-seq aligns each sequence on itself, lifelong on the first sequence.
+MODES = ("auto", "per-seq", "lifelong")
+
+Eps = float | str | Mapping[str, float]
+
+
+@dataclass(kw_only=True)
+class ResultFile:
+    """One OpenLORIS result or ground-truth file, parsed (built by :func:`lorisnb.io.read_openloris`).
+
+    Attributes:
+        path: the file.
+        header: ``key: value`` lines, first occurrence of each key (as the official tool).
+        header_lines: 1-based line number of each header key.
+        sequences: sequence number -> Trajectory, in increasing sequence order; a sequence with
+            no pose maps to an empty Trajectory.
+        seq_info: sequence number -> the ``key: value`` lines inside that block (``aided_reloc``,
+            ``reloc``, ...).
+        seq_lines: sequence number -> line of its ``seq:`` line.
+        removed_repeats: sequence number -> poses dropped as repeats of the previous pose.
+        warnings: what was noticed while reading (also issued as LorisWarning).
+    """
+
+    path: Path
+    header: dict[str, str]
+    header_lines: dict[str, int]
+    sequences: dict[int, Trajectory]
+    seq_info: dict[int, dict[str, str]] = field(default_factory=dict)
+    seq_lines: dict[int, int] = field(default_factory=dict)
+    removed_repeats: dict[int, int] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def scene(self) -> str:
+        """The scene matched from the ``scene:`` header (ParseError if missing or unknown)."""
+        if "scene" not in self.header:
+            raise ParseError(
+                self.path,
+                1,
+                "no 'scene: NAME' header line; expected one of "
+                + ", ".join(SCENES)
+                + " (add e.g. 'scene: cafe' at the top)",
+            )
+        scene = match_scene(self.header["scene"])
+        if scene is None:
+            raise ParseError(
+                self.path,
+                self.header_lines["scene"],
+                f"unknown scene {self.header['scene']!r}; expected a name containing one of " + ", ".join(SCENES),
+            )
+        return scene
+
+    @property
+    def frame(self) -> str:
+        """The ``frame:`` header (ParseError if missing or not a known sensor frame)."""
+        if "frame" not in self.header:
+            raise ParseError(self.path, 1, "no 'frame: NAME' header line; expected one of " + ", ".join(FRAMES))
+        frame = self.header["frame"]
+        if frame not in FRAMES:
+            raise ParseError(
+                self.path, self.header_lines["frame"], f"unknown frame {frame!r}; expected one of " + ", ".join(FRAMES)
+            )
+        return frame
+
+    @property
+    def n_poses(self) -> int:
+        return sum(len(t) for t in self.sequences.values())
+
+
+#: The name the first release used for :class:`ResultFile`.
+OpenLorisFile = ResultFile
+
+
+@dataclass(kw_only=True)
+class SequenceErrors:
+    """Threshold-free per-pose errors of one sequence.
+
+    Attributes:
+        seq: sequence number.
+        poses: estimate poses after reading (NaN and repeated poses dropped).
+        stamps: (M,) matched estimate stamps, seconds.
+        ate: (M,) metres. aoe: (M,) degrees.
+        est_positions, gt_positions: (M, 3) aligned estimate and interpolated ground truth, metres.
+        est_rotations, gt_rotations: the matching orientations (scipy Rotation, or None if M = 0).
+        gt_start, gt_end: ground-truth time span of the sequence, seconds.
+        scale: the scale of the alignment applied to this sequence (1 for SE(3)).
+    """
+
+    seq: int
+    poses: int
+    stamps: np.ndarray
+    ate: np.ndarray
+    aoe: np.ndarray
+    est_positions: np.ndarray
+    gt_positions: np.ndarray
+    est_rotations: Rotation | None
+    gt_rotations: Rotation | None
+    gt_start: float
+    gt_end: float
+    scale: float = 1.0
+    _rpe_cache: dict[tuple[float, str], tuple[np.ndarray, ...]] = field(default_factory=dict, repr=False, compare=False)
+
+    @classmethod
+    def unmatched(cls, seq: int, poses: int, gt_start: float, gt_end: float) -> SequenceErrors:
+        """A sequence none of whose poses matched the ground truth in time."""
+        z = np.zeros(0)
+        return cls(
+            seq=seq, poses=poses, stamps=z, ate=z, aoe=z, est_positions=np.zeros((0, 3)),
+            gt_positions=np.zeros((0, 3)), est_rotations=None, gt_rotations=None, gt_start=gt_start, gt_end=gt_end,
+        )  # fmt: skip
+
+    @property
+    def matched(self) -> int:
+        return len(self.stamps)
+
+    def rpe(self, delta: float = 1.0, unit: str = "s") -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Relative pose error pairs (i, j) and errors (metres, degrees) over ``delta`` in ``unit``
+        (see :func:`lorisnb.core.metrics.rpe_pairs`); computed once per setting and kept."""
+        key = (float(delta), unit)
+        if key not in self._rpe_cache:
+            if self.matched < 2 or self.gt_rotations is None or self.est_rotations is None:
+                z = np.zeros(0, int)
+                self._rpe_cache[key] = (z, z, np.zeros(0), np.zeros(0))
+            else:
+                i, j = metrics.rpe_pairs(self.stamps, self.gt_positions, delta, unit)
+                tr, rr = metrics.rpe(self.gt_positions, self.gt_rotations, self.est_positions, self.est_rotations, i, j)
+                self._rpe_cache[key] = (i, j, tr, rr)
+        i, j, tr, rr = self._rpe_cache[key]
+        return i, j, tr, rr
+
+
+@dataclass(kw_only=True)
+class FileErrors:
+    """Threshold-free errors of one result file."""
+
+    path: Path
+    algorithm: str
+    file: str
+    suite: str
+    scene: str
+    frame: str
+    mode: str
+    alignment: Sim3
+    aligned_on: int | None
+    official_interpolation: bool
+    sequences: list[SequenceErrors]
+    warnings: list[str] = field(default_factory=list)
+
+
+def is_monocular(algorithm: str) -> bool:
+    """Whether ``scale="auto"`` treats an algorithm as monocular (Sim(3) alignment): the official
+    tool does so for ``dso`` and ``svo``; lorisnb also accepts them as a token of the name
+    (``dso_v2``, ``my-svo``)."""
+    tokens = re.split(r"[^a-z0-9]+", algorithm.lower())
+    return "dso" in tokens or "svo" in tokens
+
+
+def scene_eps(eps: Eps, scene: str) -> float:
+    """The ATE threshold for a scene, metres: a number, ``"paper"`` (1 / 3 / 5 m by scene size,
+    Fig. 3 of the paper), or a mapping scene -> metres. Validate user values first with
+    :func:`lorisnb.core.validate.eps_value`."""
+    if isinstance(eps, str):
+        if eps.strip().lower() == "paper":
+            return PAPER_EPS[scene]
+        return float(eps)
+    if isinstance(eps, Mapping):
+        return float(eps[scene])
+    return float(eps)

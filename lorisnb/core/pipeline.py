@@ -1,0 +1,256 @@
+"""Threshold-free per-pose errors of a result file against its ground truth, as the official tool
+computes them: ground truth moved to the estimate's frame, association with interpolated ground
+truth, alignment (per sequence, or on the first sequence for a lifelong file), ATE and AOE.
+
+Pure: the ground truth (and, for one plausibility check, the time spans of other ground-truth
+sequences) are arguments; nothing here reads files or looks for data.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Mapping
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..errors import EvaluationError, LorisWarning, ParseError
+from . import metrics, plausibility
+from .association import MAX_GAP, Association, associate, groundtruth_in_frame
+from .frames import FRAMES
+from .geometry import Sim3, ros_quaternion_from_matrix, umeyama
+from .model import MODES, FileErrors, ResultFile, SequenceErrors, is_monocular
+from .trajectory import Trajectory, path_length
+from .validate import choice, scale_value
+
+#: Time spans (first, last stamp, seconds) of other ground-truth sequences by label (``cafe-2``),
+#: or a function returning them (called only when a check needs them).
+Spans = Mapping[str, tuple[float, float]] | Callable[[], Mapping[str, tuple[float, float]]]
+
+
+def apply_alignment(
+    sim: Sim3, positions: np.ndarray, rotations: Rotation, official: bool = False
+) -> tuple[np.ndarray, Rotation]:
+    """Apply an alignment to poses: positions (N, 3) metres and orientations. With ``official``
+    and a scale, the orientation is extracted from ``s * R * R_p`` as the official tool does
+    (its slip (b))."""
+    pos = sim.apply(positions)
+    if official and sim.scale != 1.0:
+        blocks = sim.scale * np.einsum("ij,njk->nik", sim.rotation, rotations.as_matrix())
+        return pos, Rotation.from_quat(ros_quaternion_from_matrix(blocks))
+    return pos, Rotation.from_matrix(sim.rotation) * rotations
+
+
+def errors_after_alignment(
+    seq: int, est: Trajectory, a: Association, sim: Sim3, official: bool = False
+) -> SequenceErrors:
+    """Per-pose ATE (m) and AOE (deg) of the matched poses of ``est`` after alignment ``sim``."""
+    if len(a) == 0 or a.gt_rotations is None:
+        return SequenceErrors.unmatched(seq, len(est), a.gt_start, a.gt_end)
+    pos, rot = apply_alignment(
+        sim, est.positions[a.est_index], Rotation.from_quat(est.quaternions[a.est_index]), official
+    )
+    return SequenceErrors(
+        seq=seq, poses=len(est), stamps=a.stamps, ate=metrics.ate(pos, a.gt_positions),
+        aoe=metrics.aoe(rot, a.gt_rotations), est_positions=pos, gt_positions=a.gt_positions, est_rotations=rot,
+        gt_rotations=a.gt_rotations, gt_start=a.gt_start, gt_end=a.gt_end, scale=sim.scale,
+    )  # fmt: skip
+
+
+def sequence_errors(
+    gt: Trajectory,
+    est: Trajectory,
+    *,
+    scale: bool = False,
+    max_gap: float = MAX_GAP,
+    official_interpolation: bool = False,
+    seq: int = 1,
+) -> SequenceErrors:
+    """Per-pose errors of one estimate against one ground truth in the same frame (TUM RGB-D,
+    ORDSLAM, a simulated estimate): association within ``max_gap`` seconds, alignment of the
+    estimate on itself (SE(3), or Sim(3) with ``scale``), ATE (m) and AOE (deg)."""
+    a = associate(gt, est.stamps, max_gap, official_interpolation)
+    if len(a) == 0:
+        return SequenceErrors.unmatched(seq, len(est), a.gt_start, a.gt_end)
+    sim = umeyama(est.positions[a.est_index], a.gt_positions, scale)
+    return errors_after_alignment(seq, est, a, sim, official_interpolation)
+
+
+def compute_errors(
+    result: ResultFile,
+    groundtruth: ResultFile,
+    *,
+    algorithm: str | None = None,
+    file: str | None = None,
+    suite: str = "",
+    mode: str = "auto",
+    scale: bool | str = False,
+    official_interpolation: bool = False,
+    max_gap: float = MAX_GAP,
+    checks: bool = True,
+    other_spans: Spans | None = None,
+) -> FileErrors:
+    """Per-pose errors of one OpenLORIS result file against its scene's ground truth.
+
+    Steps (the official tool's order): ground truth moved to the estimate's frame; association by
+    interpolation within ``max_gap`` seconds; alignment of estimated positions (Horn/Umeyama SE(3),
+    or Sim(3) with ``scale``); ATE (metres) and AOE (degrees) per matched pose.
+
+    Args:
+        result: the parsed result file (:func:`lorisnb.io.read_openloris`).
+        groundtruth: the scene's ground truth (:func:`lorisnb.io.load_groundtruth`).
+        algorithm: label; default the name of the folder holding the file.
+        mode: ``per-seq`` aligns each sequence on itself; ``lifelong`` aligns on the
+            lowest-numbered sequence with matches and applies that to every sequence;
+            ``auto`` is lifelong for files with several ``seq:`` blocks, else per-seq.
+        scale: True for Sim(3), False for SE(3), ``"auto"`` for Sim(3) on monocular
+            algorithms (:func:`lorisnb.core.model.is_monocular`); the words of
+            :func:`lorisnb.core.validate.scale_value` are accepted too.
+        official_interpolation: reproduce the official tool's orientation slips (AOE only).
+        checks: run the plausibility checks of :mod:`lorisnb.core.plausibility` (warnings only).
+        other_spans: time spans of other ground-truth sequences, for the time-overlap check.
+
+    Everything noticed (the reader's notes in ``result.warnings``, plausibility checks) is issued
+    as LorisWarning and kept in ``FileErrors.warnings``.
+    """
+    mode = choice("mode", mode, MODES)
+    scale = scale_value(scale)
+    if not isinstance(result, ResultFile) or not isinstance(groundtruth, ResultFile):
+        raise EvaluationError(
+            "compute_errors needs parsed files (lorisnb.read_openloris); to evaluate paths use lorisnb.evaluate"
+        )
+    notes: list[str | None] = list(result.warnings)
+    path = result.path
+    algorithm = algorithm if algorithm is not None else path.parent.name
+    scene, frame = result.scene, result.frame
+    with_scale = is_monocular(algorithm) if scale == "auto" else bool(scale)
+    seqs = sorted(result.sequences)
+    if not seqs:
+        raise ParseError(path, None, "no 'seq: N' block; expected at least one sequence")
+    missing = [s for s in seqs if s not in groundtruth.sequences]
+    if missing:
+        s = missing[0]
+        raise ParseError(
+            path,
+            result.seq_lines.get(s),
+            f"sequence {s} has no ground truth in {groundtruth.path.name} "
+            f"(it has {', '.join(map(str, sorted(groundtruth.sequences)))})",
+        )
+    lifelong = mode == "lifelong" or (mode == "auto" and len(seqs) > 1)
+    gt_frame = groundtruth.header.get("frame", "base_link")
+    if gt_frame not in FRAMES:
+        raise ParseError(
+            groundtruth.path,
+            groundtruth.header_lines.get("frame"),
+            f"unknown ground-truth frame {gt_frame!r}; expected one of {', '.join(FRAMES)}",
+        )
+
+    assoc: dict[int, Association] = {}
+    for s in seqs:  # one iteration per sequence
+        gt = groundtruth_in_frame(groundtruth.sequences[s], scene, frame, official_interpolation, gt_frame)
+        assoc[s] = associate(gt, result.sequences[s].stamps, max_gap, official_interpolation)
+        if checks:
+            label = f"{path.name}, seq {s}"
+            notes.append(plausibility.groundtruth_gaps(label, groundtruth.sequences[s], max_gap))
+            if len(assoc[s]) == 0 and len(result.sequences[s]):
+                spans = {
+                    f"{scene}-{k}": (float(t.stamps[0]), float(t.stamps[-1]))
+                    for k, t in groundtruth.sequences.items()
+                    if k != s and len(t)
+                }
+                more = other_spans() if callable(other_spans) else other_spans
+                spans.update({k: v for k, v in (more or {}).items() if k not in spans and k != f"{scene}-{s}"})
+                notes.append(
+                    plausibility.time_overlap(
+                        label, result.sequences[s].stamps, assoc[s].gt_start, assoc[s].gt_end, spans
+                    )
+                )
+
+    def fit(s: int) -> Sim3:
+        a = assoc[s]
+        return umeyama(result.sequences[s].positions[a.est_index], a.gt_positions, with_scale)
+
+    aligned_on: int | None = None
+    alignment = Sim3.identity()
+    per_seq_align: dict[int, Sim3] = {}
+    if lifelong:
+        with_matches = [s for s in seqs if len(assoc[s])]
+        if with_matches:
+            aligned_on = with_matches[0]
+            alignment = fit(aligned_on)
+            if aligned_on != seqs[0]:
+                notes.append(
+                    f"{path}: sequence {seqs[0]} has no pose matched to ground truth, so the "
+                    f"lifelong alignment was computed on sequence {aligned_on} (the official tool "
+                    f"would apply no alignment at all)"
+                )
+        elif any(len(result.sequences[s]) for s in seqs):
+            notes.append(
+                f"{path}: no pose of any sequence matches the ground truth in time; nothing to align "
+                f"(see the time-span warnings; is the scene or the clock right?)"
+            )
+        per_seq_align = {s: alignment for s in seqs}
+    else:
+        for s in seqs:
+            per_seq_align[s] = fit(s) if len(assoc[s]) else Sim3.identity()
+        if len(seqs) == 1:
+            alignment = per_seq_align[seqs[0]]
+            aligned_on = seqs[0] if len(assoc[seqs[0]]) else None
+
+    if checks and not with_scale:
+        fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s]) > 2]
+        for s in fitted:
+            a = assoc[s]
+            p_est = result.sequences[s].positions[a.est_index]
+            sim, se3 = umeyama(p_est, a.gt_positions, True), per_seq_align[s]
+            notes.append(
+                plausibility.scale_far_from_one(
+                    f"{path.name}, seq {s}",
+                    sim.scale,
+                    float(metrics.rmse(metrics.ate(se3.apply(p_est), a.gt_positions))),
+                    float(metrics.rmse(metrics.ate(sim.apply(p_est), a.gt_positions))),
+                    path_length(a.gt_positions),
+                )
+            )
+
+    out = [
+        errors_after_alignment(s, result.sequences[s], assoc[s], per_seq_align[s], official_interpolation) for s in seqs
+    ]
+    if checks:
+        first = next((e for e in out if e.matched > 10), None)
+        if first is not None and np.median(first.aoe) > 45.0:
+            notes.append(
+                plausibility.frame_mismatch(
+                    f"{path.name}, seq {first.seq}",
+                    frame,
+                    median_aoe_by_frame(
+                        result.sequences[first.seq],
+                        groundtruth.sequences[first.seq],
+                        scene,
+                        with_scale,
+                        max_gap,
+                        gt_frame,
+                    ),
+                )
+            )
+    kept = [n for n in dict.fromkeys(notes) if n]
+    for n in kept:
+        warnings.warn(n, LorisWarning, stacklevel=2)
+    return FileErrors(
+        path=path, algorithm=algorithm, file=file if file is not None else path.name, suite=suite, scene=scene,
+        frame=frame, mode="lifelong" if lifelong else "per-seq", alignment=alignment, aligned_on=aligned_on,
+        official_interpolation=official_interpolation, sequences=out, warnings=kept,
+    )  # fmt: skip
+
+
+def median_aoe_by_frame(
+    est: Trajectory, gt_base: Trajectory, scene: str, with_scale: bool, max_gap: float, gt_frame: str = "base_link"
+) -> dict[str, float]:
+    """Median AOE (deg) of one sequence with its ground truth moved to each sensor frame."""
+    out = {}
+    for fr in FRAMES:  # seven frames, on a suspicious sequence only
+        gt = groundtruth_in_frame(gt_base, scene, fr, gt_frame=gt_frame)
+        e = sequence_errors(gt, est, scale=with_scale, max_gap=max_gap)
+        if e.matched:
+            out[fr] = float(np.median(e.aoe))
+    return out

@@ -1,0 +1,114 @@
+"""Plausibility checks that save users hours: each returns a message (or None) saying what looks
+wrong, the numbers behind it, and the likely cause. :func:`lorisnb.evaluation.compute_errors` runs
+them and issues the messages as warnings; the evaluation itself is never changed by them.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from .trajectory import Trajectory
+
+#: A best-fit Sim(3) scale outside [1/SCALE_LIMIT, SCALE_LIMIT] that also cuts the ATE RMSE to
+#: less than SCALE_GAIN of the SE(3) value suggests a monocular trajectory (a failed run fits odd
+#: scales too, but scaling does not fix it).
+SCALE_LIMIT = 1.5
+SCALE_GAIN = 1 / 3
+MIN_PATH = 2.0
+
+
+def _span(t0: float, t1: float) -> str:
+    return f"{t0:.3f}..{t1:.3f} s"
+
+
+def time_overlap(
+    label: str,
+    est_stamps: np.ndarray,
+    gt_start: float,
+    gt_end: float,
+    other_spans: Mapping[str, tuple[float, float]] | None = None,
+) -> str | None:
+    """The estimate's stamps never fall inside the ground truth's time span: say both spans and the
+    likely cause (nanoseconds or milliseconds instead of seconds, a clock offset, the wrong scene or
+    sequence when its stamps fall in another ground-truth sequence)."""
+    t = np.asarray(est_stamps, float)
+    if t.size == 0 or ((t >= gt_start) & (t <= gt_end)).any():
+        return None
+    msg = (
+        f"{label}: no estimate stamp falls inside the ground truth's time span (estimate "
+        f"{_span(t[0], t[-1])}, ground truth {_span(gt_start, gt_end)})."
+    )
+    mid = np.median(t)
+    ref = 0.5 * (gt_start + gt_end)
+    if ref > 0 and mid > 0:
+        ratio = mid / ref
+        for factor, unit in ((1e9, "nanoseconds"), (1e6, "microseconds"), (1e3, "milliseconds")):
+            if 0.5 * factor < ratio < 2 * factor:
+                return (
+                    msg
+                    + f" The estimate's stamps are about {factor:.0e} times larger: they look like {unit}; divide them by {factor:.0e}."
+                )
+    for name, (a, b) in (other_spans or {}).items():
+        if ((t >= a) & (t <= b)).mean() > 0.5:
+            return msg + f" They fall in the span of {name} ({_span(a, b)}): is the scene or the seq: number wrong?"
+    offset = t[0] - gt_start
+    hours = offset / 3600.0
+    zone = (
+        f" {offset:+.0f} s is {hours:+.0f} h: a time-zone offset?"
+        if abs(hours) >= 0.99 and abs(hours - round(hours)) < 0.01
+        else ""
+    )
+    return msg + (
+        f" The estimate starts {offset:+.3f} s from the ground truth: a clock offset (recording time vs "
+        f"bag time?) or the wrong sequence; shift the stamps or check the seq: number.{zone}"
+    )
+
+
+def groundtruth_gaps(label: str, gt: Trajectory, max_gap: float) -> str | None:
+    """Ground truth with gaps longer than the association bracket: estimates inside are not matched."""
+    if len(gt) < 2:
+        return None
+    d = np.diff(gt.stamps)
+    big = np.flatnonzero(d > max_gap)
+    if big.size == 0:
+        return None
+    k = big[np.argmax(d[big])]
+    return (
+        f"{label}: the ground truth has {big.size} gap(s) longer than the {max_gap} s association bracket "
+        f"(longest {d[k]:.2f} s after {gt.stamps[k]:.3f} s, {gt.stamps[k] - gt.stamps[0]:.1f} s into the "
+        f"sequence); estimates inside a gap are not matched, so they count neither correct nor wrong."
+    )
+
+
+def scale_far_from_one(label: str, scale: float, ate_se3: float, ate_sim3: float, path_m: float) -> str | None:
+    """The best Sim(3) scale of an SE(3)-aligned trajectory is far from 1 and fixes most of its
+    error (ATE RMSE after SE(3) and after Sim(3) alignment, metres), on a path long enough to judge
+    (``path_m``, the matched ground truth's length, at least MIN_PATH metres)."""
+    if not np.isfinite(scale) or scale <= 0 or 1 / SCALE_LIMIT <= scale <= SCALE_LIMIT or path_m < MIN_PATH:
+        return None
+    if not (np.isfinite(ate_se3) and np.isfinite(ate_sim3)) or ate_sim3 > SCALE_GAIN * ate_se3:
+        return None
+    return (
+        f"{label}: the best-fitting scale is {scale:.3f}, far from 1, and with it the ATE RMSE drops from "
+        f"{ate_se3:.3f} m to {ate_sim3:.3f} m, but the alignment is SE(3) without scale. A monocular "
+        "trajectory? Evaluate with scale (--scale, or --scale auto for dso/svo)."
+    )
+
+
+def frame_mismatch(label: str, declared: str, median_aoe: Mapping[str, float]) -> str | None:
+    """The estimate's orientations fit another sensor frame far better than the declared one.
+
+    ``median_aoe`` maps each candidate frame to the median AOE (degrees) the sequence gets when its
+    ground truth is moved to that frame; the declared frame must be among them."""
+    if declared not in median_aoe:
+        return None
+    own = median_aoe[declared]
+    best = min(median_aoe, key=lambda k: median_aoe[k])
+    if best == declared or own < 45.0 or median_aoe[best] > 10.0:
+        return None
+    return (
+        f"{label}: the header says frame {declared!r}, but the orientations fit {best!r} much better (median "
+        f"AOE {median_aoe[best]:.1f} deg against {own:.1f} deg). Is the frame: header right?"
+    )

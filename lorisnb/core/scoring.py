@@ -1,0 +1,214 @@
+"""Scoring: every threshold-dependent metric of the paper, from per-pose errors.
+
+One implementation: :func:`sequence_grid` scores a sequence over a grid of eps x phi x delta x tau
+(Eq. 1-4 of the paper, C-ATE, C-AOE and C-RPE); :func:`score` is that kernel on a one-point grid,
+and :func:`lorisnb.core.sweep.sweep` is the same kernel on a larger grid. Units: metres, degrees,
+seconds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike
+
+from ..errors import ValidationError
+from . import metrics
+from .model import (
+    EXTRA_COLUMNS,
+    POSE_COLUMNS,
+    SEQUENCE_COLUMNS,
+    Eps,
+    FileErrors,
+    SequenceErrors,
+    scene_eps,
+)
+from .validate import choice, eps_value, positive, threshold
+
+#: Metrics computed by :func:`sequence_grid`, with their dtype in tables.
+GRID_METRICS: dict[str, type] = {
+    "ate_rmse": float, "aoe_rmse": float, "c_ate_rmse": float, "c_aoe_rmse": float, "c_matched": int,
+    "correct_time": float, "cr": float, "cr_t": float, "reloc_time": float, "cs_r": float, "t0": float,
+    "track_time": float, "first_correct": bool, "rpe_trans_rmse": float, "rpe_rot_rmse": float,
+    "c_rpe_trans_rmse": float, "c_rpe_rot_rmse": float, "rpe_pairs": int, "c_rpe_pairs": int,
+}  # fmt: skip
+RPE_METRICS = ("rpe_trans_rmse", "rpe_rot_rmse", "c_rpe_trans_rmse", "c_rpe_rot_rmse", "rpe_pairs", "c_rpe_pairs")
+
+
+def as_files(errors: FileErrors | Iterable[FileErrors]) -> list[FileErrors]:
+    """One FileErrors or several, as a list; anything else is an error that says what is expected."""
+    files = [errors] if isinstance(errors, FileErrors) else None
+    if files is None:
+        if isinstance(errors, (str, bytes)) or not isinstance(errors, Iterable):
+            raise ValidationError(
+                f"expected evaluated errors (FileErrors, or lorisnb.evaluate(...).errors), got {type(errors).__name__}"
+                " (to score a file, evaluate it first: lorisnb.evaluate(path).sequences(...))"
+            )
+        files = list(errors)
+        bad = [type(f).__name__ for f in files if not isinstance(f, FileErrors)]
+        if bad:
+            raise ValidationError(f"expected FileErrors items, got {bad[0]}")
+    return files
+
+
+def sequence_meta(f: FileErrors, e: SequenceErrors) -> dict[str, Any]:
+    """The threshold-free columns of a sequence's row."""
+    return dict(
+        algorithm=f.algorithm, file=f.file, scene=f.scene, seq=e.seq, frame=f.frame, poses=e.poses,
+        matched=e.matched, suite=f.suite, mode=f.mode, aligned_on=f.aligned_on, scale=e.scale,
+        gt_start=e.gt_start, gt_end=e.gt_end, gt_duration=e.gt_end - e.gt_start,
+        official_interpolation=f.official_interpolation,
+    )  # fmt: skip
+
+
+def sequence_grid(
+    e: SequenceErrors,
+    eps: ArrayLike,
+    phi: ArrayLike,
+    delta: ArrayLike,
+    tau: ArrayLike,
+    *,
+    rpe_delta: float = 1.0,
+    rpe_unit: str = "s",
+    with_rpe: bool = True,
+) -> dict[str, np.ndarray]:
+    """Every metric of one sequence over a grid, as arrays of shape (E, P, D, T).
+
+    Args:
+        e: per-pose errors of the sequence.
+        eps: (E,) ATE thresholds in metres (already resolved for this sequence's scene).
+        phi: (P,) AOE thresholds, degrees. delta: (D,) validity windows, seconds (Eq. 2).
+        tau: (T,) re-localization time factors, seconds (Eq. 4).
+        rpe_delta, rpe_unit: the RPE step (see :func:`lorisnb.core.metrics.rpe_pairs`).
+        with_rpe: also the RPE columns (their pairs are computed once per sequence and kept).
+
+    A sequence with no matched pose has CR = CR-T = CS-R = 0, no ATE (NaN), 0 correct poses and
+    an infinite re-localization time.
+    """
+    eps_a, phi_a, delta_a, tau_a = (np.asarray(v, float).reshape(-1) for v in (eps, phi, delta, tau))
+    shape = (len(eps_a), len(phi_a), len(delta_a), len(tau_a))
+    E, P, D, T = shape
+
+    def bc(a: Any) -> np.ndarray:
+        return np.broadcast_to(a, shape)
+
+    nan, zero = bc(np.nan), bc(0.0)
+    if e.matched == 0:
+        out = dict(
+            ate_rmse=nan, aoe_rmse=nan, c_ate_rmse=nan, c_aoe_rmse=nan, c_matched=zero, correct_time=zero, cr=zero,
+            cr_t=zero, reloc_time=bc(np.inf), cs_r=zero, t0=nan, track_time=zero, first_correct=bc(False),
+        )  # fmt: skip
+        if with_rpe:
+            out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)
+        return out
+    # correctness of every pose at every (eps, phi), Eq. (1): (E, P, M)
+    c = (e.ate[None, None, :] <= eps_a[:, None, None]) & (e.aoe[None, None, :] <= phi_a[None, :, None])
+    cf = c.reshape(E * P, -1).astype(float)
+    held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end)[None, :], delta_a[:, None])  # (D, M)
+    ct = (cf @ held.T).reshape(E, P, D)  # correct time, numerator of Eq. (2) and (3)
+    n_c = cf.sum(axis=1).reshape(E, P)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c_ate = np.where(n_c > 0, np.sqrt((cf @ (e.ate**2)).reshape(E, P) / n_c), np.nan)
+        c_aoe = np.where(n_c > 0, np.sqrt((cf @ (e.aoe**2)).reshape(E, P) / n_c), np.nan)
+    t0 = float(e.stamps[0])
+    track = e.gt_end - t0
+    rt = metrics.relocalization_time(t0, e.gt_start)
+    first = c[:, :, 0]
+    csr = metrics.relocalization_score(t0, e.gt_start, first[:, :, None], tau_a[None, None, :])  # Eq. (4), (E, P, T)
+    out = dict(
+        ate_rmse=bc(float(metrics.rmse(e.ate))), aoe_rmse=bc(float(metrics.rmse(e.aoe))),
+        c_ate_rmse=bc(c_ate[:, :, None, None]), c_aoe_rmse=bc(c_aoe[:, :, None, None]),
+        c_matched=bc(n_c[:, :, None, None]), correct_time=bc(ct[:, :, :, None]),
+        cr=bc(metrics.correct_rate(ct, e.gt_start, e.gt_end)[:, :, :, None]),
+        cr_t=bc(metrics.correct_rate_tracking(ct, t0, e.gt_end)[:, :, :, None]),
+        reloc_time=bc(rt), cs_r=bc(csr[:, :, None, :]), t0=bc(t0), track_time=bc(track),
+        first_correct=bc(first[:, :, None, None]),
+    )  # fmt: skip
+    if not with_rpe:
+        return out
+    # RPE: pairs fixed per sequence; C-RPE over the pairs whose two poses are correct
+    i, j, tr, rr = e.rpe(rpe_delta, rpe_unit)
+    if len(i) == 0:
+        out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)
+        return out
+    both = (c[:, :, i] & c[:, :, j]).reshape(E * P, -1).astype(float)
+    nb = both.sum(axis=1).reshape(E, P)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ctr = np.where(nb > 0, np.sqrt((both @ tr**2).reshape(E, P) / nb), np.nan)
+        crr = np.where(nb > 0, np.sqrt((both @ rr**2).reshape(E, P) / nb), np.nan)
+    out.update(
+        rpe_trans_rmse=bc(float(metrics.rmse(tr))), rpe_rot_rmse=bc(float(metrics.rmse(rr))),
+        c_rpe_trans_rmse=bc(ctr[:, :, None, None]), c_rpe_rot_rmse=bc(crr[:, :, None, None]),
+        rpe_pairs=bc(float(len(i))), c_rpe_pairs=bc(nb[:, :, None, None]),
+    )  # fmt: skip
+    return out
+
+
+def rpe_setting(rpe_delta: Any, rpe_unit: Any) -> tuple[float, str]:
+    """Validated RPE step: a positive delta in ``s`` (seconds), ``f`` (frames, whole) or ``m`` (metres)."""
+    unit = choice("rpe_unit", rpe_unit, metrics.RPE_UNITS)
+    names = {"s": "seconds", "f": "frames", "m": "metres"}
+    return positive("rpe_delta", rpe_delta, names[unit], integer=unit == "f"), unit
+
+
+def score(
+    errors: FileErrors | Iterable[FileErrors],
+    eps: Eps = np.inf,
+    phi: float = np.inf,
+    delta: float = 1.0,
+    tau: float = 60.0,
+    rpe_delta: float = 1.0,
+    rpe_unit: str = "s",
+) -> pd.DataFrame:
+    """One row per sequence: every metric of the paper at one threshold setting.
+
+    Args:
+        eps: ATE threshold, metres (number, ``"paper"`` or scene -> metres). Default infinity.
+        phi: AOE threshold, degrees. Default infinity.
+        delta: validity window of a pose, seconds (Eq. 2). Default 1 s.
+        tau: re-localization time factor, seconds (Eq. 4). Default 60 s.
+        rpe_delta, rpe_unit: the RPE step (see :func:`lorisnb.core.metrics.rpe_pairs`).
+
+    Columns: :data:`~lorisnb.core.model.SEQUENCE_COLUMNS` then
+    :data:`~lorisnb.core.model.EXTRA_COLUMNS`. Each row is :func:`sequence_grid` on a one-point
+    grid.
+    """
+    files = as_files(errors)
+    eps_v = eps_value(eps)
+    phi_v, delta_v, tau_v = threshold("phi", phi), threshold("delta", delta), threshold("tau", tau)
+    rpe_d, rpe_u = rpe_setting(rpe_delta, rpe_unit)
+    rows = []
+    for f in files:  # one iteration per file and sequence, never per pose
+        e_scene = scene_eps(eps_v, f.scene)
+        for e in f.sequences:
+            grid = sequence_grid(e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u)
+            row = sequence_meta(f, e) | dict(eps=e_scene, phi=phi_v, delta=delta_v, tau=tau_v)
+            row.update({k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in grid.items()})
+            rows.append(row)
+    return pd.DataFrame(rows, columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS)
+
+
+def pose_table(errors: FileErrors | Iterable[FileErrors], eps: Eps = np.inf, phi: float = np.inf) -> pd.DataFrame:
+    """One row per matched pose: algorithm, file, suite, scene, seq, stamp (s), t_rel (s from the
+    ground truth's start), ate (m), aoe (deg), correct (Eq. 1)."""
+    files = as_files(errors)
+    eps_v, phi_v = eps_value(eps), threshold("phi", phi)
+    parts = []
+    for f in files:
+        e_scene = scene_eps(eps_v, f.scene)
+        for e in f.sequences:
+            if e.matched == 0:
+                continue
+            parts.append(
+                pd.DataFrame(
+                    {
+                        "algorithm": f.algorithm, "file": f.file, "suite": f.suite, "scene": f.scene, "seq": e.seq,
+                        "stamp": e.stamps, "t_rel": e.stamps - e.gt_start, "ate": e.ate, "aoe": e.aoe,
+                        "correct": metrics.correctness(e.ate, e.aoe, e_scene, phi_v),
+                    }
+                )
+            )  # fmt: skip
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=POSE_COLUMNS)

@@ -1,0 +1,168 @@
+"""A trajectory simulator for teaching: from a real ground-truth sequence, an "estimate" with
+controlled, documented faults. Deterministic for a given seed, vectorized, and labelled as
+simulated everywhere (``meta["simulated"] = True``, the algorithm name ``simulated: ...`` and a
+``simulated`` column in its tables).
+
+Faults (all optional; applied in this order):
+
+1. **drift**: the heading turns by ``yaw_drift_deg_per_m`` per metre travelled (the path bends),
+   and positions wander by ``drift_per_m`` metres per metre travelled along a fixed random
+   horizontal direction;
+2. **scale** error: positions multiplied by ``scale`` about the start;
+3. **white noise** on positions (``position_noise_m``, standard deviation per axis) and on
+   orientations (``orientation_noise_deg``, standard deviation of a random rotation vector);
+4. **wrong re-localization** at ``wrong_reloc_at_s`` (seconds from the start): from then on, every
+   pose is moved by ``wrong_reloc_offset_m`` and turned by ``wrong_reloc_yaw_deg`` about the
+   vertical axis through the pose at that time (a jump to a wrong pose that persists);
+5. **output gaps**: nothing before ``init_delay_s`` (delayed initialization) and nothing inside the
+   ``lost`` intervals ``[(start_s, end_s), ...]`` (tracking loss);
+6. a lower **output rate** ``rate_hz`` (the first pose of each 1/rate bin is kept);
+7. a **clock offset** ``clock_offset_s`` added to the stamps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Mapping, Sequence
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .model import FileErrors, ResultFile
+from .pipeline import compute_errors
+from .trajectory import Trajectory
+
+
+@dataclass(frozen=True)
+class Faults:
+    """What goes wrong in a simulated estimate (units in the names: m, deg, s, Hz)."""
+
+    position_noise_m: float = 0.0
+    orientation_noise_deg: float = 0.0
+    drift_per_m: float = 0.0
+    yaw_drift_deg_per_m: float = 0.0
+    scale: float = 1.0
+    init_delay_s: float = 0.0
+    lost: tuple[tuple[float, float], ...] = field(default_factory=tuple)
+    wrong_reloc_at_s: float | None = None
+    wrong_reloc_offset_m: tuple[float, float, float] = (3.0, 0.0, 0.0)
+    wrong_reloc_yaw_deg: float = 45.0
+    rate_hz: float | None = None
+    clock_offset_s: float = 0.0
+    seed: int = 0
+
+    def describe(self) -> str:
+        """A short label of the faults that are on."""
+        on = [
+            f"{k}={v}"
+            for k, v in asdict(self).items()
+            if k != "seed"
+            and v != getattr(Faults(), k)
+            and not (k.startswith("wrong_reloc_") and self.wrong_reloc_at_s is None)
+        ]
+        return ", ".join(on) if on else "no faults"
+
+
+def simulate(gt: Trajectory, faults: Faults = Faults()) -> Trajectory:
+    """An estimate of ``gt`` with the given faults (see the module docstring). Deterministic for
+    ``faults.seed``; the result's ``meta`` says ``simulated: True`` and lists the faults."""
+    rng = np.random.default_rng(faults.seed)
+    t = np.array(gt.stamps, float)  # copies: the ground truth is never modified
+    p = np.array(gt.positions, float)
+    rot = gt.rotations()
+    n = len(t)
+    rel = t - t[0] if n else t
+    step = np.linalg.norm(np.diff(p, axis=0), axis=1) if n > 1 else np.zeros(0)
+    dist = np.concatenate(([0.0], np.cumsum(step))) if n else np.zeros(0)
+
+    # 1. drift: bend the path by the heading error and add a wander along a fixed direction
+    if n > 1 and faults.yaw_drift_deg_per_m:
+        yaw = Rotation.from_euler("z", (np.radians(faults.yaw_drift_deg_per_m) * dist)[:, None])
+        inc = yaw[1:].apply(np.diff(p, axis=0))
+        p = np.vstack([p[:1], p[:1] + np.cumsum(inc, axis=0)])
+        rot = yaw * rot
+    if faults.drift_per_m:
+        ang = rng.uniform(0, 2 * np.pi)
+        p = p + faults.drift_per_m * dist[:, None] * np.array([np.cos(ang), np.sin(ang), 0.0])
+    # 2. scale about the start
+    if faults.scale != 1.0 and n:
+        p = p[:1] + faults.scale * (p - p[:1])
+    # 3. white noise
+    if faults.position_noise_m:
+        p = p + rng.normal(scale=faults.position_noise_m, size=p.shape)
+    if faults.orientation_noise_deg and n:
+        rot = rot * Rotation.from_rotvec(np.radians(faults.orientation_noise_deg) * rng.normal(size=(n, 3)))
+    # 4. wrong re-localization: a rigid jump that persists
+    if faults.wrong_reloc_at_s is not None and n:
+        after = rel >= faults.wrong_reloc_at_s
+        if after.any():
+            k = int(np.flatnonzero(after)[0])
+            turn = Rotation.from_euler("z", faults.wrong_reloc_yaw_deg, degrees=True)
+            pivot = p[k].copy()
+            p[after] = pivot + turn.apply(p[after] - pivot) + np.asarray(faults.wrong_reloc_offset_m, float)
+            rot = Rotation.concatenate([rot[~after], turn * rot[after]]) if (~after).any() else turn * rot
+    # 5. output gaps, 6. lower rate
+    keep = rel >= faults.init_delay_s
+    for a, b in faults.lost:
+        keep &= ~((rel >= a) & (rel < b))
+    if faults.rate_hz:
+        bins = np.floor(rel * faults.rate_hz)
+        first_in_bin = np.concatenate(([True], bins[1:] != bins[:-1]))
+        keep &= first_in_bin
+    meta = {"simulated": True, "faults": asdict(faults), "label": f"simulated: {faults.describe()}"}
+    # 7. clock offset
+    return Trajectory(
+        t[keep] + faults.clock_offset_s, p[keep], rot.as_quat()[keep] if n else np.zeros((0, 4)), None, meta
+    )
+
+
+def simulated_result(
+    groundtruth: ResultFile,
+    faults: Faults | Mapping[int, Faults],
+    seqs: Sequence[int] | None = None,
+    name: str | None = None,
+) -> ResultFile:
+    """An in-memory OpenLORIS result file whose sequences are simulated from ``groundtruth``
+    (in ``base_link``): ``faults`` for every sequence, or one Faults per sequence number. Its
+    header says ``simulated: true`` and names the faults."""
+    seqs = (
+        list(seqs)
+        if seqs is not None
+        else (sorted(faults) if isinstance(faults, Mapping) else sorted(groundtruth.sequences))
+    )
+    per = {q: (faults[q] if isinstance(faults, Mapping) else faults) for q in seqs}
+    sequences = {q: simulate(groundtruth.sequences[q], per[q]) for q in seqs}
+    label = (
+        f"simulated: {name}"
+        if name
+        else "simulated: "
+        + "; ".join(f"seq {q}: {per[q].describe()}" if len(seqs) > 1 else per[q].describe() for q in seqs)
+    )
+    scene = groundtruth.header.get("scene", "unknown")
+    header = {"scene": scene, "frame": "base_link", "simulated": "true", "algorithm": label}
+    return ResultFile(
+        path=Path("simulated") / f"{scene}.txt",
+        header=header,
+        header_lines={k: 0 for k in header},
+        sequences=sequences,
+        seq_info={q: {} for q in seqs},
+        seq_lines={q: 0 for q in seqs},
+        removed_repeats={q: 0 for q in seqs},
+    )
+
+
+def simulated_errors(
+    groundtruth: ResultFile,
+    faults: Faults | Mapping[int, Faults],
+    seqs: Sequence[int] | None = None,
+    name: str | None = None,
+    mode: str = "auto",
+    scale: bool = False,
+) -> FileErrors:
+    """Simulate and evaluate with the real pipeline (:func:`lorisnb.core.pipeline.compute_errors`):
+    the algorithm is labelled ``simulated: ...`` and the suite ``simulated``. Several sequences
+    are evaluated in lifelong mode (aligned on the first) unless ``mode="per-seq"``."""
+    res = simulated_result(groundtruth, faults, seqs, name)
+    label = res.header["algorithm"]
+    return compute_errors(res, groundtruth, algorithm=label, file=label, suite="simulated", mode=mode, scale=scale)

@@ -1,0 +1,261 @@
+"""Threshold sensitivity: every metric over grids of eps, phi, delta and tau, from per-pose errors
+computed once (:func:`lorisnb.core.pipeline.compute_errors`).
+
+The metrics come from the one scoring kernel, :func:`lorisnb.core.scoring.sequence_grid`, on the
+whole grid at once; nothing is re-read or re-aligned per setting, and a row of :func:`sweep`
+equals the row :func:`lorisnb.core.scoring.score` gives for that setting (same columns, same
+numbers).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from ..errors import ValidationError
+from . import metrics
+from .aggregate import aggregate_scenes
+from .frames import PAPER_EPS, PAPER_PHI
+from .model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, FileErrors, SequenceErrors, scene_eps
+from .scoring import GRID_METRICS, as_files, rpe_setting, sequence_grid, sequence_meta
+from .trajectory import extent, path_length
+from .validate import choice, threshold, threshold_list
+
+#: Columns of the default (lean) sweep table: identity, thresholds, and the metrics that depend on
+#: them, plus what scene aggregation needs. ``columns="all"`` gives every column of ``score``.
+METRIC_COLUMNS = [
+    "suite", "algorithm", "file", "scene", "seq", "eps", "eps_value", "phi", "delta", "tau", "matched",
+    "c_matched", "correct_time", "track_time", "cr", "cr_t", "cs_r", "ate_rmse", "c_ate_rmse", "c_aoe_rmse",
+]  # fmt: skip
+
+#: How eps may be given relative to the size of each sequence's ground truth.
+RELATIVE = ("extent", "length")
+
+
+def sequence_size(e: SequenceErrors, relative_to: str) -> float:
+    """Size of a sequence's ground truth (at the matched stamps), metres: ``extent`` is the
+    diagonal of its bounding box, ``length`` the distance travelled; NaN for fewer than two poses."""
+    relative_to = choice("relative_to", relative_to, RELATIVE)
+    if e.matched < 2:
+        return np.nan
+    return extent(e.gt_positions) if relative_to == "extent" else path_length(e.gt_positions)
+
+
+def _eps_values(eps: list[Any], scene: str, e: SequenceErrors, relative_to: str | None) -> np.ndarray:
+    """The eps of each grid value for one sequence, metres."""
+    size = sequence_size(e, relative_to) if relative_to is not None else np.nan
+    return np.array(
+        [
+            PAPER_EPS[scene] if v == "paper" else (scene_eps(v, scene) if relative_to is None else float(v) * size)
+            for v in eps  # over grid values, not poses
+        ]
+    )
+
+
+def sweep(
+    errors: FileErrors | Iterable[FileErrors],
+    eps: Any = (np.inf,),
+    phi: Any = (np.inf,),
+    delta: Any = (1.0,),
+    tau: Any = (60.0,),
+    relative_to: str | None = None,
+    rpe_delta: float = 1.0,
+    rpe_unit: str = "s",
+    columns: str = "metrics",
+) -> pd.DataFrame:
+    """One row per sequence and per combination of thresholds. With ``columns="all"`` the columns
+    are those of :func:`lorisnb.core.scoring.score` (a row equals ``score`` at that setting, RPE
+    included); the default ``"metrics"`` keeps :data:`METRIC_COLUMNS` (same values, less memory).
+
+    Args:
+        eps: ATE thresholds in metres; ``"paper"`` gives each scene the paper's 1/3/5 m. With
+            ``relative_to`` the numbers are fractions of each sequence's ground-truth ``extent``
+            (bounding-box diagonal) or ``length`` (distance travelled); ``eps_value`` keeps the
+            value as given, ``eps`` the metres used.
+        phi: AOE thresholds, degrees. delta: validity windows, seconds. tau: re-localization
+            time factors, seconds. Each a value or a list (validated like the command line's).
+    """
+    files = as_files(errors)
+    if relative_to is not None:
+        relative_to = choice("relative_to", relative_to, RELATIVE)
+    columns = choice("columns", columns, ("all", "metrics"))
+    eps_l = threshold_list("eps", eps)
+    if relative_to is not None and any(isinstance(v, (str, Mapping)) for v in eps_l):
+        raise ValidationError("eps: with relative_to, eps values are fractions (numbers), not 'paper' or a mapping")
+    phi_a = np.array(threshold_list("phi", phi))
+    delta_a = np.array(threshold_list("delta", delta))
+    tau_a = np.array(threshold_list("tau", tau))
+    rpe_d, rpe_u = rpe_setting(rpe_delta, rpe_unit)
+    E, P, D, T = len(eps_l), len(phi_a), len(delta_a), len(tau_a)
+    n_set = E * P * D * T
+    with_rpe = columns == "all"
+    seq_meta, blocks = [], []
+    for f in files:  # per sequence, never per pose
+        for e in f.sequences:
+            eps_m = _eps_values(eps_l, f.scene, e, relative_to)
+            blocks.append(
+                sequence_grid(e, eps_m, phi_a, delta_a, tau_a, rpe_delta=rpe_d, rpe_unit=rpe_u, with_rpe=with_rpe)
+            )
+            blocks[-1]["eps"] = np.broadcast_to(eps_m[:, None, None, None], (E, P, D, T))
+            seq_meta.append(sequence_meta(f, e))
+    cols = SEQUENCE_COLUMNS + EXTRA_COLUMNS + ["eps_value"] if columns == "all" else METRIC_COLUMNS
+    if not blocks:
+        return pd.DataFrame(columns=cols)
+    S = len(blocks)
+    meta = pd.DataFrame(seq_meta)
+    rep = np.repeat(np.arange(S), n_set)
+    data: dict[str, Any] = {}
+    for k in [c for c in meta.columns if c in cols]:
+        col = meta[k]
+        data[k] = pd.Categorical(col.to_numpy()[rep]) if col.dtype == object else col.to_numpy()[rep]
+    grid_idx = np.indices((E, P, D, T)).reshape(4, -1)
+    data["phi"] = np.tile(phi_a[grid_idx[1]], S)
+    data["delta"] = np.tile(delta_a[grid_idx[2]], S)
+    data["tau"] = np.tile(tau_a[grid_idx[3]], S)
+    labels = np.array([v if isinstance(v, str) else float(v) for v in eps_l], dtype=object)
+    if any(isinstance(v, str) for v in eps_l):
+        data["eps_value"] = pd.Categorical(np.tile(labels[grid_idx[0]], S).astype(str))
+    else:
+        data["eps_value"] = np.tile(labels[grid_idx[0]].astype(float), S)
+    for k in [c for c in blocks[0] if c in cols]:
+        col = np.empty(S * n_set, dtype=GRID_METRICS.get(k, float))
+        view = col.reshape(S, E, P, D, T)
+        for s_i, b in enumerate(blocks):  # per sequence: broadcast straight into the column
+            view[s_i] = b[k]
+        data[k] = col
+    # columns in final order, no consolidation copy: the table is large for big grids
+    return pd.DataFrame({k: data[k] for k in cols}, copy=False)
+
+
+def sweep_scenes(table: pd.DataFrame, durations: pd.DataFrame) -> pd.DataFrame:
+    """Scene aggregates (:func:`lorisnb.core.aggregate.aggregate_scenes`) of a sweep, per setting;
+    ``durations`` as for that function (``Evaluation.durations()``)."""
+    plain = table.astype({c: str for c in ("algorithm", "scene", "suite", "file") if c in table.columns})
+    if "eps_value" in plain.columns:
+        plain["eps_value"] = plain["eps_value"].astype(str)
+    return aggregate_scenes(plain, durations)
+
+
+def eps_at_cr(
+    errors: Iterable[FileErrors], target: float, durations: pd.DataFrame, phi: float = np.inf, delta: float = 1.0
+) -> pd.DataFrame:
+    """The smallest eps (metres) at which each algorithm reaches scene CR >= ``target``, exactly.
+
+    Scene CR grows with eps as a step function that steps at the poses' ATE values: sorting the
+    poses of a scene by ATE and accumulating the time they hold gives the answer without a grid.
+    NaN where even eps = infinity does not reach the target (not enough tracking time).
+    ``durations``: the ground-truth durations (``Evaluation.durations()``).
+    """
+    files = as_files(errors)
+    phi, delta = threshold("phi", phi), threshold("delta", delta)
+    total = durations.groupby("scene")["gt_duration"].sum()
+    parts: dict[tuple[str, str, str], list[tuple[np.ndarray, np.ndarray]]] = {}
+    for f in files:
+        for e in f.sequences:
+            if e.matched == 0:
+                continue
+            held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end), delta)
+            ok = e.aoe <= phi
+            parts.setdefault((f.suite, f.algorithm, f.scene), []).append((e.ate[ok], held[ok]))
+    rows = []
+    for (suite, alg, scene), chunks in parts.items():
+        ate = np.concatenate([a for a, _ in chunks])
+        held = np.concatenate([h for _, h in chunks])
+        order = np.argsort(ate, kind="stable")
+        cr = np.cumsum(held[order]) / total[scene]
+        k = np.searchsorted(cr, target - 1e-12)
+        rows.append(
+            dict(
+                suite=suite,
+                algorithm=alg,
+                scene=scene,
+                target_cr=target,
+                phi=phi,
+                delta=delta,
+                eps=float(ate[order][k]) if k < len(cr) else np.nan,
+                max_cr=float(cr[-1]) if len(cr) else 0.0,
+            )
+        )
+    return pd.DataFrame(rows, columns=["suite", "algorithm", "scene", "target_cr", "phi", "delta", "eps", "max_cr"])
+
+
+def rank_stability(
+    scenes: pd.DataFrame, metric: str = "cr", reference: Mapping[str, float] | None = None
+) -> pd.DataFrame:
+    """How stable the ranking of algorithms is as eps changes, per scene (and suite, phi, delta, tau):
+    Kendall's tau between the ranking at each eps and at the reference eps (default: the paper's
+    eps for the scene), and the number of algorithm pairs whose order differs.
+
+    ``scenes`` is a scene aggregate over several eps (:func:`sweep_scenes`).
+    """
+    keys = ["suite", "scene", "phi", "delta", "tau"]
+    rows = []
+    for key, grp in scenes.groupby(keys, sort=False, observed=True):
+        scene = key[1]
+        ref_eps = (reference or {}).get(scene, PAPER_EPS.get(scene))
+        wide = grp.pivot_table(index="algorithm", columns="eps", values=metric, observed=True)
+        if wide.shape[0] < 2:
+            continue
+        cols = np.asarray(wide.columns, float)
+        ref_col = wide.columns[int(np.argmin(np.abs(cols - ref_eps)))]
+        ref = wide[ref_col].to_numpy()
+        for e in wide.columns:
+            cur = wide[e].to_numpy()
+            ok = np.isfinite(cur) & np.isfinite(ref)
+            kt = stats.kendalltau(ref[ok], cur[ok]).statistic if ok.sum() > 1 else np.nan
+            a, b = np.triu_indices(int(ok.sum()), 1)
+            flips = int(np.sum(np.sign(ref[ok][a] - ref[ok][b]) * np.sign(cur[ok][a] - cur[ok][b]) < 0))
+            rows.append(
+                dict(
+                    zip(keys, key, strict=True),
+                    eps=float(e),
+                    reference_eps=float(ref_col),
+                    kendall_tau=kt,
+                    swapped_pairs=flips,
+                    algorithms=int(ok.sum()),
+                )
+            )
+    return pd.DataFrame(rows, columns=keys + ["eps", "reference_eps", "kendall_tau", "swapped_pairs", "algorithms"])
+
+
+def rank_swaps(scenes: pd.DataFrame, metric: str = "cr") -> pd.DataFrame:
+    """Where two algorithms swap rank as eps grows: one row per scene, pair and eps interval in
+    which their order of ``metric`` reverses."""
+    rows = []
+    for (suite, scene, phi, delta, tau), grp in scenes.groupby(
+        ["suite", "scene", "phi", "delta", "tau"], sort=False, observed=True
+    ):
+        wide = grp.pivot_table(index="eps", columns="algorithm", values=metric, observed=True).sort_index()
+        algs = list(wide.columns)
+        eps = wide.index.to_numpy(float)
+        v = wide.to_numpy()
+        for a in range(len(algs)):
+            for b in range(a + 1, len(algs)):  # pairs of algorithms, a handful
+                s = np.sign(v[:, a] - v[:, b])
+                nz = np.flatnonzero(s != 0)
+                flips = nz[1:][s[nz[1:]] != s[nz[:-1]]]
+                prev = nz[:-1][s[nz[1:]] != s[nz[:-1]]]
+                for k0, k1 in zip(prev, flips, strict=True):
+                    rows.append(
+                        dict(
+                            suite=suite,
+                            scene=scene,
+                            phi=phi,
+                            delta=delta,
+                            tau=tau,
+                            leader_before=algs[a] if s[k0] > 0 else algs[b],
+                            leader_after=algs[a] if s[k1] > 0 else algs[b],
+                            eps_from=float(eps[k0]),
+                            eps_to=float(eps[k1]),
+                        )
+                    )
+    return pd.DataFrame(
+        rows, columns=["suite", "scene", "phi", "delta", "tau", "leader_before", "leader_after", "eps_from", "eps_to"]
+    )
+
+
+PAPER_SETTING = dict(eps="paper", phi=PAPER_PHI, delta=1.0, tau=60.0)

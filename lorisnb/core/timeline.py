@@ -1,0 +1,103 @@
+"""Timeline data of the paper's Fig. 2 and Fig. 3: when each algorithm tracked correctly, when it
+was wrong, and where it (re-)localized. Pure functions returning arrays and DataFrames; the
+drawing is in :mod:`lorisnb.plotting`.
+
+A pose at t_k stands for ``[t_k, min(t_{k+1}, t_k + delta)]`` (its validity window, Eq. 2);
+consecutive windows that touch and agree in correctness merge into one segment.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable, Mapping
+
+import numpy as np
+import pandas as pd
+
+from . import metrics
+from .frames import SCENES
+from .model import FileErrors, scene_eps
+
+
+def pose_segments(
+    stamps: np.ndarray, correct: np.ndarray, t_end: float, delta: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Merged segments (start, end, correct) of one sequence, seconds. Vectorized."""
+    stamps = np.asarray(stamps, float)
+    if stamps.size == 0:
+        return np.zeros(0), np.zeros(0), np.zeros(0, bool)
+    dt = metrics.valid_intervals(stamps, t_end)
+    end = stamps + np.minimum(dt, delta)
+    nxt = np.append(stamps[1:], np.inf)
+    correct = np.asarray(correct, bool)
+    # a run continues from k to k+1 when the window of k reaches t_{k+1} and correctness agrees
+    cont = (end[:-1] >= nxt[:-1]) & (correct[:-1] == correct[1:])
+    starts = np.flatnonzero(np.concatenate(([True], ~cont)))
+    ends = np.concatenate((starts[1:] - 1, [stamps.size - 1]))
+    keep = end[ends] > stamps[starts]
+    return stamps[starts][keep], end[ends][keep], correct[starts][keep]
+
+
+def timeline_table(
+    errors: Iterable[FileErrors],
+    eps: float | str | Mapping[str, float] = np.inf,
+    phi: float = np.inf,
+    delta: float = 1.0,
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Segments and first poses of every sequence.
+
+    Returns:
+        segments: algorithm, suite, scene, seq, start, end (seconds from the sequence's
+            ground-truth start), correct.
+        firsts: algorithm, suite, scene, seq, t (first matched pose, seconds from the start),
+            correct (a dot in the figure if correct, a cross if not).
+    """
+    segs, firsts = [], []
+    for f in errors:
+        e_eps = scene_eps(eps, f.scene)
+        for e in f.sequences:
+            if e.matched == 0:
+                continue
+            c = metrics.correctness(e.ate, e.aoe, e_eps, phi)
+            s, t, ok = pose_segments(e.stamps, c, e.gt_end, delta)
+            segs.append(
+                pd.DataFrame(
+                    {
+                        "algorithm": f.algorithm,
+                        "suite": f.suite,
+                        "scene": f.scene,
+                        "seq": e.seq,
+                        "start": s - e.gt_start,
+                        "end": t - e.gt_start,
+                        "correct": ok,
+                    }
+                )
+            )
+            firsts.append(
+                dict(
+                    algorithm=f.algorithm,
+                    suite=f.suite,
+                    scene=f.scene,
+                    seq=e.seq,
+                    t=max(0.0, e.stamps[0] - e.gt_start),
+                    correct=bool(c[0]),
+                )
+            )
+    seg_cols = ["algorithm", "suite", "scene", "seq", "start", "end", "correct"]
+    segments = pd.concat(segs, ignore_index=True) if segs else pd.DataFrame(columns=seg_cols)
+    return segments, pd.DataFrame(firsts, columns=["algorithm", "suite", "scene", "seq", "t", "correct"])
+
+
+def sequence_layout(
+    durations: pd.DataFrame, scenes: Iterable[str] | None = None, scene_gap: float = 20.0
+) -> pd.DataFrame:
+    """x offsets of each sequence on the shared time axis: sequences of a scene side by side,
+    each as long as its ground truth, ``scene_gap`` seconds between scenes (as in the paper)."""
+    order = [s for s in SCENES if s in set(durations["scene"])] if scenes is None else list(scenes)
+    rows, x = [], 0.0
+    for scene in order:
+        d = durations[durations["scene"] == scene].sort_values("seq")
+        for _, r in d.iterrows():
+            rows.append(dict(scene=scene, seq=int(r["seq"]), offset=x, duration=float(r["gt_duration"])))
+            x += float(r["gt_duration"])
+        x += scene_gap
+    return pd.DataFrame(rows, columns=["scene", "seq", "offset", "duration"])

@@ -1,0 +1,106 @@
+"""The trajectory type: stamped poses as plain arrays, and the sizes of a path (length, extent)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+
+def path_length(positions: np.ndarray) -> float:
+    """Distance travelled along (N, 3) positions: the sum of consecutive distances, metres
+    (0 for fewer than two positions)."""
+    p = np.asarray(positions, float)
+    if len(p) < 2:
+        return 0.0
+    return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
+
+
+def extent(positions: np.ndarray) -> float:
+    """Size of (N, 3) positions: the diagonal of their axis-aligned bounding box, metres (0 for
+    fewer than two positions)."""
+    p = np.asarray(positions, float)
+    if len(p) < 2:
+        return 0.0
+    return float(np.linalg.norm(p.max(axis=0) - p.min(axis=0)))
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Stamped poses, sorted by strictly increasing stamp.
+
+    Attributes:
+        stamps: (N,) seconds.
+        positions: (N, 3) metres.
+        quaternions: (N, 4) orientation as ``qx qy qz qw``, as read (not renormalized: the
+            official tool's interpolation slip depends on the raw values).
+        lines: (N,) 1-based line numbers in the source file, or None for computed poses.
+        meta: free-form labels (for example ``{"simulated": True}``).
+    """
+
+    stamps: np.ndarray
+    positions: np.ndarray
+    quaternions: np.ndarray
+    lines: np.ndarray | None = None
+    meta: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        n = len(self.stamps)
+        if self.positions.shape != (n, 3) or self.quaternions.shape != (n, 4):
+            raise ValueError(
+                f"Trajectory arrays disagree: {n} stamps, positions {self.positions.shape}, "
+                f"quaternions {self.quaternions.shape}; expected (N,), (N, 3), (N, 4)"
+            )
+
+    def __len__(self) -> int:
+        return len(self.stamps)
+
+    @classmethod
+    def empty(cls) -> "Trajectory":
+        return cls(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 4)), np.zeros(0, dtype=int))
+
+    @classmethod
+    def from_rotations(
+        cls, stamps: np.ndarray, positions: np.ndarray, rotations: Rotation, meta: dict[str, Any] | None = None
+    ) -> "Trajectory":
+        """Build from a scipy ``Rotation`` (stored as unit quaternions ``xyzw``)."""
+        q = rotations.as_quat() if len(stamps) else np.zeros((0, 4))
+        return cls(
+            np.asarray(stamps, float),
+            np.asarray(positions, float).reshape(-1, 3),
+            q.reshape(-1, 4),
+            None,
+            dict(meta or {}),
+        )
+
+    def rotations(self) -> Rotation:
+        """Orientations as a scipy ``Rotation`` (quaternions normalized)."""
+        return Rotation.from_quat(self.quaternions)
+
+    def subset(self, mask_or_index: np.ndarray) -> "Trajectory":
+        """The poses selected by a boolean mask or an index array."""
+        lines = None if self.lines is None else self.lines[mask_or_index]
+        return Trajectory(
+            self.stamps[mask_or_index],
+            self.positions[mask_or_index],
+            self.quaternions[mask_or_index],
+            lines,
+            dict(self.meta),
+        )
+
+    @property
+    def duration(self) -> float:
+        """Last stamp minus first stamp, seconds (0 for fewer than two poses)."""
+        return float(self.stamps[-1] - self.stamps[0]) if len(self) > 1 else 0.0
+
+    @property
+    def path_length(self) -> float:
+        """Distance travelled, metres (:func:`path_length`)."""
+        return path_length(self.positions)
+
+    @property
+    def extent(self) -> float:
+        """Bounding-box diagonal of the positions, metres (:func:`extent`)."""
+        return extent(self.positions)

@@ -1,0 +1,131 @@
+"""Validation of every user value, in one place.
+
+The command line, the Python API, sweeps, notebook parameters and widgets all pass user values
+through these functions, so the same value is accepted or refused with the same message
+everywhere. Each returns the normalized value or raises :class:`~lorisnb.errors.ValidationError`
+naming the value, what was given and what is expected.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from numbers import Real
+from typing import Any
+
+from ..errors import ValidationError
+from .frames import SCENES
+
+#: The words accepted for ``scale`` (command line ``--scale WORD``, Python ``scale=``), any case.
+SCALE_WORDS: dict[str, bool | str] = {
+    "auto": "auto",
+    "on": True, "yes": True, "true": True, "1": True, "sim3": True,
+    "off": False, "no": False, "false": False, "0": False, "se3": False,
+}  # fmt: skip
+
+#: Thresholds: name -> (unit, whether 0 is allowed). Infinity is allowed for all of them.
+THRESHOLDS: dict[str, tuple[str, bool]] = {
+    "eps": ("metres", True),
+    "phi": ("degrees", True),
+    "delta": ("seconds", False),
+    "tau": ("seconds", False),
+}
+
+
+def _number(name: str, value: Any, words: Mapping[str, Any]) -> Any:
+    if isinstance(value, bool) or value is None:
+        raise ValidationError(f"{name}={value!r}: expected a number")
+    if isinstance(value, str):
+        text = value.strip().lower()
+        if text in words:
+            return words[text]
+        try:
+            return float(text)
+        except ValueError:
+            extra = "".join(f", '{w}'" for w in words if w not in ("inf", "+inf", "infinity"))
+            raise ValidationError(f"{name}={value!r} is not a number; expected a number, 'inf'{extra}") from None
+    if isinstance(value, Real):
+        return float(value)
+    try:  # numpy 0-d arrays and the like
+        return float(value)
+    except (TypeError, ValueError):
+        raise ValidationError(f"{name}={value!r} ({type(value).__name__}): expected a number") from None
+
+
+_INF = {"inf": math.inf, "+inf": math.inf, "infinity": math.inf}
+
+
+def threshold(name: str, value: Any) -> float:
+    """One threshold: ``eps`` (metres), ``phi`` (degrees), ``delta`` or ``tau`` (seconds).
+
+    Accepts numbers and number strings, ``"inf"`` in any case. Refuses NaN, negative values, and
+    zero for ``delta`` and ``tau`` (a zero validity window or time factor has no meaning)."""
+    unit, zero_ok = THRESHOLDS[name]
+    v = _number(name, value, _INF)
+    if math.isnan(v):
+        raise ValidationError(f"{name}={value!r}: expected a number of {unit}, not NaN")
+    if v < 0 or (v == 0 and not zero_ok):
+        bound = ">= 0" if zero_ok else "> 0"
+        raise ValidationError(f"{name}={value!r}: expected a number of {unit} {bound}")
+    return float(v)
+
+
+def eps_value(value: Any) -> float | str | dict[str, float]:
+    """The ATE threshold: metres (as :func:`threshold`), ``"paper"`` in any case (1/3/5 m by
+    scene), or a mapping scene -> metres."""
+    if isinstance(value, Mapping):
+        unknown = [k for k in value if k not in SCENES]
+        if unknown:
+            raise ValidationError(f"eps: unknown scene(s) {unknown}; expected keys among {', '.join(SCENES)}")
+        return {str(k): threshold("eps", v) for k, v in value.items()}
+    if isinstance(value, str) and value.strip().lower() == "paper":
+        return "paper"
+    try:
+        return threshold("eps", value)
+    except ValidationError as exc:
+        raise ValidationError(str(exc).replace("expected a number", "expected 'paper', a number", 1)) from None
+
+
+def threshold_list(name: str, values: Any) -> list[Any]:
+    """A non-empty list of thresholds (for sweeps): one value or an iterable of them; ``eps``
+    values may be ``"paper"``. A string is split at commas, as on the command line."""
+    if isinstance(values, str):
+        items: list[Any] = [p for p in values.split(",") if p.strip()]
+    elif isinstance(values, Iterable) and not isinstance(values, Mapping):
+        items = list(values)
+    else:
+        items = [values]
+    if not items:
+        raise ValidationError(f"{name}: an empty list; expected at least one value")
+    if name == "eps":
+        return [eps_value(v) for v in items]
+    return [threshold(name, v) for v in items]
+
+
+def scale_value(value: Any) -> bool | str:
+    """Alignment scale: True (Sim(3)), False (SE(3)) or ``"auto"`` (Sim(3) for monocular
+    algorithms). Accepts booleans and the words of :data:`SCALE_WORDS` in any case."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, str) and value.strip().lower() in SCALE_WORDS:
+        return SCALE_WORDS[value.strip().lower()]
+    if isinstance(value, int) and value in (0, 1):
+        return bool(value)
+    raise ValidationError(f"scale={value!r}: expected True, False, 'auto', or one of {', '.join(SCALE_WORDS)}")
+
+
+def choice(name: str, value: Any, options: Iterable[str]) -> str:
+    """One of a fixed set of words (case-insensitive)."""
+    opts = tuple(options)
+    if isinstance(value, str) and value.strip().lower() in opts:
+        return value.strip().lower()
+    raise ValidationError(f"{name}={value!r}: expected one of {', '.join(opts)}")
+
+
+def positive(name: str, value: Any, unit: str, *, integer: bool = False) -> float:
+    """A positive number (for example an RPE step), optionally a whole number."""
+    v = _number(name, value, {})
+    if math.isnan(v) or v <= 0 or math.isinf(v) or (integer and v != int(v)):
+        kind = "a positive whole number" if integer else "a positive number"
+        raise ValidationError(f"{name}={value!r}: expected {kind} of {unit}")
+    return float(v)

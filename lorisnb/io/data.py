@@ -1,0 +1,168 @@
+"""Where the data is: OpenLORIS-Scene ground truth, the ``icra20_results``, TUM RGB-D files and
+the published tables; and the ground truth read from there.
+
+The data root is found, in this order, from
+
+1. an explicit ``data_root`` argument (command line ``--data DIR``),
+2. the environment variable ``LORISNB_DATA``,
+3. a ``shared/data`` folder beside the current folder or one of its parents (``../shared/data``
+   seen from a checkout of lorisnb, or from its ``notebooks/`` folder), then beside the checkout
+   lorisnb runs from, if it runs from one.
+
+A root is a folder laid out like the shared data: ``openloris-scene/groundtruth/gt_<scene>_1.txt``,
+``openloris-scene/icra20_results/{per-seq,lifelong}/<algorithm>/*.txt``, ``tum-rgbd/`` and
+``published/``. When nothing is found, :class:`~lorisnb.errors.DataNotFoundError` lists every
+place that was looked at and how to point lorisnb at the data.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import pandas as pd
+
+from ..core.aggregate import durations_table
+from ..core.frames import SCENES
+from ..core.model import ResultFile
+from ..errors import DataNotFoundError, LorisError
+from .openloris import read_openloris
+
+ENV_VAR = "LORISNB_DATA"
+_MARKERS = ("openloris-scene", "tum-rgbd", "published")
+
+DataRoot = str | os.PathLike[str]
+
+
+def _candidates(path: DataRoot | None) -> list[tuple[str, Path]]:
+    if path is not None:
+        if str(path).strip() == "":
+            return [("argument (empty)", Path(""))]
+        return [("argument", Path(path).expanduser())]
+    out: list[tuple[str, Path]] = []
+    env = os.environ.get(ENV_VAR)
+    if env:
+        out.append((f"${ENV_VAR}", Path(env).expanduser()))
+    here = Path.cwd()
+    for folder in (here, *here.parents):
+        out.append((f"shared/data beside {folder}", folder / "shared" / "data"))
+    checkout = Path(__file__).resolve().parents[2]
+    if (checkout / "pyproject.toml").is_file():  # running from a source checkout
+        out.append(("beside the lorisnb checkout", checkout.parent / "shared" / "data"))
+    return out
+
+
+def _looks_like_root(p: Path) -> bool:
+    return str(p) != "" and p.is_dir() and any((p / m).is_dir() for m in _MARKERS)
+
+
+@dataclass(frozen=True)
+class DataPaths:
+    """Paths below one data root. Each accessor raises DataNotFoundError naming the missing path."""
+
+    root: Path
+
+    def _need(self, p: Path, what: str) -> Path:
+        if not p.exists():
+            raise DataNotFoundError(
+                f"{what} not found: looked for {p} (data root {self.root}). "
+                f"Point lorisnb at a folder laid out like ../shared/data with the data_root "
+                f"argument (--data DIR) or the {ENV_VAR} environment variable."
+            )
+        return p
+
+    @property
+    def openloris(self) -> Path:
+        return self._need(self.root / "openloris-scene", "OpenLORIS-Scene folder")
+
+    @property
+    def groundtruth_dir(self) -> Path:
+        return self._need(self.root / "openloris-scene" / "groundtruth", "OpenLORIS ground-truth folder")
+
+    def groundtruth(self, scene: str) -> Path:
+        """``gt_<scene>_1.txt`` (base_link poses of every sequence of the scene)."""
+        return self._need(
+            self.root / "openloris-scene" / "groundtruth" / f"gt_{scene}_1.txt", f"ground truth of scene {scene!r}"
+        )
+
+    @property
+    def icra20(self) -> Path:
+        return self._need(self.root / "openloris-scene" / "icra20_results", "icra20_results folder")
+
+    @property
+    def extrinsics_json(self) -> Path:
+        return self._need(self.root / "openloris-scene" / "extrinsics.json", "extrinsics.json")
+
+    @property
+    def tum(self) -> Path:
+        return self._need(self.root / "tum-rgbd", "TUM RGB-D folder")
+
+    @property
+    def published(self) -> Path:
+        return self._need(self.root / "published", "published tables folder")
+
+    def scenes_with_groundtruth(self) -> list[str]:
+        """The OpenLORIS scenes whose ground truth is in this root, in the paper's order."""
+        d = self.root / "openloris-scene" / "groundtruth"
+        return [s for s in SCENES if (d / f"gt_{s}_1.txt").is_file()]
+
+
+def find_data(data_root: DataRoot | DataPaths | None = None) -> DataPaths:
+    """Locate the data root (see the module docstring for the search order)."""
+    if isinstance(data_root, DataPaths):
+        return data_root
+    looked = []
+    for how, cand in _candidates(data_root):
+        if _looks_like_root(cand):
+            return DataPaths(cand.resolve())
+        state = "not a data root" if cand.is_dir() and str(cand) else "does not exist"
+        looked.append(f"  - {cand} ({how}): {state}")
+    raise DataNotFoundError(
+        "lorisnb could not find its data. It looked at:\n" + "\n".join(looked) + "\n"
+        f"A data root holds openloris-scene/ (groundtruth/, icra20_results/), tum-rgbd/ or "
+        f"published/. Pass data_root=... (command line: --data DIR) or set {ENV_VAR}=DIR."
+    )
+
+
+@lru_cache(maxsize=32)
+def _read_gt_cached(path: str, mtime: float, size: int, remove_repeated: bool) -> ResultFile:
+    return read_openloris(path, remove_repeated=remove_repeated, warn=False)
+
+
+def load_groundtruth(
+    scene: str, data_root: DataRoot | DataPaths | None = None, remove_repeated: bool = True
+) -> ResultFile:
+    """The ground truth of an OpenLORIS scene (``gt_<scene>_1.txt``), read once and cached (until
+    the file changes). Repeated poses are dropped from ground truth too, as the official tool does."""
+    path = find_data(data_root).groundtruth(scene)
+    st = path.stat()
+    return _read_gt_cached(str(path), st.st_mtime, st.st_size, remove_repeated)
+
+
+def groundtruth_spans(
+    data_root: DataRoot | DataPaths | None = None, remove_repeated: bool = True
+) -> dict[str, tuple[float, float]]:
+    """Time span (first, last stamp, seconds) of every ground-truth sequence in the data, by
+    ``<scene>-<seq>``: what the time-overlap plausibility check compares against."""
+    data = find_data(data_root)
+    spans: dict[str, tuple[float, float]] = {}
+    for scene in data.scenes_with_groundtruth():
+        try:
+            gt = load_groundtruth(scene, data, remove_repeated)
+        except LorisError:
+            continue
+        spans.update(
+            {f"{scene}-{k}": (float(t.stamps[0]), float(t.stamps[-1])) for k, t in gt.sequences.items() if len(t)}
+        )
+    return spans
+
+
+def scene_durations(
+    scenes: Iterable[str], data_root: DataRoot | DataPaths | None = None, remove_repeated: bool = True
+) -> pd.DataFrame:
+    """Ground-truth duration of every sequence of each scene (``lorisnb.core.aggregate.durations_table``)."""
+    gts: Mapping[str, ResultFile] = {s: load_groundtruth(s, data_root, remove_repeated) for s in scenes}
+    return durations_table(gts)

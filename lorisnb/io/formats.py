@@ -1,0 +1,179 @@
+"""Readers of plain trajectory formats: TUM RGB-D text, KITTI poses, EuRoC CSV, times files, and
+:func:`read_trajectory` for any of them (OpenLORIS files: :mod:`lorisnb.io.openloris`).
+
+All scan the file as bytes with numpy (:mod:`lorisnb.io.scanner`) and raise
+:class:`~lorisnb.errors.ParseError` naming the file, the line and what was expected.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..core.trajectory import Trajectory
+from ..errors import LorisWarning, ParseError, ValidationError
+from .openloris import read_openloris
+from .scanner import Lines, check_rows, finish, read_bytes, scan
+
+#: Formats :func:`read_trajectory` reads.
+TRAJECTORY_FORMATS = ("tum", "kitti", "euroc", "openloris")
+ROTATION_TOLERANCE = 1e-3  # KITTI/EuRoC rotation blocks: |R R^T - I| and |det R - 1| below this
+
+
+def _warn(notes: list[str], warn: bool) -> None:
+    if warn:
+        for note in notes:
+            warnings.warn(note, LorisWarning, stacklevel=3)
+
+
+def _data_rows(lines: Lines) -> np.ndarray:
+    """Lines that are neither blank nor ``#`` comments."""
+    return np.flatnonzero((lines.first >= 0) & (lines.first != ord("#")))
+
+
+def _check_width(lines: Lines, rows: np.ndarray, spath: str, ok: np.ndarray, expected: str) -> None:
+    if not ok.all():
+        i = rows[np.flatnonzero(~ok)[0]]
+        raise ParseError(spath, int(i) + 1, f"{lines.text(i)[:80]!r} has {lines.ntok[i]} fields; expected {expected}")
+
+
+def read_tum(path: str | os.PathLike, warn: bool = True) -> Trajectory:
+    """Read a TUM RGB-D trajectory: lines ``stamp tx ty tz qx qy qz qw`` (seconds, metres,
+    quaternion xyzw), ``#`` comments; spaces, tabs or commas separate the values.
+
+    Non-finite poses are skipped and unsorted or repeated stamps sorted (keeping the last), with a
+    warning. Raises ParseError for a malformed line or a zero-norm quaternion.
+    """
+    spath = str(path)
+    lines = scan(read_bytes(path), separators=b",")
+    rows = _data_rows(lines)
+    expected = "8 numbers 'stamp tx ty tz qx qy qz qw' (TUM format) or a '#' comment"
+    _check_width(lines, rows, spath, lines.ntok[rows] == 8, expected)
+    values = lines.numbers(rows, spath, "numbers 'stamp tx ty tz qx qy qz qw'").reshape(-1, 8)
+    notes: list[str] = []
+    line_no = rows + 1
+    keep = check_rows(spath, values[:, 0], values[:, 1:], line_no, notes)
+    nan_rows = int((~keep).sum())
+    if nan_rows:
+        notes.append(f"{spath}: {nan_rows} pose(s) with NaN or infinite values skipped")
+    traj = finish(spath, values[keep, 0], values[keep, 1:], line_no[keep], "", notes)
+    _warn(notes, warn)
+    return traj
+
+
+def _from_matrices(spath: str, stamps: np.ndarray, mats: np.ndarray, line_no: np.ndarray) -> Trajectory:
+    """Poses from (N, 3, 4) ``[R | t]`` blocks, each checked to hold a proper rotation."""
+    rot = mats[:, :, :3]
+    with np.errstate(all="ignore"):
+        det = np.linalg.det(rot) if len(rot) else np.zeros(0)
+        ortho = np.abs(np.einsum("nij,nkj->nik", rot, rot) - np.eye(3)).max(axis=(1, 2)) if len(rot) else det
+    bad = ~np.isfinite(mats).all(axis=(1, 2)) | (np.abs(det - 1) > ROTATION_TOLERANCE) | (ortho > ROTATION_TOLERANCE)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise ParseError(
+            spath,
+            int(line_no[k]),
+            "not a rotation (non-finite values, or a rotation block that is not orthonormal with determinant 1); "
+            "expected a pose",
+        )
+    q = Rotation.from_matrix(rot).as_quat() if len(rot) else np.zeros((0, 4))
+    return Trajectory(np.asarray(stamps, float), mats[:, :, 3].copy(), q, line_no, {"source": spath})
+
+
+def read_kitti(path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike | None = None) -> Trajectory:
+    """Read a KITTI pose file: one 3x4 matrix ``[R | t]`` per line, row-major (12 numbers, metres).
+
+    KITTI files carry no stamps: pass ``stamps`` (an array, or a times file with one stamp per
+    line as KITTI's ``times.txt``); without them the pose index is used as the stamp (and
+    ``meta["stamps"] == "index"``).
+    """
+    spath = str(path)
+    lines = scan(read_bytes(path), separators=b",")
+    rows = _data_rows(lines)
+    _check_width(lines, rows, spath, lines.ntok[rows] == 12, "12 numbers per line, a 3x4 pose matrix row-major (KITTI)")
+    mats = lines.numbers(rows, spath, "12 numbers of a 3x4 pose matrix").reshape(-1, 3, 4)
+    if stamps is None:
+        t = np.arange(len(mats), dtype=float)
+    elif isinstance(stamps, (str, os.PathLike)):
+        t = read_times(stamps)
+    else:
+        t = np.asarray(stamps, dtype=float).reshape(-1)
+    if len(t) != len(mats):
+        raise ParseError(spath, None, f"{len(mats)} poses but {len(t)} stamps; expected one stamp per pose")
+    out = _from_matrices(spath, t, mats, rows + 1)
+    out.meta["stamps"] = "index" if stamps is None else "given"
+    if stamps is not None and len(t) > 1 and not np.all(np.diff(t) > 0):
+        raise ParseError(spath, None, "the stamps given for this KITTI file are not strictly increasing")
+    return out
+
+
+def read_times(path: str | os.PathLike) -> np.ndarray:
+    """Read a times file: one stamp (seconds) per line, ``#`` comments allowed."""
+    spath = str(path)
+    lines = scan(read_bytes(path))
+    rows = _data_rows(lines)
+    _check_width(lines, rows, spath, lines.ntok[rows] == 1, "one stamp per line")
+    return lines.numbers(rows, spath, "one stamp in seconds per line")
+
+
+def read_euroc(path: str | os.PathLike, warn: bool = True) -> Trajectory:
+    """Read a EuRoC ground-truth CSV (``state_groundtruth_estimate0/data.csv``): rows
+    ``stamp_ns, p_x, p_y, p_z, q_w, q_x, q_y, q_z[, ...]`` after a ``#timestamp,...`` header;
+    stamps become seconds, quaternions ``xyzw``. Further columns (velocities, biases) are ignored."""
+    spath = str(path)
+    lines = scan(read_bytes(path), separators=b",")
+    rows = _data_rows(lines)
+    if rows.size and lines.ntok[rows[0]] >= 8:
+        first = lines.text(rows[0]).split()[0] if lines.text(rows[0]).split() else ""
+        try:
+            float(first)
+        except ValueError:
+            rows = rows[1:]  # a header line without '#'
+    width = lines.ntok[rows]
+    _check_width(
+        lines, rows, spath, (width >= 8) & (width == (width[0] if width.size else 8)),
+        "the same number (8 or more) of comma-separated numbers on every row: "
+        "'timestamp_ns,p_x,p_y,p_z,q_w,q_x,q_y,q_z,...' (EuRoC CSV)",
+    )  # fmt: skip
+    ncol = int(width[0]) if width.size else 8
+    values = lines.numbers(rows, spath, "numbers 'timestamp_ns,p_x,p_y,p_z,q_w,q_x,q_y,q_z'").reshape(-1, ncol)
+    poses = np.column_stack([values[:, 1:4], values[:, 5:8], values[:, 4]])  # x y z qx qy qz qw
+    notes: list[str] = []
+    line_no = rows + 1
+    keep = check_rows(spath, values[:, 0], poses, line_no, notes)
+    traj = finish(spath, values[keep, 0] * 1e-9, poses[keep], line_no[keep], "", notes)
+    _warn(notes, warn)
+    return traj
+
+
+def read_trajectory(
+    path: str | os.PathLike,
+    fmt: str = "tum",
+    seq: int | None = None,
+    stamps: np.ndarray | str | os.PathLike | None = None,
+) -> Trajectory:
+    """Read one trajectory in any supported format.
+
+    Args:
+        fmt: ``tum``, ``kitti``, ``euroc`` or ``openloris`` (for OpenLORIS, ``seq`` picks the
+            sequence; default the lowest-numbered one).
+        stamps: KITTI only: stamps or a times file (see :func:`read_kitti`).
+    """
+    if fmt == "tum":
+        return read_tum(path)
+    if fmt == "kitti":
+        return read_kitti(path, stamps)
+    if fmt == "euroc":
+        return read_euroc(path)
+    if fmt == "openloris":
+        f = read_openloris(path)
+        if not f.sequences:
+            raise ParseError(path, None, "no 'seq: N' block; expected at least one sequence")
+        key = min(f.sequences) if seq is None else seq
+        if key not in f.sequences:
+            raise ParseError(path, None, f"no sequence {key}; the file has {sorted(f.sequences)}")
+        return f.sequences[key]
+    raise ValidationError(f"format={fmt!r}: expected one of {', '.join(TRAJECTORY_FORMATS)}")

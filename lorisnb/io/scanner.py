@@ -1,0 +1,189 @@
+"""The byte scanner behind every text reader: a file's lines, their first characters, their
+token counts and their numbers, computed with numpy over the whole buffer (no Python loop over
+lines), plus the row checks shared by the readers.
+
+Errors are :class:`~lorisnb.errors.ParseError` naming the file, the line and what was expected.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.trajectory import Trajectory
+from ..errors import ParseError
+
+WHITESPACE = np.zeros(256, dtype=bool)
+WHITESPACE[[9, 10, 11, 12, 13, 32]] = True
+QUAT_EPS = np.finfo(float).eps * 4.0  # below this squared norm a quaternion has no direction
+
+POSE_FIELDS = "stamp [output_time] x y z qx qy qz qw"
+
+
+@dataclass
+class Lines:
+    """Per-line facts of a byte buffer, computed with numpy."""
+
+    raw: bytes
+    buf: np.ndarray  # uint8 view
+    starts: np.ndarray  # byte offset of each line
+    ends: np.ndarray  # byte offset of each line's end (its newline excluded)
+    line_of: np.ndarray  # line index of each byte
+    first: np.ndarray  # first non-blank byte of each line, -1 for blank lines
+    first_pos: np.ndarray  # byte offset of that byte, -1 for blank lines
+    has_colon: np.ndarray  # bool per line
+    ntok: np.ndarray  # whitespace-separated tokens per line
+
+    def text(self, i: int) -> str:
+        return self.raw[self.starts[i] : self.ends[i]].decode("utf-8", "replace").strip()
+
+    def numbers(self, rows: np.ndarray, path: str, expected: str) -> np.ndarray:
+        """All tokens of lines ``rows`` as float64, flat; on a bad token, a ParseError for its line."""
+        keep = np.zeros(len(self.starts), dtype=bool)
+        keep[rows] = True
+        b = self.buf.copy()
+        b[~keep[self.line_of]] = 32
+        toks = b.tobytes().split()
+        try:
+            return np.array(toks, dtype=np.float64)
+        except (ValueError, TypeError):
+            pass
+        for i in rows:  # error path only: find the first offending line
+            for tok in self.raw[self.starts[i] : self.ends[i]].split():
+                try:
+                    float(tok)
+                except ValueError:
+                    shown = tok.decode("utf-8", "replace")
+                    raise ParseError(path, int(i) + 1, f"{shown!r} is not a number; expected {expected}") from None
+        raise ParseError(path, None, f"could not read the numbers; expected {expected}")
+
+
+def scan(raw: bytes, separators: bytes = b"") -> Lines:
+    buf = np.frombuffer(raw, dtype=np.uint8)
+    if separators:
+        buf = buf.copy()
+        for s in separators:
+            buf[buf == s] = 32
+        raw = buf.tobytes()
+    n = buf.size
+    nl = np.flatnonzero(buf == 10)
+    starts = np.concatenate(([0], nl + 1))
+    ends = np.concatenate((nl, [n]))
+    nlines = starts.size
+    line_of = np.repeat(np.arange(nlines), ends - starts + 1)[:n]
+    ws = WHITESPACE[buf]
+    nonws = np.flatnonzero(~ws)
+    first = np.full(nlines, -1, dtype=np.int16)
+    first_pos = np.full(nlines, -1, dtype=np.int64)
+    if nonws.size:
+        ln = line_of[nonws]
+        run = np.concatenate(([True], ln[1:] != ln[:-1]))
+        first[ln[run]] = buf[nonws[run]]
+        first_pos[ln[run]] = nonws[run]
+    has_colon = np.bincount(line_of[buf == 58], minlength=nlines) > 0
+    tok_start = ~ws & np.concatenate(([True], ws[:-1]))
+    ntok = np.bincount(line_of[tok_start], minlength=nlines)
+    return Lines(raw, buf, starts, ends, line_of, first, first_pos, has_colon, ntok)
+
+
+def stamp_fractions(lines: Lines, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For the first token (the stamp) of each line in ``rows``: the number of digits after its
+    decimal point (-1 if none) and those digits read as an integer. Vectorized over lines."""
+    if rows.size == 0:
+        return np.zeros(0, int), np.zeros(0, np.int64)
+    buf = lines.buf
+    start = lines.first_pos[rows]
+    ws = np.append(np.flatnonzero(WHITESPACE[buf]), buf.size)  # sentinels: a token or fraction ends at the end
+    end = ws[np.searchsorted(ws, start)]
+    dots = np.append(np.flatnonzero(buf == 46), buf.size)
+    dot = dots[np.searchsorted(dots, start)]
+    has = dot < end
+    ndig = np.where(has, end - dot - 1, -1)
+    n = np.where(has, ndig, 0)
+    # digit positions of every fraction, then their integer value by a segmented sum
+    total = int(n.sum())
+    value = np.zeros(rows.size, np.int64)
+    if total:
+        owner = np.repeat(np.arange(rows.size), n)
+        offs = np.arange(total) - np.repeat(np.cumsum(n) - n, n)
+        pos = np.repeat(dot + 1, n) + offs
+        digit = buf[pos].astype(np.int64) - 48
+        if ((digit < 0) | (digit > 9)).any():
+            return ndig, value  # not plain digits: no repair possible; numbers() reports the line
+        power = 10 ** (np.repeat(n, n) - 1 - offs)
+        np.add.at(value, owner, digit * power)
+    return ndig, value
+
+
+def nanosecond_pattern(ndig: np.ndarray) -> np.ndarray:
+    """Lines whose stamp looks like ``secs.nanosecs`` printed without zero padding: most stamps of
+    the file have exactly 9 decimals and these have fewer (``1560000003.28307199`` for
+    ``.028307199``). Returns a boolean mask (all False when the file does not follow the pattern)."""
+    if ndig.size == 0:
+        return np.zeros(0, bool)
+    nine = np.mean(ndig == 9)
+    short = (ndig >= 1) & (ndig < 9)
+    return short if nine >= 0.5 and short.any() else np.zeros(ndig.size, bool)
+
+
+def read_bytes(path: str | os.PathLike) -> bytes:
+    try:
+        with open(path, "rb") as fh:
+            return fh.read()
+    except FileNotFoundError:
+        raise ParseError(path, None, "file not found; expected a trajectory file at this path") from None
+    except IsADirectoryError:
+        raise ParseError(path, None, "is a folder; expected a trajectory file") from None
+    except OSError as exc:
+        raise ParseError(path, None, f"cannot be read ({exc.strerror})") from None
+
+
+def finish(
+    path: str, stamps: np.ndarray, poses: np.ndarray, lines: np.ndarray, label: str, notes: list[str]
+) -> Trajectory:
+    """Sort by stamp keeping the last pose of a repeated stamp (as a dict keyed by stamp would)."""
+    if stamps.size > 1 and not np.all(np.diff(stamps) > 0):
+        back = np.flatnonzero(np.diff(stamps) <= 0)
+        i = back[0] + 1
+        kind = "repeats" if stamps[i] == stamps[i - 1] else "goes backwards"
+        notes.append(
+            f"{path}{label}: timestamps are not increasing ({len(back)} times; first at line "
+            f"{lines[i]}: {stamps[i]:.9f} {kind} after {stamps[i - 1]:.9f}); sorted them and kept "
+            f"the last pose of each repeated stamp, as the official tool does"
+        )
+        order = np.argsort(stamps, kind="stable")
+        s = stamps[order]
+        last = np.concatenate((s[1:] != s[:-1], [True]))
+        order = order[last]
+        stamps, poses, lines = stamps[order], poses[order], lines[order]
+    return Trajectory(stamps, poses[:, :3].copy(), poses[:, 3:7].copy(), lines)
+
+
+def check_rows(path: str, stamps: np.ndarray, poses: np.ndarray, lines: np.ndarray, notes: list[str]) -> np.ndarray:
+    """Validate rows; return the mask of rows to keep (NaN poses are skipped)."""
+    bad_stamp = ~np.isfinite(stamps)
+    if bad_stamp.any():
+        i = np.flatnonzero(bad_stamp)[0]
+        raise ParseError(path, int(lines[i]), f"timestamp {stamps[i]} is not finite; expected seconds")
+    finite = np.isfinite(poses).all(axis=1)
+    inf_rows = ~finite & ~np.isnan(poses).any(axis=1)
+    if inf_rows.any():
+        notes.append(
+            f"{path}: {int(inf_rows.sum())} pose(s) with infinite values skipped "
+            f"(first at line {lines[np.flatnonzero(inf_rows)[0]]})"
+        )
+    with np.errstate(over="ignore"):
+        nq = np.einsum("ij,ij->i", poses[:, 3:7], poses[:, 3:7])
+    zero = finite & (nq < QUAT_EPS)
+    if zero.any():
+        i = np.flatnonzero(zero)[0]
+        raise ParseError(path, int(lines[i]), "quaternion has zero norm; expected a rotation qx qy qz qw of unit norm")
+    huge = finite & ~np.isfinite(nq)
+    if huge.any():
+        i = np.flatnonzero(huge)[0]
+        raise ParseError(
+            path, int(lines[i]), "quaternion is too large to normalize; expected a rotation qx qy qz qw of unit norm"
+        )
+    return finite

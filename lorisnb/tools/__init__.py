@@ -1,0 +1,8 @@
+"""The edge: evaluation of files and folders, notebook helpers, figures, widgets, reports and the
+bridge to evo. Optional dependencies (evo, papermill, ipywidgets) are imported when first used."""
+
+from ._extras import require
+from .evaluate import Evaluation, Failure, evaluate, result_files
+from .notebook import Outputs, setup
+
+__all__ = ["Evaluation", "Failure", "Outputs", "evaluate", "require", "result_files", "setup"]

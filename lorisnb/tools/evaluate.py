@@ -1,0 +1,208 @@
+"""Evaluation of result files and folders: the edge that reads files, finds the ground truth in
+the data root and runs the pure pipeline (:func:`lorisnb.core.pipeline.compute_errors`) on each,
+collecting failures instead of stopping.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..core.aggregate import aggregate_scenes
+from ..core.association import MAX_GAP
+from ..core.frames import SCENES
+from ..core.model import Eps, FileErrors
+from ..core.pipeline import compute_errors
+from ..core.scoring import pose_table, score
+from ..core.validate import choice, scale_value
+from ..errors import DataNotFoundError, LorisError, LorisWarning, ValidationError
+from ..io.data import DataPaths, DataRoot, find_data, groundtruth_spans, load_groundtruth, scene_durations
+from ..io.openloris import read_openloris
+
+PathArg = str | os.PathLike[str]
+
+
+@dataclass
+class Failure:
+    """A file that could not be evaluated, with the reason (file, line, what was expected)."""
+
+    path: Path
+    error: str
+    kind: str
+
+
+@dataclass
+class Evaluation:
+    """What :func:`evaluate` returns: the errors of every file evaluated, and the failures."""
+
+    errors: list[FileErrors]
+    failures: list[Failure]
+    root: Path | None = None
+    skipped: list[Failure] = field(default_factory=list)
+    data: DataPaths | None = None
+
+    def sequences(
+        self, eps: Eps = np.inf, phi: float = np.inf, delta: float = 1.0, tau: float = 60.0, **kw: Any
+    ) -> pd.DataFrame:
+        """Per-sequence table at one setting (see :func:`lorisnb.core.scoring.score`)."""
+        return score(self.errors, eps, phi, delta, tau, **kw)
+
+    def poses(self, eps: Eps = np.inf, phi: float = np.inf) -> pd.DataFrame:
+        """Per-pose table (see :func:`lorisnb.core.scoring.pose_table`)."""
+        return pose_table(self.errors, eps, phi)
+
+    def scenes(self, eps: Eps = np.inf, phi: float = np.inf, delta: float = 1.0, tau: float = 60.0) -> pd.DataFrame:
+        """Per algorithm and scene, as in the paper's figures (see
+        :func:`lorisnb.core.aggregate.aggregate_scenes`)."""
+        return aggregate_scenes(self.sequences(eps, phi, delta, tau), self.durations())
+
+    @property
+    def algorithms(self) -> list[str]:
+        return sorted({f.algorithm for f in self.errors})
+
+    def durations(self) -> pd.DataFrame:
+        """Ground-truth durations of every sequence of the scenes evaluated, seconds."""
+        scenes = sorted({f.scene for f in self.errors}, key=SCENES.index)
+        return scene_durations(scenes, self.data)
+
+    @property
+    def warnings(self) -> list[str]:
+        return [w for f in self.errors for w in f.warnings]
+
+    def failures_table(self) -> pd.DataFrame:
+        """Failed and skipped files with the reason, one row each."""
+        rows = [dict(file=str(f.path), status="failed", kind=f.kind, error=f.error) for f in self.failures]
+        rows += [dict(file=str(f.path), status="skipped", kind=f.kind, error=f.error) for f in self.skipped]
+        return pd.DataFrame(rows, columns=["file", "status", "kind", "error"])
+
+
+def is_hidden(path: Path) -> bool:
+    """Hidden files and editor leftovers (``.x.txt``, ``.#x.txt``, ``~x.txt``) are not results."""
+    return path.name.startswith((".", "~"))
+
+
+def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
+    """One path or several, as Paths; an empty path or another type is a ValidationError."""
+    items = [paths] if isinstance(paths, (str, os.PathLike)) else None
+    if items is None:
+        if isinstance(paths, (bytes, pd.DataFrame)) or not isinstance(paths, Iterable):
+            raise ValidationError(
+                f"paths: expected a file or folder path (str or pathlib.Path) or a list of them, "
+                f"got {type(paths).__name__}"
+            )
+        items = list(paths)
+    out = []
+    for p in items:
+        if not isinstance(p, (str, os.PathLike)):
+            raise ValidationError(f"paths: expected str or pathlib.Path items, got {type(p).__name__} ({p!r:.60})")
+        if str(p).strip() == "":
+            raise ValidationError("paths: an empty path (an unset shell variable?); expected a file or folder")
+        out.append(Path(p))
+    if not out:
+        raise ValidationError("paths: no path given; expected at least one file or folder")
+    return out
+
+
+def result_files(paths: PathArg | Iterable[PathArg]) -> list[tuple[Path, Path | None]]:
+    """Expand files and folders into ``(file, root)`` pairs; a folder is walked for ``*.txt``
+    below it (``root/<algorithm>/*.txt``, or deeper: ``root/<suite>/<algorithm>/*.txt``), hidden
+    files and folders left out."""
+    out: list[tuple[Path, Path | None]] = []
+    for p in as_paths(paths):
+        if p.is_dir():
+            files = sorted(
+                f
+                for f in p.rglob("*.txt")
+                if f.is_file() and not any(is_hidden(Path(part)) for part in f.relative_to(p).parts)
+            )
+            out.extend((f, p) for f in files)
+        else:
+            out.append((p, None))
+    return out
+
+
+def labels(path: Path, root: Path | None) -> tuple[str, str, str]:
+    """(algorithm, file relative to the root, suite) for a result file."""
+    if root is None:
+        return path.parent.name, path.name, ""
+    parts = path.relative_to(root).parts
+    algorithm = parts[-2] if len(parts) >= 2 else root.name
+    return algorithm, path.relative_to(root).as_posix(), "/".join(parts[:-2])
+
+
+def evaluate(
+    paths: PathArg | Iterable[PathArg],
+    *,
+    mode: str = "auto",
+    scale: bool | str = False,
+    official_interpolation: bool = False,
+    remove_repeated: bool = True,
+    data_root: DataRoot | DataPaths | None = None,
+    algorithms: Iterable[str] | None = None,
+    scenes: Iterable[str] | None = None,
+    repair_stamps: bool = False,
+    max_gap: float = MAX_GAP,
+    progress: bool = False,
+) -> Evaluation:
+    """Evaluate OpenLORIS result files and folders. A file that fails (bad line, unknown frame,
+    ...) is recorded in ``failures`` with its reason and the rest go on; a file whose scene has no
+    ground truth in the data (office, in the bundled data) is recorded in ``skipped``.
+
+    Args:
+        paths: files, or folders walked as ``<algorithm>/*.txt`` (see :func:`result_files`).
+        mode, scale, official_interpolation, max_gap: see
+            :func:`lorisnb.core.pipeline.compute_errors`.
+        remove_repeated, repair_stamps: see :func:`lorisnb.io.read_openloris`.
+        data_root: where the ground truth is (see :func:`lorisnb.io.find_data`).
+        algorithms, scenes: evaluate only these (None: all).
+        progress: show a progress bar over files (tqdm; notebook-aware).
+    """
+    mode = choice("mode", mode, ("auto", "per-seq", "lifelong"))
+    scale = scale_value(scale)
+    items = result_files(paths)
+    data = find_data(data_root)  # no data at all is an error for the whole call, not per file
+    if algorithms is not None:
+        wanted = {algorithms} if isinstance(algorithms, str) else set(algorithms)
+        items = [(p, r) for p, r in items if labels(p, r)[0] in wanted]
+    scene_set = None if scenes is None else ({scenes} if isinstance(scenes, str) else set(scenes))
+    iterator: Iterable[tuple[Path, Path | None]] = items
+    if progress:
+        from tqdm.auto import tqdm
+
+        iterator = tqdm(items, desc="evaluating", unit="file")
+    done: list[FileErrors] = []
+    failed: list[Failure] = []
+    skipped: list[Failure] = []
+    spans = partial(groundtruth_spans, data, remove_repeated)
+    for path, root in iterator:
+        algorithm, rel, suite = labels(path, root)
+        try:
+            result = read_openloris(path, remove_repeated=remove_repeated, warn=False, repair_stamps=repair_stamps)
+            if scene_set is not None and result.scene not in scene_set:
+                continue
+            gt = load_groundtruth(result.scene, data, remove_repeated)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", LorisWarning)  # kept in FileErrors.warnings
+                done.append(
+                    compute_errors(
+                        result, gt, algorithm=algorithm, file=rel, suite=suite, mode=mode, scale=scale,
+                        official_interpolation=official_interpolation, max_gap=max_gap, other_spans=spans,
+                    )
+                )  # fmt: skip
+        except DataNotFoundError as exc:
+            skipped.append(Failure(path, str(exc), "no-groundtruth"))
+        except LorisError as exc:
+            failed.append(Failure(path, str(exc), type(exc).__name__))
+    roots = as_paths(paths)
+    root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
+    for w in dict.fromkeys(w for f in done for w in f.warnings):
+        warnings.warn(w, LorisWarning, stacklevel=2)
+    return Evaluation(done, failed, root, skipped, data)

@@ -1,0 +1,186 @@
+"""A bridge to evo both ways: :func:`to_evo` / :func:`from_evo` convert between lorisnb's
+:class:`~lorisnb.core.trajectory.Trajectory` and evo's ``PoseTrajectory3D``; :func:`evo_result_table`
+turns an evo ``Result`` into tidy tables; :func:`pair_poses` builds identically associated pose
+pairs, and :func:`evo_ape` / :func:`evo_rpe` compute evo's numbers on them, which
+:mod:`lorisnb.tools.crosscheck` compares with lorisnb's. evo is imported when first used
+(``pip install 'lorisnb[evo]'``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from scipy.spatial.transform import Rotation
+
+from ..core.association import MAX_GAP, associate
+from ..core.geometry import Sim3, umeyama
+from ..core.trajectory import Trajectory
+from ..errors import EvaluationError
+from ._extras import require
+
+CROSSCHECK_COLUMNS = ["quantity", "alignment", "lorisnb", "evo", "abs_diff", "rel_diff", "agrees", "n_pairs", "note"]
+
+#: Agreement on identical pairs: both libraries do the same float64 math in a different order,
+#: so results agree to ~1e-12; 1e-9 (absolute, metres/degrees, or relative) leaves margin.
+TOLERANCE = 1e-9
+
+#: evo's default association window (``evo_ape --t_max_diff``), seconds.
+EVO_MAX_DIFF = 0.01
+
+
+def to_evo(traj: Trajectory, name: str = ""):
+    """A lorisnb Trajectory as evo's ``PoseTrajectory3D`` (quaternions become ``wxyz``)."""
+    PoseTrajectory3D = require("evo.core.trajectory").PoseTrajectory3D
+
+    q = traj.rotations().as_quat() if len(traj) else np.zeros((0, 4))
+    out = PoseTrajectory3D(
+        positions_xyz=np.asarray(traj.positions, float),
+        orientations_quat_wxyz=q[:, [3, 0, 1, 2]],
+        timestamps=np.asarray(traj.stamps, float),
+    )
+    if name:
+        out.name = name
+    return out
+
+
+def from_evo(traj) -> Trajectory:
+    """evo's ``PoseTrajectory3D`` (or ``PosePath3D``: stamps become indices) as a lorisnb Trajectory."""
+    q = np.asarray(traj.orientations_quat_wxyz, float)[:, [1, 2, 3, 0]]
+    stamps = np.asarray(getattr(traj, "timestamps", np.arange(traj.num_poses, dtype=float)), float)
+    return Trajectory(stamps, np.asarray(traj.positions_xyz, float).copy(), q, None, {"source": "evo"})
+
+
+def evo_result_table(result) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """An evo ``Result`` (from ``evo.main_ape.ape`` / ``main_rpe.rpe`` or ``Result`` files) as
+    (per-pose table: stamp, error; statistics table: statistic, value, metric)."""
+    arrays = result.np_arrays
+    err = np.asarray(arrays.get("error_array", []), float)
+    stamps = np.asarray(arrays.get("timestamps", np.arange(len(err))), float)[: len(err)]
+    title = result.info.get("title", "")
+    per_pose = pd.DataFrame({"stamp": stamps, "error": err, "metric": title})
+    stats = pd.DataFrame([dict(statistic=k, value=float(v), metric=title) for k, v in result.stats.items()])
+    return per_pose, stats
+
+
+@dataclass
+class PairedPoses:
+    """Estimate poses and ground truth at the same stamps (the pairs both libraries score)."""
+
+    stamps: np.ndarray
+    gt_positions: np.ndarray
+    gt_rotations: Rotation
+    est_positions: np.ndarray
+    est_rotations: Rotation
+    how: str
+
+    def __len__(self) -> int:
+        return len(self.stamps)
+
+    def as_trajectories(self) -> tuple[Trajectory, Trajectory]:
+        return (
+            Trajectory.from_rotations(self.stamps, self.gt_positions, self.gt_rotations),
+            Trajectory.from_rotations(self.stamps, self.est_positions, self.est_rotations),
+        )
+
+
+def pair_poses(
+    gt: Trajectory, est: Trajectory, max_gap: float = MAX_GAP, by_index: bool = False, official: bool = False
+) -> PairedPoses:
+    """lorisnb's association: ground truth interpolated at each estimate stamp within the 0.5 s
+    bracket (or, ``by_index``, pose i with pose i, as evo does for KITTI files)."""
+    if by_index:
+        n = min(len(gt), len(est))
+        return PairedPoses(
+            est.stamps[:n],
+            gt.positions[:n],
+            gt.rotations()[:n] if n else Rotation.identity(0),
+            est.positions[:n],
+            est.rotations()[:n] if n else Rotation.identity(0),
+            "by index",
+        )
+    a = associate(gt, est.stamps, max_gap, official)
+    if len(a) == 0:
+        raise EvaluationError(
+            f"no estimate stamp lies within {max_gap} s of ground truth on both sides; estimate spans "
+            f"{est.stamps[0] if len(est) else np.nan:.3f}..{est.stamps[-1] if len(est) else np.nan:.3f} s, "
+            f"ground truth {gt.stamps[0]:.3f}..{gt.stamps[-1]:.3f} s"
+        )
+    return PairedPoses(
+        a.stamps,
+        a.gt_positions,
+        a.gt_rotations,
+        est.positions[a.est_index],
+        Rotation.from_quat(est.quaternions[a.est_index]),
+        f"interpolated ground truth within {max_gap} s",
+    )
+
+
+def agreement_row(quantity, alignment, ours, theirs, n, note, tol=TOLERANCE) -> dict:
+    ours = float(ours) if ours is not None else np.nan
+    theirs = float(theirs) if theirs is not None else np.nan
+    diff = abs(ours - theirs) if np.isfinite(ours) and np.isfinite(theirs) else np.nan
+    rel = diff / abs(theirs) if np.isfinite(diff) and theirs != 0 else (0.0 if diff == 0 else np.nan)
+    agrees = bool(np.isfinite(diff) and (diff <= tol or rel <= tol))
+    return dict(
+        quantity=quantity,
+        alignment=alignment,
+        lorisnb=ours,
+        evo=theirs,
+        abs_diff=diff,
+        rel_diff=rel,
+        agrees=agrees,
+        n_pairs=int(n),
+        note=note,
+    )
+
+
+def aligned_estimate(p: PairedPoses, alignment: str) -> tuple[np.ndarray, Rotation, Sim3]:
+    if alignment == "none":
+        sim = Sim3.identity()
+    else:
+        sim = umeyama(p.est_positions, p.gt_positions, with_scale=alignment == "sim3")
+    pos = sim.apply(p.est_positions)
+    rot = Rotation.from_matrix(sim.rotation) * p.est_rotations
+    return pos, rot, sim
+
+
+def evo_aligned(ref, est, alignment: str):
+    import copy
+
+    e = copy.deepcopy(est)
+    if alignment != "none":
+        e.align(ref, correct_scale=alignment == "sim3")
+    return e
+
+
+def evo_ape(ref, est, relation: str) -> np.ndarray:
+    em = require("evo.core.metrics")
+
+    rel = em.PoseRelation.translation_part if relation == "t" else em.PoseRelation.rotation_angle_deg
+    m = em.APE(rel)
+    m.process_data((ref, est))
+    return np.asarray(m.error, float)
+
+
+def evo_rpe(ref, est, relation: str, delta: float, unit: str, all_pairs: bool):
+    em = require("evo.core.metrics")
+
+    rel = em.PoseRelation.translation_part if relation == "t" else em.PoseRelation.rotation_angle_deg
+    u = em.Unit.frames if unit == "f" else em.Unit.meters
+    m = em.RPE(rel, delta, u, all_pairs=all_pairs)
+    m.process_data((ref, est))
+    return np.asarray(m.error, float)
+
+
+def evo_pairs(est_positions: np.ndarray, delta: float, unit: str, all_pairs: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The (i, j) pairs evo's RPE uses (pairs taken on the estimate, evo's default)."""
+    em = require("evo.core.metrics")
+
+    poses = np.tile(np.eye(4), (len(est_positions), 1, 1))
+    poses[:, :3, 3] = est_positions
+    u = em.Unit.frames if unit == "f" else em.Unit.meters
+    pairs = em.id_pairs_from_delta(list(poses), delta, u, all_pairs=all_pairs)
+    arr = np.asarray(pairs, int).reshape(-1, 2)
+    return arr[:, 0], arr[:, 1]

@@ -1,0 +1,320 @@
+"""Figures (matplotlib/seaborn): the paper's timeline (Fig. 2 / Fig. 3), trajectories coloured by
+correctness, and helpers to save figures. Every function returns the Figure; none calls show().
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Iterable, Mapping, Sequence
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import seaborn as sns
+from matplotlib.collections import LineCollection
+from matplotlib.lines import Line2D
+
+from ..core.metrics import correctness
+from ..core.model import FileErrors, scene_eps
+from ..core.timeline import sequence_layout, timeline_table
+
+CORRECT = "#1f5fbf"
+WRONG = "#d62728"
+
+
+def _pct(v: float) -> str:
+    return "n/a" if v is None or not np.isfinite(v) else f"{100 * v:.1f}%"
+
+
+def plot_timeline(
+    errors: Sequence[FileErrors],
+    durations: pd.DataFrame,
+    scene_table: pd.DataFrame,
+    eps: float | str | Mapping[str, float] = np.inf,
+    phi: float = np.inf,
+    delta: float = 1.0,
+    algorithms: Sequence[str] | None = None,
+    labels: Mapping[str, str] | None = None,
+    show_wrong: bool = True,
+    title: str | None = None,
+):
+    """The paper's timeline figure.
+
+    One row per algorithm, the scenes' sequences side by side on a shared time axis (each as long
+    as its ground truth; black dots mark sequence starts). Correct tracking is drawn as blue
+    segments, incorrect estimates as red ones (``show_wrong``, Fig. 3); the first pose of each
+    sequence is a blue dot if correct (initialization / correct re-localization) or a red cross.
+    Per scene, the CR is printed at the top left of each row and the C-ATE RMSE (metres) at the
+    bottom right, from ``scene_table`` (:func:`lorisnb.evaluation.aggregate_scenes`).
+    """
+    segments, firsts = timeline_table(errors, eps, phi, delta)
+    layout = sequence_layout(durations)
+    if algorithms is None:
+        algorithms = sorted({f.algorithm for f in errors})
+    labels = dict(labels or {})
+    n = len(algorithms)
+    width = max(8.0, 0.006 * (layout["offset"].iloc[-1] + layout["duration"].iloc[-1]) + 3) if len(layout) else 8
+    sns.set_theme(style="white", context="paper")
+    fig, ax = plt.subplots(figsize=(min(width, 20), 0.55 * n + 1.4))
+    off = {(r.scene, r.seq): r.offset for r in layout.itertuples()}
+    y_of = {a: n - i for i, a in enumerate(algorithms)}
+    top = n + 0.8
+    for scene, d in layout.groupby("scene", sort=False):
+        x0, x1 = d["offset"].min(), (d["offset"] + d["duration"]).max()
+        ax.plot([x0, x1], [top, top], "-k", lw=1)
+        ax.plot(d["offset"], np.full(len(d), top), "ok", ms=3)
+        ax.text((x0 + x1) / 2, top + 0.25, scene, ha="center", va="bottom", fontsize=9)
+        ax.axvline(x0, color="0.7", lw=0.6)
+        ax.axvline(x1, color="0.7", lw=0.6)
+    for correct_flag, color in ((True, CORRECT), (False, WRONG)):
+        if not show_wrong and not correct_flag:
+            continue
+        s = segments[(segments["correct"] == correct_flag) & segments["algorithm"].isin(algorithms)]
+        s = s[[(sc, q) in off for sc, q in zip(s["scene"], s["seq"], strict=True)]]
+        if s.empty:
+            continue
+        base = np.array([off[(sc, q)] for sc, q in zip(s["scene"], s["seq"], strict=True)])
+        y = s["algorithm"].map(y_of).to_numpy(float)
+        lines = np.stack([np.stack([base + s["start"], y], 1), np.stack([base + s["end"], y], 1)], 1)
+        ax.add_collection(LineCollection(list(lines), colors=color, linewidths=2.2))
+    f = firsts[firsts["algorithm"].isin(algorithms)]
+    f = f[[(sc, q) in off for sc, q in zip(f["scene"], f["seq"], strict=True)]]
+    if len(f):
+        x = np.array([off[(sc, q)] for sc, q in zip(f["scene"], f["seq"], strict=True)]) + f["t"].to_numpy()
+        y = f["algorithm"].map(y_of).to_numpy(float)
+        ok = f["correct"].to_numpy(bool)
+        ax.plot(x[ok], y[ok], "o", color=CORRECT, ms=4)
+        ax.plot(x[~ok], y[~ok], "x", color=WRONG, ms=6, mew=1.5)
+    for r in scene_table[scene_table["algorithm"].isin(algorithms)].itertuples():
+        d = layout[layout["scene"] == r.scene]
+        if d.empty:
+            continue
+        x0, x1 = d["offset"].min(), (d["offset"] + d["duration"]).max()
+        yy = y_of[r.algorithm]
+        ax.text(x0 + 2, yy + 0.12, _pct(r.cr), fontsize=7, ha="left", va="bottom")
+        rmse = r.c_ate_rmse
+        ax.text(
+            x1 - 2, yy - 0.42, "N/A" if not np.isfinite(rmse) else f"{rmse:.3f}", fontsize=7, ha="right", va="bottom"
+        )
+    ax.set_yticks([y_of[a] for a in algorithms], [labels.get(a, a) for a in algorithms])
+    ax.set_ylim(0.4, n + 1.5)
+    if len(layout):
+        ax.set_xlim(layout["offset"].min() - 5, (layout["offset"] + layout["duration"]).max() + 5)
+    ax.set_xticks([])
+    ax.set_xlabel("time (each sequence to scale; black dots mark sequence starts)")
+    sns.despine(ax=ax, left=True, bottom=True)
+    handles = [
+        Line2D([], [], color=CORRECT, lw=2.2, label="correct pose estimates"),
+        Line2D([], [], color=CORRECT, marker="o", ls="", label="correct (re-)localization"),
+    ]
+    if show_wrong:
+        handles += [
+            Line2D([], [], color=WRONG, lw=2.2, label="incorrect pose estimates"),
+            Line2D([], [], color=WRONG, marker="x", ls="", label="incorrect (re-)localization"),
+        ]
+    ax.legend(
+        handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=len(handles), frameon=False, fontsize=8
+    )
+    if title:
+        ax.set_title(title, fontsize=10, pad=18)
+    fig.tight_layout()
+    return fig
+
+
+def plot_trajectories(
+    errors: FileErrors, eps: float | str | Mapping[str, float] = np.inf, phi: float = np.inf, max_cols: int = 3
+):
+    """Top view (x-y, metres) of each sequence: interpolated ground truth in grey, the aligned
+    estimate as points coloured by correctness (blue correct, red wrong)."""
+    seqs = [e for e in errors.sequences if e.matched]
+    n = max(1, len(seqs))
+    cols = min(max_cols, n)
+    rows = int(np.ceil(n / cols))
+    sns.set_theme(style="whitegrid", context="paper")
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4.0 * rows), squeeze=False)
+    e_eps = scene_eps(eps, errors.scene)
+    for ax, e in zip(axes.flat, seqs, strict=False):
+        c = correctness(e.ate, e.aoe, e_eps, phi)
+        ax.plot(e.gt_positions[:, 0], e.gt_positions[:, 1], "-", color="0.6", lw=1.2, label="ground truth")
+        ax.scatter(e.est_positions[c, 0], e.est_positions[c, 1], s=3, color=CORRECT, label="estimate, correct")
+        ax.scatter(e.est_positions[~c, 0], e.est_positions[~c, 1], s=3, color=WRONG, label="estimate, wrong")
+        ax.set_title(f"{errors.scene}-{e.seq}: {c.mean():.0%} of {e.matched} poses correct", fontsize=9)
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_aspect("equal", adjustable="datalim")
+    for ax in list(axes.flat)[len(seqs) :]:
+        ax.axis("off")
+    if seqs:
+        axes.flat[0].legend(fontsize=7, loc="best", markerscale=3)
+    fig.suptitle(f"{errors.algorithm}: {errors.file} ({errors.mode}, top view)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def save_figure(fig, out_dir: str | Path, name: str, formats: Iterable[str] = ("png", "svg")) -> list[Path]:
+    """Write a figure as ``name.png`` and ``name.svg`` in ``out_dir``; returns the paths."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for fmt in formats:
+        p = out_dir / f"{name}.{fmt}"
+        fig.savefig(p, dpi=150, bbox_inches="tight")
+        paths.append(p)
+    return paths
+
+
+# --- threshold sensitivity -------------------------------------------------------------------
+
+
+def _mark(ax, x, label: str | None = None, axis: str = "x") -> None:
+    line = ax.axvline if axis == "x" else ax.axhline
+    line(x, color="0.25", ls="--", lw=1)
+    if label:
+        ax.annotate(
+            label,
+            xy=(x, 1.0),
+            xycoords=("data", "axes fraction"),
+            xytext=(3, -12),
+            textcoords="offset points",
+            fontsize=7,
+            color="0.25",
+        )
+
+
+def plot_metric_vs_threshold(
+    scenes: pd.DataFrame,
+    x: str,
+    y: str = "cr",
+    marks: Mapping[str, float] | float | None = None,
+    log: bool = True,
+    hue: str = "algorithm",
+    col: str = "scene",
+    xlabel: str | None = None,
+    ylabel: str | None = None,
+    col_wrap: int = 4,
+):
+    """Lines of a scene metric (``cr``, ``cr_t``, ``cs_r_mean``, ...) against one threshold, one
+    panel per scene, one line per algorithm; ``marks`` draws the paper's value (a number, or one
+    per scene) as a dashed line. ``scenes`` is a scene aggregate of a sweep."""
+    sns.set_theme(style="whitegrid", context="paper")
+    data = scenes.replace([np.inf], np.nan).dropna(subset=[x]) if log else scenes
+    g = sns.relplot(
+        data=data,
+        x=x,
+        y=y,
+        hue=hue,
+        col=col,
+        kind="line",
+        marker="o",
+        markersize=3,
+        col_wrap=min(col_wrap, data[col].nunique()) if col else None,
+        height=2.8,
+        aspect=1.15,
+        facet_kws={"sharey": True, "sharex": True},
+    )
+    for key, ax in g.axes_dict.items():
+        if log:
+            ax.set_xscale("log")
+        m = marks.get(key) if isinstance(marks, Mapping) else marks
+        if m is not None and np.isfinite(m):
+            _mark(ax, m, "paper")
+    g.set_axis_labels(xlabel or x, ylabel or y)
+    g.set_titles("{col_name}")
+    return g.figure
+
+
+def plot_cr_heatmaps(
+    scenes: pd.DataFrame, scene: str, mark: tuple[float, float] | None = None, metric: str = "cr", max_cols: int = 3
+):
+    """Heatmaps of a scene metric over (eps, phi), one per algorithm, for one scene; ``mark``
+    outlines the cell of the paper's (eps, phi)."""
+    d = scenes[(scenes["scene"] == scene) & np.isfinite(scenes["eps"]) & np.isfinite(scenes["phi"])]
+    algs = sorted(d["algorithm"].unique())
+    cols = min(max_cols, max(1, len(algs)))
+    rows = int(np.ceil(len(algs) / cols)) or 1
+    sns.set_theme(style="white", context="paper")
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.6 * rows), squeeze=False)
+    for ax, alg in zip(axes.flat, algs, strict=False):
+        wide = (
+            d[d["algorithm"] == alg].pivot_table(index="phi", columns="eps", values=metric).sort_index(ascending=False)
+        )
+        sns.heatmap(
+            wide,
+            ax=ax,
+            vmin=0,
+            vmax=1,
+            cmap="viridis",
+            cbar=ax is axes.flat[cols - 1],
+            xticklabels=[f"{v:.2g}" for v in wide.columns],
+            yticklabels=[f"{v:.0f}" for v in wide.index],
+        )
+        ax.set_title(alg, fontsize=9)
+        ax.set_xlabel("eps (m)")
+        ax.set_ylabel("phi (deg)")
+        if mark is not None:
+            ci = int(np.argmin(np.abs(np.asarray(wide.columns, float) - mark[0])))
+            ri = int(np.argmin(np.abs(np.asarray(wide.index, float) - mark[1])))
+            ax.add_patch(plt.Rectangle((ci, ri), 1, 1, fill=False, edgecolor="red", lw=2))
+    for ax in list(axes.flat)[len(algs) :]:
+        ax.axis("off")
+    fig.suptitle(
+        f"{scene}: {metric.upper()} over ATE threshold eps and AOE threshold phi (red box: the paper's setting)",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    return fig
+
+
+def plot_rank_stability(stability: pd.DataFrame):
+    """Kendall's tau between the ranking at each eps and at the reference (paper) eps, per scene."""
+    sns.set_theme(style="whitegrid", context="paper")
+    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    d = stability[np.isfinite(stability["eps"])]
+    sns.lineplot(data=d, x="eps", y="kendall_tau", hue="scene", marker="o", ax=ax)
+    for scene, ref in d.groupby("scene")["reference_eps"].first().items():
+        ax.axvline(ref, color=sns.color_palette()[list(d["scene"].unique()).index(scene) % 10], ls="--", lw=0.8)
+    ax.set_xscale("log")
+    ax.set_ylim(-1.05, 1.05)
+    ax.set_xlabel("eps (m)")
+    ax.set_ylabel("Kendall tau vs ranking at the paper's eps")
+    ax.set_title("How stable is the ranking of algorithms by CR? (dashed: paper's eps)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def plot_crosscheck_scatter(per_pose: Mapping[str, pd.DataFrame]):
+    """lorisnb ATE against evo APE (and AOE against evo's rotation angle), per pose, one column
+    per dataset: points lie on the diagonal where the association coincides."""
+    n = len(per_pose)
+    sns.set_theme(style="whitegrid", context="paper")
+    fig, axes = plt.subplots(2, n, figsize=(3.6 * n, 6.6), squeeze=False)
+    for k, (name, df) in enumerate(per_pose.items()):
+        for r, (ours, theirs, unit) in enumerate((("ate_lorisnb", "ate_evo", "m"), ("aoe_lorisnb", "aoe_evo", "deg"))):
+            ax = axes[r, k]
+            ax.scatter(df[theirs], df[ours], s=4, alpha=0.5)
+            hi = float(max(df[theirs].max(), df[ours].max())) if len(df) else 1.0
+            ax.plot([0, hi], [0, hi], "--", color="0.3", lw=1)
+            ax.set_xlabel(f"evo APE ({unit})")
+            ax.set_ylabel(f"lorisnb {'ATE' if r == 0 else 'AOE'} ({unit})")
+            diff = np.max(np.abs(df[ours] - df[theirs])) if len(df) else np.nan
+            ax.set_title(f"{name}\nmax |difference| {diff:.1e} {unit}", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def plot_normalized_accuracy(measures: pd.DataFrame, published: pd.DataFrame):
+    """ATE RMSE as % of the distance travelled: computed sequences as points (one row per
+    dataset, coloured by scene or sequence), published values as black diamonds on their own rows."""
+    sns.set_theme(style="whitegrid", context="paper")
+    fig, ax = plt.subplots(figsize=(8, 3.8))
+    pts = measures.dropna(subset=["ate_pct_length"])
+    sns.stripplot(data=pts, y="dataset", x="ate_pct_length", hue="group", dodge=False, alpha=0.6, ax=ax, size=4)
+    rows = [f"{d} (published)" for d in published["dataset"]]
+    ax.scatter(published["ate_pct_length"], rows, marker="D", color="black", label="published values")
+    ax.set_xscale("log")
+    ax.set_xlabel("ATE RMSE, % of the distance travelled (log scale)")
+    ax.set_ylabel("")
+    ax.legend(fontsize=7, bbox_to_anchor=(1.01, 1), loc="upper left")
+    ax.set_title("Accuracy normalized by path length: computed sequences and published values", fontsize=10)
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,1 @@
+"""lorisnb's notebooks, shipped as package data (``lorisnb.notebooks``): ``lorisnb report`` runs them."""

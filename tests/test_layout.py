@@ -1,0 +1,109 @@
+"""The package's shape: the public API (pinned), the names the README shows, the layers, private
+names kept private, notebooks stored clean. Fast, and independent of ../shared/data."""
+
+from __future__ import annotations
+
+import ast
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import nbformat
+import pytest
+
+import lorisnb as ln
+from lorisnb.tools.report import DEFAULT_NOTEBOOKS, notebook_dir
+
+ROOT = Path(__file__).resolve().parents[1]
+
+PUBLIC_API = [
+    "DataNotFoundError", "EvaluationError", "Evaluation", "FileErrors", "FrameError", "LorisError", "LorisWarning",
+    "MissingDependencyError", "OpenLorisFile", "OutputError", "PAPER_EPS", "PAPER_PHI", "ParseError",
+    "ResultFile", "SCENES", "SequenceErrors", "Trajectory", "ValidationError", "__version__", "aggregate_scenes",
+    "compute_errors", "evaluate", "find_data", "load_groundtruth", "pose_table", "read_euroc", "read_kitti",
+    "read_openloris", "read_ordslam", "read_trajectory", "read_tum", "score", "sequence_errors", "setup", "sweep",
+    "write_openloris",
+]  # fmt: skip
+
+
+def test_public_api_is_pinned():
+    assert sorted(ln.__all__) == sorted(PUBLIC_API)
+    assert all(hasattr(ln, n) for n in ln.__all__)
+
+
+def test_version_is_defined_once():
+    from importlib import metadata
+
+    assert ln.__version__ == metadata.version("lorisnb")
+    assert "version =" not in (ROOT / "pyproject.toml").read_text().split("[project]")[1].split("[")[0]
+
+
+def test_names_the_readme_shows_exist():
+    text = (ROOT / "README.md").read_text()
+    for name in set(re.findall(r"\blorisnb\.([A-Za-z_][A-Za-z0-9_]*)\(", text)) | set(
+        re.findall(r"\bln\.([A-Za-z_][A-Za-z0-9_]*)\b", text)
+    ):
+        assert hasattr(ln, name), f"the README uses lorisnb.{name}, which is not exported"
+    for module in set(re.findall(r"`(lorisnb(?:\.[a-z_]+)+)`", text)):
+        parts = module.split(".")
+        for k in range(len(parts), 1, -1):  # a module, or a name in a module
+            try:
+                m = __import__(".".join(parts[:k]), fromlist=["x"])
+            except ImportError:
+                continue
+            obj = m
+            for attr in parts[k:]:
+                assert hasattr(obj, attr), f"the README names {module}, which does not exist"
+                obj = getattr(obj, attr)
+            break
+        else:
+            pytest.fail(f"the README names {module}, which does not exist")
+
+
+def _imports(path: Path):
+    tree = ast.parse(path.read_text())
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            yield node, [a.name for a in node.names]
+
+
+def test_no_private_names_imported_across_modules():
+    for path in (ROOT / "lorisnb").rglob("*.py"):
+        for node, names in _imports(path):
+            private = [n for n in names if n.startswith("_") and not n.startswith("__")]
+            assert not private, f"{path.relative_to(ROOT)}:{node.lineno} imports private {private} from {node.module}"
+
+
+def test_layers_hold():
+    """The import contracts of pyproject.toml (core < io < tools < cli) hold."""
+    lint = Path(sys.executable).with_name("lint-imports")
+    r = subprocess.run([str(lint)], cwd=ROOT, capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "broken" not in r.stdout.lower() or "0 broken" in r.stdout.lower()
+
+
+def test_core_does_not_look_for_data():
+    for path in (ROOT / "lorisnb" / "core").rglob("*.py"):
+        text = path.read_text()
+        for banned in ("find_data", "LORISNB_DATA", "os.environ", "print("):
+            assert banned not in text, f"{path.name} uses {banned}"
+
+
+def test_notebooks_are_stored_clean_with_one_parameters_cell():
+    found = sorted(p.stem for p in notebook_dir().glob("*.ipynb"))
+    assert found == sorted(DEFAULT_NOTEBOOKS)
+    for path in notebook_dir().glob("*.ipynb"):
+        nb = nbformat.read(str(path), as_version=4)
+        code = [c for c in nb.cells if c.cell_type == "code"]
+        assert all(not c.outputs and c.execution_count is None for c in code), path.name
+        tagged = [c for c in code if "parameters" in c.metadata.get("tags", [])]
+        assert len(tagged) == 1, path.name
+        assert "output_dir = None" in tagged[0].source and "quick" in tagged[0].source, path.name
+        assert sum("ln.setup(" in c.source for c in code) == 1, f"{path.name}: one setup call"
+
+
+def test_modules_are_small():
+    for path in (ROOT / "lorisnb").rglob("*.py"):
+        n = len(path.read_text().splitlines())
+        assert n <= 400, f"{path.relative_to(ROOT)} has {n} lines"

@@ -1,0 +1,100 @@
+"""A wheel of lorisnb installed outside the checkout runs `lorisnb evaluate` and `lorisnb report`
+with `--data`: the notebooks ship as package data and nothing assumes the source tree."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import sysconfig
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory):
+    """A fresh venv with lorisnb from its wheel (dependencies from this environment's
+    site-packages through a .pth file, which does not activate the editable install)."""
+    base = tmp_path_factory.mktemp("wheel")
+    dist = base / "dist"
+    subprocess.run(
+        [sys.executable, "-m", "build", "--wheel", "--no-isolation", "--outdir", str(dist), str(ROOT)],
+        check=True,
+        capture_output=True,
+        cwd=base,
+    )
+    wheel = next(dist.glob("lorisnb-*.whl"))
+    venv = base / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
+    py = venv / "bin" / "python"
+    site = Path(
+        subprocess.run(
+            [str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+            check=True,
+            capture_output=True,
+            text=True,
+        ).stdout.strip()
+    )
+    (site / "deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    subprocess.run(
+        [sys.executable, "-m", "pip", "install", "--no-deps", "--no-index", "--target", str(site), str(wheel)],
+        check=True,
+        capture_output=True,
+    )
+    return venv, base
+
+
+def _run(venv: Path, cwd: Path, *args: str) -> subprocess.CompletedProcess:
+    env = {k: v for k, v in os.environ.items() if k not in ("LORISNB_DATA", "PYTHONPATH")}
+    env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"
+    return subprocess.run(
+        [str(venv / "bin" / "python"), "-m", "lorisnb.cli", *args],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+
+
+def test_wheel_evaluates_and_reports_outside_the_checkout(installed, data, tmp_path):
+    venv, _ = installed
+    where = subprocess.run(
+        [str(venv / "bin" / "python"), "-c", "import lorisnb; print(lorisnb.__file__)"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    assert str(ROOT) not in where and "site-packages" in where
+    src = data.icra20 / "per-seq" / "orbslam2_rgbd" / "cafe_1_1_orbslam2-original.txt"
+    r = _run(venv, tmp_path, "evaluate", str(src), "--data", str(data.root), "--csv", "out.csv", "--no-progress")
+    assert r.returncode == 0, r.stderr
+    row = pd.read_csv(tmp_path / "out.csv").iloc[0]
+    assert row["matched"] == 1708 and row["ate_rmse"] == pytest.approx(0.472544, abs=1e-6)  # issue #2 reference
+    r = _run(
+        venv,
+        tmp_path,
+        "report",
+        "--data",
+        str(data.root),
+        "--out",
+        "rep",
+        "--notebooks",
+        "metrics_primer",
+        "-p",
+        "quick",
+        "true",
+        "--no-progress",
+    )
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert (tmp_path / "rep" / "index.html").exists()
+    assert (tmp_path / "rep" / "metrics_primer" / "primer_cases.csv").exists()
+    # no data given and none beside the folder: a clear error naming where it looked
+    r = _run(venv, tmp_path, "evaluate", str(src), "--no-progress")
+    assert r.returncode == 2 and "could not find its data" in r.stderr and str(tmp_path) in r.stderr
