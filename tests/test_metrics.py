@@ -71,8 +71,8 @@ def test_association_bracket_is_strict_and_interpolates():
 
 def test_official_slerp_at_a_groundtruth_stamp_takes_the_interval_ending_there():
     gt = _gt()
-    exact = associate(gt, np.array([0.4]), official=False)
-    off = associate(gt, np.array([0.4]), official=True)
+    exact = associate(gt, np.array([0.4]), official_interpolation=False)
+    off = associate(gt, np.array([0.4]), official_interpolation=True)
     # positions identical; the correct slerp gives 40 deg, the official one the start of [0, 0.4]
     np.testing.assert_allclose(off.gt_positions, exact.gt_positions)
     assert exact.gt_rotations.as_euler("xyz", degrees=True)[0, 2] == pytest.approx(40.0)

@@ -22,12 +22,12 @@ MAX_GAP = 0.5  # seconds; the official tool's bracket
 
 
 def groundtruth_in_frame(
-    gt: Trajectory, scene: str, frame: str, official: bool = False, gt_frame: str = "base_link"
+    gt: Trajectory, scene: str, frame: str, official_interpolation: bool = False, gt_frame: str = "base_link"
 ) -> Trajectory:
     """Ground-truth poses of ``gt_frame`` (``base_link`` in OpenLORIS) moved to sensor ``frame``:
     ``world_T_gt @ T_gt_frame``.
 
-    With ``official=True`` the quaternions are computed as the official tool computes them (ROS
+    With ``official_interpolation=True`` the quaternions are computed as the official tool computes them (ROS
     tf's ``quaternion_from_matrix``), whose signs decide its interpolation slip; otherwise they are
     scipy's. The same frame returns ``gt`` unchanged (raw quaternions, as read).
     """
@@ -41,7 +41,7 @@ def groundtruth_in_frame(
     rot = gt.rotations()
     positions = gt.positions + rot.apply(t_off)
     new_rot = rot * r_off
-    if official:
+    if official_interpolation:
         quats = ros_quaternion_from_matrix(new_rot.as_matrix())
     else:
         quats = new_rot.as_quat()
@@ -71,15 +71,17 @@ class Association:
         return len(self.stamps)
 
 
-def associate(gt: Trajectory, est_stamps: np.ndarray, max_gap: float = MAX_GAP, official: bool = False) -> Association:
+def associate(
+    gt: Trajectory, est_stamps: np.ndarray, max_gap: float = MAX_GAP, official_interpolation: bool = False
+) -> Association:
     """Match estimate stamps to the ground truth by interpolation (see the module docstring).
 
     Args:
         gt: ground truth in the estimate's frame, stamps strictly increasing.
         est_stamps: (N,) estimate stamps, seconds, strictly increasing.
         max_gap: the bracket in seconds (strict: ``max(t - k1, k2 - t) < max_gap``).
-        official: interpolate orientations as the official tool does (slip (a): see
-            :func:`lorisnb.geometry.official_slerp`; at a stamp equal to a ground-truth stamp it
+        official_interpolation: interpolate orientations as the official tool does (slip (a): see
+            :func:`lorisnb.core.geometry.official_slerp`; at a stamp equal to a ground-truth stamp it
             uses the interval ending there). Positions are the same either way.
     """
     g = gt.stamps
@@ -99,7 +101,7 @@ def associate(gt: Trajectory, est_stamps: np.ndarray, max_gap: float = MAX_GAP, 
     w1 = 1.0 - w2
     p = gt.positions
     pos = w1[:, None] * p[i] + w2[:, None] * p[i + 1]
-    if official:
+    if official_interpolation:
         q = gt.quaternions
         rot = Rotation.from_quat(official_slerp(q[i], q[i + 1], w1, w2))
     else:

@@ -60,8 +60,8 @@ def difficulty_measures(
     """The normalized measures of one evaluated sequence (see the module docstring).
 
     Args:
-        e: per-pose errors of the sequence (:func:`lorisnb.evaluation.compute_errors` or
-            :func:`lorisnb.evaluation.sequence_errors`).
+        e: per-pose errors of the sequence (:func:`lorisnb.core.pipeline.compute_errors` or
+            :func:`lorisnb.core.pipeline.sequence_errors`).
         gt: the sequence's full ground truth (for its length and extent).
         eps_fraction: eps as a fraction of the ground truth's size for ``cr_scaled``.
         relative_to: that size: ``extent`` (bounding-box diagonal) or ``length`` (distance travelled).

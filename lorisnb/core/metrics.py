@@ -4,7 +4,7 @@ Equation numbers refer to Shi et al., "Are We Ready for Service Robots? The Open
 Datasets for Lifelong SLAM", ICRA 2020 (``../shared/papers/openloris-scene-2020.md``).
 
 Every threshold argument broadcasts: pass arrays of eps / phi / delta / tau shaped for a grid and
-get the grid back (that is how :mod:`lorisnb.sweep` evaluates thousands of settings at once).
+get the grid back (that is how :mod:`lorisnb.core.sweep` evaluates thousands of settings at once).
 Units: metres, degrees, seconds.
 """
 

@@ -29,26 +29,26 @@ Spans = Mapping[str, tuple[float, float]] | Callable[[], Mapping[str, tuple[floa
 
 
 def apply_alignment(
-    sim: Sim3, positions: np.ndarray, rotations: Rotation, official: bool = False
+    sim: Sim3, positions: np.ndarray, rotations: Rotation, official_interpolation: bool = False
 ) -> tuple[np.ndarray, Rotation]:
-    """Apply an alignment to poses: positions (N, 3) metres and orientations. With ``official``
+    """Apply an alignment to poses: positions (N, 3) metres and orientations. With ``official_interpolation``
     and a scale, the orientation is extracted from ``s * R * R_p`` as the official tool does
     (its slip (b))."""
     pos = sim.apply(positions)
-    if official and sim.scale != 1.0:
+    if official_interpolation and sim.scale != 1.0:
         blocks = sim.scale * np.einsum("ij,njk->nik", sim.rotation, rotations.as_matrix())
         return pos, Rotation.from_quat(ros_quaternion_from_matrix(blocks))
     return pos, Rotation.from_matrix(sim.rotation) * rotations
 
 
 def errors_after_alignment(
-    seq: int, est: Trajectory, a: Association, sim: Sim3, official: bool = False
+    seq: int, est: Trajectory, a: Association, sim: Sim3, official_interpolation: bool = False
 ) -> SequenceErrors:
     """Per-pose ATE (m) and AOE (deg) of the matched poses of ``est`` after alignment ``sim``."""
     if len(a) == 0 or a.gt_rotations is None:
         return SequenceErrors.unmatched(seq, len(est), a.gt_start, a.gt_end)
     pos, rot = apply_alignment(
-        sim, est.positions[a.est_index], Rotation.from_quat(est.quaternions[a.est_index]), official
+        sim, est.positions[a.est_index], Rotation.from_quat(est.quaternions[a.est_index]), official_interpolation
     )
     return SequenceErrors(
         seq=seq, poses=len(est), stamps=a.stamps, ate=metrics.ate(pos, a.gt_positions),

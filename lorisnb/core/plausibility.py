@@ -1,5 +1,5 @@
 """Plausibility checks that save users hours: each returns a message (or None) saying what looks
-wrong, the numbers behind it, and the likely cause. :func:`lorisnb.evaluation.compute_errors` runs
+wrong, the numbers behind it, and the likely cause. :func:`lorisnb.core.pipeline.compute_errors` runs
 them and issues the messages as warnings; the evaluation itself is never changed by them.
 """
 

@@ -163,7 +163,7 @@ def read_ordslam(path: str | os.PathLike, fps: float | None = None, layout: str 
             ``pose``, ``kitti``, ``index-kitti``): stamp = frame / fps, seconds.
         layout: force one of :data:`LAYOUTS` instead of detecting it.
 
-    Returns a :class:`~lorisnb.trajectory.Trajectory` with ``meta = {"dataset": "ORDSLAM",
+    Returns a :class:`~lorisnb.core.trajectory.Trajectory` with ``meta = {"dataset": "ORDSLAM",
     "layout": ..., "fps": ...}``.
     """
     spath = str(path)

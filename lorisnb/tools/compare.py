@@ -1,5 +1,5 @@
 """Indoor (OpenLORIS-Scene, TUM RGB-D) against outdoor (ORDSLAM): tables of trajectory statistics
-and normalized difficulty measures (:mod:`lorisnb.difficulty`) for every dataset at hand, with the
+and normalized difficulty measures (:mod:`lorisnb.core.difficulty`) for every dataset at hand, with the
 same columns so they can be stacked and grouped."""
 
 from __future__ import annotations

@@ -86,7 +86,11 @@ class PairedPoses:
 
 
 def pair_poses(
-    gt: Trajectory, est: Trajectory, max_gap: float = MAX_GAP, by_index: bool = False, official: bool = False
+    gt: Trajectory,
+    est: Trajectory,
+    max_gap: float = MAX_GAP,
+    by_index: bool = False,
+    official_interpolation: bool = False,
 ) -> PairedPoses:
     """lorisnb's association: ground truth interpolated at each estimate stamp within the 0.5 s
     bracket (or, ``by_index``, pose i with pose i, as evo does for KITTI files)."""
@@ -100,7 +104,7 @@ def pair_poses(
             est.rotations()[:n] if n else Rotation.identity(0),
             "by index",
         )
-    a = associate(gt, est.stamps, max_gap, official)
+    a = associate(gt, est.stamps, max_gap, official_interpolation)
     if len(a) == 0:
         raise EvaluationError(
             f"no estimate stamp lies within {max_gap} s of ground truth on both sides; estimate spans "

@@ -45,7 +45,7 @@ def plot_timeline(
     segments, incorrect estimates as red ones (``show_wrong``, Fig. 3); the first pose of each
     sequence is a blue dot if correct (initialization / correct re-localization) or a red cross.
     Per scene, the CR is printed at the top left of each row and the C-ATE RMSE (metres) at the
-    bottom right, from ``scene_table`` (:func:`lorisnb.evaluation.aggregate_scenes`).
+    bottom right, from ``scene_table`` (:func:`lorisnb.core.aggregate.aggregate_scenes`).
     """
     segments, firsts = timeline_table(errors, eps, phi, delta)
     layout = sequence_layout(durations)

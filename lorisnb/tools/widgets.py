@@ -101,7 +101,7 @@ class ThresholdExplorer:
 
 
 class FaultExplorer:
-    """Sliders for the simulator's faults (:class:`lorisnb.simulate.Faults`) on one ground-truth
+    """Sliders for the simulator's faults (:class:`lorisnb.core.simulate.Faults`) on one ground-truth
     sequence: every change re-simulates, re-scores and redraws the metrics and the timeline."""
 
     def __init__(
