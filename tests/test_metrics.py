@@ -131,3 +131,20 @@ def test_groundtruth_in_another_frame_composes_extrinsics():
     again = groundtruth_in_frame(in_color, "cafe", "t265_fisheye1", gt_frame="d400_color")
     np.testing.assert_allclose(again.positions, via_base.positions, atol=1e-12)
     np.testing.assert_allclose((again.rotations().inv() * via_base.rotations()).magnitude(), 0, atol=1e-12)
+
+
+def test_fast_rotation_helpers_equal_scipy():
+    """geometry.compose and geometry.slerp are scipy's Rotation.__mul__ and Slerp, vectorized."""
+    from scipy.spatial.transform import Rotation, Slerp
+
+    from lorisnb.core.geometry import compose, slerp
+
+    a, b = Rotation.random(500, random_state=1), Rotation.random(500, random_state=2)
+    np.testing.assert_allclose(compose(a, b).as_matrix(), (a * b).as_matrix(), atol=1e-14)
+    np.testing.assert_allclose(compose(a, b[0]).as_matrix(), (a * b[0]).as_matrix(), atol=1e-14)
+    w = np.random.default_rng(3).uniform(0, 1, 500)
+    ours = Rotation.from_quat(slerp(a.as_quat(), -b.as_quat(), w))  # signs must not matter
+    theirs = Rotation.concatenate([Slerp([0.0, 1.0], Rotation.concatenate([a[k], b[k]]))(w[k]) for k in range(500)])
+    np.testing.assert_allclose(ours.as_matrix(), theirs.as_matrix(), atol=1e-12)
+    near = Rotation.from_quat(slerp(a.as_quat(), a.as_quat(), w))  # equal ends: no division by zero
+    np.testing.assert_allclose(near.as_matrix(), a.as_matrix(), atol=1e-14)

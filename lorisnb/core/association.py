@@ -12,10 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
+from scipy.spatial.transform import Rotation
 
 from .frames import extrinsic, relative_extrinsic
-from .geometry import official_slerp, ros_quaternion_from_matrix
+from .geometry import compose, official_slerp, ros_quaternion_from_matrix, slerp
 from .trajectory import Trajectory
 
 MAX_GAP = 0.5  # seconds; the official tool's bracket
@@ -40,7 +40,7 @@ def groundtruth_in_frame(
         t_off, r_off = relative_extrinsic(scene, gt_frame, frame)
     rot = gt.rotations()
     positions = gt.positions + rot.apply(t_off)
-    new_rot = rot * r_off
+    new_rot = compose(rot, r_off)
     if official_interpolation:
         quats = ros_quaternion_from_matrix(new_rot.as_matrix())
     else:
@@ -105,7 +105,7 @@ def associate(
         q = gt.quaternions
         rot = Rotation.from_quat(official_slerp(q[i], q[i + 1], w1, w2))
     else:
-        # Slerp over the bracketing ground-truth poses only (adjacent knots keep their interval)
-        knots = np.unique(np.concatenate((i, i + 1)))
-        rot = Slerp(g[knots], Rotation.from_quat(gt.quaternions[knots]))(t)
+        # slerp between the bracketing ground-truth poses (scipy's Slerp on each interval)
+        q = gt.quaternions
+        rot = Rotation.from_quat(slerp(q[i], q[i + 1], w2))
     return Association(idx, t, pos, rot, gt_start, gt_end)

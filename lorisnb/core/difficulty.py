@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
+from .geometry import angle_deg, compose
 from .model import SequenceErrors
 from .trajectory import Trajectory
 
@@ -36,7 +37,7 @@ def trajectory_stats(traj: Trajectory) -> dict:
             rate_hz=np.nan,
         )
     rot = traj.rotations()
-    turn = np.degrees((rot[:-1].inv() * rot[1:]).magnitude()).sum()
+    turn = angle_deg(compose(rot[:-1].inv(), rot[1:])).sum()
     dur = traj.duration
     return dict(
         poses=n,

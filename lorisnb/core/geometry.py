@@ -143,6 +143,49 @@ def official_slerp(q1: np.ndarray, q2: np.ndarray, w1: np.ndarray, w2: np.ndarra
     return k1[:, None] * q1 + k2[:, None] * q2
 
 
+def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
+    """Hamilton product ``q1 (x) q2`` of quaternions ``xyzw``, broadcast over leading axes: the
+    rotation that applies ``q2`` first, then ``q1``."""
+    q1, q2 = np.asarray(q1, float), np.asarray(q2, float)
+    v1, w1 = q1[..., :3], q1[..., 3:]
+    v2, w2 = q2[..., :3], q2[..., 3:]
+    w = w1 * w2 - np.sum(v1 * v2, axis=-1, keepdims=True)
+    v = w1 * v2 + w2 * v1 + np.cross(v1, v2)
+    return np.concatenate([v, w], axis=-1)
+
+
+def compose(a: Rotation, b: Rotation) -> Rotation:
+    """``a * b`` (apply ``b``, then ``a``), for one or many rotations on either side.
+
+    The same as scipy's ``Rotation.__mul__``, which in scipy 1.17 costs about 2.7 us per rotation
+    (27 ms for 10,000; ``make bench``); this is one vectorized quaternion product."""
+    return Rotation.from_quat(quat_multiply(a.as_quat(), b.as_quat()))
+
+
+def slerp(q1: np.ndarray, q2: np.ndarray, w2: np.ndarray) -> np.ndarray:
+    """Spherical linear interpolation between unit quaternions ``xyzw`` (N, 4), with weight ``w2``
+    (N,) of ``q2`` (0 gives q1, 1 gives q2), along the shorter arc; unit quaternions out.
+
+    The same rotations as ``scipy.spatial.transform.Slerp`` over each pair (to ~1e-15), without
+    its per-call cost in scipy 1.17 (``Rotation.__mul__``; ``make bench``)."""
+    q1 = np.asarray(q1, float)
+    q1 = q1 / np.linalg.norm(q1, axis=-1, keepdims=True)
+    q2 = np.asarray(q2, float)
+    q2 = q2 / np.linalg.norm(q2, axis=-1, keepdims=True)
+    w2 = np.asarray(w2, float)[..., None]
+    dot = np.sum(q1 * q2, axis=-1, keepdims=True)
+    q2 = np.where(dot < 0, -q2, q2)
+    dot = np.abs(dot)
+    theta = np.arccos(np.clip(dot, -1.0, 1.0))
+    sin_theta = np.sin(theta)
+    small = sin_theta < 1e-9
+    with np.errstate(invalid="ignore", divide="ignore"):
+        k1 = np.where(small, 1.0 - w2, np.sin((1.0 - w2) * theta) / sin_theta)
+        k2 = np.where(small, w2, np.sin(w2 * theta) / sin_theta)
+    q = k1 * q1 + k2 * q2
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
 def angle_deg(rotations: Rotation) -> np.ndarray:
     """Rotation angle of each rotation, degrees in [0, 180]."""
     return np.degrees(rotations.magnitude())

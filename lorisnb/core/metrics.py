@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .geometry import angle_deg
+from .geometry import angle_deg, compose
 
 
 def ate(est_positions: np.ndarray, gt_positions: np.ndarray) -> np.ndarray:
@@ -23,7 +23,7 @@ def ate(est_positions: np.ndarray, gt_positions: np.ndarray) -> np.ndarray:
 
 def aoe(est_rotations: Rotation, gt_rotations: Rotation) -> np.ndarray:
     """Absolute orientation error of each pose: angle of ``R_gt^-1 R_est``, degrees in [0, 180]."""
-    return angle_deg(gt_rotations.inv() * est_rotations)
+    return angle_deg(compose(gt_rotations.inv(), est_rotations))
 
 
 def correctness(ate_m: np.ndarray, aoe_deg: np.ndarray, eps, phi) -> np.ndarray:
@@ -156,10 +156,10 @@ def rpe(
         return np.zeros(0), np.zeros(0)
     gi, gj = gt_rotations[i], gt_rotations[j]
     ei, ej = est_rotations[i], est_rotations[j]
-    rel_g_rot = gi.inv() * gj
+    rel_g_rot = compose(gi.inv(), gj)
     rel_g_t = gi.inv().apply(gt_positions[j] - gt_positions[i])
-    rel_e_rot = ei.inv() * ej
+    rel_e_rot = compose(ei.inv(), ej)
     rel_e_t = ei.inv().apply(est_positions[j] - est_positions[i])
     err_t = rel_g_rot.inv().apply(rel_e_t - rel_g_t)
-    err_r = rel_g_rot.inv() * rel_e_rot
+    err_r = compose(rel_g_rot.inv(), rel_e_rot)
     return np.linalg.norm(err_t, axis=1), angle_deg(err_r)

@@ -18,7 +18,7 @@ from ..errors import EvaluationError, LorisWarning, ParseError
 from . import metrics, plausibility
 from .association import MAX_GAP, Association, associate, groundtruth_in_frame
 from .frames import FRAMES
-from .geometry import Sim3, ros_quaternion_from_matrix, umeyama
+from .geometry import Sim3, compose, ros_quaternion_from_matrix, umeyama
 from .model import MODES, FileErrors, ResultFile, SequenceErrors, is_monocular
 from .trajectory import Trajectory, path_length
 from .validate import choice, scale_value
@@ -38,7 +38,7 @@ def apply_alignment(
     if official_interpolation and sim.scale != 1.0:
         blocks = sim.scale * np.einsum("ij,njk->nik", sim.rotation, rotations.as_matrix())
         return pos, Rotation.from_quat(ros_quaternion_from_matrix(blocks))
-    return pos, Rotation.from_matrix(sim.rotation) * rotations
+    return pos, compose(Rotation.from_matrix(sim.rotation), rotations)
 
 
 def errors_after_alignment(
