@@ -179,9 +179,10 @@ def test_kitti_and_euroc_through_evo(tmp_path_factory, data):
 
 def test_missing_headers_and_empty_file(tmp_path, cafe_gt):
     p = tmp_path / "empty.txt"
-    p.write_bytes(b"")
-    with pytest.raises(ParseError, match="no 'scene: NAME' header"):
-        errors_of(p, cafe_gt)
+    for empty in (b"", b"\n  \n", b"\xef\xbb\xbf"):
+        p.write_bytes(empty)
+        with pytest.raises(ParseError, match="empty.txt: empty file; expected an OpenLORIS trajectory file"):
+            errors_of(p, cafe_gt)
     p.write_bytes(b"seq: 1\n1 0 0 0 0 0 0 1\n")
     with pytest.raises(ParseError, match="no 'scene: NAME' header line"):
         errors_of(p, cafe_gt)

@@ -11,7 +11,7 @@ import pandas as pd
 import papermill as pm
 import pytest
 
-from lorisnb.tools.report import kernel_env, notebook_dir
+from lorisnb.tools.report import KERNEL_ARGS, kernel_env, notebook_dir
 
 NOTEBOOK_DIR = notebook_dir()
 pytestmark = pytest.mark.slow
@@ -34,6 +34,7 @@ def run(name: str, tmp_path: Path, **params) -> Path:
         kernel_name="python3",
         progress_bar=False,
         cwd=str(tmp_path),
+        extra_arguments=KERNEL_ARGS,
     )
     return out
 

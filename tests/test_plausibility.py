@@ -108,3 +108,19 @@ def test_clean_files_raise_no_plausibility_warning(icra20, f):
     assert not any(
         k in m for m in msgs for k in ("nanoseconds", "time span", "orientations fit", "best-fitting", "gap")
     )
+
+
+def test_quaternions_written_w_first(icra20, tmp_path):
+    """A file written 'stamp x y z qw qx qy qz' gives AOE near 180 deg: lorisnb says why."""
+    out = []
+    for line in (icra20 / ORB_CAFE).read_text().splitlines():
+        parts = line.split()
+        if line[:1].isdigit():
+            parts = parts[:-4] + [parts[-1]] + parts[-4:-1]
+        out.append(" ".join(parts))
+    f = tmp_path / "wxyz" / "cafe.txt"
+    f.parent.mkdir()
+    f.write_text("\n".join(out) + "\n")
+    msgs = _warned(f)
+    assert any("look like 'qw qx qy qz' instead of 'qx qy qz qw'" in m for m in msgs), msgs
+    assert not any("'qw qx qy qz'" in m for m in _warned(icra20 / ORB_CAFE))

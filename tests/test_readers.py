@@ -143,3 +143,19 @@ def test_no_warning_on_clean_file(data):
     with warnings.catch_warnings():
         warnings.simplefilter("error", LorisWarning)
         read_openloris(data.groundtruth("cafe"))
+
+
+def test_bom_header_case_binary_and_openloris_hint(tmp_path, data):
+    """A UTF-8 byte-order mark and 'Scene:' in another case are read; binary input is refused
+    early; a TUM reader given an OpenLORIS file says which reader to use."""
+    text = data.groundtruth("cafe").read_text()
+    ref = read_openloris(data.groundtruth("cafe"))
+    bom = write(tmp_path, "bom.txt", b"\xef\xbb\xbf" + text.replace("scene:", "Scene:", 1).encode())
+    got = read_openloris(bom)
+    assert got.scene == "cafe" and got.n_poses == ref.n_poses
+    np.testing.assert_array_equal(got.sequences[1].stamps, ref.sequences[1].stamps)
+    binary = write(tmp_path, "bin.txt", b"scene: cafe\n" + bytes(range(256)) * 10)
+    with pytest.raises(ParseError, match=r"bin.txt, line 2: binary data \(a NUL byte\)"):
+        read_openloris(binary)
+    with pytest.raises(ParseError, match="looks like an OpenLORIS file: read it with read_openloris"):
+        read_tum(data.groundtruth("cafe"))

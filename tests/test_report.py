@@ -58,7 +58,7 @@ def test_report_with_broken_input_and_failing_notebook(tmp_path, tree):
     assert not list(tmp_path.glob(".run.partial-*"))
 
 
-def test_report_cli_parameters(tmp_path, tree, capsys):
+def test_report_cli_parameters(tmp_path, tree, capfd):
     out = tmp_path / "cli-run"
     rc = main(
         [
@@ -80,6 +80,8 @@ def test_report_cli_parameters(tmp_path, tree, capsys):
         ]
     )
     assert rc == 1  # the tree holds one broken input: the terminal says so, as index.html does
-    assert "per_sequence_benchmark       ok, 1 input file(s) failed" in capsys.readouterr().out
+    captured = capfd.readouterr()  # the kernel's own output too (file descriptors, not sys.stderr)
+    assert "per_sequence_benchmark       ok, 1 input file(s) failed" in captured.out
+    assert "without encryption" not in captured.err and "KeyboardInterrupt" not in captured.err
     params = (out / "parameters.json").read_text()
     assert '"delta": 0.5' in params

@@ -11,9 +11,10 @@ import sys
 
 import numpy as np
 
+from ..core import validate
 from ..errors import LorisError
 from .commands import cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
-from .options import add_evaluation_options, add_scale_option, threshold_list_type, threshold_type
+from .options import add_evaluation_options, add_scale_option, arg_type, threshold_list_type, threshold_type
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -63,16 +64,33 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("crosscheck", help="compare lorisnb with evo on one ground truth and one estimate")
     p.add_argument("gt", help="ground truth (for --format openloris: gt_<scene>_1.txt, or 'auto' to find it)")
     p.add_argument("est", help="estimate")
-    p.add_argument("--format", choices=["tum", "kitti", "euroc", "openloris"], default="tum")
-    add_scale_option(p, "Sim(3) for the RPE and association rows ('auto' for openloris: by algorithm)")
     p.add_argument(
-        "--times",
-        default=None,
-        help="KITTI: times file (one stamp per line) for both files; without it poses are paired by index, as evo does",
+        "--format",
+        choices=["tum", "kitti", "euroc", "openloris"],
+        default="tum",
+        help="format of GT (and of EST unless --est-format); euroc follows evo: the ground truth is the "
+        "EuRoC CSV, the estimate TUM text",
     )
+    p.add_argument(
+        "--est-format", choices=["tum", "kitti", "euroc"], default=None, help="format of EST when it differs"
+    )
+    add_scale_option(p, "Sim(3) for the RPE and association rows ('auto' for openloris: by algorithm)")
+    p.add_argument("--times", default=None, help="KITTI: one times file (a stamp per line) for both files")
+    p.add_argument("--gt-times", default=None, help="KITTI: the ground truth's times file")
+    p.add_argument("--est-times", default=None, help="KITTI: the estimate's times file")
     p.add_argument("--seq", type=int, default=None, help="openloris: the sequence (default: the first with poses)")
-    p.add_argument("--rpe-frames", type=int, default=1, help="RPE delta in frames (default 1)")
-    p.add_argument("--rpe-metres", type=float, default=1.0, help="RPE delta in metres (default 1)")
+    p.add_argument(
+        "--rpe-frames",
+        type=arg_type(lambda t: int(validate.positive("--rpe-frames", t, "frames", integer=True))),
+        default=1,
+        help="RPE delta in frames (default 1)",
+    )
+    p.add_argument(
+        "--rpe-metres",
+        type=arg_type(lambda t: validate.positive("--rpe-metres", t, "metres")),
+        default=1.0,
+        help="RPE delta in metres (default 1)",
+    )
     p.add_argument("--all-pairs", action="store_true", help="RPE over all pairs (evo's default: consecutive)")
     p.add_argument("--data", default=None, metavar="DIR")
     p.add_argument("--csv", default=None, metavar="OUT")

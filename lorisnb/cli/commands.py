@@ -11,7 +11,7 @@ from typing import Any
 
 import pandas as pd
 
-from ..errors import LorisError, LorisWarning
+from ..errors import LorisError, LorisWarning, ValidationError
 from .options import check_output, param_value
 
 
@@ -118,17 +118,24 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     from ..tools.crosscheck import crosscheck, crosscheck_openloris
 
     check_output(args.csv, [args.gt, args.est], args.force)
-
     deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
+    gt_format = args.format
+    est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)
     if args.format == "openloris":
         gt_file = read_openloris(args.gt) if args.gt not in ("-", "auto") else None
         table = crosscheck_openloris(
             args.est, args.seq, scale=args.scale, data_root=args.data, groundtruth=gt_file, rpe_deltas=deltas
         )
     else:
-        by_index = args.format == "kitti" and args.times is None
-        gt = read_trajectory(args.gt, args.format, stamps=args.times)
-        est = read_trajectory(args.est, args.format, stamps=args.times)
+        gt_times, est_times = args.gt_times or args.times, args.est_times or args.times
+        by_index = "kitti" in (gt_format, est_format) and (gt_times is None or est_times is None)
+        if by_index and (gt_format != est_format or gt_times is not None or est_times is not None):
+            raise ValidationError(
+                "--gt-times and --est-times: a KITTI file has no stamps; give stamps for both files (or for "
+                "neither, to pair two KITTI files of equal length by index)"
+            )
+        gt = read_trajectory(args.gt, gt_format, stamps=gt_times if gt_format == "kitti" else None)
+        est = read_trajectory(args.est, est_format, stamps=est_times if est_format == "kitti" else None)
         table = crosscheck(
             gt, est, scale=bool(args.scale), by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs
         )

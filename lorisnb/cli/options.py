@@ -96,6 +96,11 @@ def check_output(out: str | None, inputs: list[str], force: bool) -> None:
         src = Path(i).resolve()
         if target == src:
             raise OutputError(f"{out} is an input of this command; choose another output file")
+        if src.is_dir() and src in target.parents and target.suffix.lower() == ".txt":
+            raise OutputError(
+                f"{out} lies in the input folder {i} and ends in .txt, so it is (or would be read as) a result "
+                "file; choose another name or place"
+            )
     if target.is_dir():
         raise OutputError(f"{out} is a folder; expected a file name for the CSV")
     if target.exists() and not force:

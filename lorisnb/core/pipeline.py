@@ -219,6 +219,17 @@ def compute_errors(
     if checks:
         first = next((e for e in out if e.matched > 10), None)
         if first is not None and np.median(first.aoe) > 45.0:
+            est, gt_seq = result.sequences[first.seq], groundtruth.sequences[first.seq]
+            swapped = Trajectory(est.stamps, est.positions, np.roll(est.quaternions, -1, axis=1))
+            gt_own = groundtruth_in_frame(gt_seq, scene, frame, gt_frame=gt_frame)
+            e_swapped = sequence_errors(gt_own, swapped, scale=with_scale, max_gap=max_gap)
+            notes.append(
+                plausibility.quaternion_order(
+                    f"{path.name}, seq {first.seq}",
+                    float(np.median(first.aoe)),
+                    float(np.median(e_swapped.aoe)) if e_swapped.matched else np.nan,
+                )
+            )
             notes.append(
                 plausibility.frame_mismatch(
                     f"{path.name}, seq {first.seq}",

@@ -112,3 +112,19 @@ def frame_mismatch(label: str, declared: str, median_aoe: Mapping[str, float]) -
         f"{label}: the header says frame {declared!r}, but the orientations fit {best!r} much better (median "
         f"AOE {median_aoe[best]:.1f} deg against {own:.1f} deg). Is the frame: header right?"
     )
+
+
+def quaternion_order(label: str, median_aoe: float, median_aoe_swapped: float) -> str | None:
+    """The orientations fit far better when each quaternion is read ``w x y z`` instead of
+    ``x y z w`` (median AOE in degrees either way): the file was probably written in the other
+    order (Eigen's coefficients, ROS messages and TUM files use ``x y z w`` last-w; many tools
+    print ``w x y z``)."""
+    if not (np.isfinite(median_aoe) and np.isfinite(median_aoe_swapped)):
+        return None
+    if median_aoe < 45.0 or median_aoe_swapped > 10.0:
+        return None
+    return (
+        f"{label}: the quaternions look like 'qw qx qy qz' instead of 'qx qy qz qw': read that way the median "
+        f"AOE drops from {median_aoe:.1f} deg to {median_aoe_swapped:.1f} deg. Write each pose as "
+        "'stamp x y z qx qy qz qw' (the real part last)."
+    )

@@ -32,6 +32,29 @@ METRIC_COLUMNS = [
     "c_matched", "correct_time", "track_time", "cr", "cr_t", "cs_r", "ate_rmse", "c_ate_rmse", "c_aoe_rmse",
 ]  # fmt: skip
 
+#: Memory a sweep may use by default (table plus working arrays), bytes.
+MAX_SWEEP_BYTES = 4 * 2**30
+
+
+def check_sweep_size(
+    files: list[FileErrors], shape: tuple[int, int, int, int], columns: str, max_bytes: float = MAX_SWEEP_BYTES
+) -> None:
+    """Refuse a sweep whose tidy table (rows x columns x 8 bytes) or per-sequence working arrays
+    (eps x phi x poses) would need more than ``max_bytes``, saying how much it would need."""
+    E, P, D, T = shape
+    n_seq = sum(len(f.sequences) for f in files)
+    longest = max((e.matched for f in files for e in f.sequences), default=0)
+    ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
+    rows = n_seq * E * P * D * T
+    need = max(rows * ncol * 8.0, E * P * longest * 9.0 + E * P * D * T * len(GRID_METRICS) * 8.0)
+    if need > max_bytes:
+        raise ValidationError(
+            f"this sweep would need about {need / 2**30:.1f} GiB ({rows:,} rows of {ncol} columns; "
+            f"{E} eps x {P} phi x {D} delta x {T} tau over {n_seq} sequences, up to {longest:,} poses each), "
+            f"more than the {max_bytes / 2**30:.1f} GiB allowed (max_bytes); use fewer thresholds or files"
+        )
+
+
 #: How eps may be given relative to the size of each sequence's ground truth.
 RELATIVE = ("extent", "length")
 
@@ -66,6 +89,7 @@ def sweep(
     rpe_delta: float = 1.0,
     rpe_unit: str = "s",
     columns: str = "metrics",
+    max_bytes: float = MAX_SWEEP_BYTES,
 ) -> pd.DataFrame:
     """One row per sequence and per combination of thresholds. With ``columns="all"`` the columns
     are those of :func:`lorisnb.core.scoring.score` (a row equals ``score`` at that setting, RPE
@@ -78,6 +102,8 @@ def sweep(
             value as given, ``eps`` the metres used.
         phi: AOE thresholds, degrees. delta: validity windows, seconds. tau: re-localization
             time factors, seconds. Each a value or a list (validated like the command line's).
+        max_bytes: refuse (with the size it would need) a sweep whose table or working arrays
+            would take more memory than this.
     """
     files = as_files(errors)
     if relative_to is not None:
@@ -92,6 +118,7 @@ def sweep(
     rpe_d, rpe_u = rpe_setting(rpe_delta, rpe_unit)
     E, P, D, T = len(eps_l), len(phi_a), len(delta_a), len(tau_a)
     n_set = E * P * D * T
+    check_sweep_size(files, (E, P, D, T), columns, max_bytes)
     with_rpe = columns == "all"
     seq_meta, blocks = [], []
     for f in files:  # per sequence, never per pose

@@ -32,9 +32,14 @@ THRESHOLDS: dict[str, tuple[str, bool]] = {
 }
 
 
+def _show(value: Any) -> str:
+    """A value as the user typed it (strings without quotes, so command-line values read naturally)."""
+    return value if isinstance(value, str) else repr(value)
+
+
 def _number(name: str, value: Any, words: Mapping[str, Any]) -> Any:
     if isinstance(value, bool) or value is None:
-        raise ValidationError(f"{name}={value!r}: expected a number")
+        raise ValidationError(f"{name}={_show(value)}: expected a number")
     if isinstance(value, str):
         text = value.strip().lower()
         if text in words:
@@ -43,13 +48,13 @@ def _number(name: str, value: Any, words: Mapping[str, Any]) -> Any:
             return float(text)
         except ValueError:
             extra = "".join(f", '{w}'" for w in words if w not in ("inf", "+inf", "infinity"))
-            raise ValidationError(f"{name}={value!r} is not a number; expected a number, 'inf'{extra}") from None
+            raise ValidationError(f"{name}={_show(value)} is not a number; expected a number, 'inf'{extra}") from None
     if isinstance(value, Real):
         return float(value)
     try:  # numpy 0-d arrays and the like
         return float(value)
     except (TypeError, ValueError):
-        raise ValidationError(f"{name}={value!r} ({type(value).__name__}): expected a number") from None
+        raise ValidationError(f"{name}={_show(value)} ({type(value).__name__}): expected a number") from None
 
 
 _INF = {"inf": math.inf, "+inf": math.inf, "infinity": math.inf}
@@ -63,10 +68,10 @@ def threshold(name: str, value: Any) -> float:
     unit, zero_ok = THRESHOLDS[name]
     v = _number(name, value, _INF)
     if math.isnan(v):
-        raise ValidationError(f"{name}={value!r}: expected a number of {unit}, not NaN")
+        raise ValidationError(f"{name}={_show(value)}: expected a number of {unit}, not NaN")
     if v < 0 or (v == 0 and not zero_ok):
         bound = ">= 0" if zero_ok else "> 0"
-        raise ValidationError(f"{name}={value!r}: expected a number of {unit} {bound}")
+        raise ValidationError(f"{name}={_show(value)}: expected a number of {unit} {bound}")
     return float(v)
 
 
@@ -111,7 +116,7 @@ def scale_value(value: Any) -> bool | str:
         return SCALE_WORDS[value.strip().lower()]
     if isinstance(value, int) and value in (0, 1):
         return bool(value)
-    raise ValidationError(f"scale={value!r}: expected True, False, 'auto', or one of {', '.join(SCALE_WORDS)}")
+    raise ValidationError(f"scale={_show(value)}: expected True, False, 'auto', or one of {', '.join(SCALE_WORDS)}")
 
 
 def choice(name: str, value: Any, options: Iterable[str]) -> str:
@@ -119,7 +124,7 @@ def choice(name: str, value: Any, options: Iterable[str]) -> str:
     opts = tuple(options)
     if isinstance(value, str) and value.strip().lower() in opts:
         return value.strip().lower()
-    raise ValidationError(f"{name}={value!r}: expected one of {', '.join(opts)}")
+    raise ValidationError(f"{name}={_show(value)}: expected one of {', '.join(opts)}")
 
 
 def positive(name: str, value: Any, unit: str, *, integer: bool = False) -> float:
@@ -127,5 +132,5 @@ def positive(name: str, value: Any, unit: str, *, integer: bool = False) -> floa
     v = _number(name, value, {})
     if math.isnan(v) or v <= 0 or math.isinf(v) or (integer and v != int(v)):
         kind = "a positive whole number" if integer else "a positive number"
-        raise ValidationError(f"{name}={value!r}: expected {kind} of {unit}")
+        raise ValidationError(f"{name}={_show(value)}: expected {kind} of {unit}")
     return float(v)

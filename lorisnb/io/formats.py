@@ -37,7 +37,11 @@ def _data_rows(lines: Lines) -> np.ndarray:
 def _check_width(lines: Lines, rows: np.ndarray, spath: str, ok: np.ndarray, expected: str) -> None:
     if not ok.all():
         i = rows[np.flatnonzero(~ok)[0]]
-        raise ParseError(spath, int(i) + 1, f"{lines.text(i)[:80]!r} has {lines.ntok[i]} fields; expected {expected}")
+        text = lines.text(i)
+        hint = ""
+        if text.split(":")[0].strip().lower() in ("scene", "frame", "seq"):
+            hint = "; this looks like an OpenLORIS file: read it with read_openloris (command line: --format openloris)"
+        raise ParseError(spath, int(i) + 1, f"{text[:80]!r} has {lines.ntok[i]} fields; expected {expected}{hint}")
 
 
 def read_tum(path: str | os.PathLike, warn: bool = True) -> Trajectory:

@@ -50,7 +50,7 @@ def read_openloris(
         ParseError: malformed line, pose before any ``seq:``, zero-norm quaternion, ...
     """
     spath = str(path)
-    lines = scan(read_bytes(path))
+    lines = scan(read_bytes(path, "an OpenLORIS trajectory file ('scene:', 'frame:', 'seq: N' blocks of poses)"))
     comment = lines.first == ord("#")
     blank = lines.first < 0
     special = np.flatnonzero(lines.has_colon & ~comment & ~blank)
@@ -65,7 +65,7 @@ def read_openloris(
     for i in map(int, special):  # header and seq lines only: a handful per file
         text = lines.text(i)
         key, _, value = text.partition(":")
-        key, value = key.strip(), value.strip()
+        key, value = key.strip().lower(), value.strip()  # keys in any case: 'Scene: cafe'
         if key == "seq":
             try:
                 current = int(value)

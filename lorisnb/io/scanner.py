@@ -128,16 +128,34 @@ def nanosecond_pattern(ndig: np.ndarray) -> np.ndarray:
     return short if nine >= 0.5 and short.any() else np.zeros(ndig.size, bool)
 
 
-def read_bytes(path: str | os.PathLike) -> bytes:
+BOM = b"\xef\xbb\xbf"
+SNIFF_BYTES = 65536  # binary input is recognized in this many bytes, before the rest is read
+
+
+def read_bytes(path: str | os.PathLike[str], what: str = "a trajectory file") -> bytes:
+    """A text file's bytes, a UTF-8 byte-order mark removed. ParseError for a missing file, a
+    folder, an unreadable file, an empty file, or binary content (NUL bytes in its first 64 KB,
+    found before the rest is read)."""
     try:
         with open(path, "rb") as fh:
-            return fh.read()
+            head = fh.read(SNIFF_BYTES)
+            nul = head.find(b"\0")
+            if nul >= 0:
+                raise ParseError(
+                    path, head.count(b"\n", 0, nul) + 1, f"binary data (a NUL byte); expected {what} (text)"
+                )
+            raw = head + fh.read()
     except FileNotFoundError:
-        raise ParseError(path, None, "file not found; expected a trajectory file at this path") from None
+        raise ParseError(path, None, f"file not found; expected {what} at this path") from None
     except IsADirectoryError:
-        raise ParseError(path, None, "is a folder; expected a trajectory file") from None
+        raise ParseError(path, None, f"is a folder; expected {what}") from None
     except OSError as exc:
         raise ParseError(path, None, f"cannot be read ({exc.strerror})") from None
+    if raw.startswith(BOM):
+        raw = raw[len(BOM) :]
+    if not raw.strip():
+        raise ParseError(path, None, f"empty file; expected {what}")
+    return raw
 
 
 def finish(

@@ -9,6 +9,7 @@ pairs, and :func:`evo_ape` / :func:`evo_rpe` compute evo's numbers on them, whic
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -95,7 +96,12 @@ def pair_poses(
     """lorisnb's association: ground truth interpolated at each estimate stamp within the 0.5 s
     bracket (or, ``by_index``, pose i with pose i, as evo does for KITTI files)."""
     if by_index:
-        n = min(len(gt), len(est))
+        if len(gt) != len(est):
+            raise EvaluationError(
+                f"pairing by index needs files of the same length, but the ground truth has {len(gt)} poses and "
+                f"the estimate {len(est)}; give stamps for each (command line: --gt-times and --est-times)"
+            )
+        n = len(gt)
         return PairedPoses(
             est.stamps[:n],
             gt.positions[:n],
@@ -150,12 +156,19 @@ def aligned_estimate(p: PairedPoses, alignment: str) -> tuple[np.ndarray, Rotati
     return pos, rot, sim
 
 
-def evo_aligned(ref, est, alignment: str):
+def evo_aligned(ref: Any, est: Any, alignment: str) -> Any:
+    """A copy of evo trajectory ``est`` aligned on ``ref`` by evo (``none``, ``se3``, ``sim3``);
+    an alignment evo cannot compute (degenerate: collinear or too few poses) is an EvaluationError."""
     import copy
 
     e = copy.deepcopy(est)
     if alignment != "none":
-        e.align(ref, correct_scale=alignment == "sim3")
+        try:
+            e.align(ref, correct_scale=alignment == "sim3")
+        except Exception as exc:  # evo's GeometryException and numpy's LinAlgError
+            raise EvaluationError(
+                f"evo cannot align these trajectories ({exc}); they need at least 3 poses not on one line"
+            ) from None
     return e
 
 

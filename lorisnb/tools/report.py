@@ -41,6 +41,10 @@ DEFAULT_NOTEBOOKS = (
     "evaluate_my_results",
 )
 
+#: Kernel options: its log shows errors only (not the loopback-TCP 'without encryption' notice or
+#: the 'KeyboardInterrupt caught in kernel' line of a normal shutdown).
+KERNEL_ARGS = ["--IPKernelApp.log_level=ERROR"]
+
 #: A file lorisnb writes into every run folder; ``--force`` replaces only folders that hold it.
 RUN_MARKER = ".lorisnb-run"
 
@@ -195,7 +199,7 @@ def run_notebook(
     try:
         pm.execute_notebook(
             str(src), str(target), parameters=params, kernel_name="python3", progress_bar=False,
-            cwd=str(nb_dir), execution_timeout=timeout, log_output=False,
+            cwd=str(nb_dir), execution_timeout=timeout, log_output=False, extra_arguments=KERNEL_ARGS,
         )  # fmt: skip
     except KeyboardInterrupt:
         raise

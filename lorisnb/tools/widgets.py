@@ -17,6 +17,7 @@ from ..core.aggregate import aggregate_scenes, durations_table
 from ..core.model import FileErrors, ResultFile
 from ..core.scoring import score
 from ..core.simulate import Faults, simulated_errors
+from ..core.validate import threshold
 from .plotting import plot_timeline
 
 
@@ -48,7 +49,9 @@ class ThresholdExplorer:
         self.errors = list(errors)
         self.durations = durations
         self.scenes = [s for s in durations["scene"].unique() if any(f.scene == s for f in self.errors)]
-        self.eps, self.phi, self.delta, self.tau = float(eps), float(phi), float(delta), float(tau)
+        self.eps, self.phi, self.delta, self.tau = (
+            threshold(name, v) for name, v in (("eps", eps), ("phi", phi), ("delta", delta), ("tau", tau))
+        )
         self.scene = scene if scene is not None else (self.scenes[0] if self.scenes else None)
 
     def results(self) -> tuple[pd.DataFrame, plt.Figure]:
@@ -116,7 +119,10 @@ class FaultExplorer:
     ):
         self.groundtruth = groundtruth
         self.seq = seq
-        self.eps, self.phi, self.delta, self.tau, self.seed = eps, phi, delta, tau, seed
+        self.eps, self.phi, self.delta, self.tau = (
+            threshold(name, v) for name, v in (("eps", eps), ("phi", phi), ("delta", delta), ("tau", tau))
+        )
+        self.seed = seed
         self.duration = groundtruth.sequences[seq].duration
         d = durations_table({groundtruth.scene: groundtruth})
         self.durations = d[d["seq"] == seq]
