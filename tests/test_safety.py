@@ -258,3 +258,12 @@ def test_wrong_types_get_lorisnb_errors(value):
 def test_score_of_a_path_says_what_to_do():
     with pytest.raises(ln.ValidationError, match=r"evaluate it first: lorisnb.evaluate\(path\)"):
         ln.score("file.txt")
+
+
+def test_report_skips_a_notebook_whose_extra_is_missing(tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(report.NOTEBOOK_NEEDS, "metrics_primer", ("no_such_package_for_lorisnb",))
+    out = tmp_path / "run"
+    assert main(["report", "--out", str(out), "--notebooks", "metrics_primer", "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "metrics_primer" in text and "skipped" in text and "needs no_such_package_for_lorisnb" in text
+    assert "skipped" in (out / "index.html").read_text()

@@ -184,4 +184,4 @@ def cmd_report(args: argparse.Namespace) -> int:
             f"note: {args.out} appeared while this report ran (another run?); this run is in {run_dir}", file=sys.stderr
         )
     print(f"report: {run_dir / 'index.html'}")
-    return 1 if any(r.status != "ok" or r.input_errors for r in runs) else 0
+    return 1 if any(r.status == "failed" or r.input_errors for r in runs) else 0

@@ -9,6 +9,7 @@ leaves nothing half-written, and an existing run folder is never replaced withou
 from __future__ import annotations
 
 import datetime as _dt
+import importlib.util
 import json
 import os
 import shutil
@@ -26,7 +27,7 @@ import pandas as pd
 
 from ..core import validate
 from ..errors import LorisError, ValidationError
-from ._extras import require
+from ._extras import EXTRAS, require
 from .notebook import INPUT_ERRORS_CSV
 from .report_index import versions, write_index
 
@@ -44,6 +45,9 @@ DEFAULT_NOTEBOOKS = (
 #: Kernel options: its log shows errors only (not the loopback-TCP 'without encryption' notice or
 #: the 'KeyboardInterrupt caught in kernel' line of a normal shutdown).
 KERNEL_ARGS = ["--IPKernelApp.log_level=ERROR"]
+
+#: Optional packages a notebook needs; without them the report skips it and says which extra to install.
+NOTEBOOK_NEEDS: dict[str, tuple[str, ...]] = {"evo_crosscheck": ("evo",)}
 
 #: A file lorisnb writes into every run folder; ``--force`` replaces only folders that hold it.
 RUN_MARKER = ".lorisnb-run"
@@ -84,8 +88,9 @@ def available_notebooks(notebooks_dir: str | os.PathLike[str] | None = None) -> 
 
 @dataclass
 class NotebookRun:
-    """How one notebook of a report went: status ``ok`` or ``failed``, the error, and how many
-    of its input files could not be evaluated."""
+    """How one notebook of a report went: status ``ok``, ``failed`` or ``skipped`` (an optional
+    package it needs is missing), the error or reason, and how many of its input files could not be
+    evaluated."""
 
     name: str
     status: str = "ok"
@@ -194,6 +199,11 @@ def run_notebook(
     if "output_dir" in declared:
         params["output_dir"] = "."  # papermill runs the notebook in its own folder of the run
     run = NotebookRun(stem, parameters=params)
+    missing = [m for m in NOTEBOOK_NEEDS.get(stem, ()) if importlib.util.find_spec(m) is None]
+    if missing:
+        run.status = "skipped"
+        run.error = f"needs {', '.join(missing)}: pip install 'lorisnb[{EXTRAS.get(missing[0], 'all')}]'"
+        return run
     t = time.perf_counter()
     target = nb_dir / f"{stem}.ipynb"
     try:

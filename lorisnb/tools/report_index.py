@@ -56,7 +56,7 @@ def write_index(
         "<!doctype html><html><head><meta charset='utf-8'><title>lorisnb report</title>",
         "<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto}table{border-collapse:collapse}"
         "td,th{border:1px solid #ccc;padding:3px 8px;text-align:left;vertical-align:top}"
-        ".failed{color:#b00}.ok{color:#070}img{max-width:100%;border:1px solid #ddd}</style></head><body>",
+        ".failed{color:#b00}.ok{color:#070}.skipped{color:#b60}img{max-width:100%;border:1px solid #ddd}</style></head><body>",
         f"<h1>lorisnb report</h1><p>Run folder <code>{esc(name or run_dir.name)}</code>, written "
         f"{esc(_dt.datetime.now().isoformat(timespec='seconds'))}.</p>",
         "<h2>Notebooks</h2><table><tr><th>notebook</th><th>status</th><th>seconds</th><th>files</th><th>error</th></tr>",
