@@ -174,3 +174,25 @@ def test_metrics_primer(tmp_path):
     real = pd.read_csv(out / "real_estimates.csv").set_index(["algorithm", "seq"])
     assert real.loc[("vins_mono_color_imu_with_loop", 1), "cr"] == pytest.approx(0.961294, abs=1e-6)
     assert (out / "primer_timeline.png").exists()
+
+
+def test_compare_algorithms(tmp_path):
+    out = run("compare_algorithms", tmp_path)
+    rank = pd.read_csv(out / "simulated_ranking.csv").set_index("algorithm")
+    # the drifting algorithm (3 cm/m) is separated from both others; steady and its twin are tied
+    assert rank.loc["simulated: drifting", "rank"] == 3
+    assert rank.loc["simulated: steady", "rank"] == rank.loc["simulated: twin of steady", "rank"] == 1
+    assert rank.loc["simulated: drifting", "value"] < rank.loc["simulated: steady", "value"] - 0.2
+    pairs = pd.read_csv(out / "simulated_pairwise.csv").set_index(["a", "b"])
+    assert not pairs.loc[("simulated: steady", "simulated: twin of steady"), "significant_trials"]
+    ci = pd.read_csv(out / "intervals.csv")
+    finite = ci.dropna(subset=["low", "high"])
+    assert len(finite) > 0.8 * len(ci) and (finite["low"] <= finite["high"]).all()
+    assert set(ci["unit"]) == {"sequences"} and (ci.loc[ci["units"] == 1, "low"].isna()).all()
+    assert {"home", "corridor"} == set(ci["scene"])
+    tex = (out / "cr_table.tex").read_text()
+    assert r"\toprule" in tex and tex.count(r"\textbf") >= 2
+    for ext in ("png", "svg", "pdf"):
+        assert (out / f"simulated_trials.{ext}").stat().st_size > 5_000
+    first = pd.read_csv(out / "robust_first.csv")
+    assert first["cases"].iloc[0] == 3 * 2 * 5  # 3 eps x 2 phi x 5 trials (quick)

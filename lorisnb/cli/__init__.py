@@ -13,8 +13,14 @@ import numpy as np
 
 from ..core import validate
 from ..errors import LorisError
-from .commands import cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
-from .options import add_evaluation_options, add_scale_option, arg_type, threshold_list_type, threshold_type
+from .commands import cmd_compare, cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
+from .options import (
+    add_evaluation_options,
+    add_scale_option,
+    add_threshold_options,
+    arg_type,
+    threshold_list_type,
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -23,16 +29,22 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("evaluate", help="score result files: ATE, AOE, CR, CR-T, CS-R, C-ATE, RPE")
     add_evaluation_options(p)
-    p.add_argument(
-        "--eps",
-        type=threshold_type("eps"),
-        default=np.inf,
-        help="ATE threshold in metres, 'inf' or 'paper' (1/3/5 m by scene); default inf",
-    )
-    p.add_argument("--phi", type=threshold_type("phi"), default=np.inf, help="AOE threshold in degrees; default inf")
-    p.add_argument("--delta", type=threshold_type("delta"), default=1.0, help="validity window of a pose, s; default 1")
-    p.add_argument("--tau", type=threshold_type("tau"), default=60.0, help="re-localization time factor, s; default 60")
+    add_threshold_options(p, eps=np.inf, phi=np.inf)
     p.set_defaults(func=cmd_evaluate)
+
+    p = sub.add_parser("compare", help="compare algorithms over trials and sequences: intervals, tests, ranking")
+    add_evaluation_options(p)
+    add_threshold_options(p, eps="paper", phi=30.0)
+    p.add_argument("--metric", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"], default="cr",
+                   help="the metric of the ranking, pairwise tests and tables (default cr)")  # fmt: skip
+    p.add_argument("--level", type=arg_type(lambda t: validate.positive("--level", t, "a probability")), default=0.95,
+                   help="confidence level of the intervals (default 0.95)")  # fmt: skip
+    p.add_argument("--alpha", type=arg_type(lambda t: validate.positive("--alpha", t, "a probability")), default=0.05,
+                   help="significance level of the pairwise tests, after Holm's correction (default 0.05)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (default 0)")
+    p.add_argument("--latex", default=None, metavar="OUT", help="write the comparison table as LaTeX (booktabs)")
+    p.add_argument("--markdown", default=None, metavar="OUT", help="write the comparison table as Markdown")
+    p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser(
         "sweep", help="every metric over grids of eps, phi, delta and tau (one row per sequence and setting)"

@@ -1,4 +1,4 @@
-"""The commands: ``evaluate``, ``sweep``, ``crosscheck``, ``report``. Tables go to stdout,
+"""The commands: ``evaluate``, ``sweep``, ``compare``, ``crosscheck``, ``report``. Tables go to stdout,
 warnings and failures to stderr; the exit status is non-zero when any input failed."""
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
             remove_repeated=not args.keep_repeated,
             data_root=args.data,
             repair_stamps=args.repair_stamps,
+            trials_by=args.trials_by,
             progress=not args.no_progress,
         )
     notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))
@@ -107,6 +108,46 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
         out = write_csv(table if keep_label else table.drop(columns=["eps_value"]), args.csv, args.force)
         print(f"wrote {len(table)} rows to {out}", file=sys.stderr)
+    _report_problems(ev, notes)
+    return 1 if ev.failures else 0
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    """Scene values with bootstrap intervals, the ranking with ties the data cannot separate,
+    significant pairwise differences; tables as CSV, LaTeX, Markdown."""
+    from ..core import stats
+    from ..io.writers import write_csv
+    from ..tools.tables import interval, write_comparison
+
+    for out in (args.csv, args.latex, args.markdown):
+        check_output(out, args.paths, args.force)
+    ev, notes = _run_evaluation(args)
+    table = ev.sequences(args.eps, args.phi, args.delta, args.tau)
+    if not table.empty:
+        ci = stats.confidence_intervals(table, level=args.level, seed=args.seed)
+        rank = stats.ranking(table, args.metric, alpha=args.alpha, seed=args.seed)
+        c = ci[ci["metric"] == args.metric].set_index(["suite", "scene", "algorithm"])
+        cells = c.loc[list(zip(rank["suite"], rank["scene"], rank["algorithm"], strict=True))]
+        rank["value [CI]"] = [
+            interval(v, lo, hi, digits=3) for v, lo, hi in zip(cells["value"], cells["low"], cells["high"], strict=True)
+        ]
+        n_trials = table.groupby(["algorithm", "scene"])["trial"].nunique().max()
+        units = ", ".join(sorted(set(ci["unit"])))
+        print(f"{args.metric} per algorithm and scene, {args.level:.0%} bootstrap intervals over {units} "
+              f"(up to {n_trials} trial(s)); rank = 1 + algorithms significantly better (Wilcoxon, Holm, "
+              f"alpha {args.alpha}):")  # fmt: skip
+        with pd.option_context("display.max_colwidth", 50):
+            print(_fmt(rank[["suite", "scene", "algorithm", "value [CI]", "rank", "tied_with"]]))
+        pairs = stats.pairwise(table, args.metric, alpha=args.alpha, seed=args.seed)
+        sig = pairs[pairs["significant"]]
+        print(f"\n{len(sig)} of {len(pairs)} pairs differ significantly" + (":" if len(sig) else "."))
+        if len(sig):
+            print(_fmt(sig[["scene", "a", "b", "value_a", "value_b", "p_a_better", "p_holm"]]))
+        if args.csv:
+            print(f"wrote {write_csv(ci, args.csv, args.force)}", file=sys.stderr)
+        for out in (args.latex, args.markdown):
+            if out:
+                print(f"wrote {write_comparison(ci, args.metric, out, args.force)}", file=sys.stderr)
     _report_problems(ev, notes)
     return 1 if ev.failures else 0
 

@@ -40,6 +40,15 @@ def add_scale_option(p: argparse.ArgumentParser, help: str) -> None:
     p.add_argument("--scale", nargs="?", const=True, default=False, type=arg_type(validate.scale_value), help=help)
 
 
+def add_threshold_options(p: argparse.ArgumentParser, eps: Any, phi: Any) -> None:
+    """``--eps --phi --delta --tau``, one value each (``evaluate``, ``compare``)."""
+    p.add_argument("--eps", type=threshold_type("eps"), default=eps,
+                   help=f"ATE threshold in metres, 'inf' or 'paper' (1/3/5 m by scene); default {eps}")  # fmt: skip
+    p.add_argument("--phi", type=threshold_type("phi"), default=phi, help=f"AOE threshold in degrees; default {phi}")
+    p.add_argument("--delta", type=threshold_type("delta"), default=1.0, help="validity window of a pose, s; default 1")
+    p.add_argument("--tau", type=threshold_type("tau"), default=60.0, help="re-localization time factor, s; default 60")
+
+
 def add_evaluation_options(p: argparse.ArgumentParser) -> None:
     """Options shared by ``evaluate`` and ``sweep`` (same names, same meaning)."""
     p.add_argument(
@@ -79,7 +88,10 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
         metavar="DIR",
         help="data root (default: $LORISNB_DATA, else ../shared/data next to the project)",
     )
-    p.add_argument("--csv", default=None, metavar="OUT", help="write one row per sequence to this CSV")
+    p.add_argument("--trials-by", default=None, metavar="REGEX",
+                   help="regular expression whose first group is the trial number in a file's path "
+                   "(default: _trial3, -trial-3, trial3/, run_2/, stamped_traj_estimate3)")  # fmt: skip
+    p.add_argument("--csv", default=None, metavar="OUT", help="write the table (one row per sequence) to this CSV")
     p.add_argument("--force", action="store_true", help="overwrite OUT if it exists")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 

@@ -53,7 +53,7 @@ def aggregate_scenes(sequences: pd.DataFrame, durations: pd.DataFrame) -> pd.Dat
     total = durations.groupby("scene")["gt_duration"].sum()
     nseq = durations.groupby("scene")["seq"].count()
     keys = ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau"]
-    keys += [c for c in ("eps_value",) if c in sequences.columns]  # a sweep: eps as given
+    keys += [c for c in ("eps_value", "trial") if c in sequences.columns]  # a sweep: eps as given; trials
     dup = sequences.duplicated(subset=keys + ["seq"], keep=False)
     if dup.any():
         d = sequences[dup].iloc[0]
@@ -84,6 +84,7 @@ def aggregate_scenes(sequences: pd.DataFrame, durations: pd.DataFrame) -> pd.Dat
     order = {s: i for i, s in enumerate(SCENES)}
     out = out.drop(columns=["_c_sq", "_c_w", "_a_w"])[SCENE_COLUMNS + keys[7:]]
     out = out.sort_values(
-        ["suite", "algorithm", "scene"], key=lambda c: c.map(order) if c.name == "scene" else c.astype(str)
+        ["suite", "algorithm", "scene"] + (["trial"] if "trial" in out.columns else []),
+        key=lambda c: c.map(order) if c.name == "scene" else (c if c.name == "trial" else c.astype(str)),
     )
     return out.reset_index(drop=True)

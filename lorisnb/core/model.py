@@ -31,7 +31,7 @@ SEQUENCE_COLUMNS = [
 EXTRA_COLUMNS = [
     "suite", "mode", "aligned_on", "scale", "c_matched", "gt_start", "gt_end", "gt_duration",
     "t0", "track_time", "first_correct", "rpe_trans_rmse", "rpe_rot_rmse", "c_rpe_trans_rmse",
-    "c_rpe_rot_rmse", "rpe_pairs", "c_rpe_pairs", "official_interpolation",
+    "c_rpe_rot_rmse", "rpe_pairs", "c_rpe_pairs", "official_interpolation", "trial",
 ]  # fmt: skip
 #: Columns of the per-scene table (:func:`lorisnb.core.aggregate.aggregate_scenes`).
 SCENE_COLUMNS = [
@@ -189,6 +189,7 @@ class FileErrors:
     official_interpolation: bool
     sequences: list[SequenceErrors]
     warnings: list[str] = field(default_factory=list)
+    trial: int = 0  # the trial number (:mod:`lorisnb.core.trials`); 0 for the only trial
 
 
 def is_monocular(algorithm: str) -> bool:

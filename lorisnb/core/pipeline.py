@@ -89,6 +89,7 @@ def compute_errors(
     max_gap: float = MAX_GAP,
     checks: bool = True,
     other_spans: Spans | None = None,
+    trial: int = 0,
 ) -> FileErrors:
     """Per-pose errors of one OpenLORIS result file against its scene's ground truth.
 
@@ -109,6 +110,7 @@ def compute_errors(
         official_interpolation: reproduce the official tool's orientation slips (AOE only).
         checks: run the plausibility checks of :mod:`lorisnb.core.plausibility` (warnings only).
         other_spans: time spans of other ground-truth sequences, for the time-overlap check.
+        trial: the trial number of this file (:mod:`lorisnb.core.trials`).
 
     Everything noticed (the reader's notes in ``result.warnings``, plausibility checks) is issued
     as LorisWarning and kept in ``FileErrors.warnings``.
@@ -250,7 +252,7 @@ def compute_errors(
     return FileErrors(
         path=path, algorithm=algorithm, file=file if file is not None else path.name, suite=suite, scene=scene,
         frame=frame, mode="lifelong" if lifelong else "per-seq", alignment=alignment, aligned_on=aligned_on,
-        official_interpolation=official_interpolation, sequences=out, warnings=kept,
+        official_interpolation=official_interpolation, sequences=out, warnings=kept, trial=trial,
     )  # fmt: skip
 
 

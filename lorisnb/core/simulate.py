@@ -22,7 +22,7 @@ Faults (all optional; applied in this order):
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Mapping, Sequence
 
@@ -166,3 +166,22 @@ def simulated_errors(
     res = simulated_result(groundtruth, faults, seqs, name)
     label = res.header["algorithm"]
     return compute_errors(res, groundtruth, algorithm=label, file=label, suite="simulated", mode=mode, scale=scale)
+
+
+def simulated_trials(
+    groundtruth: ResultFile,
+    algorithms: Mapping[str, Faults],
+    trials: int = 5,
+    seqs: Sequence[int] | None = None,
+    mode: str = "per-seq",
+) -> list[FileErrors]:
+    """Repeated runs of simulated algorithms: for each name and faults, ``trials`` runs that differ
+    only in the random seed (``faults.seed + k`` for trial k = 1..trials), evaluated with the real
+    pipeline. Labelled ``simulated: NAME``; ``FileErrors.trial`` holds k."""
+    out = []
+    for name, faults in algorithms.items():  # a few algorithms x trials, never poses
+        for k in range(1, trials + 1):
+            fe = simulated_errors(groundtruth, replace(faults, seed=faults.seed + k), seqs, name=name, mode=mode)
+            fe.trial = k
+            out.append(fe)
+    return out

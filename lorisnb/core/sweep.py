@@ -28,7 +28,7 @@ from .validate import choice, threshold, threshold_list
 #: Columns of the default (lean) sweep table: identity, thresholds, and the metrics that depend on
 #: them, plus what scene aggregation needs. ``columns="all"`` gives every column of ``score``.
 METRIC_COLUMNS = [
-    "suite", "algorithm", "file", "scene", "seq", "eps", "eps_value", "phi", "delta", "tau", "matched",
+    "suite", "algorithm", "trial", "file", "scene", "seq", "eps", "eps_value", "phi", "delta", "tau", "matched",
     "c_matched", "correct_time", "track_time", "cr", "cr_t", "cs_r", "ate_rmse", "c_ate_rmse", "c_aoe_rmse",
 ]  # fmt: skip
 

@@ -5,6 +5,7 @@ never replacing an existing file unless asked.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -25,8 +26,7 @@ def write_openloris(
     """Write trajectories as an OpenLORIS result file (a simulated one says ``simulated: true`` in
     its header). Written to a temporary name and moved into place; an existing file is kept unless
     ``overwrite``."""
-    path = Path(path)
-    if path.exists() and not overwrite:
+    if Path(path).exists() and not overwrite:
         raise OutputError(f"{path} exists; choose another name or pass overwrite=True to replace it")
     lines = [f"scene: {scene}", f"frame: {frame}"]
     extra = dict(header or {})
@@ -37,22 +37,30 @@ def write_openloris(
         lines.append(f"seq: {seq}")
         block = np.column_stack([t.stamps, t.positions, t.quaternions])
         lines += [" ".join(f"{v:.17g}" for v in row) for row in block]
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    tmp.write_text("\n".join(lines) + "\n")
-    os.replace(tmp, path)
+    write_text("\n".join(lines) + "\n", path, force=True)
 
 
-def write_csv(df: pd.DataFrame, out: str | os.PathLike, force: bool = False) -> Path:
-    """Write a table as CSV through a temporary name and move it into place; refuse to replace an
-    existing file unless ``force``."""
+def write_atomically(out: str | os.PathLike[str], write: Callable[[Path], object], force: bool = False) -> Path:
+    """Call ``write(tmp)`` on a temporary name beside ``out``, then move it into place; refuse to
+    replace an existing file unless ``force``; never leave the temporary file behind."""
     out = Path(out)
     if out.exists() and not force:
         raise OutputError(f"{out} exists; choose another name or pass --force to replace it")
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
     try:
-        df.to_csv(tmp, index=False)
+        write(tmp)
         os.replace(tmp, out)
     finally:
         tmp.unlink(missing_ok=True)
     return out
+
+
+def write_csv(df: pd.DataFrame, out: str | os.PathLike[str], force: bool = False) -> Path:
+    """Write a table as CSV (:func:`write_atomically`)."""
+    return write_atomically(out, lambda p: df.to_csv(p, index=False), force)
+
+
+def write_text(text: str, out: str | os.PathLike[str], force: bool = False) -> Path:
+    """Write text, UTF-8 (:func:`write_atomically`)."""
+    return write_atomically(out, lambda p: p.write_text(text, encoding="utf-8"), force)

@@ -22,6 +22,7 @@ from ..core.frames import SCENES
 from ..core.model import Eps, FileErrors
 from ..core.pipeline import compute_errors
 from ..core.scoring import pose_table, score
+from ..core.trials import compile_trials_by, split_trial
 from ..core.validate import choice, scale_value
 from ..errors import DataNotFoundError, LorisError, LorisWarning, ValidationError
 from ..io.data import DataPaths, DataRoot, find_data, groundtruth_spans, load_groundtruth, scene_durations
@@ -129,13 +130,16 @@ def result_files(paths: PathArg | Iterable[PathArg]) -> list[tuple[Path, Path | 
     return out
 
 
-def labels(path: Path, root: Path | None) -> tuple[str, str, str]:
-    """(algorithm, file relative to the root, suite) for a result file."""
+def labels(path: Path, root: Path | None, trials_by: str | None = None) -> tuple[str, str, str, int]:
+    """(algorithm, file relative to the root, suite, trial) for a result file; a trial token in
+    the path (:func:`lorisnb.core.trials.split_trial`) is not part of the algorithm or suite."""
+    rel = path.relative_to(root).as_posix() if root is not None else f"{path.parent.name}/{path.name}"
+    base, trial = split_trial(rel, trials_by)
+    parts = base.split("/")
     if root is None:
-        return path.parent.name, path.name, ""
-    parts = path.relative_to(root).parts
+        return (parts[-2] if len(parts) >= 2 else path.parent.name), path.name, "", trial
     algorithm = parts[-2] if len(parts) >= 2 else root.name
-    return algorithm, path.relative_to(root).as_posix(), "/".join(parts[:-2])
+    return algorithm, rel, "/".join(parts[:-2]), trial
 
 
 def evaluate(
@@ -150,6 +154,7 @@ def evaluate(
     scenes: Iterable[str] | None = None,
     repair_stamps: bool = False,
     max_gap: float = MAX_GAP,
+    trials_by: str | None = None,
     progress: bool = False,
 ) -> Evaluation:
     """Evaluate OpenLORIS result files and folders. A file that fails (bad line, unknown frame,
@@ -163,15 +168,18 @@ def evaluate(
         remove_repeated, repair_stamps: see :func:`lorisnb.io.read_openloris`.
         data_root: where the ground truth is (see :func:`lorisnb.io.find_data`).
         algorithms, scenes: evaluate only these (None: all).
+        trials_by: a regular expression whose first group is the trial number in a file's path
+            (default: the tokens of :mod:`lorisnb.core.trials`: ``_trial3``, ``run_2/``, ...).
         progress: show a progress bar over files (tqdm; notebook-aware).
     """
     mode = choice("mode", mode, ("auto", "per-seq", "lifelong"))
+    compile_trials_by(trials_by)
     scale = scale_value(scale)
     items = result_files(paths)
     data = find_data(data_root)  # no data at all is an error for the whole call, not per file
     if algorithms is not None:
         wanted = {algorithms} if isinstance(algorithms, str) else set(algorithms)
-        items = [(p, r) for p, r in items if labels(p, r)[0] in wanted]
+        items = [(p, r) for p, r in items if labels(p, r, trials_by)[0] in wanted]
     scene_set = None if scenes is None else ({scenes} if isinstance(scenes, str) else set(scenes))
     iterator: Iterable[tuple[Path, Path | None]] = items
     if progress:
@@ -183,7 +191,7 @@ def evaluate(
     skipped: list[Failure] = []
     spans = partial(groundtruth_spans, data, remove_repeated)
     for path, root in iterator:
-        algorithm, rel, suite = labels(path, root)
+        algorithm, rel, suite, trial = labels(path, root, trials_by)
         try:
             result = read_openloris(path, remove_repeated=remove_repeated, warn=False, repair_stamps=repair_stamps)
             if scene_set is not None and result.scene not in scene_set:
@@ -195,6 +203,7 @@ def evaluate(
                     compute_errors(
                         result, gt, algorithm=algorithm, file=rel, suite=suite, mode=mode, scale=scale,
                         official_interpolation=official_interpolation, max_gap=max_gap, other_spans=spans,
+                        trial=trial,
                     )
                 )  # fmt: skip
         except DataNotFoundError as exc:

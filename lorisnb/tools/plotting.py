@@ -151,8 +151,8 @@ def plot_trajectories(
     return fig
 
 
-def save_figure(fig, out_dir: str | Path, name: str, formats: Iterable[str] = ("png", "svg")) -> list[Path]:
-    """Write a figure as ``name.png`` and ``name.svg`` in ``out_dir``; returns the paths."""
+def save_figure(fig, out_dir: str | Path, name: str, formats: Iterable[str] = ("png", "svg", "pdf")) -> list[Path]:
+    """Write a figure as ``name.png``, ``name.svg`` and ``name.pdf`` in ``out_dir``; returns the paths."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []

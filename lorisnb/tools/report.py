@@ -37,6 +37,7 @@ DEFAULT_NOTEBOOKS = (
     "per_sequence_benchmark",
     "lifelong_benchmark",
     "threshold_sensitivity",
+    "compare_algorithms",
     "evo_crosscheck",
     "indoor_vs_outdoor",
     "evaluate_my_results",

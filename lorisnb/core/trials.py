@@ -1,0 +1,58 @@
+"""Repeated trials: several result files of one algorithm on one sequence.
+
+A trial number is read from a file's path relative to the results folder: a token such as
+``cafe_trial3.txt``, ``cafe-trial-3.txt``, ``trial3/cafe.txt``, ``run_2/cafe.txt``, ``run-2/`` or
+rpg_trajectory_evaluation's ``stamped_traj_estimate3.txt``; or by a user's regular expression whose
+first group (or group named ``trial``) is the number. A path without a trial token is trial 0 (the
+only trial). The token is removed from the path to tell which files belong together.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import PurePosixPath
+
+from ..errors import ValidationError
+
+#: Trial tokens recognized by default, in a file name or as a folder of their own.
+TRIAL_PATTERNS = (
+    re.compile(r"(?:^|[_\-./])(?:trial|run)[_\-]?(?P<trial>\d+)(?=$|[_\-./])", re.IGNORECASE),
+    re.compile(r"(?<=^stamped_traj_estimate)(?P<trial>\d+)(?=\.)"),
+)
+
+
+def compile_trials_by(regex: str | None) -> re.Pattern[str] | None:
+    """A user's ``--trials-by`` expression, checked: it must compile and have a group."""
+    if regex is None:
+        return None
+    try:
+        pat = re.compile(regex)
+    except re.error as exc:
+        raise ValidationError(f"trials_by={regex}: not a regular expression ({exc})") from None
+    if pat.groups < 1:
+        raise ValidationError(f"trials_by={regex}: expected a group around the trial number, e.g. 'run(\\d+)'")
+    return pat
+
+
+def split_trial(relpath: str, trials_by: str | re.Pattern[str] | None = None) -> tuple[str, int]:
+    """(the path without its trial token, the trial number) of a result file's relative path
+    (``/``-separated); trial 0 when the path names none."""
+    pattern = compile_trials_by(trials_by) if isinstance(trials_by, str) else trials_by
+    parts = list(PurePosixPath(relpath).parts)
+    for k in range(len(parts) - 1, -1, -1):  # the file name first, then its folders
+        for pat in [pattern] if pattern is not None else TRIAL_PATTERNS:
+            m = pat.search(parts[k])
+            if m is None:
+                continue
+            number = m.group("trial") if "trial" in pat.groupindex else m.group(1)
+            try:
+                trial = int(number)
+            except (TypeError, ValueError):
+                raise ValidationError(f"trials_by: matched {m.group(0)!r} in {relpath}, not a whole number") from None
+            cut = re.sub(r"[_\-]+(?=\.|$)", "", parts[k][: m.start()] + parts[k][m.end() :]).strip("_-")
+            if k == len(parts) - 1 and (not cut or cut.startswith(".")):
+                cut = "estimate" + cut  # the whole name was the trial token
+            rest = cut if k == len(parts) - 1 or cut not in (".", "") else ""
+            kept = parts[:k] + ([rest] if rest else []) + parts[k + 1 :]
+            return "/".join(kept), trial
+    return relpath, 0
