@@ -98,6 +98,7 @@ def test_openloris_crosscheck_explains_lifelong_and_slips(icra20):
     assert slip["lorisnb"] != slip["evo"]
 
 
+@pytest.mark.slow  # evo on 12,000 market poses: about 9 s
 def test_repeated_pose_row(icra20):
     # market-1-1 odometry repeats 445 poses while the robot stands still
     table = crosscheck_openloris(icra20 / "per-seq" / "odom" / "market-1-1-odom.txt")
