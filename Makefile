@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND ?= Agg
 
-.PHONY: report test test-fast test-slow lint format evaluate bench clean-venv
+.PHONY: report test test-fast test-slow test-browser browser-deps lint format evaluate bench clean-venv
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -23,13 +23,23 @@ evaluate: $(STAMP)
 
 # everything: fast tests, then the slow ones (notebooks, reports, the installed wheel)
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -m "not browser"
 
 test-fast: $(STAMP)
-	$(BIN)/python -m pytest -q -m "not slow"
+	$(BIN)/python -m pytest -q -m "not slow and not browser"
 
 test-slow: $(STAMP)
-	$(BIN)/python -m pytest -q -m slow
+	$(BIN)/python -m pytest -q -m "slow and not browser"
+
+# Debian's Chromium and its driver (apt, as root or with sudo), where missing
+browser-deps:
+	@command -v chromium >/dev/null && command -v chromedriver >/dev/null || { \
+	  SUDO=$$(test "$$(id -u)" = 0 || echo sudo); \
+	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq chromium chromium-driver; }
+
+# the notebooks in JupyterLab in headless Chromium (screenshots in results/browser/)
+test-browser: $(STAMP) browser-deps
+	$(BIN)/python -m pytest -q -m browser -p no:randomly
 
 lint: $(STAMP)
 	$(BIN)/ruff check lorisnb tests benchmarks notebooks

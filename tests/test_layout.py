@@ -101,6 +101,14 @@ def test_notebooks_are_stored_clean_with_one_parameters_cell():
         assert len(tagged) == 1, path.name
         assert "output_dir = None" in tagged[0].source and "quick" in tagged[0].source, path.name
         assert sum("ln.setup(" in c.source for c in code) == 1, f"{path.name}: one setup call"
+        # what JupyterLab writes on connecting to the kernel: stored as is, the notebook opens unmodified
+        assert nb.metadata["kernelspec"] == {
+            "display_name": "Python 3 (ipykernel)",
+            "language": "python",
+            "name": "python3",
+        }
+        assert nb.metadata["language_info"]["name"] == "python" and "codemirror_mode" in nb.metadata["language_info"]
+        assert all("id" in c for c in nb.cells), f"{path.name}: cells need ids (nbformat 4.5)"
 
 
 def test_modules_are_small():

@@ -8,6 +8,7 @@ else a new temporary folder. ``lorisnb report`` passes ``output_dir="."`` (its r
 
 from __future__ import annotations
 
+import io
 import os
 import tempfile
 import warnings
@@ -39,15 +40,65 @@ class Outputs:
         write_csv(df.reset_index() if index else df, self.dir / f"{name}.csv", force=True)
         return df
 
-    def figure(self, fig: Any, name: str) -> Any:
+    def figure(self, fig: Any, name: str) -> None:
+        """Save ``fig`` as PNG, SVG and PDF and show it once in the notebook (:func:`show_figure`)."""
         from .plotting import save_figure
 
         save_figure(fig, self.dir, name)
-        return fig
+        show_figure(fig)
 
     def input_errors(self, failures: pd.DataFrame) -> pd.DataFrame:
         write_csv(failures, self.dir / INPUT_ERRORS_CSV, force=True)
         return failures
+
+
+def figure_png(fig: Any, dpi: int = 144) -> bytes:
+    """A figure rendered to PNG bytes (tight bounding box), on the calling thread."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
+    return buf.getvalue()
+
+
+def show_figure(fig: Any, dpi: int = 144) -> None:
+    """Display a figure once, as a PNG image at its own size (not scaled to the notebook width
+    unless wider), without going through pyplot; a pyplot figure is closed so that the inline
+    backend does not show it a second time. Outside IPython, nothing is shown."""
+    try:
+        from IPython import get_ipython
+        from IPython.display import Image, display
+    except ImportError:
+        return
+    import matplotlib.pyplot as plt
+
+    if plt.fignum_exists(getattr(fig, "number", -1)):
+        plt.close(fig)
+    if get_ipython() is None:
+        return
+    width = int(round(fig.get_figwidth() * 100))  # CSS pixels of the figure as designed
+    display(Image(data=figure_png(fig, dpi), format="png", width=width))
+
+
+def show_inputs(ev: Any, out: Outputs) -> None:
+    """What a notebook shows about its inputs: the files that failed or were skipped (written to
+    ``input_errors.csv`` for the report, shown only when there are any) and the warnings about
+    the inputs, one row per file with the count and the first message (all of them in
+    ``ev.warnings``)."""
+    from IPython.display import display
+
+    failures = out.input_errors(ev.failures_table())
+    if len(failures):
+        display(failures)
+    table = warnings_table(ev)
+    if len(table):
+        print(f"{int(table['warnings'].sum())} note(s) about {len(table)} input file(s); all of them: ev.warnings")
+        with pd.option_context("display.max_colwidth", 160):
+            display(table)
+
+
+def warnings_table(ev: Any) -> pd.DataFrame:
+    """One row per input file with warnings: file, how many, the first message."""
+    rows = [dict(file=f.file, warnings=len(f.warnings), first=f.warnings[0]) for f in ev.errors if f.warnings]
+    return pd.DataFrame(rows, columns=["file", "warnings", "first"])
 
 
 def default_output_dir(name: str, start: Path | None = None) -> Path:
@@ -68,13 +119,18 @@ class Session:
     out: Outputs
     name: str
 
+    def show_inputs(self, ev: Any) -> None:
+        """Show the input files that failed and the warnings about inputs (:func:`show_inputs`)."""
+        show_inputs(ev, self.out)
+
 
 def setup(name: str, data_root: DataRoot | None = None, output_dir: str | os.PathLike[str] | None = None) -> Session:
     """The first call of every notebook: find the data (``data_root``, else ``$LORISNB_DATA``, else
     ``../shared/data``), create the output folder (``output_dir``, else :func:`default_output_dir`),
-    and show each lorisnb warning once (not once per line of code that issued it)."""
+    and keep lorisnb's warnings about input files out of the cell output as Python warnings (they are
+    summarized per file by :func:`show_inputs`)."""
     data = find_data(data_root)
     out = Outputs(output_dir if output_dir is not None else default_output_dir(name))
-    warnings.filterwarnings("once", category=LorisWarning)
+    warnings.filterwarnings("ignore", category=LorisWarning)
     print(f"data root: {data.root}\noutputs:   {out.dir.resolve()}")
     return Session(data, out, name)

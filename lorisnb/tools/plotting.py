@@ -5,18 +5,32 @@ correctness, and helpers to save figures. Every function returns the Figure; non
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Iterable, Mapping, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import seaborn as sns
 from matplotlib.collections import LineCollection
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.patches import Rectangle
 
 from ..core.metrics import correctness
 from ..core.model import FileErrors, scene_eps
 from ..core.timeline import sequence_layout, timeline_table
+
+#: Widest figure, inches (about 1,300 px in a notebook): wider ones would be shrunk to unreadable text.
+MAX_WIDTH_IN = 13.0
+
+
+def subplots(nrows: int = 1, ncols: int = 1, **kw: Any) -> tuple[Figure, Any]:
+    """Like ``plt.subplots``, but the figure is not registered with pyplot: no backend redraws or
+    shows it behind the caller's back (a widget's figure stays the widget's, and a notebook shows
+    each figure once, where :meth:`lorisnb.tools.notebook.Outputs.figure` displays it)."""
+    figsize = kw.pop("figsize", None)
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(nrows, ncols, **kw)
+
 
 CORRECT = "#1f5fbf"
 WRONG = "#d62728"
@@ -55,7 +69,7 @@ def plot_timeline(
     n = len(algorithms)
     width = max(8.0, 0.006 * (layout["offset"].iloc[-1] + layout["duration"].iloc[-1]) + 3) if len(layout) else 8
     sns.set_theme(style="white", context="paper")
-    fig, ax = plt.subplots(figsize=(min(width, 20), 0.55 * n + 1.4))
+    fig, ax = subplots(figsize=(min(width, MAX_WIDTH_IN), 0.55 * n + 1.7))
     off = {(r.scene, r.seq): r.offset for r in layout.itertuples()}
     y_of = {a: n - i for i, a in enumerate(algorithms)}
     top = n + 0.8
@@ -112,12 +126,12 @@ def plot_timeline(
             Line2D([], [], color=WRONG, lw=2.2, label="incorrect pose estimates"),
             Line2D([], [], color=WRONG, marker="x", ls="", label="incorrect (re-)localization"),
         ]
-    ax.legend(
-        handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=len(handles), frameon=False, fontsize=8
-    )
+    # the legend gets its own strip under the axis label, so the two never overlap
+    fig.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=len(handles), frameon=False,
+               fontsize=8)  # fmt: skip
     if title:
         ax.set_title(title, fontsize=10, pad=18)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.3 / fig.get_figheight(), 1, 1))
     return fig
 
 
@@ -131,7 +145,7 @@ def plot_trajectories(
     cols = min(max_cols, n)
     rows = int(np.ceil(n / cols))
     sns.set_theme(style="whitegrid", context="paper")
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4.0 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(4.2 * cols, 4.0 * rows), squeeze=False)
     e_eps = scene_eps(eps, errors.scene)
     for ax, e in zip(axes.flat, seqs, strict=False):
         c = correctness(e.ate, e.aoe, e_eps, phi)
@@ -233,7 +247,7 @@ def plot_cr_heatmaps(
     cols = min(max_cols, max(1, len(algs)))
     rows = int(np.ceil(len(algs) / cols)) or 1
     sns.set_theme(style="white", context="paper")
-    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.6 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(4.6 * cols, 3.6 * rows), squeeze=False)
     for ax, alg in zip(axes.flat, algs, strict=False):
         wide = (
             d[d["algorithm"] == alg].pivot_table(index="phi", columns="eps", values=metric).sort_index(ascending=False)
@@ -254,7 +268,7 @@ def plot_cr_heatmaps(
         if mark is not None:
             ci = int(np.argmin(np.abs(np.asarray(wide.columns, float) - mark[0])))
             ri = int(np.argmin(np.abs(np.asarray(wide.index, float) - mark[1])))
-            ax.add_patch(plt.Rectangle((ci, ri), 1, 1, fill=False, edgecolor="red", lw=2))
+            ax.add_patch(Rectangle((ci, ri), 1, 1, fill=False, edgecolor="red", lw=2))
     for ax in list(axes.flat)[len(algs) :]:
         ax.axis("off")
     fig.suptitle(
@@ -268,7 +282,7 @@ def plot_cr_heatmaps(
 def plot_rank_stability(stability: pd.DataFrame):
     """Kendall's tau between the ranking at each eps and at the reference (paper) eps, per scene."""
     sns.set_theme(style="whitegrid", context="paper")
-    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    fig, ax = subplots(figsize=(6.5, 3.6))
     d = stability[np.isfinite(stability["eps"])]
     sns.lineplot(data=d, x="eps", y="kendall_tau", hue="scene", marker="o", ax=ax)
     for scene, ref in d.groupby("scene")["reference_eps"].first().items():
@@ -287,7 +301,7 @@ def plot_crosscheck_scatter(per_pose: Mapping[str, pd.DataFrame]):
     per dataset: points lie on the diagonal where the association coincides."""
     n = len(per_pose)
     sns.set_theme(style="whitegrid", context="paper")
-    fig, axes = plt.subplots(2, n, figsize=(3.6 * n, 6.6), squeeze=False)
+    fig, axes = subplots(2, n, figsize=(min(3.6 * n, MAX_WIDTH_IN), 6.6), squeeze=False)
     for k, (name, df) in enumerate(per_pose.items()):
         for r, (ours, theirs, unit) in enumerate((("ate_lorisnb", "ate_evo", "m"), ("aoe_lorisnb", "aoe_evo", "deg"))):
             ax = axes[r, k]
@@ -306,7 +320,7 @@ def plot_normalized_accuracy(measures: pd.DataFrame, published: pd.DataFrame):
     """ATE RMSE as % of the distance travelled: computed sequences as points (one row per
     dataset, coloured by scene or sequence), published values as black diamonds on their own rows."""
     sns.set_theme(style="whitegrid", context="paper")
-    fig, ax = plt.subplots(figsize=(8, 3.8))
+    fig, ax = subplots(figsize=(8, 3.8))
     pts = measures.dropna(subset=["ate_pct_length"])
     sns.stripplot(data=pts, y="dataset", x="ate_pct_length", hue="group", dodge=False, alpha=0.6, ax=ax, size=4)
     rows = [f"{d} (published)" for d in published["dataset"]]

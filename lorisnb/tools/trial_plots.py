@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import matplotlib.pyplot as plt
 import pandas as pd
 import seaborn as sns
 from matplotlib.figure import Figure
 
 from ..core.stats import scene_values, with_trials
+from .plotting import MAX_WIDTH_IN, subplots
 from .tables import LABELS
 
 
@@ -21,7 +21,7 @@ def plot_trials(table: pd.DataFrame, metric: str = "cr", scenes: Sequence[str] |
         values = values[values["scene"].isin(list(scenes))]
     panels = list(dict.fromkeys(values["scene"]))
     algs = sorted(values["algorithm"].unique())
-    fig, axes = plt.subplots(1, max(1, len(panels)), figsize=(3.2 * max(1, len(panels)), 0.35 * len(algs) + 1.6),
+    fig, axes = subplots(1, max(1, len(panels)), figsize=(min(3.2 * max(1, len(panels)), MAX_WIDTH_IN), 0.35 * len(algs) + 1.6),
                              sharey=True, squeeze=False)  # fmt: skip
     for ax, scene in zip(axes[0], panels, strict=False):
         d = values[values["scene"] == scene]

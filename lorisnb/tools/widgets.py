@@ -8,29 +8,52 @@ when it runs in batch (papermill has no widget front end).
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any
 
-import matplotlib.pyplot as plt
+import numpy as np
 import pandas as pd
+from matplotlib.figure import Figure
 
 from ..core.aggregate import aggregate_scenes, durations_table
+from ..core.frames import PAPER_EPS, PAPER_PHI
 from ..core.model import FileErrors, ResultFile
 from ..core.scoring import score
 from ..core.simulate import Faults, simulated_errors
 from ..core.validate import threshold
+from .notebook import show_figure
 from .plotting import plot_timeline
 
+STYLE = {"description_width": "110px"}
+OFF = -1.0  # the "off" position of the wrong re-localization slider
+SLIDER_WIDTH = "460px"  # long enough for about 80 positions
 
-def _render(out, results) -> None:
-    """Replace the widget output with the table and figure of ``results()``."""
+
+def value_slider(description: str, value: float, grid: Iterable[float], exact: Iterable[float] = ()) -> Any:
+    """A slider over a fixed list of values (a log or linear grid, rounded to 3 significant
+    digits, plus ``value`` and the ``exact`` values themselves), so that it starts at ``value``
+    exactly and offers the paper's values exactly; updates when released."""
+    import ipywidgets as w
+
+    rounded = {float(f"{v:.3g}") for v in grid}
+    values = sorted(rounded | {float(value)} | {float(v) for v in exact})
+    return w.SelectionSlider(
+        options=[(f"{v:g}", v) for v in values], value=float(value), description=description, style=STYLE,
+        continuous_update=False, layout=w.Layout(width=SLIDER_WIDTH),
+    )  # fmt: skip
+
+
+def _render(out: Any, results: Callable[[], tuple[pd.DataFrame, Figure]]) -> None:
+    """Replace the widget output with the table and figure of ``results()``. The figure is a
+    :class:`matplotlib.figure.Figure` outside pyplot, rendered to PNG on this thread, so no
+    backend redraw can race with it (fast drags never show a blank or half-drawn figure)."""
     from IPython.display import display
 
+    table, fig = results()
     with out:
         out.clear_output(wait=True)
-        table, fig = results()
         display(table.round(3))
-        display(fig)
-        plt.close(fig)
+        show_figure(fig)
 
 
 class ThresholdExplorer:
@@ -54,7 +77,7 @@ class ThresholdExplorer:
         )
         self.scene = scene if scene is not None else (self.scenes[0] if self.scenes else None)
 
-    def results(self) -> tuple[pd.DataFrame, plt.Figure]:
+    def results(self) -> tuple[pd.DataFrame, Figure]:
         """Scene table and timeline figure for the current values."""
         files = [f for f in self.errors if f.scene == self.scene]
         table = aggregate_scenes(
@@ -73,34 +96,28 @@ class ThresholdExplorer:
         cols = ["algorithm", "cr", "cr_t", "cs_r_mean", "c_ate_rmse", "c_matched", "matched"]
         return table[cols].sort_values("cr", ascending=False).reset_index(drop=True), fig
 
-    def widget(self):
-        """The interactive controls and their output (for JupyterLab)."""
+    def widget(self) -> Any:
+        """The interactive controls and their output (for JupyterLab). Each slider starts exactly at
+        the explorer's value and offers the paper's values (eps 1/3/5 m, phi 30 deg, delta 1 s,
+        tau 60 s) exactly."""
         import ipywidgets as w
 
-        style = {"description_width": "90px"}
-        eps = w.FloatLogSlider(value=self.eps, base=10, min=-2, max=2, step=0.05, description="eps (m)", style=style)
-        phi = w.FloatSlider(value=min(self.phi, 180.0), min=1, max=180, step=1, description="phi (deg)", style=style)
-        delta = w.FloatLogSlider(
-            value=self.delta, base=10, min=-1.3, max=1, step=0.05, description="delta (s)", style=style
-        )
-        tau = w.FloatLogSlider(value=self.tau, base=10, min=0, max=3, step=0.05, description="tau (s)", style=style)
-        scene = w.Dropdown(options=self.scenes, value=self.scene, description="scene", style=style)
+        eps = value_slider("eps (m)", self.eps, np.geomspace(0.01, 100, 81), PAPER_EPS.values())
+        phi = value_slider("phi (deg)", self.phi, np.arange(1, 181), [PAPER_PHI])
+        delta = value_slider("delta (s)", self.delta, np.geomspace(0.05, 10, 47), [1.0])
+        tau = value_slider("tau (s)", self.tau, np.geomspace(1, 1000, 61), [60.0])
+        scene = w.Dropdown(options=self.scenes, value=self.scene, description="scene", style=STYLE)
         out = w.Output()
 
-        def update(_=None):
-            self.eps, self.phi, self.delta, self.tau, self.scene = (
-                eps.value,
-                phi.value,
-                delta.value,
-                tau.value,
-                scene.value,
-            )
+        def update(_: Any = None) -> None:
+            self.eps, self.phi, self.delta, self.tau = eps.value, phi.value, delta.value, tau.value
+            self.scene = scene.value
             _render(out, self.results)
 
         for c in (eps, phi, delta, tau, scene):
             c.observe(update, names="value")
         update()
-        return w.VBox([w.HBox([w.VBox([eps, phi]), w.VBox([delta, tau]), scene]), out])
+        return w.VBox([w.HBox([w.VBox([eps, phi]), w.VBox([delta, tau, scene])]), out])
 
 
 class FaultExplorer:
@@ -126,7 +143,7 @@ class FaultExplorer:
         self.duration = groundtruth.sequences[seq].duration
         d = durations_table({groundtruth.scene: groundtruth})
         self.durations = d[d["seq"] == seq]
-        self.values = dict(
+        self.values: dict[str, Any] = dict(
             position_noise_m=0.0,
             orientation_noise_deg=0.0,
             yaw_drift_deg_per_m=0.0,
@@ -134,7 +151,7 @@ class FaultExplorer:
             init_delay_s=0.0,
             lost_from_s=0.0,
             lost_for_s=0.0,
-            wrong_reloc_at_s=-1.0,
+            wrong_reloc_at_s=OFF,
             rate_hz=0.0,
             clock_offset_s=0.0,
         )
@@ -149,13 +166,13 @@ class FaultExplorer:
             scale=v["scale"],
             init_delay_s=v["init_delay_s"],
             lost=lost,
-            wrong_reloc_at_s=v["wrong_reloc_at_s"] if v["wrong_reloc_at_s"] >= 0 else None,
+            wrong_reloc_at_s=None if v["wrong_reloc_at_s"] == OFF else v["wrong_reloc_at_s"],
             rate_hz=v["rate_hz"] or None,
             clock_offset_s=v["clock_offset_s"],
             seed=self.seed,
         )
 
-    def results(self) -> tuple[pd.DataFrame, plt.Figure]:
+    def results(self) -> tuple[pd.DataFrame, Figure]:
         """Metrics table and timeline for the current slider values."""
         fe = simulated_errors(self.groundtruth, self.faults(), seqs=[self.seq], name="sliders")
         table = score(fe, self.eps, self.phi, self.delta, self.tau)
@@ -171,27 +188,38 @@ class FaultExplorer:
         cols = ["matched", "ate_rmse", "aoe_rmse", "c_ate_rmse", "cr", "cr_t", "reloc_time", "cs_r", "rpe_trans_rmse"]
         return table[cols], fig
 
-    def widget(self):
+    def widget(self) -> Any:
+        """Sliders for every fault (each starts at no fault), and their output. A wrong
+        re-localization is "off" or happens at a time after the start: a jump at the very start
+        would be absorbed by the alignment, so the slider starts at 5 s."""
         import ipywidgets as w
 
         d = self.duration
         spec = [
-            ("position_noise_m", w.FloatSlider, dict(min=0, max=1, step=0.01, description="noise (m)")),
-            ("orientation_noise_deg", w.FloatSlider, dict(min=0, max=45, step=1, description="noise (deg)")),
-            ("yaw_drift_deg_per_m", w.FloatSlider, dict(min=0, max=5, step=0.1, description="yaw drift (deg/m)")),
-            ("scale", w.FloatSlider, dict(min=0.2, max=2, step=0.05, description="scale")),
-            ("init_delay_s", w.FloatSlider, dict(min=0, max=d, step=1, description="init delay (s)")),
-            ("lost_from_s", w.FloatSlider, dict(min=0, max=d, step=1, description="lost from (s)")),
-            ("lost_for_s", w.FloatSlider, dict(min=0, max=d, step=1, description="lost for (s)")),
-            ("wrong_reloc_at_s", w.FloatSlider, dict(min=-1, max=d, step=1, description="wrong reloc at (s)")),
-            ("rate_hz", w.FloatSlider, dict(min=0, max=10, step=0.1, description="rate (Hz, 0: all)")),
-            ("clock_offset_s", w.FloatSlider, dict(min=-2, max=2, step=0.05, description="clock offset (s)")),
+            ("position_noise_m", dict(min=0, max=1, step=0.01, description="noise (m)")),
+            ("orientation_noise_deg", dict(min=0, max=45, step=1, description="noise (deg)")),
+            ("yaw_drift_deg_per_m", dict(min=0, max=5, step=0.1, description="yaw drift (deg/m)")),
+            ("scale", dict(min=0.2, max=2, step=0.05, description="scale")),
+            ("init_delay_s", dict(min=0, max=d, step=1, description="init delay (s)")),
+            ("lost_from_s", dict(min=0, max=d, step=1, description="lost from (s)")),
+            ("lost_for_s", dict(min=0, max=d, step=1, description="lost for (s)")),
+            ("rate_hz", dict(min=0, max=10, step=0.1, description="rate (Hz, 0: all)")),
+            ("clock_offset_s", dict(min=-2, max=2, step=0.05, description="clock offset (s)")),
         ]
         style = {"description_width": "130px"}
-        controls = {k: cls(value=self.values[k], style=style, continuous_update=False, **kw) for k, cls, kw in spec}
+        layout = w.Layout(width=SLIDER_WIDTH)
+        controls = {
+            k: w.FloatSlider(value=self.values[k], style=style, continuous_update=False, layout=layout, **kw)
+            for k, kw in spec
+        }
+        times = [("off", OFF)] + [(f"{t:g}", float(t)) for t in np.arange(5.0, d, 5.0)]
+        controls["wrong_reloc_at_s"] = w.SelectionSlider(
+            options=times, value=OFF, description="wrong reloc at (s)", style=style, continuous_update=False,
+            layout=layout,
+        )  # fmt: skip
         out = w.Output()
 
-        def update(_=None):
+        def update(_: Any = None) -> None:
             self.values.update({k: c.value for k, c in controls.items()})
             _render(out, self.results)
 

@@ -1,0 +1,293 @@
+"""The notebooks in a real browser, as a student uses them: JupyterLab on a loopback port with a
+token, Debian's Chromium driven by selenium through its own executable (no browser download).
+
+For every notebook: open it (it must not be marked modified), run all cells, and assert no error
+output and no figure shown twice in a cell. For each interactive explorer: the first values shown
+equal the notebook's parameters, and a slider drag, an arrow key and (threshold explorer) a
+dropdown change each change the figure, which is never blank (its pixels are checked).
+Screenshots of each explorer before and after each input land in ``results/browser/``.
+
+Run with ``make test-browser`` (installs Chromium with apt where missing).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lorisnb.core.frames import PAPER_EPS
+from lorisnb.tools.report import DEFAULT_NOTEBOOKS, notebook_dir
+
+pytestmark = [pytest.mark.browser, pytest.mark.slow]
+
+PANEL = "document.querySelector('.jp-NotebookPanel:not(.lm-mod-hidden)')"  # the notebook in front
+CHROMIUM = os.environ.get("LORISNB_CHROMIUM", "/usr/bin/chromium")
+CHROMEDRIVER = os.environ.get("LORISNB_CHROMEDRIVER", "/usr/bin/chromedriver")
+SHOTS = Path(__file__).resolve().parents[1] / "results" / "browser"
+TOKEN = "lorisnb-browser-test"
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory, data):
+    """A JupyterLab server on 127.0.0.1 over a copy of the notebooks; stopped at the end."""
+    if not (Path(CHROMIUM).exists() and Path(CHROMEDRIVER).exists()):
+        pytest.fail(f"{CHROMIUM} / {CHROMEDRIVER} missing: run `make test-browser` (installs Debian's chromium)")
+    root = tmp_path_factory.mktemp("lab")
+    for p in notebook_dir().glob("*.ipynb"):
+        shutil.copy(p, root / p.name)
+    settings = root / ".settings" / "@jupyterlab" / "notebook-extension"
+    settings.mkdir(parents=True)
+    (settings / "tracker.jupyterlab-settings").write_text(json.dumps({"windowingMode": "none"}))
+    notify = root / ".settings" / "@jupyterlab" / "apputils-extension"
+    notify.mkdir(parents=True)
+    (notify / "notification.jupyterlab-settings").write_text(
+        json.dumps({"fetchNews": "false", "checkForUpdates": False})
+    )
+    port = _free_port()
+    env = dict(os.environ, LORISNB_DATA=str(data.root), JUPYTERLAB_SETTINGS_DIR=str(root / ".settings"),
+               MPLBACKEND="module://matplotlib_inline.backend_inline")  # fmt: skip
+    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
+    log = open(root / "lab.log", "w")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "jupyter", "lab", "--no-browser", "--ServerApp.ip=127.0.0.1", f"--ServerApp.port={port}",
+         f"--IdentityProvider.token={TOKEN}", f"--ServerApp.root_dir={root}", "--ServerApp.open_browser=False",
+         f"--LabApp.workspaces_dir={root / '.workspaces'}",
+         "--LabApp.news_url=", "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate"]
+        + (["--allow-root"] if os.geteuid() == 0 else []),
+        cwd=root, env=env, stdout=log, stderr=subprocess.STDOUT,
+    )  # fmt: skip
+    url = f"http://127.0.0.1:{port}"
+    for _ in range(120):
+        if proc.poll() is not None:
+            break
+        try:
+            with socket.create_connection(("127.0.0.1", port), timeout=1):
+                break
+        except OSError:
+            time.sleep(0.5)
+    else:
+        proc.terminate()
+        pytest.fail("JupyterLab did not start: " + (root / "lab.log").read_text()[-2000:])
+    yield url, root
+    proc.terminate()
+    try:
+        proc.wait(timeout=20)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+    log.close()
+
+
+@pytest.fixture(scope="module")
+def browser(lab):
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync", "--disable-quic",
+                "--window-size=1500,1100"):  # fmt: skip
+        opts.add_argument(arg)
+    opts.add_argument(f"--user-data-dir={lab[1] / '.chromium'}")
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    driver.set_script_timeout(30)
+    yield driver
+    driver.quit()
+
+
+def _wait(cond, timeout: float, what: str, interval: float = 0.25):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        try:
+            got = cond()
+        except Exception:  # the page is still changing under us
+            got = None
+        if got:
+            return got
+        time.sleep(interval)
+    raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+def _shot(el, name: str) -> bytes:
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    png = el.screenshot_as_png
+    (SHOTS / f"{name}.png").write_bytes(png)
+    return png
+
+
+def _not_blank(png: bytes) -> bool:
+    from PIL import Image
+
+    img = np.asarray(Image.open(io.BytesIO(png)).convert("L"), float)
+    return img.shape[0] > 120 and img.shape[1] > 200 and (img < 235).mean() > 0.03 and img.std() > 25
+
+
+def _open_and_run(driver, url: str, name: str, timeout: float) -> None:
+    from selenium.webdriver.common.by import By
+
+    driver.get(f"{url}/lab/tree/{name}.ipynb?token={TOKEN}")
+    _wait(lambda: driver.execute_script(f"const p = {PANEL}; return p && p.querySelector('.jp-Cell') && "
+                                        f"document.title.startsWith('{name[:8]}')"), 60, f"{name} to open")  # fmt: skip
+    _wait(lambda: "Idle" in driver.execute_script(
+        "const s = document.querySelector('.jp-Notebook-ExecutionIndicator, .jp-Toolbar-kernelStatus');"
+        "return s ? (s.getAttribute('title') || s.textContent || '') + ' Idle' : '';"), 60, "the kernel")  # fmt: skip
+    time.sleep(1.0)
+    tab = driver.find_element(By.CSS_SELECTOR, ".lm-DockPanel-tabBar .lm-TabBar-tab.lm-mod-current")
+    assert "jp-mod-dirty" not in tab.get_attribute("class"), f"{name} is marked modified as soon as it opens"
+    driver.find_element(By.XPATH, "//div[contains(@class,'lm-MenuBar-itemLabel') and text()='Run']").click()
+    _wait(lambda: driver.find_element(By.XPATH, "//div[contains(@class,'lm-Menu-itemLabel') and text()='Run All Cells']"),
+          10, "the Run menu").click()  # fmt: skip
+
+    def done():
+        prompts = driver.execute_script(
+            f"return Array.from({PANEL}.querySelectorAll('.jp-CodeCell .jp-InputPrompt')).map(e => e.textContent)"
+        )
+        return prompts and all(p.strip() not in ("[ ]:", "[*]:", "") for p in prompts)
+
+    _wait(done, timeout, f"every cell of {name} to run", interval=1.0)
+
+
+def _errors(driver) -> list[str]:
+    return driver.execute_script(
+        f"return Array.from({PANEL}.querySelectorAll('.jp-OutputArea-output[data-mime-type=\"application/vnd.jupyter.stderr\"]'))"
+        ".map(e => e.textContent).filter(t => /Traceback|Error/.test(t))"
+    )
+
+
+def _duplicate_figures(driver) -> list[str]:
+    return driver.execute_script(
+        "const out = [];"
+        f"{PANEL}.querySelectorAll('.jp-CodeCell').forEach((c, i) => {{"
+        "  const srcs = Array.from(c.querySelectorAll('.jp-OutputArea-output img')).map(im => im.src);"
+        "  if (new Set(srcs).size < srcs.length) out.push(i); });"
+        "return out;"
+    )
+
+
+def _explorer(driver):
+    """The last widget box on the page: its sliders, dropdowns and figure."""
+    boxes = driver.execute_script(
+        f"return Array.from({PANEL}.querySelectorAll('.jp-OutputArea-output .widget-vbox'))"
+        ".filter(b => !b.parentElement.closest('.widget-vbox'));"
+    )
+    assert boxes, "no explorer widget rendered"
+    box = boxes[-1]
+    driver.execute_script("arguments[0].scrollIntoView({block: 'start'});", box)
+    return box
+
+
+def _figure(box):
+    from selenium.webdriver.common.by import By
+
+    imgs = box.find_elements(By.CSS_SELECTOR, ".widget-output img")
+    return imgs[-1] if imgs else None
+
+
+def _changes_figure(driver, box, act, label: str, name: str) -> None:
+    before = _figure(box).get_attribute("src")
+    act()
+    img = _wait(lambda: (f := _figure(box)) is not None and f.get_attribute("src") != before and f, 30,
+                f"the figure to change after {label}")  # fmt: skip
+    time.sleep(0.3)
+    png = _shot(box, f"{name}-after-{label}")
+    assert _not_blank(_shot(img, f"{name}-figure-after-{label}")), f"blank figure after {label}"
+    assert len(png) > 10_000
+
+
+def _slider_handles(box):
+    from selenium.webdriver.common.by import By
+
+    return box.find_elements(By.CSS_SELECTOR, ".noUi-handle")
+
+
+def _readouts(box) -> dict[str, str]:
+    from selenium.webdriver.common.by import By
+
+    out = {}
+    for w in box.find_elements(By.CSS_SELECTOR, ".widget-hslider"):
+        label = w.find_elements(By.CSS_SELECTOR, ".widget-label")
+        value = w.find_elements(By.CSS_SELECTOR, ".widget-readout")
+        if label and value:
+            out[label[0].text.strip()] = value[0].text.strip()
+    return out
+
+
+def _drive_explorer(driver, name: str, expected: dict[str, str], dropdown: bool) -> None:
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+    from selenium.webdriver.support.ui import Select
+
+    box = _explorer(driver)
+    _wait(lambda: _figure(box), 30, "the explorer's figure")
+    assert _not_blank(_shot(_figure(box), f"{name}-figure-before")), "blank figure before any input"
+    _shot(box, f"{name}-before")
+    shown = _readouts(box)
+    for k, v in expected.items():
+        assert shown.get(k) == v, f"{name}: slider {k!r} starts at {shown.get(k)!r}, the parameter is {v!r}"
+    handles = _slider_handles(box)
+    assert handles, "no slider"
+    first = handles[0]
+    _changes_figure(driver, box, lambda: ActionChains(driver).click_and_hold(first).move_by_offset(90, 0)
+                    .release().perform(), "drag", name)  # fmt: skip
+    second = _slider_handles(box)[1]
+
+    def key():
+        second.click()
+        second.send_keys(Keys.ARROW_RIGHT)
+
+    _changes_figure(driver, box, key, "arrow-key", name)
+    if dropdown:
+        select = Select(box.find_element(By.CSS_SELECTOR, ".widget-dropdown select"))
+        _changes_figure(driver, box, lambda: select.select_by_index(len(select.options) - 1), "dropdown", name)
+
+
+EXPLORERS = {
+    "threshold_sensitivity": (
+        # eps = "paper" for the first scene in the paper's order with results: corridor, 5 m
+        {"eps (m)": f"{PAPER_EPS['corridor']:g}", "phi (deg)": "30", "delta (s)": "1", "tau (s)": "60"},
+        True,
+    ),
+    "metrics_primer": ({"noise (m)": "0.00", "scale": "1.00", "wrong reloc at (s)": "off"}, False),
+}
+
+
+@pytest.mark.parametrize("name", DEFAULT_NOTEBOOKS)
+def test_notebook_in_the_browser(lab, browser, name):
+    url, _ = lab
+    _open_and_run(browser, url, name, timeout=240)
+    errors = _errors(browser)
+    assert not errors, f"{name}: error output: {errors[0][:500]}"
+    assert not _duplicate_figures(browser), f"{name}: a figure shown twice in cell(s) {_duplicate_figures(browser)}"
+    if name in EXPLORERS:
+        expected, dropdown = EXPLORERS[name]
+        _drive_explorer(browser, name, expected, dropdown)
+    _shut_down_kernels(url)
+
+
+def _shut_down_kernels(url: str) -> None:
+    """Stop the notebook's kernel (the next notebook gets both cores)."""
+    import urllib.request
+
+    head = {"Authorization": f"token {TOKEN}"}
+    with urllib.request.urlopen(urllib.request.Request(f"{url}/api/kernels", headers=head), timeout=10) as r:
+        kernels = json.load(r)
+    for k in kernels:
+        req = urllib.request.Request(f"{url}/api/kernels/{k['id']}", headers=head, method="DELETE")
+        urllib.request.urlopen(req, timeout=10).close()
