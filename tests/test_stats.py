@@ -11,7 +11,7 @@ from helpers import write
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core import stats
+from lorisnb.core import ranking, stats
 from lorisnb.core.trials import split_trial
 from lorisnb.tools.tables import comparison_table, interval, to_latex, to_markdown
 
@@ -46,6 +46,8 @@ def test_trials_through_evaluate(tmp_path, icra20):
     assert len(scenes) == 3 and scenes["cr"].nunique() == 1
     summary = stats.trial_summary(t).set_index("algorithm")
     assert summary.loc["orb", "trials"] == 2 and summary.loc["orb", "cr_std"] == 0.0
+    per_seq = stats.trial_summary(t, level="sequence").set_index(["algorithm", "seq"])
+    assert per_seq.loc[("orb", 1), "trials"] == 2 and per_seq.loc[("orb", 1), "cr_mean"] == t["cr"].iloc[0]
     custom = ln.evaluate(write(tmp_path, "x/orb/cafe_seed7.txt", src).parent.parent, trials_by=r"seed(\d+)")
     assert custom.errors[0].trial == 7
     with pytest.raises(ln.ValidationError, match="expected a group"):
@@ -64,6 +66,12 @@ def _population(rng, n_seq, n_trials, mean_shift=0.0, algorithm="a"):
     return pd.DataFrame(rows), base
 
 
+def test_single_sequence_with_trials_bootstraps_the_trials():
+    table, _ = _population(np.random.default_rng(1), n_seq=1, n_trials=8)
+    ci = stats.confidence_intervals(table, ["cr"]).iloc[0]
+    assert ci["unit"] == "trials" and ci["units"] == 8 and ci["low"] < ci["value"] < ci["high"]
+
+
 def test_intervals_cover_the_true_value_at_about_the_nominal_rate():
     """Over 300 simulated benchmarks (fixed seeds), the 95 % interval covers the population mean."""
     rng = np.random.default_rng(12345)
@@ -71,6 +79,7 @@ def test_intervals_cover_the_true_value_at_about_the_nominal_rate():
     for k in range(n):
         table, _ = _population(rng, n_seq=12, n_trials=3)
         ci = stats.confidence_intervals(table, ["cr"], n_resamples=400, seed=k).iloc[0]
+        assert ci["unit"] == "sequences x trials" and ci["trials"] == 3
         hits += ci["low"] <= 0.625 <= ci["high"]
     assert 0.88 <= hits / n <= 0.99, hits / n
 
@@ -105,7 +114,7 @@ def test_ranking_marks_ties():
     a, _ = _population(rng, 15, 1)
     b = a.assign(algorithm="b", cr=a["cr"] + rng.normal(0, 0.01, len(a)))
     c = a.assign(algorithm="c", cr=a["cr"] - 0.2)
-    r = stats.ranking(pd.concat([a, b, c])).set_index("algorithm")
+    r = ranking.ranking(pd.concat([a, b, c])).set_index("algorithm")
     assert r.loc["a", "rank"] == r.loc["b", "rank"] == 1 and r.loc["c", "rank"] == 3
     assert r.loc["a", "tied_with"] == "b" and r.loc["c", "tied_with"] == ""
 
@@ -150,7 +159,7 @@ def test_compare_command(tmp_path, icra20, capsys):
 def test_robust_ranking_counts_ties_as_first(icra20):
     ev = ln.evaluate([icra20 / "per-seq" / a for a in ("orbslam2_rgbd", "odom")], scenes=["home"])
     grid = ln.sweep(ev.errors, [0.5, 1, 100], [10, 180])
-    first, region = stats.robust_ranking(grid, ev.durations(), "cr", reference=(1.0, 180.0))
+    first, region = ranking.robust_ranking(grid, ev.durations(), "cr", reference=(1.0, 180.0))
     assert set(first["cases"]) == {6}
     assert first["firsts"].sum() >= 6  # every case has a first; ties count for each
     assert region.set_index(["eps", "phi"]).loc[(1.0, 180.0), "same_ranking"]

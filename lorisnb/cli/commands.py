@@ -115,7 +115,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 def cmd_compare(args: argparse.Namespace) -> int:
     """Scene values with bootstrap intervals, the ranking with ties the data cannot separate,
     significant pairwise differences; tables as CSV, LaTeX, Markdown."""
-    from ..core import stats
+    from ..core import ranking, stats
     from ..io.writers import write_csv
     from ..tools.tables import interval, write_comparison
 
@@ -125,7 +125,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     table = ev.sequences(args.eps, args.phi, args.delta, args.tau)
     if not table.empty:
         ci = stats.confidence_intervals(table, level=args.level, seed=args.seed)
-        rank = stats.ranking(table, args.metric, alpha=args.alpha, seed=args.seed)
+        rank = ranking.ranking(table, args.metric, alpha=args.alpha, seed=args.seed)
         c = ci[ci["metric"] == args.metric].set_index(["suite", "scene", "algorithm"])
         cells = c.loc[list(zip(rank["suite"], rank["scene"], rank["algorithm"], strict=True))]
         rank["value [CI]"] = [

@@ -5,9 +5,10 @@ per algorithm, scene, sequence and trial. Scene values follow the paper: CR is c
 ground-truth time, so a scene's CR is the mean of its sequences' CR weighted by their durations;
 CR-T is weighted by tracked time, C-ATE by correct poses, CS-R is a plain mean.
 
-Uncertainty (:func:`confidence_intervals`): the resampled units are the sequences (each holding
-the mean over its trials), with ``scipy.stats.bootstrap`` (percentile, seeded); with a single
-sequence and several trials, the trials. What this assumes: sequences (and trials) are exchangeable
+Uncertainty (:func:`confidence_intervals`): a percentile bootstrap, seeded. With one trial per
+sequence, ``scipy.stats.bootstrap`` over the sequences; with several trials, two levels (the
+sequences are redrawn, then the trials within each drawn sequence); with a single sequence and
+several trials, over the trials. What this assumes: sequences (and trials) are exchangeable
 draws from the conditions the benchmark stands for, and a scene's value is the weighted mean above.
 With few sequences the interval is wide, as it should be.
 
@@ -61,16 +62,24 @@ def with_trials(table: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-def trial_summary(table: pd.DataFrame, metrics: Sequence[str] = ("cr", "cr_t", "cs_r", "c_ate_rmse")) -> pd.DataFrame:
-    """Per algorithm and scene, each metric's scene value in every trial, summarized over trials:
-    mean, median, std (ddof 1), min, max, the number of trials, and the share of trials that
-    failed (scene CR = 0, or no sequence matched)."""
+def trial_summary(
+    table: pd.DataFrame, metrics: Sequence[str] = ("cr", "cr_t", "cs_r", "c_ate_rmse"), level: str = "scene"
+) -> pd.DataFrame:
+    """Each metric summarized over trials: mean, median, std (ddof 1), min, max, the number of
+    trials, and the share of trials that failed (CR = 0, or nothing matched). ``level="scene"``:
+    per algorithm and scene, of the scene value of each trial; ``level="sequence"``: per
+    algorithm, scene and sequence, of the sequence's values."""
     t = with_trials(table)
     _need(t, ["algorithm", "scene", "seq", "matched", *(_metric(m) or m for m in metrics), *metrics])
-    per_trial = scene_values(t, metrics, by=GROUP + ["trial"])
+    if level == "scene":
+        per_trial, group = scene_values(t, metrics, by=GROUP + ["trial"]), GROUP
+    elif level == "sequence":
+        per_trial, group = t, GROUP + ["seq"]
+    else:
+        raise ValidationError(f"level={level}: expected 'scene' or 'sequence'")
     rows = []
-    for key, g in per_trial.groupby(GROUP, sort=False, observed=True):
-        row = dict(zip(GROUP, key, strict=True), trials=len(g))
+    for key, g in per_trial.groupby(group, sort=False, observed=True):
+        row = dict(zip(group, key, strict=True), trials=len(g))
         row["failed_share"] = float(((g["cr"] <= 0) | (g["matched"] == 0)).mean()) if "cr" in g else np.nan
         for m in metrics:
             v = g[m].to_numpy(float)
@@ -109,16 +118,40 @@ def scene_values(table: pd.DataFrame, metrics: Sequence[str], by: Sequence[str])
     return out.merge(counts.reset_index(), on=list(by))
 
 
-def _units(g: pd.DataFrame, metric: str) -> tuple[np.ndarray, np.ndarray, str]:
-    """Resampling units of one algorithm and scene: (values, weights, 'sequences' or 'trials')."""
+def _units(g: pd.DataFrame, metric: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
+    """Resampling units of one algorithm and scene: (values (S, K) with NaN padding, weights (S,),
+    trial counts (S,), 'sequences', 'sequences x trials' or 'trials')."""
     w = _metric(metric)
     g = g.assign(_w=1.0 if w is None else g[w].astype(float))
+    g = g[np.isfinite(g[metric].astype(float)) & np.isfinite(g["_w"])]
     if metric == "c_ate_rmse":
-        g = g[np.isfinite(g[metric]) & (g["_w"] > 0)]
-    if g["seq"].nunique() >= 2 or g["trial"].nunique() < 2:
-        per = g.groupby("seq").agg(v=(metric, "mean"), w=("_w", "mean"))
-        return per["v"].to_numpy(float), per["w"].to_numpy(float), "sequences"
-    return g[metric].to_numpy(float), g["_w"].to_numpy(float), "trials"
+        g = g[g["_w"] > 0]
+    if g.empty:
+        return np.zeros((0, 1)), np.zeros(0), np.zeros(0, int), "sequences"
+    if g["seq"].nunique() < 2 and g["trial"].nunique() >= 2:  # one sequence, several runs
+        v = g[metric].to_numpy(float)
+        return v[:, None], g["_w"].to_numpy(float), np.ones(len(v), int), "trials"
+    per = [(d[metric].to_numpy(float), float(d["_w"].mean())) for _, d in g.groupby("seq", sort=True)]
+    k = max(len(v) for v, _ in per)
+    values = np.full((len(per), k), np.nan)
+    for i, (v, _) in enumerate(per):
+        values[i, : len(v)] = v
+    counts = np.array([len(v) for v, _ in per])
+    unit = "sequences x trials" if k > 1 else "sequences"
+    return values, np.array([w for _, w in per]), counts, unit
+
+
+def _nested_resample(values: np.ndarray, weights: np.ndarray, counts: np.ndarray, n: int, rng: np.random.Generator
+                     ) -> np.ndarray:  # fmt: skip
+    """Two-level bootstrap: n redraws of the sequences, and within each drawn sequence of its
+    trials, all vectorized; returns the n weighted means."""
+    S, K = values.shape
+    seq = rng.integers(0, S, size=(n, S))
+    trial = np.floor(rng.random((n, S, K)) * counts[seq][:, :, None]).astype(int)
+    drawn = values[seq[:, :, None], trial]  # (n, S, K): trial k of each drawn sequence
+    keep = np.arange(K)[None, None, :] < counts[seq][:, :, None]
+    means = np.where(keep, drawn, 0.0).sum(axis=2) / counts[seq]
+    return _weighted_mean(means, weights[seq])
 
 
 def _weighted_mean(v: np.ndarray, w: np.ndarray, axis: int = -1) -> np.ndarray:
@@ -133,9 +166,10 @@ def confidence_intervals(
     n_resamples: int = 2000,
     seed: int = 0,
 ) -> pd.DataFrame:
-    """Per algorithm, scene and metric: the scene value (mean over trials of the weighted mean over
-    sequences), and a bootstrap confidence interval (``low``, ``high``) at ``level``, with the
-    units resampled (``sequences`` or ``trials``) and how many. NaN bounds with a single unit."""
+    """Per algorithm, scene and metric: the scene value (the weighted mean over sequences of each
+    sequence's mean over trials), and a bootstrap confidence interval (``low``, ``high``) at
+    ``level``, with what was resampled (``sequences``, ``sequences x trials`` or ``trials``), how
+    many units and the most trials of a sequence. NaN bounds with a single unit."""
     if not 0 < level < 1:
         raise ValidationError(f"level={level}: expected a confidence level between 0 and 1")
     t = with_trials(table)
@@ -143,24 +177,27 @@ def confidence_intervals(
     rows = []
     for key, g in t.groupby(GROUP, sort=False, observed=True):
         for m in metrics:
-            v, w, unit = _units(g, m)
-            ok = np.isfinite(v) & np.isfinite(w)
-            v, w = v[ok], w[ok]
-            value = float(_weighted_mean(v, w)) if len(v) and w.sum() > 0 else np.nan
+            values, w, counts, unit = _units(g, m)
+            seq_means = np.nanmean(values, axis=1) if len(values) else np.zeros(0)
+            value = float(_weighted_mean(seq_means, w)) if len(w) and w.sum() > 0 else np.nan
             low = high = np.nan
-            if len(v) >= 2 and np.ptp(v) > 0:
-                with warnings.catch_warnings():  # a handful of units: scipy warns, the interval is wide
-                    warnings.simplefilter("ignore", stats.DegenerateDataWarning)
-                    res = stats.bootstrap(
-                        (v, w), _weighted_mean, paired=True, vectorized=True, n_resamples=n_resamples,
-                        confidence_level=level, method="percentile", random_state=rng,
-                    )  # fmt: skip
-                low, high = float(res.confidence_interval.low), float(res.confidence_interval.high)
-            elif len(v) >= 2:
+            if len(w) >= 2 and np.nanmax(values) > np.nanmin(values):
+                if values.shape[1] == 1:  # one value per unit: scipy's bootstrap over the units
+                    with warnings.catch_warnings():  # a handful of units: scipy warns, the interval is wide
+                        warnings.simplefilter("ignore", stats.DegenerateDataWarning)
+                        res = stats.bootstrap(
+                            (values[:, 0], w), _weighted_mean, paired=True, vectorized=True,
+                            n_resamples=n_resamples, confidence_level=level, method="percentile", random_state=rng,
+                        )  # fmt: skip
+                    low, high = float(res.confidence_interval.low), float(res.confidence_interval.high)
+                else:  # several trials: sequences, then trials within each (two levels)
+                    boot = _nested_resample(values, w, counts, n_resamples, rng)
+                    low, high = (float(q) for q in np.nanquantile(boot, [(1 - level) / 2, (1 + level) / 2]))
+            elif len(w) >= 2:
                 low = high = value
             rows.append(
                 dict(zip(GROUP, key, strict=True), metric=m, value=value, low=low, high=high, level=level,
-                     unit=unit, units=len(v))
+                     unit=unit, units=len(w), trials=int(counts.max()) if len(counts) else 0)
             )  # fmt: skip
     return pd.DataFrame(rows)
 
@@ -247,83 +284,3 @@ def pairwise(
             "min_p", "p_holm", "significant", "trials_a", "trials_b", "trials_p", "trials_p_holm", "significant_trials",
             "correction"]  # fmt: skip
     return pd.DataFrame(rows, columns=cols)
-
-
-def ranking(table: pd.DataFrame, metric: str = "cr", alpha: float = 0.05, seed: int = 0) -> pd.DataFrame:
-    """Algorithms of each scene ordered by ``metric``, with ``rank`` = 1 + the number of
-    algorithms significantly better (by the sequence test or the trials test of :func:`pairwise`,
-    each after Holm's correction), so algorithms the data cannot separate share a rank, and
-    ``tied_with`` naming them."""
-    better_high = metric != "c_ate_rmse"
-    pairs = pairwise(table, metric, alpha=alpha, seed=seed)
-    values = scene_values(with_trials(table), [metric], by=["suite", "algorithm", "scene", "trial"])
-    mean = values.groupby(["suite", "scene", "algorithm"])[metric].mean()
-    rows = []
-    for (suite, scene), s in mean.groupby(level=[0, 1], sort=False):
-        algs = list(s.index.get_level_values(2))
-        p = pairs[(pairs["suite"] == suite) & (pairs["scene"] == scene)]
-        for alg in algs:
-            beaten = tied = 0
-            names = []
-            for _, r in p[(p["a"] == alg) | (p["b"] == alg)].iterrows():  # pairs of algorithms, a handful
-                other = r["b"] if r["a"] == alg else r["a"]
-                mine, theirs = (r["value_a"], r["value_b"]) if r["a"] == alg else (r["value_b"], r["value_a"])
-                if not (r["significant"] or r["significant_trials"]):
-                    tied += 1
-                    names.append(other)
-                elif (theirs > mine) == better_high:
-                    beaten += 1
-            rows.append(dict(suite=suite, scene=scene, metric=metric, algorithm=alg, value=float(s.loc[(suite, scene, alg)]),
-                             rank=1 + beaten, tied_with=", ".join(sorted(names))))  # fmt: skip
-    out = pd.DataFrame(rows)
-    if out.empty:
-        return out
-    return out.sort_values(["suite", "scene", "rank", "value"], ascending=[True, True, True, not better_high])
-
-
-def robust_ranking(sweep_table: pd.DataFrame, durations: pd.DataFrame, metric: str = "cr",
-                   reference: tuple[float, float] | None = None) -> tuple[pd.DataFrame, pd.DataFrame]:  # fmt: skip
-    """Rankings over a grid of thresholds and the trials together, from a sweep
-    (:func:`lorisnb.core.sweep.sweep`, eps x phi) of several algorithms.
-
-    Returns:
-        first: per scene and algorithm, the share of (eps, phi, trial) cases in which it ranks
-            first by the scene ``metric`` (algorithms tied at the top all count as first).
-        region: per scene, eps and phi, whether the ranking by the mean over trials equals the
-            ranking at ``reference`` (default: the paper's eps for the scene and phi 30 deg), and
-            Kendall's tau between the two.
-    """
-    from .aggregate import aggregate_scenes
-    from .frames import PAPER_EPS, PAPER_PHI
-
-    t = with_trials(sweep_table)
-    t = t.astype({c: str for c in ("algorithm", "scene", "suite", "file") if c in t.columns})
-    if "eps_value" in t.columns:
-        t["eps_value"] = t["eps_value"].astype(str)
-    scenes = aggregate_scenes(t, durations)
-    sign = -1.0 if metric == "c_ate_rmse" else 1.0
-    keys = ["suite", "scene", "eps", "phi", "trial"]
-    scenes["_score"] = sign * scenes[metric].fillna(-np.inf if sign > 0 else np.inf)
-    top = scenes.groupby(keys, sort=False)["_score"].transform("max")
-    best = scenes[np.isclose(scenes["_score"], top, rtol=0, atol=1e-12) | (scenes["_score"] == top)]
-    cases = scenes.groupby(["suite", "scene"])[keys[2:]].apply(lambda d: len(d.drop_duplicates()))
-    first = best.groupby(["suite", "scene", "algorithm"]).size().rename("firsts").reset_index()
-    first["cases"] = first.set_index(["suite", "scene"]).index.map(cases).to_numpy()
-    first["share_first"] = first["firsts"] / first["cases"]
-    mean = scenes.groupby(["suite", "scene", "eps", "phi", "algorithm"])["_score"].mean().reset_index()
-    rows = []
-    for (suite, scene), g in mean.groupby(["suite", "scene"], sort=False):
-        ref_eps, ref_phi = reference if reference is not None else (PAPER_EPS.get(scene, np.nan), PAPER_PHI)
-        grid_eps = np.unique(g["eps"].to_numpy(float))
-        grid_phi = np.unique(g["phi"].to_numpy(float))
-        e0 = grid_eps[np.argmin(np.abs(grid_eps - ref_eps))]
-        p0 = grid_phi[np.argmin(np.abs(grid_phi - ref_phi))]
-        ref = g[(g["eps"] == e0) & (g["phi"] == p0)].set_index("algorithm")["_score"]
-        ref_order = list(ref.sort_values(ascending=False).index)
-        for (eps, phi), s in g.groupby(["eps", "phi"], sort=True):
-            cur = s.set_index("algorithm")["_score"].reindex(ref.index)
-            order = list(cur.sort_values(ascending=False).index)
-            kt = stats.kendalltau(ref.to_numpy(), cur.to_numpy()).statistic if len(ref) > 1 else np.nan
-            rows.append(dict(suite=suite, scene=scene, eps=float(eps), phi=float(phi), reference_eps=float(e0),
-                             reference_phi=float(p0), same_ranking=order == ref_order, kendall_tau=kt))  # fmt: skip
-    return first.sort_values(["suite", "scene", "share_first"], ascending=[True, True, False]), pd.DataFrame(rows)

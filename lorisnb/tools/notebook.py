@@ -44,22 +44,22 @@ class Outputs:
         """Save ``fig`` as PNG, SVG and PDF and show it once in the notebook (:func:`show_figure`)."""
         from .plotting import save_figure
 
-        save_figure(fig, self.dir, name)
-        show_figure(fig)
+        paths = save_figure(fig, self.dir, name)
+        show_figure(fig, png=paths[0].read_bytes())  # the PNG just written: drawn once, not twice
 
     def input_errors(self, failures: pd.DataFrame) -> pd.DataFrame:
         write_csv(failures, self.dir / INPUT_ERRORS_CSV, force=True)
         return failures
 
 
-def figure_png(fig: Any, dpi: int = 144) -> bytes:
+def figure_png(fig: Any, dpi: int = 150) -> bytes:
     """A figure rendered to PNG bytes (tight bounding box), on the calling thread."""
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
     return buf.getvalue()
 
 
-def show_figure(fig: Any, dpi: int = 144) -> None:
+def show_figure(fig: Any, dpi: int = 150, png: bytes | None = None) -> None:
     """Display a figure once, as a PNG image at its own size (not scaled to the notebook width
     unless wider), without going through pyplot; a pyplot figure is closed so that the inline
     backend does not show it a second time. Outside IPython, nothing is shown."""
@@ -75,7 +75,7 @@ def show_figure(fig: Any, dpi: int = 144) -> None:
     if get_ipython() is None:
         return
     width = int(round(fig.get_figwidth() * 100))  # CSS pixels of the figure as designed
-    display(Image(data=figure_png(fig, dpi), format="png", width=width))
+    display(Image(data=png if png is not None else figure_png(fig, dpi), format="png", width=width))
 
 
 def show_inputs(ev: Any, out: Outputs) -> None:
