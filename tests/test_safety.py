@@ -267,3 +267,26 @@ def test_report_skips_a_notebook_whose_extra_is_missing(tmp_path, monkeypatch, c
     text = capsys.readouterr().out
     assert "metrics_primer" in text and "skipped" in text and "needs no_such_package_for_lorisnb" in text
     assert "skipped" in (out / "index.html").read_text()
+
+
+@pytest.mark.parametrize(
+    "call, error",
+    [
+        (lambda p: ln.evaluate(p, data_root=42), ln.DataNotFoundError),
+        (lambda p: ln.evaluate(p, algorithms=5), ln.ValidationError),
+        (lambda p: ln.evaluate(p, scenes=[1, 2]), ln.ValidationError),
+        (lambda p: ln.evaluate(p, mode=None), ln.ValidationError),
+        (lambda p: ln.read_openloris(None), ln.ParseError),
+        (lambda p: ln.read_tum(42), ln.ParseError),
+        (lambda p: ln.read_openloris(""), ln.ParseError),
+        (lambda p: ln.load_groundtruth("kitchen"), ln.DataNotFoundError),
+        (lambda p: ln.score(ln.evaluate(p).errors, eps=[1, 2]), ln.ValidationError),
+        (lambda p: ln.sweep(ln.evaluate(p).errors, eps=[]), ln.ValidationError),
+        (lambda p: ln.sweep(ln.evaluate(p).errors, relative_to="size"), ln.ValidationError),
+        (lambda p: ln.evaluate(p).sequences(rpe_delta=0), ln.ValidationError),
+        (lambda p: ln.evaluate(p).sequences(rpe_unit="km"), ln.ValidationError),
+    ],
+)
+def test_wrong_values_in_python_get_lorisnb_errors(icra20, call, error):
+    with pytest.raises(error):
+        call(icra20 / ORB)

@@ -114,6 +114,10 @@ def find_data(data_root: DataRoot | DataPaths | None = None) -> DataPaths:
     """Locate the data root (see the module docstring for the search order)."""
     if isinstance(data_root, DataPaths):
         return data_root
+    if data_root is not None and not isinstance(data_root, (str, os.PathLike)):
+        raise DataNotFoundError(
+            f"data_root={data_root!r}: expected a folder path (str or pathlib.Path), or None to look in the usual places"
+        )
     looked = []
     for how, cand in _candidates(data_root):
         if _looks_like_root(cand):

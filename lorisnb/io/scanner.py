@@ -136,6 +136,10 @@ def read_bytes(path: str | os.PathLike[str], what: str = "a trajectory file") ->
     """A text file's bytes, a UTF-8 byte-order mark removed. ParseError for a missing file, a
     folder, an unreadable file, an empty file, or binary content (NUL bytes in its first 64 KB,
     found before the rest is read)."""
+    if not isinstance(path, (str, os.PathLike)) or str(path).strip() == "":
+        raise ParseError(
+            str(path), None, f"expected the path of {what} (str or pathlib.Path), got {type(path).__name__}"
+        )
     try:
         with open(path, "rb") as fh:
             head = fh.read(SNIFF_BYTES)

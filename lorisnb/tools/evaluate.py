@@ -130,6 +130,18 @@ def result_files(paths: PathArg | Iterable[PathArg]) -> list[tuple[Path, Path | 
     return out
 
 
+def _names(what: str, value: object) -> list[str]:
+    """A name or a list of names (algorithms, scenes), checked."""
+    items = [value] if isinstance(value, str) else value
+    if not isinstance(items, Iterable) or isinstance(items, (bytes, pd.DataFrame)):
+        raise ValidationError(f"{what}={value!r}: expected a name or a list of names")
+    names = list(items)
+    bad = [n for n in names if not isinstance(n, str)]
+    if bad:
+        raise ValidationError(f"{what}: expected names (str), got {bad[0]!r}")
+    return names
+
+
 def labels(path: Path, root: Path | None, trials_by: str | None = None) -> tuple[str, str, str, int]:
     """(algorithm, file relative to the root, suite, trial) for a result file; a trial token in
     the path (:func:`lorisnb.core.trials.split_trial`) is not part of the algorithm or suite."""
@@ -178,9 +190,9 @@ def evaluate(
     items = result_files(paths)
     data = find_data(data_root)  # no data at all is an error for the whole call, not per file
     if algorithms is not None:
-        wanted = {algorithms} if isinstance(algorithms, str) else set(algorithms)
+        wanted = set(_names("algorithms", algorithms))
         items = [(p, r) for p, r in items if labels(p, r, trials_by)[0] in wanted]
-    scene_set = None if scenes is None else ({scenes} if isinstance(scenes, str) else set(scenes))
+    scene_set = None if scenes is None else set(_names("scenes", scenes))
     iterator: Iterable[tuple[Path, Path | None]] = items
     if progress:
         from tqdm.auto import tqdm
