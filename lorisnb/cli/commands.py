@@ -18,6 +18,16 @@ from .options import check_output, param_value
 def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
     from ..tools.evaluate import evaluate
 
+    executor = None
+    if args.scheduler:
+        from ..tools import require
+
+        try:
+            client = require("distributed").Client(args.scheduler, timeout=10)
+        except (OSError, TimeoutError) as exc:
+            raise LorisError(f"--scheduler {args.scheduler}: cannot reach the Dask scheduler ({exc})") from None
+        executor = client.get_executor()
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
         ev = evaluate(
@@ -29,6 +39,8 @@ def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
             data_root=args.data,
             repair_stamps=args.repair_stamps,
             trials_by=args.trials_by,
+            jobs=args.jobs,
+            executor=executor,
             progress=not args.no_progress,
         )
     notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))

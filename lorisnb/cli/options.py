@@ -88,6 +88,15 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
         metavar="DIR",
         help="data root (default: $LORISNB_DATA, else ../shared/data next to the project)",
     )
+    p.add_argument(
+        "--jobs",
+        type=arg_type(lambda t: int(validate.positive("--jobs", t, "processes", integer=True))),
+        default=None,
+        metavar="N",
+        help="processes evaluating files in parallel (default: all cores; 1: one)",
+    )
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="evaluate on a running Dask cluster (tcp://host:8786); needs lorisnb[dask]")  # fmt: skip
     p.add_argument("--trials-by", default=None, metavar="REGEX",
                    help="regular expression whose first group is the trial number in a file's path "
                    "(default: _trial3, -trial-3, trial3/, run_2/, stamped_traj_estimate3)")  # fmt: skip

@@ -6,16 +6,20 @@ collecting failures instead of stopping.
 from __future__ import annotations
 
 import os
+import threading
 import warnings
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field, replace
 from functools import partial
+from multiprocessing import get_all_start_methods, get_context
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from ..core import validate
 from ..core.aggregate import aggregate_scenes
 from ..core.association import MAX_GAP
 from ..core.frames import SCENES
@@ -154,6 +158,100 @@ def labels(path: Path, root: Path | None, trials_by: str | None = None) -> tuple
     return algorithm, rel, "/".join(parts[:-2]), trial
 
 
+@dataclass(frozen=True, kw_only=True)
+class FileJob:
+    """Everything one worker needs to evaluate one file (picklable, for process pools and Dask)."""
+
+    path: Path
+    root: Path | None
+    data: DataPaths
+    mode: str
+    scale: bool | str
+    official_interpolation: bool
+    remove_repeated: bool
+    repair_stamps: bool
+    max_gap: float
+    trials_by: str | None
+    scenes: frozenset[str] | None
+
+
+def evaluate_file(job: FileJob) -> tuple[str, FileErrors | Failure | None]:
+    """Evaluate one file: ``("ok", FileErrors)``, ``("failed" | "skipped", Failure)`` or
+    ``("filtered", None)`` when its scene is not wanted. Never raises for bad input."""
+    algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
+    try:
+        result = read_openloris(
+            job.path, remove_repeated=job.remove_repeated, warn=False, repair_stamps=job.repair_stamps
+        )
+        if job.scenes is not None and result.scene not in job.scenes:
+            return "filtered", None
+        gt = load_groundtruth(result.scene, job.data, job.remove_repeated)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", LorisWarning)  # kept in FileErrors.warnings
+            return "ok", compute_errors(
+                result, gt, algorithm=algorithm, file=rel, suite=suite, mode=job.mode, scale=job.scale,
+                official_interpolation=job.official_interpolation, max_gap=job.max_gap, trial=trial,
+                other_spans=partial(groundtruth_spans, job.data, job.remove_repeated),
+            )  # fmt: skip
+    except DataNotFoundError as exc:
+        return "skipped", Failure(job.path, str(exc), "no-groundtruth")
+    except LorisError as exc:
+        return "failed", Failure(job.path, str(exc), type(exc).__name__)
+
+
+def _run(jobs: list[FileJob], n_jobs: int, executor: Executor | None, progress: bool) -> list[tuple[str, Any]]:
+    """Results of :func:`evaluate_file` in the order of ``jobs``: here, in a local process pool of
+    ``n_jobs`` processes, or on ``executor``."""
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(jobs), desc="evaluating", unit="file")
+    try:
+        if executor is None and (n_jobs <= 1 or len(jobs) < 2 * n_jobs):
+            out = []
+            for job in jobs:  # one file at a time
+                out.append(evaluate_file(job))
+                if bar is not None:
+                    bar.update()
+            return out
+        own = executor is None
+        pool = executor or ProcessPoolExecutor(max_workers=n_jobs, mp_context=_context())
+        try:
+            futures = {pool.submit(evaluate_file, job): k for k, job in enumerate(jobs)}
+            results: list[Any] = [None] * len(jobs)
+            for fut in as_completed(futures):
+                results[futures[fut]] = fut.result()
+                if bar is not None:
+                    bar.update()
+            return results
+        finally:
+            if own:
+                pool.shutdown(cancel_futures=True)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _context() -> Any:
+    """How worker processes start: forked when this process runs a single thread (the command
+    line, scripts: cheapest), else from a fork server (a Jupyter kernel runs threads, and forking
+    a threaded process is unsafe), else spawned (platforms without fork)."""
+    methods = get_all_start_methods()
+    if "fork" in methods and threading.active_count() == 1:
+        return get_context("fork")
+    if "forkserver" in methods:
+        ctx = get_context("forkserver")
+        ctx.set_forkserver_preload(["lorisnb.tools.evaluate"])
+        return ctx
+    return get_context("spawn")
+
+
+def default_jobs() -> int:
+    """All local cores (``os.cpu_count()``)."""
+    return max(1, os.cpu_count() or 1)
+
+
 def evaluate(
     paths: PathArg | Iterable[PathArg],
     *,
@@ -168,6 +266,8 @@ def evaluate(
     max_gap: float = MAX_GAP,
     trials_by: str | None = None,
     progress: bool = False,
+    jobs: int | None = None,
+    executor: Executor | None = None,
 ) -> Evaluation:
     """Evaluate OpenLORIS result files and folders. A file that fails (bad line, unknown frame,
     ...) is recorded in ``failures`` with its reason and the rest go on; a file whose scene has no
@@ -183,6 +283,11 @@ def evaluate(
         trials_by: a regular expression whose first group is the trial number in a file's path
             (default: the tokens of :mod:`lorisnb.core.trials`: ``_trial3``, ``run_2/``, ...).
         progress: show a progress bar over files (tqdm; notebook-aware).
+        jobs: processes evaluating files in parallel; default all local cores (:func:`default_jobs`),
+            1 for one process. Small inputs (fewer than two files per process) run in this process.
+        executor: any ``concurrent.futures.Executor`` to run the files on instead, for example a
+            Dask cluster's (``distributed.Client(address).get_executor()``). Results are the same
+            and in the same order as one process gives.
     """
     mode = choice("mode", mode, ("auto", "per-seq", "lifelong"))
     compile_trials_by(trials_by)
@@ -193,35 +298,25 @@ def evaluate(
         wanted = set(_names("algorithms", algorithms))
         items = [(p, r) for p, r in items if labels(p, r, trials_by)[0] in wanted]
     scene_set = None if scenes is None else set(_names("scenes", scenes))
-    iterator: Iterable[tuple[Path, Path | None]] = items
-    if progress:
-        from tqdm.auto import tqdm
-
-        iterator = tqdm(items, desc="evaluating", unit="file")
+    n_jobs = default_jobs() if jobs is None else int(validate.positive("jobs", jobs, "processes", integer=True))
+    if executor is not None and not isinstance(executor, Executor):
+        raise ValidationError(f"executor: expected a concurrent.futures.Executor, got {type(executor).__name__}")
+    template = FileJob(
+        path=Path(), root=None, data=data, mode=mode, scale=scale, official_interpolation=official_interpolation,
+        remove_repeated=remove_repeated, repair_stamps=repair_stamps, max_gap=max_gap, trials_by=trials_by,
+        scenes=None if scene_set is None else frozenset(scene_set),
+    )  # fmt: skip
+    work = [replace(template, path=p, root=r) for p, r in items]
     done: list[FileErrors] = []
     failed: list[Failure] = []
     skipped: list[Failure] = []
-    spans = partial(groundtruth_spans, data, remove_repeated)
-    for path, root in iterator:
-        algorithm, rel, suite, trial = labels(path, root, trials_by)
-        try:
-            result = read_openloris(path, remove_repeated=remove_repeated, warn=False, repair_stamps=repair_stamps)
-            if scene_set is not None and result.scene not in scene_set:
-                continue
-            gt = load_groundtruth(result.scene, data, remove_repeated)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", LorisWarning)  # kept in FileErrors.warnings
-                done.append(
-                    compute_errors(
-                        result, gt, algorithm=algorithm, file=rel, suite=suite, mode=mode, scale=scale,
-                        official_interpolation=official_interpolation, max_gap=max_gap, other_spans=spans,
-                        trial=trial,
-                    )
-                )  # fmt: skip
-        except DataNotFoundError as exc:
-            skipped.append(Failure(path, str(exc), "no-groundtruth"))
-        except LorisError as exc:
-            failed.append(Failure(path, str(exc), type(exc).__name__))
+    for status, value in _run(work, n_jobs, executor, progress):
+        if status == "ok":
+            done.append(value)
+        elif status == "failed":
+            failed.append(value)
+        elif status == "skipped":
+            skipped.append(value)
     roots = as_paths(paths)
     root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
     for w in dict.fromkeys(w for f in done for w in f.warnings):

@@ -1,0 +1,62 @@
+"""Parallel evaluation: in local processes and on a Dask cluster the results equal one process's."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import lorisnb as ln
+from lorisnb.cli import main
+
+
+def _same(a: ln.Evaluation, b: ln.Evaluation) -> None:
+    ta, tb = a.sequences(eps="paper", phi=30), b.sequences(eps="paper", phi=30)
+    pd.testing.assert_frame_equal(ta, tb)
+    assert [f.path for f in a.failures] == [f.path for f in b.failures]
+    assert [f.path for f in a.skipped] == [f.path for f in b.skipped]
+    for fa, fb in zip(a.errors, b.errors, strict=True):
+        for ea, eb in zip(fa.sequences, fb.sequences, strict=True):
+            np.testing.assert_array_equal(ea.ate, eb.ate)
+            np.testing.assert_array_equal(ea.aoe, eb.aoe)
+
+
+def test_local_processes_equal_one_process(icra20):
+    src = icra20 / "per-seq"
+    _same(ln.evaluate(src, jobs=1, scale="auto"), ln.evaluate(src, jobs=2, scale="auto"))
+
+
+def test_bad_jobs_and_executor(icra20):
+    with pytest.raises(ln.ValidationError, match="jobs=0"):
+        ln.evaluate(icra20 / "per-seq" / "odom", jobs=0)
+    with pytest.raises(ln.ValidationError, match="concurrent.futures.Executor"):
+        ln.evaluate(icra20 / "per-seq" / "odom", executor="dask")
+
+
+@pytest.mark.slow
+def test_dask_cluster_equals_one_process(icra20, tmp_path, capsys):
+    distributed = pytest.importorskip("distributed")
+    src = icra20 / "lifelong"
+    serial = ln.evaluate(src, jobs=1)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            _same(serial, ln.evaluate(src, executor=client.get_executor()))
+            out = tmp_path / "dask.csv"
+            assert main(["evaluate", str(src), "--scheduler", cluster.scheduler_address, "--csv", str(out),
+                         "--no-progress"]) == 0  # fmt: skip
+    pd.testing.assert_frame_equal(pd.read_csv(out), pd.read_csv(_csv_of(serial, tmp_path)))
+
+
+def _csv_of(ev: ln.Evaluation, tmp_path) -> str:
+    p = tmp_path / "serial.csv"
+    ev.sequences().to_csv(p, index=False)
+    return str(p)
+
+
+@pytest.mark.slow  # waits for the connection timeout (10 s)
+def test_unreachable_scheduler_is_a_clear_error(icra20, capsys):
+    pytest.importorskip("distributed")
+    assert (
+        main(["evaluate", str(icra20 / "per-seq" / "odom"), "--scheduler", "tcp://127.0.0.1:9", "--no-progress"]) == 2
+    )
+    assert "cannot reach the Dask scheduler" in capsys.readouterr().err
