@@ -113,6 +113,8 @@ def main() -> None:
         f"speed-up x{t_score * n_set / t_sweep:,.0f}"
     )
 
+    bench_surfaces(ev)
+
     gt_path = data.groundtruth("market")
     est_path = root / "lifelong" / "maslam" / "market.txt"
     gt_b = baseline_parse(gt_path)
@@ -130,6 +132,30 @@ def main() -> None:
     )
 
     bench_against_evo(data)
+
+
+def bench_surfaces(ev) -> None:
+    """CR surfaces over a 1000 eps x 1000 phi grid for every algorithm and scene of the tree, by
+    dominance counting, against the tidy sweep (the baseline) on a 50 x 50 grid in the same process."""
+    import tracemalloc
+
+    from lorisnb.core.surfaces import cr_surfaces
+    from lorisnb.core.sweep import sweep
+
+    durations = ev.durations()
+    eps, phi = np.geomspace(0.01, 100, 1000), np.linspace(0.1, 180, 1000)
+    tracemalloc.start()
+    t_surf, surf = _timed(lambda: cr_surfaces(ev.errors, eps, phi, durations), repeat=1)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    t_small, _ = _timed(lambda: sweep(ev.errors, eps[::20], phi[::20]), repeat=1)
+    per_point_surf = t_surf / (len(eps) * len(phi))
+    per_point_sweep = t_small / (50 * 50)
+    print(
+        f"CR surfaces 1000x1000  lorisnb {t_surf:7.3f} s, peak {peak / 2**20:6.0f} MiB, {len(surf.groups)} surfaces "
+        f"({surf.cr.nbytes / 2**20:.0f} MiB);  tidy sweep 50x50 {t_small:.3f} s: per grid point x"
+        f"{per_point_sweep / per_point_surf:,.0f} faster"
+    )
 
 
 def bench_against_evo(data, n: int = 50_000) -> None:

@@ -20,13 +20,14 @@ from .model import (
 from .pipeline import compute_errors, sequence_errors
 from .scoring import pose_table, score, sequence_grid
 from .simulate import Faults, simulate, simulated_errors, simulated_result
+from .surfaces import Surfaces, cr_surfaces
 from .sweep import eps_at_cr, rank_stability, rank_swaps, sweep, sweep_scenes
 from .trajectory import Trajectory, extent, path_length
 
 __all__ = [
     "EXTRA_COLUMNS", "FRAMES", "MAX_GAP", "PAPER_EPS", "PAPER_PHI", "SCENES", "SCENE_COLUMNS", "SEQUENCE_COLUMNS",
-    "Association", "Faults", "FileErrors", "OpenLorisFile", "ResultFile", "SequenceErrors", "Sim3", "Trajectory",
-    "aggregate_scenes", "associate", "compute_errors", "durations_table", "eps_at_cr", "extent",
+    "Association", "Faults", "Surfaces", "FileErrors", "OpenLorisFile", "ResultFile", "SequenceErrors", "Sim3", "Trajectory",
+    "aggregate_scenes", "associate", "compute_errors", "cr_surfaces", "durations_table", "eps_at_cr", "extent",
     "groundtruth_in_frame", "is_monocular", "path_length", "pose_table", "rank_stability", "rank_swaps",
     "scene_eps", "score", "sequence_errors", "sequence_grid", "simulate", "simulated_errors", "simulated_result",
     "sweep", "sweep_scenes", "umeyama",

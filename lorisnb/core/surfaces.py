@@ -1,0 +1,120 @@
+"""CR surfaces over eps x phi grids of any resolution, in memory that does not grow with grid size
+times poses.
+
+Correct time over a grid of (eps, phi) is a weighted two-dimensional dominance count: a pose is
+correct at (eps_i, phi_j) exactly when ``ATE <= eps_i`` and ``AOE <= phi_j`` (Eq. 1, thresholds
+inclusive). Each pose is binned at the first eps and the first phi it satisfies, weighted by the
+time it holds, ``min(t_next - t, delta)`` (Eq. 2), and cumulative sums over both grid axes give
+the correct time at every grid point: O(poses + grid) per sequence, for a whole scene group at once.
+CR-T divides by the tracked time instead of the ground-truth time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ..errors import ValidationError
+from . import metrics
+from .model import FileErrors
+from .scoring import as_files
+from .validate import threshold, threshold_list
+
+
+@dataclass(frozen=True, kw_only=True)
+class Surfaces:
+    """CR and CR-T of every (suite, algorithm, scene) over an eps x phi grid.
+
+    Attributes:
+        eps: (E,) metres, increasing. phi: (P,) degrees, increasing.
+        groups: one row per surface: suite, algorithm, scene, trial, sequences.
+        correct_time: (G, E, P) seconds. cr: (G, E, P), correct time over the scene's ground-truth
+            time (Eq. 2). cr_t: (G, E, P), over the tracked time (Eq. 3).
+        delta: the validity window used, seconds.
+    """
+
+    eps: np.ndarray
+    phi: np.ndarray
+    groups: pd.DataFrame
+    correct_time: np.ndarray
+    cr: np.ndarray
+    cr_t: np.ndarray
+    delta: float
+
+    def at(self, algorithm: str, scene: str, suite: str = "", trial: int = 0) -> np.ndarray:
+        """The CR surface (E, P) of one algorithm and scene."""
+        g = self.groups
+        hit = np.flatnonzero(
+            (g["algorithm"] == algorithm) & (g["scene"] == scene) & (g["suite"] == suite) & (g["trial"] == trial)
+        )
+        if hit.size == 0:
+            raise KeyError(f"no surface for {algorithm!r} in {scene!r} (suite {suite!r}, trial {trial})")
+        return self.cr[hit[0]]
+
+
+def _grid(name: str, values: object) -> np.ndarray:
+    """A validated grid, sorted, without repeats."""
+    items = threshold_list(name, values)
+    if any(isinstance(x, (str, dict)) for x in items):
+        raise ValidationError(f"{name}: a surface's grid is numbers (metres or degrees), not 'paper' or a mapping")
+    return np.unique(np.asarray(items, float))
+
+
+def sequence_correct_time(ate: np.ndarray, aoe: np.ndarray, held: np.ndarray, eps: np.ndarray, phi: np.ndarray
+                          ) -> np.ndarray:  # fmt: skip
+    """Correct time (E, P) of one sequence: the dominance count of its poses, weighted by the time
+    each holds. ``eps`` and ``phi`` increasing; a pose counts at (i, j) iff ATE <= eps_i and
+    AOE <= phi_j."""
+    E, P = len(eps), len(phi)
+    i = np.searchsorted(eps, ate, side="left")  # first eps with ATE <= eps
+    j = np.searchsorted(phi, aoe, side="left")
+    inside = (i < E) & (j < P)
+    hist = np.bincount(i[inside] * P + j[inside], weights=held[inside], minlength=E * P).reshape(E, P)
+    return hist.cumsum(axis=0).cumsum(axis=1)
+
+
+def cr_surfaces(
+    errors: FileErrors | Iterable[FileErrors],
+    eps: object,
+    phi: object,
+    durations: pd.DataFrame,
+    delta: float = 1.0,
+) -> Surfaces:
+    """CR and CR-T surfaces over the grid ``eps`` x ``phi`` (metres, degrees; any resolution) of
+    every (suite, algorithm, scene, trial), with ``delta`` the validity window (seconds) and
+    ``durations`` the ground-truth durations (``Evaluation.durations()``). Each value equals the
+    scene CR that :func:`lorisnb.core.aggregate.aggregate_scenes` gives for that setting."""
+    files = as_files(errors)
+    eps_a, phi_a = _grid("eps", eps), _grid("phi", phi)
+    delta = threshold("delta", delta)
+    total = durations.groupby("scene")["gt_duration"].sum()
+    keys: dict[tuple[str, str, str, int], int] = {}
+    sums: list[np.ndarray] = []
+    tracked: list[float] = []
+    nseq: list[int] = []
+    for f in files:  # per file and sequence, never per pose
+        key = (f.suite, f.algorithm, f.scene, f.trial)
+        if key not in keys:
+            keys[key] = len(sums)
+            sums.append(np.zeros((len(eps_a), len(phi_a))))
+            tracked.append(0.0)
+            nseq.append(0)
+        k = keys[key]
+        for e in f.sequences:
+            nseq[k] += 1
+            if e.matched == 0:
+                continue
+            held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end), delta)
+            sums[k] += sequence_correct_time(e.ate, e.aoe, held, eps_a, phi_a)
+            tracked[k] += e.gt_end - float(e.stamps[0])
+    groups = pd.DataFrame(list(keys), columns=["suite", "algorithm", "scene", "trial"]).assign(sequences=nseq)
+    ct = np.stack(sums) if sums else np.zeros((0, len(eps_a), len(phi_a)))
+    scene_time = groups["scene"].map(total).to_numpy(float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cr = ct / scene_time[:, None, None]
+        tr = np.asarray(tracked)
+        cr_t = np.where(tr[:, None, None] > 0, ct / tr[:, None, None], np.nan)
+    return Surfaces(eps=eps_a, phi=phi_a, groups=groups, correct_time=ct, cr=cr, cr_t=cr_t, delta=delta)
