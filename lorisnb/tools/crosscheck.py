@@ -109,56 +109,29 @@ def crosscheck_native(
     lorisnb's interpolation, each scored after its own alignment."""
     sync = require("evo.core.sync")
 
-    rows = []
     ref_e, est_e = to_evo(gt), to_evo(est)
     pos, _, _ = aligned_estimate(p, alignment)
     ours = metrics.rmse(metrics.ate(pos, p.gt_positions))
-    try:
-        r, e = sync.associate_trajectories(ref_e, est_e, max_diff=max_diff)
-        e.align(r, correct_scale=alignment == "sim3")
-        theirs = evo_ape(r, e, "t")
-        rows.append(
-            agreement_row(
-                "ate_rmse",
-                alignment,
-                ours,
-                metrics.rmse(theirs),
-                len(theirs),
-                f"definitions differ: evo pairs each pose with the nearest stamp within {max_diff} s "
-                f"({len(theirs)} pairs), lorisnb interpolates ground truth within {MAX_GAP} s "
-                f"({len(p)} pairs)",
-            )
-        )
-    except Exception as exc:
-        rows.append(
-            agreement_row(
-                "ate_rmse",
-                alignment,
-                ours,
-                np.nan,
-                0,
-                f"evo's nearest-stamp association within {max_diff} s found no pairs ({exc})",
-            )
-        )
-    try:
-        r, e = sync.associate_trajectories(ref_e, est_e, max_diff=MAX_GAP, sync_method=sync.SyncMethod.interpolation)
-        e.align(r, correct_scale=alignment == "sim3")
-        theirs = evo_ape(r, e, "t")
-        rows.append(
-            agreement_row(
-                "ate_rmse",
-                alignment,
-                ours,
-                metrics.rmse(theirs),
-                len(theirs),
-                f"definitions differ: evo's interpolating sync (nearest stamp within {MAX_GAP} s, then "
-                f"interpolation) against lorisnb's bracket rule (both neighbours within {MAX_GAP} s)",
-            )
-        )
-    except Exception as exc:  # older evo or no pairs
-        rows.append(
-            agreement_row("ate_rmse", alignment, ours, np.nan, 0, f"evo's interpolating sync not available ({exc})")
-        )
+    variants = [  # (evo's association options, the note when it works, the note when it does not)
+        (dict(max_diff=max_diff),
+         f"definitions differ: evo pairs each pose with the nearest stamp within {max_diff} s ({{n}} pairs), "
+         f"lorisnb interpolates ground truth within {MAX_GAP} s ({len(p)} pairs)",
+         f"evo's nearest-stamp association within {max_diff} s found no pairs"),
+        (dict(max_diff=MAX_GAP, sync_method=sync.SyncMethod.interpolation),
+         f"definitions differ: evo's interpolating sync (nearest stamp within {MAX_GAP} s, then interpolation) "
+         f"against lorisnb's bracket rule (both neighbours within {MAX_GAP} s)",
+         "evo's interpolating sync not available"),
+    ]  # fmt: skip
+    rows = []
+    for options, note, failed in variants:  # two association variants
+        try:
+            r, e = sync.associate_trajectories(ref_e, est_e, **options)
+            e.align(r, correct_scale=alignment == "sim3")
+            theirs = evo_ape(r, e, "t")
+            rows.append(agreement_row("ate_rmse", alignment, ours, metrics.rmse(theirs), len(theirs),
+                                      note.format(n=len(theirs))))  # fmt: skip
+        except Exception as exc:  # evo found no pairs, or an older evo
+            rows.append(agreement_row("ate_rmse", alignment, ours, np.nan, 0, f"{failed} ({exc})"))
     return rows
 
 
