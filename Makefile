@@ -39,7 +39,7 @@ browser-deps:
 
 # the notebooks in JupyterLab in headless Chromium (screenshots in results/browser/)
 test-browser: $(STAMP) browser-deps
-	$(BIN)/python -m pytest -q -m browser -p no:randomly
+	$(BIN)/python -m pytest -q -m browser
 
 lint: $(STAMP)
 	$(BIN)/ruff check lorisnb tests benchmarks notebooks

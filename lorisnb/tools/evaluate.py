@@ -208,7 +208,7 @@ def _run(jobs: list[FileJob], n_jobs: int, executor: Executor | None, progress: 
 
         bar = tqdm(total=len(jobs), desc="evaluating", unit="file")
     try:
-        if executor is None and (n_jobs <= 1 or len(jobs) < 2 * n_jobs):
+        if executor is None and not _worth_processes(jobs, n_jobs):
             out = []
             for job in jobs:  # one file at a time
                 out.append(evaluate_file(job))
@@ -231,6 +231,22 @@ def _run(jobs: list[FileJob], n_jobs: int, executor: Executor | None, progress: 
     finally:
         if bar is not None:
             bar.close()
+
+
+#: Inputs smaller than this (bytes) are evaluated in this process when worker processes are costly
+#: to start (a fork server or spawned interpreters import numpy, scipy and pandas: about 2 s).
+PARALLEL_MIN_BYTES = 100 * 2**20
+
+
+def _worth_processes(jobs: list[FileJob], n_jobs: int) -> bool:
+    """Whether a local process pool pays: several processes, at least two files each, and forked
+    workers (cheap) or enough input to outweigh starting interpreters."""
+    if n_jobs <= 1 or len(jobs) < 2 * n_jobs:
+        return False
+    if _context().get_start_method() == "fork":
+        return True
+    size = sum(j.path.stat().st_size for j in jobs if j.path.is_file())
+    return size >= PARALLEL_MIN_BYTES
 
 
 def _context() -> Any:
@@ -284,7 +300,9 @@ def evaluate(
             (default: the tokens of :mod:`lorisnb.core.trials`: ``_trial3``, ``run_2/``, ...).
         progress: show a progress bar over files (tqdm; notebook-aware).
         jobs: processes evaluating files in parallel; default all local cores (:func:`default_jobs`),
-            1 for one process. Small inputs (fewer than two files per process) run in this process.
+            1 for one process. Small inputs run in this process: fewer than two files per process,
+            or, where workers cannot be forked cheaply (inside Jupyter), under
+            :data:`PARALLEL_MIN_BYTES`.
         executor: any ``concurrent.futures.Executor`` to run the files on instead, for example a
             Dask cluster's (``distributed.Client(address).get_executor()``). Results are the same
             and in the same order as one process gives.
