@@ -132,5 +132,6 @@ def setup(name: str, data_root: DataRoot | None = None, output_dir: str | os.Pat
     data = find_data(data_root)
     out = Outputs(output_dir if output_dir is not None else default_output_dir(name))
     warnings.filterwarnings("ignore", category=LorisWarning)
-    print(f"data root: {data.root}\noutputs:   {out.dir.resolve()}")
+    shown = out.dir.resolve() if output_dir is None else out.dir  # as given (a report passes ".")
+    print(f"data root: {data.root}\noutputs:   {shown}")
     return Session(data, out, name)
