@@ -43,9 +43,9 @@ DEFAULT_NOTEBOOKS = (
     "evaluate_my_results",
 )
 
-#: Kernel options: its log shows errors only (not the loopback-TCP 'without encryption' notice or
+#: Kernel options: its own log is silenced (the loopback-TCP 'without encryption' notice or
 #: the 'KeyboardInterrupt caught in kernel' line of a normal shutdown).
-KERNEL_ARGS = ["--IPKernelApp.log_level=ERROR"]
+KERNEL_ARGS = ["--IPKernelApp.log_level=CRITICAL"]
 
 #: Optional packages a notebook needs; without them the report skips it and says which extra to install.
 NOTEBOOK_NEEDS: dict[str, tuple[str, ...]] = {"evo_crosscheck": ("evo",)}
