@@ -60,3 +60,25 @@ def test_unreachable_scheduler_is_a_clear_error(icra20, capsys):
         main(["evaluate", str(icra20 / "per-seq" / "odom"), "--scheduler", "tcp://127.0.0.1:9", "--no-progress"]) == 2
     )
     assert "cannot reach the Dask scheduler" in capsys.readouterr().err
+
+
+def test_parquet_dataset_has_the_csv_columns_and_values(icra20, tmp_path, capsys):
+    pytest.importorskip("pyarrow")
+    src = [str(icra20 / "per-seq" / "odom"), str(icra20 / "per-seq" / "dso")]
+    pq, csv = tmp_path / "seq.parquet", tmp_path / "seq.csv"
+    assert main(["evaluate", *src, "--parquet", str(pq), "--csv", str(csv), "--no-progress"]) == 0
+    assert sorted(p.name for p in pq.iterdir()) == ["algorithm=dso", "algorithm=odom"]
+    a = pd.read_parquet(pq)
+    b = pd.read_csv(csv).fillna({"suite": ""})  # the CSV reads the empty suite back as NaN
+    assert set(a.columns) == set(b.columns)
+    key = ["algorithm", "file", "seq"]
+    a = a.astype({"algorithm": str}).sort_values(key).reset_index(drop=True)[list(b.columns)]
+    b = b.sort_values(key).reset_index(drop=True)
+    pd.testing.assert_frame_equal(a, b, check_dtype=False)
+    assert main(["evaluate", *src, "--parquet", str(pq), "--no-progress"]) == 2  # exists, no --force
+    assert main(["evaluate", *src, "--parquet", str(pq), "--force", "--no-progress"]) == 0
+    (pq / "notes.txt").write_text("mine")
+    assert main(["evaluate", *src, "--parquet", str(pq), "--force", "--no-progress"]) == 2
+    assert (pq / "notes.txt").read_text() == "mine"
+    assert main(["sweep", *src, "--eps", "1,3", "--parquet", str(tmp_path / "sw"), "--no-progress"]) == 0
+    assert len(pd.read_parquet(tmp_path / "sw")) == 2 * len(b)

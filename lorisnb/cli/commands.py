@@ -65,9 +65,10 @@ def _fmt(df: pd.DataFrame) -> str:
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from ..core.aggregate import aggregate_scenes
     from ..core.scoring import score
-    from ..io.writers import write_csv
+    from ..io.writers import write_csv, write_parquet
 
     check_output(args.csv, args.paths, args.force)
+    check_output(args.parquet, args.paths, args.force, folder=True)
     ev, notes = _run_evaluation(args)
     table = score(ev.errors, args.eps, args.phi, args.delta, args.tau)
     if not table.empty:
@@ -94,6 +95,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.csv:
         out = write_csv(table, args.csv, args.force)
         print(f"\nwrote {len(table)} rows to {out}", file=sys.stderr)
+    if args.parquet:
+        print(f"wrote {len(table)} rows to {write_parquet(table, args.parquet, force=args.force)}", file=sys.stderr)
     _report_problems(ev, notes)
     print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.skipped)} skipped", file=sys.stderr)
     return 1 if ev.failures else 0
@@ -101,9 +104,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     from ..core.sweep import sweep, sweep_scenes
-    from ..io.writers import write_csv
+    from ..io.writers import write_csv, write_parquet
 
     check_output(args.csv, args.paths, args.force)
+    check_output(args.parquet, args.paths, args.force, folder=True)
     ev, notes = _run_evaluation(args)
     table = sweep(ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all")
     print(
@@ -116,10 +120,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         print(_fmt(view.head(60)))
         if len(view) > 60:
             print(f"... {len(view) - 60} more scene rows (write them all with --csv)")
+    keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
+    written = table if keep_label else table.drop(columns=["eps_value"])  # eps as given, when it differs
     if args.csv:
-        keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
-        out = write_csv(table if keep_label else table.drop(columns=["eps_value"]), args.csv, args.force)
-        print(f"wrote {len(table)} rows to {out}", file=sys.stderr)
+        print(f"wrote {len(table)} rows to {write_csv(written, args.csv, args.force)}", file=sys.stderr)
+    if args.parquet:
+        print(f"wrote {len(table)} rows to {write_parquet(written, args.parquet, force=args.force)}", file=sys.stderr)
     _report_problems(ev, notes)
     return 1 if ev.failures else 0
 

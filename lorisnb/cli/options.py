@@ -101,11 +101,18 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
                    help="regular expression whose first group is the trial number in a file's path "
                    "(default: _trial3, -trial-3, trial3/, run_2/, stamped_traj_estimate3)")  # fmt: skip
     p.add_argument("--csv", default=None, metavar="OUT", help="write the table (one row per sequence) to this CSV")
+    p.add_argument("--parquet", default=None, metavar="DIR",
+                   help="write the table as a Parquet dataset partitioned by algorithm (needs lorisnb[parquet])")  # fmt: skip
     p.add_argument("--force", action="store_true", help="overwrite OUT if it exists")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-def check_output(out: str | None, inputs: list[str], force: bool) -> None:
+def src_inside(target: Path, inputs: list[str]) -> bool:
+    """Whether an output folder ``target`` is an input, or contains one."""
+    return any(target == Path(i).resolve() or target in Path(i).resolve().parents for i in inputs)
+
+
+def check_output(out: str | None, inputs: list[str], force: bool, folder: bool = False) -> None:
     """Refuse an output before any work: an input of the command, a folder, an existing file
     without --force, or a place that cannot be written."""
     if out is None:
@@ -122,8 +129,10 @@ def check_output(out: str | None, inputs: list[str], force: bool) -> None:
                 f"{out} lies in the input folder {i} and ends in .txt, so it is (or would be read as) a result "
                 "file; choose another name or place"
             )
-    if target.is_dir():
+    if target.is_dir() and not folder:
         raise OutputError(f"{out} is a folder; expected a file name for the CSV")
+    if folder and src_inside(target, inputs):
+        raise OutputError(f"{out} is or holds an input of this command; choose another output folder")
     if target.exists() and not force:
         raise OutputError(f"{out} exists; choose another name or pass --force to replace it")
     parent = target.parent

@@ -5,6 +5,8 @@ never replacing an existing file unless asked.
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -12,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.trajectory import Trajectory
-from ..errors import OutputError
+from ..errors import MissingDependencyError, OutputError
 
 
 def write_openloris(
@@ -64,3 +66,39 @@ def write_csv(df: pd.DataFrame, out: str | os.PathLike[str], force: bool = False
 def write_text(text: str, out: str | os.PathLike[str], force: bool = False) -> Path:
     """Write text, UTF-8 (:func:`write_atomically`)."""
     return write_atomically(out, lambda p: p.write_text(text, encoding="utf-8"), force)
+
+
+def write_parquet(
+    df: pd.DataFrame, out: str | os.PathLike[str], partition_by: str = "algorithm", force: bool = False
+) -> Path:
+    """Write a table as a Parquet dataset (a folder, one sub-folder per ``partition_by`` value,
+    e.g. ``algorithm=orbslam2_rgbd/``), with the same columns as the CSV. Built beside ``out`` and
+    moved into place; an existing ``out`` is replaced only with ``force`` and only if it holds
+    nothing but such a dataset. Needs pyarrow (``pip install 'lorisnb[parquet]'``)."""
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise MissingDependencyError("writing Parquet needs pyarrow: pip install 'lorisnb[parquet]'") from None
+    out = Path(out)
+    if out.exists():
+        foreign = [p for p in out.rglob("*") if p.is_file() and p.suffix != ".parquet"] if out.is_dir() else [out]
+        if not force or foreign:
+            why = (
+                "pass --force to replace it"
+                if not foreign
+                else f"it holds other files ({foreign[0].name}); choose another name"
+            )
+            raise OutputError(f"{out} exists; {why}")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
+    try:
+        table = df.astype({partition_by: str}) if partition_by in df.columns else df
+        table.to_parquet(
+            tmp / "data", partition_cols=[partition_by] if partition_by in df.columns else None, index=False
+        )
+        if out.exists():
+            shutil.rmtree(out)
+        os.rename(tmp / "data", out)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return out
