@@ -67,7 +67,7 @@ def test_parquet_dataset_has_the_csv_columns_and_values(icra20, tmp_path, capsys
     src = [str(icra20 / "per-seq" / "odom"), str(icra20 / "per-seq" / "dso")]
     pq, csv = tmp_path / "seq.parquet", tmp_path / "seq.csv"
     assert main(["evaluate", *src, "--parquet", str(pq), "--csv", str(csv), "--no-progress"]) == 0
-    assert sorted(p.name for p in pq.iterdir()) == ["algorithm=dso", "algorithm=odom"]
+    assert sorted(p.name for p in pq.iterdir()) == [".lorisnb-table", "algorithm=dso", "algorithm=odom"]
     a = pd.read_parquet(pq)
     b = pd.read_csv(csv).fillna({"suite": ""})  # the CSV reads the empty suite back as NaN
     assert set(a.columns) == set(b.columns)
@@ -78,7 +78,19 @@ def test_parquet_dataset_has_the_csv_columns_and_values(icra20, tmp_path, capsys
     assert main(["evaluate", *src, "--parquet", str(pq), "--no-progress"]) == 2  # exists, no --force
     assert main(["evaluate", *src, "--parquet", str(pq), "--force", "--no-progress"]) == 0
     (pq / "notes.txt").write_text("mine")
-    assert main(["evaluate", *src, "--parquet", str(pq), "--force", "--no-progress"]) == 2
+    assert main(["evaluate", *src, "--parquet", str(pq), "--force", "--no-progress"]) == 2  # not ours alone any more
     assert (pq / "notes.txt").read_text() == "mine"
     assert main(["sweep", *src, "--eps", "1,3", "--parquet", str(tmp_path / "sw"), "--no-progress"]) == 0
     assert len(pd.read_parquet(tmp_path / "sw")) == 2 * len(b)
+
+
+def test_parquet_force_never_replaces_a_foreign_dataset(icra20, tmp_path, capsys):
+    pytest.importorskip("pyarrow")
+    foreign = tmp_path / "theirs"
+    pd.DataFrame({"a": [1, 2]}).to_parquet(foreign, partition_cols=["a"])
+    before = sorted(p.relative_to(foreign) for p in foreign.rglob("*"))
+    assert (
+        main(["evaluate", str(icra20 / "per-seq" / "odom"), "--parquet", str(foreign), "--force", "--no-progress"]) == 2
+    )
+    assert "lorisnb did not write it" in capsys.readouterr().err
+    assert sorted(p.relative_to(foreign) for p in foreign.rglob("*")) == before

@@ -68,27 +68,30 @@ def write_text(text: str, out: str | os.PathLike[str], force: bool = False) -> P
     return write_atomically(out, lambda p: p.write_text(text, encoding="utf-8"), force)
 
 
+#: A hidden file in every Parquet dataset lorisnb writes; ``--force`` replaces only such datasets.
+TABLE_MARKER = ".lorisnb-table"
+
+
 def write_parquet(
     df: pd.DataFrame, out: str | os.PathLike[str], partition_by: str = "algorithm", force: bool = False
 ) -> Path:
     """Write a table as a Parquet dataset (a folder, one sub-folder per ``partition_by`` value,
     e.g. ``algorithm=orbslam2_rgbd/``), with the same columns as the CSV. Built beside ``out`` and
-    moved into place; an existing ``out`` is replaced only with ``force`` and only if it holds
-    nothing but such a dataset. Needs pyarrow (``pip install 'lorisnb[parquet]'``)."""
+    moved into place; an existing ``out`` is replaced only with ``force`` and only if it is a
+    dataset lorisnb wrote (:data:`TABLE_MARKER`) holding nothing else. Needs pyarrow (``pip install 'lorisnb[parquet]'``)."""
     try:
         import pyarrow  # noqa: F401
     except ImportError:
         raise MissingDependencyError("writing Parquet needs pyarrow: pip install 'lorisnb[parquet]'") from None
     out = Path(out)
     if out.exists():
-        foreign = [p for p in out.rglob("*") if p.is_file() and p.suffix != ".parquet"] if out.is_dir() else [out]
-        if not force or foreign:
-            why = (
-                "pass --force to replace it"
-                if not foreign
-                else f"it holds other files ({foreign[0].name}); choose another name"
-            )
-            raise OutputError(f"{out} exists; {why}")
+        if not force:
+            raise OutputError(f"{out} exists; choose another name or pass --force to replace it")
+        files = [p for p in out.rglob("*") if p.is_file()] if out.is_dir() else [out]
+        foreign = [p for p in files if p.suffix != ".parquet" and p.name != TABLE_MARKER]
+        if foreign or not (out / TABLE_MARKER).is_file():
+            what = f"it holds other files ({foreign[0].name})" if foreign else "lorisnb did not write it"
+            raise OutputError(f"--force will not replace {out}: {what}; choose another name")
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
     try:
@@ -96,6 +99,7 @@ def write_parquet(
         table.to_parquet(
             tmp / "data", partition_cols=[partition_by] if partition_by in df.columns else None, index=False
         )
+        (tmp / "data" / TABLE_MARKER).write_text("written by lorisnb\n")  # hidden: Parquet readers skip it
         if out.exists():
             shutil.rmtree(out)
         os.rename(tmp / "data", out)
