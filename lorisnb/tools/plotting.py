@@ -19,8 +19,8 @@ from ..core.metrics import correctness
 from ..core.model import FileErrors, scene_eps
 from ..core.timeline import sequence_layout, timeline_table
 
-#: Widest figure, inches (about 1,300 px in a notebook): wider ones would be shrunk to unreadable text.
-MAX_WIDTH_IN = 13.0
+#: Widest figure, inches (about 1,200 px in a notebook): wider ones would be shrunk to unreadable text.
+MAX_WIDTH_IN = 12.0
 
 
 def subplots(nrows: int = 1, ncols: int = 1, **kw: Any) -> tuple[Figure, Any]:
@@ -145,7 +145,7 @@ def plot_trajectories(
     cols = min(max_cols, n)
     rows = int(np.ceil(n / cols))
     sns.set_theme(style="whitegrid", context="paper")
-    fig, axes = subplots(rows, cols, figsize=(4.2 * cols, 4.0 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(3.9 * cols, 3.8 * rows), squeeze=False)
     e_eps = scene_eps(eps, errors.scene)
     for ax, e in zip(axes.flat, seqs, strict=False):
         c = correctness(e.ate, e.aoe, e_eps, phi)
@@ -247,7 +247,7 @@ def plot_cr_heatmaps(
     cols = min(max_cols, max(1, len(algs)))
     rows = int(np.ceil(len(algs) / cols)) or 1
     sns.set_theme(style="white", context="paper")
-    fig, axes = subplots(rows, cols, figsize=(4.6 * cols, 3.6 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(3.9 * cols, 3.3 * rows), squeeze=False)  # 3 columns fit 12 in
     for ax, alg in zip(axes.flat, algs, strict=False):
         wide = (
             d[d["algorithm"] == alg].pivot_table(index="phi", columns="eps", values=metric).sort_index(ascending=False)
