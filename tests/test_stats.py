@@ -48,6 +48,8 @@ def test_trials_through_evaluate(tmp_path, icra20):
     assert summary.loc["orb", "trials"] == 2 and summary.loc["orb", "cr_std"] == 0.0
     per_seq = stats.trial_summary(t, level="sequence").set_index(["algorithm", "seq"])
     assert per_seq.loc[("orb", 1), "trials"] == 2 and per_seq.loc[("orb", 1), "cr_mean"] == t["cr"].iloc[0]
+    alone = ln.evaluate(tmp_path / "vins" / "run_1" / "cafe.txt").errors[0]  # a file given alone
+    assert (alone.algorithm, alone.trial) == ("vins", 1)
     custom = ln.evaluate(write(tmp_path, "x/orb/cafe_seed7.txt", src).parent.parent, trials_by=r"seed(\d+)")
     assert custom.errors[0].trial == 7
     with pytest.raises(ln.ValidationError, match="expected a group"):

@@ -149,11 +149,13 @@ def _names(what: str, value: object) -> list[str]:
 def labels(path: Path, root: Path | None, trials_by: str | None = None) -> tuple[str, str, str, int]:
     """(algorithm, file relative to the root, suite, trial) for a result file; a trial token in
     the path (:func:`lorisnb.core.trials.split_trial`) is not part of the algorithm or suite."""
-    rel = path.relative_to(root).as_posix() if root is not None else f"{path.parent.name}/{path.name}"
+    if root is None:  # a file given alone: its algorithm is its folder, or the folder above a trial folder
+        base, trial = split_trial("/".join(path.parts[-3:]), trials_by)
+        parts = base.split("/")
+        return (parts[-2] if len(parts) >= 2 else path.parent.name), path.name, "", trial
+    rel = path.relative_to(root).as_posix()
     base, trial = split_trial(rel, trials_by)
     parts = base.split("/")
-    if root is None:
-        return (parts[-2] if len(parts) >= 2 else path.parent.name), path.name, "", trial
     algorithm = parts[-2] if len(parts) >= 2 else root.name
     return algorithm, rel, "/".join(parts[:-2]), trial
 
