@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Callable
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..core.trajectory import Trajectory
 from ..errors import LorisWarning, ParseError, ValidationError
+from .chunks import read_rows
 from .openloris import read_openloris
 from .scanner import Lines, check_rows, finish, read_bytes, scan
 
@@ -34,36 +36,48 @@ def _data_rows(lines: Lines) -> np.ndarray:
     return np.flatnonzero((lines.first >= 0) & (lines.first != ord("#")))
 
 
+def _width_message(text: str, ntok: int, expected: str) -> str:
+    hint = ""
+    if text.split(":")[0].strip().lower() in ("scene", "frame", "seq"):
+        hint = "; this looks like an OpenLORIS file: read it with read_openloris (command line: --format openloris)"
+    return f"{text[:80]!r} has {ntok} fields; expected {expected}{hint}"
+
+
 def _check_width(lines: Lines, rows: np.ndarray, spath: str, ok: np.ndarray, expected: str) -> None:
     if not ok.all():
         i = rows[np.flatnonzero(~ok)[0]]
-        text = lines.text(i)
-        hint = ""
-        if text.split(":")[0].strip().lower() in ("scene", "frame", "seq"):
-            hint = "; this looks like an OpenLORIS file: read it with read_openloris (command line: --format openloris)"
-        raise ParseError(spath, int(i) + 1, f"{text[:80]!r} has {lines.ntok[i]} fields; expected {expected}{hint}")
+        raise ParseError(spath, int(i) + 1, _width_message(lines.text(i), int(lines.ntok[i]), expected))
 
 
-def read_tum(path: str | os.PathLike, warn: bool = True) -> Trajectory:
+def read_tum(path: str | os.PathLike, warn: bool = True, progress: Callable[[int], object] | None = None) -> Trajectory:
     """Read a TUM RGB-D trajectory: lines ``stamp tx ty tz qx qy qz qw`` (seconds, metres,
     quaternion xyzw), ``#`` comments; spaces, tabs or commas separate the values.
 
     Non-finite poses are skipped and unsorted or repeated stamps sorted (keeping the last), with a
-    warning. Raises ParseError for a malformed line or a zero-norm quaternion.
+    warning. Raises ParseError for a malformed line or a zero-norm quaternion. The file is read
+    in chunks (:func:`lorisnb.io.chunks.read_rows`); ``progress`` is called with each chunk's bytes.
     """
     spath = str(path)
-    lines = scan(read_bytes(path), separators=b",")
-    rows = _data_rows(lines)
     expected = "8 numbers 'stamp tx ty tz qx qy qz qw' (TUM format) or a '#' comment"
-    _check_width(lines, rows, spath, lines.ntok[rows] == 8, expected)
-    values = lines.numbers(rows, spath, "numbers 'stamp tx ty tz qx qy qz qw'").reshape(-1, 8)
+    rows = read_rows(
+        path,
+        (8,),
+        what="a TUM trajectory file",
+        numbers="numbers 'stamp tx ty tz qx qy qz qw'",
+        bad_width=lambda text, n: _width_message(text, n, expected),
+        separators=b",",
+        progress=progress,
+    )
+    values = rows.values  # (n, 8) view of the columns
     notes: list[str] = []
-    line_no = rows + 1
-    keep = check_rows(spath, values[:, 0], values[:, 1:], line_no, notes)
+    keep = check_rows(spath, values[:, 0], values[:, 1:], rows.lines, notes)
     nan_rows = int((~keep).sum())
     if nan_rows:
         notes.append(f"{spath}: {nan_rows} pose(s) with NaN or infinite values skipped")
-    traj = finish(spath, values[keep, 0], values[keep, 1:], line_no[keep], "", notes)
+        values, line_no = values[keep], rows.lines[keep]
+    else:
+        line_no = rows.lines
+    traj = finish(spath, np.ascontiguousarray(values[:, 0]), values[:, 1:], line_no, "", notes)
     _warn(notes, warn)
     return traj
 
@@ -95,10 +109,15 @@ def read_kitti(path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike |
     ``meta["stamps"] == "index"``).
     """
     spath = str(path)
-    lines = scan(read_bytes(path), separators=b",")
-    rows = _data_rows(lines)
-    _check_width(lines, rows, spath, lines.ntok[rows] == 12, "12 numbers per line, a 3x4 pose matrix row-major (KITTI)")
-    mats = lines.numbers(rows, spath, "12 numbers of a 3x4 pose matrix").reshape(-1, 3, 4)
+    rows = read_rows(
+        path,
+        (12,),
+        what="a KITTI pose file",
+        numbers="12 numbers of a 3x4 pose matrix",
+        bad_width=lambda text, n: _width_message(text, n, "12 numbers per line, a 3x4 pose matrix row-major (KITTI)"),
+        separators=b",",
+    )
+    mats = np.ascontiguousarray(rows.values).reshape(-1, 3, 4)
     if stamps is None:
         t = np.arange(len(mats), dtype=float)
     elif isinstance(stamps, (str, os.PathLike)):
@@ -107,7 +126,7 @@ def read_kitti(path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike |
         t = np.asarray(stamps, dtype=float).reshape(-1)
     if len(t) != len(mats):
         raise ParseError(spath, None, f"{len(mats)} poses but {len(t)} stamps; expected one stamp per pose")
-    out = _from_matrices(spath, t, mats, rows + 1)
+    out = _from_matrices(spath, t, mats, rows.lines)
     out.meta["stamps"] = "index" if stamps is None else "given"
     if stamps is not None and len(t) > 1 and not np.all(np.diff(t) > 0):
         raise ParseError(spath, None, "the stamps given for this KITTI file are not strictly increasing")

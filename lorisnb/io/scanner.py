@@ -180,7 +180,9 @@ def finish(
         last = np.concatenate((s[1:] != s[:-1], [True]))
         order = order[last]
         stamps, poses, lines = stamps[order], poses[order], lines[order]
-    return Trajectory(stamps, poses[:, :3].copy(), poses[:, 3:7].copy(), lines)
+    return Trajectory(
+        stamps.copy(), poses[:, :3].copy(), poses[:, 3:7].copy(), lines
+    )  # copies: no view into the read buffers
 
 
 def check_rows(path: str, stamps: np.ndarray, poses: np.ndarray, lines: np.ndarray, notes: list[str]) -> np.ndarray:

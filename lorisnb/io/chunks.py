@@ -1,0 +1,263 @@
+"""Streamed reading of numeric line files: the file is read in chunks of whole lines, each chunk's
+numbers parsed by pandas' C parser, so memory grows only with the numbers kept and speed is the C
+parser's.
+
+A chunk that is not plain numbers (blank or indented lines, ``nan`` tokens, short or long rows,
+separators other than whitespace, anything the C parser refuses) is read again by the exact numpy
+byte scanner (:mod:`lorisnb.io.scanner`), which accepts what Python's ``float`` accepts and names
+the line and the token of any error. Both paths give the same numbers: pandas' default float
+conversion and Python's ``float`` are both correctly rounded.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ..errors import ParseError
+from .scanner import BOM, SNIFF_BYTES, scan
+
+CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
+LINE_LIMIT = 1 << 20  # a "line" longer than this is not a text line of numbers
+
+
+@dataclass
+class Rows:
+    """The numeric lines of a file.
+
+    Attributes:
+        columns: (width, n) float64, column k holding each line's k-th token (NaN past its last
+            token); column-major so that a column is a contiguous array.
+        ntok: (n,) tokens per line.
+        lines: (n,) 1-based line numbers.
+        specials: ``(line, text)`` of the lines holding a colon (``key: value``), when asked for.
+    """
+
+    columns: np.ndarray
+    ntok: np.ndarray
+    lines: np.ndarray
+    specials: list[tuple[int, str]]
+
+    @property
+    def values(self) -> np.ndarray:
+        """(n, width) view of :attr:`columns`."""
+        return self.columns.T
+
+
+def _chunks(path: str | os.PathLike, what: str, size: int) -> Iterator[tuple[bytes, int, int]]:
+    """Chunks of whole lines, the 0-based line number each starts at and its number of lines. A UTF-8 BOM is dropped;
+    NUL bytes (binary data) are refused in the chunk where they appear, before reading on."""
+    spath = str(path)
+    if not isinstance(path, (str, os.PathLike)) or spath.strip() == "":
+        raise ParseError(spath, None, f"expected the path of {what} (str or pathlib.Path), got {type(path).__name__}")
+    try:
+        fh = open(path, "rb")  # noqa: SIM115 (closed below; errors are mapped first)
+    except FileNotFoundError:
+        raise ParseError(spath, None, f"file not found; expected {what} at this path") from None
+    except IsADirectoryError:
+        raise ParseError(spath, None, f"is a folder; expected {what}") from None
+    except OSError as exc:
+        raise ParseError(spath, None, f"cannot be read ({exc.strerror})") from None
+    with fh:
+        line0, rest, first, seen_text = 0, b"", True, False
+        while True:
+            try:
+                block = fh.read(SNIFF_BYTES if first else size)
+            except OSError as exc:
+                raise ParseError(spath, None, f"cannot be read ({exc.strerror})") from None
+            if first and block.startswith(BOM):
+                block = block[len(BOM) :]
+            first = False
+            nul = block.find(b"\0")
+            if nul >= 0:
+                line = line0 + rest.count(b"\n") + block.count(b"\n", 0, nul) + 1
+                raise ParseError(spath, line, f"binary data (a NUL byte); expected {what} (text)")
+            data = rest + block if rest else block
+            if not block:
+                if data:
+                    seen_text = seen_text or bool(data.strip())
+                    yield data + b"\n", line0, data.count(b"\n") + 1
+                break
+            cut = data.rfind(b"\n") + 1
+            if cut == 0:
+                if len(data) > LINE_LIMIT:
+                    raise ParseError(spath, line0 + 1, f"a line longer than {LINE_LIMIT} bytes; expected {what} (text)")
+                rest = data
+                continue
+            piece, rest = data[:cut], data[cut:]
+            seen_text = seen_text or bool(piece.strip())
+            n = piece.count(b"\n")
+            yield piece, line0, n
+            line0 += n
+        if not seen_text:
+            raise ParseError(spath, None, f"empty file; expected {what}")
+
+
+def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) -> Rows | None:
+    """The C-parser path for one chunk, or None when the chunk needs the exact scanner."""
+    skip: list[int] = []
+    specials: list[tuple[int, str]] = []
+    if b"#" in chunk or b":" in chunk:
+        buf = np.frombuffer(chunk, np.uint8)
+        nl = np.flatnonzero(buf == 10)
+        starts = np.concatenate(([0], nl[:-1] + 1))
+        comment = buf[np.minimum(starts, buf.size - 1)] == ord("#")
+        colon = np.zeros(nlines, bool)
+        colon[np.searchsorted(nl, np.flatnonzero(buf == 58))] = True
+        if colon.any() and not specials_ok:
+            return None
+        for i in np.flatnonzero(colon & ~comment):
+            specials.append((line0 + int(i) + 1, chunk[starts[i] : nl[i]].decode("utf-8", "replace").strip()))
+        skip = np.flatnonzero(comment | colon).tolist()
+    nrows = nlines - len(skip)
+    if nrows == 0:
+        return Rows(np.zeros((width, 0)), np.zeros(0, np.int64), np.zeros(0, np.int64), specials)
+    first_row = 0
+    if skip:
+        marks = np.concatenate(([-1], skip))
+        gaps = np.flatnonzero(np.diff(marks) > 1)
+        first_row = int(marks[gaps[0]] + 1) if gaps.size else len(skip)  # first line not skipped
+    try:
+        at = 0
+        for _ in range(first_row):
+            at = chunk.index(b"\n", at) + 1
+        ntok = len(chunk[at : chunk.index(b"\n", at)].split())
+        if ntok > width or ntok == 0:
+            return None
+        values = pd.read_csv(
+            io.BytesIO(chunk),
+            sep=r"\s+",
+            header=None,
+            names=range(ntok),
+            dtype=np.float64,
+            quoting=csv.QUOTE_NONE,
+            na_filter=False,
+            engine="c",
+            index_col=False,
+            low_memory=False,
+            skiprows=skip or None,
+        ).to_numpy()  # (nrows, ntok), a transposed view of pandas' column block
+    except (ValueError, IndexError, pd.errors.ParserError, UnicodeDecodeError):
+        return None
+    if len(values) != nrows:  # blank or whitespace-only lines were skipped: line numbers unknown
+        return None
+    columns = values.T
+    if ntok < width:
+        columns = np.concatenate((columns, np.full((width - ntok, nrows), np.nan)))
+    keep = np.ones(nlines, bool)
+    keep[skip] = False
+    lines = line0 + 1 + (np.flatnonzero(keep) if skip else np.arange(nlines))
+    return Rows(columns, np.full(nrows, ntok), lines, specials)
+
+
+def _exact(
+    chunk: bytes,
+    line0: int,
+    path: str,
+    widths: tuple[int, ...],
+    specials_ok: bool,
+    bad_width: Callable[[str, int], str],
+    numbers: str,
+) -> Rows:
+    """The numpy byte-scanner path for one chunk (any whitespace, ``nan``, exact error lines)."""
+    lines = scan(chunk)
+    comment = lines.first == ord("#")
+    blank = lines.first < 0
+    colon = lines.has_colon & ~comment & ~blank if specials_ok else np.zeros_like(blank)
+    specials = [(line0 + int(i) + 1, lines.text(int(i))) for i in np.flatnonzero(colon)]
+    rows = np.flatnonzero(~comment & ~blank & ~colon)
+    ntok = lines.ntok[rows]
+    bad = ~np.isin(ntok, widths)
+    if bad.any():
+        i = int(rows[np.flatnonzero(bad)[0]])
+        raise ParseError(path, line0 + i + 1, bad_width(lines.text(i), int(lines.ntok[i])))
+    try:
+        flat = lines.numbers(rows, path, numbers)
+    except ParseError as exc:
+        if exc.line is not None:
+            raise ParseError(path, line0 + exc.line, exc.reason) from None
+        raise
+    width = max(widths)
+    columns = np.full((width, rows.size), np.nan)
+    offs = np.cumsum(ntok) - ntok
+    col = np.arange(flat.size) - np.repeat(offs, ntok)
+    columns[col, np.repeat(np.arange(rows.size), ntok)] = flat
+    return Rows(columns, ntok.astype(np.int64), line0 + rows + 1, specials)
+
+
+def read_rows(
+    path: str | os.PathLike,
+    widths: tuple[int, ...],
+    *,
+    what: str,
+    numbers: str,
+    bad_width: Callable[[str, int], str],
+    specials: bool = False,
+    separators: bytes = b"",
+    chunk_bytes: int = CHUNK_BYTES,
+    progress: Callable[[int], object] | None = None,
+) -> Rows:
+    """Read the numeric lines of a text file in chunks.
+
+    Blank lines and ``#`` comments are skipped. Each other line must hold a number of
+    whitespace-separated tokens in ``widths``, all numbers; otherwise a ParseError names the
+    line, using ``bad_width(text, ntok)`` or ``numbers`` (what was expected) for the message.
+
+    Args:
+        path: the file.
+        widths: allowed token counts per line.
+        what: what the file should be, for messages ("a TUM trajectory file").
+        numbers: the numbers expected on a line, for messages.
+        bad_width: message for a line of ``ntok`` tokens.
+        specials: return lines holding a colon (``key: value``) in ``Rows.specials`` instead of
+            reading them as numbers.
+        separators: bytes read as whitespace too (``b","``).
+        chunk_bytes: chunk size.
+        progress: called with the bytes of each chunk read.
+    """
+    spath = str(path)
+    width = max(widths)
+    parts: list[Rows] = []
+    for chunk, line0, nlines in _chunks(path, what, chunk_bytes):
+        if separators and any(s in chunk for s in separators):
+            chunk = chunk.translate(bytes.maketrans(separators, b" " * len(separators)))
+        part = _fast(chunk, line0, nlines, width, specials)
+        if part is None or not np.isin(part.ntok[:1], widths).all():
+            part = _exact(chunk, line0, spath, widths, specials, bad_width, numbers)
+        parts.append(part)
+        if progress is not None:
+            progress(len(chunk))
+    if len(parts) == 1:
+        return parts[0]
+    rows = Rows(
+        np.concatenate([p.columns for p in parts], axis=1),
+        np.concatenate([p.ntok for p in parts]),
+        np.concatenate([p.lines for p in parts]),
+        [s for p in parts for s in p.specials],
+    )
+    parts.clear()
+    return rows
+
+
+def stamp_digits(
+    path: str | os.PathLike, lines: np.ndarray, chunk_bytes: int = CHUNK_BYTES
+) -> tuple[np.ndarray, np.ndarray]:
+    """For the given 1-based ``lines`` (increasing) of a file: the digits after the decimal point
+    of each line's first token (-1 if none) and those digits as an integer, read exactly from the
+    bytes (nanosecond digits included). Streams the file again; used only when needed."""
+    from .scanner import stamp_fractions
+
+    ndig = np.full(lines.size, -1, np.int64)
+    frac = np.zeros(lines.size, np.int64)
+    for chunk, line0, n in _chunks(path, "a text file", chunk_bytes):
+        lo, hi = np.searchsorted(lines, [line0 + 1, line0 + n + 1])
+        if hi > lo:
+            scanned = scan(chunk)
+            ndig[lo:hi], frac[lo:hi] = stamp_fractions(scanned, lines[lo:hi] - line0 - 1)
+    return ndig, frac
