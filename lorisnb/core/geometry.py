@@ -143,15 +143,48 @@ def official_slerp(q1: np.ndarray, q2: np.ndarray, w1: np.ndarray, w2: np.ndarra
     return k1[:, None] * q1 + k2[:, None] * q2
 
 
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product of 3-vectors on the last axis (``np.cross`` without its per-call overhead)."""
+    a1, a2, a3 = a[..., 0], a[..., 1], a[..., 2]
+    b1, b2, b3 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a2 * b3 - a3 * b2, a3 * b1 - a1 * b3, a1 * b2 - a2 * b1], axis=-1)
+
+
 def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
     """Hamilton product ``q1 (x) q2`` of quaternions ``xyzw``, broadcast over leading axes: the
     rotation that applies ``q2`` first, then ``q1``."""
     q1, q2 = np.asarray(q1, float), np.asarray(q2, float)
-    v1, w1 = q1[..., :3], q1[..., 3:]
-    v2, w2 = q2[..., :3], q2[..., 3:]
-    w = w1 * w2 - np.sum(v1 * v2, axis=-1, keepdims=True)
-    v = w1 * v2 + w2 * v1 + np.cross(v1, v2)
-    return np.concatenate([v, w], axis=-1)
+    x1, y1, z1, w1 = q1[..., 0], q1[..., 1], q1[..., 2], q1[..., 3]
+    x2, y2, z2, w2 = q2[..., 0], q2[..., 1], q2[..., 2], q2[..., 3]
+    return np.stack(
+        [
+            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+        ],
+        axis=-1,
+    )
+
+
+def quat_conjugate(q: np.ndarray) -> np.ndarray:
+    """Conjugate of quaternions ``xyzw`` (the inverse rotation of unit quaternions)."""
+    q = np.asarray(q, float)
+    return np.concatenate([-q[..., :3], q[..., 3:]], axis=-1)
+
+
+def quat_rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Vectors ``v`` (..., 3) rotated by unit quaternions ``q`` (..., 4) ``xyzw``."""
+    q, v = np.asarray(q, float), np.asarray(v, float)
+    u, w = q[..., :3], q[..., 3:]
+    t = 2.0 * cross3(u, v)
+    return v + w * t + cross3(u, t)
+
+
+def quat_angle_deg(q: np.ndarray) -> np.ndarray:
+    """Rotation angle of unit quaternions ``xyzw``, degrees in [0, 180] (as scipy's ``magnitude``)."""
+    q = np.asarray(q, float)
+    return np.degrees(2.0 * np.arctan2(np.linalg.norm(q[..., :3], axis=-1), np.abs(q[..., 3])))
 
 
 def compose(a: Rotation, b: Rotation) -> Rotation:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .geometry import angle_deg, compose
+from .geometry import angle_deg, compose, quat_angle_deg, quat_conjugate, quat_multiply, quat_rotate
 
 
 def ate(est_positions: np.ndarray, gt_positions: np.ndarray) -> np.ndarray:
@@ -154,12 +154,13 @@ def rpe(
     """
     if len(i) == 0:
         return np.zeros(0), np.zeros(0)
-    gi, gj = gt_rotations[i], gt_rotations[j]
-    ei, ej = est_rotations[i], est_rotations[j]
-    rel_g_rot = compose(gi.inv(), gj)
-    rel_g_t = gi.inv().apply(gt_positions[j] - gt_positions[i])
-    rel_e_rot = compose(ei.inv(), ej)
-    rel_e_t = ei.inv().apply(est_positions[j] - est_positions[i])
-    err_t = rel_g_rot.inv().apply(rel_e_t - rel_g_t)
-    err_r = compose(rel_g_rot.inv(), rel_e_rot)
-    return np.linalg.norm(err_t, axis=1), angle_deg(err_r)
+    qg, qe = gt_rotations.as_quat(), est_rotations.as_quat()  # unit quaternions xyzw
+    inv_gi, inv_ei = quat_conjugate(qg[i]), quat_conjugate(qe[i])
+    rel_g_rot = quat_multiply(inv_gi, qg[j])
+    rel_g_t = quat_rotate(inv_gi, gt_positions[j] - gt_positions[i])
+    rel_e_rot = quat_multiply(inv_ei, qe[j])
+    rel_e_t = quat_rotate(inv_ei, est_positions[j] - est_positions[i])
+    inv_rel_g = quat_conjugate(rel_g_rot)
+    err_t = quat_rotate(inv_rel_g, rel_e_t - rel_g_t)
+    err_r = quat_multiply(inv_rel_g, rel_e_rot)
+    return np.linalg.norm(err_t, axis=1), quat_angle_deg(err_r)

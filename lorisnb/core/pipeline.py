@@ -25,6 +25,8 @@ from .validate import choice, scale_value
 
 #: Time spans (first, last stamp, seconds) of other ground-truth sequences by label (``cafe-2``),
 #: or a function returning them (called only when a check needs them).
+PLAUSIBILITY_POSES = 300  # estimate poses a plausibility check looks at (evenly spread)
+
 Spans = Mapping[str, tuple[float, float]] | Callable[[], Mapping[str, tuple[float, float]]]
 
 
@@ -74,6 +76,21 @@ def sequence_errors(
         return SequenceErrors.unmatched(seq, len(est), a.gt_start, a.gt_end)
     sim = umeyama(est.positions[a.est_index], a.gt_positions, scale)
     return errors_after_alignment(seq, est, a, sim, official_interpolation)
+
+
+def groundtruth_sequence(
+    groundtruth: ResultFile, seq: int, scene: str, frame: str, official_interpolation: bool, gt_frame: str
+) -> Trajectory:
+    """Sequence ``seq`` of a ground-truth file moved to sensor ``frame``
+    (:func:`~lorisnb.core.association.groundtruth_in_frame`), computed once per file, sequence and
+    frame and kept in ``groundtruth.derived`` (a ground truth is shared by every result file of
+    its scene)."""
+    key = ("in_frame", seq, scene, frame, official_interpolation, gt_frame)
+    found = groundtruth.derived.get(key)
+    if not isinstance(found, Trajectory):
+        found = groundtruth_in_frame(groundtruth.sequences[seq], scene, frame, official_interpolation, gt_frame)
+        groundtruth.derived[key] = found
+    return found
 
 
 def compute_errors(
@@ -149,7 +166,7 @@ def compute_errors(
 
     assoc: dict[int, Association] = {}
     for s in seqs:  # one iteration per sequence
-        gt = groundtruth_in_frame(groundtruth.sequences[s], scene, frame, official_interpolation, gt_frame)
+        gt = groundtruth_sequence(groundtruth, s, scene, frame, official_interpolation, gt_frame)
         assoc[s] = associate(gt, result.sequences[s].stamps, max_gap, official_interpolation)
         if checks:
             label = f"{path.name}, seq {s}"
@@ -221,9 +238,10 @@ def compute_errors(
     if checks:
         first = next((e for e in out if e.matched > 10), None)
         if first is not None and np.median(first.aoe) > 45.0:
-            est, gt_seq = result.sequences[first.seq], groundtruth.sequences[first.seq]
-            swapped = Trajectory(est.stamps, est.positions, np.roll(est.quaternions, -1, axis=1))
-            gt_own = groundtruth_in_frame(gt_seq, scene, frame, gt_frame=gt_frame)
+            est = result.sequences[first.seq]
+            few = np.unique(np.linspace(0, len(est) - 1, min(len(est), PLAUSIBILITY_POSES)).astype(int))
+            swapped = Trajectory(est.stamps[few], est.positions[few], np.roll(est.quaternions[few], -1, axis=1))
+            gt_own = groundtruth_sequence(groundtruth, first.seq, scene, frame, False, gt_frame)
             e_swapped = sequence_errors(gt_own, swapped, scale=with_scale, max_gap=max_gap)
             notes.append(
                 plausibility.quaternion_order(
@@ -243,6 +261,7 @@ def compute_errors(
                         with_scale,
                         max_gap,
                         gt_frame,
+                        in_frame=lambda fr: groundtruth_sequence(groundtruth, first.seq, scene, fr, False, gt_frame),
                     ),
                 )
             )
@@ -257,12 +276,27 @@ def compute_errors(
 
 
 def median_aoe_by_frame(
-    est: Trajectory, gt_base: Trajectory, scene: str, with_scale: bool, max_gap: float, gt_frame: str = "base_link"
+    est: Trajectory,
+    gt_base: Trajectory,
+    scene: str,
+    with_scale: bool,
+    max_gap: float,
+    gt_frame: str = "base_link",
+    *,
+    in_frame: Callable[[str], Trajectory] | None = None,
+    max_poses: int = PLAUSIBILITY_POSES,
 ) -> dict[str, float]:
-    """Median AOE (deg) of one sequence with its ground truth moved to each sensor frame."""
+    """Median AOE (deg) of one sequence with its ground truth moved to each sensor frame.
+
+    A check, not a metric: at most ``max_poses`` estimate poses, evenly spread, are used (a
+    median over 300 poses is stable to a fraction of a degree), and ``in_frame(frame)`` may supply
+    the ground truth already moved to a frame (computed once per file and frame)."""
+    if len(est) > max_poses:
+        keep = np.unique(np.linspace(0, len(est) - 1, max_poses).astype(int))
+        est = Trajectory(est.stamps[keep], est.positions[keep], est.quaternions[keep])
     out = {}
     for fr in FRAMES:  # seven frames, on a suspicious sequence only
-        gt = groundtruth_in_frame(gt_base, scene, fr, gt_frame=gt_frame)
+        gt = in_frame(fr) if in_frame is not None else groundtruth_in_frame(gt_base, scene, fr, gt_frame=gt_frame)
         e = sequence_errors(gt, est, scale=with_scale, max_gap=max_gap)
         if e.matched:
             out[fr] = float(np.median(e.aoe))

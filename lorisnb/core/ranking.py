@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy import stats as sps
 
 from .aggregate import aggregate_scenes
 from .frames import PAPER_EPS, PAPER_PHI
@@ -57,6 +56,8 @@ def robust_ranking(sweep_table: pd.DataFrame, durations: pd.DataFrame, metric: s
             ranking at ``reference`` (default: the paper's eps for the scene and phi 30 deg), and
             Kendall's tau between the two.
     """
+    from scipy import stats as sps  # here, not at the top: scipy.stats takes half a second to import
+
     t = with_trials(sweep_table)
     t = t.astype({c: str for c in ("algorithm", "scene", "suite", "file") if c in t.columns})
     if "eps_value" in t.columns:

@@ -31,7 +31,6 @@ from itertools import combinations
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from ..errors import ValidationError
 
@@ -170,6 +169,8 @@ def confidence_intervals(
     sequence's mean over trials), and a bootstrap confidence interval (``low``, ``high``) at
     ``level``, with what was resampled (``sequences``, ``sequences x trials`` or ``trials``), how
     many units and the most trials of a sequence. NaN bounds with a single unit."""
+    from scipy import stats  # here, not at the top: scipy.stats takes half a second to import
+
     if not 0 < level < 1:
         raise ValidationError(f"level={level}: expected a confidence level between 0 and 1")
     t = with_trials(table)
@@ -228,6 +229,8 @@ def pairwise(
     values, ``p_a_better`` (bootstrap probability that A is better), the Wilcoxon signed-rank
     p-value of the per-sequence differences, the Holm-corrected p-value over the scene's pairs,
     and whether the difference is significant at ``alpha`` after correction."""
+    from scipy import stats  # here, not at the top: scipy.stats takes half a second to import
+
     better_high = (metric != "c_ate_rmse") if higher_is_better is None else higher_is_better
     w_col = _metric(metric)
     t = with_trials(table)

@@ -14,7 +14,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from ..errors import ValidationError
 from . import metrics
@@ -219,6 +218,8 @@ def rank_stability(
 
     ``scenes`` is a scene aggregate over several eps (:func:`sweep_scenes`).
     """
+    from scipy import stats  # here, not at the top: scipy.stats takes half a second to import
+
     keys = ["suite", "scene", "phi", "delta", "tau"]
     rows = []
     for key, grp in scenes.groupby(keys, sort=False, observed=True):

@@ -24,6 +24,7 @@ from ..errors import ParseError
 from .scanner import BOM, SNIFF_BYTES, scan
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
+FAST_MIN_BYTES = 32 << 10  # below this the numpy scanner is faster than a call of the C parser
 LINE_LIMIT = 1 << 20  # a "line" longer than this is not a text line of numbers
 
 
@@ -37,12 +38,14 @@ class Rows:
         ntok: (n,) tokens per line.
         lines: (n,) 1-based line numbers.
         specials: ``(line, text)`` of the lines holding a colon (``key: value``), when asked for.
+        parsed_in_c: how many of the lines pandas' C parser read (the others: the numpy scanner).
     """
 
     columns: np.ndarray
     ntok: np.ndarray
     lines: np.ndarray
     specials: list[tuple[int, str]]
+    parsed_in_c: int = 0
 
     @property
     def values(self) -> np.ndarray:
@@ -101,28 +104,30 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Iterator[tuple[byt
 
 def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) -> Rows | None:
     """The C-parser path for one chunk, or None when the chunk needs the exact scanner."""
-    skip: list[int] = []
+    skip = np.zeros(0, np.int64)
     specials: list[tuple[int, str]] = []
-    if b"#" in chunk or b":" in chunk:
+    first_row = 0
+    if b"#" in chunk or b":" in chunk or b"\n\n" in chunk or b"\n\r\n" in chunk or chunk[:1] in (b"\n", b"\r"):
         buf = np.frombuffer(chunk, np.uint8)
         nl = np.flatnonzero(buf == 10)
         starts = np.concatenate(([0], nl[:-1] + 1))
-        comment = buf[np.minimum(starts, buf.size - 1)] == ord("#")
+        length = nl - starts
+        head = buf[np.minimum(starts, buf.size - 1)]
+        blank = (length == 0) | ((length == 1) & (head == 13))
+        comment = head == ord("#")
         colon = np.zeros(nlines, bool)
         colon[np.searchsorted(nl, np.flatnonzero(buf == 58))] = True
+        colon &= ~comment
         if colon.any() and not specials_ok:
             return None
-        for i in np.flatnonzero(colon & ~comment):
+        for i in np.flatnonzero(colon):
             specials.append((line0 + int(i) + 1, chunk[starts[i] : nl[i]].decode("utf-8", "replace").strip()))
-        skip = np.flatnonzero(comment | colon).tolist()
+        skipped = comment | colon | blank
+        skip = np.flatnonzero(skipped)
+        first_row = int(np.argmin(skipped))  # the first line read as numbers
     nrows = nlines - len(skip)
     if nrows == 0:
         return Rows(np.zeros((width, 0)), np.zeros(0, np.int64), np.zeros(0, np.int64), specials)
-    first_row = 0
-    if skip:
-        marks = np.concatenate(([-1], skip))
-        gaps = np.flatnonzero(np.diff(marks) > 1)
-        first_row = int(marks[gaps[0]] + 1) if gaps.size else len(skip)  # first line not skipped
     try:
         at = 0
         for _ in range(first_row):
@@ -141,7 +146,7 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
             engine="c",
             index_col=False,
             low_memory=False,
-            skiprows=skip or None,
+            skiprows=skip.tolist() if skip.size else None,
         ).to_numpy()  # (nrows, ntok), a transposed view of pandas' column block
     except (ValueError, IndexError, pd.errors.ParserError, UnicodeDecodeError):
         return None
@@ -150,10 +155,13 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
     columns = values.T
     if ntok < width:
         columns = np.concatenate((columns, np.full((width - ntok, nrows), np.nan)))
-    keep = np.ones(nlines, bool)
-    keep[skip] = False
-    lines = line0 + 1 + (np.flatnonzero(keep) if skip else np.arange(nlines))
-    return Rows(columns, np.full(nrows, ntok), lines, specials)
+    if skip.size:
+        keep = np.ones(nlines, bool)
+        keep[skip] = False
+        lines = line0 + 1 + np.flatnonzero(keep)
+    else:
+        lines = line0 + 1 + np.arange(nlines)
+    return Rows(columns, np.full(nrows, ntok), lines, specials, nrows)
 
 
 def _exact(
@@ -201,6 +209,7 @@ def read_rows(
     specials: bool = False,
     separators: bytes = b"",
     chunk_bytes: int = CHUNK_BYTES,
+    fast_min_bytes: int = FAST_MIN_BYTES,
     progress: Callable[[int], object] | None = None,
 ) -> Rows:
     """Read the numeric lines of a text file in chunks.
@@ -219,6 +228,7 @@ def read_rows(
             reading them as numbers.
         separators: bytes read as whitespace too (``b","``).
         chunk_bytes: chunk size.
+        fast_min_bytes: chunks smaller than this skip the C parser (0: always try it first).
         progress: called with the bytes of each chunk read.
     """
     spath = str(path)
@@ -227,7 +237,7 @@ def read_rows(
     for chunk, line0, nlines in _chunks(path, what, chunk_bytes):
         if separators and any(s in chunk for s in separators):
             chunk = chunk.translate(bytes.maketrans(separators, b" " * len(separators)))
-        part = _fast(chunk, line0, nlines, width, specials)
+        part = _fast(chunk, line0, nlines, width, specials) if len(chunk) >= fast_min_bytes else None
         if part is None or not np.isin(part.ntok[:1], widths).all():
             part = _exact(chunk, line0, spath, widths, specials, bad_width, numbers)
         parts.append(part)
@@ -240,6 +250,7 @@ def read_rows(
         np.concatenate([p.ntok for p in parts]),
         np.concatenate([p.lines for p in parts]),
         [s for p in parts for s in p.specials],
+        sum(p.parsed_in_c for p in parts),
     )
     parts.clear()
     return rows

@@ -190,11 +190,14 @@ def evaluate_file(job: FileJob) -> tuple[str, FileErrors | Failure | None]:
         gt = load_groundtruth(result.scene, job.data, job.remove_repeated)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", LorisWarning)  # kept in FileErrors.warnings
-            return "ok", compute_errors(
+            errors = compute_errors(
                 result, gt, algorithm=algorithm, file=rel, suite=suite, mode=job.mode, scale=job.scale,
                 official_interpolation=job.official_interpolation, max_gap=job.max_gap, trial=trial,
                 other_spans=partial(groundtruth_spans, job.data, job.remove_repeated),
             )  # fmt: skip
+        for seq in errors.sequences:  # the default RPE pairs, here (in a worker, when in parallel)
+            seq.rpe()
+        return "ok", errors
     except DataNotFoundError as exc:
         return "skipped", Failure(job.path, str(exc), "no-groundtruth")
     except LorisError as exc:
@@ -204,40 +207,57 @@ def evaluate_file(job: FileJob) -> tuple[str, FileErrors | Failure | None]:
 def _run(jobs: list[FileJob], n_jobs: int, executor: Executor | None, progress: bool) -> list[tuple[str, Any]]:
     """Results of :func:`evaluate_file` in the order of ``jobs``: here, in a local process pool of
     ``n_jobs`` processes, or on ``executor``."""
-    bar = None
-    if progress:
+
+    def new_bar() -> Any:
+        if not progress:
+            return None
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=len(jobs), desc="evaluating", unit="file")
-    try:
-        if executor is None and not _worth_processes(jobs, n_jobs):
-            out = []
+        return tqdm(total=len(jobs), desc="evaluating", unit="file")
+
+    if executor is None and not _worth_processes(jobs, n_jobs):
+        out = []
+        bar = new_bar()
+        try:
             for job in jobs:  # one file at a time
                 out.append(evaluate_file(job))
                 if bar is not None:
                     bar.update()
-            return out
-        own = executor is None
-        pool = executor or ProcessPoolExecutor(max_workers=n_jobs, mp_context=_context())
-        try:
-            futures = {pool.submit(evaluate_file, job): k for k, job in enumerate(jobs)}
-            results: list[Any] = [None] * len(jobs)
-            for fut in as_completed(futures):
-                results[futures[fut]] = fut.result()
-                if bar is not None:
-                    bar.update()
-            return results
         finally:
-            if own:
-                pool.shutdown(cancel_futures=True)
+            if bar is not None:
+                bar.close()
+        return out
+    own = executor is None
+    pool = executor or ProcessPoolExecutor(max_workers=n_jobs, mp_context=_context())
+    bar = None
+    try:
+        # largest files first, so that no worker is left with a big one at the end
+        order = sorted(range(len(jobs)), key=lambda k: -_size(jobs[k].path))
+        futures = {pool.submit(evaluate_file, jobs[k]): k for k in order}
+        bar = new_bar()  # after the workers are forked: the bar may start a monitor thread
+        results: list[Any] = [None] * len(jobs)
+        for fut in as_completed(futures):
+            results[futures[fut]] = fut.result()
+            if bar is not None:
+                bar.update()
+        return results
     finally:
         if bar is not None:
             bar.close()
+        if own:
+            pool.shutdown(cancel_futures=True)
 
 
 #: Inputs smaller than this (bytes) are evaluated in this process when worker processes are costly
 #: to start (a fork server or spawned interpreters import numpy, scipy and pandas: about 2 s).
 PARALLEL_MIN_BYTES = 100 * 2**20
+
+
+def _size(path: Path) -> int:
+    try:
+        return path.stat().st_size
+    except OSError:
+        return 0
 
 
 def _worth_processes(jobs: list[FileJob], n_jobs: int) -> bool:
@@ -247,7 +267,7 @@ def _worth_processes(jobs: list[FileJob], n_jobs: int) -> bool:
         return False
     if _context().get_start_method() == "fork":
         return True
-    size = sum(j.path.stat().st_size for j in jobs if j.path.is_file())
+    size = sum(_size(j.path) for j in jobs)
     return size >= PARALLEL_MIN_BYTES
 
 

@@ -1,0 +1,86 @@
+"""The streamed reader: its C-parser path and its exact numpy path give the same rows, line
+numbers and special lines, on every bundled file and on awkward synthetic ones, whatever the chunk
+size; errors name the same line either way."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lorisnb.errors import ParseError
+from lorisnb.io import read_openloris, read_tum
+from lorisnb.io.chunks import read_rows
+from lorisnb.tools.evaluate import result_files
+
+from helpers import write
+
+WIDTHS = (8, 9)
+
+
+def _read(path, **kw):
+    return read_rows(
+        path, WIDTHS, what="x", numbers="numbers", bad_width=lambda t, k: f"{k} fields", specials=True, **kw
+    )
+
+
+def _same(a, b):
+    assert np.array_equal(a.columns, b.columns, equal_nan=True)
+    assert np.array_equal(a.lines, b.lines)
+    assert a.specials == b.specials
+    assert np.array_equal(a.ntok, b.ntok)
+
+
+def test_fast_path_equals_exact_path_on_every_bundled_file(data):
+    files = [p for p, _ in result_files([data.icra20])] + [data.groundtruth(s) for s in ("cafe", "market")]
+    for path in files:
+        fast, exact = _read(path, fast_min_bytes=0), _read(path, fast_min_bytes=1 << 40)
+        assert fast.parsed_in_c == len(fast.lines)  # the bundled files all take the C parser
+        assert exact.parsed_in_c == 0
+        _same(fast, exact)
+
+
+AWKWARD = (
+    "scene: cafe\r\nframe: d400_color\r\n\r\n# comment\r\nseq: 1\r\n"
+    "1.5 2 0 0 0 0 0 1\r\n  \r\n1.6 1.61 2 0 0 0 0 0 1\r\n\r\nseq: 2\r\n"
+    "2.0 nan nan nan nan nan nan nan\r\n2.1 1 1 1 0 0 0 1\r\n   2.2 2 1 1 0 0 0 1\n"
+)
+
+
+@pytest.mark.parametrize("chunk_bytes", [16, 64, 1 << 20])
+def test_awkward_file_reads_the_same_in_any_chunking(tmp_path, chunk_bytes):
+    path = write(tmp_path, "a.txt", AWKWARD)
+    whole = _read(path, fast_min_bytes=1 << 40)
+    parts = _read(path, chunk_bytes=chunk_bytes, fast_min_bytes=0)
+    _same(whole, parts)
+    assert whole.lines.tolist() == [6, 8, 11, 12, 13]
+    assert whole.specials[0] == (1, "scene: cafe") and whole.specials[-1] == (10, "seq: 2")
+    f = read_openloris(path, warn=False)
+    assert sorted(f.sequences) == [1, 2] and len(f.sequences[2]) == 2  # the NaN pose is skipped
+
+
+def test_large_file_takes_fast_path_and_keeps_exact_lines(tmp_path):
+    n = 50_000
+    rng = np.random.default_rng(1)
+    t = 1_560_000_000 + np.arange(n) * 0.0625 + rng.integers(0, 1000, n) * 1e-9
+    rows = [f"{s:.9f} {x:.6f} 0 0 0 0 0 1" for s, x in zip(t, rng.normal(size=n), strict=True)]
+    rows.insert(20_000, "")  # a blank line in the middle
+    rows.insert(40_000, "# a comment")
+    path = write(tmp_path, "big.txt", "# header\n" + "\n".join(rows) + "\n")
+    traj = read_tum(path)
+    assert len(traj) == n
+    tokens = [r.split()[0] for r in rows if r and not r.startswith("#")]
+    assert np.array_equal(traj.stamps, np.array([float(x) for x in tokens]))  # correctly rounded, as float()
+    assert traj.lines[0] == 2 and traj.lines[-1] == n + 3
+    bad = rows.copy()
+    bad[45_000] = "1.0 2.0 oops 0 0 0 0 1"
+    write(tmp_path, "bad.txt", "\n".join(bad) + "\n")
+    with pytest.raises(ParseError, match=r"bad.txt, line 45001: 'oops' is not a number"):
+        read_tum(tmp_path / "bad.txt")
+
+
+def test_binary_data_after_the_first_chunk_is_refused_where_it_appears(tmp_path):
+    text = "".join(f"{i}.0 0 0 0 0 0 0 1\n" for i in range(20_000))
+    path = tmp_path / "mixed.txt"
+    path.write_bytes(text.encode() + b"\0\1\2" * 100_000)
+    with pytest.raises(ParseError, match=r"line 20001: binary data"):
+        read_tum(path)
