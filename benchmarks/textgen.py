@@ -47,8 +47,8 @@ def pose_lines(t: Trajectory) -> bytes:
     """OpenLORIS/TUM pose lines ``stamp x y z qx qy qz qw`` (stamps with 9 decimals, nanoseconds)."""
     space = np.full((len(t), 1), ord(" "), np.uint8)
     cols = [fixed(t.stamps, 9, 21)]
-    cols += [c for k in range(3) for c in (space, fixed(t.positions[:, k], 6, 11))]
-    cols += [c for k in range(4) for c in (space, fixed(t.quaternions[:, k], 9, 12))]
+    cols += [c for k in range(3) for c in (space, fixed(t.positions[:, k], 4, 9))]
+    cols += [c for k in range(4) for c in (space, fixed(t.quaternions[:, k], 7, 10))]
     table = np.concatenate(cols + [np.full((len(t), 1), ord("\n"), np.uint8)], axis=1)
     return table.tobytes()
 

@@ -94,3 +94,32 @@ def test_parquet_force_never_replaces_a_foreign_dataset(icra20, tmp_path, capsys
     )
     assert "lorisnb did not write it" in capsys.readouterr().err
     assert sorted(p.relative_to(foreign) for p in foreign.rglob("*")) == before
+
+
+def test_a_sweep_too_large_for_memory_streams_to_parquet_with_the_same_rows(icra20, tmp_path, capsys):
+    from lorisnb.core.sweep import sweep, sweep_bytes, sweep_groups
+    from lorisnb.tools.streaming import sweep_to_parquet
+
+    ev = ln.evaluate(icra20 / "lifelong", scale="auto", jobs=1)
+    grid = (np.geomspace(0.1, 10, 12), [10.0, 30.0, 90.0], [0.5, 1.0], [30.0, 60.0])
+    full = sweep(ev.errors, *grid, columns="all")
+    whole = sweep_bytes(ev.errors, (12, 3, 2, 2), "all")
+    largest = max(sweep_bytes(g, (12, 3, 2, 2), "all") for g in sweep_groups(ev.errors))
+    assert largest < whole / 2
+    small = (largest + whole) / 2  # the whole table would not fit, each group does
+    with pytest.raises(ln.ValidationError, match=r"GiB .* --parquet DIR; Python: lorisnb.tools.sweep_to_parquet"):
+        sweep(ev.errors, *grid, columns="all", max_bytes=small)
+    path, rows = sweep_to_parquet(ev.errors, tmp_path / "big", *grid, max_bytes=small)
+    assert rows == len(full)
+    back = pd.read_parquet(path)
+    keys = ["algorithm", "scene", "seq", "eps", "phi", "delta", "tau"]
+    a = full.astype({"algorithm": str, "scene": str}).sort_values(keys).reset_index(drop=True)
+    b = back.astype({"algorithm": str, "scene": str}).sort_values(keys).reset_index(drop=True)[a.columns]
+    for col in ("cr", "cr_t", "cs_r", "c_ate_rmse", "correct_time", "rpe_trans_rmse"):
+        np.testing.assert_array_equal(a[col].to_numpy(), b[col].to_numpy())
+    # the command line streams with --parquet alone, and prints the scene summary
+    args = ["sweep", str(icra20 / "lifelong" / "maslam"), "--eps", "0.5,1,2", "--phi", "10,30"]
+    assert main([*args, "--parquet", str(tmp_path / "cli"), "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "rows:" in out and "cr_t" in out
+    assert len(pd.read_parquet(tmp_path / "cli")) == len(sweep(ln.evaluate(args[1]).errors, [0.5, 1, 2], [10, 30]))

@@ -109,18 +109,44 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     check_output(args.csv, args.paths, args.force)
     check_output(args.parquet, args.paths, args.force, folder=True)
     ev, notes = _run_evaluation(args)
+    keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
+    grid = f"{len(args.eps)} eps x {len(args.phi)} phi x {len(args.delta)} delta x {len(args.tau)} tau"
+    cols = ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "cr", "cr_t", "c_ate_rmse"]
+    if args.parquet and not args.csv:  # streamed, one group of files at a time: any grid size
+        from ..tools.streaming import sweep_to_parquet
+
+        durations = ev.durations()
+        shown: list[pd.DataFrame] = []
+        scene_rows = 0
+
+        def summarize(part: pd.DataFrame) -> pd.DataFrame:
+            nonlocal scene_rows
+            scenes = sweep_scenes(part, durations)[cols]
+            scene_rows += len(scenes)
+            if sum(map(len, shown)) < 60:
+                shown.append(scenes.head(60))
+            return part if keep_label else part.drop(columns=["eps_value"])
+
+        path, rows = sweep_to_parquet(
+            ev.errors, args.parquet, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
+            force=args.force, progress=not args.no_progress, on_part=summarize,
+        )  # fmt: skip
+        print(f"{rows} rows: {len(ev.errors)} file(s) x {grid}")
+        if shown:
+            print(_fmt(pd.concat(shown).head(60)))
+            if scene_rows > 60:
+                print(f"... {scene_rows - 60} more scene rows (in the Parquet dataset, aggregate with sweep_scenes)")
+        print(f"wrote {rows} rows to {path}", file=sys.stderr)
+        _report_problems(ev, notes)
+        return 1 if ev.failures else 0
     table = sweep(ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all")
-    print(
-        f"{len(table)} rows: {len(ev.errors)} file(s) x {len(args.eps)} eps x {len(args.phi)} phi x "
-        f"{len(args.delta)} delta x {len(args.tau)} tau"
-    )
+    print(f"{len(table)} rows: {len(ev.errors)} file(s) x {grid}")
     if not table.empty:
         scenes = sweep_scenes(table, ev.durations())
-        view = scenes[["suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "cr", "cr_t", "c_ate_rmse"]]
+        view = scenes[cols]
         print(_fmt(view.head(60)))
         if len(view) > 60:
             print(f"... {len(view) - 60} more scene rows (write them all with --csv)")
-    keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
     written = table if keep_label else table.drop(columns=["eps_value"])  # eps as given, when it differs
     if args.csv:
         print(f"wrote {len(table)} rows to {write_csv(written, args.csv, args.force)}", file=sys.stderr)

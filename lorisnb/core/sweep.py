@@ -35,22 +35,33 @@ METRIC_COLUMNS = [
 MAX_SWEEP_BYTES = 4 * 2**30
 
 
+def sweep_bytes(files: list[FileErrors], shape: tuple[int, int, int, int], columns: str = "metrics") -> float:
+    """Memory a sweep of ``files`` over an eps x phi x delta x tau grid of ``shape`` needs, bytes:
+    the larger of its tidy table (rows x columns x 8) and its per-sequence working arrays."""
+    E, P, D, T = shape
+    n_seq = sum(len(f.sequences) for f in files)
+    longest = max((e.matched for f in files for e in f.sequences), default=0)
+    ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
+    return max(n_seq * E * P * D * T * ncol * 8.0, E * P * longest * 9.0 + E * P * D * T * len(GRID_METRICS) * 8.0)
+
+
 def check_sweep_size(
     files: list[FileErrors], shape: tuple[int, int, int, int], columns: str, max_bytes: float = MAX_SWEEP_BYTES
 ) -> None:
-    """Refuse a sweep whose tidy table (rows x columns x 8 bytes) or per-sequence working arrays
-    (eps x phi x poses) would need more than ``max_bytes``, saying how much it would need."""
+    """Refuse a sweep that would need more than ``max_bytes`` (:func:`sweep_bytes`), saying how much
+    it would need and how to stream it instead."""
     E, P, D, T = shape
     n_seq = sum(len(f.sequences) for f in files)
     longest = max((e.matched for f in files for e in f.sequences), default=0)
     ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
     rows = n_seq * E * P * D * T
-    need = max(rows * ncol * 8.0, E * P * longest * 9.0 + E * P * D * T * len(GRID_METRICS) * 8.0)
+    need = sweep_bytes(files, shape, columns)
     if need > max_bytes:
         raise ValidationError(
             f"this sweep would need about {need / 2**30:.1f} GiB ({rows:,} rows of {ncol} columns; "
             f"{E} eps x {P} phi x {D} delta x {T} tau over {n_seq} sequences, up to {longest:,} poses each), "
-            f"more than the {max_bytes / 2**30:.1f} GiB allowed (max_bytes); use fewer thresholds or files"
+            f"more than the {max_bytes / 2**30:.1f} GiB allowed (max_bytes); use fewer thresholds or files, "
+            "or stream the table to Parquet (command line: --parquet DIR; Python: lorisnb.tools.sweep_to_parquet)"
         )
 
 
@@ -137,7 +148,11 @@ def sweep(
     data: dict[str, Any] = {}
     for k in [c for c in meta.columns if c in cols]:
         col = meta[k]
-        data[k] = pd.Categorical(col.to_numpy()[rep]) if col.dtype == object else col.to_numpy()[rep]
+        if col.dtype == object or isinstance(col.dtype, pd.StringDtype):
+            codes, uniques = pd.factorize(col, sort=True)  # one code per sequence, repeated: no strings copied
+            data[k] = pd.Categorical.from_codes(codes[rep], categories=uniques)
+        else:
+            data[k] = col.to_numpy()[rep]
     grid_idx = np.indices((E, P, D, T)).reshape(4, -1)
     data["phi"] = np.tile(phi_a[grid_idx[1]], S)
     data["delta"] = np.tile(delta_a[grid_idx[2]], S)
@@ -155,6 +170,16 @@ def sweep(
         data[k] = col
     # columns in final order, no consolidation copy: the table is large for big grids
     return pd.DataFrame({k: data[k] for k in cols}, copy=False)
+
+
+def sweep_groups(errors: FileErrors | Iterable[FileErrors]) -> list[list[FileErrors]]:
+    """Files grouped by suite, algorithm, scene and trial, in order of first appearance: the
+    sequences that scene aggregation (:func:`sweep_scenes`) combines, so that a sweep can be
+    computed, aggregated and written one group at a time."""
+    groups: dict[tuple[str, str, str, int], list[FileErrors]] = {}
+    for f in as_files(errors):
+        groups.setdefault((f.suite, f.algorithm, f.scene, f.trial), []).append(f)
+    return list(groups.values())
 
 
 def sweep_scenes(table: pd.DataFrame, durations: pd.DataFrame) -> pd.DataFrame:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 import numpy as np
@@ -79,8 +79,24 @@ def write_parquet(
     e.g. ``algorithm=orbslam2_rgbd/``), with the same columns as the CSV. Built beside ``out`` and
     moved into place; an existing ``out`` is replaced only with ``force`` and only if it is a
     dataset lorisnb wrote (:data:`TABLE_MARKER`) holding nothing else. Needs pyarrow (``pip install 'lorisnb[parquet]'``)."""
+    return write_parquet_parts([df], out, partition_by, force)
+
+
+def _plain(df: pd.DataFrame) -> pd.DataFrame:
+    """Categorical columns as their values, so that every part of a dataset has the same schema."""
+    cats = [c for c in df.columns if isinstance(df[c].dtype, pd.CategoricalDtype)]
+    return df.astype({c: df[c].cat.categories.dtype for c in cats}) if cats else df
+
+
+def write_parquet_parts(
+    parts: Iterable[pd.DataFrame], out: str | os.PathLike[str], partition_by: str = "algorithm", force: bool = False
+) -> Path:
+    """Write tables one after the other into one Parquet dataset (as :func:`write_parquet`), each
+    part as its own file in its partition's folder: a table larger than memory is streamed, part
+    by part, and only one part is held at a time. Nothing is left behind if a part fails."""
     try:
-        import pyarrow  # noqa: F401
+        import pyarrow as pa
+        import pyarrow.parquet as pq
     except ImportError:
         raise MissingDependencyError("writing Parquet needs pyarrow: pip install 'lorisnb[parquet]'") from None
     out = Path(out)
@@ -95,14 +111,22 @@ def write_parquet(
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
     try:
-        table = df.astype({partition_by: str}) if partition_by in df.columns else df
-        table.to_parquet(
-            tmp / "data", partition_cols=[partition_by] if partition_by in df.columns else None, index=False
-        )
-        (tmp / "data" / TABLE_MARKER).write_text("written by lorisnb\n")  # hidden: Parquet readers skip it
+        data = tmp / "data"
+        data.mkdir()
+        for n, df in enumerate(parts):
+            if partition_by not in df.columns:
+                pq.write_table(pa.Table.from_pandas(_plain(df), preserve_index=False), data / f"part-{n:05d}.parquet")
+                continue
+            df = _plain(df)
+            for value, group in df.groupby(partition_by, observed=True, sort=False):
+                folder = data / f"{partition_by}={value}"
+                folder.mkdir(exist_ok=True)
+                table = pa.Table.from_pandas(group.drop(columns=[partition_by]), preserve_index=False)
+                pq.write_table(table, folder / f"part-{n:05d}.parquet")
+        (data / TABLE_MARKER).write_text("written by lorisnb\n")  # hidden: Parquet readers skip it
         if out.exists():
             shutil.rmtree(out)
-        os.rename(tmp / "data", out)
+        os.rename(data, out)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return out
