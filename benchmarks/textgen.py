@@ -54,6 +54,7 @@ def pose_lines(t: Trajectory) -> bytes:
 
 
 def write_lines(path: Path, scene: str, sequences: dict[int, Trajectory], simulated: bool) -> None:
+    """An OpenLORIS file of the given sequences (``simulated: true`` in its header if asked)."""
     with open(path, "wb") as fh:
         fh.write(f"scene: {scene}\nframe: base_link\n".encode())
         if simulated:
@@ -101,6 +102,6 @@ def lifelong_files(folder: Path, n_poses: int = 10_000_000, n_sessions: int = 5)
         )
         est[s] = simulate(g, faults)
     gt_path, est_path = folder / "lifelong_groundtruth.txt", folder / "simulated_lifelong.txt"
-    write_lines(gt_path, "simulated-building", gt, simulated=True)
-    write_lines(est_path, "simulated-building", est, simulated=True)
+    write_lines(gt_path, "market", gt, simulated=True)  # a known scene name; base_link frame on both sides
+    write_lines(est_path, "market", est, simulated=True)
     return gt_path, est_path

@@ -10,6 +10,8 @@ on the right with ``T_base_link_S`` (``world_T_S = world_T_base_link @ T_base_li
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -129,6 +131,7 @@ def extrinsic_rotation(scene: str, frame: str) -> tuple[np.ndarray, Rotation]:
     return t, Rotation.from_quat(q)
 
 
+@functools.lru_cache(maxsize=256)
 def relative_extrinsic(scene: str, from_frame: str, to_frame: str) -> tuple[np.ndarray, Rotation]:
     """``T_from_to`` = ``T_base_from^-1 @ T_base_to`` for the robot of ``scene``: (translation in
     metres, rotation). Ground truth reported in ``from_frame`` is moved to ``to_frame`` by

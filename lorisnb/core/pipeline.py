@@ -17,8 +17,17 @@ from scipy.spatial.transform import Rotation
 from ..errors import EvaluationError, LorisWarning, ParseError
 from . import metrics, plausibility
 from .association import MAX_GAP, Association, associate, groundtruth_in_frame
-from .frames import FRAMES
-from .geometry import Sim3, compose, ros_quaternion_from_matrix, umeyama
+from .frames import FRAMES, relative_extrinsic
+from .geometry import (
+    Sim3,
+    compose,
+    quat_angle_deg,
+    quat_conjugate,
+    quat_multiply,
+    quat_rotate,
+    ros_quaternion_from_matrix,
+    umeyama,
+)
 from .model import MODES, FileErrors, ResultFile, SequenceErrors, is_monocular
 from .trajectory import Trajectory, path_length
 from .validate import choice, scale_value
@@ -261,7 +270,6 @@ def compute_errors(
                         with_scale,
                         max_gap,
                         gt_frame,
-                        in_frame=lambda fr: groundtruth_sequence(groundtruth, first.seq, scene, fr, False, gt_frame),
                     ),
                 )
             )
@@ -283,21 +291,29 @@ def median_aoe_by_frame(
     max_gap: float,
     gt_frame: str = "base_link",
     *,
-    in_frame: Callable[[str], Trajectory] | None = None,
     max_poses: int = PLAUSIBILITY_POSES,
 ) -> dict[str, float]:
     """Median AOE (deg) of one sequence with its ground truth moved to each sensor frame.
 
-    A check, not a metric: at most ``max_poses`` estimate poses, evenly spread, are used (a
-    median over 300 poses is stable to a fraction of a degree), and ``in_frame(frame)`` may supply
-    the ground truth already moved to a frame (computed once per file and frame)."""
+    A check, not a metric: at most ``max_poses`` estimate poses, evenly spread, are associated
+    once with the ground truth as given, and the interpolated ground-truth poses are then moved to
+    each frame (``T_gt @ T_gt_frame``; the same as interpolating the moved ground truth, up to the
+    linear interpolation of the lever arm)."""
     if len(est) > max_poses:
         keep = np.unique(np.linspace(0, len(est) - 1, max_poses).astype(int))
         est = Trajectory(est.stamps[keep], est.positions[keep], est.quaternions[keep])
+    a = associate(gt_base, est.stamps, max_gap)
+    if len(a) < 3 or a.gt_rotations is None:
+        return {}
+    p_est = est.positions[a.est_index]
+    q_est = est.quaternions[a.est_index]
+    q_est = q_est / np.linalg.norm(q_est, axis=1, keepdims=True)
+    q_gt = a.gt_rotations.as_quat()
     out = {}
     for fr in FRAMES:  # seven frames, on a suspicious sequence only
-        gt = in_frame(fr) if in_frame is not None else groundtruth_in_frame(gt_base, scene, fr, gt_frame=gt_frame)
-        e = sequence_errors(gt, est, scale=with_scale, max_gap=max_gap)
-        if e.matched:
-            out[fr] = float(np.median(e.aoe))
+        t_off, r_off = relative_extrinsic(scene, gt_frame, fr)
+        sim = umeyama(p_est, a.gt_positions + quat_rotate(q_gt, t_off), with_scale)
+        q_aligned = quat_multiply(Rotation.from_matrix(sim.rotation).as_quat(), q_est)
+        q_gt_fr = quat_multiply(q_gt, r_off.as_quat())
+        out[fr] = float(np.median(quat_angle_deg(quat_multiply(quat_conjugate(q_gt_fr), q_aligned))))
     return out

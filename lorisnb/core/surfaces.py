@@ -63,19 +63,6 @@ def _grid(name: str, values: object) -> np.ndarray:
     return np.unique(np.asarray(items, float))
 
 
-def sequence_correct_time(ate: np.ndarray, aoe: np.ndarray, held: np.ndarray, eps: np.ndarray, phi: np.ndarray
-                          ) -> np.ndarray:  # fmt: skip
-    """Correct time (E, P) of one sequence: the dominance count of its poses, weighted by the time
-    each holds. ``eps`` and ``phi`` increasing; a pose counts at (i, j) iff ATE <= eps_i and
-    AOE <= phi_j."""
-    E, P = len(eps), len(phi)
-    i = np.searchsorted(eps, ate, side="left")  # first eps with ATE <= eps
-    j = np.searchsorted(phi, aoe, side="left")
-    inside = (i < E) & (j < P)
-    hist = np.bincount(i[inside] * P + j[inside], weights=held[inside], minlength=E * P).reshape(E, P)
-    return hist.cumsum(axis=0).cumsum(axis=1)
-
-
 def cr_surfaces(
     errors: FileErrors | Iterable[FileErrors],
     eps: object,
@@ -91,15 +78,18 @@ def cr_surfaces(
     eps_a, phi_a = _grid("eps", eps), _grid("phi", phi)
     delta = threshold("delta", delta)
     total = durations.groupby("scene")["gt_duration"].sum()
+    E, P = len(eps_a), len(phi_a)
     keys: dict[tuple[str, str, str, int], int] = {}
-    sums: list[np.ndarray] = []
+    cells: list[list[np.ndarray]] = []  # per group: the grid cell of each pose, and its held time
+    weights: list[list[np.ndarray]] = []
     tracked: list[float] = []
     nseq: list[int] = []
     for f in files:  # per file and sequence, never per pose
         key = (f.suite, f.algorithm, f.scene, f.trial)
         if key not in keys:
-            keys[key] = len(sums)
-            sums.append(np.zeros((len(eps_a), len(phi_a))))
+            keys[key] = len(cells)
+            cells.append([])
+            weights.append([])
             tracked.append(0.0)
             nseq.append(0)
         k = keys[key]
@@ -108,13 +98,24 @@ def cr_surfaces(
             if e.matched == 0:
                 continue
             held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end), delta)
-            sums[k] += sequence_correct_time(e.ate, e.aoe, held, eps_a, phi_a)
+            i = np.searchsorted(eps_a, e.ate, side="left")  # first eps with ATE <= eps
+            j = np.searchsorted(phi_a, e.aoe, side="left")
+            inside = (i < E) & (j < P)
+            cells[k].append(i[inside] * P + j[inside])
+            weights[k].append(held[inside])
             tracked[k] += e.gt_end - float(e.stamps[0])
     groups = pd.DataFrame(list(keys), columns=["suite", "algorithm", "scene", "trial"]).assign(sequences=nseq)
-    ct = np.stack(sums) if sums else np.zeros((0, len(eps_a), len(phi_a)))
-    scene_time = groups["scene"].map(total).to_numpy(float)
+    ct = np.zeros((len(cells), E, P))
+    for k in range(len(cells)):  # per group: one histogram, then cumulative sums in place
+        if cells[k]:
+            ct[k] = np.bincount(np.concatenate(cells[k]), np.concatenate(weights[k]), minlength=E * P).reshape(E, P)
+            np.cumsum(ct[k], axis=0, out=ct[k])
+            np.cumsum(ct[k], axis=1, out=ct[k])
+    scene_time = groups["scene"].map(total).to_numpy(float)[:, None, None]
+    tr = np.asarray(tracked, float)[:, None, None]
+    cr = np.empty_like(ct)
+    cr_t = np.full_like(ct, np.nan)
     with np.errstate(invalid="ignore", divide="ignore"):
-        cr = ct / scene_time[:, None, None]
-        tr = np.asarray(tracked)
-        cr_t = np.where(tr[:, None, None] > 0, ct / tr[:, None, None], np.nan)
+        np.divide(ct, scene_time, out=cr)
+        np.divide(ct, tr, out=cr_t, where=tr > 0)
     return Surfaces(eps=eps_a, phi=phi_a, groups=groups, correct_time=ct, cr=cr, cr_t=cr_t, delta=delta)

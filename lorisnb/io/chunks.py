@@ -33,8 +33,9 @@ class Rows:
     """The numeric lines of a file.
 
     Attributes:
-        columns: (width, n) float64, column k holding each line's k-th token (NaN past its last
-            token); column-major so that a column is a contiguous array.
+        columns: (k, n) float64, k the most tokens of any line (at most the largest width),
+            column i holding each line's i-th token (NaN past its last token); column-major so
+            that a column is a contiguous array.
         ntok: (n,) tokens per line.
         lines: (n,) 1-based line numbers.
         specials: ``(line, text)`` of the lines holding a colon (``key: value``), when asked for.
@@ -102,59 +103,73 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Iterator[tuple[byt
             raise ParseError(spath, None, f"empty file; expected {what}")
 
 
+def _layout(
+    chunk: bytes, line0: int, nlines: int, specials_ok: bool
+) -> tuple[np.ndarray, list[tuple[int, str]], int] | None:
+    """Lines of a chunk the C parser must skip (comments, ``key: value`` lines, blank lines), the
+    special lines' text, and the first line it reads; None if special lines are not allowed."""
+    buf = np.frombuffer(chunk, np.uint8)
+    nl = np.flatnonzero(buf == 10)
+    starts = np.concatenate(([0], nl[:-1] + 1))
+    length = nl - starts
+    head = buf[np.minimum(starts, buf.size - 1)]
+    blank = (length == 0) | ((length == 1) & (head == 13))
+    comment = head == ord("#")
+    colon = np.zeros(nlines, bool)
+    colon[np.searchsorted(nl, np.flatnonzero(buf == 58))] = True
+    colon &= ~comment
+    if colon.any() and not specials_ok:
+        return None
+    specials = [
+        (line0 + int(i) + 1, chunk[starts[i] : nl[i]].decode("utf-8", "replace").strip()) for i in np.flatnonzero(colon)
+    ]  # a handful per file
+    skipped = comment | colon | blank
+    return np.flatnonzero(skipped), specials, int(np.argmin(skipped))
+
+
 def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) -> Rows | None:
     """The C-parser path for one chunk, or None when the chunk needs the exact scanner."""
     skip = np.zeros(0, np.int64)
     specials: list[tuple[int, str]] = []
     first_row = 0
-    if b"#" in chunk or b":" in chunk or b"\n\n" in chunk or b"\n\r\n" in chunk or chunk[:1] in (b"\n", b"\r"):
-        buf = np.frombuffer(chunk, np.uint8)
-        nl = np.flatnonzero(buf == 10)
-        starts = np.concatenate(([0], nl[:-1] + 1))
-        length = nl - starts
-        head = buf[np.minimum(starts, buf.size - 1)]
-        blank = (length == 0) | ((length == 1) & (head == 13))
-        comment = head == ord("#")
-        colon = np.zeros(nlines, bool)
-        colon[np.searchsorted(nl, np.flatnonzero(buf == 58))] = True
-        colon &= ~comment
-        if colon.any() and not specials_ok:
+    structured = b"#" in chunk or b":" in chunk or chunk[:1] in (b"\n", b"\r")
+    for attempt in range(2):  # plain numbers first; blank lines are found if the row count says so
+        if structured:
+            layout = _layout(chunk, line0, nlines, specials_ok)
+            if layout is None:
+                return None
+            skip, specials, first_row = layout
+        nrows = nlines - len(skip)
+        if nrows == 0:
+            return Rows(np.zeros((width, 0)), np.zeros(0, np.int64), np.zeros(0, np.int64), specials)
+        try:
+            at = 0
+            for _ in range(first_row):
+                at = chunk.index(b"\n", at) + 1
+            ntok = len(chunk[at : chunk.index(b"\n", at)].split())
+            if ntok > width or ntok == 0:
+                return None
+            values = pd.read_csv(
+                io.BytesIO(chunk),
+                sep=r"\s+",
+                header=None,
+                names=range(ntok),
+                dtype=np.float64,
+                quoting=csv.QUOTE_NONE,
+                na_filter=False,
+                engine="c",
+                index_col=False,
+                low_memory=False,
+                skiprows=skip.tolist() if skip.size else None,
+            ).to_numpy()  # (nrows, ntok), a transposed view of pandas' column block
+        except (ValueError, IndexError, pd.errors.ParserError, UnicodeDecodeError):
             return None
-        for i in np.flatnonzero(colon):
-            specials.append((line0 + int(i) + 1, chunk[starts[i] : nl[i]].decode("utf-8", "replace").strip()))
-        skipped = comment | colon | blank
-        skip = np.flatnonzero(skipped)
-        first_row = int(np.argmin(skipped))  # the first line read as numbers
-    nrows = nlines - len(skip)
-    if nrows == 0:
-        return Rows(np.zeros((width, 0)), np.zeros(0, np.int64), np.zeros(0, np.int64), specials)
-    try:
-        at = 0
-        for _ in range(first_row):
-            at = chunk.index(b"\n", at) + 1
-        ntok = len(chunk[at : chunk.index(b"\n", at)].split())
-        if ntok > width or ntok == 0:
+        if len(values) == nrows:
+            break
+        if structured or attempt:  # whitespace-only lines were skipped: line numbers unknown
             return None
-        values = pd.read_csv(
-            io.BytesIO(chunk),
-            sep=r"\s+",
-            header=None,
-            names=range(ntok),
-            dtype=np.float64,
-            quoting=csv.QUOTE_NONE,
-            na_filter=False,
-            engine="c",
-            index_col=False,
-            low_memory=False,
-            skiprows=skip.tolist() if skip.size else None,
-        ).to_numpy()  # (nrows, ntok), a transposed view of pandas' column block
-    except (ValueError, IndexError, pd.errors.ParserError, UnicodeDecodeError):
-        return None
-    if len(values) != nrows:  # blank or whitespace-only lines were skipped: line numbers unknown
-        return None
-    columns = values.T
-    if ntok < width:
-        columns = np.concatenate((columns, np.full((width - ntok, nrows), np.nan)))
+        structured = True  # blank lines: find them, and read again with their numbers known
+    columns = values.T  # (ntok, nrows): read_rows pads short rows' columns with NaN when it joins chunks
     if skip.size:
         keep = np.ones(nlines, bool)
         keep[skip] = False
@@ -243,17 +258,32 @@ def read_rows(
         parts.append(part)
         if progress is not None:
             progress(len(chunk))
+    return _join(parts, width)
+
+
+def _join(parts: list[Rows], width: int) -> Rows:
+    """One Rows of all chunks: columns copied once into a (k, n) array, k the most tokens of any
+    line, NaN-padded."""
+    used = max((len(p.columns) for p in parts if p.columns.shape[1]), default=width)
     if len(parts) == 1:
         return parts[0]
-    rows = Rows(
-        np.concatenate([p.columns for p in parts], axis=1),
+    n = sum(p.columns.shape[1] for p in parts)
+    columns = np.empty((used, n))
+    at = 0
+    for p in parts:
+        k, m = p.columns.shape
+        columns[:k, at : at + m] = p.columns
+        if k < used:
+            columns[k:used, at : at + m] = np.nan
+        at += m
+        p.columns = columns[:0]  # let the chunk's copy go as soon as it is joined
+    return Rows(
+        columns,
         np.concatenate([p.ntok for p in parts]),
         np.concatenate([p.lines for p in parts]),
         [s for p in parts for s in p.specials],
         sum(p.parsed_in_c for p in parts),
     )
-    parts.clear()
-    return rows
 
 
 def stamp_digits(

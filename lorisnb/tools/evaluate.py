@@ -177,14 +177,21 @@ class FileJob:
     scenes: frozenset[str] | None
 
 
-def evaluate_file(job: FileJob) -> tuple[str, FileErrors | Failure | None]:
+def evaluate_file(job: FileJob, progress: bool = False) -> tuple[str, FileErrors | Failure | None]:
     """Evaluate one file: ``("ok", FileErrors)``, ``("failed" | "skipped", Failure)`` or
-    ``("filtered", None)`` when its scene is not wanted. Never raises for bad input."""
+    ``("filtered", None)`` when its scene is not wanted. Never raises for bad input. With
+    ``progress``, a file over :data:`BIG_FILE_BYTES` shows a bar of the bytes read."""
     algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
+    bar = None
+    if progress and _size(job.path) >= BIG_FILE_BYTES:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=_size(job.path), desc=f"reading {job.path.name}", unit="B", unit_scale=True, leave=False)
     try:
         result = read_openloris(
-            job.path, remove_repeated=job.remove_repeated, warn=False, repair_stamps=job.repair_stamps
-        )
+            job.path, remove_repeated=job.remove_repeated, warn=False, repair_stamps=job.repair_stamps,
+            progress=bar.update if bar is not None else None,
+        )  # fmt: skip
         if job.scenes is not None and result.scene not in job.scenes:
             return "filtered", None
         gt = load_groundtruth(result.scene, job.data, job.remove_repeated)
@@ -202,6 +209,13 @@ def evaluate_file(job: FileJob) -> tuple[str, FileErrors | Failure | None]:
         return "skipped", Failure(job.path, str(exc), "no-groundtruth")
     except LorisError as exc:
         return "failed", Failure(job.path, str(exc), type(exc).__name__)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+#: Files at least this large show a progress bar of their own while read (when evaluated here).
+BIG_FILE_BYTES = 64 * 2**20
 
 
 def _run(jobs: list[FileJob], n_jobs: int, executor: Executor | None, progress: bool) -> list[tuple[str, Any]]:
@@ -220,7 +234,7 @@ def _run(jobs: list[FileJob], n_jobs: int, executor: Executor | None, progress: 
         bar = new_bar()
         try:
             for job in jobs:  # one file at a time
-                out.append(evaluate_file(job))
+                out.append(evaluate_file(job, progress=progress))
                 if bar is not None:
                     bar.update()
         finally:
