@@ -134,3 +134,11 @@ def positive(name: str, value: Any, unit: str, *, integer: bool = False) -> floa
         kind = "a positive whole number" if integer else "a positive number"
         raise ValidationError(f"{name}={_show(value)}: expected {kind} of {unit}")
     return float(v)
+
+
+def finite(name: str, value: Any, unit: str) -> float:
+    """A finite number of any sign (for example a clock offset)."""
+    v = _number(name, value, {})
+    if math.isnan(v) or math.isinf(v):
+        raise ValidationError(f"{name}={_show(value)}: expected a finite number of {unit}")
+    return float(v)

@@ -1,0 +1,170 @@
+"""The conventions of the field, selectable: how estimate and ground-truth poses are matched in
+time and how the estimate is aligned before errors are taken.
+
+Association:
+    ``interpolate`` (OpenLORIS, lorisnb's default): the ground truth interpolated at each estimate
+    stamp inside a bracket of ``max_gap`` seconds (:func:`lorisnb.core.association.associate`).
+    ``nearest`` (TUM RGB-D's ``associate.py``, also rpg_trajectory_evaluation's): candidate pairs
+    whose stamps differ by less than ``max_diff`` seconds, accepted greedily in order of increasing
+    difference, each stamp used at most once. ``t_offset`` (seconds) is added to every estimate
+    stamp first (a known clock offset; TUM's ``--offset``).
+
+Alignment (``gt = s R est + t``, fitted on the matched positions):
+    ``se3`` (Horn/Umeyama, no scale), ``sim3`` (with scale), ``posyaw`` (4-DoF: translation and a
+    rotation about gravity, z; the standard for visual-inertial systems, rpg's ``posyaw``),
+    ``none``. ``align_frames=N`` fits on the first N matched poses only (evo's ``n_to_align``,
+    rpg's ``align_num_frames``); with N = 1, ``se3`` and ``posyaw`` use the first pose's
+    orientation as rpg does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..errors import EvaluationError, ValidationError
+from .association import MAX_GAP
+from .geometry import Sim3, umeyama
+from .validate import choice, finite, positive
+
+ASSOCIATIONS = ("interpolate", "nearest")
+ALIGNMENTS = ("se3", "sim3", "posyaw", "none")
+MAX_DIFF = 0.02  # seconds; TUM's and rpg's default
+
+
+@dataclass(frozen=True)
+class Conventions:
+    """How a pair is matched and aligned (see the module docstring). Every value is validated."""
+
+    association: str = "interpolate"
+    max_gap: float = MAX_GAP
+    max_diff: float = MAX_DIFF
+    t_offset: float = 0.0
+    align: str = "se3"
+    align_frames: int | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "association", choice("association", self.association, ASSOCIATIONS))
+        object.__setattr__(self, "align", choice("align", self.align, ALIGNMENTS))
+        object.__setattr__(self, "max_gap", positive("max_gap", self.max_gap, "seconds"))
+        object.__setattr__(self, "max_diff", positive("max_diff", self.max_diff, "seconds"))
+        object.__setattr__(self, "t_offset", finite("t_offset", self.t_offset, "seconds"))
+        if self.align_frames is not None:
+            n = int(positive("align_frames", self.align_frames, "poses", integer=True))
+            if self.align == "sim3" and n < 2:
+                raise ValidationError("align_frames=1 with align='sim3': a scale needs at least 2 poses")
+            object.__setattr__(self, "align_frames", n)
+
+    @classmethod
+    def preset(cls, name: str, **changes: object) -> Conventions:
+        """Named conventions: ``openloris`` (interpolation, SE(3) on all poses), ``tum``
+        (``evaluate_ate.py``: nearest within 0.02 s, SE(3)), ``rpg`` (rpg_trajectory_evaluation:
+        nearest within 0.02 s, Sim(3)), ``vio`` (nearest, ``posyaw``); ``changes`` override."""
+        presets = {
+            "openloris": cls(),
+            "tum": cls(association="nearest", align="se3"),
+            "rpg": cls(association="nearest", align="sim3"),
+            "vio": cls(association="nearest", align="posyaw"),
+        }
+        return replace(presets[choice("conventions", name, tuple(presets))], **changes)  # type: ignore[arg-type]
+
+    def describe(self) -> str:
+        """One line saying what was used."""
+        match = (
+            f"interpolated ground truth within {self.max_gap:g} s"
+            if self.association == "interpolate"
+            else f"nearest stamps within {self.max_diff:g} s (greedy, TUM associate.py)"
+        )
+        frames = "all matched poses" if self.align_frames is None else f"the first {self.align_frames} matched poses"
+        offset = f", estimate stamps + {self.t_offset:g} s" if self.t_offset else ""
+        return f"association: {match}{offset}; alignment: {self.align} on {frames}"
+
+
+def associate_nearest(
+    gt_stamps: np.ndarray, est_stamps: np.ndarray, max_diff: float = MAX_DIFF
+) -> tuple[np.ndarray, np.ndarray]:
+    """TUM's ``associate``: pairs ``(gt i, est j)`` with ``|t_gt - t_est| < max_diff``, accepted in
+    order of increasing difference (ties: earlier ground-truth, then earlier estimate stamp), each
+    stamp used once. Returns the matched indices in increasing estimate order.
+
+    Vectorized: in each round every candidate that is the best remaining one of both its stamps
+    is accepted (for a strict order of candidates this gives exactly the greedy matching), and
+    candidates touching an accepted stamp are dropped; a few rounds suffice.
+    """
+    g = np.asarray(gt_stamps, float)
+    e = np.asarray(est_stamps, float)
+    lo = np.searchsorted(g, e - max_diff, side="left")
+    hi = np.searchsorted(g, e + max_diff, side="right")
+    count = hi - lo
+    ej = np.repeat(np.arange(e.size), count)
+    gi = np.repeat(lo, count) + (np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count))
+    diff = np.abs(g[gi] - e[ej])
+    ok = diff < max_diff
+    gi, ej, diff = gi[ok], ej[ok], diff[ok]
+    # a strict order of candidates: difference, then gt stamp, then estimate stamp (TUM sorts tuples)
+    rank = np.empty(gi.size, np.int64)
+    rank[np.lexsort((e[ej], g[gi], diff))] = np.arange(gi.size)
+    taken_g = np.zeros(g.size, bool)
+    taken_e = np.zeros(e.size, bool)
+    out_g, out_e = [], []
+    while gi.size:  # rounds, not poses: each round accepts at least the best candidate
+        best_g = np.full(g.size, np.iinfo(np.int64).max)
+        best_e = np.full(e.size, np.iinfo(np.int64).max)
+        np.minimum.at(best_g, gi, rank)
+        np.minimum.at(best_e, ej, rank)
+        win = (best_g[gi] == rank) & (best_e[ej] == rank)
+        out_g.append(gi[win])
+        out_e.append(ej[win])
+        taken_g[gi[win]] = True
+        taken_e[ej[win]] = True
+        keep = ~taken_g[gi] & ~taken_e[ej]
+        gi, ej, rank = gi[keep], ej[keep], rank[keep]
+    mg = np.concatenate(out_g) if out_g else np.zeros(0, int)
+    me = np.concatenate(out_e) if out_e else np.zeros(0, int)
+    order = np.argsort(me, kind="stable")
+    return mg[order], me[order]
+
+
+def _best_yaw(c: np.ndarray) -> float:
+    """The yaw maximizing ``trace(Rz(theta) C)`` (rpg's ``get_best_yaw``)."""
+    return float(np.pi / 2 - np.arctan2(c[0, 0] + c[1, 1], c[0, 1] - c[1, 0]))
+
+
+def _rot_z(theta: float) -> np.ndarray:
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def fit_alignment(
+    est_positions: np.ndarray,
+    gt_positions: np.ndarray,
+    method: str = "se3",
+    frames: int | None = None,
+    est_quaternions: np.ndarray | None = None,
+    gt_quaternions: np.ndarray | None = None,
+) -> Sim3:
+    """The alignment ``gt = s R est + t`` of matched poses by ``method`` (see the module
+    docstring), fitted on the first ``frames`` matched poses (None: all). Positions in metres;
+    quaternions ``xyzw``, needed for ``frames=1`` with ``se3`` or ``posyaw``."""
+    method = choice("align", method, ALIGNMENTS)
+    p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
+    if method == "none" or len(p_e) == 0:
+        return Sim3.identity()
+    n = len(p_e) if frames is None else min(int(frames), len(p_e))
+    if n == 1 and method in ("se3", "posyaw"):
+        if est_quaternions is None or gt_quaternions is None:
+            raise EvaluationError(f"align={method!r} on one pose needs the orientations")
+        r_g = Rotation.from_quat(gt_quaternions[0]).as_matrix()
+        r_e = Rotation.from_quat(est_quaternions[0]).as_matrix()
+        rot = r_g @ r_e.T if method == "se3" else _rot_z(_best_yaw(r_e @ r_g.T))
+        return Sim3(rot, p_g[0] - rot @ p_e[0], 1.0)
+    if method == "sim3" and n < 2:
+        raise EvaluationError("a Sim(3) alignment needs at least 2 matched poses")
+    if method == "posyaw":
+        mu_e, mu_g = p_e[:n].mean(axis=0), p_g[:n].mean(axis=0)
+        c = (p_e[:n] - mu_e).T @ (p_g[:n] - mu_g)
+        rot = _rot_z(_best_yaw(c))
+        return Sim3(rot, mu_g - rot @ mu_e, 1.0)
+    return umeyama(p_e[:n], p_g[:n], method == "sim3")

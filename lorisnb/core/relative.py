@@ -1,0 +1,103 @@
+"""rpg_trajectory_evaluation's relative error: over sub-trajectories of given lengths (metres
+travelled along the ground truth, by default 10, 20, 30, 40 and 50 % of the total length), the
+error of the estimate's relative motion, reported per metre travelled as rpg reports it
+(translation in % of the length, rotation in degrees per metre).
+
+For each start pose i, the end pose is the first j >= i whose distance from the start is closest
+to ``d_i + L``, within ``0.2 L``. Like rpg, the pairs are then numbered in order of the starts that
+found an end (rpg's ``compute_relative_error`` pairs the k-th found end with the k-th pose); the
+two agree whenever the ends missing are all at the end of the trajectory, as they are unless the
+ground truth jumps by more than 0.2 L. The rotation angle is ``arccos((trace R - 1) / 2)`` as rpg
+computes it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+from scipy.spatial.transform import Rotation
+
+from .geometry import quat_conjugate, quat_multiply, quat_rotate
+
+#: rpg's default sub-trajectory lengths, fractions of the total length
+RPG_FRACTIONS = (0.1, 0.2, 0.3, 0.4, 0.5)
+
+
+def distances(positions: np.ndarray) -> np.ndarray:
+    """Distance travelled from the first position to each, metres."""
+    steps = np.linalg.norm(np.diff(np.asarray(positions, float), axis=0), axis=1)
+    return np.concatenate(([0.0], np.cumsum(steps)))
+
+
+def rpg_lengths(gt_positions: np.ndarray, fractions: tuple[float, ...] = RPG_FRACTIONS) -> list[float]:
+    """Sub-trajectory lengths as rpg computes them: each fraction of the total length, truncated
+    to centimetres."""
+    total = float(distances(gt_positions)[-1]) if len(gt_positions) else 0.0
+    return [math.trunc(f * total * 100) / 100.0 for f in fractions]
+
+
+def rpg_pairs(dist: np.ndarray, length: float, max_dist_diff: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Start and end indices of the sub-trajectories of ``length`` metres (see the module docstring)."""
+    if max_dist_diff is None:
+        max_dist_diff = 0.2 * length
+    n = dist.size
+    target = dist + length
+    k = np.searchsorted(dist, target, side="left")  # first with distance >= target
+    before = np.clip(k - 1, 0, n - 1)
+    before = np.searchsorted(dist, dist[before], side="left")  # earliest of equal distances
+    before = np.maximum(before, np.arange(n))
+    after = np.minimum(k, n - 1)
+    err_b = np.abs(dist[before] - target)
+    err_a = np.abs(dist[after] - target)
+    best = np.where(err_b <= err_a, before, after)
+    err = np.minimum(err_b, err_a)
+    found = best[err < max_dist_diff]
+    return np.arange(found.size), found
+
+
+def rpg_relative_errors(
+    gt_positions: np.ndarray,
+    gt_quaternions: np.ndarray,
+    est_positions: np.ndarray,
+    est_quaternions: np.ndarray,
+    lengths: list[float] | None = None,
+    scale: float = 1.0,
+) -> pd.DataFrame:
+    """rpg's relative errors of matched poses for each sub-trajectory length (metres; default
+    :func:`rpg_lengths`), the estimate's relative translations multiplied by ``scale`` (the Sim(3)
+    scale, as rpg does). One row per pair: ``length``, ``trans`` (m), ``trans_perc`` (% of the
+    length), ``rot`` (deg), ``rot_deg_per_m``."""
+    p_g, p_e = np.asarray(gt_positions, float), np.asarray(est_positions, float)
+    q_g = Rotation.from_quat(gt_quaternions).as_quat()
+    q_e = Rotation.from_quat(est_quaternions).as_quat()
+    dist = distances(p_g)
+    rows = []
+    for length in rpg_lengths(p_g) if lengths is None else lengths:  # a handful of lengths
+        i, j = rpg_pairs(dist, float(length))
+        if i.size < 2:  # rpg: "Too few samples! Will not compute."
+            continue
+        inv_e, inv_g = quat_conjugate(q_e[i]), quat_conjugate(q_g[i])
+        rel_e_t = scale * quat_rotate(inv_e, p_e[j] - p_e[i])
+        rel_g_t = quat_rotate(inv_g, p_g[j] - p_g[i])
+        rel_g_q = quat_multiply(inv_g, q_g[j])
+        inv_rel_g = quat_conjugate(rel_g_q)
+        err_t = quat_rotate(inv_rel_g, rel_e_t - rel_g_t)
+        err_q = quat_multiply(inv_rel_g, quat_multiply(inv_e, q_e[j]))
+        trace = Rotation.from_quat(err_q).as_matrix().trace(axis1=1, axis2=2)
+        rot = np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0)))
+        trans = np.linalg.norm(err_t, axis=1)
+        rows.append(
+            pd.DataFrame(
+                dict(
+                    length=float(length),
+                    trans=trans,
+                    trans_perc=trans / length * 100,
+                    rot=rot,
+                    rot_deg_per_m=rot / length,
+                )
+            )  # fmt: skip
+        )
+    cols = ["length", "trans", "trans_perc", "rot", "rot_deg_per_m"]
+    return pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(columns=cols)
