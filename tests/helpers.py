@@ -88,3 +88,77 @@ def openloris_fixture(tmp_path: Path) -> tuple[Path, Path]:
     gt = write(tmp_path, "gt_cafe_1.txt", openloris_text({1: gt1, 2: gt2}))
     est = write(tmp_path, "synthetic/cafe.txt", openloris_text({1: perturbed(gt1, 0.05), 2: est2}))
     return gt, est
+
+
+def write_bag(path: Path, traj, ros: int, msgtype: str = "geometry_msgs/msg/PoseStamped", topic: str = "/pose",
+              tf: tuple[str, str, str] | None = None) -> Path:  # fmt: skip
+    """Write ``traj`` to a ROS 1 bag (``ros=1``, a .bag file) or a ROS 2 bag (``ros=2``, a folder) as
+    ``msgtype`` messages on ``topic``; with ``tf=(parent, middle, child)`` also as TF: a static
+    ``parent -> middle`` offset (1 m along x) and ``middle -> child`` moving so that the chain
+    ``parent -> child`` equals the trajectory."""
+    import numpy as np
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC if ros == 1 else Stores.ROS2_HUMBLE)
+    T = ts.types
+    Time, Header = T["builtin_interfaces/msg/Time"], T["std_msgs/msg/Header"]
+    Point, Quat, Pose = T["geometry_msgs/msg/Point"], T["geometry_msgs/msg/Quaternion"], T["geometry_msgs/msg/Pose"]
+    Vec, Tr = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Transform"]
+
+    def header(t, frame="world"):
+        sec = int(np.floor(t))
+        return Header(seq=0, stamp=Time(sec=sec, nanosec=int(round((t - sec) * 1e9))), frame_id=frame) if ros == 1 else \
+            Header(stamp=Time(sec=sec, nanosec=int(round((t - sec) * 1e9))), frame_id=frame)  # fmt: skip
+
+    def pose(p, q):
+        return Pose(position=Point(x=p[0], y=p[1], z=p[2]), orientation=Quat(x=q[0], y=q[1], z=q[2], w=q[3]))
+
+    def msg(t, p, q):
+        if msgtype.endswith("PoseStamped") and "Covariance" not in msgtype:
+            return T[msgtype](header=header(t), pose=pose(p, q))
+        cov = T["geometry_msgs/msg/PoseWithCovariance"](pose=pose(p, q), covariance=np.zeros(36))
+        if msgtype.endswith("PoseWithCovarianceStamped"):
+            return T[msgtype](header=header(t), pose=cov)
+        twist = T["geometry_msgs/msg/TwistWithCovariance"](
+            twist=T["geometry_msgs/msg/Twist"](linear=Vec(x=0.0, y=0.0, z=0.0), angular=Vec(x=0.0, y=0.0, z=0.0)),
+            covariance=np.zeros(36),
+        )
+        return T[msgtype](header=header(t), child_frame_id="base", pose=cov, twist=twist)
+
+    def ser(m, kind):
+        return ts.serialize_ros1(m, kind) if ros == 1 else ts.serialize_cdr(m, kind)
+
+    if ros == 1:
+        from rosbags.rosbag1 import Writer
+
+        writer = Writer(path)
+    else:
+        from rosbags.rosbag2 import Writer
+
+        writer = Writer(path, version=8)
+    with writer:
+        conn = writer.add_connection(topic, msgtype, typestore=ts)
+        tf_conn = static_conn = None
+        if tf is not None:
+            kind = "tf2_msgs/msg/TFMessage"
+            if kind not in T:
+                from rosbags.typesys import get_types_from_msg
+
+                ts.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
+                T = ts.types
+            tf_conn = writer.add_connection("/tf", kind, typestore=ts)
+            static_conn = writer.add_connection("/tf_static", kind, typestore=ts)
+            TS = T["geometry_msgs/msg/TransformStamped"]
+            parent, middle, child = tf
+            t0 = float(traj.stamps[0])
+            static = TS(header=header(t0, parent), child_frame_id=middle,
+                        transform=Tr(translation=Vec(x=1.0, y=0.0, z=0.0), rotation=Quat(x=0.0, y=0.0, z=0.0, w=1.0)))  # fmt: skip
+            writer.write(static_conn, int(t0 * 1e9), ser(T[kind](transforms=[static]), kind))
+        for t, p, q in zip(traj.stamps, traj.positions, traj.quaternions, strict=True):
+            ns = int(round(t * 1e9))
+            writer.write(conn, ns, ser(msg(float(t), p, q), msgtype))
+            if tf is not None:
+                moved = Tr(translation=Vec(x=p[0] - 1.0, y=p[1], z=p[2]), rotation=Quat(x=q[0], y=q[1], z=q[2], w=q[3]))
+                m = TS(header=header(float(t), tf[1]), child_frame_id=tf[2], transform=moved)
+                writer.write(tf_conn, ns, ser(T[kind](transforms=[m]), kind))
+    return path

@@ -12,11 +12,14 @@ from typing import Any
 import pandas as pd
 
 from ..errors import LorisError, LorisWarning, ValidationError
-from .options import check_output, param_value
+from .options import check_output, conventions_of, param_value
 
 
 def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
     from ..tools.evaluate import evaluate
+
+    if getattr(args, "gt", None) or getattr(args, "manifest", None):
+        return _run_pairs(args)
 
     executor = None
     if args.scheduler:
@@ -44,6 +47,36 @@ def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
             progress=not args.no_progress,
         )
     notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))
+    return ev, notes
+
+
+def _run_pairs(args: argparse.Namespace) -> tuple[Any, list[str]]:
+    """``--gt`` (plain pairs) or ``--manifest`` (sessions): lorisnb.tools.pairs."""
+    from ..io.manifest import read_manifest
+    from ..tools.pairs import evaluate_manifest, evaluate_pairs
+
+    if args.gt and args.manifest:
+        raise ValidationError("--gt and --manifest: give one (a manifest names the ground truth of each session)")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        if args.gt:
+            ev = evaluate_pairs(
+                args.paths, args.gt, fmt=args.format or "tum", gt_fmt=args.gt_format,
+                conventions=conventions_of(args), scene=args.scene, est_times=args.est_times,
+                gt_times=args.gt_times, topic=args.topic, gt_topic=args.gt_topic, tf=args.tf, gt_tf=args.gt_tf,
+                trials_by=args.trials_by, progress=not args.no_progress,
+            )  # fmt: skip
+        else:
+            m = read_manifest(args.manifest)
+            if m.openloris:
+                return _run_evaluation(argparse.Namespace(**{**vars(args), "manifest": None}))
+            lifelong = None if args.mode == "auto" else args.mode == "lifelong"
+            ev = evaluate_manifest(
+                m, args.paths, conventions=conventions_of(args, m.conventions), lifelong=lifelong,
+                trials_by=args.trials_by, progress=not args.no_progress,
+            )  # fmt: skip
+    notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))
+    print(f"conventions: {ev.conventions}", file=sys.stderr)
     return ev, notes
 
 

@@ -7,11 +7,15 @@ import argparse
 import json
 import os
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from ..core import validate
+from ..core.conventions import ALIGNMENTS, ASSOCIATIONS, Conventions
 from ..errors import OutputError, ValidationError
+from ..io.formats import TRAJECTORY_FORMATS
+from ..io.manifest import BUILT_IN
 
 
 def arg_type(func: Callable[[str], Any]) -> Callable[[str], Any]:
@@ -49,11 +53,58 @@ def add_threshold_options(p: argparse.ArgumentParser, eps: Any, phi: Any) -> Non
     p.add_argument("--tau", type=threshold_type("tau"), default=60.0, help="re-localization time factor, s; default 60")
 
 
+def add_input_options(p: argparse.ArgumentParser) -> None:
+    """Inputs other than OpenLORIS result files: a ground truth and a format for plain pairs, or a
+    manifest; and the conventions of association and alignment."""
+    g = p.add_argument_group("pairs and manifests (TUM, EuRoC, KITTI, ROS bags, your own sessions)")
+    g.add_argument("--gt", default=None, metavar="FILE", help="ground truth: score the inputs as estimates against it")
+    g.add_argument("--format", default=None, choices=TRAJECTORY_FORMATS, help="format of the estimates (default tum)")
+    g.add_argument("--gt-format", default=None, choices=TRAJECTORY_FORMATS, help="format of --gt (default: --format)")
+    g.add_argument("--manifest", default=None, metavar="NAME_OR_TOML",
+                   help=f"a multi-session manifest (built in: {', '.join(BUILT_IN)}); the inputs are folders of estimates")  # fmt: skip
+    g.add_argument("--scene", default=None, help="scene label of a pair's rows (default: the ground truth's file name)")
+    g.add_argument("--conventions", default=None, choices=["openloris", "tum", "rpg", "vio"],
+                   help="preset conventions (tum: evaluate_ate.py; rpg: rpg_trajectory_evaluation; vio: posyaw)")  # fmt: skip
+    g.add_argument("--association", default=None, choices=ASSOCIATIONS, help="interpolate (default) or nearest")
+    g.add_argument("--max-gap", default=None, type=arg_type(lambda t: validate.positive("--max-gap", t, "seconds")),
+                   help="interpolation bracket, seconds (default 0.5)")  # fmt: skip
+    g.add_argument("--max-diff", default=None, type=arg_type(lambda t: validate.positive("--max-diff", t, "seconds")),
+                   help="nearest association: largest stamp difference, seconds (default 0.02)")  # fmt: skip
+    g.add_argument("--t-offset", default=None, type=arg_type(lambda t: validate.finite("--t-offset", t, "seconds")),
+                   help="seconds added to every estimate stamp (a known clock offset)")  # fmt: skip
+    g.add_argument("--align", default=None, choices=ALIGNMENTS, help="se3 (default), sim3, posyaw or none")
+    g.add_argument("--align-frames", default=None, metavar="N",
+                   type=arg_type(lambda t: int(validate.positive("--align-frames", t, "poses", integer=True))),
+                   help="fit the alignment on the first N matched poses only")  # fmt: skip
+    g.add_argument("--topic", default=None, help="bags: the estimate's pose topic")
+    g.add_argument("--gt-topic", default=None, help="bags: the ground truth's pose topic")
+    g.add_argument("--tf", default=None, metavar="PARENT:CHILD", help="bags: the estimate as a TF chain")
+    g.add_argument("--gt-tf", default=None, metavar="PARENT:CHILD", help="bags: the ground truth as a TF chain")
+    g.add_argument("--gt-times", default=None, metavar="FILE", help="KITTI: the ground truth's times file")
+    g.add_argument("--est-times", default=None, metavar="FILE", help="KITTI: the estimates' times file")
+
+
+def conventions_of(args: argparse.Namespace, base: Conventions | None = None) -> Conventions | None:
+    """The conventions the options ask for (a preset, then single options over it); None if none."""
+    changes = {
+        k: getattr(args, k)
+        for k in ("association", "max_gap", "max_diff", "t_offset", "align", "align_frames")
+        if getattr(args, k, None) is not None
+    }
+    if getattr(args, "conventions", None):
+        return Conventions.preset(args.conventions, **changes)
+    if changes:
+        return replace(base or Conventions(), **changes)
+    return base
+
+
 def add_evaluation_options(p: argparse.ArgumentParser) -> None:
     """Options shared by ``evaluate`` and ``sweep`` (same names, same meaning)."""
     p.add_argument(
-        "paths", nargs="+", metavar="FILE_OR_DIR", help="result files, or folders walked as <algorithm>/*.txt"
-    )
+        "paths", nargs="+", metavar="FILE_OR_DIR",
+        help="result files, or folders walked as <algorithm>/*.txt (with --gt: estimates; with --manifest: folders)",
+    )  # fmt: skip
+    add_input_options(p)
     add_scale_option(p, "align with Sim(3) (scale); 'auto': only for monocular algorithms (dso, svo)")
     g = p.add_mutually_exclusive_group()
     g.add_argument(

@@ -26,6 +26,7 @@ from .model import (
     SequenceErrors,
     scene_eps,
 )
+from .trajectory import extent
 from .validate import choice, eps_value, positive, threshold
 
 #: Metrics computed by :func:`sequence_grid`, with their dtype in tables.
@@ -154,6 +155,15 @@ def rpe_setting(rpe_delta: Any, rpe_unit: Any) -> tuple[float, str]:
     return positive("rpe_delta", rpe_delta, names[unit], integer=unit == "f"), unit
 
 
+def sequence_eps(eps: Eps, scene: str, e: SequenceErrors) -> float:
+    """The ATE threshold of one sequence, metres: :func:`~lorisnb.core.model.scene_eps`, or for
+    ``"relative:F"`` F times the extent of the sequence's matched ground truth (0 with fewer than
+    two matched poses)."""
+    if isinstance(eps, str) and eps.startswith("relative:"):
+        return float(eps.split(":", 1)[1]) * extent(e.gt_positions)
+    return scene_eps(eps, scene)
+
+
 def score(
     errors: FileErrors | Iterable[FileErrors],
     eps: Eps = np.inf,
@@ -182,8 +192,8 @@ def score(
     rpe_d, rpe_u = rpe_setting(rpe_delta, rpe_unit)
     rows = []
     for f in files:  # one iteration per file and sequence, never per pose
-        e_scene = scene_eps(eps_v, f.scene)
         for e in f.sequences:
+            e_scene = sequence_eps(eps_v, f.scene, e)
             grid = sequence_grid(e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u)
             row = sequence_meta(f, e) | dict(eps=e_scene, phi=phi_v, delta=delta_v, tau=tau_v)
             row.update({k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in grid.items()})
@@ -198,10 +208,10 @@ def pose_table(errors: FileErrors | Iterable[FileErrors], eps: Eps = np.inf, phi
     eps_v, phi_v = eps_value(eps), threshold("phi", phi)
     parts = []
     for f in files:
-        e_scene = scene_eps(eps_v, f.scene)
         for e in f.sequences:
             if e.matched == 0:
                 continue
+            e_scene = sequence_eps(eps_v, f.scene, e)
             parts.append(
                 pd.DataFrame(
                     {

@@ -77,7 +77,8 @@ def threshold(name: str, value: Any) -> float:
 
 def eps_value(value: Any) -> float | str | dict[str, float]:
     """The ATE threshold: metres (as :func:`threshold`), ``"paper"`` in any case (1/3/5 m by
-    scene), or a mapping scene -> metres."""
+    scene), ``"relative:F"`` (F times each sequence's ground-truth extent, the diagonal of its
+    bounding box), or a mapping scene -> metres."""
     if isinstance(value, Mapping):
         unknown = [k for k in value if k not in SCENES]
         if unknown:
@@ -85,10 +86,15 @@ def eps_value(value: Any) -> float | str | dict[str, float]:
         return {str(k): threshold("eps", v) for k, v in value.items()}
     if isinstance(value, str) and value.strip().lower() == "paper":
         return "paper"
+    if isinstance(value, str) and value.strip().lower().startswith("relative:"):
+        fraction = positive("eps", value.strip()[len("relative:") :], "(a fraction of the ground truth's extent)")
+        return f"relative:{fraction!r}"
     try:
         return threshold("eps", value)
     except ValidationError as exc:
-        raise ValidationError(str(exc).replace("expected a number", "expected 'paper', a number", 1)) from None
+        raise ValidationError(
+            str(exc).replace("expected a number", "expected 'paper', 'relative:F', a number", 1)
+        ) from None
 
 
 def threshold_list(name: str, values: Any) -> list[Any]:

@@ -15,13 +15,14 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..core.trajectory import Trajectory
+from ..core.validate import choice
 from ..errors import LorisWarning, ParseError, ValidationError
 from .chunks import read_rows
 from .openloris import read_openloris
 from .scanner import Lines, check_rows, finish, read_bytes, scan
 
 #: Formats :func:`read_trajectory` reads.
-TRAJECTORY_FORMATS = ("tum", "kitti", "euroc", "openloris")
+TRAJECTORY_FORMATS = ("tum", "kitti", "euroc", "openloris", "bag")
 ROTATION_TOLERANCE = 1e-3  # KITTI/EuRoC rotation blocks: |R R^T - I| and |det R - 1| below this
 
 
@@ -177,14 +178,22 @@ def read_trajectory(
     fmt: str = "tum",
     seq: int | None = None,
     stamps: np.ndarray | str | os.PathLike | None = None,
+    topic: str | None = None,
+    tf: str | None = None,
 ) -> Trajectory:
     """Read one trajectory in any supported format.
 
     Args:
-        fmt: ``tum``, ``kitti``, ``euroc`` or ``openloris`` (for OpenLORIS, ``seq`` picks the
-            sequence; default the lowest-numbered one).
+        fmt: ``tum``, ``kitti``, ``euroc``, ``openloris`` (``seq`` picks the sequence; default
+            the lowest-numbered one) or ``bag`` (ROS 1 or ROS 2; ``topic`` or ``tf``, see
+            :func:`lorisnb.io.bags.read_bag`).
         stamps: KITTI only: stamps or a times file (see :func:`read_kitti`).
     """
+    fmt = choice("format", fmt, TRAJECTORY_FORMATS)
+    if fmt == "bag":
+        from .bags import read_bag
+
+        return read_bag(path, topic=topic, tf=tf)
     if fmt == "tum":
         return read_tum(path)
     if fmt == "kitti":
@@ -199,4 +208,4 @@ def read_trajectory(
         if key not in f.sequences:
             raise ParseError(path, None, f"no sequence {key}; the file has {sorted(f.sequences)}")
         return f.sequences[key]
-    raise ValidationError(f"format={fmt!r}: expected one of {', '.join(TRAJECTORY_FORMATS)}")
+    raise ValidationError(f"format={fmt!r}: expected one of {', '.join(TRAJECTORY_FORMATS)}")  # pragma: no cover

@@ -20,10 +20,10 @@ import numpy as np
 import pandas as pd
 
 from ..core import validate
-from ..core.aggregate import aggregate_scenes
+from ..core.aggregate import aggregate_scenes, durations_table
 from ..core.association import MAX_GAP
 from ..core.frames import SCENES
-from ..core.model import Eps, FileErrors
+from ..core.model import Eps, FileErrors, ResultFile
 from ..core.pipeline import compute_errors
 from ..core.scoring import pose_table, score
 from ..core.trials import compile_trials_by, split_trial
@@ -53,6 +53,8 @@ class Evaluation:
     root: Path | None = None
     skipped: list[Failure] = field(default_factory=list)
     data: DataPaths | None = None
+    groundtruth: dict[str, ResultFile] | None = None  # scene -> ground truth, for pairs and manifests
+    conventions: str = ""  # what association and alignment were used, in words
 
     def sequences(
         self, eps: Eps = np.inf, phi: float = np.inf, delta: float = 1.0, tau: float = 60.0, **kw: Any
@@ -75,6 +77,8 @@ class Evaluation:
 
     def durations(self) -> pd.DataFrame:
         """Ground-truth durations of every sequence of the scenes evaluated, seconds."""
+        if self.groundtruth is not None:
+            return durations_table(self.groundtruth)
         scenes = sorted({f.scene for f in self.errors}, key=SCENES.index)
         return scene_durations(scenes, self.data)
 
@@ -116,18 +120,21 @@ def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
     return out
 
 
-def result_files(paths: PathArg | Iterable[PathArg]) -> list[tuple[Path, Path | None]]:
-    """Expand files and folders into ``(file, root)`` pairs; a folder is walked for ``*.txt``
-    below it (``root/<algorithm>/*.txt``, or deeper: ``root/<suite>/<algorithm>/*.txt``), hidden
-    files and folders left out."""
+def result_files(
+    paths: PathArg | Iterable[PathArg], suffixes: tuple[str, ...] = (".txt",)
+) -> list[tuple[Path, Path | None]]:
+    """Expand files and folders into ``(file, root)`` pairs; a folder is walked for files ending in
+    ``suffixes`` below it (``root/<algorithm>/*.txt``, or deeper: ``root/<suite>/<algorithm>/*.txt``),
+    hidden files and folders left out. A ROS 2 bag (a folder holding ``metadata.yaml``) is one
+    file when ``.bag`` is among the suffixes."""
     out: list[tuple[Path, Path | None]] = []
+    bags = ".bag" in suffixes
     for p in as_paths(paths):
-        if p.is_dir():
-            files = sorted(
-                f
-                for f in p.rglob("*.txt")
-                if f.is_file() and not any(is_hidden(Path(part)) for part in f.relative_to(p).parts)
-            )
+        if p.is_dir() and not (bags and (p / "metadata.yaml").is_file()):
+            found = [f for f in p.rglob("*") if f.suffix in suffixes and f.is_file()]
+            if bags:
+                found += [m.parent for m in p.rglob("metadata.yaml")]
+            files = sorted(f for f in found if not any(is_hidden(Path(part)) for part in f.relative_to(p).parts))
             out.extend((f, p) for f in files)
         else:
             out.append((p, None))

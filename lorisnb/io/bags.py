@@ -1,0 +1,191 @@
+"""Trajectories from ROS 1 and ROS 2 bags (through the ``rosbags`` package, which evo uses too):
+a ``geometry_msgs/PoseStamped``, ``PoseWithCovarianceStamped``, ``TransformStamped`` or
+``nav_msgs/Odometry`` topic, or a TF chain ``parent:child`` from ``/tf`` and ``/tf_static``.
+
+Stamps are the messages' header stamps (seconds); quaternions ``xyzw``. A TF chain may pass
+through several frames: its poses are taken at the stamps of its busiest moving link, the other
+moving links interpolated there (linear positions, slerp), the static ones applied as they are.
+"""
+
+from __future__ import annotations
+
+import os
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..core.geometry import quat_multiply, quat_rotate, slerp
+from ..core.trajectory import Trajectory
+from ..errors import MissingDependencyError, ParseError
+from .scanner import finish
+
+POSE_TYPES = {
+    "geometry_msgs/msg/PoseStamped": lambda m: m.pose,
+    "geometry_msgs/msg/PoseWithCovarianceStamped": lambda m: m.pose.pose,
+    "nav_msgs/msg/Odometry": lambda m: m.pose.pose,
+    "geometry_msgs/msg/TransformStamped": lambda m: m.transform,
+}
+TF_TOPICS = ("/tf", "/tf_static")
+
+
+def _reader(path: Path):
+    try:
+        from rosbags.highlevel import AnyReader
+        from rosbags.typesys import Stores, get_typestore
+    except ImportError:
+        raise MissingDependencyError("reading ROS bags needs rosbags: pip install 'lorisnb[bags]'") from None
+    return AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+
+
+def _stamp(msg: Any) -> float:
+    st = msg.header.stamp
+    return st.sec + st.nanosec * 1e-9
+
+
+def _pose(p: Any) -> list[float]:
+    t = p.position if hasattr(p, "position") else p.translation  # a Pose or a Transform
+    q = p.orientation if hasattr(p, "orientation") else p.rotation
+    return [t.x, t.y, t.z, q.x, q.y, q.z, q.w]
+
+
+def read_bag(path: str | os.PathLike, topic: str | None = None, tf: str | None = None) -> Trajectory:
+    """Read a trajectory from a ROS 1 bag (``.bag``) or a ROS 2 bag (its folder, ``.db3`` or
+    ``.mcap``): the poses of ``topic``, or the transform chain ``tf="parent:child"``. Without
+    either, the bag's only pose topic. ParseError names what the bag holds when the choice is
+    missing or wrong."""
+    spath = str(path)
+    p = Path(path)
+    if p.suffix in (".db3", ".mcap") and p.parent.is_dir():
+        p = p.parent  # a ROS 2 bag is read from its folder
+    if not p.exists():
+        raise ParseError(spath, None, "file not found; expected a ROS 1 bag (.bag) or a ROS 2 bag folder")
+    try:
+        reader = _reader(p)
+        reader.open()
+    except MissingDependencyError:
+        raise
+    except Exception as exc:  # noqa: BLE001 (rosbags raises its own types for non-bags)
+        raise ParseError(spath, None, f"not a readable ROS bag ({exc}); expected a ROS 1 .bag or a ROS 2 bag") from None
+    try:
+        if tf is not None:
+            return _read_tf(reader, spath, tf)
+        return _read_topic(reader, spath, topic)
+    finally:
+        reader.close()
+
+
+def _pose_topics(reader) -> dict[str, str]:
+    return {c.topic: c.msgtype for c in reader.connections if c.msgtype in POSE_TYPES}
+
+
+def _read_topic(reader, spath: str, topic: str | None) -> Trajectory:
+    topics = _pose_topics(reader)
+    listing = ", ".join(f"{t} ({m.split('/')[-1]})" for t, m in sorted(topics.items())) or "none"
+    if topic is None:
+        if len(topics) != 1:
+            raise ParseError(
+                spath, None, f"choose a pose topic (--topic) or a TF chain (--tf parent:child); pose topics: {listing}"
+            )
+        topic = next(iter(topics))
+    if topic not in topics:
+        raise ParseError(spath, None, f"no pose topic {topic!r}; pose topics in this bag: {listing}")
+    conns = [c for c in reader.connections if c.topic == topic]
+    get = POSE_TYPES[topics[topic]]
+    stamps, poses = [], []
+    for conn, _, raw in reader.messages(connections=conns):  # rosbags deserializes one message at a time
+        msg = reader.deserialize(raw, conn.msgtype)
+        stamps.append(_stamp(msg))
+        poses.append(_pose(get(msg)))
+    if not stamps:
+        raise ParseError(spath, None, f"topic {topic!r} holds no message")
+    notes: list[str] = []
+    line_no = np.arange(1, len(stamps) + 1)  # message number on the topic
+    traj = finish(f"{spath} {topic}", np.array(stamps), np.array(poses, float), line_no, "", notes)
+    traj.meta.update(source=spath, topic=topic, notes=notes)
+    return traj
+
+
+def _read_tf(reader, spath: str, chain: str) -> Trajectory:
+    parent, sep, child = chain.partition(":")
+    if not sep or not parent or not child:
+        raise ParseError(spath, None, f"--tf {chain!r}: expected 'parent:child' frame names")
+    edges: dict[tuple[str, str], list[tuple[float, list[float]]]] = defaultdict(list)
+    static: set[tuple[str, str]] = set()
+    conns = [c for c in reader.connections if c.topic in TF_TOPICS]
+    for conn, _, raw in reader.messages(connections=conns):
+        msg = reader.deserialize(raw, conn.msgtype)
+        for t in msg.transforms:
+            key = (t.header.frame_id.strip("/"), t.child_frame_id.strip("/"))
+            edges[key].append((_stamp(t), _pose(t.transform)))
+            if conn.topic == "/tf_static":
+                static.add(key)
+    path = _chain(edges, parent.strip("/"), child.strip("/"))
+    if path is None:
+        frames = sorted({f for e in edges for f in e})
+        raise ParseError(
+            spath,
+            None,
+            f"no TF chain from {parent!r} to {child!r}; frames in /tf and /tf_static: {', '.join(frames) or 'none'}",
+        )
+    moving = [e for e, _ in path if e not in static]
+    if not moving:
+        raise ParseError(spath, None, f"the TF chain {parent}->{child} is static; expected a moving frame")
+    base = max(moving, key=lambda e: len(edges[e]))
+    stamps = np.unique(np.array([s for s, _ in edges[base]]))
+    pos = np.zeros((stamps.size, 3))
+    quat = np.tile([0.0, 0.0, 0.0, 1.0], (stamps.size, 1))
+    keep = np.ones(stamps.size, bool)
+    for edge, forward in path:  # a few links
+        s, p, q, inside = _link_at(edges[edge], stamps, edge in static)
+        keep &= inside
+        if not forward:  # the inverse transform
+            q = q * np.array([-1.0, -1.0, -1.0, 1.0])
+            p = -quat_rotate(q, p)
+        pos = pos + quat_rotate(quat, p)
+        quat = quat_multiply(quat, q)
+    traj = Trajectory(stamps[keep], pos[keep], quat[keep], np.arange(1, keep.sum() + 1))
+    traj.meta.update(source=spath, tf=f"{parent}:{child}")
+    return traj
+
+
+def _chain(edges: dict, parent: str, child: str) -> list[tuple[tuple[str, str], bool]] | None:
+    """The links from ``parent`` to ``child`` (breadth first), each with its direction."""
+    nbr: dict[str, list[tuple[str, tuple[str, str], bool]]] = defaultdict(list)
+    for a, b in edges:
+        nbr[a].append((b, (a, b), True))
+        nbr[b].append((a, (a, b), False))
+    seen: dict[str, list[tuple[tuple[str, str], bool]]] = {parent: []}
+    todo = [parent]
+    while todo:  # frames, not poses
+        f = todo.pop(0)
+        if f == child:
+            return seen[f]
+        for g, edge, fwd in nbr[f]:
+            if g not in seen:
+                seen[g] = seen[f] + [(edge, fwd)]
+                todo.append(g)
+    return None
+
+
+def _link_at(samples: list, stamps: np.ndarray, is_static: bool):
+    """A link's transform at ``stamps``: the last one if static, else interpolated inside its span."""
+    t = np.array([s for s, _ in samples])
+    v = np.array([p for _, p in samples], float)
+    order = np.argsort(t, kind="stable")
+    t, v = t[order], v[order]
+    v[:, 3:] /= np.linalg.norm(v[:, 3:], axis=1, keepdims=True)
+    if is_static or len(t) == 1:
+        return (
+            stamps,
+            np.broadcast_to(v[-1, :3], (stamps.size, 3)),
+            np.broadcast_to(v[-1, 3:], (stamps.size, 4)),
+            np.ones(stamps.size, bool),
+        )
+    inside = (stamps >= t[0]) & (stamps <= t[-1])
+    i = np.clip(np.searchsorted(t, stamps, side="right") - 1, 0, len(t) - 2)
+    w = np.clip((stamps - t[i]) / np.where(t[i + 1] > t[i], t[i + 1] - t[i], 1.0), 0.0, 1.0)
+    p = v[i, :3] * (1 - w)[:, None] + v[i + 1, :3] * w[:, None]
+    q = slerp(v[i, 3:], v[i + 1, 3:], w)
+    return stamps, p, q, inside

@@ -1,0 +1,207 @@
+"""Multi-session datasets described by a small TOML manifest: sessions in order, each with its
+ground-truth file and format, a shared map frame or not, scene names, thresholds, conventions and
+the transform between estimate and ground truth. A manifest is read by :func:`read_manifest`;
+built-in ones (``lorisnb.io.manifest.BUILT_IN``) ship with lorisnb: ``openloris`` (the default
+OpenLORIS evaluation), ``euroc-vicon-room1``, ``euroc-vicon-room2`` and ``tum-fr1-office``.
+
+Example (every key but ``[[session]]`` optional)::
+
+    name = "EuRoC Vicon room 1"
+    scene = "vicon-room-1"          # the scene of every session (a session may set its own)
+    root = "${EUROC_ROOT}"          # where ground-truth paths start (default: the manifest's folder)
+    lifelong = true                 # one map frame: align on the first session, apply to all
+    groundtruth_format = "euroc"    # tum, euroc, kitti, bag, openloris
+    estimate_format = "tum"
+    eps = 0.3                       # default thresholds, metres / degrees
+    phi = 10.0
+
+    [conventions]                   # see lorisnb.core.conventions
+    association = "nearest"
+    max_diff = 0.02
+    align = "se3"
+
+    [transform]                     # T_gt_est, when the estimate tracks another body frame
+    translation = [0.0, 0.0, 0.0]
+    quaternion = [0.0, 0.0, 0.0, 1.0]   # x y z w
+
+    [[session]]
+    name = "V1_01_easy"
+    groundtruth = "V1_01_easy/mav0/state_groundtruth_estimate0/data.csv"
+    # estimate = "V1_01_easy.txt"   # default: the session name with the estimate format's suffix
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..core.conventions import Conventions
+from ..core.geometry import Sim3
+from ..errors import ParseError, ValidationError
+from .formats import TRAJECTORY_FORMATS
+
+BUILT_IN = ("openloris", "euroc-vicon-room1", "euroc-vicon-room2", "tum-fr1-office")
+SUFFIX = {"tum": ".txt", "kitti": ".txt", "euroc": ".csv", "openloris": ".txt", "bag": ".bag"}
+TOP_KEYS = {"name", "scene", "root", "lifelong", "groundtruth_format", "estimate_format", "eps", "phi", "source",
+            "conventions", "transform", "session", "groundtruth_topic", "estimate_topic", "groundtruth_tf",
+            "estimate_tf", "openloris"}  # fmt: skip
+SESSION_KEYS = {"name", "seq", "scene", "groundtruth", "estimate"}
+
+
+@dataclass(frozen=True)
+class Session:
+    """One session: its number (order), name, scene, ground-truth file and estimate file name."""
+
+    seq: int
+    name: str
+    scene: str
+    groundtruth: Path
+    estimate: str
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """A dataset's sessions and how to evaluate them (see the module docstring)."""
+
+    path: Path
+    name: str
+    sessions: list[Session]
+    lifelong: bool = False
+    groundtruth_format: str = "tum"
+    estimate_format: str = "tum"
+    conventions: Conventions = field(default_factory=Conventions)
+    transform: Sim3 | None = None
+    eps: float | None = None
+    phi: float | None = None
+    groundtruth_topic: str | None = None
+    estimate_topic: str | None = None
+    groundtruth_tf: str | None = None
+    estimate_tf: str | None = None
+    source: str = ""
+    openloris: bool = False  # the built-in OpenLORIS evaluation (lorisnb.evaluate's own path)
+
+    @property
+    def scenes(self) -> list[str]:
+        return list(dict.fromkeys(s.scene for s in self.sessions))
+
+
+def manifest_path(name_or_path: str | os.PathLike[str]) -> Path:
+    """A built-in manifest's file (by name) or the given path."""
+    if isinstance(name_or_path, str) and name_or_path in BUILT_IN:
+        return Path(str(resources.files("lorisnb.manifests").joinpath(f"{name_or_path}.toml")))
+    return Path(name_or_path)
+
+
+def _fmt(value: Any, key: str, path: Path) -> str:
+    if value not in TRAJECTORY_FORMATS:
+        raise ParseError(path, None, f"{key} = {value!r}: expected one of {', '.join(TRAJECTORY_FORMATS)}")
+    return str(value)
+
+
+def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
+    """Read and check a manifest (a built-in name or a TOML file). ParseError names the file, the
+    key and what was expected; environment variables in ``root`` (``${EUROC_ROOT}``) are expanded
+    and an unset one is named."""
+    path = manifest_path(name_or_path)
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ParseError(
+            path, None, f"manifest not found; expected a TOML file or one of {', '.join(BUILT_IN)}"
+        ) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParseError(path, None, f"cannot be read ({exc})") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ParseError(path, getattr(exc, "lineno", None), f"not valid TOML ({exc})") from None
+    unknown = sorted(set(raw) - TOP_KEYS)
+    if unknown:
+        raise ParseError(path, None, f"unknown key {unknown[0]!r}; expected keys among {', '.join(sorted(TOP_KEYS))}")
+    if raw.get("openloris"):
+        return Manifest(path=path, name=str(raw.get("name", "OpenLORIS-Scene")), sessions=[], openloris=True,
+                        source=str(raw.get("source", "")), groundtruth_format="openloris", estimate_format="openloris")  # fmt: skip
+    root_text = str(raw.get("root", "."))
+    expanded = os.path.expandvars(root_text)
+    if "$" in expanded:
+        raise ParseError(
+            path, None, f"root = {root_text!r}: environment variable not set; set it to the dataset's folder"
+        )
+    root = (path.parent / Path(expanded).expanduser()).resolve()
+    gt_fmt = _fmt(raw.get("groundtruth_format", "tum"), "groundtruth_format", path)
+    est_fmt = _fmt(raw.get("estimate_format", "tum"), "estimate_format", path)
+    scene = str(raw.get("scene", path.stem))
+    items = raw.get("session")
+    if not isinstance(items, list) or not items:
+        raise ParseError(path, None, "no [[session]] table; expected one per session, in order")
+    sessions: list[Session] = []
+    for k, item in enumerate(items, start=1):
+        if not isinstance(item, dict) or "groundtruth" not in item:
+            raise ParseError(path, None, f"session {k}: expected a table with at least 'groundtruth = \"file\"'")
+        bad = sorted(set(item) - SESSION_KEYS)
+        if bad:
+            raise ParseError(
+                path, None, f"session {k}: unknown key {bad[0]!r}; expected {', '.join(sorted(SESSION_KEYS))}"
+            )
+        name = str(item.get("name", f"session{k}"))
+        seq = item.get("seq", k)
+        if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
+            raise ParseError(path, None, f"session {name!r}: seq = {seq!r}; expected a whole number")
+        sessions.append(
+            Session(
+                seq=seq,
+                name=name,
+                scene=str(item.get("scene", scene)),
+                groundtruth=root / str(item["groundtruth"]),
+                estimate=str(item.get("estimate", name + SUFFIX[est_fmt])),
+            )  # fmt: skip
+        )
+    seqs = [s.seq for s in sessions]
+    if len(set(seqs)) != len(seqs):
+        raise ParseError(path, None, f"session numbers repeat ({seqs}); expected each session once")
+    try:
+        conventions = Conventions(**raw.get("conventions", {}))
+    except TypeError as exc:
+        raise ParseError(
+            path, None, f"[conventions]: {exc}; expected association, max_gap, max_diff, t_offset, align, align_frames"
+        ) from None
+    except ValidationError as exc:
+        raise ParseError(path, None, f"[conventions]: {exc}") from None
+    return Manifest(
+        path=path, name=str(raw.get("name", path.stem)), sessions=sessions, lifelong=bool(raw.get("lifelong", False)),
+        groundtruth_format=gt_fmt, estimate_format=est_fmt, conventions=conventions,
+        transform=_transform(raw.get("transform"), path), eps=_opt_float(raw, "eps", path),
+        phi=_opt_float(raw, "phi", path), groundtruth_topic=raw.get("groundtruth_topic"),
+        estimate_topic=raw.get("estimate_topic"), groundtruth_tf=raw.get("groundtruth_tf"),
+        estimate_tf=raw.get("estimate_tf"), source=str(raw.get("source", "")),
+    )  # fmt: skip
+
+
+def _opt_float(raw: dict[str, Any], key: str, path: Path) -> float | None:
+    if key not in raw:
+        return None
+    v = raw[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
+        raise ParseError(path, None, f"{key} = {v!r}: expected a positive number")
+    return float(v)
+
+
+def _transform(raw: Any, path: Path) -> Sim3 | None:
+    if raw is None:
+        return None
+    try:
+        t = np.asarray(raw.get("translation", [0.0, 0.0, 0.0]), float).reshape(3)
+        q = np.asarray(raw.get("quaternion", [0.0, 0.0, 0.0, 1.0]), float).reshape(4)
+    except (AttributeError, ValueError, TypeError):
+        raise ParseError(
+            path, None, "[transform]: expected translation = [x, y, z] and quaternion = [x, y, z, w]"
+        ) from None
+    if not np.isfinite(t).all() or not np.isfinite(q).all() or np.linalg.norm(q) < 1e-9:
+        raise ParseError(path, None, "[transform]: expected finite values and a non-zero quaternion x y z w")
+    from scipy.spatial.transform import Rotation
+
+    return Sim3(Rotation.from_quat(q).as_matrix(), t, 1.0)
