@@ -6,13 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import write
 
 from lorisnb.errors import ParseError
 from lorisnb.io import read_openloris, read_tum
 from lorisnb.io.chunks import read_rows
 from lorisnb.tools.evaluate import result_files
-
-from helpers import write
 
 WIDTHS = (8, 9)
 

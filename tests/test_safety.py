@@ -137,7 +137,7 @@ def test_scale_words_mean_what_they_say(icra20):
     [
         (["-p", "esp", "0.1"], "esp not declared by the selected notebooks; they declare: "),
         (["-p", "eps", "abc"], "eps=abc is not a number"),
-        (["-p", "eps", "-1"], "eps=-1: expected 'paper', a number of metres >= 0"),
+        (["-p", "eps", "-1"], "eps=-1: expected 'paper', 'relative:F', a number of metres >= 0"),
         (["-p", "delta", "0"], "delta=0: expected a number of seconds > 0"),
         (["-p", "scale", "maybe"], "scale=maybe: expected True, False, 'auto'"),
     ],

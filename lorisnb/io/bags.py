@@ -114,7 +114,7 @@ def _read_tf(reader, spath: str, chain: str) -> Trajectory:
     edges: dict[tuple[str, str], list[tuple[float, list[float]]]] = defaultdict(list)
     static: set[tuple[str, str]] = set()
     conns = [c for c in reader.connections if c.topic in TF_TOPICS]
-    for conn, _, raw in reader.messages(connections=conns):
+    for conn, _, raw in reader.messages(connections=conns) if conns else ():  # (no connections: all topics)
         msg = reader.deserialize(raw, conn.msgtype)
         for t in msg.transforms:
             key = (t.header.frame_id.strip("/"), t.child_frame_id.strip("/"))
