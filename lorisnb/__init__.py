@@ -11,6 +11,7 @@ from .core import (
     PAPER_EPS,
     PAPER_PHI,
     SCENES,
+    Conventions,
     FileErrors,
     OpenLorisFile,
     ResultFile,
@@ -21,6 +22,7 @@ from .core import (
     pose_table,
     score,
     sequence_errors,
+    session_errors,
     sweep,
 )
 from .errors import (
@@ -39,13 +41,14 @@ from .io import (
     load_groundtruth,
     read_euroc,
     read_kitti,
+    read_manifest,
     read_openloris,
     read_ordslam,
     read_trajectory,
     read_tum,
     write_openloris,
 )
-from .tools import Evaluation, evaluate, setup
+from .tools import Evaluation, evaluate, evaluate_manifest, evaluate_pairs, setup
 
 __all__ = [
     "DataNotFoundError", "EvaluationError", "Evaluation", "FileErrors", "FrameError", "LorisError", "LorisWarning",
@@ -53,5 +56,5 @@ __all__ = [
     "ResultFile", "SCENES", "SequenceErrors", "Trajectory", "ValidationError", "__version__", "aggregate_scenes",
     "compute_errors", "evaluate", "find_data", "load_groundtruth", "pose_table", "read_euroc", "read_kitti",
     "read_openloris", "read_ordslam", "read_trajectory", "read_tum", "score", "sequence_errors", "setup", "sweep",
-    "write_openloris",
+    "write_openloris", "Conventions", "session_errors", "evaluate_pairs", "evaluate_manifest", "read_manifest",
 ]  # fmt: skip

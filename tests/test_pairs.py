@@ -314,3 +314,16 @@ def test_relative_eps_is_a_fraction_of_the_extent(tum_pairs):
     assert a["cr"].iloc[0] == b["cr"].iloc[0]
     with pytest.raises(ln.ValidationError, match="eps"):
         ln.score(fe, eps="relative:-1")
+
+
+def test_relative_table_equals_rpg_from_the_command_line_path(data):
+    ev = evaluate_pairs(data.tum / "freiburg1_xyz-rgbdslam.txt", data.tum / "freiburg1_xyz-groundtruth.txt",
+                        conventions="rpg")  # fmt: skip
+    table = ev.relative()
+    for key, (length, samples, trans_perc, deg_per_m) in (
+        (k, v) for k, v in REFERENCE["fr1_xyz"].items() if k.startswith("rpg_rel")
+    ):
+        row = table[table["length"] == length].iloc[0]
+        assert row["samples"] == samples, key
+        assert row["trans_perc_mean"] == pytest.approx(trans_perc, rel=REL), key  # aligned poses: the same numbers
+        assert row["rot_deg_per_m_mean"] == pytest.approx(deg_per_m, rel=REL), key

@@ -130,6 +130,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(f"\nwrote {len(table)} rows to {out}", file=sys.stderr)
     if args.parquet:
         print(f"wrote {len(table)} rows to {write_parquet(table, args.parquet, force=args.force)}", file=sys.stderr)
+    if getattr(args, "relative", False):
+        rel = ev.relative()
+        print("\nrelative error (rpg_trajectory_evaluation: sub-trajectories of 10..50 % of the length):")
+        print(_fmt(rel.drop(columns=["suite", "trial"])) if not rel.empty else "(no sequence long enough)")
     _report_problems(ev, notes)
     print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.skipped)} skipped", file=sys.stderr)
     return 1 if ev.failures else 0

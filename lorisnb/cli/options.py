@@ -80,6 +80,8 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--gt-topic", default=None, help="bags: the ground truth's pose topic")
     g.add_argument("--tf", default=None, metavar="PARENT:CHILD", help="bags: the estimate as a TF chain")
     g.add_argument("--gt-tf", default=None, metavar="PARENT:CHILD", help="bags: the ground truth as a TF chain")
+    g.add_argument("--relative", action="store_true",
+                   help="also print rpg's relative error (10..50 %% of each sequence's length; %% and deg/m)")  # fmt: skip
     g.add_argument("--gt-times", default=None, metavar="FILE", help="KITTI: the ground truth's times file")
     g.add_argument("--est-times", default=None, metavar="FILE", help="KITTI: the estimates' times file")
 

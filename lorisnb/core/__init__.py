@@ -4,6 +4,7 @@ reads files, looks up data, draws or prints; :mod:`lorisnb.io` and :mod:`lorisnb
 
 from .aggregate import aggregate_scenes, durations_table
 from .association import MAX_GAP, Association, associate, groundtruth_in_frame
+from .conventions import Conventions, associate_nearest, fit_alignment
 from .frames import FRAMES, PAPER_EPS, PAPER_PHI, SCENES
 from .geometry import Sim3, umeyama
 from .model import (
@@ -17,7 +18,9 @@ from .model import (
     is_monocular,
     scene_eps,
 )
+from .pairs import session_errors
 from .pipeline import compute_errors, sequence_errors
+from .relative import relative_table, rpg_relative_errors
 from .scoring import pose_table, score, sequence_grid
 from .simulate import Faults, simulate, simulated_errors, simulated_result
 from .surfaces import Surfaces, cr_surfaces
@@ -30,5 +33,6 @@ __all__ = [
     "aggregate_scenes", "associate", "compute_errors", "cr_surfaces", "durations_table", "eps_at_cr", "extent",
     "groundtruth_in_frame", "is_monocular", "path_length", "pose_table", "rank_stability", "rank_swaps",
     "scene_eps", "score", "sequence_errors", "sequence_grid", "simulate", "simulated_errors", "simulated_result",
-    "sweep", "sweep_scenes", "umeyama",
+    "sweep", "sweep_scenes", "umeyama", "Conventions", "associate_nearest", "fit_alignment", "session_errors",
+    "relative_table", "rpg_relative_errors",
 ]  # fmt: skip

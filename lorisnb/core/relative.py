@@ -14,12 +14,15 @@ computes it.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 
 import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation
 
 from .geometry import quat_conjugate, quat_multiply, quat_rotate
+from .model import FileErrors
+from .scoring import as_files
 
 #: rpg's default sub-trajectory lengths, fractions of the total length
 RPG_FRACTIONS = (0.1, 0.2, 0.3, 0.4, 0.5)
@@ -101,3 +104,42 @@ def rpg_relative_errors(
         )
     cols = ["length", "trans", "trans_perc", "rot", "rot_deg_per_m"]
     return pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(columns=cols)
+
+
+def relative_table(
+    errors: FileErrors | Iterable[FileErrors], fractions: tuple[float, ...] = RPG_FRACTIONS
+) -> pd.DataFrame:
+    """rpg's relative error of every sequence, per sub-trajectory length (``fractions`` of each
+    sequence's matched ground-truth length): samples, mean and RMSE of the translation error in %
+    of the length, mean rotation error in degrees per metre. Computed on the aligned poses (a rigid
+    alignment leaves relative motion unchanged, and a Sim(3) alignment's scale is rpg's ``scale``)."""
+    rows = []
+    for f in as_files(errors):  # per file, sequence and length, never per pose
+        for e in f.sequences:
+            if e.matched < 2 or e.gt_rotations is None or e.est_rotations is None:
+                continue
+            lengths = rpg_lengths(e.gt_positions, fractions)
+            rel = rpg_relative_errors(e.gt_positions, e.gt_rotations.as_quat(), e.est_positions,
+                                      e.est_rotations.as_quat(), [x for x in lengths if x > 0])  # fmt: skip
+            fraction_of = dict(zip(lengths, fractions, strict=True))
+            for length, g in rel.groupby("length", sort=False):
+                frac = fraction_of[float(length)]
+                rows.append(
+                    dict(
+                        algorithm=f.algorithm,
+                        file=f.file,
+                        suite=f.suite,
+                        scene=f.scene,
+                        trial=f.trial,
+                        seq=e.seq,
+                        fraction=frac,
+                        length=length,
+                        samples=len(g),
+                        trans_perc_mean=g["trans_perc"].mean(),
+                        trans_perc_rmse=float(np.sqrt(np.mean(g["trans_perc"] ** 2))),
+                        rot_deg_per_m_mean=g["rot_deg_per_m"].mean(),
+                    )  # fmt: skip
+                )
+    cols = ["algorithm", "file", "suite", "scene", "trial", "seq", "fraction", "length", "samples", "trans_perc_mean",
+            "trans_perc_rmse", "rot_deg_per_m_mean"]  # fmt: skip
+    return pd.DataFrame(rows, columns=cols)

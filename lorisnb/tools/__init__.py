@@ -4,6 +4,18 @@ bridge to evo. Optional dependencies (evo, papermill, ipywidgets) are imported w
 from ._extras import require
 from .evaluate import Evaluation, Failure, evaluate, result_files
 from .notebook import Outputs, setup
+from .pairs import evaluate_manifest, evaluate_pairs
 from .streaming import sweep_to_parquet
 
-__all__ = ["Evaluation", "Failure", "Outputs", "evaluate", "require", "result_files", "setup", "sweep_to_parquet"]
+__all__ = [
+    "Evaluation",
+    "Failure",
+    "Outputs",
+    "evaluate",
+    "require",
+    "result_files",
+    "setup",
+    "sweep_to_parquet",
+    "evaluate_pairs",
+    "evaluate_manifest",
+]

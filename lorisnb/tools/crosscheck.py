@@ -76,8 +76,8 @@ def crosscheck_pairs(
             i, j = metrics.rpe_pairs(p.stamps, p.gt_positions, delta, "f", all_pairs=all_pairs)
             how = f"delta {int(delta)} frame(s), {'all' if all_pairs else 'consecutive'} pairs"
         else:
-            i, j = evo_pairs(pos, delta, "m", all_pairs)
-            how = f"delta {delta:g} m along the estimate, evo's pairs ({'all' if all_pairs else 'consecutive'})"
+            i, j = evo_pairs(p.gt_positions, delta, "m", all_pairs)
+            how = f"delta {delta:g} m along the ground truth, evo's pairs ({'all' if all_pairs else 'consecutive'})"
         if len(i) == 0:
             continue
         tr, rr = metrics.rpe(p.gt_positions, p.gt_rotations, pos, rot, i, j)
@@ -99,6 +99,52 @@ def crosscheck_pairs(
                 "rpe_rot_rmse", rpe_alignment, metrics.rmse(rr), metrics.rmse(rr_e), len(i), f"{note}; {how}; degrees"
             )
         )
+    return rows
+
+
+def crosscheck_conventions(gt: Trajectory, est: Trajectory) -> list[dict]:
+    """lorisnb under TUM's and rpg's conventions (:mod:`lorisnb.core.conventions`), against evo
+    on the same matched pairs and alignment; and rpg's relative error (no evo equivalent).
+    lorisnb reproduces TUM's ``evaluate_ate.py`` and rpg_trajectory_evaluation on the bundled
+    TUM pairs to 1e-12 (``tests/test_pairs.py``, values from the tools themselves)."""
+    from scipy.spatial.transform import Rotation
+
+    from ..core.conventions import Conventions
+    from ..core.pairs import match, session_errors
+    from ..core.relative import rpg_relative_errors
+
+    rows = []
+    for name, label in (
+        ("tum", "TUM evaluate_ate.py: nearest stamps within 0.02 s (greedy), SE(3)"),
+        ("rpg", "rpg_trajectory_evaluation: nearest stamps within 0.02 s, Sim(3)"),
+    ):
+        conv = Conventions.preset(name)
+        a = match(gt, est, conv)
+        if len(a) < 3 or a.gt_rotations is None:
+            rows.append(agreement_row("ate_rmse", conv.align, np.nan, np.nan, len(a), f"{label}: too few matches"))
+            continue
+        fe = session_errors({1: gt}, {1: est}, conv).sequences[0]
+        p = PairedPoses(
+            a.stamps, a.gt_positions, a.gt_rotations, est.positions[a.est_index],
+            Rotation.from_quat(est.quaternions[a.est_index]), f"{name} convention",
+        )  # fmt: skip
+        ref_t, est_t = p.as_trajectories()
+        e = evo_aligned(to_evo(ref_t), to_evo(est_t), conv.align)
+        ref = to_evo(ref_t)
+        rows.append(agreement_row("ate_rmse", conv.align, metrics.rmse(fe.ate), metrics.rmse(evo_ape(ref, e, "t")),
+                                  len(a), f"{label}; evo on the same pairs; metres"))  # fmt: skip
+        rows.append(agreement_row("aoe_rmse", conv.align, metrics.rmse(fe.aoe), metrics.rmse(evo_ape(ref, e, "r")),
+                                  len(a), f"{label}; evo on the same pairs; degrees"))  # fmt: skip
+        if name == "rpg":
+            rel = rpg_relative_errors(
+                a.gt_positions, a.gt_rotations.as_quat(), est.positions[a.est_index], est.quaternions[a.est_index],
+                scale=fe.scale,
+            )  # fmt: skip
+            for length, g in rel.groupby("length"):
+                for q, col, unit in (("rpg_rel_trans", "trans_perc", "% of the length"),
+                                     ("rpg_rel_rot", "rot_deg_per_m", "deg per metre")):  # fmt: skip
+                    rows.append(agreement_row(q, "sim3", g[col].mean(), np.nan, len(g),
+                                              f"rpg relative error over {length:g} m, mean, {unit}; evo has no equivalent"))  # fmt: skip
     return rows
 
 
@@ -158,6 +204,7 @@ def crosscheck(
     rows = crosscheck_pairs(p, rpe_deltas, alignment, all_pairs)
     if not by_index:
         rows += crosscheck_native(gt, est, p, alignment)
+        rows += crosscheck_conventions(gt, est)
     for q in ("cr", "cr_t", "cs_r"):
         rows.append(
             dict(

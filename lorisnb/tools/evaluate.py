@@ -25,6 +25,7 @@ from ..core.association import MAX_GAP
 from ..core.frames import SCENES
 from ..core.model import Eps, FileErrors, ResultFile
 from ..core.pipeline import compute_errors
+from ..core.relative import RPG_FRACTIONS, relative_table
 from ..core.scoring import pose_table, score
 from ..core.trials import compile_trials_by, split_trial
 from ..core.validate import choice, scale_value
@@ -70,6 +71,11 @@ class Evaluation:
         """Per algorithm and scene, as in the paper's figures (see
         :func:`lorisnb.core.aggregate.aggregate_scenes`)."""
         return aggregate_scenes(self.sequences(eps, phi, delta, tau), self.durations())
+
+    def relative(self, fractions: tuple[float, ...] = RPG_FRACTIONS) -> pd.DataFrame:
+        """rpg_trajectory_evaluation's relative error per sequence and sub-trajectory length
+        (see :func:`lorisnb.core.relative.relative_table`)."""
+        return relative_table(self.errors, fractions)
 
     @property
     def algorithms(self) -> list[str]:

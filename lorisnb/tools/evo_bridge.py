@@ -186,17 +186,19 @@ def evo_rpe(ref, est, relation: str, delta: float, unit: str, all_pairs: bool):
 
     rel = em.PoseRelation.translation_part if relation == "t" else em.PoseRelation.rotation_angle_deg
     u = em.Unit.frames if unit == "f" else em.Unit.meters
-    m = em.RPE(rel, delta, u, all_pairs=all_pairs)
+    m = em.RPE(rel, delta, u, all_pairs=all_pairs, pairs_from_reference=True)  # metres along the ground truth
     m.process_data((ref, est))
     return np.asarray(m.error, float)
 
 
-def evo_pairs(est_positions: np.ndarray, delta: float, unit: str, all_pairs: bool) -> tuple[np.ndarray, np.ndarray]:
-    """The (i, j) pairs evo's RPE uses (pairs taken on the estimate, evo's default)."""
+def evo_pairs(positions: np.ndarray, delta: float, unit: str, all_pairs: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The (i, j) pairs evo's RPE takes on ``positions`` (lorisnb passes the ground truth's: a
+    distance in metres is travelled along the ground truth everywhere in lorisnb, and evo is run
+    with ``pairs_from_reference=True`` to match)."""
     em = require("evo.core.metrics")
 
-    poses = np.tile(np.eye(4), (len(est_positions), 1, 1))
-    poses[:, :3, 3] = est_positions
+    poses = np.tile(np.eye(4), (len(positions), 1, 1))
+    poses[:, :3, 3] = positions
     u = em.Unit.frames if unit == "f" else em.Unit.meters
     pairs = em.id_pairs_from_delta(list(poses), delta, u, all_pairs=all_pairs)
     arr = np.asarray(pairs, int).reshape(-1, 2)
