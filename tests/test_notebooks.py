@@ -89,6 +89,22 @@ def test_evaluate_my_results_default_and_broken_input(tmp_path, icra20):
     assert "line 4" in errors.loc[0, "error"]
 
 
+def test_evaluate_my_results_with_a_tum_pair(tmp_path, data):
+    from reference_tools import REFERENCE
+
+    out = run(
+        "evaluate_my_results", tmp_path, path=str(data.tum / "fr2_desk_ORB.txt"),
+        groundtruth=str(data.tum / "fr2_desk_groundtruth.txt"), conventions="tum", eps="relative:0.02", phi=5.0,
+    )  # fmt: skip
+    seq = pd.read_csv(out / "sequences.csv")
+    pairs, ate = REFERENCE["fr2_desk"]["tum_ate offset=0.0 max_diff=0.02"]  # TUM's evaluate_ate.py
+    assert seq.loc[0, "matched"] == pairs and seq.loc[0, "ate_rmse"] == pytest.approx(ate, rel=1e-9)
+    assert seq.loc[0, "scene"] == "fr2_desk" and 0 < seq.loc[0, "cr"] < 1
+    assert len(pd.read_csv(out / "relative.csv")) == 5
+    text = (tmp_path / "evaluate_my_results.ipynb").read_text()
+    assert "conventions: association: nearest stamps within 0.02 s" in text
+
+
 def test_threshold_sensitivity(tmp_path):
     out = run("threshold_sensitivity", tmp_path)
     curve = pd.read_csv(out / "cr_vs_eps.csv")

@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..errors import ParseError
+from ..errors import ParseError, ValidationError
 from . import metrics
 from .frames import FRAMES, PAPER_EPS, SCENES, match_scene
 from .geometry import Sim3
-from .trajectory import Trajectory
+from .trajectory import Trajectory, extent
 
 #: Columns of the per-sequence table (``lorisnb evaluate --csv``); scripts rely on these names.
 SEQUENCE_COLUMNS = [
@@ -209,8 +209,22 @@ def scene_eps(eps: Eps, scene: str) -> float:
     :func:`lorisnb.core.validate.eps_value`."""
     if isinstance(eps, str):
         if eps.strip().lower() == "paper":
+            if scene not in PAPER_EPS:
+                raise ValidationError(
+                    f"eps='paper' is the paper's 1/3/5 m for the OpenLORIS scenes; scene {scene!r} is not one: "
+                    "give eps in metres or as 'relative:F' (a fraction of the ground truth's extent)"
+                )
             return PAPER_EPS[scene]
         return float(eps)
     if isinstance(eps, Mapping):
         return float(eps[scene])
     return float(eps)
+
+
+def sequence_eps(eps: Eps, scene: str, e: SequenceErrors) -> float:
+    """The ATE threshold of one sequence, metres: :func:`~lorisnb.core.model.scene_eps`, or for
+    ``"relative:F"`` F times the extent of the sequence's matched ground truth (0 with fewer than
+    two matched poses)."""
+    if isinstance(eps, str) and eps.startswith("relative:"):
+        return float(eps.split(":", 1)[1]) * extent(e.gt_positions)
+    return scene_eps(eps, scene)

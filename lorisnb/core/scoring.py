@@ -24,9 +24,8 @@ from .model import (
     Eps,
     FileErrors,
     SequenceErrors,
-    scene_eps,
+    sequence_eps,
 )
-from .trajectory import extent
 from .validate import choice, eps_value, positive, threshold
 
 #: Metrics computed by :func:`sequence_grid`, with their dtype in tables.
@@ -153,15 +152,6 @@ def rpe_setting(rpe_delta: Any, rpe_unit: Any) -> tuple[float, str]:
     unit = choice("rpe_unit", rpe_unit, metrics.RPE_UNITS)
     names = {"s": "seconds", "f": "frames", "m": "metres"}
     return positive("rpe_delta", rpe_delta, names[unit], integer=unit == "f"), unit
-
-
-def sequence_eps(eps: Eps, scene: str, e: SequenceErrors) -> float:
-    """The ATE threshold of one sequence, metres: :func:`~lorisnb.core.model.scene_eps`, or for
-    ``"relative:F"`` F times the extent of the sequence's matched ground truth (0 with fewer than
-    two matched poses)."""
-    if isinstance(eps, str) and eps.startswith("relative:"):
-        return float(eps.split(":", 1)[1]) * extent(e.gt_positions)
-    return scene_eps(eps, scene)
 
 
 def score(

@@ -19,7 +19,7 @@ from ..errors import ValidationError
 from . import metrics
 from .aggregate import aggregate_scenes
 from .frames import PAPER_EPS, PAPER_PHI
-from .model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, FileErrors, SequenceErrors, scene_eps
+from .model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, FileErrors, SequenceErrors, sequence_eps
 from .scoring import GRID_METRICS, as_files, rpe_setting, sequence_grid, sequence_meta
 from .trajectory import extent, path_length
 from .validate import choice, threshold, threshold_list
@@ -83,7 +83,7 @@ def _eps_values(eps: list[Any], scene: str, e: SequenceErrors, relative_to: str 
     size = sequence_size(e, relative_to) if relative_to is not None else np.nan
     return np.array(
         [
-            PAPER_EPS[scene] if v == "paper" else (scene_eps(v, scene) if relative_to is None else float(v) * size)
+            sequence_eps(v, scene, e) if relative_to is None else float(v) * size
             for v in eps  # over grid values, not poses
         ]
     )

@@ -15,7 +15,7 @@ import pandas as pd
 
 from . import metrics
 from .frames import SCENES
-from .model import FileErrors, scene_eps
+from .model import FileErrors, sequence_eps
 
 
 def pose_segments(
@@ -53,11 +53,10 @@ def timeline_table(
     """
     segs, firsts = [], []
     for f in errors:
-        e_eps = scene_eps(eps, f.scene)
         for e in f.sequences:
             if e.matched == 0:
                 continue
-            c = metrics.correctness(e.ate, e.aoe, e_eps, phi)
+            c = metrics.correctness(e.ate, e.aoe, sequence_eps(eps, f.scene, e), phi)
             s, t, ok = pose_segments(e.stamps, c, e.gt_end, delta)
             segs.append(
                 pd.DataFrame(

@@ -22,6 +22,7 @@ import pandas as pd
 from ..core import validate
 from ..core.aggregate import aggregate_scenes, durations_table
 from ..core.association import MAX_GAP
+from ..core.conventions import Conventions
 from ..core.frames import SCENES
 from ..core.model import Eps, FileErrors, ResultFile
 from ..core.pipeline import compute_errors
@@ -388,4 +389,9 @@ def evaluate(
     root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
     for w in dict.fromkeys(w for f in done for w in f.warnings):
         warnings.warn(w, LorisWarning, stacklevel=2)
-    return Evaluation(done, failed, root, skipped, data)
+    how = (
+        f"OpenLORIS: ground truth moved to each file's sensor frame, {Conventions(max_gap=max_gap).describe()}"
+        f"{' (Sim(3) with scale)' if scale is True else ''}{' (Sim(3) for monocular algorithms)' if scale == 'auto' else ''}; "
+        f"{'lifelong files aligned on their first sequence' if mode != 'per-seq' else 'each sequence aligned on itself'}"
+    )
+    return Evaluation(done, failed, root, skipped, data, conventions=how)

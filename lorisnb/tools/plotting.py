@@ -16,7 +16,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
 
 from ..core.metrics import correctness
-from ..core.model import FileErrors, scene_eps
+from ..core.model import FileErrors, sequence_eps
 from ..core.timeline import sequence_layout, timeline_table
 
 #: Widest figure, inches (about 1,200 px in a notebook): wider ones would be shrunk to unreadable text.
@@ -146,9 +146,8 @@ def plot_trajectories(
     rows = int(np.ceil(n / cols))
     sns.set_theme(style="whitegrid", context="paper")
     fig, axes = subplots(rows, cols, figsize=(3.9 * cols, 3.8 * rows), squeeze=False)
-    e_eps = scene_eps(eps, errors.scene)
     for ax, e in zip(axes.flat, seqs, strict=False):
-        c = correctness(e.ate, e.aoe, e_eps, phi)
+        c = correctness(e.ate, e.aoe, sequence_eps(eps, errors.scene, e), phi)
         ax.plot(e.gt_positions[:, 0], e.gt_positions[:, 1], "-", color="0.6", lw=1.2, label="ground truth")
         ax.scatter(e.est_positions[c, 0], e.est_positions[c, 1], s=3, color=CORRECT, label="estimate, correct")
         ax.scatter(e.est_positions[~c, 0], e.est_positions[~c, 1], s=3, color=WRONG, label="estimate, wrong")
