@@ -47,7 +47,7 @@ def test_names_the_readme_shows_exist():
         assert hasattr(ln, name), f"the README uses lorisnb.{name}, which is not exported"
     for module in set(re.findall(r"`(lorisnb(?:\.[a-z_]+)+)`", text)):
         parts = module.split(".")
-        for k in range(len(parts), 1, -1):  # a module, or a name in a module
+        for k in range(len(parts), 0, -1):  # a module, or a name in a module (or in lorisnb itself)
             try:
                 m = __import__(".".join(parts[:k]), fromlist=["x"])
             except ImportError:
