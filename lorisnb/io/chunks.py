@@ -14,7 +14,9 @@ from __future__ import annotations
 import csv
 import io
 import os
+from collections import deque
 from collections.abc import Callable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +26,9 @@ from ..errors import ParseError
 from .scanner import BOM, SNIFF_BYTES, scan
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
-FAST_MIN_BYTES = 32 << 10  # below this the numpy scanner is faster than a call of the C parser
+PARSE_THREADS = max(1, min(4, os.cpu_count() or 1))  # threads parsing the chunks of one large file
+FAST_MIN_BYTES = 32 << 10
+SMALL_CHUNK = 1 << 20  # below this the numpy scanner is faster than a call of the C parser
 LINE_LIMIT = 1 << 20  # a "line" longer than this is not a text line of numbers
 
 
@@ -133,6 +137,8 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
     specials: list[tuple[int, str]] = []
     first_row = 0
     structured = b"#" in chunk or b":" in chunk or chunk[:1] in (b"\n", b"\r")
+    if not structured and len(chunk) < SMALL_CHUNK:  # small: look for blank lines now rather than parse twice
+        structured = b"\n\n" in chunk or b"\n\r\n" in chunk
     for attempt in range(2):  # plain numbers first; blank lines are found if the row count says so
         if structured:
             layout = _layout(chunk, line0, nlines, specials_ok)
@@ -249,15 +255,40 @@ def read_rows(
     spath = str(path)
     width = max(widths)
     parts: list[Rows] = []
-    for chunk, line0, nlines in _chunks(path, what, chunk_bytes):
+
+    def parse(chunk: bytes, line0: int, nlines: int) -> Rows:
         if separators and any(s in chunk for s in separators):
             chunk = chunk.translate(bytes.maketrans(separators, b" " * len(separators)))
         part = _fast(chunk, line0, nlines, width, specials) if len(chunk) >= fast_min_bytes else None
         if part is None or not np.isin(part.ntok[:1], widths).all():
             part = _exact(chunk, line0, spath, widths, specials, bad_width, numbers)
-        parts.append(part)
-        if progress is not None:
-            progress(len(chunk))
+        return part
+
+    chunks = _chunks(path, what, chunk_bytes)
+    first = next(chunks)
+    parts.append(parse(*first))
+    if progress is not None:
+        progress(len(first[0]))
+    pool = None
+    pending: deque[tuple[Future[Rows], int]] = deque()
+    try:
+        for chunk, line0, nlines in chunks:  # a large file: chunks parsed on threads (the C parser releases the GIL)
+            if pool is None:
+                pool = ThreadPoolExecutor(max_workers=PARSE_THREADS)
+            pending.append((pool.submit(parse, chunk, line0, nlines), len(chunk)))
+            while len(pending) > 2 * PARSE_THREADS or (pending and pending[0][0].done()):
+                fut, size = pending.popleft()
+                parts.append(fut.result())  # in file order
+                if progress is not None:
+                    progress(size)
+        while pending:
+            fut, size = pending.popleft()
+            parts.append(fut.result())
+            if progress is not None:
+                progress(size)
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
     return _join(parts, width)
 
 
