@@ -259,6 +259,12 @@ groundtruth = "s2-gt.txt"
                      "--csv", str(d / "m.csv"), "--no-progress"]) == 0  # fmt: skip
         pd.testing.assert_frame_equal(pd.read_csv(d / "m.csv")[["seq", "cr", "ate_rmse"]],
                                       a[["seq", "cr", "ate_rmse"]].reset_index(drop=True), check_dtype=False)  # fmt: skip
+        # without --eps / --phi the manifest's thresholds are used
+        assert main(["evaluate", str(d / "results"), "--manifest", str(manifest), "--csv", str(d / "m2.csv"),
+                     "--no-progress"]) == 0  # fmt: skip
+        m2 = pd.read_csv(d / "m2.csv")
+        assert m2["eps"].tolist() == [0.05, 0.05] and m2["phi"].tolist() == [5.0, 5.0]
+        assert m2["cr"].tolist() == pytest.approx(a["cr"].tolist(), abs=0)
     finally:
         del os.environ["DESK_ROOT"]
 
@@ -327,3 +333,21 @@ def test_relative_table_equals_rpg_from_the_command_line_path(data):
         assert row["samples"] == samples, key
         assert row["trans_perc_mean"] == pytest.approx(trans_perc, rel=REL), key  # aligned poses: the same numbers
         assert row["rot_deg_per_m_mean"] == pytest.approx(deg_per_m, rel=REL), key
+
+
+def test_transform_between_estimate_and_ground_truth_body_frames(tum_pairs):
+    from scipy.spatial.transform import Rotation
+
+    from lorisnb.core.geometry import Sim3
+
+    gt, _ = tum_pairs["fr1_xyz"]
+    t_gt_est = Sim3(Rotation.from_euler("zyx", [30, -10, 5], degrees=True).as_matrix(), np.array([0.1, -0.05, 0.2]))
+    # the estimate tracks a camera mounted at T_gt_est on the ground-truth body: pose_est = pose_gt @ T_gt_est
+    r = gt.rotations() * Rotation.from_matrix(t_gt_est.rotation)
+    est = Trajectory.from_rotations(gt.stamps, gt.positions + gt.rotations().apply(t_gt_est.translation), r)
+    inverse = Sim3(t_gt_est.rotation.T, -t_gt_est.rotation.T @ t_gt_est.translation)
+    conv = Conventions(association="nearest", align="none")
+    wrong = session_errors({1: gt}, {1: est}, conv).sequences[0]
+    right = session_errors({1: gt}, {1: est}, conv, transform=inverse).sequences[0]
+    assert rmse(wrong.ate) > 0.05 and rmse(wrong.aoe) > 10
+    assert rmse(right.ate) < 1e-9 and rmse(right.aoe) < 1e-6

@@ -80,6 +80,14 @@ def _run_pairs(args: argparse.Namespace) -> tuple[Any, list[str]]:
     return ev, notes
 
 
+def _thresholds(args: argparse.Namespace, ev: Any) -> tuple[Any, Any]:
+    """--eps and --phi as given, else the manifest's, else the command's defaults."""
+    defaults = getattr(ev, "thresholds", {}) or {}
+    eps = args.eps if args.eps is not None else defaults.get("eps", args.eps_default)
+    phi = args.phi if args.phi is not None else defaults.get("phi", args.phi_default)
+    return eps, phi
+
+
 def _report_problems(ev: Any, notes: list[str]) -> None:
     for n in notes:
         print(f"warning: {n}", file=sys.stderr)
@@ -103,7 +111,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     check_output(args.csv, args.paths, args.force)
     check_output(args.parquet, args.paths, args.force, folder=True)
     ev, notes = _run_evaluation(args)
-    table = score(ev.errors, args.eps, args.phi, args.delta, args.tau)
+    eps, phi = _thresholds(args, ev)
+    table = score(ev.errors, eps, phi, args.delta, args.tau)
     if not table.empty:
         cols = [
             "algorithm",
@@ -203,7 +212,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     for out in (args.csv, args.latex, args.markdown):
         check_output(out, args.paths, args.force)
     ev, notes = _run_evaluation(args)
-    table = ev.sequences(args.eps, args.phi, args.delta, args.tau)
+    eps, phi = _thresholds(args, ev)
+    table = ev.sequences(eps, phi, args.delta, args.tau)
     if not table.empty:
         ci = stats.confidence_intervals(table, level=args.level, seed=args.seed)
         rank = ranking.ranking(table, args.metric, alpha=args.alpha, seed=args.seed)

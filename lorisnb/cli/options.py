@@ -46,9 +46,12 @@ def add_scale_option(p: argparse.ArgumentParser, help: str) -> None:
 
 def add_threshold_options(p: argparse.ArgumentParser, eps: Any, phi: Any) -> None:
     """``--eps --phi --delta --tau``, one value each (``evaluate``, ``compare``)."""
-    p.add_argument("--eps", type=threshold_type("eps"), default=eps,
-                   help=f"ATE threshold in metres, 'inf' or 'paper' (1/3/5 m by scene); default {eps}")  # fmt: skip
-    p.add_argument("--phi", type=threshold_type("phi"), default=phi, help=f"AOE threshold in degrees; default {phi}")
+    p.add_argument("--eps", type=threshold_type("eps"), default=None,
+                   help=f"ATE threshold in metres, 'inf', 'paper' (1/3/5 m by scene) or 'relative:F'; default {eps} "
+                   "(a manifest's eps, with --manifest)")  # fmt: skip
+    p.add_argument("--phi", type=threshold_type("phi"), default=None,
+                   help=f"AOE threshold in degrees; default {phi} (a manifest's phi, with --manifest)")  # fmt: skip
+    p.set_defaults(eps_default=eps, phi_default=phi)
     p.add_argument("--delta", type=threshold_type("delta"), default=1.0, help="validity window of a pose, s; default 1")
     p.add_argument("--tau", type=threshold_type("tau"), default=60.0, help="re-localization time factor, s; default 60")
 

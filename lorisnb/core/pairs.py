@@ -7,9 +7,11 @@ table, sweep and figure of lorisnb applies.
 Sessions in order: per session each estimate is matched with its ground truth; with
 ``lifelong=True`` one alignment is fitted on the first session that has matches and applied to
 every session (the estimate keeps one map frame, as OpenLORIS' lifelong evaluation), else each
-session is aligned on itself. ``transform`` (``T_gt_est``: estimate frame to ground-truth body
-frame, a :class:`~lorisnb.core.geometry.Sim3` or a 4x4 matrix) is applied to each estimate pose
-on the right first, when the estimate tracks another body frame.
+session is aligned on itself. ``transform`` (``T_est_gt``: the pose of the ground-truth body in the
+estimate's body frame, a :class:`~lorisnb.core.geometry.Sim3` or a 4x4 matrix) is composed with
+each estimate pose on the right first, when the estimate tracks another body (a camera on the
+robot whose base the ground truth tracks): ``pose_est @ T_est_gt`` is then a pose of the
+ground-truth body.
 """
 
 from __future__ import annotations
@@ -47,12 +49,13 @@ def match(gt: Trajectory, est: Trajectory, conventions: Conventions = DEFAULT) -
 
 
 def with_transform(est: Trajectory, transform: Sim3 | np.ndarray | None) -> Trajectory:
-    """Estimate poses composed on the right with ``T_gt_est`` (None: unchanged)."""
+    """Estimate poses composed on the right with ``T_est_gt`` (poses of the ground-truth body;
+    None: unchanged)."""
     if transform is None:
         return est
     m = transform.matrix() if isinstance(transform, Sim3) else np.asarray(transform, float)
     if m.shape != (4, 4):
-        raise EvaluationError(f"transform: expected a 4x4 matrix T_gt_est, got shape {m.shape}")
+        raise EvaluationError(f"transform: expected a 4x4 matrix T_est_gt, got shape {m.shape}")
     q_off = Rotation.from_matrix(m[:3, :3]).as_quat()
     q = est.quaternions / np.linalg.norm(est.quaternions, axis=1, keepdims=True)
     pos = est.positions + quat_rotate(q, m[:3, 3])
@@ -80,7 +83,7 @@ def session_errors(
             ground-truth session of the same number.
         conventions: association and alignment (:class:`~lorisnb.core.conventions.Conventions`).
         lifelong: one alignment for all sessions, fitted on the first with matches.
-        transform: ``T_gt_est`` applied to each estimate pose first (None: same body frame).
+        transform: ``T_est_gt`` composed with each estimate pose first (None: same body).
         path, algorithm, scene, suite, trial, frame: labels of the result.
     """
     missing = sorted(set(estimates) - set(groundtruth))

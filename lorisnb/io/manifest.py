@@ -20,7 +20,7 @@ Example (every key but ``[[session]]`` optional)::
     max_diff = 0.02
     align = "se3"
 
-    [transform]                     # T_gt_est, when the estimate tracks another body frame
+    [transform]                     # T_est_gt: the ground-truth body's pose in the estimate's body frame
     translation = [0.0, 0.0, 0.0]
     quaternion = [0.0, 0.0, 0.0, 1.0]   # x y z w
 

@@ -57,6 +57,7 @@ class Evaluation:
     data: DataPaths | None = None
     groundtruth: dict[str, ResultFile] | None = None  # scene -> ground truth, for pairs and manifests
     conventions: str = ""  # what association and alignment were used, in words
+    thresholds: dict[str, float] = field(default_factory=dict)  # default eps / phi (a manifest's)
 
     def sequences(
         self, eps: Eps = np.inf, phi: float = np.inf, delta: float = 1.0, tau: float = 60.0, **kw: Any

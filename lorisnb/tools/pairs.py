@@ -77,7 +77,8 @@ def evaluate_pairs(
         scene: the scene label of the rows (default: the ground-truth file's name).
         est_times, gt_times: times files for KITTI poses (one stamp per line).
         topic, gt_topic, tf, gt_tf: what to read from bags (see :func:`lorisnb.io.bags.read_bag`).
-        transform: ``T_gt_est`` when the estimate tracks another body frame.
+        transform: ``T_est_gt``, the ground-truth body's pose in the estimate's body frame, when
+            the estimate tracks another body (see :func:`lorisnb.core.pairs.with_transform`).
     """
     if isinstance(conventions, str):
         conventions = Conventions.preset(conventions)
@@ -201,6 +202,7 @@ def evaluate_manifest(
         errors=errors, failures=failures,
         groundtruth={sc: _groundtruth_file(m.path, sc, seqs) for sc, seqs in gts.items()},
         conventions=conv.describe() + ("; one alignment for all sessions" if along else "; each session aligned on itself"),
+        thresholds={k: v for k, v in (("eps", m.eps), ("phi", m.phi)) if v is not None},
     )  # fmt: skip
 
 
