@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParseError
-from .scanner import BOM, SNIFF_BYTES, scan
+from .scanner import BOM, SNIFF_BYTES, open_input, scan
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
 PARSE_THREADS = max(1, min(4, os.cpu_count() or 1))  # threads parsing the chunks of one large file
@@ -62,17 +62,7 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Iterator[tuple[byt
     """Chunks of whole lines, the 0-based line number each starts at and its number of lines. A UTF-8 BOM is dropped;
     NUL bytes (binary data) are refused in the chunk where they appear, before reading on."""
     spath = str(path)
-    if not isinstance(path, (str, os.PathLike)) or spath.strip() == "":
-        raise ParseError(spath, None, f"expected the path of {what} (str or pathlib.Path), got {type(path).__name__}")
-    try:
-        fh = open(path, "rb")  # noqa: SIM115 (closed below; errors are mapped first)
-    except FileNotFoundError:
-        raise ParseError(spath, None, f"file not found; expected {what} at this path") from None
-    except IsADirectoryError:
-        raise ParseError(spath, None, f"is a folder; expected {what}") from None
-    except OSError as exc:
-        raise ParseError(spath, None, f"cannot be read ({exc.strerror})") from None
-    with fh:
+    with open_input(path, what) as fh:
         line0, rest, first, seen_text = 0, b"", True, False
         while True:
             try:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import BinaryIO
 
 import numpy as np
 
@@ -132,16 +133,29 @@ BOM = b"\xef\xbb\xbf"
 SNIFF_BYTES = 65536  # binary input is recognized in this many bytes, before the rest is read
 
 
-def read_bytes(path: str | os.PathLike[str], what: str = "a trajectory file") -> bytes:
-    """A text file's bytes, a UTF-8 byte-order mark removed. ParseError for a missing file, a
-    folder, an unreadable file, an empty file, or binary content (NUL bytes in its first 64 KB,
-    found before the rest is read)."""
+def open_input(path: str | os.PathLike[str], what: str) -> BinaryIO:
+    """A file opened for reading bytes; ParseError for a path that is not one (a missing file, a
+    folder, an unreadable file, not a path at all), saying what was expected."""
     if not isinstance(path, (str, os.PathLike)) or str(path).strip() == "":
         raise ParseError(
             str(path), None, f"expected the path of {what} (str or pathlib.Path), got {type(path).__name__}"
         )
     try:
-        with open(path, "rb") as fh:
+        return open(path, "rb")  # noqa: SIM115 (the caller closes it)
+    except FileNotFoundError:
+        raise ParseError(path, None, f"file not found; expected {what} at this path") from None
+    except IsADirectoryError:
+        raise ParseError(path, None, f"is a folder; expected {what}") from None
+    except OSError as exc:
+        raise ParseError(path, None, f"cannot be read ({exc.strerror})") from None
+
+
+def read_bytes(path: str | os.PathLike[str], what: str = "a trajectory file") -> bytes:
+    """A text file's bytes, a UTF-8 byte-order mark removed. ParseError for a missing file, a
+    folder, an unreadable file, an empty file, or binary content (NUL bytes in its first 64 KB,
+    found before the rest is read)."""
+    with open_input(path, what) as fh:
+        try:
             head = fh.read(SNIFF_BYTES)
             nul = head.find(b"\0")
             if nul >= 0:
@@ -149,12 +163,8 @@ def read_bytes(path: str | os.PathLike[str], what: str = "a trajectory file") ->
                     path, head.count(b"\n", 0, nul) + 1, f"binary data (a NUL byte); expected {what} (text)"
                 )
             raw = head + fh.read()
-    except FileNotFoundError:
-        raise ParseError(path, None, f"file not found; expected {what} at this path") from None
-    except IsADirectoryError:
-        raise ParseError(path, None, f"is a folder; expected {what}") from None
-    except OSError as exc:
-        raise ParseError(path, None, f"cannot be read ({exc.strerror})") from None
+        except OSError as exc:
+            raise ParseError(path, None, f"cannot be read ({exc.strerror})") from None
     if raw.startswith(BOM):
         raw = raw[len(BOM) :]
     if not raw.strip():

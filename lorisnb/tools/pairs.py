@@ -12,9 +12,9 @@ from __future__ import annotations
 import os
 import re
 import warnings
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -39,12 +39,16 @@ def _groundtruth_file(path: Path, scene: str, sequences: dict[int, Trajectory]) 
     return ResultFile(path=path, header={"scene": scene}, header_lines={}, sequences=sequences)
 
 
-def _bar(total: int, progress: bool, desc: str) -> Any:
+@contextmanager
+def _ticks(total: int, progress: bool) -> Iterator[Callable[[], object]]:
+    """A progress bar's update (a no-op without ``progress``), closed at the end."""
     if not progress:
-        return None
+        yield lambda: None
+        return
     from tqdm.auto import tqdm
 
-    return tqdm(total=total, desc=desc, unit="file")
+    with tqdm(total=total, desc="evaluating", unit="file") as bar:
+        yield bar.update
 
 
 def evaluate_pairs(
@@ -90,28 +94,25 @@ def evaluate_pairs(
     label = scene or scene_label(gt_path)
     jobs = result_files(estimates, _suffixes(fmt))
     errors, failures = [], []
-    bar = _bar(len(jobs), progress, "evaluating")
-    for path, root in jobs:  # one file at a time
-        algorithm, rel, suite, trial = labels(path, root, trials_by)
-        if root is None:  # a file given alone: its name says which estimate it is
-            algorithm = path.stem
-        try:
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always", LorisWarning)
-                est = read_trajectory(path, fmt, stamps=est_times, topic=topic, tf=tf)
-                fe = session_errors(
-                    {1: gt}, {1: est}, conv, transform=transform, path=path, algorithm=algorithm, scene=label,
-                    suite=suite, trial=trial,
-                )  # fmt: skip
-            fe.warnings[:0] = [str(w.message) for w in caught if issubclass(w.category, LorisWarning)]
-            fe.file = rel
-            errors.append(fe)
-        except LorisError as exc:
-            failures.append(Failure(path, str(exc), type(exc).__name__))
-        if bar is not None:
-            bar.update()
-    if bar is not None:
-        bar.close()
+    with _ticks(len(jobs), progress) as tick:
+        for path, root in jobs:  # one file at a time
+            algorithm, rel, suite, trial = labels(path, root, trials_by)
+            if root is None:  # a file given alone: its name says which estimate it is
+                algorithm = path.stem
+            try:
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always", LorisWarning)
+                    est = read_trajectory(path, fmt, stamps=est_times, topic=topic, tf=tf)
+                    fe = session_errors(
+                        {1: gt}, {1: est}, conv, transform=transform, path=path, algorithm=algorithm, scene=label,
+                        suite=suite, trial=trial,
+                    )  # fmt: skip
+                fe.warnings[:0] = [str(w.message) for w in caught if issubclass(w.category, LorisWarning)]
+                fe.file = rel
+                errors.append(fe)
+            except LorisError as exc:
+                failures.append(Failure(path, str(exc), type(exc).__name__))
+            tick()
     return Evaluation(
         errors=errors, failures=failures, groundtruth={label: _groundtruth_file(gt_path, label, {1: gt})},
         conventions=conv.describe(),
@@ -170,34 +171,33 @@ def evaluate_manifest(
         )
     folders = _algorithm_folders(results, m)
     errors, failures = [], []
-    bar = _bar(len(folders) * len(m.scenes), progress, "evaluating")
-    for folder, root in folders:
-        algorithm, _, suite, trial = labels(folder / "x", root, trials_by)
-        for scene in m.scenes:
-            sessions = [s for s in m.sessions if s.scene == scene]
-            ests: dict[int, Trajectory] = {}
-            try:
-                for s in sessions:
-                    path = folder / s.estimate
-                    if path.exists():
-                        ests[s.seq] = read_trajectory(path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf)
-                if not ests:
-                    raise ParseError(
-                        folder,
-                        None,
-                        f"no estimate of scene {scene!r}; expected {', '.join(s.estimate for s in sessions)}",
-                    )
-                fe = session_errors(
-                    gts[scene], ests, conv, lifelong=along, transform=m.transform, path=folder, algorithm=algorithm,
-                    scene=scene, suite=suite, trial=trial,
-                )  # fmt: skip
-                errors.append(fe)
-            except LorisError as exc:
-                failures.append(Failure(folder, str(exc), type(exc).__name__))
-            if bar is not None:
-                bar.update()
-    if bar is not None:
-        bar.close()
+    with _ticks(len(folders) * len(m.scenes), progress) as tick:
+        for folder, root in folders:
+            algorithm, _, suite, trial = labels(folder / "x", root, trials_by)
+            for scene in m.scenes:
+                sessions = [s for s in m.sessions if s.scene == scene]
+                ests: dict[int, Trajectory] = {}
+                try:
+                    for s in sessions:
+                        path = folder / s.estimate
+                        if path.exists():
+                            ests[s.seq] = read_trajectory(
+                                path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf
+                            )
+                    if not ests:
+                        raise ParseError(
+                            folder,
+                            None,
+                            f"no estimate of scene {scene!r}; expected {', '.join(s.estimate for s in sessions)}",
+                        )
+                    fe = session_errors(
+                        gts[scene], ests, conv, lifelong=along, transform=m.transform, path=folder, algorithm=algorithm,
+                        scene=scene, suite=suite, trial=trial,
+                    )  # fmt: skip
+                    errors.append(fe)
+                except LorisError as exc:
+                    failures.append(Failure(folder, str(exc), type(exc).__name__))
+                tick()
     return Evaluation(
         errors=errors, failures=failures,
         groundtruth={sc: _groundtruth_file(m.path, sc, seqs) for sc, seqs in gts.items()},
