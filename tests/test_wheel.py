@@ -77,6 +77,17 @@ def test_wheel_evaluates_and_reports_outside_the_checkout(installed, data, tmp_p
     assert r.returncode == 0, r.stderr
     row = pd.read_csv(tmp_path / "out.csv").iloc[0]
     assert row["matched"] == 1708 and row["ate_rmse"] == pytest.approx(0.472544, abs=1e-6)  # issue #2 reference
+    # the built-in manifests ship in the wheel: the OpenLORIS one gives the same row
+    r = _run(venv, tmp_path, "evaluate", str(src), "--manifest", "openloris", "--data", str(data.root),
+             "--csv", "out2.csv", "--no-progress")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert pd.read_csv(tmp_path / "out2.csv").iloc[0]["ate_rmse"] == row["ate_rmse"]
+    # and a TUM pair under TUM's conventions
+    tum = data.tum
+    r = _run(venv, tmp_path, "evaluate", str(tum / "fr2_desk_ORB.txt"), "--gt", str(tum / "fr2_desk_groundtruth.txt"),
+             "--conventions", "tum", "--csv", "tum.csv", "--no-progress")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert pd.read_csv(tmp_path / "tum.csv").iloc[0]["matched"] == 2223
     r = _run(
         venv,
         tmp_path,
