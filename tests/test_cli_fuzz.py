@@ -60,6 +60,29 @@ def _options(draw, paths, out_dir, command):
         )
         if command == "sweep" and draw(st.booleans()):
             args += ["--relative-to", draw(st.sampled_from(["extent", "length", "size"]))]
+        if draw(st.booleans()):  # pairs and manifests
+            args += draw(st.sampled_from([
+                ["--gt", paths["tum"]], ["--gt", paths["missing"]], ["--gt", paths["good"]], ["--gt", paths["binary"]],
+                ["--manifest", "openloris"], ["--manifest", "tum-fr1-office"], ["--manifest", paths["tum"]],
+                ["--gt", paths["tum"], "--manifest", "openloris"],
+            ]))  # fmt: skip
+            for opt, pool in (
+                ("--format", ["tum", "kitti", "euroc", "openloris", "bag", "csv"]),
+                ("--gt-format", ["tum", "openloris", "kitti"]),
+                ("--conventions", ["tum", "rpg", "vio", "openloris", "evo"]),
+                ("--association", ["nearest", "interpolate", "closest"]),
+                ("--align", ["se3", "sim3", "posyaw", "none", "yaw"]),
+                ("--align-frames", ["1", "2", "0", "-1", "x"]),
+                ("--max-diff", ["0.02", "0", "nan"]),
+                ("--t-offset", ["0.1", "-5", "inf", "x"]),
+                ("--eps", ["relative:0.05", "relative:-1", "relative:x"]),
+                ("--topic", ["/pose"]),
+                ("--tf", ["map:base", "map"]),
+            ):
+                if draw(st.booleans()):
+                    args += [opt, draw(st.sampled_from(pool))]
+            if draw(st.booleans()):
+                args += ["--relative"]
     elif command == "crosscheck":
         args += [draw(st.sampled_from(list(paths.values()))), draw(st.sampled_from(list(paths.values())))]
         if draw(st.booleans()):
