@@ -351,3 +351,32 @@ def test_transform_between_estimate_and_ground_truth_body_frames(tum_pairs):
     right = session_errors({1: gt}, {1: est}, conv, transform=inverse).sequences[0]
     assert rmse(wrong.ate) > 0.05 and rmse(wrong.aoe) > 10
     assert rmse(right.ate) < 1e-9 and rmse(right.aoe) < 1e-6
+
+
+def test_session_formats_and_pair_only_options(tum_pairs, tmp_path, icra20, capsys):
+    gt, est = tum_pairs["fr1_xyz"]
+    n = len(gt) // 2
+    g1 = Trajectory(gt.stamps[:n], gt.positions[:n], gt.quaternions[:n])
+    g2 = Trajectory(gt.stamps[n:], gt.positions[n:], gt.quaternions[n:])
+    write(tmp_path, "data/a.txt", _tum(g1))
+    _euroc(tmp_path / "data" / "b.csv", g2)
+    for name, g in (("a", g1), ("b", g2)):
+        keep = (est.stamps >= g.stamps[0]) & (est.stamps <= g.stamps[-1])
+        write(
+            tmp_path,
+            f"res/slam/{name}.txt",
+            _tum(Trajectory(est.stamps[keep], est.positions[keep], est.quaternions[keep])),
+        )
+    m = write(tmp_path, "two.toml", "root = 'data'\nlifelong = true\n[[session]]\nname = 'a'\ngroundtruth = 'a.txt'\n"
+                                    "[[session]]\nname = 'b'\ngroundtruth = 'b.csv'\ngroundtruth_format = 'euroc'\n")  # fmt: skip
+    ev = evaluate_manifest(m, tmp_path / "res")
+    table = ev.sequences(eps=0.05, phi=5)
+    assert table["matched"].tolist()[1] > 100 and table["cr"].gt(0).all()
+    # options of pairs on OpenLORIS result files: refused, not silently ignored
+    src = str(icra20 / "lifelong" / "maslam")
+    assert main(["evaluate", src, "--align", "posyaw", "--no-progress"]) == 2
+    assert "--align: for estimates scored against --gt or a --manifest" in capsys.readouterr().err
+    assert (
+        main(["evaluate", str(icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt"), "--max-gap", "0.2", "--no-progress"])
+        == 0
+    )

@@ -11,6 +11,7 @@ from typing import Any
 
 import pandas as pd
 
+from ..core.association import MAX_GAP
 from ..errors import LorisError, LorisWarning, ValidationError
 from .options import check_output, conventions_of, param_value
 
@@ -20,6 +21,17 @@ def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
 
     if getattr(args, "gt", None) or getattr(args, "manifest", None):
         return _run_pairs(args)
+    pair_only = [
+        f"--{k.replace('_', '-')}"
+        for k in ("format", "gt_format", "conventions", "association", "max_diff", "t_offset", "align", "align_frames",
+                  "topic", "gt_topic", "tf", "gt_tf", "gt_times", "est_times", "scene")
+        if getattr(args, k, None) is not None
+    ]  # fmt: skip
+    if pair_only:
+        raise ValidationError(
+            f"{', '.join(pair_only)}: for estimates scored against --gt or a --manifest; OpenLORIS result files "
+            "use the official conventions (choose --max-gap, --scale, --per-seq or --lifelong)"
+        )
 
     executor = None
     if args.scheduler:
@@ -41,6 +53,7 @@ def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
             remove_repeated=not args.keep_repeated,
             data_root=args.data,
             repair_stamps=args.repair_stamps,
+            max_gap=args.max_gap if getattr(args, "max_gap", None) is not None else MAX_GAP,
             trials_by=args.trials_by,
             jobs=args.jobs,
             executor=executor,

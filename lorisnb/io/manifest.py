@@ -28,6 +28,7 @@ Example (every key but ``[[session]]`` optional)::
     name = "V1_01_easy"
     groundtruth = "V1_01_easy/mav0/state_groundtruth_estimate0/data.csv"
     # estimate = "V1_01_easy.txt"   # default: the session name with the estimate format's suffix
+    # groundtruth_format = "euroc"  # default: the manifest's groundtruth_format
 """
 
 from __future__ import annotations
@@ -51,18 +52,20 @@ SUFFIX = {"tum": ".txt", "kitti": ".txt", "euroc": ".csv", "openloris": ".txt", 
 TOP_KEYS = {"name", "scene", "root", "lifelong", "groundtruth_format", "estimate_format", "eps", "phi", "source",
             "conventions", "transform", "session", "groundtruth_topic", "estimate_topic", "groundtruth_tf",
             "estimate_tf", "openloris"}  # fmt: skip
-SESSION_KEYS = {"name", "seq", "scene", "groundtruth", "estimate"}
+SESSION_KEYS = {"name", "seq", "scene", "groundtruth", "estimate", "groundtruth_format"}
 
 
 @dataclass(frozen=True)
 class Session:
-    """One session: its number (order), name, scene, ground-truth file and estimate file name."""
+    """One session: its number (order), name, scene, ground-truth file and its format, and the
+    estimate file's name."""
 
     seq: int
     name: str
     scene: str
     groundtruth: Path
     estimate: str
+    groundtruth_format: str = "tum"
 
 
 @dataclass(frozen=True)
@@ -158,6 +161,9 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
                 scene=str(item.get("scene", scene)),
                 groundtruth=root / str(item["groundtruth"]),
                 estimate=str(item.get("estimate", name + SUFFIX[est_fmt])),
+                groundtruth_format=_fmt(
+                    item.get("groundtruth_format", gt_fmt), f"session {name!r}: groundtruth_format", path
+                ),
             )  # fmt: skip
         )
     seqs = [s.seq for s in sessions]

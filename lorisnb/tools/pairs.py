@@ -167,7 +167,7 @@ def evaluate_manifest(
                 s.groundtruth, None, f"ground truth of session {s.name!r} not found ({m.path}: root and groundtruth)"
             )
         gts.setdefault(s.scene, {})[s.seq] = read_trajectory(
-            s.groundtruth, m.groundtruth_format, topic=m.groundtruth_topic, tf=m.groundtruth_tf
+            s.groundtruth, s.groundtruth_format, topic=m.groundtruth_topic, tf=m.groundtruth_tf
         )
     folders = _algorithm_folders(results, m)
     errors, failures = [], []
