@@ -31,10 +31,10 @@ from .model import MODES, FileErrors, ResultFile, SequenceErrors, is_monocular
 from .trajectory import Trajectory, path_length
 from .validate import choice, scale_value
 
-#: Time spans (first, last stamp, seconds) of other ground-truth sequences by label (``cafe-2``),
-#: or a function returning them (called only when a check needs them).
 PLAUSIBILITY_POSES = 300  # estimate poses a plausibility check looks at (evenly spread)
 
+#: Time spans (first, last stamp, seconds) of other ground-truth sequences by label (``cafe-2``),
+#: or a function returning them (called only when a check needs them).
 Spans = Mapping[str, tuple[float, float]] | Callable[[], Mapping[str, tuple[float, float]]]
 
 
@@ -251,8 +251,8 @@ def compute_errors(
         first = next((e for e in out if e.matched > 10), None)
         if first is not None and np.median(first.aoe) > 45.0:
             est = result.sequences[first.seq]
-            few = spread(len(est), PLAUSIBILITY_POSES)
-            swapped = Trajectory(est.stamps[few], est.positions[few], np.roll(est.quaternions[few], -1, axis=1))
+            few = est.subset(spread(len(est), PLAUSIBILITY_POSES))
+            swapped = Trajectory(few.stamps, few.positions, np.roll(few.quaternions, -1, axis=1))
             gt_own = groundtruth_sequence(groundtruth, first.seq, scene, frame, False, gt_frame)
             e_swapped = sequence_errors(gt_own, swapped, scale=with_scale, max_gap=max_gap)
             notes.append(
@@ -310,7 +310,7 @@ def median_aoe_by_frame(
     than the tens of degrees this check looks for."""
     if len(est) > max_poses:
         keep = spread(len(est), max_poses)
-        est = Trajectory(est.stamps[keep], est.positions[keep], est.quaternions[keep])
+        est = est.subset(keep)
     a = associate(gt_base, est.stamps, max_gap)
     if len(a) < 3 or a.gt_rotations is None:
         return {}
