@@ -251,8 +251,8 @@ def compute_errors(
         first = next((e for e in out if e.matched > 10), None)
         if first is not None and np.median(first.aoe) > 45.0:
             est = result.sequences[first.seq]
-            few = est.subset(spread(len(est), PLAUSIBILITY_POSES))
-            swapped = Trajectory(few.stamps, few.positions, np.roll(few.quaternions, -1, axis=1))
+            sub = est.subset(spread(len(est), PLAUSIBILITY_POSES))
+            swapped = Trajectory(sub.stamps, sub.positions, np.roll(sub.quaternions, -1, axis=1))
             gt_own = groundtruth_sequence(groundtruth, first.seq, scene, frame, False, gt_frame)
             e_swapped = sequence_errors(gt_own, swapped, scale=with_scale, max_gap=max_gap)
             notes.append(
