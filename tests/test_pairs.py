@@ -380,3 +380,11 @@ def test_session_formats_and_pair_only_options(tum_pairs, tmp_path, icra20, caps
         main(["evaluate", str(icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt"), "--max-gap", "0.2", "--no-progress"])
         == 0
     )
+
+
+def test_openloris_manifest_takes_lifelong_and_refuses_conventions(icra20):
+    src = icra20 / "lifelong" / "maslam"
+    per = evaluate_manifest("openloris", src, lifelong=False)
+    assert {f.mode for f in per.errors} == {"per-seq"}
+    with pytest.raises(ln.ValidationError, match="official conventions"):
+        evaluate_manifest("openloris", src, conventions="tum")

@@ -155,7 +155,13 @@ def evaluate_manifest(
     if m.openloris:
         from .evaluate import evaluate
 
-        return evaluate(results, trials_by=trials_by, progress=progress, **openloris)  # type: ignore[arg-type]
+        if conventions is not None:
+            raise ValidationError(
+                "conventions: OpenLORIS result files are scored with the official conventions "
+                "(choose max_gap, scale and lifelong instead)"
+            )
+        mode = "auto" if lifelong is None else ("lifelong" if lifelong else "per-seq")
+        return evaluate(results, mode=mode, trials_by=trials_by, progress=progress, **openloris)  # type: ignore[arg-type]
     if isinstance(conventions, str):
         conventions = Conventions.preset(conventions)
     conv = conventions if conventions is not None else m.conventions
