@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParseError
-from .scanner import BOM, SNIFF_BYTES, open_input, scan
+from .scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
 PARSE_THREADS = max(1, min(4, os.cpu_count() or 1))  # threads parsing the chunks of one large file
@@ -313,8 +313,6 @@ def stamp_digits(
     """For the given 1-based ``lines`` (increasing) of a file: the digits after the decimal point
     of each line's first token (-1 if none) and those digits as an integer, read exactly from the
     bytes (nanosecond digits included). Streams the file again; used only when needed."""
-    from .scanner import stamp_fractions
-
     ndig = np.full(lines.size, -1, np.int64)
     frac = np.zeros(lines.size, np.int64)
     for chunk, line0, n in _chunks(path, "a text file", chunk_bytes):

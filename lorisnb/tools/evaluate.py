@@ -390,9 +390,11 @@ def evaluate(
     root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
     for w in dict.fromkeys(w for f in done for w in f.warnings):
         warnings.warn(w, LorisWarning, stacklevel=2)
+    aligned = {"per-seq": "each sequence aligned on itself", "lifelong": "every file aligned on its first sequence"}
     how = (
-        f"OpenLORIS: ground truth moved to each file's sensor frame, {Conventions(max_gap=max_gap).describe()}"
-        f"{' (Sim(3) with scale)' if scale is True else ''}{' (Sim(3) for monocular algorithms)' if scale == 'auto' else ''}; "
-        f"{'lifelong files aligned on their first sequence' if mode != 'per-seq' else 'each sequence aligned on itself'}"
+        f"OpenLORIS: ground truth moved to each file's sensor frame, "
+        f"{Conventions(max_gap=max_gap, align='sim3' if scale is True else 'se3').describe()}"
+        f"{' (sim3 for monocular algorithms)' if scale == 'auto' else ''}; "
+        f"{aligned.get(mode, 'files with several sequences aligned on their first')}"
     )
     return Evaluation(done, failed, root, skipped, data, conventions=how)
