@@ -133,18 +133,49 @@ def test_groundtruth_in_another_frame_composes_extrinsics():
     np.testing.assert_allclose((again.rotations().inv() * via_base.rotations()).magnitude(), 0, atol=1e-12)
 
 
-def test_fast_rotation_helpers_equal_scipy():
-    """geometry.compose and geometry.slerp are scipy's Rotation.__mul__ and Slerp, vectorized."""
+def test_quaternion_helpers_equal_scipy():
+    """The quaternion algebra the evaluation runs on (lorisnb.core.geometry) is scipy's Rotation:
+    products, inverses, angles, vector rotation, matrices both ways and Slerp."""
     from scipy.spatial.transform import Rotation, Slerp
 
-    from lorisnb.core.geometry import compose, slerp
+    from lorisnb.core.geometry import (
+        as_quaternions,
+        quat_angle_deg,
+        quat_conjugate,
+        quat_from_matrix,
+        quat_multiply,
+        quat_normalize,
+        quat_rotate,
+        quat_to_matrix,
+        slerp,
+    )
 
     a, b = Rotation.random(500, random_state=1), Rotation.random(500, random_state=2)
-    np.testing.assert_allclose(compose(a, b).as_matrix(), (a * b).as_matrix(), atol=1e-14)
-    np.testing.assert_allclose(compose(a, b[0]).as_matrix(), (a * b[0]).as_matrix(), atol=1e-14)
+    qa, qb = a.as_quat(), b.as_quat()
+    mat = Rotation.from_quat(quat_multiply(qa, qb)).as_matrix()
+    np.testing.assert_allclose(mat, (a * b).as_matrix(), atol=1e-14)
+    np.testing.assert_allclose(
+        Rotation.from_quat(quat_multiply(qa, qb[0])).as_matrix(), (a * b[0]).as_matrix(), atol=1e-14
+    )
+    np.testing.assert_allclose(Rotation.from_quat(quat_conjugate(qa)).as_matrix(), a.inv().as_matrix(), atol=1e-14)
+    np.testing.assert_allclose(quat_angle_deg(qa), a.magnitude() * 180 / np.pi, atol=1e-12)
+    v = np.random.default_rng(4).normal(size=(500, 3))
+    np.testing.assert_allclose(quat_rotate(qa, v), a.apply(v), atol=1e-13)
+    raw = 3.7 * qa  # not unit, as read from a file
+    np.testing.assert_allclose(quat_to_matrix(raw), a.as_matrix(), atol=1e-14)
+    np.testing.assert_allclose(quat_normalize(raw), qa, atol=1e-15)
+    np.testing.assert_allclose(as_quaternions(raw), qa, atol=1e-15)
+    np.testing.assert_array_equal(as_quaternions(a), qa)
+    # every branch of the matrix conversion: trace largest, and each diagonal element largest
+    turns = Rotation.from_euler("xyz", [[0, 0, 10], [179, 0, 0], [0, 179, 0], [0, 0, 179]], degrees=True)
+    for r in (a, turns):
+        np.testing.assert_allclose(
+            quat_from_matrix(r.as_matrix()), Rotation.from_matrix(r.as_matrix()).as_quat(), atol=1e-15
+        )
+    assert quat_from_matrix(np.eye(3)).shape == (4,)
     w = np.random.default_rng(3).uniform(0, 1, 500)
-    ours = Rotation.from_quat(slerp(a.as_quat(), -b.as_quat(), w))  # signs must not matter
+    ours = Rotation.from_quat(slerp(qa, -qb, w))  # signs must not matter
     theirs = Rotation.concatenate([Slerp([0.0, 1.0], Rotation.concatenate([a[k], b[k]]))(w[k]) for k in range(500)])
     np.testing.assert_allclose(ours.as_matrix(), theirs.as_matrix(), atol=1e-12)
-    near = Rotation.from_quat(slerp(a.as_quat(), a.as_quat(), w))  # equal ends: no division by zero
+    near = Rotation.from_quat(slerp(qa, qa, w))  # equal ends: no division by zero
     np.testing.assert_allclose(near.as_matrix(), a.as_matrix(), atol=1e-14)

@@ -10,13 +10,25 @@ are ignored (not counted wrong).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from .frames import extrinsic, relative_extrinsic
-from .geometry import compose, official_slerp, ros_quaternion_from_matrix, slerp
+from .geometry import (
+    official_slerp,
+    quat_multiply,
+    quat_normalize,
+    quat_rotate,
+    quat_to_matrix,
+    ros_quaternion_from_matrix,
+    rotations_of,
+    slerp,
+)
 from .trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
 
 MAX_GAP = 0.5  # seconds; the official tool's bracket
 
@@ -35,16 +47,14 @@ def groundtruth_in_frame(
         return gt
     if gt_frame == "base_link":
         t_off, q_off = extrinsic(scene, frame)
-        r_off = Rotation.from_quat(q_off)
+        q_off = quat_normalize(q_off)
     else:
-        t_off, r_off = relative_extrinsic(scene, gt_frame, frame)
-    rot = gt.rotations()
-    positions = gt.positions + rot.apply(t_off)
-    new_rot = compose(rot, r_off)
+        t_off, q_off = relative_extrinsic(scene, gt_frame, frame)
+    q = quat_normalize(gt.quaternions)
+    positions = gt.positions + quat_rotate(q, t_off)
+    quats = quat_normalize(quat_multiply(q, q_off))
     if official_interpolation:
-        quats = ros_quaternion_from_matrix(new_rot.as_matrix())
-    else:
-        quats = new_rot.as_quat()
+        quats = ros_quaternion_from_matrix(quat_to_matrix(quats))
     return Trajectory(gt.stamps, positions, quats, gt.lines, dict(gt.meta))
 
 
@@ -56,19 +66,25 @@ class Association:
         est_index: (M,) indices of the matched poses in the estimate.
         stamps: (M,) their stamps, seconds, increasing.
         gt_positions: (M, 3) interpolated ground-truth positions, metres.
-        gt_rotations: interpolated ground-truth orientations (scipy Rotation of length M).
+        gt_quaternions: (M, 4) interpolated ground-truth orientations, unit quaternions ``xyzw``
+            (None if M = 0); ``gt_rotations`` gives them as a scipy ``Rotation``.
         gt_start, gt_end: first and last ground-truth stamp of the sequence, seconds.
     """
 
     est_index: np.ndarray
     stamps: np.ndarray
     gt_positions: np.ndarray
-    gt_rotations: Rotation | None
+    gt_quaternions: np.ndarray | None
     gt_start: float
     gt_end: float
 
     def __len__(self) -> int:
         return len(self.stamps)
+
+    @property
+    def gt_rotations(self) -> Rotation | None:
+        """:attr:`gt_quaternions` as a scipy ``Rotation`` (built on request)."""
+        return rotations_of(self.gt_quaternions)
 
 
 def associate(
@@ -101,11 +117,9 @@ def associate(
     w1 = 1.0 - w2
     p = gt.positions
     pos = w1[:, None] * p[i] + w2[:, None] * p[i + 1]
+    q = gt.quaternions
     if official_interpolation:
-        q = gt.quaternions
-        rot = Rotation.from_quat(official_slerp(q[i], q[i + 1], w1, w2))
-    else:
-        # slerp between the bracketing ground-truth poses (scipy's Slerp on each interval)
-        q = gt.quaternions
-        rot = Rotation.from_quat(slerp(q[i], q[i + 1], w2))
-    return Association(idx, t, pos, rot, gt_start, gt_end)
+        quats = quat_normalize(official_slerp(q[i], q[i + 1], w1, w2))
+    else:  # slerp between the bracketing ground-truth poses (scipy's Slerp on each interval)
+        quats = slerp(q[i], q[i + 1], w2)
+    return Association(idx, t, pos, quats, gt_start, gt_end)

@@ -22,11 +22,10 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..errors import EvaluationError, ValidationError
 from .association import MAX_GAP
-from .geometry import Sim3, umeyama
+from .geometry import Sim3, quat_to_matrix, umeyama
 from .validate import choice, finite, positive
 
 ASSOCIATIONS = ("interpolate", "nearest")
@@ -156,8 +155,8 @@ def fit_alignment(
     if n == 1 and method in ("se3", "posyaw"):
         if est_quaternions is None or gt_quaternions is None:
             raise EvaluationError(f"align={method!r} on one pose needs the orientations")
-        r_g = Rotation.from_quat(gt_quaternions[0]).as_matrix()
-        r_e = Rotation.from_quat(est_quaternions[0]).as_matrix()
+        r_g = quat_to_matrix(np.asarray(gt_quaternions[0], float))
+        r_e = quat_to_matrix(np.asarray(est_quaternions[0], float))
         rot = r_g @ r_e.T if method == "se3" else _rot_z(_best_yaw(r_e @ r_g.T))
         return Sim3(rot, p_g[0] - rot @ p_e[0], 1.0)
     if method == "sim3" and n < 2:

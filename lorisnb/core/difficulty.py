@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from . import metrics
-from .geometry import angle_deg, compose
+from .geometry import quat_angle_deg, quat_conjugate, quat_multiply, quat_normalize
 from .model import SequenceErrors
 from .trajectory import Trajectory
 
@@ -36,8 +36,8 @@ def trajectory_stats(traj: Trajectory) -> dict:
             angular_speed_dps=np.nan,
             rate_hz=np.nan,
         )
-    rot = traj.rotations()
-    turn = angle_deg(compose(rot[:-1].inv(), rot[1:])).sum()
+    q = quat_normalize(traj.quaternions)
+    turn = quat_angle_deg(quat_multiply(quat_conjugate(q[:-1]), q[1:])).sum()
     dur = traj.duration
     return dict(
         poses=n,

@@ -13,9 +13,9 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..errors import FrameError
+from .geometry import quat_conjugate, quat_multiply, quat_normalize, quat_rotate
 
 #: Scenes in the order the official tool matches them (by substring of the ``scene:`` header).
 SCENES: tuple[str, ...] = ("office", "corridor", "home", "cafe", "market")
@@ -125,18 +125,15 @@ def extrinsic(scene: str, frame: str) -> tuple[np.ndarray, np.ndarray]:
     return np.array(xyz, dtype=float), np.array(q, dtype=float)
 
 
-def extrinsic_rotation(scene: str, frame: str) -> tuple[np.ndarray, Rotation]:
-    """Like :func:`extrinsic` but with the rotation as a scipy ``Rotation``."""
-    t, q = extrinsic(scene, frame)
-    return t, Rotation.from_quat(q)
-
-
 @functools.lru_cache(maxsize=256)
-def relative_extrinsic(scene: str, from_frame: str, to_frame: str) -> tuple[np.ndarray, Rotation]:
-    """``T_from_to`` = ``T_base_from^-1 @ T_base_to`` for the robot of ``scene``: (translation in
-    metres, rotation). Ground truth reported in ``from_frame`` is moved to ``to_frame`` by
-    composing it on the right with this transform."""
-    t_a, r_a = extrinsic_rotation(scene, from_frame)
-    t_b, r_b = extrinsic_rotation(scene, to_frame)
-    inv = r_a.inv()
-    return inv.apply(t_b - t_a), inv * r_b
+def relative_extrinsic(scene: str, from_frame: str, to_frame: str) -> tuple[np.ndarray, np.ndarray]:
+    """``T_from_to`` = ``T_base_from^-1 @ T_base_to`` for the robot of ``scene``: (translation (3,)
+    in metres, unit quaternion (4,) ``xyzw``). Ground truth reported in ``from_frame`` is moved to
+    ``to_frame`` by composing it on the right with this transform."""
+    t_a, q_a = extrinsic(scene, from_frame)
+    t_b, q_b = extrinsic(scene, to_frame)
+    inv = quat_conjugate(quat_normalize(q_a))
+    t, q = quat_rotate(inv, t_b - t_a), quat_multiply(inv, quat_normalize(q_b))
+    t.flags.writeable = False  # cached: shared by every caller
+    q.flags.writeable = False
+    return t, q

@@ -1,15 +1,21 @@
-"""Pure geometry on arrays: rigid/similarity alignment, pose composition, and the two
+"""Pure geometry on arrays: rigid/similarity alignment, quaternion algebra, and the two
 orientation slips of the official OpenLORIS-Scene tool (reproduced only on request).
 
 All functions are vectorized over poses. Positions are metres, angles degrees unless stated.
+Orientations are quaternions ``xyzw`` (scipy's order) in plain arrays: the evaluation never builds
+a scipy ``Rotation`` (whose import and per-call cost dominated a run over many small files), and
+tests check every function here against ``scipy.spatial.transform``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial.transform import Rotation
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
 
 
 @dataclass(frozen=True)
@@ -70,9 +76,79 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False) ->
     return Sim3(rot, trans, scale)
 
 
-def compose_positions(positions: np.ndarray, rotations: Rotation, offset: np.ndarray) -> np.ndarray:
-    """Positions of ``pose @ T`` for poses (p, R) and a fixed offset translation t: ``p + R t``."""
-    return positions + rotations.apply(offset)
+def quat_from_matrix(matrices: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``xyzw`` of rotation matrices (..., 3, 3), as scipy's
+    ``Rotation.from_matrix`` computes them (the largest of the trace and the diagonal picks the
+    branch; to ~1e-16). The input must be orthonormal (as Umeyama's rotations are): scipy first
+    projects other matrices onto rotations, which the readers of matrix files rely on."""
+    m = np.asarray(matrices, float)
+    shape = m.shape[:-2]
+    m = m.reshape(-1, 3, 3)
+    n = len(m)
+    r = np.arange(n)
+    diag = np.stack([m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]], axis=1)
+    trace = diag.sum(axis=1)
+    choice = np.argmax(np.column_stack([diag, trace]), axis=1)
+    q = np.empty((n, 4))
+    on_trace = choice == 3
+    t = r[on_trace]
+    q[t, 0] = m[t, 2, 1] - m[t, 1, 2]
+    q[t, 1] = m[t, 0, 2] - m[t, 2, 0]
+    q[t, 2] = m[t, 1, 0] - m[t, 0, 1]
+    q[t, 3] = 1.0 + trace[t]
+    d = r[~on_trace]
+    i = choice[d]
+    j, k = (i + 1) % 3, (i + 2) % 3
+    q[d, i] = 1.0 - trace[d] + 2.0 * m[d, i, i]
+    q[d, j] = m[d, j, i] + m[d, i, j]
+    q[d, k] = m[d, k, i] + m[d, i, k]
+    q[d, 3] = m[d, k, j] - m[d, j, k]
+    return quat_normalize(q).reshape(*shape, 4)
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) of quaternions ``xyzw`` (normalized first), as scipy's
+    ``Rotation.as_matrix``."""
+    q = quat_normalize(q)
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    xx, yy, zz, ww = x * x, y * y, z * z, w * w
+    xy, zw, xz, yw, yz, xw = x * y, z * w, x * z, y * w, y * z, x * w
+    m = np.empty(q.shape[:-1] + (3, 3))
+    m[..., 0, 0] = xx - yy - zz + ww
+    m[..., 1, 0] = 2 * (xy + zw)
+    m[..., 2, 0] = 2 * (xz - yw)
+    m[..., 0, 1] = 2 * (xy - zw)
+    m[..., 1, 1] = -xx + yy - zz + ww
+    m[..., 2, 1] = 2 * (yz + xw)
+    m[..., 0, 2] = 2 * (xz + yw)
+    m[..., 1, 2] = 2 * (yz - xw)
+    m[..., 2, 2] = -xx - yy + zz + ww
+    return m
+
+
+def quat_normalize(q: np.ndarray) -> np.ndarray:
+    """Quaternions scaled to unit norm (what scipy's ``Rotation.from_quat`` stores)."""
+    q = np.asarray(q, float)
+    return q / np.sqrt(np.einsum("...i,...i->...", q, q))[..., None]
+
+
+def as_quaternions(rotations: object) -> np.ndarray:
+    """Unit quaternions ``xyzw`` (N, 4) of a scipy ``Rotation`` or of a quaternion array (normalized),
+    so that the metrics take either."""
+    as_quat = getattr(rotations, "as_quat", None)
+    if callable(as_quat):
+        return np.asarray(as_quat(), float).reshape(-1, 4)
+    return quat_normalize(np.asarray(rotations, float).reshape(-1, 4))
+
+
+def rotations_of(quaternions: np.ndarray | None) -> Rotation | None:
+    """A scipy ``Rotation`` of quaternions ``xyzw`` (None stays None): for users' code and for
+    evo; scipy is imported here, not on the evaluation's path."""
+    if quaternions is None:
+        return None
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_quat(quaternions)
 
 
 def ros_quaternion_from_matrix(blocks: np.ndarray) -> np.ndarray:
@@ -152,7 +228,7 @@ def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
     """Hamilton product ``q1 (x) q2`` of quaternions ``xyzw``, broadcast over leading axes: the
-    rotation that applies ``q2`` first, then ``q1``."""
+    rotation that applies ``q2`` first, then ``q1`` (scipy's ``Rotation.__mul__``)."""
     q1, q2 = np.asarray(q1, float), np.asarray(q2, float)
     x1, y1, z1, w1 = q1[..., 0], q1[..., 1], q1[..., 2], q1[..., 3]
     x2, y2, z2, w2 = q2[..., 0], q2[..., 1], q2[..., 2], q2[..., 3]
@@ -170,7 +246,7 @@ def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
 def quat_conjugate(q: np.ndarray) -> np.ndarray:
     """Conjugate of quaternions ``xyzw`` (the inverse rotation of unit quaternions)."""
     q = np.asarray(q, float)
-    return np.concatenate([-q[..., :3], q[..., 3:]], axis=-1)
+    return q * np.array([-1.0, -1.0, -1.0, 1.0])
 
 
 def quat_rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -184,41 +260,25 @@ def quat_rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
 def quat_angle_deg(q: np.ndarray) -> np.ndarray:
     """Rotation angle of unit quaternions ``xyzw``, degrees in [0, 180] (as scipy's ``magnitude``)."""
     q = np.asarray(q, float)
-    return np.degrees(2.0 * np.arctan2(np.linalg.norm(q[..., :3], axis=-1), np.abs(q[..., 3])))
-
-
-def compose(a: Rotation, b: Rotation) -> Rotation:
-    """``a * b`` (apply ``b``, then ``a``), for one or many rotations on either side.
-
-    The same as scipy's ``Rotation.__mul__``, which in scipy 1.17 costs about 2.7 us per rotation
-    (27 ms for 10,000; ``make bench``); this is one vectorized quaternion product."""
-    return Rotation.from_quat(quat_multiply(a.as_quat(), b.as_quat()))
+    xyz = q[..., :3]
+    return np.degrees(2.0 * np.arctan2(np.sqrt(np.einsum("...i,...i->...", xyz, xyz)), np.abs(q[..., 3])))
 
 
 def slerp(q1: np.ndarray, q2: np.ndarray, w2: np.ndarray) -> np.ndarray:
-    """Spherical linear interpolation between unit quaternions ``xyzw`` (N, 4), with weight ``w2``
-    (N,) of ``q2`` (0 gives q1, 1 gives q2), along the shorter arc; unit quaternions out.
+    """Spherical linear interpolation between quaternions ``xyzw`` (N, 4) (normalized first), with
+    weight ``w2`` (N,) of ``q2`` (0 gives q1, 1 gives q2), along the shorter arc; unit quaternions out.
 
     The same rotations as ``scipy.spatial.transform.Slerp`` over each pair (to ~1e-15), without
-    its per-call cost in scipy 1.17 (``Rotation.__mul__``; ``make bench``)."""
-    q1 = np.asarray(q1, float)
-    q1 = q1 / np.linalg.norm(q1, axis=-1, keepdims=True)
-    q2 = np.asarray(q2, float)
-    q2 = q2 / np.linalg.norm(q2, axis=-1, keepdims=True)
-    w2 = np.asarray(w2, float)[..., None]
-    dot = np.sum(q1 * q2, axis=-1, keepdims=True)
-    q2 = np.where(dot < 0, -q2, q2)
-    dot = np.abs(dot)
-    theta = np.arccos(np.clip(dot, -1.0, 1.0))
+    its per-call cost."""
+    q1 = quat_normalize(q1)
+    q2 = quat_normalize(q2)
+    w2 = np.asarray(w2, float)
+    dot = np.einsum("...i,...i->...", q1, q2)
+    sign = np.where(dot < 0, -1.0, 1.0)  # the shorter arc
+    theta = np.arccos(np.clip(np.abs(dot), -1.0, 1.0))
     sin_theta = np.sin(theta)
     small = sin_theta < 1e-9
     with np.errstate(invalid="ignore", divide="ignore"):
         k1 = np.where(small, 1.0 - w2, np.sin((1.0 - w2) * theta) / sin_theta)
-        k2 = np.where(small, w2, np.sin(w2 * theta) / sin_theta)
-    q = k1 * q1 + k2 * q2
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)
-
-
-def angle_deg(rotations: Rotation) -> np.ndarray:
-    """Rotation angle of each rotation, degrees in [0, 180]."""
-    return np.degrees(rotations.magnitude())
+        k2 = np.where(small, w2, np.sin(w2 * theta) / sin_theta) * sign
+    return quat_normalize(k1[..., None] * q1 + k2[..., None] * q2)

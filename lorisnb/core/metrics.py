@@ -10,20 +10,30 @@ Units: metres, degrees, seconds.
 
 from __future__ import annotations
 
-import numpy as np
-from scipy.spatial.transform import Rotation
+from typing import TYPE_CHECKING, Union
 
-from .geometry import angle_deg, compose, quat_angle_deg, quat_conjugate, quat_multiply, quat_rotate
+import numpy as np
+
+from .geometry import as_quaternions, quat_angle_deg, quat_conjugate, quat_multiply, quat_rotate
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
+
+#: Orientations: a scipy ``Rotation`` or (N, 4) quaternions ``xyzw``.
+Orientations = Union["Rotation", np.ndarray]
 
 
 def ate(est_positions: np.ndarray, gt_positions: np.ndarray) -> np.ndarray:
     """Absolute trajectory error of each pose: position distance, metres."""
-    return np.linalg.norm(np.asarray(est_positions) - np.asarray(gt_positions), axis=-1)
+    d = np.asarray(est_positions, float) - np.asarray(gt_positions, float)
+    return np.sqrt(np.einsum("...i,...i->...", d, d))
 
 
-def aoe(est_rotations: Rotation, gt_rotations: Rotation) -> np.ndarray:
-    """Absolute orientation error of each pose: angle of ``R_gt^-1 R_est``, degrees in [0, 180]."""
-    return angle_deg(compose(gt_rotations.inv(), est_rotations))
+def aoe(est_rotations: Orientations, gt_rotations: Orientations) -> np.ndarray:
+    """Absolute orientation error of each pose: angle of ``R_gt^-1 R_est``, degrees in [0, 180].
+    Orientations are scipy ``Rotation`` objects or (N, 4) quaternions ``xyzw``."""
+    q_est, q_gt = as_quaternions(est_rotations), as_quaternions(gt_rotations)
+    return quat_angle_deg(quat_multiply(quat_conjugate(q_gt), q_est))
 
 
 def correctness(ate_m: np.ndarray, aoe_deg: np.ndarray, eps, phi) -> np.ndarray:
@@ -141,20 +151,21 @@ def rpe_pairs(
 
 def rpe(
     gt_positions: np.ndarray,
-    gt_rotations: Rotation,
+    gt_rotations: Orientations,
     est_positions: np.ndarray,
-    est_rotations: Rotation,
+    est_rotations: Orientations,
     i: np.ndarray,
     j: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Relative pose error of pairs (i, j), TUM definition:
     ``E = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)`` with Q ground truth, P estimate.
 
+    Orientations are scipy ``Rotation`` objects or (N, 4) quaternions ``xyzw``.
     Returns (translational error in metres, rotational error in degrees) per pair.
     """
     if len(i) == 0:
         return np.zeros(0), np.zeros(0)
-    qg, qe = gt_rotations.as_quat(), est_rotations.as_quat()  # unit quaternions xyzw
+    qg, qe = as_quaternions(gt_rotations), as_quaternions(est_rotations)
     inv_gi, inv_ei = quat_conjugate(qg[i]), quat_conjugate(qe[i])
     rel_g_rot = quat_multiply(inv_gi, qg[j])
     rel_g_t = quat_rotate(inv_gi, gt_positions[j] - gt_positions[i])
@@ -163,4 +174,4 @@ def rpe(
     inv_rel_g = quat_conjugate(rel_g_rot)
     err_t = quat_rotate(inv_rel_g, rel_e_t - rel_g_t)
     err_r = quat_multiply(inv_rel_g, rel_e_rot)
-    return np.linalg.norm(err_t, axis=1), quat_angle_deg(err_r)
+    return np.sqrt(np.einsum("ij,ij->i", err_t, err_t)), quat_angle_deg(err_r)

@@ -11,15 +11,18 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..errors import ParseError, ValidationError
 from . import metrics
 from .frames import FRAMES, PAPER_EPS, SCENES, match_scene
-from .geometry import Sim3
+from .geometry import Sim3, rotations_of
 from .trajectory import Trajectory, extent
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
 
 #: Columns of the per-sequence table (``lorisnb evaluate --csv``); scripts rely on these names.
 SEQUENCE_COLUMNS = [
@@ -128,7 +131,8 @@ class SequenceErrors:
         stamps: (M,) matched estimate stamps, seconds.
         ate: (M,) metres. aoe: (M,) degrees.
         est_positions, gt_positions: (M, 3) aligned estimate and interpolated ground truth, metres.
-        est_rotations, gt_rotations: the matching orientations (scipy Rotation, or None if M = 0).
+        est_quaternions, gt_quaternions: (M, 4) the matching orientations, unit quaternions ``xyzw``
+            (None if M = 0); ``est_rotations`` and ``gt_rotations`` give them as scipy ``Rotation``.
         gt_start, gt_end: ground-truth time span of the sequence, seconds.
         scale: the scale of the alignment applied to this sequence (1 for SE(3)).
     """
@@ -140,8 +144,8 @@ class SequenceErrors:
     aoe: np.ndarray
     est_positions: np.ndarray
     gt_positions: np.ndarray
-    est_rotations: Rotation | None
-    gt_rotations: Rotation | None
+    est_quaternions: np.ndarray | None
+    gt_quaternions: np.ndarray | None
     gt_start: float
     gt_end: float
     scale: float = 1.0
@@ -153,24 +157,36 @@ class SequenceErrors:
         z = np.zeros(0)
         return cls(
             seq=seq, poses=poses, stamps=z, ate=z, aoe=z, est_positions=np.zeros((0, 3)),
-            gt_positions=np.zeros((0, 3)), est_rotations=None, gt_rotations=None, gt_start=gt_start, gt_end=gt_end,
+            gt_positions=np.zeros((0, 3)), est_quaternions=None, gt_quaternions=None, gt_start=gt_start, gt_end=gt_end,
         )  # fmt: skip
 
     @property
     def matched(self) -> int:
         return len(self.stamps)
 
+    @property
+    def est_rotations(self) -> Rotation | None:
+        """:attr:`est_quaternions` as a scipy ``Rotation`` (built on request)."""
+        return rotations_of(self.est_quaternions)
+
+    @property
+    def gt_rotations(self) -> Rotation | None:
+        """:attr:`gt_quaternions` as a scipy ``Rotation`` (built on request)."""
+        return rotations_of(self.gt_quaternions)
+
     def rpe(self, delta: float = 1.0, unit: str = "s") -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Relative pose error pairs (i, j) and errors (metres, degrees) over ``delta`` in ``unit``
         (see :func:`lorisnb.core.metrics.rpe_pairs`); computed once per setting and kept."""
         key = (float(delta), unit)
         if key not in self._rpe_cache:
-            if self.matched < 2 or self.gt_rotations is None or self.est_rotations is None:
+            if self.matched < 2 or self.gt_quaternions is None or self.est_quaternions is None:
                 z = np.zeros(0, int)
                 self._rpe_cache[key] = (z, z, np.zeros(0), np.zeros(0))
             else:
                 i, j = metrics.rpe_pairs(self.stamps, self.gt_positions, delta, unit)
-                tr, rr = metrics.rpe(self.gt_positions, self.gt_rotations, self.est_positions, self.est_rotations, i, j)
+                tr, rr = metrics.rpe(
+                    self.gt_positions, self.gt_quaternions, self.est_positions, self.est_quaternions, i, j
+                )
                 self._rpe_cache[key] = (i, j, tr, rr)
         i, j, tr, rr = self._rpe_cache[key]
         return i, j, tr, rr

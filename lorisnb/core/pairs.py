@@ -20,12 +20,11 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..errors import EvaluationError
 from .association import Association, associate
 from .conventions import Conventions, associate_nearest, fit_alignment
-from .geometry import Sim3, quat_multiply, quat_rotate
+from .geometry import Sim3, quat_from_matrix, quat_multiply, quat_normalize, quat_rotate
 from .model import FileErrors
 from .pipeline import errors_after_alignment
 from .trajectory import Trajectory
@@ -44,8 +43,7 @@ def match(gt: Trajectory, est: Trajectory, conventions: Conventions = DEFAULT) -
     gi, ej = associate_nearest(gt.stamps, stamps, conventions.max_diff)
     if ej.size == 0:
         return Association(ej, np.zeros(0), np.zeros((0, 3)), None, g_start, g_end)
-    rot = Rotation.from_quat(gt.quaternions[gi])
-    return Association(ej, stamps[ej], gt.positions[gi], rot, g_start, g_end)
+    return Association(ej, stamps[ej], gt.positions[gi], quat_normalize(gt.quaternions[gi]), g_start, g_end)
 
 
 def with_transform(est: Trajectory, transform: Sim3 | np.ndarray | None) -> Trajectory:
@@ -56,8 +54,8 @@ def with_transform(est: Trajectory, transform: Sim3 | np.ndarray | None) -> Traj
     m = transform.matrix() if isinstance(transform, Sim3) else np.asarray(transform, float)
     if m.shape != (4, 4):
         raise EvaluationError(f"transform: expected a 4x4 matrix T_est_gt, got shape {m.shape}")
-    q_off = Rotation.from_matrix(m[:3, :3]).as_quat()
-    q = est.quaternions / np.linalg.norm(est.quaternions, axis=1, keepdims=True)
+    q_off = quat_from_matrix(m[:3, :3])
+    q = quat_normalize(est.quaternions)
     pos = est.positions + quat_rotate(q, m[:3, 3])
     return Trajectory(est.stamps, pos, quat_multiply(q, q_off), est.lines, dict(est.meta))
 
@@ -99,10 +97,9 @@ def session_errors(
 
     def fit(s: int) -> Sim3:
         a, e = assoc[s], est[s]
-        gt_q = a.gt_rotations.as_quat() if a.gt_rotations is not None else None
         return fit_alignment(
             e.positions[a.est_index], a.gt_positions, conventions.align, conventions.align_frames,
-            e.quaternions[a.est_index], gt_q,
+            e.quaternions[a.est_index], a.gt_quaternions,
         )  # fmt: skip
 
     notes: list[str] = []

@@ -12,7 +12,6 @@ import warnings
 from collections.abc import Callable, Mapping
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..errors import EvaluationError, LorisWarning, ParseError
 from . import metrics, plausibility
@@ -20,10 +19,12 @@ from .association import MAX_GAP, Association, associate, groundtruth_in_frame
 from .frames import FRAMES, relative_extrinsic
 from .geometry import (
     Sim3,
-    compose,
     quat_angle_deg,
     quat_conjugate,
+    quat_from_matrix,
     quat_multiply,
+    quat_normalize,
+    quat_to_matrix,
     ros_quaternion_from_matrix,
     umeyama,
 )
@@ -39,31 +40,29 @@ Spans = Mapping[str, tuple[float, float]] | Callable[[], Mapping[str, tuple[floa
 
 
 def apply_alignment(
-    sim: Sim3, positions: np.ndarray, rotations: Rotation, official_interpolation: bool = False
-) -> tuple[np.ndarray, Rotation]:
-    """Apply an alignment to poses: positions (N, 3) metres and orientations. With ``official_interpolation``
-    and a scale, the orientation is extracted from ``s * R * R_p`` as the official tool does
-    (its slip (b))."""
+    sim: Sim3, positions: np.ndarray, quaternions: np.ndarray, official_interpolation: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """Apply an alignment to poses: positions (N, 3) metres and orientations (N, 4) quaternions
+    ``xyzw`` (normalized here); unit quaternions out. With ``official_interpolation`` and a scale,
+    the orientation is extracted from ``s * R * R_p`` as the official tool does (its slip (b))."""
     pos = sim.apply(positions)
     if official_interpolation and sim.scale != 1.0:
-        blocks = sim.scale * np.einsum("ij,njk->nik", sim.rotation, rotations.as_matrix())
-        return pos, Rotation.from_quat(ros_quaternion_from_matrix(blocks))
-    return pos, compose(Rotation.from_matrix(sim.rotation), rotations)
+        blocks = sim.scale * np.einsum("ij,njk->nik", sim.rotation, quat_to_matrix(quaternions))
+        return pos, quat_normalize(ros_quaternion_from_matrix(blocks))
+    return pos, quat_normalize(quat_multiply(quat_from_matrix(sim.rotation), quat_normalize(quaternions)))
 
 
 def errors_after_alignment(
     seq: int, est: Trajectory, a: Association, sim: Sim3, official_interpolation: bool = False
 ) -> SequenceErrors:
     """Per-pose ATE (m) and AOE (deg) of the matched poses of ``est`` after alignment ``sim``."""
-    if len(a) == 0 or a.gt_rotations is None:
+    if len(a) == 0 or a.gt_quaternions is None:
         return SequenceErrors.unmatched(seq, len(est), a.gt_start, a.gt_end)
-    pos, rot = apply_alignment(
-        sim, est.positions[a.est_index], Rotation.from_quat(est.quaternions[a.est_index]), official_interpolation
-    )
+    pos, q = apply_alignment(sim, est.positions[a.est_index], est.quaternions[a.est_index], official_interpolation)
     return SequenceErrors(
         seq=seq, poses=len(est), stamps=a.stamps, ate=metrics.ate(pos, a.gt_positions),
-        aoe=metrics.aoe(rot, a.gt_rotations), est_positions=pos, gt_positions=a.gt_positions, est_rotations=rot,
-        gt_rotations=a.gt_rotations, gt_start=a.gt_start, gt_end=a.gt_end, scale=sim.scale,
+        aoe=metrics.aoe(q, a.gt_quaternions), est_positions=pos, gt_positions=a.gt_positions, est_quaternions=q,
+        gt_quaternions=a.gt_quaternions, gt_start=a.gt_start, gt_end=a.gt_end, scale=sim.scale,
     )  # fmt: skip
 
 
@@ -312,15 +311,15 @@ def median_aoe_by_frame(
         keep = spread(len(est), max_poses)
         est = est.subset(keep)
     a = associate(gt_base, est.stamps, max_gap)
-    if len(a) < 3 or a.gt_rotations is None:
+    if len(a) < 3 or a.gt_quaternions is None:
         return {}
     p_est = est.positions[a.est_index]
     q_est = est.quaternions[a.est_index]
-    q_est = q_est / np.linalg.norm(q_est, axis=1, keepdims=True)
-    q_gt = a.gt_rotations.as_quat()
+    q_est = quat_normalize(q_est)
+    q_gt = a.gt_quaternions
     sim = umeyama(p_est, a.gt_positions, with_scale)
-    q_aligned = quat_multiply(Rotation.from_matrix(sim.rotation).as_quat(), q_est)
-    offsets = np.stack([relative_extrinsic(scene, gt_frame, fr)[1].as_quat() for fr in FRAMES])  # (7, 4)
+    q_aligned = quat_multiply(quat_from_matrix(sim.rotation), q_est)
+    offsets = np.stack([relative_extrinsic(scene, gt_frame, fr)[1] for fr in FRAMES])  # (7, 4)
     q_gt_fr = quat_multiply(q_gt[None, :, :], offsets[:, None, :])  # every frame at once
     angles = quat_angle_deg(quat_multiply(quat_conjugate(q_gt_fr), q_aligned[None, :, :]))
     return dict(zip(FRAMES, np.median(angles, axis=1).tolist(), strict=True))

@@ -18,9 +18,8 @@ from collections.abc import Iterable
 
 import numpy as np
 import pandas as pd
-from scipy.spatial.transform import Rotation
 
-from .geometry import quat_conjugate, quat_multiply, quat_rotate
+from .geometry import quat_conjugate, quat_multiply, quat_normalize, quat_rotate, quat_to_matrix
 from .model import FileErrors
 from .scoring import as_files
 
@@ -73,8 +72,8 @@ def rpg_relative_errors(
     scale, as rpg does). One row per pair: ``length``, ``trans`` (m), ``trans_perc`` (% of the
     length), ``rot`` (deg), ``rot_deg_per_m``."""
     p_g, p_e = np.asarray(gt_positions, float), np.asarray(est_positions, float)
-    q_g = Rotation.from_quat(gt_quaternions).as_quat()
-    q_e = Rotation.from_quat(est_quaternions).as_quat()
+    q_g = quat_normalize(gt_quaternions)
+    q_e = quat_normalize(est_quaternions)
     dist = distances(p_g)
     rows = []
     for length in rpg_lengths(p_g) if lengths is None else lengths:  # a handful of lengths
@@ -88,7 +87,7 @@ def rpg_relative_errors(
         inv_rel_g = quat_conjugate(rel_g_q)
         err_t = quat_rotate(inv_rel_g, rel_e_t - rel_g_t)
         err_q = quat_multiply(inv_rel_g, quat_multiply(inv_e, q_e[j]))
-        trace = Rotation.from_quat(err_q).as_matrix().trace(axis1=1, axis2=2)
+        trace = quat_to_matrix(err_q).trace(axis1=1, axis2=2)
         rot = np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0)))
         trans = np.linalg.norm(err_t, axis=1)
         rows.append(
@@ -116,11 +115,11 @@ def relative_table(
     rows = []
     for f in as_files(errors):  # per file, sequence and length, never per pose
         for e in f.sequences:
-            if e.matched < 2 or e.gt_rotations is None or e.est_rotations is None:
+            if e.matched < 2 or e.gt_quaternions is None or e.est_quaternions is None:
                 continue
             lengths = rpg_lengths(e.gt_positions, fractions)
-            rel = rpg_relative_errors(e.gt_positions, e.gt_rotations.as_quat(), e.est_positions,
-                                      e.est_rotations.as_quat(), [x for x in lengths if x > 0])  # fmt: skip
+            rel = rpg_relative_errors(e.gt_positions, e.gt_quaternions, e.est_positions, e.est_quaternions,
+                                      [x for x in lengths if x > 0])  # fmt: skip
             fraction_of = dict(zip(lengths, fractions, strict=True))
             for length, g in rel.groupby("length", sort=False):
                 frac = fraction_of[float(length)]

@@ -27,7 +27,6 @@ from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from .model import FileErrors, ResultFile
 from .pipeline import compute_errors
@@ -67,6 +66,8 @@ class Faults:
 def simulate(gt: Trajectory, faults: Faults = Faults()) -> Trajectory:
     """An estimate of ``gt`` with the given faults (see the module docstring). Deterministic for
     ``faults.seed``; the result's ``meta`` says ``simulated: True`` and lists the faults."""
+    from scipy.spatial.transform import Rotation  # here: a simulation, not the evaluation's path
+
     rng = np.random.default_rng(faults.seed)
     t = np.array(gt.stamps, float)  # copies: the ground truth is never modified
     p = np.array(gt.positions, float)

@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.spatial.transform import Rotation
+
+from .geometry import rotations_of
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
 
 
 def path_length(positions: np.ndarray) -> float:
@@ -77,7 +81,7 @@ class Trajectory:
 
     def rotations(self) -> Rotation:
         """Orientations as a scipy ``Rotation`` (quaternions normalized)."""
-        return Rotation.from_quat(self.quaternions)
+        return rotations_of(self.quaternions)
 
     def subset(self, mask_or_index: np.ndarray) -> "Trajectory":
         """The poses selected by a boolean mask or an index array."""

@@ -67,12 +67,15 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Iterator[tuple[byt
         while True:
             try:
                 block = fh.read(SNIFF_BYTES if first else size)
+                if first and block.startswith(BOM):
+                    block = block[len(BOM) :]
+                nul = block.find(b"\0")
+                if first and nul < 0 and len(block) >= SNIFF_BYTES - len(BOM):  # text so far: the rest of a chunk
+                    block += fh.read(max(size - SNIFF_BYTES, 0))
+                    nul = block.find(b"\0", SNIFF_BYTES - len(BOM))
             except OSError as exc:
                 raise ParseError(spath, None, f"cannot be read ({exc.strerror})") from None
-            if first and block.startswith(BOM):
-                block = block[len(BOM) :]
             first = False
-            nul = block.find(b"\0")
             if nul >= 0:
                 line = line0 + rest.count(b"\n") + block.count(b"\n", 0, nul) + 1
                 raise ParseError(spath, line, f"binary data (a NUL byte); expected {what} (text)")

@@ -12,7 +12,6 @@ import warnings
 from collections.abc import Callable
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..core.trajectory import Trajectory
 from ..core.validate import choice
@@ -98,6 +97,8 @@ def _from_matrices(spath: str, stamps: np.ndarray, mats: np.ndarray, line_no: np
             "not a rotation (non-finite values, or a rotation block that is not orthonormal with determinant 1); "
             "expected a pose",
         )
+    from scipy.spatial.transform import Rotation  # here: only matrix files need it
+
     q = Rotation.from_matrix(rot).as_quat() if len(rot) else np.zeros((0, 4))
     return Trajectory(np.asarray(stamps, float), mats[:, :, 3].copy(), q, line_no, {"source": spath})
 

@@ -37,7 +37,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy.spatial.transform import Rotation
 
 from ..core.trajectory import Trajectory
 from ..errors import DataNotFoundError, ParseError
@@ -217,6 +216,8 @@ def read_ordslam(path: str | os.PathLike, fps: float | None = None, layout: str 
                 int(line_no[i]),
                 f"3x4 matrix has a rotation block of determinant {det[i]:.4f}; expected a rotation (determinant 1)",
             )
+        from scipy.spatial.transform import Rotation  # here: only matrix files need it
+
         quat = Rotation.from_matrix(mats[:, :, :3]).as_quat()
         pose = np.concatenate([mats[:, :, 3], quat], axis=1)
     notes: list[str] = []
