@@ -59,6 +59,26 @@ def test_awkward_file_reads_the_same_in_any_chunking(tmp_path, chunk_bytes):
     assert sorted(f.sequences) == [1, 2] and len(f.sequences[2]) == 2  # the NaN pose is skipped
 
 
+@pytest.mark.parametrize(
+    "later",
+    ["2 1 1 1 0 0 0 1 ", "2  1 1 1 0 0 0 1", "2\t1 1 1 0 0 0 1", " 2 1 1 1 0 0 0 1", "9 2 1 1 1 0 0 0 1", "2 1 1 1 0 0 1"],
+    ids=["trailing-space", "double-space", "tab", "leading-space", "nine-fields", "seven-fields"],
+)
+def test_single_spaced_lines_then_other_spacing_read_as_the_exact_scanner_does(tmp_path, later):
+    """The C parser splits on single spaces when the first line is single-spaced; any other
+    spacing further on must give the exact scanner's rows (or the same error), never other numbers."""
+    text = "seq: 1\n" + "".join(f"1.{k} 0.5 0.25 0 0 0 0 1\n" for k in range(50)) + later + "\n1.9 0 0 0 0 0 0 1\n"
+    path = write(tmp_path, "s.txt", text)
+    try:
+        exact = _read(path, fast_min_bytes=1 << 40)
+    except ParseError as exc:
+        with pytest.raises(ParseError) as fast_exc:
+            _read(path, fast_min_bytes=0)
+        assert (fast_exc.value.line, fast_exc.value.reason) == (exc.line, exc.reason)
+        return
+    _same(_read(path, fast_min_bytes=0), exact)
+
+
 def test_large_file_takes_fast_path_and_keeps_exact_lines(tmp_path):
     n = 50_000
     rng = np.random.default_rng(1)

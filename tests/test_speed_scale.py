@@ -26,6 +26,20 @@ def test_local_processes_equal_one_process(icra20):
     _same(ln.evaluate(src, jobs=1, scale="auto"), ln.evaluate(src, jobs=2, scale="auto"))
 
 
+def test_durations_come_from_the_workers_and_equal_reading_the_ground_truth(icra20):
+    """Scene durations (the CR denominators) are the spans the workers saw, not a second read of
+    every ground truth in the parent; they equal reading it."""
+    from lorisnb.core.aggregate import durations_table
+    from lorisnb.io import load_groundtruth
+
+    ev = ln.evaluate(icra20 / "lifelong", jobs=2, progress=False)
+    assert all(f.groundtruth_spans for f in ev.errors)
+    scenes = list(dict.fromkeys(ev.durations()["scene"]))
+    assert set(scenes) == {f.scene for f in ev.errors} and len(scenes) > 1
+    expected = durations_table({s: load_groundtruth(s) for s in scenes})
+    pd.testing.assert_frame_equal(ev.durations(), expected)
+
+
 def test_bad_jobs_and_executor(icra20):
     with pytest.raises(ln.ValidationError, match="jobs=0"):
         ln.evaluate(icra20 / "per-seq" / "odom", jobs=0)

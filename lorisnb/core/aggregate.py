@@ -19,11 +19,20 @@ DURATION_COLUMNS = ["scene", "seq", "gt_start", "gt_end", "gt_duration"]
 def durations_table(groundtruths: Mapping[str, ResultFile]) -> pd.DataFrame:
     """Ground-truth span of every sequence of each scene: first and last stamp and duration,
     seconds. ``groundtruths`` maps scene -> its ground-truth file."""
+    return spans_table(
+        {
+            scene: {s: (float(t.stamps[0]), float(t.stamps[-1])) for s, t in gt.sequences.items() if len(t)}
+            for scene, gt in groundtruths.items()
+        }
+    )
+
+
+def spans_table(spans: Mapping[str, Mapping[int, tuple[float, float]]]) -> pd.DataFrame:
+    """:func:`durations_table` from the spans alone: scene -> sequence -> (first, last stamp, seconds)."""
     rows = [
-        dict(scene=scene, seq=s, gt_start=float(t.stamps[0]), gt_end=float(t.stamps[-1]), gt_duration=t.duration)
-        for scene, gt in groundtruths.items()
-        for s, t in gt.sequences.items()
-        if len(t)
+        dict(scene=scene, seq=s, gt_start=start, gt_end=end, gt_duration=end - start)
+        for scene, by_seq in spans.items()
+        for s, (start, end) in by_seq.items()
     ]
     return pd.DataFrame(rows, columns=DURATION_COLUMNS)
 

@@ -209,6 +209,9 @@ class FileErrors:
     sequences: list[SequenceErrors]
     warnings: list[str] = field(default_factory=list)
     trial: int = 0  # the trial number (:mod:`lorisnb.core.trials`); 0 for the only trial
+    #: first and last stamp (seconds) of every sequence of the scene's ground truth, all of them and
+    #: not only those of this file: what the scene's CR is taken over (empty when not known)
+    groundtruth_spans: dict[int, tuple[float, float]] = field(default_factory=dict)
 
 
 def is_monocular(algorithm: str) -> bool:

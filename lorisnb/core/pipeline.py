@@ -282,6 +282,7 @@ def compute_errors(
         path=path, algorithm=algorithm, file=file if file is not None else path.name, suite=suite, scene=scene,
         frame=frame, mode="lifelong" if lifelong else "per-seq", alignment=alignment, aligned_on=aligned_on,
         official_interpolation=official_interpolation, sequences=out, warnings=kept, trial=trial,
+        groundtruth_spans={k: (float(t.stamps[0]), float(t.stamps[-1])) for k, t in groundtruth.sequences.items() if len(t)},
     )  # fmt: skip
 
 

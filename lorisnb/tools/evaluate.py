@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ..core import validate
-from ..core.aggregate import aggregate_scenes, durations_table
+from ..core.aggregate import aggregate_scenes, durations_table, spans_table
 from ..core.association import MAX_GAP
 from ..core.conventions import Conventions
 from ..core.frames import SCENES
@@ -88,6 +88,9 @@ class Evaluation:
         if self.groundtruth is not None:
             return durations_table(self.groundtruth)
         scenes = sorted({f.scene for f in self.errors}, key=SCENES.index)
+        known = {f.scene: f.groundtruth_spans for f in self.errors if f.groundtruth_spans}
+        if set(known) == set(scenes):  # spans found while evaluating: no ground truth read again
+            return spans_table({s: dict(sorted(known[s].items())) for s in scenes})
         return scene_durations(scenes, self.data)
 
     @property
@@ -260,21 +263,49 @@ def _run(jobs: list[FileJob], n_jobs: int, executor: Executor | None, progress: 
     pool = executor or ProcessPoolExecutor(max_workers=n_jobs, mp_context=_context())
     bar = None
     try:
-        # largest files first, so that no worker is left with a big one at the end
-        order = sorted(range(len(jobs)), key=lambda k: -_size(jobs[k].path))
-        futures = {pool.submit(evaluate_file, jobs[k]): k for k in order}
+        futures = {pool.submit(evaluate_batch, [jobs[k] for k in batch]): batch for batch in _batches(jobs, n_jobs)}
         bar = new_bar()  # after the workers are forked: the bar may start a monitor thread
         results: list[Any] = [None] * len(jobs)
         for fut in as_completed(futures):
-            results[futures[fut]] = fut.result()
+            for k, result in zip(futures[fut], fut.result(), strict=True):
+                results[k] = result
             if bar is not None:
-                bar.update()
+                bar.update(len(futures[fut]))
         return results
     finally:
         if bar is not None:
             bar.close()
         if own:
             pool.shutdown(cancel_futures=True)
+
+
+def evaluate_batch(jobs: list[FileJob]) -> list[tuple[str, FileErrors | Failure | None]]:
+    """:func:`evaluate_file` of several files, in one task of a pool."""
+    return [evaluate_file(job) for job in jobs]
+
+
+#: A task of a pool holds files of about this many bytes at most (small files travel together:
+#: one task per file costs more than evaluating a small file), and there are at least this many
+#: tasks per worker, so that the work stays balanced.
+BATCH_BYTES = 8 * 2**20
+TASKS_PER_WORKER = 4
+
+
+def _batches(jobs: list[FileJob], n_jobs: int) -> list[list[int]]:
+    """Indices of ``jobs`` in tasks: largest files first (no worker is left with a big one at the
+    end), each task at most :data:`BATCH_BYTES` or an even share of the whole, whichever is smaller."""
+    sizes = [_size(j.path) for j in jobs]
+    order = sorted(range(len(jobs)), key=lambda k: -sizes[k])
+    limit = min(BATCH_BYTES, sum(sizes) / max(1, TASKS_PER_WORKER * n_jobs))
+    batches: list[list[int]] = []
+    load = 0.0
+    for k in order:
+        if not batches or load + sizes[k] > limit:
+            batches.append([])
+            load = 0.0
+        batches[-1].append(k)
+        load += sizes[k]
+    return batches
 
 
 #: Inputs smaller than this (bytes) are evaluated in this process when worker processes are costly
