@@ -61,7 +61,14 @@ def test_awkward_file_reads_the_same_in_any_chunking(tmp_path, chunk_bytes):
 
 @pytest.mark.parametrize(
     "later",
-    ["2 1 1 1 0 0 0 1 ", "2  1 1 1 0 0 0 1", "2\t1 1 1 0 0 0 1", " 2 1 1 1 0 0 0 1", "9 2 1 1 1 0 0 0 1", "2 1 1 1 0 0 1"],
+    [
+        "2 1 1 1 0 0 0 1 ",
+        "2  1 1 1 0 0 0 1",
+        "2\t1 1 1 0 0 0 1",
+        " 2 1 1 1 0 0 0 1",
+        "9 2 1 1 1 0 0 0 1",
+        "2 1 1 1 0 0 1",
+    ],
     ids=["trailing-space", "double-space", "tab", "leading-space", "nine-fields", "seven-fields"],
 )
 def test_single_spaced_lines_then_other_spacing_read_as_the_exact_scanner_does(tmp_path, later):

@@ -6,13 +6,11 @@ collecting failures instead of stopping.
 from __future__ import annotations
 
 import os
-import threading
 import warnings
 from collections.abc import Iterable
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor
 from dataclasses import dataclass, field, replace
 from functools import partial
-from multiprocessing import get_all_start_methods, get_context
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +31,7 @@ from ..core.validate import choice, scale_value
 from ..errors import DataNotFoundError, LorisError, LorisWarning, ValidationError
 from ..io.data import DataPaths, DataRoot, find_data, groundtruth_spans, load_groundtruth, scene_durations
 from ..io.openloris import read_openloris
+from .pool import default_jobs, run_tasks, size_of
 
 PathArg = str | os.PathLike[str]
 
@@ -201,10 +200,10 @@ def evaluate_file(job: FileJob, progress: bool = False) -> tuple[str, FileErrors
     ``progress``, a file over :data:`BIG_FILE_BYTES` shows a bar of the bytes read."""
     algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
     bar = None
-    if progress and _size(job.path) >= BIG_FILE_BYTES:
+    if progress and size_of(job.path) >= BIG_FILE_BYTES:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=_size(job.path), desc=f"reading {job.path.name}", unit="B", unit_scale=True, leave=False)
+        bar = tqdm(total=size_of(job.path), desc=f"reading {job.path.name}", unit="B", unit_scale=True, leave=False)
     try:
         result = read_openloris(
             job.path, remove_repeated=job.remove_repeated, warn=False, repair_stamps=job.repair_stamps,
@@ -234,120 +233,6 @@ def evaluate_file(job: FileJob, progress: bool = False) -> tuple[str, FileErrors
 
 #: Files at least this large show a progress bar of their own while read (when evaluated here).
 BIG_FILE_BYTES = 64 * 2**20
-
-
-def _run(jobs: list[FileJob], n_jobs: int, executor: Executor | None, progress: bool) -> list[tuple[str, Any]]:
-    """Results of :func:`evaluate_file` in the order of ``jobs``: here, in a local process pool of
-    ``n_jobs`` processes, or on ``executor``."""
-
-    def new_bar() -> Any:
-        if not progress:
-            return None
-        from tqdm.auto import tqdm
-
-        return tqdm(total=len(jobs), desc="evaluating", unit="file")
-
-    if executor is None and not _worth_processes(jobs, n_jobs):
-        out = []
-        bar = new_bar()
-        try:
-            for job in jobs:  # one file at a time
-                out.append(evaluate_file(job, progress=progress))
-                if bar is not None:
-                    bar.update()
-        finally:
-            if bar is not None:
-                bar.close()
-        return out
-    own = executor is None
-    pool = executor or ProcessPoolExecutor(max_workers=n_jobs, mp_context=_context())
-    bar = None
-    try:
-        futures = {pool.submit(evaluate_batch, [jobs[k] for k in batch]): batch for batch in _batches(jobs, n_jobs)}
-        bar = new_bar()  # after the workers are forked: the bar may start a monitor thread
-        results: list[Any] = [None] * len(jobs)
-        for fut in as_completed(futures):
-            for k, result in zip(futures[fut], fut.result(), strict=True):
-                results[k] = result
-            if bar is not None:
-                bar.update(len(futures[fut]))
-        return results
-    finally:
-        if bar is not None:
-            bar.close()
-        if own:
-            pool.shutdown(cancel_futures=True)
-
-
-def evaluate_batch(jobs: list[FileJob]) -> list[tuple[str, FileErrors | Failure | None]]:
-    """:func:`evaluate_file` of several files, in one task of a pool."""
-    return [evaluate_file(job) for job in jobs]
-
-
-#: A task of a pool holds files of about this many bytes at most (small files travel together:
-#: one task per file costs more than evaluating a small file), and there are at least this many
-#: tasks per worker, so that the work stays balanced.
-BATCH_BYTES = 8 * 2**20
-TASKS_PER_WORKER = 4
-
-
-def _batches(jobs: list[FileJob], n_jobs: int) -> list[list[int]]:
-    """Indices of ``jobs`` in tasks: largest files first (no worker is left with a big one at the
-    end), each task at most :data:`BATCH_BYTES` or an even share of the whole, whichever is smaller."""
-    sizes = [_size(j.path) for j in jobs]
-    order = sorted(range(len(jobs)), key=lambda k: -sizes[k])
-    limit = min(BATCH_BYTES, sum(sizes) / max(1, TASKS_PER_WORKER * n_jobs))
-    batches: list[list[int]] = []
-    load = 0.0
-    for k in order:
-        if not batches or load + sizes[k] > limit:
-            batches.append([])
-            load = 0.0
-        batches[-1].append(k)
-        load += sizes[k]
-    return batches
-
-
-#: Inputs smaller than this (bytes) are evaluated in this process when worker processes are costly
-#: to start (a fork server or spawned interpreters import numpy, scipy and pandas: about 2 s).
-PARALLEL_MIN_BYTES = 100 * 2**20
-
-
-def _size(path: Path) -> int:
-    try:
-        return path.stat().st_size
-    except OSError:
-        return 0
-
-
-def _worth_processes(jobs: list[FileJob], n_jobs: int) -> bool:
-    """Whether a local process pool pays: several processes, at least two files each, and forked
-    workers (cheap) or enough input to outweigh starting interpreters."""
-    if n_jobs <= 1 or len(jobs) < 2 * n_jobs:
-        return False
-    if _context().get_start_method() == "fork":
-        return True
-    size = sum(_size(j.path) for j in jobs)
-    return size >= PARALLEL_MIN_BYTES
-
-
-def _context() -> Any:
-    """How worker processes start: forked when this process runs a single thread (the command
-    line, scripts: cheapest), else from a fork server (a Jupyter kernel runs threads, and forking
-    a threaded process is unsafe), else spawned (platforms without fork)."""
-    methods = get_all_start_methods()
-    if "fork" in methods and threading.active_count() == 1:
-        return get_context("fork")
-    if "forkserver" in methods:
-        ctx = get_context("forkserver")
-        ctx.set_forkserver_preload(["lorisnb.tools.evaluate"])
-        return ctx
-    return get_context("spawn")
-
-
-def default_jobs() -> int:
-    """All local cores (``os.cpu_count()``)."""
-    return max(1, os.cpu_count() or 1)
 
 
 def evaluate(
@@ -381,10 +266,10 @@ def evaluate(
         trials_by: a regular expression whose first group is the trial number in a file's path
             (default: the tokens of :mod:`lorisnb.core.trials`: ``_trial3``, ``run_2/``, ...).
         progress: show a progress bar over files (tqdm; notebook-aware).
-        jobs: processes evaluating files in parallel; default all local cores (:func:`default_jobs`),
+        jobs: processes evaluating files in parallel; default all local cores (:func:`lorisnb.tools.pool.default_jobs`),
             1 for one process. Small inputs run in this process: fewer than two files per process,
             or, where workers cannot be forked cheaply (inside Jupyter), under
-            :data:`PARALLEL_MIN_BYTES`.
+            :data:`lorisnb.tools.pool.PARALLEL_MIN_BYTES`.
         executor: any ``concurrent.futures.Executor`` to run the files on instead, for example a
             Dask cluster's (``distributed.Client(address).get_executor()``). Results are the same
             and in the same order as one process gives.
@@ -410,13 +295,14 @@ def evaluate(
     done: list[FileErrors] = []
     failed: list[Failure] = []
     skipped: list[Failure] = []
-    for status, value in _run(work, n_jobs, executor, progress):
-        if status == "ok":
+    sizes = [size_of(j.path) for j in work]
+    for status, value in run_tasks(
+        evaluate_file, work, sizes, n_jobs, executor, progress, desc="evaluating", unit="file"
+    ):
+        if isinstance(value, FileErrors):
             done.append(value)
-        elif status == "failed":
-            failed.append(value)
-        elif status == "skipped":
-            skipped.append(value)
+        elif isinstance(value, Failure):
+            (failed if status == "failed" else skipped).append(value)
     roots = as_paths(paths)
     root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
     for w in dict.fromkeys(w for f in done for w in f.warnings):

@@ -1,0 +1,141 @@
+"""Running one task per input file here, on all local cores, or on any ``concurrent.futures``
+executor (a Dask cluster's): largest inputs first, small ones together in one task, results in
+the order of the inputs, one progress bar."""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from functools import partial
+from multiprocessing import get_all_start_methods, get_context
+from pathlib import Path
+from typing import Any, TypeVar
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+#: A task sent to a pool holds inputs of about this many bytes at most (small files travel
+#: together: one task per file costs more than evaluating a small file), and there are at least
+#: this many tasks per worker, so that the work stays balanced.
+BATCH_BYTES = 8 * 2**20
+TASKS_PER_WORKER = 4
+
+#: Inputs smaller than this (bytes) are handled in this process when worker processes are costly
+#: to start (a fork server or spawned interpreters import numpy and pandas: about a second).
+PARALLEL_MIN_BYTES = 100 * 2**20
+
+
+def size_of(path: Path) -> int:
+    """Bytes of a file (0 if it cannot be read: the task reports why)."""
+    try:
+        return path.stat().st_size
+    except OSError:
+        return 0
+
+
+def default_jobs() -> int:
+    """All local cores (``os.cpu_count()``)."""
+    return max(1, os.cpu_count() or 1)
+
+
+def batches(sizes: Sequence[int], n_jobs: int) -> list[list[int]]:
+    """Indices of inputs grouped into tasks: largest first (no worker is left with a big one at the
+    end), each task at most :data:`BATCH_BYTES` or an even share of the whole, whichever is smaller."""
+    order = sorted(range(len(sizes)), key=lambda k: -sizes[k])
+    limit = min(BATCH_BYTES, sum(sizes) / max(1, TASKS_PER_WORKER * n_jobs))
+    out: list[list[int]] = []
+    load = 0.0
+    for k in order:
+        if not out or load + sizes[k] > limit:
+            out.append([])
+            load = 0.0
+        out[-1].append(k)
+        load += sizes[k]
+    return out
+
+
+def start_context() -> Any:
+    """How worker processes start: forked when this process runs a single thread (the command
+    line, scripts: cheapest), else from a fork server (a Jupyter kernel runs threads, and forking
+    a threaded process is unsafe), else spawned (platforms without fork)."""
+    methods = get_all_start_methods()
+    if "fork" in methods and threading.active_count() == 1:
+        return get_context("fork")
+    if "forkserver" in methods:
+        ctx = get_context("forkserver")
+        ctx.set_forkserver_preload(["lorisnb.tools.evaluate"])
+        return ctx
+    return get_context("spawn")
+
+
+def worth_processes(sizes: Sequence[int], n_jobs: int) -> bool:
+    """Whether a local process pool pays: several processes, at least two inputs each, and forked
+    workers (cheap) or enough input to outweigh starting interpreters."""
+    if n_jobs <= 1 or len(sizes) < 2 * n_jobs:
+        return False
+    if start_context().get_start_method() == "fork":
+        return True
+    return sum(sizes) >= PARALLEL_MIN_BYTES
+
+
+def apply_all(fn: Callable[[T], R], items: list[T]) -> list[R]:
+    """``fn`` on each item: one task of a pool."""
+    return [fn(item) for item in items]
+
+
+def run_tasks(
+    fn: Callable[..., R],
+    items: Sequence[T],
+    sizes: Sequence[int],
+    n_jobs: int,
+    executor: Executor | None = None,
+    progress: bool = False,
+    *,
+    desc: str,
+    unit: str,
+) -> list[R]:
+    """``fn(item)`` for every item, in the order of ``items``: here one at a time (``fn`` then gets
+    ``progress=`` too, for bars of its own), in a local pool of ``n_jobs`` processes, or on
+    ``executor``. ``fn`` must be a module-level function (it is pickled by name). ``sizes`` are
+    the items' bytes, for scheduling."""
+
+    def new_bar() -> Any:
+        if not progress:
+            return None
+        from tqdm.auto import tqdm
+
+        return tqdm(total=len(items), desc=desc, unit=unit)
+
+    if executor is None and not worth_processes(sizes, n_jobs):
+        out = []
+        bar = new_bar()
+        try:
+            for item in items:
+                out.append(fn(item, progress=progress))
+                if bar is not None:
+                    bar.update()
+        finally:
+            if bar is not None:
+                bar.close()
+        return out
+    own = executor is None
+    pool = executor or ProcessPoolExecutor(max_workers=n_jobs, mp_context=start_context())
+    bar = None
+    try:
+        task = partial(apply_all, fn)
+        futures = {pool.submit(task, [items[k] for k in batch]): batch for batch in batches(sizes, n_jobs)}
+        bar = new_bar()  # after the workers are forked: the bar may start a monitor thread
+        results: list[Any] = [None] * len(items)
+        for fut in as_completed(futures):
+            for k, result in zip(futures[fut], fut.result(), strict=True):
+                results[k] = result
+            if bar is not None:
+                bar.update(len(futures[fut]))
+        return results
+    finally:
+        if bar is not None:
+            bar.close()
+        if own:
+            pool.shutdown(cancel_futures=True)
