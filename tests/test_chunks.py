@@ -112,3 +112,39 @@ def test_binary_data_after_the_first_chunk_is_refused_where_it_appears(tmp_path)
     path.write_bytes(text.encode() + b"\0\1\2" * 100_000)
     with pytest.raises(ParseError, match=r"line 20001: binary data"):
         read_tum(path)
+
+
+@pytest.mark.parametrize("fault", ["bad-number", "nul", "overlong", "no-final-newline"])
+def test_later_chunks_read_on_threads_name_the_same_lines(tmp_path, fault, monkeypatch):
+    """Past the first chunk a regular file is read and parsed on threads, each range on its own;
+    rows, line numbers and errors are those of reading it whole."""
+    from lorisnb.io import ranges
+
+    monkeypatch.setattr(ranges, "LINE_LIMIT", 3000)
+    rows = [f"seq: {k // 5000 + 1}" if k % 5000 == 0 else f"{k}.5 0.25 1 2 0 0 0 1" for k in range(30_000)]
+    body = "\n".join(rows) + "\n"
+    if fault == "bad-number":
+        body = body.replace("\n21000.5 0.25", "\n21000.5 x0.25")
+    elif fault == "nul":
+        body = body.replace("\n22000.5 0.25", "\n22000.5 \0.25")
+    elif fault == "overlong":
+        body = body.replace("\n23000.5 0.25", "\n23000.5 " + "1" * 20_000)  # no line end for 5 chunks
+    else:
+        body = body[:-1]
+    path = tmp_path / "t.txt"
+    path.write_bytes(body.encode())
+    if fault == "overlong":  # as one chunk after another would: no line end within a chunk is not text
+        with pytest.raises(ParseError, match=r"t.txt, line 23001: a line longer than 3000 bytes"):
+            _read(path, chunk_bytes=4096)
+        return
+    try:
+        whole = _read(path, chunk_bytes=1 << 30)
+    except ParseError as exc:
+        with pytest.raises(ParseError) as threaded:
+            _read(path, chunk_bytes=4096)
+        assert (threaded.value.line, threaded.value.reason) == (exc.line, exc.reason)
+        assert exc.line == {"bad-number": 21001, "nul": 22001}[fault]
+        return
+    assert fault == "no-final-newline"
+    _same(_read(path, chunk_bytes=4096), whole)
+    assert whole.lines[-1] == 30_000

@@ -40,6 +40,28 @@ def test_durations_come_from_the_workers_and_equal_reading_the_ground_truth(icra
     pd.testing.assert_frame_equal(ev.durations(), expected)
 
 
+def test_row_blocks_and_threads_give_the_same_numbers(icra20, monkeypatch):
+    """Long per-pose computations run in row blocks, on threads (lorisnb.core.blocks): every
+    error, RPE included, is the same whatever the block size and thread count."""
+    from lorisnb.core import blocks
+
+    path = icra20 / "lifelong" / "maslam" / "market.txt"  # 5 sequences, about 11,000 poses
+    whole = ln.evaluate(path, jobs=1, progress=False, official_interpolation=False)
+    monkeypatch.setattr(blocks, "BLOCK_ROWS", 7)
+    with blocks.threads(3):
+        small = ln.evaluate(path, jobs=1, progress=False)
+        official = ln.evaluate(path, jobs=1, progress=False, official_interpolation=True)
+    monkeypatch.setattr(blocks, "BLOCK_ROWS", 1 << 20)
+    official_whole = ln.evaluate(path, jobs=1, progress=False, official_interpolation=True)
+    for a, b in ((whole, small), (official_whole, official)):
+        assert sum(e.matched for e in a.errors[0].sequences) > 1000
+        for ea, eb in zip(a.errors[0].sequences, b.errors[0].sequences, strict=True):
+            for name in ("ate", "aoe", "est_positions", "gt_positions", "est_quaternions", "gt_quaternions"):
+                np.testing.assert_array_equal(getattr(ea, name), getattr(eb, name))
+            for x, y in zip(ea.rpe(), eb.rpe(), strict=True):
+                np.testing.assert_array_equal(x, y)
+
+
 def test_bad_jobs_and_executor(icra20):
     with pytest.raises(ln.ValidationError, match="jobs=0"):
         ln.evaluate(icra20 / "per-seq" / "odom", jobs=0)

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .blocks import blockwise
 from .frames import extrinsic, relative_extrinsic
 from .geometry import (
     official_slerp,
@@ -113,13 +114,18 @@ def associate(
     if idx.size == 0:
         return Association(idx, np.zeros(0), np.zeros((0, 3)), None, gt_start, gt_end)
     t, i = t[idx], i[idx]
-    w2 = (t - g[i]) / (g[i + 1] - g[i])
-    w1 = 1.0 - w2
-    p = gt.positions
-    pos = w1[:, None] * p[i] + w2[:, None] * p[i + 1]
-    q = gt.quaternions
-    if official_interpolation:
-        quats = quat_normalize(official_slerp(q[i], q[i + 1], w1, w2))
-    else:  # slerp between the bracketing ground-truth poses (scipy's Slerp on each interval)
-        quats = slerp(q[i], q[i + 1], w2)
+    p, q = gt.positions, gt.quaternions
+    pos, quats = np.empty((len(t), 3)), np.empty((len(t), 4))
+
+    def rows(lo: int, hi: int) -> None:
+        k = i[lo:hi]
+        w2 = (t[lo:hi] - g[k]) / (g[k + 1] - g[k])
+        w1 = 1.0 - w2
+        pos[lo:hi] = w1[:, None] * p[k] + w2[:, None] * p[k + 1]
+        if official_interpolation:
+            quats[lo:hi] = quat_normalize(official_slerp(q[k], q[k + 1], w1, w2))
+        else:  # slerp between the bracketing ground-truth poses (scipy's Slerp on each interval)
+            quats[lo:hi] = slerp(q[k], q[k + 1], w2)
+
+    blockwise(rows, len(t))
     return Association(idx, t, pos, quats, gt_start, gt_end)

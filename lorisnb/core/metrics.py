@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Union
 
 import numpy as np
 
+from .blocks import blockwise
 from .geometry import as_quaternions, quat_angle_deg, quat_conjugate, quat_multiply, quat_rotate
 
 if TYPE_CHECKING:
@@ -156,22 +157,37 @@ def rpe(
     est_rotations: Orientations,
     i: np.ndarray,
     j: np.ndarray,
+    *,
+    assume_unit: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Relative pose error of pairs (i, j), TUM definition:
     ``E = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)`` with Q ground truth, P estimate.
 
-    Orientations are scipy ``Rotation`` objects or (N, 4) quaternions ``xyzw``.
+    Orientations are scipy ``Rotation`` objects or (N, 4) quaternions ``xyzw`` (normalized here
+    unless ``assume_unit``). Computed in row blocks (:mod:`lorisnb.core.blocks`).
     Returns (translational error in metres, rotational error in degrees) per pair.
     """
+    i, j = np.asarray(i, np.intp), np.asarray(j, np.intp)
     if len(i) == 0:
         return np.zeros(0), np.zeros(0)
-    qg, qe = as_quaternions(gt_rotations), as_quaternions(est_rotations)
-    inv_gi, inv_ei = quat_conjugate(qg[i]), quat_conjugate(qe[i])
-    rel_g_rot = quat_multiply(inv_gi, qg[j])
-    rel_g_t = quat_rotate(inv_gi, gt_positions[j] - gt_positions[i])
-    rel_e_rot = quat_multiply(inv_ei, qe[j])
-    rel_e_t = quat_rotate(inv_ei, est_positions[j] - est_positions[i])
-    inv_rel_g = quat_conjugate(rel_g_rot)
-    err_t = quat_rotate(inv_rel_g, rel_e_t - rel_g_t)
-    err_r = quat_multiply(inv_rel_g, rel_e_rot)
-    return np.sqrt(np.einsum("ij,ij->i", err_t, err_t)), quat_angle_deg(err_r)
+    if assume_unit:
+        qg, qe = np.asarray(gt_rotations, float), np.asarray(est_rotations, float)
+    else:
+        qg, qe = as_quaternions(gt_rotations), as_quaternions(est_rotations)
+    pg, pe = np.asarray(gt_positions, float), np.asarray(est_positions, float)
+    trans, rot = np.empty(len(i)), np.empty(len(i))
+
+    def rows(lo: int, hi: int) -> None:
+        a, b = i[lo:hi], j[lo:hi]
+        inv_gi, inv_ei = quat_conjugate(qg[a]), quat_conjugate(qe[a])
+        rel_g_rot = quat_multiply(inv_gi, qg[b])
+        rel_g_t = quat_rotate(inv_gi, pg[b] - pg[a])
+        rel_e_rot = quat_multiply(inv_ei, qe[b])
+        rel_e_t = quat_rotate(inv_ei, pe[b] - pe[a])
+        inv_rel_g = quat_conjugate(rel_g_rot)
+        err_t = quat_rotate(inv_rel_g, rel_e_t - rel_g_t)
+        trans[lo:hi] = np.sqrt(np.einsum("ij,ij->i", err_t, err_t))
+        rot[lo:hi] = quat_angle_deg(quat_multiply(inv_rel_g, rel_e_rot))
+
+    blockwise(rows, len(i))
+    return trans, rot

@@ -185,8 +185,9 @@ class SequenceErrors:
             else:
                 i, j = metrics.rpe_pairs(self.stamps, self.gt_positions, delta, unit)
                 tr, rr = metrics.rpe(
-                    self.gt_positions, self.gt_quaternions, self.est_positions, self.est_quaternions, i, j
-                )
+                    self.gt_positions, self.gt_quaternions, self.est_positions, self.est_quaternions, i, j,
+                    assume_unit=True,
+                )  # fmt: skip
                 self._rpe_cache[key] = (i, j, tr, rr)
         i, j, tr, rr = self._rpe_cache[key]
         return i, j, tr, rr

@@ -16,6 +16,7 @@ import numpy as np
 from ..errors import EvaluationError, LorisWarning, ParseError
 from . import metrics, plausibility
 from .association import MAX_GAP, Association, associate, groundtruth_in_frame
+from .blocks import blockwise
 from .frames import FRAMES, relative_extrinsic
 from .geometry import (
     Sim3,
@@ -55,14 +56,25 @@ def apply_alignment(
 def errors_after_alignment(
     seq: int, est: Trajectory, a: Association, sim: Sim3, official_interpolation: bool = False
 ) -> SequenceErrors:
-    """Per-pose ATE (m) and AOE (deg) of the matched poses of ``est`` after alignment ``sim``."""
+    """Per-pose ATE (m) and AOE (deg) of the matched poses of ``est`` after alignment ``sim``
+    (in row blocks, :mod:`lorisnb.core.blocks`)."""
     if len(a) == 0 or a.gt_quaternions is None:
         return SequenceErrors.unmatched(seq, len(est), a.gt_start, a.gt_end)
-    pos, q = apply_alignment(sim, est.positions[a.est_index], est.quaternions[a.est_index], official_interpolation)
+    m = len(a)
+    pos, q = np.empty((m, 3)), np.empty((m, 4))
+    ate, aoe = np.empty(m), np.empty(m)
+    gt_q = a.gt_quaternions
+
+    def rows(lo: int, hi: int) -> None:
+        k = a.est_index[lo:hi]
+        pos[lo:hi], q[lo:hi] = apply_alignment(sim, est.positions[k], est.quaternions[k], official_interpolation)
+        ate[lo:hi] = metrics.ate(pos[lo:hi], a.gt_positions[lo:hi])
+        aoe[lo:hi] = quat_angle_deg(quat_multiply(quat_conjugate(gt_q[lo:hi]), q[lo:hi]))  # unit on both sides
+
+    blockwise(rows, m)
     return SequenceErrors(
-        seq=seq, poses=len(est), stamps=a.stamps, ate=metrics.ate(pos, a.gt_positions),
-        aoe=metrics.aoe(q, a.gt_quaternions), est_positions=pos, gt_positions=a.gt_positions, est_quaternions=q,
-        gt_quaternions=a.gt_quaternions, gt_start=a.gt_start, gt_end=a.gt_end, scale=sim.scale,
+        seq=seq, poses=len(est), stamps=a.stamps, ate=ate, aoe=aoe, est_positions=pos, gt_positions=a.gt_positions,
+        est_quaternions=q, gt_quaternions=gt_q, gt_start=a.gt_start, gt_end=a.gt_end, scale=sim.scale,
     )  # fmt: skip
 
 

@@ -14,22 +14,21 @@ from __future__ import annotations
 import csv
 import io
 import os
-from collections import deque
-from collections.abc import Callable, Iterator
-from concurrent.futures import Future, ThreadPoolExecutor
+import stat
+from collections.abc import Callable, Generator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from ..errors import ParseError
+from .ranges import LINE_LIMIT, PARSE_THREADS, in_order, line_ranges, read_range
 from .scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
-PARSE_THREADS = max(1, min(4, os.cpu_count() or 1))  # threads parsing the chunks of one large file
 FAST_MIN_BYTES = 32 << 10
 SMALL_CHUNK = 1 << 20  # below this the numpy scanner is faster than a call of the C parser
-LINE_LIMIT = 1 << 20  # a "line" longer than this is not a text line of numbers
 
 
 @dataclass
@@ -58,9 +57,10 @@ class Rows:
         return self.columns.T
 
 
-def _chunks(path: str | os.PathLike, what: str, size: int) -> Iterator[tuple[bytes, int, int]]:
-    """Chunks of whole lines, the 0-based line number each starts at and its number of lines. A UTF-8 BOM is dropped;
-    NUL bytes (binary data) are refused in the chunk where they appear, before reading on."""
+def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[bytes, int, int, int], None, None]:
+    """Chunks of whole lines, the 0-based line number each starts at, its number of lines and the
+    byte offset in the file where the next chunk starts. A UTF-8 BOM is dropped; NUL bytes
+    (binary data) are refused in the chunk where they appear, before reading on."""
     spath = str(path)
     with open_input(path, what) as fh:
         line0, rest, first, seen_text = 0, b"", True, False
@@ -83,7 +83,7 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Iterator[tuple[byt
             if not block:
                 if data:
                     seen_text = seen_text or bool(data.strip())
-                    yield data + b"\n", line0, data.count(b"\n") + 1
+                    yield data + b"\n", line0, data.count(b"\n") + 1, fh.tell()
                 break
             cut = data.rfind(b"\n") + 1
             if cut == 0:
@@ -94,7 +94,7 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Iterator[tuple[byt
             piece, rest = data[:cut], data[cut:]
             seen_text = seen_text or bool(piece.strip())
             n = piece.count(b"\n")
-            yield piece, line0, n
+            yield piece, line0, n, fh.tell() - len(rest)
             line0 += n
         if not seen_text:
             raise ParseError(spath, None, f"empty file; expected {what}")
@@ -271,30 +271,35 @@ def read_rows(
         return part
 
     chunks = _chunks(path, what, chunk_bytes)
-    first = next(chunks)
-    parts.append(parse(*first))
+    first, _, _, at = next(chunks)
+    parts.append(parse(first, 0, first.count(b"\n")))
     if progress is not None:
-        progress(len(first[0]))
-    pool = None
-    pending: deque[tuple[Future[Rows], int]] = deque()
+        progress(len(first))
     try:
-        for chunk, line0, nlines in chunks:  # a large file: chunks parsed on threads (the C parser releases the GIL)
-            if pool is None:
-                pool = ThreadPoolExecutor(max_workers=PARSE_THREADS)
-            pending.append((pool.submit(parse, chunk, line0, nlines), len(chunk)))
-            while len(pending) > 2 * PARSE_THREADS or (pending and pending[0][0].done()):
-                fut, size = pending.popleft()
-                parts.append(fut.result())  # in file order
-                if progress is not None:
-                    progress(size)
-        while pending:
-            fut, size = pending.popleft()
-            parts.append(fut.result())
-            if progress is not None:
-                progress(size)
+        st = os.stat(path)
+        regular, total = stat.S_ISREG(st.st_mode), st.st_size
+    except OSError:
+        regular, total = False, 0
+    if not regular or at >= total:  # a pipe or a device (or no more chunks: the end checks for an empty file)
+        parts += in_order((((parse, c, l0, n), len(c)) for c, l0, n, _ in chunks), progress)
+        return _join(parts, width)
+    chunks.close()
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        tasks = (
+            ((read_range, fd, lo, hi, overlong, parse, spath, what), hi - lo)
+            for lo, hi, overlong in line_ranges(fd, at, total, chunk_bytes)
+        )
+        line0 = first.count(b"\n")
+        for part, nlines in in_order(tasks, progress):  # chunks read and parsed on threads, joined in order
+            if isinstance(part, ParseError):
+                raise ParseError(spath, None if part.line is None else part.line + line0, part.reason)
+            part.lines += line0
+            part.specials = [(k + line0, text) for k, text in part.specials]
+            parts.append(part)
+            line0 += nlines
     finally:
-        if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+        os.close(fd)
     return _join(parts, width)
 
 
@@ -304,16 +309,24 @@ def _join(parts: list[Rows], width: int) -> Rows:
     used = max((len(p.columns) for p in parts if p.columns.shape[1]), default=width)
     if len(parts) == 1:
         return parts[0]
-    n = sum(p.columns.shape[1] for p in parts)
-    columns = np.empty((used, n))
-    at = 0
-    for p in parts:
+    sizes = [p.columns.shape[1] for p in parts]
+    columns = np.empty((used, sum(sizes)))
+    offsets = np.cumsum([0] + sizes)
+
+    def copy(i: int) -> None:
+        p, at = parts[i], int(offsets[i])
         k, m = p.columns.shape
         columns[:k, at : at + m] = p.columns
         if k < used:
             columns[k:used, at : at + m] = np.nan
-        at += m
         p.columns = columns[:0]  # let the chunk's copy go as soon as it is joined
+
+    if len(parts) > 2 * PARSE_THREADS:  # a large file: copies on threads too (numpy releases the GIL)
+        with ThreadPoolExecutor(max_workers=PARSE_THREADS) as pool:
+            list(pool.map(copy, range(len(parts))))
+    else:
+        for i in range(len(parts)):
+            copy(i)
     return Rows(
         columns,
         np.concatenate([p.ntok for p in parts]),
@@ -331,7 +344,7 @@ def stamp_digits(
     bytes (nanosecond digits included). Streams the file again; used only when needed."""
     ndig = np.full(lines.size, -1, np.int64)
     frac = np.zeros(lines.size, np.int64)
-    for chunk, line0, n in _chunks(path, "a text file", chunk_bytes):
+    for chunk, line0, n, _ in _chunks(path, "a text file", chunk_bytes):
         lo, hi = np.searchsorted(lines, [line0 + 1, line0 + n + 1])
         if hi > lo:
             scanned = scan(chunk)

@@ -13,6 +13,8 @@ from multiprocessing import get_all_start_methods, get_context
 from pathlib import Path
 from typing import Any, TypeVar
 
+from ..core.blocks import threads
+
 T = TypeVar("T")
 R = TypeVar("R")
 
@@ -97,7 +99,8 @@ def run_tasks(
     unit: str,
 ) -> list[R]:
     """``fn(item)`` for every item, in the order of ``items``: here one at a time (``fn`` then gets
-    ``progress=`` too, for bars of its own), in a local pool of ``n_jobs`` processes, or on
+    ``progress=`` too, for bars of its own, and long computations run on ``n_jobs`` threads,
+    :mod:`lorisnb.core.blocks`), in a local pool of ``n_jobs`` processes, or on
     ``executor``. ``fn`` must be a module-level function (it is pickled by name). ``sizes`` are
     the items' bytes, for scheduling."""
 
@@ -112,10 +115,11 @@ def run_tasks(
         out = []
         bar = new_bar()
         try:
-            for item in items:
-                out.append(fn(item, progress=progress))
-                if bar is not None:
-                    bar.update()
+            with threads(n_jobs):  # one input at a time: its long computations use the cores
+                for item in items:
+                    out.append(fn(item, progress=progress))
+                    if bar is not None:
+                        bar.update()
         finally:
             if bar is not None:
                 bar.close()

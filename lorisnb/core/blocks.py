@@ -1,0 +1,44 @@
+"""Row blocks: long per-pose computations (millions of poses in a lifelong run) done a block of
+rows at a time, so that each chain of numpy operations works on arrays that stay in the CPU's
+cache instead of streaming every temporary through memory, and blocks run on threads (numpy
+releases the GIL inside its loops). Every row's result is the same whatever the block size.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
+
+#: Rows per block: about a megabyte per (N, 4) float64 temporary.
+BLOCK_ROWS = 16384
+
+#: Threads for the blocks of one computation: 1 unless the caller lends its cores (:func:`threads`;
+#: the evaluation does when it runs files in this process rather than in a pool of processes).
+_threads = 1
+
+
+@contextmanager
+def threads(n: int) -> Iterator[None]:
+    """Within the block, :func:`blockwise` runs blocks on ``n`` threads (1: one after another)."""
+    global _threads
+    before, _threads = _threads, max(1, int(n))
+    try:
+        yield
+    finally:
+        _threads = before
+
+
+def blockwise(fn: Callable[[int, int], None], n: int, block: int | None = None) -> None:
+    """Call ``fn(lo, hi)`` for consecutive blocks ``[lo, hi)`` covering ``range(n)`` (of
+    :data:`BLOCK_ROWS` rows unless ``block`` is given), on threads when there are several blocks.
+    ``fn`` writes its rows of preallocated outputs."""
+    block = block or BLOCK_ROWS
+    starts = range(0, n, block)
+    if len(starts) <= 1 or _threads == 1:
+        for lo in starts:
+            fn(lo, min(lo + block, n))
+        return
+    with ThreadPoolExecutor(max_workers=_threads) as pool:
+        for _ in pool.map(lambda lo: fn(lo, min(lo + block, n)), starts):
+            pass  # re-raises a block's exception
