@@ -179,11 +179,12 @@ def rpe(
 
     def rows(lo: int, hi: int) -> None:
         a, b = i[lo:hi], j[lo:hi]
-        inv_gi, inv_ei = quat_conjugate(qg[a]), quat_conjugate(qe[a])
-        rel_g_rot = quat_multiply(inv_gi, qg[b])
-        rel_g_t = quat_rotate(inv_gi, pg[b] - pg[a])
-        rel_e_rot = quat_multiply(inv_ei, qe[b])
-        rel_e_t = quat_rotate(inv_ei, pe[b] - pe[a])
+        take = np.take  # gathers: faster than fancy indexing, and without the GIL
+        inv_gi, inv_ei = quat_conjugate(take(qg, a, axis=0)), quat_conjugate(take(qe, a, axis=0))
+        rel_g_rot = quat_multiply(inv_gi, take(qg, b, axis=0))
+        rel_g_t = quat_rotate(inv_gi, take(pg, b, axis=0) - take(pg, a, axis=0))
+        rel_e_rot = quat_multiply(inv_ei, take(qe, b, axis=0))
+        rel_e_t = quat_rotate(inv_ei, take(pe, b, axis=0) - take(pe, a, axis=0))
         inv_rel_g = quat_conjugate(rel_g_rot)
         err_t = quat_rotate(inv_rel_g, rel_e_t - rel_g_t)
         trans[lo:hi] = np.sqrt(np.einsum("ij,ij->i", err_t, err_t))

@@ -82,6 +82,12 @@ def groundtruth_gaps(label: str, gt: Trajectory, max_gap: float) -> str | None:
     )
 
 
+def scale_in_range(scale: float) -> bool:
+    """A best-fit scale :func:`scale_far_from_one` never warns about (the rest of its inputs need not
+    be computed)."""
+    return bool(np.isfinite(scale) and 1 / SCALE_LIMIT <= scale <= SCALE_LIMIT)
+
+
 def scale_far_from_one(label: str, scale: float, ate_se3: float, ate_sim3: float, path_m: float) -> str | None:
     """The best Sim(3) scale of an SE(3)-aligned trajectory is far from 1 and fixes most of its
     error (ATE RMSE after SE(3) and after Sim(3) alignment, metres), on a path long enough to judge

@@ -13,6 +13,7 @@ from typing import BinaryIO
 
 import numpy as np
 
+from ..core.blocks import blockwise
 from ..core.trajectory import Trajectory
 from ..errors import ParseError
 
@@ -190,9 +191,14 @@ def finish(
         last = np.concatenate((s[1:] != s[:-1], [True]))
         order = order[last]
         stamps, poses, lines = stamps[order], poses[order], lines[order]
-    return Trajectory(
-        stamps.copy(), poses[:, :3].copy(), poses[:, 3:7].copy(), lines
-    )  # copies: no view into the read buffers
+    positions, quaternions = np.empty((len(stamps), 3)), np.empty((len(stamps), 4))
+
+    def rows(lo: int, hi: int) -> None:  # copies (no view into the read buffers), on threads when long
+        positions[lo:hi] = poses[lo:hi, :3]
+        quaternions[lo:hi] = poses[lo:hi, 3:7]
+
+    blockwise(rows, len(stamps), 1 << 18)
+    return Trajectory(stamps.copy(), positions, quaternions, lines)
 
 
 def check_rows(path: str, stamps: np.ndarray, poses: np.ndarray, lines: np.ndarray, notes: list[str]) -> np.ndarray:
@@ -201,8 +207,11 @@ def check_rows(path: str, stamps: np.ndarray, poses: np.ndarray, lines: np.ndarr
     if bad_stamp.any():
         i = np.flatnonzero(bad_stamp)[0]
         raise ParseError(path, int(lines[i]), f"timestamp {stamps[i]} is not finite; expected seconds")
-    finite = np.isfinite(poses).all(axis=1)
-    inf_rows = ~finite & ~np.isnan(poses).any(axis=1)
+    if np.isfinite(poses).all():  # the usual case: one pass, no per-row reductions
+        finite = np.ones(len(poses), bool)
+    else:
+        finite = np.isfinite(poses).all(axis=1)
+    inf_rows = ~finite & ~np.isnan(poses).any(axis=1) if not finite.all() else np.zeros(len(poses), bool)
     if inf_rows.any():
         notes.append(
             f"{path}: {int(inf_rows.sum())} pose(s) with infinite values skipped "
