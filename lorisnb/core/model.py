@@ -188,6 +188,8 @@ class SequenceErrors:
                     self.gt_positions, self.gt_quaternions, self.est_positions, self.est_quaternions, i, j,
                     assume_unit=True,
                 )  # fmt: skip
+                if self.matched < 2**31:  # kept: indices in 4 bytes
+                    i, j = i.astype(np.int32), j.astype(np.int32)
                 self._rpe_cache[key] = (i, j, tr, rr)
         i, j, tr, rr = self._rpe_cache[key]
         return i, j, tr, rr

@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParseError
-from .ranges import LINE_LIMIT, PARSE_THREADS, in_order, line_ranges, read_range
+from .ranges import LINE_LIMIT, PARSE_THREADS, give_back_memory, in_order, line_ranges, read_range
 from .scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
@@ -126,10 +126,12 @@ def _layout(
 
 def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str) -> np.ndarray:
     """(rows, ntok) numbers of a chunk by pandas' C parser, skipping the lines ``skip``. With
-    ``sep=" "`` any spacing but single spaces raises (an empty field or too many fields)."""
+    ``sep=" "`` runs of spaces separate fields, and a tab, a trailing space or a line of spaces
+    raises (an empty field, or a field that is not a number)."""
     return pd.read_csv(
         io.BytesIO(chunk),
         sep=sep,
+        skipinitialspace=sep == " ",
         header=None,
         names=range(ntok),
         dtype=np.float64,
@@ -167,7 +169,9 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
             ntok = len(line.split())
             if ntok > width or ntok == 0:
                 return None
-            single = line.count(b" ") == ntok - 1  # single spaces: the C parser's faster one-character split
+            # spaces only (any number): the C parser's one-character split, skipping repeated spaces, is
+            # faster than its whitespace split; tabs or trailing spaces further on raise, then read as below
+            single = b"\t" not in line and not line.endswith(b" ")
             try:
                 values = _read_c(chunk, ntok, skip, " " if single else r"\s+")
             except (ValueError, pd.errors.ParserError):
@@ -300,7 +304,10 @@ def read_rows(
             line0 += nlines
     finally:
         os.close(fd)
-    return _join(parts, width)
+    rows = _join(parts, width)
+    del parts
+    give_back_memory()
+    return rows
 
 
 def _join(parts: list[Rows], width: int) -> Rows:

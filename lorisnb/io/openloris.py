@@ -28,6 +28,7 @@ from ..core.model import ResultFile
 from ..core.trajectory import Trajectory
 from ..errors import LorisWarning, ParseError
 from .chunks import read_rows, stamp_digits
+from .ranges import GIVE_BACK_BYTES, give_back_memory
 from .scanner import check_rows, finish, nanosecond_pattern
 
 POSE_FIELDS = "stamp [output_time] x y z qx qy qz qw"
@@ -190,4 +191,7 @@ def read_openloris(
     if warn:
         for note in notes:
             warnings.warn(note, LorisWarning, stacklevel=2)
+    if line_no.size * 64 >= GIVE_BACK_BYTES:  # a large file: its parsed columns were just freed
+        del columns, poses, stamps
+        give_back_memory()
     return result
