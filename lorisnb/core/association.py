@@ -107,9 +107,16 @@ def associate(
     gt_end = float(g[-1]) if len(g) else np.nan
     if len(g) < 2 or len(t) == 0:
         return Association(np.zeros(0, int), np.zeros(0), np.zeros((0, 3)), None, gt_start, gt_end)
-    i = np.clip(np.searchsorted(g, t, side="left") - 1, 0, len(g) - 2)
-    k1, k2 = g[i], g[i + 1]
-    ok = (t >= g[0]) & (t <= g[-1]) & (np.maximum(t - k1, k2 - t) < max_gap)
+    i = np.empty(len(t), np.intp)
+    ok = np.empty(len(t), bool)
+
+    def bracket(lo: int, hi: int) -> None:  # the ground-truth interval of each stamp, and whether it matches
+        tt = t[lo:hi]
+        k = np.clip(np.searchsorted(g, tt, side="left") - 1, 0, len(g) - 2)
+        i[lo:hi] = k
+        ok[lo:hi] = (tt >= g[0]) & (tt <= g[-1]) & (np.maximum(tt - np.take(g, k), np.take(g, k + 1) - tt) < max_gap)
+
+    blockwise(bracket, len(t))
     idx = np.flatnonzero(ok)
     if idx.size == 0:
         return Association(idx, np.zeros(0), np.zeros((0, 3)), None, gt_start, gt_end)

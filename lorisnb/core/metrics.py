@@ -121,13 +121,20 @@ def rpe_pairs(
         i = np.arange(0, n - step) if all_pairs else np.arange(0, n - step, step)
         return i, i + step
     if unit == "s":
-        target = stamps + delta
-        j = np.clip(np.searchsorted(stamps, target), 1, n - 1)
-        closer_left = np.abs(stamps[j - 1] - target) <= np.abs(stamps[j] - target)
-        j = np.where(closer_left, j - 1, j)
-        i = np.arange(n)
-        keep = (j > i) & (target <= stamps[-1] + 1e-9)
-        i, j = i[keep], j[keep]
+        j = np.empty(n, np.intp)
+        keep = np.empty(n, bool)
+
+        def closest(lo: int, hi: int) -> None:  # the pose closest to t_i + delta, for a block of starts
+            target = stamps[lo:hi] + delta
+            k = np.clip(np.searchsorted(stamps, target), 1, n - 1)
+            closer_left = np.abs(np.take(stamps, k - 1) - target) <= np.abs(np.take(stamps, k) - target)
+            k = np.where(closer_left, k - 1, k)
+            j[lo:hi] = k
+            keep[lo:hi] = (k > np.arange(lo, hi)) & (target <= stamps[-1] + 1e-9)
+
+        blockwise(closest, n)
+        i = np.flatnonzero(keep)
+        j = j[i]
     elif unit == "m":
         dist = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(gt_positions, axis=0), axis=1))))
         j = np.searchsorted(dist, dist + delta, side="left")
