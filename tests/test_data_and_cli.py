@@ -108,3 +108,23 @@ def test_cli_rejects_bad_threshold(capsys):
     with pytest.raises(SystemExit):
         main(["evaluate", "x.txt", "--eps", "big"])
     assert "is not a number" in capsys.readouterr().err
+
+
+def test_command_ends_quietly_when_its_output_is_cut(icra20):
+    """``lorisnb evaluate ... | head``: when the reader is gone, no traceback, exit status 1."""
+    import os
+    import subprocess
+    import sys
+
+    read, write = os.pipe()
+    os.close(read)  # the reader left before the first line
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-m", "lorisnb.cli", "evaluate", "--no-progress", str(icra20 / "lifelong" / "ds-slam")],
+            stdout=write, stderr=subprocess.PIPE, timeout=120, check=False,
+        )  # fmt: skip
+    finally:
+        os.close(write)
+    err = proc.stderr.decode()
+    assert proc.returncode == 1, err
+    assert "Traceback" not in err and "BrokenPipe" not in err

@@ -7,6 +7,8 @@ a non-zero exit status when any input failed (2 for a usage or output error, 130
 from __future__ import annotations
 
 import argparse
+import gc
+import os
 import sys
 
 import numpy as np
@@ -144,3 +146,18 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+
+
+def run() -> None:
+    """The ``lorisnb`` command: :func:`main`, then exit. A closed output pipe (``lorisnb evaluate
+    ... | head``) ends it quietly; the interpreter's last garbage collection over everything the
+    run made is skipped (about a tenth of a second after a large evaluation)."""
+    try:
+        code = main()
+        sys.stdout.flush()
+    except BrokenPipeError:
+        devnull = os.open(os.devnull, os.O_WRONLY)  # Python's advice: no second error at exit
+        os.dup2(devnull, sys.stdout.fileno())
+        code = 1
+    gc.freeze()
+    sys.exit(code)
