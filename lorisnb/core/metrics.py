@@ -193,7 +193,9 @@ def rpe(
         rel_e_rot = quat_multiply(inv_ei, take(qe, b, axis=0))
         rel_e_t = quat_rotate(inv_ei, take(pe, b, axis=0) - take(pe, a, axis=0))
         inv_rel_g = quat_conjugate(rel_g_rot)
-        err_t = quat_rotate(inv_rel_g, rel_e_t - rel_g_t)
+        # E's translation is R_rel_g^-1 (t_rel_e - t_rel_g); a rotation keeps the length, so its norm is
+        # that of the difference (the same to rounding, one rotation less)
+        err_t = rel_e_t - rel_g_t
         trans[lo:hi] = np.sqrt(np.einsum("ij,ij->i", err_t, err_t))
         rot[lo:hi] = quat_angle_deg(quat_multiply(inv_rel_g, rel_e_rot))
 
