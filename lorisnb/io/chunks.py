@@ -275,8 +275,8 @@ def read_rows(
         return part
 
     chunks = _chunks(path, what, chunk_bytes)
-    first, _, _, at = next(chunks)
-    parts.append(parse(first, 0, first.count(b"\n")))
+    first, _, first_lines, at = next(chunks)
+    parts.append(parse(first, 0, first_lines))
     if progress is not None:
         progress(len(first))
     try:
@@ -294,7 +294,7 @@ def read_rows(
             ((read_range, fd, lo, hi, overlong, parse, spath, what), hi - lo)
             for lo, hi, overlong in line_ranges(fd, at, total, chunk_bytes)
         )
-        line0 = first.count(b"\n")
+        line0 = first_lines
         for part, nlines in in_order(tasks, progress):  # chunks read and parsed on threads, joined in order
             if isinstance(part, ParseError):
                 raise ParseError(spath, None if part.line is None else part.line + line0, part.reason)
