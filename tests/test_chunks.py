@@ -72,6 +72,22 @@ def test_awkward_file_reads_the_same_in_any_chunking(tmp_path, chunk_bytes):
     assert sorted(f.sequences) == [1, 2] and len(f.sequences[2]) == 2  # the NaN pose is skipped
 
 
+@pytest.mark.parametrize("chunk_bytes", [16, 64, 1 << 20])
+def test_split_equals_the_joined_columns(tmp_path, chunk_bytes):
+    """Rows.split (row-major groups of tokens, copied once from the chunks' blocks) holds what
+    Rows.columns holds, NaN where a line lacks tokens, and lets the blocks go."""
+    path = write(tmp_path, "a.txt", AWKWARD)
+    columns = _read(path, chunk_bytes=chunk_bytes, fast_min_bytes=0).columns
+    rows = _read(path, chunk_bytes=chunk_bytes, fast_min_bytes=0)
+    groups = [slice(0, 1), slice(1, 4), slice(4, 9)]
+    for got, g in zip(rows.split(groups), groups, strict=True):
+        want = np.full((columns.shape[1], g.stop - g.start), np.nan)
+        have = columns[g].T
+        want[:, : have.shape[1]] = have
+        assert got.flags.c_contiguous and np.array_equal(got, want, equal_nan=True)
+    assert rows.blocks == []
+
+
 @pytest.mark.parametrize(
     "later",
     [

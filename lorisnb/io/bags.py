@@ -102,7 +102,8 @@ def _read_topic(reader, spath: str, topic: str | None) -> Trajectory:
         raise ParseError(spath, None, f"topic {topic!r} holds no message")
     notes: list[str] = []
     line_no = np.arange(1, len(stamps) + 1)  # message number on the topic
-    traj = finish(f"{spath} {topic}", np.array(stamps), np.array(poses, float), line_no, "", notes)
+    pose = np.array(poses, float).reshape(-1, 7)
+    traj = finish(f"{spath} {topic}", np.array(stamps, float), pose[:, :3], pose[:, 3:], line_no, "", notes)
     traj.meta.update(source=spath, topic=topic, notes=notes)
     return traj
 

@@ -16,45 +16,18 @@ import io
 import os
 import stat
 from collections.abc import Callable, Generator
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from ..errors import ParseError
-from .ranges import LINE_LIMIT, PARSE_THREADS, give_back_memory, in_order, line_ranges, read_range
+from .ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, read_range
+from .rows import Rows, line_dtype
 from .scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
 FAST_MIN_BYTES = 32 << 10
 SMALL_CHUNK = 1 << 20  # below this the numpy scanner is faster than a call of the C parser
-
-
-@dataclass
-class Rows:
-    """The numeric lines of a file.
-
-    Attributes:
-        columns: (k, n) float64, k the most tokens of any line (at most the largest width),
-            column i holding each line's i-th token (NaN past its last token); column-major so
-            that a column is a contiguous array.
-        ntok: (n,) tokens per line.
-        lines: (n,) 1-based line numbers.
-        specials: ``(line, text)`` of the lines holding a colon (``key: value``), when asked for.
-        parsed_in_c: how many of the lines pandas' C parser read (the others: the numpy scanner).
-    """
-
-    columns: np.ndarray
-    ntok: np.ndarray
-    lines: np.ndarray
-    specials: list[tuple[int, str]]
-    parsed_in_c: int = 0
-
-    @property
-    def values(self) -> np.ndarray:
-        """(n, width) view of :attr:`columns`."""
-        return self.columns.T
 
 
 def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[bytes, int, int, int], None, None]:
@@ -160,7 +133,7 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
             skip, specials, first_row = layout
         nrows = nlines - len(skip)
         if nrows == 0:
-            return Rows(np.zeros((width, 0)), np.zeros(0, np.int64), np.zeros(0, np.int64), specials)
+            return Rows([np.zeros((width, 0))], np.zeros(0, np.int64), np.zeros(0, np.int64), specials)
         try:
             at = 0
             for _ in range(first_row):
@@ -189,10 +162,10 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
     if skip.size:
         keep = np.ones(nlines, bool)
         keep[skip] = False
-        lines = line0 + 1 + np.flatnonzero(keep)
+        lines = (line0 + 1 + np.flatnonzero(keep)).astype(line_dtype(line0 + nlines))
     else:
-        lines = line0 + 1 + np.arange(nlines)
-    return Rows(columns, np.full(nrows, ntok), lines, specials, nrows)
+        lines = np.arange(line0 + 1, line0 + 1 + nlines, dtype=line_dtype(line0 + nlines))
+    return Rows([columns], np.full(nrows, ntok, np.int8), lines, specials, nrows)
 
 
 def _exact(
@@ -227,7 +200,7 @@ def _exact(
     offs = np.cumsum(ntok) - ntok
     col = np.arange(flat.size) - np.repeat(offs, ntok)
     columns[col, np.repeat(np.arange(rows.size), ntok)] = flat
-    return Rows(columns, ntok.astype(np.int64), line0 + rows + 1, specials)
+    return Rows([columns], ntok.astype(np.int8), line0 + rows + 1, specials)
 
 
 def read_rows(
@@ -286,7 +259,7 @@ def read_rows(
         regular, total = False, 0
     if not regular or at >= total:  # a pipe or a device (or no more chunks: the end checks for an empty file)
         parts += in_order((((parse, c, l0, n), len(c)) for c, l0, n, _ in chunks), progress)
-        return _join(parts, width)
+        return _join(parts)
     chunks.close()
     fd = os.open(path, os.O_RDONLY)
     try:
@@ -298,44 +271,28 @@ def read_rows(
         for part, nlines in in_order(tasks, progress):  # chunks read and parsed on threads, joined in order
             if isinstance(part, ParseError):
                 raise ParseError(spath, None if part.line is None else part.line + line0, part.reason)
-            part.lines += line0
+            if part.lines.dtype == np.int64 or line_dtype(line0 + nlines) == np.int32:
+                part.lines += line0
+            else:
+                part.lines = part.lines + np.int64(line0)
             part.specials = [(k + line0, text) for k, text in part.specials]
             parts.append(part)
             line0 += nlines
     finally:
         os.close(fd)
-    rows = _join(parts, width)
+    rows = _join(parts)
     del parts
     give_back_memory()
     return rows
 
 
-def _join(parts: list[Rows], width: int) -> Rows:
-    """One Rows of all chunks: columns copied once into a (k, n) array, k the most tokens of any
-    line, NaN-padded."""
-    used = max((len(p.columns) for p in parts if p.columns.shape[1]), default=width)
+def _join(parts: list[Rows]) -> Rows:
+    """One Rows of all chunks (their blocks kept as they are: joined when :attr:`Rows.columns` is
+    asked for, or copied once by :meth:`Rows.split`)."""
     if len(parts) == 1:
         return parts[0]
-    sizes = [p.columns.shape[1] for p in parts]
-    columns = np.empty((used, sum(sizes)))
-    offsets = np.cumsum([0] + sizes)
-
-    def copy(i: int) -> None:
-        p, at = parts[i], int(offsets[i])
-        k, m = p.columns.shape
-        columns[:k, at : at + m] = p.columns
-        if k < used:
-            columns[k:used, at : at + m] = np.nan
-        p.columns = columns[:0]  # let the chunk's copy go as soon as it is joined
-
-    if len(parts) > 2 * PARSE_THREADS:  # a large file: copies on threads too (numpy releases the GIL)
-        with ThreadPoolExecutor(max_workers=PARSE_THREADS) as pool:
-            list(pool.map(copy, range(len(parts))))
-    else:
-        for i in range(len(parts)):
-            copy(i)
     return Rows(
-        columns,
+        [b for p in parts for b in p.blocks],
         np.concatenate([p.ntok for p in parts]),
         np.concatenate([p.lines for p in parts]),
         [s for p in parts for s in p.specials],

@@ -70,14 +70,14 @@ def read_tum(path: str | os.PathLike, warn: bool = True, progress: Callable[[int
     )
     values = rows.values  # (n, 8) view of the columns
     notes: list[str] = []
-    keep = check_rows(spath, values[:, 0], values[:, 1:], rows.lines, notes)
+    keep = check_rows(spath, values[:, 0], values[:, 1:4], values[:, 4:8], rows.lines, notes)
     nan_rows = int((~keep).sum())
     if nan_rows:
         notes.append(f"{spath}: {nan_rows} pose(s) with NaN or infinite values skipped")
         values, line_no = values[keep], rows.lines[keep]
     else:
         line_no = rows.lines
-    traj = finish(spath, np.ascontiguousarray(values[:, 0]), values[:, 1:], line_no, "", notes)
+    traj = finish(spath, values[:, 0], values[:, 1:4], values[:, 4:8], line_no, "", notes)
     _warn(notes, warn)
     return traj
 
@@ -168,8 +168,8 @@ def read_euroc(path: str | os.PathLike, warn: bool = True) -> Trajectory:
     poses = np.column_stack([values[:, 1:4], values[:, 5:8], values[:, 4]])  # x y z qx qy qz qw
     notes: list[str] = []
     line_no = rows + 1
-    keep = check_rows(spath, values[:, 0], poses, line_no, notes)
-    traj = finish(spath, values[keep, 0] * 1e-9, poses[keep], line_no[keep], "", notes)
+    keep = check_rows(spath, values[:, 0], poses[:, :3], poses[:, 3:], line_no, notes)
+    traj = finish(spath, values[keep, 0] * 1e-9, poses[keep, :3], poses[keep, 3:], line_no[keep], "", notes)
     _warn(notes, warn)
     return traj
 

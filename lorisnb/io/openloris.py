@@ -143,30 +143,36 @@ def read_openloris(
         raise ParseError(
             spath, int(line_no[0]), "pose line before any 'seq: N' line; expected 'seq: N' to open each sequence"
         )
-    columns, ntok = rows.columns, rows.ntok
-    del rows
-    stamps = columns[0]
-    if ntok.size and (ntok == ntok[0]).all():
-        poses = columns[int(ntok[0]) - 7 : int(ntok[0])].T  # a view; finish() copies what it keeps
+    ntok = rows.ntok
+    if ntok.size and (ntok == ntok[0]).all():  # the usual file: stamps and poses copied once, row-major
+        k = int(ntok[0])
+        first, positions, quaternions = rows.split([slice(0, 1), slice(k - 7, k - 4), slice(k - 4, k)])
+        stamps = first[:, 0]  # contiguous: one column of a (n, 1) array
     else:
+        columns = rows.columns
+        stamps = columns[0]
         poses = np.take_along_axis(columns.T, (ntok - 7)[:, None] + np.arange(7), axis=1)
+        positions, quaternions = poses[:, :3], poses[:, 3:]
+    del rows
     if repair_stamps or (stamps.size > 1 and not (np.diff(stamps) > 0).all()):
         # stamps out of order: perhaps nanoseconds printed without zero padding (read the digits)
         ndig, frac = stamp_digits(path, line_no)
         _unpadded_stamps(spath, stamps, line_no, ndig, frac, repair_stamps, notes)
-    keep = check_rows(spath, stamps, poses, line_no, notes)
-    # block of each pose line: the last seq line above it
-    block = np.searchsorted(seq_line, line_no, side="right") - 1
+    keep = check_rows(spath, stamps, positions, quaternions, line_no, notes)
     if not keep.all():
-        stamps, poses, line_no, block = stamps[keep], poses[keep], line_no[keep], block[keep]
+        stamps, positions, quaternions, line_no = stamps[keep], positions[keep], quaternions[keep], line_no[keep]
     repeat = np.zeros(len(stamps), dtype=bool)
-    if remove_repeated and len(stamps) > 1:
-        repeat[1:] = (poses[1:] == poses[:-1]).all(axis=1)
+    if remove_repeated and len(stamps) > 1:  # rows equal to the row before: where qw is, then all 7 values
+        at = np.flatnonzero(quaternions[1:, 3] == quaternions[:-1, 3]) + 1
+        same = (positions[at] == positions[at - 1]).all(axis=1) & (quaternions[at] == quaternions[at - 1]).all(axis=1)
+        repeat[at[same]] = True
 
     sequences: dict[int, Trajectory] = {}
     removed: dict[int, int] = {}
     seq_lines: dict[int, int] = {}
-    bounds = np.searchsorted(block, np.arange(len(seq_at) + 1))  # blocks are in file order
+    # the rows of each block: from its 'seq:' line to the next (lines in file order; the first row is past the first)
+    bounds = np.searchsorted(line_no, np.append(seq_line, np.iinfo(np.int64).max))
+    bounds[0] = 0
     for b, (li, seq) in enumerate(seq_at):  # one iteration per `seq:` block
         lo, hi = int(bounds[b]), int(bounds[b + 1])
         rep = repeat[lo:hi]
@@ -174,9 +180,10 @@ def read_openloris(
         seq_lines[seq] = li
         if removed[seq]:
             sel = np.flatnonzero(~rep) + lo
-            sequences[seq] = finish(spath, stamps[sel], poses[sel], line_no[sel], f", seq {seq}", notes)
+            rows_of = (stamps[sel], positions[sel], quaternions[sel], line_no[sel])
         else:
-            sequences[seq] = finish(spath, stamps[lo:hi], poses[lo:hi], line_no[lo:hi], f", seq {seq}", notes)
+            rows_of = (stamps[lo:hi], positions[lo:hi], quaternions[lo:hi], line_no[lo:hi])
+        sequences[seq] = finish(spath, *rows_of, f", seq {seq}", notes)
     sequences = dict(sorted(sequences.items()))
     result = ResultFile(
         path=Path(path),
@@ -192,6 +199,6 @@ def read_openloris(
         for note in notes:
             warnings.warn(note, LorisWarning, stacklevel=2)
     if line_no.size * 64 >= GIVE_BACK_BYTES:  # a large file: its parsed columns were just freed
-        del columns, poses, stamps
+        del stamps, positions, quaternions
         give_back_memory()
     return result

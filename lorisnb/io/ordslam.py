@@ -221,8 +221,8 @@ def read_ordslam(path: str | os.PathLike, fps: float | None = None, layout: str 
         quat = Rotation.from_matrix(mats[:, :, :3]).as_quat()
         pose = np.concatenate([mats[:, :, 3], quat], axis=1)
     notes: list[str] = []
-    keep = check_rows(spath, stamps, pose, line_no, notes)
-    traj = finish(spath, stamps[keep], pose[keep], line_no[keep], "", notes)
+    keep = check_rows(spath, stamps, pose[:, :3], pose[:, 3:7], line_no, notes)
+    traj = finish(spath, stamps[keep], pose[keep, :3], pose[keep, 3:7], line_no[keep], "", notes)
     return Trajectory(
         traj.stamps,
         traj.positions,

@@ -174,9 +174,18 @@ def read_bytes(path: str | os.PathLike[str], what: str = "a trajectory file") ->
 
 
 def finish(
-    path: str, stamps: np.ndarray, poses: np.ndarray, lines: np.ndarray, label: str, notes: list[str]
+    path: str,
+    stamps: np.ndarray,
+    positions: np.ndarray,
+    quaternions: np.ndarray,
+    lines: np.ndarray,
+    label: str,
+    notes: list[str],
 ) -> Trajectory:
-    """Sort by stamp keeping the last pose of a repeated stamp (as a dict keyed by stamp would)."""
+    """A Trajectory of rows (stamps (N,) seconds, positions (N, 3), quaternions (N, 4) ``xyzw``,
+    1-based source lines): sorted by stamp keeping the last pose of a repeated stamp (as a dict
+    keyed by stamp would). Contiguous arrays are kept as they are (a reader passes arrays of its
+    own), others copied."""
     if stamps.size > 1 and not np.all(np.diff(stamps) > 0):
         back = np.flatnonzero(np.diff(stamps) <= 0)
         i = back[0] + 1
@@ -190,36 +199,44 @@ def finish(
         s = stamps[order]
         last = np.concatenate((s[1:] != s[:-1], [True]))
         order = order[last]
-        stamps, poses, lines = stamps[order], poses[order], lines[order]
-    positions, quaternions = np.empty((len(stamps), 3)), np.empty((len(stamps), 4))
-
-    def rows(lo: int, hi: int) -> None:  # copies (no view into the read buffers), on threads when long
-        positions[lo:hi] = poses[lo:hi, :3]
-        quaternions[lo:hi] = poses[lo:hi, 3:7]
-
-    blockwise(rows, len(stamps), 1 << 18)
+        stamps, positions, quaternions, lines = stamps[order], positions[order], quaternions[order], lines[order]
     small = lines.size == 0 or int(lines.max()) < 2**31  # line numbers in 4 bytes: 40 MB less per 10M poses
-    return Trajectory(stamps.copy(), positions, quaternions, lines.astype(np.int32) if small else lines)
+    return Trajectory(
+        np.ascontiguousarray(stamps, float),
+        np.ascontiguousarray(positions, float),
+        np.ascontiguousarray(quaternions, float),
+        lines.astype(np.int32, copy=False) if small else lines,
+    )
 
 
-def check_rows(path: str, stamps: np.ndarray, poses: np.ndarray, lines: np.ndarray, notes: list[str]) -> np.ndarray:
-    """Validate rows; return the mask of rows to keep (NaN poses are skipped)."""
+def check_rows(
+    path: str, stamps: np.ndarray, positions: np.ndarray, quaternions: np.ndarray, lines: np.ndarray, notes: list[str]
+) -> np.ndarray:
+    """Validate rows (stamps (N,), positions (N, 3), quaternions (N, 4)); return the mask of rows
+    to keep (NaN poses are skipped)."""
     bad_stamp = ~np.isfinite(stamps)
     if bad_stamp.any():
         i = np.flatnonzero(bad_stamp)[0]
         raise ParseError(path, int(lines[i]), f"timestamp {stamps[i]} is not finite; expected seconds")
-    if np.isfinite(poses).all():  # the usual case: one pass, no per-row reductions
-        finite = np.ones(len(poses), bool)
+    n = len(stamps)
+    with np.errstate(over="ignore", invalid="ignore"):  # a sum is inf or NaN if a value is (or if it overflows:
+        all_finite = np.isfinite(positions.sum()) and np.isfinite(quaternions.sum())  # then row by row)
+    if all_finite:  # the usual case: one pass, no temporaries
+        finite = np.ones(n, bool)
     else:
-        finite = np.isfinite(poses).all(axis=1)
-    inf_rows = ~finite & ~np.isnan(poses).any(axis=1) if not finite.all() else np.zeros(len(poses), bool)
+        finite = np.isfinite(positions).all(axis=1) & np.isfinite(quaternions).all(axis=1)
+    inf_rows = np.zeros(n, bool)
+    if not finite.all():
+        inf_rows = ~finite & ~(np.isnan(positions).any(axis=1) | np.isnan(quaternions).any(axis=1))
     if inf_rows.any():
         notes.append(
             f"{path}: {int(inf_rows.sum())} pose(s) with infinite values skipped "
             f"(first at line {lines[np.flatnonzero(inf_rows)[0]]})"
         )
+    if _norms_fit(quaternions):
+        return finite
     with np.errstate(over="ignore"):
-        nq = np.einsum("ij,ij->i", poses[:, 3:7], poses[:, 3:7])
+        nq = np.einsum("ij,ij->i", quaternions, quaternions)
     zero = finite & (nq < QUAT_EPS)
     if zero.any():
         i = np.flatnonzero(zero)[0]
@@ -231,3 +248,18 @@ def check_rows(path: str, stamps: np.ndarray, poses: np.ndarray, lines: np.ndarr
             path, int(lines[i]), "quaternion is too large to normalize; expected a rotation qx qy qz qw of unit norm"
         )
     return finite
+
+
+def _norms_fit(quaternions: np.ndarray) -> bool:
+    """Whether every quaternion's squared norm is finite and at least :data:`QUAT_EPS` (the usual
+    case), looked at in row blocks on threads without a temporary of the file's length."""
+    fits = [True]
+
+    def rows(lo: int, hi: int) -> None:
+        with np.errstate(over="ignore", invalid="ignore"):
+            nq = np.einsum("ij,ij->i", quaternions[lo:hi], quaternions[lo:hi])
+            if not (nq.min() >= QUAT_EPS and np.isfinite(nq.max())):  # NaN compares False
+                fits[0] = False
+
+    blockwise(rows, len(quaternions), 1 << 16)
+    return fits[0]
