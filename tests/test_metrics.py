@@ -141,6 +141,7 @@ def test_quaternion_helpers_equal_scipy():
     from lorisnb.core.geometry import (
         as_quaternions,
         quat_angle_deg,
+        quat_conj_multiply,
         quat_conjugate,
         quat_from_matrix,
         quat_multiply,
@@ -158,6 +159,8 @@ def test_quaternion_helpers_equal_scipy():
         Rotation.from_quat(quat_multiply(qa, qb[0])).as_matrix(), (a * b[0]).as_matrix(), atol=1e-14
     )
     np.testing.assert_allclose(Rotation.from_quat(quat_conjugate(qa)).as_matrix(), a.inv().as_matrix(), atol=1e-14)
+    # the conjugate folded into the product: the very same numbers (sign changes are exact)
+    np.testing.assert_array_equal(quat_conj_multiply(qa, qb), quat_multiply(quat_conjugate(qa), qb))
     np.testing.assert_allclose(quat_angle_deg(qa), a.magnitude() * 180 / np.pi, atol=1e-12)
     v = np.random.default_rng(4).normal(size=(500, 3))
     np.testing.assert_allclose(quat_rotate(qa, v), a.apply(v), atol=1e-13)
@@ -179,3 +182,25 @@ def test_quaternion_helpers_equal_scipy():
     np.testing.assert_allclose(ours.as_matrix(), theirs.as_matrix(), atol=1e-12)
     near = Rotation.from_quat(slerp(qa, qa, w))  # equal ends: no division by zero
     np.testing.assert_allclose(near.as_matrix(), a.as_matrix(), atol=1e-14)
+
+
+def test_rpe_equals_its_definition_with_matrices():
+    """metrics.rpe goes through D_k = R(Q_k) R(P_k)^-1; compare with E = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)
+    written out with scipy rotations and 4x4 matrices, on random poses and random pairs."""
+    rng = np.random.default_rng(7)
+    n = 500
+    gt_pos, est_pos = rng.normal(size=(n, 3)) * 20, rng.normal(size=(n, 3)) * 20
+    gt_rot, est_rot = Rotation.random(n, random_state=3), Rotation.random(n, random_state=4)
+    i = rng.integers(0, n, 2000)
+    j = rng.integers(0, n, 2000)
+
+    def matrices(p, r):
+        m = np.tile(np.eye(4), (n, 1, 1))
+        m[:, :3, :3], m[:, :3, 3] = r.as_matrix(), p
+        return m
+
+    q, p = matrices(gt_pos, gt_rot), matrices(est_pos, est_rot)
+    e = np.linalg.inv(np.linalg.inv(q[i]) @ q[j]) @ (np.linalg.inv(p[i]) @ p[j])
+    t, r = metrics.rpe(gt_pos, gt_rot, est_pos, est_rot, i, j)
+    np.testing.assert_allclose(t, np.linalg.norm(e[:, :3, 3], axis=1), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(r, Rotation.from_matrix(e[:, :3, :3]).magnitude() * 180 / np.pi, rtol=0, atol=1e-8)

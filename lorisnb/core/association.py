@@ -110,9 +110,13 @@ def associate(
     i = np.empty(len(t), np.intp)
     ok = np.empty(len(t), bool)
 
+    increasing = bool(np.all(t[1:] >= t[:-1]))  # as a Trajectory's stamps are
+
     def bracket(lo: int, hi: int) -> None:  # the ground-truth interval of each stamp, and whether it matches
         tt = t[lo:hi]
-        k = np.clip(np.searchsorted(g, tt, side="left") - 1, 0, len(g) - 2)
+        w0, w1 = np.searchsorted(g, (tt[0], tt[-1]), side="left") if increasing else (0, len(g))
+        # increasing stamps: only the ground truth between the block's first and last stamp can bracket them
+        k = np.clip(np.searchsorted(g[w0 : w1 + 1], tt, side="left") + (w0 - 1), 0, len(g) - 2)
         i[lo:hi] = k
         ok[lo:hi] = (tt >= g[0]) & (tt <= g[-1]) & (np.maximum(tt - np.take(g, k), np.take(g, k + 1) - tt) < max_gap)
 

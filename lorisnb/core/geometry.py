@@ -243,6 +243,24 @@ def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
     )
 
 
+def quat_conj_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
+    """``conj(q1) (x) q2`` of quaternions ``xyzw`` (for unit q1: ``q1^-1 q2``, the rotation from q1 to
+    q2): the same numbers as ``quat_multiply(quat_conjugate(q1), q2)`` (the signs folded in, which
+    is exact), without the conjugate's copy."""
+    q1, q2 = np.asarray(q1, float), np.asarray(q2, float)
+    x1, y1, z1, w1 = q1[..., 0], q1[..., 1], q1[..., 2], q1[..., 3]
+    x2, y2, z2, w2 = q2[..., 0], q2[..., 1], q2[..., 2], q2[..., 3]
+    return np.stack(
+        [
+            w1 * x2 - x1 * w2 - y1 * z2 + z1 * y2,
+            w1 * y2 + x1 * z2 - y1 * w2 - z1 * x2,
+            w1 * z2 - x1 * y2 + y1 * x2 - z1 * w2,
+            w1 * w2 + x1 * x2 + y1 * y2 + z1 * z2,
+        ],
+        axis=-1,
+    )
+
+
 def quat_conjugate(q: np.ndarray) -> np.ndarray:
     """Conjugate of quaternions ``xyzw`` (the inverse rotation of unit quaternions)."""
     q = np.asarray(q, float)
