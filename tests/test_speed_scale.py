@@ -45,7 +45,7 @@ def test_row_blocks_and_threads_give_the_same_numbers(icra20, monkeypatch):
     error, RPE included, is the same whatever the block size and thread count."""
     from lorisnb.core import blocks
 
-    path = icra20 / "lifelong" / "maslam" / "market.txt"  # 5 sequences, about 11,000 poses
+    path = icra20 / "lifelong" / "maslam" / "market.txt"  # 3 sequences, about 11,000 poses
     whole = ln.evaluate(path, jobs=1, progress=False, official_interpolation=False)
     monkeypatch.setattr(blocks, "BLOCK_ROWS", 7)
     with blocks.threads(3):
@@ -60,6 +60,24 @@ def test_row_blocks_and_threads_give_the_same_numbers(icra20, monkeypatch):
                 np.testing.assert_array_equal(getattr(ea, name), getattr(eb, name))
             for x, y in zip(ea.rpe(), eb.rpe(), strict=True):
                 np.testing.assert_array_equal(x, y)
+
+
+def test_consuming_the_result_gives_the_same_errors(icra20, data):
+    """compute_errors(consume=True), as evaluate() calls it to let a long file's poses go sequence by
+    sequence: the same errors, and the result keeps only the sequence the frame checks look at."""
+    from lorisnb.core.pipeline import compute_errors
+
+    path = icra20 / "lifelong" / "maslam" / "market.txt"
+    gt = ln.load_groundtruth("market", data)
+    kept = compute_errors(ln.read_openloris(path, warn=False), gt, other_spans={})
+    result = ln.read_openloris(path, warn=False)
+    consumed = compute_errors(result, gt, other_spans={}, consume=True)
+    first = next(e.seq for e in kept.sequences if e.matched > 10)
+    assert len(kept.sequences) == 3 and list(result.sequences) == [first]
+    for a, b in zip(kept.sequences, consumed.sequences, strict=True):
+        for name in ("ate", "aoe", "est_positions", "est_quaternions"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert kept.warnings == consumed.warnings
 
 
 def test_bad_jobs_and_executor(icra20):

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..core import validate
 from ..errors import LorisError
+from ..io.ranges import keep_freed_memory
 from .commands import cmd_compare, cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
 from .options import (
     add_evaluation_options,
@@ -138,6 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    keep_freed_memory()  # a command is one short process: reuse freed memory (see there)
     try:
         return int(args.func(args) or 0)
     except LorisError as exc:

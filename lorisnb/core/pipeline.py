@@ -21,7 +21,7 @@ from .frames import FRAMES, relative_extrinsic
 from .geometry import (
     Sim3,
     quat_angle_deg,
-    quat_conjugate,
+    quat_conj_multiply,
     quat_from_matrix,
     quat_multiply,
     quat_normalize,
@@ -70,7 +70,7 @@ def errors_after_alignment(
         p_k, q_k = np.take(est.positions, k, axis=0), np.take(est.quaternions, k, axis=0)  # without the GIL
         pos[lo:hi], q[lo:hi] = apply_alignment(sim, p_k, q_k, official_interpolation)
         ate[lo:hi] = metrics.ate(pos[lo:hi], a.gt_positions[lo:hi])
-        aoe[lo:hi] = quat_angle_deg(quat_multiply(quat_conjugate(gt_q[lo:hi]), q[lo:hi]))  # unit on both sides
+        aoe[lo:hi] = quat_angle_deg(quat_conj_multiply(gt_q[lo:hi], q[lo:hi]))  # unit on both sides
 
     blockwise(rows, m)
     return SequenceErrors(
@@ -127,6 +127,7 @@ def compute_errors(
     checks: bool = True,
     other_spans: Spans | None = None,
     trial: int = 0,
+    consume: bool = False,
 ) -> FileErrors:
     """Per-pose errors of one OpenLORIS result file against its scene's ground truth.
 
@@ -148,6 +149,9 @@ def compute_errors(
         checks: run the plausibility checks of :mod:`lorisnb.core.plausibility` (warnings only).
         other_spans: time spans of other ground-truth sequences, for the time-overlap check.
         trial: the trial number of this file (:mod:`lorisnb.core.trials`).
+        consume: take each sequence out of ``result.sequences`` once its errors are computed, so
+            that a long file's poses go while the next sequence is evaluated (for a caller that
+            is done with ``result``; the one sequence a plausibility check still needs stays).
 
     Everything noticed (the reader's notes in ``result.warnings``, plausibility checks) is issued
     as LorisWarning and kept in ``FileErrors.warnings``.
@@ -258,9 +262,14 @@ def compute_errors(
                 )
             )
 
-    out = [
-        errors_after_alignment(s, result.sequences[s], assoc[s], per_seq_align[s], official_interpolation) for s in seqs
-    ]
+    out: list[SequenceErrors] = []
+    for s in seqs:
+        checked = checks and not any(e.matched > 10 for e in out)  # the frame checks below look at this one
+        out.append(
+            errors_after_alignment(s, result.sequences[s], assoc.pop(s), per_seq_align[s], official_interpolation)
+        )
+        if consume and not (checked and out[-1].matched > 10):
+            del result.sequences[s]
     if checks:
         first = next((e for e in out if e.matched > 10), None)
         if first is not None and np.median(first.aoe) > 45.0:
@@ -320,10 +329,10 @@ def median_aoe_by_frame(
     q_aligned = quat_multiply(q_rot, quat_normalize(q_est))
     offsets = np.stack([relative_extrinsic(scene, gt_frame, fr)[1] for fr in FRAMES])  # (7, 4)
     q_gt_fr = quat_multiply(a.gt_quaternions[None, :, :], offsets[:, None, :])  # every frame at once
-    angles = quat_angle_deg(quat_multiply(quat_conjugate(q_gt_fr), q_aligned[None, :, :]))
+    angles = quat_angle_deg(quat_conj_multiply(q_gt_fr, q_aligned[None, :, :]))
     by_frame = dict(zip(FRAMES, np.median(angles, axis=1).tolist(), strict=True))
     if swapped_in not in FRAMES:
         return by_frame, np.nan
     q_swapped = quat_multiply(q_rot, quat_normalize(np.roll(q_est, -1, axis=1)))
     k = FRAMES.index(swapped_in)
-    return by_frame, float(np.median(quat_angle_deg(quat_multiply(quat_conjugate(q_gt_fr[k]), q_swapped))))
+    return by_frame, float(np.median(quat_angle_deg(quat_conj_multiply(q_gt_fr[k], q_swapped))))

@@ -100,16 +100,38 @@ def give_back_memory() -> None:
     """Return freed heap memory to the system (glibc's ``malloc_trim``; nothing elsewhere). Chunks
     parsed on threads are freed in per-thread heaps that glibc keeps otherwise: after a 1 GB file
     that is about 0.7 GB of a process's resident memory."""
-    global _trim
-    if _trim is None:
+    libc = _libc()
+    if libc is not None:
+        libc.malloc_trim(0)
+
+
+def keep_freed_memory() -> None:
+    """For a short-lived process (the command line): glibc serves blocks under 32 MB (a chunk's
+    text, the parser's buffers, row blocks' temporaries) from memory freed earlier instead of new
+    pages, and gives memory back only when :func:`give_back_memory` says so (after a large file).
+    By default it unmaps and trims such blocks again and again, and each new page is zeroed by the
+    kernel: about a third less system time on a 1 GB file. Nothing outside glibc."""
+    libc = _libc()
+    if libc is not None:
+        libc.mallopt(_M_MMAP_THRESHOLD, 32 << 20)  # glibc's largest
+        libc.mallopt(_M_TRIM_THRESHOLD, 1 << 30)
+
+
+_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3  # glibc's malloc.h
+
+
+def _libc() -> Any:
+    """glibc, or None (another C library, another system)."""
+    global _glibc
+    if _glibc is None:
         try:
             import ctypes
 
-            _trim = ctypes.CDLL("libc.so.6").malloc_trim
-        except (OSError, AttributeError):
-            _trim = False
-    if _trim:
-        _trim(0)
+            lib = ctypes.CDLL("libc.so.6")
+            _glibc = lib if hasattr(lib, "malloc_trim") and hasattr(lib, "mallopt") else False
+        except OSError:
+            _glibc = False
+    return _glibc or None
 
 
-_trim: Any = None
+_glibc: Any = None

@@ -217,7 +217,7 @@ def evaluate_file(job: FileJob, progress: bool = False) -> tuple[str, FileErrors
             errors = compute_errors(
                 result, gt, algorithm=algorithm, file=rel, suite=suite, mode=job.mode, scale=job.scale,
                 official_interpolation=job.official_interpolation, max_gap=job.max_gap, trial=trial,
-                other_spans=partial(groundtruth_spans, job.data, job.remove_repeated),
+                other_spans=partial(groundtruth_spans, job.data, job.remove_repeated), consume=True,
             )  # fmt: skip
         del result  # the poses as read are not needed for RPE: a long file's memory goes back first
         for seq in errors.sequences:  # the default RPE pairs, here (in a worker, when in parallel)
