@@ -263,23 +263,22 @@ def compute_errors(
             )
 
     out: list[SequenceErrors] = []
+    first_seen, suspect = False, None  # the first sequence with matches, if its AOE is large: the frame checks
     for s in seqs:
-        checked = checks and not any(e.matched > 10 for e in out)  # the frame checks below look at this one
-        out.append(
-            errors_after_alignment(s, result.sequences[s], assoc.pop(s), per_seq_align[s], official_interpolation)
-        )
-        if consume and not (checked and out[-1].matched > 10):
+        e = errors_after_alignment(s, result.sequences[s], assoc.pop(s), per_seq_align[s], official_interpolation)
+        out.append(e)
+        if checks and not first_seen and e.matched > 10:
+            first_seen, suspect = True, e if np.median(e.aoe) > 45.0 else None
+        if consume and e is not suspect:
             del result.sequences[s]
-    if checks:
-        first = next((e for e in out if e.matched > 10), None)
-        if first is not None and np.median(first.aoe) > 45.0:
-            label = f"{path.name}, seq {first.seq}"
-            by_frame, swapped = median_aoe_by_frame(
-                result.sequences[first.seq], groundtruth.sequences[first.seq], scene, with_scale, max_gap, gt_frame,
-                swapped_in=frame,
-            )  # fmt: skip
-            notes.append(plausibility.quaternion_order(label, float(np.median(first.aoe)), swapped))
-            notes.append(plausibility.frame_mismatch(label, frame, by_frame))
+    if suspect is not None:
+        label = f"{path.name}, seq {suspect.seq}"
+        by_frame, swapped = median_aoe_by_frame(
+            result.sequences[suspect.seq], groundtruth.sequences[suspect.seq], scene, with_scale, max_gap, gt_frame,
+            swapped_in=frame,
+        )  # fmt: skip
+        notes.append(plausibility.quaternion_order(label, float(np.median(suspect.aoe)), swapped))
+        notes.append(plausibility.frame_mismatch(label, frame, by_frame))
     kept = [n for n in dict.fromkeys(notes) if n]
     for n in kept:
         warnings.warn(n, LorisWarning, stacklevel=2)
