@@ -165,3 +165,47 @@ def test_later_chunks_read_on_threads_name_the_same_lines(tmp_path, fault, monke
     assert (error.line if error is not None else None) == expected
     if error is None:
         assert _read(path).lines[-1] == 30_000
+
+
+@pytest.mark.parametrize("kind", ["uniform", "short-guess", "mixed-widths", "mixed-first-chunk"])
+def test_rows_copied_into_their_arrays_as_read_equal_a_whole_read(tmp_path, monkeypatch, kind):
+    """A large OpenLORIS file is copied into its stamp, position and quaternion arrays chunk by
+    chunk as it is parsed (RowSink): the same trajectories as reading it in one chunk, when the
+    first chunk's lines are longer than the rest (the row guess is short: the arrays grow) and when
+    lines of 8 and 9 numbers mix, later (read again the general way) or in the first chunk."""
+    from lorisnb.io import chunks
+
+    rng = np.random.default_rng(5)
+    lines = ["scene: cafe", "frame: d400_color"]
+    for k in range(12_000):
+        if k % 4000 == 0:
+            lines.append(f"seq: {k // 4000 + 1}")
+        x = rng.normal(size=3)
+        if kind == "short-guess" and k < 1500:
+            lines.append(
+                f"{1560000000 + k * 0.05:.9f} {x[0]:.15f} {x[1]:.15f} {x[2]:.15f} 0.0000000000 0 0 1.000000000"
+            )
+        elif (kind == "mixed-widths" and k == 9000) or (kind == "mixed-first-chunk" and k == 0):
+            lines.append(f"{1560000000 + k * 0.05:.3f} 7 {x[0]:.4f} {x[1]:.4f} {x[2]:.4f} 0 0 0 1")
+        else:
+            lines.append(f"{1560000000 + k * 0.05:.3f} {x[0]:.4f} {x[1]:.4f} {x[2]:.4f} 0 0 0 1")
+        if k == 5000:
+            lines.append(lines[-1])  # a repeated pose: dropped, as the official tool does
+    path = write(tmp_path, "cafe.txt", "\n".join(lines) + "\n")
+    whole = read_openloris(path, warn=False)
+    monkeypatch.setattr(chunks, "CHUNK_BYTES", 4096)
+    parts = read_openloris(path, warn=False)
+    assert sorted(parts.sequences) == [1, 2, 3] and parts.removed_repeats == whole.removed_repeats == {1: 0, 2: 1, 3: 0}
+    for s, t in whole.sequences.items():
+        u = parts.sequences[s]
+        for name in ("stamps", "positions", "quaternions", "lines"):
+            np.testing.assert_array_equal(getattr(u, name), getattr(t, name))
+        assert u.positions.flags.c_contiguous and u.quaternions.flags.c_contiguous
+
+
+def test_a_large_file_without_poses_reads_as_empty_sequences(tmp_path, monkeypatch):
+    from lorisnb.io import chunks
+
+    monkeypatch.setattr(chunks, "CHUNK_BYTES", 4096)
+    path = write(tmp_path, "cafe.txt", "scene: cafe\nseq: 1\n" + "# a comment, no pose\n" * 20_000)
+    assert {k: len(t) for k, t in read_openloris(path, warn=False).sequences.items()} == {1: 0}

@@ -15,14 +15,14 @@ import csv
 import io
 import os
 import stat
-from collections.abc import Callable, Generator
+from collections.abc import Callable, Generator, Sequence
 
 import numpy as np
 import pandas as pd
 
 from ..errors import ParseError
 from .ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, read_range
-from .rows import Rows, line_dtype
+from .rows import Rows, RowSink, line_dtype
 from .scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
@@ -212,9 +212,10 @@ def read_rows(
     bad_width: Callable[[str, int], str],
     specials: bool = False,
     separators: bytes = b"",
-    chunk_bytes: int = CHUNK_BYTES,
+    chunk_bytes: int | None = None,
     fast_min_bytes: int = FAST_MIN_BYTES,
     progress: Callable[[int], object] | None = None,
+    layout: Callable[[int], Sequence[slice]] | None = None,
 ) -> Rows:
     """Read the numeric lines of a text file in chunks.
 
@@ -231,12 +232,16 @@ def read_rows(
         specials: return lines holding a colon (``key: value``) in ``Rows.specials`` instead of
             reading them as numbers.
         separators: bytes read as whitespace too (``b","``).
-        chunk_bytes: chunk size.
+        chunk_bytes: chunk size (default :data:`CHUNK_BYTES`).
         fast_min_bytes: chunks smaller than this skip the C parser (0: always try it first).
         progress: called with the bytes of each chunk read.
+        layout: the column groups the caller will :meth:`~lorisnb.io.rows.Rows.split` the rows
+            into, given the lines' token count: a large file whose lines all have the same count
+            is then copied into them as its chunks are parsed (:class:`~lorisnb.io.rows.RowSink`).
     """
     spath = str(path)
     width = max(widths)
+    chunk_bytes = chunk_bytes or CHUNK_BYTES
     parts: list[Rows] = []
 
     def parse(chunk: bytes, line0: int, nlines: int) -> Rows:
@@ -261,6 +266,11 @@ def read_rows(
         parts += in_order((((parse, c, l0, n), len(c)) for c, l0, n, _ in chunks), progress)
         return _join(parts)
     chunks.close()
+    sink, again = None, False
+    if layout is not None:  # the rows of the whole file, guessed from the first chunk's lines per byte
+        sink = RowSink(layout, int(total * (first_lines + 1) / max(len(first), 1) * 1.05) + 1024)
+        if not sink.add(parts[0]):
+            sink = None  # lines of several token counts at once: nothing copied yet, read on as usual
     fd = os.open(path, os.O_RDONLY)
     try:
         tasks = (
@@ -276,12 +286,21 @@ def read_rows(
             else:
                 part.lines = part.lines + np.int64(line0)
             part.specials = [(k + line0, text) for k, text in part.specials]
+            if sink is not None and not sink.add(part):
+                again = True  # lines of another token count: read the file again without the sink
+                break
             parts.append(part)
             line0 += nlines
     finally:
         os.close(fd)
+    if again:
+        del parts
+        return read_rows(path, widths, what=what, numbers=numbers, bad_width=bad_width, specials=specials,
+                         separators=separators, chunk_bytes=chunk_bytes, fast_min_bytes=fast_min_bytes)  # fmt: skip
     rows = _join(parts)
     del parts
+    if sink is not None and sink.ntok is not None:
+        rows.filled = sink.filled()
     give_back_memory()
     return rows
 

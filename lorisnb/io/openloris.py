@@ -66,6 +66,11 @@ def _unpadded_stamps(
         )
 
 
+def _pose_groups(ntok: int) -> tuple[slice, slice, slice]:
+    """The tokens of a pose line of ``ntok`` tokens: stamp, position, quaternion (the last 7)."""
+    return slice(0, 1), slice(ntok - 7, ntok - 4), slice(ntok - 4, ntok)
+
+
 def read_openloris(
     path: str | os.PathLike,
     remove_repeated: bool = True,
@@ -103,6 +108,7 @@ def read_openloris(
         ),
         specials=True,
         progress=progress,
+        layout=_pose_groups,
     )
 
     header: dict[str, str] = {}
@@ -145,8 +151,7 @@ def read_openloris(
         )
     ntok = rows.ntok
     if ntok.size and (ntok == ntok[0]).all():  # the usual file: stamps and poses copied once, row-major
-        k = int(ntok[0])
-        first, positions, quaternions = rows.split([slice(0, 1), slice(k - 7, k - 4), slice(k - 4, k)])
+        first, positions, quaternions = rows.split(_pose_groups(int(ntok[0])))
         stamps = first[:, 0]  # contiguous: one column of a (n, 1) array
     else:
         columns = rows.columns

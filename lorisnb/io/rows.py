@@ -26,6 +26,8 @@ class Rows:
         lines: (n,) 1-based line numbers (int32 where they fit, see :func:`line_dtype`).
         specials: ``(line, text)`` of the lines holding a colon (``key: value``), when asked for.
         parsed_in_c: how many of the lines pandas' C parser read (the others: the numpy scanner).
+        filled: the column groups and their arrays when the numbers were copied into them as they
+            were read (:class:`RowSink`; then ``blocks`` is empty and :meth:`split` returns them).
     """
 
     blocks: list[np.ndarray]
@@ -33,6 +35,7 @@ class Rows:
     lines: np.ndarray
     specials: list[tuple[int, str]]
     parsed_in_c: int = 0
+    filled: tuple[tuple[slice, ...], list[np.ndarray]] | None = None
 
     @property
     def columns(self) -> np.ndarray:
@@ -51,6 +54,12 @@ class Rows:
         """Row-major (n, stop - start) arrays of the column ``groups`` (slices of token positions
         with a stop), copied once from the blocks (on threads when many), which are let go as
         they are copied: afterwards this Rows holds no numbers. Tokens a line lacks are NaN."""
+        if self.filled is not None:
+            filled, arrays = self.filled
+            if tuple(groups) != filled:
+                raise ValueError(f"the rows were read into the groups {filled}, not {tuple(groups)}")
+            self.filled = None
+            return arrays
         blocks, self.blocks = self.blocks, []
         sizes = [b.shape[1] for b in blocks]
         outs = [np.empty((sum(sizes), len(range(g.stop)[g]))) for g in groups]
@@ -104,3 +113,46 @@ def _join_blocks(blocks: list[np.ndarray]) -> np.ndarray:
 
     _each(copy, len(blocks))
     return columns
+
+
+class RowSink:
+    """Rows copied into row-major arrays of column groups as a file's chunks arrive in order, each
+    chunk's block let go at once: a large file never holds its numbers twice. ``layout(ntok)``
+    gives the groups for lines of ``ntok`` tokens; ``capacity`` is a guess of the rows (the arrays
+    grow when it is short; pages past the rows are never touched)."""
+
+    def __init__(self, layout: Callable[[int], Sequence[slice]], capacity: int) -> None:
+        self.layout, self.capacity, self.n = layout, max(int(capacity), 1), 0
+        self.ntok: int | None = None
+        self.groups: tuple[slice, ...] = ()
+        self.outs: list[np.ndarray] = []
+
+    def add(self, part: Rows) -> bool:
+        """Copy a chunk's numbers in (its blocks are emptied). False when its lines' token counts
+        differ from the first lines': then the file needs the general reading."""
+        m = len(part.ntok)
+        if m == 0:  # no numbers (its empty block stays)
+            return True
+        lo, hi = int(part.ntok.min()), int(part.ntok.max())
+        if self.ntok is None:
+            self.ntok, self.groups = lo, tuple(self.layout(lo))
+            self.outs = [np.empty((self.capacity, len(range(g.stop)[g]))) for g in self.groups]
+        if lo != hi or lo != self.ntok:
+            return False
+        if self.n + m > self.capacity:
+            self.capacity = max(2 * self.capacity, self.n + m)
+            self.outs = [
+                np.concatenate((o[: self.n], np.empty((self.capacity - self.n, o.shape[1])))) for o in self.outs
+            ]
+        at = self.n
+        for b in part.blocks:
+            k = b.shape[1]
+            for g, out in zip(self.groups, self.outs, strict=True):
+                out[at : at + k] = b[g].T  # every line has the group's tokens
+            at += k
+        part.blocks, self.n = [], at
+        return True
+
+    def filled(self) -> tuple[tuple[slice, ...], list[np.ndarray]]:
+        """The groups and their arrays, trimmed to the rows added (views)."""
+        return self.groups, [o[: self.n] for o in self.outs]
