@@ -125,8 +125,9 @@ def rpe_pairs(
         keep = np.empty(n, bool)
 
         def closest(lo: int, hi: int) -> None:  # the pose closest to t_i + delta, for a block of starts
-            target = stamps[lo:hi] + delta
-            k = np.clip(np.searchsorted(stamps, target), 1, n - 1)
+            target = stamps[lo:hi] + delta  # increasing, as the stamps: search between its first and last
+            w0, w1 = np.searchsorted(stamps, (target[0], target[-1]))
+            k = np.clip(np.searchsorted(stamps[w0 : w1 + 1], target) + w0, 1, n - 1)
             closer_left = np.abs(np.take(stamps, k - 1) - target) <= np.abs(np.take(stamps, k) - target)
             k = np.where(closer_left, k - 1, k)
             j[lo:hi] = k
