@@ -201,6 +201,8 @@ def test_rows_copied_into_their_arrays_as_read_equal_a_whole_read(tmp_path, monk
         for name in ("stamps", "positions", "quaternions", "lines"):
             np.testing.assert_array_equal(getattr(u, name), getattr(t, name))
         assert u.positions.flags.c_contiguous and u.quaternions.flags.c_contiguous
+        held = u.stamps.base.size if u.stamps.base is not None else u.stamps.size
+        assert held < 3 * 12_001  # the stamps hold no array of every token of the file
 
 
 def test_a_large_file_without_poses_reads_as_empty_sequences(tmp_path, monkeypatch):

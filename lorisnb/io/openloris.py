@@ -154,10 +154,10 @@ def read_openloris(
         first, positions, quaternions = rows.split(_pose_groups(int(ntok[0])))
         stamps = first[:, 0]  # contiguous: one column of a (n, 1) array
     else:
-        columns = rows.columns
-        stamps = columns[0]
+        columns = rows.columns  # lines of 8 and 9 numbers: the pose is each line's last 7
         poses = np.take_along_axis(columns.T, (ntok - 7)[:, None] + np.arange(7), axis=1)
-        positions, quaternions = poses[:, :3], poses[:, 3:]
+        stamps, positions, quaternions = columns[0].copy(), poses[:, :3], poses[:, 3:]  # finish() copies these
+        del columns, poses
     del rows
     if repair_stamps or (stamps.size > 1 and not (np.diff(stamps) > 0).all()):
         # stamps out of order: perhaps nanoseconds printed without zero padding (read the digits)
@@ -203,7 +203,7 @@ def read_openloris(
     if warn:
         for note in notes:
             warnings.warn(note, LorisWarning, stacklevel=2)
-    if line_no.size * 64 >= GIVE_BACK_BYTES:  # a large file: its parsed columns were just freed
+    if line_no.size * 64 >= GIVE_BACK_BYTES:  # a large file: the checks' temporaries were just freed
         del stamps, positions, quaternions
         give_back_memory()
     return result

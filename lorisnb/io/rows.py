@@ -141,9 +141,7 @@ class RowSink:
             return False
         if self.n + m > self.capacity:
             self.capacity = max(2 * self.capacity, self.n + m)
-            self.outs = [
-                np.concatenate((o[: self.n], np.empty((self.capacity - self.n, o.shape[1])))) for o in self.outs
-            ]
+            self.outs = [self._moved(o) for o in self.outs]
         at = self.n
         for b in part.blocks:
             k = b.shape[1]
@@ -152,6 +150,13 @@ class RowSink:
             at += k
         part.blocks, self.n = [], at
         return True
+
+    def _moved(self, out: np.ndarray) -> np.ndarray:
+        """``out``'s rows in an array of the new capacity (only they are written: pages past them
+        stay untouched, so not resident)."""
+        grown = np.empty((self.capacity, out.shape[1]))
+        grown[: self.n] = out[: self.n]
+        return grown
 
     def filled(self) -> tuple[tuple[slice, ...], list[np.ndarray]]:
         """The groups and their arrays, trimmed to the rows added (views)."""
