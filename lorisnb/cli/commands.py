@@ -13,7 +13,7 @@ import pandas as pd
 
 from ..core.association import MAX_GAP
 from ..errors import LorisError, LorisWarning, ValidationError
-from .options import check_output, conventions_of, param_value
+from .options import check_outputs, conventions_of, param_value
 
 
 def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
@@ -35,12 +35,9 @@ def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
 
     executor = None
     if args.scheduler:
-        from ..tools import require
+        from ..tools.pool import connect_scheduler
 
-        try:
-            client = require("distributed").Client(args.scheduler, timeout=10)
-        except (OSError, TimeoutError) as exc:
-            raise LorisError(f"--scheduler {args.scheduler}: cannot reach the Dask scheduler ({exc})") from None
+        client = connect_scheduler(args.scheduler)
         executor = client.get_executor()
 
     with warnings.catch_warnings(record=True) as caught:
@@ -121,8 +118,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from ..core.scoring import score
     from ..io.writers import write_csv, write_parquet
 
-    check_output(args.csv, args.paths, args.force)
-    check_output(args.parquet, args.paths, args.force, folder=True)
+    check_outputs({"--csv": args.csv, "--parquet": args.parquet}, args.paths, args.force)
     ev, notes = _run_evaluation(args)
     eps, phi = _thresholds(args, ev)
     table = score(ev.errors, eps, phi, args.delta, args.tau)
@@ -165,8 +161,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from ..core.sweep import sweep, sweep_scenes
     from ..io.writers import write_csv, write_parquet
 
-    check_output(args.csv, args.paths, args.force)
-    check_output(args.parquet, args.paths, args.force, folder=True)
+    check_outputs({"--csv": args.csv, "--parquet": args.parquet}, args.paths, args.force)
     ev, notes = _run_evaluation(args)
     keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
     grid = f"{len(args.eps)} eps x {len(args.phi)} phi x {len(args.delta)} delta x {len(args.tau)} tau"
@@ -222,8 +217,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from ..io.writers import write_csv
     from ..tools.tables import interval, write_comparison
 
-    for out in (args.csv, args.latex, args.markdown):
-        check_output(out, args.paths, args.force)
+    if args.parquet:
+        raise ValidationError(
+            "--parquet: compare writes --csv, --latex and --markdown; --parquet is for evaluate and sweep"
+        )
+    check_outputs({"--csv": args.csv, "--latex": args.latex, "--markdown": args.markdown}, args.paths, args.force)
     ev, notes = _run_evaluation(args)
     eps, phi = _thresholds(args, ev)
     table = ev.sequences(eps, phi, args.delta, args.tau)
@@ -262,7 +260,7 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     from ..io.writers import write_csv
     from ..tools.crosscheck import crosscheck, crosscheck_openloris
 
-    check_output(args.csv, [args.gt, args.est], args.force)
+    check_outputs({"--csv": args.csv}, [args.gt, args.est], args.force)
     deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
     gt_format = args.format
     est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)

@@ -168,13 +168,13 @@ def src_inside(target: Path, inputs: list[str]) -> bool:
     return any(target == Path(i).resolve() or target in Path(i).resolve().parents for i in inputs)
 
 
-def check_output(out: str | None, inputs: list[str], force: bool, folder: bool = False) -> None:
+def check_output(out: str | None, inputs: list[str], force: bool, folder: bool = False, option: str = "--csv") -> None:
     """Refuse an output before any work: an input of the command, a folder, an existing file
     without --force, or a place that cannot be written."""
     if out is None:
         return
     if str(out).strip() == "":
-        raise OutputError("--csv: an empty path; expected a file name")
+        raise OutputError(f"{option}: an empty path; expected a {'folder' if folder else 'file'} name")
     target = Path(out).resolve()
     for i in inputs:
         src = Path(i).resolve()
@@ -186,7 +186,7 @@ def check_output(out: str | None, inputs: list[str], force: bool, folder: bool =
                 "file; choose another name or place"
             )
     if target.is_dir() and not folder:
-        raise OutputError(f"{out} is a folder; expected a file name for the CSV")
+        raise OutputError(f"{out} is a folder; expected a file name for {option}")
     if folder and src_inside(target, inputs):
         raise OutputError(f"{out} is or holds an input of this command; choose another output folder")
     if target.exists() and not force:
@@ -196,6 +196,45 @@ def check_output(out: str | None, inputs: list[str], force: bool, folder: bool =
         parent = parent.parent
     if not os.access(parent, os.W_OK):
         raise OutputError(f"cannot write {out}: {parent} is not writable; choose another place")
+
+
+#: The file name each output option needs (any case); ``None``: a folder (a Parquet dataset).
+OUTPUT_SUFFIXES: dict[str, tuple[str, ...] | None] = {
+    "--csv": (".csv",),
+    "--latex": (".tex",),
+    "--markdown": (".md",),
+    "--parquet": None,
+}
+
+
+def check_outputs(outputs: dict[str, str | None], inputs: list[str], force: bool) -> None:
+    """Every output of a command checked together, before any work, so that a refused run leaves
+    nothing behind: each as :func:`check_output`, with the suffix its option writes
+    (:data:`OUTPUT_SUFFIXES`), no two outputs on one path, and no file inside a folder output.
+    ``outputs`` maps each option (``"--csv"``) to its value (None: not given)."""
+    given = {opt: out for opt, out in outputs.items() if out is not None}
+    for opt, out in given.items():
+        folder = OUTPUT_SUFFIXES.get(opt, ()) is None
+        check_output(out, inputs, force, folder=folder, option=opt)
+        suffixes = OUTPUT_SUFFIXES.get(opt)
+        name = Path(out).name.lower()
+        if suffixes and not name.endswith(suffixes):
+            raise OutputError(f"{opt} {out}: expected a file name ending in {' or '.join(suffixes)}")
+        if folder and name.endswith((".csv", ".tex", ".md", ".txt")):
+            raise OutputError(f"{opt} {out}: expected a folder name (a Parquet dataset), not a file name")
+    seen: dict[Path, str] = {}
+    for opt, out in given.items():
+        target = Path(out).resolve()
+        if target in seen:
+            raise OutputError(f"{seen[target]} and {opt} both name {out}; give each output its own path")
+        seen[target] = opt
+    for opt, out in given.items():
+        if OUTPUT_SUFFIXES.get(opt, ()) is None:
+            inside = [o for o, p in given.items() if Path(out).resolve() in Path(p).resolve().parents]
+            if inside:
+                raise OutputError(
+                    f"{inside[0]} {given[inside[0]]} lies inside the {opt} folder {out}; write it elsewhere"
+                )
 
 
 def param_value(text: str) -> Any:
