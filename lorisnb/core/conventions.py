@@ -19,13 +19,14 @@ Alignment (``gt = s R est + t``, fitted on the matched positions):
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import EvaluationError, ValidationError
+from ..errors import EvaluationError, LorisWarning, ValidationError
 from .association import MAX_GAP
-from .geometry import Sim3, quat_to_matrix, umeyama
+from .geometry import Sim3, degenerate_alignment, quat_to_matrix, umeyama
 from .validate import choice, finite, positive
 
 ASSOCIATIONS = ("interpolate", "nearest")
@@ -164,6 +165,39 @@ def fit_alignment(
     if method == "posyaw":
         mu_e, mu_g = p_e[:n].mean(axis=0), p_g[:n].mean(axis=0)
         c = (p_e[:n] - mu_e).T @ (p_g[:n] - mu_g)
+        if not np.hypot(c[0, 0] + c[1, 1], c[0, 1] - c[1, 0]) > np.finfo(float).eps * max(1.0, np.abs(c).max()):
+            raise EvaluationError(
+                f"no posyaw alignment can be determined: the {n} matched positions have no horizontal spread "
+                "(all on one vertical line or one point), so the yaw is arbitrary; align on more poses, on the "
+                "first pose's orientation (--align-frames 1), or not at all (--align none)"
+            )
         rot = _rot_z(_best_yaw(c))
+        _warn_tilt(p_e[:n], p_g[:n], Sim3(rot, mu_g - rot @ mu_e, 1.0))
         return Sim3(rot, mu_g - rot @ mu_e, 1.0)
-    return umeyama(p_e[:n], p_g[:n], method == "sim3")
+    return umeyama(p_e[:n], p_g[:n], method == "sim3", strict=True)
+
+
+#: posyaw is questioned when the best full rotation between the positions tilts z by more than
+#: this (degrees) and fits them at least this much better (ATE RMSE ratio).
+TILT_DEGREES = 10.0
+TILT_GAIN = 0.5
+
+
+def _warn_tilt(p_e: np.ndarray, p_g: np.ndarray, posyaw: Sim3) -> None:
+    """Warn when the positions say the two world frames differ in roll/pitch: posyaw (a rotation
+    about gravity only) then leaves a tilt in every error."""
+    if degenerate_alignment(p_e, p_g) is not None:
+        return
+    se3 = umeyama(p_e, p_g)
+    tilt = float(np.degrees(np.arccos(np.clip(se3.rotation[2, 2], -1.0, 1.0))))
+    rmse_yaw = float(np.sqrt(np.mean(np.sum((posyaw.apply(p_e) - p_g) ** 2, axis=1))))
+    rmse_se3 = float(np.sqrt(np.mean(np.sum((se3.apply(p_e) - p_g) ** 2, axis=1))))
+    if tilt > TILT_DEGREES and rmse_se3 < TILT_GAIN * rmse_yaw:
+        warnings.warn(
+            f"align='posyaw' assumes both trajectories have z along gravity, but the best full rotation between "
+            f"them tilts z by {tilt:.1f} deg (roll/pitch) and fits with ATE RMSE {rmse_se3:.3f} m against "
+            f"{rmse_yaw:.3f} m for posyaw: is the estimate gravity-aligned (a visual-only system?)? "
+            "Use --align se3 (or sim3).",
+            LorisWarning,
+            stacklevel=3,
+        )
