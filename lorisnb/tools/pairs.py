@@ -23,6 +23,7 @@ from ..core.geometry import Sim3
 from ..core.model import ResultFile
 from ..core.pairs import session_errors
 from ..core.trajectory import Trajectory
+from ..core.units import check_stamp_units
 from ..errors import LorisError, LorisWarning, ParseError, ValidationError
 from ..io.formats import TRAJECTORY_FORMATS, read_trajectory
 from ..io.manifest import SUFFIX, Manifest, read_manifest
@@ -103,6 +104,7 @@ def evaluate_pairs(
                 with warnings.catch_warnings(record=True) as caught:
                     warnings.simplefilter("always", LorisWarning)
                     est = read_trajectory(path, fmt, stamps=est_times, topic=topic, tf=tf)
+                    check_stamp_units(est, gt, str(path))  # seconds vs indices or nanoseconds
                     fe = session_errors(
                         {1: gt}, {1: est}, conv, transform=transform, path=path, algorithm=algorithm, scene=label,
                         suite=suite, trial=trial,
@@ -190,6 +192,7 @@ def evaluate_manifest(
                             ests[s.seq] = read_trajectory(
                                 path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf
                             )
+                            check_stamp_units(ests[s.seq], gts[scene][s.seq], str(path))
                     if not ests:
                         raise ParseError(
                             folder,
