@@ -103,6 +103,8 @@ def _report_problems(ev: Any, notes: list[str]) -> None:
         print(f"warning: {n}", file=sys.stderr)
     for f in ev.failures:
         print(f"error: {f.error}", file=sys.stderr)
+    for f in ev.unscored:  # in the table, scored as the paper scores it; the exit status says so
+        print(f"not scored: {f.error}", file=sys.stderr)
     if ev.skipped:
         reasons = sorted({f.error.split(":")[0] for f in ev.skipped})
         print(f"skipped {len(ev.skipped)} file(s): " + "; ".join(reasons), file=sys.stderr)
@@ -153,8 +155,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print("\nrelative error (rpg_trajectory_evaluation: sub-trajectories of 10..50 % of the length):")
         print(_fmt(rel.drop(columns=["suite", "trial"])) if not rel.empty else "(no sequence long enough)")
     _report_problems(ev, notes)
-    print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.skipped)} skipped", file=sys.stderr)
-    return 1 if ev.failures else 0
+    print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.unscored)} not scored, "
+          f"{len(ev.skipped)} skipped", file=sys.stderr)  # fmt: skip
+    return ev.exit_status()
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
@@ -192,7 +195,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                 print(f"... {scene_rows - 60} more scene rows (in the Parquet dataset, aggregate with sweep_scenes)")
         print(f"wrote {rows} rows to {path}", file=sys.stderr)
         _report_problems(ev, notes)
-        return 1 if ev.failures else 0
+        return ev.exit_status()
     table = sweep(ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all")
     print(f"{len(table)} rows: {len(ev.errors)} file(s) x {grid}")
     if not table.empty:
@@ -207,7 +210,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.parquet:
         print(f"wrote {len(table)} rows to {write_parquet(written, args.parquet, force=args.force)}", file=sys.stderr)
     _report_problems(ev, notes)
-    return 1 if ev.failures else 0
+    return ev.exit_status()
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
@@ -251,7 +254,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
             if out:
                 print(f"wrote {write_comparison(ci, args.metric, out, args.force)}", file=sys.stderr)
     _report_problems(ev, notes)
-    return 1 if ev.failures else 0
+    return ev.exit_status()
 
 
 def cmd_crosscheck(args: argparse.Namespace) -> int:

@@ -93,6 +93,16 @@ class Manifest:
     def scenes(self) -> list[str]:
         return list(dict.fromkeys(s.scene for s in self.sessions))
 
+    def __repr__(self) -> str:
+        if self.openloris:
+            return f"<Manifest {self.name!r}: the built-in OpenLORIS evaluation>"
+        n, k = len(self.sessions), len(self.scenes)
+        return (
+            f"<Manifest {self.name!r}: {n} session{'' if n == 1 else 's'} ({k} scene{'' if k == 1 else 's'}), "
+            f"{'lifelong' if self.lifelong else 'per session'}, {self.groundtruth_format} ground truth, "
+            f"{self.estimate_format} estimates>"
+        )
+
 
 def manifest_path(name_or_path: str | os.PathLike[str]) -> Path:
     """A built-in manifest's file (by name) or the given path."""
@@ -169,6 +179,7 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
     seqs = [s.seq for s in sessions]
     if len(set(seqs)) != len(seqs):
         raise ParseError(path, None, f"session numbers repeat ({seqs}); expected each session once")
+    check_repeats(sessions, path)
     try:
         conventions = Conventions(**raw.get("conventions", {}))
     except TypeError as exc:
@@ -185,6 +196,26 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
         estimate_topic=raw.get("estimate_topic"), groundtruth_tf=raw.get("groundtruth_tf"),
         estimate_tf=raw.get("estimate_tf"), source=str(raw.get("source", "")),
     )  # fmt: skip
+
+
+def check_repeats(sessions: list[Session], path: Path) -> None:
+    """A session listed twice (the same name, estimate file or ground-truth file in two
+    ``[[session]]`` tables) is an error: it would be scored twice."""
+    for what, key in (
+        ("name", lambda s: s.name),
+        ("estimate file", lambda s: s.estimate),
+        ("ground-truth file", lambda s: s.groundtruth.resolve()),
+    ):
+        first: dict[object, Session] = {}
+        for s in sessions:
+            k = key(s)
+            if k in first:
+                raise ParseError(
+                    path, None,
+                    f"sessions {first[k].seq} ({first[k].name!r}) and {s.seq} ({s.name!r}) have the same {what} "
+                    f"({k}): a session listed twice? Each session must be listed once, with its own files",
+                )  # fmt: skip
+            first[k] = s
 
 
 def _opt_float(raw: dict[str, Any], key: str, path: Path) -> float | None:

@@ -31,7 +31,10 @@ from ..core.validate import choice, scale_value
 from ..errors import DataNotFoundError, LorisError, LorisWarning, ValidationError
 from ..io.data import DataPaths, DataRoot, find_data, groundtruth_spans, load_groundtruth, scene_durations
 from ..io.openloris import read_openloris
+from . import status as _status_rules
+from .inputs import as_paths, unique_files
 from .pool import default_jobs, run_tasks, size_of
+from .reprs import describe_evaluation
 
 PathArg = str | os.PathLike[str]
 
@@ -57,6 +60,21 @@ class Evaluation:
     groundtruth: dict[str, ResultFile] | None = None  # scene -> ground truth, for pairs and manifests
     conventions: str = ""  # what association and alignment were used, in words
     thresholds: dict[str, float] = field(default_factory=dict)  # default eps / phi (a manifest's)
+    missing: list[Failure] = field(default_factory=list)  # declared sessions without an estimate
+
+    @property
+    def unscored(self) -> list[Failure]:
+        """Inputs read but not scored (no pose matched; declared sessions without an estimate):
+        see :func:`lorisnb.tools.status.unscored`."""
+        return _status_rules.unscored(self)
+
+    def exit_status(self) -> int:
+        """0 if every input was read and matched the ground truth, else 1 (every command's exit
+        status; :mod:`lorisnb.tools.status`)."""
+        return _status_rules.exit_status(self)
+
+    def __repr__(self) -> str:
+        return describe_evaluation(self)
 
     def sequences(
         self, eps: Eps = np.inf, phi: float = np.inf, delta: float = 1.0, tau: float = 60.0, **kw: Any
@@ -97,37 +115,16 @@ class Evaluation:
         return [w for f in self.errors for w in f.warnings]
 
     def failures_table(self) -> pd.DataFrame:
-        """Failed and skipped files with the reason, one row each."""
+        """Failed, skipped and unscored inputs (:attr:`unscored`) with the reason, one row each."""
         rows = [dict(file=str(f.path), status="failed", kind=f.kind, error=f.error) for f in self.failures]
         rows += [dict(file=str(f.path), status="skipped", kind=f.kind, error=f.error) for f in self.skipped]
+        rows += [dict(file=str(f.path), status="not scored", kind=f.kind, error=f.error) for f in self.unscored]
         return pd.DataFrame(rows, columns=["file", "status", "kind", "error"])
 
 
 def is_hidden(path: Path) -> bool:
     """Hidden files and editor leftovers (``.x.txt``, ``.#x.txt``, ``~x.txt``) are not results."""
     return path.name.startswith((".", "~"))
-
-
-def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
-    """One path or several, as Paths; an empty path or another type is a ValidationError."""
-    items = [paths] if isinstance(paths, (str, os.PathLike)) else None
-    if items is None:
-        if isinstance(paths, (bytes, pd.DataFrame)) or not isinstance(paths, Iterable):
-            raise ValidationError(
-                f"paths: expected a file or folder path (str or pathlib.Path) or a list of them, "
-                f"got {type(paths).__name__}"
-            )
-        items = list(paths)
-    out = []
-    for p in items:
-        if not isinstance(p, (str, os.PathLike)):
-            raise ValidationError(f"paths: expected str or pathlib.Path items, got {type(p).__name__} ({p!r:.60})")
-        if str(p).strip() == "":
-            raise ValidationError("paths: an empty path (an unset shell variable?); expected a file or folder")
-        out.append(Path(p))
-    if not out:
-        raise ValidationError("paths: no path given; expected at least one file or folder")
-    return out
 
 
 def result_files(
@@ -148,7 +145,7 @@ def result_files(
             out.extend((f, p) for f in files)
         else:
             out.append((p, None))
-    return out
+    return unique_files(out)
 
 
 def _names(what: str, value: object) -> list[str]:
@@ -276,6 +273,7 @@ def evaluate(
             and in the same order as one process gives.
     """
     mode = choice("mode", mode, ("auto", "per-seq", "lifelong"))
+    paths = as_paths(paths)  # once: a generator is read once
     compile_trials_by(trials_by)
     scale = scale_value(scale)
     items = result_files(paths)

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..core.conventions import Conventions
 from ..core.geometry import Sim3
+from ..core.missing import with_missing
 from ..core.model import ResultFile
 from ..core.pairs import session_errors
 from ..core.trajectory import Trajectory
@@ -28,6 +29,7 @@ from ..errors import LorisError, LorisWarning, ParseError, ValidationError
 from ..io.formats import TRAJECTORY_FORMATS, read_trajectory
 from ..io.manifest import SUFFIX, Manifest, read_manifest
 from .evaluate import Evaluation, Failure, as_paths, labels, result_files
+from .inputs import holds_any, missing_note
 
 PathArg = str | os.PathLike[str]
 
@@ -178,7 +180,7 @@ def evaluate_manifest(
             s.groundtruth, s.groundtruth_format, topic=m.groundtruth_topic, tf=m.groundtruth_tf
         )
     folders = _algorithm_folders(results, m)
-    errors, failures = [], []
+    errors, failures, missing = [], [], []
     with _ticks(len(folders) * len(m.scenes), progress) as tick:
         for folder, root in folders:
             algorithm, _, suite, trial = labels(folder / "x", root, trials_by)
@@ -193,23 +195,30 @@ def evaluate_manifest(
                                 path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf
                             )
                             check_stamp_units(ests[s.seq], gts[scene][s.seq], str(path))
-                    if not ests:
-                        raise ParseError(
-                            folder,
-                            None,
-                            f"no estimate of scene {scene!r}; expected {', '.join(s.estimate for s in sessions)}",
+                    fe = None
+                    if ests:
+                        fe = session_errors(
+                            gts[scene], ests, conv, lifelong=along, transform=m.transform, path=folder,
+                            algorithm=algorithm, scene=scene, suite=suite, trial=trial,
+                        )  # fmt: skip
+                    absent = [s for s in sessions if s.seq not in ests]
+                    if absent:  # scored as the paper scores missing output, never dropped
+                        note = missing_note(folder, algorithm, [(s.name, s.estimate) for s in absent])
+                        fe = with_missing(
+                            fe, gts[scene], [s.seq for s in absent], path=folder, algorithm=algorithm, scene=scene,
+                            suite=suite, trial=trial, lifelong=along, note=note,
+                        )  # fmt: skip
+                        names = ", ".join(s.name for s in absent)
+                        missing.append(
+                            Failure(folder, f"{folder}: no estimate for session(s) {names}", "missing-estimate")
                         )
-                    fe = session_errors(
-                        gts[scene], ests, conv, lifelong=along, transform=m.transform, path=folder, algorithm=algorithm,
-                        scene=scene, suite=suite, trial=trial,
-                    )  # fmt: skip
                     errors.append(fe)
                 except LorisError as exc:
                     failures.append(Failure(folder, str(exc), type(exc).__name__))
                 tick()
     return Evaluation(
         errors=errors, failures=failures,
-        groundtruth={sc: _groundtruth_file(m.path, sc, seqs) for sc, seqs in gts.items()},
+        groundtruth={sc: _groundtruth_file(m.path, sc, seqs) for sc, seqs in gts.items()}, missing=missing,
         conventions=conv.describe() + ("; one alignment for all sessions" if along else "; each session aligned on itself"),
         thresholds={k: v for k, v in (("eps", m.eps), ("phi", m.phi)) if v is not None},
     )  # fmt: skip
@@ -223,10 +232,10 @@ def _algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> lis
     for p in as_paths(results):
         if not p.is_dir():
             raise ValidationError(f"{p}: expected a folder of estimates (one per session, named as in {m.path.name})")
-        if any((p / n).exists() for n in names):
+        if holds_any(p, names):
             out.append((p, None))
             continue
-        subs = sorted(d for d in p.rglob("*") if d.is_dir() and any((d / n).exists() for n in names))
+        subs = sorted(d for d in p.rglob("*") if d.is_dir() and holds_any(d, names))
         out.extend((d, p) for d in subs)
         if not subs:
             raise ValidationError(f"{p}: no estimate named {', '.join(sorted(names))} in it or below it")

@@ -1,0 +1,43 @@
+"""What an evaluation did not score, and the exit status every command returns from it:
+
+* 0: every input was read and matched the ground truth;
+* 1: an input failed (it could not be read or evaluated), matched no ground-truth stamp at all, or
+  a declared session had no estimate; each still appears (in the table, scored as the paper
+  scores it, or among the failures) with a one-line reason;
+* 2: a usage error (a bad option, a bad output, a manifest or ground truth that cannot be read).
+
+A file skipped because the data holds no ground truth for its scene (OpenLORIS' office) is
+reported but does not count: there is nothing it could have matched.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .evaluate import Evaluation, Failure
+
+#: Exit statuses of the ``lorisnb`` commands.
+OK, UNSCORED, USAGE = 0, 1, 2
+
+
+def unscored(ev: Evaluation) -> list[Failure]:
+    """Inputs that were read but not scored: files none of whose poses matched the ground truth
+    in time (kind ``no-match``, with the reason the evaluation gave) and declared sessions without
+    an estimate (kind ``missing-estimate``). Failures are in ``ev.failures``."""
+    from .evaluate import Failure
+
+    out = list(getattr(ev, "missing", []))
+    for f in ev.errors:
+        if any(e.matched for e in f.sequences):
+            continue
+        if any(e.poses for e in f.sequences) or not f.sequences:
+            why = next((w for w in f.warnings if "no estimate stamp" in w or "no pose" in w), "")
+            reason = why or f"{f.algorithm} {f.file}: no pose matched the ground truth in time"
+            out.append(Failure(f.path, reason.splitlines()[0], "no-match"))
+    return out
+
+
+def exit_status(ev: Evaluation) -> int:
+    """0 if every input was read and matched the ground truth, else 1 (see the module docstring)."""
+    return UNSCORED if ev.failures or unscored(ev) else OK
