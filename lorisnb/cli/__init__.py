@@ -16,6 +16,7 @@ import numpy as np
 from ..core import validate
 from ..errors import LorisError
 from ..io.ranges import keep_freed_memory
+from ..io.registry import TEXT_FORMATS
 from .commands import cmd_compare, cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
 from .options import (
     add_evaluation_options,
@@ -81,13 +82,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("est", help="estimate")
     p.add_argument(
         "--format",
-        choices=["tum", "kitti", "euroc", "openloris"],
+        choices=TEXT_FORMATS,
         default="tum",
         help="format of GT (and of EST unless --est-format); euroc follows evo: the ground truth is the "
         "EuRoC CSV, the estimate TUM text",
     )
     p.add_argument(
-        "--est-format", choices=["tum", "kitti", "euroc"], default=None, help="format of EST when it differs"
+        "--est-format",
+        choices=[f for f in TEXT_FORMATS if f != "openloris"],
+        default=None,
+        help="format of EST when it differs",
     )
     add_scale_option(p, "Sim(3) for the RPE and association rows ('auto' for openloris: by algorithm)")
     p.add_argument("--times", default=None, help="KITTI: one times file (a stamp per line) for both files")

@@ -44,11 +44,13 @@ import numpy as np
 
 from ..core.conventions import Conventions
 from ..core.geometry import Sim3
+from ..core.validate import threshold
 from ..errors import ParseError, ValidationError
 from .formats import TRAJECTORY_FORMATS
+from .registry import suffixes
 
 BUILT_IN = ("openloris", "euroc-vicon-room1", "euroc-vicon-room2", "tum-fr1-office")
-SUFFIX = {"tum": ".txt", "kitti": ".txt", "euroc": ".csv", "openloris": ".txt", "bag": ".bag"}
+SUFFIX = {name: suffixes(name)[0] for name in TRAJECTORY_FORMATS}  # an estimate file's default suffix
 TOP_KEYS = {"name", "scene", "root", "lifelong", "groundtruth_format", "estimate_format", "eps", "phi", "source",
             "conventions", "transform", "session", "groundtruth_topic", "estimate_topic", "groundtruth_tf",
             "estimate_tf", "openloris"}  # fmt: skip
@@ -224,7 +226,10 @@ def _opt_float(raw: dict[str, Any], key: str, path: Path) -> float | None:
     v = raw[key]
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
         raise ParseError(path, None, f"{key} = {v!r}: expected a positive number")
-    return float(v)
+    try:
+        return threshold(key, v)  # the same limits as every other surface (phi <= 180 degrees, ...)
+    except ValidationError as exc:
+        raise ParseError(path, None, str(exc)) from None
 
 
 def _transform(raw: Any, path: Path) -> Sim3 | None:

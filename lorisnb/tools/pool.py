@@ -179,11 +179,13 @@ def scheduler_address(address: object) -> tuple[str, str, int]:
     return scheme, m["host"].strip("[]"), int(m["port"])
 
 
-def probe_scheduler(address: str, timeout: float = SCHEDULER_TIMEOUT) -> None:
+def probe_scheduler(address: str, timeout: float | None = None) -> None:
     """Check, within ``timeout`` seconds, that ``address`` accepts a TCP connection and (plain
     ``tcp``) speaks first as a Dask scheduler does (it sends its handshake on every connection):
     a closed port, a silent server, or an HTTP server (the dashboard's port, 8787, is the usual
-    mistake) is an EvaluationError of one line naming the address. ``inproc`` is not probed."""
+    mistake) is an EvaluationError of one line naming the address. ``inproc`` is not probed.
+    ``timeout`` defaults to :data:`SCHEDULER_TIMEOUT`."""
+    timeout = SCHEDULER_TIMEOUT if timeout is None else float(timeout)
     scheme, host, port = scheduler_address(address)
     if scheme == "inproc":
         return
@@ -223,13 +225,13 @@ def probe_scheduler(address: str, timeout: float = SCHEDULER_TIMEOUT) -> None:
         raise EvaluationError(f"--scheduler {address}: the server there does not speak Dask's protocol; {hint}")
 
 
-def connect_scheduler(address: str, timeout: float = SCHEDULER_TIMEOUT) -> Any:
+def connect_scheduler(address: str, timeout: float | None = None) -> Any:
     """A ``distributed.Client`` of the Dask scheduler at ``address``, after
     :func:`scheduler_address` checked its form and :func:`probe_scheduler` its answer; every
     failure is one lorisnb error naming the address, within about ``timeout`` seconds."""
     from . import require
 
-    timeout = float(timeout)
+    timeout = SCHEDULER_TIMEOUT if timeout is None else float(timeout)
     distributed = require("distributed")
     probe_scheduler(address, timeout)
     try:
