@@ -213,6 +213,12 @@ def check_outputs(outputs: dict[str, str | None], inputs: list[str], force: bool
     (:data:`OUTPUT_SUFFIXES`), no two outputs on one path, and no file inside a folder output.
     ``outputs`` maps each option (``"--csv"``) to its value (None: not given)."""
     given = {opt: out for opt, out in outputs.items() if out is not None}
+    seen: dict[Path, str] = {}
+    for opt, out in given.items():
+        target = Path(out).resolve()
+        if target in seen:
+            raise OutputError(f"{seen[target]} and {opt} both name {out}; give each output its own path")
+        seen[target] = opt
     for opt, out in given.items():
         folder = OUTPUT_SUFFIXES.get(opt, ()) is None
         check_output(out, inputs, force, folder=folder, option=opt)
@@ -222,12 +228,6 @@ def check_outputs(outputs: dict[str, str | None], inputs: list[str], force: bool
             raise OutputError(f"{opt} {out}: expected a file name ending in {' or '.join(suffixes)}")
         if folder and name.endswith((".csv", ".tex", ".md", ".txt")):
             raise OutputError(f"{opt} {out}: expected a folder name (a Parquet dataset), not a file name")
-    seen: dict[Path, str] = {}
-    for opt, out in given.items():
-        target = Path(out).resolve()
-        if target in seen:
-            raise OutputError(f"{seen[target]} and {opt} both name {out}; give each output its own path")
-        seen[target] = opt
     for opt, out in given.items():
         if OUTPUT_SUFFIXES.get(opt, ()) is None:
             inside = [o for o, p in given.items() if Path(out).resolve() in Path(p).resolve().parents]

@@ -59,8 +59,8 @@ def degenerate_alignment(source: np.ndarray, target: np.ndarray) -> str | None:
     if n == 0:
         return "no matched position"
     xs, xt = source - source.mean(axis=0), target - target.mean(axis=0)
-    for side, x in (("estimate", xs), ("ground-truth", xt)):
-        if not np.any(np.abs(x) > 0):
+    for side, p in (("estimate", source), ("ground-truth", target)):
+        if np.ptp(p, axis=0).max() <= 1e-12 * max(1.0, float(np.abs(p).max())):
             return f"all {n} matched {side} positions are identical (zero spread)"
     d = np.linalg.svd(xt.T @ xs / n, compute_uv=False)
     if n < 3 or d[1] <= max(DEGENERATE_RATIO * d[0], np.finfo(float).eps):

@@ -212,7 +212,8 @@ def evaluate_manifest(
                         missing.append(
                             Failure(folder, f"{folder}: no estimate for session(s) {names}", "missing-estimate")
                         )
-                    errors.append(fe)
+                    if fe is not None:  # not None: the scene has sessions
+                        errors.append(fe)
                 except LorisError as exc:
                     failures.append(Failure(folder, str(exc), type(exc).__name__))
                 tick()
