@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from helpers import write
+from helpers import circle, errors_of, openloris_text, write
 from scipy.spatial.transform import Rotation
 
 import lorisnb as ln
@@ -154,6 +154,10 @@ def test_a_session_without_its_estimate_is_a_row_with_a_warning(data, tmp_path, 
     err = _err(capsys)
     assert "no estimate for 1 session(s)" in err and "not scored:" in err
     assert pd.read_csv(out)["seq"].tolist() == [1, 2]
+    # the results folder named twice: scored once
+    with pytest.warns(ln.LorisWarning, match="named more than once"):
+        twice = evaluate_manifest(m, [tmp_path / "res", tmp_path / "res" / "slam"])
+    assert len(twice.errors) == 1
     # no estimate of the scene at all: every session is a row
     (tmp_path / "res" / "slam" / "s1.txt").unlink()
     ev = evaluate_manifest(m, tmp_path / "res")
@@ -296,6 +300,22 @@ def test_degenerate_alignments_are_refused_or_warned(pair, data):
     tilted = Trajectory(est.stamps, tilt.apply(est.positions), (tilt * Rotation.from_quat(est.quaternions)).as_quat())
     with pytest.warns(ln.LorisWarning, match=r"posyaw.*tilts z by 4\d\.\d deg.*--align se3"):
         ln.session_errors({1: gt}, {1: tilted}, ln.Conventions.preset("vio"))
+
+
+def test_a_degenerate_lifelong_alignment_of_an_openloris_file_is_said(tmp_path):
+    gt1, gt2 = circle(), circle(t0=2000.0)
+    gt = write(tmp_path, "gt_cafe_1.txt", openloris_text({1: gt1, 2: gt2}))
+    first = Trajectory(gt1.stamps[:2], gt1.positions[:2] + 0.1, gt1.quaternions[:2])  # 2 poses, then lost
+    est = write(tmp_path, "algo/cafe.txt", openloris_text({1: first, 2: gt2}))
+    ref = ln.read_openloris(gt)
+    fe = errors_of(est, ref, mode="lifelong")
+    assert any("seq 1: the alignment was fitted on only 2 matched positions" in w for w in fe.warnings)
+    # said, not changed: the official tool aligns on those two poses all the same
+    fitted = umeyama(first.positions, fe.sequences[0].gt_positions)
+    np.testing.assert_allclose(fe.alignment.rotation, fitted.rotation, atol=1e-6)  # 9 digits in the file
+    assert fe.aligned_on == 1 and fe.sequences[1].matched == len(gt2)
+    good = errors_of(write(tmp_path, "algo2/cafe.txt", openloris_text({1: gt1, 2: gt2})), ref, mode="lifelong")
+    assert not any("alignment was fitted" in w for w in good.warnings)
 
 
 # --- 8. values outside their meaning ----------------------------------------------------------

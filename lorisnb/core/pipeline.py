@@ -240,6 +240,13 @@ def compute_errors(
             alignment = per_seq_align[seqs[0]]
             aligned_on = seqs[0] if len(assoc[seqs[0]]) else None
 
+    for s in [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s])]:
+        a = assoc[s]  # an alignment on positions that cannot fix a rotation: said, not changed (issue 24)
+        notes.append(
+            plausibility.degenerate_fit(
+                f"{path.name}, seq {s}", result.sequences[s].positions[a.est_index], a.gt_positions
+            )
+        )
     if checks and not with_scale:
         fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s]) > 2]
         for s in fitted:

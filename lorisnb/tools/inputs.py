@@ -70,7 +70,7 @@ def unique_files(items: list[tuple[Path, Path | None]]) -> list[tuple[Path, Path
     if again:
         shown = "; ".join(again[:5]) + (f"; and {len(again) - 5} more" if len(again) > 5 else "")
         warnings.warn(
-            f"{len(again)} input file(s) named more than once, each counted once: {shown}",
+            f"{len(again)} input(s) named more than once, each counted once: {shown}",
             LorisWarning,
             stacklevel=3,
         )

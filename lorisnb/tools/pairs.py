@@ -29,7 +29,7 @@ from ..errors import LorisError, LorisWarning, ParseError, ValidationError
 from ..io.formats import TRAJECTORY_FORMATS, read_trajectory
 from ..io.manifest import SUFFIX, Manifest, read_manifest
 from .evaluate import Evaluation, Failure, as_paths, labels, result_files
-from .inputs import holds_any, missing_note
+from .inputs import holds_any, missing_note, unique_files
 
 PathArg = str | os.PathLike[str]
 
@@ -92,7 +92,10 @@ def evaluate_pairs(
     conv = conventions if conventions is not None else Conventions()
     fmt = _format("format", fmt)
     gt_fmt = _format("gt_format", gt_fmt or fmt)
-    gt_path = as_paths(groundtruth)[0]
+    gt_paths = as_paths(groundtruth)
+    if len(gt_paths) != 1:
+        raise ValidationError(f"groundtruth: {len(gt_paths)} paths given; expected one ground-truth file")
+    gt_path = gt_paths[0]
     gt = read_trajectory(gt_path, gt_fmt, stamps=gt_times, topic=gt_topic, tf=gt_tf)
     label = scene or scene_label(gt_path)
     jobs = result_files(estimates, _suffixes(fmt))
@@ -240,4 +243,4 @@ def _algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> lis
         out.extend((d, p) for d in subs)
         if not subs:
             raise ValidationError(f"{p}: no estimate named {', '.join(sorted(names))} in it or below it")
-    return out
+    return unique_files(out)  # a folder named twice is scored once
