@@ -25,8 +25,8 @@ from lorisnb.core.trajectory import Trajectory
 from lorisnb.core.units import check_stamp_units, stamp_unit
 from lorisnb.io import registry
 from lorisnb.tools import pool
-from lorisnb.tools.evaluate import result_files
-from lorisnb.tools.pairs import evaluate_manifest, evaluate_pairs
+from lorisnb.tools.evaluate import evaluate_manifest, evaluate_pairs
+from lorisnb.tools.inputs import result_files
 
 GT, EST = "freiburg1_xyz-groundtruth.txt", "freiburg1_xyz-rgbdslam.txt"
 
@@ -192,7 +192,7 @@ def test_a_file_in_another_format_names_the_option_that_reads_it(pair, tmp_path,
     assert main(["evaluate", str(data.tum / EST), "--gt", str(data.tum / GT), "--format", "euroc",
                  "--gt-format", "tum", "--no-progress"]) == 1  # fmt: skip
     assert "--format tum" in _err(capsys)
-    assert main(["evaluate", str(data.tum / EST), "--gt", str(euroc), "--no-progress"]) == 2
+    assert main(["evaluate", str(data.tum / EST), "--gt", str(euroc), "--no-progress"]) == 1  # nothing scored
     assert "--gt-format euroc" in _err(capsys)
     # and the right option reads them: the same numbers
     right = evaluate_pairs(data.tum / EST, euroc, gt_fmt="euroc", conventions="tum").sequences()
@@ -423,7 +423,7 @@ def test_a_real_scheduler_on_loopback_connects():
 def test_outputs_are_refused_before_any_work(data, tmp_path, monkeypatch, capsys, outputs, message):
     monkeypatch.chdir(tmp_path)
     called = []
-    monkeypatch.setattr("lorisnb.tools.pairs.read_trajectory", lambda *a, **k: called.append(a))
+    monkeypatch.setattr("lorisnb.tools.jobs.read_trajectory", lambda *a, **k: called.append(a))
     rc = main(["compare", str(data.tum / EST), "--gt", str(data.tum / GT), *outputs, "--no-progress"])
     assert rc == 2 and message in _err(capsys)
     assert called == [] and list(tmp_path.iterdir()) == []  # nothing read, nothing left behind
@@ -444,7 +444,7 @@ def test_folder_and_file_outputs_do_not_overlap(data, tmp_path, monkeypatch, cap
 def test_objects_print_a_short_useful_repr(data, icra20, tmp_path):
     ev = evaluate_pairs([data.tum / EST, write(tmp_path, "x/late.txt", "1 0 0 0 0 0 0 1\n")], data.tum / GT)
     text = repr(ev)
-    assert text.startswith("<Evaluation: 2 files (2 algorithms, 1 scene), 1 unscored; conventions: association")
+    assert text == "<Evaluation: 2 inputs (2 algorithms, 1 scene), 1 unscored; EvalSpec.preset('openloris')>"
     f = ev.errors[0]
     assert repr(f).startswith(f"<FileErrors {f.algorithm} {f.file} (scene freiburg1_xyz, per-seq): 1 sequence, ")
     s = repr(f.sequences[0])

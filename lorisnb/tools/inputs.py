@@ -1,10 +1,12 @@
-"""The inputs of an evaluation, counted once: any iterable of paths as a list of Paths, and files
-named more than once (the same file or folder twice, a file and its folder, a symbolic link and
-its target) kept once, with a note."""
+"""Inputs of an evaluation: paths given by the user (any iterable of them), the result files and
+folders they hold, each counted once (the same file or folder named twice, a file and its folder,
+a link and its target: kept once, with a note), and the labels (algorithm, file, suite, trial,
+scene) read from their names."""
 
 from __future__ import annotations
 
 import os
+import re
 import warnings
 from collections.abc import Iterable
 from pathlib import Path
@@ -12,9 +14,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..core.trials import split_trial
 from ..errors import LorisWarning, ValidationError
+from ..io.manifest import Manifest
 
 PathArg = str | os.PathLike[str]
+
+
+def is_hidden(path: Path) -> bool:
+    """Hidden files and editor leftovers (``.x.txt``, ``.#x.txt``, ``~x.txt``) are not results."""
+    return path.name.startswith((".", "~"))
 
 
 def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
@@ -43,6 +52,82 @@ def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
     if not out:
         raise ValidationError("paths: no path given; expected at least one file or folder")
     return out
+
+
+def result_files(
+    paths: PathArg | Iterable[PathArg], suffixes: tuple[str, ...] = (".txt",)
+) -> list[tuple[Path, Path | None]]:
+    """Expand files and folders into ``(file, root)`` pairs; a folder is walked for files ending in
+    ``suffixes`` below it (``root/<algorithm>/*.txt``, or deeper: ``root/<suite>/<algorithm>/*.txt``),
+    hidden files and folders left out. A ROS 2 bag (a folder holding ``metadata.yaml``) is one
+    file when ``.bag`` is among the suffixes."""
+    out: list[tuple[Path, Path | None]] = []
+    bags = ".bag" in suffixes
+    for p in as_paths(paths):
+        if p.is_dir() and not (bags and (p / "metadata.yaml").is_file()):
+            found = [f for f in p.rglob("*") if f.suffix in suffixes and f.is_file()]
+            if bags:
+                found += [m.parent for m in p.rglob("metadata.yaml")]
+            files = sorted(f for f in found if not any(is_hidden(Path(part)) for part in f.relative_to(p).parts))
+            out.extend((f, p) for f in files)
+        else:
+            out.append((p, None))
+    return unique_files(out)
+
+
+def names(what: str, value: object) -> list[str]:
+    """A name or a list of names (algorithms, scenes), checked."""
+    items = [value] if isinstance(value, str) else value
+    if not isinstance(items, Iterable) or isinstance(items, (bytes, pd.DataFrame)):
+        raise ValidationError(f"{what}={value!r}: expected a name or a list of names")
+    names = list(items)
+    bad = [n for n in names if not isinstance(n, str)]
+    if bad:
+        raise ValidationError(f"{what}: expected names (str), got {bad[0]!r}")
+    return names
+
+
+def labels(path: Path, root: Path | None, trials_by: str | None = None) -> tuple[str, str, str, int]:
+    """(algorithm, file relative to the root, suite, trial) for a result file; a trial token in
+    the path (:func:`lorisnb.core.trials.split_trial`) is not part of the algorithm or suite."""
+    if root is None:  # a file given alone: its algorithm is its folder, or the folder above a trial folder
+        base, trial = split_trial("/".join(path.parts[-3:]), trials_by)
+        parts = base.split("/")
+        return (parts[-2] if len(parts) >= 2 else path.parent.name), path.name, "", trial
+    rel = path.relative_to(root).as_posix()
+    base, trial = split_trial(rel, trials_by)
+    parts = base.split("/")
+    algorithm = parts[-2] if len(parts) >= 2 else root.name
+    return algorithm, rel, "/".join(parts[:-2]), trial
+
+
+def scene_label(gt_path: Path) -> str:
+    """A scene name from a ground-truth path: ``fr2_desk_groundtruth.txt`` -> ``fr2_desk``;
+    EuRoC's ``V1_01_easy/mav0/state_groundtruth_estimate0/data.csv`` -> ``V1_01_easy``."""
+    generic = {"data", "groundtruth", "gt", "mav0", "state_groundtruth_estimate0", "poses", "metadata"}
+    for part in [gt_path.stem, *[p.name for p in gt_path.parents]]:
+        name = re.sub(r"[-_.]?(groundtruth|ground_truth|gt)$", "", part, flags=re.IGNORECASE)
+        if name and name.lower() not in generic:
+            return name
+    return gt_path.stem
+
+
+def algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> list[tuple[Path, Path | None]]:
+    """Folders holding estimate files of the manifest's sessions: each given folder if it holds
+    one itself, else its sub-folders that do."""
+    names = {s.estimate for s in m.sessions}
+    out: list[tuple[Path, Path | None]] = []
+    for p in as_paths(results):
+        if not p.is_dir():
+            raise ValidationError(f"{p}: expected a folder of estimates (one per session, named as in {m.path.name})")
+        if holds_any(p, names):
+            out.append((p, None))
+            continue
+        subs = sorted(d for d in p.rglob("*") if d.is_dir() and holds_any(d, names))
+        out.extend((d, p) for d in subs)
+        if not subs:
+            raise ValidationError(f"{p}: no estimate named {', '.join(sorted(names))} in it or below it")
+    return unique_files(out)  # a folder named twice is scored once
 
 
 def real_path(path: Path) -> Path:

@@ -15,26 +15,29 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from .evaluate import Evaluation, Failure
+    from .evaluation import Evaluation, Failure
 
 #: Exit statuses of the ``lorisnb`` commands.
 OK, UNSCORED, USAGE = 0, 1, 2
 
 
 def unscored(ev: Evaluation) -> list[Failure]:
-    """Inputs that were read but not scored: files none of whose poses matched the ground truth
-    in time (kind ``no-match``, with the reason the evaluation gave) and declared sessions without
-    an estimate (kind ``missing-estimate``). Failures are in ``ev.failures``."""
-    from .evaluate import Failure
+    """Inputs that were read but not scored: inputs none of whose poses matched the ground truth
+    in time (kind ``no-match``, with the reason the evaluation gave) and, for manifests, declared
+    sessions without an estimate (kind ``missing-estimate``: rows with 0 poses,
+    :mod:`lorisnb.core.missing`). Failures are in ``ev.failures``."""
+    from .evaluation import Failure
 
-    out = list(getattr(ev, "missing", []))
+    out = []
     for f in ev.errors:
-        if any(e.matched for e in f.sequences):
+        absent = [e.seq for e in f.sequences if e.poses == 0] if ev.kind == "manifest" else []
+        if absent:
+            out.append(Failure(f.path, f"{f.path}: no estimate for session(s) {absent}", "missing-estimate"))
+        if any(e.matched for e in f.sequences) or not any(e.poses for e in f.sequences):
             continue
-        if any(e.poses for e in f.sequences) or not f.sequences:
-            why = next((w for w in f.warnings if "no estimate stamp" in w or "no pose" in w), "")
-            reason = why or f"{f.algorithm} {f.file}: no pose matched the ground truth in time"
-            out.append(Failure(f.path, reason.splitlines()[0], "no-match"))
+        why = next((w for w in f.warnings if "no estimate stamp" in w or "no pose" in w), "")
+        reason = why or f"{f.algorithm} {f.file}: no pose matched the ground truth in time"
+        out.append(Failure(f.path, reason.splitlines()[0], "no-match"))
     return out
 
 
