@@ -257,6 +257,9 @@ def test_nothing_matched_is_exit_status_1_on_every_command(pair, tmp_path, capsy
         if command[0] != "compare":
             rows = pd.read_csv(out)
             assert (rows["matched"] == 0).all() and (rows["cr"] == 0).all()  # still in the table
+    pytest.importorskip("evo")
+    assert main(["crosscheck", gtp, str(late)]) == 1  # crosscheck: nothing to compare is 1 as well
+    assert "no estimate stamp" in _err(capsys)
     ev = evaluate_pairs(late, gtp)
     assert ev.exit_status() == 1 and [f.kind for f in ev.unscored] == ["no-match"]
     assert "no estimate stamp" in ev.unscored[0].error

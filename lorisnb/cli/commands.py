@@ -12,7 +12,7 @@ from typing import Any
 import pandas as pd
 
 from ..core.spec import make_spec
-from ..errors import LorisError, LorisWarning, ValidationError
+from ..errors import EvaluationError, LorisError, LorisWarning, ParseError, ValidationError
 from .options import check_outputs, param_value, spec_from_args
 
 
@@ -237,12 +237,37 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 
 def cmd_crosscheck(args: argparse.Namespace) -> int:
-    from ..io.formats import read_trajectory
-    from ..io.openloris import read_openloris
     from ..io.writers import write_csv
-    from ..tools.crosscheck import crosscheck, crosscheck_openloris
 
     check_outputs({"--csv": args.csv}, [args.gt, args.est], args.force)
+    try:
+        table = _crosscheck_table(args)
+    except (ParseError, EvaluationError) as exc:  # an input that cannot be read or compared: 1, as every command
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    from ..tools import require
+
+    evo_version = require("evo").__version__
+
+    with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"))
+    must = table["note"].str.startswith("identical pairs")
+    print(
+        f"\nevo {evo_version}: {int(table.loc[must, 'agrees'].sum())} of {int(must.sum())} quantities computed "
+        "on identical pairs agree; other rows explain where the definitions differ",
+        file=sys.stderr,
+    )
+    if args.csv:
+        write_csv(table, args.csv, args.force)
+    return 0 if table.loc[must, "agrees"].all() else 1
+
+
+def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame:
+    """The agreement table of ``crosscheck`` (reads both inputs)."""
+    from ..io.formats import read_trajectory
+    from ..io.openloris import read_openloris
+    from ..tools.crosscheck import crosscheck, crosscheck_openloris
+
     deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
     gt_format = args.format
     est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)
@@ -269,21 +294,7 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
         spec = make_spec(None, surface="cli", **({} if args.scale is None else {"scale": args.scale}))
         with_scale = spec.alignment_for(Path(args.est).stem) == "sim3"
         table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs)
-    from ..tools import require
-
-    evo_version = require("evo").__version__
-
-    with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
-        print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"))
-    must = table["note"].str.startswith("identical pairs")
-    print(
-        f"\nevo {evo_version}: {int(table.loc[must, 'agrees'].sum())} of {int(must.sum())} quantities computed "
-        "on identical pairs agree; other rows explain where the definitions differ",
-        file=sys.stderr,
-    )
-    if args.csv:
-        write_csv(table, args.csv, args.force)
-    return 0 if table.loc[must, "agrees"].all() else 1
+    return table
 
 
 def cmd_report(args: argparse.Namespace) -> int:
