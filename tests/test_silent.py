@@ -194,6 +194,9 @@ def test_a_file_in_another_format_names_the_option_that_reads_it(pair, tmp_path,
     assert "--format tum" in _err(capsys)
     assert main(["evaluate", str(data.tum / EST), "--gt", str(euroc), "--no-progress"]) == 1  # nothing scored
     assert "--gt-format euroc" in _err(capsys)
+    # without --gt a TUM file is read as an OpenLORIS result: the message says how to score it
+    ev = ln.evaluate(data.tum / EST, jobs=1)
+    assert "looks like a TUM trajectory file" in ev.failures[0].error and "--gt FILE" in ev.failures[0].error
     # and the right option reads them: the same numbers
     right = evaluate_pairs(data.tum / EST, euroc, gt_fmt="euroc", conventions="tum").sequences()
     ref = evaluate_pairs(data.tum / EST, data.tum / GT, conventions="tum").sequences()

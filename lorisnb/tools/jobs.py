@@ -24,6 +24,7 @@ from ..io.data import DataPaths, groundtruth_spans, load_groundtruth
 from ..io.formats import read_trajectory
 from ..io.manifest import Manifest
 from ..io.openloris import read_openloris
+from ..io.registry import hint
 from .evaluation import Failure
 from .inputs import labels, missing_note
 from .pool import size_of
@@ -132,6 +133,12 @@ def _openloris(job: Job, progress: bool) -> FileErrors | None:
     try:
         result = read_openloris(job.path, remove_repeated=drop, warn=False, repair_stamps=spec.repair_stamps,
                                 progress=bar.update if bar is not None else None)  # fmt: skip
+    except ParseError as exc:  # a file plainly in another format: say how to score it
+        more = hint(job.path, "openloris")
+        if not more:
+            raise
+        raise ParseError(exc.path, exc.line, f"{exc.reason}{more}, and give its ground truth with --gt FILE "
+                         "(evaluate_pairs in Python)") from None  # fmt: skip
     finally:
         if bar is not None:
             bar.close()
