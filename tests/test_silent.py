@@ -93,6 +93,17 @@ def test_the_same_input_named_twice_is_counted_once(data, tmp_path, capsys):
     assert "named more than once" in _err(capsys)
 
 
+def test_the_ground_truth_is_never_scored_as_an_estimate_of_itself(data, tmp_path):
+    d = tmp_path / "res"
+    gt = write(d, "gt.txt", (data.tum / GT).read_bytes())
+    write(d, "slam/xyz.txt", (data.tum / EST).read_bytes())
+    with pytest.warns(ln.LorisWarning, match="the ground truth is among the estimates; left out"):
+        ev = evaluate_pairs(d, gt)
+    assert [f.algorithm for f in ev.errors] == ["slam"]
+    with pytest.raises(ln.ValidationError, match="the only input is the ground truth itself"):
+        evaluate_pairs(gt, gt)
+
+
 def test_openloris_folder_named_twice_is_counted_once(icra20):
     folder = icra20 / "per-seq" / "dso"
     with pytest.warns(ln.LorisWarning, match="named more than once"):

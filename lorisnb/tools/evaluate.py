@@ -26,7 +26,7 @@ from ..io.data import DataRoot, find_data
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import SUFFIX, Manifest, read_manifest
 from .evaluation import Evaluation, Failure
-from .inputs import algorithm_folders, as_paths, labels, names, result_files, scene_label
+from .inputs import algorithm_folders, as_paths, labels, names, result_files, scene_label, without_groundtruth
 from .jobs import BIG_FILE_BYTES, Job, PairSource, run_job
 from .pool import default_jobs, run_tasks, size_of
 
@@ -208,7 +208,7 @@ def evaluate_pairs(
         raise ParseError(src.groundtruth, None, "ground truth not found; expected a file (or a ROS 2 bag folder)")
     work = [
         Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=src)
-        for p, r in result_files(estimates, _pair_suffixes(src.fmt))
+        for p, r in without_groundtruth(result_files(estimates, _pair_suffixes(src.fmt)), src.groundtruth)
     ]
     return _run(work, the_spec, "pair", n_jobs=jobs, executor=executor, progress=progress, notes=notes)
 
