@@ -7,11 +7,13 @@
 * 2: a usage error (a bad option, a bad output, a manifest or ground truth that cannot be read).
 
 A file skipped because the data holds no ground truth for its scene (OpenLORIS' office) is
-reported but does not count: there is nothing it could have matched.
+reported but does not count: there is nothing it could have matched. A run that evaluated nothing
+at all (an empty folder, every file skipped) is 1.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -29,6 +31,10 @@ def unscored(ev: Evaluation) -> list[Failure]:
     from .evaluation import Failure
 
     out = []
+    if not ev.errors and not ev.failures:  # nothing at all: an empty folder, or every file skipped
+        where = ev.root if ev.root is not None else Path(".")
+        why = "every input was skipped" if ev.skipped else "no input file was found"
+        out.append(Failure(where, f"nothing was evaluated: {why}", "nothing"))
     for f in ev.errors:
         absent = [e.seq for e in f.sequences if e.poses == 0] if ev.kind == "manifest" else []
         if absent:
