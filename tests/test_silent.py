@@ -228,7 +228,7 @@ def test_the_registry_is_the_one_source_of_format_knowledge():
     assert registry.recognise(registry.sample_bytes(b"")) == []
 
 
-def test_stamps_in_different_units_are_an_error_naming_the_cause(pair, tmp_path, capsys):
+def test_stamps_in_different_units_are_an_error_naming_the_cause(pair, tmp_path, capsys, data):
     gt, est = pair
     t0 = gt.stamps[0]
     g = write(tmp_path, "gt.txt", _kitti(gt))
@@ -251,6 +251,14 @@ def test_stamps_in_different_units_are_an_error_naming_the_cause(pair, tmp_path,
     with pytest.raises(ln.EvaluationError, match=r"ground truth's stamps look like nanoseconds.*--gt-format euroc"):
         check_stamp_units(est, ns)
     check_stamp_units(est, gt)  # the same units: fine
+    # through a manifest: KITTI estimates (no stamps) against TUM ground truth (seconds)
+    write(tmp_path, "res/slam/xyz.txt", _kitti(est))
+    kitti_manifest = MANIFEST.format(root=data.tum, gt=GT).replace(
+        'scene = "xyz"', 'scene = "xyz"\nestimate_format = "kitti"'
+    )
+    m = write(tmp_path, "k.toml", kitti_manifest)
+    ev = evaluate_manifest(m, tmp_path / "res" / "slam")
+    assert ev.exit_status() == 1 and "estimate's stamps are pose indices" in ev.failures[0].error
     nsfile = write(tmp_path, "gt_ns.txt", _tum(gt, gt.stamps * 1e9))
     ev = evaluate_pairs(e, nsfile, fmt="kitti", est_times=est_times, gt_fmt="tum")
     assert ev.exit_status() == 1 and "stamps in different units" in ev.failures[0].error
@@ -289,7 +297,7 @@ def test_nothing_matched_is_exit_status_1_on_every_command(pair, tmp_path, capsy
 # --- 6. degenerate alignments -----------------------------------------------------------------
 
 
-def test_degenerate_alignments_are_refused_or_warned(pair, data):
+def test_degenerate_alignments_are_refused_or_warned(pair, data, tmp_path):
     gt, est = pair
     m = ln.session_errors({1: gt}, {1: est}, ln.Conventions.preset("tum")).sequences[0]
     p_e, p_g = m.est_positions, m.gt_positions
@@ -312,6 +320,12 @@ def test_degenerate_alignments_are_refused_or_warned(pair, data):
     # through the pipeline: the file fails with the reason, the exit status is 1
     ev = evaluate_pairs(data.tum / EST, data.tum / GT, conventions=ln.Conventions.preset("tum", align_frames=2))
     assert ev.exit_status() == 1 and "no SE(3) alignment can be determined" in ev.failures[0].error
+    # through a manifest's [conventions]: the same refusal
+    write(tmp_path, "res/slam/xyz.txt", (data.tum / EST).read_bytes())
+    m = write(tmp_path, "m.toml", MANIFEST.format(root=data.tum, gt=GT) + "")
+    text = m.read_text().replace('association = "nearest"', 'association = "nearest"\nalign_frames = 2')
+    ev = evaluate_manifest(write(tmp_path, "m2.toml", text), tmp_path / "res")
+    assert ev.exit_status() == 1 and "only 2 matched positions" in ev.failures[0].error
     # posyaw on an estimate tilted against gravity: a warning saying what to do
     tilt = Rotation.from_euler("x", 40, degrees=True)
     tilted = Trajectory(est.stamps, tilt.apply(est.positions), (tilt * Rotation.from_quat(est.quaternions)).as_quat())
