@@ -189,15 +189,8 @@ def evaluate_sessions(
     def fit(s: int) -> Sim3:
         a, e = assoc[s], est[s]
         q_e = e.quaternions[a.est_index] if spec.align_frames == 1 else None
-        return fit_alignment(
-            e.positions[a.est_index],
-            a.gt_positions,
-            method,
-            spec.align_frames,
-            q_e,
-            a.gt_quaternions,
-            strict=frames is None,
-        )  # OpenLORIS files: the official tool's alignment, whatever it is
+        return fit_alignment(e.positions[a.est_index], a.gt_positions, method, spec.align_frames, q_e, a.gt_quaternions,
+                             strict=frames is None)  # OpenLORIS files: the official tool's alignment  # fmt: skip
 
     aligned_on: int | None = None
     alignment = Sim3.identity()
@@ -225,9 +218,8 @@ def evaluate_sessions(
             aligned_on = seqs[0] if len(assoc[seqs[0]]) else None
 
     if frames is not None:  # an OpenLORIS file is aligned as the official tool aligns it, degenerate or not: said
-        for s in [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s])]:
-            found.append(plausibility.degenerate_fit(f"{name}, seq {s}", est[s].positions[assoc[s].est_index],
-                                                     assoc[s].gt_positions))  # fmt: skip
+        fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s])]
+        found += [checks.degenerate_note(f"{name}, seq {s}", est[s].positions, assoc[s]) for s in fitted]
     if checks_on and method == "se3":
         hint = "--scale, or --scale auto for dso/svo" if frames is not None else "--align sim3"
         fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s]) > 2]
