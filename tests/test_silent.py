@@ -331,6 +331,13 @@ def test_degenerate_alignments_are_refused_or_warned(pair, data, tmp_path):
     tilted = Trajectory(est.stamps, tilt.apply(est.positions), (tilt * Rotation.from_quat(est.quaternions)).as_quat())
     with pytest.warns(ln.LorisWarning, match=r"posyaw.*tilts z by 4\d\.\d deg.*--align se3"):
         ln.session_errors({1: gt}, {1: tilted}, ln.Conventions.preset("vio"))
+    tilted_file = write(tmp_path, "tilted/slam.txt", _tum(tilted))
+    ev = evaluate_pairs(tilted_file, data.tum / GT, conventions="vio")
+    assert any("tilts z by" in w for w in ev.warnings)  # kept with the file, shown by the command line
+    # an alignment on all of a handful of poses absorbs their error: said
+    few = write(tmp_path, "few/slam.txt", "".join((data.tum / EST).read_text().splitlines(keepends=True)[10:200:40]))
+    ev = evaluate_pairs(few, data.tum / GT, conventions="tum")
+    assert any("fitted on all of only 5 matched poses" in w for w in ev.warnings)
 
 
 def test_a_degenerate_lifelong_alignment_of_an_openloris_file_is_said(tmp_path):

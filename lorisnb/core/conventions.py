@@ -97,6 +97,7 @@ def fit_alignment(
     est_quaternions: np.ndarray | None = None,
     gt_quaternions: np.ndarray | None = None,
     strict: bool = True,
+    notes: list[str | None] | None = None,
 ) -> Sim3:
     """The alignment ``gt = s R est + t`` of matched poses by ``method`` (see the module
     docstring), fitted on the first ``frames`` matched poses (None: all). Positions in metres;
@@ -106,11 +107,19 @@ def fit_alignment(
     posyaw without horizontal spread) it raises EvaluationError saying what to do; ``strict=False``
     fits se3/sim3 on all poses all the same, as the official OpenLORIS tool does (the pipeline then
     says so: :func:`lorisnb.core.plausibility.degenerate_fit`). posyaw on an estimate tilted
-    against the ground truth is warned about."""
+    against the ground truth, or an alignment on all of fewer than :data:`FEW_POSES` poses, is
+    warned about (appended to ``notes`` when given, else a LorisWarning)."""
     method = choice("align", method, ALIGNMENTS)
     p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
     if method == "none" or len(p_e) == 0:
         return Sim3.identity()
+    if frames is None and 3 <= len(p_e) < FEW_POSES:
+        _say(
+            f"the {method} alignment is fitted on all of only {len(p_e)} matched poses, so it absorbs most of their "
+            "error (the ATE is small by construction); evaluate a longer estimate, or align on fewer poses "
+            "(--align-frames N) and judge the rest",
+            notes,
+        )
     if frames is None and method in ("se3", "sim3"):  # all matched poses: Horn/Umeyama, as the official tool
         return umeyama(p_e, p_g, method == "sim3", strict=strict)
     n = len(p_e) if frames is None else min(int(frames), len(p_e))
@@ -133,32 +142,42 @@ def fit_alignment(
                 "first pose's orientation (--align-frames 1), or not at all (--align none)"
             )
         rot = _rot_z(_best_yaw(c))
-        _warn_tilt(p_e[:n], p_g[:n], Sim3(rot, mu_g - rot @ mu_e, 1.0))
+        _say(_tilt_note(p_e[:n], p_g[:n], Sim3(rot, mu_g - rot @ mu_e, 1.0)), notes)
         return Sim3(rot, mu_g - rot @ mu_e, 1.0)
     return umeyama(p_e[:n], p_g[:n], method == "sim3", strict=True)
 
 
+#: An alignment on all matched poses, fewer than this, is said to absorb their error.
+FEW_POSES = 10
 #: posyaw is questioned when the best full rotation between the positions tilts z by more than
 #: this (degrees) and fits them at least this much better (ATE RMSE ratio).
 TILT_DEGREES = 10.0
 TILT_GAIN = 0.5
 
 
-def _warn_tilt(p_e: np.ndarray, p_g: np.ndarray, posyaw: Sim3) -> None:
-    """Warn when the positions say the two world frames differ in roll/pitch: posyaw (a rotation
-    about gravity only) then leaves a tilt in every error."""
-    if degenerate_alignment(p_e, p_g) is not None:
+def _say(note: str | None, notes: list[str | None] | None) -> None:
+    if note is None:
         return
+    if notes is not None:
+        notes.append(note)
+    else:
+        warnings.warn(note, LorisWarning, stacklevel=3)
+
+
+def _tilt_note(p_e: np.ndarray, p_g: np.ndarray, posyaw: Sim3) -> str | None:
+    """The positions say the two world frames differ in roll/pitch: posyaw (a rotation about
+    gravity only) then leaves a tilt in every error."""
+    if degenerate_alignment(p_e, p_g) is not None:
+        return None
     se3 = umeyama(p_e, p_g)
     tilt = float(np.degrees(np.arccos(np.clip(se3.rotation[2, 2], -1.0, 1.0))))
     rmse_yaw = float(np.sqrt(np.mean(np.sum((posyaw.apply(p_e) - p_g) ** 2, axis=1))))
     rmse_se3 = float(np.sqrt(np.mean(np.sum((se3.apply(p_e) - p_g) ** 2, axis=1))))
     if tilt > TILT_DEGREES and rmse_se3 < TILT_GAIN * rmse_yaw:
-        warnings.warn(
+        return (
             f"align='posyaw' assumes both trajectories have z along gravity, but the best full rotation between "
             f"them tilts z by {tilt:.1f} deg (roll/pitch) and fits with ATE RMSE {rmse_se3:.3f} m against "
             f"{rmse_yaw:.3f} m for posyaw: is the estimate gravity-aligned (a visual-only system?)? "
-            "Use --align se3 (or sim3).",
-            LorisWarning,
-            stacklevel=3,
+            "Use --align se3 (or sim3)."
         )
+    return None

@@ -190,7 +190,7 @@ def evaluate_sessions(
         a, e = assoc[s], est[s]
         q_e = e.quaternions[a.est_index] if spec.align_frames == 1 else None
         return fit_alignment(e.positions[a.est_index], a.gt_positions, method, spec.align_frames, q_e, a.gt_quaternions,
-                             strict=frames is None)  # OpenLORIS files: the official tool's alignment  # fmt: skip
+                             strict=frames is None, notes=found)  # OpenLORIS: the official tool's alignment  # fmt: skip
 
     aligned_on: int | None = None
     alignment = Sim3.identity()
