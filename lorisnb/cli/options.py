@@ -15,6 +15,7 @@ from ..core.spec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, 
 from ..errors import OutputError, ValidationError
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import BUILT_IN
+from ..io.registry import FORMATS
 
 
 def arg_type(func: Callable[[str], Any]) -> Callable[[str], Any]:
@@ -194,6 +195,11 @@ def src_inside(target: Path, inputs: list[str]) -> bool:
     return any(target == Path(i).resolve() or target in Path(i).resolve().parents for i in inputs)
 
 
+#: Suffixes of the files a folder of inputs is walked for (every format's, :mod:`lorisnb.io.registry`):
+#: an output among the inputs with one of them would be read as an input by the next run.
+INPUT_SUFFIXES = frozenset(x for f in FORMATS.values() for x in f.suffixes)
+
+
 def check_output(out: str | None, inputs: list[str], force: bool, folder: bool = False, option: str = "--csv") -> None:
     """Refuse an output before any work: an input of the command, a folder, an existing file
     without --force, or a place that cannot be written."""
@@ -206,10 +212,10 @@ def check_output(out: str | None, inputs: list[str], force: bool, folder: bool =
         src = Path(i).resolve()
         if target == src:
             raise OutputError(f"{out} is an input of this command; choose another output file")
-        if src.is_dir() and src in target.parents and target.suffix.lower() == ".txt":
+        if src.is_dir() and src in target.parents and target.suffix.lower() in INPUT_SUFFIXES:
             raise OutputError(
-                f"{out} lies in the input folder {i} and ends in .txt, so it is (or would be read as) a result "
-                "file; choose another name or place"
+                f"{out} lies in the input folder {i} and ends in {target.suffix}, so it is (or would be read as) a "
+                "result file; choose another name or place"
             )
     if target.is_dir() and not folder:
         raise OutputError(f"{out} is a folder; expected a file name for {option}")
