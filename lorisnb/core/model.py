@@ -66,8 +66,6 @@ class ResultFile:
         seq_lines: sequence number -> line of its ``seq:`` line.
         removed_repeats: sequence number -> poses dropped as repeats of the previous pose.
         warnings: what was noticed while reading (also issued as LorisWarning).
-        derived: values computed from this file once and reused (the ground truth moved to each
-            sensor frame), keyed by what they depend on; not part of equality.
     """
 
     path: Path
@@ -78,7 +76,6 @@ class ResultFile:
     seq_lines: dict[int, int] = field(default_factory=dict)
     removed_repeats: dict[int, int] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
-    derived: dict[tuple[object, ...], object] = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def scene(self) -> str:
