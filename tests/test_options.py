@@ -155,6 +155,7 @@ def _honoured(option: str, a: tuple, b: tuple) -> str:
     return "changed"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["openloris", "pair", "manifest", "bag"])
 def test_every_option_changes_the_result_or_is_refused(kind, kinds, tmp_path, capsys):
     base = kinds[kind]

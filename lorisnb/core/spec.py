@@ -254,7 +254,7 @@ def _namer(surface: str) -> Any:
         spelled = {"mode": "--per-seq/--lifelong", "repeated": "--keep-repeated", "align": "--align"}
         return lambda n: spelled.get(n, "--" + n.replace("_", "-"))
     if surface == "manifest":
-        return lambda n: f"manifest key {n!r}"
+        return lambda n: n
     return lambda n: n
 
 
