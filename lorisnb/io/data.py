@@ -78,10 +78,6 @@ class DataPaths:
     def openloris(self) -> Path:
         return self._need(self.root / "openloris-scene", "OpenLORIS-Scene folder")
 
-    @property
-    def groundtruth_dir(self) -> Path:
-        return self._need(self.root / "openloris-scene" / "groundtruth", "OpenLORIS ground-truth folder")
-
     def groundtruth(self, scene: str) -> Path:
         """``gt_<scene>_1.txt`` (base_link poses of every sequence of the scene)."""
         return self._need(
