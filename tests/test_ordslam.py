@@ -18,8 +18,8 @@ from lorisnb.errors import ParseError
 from lorisnb.io import load_groundtruth
 from lorisnb.io.ordslam import SCENARIOS, describe_sequence, find_ordslam, light_period, read_ordslam, scenario
 from lorisnb.io.published import ordslam_table3, ordslam_table4_tum, published_ate
-from lorisnb.tools.indoor_outdoor import TUM_PAIRS
 from lorisnb.tools.evo_bridge import to_evo
+from lorisnb.tools.indoor_outdoor import TUM_PAIRS
 
 
 @pytest.fixture(scope="module")
