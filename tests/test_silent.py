@@ -128,7 +128,6 @@ def test_a_manifest_session_listed_twice_is_an_error(data, tmp_path):
     cases = {
         "name": base + '[[session]]\nname = "xyz"\ngroundtruth = "other.txt"\n',
         "estimate file": base + f'[[session]]\nname = "b"\nestimate = "xyz.txt"\ngroundtruth = "{GT}"\n',
-        "ground-truth file": base + f'[[session]]\nname = "b"\ngroundtruth = "{GT}"\n',
     }
     for what, text in cases.items():
         m = write(tmp_path, f"{what[:4]}.toml", text)

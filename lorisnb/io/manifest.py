@@ -210,13 +210,12 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
 
 
 def check_repeats(sessions: list[Session], path: Path) -> None:
-    """A session listed twice (the same name, estimate file or ground-truth file in two
-    ``[[session]]`` tables) is an error: it would be scored twice."""
+    """A session listed twice (the same name or estimate file in two ``[[session]]`` tables) is an
+    error: it would be scored twice."""
     for what, key in (
         ("name", lambda s: s.name),
         ("estimate file", lambda s: s.estimate),
-        ("ground-truth file", lambda s: s.groundtruth.resolve()),
-    ):
+    ):  # (a ground-truth file may serve several sessions: one long recording, runs in its time windows)
         first: dict[object, Session] = {}
         for s in sessions:
             k = key(s)
