@@ -250,6 +250,8 @@ def test_stamps_in_different_units_are_an_error_naming_the_cause(pair, tmp_path,
     with pytest.raises(ln.EvaluationError, match=r"ground truth's stamps look like nanoseconds.*--gt-format euroc"):
         check_stamp_units(est, ns)
     check_stamp_units(est, gt)  # the same units: fine
+    with pytest.raises(ln.EvaluationError, match="stamps of both files look like nanoseconds"):
+        check_stamp_units(Trajectory(est.stamps * 1e9, est.positions, est.quaternions), ns)
     # through a manifest: KITTI estimates (no stamps) against TUM ground truth (seconds)
     write(tmp_path, "res/slam/xyz.txt", _kitti(est))
     kitti_manifest = MANIFEST.format(root=data.tum, gt=GT).replace(
@@ -426,7 +428,7 @@ def test_scheduler_addresses_are_checked_and_time_out(http_port, monkeypatch, da
     assert time.monotonic() - start < 5
     monkeypatch.setattr(pool, "SCHEDULER_TIMEOUT", 1.0)
     odom = str(data.icra20 / "per-seq" / "odom")
-    for address in ("not-an-address", f"127.0.0.1:{http_port}", f"tcp://127.0.0.1:{_closed_port()}"):
+    for address in ("not-an-address", "", f"127.0.0.1:{http_port}", f"tcp://127.0.0.1:{_closed_port()}"):
         assert main(["evaluate", odom, "--scheduler", address, "--no-progress"]) == 2
         err = _err(capsys).strip().splitlines()
         assert len(err) == 1 and address in err[0] and "Traceback" not in err[0]

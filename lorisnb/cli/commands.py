@@ -18,7 +18,7 @@ from .options import check_outputs, param_value, spec_from_args
 
 def _executor(args: argparse.Namespace) -> Any:
     """A Dask cluster's executor for ``--scheduler ADDRESS`` (None without it)."""
-    if not getattr(args, "scheduler", None):
+    if getattr(args, "scheduler", None) is None:
         return None
     from ..tools.pool import connect_scheduler
 

@@ -47,11 +47,19 @@ def _cause(unit: str, role: str, option: str) -> str:
 
 def check_stamp_units(est: Trajectory, gt: Trajectory, label: str = "estimate") -> None:
     """Raise EvaluationError when the estimate's and the ground truth's stamps are in different
-    units (:func:`stamp_unit`), naming the likely cause and the option that fixes it. Two
-    trajectories indexed by pose order (two KITTI files without times) agree."""
+    units (:func:`stamp_unit`), or either is in nanoseconds (every time option of lorisnb, max gap,
+    max diff, delta, tau, is in seconds, so nothing would match), naming the likely cause and the
+    option that fixes it. Two trajectories indexed by pose order (two KITTI files without times)
+    agree."""
     ue, ug = stamp_unit(est), stamp_unit(gt)
-    if ue == ug:
+    if ue == ug and ue != "nanoseconds":
         return
+    if ue == ug:  # both in nanoseconds
+        raise EvaluationError(
+            f"{label}: the stamps of both files look like nanoseconds, but lorisnb's times (max gap, max diff, "
+            "delta, tau) are seconds: EuRoC CSV files read as TUM text? (--format euroc / --gt-format euroc); "
+            "else divide the stamps by 1e9. Nothing was compared."
+        )
     both = f"{_cause(ue, 'estimate', '--est-times')}, but {_cause(ug, 'ground truth', '--gt-times')}"
     if "index" in (ue, ug):
         both += (
