@@ -500,7 +500,8 @@ def test_objects_print_a_short_useful_repr(data, icra20, tmp_path):
     assert repr(rf) == "<ResultFile cafe-1-1-all.txt: scene cafe, frame d400_color, 1 sequence, 314 poses>"
     m = ln.read_manifest(write(tmp_path, "m.toml", MANIFEST.format(root=data.tum, gt=GT)))
     assert repr(m) == "<Manifest 'xyz twice': 1 session (1 scene), per session, tum ground truth, tum estimates>"
-    assert all(len(repr(o)) < 300 for o in (ev, f, f.sequences[0], traj, rf, m))
+    assert re.fullmatch(r"<Sim3: rotation [\d.]+ deg, translation \[.*\] m, scale 1>", repr(f.alignment))
+    assert all(len(repr(o)) < 300 for o in (ev, f, f.sequences[0], traj, rf, m, f.alignment))
 
 
 def test_any_iterable_of_paths_works(icra20):

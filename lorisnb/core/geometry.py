@@ -32,6 +32,11 @@ class Sim3:
     def identity(cls) -> "Sim3":
         return cls(np.eye(3), np.zeros(3), 1.0)
 
+    def __repr__(self) -> str:
+        angle = float(np.degrees(np.arccos(np.clip((np.trace(self.rotation) - 1) / 2, -1.0, 1.0))))
+        t = ", ".join(f"{v:.4g}" for v in np.asarray(self.translation, float))
+        return f"<Sim3: rotation {angle:.4g} deg, translation [{t}] m, scale {self.scale:.6g}>"
+
     def apply(self, points: np.ndarray) -> np.ndarray:
         """Transform (N, 3) points."""
         return self.scale * points @ self.rotation.T + self.translation
