@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from helpers import circle, errors_of, openloris_text, write
+from helpers import circle, errors_of, openloris_text, write, write_bag
 from scipy.spatial.transform import Rotation
 
 import lorisnb as ln
@@ -211,6 +211,18 @@ def test_a_file_in_another_format_names_the_option_that_reads_it(pair, tmp_path,
     right = evaluate_pairs(data.tum / EST, euroc, gt_fmt="euroc", conventions="tum").sequences()
     ref = evaluate_pairs(data.tum / EST, data.tum / GT, conventions="tum").sequences()
     assert right["ate_rmse"].iloc[0] == pytest.approx(ref["ate_rmse"].iloc[0], rel=1e-9)
+
+
+def test_evo_tf_spelling_is_read_as_lorisnb_spelling(pair, tmp_path):
+    pytest.importorskip("rosbags")
+    gt, _ = pair
+    part = Trajectory(gt.stamps[:60], gt.positions[:60], gt.quaternions[:60])
+    bag = write_bag(tmp_path / "tf2", part, 2, tf=("world", "odom", "base"))
+    ours = ln.read_trajectory(bag, "bag", tf="world:base")
+    for kw in ({"tf": "/tf:world.base"}, {"topic": "/tf:world.base"}):  # evo_ape's syntax, as tf or as topic
+        theirs = ln.read_trajectory(bag, "bag", **kw)
+        np.testing.assert_array_equal(theirs.positions, ours.positions)
+    np.testing.assert_allclose(ours.positions, part.positions, atol=1e-9)
 
 
 def test_the_registry_is_the_one_source_of_format_knowledge():

@@ -56,6 +56,9 @@ def read_bag(path: str | os.PathLike, topic: str | None = None, tf: str | None =
     either, the bag's only pose topic. ParseError names what the bag holds when the choice is
     missing or wrong."""
     spath = str(path)
+    if topic is not None and tf is None and evo_tf(topic) is not None:  # evo gives TF chains as a "topic"
+        topic, tf = None, evo_tf(topic)
+    tf = evo_tf(tf) or tf if tf is not None else None
     p = Path(path)
     if p.suffix in (".db3", ".mcap") and p.parent.is_dir():
         p = p.parent  # a ROS 2 bag is read from its folder
@@ -74,6 +77,16 @@ def read_bag(path: str | os.PathLike, topic: str | None = None, tf: str | None =
         return _read_topic(reader, spath, topic)
     finally:
         reader.close()
+
+
+def evo_tf(text: str) -> str | None:
+    """evo's spelling of a TF chain, ``/tf:parent.child``, as lorisnb's ``parent:child`` (None for
+    anything else; a ROS topic name has no colon, so the two cannot be confused)."""
+    head, sep, rest = text.partition(":")
+    parent, dot, child = rest.partition(".")
+    if sep and head.strip("/") == "tf" and dot and parent and child:
+        return f"{parent.strip('/')}:{child}"
+    return None
 
 
 def _pose_topics(reader) -> dict[str, str]:
