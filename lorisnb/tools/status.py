@@ -42,8 +42,8 @@ def unscored(ev: Evaluation) -> list[Failure]:
         if any(e.matched for e in f.sequences) or not any(e.poses for e in f.sequences):
             continue
         why = next((w for w in f.warnings if "no estimate stamp" in w or "no pose" in w), "")
-        reason = why or f"{f.algorithm} {f.file}: no pose matched the ground truth in time"
-        out.append(Failure(f.path, reason.splitlines()[0], "no-match"))
+        reason = why.split(". ")[0] if why else f"{f.algorithm} {f.file}: no pose matched the ground truth in time"
+        out.append(Failure(f.path, reason.splitlines()[0], "no-match"))  # one line; the warning has the rest
     return out
 
 
