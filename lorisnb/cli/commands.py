@@ -216,42 +216,39 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    """Scene values with bootstrap intervals, the ranking with ties the data cannot separate,
-    significant pairwise differences; tables as CSV, LaTeX, Markdown."""
-    from ..core import ranking, stats
-    from ..io.writers import write_csv
-    from ..tools.tables import interval, write_comparison
+    """Scene values with bootstrap intervals, the ranking with ties from one permutation test,
+    its significant pairs; tables as CSV, LaTeX, Markdown (see :mod:`lorisnb.tools.comparison`)."""
+    from ..tools.comparison import compare_table, write_outputs
+    from ..tools.tables import check_table_suffix
 
-    for out in (args.csv, args.latex, args.markdown):
+    outs = [o for o in (args.csv, args.pairs_csv, args.latex, args.markdown) if o]
+    for out in outs:
         check_output(out, args.paths, args.force)
+    if len({str(Path(o).resolve()) for o in outs}) < len(outs):
+        raise ValidationError("--csv, --pairs-csv, --latex, --markdown: give each output its own file")
+    for out in (args.latex, args.markdown):
+        if out:
+            check_table_suffix(out)
     ev, notes = _run_evaluation(args)
     eps, phi = _thresholds(args, ev)
     table = ev.sequences(eps, phi, args.delta, args.tau)
     if not table.empty:
-        ci = stats.confidence_intervals(table, level=args.level, seed=args.seed)
-        rank = ranking.ranking(table, args.metric, alpha=args.alpha, seed=args.seed)
-        c = ci[ci["metric"] == args.metric].set_index(["suite", "scene", "algorithm"])
-        cells = c.loc[list(zip(rank["suite"], rank["scene"], rank["algorithm"], strict=True))]
-        rank["value [CI]"] = [
-            interval(v, lo, hi, digits=3) for v, lo, hi in zip(cells["value"], cells["low"], cells["high"], strict=True)
-        ]
-        n_trials = table.groupby(["algorithm", "scene"])["trial"].nunique().max()
-        units = ", ".join(sorted(set(ci["unit"])))
-        print(f"{args.metric} per algorithm and scene, {args.level:.0%} bootstrap intervals over {units} "
-              f"(up to {n_trials} trial(s)); rank = 1 + algorithms significantly better (Wilcoxon, Holm, "
-              f"alpha {args.alpha}):")  # fmt: skip
-        with pd.option_context("display.max_colwidth", 50):
-            print(_fmt(rank[["suite", "scene", "algorithm", "value [CI]", "rank", "tied_with"]]))
-        pairs = stats.pairwise(table, args.metric, alpha=args.alpha, seed=args.seed)
-        sig = pairs[pairs["significant"]]
-        print(f"\n{len(sig)} of {len(pairs)} pairs differ significantly" + (":" if len(sig) else "."))
-        if len(sig):
-            print(_fmt(sig[["scene", "a", "b", "value_a", "value_b", "p_a_better", "p_holm"]]))
-        if args.csv:
-            print(f"wrote {write_csv(ci, args.csv, args.force)}", file=sys.stderr)
-        for out in (args.latex, args.markdown):
-            if out:
-                print(f"wrote {write_comparison(ci, args.metric, out, args.force)}", file=sys.stderr)
+        res = compare_table(table, ev.durations(), args.metric, level=args.level, alpha=args.alpha,
+                            seed=args.seed, power_delta=args.power)  # fmt: skip
+        notes += res.notes
+        print(res.header)
+        with pd.option_context("display.max_colwidth", 60):
+            print(_fmt(res.algorithms[["suite", "scene", "algorithm", "value [CI]", "covered", "rank", "tied_with"]]))
+        print("\n" + res.summary)
+        if len(res.significant):
+            print(_fmt(res.significant[["scene", "a", "b", "value_a", "value_b", "difference", "p", "p_holm"]]))
+        if res.power is not None:
+            print(f"\nruns needed to detect a difference of {args.power} in {args.metric} (power 0.8, alpha "
+                  f"{args.alpha}) where no difference was found:")  # fmt: skip
+            print(_fmt(res.power[["scene", "a", "b", "unit", "have", "needed"]]))
+        for path in write_outputs(res, args.metric, args.csv, args.pairs_csv, args.latex, args.markdown, args.force,
+                                  args.alpha):  # fmt: skip
+            print(f"wrote {path}", file=sys.stderr)
     _report_problems(ev, notes)
     return 1 if ev.failures else 0
 

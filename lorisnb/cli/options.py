@@ -207,3 +207,35 @@ def param_value(text: str) -> Any:
         return json.loads(text)
     except ValueError:
         return text
+
+
+def probability_type(name: str) -> Callable[[str], Any]:
+    """A probability strictly between 0 and 1 (``--level``, ``--alpha``)."""
+
+    def check(text: str) -> float:
+        v = validate.positive(name, text, "a probability")
+        if not v < 1:
+            raise ValidationError(f"{name}={text}: expected a probability between 0 and 1")
+        return v
+
+    return arg_type(check)
+
+
+def add_compare_options(p: argparse.ArgumentParser) -> None:
+    """``compare``'s own options: the metric, the interval level, the test's alpha, the bootstrap
+    seed, the power question and the tables."""
+    p.add_argument("--metric", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"], default="cr",
+                   help="the metric of the ranking, pairwise tests and tables (default cr)")  # fmt: skip
+    p.add_argument("--level", type=probability_type("--level"), default=0.95,
+                   help="confidence level of the intervals (default 0.95)")  # fmt: skip
+    p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
+                   help="significance level of the pairwise permutation test, after Holm's correction (default 0.05)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap and of sampled relabellings (default 0)")
+    p.add_argument("--power", default=None, metavar="DELTA",
+                   type=arg_type(lambda t: validate.positive("--power", t, "the metric's unit")),
+                   help="for pairs not found different: the sequences or trials needed to detect a difference "
+                   "DELTA of the metric (power 0.8)")  # fmt: skip
+    p.add_argument("--pairs-csv", default=None, metavar="OUT",
+                   help="write the pairwise test (p, min_p, Holm, effect sizes) to this CSV")  # fmt: skip
+    p.add_argument("--latex", default=None, metavar="OUT", help="write the comparison table as LaTeX (booktabs, .tex)")
+    p.add_argument("--markdown", default=None, metavar="OUT", help="write the comparison table as Markdown (.md)")

@@ -26,7 +26,7 @@ from ..core.model import Eps, FileErrors, ResultFile
 from ..core.pipeline import compute_errors
 from ..core.relative import RPG_FRACTIONS, relative_table
 from ..core.scoring import pose_table, score
-from ..core.trials import compile_trials_by, split_trial
+from ..core.trials import check_duplicates, check_trials_by, compile_trials_by, split_trial
 from ..core.validate import choice, scale_value
 from ..errors import DataNotFoundError, LorisError, LorisWarning, ValidationError
 from ..io.data import DataPaths, DataRoot, find_data, groundtruth_spans, load_groundtruth, scene_durations
@@ -279,6 +279,7 @@ def evaluate(
     compile_trials_by(trials_by)
     scale = scale_value(scale)
     items = result_files(paths)
+    check_trials_by([labels(p, r, trials_by)[1] if r else "/".join(p.parts[-3:]) for p, r in items], trials_by)
     data = find_data(data_root)  # no data at all is an error for the whole call, not per file
     if algorithms is not None:
         wanted = set(_names("algorithms", algorithms))
@@ -304,6 +305,8 @@ def evaluate(
             done.append(value)
         elif isinstance(value, Failure):
             (failed if status == "failed" else skipped).append(value)
+    check_duplicates([(str(f.path), (f.suite, f.algorithm, f.scene, f.trial), tuple(e.seq for e in f.sequences))
+                      for f in done])  # fmt: skip
     roots = as_paths(paths)
     root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
     for w in dict.fromkeys(w for f in done for w in f.warnings):
