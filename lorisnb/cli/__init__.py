@@ -19,12 +19,14 @@ from ..io.ranges import keep_freed_memory
 from .commands import cmd_compare, cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
 from .options import (
     add_compare_options,
+    add_diff_options,
     add_evaluation_options,
     add_scale_option,
     add_threshold_options,
     arg_type,
     threshold_list_type,
 )
+from .runs import cmd_diff
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -41,6 +43,13 @@ def build_parser() -> argparse.ArgumentParser:
     add_threshold_options(p, eps="paper", phi=30.0)
     add_compare_options(p)
     p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("diff", help="did CAND regress against BASE? two result folders, report runs or tables")
+    add_evaluation_options(p)
+    add_threshold_options(p, eps="paper", phi=30.0)
+    add_diff_options(p)
+    p.set_defaults(func=cmd_diff)
+    p.set_defaults(defaults=vars(p.parse_args(["BASE", "CAND"])))
 
     p = sub.add_parser(
         "sweep", help="every metric over grids of eps, phi, delta and tau (one row per sequence and setting)"

@@ -327,3 +327,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         )
     print(f"report: {run_dir / 'index.html'}")
     return 1 if any(r.status == "failed" or r.input_errors for r in runs) else 0
+
+
+#: The helpers other command modules (:mod:`lorisnb.cli.runs`) share with these commands.
+run_evaluation, thresholds_of, report_problems, fmt_table = _run_evaluation, _thresholds, _report_problems, _fmt

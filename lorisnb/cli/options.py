@@ -239,3 +239,20 @@ def add_compare_options(p: argparse.ArgumentParser) -> None:
                    help="write the pairwise test (p, min_p, Holm, effect sizes) to this CSV")  # fmt: skip
     p.add_argument("--latex", default=None, metavar="OUT", help="write the comparison table as LaTeX (booktabs, .tex)")
     p.add_argument("--markdown", default=None, metavar="OUT", help="write the comparison table as Markdown (.md)")
+
+
+def add_diff_options(p: argparse.ArgumentParser) -> None:
+    """``diff``'s own options: tolerances, the test's alpha, the seed and the verdict files."""
+    from ..core.regression import DEFAULT_TOLERANCES
+
+    defaults = ",".join(f"{k}={v}" for k, v in DEFAULT_TOLERANCES.items())
+    p.add_argument("--tolerance", default=None, metavar="M=V,...",
+                   help="how much worse a metric may get before it is a regression: an amount in the metric's unit "
+                   f"or a percentage of the base value (defaults: {defaults.replace('%', '%%')})")  # fmt: skip
+    p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
+                   help="significance level of the permutation test across trials (default 0.05)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of sampled relabellings (default 0)")
+    p.add_argument("--json", default=None, metavar="OUT", help="write the verdict as JSON")
+    p.add_argument(
+        "--junit", default=None, metavar="OUT", help="write the verdict as JUnit XML (one test per sequence)"
+    )

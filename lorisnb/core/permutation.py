@@ -33,8 +33,10 @@ EXACT_LIMIT = 200_000
 
 @dataclass(frozen=True)
 class PermutationResult:
-    """``statistic``: T (A minus B); ``pvalue``: two-sided; ``min_p``: the smallest p-value this
-    design can give; ``relabellings``: how many there are; ``exact``: all were enumerated."""
+    """``statistic``: T (A minus B); ``pvalue``: two-sided; ``min_p``: the smallest p-value these
+    data can give (exact test: the share of relabellings reaching the largest |T|; sampled: the
+    design's bound over the strata whose values are not all equal); ``relabellings``: how many
+    there are; ``exact``: all were enumerated."""
 
     statistic: float
     pvalue: float
@@ -92,12 +94,16 @@ def permutation_test(
     wk = w[keep] / w[keep].sum()
     sizes = [(len(x), len(y)) for x, y in zip(xa, xb, strict=True)]
     observed = float(sum(wi * (x.mean() - y.mean()) for wi, x, y in zip(wk, xa, xb, strict=True)))
-    total, floor = relabellings(sizes), min_p(sizes)
+    total = relabellings(sizes)
+    varying = [sz for sz, x, y in zip(sizes, xa, xb, strict=True) if np.ptp(np.concatenate([x, y])) > 0]
+    floor = min_p(varying)  # strata whose values are all equal cannot move the statistic
     tol = 1e-12 * max(1.0, abs(observed))
     if total <= EXACT_LIMIT:
         dist = np.zeros(1)
         for x, y, wi in zip(xa, xb, wk, strict=True):  # strata: a handful; the relabellings are arrays
             dist = (dist[:, None] + _stratum_contributions(x, y, wi)[None, :]).ravel()
+        top = np.abs(dist).max()
+        floor = float(np.mean(np.abs(dist) >= top - 1e-12 * max(1.0, top)))  # exact: from the data
         p = float(np.mean(np.abs(dist) >= abs(observed) - tol))
         return PermutationResult(observed, p, floor, total, True)
     rng = rng if rng is not None else np.random.default_rng(0)
