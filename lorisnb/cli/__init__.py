@@ -21,12 +21,13 @@ from .options import (
     add_compare_options,
     add_diff_options,
     add_evaluation_options,
+    add_history_options,
     add_scale_option,
     add_threshold_options,
     arg_type,
     threshold_list_type,
 )
-from .runs import cmd_diff
+from .runs import cmd_diff, cmd_history
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -50,6 +51,10 @@ def build_parser() -> argparse.ArgumentParser:
     add_diff_options(p)
     p.set_defaults(func=cmd_diff)
     p.set_defaults(defaults=vars(p.parse_args(["BASE", "CAND"])))
+
+    p = sub.add_parser("history", help="scene values over many runs: first changes, runs not comparable")
+    add_history_options(p)
+    p.set_defaults(func=cmd_history)
 
     p = sub.add_parser(
         "sweep", help="every metric over grids of eps, phi, delta and tau (one row per sequence and setting)"

@@ -256,3 +256,16 @@ def add_diff_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--junit", default=None, metavar="OUT", help="write the verdict as JUnit XML (one test per sequence)"
     )
+
+
+def add_history_options(p: argparse.ArgumentParser) -> None:
+    """``history``'s options: the runs, the metrics, tolerances and the outputs."""
+    p.add_argument("runs", nargs="+", metavar="RUN",
+                   help="report run folders (run.json + tables) or per-sequence CSV/Parquet tables")  # fmt: skip
+    p.add_argument("--metric", nargs="+", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"],
+                   default=["cr", "cr_t", "cs_r", "c_ate_rmse"], help="scene metrics to follow (default: all four)")  # fmt: skip
+    p.add_argument("--tolerance", default=None, metavar="M=V,...",
+                   help="how much a value may move before it counts as a change (as diff's --tolerance)")  # fmt: skip
+    p.add_argument("--csv", default=None, metavar="OUT", help="write the history table to this CSV")
+    p.add_argument("--out", default=None, metavar="DIR", help="write one figure per metric (PNG, SVG) into DIR")
+    p.add_argument("--force", action="store_true", help="overwrite OUT / files in DIR")

@@ -115,3 +115,39 @@ def cmd_diff(args: argparse.Namespace) -> int:
         print(f"error: {len(base_failed)} file(s) of BASE could not be evaluated: not every sequence was compared",
               file=sys.stderr)  # fmt: skip
     return 1 if d.regressed or base_failed else 0
+
+
+def cmd_history(args: argparse.Namespace) -> int:
+    """``lorisnb history RUN...``: scene values over runs, first changes, runs not comparable."""
+    from ..core.regression import parse_tolerances
+    from ..io.writers import write_csv
+    from ..tools.history import first_changes, history_table, load_runs, write_figures
+
+    check_output(args.csv, args.runs, args.force)
+    check_output(args.out, args.runs, args.force, folder=True)
+    tolerances = parse_tolerances(args.tolerance)
+    runs = load_runs(args.runs)
+    h = history_table(runs, args.metric, tolerances)
+    how = sorted({r.created_from for r in runs})
+    print(f"{len(runs)} run(s), oldest first, ordered by {' and '.join(how)}")
+    for r in runs:
+        print(
+            f"  {r.name}: {r.created.isoformat() if r.created else '?'}"
+            + (f", lorisnb {r.version}" if r.version else "")
+        )
+    for m in args.metric:
+        view = h[h["metric"] == m].pivot_table(index=["suite", "algorithm", "scene"], columns="run", values="value",
+                                              sort=False)  # fmt: skip
+        print(f"\n{m} per scene:")
+        print(fmt_table(view[[r.name for r in runs if r.name in view.columns]].reset_index()))
+    lost = h.drop_duplicates("run")
+    for r in lost[~lost["comparable"]].itertuples():
+        print(f"\nnot comparable: {r.run} with the run before it ({r.not_comparable})")
+    lines = first_changes(h)
+    print("\n" + ("\n".join(lines) if lines else "no value changed beyond its tolerance"))
+    if args.csv:
+        print(f"wrote {write_csv(h, args.csv, args.force)}", file=sys.stderr)
+    if args.out:
+        paths = write_figures(h, args.out)
+        print(f"wrote {len(paths)} figure file(s) to {args.out}", file=sys.stderr)
+    return 0
