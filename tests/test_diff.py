@@ -143,6 +143,7 @@ def test_diff_of_tables_and_a_missing_sequence(versions, tmp_path, capsys):
     assert rc == 2 and "tolerance cr=-1" in err
 
 
+@pytest.mark.slow
 def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
     """Two report run folders (run.json + per-sequence CSV tables), then history over three runs."""
     a, b = versions

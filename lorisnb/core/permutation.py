@@ -36,7 +36,8 @@ class PermutationResult:
     """``statistic``: T (A minus B); ``pvalue``: two-sided; ``min_p``: the smallest p-value these
     data can give (exact test: the share of relabellings reaching the largest |T|; sampled: the
     design's bound over the strata whose values are not all equal); ``relabellings``: how many
-    there are; ``exact``: all were enumerated."""
+    there are (strata whose values are all equal left out: they cannot move T); ``exact``: all
+    were enumerated."""
 
     statistic: float
     pvalue: float
@@ -94,9 +95,12 @@ def permutation_test(
     wk = w[keep] / w[keep].sum()
     sizes = [(len(x), len(y)) for x, y in zip(xa, xb, strict=True)]
     observed = float(sum(wi * (x.mean() - y.mean()) for wi, x, y in zip(wk, xa, xb, strict=True)))
+    # a stratum whose values are all equal adds 0 under every relabelling: it leaves the distribution
+    moving = [k for k in range(len(xa)) if np.ptp(np.concatenate([xa[k], xb[k]])) > 0]
+    xa, xb, wk = [xa[k] for k in moving], [xb[k] for k in moving], wk[moving]
+    sizes = [sizes[k] for k in moving]
     total = relabellings(sizes)
-    varying = [sz for sz, x, y in zip(sizes, xa, xb, strict=True) if np.ptp(np.concatenate([x, y])) > 0]
-    floor = min_p(varying)  # strata whose values are all equal cannot move the statistic
+    floor = min_p(sizes)
     tol = 1e-12 * max(1.0, abs(observed))
     if total <= EXACT_LIMIT:
         dist = np.zeros(1)

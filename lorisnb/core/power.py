@@ -55,7 +55,9 @@ def runs_for_power(
             w = w / w.sum() if len(w) and w.sum() > 0 else w
             sa, sb = _within_sd(ga[ga["seq"].isin(common)], metric), _within_sd(gb[gb["seq"].isin(common)], metric)
             sd = float(np.sqrt(np.sum(w**2) * (sa**2 + sb**2) / 2)) if len(w) else np.nan
+            both = g[g["algorithm"].isin([r.a, r.b]) & g["seq"].isin(common)]
+            moving = int((both.groupby("seq")[metric].agg(np.ptp) > 0).sum())  # all-equal sequences cannot help
             rows.append(dict(unit="trials per sequence", have=min(r.trials_a, r.trials_b),
-                             needed=units_for_power(sd, delta, alpha, power, groups=2, strata=max(len(common), 1))))  # fmt: skip
+                             needed=units_for_power(sd, delta, alpha, power, groups=2, strata=max(moving, 1))))  # fmt: skip
     extra = pd.DataFrame(rows, columns=["unit", "have", "needed"], index=pairs.index)
     return pairs.assign(delta=delta, power=power).join(extra)
