@@ -148,7 +148,7 @@ def test_missing_sequences_count_as_evaluate_counts_them(tmp_path, icra20, capsy
     assert "3/5" in out
 
 
-def test_duplicate_files_and_unmatched_trials_by_are_errors(tmp_path, icra20, capsys):
+def test_duplicate_files_and_unmatched_trials_by_are_errors(tmp_path, icra20, data, capsys):
     src = (icra20 / "per-seq" / "orbslam2_rgbd" / "cafe_1_1_orbslam2-original.txt").read_bytes()
     write(tmp_path, "res/orb/cafe_a.txt", src)
     write(tmp_path, "res/orb/cafe_b.txt", src)
@@ -162,6 +162,10 @@ def test_duplicate_files_and_unmatched_trials_by_are_errors(tmp_path, icra20, ca
     assert rc == 2 and r"trials_by=seed(\d+): matches none of the 2 result file path(s)" in err
     with pytest.raises(ln.ValidationError, match="matches none"):
         ln.evaluate(tmp_path / "res", trials_by=r"seed(\d+)")
+    tum = data.tum  # estimates against a --gt: the same rule
+    rc = main(["evaluate", str(tum / "freiburg1_xyz-rgbdslam.txt"),
+               "--gt", str(tum / "freiburg1_xyz-groundtruth.txt"), "--trials-by", r"seed(\d+)", "--no-progress"])  # fmt: skip
+    assert rc == 2 and "matches none of the 1 result file path(s)" in capsys.readouterr().err
     (tmp_path / "res" / "orb" / "cafe_b.txt").rename(tmp_path / "res" / "orb" / "cafe_seed2.txt")
     (tmp_path / "res" / "orb" / "cafe_a.txt").rename(tmp_path / "res" / "orb" / "cafe_seed1.txt")
     ev = ln.evaluate(tmp_path / "res", trials_by=r"seed(\d+)")

@@ -88,6 +88,10 @@ def _run_pairs(args: argparse.Namespace) -> tuple[Any, list[str]]:
                 m, args.paths, conventions=conventions_of(args, m.conventions), lifelong=lifelong,
                 trials_by=args.trials_by, progress=not args.no_progress,
             )  # fmt: skip
+    if args.trials_by:  # a --trials-by that numbers none of the estimates is an error
+        from ..core.trials import check_trials_by
+
+        check_trials_by([Path(f.path).as_posix() for f in ev.errors + ev.failures], args.trials_by)
     notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))
     print(f"conventions: {ev.conventions}", file=sys.stderr)
     return ev, notes
