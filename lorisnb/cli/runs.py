@@ -25,6 +25,14 @@ def _given_evaluate_options(args: argparse.Namespace, defaults: dict[str, Any]) 
             if k not in DIFF_OWN and k in defaults and v != defaults[k]]  # fmt: skip
 
 
+def _short(v: object) -> str:
+    """A value for the terminal: numbers to 4 decimals, long text cut (the JSON keeps it whole)."""
+    if isinstance(v, float):
+        return f"{v:.4f}"
+    text = str(v)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], list[str]]:
     """A run (report run or table as read, or a result folder evaluated with the options), the
     files of it that failed (relative path -> reason), and notes."""
@@ -75,7 +83,10 @@ def cmd_diff(args: argparse.Namespace) -> int:
     (base, _, base_failed), (cand, cand_failed, _) = (_side(p, args) for p in args.paths)
     problems = spec_differences(base, cand)
     if problems:
-        raise ValidationError("BASE and CAND are not comparable (different evaluation specs): " + "; ".join(problems))
+        raise ValidationError(
+            "BASE and CAND are not comparable (different evaluation specs): " + "; ".join(problems) + ". Compare "
+            "runs made with the same thresholds (for a result folder: --eps, --phi, --delta, --tau as the table's)"
+        )
     if base.version and cand.version and base.version != cand.version:
         print(f"note: lorisnb {base.version} made BASE, {cand.version} CAND", file=sys.stderr)
     d = diff_tables(base.table, cand.table, tolerances, args.alpha, args.seed, cand_failed)
@@ -88,8 +99,9 @@ def cmd_diff(args: argparse.Namespace) -> int:
         f"{v} {k}" for k, v in counts.items() if v))  # fmt: skip
     if len(bad):
         print("\nregressions per sequence:")
-        print(fmt_table(bad[["algorithm", "scene", "seq", "metric", "base", "cand", "worse_by", "tolerance",
-                             "status"]].astype({"base": str, "cand": str})))  # fmt: skip
+        shown = bad[["algorithm", "scene", "seq", "metric", "base", "cand", "worse_by", "tolerance", "status"]]
+        shown = shown.assign(base=[_short(v) for v in shown["base"]], cand=[_short(v) for v in shown["cand"]])
+        print(fmt_table(shown))
     if len(scene_bad):
         print("\nregressions per scene:")
         print(fmt_table(scene_bad[["algorithm", "scene", "metric", "base", "cand", "worse_by", "p_holm",
