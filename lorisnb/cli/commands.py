@@ -148,7 +148,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         try:
             scenes = aggregate_scenes(table, ev.durations())
             print("\nper scene (CR over all ground-truth time of the scene; C-ATE RMSE weighted by correct poses):")
-            scenes["coverage"] = [f"{k}/{n}" for k, n in zip(scenes["sequences"], scenes["scene_sequences"], strict=True)]
+            scenes["coverage"] = [
+                f"{k}/{n}" for k, n in zip(scenes["sequences"], scenes["scene_sequences"], strict=True)
+            ]
             print(_fmt(scenes[["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]))
         except LorisError as exc:
             print(f"warning: no scene aggregate: {exc}", file=sys.stderr)

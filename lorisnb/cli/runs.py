@@ -81,6 +81,8 @@ def cmd_diff(args: argparse.Namespace) -> int:
         raise ValidationError(f"{', '.join(given)}: evaluate options apply to result folders; BASE and CAND are "
                               "tables or report runs, whose numbers are already computed")  # fmt: skip
     (base, _, base_failed), (cand, cand_failed, _) = (_side(p, args) for p in args.paths)
+    for note in base.notes + cand.notes:
+        print(f"note: {note}", file=sys.stderr)
     problems = spec_differences(base, cand)
     if problems:
         raise ValidationError(
@@ -139,6 +141,8 @@ def cmd_history(args: argparse.Namespace) -> int:
     check_output(args.out, args.runs, args.force, folder=True)
     tolerances = parse_tolerances(args.tolerance)
     runs = load_runs(args.runs)
+    for note in (n for r in runs for n in r.notes):
+        print(f"note: {note}", file=sys.stderr)
     h = history_table(runs, args.metric, tolerances)
     how = sorted({r.created_from for r in runs})
     print(f"{len(runs)} run(s), oldest first, ordered by {' and '.join(how)}")

@@ -39,6 +39,7 @@ class Run:
     meta: dict[str, Any] = field(default_factory=dict)
     created: datetime | None = None
     created_from: str = ""
+    notes: list[str] = field(default_factory=list)
 
     @property
     def name(self) -> str:
@@ -101,9 +102,10 @@ def read_table(path: Path) -> pd.DataFrame:
     return df
 
 
-def _report_tables(folder: Path) -> pd.DataFrame:
+def _report_tables(folder: Path, notes: list[str]) -> pd.DataFrame:
     """Every per-sequence CSV table of a report run, stacked, with a ``table`` column (its path in the
-    run); tables that are not per-sequence (scenes, pairs, ...) are left out."""
+    run); tables that are not per-sequence (scenes, pairs, ...) are left out, and so are tables with
+    several rows per sequence and trial (sweeps), with a note in ``notes``."""
     parts = []
     for csv in sorted(folder.rglob("*.csv")):
         if any(part.startswith(".") for part in csv.relative_to(folder).parts):
@@ -113,7 +115,12 @@ def _report_tables(folder: Path) -> pd.DataFrame:
         except (ValueError, OSError):
             continue
         if all(c in head.columns for c in REQUIRED):
-            parts.append(read_table(csv).assign(table=csv.relative_to(folder).as_posix()))
+            t = read_table(csv)
+            keys = [c for c in ("suite", "algorithm", "scene", "seq", "trial") if c in t.columns]
+            if t.duplicated(keys).any():
+                notes.append(f"{csv}: several rows per sequence (a sweep?); left out")
+                continue
+            parts.append(t.assign(table=csv.relative_to(folder).as_posix()))
     if not parts:
         raise DataNotFoundError(f"{folder}: a report run (run.json) without a per-sequence CSV table "
                                 f"(columns {', '.join(REQUIRED)})")  # fmt: skip
@@ -135,7 +142,8 @@ def load_run(path: str | os.PathLike[str]) -> Run:
         created, source = _parse_time(meta.get("created")), "run.json"
         if created is None:
             created, source = _mtime(p / RUN_JSON), "modification time of run.json"
-        return Run(p, "report", _report_tables(p), meta, created, source)
+        notes: list[str] = []
+        return Run(p, "report", _report_tables(p, notes), meta, created, source, notes)
     if is_table(p):
         return Run(p, "table", read_table(p), {}, _mtime(p), "modification time")
     raise ValidationError(f"{p}: not a report run (no {RUN_JSON}) and not a CSV/Parquet table")
