@@ -16,6 +16,7 @@ from ..core.regression import Tolerance, scene_changes, sequence_changes, verdic
 from ..core.stats import with_trials
 from ..errors import ValidationError
 from ..io.writers import write_text
+from .comparison import check_table_duplicates
 
 
 @dataclass
@@ -37,6 +38,8 @@ def keyed(table: pd.DataFrame) -> pd.DataFrame:
     error (a sweep holds several settings: diff one)."""
     t = with_trials(table)
     t["suite"] = t["suite"].fillna("").astype(str)
+    if "table" not in t.columns and "eps_value" not in t.columns:
+        check_table_duplicates(t)  # two files for one sequence: named, with what to do
     if "table" in t.columns:
         t["suite"] = t["table"].astype(str) + [f":{s}" if s else "" for s in t["suite"]]
     dup = t.duplicated(["suite", "algorithm", "scene", "seq", "trial"], keep=False)
