@@ -170,3 +170,21 @@ def test_duplicate_files_and_unmatched_trials_by_are_errors(tmp_path, icra20, da
     (tmp_path / "res" / "orb" / "cafe_a.txt").rename(tmp_path / "res" / "orb" / "cafe_seed1.txt")
     ev = ln.evaluate(tmp_path / "res", trials_by=r"seed(\d+)")
     assert sorted(f.trial for f in ev.errors) == [1, 2]
+
+
+def test_options_compare_and_diff_cannot_apply_are_refused(tmp_path, icra20, capsys):
+    odom = icra20 / "per-seq" / "odom"
+    rc, _, err = compare(capsys, odom, "--parquet", tmp_path / "x")
+    assert rc == 2 and "--parquet: not used by lorisnb compare" in err and not (tmp_path / "x").exists()
+    rc, _, err = compare(capsys, odom, "--relative")
+    assert rc == 2 and "--relative: not used" in err
+    rc, _, err = compare(capsys, odom, "--latex", tmp_path / "t.txt")
+    assert rc == 2 and "expected a .tex" in err
+    rc, _, err = compare(capsys, odom, "--csv", tmp_path / "same.csv", "--pairs-csv", tmp_path / "same.csv")
+    assert rc == 2 and "its own file" in err and not (tmp_path / "same.csv").exists()
+    for bad in ("--alpha", "--level"):
+        with pytest.raises(SystemExit):
+            main(["compare", str(odom), bad, "1.5"])
+    assert main(["diff", str(odom), str(odom), "--relative"]) == 2
+    assert main(["diff", str(odom), "--no-progress"]) == 2  # one run only
+    capsys.readouterr()

@@ -269,3 +269,11 @@ def add_history_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--csv", default=None, metavar="OUT", help="write the history table to this CSV")
     p.add_argument("--out", default=None, metavar="DIR", help="write one figure per metric (PNG, SVG) into DIR")
     p.add_argument("--force", action="store_true", help="overwrite OUT / files in DIR")
+
+
+def refuse_unused(args: argparse.Namespace, unused: dict[str, str]) -> None:
+    """Options a command shares with ``evaluate`` but cannot apply: refused, naming what to use."""
+    given = [(k, use) for k, use in unused.items() if getattr(args, k, None)]
+    if given:
+        k, use = given[0]
+        raise ValidationError(f"--{k.replace('_', '-')}: not used by lorisnb {args.command}; use {use}")

@@ -13,7 +13,7 @@ import pandas as pd
 
 from ..errors import ValidationError
 from .commands import fmt_table, report_problems, run_evaluation, thresholds_of
-from .options import check_output
+from .options import check_output, refuse_unused
 
 #: diff's own options; every other option is an evaluate option (for result folders only).
 DIFF_OWN = {"paths", "tolerance", "alpha", "seed", "json", "junit", "csv", "parquet", "force", "no_progress", "func",
@@ -64,6 +64,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
     from ..tools.diff import diff_tables, write_json, write_junit
     from ..tools.runs import is_report_run, is_table, spec_differences
 
+    refuse_unused(args, {"relative": "lorisnb evaluate (diff compares the RPE columns)"})
     if len(args.paths) != 2:
         raise ValidationError(f"diff takes two runs, BASE and CAND; got {len(args.paths)} path(s)")
     outs = [o for o in (args.json, args.junit, args.csv) if o]
