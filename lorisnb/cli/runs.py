@@ -112,7 +112,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
     n = d.verdict["regressed_sequences"]
     print(f"\nverdict: {d.verdict['verdict']}" + (f" ({n} sequence(s) regressed)" if d.regressed else ""))
     extra = dict(base=args.paths[0], cand=args.paths[1], tolerances={k: str(v) for k, v in tolerances.items()},
-                 alpha=args.alpha, base_failed=base_failed)  # fmt: skip
+                 alpha=args.alpha, base_failed=base_failed, cand_failed=sorted(cand_failed))  # fmt: skip
     written = []
     if args.json:
         written.append(write_json(d, args.json, args.force, extra))
@@ -126,10 +126,12 @@ def cmd_diff(args: argparse.Namespace) -> int:
         written.append(write_parquet(both, args.parquet, force=args.force))
     for w in written:
         print(f"wrote {w}", file=sys.stderr)
-    if base_failed:
-        print(f"error: {len(base_failed)} file(s) of BASE could not be evaluated: not every sequence was compared",
-              file=sys.stderr)  # fmt: skip
-    return 1 if d.regressed or base_failed else 0
+    base_files = set(base.table["file"].astype(str)) if "file" in base.table.columns else set()
+    cand_other = sorted(f for f in cand_failed if f not in base_files)  # not matched to a BASE sequence
+    if base_failed or cand_other:
+        print(f"error: {len(base_failed)} file(s) of BASE and {len(cand_other)} other file(s) of CAND could not be "
+              "evaluated: not every sequence was compared", file=sys.stderr)  # fmt: skip
+    return 1 if d.regressed or base_failed or cand_other else 0
 
 
 def cmd_history(args: argparse.Namespace) -> int:
