@@ -72,6 +72,11 @@ def test_ranks_summary_bold_and_csv_agree(tmp_path, icra20, capsys):
     assert set(sig["better"]) == {"odom", "odom_twin"} and (sig["p_holm"] <= 0.05).all()
     assert (algs.loc[algs["algorithm"] == "orb", "p_holm_vs_top"] <= 0.05).all()
     assert algs["cliffs_delta_vs_top"].dropna().between(-1, 1).all()
+    holds_zero = (pairs["difference_low"] <= 0) & (pairs["difference_high"] >= 0)  # the inverted test's interval
+    assert (holds_zero == ~pairs["significant"]).all()
+    others = algs[algs["algorithm"] != algs["top"]]
+    zero = (others["difference_low_vs_top"] <= 0) & (others["difference_high_vs_top"] >= 0)
+    assert (zero == (others["p_holm_vs_top"] > 0.05)).all() and not zero[others["algorithm"] == "orb"].any()
     bold = {line.split("|")[1].strip() for line in md.read_text().splitlines() if "**" in line}
     assert bold == {"odom", "odom_twin"}  # rank 1 where the test separates someone
     assert tex.read_text().count(r"\textbf") == 2
@@ -89,6 +94,8 @@ def test_no_significant_pair_no_bold_and_equal_ranks(tmp_path, icra20, capsys):
     algs = pd.read_csv(csv)
     assert (algs["rank"] == 1).all() and (algs["coverage"] == 1).all()
     assert algs.loc[algs["scene"] == "home", "min_p_vs_top"].dropna().eq(0.0625).all()
+    unbounded = algs.dropna(subset=["p_vs_top"])  # no design here can reach 0.05: the test's interval is unbounded
+    assert np.isinf(unbounded["difference_low_vs_top"]).all() and np.isinf(unbounded["difference_high_vs_top"]).all()
     assert "runs needed to detect a difference of 0.1" in out and re.search(
         r"home\s+odom\s+orbslam2_rgbd\s+sequences\s+5\s+\d+", out
     )
@@ -188,3 +195,21 @@ def test_options_compare_and_diff_cannot_apply_are_refused(tmp_path, icra20, cap
     assert main(["diff", str(odom), str(odom), "--relative"]) == 2
     assert main(["diff", str(odom), "--no-progress"]) == 2  # one run only
     capsys.readouterr()
+
+
+def test_difference_interval_inverts_the_test():
+    """Paired, eight sequences (256 sign flips): the interval holds the shifts the exact test accepts;
+    just inside a bound p > alpha, just outside p <= alpha; 0 is outside as the test rejects."""
+    from lorisnb.core.permutation import difference_interval, holm_levels
+
+    x = np.array([0.9, 0.8, 0.85, 0.7, 0.75, 0.95, 0.6, 0.88])
+    y = x - np.array([0.2, 0.1, 0.25, 0.15, 0.3, 0.12, 0.18, 0.22])
+    a, b = [np.array([v]) for v in x], [np.array([v]) for v in y]
+    res = permutation_test(a, b)
+    assert res.exact and res.pvalue == pytest.approx(2 / 256)
+    low, high = difference_interval(a, b, None, 0.05)
+    assert 0 < low < res.statistic < high
+    shift = lambda d: permutation_test([v - d for v in a], b).pvalue  # noqa: E731
+    assert shift(low + 1e-6) > 0.05 >= shift(low - 1e-3) and shift(high - 1e-6) > 0.05 >= shift(high + 1e-3)
+    assert difference_interval(a[:4], b[:4], None, 0.05) == (-np.inf, np.inf)  # 2/16 > 0.05: nothing rejected
+    np.testing.assert_allclose(holm_levels(np.array([0.01, 0.04, 0.03]), 0.05), [0.05 / 3, 0.025, 0.025])

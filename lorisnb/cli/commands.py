@@ -246,7 +246,22 @@ def cmd_compare(args: argparse.Namespace) -> int:
         notes += res.notes
         print(res.header)
         with pd.option_context("display.max_colwidth", 60):
-            print(_fmt(res.algorithms[["suite", "scene", "algorithm", "value [CI]", "covered", "rank", "tied_with"]]))
+            print(
+                _fmt(
+                    res.algorithms[
+                        [
+                            "suite",
+                            "scene",
+                            "algorithm",
+                            "value [CI]",
+                            "covered",
+                            "rank",
+                            "vs top [test interval]",
+                            "tied_with",
+                        ]
+                    ]
+                )
+            )
         print("\n" + res.summary)
         if len(res.significant):
             print(_fmt(res.significant[["scene", "a", "b", "value_a", "value_b", "difference", "p", "p_holm"]]))

@@ -120,6 +120,24 @@ def permutation_test(
     return PermutationResult(observed, (1 + hits) / (1 + n_resamples), floor, total, False)
 
 
+def holm_levels(p: np.ndarray, alpha: float) -> np.ndarray:
+    """The level at which Holm's procedure (at family level ``alpha``) decides each p-value:
+    alpha / (m - j) for the j-th smallest while all before it are rejected, and, for the first not
+    rejected and all after it, the level of that first step. A test inverted at these levels
+    (:func:`lorisnb.core.permutation.difference_interval`) agrees with Holm's decisions."""
+    p = np.asarray(p, float)
+    out = np.full(p.shape, np.nan)
+    ok = np.flatnonzero(np.isfinite(p))
+    order = ok[np.argsort(p[ok])]
+    m, stop = order.size, None
+    for j, i in enumerate(order):
+        level = alpha / (m - j)
+        if stop is None and p[i] > level:
+            stop = level
+        out[i] = level if stop is None else stop
+    return out
+
+
 def runs_needed(alpha: float, paired: bool, strata: int = 1) -> int:
     """The fewest units that can reach ``alpha`` at all: paired sequences n with 2 / 2^n <= alpha,
     or trials per group m (m vs m in each of ``strata`` sequences) with min_p <= alpha."""
@@ -145,3 +163,55 @@ def units_for_power(
     z = norm.ppf(1 - alpha / 2) + norm.ppf(power)
     n = math.ceil(groups * (z * sd / abs(delta)) ** 2)
     return max(n, runs_needed(alpha, paired=groups == 1, strata=strata))
+
+
+def difference_interval(
+    a: Sequence[np.ndarray],
+    b: Sequence[np.ndarray],
+    weights: Sequence[float] | np.ndarray | None,
+    alpha: float,
+    n_resamples: int = 2000,
+    seed: int = 0,
+    iterations: int = 30,
+    rejected: bool | None = None,
+) -> tuple[float, float]:
+    """The interval of the difference T (A minus B) that inverts :func:`permutation_test`: the shifts
+    d for which the test of A - d against B does not reject at ``alpha`` (p > alpha), found outward
+    from T by doubling and bisection. Infinite bounds where no shift can be rejected (the design
+    cannot reach ``alpha``). Sampled tests reuse one seed for every shift. ``rejected``: the
+    decision of the test on the data as reported elsewhere (it may have used other random
+    relabellings); the interval is then made to contain 0 exactly when it was not rejected, so the
+    two always agree."""
+    if not a or not any(len(x) for x in a):
+        return np.nan, np.nan
+
+    def p_at(d: float) -> float:
+        shifted = [np.asarray(x, float) - d for x in a]
+        return permutation_test(shifted, b, weights, n_resamples, np.random.default_rng(seed)).pvalue
+
+    centre = permutation_test(a, b, weights, n_resamples, np.random.default_rng(seed)).statistic
+    if not np.isfinite(centre):
+        return np.nan, np.nan
+    values = np.concatenate([np.asarray(x, float) for x in list(a) + list(b) if len(x)])
+    span = max(float(np.ptp(values)), abs(centre), 1e-9)
+    bounds = []
+    for sign in (-1.0, 1.0):
+        inside, step = 0.0, span
+        while step <= 64 * span and p_at(centre + sign * step) > alpha:  # still accepted: look further out
+            inside, step = step, 2 * step
+        if step > 64 * span:
+            bounds.append(sign * np.inf)
+            continue
+        lo, hi = inside, step  # accepted at lo, rejected at hi
+        for _ in range(iterations):
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if p_at(centre + sign * mid) > alpha else (lo, mid)
+        bounds.append(centre + sign * lo)
+    low, high = float(bounds[0]), float(bounds[1])
+    if rejected is None:
+        rejected = p_at(0.0) <= alpha
+    if not rejected:  # 0 is an accepted shift: the interval holds it
+        low, high = min(low, 0.0), max(high, 0.0)
+    elif low <= 0.0 <= high:  # rejected: the interval stops short of 0 on its side
+        low, high = (float(np.nextafter(0.0, 1.0)), high) if centre > 0 else (low, float(np.nextafter(0.0, -1.0)))
+    return low, high

@@ -261,6 +261,7 @@ def pairwise(
     n_resamples: int = 2000,
     seed: int = 0,
     higher_is_better: bool | None = None,
+    intervals: bool = True,
 ) -> pd.DataFrame:
     """Every pair of algorithms in each scene, on the sequences both have: one stratified
     permutation test (:func:`lorisnb.core.permutation.permutation_test`: trials relabelled within
@@ -273,8 +274,11 @@ def pairwise(
     smallest p the design can give), ``exact``, ``p_holm`` (Holm over the scene's pairs),
     ``significant`` (p_holm <= alpha), ``better`` (the significantly better algorithm, or ""),
     ``reachable`` (whether min_p, Holm-corrected as if it were the scene's smallest p, can reach
-    alpha), and ``p_a_better`` (bootstrap probability that A is better, descriptive)."""
-    from .permutation import permutation_test
+    alpha), ``difference_low``, ``difference_high`` (with ``intervals``: the interval of the
+    difference that inverts the same test at the level Holm decided it at, ``interval_level``; it
+    holds 0 exactly when the pair is not significant) and ``p_a_better`` (bootstrap probability
+    that A is better, descriptive)."""
+    from .permutation import difference_interval, holm_levels, permutation_test
 
     better_high = (metric != "c_ate_rmse") if higher_is_better is None else higher_is_better
     t = with_trials(table)
@@ -283,13 +287,14 @@ def pairwise(
     rows = []
     for (suite, scene), g in t.groupby(["suite", "scene"], sort=False, observed=True):
         per = _sequence_trials(g, metric)
-        scene_rows = []
+        scene_rows, samples = [], []
         for a, b in combinations(sorted(per), 2):
             (va, wa), (vb, wb) = per[a], per[b]
             common = sorted(set(va) & set(vb), key=str)
             xa, xb = [va[s] for s in common], [vb[s] for s in common]
             w = np.array([(wa[s] + wb[s]) / 2 for s in common])
             res = permutation_test(xa, xb, w, n_resamples=max(n_resamples, 2000), rng=rng)
+            samples.append((xa, xb, w))
             ma = np.array([x.mean() for x in xa])
             mb = np.array([x.mean() for x in xb])
             mean_a = float(_weighted_mean(ma, np.array([wa[s] for s in common]))) if common else np.nan
@@ -311,14 +316,18 @@ def pairwise(
                      p_a_better=p_better)
             )  # fmt: skip
         adj = holm(np.array([r["p"] for r in scene_rows]))
-        for r, pa in zip(scene_rows, adj, strict=True):
+        levels = holm_levels(np.array([r["p"] for r in scene_rows]), alpha)
+        for r, pa, level, (xa, xb, w) in zip(scene_rows, adj, levels, samples, strict=True):
             sig = bool(np.isfinite(pa) and pa <= alpha)
+            low, high = (difference_interval(xa, xb, w, level, n_resamples=1000, seed=seed, iterations=20, rejected=sig)
+                         if intervals and np.isfinite(level) else (np.nan, np.nan))  # fmt: skip
+            r.update(difference_low=low, difference_high=high, interval_level=1 - level)
             a_wins = (r["difference"] > 0) == better_high
             r.update(p_holm=pa, significant=sig, better=(r["a"] if a_wins else r["b"]) if sig else "",
                      reachable=bool(np.isfinite(r["min_p"]) and r["min_p"] * len(scene_rows) <= alpha),
                      correction=f"Holm over {len(scene_rows)} pair(s) of this scene, alpha {alpha}")  # fmt: skip
         rows += scene_rows
     cols = ["suite", "scene", "metric", "a", "b", "sequences", "trials_a", "trials_b", "value_a", "value_b",
-            "difference", "cliffs_delta", "test", "relabellings", "exact", "p", "min_p", "p_holm", "significant",
-            "better", "reachable", "p_a_better", "correction"]  # fmt: skip
+            "difference", "difference_low", "difference_high", "interval_level", "cliffs_delta", "test", "relabellings",
+            "exact", "p", "min_p", "p_holm", "significant", "better", "reachable", "p_a_better", "correction"]  # fmt: skip
     return pd.DataFrame(rows, columns=cols)

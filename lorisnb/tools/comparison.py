@@ -50,6 +50,11 @@ def check_table_duplicates(table: pd.DataFrame) -> None:
     check_duplicates(keys)
 
 
+def _bound(v: float) -> str:
+    return "n/a" if not np.isfinite(v) and not np.isinf(v) else ("-inf" if v == -np.inf else "inf" if v == np.inf
+                                                                  else f"{v:+.3f}")  # fmt: skip
+
+
 def _versus_top(rank: pd.DataFrame, pairs: pd.DataFrame) -> pd.DataFrame:
     """Each algorithm against the top-ranked algorithm of its scene (best value among rank 1)."""
     out = []
@@ -58,12 +63,16 @@ def _versus_top(rank: pd.DataFrame, pairs: pd.DataFrame) -> pd.DataFrame:
         p = pairs[(pairs["suite"] == suite) & (pairs["scene"] == scene)]
         for alg in r["algorithm"]:
             row = dict(suite=suite, scene=scene, algorithm=alg, top=top, difference_vs_top=np.nan,
-                       cliffs_delta_vs_top=np.nan, p_vs_top=np.nan, p_holm_vs_top=np.nan, min_p_vs_top=np.nan)  # fmt: skip
+                       difference_low_vs_top=np.nan, difference_high_vs_top=np.nan, cliffs_delta_vs_top=np.nan,
+                       p_vs_top=np.nan, p_holm_vs_top=np.nan, min_p_vs_top=np.nan)  # fmt: skip
             hit = p[((p["a"] == alg) & (p["b"] == top)) | ((p["a"] == top) & (p["b"] == alg))]
             if alg != top and len(hit):
                 h = hit.iloc[0]
                 sign = 1.0 if h["a"] == alg else -1.0
+                low, high = (h["difference_low"], h["difference_high"])
                 row.update(difference_vs_top=sign * h["difference"], cliffs_delta_vs_top=sign * h["cliffs_delta"],
+                           difference_low_vs_top=low if sign > 0 else -high,
+                           difference_high_vs_top=high if sign > 0 else -low,
                            p_vs_top=h["p"], p_holm_vs_top=h["p_holm"], min_p_vs_top=h["min_p"])  # fmt: skip
             out.append(row)
     return pd.DataFrame(out)
@@ -94,6 +103,12 @@ def compare_table(
         interval(v, lo, hi, 3) for v, lo, hi in zip(algs["value"], algs["low"], algs["high"], strict=True)
     ]
     algs["covered"] = [f"{s}/{e}" for s, e in zip(algs["sequences"], algs["expected"], strict=True)]
+    algs["vs top [test interval]"] = [
+        "" if not np.isfinite(d) else f"{d:+.3f} [{_bound(lo)}, {_bound(hi)}]"
+        for d, lo, hi in zip(
+            algs["difference_vs_top"], algs["difference_low_vs_top"], algs["difference_high_vs_top"], strict=True
+        )
+    ]
     algs = algs.rename(columns={"sequences": "sequences_with_output", "expected": "scene_sequences"})
     per_seq = stats.with_trials(full).groupby(["algorithm", "scene", "seq"])["trial"].nunique()
     lo, hi = int(per_seq.min()), int(per_seq.max())
@@ -102,7 +117,9 @@ def compare_table(
     header = (
         f"{metric} per algorithm and scene, {level:.0%} bootstrap intervals over {units} ({trials}); "
         f"missing sequences count as failed runs; rank = 1 + algorithms significantly better by a permutation "
-        f"test (exact where the relabellings are few; Holm per scene, alpha {alpha}):"
+        f"test (exact where the relabellings are few; Holm per scene, alpha {alpha}); 'vs top': the difference to "
+        "the scene's first algorithm, with the interval that inverts the same test (it holds 0 exactly when the "
+        "test does not separate the two):"
     )
     sig = pairs[pairs["significant"]]
     summary = f"{len(sig)} of {len(pairs)} pairs differ significantly (the test behind the ranks and bold marks)"
@@ -140,7 +157,9 @@ def write_outputs(
     the top), per pair (the test), LaTeX and Markdown (bold from the ranking)."""
     written = []
     if csv:
-        written.append(write_csv(res.algorithms.drop(columns=["value [CI]", "covered"]), csv, force))
+        written.append(
+            write_csv(res.algorithms.drop(columns=["value [CI]", "covered", "vs top [test interval]"]), csv, force)
+        )
     if pairs_csv:
         pairs = res.pairs if res.power is None else res.pairs.join(res.power[["unit", "have", "needed"]])
         written.append(write_csv(pairs, pairs_csv, force))
