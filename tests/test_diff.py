@@ -211,3 +211,17 @@ def test_regression_core_on_trials():
     with pytest.raises(ValidationError, match="not a compared metric"):
         parse_tolerances("speed=3")
     assert str(parse_tolerances("ate_rmse=5%")["ate_rmse"]) == "5%"
+
+
+def test_diff_in_python(versions):
+    """The same verdict through Python: two Evaluations' tables and lorisnb.tools.diff.diff_tables."""
+    import lorisnb as ln
+    from lorisnb.tools.diff import diff_tables
+
+    a, b = (ln.evaluate(v).sequences(eps="paper", phi=30) for v in versions)
+    d = diff_tables(a, b, "cr=0.02,ate_rmse=10%")
+    flagged = {(r["algorithm"], r["scene"], r["seq"]) for r in d.verdict["regressions"] if r["seq"] is not None}
+    assert d.regressed and flagged == {(alg, scene, seq) for alg, _, scene, seq, _ in CHANGED}
+    assert not diff_tables(a, a).regressed
+    with pytest.raises(ValidationError, match="tolerance cr=x"):
+        diff_tables(a, b, {"cr": "x"})

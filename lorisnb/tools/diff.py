@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..core.regression import Tolerance, scene_changes, sequence_changes, verdict
+from ..core.regression import Tolerance, parse_tolerances, scene_changes, sequence_changes, verdict
 from ..core.stats import with_trials
 from ..errors import ValidationError
 from ..io.writers import write_text
@@ -56,16 +56,23 @@ def keyed(table: pd.DataFrame) -> pd.DataFrame:
 def diff_tables(
     base: pd.DataFrame,
     cand: pd.DataFrame,
-    tolerances: Mapping[str, Tolerance],
+    tolerances: Mapping[str, Tolerance] | Mapping[str, str | float] | str | None = None,
     alpha: float = 0.05,
     seed: int = 0,
     cand_failures: Mapping[str, str] | None = None,
 ) -> Diff:
-    """Compare two per-sequence tables. ``cand_failures`` maps a result file (relative path, as in
-    the ``file`` column) that the candidate could not evaluate to the reason: a base sequence from
-    that file is reported as failed, with the reason."""
+    """Compare two per-sequence tables (``Evaluation.sequences(...)``, or tables read back).
+    ``tolerances``: :func:`lorisnb.core.regression.parse_tolerances` of them, or the parsed ones
+    (None: the defaults). ``cand_failures`` maps a result file (relative path, as in the ``file``
+    column) that the candidate could not evaluate to the reason: a base sequence from that file is
+    reported as failed, with the reason."""
+    tols: dict[str, Tolerance]
+    if isinstance(tolerances, Mapping) and all(isinstance(v, Tolerance) for v in tolerances.values()):
+        tols = {k: v for k, v in tolerances.items() if isinstance(v, Tolerance)}
+    else:
+        tols = parse_tolerances(tolerances)  # type: ignore[arg-type]
     b, c = keyed(base), keyed(cand)
-    seqs = sequence_changes(b, c, tolerances, alpha, seed)
+    seqs = sequence_changes(b, c, tols, alpha, seed)
     if cand_failures and "file" in b.columns and len(seqs):
         files = b.drop_duplicates(["suite", "algorithm", "scene", "seq"]).set_index(
             ["suite", "algorithm", "scene", "seq"]
@@ -74,7 +81,7 @@ def diff_tables(
             f = files.get(tuple(seqs.loc[i, ["suite", "algorithm", "scene", "seq"]]))
             if f in cand_failures:
                 seqs.loc[i, ["status", "cand"]] = ["failed", f"failed: {cand_failures[f]}"]
-    scenes = scene_changes(b, c, tolerances, alpha, seed)
+    scenes = scene_changes(b, c, tols, alpha, seed)
     return Diff(seqs, scenes, verdict(seqs, scenes))
 
 
