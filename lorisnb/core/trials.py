@@ -89,13 +89,11 @@ def check_duplicates(keys: list[tuple[str, tuple, tuple[int, ...]]]) -> None:
             if j == k:
                 continue
             suite, algorithm, scene, trial = label
+            held = f"{algorithm}{f' ({suite})' if suite else ''} {scene}-{s}{f' trial {trial}' if trial else ''}"
             if PurePosixPath(other) == PurePosixPath(path):
-                what = f"{path} is given twice"
-            else:
-                what = f"{other} and {path} both hold"
+                raise ValidationError(f"{path} is given twice (it holds {held}); give each file or folder once")
             raise ValidationError(
-                f"{what} {algorithm}{f' ({suite})' if suite else ''} {scene}-{s}"
-                f"{f' trial {trial}' if trial else ''}, with no trial number to tell them apart; name the trials "
+                f"{other} and {path} both hold {held}, with no trial number to tell them apart; name the trials "
                 "(cafe_trial1.txt, run_2/, ...) or give --trials-by REGEX (trials_by= in Python) whose group is "
                 "the trial number, or evaluate them separately"
             )
