@@ -4,6 +4,7 @@ tables and report runs as inputs, the verdict files, and history over runs."""
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import xml.etree.ElementTree as ET
 
@@ -137,6 +138,18 @@ def test_diff_of_tables_and_a_missing_sequence(versions, tmp_path, capsys):
     capsys.readouterr()
     rc, _, err = run(capsys, ta, other)
     assert rc == 2 and "not comparable" in err and "eps" in err
+    # history over bare tables: ordered by modification time, the change found, other thresholds marked
+    for k, f in enumerate((ta, tb, other)):
+        os.utime(f, (1.7e9 + 100 * k, 1.7e9 + 100 * k))
+    hist = tmp_path / "history.csv"
+    assert main(["history", str(other), str(tb), str(ta), "--metric", "cr", "--csv", str(hist)]) == 0
+    out = capsys.readouterr().out
+    assert "ordered by modification time" in out and "odom home cr: first change in b.csv" in out
+    h = pd.read_csv(hist)
+    assert list(h.drop_duplicates("run")["run"]) == ["a.csv", "b.csv", "other.csv"]
+    mark = h.drop_duplicates("run").set_index("run")
+    assert mark.loc["b.csv", "comparable"] and not mark.loc["other.csv", "comparable"]
+    assert "eps" in mark.loc["other.csv", "not_comparable"]
     rc, _, err = run(capsys, ta, tb, "--scale")  # an evaluate option cannot apply to tables
     assert rc == 2 and "--scale" in err
     rc, _, err = run(capsys, ta, tb, "--tolerance", "cr=-1")

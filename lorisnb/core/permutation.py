@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from itertools import combinations
 
 import numpy as np
@@ -61,12 +62,17 @@ def min_p(sizes: Sequence[tuple[int, int]]) -> float:
     return min(1.0, (2.0 if balanced else 1.0) / total)
 
 
+@lru_cache(maxsize=64)
+def _picks(n: int, m: int) -> np.ndarray:
+    """Every choice of m of n positions, one per row (made once per design)."""
+    return np.array(list(combinations(range(n), m)), dtype=np.int32).reshape(-1, m)
+
+
 def _stratum_contributions(a: np.ndarray, b: np.ndarray, weight: float) -> np.ndarray:
     """Every relabelling of one stratum: weight * (mean of A's values - mean of B's)."""
     pooled = np.concatenate([a, b])
     m, total = len(a), pooled.sum()
-    picks = np.array(list(combinations(range(len(pooled)), m)), dtype=int).reshape(-1, m)
-    sum_a = pooled[picks].sum(axis=1)
+    sum_a = pooled[_picks(len(pooled), m)].sum(axis=1)
     return weight * (sum_a / m - (total - sum_a) / len(b))
 
 
