@@ -185,12 +185,21 @@ def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
     rc, _, err = run(capsys, runs[0], odd)
     assert rc == 2 and "spec" in err
 
+    regt = tmp_path / "run-3"  # the ground truth changed under the same version
+    shutil.copytree(runs[2], regt)
+    meta = json.loads((runs[2] / "run.json").read_text())
+    meta.update(created="2026-11-04T02:00:00+00:00", inputs={"/data/openloris-scene/groundtruth/gt_home_1.txt": "ff"})
+    (regt / "run.json").write_text(json.dumps(meta))
     csv, figs = tmp_path / "history.csv", tmp_path / "figures"
-    rc = main(["history", str(runs[2]), str(runs[0]), str(runs[1]), "--csv", str(csv), "--out", str(figs)])
+    rc = main(["history", str(runs[2]), str(regt), str(runs[0]), str(runs[1]), "--csv", str(csv), "--out", str(figs)])
     out = capsys.readouterr().out
     assert rc == 0
     h = pd.read_csv(csv)
-    assert list(h.drop_duplicates("run")["run"]) == ["run-0", "run-1", "run-2"]  # ordered by run.json's time
+    assert list(h.drop_duplicates("run")["run"]) == ["run-0", "run-1", "run-2", "run-3"]  # by run.json's time
+    assert (
+        "ground truth changed: gt_home_1.txt"
+        in h.drop_duplicates("run").set_index("run").loc["run-3", "not_comparable"]
+    )
     home = h[(h["algorithm"] == "odom") & (h["scene"] == "home") & (h["metric"] == "cr")].set_index("run")
     assert home.loc["run-1", "value"] < home.loc["run-0", "value"] - 0.05
     assert home.loc["run-1", "changed"] and not home.loc["run-0", "changed"]  # the first run where it changed
