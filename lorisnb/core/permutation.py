@@ -190,9 +190,18 @@ def difference_interval(
     two always agree."""
     if not a or not any(len(x) for x in a):
         return np.nan, np.nan
+    # the shift moves T by d through the strata that vary (all-equal ones stay out of the test, as in it)
+    w = np.ones(len(a)) if weights is None else np.asarray(weights, float)
+    used = np.array([bool(len(x) and len(y) and np.isfinite(wi) and wi > 0) for x, y, wi in zip(a, b, w, strict=True)])
+    moving = used & np.array(
+        [bool(len(x) and len(y) and np.ptp(np.concatenate([x, y])) > 0) for x, y in zip(a, b, strict=True)]
+    )
+    share = float(w[moving].sum() / w[used].sum()) if used.any() else 0.0
+    if share <= 0:
+        return -np.inf, np.inf  # nothing varies: no shift can be rejected
 
     def p_at(d: float) -> float:
-        shifted = [np.asarray(x, float) - d for x in a]
+        shifted = [np.asarray(x, float) - (d / share if moving[k] else 0.0) for k, x in enumerate(a)]
         return permutation_test(shifted, b, weights, n_resamples, np.random.default_rng(seed)).pvalue
 
     centre = permutation_test(a, b, weights, n_resamples, np.random.default_rng(seed)).statistic
