@@ -244,6 +244,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         res = compare_table(table, ev.durations(), args.metric, level=args.level, alpha=args.alpha,
                             seed=args.seed, power_delta=args.power)  # fmt: skip
         notes += res.notes
+        print(f"thresholds: eps {eps}, phi {phi} deg, delta {args.delta} s, tau {args.tau} s")
         print(res.header)
         with pd.option_context("display.max_colwidth", 60):
             print(
