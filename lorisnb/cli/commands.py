@@ -13,7 +13,7 @@ import pandas as pd
 
 from ..core.association import MAX_GAP
 from ..errors import LorisError, LorisWarning, ValidationError
-from .options import check_output, conventions_of, param_value, refuse_unused
+from .options import check_output, check_outputs, conventions_of, param_value, refuse_unused
 
 
 def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
@@ -229,11 +229,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from ..tools.tables import check_table_suffix
 
     refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate"})
-    outs = [o for o in (args.csv, args.pairs_csv, args.latex, args.markdown) if o]
-    for out in outs:
-        check_output(out, args.paths, args.force)
-    if len({str(Path(o).resolve()) for o in outs}) < len(outs):
-        raise ValidationError("--csv, --pairs-csv, --latex, --markdown: give each output its own file")
+    check_outputs(args, args.paths, ["csv", "pairs_csv", "latex", "markdown"])
     for out in (args.latex, args.markdown):
         if out:
             check_table_suffix(out)

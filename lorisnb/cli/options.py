@@ -277,3 +277,14 @@ def refuse_unused(args: argparse.Namespace, unused: dict[str, str]) -> None:
     if given:
         k, use = given[0]
         raise ValidationError(f"--{k.replace('_', '-')}: not used by lorisnb {args.command}; use {use}")
+
+
+def check_outputs(args: argparse.Namespace, inputs: list[str], files: list[str], folders: tuple[str, ...] = ()) -> None:
+    """:func:`check_output` for each output option given (``files`` and ``folders``: option names,
+    as attributes of ``args``), and that no two of them name the same place; all before any work."""
+    given: list[tuple[str, str]] = [(k, str(getattr(args, k))) for k in [*files, *folders] if getattr(args, k, None)]
+    for k, v in given:
+        check_output(v, inputs, args.force, folder=k in folders)
+    if len({str(Path(v).resolve()) for _, v in given}) < len(given):
+        names = ", ".join(f"--{k.replace('_', '-')}" for k, _ in given)
+        raise ValidationError(f"{names}: give each output its own file or folder")

@@ -13,7 +13,7 @@ import pandas as pd
 
 from ..errors import ValidationError
 from .commands import fmt_table, report_problems, run_evaluation, thresholds_of
-from .options import check_output, refuse_unused
+from .options import check_outputs, refuse_unused
 
 #: diff's own options; every other option is an evaluate option (for result folders only).
 DIFF_OWN = {"paths", "tolerance", "alpha", "seed", "json", "junit", "csv", "parquet", "force", "no_progress", "func",
@@ -67,14 +67,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
     refuse_unused(args, {"relative": "lorisnb evaluate (diff compares the RPE columns)"})
     if len(args.paths) != 2:
         raise ValidationError(f"diff takes two runs, BASE and CAND; got {len(args.paths)} path(s)")
-    outs = [o for o in (args.json, args.junit, args.csv) if o]
-    for out in outs:
-        check_output(out, args.paths, args.force)
-    check_output(args.parquet, args.paths, args.force, folder=True)
-    if len({str(Path(o).resolve()) for o in outs + ([args.parquet] if args.parquet else [])}) < len(outs) + bool(
-        args.parquet
-    ):
-        raise ValidationError("--json, --junit, --csv, --parquet: give each output its own name")
+    check_outputs(args, args.paths, ["json", "junit", "csv"], folders=("parquet",))
     tolerances = parse_tolerances(args.tolerance)
     tables = [is_report_run(Path(p)) or is_table(Path(p)) for p in args.paths]
     given = _given_evaluate_options(args, args.defaults)
@@ -140,8 +133,7 @@ def cmd_history(args: argparse.Namespace) -> int:
     from ..io.writers import write_csv
     from ..tools.history import first_changes, history_table, load_runs, write_figures
 
-    check_output(args.csv, args.runs, args.force)
-    check_output(args.out, args.runs, args.force, folder=True)
+    check_outputs(args, args.runs, ["csv"], folders=("out",))
     tolerances = parse_tolerances(args.tolerance)
     runs = load_runs(args.runs)
     for note in (n for r in runs for n in r.notes):
