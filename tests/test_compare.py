@@ -214,3 +214,15 @@ def test_difference_interval_inverts_the_test():
     assert shift(low + 1e-6) > 0.05 >= shift(low - 1e-3) and shift(high - 1e-6) > 0.05 >= shift(high + 1e-3)
     assert difference_interval(a[:4], b[:4], None, 0.05) == (-np.inf, np.inf)  # 2/16 > 0.05: nothing rejected
     np.testing.assert_allclose(holm_levels(np.array([0.01, 0.04, 0.03]), 0.05), [0.05 / 3, 0.025, 0.025])
+
+
+def test_tables_keep_suites_apart(tmp_path, icra20, capsys):
+    """The same algorithm in two suites (folders above it): two rows, not one."""
+    for suite in ("v1", "v2"):
+        for seq in (1, 2):
+            src = icra20 / "per-seq" / "odom" / HOME["odom"].format(seq)
+            write(tmp_path, f"res/{suite}/odom/{src.name}", src.read_bytes())
+    md = tmp_path / "t.md"
+    rc, _, _ = compare(capsys, tmp_path / "res", "--markdown", md)
+    rows = [line.split("|")[1].strip() for line in md.read_text().splitlines()[2:] if line.startswith("|")]
+    assert rc == 0 and rows == ["odom (v1)", "odom (v2)"]

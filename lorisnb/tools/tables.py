@@ -45,18 +45,29 @@ def comparison_table(
     cells = c.assign(
         cell=[interval(v, lo, hi, digits) for v, lo, hi in zip(c["value"], c["low"], c["high"], strict=True)]
     )
-    text = cells.pivot_table(index="algorithm", columns="scene", values="cell", aggfunc="first", sort=False)
+    several = "suite" in c.columns and c["suite"].nunique() > 1  # rows per algorithm and suite
+    cells["row"] = _rows(cells, several)
+    text = cells.pivot_table(index="row", columns="scene", values="cell", aggfunc="first", sort=False)
+    text.index.name = "algorithm"
     best = pd.DataFrame(False, index=text.index, columns=text.columns)
     if ranks is not None and len(ranks):
         r = ranks[ranks["metric"] == metric] if "metric" in ranks.columns else ranks
         if r.empty:
             raise ValidationError(f"the ranking is not of {metric}; rank the same metric as the table")
-        separated = r.groupby("scene")["rank"].transform("max") > 1
+        by = [c for c in ("suite", "scene") if c in r.columns]
+        separated = r.groupby(by)["rank"].transform("max") > 1
         top = r[(r["rank"] == 1) & separated]
-        for alg, scene in zip(top["algorithm"], top["scene"], strict=True):
-            if alg in best.index and scene in best.columns:
-                best.loc[alg, scene] = True
+        for row, scene in zip(_rows(top, several), top["scene"], strict=True):
+            if row in best.index and scene in best.columns:
+                best.loc[row, scene] = True
     return text.fillna("n/a"), best
+
+
+def _rows(df: pd.DataFrame, several: bool) -> list[str]:
+    """Row labels: the algorithm, with its suite when the table holds several suites."""
+    if not several or "suite" not in df.columns:
+        return [str(a) for a in df["algorithm"]]
+    return [f"{a} ({s})" if s else str(a) for a, s in zip(df["algorithm"], df["suite"], strict=True)]
 
 
 def caption_of(metric: str, level: float, test: str = "", alpha: float | None = None) -> str:
