@@ -113,7 +113,7 @@ def lost_intervals(lost: object) -> tuple[tuple[float, float], ...]:
         return ()
     if isinstance(lost, (str, bytes)) or not hasattr(lost, "__iter__"):
         raise ValidationError(f"Faults(lost={lost!r}): expected a tuple of (start_s, end_s) pairs; {_LOST_EXAMPLE}")
-    items = list(lost)  # type: ignore[call-overload]
+    items = list(lost)
     if len(items) == 2 and all(isinstance(v, (int, float, np.number)) and not isinstance(v, bool) for v in items):
         a, b = items
         raise ValidationError(
