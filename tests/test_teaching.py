@@ -5,6 +5,7 @@ mistake (issue 26). Fast; needs no data except the last test (a real sequence)."
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from lorisnb.core.simulate import Faults, simulated_errors
@@ -188,3 +189,60 @@ def test_checks_on_cases_from_a_real_sequence():
         teach.check_correct_rate(cr_no_cap, cases["correct_rate"])
     with pytest.raises(AnswerError, match="first pose"):
         teach.check_cs_r(CSR_WRONG[0][0], cases["cs_r"])
+
+
+@pytest.fixture(scope="module")
+def sample():
+    from lorisnb.io.data import sample_data
+
+    return sample_data()
+
+
+def test_lab_checks_compute_their_reference_and_name_the_mistake(sample):
+    """The lab checks whose reference lorisnb computes (so the student version shows no solution):
+    the right answers pass; the typical wrong ones get their hint."""
+    import lorisnb as ln
+    from lorisnb.core.sweep import eps_at_cr
+
+    gt = ln.load_groundtruth("cafe", sample)
+    faults = {1: Faults(position_noise_m=0.05), 2: Faults(wrong_reloc_at_s=0.0, wrong_reloc_offset_m=(4.0, 0.0, 0.0))}
+    life = ln.score(simulated_errors(gt, faults, seqs=[1, 2]), 1.0, 30.0, 1.0, 60.0).set_index("seq").loc[2, "cr"]
+    per = ln.score(simulated_errors(gt, faults, seqs=[1, 2], mode="per-seq"), 1.0, 30.0, 1.0, 60.0)
+    per = per.set_index("seq").loc[2, "cr"]
+    assert life == 0.0 and per > 0.99
+    assert teach.check_alignment_cr(life, per, gt, faults, 2, 1.0, 30.0, 1.0, 60.0)
+    for a, b in ((per, per), (per, life), (life, life)):
+        with pytest.raises(AnswerError, match=r"Hint \(alignment\): per-sequence vs lifelong alignment"):
+            teach.check_alignment_cr(a, b, gt, faults, 2, 1.0, 30.0, 1.0, 60.0)
+
+    ev = ln.evaluate(sorted((sample.icra20 / "per-seq" / "orbslam2_rgbd").glob("cafe*.txt")), data_root=sample)
+    want = eps_at_cr(ev.errors, 0.4, ev.durations(), 30.0, 1.0)["eps"].iloc[0]
+    assert want == pytest.approx(0.6265, abs=1e-3)
+    assert teach.check_eps_at_cr(want, ev.errors, ev.durations(), 0.4, 30.0, 1.0)
+    with pytest.raises(AnswerError, match="you answered 2"):
+        teach.check_eps_at_cr(2.0, ev.errors, ev.durations(), 0.4, 30.0, 1.0)
+
+    row = ev.sequences(eps=1.0, phi=30.0).set_index("seq").loc[1]
+    seq1 = gt.sequences[1]
+    pct = 100 * row["ate_rmse"] / seq1.path_length
+    assert teach.check_ate_percent(pct, row["ate_rmse"], row["c_ate_rmse"], seq1)
+    for wrong, hint in (
+        (pct / 100, "percent"),
+        (100 * row["ate_rmse"] / seq1.extent, "extent vs length"),
+    ):
+        with pytest.raises(AnswerError, match=rf"Hint \({hint}\)"):
+            teach.check_ate_percent(wrong, row["ate_rmse"], row["c_ate_rmse"], seq1)
+
+    lifelong = ln.evaluate(sorted((sample.icra20 / "lifelong").glob("*/cafe*.txt")), data_root=sample)
+    table = lifelong.sequences(eps=1.0, phi=30.0)
+    scenes = ln.aggregate_scenes(table, lifelong.durations())
+    assert teach.check_silent_sequences(2, table, 2)  # infinitam and orbslam2_t265 output nothing in visit 2
+    with pytest.raises(AnswerError, match="you answered 1"):
+        teach.check_silent_sequences(1, table, 2)
+    assert teach.check_best_cr("vins_mono_color_imu_with_loop", scenes)
+    with pytest.raises(AnswerError, match="longest blue bars"):
+        teach.check_best_cr("ds-slam", scenes)
+    # a late starter that tracks well once running: best by CR-T, not by CR
+    toy = pd.DataFrame({"algorithm": ["steady", "late"], "cr": [0.6, 0.4], "cr_t": [0.7, 0.95]})
+    with pytest.raises(AnswerError, match=r"Hint \(cr vs crt\)"):
+        teach.check_best_cr("late", toy)

@@ -1,12 +1,4 @@
-"""Checks that teach: the graders of the labs in ``teaching/``.
-
-Each ``check_*`` function compares a learner's answer (a function they wrote, or a number) with
-lorisnb's own numbers (:mod:`lorisnb.core.metrics`, :func:`lorisnb.core.score`, ...). A right
-answer prints a line starting with ``✓`` and returns True; a wrong one raises
-:class:`~lorisnb.errors.AnswerError` (an ``AssertionError``, so nbgrader and pytest count a failed
-test) saying what is wrong, with the numbers, and, when the answer is what a typical mistake gives,
-a hint naming that mistake (:data:`MISTAKES`): the answer is recomputed with each mistake made on
-purpose and compared.
+"""The formula checks (Eq. 1-4), numbers and choices; re-exported by :mod:`lorisnb.tools.teaching`.
 
 Every formula check runs on small hand-made cases (:data:`CORRECTNESS_CASES`, ...) chosen so that
 each typical mistake gives a different number; the labs' hidden tests pass cases taken from real
@@ -21,9 +13,9 @@ from typing import Any
 
 import numpy as np
 
-from ..core import metrics
-from ..core.model import FileErrors
-from ..errors import AnswerError
+from ...core import metrics
+from ...core.model import FileErrors
+from ...errors import AnswerError
 
 #: The typical mistakes, each with the hint a learner gets when their answer matches it.
 MISTAKES: dict[str, str] = {
