@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND ?= Agg
 
-.PHONY: report test test-fast test-slow test-browser browser-deps lint format evaluate bench clean-venv student grade book
+.PHONY: report test test-fast test-slow test-browser browser-deps lint format evaluate bench clean-venv student grade book slides
 
 $(STAMP): pyproject.toml lorisnb/_version.py
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -70,7 +70,7 @@ $(TEACH_STAMP): $(STAMP) teaching/requirements.txt
 	$(BIN)/python -c "import sysconfig; print('import site; site.addsitedir(%r)' % sysconfig.get_paths()['purelib'])" \
 	  > "$$($(TEACH)/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')/lorisnb-venv.pth"
 	$(TEACH)/bin/python -m pip install -r teaching/requirements.txt
-	$(TEACH)/bin/python -m pip install --no-deps django-static-mathjax==3.2.2.1
+	$(TEACH)/bin/python -m pip install --no-deps django-static-mathjax==3.2.2.1 sphinx-revealjs==3.2.1
 	touch $@
 
 # the student version of every lab (no solutions, no hidden tests) into teaching/release/
@@ -88,3 +88,7 @@ grade: student
 # the offline book of the primer and the labs (Jupyter Book 1 + sphinx-exercise) into build/book/
 book: $(TEACH_STAMP)
 	$(TEACH_ENV) python teaching/book.py build/book
+
+# reveal.js slides of the primer and the labs (executed), reveal.js and MathJax beside them: build/slides/
+slides: $(TEACH_STAMP)
+	$(TEACH_ENV) python teaching/slides.py build/slides

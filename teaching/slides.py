@@ -65,12 +65,13 @@ def main(out: Path) -> int:
         template_name="offline",
         reveal_url_prefix="reveal.js",
         reveal_scroll=True,
+        mathjax_url="mathjax/tex-chtml.js",
     )
     bad = []
     for path in notebooks:
         nb = slide_notebook(path)
         NotebookClient(nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": str(out)}}).execute()
-        html, _ = exporter.from_notebook_node(nb, resources={"mathjax_url": "mathjax/tex-chtml.js"})
+        html, _ = exporter.from_notebook_node(nb)
         page = out / f"{path.stem}.slides.html"
         page.write_text(html)
         bad += [f"{page.name}: {s}" for s in remote_scripts(html)]
