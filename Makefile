@@ -83,6 +83,7 @@ grade: student
 	cd teaching && ls -d submitted/*/ >/dev/null 2>&1 || $(TEACH_ENV) python demo_submissions.py
 	cd teaching && $(TEACH_ENV) nbgrader autograde $(LAB) --create --force
 	cd teaching && $(TEACH_ENV) nbgrader generate_feedback $(LAB) --force
+	cd teaching && $(TEACH_ENV) python offline_feedback.py
 	cd teaching && $(TEACH_ENV) nbgrader export --to grades.csv
 
 # the offline book of the primer and the labs (Jupyter Book 1 + sphinx-exercise) into build/book/
