@@ -90,14 +90,14 @@ def _copy_checkout(dest: Path) -> None:
 
 
 @pytest.mark.slow
-def test_make_student_grade_and_book_on_a_fresh_copy(tmp_path):
+def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path):
     copy = tmp_path / "lorisnb"
     _copy_checkout(copy)
     venv = Path(sys.prefix)
     env = {k: v for k, v in os.environ.items() if k not in ("LORISNB_DATA", "PYTHONPATH")}
     args = [f"VENV={venv}", f"TEACH={ROOT / '.venv-teach'}", "-o", f"{venv}/.installed-stamp"]
     r = subprocess.run(
-        ["make", "-C", str(copy), *args, "student", "grade", "book"],
+        ["make", "-C", str(copy), *args, "student", "grade", "book", "slides"],
         env=env,
         capture_output=True,
         text=True,
@@ -127,6 +127,7 @@ def test_make_student_grade_and_book_on_a_fresh_copy(tmp_path):
         hints = set(re.findall(r"Hint \(([a-z ]+)\)", re.sub(r"<[^>]+>", "", feedback)))
         assert {"delta cap", "cr vs crt", "degrees radians", "first pose", "alignment"} <= hints, hints
         assert (teaching / "feedback" / "demo-correct" / lab / f"{lab}.html").exists()
+        assert "../../mathjax/tex-chtml.js" in feedback and not re.search(r"<script[^>]*src=\"https?:", feedback)
     # the book: every page, exercises with dropdown solutions, executed checks, local MathJax only
     out = copy / "build" / "book"
     assert (out / "index.html").exists() and (out / "metrics_primer.html").exists()
@@ -135,3 +136,10 @@ def test_make_student_grade_and_book_on_a_fresh_copy(tmp_path):
     assert "_static/mathjax/tex-chtml.js" in page and (out / "_static" / "mathjax" / "tex-chtml.js").is_file()
     assert _book_module().remote_scripts(out) == []
     assert list((out / "_images").glob("*.png")), "figures of the executed notebooks"
+    # the slides: one per notebook, reveal.js and MathJax beside them, nothing from the network
+    slides = copy / "build" / "slides"
+    for name in ("metrics_primer", *LABS):
+        html = (slides / f"{name}.slides.html").read_text()
+        assert 'src="reveal.js/dist/reveal.js"' in html and 'src="mathjax/tex-chtml.js"' in html
+        assert not re.search(r"<script[^>]*src=\"(https?:)?//", html) and "<section" in html
+    assert (slides / "reveal.js" / "dist" / "reveal.js").is_file() and (slides / "mathjax" / "tex-chtml.js").is_file()
