@@ -31,6 +31,7 @@ CORRECTNESS_WRONG = [
     (lambda ate_m, aoe_deg, eps, phi: (ate_m <= eps) & (aoe_deg <= np.deg2rad(phi)), "degrees radians"),
     (lambda ate_m, aoe_deg, eps, phi: (ate_m <= eps) & (np.deg2rad(aoe_deg) <= phi), "degrees radians"),
     (lambda ate_m, aoe_deg, eps, phi: ate_m <= eps, "ate only"),
+    (lambda ate_m, aoe_deg, eps, phi: (ate_m <= phi) & (aoe_deg <= eps), "swapped"),
     (lambda ate_m, aoe_deg, eps, phi: aoe_deg <= phi, "aoe only"),
 ]
 
@@ -63,6 +64,11 @@ def cr_counts_every_pose(stamps, correct, t_min, t_max, delta):
 def cr_drops_last_pose(stamps, correct, t_min, t_max, delta):
     held = np.minimum(np.diff(stamps), delta)
     return (held * correct[:-1]).sum() / (t_max - t_min)
+
+
+def cr_last_pose_uncapped(stamps, correct, t_min, t_max, delta):
+    held = list(np.minimum(np.diff(stamps), delta)) + [t_max - stamps[-1]]
+    return float(np.dot(held, correct) / (t_max - t_min))
 
 
 def cr_forgets_return(stamps, correct, t_min, t_max, delta):
@@ -115,6 +121,9 @@ def test_right_answers_pass(check, fn, capsys):
         (teach.check_correct_rate, cr_counts_poses, "share of TIME, not of poses"),
         (teach.check_correct_rate, cr_counts_every_pose, "only correct poses earn time"),
         (teach.check_correct_rate, cr_drops_last_pose, "the last pose holds too"),
+        (teach.check_correct_rate, cr_last_pose_uncapped, "capped at delta like the others"),
+        (teach.check_correct_rate, lambda **kw: 100 * cr_right(**kw), "not percentages"),
+        (teach.check_cs_r, lambda **kw: 100 * csr_right(**kw), "not percentages"),
         (teach.check_correct_rate, cr_forgets_return, "did you forget `return`"),
         (teach.check_correct_rate_tracking, cr_right, "CR-T vs CR"),
         (teach.check_correct_rate, lambda **kw: 1 / 0, "ZeroDivisionError"),
@@ -146,14 +155,24 @@ def test_a_wrong_answer_no_mistake_explains_still_says_what_is_wrong():
 
 @pytest.mark.parametrize(
     "answer, hint",
-    [(0.70, "forgot the delta cap"), (0.50, "CR vs CR-T"), (0.2, None), (..., None), ("about 0.8", None)],
+    [
+        (0.70, "forgot the delta cap"),
+        (0.50, "CR vs CR-T"),
+        (80.5, "not percentages"),
+        (0.2, None),
+        (..., None),
+        ("about 0.8", None),
+    ],
 )
 def test_check_value_names_the_mistake_its_value_matches(answer, hint):
     mistakes = {"delta_cap": 0.70, "cr_vs_crt": 0.50}
     assert teach.check_value("CR", 0.81, 0.80, mistakes=mistakes)
     with pytest.raises(AnswerError) as exc:
-        teach.check_value("CR", answer, 0.80, mistakes=mistakes)
+        teach.check_value("CR", answer, 0.80, mistakes=mistakes, fraction=True)
     assert (hint in str(exc.value)) if hint else "Hint" not in str(exc.value)
+    with pytest.raises(AnswerError) as exc:  # not a rate: no percent hint
+        teach.check_value("eps (m)", 80.5, 0.80)
+    assert "Hint" not in str(exc.value)
     with pytest.raises(ValueError, match="unknown mistake"):
         teach.check_value("CR", 0.8, 0.8, mistakes={"typo": 1.0})
 
@@ -221,6 +240,8 @@ def test_lab_checks_compute_their_reference_and_name_the_mistake(sample):
     assert teach.check_eps_at_cr(want, ev.errors, ev.durations(), 0.4, 30.0, 1.0)
     with pytest.raises(AnswerError, match="you answered 2"):
         teach.check_eps_at_cr(2.0, ev.errors, ev.durations(), 0.4, 30.0, 1.0)
+    with pytest.raises(AnswerError, match=r"Hint \(coarse grid\)"):  # a scan of eps in steps of 0.05 m
+        teach.check_eps_at_cr(0.65, ev.errors, ev.durations(), 0.4, 30.0, 1.0)
 
     row = ev.sequences(eps=1.0, phi=30.0).set_index("seq").loc[1]
     seq1 = gt.sequences[1]

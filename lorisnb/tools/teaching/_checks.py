@@ -21,6 +21,8 @@ from ...errors import AnswerError
 MISTAKES: dict[str, str] = {
     "and_or": "a pose is correct only if BOTH errors are small: (ATE <= eps) AND (AOE <= phi), Eq. (1); "
     "'or' (|) accepts a pose that is right in one error only",
+    "swapped": "eps (metres) bounds the ATE and phi (degrees) the AOE; the two thresholds are swapped",
+    "fraction": "CR, CR-T and CS-R are fractions between 0 and 1, not percentages",
     "ate_only": "the orientation condition is missing: Eq. (1) also needs AOE <= phi",
     "aoe_only": "the position condition is missing: Eq. (1) also needs ATE <= eps",
     "inclusive": "Eq. (1) is inclusive: a pose exactly at the threshold (ATE == eps) is correct; use <=, not <",
@@ -35,7 +37,9 @@ MISTAKES: dict[str, str] = {
     "poses_not_time": "CR is a share of TIME, not of poses: weight each correct pose by the time it holds, "
     "min(t_{k+1} - t_k, delta), and divide by the sequence's duration",
     "wrong_poses_count": "only correct poses earn time: multiply each pose's held time by c_k (0 or 1)",
-    "last_pose": "the last pose holds too: its next time is t_{N+1} = t_max (capped at delta)",
+    "last_pose": "the last pose holds too: its next time is t_{N+1} = t_max, and it is capped at delta like the others",
+    "coarse_grid": "your eps reaches the target but is not the smallest: refine the grid of eps you scanned, "
+    "or use lorisnb.core.sweep.eps_at_cr, which is exact",
     "first_pose": "CS-R is 0 when the first pose is wrong: Eq. (4) multiplies by c(p_0); a system that "
     "re-localizes to a wrong place must not score",
     "tau_inverted": "the exponent is -(t0 - t_min) / tau (Eq. 4): the waiting time over the time factor, not the "
@@ -190,6 +194,7 @@ def check_correctness(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]]
         ("degrees_radians", lambda ate_m, aoe_deg, eps, phi: (ate_m <= eps) & (aoe_deg <= np.radians(phi))),
         ("degrees_radians", lambda ate_m, aoe_deg, eps, phi: (ate_m <= eps) & (np.radians(aoe_deg) <= phi)),
         ("degrees_radians", lambda ate_m, aoe_deg, eps, phi: (ate_m <= eps) & (np.degrees(aoe_deg) <= phi)),
+        ("swapped", lambda ate_m, aoe_deg, eps, phi: (ate_m <= phi) & (aoe_deg <= eps)),
         ("ate_only", lambda ate_m, aoe_deg, eps, phi: ate_m <= eps),
         ("aoe_only", lambda ate_m, aoe_deg, eps, phi: aoe_deg <= phi),
     ]
@@ -236,6 +241,11 @@ def _no_last(stamps: Any, correct: Any, t_min: float, t_max: float, delta: float
     return float(np.sum(np.minimum(np.diff(stamps), delta) * correct[:-1]) / (t_max - t_min))
 
 
+def _last_uncapped(stamps: Any, correct: Any, t_min: float, t_max: float, delta: float) -> float:
+    held = np.append(np.minimum(np.diff(stamps), delta), t_max - stamps[-1])
+    return float(np.sum(held * correct) / (t_max - t_min))
+
+
 def check_correct_rate(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]] = CR_CASES) -> bool:
     """``fn(stamps, correct, t_min, t_max, delta)`` -> CR, Eq. (2), against
     :func:`lorisnb.core.metrics.correct_time` and :func:`~lorisnb.core.metrics.correct_rate`."""
@@ -246,6 +256,8 @@ def check_correct_rate(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]
         ("poses_not_time", lambda stamps, correct, t_min, t_max, delta: float(np.mean(correct))),
         ("wrong_poses_count", lambda stamps, correct, t_min, t_max, delta: _cr(stamps, True, t_min, t_max, delta)),
         ("last_pose", _no_last),
+        ("last_pose", _last_uncapped),
+        ("fraction", lambda stamps, correct, t_min, t_max, delta: 100.0 * _cr(stamps, correct, t_min, t_max, delta)),
     ]
     return _check_function("correct_rate", fn, cases, _cr, variants)
 
@@ -258,6 +270,7 @@ def check_correct_rate_tracking(fn: Callable[..., Any], cases: Sequence[Mapping[
         ("delta_cap", lambda stamps, correct, t_min, t_max, delta: _cr_t(stamps, correct, t_min, t_max, np.inf)),
         ("delta_cap", lambda stamps, correct, t_min, t_max, delta: _cr(stamps, correct, t_min, t_max, np.inf)),
         ("wrong_poses_count", lambda stamps, correct, t_min, t_max, delta: _cr_t(stamps, True, t_min, t_max, delta)),
+        ("fraction", lambda stamps, correct, t_min, t_max, delta: 100.0 * _cr_t(stamps, correct, t_min, t_max, delta)),
     ]
     return _check_function("correct_rate_tracking", fn, cases, _cr_t, variants)
 
@@ -289,6 +302,7 @@ def check_cs_r(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]] = CSR_
         ("tau_sign", lambda t0, t_min, first_correct, tau: float(np.exp((t0 - t_min) / tau) * first_correct)),
         ("linear", lambda t0, t_min, first_correct, tau: float((1 - (t0 - t_min) / tau) * first_correct)),
         ("first_pose", lambda t0, t_min, first_correct, tau: float(np.exp(-np.float64(tau) / (t0 - t_min)))),
+        ("fraction", lambda t0, t_min, first_correct, tau: 100.0 * _csr(t0, t_min, first_correct, tau)),
     ]
     return _check_function("cs_r", fn, cases, _csr, variants)
 
@@ -304,10 +318,12 @@ def check_value(
     tol: float = 0.02,
     mistakes: Mapping[str, float] | None = None,
     source: str = "lorisnb",
+    fraction: bool = False,
 ) -> bool:
     """A number the learner predicted or read off: right when within ``tol`` (absolute) of
     ``expected``; else the message gives both, and a hint when the answer is within ``tol`` of
-    the value a typical mistake gives (``mistakes``: name in :data:`MISTAKES` -> that value)."""
+    the value a typical mistake gives (``mistakes``: name in :data:`MISTAKES` -> that value).
+    ``fraction``: the answer is a rate in [0, 1] (CR, CR-T, CS-R); one given in percent gets a hint."""
     unknown = [m for m in (mistakes or {}) if m not in MISTAKES]
     if unknown:
         raise ValueError(f"unknown mistake(s) {unknown}; known: {', '.join(MISTAKES)}")
@@ -315,6 +331,8 @@ def check_value(
     if abs(v - expected) <= tol:
         return _ok(f"{what}: {v:.4g} (computed by {source}: {expected:.4g})")
     hit = next((m for m, x in (mistakes or {}).items() if abs(v - x) <= tol and abs(x - expected) > tol), None)
+    if hit is None and fraction and abs(v / 100.0 - expected) <= tol and v > 1:
+        hit = "fraction"  # a rate given in percent
     _fail(f"{what}: you answered {v:.4g}; {source} computes {expected:.4g} (tolerance {tol:g})", hit)
     return False  # not reached
 

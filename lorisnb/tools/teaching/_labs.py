@@ -14,6 +14,7 @@ from ...core.scoring import score
 from ...core.simulate import Faults, simulated_errors
 from ...core.sweep import eps_at_cr
 from ...core.trajectory import Trajectory
+from ...errors import AnswerError
 from ._checks import MISTAKES, check_choice, check_value
 
 
@@ -63,6 +64,15 @@ def check_eps_at_cr(
         return float(table["eps"].iloc[0])
 
     want = at(phi, delta)
+    try:
+        v = float(answer)
+    except (TypeError, ValueError):
+        v = np.nan
+    if want + 0.01 < v <= want + 0.2:  # past the step: a grid too coarse to find the smallest eps
+        raise AnswerError(
+            f"✗ smallest eps for a scene CR of {target:g} (m): you answered {v:.4g}; lorisnb computes {want:.4g}"
+            f"\nHint (coarse grid): {MISTAKES['coarse_grid']}"
+        )
     return check_value(f"smallest eps for a scene CR of {target:g} (m)", answer, want, tol=0.01,
                        mistakes=_differs({"phi_ignored": at(np.inf, delta), "delta_cap": at(phi, np.inf)}, want, 0.01))  # fmt: skip
 
