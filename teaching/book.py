@@ -7,8 +7,7 @@ every exercise in a sphinx-exercise ``exercise`` block and its solution in a ``s
 (hidden tests removed). Jupyter Book executes them (on the sample data shipped with lorisnb when no
 data root is found) and writes HTML into ``OUT/``. MathJax 3 is served from the book's own
 ``_static/mathjax/`` (copied from the django-static-mathjax package), never from a CDN, and no
-widget JavaScript is loaded from the network; :func:`remote_scripts` lists any ``<script src>`` that
-is not local (the build fails if there is one).
+widget JavaScript is loaded from the network (the build fails if a page loads a script from it).
 """
 
 from __future__ import annotations
@@ -20,6 +19,7 @@ import sys
 from pathlib import Path
 
 import nbformat
+from offline import mathjax_dir, refuse_remote
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -116,26 +116,6 @@ def book_notebook(source: Path) -> nbformat.NotebookNode:
     return nb
 
 
-def mathjax_dir() -> Path:
-    """MathJax 3's files from the django-static-mathjax package (installed by `make book`)."""
-    import mathjax  # the django-static-mathjax distribution's package
-
-    d = Path(mathjax.__file__).parent / "static" / "mathjax" / "es5"
-    if not (d / "tex-chtml.js").is_file():
-        sys.exit(f"MathJax not found in {d}: install django-static-mathjax (make book does)")
-    return d
-
-
-def remote_scripts(html_dir: Path) -> list[str]:
-    """Every ``<script src=...>`` of the built pages that is not a local file."""
-    bad = []
-    for page in html_dir.rglob("*.html"):
-        for src in re.findall(r"<script[^>]*\ssrc=\"([^\"]+)\"", page.read_text(errors="replace")):
-            if re.match(r"(https?:)?//", src):
-                bad.append(f"{page.relative_to(html_dir)}: {src}")
-    return bad
-
-
 def main(out: Path) -> int:
     src = out.with_name(out.name + "-src")
     if src.exists():
@@ -159,9 +139,7 @@ def main(out: Path) -> int:
         print("the book did not build", file=sys.stderr)
         return 1
     shutil.copytree(html, out)
-    bad = remote_scripts(out)
-    if bad:
-        print("scripts loaded from the network:\n  " + "\n  ".join(bad), file=sys.stderr)
+    if refuse_remote(sorted(out.rglob("*.html"))):
         return 1
     print(f"book: {out / 'index.html'}")
     return 0

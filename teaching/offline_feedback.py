@@ -15,29 +15,26 @@ import shutil
 import sys
 from pathlib import Path
 
+from offline import mathjax_dir, refuse_remote
+
 HERE = Path(__file__).resolve().parent
 CDN = re.compile(r'<script src="https://cdnjs\.cloudflare\.com/ajax/libs/mathjax/[^"]+">\s*</script>')
 CONFIG = '<script>window.MathJax = {tex: {inlineMath: [["$", "$"], ["\\\\(", "\\\\)"]]}};</script>'
 
 
 def main(feedback: Path) -> int:
-    import mathjax
-
     pages = sorted(feedback.rglob("*.html"))
     if not pages:
         return 0
     local = feedback / "mathjax"
     if not local.exists():
-        shutil.copytree(Path(mathjax.__file__).parent / "static" / "mathjax" / "es5", local)
-    left = []
+        shutil.copytree(mathjax_dir(), local)
     for page in pages:
         html = page.read_text()
         src = Path(os.path.relpath(local / "tex-chtml.js", page.parent)).as_posix()
         html = CDN.sub(lambda _m, s=src: f'{CONFIG}\n<script defer src="{s}"></script>', html)
         page.write_text(html)
-        left += [f"{page}: {s}" for s in re.findall(r"<script[^>]*\ssrc=\"((?:https?:)?//[^\"]+)\"", html)]
-    if left:
-        print("scripts still loaded from the network:\n  " + "\n  ".join(left), file=sys.stderr)
+    if refuse_remote(pages):
         return 1
     print(f"{len(pages)} feedback page(s) use the local MathJax in {local}")
     return 0
