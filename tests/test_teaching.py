@@ -32,6 +32,7 @@ CORRECTNESS_WRONG = [
     (lambda ate_m, aoe_deg, eps, phi: (ate_m <= eps) & (np.deg2rad(aoe_deg) <= phi), "degrees radians"),
     (lambda ate_m, aoe_deg, eps, phi: ate_m <= eps, "ate only"),
     (lambda ate_m, aoe_deg, eps, phi: (ate_m <= phi) & (aoe_deg <= eps), "swapped"),
+    (lambda ate_m, aoe_deg, eps, phi: ate_m <= eps and aoe_deg <= phi, "element-wise"),
     (lambda ate_m, aoe_deg, eps, phi: aoe_deg <= phi, "aoe only"),
 ]
 
@@ -173,6 +174,8 @@ def test_check_value_names_the_mistake_its_value_matches(answer, hint):
     with pytest.raises(AnswerError) as exc:  # not a rate: no percent hint
         teach.check_value("eps (m)", 80.5, 0.80)
     assert "Hint" not in str(exc.value)
+    with pytest.raises(AnswerError, match="no answer yet"):
+        teach.check_value("CR", ..., 0.8)
     with pytest.raises(ValueError, match="unknown mistake"):
         teach.check_value("CR", 0.8, 0.8, mistakes={"typo": 1.0})
 

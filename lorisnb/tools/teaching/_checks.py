@@ -21,6 +21,8 @@ from ...errors import AnswerError
 MISTAKES: dict[str, str] = {
     "and_or": "a pose is correct only if BOTH errors are small: (ATE <= eps) AND (AOE <= phi), Eq. (1); "
     "'or' (|) accepts a pose that is right in one error only",
+    "elementwise": "on numpy arrays use & and | (element-wise), not Python's `and` / `or`, and put each "
+    "comparison in parentheses: (ate_m <= eps) & (aoe_deg <= phi)",
     "swapped": "eps (metres) bounds the ATE and phi (degrees) the AOE; the two thresholds are swapped",
     "fraction": "CR, CR-T and CS-R are fractions between 0 and 1, not percentages",
     "ate_only": "the orientation condition is missing: Eq. (1) also needs AOE <= phi",
@@ -71,7 +73,9 @@ def _same(a: Any, b: Any, tol: float) -> bool:
 
 
 def _number(what: str, value: Any) -> float:
-    if isinstance(value, (bool, np.bool_)) or value is None or value is Ellipsis:
+    if value is Ellipsis:
+        _fail(f"{what}: no answer yet (replace the `...` and the `raise NotImplementedError()` with your answer)")
+    if isinstance(value, (bool, np.bool_)) or value is None:
         _fail(f"{what}: expected a number, got {value!r}")
     try:
         v = float(np.asarray(value, float).reshape(()))
@@ -114,7 +118,11 @@ def _check_function(
         except NotImplementedError:
             _fail(f"{what}: not written yet (raise NotImplementedError is still there)")
         except Exception as exc:  # the learner's code failed: say where and with what
-            _fail(f"{what} raised {type(exc).__name__}: {exc} on case {k + 1} ({_describe(case)})")
+            ambiguous = isinstance(exc, ValueError) and "truth value of an array" in str(exc)
+            _fail(
+                f"{what} raised {type(exc).__name__}: {exc} on case {k + 1} ({_describe(case)})",
+                "elementwise" if ambiguous else None,
+            )
         want = reference(**case)
         if boolean:
             got_a = np.asarray(got)
@@ -341,7 +349,7 @@ def check_choice(what: str, answer: Any, expected: Any, why: str) -> bool:
     """A choice (a sequence number, an algorithm name, True/False): right when equal to
     ``expected``; else the message says what to look at (``why``)."""
     if answer is Ellipsis or answer is None:
-        _fail(f"{what}: no answer yet")
+        _fail(f"{what}: no answer yet (replace the `...` and the `raise NotImplementedError()` with your answer)")
     norm = (lambda x: x.strip().lower()) if isinstance(expected, str) and isinstance(answer, str) else (lambda x: x)
     if norm(answer) == norm(expected):
         return _ok(f"{what}: {answer!r}")
