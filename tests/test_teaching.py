@@ -72,6 +72,11 @@ def cr_last_pose_uncapped(stamps, correct, t_min, t_max, delta):
     return float(np.dot(held, correct) / (t_max - t_min))
 
 
+def cr_held_since_previous(stamps, correct, t_min, t_max, delta):
+    gaps = np.diff(stamps, prepend=t_min)
+    return np.where(correct, np.clip(gaps, 0, delta), 0).sum() / (t_max - t_min)
+
+
 def cr_forgets_return(stamps, correct, t_min, t_max, delta):
     (np.minimum(np.diff(np.append(stamps, t_max)), delta) * correct).sum() / (t_max - t_min)
 
@@ -123,6 +128,7 @@ def test_right_answers_pass(check, fn, capsys):
         (teach.check_correct_rate, cr_counts_every_pose, "only correct poses earn time"),
         (teach.check_correct_rate, cr_drops_last_pose, "the last pose holds too"),
         (teach.check_correct_rate, cr_last_pose_uncapped, "capped at delta like the others"),
+        (teach.check_correct_rate, cr_held_since_previous, "holds FORWARD"),
         (teach.check_correct_rate, lambda **kw: 100 * cr_right(**kw), "not percentages"),
         (teach.check_cs_r, lambda **kw: 100 * csr_right(**kw), "not percentages"),
         (teach.check_correct_rate, cr_forgets_return, "did you forget `return`"),

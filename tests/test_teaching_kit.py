@@ -50,6 +50,10 @@ def test_lab_sources_are_clean_and_nbgrader_ready(lab):
     assert len(answers) >= 8 and len(tests) >= 8
     for c in answers:
         assert "### BEGIN SOLUTION" in c.source and "### END SOLUTION" in c.source, _nbgrader(c)["grade_id"]
+        # a student may rewrite the whole answer cell: it defines nothing the later cells need
+        outside = re.sub(r"### BEGIN SOLUTION.*?### END SOLUTION", "", c.source, flags=re.S)
+        for line in outside.splitlines():
+            assert " = " not in line or line.rstrip().endswith("= ..."), f"{_nbgrader(c)['grade_id']}: {line}"
     for c in tests:
         assert _nbgrader(c)["points"] > 0 and "teach.check_" in c.source, _nbgrader(c)["grade_id"]
     # the write-it-yourself exercises have hidden tests on real sequences

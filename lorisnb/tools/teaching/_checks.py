@@ -38,6 +38,9 @@ MISTAKES: dict[str, str] = {
     "dividing by t_max - t_min gives CR (Eq. 2)",
     "poses_not_time": "CR is a share of TIME, not of poses: weight each correct pose by the time it holds, "
     "min(t_{k+1} - t_k, delta), and divide by the sequence's duration",
+    "held_backward": "each pose holds FORWARD, until the next pose: min(t_{k+1} - t_k, delta), not the time since "
+    "the previous pose",
+    "gap_last_pose": "the last pose before the gap still holds for delta seconds into it (Eq. 2)",
     "wrong_poses_count": "only correct poses earn time: multiply each pose's held time by c_k (0 or 1)",
     "last_pose": "the last pose holds too: its next time is t_{N+1} = t_max, and it is capped at delta like the others",
     "coarse_grid": "your eps reaches the target but is not the smallest: refine the grid of eps you scanned, "
@@ -254,6 +257,11 @@ def _last_uncapped(stamps: Any, correct: Any, t_min: float, t_max: float, delta:
     return float(np.sum(held * correct) / (t_max - t_min))
 
 
+def _held_backward(stamps: Any, correct: Any, t_min: float, t_max: float, delta: float) -> float:
+    held = np.minimum(np.diff(np.asarray(stamps, float), prepend=t_min), delta)
+    return float(np.sum(held * correct) / (t_max - t_min))
+
+
 def check_correct_rate(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]] = CR_CASES) -> bool:
     """``fn(stamps, correct, t_min, t_max, delta)`` -> CR, Eq. (2), against
     :func:`lorisnb.core.metrics.correct_time` and :func:`~lorisnb.core.metrics.correct_rate`."""
@@ -265,6 +273,7 @@ def check_correct_rate(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]
         ("wrong_poses_count", lambda stamps, correct, t_min, t_max, delta: _cr(stamps, True, t_min, t_max, delta)),
         ("last_pose", _no_last),
         ("last_pose", _last_uncapped),
+        ("held_backward", _held_backward),
         ("fraction", lambda stamps, correct, t_min, t_max, delta: 100.0 * _cr(stamps, correct, t_min, t_max, delta)),
     ]
     return _check_function("correct_rate", fn, cases, _cr, variants)
