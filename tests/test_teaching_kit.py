@@ -150,3 +150,17 @@ def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path):
         assert 'src="reveal.js/dist/reveal.js"' in html and 'src="mathjax/tex-chtml.js"' in html
         assert not re.search(r"<script[^>]*src=\"(https?:)?//", html) and "<section" in html
     assert (slides / "reveal.js" / "dist" / "reveal.js").is_file() and (slides / "mathjax" / "tex-chtml.js").is_file()
+
+
+def test_sample_data_is_small_and_a_verbatim_subset_of_the_data(data):
+    """The teaching data shipped in the package: every file under 512 KiB, about 1.4 MB in all,
+    each a byte-for-byte copy of the file of the same path in the full data (teaching/make_sample_data.py)."""
+    from lorisnb.io.data import sample_data
+
+    root = sample_data().root
+    files = [p for p in root.rglob("*") if p.is_file() and p != root / "README.md"]  # that one is the sample's own
+    assert 20 <= len(files) and all(p.stat().st_size < 512 * 1024 for p in files)
+    assert 1.0e6 < sum(p.stat().st_size for p in files) < 1.6e6
+    for p in files:
+        assert p.read_bytes() == (data.root / p.relative_to(root)).read_bytes(), p
+    assert sample_data().scenes_with_groundtruth() == ["cafe"]
