@@ -77,6 +77,11 @@ def cr_held_since_previous(stamps, correct, t_min, t_max, delta):
     return np.where(correct, np.clip(gaps, 0, delta), 0).sum() / (t_max - t_min)
 
 
+def cr_over_estimate_span(stamps, correct, t_min, t_max, delta):
+    held = np.minimum(np.diff(np.append(stamps, t_max)), delta)
+    return held @ np.asarray(correct, float) / (stamps[-1] - stamps[0])
+
+
 def cr_forgets_return(stamps, correct, t_min, t_max, delta):
     (np.minimum(np.diff(np.append(stamps, t_max)), delta) * correct).sum() / (t_max - t_min)
 
@@ -96,6 +101,7 @@ CSR_WRONG = [
     (lambda t0, t_min, first_correct, tau: np.exp(-(t0 - t_min) / tau), "first pose"),
     (lambda t0, t_min, first_correct, tau: np.exp((t0 - t_min) / tau) if first_correct else 0.0, "tau sign"),
     (lambda t0, t_min, first_correct, tau: max(0.0, 1 - (t0 - t_min) / tau) * first_correct, "linear"),
+    (lambda t0, t_min, first_correct, tau: np.exp(-(t0 - t_min) * tau) * first_correct, "the waiting time over"),
     (
         lambda t0, t_min, first_correct, tau: np.exp(-tau / np.float64(t0 - t_min)) * first_correct,
         "the waiting time over",
@@ -129,6 +135,7 @@ def test_right_answers_pass(check, fn, capsys):
         (teach.check_correct_rate, cr_drops_last_pose, "the last pose holds too"),
         (teach.check_correct_rate, cr_last_pose_uncapped, "capped at delta like the others"),
         (teach.check_correct_rate, cr_held_since_previous, "holds FORWARD"),
+        (teach.check_correct_rate, cr_over_estimate_span, "ground truth's span"),
         (teach.check_correct_rate, lambda **kw: 100 * cr_right(**kw), "not percentages"),
         (teach.check_cs_r, lambda **kw: 100 * csr_right(**kw), "not percentages"),
         (teach.check_correct_rate, cr_forgets_return, "did you forget `return`"),

@@ -15,7 +15,6 @@ from ._checks import (
     CORRECTNESS_CASES,
     CR_CASES,
     CSR_CASES,
-    MISTAKES,
     cases_from,
     check_choice,
     check_correct_rate,
@@ -25,6 +24,7 @@ from ._checks import (
     check_value,
 )
 from ._labs import check_alignment_cr, check_ate_percent, check_best_cr, check_eps_at_cr, check_silent_sequences
+from ._mistakes import MISTAKES
 
 __all__ = [
     "CORRECTNESS_CASES", "CR_CASES", "CSR_CASES", "MISTAKES", "cases_from", "check_alignment_cr", "check_ate_percent",

@@ -15,7 +15,8 @@ from ...core.simulate import Faults, simulated_errors
 from ...core.sweep import eps_at_cr
 from ...core.trajectory import Trajectory
 from ...errors import AnswerError
-from ._checks import MISTAKES, check_choice, check_value
+from ._checks import check_choice, check_value
+from ._mistakes import MISTAKES
 
 
 def _differs(values: Mapping[str, float], expected: float, tol: float) -> dict[str, float]:
