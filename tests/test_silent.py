@@ -464,11 +464,11 @@ def test_a_real_scheduler_on_loopback_connects():
     ("outputs", "message"),
     [
         (["--csv", "X.csv", "--latex", "X.csv"], "both name"),
-        (["--csv", "X.tex"], "ending in .csv"),
-        (["--csv", "out.txt"], "ending in .csv"),
-        (["--latex", "table.md"], "ending in .tex"),
-        (["--markdown", "table.tex"], "ending in .md"),
-        (["--parquet", "pq"], "--parquet is for evaluate and sweep"),
+        (["--csv", "X.tex"], "expected a .csv file name"),
+        (["--csv", "out.txt"], "expected a .csv file name"),
+        (["--latex", "table.md"], "expected a .tex file name"),
+        (["--markdown", "table.tex"], "expected a .md file name"),
+        (["--parquet", "pq"], "--parquet: not used by lorisnb compare"),
     ],
 )
 def test_outputs_are_refused_before_any_work(data, tmp_path, monkeypatch, capsys, outputs, message):
@@ -492,7 +492,7 @@ def test_folder_and_file_outputs_do_not_overlap(data, tmp_path, monkeypatch, cap
     rc = main(["evaluate", str(d), "--gt", str(data.tum / GT), "--format", "euroc", "--csv", str(d / "table.csv")])
     assert rc == 2 and "lies in the input folder" in _err(capsys)
     assert main(["evaluate", str(data.tum / EST), "--gt", str(data.tum / GT), "--csv", "t.csv.gz"]) == 2
-    assert "ending in .csv" in _err(capsys) and not (tmp_path / "t.csv.gz").exists()
+    assert "expected a .csv file name" in _err(capsys) and not (tmp_path / "t.csv.gz").exists()
 
 
 # --- 12. reprs and any iterable of paths ------------------------------------------------------

@@ -13,7 +13,7 @@ import pandas as pd
 
 from ..core.spec import make_spec
 from ..errors import EvaluationError, LorisError, LorisWarning, ParseError, ValidationError
-from .options import check_outputs, param_value, spec_from_args
+from .options import check_outputs, param_value, refuse_unused, spec_from_args
 
 
 def _executor(args: argparse.Namespace) -> Any:
@@ -99,7 +99,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from ..core.aggregate import aggregate_scenes
     from ..io.writers import write_csv, write_parquet
 
-    check_outputs({"--csv": args.csv, "--parquet": args.parquet}, args.paths, args.force)
+    check_outputs(args, args.paths, ["csv"], folders=("parquet",))
     ev, notes = _run_evaluation(args)
     table = ev.sequences()
     if not table.empty:
@@ -120,7 +120,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         try:
             scenes = aggregate_scenes(table, ev.durations())
             print("\nper scene (CR over all ground-truth time of the scene; C-ATE RMSE weighted by correct poses):")
-            print(_fmt(scenes[["suite", "algorithm", "scene", "sequences", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]))
+            scenes["coverage"] = [
+                f"{k}/{n}" for k, n in zip(scenes["sequences"], scenes["scene_sequences"], strict=True)
+            ]
+            print(_fmt(scenes[["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]))
         except LorisError as exc:
             print(f"warning: no scene aggregate: {exc}", file=sys.stderr)
     if args.csv:
@@ -142,7 +145,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from ..core.sweep import sweep, sweep_scenes
     from ..io.writers import write_csv, write_parquet
 
-    check_outputs({"--csv": args.csv, "--parquet": args.parquet}, args.paths, args.force)
+    check_outputs(args, args.paths, ["csv"], folders=("parquet",))
     ev, notes = _run_evaluation(args)
     keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
     grid = f"{len(args.eps)} eps x {len(args.phi)} phi x {len(args.delta)} delta x {len(args.tau)} tau"
@@ -199,47 +202,55 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    """Scene values with bootstrap intervals, the ranking with ties the data cannot separate,
-    significant pairwise differences; tables as CSV, LaTeX, Markdown."""
-    from ..core import ranking, stats
-    from ..io.writers import write_csv
-    from ..tools.tables import interval, write_comparison
+    """Scene values with bootstrap intervals, the ranking with ties from one permutation test,
+    its significant pairs; tables as CSV, LaTeX, Markdown (see :mod:`lorisnb.tools.comparison`)."""
+    from ..tools.comparison import compare_table, write_outputs
+    from ..tools.tables import check_table_suffix
 
-    if args.parquet:
-        raise ValidationError(
-            "--parquet: compare writes --csv, --latex and --markdown; --parquet is for evaluate and sweep"
-        )
-    check_outputs({"--csv": args.csv, "--latex": args.latex, "--markdown": args.markdown}, args.paths, args.force)
     rpe = [o for o, v in (("--rpe-delta", args.rpe_delta), ("--rpe-unit", args.rpe_unit)) if v is not None]
     if rpe and not args.metric.startswith(("rpe", "c_rpe")):
         raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
+    refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate"})
+    check_outputs(args, args.paths, ["csv", "pairs_csv", "latex", "markdown"])
+    for out in (args.latex, args.markdown):
+        if out:
+            check_table_suffix(out)
     ev, notes = _run_evaluation(args)
     table = ev.sequences()
     if not table.empty:
-        ci = stats.confidence_intervals(table, level=args.level, seed=args.seed)
-        rank = ranking.ranking(table, args.metric, alpha=args.alpha, seed=args.seed)
-        c = ci[ci["metric"] == args.metric].set_index(["suite", "scene", "algorithm"])
-        cells = c.loc[list(zip(rank["suite"], rank["scene"], rank["algorithm"], strict=True))]
-        rank["value [CI]"] = [
-            interval(v, lo, hi, digits=3) for v, lo, hi in zip(cells["value"], cells["low"], cells["high"], strict=True)
-        ]
-        n_trials = table.groupby(["algorithm", "scene"])["trial"].nunique().max()
-        units = ", ".join(sorted(set(ci["unit"])))
-        print(f"{args.metric} per algorithm and scene, {args.level:.0%} bootstrap intervals over {units} "
-              f"(up to {n_trials} trial(s)); rank = 1 + algorithms significantly better (Wilcoxon, Holm, "
-              f"alpha {args.alpha}):")  # fmt: skip
-        with pd.option_context("display.max_colwidth", 50):
-            print(_fmt(rank[["suite", "scene", "algorithm", "value [CI]", "rank", "tied_with"]]))
-        pairs = stats.pairwise(table, args.metric, alpha=args.alpha, seed=args.seed)
-        sig = pairs[pairs["significant"]]
-        print(f"\n{len(sig)} of {len(pairs)} pairs differ significantly" + (":" if len(sig) else "."))
-        if len(sig):
-            print(_fmt(sig[["scene", "a", "b", "value_a", "value_b", "p_a_better", "p_holm"]]))
-        if args.csv:
-            print(f"wrote {write_csv(ci, args.csv, args.force)}", file=sys.stderr)
-        for out in (args.latex, args.markdown):
-            if out:
-                print(f"wrote {write_comparison(ci, args.metric, out, args.force)}", file=sys.stderr)
+        res = compare_table(table, ev.durations(), args.metric, level=args.level, alpha=args.alpha,
+                            seed=args.seed, power_delta=args.power)  # fmt: skip
+        notes += res.notes
+        sp = ev.spec
+        print(f"thresholds: eps {sp.eps}, phi {sp.phi:g} deg, delta {sp.delta:g} s, tau {sp.tau:g} s")
+        print(res.header)
+        with pd.option_context("display.max_colwidth", 60):
+            print(
+                _fmt(
+                    res.algorithms[
+                        [
+                            "suite",
+                            "scene",
+                            "algorithm",
+                            "value [CI]",
+                            "covered",
+                            "rank",
+                            "vs top [test interval]",
+                            "tied_with",
+                        ]
+                    ]
+                )
+            )
+        print("\n" + res.summary)
+        if len(res.significant):
+            print(_fmt(res.significant[["scene", "a", "b", "value_a", "value_b", "difference", "p", "p_holm"]]))
+        if res.power is not None:
+            print(f"\nruns needed to detect a difference of {args.power} in {args.metric} (power 0.8, alpha "
+                  f"{args.alpha}) where no difference was found:")  # fmt: skip
+            print(_fmt(res.power[["scene", "a", "b", "unit", "have", "needed"]]))
+        for path in write_outputs(res, args.metric, args.csv, args.pairs_csv, args.latex, args.markdown, args.force,
+                                  args.alpha):  # fmt: skip
+            print(f"wrote {path}", file=sys.stderr)
     _report_problems(ev, notes)
     return ev.exit_status()
 
@@ -247,7 +258,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 def cmd_crosscheck(args: argparse.Namespace) -> int:
     from ..io.writers import write_csv
 
-    check_outputs({"--csv": args.csv}, [args.gt, args.est], args.force)
+    check_outputs(args, [args.gt, args.est], ["csv"])
     try:
         table = _crosscheck_table(args)
     except (ParseError, EvaluationError) as exc:  # an input that cannot be read or compared: 1, as every command
@@ -348,3 +359,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         )
     print(f"report: {run_dir / 'index.html'}")
     return 1 if any(r.status == "failed" or r.input_errors for r in runs) else 0
+
+
+#: The helpers other command modules (:mod:`lorisnb.cli.runs`) share with these commands.
+run_evaluation, report_problems, fmt_table = _run_evaluation, _report_problems, _fmt

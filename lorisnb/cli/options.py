@@ -230,43 +230,47 @@ def check_output(out: str | None, inputs: list[str], force: bool, folder: bool =
         raise OutputError(f"cannot write {out}: {parent} is not writable; choose another place")
 
 
-#: The file name each output option needs (any case); ``None``: a folder (a Parquet dataset).
-OUTPUT_SUFFIXES: dict[str, tuple[str, ...] | None] = {
-    "--csv": (".csv",),
-    "--latex": (".tex",),
-    "--markdown": (".md",),
-    "--parquet": None,
+#: The file name each output option needs (any case), by its argparse name.
+OUTPUT_SUFFIXES: dict[str, tuple[str, ...]] = {
+    "csv": (".csv",),
+    "pairs_csv": (".csv",),
+    "latex": (".tex",),
+    "markdown": (".md",),
 }
 
 
-def check_outputs(outputs: dict[str, str | None], inputs: list[str], force: bool) -> None:
-    """Every output of a command checked together, before any work, so that a refused run leaves
-    nothing behind: each as :func:`check_output`, with the suffix its option writes
-    (:data:`OUTPUT_SUFFIXES`), no two outputs on one path, and no file inside a folder output.
-    ``outputs`` maps each option (``"--csv"``) to its value (None: not given)."""
-    given = {opt: out for opt, out in outputs.items() if out is not None}
+def check_outputs(args: argparse.Namespace, inputs: list[str], files: list[str], folders: tuple[str, ...] = ()) -> None:
+    """Every output of a command checked together, first, so that a refused run leaves nothing
+    behind: ``files`` and ``folders`` are the command's output options (argparse names, read from
+    ``args``); no two of them may name one place, each gets :func:`check_output` (an input, a
+    folder, an existing file without ``--force``, a place that cannot be written), a file option
+    the suffix it writes (:data:`OUTPUT_SUFFIXES`), a folder option a folder name, and no file may
+    lie inside a folder output."""
+
+    def opt(k: str) -> str:
+        return "--" + k.replace("_", "-")
+
+    given = [(k, str(getattr(args, k)), k in folders) for k in [*files, *folders] if getattr(args, k, None) is not None]
     seen: dict[Path, str] = {}
-    for opt, out in given.items():
+    for k, out, _ in given:
         target = Path(out).resolve()
         if target in seen:
-            raise OutputError(f"{seen[target]} and {opt} both name {out}; give each output its own path")
-        seen[target] = opt
-    for opt, out in given.items():
-        folder = OUTPUT_SUFFIXES.get(opt, ()) is None
-        check_output(out, inputs, force, folder=folder, option=opt)
-        suffixes = OUTPUT_SUFFIXES.get(opt)
+            raise OutputError(f"{seen[target]} and {opt(k)} both name {out}; give each output its own file or folder")
+        seen[target] = opt(k)
+    for k, out, folder in given:
+        check_output(out, inputs, args.force, folder=folder, option=opt(k))
         name = Path(out).name.lower()
-        if suffixes and not name.endswith(suffixes):
-            raise OutputError(f"{opt} {out}: expected a file name ending in {' or '.join(suffixes)}")
+        suffixes = OUTPUT_SUFFIXES.get(k)
+        if not folder and suffixes and not name.endswith(suffixes):
+            raise OutputError(f"{opt(k)} {out}: expected a {' or '.join(suffixes)} file name for what {opt(k)} writes")
         if folder and name.endswith((".csv", ".tex", ".md", ".txt")):
-            raise OutputError(f"{opt} {out}: expected a folder name (a Parquet dataset), not a file name")
-    for opt, out in given.items():
-        if OUTPUT_SUFFIXES.get(opt, ()) is None:
-            inside = [o for o, p in given.items() if Path(out).resolve() in Path(p).resolve().parents]
-            if inside:
-                raise OutputError(
-                    f"{inside[0]} {given[inside[0]]} lies inside the {opt} folder {out}; write it elsewhere"
-                )
+            raise OutputError(f"{opt(k)} {out}: expected a folder name, not a file name")
+    for k, out, folder in given:
+        inside = [(o, p) for o, p, f in given if not f and Path(out).resolve() in Path(p).resolve().parents]
+        if folder and inside:
+            raise OutputError(
+                f"{opt(inside[0][0])} {inside[0][1]} lies inside the {opt(k)} folder {out}; write it elsewhere"
+            )
 
 
 def param_value(text: str) -> Any:
@@ -278,3 +282,73 @@ def param_value(text: str) -> Any:
         return json.loads(text)
     except ValueError:
         return text
+
+
+def probability_type(name: str) -> Callable[[str], Any]:
+    """A probability strictly between 0 and 1 (``--level``, ``--alpha``)."""
+
+    def check(text: str) -> float:
+        v = validate.positive(name, text, "a probability")
+        if not v < 1:
+            raise ValidationError(f"{name}={text}: expected a probability between 0 and 1")
+        return v
+
+    return arg_type(check)
+
+
+def add_compare_options(p: argparse.ArgumentParser) -> None:
+    """``compare``'s own options: the metric, the interval level, the test's alpha, the bootstrap
+    seed, the power question and the tables."""
+    p.add_argument("--metric", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"], default="cr",
+                   help="the metric of the ranking, pairwise tests and tables (default cr)")  # fmt: skip
+    p.add_argument("--level", type=probability_type("--level"), default=0.95,
+                   help="confidence level of the intervals (default 0.95)")  # fmt: skip
+    p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
+                   help="significance level of the pairwise permutation test, after Holm's correction (default 0.05)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap and of sampled relabellings (default 0)")
+    p.add_argument("--power", default=None, metavar="DELTA",
+                   type=arg_type(lambda t: validate.positive("--power", t, "the metric's unit")),
+                   help="for pairs not found different: the sequences or trials needed to detect a difference "
+                   "DELTA of the metric (power 0.8)")  # fmt: skip
+    p.add_argument("--pairs-csv", default=None, metavar="OUT",
+                   help="write the pairwise test (p, min_p, Holm, effect sizes) to this CSV")  # fmt: skip
+    p.add_argument("--latex", default=None, metavar="OUT", help="write the comparison table as LaTeX (booktabs, .tex)")
+    p.add_argument("--markdown", default=None, metavar="OUT", help="write the comparison table as Markdown (.md)")
+
+
+def add_diff_options(p: argparse.ArgumentParser) -> None:
+    """``diff``'s own options: tolerances, the test's alpha, the seed and the verdict files."""
+    from ..core.regression import DEFAULT_TOLERANCES
+
+    defaults = ",".join(f"{k}={v}" for k, v in DEFAULT_TOLERANCES.items())
+    p.add_argument("--tolerance", default=None, metavar="M=V,...",
+                   help="how much worse a metric may get before it is a regression: an amount in the metric's unit "
+                   f"or a percentage of the base value (defaults: {defaults.replace('%', '%%')})")  # fmt: skip
+    p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
+                   help="significance level of the permutation test across trials (default 0.05)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of sampled relabellings (default 0)")
+    p.add_argument("--json", default=None, metavar="OUT", help="write the verdict as JSON")
+    p.add_argument(
+        "--junit", default=None, metavar="OUT", help="write the verdict as JUnit XML (one test per sequence)"
+    )
+
+
+def add_history_options(p: argparse.ArgumentParser) -> None:
+    """``history``'s options: the runs, the metrics, tolerances and the outputs."""
+    p.add_argument("runs", nargs="+", metavar="RUN",
+                   help="report run folders (run.json + tables) or per-sequence CSV/Parquet tables")  # fmt: skip
+    p.add_argument("--metric", nargs="+", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"],
+                   default=["cr", "cr_t", "cs_r", "c_ate_rmse"], help="scene metrics to follow (default: all four)")  # fmt: skip
+    p.add_argument("--tolerance", default=None, metavar="M=V,...",
+                   help="how much a value may move before it counts as a change (as diff's --tolerance)")  # fmt: skip
+    p.add_argument("--csv", default=None, metavar="OUT", help="write the history table to this CSV")
+    p.add_argument("--out", default=None, metavar="DIR", help="write one figure per metric (PNG, SVG) into DIR")
+    p.add_argument("--force", action="store_true", help="overwrite OUT / files in DIR")
+
+
+def refuse_unused(args: argparse.Namespace, unused: dict[str, str]) -> None:
+    """Options a command shares with ``evaluate`` but cannot apply: refused, naming what to use."""
+    given = [(k, use) for k, use in unused.items() if getattr(args, k, None)]
+    if given:
+        k, use = given[0]
+        raise ValidationError(f"--{k.replace('_', '-')}: not used by lorisnb {args.command}; use {use}")

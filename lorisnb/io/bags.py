@@ -57,8 +57,10 @@ def read_bag(path: str | os.PathLike, topic: str | None = None, tf: str | None =
     missing or wrong."""
     spath = str(path)
     if topic is not None and tf is None and evo_tf(topic) is not None:  # evo gives TF chains as a "topic"
-        topic, tf = None, evo_tf(topic)
-    tf = evo_tf(tf) or tf if tf is not None else None
+        tf = evo_tf(topic)
+        topic = None
+    if tf is not None:
+        tf = evo_tf(tf) or tf
     p = Path(path)
     if p.suffix in (".db3", ".mcap") and p.parent.is_dir():
         p = p.parent  # a ROS 2 bag is read from its folder
