@@ -207,3 +207,38 @@ def test_random_trajectories_all_units():
             m.process_data((r, e))
             ours = rpe_relation(gt.positions, gt.quaternions, est.positions, est.quaternions, i, j, "full")
             np.testing.assert_allclose(ours, m.error, rtol=0, atol=TOL)
+
+
+def test_statistics_columns_of_the_sequence_table(evo_pairs):
+    from lorisnb.core import score
+    from lorisnb.core.conventions import Conventions
+    from lorisnb.core.model import STAT_COLUMNS
+    from lorisnb.core.pairs import session_errors
+
+    ref, est, gt, es = evo_pairs["fr1_xyz"]
+    f = session_errors({1: gt}, {1: es}, Conventions.preset("tum"))
+    row = score(f, eps=0.02, phi=2.0, rpe_delta=1, rpe_unit="f").iloc[0]
+    assert set(STAT_COLUMNS) <= set(row.index)
+    e = f.sequences[0]
+    # evo's statistics of the same per-pose errors (evo's APE on the aligned poses lorisnb scored)
+    r = to_evo(Trajectory(e.stamps, e.gt_positions, e.gt_quaternions))
+    x = to_evo(Trajectory(e.stamps, e.est_positions, e.est_quaternions))
+    for name, rel in (("ate", em.PoseRelation.translation_part), ("aoe", em.PoseRelation.rotation_angle_deg)):
+        m = em.APE(rel)
+        m.process_data((r, x))
+        stats = m.get_all_statistics()
+        assert row[f"{name}_rmse"] == pytest.approx(stats["rmse"], rel=TOL)
+        for k in ("mean", "median", "std", "min", "max", "sse"):
+            assert row[f"{name}_{k}"] == pytest.approx(stats[k], rel=TOL), (name, k)
+    m = em.RPE(em.PoseRelation.translation_part, 1, em.Unit.frames, all_pairs=True)
+    m.process_data((r, x))
+    for k, v in m.get_all_statistics().items():
+        assert row[f"rpe_trans_{k}"] == pytest.approx(v, rel=TOL), k
+    ok = (e.ate <= 0.02) & (e.aoe <= 2.0)
+    assert 0 < ok.sum() < len(ok)
+    for k, v in error_statistics(e.ate[ok]).items():
+        assert row[f"c_ate_{k}"] == pytest.approx(v, rel=1e-12), k
+    i, j, tr, _ = e.rpe(1, "f")
+    both = ok[i] & ok[j]
+    for k, v in error_statistics(tr[both]).items():
+        assert row[f"c_rpe_trans_{k}"] == pytest.approx(v, rel=1e-12), k

@@ -36,6 +36,13 @@ EXTRA_COLUMNS = [
     "t0", "track_time", "first_correct", "rpe_trans_rmse", "rpe_rot_rmse", "c_rpe_trans_rmse",
     "c_rpe_rot_rmse", "rpe_pairs", "c_rpe_pairs", "official_interpolation", "trial",
 ]  # fmt: skip
+#: Error statistics of the per-sequence table (:func:`lorisnb.core.scoring.score`), after
+#: :data:`EXTRA_COLUMNS`: evo's statistics (``rmse`` is in the columns above) of ATE (m), AOE (deg)
+#: and RPE translation (m) and rotation (deg), and of the same over correct poses (pairs) only.
+STAT_COLUMNS = [
+    f"{c}{m}_{s}" for c in ("", "c_") for m in ("ate", "aoe", "rpe_trans", "rpe_rot")
+    for s in ("mean", "median", "std", "min", "max", "sse")
+]  # fmt: skip
 #: Columns of the per-scene table (:func:`lorisnb.core.aggregate.aggregate_scenes`).
 SCENE_COLUMNS = [
     "suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "sequences", "scene_sequences", "matched",

@@ -15,6 +15,7 @@ sse (sum of squares), evo's ``get_all_statistics``.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
@@ -110,3 +111,33 @@ def error_statistics(values: np.ndarray, mask: np.ndarray | None = None) -> dict
         rmse=math.sqrt(np.mean(sq)), mean=float(np.mean(v)), median=float(np.median(v)), std=float(np.std(v)),
         min=float(np.min(v)), max=float(np.max(v)), sse=float(np.sum(sq)),
     )  # fmt: skip
+
+
+def masked_statistics(values: np.ndarray, mask: np.ndarray) -> dict[str, np.ndarray]:
+    """:func:`error_statistics` (without rmse) of ``values`` (M,) over each row of a boolean
+    ``mask`` (..., M) at once (a threshold grid's correct poses): arrays shaped ``mask.shape[:-1]``,
+    NaN where a row selects nothing."""
+    v = np.asarray(values, float)
+    m = np.asarray(mask, bool)
+    shape = m.shape[:-1]
+    rows = np.ascontiguousarray(m.reshape(-1, v.size))
+
+    def row_sums(x: np.ndarray) -> np.ndarray:  # contiguous rows: each row summed alike, whatever the grid
+        return np.ascontiguousarray(np.where(rows, x, 0.0)).sum(axis=1).reshape(shape)
+
+    n = rows.sum(axis=1).reshape(shape)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.where(n > 0, row_sums(np.broadcast_to(v, rows.shape)) / n, np.nan)
+        dev = v[None, :] - mean.reshape(-1, 1)
+        std = np.where(n > 0, np.sqrt(row_sums(dev * dev) / n), np.nan)
+        sse = np.where(n > 0, row_sums(np.broadcast_to(v * v, rows.shape)), np.nan)
+        lo = np.where(n > 0, np.where(m, v, np.inf).min(axis=-1, initial=np.inf), np.nan)
+        hi = np.where(n > 0, np.where(m, v, -np.inf).max(axis=-1, initial=-np.inf), np.nan)
+        if m.shape[-1]:
+            filled = np.where(m, v, np.nan)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # rows with no value: NaN, said above
+                median = np.nanmedian(filled, axis=-1)
+        else:
+            median = np.full(m.shape[:-1], np.nan)
+    return dict(mean=mean, median=median, std=std, min=lo, max=hi, sse=sse)

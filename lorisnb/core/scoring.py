@@ -21,11 +21,13 @@ from .model import (
     EXTRA_COLUMNS,
     POSE_COLUMNS,
     SEQUENCE_COLUMNS,
+    STAT_COLUMNS,
     Eps,
     FileErrors,
     SequenceErrors,
     sequence_eps,
 )
+from .relations import error_statistics, masked_statistics
 from .validate import choice, eps_value, positive, threshold
 
 #: Metrics computed by :func:`sequence_grid`, with their dtype in tables.
@@ -35,6 +37,7 @@ GRID_METRICS: dict[str, type] = {
     "track_time": float, "first_correct": bool, "rpe_trans_rmse": float, "rpe_rot_rmse": float,
     "c_rpe_trans_rmse": float, "c_rpe_rot_rmse": float, "rpe_pairs": int, "c_rpe_pairs": int,
 }  # fmt: skip
+GRID_METRICS.update(dict.fromkeys(STAT_COLUMNS, float))
 RPE_METRICS = ("rpe_trans_rmse", "rpe_rot_rmse", "c_rpe_trans_rmse", "c_rpe_rot_rmse", "rpe_pairs", "c_rpe_pairs")
 
 
@@ -74,6 +77,7 @@ def sequence_grid(
     rpe_delta: float = 1.0,
     rpe_unit: str = "s",
     with_rpe: bool = True,
+    with_stats: bool = False,
 ) -> dict[str, np.ndarray]:
     """Every metric of one sequence over a grid, as arrays of shape (E, P, D, T).
 
@@ -84,6 +88,8 @@ def sequence_grid(
         tau: (T,) re-localization time factors, seconds (Eq. 4).
         rpe_delta, rpe_unit: the RPE step (see :func:`lorisnb.core.metrics.rpe_pairs`).
         with_rpe: also the RPE columns (their pairs are computed once per sequence and kept).
+        with_stats: also :data:`~lorisnb.core.model.STAT_COLUMNS` (needs ``with_rpe``): evo's
+            statistics of ATE, AOE and RPE, and of the same over correct poses (pairs) only.
 
     A sequence with no matched pose has CR = CR-T = CS-R = 0, no ATE (NaN), 0 correct poses and
     an infinite re-localization time.
@@ -103,6 +109,8 @@ def sequence_grid(
         )  # fmt: skip
         if with_rpe:
             out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)
+        if with_stats:
+            out.update(dict.fromkeys(STAT_COLUMNS, nan))
         return out
     # correctness of every pose at every (eps, phi), Eq. (1): (E, P, M)
     c = (e.ate[None, None, :] <= eps_a[:, None, None]) & (e.aoe[None, None, :] <= phi_a[None, :, None])
@@ -131,6 +139,17 @@ def sequence_grid(
         return out
     # RPE: pairs fixed per sequence; C-RPE over the pairs whose two poses are correct
     i, j, tr, rr = e.rpe(rpe_delta, rpe_unit)
+    if with_stats:
+        both_ep = c[:, :, i] & c[:, :, j]
+        for prefix, grid_mask, pair_mask in (("", None, None), ("c_", c, both_ep)):
+            for name, values, m in (("ate", e.ate, grid_mask), ("aoe", e.aoe, grid_mask), ("rpe_trans", tr, pair_mask),
+                                    ("rpe_rot", rr, pair_mask)):  # fmt: skip
+                if m is None:
+                    stats = error_statistics(values)
+                    out.update({f"{name}_{k}": bc(v) for k, v in stats.items() if k != "rmse"})
+                else:
+                    ms = masked_statistics(values, m)
+                    out.update({f"{prefix}{name}_{k}": bc(v[:, :, None, None]) for k, v in ms.items()})
     if len(i) == 0:
         out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)
         return out
@@ -172,8 +191,8 @@ def score(
         tau: re-localization time factor, seconds (Eq. 4). Default 60 s.
         rpe_delta, rpe_unit: the RPE step (see :func:`lorisnb.core.metrics.rpe_pairs`).
 
-    Columns: :data:`~lorisnb.core.model.SEQUENCE_COLUMNS` then
-    :data:`~lorisnb.core.model.EXTRA_COLUMNS`. Each row is :func:`sequence_grid` on a one-point
+    Columns: :data:`~lorisnb.core.model.SEQUENCE_COLUMNS`, then
+    :data:`~lorisnb.core.model.EXTRA_COLUMNS` and :data:`~lorisnb.core.model.STAT_COLUMNS`. Each row is :func:`sequence_grid` on a one-point
     grid.
     """
     files = as_files(errors)
@@ -184,11 +203,13 @@ def score(
     for f in files:  # one iteration per file and sequence, never per pose
         for e in f.sequences:
             e_scene = sequence_eps(eps_v, f.scene, e)
-            grid = sequence_grid(e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u)
+            grid = sequence_grid(
+                e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u, with_stats=True
+            )
             row = sequence_meta(f, e) | dict(eps=e_scene, phi=phi_v, delta=delta_v, tau=tau_v)
             row.update({k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in grid.items()})
             rows.append(row)
-    return pd.DataFrame(rows, columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS)
+    return pd.DataFrame(rows, columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS)
 
 
 def pose_table(errors: FileErrors | Iterable[FileErrors], eps: Eps = np.inf, phi: float = np.inf) -> pd.DataFrame:

@@ -19,7 +19,7 @@ from ..errors import ValidationError
 from . import metrics
 from .aggregate import aggregate_scenes
 from .frames import PAPER_EPS, PAPER_PHI
-from .model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, FileErrors, SequenceErrors, sequence_eps
+from .model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, STAT_COLUMNS, FileErrors, SequenceErrors, sequence_eps
 from .scoring import GRID_METRICS, as_files, rpe_setting, sequence_grid, sequence_meta
 from .trajectory import extent, path_length
 from .validate import choice, threshold, threshold_list
@@ -41,7 +41,7 @@ def sweep_bytes(files: list[FileErrors], shape: tuple[int, int, int, int], colum
     E, P, D, T = shape
     n_seq = sum(len(f.sequences) for f in files)
     longest = max((e.matched for f in files for e in f.sequences), default=0)
-    ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
+    ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
     return max(n_seq * E * P * D * T * ncol * 8.0, E * P * longest * 9.0 + E * P * D * T * len(GRID_METRICS) * 8.0)
 
 
@@ -53,7 +53,7 @@ def check_sweep_size(
     E, P, D, T = shape
     n_seq = sum(len(f.sequences) for f in files)
     longest = max((e.matched for f in files for e in f.sequences), default=0)
-    ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
+    ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
     rows = n_seq * E * P * D * T
     need = sweep_bytes(files, shape, columns)
     if need > max_bytes:
@@ -135,11 +135,21 @@ def sweep(
         for e in f.sequences:
             eps_m = _eps_values(eps_l, f.scene, e, relative_to)
             blocks.append(
-                sequence_grid(e, eps_m, phi_a, delta_a, tau_a, rpe_delta=rpe_d, rpe_unit=rpe_u, with_rpe=with_rpe)
+                sequence_grid(
+                    e,
+                    eps_m,
+                    phi_a,
+                    delta_a,
+                    tau_a,
+                    rpe_delta=rpe_d,
+                    rpe_unit=rpe_u,
+                    with_rpe=with_rpe,
+                    with_stats=with_rpe,
+                )  # fmt: skip
             )
             blocks[-1]["eps"] = np.broadcast_to(eps_m[:, None, None, None], (E, P, D, T))
             seq_meta.append(sequence_meta(f, e))
-    cols = SEQUENCE_COLUMNS + EXTRA_COLUMNS + ["eps_value"] if columns == "all" else METRIC_COLUMNS
+    cols = SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS + ["eps_value"] if columns == "all" else METRIC_COLUMNS
     if not blocks:
         return pd.DataFrame(columns=cols)
     S = len(blocks)
