@@ -222,6 +222,9 @@ class FileErrors:
     #: first and last stamp (seconds) of every sequence of the scene's ground truth, all of them and
     #: not only those of this file: what the scene's CR is taken over (empty when not known)
     groundtruth_spans: dict[int, tuple[float, float]] = field(default_factory=dict)
+    #: path length (metres) of every sequence's whole ground truth as read, before association:
+    #: what rpg's relative error takes its sub-trajectory lengths from (empty when not known)
+    groundtruth_lengths: dict[int, float] = field(default_factory=dict)
 
 
 def is_monocular(algorithm: str) -> bool:
