@@ -242,3 +242,42 @@ def test_statistics_columns_of_the_sequence_table(evo_pairs):
     both = ok[i] & ok[j]
     for k, v in error_statistics(tr[both]).items():
         assert row[f"c_rpe_trans_{k}"] == pytest.approx(v, rel=1e-12), k
+
+
+@pytest.mark.parametrize(
+    "delta, unit, pairs, all_pairs",
+    [(1, "frames", "estimate", False), (0.3, "m", "estimate", False), (0.3, "m", "reference", True),
+     (5.0, "deg", "estimate", False), (2, "f", "reference", True)],
+)  # fmt: skip
+def test_score_rpe_options_equal_evo_rpe(evo_pairs, delta, unit, pairs, all_pairs):
+    from lorisnb.core import score
+    from lorisnb.core.conventions import Conventions
+    from lorisnb.core.pairs import session_errors
+
+    _, _, gt, es = evo_pairs["fr1_xyz"]
+    f = session_errors({1: gt}, {1: es}, Conventions.preset("tum"))
+    row = score(f, rpe_delta=delta, rpe_unit=unit, rpe_pairs=pairs, rpe_all_pairs=all_pairs).iloc[0]
+    e = f.sequences[0]
+    r = to_evo(Trajectory(e.stamps, e.gt_positions, e.gt_quaternions))
+    x = to_evo(Trajectory(e.stamps, e.est_positions, e.est_quaternions))
+    evo_unit = EVO_UNIT["frames" if unit == "f" else unit]
+    for name, rel in (("rpe_trans", em.PoseRelation.translation_part), ("rpe_rot", em.PoseRelation.rotation_angle_deg)):
+        m = em.RPE(rel, delta, evo_unit, 0.1, all_pairs, pairs == "reference")
+        m.process_data((r, x))
+        assert row["rpe_pairs"] == len(m.error)
+        for k, v in m.get_all_statistics().items():
+            assert row[f"{name}_{k}"] == pytest.approx(v, rel=TOL, abs=1e-12), (name, k)
+
+
+def test_lorisnb_rpe_rule_unchanged_by_default(evo_pairs):
+    from lorisnb.core import metrics
+
+    _, _, gt, es = evo_pairs["fr1_xyz"]
+    from lorisnb.core.conventions import Conventions
+    from lorisnb.core.pairs import session_errors
+
+    e = session_errors({1: gt}, {1: es}, Conventions.preset("tum")).sequences[0]
+    for delta, unit in ((1.0, "s"), (0.5, "m"), (3, "f")):
+        i, j, _, _ = e.rpe(delta, unit)
+        i0, j0 = metrics.rpe_pairs(e.stamps, e.gt_positions, delta, unit)
+        assert i.tolist() == i0.tolist() and j.tolist() == j0.tolist()

@@ -19,6 +19,7 @@ from ..errors import ParseError, ValidationError
 from . import metrics
 from .frames import FRAMES, PAPER_EPS, SCENES, match_scene
 from .geometry import Sim3, rotations_of
+from .rpe import rpe_indices
 from .trajectory import Trajectory, extent
 
 if TYPE_CHECKING:
@@ -156,7 +157,9 @@ class SequenceErrors:
     gt_start: float
     gt_end: float
     scale: float = 1.0
-    _rpe_cache: dict[tuple[float, str], tuple[np.ndarray, ...]] = field(default_factory=dict, repr=False, compare=False)
+    _rpe_cache: dict[tuple[float, str, str, bool | None, float], tuple[np.ndarray, ...]] = field(
+        default_factory=dict, repr=False, compare=False
+    )
 
     @classmethod
     def unmatched(cls, seq: int, poses: int, gt_start: float, gt_end: float) -> SequenceErrors:
@@ -181,16 +184,28 @@ class SequenceErrors:
         """:attr:`gt_quaternions` as a scipy ``Rotation`` (built on request)."""
         return rotations_of(self.gt_quaternions)
 
-    def rpe(self, delta: float = 1.0, unit: str = "s") -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Relative pose error pairs (i, j) and errors (metres, degrees) over ``delta`` in ``unit``
-        (see :func:`lorisnb.core.metrics.rpe_pairs`); computed once per setting and kept."""
-        key = (float(delta), unit)
+    def rpe(
+        self,
+        delta: float = 1.0,
+        unit: str = "s",
+        pairs: str = "reference",
+        all_pairs: bool | None = None,
+        tolerance: float = 0.1,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Relative pose error pairs (i, j) and errors (metres, degrees) over ``delta`` in ``unit``,
+        pairs taken along the ``reference`` or the ``estimate``, by lorisnb's rule
+        (``all_pairs=None``) or evo's (see :func:`lorisnb.core.rpe.rpe_indices`); computed once per
+        setting and kept."""
+        key = (float(delta), unit, pairs, all_pairs, float(tolerance))
         if key not in self._rpe_cache:
             if self.matched < 2 or self.gt_quaternions is None or self.est_quaternions is None:
                 z = np.zeros(0, int)
                 self._rpe_cache[key] = (z, z, np.zeros(0), np.zeros(0))
             else:
-                i, j = metrics.rpe_pairs(self.stamps, self.gt_positions, delta, unit)
+                i, j = rpe_indices(
+                    self.stamps, self.gt_positions, self.gt_quaternions, self.est_positions, self.est_quaternions,
+                    delta, unit, pairs, all_pairs, tolerance,
+                )  # fmt: skip
                 tr, rr = metrics.rpe(
                     self.gt_positions, self.gt_quaternions, self.est_positions, self.est_quaternions, i, j,
                     assume_unit=True,

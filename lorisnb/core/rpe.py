@@ -20,13 +20,51 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ValidationError
+from . import metrics
 from .evo_sync import accumulated_distances, rotation_angles
 from .geometry import quat_normalize
 
 RPE_UNITS = ("frames", "m", "deg", "rad", "s")
+#: lorisnb's own rules (``all_pairs=None``): every start, along the reference (see :func:`rpe_indices`).
 RPE_PAIRS = ("estimate", "reference")
 RPE_TOLERANCE = 0.1  # evo's --delta_tol
 _ALIASES = {"f": "frames", "d": "deg", "r": "rad"}
+
+
+def rpe_indices(
+    stamps: np.ndarray,
+    gt_positions: np.ndarray,
+    gt_quaternions: np.ndarray | None,
+    est_positions: np.ndarray,
+    est_quaternions: np.ndarray | None,
+    delta: float,
+    unit: str = "s",
+    pairs: str = "reference",
+    all_pairs: bool | None = None,
+    tolerance: float = RPE_TOLERANCE,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The RPE pairs of matched poses under every rule.
+
+    ``all_pairs=None`` is lorisnb's own rule (its default, unchanged): every start pose, for ``s``
+    the pose closest to ``t_i + delta`` (TUM), ``frames`` ``i + delta``, ``m`` the first pose at
+    least ``delta`` metres further along the reference (:func:`lorisnb.core.metrics.rpe_pairs`);
+    ``deg`` / ``rad`` take evo's all pairs. ``True`` / ``False`` are evo's all pairs (within
+    ``tolerance``) / consecutive pairs (:func:`evo_rpe_pairs`; ``s``: lorisnb's seconds rule, with
+    consecutive pairs chained). ``pairs``: measure ``m``/``deg``/``rad`` along the ``reference`` or
+    the ``estimate`` (the aligned poses, as evo)."""
+    unit = rpe_unit(unit)
+    if pairs not in RPE_PAIRS:
+        raise ValidationError(f"RPE pairs along {pairs!r}: expected one of {', '.join(RPE_PAIRS)}")
+    if unit == "s":
+        return metrics.rpe_pairs(stamps, gt_positions, delta, "s", all_pairs=all_pairs is not False)
+    pos, quat = (gt_positions, gt_quaternions) if pairs == "reference" else (est_positions, est_quaternions)
+    if all_pairs is None:
+        if unit == "frames":
+            return metrics.rpe_pairs(stamps, pos, delta, "f", all_pairs=True)
+        if unit == "m":
+            return metrics.rpe_pairs(stamps, pos, delta, "m", all_pairs=True)
+        all_pairs = True
+    return evo_rpe_pairs(pos, quat, delta, unit, all_pairs, tolerance)
 
 
 def rpe_unit(unit: str) -> str:

@@ -28,6 +28,7 @@ from .model import (
     sequence_eps,
 )
 from .relations import error_statistics, masked_statistics
+from .rpe import RPE_PAIRS, RPE_UNITS
 from .validate import choice, eps_value, positive, threshold
 
 #: Metrics computed by :func:`sequence_grid`, with their dtype in tables.
@@ -78,6 +79,9 @@ def sequence_grid(
     rpe_unit: str = "s",
     with_rpe: bool = True,
     with_stats: bool = False,
+    rpe_pairs: str = "reference",
+    rpe_all_pairs: bool | None = None,
+    rpe_tolerance: float = 0.1,
 ) -> dict[str, np.ndarray]:
     """Every metric of one sequence over a grid, as arrays of shape (E, P, D, T).
 
@@ -86,7 +90,8 @@ def sequence_grid(
         eps: (E,) ATE thresholds in metres (already resolved for this sequence's scene).
         phi: (P,) AOE thresholds, degrees. delta: (D,) validity windows, seconds (Eq. 2).
         tau: (T,) re-localization time factors, seconds (Eq. 4).
-        rpe_delta, rpe_unit: the RPE step (see :func:`lorisnb.core.metrics.rpe_pairs`).
+        rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance: the RPE pairs (see
+            :func:`lorisnb.core.rpe.rpe_indices`).
         with_rpe: also the RPE columns (their pairs are computed once per sequence and kept).
         with_stats: also :data:`~lorisnb.core.model.STAT_COLUMNS` (needs ``with_rpe``): evo's
             statistics of ATE, AOE and RPE, and of the same over correct poses (pairs) only.
@@ -138,7 +143,7 @@ def sequence_grid(
     if not with_rpe:
         return out
     # RPE: pairs fixed per sequence; C-RPE over the pairs whose two poses are correct
-    i, j, tr, rr = e.rpe(rpe_delta, rpe_unit)
+    i, j, tr, rr = e.rpe(rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance)
     if with_stats:
         both_ep = c[:, :, i] & c[:, :, j]
         for prefix, grid_mask, pair_mask in (("", None, None), ("c_", c, both_ep)):
@@ -167,10 +172,21 @@ def sequence_grid(
 
 
 def rpe_setting(rpe_delta: Any, rpe_unit: Any) -> tuple[float, str]:
-    """Validated RPE step: a positive delta in ``s`` (seconds), ``f`` (frames, whole) or ``m`` (metres)."""
-    unit = choice("rpe_unit", rpe_unit, metrics.RPE_UNITS)
-    names = {"s": "seconds", "f": "frames", "m": "metres"}
-    return positive("rpe_delta", rpe_delta, names[unit], integer=unit == "f"), unit
+    """Validated RPE step: a positive delta in ``s`` (seconds), ``f`` or ``frames`` (whole),
+    ``m`` (metres), ``deg`` or ``rad`` (rotation)."""
+    unit = choice("rpe_unit", rpe_unit, ("f", *RPE_UNITS))
+    names = {"s": "seconds", "f": "frames", "frames": "frames", "m": "metres", "deg": "degrees", "rad": "radians"}
+    return positive("rpe_delta", rpe_delta, names[unit], integer=unit in ("f", "frames")), unit
+
+
+def rpe_options(rpe_pairs: Any, rpe_all_pairs: Any, rpe_tolerance: Any) -> tuple[str, bool | None, float]:
+    """Validated RPE pair options: along ``reference`` or ``estimate``; all pairs True / False
+    (evo's rules) or None (lorisnb's); a positive relative tolerance."""
+    pairs = choice("rpe_pairs", rpe_pairs, RPE_PAIRS)
+    if rpe_all_pairs is not None and not isinstance(rpe_all_pairs, (bool, np.bool_)):
+        raise ValidationError(f"rpe_all_pairs: expected True, False or None, got {rpe_all_pairs!r}")
+    tol = positive("rpe_tolerance", rpe_tolerance, "(a fraction of delta)")
+    return pairs, None if rpe_all_pairs is None else bool(rpe_all_pairs), tol
 
 
 def score(
@@ -181,6 +197,9 @@ def score(
     tau: float = 60.0,
     rpe_delta: float = 1.0,
     rpe_unit: str = "s",
+    rpe_pairs: str = "reference",
+    rpe_all_pairs: bool | None = None,
+    rpe_tolerance: float = 0.1,
 ) -> pd.DataFrame:
     """One row per sequence: every metric of the paper at one threshold setting.
 
@@ -189,7 +208,8 @@ def score(
         phi: AOE threshold, degrees. Default infinity.
         delta: validity window of a pose, seconds (Eq. 2). Default 1 s.
         tau: re-localization time factor, seconds (Eq. 4). Default 60 s.
-        rpe_delta, rpe_unit: the RPE step (see :func:`lorisnb.core.metrics.rpe_pairs`).
+        rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance: the RPE pairs (see
+            :func:`lorisnb.core.rpe.rpe_indices`; defaults: lorisnb's own rule over 1 s).
 
     Columns: :data:`~lorisnb.core.model.SEQUENCE_COLUMNS`, then
     :data:`~lorisnb.core.model.EXTRA_COLUMNS` and :data:`~lorisnb.core.model.STAT_COLUMNS`. Each row is :func:`sequence_grid` on a one-point
@@ -199,13 +219,15 @@ def score(
     eps_v = eps_value(eps)
     phi_v, delta_v, tau_v = threshold("phi", phi), threshold("delta", delta), threshold("tau", tau)
     rpe_d, rpe_u = rpe_setting(rpe_delta, rpe_unit)
+    rpe_p, rpe_a, rpe_t = rpe_options(rpe_pairs, rpe_all_pairs, rpe_tolerance)
     rows = []
     for f in files:  # one iteration per file and sequence, never per pose
         for e in f.sequences:
             e_scene = sequence_eps(eps_v, f.scene, e)
             grid = sequence_grid(
-                e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u, with_stats=True
-            )
+                e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u, with_stats=True,
+                rpe_pairs=rpe_p, rpe_all_pairs=rpe_a, rpe_tolerance=rpe_t,
+            )  # fmt: skip
             row = sequence_meta(f, e) | dict(eps=e_scene, phi=phi_v, delta=delta_v, tau=tau_v)
             row.update({k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in grid.items()})
             rows.append(row)

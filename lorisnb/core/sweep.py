@@ -20,7 +20,7 @@ from . import metrics
 from .aggregate import aggregate_scenes
 from .frames import PAPER_EPS, PAPER_PHI
 from .model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, STAT_COLUMNS, FileErrors, SequenceErrors, sequence_eps
-from .scoring import GRID_METRICS, as_files, rpe_setting, sequence_grid, sequence_meta
+from .scoring import GRID_METRICS, as_files, rpe_options, rpe_setting, sequence_grid, sequence_meta
 from .trajectory import extent, path_length
 from .validate import choice, threshold, threshold_list
 
@@ -100,6 +100,9 @@ def sweep(
     rpe_unit: str = "s",
     columns: str = "metrics",
     max_bytes: float = MAX_SWEEP_BYTES,
+    rpe_pairs: str = "reference",
+    rpe_all_pairs: bool | None = None,
+    rpe_tolerance: float = 0.1,
 ) -> pd.DataFrame:
     """One row per sequence and per combination of thresholds. With ``columns="all"`` the columns
     are those of :func:`lorisnb.core.scoring.score` (a row equals ``score`` at that setting, RPE
@@ -126,6 +129,7 @@ def sweep(
     delta_a = np.array(threshold_list("delta", delta))
     tau_a = np.array(threshold_list("tau", tau))
     rpe_d, rpe_u = rpe_setting(rpe_delta, rpe_unit)
+    rpe_p, rpe_a, rpe_t = rpe_options(rpe_pairs, rpe_all_pairs, rpe_tolerance)
     E, P, D, T = len(eps_l), len(phi_a), len(delta_a), len(tau_a)
     n_set = E * P * D * T
     check_sweep_size(files, (E, P, D, T), columns, max_bytes)
@@ -145,6 +149,9 @@ def sweep(
                     rpe_unit=rpe_u,
                     with_rpe=with_rpe,
                     with_stats=with_rpe,
+                    rpe_pairs=rpe_p,
+                    rpe_all_pairs=rpe_a,
+                    rpe_tolerance=rpe_t,
                 )  # fmt: skip
             )
             blocks[-1]["eps"] = np.broadcast_to(eps_m[:, None, None, None], (E, P, D, T))
