@@ -171,3 +171,23 @@ def test_evo_result_zips_become_table_rows(data, tmp_path):
     bad.write_text("no zip")
     with pytest.raises(ParseError, match="evo --save_results"):
         read_evo_result(bad)
+
+
+def test_crosscheck_reading_shows_where_and_why(data, tmp_path):
+    from lorisnb.tools.crosscheck_reading import crosscheck_reading
+
+    t = crosscheck_reading(data.tum / "fr2_desk_groundtruth.txt").set_index("quantity")
+    assert not t.loc["poses", "agrees"] and "repeated" in t.loc["poses", "note"]
+    assert t.loc["poses", "evo"] - t.loc["poses", "lorisnb"] == 1
+    assert t.loc[["poses (repeated kept)", "stamps", "positions", "orientations"], "agrees"].all()
+    k = tmp_path / "poses.txt"
+    tr = _traj(50, 6)
+    mats = np.concatenate([tr.rotations().as_matrix(), tr.positions[:, :, None]], axis=2).reshape(-1, 12)
+    k.write_text("\n".join(" ".join(f"{v:.6e}" for v in m) for m in mats) + "\n")
+    kt = crosscheck_reading(k, "kitti").set_index("quantity")
+    assert 1e-8 < kt.loc["rotation block", "lorisnb"] < 1e-5 and kt.loc["rotation block", "agrees"]
+    folder = _two_topic_mcap(tmp_path / "bag", _traj(30, 1), _traj(20, 2))
+    lone = tmp_path / "lone.mcap"
+    shutil.copy(next(folder.glob("*.mcap")), lone)
+    b = crosscheck_reading(lone, "bag", "/est")
+    assert b["agrees"].all() and b["n_pairs"].iloc[0] == 20
