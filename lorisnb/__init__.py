@@ -12,6 +12,7 @@ from .core import (
     PAPER_PHI,
     SCENES,
     Conventions,
+    EvalSpec,
     FileErrors,
     OpenLorisFile,
     ResultFile,
@@ -19,6 +20,8 @@ from .core import (
     Trajectory,
     aggregate_scenes,
     compute_errors,
+    evaluate_sessions,
+    make_spec,
     pose_table,
     score,
     sequence_errors,
@@ -57,4 +60,5 @@ __all__ = [
     "compute_errors", "evaluate", "find_data", "load_groundtruth", "pose_table", "read_euroc", "read_kitti",
     "read_openloris", "read_ordslam", "read_trajectory", "read_tum", "score", "sequence_errors", "setup", "sweep",
     "write_openloris", "Conventions", "session_errors", "evaluate_pairs", "evaluate_manifest", "read_manifest",
+    "EvalSpec", "make_spec", "evaluate_sessions",
 ]  # fmt: skip

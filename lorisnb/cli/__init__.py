@@ -32,12 +32,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("evaluate", help="score result files: ATE, AOE, CR, CR-T, CS-R, C-ATE, RPE")
     add_evaluation_options(p)
-    add_threshold_options(p, eps=np.inf, phi=np.inf)
+    add_threshold_options(p)
     p.set_defaults(func=cmd_evaluate)
 
     p = sub.add_parser("compare", help="compare algorithms over trials and sequences: intervals, tests, ranking")
     add_evaluation_options(p)
-    add_threshold_options(p, eps="paper", phi=30.0)
+    add_threshold_options(p)
     p.add_argument("--metric", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"], default="cr",
                    help="the metric of the ranking, pairwise tests and tables (default cr)")  # fmt: skip
     p.add_argument("--level", type=arg_type(lambda t: validate.positive("--level", t, "a probability")), default=0.95,

@@ -11,94 +11,69 @@ from typing import Any
 
 import pandas as pd
 
-from ..core.association import MAX_GAP
+from ..core.spec import make_spec
 from ..errors import LorisError, LorisWarning, ValidationError
-from .options import check_output, conventions_of, param_value
+from .options import check_output, param_value, spec_from_args
+
+
+def _executor(args: argparse.Namespace) -> Any:
+    """A Dask cluster's executor for ``--scheduler ADDRESS`` (None without it)."""
+    if not getattr(args, "scheduler", None):
+        return None
+    from ..tools import require
+
+    try:
+        client = require("distributed").Client(args.scheduler, timeout=10)
+    except (OSError, TimeoutError) as exc:
+        raise LorisError(f"--scheduler {args.scheduler}: cannot reach the Dask scheduler ({exc})") from None
+    return client.get_executor()
 
 
 def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
-    from ..tools.evaluate import evaluate
-
-    if getattr(args, "gt", None) or getattr(args, "manifest", None):
-        return _run_pairs(args)
-    pair_only = [
-        f"--{k.replace('_', '-')}"
-        for k in ("format", "gt_format", "conventions", "association", "max_diff", "t_offset", "align", "align_frames",
-                  "topic", "gt_topic", "tf", "gt_tf", "gt_times", "est_times", "scene")
-        if getattr(args, k, None) is not None
-    ]  # fmt: skip
-    if pair_only:
-        raise ValidationError(
-            f"{', '.join(pair_only)}: for estimates scored against --gt or a --manifest; OpenLORIS result files "
-            "use the official conventions (choose --max-gap, --scale, --per-seq or --lifelong)"
-        )
-
-    executor = None
-    if args.scheduler:
-        from ..tools import require
-
-        try:
-            client = require("distributed").Client(args.scheduler, timeout=10)
-        except (OSError, TimeoutError) as exc:
-            raise LorisError(f"--scheduler {args.scheduler}: cannot reach the Dask scheduler ({exc})") from None
-        executor = client.get_executor()
-
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", LorisWarning)
-        ev = evaluate(
-            args.paths,
-            mode=args.mode,
-            scale=args.scale,
-            official_interpolation=args.official_interpolation,
-            remove_repeated=not args.keep_repeated,
-            data_root=args.data,
-            repair_stamps=args.repair_stamps,
-            max_gap=args.max_gap if getattr(args, "max_gap", None) is not None else MAX_GAP,
-            trials_by=args.trials_by,
-            jobs=args.jobs,
-            executor=executor,
-            progress=not args.no_progress,
-        )
-    notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))
-    return ev, notes
-
-
-def _run_pairs(args: argparse.Namespace) -> tuple[Any, list[str]]:
-    """``--gt`` (plain pairs) or ``--manifest`` (sessions): lorisnb.tools.pairs."""
+    """Every input kind through one spec (:func:`spec_from_args`) and one runner: OpenLORIS result
+    files, ``--gt`` pairs or a ``--manifest``'s sessions. Prints the ``conventions:`` line."""
     from ..io.manifest import read_manifest
-    from ..tools.pairs import evaluate_manifest, evaluate_pairs
+    from ..tools.evaluate import evaluate, evaluate_manifest, evaluate_pairs
 
     if args.gt and args.manifest:
         raise ValidationError("--gt and --manifest: give one (a manifest names the ground truth of each session)")
+    manifest = read_manifest(args.manifest) if args.manifest else None
+    if manifest is not None and manifest.openloris:
+        if args.conventions:
+            raise ValidationError(
+                "--conventions: OpenLORIS result files are scored with the official conventions "
+                "(choose --max-gap, --scale, --per-seq or --lifelong instead)"
+            )
+        manifest = None
+    reading = ["format", "gt_format", "topic", "gt_topic", "tf", "gt_tf", "gt_times", "est_times", "scene"]
+    if not args.gt:
+        given = [f"--{k.replace('_', '-')}" for k in reading if getattr(args, k, None) is not None]
+        if given:
+            raise ValidationError(
+                f"{', '.join(given)}: for estimates scored against --gt (a manifest names its formats); "
+                "OpenLORIS result files name their scene and frame in their header"
+            )
+    spec = spec_from_args(args, manifest.spec if manifest is not None else None)
+    kw: dict[str, Any] = dict(trials_by=args.trials_by, progress=not args.no_progress, jobs=args.jobs,
+                              executor=_executor(args))  # fmt: skip
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
         if args.gt:
+            spec.refuse_inapplicable("pair", surface="cli")
             ev = evaluate_pairs(
-                args.paths, args.gt, fmt=args.format or "tum", gt_fmt=args.gt_format,
-                conventions=conventions_of(args), scene=args.scene, est_times=args.est_times,
-                gt_times=args.gt_times, topic=args.topic, gt_topic=args.gt_topic, tf=args.tf, gt_tf=args.gt_tf,
-                trials_by=args.trials_by, progress=not args.no_progress,
+                args.paths, args.gt, spec, fmt=args.format or "tum", gt_fmt=args.gt_format, scene=args.scene,
+                est_times=args.est_times, gt_times=args.gt_times, topic=args.topic, gt_topic=args.gt_topic,
+                tf=args.tf, gt_tf=args.gt_tf, **kw,
             )  # fmt: skip
+        elif manifest is not None:
+            spec.refuse_inapplicable("manifest", surface="cli")
+            ev = evaluate_manifest(manifest, args.paths, spec, **kw)
         else:
-            m = read_manifest(args.manifest)
-            if m.openloris:
-                return _run_evaluation(argparse.Namespace(**{**vars(args), "manifest": None}))
-            lifelong = None if args.mode == "auto" else args.mode == "lifelong"
-            ev = evaluate_manifest(
-                m, args.paths, conventions=conventions_of(args, m.conventions), lifelong=lifelong,
-                trials_by=args.trials_by, progress=not args.no_progress,
-            )  # fmt: skip
-    notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))
+            spec.refuse_inapplicable("openloris", surface="cli")
+            ev = evaluate(args.paths, spec, data_root=args.data, **kw)
+    notes = list(dict.fromkeys(ev.notes + ev.warnings + [str(w.message) for w in caught]))
     print(f"conventions: {ev.conventions}", file=sys.stderr)
     return ev, notes
-
-
-def _thresholds(args: argparse.Namespace, ev: Any) -> tuple[Any, Any]:
-    """--eps and --phi as given, else the manifest's, else the command's defaults."""
-    defaults = getattr(ev, "thresholds", {}) or {}
-    eps = args.eps if args.eps is not None else defaults.get("eps", args.eps_default)
-    phi = args.phi if args.phi is not None else defaults.get("phi", args.phi_default)
-    return eps, phi
 
 
 def _report_problems(ev: Any, notes: list[str]) -> None:
@@ -118,14 +93,12 @@ def _fmt(df: pd.DataFrame) -> str:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from ..core.aggregate import aggregate_scenes
-    from ..core.scoring import score
     from ..io.writers import write_csv, write_parquet
 
     check_output(args.csv, args.paths, args.force)
     check_output(args.parquet, args.paths, args.force, folder=True)
     ev, notes = _run_evaluation(args)
-    eps, phi = _thresholds(args, ev)
-    table = score(ev.errors, eps, phi, args.delta, args.tau)
+    table = ev.sequences()
     if not table.empty:
         cols = [
             "algorithm",
@@ -184,11 +157,14 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             scene_rows += len(scenes)
             if sum(map(len, shown)) < 60:
                 shown.append(scenes.head(60))
-            return part if keep_label else part.drop(columns=["eps_value"])
+            part = part if keep_label else part.drop(columns=["eps_value"])
+            part["spec"] = ev.spec.canonical(thresholds=False)
+            return part
 
         path, rows = sweep_to_parquet(
             ev.errors, args.parquet, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
-            force=args.force, progress=not args.no_progress, on_part=summarize,
+            force=args.force, progress=not args.no_progress, on_part=summarize, rpe_delta=ev.spec.rpe_delta,
+            rpe_unit=ev.spec.rpe_unit,
         )  # fmt: skip
         print(f"{rows} rows: {len(ev.errors)} file(s) x {grid}")
         if shown:
@@ -198,7 +174,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         print(f"wrote {rows} rows to {path}", file=sys.stderr)
         _report_problems(ev, notes)
         return 1 if ev.failures else 0
-    table = sweep(ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all")
+    table = sweep(
+        ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all",
+        rpe_delta=ev.spec.rpe_delta, rpe_unit=ev.spec.rpe_unit,
+    )  # fmt: skip
+    table["spec"] = ev.spec.canonical(thresholds=False)
     print(f"{len(table)} rows: {len(ev.errors)} file(s) x {grid}")
     if not table.empty:
         scenes = sweep_scenes(table, ev.durations())
@@ -225,8 +205,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     for out in (args.csv, args.latex, args.markdown):
         check_output(out, args.paths, args.force)
     ev, notes = _run_evaluation(args)
-    eps, phi = _thresholds(args, ev)
-    table = ev.sequences(eps, phi, args.delta, args.tau)
+    table = ev.sequences()
     if not table.empty:
         ci = stats.confidence_intervals(table, level=args.level, seed=args.seed)
         rank = ranking.ranking(table, args.metric, alpha=args.alpha, seed=args.seed)
@@ -269,7 +248,12 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     if args.format == "openloris":
         gt_file = read_openloris(args.gt) if args.gt not in ("-", "auto") else None
         table = crosscheck_openloris(
-            args.est, args.seq, scale=args.scale, data_root=args.data, groundtruth=gt_file, rpe_deltas=deltas
+            args.est,
+            args.seq,
+            scale=False if args.scale is None else args.scale,
+            data_root=args.data,
+            groundtruth=gt_file,
+            rpe_deltas=deltas,
         )
     else:
         gt_times, est_times = args.gt_times or args.times, args.est_times or args.times
@@ -281,9 +265,9 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
             )
         gt = read_trajectory(args.gt, gt_format, stamps=gt_times if gt_format == "kitti" else None)
         est = read_trajectory(args.est, est_format, stamps=est_times if est_format == "kitti" else None)
-        table = crosscheck(
-            gt, est, scale=bool(args.scale), by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs
-        )
+        spec = make_spec(None, surface="cli", **({} if args.scale is None else {"scale": args.scale}))
+        with_scale = spec.alignment_for(Path(args.est).stem) == "sim3"
+        table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs)
     from ..tools import require
 
     evo_version = require("evo").__version__

@@ -7,12 +7,11 @@ import argparse
 import json
 import os
 from collections.abc import Callable
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from ..core import validate
-from ..core.conventions import ALIGNMENTS, ASSOCIATIONS, Conventions
+from ..core.spec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, make_spec
 from ..errors import OutputError, ValidationError
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import BUILT_IN
@@ -41,19 +40,22 @@ def threshold_list_type(name: str) -> Callable[[str], Any]:
 
 def add_scale_option(p: argparse.ArgumentParser, help: str) -> None:
     """``--scale [auto|on|off|...]``: the words of :func:`lorisnb.core.validate.scale_value`."""
-    p.add_argument("--scale", nargs="?", const=True, default=False, type=arg_type(validate.scale_value), help=help)
+    p.add_argument("--scale", nargs="?", const=True, default=None, type=arg_type(validate.scale_value), help=help)
 
 
-def add_threshold_options(p: argparse.ArgumentParser, eps: Any, phi: Any) -> None:
-    """``--eps --phi --delta --tau``, one value each (``evaluate``, ``compare``)."""
+def add_threshold_options(p: argparse.ArgumentParser) -> None:
+    """``--eps --phi --delta --tau``, one value each (``evaluate``, ``compare``); default: the
+    spec's (the preset's, or a manifest's), the same for every command."""
+    d = PRESETS["openloris"]
     p.add_argument("--eps", type=threshold_type("eps"), default=None,
-                   help=f"ATE threshold in metres, 'inf', 'paper' (1/3/5 m by scene) or 'relative:F'; default {eps} "
-                   "(a manifest's eps, with --manifest)")  # fmt: skip
+                   help=f"ATE threshold in metres, 'inf', 'paper' (1/3/5 m by scene) or 'relative:F'; default "
+                   f"{d.eps} (a manifest's eps, with --manifest)")  # fmt: skip
     p.add_argument("--phi", type=threshold_type("phi"), default=None,
-                   help=f"AOE threshold in degrees; default {phi} (a manifest's phi, with --manifest)")  # fmt: skip
-    p.set_defaults(eps_default=eps, phi_default=phi)
-    p.add_argument("--delta", type=threshold_type("delta"), default=1.0, help="validity window of a pose, s; default 1")
-    p.add_argument("--tau", type=threshold_type("tau"), default=60.0, help="re-localization time factor, s; default 60")
+                   help=f"AOE threshold in degrees; default {d.phi} (a manifest's phi, with --manifest)")  # fmt: skip
+    p.add_argument("--delta", type=threshold_type("delta"), default=None,
+                   help=f"validity window of a pose, s; default {d.delta:g}")  # fmt: skip
+    p.add_argument("--tau", type=threshold_type("tau"), default=None,
+                   help=f"re-localization time factor, s; default {d.tau:g}")  # fmt: skip
 
 
 def add_input_options(p: argparse.ArgumentParser) -> None:
@@ -66,8 +68,9 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--manifest", default=None, metavar="NAME_OR_TOML",
                    help=f"a multi-session manifest (built in: {', '.join(BUILT_IN)}); the inputs are folders of estimates")  # fmt: skip
     g.add_argument("--scene", default=None, help="scene label of a pair's rows (default: the ground truth's file name)")
-    g.add_argument("--conventions", default=None, choices=["openloris", "tum", "rpg", "vio"],
-                   help="preset conventions (tum: evaluate_ate.py; rpg: rpg_trajectory_evaluation; vio: posyaw)")  # fmt: skip
+    g.add_argument("--conventions", default=None, choices=list(PRESETS),
+                   help="a preset of the evaluation spec (openloris: the official tool; tum: evaluate_ate.py; "
+                   "rpg: rpg_trajectory_evaluation; vio: posyaw)")  # fmt: skip
     g.add_argument("--association", default=None, choices=ASSOCIATIONS, help="interpolate (default) or nearest")
     g.add_argument("--max-gap", default=None, type=arg_type(lambda t: validate.positive("--max-gap", t, "seconds")),
                    help="interpolation bracket, seconds (default 0.5)")  # fmt: skip
@@ -75,7 +78,8 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
                    help="nearest association: largest stamp difference, seconds (default 0.02)")  # fmt: skip
     g.add_argument("--t-offset", default=None, type=arg_type(lambda t: validate.finite("--t-offset", t, "seconds")),
                    help="seconds added to every estimate stamp (a known clock offset)")  # fmt: skip
-    g.add_argument("--align", default=None, choices=ALIGNMENTS, help="se3 (default), sim3, posyaw or none")
+    g.add_argument("--align", default=None, choices=ALIGNMENTS,
+                   help="se3 (default), sim3, posyaw, none, or auto (sim3 for monocular algorithms: dso, svo)")  # fmt: skip
     g.add_argument("--align-frames", default=None, metavar="N",
                    type=arg_type(lambda t: int(validate.positive("--align-frames", t, "poses", integer=True))),
                    help="fit the alignment on the first N matched poses only")  # fmt: skip
@@ -89,18 +93,39 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--est-times", default=None, metavar="FILE", help="KITTI: the estimates' times file")
 
 
-def conventions_of(args: argparse.Namespace, base: Conventions | None = None) -> Conventions | None:
-    """The conventions the options ask for (a preset, then single options over it); None if none."""
-    changes = {
-        k: getattr(args, k)
-        for k in ("association", "max_gap", "max_diff", "t_offset", "align", "align_frames")
-        if getattr(args, k, None) is not None
+#: Command-line options that are values of the evaluation spec (dest -> spec name).
+SPEC_OPTIONS = {
+    "association": "association", "max_gap": "max_gap", "max_diff": "max_diff", "t_offset": "t_offset",
+    "align": "align", "align_frames": "align_frames", "scale": "scale", "mode": "mode",
+    "official_interpolation": "official_interpolation", "repair_stamps": "repair_stamps",
+    "keep_repeated": "keep_repeated", "eps": "eps", "phi": "phi", "delta": "delta", "tau": "tau",
+    "rpe_delta": "rpe_delta", "rpe_unit": "rpe_unit",
+}  # fmt: skip
+
+
+def spec_from_args(args: argparse.Namespace, base: EvalSpec | str | None = None) -> EvalSpec:
+    """The evaluation spec the options ask for: ``--conventions`` (or ``base``, a manifest's spec),
+    then every single option over it, validated by :func:`lorisnb.core.spec.make_spec` as in Python.
+    A sweep's threshold lists are its grid, not the spec's thresholds."""
+    flags = ("official_interpolation", "repair_stamps", "keep_repeated")  # store_true: given when set
+    given = {
+        name: getattr(args, dest)
+        for dest, name in SPEC_OPTIONS.items()
+        if getattr(args, dest, None) is not None
+        and not (dest in flags and getattr(args, dest) is False)
+        and not isinstance(getattr(args, dest), list)
     }
-    if getattr(args, "conventions", None):
-        return Conventions.preset(args.conventions, **changes)
-    if changes:
-        return replace(base or Conventions(), **changes)
-    return base
+    preset = getattr(args, "conventions", None) or base
+    return make_spec(preset, surface="cli", **given)
+
+
+def add_rpe_options(p: argparse.ArgumentParser) -> None:
+    """``--rpe-delta`` and ``--rpe-unit``: the RPE step of the tables."""
+    d = PRESETS["openloris"]
+    p.add_argument("--rpe-delta", default=None, type=arg_type(lambda t: validate.positive("--rpe-delta", t, "steps")),
+                   help=f"RPE step (default {d.rpe_delta:g}, in --rpe-unit)")  # fmt: skip
+    p.add_argument("--rpe-unit", default=None, choices=RPE_UNITS,
+                   help=f"unit of the RPE step: s, m (along the ground truth) or f (frames); default {d.rpe_unit}")  # fmt: skip
 
 
 def add_evaluation_options(p: argparse.ArgumentParser) -> None:
@@ -110,6 +135,7 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
         help="result files, or folders walked as <algorithm>/*.txt (with --gt: estimates; with --manifest: folders)",
     )  # fmt: skip
     add_input_options(p)
+    add_rpe_options(p)
     add_scale_option(p, "align with Sim(3) (scale); 'auto': only for monocular algorithms (dso, svo)")
     g = p.add_mutually_exclusive_group()
     g.add_argument(
@@ -122,7 +148,7 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
         const="lifelong",
         help="align on the first sequence and apply that to all (default for files with several seq: blocks)",
     )
-    p.set_defaults(mode="auto")
+    p.set_defaults(mode=None)
     p.add_argument(
         "--official-interpolation",
         action="store_true",

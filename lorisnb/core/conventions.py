@@ -19,66 +19,17 @@ Alignment (``gt = s R est + t``, fitted on the matched positions):
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-
 import numpy as np
 
-from ..errors import EvaluationError, ValidationError
-from .association import MAX_GAP
+from ..errors import EvaluationError
 from .geometry import Sim3, quat_to_matrix, umeyama
-from .validate import choice, finite, positive
+from .spec import ASSOCIATIONS, MAX_DIFF, Conventions
+from .validate import choice
 
-ASSOCIATIONS = ("interpolate", "nearest")
+#: The alignments :func:`fit_alignment` fits (the spec's ``auto`` is resolved per algorithm first).
 ALIGNMENTS = ("se3", "sim3", "posyaw", "none")
-MAX_DIFF = 0.02  # seconds; TUM's and rpg's default
 
-
-@dataclass(frozen=True)
-class Conventions:
-    """How a pair is matched and aligned (see the module docstring). Every value is validated."""
-
-    association: str = "interpolate"
-    max_gap: float = MAX_GAP
-    max_diff: float = MAX_DIFF
-    t_offset: float = 0.0
-    align: str = "se3"
-    align_frames: int | None = None
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "association", choice("association", self.association, ASSOCIATIONS))
-        object.__setattr__(self, "align", choice("align", self.align, ALIGNMENTS))
-        object.__setattr__(self, "max_gap", positive("max_gap", self.max_gap, "seconds"))
-        object.__setattr__(self, "max_diff", positive("max_diff", self.max_diff, "seconds"))
-        object.__setattr__(self, "t_offset", finite("t_offset", self.t_offset, "seconds"))
-        if self.align_frames is not None:
-            n = int(positive("align_frames", self.align_frames, "poses", integer=True))
-            if self.align == "sim3" and n < 2:
-                raise ValidationError("align_frames=1 with align='sim3': a scale needs at least 2 poses")
-            object.__setattr__(self, "align_frames", n)
-
-    @classmethod
-    def preset(cls, name: str, **changes: object) -> Conventions:
-        """Named conventions: ``openloris`` (interpolation, SE(3) on all poses), ``tum``
-        (``evaluate_ate.py``: nearest within 0.02 s, SE(3)), ``rpg`` (rpg_trajectory_evaluation:
-        nearest within 0.02 s, Sim(3)), ``vio`` (nearest, ``posyaw``); ``changes`` override."""
-        presets = {
-            "openloris": cls(),
-            "tum": cls(association="nearest", align="se3"),
-            "rpg": cls(association="nearest", align="sim3"),
-            "vio": cls(association="nearest", align="posyaw"),
-        }
-        return replace(presets[choice("conventions", name, tuple(presets))], **changes)  # type: ignore[arg-type]
-
-    def describe(self) -> str:
-        """One line saying what was used."""
-        match = (
-            f"interpolated ground truth within {self.max_gap:g} s"
-            if self.association == "interpolate"
-            else f"nearest stamps within {self.max_diff:g} s (greedy, TUM associate.py)"
-        )
-        frames = "all matched poses" if self.align_frames is None else f"the first {self.align_frames} matched poses"
-        offset = f", estimate stamps + {self.t_offset:g} s" if self.t_offset else ""
-        return f"association: {match}{offset}; alignment: {self.align} on {frames}"
+__all__ = ["ALIGNMENTS", "ASSOCIATIONS", "MAX_DIFF", "Conventions", "associate_nearest", "fit_alignment"]
 
 
 def associate_nearest(
@@ -151,6 +102,8 @@ def fit_alignment(
     p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
     if method == "none" or len(p_e) == 0:
         return Sim3.identity()
+    if frames is None and method in ("se3", "sim3"):  # all matched poses: Horn/Umeyama, as the official tool
+        return umeyama(p_e, p_g, method == "sim3")
     n = len(p_e) if frames is None else min(int(frames), len(p_e))
     if n == 1 and method in ("se3", "posyaw"):
         if est_quaternions is None or gt_quaternions is None:

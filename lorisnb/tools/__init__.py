@@ -2,9 +2,10 @@
 bridge to evo. Optional dependencies (evo, papermill, ipywidgets) are imported when first used."""
 
 from ._extras import require
-from .evaluate import Evaluation, Failure, evaluate, result_files
+from .evaluate import evaluate, evaluate_manifest, evaluate_pairs
+from .evaluation import Evaluation, Failure
+from .inputs import result_files
 from .notebook import Outputs, setup
-from .pairs import evaluate_manifest, evaluate_pairs
 from .streaming import sweep_to_parquet
 
 __all__ = [

@@ -30,6 +30,8 @@ def sweep_to_parquet(
     progress: bool = False,
     max_bytes: float = MAX_SWEEP_BYTES,
     on_part: Any = None,
+    rpe_delta: float = 1.0,
+    rpe_unit: str = "s",
 ) -> tuple[Path, int]:
     """The table of :func:`lorisnb.core.sweep.sweep` (same columns, same values), written to a
     Parquet dataset partitioned by algorithm, one group of files (suite, algorithm, scene, trial)
@@ -58,7 +60,10 @@ def sweep_to_parquet(
             bar = tqdm(total=len(groups), desc="sweeping", unit="group")
         try:
             for g in groups:
-                table = sweep(g, eps, phi, delta, tau, relative_to=relative_to, columns=columns, max_bytes=max_bytes)
+                table = sweep(
+                    g, eps, phi, delta, tau, relative_to=relative_to, columns=columns, max_bytes=max_bytes,
+                    rpe_delta=rpe_delta, rpe_unit=rpe_unit,
+                )  # fmt: skip
                 rows += len(table)
                 if on_part is not None:
                     replaced = on_part(table)
