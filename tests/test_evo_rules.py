@@ -213,7 +213,7 @@ def test_statistics_columns_of_the_sequence_table(evo_pairs):
     from lorisnb.core import score
     from lorisnb.core.conventions import Conventions
     from lorisnb.core.model import STAT_COLUMNS
-    from lorisnb.core.pairs import session_errors
+    from lorisnb.core.pipeline import session_errors
 
     ref, est, gt, es = evo_pairs["fr1_xyz"]
     f = session_errors({1: gt}, {1: es}, Conventions.preset("tum"))
@@ -252,7 +252,7 @@ def test_statistics_columns_of_the_sequence_table(evo_pairs):
 def test_score_rpe_options_equal_evo_rpe(evo_pairs, delta, unit, pairs, all_pairs):
     from lorisnb.core import score
     from lorisnb.core.conventions import Conventions
-    from lorisnb.core.pairs import session_errors
+    from lorisnb.core.pipeline import session_errors
 
     _, _, gt, es = evo_pairs["fr1_xyz"]
     f = session_errors({1: gt}, {1: es}, Conventions.preset("tum"))
@@ -274,7 +274,7 @@ def test_lorisnb_rpe_rule_unchanged_by_default(evo_pairs):
 
     _, _, gt, es = evo_pairs["fr1_xyz"]
     from lorisnb.core.conventions import Conventions
-    from lorisnb.core.pairs import session_errors
+    from lorisnb.core.pipeline import session_errors
 
     e = session_errors({1: gt}, {1: es}, Conventions.preset("tum")).sequences[0]
     for delta, unit in ((1.0, "s"), (0.5, "m"), (3, "f")):

@@ -10,7 +10,7 @@ import pytest
 from reference_tools import REFERENCE
 
 from lorisnb.core.conventions import Conventions
-from lorisnb.core.pairs import session_errors
+from lorisnb.core.pipeline import session_errors
 from lorisnb.core.relative import relative_table, rpg_lengths
 from lorisnb.io import read_tum
 
