@@ -86,9 +86,9 @@ def _report_problems(ev: Any, notes: list[str]) -> None:
         print(f"skipped {len(ev.skipped)} file(s): " + "; ".join(reasons), file=sys.stderr)
 
 
-def _fmt(df: pd.DataFrame) -> str:
+def _fmt(df: pd.DataFrame, digits: int = 4) -> str:
     with pd.option_context("display.max_rows", 500, "display.width", 200, "display.max_columns", 30):
-        return df.to_string(index=False, float_format=lambda v: f"{v:.4f}")
+        return df.to_string(index=False, float_format=lambda v: f"{v:.{digits}f}")
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
@@ -113,11 +113,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             "cr_t",
             "cs_r",
         ]
-        print(_fmt(table[cols]))
+        if ev.spec.preset_name == "evo":  # evo's statistics, as evo_ape / evo_rpe print them
+            cols += ["ate_mean", "ate_median", "ate_max", "rpe_trans_rmse", "rpe_rot_rmse"]
+        print(_fmt(table[cols], args.digits))
         try:
             scenes = aggregate_scenes(table, ev.durations())
             print("\nper scene (CR over all ground-truth time of the scene; C-ATE RMSE weighted by correct poses):")
-            print(_fmt(scenes[["suite", "algorithm", "scene", "sequences", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]))
+            view = scenes[["suite", "algorithm", "scene", "sequences", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]
+            print(_fmt(view, args.digits))
         except LorisError as exc:
             print(f"warning: no scene aggregate: {exc}", file=sys.stderr)
     if args.csv:
@@ -128,7 +131,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if getattr(args, "relative", False):
         rel = ev.relative()
         print("\nrelative error (rpg_trajectory_evaluation: sub-trajectories of 10..50 % of the length):")
-        print(_fmt(rel.drop(columns=["suite", "trial"])) if not rel.empty else "(no sequence long enough)")
+        print(_fmt(rel.drop(columns=["suite", "trial"]), args.digits) if not rel.empty else "(no sequence long enough)")
     _report_problems(ev, notes)
     print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.skipped)} skipped", file=sys.stderr)
     return 1 if ev.failures else 0
@@ -163,12 +166,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
         path, rows = sweep_to_parquet(
             ev.errors, args.parquet, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
-            force=args.force, progress=not args.no_progress, on_part=summarize, rpe_delta=ev.spec.rpe_delta,
-            rpe_unit=ev.spec.rpe_unit,
+            force=args.force, progress=not args.no_progress, on_part=summarize, **ev.spec.rpe_options(),
         )  # fmt: skip
         print(f"{rows} rows: {len(ev.errors)} file(s) x {grid}")
         if shown:
-            print(_fmt(pd.concat(shown).head(60)))
+            print(_fmt(pd.concat(shown).head(60), args.digits))
             if scene_rows > 60:
                 print(f"... {scene_rows - 60} more scene rows (in the Parquet dataset, aggregate with sweep_scenes)")
         print(f"wrote {rows} rows to {path}", file=sys.stderr)
@@ -176,14 +178,14 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         return 1 if ev.failures else 0
     table = sweep(
         ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all",
-        rpe_delta=ev.spec.rpe_delta, rpe_unit=ev.spec.rpe_unit,
+        **ev.spec.rpe_options(),
     )  # fmt: skip
     table["spec"] = ev.spec.canonical(thresholds=False)
     print(f"{len(table)} rows: {len(ev.errors)} file(s) x {grid}")
     if not table.empty:
         scenes = sweep_scenes(table, ev.durations())
         view = scenes[cols]
-        print(_fmt(view.head(60)))
+        print(_fmt(view.head(60), args.digits))
         if len(view) > 60:
             print(f"... {len(view) - 60} more scene rows (write them all with --csv)")
     written = table if keep_label else table.drop(columns=["eps_value"])  # eps as given, when it differs
@@ -220,12 +222,12 @@ def cmd_compare(args: argparse.Namespace) -> int:
               f"(up to {n_trials} trial(s)); rank = 1 + algorithms significantly better (Wilcoxon, Holm, "
               f"alpha {args.alpha}):")  # fmt: skip
         with pd.option_context("display.max_colwidth", 50):
-            print(_fmt(rank[["suite", "scene", "algorithm", "value [CI]", "rank", "tied_with"]]))
+            print(_fmt(rank[["suite", "scene", "algorithm", "value [CI]", "rank", "tied_with"]], args.digits))
         pairs = stats.pairwise(table, args.metric, alpha=args.alpha, seed=args.seed)
         sig = pairs[pairs["significant"]]
         print(f"\n{len(sig)} of {len(pairs)} pairs differ significantly" + (":" if len(sig) else "."))
         if len(sig):
-            print(_fmt(sig[["scene", "a", "b", "value_a", "value_b", "p_a_better", "p_holm"]]))
+            print(_fmt(sig[["scene", "a", "b", "value_a", "value_b", "p_a_better", "p_holm"]], args.digits))
         if args.csv:
             print(f"wrote {write_csv(ci, args.csv, args.force)}", file=sys.stderr)
         for out in (args.latex, args.markdown):

@@ -148,10 +148,11 @@ def _pair_suffixes(fmt: str) -> tuple[str, ...]:
 
 
 def _refuse_reading(spec: EvalSpec, fmt: str, kind: str) -> None:
-    """Spec options that only OpenLORIS' reader honours, refused for other formats."""
+    """Spec options that only OpenLORIS' reader honours, refused for other formats (``repeated``
+    keep: every reader keeps the poses of a repeated stamp, as evo)."""
     if fmt == "openloris":
         return
-    for name, on in (("repair_stamps", spec.repair_stamps), ("repeated", spec.repeated == "keep")):
+    for name, on in (("repair_stamps", spec.repair_stamps),):
         if name in spec.explicit and on:
             raise ValidationError(
                 f"{name}: only OpenLORIS result files are read with this rule; the {kind}'s estimates are {fmt} files"

@@ -61,8 +61,8 @@ class Evaluation:
         """Per-sequence table at one setting (see :func:`lorisnb.core.scoring.score`); thresholds and
         the RPE step not given are the spec's. A ``spec`` column holds the spec's exact text."""
         s = self.spec
-        kw.setdefault("rpe_delta", s.rpe_delta)
-        kw.setdefault("rpe_unit", s.rpe_unit)
+        for k, v in s.rpe_options().items():
+            kw.setdefault(k, v)
         table = score(
             self.errors, s.eps if eps is None else eps, s.phi if phi is None else phi,
             s.delta if delta is None else delta, s.tau if tau is None else tau, **kw,
