@@ -190,3 +190,20 @@ def test_ros1_bag_and_lone_mcap_equal_evo(fr2, tmp_path, ros, variant):
                                            "/est", *args])  # fmt: skip
     theirs = evo_numbers(_evo_bag(bag, "/gt"), _evo_bag(bag, "/est"), o)
     check(row, theirs, 1e-9)
+
+
+def test_crosscheck_under_the_evo_preset_agrees_and_explains_reading(data, fr2, tmp_path, capsys):
+    out = tmp_path / "cc.csv"
+    g, e = data.tum / "fr2_desk_groundtruth.txt", data.tum / "fr2_desk_ORB.txt"
+    assert main(["crosscheck", str(g), str(e), "--conventions", "evo", "--align", "sim3", "--csv", str(out)]) == 0
+    table = pd.read_csv(out).set_index("quantity")
+    assert "29 of 29 statistics agree" in capsys.readouterr().err
+    assert not table.loc["ground truth: poses", "agrees"]  # the repeated stamp: lorisnb's default drops it
+    assert "repeated" in table.loc["ground truth: poses", "note"]
+    assert table.loc["ate_rmse", "agrees"] and table.loc["rpe_rot_max", "agrees"]
+    gt, est = fr2
+    bag = write_two_topic_bag(tmp_path / "run.bag", gt, est, 1)
+    assert main(["crosscheck", str(bag), str(bag), "--format", "bag", "--gt-topic", "/gt", "--topic", "/est",
+                 "--conventions", "evo", "--align", "se3"]) == 0  # fmt: skip
+    # lorisnb's own conventions do not claim evo's numbers: the association differs, and crosscheck says so
+    assert main(["crosscheck", str(g), str(e), "--conventions", "tum"]) == 1

@@ -247,6 +247,8 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
     gt_format = args.format
     est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)
+    if args.conventions is not None:
+        return _crosscheck_conventions(args, gt_format, est_format)
     if args.format == "openloris":
         gt_file = read_openloris(args.gt) if args.gt not in ("-", "auto") else None
         table = crosscheck_openloris(
@@ -270,6 +272,12 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
         spec = make_spec(None, surface="cli", **({} if args.scale is None else {"scale": args.scale}))
         with_scale = spec.alignment_for(Path(args.est).stem) == "sim3"
         table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs)
+        if "bag" not in (gt_format, est_format):  # and evo's own reading of each file
+            from ..tools.crosscheck_reading import crosscheck_reading
+
+            parts = [crosscheck_reading(f, fm).assign(quantity=lambda t, w=w: w + ": " + t["quantity"])
+                     for w, f, fm in (("ground truth", args.gt, gt_format), ("estimate", args.est, est_format))]  # fmt: skip
+            table = pd.concat([table, *parts], ignore_index=True)
     from ..tools import require
 
     evo_version = require("evo").__version__
@@ -285,6 +293,24 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     if args.csv:
         write_csv(table, args.csv, args.force)
     return 0 if table.loc[must, "agrees"].all() else 1
+
+
+def _crosscheck_conventions(args: argparse.Namespace, gt_format: str, est_format: str) -> int:
+    """``crosscheck --conventions P``: lorisnb under preset P against evo reading the files itself."""
+    from ..io.writers import write_csv
+    from ..tools.crosscheck_evo import crosscheck_evo
+
+    spec = make_spec(args.conventions, surface="cli", **({"align": args.align} if args.align else {}))
+    table = crosscheck_evo(args.gt, args.est, spec, fmt=est_format, gt_fmt=gt_format, topic=args.topic,
+                           gt_topic=args.gt_topic, tol=1e-5 if "kitti" in (gt_format, est_format) else 1e-9)  # fmt: skip
+    with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.10g}"))
+    stats = ~table["quantity"].str.contains(":") & table["evo"].notna()
+    print(f"\n{int(table.loc[stats, 'agrees'].sum())} of {int(stats.sum())} statistics agree with evo reading the "
+          "files itself; the reading rows say where the readings differ and why", file=sys.stderr)  # fmt: skip
+    if args.csv:
+        write_csv(table, args.csv, args.force)
+    return 0 if table.loc[stats, "agrees"].all() else 1
 
 
 def cmd_report(args: argparse.Namespace) -> int:

@@ -86,7 +86,7 @@ def crosscheck_reading(path: str | os.PathLike, fmt: str = "tum", topic: str | N
         "poses", "reading", len(ours), n_evo, n_evo,
         "same poses" if dropped == 0 else
         f"definitions differ: lorisnb keeps the last pose of a repeated stamp (the official tool's rule), evo keeps "
-        f"all ({dropped} more); read with repeated='keep' (--repeated keep, or --conventions evo) to read as evo",
+        f"all ({dropped} more); read with repeated='keep' (--keep-repeated, or --conventions evo) to read as evo",
     ))  # fmt: skip
     rows.append(agreement_row("poses (repeated kept)", "reading", len(kept), n_evo, n_evo, "repeated='keep'"))
     if len(kept) != n_evo:

@@ -144,7 +144,7 @@ def pair_source(
 
 
 def _pair_suffixes(fmt: str) -> tuple[str, ...]:
-    return (".bag",) if fmt == "bag" else tuple(dict.fromkeys((SUFFIX[fmt], ".txt", ".csv")))
+    return (".bag", ".mcap", ".db3") if fmt == "bag" else tuple(dict.fromkeys((SUFFIX[fmt], ".txt", ".csv")))
 
 
 def _refuse_reading(spec: EvalSpec, fmt: str, kind: str) -> None:
