@@ -3,7 +3,7 @@ keeping repeated stamps as evo does) and by evo's own readers (``evo.tools.file_
 KITTI, EuRoC CSV, ROS 1 and ROS 2 bags, lone ``.mcap`` / ``.db3`` files), compared pose by pose.
 
 Rows have the columns of :data:`~lorisnb.tools.evo_bridge.CROSSCHECK_COLUMNS` (``alignment`` is
-``reading``); ``note`` says why a difference exists (repeated stamps, KITTI rotation blocks printed
+``none``: nothing is aligned); ``note`` says why a difference exists (repeated stamps, KITTI rotation blocks printed
 to 7 digits, ...).
 """
 
@@ -83,29 +83,29 @@ def crosscheck_reading(path: str | os.PathLike, fmt: str = "tum", topic: str | N
     rows = []
     dropped = n_evo - len(ours)
     rows.append(agreement_row(
-        "poses", "reading", len(ours), n_evo, n_evo,
+        "poses", "none", len(ours), n_evo, n_evo,
         "same poses" if dropped == 0 else
         f"definitions differ: lorisnb keeps the last pose of a repeated stamp (the official tool's rule), evo keeps "
         f"all ({dropped} more); read with repeated='keep' (--keep-repeated, or --conventions evo) to read as evo",
     ))  # fmt: skip
-    rows.append(agreement_row("poses (repeated kept)", "reading", len(kept), n_evo, n_evo, "repeated='keep'"))
+    rows.append(agreement_row("poses (repeated kept)", "none", len(kept), n_evo, n_evo, "repeated='keep'"))
     if len(kept) != n_evo:
         return pd.DataFrame(rows, columns=CROSSCHECK_COLUMNS)
     stamps = getattr(theirs, "timestamps", None)
     if stamps is not None:
         d = float(np.max(np.abs(kept.stamps - stamps))) if n_evo else 0.0
         order = "" if np.all(np.diff(stamps) >= 0) else "; evo keeps the file's order of unsorted stamps, lorisnb sorts"
-        rows.append(agreement_row("stamps", "reading", d, 0.0, n_evo, "largest difference, seconds" + order))
+        rows.append(agreement_row("stamps", "none", d, 0.0, n_evo, "largest difference, seconds" + order))
     d = float(np.max(np.abs(kept.positions - theirs.positions_xyz))) if n_evo else 0.0
-    rows.append(agreement_row("positions", "reading", d, 0.0, n_evo, "largest difference, metres"))
+    rows.append(agreement_row("positions", "none", d, 0.0, n_evo, "largest difference, metres"))
     ang = _rotations_deg(kept.quaternions, theirs) if n_evo else np.zeros(0)
-    rows.append(agreement_row("orientations", "reading", float(ang.max(initial=0.0)), 0.0, n_evo,
+    rows.append(agreement_row("orientations", "none", float(ang.max(initial=0.0)), 0.0, n_evo,
                               "largest angle between the two readings' rotations, degrees"))  # fmt: skip
     if fmt == "kitti" and n_evo:
         mats = np.array(theirs.poses_se3)[:, :3, :3]
         ortho = float(np.abs(np.einsum("nij,nkj->nik", mats, mats) - np.eye(3)).max())
         rows.append(agreement_row(
-            "rotation block", "reading", ortho, 0.0, n_evo,
+            "rotation block", "none", ortho, 0.0, n_evo,
             "largest |R R^T - I| of the printed blocks: evo computes with them as they are, lorisnb with the nearest "
             "rotation; errors then differ by about this much (1e-5 for 7 printed digits)",
             tol=1e-4,
