@@ -207,3 +207,20 @@ def test_crosscheck_under_the_evo_preset_agrees_and_explains_reading(data, fr2, 
                  "--conventions", "evo", "--align", "se3"]) == 0  # fmt: skip
     # lorisnb's own conventions do not claim evo's numbers: the association differs, and crosscheck says so
     assert main(["crosscheck", str(g), str(e), "--conventions", "tum"]) == 1
+
+
+@pytest.mark.parametrize("relation, evo_relation", [("full", em.PoseRelation.full_transformation),
+                                                    ("rot_part", em.PoseRelation.rotation_part),
+                                                    ("angle_rad", em.PoseRelation.rotation_angle_rad),
+                                                    ("point_distance", em.PoseRelation.point_distance)])  # fmt: skip
+def test_relation_columns_equal_evo(data, tmp_path, relation, evo_relation):
+    g, e = data.tum / "freiburg1_xyz-groundtruth.txt", data.tum / "freiburg1_xyz-rgbdslam.txt"
+    row = lorisnb_row(tmp_path, str(e), ["--gt", str(g), "--align", "se3", "--relation", relation, "--rpe-delta",
+                                         "0.5", "--rpe-unit", "m"])  # fmt: skip
+    ref, est = sync.associate_trajectories(fi.read_tum_trajectory_file(g), fi.read_tum_trajectory_file(e))
+    a = ape(copy.deepcopy(ref), copy.deepcopy(est), evo_relation, align=True)
+    r = rpe(copy.deepcopy(ref), copy.deepcopy(est), evo_relation, delta=0.5, delta_unit=em.Unit.meters, align=True)
+    assert row["relation"] == relation
+    for k in STATS:
+        assert row[f"ape_{k}"] == pytest.approx(a.stats[k], rel=1e-9, abs=1e-12), k
+        assert row[f"rpe_{k}"] == pytest.approx(r.stats[k], rel=1e-9, abs=1e-12), k

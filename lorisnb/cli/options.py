@@ -12,6 +12,7 @@ from typing import Any
 
 from ..core import validate
 from ..core.evo_options import PLANES
+from ..core.relations import RELATIONS
 from ..core.rpe import RPE_PAIRS
 from ..core.spec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, make_spec
 from ..errors import OutputError, ValidationError
@@ -101,6 +102,8 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
                    help="reduce both trajectories to N evenly spaced poses first (evo's --downsample)")  # fmt: skip
     g.add_argument("--motion-filter", default=None, nargs=2, metavar=("METRES", "DEGREES"),
                    help="keep poses that moved or turned at least this much (evo's --motion_filter)")  # fmt: skip
+    g.add_argument("--relation", default=None, choices=RELATIONS,
+                   help="also the ape_* and rpe_* statistics of this pose relation (evo's -r)")  # fmt: skip
     g.add_argument("--topic", default=None, help="bags: the estimate's pose topic (evo's TF id /tf:parent.child too)")
     g.add_argument("--gt-topic", default=None, help="bags: the ground truth's pose topic")
     g.add_argument("--tf", default=None, metavar="PARENT:CHILD", help="bags: the estimate as a TF chain")
@@ -119,7 +122,7 @@ SPEC_OPTIONS = {
     "keep_repeated": "keep_repeated", "eps": "eps", "phi": "phi", "delta": "delta", "tau": "tau",
     "rpe_delta": "rpe_delta", "rpe_unit": "rpe_unit", "rpe_pairs": "rpe_pairs", "rpe_all_pairs": "rpe_all_pairs",
     "rpe_tolerance": "rpe_tolerance", "t_start": "t_start", "t_end": "t_end", "project_to_plane": "project_to_plane",
-    "downsample": "downsample", "motion_filter": "motion_filter",
+    "downsample": "downsample", "motion_filter": "motion_filter", "relation": "relation",
 }  # fmt: skip
 
 

@@ -109,6 +109,7 @@ class EvalSpec:
     project_to_plane: str | None = None
     downsample: int | None = None
     motion_filter: tuple[float, float] | None = None
+    relation: str | None = None
     preset_name: str = "openloris"
     explicit: frozenset[str] = field(default=frozenset(), compare=False, repr=False)
 

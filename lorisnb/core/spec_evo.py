@@ -17,6 +17,7 @@ from typing import Any
 from ..errors import ValidationError
 from . import validate
 from .evo_options import PLANES
+from .relations import RELATIONS
 from .rpe import RPE_PAIRS
 
 EVO_ASSOCIATIONS = ("evo-nearest", "evo-interpolate")
@@ -27,7 +28,7 @@ EVO_MAX_DIFF = 0.01  # seconds: evo's --t_max_diff
 #: Default of each evo field (lorisnb's own: nothing of evo's applies).
 EVO_DEFAULTS: dict[str, Any] = dict(
     rpe_pairs="reference", rpe_all_pairs=None, rpe_tolerance=0.1, t_start=None, t_end=None,
-    project_to_plane=None, downsample=None, motion_filter=None,
+    project_to_plane=None, downsample=None, motion_filter=None, relation=None,
 )  # fmt: skip
 
 #: The ``evo`` preset: evo_ape's and evo_rpe's defaults.
@@ -46,6 +47,7 @@ EVO_OPTIONS: dict[str, tuple[str, str, str]] = {
     "project_to_plane": ("errors of the poses projected to xy / xz / yz (after alignment)", "", "all"),
     "downsample": ("both trajectories reduced to N evenly spaced poses first (evo's --downsample)", "poses", "all"),
     "motion_filter": ("poses kept when moved >= D m or turned >= A deg (evo's --motion_filter)", "m, deg", "all"),
+    "relation": ("evo's pose relation (-r) of the ape_* and rpe_* columns it adds", "", "all"),
 }
 
 
@@ -63,6 +65,8 @@ def check_evo(key: str, v: Any, label: str) -> Any:
         return None if v is None else validate.choice(label, v, PLANES)
     if key == "downsample":
         return None if v is None else int(validate.positive(label, v, "poses", integer=True))
+    if key == "relation":
+        return None if v is None else validate.choice(label, v, RELATIONS)
     if key == "motion_filter":
         if v is None:
             return None
@@ -106,6 +110,8 @@ def describe_evo(spec: Any) -> str:
         words.append(f"motion filter {spec.motion_filter[0]:g} m / {spec.motion_filter[1]:g} deg")
     if spec.project_to_plane is not None:
         words.append(f"projected to the {spec.project_to_plane} plane")
+    if spec.relation is not None:
+        words.append(f"pose relation {spec.relation} (ape_*, rpe_* columns)")
     return "; ".join(words)
 
 

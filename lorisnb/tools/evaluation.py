@@ -13,6 +13,7 @@ import pandas as pd
 from ..core.aggregate import aggregate_scenes, spans_table
 from ..core.frames import SCENES
 from ..core.model import Eps, FileErrors
+from ..core.relation_table import relation_columns
 from ..core.relative import RPG_FRACTIONS, relative_table
 from ..core.scoring import pose_table, score
 from ..core.spec import EvalSpec
@@ -67,6 +68,9 @@ class Evaluation:
             self.errors, s.eps if eps is None else eps, s.phi if phi is None else phi,
             s.delta if delta is None else delta, s.tau if tau is None else tau, **kw,
         )  # fmt: skip
+        if s.relation is not None and len(table):  # evo's -r: statistics of that pose relation
+            rel = relation_columns(self.errors, s.relation, **{k: v for k, v in kw.items() if k.startswith("rpe_")})
+            table = pd.concat([table, rel.set_index(table.index)], axis=1)
         table["spec"] = s.canonical(thresholds=False)
         return table
 
