@@ -60,7 +60,7 @@ def evo_statistics(ref, est, spec: EvalSpec) -> dict[str, float]:
         for name, rel in (("rpe_trans", em.PoseRelation.translation_part),
                           ("rpe_rot", em.PoseRelation.rotation_angle_deg)):  # fmt: skip
             r = main_rpe.rpe(
-                c(ref), c(est), rel, delta=spec.rpe_delta, delta_unit=em.Unit(unit), rel_delta_tol=spec.rpe_tolerance,
+                c(ref), c(est), rel, delta=spec.rpe_delta, delta_unit=em.Unit[unit], rel_delta_tol=spec.rpe_tolerance,
                 all_pairs=bool(spec.rpe_all_pairs), pairs_from_reference=spec.rpe_pairs == "reference", **align,
             )  # fmt: skip
             out.update({f"{name}_{k}": v for k, v in r.stats.items()})
