@@ -191,3 +191,24 @@ def test_crosscheck_reading_shows_where_and_why(data, tmp_path):
     shutil.copy(next(folder.glob("*.mcap")), lone)
     b = crosscheck_reading(lone, "bag", "/est")
     assert b["agrees"].all() and b["n_pairs"].iloc[0] == 20
+
+
+def test_several_topics_of_one_bag_in_one_run(tmp_path):
+    from test_evo_parity import write_two_topic_bag
+
+    from lorisnb.cli import main
+
+    gt, est = _traj(200, 8), _traj(200, 9)
+    est = Trajectory(gt.stamps, est.positions * 0.01 + gt.positions, gt.quaternions)
+    bag = write_two_topic_bag(tmp_path / "run.bag", gt, est, 1)
+    out = tmp_path / "t.csv"
+    args = ["evaluate", str(bag), "--gt", str(bag), "--format", "bag", "--gt-topic", "/gt", "--conventions", "evo"]
+    assert main([*args, "--topic", "/gt,/est", "--csv", str(out), "--no-progress"]) == 0
+    import pandas as pd
+
+    both = pd.read_csv(out).set_index("algorithm")
+    assert sorted(both.index) == ["/est", "/gt"] and (both["file"] == "run.bag").all()
+    assert both.loc["/gt", "ate_max"] == 0.0 and both.loc["/est", "ate_max"] > 0.0
+    single = tmp_path / "s.csv"
+    assert main([*args, "--topic", "/est", "--csv", str(single), "--no-progress"]) == 0
+    assert pd.read_csv(single).iloc[0]["ate_rmse"] == both.loc["/est", "ate_rmse"]

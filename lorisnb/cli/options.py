@@ -104,7 +104,8 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
                    help="keep poses that moved or turned at least this much (evo's --motion_filter)")  # fmt: skip
     g.add_argument("--relation", default=None, choices=RELATIONS,
                    help="also the ape_* and rpe_* statistics of this pose relation (evo's -r)")  # fmt: skip
-    g.add_argument("--topic", default=None, help="bags: the estimate's pose topic (evo's TF id /tf:parent.child too)")
+    g.add_argument("--topic", default=None,
+                   help="bags: the estimate's pose topic (evo's TF id /tf:parent.child too); several, comma-separated: a row each")  # fmt: skip
     g.add_argument("--gt-topic", default=None, help="bags: the ground truth's pose topic")
     g.add_argument("--tf", default=None, metavar="PARENT:CHILD", help="bags: the estimate as a TF chain")
     g.add_argument("--gt-tf", default=None, metavar="PARENT:CHILD", help="bags: the ground truth as a TF chain")

@@ -192,7 +192,9 @@ def evaluate_pairs(
             ``kitti``, ``bag``, ``openloris``); ``gt_fmt`` defaults to ``fmt``.
         scene: the scene label of the rows (default: the ground-truth file's name).
         est_times, gt_times: times files for KITTI poses (one stamp per line).
-        topic, gt_topic, tf, gt_tf: what to read from bags (see :func:`lorisnb.io.bags.read_bag`).
+        topic, gt_topic, tf, gt_tf: what to read from bags (see :func:`lorisnb.io.bags.read_bag`);
+            ``topic`` may name several topics (or evo's TF ids) separated by commas: one row each, its
+            ``algorithm`` the topic.
         jobs, executor, progress, trials_by: as for :func:`evaluate`.
     """
     the_spec = _spec(spec, conventions, options)
@@ -203,9 +205,14 @@ def evaluate_pairs(
     compile_trials_by(trials_by)
     if not src.groundtruth.exists():
         raise ParseError(src.groundtruth, None, "ground truth not found; expected a file (or a ROS 2 bag folder)")
+    topics = [t.strip() for t in src.topic.split(",")] if src.topic and "," in src.topic else [src.topic]
+    if len(topics) > 1 and not all(topics):
+        raise ValidationError(f"topic {src.topic!r}: expected topics separated by commas, none empty")
+    sources = [src] if len(topics) == 1 else [replace(src, topic=t, label_topic=True) for t in topics]
     work = [
-        Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=src)
+        Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=one)
         for p, r in result_files(estimates, _pair_suffixes(src.fmt))
+        for one in sources  # several topics of one bag: one row each, labelled with its topic
     ]
     return _run(work, the_spec, "pair", n_jobs=jobs, executor=executor, progress=progress, notes=notes)
 

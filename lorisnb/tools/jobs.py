@@ -45,6 +45,7 @@ class PairSource:
     gt_topic: str | None = None
     tf: str | None = None
     gt_tf: str | None = None
+    label_topic: bool = False  # one of several topics of the bag: the rows' algorithm is the topic
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -153,6 +154,8 @@ def _pair(job: Job) -> FileErrors:
     algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
     if job.root is None:  # a file given alone: its name says which estimate it is
         algorithm = job.path.stem
+    if src.label_topic and src.topic:
+        algorithm = src.topic
     rule = job.spec.repeated
     gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, rule)
     with warnings.catch_warnings(record=True) as caught:
