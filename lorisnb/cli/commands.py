@@ -53,6 +53,11 @@ def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
                 f"{', '.join(given)}: for estimates scored against --gt (a manifest names its formats); "
                 "OpenLORIS result files name their scene and frame in their header"
             )
+    if getattr(args, "data", None) is not None and (args.gt or manifest is not None):
+        raise ValidationError(
+            "--data: the data root holds OpenLORIS ground truth; "
+            + ("a pair's ground truth is --gt" if args.gt else "a manifest names its ground-truth files")
+        )
     spec = spec_from_args(args, manifest.spec if manifest is not None else None)
     kw: dict[str, Any] = dict(trials_by=args.trials_by, progress=not args.no_progress, jobs=args.jobs,
                               executor=_executor(args))  # fmt: skip
@@ -204,6 +209,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from ..io.writers import write_csv
     from ..tools.tables import interval, write_comparison
 
+    rpe = [o for o, v in (("--rpe-delta", args.rpe_delta), ("--rpe-unit", args.rpe_unit), ("--rpe-pairs", args.rpe_pairs),
+                          ("--rpe-all-pairs", args.rpe_all_pairs), ("--rpe-tolerance", args.rpe_tolerance)) if v is not None]  # fmt: skip
+    if rpe and not args.metric.startswith(("rpe", "c_rpe")):
+        raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
     for out in (args.csv, args.latex, args.markdown):
         check_output(out, args.paths, args.force)
     ev, notes = _run_evaluation(args)
@@ -244,6 +253,20 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     from ..tools.crosscheck import crosscheck, crosscheck_openloris
 
     check_output(args.csv, [args.gt, args.est], args.force)
+    openloris = args.format == "openloris"
+    times = [
+        o for o, v in (("--times", args.times), ("--gt-times", args.gt_times), ("--est-times", args.est_times)) if v
+    ]
+    kitti = "kitti" in (args.format, args.est_format)
+    refused = [o for o, v in (("--seq", args.seq), ("--data", args.data)) if v is not None and not openloris]
+    refused += [o for o, v in (("--est-format", args.est_format),) if v is not None and openloris]
+    refused += times if not kitti else []
+    if refused:
+        raise ValidationError(
+            f"{', '.join(refused)}: does not apply to --format {args.format}"
+            + (f" with --est-format {args.est_format}" if args.est_format else "")
+            + " (--seq and --data: OpenLORIS files; --est-format: TUM/KITTI/EuRoC pairs; times files: KITTI)"
+        )
     deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
     gt_format = args.format
     est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)

@@ -20,7 +20,7 @@ from . import metrics
 from .frames import FRAMES, PAPER_EPS, SCENES, match_scene
 from .geometry import Sim3, rotations_of
 from .rpe import rpe_indices
-from .trajectory import Trajectory, extent
+from .trajectory import Trajectory, size
 
 if TYPE_CHECKING:
     from scipy.spatial.transform import Rotation
@@ -74,8 +74,6 @@ class ResultFile:
         seq_lines: sequence number -> line of its ``seq:`` line.
         removed_repeats: sequence number -> poses dropped as repeats of the previous pose.
         warnings: what was noticed while reading (also issued as LorisWarning).
-        derived: values computed from this file once and reused (the ground truth moved to each
-            sensor frame), keyed by what they depend on; not part of equality.
     """
 
     path: Path
@@ -86,7 +84,6 @@ class ResultFile:
     seq_lines: dict[int, int] = field(default_factory=dict)
     removed_repeats: dict[int, int] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
-    derived: dict[tuple[object, ...], object] = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def scene(self) -> str:
@@ -268,10 +265,15 @@ def scene_eps(eps: Eps, scene: str) -> float:
     return float(eps)
 
 
+def sequence_size(e: SequenceErrors, relative_to: str = "extent") -> float:
+    """The size a relative eps is a fraction of, metres: :func:`~lorisnb.core.trajectory.size` of the
+    sequence's matched ground truth (``extent`` or ``length``; 0 with fewer than two matched poses)."""
+    return size(e.gt_positions, relative_to)
+
+
 def sequence_eps(eps: Eps, scene: str, e: SequenceErrors) -> float:
     """The ATE threshold of one sequence, metres: :func:`~lorisnb.core.model.scene_eps`, or for
-    ``"relative:F"`` F times the extent of the sequence's matched ground truth (0 with fewer than
-    two matched poses)."""
+    ``"relative:F"`` F times :func:`sequence_size` (the extent of the matched ground truth)."""
     if isinstance(eps, str) and eps.startswith("relative:"):
-        return float(eps.split(":", 1)[1]) * extent(e.gt_positions)
+        return float(eps.split(":", 1)[1]) * sequence_size(e, "extent")
     return scene_eps(eps, scene)

@@ -204,7 +204,10 @@ class EvalSpec:
         if not isinstance(values, dict):
             raise ValidationError(f"spec: expected the text of EvalSpec.canonical(), got {text!r:.80}")
         preset = values.pop("preset", "openloris")
-        return replace(make_spec(None, **values), preset_name=preset)
+        base = PRESETS.get(preset, PRESETS["openloris"])
+        full = replace(make_spec(base, **values), preset_name=preset)
+        changed = {f.name for f in fields(full) if f.compare and getattr(full, f.name) != getattr(base, f.name)}
+        return replace(full, explicit=frozenset(changed - {"preset_name"}))
 
     def refuse_inapplicable(self, kind: str, *, surface: str = "python") -> list[str]:
         """Refuse options the user set that cannot apply to an input ``kind`` (``openloris``,
@@ -272,7 +275,7 @@ def _namer(surface: str) -> Any:
         spelled = {"mode": "--per-seq/--lifelong", "repeated": "--keep-repeated", "align": "--align"}
         return lambda n: spelled.get(n, "--" + n.replace("_", "-"))
     if surface == "manifest":
-        return lambda n: f"manifest key {n!r}"
+        return lambda n: n
     return lambda n: n
 
 

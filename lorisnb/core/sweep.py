@@ -18,10 +18,18 @@ import pandas as pd
 from ..errors import ValidationError
 from . import metrics
 from .aggregate import aggregate_scenes
-from .frames import PAPER_EPS, PAPER_PHI
-from .model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, STAT_COLUMNS, FileErrors, SequenceErrors, sequence_eps
+from .frames import PAPER_EPS
+from .model import (
+    EXTRA_COLUMNS,
+    SEQUENCE_COLUMNS,
+    STAT_COLUMNS,
+    FileErrors,
+    SequenceErrors,
+    sequence_eps,
+    sequence_size,
+)  # fmt: skip
 from .scoring import GRID_METRICS, as_files, rpe_options, rpe_setting, sequence_grid, sequence_meta
-from .trajectory import extent, path_length
+from .trajectory import RELATIVE
 from .validate import choice, threshold, threshold_list
 
 #: Columns of the default (lean) sweep table: identity, thresholds, and the metrics that depend on
@@ -63,19 +71,6 @@ def check_sweep_size(
             f"more than the {max_bytes / 2**30:.1f} GiB allowed (max_bytes); use fewer thresholds or files, "
             "or stream the table to Parquet (command line: --parquet DIR; Python: lorisnb.tools.sweep_to_parquet)"
         )
-
-
-#: How eps may be given relative to the size of each sequence's ground truth.
-RELATIVE = ("extent", "length")
-
-
-def sequence_size(e: SequenceErrors, relative_to: str) -> float:
-    """Size of a sequence's ground truth (at the matched stamps), metres: ``extent`` is the
-    diagonal of its bounding box, ``length`` the distance travelled; NaN for fewer than two poses."""
-    relative_to = choice("relative_to", relative_to, RELATIVE)
-    if e.matched < 2:
-        return np.nan
-    return extent(e.gt_positions) if relative_to == "extent" else path_length(e.gt_positions)
 
 
 def _eps_values(eps: list[Any], scene: str, e: SequenceErrors, relative_to: str | None) -> np.ndarray:
@@ -326,6 +321,3 @@ def rank_swaps(scenes: pd.DataFrame, metric: str = "cr") -> pd.DataFrame:
     return pd.DataFrame(
         rows, columns=["suite", "scene", "phi", "delta", "tau", "leader_before", "leader_after", "eps_from", "eps_to"]
     )
-
-
-PAPER_SETTING = dict(eps="paper", phi=PAPER_PHI, delta=1.0, tau=60.0)

@@ -134,7 +134,9 @@ def pair_source(
     ):  # fmt: skip
         if value is not None and has != needs:
             side = "the ground truth" if name.startswith("gt_") else "the estimates"
-            raise ValidationError(f"{name}: only for {needs} files; {side} are read as {has}")
+            raise ValidationError(
+                f"{name} (command line --{name.replace('_', '-')}): only for {needs} files; {side} are read as {has}"
+            )
     gt_path = as_paths(groundtruth)[0]
     return PairSource(
         groundtruth=gt_path, fmt=fmt, gt_fmt=gt_fmt, scene=scene or scene_label(gt_path),
@@ -152,10 +154,11 @@ def _refuse_reading(spec: EvalSpec, fmt: str, kind: str) -> None:
     keep: every reader keeps the poses of a repeated stamp, as evo)."""
     if fmt == "openloris":
         return
-    for name, on in (("repair_stamps", spec.repair_stamps),):
+    for name, flag, on in (("repair_stamps", "--repair-stamps", spec.repair_stamps),):  # fmt: skip
         if name in spec.explicit and on:
             raise ValidationError(
-                f"{name}: only OpenLORIS result files are read with this rule; the {kind}'s estimates are {fmt} files"
+                f"{name} (command line {flag}): only OpenLORIS result files are read with this rule; the {kind}'s "
+                f"estimates are {fmt} files"
             )
 
 
@@ -234,7 +237,8 @@ def evaluate_manifest(
     """Score the results of a multi-session dataset: ``results`` holds one folder per algorithm
     with one estimate file per session (named as the manifest says), or is one such folder.
     The manifest's spec (its ``[conventions]``, ``lifelong``, ``transform``, thresholds) is the
-    default; ``spec``/``conventions``, ``lifelong`` and ``options`` override it. The built-in
+    default; a preset name (``spec``/``conventions``) replaces its conventions and keeps the rest, a
+    spec object is used as it is, and ``lifelong`` and ``options`` go over either. The built-in
     ``openloris`` manifest runs :func:`evaluate` (``data_root`` is its data)."""
     m = manifest if isinstance(manifest, Manifest) else read_manifest(manifest)
     if lifelong is not None:
@@ -249,11 +253,10 @@ def evaluate_manifest(
                         executor=executor, **options)  # fmt: skip
     if data_root is not None:
         raise ValidationError("data_root: a manifest names its own ground-truth files (root and groundtruth)")
-    base = m.spec
-    if spec is not None or conventions is not None:  # a preset over the manifest's thresholds and body transform
-        chosen = _spec(spec, conventions, {})
+    base = _spec(spec, conventions, {}) if spec is not None or conventions is not None else m.spec
+    if isinstance(spec if spec is not None else conventions, str):  # a preset by name: over the manifest's
         kept = {k: getattr(m.spec, k) for k in ("eps", "phi", "transform", "mode") if k in m.spec.explicit}
-        base = make_spec(chosen, **kept)
+        base = make_spec(base, **kept)  # thresholds, body transform and mode
     the_spec = make_spec(base, **options)
     notes = the_spec.refuse_inapplicable("manifest")
     _refuse_reading(the_spec, m.estimate_format, "manifest")
