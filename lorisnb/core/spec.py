@@ -61,7 +61,7 @@ OPTIONS: dict[str, tuple[str, str, str]] = {
     "max_gap": ("interpolation bracket: both neighbours within it", "s", "interpolate"),
     "max_diff": ("nearest association: largest stamp difference", "s", "nearest, evo-*"),
     "t_offset": ("added to every estimate stamp (a known clock offset)", "s", "all"),
-    "repeated": ("poses repeating the previous one: drop (official) / keep", "", "all"),
+    "repeated": ("poses repeating the previous one or its stamp: drop (official) / keep (evo)", "", "all"),
     "align": ("se3 / sim3 / posyaw / none / auto (sim3 for dso, svo) / scale (only) / origin (first pose)", "", "all"),
     "align_frames": ("fit the alignment on the first N matched poses", "poses", "align != none"),
     "mode": ("auto / per-seq / lifelong (one alignment, first sequence)", "", "all"),
@@ -173,8 +173,7 @@ class EvalSpec:
             f"{repeated}{extra}; {thresholds}{'; ' + evo_words if evo_words else ''} (preset {self.preset_name})"
         )
 
-    def rpe_options(self) -> dict[str, Any]:  # the RPE settings, as lorisnb.core.scoring.score takes them
-        return {k: getattr(self, k) for k in ("rpe_delta", "rpe_unit", "rpe_pairs", "rpe_all_pairs", "rpe_tolerance")}
+    rpe_options = evo.rpe_options  # the RPE settings, as lorisnb.core.scoring.score takes them
 
     def to_dict(self) -> dict[str, Any]:
         """Every value (JSON-friendly: inf as ``"inf"``), for run records."""
@@ -305,13 +304,9 @@ def _checked(values: Mapping[str, Any], surface: str) -> dict[str, Any]:
             out[key] = validate.eps_value(v)
         elif key in ("phi", "delta", "tau"):
             out[key] = validate.threshold(key, v)
-        elif key == "rpe_unit":
-            out[key] = validate.choice(label, v, RPE_UNITS)
-        elif key == "rpe_delta":
-            out[key] = validate.positive(label, v, "steps")
         elif key == "transform":
             out[key] = validate.rigid_transform(v, label)
-        elif key in evo.EVO_DEFAULTS:
+        elif key in evo.EVO_DEFAULTS or key.startswith("rpe_"):  # the RPE step and evo's options
             out[key] = evo.check_evo(key, v, label)
         elif key == "preset_name":
             if not isinstance(v, str) or not v:

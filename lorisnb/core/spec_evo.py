@@ -51,8 +51,17 @@ EVO_OPTIONS: dict[str, tuple[str, str, str]] = {
 }
 
 
+def rpe_options(spec: Any) -> dict[str, Any]:
+    """The RPE settings of a spec, as :func:`lorisnb.core.scoring.score` takes them."""
+    return {k: getattr(spec, k) for k in ("rpe_delta", "rpe_unit", "rpe_pairs", "rpe_all_pairs", "rpe_tolerance")}
+
+
 def check_evo(key: str, v: Any, label: str) -> Any:
-    """One evo option validated and normalized (``label``: how the surface names it)."""
+    """One evo option or RPE setting validated and normalized (``label``: how the surface names it)."""
+    if key == "rpe_unit":
+        return validate.choice(label, v, RPE_UNITS)
+    if key == "rpe_delta":
+        return validate.positive(label, v, "steps")
     if key == "rpe_pairs":
         return validate.choice(label, v, RPE_PAIRS)
     if key == "rpe_all_pairs":
