@@ -34,7 +34,7 @@ VARIANTS = {
                dict(align=True, scale=True, delta=0.5, unit="m", all_pairs=False, ref=False)),
     "ref all m": (["--align", "se3", "--rpe-delta", "0.3", "--rpe-unit", "m", "--rpe-pairs", "reference",
                    "--rpe-all-pairs"], dict(align=True, scale=False, delta=0.3, unit="m", all_pairs=True, ref=True)),
-    "deg": (["--rpe-delta", "5", "--rpe-unit", "deg"],
+    "deg": (["--rpe-delta", "5", "--rpe-unit", "d"],  # evo's letter for degrees
             dict(align=False, scale=False, delta=5.0, unit="deg", all_pairs=False, ref=False)),
     "scale only": (["--align", "scale", "--rpe-delta", "3", "--rpe-all-pairs"],
                    dict(align=False, scale=True, delta=3, unit="frames", all_pairs=True, ref=False)),

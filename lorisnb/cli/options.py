@@ -148,8 +148,8 @@ def add_rpe_options(p: argparse.ArgumentParser) -> None:
     d = PRESETS["openloris"]
     p.add_argument("--rpe-delta", default=None, type=arg_type(lambda t: validate.positive("--rpe-delta", t, "steps")),
                    help=f"RPE step (default {d.rpe_delta:g}, in --rpe-unit)")  # fmt: skip
-    p.add_argument("--rpe-unit", default=None, choices=RPE_UNITS,
-                   help=f"unit of the RPE step: s, m, f or frames, deg, rad; default {d.rpe_unit} (evo: frames)")  # fmt: skip
+    p.add_argument("--rpe-unit", default=None, choices=(*RPE_UNITS, "d", "r"),
+                   help=f"unit of the RPE step: s, m, f or frames, deg (d), rad (r); default {d.rpe_unit} (evo: frames)")  # fmt: skip
     p.add_argument("--rpe-pairs", default=None, choices=RPE_PAIRS,
                    help="measure m / deg / rad along the reference (lorisnb's default) or the aligned estimate (evo's)")  # fmt: skip
     g = p.add_mutually_exclusive_group()

@@ -58,8 +58,8 @@ def rpe_options(spec: Any) -> dict[str, Any]:
 
 def check_evo(key: str, v: Any, label: str) -> Any:
     """One evo option or RPE setting validated and normalized (``label``: how the surface names it)."""
-    if key == "rpe_unit":
-        return validate.choice(label, v, RPE_UNITS)
+    if key == "rpe_unit":  # evo's letters d and r are its deg and rad
+        return {"d": "deg", "r": "rad"}.get(validate.choice(label, v, (*RPE_UNITS, "d", "r")), v)
     if key == "rpe_delta":
         return validate.positive(label, v, "steps")
     if key == "rpe_pairs":
