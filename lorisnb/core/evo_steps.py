@@ -1,7 +1,8 @@
 """evo's steps inside the one pipeline (:func:`lorisnb.core.pipeline.evaluate_sessions`), in evo's
 order: before matching, ``downsample`` and ``motion_filter`` on both trajectories, then the time
 window ``t_start``/``t_end`` on the ground truth (:func:`prepare`); the evo associations
-(:func:`evo_match`); after the alignment, ``project_to_plane`` (:func:`projected`).
+(:func:`evo_match`); after the alignment, ``project_to_plane`` (:func:`projected`). And rpg's
+length of the whole ground truth (:func:`whole_length`), which the pipeline records.
 """
 
 from __future__ import annotations
@@ -54,6 +55,17 @@ def evo_match(gt: Trajectory, est: Trajectory, spec: EvalSpec) -> tuple[Associat
         return Association(ej, est.stamps[ej] + spec.t_offset, g2.positions, g2.quaternions, g_start, g_end), est
     return Association(ej, est.stamps[ej] + spec.t_offset, gt.positions[gi], quat_normalize(gt.quaternions[gi]),
                        g_start, g_end), est  # fmt: skip
+
+
+def whole_length(traj: Trajectory) -> float:
+    """Path length of a whole trajectory, metres (rpg's ``traj_length`` of the ground truth as
+    read), in blocks of rows: no temporary as large as the trajectory."""
+    p, n, total = traj.positions, len(traj), 0.0
+    for lo in range(0, n - 1, 1 << 18):  # blocks of 262,144 steps, not poses
+        hi = min(n - 1, lo + (1 << 18))
+        d = p[lo + 1 : hi + 1] - p[lo:hi]
+        total += float(np.sqrt(np.einsum("ij,ij->i", d, d)).sum())
+    return total
 
 
 def projected(e: SequenceErrors, plane: str) -> SequenceErrors:

@@ -264,7 +264,7 @@ def evaluate_sessions(
         scene=scene, frame=frame, mode="lifelong" if lifelong else "per-seq", alignment=alignment,
         aligned_on=aligned_on, official_interpolation=spec.official_interpolation, sequences=out, warnings=kept,
         trial=trial, groundtruth_spans=dict(groundtruth_spans or {}),
-        groundtruth_lengths={s: groundtruth[s].path_length for s in seqs},
+        groundtruth_lengths={s: evo_steps.whole_length(groundtruth[s]) for s in seqs},
     )  # fmt: skip
 
 
