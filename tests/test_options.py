@@ -71,7 +71,9 @@ OWN = {  # options of one command, with their cases
         "--metric": (["--metric", "cs_r"], []),
         "--level": (["--level", "0.5"], []),
         "--alpha": (["--alpha", "0.5"], []),
-        "--seed": ([], []),
+        "--seed": ([], []),  # test_compare: seeds, tables
+        "--pairs-csv": ([], []),
+        "--power": (["--power", "0.5"], []),
         "--latex": ([], []),
         "--markdown": ([], []),  # test_stats: seeds, tables
     },  # fmt: skip
@@ -230,7 +232,7 @@ def test_jobs_fan_out_every_input_kind(kinds, tmp_path, capsys, monkeypatch):
 
 @pytest.mark.parametrize("command", ["sweep", "compare"])
 def test_options_of_sweep_and_compare(command, kinds, tmp_path, capsys):
-    base = kinds["two"]
+    base = kinds["two"] + (["--eps", "0.03", "--phi", "3"] if command == "compare" else [])  # CR^inf: no alignment
     for option, (with_it, contrast) in OWN[command].items():
         if not with_it:
             continue  # outputs: test_stats and test_safety

@@ -19,12 +19,16 @@ from ..errors import LorisError
 from ..io.ranges import keep_freed_memory
 from .commands import cmd_compare, cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
 from .options import (
+    add_compare_options,
+    add_diff_options,
     add_evaluation_options,
+    add_history_options,
     add_scale_option,
     add_threshold_options,
     arg_type,
     threshold_list_type,
 )
+from .runs import cmd_diff, cmd_history
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -39,16 +43,19 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="compare algorithms over trials and sequences: intervals, tests, ranking")
     add_evaluation_options(p)
     add_threshold_options(p)
-    p.add_argument("--metric", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"], default="cr",
-                   help="the metric of the ranking, pairwise tests and tables (default cr)")  # fmt: skip
-    p.add_argument("--level", type=arg_type(lambda t: validate.positive("--level", t, "a probability")), default=0.95,
-                   help="confidence level of the intervals (default 0.95)")  # fmt: skip
-    p.add_argument("--alpha", type=arg_type(lambda t: validate.positive("--alpha", t, "a probability")), default=0.05,
-                   help="significance level of the pairwise tests, after Holm's correction (default 0.05)")  # fmt: skip
-    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (default 0)")
-    p.add_argument("--latex", default=None, metavar="OUT", help="write the comparison table as LaTeX (booktabs)")
-    p.add_argument("--markdown", default=None, metavar="OUT", help="write the comparison table as Markdown")
+    add_compare_options(p)
     p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("diff", help="did CAND regress against BASE? two result folders, report runs or tables")
+    add_evaluation_options(p)
+    add_threshold_options(p)
+    add_diff_options(p)
+    p.set_defaults(func=cmd_diff)
+    p.set_defaults(defaults=vars(p.parse_args(["BASE", "CAND"])))
+
+    p = sub.add_parser("history", help="scene values over many runs: first changes, runs not comparable")
+    add_history_options(p)
+    p.set_defaults(func=cmd_history)
 
     p = sub.add_parser(
         "sweep", help="every metric over grids of eps, phi, delta and tau (one row per sequence and setting)"

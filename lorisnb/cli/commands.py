@@ -13,7 +13,7 @@ import pandas as pd
 
 from ..core.spec import make_spec
 from ..errors import LorisError, LorisWarning, ValidationError
-from .options import check_output, param_value, spec_from_args
+from .options import check_output, check_outputs, param_value, refuse_unused, spec_from_args
 
 
 def _executor(args: argparse.Namespace) -> Any:
@@ -124,7 +124,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         try:
             scenes = aggregate_scenes(table, ev.durations())
             print("\nper scene (CR over all ground-truth time of the scene; C-ATE RMSE weighted by correct poses):")
-            view = scenes[["suite", "algorithm", "scene", "sequences", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]
+            scenes["coverage"] = [
+                f"{k}/{n}" for k, n in zip(scenes["sequences"], scenes["scene_sequences"], strict=True)
+            ]
+            view = scenes[["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]
             print(_fmt(view, args.digits))
         except LorisError as exc:
             print(f"warning: no scene aggregate: {exc}", file=sys.stderr)
@@ -203,45 +206,61 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    """Scene values with bootstrap intervals, the ranking with ties the data cannot separate,
-    significant pairwise differences; tables as CSV, LaTeX, Markdown."""
-    from ..core import ranking, stats
-    from ..io.writers import write_csv
-    from ..tools.tables import interval, write_comparison
+    """Scene values with bootstrap intervals, the ranking with ties from one permutation test,
+    its significant pairs; tables as CSV, LaTeX, Markdown (see :mod:`lorisnb.tools.comparison`)."""
+    from ..tools.comparison import compare_table, write_outputs
+    from ..tools.tables import check_table_suffix
 
     rpe = [o for o, v in (("--rpe-delta", args.rpe_delta), ("--rpe-unit", args.rpe_unit), ("--rpe-pairs", args.rpe_pairs),
                           ("--rpe-all-pairs", args.rpe_all_pairs), ("--rpe-tolerance", args.rpe_tolerance)) if v is not None]  # fmt: skip
     if rpe and not args.metric.startswith(("rpe", "c_rpe")):
         raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
-    for out in (args.csv, args.latex, args.markdown):
-        check_output(out, args.paths, args.force)
+    refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate"})
+    check_outputs(args, args.paths, ["csv", "pairs_csv", "latex", "markdown"])
+    for out in (args.latex, args.markdown):
+        if out:
+            check_table_suffix(out)
     ev, notes = _run_evaluation(args)
     table = ev.sequences()
     if not table.empty:
-        ci = stats.confidence_intervals(table, level=args.level, seed=args.seed)
-        rank = ranking.ranking(table, args.metric, alpha=args.alpha, seed=args.seed)
-        c = ci[ci["metric"] == args.metric].set_index(["suite", "scene", "algorithm"])
-        cells = c.loc[list(zip(rank["suite"], rank["scene"], rank["algorithm"], strict=True))]
-        rank["value [CI]"] = [
-            interval(v, lo, hi, digits=3) for v, lo, hi in zip(cells["value"], cells["low"], cells["high"], strict=True)
-        ]
-        n_trials = table.groupby(["algorithm", "scene"])["trial"].nunique().max()
-        units = ", ".join(sorted(set(ci["unit"])))
-        print(f"{args.metric} per algorithm and scene, {args.level:.0%} bootstrap intervals over {units} "
-              f"(up to {n_trials} trial(s)); rank = 1 + algorithms significantly better (Wilcoxon, Holm, "
-              f"alpha {args.alpha}):")  # fmt: skip
-        with pd.option_context("display.max_colwidth", 50):
-            print(_fmt(rank[["suite", "scene", "algorithm", "value [CI]", "rank", "tied_with"]], args.digits))
-        pairs = stats.pairwise(table, args.metric, alpha=args.alpha, seed=args.seed)
-        sig = pairs[pairs["significant"]]
-        print(f"\n{len(sig)} of {len(pairs)} pairs differ significantly" + (":" if len(sig) else "."))
-        if len(sig):
-            print(_fmt(sig[["scene", "a", "b", "value_a", "value_b", "p_a_better", "p_holm"]], args.digits))
-        if args.csv:
-            print(f"wrote {write_csv(ci, args.csv, args.force)}", file=sys.stderr)
-        for out in (args.latex, args.markdown):
-            if out:
-                print(f"wrote {write_comparison(ci, args.metric, out, args.force)}", file=sys.stderr)
+        res = compare_table(table, ev.durations(), args.metric, level=args.level, alpha=args.alpha,
+                            seed=args.seed, power_delta=args.power)  # fmt: skip
+        notes += res.notes
+        sp = ev.spec
+        print(f"thresholds: eps {sp.eps}, phi {sp.phi:g} deg, delta {sp.delta:g} s, tau {sp.tau:g} s")
+        print(res.header)
+        with pd.option_context("display.max_colwidth", 60):
+            print(
+                _fmt(
+                    res.algorithms[
+                        [
+                            "suite",
+                            "scene",
+                            "algorithm",
+                            "value [CI]",
+                            "covered",
+                            "rank",
+                            "vs top [test interval]",
+                            "tied_with",
+                        ]
+                    ],
+                    args.digits,
+                )
+            )
+        print("\n" + res.summary)
+        if len(res.significant):
+            print(
+                _fmt(
+                    res.significant[["scene", "a", "b", "value_a", "value_b", "difference", "p", "p_holm"]], args.digits
+                )
+            )
+        if res.power is not None:
+            print(f"\nruns needed to detect a difference of {args.power} in {args.metric} (power 0.8, alpha "
+                  f"{args.alpha}) where no difference was found:")  # fmt: skip
+            print(_fmt(res.power[["scene", "a", "b", "unit", "have", "needed"]], args.digits))
+        for path in write_outputs(res, args.metric, args.csv, args.pairs_csv, args.latex, args.markdown, args.force,
+                                  args.alpha):  # fmt: skip
+            print(f"wrote {path}", file=sys.stderr)
     _report_problems(ev, notes)
     return 1 if ev.failures else 0
 
@@ -365,3 +384,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         )
     print(f"report: {run_dir / 'index.html'}")
     return 1 if any(r.status == "failed" or r.input_errors for r in runs) else 0
+
+
+#: The helpers other command modules (:mod:`lorisnb.cli.runs`) share with these commands.
+run_evaluation, report_problems, fmt_table = _run_evaluation, _report_problems, _fmt

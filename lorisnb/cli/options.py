@@ -269,3 +269,84 @@ def param_value(text: str) -> Any:
         return json.loads(text)
     except ValueError:
         return text
+
+
+def probability_type(name: str) -> Callable[[str], Any]:
+    """A probability strictly between 0 and 1 (``--level``, ``--alpha``)."""
+
+    def check(text: str) -> float:
+        v = validate.positive(name, text, "a probability")
+        if not v < 1:
+            raise ValidationError(f"{name}={text}: expected a probability between 0 and 1")
+        return v
+
+    return arg_type(check)
+
+
+def add_compare_options(p: argparse.ArgumentParser) -> None:
+    """``compare``'s own options: the metric, the interval level, the test's alpha, the bootstrap
+    seed, the power question and the tables."""
+    p.add_argument("--metric", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"], default="cr",
+                   help="the metric of the ranking, pairwise tests and tables (default cr)")  # fmt: skip
+    p.add_argument("--level", type=probability_type("--level"), default=0.95,
+                   help="confidence level of the intervals (default 0.95)")  # fmt: skip
+    p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
+                   help="significance level of the pairwise permutation test, after Holm's correction (default 0.05)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap and of sampled relabellings (default 0)")
+    p.add_argument("--power", default=None, metavar="DELTA",
+                   type=arg_type(lambda t: validate.positive("--power", t, "the metric's unit")),
+                   help="for pairs not found different: the sequences or trials needed to detect a difference "
+                   "DELTA of the metric (power 0.8)")  # fmt: skip
+    p.add_argument("--pairs-csv", default=None, metavar="OUT",
+                   help="write the pairwise test (p, min_p, Holm, effect sizes) to this CSV")  # fmt: skip
+    p.add_argument("--latex", default=None, metavar="OUT", help="write the comparison table as LaTeX (booktabs, .tex)")
+    p.add_argument("--markdown", default=None, metavar="OUT", help="write the comparison table as Markdown (.md)")
+
+
+def add_diff_options(p: argparse.ArgumentParser) -> None:
+    """``diff``'s own options: tolerances, the test's alpha, the seed and the verdict files."""
+    from ..core.regression import DEFAULT_TOLERANCES
+
+    defaults = ",".join(f"{k}={v}" for k, v in DEFAULT_TOLERANCES.items())
+    p.add_argument("--tolerance", default=None, metavar="M=V,...",
+                   help="how much worse a metric may get before it is a regression: an amount in the metric's unit "
+                   f"or a percentage of the base value (defaults: {defaults.replace('%', '%%')})")  # fmt: skip
+    p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
+                   help="significance level of the permutation test across trials (default 0.05)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of sampled relabellings (default 0)")
+    p.add_argument("--json", default=None, metavar="OUT", help="write the verdict as JSON")
+    p.add_argument(
+        "--junit", default=None, metavar="OUT", help="write the verdict as JUnit XML (one test per sequence)"
+    )
+
+
+def add_history_options(p: argparse.ArgumentParser) -> None:
+    """``history``'s options: the runs, the metrics, tolerances and the outputs."""
+    p.add_argument("runs", nargs="+", metavar="RUN",
+                   help="report run folders (run.json + tables) or per-sequence CSV/Parquet tables")  # fmt: skip
+    p.add_argument("--metric", nargs="+", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"],
+                   default=["cr", "cr_t", "cs_r", "c_ate_rmse"], help="scene metrics to follow (default: all four)")  # fmt: skip
+    p.add_argument("--tolerance", default=None, metavar="M=V,...",
+                   help="how much a value may move before it counts as a change (as diff's --tolerance)")  # fmt: skip
+    p.add_argument("--csv", default=None, metavar="OUT", help="write the history table to this CSV")
+    p.add_argument("--out", default=None, metavar="DIR", help="write one figure per metric (PNG, SVG) into DIR")
+    p.add_argument("--force", action="store_true", help="overwrite OUT / files in DIR")
+
+
+def refuse_unused(args: argparse.Namespace, unused: dict[str, str]) -> None:
+    """Options a command shares with ``evaluate`` but cannot apply: refused, naming what to use."""
+    given = [(k, use) for k, use in unused.items() if getattr(args, k, None)]
+    if given:
+        k, use = given[0]
+        raise ValidationError(f"--{k.replace('_', '-')}: not used by lorisnb {args.command}; use {use}")
+
+
+def check_outputs(args: argparse.Namespace, inputs: list[str], files: list[str], folders: tuple[str, ...] = ()) -> None:
+    """:func:`check_output` for each output option given (``files`` and ``folders``: option names,
+    as attributes of ``args``), and that no two of them name the same place; all before any work."""
+    given: list[tuple[str, str]] = [(k, str(getattr(args, k))) for k in [*files, *folders] if getattr(args, k, None)]
+    for k, v in given:
+        check_output(v, inputs, args.force, folder=k in folders)
+    if len({str(Path(v).resolve()) for _, v in given}) < len(given):
+        names = ", ".join(f"--{k.replace('_', '-')}" for k, _ in given)
+        raise ValidationError(f"{names}: give each output its own file or folder")

@@ -20,7 +20,7 @@ from typing import Any
 from ..core import validate
 from ..core.model import FileErrors
 from ..core.spec import EvalSpec, make_spec
-from ..core.trials import compile_trials_by
+from ..core.trials import check_duplicates, check_trials_by, compile_trials_by
 from ..errors import LorisWarning, ParseError, ValidationError
 from ..io.data import DataRoot, find_data
 from ..io.formats import TRAJECTORY_FORMATS
@@ -56,9 +56,16 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
             done.append(value)
         elif isinstance(value, Failure):
             (failed if status == "failed" else skipped).append(value)
+    check_duplicates([(str(f.path), (f.suite, f.algorithm, f.scene, f.trial), tuple(e.seq for e in f.sequences))
+                      for f in done])  # fmt: skip
     for w in dict.fromkeys(w for f in done for w in f.warnings):
         warnings.warn(w, LorisWarning, stacklevel=3)
     return Evaluation(done, failed, root, skipped, data, spec=spec, kind=kind, notes=list(notes or []))
+
+
+def _check_trials(items: list[tuple[Path, Path | None]], trials_by: str | None) -> None:
+    """A ``trials_by`` that matches none of the inputs' paths is an error (:func:`check_trials_by`)."""
+    check_trials_by([labels(p, r, trials_by)[1] if r else "/".join(p.parts[-3:]) for p, r in items], trials_by)
 
 
 def evaluate(
@@ -100,6 +107,7 @@ def evaluate(
     notes = the_spec.refuse_inapplicable("openloris")
     compile_trials_by(trials_by)
     items = result_files(paths)
+    _check_trials(items, trials_by)
     data = find_data(data_root)  # no data at all is an error for the whole call, not per file
     if algorithms is not None:
         wanted = set(names("algorithms", algorithms))
@@ -208,14 +216,16 @@ def evaluate_pairs(
     compile_trials_by(trials_by)
     if not src.groundtruth.exists():
         raise ParseError(src.groundtruth, None, "ground truth not found; expected a file (or a ROS 2 bag folder)")
+    items = result_files(estimates, _pair_suffixes(src.fmt))
+    _check_trials(items, trials_by)
     topics = [t.strip() for t in src.topic.split(",")] if src.topic and "," in src.topic else [src.topic]
     if len(topics) > 1 and not all(topics):
         raise ValidationError(f"topic {src.topic!r}: expected topics separated by commas, none empty")
     sources = [src] if len(topics) == 1 else [replace(src, topic=t, label_topic=True) for t in topics]
-    work = [
+    work = [  # several topics of one bag: one row each, labelled with its topic
         Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=one)
-        for p, r in result_files(estimates, _pair_suffixes(src.fmt))
-        for one in sources  # several topics of one bag: one row each, labelled with its topic
+        for p, r in items
+        for one in sources
     ]
     return _run(work, the_spec, "pair", n_jobs=jobs, executor=executor, progress=progress, notes=notes)
 
@@ -266,9 +276,11 @@ def evaluate_manifest(
             raise ParseError(
                 s.groundtruth, None, f"ground truth of session {s.name!r} not found ({m.path}: root and groundtruth)"
             )
+    folders = algorithm_folders(results, m)
+    _check_trials([(f / "x", r) for f, r in folders], trials_by)
     work = [
         Job(kind="manifest", path=folder, root=root, spec=the_spec, trials_by=trials_by, manifest=m, scene=scene)
-        for folder, root in algorithm_folders(results, m)
+        for folder, root in folders
         for scene in m.scenes
     ]
     return _run(work, the_spec, "manifest", n_jobs=jobs, executor=executor, progress=progress, notes=notes)
