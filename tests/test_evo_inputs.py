@@ -212,3 +212,33 @@ def test_several_topics_of_one_bag_in_one_run(tmp_path):
     single = tmp_path / "s.csv"
     assert main([*args, "--topic", "/est", "--csv", str(single), "--no-progress"]) == 0
     assert pd.read_csv(single).iloc[0]["ate_rmse"] == both.loc["/est", "ate_rmse"]
+
+
+def test_point_stamped_topic_as_evo_reads_it(tmp_path):
+    from rosbags.rosbag1 import Reader, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    T = ts.types
+    t = _traj(25, 11)
+    bag = tmp_path / "points.bag"
+    with Writer(bag) as w:
+        conn = w.add_connection("/gps", "geometry_msgs/msg/PointStamped", typestore=ts)
+        for s, p in zip(t.stamps, t.positions, strict=True):
+            sec = int(np.floor(s))
+            head = T["std_msgs/msg/Header"](seq=0, stamp=T["builtin_interfaces/msg/Time"](
+                sec=sec, nanosec=int(round((s - sec) * 1e9))), frame_id="map")  # fmt: skip
+            msg = T["geometry_msgs/msg/PointStamped"](
+                header=head, point=T["geometry_msgs/msg/Point"](x=p[0], y=p[1], z=p[2])
+            )
+            w.write(conn, int(round(s * 1e9)), ts.serialize_ros1(msg, "geometry_msgs/msg/PointStamped"))
+    ours = read_bag(bag)  # the only position topic
+    r = Reader(bag)
+    r.open()
+    try:
+        theirs = fi.read_bag_trajectory(r, "/gps")
+    finally:
+        r.close()
+    np.testing.assert_array_equal(ours.stamps, theirs.timestamps)
+    np.testing.assert_array_equal(ours.positions, theirs.positions_xyz)
+    assert (ours.quaternions == [0.0, 0.0, 0.0, 1.0]).all()

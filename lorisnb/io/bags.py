@@ -1,6 +1,6 @@
 """Trajectories from ROS 1 and ROS 2 bags (through the ``rosbags`` package, which evo uses too):
-a ``geometry_msgs/PoseStamped``, ``PoseWithCovarianceStamped``, ``TransformStamped`` or
-``nav_msgs/Odometry`` topic, or a TF chain ``parent:child`` (evo's ``/tf:parent.child``) from ``/tf``
+a ``geometry_msgs/PoseStamped``, ``PoseWithCovarianceStamped``, ``TransformStamped``,
+``PointStamped`` (positions only: the identity orientation, as evo) or ``nav_msgs/Odometry`` topic, or a TF chain ``parent:child`` (evo's ``/tf:parent.child``) from ``/tf``
 and ``/tf_static``; several of one bag at once with :func:`read_bag_topics`.
 
 Stamps are the messages' header stamps (seconds); quaternions ``xyzw``. A TF chain may pass
@@ -27,6 +27,7 @@ POSE_TYPES = {
     "geometry_msgs/msg/PoseWithCovarianceStamped": lambda m: m.pose.pose,
     "nav_msgs/msg/Odometry": lambda m: m.pose.pose,
     "geometry_msgs/msg/TransformStamped": lambda m: m.transform,
+    "geometry_msgs/msg/PointStamped": lambda m: m.point,  # no orientation: the identity, as evo reads it
 }
 TF_TOPICS = ("/tf", "/tf_static")
 
@@ -46,6 +47,8 @@ def _stamp(msg: Any) -> float:
 
 
 def _pose(p: Any) -> list[float]:
+    if hasattr(p, "x"):  # a Point: no orientation (only position errors mean something)
+        return [p.x, p.y, p.z, 0.0, 0.0, 0.0, 1.0]
     t = p.position if hasattr(p, "position") else p.translation  # a Pose or a Transform
     q = p.orientation if hasattr(p, "orientation") else p.rotation
     return [t.x, t.y, t.z, q.x, q.y, q.z, q.w]
