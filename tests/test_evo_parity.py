@@ -205,6 +205,9 @@ def test_crosscheck_under_the_evo_preset_agrees_and_explains_reading(data, fr2, 
     bag = write_two_topic_bag(tmp_path / "run.bag", gt, est, 1)
     assert main(["crosscheck", str(bag), str(bag), "--format", "bag", "--gt-topic", "/gt", "--topic", "/est",
                  "--conventions", "evo", "--align", "se3"]) == 0  # fmt: skip
+    # the classic crosscheck takes bags too, with evo's reading of each topic
+    assert main(["crosscheck", str(bag), str(bag), "--format", "bag", "--gt-topic", "/gt", "--topic", "/est"]) == 0
+    assert "estimate: positions" in capsys.readouterr().out
     # lorisnb's own conventions do not claim evo's numbers: the association differs, and crosscheck says so
     assert main(["crosscheck", str(g), str(e), "--conventions", "tum"]) == 1
 

@@ -280,12 +280,17 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     refused = [o for o, v in (("--seq", args.seq), ("--data", args.data)) if v is not None and not openloris]
     refused += [o for o, v in (("--est-format", args.est_format),) if v is not None and openloris]
     refused += times if not kitti else []
+    bag = "bag" in (args.format, args.est_format)
+    refused += [o for o, v in (("--topic", args.topic), ("--gt-topic", args.gt_topic)) if v is not None and not bag]
     if refused:
         raise ValidationError(
             f"{', '.join(refused)}: does not apply to --format {args.format}"
             + (f" with --est-format {args.est_format}" if args.est_format else "")
-            + " (--seq and --data: OpenLORIS files; --est-format: TUM/KITTI/EuRoC pairs; times files: KITTI)"
+            + " (--seq and --data: OpenLORIS files; --est-format: TUM/KITTI/EuRoC pairs; times files: KITTI;"
+            " topics: bags)"
         )
+    if args.align is not None and args.conventions is None:
+        raise ValidationError("--align: only with --conventions (the crosscheck's own rows use none, se3 and sim3)")
     deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
     gt_format = args.format
     est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)
@@ -309,17 +314,19 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
                 "--gt-times and --est-times: a KITTI file has no stamps; give stamps for both files (or for "
                 "neither, to pair two KITTI files of equal length by index)"
             )
-        gt = read_trajectory(args.gt, gt_format, stamps=gt_times if gt_format == "kitti" else None)
-        est = read_trajectory(args.est, est_format, stamps=est_times if est_format == "kitti" else None)
+        gt = read_trajectory(args.gt, gt_format, stamps=gt_times if gt_format == "kitti" else None,
+                             topic=args.gt_topic if gt_format == "bag" else None)  # fmt: skip
+        est = read_trajectory(args.est, est_format, stamps=est_times if est_format == "kitti" else None,
+                              topic=args.topic if est_format == "bag" else None)  # fmt: skip
         spec = make_spec(None, surface="cli", **({} if args.scale is None else {"scale": args.scale}))
         with_scale = spec.alignment_for(Path(args.est).stem) == "sim3"
         table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs)
-        if "bag" not in (gt_format, est_format):  # and evo's own reading of each file
-            from ..tools.crosscheck_reading import crosscheck_reading
+        from ..tools.crosscheck_reading import crosscheck_reading  # and evo's own reading of each file
 
-            parts = [crosscheck_reading(f, fm).assign(quantity=lambda t, w=w: w + ": " + t["quantity"])
-                     for w, f, fm in (("ground truth", args.gt, gt_format), ("estimate", args.est, est_format))]  # fmt: skip
-            table = pd.concat([table, *parts], ignore_index=True)
+        parts = [crosscheck_reading(f, fm, t).assign(quantity=lambda x, w=w: w + ": " + x["quantity"])
+                 for w, f, fm, t in (("ground truth", args.gt, gt_format, args.gt_topic),
+                                     ("estimate", args.est, est_format, args.topic))]  # fmt: skip
+        table = pd.concat([table, *parts], ignore_index=True)
     from ..tools import require
 
     evo_version = require("evo").__version__
