@@ -45,3 +45,12 @@ def test_rpg_lengths_and_errors_from_the_whole_groundtruth(data, name):
     # rpg's preset distances
     preset = relative_table(f, lengths=[1.0, 2.5])
     assert preset["length"].tolist() == [1.0, 2.5] and preset["fraction"].map(math.isnan).all()
+
+
+def test_evaluation_relative_takes_preset_distances(data):
+    import lorisnb as ln
+
+    ev = ln.evaluate_pairs(data.tum / "freiburg1_xyz-rgbdslam.txt", data.tum / "freiburg1_xyz-groundtruth.txt",
+                           conventions="rpg")  # fmt: skip
+    assert ev.relative()["length"].tolist() == [0.91, 1.83, 2.74, 3.66, 4.57]  # rpg's, from the whole ground truth
+    assert ev.relative(lengths=[2.0])["length"].tolist() == [2.0]

@@ -85,10 +85,13 @@ class Evaluation:
         :func:`lorisnb.core.aggregate.aggregate_scenes`)."""
         return aggregate_scenes(self.sequences(eps, phi, delta, tau), self.durations())
 
-    def relative(self, fractions: tuple[float, ...] = RPG_FRACTIONS) -> pd.DataFrame:
-        """rpg_trajectory_evaluation's relative error per sequence and sub-trajectory length
-        (see :func:`lorisnb.core.relative.relative_table`)."""
-        return relative_table(self.errors, fractions)
+    def relative(
+        self, fractions: tuple[float, ...] = RPG_FRACTIONS, lengths: list[float] | None = None
+    ) -> pd.DataFrame:
+        """rpg_trajectory_evaluation's relative error per sequence and sub-trajectory length: fractions
+        of the whole ground truth's length, or rpg's preset ``lengths`` in metres (see
+        :func:`lorisnb.core.relative.relative_table`)."""
+        return relative_table(self.errors, fractions, lengths)
 
     @property
     def algorithms(self) -> list[str]:
