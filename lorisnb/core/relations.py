@@ -115,29 +115,38 @@ def error_statistics(values: np.ndarray, mask: np.ndarray | None = None) -> dict
 
 def masked_statistics(values: np.ndarray, mask: np.ndarray) -> dict[str, np.ndarray]:
     """:func:`error_statistics` (without rmse) of ``values`` (M,) over each row of a boolean
-    ``mask`` (..., M) at once (a threshold grid's correct poses): arrays shaped ``mask.shape[:-1]``,
-    NaN where a row selects nothing."""
+    ``mask`` (..., M) (a threshold grid's correct poses): arrays shaped ``mask.shape[:-1]``, NaN
+    where a row selects nothing. Rows are done in chunks of about 2**22 values (bounded memory
+    whatever the grid); each row's numbers are the same whatever the chunk."""
     v = np.asarray(values, float)
     m = np.asarray(mask, bool)
     shape = m.shape[:-1]
-    rows = np.ascontiguousarray(m.reshape(-1, v.size))
+    rows = m.reshape(-1, v.size)
+    out = {k: np.full(rows.shape[0], np.nan) for k in ("mean", "median", "std", "min", "max", "sse")}
+    step = max(1, (1 << 22) // max(v.size, 1))
+    for lo in range(0, rows.shape[0], step):  # chunks of grid rows, not poses
+        _masked_rows(v, np.ascontiguousarray(rows[lo : lo + step]), {k: a[lo : lo + step] for k, a in out.items()})
+    return {k: a.reshape(shape) for k, a in out.items()}
 
-    def row_sums(x: np.ndarray) -> np.ndarray:  # contiguous rows: each row summed alike, whatever the grid
-        return np.ascontiguousarray(np.where(rows, x, 0.0)).sum(axis=1).reshape(shape)
 
-    n = rows.sum(axis=1).reshape(shape)
+def _masked_rows(v: np.ndarray, rows: np.ndarray, out: dict[str, np.ndarray]) -> None:
+    """The statistics of ``v`` over each row of ``rows`` (R, M), written into ``out``'s (R,) views."""
+
+    def row_sums(x: np.ndarray) -> np.ndarray:  # contiguous rows: each row summed alike, whatever the chunk
+        return np.ascontiguousarray(np.where(rows, x, 0.0)).sum(axis=1)
+
+    n = rows.sum(axis=1)
+    some = n > 0
+    if not v.size or not some.any():
+        return
     with np.errstate(invalid="ignore", divide="ignore"):
-        mean = np.where(n > 0, row_sums(np.broadcast_to(v, rows.shape)) / n, np.nan)
-        dev = v[None, :] - mean.reshape(-1, 1)
-        std = np.where(n > 0, np.sqrt(row_sums(dev * dev) / n), np.nan)
-        sse = np.where(n > 0, row_sums(np.broadcast_to(v * v, rows.shape)), np.nan)
-        lo = np.where(n > 0, np.where(m, v, np.inf).min(axis=-1, initial=np.inf), np.nan)
-        hi = np.where(n > 0, np.where(m, v, -np.inf).max(axis=-1, initial=-np.inf), np.nan)
-        if m.shape[-1]:
-            filled = np.where(m, v, np.nan)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)  # rows with no value: NaN, said above
-                median = np.nanmedian(filled, axis=-1)
-        else:
-            median = np.full(m.shape[:-1], np.nan)
-    return dict(mean=mean, median=median, std=std, min=lo, max=hi, sse=sse)
+        mean = row_sums(np.broadcast_to(v, rows.shape)) / n
+        dev = v[None, :] - mean[:, None]
+        out["mean"][some] = mean[some]
+        out["std"][some] = np.sqrt(row_sums(dev * dev) / n)[some]
+        out["sse"][some] = row_sums(np.broadcast_to(v * v, rows.shape))[some]
+        out["min"][some] = np.where(rows, v, np.inf).min(axis=1)[some]
+        out["max"][some] = np.where(rows, v, -np.inf).max(axis=1)[some]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # rows with no value: NaN, said above
+            out["median"][some] = np.nanmedian(np.where(rows, v, np.nan), axis=1)[some]
