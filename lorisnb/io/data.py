@@ -32,6 +32,8 @@ from ..errors import DataNotFoundError, LorisError
 from .openloris import read_openloris
 
 ENV_VAR = "LORISNB_DATA"
+#: The small teaching data shipped inside the package (``teaching/make_sample_data.py`` writes it).
+SAMPLE_DATA = Path(__file__).resolve().parents[1] / "sample_data"
 _MARKERS = ("openloris-scene", "tum-rgbd", "published")
 
 DataRoot = str | os.PathLike[str]
@@ -125,6 +127,16 @@ def find_data(data_root: DataRoot | DataPaths | None = None) -> DataPaths:
         f"A data root holds openloris-scene/ (groundtruth/, icra20_results/), tum-rgbd/ or "
         f"published/. Pass data_root=... (command line: --data DIR) or set {ENV_VAR}=DIR."
     )
+
+
+def sample_data() -> DataPaths:
+    """The small teaching data shipped inside lorisnb (about 1.4 MB, laid out like a data root):
+    the cafe ground truth, a few icra20 results of cafe, a TUM RGB-D pair and the published
+    tables. Only the primer and the labs fall back to it (``setup(..., sample=True)``); nothing
+    else uses it unless asked (``data_root=sample_data()``)."""
+    if not _looks_like_root(SAMPLE_DATA):
+        raise DataNotFoundError(f"lorisnb's sample data is missing from {SAMPLE_DATA} (a broken install?)")
+    return DataPaths(SAMPLE_DATA)
 
 
 @lru_cache(maxsize=32)
