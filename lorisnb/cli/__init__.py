@@ -14,6 +14,7 @@ import sys
 import numpy as np
 
 from ..core import validate
+from ..core.spec import ALIGNMENTS, PRESETS
 from ..errors import LorisError
 from ..io.ranges import keep_freed_memory
 from .commands import cmd_compare, cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
@@ -88,14 +89,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("est", help="estimate")
     p.add_argument(
         "--format",
-        choices=["tum", "kitti", "euroc", "openloris"],
+        choices=["tum", "kitti", "euroc", "bag", "openloris"],
         default="tum",
         help="format of GT (and of EST unless --est-format); euroc follows evo: the ground truth is the "
         "EuRoC CSV, the estimate TUM text",
     )
     p.add_argument(
-        "--est-format", choices=["tum", "kitti", "euroc"], default=None, help="format of EST when it differs"
+        "--est-format", choices=["tum", "kitti", "euroc", "bag"], default=None, help="format of EST when it differs"
     )
+    p.add_argument("--conventions", choices=list(PRESETS), default=None,
+                   help="lorisnb under this preset (e.g. evo) against evo reading the files itself: every statistic")  # fmt: skip
+    p.add_argument("--align", choices=ALIGNMENTS, default=None, help="with --conventions: the alignment")
+    p.add_argument("--topic", default=None, help="bags: the estimate's topic (evo's /tf:parent.child too)")
+    p.add_argument("--gt-topic", default=None, help="bags: the ground truth's topic")
     add_scale_option(p, "Sim(3) for the RPE and association rows ('auto' for openloris: by algorithm)")
     p.add_argument("--times", default=None, help="KITTI: one times file (a stamp per line) for both files")
     p.add_argument("--gt-times", default=None, help="KITTI: the ground truth's times file")
