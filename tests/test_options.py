@@ -44,12 +44,27 @@ CASES: dict[str, tuple[list[str], list[str]]] = {
     "--relative": (["--relative"], []),
     "--trials-by": (["--trials-by", r"x(\d)"], []),
     "--scene": (["--scene", "somewhere"], []),
+    # evo's options (issue 23)
+    "--align-origin": (["--align-origin"], []),
+    "--t-start": (["--t-start", "1560000100"], []),  # inside the OpenLORIS home sequence; after fr1_xyz
+    "--t-end": (["--t-end", "1305031110"], []),  # inside fr1_xyz; before every OpenLORIS stamp
+    "--project-to-plane": (["--project-to-plane", "xz"], []),
+    "--downsample": (["--downsample", "50"], []),
+    "--motion-filter": (["--motion-filter", "0.05", "5"], []),
+    "--relation": (["--relation", "full"], []),
+    "--rpe-pairs": (["--rpe-unit", "m", "--rpe-pairs", "estimate"], ["--rpe-unit", "m"]),
+    "--rpe-all-pairs": (["--rpe-unit", "m", "--rpe-all-pairs"], ["--rpe-unit", "m"]),
+    "--rpe-consecutive": (["--rpe-consecutive"], []),
+    "--rpe-tolerance": (
+        ["--rpe-unit", "m", "--rpe-all-pairs", "--rpe-tolerance", "0.01"],
+        ["--rpe-unit", "m", "--rpe-all-pairs"],
+    ),
 }
 #: Options that say what to read (checked below: refused where they cannot apply), how to run, or
 #: where to write (checked by their own tests: test_speed_scale, test_safety, test_data_and_cli).
 READING = {"--gt", "--format", "--gt-format", "--manifest", "--topic", "--gt-topic", "--tf", "--gt-tf", "--gt-times",
            "--est-times", "--data"}  # fmt: skip
-RUNNING = {"--jobs", "--scheduler", "--no-progress", "--csv", "--parquet", "--force", "--help"}
+RUNNING = {"--jobs", "--scheduler", "--no-progress", "--csv", "--parquet", "--force", "--help", "--digits"}
 OWN = {  # options of one command, with their cases
     "sweep": {"--relative-to": (["--eps", "0.1", "--relative-to", "extent"], ["--eps", "0.1"])},
     "compare": {
@@ -98,6 +113,10 @@ def kinds(tmp_path_factory, data):
     pair = write(d, "pair/rgbd/est_x1.txt", "".join(body[:300] + [body[299]] + body[300:]))
     man = d / "man" / "rgbd_x1"  # a trial token in the algorithm's folder (--trials-by)
     man.mkdir(parents=True)
+    # a repeated stamp (for --keep-repeated: evo's rule keeps both poses) in every input kind
+    rep = np.insert(np.arange(len(est)), 100, 100)
+    est = Trajectory(est.stamps[rep], est.positions[rep], est.quaternions[rep])
+    half = len(est) // 2
     for k, sl in ((1, slice(0, half)), (2, slice(half, None))):
         sub = Trajectory(est.stamps[sl], est.positions[sl], est.quaternions[sl])
         write(man, f"s{k}_x1.txt", "".join(f"{t} {' '.join(map(str, p))} {' '.join(map(str, q))}\n"

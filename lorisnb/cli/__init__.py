@@ -14,10 +14,12 @@ import sys
 import numpy as np
 
 from ..core import validate
+from ..core.spec import ALIGNMENTS, PRESETS
 from ..errors import LorisError
 from ..io.ranges import keep_freed_memory
-from ..io.registry import TEXT_FORMATS
-from .commands import cmd_compare, cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
+from ..io.registry import FORMAT_NAMES
+from .commands import cmd_compare, cmd_evaluate, cmd_report, cmd_sweep
+from .crosscheck import cmd_crosscheck
 from .options import (
     add_compare_options,
     add_diff_options,
@@ -89,17 +91,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("est", help="estimate")
     p.add_argument(
         "--format",
-        choices=TEXT_FORMATS,
+        choices=FORMAT_NAMES,
         default="tum",
         help="format of GT (and of EST unless --est-format); euroc follows evo: the ground truth is the "
         "EuRoC CSV, the estimate TUM text",
     )
     p.add_argument(
         "--est-format",
-        choices=[f for f in TEXT_FORMATS if f != "openloris"],
+        choices=[f for f in FORMAT_NAMES if f != "openloris"],
         default=None,
         help="format of EST when it differs",
     )
+    p.add_argument("--conventions", choices=list(PRESETS), default=None,
+                   help="lorisnb under this preset (e.g. evo) against evo reading the files itself: every statistic")  # fmt: skip
+    p.add_argument("--align", choices=ALIGNMENTS, default=None, help="with --conventions: the alignment")
+    p.add_argument("--topic", default=None, help="bags: the estimate's topic (evo's /tf:parent.child too)")
+    p.add_argument("--gt-topic", default=None, help="bags: the ground truth's topic")
     add_scale_option(p, "Sim(3) for the RPE and association rows ('auto' for openloris: by algorithm)")
     p.add_argument("--times", default=None, help="KITTI: one times file (a stamp per line) for both files")
     p.add_argument("--gt-times", default=None, help="KITTI: the ground truth's times file")

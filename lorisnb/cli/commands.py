@@ -11,8 +11,7 @@ from typing import Any
 
 import pandas as pd
 
-from ..core.spec import make_spec
-from ..errors import EvaluationError, LorisError, LorisWarning, ParseError, ValidationError
+from ..errors import LorisError, LorisWarning, ValidationError
 from .options import check_outputs, param_value, refuse_unused, spec_from_args
 
 
@@ -90,9 +89,9 @@ def _report_problems(ev: Any, notes: list[str]) -> None:
         print(f"skipped {len(ev.skipped)} file(s): " + "; ".join(reasons), file=sys.stderr)
 
 
-def _fmt(df: pd.DataFrame) -> str:
+def _fmt(df: pd.DataFrame, digits: int = 4) -> str:
     with pd.option_context("display.max_rows", 500, "display.width", 200, "display.max_columns", 30):
-        return df.to_string(index=False, float_format=lambda v: f"{v:.4f}")
+        return df.to_string(index=False, float_format=lambda v: f"{v:.{digits}f}")
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
@@ -116,14 +115,17 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             "cr_t",
             "cs_r",
         ]
-        print(_fmt(table[cols]))
+        if ev.spec.preset_name == "evo":  # evo's statistics, as evo_ape / evo_rpe print them
+            cols += ["ate_mean", "ate_median", "ate_max", "rpe_trans_rmse", "rpe_rot_rmse"]
+        print(_fmt(table[cols], args.digits))
         try:
             scenes = aggregate_scenes(table, ev.durations())
             print("\nper scene (CR over all ground-truth time of the scene; C-ATE RMSE weighted by correct poses):")
             scenes["coverage"] = [
                 f"{k}/{n}" for k, n in zip(scenes["sequences"], scenes["scene_sequences"], strict=True)
             ]
-            print(_fmt(scenes[["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]))
+            view = scenes[["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]
+            print(_fmt(view, args.digits))
         except LorisError as exc:
             print(f"warning: no scene aggregate: {exc}", file=sys.stderr)
     if args.csv:
@@ -134,7 +136,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if getattr(args, "relative", False):
         rel = ev.relative()
         print("\nrelative error (rpg_trajectory_evaluation: sub-trajectories of 10..50 % of the length):")
-        print(_fmt(rel.drop(columns=["suite", "trial"])) if not rel.empty else "(no sequence long enough)")
+        print(_fmt(rel.drop(columns=["suite", "trial"]), args.digits) if not rel.empty else "(no sequence long enough)")
     _report_problems(ev, notes)
     print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.unscored)} not scored, "
           f"{len(ev.skipped)} skipped", file=sys.stderr)  # fmt: skip
@@ -169,12 +171,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
         path, rows = sweep_to_parquet(
             ev.errors, args.parquet, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
-            force=args.force, progress=not args.no_progress, on_part=summarize, rpe_delta=ev.spec.rpe_delta,
-            rpe_unit=ev.spec.rpe_unit,
+            force=args.force, progress=not args.no_progress, on_part=summarize, **ev.spec.rpe_options(),
         )  # fmt: skip
         print(f"{rows} rows: {len(ev.errors)} file(s) x {grid}")
         if shown:
-            print(_fmt(pd.concat(shown).head(60)))
+            print(_fmt(pd.concat(shown).head(60), args.digits))
             if scene_rows > 60:
                 print(f"... {scene_rows - 60} more scene rows (in the Parquet dataset, aggregate with sweep_scenes)")
         print(f"wrote {rows} rows to {path}", file=sys.stderr)
@@ -182,14 +183,14 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         return ev.exit_status()
     table = sweep(
         ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all",
-        rpe_delta=ev.spec.rpe_delta, rpe_unit=ev.spec.rpe_unit,
+        **ev.spec.rpe_options(),
     )  # fmt: skip
     table["spec"] = ev.spec.canonical(thresholds=False)
     print(f"{len(table)} rows: {len(ev.errors)} file(s) x {grid}")
     if not table.empty:
         scenes = sweep_scenes(table, ev.durations())
         view = scenes[cols]
-        print(_fmt(view.head(60)))
+        print(_fmt(view.head(60), args.digits))
         if len(view) > 60:
             print(f"... {len(view) - 60} more scene rows (write them all with --csv)")
     written = table if keep_label else table.drop(columns=["eps_value"])  # eps as given, when it differs
@@ -207,7 +208,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from ..tools.comparison import compare_table, write_outputs
     from ..tools.tables import check_table_suffix
 
-    rpe = [o for o, v in (("--rpe-delta", args.rpe_delta), ("--rpe-unit", args.rpe_unit)) if v is not None]
+    rpe = [o for o, v in (("--rpe-delta", args.rpe_delta), ("--rpe-unit", args.rpe_unit), ("--rpe-pairs", args.rpe_pairs),
+                          ("--rpe-all-pairs", args.rpe_all_pairs), ("--rpe-tolerance", args.rpe_tolerance)) if v is not None]  # fmt: skip
     if rpe and not args.metric.startswith(("rpe", "c_rpe")):
         raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
     refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate"})
@@ -238,96 +240,26 @@ def cmd_compare(args: argparse.Namespace) -> int:
                             "vs top [test interval]",
                             "tied_with",
                         ]
-                    ]
+                    ],
+                    args.digits,
                 )
             )
         print("\n" + res.summary)
         if len(res.significant):
-            print(_fmt(res.significant[["scene", "a", "b", "value_a", "value_b", "difference", "p", "p_holm"]]))
+            print(
+                _fmt(
+                    res.significant[["scene", "a", "b", "value_a", "value_b", "difference", "p", "p_holm"]], args.digits
+                )
+            )
         if res.power is not None:
             print(f"\nruns needed to detect a difference of {args.power} in {args.metric} (power 0.8, alpha "
                   f"{args.alpha}) where no difference was found:")  # fmt: skip
-            print(_fmt(res.power[["scene", "a", "b", "unit", "have", "needed"]]))
+            print(_fmt(res.power[["scene", "a", "b", "unit", "have", "needed"]], args.digits))
         for path in write_outputs(res, args.metric, args.csv, args.pairs_csv, args.latex, args.markdown, args.force,
                                   args.alpha):  # fmt: skip
             print(f"wrote {path}", file=sys.stderr)
     _report_problems(ev, notes)
     return ev.exit_status()
-
-
-def cmd_crosscheck(args: argparse.Namespace) -> int:
-    from ..io.writers import write_csv
-
-    check_outputs(args, [args.gt, args.est], ["csv"])
-    try:
-        table = _crosscheck_table(args)
-    except (ParseError, EvaluationError) as exc:  # an input that cannot be read or compared: 1, as every command
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
-    from ..tools import require
-
-    evo_version = require("evo").__version__
-
-    with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
-        print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"))
-    must = table["note"].str.startswith("identical pairs")
-    print(
-        f"\nevo {evo_version}: {int(table.loc[must, 'agrees'].sum())} of {int(must.sum())} quantities computed "
-        "on identical pairs agree; other rows explain where the definitions differ",
-        file=sys.stderr,
-    )
-    if args.csv:
-        write_csv(table, args.csv, args.force)
-    return 0 if table.loc[must, "agrees"].all() else 1
-
-
-def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame:
-    """The agreement table of ``crosscheck`` (reads both inputs)."""
-    from ..io.formats import read_trajectory
-    from ..io.openloris import read_openloris
-    from ..tools.crosscheck import crosscheck, crosscheck_openloris
-
-    openloris = args.format == "openloris"
-    times = [
-        o for o, v in (("--times", args.times), ("--gt-times", args.gt_times), ("--est-times", args.est_times)) if v
-    ]
-    kitti = "kitti" in (args.format, args.est_format)
-    refused = [o for o, v in (("--seq", args.seq), ("--data", args.data)) if v is not None and not openloris]
-    refused += [o for o, v in (("--est-format", args.est_format),) if v is not None and openloris]
-    refused += times if not kitti else []
-    if refused:
-        raise ValidationError(
-            f"{', '.join(refused)}: does not apply to --format {args.format}"
-            + (f" with --est-format {args.est_format}" if args.est_format else "")
-            + " (--seq and --data: OpenLORIS files; --est-format: TUM/KITTI/EuRoC pairs; times files: KITTI)"
-        )
-    deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
-    gt_format = args.format
-    est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)
-    if args.format == "openloris":
-        gt_file = read_openloris(args.gt) if args.gt not in ("-", "auto") else None
-        table = crosscheck_openloris(
-            args.est,
-            args.seq,
-            scale=False if args.scale is None else args.scale,
-            data_root=args.data,
-            groundtruth=gt_file,
-            rpe_deltas=deltas,
-        )
-    else:
-        gt_times, est_times = args.gt_times or args.times, args.est_times or args.times
-        by_index = "kitti" in (gt_format, est_format) and (gt_times is None or est_times is None)
-        if by_index and (gt_format != est_format or gt_times is not None or est_times is not None):
-            raise ValidationError(
-                "--gt-times and --est-times: a KITTI file has no stamps; give stamps for both files (or for "
-                "neither, to pair two KITTI files of equal length by index)"
-            )
-        gt = read_trajectory(args.gt, gt_format, stamps=gt_times if gt_format == "kitti" else None)
-        est = read_trajectory(args.est, est_format, stamps=est_times if est_format == "kitti" else None)
-        spec = make_spec(None, surface="cli", **({} if args.scale is None else {"scale": args.scale}))
-        with_scale = spec.alignment_for(Path(args.est).stem) == "sim3"
-        table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs)
-    return table
 
 
 def cmd_report(args: argparse.Namespace) -> int:

@@ -11,6 +11,9 @@ from pathlib import Path
 from typing import Any
 
 from ..core import validate
+from ..core.evo_options import PLANES
+from ..core.relations import RELATIONS
+from ..core.rpe import RPE_PAIRS
 from ..core.spec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, make_spec
 from ..errors import OutputError, ValidationError
 from ..io.formats import TRAJECTORY_FORMATS
@@ -71,20 +74,39 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--scene", default=None, help="scene label of a pair's rows (default: the ground truth's file name)")
     g.add_argument("--conventions", default=None, choices=list(PRESETS),
                    help="a preset of the evaluation spec (openloris: the official tool; tum: evaluate_ate.py; "
-                   "rpg: rpg_trajectory_evaluation; vio: posyaw)")  # fmt: skip
-    g.add_argument("--association", default=None, choices=ASSOCIATIONS, help="interpolate (default) or nearest")
+                   "rpg: rpg_trajectory_evaluation; vio: posyaw; evo: evo_ape/evo_rpe's defaults)")  # fmt: skip
+    g.add_argument("--association", default=None, choices=ASSOCIATIONS,
+                   help="interpolate (default), nearest (TUM's greedy), evo-nearest or evo-interpolate (evo's sync)")  # fmt: skip
     g.add_argument("--max-gap", default=None, type=arg_type(lambda t: validate.positive("--max-gap", t, "seconds")),
                    help="interpolation bracket, seconds (default 0.5)")  # fmt: skip
     g.add_argument("--max-diff", default=None, type=arg_type(lambda t: validate.positive("--max-diff", t, "seconds")),
-                   help="nearest association: largest stamp difference, seconds (default 0.02)")  # fmt: skip
+                   help="nearest associations: largest stamp difference, seconds (default 0.02; evo 0.01)")  # fmt: skip
     g.add_argument("--t-offset", default=None, type=arg_type(lambda t: validate.finite("--t-offset", t, "seconds")),
                    help="seconds added to every estimate stamp (a known clock offset)")  # fmt: skip
-    g.add_argument("--align", default=None, choices=ALIGNMENTS,
-                   help="se3 (default), sim3, posyaw, none, or auto (sim3 for monocular algorithms: dso, svo)")  # fmt: skip
+    a = g.add_mutually_exclusive_group()
+    a.add_argument("--align", default=None, choices=ALIGNMENTS,
+                   help="se3 (default), sim3, posyaw, none, auto (sim3 for monocular algorithms: dso, svo), scale "
+                   "(the Sim(3) scale only: evo's -s without -a) or origin (evo's --align_origin)")  # fmt: skip
+    a.add_argument("--align-origin", dest="align", action="store_const", const="origin",
+                   help="align the first matched estimate pose onto the first ground-truth pose (evo's --align_origin)")  # fmt: skip
     g.add_argument("--align-frames", default=None, metavar="N",
                    type=arg_type(lambda t: int(validate.positive("--align-frames", t, "poses", integer=True))),
                    help="fit the alignment on the first N matched poses only")  # fmt: skip
-    g.add_argument("--topic", default=None, help="bags: the estimate's pose topic")
+    g.add_argument("--t-start", default=None, type=arg_type(lambda t: validate.finite("--t-start", t, "seconds")),
+                   help="leave out ground-truth poses before this stamp, seconds (evo's --t_start)")  # fmt: skip
+    g.add_argument("--t-end", default=None, type=arg_type(lambda t: validate.finite("--t-end", t, "seconds")),
+                   help="leave out ground-truth poses after this stamp, seconds (evo's --t_end)")  # fmt: skip
+    g.add_argument("--project-to-plane", default=None, choices=PLANES,
+                   help="errors of the aligned poses projected to a plane (evo's --project_to_plane)")  # fmt: skip
+    g.add_argument("--downsample", default=None, metavar="N",
+                   type=arg_type(lambda t: int(validate.positive("--downsample", t, "poses", integer=True))),
+                   help="reduce both trajectories to N evenly spaced poses first (evo's --downsample)")  # fmt: skip
+    g.add_argument("--motion-filter", default=None, nargs=2, metavar=("METRES", "DEGREES"),
+                   help="keep poses that moved or turned at least this much (evo's --motion_filter)")  # fmt: skip
+    g.add_argument("--relation", default=None, choices=RELATIONS,
+                   help="also the ape_* and rpe_* statistics of this pose relation (evo's -r)")  # fmt: skip
+    g.add_argument("--topic", default=None,
+                   help="bags: the estimate's pose topic (evo's TF id /tf:parent.child too); several, comma-separated: a row each")  # fmt: skip
     g.add_argument("--gt-topic", default=None, help="bags: the ground truth's pose topic")
     g.add_argument("--tf", default=None, metavar="PARENT:CHILD", help="bags: the estimate as a TF chain")
     g.add_argument("--gt-tf", default=None, metavar="PARENT:CHILD", help="bags: the ground truth as a TF chain")
@@ -100,7 +122,9 @@ SPEC_OPTIONS = {
     "align": "align", "align_frames": "align_frames", "scale": "scale", "mode": "mode",
     "official_interpolation": "official_interpolation", "repair_stamps": "repair_stamps",
     "keep_repeated": "keep_repeated", "eps": "eps", "phi": "phi", "delta": "delta", "tau": "tau",
-    "rpe_delta": "rpe_delta", "rpe_unit": "rpe_unit",
+    "rpe_delta": "rpe_delta", "rpe_unit": "rpe_unit", "rpe_pairs": "rpe_pairs", "rpe_all_pairs": "rpe_all_pairs",
+    "rpe_tolerance": "rpe_tolerance", "t_start": "t_start", "t_end": "t_end", "project_to_plane": "project_to_plane",
+    "downsample": "downsample", "motion_filter": "motion_filter", "relation": "relation",
 }  # fmt: skip
 
 
@@ -114,7 +138,7 @@ def spec_from_args(args: argparse.Namespace, base: EvalSpec | str | None = None)
         for dest, name in SPEC_OPTIONS.items()
         if getattr(args, dest, None) is not None
         and not (dest in flags and getattr(args, dest) is False)
-        and not isinstance(getattr(args, dest), list)
+        and not (isinstance(getattr(args, dest), list) and dest != "motion_filter")
     }
     preset = getattr(args, "conventions", None) or base
     return make_spec(preset, surface="cli", **given)
@@ -125,8 +149,20 @@ def add_rpe_options(p: argparse.ArgumentParser) -> None:
     d = PRESETS["openloris"]
     p.add_argument("--rpe-delta", default=None, type=arg_type(lambda t: validate.positive("--rpe-delta", t, "steps")),
                    help=f"RPE step (default {d.rpe_delta:g}, in --rpe-unit)")  # fmt: skip
-    p.add_argument("--rpe-unit", default=None, choices=RPE_UNITS,
-                   help=f"unit of the RPE step: s, m (along the ground truth) or f (frames); default {d.rpe_unit}")  # fmt: skip
+    p.add_argument("--rpe-unit", default=None, choices=(*RPE_UNITS, "d", "r"),
+                   help=f"unit of the RPE step: s, m, f or frames, deg (d), rad (r); default {d.rpe_unit} (evo: frames)")  # fmt: skip
+    p.add_argument("--rpe-pairs", default=None, choices=RPE_PAIRS,
+                   help="measure m / deg / rad along the reference (lorisnb's default) or the aligned estimate (evo's)")  # fmt: skip
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--rpe-all-pairs", dest="rpe_all_pairs", action="store_const", const=True, default=None,
+                   help="evo's all pairs (--all_pairs): in m, the pose closest to delta within the tolerance")  # fmt: skip
+    g.add_argument("--rpe-consecutive", dest="rpe_all_pairs", action="store_const", const=False,
+                   help="evo's consecutive pairs (evo's default; the evo preset's)")  # fmt: skip
+    p.add_argument("--rpe-tolerance", default=None, type=arg_type(lambda t: validate.positive("--rpe-tolerance", t, "")),
+                   help="evo's --delta_tol for --rpe-all-pairs, a fraction of the delta (default 0.1)")  # fmt: skip
+    p.add_argument("--digits", default=4, metavar="N",
+                   type=arg_type(lambda t: int(validate.positive("--digits", t, "digits", integer=True))),
+                   help="decimals of the printed tables (default 4; the CSV keeps every digit)")  # fmt: skip
 
 
 def add_evaluation_options(p: argparse.ArgumentParser) -> None:

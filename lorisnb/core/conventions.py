@@ -12,7 +12,9 @@ Association:
 Alignment (``gt = s R est + t``, fitted on the matched positions):
     ``se3`` (Horn/Umeyama, no scale), ``sim3`` (with scale), ``posyaw`` (4-DoF: translation and a
     rotation about gravity, z; the standard for visual-inertial systems, rpg's ``posyaw``),
-    ``none``. ``align_frames=N`` fits on the first N matched poses only (evo's ``n_to_align``,
+    ``none``, ``scale`` (the Sim(3) scale alone, about the origin: evo's ``-s`` without ``-a``),
+    ``origin`` (the first matched estimate pose onto the first ground-truth pose: evo's
+    ``--align_origin``). ``align_frames=N`` fits on the first N matched poses only (evo's ``n_to_align``,
     rpg's ``align_num_frames``); with N = 1, ``se3`` and ``posyaw`` use the first pose's
     orientation as rpg does.
 """
@@ -24,12 +26,13 @@ import warnings
 import numpy as np
 
 from ..errors import EvaluationError, LorisWarning
+from .evo_options import origin_alignment, scale_alignment
 from .geometry import Sim3, degenerate_alignment, quat_to_matrix, umeyama
 from .spec import ASSOCIATIONS, MAX_DIFF, Conventions
 from .validate import choice
 
 #: The alignments :func:`fit_alignment` fits (the spec's ``auto`` is resolved per algorithm first).
-ALIGNMENTS = ("se3", "sim3", "posyaw", "none")
+ALIGNMENTS = ("se3", "sim3", "posyaw", "none", "scale", "origin")
 
 __all__ = ["ALIGNMENTS", "ASSOCIATIONS", "MAX_DIFF", "Conventions", "associate_nearest", "fit_alignment"]
 
@@ -101,7 +104,7 @@ def fit_alignment(
 ) -> Sim3:
     """The alignment ``gt = s R est + t`` of matched poses by ``method`` (see the module
     docstring), fitted on the first ``frames`` matched poses (None: all). Positions in metres;
-    quaternions ``xyzw``, needed for ``frames=1`` with ``se3`` or ``posyaw``.
+    quaternions ``xyzw``, needed for ``frames=1`` with ``se3`` or ``posyaw``, and for ``origin``.
 
     Where no alignment can be determined (fewer than 3 positions, zero spread, all on one line;
     posyaw without horizontal spread) it raises EvaluationError saying what to do; ``strict=False``
@@ -113,6 +116,12 @@ def fit_alignment(
     p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
     if method == "none" or len(p_e) == 0:
         return Sim3.identity()
+    if method == "scale":
+        return scale_alignment(p_e, p_g, frames)
+    if method == "origin":
+        if est_quaternions is None or gt_quaternions is None:
+            raise EvaluationError("align='origin' needs the orientations")
+        return origin_alignment(p_e[0], est_quaternions[0], p_g[0], gt_quaternions[0])
     if frames is None and 3 <= len(p_e) < FEW_POSES:
         _say(
             f"the {method} alignment is fitted on all of only {len(p_e)} matched poses, so it absorbs most of their "

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import EvaluationError, LorisWarning, ParseError
-from . import checks, metrics, plausibility
+from . import checks, evo_steps, metrics, plausibility
 from .association import Association, associate, groundtruth_in_frame
 from .blocks import blockwise
 from .conventions import associate_nearest, fit_alignment
@@ -40,6 +40,7 @@ from .geometry import (
 )
 from .model import FileErrors, ResultFile, SequenceErrors
 from .spec import EvalSpec, make_spec
+from .spec_evo import EVO_ASSOCIATIONS
 from .trajectory import Trajectory
 
 #: Time spans (first, last stamp, seconds) of other ground-truth sequences by label (``cafe-2``),
@@ -170,7 +171,11 @@ def evaluate_sessions(
     est = {s: with_transform(estimates[s], spec.transform) for s in seqs}
     assoc: dict[int, Association] = {}
     for s in seqs:  # one iteration per sequence
-        assoc[s] = match(groundtruth[s], est[s], spec)
+        gt_s, est[s] = evo_steps.prepare(groundtruth[s], est[s], spec)  # evo's downsample, motion filter, window
+        if spec.association in EVO_ASSOCIATIONS:
+            assoc[s], est[s] = evo_steps.evo_match(gt_s, est[s], spec)
+        else:
+            assoc[s] = match(gt_s, est[s], spec)
         if checks_on:
             label = f"{name}, seq {s}"
             raw = frames[3][s] if frames is not None else groundtruth[s]
@@ -188,7 +193,7 @@ def evaluate_sessions(
 
     def fit(s: int) -> Sim3:
         a, e = assoc[s], est[s]
-        q_e = e.quaternions[a.est_index] if spec.align_frames == 1 else None
+        q_e = e.quaternions[a.est_index] if spec.align_frames == 1 or method == "origin" else None
         return fit_alignment(e.positions[a.est_index], a.gt_positions, method, spec.align_frames, q_e, a.gt_quaternions,
                              strict=frames is None, notes=found)  # OpenLORIS: the official tool's alignment  # fmt: skip
 
@@ -232,6 +237,7 @@ def evaluate_sessions(
     for s in seqs:
         a = assoc.pop(s)
         e = errors_after_alignment(s, est[s], a, per_seq[s], spec.official_interpolation)
+        e = evo_steps.projected(e, spec.project_to_plane) if spec.project_to_plane else e
         out.append(e)
         if checks_on and not first_seen and e.matched > 10:
             first_seen = True
@@ -262,6 +268,7 @@ def evaluate_sessions(
         scene=scene, frame=frame, mode="lifelong" if lifelong else "per-seq", alignment=alignment,
         aligned_on=aligned_on, official_interpolation=spec.official_interpolation, sequences=out, warnings=kept,
         trial=trial, groundtruth_spans=dict(groundtruth_spans or {}),
+        groundtruth_lengths={s: evo_steps.whole_length(groundtruth[s]) for s in seqs},
     )  # fmt: skip
 
 

@@ -38,14 +38,15 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from ..errors import ValidationError
+from . import spec_evo as evo
 from . import validate
 from .association import MAX_GAP
 
-ASSOCIATIONS = ("interpolate", "nearest")
-ALIGNMENTS = ("se3", "sim3", "posyaw", "none", "auto")
+ASSOCIATIONS = ("interpolate", "nearest", *evo.EVO_ASSOCIATIONS)
+ALIGNMENTS = ("se3", "sim3", "posyaw", "none", "auto", *evo.EVO_ALIGNMENTS)
+RPE_UNITS = evo.RPE_UNITS
 REPEATED = ("drop", "keep")
 MODES = ("auto", "per-seq", "lifelong")
-RPE_UNITS = ("s", "m", "f")
 MAX_DIFF = 0.02  # seconds; TUM's and rpg's default
 THRESHOLD_NAMES = ("eps", "phi", "delta", "tau")
 #: Input kinds a spec is applied to (see :meth:`EvalSpec.refuse_inapplicable`).
@@ -56,12 +57,12 @@ Transform = tuple[tuple[float, float, float, float], ...]
 #: What each option of the spec means, its unit, and which inputs it applies to: the README's
 #: spec table is :func:`spec_table` (a test keeps them equal).
 OPTIONS: dict[str, tuple[str, str, str]] = {
-    "association": ("how poses are matched in time: interpolate / nearest", "", "all"),
+    "association": ("how poses are matched in time: interpolate / nearest / evo-nearest / evo-interpolate", "", "all"),
     "max_gap": ("interpolation bracket: both neighbours within it", "s", "interpolate"),
-    "max_diff": ("nearest association: largest stamp difference", "s", "nearest"),
+    "max_diff": ("nearest association: largest stamp difference", "s", "nearest, evo-*"),
     "t_offset": ("added to every estimate stamp (a known clock offset)", "s", "all"),
-    "repeated": ("poses repeating the previous one: drop (official) / keep", "", "all"),
-    "align": ("se3 / sim3 / posyaw / none / auto (sim3 for dso, svo)", "", "all"),
+    "repeated": ("poses repeating the previous one or its stamp: drop (official) / keep (evo)", "", "all"),
+    "align": ("se3 / sim3 / posyaw / none / auto (sim3 for dso, svo) / scale (only) / origin (first pose)", "", "all"),
     "align_frames": ("fit the alignment on the first N matched poses", "poses", "align != none"),
     "mode": ("auto / per-seq / lifelong (one alignment, first sequence)", "", "all"),
     "official_interpolation": ("the official tool's orientation slips (AOE only)", "", "interpolate"),
@@ -71,7 +72,8 @@ OPTIONS: dict[str, tuple[str, str, str]] = {
     "delta": ("validity window of a pose (Eq. 2, 3)", "s", "all"),
     "tau": ("re-localization time factor (Eq. 4)", "s", "all"),
     "rpe_delta": ("RPE step", "rpe_unit", "all"),
-    "rpe_unit": ("unit of the RPE step: s / m (along the ground truth) / f (frames)", "", "all"),
+    "rpe_unit": ("unit of the RPE step: s / m / f or frames / deg / rad", "", "all"),
+    **evo.EVO_OPTIONS,
     "transform": ("T_est_gt: the ground-truth body's pose in the estimate's body frame", "4x4", "pairs, manifests"),
 }
 
@@ -99,6 +101,15 @@ class EvalSpec:
     rpe_delta: float = 1.0
     rpe_unit: str = "s"
     transform: Transform | None = None
+    rpe_pairs: str = "reference"
+    rpe_all_pairs: bool | None = None
+    rpe_tolerance: float = 0.1
+    t_start: float | None = None
+    t_end: float | None = None
+    project_to_plane: str | None = None
+    downsample: int | None = None
+    motion_filter: tuple[float, float] | None = None
+    relation: str | None = None
     preset_name: str = "openloris"
     explicit: frozenset[str] = field(default=frozenset(), compare=False, repr=False)
 
@@ -137,6 +148,8 @@ class EvalSpec:
             match = f"interpolated ground truth within {self.max_gap:g} s"
             if self.official_interpolation:
                 match += " (the official tool's orientation slips)"
+        elif self.association in evo.EVO_ASSOCIATIONS:
+            match = evo.association_words(self)
         else:
             match = f"nearest stamps within {self.max_diff:g} s (greedy, TUM associate.py)"
         frames = "all matched poses" if self.align_frames is None else f"the first {self.align_frames} matched poses"
@@ -154,10 +167,13 @@ class EvalSpec:
             f"eps {_text(self.eps)}, phi {_text(self.phi)} deg, delta {self.delta:g} s, tau {self.tau:g} s; "
             f"RPE over {self.rpe_delta:g} {self.rpe_unit}"
         )
+        evo_words = evo.describe_evo(self)
         return (
             f"association: {match}{offset}; alignment: {align} on {frames}{transform}; {mode}; "
-            f"{repeated}{extra}; {thresholds} (preset {self.preset_name})"
+            f"{repeated}{extra}; {thresholds}{'; ' + evo_words if evo_words else ''} (preset {self.preset_name})"
         )
+
+    rpe_options = evo.rpe_options  # the RPE settings, as lorisnb.core.scoring.score takes them
 
     def to_dict(self) -> dict[str, Any]:
         """Every value (JSON-friendly: inf as ``"inf"``), for run records."""
@@ -201,11 +217,12 @@ class EvalSpec:
         name = _namer(surface)
         problems: list[str] = []
         notes: list[str] = []
-        if "max_diff" in given and self.association != "nearest":
+        if "max_diff" in given and self.association in ("interpolate",):
             problems.append(
                 f"{name('max_diff')}: only for nearest association ({name('association')} nearest); "
                 f"interpolation uses {name('max_gap')}"
             )
+        problems += evo.evo_refusals(self, given, name)
         if "max_gap" in given and self.association != "interpolate":
             problems.append(f"{name('max_gap')}: only for interpolation; nearest association uses {name('max_diff')}")
         if "official_interpolation" in given and self.official_interpolation and self.association != "interpolate":
@@ -287,12 +304,10 @@ def _checked(values: Mapping[str, Any], surface: str) -> dict[str, Any]:
             out[key] = validate.eps_value(v)
         elif key in ("phi", "delta", "tau"):
             out[key] = validate.threshold(key, v)
-        elif key == "rpe_unit":
-            out[key] = validate.choice(label, v, RPE_UNITS)
-        elif key == "rpe_delta":
-            out[key] = validate.positive(label, v, "steps")
         elif key == "transform":
             out[key] = validate.rigid_transform(v, label)
+        elif key in evo.EVO_DEFAULTS or key.startswith("rpe_"):  # the RPE step and evo's options
+            out[key] = evo.check_evo(key, v, label)
         elif key == "preset_name":
             if not isinstance(v, str) or not v:
                 raise ValidationError(f"preset_name={v!r}: expected the name of a preset")
@@ -301,10 +316,7 @@ def _checked(values: Mapping[str, Any], surface: str) -> dict[str, Any]:
             out[key] = frozenset(v)
         else:  # pragma: no cover - make_spec refuses unknown names first
             raise ValidationError(f"{label}: not an option of the evaluation spec")
-    if "rpe_delta" in out or "rpe_unit" in out:
-        unit = out.get("rpe_unit", values.get("rpe_unit", "s"))
-        if unit == "f" and float(out.get("rpe_delta", values.get("rpe_delta", 1.0))) % 1:
-            raise ValidationError(f"{name('rpe_delta')}: expected a whole number of frames with rpe_unit f")
+    evo.check_evo_together({**values, **out}, name)
     return out
 
 
@@ -372,6 +384,7 @@ PRESETS["openloris"] = EvalSpec()
 PRESETS["tum"] = EvalSpec(association="nearest", align="se3", preset_name="tum")
 PRESETS["rpg"] = EvalSpec(association="nearest", align="sim3", preset_name="rpg")
 PRESETS["vio"] = EvalSpec(association="nearest", align="posyaw", preset_name="vio")
+PRESETS["evo"] = EvalSpec(**evo.EVO_PRESET, preset_name="evo")
 
 
 def spec_table() -> str:

@@ -19,7 +19,7 @@ from ..errors import LorisWarning, ParseError, ValidationError
 from .chunks import read_rows
 from .openloris import read_openloris
 from .registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample
-from .scanner import Lines, check_rows, finish, read_bytes, scan
+from .scanner import REPEATED, Lines, check_rows, finish, read_bytes, scan
 
 #: Formats :func:`read_trajectory` reads (the names of :data:`lorisnb.io.registry.FORMATS`).
 TRAJECTORY_FORMATS = FORMAT_NAMES
@@ -50,12 +50,17 @@ def _check_width(lines: Lines, rows: np.ndarray, spath: str, ok: np.ndarray, exp
         raise ParseError(spath, int(i) + 1, _width_message(lines.text(i), int(lines.ntok[i]), expected, fmt))
 
 
-def read_tum(path: str | os.PathLike, warn: bool = True, progress: Callable[[int], object] | None = None) -> Trajectory:
+def read_tum(
+    path: str | os.PathLike,
+    warn: bool = True,
+    progress: Callable[[int], object] | None = None,
+    repeated: str = "drop",
+) -> Trajectory:
     """Read a TUM RGB-D trajectory: lines ``stamp tx ty tz qx qy qz qw`` (seconds, metres,
     quaternion xyzw), ``#`` comments; spaces, tabs or commas separate the values.
 
-    Non-finite poses are skipped and unsorted or repeated stamps sorted (keeping the last), with a
-    warning. Raises ParseError for a malformed line or a zero-norm quaternion. The file is read
+    Non-finite poses are skipped and unsorted or repeated stamps sorted (keeping the last, or with
+    ``repeated="keep"`` every pose of a repeated stamp, as evo does), with a warning. Raises ParseError for a malformed line or a zero-norm quaternion. The file is read
     in chunks (:func:`lorisnb.io.chunks.read_rows`); ``progress`` is called with each chunk's bytes.
     """
     spath = str(path)
@@ -78,7 +83,7 @@ def read_tum(path: str | os.PathLike, warn: bool = True, progress: Callable[[int
         values, line_no = values[keep], rows.lines[keep]
     else:
         line_no = rows.lines
-    traj = finish(spath, values[:, 0], values[:, 1:4], values[:, 4:8], line_no, "", notes)
+    traj = finish(spath, values[:, 0], values[:, 1:4], values[:, 4:8], line_no, "", notes, repeated)
     _warn(notes, warn)
     return traj
 
@@ -104,13 +109,16 @@ def _from_matrices(spath: str, stamps: np.ndarray, mats: np.ndarray, line_no: np
     return Trajectory(np.asarray(stamps, float), mats[:, :, 3].copy(), q, line_no, {"source": spath})
 
 
-def read_kitti(path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike | None = None) -> Trajectory:
+def read_kitti(
+    path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike | None = None, repeated: str = "drop"
+) -> Trajectory:
     """Read a KITTI pose file: one 3x4 matrix ``[R | t]`` per line, row-major (12 numbers, metres).
 
     KITTI files carry no stamps: pass ``stamps`` (an array, or a times file with one stamp per
     line as KITTI's ``times.txt``); without them the pose index is used as the stamp (and
-    ``meta["stamps"] == "index"``).
+    ``meta["stamps"] == "index"``). Given stamps must increase (``repeated="keep"``: or repeat).
     """
+    keep_all = choice("repeated", repeated, REPEATED) == "keep"
     spath = str(path)
     rows = read_rows(
         path,
@@ -133,7 +141,7 @@ def read_kitti(path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike |
         raise ParseError(spath, None, f"{len(mats)} poses but {len(t)} stamps; expected one stamp per pose")
     out = _from_matrices(spath, t, mats, rows.lines)
     out.meta["stamps"] = "index" if stamps is None else "given"
-    if stamps is not None and len(t) > 1 and not np.all(np.diff(t) > 0):
+    if stamps is not None and len(t) > 1 and not np.all(np.diff(t) >= 0 if keep_all else np.diff(t) > 0):
         raise ParseError(spath, None, "the stamps given for this KITTI file are not strictly increasing")
     return out
 
@@ -147,10 +155,11 @@ def read_times(path: str | os.PathLike) -> np.ndarray:
     return lines.numbers(rows, spath, "one stamp in seconds per line")
 
 
-def read_euroc(path: str | os.PathLike, warn: bool = True) -> Trajectory:
+def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop") -> Trajectory:
     """Read a EuRoC ground-truth CSV (``state_groundtruth_estimate0/data.csv``): rows
     ``stamp_ns, p_x, p_y, p_z, q_w, q_x, q_y, q_z[, ...]`` after a ``#timestamp,...`` header;
-    stamps become seconds, quaternions ``xyzw``. Further columns (velocities, biases) are ignored."""
+    stamps become seconds (nanoseconds / 1e9, as evo), quaternions ``xyzw``. Further columns
+    (velocities, biases) are ignored. ``repeated``: as :func:`read_tum`."""
     spath = str(path)
     lines = scan(read_bytes(path), separators=b",")
     rows = _data_rows(lines)
@@ -180,7 +189,7 @@ def read_euroc(path: str | os.PathLike, warn: bool = True) -> Trajectory:
     notes: list[str] = []
     line_no = rows + 1
     keep = check_rows(spath, values[:, 0], poses[:, :3], poses[:, 3:], line_no, notes)
-    traj = finish(spath, values[keep, 0] * 1e-9, poses[keep, :3], poses[keep, 3:], line_no[keep], "", notes)
+    traj = finish(spath, values[keep, 0] / 1e9, poses[keep, :3], poses[keep, 3:], line_no[keep], "", notes, repeated)
     _warn(notes, warn)
     return traj
 
@@ -192,6 +201,7 @@ def read_trajectory(
     stamps: np.ndarray | str | os.PathLike | None = None,
     topic: str | None = None,
     tf: str | None = None,
+    repeated: str = "drop",
 ) -> Trajectory:
     """Read one trajectory in any supported format.
 
@@ -200,13 +210,15 @@ def read_trajectory(
             the lowest-numbered one) or ``bag`` (ROS 1 or ROS 2; ``topic`` or ``tf``, see
             :func:`lorisnb.io.bags.read_bag`).
         stamps: KITTI only: stamps or a times file (see :func:`read_kitti`).
+        repeated: poses of a repeated stamp: ``drop`` all but the last, or ``keep`` them all (evo's
+            rule; not for OpenLORIS files, whose reader drops repeated poses as the official tool).
     """
     fmt = choice("format", fmt, TRAJECTORY_FORMATS)
     found = recognise(sample(path))
     if found and fmt not in found:  # plainly another format: say which option reads it
         want = FORMATS[fmt]
         raise ParseError(path, None, f"expected the {want.name} format ({want.columns}); {FORMATS[found[0]].hint()}")
-    return _read(path, fmt, seq, stamps, topic, tf)
+    return _read(path, fmt, seq, stamps, topic, tf, repeated)
 
 
 def _read(
@@ -216,17 +228,18 @@ def _read(
     stamps: np.ndarray | str | os.PathLike | None,
     topic: str | None,
     tf: str | None,
+    repeated: str,
 ) -> Trajectory:
     if fmt == "bag":
         from .bags import read_bag
 
-        return read_bag(path, topic=topic, tf=tf)
+        return read_bag(path, topic=topic, tf=tf, repeated=repeated)
     if fmt == "tum":
-        return read_tum(path)
+        return read_tum(path, repeated=repeated)
     if fmt == "kitti":
-        return read_kitti(path, stamps)
+        return read_kitti(path, stamps, repeated=repeated)
     if fmt == "euroc":
-        return read_euroc(path)
+        return read_euroc(path, repeated=repeated)
     if fmt == "openloris":
         f = read_openloris(path)
         if not f.sequences:

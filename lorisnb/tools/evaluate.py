@@ -158,15 +158,15 @@ def pair_source(
 
 
 def _pair_suffixes(fmt: str) -> tuple[str, ...]:
-    return (".bag",) if fmt == "bag" else tuple(dict.fromkeys((SUFFIX[fmt], ".txt", ".csv")))
+    return (".bag", ".mcap", ".db3") if fmt == "bag" else tuple(dict.fromkeys((SUFFIX[fmt], ".txt", ".csv")))
 
 
 def _refuse_reading(spec: EvalSpec, fmt: str, kind: str) -> None:
-    """Spec options that only OpenLORIS' reader honours, refused for other formats."""
+    """Spec options that only OpenLORIS' reader honours, refused for other formats (``repeated``
+    keep: every reader keeps the poses of a repeated stamp, as evo)."""
     if fmt == "openloris":
         return
-    for name, flag, on in (("repair_stamps", "--repair-stamps", spec.repair_stamps),
-                           ("repeated", "--keep-repeated", spec.repeated == "keep")):  # fmt: skip
+    for name, flag, on in (("repair_stamps", "--repair-stamps", spec.repair_stamps),):  # fmt: skip
         if name in spec.explicit and on:
             raise ValidationError(
                 f"{name} (command line {flag}): only OpenLORIS result files are read with this rule; the {kind}'s "
@@ -207,7 +207,9 @@ def evaluate_pairs(
             ``kitti``, ``bag``, ``openloris``); ``gt_fmt`` defaults to ``fmt``.
         scene: the scene label of the rows (default: the ground-truth file's name).
         est_times, gt_times: times files for KITTI poses (one stamp per line).
-        topic, gt_topic, tf, gt_tf: what to read from bags (see :func:`lorisnb.io.bags.read_bag`).
+        topic, gt_topic, tf, gt_tf: what to read from bags (see :func:`lorisnb.io.bags.read_bag`);
+            ``topic`` may name several topics (or evo's TF ids) separated by commas: one row each, its
+            ``algorithm`` the topic.
         jobs, executor, progress, trials_by: as for :func:`evaluate`.
     """
     the_spec = _spec(spec, conventions, options)
@@ -218,9 +220,19 @@ def evaluate_pairs(
     compile_trials_by(trials_by)
     if not src.groundtruth.exists():
         raise ParseError(src.groundtruth, None, "ground truth not found; expected a file (or a ROS 2 bag folder)")
-    items = without_groundtruth(result_files(estimates, _pair_suffixes(src.fmt)), src.groundtruth)
+    items = result_files(estimates, _pair_suffixes(src.fmt))
+    if "bag" not in (src.fmt, src.gt_fmt):  # (one bag may hold both, on other topics)
+        items = without_groundtruth(items, src.groundtruth)
     _check_trials(items, trials_by)
-    work = [Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=src) for p, r in items]
+    topics = [t.strip() for t in src.topic.split(",")] if src.topic and "," in src.topic else [src.topic]
+    if len(topics) > 1 and not all(topics):
+        raise ValidationError(f"topic {src.topic!r}: expected topics separated by commas, none empty")
+    sources = [src] if len(topics) == 1 else [replace(src, topic=t, label_topic=True) for t in topics]
+    work = [  # several topics of one bag: one row each, labelled with its topic
+        Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=one)
+        for p, r in items
+        for one in sources
+    ]
     return _run(work, the_spec, "pair", n_jobs=jobs, executor=executor, progress=progress, notes=notes)
 
 

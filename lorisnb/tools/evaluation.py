@@ -13,6 +13,7 @@ import pandas as pd
 from ..core.aggregate import aggregate_scenes, spans_table
 from ..core.frames import SCENES
 from ..core.model import Eps, FileErrors
+from ..core.relation_table import relation_columns
 from ..core.relative import RPG_FRACTIONS, relative_table
 from ..core.scoring import pose_table, score
 from ..core.spec import EvalSpec
@@ -62,12 +63,15 @@ class Evaluation:
         """Per-sequence table at one setting (see :func:`lorisnb.core.scoring.score`); thresholds and
         the RPE step not given are the spec's. A ``spec`` column holds the spec's exact text."""
         s = self.spec
-        kw.setdefault("rpe_delta", s.rpe_delta)
-        kw.setdefault("rpe_unit", s.rpe_unit)
+        for k, v in s.rpe_options().items():
+            kw.setdefault(k, v)
         table = score(
             self.errors, s.eps if eps is None else eps, s.phi if phi is None else phi,
             s.delta if delta is None else delta, s.tau if tau is None else tau, **kw,
         )  # fmt: skip
+        if s.relation is not None and len(table):  # evo's -r: statistics of that pose relation
+            rel = relation_columns(self.errors, s.relation, **{k: v for k, v in kw.items() if k.startswith("rpe_")})
+            table = pd.concat([table, rel.set_index(table.index)], axis=1)
         table["spec"] = s.canonical(thresholds=False)
         return table
 
@@ -82,10 +86,13 @@ class Evaluation:
         :func:`lorisnb.core.aggregate.aggregate_scenes`)."""
         return aggregate_scenes(self.sequences(eps, phi, delta, tau), self.durations())
 
-    def relative(self, fractions: tuple[float, ...] = RPG_FRACTIONS) -> pd.DataFrame:
-        """rpg_trajectory_evaluation's relative error per sequence and sub-trajectory length
-        (see :func:`lorisnb.core.relative.relative_table`)."""
-        return relative_table(self.errors, fractions)
+    def relative(
+        self, fractions: tuple[float, ...] = RPG_FRACTIONS, lengths: list[float] | None = None
+    ) -> pd.DataFrame:
+        """rpg_trajectory_evaluation's relative error per sequence and sub-trajectory length: fractions
+        of the whole ground truth's length, or rpg's preset ``lengths`` in metres (see
+        :func:`lorisnb.core.relative.relative_table`)."""
+        return relative_table(self.errors, fractions, lengths)
 
     @property
     def algorithms(self) -> list[str]:

@@ -48,6 +48,7 @@ class PairSource:
     gt_topic: str | None = None
     tf: str | None = None
     gt_tf: str | None = None
+    label_topic: bool = False  # one of several topics of the bag: the rows' algorithm is the topic
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -73,10 +74,11 @@ def _stamp(path: Path) -> tuple[float, int]:
 
 @lru_cache(maxsize=64)
 def _read_groundtruth(
-    path: Path, fmt: str, stamp: tuple[float, int], times: Path | None, topic: str | None, tf: str | None
-) -> Trajectory:
+    path: Path, fmt: str, stamp: tuple[float, int], times: Path | None, topic: str | None, tf: str | None,
+    repeated: str = "drop",
+) -> Trajectory:  # fmt: skip
     """A ground-truth trajectory, read once per process (until the file changes), arrays read-only."""
-    gt = read_trajectory(path, fmt, stamps=times, topic=topic, tf=tf)
+    gt = read_trajectory(path, fmt, stamps=times, topic=topic, tf=tf, repeated=repeated)
     for a in (gt.stamps, gt.positions, gt.quaternions, gt.lines):
         if a is not None:
             a.setflags(write=False)
@@ -84,10 +86,11 @@ def _read_groundtruth(
 
 
 def groundtruth_of(path: Path, fmt: str, times: Path | None = None, topic: str | None = None,
-                   tf: str | None = None) -> Trajectory:  # fmt: skip
-    """The ground truth of a pair or a manifest session (cached; read-only arrays)."""
+                   tf: str | None = None, repeated: str = "drop") -> Trajectory:  # fmt: skip
+    """The ground truth of a pair or a manifest session (cached; read-only arrays); ``repeated``:
+    the rule for poses of a repeated stamp (see :func:`lorisnb.io.formats.read_trajectory`)."""
     stamp = _stamp(path) if path.is_file() else (0.0, 0)
-    return _read_groundtruth(path, fmt, stamp, times, topic, tf)
+    return _read_groundtruth(path, fmt, stamp, times, topic, tf, "drop" if fmt == "openloris" else repeated)
 
 
 @lru_cache(maxsize=64)
@@ -112,7 +115,8 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
         if errors is None:
             return "filtered", None
         for seq in errors.sequences:  # the RPE pairs of the spec, here (in a worker, when in parallel)
-            seq.rpe(job.spec.rpe_delta, job.spec.rpe_unit)
+            o = job.spec.rpe_options()
+            seq.rpe(o["rpe_delta"], o["rpe_unit"], o["rpe_pairs"], o["rpe_all_pairs"], o["rpe_tolerance"])
         return "ok", errors
     except DataNotFoundError as exc:
         return "skipped", Failure(job.path, str(exc), "no-groundtruth")
@@ -159,10 +163,14 @@ def _pair(job: Job) -> FileErrors:
     algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
     if job.root is None:  # a file given alone: its name says which estimate it is
         algorithm = job.path.stem
-    gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf)
+    if src.label_topic and src.topic:
+        algorithm = src.topic
+    rule = job.spec.repeated
+    gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, rule)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
-        est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf)
+        est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf,
+                              repeated="drop" if src.fmt == "openloris" else rule)  # fmt: skip
     check_stamp_units(est, gt, str(job.path))  # seconds against pose indices or nanoseconds: an error
     span = {1: (float(gt.stamps[0]), float(gt.stamps[-1]))} if len(gt) else {}
     return evaluate_sessions(
@@ -182,7 +190,8 @@ def _manifest(job: Job) -> FileErrors:
             raise ParseError(
                 s.groundtruth, None, f"ground truth of session {s.name!r} not found ({m.path}: root and groundtruth)"
             )
-        gts[s.seq] = groundtruth_of(s.groundtruth, s.groundtruth_format, None, m.groundtruth_topic, m.groundtruth_tf)
+        gts[s.seq] = groundtruth_of(s.groundtruth, s.groundtruth_format, None, m.groundtruth_topic, m.groundtruth_tf,
+                                    job.spec.repeated)  # fmt: skip
     ests: dict[int, Trajectory] = {}
     notes: list[str] = []
     with warnings.catch_warnings(record=True) as caught:
@@ -190,7 +199,8 @@ def _manifest(job: Job) -> FileErrors:
         for s in sessions:
             path = job.path / s.estimate
             if path.exists():
-                ests[s.seq] = read_trajectory(path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf)
+                ests[s.seq] = read_trajectory(path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf,
+                                              repeated="drop" if m.estimate_format == "openloris" else job.spec.repeated)  # fmt: skip
                 check_stamp_units(ests[s.seq], gts[s.seq], str(path))
     notes += [str(w.message) for w in caught]
     spans = {k: (float(t.stamps[0]), float(t.stamps[-1])) for k, t in gts.items() if len(t)}
