@@ -17,7 +17,9 @@ from ..core import validate
 from ..core.spec import ALIGNMENTS, PRESETS
 from ..errors import LorisError
 from ..io.ranges import keep_freed_memory
-from .commands import cmd_compare, cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
+from ..io.registry import FORMAT_NAMES
+from .commands import cmd_compare, cmd_evaluate, cmd_report, cmd_sweep
+from .crosscheck import cmd_crosscheck
 from .options import (
     add_compare_options,
     add_diff_options,
@@ -89,13 +91,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("est", help="estimate")
     p.add_argument(
         "--format",
-        choices=["tum", "kitti", "euroc", "bag", "openloris"],
+        choices=FORMAT_NAMES,
         default="tum",
         help="format of GT (and of EST unless --est-format); euroc follows evo: the ground truth is the "
         "EuRoC CSV, the estimate TUM text",
     )
     p.add_argument(
-        "--est-format", choices=["tum", "kitti", "euroc", "bag"], default=None, help="format of EST when it differs"
+        "--est-format",
+        choices=[f for f in FORMAT_NAMES if f != "openloris"],
+        default=None,
+        help="format of EST when it differs",
     )
     p.add_argument("--conventions", choices=list(PRESETS), default=None,
                    help="lorisnb under this preset (e.g. evo) against evo reading the files itself: every statistic")  # fmt: skip

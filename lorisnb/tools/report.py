@@ -225,7 +225,7 @@ def run_notebook(
     errors_csv = nb_dir / INPUT_ERRORS_CSV
     if errors_csv.exists():
         failed = pd.read_csv(errors_csv)
-        run.input_errors = int((failed.get("status", pd.Series(dtype=str)) == "failed").sum())
+        run.input_errors = int(failed.get("status", pd.Series(dtype=str)).isin(["failed", "not scored"]).sum())
     return run
 
 
