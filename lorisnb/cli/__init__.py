@@ -156,6 +156,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = ["lorisnb", *(sys.argv[1:] if argv is None else argv)]  # the command line, as run.json records it
     keep_freed_memory()  # a command is one short process: reuse freed memory (see there)
     try:
         return int(args.func(args) or 0)

@@ -321,7 +321,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         protect=protect,
         results=args.results,
         jobs=args.jobs,
-        command=["lorisnb", *sys.argv[1:]] if sys.argv and Path(sys.argv[0]).name == "lorisnb" else list(sys.argv),
+        command=getattr(args, "argv", None),
     )
     for r in runs:
         status = r.status if r.status != "ok" or not r.input_errors else f"ok, {r.input_errors} input file(s) failed"

@@ -9,6 +9,7 @@ with ground truth, and trials) and words the result.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from ..core import ranking, stats
+from ..errors import LorisWarning
 from ..io.data import DataPaths
 
 #: Names of the metrics in sentences, with whether higher is better.
@@ -172,10 +174,12 @@ def report_findings(
     from .evaluate import evaluate
 
     values: dict[str, Any] = {k: v if parameters.get(k) is None else parameters[k] for k, v in SETTINGS.items()}
-    ev = evaluate(
-        source, scale=values["scale"], data_root=data, trials_by=values["trials_by"],
-        algorithms=values["algorithms"], scenes=values["scenes"],
-    )  # fmt: skip
+    with warnings.catch_warnings():  # the notebooks show the warnings about inputs, per file
+        warnings.simplefilter("ignore", LorisWarning)
+        ev = evaluate(
+            source, scale=values["scale"], data_root=data, trials_by=values["trials_by"],
+            algorithms=values["algorithms"], scenes=values["scenes"],
+        )  # fmt: skip
     table = ev.sequences(values["eps"], values["phi"], values["delta"], values["tau"])
     f = findings(
         table, ev.durations() if len(table) else pd.DataFrame(columns=["scene", "seq"]), str(values["metric"]),

@@ -35,7 +35,8 @@ class Outputs:
     ``table`` and ``figure`` return their argument so a cell can write and display at once.
     Input files that could not be evaluated go to ``input_errors.csv``, which the report lists.
     Inside a report's run folder (:data:`RUN_MARKER` in the parent folder) a figure is stored once:
-    one PNG, which the notebook (and its HTML page) shows by reference instead of embedding.
+    one PNG at 100 dpi (the size it is shown at) in 256 colours (:func:`compact_png`), which the
+    notebook (and its HTML page) shows by reference instead of embedding.
     """
 
     def __init__(self, output_dir: str | os.PathLike[str]):
@@ -51,8 +52,9 @@ class Outputs:
         """Save ``fig`` as PNG, SVG and PDF and show it once in the notebook (:func:`show_figure`)."""
         from .plotting import save_figure
 
-        if self.in_report:
-            path = save_figure(fig, self.dir, name, formats=("png",))[0]
+        if self.in_report:  # one PNG at 100 dpi (the size it is shown at), 256 colours: about 20 kB
+            path = self.dir / f"{name}.png"
+            path.write_bytes(compact_png(figure_png(fig, dpi=100)))
             show_figure(fig, url=path.name)
             return
         paths = save_figure(fig, self.dir, name)
@@ -68,6 +70,18 @@ def figure_png(fig: Any, dpi: int = 150) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
     return buf.getvalue()
+
+
+def compact_png(png: bytes) -> bytes:
+    """A PNG with its colours reduced to a 256-colour palette (Pillow's fast octree): a plot's
+    flat colours and antialiasing survive, the file is about four times smaller."""
+    from PIL import Image
+
+    out = io.BytesIO()
+    Image.open(io.BytesIO(png)).convert("RGB").quantize(256, method=Image.Quantize.FASTOCTREE).save(
+        out, format="PNG", optimize=True
+    )
+    return out.getvalue()
 
 
 def show_figure(fig: Any, dpi: int = 150, png: bytes | None = None, url: str | None = None) -> None:

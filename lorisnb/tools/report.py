@@ -17,7 +17,7 @@ import shutil
 import sys
 import tempfile
 from collections.abc import Iterable, Mapping
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
@@ -27,12 +27,14 @@ from ..io.writers import write_csv
 from .leaderboard import Findings, report_findings
 from .notebook import RUN_MARKER
 from .provenance import checksums, input_files, run_record, write_run_json
-from .report_html import single_file
+from .report_html import single_file, write_notebook_css
 from .report_index import versions, write_index
 from .report_notebooks import (
     DEFAULT_NOTEBOOKS,
     KERNEL_ARGS,
+    NOTEBOOK_CSS,
     NOTEBOOK_NEEDS,
+    TYPICAL_SECONDS,
     NotebookRun,
     available_notebooks,
     check_parameters,
@@ -99,29 +101,39 @@ def _select(notebooks: Iterable[str] | None, notebooks_dir: Any, results: Any) -
 
 def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_dir: Any, jobs: int,
              progress: bool) -> list[NotebookRun]:  # fmt: skip
-    """Run the notebooks, ``jobs`` at a time (each in its own kernel process); results in ``names`` order."""
-    runs: dict[int, NotebookRun] = {}
+    """Run the notebooks, ``jobs`` at a time, each in its own worker process (papermill's clients
+    are not safe side by side in one process) and kernel; one at a time in this process when
+    ``jobs`` is 1. Results in ``names`` order; the longest notebooks start first."""
     bar = None
     if progress:
         from tqdm.auto import tqdm
 
         bar = tqdm(total=len(names), desc="report", unit="notebook")
-    pool = ThreadPoolExecutor(max_workers=max(1, jobs))
+    runs: dict[int, NotebookRun] = {}
+    order = sorted(range(len(names)), key=lambda i: -TYPICAL_SECONDS.get(Path(names[i]).stem, 0))
     try:
-        futures = {
-            pool.submit(run_notebook, n, tmp, params, notebooks_dir=notebooks_dir): i for i, n in enumerate(names)
-        }
-        for fut in as_completed(futures):
-            runs[futures[fut]] = fut.result()
-            if bar is not None:
-                bar.set_postfix_str(runs[futures[fut]].name)
-                bar.update()
-    except BaseException:
-        for fut in futures:
-            fut.cancel()
-        raise
+        if jobs <= 1 or len(names) <= 1:
+            for i in order:
+                runs[i] = run_notebook(names[i], tmp, params, notebooks_dir=notebooks_dir)
+                if bar is not None:
+                    bar.set_postfix_str(runs[i].name)
+                    bar.update()
+            return [runs[i] for i in range(len(names))]
+        import multiprocessing
+
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+            futures = {pool.submit(run_notebook, names[i], tmp, dict(params), notebooks_dir=notebooks_dir): i
+                       for i in order}  # fmt: skip
+            try:
+                for fut in as_completed(futures):
+                    runs[futures[fut]] = fut.result()
+                    if bar is not None:
+                        bar.set_postfix_str(runs[futures[fut]].name)
+                        bar.update()
+            except BaseException:
+                pool.shutdown(wait=False, cancel_futures=True)
+                raise
     finally:
-        pool.shutdown(wait=False, cancel_futures=True)
         if bar is not None:
             bar.close()
     return [runs[i] for i in range(len(names))]
@@ -216,6 +228,10 @@ def run_report(
     tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
     try:
         (tmp / RUN_MARKER).write_text(json.dumps({"lorisnb": versions()["lorisnb"], "pid": os.getpid()}))
+        try:
+            write_notebook_css(tmp / NOTEBOOK_CSS)
+        except (OSError, IndexError, LorisError):  # no nbconvert templates: each page keeps its own style
+            pass
         findings: Findings | None = None
         spec: dict[str, Any] = {"description": None, "values": {}}
         failures = per_sequence = None

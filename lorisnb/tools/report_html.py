@@ -24,6 +24,9 @@ _TEMPLATE_TEXT = r"""{%- extends 'index.html.j2' -%}
 {%- block html_head_js_mermaidjs -%}{%- endblock html_head_js_mermaidjs -%}
 {% block extra_css %}<style>details.lorisnb-code>summary{cursor:pointer;color:#666;font:12px sans-serif;
 margin:2px 0 2px 70px}.lorisnb-note{color:#666;font-style:italic}</style>{% endblock extra_css %}
+{% block notebook_css %}
+{%- if resources.lorisnb_css -%}<link rel="stylesheet" href="{{ resources.lorisnb_css }}">{%- else -%}{{ super() }}{%- endif -%}
+{% endblock notebook_css %}
 {% block input_group -%}
 <details class="lorisnb-code"><summary>code</summary>
 {{ super() }}
@@ -66,8 +69,33 @@ def static_widgets(nb: Any) -> Any:
     return nb
 
 
-def export_html(ipynb: Path) -> Path:
-    """The notebook ``ipynb`` as an offline HTML page beside it (same stem); raises on failure."""
+#: Rules of nbconvert's lab template that sit outside its style sheets.
+_EXTRA_CSS = """
+* { -webkit-print-color-adjust: exact; }
+a.anchor-link { display: none; }
+.jp-InputArea { overflow: hidden; }
+.jp-InputArea-editor { overflow: hidden; }
+.cm-editor.cm-s-jupyter .highlight pre { padding: var(--jp-code-padding) 4px; margin: 0; font-family: inherit;
+  font-size: inherit; line-height: inherit; color: inherit; }
+.jp-OutputArea-output pre { line-height: inherit; font-family: inherit; }
+.jp-RenderedText pre { color: var(--jp-content-font-color1); font-size: var(--jp-code-font-size); }
+.jp-Collapser { display: none; }
+"""
+
+
+def write_notebook_css(out: Path) -> Path:
+    """The style sheet of nbconvert's lab template (light theme) as one file, which every notebook
+    page of a run links (:func:`export_html` with ``css``) instead of carrying its own copy."""
+    static = Path(_template_dirs()[0]) / "lab" / "static"
+    text = "\n".join((static / name).read_text(encoding="utf-8") for name in ("index.css", "theme-light.css"))
+    out.write_text(text + _EXTRA_CSS, encoding="utf-8")
+    return out
+
+
+def export_html(ipynb: Path, css: str | None = None) -> Path:
+    """The notebook ``ipynb`` as an offline HTML page beside it (same stem); raises on failure.
+    ``css``: a style sheet to link (a relative URL, see :func:`write_notebook_css`) instead of
+    inlining nbconvert's (about 280 kB per page)."""
     nbformat = require("nbformat")
     nbconvert = require("nbconvert")
     jinja2 = require("jinja2")
@@ -80,7 +108,8 @@ def export_html(ipynb: Path) -> Path:
         extra_template_basedirs=_template_dirs(),
         extra_template_paths=_template_dirs(),
     )
-    body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": ipynb.stem}})
+    resources = {"metadata": {"name": ipynb.stem}, "lorisnb_css": css or ""}
+    body, _ = exporter.from_notebook_node(nb, resources=resources)
     out = ipynb.with_suffix(".html")
     out.write_text(body, encoding="utf-8")
     return out

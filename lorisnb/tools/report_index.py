@@ -109,13 +109,18 @@ def _fmt(v: float) -> str:
 
 
 def _board_rows(board: pd.DataFrame) -> pd.DataFrame:
+    everyone = set(board["algorithm"])
+    tied = [
+        "all others" if t and set(t.split(", ")) == everyone - {a} else t
+        for a, t in zip(board["algorithm"], board["tied_with"].fillna("").astype(str), strict=True)
+    ]
     out = pd.DataFrame({
         "rank": board["rank"], "algorithm": board["algorithm"], board["metric"].iloc[0]: board["value"].map(_fmt),
         f"{board['level'].iloc[0]:.0%} interval": [
-            "" if pd.isna(lo) else f"[{lo:.3f}, {hi:.3f}]" for lo, hi in zip(board["low"], board["high"], strict=True)
+            ("(one sequence)" if n <= 1 else "") if pd.isna(lo) else f"[{lo:.3f}, {hi:.3f}]"
+            for lo, hi, n in zip(board["low"], board["high"], board["sequences_covered"], strict=True)
         ],
-        "coverage (sequences)": board["coverage"], "trials": board["trials"],
-        "tied with": board["tied_with"].fillna(""),
+        "coverage (sequences)": board["coverage"], "trials": board["trials"], "tied with": tied,
     })  # fmt: skip
     return out
 
@@ -136,7 +141,8 @@ def _findings_html(f: "Findings", spec: Mapping[str, Any], evidence: Mapping[str
         anchor = f"scene-{suite}-{scene}".replace("/", "-")
         parts.append(f"<h3 id='{esc(anchor)}'>{esc(title)}</h3>")
         parts.append(_table(_board_rows(g), "leaderboard"))
-        links = " · ".join(evidence.get(scene, []) + evidence.get("*", []))
+        links = " · ".join(evidence.get(scene, []) + evidence.get(f"suite:{suite}", []) + evidence.get("*", []))
+        links += f" · <a href='#seq-{esc(anchor[6:])}'>per-sequence values</a> · <a href='#failures'>failures</a>"
         parts.append(f"<p class='sentence'>{esc(f.sentences[(suite, scene)])}</p><p class='why'>Why: {links}</p>")
     return parts
 
@@ -151,17 +157,28 @@ def _figures(run_dir: Path, runs: Sequence["NotebookRun"]) -> dict[str, list[tup
     return out
 
 
+#: Figures that are evidence for every scene: the suite's timeline, the threshold curves.
+_TIMELINE = {"per-seq": "timeline_per_sequence", "lifelong": "timeline_lifelong"}
+_GENERAL = ("cr_vs_eps", "rank_stability")
+
+
 def _evidence(figures: Mapping[str, list[tuple[Path, str, str]]], scenes: Sequence[str]) -> dict[str, list[str]]:
+    """Links to the figures behind a scene's claims: its own (``cr_heatmap_<scene>``), its suite's
+    timeline (key ``suite:<suite>``; both timelines for a results folder without suites), and the
+    threshold curves (key ``*``)."""
     ev: dict[str, list[str]] = {"*": []}
-    for section, items in figures.items():
+    for items in figures.values():
         for p, nb, _ in items:
             link = f"<a href='#fig-{esc(nb)}-{esc(p.stem)}'>{esc(p.stem.replace('_', ' '))}</a>"
-            hit = [s for s in scenes if p.stem.endswith(f"_{s}")]
-            for s in hit:
-                ev.setdefault(s, []).append(link)
-            if not hit and section in ("timelines", "thresholds"):
+            for s in scenes:
+                if p.stem.endswith(f"_{s}"):
+                    ev.setdefault(s, []).append(link)
+            for suite, stem in _TIMELINE.items():
+                if p.stem == stem:
+                    ev.setdefault(f"suite:{suite}", []).append(link)
+                    ev.setdefault("suite:", []).append(link)
+            if p.stem in _GENERAL:
                 ev["*"].append(link)
-    ev["*"] += ["<a href='#per-sequence'>per-sequence values</a>", "<a href='#failures'>failures</a>"]
     return ev
 
 
@@ -221,7 +238,9 @@ def write_index(
         for (suite, scene), g in per_sequence.groupby(["suite", "scene"], sort=False):
             pivot = g.pivot_table(index="algorithm", columns="seq", values=metric, aggfunc="mean")
             pivot.columns = [f"seq {c}" for c in pivot.columns]
-            parts.append(f"<h4>{esc(scene)}" + (f" ({esc(suite)})" if suite else "") + "</h4>")
+            parts.append(
+                f"<h4 id='seq-{esc(suite)}-{esc(scene)}'>{esc(scene)}" + (f" ({esc(suite)})" if suite else "") + "</h4>"
+            )
             parts.append(_table(pivot.map(_fmt).reset_index(), "values"))
     else:
         parts.append("<p>None in this report.</p>")

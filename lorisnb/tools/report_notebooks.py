@@ -8,8 +8,10 @@ import importlib.util
 import json
 import os
 import sys
+import tempfile
 import time
 import traceback
+import uuid
 import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
@@ -24,6 +26,9 @@ from ._extras import EXTRAS, require
 from .notebook import INPUT_ERRORS_CSV
 from .report_html import export_html
 
+#: The notebook pages' shared style sheet in the run folder (written once by the report).
+NOTEBOOK_CSS = "notebook.css"
+
 #: Report order: the teaching notebook first, then the paper's figures, then the explorations.
 DEFAULT_NOTEBOOKS = (
     "metrics_primer",
@@ -35,6 +40,13 @@ DEFAULT_NOTEBOOKS = (
     "indoor_vs_outdoor",
     "evaluate_my_results",
 )
+
+#: About how long each shipped notebook runs alone (seconds, 2 cores): a report starts the longest
+#: first, so that notebooks running side by side finish close together.
+TYPICAL_SECONDS = {
+    "evo_crosscheck": 20, "threshold_sensitivity": 20, "compare_algorithms": 10, "per_sequence_benchmark": 8,
+    "indoor_vs_outdoor": 7, "evaluate_my_results": 7, "metrics_primer": 6, "lifelong_benchmark": 6,
+}  # fmt: skip
 
 #: Kernel options: its own log is silenced (the loopback-TCP 'without encryption' notice or
 #: the 'KeyboardInterrupt caught in kernel' line of a normal shutdown).
@@ -131,6 +143,28 @@ def kernel_env() -> None:
     logging.getLogger("traitlets").setLevel(logging.ERROR)
 
 
+def kernel_manager_class() -> Any:
+    """Jupyter's kernel manager with the kernel's sockets on ipc files of a unique name (POSIX):
+    kernels started side by side by several processes never race for the same free TCP port (a
+    kernel that loses dies "before replying to kernel_info")."""
+    from jupyter_client.manager import AsyncKernelManager
+
+    if os.name != "posix":
+        return AsyncKernelManager
+    from traitlets import default
+
+    class IpcKernelManager(AsyncKernelManager):
+        @default("transport")
+        def _transport_default(self) -> str:
+            return "ipc"
+
+        @default("ip")
+        def _ip_default(self) -> str:
+            return os.path.join(tempfile.gettempdir(), f"lorisnb-kernel-{uuid.uuid4().hex[:16]}")
+
+    return IpcKernelManager
+
+
 def declared_parameters(path: Path) -> dict[str, dict[str, Any]]:
     """The parameters a notebook declares in its cell tagged ``parameters`` (name -> papermill's
     description: default, inferred type, help)."""
@@ -199,7 +233,9 @@ def run_one(
     try:
         pm.execute_notebook(
             str(src), str(target), parameters=params, kernel_name="python3", progress_bar=False,
-            cwd=str(nb_dir), execution_timeout=timeout, log_output=False, extra_arguments=KERNEL_ARGS,
+            execution_timeout=timeout, log_output=False, extra_arguments=KERNEL_ARGS,
+            resources={"metadata": {"path": str(nb_dir)}},  # the kernel's folder; cwd= would chdir this process
+            kernel_manager_class=kernel_manager_class(),
         )  # fmt: skip
     except KeyboardInterrupt:
         raise
@@ -211,7 +247,7 @@ def run_one(
     run.seconds = time.perf_counter() - t
     if target.exists():
         try:
-            export_html(target)
+            export_html(target, css=f"../{NOTEBOOK_CSS}" if (out_dir / NOTEBOOK_CSS).is_file() else None)
         except Exception as exc:  # an HTML export failure must not lose the run: say so
             note = f"HTML export failed: {type(exc).__name__}: {exc}"
             run.error = f"{run.error}\n{note}" if run.error else note
