@@ -125,6 +125,7 @@ class NotebookRun:
     error: str = ""
     parameters: dict[str, Any] = field(default_factory=dict)
     input_errors: int = 0
+    thresholds: dict[str, str] = field(default_factory=dict)  # eps, phi, delta, tau it ran with, as written
 
 
 def kernel_env() -> None:
@@ -223,6 +224,11 @@ def run_one(
     if "output_dir" in declared:
         params["output_dir"] = "."  # papermill runs the notebook in its own folder of the run
     run = NotebookRun(stem, parameters=params)
+    run.thresholds = {
+        k: str(params[k]) if k in params else str(declared[k].get("default"))
+        for k in ("eps", "phi", "delta", "tau")
+        if k in declared
+    }
     missing = [m for m in NOTEBOOK_NEEDS.get(stem, ()) if importlib.util.find_spec(m) is None]
     if missing:
         run.status = "skipped"
