@@ -178,3 +178,28 @@ def test_single_file_inlines_images(tmp_path):
 def test_leaderboard_of_an_empty_table():
     f = findings(pd.DataFrame(), pd.DataFrame(columns=["scene", "seq"]))
     assert f.board.empty and f.sentences == {}
+
+
+def test_a_run_folder_is_readable_and_records_its_provenance(tmp_path, monkeypatch):
+    """With the notebooks themselves replaced (they run in the slow tests): run.json with its keys,
+    the umask's permissions (not owner-only), index.html and report.html."""
+    import os
+    import stat
+
+    from lorisnb.tools import report
+
+    monkeypatch.setattr(report, "run_notebook", lambda name, out_dir, parameters, timeout=1800, notebooks_dir=None:
+                        report.NotebookRun(name))  # fmt: skip
+    old = os.umask(0o027)
+    try:
+        run_dir, _ = report.run_report(tmp_path / "run", {}, ["metrics_primer"], progress=False, command=["x"])
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(run_dir.stat().st_mode) == 0o750
+    record = json.loads((run_dir / "run.json").read_text())
+    assert tuple(record) == KEYS and record["command"] == ["x"] and record["notebooks"] == {"metrics_primer": "ok"}
+    assert "openloris-scene/groundtruth/gt_cafe_1.txt" in record["inputs"]
+    index = (run_dir / "index.html").read_text()
+    assert "No leaderboard" in index and (run_dir / "report.html").exists()
+    with pytest.raises(ValidationError, match="two folders"):
+        report.run_report(tmp_path / "other", {"results_dir": str(tmp_path)}, progress=False, results=run_dir)

@@ -214,8 +214,11 @@ def run_report(
     declared = declared_by(names, notebooks_dir)
     params = dict(parameters or {})
     check_parameters(params, declared)
+    given = params.get("results_dir")
+    if results is not None and given is not None and Path(str(given)).resolve() != Path(results).resolve():
+        raise ValidationError("--results and -p results_dir name two folders; give one")
     if results is not None and "results_dir" in declared:
-        params.setdefault("results_dir", str(Path(results).resolve()))
+        params["results_dir"] = str(Path(results).resolve())
     try:
         data = find_data(params.get("data_root"))
     except DataNotFoundError:
