@@ -303,7 +303,7 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
 
 def cmd_report(args: argparse.Namespace) -> int:
     from ..io.data import find_data
-    from ..tools.report import run_report
+    from ..tools.report import findings_input_errors, run_report
 
     params = {k: param_value(v) for k, v in (args.parameter or [])}
     if args.data and "data_root" not in params:
@@ -331,8 +331,11 @@ def cmd_report(args: argparse.Namespace) -> int:
         print(
             f"note: {args.out} appeared while this report ran (another run?); this run is in {run_dir}", file=sys.stderr
         )
+    failed_inputs = findings_input_errors(run_dir)
+    if failed_inputs:
+        print(f"leaderboard: {failed_inputs} input file(s) could not be evaluated (listed in index.html)")
     print(f"report: {run_dir / 'index.html'}")
-    return 1 if any(r.status == "failed" or r.input_errors for r in runs) else 0
+    return 1 if failed_inputs or any(r.status == "failed" or r.input_errors for r in runs) else 0
 
 
 def cmd_verify(args: argparse.Namespace) -> int:

@@ -12,6 +12,7 @@ import io
 import os
 import tempfile
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -151,6 +152,16 @@ class Session:
     def show_inputs(self, ev: Any) -> None:
         """Show the input files that failed and the warnings about inputs (:func:`show_inputs`)."""
         show_inputs(ev, self.out)
+
+    def interactive(self, make: Callable[[], Any]) -> None:
+        """Display the widget ``make()`` builds. In a report's run folder nothing would ever move its
+        sliders (the page is static), so it is not built; a note says where it works instead."""
+        from IPython.display import display
+
+        if self.out.in_report:
+            print("(interactive explorer: open this notebook's .ipynb in Jupyter to use its sliders)")
+            return
+        display(make())
 
 
 def setup(name: str, data_root: DataRoot | None = None, output_dir: str | os.PathLike[str] | None = None) -> Session:

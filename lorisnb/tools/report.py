@@ -25,7 +25,7 @@ from ..errors import DataNotFoundError, LorisError, ValidationError
 from ..io.data import find_data
 from ..io.writers import write_csv
 from .leaderboard import Findings, report_findings
-from .notebook import RUN_MARKER
+from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
 from .provenance import checksums, input_files, run_record, write_run_json
 from .report_html import single_file, write_notebook_css
 from .report_index import versions, write_index
@@ -47,7 +47,7 @@ from .report_notebooks import (
 )
 
 __all__ = [
-    "DEFAULT_NOTEBOOKS", "KERNEL_ARGS", "NOTEBOOK_NEEDS", "RUN_MARKER", "NotebookRun", "available_notebooks",
+    "DEFAULT_NOTEBOOKS", "findings_input_errors", "KERNEL_ARGS", "NOTEBOOK_NEEDS", "RUN_MARKER", "NotebookRun", "available_notebooks",
     "check_parameters", "declared_parameters", "kernel_env", "notebook_dir", "notebook_path", "run_notebook",
     "run_report",
 ]  # fmt: skip
@@ -130,8 +130,10 @@ def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_d
                     if bar is not None:
                         bar.set_postfix_str(runs[futures[fut]].name)
                         bar.update()
-            except BaseException:
+            except BaseException:  # Ctrl-C or an error here: stop the workers (their kernels follow them)
                 pool.shutdown(wait=False, cancel_futures=True)
+                for worker in multiprocessing.active_children():
+                    worker.terminate()
                 raise
     finally:
         if bar is not None:
@@ -247,6 +249,7 @@ def run_report(
             write_csv(findings.board, tmp / "findings" / "leaderboard.csv")
             write_csv(findings.pairs, tmp / "findings" / "pairwise.csv")
             failures = ev.failures_table()
+            write_csv(failures, tmp / "findings" / INPUT_ERRORS_CSV)
         n_jobs = jobs or min(len(names), os.cpu_count() or 1)
         runs = _run_all(names, tmp, params, notebooks_dir, n_jobs, progress)
         (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
@@ -263,6 +266,16 @@ def run_report(
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return final, runs
+
+
+def findings_input_errors(run_dir: Path) -> int:
+    """How many input files the report's own evaluation (``findings/``) could not evaluate."""
+    import pandas as pd
+
+    f = run_dir / "findings" / INPUT_ERRORS_CSV
+    if not f.is_file():
+        return 0
+    return int((pd.read_csv(f).get("status", pd.Series(dtype=str)) == "failed").sum())
 
 
 def _move_into_place(tmp: Path, run_dir: Path, force: bool) -> Path:

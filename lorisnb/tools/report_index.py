@@ -233,13 +233,15 @@ def write_index(
     parts.append("<h3 id='per-sequence'>Per-sequence values</h3>")
     if per_sequence is not None and len(per_sequence):
         metric = spec.get("values", {}).get("metric", "cr")
-        parts.append(f"<p class='why'>The {esc(metric)} of every sequence behind the leaderboards (blank: no "
+        parts.append(f"<p class='why'>The {esc(metric)} of every sequence (the mean over its trials) behind the leaderboards (blank: no "
                      "output); all columns in <a href='findings/sequences.csv'>findings/sequences.csv</a>.</p>")  # fmt: skip
         for (suite, scene), g in per_sequence.groupby(["suite", "scene"], sort=False):
             pivot = g.pivot_table(index="algorithm", columns="seq", values=metric, aggfunc="mean")
             pivot.columns = [f"seq {c}" for c in pivot.columns]
             parts.append(
-                f"<h4 id='seq-{esc(suite)}-{esc(scene)}'>{esc(scene)}" + (f" ({esc(suite)})" if suite else "") + "</h4>"
+                f"<h4 id='seq-{esc(f'{suite}-{scene}'.replace('/', '-'))}'>{esc(scene)}"
+                + (f" ({esc(suite)})" if suite else "")
+                + "</h4>"
             )
             parts.append(_table(pivot.map(_fmt).reset_index(), "values"))
     else:
