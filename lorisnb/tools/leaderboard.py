@@ -178,7 +178,7 @@ def report_findings(
         warnings.simplefilter("ignore", LorisWarning)
         ev = evaluate(
             source, scale=values["scale"], data_root=data, trials_by=values["trials_by"],
-            algorithms=values["algorithms"], scenes=values["scenes"],
+            algorithms=values["algorithms"], scenes=values["scenes"], jobs=1,  # beside the notebooks: one process
         )  # fmt: skip
     table = ev.sequences(values["eps"], values["phi"], values["delta"], values["tau"])
     f = findings(

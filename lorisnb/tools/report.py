@@ -16,7 +16,7 @@ import os
 import shutil
 import sys
 import tempfile
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
@@ -24,7 +24,7 @@ from typing import Any
 from ..errors import DataNotFoundError, LorisError, ValidationError
 from ..io.data import find_data
 from ..io.writers import write_csv
-from .leaderboard import Findings, report_findings
+from .leaderboard import report_findings
 from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
 from .provenance import checksums, input_files, run_record, write_run_json
 from .report_html import single_file, write_notebook_css
@@ -100,10 +100,11 @@ def _select(notebooks: Iterable[str] | None, notebooks_dir: Any, results: Any) -
 
 
 def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_dir: Any, jobs: int,
-             progress: bool) -> list[NotebookRun]:  # fmt: skip
+             progress: bool, meanwhile: Callable[[], None] = lambda: None) -> list[NotebookRun]:  # fmt: skip
     """Run the notebooks, ``jobs`` at a time, each in its own worker process (papermill's clients
     are not safe side by side in one process) and kernel; one at a time in this process when
-    ``jobs`` is 1. Results in ``names`` order; the longest notebooks start first."""
+    ``jobs`` is 1. Results in ``names`` order; the longest notebooks start first. ``meanwhile()``
+    runs in this process while the workers run (before the notebooks, when ``jobs`` is 1)."""
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -113,6 +114,7 @@ def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_d
     order = sorted(range(len(names)), key=lambda i: -TYPICAL_SECONDS.get(Path(names[i]).stem, 0))
     try:
         if jobs <= 1 or len(names) <= 1:
+            meanwhile()
             for i in order:
                 runs[i] = run_notebook(names[i], tmp, params, notebooks_dir=notebooks_dir)
                 if bar is not None:
@@ -125,6 +127,7 @@ def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_d
             futures = {pool.submit(run_notebook, names[i], tmp, dict(params), notebooks_dir=notebooks_dir): i
                        for i in order}  # fmt: skip
             try:
+                meanwhile()
                 for fut in as_completed(futures):
                     runs[futures[fut]] = fut.result()
                     if bar is not None:
@@ -237,28 +240,32 @@ def run_report(
             write_notebook_css(tmp / NOTEBOOK_CSS)
         except (OSError, IndexError, LorisError):  # no nbconvert templates: each page keeps its own style
             pass
-        findings: Findings | None = None
-        spec: dict[str, Any] = {"description": None, "values": {}}
-        failures = per_sequence = None
-        if wants_board and source is not None and data is not None:
+        board: dict[str, Any] = {"spec": {"description": None, "values": {}}}
+
+        def leaderboard() -> None:  # the report's own evaluation, while the notebooks run
+            if not (wants_board and source is not None and data is not None):
+                return
             findings, ev, values = report_findings(source, data, params)
-            spec = {"description": ev.conventions, "values": {**values, "source": str(source)}}
             (tmp / "findings").mkdir()
             per_sequence = ev.sequences(values["eps"], values["phi"], values["delta"], values["tau"])
-            write_csv(per_sequence, tmp / "findings" / "sequences.csv")
-            write_csv(findings.board, tmp / "findings" / "leaderboard.csv")
-            write_csv(findings.pairs, tmp / "findings" / "pairwise.csv")
             failures = ev.failures_table()
-            write_csv(failures, tmp / "findings" / INPUT_ERRORS_CSV)
+            for table, name in ((per_sequence, "sequences.csv"), (findings.board, "leaderboard.csv"),
+                                (findings.pairs, "pairwise.csv"), (failures, INPUT_ERRORS_CSV)):  # fmt: skip
+                write_csv(table, tmp / "findings" / name)
+            board.update(findings=findings, per_sequence=per_sequence, failures=failures,
+                         spec={"description": ev.conventions, "values": {**values, "source": str(source)}})  # fmt: skip
+
         n_jobs = jobs or min(len(names), os.cpu_count() or 1)
-        runs = _run_all(names, tmp, params, notebooks_dir, n_jobs, progress)
+        runs = _run_all(names, tmp, params, notebooks_dir, n_jobs, progress, meanwhile=leaderboard)
+        spec = board["spec"]
         (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
         inputs = checksums(_inputs(names, params, data, source if wants_board else None), data.root if data else None)
         record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
                             {r.name: r.status for r in runs})  # fmt: skip
         write_run_json(tmp, record)
-        index = write_index(tmp, runs, params, name=run_dir.name, findings=findings, spec=spec, failures=failures,
-                            left_out=left_out, per_sequence=per_sequence)  # fmt: skip
+        index = write_index(tmp, runs, params, name=run_dir.name, findings=board.get("findings"), spec=spec,
+                            failures=board.get("failures"), left_out=left_out,
+                            per_sequence=board.get("per_sequence"))  # fmt: skip
         single_file(index, tmp / "report.html")
         os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp made it owner-only
         final = _move_into_place(tmp, run_dir, force)
