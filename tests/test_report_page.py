@@ -201,5 +201,9 @@ def test_a_run_folder_is_readable_and_records_its_provenance(tmp_path, monkeypat
     assert "openloris-scene/groundtruth/gt_cafe_1.txt" in record["inputs"]
     index = (run_dir / "index.html").read_text()
     assert "No leaderboard" in index and (run_dir / "report.html").exists()
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ValidationError, match="no result files in it"):
+        report.run_report(tmp_path / "other", {}, progress=False, results=tmp_path / "empty")
+    assert not (tmp_path / "other").exists()
     with pytest.raises(ValidationError, match="two folders"):
         report.run_report(tmp_path / "other", {"results_dir": str(tmp_path)}, progress=False, results=run_dir)

@@ -24,6 +24,7 @@ from typing import Any
 from ..errors import DataNotFoundError, LorisError, ValidationError
 from ..io.data import find_data
 from ..io.writers import write_csv
+from .evaluate import result_files
 from .leaderboard import report_findings
 from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
 from .provenance import checksums, input_files, run_record, write_run_json
@@ -206,8 +207,11 @@ def run_report(
     nb_dir = notebook_dir(notebooks_dir)
     keep_safe = [nb_dir, *map(Path, protect), Path(__file__).resolve().parents[1]]
     if results is not None:
-        if not Path(results).is_dir():
-            raise ValidationError(f"--results {results}: not a folder; expected <algorithm>/*.txt result files")
+        if not Path(results).is_dir() or not result_files([results]):
+            raise ValidationError(
+                f"--results {results}: {'no result files in it' if Path(results).is_dir() else 'not a folder'}; "
+                "expected a folder of <algorithm>/*.txt result files"
+            )
         keep_safe.append(Path(results))
     if run_dir.exists():
         if not force:

@@ -208,7 +208,10 @@ def write_index(
         f"checksums) in <a href='run.json'>run.json</a>; one file for e-mail: <a href='report.html'>report.html</a>.</p>",
     ]
     figures = _figures(run_dir, runs)
-    if findings is not None and len(findings.board):
+    if findings is not None and not len(findings.board):
+        parts.append("<h2 id='findings'>What was found</h2><p class='failed'>No leaderboard: no result file could be "
+                     "scored (see the failures below).</p>")  # fmt: skip
+    elif findings is not None:
         scenes = list(dict.fromkeys(findings.board["scene"]))
         parts += _findings_html(findings, spec, _evidence(figures, scenes))
     else:
