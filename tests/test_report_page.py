@@ -205,5 +205,7 @@ def test_a_run_folder_is_readable_and_records_its_provenance(tmp_path, monkeypat
     with pytest.raises(ValidationError, match="no result files in it"):
         report.run_report(tmp_path / "other", {}, progress=False, results=tmp_path / "empty")
     assert not (tmp_path / "other").exists()
+    (tmp_path / "mine" / "orb").mkdir(parents=True)
+    (tmp_path / "mine" / "orb" / "cafe.txt").write_text("scene: cafe\n")
     with pytest.raises(ValidationError, match="two folders"):
-        report.run_report(tmp_path / "other", {"results_dir": str(tmp_path)}, progress=False, results=run_dir)
+        report.run_report(tmp_path / "other", {"results_dir": str(run_dir)}, progress=False, results=tmp_path / "mine")
