@@ -113,7 +113,11 @@ def _board_rows(board: pd.DataFrame) -> pd.DataFrame:
     everyone = set(board["algorithm"])
     tied = [
         "all others" if t and set(t.split(", ")) == everyone - {a} else t
-        for a, t in zip(board["algorithm"], board["tied_with"].fillna("").astype(str), strict=True)
+        for a, t in zip(
+            board["algorithm"],
+            board.get("tied_with", pd.Series("", index=board.index)).fillna("").astype(str),
+            strict=True,
+        )  # fmt: skip
     ]
     out = pd.DataFrame({
         "rank": board["rank"], "algorithm": board["algorithm"], board["metric"].iloc[0]: board["value"].map(_fmt),
