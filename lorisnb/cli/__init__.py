@@ -1,4 +1,4 @@
-"""The ``lorisnb`` command line: ``evaluate``, ``sweep``, ``crosscheck`` and ``report``.
+"""The ``lorisnb`` command line: ``evaluate``, ``sweep``, ``compare``, ``crosscheck``, ``report`` and ``verify``.
 
 The command line is where lorisnb reports: tables on stdout, warnings and failures on stderr,
 a non-zero exit status when any input failed (2 for a usage or output error, 130 on Ctrl-C).
@@ -18,7 +18,7 @@ from ..core.spec import ALIGNMENTS, PRESETS
 from ..errors import LorisError
 from ..io.ranges import keep_freed_memory
 from ..io.registry import FORMAT_NAMES
-from .commands import cmd_compare, cmd_evaluate, cmd_report, cmd_sweep
+from .commands import cmd_compare, cmd_evaluate, cmd_report, cmd_sweep, cmd_verify
 from .crosscheck import cmd_crosscheck
 from .options import (
     add_compare_options,
@@ -148,15 +148,33 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="folder of the notebooks (default: those shipped with lorisnb)",
     )
+    p.add_argument(
+        "--results",
+        default=None,
+        metavar="DIR",
+        help="your results folder (<algorithm>/*.txt, trials allowed): the leaderboard's input and the notebooks' "
+        "results_dir; notebooks about the bundled data only are left out unless named",
+    )
+    p.add_argument(
+        "--jobs",
+        type=arg_type(lambda t: int(validate.positive("--jobs", t, "notebooks", integer=True))),
+        default=None,
+        help="notebooks run at a time (default: the cores)",
+    )
     p.add_argument("--force", action="store_true", help="replace --out if it is an earlier lorisnb run folder")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=cmd_report)
+
+    p = sub.add_parser("verify", help="re-check a report run's inputs against the checksums in its run.json")
+    p.add_argument("run", metavar="RUN", help="a run folder written by lorisnb report (or its run.json)")
+    p.set_defaults(func=cmd_verify)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = ["lorisnb", *(sys.argv[1:] if argv is None else argv)]  # the command line, as run.json records it
     keep_freed_memory()  # a command is one short process: reuse freed memory (see there)
     try:
         return int(args.func(args) or 0)

@@ -1,4 +1,4 @@
-"""The commands: ``evaluate``, ``sweep``, ``compare``, ``crosscheck``, ``report``. Tables go to stdout,
+"""The commands: ``evaluate``, ``sweep``, ``compare``, ``crosscheck``, ``report``, ``verify``. Tables go to stdout,
 warnings and failures to stderr; the exit status is non-zero when any input failed."""
 
 from __future__ import annotations
@@ -264,7 +264,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 def cmd_report(args: argparse.Namespace) -> int:
     from ..io.data import find_data
-    from ..tools.report import run_report
+    from ..tools.report import findings_input_errors, run_report
 
     params = {k: param_value(v) for k, v in (args.parameter or [])}
     if args.data and "data_root" not in params:
@@ -280,6 +280,9 @@ def cmd_report(args: argparse.Namespace) -> int:
         progress=not args.no_progress,
         notebooks_dir=args.notebooks_dir,
         protect=protect,
+        results=args.results,
+        jobs=args.jobs,
+        command=getattr(args, "argv", None),
     )
     for r in runs:
         status = r.status if r.status != "ok" or not r.input_errors else f"ok, {r.input_errors} input file(s) failed"
@@ -289,8 +292,27 @@ def cmd_report(args: argparse.Namespace) -> int:
         print(
             f"note: {args.out} appeared while this report ran (another run?); this run is in {run_dir}", file=sys.stderr
         )
+    failed_inputs = findings_input_errors(run_dir)
+    if failed_inputs:
+        print(f"leaderboard: {failed_inputs} input file(s) could not be evaluated (listed in index.html)")
     print(f"report: {run_dir / 'index.html'}")
-    return 1 if any(r.status == "failed" or r.input_errors for r in runs) else 0
+    return 1 if failed_inputs or any(r.status == "failed" or r.input_errors for r in runs) else 0
+
+
+def cmd_verify(args: argparse.Namespace) -> int:
+    """Re-check a run's inputs against run.json: exit 1 if any changed or is missing."""
+    from ..tools.provenance import read_run_json, verify_run
+
+    record = read_run_json(args.run)
+    problems = verify_run(args.run)
+    for path, what in problems:
+        print(f"{what}: {path}")
+    n = len(record["inputs"])
+    if problems:
+        print(f"{len(problems)} of {n} input file(s) changed or missing since the run", file=sys.stderr)
+        return 1
+    print(f"all {n} input file(s) unchanged", file=sys.stderr)
+    return 0
 
 
 #: The helpers other command modules (:mod:`lorisnb.cli.runs`) share with these commands.

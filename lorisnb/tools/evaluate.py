@@ -22,7 +22,7 @@ from ..core.model import FileErrors
 from ..core.spec import EvalSpec, make_spec
 from ..core.trials import check_duplicates, check_trials_by, compile_trials_by
 from ..errors import LorisWarning, ParseError, ValidationError
-from ..io.data import DataRoot, find_data
+from ..io.data import DataPaths, DataRoot, find_data
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import SUFFIX, Manifest, read_manifest
 from .evaluation import Evaluation, Failure
@@ -72,7 +72,7 @@ def evaluate(
     paths: PathArg | Iterable[PathArg],
     spec: EvalSpec | str | None = None,
     *,
-    data_root: DataRoot | None = None,
+    data_root: DataRoot | DataPaths | None = None,
     algorithms: Iterable[str] | None = None,
     scenes: Iterable[str] | None = None,
     trials_by: str | None = None,
@@ -247,7 +247,7 @@ def evaluate_manifest(
     progress: bool = False,
     jobs: int | None = None,
     executor: Executor | None = None,
-    data_root: DataRoot | None = None,
+    data_root: DataRoot | DataPaths | None = None,
     **options: Any,
 ) -> Evaluation:
     """Score the results of a multi-session dataset: ``results`` holds one folder per algorithm
