@@ -18,9 +18,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..core import ranking, stats
+from ..core import stats
 from ..errors import LorisWarning
 from ..io.data import DataPaths
+from .comparison import compare_table
 
 #: Names of the metrics in sentences, with whether higher is better.
 METRICS: dict[str, tuple[str, bool]] = {
@@ -85,19 +86,16 @@ def findings(
     seed: int = 0,
 ) -> Findings:
     """The leaderboard of ``table`` (a per-sequence table of :meth:`Evaluation.sequences`, with
-    trials), its pairwise tests and the sentences (see the module docstring)."""
+    trials), its pairwise tests and the sentences (see the module docstring): the values, ranks and
+    tests of ``lorisnb compare`` (:func:`lorisnb.tools.comparison.compare_table`; a sequence without
+    output counts as a failed run)."""
     if table.empty:
         return Findings(pd.DataFrame(columns=BOARD_COLUMNS), pd.DataFrame(), {}, "")
-    ci = stats.confidence_intervals(table, metrics=(metric,), level=level, seed=seed)
-    ranks = ranking.ranking(table, metric, alpha=alpha, seed=seed)
-    pairs = stats.pairwise(table, metric, alpha=alpha, seed=seed)
-    keys = ["suite", "scene", "algorithm"]
-    board = ranks.drop(columns=[c for c in ("value",) if c in ranks.columns]).merge(
-        ci[[*keys, "value", "low", "high", "level"]], on=keys, how="left"
-    )
-    board = board.merge(coverage(table, durations), on=keys, how="left")
+    res = compare_table(table, durations, metric, level=level, alpha=alpha, seed=seed)  # what compare ranks on
+    pairs = res.pairs
+    board = res.algorithms.drop(columns=["trials", "coverage", "sequences_with_output", "scene_sequences"])
+    board = board.merge(coverage(table, durations), on=["suite", "scene", "algorithm"], how="left")  # matched poses
     board["coverage"] = [f"{c}/{n}" for c, n in zip(board["sequences_covered"], board["sequences_total"], strict=True)]
-    board["metric"] = metric
     higher = METRICS.get(metric, ("", True))[1]
     board = board.sort_values(["suite", "scene", "rank", "value"], ascending=[True, True, True, not higher])
     board = board[[c for c in BOARD_COLUMNS if c in board.columns]].reset_index(drop=True)
