@@ -35,6 +35,7 @@ def run(name: str, tmp_path: Path, **params) -> Path:
         progress_bar=False,
         cwd=str(tmp_path),
         extra_arguments=KERNEL_ARGS,
+        execution_timeout=900,  # a cell that never answers (jupyter/nbclient#312) fails instead of hanging
     )
     return out
 
