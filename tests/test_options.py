@@ -147,8 +147,9 @@ def kinds(tmp_path_factory, data):
 
 def _run(args: list[str], out: Path, capsys) -> tuple[int, str, str, pd.DataFrame | None]:
     capsys.readouterr()
+    running = [] if args[0] == "crosscheck" else ["--no-progress", "--jobs", "1"]
     try:
-        rc = main([*args, "--no-progress", "--jobs", "1", "--csv", str(out), "--force"])
+        rc = main([*args, *running, "--csv", str(out), "--force"])
     except SystemExit as exc:
         rc = int(exc.code or 0)
     cap = capsys.readouterr()
@@ -291,3 +292,27 @@ def test_inputs_are_never_changed(data):
         assert np.array_equal(t.stamps, st) and np.array_equal(t.positions, p) and np.array_equal(t.quaternions, q)
     ate = ln.evaluate(path, data_root=data).sequences()["ate_rmse"].to_numpy()
     assert np.allclose(ate, ln.score(fe)["ate_rmse"].to_numpy(), equal_nan=True)  # the edited copy did not leak
+
+
+#: crosscheck's options on a TUM pair: each changes the table, or is refused or fails naming why.
+CROSSCHECK = {
+    "--format": ["--format", "kitti"], "--est-format": ["--est-format", "kitti"], "--conventions": ["--conventions", "evo"],
+    "--align": ["--conventions", "evo", "--align", "sim3"], "--topic": ["--topic", "/x"], "--gt-topic": ["--gt-topic", "/x"],
+    "--scale": ["--scale", "on"], "--times": ["--times", "t.txt"], "--gt-times": ["--gt-times", "t.txt"],
+    "--est-times": ["--est-times", "t.txt"], "--seq": ["--seq", "2"], "--rpe-frames": ["--rpe-frames", "3"],
+    "--rpe-metres": ["--rpe-metres", "0.3"], "--all-pairs": ["--all-pairs"], "--data": ["--data", "."],
+}  # fmt: skip
+
+
+def test_every_crosscheck_option_changes_the_table_or_is_refused(data, tmp_path, capsys):
+    missing = _options("crosscheck") - set(CROSSCHECK) - RUNNING
+    assert not missing, f"options of crosscheck without a case in tests/test_options.py: {sorted(missing)}"
+    gt, est = (str(data.root / TUM / f) for f in ("freiburg1_xyz-groundtruth.txt", "freiburg1_xyz-rgbdslam.txt"))
+    base = _run(["crosscheck", gt, est], tmp_path / "b.csv", capsys)
+    assert base[0] == 0 and base[3] is not None
+    for option, args in CROSSCHECK.items():
+        rc, out, err, table = _run(["crosscheck", gt, est, *args], tmp_path / "a.csv", capsys)
+        if rc in (1, 2):  # refused (usage) or the files cannot be read that way: said, naming why
+            assert "error" in err and (option in err or args[-1] in err or "kitti" in err.lower()), (option, err[-300:])
+        else:
+            assert table is not None and not table.equals(base[3]), f"crosscheck {option} changed nothing"
