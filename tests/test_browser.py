@@ -31,6 +31,7 @@ from lorisnb.tools.report import DEFAULT_NOTEBOOKS, notebook_dir
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
 PANEL = "document.querySelector('.jp-NotebookPanel:not(.lm-mod-hidden)')"  # the notebook in front
+CURRENT_TAB = "(document.querySelector('#jp-main-dock-panel .lm-TabBar-tab.lm-mod-current .lm-TabBar-tabLabel') || {}).textContent || ''"
 CHROMIUM = os.environ.get("LORISNB_CHROMIUM", "/usr/bin/chromium")
 CHROMEDRIVER = os.environ.get("LORISNB_CHROMEDRIVER", "/usr/bin/chromedriver")
 SHOTS = Path(__file__).resolve().parents[1] / "results" / "browser"
@@ -142,8 +143,9 @@ def _open_and_run(driver, url: str, name: str, timeout: float) -> None:
     from selenium.webdriver.common.by import By
 
     driver.get(f"{url}/lab/tree/{name}.ipynb?token={TOKEN}")
+    # the notebook in front (its tab: headless Chromium 156 no longer gets JupyterLab's document.title)
     _wait(lambda: driver.execute_script(f"const p = {PANEL}; return p && p.querySelector('.jp-Cell') && "
-                                        f"document.title.startsWith('{name[:8]}')"), 60, f"{name} to open")  # fmt: skip
+                                        f"{CURRENT_TAB}.startsWith('{name}.ipynb')"), 60, f"{name} to open")  # fmt: skip
     _wait(lambda: "Idle" in driver.execute_script(
         "const s = document.querySelector('.jp-Notebook-ExecutionIndicator, .jp-Toolbar-kernelStatus');"
         "return s ? (s.getAttribute('title') || s.textContent || '') + ' Idle' : '';"), 60, "the kernel")  # fmt: skip
