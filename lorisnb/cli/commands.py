@@ -7,13 +7,14 @@ import argparse
 import sys
 import warnings
 from pathlib import Path
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from ..core.association import MAX_GAP
 from ..errors import LorisError, LorisWarning, ValidationError
 from .options import check_output, conventions_of, param_value
+
+if TYPE_CHECKING:  # pandas is imported by the commands that print tables (not by --help)
+    import pandas as pd
 
 
 def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
@@ -112,6 +113,8 @@ def _report_problems(ev: Any, notes: list[str]) -> None:
 
 
 def _fmt(df: pd.DataFrame) -> str:
+    import pandas as pd
+
     with pd.option_context("display.max_rows", 500, "display.width", 200, "display.max_columns", 30):
         return df.to_string(index=False, float_format=lambda v: f"{v:.4f}")
 
@@ -162,6 +165,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
+    import pandas as pd
+
     from ..core.sweep import sweep, sweep_scenes
     from ..io.writers import write_csv, write_parquet
 
@@ -216,6 +221,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
+    import pandas as pd
+
     """Scene values with bootstrap intervals, the ranking with ties the data cannot separate,
     significant pairwise differences; tables as CSV, LaTeX, Markdown."""
     from ..core import ranking, stats
@@ -257,6 +264,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 
 def cmd_crosscheck(args: argparse.Namespace) -> int:
+    import pandas as pd
+
     from ..io.formats import read_trajectory
     from ..io.openloris import read_openloris
     from ..io.writers import write_csv

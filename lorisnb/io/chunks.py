@@ -18,7 +18,6 @@ import stat
 from collections.abc import Callable, Generator, Sequence
 
 import numpy as np
-import pandas as pd
 
 from ..errors import ParseError
 from .ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, read_range
@@ -101,6 +100,8 @@ def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str) -> np.ndarray:
     """(rows, ntok) numbers of a chunk by pandas' C parser, skipping the lines ``skip``. With
     ``sep=" "`` runs of spaces separate fields, and a tab, a trailing space or a line of spaces
     raises (an empty field, or a field that is not a number)."""
+    import pandas as pd  # here: reading a small file needs no pandas
+
     return pd.read_csv(
         io.BytesIO(chunk),
         sep=sep,
@@ -119,6 +120,8 @@ def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str) -> np.ndarray:
 
 def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) -> Rows | None:
     """The C-parser path for one chunk, or None when the chunk needs the exact scanner."""
+    import pandas as pd
+
     skip = np.zeros(0, np.int64)
     specials: list[tuple[int, str]] = []
     first_row = 0
