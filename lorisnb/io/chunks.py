@@ -96,16 +96,18 @@ def _layout(
     return np.flatnonzero(skipped), specials, int(np.argmin(skipped))
 
 
-def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str) -> np.ndarray:
+def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str, runs: bool = False) -> np.ndarray:
     """(rows, ntok) numbers of a chunk by pandas' C parser, skipping the lines ``skip``. With
-    ``sep=" "`` runs of spaces separate fields, and a tab, a trailing space or a line of spaces
-    raises (an empty field, or a field that is not a number)."""
+    ``sep=" "`` and ``runs`` runs of spaces separate fields, without ``runs`` one space only; a tab,
+    a trailing space or a line of spaces raises (an empty field, or a field that is not a number),
+    and so does a run of spaces without ``runs``: read again with it (one space between fields is
+    the usual case, and skipping spaces after each separator costs a third of the parse)."""
     import pandas as pd  # here: reading a small file needs no pandas
 
     return pd.read_csv(
         io.BytesIO(chunk),
         sep=sep,
-        skipinitialspace=sep == " ",
+        skipinitialspace=runs,
         header=None,
         names=range(ntok),
         dtype=np.float64,
@@ -113,7 +115,6 @@ def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str) -> np.ndarray:
         na_filter=False,
         engine="c",
         index_col=False,
-        low_memory=False,
         skiprows=skip.tolist() if skip.size else None,
     ).to_numpy()  # (nrows, ntok), a transposed view of pandas' column block
 
@@ -148,12 +149,16 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
             # spaces only (any number): the C parser's one-character split, skipping repeated spaces, is
             # faster than its whitespace split; tabs or trailing spaces further on raise, then read as below
             single = b"\t" not in line and not line.endswith(b" ")
-            try:
-                values = _read_c(chunk, ntok, skip, " " if single else r"\s+")
-            except (ValueError, pd.errors.ParserError):
-                if not single:
-                    raise
-                values = _read_c(chunk, ntok, skip, r"\s+")  # other spacing further on
+            runs = b"  " in line or line.startswith(b" ")
+            tries = [(" ", runs)] + ([(" ", True)] if not runs else []) if single else []
+            tries.append((r"\s+", False))  # other spacing further on
+            for k, (sep, skip_runs) in enumerate(tries):
+                try:
+                    values = _read_c(chunk, ntok, skip, sep, skip_runs)
+                    break
+                except (ValueError, pd.errors.ParserError):
+                    if k == len(tries) - 1:
+                        raise
         except (ValueError, IndexError, pd.errors.ParserError, UnicodeDecodeError):
             return None
         if len(values) == nrows:
@@ -219,6 +224,7 @@ def read_rows(
     fast_min_bytes: int = FAST_MIN_BYTES,
     progress: Callable[[int], object] | None = None,
     layout: Callable[[int], Sequence[slice]] | None = None,
+    skip_lines: int = 0,
 ) -> Rows:
     """Read the numeric lines of a text file in chunks.
 
@@ -241,6 +247,8 @@ def read_rows(
         layout: the column groups the caller will :meth:`~lorisnb.io.rows.Rows.split` the rows
             into, given the lines' token count: a large file whose lines all have the same count
             is then copied into them as its chunks are parsed (:class:`~lorisnb.io.rows.RowSink`).
+        skip_lines: line ``skip_lines`` (1-based; 0: none) is skipped as a comment (a header line
+            without ``#``; the lines before it must be blank or comments).
     """
     spath = str(path)
     width = max(widths)
@@ -257,7 +265,7 @@ def read_rows(
 
     chunks = _chunks(path, what, chunk_bytes)
     first, _, first_lines, at = next(chunks)
-    parts.append(parse(first, 0, first_lines))
+    parts.append(parse(_commented(first, skip_lines), 0, first_lines))
     if progress is not None:
         progress(len(first))
     try:
@@ -265,8 +273,11 @@ def read_rows(
         regular, total = stat.S_ISREG(st.st_mode), st.st_size
     except OSError:
         regular, total = False, 0
-    if not regular or at >= total:  # a pipe or a device (or no more chunks: the end checks for an empty file)
-        parts += in_order((((parse, c, l0, n), len(c)) for c, l0, n, _ in chunks), progress)
+    if not regular or at >= total or skip_lines > first_lines:  # a pipe or a device (or no more chunks: the
+        # end checks for an empty file; or the line to skip further on): chunks one after another
+        parts += in_order(
+            (((parse, _commented(c, skip_lines - l0), l0, n), len(c)) for c, l0, n, _ in chunks), progress
+        )
         return _join(parts)
     chunks.close()
     sink, again = None, False
@@ -299,13 +310,26 @@ def read_rows(
     if again:
         del parts
         return read_rows(path, widths, what=what, numbers=numbers, bad_width=bad_width, specials=specials,
-                         separators=separators, chunk_bytes=chunk_bytes, fast_min_bytes=fast_min_bytes)  # fmt: skip
+                         separators=separators, chunk_bytes=chunk_bytes, fast_min_bytes=fast_min_bytes,
+                         skip_lines=skip_lines)  # fmt: skip
     rows = _join(parts)
     del parts
     if sink is not None and sink.ntok is not None:
         rows.filled = sink.filled()
     give_back_memory()
     return rows
+
+
+def _commented(chunk: bytes, line: int) -> bytes:
+    """``chunk`` with ``#`` put before its ``line``-th line (1-based), if the chunk holds it."""
+    if line < 1:
+        return chunk
+    at = 0
+    for _ in range(line - 1):
+        at = chunk.find(b"\n", at) + 1
+        if at == 0:
+            return chunk
+    return chunk[:at] + b"#" + chunk[at:]
 
 
 def _join(parts: list[Rows]) -> Rows:
