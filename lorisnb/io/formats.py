@@ -132,8 +132,10 @@ def read_kitti(path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike |
         numbers="12 numbers of a 3x4 pose matrix",
         bad_width=lambda text, n: _width_message(text, n, "12 numbers per line, a 3x4 pose matrix row-major (KITTI)"),
         separators=b",",
+        layout=_matrix_groups,
     )
-    mats = np.ascontiguousarray(rows.values).reshape(-1, 3, 4)
+    (flat,) = rows.split(_matrix_groups(12))  # row-major, filled as the chunks were read
+    mats = flat.reshape(-1, 3, 4)
     if stamps is None:
         t = np.arange(len(mats), dtype=float)
     elif isinstance(stamps, (str, os.PathLike)):
@@ -147,6 +149,11 @@ def read_kitti(path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike |
     if stamps is not None and len(t) > 1 and not np.all(np.diff(t) > 0):
         raise ParseError(spath, None, "the stamps given for this KITTI file are not strictly increasing")
     return out
+
+
+def _matrix_groups(ntok: int) -> tuple[slice]:
+    """The columns of a KITTI line (``ntok`` is 12): the 3x4 matrix, row-major."""
+    return (slice(0, 12),)
 
 
 def read_times(path: str | os.PathLike) -> np.ndarray:
