@@ -97,9 +97,11 @@ def session_errors(
 
     def fit(s: int) -> Sim3:
         a, e = assoc[s], est[s]
+        k = a.est_index[: conventions.align_frames]  # the poses the fit uses; all of them: no copy
+        positions = e.positions if len(k) == len(e) else e.positions[k]
         return fit_alignment(
-            e.positions[a.est_index], a.gt_positions, conventions.align, conventions.align_frames,
-            e.quaternions[a.est_index], a.gt_quaternions,
+            positions, a.gt_positions[: len(k)], conventions.align, conventions.align_frames,
+            e.quaternions[k[:1]], a.gt_quaternions,  # the first orientation (used for one pose only)
         )  # fmt: skip
 
     notes: list[str] = []
