@@ -53,8 +53,11 @@ def pose_lines(t: Trajectory) -> bytes:
     return table.tobytes()
 
 
-def write_lines(path: Path, scene: str, sequences: dict[int, Trajectory], simulated: bool) -> None:
-    """An OpenLORIS file of the given sequences (``simulated: true`` in its header if asked)."""
+def write_lines(
+    path: Path, scene: str, sequences: dict[int, Trajectory], simulated: bool, single: bool = False
+) -> None:
+    """An OpenLORIS file of the given sequences (``simulated: true`` in its header if asked), its
+    numbers in fixed-width columns, or with ``single`` one space apart."""
     with open(path, "wb") as fh:
         fh.write(f"scene: {scene}\nframe: base_link\n".encode())
         if simulated:
@@ -64,7 +67,8 @@ def write_lines(path: Path, scene: str, sequences: dict[int, Trajectory], simula
             for lo in range(0, len(t), 1_000_000):
                 part = Trajectory(t.stamps[lo : lo + 1_000_000], t.positions[lo : lo + 1_000_000],
                                   t.quaternions[lo : lo + 1_000_000])  # fmt: skip
-                fh.write(pose_lines(part))
+                text = pose_lines(part)
+                fh.write(squeeze(np.frombuffer(text, np.uint8).reshape(len(part), -1)) if single else text)
 
 
 def lifelong_groundtruth(n_poses: int, n_sessions: int, rate_hz: float = 16.0, seed: int = 0) -> dict[int, Trajectory]:
@@ -134,7 +138,9 @@ def write_plain(path: Path, t: Trajectory, fmt: str) -> None:
 
     with open(path, "wb") as fh:
         if fmt == "euroc":
-            fh.write(b"#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z []\n")
+            fh.write(
+                b"#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z []\n"
+            )
         for lo in range(0, len(t), 1_000_000):
             s, p, q = (a[lo : lo + 1_000_000] for a in (t.stamps, t.positions, t.quaternions))
             n = len(s)

@@ -20,13 +20,12 @@ from collections.abc import Callable, Generator, Sequence
 import numpy as np
 
 from ..errors import ParseError
-from .ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, read_range
+from .ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, newlines, read_range
 from .rows import Rows, RowSink, line_dtype
 from .scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
 FAST_MIN_BYTES = 32 << 10
-SMALL_CHUNK = 1 << 20  # below this the numpy scanner is faster than a call of the C parser
 
 
 def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[bytes, int, int, int], None, None]:
@@ -55,7 +54,7 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[by
             if not block:
                 if data:
                     seen_text = seen_text or bool(data.strip())
-                    yield data + b"\n", line0, data.count(b"\n") + 1, fh.tell()
+                    yield data + b"\n", line0, newlines(data) + 1, fh.tell()
                 break
             cut = data.rfind(b"\n") + 1
             if cut == 0:
@@ -65,7 +64,7 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[by
                 continue
             piece, rest = data[:cut], data[cut:]
             seen_text = seen_text or bool(piece.strip())
-            n = piece.count(b"\n")
+            n = newlines(piece)
             yield piece, line0, n, fh.tell() - len(rest)
             line0 += n
         if not seen_text:
@@ -127,8 +126,6 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
     specials: list[tuple[int, str]] = []
     first_row = 0
     structured = b"#" in chunk or b":" in chunk or chunk[:1] in (b"\n", b"\r")
-    if not structured and len(chunk) < SMALL_CHUNK:  # small: look for blank lines now rather than parse twice
-        structured = b"\n\n" in chunk or b"\n\r\n" in chunk
     for attempt in range(2):  # plain numbers first; blank lines are found if the row count says so
         if structured:
             layout = _layout(chunk, line0, nlines, specials_ok)
