@@ -222,8 +222,7 @@ def read_euroc(path: str | os.PathLike, warn: bool = True) -> Trajectory:
     except ParseError:
         return _read_euroc_whole(path, warn)  # the first problem of the whole file, as it always was reported
     first, positions, wxyz = rows.split(_euroc_groups(width))
-    quaternions = np.empty_like(wxyz)  # x y z w
-    quaternions[:, :3], quaternions[:, 3] = wxyz[:, 1:], wxyz[:, 0]
+    quaternions = wxyz[:, [1, 2, 3, 0]]  # x y z w
     del wxyz
     notes: list[str] = []
     line_no = rows.lines
