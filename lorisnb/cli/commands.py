@@ -221,10 +221,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    import pandas as pd
-
     """Scene values with bootstrap intervals, the ranking with ties the data cannot separate,
     significant pairwise differences; tables as CSV, LaTeX, Markdown."""
+    import pandas as pd
+
     from ..core import ranking, stats
     from ..io.writers import write_csv
     from ..tools.tables import interval, write_comparison

@@ -97,10 +97,8 @@ def _layout(
 
 def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str, runs: bool = False) -> np.ndarray:
     """(rows, ntok) numbers of a chunk by pandas' C parser, skipping the lines ``skip``. With
-    ``sep=" "`` and ``runs`` runs of spaces separate fields, without ``runs`` one space only; a tab,
-    a trailing space or a line of spaces raises (an empty field, or a field that is not a number),
-    and so does a run of spaces without ``runs``: read again with it (one space between fields is
-    the usual case, and skipping spaces after each separator costs a third of the parse)."""
+    ``sep=" "``: fields one space apart, runs of spaces too with ``runs`` (a third slower); a tab, a
+    trailing space, a line of spaces (or a run of spaces without ``runs``) raise (an empty field)."""
     import pandas as pd  # here: reading a small file needs no pandas
 
     return pd.read_csv(
@@ -319,14 +317,10 @@ def read_rows(
 
 def _commented(chunk: bytes, line: int) -> bytes:
     """``chunk`` with ``#`` put before its ``line``-th line (1-based), if the chunk holds it."""
-    if line < 1:
+    parts = chunk.split(b"\n", line - 1) if line >= 1 else []
+    if len(parts) < line or line < 1 or not parts[-1]:  # not in this chunk (an empty rest: the next one's)
         return chunk
-    at = 0
-    for _ in range(line - 1):
-        at = chunk.find(b"\n", at) + 1
-        if at == 0:
-            return chunk
-    return chunk[:at] + b"#" + chunk[at:]
+    return b"\n".join(parts[:-1] + [b"#" + parts[-1]])
 
 
 def _join(parts: list[Rows]) -> Rows:
