@@ -14,6 +14,7 @@ import sys
 import numpy as np
 
 from ..core import validate
+from ..core.blocks import ordinary_pages
 from ..errors import LorisError
 from ..io.ranges import keep_freed_memory
 from .commands import cmd_compare, cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
@@ -140,6 +141,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     keep_freed_memory()  # a command is one short process: reuse freed memory (see there)
+    ordinary_pages(True)  # and new arrays in ordinary pages (see there)
     if not (getattr(args, "parquet", None) or getattr(args, "scheduler", None) or args.command == "report"):
         pandas_without_pyarrow()
     try:

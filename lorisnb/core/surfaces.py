@@ -19,7 +19,7 @@ import pandas as pd
 
 from ..errors import ValidationError
 from . import metrics
-from .blocks import blockwise
+from .blocks import blockwise, ordinary_pages
 from .model import FileErrors
 from .scoring import as_files
 from .validate import threshold, threshold_list
@@ -57,18 +57,13 @@ class Surfaces:
 
 
 def _outputs(count: int, shape: tuple[int, ...]) -> list[np.ndarray]:
-    """``count`` new float64 arrays of ``shape``, in ordinary pages: numpy asks the kernel for huge
-    pages for large arrays, and where the kernel compacts memory to find them when they are first
-    written (``transparent_hugepage/defrag`` = ``madvise``, the usual default), a first call took
-    about four times as long on a busy machine; these arrays are written once, in order."""
-    hugepage = getattr(getattr(np, "_core", None), "multiarray", None)
-    toggle = getattr(hugepage, "_set_madvise_hugepage", None)
-    before = toggle(False) if toggle is not None else None
+    """``count`` new float64 arrays of ``shape`` in ordinary pages (:func:`~lorisnb.core.blocks.ordinary_pages`:
+    they are written once, in order)."""
+    before = ordinary_pages(True)
     try:
         return [np.empty(shape) for _ in range(count)]
     finally:
-        if toggle is not None:
-            toggle(before)
+        ordinary_pages(before)
 
 
 def _grid(name: str, values: object) -> np.ndarray:
