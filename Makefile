@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND ?= Agg
 
-.PHONY: report test test-fast test-slow test-browser browser-deps lint format evaluate bench bytecode clean-venv
+.PHONY: report test test-fast test-slow test-browser browser-deps lint format evaluate bench bytecode clean-venv student grade book slides
 
 $(STAMP): pyproject.toml lorisnb/_version.py
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -61,3 +61,40 @@ bench: bytecode
 
 clean-venv:
 	rm -rf $(VENV)
+
+# --- teaching (teaching/README.md): the tools live in .venv-teach/, layered on .venv, because
+# Jupyter Book 1 needs markdown-it-py < 4; nbgrader runs from teaching/ (its nbgrader_config.py)
+TEACH := .venv-teach
+TEACH_STAMP := $(TEACH)/.installed-stamp
+TEACH_ENV = PATH="$(abspath $(TEACH))/bin:$(abspath $(BIN)):$$PATH" \
+	JUPYTER_PATH="$$($(BIN)/python -c 'import nbconvert, pathlib; print(pathlib.Path(nbconvert.__file__).parents[4] / "share" / "jupyter")')"
+LAB := lab1_lifelong_metrics
+
+$(TEACH_STAMP): $(STAMP) teaching/requirements.txt
+	test -x $(TEACH)/bin/python || $(PYTHON) -m venv $(TEACH)
+	$(BIN)/python -c "import sysconfig; print('import site; site.addsitedir(%r)' % sysconfig.get_paths()['purelib'])" \
+	  > "$$($(TEACH)/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')/lorisnb-venv.pth"
+	$(TEACH)/bin/python -m pip install -r teaching/requirements.txt
+	$(TEACH)/bin/python -m pip install --no-deps django-static-mathjax==3.2.2.1 sphinx-revealjs==3.2.1
+	touch $@
+
+# the student version of every lab (no solutions, no hidden tests) into teaching/release/
+student: $(TEACH_STAMP)
+	cd teaching && $(TEACH_ENV) nbgrader generate_assignment $(LAB) --force
+
+# autograde teaching/submitted/ (demo students written when it holds none), then the grades CSV
+# (teaching/grades.csv) and per-student feedback HTML (teaching/feedback/<student>/<lab>/)
+grade: student
+	cd teaching && ls -d submitted/*/ >/dev/null 2>&1 || $(TEACH_ENV) python demo_submissions.py
+	cd teaching && $(TEACH_ENV) nbgrader autograde $(LAB) --create --force
+	cd teaching && $(TEACH_ENV) nbgrader generate_feedback $(LAB) --force
+	cd teaching && $(TEACH_ENV) python offline_feedback.py
+	cd teaching && $(TEACH_ENV) nbgrader export --to grades.csv
+
+# the offline book of the primer and the labs (Jupyter Book 1 + sphinx-exercise) into build/book/
+book: $(TEACH_STAMP)
+	$(TEACH_ENV) python teaching/book.py build/book
+
+# reveal.js slides of the primer and the labs (executed), reveal.js and MathJax beside them: build/slides/
+slides: $(TEACH_STAMP)
+	$(TEACH_ENV) python teaching/slides.py build/slides

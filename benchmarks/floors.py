@@ -175,7 +175,7 @@ def bench_growth(folder: Path) -> None:
     process that only parses both files, and peak memory per pose above the start-up's; evo_ape
     up to 100k poses."""
     sizes = [10_000, 100_000, 1_000_000] + ([10_000_000] if os.environ.get("LORISNB_BENCH_HUGE", "1") != "0" else [])
-    start = [sys.executable, "-c", NO_PYARROW + "import pandas, lorisnb.cli, lorisnb.tools.pairs"]
+    start = [sys.executable, "-c", NO_PYARROW + "import pandas, lorisnb.cli, lorisnb.tools.evaluate"]
     base = min(process(start)[1] for _ in range(3))
     print(
         f"\ngrowth: lorisnb evaluate EST --gt GT (TUM, n poses each), whole processes; start-up {base / 2**20:.0f} MiB"

@@ -17,6 +17,7 @@ if TYPE_CHECKING:
         PAPER_PHI,
         SCENES,
         Conventions,
+        EvalSpec,
         FileErrors,
         OpenLorisFile,
         ResultFile,
@@ -24,6 +25,8 @@ if TYPE_CHECKING:
         Trajectory,
         aggregate_scenes,
         compute_errors,
+        evaluate_sessions,
+        make_spec,
         pose_table,
         score,
         sequence_errors,
@@ -64,4 +67,5 @@ __all__ = [
     "compute_errors", "evaluate", "find_data", "load_groundtruth", "pose_table", "read_euroc", "read_kitti",
     "read_openloris", "read_ordslam", "read_trajectory", "read_tum", "score", "sequence_errors", "setup", "sweep",
     "write_openloris", "Conventions", "session_errors", "evaluate_pairs", "evaluate_manifest", "read_manifest",
+    "EvalSpec", "make_spec", "evaluate_sessions",
 ]  # fmt: skip

@@ -55,3 +55,9 @@ class MissingDependencyError(LorisError, ImportError):
 
 class LorisWarning(UserWarning):
     """Something in the input deserves a look, but the evaluation went on."""
+
+
+class AnswerError(LorisError, AssertionError):
+    """A learner's answer to an exercise (``lorisnb.tools.teaching``) is not right: says what is
+    wrong, with the numbers, and hints at the typical mistake. An AssertionError, so a grader
+    (nbgrader, pytest) counts it as a failed test."""

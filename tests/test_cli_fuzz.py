@@ -116,6 +116,7 @@ def _options(draw, paths, out_dir, command):
 @given(data=st.data())
 def test_cli_never_ends_in_a_traceback(inputs, monkeypatch, data, capsys):
     d, paths = inputs
+    monkeypatch.chdir(d)  # a report without --out goes to ./results/run-*: here, not in the checkout
     before = {p: open(p, "rb").read() for p in (paths["good"], paths["tum"])}
     monkeypatch.setattr(
         report,

@@ -17,12 +17,21 @@ from lorisnb.io import find_data
 
 
 def test_find_data_order_and_error(tmp_path, monkeypatch, data):
+    monkeypatch.delenv("LORISNB_DATA", raising=False)  # whatever the developer has set
+    try:
+        fallback = find_data().root  # ../shared/data next to the folder or the project
+    except DataNotFoundError:
+        fallback = None
     monkeypatch.setenv("LORISNB_DATA", str(data.root))
     assert find_data().root == data.root
     assert find_data(data.root).root == data.root
     monkeypatch.setenv("LORISNB_DATA", str(tmp_path / "missing"))
     # the environment variable is tried first, then ../shared/data next to the project
-    assert find_data().root == data.root
+    if fallback is None:
+        with pytest.raises(DataNotFoundError, match="missing"):
+            find_data()
+    else:
+        assert find_data().root == fallback
     with pytest.raises(DataNotFoundError) as exc:
         find_data(tmp_path / "nowhere")
     msg = str(exc.value)

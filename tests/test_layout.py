@@ -24,6 +24,7 @@ PUBLIC_API = [
     "compute_errors", "evaluate", "find_data", "load_groundtruth", "pose_table", "read_euroc", "read_kitti",
     "read_openloris", "read_ordslam", "read_trajectory", "read_tum", "score", "sequence_errors", "setup", "sweep",
     "write_openloris", "Conventions", "session_errors", "evaluate_pairs", "evaluate_manifest", "read_manifest",
+    "EvalSpec", "make_spec", "evaluate_sessions",
 ]  # fmt: skip
 
 

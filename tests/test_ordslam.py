@@ -18,8 +18,8 @@ from lorisnb.errors import ParseError
 from lorisnb.io import load_groundtruth
 from lorisnb.io.ordslam import SCENARIOS, describe_sequence, find_ordslam, light_period, read_ordslam, scenario
 from lorisnb.io.published import ordslam_table3, ordslam_table4_tum, published_ate
-from lorisnb.tools.compare import TUM_PAIRS
 from lorisnb.tools.evo_bridge import to_evo
+from lorisnb.tools.indoor_outdoor import TUM_PAIRS
 
 
 @pytest.fixture(scope="module")
@@ -177,7 +177,7 @@ def make_synthetic_ordslam(root, segment):
 
 
 def test_ordslam_folder_measures(tmp_path, segment):
-    from lorisnb.tools.compare import ordslam_difficulty, ordslam_stats
+    from lorisnb.tools.indoor_outdoor import ordslam_difficulty, ordslam_stats
 
     folder = find_ordslam(make_synthetic_ordslam(tmp_path, segment))
     assert len(folder.groundtruth) == 4 and list(folder.estimates) == ["synthetic_slam"]
@@ -191,7 +191,7 @@ def test_ordslam_folder_measures(tmp_path, segment):
 
 
 def test_headline_numbers(data):
-    from lorisnb.tools.compare import headline, tum_difficulty
+    from lorisnb.tools.indoor_outdoor import headline, tum_difficulty
 
     meas = tum_difficulty(data)
     h = headline(meas, published_ate())

@@ -9,6 +9,7 @@ from helpers import errors_of
 import lorisnb as ln
 from lorisnb.core import score
 from lorisnb.core.simulate import Faults, simulate, simulated_errors
+from lorisnb.errors import ValidationError
 from lorisnb.io import load_groundtruth, read_openloris, write_openloris
 
 
@@ -89,3 +90,47 @@ def test_write_openloris_roundtrip_keeps_existing_files(tmp_path, gt):
         write_openloris(p, {1: t}, "cafe")
     errs = errors_of(p, algorithm="sim")
     assert errs.sequences[0].matched == len(t)
+
+
+@pytest.mark.parametrize(
+    "kwargs, words",
+    [
+        (dict(lost=(15, 35)), ["wrapped in a tuple", "lost=((15, 35),)"]),
+        (dict(lost=((35, 15),)), ["ends before it starts", "(15.0, 35.0)"]),
+        (dict(lost=((15, 15),)), ["ends before it starts"]),
+        (dict(lost=((15,),)), ["interval 1", "expected a pair"]),
+        (dict(lost=((5, 10), 40)), ["interval 2", "expected a pair"]),
+        (dict(lost="15-35"), ["expected a tuple of (start_s, end_s) pairs"]),
+        (dict(lost=((-5, 10),)), ["starts before 0 s"]),
+        (dict(lost=((float("nan"), 10),)), ["finite number"]),
+        (dict(position_noise_m=-0.1), ["position_noise_m", ">= 0", "metres"]),
+        (dict(orientation_noise_deg=float("nan")), ["orientation_noise_deg", "finite"]),
+        (dict(scale=0), ["scale=0", "positive"]),
+        (dict(rate_hz=-1), ["rate_hz", "positive", "Hz"]),
+        (dict(wrong_reloc_offset_m=3.0), ["three numbers"]),
+        (dict(seed=-1), ["seed", "whole number"]),
+        (dict(init_delay_s="late"), ["init_delay_s", "not a number"]),
+    ],
+)
+def test_faults_refuse_a_learners_mistakes_with_a_message(kwargs, words):
+    """Each typical slip is a ValidationError (never a silent no-op or a bare TypeError) whose
+    message says what to write (issue 26)."""
+    with pytest.raises(ValidationError) as exc:
+        Faults(**kwargs)
+    for w in words:
+        assert w in str(exc.value), (w, str(exc.value))
+
+
+def test_simulated_errors_refuse_unknown_sequences_and_missing_faults(gt_file):
+    with pytest.raises(ValidationError, match=r"sequence 7: the ground truth of cafe has sequences 1, 2"):
+        simulated_errors(gt_file, Faults(), seqs=[7])
+    with pytest.raises(ValidationError, match=r"no Faults for sequence\(s\) \[2\]"):
+        simulated_errors(gt_file, {1: Faults()}, seqs=[1, 2])
+    with pytest.raises(ValidationError, match=r"expected a Faults\(...\) object, got dict"):
+        simulated_errors(gt_file, {1: {"lost": (1, 2)}}, seqs=[1])
+    # a valid interval list in any sequence type is normalized, and the simulation honours it
+    f = Faults(lost=[[15, 35]])
+    assert f.lost == ((15.0, 35.0),)
+    fe = simulated_errors(gt_file, f, seqs=[1])
+    rel = fe.sequences[0].stamps - gt_file.sequences[1].stamps[0]
+    assert not ((rel >= 15) & (rel < 35)).any() and (rel > 35).any()

@@ -62,18 +62,23 @@ def test_row_blocks_and_threads_give_the_same_numbers(icra20, monkeypatch):
                 np.testing.assert_array_equal(x, y)
 
 
-def test_consuming_the_result_gives_the_same_errors(icra20, data):
-    """compute_errors(consume=True), as evaluate() calls it to let a long file's poses go sequence by
-    sequence: the same errors; the result keeps only a sequence the frame checks look at (its AOE is
-    large), here none."""
+def test_releasing_the_result_gives_the_same_errors(icra20, data):
+    """compute_errors(release=result.sequences.pop), as evaluate() calls it to let a long file's poses
+    go sequence by sequence (the edge drops its own object; the core writes into nothing): the same
+    errors, every sequence released once, the last only after the frame checks would have looked."""
     from lorisnb.core.pipeline import compute_errors
 
     path = icra20 / "lifelong" / "maslam" / "market.txt"
     gt = ln.load_groundtruth("market", data)
-    kept = compute_errors(ln.read_openloris(path, warn=False), gt, other_spans={})
+    kept_input = ln.read_openloris(path, warn=False)
+    kept = compute_errors(kept_input, gt, other_spans={})
+    assert sorted(kept_input.sequences) == [1, 2, 3]  # without release, the input is left as it was
     result = ln.read_openloris(path, warn=False)
-    consumed = compute_errors(result, gt, other_spans={}, consume=True)
-    assert len(kept.sequences) == 3 and list(result.sequences) == []  # no sequence for the frame checks
+    released: list[int] = []
+    consumed = compute_errors(
+        result, gt, other_spans={}, release=lambda s: released.append(result.sequences.pop(s) and s)
+    )
+    assert len(kept.sequences) == 3 and list(result.sequences) == [] and sorted(released) == [1, 2, 3]
     for a, b in zip(kept.sequences, consumed.sequences, strict=True):
         for name in ("ate", "aoe", "est_positions", "est_quaternions"):
             np.testing.assert_array_equal(getattr(a, name), getattr(b, name))

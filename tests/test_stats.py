@@ -94,7 +94,7 @@ def test_pairwise_detects_a_real_difference_and_not_a_null_one():
         a, base = _population(rng, 12, 2, algorithm="a")
         b = a.assign(algorithm="b", cr=np.clip(a["cr"] - 0.08 + rng.normal(0, 0.02, len(a)), 0, 1))
         c = a.assign(algorithm="c", cr=np.clip(a["cr"] + rng.normal(0, 0.03, len(a)), 0, 1))
-        p = stats.pairwise(pd.concat([a, b, c]), "cr", n_resamples=200, seed=k).set_index(["a", "b"])
+        p = stats.pairwise(pd.concat([a, b, c]), "cr", n_resamples=200, seed=k, intervals=False).set_index(["a", "b"])
         detected += bool(p.loc[("a", "b"), "significant"])
         false_alarms += bool(p.loc[("a", "c"), "significant"])
         assert p["correction"].iloc[0].startswith("Holm over 3 pair(s)")
@@ -107,7 +107,7 @@ def test_holm_and_minimum_p():
     a, _ = _population(np.random.default_rng(0), 5, 1)
     b = a.assign(algorithm="b", cr=a["cr"] - 0.2)
     p = stats.pairwise(pd.concat([a, b])).iloc[0]
-    assert p["min_p"] == pytest.approx(0.0625) and p["wilcoxon_p"] == pytest.approx(0.0625)
+    assert p["min_p"] == pytest.approx(0.0625) and p["p"] == pytest.approx(0.0625) and p["exact"]
     assert not p["significant"] and p["p_a_better"] == 1.0  # five sequences can never reach 0.05
 
 
@@ -125,6 +125,10 @@ def test_latex_and_markdown_tables(icra20):
     ev = ln.evaluate([icra20 / "per-seq" / a for a in ("orbslam2_rgbd", "dso", "odom")], scale="auto")
     ci = stats.confidence_intervals(ev.sequences(eps="paper", phi=30), ["cr", "c_ate_rmse"], n_resamples=300)
     text, best = comparison_table(ci, "cr")
+    assert not best.to_numpy().any()  # no test given: nothing in bold
+    table = ev.sequences(eps="paper", phi=30)
+    rank = ranking.ranking(table, "cr")
+    text, best = comparison_table(ci, "cr", ranks=rank)
     tex = to_latex(text, best, caption="CR 95% intervals", label="tab:cr")
     assert tex.count("{") == tex.count("}") and tex.count("[") == tex.count("]")
     rules = [tex.index(r) for r in (r"\toprule", r"\midrule", r"\bottomrule")]
@@ -132,16 +136,15 @@ def test_latex_and_markdown_tables(icra20):
     body = tex[rules[1] : rules[2]].strip().splitlines()[1:]
     assert len(body) == 3 and all(line.endswith(r"\\") for line in body)  # one row per algorithm
     assert r"95\%" in tex and r"orbslam2\_rgbd" in tex
-    for col in text.columns:  # the best of each column (CR: the largest) is bold
-        col_best = ci[(ci["metric"] == "cr") & (ci["scene"] == col)].sort_values("value").iloc[-1]
-        assert best.loc[col_best["algorithm"], col]
+    for col in text.columns:  # bold = rank 1 where the test separates someone
+        r = rank[rank["scene"] == col].set_index("algorithm")
+        separated = (r["rank"] > 1).any()
+        for alg in text.index:
+            assert best.loc[alg, col] == (separated and r.loc[alg, "rank"] == 1)
     assert tex.count(r"\textbf") == int(best.to_numpy().sum())
     assert re.search(r"\d\.\d\d \[\d\.\d\d, \d\.\d\d\]", tex)
     md = to_markdown(text, best)
     assert md.count("\n") == 2 + 3 and md.count("**") == 2 * int(best.to_numpy().sum())
-    low_best = comparison_table(ci, "c_ate_rmse")[1]  # C-ATE: the smallest is best
-    c = ci[(ci["metric"] == "c_ate_rmse") & (ci["scene"] == "home")].dropna(subset=["value"])
-    assert low_best.loc[c.sort_values("value").iloc[0]["algorithm"], "home"]
     assert interval(0.834, 0.791, 0.872) == "0.83 [0.79, 0.87]" and interval(np.nan, 0, 1) == "n/a"
 
 

@@ -4,6 +4,7 @@ with `--data`: the notebooks ship as package data and nothing assumes the source
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 import sysconfig
@@ -109,3 +110,47 @@ def test_wheel_evaluates_and_reports_outside_the_checkout(installed, data, tmp_p
     # no data given and none beside the folder: a clear error naming where it looked
     r = _run(venv, tmp_path, "evaluate", str(src), "--no-progress")
     assert r.returncode == 2 and "could not find its data" in r.stderr and str(tmp_path) in r.stderr
+
+
+def test_wheel_runs_the_primer_and_a_lab_with_no_data_folder(installed, tmp_path):
+    """A student's start (issue 26): the wheel installed, no ../shared and no LORISNB_DATA; the primer
+    (shipped in the package) and lab 1 (handed out as a notebook; here the instructor version, so
+    that every check runs) run on the sample data inside the package, and every check passes."""
+    import nbformat
+
+    venv, _ = installed
+    assert not any((p / "shared" / "data").exists() for p in (tmp_path, *tmp_path.parents))
+    lab = ROOT / "teaching" / "source" / "lab1_lifelong_metrics" / "lab1_lifelong_metrics.ipynb"
+    shutil.copyfile(lab, tmp_path / lab.name)
+    script = (
+        "import sys, pathlib, papermill as pm, lorisnb.notebooks as n\n"
+        "primer = pathlib.Path(n.__file__).parent / 'metrics_primer.ipynb'\n"
+        "pm.execute_notebook(str(primer), 'primer_run.ipynb', parameters={'quick': True, 'output_dir': 'primer_out'},"
+        " kernel_name='python3', progress_bar=False)\n"
+        "pm.execute_notebook(sys.argv[1], 'lab_run.ipynb', parameters={'output_dir': 'lab_out'},"
+        " kernel_name='python3', progress_bar=False)\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k not in ("LORISNB_DATA", "PYTHONPATH")}
+    env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"
+    env["MPLBACKEND"] = "Agg"
+    r = subprocess.run(
+        [str(venv / "bin" / "python"), "-c", script, lab.name],
+        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=900,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+
+    def printed(name: str) -> str:
+        nb = nbformat.read(tmp_path / name, as_version=4)
+        return "".join(
+            o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.outputs if o.output_type == "stream"
+        )
+
+    for name in ("primer_run.ipynb", "lab_run.ipynb"):
+        out = printed(name)
+        assert "using the small sample data shipped with lorisnb" in out and "site-packages" in out, out[:500]
+    assert (tmp_path / "primer_out" / "primer_cases.csv").exists()
+    lab_out = printed("lab_run.ipynb")
+    checks = sum(
+        c.source.count("teach.check_") for c in nbformat.read(lab, as_version=4).cells if c.cell_type == "code"
+    )
+    assert "✗" not in lab_out and lab_out.count("✓") >= checks, lab_out  # check_alignment_cr prints two

@@ -8,23 +8,38 @@ from __future__ import annotations
 
 import argparse
 import gc
+import importlib
 import os
 import sys
+from collections.abc import Callable
 
 import numpy as np
 
 from ..core import validate
 from ..core.blocks import ordinary_pages
+from ..core.spec import ALIGNMENTS, PRESETS
 from ..errors import LorisError
 from ..io.ranges import keep_freed_memory
-from .commands import cmd_compare, cmd_crosscheck, cmd_evaluate, cmd_report, cmd_sweep
 from .options import (
+    add_compare_options,
+    add_diff_options,
     add_evaluation_options,
+    add_history_options,
     add_scale_option,
     add_threshold_options,
     arg_type,
     threshold_list_type,
 )
+
+
+def _command(module: str, name: str) -> Callable[[argparse.Namespace], int]:
+    """The command ``name`` of ``module``, imported when it runs (``--help`` imports neither the
+    commands nor pandas, and a command imports pandas after :func:`pandas_without_pyarrow`)."""
+
+    def run(args: argparse.Namespace) -> int:
+        return int(getattr(importlib.import_module(module, __name__), name)(args) or 0)
+
+    return run
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -33,22 +48,25 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("evaluate", help="score result files: ATE, AOE, CR, CR-T, CS-R, C-ATE, RPE")
     add_evaluation_options(p)
-    add_threshold_options(p, eps=np.inf, phi=np.inf)
-    p.set_defaults(func=cmd_evaluate)
+    add_threshold_options(p)
+    p.set_defaults(func=_command(".commands", "cmd_evaluate"))
 
     p = sub.add_parser("compare", help="compare algorithms over trials and sequences: intervals, tests, ranking")
     add_evaluation_options(p)
-    add_threshold_options(p, eps="paper", phi=30.0)
-    p.add_argument("--metric", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"], default="cr",
-                   help="the metric of the ranking, pairwise tests and tables (default cr)")  # fmt: skip
-    p.add_argument("--level", type=arg_type(lambda t: validate.positive("--level", t, "a probability")), default=0.95,
-                   help="confidence level of the intervals (default 0.95)")  # fmt: skip
-    p.add_argument("--alpha", type=arg_type(lambda t: validate.positive("--alpha", t, "a probability")), default=0.05,
-                   help="significance level of the pairwise tests, after Holm's correction (default 0.05)")  # fmt: skip
-    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (default 0)")
-    p.add_argument("--latex", default=None, metavar="OUT", help="write the comparison table as LaTeX (booktabs)")
-    p.add_argument("--markdown", default=None, metavar="OUT", help="write the comparison table as Markdown")
-    p.set_defaults(func=cmd_compare)
+    add_threshold_options(p)
+    add_compare_options(p)
+    p.set_defaults(func=_command(".commands", "cmd_compare"))
+
+    p = sub.add_parser("diff", help="did CAND regress against BASE? two result folders, report runs or tables")
+    add_evaluation_options(p)
+    add_threshold_options(p)
+    add_diff_options(p)
+    p.set_defaults(func=_command(".runs", "cmd_diff"))
+    p.set_defaults(defaults=vars(p.parse_args(["BASE", "CAND"])))
+
+    p = sub.add_parser("history", help="scene values over many runs: first changes, runs not comparable")
+    add_history_options(p)
+    p.set_defaults(func=_command(".runs", "cmd_history"))
 
     p = sub.add_parser(
         "sweep", help="every metric over grids of eps, phi, delta and tau (one row per sequence and setting)"
@@ -75,21 +93,26 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="read --eps as fractions of each sequence's ground-truth extent or length",
     )
-    p.set_defaults(func=cmd_sweep)
+    p.set_defaults(func=_command(".commands", "cmd_sweep"))
 
     p = sub.add_parser("crosscheck", help="compare lorisnb with evo on one ground truth and one estimate")
     p.add_argument("gt", help="ground truth (for --format openloris: gt_<scene>_1.txt, or 'auto' to find it)")
     p.add_argument("est", help="estimate")
     p.add_argument(
         "--format",
-        choices=["tum", "kitti", "euroc", "openloris"],
+        choices=["tum", "kitti", "euroc", "bag", "openloris"],
         default="tum",
         help="format of GT (and of EST unless --est-format); euroc follows evo: the ground truth is the "
         "EuRoC CSV, the estimate TUM text",
     )
     p.add_argument(
-        "--est-format", choices=["tum", "kitti", "euroc"], default=None, help="format of EST when it differs"
+        "--est-format", choices=["tum", "kitti", "euroc", "bag"], default=None, help="format of EST when it differs"
     )
+    p.add_argument("--conventions", choices=list(PRESETS), default=None,
+                   help="lorisnb under this preset (e.g. evo) against evo reading the files itself: every statistic")  # fmt: skip
+    p.add_argument("--align", choices=ALIGNMENTS, default=None, help="with --conventions: the alignment")
+    p.add_argument("--topic", default=None, help="bags: the estimate's topic (evo's /tf:parent.child too)")
+    p.add_argument("--gt-topic", default=None, help="bags: the ground truth's topic")
     add_scale_option(p, "Sim(3) for the RPE and association rows ('auto' for openloris: by algorithm)")
     p.add_argument("--times", default=None, help="KITTI: one times file (a stamp per line) for both files")
     p.add_argument("--gt-times", default=None, help="KITTI: the ground truth's times file")
@@ -111,7 +134,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--data", default=None, metavar="DIR")
     p.add_argument("--csv", default=None, metavar="OUT")
     p.add_argument("--force", action="store_true")
-    p.set_defaults(func=cmd_crosscheck)
+    p.set_defaults(func=_command(".commands", "cmd_crosscheck"))
 
     p = sub.add_parser("report", help="run the notebooks with papermill into a report folder under results/")
     p.add_argument("--out", default=None, help="run folder (default results/run-<date>-<time>)")
@@ -133,7 +156,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--force", action="store_true", help="replace --out if it is an earlier lorisnb run folder")
     p.add_argument("--no-progress", action="store_true")
-    p.set_defaults(func=cmd_report)
+    p.set_defaults(func=_command(".commands", "cmd_report"))
     return parser
 
 

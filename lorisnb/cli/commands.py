@@ -7,99 +7,78 @@ import argparse
 import sys
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from ..core.association import MAX_GAP
+import pandas as pd
+
+from ..core.spec import make_spec
 from ..errors import LorisError, LorisWarning, ValidationError
-from .options import check_output, conventions_of, param_value
+from .options import check_output, check_outputs, param_value, refuse_unused, spec_from_args
 
-if TYPE_CHECKING:  # pandas is imported by the commands that print tables (not by --help)
-    import pandas as pd
+
+def _executor(args: argparse.Namespace) -> Any:
+    """A Dask cluster's executor for ``--scheduler ADDRESS`` (None without it)."""
+    if not getattr(args, "scheduler", None):
+        return None
+    from ..tools import require
+
+    try:
+        client = require("distributed").Client(args.scheduler, timeout=10)
+    except (OSError, TimeoutError) as exc:
+        raise LorisError(f"--scheduler {args.scheduler}: cannot reach the Dask scheduler ({exc})") from None
+    return client.get_executor()
 
 
 def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
-    from ..tools.evaluate import evaluate
-
-    if getattr(args, "gt", None) or getattr(args, "manifest", None):
-        return _run_pairs(args)
-    pair_only = [
-        f"--{k.replace('_', '-')}"
-        for k in ("format", "gt_format", "conventions", "association", "max_diff", "t_offset", "align", "align_frames",
-                  "topic", "gt_topic", "tf", "gt_tf", "gt_times", "est_times", "scene")
-        if getattr(args, k, None) is not None
-    ]  # fmt: skip
-    if pair_only:
-        raise ValidationError(
-            f"{', '.join(pair_only)}: for estimates scored against --gt or a --manifest; OpenLORIS result files "
-            "use the official conventions (choose --max-gap, --scale, --per-seq or --lifelong)"
-        )
-
-    executor = None
-    if args.scheduler:
-        from ..tools import require
-
-        try:
-            client = require("distributed").Client(args.scheduler, timeout=10)
-        except (OSError, TimeoutError) as exc:
-            raise LorisError(f"--scheduler {args.scheduler}: cannot reach the Dask scheduler ({exc})") from None
-        executor = client.get_executor()
-
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", LorisWarning)
-        ev = evaluate(
-            args.paths,
-            mode=args.mode,
-            scale=args.scale,
-            official_interpolation=args.official_interpolation,
-            remove_repeated=not args.keep_repeated,
-            data_root=args.data,
-            repair_stamps=args.repair_stamps,
-            max_gap=args.max_gap if getattr(args, "max_gap", None) is not None else MAX_GAP,
-            trials_by=args.trials_by,
-            jobs=args.jobs,
-            executor=executor,
-            progress=not args.no_progress,
-        )
-    notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))
-    return ev, notes
-
-
-def _run_pairs(args: argparse.Namespace) -> tuple[Any, list[str]]:
-    """``--gt`` (plain pairs) or ``--manifest`` (sessions): lorisnb.tools.pairs."""
+    """Every input kind through one spec (:func:`spec_from_args`) and one runner: OpenLORIS result
+    files, ``--gt`` pairs or a ``--manifest``'s sessions. Prints the ``conventions:`` line."""
     from ..io.manifest import read_manifest
-    from ..tools.pairs import evaluate_manifest, evaluate_pairs
+    from ..tools.evaluate import evaluate, evaluate_manifest, evaluate_pairs
 
     if args.gt and args.manifest:
         raise ValidationError("--gt and --manifest: give one (a manifest names the ground truth of each session)")
+    manifest = read_manifest(args.manifest) if args.manifest else None
+    if manifest is not None and manifest.openloris:
+        if args.conventions:
+            raise ValidationError(
+                "--conventions: OpenLORIS result files are scored with the official conventions "
+                "(choose --max-gap, --scale, --per-seq or --lifelong instead)"
+            )
+        manifest = None
+    reading = ["format", "gt_format", "topic", "gt_topic", "tf", "gt_tf", "gt_times", "est_times", "scene"]
+    if not args.gt:
+        given = [f"--{k.replace('_', '-')}" for k in reading if getattr(args, k, None) is not None]
+        if given:
+            raise ValidationError(
+                f"{', '.join(given)}: for estimates scored against --gt (a manifest names its formats); "
+                "OpenLORIS result files name their scene and frame in their header"
+            )
+    if getattr(args, "data", None) is not None and (args.gt or manifest is not None):
+        raise ValidationError(
+            "--data: the data root holds OpenLORIS ground truth; "
+            + ("a pair's ground truth is --gt" if args.gt else "a manifest names its ground-truth files")
+        )
+    spec = spec_from_args(args, manifest.spec if manifest is not None else None)
+    kw: dict[str, Any] = dict(trials_by=args.trials_by, progress=not args.no_progress, jobs=args.jobs,
+                              executor=_executor(args))  # fmt: skip
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
         if args.gt:
+            spec.refuse_inapplicable("pair", surface="cli")
             ev = evaluate_pairs(
-                args.paths, args.gt, fmt=args.format or "tum", gt_fmt=args.gt_format,
-                conventions=conventions_of(args), scene=args.scene, est_times=args.est_times,
-                gt_times=args.gt_times, topic=args.topic, gt_topic=args.gt_topic, tf=args.tf, gt_tf=args.gt_tf,
-                trials_by=args.trials_by, progress=not args.no_progress,
+                args.paths, args.gt, spec, fmt=args.format or "tum", gt_fmt=args.gt_format, scene=args.scene,
+                est_times=args.est_times, gt_times=args.gt_times, topic=args.topic, gt_topic=args.gt_topic,
+                tf=args.tf, gt_tf=args.gt_tf, **kw,
             )  # fmt: skip
+        elif manifest is not None:
+            spec.refuse_inapplicable("manifest", surface="cli")
+            ev = evaluate_manifest(manifest, args.paths, spec, **kw)
         else:
-            m = read_manifest(args.manifest)
-            if m.openloris:
-                return _run_evaluation(argparse.Namespace(**{**vars(args), "manifest": None}))
-            lifelong = None if args.mode == "auto" else args.mode == "lifelong"
-            ev = evaluate_manifest(
-                m, args.paths, conventions=conventions_of(args, m.conventions), lifelong=lifelong,
-                trials_by=args.trials_by, progress=not args.no_progress,
-            )  # fmt: skip
-    notes = list(dict.fromkeys(ev.warnings + [str(w.message) for w in caught]))
+            spec.refuse_inapplicable("openloris", surface="cli")
+            ev = evaluate(args.paths, spec, data_root=args.data, **kw)
+    notes = list(dict.fromkeys(ev.notes + ev.warnings + [str(w.message) for w in caught]))
     print(f"conventions: {ev.conventions}", file=sys.stderr)
     return ev, notes
-
-
-def _thresholds(args: argparse.Namespace, ev: Any) -> tuple[Any, Any]:
-    """--eps and --phi as given, else the manifest's, else the command's defaults."""
-    defaults = getattr(ev, "thresholds", {}) or {}
-    eps = args.eps if args.eps is not None else defaults.get("eps", args.eps_default)
-    phi = args.phi if args.phi is not None else defaults.get("phi", args.phi_default)
-    return eps, phi
 
 
 def _report_problems(ev: Any, notes: list[str]) -> None:
@@ -112,23 +91,19 @@ def _report_problems(ev: Any, notes: list[str]) -> None:
         print(f"skipped {len(ev.skipped)} file(s): " + "; ".join(reasons), file=sys.stderr)
 
 
-def _fmt(df: pd.DataFrame) -> str:
-    import pandas as pd
-
+def _fmt(df: pd.DataFrame, digits: int = 4) -> str:
     with pd.option_context("display.max_rows", 500, "display.width", 200, "display.max_columns", 30):
-        return df.to_string(index=False, float_format=lambda v: f"{v:.4f}")
+        return df.to_string(index=False, float_format=lambda v: f"{v:.{digits}f}")
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from ..core.aggregate import aggregate_scenes
-    from ..core.scoring import score
     from ..io.writers import write_csv, write_parquet
 
     check_output(args.csv, args.paths, args.force)
     check_output(args.parquet, args.paths, args.force, folder=True)
     ev, notes = _run_evaluation(args)
-    eps, phi = _thresholds(args, ev)
-    table = score(ev.errors, eps, phi, args.delta, args.tau)
+    table = ev.sequences()
     if not table.empty:
         cols = [
             "algorithm",
@@ -143,11 +118,17 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             "cr_t",
             "cs_r",
         ]
-        print(_fmt(table[cols]))
+        if ev.spec.preset_name == "evo":  # evo's statistics, as evo_ape / evo_rpe print them
+            cols += ["ate_mean", "ate_median", "ate_max", "rpe_trans_rmse", "rpe_rot_rmse"]
+        print(_fmt(table[cols], args.digits))
         try:
             scenes = aggregate_scenes(table, ev.durations())
             print("\nper scene (CR over all ground-truth time of the scene; C-ATE RMSE weighted by correct poses):")
-            print(_fmt(scenes[["suite", "algorithm", "scene", "sequences", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]))
+            scenes["coverage"] = [
+                f"{k}/{n}" for k, n in zip(scenes["sequences"], scenes["scene_sequences"], strict=True)
+            ]
+            view = scenes[["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]
+            print(_fmt(view, args.digits))
         except LorisError as exc:
             print(f"warning: no scene aggregate: {exc}", file=sys.stderr)
     if args.csv:
@@ -158,15 +139,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if getattr(args, "relative", False):
         rel = ev.relative()
         print("\nrelative error (rpg_trajectory_evaluation: sub-trajectories of 10..50 % of the length):")
-        print(_fmt(rel.drop(columns=["suite", "trial"])) if not rel.empty else "(no sequence long enough)")
+        print(_fmt(rel.drop(columns=["suite", "trial"]), args.digits) if not rel.empty else "(no sequence long enough)")
     _report_problems(ev, notes)
     print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.skipped)} skipped", file=sys.stderr)
     return 1 if ev.failures else 0
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    import pandas as pd
-
     from ..core.sweep import sweep, sweep_scenes
     from ..io.writers import write_csv, write_parquet
 
@@ -189,26 +168,32 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             scene_rows += len(scenes)
             if sum(map(len, shown)) < 60:
                 shown.append(scenes.head(60))
-            return part if keep_label else part.drop(columns=["eps_value"])
+            part = part if keep_label else part.drop(columns=["eps_value"])
+            part["spec"] = ev.spec.canonical(thresholds=False)
+            return part
 
         path, rows = sweep_to_parquet(
             ev.errors, args.parquet, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
-            force=args.force, progress=not args.no_progress, on_part=summarize,
+            force=args.force, progress=not args.no_progress, on_part=summarize, **ev.spec.rpe_options(),
         )  # fmt: skip
         print(f"{rows} rows: {len(ev.errors)} file(s) x {grid}")
         if shown:
-            print(_fmt(pd.concat(shown).head(60)))
+            print(_fmt(pd.concat(shown).head(60), args.digits))
             if scene_rows > 60:
                 print(f"... {scene_rows - 60} more scene rows (in the Parquet dataset, aggregate with sweep_scenes)")
         print(f"wrote {rows} rows to {path}", file=sys.stderr)
         _report_problems(ev, notes)
         return 1 if ev.failures else 0
-    table = sweep(ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all")
+    table = sweep(
+        ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all",
+        **ev.spec.rpe_options(),
+    )  # fmt: skip
+    table["spec"] = ev.spec.canonical(thresholds=False)
     print(f"{len(table)} rows: {len(ev.errors)} file(s) x {grid}")
     if not table.empty:
         scenes = sweep_scenes(table, ev.durations())
         view = scenes[cols]
-        print(_fmt(view.head(60)))
+        print(_fmt(view.head(60), args.digits))
         if len(view) > 60:
             print(f"... {len(view) - 60} more scene rows (write them all with --csv)")
     written = table if keep_label else table.drop(columns=["eps_value"])  # eps as given, when it differs
@@ -221,64 +206,105 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    """Scene values with bootstrap intervals, the ranking with ties the data cannot separate,
-    significant pairwise differences; tables as CSV, LaTeX, Markdown."""
-    import pandas as pd
+    """Scene values with bootstrap intervals, the ranking with ties from one permutation test,
+    its significant pairs; tables as CSV, LaTeX, Markdown (see :mod:`lorisnb.tools.comparison`)."""
+    from ..tools.comparison import compare_table, write_outputs
+    from ..tools.tables import check_table_suffix
 
-    from ..core import ranking, stats
-    from ..io.writers import write_csv
-    from ..tools.tables import interval, write_comparison
-
-    for out in (args.csv, args.latex, args.markdown):
-        check_output(out, args.paths, args.force)
+    rpe = [o for o, v in (("--rpe-delta", args.rpe_delta), ("--rpe-unit", args.rpe_unit), ("--rpe-pairs", args.rpe_pairs),
+                          ("--rpe-all-pairs", args.rpe_all_pairs), ("--rpe-tolerance", args.rpe_tolerance)) if v is not None]  # fmt: skip
+    if rpe and not args.metric.startswith(("rpe", "c_rpe")):
+        raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
+    refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate"})
+    check_outputs(args, args.paths, ["csv", "pairs_csv", "latex", "markdown"])
+    for out in (args.latex, args.markdown):
+        if out:
+            check_table_suffix(out)
     ev, notes = _run_evaluation(args)
-    eps, phi = _thresholds(args, ev)
-    table = ev.sequences(eps, phi, args.delta, args.tau)
+    table = ev.sequences()
     if not table.empty:
-        ci = stats.confidence_intervals(table, level=args.level, seed=args.seed)
-        rank = ranking.ranking(table, args.metric, alpha=args.alpha, seed=args.seed)
-        c = ci[ci["metric"] == args.metric].set_index(["suite", "scene", "algorithm"])
-        cells = c.loc[list(zip(rank["suite"], rank["scene"], rank["algorithm"], strict=True))]
-        rank["value [CI]"] = [
-            interval(v, lo, hi, digits=3) for v, lo, hi in zip(cells["value"], cells["low"], cells["high"], strict=True)
-        ]
-        n_trials = table.groupby(["algorithm", "scene"])["trial"].nunique().max()
-        units = ", ".join(sorted(set(ci["unit"])))
-        print(f"{args.metric} per algorithm and scene, {args.level:.0%} bootstrap intervals over {units} "
-              f"(up to {n_trials} trial(s)); rank = 1 + algorithms significantly better (Wilcoxon, Holm, "
-              f"alpha {args.alpha}):")  # fmt: skip
-        with pd.option_context("display.max_colwidth", 50):
-            print(_fmt(rank[["suite", "scene", "algorithm", "value [CI]", "rank", "tied_with"]]))
-        pairs = stats.pairwise(table, args.metric, alpha=args.alpha, seed=args.seed)
-        sig = pairs[pairs["significant"]]
-        print(f"\n{len(sig)} of {len(pairs)} pairs differ significantly" + (":" if len(sig) else "."))
-        if len(sig):
-            print(_fmt(sig[["scene", "a", "b", "value_a", "value_b", "p_a_better", "p_holm"]]))
-        if args.csv:
-            print(f"wrote {write_csv(ci, args.csv, args.force)}", file=sys.stderr)
-        for out in (args.latex, args.markdown):
-            if out:
-                print(f"wrote {write_comparison(ci, args.metric, out, args.force)}", file=sys.stderr)
+        res = compare_table(table, ev.durations(), args.metric, level=args.level, alpha=args.alpha,
+                            seed=args.seed, power_delta=args.power)  # fmt: skip
+        notes += res.notes
+        sp = ev.spec
+        print(f"thresholds: eps {sp.eps}, phi {sp.phi:g} deg, delta {sp.delta:g} s, tau {sp.tau:g} s")
+        print(res.header)
+        with pd.option_context("display.max_colwidth", 60):
+            print(
+                _fmt(
+                    res.algorithms[
+                        [
+                            "suite",
+                            "scene",
+                            "algorithm",
+                            "value [CI]",
+                            "covered",
+                            "rank",
+                            "vs top [test interval]",
+                            "tied_with",
+                        ]
+                    ],
+                    args.digits,
+                )
+            )
+        print("\n" + res.summary)
+        if len(res.significant):
+            print(
+                _fmt(
+                    res.significant[["scene", "a", "b", "value_a", "value_b", "difference", "p", "p_holm"]], args.digits
+                )
+            )
+        if res.power is not None:
+            print(f"\nruns needed to detect a difference of {args.power} in {args.metric} (power 0.8, alpha "
+                  f"{args.alpha}) where no difference was found:")  # fmt: skip
+            print(_fmt(res.power[["scene", "a", "b", "unit", "have", "needed"]], args.digits))
+        for path in write_outputs(res, args.metric, args.csv, args.pairs_csv, args.latex, args.markdown, args.force,
+                                  args.alpha):  # fmt: skip
+            print(f"wrote {path}", file=sys.stderr)
     _report_problems(ev, notes)
     return 1 if ev.failures else 0
 
 
 def cmd_crosscheck(args: argparse.Namespace) -> int:
-    import pandas as pd
-
     from ..io.formats import read_trajectory
     from ..io.openloris import read_openloris
     from ..io.writers import write_csv
     from ..tools.crosscheck import crosscheck, crosscheck_openloris
 
     check_output(args.csv, [args.gt, args.est], args.force)
+    openloris = args.format == "openloris"
+    times = [
+        o for o, v in (("--times", args.times), ("--gt-times", args.gt_times), ("--est-times", args.est_times)) if v
+    ]
+    kitti = "kitti" in (args.format, args.est_format)
+    refused = [o for o, v in (("--seq", args.seq), ("--data", args.data)) if v is not None and not openloris]
+    refused += [o for o, v in (("--est-format", args.est_format),) if v is not None and openloris]
+    refused += times if not kitti else []
+    bag = "bag" in (args.format, args.est_format)
+    refused += [o for o, v in (("--topic", args.topic), ("--gt-topic", args.gt_topic)) if v is not None and not bag]
+    if refused:
+        raise ValidationError(
+            f"{', '.join(refused)}: does not apply to --format {args.format}"
+            + (f" with --est-format {args.est_format}" if args.est_format else "")
+            + " (--seq and --data: OpenLORIS files; --est-format: TUM/KITTI/EuRoC pairs; times files: KITTI;"
+            " topics: bags)"
+        )
+    if args.align is not None and args.conventions is None:
+        raise ValidationError("--align: only with --conventions (the crosscheck's own rows use none, se3 and sim3)")
     deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
     gt_format = args.format
     est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)
+    if args.conventions is not None:
+        return _crosscheck_conventions(args, gt_format, est_format)
     if args.format == "openloris":
         gt_file = read_openloris(args.gt) if args.gt not in ("-", "auto") else None
         table = crosscheck_openloris(
-            args.est, args.seq, scale=args.scale, data_root=args.data, groundtruth=gt_file, rpe_deltas=deltas
+            args.est,
+            args.seq,
+            scale=False if args.scale is None else args.scale,
+            data_root=args.data,
+            groundtruth=gt_file,
+            rpe_deltas=deltas,
         )
     else:
         gt_times, est_times = args.gt_times or args.times, args.est_times or args.times
@@ -288,11 +314,19 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
                 "--gt-times and --est-times: a KITTI file has no stamps; give stamps for both files (or for "
                 "neither, to pair two KITTI files of equal length by index)"
             )
-        gt = read_trajectory(args.gt, gt_format, stamps=gt_times if gt_format == "kitti" else None)
-        est = read_trajectory(args.est, est_format, stamps=est_times if est_format == "kitti" else None)
-        table = crosscheck(
-            gt, est, scale=bool(args.scale), by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs
-        )
+        gt = read_trajectory(args.gt, gt_format, stamps=gt_times if gt_format == "kitti" else None,
+                             topic=args.gt_topic if gt_format == "bag" else None)  # fmt: skip
+        est = read_trajectory(args.est, est_format, stamps=est_times if est_format == "kitti" else None,
+                              topic=args.topic if est_format == "bag" else None)  # fmt: skip
+        spec = make_spec(None, surface="cli", **({} if args.scale is None else {"scale": args.scale}))
+        with_scale = spec.alignment_for(Path(args.est).stem) == "sim3"
+        table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs)
+        from ..tools.crosscheck_reading import crosscheck_reading  # and evo's own reading of each file
+
+        parts = [crosscheck_reading(f, fm, t).assign(quantity=lambda x, w=w: w + ": " + x["quantity"])
+                 for w, f, fm, t in (("ground truth", args.gt, gt_format, args.gt_topic),
+                                     ("estimate", args.est, est_format, args.topic))]  # fmt: skip
+        table = pd.concat([table, *parts], ignore_index=True)
     from ..tools import require
 
     evo_version = require("evo").__version__
@@ -308,6 +342,24 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     if args.csv:
         write_csv(table, args.csv, args.force)
     return 0 if table.loc[must, "agrees"].all() else 1
+
+
+def _crosscheck_conventions(args: argparse.Namespace, gt_format: str, est_format: str) -> int:
+    """``crosscheck --conventions P``: lorisnb under preset P against evo reading the files itself."""
+    from ..io.writers import write_csv
+    from ..tools.crosscheck_evo import crosscheck_evo
+
+    spec = make_spec(args.conventions, surface="cli", **({"align": args.align} if args.align else {}))
+    table = crosscheck_evo(args.gt, args.est, spec, fmt=est_format, gt_fmt=gt_format, topic=args.topic,
+                           gt_topic=args.gt_topic, tol=1e-5 if "kitti" in (gt_format, est_format) else 1e-9)  # fmt: skip
+    with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.10g}"))
+    stats = ~table["quantity"].str.contains(":") & table["evo"].notna()
+    print(f"\n{int(table.loc[stats, 'agrees'].sum())} of {int(stats.sum())} statistics agree with evo reading the "
+          "files itself; the reading rows say where the readings differ and why", file=sys.stderr)  # fmt: skip
+    if args.csv:
+        write_csv(table, args.csv, args.force)
+    return 0 if table.loc[stats, "agrees"].all() else 1
 
 
 def cmd_report(args: argparse.Namespace) -> int:
@@ -339,3 +391,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         )
     print(f"report: {run_dir / 'index.html'}")
     return 1 if any(r.status == "failed" or r.input_errors for r in runs) else 0
+
+
+#: The helpers other command modules (:mod:`lorisnb.cli.runs`) share with these commands.
+run_evaluation, report_problems, fmt_table = _run_evaluation, _report_problems, _fmt

@@ -7,12 +7,14 @@ import argparse
 import json
 import os
 from collections.abc import Callable
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from ..core import validate
-from ..core.conventions import ALIGNMENTS, ASSOCIATIONS, Conventions
+from ..core.evo_options import PLANES
+from ..core.relations import RELATIONS
+from ..core.rpe import RPE_PAIRS
+from ..core.spec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, make_spec
 from ..errors import OutputError, ValidationError
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import BUILT_IN
@@ -41,19 +43,22 @@ def threshold_list_type(name: str) -> Callable[[str], Any]:
 
 def add_scale_option(p: argparse.ArgumentParser, help: str) -> None:
     """``--scale [auto|on|off|...]``: the words of :func:`lorisnb.core.validate.scale_value`."""
-    p.add_argument("--scale", nargs="?", const=True, default=False, type=arg_type(validate.scale_value), help=help)
+    p.add_argument("--scale", nargs="?", const=True, default=None, type=arg_type(validate.scale_value), help=help)
 
 
-def add_threshold_options(p: argparse.ArgumentParser, eps: Any, phi: Any) -> None:
-    """``--eps --phi --delta --tau``, one value each (``evaluate``, ``compare``)."""
+def add_threshold_options(p: argparse.ArgumentParser) -> None:
+    """``--eps --phi --delta --tau``, one value each (``evaluate``, ``compare``); default: the
+    spec's (the preset's, or a manifest's), the same for every command."""
+    d = PRESETS["openloris"]
     p.add_argument("--eps", type=threshold_type("eps"), default=None,
-                   help=f"ATE threshold in metres, 'inf', 'paper' (1/3/5 m by scene) or 'relative:F'; default {eps} "
-                   "(a manifest's eps, with --manifest)")  # fmt: skip
+                   help=f"ATE threshold in metres, 'inf', 'paper' (1/3/5 m by scene) or 'relative:F'; default "
+                   f"{d.eps} (a manifest's eps, with --manifest)")  # fmt: skip
     p.add_argument("--phi", type=threshold_type("phi"), default=None,
-                   help=f"AOE threshold in degrees; default {phi} (a manifest's phi, with --manifest)")  # fmt: skip
-    p.set_defaults(eps_default=eps, phi_default=phi)
-    p.add_argument("--delta", type=threshold_type("delta"), default=1.0, help="validity window of a pose, s; default 1")
-    p.add_argument("--tau", type=threshold_type("tau"), default=60.0, help="re-localization time factor, s; default 60")
+                   help=f"AOE threshold in degrees; default {d.phi} (a manifest's phi, with --manifest)")  # fmt: skip
+    p.add_argument("--delta", type=threshold_type("delta"), default=None,
+                   help=f"validity window of a pose, s; default {d.delta:g}")  # fmt: skip
+    p.add_argument("--tau", type=threshold_type("tau"), default=None,
+                   help=f"re-localization time factor, s; default {d.tau:g}")  # fmt: skip
 
 
 def add_input_options(p: argparse.ArgumentParser) -> None:
@@ -66,20 +71,41 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--manifest", default=None, metavar="NAME_OR_TOML",
                    help=f"a multi-session manifest (built in: {', '.join(BUILT_IN)}); the inputs are folders of estimates")  # fmt: skip
     g.add_argument("--scene", default=None, help="scene label of a pair's rows (default: the ground truth's file name)")
-    g.add_argument("--conventions", default=None, choices=["openloris", "tum", "rpg", "vio"],
-                   help="preset conventions (tum: evaluate_ate.py; rpg: rpg_trajectory_evaluation; vio: posyaw)")  # fmt: skip
-    g.add_argument("--association", default=None, choices=ASSOCIATIONS, help="interpolate (default) or nearest")
+    g.add_argument("--conventions", default=None, choices=list(PRESETS),
+                   help="a preset of the evaluation spec (openloris: the official tool; tum: evaluate_ate.py; "
+                   "rpg: rpg_trajectory_evaluation; vio: posyaw; evo: evo_ape/evo_rpe's defaults)")  # fmt: skip
+    g.add_argument("--association", default=None, choices=ASSOCIATIONS,
+                   help="interpolate (default), nearest (TUM's greedy), evo-nearest or evo-interpolate (evo's sync)")  # fmt: skip
     g.add_argument("--max-gap", default=None, type=arg_type(lambda t: validate.positive("--max-gap", t, "seconds")),
                    help="interpolation bracket, seconds (default 0.5)")  # fmt: skip
     g.add_argument("--max-diff", default=None, type=arg_type(lambda t: validate.positive("--max-diff", t, "seconds")),
-                   help="nearest association: largest stamp difference, seconds (default 0.02)")  # fmt: skip
+                   help="nearest associations: largest stamp difference, seconds (default 0.02; evo 0.01)")  # fmt: skip
     g.add_argument("--t-offset", default=None, type=arg_type(lambda t: validate.finite("--t-offset", t, "seconds")),
                    help="seconds added to every estimate stamp (a known clock offset)")  # fmt: skip
-    g.add_argument("--align", default=None, choices=ALIGNMENTS, help="se3 (default), sim3, posyaw or none")
+    a = g.add_mutually_exclusive_group()
+    a.add_argument("--align", default=None, choices=ALIGNMENTS,
+                   help="se3 (default), sim3, posyaw, none, auto (sim3 for monocular algorithms: dso, svo), scale "
+                   "(the Sim(3) scale only: evo's -s without -a) or origin (evo's --align_origin)")  # fmt: skip
+    a.add_argument("--align-origin", dest="align", action="store_const", const="origin",
+                   help="align the first matched estimate pose onto the first ground-truth pose (evo's --align_origin)")  # fmt: skip
     g.add_argument("--align-frames", default=None, metavar="N",
                    type=arg_type(lambda t: int(validate.positive("--align-frames", t, "poses", integer=True))),
                    help="fit the alignment on the first N matched poses only")  # fmt: skip
-    g.add_argument("--topic", default=None, help="bags: the estimate's pose topic")
+    g.add_argument("--t-start", default=None, type=arg_type(lambda t: validate.finite("--t-start", t, "seconds")),
+                   help="leave out ground-truth poses before this stamp, seconds (evo's --t_start)")  # fmt: skip
+    g.add_argument("--t-end", default=None, type=arg_type(lambda t: validate.finite("--t-end", t, "seconds")),
+                   help="leave out ground-truth poses after this stamp, seconds (evo's --t_end)")  # fmt: skip
+    g.add_argument("--project-to-plane", default=None, choices=PLANES,
+                   help="errors of the aligned poses projected to a plane (evo's --project_to_plane)")  # fmt: skip
+    g.add_argument("--downsample", default=None, metavar="N",
+                   type=arg_type(lambda t: int(validate.positive("--downsample", t, "poses", integer=True))),
+                   help="reduce both trajectories to N evenly spaced poses first (evo's --downsample)")  # fmt: skip
+    g.add_argument("--motion-filter", default=None, nargs=2, metavar=("METRES", "DEGREES"),
+                   help="keep poses that moved or turned at least this much (evo's --motion_filter)")  # fmt: skip
+    g.add_argument("--relation", default=None, choices=RELATIONS,
+                   help="also the ape_* and rpe_* statistics of this pose relation (evo's -r)")  # fmt: skip
+    g.add_argument("--topic", default=None,
+                   help="bags: the estimate's pose topic (evo's TF id /tf:parent.child too); several, comma-separated: a row each")  # fmt: skip
     g.add_argument("--gt-topic", default=None, help="bags: the ground truth's pose topic")
     g.add_argument("--tf", default=None, metavar="PARENT:CHILD", help="bags: the estimate as a TF chain")
     g.add_argument("--gt-tf", default=None, metavar="PARENT:CHILD", help="bags: the ground truth as a TF chain")
@@ -89,18 +115,53 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--est-times", default=None, metavar="FILE", help="KITTI: the estimates' times file")
 
 
-def conventions_of(args: argparse.Namespace, base: Conventions | None = None) -> Conventions | None:
-    """The conventions the options ask for (a preset, then single options over it); None if none."""
-    changes = {
-        k: getattr(args, k)
-        for k in ("association", "max_gap", "max_diff", "t_offset", "align", "align_frames")
-        if getattr(args, k, None) is not None
+#: Command-line options that are values of the evaluation spec (dest -> spec name).
+SPEC_OPTIONS = {
+    "association": "association", "max_gap": "max_gap", "max_diff": "max_diff", "t_offset": "t_offset",
+    "align": "align", "align_frames": "align_frames", "scale": "scale", "mode": "mode",
+    "official_interpolation": "official_interpolation", "repair_stamps": "repair_stamps",
+    "keep_repeated": "keep_repeated", "eps": "eps", "phi": "phi", "delta": "delta", "tau": "tau",
+    "rpe_delta": "rpe_delta", "rpe_unit": "rpe_unit", "rpe_pairs": "rpe_pairs", "rpe_all_pairs": "rpe_all_pairs",
+    "rpe_tolerance": "rpe_tolerance", "t_start": "t_start", "t_end": "t_end", "project_to_plane": "project_to_plane",
+    "downsample": "downsample", "motion_filter": "motion_filter", "relation": "relation",
+}  # fmt: skip
+
+
+def spec_from_args(args: argparse.Namespace, base: EvalSpec | str | None = None) -> EvalSpec:
+    """The evaluation spec the options ask for: ``--conventions`` (or ``base``, a manifest's spec),
+    then every single option over it, validated by :func:`lorisnb.core.spec.make_spec` as in Python.
+    A sweep's threshold lists are its grid, not the spec's thresholds."""
+    flags = ("official_interpolation", "repair_stamps", "keep_repeated")  # store_true: given when set
+    given = {
+        name: getattr(args, dest)
+        for dest, name in SPEC_OPTIONS.items()
+        if getattr(args, dest, None) is not None
+        and not (dest in flags and getattr(args, dest) is False)
+        and not (isinstance(getattr(args, dest), list) and dest != "motion_filter")
     }
-    if getattr(args, "conventions", None):
-        return Conventions.preset(args.conventions, **changes)
-    if changes:
-        return replace(base or Conventions(), **changes)
-    return base
+    preset = getattr(args, "conventions", None) or base
+    return make_spec(preset, surface="cli", **given)
+
+
+def add_rpe_options(p: argparse.ArgumentParser) -> None:
+    """``--rpe-delta`` and ``--rpe-unit``: the RPE step of the tables."""
+    d = PRESETS["openloris"]
+    p.add_argument("--rpe-delta", default=None, type=arg_type(lambda t: validate.positive("--rpe-delta", t, "steps")),
+                   help=f"RPE step (default {d.rpe_delta:g}, in --rpe-unit)")  # fmt: skip
+    p.add_argument("--rpe-unit", default=None, choices=(*RPE_UNITS, "d", "r"),
+                   help=f"unit of the RPE step: s, m, f or frames, deg (d), rad (r); default {d.rpe_unit} (evo: frames)")  # fmt: skip
+    p.add_argument("--rpe-pairs", default=None, choices=RPE_PAIRS,
+                   help="measure m / deg / rad along the reference (lorisnb's default) or the aligned estimate (evo's)")  # fmt: skip
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--rpe-all-pairs", dest="rpe_all_pairs", action="store_const", const=True, default=None,
+                   help="evo's all pairs (--all_pairs): in m, the pose closest to delta within the tolerance")  # fmt: skip
+    g.add_argument("--rpe-consecutive", dest="rpe_all_pairs", action="store_const", const=False,
+                   help="evo's consecutive pairs (evo's default; the evo preset's)")  # fmt: skip
+    p.add_argument("--rpe-tolerance", default=None, type=arg_type(lambda t: validate.positive("--rpe-tolerance", t, "")),
+                   help="evo's --delta_tol for --rpe-all-pairs, a fraction of the delta (default 0.1)")  # fmt: skip
+    p.add_argument("--digits", default=4, metavar="N",
+                   type=arg_type(lambda t: int(validate.positive("--digits", t, "digits", integer=True))),
+                   help="decimals of the printed tables (default 4; the CSV keeps every digit)")  # fmt: skip
 
 
 def add_evaluation_options(p: argparse.ArgumentParser) -> None:
@@ -110,6 +171,7 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
         help="result files, or folders walked as <algorithm>/*.txt (with --gt: estimates; with --manifest: folders)",
     )  # fmt: skip
     add_input_options(p)
+    add_rpe_options(p)
     add_scale_option(p, "align with Sim(3) (scale); 'auto': only for monocular algorithms (dso, svo)")
     g = p.add_mutually_exclusive_group()
     g.add_argument(
@@ -122,7 +184,7 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
         const="lifelong",
         help="align on the first sequence and apply that to all (default for files with several seq: blocks)",
     )
-    p.set_defaults(mode="auto")
+    p.set_defaults(mode=None)
     p.add_argument(
         "--official-interpolation",
         action="store_true",
@@ -207,3 +269,84 @@ def param_value(text: str) -> Any:
         return json.loads(text)
     except ValueError:
         return text
+
+
+def probability_type(name: str) -> Callable[[str], Any]:
+    """A probability strictly between 0 and 1 (``--level``, ``--alpha``)."""
+
+    def check(text: str) -> float:
+        v = validate.positive(name, text, "a probability")
+        if not v < 1:
+            raise ValidationError(f"{name}={text}: expected a probability between 0 and 1")
+        return v
+
+    return arg_type(check)
+
+
+def add_compare_options(p: argparse.ArgumentParser) -> None:
+    """``compare``'s own options: the metric, the interval level, the test's alpha, the bootstrap
+    seed, the power question and the tables."""
+    p.add_argument("--metric", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"], default="cr",
+                   help="the metric of the ranking, pairwise tests and tables (default cr)")  # fmt: skip
+    p.add_argument("--level", type=probability_type("--level"), default=0.95,
+                   help="confidence level of the intervals (default 0.95)")  # fmt: skip
+    p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
+                   help="significance level of the pairwise permutation test, after Holm's correction (default 0.05)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap and of sampled relabellings (default 0)")
+    p.add_argument("--power", default=None, metavar="DELTA",
+                   type=arg_type(lambda t: validate.positive("--power", t, "the metric's unit")),
+                   help="for pairs not found different: the sequences or trials needed to detect a difference "
+                   "DELTA of the metric (power 0.8)")  # fmt: skip
+    p.add_argument("--pairs-csv", default=None, metavar="OUT",
+                   help="write the pairwise test (p, min_p, Holm, effect sizes) to this CSV")  # fmt: skip
+    p.add_argument("--latex", default=None, metavar="OUT", help="write the comparison table as LaTeX (booktabs, .tex)")
+    p.add_argument("--markdown", default=None, metavar="OUT", help="write the comparison table as Markdown (.md)")
+
+
+def add_diff_options(p: argparse.ArgumentParser) -> None:
+    """``diff``'s own options: tolerances, the test's alpha, the seed and the verdict files."""
+    from ..core.tolerances import DEFAULT_TOLERANCES
+
+    defaults = ",".join(f"{k}={v}" for k, v in DEFAULT_TOLERANCES.items())
+    p.add_argument("--tolerance", default=None, metavar="M=V,...",
+                   help="how much worse a metric may get before it is a regression: an amount in the metric's unit "
+                   f"or a percentage of the base value (defaults: {defaults.replace('%', '%%')})")  # fmt: skip
+    p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
+                   help="significance level of the permutation test across trials (default 0.05)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="seed of sampled relabellings (default 0)")
+    p.add_argument("--json", default=None, metavar="OUT", help="write the verdict as JSON")
+    p.add_argument(
+        "--junit", default=None, metavar="OUT", help="write the verdict as JUnit XML (one test per sequence)"
+    )
+
+
+def add_history_options(p: argparse.ArgumentParser) -> None:
+    """``history``'s options: the runs, the metrics, tolerances and the outputs."""
+    p.add_argument("runs", nargs="+", metavar="RUN",
+                   help="report run folders (run.json + tables) or per-sequence CSV/Parquet tables")  # fmt: skip
+    p.add_argument("--metric", nargs="+", choices=["cr", "cr_t", "cs_r", "c_ate_rmse"],
+                   default=["cr", "cr_t", "cs_r", "c_ate_rmse"], help="scene metrics to follow (default: all four)")  # fmt: skip
+    p.add_argument("--tolerance", default=None, metavar="M=V,...",
+                   help="how much a value may move before it counts as a change (as diff's --tolerance)")  # fmt: skip
+    p.add_argument("--csv", default=None, metavar="OUT", help="write the history table to this CSV")
+    p.add_argument("--out", default=None, metavar="DIR", help="write one figure per metric (PNG, SVG) into DIR")
+    p.add_argument("--force", action="store_true", help="overwrite OUT / files in DIR")
+
+
+def refuse_unused(args: argparse.Namespace, unused: dict[str, str]) -> None:
+    """Options a command shares with ``evaluate`` but cannot apply: refused, naming what to use."""
+    given = [(k, use) for k, use in unused.items() if getattr(args, k, None)]
+    if given:
+        k, use = given[0]
+        raise ValidationError(f"--{k.replace('_', '-')}: not used by lorisnb {args.command}; use {use}")
+
+
+def check_outputs(args: argparse.Namespace, inputs: list[str], files: list[str], folders: tuple[str, ...] = ()) -> None:
+    """:func:`check_output` for each output option given (``files`` and ``folders``: option names,
+    as attributes of ``args``), and that no two of them name the same place; all before any work."""
+    given: list[tuple[str, str]] = [(k, str(getattr(args, k))) for k in [*files, *folders] if getattr(args, k, None)]
+    for k, v in given:
+        check_output(v, inputs, args.force, folder=k in folders)
+    if len({str(Path(v).resolve()) for _, v in given}) < len(given):
+        names = ", ".join(f"--{k.replace('_', '-')}" for k, _ in given)
+        raise ValidationError(f"{names}: give each output its own file or folder")

@@ -23,11 +23,11 @@ if TYPE_CHECKING:
         is_monocular,
         scene_eps,
     )
-    from .pairs import session_errors
-    from .pipeline import compute_errors, sequence_errors
+    from .pipeline import compute_errors, evaluate_sessions, sequence_errors, session_errors
     from .relative import relative_table, rpg_relative_errors
     from .scoring import pose_table, score, sequence_grid
     from .simulate import Faults, simulate, simulated_errors, simulated_result
+    from .spec import PRESETS, EvalSpec, make_spec
     from .surfaces import Surfaces, cr_surfaces
     from .sweep import eps_at_cr, rank_stability, rank_swaps, sweep, sweep_scenes
     from .trajectory import Trajectory, extent, path_length
@@ -41,5 +41,5 @@ __all__ = [
     "groundtruth_in_frame", "is_monocular", "path_length", "pose_table", "rank_stability", "rank_swaps",
     "scene_eps", "score", "sequence_errors", "sequence_grid", "simulate", "simulated_errors", "simulated_result",
     "sweep", "sweep_scenes", "umeyama", "Conventions", "associate_nearest", "fit_alignment", "session_errors",
-    "relative_table", "rpg_relative_errors",
+    "relative_table", "rpg_relative_errors", "EvalSpec", "PRESETS", "evaluate_sessions", "make_spec",
 ]  # fmt: skip

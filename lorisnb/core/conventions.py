@@ -12,73 +12,27 @@ Association:
 Alignment (``gt = s R est + t``, fitted on the matched positions):
     ``se3`` (Horn/Umeyama, no scale), ``sim3`` (with scale), ``posyaw`` (4-DoF: translation and a
     rotation about gravity, z; the standard for visual-inertial systems, rpg's ``posyaw``),
-    ``none``. ``align_frames=N`` fits on the first N matched poses only (evo's ``n_to_align``,
+    ``none``, ``scale`` (the Sim(3) scale alone, about the origin: evo's ``-s`` without ``-a``),
+    ``origin`` (the first matched estimate pose onto the first ground-truth pose: evo's
+    ``--align_origin``). ``align_frames=N`` fits on the first N matched poses only (evo's ``n_to_align``,
     rpg's ``align_num_frames``); with N = 1, ``se3`` and ``posyaw`` use the first pose's
     orientation as rpg does.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-
 import numpy as np
 
-from ..errors import EvaluationError, ValidationError
-from .association import MAX_GAP
+from ..errors import EvaluationError
+from .evo_options import origin_alignment, scale_alignment
 from .geometry import Sim3, quat_to_matrix, umeyama
-from .validate import choice, finite, positive
+from .spec import ASSOCIATIONS, MAX_DIFF, Conventions
+from .validate import choice
 
-ASSOCIATIONS = ("interpolate", "nearest")
-ALIGNMENTS = ("se3", "sim3", "posyaw", "none")
-MAX_DIFF = 0.02  # seconds; TUM's and rpg's default
+#: The alignments :func:`fit_alignment` fits (the spec's ``auto`` is resolved per algorithm first).
+ALIGNMENTS = ("se3", "sim3", "posyaw", "none", "scale", "origin")
 
-
-@dataclass(frozen=True)
-class Conventions:
-    """How a pair is matched and aligned (see the module docstring). Every value is validated."""
-
-    association: str = "interpolate"
-    max_gap: float = MAX_GAP
-    max_diff: float = MAX_DIFF
-    t_offset: float = 0.0
-    align: str = "se3"
-    align_frames: int | None = None
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "association", choice("association", self.association, ASSOCIATIONS))
-        object.__setattr__(self, "align", choice("align", self.align, ALIGNMENTS))
-        object.__setattr__(self, "max_gap", positive("max_gap", self.max_gap, "seconds"))
-        object.__setattr__(self, "max_diff", positive("max_diff", self.max_diff, "seconds"))
-        object.__setattr__(self, "t_offset", finite("t_offset", self.t_offset, "seconds"))
-        if self.align_frames is not None:
-            n = int(positive("align_frames", self.align_frames, "poses", integer=True))
-            if self.align == "sim3" and n < 2:
-                raise ValidationError("align_frames=1 with align='sim3': a scale needs at least 2 poses")
-            object.__setattr__(self, "align_frames", n)
-
-    @classmethod
-    def preset(cls, name: str, **changes: object) -> Conventions:
-        """Named conventions: ``openloris`` (interpolation, SE(3) on all poses), ``tum``
-        (``evaluate_ate.py``: nearest within 0.02 s, SE(3)), ``rpg`` (rpg_trajectory_evaluation:
-        nearest within 0.02 s, Sim(3)), ``vio`` (nearest, ``posyaw``); ``changes`` override."""
-        presets = {
-            "openloris": cls(),
-            "tum": cls(association="nearest", align="se3"),
-            "rpg": cls(association="nearest", align="sim3"),
-            "vio": cls(association="nearest", align="posyaw"),
-        }
-        return replace(presets[choice("conventions", name, tuple(presets))], **changes)  # type: ignore[arg-type]
-
-    def describe(self) -> str:
-        """One line saying what was used."""
-        match = (
-            f"interpolated ground truth within {self.max_gap:g} s"
-            if self.association == "interpolate"
-            else f"nearest stamps within {self.max_diff:g} s (greedy, TUM associate.py)"
-        )
-        frames = "all matched poses" if self.align_frames is None else f"the first {self.align_frames} matched poses"
-        offset = f", estimate stamps + {self.t_offset:g} s" if self.t_offset else ""
-        return f"association: {match}{offset}; alignment: {self.align} on {frames}"
+__all__ = ["ALIGNMENTS", "ASSOCIATIONS", "MAX_DIFF", "Conventions", "associate_nearest", "fit_alignment"]
 
 
 def associate_nearest(
@@ -218,11 +172,19 @@ def fit_alignment(
 ) -> Sim3:
     """The alignment ``gt = s R est + t`` of matched poses by ``method`` (see the module
     docstring), fitted on the first ``frames`` matched poses (None: all). Positions in metres;
-    quaternions ``xyzw``, needed for ``frames=1`` with ``se3`` or ``posyaw``."""
+    quaternions ``xyzw``, needed for ``frames=1`` with ``se3`` or ``posyaw``, and for ``origin``."""
     method = choice("align", method, ALIGNMENTS)
     p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
     if method == "none" or len(p_e) == 0:
         return Sim3.identity()
+    if method == "scale":
+        return scale_alignment(p_e, p_g, frames)
+    if method == "origin":
+        if est_quaternions is None or gt_quaternions is None:
+            raise EvaluationError("align='origin' needs the orientations")
+        return origin_alignment(p_e[0], est_quaternions[0], p_g[0], gt_quaternions[0])
+    if frames is None and method in ("se3", "sim3"):  # all matched poses: Horn/Umeyama, as the official tool
+        return umeyama(p_e, p_g, method == "sim3")
     n = len(p_e) if frames is None else min(int(frames), len(p_e))
     if n == 1 and method in ("se3", "posyaw"):
         if est_quaternions is None or gt_quaternions is None:

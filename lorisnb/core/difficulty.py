@@ -19,7 +19,7 @@ import pandas as pd
 from . import metrics
 from .geometry import quat_angle_deg, quat_conjugate, quat_multiply, quat_normalize
 from .model import SequenceErrors
-from .trajectory import Trajectory
+from .trajectory import Trajectory, size
 
 
 def trajectory_stats(traj: Trajectory) -> dict:
@@ -64,14 +64,13 @@ def difficulty_measures(
         e: per-pose errors of the sequence (:func:`lorisnb.core.pipeline.compute_errors` or
             :func:`lorisnb.core.pipeline.sequence_errors`).
         gt: the sequence's full ground truth (for its length and extent).
-        eps_fraction: eps as a fraction of the ground truth's size for ``cr_scaled``.
+        eps_fraction: eps as a fraction of the whole ground truth's size for ``cr_scaled``
+            (:func:`lorisnb.core.trajectory.size`, the one rule of relative thresholds).
         relative_to: that size: ``extent`` (bounding-box diagonal) or ``length`` (distance travelled).
         rpe_metres: distance along the ground truth over which the RPE is taken, metres.
     """
     st = trajectory_stats(gt)
-    if relative_to not in ("extent", "length"):
-        raise ValueError(f"relative_to must be 'extent' or 'length', got {relative_to!r}")
-    eps = eps_fraction * st[f"{relative_to}_m"]
+    eps = eps_fraction * size(gt.positions, relative_to)  # of the whole sequence, whatever was tracked
     out = dict(
         length_m=st["length_m"],
         extent_m=st["extent_m"],

@@ -20,8 +20,6 @@ from .geometry import quat_conjugate, quat_multiply, quat_normalize, quat_rotate
 #: Scenes in the order the official tool matches them (by substring of the ``scene:`` header).
 SCENES: tuple[str, ...] = ("office", "corridor", "home", "cafe", "market")
 
-#: Number of sequences per scene in OpenLORIS-Scene (paper Sec. III-D).
-SEQUENCES_PER_SCENE: dict[str, int] = {"office": 7, "corridor": 5, "home": 5, "cafe": 2, "market": 3}
 
 #: The paper's lifelong ATE thresholds (Fig. 3 caption), metres: 1 m office, 3 m home and cafe,
 #: 5 m corridor and market. The AOE threshold there is 30 degrees for every scene.

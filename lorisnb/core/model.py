@@ -19,7 +19,8 @@ from ..errors import ParseError, ValidationError
 from . import metrics
 from .frames import FRAMES, PAPER_EPS, SCENES, match_scene
 from .geometry import Sim3, rotations_of
-from .trajectory import Trajectory, extent
+from .rpe import rpe_indices
+from .trajectory import Trajectory, size
 
 if TYPE_CHECKING:
     from scipy.spatial.transform import Rotation
@@ -35,6 +36,13 @@ EXTRA_COLUMNS = [
     "suite", "mode", "aligned_on", "scale", "c_matched", "gt_start", "gt_end", "gt_duration",
     "t0", "track_time", "first_correct", "rpe_trans_rmse", "rpe_rot_rmse", "c_rpe_trans_rmse",
     "c_rpe_rot_rmse", "rpe_pairs", "c_rpe_pairs", "official_interpolation", "trial",
+]  # fmt: skip
+#: Error statistics of the per-sequence table (:func:`lorisnb.core.scoring.score`), after
+#: :data:`EXTRA_COLUMNS`: evo's statistics (``rmse`` is in the columns above) of ATE (m), AOE (deg)
+#: and RPE translation (m) and rotation (deg), and of the same over correct poses (pairs) only.
+STAT_COLUMNS = [
+    f"{c}{m}_{s}" for c in ("", "c_") for m in ("ate", "aoe", "rpe_trans", "rpe_rot")
+    for s in ("mean", "median", "std", "min", "max", "sse")
 ]  # fmt: skip
 #: Columns of the per-scene table (:func:`lorisnb.core.aggregate.aggregate_scenes`).
 SCENE_COLUMNS = [
@@ -66,8 +74,6 @@ class ResultFile:
         seq_lines: sequence number -> line of its ``seq:`` line.
         removed_repeats: sequence number -> poses dropped as repeats of the previous pose.
         warnings: what was noticed while reading (also issued as LorisWarning).
-        derived: values computed from this file once and reused (the ground truth moved to each
-            sensor frame), keyed by what they depend on; not part of equality.
     """
 
     path: Path
@@ -78,7 +84,6 @@ class ResultFile:
     seq_lines: dict[int, int] = field(default_factory=dict)
     removed_repeats: dict[int, int] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
-    derived: dict[tuple[object, ...], object] = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def scene(self) -> str:
@@ -149,7 +154,9 @@ class SequenceErrors:
     gt_start: float
     gt_end: float
     scale: float = 1.0
-    _rpe_cache: dict[tuple[float, str], tuple[np.ndarray, ...]] = field(default_factory=dict, repr=False, compare=False)
+    _rpe_cache: dict[tuple[float, str, str, bool | None, float], tuple[np.ndarray, ...]] = field(
+        default_factory=dict, repr=False, compare=False
+    )
 
     @classmethod
     def unmatched(cls, seq: int, poses: int, gt_start: float, gt_end: float) -> SequenceErrors:
@@ -174,16 +181,28 @@ class SequenceErrors:
         """:attr:`gt_quaternions` as a scipy ``Rotation`` (built on request)."""
         return rotations_of(self.gt_quaternions)
 
-    def rpe(self, delta: float = 1.0, unit: str = "s") -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Relative pose error pairs (i, j) and errors (metres, degrees) over ``delta`` in ``unit``
-        (see :func:`lorisnb.core.metrics.rpe_pairs`); computed once per setting and kept."""
-        key = (float(delta), unit)
+    def rpe(
+        self,
+        delta: float = 1.0,
+        unit: str = "s",
+        pairs: str = "reference",
+        all_pairs: bool | None = None,
+        tolerance: float = 0.1,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Relative pose error pairs (i, j) and errors (metres, degrees) over ``delta`` in ``unit``,
+        pairs taken along the ``reference`` or the ``estimate``, by lorisnb's rule
+        (``all_pairs=None``) or evo's (see :func:`lorisnb.core.rpe.rpe_indices`); computed once per
+        setting and kept."""
+        key = (float(delta), unit, pairs, all_pairs, float(tolerance))
         if key not in self._rpe_cache:
             if self.matched < 2 or self.gt_quaternions is None or self.est_quaternions is None:
                 z = np.zeros(0, int)
                 self._rpe_cache[key] = (z, z, np.zeros(0), np.zeros(0))
             else:
-                i, j = metrics.rpe_pairs(self.stamps, self.gt_positions, delta, unit)
+                i, j = rpe_indices(
+                    self.stamps, self.gt_positions, self.gt_quaternions, self.est_positions, self.est_quaternions,
+                    delta, unit, pairs, all_pairs, tolerance,
+                )  # fmt: skip
                 tr, rr = metrics.rpe(
                     self.gt_positions, self.gt_quaternions, self.est_positions, self.est_quaternions, i, j,
                     assume_unit=True,
@@ -215,6 +234,9 @@ class FileErrors:
     #: first and last stamp (seconds) of every sequence of the scene's ground truth, all of them and
     #: not only those of this file: what the scene's CR is taken over (empty when not known)
     groundtruth_spans: dict[int, tuple[float, float]] = field(default_factory=dict)
+    #: path length (metres) of every sequence's whole ground truth as read, before association:
+    #: what rpg's relative error takes its sub-trajectory lengths from (empty when not known)
+    groundtruth_lengths: dict[int, float] = field(default_factory=dict)
 
 
 def is_monocular(algorithm: str) -> bool:
@@ -243,10 +265,15 @@ def scene_eps(eps: Eps, scene: str) -> float:
     return float(eps)
 
 
+def sequence_size(e: SequenceErrors, relative_to: str = "extent") -> float:
+    """The size a relative eps is a fraction of, metres: :func:`~lorisnb.core.trajectory.size` of the
+    sequence's matched ground truth (``extent`` or ``length``; 0 with fewer than two matched poses)."""
+    return size(e.gt_positions, relative_to)
+
+
 def sequence_eps(eps: Eps, scene: str, e: SequenceErrors) -> float:
     """The ATE threshold of one sequence, metres: :func:`~lorisnb.core.model.scene_eps`, or for
-    ``"relative:F"`` F times the extent of the sequence's matched ground truth (0 with fewer than
-    two matched poses)."""
+    ``"relative:F"`` F times :func:`sequence_size` (the extent of the matched ground truth)."""
     if isinstance(eps, str) and eps.startswith("relative:"):
-        return float(eps.split(":", 1)[1]) * extent(e.gt_positions)
+        return float(eps.split(":", 1)[1]) * sequence_size(e, "extent")
     return scene_eps(eps, scene)

@@ -1,23 +1,32 @@
-"""Threshold-free per-pose errors of a result file against its ground truth, as the official tool
-computes them: ground truth moved to the estimate's frame, association with interpolated ground
-truth, alignment (per sequence, or on the first sequence for a lifelong file), ATE and AOE.
+"""The one evaluation pipeline: threshold-free per-pose errors of estimate sequences against their
+ground truth under an :class:`~lorisnb.core.spec.EvalSpec`, for every input kind.
+
+    read (the edge) -> frames / transform -> associate -> align -> per-pose errors -> metrics
+
+:func:`evaluate_sessions` is the pipeline. An OpenLORIS result file is its ``seq:`` blocks plus the
+scene's ground truth moved to the file's sensor frame, under the ``openloris`` preset
+(:func:`compute_errors`); a plain pair is one session (:func:`sequence_errors`), a manifest's
+sessions or a bag topic are sessions with other values of the spec (:func:`session_errors`).
 
 Pure: the ground truth (and, for one plausibility check, the time spans of other ground-truth
-sequences) are arguments; nothing here reads files or looks for data.
+sequences) are arguments; nothing here reads files, looks for data, or writes into its arguments.
 """
 
 from __future__ import annotations
 
 import warnings
 from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..errors import EvaluationError, LorisWarning, ParseError
-from . import metrics, plausibility
-from .association import MAX_GAP, Association, associate, groundtruth_in_frame
+from . import checks, evo_steps, metrics, plausibility
+from .association import Association, associate, groundtruth_in_frame
 from .blocks import blockwise
-from .frames import FRAMES, relative_extrinsic
+from .conventions import associate_nearest, fit_alignment
+from .frames import FRAMES
 from .geometry import (
     Sim3,
     quat_angle_deg,
@@ -25,19 +34,23 @@ from .geometry import (
     quat_from_matrix,
     quat_multiply,
     quat_normalize,
+    quat_rotate,
     quat_to_matrix,
     ros_quaternion_from_matrix,
-    umeyama,
 )
-from .model import MODES, FileErrors, ResultFile, SequenceErrors, is_monocular
-from .trajectory import Trajectory, path_length
-from .validate import choice, scale_value
-
-PLAUSIBILITY_POSES = 300  # estimate poses a plausibility check looks at (evenly spread)
+from .model import FileErrors, ResultFile, SequenceErrors
+from .spec import EvalSpec, make_spec
+from .spec_evo import EVO_ASSOCIATIONS
+from .trajectory import Trajectory
 
 #: Time spans (first, last stamp, seconds) of other ground-truth sequences by label (``cafe-2``),
 #: or a function returning them (called only when a check needs them).
 Spans = Mapping[str, tuple[float, float]] | Callable[[], Mapping[str, tuple[float, float]]]
+#: The sensor frames of an OpenLORIS file, for its frame checks: (scene, frame, ground-truth frame,
+#: the ground truth as read, in its own frame).
+FrameInfo = tuple[str, str, str, Mapping[int, Trajectory]]
+
+DEFAULT = EvalSpec()  # lorisnb's own: interpolation within 0.5 s, SE(3) on all matched poses
 
 
 def apply_alignment(
@@ -79,259 +92,304 @@ def errors_after_alignment(
     )  # fmt: skip
 
 
-def sequence_errors(
-    gt: Trajectory,
-    est: Trajectory,
+def match(gt: Trajectory, est: Trajectory, spec: EvalSpec = DEFAULT) -> Association:
+    """Matched poses of ``est`` and ``gt`` by the spec's association (estimate stamps shifted by
+    ``t_offset`` first); for ``nearest`` the ground-truth poses are taken as they are."""
+    stamps = est.stamps + spec.t_offset if spec.t_offset else est.stamps
+    if spec.association == "interpolate":
+        return associate(gt, stamps, spec.max_gap, spec.official_interpolation)
+    g_start = float(gt.stamps[0]) if len(gt) else np.nan
+    g_end = float(gt.stamps[-1]) if len(gt) else np.nan
+    gi, ej = associate_nearest(gt.stamps, stamps, spec.max_diff)
+    if ej.size == 0:
+        return Association(ej, np.zeros(0), np.zeros((0, 3)), None, g_start, g_end)
+    return Association(ej, stamps[ej], gt.positions[gi], quat_normalize(gt.quaternions[gi]), g_start, g_end)
+
+
+def with_transform(est: Trajectory, transform: Sim3 | np.ndarray | tuple | None) -> Trajectory:
+    """Estimate poses composed on the right with ``T_est_gt`` (poses of the ground-truth body;
+    None: unchanged). A new trajectory; ``est`` is not changed."""
+    if transform is None:
+        return est
+    m = transform.matrix() if isinstance(transform, Sim3) else np.asarray(transform, float)
+    if m.shape != (4, 4):
+        raise EvaluationError(f"transform: expected a 4x4 matrix T_est_gt, got shape {m.shape}")
+    q_off = quat_from_matrix(m[:3, :3])
+    q = quat_normalize(est.quaternions)
+    pos = est.positions + quat_rotate(q, m[:3, 3])
+    return Trajectory(est.stamps, pos, quat_multiply(q, q_off), est.lines, dict(est.meta))
+
+
+def evaluate_sessions(
+    groundtruth: Mapping[int, Trajectory],
+    estimates: Mapping[int, Trajectory],
+    spec: EvalSpec = DEFAULT,
     *,
-    scale: bool = False,
-    max_gap: float = MAX_GAP,
-    official_interpolation: bool = False,
-    seq: int = 1,
-) -> SequenceErrors:
-    """Per-pose errors of one estimate against one ground truth in the same frame (TUM RGB-D,
-    ORDSLAM, a simulated estimate): association within ``max_gap`` seconds, alignment of the
-    estimate on itself (SE(3), or Sim(3) with ``scale``), ATE (m) and AOE (deg)."""
-    a = associate(gt, est.stamps, max_gap, official_interpolation)
-    if len(a) == 0:
-        return SequenceErrors.unmatched(seq, len(est), a.gt_start, a.gt_end)
-    sim = umeyama(est.positions[a.est_index], a.gt_positions, scale)
-    return errors_after_alignment(seq, est, a, sim, official_interpolation)
-
-
-def groundtruth_sequence(
-    groundtruth: ResultFile, seq: int, scene: str, frame: str, official_interpolation: bool, gt_frame: str
-) -> Trajectory:
-    """Sequence ``seq`` of a ground-truth file moved to sensor ``frame``
-    (:func:`~lorisnb.core.association.groundtruth_in_frame`), computed once per file, sequence and
-    frame and kept in ``groundtruth.derived`` (a ground truth is shared by every result file of
-    its scene)."""
-    key = ("in_frame", seq, scene, frame, official_interpolation, gt_frame)
-    found = groundtruth.derived.get(key)
-    if not isinstance(found, Trajectory):
-        found = groundtruth_in_frame(groundtruth.sequences[seq], scene, frame, official_interpolation, gt_frame)
-        groundtruth.derived[key] = found
-    return found
-
-
-def compute_errors(
-    result: ResultFile,
-    groundtruth: ResultFile,
-    *,
-    algorithm: str | None = None,
+    path: str | Path = "estimate",
+    algorithm: str = "estimate",
     file: str | None = None,
+    scene: str = "sequence",
     suite: str = "",
-    mode: str = "auto",
-    scale: bool | str = False,
-    official_interpolation: bool = False,
-    max_gap: float = MAX_GAP,
-    checks: bool = True,
-    other_spans: Spans | None = None,
     trial: int = 0,
-    consume: bool = False,
+    frame: str = "",
+    checks_on: bool = True,
+    other_spans: Spans | None = None,
+    frames: FrameInfo | None = None,
+    release: Callable[[int], object] | None = None,
+    notes: list[str] | None = None,
+    groundtruth_spans: dict[int, tuple[float, float]] | None = None,
 ) -> FileErrors:
-    """Per-pose errors of one OpenLORIS result file against its scene's ground truth.
-
-    Steps (the official tool's order): ground truth moved to the estimate's frame; association by
-    interpolation within ``max_gap`` seconds; alignment of estimated positions (Horn/Umeyama SE(3),
-    or Sim(3) with ``scale``); ATE (metres) and AOE (degrees) per matched pose.
+    """Per-pose errors of estimate sequences against their ground truth: the one pipeline.
 
     Args:
-        result: the parsed result file (:func:`lorisnb.io.read_openloris`).
-        groundtruth: the scene's ground truth (:func:`lorisnb.io.load_groundtruth`).
-        algorithm: label; default the name of the folder holding the file.
-        mode: ``per-seq`` aligns each sequence on itself; ``lifelong`` aligns on the
-            lowest-numbered sequence with matches and applies that to every sequence;
-            ``auto`` is lifelong for files with several ``seq:`` blocks, else per-seq.
-        scale: True for Sim(3), False for SE(3), ``"auto"`` for Sim(3) on monocular
-            algorithms (:func:`lorisnb.core.model.is_monocular`); the words of
-            :func:`lorisnb.core.validate.scale_value` are accepted too.
-        official_interpolation: reproduce the official tool's orientation slips (AOE only).
-        checks: run the plausibility checks of :mod:`lorisnb.core.plausibility` (warnings only).
+        groundtruth: sequence number -> ground truth in the estimate's frame (every estimate
+            sequence needs one).
+        estimates: sequence number -> estimate poses (the edge's objects; never changed here).
+        spec: association, alignment, mode and the rest (:class:`~lorisnb.core.spec.EvalSpec`).
+        path, algorithm, file, scene, suite, trial, frame: labels of the result.
+        checks_on: run the plausibility checks (:mod:`lorisnb.core.checks`; warnings only).
         other_spans: time spans of other ground-truth sequences, for the time-overlap check.
-        trial: the trial number of this file (:mod:`lorisnb.core.trials`).
-        consume: take each sequence out of ``result.sequences`` once its errors are computed, so
-            that a long file's poses go while the next sequence is evaluated (for a caller that
-            is done with ``result``; the one sequence a plausibility check still needs stays).
+        frames: an OpenLORIS file's frames and raw ground truth, for its sensor-frame check.
+        release: called with each sequence number once its errors are computed and the pipeline
+            no longer needs its poses (the edge lets a long file's poses go).
+        notes: what the reader noticed, kept first in ``FileErrors.warnings``.
 
-    Everything noticed (the reader's notes in ``result.warnings``, plausibility checks) is issued
-    as LorisWarning and kept in ``FileErrors.warnings``.
+    Every note is issued as a LorisWarning and kept in ``FileErrors.warnings``.
     """
-    mode = choice("mode", mode, MODES)
-    scale = scale_value(scale)
-    if not isinstance(result, ResultFile) or not isinstance(groundtruth, ResultFile):
-        raise EvaluationError(
-            "compute_errors needs parsed files (lorisnb.read_openloris); to evaluate paths use lorisnb.evaluate"
-        )
-    notes: list[str | None] = list(result.warnings)
-    path = result.path
-    algorithm = algorithm if algorithm is not None else path.parent.name
-    scene, frame = result.scene, result.frame
-    with_scale = is_monocular(algorithm) if scale == "auto" else bool(scale)
-    seqs = sorted(result.sequences)
+    seqs = sorted(estimates)
     if not seqs:
-        raise ParseError(path, None, "no 'seq: N' block; expected at least one sequence")
-    missing = [s for s in seqs if s not in groundtruth.sequences]
+        raise EvaluationError(f"{path}: no sequence to evaluate")
+    missing = [s for s in seqs if s not in groundtruth]
     if missing:
-        s = missing[0]
-        raise ParseError(
-            path,
-            result.seq_lines.get(s),
-            f"sequence {s} has no ground truth in {groundtruth.path.name} "
-            f"(it has {', '.join(map(str, sorted(groundtruth.sequences)))})",
+        raise EvaluationError(
+            f"{path}: sequence {missing[0]} has no ground truth (ground truth has {sorted(groundtruth)})"
         )
-    lifelong = mode == "lifelong" or (mode == "auto" and len(seqs) > 1)
-    gt_frame = groundtruth.header.get("frame", "base_link")
-    if gt_frame not in FRAMES:
-        raise ParseError(
-            groundtruth.path,
-            groundtruth.header_lines.get("frame"),
-            f"unknown ground-truth frame {gt_frame!r}; expected one of {', '.join(FRAMES)}",
-        )
-
+    found: list[str | None] = list(notes or [])
+    name = Path(path).name
+    method = spec.alignment_for(algorithm)
+    lifelong = spec.lifelong_for(len(seqs))
+    est = {s: with_transform(estimates[s], spec.transform) for s in seqs}
     assoc: dict[int, Association] = {}
     for s in seqs:  # one iteration per sequence
-        gt = groundtruth_sequence(groundtruth, s, scene, frame, official_interpolation, gt_frame)
-        assoc[s] = associate(gt, result.sequences[s].stamps, max_gap, official_interpolation)
-        if checks:
-            label = f"{path.name}, seq {s}"
-            notes.append(plausibility.groundtruth_gaps(label, groundtruth.sequences[s], max_gap))
-            if len(assoc[s]) == 0 and len(result.sequences[s]):
-                spans = {
-                    f"{scene}-{k}": (float(t.stamps[0]), float(t.stamps[-1]))
-                    for k, t in groundtruth.sequences.items()
-                    if k != s and len(t)
-                }
+        gt_s, est[s] = evo_steps.prepare(groundtruth[s], est[s], spec)  # evo's downsample, motion filter, window
+        if spec.association in EVO_ASSOCIATIONS:
+            assoc[s], est[s] = evo_steps.evo_match(gt_s, est[s], spec)
+        else:
+            assoc[s] = match(gt_s, est[s], spec)
+        if checks_on:
+            label = f"{name}, seq {s}"
+            raw = frames[3][s] if frames is not None else groundtruth[s]
+            if spec.association == "interpolate":
+                found.append(plausibility.groundtruth_gaps(label, raw, spec.max_gap))
+            if len(assoc[s]) == 0 and len(est[s]):
                 more = other_spans() if callable(other_spans) else other_spans
-                spans.update({k: v for k, v in (more or {}).items() if k not in spans and k != f"{scene}-{s}"})
-                notes.append(
-                    plausibility.time_overlap(
-                        label, result.sequences[s].stamps, assoc[s].gt_start, assoc[s].gt_end, spans
-                    )
+                spans = checks.other_spans(frames[3] if frames is not None else groundtruth, scene, s, more)
+                found.append(
+                    plausibility.time_overlap(label, est[s].stamps, assoc[s].gt_start, assoc[s].gt_end, spans)
+                    or f"{label}: no estimate stamp matches the ground truth ({spec.describe().split(';')[0]}); "
+                    f"estimate {est[s].stamps[0]:.3f}..{est[s].stamps[-1]:.3f} s, ground truth "
+                    f"{assoc[s].gt_start:.3f}..{assoc[s].gt_end:.3f} s"
                 )
 
     def fit(s: int) -> Sim3:
-        a = assoc[s]
-        return umeyama(result.sequences[s].positions[a.est_index], a.gt_positions, with_scale)
+        a, e = assoc[s], est[s]
+        q_e = e.quaternions[a.est_index] if spec.align_frames == 1 or method == "origin" else None
+        return fit_alignment(e.positions[a.est_index], a.gt_positions, method, spec.align_frames, q_e, a.gt_quaternions)
 
     aligned_on: int | None = None
     alignment = Sim3.identity()
-    per_seq_align: dict[int, Sim3] = {}
     if lifelong:
         with_matches = [s for s in seqs if len(assoc[s])]
         if with_matches:
             aligned_on = with_matches[0]
             alignment = fit(aligned_on)
             if aligned_on != seqs[0]:
-                notes.append(
+                found.append(
                     f"{path}: sequence {seqs[0]} has no pose matched to ground truth, so the "
                     f"lifelong alignment was computed on sequence {aligned_on} (the official tool "
                     f"would apply no alignment at all)"
                 )
-        elif any(len(result.sequences[s]) for s in seqs):
-            notes.append(
+        elif any(len(est[s]) for s in seqs):
+            found.append(
                 f"{path}: no pose of any sequence matches the ground truth in time; nothing to align "
                 f"(see the time-span warnings; is the scene or the clock right?)"
             )
-        per_seq_align = {s: alignment for s in seqs}
+        per_seq = {s: alignment for s in seqs}
     else:
-        for s in seqs:
-            per_seq_align[s] = fit(s) if len(assoc[s]) else Sim3.identity()
+        per_seq = {s: fit(s) if len(assoc[s]) else Sim3.identity() for s in seqs}
         if len(seqs) == 1:
-            alignment = per_seq_align[seqs[0]]
+            alignment = per_seq[seqs[0]]
             aligned_on = seqs[0] if len(assoc[seqs[0]]) else None
 
-    if checks and not with_scale:
+    if checks_on and method == "se3":
+        hint = "--scale, or --scale auto for dso/svo" if frames is not None else "--align sim3"
         fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s]) > 2]
         for s in fitted:
-            a = assoc[s]
-            few = spread(len(a), 10 * PLAUSIBILITY_POSES)
-            p_est, p_gt = (
-                result.sequences[s].positions[a.est_index[few]],
-                a.gt_positions[few],
-            )  # a check: evenly spread poses
-            sim, se3 = umeyama(p_est, p_gt, True), per_seq_align[s]
-            if plausibility.scale_in_range(sim.scale):
-                continue
-            notes.append(
-                plausibility.scale_far_from_one(
-                    f"{path.name}, seq {s}",
-                    sim.scale,
-                    float(metrics.rmse(metrics.ate(se3.apply(p_est), p_gt))),
-                    float(metrics.rmse(metrics.ate(sim.apply(p_est), p_gt))),
-                    path_length(a.gt_positions),
-                )
-            )
+            found.append(checks.scale_note(f"{name}, seq {s}", est[s].positions, assoc[s], per_seq[s], hint))
 
     out: list[SequenceErrors] = []
-    first_seen, suspect = False, None  # the first sequence with matches, if its AOE is large: the frame checks
+    suspect: tuple[SequenceErrors, Association] | None = None
+    first_seen = False  # the first sequence with matches, if its AOE is large: the orientation checks
     for s in seqs:
-        e = errors_after_alignment(s, result.sequences[s], assoc.pop(s), per_seq_align[s], official_interpolation)
+        a = assoc.pop(s)
+        e = errors_after_alignment(s, est[s], a, per_seq[s], spec.official_interpolation)
+        e = evo_steps.projected(e, spec.project_to_plane) if spec.project_to_plane else e
         out.append(e)
-        if checks and not first_seen and e.matched > 10:
-            first_seen, suspect = True, e if np.median(e.aoe) > 45.0 else None
-        if consume and e is not suspect:
-            del result.sequences[s]
+        if checks_on and not first_seen and e.matched > 10:
+            first_seen = True
+            suspect = (e, a) if np.median(e.aoe) > 45.0 else None
+        if suspect is None or suspect[0] is not e:
+            if release is not None:
+                release(s)
+            del est[s]
     if suspect is not None:
-        label = f"{path.name}, seq {suspect.seq}"
-        by_frame, swapped = median_aoe_by_frame(
-            result.sequences[suspect.seq], groundtruth.sequences[suspect.seq], scene, with_scale, max_gap, gt_frame,
-            swapped_in=frame,
-        )  # fmt: skip
-        notes.append(plausibility.quaternion_order(label, float(np.median(suspect.aoe)), swapped))
-        notes.append(plausibility.frame_mismatch(label, frame, by_frame))
-    kept = [n for n in dict.fromkeys(notes) if n]
+        e, a = suspect
+        label = f"{name}, seq {e.seq}"
+        if frames is not None and frame in FRAMES:
+            sc, fr, gt_frame, raw_gt = frames
+            found += checks.frame_notes(
+                label, est[e.seq], raw_gt[e.seq], sc, fr, gt_frame, method == "sim3", spec.max_gap,
+                float(np.median(e.aoe)),
+            )  # fmt: skip
+        else:
+            swapped = checks.median_aoe_swapped(est[e.seq], a, per_seq[e.seq])
+            found.append(plausibility.quaternion_order(label, float(np.median(e.aoe)), swapped))
+        if release is not None:
+            release(e.seq)
+    kept = [n for n in dict.fromkeys(found) if n]
     for n in kept:
         warnings.warn(n, LorisWarning, stacklevel=2)
     return FileErrors(
-        path=path, algorithm=algorithm, file=file if file is not None else path.name, suite=suite, scene=scene,
-        frame=frame, mode="lifelong" if lifelong else "per-seq", alignment=alignment, aligned_on=aligned_on,
-        official_interpolation=official_interpolation, sequences=out, warnings=kept, trial=trial,
+        path=Path(path), algorithm=algorithm, file=file if file is not None else Path(path).name, suite=suite,
+        scene=scene, frame=frame, mode="lifelong" if lifelong else "per-seq", alignment=alignment,
+        aligned_on=aligned_on, official_interpolation=spec.official_interpolation, sequences=out, warnings=kept,
+        trial=trial, groundtruth_spans=dict(groundtruth_spans or {}),
+        groundtruth_lengths={s: evo_steps.whole_length(groundtruth[s]) for s in seqs},
+    )  # fmt: skip
+
+
+def groundtruth_frame(groundtruth: ResultFile) -> str:
+    """The sensor frame an OpenLORIS ground truth is given in (``frame:`` header, default
+    ``base_link``); ParseError for an unknown frame."""
+    gt_frame = groundtruth.header.get("frame", "base_link")
+    if gt_frame not in FRAMES:
+        raise ParseError(
+            groundtruth.path, groundtruth.header_lines.get("frame"),
+            f"unknown ground-truth frame {gt_frame!r}; expected one of {', '.join(FRAMES)}",
+        )  # fmt: skip
+    return gt_frame
+
+
+def moved_groundtruth(
+    groundtruth: ResultFile, scene: str, frame: str, official_interpolation: bool = False
+) -> dict[int, Trajectory]:
+    """Every sequence of an OpenLORIS ground truth moved to sensor ``frame``
+    (:func:`~lorisnb.core.association.groundtruth_in_frame`); new trajectories."""
+    gt_frame = groundtruth_frame(groundtruth)
+    return {
+        s: groundtruth_in_frame(t, scene, frame, official_interpolation, gt_frame)
+        for s, t in groundtruth.sequences.items()
+    }
+
+
+def compute_errors(
+    result: ResultFile,
+    groundtruth: ResultFile,
+    spec: EvalSpec | None = None,
+    *,
+    algorithm: str | None = None,
+    file: str | None = None,
+    suite: str = "",
+    trial: int = 0,
+    checks: bool = True,
+    other_spans: Spans | None = None,
+    in_frame: Mapping[int, Trajectory] | None = None,
+    release: Callable[[int], object] | None = None,
+    **options: Any,
+) -> FileErrors:
+    """Per-pose errors of one OpenLORIS result file against its scene's ground truth: the file's
+    sequences and the ground truth moved to its sensor frame, through :func:`evaluate_sessions`.
+
+    Steps (the official tool's order): ground truth moved to the estimate's frame; association by
+    interpolation within ``max_gap`` seconds; alignment of estimated positions (Horn/Umeyama SE(3),
+    or Sim(3) with scale); ATE (metres) and AOE (degrees) per matched pose.
+
+    Args:
+        result: the parsed result file (:func:`lorisnb.io.read_openloris`).
+        groundtruth: the scene's ground truth (:func:`lorisnb.io.load_groundtruth`).
+        spec: the evaluation spec (default the ``openloris`` preset); ``options`` are spec options
+            over it (``mode``, ``scale``, ``official_interpolation``, ``max_gap``, ...; see
+            :func:`lorisnb.core.spec.make_spec`).
+        algorithm: label; default the name of the folder holding the file.
+        checks: run the plausibility checks (warnings only).
+        other_spans: time spans of other ground-truth sequences, for the time-overlap check.
+        in_frame: the ground truth already moved to the file's frame (the edge's cache), by sequence.
+        release: see :func:`evaluate_sessions`.
+    """
+    spec = make_spec(spec, **options)
+    spec.refuse_inapplicable("openloris")
+    if not isinstance(result, ResultFile) or not isinstance(groundtruth, ResultFile):
+        raise EvaluationError(
+            "compute_errors needs parsed files (lorisnb.read_openloris); to evaluate paths use lorisnb.evaluate"
+        )
+    path, seqs = result.path, sorted(result.sequences)
+    if not seqs:
+        raise ParseError(path, None, "no 'seq: N' block; expected at least one sequence")
+    missing = [s for s in seqs if s not in groundtruth.sequences]
+    if missing:
+        raise ParseError(
+            path, result.seq_lines.get(missing[0]),
+            f"sequence {missing[0]} has no ground truth in {groundtruth.path.name} "
+            f"(it has {', '.join(map(str, sorted(groundtruth.sequences)))})",
+        )  # fmt: skip
+    scene, frame, gt_frame = result.scene, result.frame, groundtruth_frame(groundtruth)
+    if in_frame is None:
+        in_frame = {
+            s: groundtruth_in_frame(groundtruth.sequences[s], scene, frame, spec.official_interpolation, gt_frame)
+            for s in seqs
+        }
+    frames = (scene, frame, gt_frame, groundtruth.sequences)
+    return evaluate_sessions(
+        {s: in_frame[s] for s in seqs}, result.sequences, spec, path=path,
+        algorithm=algorithm if algorithm is not None else result.path.parent.name,
+        file=file, scene=scene, suite=suite, trial=trial, frame=frame, checks_on=checks,
+        other_spans=other_spans, frames=frames, release=release, notes=list(result.warnings),
         groundtruth_spans={k: (float(t.stamps[0]), float(t.stamps[-1])) for k, t in groundtruth.sequences.items() if len(t)},
     )  # fmt: skip
 
 
-def spread(n: int, k: int) -> np.ndarray:
-    """At most ``k`` indices of ``range(n)``, evenly spread, first and last included."""
-    return np.round(np.linspace(0, n - 1, min(n, k))).astype(int) if n else np.zeros(0, int)
-
-
-def median_aoe_by_frame(
-    est: Trajectory,
-    gt_base: Trajectory,
-    scene: str,
-    with_scale: bool,
-    max_gap: float,
-    gt_frame: str = "base_link",
+def session_errors(
+    groundtruth: Mapping[int, Trajectory],
+    estimates: Mapping[int, Trajectory],
+    conventions: EvalSpec | str | None = None,
     *,
-    max_poses: int = PLAUSIBILITY_POSES,
-    swapped_in: str | None = None,
-) -> tuple[dict[str, float], float]:
-    """Median AOE (deg) of one sequence with its ground truth moved to each sensor frame, and (with
-    ``swapped_in``) the median AOE in that frame with each quaternion read ``qw qx qy qz``.
+    lifelong: bool = False,
+    transform: Sim3 | np.ndarray | None = None,
+    path: str | Path = "estimate",
+    algorithm: str = "estimate",
+    scene: str = "sequence",
+    suite: str = "",
+    trial: int = 0,
+    frame: str = "",
+    checks: bool = True,
+) -> FileErrors:
+    """Errors of estimate sessions against their ground truth (every estimate session needs a
+    ground-truth session of the same number), through :func:`evaluate_sessions`: ``lifelong`` fits
+    one alignment on the first session with matches; ``transform`` (``T_est_gt``, the ground-truth
+    body's pose in the estimate's body frame) is composed with each estimate pose first."""
+    spec = make_spec(conventions, lifelong=lifelong, transform=transform)
+    return evaluate_sessions(
+        groundtruth, estimates, spec, path=path, algorithm=algorithm, scene=scene, suite=suite, trial=trial,
+        frame=frame, checks_on=checks,
+    )  # fmt: skip
 
-    A check, not a metric: at most ``max_poses`` estimate poses, evenly spread, are associated
-    once with the ground truth as given and aligned once on its positions; the interpolated
-    ground-truth orientations are then turned to each frame (``R_gt @ R_gt_frame``). Moving the
-    positions by each frame's lever arm (a few centimetres) would change the alignment by far less
-    than the tens of degrees this check looks for; the positions do not depend on the quaternion
-    order either, so one alignment serves both questions. NaN where nothing matched."""
-    if len(est) > max_poses:
-        keep = spread(len(est), max_poses)
-        est = est.subset(keep)
-    a = associate(gt_base, est.stamps, max_gap)
-    if len(a) < 3 or a.gt_quaternions is None:
-        return {}, np.nan
-    p_est = est.positions[a.est_index]
-    q_est = est.quaternions[a.est_index]
-    sim = umeyama(p_est, a.gt_positions, with_scale)
-    q_rot = quat_from_matrix(sim.rotation)
-    q_aligned = quat_multiply(q_rot, quat_normalize(q_est))
-    offsets = np.stack([relative_extrinsic(scene, gt_frame, fr)[1] for fr in FRAMES])  # (7, 4)
-    q_gt_fr = quat_multiply(a.gt_quaternions[None, :, :], offsets[:, None, :])  # every frame at once
-    angles = quat_angle_deg(quat_conj_multiply(q_gt_fr, q_aligned[None, :, :]))
-    by_frame = dict(zip(FRAMES, np.median(angles, axis=1).tolist(), strict=True))
-    if swapped_in not in FRAMES:
-        return by_frame, np.nan
-    q_swapped = quat_multiply(q_rot, quat_normalize(np.roll(q_est, -1, axis=1)))
-    k = FRAMES.index(swapped_in)
-    return by_frame, float(np.median(quat_angle_deg(quat_conj_multiply(q_gt_fr[k], q_swapped))))
+
+def sequence_errors(
+    gt: Trajectory, est: Trajectory, spec: EvalSpec | None = None, *, seq: int = 1, **options: Any
+) -> SequenceErrors:
+    """Per-pose errors of one estimate against one ground truth in the same frame (TUM RGB-D,
+    ORDSLAM, a simulated estimate), through :func:`evaluate_sessions` without plausibility checks:
+    by default association within ``max_gap`` seconds and the estimate aligned on itself (SE(3), or
+    Sim(3) with ``scale=True``); ATE (m) and AOE (deg)."""
+    spec = make_spec(spec, **options)
+    return evaluate_sessions({seq: gt}, {seq: est}, spec, checks_on=False).sequences[0]

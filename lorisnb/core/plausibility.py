@@ -1,6 +1,6 @@
 """Plausibility checks that save users hours: each returns a message (or None) saying what looks
-wrong, the numbers behind it, and the likely cause. :func:`lorisnb.core.pipeline.compute_errors` runs
-them and issues the messages as warnings; the evaluation itself is never changed by them.
+wrong, the numbers behind it, and the likely cause. :func:`lorisnb.core.pipeline.evaluate_sessions` runs
+(through :mod:`lorisnb.core.checks`, for every input kind) and issues the messages as warnings; the evaluation itself is never changed by them.
 """
 
 from __future__ import annotations
@@ -88,7 +88,14 @@ def scale_in_range(scale: float) -> bool:
     return bool(np.isfinite(scale) and 1 / SCALE_LIMIT <= scale <= SCALE_LIMIT)
 
 
-def scale_far_from_one(label: str, scale: float, ate_se3: float, ate_sim3: float, path_m: float) -> str | None:
+def scale_far_from_one(
+    label: str,
+    scale: float,
+    ate_se3: float,
+    ate_sim3: float,
+    path_m: float,
+    hint: str = "--scale, or --scale auto for dso/svo",
+) -> str | None:
     """The best Sim(3) scale of an SE(3)-aligned trajectory is far from 1 and fixes most of its
     error (ATE RMSE after SE(3) and after Sim(3) alignment, metres), on a path long enough to judge
     (``path_m``, the matched ground truth's length, at least MIN_PATH metres)."""
@@ -99,7 +106,7 @@ def scale_far_from_one(label: str, scale: float, ate_se3: float, ate_sim3: float
     return (
         f"{label}: the best-fitting scale is {scale:.3f}, far from 1, and with it the ATE RMSE drops from "
         f"{ate_se3:.3f} m to {ate_sim3:.3f} m, but the alignment is SE(3) without scale. A monocular "
-        "trajectory? Evaluate with scale (--scale, or --scale auto for dso/svo)."
+        f"trajectory? Evaluate with scale ({hint})."
     )
 
 

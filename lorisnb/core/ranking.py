@@ -1,5 +1,5 @@
 """Rankings that say what the data can and cannot separate: algorithms ordered by a scene metric
-with ties where the tests of :func:`lorisnb.core.stats.pairwise` find no difference, and how a
+with ties where the test of :func:`lorisnb.core.stats.pairwise` finds no difference, and how a
 ranking holds up over a grid of thresholds and the trials together."""
 
 from __future__ import annotations
@@ -9,36 +9,36 @@ import pandas as pd
 
 from .aggregate import aggregate_scenes
 from .frames import PAPER_EPS, PAPER_PHI
-from .stats import pairwise, scene_values, with_trials
+from .stats import pairwise, scene_means, with_trials
 
 
-def ranking(table: pd.DataFrame, metric: str = "cr", alpha: float = 0.05, seed: int = 0) -> pd.DataFrame:
+def ranking(
+    table: pd.DataFrame, metric: str = "cr", alpha: float = 0.05, seed: int = 0, pairs: pd.DataFrame | None = None
+) -> pd.DataFrame:
     """Algorithms of each scene ordered by ``metric``, with ``rank`` = 1 + the number of
-    algorithms significantly better (by the sequence test or the trials test of :func:`pairwise`,
-    each after Holm's correction), so algorithms the data cannot separate share a rank, and
-    ``tied_with`` naming them."""
+    algorithms significantly better by the one test of :func:`lorisnb.core.stats.pairwise`
+    (Holm-corrected), so algorithms the data cannot separate share a rank; ``tied_with`` names
+    them, ``better_than`` names those it beats. ``value`` is the scene value of
+    :func:`lorisnb.core.stats.confidence_intervals` (weighted mean over the sequences of each
+    sequence's mean over trials). Give ``pairs`` (the pairwise table) to reuse it."""
     better_high = metric != "c_ate_rmse"
-    pairs = pairwise(table, metric, alpha=alpha, seed=seed)
-    values = scene_values(with_trials(table), [metric], by=["suite", "algorithm", "scene", "trial"])
-    mean = values.groupby(["suite", "scene", "algorithm"])[metric].mean()
+    pairs = pairwise(table, metric, alpha=alpha, seed=seed) if pairs is None else pairs
+    values = scene_means(table, metric)
     rows = []
-    for (suite, scene), s in mean.groupby(level=[0, 1], sort=False):
-        algs = list(s.index.get_level_values(2))
+    for (suite, scene), s in values.groupby(["suite", "scene"], sort=False):
         p = pairs[(pairs["suite"] == suite) & (pairs["scene"] == scene)]
-        for alg in algs:
-            beaten = tied = 0
-            names = []
-            for _, r in p[(p["a"] == alg) | (p["b"] == alg)].iterrows():  # pairs of algorithms, a handful
-                other = r["b"] if r["a"] == alg else r["a"]
-                mine, theirs = (r["value_a"], r["value_b"]) if r["a"] == alg else (r["value_b"], r["value_a"])
-                if not (r["significant"] or r["significant_trials"]):
-                    tied += 1
-                    names.append(other)
-                elif (theirs > mine) == better_high:
-                    beaten += 1
-            rows.append(dict(suite=suite, scene=scene, metric=metric, algorithm=alg, value=float(s.loc[(suite, scene, alg)]),
-                             rank=1 + beaten, tied_with=", ".join(sorted(names))))  # fmt: skip
-    out = pd.DataFrame(rows)
+        for alg, value in zip(s["algorithm"], s["value"], strict=True):
+            mine = p[(p["a"] == alg) | (p["b"] == alg)]
+            other = np.where(mine["a"] == alg, mine["b"], mine["a"])
+            beaten = [o for o, w in zip(other, mine["better"], strict=True) if w == o]
+            beats = [o for o, w in zip(other, mine["better"], strict=True) if w == alg]
+            tied = [o for o, w in zip(other, mine["better"], strict=True) if w == ""]
+            rows.append(dict(suite=suite, scene=scene, metric=metric, algorithm=alg, value=float(value),
+                             rank=1 + len(beaten), tied_with=", ".join(sorted(tied)),
+                             better_than=", ".join(sorted(beats))))  # fmt: skip
+    out = pd.DataFrame(
+        rows, columns=["suite", "scene", "metric", "algorithm", "value", "rank", "tied_with", "better_than"]
+    )
     if out.empty:
         return out
     return out.sort_values(["suite", "scene", "rank", "value"], ascending=[True, True, True, not better_high])

@@ -3,6 +3,11 @@ travelled along the ground truth, by default 10, 20, 30, 40 and 50 % of the tota
 error of the estimate's relative motion, reported per metre travelled as rpg reports it
 (translation in % of the length, rotation in degrees per metre).
 
+The lengths (:func:`rpg_preset_lengths`) are fractions of the path length of the *whole* ground
+truth as read (rpg's ``traj_length``, before association), truncated to centimetres, unless preset
+distances are given (rpg's ``preset_boxplot_distances``); distances along the path are measured on
+the matched ground truth.
+
 For each start pose i, the end pose is the first j >= i whose distance from the start is closest
 to ``d_i + L``, within ``0.2 L``. Like rpg, the pairs are then numbered in order of the starts that
 found an end (rpg's ``compute_relative_error`` pairs the k-th found end with the k-th pose); the
@@ -14,7 +19,7 @@ computes it.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 import pandas as pd
@@ -33,11 +38,16 @@ def distances(positions: np.ndarray) -> np.ndarray:
     return np.concatenate(([0.0], np.cumsum(steps)))
 
 
+def rpg_preset_lengths(total: float, fractions: tuple[float, ...] = RPG_FRACTIONS) -> list[float]:
+    """rpg's sub-trajectory lengths of a ground truth ``total`` metres long: each fraction of it,
+    truncated to centimetres (rpg's ``compute_boxplot_distances``)."""
+    return [math.trunc(f * float(total) * 100.0) / 100.0 for f in fractions]
+
+
 def rpg_lengths(gt_positions: np.ndarray, fractions: tuple[float, ...] = RPG_FRACTIONS) -> list[float]:
-    """Sub-trajectory lengths as rpg computes them: each fraction of the total length, truncated
-    to centimetres."""
-    total = float(distances(gt_positions)[-1]) if len(gt_positions) else 0.0
-    return [math.trunc(f * total * 100) / 100.0 for f in fractions]
+    """:func:`rpg_preset_lengths` of the path length of ``gt_positions`` (pass the whole ground
+    truth, as rpg does, for rpg's lengths)."""
+    return rpg_preset_lengths(float(distances(gt_positions)[-1]) if len(gt_positions) else 0.0, fractions)
 
 
 def rpg_pairs(dist: np.ndarray, length: float, max_dist_diff: float | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -106,23 +116,33 @@ def rpg_relative_errors(
 
 
 def relative_table(
-    errors: FileErrors | Iterable[FileErrors], fractions: tuple[float, ...] = RPG_FRACTIONS
+    errors: FileErrors | Iterable[FileErrors],
+    fractions: tuple[float, ...] = RPG_FRACTIONS,
+    lengths: Sequence[float] | None = None,
 ) -> pd.DataFrame:
-    """rpg's relative error of every sequence, per sub-trajectory length (``fractions`` of each
-    sequence's matched ground-truth length): samples, mean and RMSE of the translation error in %
-    of the length, mean rotation error in degrees per metre. Computed on the aligned poses (a rigid
-    alignment leaves relative motion unchanged, and a Sim(3) alignment's scale is rpg's ``scale``)."""
+    """rpg's relative error of every sequence, per sub-trajectory length: samples, mean and RMSE of
+    the translation error in % of the length, mean rotation error in degrees per metre. Computed on
+    the aligned poses (a rigid alignment leaves relative motion unchanged, and a Sim(3)
+    alignment's scale is rpg's ``scale``).
+
+    Lengths: ``lengths`` (metres, rpg's preset distances; ``fraction`` is then NaN), else
+    ``fractions`` of the whole ground truth's path length where the errors know it
+    (``FileErrors.groundtruth_lengths``, as rpg), else of the matched ground truth's."""
     rows = []
     for f in as_files(errors):  # per file, sequence and length, never per pose
         for e in f.sequences:
             if e.matched < 2 or e.gt_quaternions is None or e.est_quaternions is None:
                 continue
-            lengths = rpg_lengths(e.gt_positions, fractions)
+            if lengths is not None:
+                use = [float(x) for x in lengths]
+                fraction_of = dict.fromkeys(use, math.nan)
+            else:
+                total = f.groundtruth_lengths.get(e.seq)
+                use = rpg_lengths(e.gt_positions, fractions) if total is None else rpg_preset_lengths(total, fractions)
+                fraction_of = dict(zip(use, fractions, strict=True))
             rel = rpg_relative_errors(e.gt_positions, e.gt_quaternions, e.est_positions, e.est_quaternions,
-                                      [x for x in lengths if x > 0])  # fmt: skip
-            fraction_of = dict(zip(lengths, fractions, strict=True))
+                                      [x for x in use if x > 0])  # fmt: skip
             for length, g in rel.groupby("length", sort=False):
-                frac = fraction_of[float(length)]
                 rows.append(
                     dict(
                         algorithm=f.algorithm,
@@ -131,7 +151,7 @@ def relative_table(
                         scene=f.scene,
                         trial=f.trial,
                         seq=e.seq,
-                        fraction=frac,
+                        fraction=fraction_of[float(length)],
                         length=length,
                         samples=len(g),
                         trans_perc_mean=g["trans_perc"].mean(),

@@ -21,11 +21,14 @@ from .model import (
     EXTRA_COLUMNS,
     POSE_COLUMNS,
     SEQUENCE_COLUMNS,
+    STAT_COLUMNS,
     Eps,
     FileErrors,
     SequenceErrors,
     sequence_eps,
 )
+from .relations import error_statistics, masked_statistics
+from .rpe import RPE_PAIRS, RPE_UNITS
 from .validate import choice, eps_value, positive, threshold
 
 #: Metrics computed by :func:`sequence_grid`, with their dtype in tables.
@@ -35,6 +38,7 @@ GRID_METRICS: dict[str, type] = {
     "track_time": float, "first_correct": bool, "rpe_trans_rmse": float, "rpe_rot_rmse": float,
     "c_rpe_trans_rmse": float, "c_rpe_rot_rmse": float, "rpe_pairs": int, "c_rpe_pairs": int,
 }  # fmt: skip
+GRID_METRICS.update(dict.fromkeys(STAT_COLUMNS, float))
 RPE_METRICS = ("rpe_trans_rmse", "rpe_rot_rmse", "c_rpe_trans_rmse", "c_rpe_rot_rmse", "rpe_pairs", "c_rpe_pairs")
 
 
@@ -74,6 +78,10 @@ def sequence_grid(
     rpe_delta: float = 1.0,
     rpe_unit: str = "s",
     with_rpe: bool = True,
+    with_stats: bool = False,
+    rpe_pairs: str = "reference",
+    rpe_all_pairs: bool | None = None,
+    rpe_tolerance: float = 0.1,
 ) -> dict[str, np.ndarray]:
     """Every metric of one sequence over a grid, as arrays of shape (E, P, D, T).
 
@@ -82,8 +90,11 @@ def sequence_grid(
         eps: (E,) ATE thresholds in metres (already resolved for this sequence's scene).
         phi: (P,) AOE thresholds, degrees. delta: (D,) validity windows, seconds (Eq. 2).
         tau: (T,) re-localization time factors, seconds (Eq. 4).
-        rpe_delta, rpe_unit: the RPE step (see :func:`lorisnb.core.metrics.rpe_pairs`).
+        rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance: the RPE pairs (see
+            :func:`lorisnb.core.rpe.rpe_indices`).
         with_rpe: also the RPE columns (their pairs are computed once per sequence and kept).
+        with_stats: also :data:`~lorisnb.core.model.STAT_COLUMNS` (needs ``with_rpe``): evo's
+            statistics of ATE, AOE and RPE, and of the same over correct poses (pairs) only.
 
     A sequence with no matched pose has CR = CR-T = CS-R = 0, no ATE (NaN), 0 correct poses and
     an infinite re-localization time.
@@ -103,6 +114,8 @@ def sequence_grid(
         )  # fmt: skip
         if with_rpe:
             out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)
+        if with_stats:
+            out.update(dict.fromkeys(STAT_COLUMNS, nan))
         return out
     # correctness of every pose at every (eps, phi), Eq. (1): (E, P, M)
     c = (e.ate[None, None, :] <= eps_a[:, None, None]) & (e.aoe[None, None, :] <= phi_a[None, :, None])
@@ -130,7 +143,18 @@ def sequence_grid(
     if not with_rpe:
         return out
     # RPE: pairs fixed per sequence; C-RPE over the pairs whose two poses are correct
-    i, j, tr, rr = e.rpe(rpe_delta, rpe_unit)
+    i, j, tr, rr = e.rpe(rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance)
+    if with_stats:
+        both_ep = c[:, :, i] & c[:, :, j]
+        for prefix, grid_mask, pair_mask in (("", None, None), ("c_", c, both_ep)):
+            for name, values, m in (("ate", e.ate, grid_mask), ("aoe", e.aoe, grid_mask), ("rpe_trans", tr, pair_mask),
+                                    ("rpe_rot", rr, pair_mask)):  # fmt: skip
+                if m is None:
+                    stats = error_statistics(values)
+                    out.update({f"{name}_{k}": bc(v) for k, v in stats.items() if k != "rmse"})
+                else:
+                    ms = masked_statistics(values, m)
+                    out.update({f"{prefix}{name}_{k}": bc(v[:, :, None, None]) for k, v in ms.items()})
     if len(i) == 0:
         out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)
         return out
@@ -148,10 +172,21 @@ def sequence_grid(
 
 
 def rpe_setting(rpe_delta: Any, rpe_unit: Any) -> tuple[float, str]:
-    """Validated RPE step: a positive delta in ``s`` (seconds), ``f`` (frames, whole) or ``m`` (metres)."""
-    unit = choice("rpe_unit", rpe_unit, metrics.RPE_UNITS)
-    names = {"s": "seconds", "f": "frames", "m": "metres"}
-    return positive("rpe_delta", rpe_delta, names[unit], integer=unit == "f"), unit
+    """Validated RPE step: a positive delta in ``s`` (seconds), ``f`` or ``frames`` (whole),
+    ``m`` (metres), ``deg`` or ``rad`` (rotation)."""
+    unit = choice("rpe_unit", rpe_unit, ("f", *RPE_UNITS))
+    names = {"s": "seconds", "f": "frames", "frames": "frames", "m": "metres", "deg": "degrees", "rad": "radians"}
+    return positive("rpe_delta", rpe_delta, names[unit], integer=unit in ("f", "frames")), unit
+
+
+def rpe_options(rpe_pairs: Any, rpe_all_pairs: Any, rpe_tolerance: Any) -> tuple[str, bool | None, float]:
+    """Validated RPE pair options: along ``reference`` or ``estimate``; all pairs True / False
+    (evo's rules) or None (lorisnb's); a positive relative tolerance."""
+    pairs = choice("rpe_pairs", rpe_pairs, RPE_PAIRS)
+    if rpe_all_pairs is not None and not isinstance(rpe_all_pairs, (bool, np.bool_)):
+        raise ValidationError(f"rpe_all_pairs: expected True, False or None, got {rpe_all_pairs!r}")
+    tol = positive("rpe_tolerance", rpe_tolerance, "(a fraction of delta)")
+    return pairs, None if rpe_all_pairs is None else bool(rpe_all_pairs), tol
 
 
 def score(
@@ -162,6 +197,9 @@ def score(
     tau: float = 60.0,
     rpe_delta: float = 1.0,
     rpe_unit: str = "s",
+    rpe_pairs: str = "reference",
+    rpe_all_pairs: bool | None = None,
+    rpe_tolerance: float = 0.1,
 ) -> pd.DataFrame:
     """One row per sequence: every metric of the paper at one threshold setting.
 
@@ -170,25 +208,30 @@ def score(
         phi: AOE threshold, degrees. Default infinity.
         delta: validity window of a pose, seconds (Eq. 2). Default 1 s.
         tau: re-localization time factor, seconds (Eq. 4). Default 60 s.
-        rpe_delta, rpe_unit: the RPE step (see :func:`lorisnb.core.metrics.rpe_pairs`).
+        rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance: the RPE pairs (see
+            :func:`lorisnb.core.rpe.rpe_indices`; defaults: lorisnb's own rule over 1 s).
 
-    Columns: :data:`~lorisnb.core.model.SEQUENCE_COLUMNS` then
-    :data:`~lorisnb.core.model.EXTRA_COLUMNS`. Each row is :func:`sequence_grid` on a one-point
+    Columns: :data:`~lorisnb.core.model.SEQUENCE_COLUMNS`, then
+    :data:`~lorisnb.core.model.EXTRA_COLUMNS` and :data:`~lorisnb.core.model.STAT_COLUMNS`. Each row is :func:`sequence_grid` on a one-point
     grid.
     """
     files = as_files(errors)
     eps_v = eps_value(eps)
     phi_v, delta_v, tau_v = threshold("phi", phi), threshold("delta", delta), threshold("tau", tau)
     rpe_d, rpe_u = rpe_setting(rpe_delta, rpe_unit)
+    rpe_p, rpe_a, rpe_t = rpe_options(rpe_pairs, rpe_all_pairs, rpe_tolerance)
     rows = []
     for f in files:  # one iteration per file and sequence, never per pose
         for e in f.sequences:
             e_scene = sequence_eps(eps_v, f.scene, e)
-            grid = sequence_grid(e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u)
+            grid = sequence_grid(
+                e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u, with_stats=True,
+                rpe_pairs=rpe_p, rpe_all_pairs=rpe_a, rpe_tolerance=rpe_t,
+            )  # fmt: skip
             row = sequence_meta(f, e) | dict(eps=e_scene, phi=phi_v, delta=delta_v, tau=tau_v)
             row.update({k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in grid.items()})
             rows.append(row)
-    return pd.DataFrame(rows, columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS)
+    return pd.DataFrame(rows, columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS)
 
 
 def pose_table(errors: FileErrors | Iterable[FileErrors], eps: Eps = np.inf, phi: float = np.inf) -> pd.DataFrame:

@@ -28,9 +28,11 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from ..errors import ValidationError
 from .model import FileErrors, ResultFile
 from .pipeline import compute_errors
 from .trajectory import Trajectory
+from .validate import finite, positive
 
 
 @dataclass(frozen=True)
@@ -51,6 +53,32 @@ class Faults:
     clock_offset_s: float = 0.0
     seed: int = 0
 
+    def __post_init__(self) -> None:
+        """Check every value as a learner would type it; each mistake gets a message saying what to write."""
+        for name in ("position_noise_m", "orientation_noise_deg", "drift_per_m", "init_delay_s"):
+            v = finite(name, getattr(self, name), _UNITS[name])
+            if v < 0:
+                raise ValidationError(
+                    f"Faults({name}={getattr(self, name)!r}): expected a number >= 0 ({_UNITS[name]})"
+                )
+        for name in ("yaw_drift_deg_per_m", "wrong_reloc_yaw_deg", "clock_offset_s"):
+            finite(name, getattr(self, name), _UNITS[name])
+        positive("scale", self.scale, "times the true size (1 = no scale error)")
+        if self.rate_hz is not None:
+            positive("rate_hz", self.rate_hz, "Hz (None keeps every pose)")
+        if self.wrong_reloc_at_s is not None:
+            finite("wrong_reloc_at_s", self.wrong_reloc_at_s, "seconds from the start (None: no wrong re-localization)")
+        offset = self.wrong_reloc_offset_m
+        if isinstance(offset, (str, bytes)) or not hasattr(offset, "__len__") or len(offset) != 3:
+            raise ValidationError(
+                f"Faults(wrong_reloc_offset_m={offset!r}): expected three numbers (x, y, z) in metres, e.g. (3.0, 0.0, 0.0)"
+            )
+        for v in offset:
+            finite("wrong_reloc_offset_m", v, "metres")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise ValidationError(f"Faults(seed={self.seed!r}): expected a whole number >= 0")
+        object.__setattr__(self, "lost", lost_intervals(self.lost))
+
     def describe(self) -> str:
         """A short label of the faults that are on."""
         on = [
@@ -61,6 +89,57 @@ class Faults:
             and not (k.startswith("wrong_reloc_") and self.wrong_reloc_at_s is None)
         ]
         return ", ".join(on) if on else "no faults"
+
+
+_UNITS = {
+    "position_noise_m": "metres",
+    "orientation_noise_deg": "degrees",
+    "drift_per_m": "metres per metre travelled",
+    "init_delay_s": "seconds",
+    "yaw_drift_deg_per_m": "degrees per metre travelled",
+    "wrong_reloc_yaw_deg": "degrees",
+    "clock_offset_s": "seconds",
+}
+
+_LOST_EXAMPLE = "e.g. lost=((15.0, 35.0),) for one interval, lost=((5, 10), (30, 40)) for two"
+
+
+def lost_intervals(lost: object) -> tuple[tuple[float, float], ...]:
+    """``Faults.lost`` checked and normalized: a tuple of ``(start_s, end_s)`` pairs with
+    start < end, in seconds from the start of the sequence. The usual slips get their own
+    message: one pair not wrapped in a tuple (``lost=(15, 35)``), a reversed interval
+    (``(35, 15)``, which would silently remove nothing), an empty one, text or NaN."""
+    if lost is None:
+        return ()
+    if isinstance(lost, (str, bytes)) or not hasattr(lost, "__iter__"):
+        raise ValidationError(f"Faults(lost={lost!r}): expected a tuple of (start_s, end_s) pairs; {_LOST_EXAMPLE}")
+    items = list(lost)
+    if len(items) == 2 and all(isinstance(v, (int, float, np.number)) and not isinstance(v, bool) for v in items):
+        a, b = items
+        raise ValidationError(
+            f"Faults(lost={lost!r}): one interval must still be wrapped in a tuple of intervals: "
+            f"write lost=(({a}, {b}),) (note the trailing comma)"
+        )
+    out = []
+    for k, item in enumerate(items):
+        if isinstance(item, (str, bytes)) or not hasattr(item, "__len__") or len(item) != 2:
+            raise ValidationError(
+                f"Faults(lost=...): interval {k + 1} is {item!r}; expected a pair (start_s, end_s); {_LOST_EXAMPLE}"
+            )
+        a = finite("lost start", item[0], "seconds from the start of the sequence")
+        b = item[1]
+        b = np.inf if isinstance(b, (int, float)) and b == np.inf else finite("lost end", b, "seconds (or inf)")
+        if a < 0:
+            raise ValidationError(
+                f"Faults(lost=...): interval {k + 1} {item!r} starts before 0 s; times are seconds from the start"
+            )
+        if b <= a:
+            raise ValidationError(
+                f"Faults(lost=...): interval {k + 1} {item!r} ends before it starts (or is empty), so it would remove "
+                f"nothing; write (start_s, end_s) with start < end, e.g. ({min(a, b)}, {max(a, b)})"
+            )
+        out.append((float(a), float(b)))
+    return tuple(out)
 
 
 def simulate(gt: Trajectory, faults: Faults = Faults()) -> Trajectory:
@@ -132,7 +211,28 @@ def simulated_result(
         if seqs is not None
         else (sorted(faults) if isinstance(faults, Mapping) else sorted(groundtruth.sequences))
     )
+    scene = groundtruth.header.get("scene", "unknown")
+    have = ", ".join(str(q) for q in sorted(groundtruth.sequences))
+    if not seqs:
+        raise ValidationError(f"seqs: an empty list; expected sequence numbers of {scene} ({have})")
+    for q in seqs:
+        if q not in groundtruth.sequences:
+            raise ValidationError(
+                f"sequence {q!r}: the ground truth of {scene} has sequences {have}; choose among them"
+            )
+    if isinstance(faults, Mapping):
+        missing = [q for q in seqs if q not in faults]
+        if missing:
+            raise ValidationError(
+                f"faults: no Faults for sequence(s) {missing}; the mapping has {sorted(faults)}. "
+                "Give one Faults per simulated sequence, e.g. {1: Faults(), 2: Faults(init_delay_s=20)}"
+            )
     per = {q: (faults[q] if isinstance(faults, Mapping) else faults) for q in seqs}
+    for q, f in per.items():
+        if not isinstance(f, Faults):
+            raise ValidationError(
+                f"faults for sequence {q}: expected a Faults(...) object, got {type(f).__name__} {f!r}"
+            )
     sequences = {q: simulate(groundtruth.sequences[q], per[q]) for q in seqs}
     label = (
         f"simulated: {name}"
@@ -140,7 +240,6 @@ def simulated_result(
         else "simulated: "
         + "; ".join(f"seq {q}: {per[q].describe()}" if len(seqs) > 1 else per[q].describe() for q in seqs)
     )
-    scene = groundtruth.header.get("scene", "unknown")
     header = {"scene": scene, "frame": "base_link", "simulated": "true", "algorithm": label}
     return ResultFile(
         path=Path("simulated") / f"{scene}.txt",

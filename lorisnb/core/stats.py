@@ -12,15 +12,15 @@ several trials, over the trials. What this assumes: sequences (and trials) are e
 draws from the conditions the benchmark stands for, and a scene's value is the weighted mean above.
 With few sequences the interval is wide, as it should be.
 
-Pairwise comparison (:func:`pairwise`): on the sequences both algorithms have, the bootstrap
-probability that A's scene value exceeds B's (sequences resampled in pairs), and a Wilcoxon
-signed-rank test of the per-sequence differences (``scipy.stats.wilcoxon``, two-sided), with
-Holm's correction over the pairs of a scene. It assumes pairs are independent across sequences
-and differences symmetric about their median under the null. With n sequences its smallest
-possible p-value is 2 / 2^n (0.0625 for OpenLORIS' five corridor or home sequences), so a scene
-with five sequences or fewer can never show a significant difference: ``min_p`` says so. With
-three or more trials of each algorithm, ``trials_p`` adds a Mann-Whitney U test of the per-trial
-scene values (run-to-run spread; trials assumed independent), also Holm-corrected.
+Pairwise comparison (:func:`pairwise`): one test for every pair, the stratified permutation test
+of :mod:`lorisnb.core.permutation` on the sequences both algorithms have: within each sequence the
+trials of A and B are relabelled, the statistic is the difference of the scene values. With one
+trial each it is the paired permutation test over sequences (exact: all 2^n sign flips); with
+trials it uses the run-to-run spread of every sequence. Ties need no correction. Holm's correction
+over the pairs of a scene. The smallest p-value the design can give (``min_p``) is stated: n paired
+sequences cannot go below 2 / 2^n (0.0625 for OpenLORIS' five corridor or home sequences), 3 vs 3
+trials of one sequence not below 0.1. The ranking (:mod:`lorisnb.core.ranking`), the summary of
+``compare`` and the bold marks of :mod:`lorisnb.tools.tables` all read this one test.
 """
 
 from __future__ import annotations
@@ -203,6 +203,20 @@ def confidence_intervals(
     return pd.DataFrame(rows)
 
 
+def scene_means(table: pd.DataFrame, metric: str) -> pd.DataFrame:
+    """Per suite, scene and algorithm: ``value``, the weighted mean over its sequences of each
+    sequence's mean over trials (the value :func:`confidence_intervals` and the ranking report)."""
+    t = with_trials(table)
+    rows = []
+    for key, g in t.groupby(GROUP, sort=False, observed=True):
+        values, w, _, _ = _units(g, metric)
+        seq_means = np.nanmean(values, axis=1) if len(values) else np.zeros(0)
+        value = float(_weighted_mean(seq_means, w)) if len(w) and w.sum() > 0 else np.nan
+        rows.append(dict(zip(GROUP, key, strict=True), value=value))
+    out = pd.DataFrame(rows, columns=GROUP + ["value"])
+    return out[["suite", "scene", "algorithm", "value"]]
+
+
 def holm(p: np.ndarray) -> np.ndarray:
     """Holm's step-down correction of p-values (family-wise error rate)."""
     p = np.asarray(p, float)
@@ -217,6 +231,29 @@ def holm(p: np.ndarray) -> np.ndarray:
     return out
 
 
+def _sequence_trials(g: pd.DataFrame, metric: str) -> dict[str, tuple[dict[object, np.ndarray], dict[object, float]]]:
+    """Per algorithm: (sequence -> the trials' values, sequence -> its weight), finite values only."""
+    w_col = _metric(metric)
+    out = {}
+    for alg, d in g.groupby("algorithm", sort=True, observed=True):
+        v = d[metric].to_numpy(float)
+        w = np.ones(len(d)) if w_col is None else d[w_col].to_numpy(float)
+        ok = np.isfinite(v) & np.isfinite(w) & ((w > 0) if metric == "c_ate_rmse" else True)
+        d = d.assign(_v=v, _w=w)[ok]
+        out[str(alg)] = (
+            {s: x["_v"].to_numpy(float) for s, x in d.groupby("seq", sort=True)},
+            {s: float(x["_w"].mean()) for s, x in d.groupby("seq", sort=True)},
+        )
+    return out
+
+
+def _cliffs_delta(a: list[np.ndarray], b: list[np.ndarray]) -> float:
+    """Cliff's delta within sequences: P(a > b) - P(a < b) over the pairs of trials of each sequence
+    (each sequence counts equally); from -1 (B always higher) to 1 (A always higher)."""
+    d = [np.mean(np.sign(x[:, None] - y[None, :])) for x, y in zip(a, b, strict=True) if len(x) and len(y)]
+    return float(np.mean(d)) if d else np.nan
+
+
 def pairwise(
     table: pd.DataFrame,
     metric: str = "cr",
@@ -224,66 +261,73 @@ def pairwise(
     n_resamples: int = 2000,
     seed: int = 0,
     higher_is_better: bool | None = None,
+    intervals: bool = True,
 ) -> pd.DataFrame:
-    """Every pair of algorithms in each scene, on the sequences both have (trial means): the scene
-    values, ``p_a_better`` (bootstrap probability that A is better), the Wilcoxon signed-rank
-    p-value of the per-sequence differences, the Holm-corrected p-value over the scene's pairs,
-    and whether the difference is significant at ``alpha`` after correction."""
-    from scipy import stats  # here, not at the top: scipy.stats takes half a second to import
+    """Every pair of algorithms in each scene, on the sequences both have: one stratified
+    permutation test (:func:`lorisnb.core.permutation.permutation_test`: trials relabelled within
+    each sequence; with one trial each, the paired test over sequences), exact when the
+    relabellings are few.
+
+    Columns: the scene values (``value_a``, ``value_b``: weighted means over the common sequences
+    of each sequence's mean over trials), ``difference`` (A - B, the test statistic, in the
+    metric's unit), ``cliffs_delta`` (effect size, -1..1), ``p`` (two-sided), ``min_p`` (the
+    smallest p the design can give), ``exact``, ``p_holm`` (Holm over the scene's pairs),
+    ``significant`` (p_holm <= alpha), ``better`` (the significantly better algorithm, or ""),
+    ``reachable`` (whether min_p, Holm-corrected as if it were the scene's smallest p, can reach
+    alpha), ``difference_low``, ``difference_high`` (with ``intervals``: the interval of the
+    difference that inverts the same test at the level Holm decided it at, ``interval_level``; it
+    holds 0 exactly when the pair is not significant) and ``p_a_better`` (bootstrap probability
+    that A is better, descriptive)."""
+    from .permutation import difference_interval, holm_levels, permutation_test
 
     better_high = (metric != "c_ate_rmse") if higher_is_better is None else higher_is_better
-    w_col = _metric(metric)
     t = with_trials(table)
+    _need(t, ["algorithm", "scene", "seq", metric] + ([_metric(metric) or metric]))
     rng = np.random.default_rng(seed)
     rows = []
     for (suite, scene), g in t.groupby(["suite", "scene"], sort=False, observed=True):
-        means = g.groupby(["algorithm", "seq"]).agg(
-            v=(metric, "mean"), w=(w_col, "mean") if w_col else (metric, "size")
-        )
-        if w_col is None:
-            means["w"] = 1.0
-        algs = sorted(means.index.get_level_values(0).unique())
-        trial_values = scene_values(g, [metric], by=["algorithm", "trial"])
-        per_trial = {k: d[metric].to_numpy(float) for k, d in trial_values.groupby("algorithm")}
-        scene_rows = []
-        for a, b in combinations(algs, 2):
-            both = pd.merge(
-                means.loc[a], means.loc[b], left_index=True, right_index=True, suffixes=("_a", "_b")
-            ).dropna()
-            n = len(both)
-            va, vb = both["v_a"].to_numpy(), both["v_b"].to_numpy()
-            wa, wb = both["w_a"].to_numpy(), both["w_b"].to_numpy()
-            mean_a = float(_weighted_mean(va, wa)) if n else np.nan
-            mean_b = float(_weighted_mean(vb, wb)) if n else np.nan
-            p_better, p_w = np.nan, np.nan
-            if n >= 2:
-                idx = rng.integers(0, n, size=(n_resamples, n))
-                diff = _weighted_mean(va[idx], wa[idx]) - _weighted_mean(vb[idx], wb[idx])
+        per = _sequence_trials(g, metric)
+        scene_rows, samples = [], []
+        for a, b in combinations(sorted(per), 2):
+            (va, wa), (vb, wb) = per[a], per[b]
+            common = sorted(set(va) & set(vb), key=str)
+            xa, xb = [va[s] for s in common], [vb[s] for s in common]
+            w = np.array([(wa[s] + wb[s]) / 2 for s in common])
+            res = permutation_test(xa, xb, w, n_resamples=max(n_resamples, 2000), rng=rng)
+            samples.append((xa, xb, w))
+            ma = np.array([x.mean() for x in xa])
+            mb = np.array([x.mean() for x in xb])
+            mean_a = float(_weighted_mean(ma, np.array([wa[s] for s in common]))) if common else np.nan
+            mean_b = float(_weighted_mean(mb, np.array([wb[s] for s in common]))) if common else np.nan
+            p_better = np.nan
+            if len(common) >= 2:
+                idx = rng.integers(0, len(common), size=(n_resamples, len(common)))
+                diff = _weighted_mean(ma[idx], w[idx]) - _weighted_mean(mb[idx], w[idx])
                 diff = diff if better_high else -diff
                 p_better = float(np.mean(diff > 0) + 0.5 * np.mean(diff == 0))
-                d = va - vb
-                if np.any(d != 0):
-                    p_w = float(stats.wilcoxon(va, vb, zero_method="zsplit").pvalue)
-                else:
-                    p_w = 1.0
-            ta, tb = per_trial.get(a, np.zeros(0)), per_trial.get(b, np.zeros(0))
-            p_t = np.nan
-            if len(ta) >= 3 and len(tb) >= 3:
-                p_t = 1.0 if np.ptp(np.concatenate([ta, tb])) == 0 else float(stats.mannwhitneyu(ta, tb).pvalue)
+            trials = max([len(x) for x in xa + xb], default=0)
             scene_rows.append(
-                dict(suite=suite, scene=scene, metric=metric, a=a, b=b, sequences=n, value_a=mean_a, value_b=mean_b,
-                     p_a_better=p_better, wilcoxon_p=p_w, min_p=2.0 / 2**n if n else np.nan, trials_a=len(ta),
-                     trials_b=len(tb), trials_p=p_t)
+                dict(suite=suite, scene=scene, metric=metric, a=a, b=b, sequences=len(common),
+                     trials_a=max([len(x) for x in xa], default=0), trials_b=max([len(x) for x in xb], default=0),
+                     value_a=mean_a, value_b=mean_b, difference=res.statistic, cliffs_delta=_cliffs_delta(xa, xb),
+                     test=("paired permutation over sequences" if trials <= 1 else
+                           "permutation of trials within sequences"),
+                     relabellings=res.relabellings, exact=res.exact, p=res.pvalue, min_p=res.min_p,
+                     p_a_better=p_better)
             )  # fmt: skip
-        if scene_rows:
-            adj = holm(np.array([r["wilcoxon_p"] for r in scene_rows]))
-            adj_t = holm(np.array([r["trials_p"] for r in scene_rows]))
-            for r, pa, pt in zip(scene_rows, adj, adj_t, strict=True):
-                r.update(p_holm=pa, significant=bool(pa <= alpha) if np.isfinite(pa) else False, trials_p_holm=pt,
-                         significant_trials=bool(pt <= alpha) if np.isfinite(pt) else False,
-                         correction=f"Holm over {len(scene_rows)} pair(s) of this scene, alpha {alpha}")  # fmt: skip
+        adj = holm(np.array([r["p"] for r in scene_rows]))
+        levels = holm_levels(np.array([r["p"] for r in scene_rows]), alpha)
+        for r, pa, level, (xa, xb, w) in zip(scene_rows, adj, levels, samples, strict=True):
+            sig = bool(np.isfinite(pa) and pa <= alpha)
+            low, high = (difference_interval(xa, xb, w, level, n_resamples=1000, seed=seed, iterations=20, rejected=sig)
+                         if intervals and np.isfinite(level) else (np.nan, np.nan))  # fmt: skip
+            r.update(difference_low=low, difference_high=high, interval_level=1 - level)
+            a_wins = (r["difference"] > 0) == better_high
+            r.update(p_holm=pa, significant=sig, better=(r["a"] if a_wins else r["b"]) if sig else "",
+                     reachable=bool(np.isfinite(r["min_p"]) and r["min_p"] * len(scene_rows) <= alpha),
+                     correction=f"Holm over {len(scene_rows)} pair(s) of this scene, alpha {alpha}")  # fmt: skip
         rows += scene_rows
-    cols = ["suite", "scene", "metric", "a", "b", "sequences", "value_a", "value_b", "p_a_better", "wilcoxon_p",
-            "min_p", "p_holm", "significant", "trials_a", "trials_b", "trials_p", "trials_p_holm", "significant_trials",
-            "correction"]  # fmt: skip
+    cols = ["suite", "scene", "metric", "a", "b", "sequences", "trials_a", "trials_b", "value_a", "value_b",
+            "difference", "difference_low", "difference_high", "interval_level", "cliffs_delta", "test", "relabellings",
+            "exact", "p", "min_p", "p_holm", "significant", "better", "reachable", "p_a_better", "correction"]  # fmt: skip
     return pd.DataFrame(rows, columns=cols)

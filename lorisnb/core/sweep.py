@@ -18,10 +18,18 @@ import pandas as pd
 from ..errors import ValidationError
 from . import metrics
 from .aggregate import aggregate_scenes
-from .frames import PAPER_EPS, PAPER_PHI
-from .model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, FileErrors, SequenceErrors, sequence_eps
-from .scoring import GRID_METRICS, as_files, rpe_setting, sequence_grid, sequence_meta
-from .trajectory import extent, path_length
+from .frames import PAPER_EPS
+from .model import (
+    EXTRA_COLUMNS,
+    SEQUENCE_COLUMNS,
+    STAT_COLUMNS,
+    FileErrors,
+    SequenceErrors,
+    sequence_eps,
+    sequence_size,
+)  # fmt: skip
+from .scoring import GRID_METRICS, as_files, rpe_options, rpe_setting, sequence_grid, sequence_meta
+from .trajectory import RELATIVE
 from .validate import choice, threshold, threshold_list
 
 #: Columns of the default (lean) sweep table: identity, thresholds, and the metrics that depend on
@@ -41,7 +49,7 @@ def sweep_bytes(files: list[FileErrors], shape: tuple[int, int, int, int], colum
     E, P, D, T = shape
     n_seq = sum(len(f.sequences) for f in files)
     longest = max((e.matched for f in files for e in f.sequences), default=0)
-    ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
+    ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
     return max(n_seq * E * P * D * T * ncol * 8.0, E * P * longest * 9.0 + E * P * D * T * len(GRID_METRICS) * 8.0)
 
 
@@ -53,7 +61,7 @@ def check_sweep_size(
     E, P, D, T = shape
     n_seq = sum(len(f.sequences) for f in files)
     longest = max((e.matched for f in files for e in f.sequences), default=0)
-    ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
+    ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
     rows = n_seq * E * P * D * T
     need = sweep_bytes(files, shape, columns)
     if need > max_bytes:
@@ -63,19 +71,6 @@ def check_sweep_size(
             f"more than the {max_bytes / 2**30:.1f} GiB allowed (max_bytes); use fewer thresholds or files, "
             "or stream the table to Parquet (command line: --parquet DIR; Python: lorisnb.tools.sweep_to_parquet)"
         )
-
-
-#: How eps may be given relative to the size of each sequence's ground truth.
-RELATIVE = ("extent", "length")
-
-
-def sequence_size(e: SequenceErrors, relative_to: str) -> float:
-    """Size of a sequence's ground truth (at the matched stamps), metres: ``extent`` is the
-    diagonal of its bounding box, ``length`` the distance travelled; NaN for fewer than two poses."""
-    relative_to = choice("relative_to", relative_to, RELATIVE)
-    if e.matched < 2:
-        return np.nan
-    return extent(e.gt_positions) if relative_to == "extent" else path_length(e.gt_positions)
 
 
 def _eps_values(eps: list[Any], scene: str, e: SequenceErrors, relative_to: str | None) -> np.ndarray:
@@ -100,6 +95,9 @@ def sweep(
     rpe_unit: str = "s",
     columns: str = "metrics",
     max_bytes: float = MAX_SWEEP_BYTES,
+    rpe_pairs: str = "reference",
+    rpe_all_pairs: bool | None = None,
+    rpe_tolerance: float = 0.1,
 ) -> pd.DataFrame:
     """One row per sequence and per combination of thresholds. With ``columns="all"`` the columns
     are those of :func:`lorisnb.core.scoring.score` (a row equals ``score`` at that setting, RPE
@@ -126,6 +124,7 @@ def sweep(
     delta_a = np.array(threshold_list("delta", delta))
     tau_a = np.array(threshold_list("tau", tau))
     rpe_d, rpe_u = rpe_setting(rpe_delta, rpe_unit)
+    rpe_p, rpe_a, rpe_t = rpe_options(rpe_pairs, rpe_all_pairs, rpe_tolerance)
     E, P, D, T = len(eps_l), len(phi_a), len(delta_a), len(tau_a)
     n_set = E * P * D * T
     check_sweep_size(files, (E, P, D, T), columns, max_bytes)
@@ -135,11 +134,24 @@ def sweep(
         for e in f.sequences:
             eps_m = _eps_values(eps_l, f.scene, e, relative_to)
             blocks.append(
-                sequence_grid(e, eps_m, phi_a, delta_a, tau_a, rpe_delta=rpe_d, rpe_unit=rpe_u, with_rpe=with_rpe)
+                sequence_grid(
+                    e,
+                    eps_m,
+                    phi_a,
+                    delta_a,
+                    tau_a,
+                    rpe_delta=rpe_d,
+                    rpe_unit=rpe_u,
+                    with_rpe=with_rpe,
+                    with_stats=with_rpe,
+                    rpe_pairs=rpe_p,
+                    rpe_all_pairs=rpe_a,
+                    rpe_tolerance=rpe_t,
+                )  # fmt: skip
             )
             blocks[-1]["eps"] = np.broadcast_to(eps_m[:, None, None, None], (E, P, D, T))
             seq_meta.append(sequence_meta(f, e))
-    cols = SEQUENCE_COLUMNS + EXTRA_COLUMNS + ["eps_value"] if columns == "all" else METRIC_COLUMNS
+    cols = SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS + ["eps_value"] if columns == "all" else METRIC_COLUMNS
     if not blocks:
         return pd.DataFrame(columns=cols)
     S = len(blocks)
@@ -309,6 +321,3 @@ def rank_swaps(scenes: pd.DataFrame, metric: str = "cr") -> pd.DataFrame:
     return pd.DataFrame(
         rows, columns=["suite", "scene", "phi", "delta", "tau", "leader_before", "leader_after", "eps_from", "eps_to"]
     )
-
-
-PAPER_SETTING = dict(eps="paper", phi=PAPER_PHI, delta=1.0, tau=60.0)

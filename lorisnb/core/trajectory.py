@@ -31,6 +31,25 @@ def extent(positions: np.ndarray) -> float:
     return float(np.linalg.norm(p.max(axis=0) - p.min(axis=0)))
 
 
+#: What a relative threshold is a fraction of: ``extent`` (bounding-box diagonal) or ``length``
+#: (distance travelled).
+RELATIVE = ("extent", "length")
+
+
+def size(positions: np.ndarray, relative_to: str = "extent") -> float:
+    """The size a relative threshold is a fraction of, metres: :func:`extent` or
+    :func:`path_length` of the positions (0 with fewer than two). The one rule of relative
+    thresholds: scores and sweeps (the matched ground truth, :func:`lorisnb.core.model.sequence_size`)
+    and difficulty measures (the whole ground truth)."""
+    if relative_to not in RELATIVE:
+        from ..errors import ValidationError
+
+        raise ValidationError(f"relative_to={relative_to!r}: expected one of {', '.join(RELATIVE)}")
+    if len(positions) < 2:
+        return 0.0
+    return extent(positions) if relative_to == "extent" else path_length(positions)
+
+
 @dataclass(frozen=True)
 class Trajectory:
     """Stamped poses, sorted by strictly increasing stamp.

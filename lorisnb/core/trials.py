@@ -56,3 +56,44 @@ def split_trial(relpath: str, trials_by: str | re.Pattern[str] | None = None) ->
             kept = parts[:k] + ([rest] if rest else []) + parts[k + 1 :]
             return "/".join(kept), trial
     return relpath, 0
+
+
+def names_a_trial(relpath: str, trials_by: str | re.Pattern[str] | None = None) -> bool:
+    """Whether a result file's relative path carries a trial token (the user's or the defaults)."""
+    pattern = compile_trials_by(trials_by) if isinstance(trials_by, str) else trials_by
+    pats = [pattern] if pattern is not None else list(TRIAL_PATTERNS)
+    return any(p.search(part) for part in PurePosixPath(relpath).parts for p in pats)
+
+
+def check_trials_by(relpaths: list[str], trials_by: str | None) -> None:
+    """A ``--trials-by`` expression that matches none of the files is an error (it was meant to
+    number them)."""
+    if trials_by is None or not relpaths:
+        return
+    if not any(names_a_trial(p, trials_by) for p in relpaths):
+        shown = ", ".join(relpaths[:3]) + (f" and {len(relpaths) - 3} more" if len(relpaths) > 3 else "")
+        raise ValidationError(
+            f"trials_by={trials_by}: matches none of the {len(relpaths)} result file path(s) ({shown}); "
+            "expected an expression that finds the trial number in them, e.g. 'run(\\d+)'"
+        )
+
+
+def check_duplicates(keys: list[tuple[str, tuple, tuple[int, ...]]]) -> None:
+    """Several files for one sequence and trial are an error, never averaged: ``keys`` holds, per
+    evaluated file, (its path, its labels (suite, algorithm, scene, trial), its sequence numbers).
+    The message names the files and suggests ``--trials-by``."""
+    seen: dict[tuple, tuple[int, str]] = {}
+    for k, (path, label, seqs) in enumerate(keys):
+        for s in dict.fromkeys(seqs):
+            j, other = seen.setdefault((*label, s), (k, path))
+            if j == k:
+                continue
+            suite, algorithm, scene, trial = label
+            held = f"{algorithm}{f' ({suite})' if suite else ''} {scene}-{s}{f' trial {trial}' if trial else ''}"
+            if PurePosixPath(other) == PurePosixPath(path):
+                raise ValidationError(f"{path} is given twice (it holds {held}); give each file or folder once")
+            raise ValidationError(
+                f"{other} and {path} both hold {held}, with no trial number to tell them apart; name the trials "
+                "(cafe_trial1.txt, run_2/, ...) or give --trials-by REGEX (trials_by= in Python) whose group is "
+                "the trial number, or evaluate them separately"
+            )

@@ -13,6 +13,8 @@ from collections.abc import Iterable, Mapping
 from numbers import Real
 from typing import Any
 
+import numpy as np
+
 from ..errors import ValidationError
 from .frames import SCENES
 
@@ -148,3 +150,28 @@ def finite(name: str, value: Any, unit: str) -> float:
     if math.isnan(v) or math.isinf(v):
         raise ValidationError(f"{name}={_show(value)}: expected a finite number of {unit}")
     return float(v)
+
+
+def flag(label: str, value: Any) -> bool:
+    """A yes/no value: a bool (numpy's too); strings are refused, never truth-tested."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise ValidationError(f"{label}={value!r} ({type(value).__name__}): expected True or False")
+
+
+def rigid_transform(value: Any, label: str = "transform") -> tuple[tuple[float, ...], ...] | None:
+    """``T_est_gt`` as a 4x4 tuple (from a :class:`~lorisnb.core.geometry.Sim3`, an array or nested
+    lists); None stays None. A rigid transform is expected: a rotation block and a last row 0 0 0 1."""
+    if value is None:
+        return None
+    m = value.matrix() if hasattr(value, "matrix") else value  # a Sim3
+    try:
+        arr = np.asarray(m, float)
+    except (TypeError, ValueError):
+        raise ValidationError(f"{label}: expected a 4x4 matrix T_est_gt, got {type(value).__name__}") from None
+    if arr.shape != (4, 4) or not np.isfinite(arr).all():
+        raise ValidationError(f"{label}: expected a finite 4x4 matrix T_est_gt, got shape {arr.shape}")
+    r = arr[:3, :3]
+    if not np.allclose(arr[3], [0, 0, 0, 1]) or not np.allclose(r @ r.T, np.eye(3), atol=1e-6):
+        raise ValidationError(f"{label}: expected a rigid transform (a rotation block and last row 0 0 0 1)")
+    return tuple(tuple(float(x) for x in row) for row in arr)

@@ -1,6 +1,7 @@
 """Trajectories from ROS 1 and ROS 2 bags (through the ``rosbags`` package, which evo uses too):
-a ``geometry_msgs/PoseStamped``, ``PoseWithCovarianceStamped``, ``TransformStamped`` or
-``nav_msgs/Odometry`` topic, or a TF chain ``parent:child`` from ``/tf`` and ``/tf_static``.
+a ``geometry_msgs/PoseStamped``, ``PoseWithCovarianceStamped``, ``TransformStamped``,
+``PointStamped`` (positions only: the identity orientation, as evo) or ``nav_msgs/Odometry`` topic, or a TF chain ``parent:child`` (evo's ``/tf:parent.child``) from ``/tf``
+and ``/tf_static``; several of one bag at once with :func:`read_bag_topics`.
 
 Stamps are the messages' header stamps (seconds); quaternions ``xyzw``. A TF chain may pass
 through several frames: its poses are taken at the stamps of its busiest moving link, the other
@@ -26,6 +27,7 @@ POSE_TYPES = {
     "geometry_msgs/msg/PoseWithCovarianceStamped": lambda m: m.pose.pose,
     "nav_msgs/msg/Odometry": lambda m: m.pose.pose,
     "geometry_msgs/msg/TransformStamped": lambda m: m.transform,
+    "geometry_msgs/msg/PointStamped": lambda m: m.point,  # no orientation: the identity, as evo reads it
 }
 TF_TOPICS = ("/tf", "/tf_static")
 
@@ -45,42 +47,91 @@ def _stamp(msg: Any) -> float:
 
 
 def _pose(p: Any) -> list[float]:
+    if hasattr(p, "x"):  # a Point: no orientation (only position errors mean something)
+        return [p.x, p.y, p.z, 0.0, 0.0, 0.0, 1.0]
     t = p.position if hasattr(p, "position") else p.translation  # a Pose or a Transform
     q = p.orientation if hasattr(p, "orientation") else p.rotation
     return [t.x, t.y, t.z, q.x, q.y, q.z, q.w]
 
 
-def read_bag(path: str | os.PathLike, topic: str | None = None, tf: str | None = None) -> Trajectory:
-    """Read a trajectory from a ROS 1 bag (``.bag``) or a ROS 2 bag (its folder, ``.db3`` or
-    ``.mcap``): the poses of ``topic``, or the transform chain ``tf="parent:child"``. Without
-    either, the bag's only pose topic. ParseError names what the bag holds when the choice is
-    missing or wrong."""
+def _open(path: str | os.PathLike):
+    """An open rosbags reader of a ROS 1 bag, a ROS 2 bag folder, or a lone ``.db3`` / ``.mcap``
+    file (read with its folder when the folder has the bag's ``metadata.yaml``)."""
     spath = str(path)
     p = Path(path)
-    if p.suffix in (".db3", ".mcap") and p.parent.is_dir():
-        p = p.parent  # a ROS 2 bag is read from its folder
+    if p.suffix in (".db3", ".mcap") and (p.parent / "metadata.yaml").is_file():
+        p = p.parent  # a file of a ROS 2 bag folder: the whole bag
     if not p.exists():
-        raise ParseError(spath, None, "file not found; expected a ROS 1 bag (.bag) or a ROS 2 bag folder")
+        raise ParseError(
+            spath, None, "file not found; expected a ROS 1 bag (.bag), a ROS 2 bag folder or a .db3 / .mcap file"
+        )
     try:
         reader = _reader(p)
         reader.open()
     except MissingDependencyError:
         raise
     except Exception as exc:  # noqa: BLE001 (rosbags raises its own types for non-bags)
-        raise ParseError(spath, None, f"not a readable ROS bag ({exc}); expected a ROS 1 .bag or a ROS 2 bag") from None
+        raise ParseError(
+            spath, None, f"not a readable ROS bag ({exc}); expected a ROS 1 .bag, a ROS 2 bag folder or .db3/.mcap"
+        ) from None
+    return reader
+
+
+def tf_chain(text: str) -> str | None:
+    """lorisnb's ``parent:child`` spelling of evo's TF trajectory id ``/tf:parent.child`` (with an
+    optional ``:/tf_static`` suffix); None if ``text`` is not one."""
+    topic, sep, rest = text.partition(":")
+    if not sep or topic not in TF_TOPICS[:1] or "." not in rest:
+        return None
+    frames = rest.rpartition(":")[0] if ":" in rest else rest
+    parent, _, child = frames.partition(".")
+    return f"{parent}:{child}" if parent and child else None
+
+
+def read_bag(
+    path: str | os.PathLike, topic: str | None = None, tf: str | None = None, repeated: str = "drop"
+) -> Trajectory:
+    """Read a trajectory from a ROS 1 bag (``.bag``) or a ROS 2 bag (its folder, or a lone ``.db3``
+    or ``.mcap`` file): the poses of ``topic``, or the transform chain ``tf="parent:child"`` (evo's
+    ``/tf:parent.child`` is accepted as ``topic`` or ``tf``). Without either, the bag's only pose
+    topic. ParseError names what the bag holds when the choice is missing or wrong. ``repeated``:
+    poses of a repeated stamp, as :func:`lorisnb.io.formats.read_tum`."""
+    reader = _open(path)
     try:
-        if tf is not None:
-            return _read_tf(reader, spath, tf)
-        return _read_topic(reader, spath, topic)
+        return _read_one(reader, str(path), topic, tf, repeated)
     finally:
         reader.close()
+
+
+def read_bag_topics(
+    path: str | os.PathLike, topics: list[str] | None = None, repeated: str = "drop"
+) -> dict[str, Trajectory]:
+    """Several trajectories of one bag in one pass over its index: ``{topic: Trajectory}`` for each
+    of ``topics`` (pose topics, or TF chains as evo's ``/tf:parent.child``; None: every pose topic
+    of the bag). Each trajectory's ``meta`` says its topic or chain."""
+    reader = _open(path)
+    try:
+        names = sorted(_pose_topics(reader)) if topics is None else list(topics)
+        if not names:
+            raise ParseError(str(path), None, "no pose topic in this bag; name TF chains as /tf:parent.child")
+        return {name: _read_one(reader, str(path), name, None, repeated) for name in names}  # a few topics
+    finally:
+        reader.close()
+
+
+def _read_one(reader, spath: str, topic: str | None, tf: str | None, repeated: str) -> Trajectory:
+    if tf is not None:
+        return _read_tf(reader, spath, tf_chain(tf) or tf)
+    if topic is not None and tf_chain(topic) is not None:
+        return _read_tf(reader, spath, str(tf_chain(topic)))
+    return _read_topic(reader, spath, topic, repeated)
 
 
 def _pose_topics(reader) -> dict[str, str]:
     return {c.topic: c.msgtype for c in reader.connections if c.msgtype in POSE_TYPES}
 
 
-def _read_topic(reader, spath: str, topic: str | None) -> Trajectory:
+def _read_topic(reader, spath: str, topic: str | None, repeated: str = "drop") -> Trajectory:
     topics = _pose_topics(reader)
     listing = ", ".join(f"{t} ({m.split('/')[-1]})" for t, m in sorted(topics.items())) or "none"
     if topic is None:
@@ -103,7 +154,7 @@ def _read_topic(reader, spath: str, topic: str | None) -> Trajectory:
     notes: list[str] = []
     line_no = np.arange(1, len(stamps) + 1)  # message number on the topic
     pose = np.array(poses, float).reshape(-1, 7)
-    traj = finish(f"{spath} {topic}", np.array(stamps, float), pose[:, :3], pose[:, 3:], line_no, "", notes)
+    traj = finish(f"{spath} {topic}", np.array(stamps, float), pose[:, :3], pose[:, 3:], line_no, "", notes, repeated)
     traj.meta.update(source=spath, topic=topic, notes=notes)
     return traj
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -32,6 +32,8 @@ from ..errors import DataNotFoundError, LorisError
 from .openloris import read_openloris
 
 ENV_VAR = "LORISNB_DATA"
+#: The small teaching data shipped inside the package (``teaching/make_sample_data.py`` writes it).
+SAMPLE_DATA = Path(__file__).resolve().parents[1] / "sample_data"
 _MARKERS = ("openloris-scene", "tum-rgbd", "published")
 
 DataRoot = str | os.PathLike[str]
@@ -77,10 +79,6 @@ class DataPaths:
     @property
     def openloris(self) -> Path:
         return self._need(self.root / "openloris-scene", "OpenLORIS-Scene folder")
-
-    @property
-    def groundtruth_dir(self) -> Path:
-        return self._need(self.root / "openloris-scene" / "groundtruth", "OpenLORIS ground-truth folder")
 
     def groundtruth(self, scene: str) -> Path:
         """``gt_<scene>_1.txt`` (base_link poses of every sequence of the scene)."""
@@ -131,19 +129,42 @@ def find_data(data_root: DataRoot | DataPaths | None = None) -> DataPaths:
     )
 
 
+def sample_data() -> DataPaths:
+    """The small teaching data shipped inside lorisnb (about 1.4 MB, laid out like a data root):
+    the cafe ground truth, a few icra20 results of cafe, a TUM RGB-D pair and the published
+    tables. Only the primer and the labs fall back to it (``setup(..., sample=True)``); nothing
+    else uses it unless asked (``data_root=sample_data()``)."""
+    if not _looks_like_root(SAMPLE_DATA):
+        raise DataNotFoundError(f"lorisnb's sample data is missing from {SAMPLE_DATA} (a broken install?)")
+    return DataPaths(SAMPLE_DATA)
+
+
 @lru_cache(maxsize=32)
 def _read_gt_cached(path: str, mtime: float, size: int, remove_repeated: bool) -> ResultFile:
-    return read_openloris(path, remove_repeated=remove_repeated, warn=False)
+    gt = read_openloris(path, remove_repeated=remove_repeated, warn=False)
+    for t in gt.sequences.values():  # shared by every caller: nobody may change it
+        for a in (t.stamps, t.positions, t.quaternions, t.lines):
+            if a is not None:
+                a.setflags(write=False)
+    return gt
 
 
 def load_groundtruth(
     scene: str, data_root: DataRoot | DataPaths | None = None, remove_repeated: bool = True
 ) -> ResultFile:
     """The ground truth of an OpenLORIS scene (``gt_<scene>_1.txt``), read once and cached (until
-    the file changes). Repeated poses are dropped from ground truth too, as the official tool does."""
+    the file changes). Repeated poses are dropped from ground truth too, as the official tool does.
+    Each call returns a new object whose arrays are read-only (they are shared with every other
+    caller): copy an array to change it."""
     path = find_data(data_root).groundtruth(scene)
     st = path.stat()
-    return _read_gt_cached(str(path), st.st_mtime, st.st_size, remove_repeated)
+    gt = _read_gt_cached(str(path), st.st_mtime, st.st_size, remove_repeated)
+    return replace(  # a fresh object over read-only arrays: a caller's edits never reach the next caller
+        gt, header=dict(gt.header), header_lines=dict(gt.header_lines),
+        sequences={k: replace(t, meta=dict(t.meta)) for k, t in gt.sequences.items()},
+        seq_info={k: dict(v) for k, v in gt.seq_info.items()}, seq_lines=dict(gt.seq_lines),
+        removed_repeats=dict(gt.removed_repeats), warnings=list(gt.warnings),
+    )  # fmt: skip
 
 
 def groundtruth_spans(

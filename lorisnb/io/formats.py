@@ -20,7 +20,7 @@ from ..errors import LorisWarning, ParseError, ValidationError
 from .chunks import read_rows
 from .openloris import read_openloris
 from .ranges import LINE_LIMIT
-from .scanner import BOM, Lines, check_rows, finish, read_bytes, scan
+from .scanner import BOM, REPEATED, Lines, check_rows, finish, read_bytes, scan
 
 #: Formats :func:`read_trajectory` reads.
 TRAJECTORY_FORMATS = ("tum", "kitti", "euroc", "openloris", "bag")
@@ -51,12 +51,17 @@ def _check_width(lines: Lines, rows: np.ndarray, spath: str, ok: np.ndarray, exp
         raise ParseError(spath, int(i) + 1, _width_message(lines.text(i), int(lines.ntok[i]), expected))
 
 
-def read_tum(path: str | os.PathLike, warn: bool = True, progress: Callable[[int], object] | None = None) -> Trajectory:
+def read_tum(
+    path: str | os.PathLike,
+    warn: bool = True,
+    progress: Callable[[int], object] | None = None,
+    repeated: str = "drop",
+) -> Trajectory:
     """Read a TUM RGB-D trajectory: lines ``stamp tx ty tz qx qy qz qw`` (seconds, metres,
     quaternion xyzw), ``#`` comments; spaces, tabs or commas separate the values.
 
-    Non-finite poses are skipped and unsorted or repeated stamps sorted (keeping the last), with a
-    warning. Raises ParseError for a malformed line or a zero-norm quaternion. The file is read
+    Non-finite poses are skipped and unsorted or repeated stamps sorted (keeping the last, or with
+    ``repeated="keep"`` every pose of a repeated stamp, as evo does), with a warning. Raises ParseError for a malformed line or a zero-norm quaternion. The file is read
     in chunks (:func:`lorisnb.io.chunks.read_rows`); ``progress`` is called with each chunk's bytes.
     """
     spath = str(path)
@@ -72,7 +77,7 @@ def read_tum(path: str | os.PathLike, warn: bool = True, progress: Callable[[int
         layout=_pose_groups,
     )
     first, positions, quaternions = rows.split(_pose_groups(8))  # row-major, filled as the chunks were read
-    return _poses(spath, first[:, 0], positions, quaternions, rows.lines, warn)
+    return _poses(spath, first[:, 0], positions, quaternions, rows.lines, warn, repeated)
 
 
 def _pose_groups(ntok: int) -> tuple[slice, slice, slice]:
@@ -81,7 +86,13 @@ def _pose_groups(ntok: int) -> tuple[slice, slice, slice]:
 
 
 def _poses(
-    spath: str, stamps: np.ndarray, positions: np.ndarray, quaternions: np.ndarray, line_no: np.ndarray, warn: bool
+    spath: str,
+    stamps: np.ndarray,
+    positions: np.ndarray,
+    quaternions: np.ndarray,
+    line_no: np.ndarray,
+    warn: bool,
+    repeated: str,
 ) -> Trajectory:
     """A Trajectory of rows as read: checked (:func:`~lorisnb.io.scanner.check_rows`; NaN poses
     skipped with a note), sorted (:func:`~lorisnb.io.scanner.finish`), notes issued if ``warn``."""
@@ -91,7 +102,7 @@ def _poses(
     if nan_rows:
         notes.append(f"{spath}: {nan_rows} pose(s) with NaN or infinite values skipped")
         stamps, positions, quaternions, line_no = stamps[keep], positions[keep], quaternions[keep], line_no[keep]
-    traj = finish(spath, stamps, positions, quaternions, line_no, "", notes)
+    traj = finish(spath, stamps, positions, quaternions, line_no, "", notes, repeated)
     _warn(notes, warn)
     return traj
 
@@ -117,13 +128,16 @@ def _from_matrices(spath: str, stamps: np.ndarray, mats: np.ndarray, line_no: np
     return Trajectory(np.asarray(stamps, float), mats[:, :, 3].copy(), q, line_no, {"source": spath})
 
 
-def read_kitti(path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike | None = None) -> Trajectory:
+def read_kitti(
+    path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike | None = None, repeated: str = "drop"
+) -> Trajectory:
     """Read a KITTI pose file: one 3x4 matrix ``[R | t]`` per line, row-major (12 numbers, metres).
 
     KITTI files carry no stamps: pass ``stamps`` (an array, or a times file with one stamp per
     line as KITTI's ``times.txt``); without them the pose index is used as the stamp (and
-    ``meta["stamps"] == "index"``).
+    ``meta["stamps"] == "index"``). Given stamps must increase (``repeated="keep"``: or repeat).
     """
+    keep_all = choice("repeated", repeated, REPEATED) == "keep"
     spath = str(path)
     rows = read_rows(
         path,
@@ -146,7 +160,7 @@ def read_kitti(path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike |
         raise ParseError(spath, None, f"{len(mats)} poses but {len(t)} stamps; expected one stamp per pose")
     out = _from_matrices(spath, t, mats, rows.lines)
     out.meta["stamps"] = "index" if stamps is None else "given"
-    if stamps is not None and len(t) > 1 and not np.all(np.diff(t) > 0):
+    if stamps is not None and len(t) > 1 and not np.all(np.diff(t) >= 0 if keep_all else np.diff(t) > 0):
         raise ParseError(spath, None, "the stamps given for this KITTI file are not strictly increasing")
     return out
 
@@ -201,11 +215,12 @@ def _euroc_head(path: str | os.PathLike) -> tuple[int, int]:
     return skip, 8
 
 
-def read_euroc(path: str | os.PathLike, warn: bool = True) -> Trajectory:
+def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop") -> Trajectory:
     """Read a EuRoC ground-truth CSV (``state_groundtruth_estimate0/data.csv``): rows
     ``stamp_ns, p_x, p_y, p_z, q_w, q_x, q_y, q_z[, ...]`` after a ``#timestamp,...`` header;
-    stamps become seconds, quaternions ``xyzw``. Further columns (velocities, biases) are ignored.
-    Read in chunks as :func:`read_tum` (the rows straight into the arrays kept)."""
+    stamps become seconds (nanoseconds / 1e9, as evo), quaternions ``xyzw``. Further columns
+    (velocities, biases) are ignored. ``repeated``: as :func:`read_tum`. Read in chunks as
+    :func:`read_tum` (the rows straight into the arrays kept)."""
     spath = str(path)
     skip, width = _euroc_head(path)
     try:
@@ -220,7 +235,7 @@ def read_euroc(path: str | os.PathLike, warn: bool = True) -> Trajectory:
             skip_lines=skip,
         )
     except ParseError:
-        return _read_euroc_whole(path, warn)  # the first problem of the whole file, as it always was reported
+        return _read_euroc_whole(path, warn, repeated)  # the first problem of the whole file, as it always was reported
     first, positions, wxyz = rows.split(_euroc_groups(width))
     quaternions = wxyz[:, [1, 2, 3, 0]]  # x y z w
     del wxyz
@@ -230,13 +245,13 @@ def read_euroc(path: str | os.PathLike, warn: bool = True) -> Trajectory:
     keep = check_rows(spath, stamps, positions, quaternions, line_no, notes)
     if not keep.all():
         stamps, positions, quaternions, line_no = stamps[keep], positions[keep], quaternions[keep], line_no[keep]
-    stamps *= 1e-9
-    traj = finish(spath, stamps, positions, quaternions, line_no, "", notes)
+    stamps /= 1e9
+    traj = finish(spath, stamps, positions, quaternions, line_no, "", notes, repeated)
     _warn(notes, warn)
     return traj
 
 
-def _read_euroc_whole(path: str | os.PathLike, warn: bool) -> Trajectory:
+def _read_euroc_whole(path: str | os.PathLike, warn: bool, repeated: str = "drop") -> Trajectory:
     """:func:`read_euroc` by the byte scanner over the whole file: widths checked on every row
     before any number is read (a file with several problems reports the same first one)."""
     spath = str(path)
@@ -256,7 +271,7 @@ def _read_euroc_whole(path: str | os.PathLike, warn: bool) -> Trajectory:
     notes: list[str] = []
     line_no = rows + 1
     keep = check_rows(spath, values[:, 0], poses[:, :3], poses[:, 3:], line_no, notes)
-    traj = finish(spath, values[keep, 0] * 1e-9, poses[keep, :3], poses[keep, 3:], line_no[keep], "", notes)
+    traj = finish(spath, values[keep, 0] / 1e9, poses[keep, :3], poses[keep, 3:], line_no[keep], "", notes, repeated)
     _warn(notes, warn)
     return traj
 
@@ -273,6 +288,7 @@ def read_trajectory(
     stamps: np.ndarray | str | os.PathLike | None = None,
     topic: str | None = None,
     tf: str | None = None,
+    repeated: str = "drop",
 ) -> Trajectory:
     """Read one trajectory in any supported format.
 
@@ -281,18 +297,20 @@ def read_trajectory(
             the lowest-numbered one) or ``bag`` (ROS 1 or ROS 2; ``topic`` or ``tf``, see
             :func:`lorisnb.io.bags.read_bag`).
         stamps: KITTI only: stamps or a times file (see :func:`read_kitti`).
+        repeated: poses of a repeated stamp: ``drop`` all but the last, or ``keep`` them all (evo's
+            rule; not for OpenLORIS files, whose reader drops repeated poses as the official tool).
     """
     fmt = choice("format", fmt, TRAJECTORY_FORMATS)
     if fmt == "bag":
         from .bags import read_bag
 
-        return read_bag(path, topic=topic, tf=tf)
+        return read_bag(path, topic=topic, tf=tf, repeated=repeated)
     if fmt == "tum":
-        return read_tum(path)
+        return read_tum(path, repeated=repeated)
     if fmt == "kitti":
-        return read_kitti(path, stamps)
+        return read_kitti(path, stamps, repeated=repeated)
     if fmt == "euroc":
-        return read_euroc(path)
+        return read_euroc(path, repeated=repeated)
     if fmt == "openloris":
         f = read_openloris(path)
         if not f.sequences:

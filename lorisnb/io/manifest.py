@@ -42,8 +42,8 @@ from typing import Any
 
 import numpy as np
 
-from ..core.conventions import Conventions
 from ..core.geometry import Sim3
+from ..core.spec import EvalSpec, make_spec
 from ..errors import ParseError, ValidationError
 from .formats import TRAJECTORY_FORMATS
 
@@ -78,7 +78,7 @@ class Manifest:
     lifelong: bool = False
     groundtruth_format: str = "tum"
     estimate_format: str = "tum"
-    conventions: Conventions = field(default_factory=Conventions)
+    spec: EvalSpec = field(default_factory=EvalSpec)  # [conventions], lifelong, transform, eps, phi
     transform: Sim3 | None = None
     eps: float | None = None
     phi: float | None = None
@@ -88,6 +88,11 @@ class Manifest:
     estimate_tf: str | None = None
     source: str = ""
     openloris: bool = False  # the built-in OpenLORIS evaluation (lorisnb.evaluate's own path)
+
+    @property
+    def conventions(self) -> EvalSpec:
+        """The manifest's spec (its older name)."""
+        return self.spec
 
     @property
     def scenes(self) -> list[str]:
@@ -169,31 +174,27 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
     seqs = [s.seq for s in sessions]
     if len(set(seqs)) != len(seqs):
         raise ParseError(path, None, f"session numbers repeat ({seqs}); expected each session once")
+    table = raw.get("conventions", {})
+    if not isinstance(table, dict):
+        raise ParseError(path, None, "conventions: expected a [conventions] table of spec options")
+    transform = _transform(raw.get("transform"), path)
+    options = {k: v for k, v in table.items() if k != "preset"}
     try:
-        conventions = Conventions(**raw.get("conventions", {}))
-    except TypeError as exc:
-        raise ParseError(
-            path, None, f"[conventions]: {exc}; expected association, max_gap, max_diff, t_offset, align, align_frames"
-        ) from None
+        top = {k: raw[k] for k in ("eps", "phi") if k in raw}
+        spec = make_spec(
+            table.get("preset"), surface="manifest", **options, **top, lifelong=raw.get("lifelong", False),
+            transform=transform,
+        )  # fmt: skip
     except ValidationError as exc:
-        raise ParseError(path, None, f"[conventions]: {exc}") from None
+        raise ParseError(path, None, str(exc)) from None
     return Manifest(
-        path=path, name=str(raw.get("name", path.stem)), sessions=sessions, lifelong=bool(raw.get("lifelong", False)),
-        groundtruth_format=gt_fmt, estimate_format=est_fmt, conventions=conventions,
-        transform=_transform(raw.get("transform"), path), eps=_opt_float(raw, "eps", path),
-        phi=_opt_float(raw, "phi", path), groundtruth_topic=raw.get("groundtruth_topic"),
+        path=path, name=str(raw.get("name", path.stem)), sessions=sessions, lifelong=spec.mode == "lifelong",
+        groundtruth_format=gt_fmt, estimate_format=est_fmt, spec=spec,
+        transform=transform, eps=spec.eps if "eps" in spec.explicit else None,
+        phi=spec.phi if "phi" in spec.explicit else None, groundtruth_topic=raw.get("groundtruth_topic"),
         estimate_topic=raw.get("estimate_topic"), groundtruth_tf=raw.get("groundtruth_tf"),
         estimate_tf=raw.get("estimate_tf"), source=str(raw.get("source", "")),
     )  # fmt: skip
-
-
-def _opt_float(raw: dict[str, Any], key: str, path: Path) -> float | None:
-    if key not in raw:
-        return None
-    v = raw[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
-        raise ParseError(path, None, f"{key} = {v!r}: expected a positive number")
-    return float(v)
 
 
 def _transform(raw: Any, path: Path) -> Sim3 | None:

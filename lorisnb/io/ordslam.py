@@ -64,12 +64,6 @@ SCENARIOS: dict[int, Scenario] = {
 }
 #: The paper's own list has five scenarios (no separate "returning" one): paper number -> page number.
 PAPER_TO_PAGE = {1: 1, 2: 2, 3: 4, 4: 5, 5: 6}
-DIFFICULTY_ORDER = ("simple", "medium", "difficult", "very difficult")
-
-#: Capture times of day: the paper lists whole hours, the dataset page hours and minutes.
-PAPER_TIMES = ("07:00", "12:00", "14:00", "17:00", "18:00", "21:00", "22:00")
-PAGE_TIMES = ("08:30", "13:00", "16:30", "20:00", "22:00", "22:30")
-DEPTH_MODES = ("standard", "fill")
 
 
 def scenario(number: int, numbering: str = "page") -> Scenario:

@@ -44,14 +44,6 @@ def ordslam_table4_tum(data_root: DataRoot | DataPaths | None = None) -> pd.Data
     return df
 
 
-def openloris_table3(data_root: DataRoot | DataPaths | None = None) -> pd.DataFrame:
-    """OpenLORIS-Scene paper, Table III: CS-R (eps 0.3 m, no phi, tau 60 s) for office sequence
-    pairs that differ in one factor. Not recomputable here (office ground truth is not public)."""
-    df = _read("openloris_table3_reloc_scores.csv", data_root)
-    df["source"] = "published: OpenLORIS-Scene paper, Table III"
-    return df
-
-
 def published_ate(data_root: DataRoot | DataPaths | None = None) -> pd.DataFrame:
     """Both ATE tables of the ORDSLAM paper in one table: dataset, group (scenario difficulty or
     TUM sequence), algorithm, ATE RMSE (m), path length (m), ATE as % of the path, source."""

@@ -15,7 +15,11 @@ import numpy as np
 
 from ..core.blocks import blockwise
 from ..core.trajectory import Trajectory
+from ..core.validate import choice
 from ..errors import ParseError
+
+#: Rules for poses of a repeated stamp: keep the last (the official tool's), or every one (evo's).
+REPEATED = ("drop", "keep")
 
 WHITESPACE = np.zeros(256, dtype=bool)
 WHITESPACE[[9, 10, 11, 12, 13, 32]] = True
@@ -181,24 +185,31 @@ def finish(
     lines: np.ndarray,
     label: str,
     notes: list[str],
+    repeated: str = "drop",
 ) -> Trajectory:
     """A Trajectory of rows (stamps (N,) seconds, positions (N, 3), quaternions (N, 4) ``xyzw``,
     1-based source lines): sorted by stamp keeping the last pose of a repeated stamp (as a dict
-    keyed by stamp would). Contiguous arrays are kept as they are (a reader passes arrays of its
-    own), others copied."""
-    if stamps.size > 1 and not np.all(np.diff(stamps) > 0):
-        back = np.flatnonzero(np.diff(stamps) <= 0)
+    keyed by stamp would), or with ``repeated="keep"`` every pose of a repeated stamp, in file
+    order (as evo reads them). Contiguous arrays are kept as they are (a reader passes arrays of
+    its own), others copied."""
+    keep_all = choice("repeated", repeated, REPEATED) == "keep"
+    if stamps.size > 1 and not (np.all(np.diff(stamps) >= 0) if keep_all else np.all(np.diff(stamps) > 0)):
+        back = np.flatnonzero(np.diff(stamps) < 0 if keep_all else np.diff(stamps) <= 0)
         i = back[0] + 1
         kind = "repeats" if stamps[i] == stamps[i - 1] else "goes backwards"
+        rule = (
+            "kept every pose of a repeated stamp in file order (repeated='keep')"
+            if keep_all
+            else "kept the last pose of each repeated stamp, as the official tool does"
+        )
         notes.append(
             f"{path}{label}: timestamps are not increasing ({len(back)} times; first at line "
-            f"{lines[i]}: {stamps[i]:.9f} {kind} after {stamps[i - 1]:.9f}); sorted them and kept "
-            f"the last pose of each repeated stamp, as the official tool does"
+            f"{lines[i]}: {stamps[i]:.9f} {kind} after {stamps[i - 1]:.9f}); sorted them and {rule}"
         )
         order = np.argsort(stamps, kind="stable")
         s = stamps[order]
-        last = np.concatenate((s[1:] != s[:-1], [True]))
-        order = order[last]
+        if not keep_all:
+            order = order[np.concatenate((s[1:] != s[:-1], [True]))]
         stamps, positions, quaternions, lines = stamps[order], positions[order], quaternions[order], lines[order]
     small = lines.size == 0 or int(lines.max()) < 2**31  # line numbers in 4 bytes: 40 MB less per 10M poses
     return Trajectory(

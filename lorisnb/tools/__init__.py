@@ -7,9 +7,10 @@ from .._lazy import attach
 
 if TYPE_CHECKING:
     from ._extras import require
-    from .evaluate import Evaluation, Failure, evaluate, result_files
+    from .evaluate import evaluate, evaluate_manifest, evaluate_pairs
+    from .evaluation import Evaluation, Failure
+    from .inputs import result_files
     from .notebook import Outputs, setup
-    from .pairs import evaluate_manifest, evaluate_pairs
     from .streaming import sweep_to_parquet
 
 __getattr__, __dir__ = attach(__name__)

@@ -110,7 +110,7 @@ def crosscheck_conventions(gt: Trajectory, est: Trajectory) -> list[dict]:
     from scipy.spatial.transform import Rotation
 
     from ..core.conventions import Conventions
-    from ..core.pairs import match, session_errors
+    from ..core.pipeline import match, session_errors
     from ..core.relative import rpg_relative_errors
 
     rows = []

@@ -18,8 +18,8 @@ from typing import Any
 
 import pandas as pd
 
-from ..errors import LorisWarning
-from ..io.data import DataPaths, DataRoot, find_data
+from ..errors import DataNotFoundError, LorisWarning
+from ..io.data import DataPaths, DataRoot, find_data, sample_data
 from ..io.writers import write_csv
 
 INPUT_ERRORS_CSV = "input_errors.csv"
@@ -124,12 +124,25 @@ class Session:
         show_inputs(ev, self.out)
 
 
-def setup(name: str, data_root: DataRoot | None = None, output_dir: str | os.PathLike[str] | None = None) -> Session:
+def setup(
+    name: str,
+    data_root: DataRoot | None = None,
+    output_dir: str | os.PathLike[str] | None = None,
+    sample: bool = False,
+) -> Session:
     """The first call of every notebook: find the data (``data_root``, else ``$LORISNB_DATA``, else
     ``../shared/data``), create the output folder (``output_dir``, else :func:`default_output_dir`),
     and keep lorisnb's warnings about input files out of the cell output as Python warnings (they are
-    summarized per file by :func:`show_inputs`)."""
-    data = find_data(data_root)
+    summarized per file by :func:`show_inputs`). With ``sample=True`` (the primer and the labs), a
+    notebook given no ``data_root`` that finds no data runs on the small data shipped with lorisnb
+    (:func:`lorisnb.io.data.sample_data`) and says so."""
+    try:
+        data = find_data(data_root)
+    except DataNotFoundError:
+        if not sample or data_root is not None:
+            raise
+        data = sample_data()
+        print("no data root found: using the small sample data shipped with lorisnb (cafe scene only)")
     out = Outputs(output_dir if output_dir is not None else default_output_dir(name))
     warnings.filterwarnings("ignore", category=LorisWarning)
     shown = out.dir.resolve() if output_dir is None else out.dir  # as given (a report passes ".")

@@ -30,6 +30,9 @@ def sweep_to_parquet(
     progress: bool = False,
     max_bytes: float = MAX_SWEEP_BYTES,
     on_part: Any = None,
+    rpe_delta: float = 1.0,
+    rpe_unit: str = "s",
+    **rpe: Any,
 ) -> tuple[Path, int]:
     """The table of :func:`lorisnb.core.sweep.sweep` (same columns, same values), written to a
     Parquet dataset partitioned by algorithm, one group of files (suite, algorithm, scene, trial)
@@ -37,6 +40,7 @@ def sweep_to_parquet(
     ``max_bytes`` (refused up front, with the size it would need, otherwise).
 
     Args:
+        rpe: ``rpe_pairs``, ``rpe_all_pairs``, ``rpe_tolerance`` (see :func:`lorisnb.core.sweep.sweep`).
         on_part: called with each group's table before it is written (for example to keep its
             scene aggregate); a DataFrame it returns is written instead of the table.
 
@@ -58,7 +62,10 @@ def sweep_to_parquet(
             bar = tqdm(total=len(groups), desc="sweeping", unit="group")
         try:
             for g in groups:
-                table = sweep(g, eps, phi, delta, tau, relative_to=relative_to, columns=columns, max_bytes=max_bytes)
+                table = sweep(
+                    g, eps, phi, delta, tau, relative_to=relative_to, columns=columns, max_bytes=max_bytes,
+                    rpe_delta=rpe_delta, rpe_unit=rpe_unit, **rpe,
+                )  # fmt: skip
                 rows += len(table)
                 if on_part is not None:
                     replaced = on_part(table)

@@ -16,7 +16,7 @@ from ..errors import LorisError, LorisWarning
 from ..io.data import DataPaths, load_groundtruth
 from ..io.formats import read_tum
 from ..io.ordslam import OrdslamFolder, describe_sequence, read_ordslam
-from .evaluate import Evaluation
+from .evaluation import Evaluation
 
 #: The bundled TUM RGB-D pairs: (sequence, ground truth, estimate, algorithm).
 TUM_PAIRS = (

@@ -1,0 +1,163 @@
+"""The commands over runs: ``diff`` (did CAND regress against BASE?) and ``history`` (many runs
+over time). Exit status of ``diff``: 0 no regression, 1 a regression (or an input of a run could not
+be evaluated), 2 a usage error (bad option, runs that are not comparable)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ..errors import ValidationError
+from .commands import fmt_table, report_problems, run_evaluation
+from .options import check_outputs, refuse_unused
+
+#: diff's own options; every other option is an evaluate option (for result folders only).
+DIFF_OWN = {"paths", "tolerance", "alpha", "seed", "json", "junit", "csv", "parquet", "force", "no_progress", "func",
+            "command", "eps_default", "phi_default", "defaults"}  # fmt: skip
+
+
+def _given_evaluate_options(args: argparse.Namespace, defaults: dict[str, Any]) -> list[str]:
+    return [f"--{k.replace('_', '-')}" for k, v in vars(args).items()
+            if k not in DIFF_OWN and k in defaults and v != defaults[k]]  # fmt: skip
+
+
+def _short(v: object) -> str:
+    """A value for the terminal: numbers to 4 decimals, long text cut (the JSON keeps it whole)."""
+    if isinstance(v, float):
+        return f"{v:.4f}"
+    text = str(v)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], list[str]]:
+    """A run (report run or table as read, or a result folder evaluated with the options), the
+    files of it that failed (relative path -> reason), and notes."""
+    from ..tools.runs import Run, is_report_run, is_table, load_run
+
+    p = Path(path)
+    if is_report_run(p) or is_table(p):
+        return load_run(p), {}, []
+    if not p.exists():
+        raise ValidationError(f"{path}: no such result folder, run folder or table")
+    ev, notes = run_evaluation(argparse.Namespace(**{**vars(args), "paths": [path]}))
+    report_problems(ev, [f"{path}: {n}" for n in notes])
+    root = p if p.is_dir() else p.parent
+    failed = {}
+    for f in ev.failures:
+        try:
+            failed[f.path.relative_to(root).as_posix()] = f.error
+        except ValueError:
+            failed[f.path.name] = f.error
+    table = ev.sequences()  # at the spec's thresholds (the options', else the defaults)
+    return Run(p, "results", table), failed, [str(f.path) for f in ev.failures]
+
+
+def cmd_diff(args: argparse.Namespace) -> int:
+    """``lorisnb diff BASE CAND`` (see the README's exit-status table)."""
+    from ..core.regression import parse_tolerances
+    from ..io.writers import write_csv, write_parquet
+    from ..tools.diff import diff_tables, write_json, write_junit
+    from ..tools.runs import is_report_run, is_table, spec_differences
+
+    refuse_unused(args, {"relative": "lorisnb evaluate (diff compares the RPE columns)"})
+    if len(args.paths) != 2:
+        raise ValidationError(f"diff takes two runs, BASE and CAND; got {len(args.paths)} path(s)")
+    check_outputs(args, args.paths, ["json", "junit", "csv"], folders=("parquet",))
+    tolerances = parse_tolerances(args.tolerance)
+    tables = [is_report_run(Path(p)) or is_table(Path(p)) for p in args.paths]
+    given = _given_evaluate_options(args, args.defaults)
+    if all(tables) and given:
+        raise ValidationError(f"{', '.join(given)}: evaluate options apply to result folders; BASE and CAND are "
+                              "tables or report runs, whose numbers are already computed")  # fmt: skip
+    (base, _, base_failed), (cand, cand_failed, _) = (_side(p, args) for p in args.paths)
+    for note in base.notes + cand.notes:
+        print(f"note: {note}", file=sys.stderr)
+    problems = spec_differences(base, cand)
+    if problems:
+        raise ValidationError(
+            "BASE and CAND are not comparable (different evaluation specs): " + "; ".join(problems) + ". Compare "
+            "runs made with the same thresholds (for a result folder: --eps, --phi, --delta, --tau as the table's)"
+        )
+    if base.version and cand.version and base.version != cand.version:
+        print(f"note: lorisnb {base.version} made BASE, {cand.version} CAND", file=sys.stderr)
+    d = diff_tables(base.table, cand.table, tolerances, args.alpha, args.seed, cand_failed)
+    bad = d.sequences[d.sequences["status"].isin(["regression", "missing", "failed"])]
+    scene_bad = d.scenes[d.scenes["status"] == "regression"]
+    print(f"BASE {args.paths[0]} ({base.kind}) against CAND {args.paths[1]} ({cand.kind}); tolerances: "
+          + ", ".join(f"{k} {v}" for k, v in tolerances.items()))  # fmt: skip
+    counts = d.verdict["counts"]
+    print(f"{d.verdict['sequences']} sequence(s); per metric and sequence: " + ", ".join(
+        f"{v} {k}" for k, v in counts.items() if v))  # fmt: skip
+    if len(bad):
+        print("\nregressions per sequence:")
+        shown = bad[["algorithm", "scene", "seq", "metric", "base", "cand", "worse_by", "tolerance", "status"]]
+        shown = shown.assign(base=[_short(v) for v in shown["base"]], cand=[_short(v) for v in shown["cand"]])
+        print(fmt_table(shown))
+    if len(scene_bad):
+        print("\nregressions per scene:")
+        print(fmt_table(scene_bad[["algorithm", "scene", "metric", "base", "cand", "worse_by", "p_holm",
+                                   "decided_by"]]))  # fmt: skip
+    n = d.verdict["regressed_sequences"]
+    print(f"\nverdict: {d.verdict['verdict']}" + (f" ({n} sequence(s) regressed)" if d.regressed else ""))
+    extra = dict(base=args.paths[0], cand=args.paths[1], tolerances={k: str(v) for k, v in tolerances.items()},
+                 alpha=args.alpha, base_failed=base_failed, cand_failed=sorted(cand_failed))  # fmt: skip
+    written = []
+    if args.json:
+        written.append(write_json(d, args.json, args.force, extra))
+    if args.junit:
+        written.append(write_junit(d, args.junit, args.force))
+    both = pd.concat([d.sequences.assign(level="sequence"), d.scenes.assign(level="scene")], ignore_index=True)
+    both = both.astype({"base": str, "cand": str})
+    if args.csv:
+        written.append(write_csv(both, args.csv, args.force))
+    if args.parquet:
+        written.append(write_parquet(both, args.parquet, force=args.force))
+    for w in written:
+        print(f"wrote {w}", file=sys.stderr)
+    base_files = set(base.table["file"].astype(str)) if "file" in base.table.columns else set()
+    cand_other = sorted(f for f in cand_failed if f not in base_files)  # not matched to a BASE sequence
+    if base_failed or cand_other:
+        print(f"error: {len(base_failed)} file(s) of BASE and {len(cand_other)} other file(s) of CAND could not be "
+              "evaluated: not every sequence was compared", file=sys.stderr)  # fmt: skip
+    return 1 if d.regressed or base_failed or cand_other else 0
+
+
+def cmd_history(args: argparse.Namespace) -> int:
+    """``lorisnb history RUN...``: scene values over runs, first changes, runs not comparable."""
+    from ..core.regression import parse_tolerances
+    from ..io.writers import write_csv
+    from ..tools.history import first_changes, history_table, load_runs, write_figures
+
+    check_outputs(args, args.runs, ["csv"], folders=("out",))
+    tolerances = parse_tolerances(args.tolerance)
+    runs = load_runs(args.runs)
+    for note in (n for r in runs for n in r.notes):
+        print(f"note: {note}", file=sys.stderr)
+    h = history_table(runs, args.metric, tolerances)
+    how = sorted({r.created_from for r in runs})
+    print(f"{len(runs)} run(s), oldest first, ordered by {' and '.join(how)}")
+    for r in runs:
+        print(
+            f"  {r.name}: {r.created.isoformat() if r.created else '?'}"
+            + (f", lorisnb {r.version}" if r.version else "")
+        )
+    for m in args.metric:
+        view = h[h["metric"] == m].pivot_table(index=["suite", "algorithm", "scene"], columns="run", values="value",
+                                              sort=False)  # fmt: skip
+        print(f"\n{m} per scene:")
+        print(fmt_table(view[[r.name for r in runs if r.name in view.columns]].reset_index()))
+    lost = h.drop_duplicates("run")
+    for r in lost[~lost["comparable"]].itertuples():
+        print(f"\nnot comparable: {r.run} with the run before it ({r.not_comparable})")
+    lines = first_changes(h)
+    print("\n" + ("\n".join(lines) if lines else "no value changed beyond its tolerance"))
+    if args.csv:
+        print(f"wrote {write_csv(h, args.csv, args.force)}", file=sys.stderr)
+    if args.out:
+        paths = write_figures(h, args.out)
+        print(f"wrote {len(paths)} figure file(s) to {args.out}", file=sys.stderr)
+    return 0

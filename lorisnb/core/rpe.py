@@ -1,0 +1,191 @@
+"""The pose pairs of a relative pose error, every rule: evo's (``evo_rpe --delta D --delta_unit
+f|m|d|r [--all_pairs] [--pairs_from_reference]``, evo 1.38 ``evo.core.filters``) and lorisnb's
+seconds (:func:`lorisnb.core.metrics.rpe_pairs`, TUM's closest stamp to ``t_i + delta``).
+
+Units (:data:`RPE_UNITS`): ``frames``, ``m`` (path length), ``deg`` and ``rad`` (rotation), ``s``.
+The path length and rotation are measured along the trajectory the pairs are taken from: evo's
+default is the (aligned) estimate, ``pairs="reference"`` is evo's ``--pairs_from_reference``.
+
+Consecutive pairs (evo's default): from the first pose, each pair ends at the first pose
+``delta`` frames on, or whose accumulated path length (rotation angle, summed step by step) since
+the pair's start reaches ``delta``; the next pair starts there. All pairs (``all_pairs=True``):
+frames: every ``(i, i + delta)``; metres: for each start i the pose j > i whose path distance from
+i is *closest* to ``delta``, kept if it differs from ``delta`` by at most ``tolerance * delta``
+(evo's ``--delta_tol``, 0.1); angles: every j > i whose direct rotation angle from i lies within
+``delta +- tolerance * delta`` (quadratic in the poses, as evo's).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ValidationError
+from . import metrics
+from .evo_sync import accumulated_distances, rotation_angles
+from .geometry import quat_normalize
+
+RPE_UNITS = ("frames", "m", "deg", "rad", "s")
+#: lorisnb's own rules (``all_pairs=None``): every start, along the reference (see :func:`rpe_indices`).
+RPE_PAIRS = ("estimate", "reference")
+RPE_TOLERANCE = 0.1  # evo's --delta_tol
+_ALIASES = {"f": "frames", "d": "deg", "r": "rad"}
+
+
+def rpe_indices(
+    stamps: np.ndarray,
+    gt_positions: np.ndarray,
+    gt_quaternions: np.ndarray | None,
+    est_positions: np.ndarray,
+    est_quaternions: np.ndarray | None,
+    delta: float,
+    unit: str = "s",
+    pairs: str = "reference",
+    all_pairs: bool | None = None,
+    tolerance: float = RPE_TOLERANCE,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The RPE pairs of matched poses under every rule.
+
+    ``all_pairs=None`` is lorisnb's own rule (its default, unchanged): every start pose, for ``s``
+    the pose closest to ``t_i + delta`` (TUM), ``frames`` ``i + delta``, ``m`` the first pose at
+    least ``delta`` metres further along the reference (:func:`lorisnb.core.metrics.rpe_pairs`);
+    ``deg`` / ``rad`` take evo's all pairs. ``True`` / ``False`` are evo's all pairs (within
+    ``tolerance``) / consecutive pairs (:func:`evo_rpe_pairs`; ``s``: lorisnb's seconds rule, with
+    consecutive pairs chained). ``pairs``: measure ``m``/``deg``/``rad`` along the ``reference`` or
+    the ``estimate`` (the aligned poses, as evo)."""
+    unit = rpe_unit(unit)
+    if pairs not in RPE_PAIRS:
+        raise ValidationError(f"RPE pairs along {pairs!r}: expected one of {', '.join(RPE_PAIRS)}")
+    if unit == "s":
+        return metrics.rpe_pairs(stamps, gt_positions, delta, "s", all_pairs=all_pairs is not False)
+    pos, quat = (gt_positions, gt_quaternions) if pairs == "reference" else (est_positions, est_quaternions)
+    if all_pairs is None:
+        if unit == "frames":
+            return metrics.rpe_pairs(stamps, pos, delta, "f", all_pairs=True)
+        if unit == "m":
+            return metrics.rpe_pairs(stamps, pos, delta, "m", all_pairs=True)
+        all_pairs = True
+    return evo_rpe_pairs(pos, quat, delta, unit, all_pairs, tolerance)
+
+
+def rpe_unit(unit: str) -> str:
+    """A unit name of :data:`RPE_UNITS` (evo's letters ``f``, ``d``, ``r`` accepted)."""
+    u = _ALIASES.get(unit, unit)
+    if u not in RPE_UNITS:
+        raise ValidationError(f"RPE unit {unit!r}: expected one of {', '.join(RPE_UNITS)}")
+    return u
+
+
+def _consecutive(steps: np.ndarray, delta: float) -> np.ndarray:
+    """Start indices of evo's consecutive pairs: accumulate ``steps[k]`` (the increment from pose k
+    to k + 1) from each start, reset when the sum reaches ``delta``. One loop step per pair; the
+    sums are the same sequential float additions as evo's."""
+    n = steps.size + 1
+    ids = [0]
+    k = 0
+    while k < n - 1:  # one iteration per pair
+        lo, block, found = k, 256, -1
+        run = 0.0
+        while lo < n - 1 and found < 0:
+            hi = min(n - 1, lo + block)
+            acc = np.cumsum(np.concatenate(([run], steps[lo:hi])))[1:]
+            hit = np.flatnonzero(acc >= delta)
+            if hit.size:
+                found = lo + int(hit[0]) + 1
+            else:
+                run = float(acc[-1]) if acc.size else run
+            lo, block = hi, block * 2
+        if found < 0:
+            break
+        ids.append(found)
+        k = found
+    return np.asarray(ids, np.intp)
+
+
+def evo_rpe_pairs(
+    positions: np.ndarray,
+    quaternions: np.ndarray | None,
+    delta: float,
+    unit: str = "frames",
+    all_pairs: bool = False,
+    tolerance: float = RPE_TOLERANCE,
+) -> tuple[np.ndarray, np.ndarray]:
+    """evo's pairs ``(i, j)`` (see the module docstring) over poses with ``positions`` (N, 3) metres
+    and ``quaternions`` (N, 4) ``xyzw`` (needed for ``deg`` / ``rad``). An empty result is
+    returned as empty arrays (evo raises)."""
+    unit = rpe_unit(unit)
+    p = np.asarray(positions, float)
+    n = len(p)
+    empty = np.zeros(0, np.intp)
+    if delta < 0:
+        raise ValidationError(f"RPE delta {delta}: expected a positive number")
+    if n < 2:
+        return empty, empty
+    if unit == "frames":
+        if float(delta) != int(delta):
+            raise ValidationError(f"RPE delta {delta} frames: expected a whole number")
+        step = int(delta)
+        if step < 1:
+            raise ValidationError(f"RPE delta {delta} frames: expected at least 1")
+        if all_pairs:
+            i = np.arange(max(n - step, 0))
+            return i, i + step
+        ids = np.arange(0, n, step) if step > 0 else np.zeros(0, np.intp)
+        return ids[:-1], ids[1:]
+    if unit == "m":
+        if not all_pairs:
+            steps = np.linalg.norm(p[1:] - p[:-1], axis=1)
+            ids = _consecutive(steps, float(delta))
+            return ids[:-1], ids[1:]
+        return _path_all_pairs(accumulated_distances(p), float(delta), float(delta) * tolerance)
+    if unit == "s":
+        raise ValidationError("RPE in seconds: use lorisnb.core.metrics.rpe_pairs (evo has no seconds)")
+    if quaternions is None:
+        raise ValidationError(f"RPE delta in {unit} needs the orientations")
+    q = quat_normalize(quaternions)
+    bound = 180.0 if unit == "deg" else np.pi
+    if not 0.0 <= delta <= bound:
+        raise ValidationError(f"RPE delta angle {delta} {unit}: expected a value in [0, {bound:g}]")
+    d_rad = np.deg2rad(delta) if unit == "deg" else float(delta)
+    t_rad = np.deg2rad(delta * tolerance) if unit == "deg" else float(delta) * tolerance
+    if not all_pairs:
+        ids = _consecutive(rotation_angles(q[:-1], q[1:]), d_rad)
+        return ids[:-1], ids[1:]
+    return _angle_all_pairs(q, d_rad - t_rad, d_rad + t_rad)
+
+
+def _path_all_pairs(dist: np.ndarray, delta: float, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """For each start i the j > i whose ``dist[j] - dist[i]`` is closest to ``delta`` (the first of
+    equals, as ``argmin``), kept within ``tol``; candidates around the crossing only."""
+    n = dist.size
+    i = np.arange(n - 1)
+    k = np.searchsorted(dist, dist[i] + delta, side="left")
+    best_j = np.full(i.size, -1, np.intp)
+    best_err = np.full(i.size, np.inf)
+    for off in (-2, -1, 0, 1):  # four candidates around the crossing
+        c = np.clip(k + off, i + 1, n - 1)
+        c = np.maximum(np.searchsorted(dist, dist[c], side="left"), i + 1)  # first of equal distances
+        err = np.abs((dist[c] - dist[i]) - delta)
+        better = (err < best_err) | ((err == best_err) & (c < best_j))
+        best_j = np.where(better, c, best_j)
+        best_err = np.where(better, err, best_err)
+    keep = best_err <= tol
+    return i[keep], best_j[keep]
+
+
+def _angle_all_pairs(q: np.ndarray, lower: float, upper: float) -> tuple[np.ndarray, np.ndarray]:
+    """Every (i, j > i) whose direct rotation angle lies in ``[lower, upper]`` radians (quadratic in
+    the poses, as evo's search; a block of starts against every pose at a time)."""
+    n = len(q)
+    out_i: list[np.ndarray] = []
+    out_j: list[np.ndarray] = []
+    block = max(1, 2**20 // max(n, 1))
+    for lo in range(0, n - 1, block):  # blocks of starts, not poses
+        hi = min(n - 1, lo + block)
+        ang = rotation_angles(q[lo:hi, None, :], q[None, :, :])
+        later = np.arange(n)[None, :] > np.arange(lo, hi)[:, None]
+        a, b = np.nonzero(later & (lower <= ang) & (ang <= upper))
+        out_i.append(a + lo)
+        out_j.append(b)
+    if not out_i:
+        return np.zeros(0, np.intp), np.zeros(0, np.intp)
+    return np.concatenate(out_i).astype(np.intp), np.concatenate(out_j).astype(np.intp)

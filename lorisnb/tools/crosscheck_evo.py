@@ -1,0 +1,119 @@
+"""lorisnb under evo's conventions against evo itself, each reading the files its own way: lorisnb
+evaluates the pair with the spec (the ``evo`` preset and its options), evo reads the files with its
+readers and runs what ``evo_ape`` / ``evo_rpe`` run (sync, alignment, projection, APE and RPE), and
+every statistic of ATE, AOE and RPE is compared; the reading rows of
+:func:`lorisnb.tools.crosscheck_reading.crosscheck_reading` say where the readings differ and why.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+
+import pandas as pd
+
+from ..core.relations import STATISTICS
+from ..core.spec import EvalSpec, make_spec
+from ._extras import require
+from .crosscheck_reading import crosscheck_reading, evo_read
+from .evo_bridge import CROSSCHECK_COLUMNS, agreement_row
+
+#: lorisnb's RPE units as evo's ``Unit`` names (seconds: evo has none).
+_EVO_UNITS = {"f": "frames", "frames": "frames", "m": "meters", "deg": "degrees", "rad": "radians"}
+
+
+def evo_statistics(ref, est, spec: EvalSpec) -> dict[str, float]:
+    """What evo computes for trajectories it read itself, under ``spec`` (its sync, alignment,
+    projection, APE and RPE; evo's CLI order): ``matched``, ``rpe_pairs`` and ``{ate, aoe, rpe_trans,
+    rpe_rot}_{statistic}``."""
+    em = require("evo.core.metrics")
+    sync = require("evo.core.sync")
+    main_ape, main_rpe = require("evo.main_ape"), require("evo.main_rpe")
+    from evo.core.trajectory import Plane, PoseTrajectory3D
+
+    ref, est = copy.deepcopy(ref), copy.deepcopy(est)
+    if spec.downsample is not None:
+        ref.downsample(spec.downsample)
+        est.downsample(spec.downsample)
+    if spec.motion_filter is not None:
+        ref.motion_filter(*spec.motion_filter, True)
+        est.motion_filter(*spec.motion_filter, True)
+    if isinstance(ref, PoseTrajectory3D) and isinstance(est, PoseTrajectory3D):
+        if spec.t_start is not None or spec.t_end is not None:
+            ref.reduce_to_time_range(spec.t_start, spec.t_end)
+        method = (
+            sync.SyncMethod.interpolation if spec.association == "evo-interpolate" else sync.SyncMethod.nearest_time
+        )
+        ref, est = sync.associate_trajectories(ref, est, max_diff=spec.max_diff, offset_2=spec.t_offset,
+                                               sync_method=method)  # fmt: skip
+    align = dict(
+        align=spec.align in ("se3", "sim3"), correct_scale=spec.align in ("sim3", "scale"),
+        align_origin=spec.align == "origin", n_to_align=spec.align_frames or -1,
+        project_to_plane=Plane(spec.project_to_plane) if spec.project_to_plane else None,
+    )  # fmt: skip
+    out: dict[str, float] = {"matched": ref.num_poses}
+    c = copy.deepcopy
+    for name, rel in (("ate", em.PoseRelation.translation_part), ("aoe", em.PoseRelation.rotation_angle_deg)):
+        out.update({f"{name}_{k}": v for k, v in main_ape.ape(c(ref), c(est), rel, **align).stats.items()})
+    unit = _EVO_UNITS.get(spec.rpe_unit)
+    if unit is not None:
+        for name, rel in (("rpe_trans", em.PoseRelation.translation_part),
+                          ("rpe_rot", em.PoseRelation.rotation_angle_deg)):  # fmt: skip
+            r = main_rpe.rpe(
+                c(ref), c(est), rel, delta=spec.rpe_delta, delta_unit=em.Unit[unit], rel_delta_tol=spec.rpe_tolerance,
+                all_pairs=bool(spec.rpe_all_pairs), pairs_from_reference=spec.rpe_pairs == "reference", **align,
+            )  # fmt: skip
+            out.update({f"{name}_{k}": v for k, v in r.stats.items()})
+            out["rpe_pairs"] = len(r.np_arrays["error_array"])
+    return out
+
+
+def crosscheck_evo(
+    groundtruth: str | os.PathLike,
+    estimate: str | os.PathLike,
+    spec: EvalSpec | str | None = "evo",
+    *,
+    fmt: str = "tum",
+    gt_fmt: str | None = None,
+    topic: str | None = None,
+    gt_topic: str | None = None,
+    tol: float = 1e-9,
+) -> pd.DataFrame:
+    """Reading rows of both files, then every statistic lorisnb gives under ``spec`` against what
+    evo gives reading the files itself (see the module docstring). ``fmt``: the estimate's format
+    (``tum``, ``kitti``, ``euroc``, ``bag``), ``gt_fmt`` the ground truth's (default ``fmt``).
+    KITTI files print rotations to 7 digits: evo computes with those blocks as they are, lorisnb
+    with the nearest rotation, so pass ``tol=1e-5`` for them."""
+    from .evaluate import evaluate_pairs
+
+    the_spec = make_spec(spec)
+    gt_fmt = gt_fmt or fmt
+    if the_spec.rpe_all_pairs is None and the_spec.rpe_unit != "s":
+        the_spec = make_spec(the_spec, rpe_all_pairs=False)  # lorisnb's own pairs have no evo equivalent
+    reading = []
+    for label, path, f, t in (("ground truth", groundtruth, gt_fmt, gt_topic), ("estimate", estimate, fmt, topic)):
+        r = crosscheck_reading(path, f, t)
+        r["quantity"] = label + ": " + r["quantity"]
+        reading.append(r)
+    ev = evaluate_pairs(estimate, groundtruth, the_spec, fmt=fmt, gt_fmt=gt_fmt, topic=topic, gt_topic=gt_topic)
+    if ev.failures:
+        raise ev_error(ev)
+    ours = ev.sequences().iloc[0]
+    theirs = evo_statistics(evo_read(groundtruth, gt_fmt, gt_topic), evo_read(estimate, fmt, topic), the_spec)
+    note = f"lorisnb (preset {the_spec.preset_name}, align {the_spec.align}) against evo reading the files itself"
+    rows = [agreement_row("matched", the_spec.align, ours["matched"], theirs["matched"], ours["matched"], note)]
+    for m in ("ate", "aoe", "rpe_trans", "rpe_rot"):
+        for k in STATISTICS:
+            key = f"{m}_{k}"
+            if key in theirs:
+                rows.append(agreement_row(key, the_spec.align, ours[key], theirs[key], ours["matched"], note, tol))
+            else:
+                rows.append(agreement_row(key, the_spec.align, ours[key], float("nan"), ours["matched"],
+                                          "RPE in seconds: evo has no such unit"))  # fmt: skip
+    return pd.concat([*reading, pd.DataFrame(rows, columns=CROSSCHECK_COLUMNS)], ignore_index=True)
+
+
+def ev_error(ev) -> Exception:
+    from ..errors import EvaluationError
+
+    return EvaluationError("; ".join(f.error for f in ev.failures))

@@ -1,0 +1,122 @@
+"""``lorisnb diff BASE CAND``: the changes between two runs and the verdict
+(:mod:`lorisnb.core.regression`), written as JSON and JUnit XML for CI."""
+
+from __future__ import annotations
+
+import json
+import os
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from ..core.regression import Tolerance, parse_tolerances, scene_changes, sequence_changes, verdict
+from ..core.stats import with_trials
+from ..errors import ValidationError
+from ..io.writers import write_text
+from .comparison import check_table_duplicates
+
+
+@dataclass
+class Diff:
+    """``sequences`` and ``scenes``: the change tables; ``verdict``: the JSON-ready verdict."""
+
+    sequences: pd.DataFrame
+    scenes: pd.DataFrame
+    verdict: dict
+
+    @property
+    def regressed(self) -> bool:
+        return self.verdict["verdict"] == "regression"
+
+
+def keyed(table: pd.DataFrame) -> pd.DataFrame:
+    """A run's table ready to be matched: ``suite`` and ``trial`` present; the table a row came from
+    inside a report run (``table``) is part of its suite; one row per sequence and trial, else an
+    error (a sweep holds several settings: diff one)."""
+    t = with_trials(table)
+    t["suite"] = t["suite"].fillna("").astype(str)
+    if "table" not in t.columns and "eps_value" not in t.columns:
+        check_table_duplicates(t)  # two files for one sequence: named, with what to do
+    if "table" in t.columns:
+        t["suite"] = t["table"].astype(str) + [f":{s}" if s else "" for s in t["suite"]]
+    dup = t.duplicated(["suite", "algorithm", "scene", "seq", "trial"], keep=False)
+    if dup.any():
+        r = t[dup].iloc[0]
+        raise ValidationError(
+            f"{r['algorithm']} {r['scene']}-{r['seq']} (trial {r['trial']}) has several rows"
+            f"{' in ' + str(r['table']) if 'table' in t.columns else ''}: a sweep or duplicate files; diff tables of "
+            "one setting, with one row per sequence and trial"
+        )
+    return t
+
+
+def diff_tables(
+    base: pd.DataFrame,
+    cand: pd.DataFrame,
+    tolerances: Mapping[str, Tolerance] | Mapping[str, str | float] | str | None = None,
+    alpha: float = 0.05,
+    seed: int = 0,
+    cand_failures: Mapping[str, str] | None = None,
+) -> Diff:
+    """Compare two per-sequence tables (``Evaluation.sequences(...)``, or tables read back).
+    ``tolerances``: :func:`lorisnb.core.regression.parse_tolerances` of them, or the parsed ones
+    (None: the defaults). ``cand_failures`` maps a result file (relative path, as in the ``file``
+    column) that the candidate could not evaluate to the reason: a base sequence from that file is
+    reported as failed, with the reason."""
+    tols: dict[str, Tolerance]
+    if isinstance(tolerances, Mapping) and all(isinstance(v, Tolerance) for v in tolerances.values()):
+        tols = {k: v for k, v in tolerances.items() if isinstance(v, Tolerance)}
+    else:
+        tols = parse_tolerances(tolerances)  # type: ignore[arg-type]
+    b, c = keyed(base), keyed(cand)
+    seqs = sequence_changes(b, c, tols, alpha, seed)
+    if cand_failures and "file" in b.columns and len(seqs):
+        files = b.drop_duplicates(["suite", "algorithm", "scene", "seq"]).set_index(
+            ["suite", "algorithm", "scene", "seq"]
+        )["file"]
+        for i in seqs.index[seqs["status"] == "missing"]:
+            f = files.get(tuple(seqs.loc[i, ["suite", "algorithm", "scene", "seq"]]))
+            if f in cand_failures:
+                seqs.loc[i, ["status", "cand"]] = ["failed", f"failed: {cand_failures[f]}"]
+    scenes = scene_changes(b, c, tols, alpha, seed)
+    return Diff(seqs, scenes, verdict(seqs, scenes))
+
+
+def write_json(d: Diff, out: str | os.PathLike[str], force: bool, extra: Mapping[str, object]) -> Path:
+    """The verdict as JSON: ``verdict``, ``regressions`` and what was compared (``extra``)."""
+    body = {**d.verdict, **extra}
+    return write_text(json.dumps(body, indent=2, allow_nan=False) + "\n", out, force)
+
+
+def write_junit(d: Diff, out: str | os.PathLike[str], force: bool) -> Path:
+    """JUnit XML: one test case per sequence and per scene value compared (class
+    ``suite.algorithm.scene``), failed when it regressed, with each metric's base and candidate."""
+    cases = []
+    for level, t in (("sequence", d.sequences), ("scene", d.scenes)):
+        if t.empty:
+            continue
+        keys = ["suite", "algorithm", "scene"] + (["seq"] if level == "sequence" else [])
+        for key, g in t.groupby(keys, sort=False, dropna=False):
+            suite, alg, scene = key[:3]
+            name = f"{scene}-{key[3]}" if level == "sequence" else f"{scene} (scene)"
+            bad = g[g["status"].isin(["regression", "missing", "failed"])]
+            new = bool((g["status"] == "new").all())
+            cases.append((".".join(x for x in (str(suite), str(alg), str(scene)) if x), name, bad, new))
+    root = ET.Element("testsuites", name="lorisnb diff")
+    suite_el = ET.SubElement(root, "testsuite", name="lorisnb diff", tests=str(len(cases)),
+                             failures=str(sum(len(b) > 0 for _, _, b, _ in cases)),
+                             skipped=str(sum(n for *_, n in cases)), errors="0")  # fmt: skip
+    for cls, name, bad, new in cases:
+        case = ET.SubElement(suite_el, "testcase", classname=cls, name=name)
+        if len(bad):
+            lines = [f"{r.metric}: {r.status}, base {r.base}, cand {r.cand}" for r in bad.itertuples()]
+            fail = ET.SubElement(case, "failure", message="; ".join(lines)[:500], type="regression")
+            fail.text = "\n".join(lines)
+        elif new:
+            ET.SubElement(case, "skipped", message="new in the candidate: not in the base")
+    ET.indent(root)
+    text = '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+    return write_text(text, out, force)

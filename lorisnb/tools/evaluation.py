@@ -1,0 +1,126 @@
+"""What an evaluation returns: the errors of every input evaluated, the failures, and the spec
+they were computed under (:class:`~lorisnb.core.spec.EvalSpec`), whose thresholds are the
+defaults of every table."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ..core.aggregate import aggregate_scenes, spans_table
+from ..core.frames import SCENES
+from ..core.model import Eps, FileErrors
+from ..core.relation_table import relation_columns
+from ..core.relative import RPG_FRACTIONS, relative_table
+from ..core.scoring import pose_table, score
+from ..core.spec import EvalSpec
+from ..io.data import DataPaths, scene_durations
+
+
+@dataclass
+class Failure:
+    """An input that could not be evaluated, with the reason (file, line, what was expected)."""
+
+    path: Path
+    error: str
+    kind: str
+
+
+@dataclass
+class Evaluation:
+    """What :func:`lorisnb.evaluate`, :func:`lorisnb.evaluate_pairs` and
+    :func:`lorisnb.evaluate_manifest` return: the errors of every input evaluated, the failures,
+    and the spec (``spec``) whose thresholds and RPE step the tables use unless given."""
+
+    errors: list[FileErrors]
+    failures: list[Failure]
+    root: Path | None = None
+    skipped: list[Failure] = field(default_factory=list)
+    data: DataPaths | None = None
+    spec: EvalSpec = field(default_factory=EvalSpec)
+    kind: str = "openloris"  # openloris, pair or manifest
+    notes: list[str] = field(default_factory=list)  # one-line notes on the options (harmless ones)
+
+    @property
+    def conventions(self) -> str:
+        """What was used, in words (the command line's ``conventions:`` line)."""
+        moved = "OpenLORIS: ground truth moved to each file's sensor frame; " if self.kind == "openloris" else ""
+        return moved + self.spec.describe()
+
+    @property
+    def thresholds(self) -> dict[str, Any]:
+        """The default thresholds of the tables (the spec's)."""
+        return {k: getattr(self.spec, k) for k in ("eps", "phi", "delta", "tau")}
+
+    def sequences(
+        self, eps: Eps | None = None, phi: float | None = None, delta: float | None = None, tau: float | None = None,
+        **kw: Any,
+    ) -> pd.DataFrame:  # fmt: skip
+        """Per-sequence table at one setting (see :func:`lorisnb.core.scoring.score`); thresholds and
+        the RPE step not given are the spec's. A ``spec`` column holds the spec's exact text."""
+        s = self.spec
+        for k, v in s.rpe_options().items():
+            kw.setdefault(k, v)
+        table = score(
+            self.errors, s.eps if eps is None else eps, s.phi if phi is None else phi,
+            s.delta if delta is None else delta, s.tau if tau is None else tau, **kw,
+        )  # fmt: skip
+        if s.relation is not None and len(table):  # evo's -r: statistics of that pose relation
+            rel = relation_columns(self.errors, s.relation, **{k: v for k, v in kw.items() if k.startswith("rpe_")})
+            table = pd.concat([table, rel.set_index(table.index)], axis=1)
+        table["spec"] = s.canonical(thresholds=False)
+        return table
+
+    def poses(self, eps: Eps | None = None, phi: float | None = None) -> pd.DataFrame:
+        """Per-pose table (see :func:`lorisnb.core.scoring.pose_table`)."""
+        return pose_table(self.errors, self.spec.eps if eps is None else eps, self.spec.phi if phi is None else phi)
+
+    def scenes(
+        self, eps: Eps | None = None, phi: float | None = None, delta: float | None = None, tau: float | None = None
+    ) -> pd.DataFrame:
+        """Per algorithm and scene, as in the paper's figures (see
+        :func:`lorisnb.core.aggregate.aggregate_scenes`)."""
+        return aggregate_scenes(self.sequences(eps, phi, delta, tau), self.durations())
+
+    def relative(
+        self, fractions: tuple[float, ...] = RPG_FRACTIONS, lengths: list[float] | None = None
+    ) -> pd.DataFrame:
+        """rpg_trajectory_evaluation's relative error per sequence and sub-trajectory length: fractions
+        of the whole ground truth's length, or rpg's preset ``lengths`` in metres (see
+        :func:`lorisnb.core.relative.relative_table`)."""
+        return relative_table(self.errors, fractions, lengths)
+
+    @property
+    def algorithms(self) -> list[str]:
+        return sorted({f.algorithm for f in self.errors})
+
+    def durations(self) -> pd.DataFrame:
+        """Ground-truth durations of every sequence of the scenes evaluated, seconds."""
+        known: dict[str, dict[int, tuple[float, float]]] = {}
+        for f in self.errors:
+            if f.groundtruth_spans:
+                known.setdefault(f.scene, {}).update(f.groundtruth_spans)
+        scenes = list(dict.fromkeys(f.scene for f in self.errors))
+        if set(known) == set(scenes):  # spans found while evaluating: no ground truth read again
+            return spans_table({s: dict(sorted(known[s].items())) for s in scenes})
+        return scene_durations(sorted(scenes, key=SCENES.index), self.data)
+
+    @property
+    def warnings(self) -> list[str]:
+        return [w for f in self.errors for w in f.warnings]
+
+    def failures_table(self) -> pd.DataFrame:
+        """Failed and skipped files with the reason, one row each."""
+        rows = [dict(file=str(f.path), status="failed", kind=f.kind, error=f.error) for f in self.failures]
+        rows += [dict(file=str(f.path), status="skipped", kind=f.kind, error=f.error) for f in self.skipped]
+        return pd.DataFrame(rows, columns=["file", "status", "kind", "error"])
+
+    def __repr__(self) -> str:
+        scenes = len({f.scene for f in self.errors})
+        return (
+            f"<Evaluation: {len(self.errors)} input(s) ({len(self.algorithms)} algorithm(s), {scenes} scene(s)), "
+            f"{len(self.failures)} failed, {len(self.skipped)} skipped; {self.spec!r}>"
+        )

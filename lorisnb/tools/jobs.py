@@ -1,0 +1,203 @@
+"""One unit of evaluation work per input, for every input kind: an OpenLORIS result file, an
+estimate of a plain pair, or one algorithm's sessions of a manifest scene. A :class:`Job` is
+picklable (process pools, Dask); :func:`run_job` reads what it needs (the edge: files, the data
+root, caches of ground truth), runs the one pipeline
+(:func:`lorisnb.core.pipeline.evaluate_sessions`) and never raises for bad input.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import dataclass
+from functools import lru_cache, partial
+from pathlib import Path
+
+from ..core.model import FileErrors
+from ..core.pipeline import compute_errors, evaluate_sessions, moved_groundtruth
+from ..core.spec import EvalSpec
+from ..core.trajectory import Trajectory
+from ..errors import DataNotFoundError, LorisError, LorisWarning, ParseError
+from ..io.data import DataPaths, groundtruth_spans, load_groundtruth
+from ..io.formats import read_trajectory
+from ..io.manifest import Manifest
+from ..io.openloris import read_openloris
+from .evaluation import Failure
+from .inputs import labels
+from .pool import size_of
+
+#: Files at least this large show a progress bar of their own while read (when evaluated here).
+BIG_FILE_BYTES = 64 * 2**20
+
+
+@dataclass(frozen=True, kw_only=True)
+class PairSource:
+    """How the files of a pair are read: the ground truth, the formats, KITTI times files, bag
+    topics or TF chains, and the scene label of the rows."""
+
+    groundtruth: Path
+    fmt: str = "tum"
+    gt_fmt: str = "tum"
+    scene: str = "sequence"
+    est_times: Path | None = None
+    gt_times: Path | None = None
+    topic: str | None = None
+    gt_topic: str | None = None
+    tf: str | None = None
+    gt_tf: str | None = None
+    label_topic: bool = False  # one of several topics of the bag: the rows' algorithm is the topic
+
+
+@dataclass(frozen=True, kw_only=True)
+class Job:
+    """Everything one worker needs to evaluate one input (picklable)."""
+
+    kind: str  # openloris, pair or manifest
+    path: Path  # the result or estimate file; a manifest: the algorithm's folder
+    root: Path | None
+    spec: EvalSpec
+    trials_by: str | None = None
+    data: DataPaths | None = None  # openloris: where the ground truth is
+    scenes: frozenset[str] | None = None  # openloris: evaluate only these
+    source: PairSource | None = None  # pair
+    manifest: Manifest | None = None  # manifest
+    scene: str = ""  # manifest: the scene of this job
+
+
+def _stamp(path: Path) -> tuple[float, int]:
+    st = os.stat(path)
+    return st.st_mtime, st.st_size
+
+
+@lru_cache(maxsize=64)
+def _read_groundtruth(
+    path: Path, fmt: str, stamp: tuple[float, int], times: Path | None, topic: str | None, tf: str | None,
+    repeated: str = "drop",
+) -> Trajectory:  # fmt: skip
+    """A ground-truth trajectory, read once per process (until the file changes), arrays read-only."""
+    gt = read_trajectory(path, fmt, stamps=times, topic=topic, tf=tf, repeated=repeated)
+    for a in (gt.stamps, gt.positions, gt.quaternions, gt.lines):
+        if a is not None:
+            a.setflags(write=False)
+    return gt
+
+
+def groundtruth_of(path: Path, fmt: str, times: Path | None = None, topic: str | None = None,
+                   tf: str | None = None, repeated: str = "drop") -> Trajectory:  # fmt: skip
+    """The ground truth of a pair or a manifest session (cached; read-only arrays); ``repeated``:
+    the rule for poses of a repeated stamp (see :func:`lorisnb.io.formats.read_trajectory`)."""
+    stamp = _stamp(path) if path.is_file() else (0.0, 0)
+    return _read_groundtruth(path, fmt, stamp, times, topic, tf, "drop" if fmt == "openloris" else repeated)
+
+
+@lru_cache(maxsize=64)
+def _moved(data: DataPaths, scene: str, drop_repeated: bool, frame: str, official: bool, stamp: tuple[float, int]
+           ) -> dict[int, Trajectory]:  # fmt: skip
+    """The scene's ground truth moved to a sensor frame, once per process (until the file changes)."""
+    return moved_groundtruth(load_groundtruth(scene, data, drop_repeated), scene, frame, official)
+
+
+def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure | None]:
+    """Evaluate one input: ``("ok", FileErrors)``, ``("failed" | "skipped", Failure)`` or
+    ``("filtered", None)`` when its scene is not wanted. Never raises for bad input."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", LorisWarning)  # kept in FileErrors.warnings
+            if job.kind == "openloris":
+                errors = _openloris(job, progress)
+            elif job.kind == "pair":
+                errors = _pair(job)
+            else:
+                errors = _manifest(job)
+        if errors is None:
+            return "filtered", None
+        for seq in errors.sequences:  # the RPE pairs of the spec, here (in a worker, when in parallel)
+            o = job.spec.rpe_options()
+            seq.rpe(o["rpe_delta"], o["rpe_unit"], o["rpe_pairs"], o["rpe_all_pairs"], o["rpe_tolerance"])
+        return "ok", errors
+    except DataNotFoundError as exc:
+        return "skipped", Failure(job.path, str(exc), "no-groundtruth")
+    except LorisError as exc:
+        return "failed", Failure(job.path, str(exc), type(exc).__name__)
+
+
+def _openloris(job: Job, progress: bool) -> FileErrors | None:
+    assert job.data is not None
+    spec = job.spec
+    algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
+    drop = spec.repeated == "drop"
+    bar = None
+    if progress and size_of(job.path) >= BIG_FILE_BYTES:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=size_of(job.path), desc=f"reading {job.path.name}", unit="B", unit_scale=True, leave=False)
+    try:
+        result = read_openloris(job.path, remove_repeated=drop, warn=False, repair_stamps=spec.repair_stamps,
+                                progress=bar.update if bar is not None else None)  # fmt: skip
+    finally:
+        if bar is not None:
+            bar.close()
+    if job.scenes is not None and result.scene not in job.scenes:
+        return None
+    gt = load_groundtruth(result.scene, job.data, drop)
+    moved = _moved(job.data, result.scene, drop, result.frame, spec.official_interpolation,
+                   _stamp(job.data.groundtruth(result.scene)))  # fmt: skip
+    return compute_errors(
+        result, gt, spec, algorithm=algorithm, file=rel, suite=suite, trial=trial, in_frame=moved,
+        other_spans=partial(groundtruth_spans, job.data, drop), release=result.sequences.pop,
+    )  # fmt: skip
+
+
+def _pair(job: Job) -> FileErrors:
+    src = job.source
+    assert src is not None
+    algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
+    if job.root is None:  # a file given alone: its name says which estimate it is
+        algorithm = job.path.stem
+    if src.label_topic and src.topic:
+        algorithm = src.topic
+    rule = job.spec.repeated
+    gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, rule)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf,
+                              repeated="drop" if src.fmt == "openloris" else rule)  # fmt: skip
+    span = {1: (float(gt.stamps[0]), float(gt.stamps[-1]))} if len(gt) else {}
+    return evaluate_sessions(
+        {1: gt}, {1: est}, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite,
+        trial=trial, notes=[str(w.message) for w in caught], groundtruth_spans=span,
+    )  # fmt: skip
+
+
+def _manifest(job: Job) -> FileErrors:
+    m = job.manifest
+    assert m is not None
+    algorithm, _, suite, trial = labels(job.path / "x", job.root, job.trials_by)
+    sessions = [s for s in m.sessions if s.scene == job.scene]
+    gts: dict[int, Trajectory] = {}
+    for s in sessions:  # a handful of sessions
+        if not s.groundtruth.exists():
+            raise ParseError(
+                s.groundtruth, None, f"ground truth of session {s.name!r} not found ({m.path}: root and groundtruth)"
+            )
+        gts[s.seq] = groundtruth_of(s.groundtruth, s.groundtruth_format, None, m.groundtruth_topic, m.groundtruth_tf,
+                                    job.spec.repeated)  # fmt: skip
+    ests: dict[int, Trajectory] = {}
+    notes: list[str] = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        for s in sessions:
+            path = job.path / s.estimate
+            if path.exists():
+                ests[s.seq] = read_trajectory(path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf,
+                                              repeated="drop" if m.estimate_format == "openloris" else job.spec.repeated)  # fmt: skip
+    notes += [str(w.message) for w in caught]
+    if not ests:
+        raise ParseError(
+            job.path, None, f"no estimate of scene {job.scene!r}; expected {', '.join(s.estimate for s in sessions)}"
+        )
+    spans = {k: (float(t.stamps[0]), float(t.stamps[-1])) for k, t in gts.items() if len(t)}
+    return evaluate_sessions(
+        gts, ests, job.spec, path=job.path, algorithm=algorithm, scene=job.scene, suite=suite, trial=trial,
+        notes=notes, groundtruth_spans=spans,
+    )  # fmt: skip

@@ -1,0 +1,33 @@
+"""Checks that teach: the graders of the labs in ``teaching/`` (see ``teaching/README.md``).
+
+Each ``check_*`` function compares a learner's answer (a function they wrote, or a number they
+predicted or read off) with lorisnb's own numbers. A right answer prints a line starting with ``✓``
+and returns True; a wrong one raises :class:`~lorisnb.errors.AnswerError` (an ``AssertionError``, so
+nbgrader and pytest count a failed test) saying what is wrong, with the numbers, and a hint naming
+the typical mistake when the answer is what that mistake gives (:data:`MISTAKES`).
+
+- :mod:`._checks`: the formulas (Eq. 1-4) and plain numbers and choices;
+- :mod:`._labs`: lab answers whose reference lorisnb computes from the lab's inputs (so that the
+  student version's test cells hold no solution).
+"""
+
+from ._checks import (
+    CORRECTNESS_CASES,
+    CR_CASES,
+    CSR_CASES,
+    cases_from,
+    check_choice,
+    check_correct_rate,
+    check_correct_rate_tracking,
+    check_correctness,
+    check_cs_r,
+    check_value,
+)
+from ._labs import check_alignment_cr, check_ate_percent, check_best_cr, check_eps_at_cr, check_silent_sequences
+from ._mistakes import MISTAKES
+
+__all__ = [
+    "CORRECTNESS_CASES", "CR_CASES", "CSR_CASES", "MISTAKES", "cases_from", "check_alignment_cr", "check_ate_percent",
+    "check_best_cr", "check_choice", "check_correct_rate", "check_correct_rate_tracking", "check_correctness",
+    "check_cs_r", "check_eps_at_cr", "check_silent_sequences", "check_value",
+]  # fmt: skip

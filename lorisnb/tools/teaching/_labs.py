@@ -1,0 +1,106 @@
+"""Checks of lab answers whose reference lorisnb computes from the lab's own inputs, so that the
+student version's test cells show no solution (re-exported by :mod:`lorisnb.tools.teaching`)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ...core.model import FileErrors, ResultFile
+from ...core.scoring import score
+from ...core.simulate import Faults, simulated_errors
+from ...core.sweep import eps_at_cr
+from ...core.trajectory import Trajectory
+from ...errors import AnswerError
+from ._checks import check_choice, check_value
+from ._mistakes import MISTAKES
+
+
+def _differs(values: Mapping[str, float], expected: float, tol: float) -> dict[str, float]:
+    """The mistakes whose value differs from the expected one (NaN ones dropped)."""
+    return {k: float(v) for k, v in values.items() if np.isfinite(v) and abs(v - expected) > tol}
+
+
+def check_alignment_cr(
+    cr_lifelong: Any,
+    cr_per_seq: Any,
+    groundtruth: ResultFile,
+    faults: Mapping[int, Faults],
+    seq: int,
+    eps: float,
+    phi: float,
+    delta: float,
+    tau: float,
+) -> bool:
+    """CR of sequence ``seq`` of a simulated multi-sequence run, evaluated lifelong (one alignment
+    fitted on the first sequence) and per sequence (each aligned on itself); a learner who swapped
+    the two, or used one for both, is told about per-sequence vs lifelong alignment."""
+    seqs = sorted(faults)
+    ref = {
+        m: float(score(simulated_errors(groundtruth, faults, seqs=seqs, mode=m), eps, phi, delta, tau)
+                 .set_index("seq").loc[seq, "cr"])
+        for m in ("lifelong", "per-seq")
+    }  # fmt: skip
+    tol = 0.005
+    check_value(f"CR of sequence {seq}, lifelong", cr_lifelong, ref["lifelong"], tol=tol,
+                mistakes=_differs({"alignment": ref["per-seq"]}, ref["lifelong"], tol))  # fmt: skip
+    return check_value(f"CR of sequence {seq}, per sequence", cr_per_seq, ref["per-seq"], tol=tol,
+                       mistakes=_differs({"alignment": ref["lifelong"]}, ref["per-seq"], tol))  # fmt: skip
+
+
+def check_eps_at_cr(
+    answer: Any, errors: Iterable[FileErrors], durations: pd.DataFrame, target: float, phi: float, delta: float
+) -> bool:
+    """The smallest eps (metres) at which one algorithm's scene CR reaches ``target``
+    (:func:`lorisnb.core.sweep.eps_at_cr`); hints when the answer ignores phi or the delta cap."""
+    errors = list(errors)
+
+    def at(p: float, d: float) -> float:
+        table = eps_at_cr(errors, target, durations, p, d)
+        if len(table) != 1:
+            raise ValueError(f"check_eps_at_cr: expected the errors of one algorithm on one scene, got {len(table)}")
+        return float(table["eps"].iloc[0])
+
+    want = at(phi, delta)
+    try:
+        v = float(answer)
+    except (TypeError, ValueError):
+        v = np.nan
+    if want + 0.01 < v <= want + 0.2:  # past the step: a grid too coarse to find the smallest eps
+        raise AnswerError(
+            f"✗ smallest eps for a scene CR of {target:g} (m): you answered {v:.4g}; lorisnb computes {want:.4g}"
+            f"\nHint (coarse grid): {MISTAKES['coarse_grid']}"
+        )
+    return check_value(f"smallest eps for a scene CR of {target:g} (m)", answer, want, tol=0.01,
+                       mistakes=_differs({"phi_ignored": at(np.inf, delta), "delta_cap": at(phi, np.inf)}, want, 0.01))  # fmt: skip
+
+
+def check_silent_sequences(answer: Any, sequences: pd.DataFrame, seq: int) -> bool:
+    """How many algorithms of a scored table output no matched pose in sequence ``seq``."""
+    want = int(((sequences["seq"] == seq) & (sequences["matched"] == 0)).sum())
+    return check_value(f"algorithms with no pose in sequence {seq}", answer, want, tol=0.1, source="the timeline")
+
+
+def check_best_cr(answer: Any, scenes: pd.DataFrame) -> bool:
+    """The algorithm with the highest scene CR (one scene); an answer that is the best by CR-T
+    gets the CR vs CR-T hint."""
+    best = str(scenes.sort_values("cr", ascending=False)["algorithm"].iloc[0])
+    best_t = str(scenes.sort_values("cr_t", ascending=False)["algorithm"].iloc[0])
+    why = "CR counts correct time over all the scene's sequences: look for the longest blue bars."
+    if isinstance(answer, str) and answer.strip().lower() == best_t.lower() != best.lower():
+        why += f"\nHint (cr vs crt): {MISTAKES['cr_vs_crt']}"
+    return check_choice("algorithm with the highest scene CR", answer, best, why)
+
+
+def check_ate_percent(answer: Any, ate_rmse: float, c_ate_rmse: float, groundtruth: Trajectory) -> bool:
+    """ATE RMSE as a percentage of the ground truth's path length (metres travelled)."""
+    want = 100.0 * ate_rmse / groundtruth.path_length
+    mistakes = {
+        "percent": want / 100.0,
+        "extent_vs_length": 100.0 * ate_rmse / groundtruth.extent,
+        "c_ate": 100.0 * c_ate_rmse / groundtruth.path_length,
+    }
+    return check_value("ATE RMSE as % of path length", answer, want, tol=0.05, mistakes=_differs(mistakes, want, 0.05))

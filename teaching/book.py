@@ -1,0 +1,149 @@
+"""Build the offline book of the primer and the labs (Jupyter Book 1 + sphinx-exercise).
+
+    python teaching/book.py OUT          # `make book`: OUT = build/book
+
+The sources are staged in ``OUT-src/``: the primer as it is, and each lab's instructor notebook with
+every exercise in a sphinx-exercise ``exercise`` block and its solution in a ``solution`` dropdown
+(hidden tests removed). Jupyter Book executes them (on the sample data shipped with lorisnb when no
+data root is found) and writes HTML into ``OUT/``. MathJax 3 is served from the book's own
+``_static/mathjax/`` (copied from the django-static-mathjax package), never from a CDN, and no
+widget JavaScript is loaded from the network (the build fails if a page loads a script from it).
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import nbformat
+from offline import mathjax_dir, refuse_remote
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+
+CONFIG = """\
+title: "Lifelong SLAM evaluation: the OpenLORIS-Scene metrics"
+author: lorisnb
+only_build_toc_files: true
+execute:
+  execute_notebooks: force
+  timeout: 900
+  allow_errors: false
+html:
+  use_repository_button: false
+  use_issues_button: false
+  use_edit_page_button: false
+  use_multitoc_numbering: false
+launch_buttons:
+  notebook_interface: none
+  binderhub_url: ""
+  jupyterhub_url: ""
+  thebe: false
+  colab_url: ""
+sphinx:
+  extra_extensions:
+    - sphinx_exercise
+  config:
+    mathjax_path: mathjax/tex-chtml.js
+    html_static_path: ["mathjax_static"]
+    nb_ipywidgets_js: {}
+    html_theme_options:
+      navigation_with_keys: false
+"""
+
+TOC = """\
+format: jb-book
+root: intro
+chapters:
+  - file: metrics_primer
+{labs}
+"""
+
+INTRO = """\
+# Lifelong SLAM evaluation
+
+The primer and the labs of lorisnb's teaching kit, executed. Each lab has exercises with their
+solutions in dropdowns; the labs themselves, with their checks, are in `teaching/` of the lorisnb
+repository (`make student` gives the student version).
+
+```{tableofcontents}
+```
+"""
+
+SOLUTION_MARKERS = re.compile(r"^[ \t]*### (BEGIN|END) SOLUTION[ \t]*\n?", re.M)
+HIDDEN = re.compile(r"^[ \t]*### BEGIN HIDDEN TESTS.*?### END HIDDEN TESTS[ \t]*\n?", re.S | re.M)
+
+
+def _md(text: str) -> nbformat.NotebookNode:
+    return nbformat.v4.new_markdown_cell(text)
+
+
+def book_notebook(source: Path) -> nbformat.NotebookNode:
+    """An instructor notebook for the book: exercises and dropdown solutions, no hidden tests."""
+    nb = nbformat.read(source, as_version=4)
+    cells: list[nbformat.NotebookNode] = []
+    for cell in nb.cells:
+        meta = cell.get("metadata", {}).get("nbgrader", {})
+        cell.metadata.pop("nbgrader", None)
+        if cell.cell_type == "code":
+            cell.source = HIDDEN.sub("", cell.source).rstrip()
+        if meta.get("solution") and cell.cell_type == "code":
+            label = f"ex-{meta['grade_id'].lower().replace('_', '-')}"
+            prompt = next((k for k in range(len(cells) - 1, -1, -1) if cells[k].cell_type == "markdown"), None)
+            if prompt is not None and "{exercise-" not in cells[prompt].source:
+                text = cells[prompt].source
+                at = min((i for i in (text.find("**Exercise"), text.find("**Question")) if i >= 0), default=0)
+                if at > 0:  # the section's text and heading stay outside the exercise block
+                    cells[prompt].source = text[:at].rstrip()
+                    prompt += 1
+                    cells.insert(prompt, _md(text[at:]))
+                cells.insert(prompt, _md(f"```{{exercise-start}}\n:label: {label}\n```"))
+                cells.insert(prompt + 2, _md("```{exercise-end}\n```"))
+            else:  # a second answer cell under the same text: a block of its own
+                cells.append(_md(f"```{{exercise-start}}\n:label: {label}\n```"))
+                cells.append(_md("Complete the cell below.\n\n```{exercise-end}\n```"))
+            cells.append(_md(f"```{{solution-start}} {label}\n:class: dropdown\n```"))
+            cell.source = SOLUTION_MARKERS.sub("", cell.source)
+            cell.source = re.sub(r"^\w+ = \.\.\.\n", "", cell.source, flags=re.M)
+            cells.append(cell)
+            cells.append(_md("```{solution-end}\n```"))
+            continue
+        cells.append(cell)
+    nb.cells = cells
+    return nb
+
+
+def main(out: Path) -> int:
+    src = out.with_name(out.name + "-src")
+    if src.exists():
+        shutil.rmtree(src)
+    src.mkdir(parents=True)  # not in _static/: Jupyter Book would load every .js file found there
+    shutil.copytree(mathjax_dir(), src / "mathjax_static" / "mathjax")
+    shutil.copyfile(ROOT / "notebooks" / "metrics_primer.ipynb", src / "metrics_primer.ipynb")
+    labs = sorted(p for p in (HERE / "source").iterdir() if p.is_dir())
+    for lab in labs:
+        nbformat.write(book_notebook(lab / f"{lab.name}.ipynb"), src / f"{lab.name}.ipynb")
+    (src / "_config.yml").write_text(CONFIG)
+    (src / "_toc.yml").write_text(TOC.format(labs="\n".join(f"  - file: {lab.name}" for lab in labs)))
+    (src / "intro.md").write_text(INTRO)
+    if out.exists():
+        shutil.rmtree(out)
+    subprocess.run(
+        ["jupyter-book", "build", str(src), "--path-output", str(src), "-W", "-n", "--keep-going"], check=False
+    )
+    html = src / "_build" / "html"
+    if not (html / "index.html").is_file():
+        print("the book did not build", file=sys.stderr)
+        return 1
+    shutil.copytree(html, out)
+    if refuse_remote(sorted(out.rglob("*.html"))):
+        return 1
+    print(f"book: {out / 'index.html'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(Path(sys.argv[1] if len(sys.argv) > 1 else "build/book").resolve()))

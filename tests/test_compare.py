@@ -1,0 +1,228 @@
+"""compare made statistically sound (issue 25 point 6, issue 24 points 3 and 7): one exact or
+permutation test behind ranks, summary, bold marks and the CSV; the smallest attainable p-value
+stated; missing sequences counted as evaluate counts them; duplicate files and an unmatched
+--trials-by refused."""
+
+from __future__ import annotations
+
+import re
+import shutil
+
+import numpy as np
+import pandas as pd
+import pytest
+from helpers import write
+from scipy import stats as sps
+
+import lorisnb as ln
+from lorisnb.cli import main
+from lorisnb.core.permutation import min_p, permutation_test, runs_needed
+
+HOME = {"odom": "home-1-{}-odom.txt", "orbslam2_rgbd": "home_1_{}_orbslam2-original.txt"}
+
+
+def noisy_copy(src, dst, sd: float, seed: int) -> None:
+    """A copy of a result file with Gaussian noise (metres) on every position."""
+    rng = np.random.default_rng(seed)
+    lines = src.read_text().splitlines()
+    for i, line in enumerate(lines):
+        parts = line.split()
+        if len(parts) in (8, 9):
+            try:
+                xyz = np.array(parts[-7:-4], float) + rng.normal(0, sd, 3)
+            except ValueError:
+                continue
+            parts[-7:-4] = [f"{v:.6f}" for v in xyz]
+            lines[i] = " ".join(parts)
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    dst.write_text("\n".join(lines) + "\n")
+
+
+def compare(capsys, *args) -> tuple[int, str, str]:
+    rc = main(["compare", *map(str, args), "--no-progress"])
+    out = capsys.readouterr()
+    return rc, out.out, out.err
+
+
+def test_ranks_summary_bold_and_csv_agree(tmp_path, icra20, capsys):
+    """Five noisy trials of odom, of a twin of odom (other seeds) and of ORB-SLAM2 on the five home
+    sequences: the test separates ORB-SLAM2 from both, not the twins; the printed ranks, the
+    summary sentence, the CSV ranks and p-values, and the bold cells of LaTeX and Markdown agree."""
+    res = tmp_path / "results"
+    for alg, src_alg, base_seed in (("odom", "odom", 0), ("odom_twin", "odom", 1000), ("orb", "orbslam2_rgbd", 0)):
+        for seq in range(1, 6):
+            for trial in range(1, 6):
+                src = icra20 / "per-seq" / src_alg / HOME[src_alg].format(seq)
+                noisy_copy(src, res / alg / f"trial{trial}" / src.name, 0.05, base_seed + 10 * seq + trial)
+    csv, pairs_csv, md, tex = (tmp_path / n for n in ("c.csv", "p.csv", "t.md", "t.tex"))
+    rc, out, _ = compare(capsys, res, "--csv", csv, "--pairs-csv", pairs_csv, "--markdown", md, "--latex", tex)
+    assert rc == 0
+    assert "(5 trial(s) per sequence)" in out
+    algs, pairs = pd.read_csv(csv), pd.read_csv(pairs_csv)
+    assert set(pairs["test"]) == {"permutation of trials within sequences"}
+    k = int(pairs["significant"].sum())
+    assert f"{k} of {len(pairs)} pairs differ significantly" in out
+    rank = algs.set_index("algorithm")["rank"]
+    assert rank["orb"] == 3 and rank["odom"] == rank["odom_twin"] == 1 and k == 2
+    for line in out.splitlines():  # the printed ranking is the CSV's
+        m = re.match(r"\s+home\s+(\S+)\s.*\s(\d+)\s+\S*$", line)
+        if m and m.group(1) in rank.index:
+            assert int(m.group(2)) == rank[m.group(1)]
+    sig = pairs[pairs["significant"]]
+    assert set(sig["better"]) == {"odom", "odom_twin"} and (sig["p_holm"] <= 0.05).all()
+    assert (algs.loc[algs["algorithm"] == "orb", "p_holm_vs_top"] <= 0.05).all()
+    assert algs["cliffs_delta_vs_top"].dropna().between(-1, 1).all()
+    holds_zero = (pairs["difference_low"] <= 0) & (pairs["difference_high"] >= 0)  # the inverted test's interval
+    assert (holds_zero == ~pairs["significant"]).all()
+    others = algs[algs["algorithm"] != algs["top"]]
+    zero = (others["difference_low_vs_top"] <= 0) & (others["difference_high_vs_top"] >= 0)
+    assert (zero == (others["p_holm_vs_top"] > 0.05)).all() and not zero[others["algorithm"] == "orb"].any()
+    bold = {line.split("|")[1].strip() for line in md.read_text().splitlines() if "**" in line}
+    assert bold == {"odom", "odom_twin"}  # rank 1 where the test separates someone
+    assert tex.read_text().count(r"\textbf") == 2
+
+
+def test_no_significant_pair_no_bold_and_equal_ranks(tmp_path, icra20, capsys):
+    """One run each (the bundled results): ranks 1 and 1, '0 of 1 pairs', no bold, the smallest
+    possible p-value stated (2/2^5 on five home sequences)."""
+    md, csv = tmp_path / "t.md", tmp_path / "c.csv"
+    args = [icra20 / "per-seq" / "odom", icra20 / "per-seq" / "orbslam2_rgbd", "--markdown", md, "--csv", csv]
+    rc, out, _ = compare(capsys, *args, "--power", "0.1")
+    assert rc == 0 and "0 of 4 pairs differ significantly" in out
+    assert "home (smallest possible p 0.0625" in out
+    assert "**" not in md.read_text()
+    algs = pd.read_csv(csv)
+    assert (algs["rank"] == 1).all() and (algs["coverage"] == 1).all()
+    assert algs.loc[algs["scene"] == "home", "min_p_vs_top"].dropna().eq(0.0625).all()
+    unbounded = algs.dropna(subset=["p_vs_top"])  # no design here can reach 0.05: the test's interval is unbounded
+    assert np.isinf(unbounded["difference_low_vs_top"]).all() and np.isinf(unbounded["difference_high_vs_top"]).all()
+    assert "runs needed to detect a difference of 0.1" in out and re.search(
+        r"home\s+odom\s+orbslam2_rgbd\s+sequences\s+5\s+\d+", out
+    )
+
+
+def test_exact_test_on_three_against_three_with_ties(tmp_path, icra20, capsys):
+    """3 vs 3 trials of one sequence, identical within each algorithm (ties): the exact test gives
+    p = 0.1, the smallest possible, and compare says no pair can reach 0.05."""
+    res = tmp_path / "results"
+    for alg in HOME:
+        for trial in (1, 2, 3):
+            src = icra20 / "per-seq" / alg / HOME[alg].format(2)
+            write(res, f"{alg}/{src.stem}_trial{trial}.txt", src.read_bytes())
+    pairs_csv = tmp_path / "p.csv"
+    rc, out, err = compare(capsys, res, "--pairs-csv", pairs_csv, "--power", "0.05")
+    p = pd.read_csv(pairs_csv).iloc[0]
+    assert rc == 0 and p["exact"] and p["relabellings"] == 20
+    assert p["p"] == pytest.approx(0.1) and p["min_p"] == pytest.approx(0.1) and not p["significant"]
+    assert p["difference_low"] == -np.inf and p["difference_high"] == np.inf  # no shift can be rejected either
+    assert "no pair can reach alpha 0.05 in home (smallest possible p 0.1" in out
+    assert p["needed"] >= runs_needed(0.05, paired=False) == 4  # 4 vs 4: 2/70 < 0.05
+    assert "has no output for home sequence(s) 1, 3, 4, 5" in err  # only seq 2 given: coverage stated
+
+
+def test_permutation_test_matches_scipy():
+    """The exact test equals scipy.stats.permutation_test (exact, two-sided) on tied data: two
+    independent samples, and paired samples (sign flips)."""
+    a, b = np.array([0.5, 0.5, 0.7]), np.array([0.5, 0.6, 0.6])
+    ref = sps.permutation_test((a, b), lambda x, y, axis: x.mean(axis) - y.mean(axis), permutation_type="independent",
+                               vectorized=True, n_resamples=np.inf, alternative="two-sided")  # fmt: skip
+    ours = permutation_test([a], [b])
+    assert ours.exact and ours.pvalue == pytest.approx(ref.pvalue) and ours.min_p == pytest.approx(0.1)
+    x = np.array([0.9, 0.8, 0.85, 0.7, 0.7, 0.95])
+    y = np.array([0.6, 0.8, 0.65, 0.5, 0.71, 0.9])
+    ref = sps.permutation_test((x, y), lambda u, v, axis: (u - v).mean(axis), permutation_type="samples",
+                               vectorized=True, n_resamples=np.inf, alternative="two-sided")  # fmt: skip
+    ours = permutation_test([np.array([u]) for u in x], [np.array([v]) for v in y])
+    assert ours.pvalue == pytest.approx(ref.pvalue) and ours.min_p == pytest.approx(2 / 2**5)  # one tie: 5 flips
+    assert min_p([(1, 1)] * 5) == pytest.approx(0.0625) and min_p([(3, 3)]) == pytest.approx(0.1)
+
+
+def test_missing_sequences_count_as_evaluate_counts_them(tmp_path, icra20, capsys):
+    """An algorithm without two home sequences is ranked on CR over all five (as evaluate's scene
+    CR), not on what it has, and a warning names the sequences."""
+    res = tmp_path / "results"
+    shutil.copytree(icra20 / "per-seq" / "odom", res / "odom")
+    shutil.copytree(icra20 / "per-seq" / "orbslam2_rgbd", res / "orb")
+    for n in (4, 5):
+        (res / "orb" / HOME["orbslam2_rgbd"].format(n)).unlink()
+    csv = tmp_path / "c.csv"
+    rc, out, err = compare(capsys, res, "--csv", csv)
+    assert rc == 0 and "orb has no output for home sequence(s) 4, 5 (3 of 5)" in err
+    row = pd.read_csv(csv).set_index(["algorithm", "scene"]).loc[("orb", "home")]
+    assert row["coverage"] == pytest.approx(0.6) and row["missing_seqs"] == "4, 5"
+    ev = ln.evaluate(res / "orb", scenes=["home"])
+    scene = ev.scenes(eps="paper", phi=30).iloc[0]  # evaluate's CR: correct time over all five sequences
+    assert scene["sequences"] == 3 and row["value"] == pytest.approx(scene["cr"], rel=1e-12)
+    assert "3/5" in out
+
+
+def test_duplicate_files_and_unmatched_trials_by_are_errors(tmp_path, icra20, data, capsys):
+    src = (icra20 / "per-seq" / "orbslam2_rgbd" / "cafe_1_1_orbslam2-original.txt").read_bytes()
+    write(tmp_path, "res/orb/cafe_a.txt", src)
+    write(tmp_path, "res/orb/cafe_b.txt", src)
+    rc, out, err = compare(capsys, tmp_path / "res")
+    assert rc == 2 and "cafe_a.txt and" in err and "cafe_b.txt both hold orb cafe-1" in err and "--trials-by" in err
+    with pytest.raises(ln.ValidationError, match="no trial number"):
+        ln.evaluate(tmp_path / "res")
+    rc, out, err = compare(capsys, tmp_path / "res", "--trials-by", r"cafe_([ab])")
+    assert rc == 2 and "not a whole number" in err
+    rc, out, err = compare(capsys, tmp_path / "res", "--trials-by", r"seed(\d+)")
+    assert rc == 2 and r"trials_by=seed(\d+): matches none of the 2 result file path(s)" in err
+    with pytest.raises(ln.ValidationError, match="matches none"):
+        ln.evaluate(tmp_path / "res", trials_by=r"seed(\d+)")
+    tum = data.tum  # estimates against a --gt: the same rule
+    rc = main(["evaluate", str(tum / "freiburg1_xyz-rgbdslam.txt"),
+               "--gt", str(tum / "freiburg1_xyz-groundtruth.txt"), "--trials-by", r"seed(\d+)", "--no-progress"])  # fmt: skip
+    assert rc == 2 and "matches none of the 1 result file path(s)" in capsys.readouterr().err
+    (tmp_path / "res" / "orb" / "cafe_b.txt").rename(tmp_path / "res" / "orb" / "cafe_seed2.txt")
+    (tmp_path / "res" / "orb" / "cafe_a.txt").rename(tmp_path / "res" / "orb" / "cafe_seed1.txt")
+    ev = ln.evaluate(tmp_path / "res", trials_by=r"seed(\d+)")
+    assert sorted(f.trial for f in ev.errors) == [1, 2]
+
+
+def test_options_compare_and_diff_cannot_apply_are_refused(tmp_path, icra20, capsys):
+    odom = icra20 / "per-seq" / "odom"
+    rc, _, err = compare(capsys, odom, "--parquet", tmp_path / "x")
+    assert rc == 2 and "--parquet: not used by lorisnb compare" in err and not (tmp_path / "x").exists()
+    rc, _, err = compare(capsys, odom, "--relative")
+    assert rc == 2 and "--relative: not used" in err
+    rc, _, err = compare(capsys, odom, "--latex", tmp_path / "t.txt")
+    assert rc == 2 and "expected a .tex" in err
+    rc, _, err = compare(capsys, odom, "--csv", tmp_path / "same.csv", "--pairs-csv", tmp_path / "same.csv")
+    assert rc == 2 and "its own file" in err and not (tmp_path / "same.csv").exists()
+    for bad in ("--alpha", "--level"):
+        with pytest.raises(SystemExit):
+            main(["compare", str(odom), bad, "1.5"])
+    assert main(["diff", str(odom), str(odom), "--relative"]) == 2
+    assert main(["diff", str(odom), "--no-progress"]) == 2  # one run only
+    capsys.readouterr()
+
+
+def test_difference_interval_inverts_the_test():
+    """Paired, eight sequences (256 sign flips): the interval holds the shifts the exact test accepts;
+    just inside a bound p > alpha, just outside p <= alpha; 0 is outside as the test rejects."""
+    from lorisnb.core.permutation import difference_interval, holm_levels
+
+    x = np.array([0.9, 0.8, 0.85, 0.7, 0.75, 0.95, 0.6, 0.88])
+    y = x - np.array([0.2, 0.1, 0.25, 0.15, 0.3, 0.12, 0.18, 0.22])
+    a, b = [np.array([v]) for v in x], [np.array([v]) for v in y]
+    res = permutation_test(a, b)
+    assert res.exact and res.pvalue == pytest.approx(2 / 256)
+    low, high = difference_interval(a, b, None, 0.05)
+    assert 0 < low < res.statistic < high
+    shift = lambda d: permutation_test([v - d for v in a], b).pvalue  # noqa: E731
+    assert shift(low + 1e-6) > 0.05 >= shift(low - 1e-3) and shift(high - 1e-6) > 0.05 >= shift(high + 1e-3)
+    assert difference_interval(a[:4], b[:4], None, 0.05) == (-np.inf, np.inf)  # 2/16 > 0.05: nothing rejected
+    np.testing.assert_allclose(holm_levels(np.array([0.01, 0.04, 0.03]), 0.05), [0.05 / 3, 0.025, 0.025])
+
+
+def test_tables_keep_suites_apart(tmp_path, icra20, capsys):
+    """The same algorithm in two suites (folders above it): two rows, not one."""
+    for suite in ("v1", "v2"):
+        for seq in (1, 2):
+            src = icra20 / "per-seq" / "odom" / HOME["odom"].format(seq)
+            write(tmp_path, f"res/{suite}/odom/{src.name}", src.read_bytes())
+    md = tmp_path / "t.md"
+    rc, _, _ = compare(capsys, tmp_path / "res", "--markdown", md)
+    rows = [line.split("|")[1].strip() for line in md.read_text().splitlines()[2:] if line.startswith("|")]
+    assert rc == 0 and rows == ["odom (v1)", "odom (v2)"]

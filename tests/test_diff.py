@@ -1,0 +1,249 @@
+"""lorisnb diff: two versions of an algorithm built from the bundled results (issue 25, must show),
+tables and report runs as inputs, the verdict files, and history over runs."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from lorisnb.cli import main
+from lorisnb.core.regression import parse_tolerances, scene_changes, sequence_changes
+from lorisnb.errors import ValidationError
+
+ALGORITHMS = ("odom", "orbslam2_rgbd")
+#: The sequences version B changes: (algorithm, file, scene, seq, what).
+CHANGED = [
+    ("odom", "home-1-2-odom.txt", "home", 2, "drop"),
+    ("odom", "corridor-1-3-odom.txt", "corridor", 3, "noise"),
+    ("orbslam2_rgbd", "cafe_1_1_orbslam2-original.txt", "cafe", 1, "drop+noise"),
+    ("orbslam2_rgbd", "home_1_5_orbslam2-original.txt", "home", 5, "noise"),
+]
+
+
+def pose_lines(lines: list[str]) -> list[int]:
+    """Indices of pose lines (8 or 9 numbers) of an OpenLORIS file."""
+    out = []
+    for i, line in enumerate(lines):
+        parts = line.split()
+        if len(parts) in (8, 9):
+            try:
+                [float(p) for p in parts]
+            except ValueError:
+                continue
+            out.append(i)
+    return out
+
+
+def modified(text: str, what: str, seed: int) -> str:
+    """The file with the middle 40 % of its poses dropped and/or 0.3 m of position noise."""
+    lines = text.splitlines()
+    poses = pose_lines(lines)
+    rng = np.random.default_rng(seed)
+    if "noise" in what:
+        for i in poses:
+            parts = lines[i].split()
+            xyz = np.array(parts[-7:-4], float) + rng.normal(0, 0.3, 3)
+            parts[-7:-4] = [f"{v:.6f}" for v in xyz]
+            lines[i] = " ".join(parts)
+    if "drop" in what:
+        n = len(poses)
+        gone = set(poses[int(0.3 * n) : int(0.7 * n)])
+        lines = [line for i, line in enumerate(lines) if i not in gone]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.fixture(scope="module")
+def versions(tmp_path_factory, icra20):
+    """Version A: the bundled per-seq results of two algorithms; version B: the same with a dropped
+    stretch and noise on the sequences of CHANGED."""
+    root = tmp_path_factory.mktemp("versions")
+    a, b = root / "A", root / "B"
+    for alg in ALGORITHMS:
+        shutil.copytree(icra20 / "per-seq" / alg, a / alg)
+        shutil.copytree(icra20 / "per-seq" / alg, b / alg)
+    for k, (alg, name, _, _, what) in enumerate(CHANGED):
+        f = b / alg / name
+        f.write_text(modified(f.read_text(), what, seed=k))
+    return a, b
+
+
+def run(capsys, *args) -> tuple[int, str, str]:
+    rc = main(["diff", *map(str, args), "--no-progress"])
+    out = capsys.readouterr()
+    return rc, out.out, out.err
+
+
+def test_diff_flags_exactly_the_changed_sequences(versions, tmp_path, capsys):
+    """Must show (issue 25): diff flags exactly the sequences changed, exits 1; identical runs exit 0."""
+    a, b = versions
+    js, junit = tmp_path / "verdict.json", tmp_path / "verdict.xml"
+    rc, out, _ = run(capsys, a, b, "--json", js, "--junit", junit)
+    assert rc == 1 and "verdict: regression (4 sequence(s) regressed)" in out
+    verdict = json.loads(js.read_text())
+    assert verdict["verdict"] == "regression"
+    flagged = {(r["algorithm"], r["scene"], r["seq"]) for r in verdict["regressions"] if r["seq"] is not None}
+    assert flagged == {(alg, scene, seq) for alg, _, scene, seq, _ in CHANGED}
+    for r in verdict["regressions"]:
+        assert {"algorithm", "scene", "seq", "metric", "base", "cand"} <= set(r)
+    by = {(r["algorithm"], r["scene"], r["seq"], r["metric"]): r for r in verdict["regressions"]}
+    dropped = by[("odom", "home", 2, "cr")]  # 40 % of the poses gone: CR falls by about that much
+    assert dropped["base"] == pytest.approx(0.9998, abs=1e-4) and 0.5 < dropped["cand"] < 0.75
+    noisy = by[("odom", "corridor", 3, "ate_rmse")]  # 0.3 m noise per axis on a 0.22 m ATE RMSE
+    assert noisy["base"] == pytest.approx(0.2183, abs=1e-4) and noisy["cand"] > 0.4
+    assert ("odom", "home", None, "cr") in by  # the scene value fell too (0.4 of one of five sequences)
+    cases = ET.parse(junit).getroot().iter("testcase")
+    failed = {(c.get("classname"), c.get("name")) for c in cases if c.find("failure") is not None}
+    assert {("odom.home", "home-2"), ("odom.corridor", "corridor-3"), ("orbslam2_rgbd.cafe", "cafe-1"),
+            ("orbslam2_rgbd.home", "home-5")} <= failed  # fmt: skip
+    assert all(name.endswith("(scene)") for _, name in failed - {(f"{a}.{s}", f"{s}-{q}") for a, _, s, q, _ in CHANGED})
+
+    rc, out, _ = run(capsys, a, a, "--json", tmp_path / "same.json")
+    assert rc == 0 and "verdict: ok" in out
+    same = json.loads((tmp_path / "same.json").read_text())
+    assert same["verdict"] == "ok" and same["regressions"] == [] and same["counts"]["ok"] > 0
+
+
+def test_diff_of_tables_and_a_missing_sequence(versions, tmp_path, capsys):
+    a, b = versions
+    ta, tb = tmp_path / "a.csv", tmp_path / "b.csv"
+    for src, out in ((a, ta), (b, tb)):
+        assert main(["evaluate", str(src), "--eps", "paper", "--phi", "30", "--csv", str(out), "--no-progress"]) == 0
+    capsys.readouterr()
+    rc, _, _ = run(capsys, ta, ta)
+    assert rc == 0
+    rc, out, _ = run(capsys, ta, tb, "--json", tmp_path / "t.json")
+    flagged = {(r["algorithm"], r["scene"], r["seq"]) for r in json.loads((tmp_path / "t.json").read_text())["regressions"]
+               if r["seq"] is not None}  # fmt: skip
+    assert rc == 1 and flagged == {(alg, scene, seq) for alg, _, scene, seq, _ in CHANGED}
+    # a sequence present in BASE and missing in CAND is a regression
+    cand = pd.read_csv(ta)
+    cand = cand[~((cand["algorithm"] == "odom") & (cand["scene"] == "market") & (cand["seq"] == 1))]
+    cand.to_csv(tmp_path / "lacking.csv", index=False)
+    rc, out, _ = run(capsys, ta, tmp_path / "lacking.csv", "--json", tmp_path / "m.json")
+    regs = json.loads((tmp_path / "m.json").read_text())["regressions"]
+    assert rc == 1 and {(r["scene"], r["seq"], r["metric"], r["cand"]) for r in regs if r["seq"] is not None} == {
+        ("market", 1, "sequence", "missing")
+    }
+    scene_cr = [r for r in regs if r["seq"] is None and r["metric"] == "cr"]  # counted as failed in the scene
+    assert len(scene_cr) == 1 and scene_cr[0]["cand"] < scene_cr[0]["base"] - 0.1
+    # other thresholds: refused, not compared
+    other = tmp_path / "other.csv"
+    assert main(["evaluate", str(a), "--eps", "1", "--phi", "30", "--csv", str(other), "--no-progress"]) == 0
+    capsys.readouterr()
+    rc, _, err = run(capsys, ta, other)
+    assert rc == 2 and "not comparable" in err and "eps" in err
+    # history over bare tables: ordered by modification time, the change found, other thresholds marked
+    for k, f in enumerate((ta, tb, other)):
+        os.utime(f, (1.7e9 + 100 * k, 1.7e9 + 100 * k))
+    hist = tmp_path / "history.csv"
+    assert main(["history", str(other), str(tb), str(ta), "--metric", "cr", "--csv", str(hist)]) == 0
+    out = capsys.readouterr().out
+    assert "ordered by modification time" in out and "odom home cr: first change in b.csv" in out
+    h = pd.read_csv(hist)
+    assert list(h.drop_duplicates("run")["run"]) == ["a.csv", "b.csv", "other.csv"]
+    mark = h.drop_duplicates("run").set_index("run")
+    assert mark.loc["b.csv", "comparable"] and not mark.loc["other.csv", "comparable"]
+    assert "eps" in mark.loc["other.csv", "not_comparable"]
+    rc, _, err = run(capsys, ta, tb, "--scale")  # an evaluate option cannot apply to tables
+    assert rc == 2 and "--scale" in err
+    rc, _, err = run(capsys, ta, tb, "--tolerance", "cr=-1")
+    assert rc == 2 and "tolerance cr=-1" in err
+
+
+@pytest.mark.slow
+def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
+    """Two report run folders (run.json + per-sequence CSV tables), then history over three runs."""
+    a, b = versions
+    runs = []
+    for k, (src, version) in enumerate(((a, "0.3.0"), (b, "0.3.0"), (b, "0.4.0"))):
+        folder = tmp_path / f"run-{k}"
+        (folder / "per_sequence_benchmark").mkdir(parents=True)
+        assert main(["evaluate", str(src), "--eps", "paper", "--phi", "30", "--no-progress",
+                     "--csv", str(folder / "per_sequence_benchmark" / "sequences.csv")]) == 0  # fmt: skip
+        meta = dict(command="lorisnb report", lorisnb_version=version, commit="abc", spec={"eps": "paper", "phi": 30},
+                    data_root="/data", created=f"2026-11-0{k + 1}T02:00:00+00:00",
+                    inputs={"/data/openloris-scene/groundtruth/gt_home_1.txt": "e3b0"}, notebooks=[])  # fmt: skip
+        (folder / "run.json").write_text(json.dumps(meta))
+        runs.append(folder)
+    capsys.readouterr()
+    rc, out, _ = run(capsys, runs[0], runs[1], "--json", tmp_path / "r.json")
+    flagged = {(r["algorithm"], r["scene"], r["seq"]) for r in json.loads((tmp_path / "r.json").read_text())["regressions"]
+               if r["seq"] is not None}  # fmt: skip
+    assert rc == 1 and flagged == {(alg, scene, seq) for alg, _, scene, seq, _ in CHANGED}
+    changed = json.loads((runs[2] / "run.json").read_text())
+    changed["spec"] = {"eps": 1, "phi": 30}
+    (tmp_path / "spec.json").write_text(json.dumps(changed))
+    odd = tmp_path / "odd-run"
+    shutil.copytree(runs[2], odd)
+    (odd / "run.json").write_text(json.dumps(changed))
+    rc, _, err = run(capsys, runs[0], odd)
+    assert rc == 2 and "spec" in err
+
+    regt = tmp_path / "run-3"  # the ground truth changed under the same version
+    shutil.copytree(runs[2], regt)
+    meta = json.loads((runs[2] / "run.json").read_text())
+    meta.update(created="2026-11-04T02:00:00+00:00", inputs={"/data/openloris-scene/groundtruth/gt_home_1.txt": "ff"})
+    (regt / "run.json").write_text(json.dumps(meta))
+    csv, figs = tmp_path / "history.csv", tmp_path / "figures"
+    rc = main(["history", str(runs[2]), str(regt), str(runs[0]), str(runs[1]), "--csv", str(csv), "--out", str(figs)])
+    out = capsys.readouterr().out
+    assert rc == 0
+    h = pd.read_csv(csv)
+    assert list(h.drop_duplicates("run")["run"]) == ["run-0", "run-1", "run-2", "run-3"]  # by run.json's time
+    assert (
+        "ground truth changed: gt_home_1.txt"
+        in h.drop_duplicates("run").set_index("run").loc["run-3", "not_comparable"]
+    )
+    home = h[(h["algorithm"] == "odom") & (h["scene"] == "home") & (h["metric"] == "cr")].set_index("run")
+    assert home.loc["run-1", "value"] < home.loc["run-0", "value"] - 0.05
+    assert home.loc["run-1", "changed"] and not home.loc["run-0", "changed"]  # the first run where it changed
+    assert home.loc["run-2", "comparable"] == False and "lorisnb_version" in home.loc["run-2", "not_comparable"]  # noqa: E712
+    assert "first change" in out and (figs / "history_cr.png").is_file() and (figs / "history_cr.svg").is_file()
+
+
+def test_regression_core_on_trials():
+    """Three trials a side: a shift the tolerance allows is no regression; a shift beyond it on every
+    trial is one, found by the permutation test; identical trials change nothing."""
+    rows = []
+    for run_, shift in (("base", 0.0), ("small", -0.01), ("big", -0.2)):
+        for seq in (1, 2, 3, 4, 5):
+            for trial, noise in enumerate((0.0, 0.01, -0.01), start=1):
+                rows.append(dict(run=run_, suite="", algorithm="x", scene="home", seq=seq, trial=trial,
+                                 cr=0.8 + shift + noise + 0.01 * seq, gt_duration=100.0, matched=100))  # fmt: skip
+    t = pd.DataFrame(rows)
+    base = t[t["run"] == "base"]
+    tol = parse_tolerances("cr=0.02")
+    same = sequence_changes(base, base, tol)
+    assert (same["status"] == "ok").all()
+    small = sequence_changes(base, t[t["run"] == "small"], tol)
+    assert (small["status"] == "ok").all()
+    big = sequence_changes(base, t[t["run"] == "big"], tol)
+    assert set(big.loc[big["metric"] == "cr", "status"]) == {"regression"}
+    assert big["decided_by"].str.contains("cannot reach alpha").all()  # 3 vs 3 trials: smallest p is 0.1
+    assert big["min_p"].dropna().eq(0.1).all()
+    scenes = scene_changes(base, t[t["run"] == "big"], tol)
+    row = scenes[scenes["metric"] == "cr"].iloc[0]
+    assert row["status"] == "regression" and row["p"] < 0.01 and row["decided_by"].startswith("tolerance and")
+    with pytest.raises(ValidationError, match="not a compared metric"):
+        parse_tolerances("speed=3")
+    assert str(parse_tolerances("ate_rmse=5%")["ate_rmse"]) == "5%"
+
+
+def test_diff_in_python(versions):
+    """The same verdict through Python: two Evaluations' tables and lorisnb.tools.diff.diff_tables."""
+    import lorisnb as ln
+    from lorisnb.tools.diff import diff_tables
+
+    a, b = (ln.evaluate(v).sequences(eps="paper", phi=30) for v in versions)
+    d = diff_tables(a, b, "cr=0.02,ate_rmse=10%")
+    flagged = {(r["algorithm"], r["scene"], r["seq"]) for r in d.verdict["regressions"] if r["seq"] is not None}
+    assert d.regressed and flagged == {(alg, scene, seq) for alg, _, scene, seq, _ in CHANGED}
+    assert not diff_tables(a, a).regressed
+    with pytest.raises(ValidationError, match="tolerance cr=x"):
+        diff_tables(a, b, {"cr": "x"})

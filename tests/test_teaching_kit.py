@@ -1,0 +1,166 @@
+"""The teaching kit (teaching/): the labs' sources are nbgrader-ready and stored clean; `make student`
+releases them without a trace of a solution, `make grade` grades the submissions (the
+solutions score full marks with the hidden tests; the typical mistakes get their hints in the
+feedback), and `make book` builds the offline book with no script from the network. The make test
+runs on a copy of the checkout's files (as a fresh clone would have them), outside the checkout."""
+
+from __future__ import annotations
+
+import csv
+import importlib.util
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import nbformat
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SOURCE = ROOT / "teaching" / "source"
+LABS = sorted(p.name for p in SOURCE.iterdir() if p.is_dir())
+
+
+def _teaching_module(name: str):
+    """A script of teaching/ (they import each other, so teaching/ goes on sys.path)."""
+    if str(ROOT / "teaching") not in sys.path:
+        sys.path.insert(0, str(ROOT / "teaching"))
+    spec = importlib.util.spec_from_file_location(f"teaching_{name}", ROOT / "teaching" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _nbgrader(cell) -> dict:
+    return cell.get("metadata", {}).get("nbgrader", {})
+
+
+@pytest.mark.parametrize("lab", LABS)
+def test_lab_sources_are_clean_and_nbgrader_ready(lab):
+    nb = nbformat.read(SOURCE / lab / f"{lab}.ipynb", as_version=4)
+    code = [c for c in nb.cells if c.cell_type == "code"]
+    assert all(not c.outputs and c.execution_count is None for c in code)
+    assert sum("parameters" in c.metadata.get("tags", []) for c in code) == 1
+    ids = [_nbgrader(c)["grade_id"] for c in nb.cells if _nbgrader(c)]
+    assert len(ids) == len(set(ids)), "grade ids are unique"
+    answers = [c for c in code if _nbgrader(c).get("solution")]
+    tests = [c for c in code if _nbgrader(c).get("grade")]
+    assert len(answers) >= 8 and len(tests) >= 8
+    for c in answers:
+        assert "### BEGIN SOLUTION" in c.source and "### END SOLUTION" in c.source, _nbgrader(c)["grade_id"]
+        # a student may rewrite the whole answer cell: it defines nothing the later cells need
+        outside = re.sub(r"### BEGIN SOLUTION.*?### END SOLUTION", "", c.source, flags=re.S)
+        for line in outside.splitlines():
+            assert " = " not in line or line.rstrip().endswith("= ..."), f"{_nbgrader(c)['grade_id']}: {line}"
+    for c in tests:
+        assert _nbgrader(c)["points"] > 0 and "teach.check_" in c.source, _nbgrader(c)["grade_id"]
+    # the write-it-yourself exercises have hidden tests on real sequences
+    hidden = [c for c in tests if "### BEGIN HIDDEN TESTS" in c.source]
+    assert {"test_A1_correctness", "test_B2_correct_rate", "test_C1_cs_r"} <= {_nbgrader(c)["grade_id"] for c in hidden}
+    # the equations are typeset with the paper's numbers
+    text = "\n".join(c.source for c in nb.cells if c.cell_type == "markdown")
+    for k in (1, 2, 3, 4):
+        assert f"\\tag{{{k}}}" in text
+
+
+def test_book_notebook_has_exercises_and_dropdown_solutions_without_hidden_tests():
+    book = _teaching_module("book")
+    nb = book.book_notebook(SOURCE / LABS[0] / f"{LABS[0]}.ipynb")
+    text = "\n".join(c.source for c in nb.cells)
+    n_answers = sum(
+        1
+        for c in nbformat.read(SOURCE / LABS[0] / f"{LABS[0]}.ipynb", as_version=4).cells
+        if _nbgrader(c).get("solution")
+    )
+    assert text.count("{exercise-start}") == text.count("{exercise-end}") == n_answers
+    assert text.count("{solution-start}") == text.count("{solution-end}") == n_answers
+    assert ":class: dropdown" in text
+    assert "HIDDEN TESTS" not in text and "BEGIN SOLUTION" not in text and "_fe = simulated_errors" not in text
+    assert not any(_nbgrader(c) for c in nb.cells)
+    # no exercise block opens before a section heading and closes after it
+    for c in nb.cells:
+        if c.cell_type == "markdown" and c.source.startswith("**"):
+            assert not re.search(r"^#+ ", c.source, re.M)
+
+
+def _copy_checkout(dest: Path) -> None:
+    """The checkout's files as a fresh clone has them (tracked and new, not ignored)."""
+    files = subprocess.run(
+        ["git", "ls-files", "-co", "--exclude-standard"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout.splitlines()
+    for f in files:
+        if (ROOT / f).is_file():
+            (dest / f).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / f, dest / f)
+
+
+@pytest.mark.slow
+def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path):
+    copy = tmp_path / "lorisnb"
+    _copy_checkout(copy)
+    venv = Path(sys.prefix)
+    env = {k: v for k, v in os.environ.items() if k not in ("LORISNB_DATA", "PYTHONPATH")}
+    args = [f"VENV={venv}", f"TEACH={ROOT / '.venv-teach'}", "-o", f"{venv}/.installed-stamp"]
+    r = subprocess.run(
+        ["make", "-C", str(copy), *args, "student", "grade", "book", "slides"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=1800,
+    )
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    teaching = copy / "teaching"
+    for lab in LABS:
+        # student version: every answer cell is a stub, no solution line and no hidden test left
+        source = nbformat.read(SOURCE / lab / f"{lab}.ipynb", as_version=4)
+        release = nbformat.read(teaching / "release" / lab / f"{lab}.ipynb", as_version=4)
+        text = "\n".join(c.source for c in release.cells)
+        assert "BEGIN SOLUTION" not in text and "HIDDEN TESTS" not in text
+        for c in source.cells:
+            m = re.search(r"### BEGIN SOLUTION\n(.*?)### END SOLUTION", c.source, re.S)
+            if m:
+                for line in m.group(1).strip().splitlines():
+                    if len(line.strip()) >= 12 and not line.strip().startswith("#"):
+                        assert line.strip() not in text, f"solution line left in the student version: {line}"
+        stubs = sum(c.source.count("raise NotImplementedError()") for c in release.cells if c.cell_type == "code")
+        assert stubs == sum(1 for c in source.cells if _nbgrader(c).get("solution"))
+        # grades: the instructor's solutions score full marks (hidden tests included); the mistakes do not
+        rows = {r["student_id"]: r for r in csv.DictReader((teaching / "grades.csv").open()) if r["assignment"] == lab}
+        assert float(rows["demo-correct"]["score"]) == float(rows["demo-correct"]["max_score"]) >= 15
+        assert 0 < float(rows["demo-mistakes"]["score"]) < float(rows["demo-mistakes"]["max_score"])
+        feedback = (teaching / "feedback" / "demo-mistakes" / lab / f"{lab}.html").read_text()
+        hints = set(re.findall(r"Hint \(([a-z ]+)\)", re.sub(r"<[^>]+>", "", feedback)))
+        assert {"delta cap", "cr vs crt", "degrees radians", "first pose", "alignment"} <= hints, hints
+        assert (teaching / "feedback" / "demo-correct" / lab / f"{lab}.html").exists()
+        assert "../../mathjax/tex-chtml.js" in feedback and not re.search(r"<script[^>]*src=\"https?:", feedback)
+    # the book: every page, exercises with dropdown solutions, executed checks, local MathJax only
+    out = copy / "build" / "book"
+    assert (out / "index.html").exists() and (out / "metrics_primer.html").exists()
+    page = (out / f"{LABS[0]}.html").read_text()
+    assert "exercise" in page and "dropdown" in page and "✓ correct_rate matches lorisnb" in page
+    assert "_static/mathjax/tex-chtml.js" in page and (out / "_static" / "mathjax" / "tex-chtml.js").is_file()
+    assert _teaching_module("offline").remote_scripts(sorted(out.rglob("*.html"))) == []
+    assert list((out / "_images").glob("*.png")), "figures of the executed notebooks"
+    # the slides: one per notebook, reveal.js and MathJax beside them, nothing from the network
+    slides = copy / "build" / "slides"
+    for name in ("metrics_primer", *LABS):
+        html = (slides / f"{name}.slides.html").read_text()
+        assert 'src="reveal.js/dist/reveal.js"' in html and 'src="mathjax/tex-chtml.js"' in html
+        assert not re.search(r"<script[^>]*src=\"(https?:)?//", html) and "<section" in html
+    assert (slides / "reveal.js" / "dist" / "reveal.js").is_file() and (slides / "mathjax" / "tex-chtml.js").is_file()
+
+
+def test_sample_data_is_small_and_a_verbatim_subset_of_the_data(data):
+    """The teaching data shipped in the package: every file under 512 KiB, about 1.4 MB in all,
+    each a byte-for-byte copy of the file of the same path in the full data (teaching/make_sample_data.py)."""
+    from lorisnb.io.data import sample_data
+
+    root = sample_data().root
+    files = [p for p in root.rglob("*") if p.is_file() and p != root / "README.md"]  # that one is the sample's own
+    assert 20 <= len(files) and all(p.stat().st_size < 512 * 1024 for p in files)
+    assert 1.0e6 < sum(p.stat().st_size for p in files) < 1.6e6
+    for p in files:
+        assert p.read_bytes() == (data.root / p.relative_to(root)).read_bytes(), p
+    assert sample_data().scenes_with_groundtruth() == ["cafe"]
