@@ -291,3 +291,70 @@ def _shut_down_kernels(url: str) -> None:
     for k in kernels:
         req = urllib.request.Request(f"{url}/api/kernels/{k['id']}", headers=head, method="DELETE")
         urllib.request.urlopen(req, timeout=10).close()
+
+
+@pytest.fixture(scope="module")
+def offline_report(tmp_path_factory, icra20):
+    """A report on a lab's results folder with trials (copies of bundled files, in a temporary folder)."""
+    from report_fixtures import trial_results
+
+    from lorisnb.tools.report import run_report
+
+    root = tmp_path_factory.mktemp("report")
+    results = trial_results(root / "mine", icra20)
+    run_dir, runs = run_report(root / "run", {"quick": True}, ["per_sequence_benchmark", "threshold_sensitivity"],
+                               progress=False, results=results)  # fmt: skip
+    assert [r.status for r in runs] == ["ok", "ok"], [r.error for r in runs]
+    return run_dir
+
+
+def test_report_opens_offline(offline_report, tmp_path):
+    """index.html and a notebook page from file://, with every http(s) request blocked and every
+    request recorded (Chrome's performance log): none leaves the machine, nothing fails to load,
+    and the first table of the page is a leaderboard."""
+    if not (Path(CHROMIUM).exists() and Path(CHROMEDRIVER).exists()):
+        pytest.fail(f"{CHROMIUM} / {CHROMEDRIVER} missing: run `make test-browser` (installs Debian's chromium)")
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--proxy-server=127.0.0.1:9", "--window-size=1300,1000"):  # fmt: skip
+        opts.add_argument(arg)
+    opts.add_argument(f"--user-data-dir={tmp_path / 'chromium'}")
+    opts.set_capability("goog:loggingPrefs", {"performance": "ALL"})
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    try:
+        driver.execute_cdp_cmd("Network.enable", {})
+        driver.execute_cdp_cmd("Network.setBlockedURLs", {"urls": ["http://*", "https://*", "ws://*", "wss://*"]})
+        pages = [offline_report / "index.html", offline_report / "report.html",
+                 offline_report / "per_sequence_benchmark" / "per_sequence_benchmark.html",
+                 offline_report / "threshold_sensitivity" / "threshold_sensitivity.html"]  # fmt: skip
+        requested: list[str] = []
+        for page in pages:
+            driver.get(page.as_uri())
+            _wait(lambda: driver.execute_script("return document.readyState") == "complete", 30, f"{page.name}")
+            driver.execute_script("window.scrollTo(0, document.body.scrollHeight)")  # lazy images load
+            time.sleep(1.0)
+            for entry in driver.get_log("performance"):
+                msg = json.loads(entry["message"])["message"]
+                if msg["method"] == "Network.requestWillBeSent":
+                    requested.append(msg["params"]["request"]["url"])
+            broken = driver.execute_script(
+                "return Array.from(document.images).filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.src)"
+            )
+            assert broken == [], f"{page.name}: images that did not load: {broken}"
+            if page.name in ("index.html", "report.html"):
+                first = driver.execute_script("const t = document.querySelector('table'); return t && t.className")
+                assert first == "leaderboard", f"{page.name}: the first table is {first!r}, not the leaderboard"
+                head = driver.execute_script(
+                    "return Array.from(document.querySelector('table').querySelectorAll('th')).map(t => t.textContent)"
+                )
+                assert head[:3] == ["rank", "algorithm", "cr"] and "coverage (sequences)" in head
+        outside = [u for u in requested if not u.startswith(("file:", "data:", "about:", "chrome"))]
+        assert outside == [], f"requests that would leave the machine: {outside}"
+        assert any(u.endswith(".png") for u in requested)  # the figures came from the run folder
+    finally:
+        driver.quit()

@@ -157,5 +157,5 @@ def test_bom_header_case_binary_and_openloris_hint(tmp_path, data):
     binary = write(tmp_path, "bin.txt", b"scene: cafe\n" + bytes(range(256)) * 10)
     with pytest.raises(ParseError, match=r"bin.txt, line 2: binary data \(a NUL byte\)"):
         read_openloris(binary)
-    with pytest.raises(ParseError, match="looks like an OpenLORIS file: read it with read_openloris"):
+    with pytest.raises(ParseError, match=r"looks like an OpenLORIS file .*--format openloris.*read_openloris"):
         read_tum(data.groundtruth("cafe"))

@@ -1,4 +1,4 @@
-"""The ``lorisnb`` command line: ``evaluate``, ``sweep``, ``crosscheck`` and ``report``.
+"""The ``lorisnb`` command line: ``evaluate``, ``sweep``, ``compare``, ``crosscheck``, ``report`` and ``verify``.
 
 The command line is where lorisnb reports: tables on stdout, warnings and failures on stderr,
 a non-zero exit status when any input failed (2 for a usage or output error, 130 on Ctrl-C).
@@ -20,6 +20,7 @@ from ..core.blocks import ordinary_pages
 from ..core.spec import ALIGNMENTS, PRESETS
 from ..errors import LorisError
 from ..io.ranges import keep_freed_memory
+from ..io.registry import FORMAT_NAMES
 from .options import (
     add_compare_options,
     add_diff_options,
@@ -100,13 +101,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("est", help="estimate")
     p.add_argument(
         "--format",
-        choices=["tum", "kitti", "euroc", "bag", "openloris"],
+        choices=FORMAT_NAMES,
         default="tum",
         help="format of GT (and of EST unless --est-format); euroc follows evo: the ground truth is the "
         "EuRoC CSV, the estimate TUM text",
     )
     p.add_argument(
-        "--est-format", choices=["tum", "kitti", "euroc", "bag"], default=None, help="format of EST when it differs"
+        "--est-format",
+        choices=[f for f in FORMAT_NAMES if f != "openloris"],
+        default=None,
+        help="format of EST when it differs",
     )
     p.add_argument("--conventions", choices=list(PRESETS), default=None,
                    help="lorisnb under this preset (e.g. evo) against evo reading the files itself: every statistic")  # fmt: skip
@@ -134,7 +138,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--data", default=None, metavar="DIR")
     p.add_argument("--csv", default=None, metavar="OUT")
     p.add_argument("--force", action="store_true")
-    p.set_defaults(func=_command(".commands", "cmd_crosscheck"))
+    p.set_defaults(func=_command(".crosscheck", "cmd_crosscheck"))
 
     p = sub.add_parser("report", help="run the notebooks with papermill into a report folder under results/")
     p.add_argument("--out", default=None, help="run folder (default results/run-<date>-<time>)")
@@ -154,15 +158,33 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="folder of the notebooks (default: those shipped with lorisnb)",
     )
+    p.add_argument(
+        "--results",
+        default=None,
+        metavar="DIR",
+        help="your results folder (<algorithm>/*.txt, trials allowed): the leaderboard's input and the notebooks' "
+        "results_dir; notebooks about the bundled data only are left out unless named",
+    )
+    p.add_argument(
+        "--jobs",
+        type=arg_type(lambda t: int(validate.positive("--jobs", t, "notebooks", integer=True))),
+        default=None,
+        help="notebooks run at a time (default: the cores)",
+    )
     p.add_argument("--force", action="store_true", help="replace --out if it is an earlier lorisnb run folder")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=_command(".commands", "cmd_report"))
+
+    p = sub.add_parser("verify", help="re-check a report run's inputs against the checksums in its run.json")
+    p.add_argument("run", metavar="RUN", help="a run folder written by lorisnb report (or its run.json)")
+    p.set_defaults(func=_command(".commands", "cmd_verify"))
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = ["lorisnb", *(sys.argv[1:] if argv is None else argv)]  # the command line, as run.json records it
     keep_freed_memory()  # a command is one short process: reuse freed memory (see there)
     ordinary_pages(True)  # and new arrays in ordinary pages (see there)
     if not (getattr(args, "parquet", None) or getattr(args, "scheduler", None) or args.command == "report"):

@@ -1,4 +1,4 @@
-"""The commands: ``evaluate``, ``sweep``, ``compare``, ``crosscheck``, ``report``. Tables go to stdout,
+"""The commands: ``evaluate``, ``sweep``, ``compare``, ``crosscheck``, ``report``, ``verify``. Tables go to stdout,
 warnings and failures to stderr; the exit status is non-zero when any input failed."""
 
 from __future__ import annotations
@@ -11,21 +11,17 @@ from typing import Any
 
 import pandas as pd
 
-from ..core.spec import make_spec
 from ..errors import LorisError, LorisWarning, ValidationError
-from .options import check_output, check_outputs, param_value, refuse_unused, spec_from_args
+from .options import check_outputs, param_value, refuse_unused, spec_from_args
 
 
 def _executor(args: argparse.Namespace) -> Any:
     """A Dask cluster's executor for ``--scheduler ADDRESS`` (None without it)."""
-    if not getattr(args, "scheduler", None):
+    if getattr(args, "scheduler", None) is None:
         return None
-    from ..tools import require
+    from ..tools.pool import connect_scheduler
 
-    try:
-        client = require("distributed").Client(args.scheduler, timeout=10)
-    except (OSError, TimeoutError) as exc:
-        raise LorisError(f"--scheduler {args.scheduler}: cannot reach the Dask scheduler ({exc})") from None
+    client = connect_scheduler(args.scheduler)  # checked and probed: one line, never a hang
     return client.get_executor()
 
 
@@ -86,6 +82,8 @@ def _report_problems(ev: Any, notes: list[str]) -> None:
         print(f"warning: {n}", file=sys.stderr)
     for f in ev.failures:
         print(f"error: {f.error}", file=sys.stderr)
+    for f in ev.unscored:  # in the table, scored as the paper scores it; the exit status says so
+        print(f"not scored: {f.error}", file=sys.stderr)
     if ev.skipped:
         reasons = sorted({f.error.split(":")[0] for f in ev.skipped})
         print(f"skipped {len(ev.skipped)} file(s): " + "; ".join(reasons), file=sys.stderr)
@@ -100,8 +98,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from ..core.aggregate import aggregate_scenes
     from ..io.writers import write_csv, write_parquet
 
-    check_output(args.csv, args.paths, args.force)
-    check_output(args.parquet, args.paths, args.force, folder=True)
+    check_outputs(args, args.paths, ["csv"], folders=("parquet",))
     ev, notes = _run_evaluation(args)
     table = ev.sequences()
     if not table.empty:
@@ -141,16 +138,16 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print("\nrelative error (rpg_trajectory_evaluation: sub-trajectories of 10..50 % of the length):")
         print(_fmt(rel.drop(columns=["suite", "trial"]), args.digits) if not rel.empty else "(no sequence long enough)")
     _report_problems(ev, notes)
-    print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.skipped)} skipped", file=sys.stderr)
-    return 1 if ev.failures else 0
+    print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.unscored)} not scored, "
+          f"{len(ev.skipped)} skipped", file=sys.stderr)  # fmt: skip
+    return ev.exit_status()
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     from ..core.sweep import sweep, sweep_scenes
     from ..io.writers import write_csv, write_parquet
 
-    check_output(args.csv, args.paths, args.force)
-    check_output(args.parquet, args.paths, args.force, folder=True)
+    check_outputs(args, args.paths, ["csv"], folders=("parquet",))
     ev, notes = _run_evaluation(args)
     keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
     grid = f"{len(args.eps)} eps x {len(args.phi)} phi x {len(args.delta)} delta x {len(args.tau)} tau"
@@ -183,7 +180,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                 print(f"... {scene_rows - 60} more scene rows (in the Parquet dataset, aggregate with sweep_scenes)")
         print(f"wrote {rows} rows to {path}", file=sys.stderr)
         _report_problems(ev, notes)
-        return 1 if ev.failures else 0
+        return ev.exit_status()
     table = sweep(
         ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all",
         **ev.spec.rpe_options(),
@@ -202,7 +199,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.parquet:
         print(f"wrote {len(table)} rows to {write_parquet(written, args.parquet, force=args.force)}", file=sys.stderr)
     _report_problems(ev, notes)
-    return 1 if ev.failures else 0
+    return ev.exit_status()
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
@@ -262,109 +259,12 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                   args.alpha):  # fmt: skip
             print(f"wrote {path}", file=sys.stderr)
     _report_problems(ev, notes)
-    return 1 if ev.failures else 0
-
-
-def cmd_crosscheck(args: argparse.Namespace) -> int:
-    from ..io.formats import read_trajectory
-    from ..io.openloris import read_openloris
-    from ..io.writers import write_csv
-    from ..tools.crosscheck import crosscheck, crosscheck_openloris
-
-    check_output(args.csv, [args.gt, args.est], args.force)
-    openloris = args.format == "openloris"
-    times = [
-        o for o, v in (("--times", args.times), ("--gt-times", args.gt_times), ("--est-times", args.est_times)) if v
-    ]
-    kitti = "kitti" in (args.format, args.est_format)
-    refused = [o for o, v in (("--seq", args.seq), ("--data", args.data)) if v is not None and not openloris]
-    refused += [o for o, v in (("--est-format", args.est_format),) if v is not None and openloris]
-    refused += times if not kitti else []
-    bag = "bag" in (args.format, args.est_format)
-    refused += [o for o, v in (("--topic", args.topic), ("--gt-topic", args.gt_topic)) if v is not None and not bag]
-    if refused:
-        raise ValidationError(
-            f"{', '.join(refused)}: does not apply to --format {args.format}"
-            + (f" with --est-format {args.est_format}" if args.est_format else "")
-            + " (--seq and --data: OpenLORIS files; --est-format: TUM/KITTI/EuRoC pairs; times files: KITTI;"
-            " topics: bags)"
-        )
-    if args.align is not None and args.conventions is None:
-        raise ValidationError("--align: only with --conventions (the crosscheck's own rows use none, se3 and sim3)")
-    deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
-    gt_format = args.format
-    est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)
-    if args.conventions is not None:
-        return _crosscheck_conventions(args, gt_format, est_format)
-    if args.format == "openloris":
-        gt_file = read_openloris(args.gt) if args.gt not in ("-", "auto") else None
-        table = crosscheck_openloris(
-            args.est,
-            args.seq,
-            scale=False if args.scale is None else args.scale,
-            data_root=args.data,
-            groundtruth=gt_file,
-            rpe_deltas=deltas,
-        )
-    else:
-        gt_times, est_times = args.gt_times or args.times, args.est_times or args.times
-        by_index = "kitti" in (gt_format, est_format) and (gt_times is None or est_times is None)
-        if by_index and (gt_format != est_format or gt_times is not None or est_times is not None):
-            raise ValidationError(
-                "--gt-times and --est-times: a KITTI file has no stamps; give stamps for both files (or for "
-                "neither, to pair two KITTI files of equal length by index)"
-            )
-        gt = read_trajectory(args.gt, gt_format, stamps=gt_times if gt_format == "kitti" else None,
-                             topic=args.gt_topic if gt_format == "bag" else None)  # fmt: skip
-        est = read_trajectory(args.est, est_format, stamps=est_times if est_format == "kitti" else None,
-                              topic=args.topic if est_format == "bag" else None)  # fmt: skip
-        spec = make_spec(None, surface="cli", **({} if args.scale is None else {"scale": args.scale}))
-        with_scale = spec.alignment_for(Path(args.est).stem) == "sim3"
-        table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs)
-        from ..tools.crosscheck_reading import crosscheck_reading  # and evo's own reading of each file
-
-        parts = [crosscheck_reading(f, fm, t).assign(quantity=lambda x, w=w: w + ": " + x["quantity"])
-                 for w, f, fm, t in (("ground truth", args.gt, gt_format, args.gt_topic),
-                                     ("estimate", args.est, est_format, args.topic))]  # fmt: skip
-        table = pd.concat([table, *parts], ignore_index=True)
-    from ..tools import require
-
-    evo_version = require("evo").__version__
-
-    with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
-        print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"))
-    must = table["note"].str.startswith("identical pairs")
-    print(
-        f"\nevo {evo_version}: {int(table.loc[must, 'agrees'].sum())} of {int(must.sum())} quantities computed "
-        "on identical pairs agree; other rows explain where the definitions differ",
-        file=sys.stderr,
-    )
-    if args.csv:
-        write_csv(table, args.csv, args.force)
-    return 0 if table.loc[must, "agrees"].all() else 1
-
-
-def _crosscheck_conventions(args: argparse.Namespace, gt_format: str, est_format: str) -> int:
-    """``crosscheck --conventions P``: lorisnb under preset P against evo reading the files itself."""
-    from ..io.writers import write_csv
-    from ..tools.crosscheck_evo import crosscheck_evo
-
-    spec = make_spec(args.conventions, surface="cli", **({"align": args.align} if args.align else {}))
-    table = crosscheck_evo(args.gt, args.est, spec, fmt=est_format, gt_fmt=gt_format, topic=args.topic,
-                           gt_topic=args.gt_topic, tol=1e-5 if "kitti" in (gt_format, est_format) else 1e-9)  # fmt: skip
-    with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
-        print(table.to_string(index=False, float_format=lambda v: f"{v:.10g}"))
-    stats = ~table["quantity"].str.contains(":") & table["evo"].notna()
-    print(f"\n{int(table.loc[stats, 'agrees'].sum())} of {int(stats.sum())} statistics agree with evo reading the "
-          "files itself; the reading rows say where the readings differ and why", file=sys.stderr)  # fmt: skip
-    if args.csv:
-        write_csv(table, args.csv, args.force)
-    return 0 if table.loc[stats, "agrees"].all() else 1
+    return ev.exit_status()
 
 
 def cmd_report(args: argparse.Namespace) -> int:
     from ..io.data import find_data
-    from ..tools.report import run_report
+    from ..tools.report import findings_input_errors, run_report
 
     params = {k: param_value(v) for k, v in (args.parameter or [])}
     if args.data and "data_root" not in params:
@@ -380,6 +280,9 @@ def cmd_report(args: argparse.Namespace) -> int:
         progress=not args.no_progress,
         notebooks_dir=args.notebooks_dir,
         protect=protect,
+        results=args.results,
+        jobs=args.jobs,
+        command=getattr(args, "argv", None),
     )
     for r in runs:
         status = r.status if r.status != "ok" or not r.input_errors else f"ok, {r.input_errors} input file(s) failed"
@@ -389,8 +292,27 @@ def cmd_report(args: argparse.Namespace) -> int:
         print(
             f"note: {args.out} appeared while this report ran (another run?); this run is in {run_dir}", file=sys.stderr
         )
+    failed_inputs = findings_input_errors(run_dir)
+    if failed_inputs:
+        print(f"leaderboard: {failed_inputs} input file(s) could not be evaluated (listed in index.html)")
     print(f"report: {run_dir / 'index.html'}")
-    return 1 if any(r.status == "failed" or r.input_errors for r in runs) else 0
+    return 1 if failed_inputs or any(r.status == "failed" or r.input_errors for r in runs) else 0
+
+
+def cmd_verify(args: argparse.Namespace) -> int:
+    """Re-check a run's inputs against run.json: exit 1 if any changed or is missing."""
+    from ..tools.provenance import read_run_json, verify_run
+
+    record = read_run_json(args.run)
+    problems = verify_run(args.run)
+    for path, what in problems:
+        print(f"{what}: {path}")
+    n = len(record["inputs"])
+    if problems:
+        print(f"{len(problems)} of {n} input file(s) changed or missing since the run", file=sys.stderr)
+        return 1
+    print(f"all {n} input file(s) unchanged", file=sys.stderr)
+    return 0
 
 
 #: The helpers other command modules (:mod:`lorisnb.cli.runs`) share with these commands.

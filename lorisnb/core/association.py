@@ -82,6 +82,10 @@ class Association:
     def __len__(self) -> int:
         return len(self.stamps)
 
+    def __repr__(self) -> str:
+        span = f"{self.stamps[0]:.3f}..{self.stamps[-1]:.3f} s" if len(self.stamps) else "none"
+        return f"<Association: {len(self.stamps)} matched poses ({span}); ground truth {self.gt_start:.3f}..{self.gt_end:.3f} s>"
+
     @property
     def gt_rotations(self) -> Rotation | None:
         """:attr:`gt_quaternions` as a scipy ``Rotation`` (built on request)."""

@@ -119,3 +119,13 @@ def other_spans(
     }
     spans.update({k: v for k, v in (more or {}).items() if k not in spans and k != f"{scene}-{seq}"})
     return spans
+
+
+def degenerate_note(label: str, est_positions: np.ndarray, a: Association) -> str | None:
+    """:func:`lorisnb.core.plausibility.degenerate_fit` of an alignment fitted on the matched
+    poses ``a``: judged on a few evenly spread poses first (a long sequence that is not degenerate
+    is found so at once), on all of them only when those few are."""
+    few = spread(len(a), 10 * PLAUSIBILITY_POSES)
+    if plausibility.degenerate_fit(label, est_positions[a.est_index[few]], a.gt_positions[few]) is None:
+        return None
+    return plausibility.degenerate_fit(label, est_positions[a.est_index], a.gt_positions)

@@ -21,11 +21,13 @@ Alignment (``gt = s R est + t``, fitted on the matched positions):
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from ..errors import EvaluationError
+from ..errors import EvaluationError, LorisWarning
 from .evo_options import origin_alignment, scale_alignment
-from .geometry import Sim3, quat_to_matrix, umeyama
+from .geometry import Sim3, degenerate_alignment, quat_to_matrix, umeyama
 from .spec import ASSOCIATIONS, MAX_DIFF, Conventions
 from .validate import choice
 
@@ -169,10 +171,19 @@ def fit_alignment(
     frames: int | None = None,
     est_quaternions: np.ndarray | None = None,
     gt_quaternions: np.ndarray | None = None,
+    strict: bool = True,
+    notes: list[str | None] | None = None,
 ) -> Sim3:
     """The alignment ``gt = s R est + t`` of matched poses by ``method`` (see the module
     docstring), fitted on the first ``frames`` matched poses (None: all). Positions in metres;
-    quaternions ``xyzw``, needed for ``frames=1`` with ``se3`` or ``posyaw``, and for ``origin``."""
+    quaternions ``xyzw``, needed for ``frames=1`` with ``se3`` or ``posyaw``, and for ``origin``.
+
+    Where no alignment can be determined (fewer than 3 positions, zero spread, all on one line;
+    posyaw without horizontal spread) it raises EvaluationError saying what to do; ``strict=False``
+    fits se3/sim3 on all poses all the same, as the official OpenLORIS tool does (the pipeline then
+    says so: :func:`lorisnb.core.plausibility.degenerate_fit`). posyaw on an estimate tilted
+    against the ground truth, or an alignment on all of fewer than :data:`FEW_POSES` poses, is
+    warned about (appended to ``notes`` when given, else a LorisWarning)."""
     method = choice("align", method, ALIGNMENTS)
     p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
     if method == "none" or len(p_e) == 0:
@@ -183,8 +194,15 @@ def fit_alignment(
         if est_quaternions is None or gt_quaternions is None:
             raise EvaluationError("align='origin' needs the orientations")
         return origin_alignment(p_e[0], est_quaternions[0], p_g[0], gt_quaternions[0])
+    if frames is None and 3 <= len(p_e) < FEW_POSES:
+        _say(
+            f"the {method} alignment is fitted on all of only {len(p_e)} matched poses, so it absorbs most of their "
+            "error (the ATE is small by construction); evaluate a longer estimate, or align on fewer poses "
+            "(--align-frames N) and judge the rest",
+            notes,
+        )
     if frames is None and method in ("se3", "sim3"):  # all matched poses: Horn/Umeyama, as the official tool
-        return umeyama(p_e, p_g, method == "sim3")
+        return umeyama(p_e, p_g, method == "sim3", strict=strict)
     n = len(p_e) if frames is None else min(int(frames), len(p_e))
     if n == 1 and method in ("se3", "posyaw"):
         if est_quaternions is None or gt_quaternions is None:
@@ -198,6 +216,49 @@ def fit_alignment(
     if method == "posyaw":
         mu_e, mu_g = p_e[:n].mean(axis=0), p_g[:n].mean(axis=0)
         c = (p_e[:n] - mu_e).T @ (p_g[:n] - mu_g)
+        if not np.hypot(c[0, 0] + c[1, 1], c[0, 1] - c[1, 0]) > np.finfo(float).eps * max(1.0, np.abs(c).max()):
+            raise EvaluationError(
+                f"no posyaw alignment can be determined: the {n} matched positions have no horizontal spread "
+                "(all on one vertical line or one point), so the yaw is arbitrary; align on more poses, on the "
+                "first pose's orientation (--align-frames 1), or not at all (--align none)"
+            )
         rot = _rot_z(_best_yaw(c))
+        _say(_tilt_note(p_e[:n], p_g[:n], Sim3(rot, mu_g - rot @ mu_e, 1.0)), notes)
         return Sim3(rot, mu_g - rot @ mu_e, 1.0)
-    return umeyama(p_e[:n], p_g[:n], method == "sim3")
+    return umeyama(p_e[:n], p_g[:n], method == "sim3", strict=True)
+
+
+#: An alignment on all matched poses, fewer than this, is said to absorb their error.
+FEW_POSES = 10
+#: posyaw is questioned when the best full rotation between the positions tilts z by more than
+#: this (degrees) and fits them at least this much better (ATE RMSE ratio).
+TILT_DEGREES = 10.0
+TILT_GAIN = 0.5
+
+
+def _say(note: str | None, notes: list[str | None] | None) -> None:
+    if note is None:
+        return
+    if notes is not None:
+        notes.append(note)
+    else:
+        warnings.warn(note, LorisWarning, stacklevel=3)
+
+
+def _tilt_note(p_e: np.ndarray, p_g: np.ndarray, posyaw: Sim3) -> str | None:
+    """The positions say the two world frames differ in roll/pitch: posyaw (a rotation about
+    gravity only) then leaves a tilt in every error."""
+    if degenerate_alignment(p_e, p_g) is not None:
+        return None
+    se3 = umeyama(p_e, p_g)
+    tilt = float(np.degrees(np.arccos(np.clip(se3.rotation[2, 2], -1.0, 1.0))))
+    rmse_yaw = float(np.sqrt(np.mean(np.sum((posyaw.apply(p_e) - p_g) ** 2, axis=1))))
+    rmse_se3 = float(np.sqrt(np.mean(np.sum((se3.apply(p_e) - p_g) ** 2, axis=1))))
+    if tilt > TILT_DEGREES and rmse_se3 < TILT_GAIN * rmse_yaw:
+        return (
+            f"align='posyaw' assumes both trajectories have z along gravity, but the best full rotation between "
+            f"them tilts z by {tilt:.1f} deg (roll/pitch) and fits with ATE RMSE {rmse_se3:.3f} m against "
+            f"{rmse_yaw:.3f} m for posyaw: is the estimate gravity-aligned (a visual-only system?)? "
+            "Use --align se3 (or sim3)."
+        )
+    return None

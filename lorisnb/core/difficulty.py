@@ -20,6 +20,7 @@ from . import metrics
 from .geometry import quat_angle_deg, quat_conjugate, quat_multiply, quat_normalize
 from .model import SequenceErrors
 from .trajectory import Trajectory, size
+from .validate import choice, positive, relative_fraction
 
 
 def trajectory_stats(traj: Trajectory) -> dict:
@@ -69,8 +70,10 @@ def difficulty_measures(
         relative_to: that size: ``extent`` (bounding-box diagonal) or ``length`` (distance travelled).
         rpe_metres: distance along the ground truth over which the RPE is taken, metres.
     """
+    relative_to = choice("relative_to", relative_to, ("extent", "length"))
+    fraction = relative_fraction("eps_fraction", positive("eps_fraction", eps_fraction, "(a fraction)"), eps_fraction)
     st = trajectory_stats(gt)
-    eps = eps_fraction * size(gt.positions, relative_to)  # of the whole sequence, whatever was tracked
+    eps = fraction * size(gt.positions, relative_to)  # of the whole sequence, whatever was tracked
     out = dict(
         length_m=st["length_m"],
         extent_m=st["extent_m"],

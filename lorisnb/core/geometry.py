@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..errors import EvaluationError
+
 if TYPE_CHECKING:
     from scipy.spatial.transform import Rotation
 
@@ -30,6 +32,11 @@ class Sim3:
     def identity(cls) -> "Sim3":
         return cls(np.eye(3), np.zeros(3), 1.0)
 
+    def __repr__(self) -> str:
+        angle = float(np.degrees(np.arccos(np.clip((np.trace(self.rotation) - 1) / 2, -1.0, 1.0))))
+        t = ", ".join(f"{v:.4g}" for v in np.asarray(self.translation, float))
+        return f"<Sim3: rotation {angle:.4g} deg, translation [{t}] m, scale {self.scale:.6g}>"
+
     def apply(self, points: np.ndarray) -> np.ndarray:
         """Transform (N, 3) points."""
         return self.scale * points @ self.rotation.T + self.translation
@@ -42,7 +49,31 @@ class Sim3:
         return m
 
 
-def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False) -> Sim3:
+#: Relative size below which the second singular value of the cross-covariance counts as zero:
+#: the positions lie on a line (or a point) and the rotation about it cannot be fitted.
+DEGENERATE_RATIO = 1e-12
+
+
+def degenerate_alignment(source: np.ndarray, target: np.ndarray) -> str | None:
+    """Why no rotation can be fitted between matched (N, 3) positions, or None: fewer than 3
+    positions, all positions of one side identical (zero spread), or all on one line (the
+    rotation about it is undetermined; evo refuses these too: "degenerate covariance rank")."""
+    source = np.asarray(source, float)
+    target = np.asarray(target, float)
+    n = len(source)
+    if n == 0:
+        return "no matched position"
+    xs, xt = source - source.mean(axis=0), target - target.mean(axis=0)
+    for side, p in (("estimate", source), ("ground-truth", target)):
+        if np.ptp(p, axis=0).max() <= 1e-12 * max(1.0, float(np.abs(p).max())):
+            return f"all {n} matched {side} positions are identical (zero spread)"
+    d = np.linalg.svd(xt.T @ xs / n, compute_uv=False)
+    if n < 3 or d[1] <= max(DEGENERATE_RATIO * d[0], np.finfo(float).eps):
+        return f"the {n} matched positions lie on one line" if n >= 3 else f"only {n} matched positions (fewer than 3)"
+    return None
+
+
+def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False, strict: bool = False) -> Sim3:
     """Least-squares Sim(3)/SE(3) with ``target ~ s R source + t`` (Umeyama 1991; Horn's method
     without scale).
 
@@ -50,6 +81,9 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False) ->
         source: (N, 3) points to move (estimated positions), metres.
         target: (N, 3) reference points (ground truth), metres.
         with_scale: estimate the scale s (Sim(3)); otherwise s = 1 (SE(3)).
+        strict: raise EvaluationError where no rotation can be determined
+            (:func:`degenerate_alignment`); without it such input gets the SVD's arbitrary
+            answer, as the official OpenLORIS tool computes it.
     """
     source = np.asarray(source, float)
     target = np.asarray(target, float)
@@ -58,6 +92,12 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False) ->
     n = len(source)
     if n == 0:
         raise ValueError("umeyama needs at least one point pair")
+    if strict and (why := degenerate_alignment(source, target)) is not None:
+        raise EvaluationError(
+            f"no {'Sim(3)' if with_scale else 'SE(3)'} alignment can be determined: {why}, so the rotation "
+            "about them is arbitrary; align on more poses (--align-frames N with N >= 3 poses not on one line), "
+            "on the first pose's orientation (--align-frames 1), or not at all (--align none)"
+        )
     mu_s = source.mean(axis=0)
     mu_t = target.mean(axis=0)
     xs = source - mu_s

@@ -121,6 +121,14 @@ class ResultFile:
     def n_poses(self) -> int:
         return sum(len(t) for t in self.sequences.values())
 
+    def __repr__(self) -> str:
+        head = ", ".join(f"{k} {self.header[k]}" for k in ("scene", "frame") if k in self.header)
+        n = len(self.sequences)
+        return (
+            f"<ResultFile {self.path.name}: {head + ', ' if head else ''}{n} sequence{'' if n == 1 else 's'}, "
+            f"{self.n_poses} poses{f', {len(self.warnings)} warning(s)' if self.warnings else ''}>"
+        )
+
 
 #: The name the first release used for :class:`ResultFile`.
 OpenLorisFile = ResultFile
@@ -170,6 +178,15 @@ class SequenceErrors:
     @property
     def matched(self) -> int:
         return len(self.stamps)
+
+    def __repr__(self) -> str:
+        errors = ""
+        if self.matched:
+            ate = float(np.sqrt(np.mean(np.square(self.ate))))
+            aoe = float(np.sqrt(np.mean(np.square(self.aoe))))
+            errors = f", ATE RMSE {ate:.4g} m, AOE RMSE {aoe:.4g} deg"
+        scale = f", scale {self.scale:.4g}" if self.scale != 1.0 else ""
+        return f"<SequenceErrors seq {self.seq}: {self.poses} poses, {self.matched} matched{errors}{scale}>"
 
     @property
     def est_rotations(self) -> Rotation | None:
@@ -237,6 +254,17 @@ class FileErrors:
     #: path length (metres) of every sequence's whole ground truth as read, before association:
     #: what rpg's relative error takes its sub-trajectory lengths from (empty when not known)
     groundtruth_lengths: dict[int, float] = field(default_factory=dict)
+
+    def __repr__(self) -> str:
+        n = len(self.sequences)
+        matched = sum(e.matched for e in self.sequences)
+        poses = sum(e.poses for e in self.sequences)
+        trial = f", trial {self.trial}" if self.trial else ""
+        notes = f", {len(self.warnings)} warning(s)" if self.warnings else ""
+        return (
+            f"<FileErrors {self.algorithm} {self.file} (scene {self.scene}, {self.mode}{trial}): "
+            f"{n} sequence{'' if n == 1 else 's'}, {matched} of {poses} poses matched{notes}>"
+        )
 
 
 def is_monocular(algorithm: str) -> bool:

@@ -194,7 +194,8 @@ def evaluate_sessions(
     def fit(s: int) -> Sim3:
         a, e = assoc[s], est[s]
         q_e = e.quaternions[a.est_index] if spec.align_frames == 1 or method == "origin" else None
-        return fit_alignment(e.positions[a.est_index], a.gt_positions, method, spec.align_frames, q_e, a.gt_quaternions)
+        return fit_alignment(e.positions[a.est_index], a.gt_positions, method, spec.align_frames, q_e, a.gt_quaternions,
+                             strict=frames is None, notes=found)  # OpenLORIS: the official tool's alignment  # fmt: skip
 
     aligned_on: int | None = None
     alignment = Sim3.identity()
@@ -221,6 +222,9 @@ def evaluate_sessions(
             alignment = per_seq[seqs[0]]
             aligned_on = seqs[0] if len(assoc[seqs[0]]) else None
 
+    if frames is not None:  # an OpenLORIS file is aligned as the official tool aligns it, degenerate or not: said
+        fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s])]
+        found += [checks.degenerate_note(f"{name}, seq {s}", est[s].positions, assoc[s]) for s in fitted]
     if checks_on and method == "se3":
         hint = "--scale, or --scale auto for dso/svo" if frames is not None else "--align sim3"
         fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s]) > 2]

@@ -9,6 +9,7 @@ from typing import Mapping
 
 import numpy as np
 
+from .geometry import degenerate_alignment
 from .trajectory import Trajectory
 
 #: A best-fit Sim(3) scale outside [1/SCALE_LIMIT, SCALE_LIMIT] that also cuts the ATE RMSE to
@@ -140,4 +141,19 @@ def quaternion_order(label: str, median_aoe: float, median_aoe_swapped: float) -
         f"{label}: the quaternions look like 'qw qx qy qz' instead of 'qx qy qz qw': read that way the median "
         f"AOE drops from {median_aoe:.1f} deg to {median_aoe_swapped:.1f} deg. Write each pose as "
         "'stamp x y z qx qy qz qw' (the real part last)."
+    )
+
+
+def degenerate_fit(label: str, est_positions: np.ndarray, gt_positions: np.ndarray) -> str | None:
+    """The alignment was fitted on matched positions that cannot determine a rotation (fewer than
+    3, all identical, or all on one line: :func:`lorisnb.core.geometry.degenerate_alignment`), so
+    its rotation, and every error after it, is arbitrary. The official tool aligns all the same;
+    lorisnb computes the same number and says so."""
+    why = degenerate_alignment(est_positions, gt_positions)
+    if why is None:
+        return None
+    return (
+        f"{label}: the alignment was fitted on {why}, so its rotation is arbitrary and so are the errors "
+        "after it (the official tool aligns all the same); check this sequence's output, or evaluate it "
+        "with the conventions of pairs (--align-frames 1, --align none)."
     )

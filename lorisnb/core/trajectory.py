@@ -80,6 +80,20 @@ class Trajectory:
     def __len__(self) -> int:
         return len(self.stamps)
 
+    def __repr__(self) -> str:
+        n = len(self.stamps)
+        source = self.meta.get("source")
+        where = f", from {str(source).rsplit('/', 1)[-1]}" if source else ""
+        if n == 0:
+            return f"<Trajectory: no poses{where}>"
+        t0, t1 = float(self.stamps[0]), float(self.stamps[-1])
+        span = (
+            f"stamps {t0:g}..{t1:g} (pose indices)"
+            if self.meta.get("stamps") == "index"
+            else f"stamps {t0:.3f}..{t1:.3f} s ({t1 - t0:.3f} s)"
+        )
+        return f"<Trajectory: {n} poses, {span}, path {path_length(self.positions):.2f} m{where}>"
+
     @classmethod
     def empty(cls) -> "Trajectory":
         return cls(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 4)), np.zeros(0, dtype=int))

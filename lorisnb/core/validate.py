@@ -33,6 +33,18 @@ THRESHOLDS: dict[str, tuple[str, bool]] = {
     "tau": ("seconds", False),
 }
 
+#: Largest finite value that still has a meaning, with what a larger one probably is: an AOE
+#: is at most 180 degrees; a validity window or time factor of more than a day is a value in
+#: milliseconds (or a typo). ``inf`` (no threshold) stays allowed.
+LIMITS: dict[str, tuple[float, str]] = {
+    "phi": (180.0, "an orientation error is at most 180 degrees; use 180 or 'inf' for no AOE threshold"),
+    "delta": (86400.0, "more than a day: milliseconds instead of seconds? (the paper uses 1 s)"),
+    "tau": (86400.0, "more than a day: milliseconds instead of seconds? (the paper uses 60 s)"),
+}
+
+#: A relative eps (``relative:F``) is a fraction of the ground truth's extent, at most this.
+MAX_FRACTION = 1.0
+
 
 def _show(value: Any) -> str:
     """A value as the user typed it (strings without quotes, so command-line values read naturally)."""
@@ -74,6 +86,9 @@ def threshold(name: str, value: Any) -> float:
     if v < 0 or (v == 0 and not zero_ok):
         bound = ">= 0" if zero_ok else "> 0"
         raise ValidationError(f"{name}={_show(value)}: expected a number of {unit} {bound}")
+    if name in LIMITS and math.isfinite(v) and v > LIMITS[name][0]:
+        top, why = LIMITS[name]
+        raise ValidationError(f"{name}={_show(value)}: expected at most {top:g} {unit} (or 'inf'); {why}")
     return float(v)
 
 
@@ -90,13 +105,24 @@ def eps_value(value: Any) -> float | str | dict[str, float]:
         return "paper"
     if isinstance(value, str) and value.strip().lower().startswith("relative:"):
         fraction = positive("eps", value.strip()[len("relative:") :], "(a fraction of the ground truth's extent)")
-        return f"relative:{fraction!r}"
+        return f"relative:{relative_fraction('eps', fraction, value.strip())!r}"
     try:
         return threshold("eps", value)
     except ValidationError as exc:
         raise ValidationError(
             str(exc).replace("expected a number", "expected 'paper', 'relative:F', a number", 1)
         ) from None
+
+
+def relative_fraction(name: str, fraction: float, shown: Any) -> float:
+    """A fraction of a sequence's size (relative eps, ``--relative-to``): in (0, 1]; 5 meant as
+    5 % is refused with the fraction it probably meant."""
+    if fraction > MAX_FRACTION:
+        raise ValidationError(
+            f"{name}={_show(shown)}: a fraction of the ground truth's size is at most {MAX_FRACTION:g}; "
+            f"for {fraction:g} % write {fraction / 100:g} (relative:{fraction / 100:g})"
+        )
+    return fraction
 
 
 def threshold_list(name: str, values: Any) -> list[Any]:

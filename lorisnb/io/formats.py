@@ -20,10 +20,11 @@ from ..errors import LorisWarning, ParseError, ValidationError
 from .chunks import read_rows
 from .openloris import read_openloris
 from .ranges import LINE_LIMIT
+from .registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample
 from .scanner import BOM, REPEATED, Lines, check_rows, finish, read_bytes, scan
 
-#: Formats :func:`read_trajectory` reads.
-TRAJECTORY_FORMATS = ("tum", "kitti", "euroc", "openloris", "bag")
+#: Formats :func:`read_trajectory` reads (the names of :data:`lorisnb.io.registry.FORMATS`).
+TRAJECTORY_FORMATS = FORMAT_NAMES
 ROTATION_TOLERANCE = 1e-3  # KITTI/EuRoC rotation blocks: |R R^T - I| and |det R - 1| below this
 
 
@@ -38,17 +39,17 @@ def _data_rows(lines: Lines) -> np.ndarray:
     return np.flatnonzero((lines.first >= 0) & (lines.first != ord("#")))
 
 
-def _width_message(text: str, ntok: int, expected: str) -> str:
-    hint = ""
-    if text.split(":")[0].strip().lower() in ("scene", "frame", "seq"):
-        hint = "; this looks like an OpenLORIS file: read it with read_openloris (command line: --format openloris)"
-    return f"{text[:80]!r} has {ntok} fields; expected {expected}{hint}"
+def _width_message(text: str, ntok: int, expected: str, fmt: str = "", path: str | os.PathLike | None = None) -> str:
+    """A line of the wrong width, with the option that would read it when the file (or else the
+    line) plainly belongs to another format (:mod:`lorisnb.io.registry`)."""
+    more = (hint(path, fmt) if path is not None else "") or line_hint(text, fmt)
+    return f"{text[:80]!r} has {ntok} fields; expected {expected}{more}"
 
 
-def _check_width(lines: Lines, rows: np.ndarray, spath: str, ok: np.ndarray, expected: str) -> None:
+def _check_width(lines: Lines, rows: np.ndarray, spath: str, ok: np.ndarray, expected: str, fmt: str = "") -> None:
     if not ok.all():
         i = rows[np.flatnonzero(~ok)[0]]
-        raise ParseError(spath, int(i) + 1, _width_message(lines.text(i), int(lines.ntok[i]), expected))
+        raise ParseError(spath, int(i) + 1, _width_message(lines.text(i), int(lines.ntok[i]), expected, fmt))
 
 
 def read_tum(
@@ -71,7 +72,7 @@ def read_tum(
         (8,),
         what="a TUM trajectory file",
         numbers="numbers 'stamp tx ty tz qx qy qz qw'",
-        bad_width=lambda text, n: _width_message(text, n, expected),
+        bad_width=lambda text, n: _width_message(text, n, expected, "tum", path),
         separators=b",",
         progress=progress,
         layout=_pose_groups,
@@ -144,7 +145,9 @@ def read_kitti(
         (12,),
         what="a KITTI pose file",
         numbers="12 numbers of a 3x4 pose matrix",
-        bad_width=lambda text, n: _width_message(text, n, "12 numbers per line, a 3x4 pose matrix row-major (KITTI)"),
+        bad_width=lambda text, n: _width_message(
+            text, n, "12 numbers per line, a 3x4 pose matrix row-major (KITTI)", "kitti", path
+        ),
         separators=b",",
         layout=_matrix_groups,
     )
@@ -242,6 +245,8 @@ def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop
     notes: list[str] = []
     line_no = rows.lines
     stamps = first[:, 0]
+    if (stamps != np.round(stamps)).any():  # not whole nanoseconds: reported as the whole-file reader does
+        return _read_euroc_whole(path, warn, repeated)
     keep = check_rows(spath, stamps, positions, quaternions, line_no, notes)
     if not keep.all():
         stamps, positions, quaternions, line_no = stamps[keep], positions[keep], quaternions[keep], line_no[keep]
@@ -264,9 +269,17 @@ def _read_euroc_whole(path: str | os.PathLike, warn: bool, repeated: str = "drop
         except ValueError:
             rows = rows[1:]  # a header line without '#'
     width = lines.ntok[rows]
-    _check_width(lines, rows, spath, (width >= 8) & (width == (width[0] if width.size else 8)), EUROC_ROWS)
+    _check_width(lines, rows, spath, (width >= 8) & (width == (width[0] if width.size else 8)), EUROC_ROWS, "euroc")
     ncol = int(width[0]) if width.size else 8
     values = lines.numbers(rows, spath, EUROC_NUMBERS).reshape(-1, ncol)
+    fraction = np.flatnonzero(values[:, 0] != np.round(values[:, 0]))
+    if fraction.size:  # EuRoC stamps are whole nanoseconds: these are seconds (or no stamps at all)
+        k = int(fraction[0])
+        raise ParseError(
+            spath, int(rows[k]) + 1,
+            f"stamp {lines.text(rows[k]).split(',')[0].split()[0]} has a fraction; expected whole nanoseconds "
+            f"(EuRoC CSV){hint(path, 'euroc') or '; a TUM file (stamps in seconds): read it with --format tum'}",
+        )  # fmt: skip
     poses = np.column_stack([values[:, 1:4], values[:, 5:8], values[:, 4]])  # x y z qx qy qz qw
     notes: list[str] = []
     line_no = rows + 1
@@ -301,6 +314,22 @@ def read_trajectory(
             rule; not for OpenLORIS files, whose reader drops repeated poses as the official tool).
     """
     fmt = choice("format", fmt, TRAJECTORY_FORMATS)
+    found = recognise(sample(path))
+    if found and fmt not in found:  # plainly another format: say which option reads it
+        want = FORMATS[fmt]
+        raise ParseError(path, None, f"expected the {want.name} format ({want.columns}); {FORMATS[found[0]].hint()}")
+    return _read(path, fmt, seq, stamps, topic, tf, repeated)
+
+
+def _read(
+    path: str | os.PathLike,
+    fmt: str,
+    seq: int | None,
+    stamps: np.ndarray | str | os.PathLike | None,
+    topic: str | None,
+    tf: str | None,
+    repeated: str,
+) -> Trajectory:
     if fmt == "bag":
         from .bags import read_bag
 

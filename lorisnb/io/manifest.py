@@ -46,9 +46,10 @@ from ..core.geometry import Sim3
 from ..core.spec import EvalSpec, make_spec
 from ..errors import ParseError, ValidationError
 from .formats import TRAJECTORY_FORMATS
+from .registry import suffixes
 
 BUILT_IN = ("openloris", "euroc-vicon-room1", "euroc-vicon-room2", "tum-fr1-office")
-SUFFIX = {"tum": ".txt", "kitti": ".txt", "euroc": ".csv", "openloris": ".txt", "bag": ".bag"}
+SUFFIX = {name: suffixes(name)[0] for name in TRAJECTORY_FORMATS}  # an estimate file's default suffix
 TOP_KEYS = {"name", "scene", "root", "lifelong", "groundtruth_format", "estimate_format", "eps", "phi", "source",
             "conventions", "transform", "session", "groundtruth_topic", "estimate_topic", "groundtruth_tf",
             "estimate_tf", "openloris"}  # fmt: skip
@@ -97,6 +98,16 @@ class Manifest:
     @property
     def scenes(self) -> list[str]:
         return list(dict.fromkeys(s.scene for s in self.sessions))
+
+    def __repr__(self) -> str:
+        if self.openloris:
+            return f"<Manifest {self.name!r}: the built-in OpenLORIS evaluation>"
+        n, k = len(self.sessions), len(self.scenes)
+        return (
+            f"<Manifest {self.name!r}: {n} session{'' if n == 1 else 's'} ({k} scene{'' if k == 1 else 's'}), "
+            f"{'lifelong' if self.lifelong else 'per session'}, {self.groundtruth_format} ground truth, "
+            f"{self.estimate_format} estimates>"
+        )
 
 
 def manifest_path(name_or_path: str | os.PathLike[str]) -> Path:
@@ -174,6 +185,7 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
     seqs = [s.seq for s in sessions]
     if len(set(seqs)) != len(seqs):
         raise ParseError(path, None, f"session numbers repeat ({seqs}); expected each session once")
+    check_repeats(sessions, path)
     table = raw.get("conventions", {})
     if not isinstance(table, dict):
         raise ParseError(path, None, "conventions: expected a [conventions] table of spec options")
@@ -195,6 +207,25 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
         estimate_topic=raw.get("estimate_topic"), groundtruth_tf=raw.get("groundtruth_tf"),
         estimate_tf=raw.get("estimate_tf"), source=str(raw.get("source", "")),
     )  # fmt: skip
+
+
+def check_repeats(sessions: list[Session], path: Path) -> None:
+    """A session listed twice (the same name or estimate file in two ``[[session]]`` tables) is an
+    error: it would be scored twice."""
+    for what, key in (
+        ("name", lambda s: s.name),
+        ("estimate file", lambda s: s.estimate),
+    ):  # (a ground-truth file may serve several sessions: one long recording, runs in its time windows)
+        first: dict[object, Session] = {}
+        for s in sessions:
+            k = key(s)
+            if k in first:
+                raise ParseError(
+                    path, None,
+                    f"sessions {first[k].seq} ({first[k].name!r}) and {s.seq} ({s.name!r}) have the same {what} "
+                    f"({k}): a session listed twice? Each session must be listed once, with its own files",
+                )  # fmt: skip
+            first[k] = s
 
 
 def _transform(raw: Any, path: Path) -> Sim3 | None:

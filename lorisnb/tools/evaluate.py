@@ -22,11 +22,11 @@ from ..core.model import FileErrors
 from ..core.spec import EvalSpec, make_spec
 from ..core.trials import check_duplicates, check_trials_by, compile_trials_by
 from ..errors import LorisWarning, ParseError, ValidationError
-from ..io.data import DataRoot, find_data
+from ..io.data import DataPaths, DataRoot, find_data
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import SUFFIX, Manifest, read_manifest
 from .evaluation import Evaluation, Failure
-from .inputs import algorithm_folders, as_paths, labels, names, result_files, scene_label
+from .inputs import algorithm_folders, as_paths, labels, names, result_files, scene_label, without_groundtruth
 from .jobs import BIG_FILE_BYTES, Job, PairSource, run_job
 from .pool import default_jobs, run_tasks, size_of
 
@@ -72,7 +72,7 @@ def evaluate(
     paths: PathArg | Iterable[PathArg],
     spec: EvalSpec | str | None = None,
     *,
-    data_root: DataRoot | None = None,
+    data_root: DataRoot | DataPaths | None = None,
     algorithms: Iterable[str] | None = None,
     scenes: Iterable[str] | None = None,
     trials_by: str | None = None,
@@ -106,6 +106,7 @@ def evaluate(
     the_spec = make_spec(spec, **options)
     notes = the_spec.refuse_inapplicable("openloris")
     compile_trials_by(trials_by)
+    paths = as_paths(paths)  # once: a generator is read once
     items = result_files(paths)
     _check_trials(items, trials_by)
     data = find_data(data_root)  # no data at all is an error for the whole call, not per file
@@ -145,7 +146,10 @@ def pair_source(
             raise ValidationError(
                 f"{name} (command line --{name.replace('_', '-')}): only for {needs} files; {side} are read as {has}"
             )
-    gt_path = as_paths(groundtruth)[0]
+    gt_paths = as_paths(groundtruth)
+    if len(gt_paths) != 1:
+        raise ValidationError(f"groundtruth: {len(gt_paths)} paths given; expected one ground-truth file")
+    gt_path = gt_paths[0]
     return PairSource(
         groundtruth=gt_path, fmt=fmt, gt_fmt=gt_fmt, scene=scene or scene_label(gt_path),
         est_times=None if est_times is None else Path(est_times), gt_times=None if gt_times is None else Path(gt_times),
@@ -217,6 +221,8 @@ def evaluate_pairs(
     if not src.groundtruth.exists():
         raise ParseError(src.groundtruth, None, "ground truth not found; expected a file (or a ROS 2 bag folder)")
     items = result_files(estimates, _pair_suffixes(src.fmt))
+    if "bag" not in (src.fmt, src.gt_fmt):  # (one bag may hold both, on other topics)
+        items = without_groundtruth(items, src.groundtruth)
     _check_trials(items, trials_by)
     topics = [t.strip() for t in src.topic.split(",")] if src.topic and "," in src.topic else [src.topic]
     if len(topics) > 1 and not all(topics):
@@ -241,7 +247,7 @@ def evaluate_manifest(
     progress: bool = False,
     jobs: int | None = None,
     executor: Executor | None = None,
-    data_root: DataRoot | None = None,
+    data_root: DataRoot | DataPaths | None = None,
     **options: Any,
 ) -> Evaluation:
     """Score the results of a multi-session dataset: ``results`` holds one folder per algorithm

@@ -18,6 +18,7 @@ from ..core.relative import RPG_FRACTIONS, relative_table
 from ..core.scoring import pose_table, score
 from ..core.spec import EvalSpec
 from ..io.data import DataPaths, scene_durations
+from .status import exit_status, unscored
 
 
 @dataclass
@@ -112,15 +113,31 @@ class Evaluation:
     def warnings(self) -> list[str]:
         return [w for f in self.errors for w in f.warnings]
 
+    @property
+    def unscored(self) -> list[Failure]:
+        """Inputs read but not scored (no pose matched; manifest sessions without an estimate),
+        each with a one-line reason: see :func:`lorisnb.tools.status.unscored`."""
+        return unscored(self)
+
+    def exit_status(self) -> int:
+        """0 if every input was read and matched the ground truth, else 1: every command's exit
+        status (:mod:`lorisnb.tools.status`)."""
+        return exit_status(self)
+
     def failures_table(self) -> pd.DataFrame:
-        """Failed and skipped files with the reason, one row each."""
+        """Failed, skipped and unscored inputs (:attr:`unscored`) with the reason, one row each."""
         rows = [dict(file=str(f.path), status="failed", kind=f.kind, error=f.error) for f in self.failures]
         rows += [dict(file=str(f.path), status="skipped", kind=f.kind, error=f.error) for f in self.skipped]
+        rows += [dict(file=str(f.path), status="not scored", kind=f.kind, error=f.error) for f in self.unscored]
         return pd.DataFrame(rows, columns=["file", "status", "kind", "error"])
 
     def __repr__(self) -> str:
+        def count(n: int, word: str) -> str:
+            return f"{n} {word}{'' if n == 1 else 's'}"
+
         scenes = len({f.scene for f in self.errors})
-        return (
-            f"<Evaluation: {len(self.errors)} input(s) ({len(self.algorithms)} algorithm(s), {scenes} scene(s)), "
-            f"{len(self.failures)} failed, {len(self.skipped)} skipped; {self.spec!r}>"
-        )
+        parts = [f"{count(len(self.errors), 'input')} ({count(len(self.algorithms), 'algorithm')}, "
+                 f"{count(scenes, 'scene')})"]  # fmt: skip
+        parts += [f"{n} {w}" for n, w in ((len(self.failures), "failed"), (len(self.unscored), "unscored"),
+                                          (len(self.skipped), "skipped")) if n]  # fmt: skip
+        return f"<Evaluation: {', '.join(parts)}; {self.spec!r}>"

@@ -1,17 +1,21 @@
-"""Inputs of an evaluation: paths given by the user, the result files and folders they hold, and
-the labels (algorithm, file, suite, trial, scene) read from their names."""
+"""Inputs of an evaluation: paths given by the user (any iterable of them), the result files and
+folders they hold, each counted once (the same file or folder named twice, a file and its folder,
+a link and its target: kept once, with a note), and the labels (algorithm, file, suite, trial,
+scene) read from their names."""
 
 from __future__ import annotations
 
 import os
 import re
+import warnings
 from collections.abc import Iterable
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from ..core.trials import split_trial
-from ..errors import ValidationError
+from ..errors import LorisWarning, ValidationError
 from ..io.manifest import Manifest
 
 PathArg = str | os.PathLike[str]
@@ -23,7 +27,11 @@ def is_hidden(path: Path) -> bool:
 
 
 def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
-    """One path or several, as Paths; an empty path or another type is a ValidationError."""
+    """One path or several, as Paths: a str or Path, or any iterable of them (list, tuple,
+    generator, set (sorted), numpy array of str, pandas Series or Index). An empty path or
+    another type is a ValidationError."""
+    if isinstance(paths, np.ndarray):
+        paths = paths.ravel().tolist()
     items = [paths] if isinstance(paths, (str, os.PathLike)) else None
     if items is None:
         if isinstance(paths, (bytes, pd.DataFrame)) or not isinstance(paths, Iterable):
@@ -32,6 +40,8 @@ def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
                 f"got {type(paths).__name__}"
             )
         items = list(paths)
+        if isinstance(paths, (set, frozenset)):
+            items = sorted(items, key=str)  # the same order every run
     out = []
     for p in items:
         if not isinstance(p, (str, os.PathLike)):
@@ -62,7 +72,7 @@ def result_files(
             out.extend((f, p) for f in files)
         else:
             out.append((p, None))
-    return out
+    return unique_files(out)
 
 
 def names(what: str, value: object) -> list[str]:
@@ -110,11 +120,95 @@ def algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> list
     for p in as_paths(results):
         if not p.is_dir():
             raise ValidationError(f"{p}: expected a folder of estimates (one per session, named as in {m.path.name})")
-        if any((p / n).exists() for n in names):
+        if holds_any(p, names):
             out.append((p, None))
             continue
-        subs = sorted(d for d in p.rglob("*") if d.is_dir() and any((d / n).exists() for n in names))
+        subs = sorted(d for d in p.rglob("*") if d.is_dir() and holds_any(d, names))
         out.extend((d, p) for d in subs)
         if not subs:
             raise ValidationError(f"{p}: no estimate named {', '.join(sorted(names))} in it or below it")
+    return unique_files(out)  # a folder named twice is scored once
+
+
+def real_path(path: Path) -> Path:
+    """The file a path names (links resolved), for comparing inputs."""
+    try:
+        return path.resolve()
+    except OSError:
+        return path.absolute()
+
+
+def unique_files(items: list[tuple[Path, Path | None]]) -> list[tuple[Path, Path | None]]:
+    """``(file, root)`` pairs with every file kept once (compared by real path, the first naming
+    kept), with a LorisWarning listing what was named more than once: an input is never scored
+    twice, nor called a duplicate (a second trial) of itself."""
+    seen: dict[Path, Path] = {}
+    out: list[tuple[Path, Path | None]] = []
+    again: list[str] = []
+    for path, root in items:
+        key = real_path(path)
+        if key in seen:
+            again.append(str(path) if str(path) == str(seen[key]) else f"{path} (= {seen[key]})")
+            continue
+        seen[key] = path
+        out.append((path, root))
+    if again:
+        shown = "; ".join(again[:5]) + (f"; and {len(again) - 5} more" if len(again) > 5 else "")
+        warnings.warn(
+            f"{len(again)} input(s) named more than once, each counted once: {shown}",
+            LorisWarning,
+            stacklevel=3,
+        )
     return out
+
+
+def near_names(folder: Path, name: str) -> list[str]:
+    """Files in ``folder`` whose names differ from ``name`` only in case, or are close to it
+    (``XYZ.txt``, ``xyz.TXT``, ``xyz .txt``, ``xzy.txt`` for ``xyz.txt``): what the user meant."""
+    import difflib
+
+    try:
+        names = sorted(p.name for p in folder.iterdir() if not p.name.startswith("."))
+    except OSError:
+        return []
+    same = [n for n in names if n.lower() == name.lower() and n != name]
+    return same or difflib.get_close_matches(name, names, n=3, cutoff=0.75)
+
+
+def holds_any(folder: Path, names: Iterable[str]) -> bool:
+    """Whether ``folder`` holds one of ``names``, or a file differing from one only in case."""
+    try:
+        present = {p.name.lower() for p in folder.iterdir()}
+    except OSError:
+        return False
+    return any(n.lower() in present for n in names)
+
+
+def missing_note(folder: Path, algorithm: str, absent: list[tuple[str, str]]) -> str:
+    """A warning for sessions without an estimate file: ``absent`` holds (session, expected file)."""
+    parts = []
+    for session, name in absent:
+        near = near_names(folder, name)
+        hint = (
+            f" (found {', '.join(near)}: names are case-sensitive; rename it or set estimate = '{near[0]}' in the manifest)"
+            if near
+            else ""
+        )
+        parts.append(f"{session}: {folder / name} not found{hint}")
+    return (
+        f"{algorithm}: no estimate for {len(absent)} session(s), scored as missing output (0 poses, CR 0): "
+        + "; ".join(parts)
+    )
+
+
+def without_groundtruth(items: list[tuple[Path, Path | None]], groundtruth: Path) -> list[tuple[Path, Path | None]]:
+    """``(file, root)`` pairs less the ground-truth file itself (a ground truth kept in the results
+    folder would be scored as an estimate of itself), with a LorisWarning when it was among them;
+    nothing left is a ValidationError."""
+    gt = real_path(groundtruth)
+    kept = [(p, r) for p, r in items if real_path(p) != gt]
+    if len(kept) < len(items):
+        warnings.warn(f"{groundtruth}: the ground truth is among the estimates; left out", LorisWarning, stacklevel=3)
+    if not kept:
+        raise ValidationError(f"{groundtruth}: the only input is the ground truth itself; expected estimate files")
+    return kept

@@ -13,17 +13,20 @@ from dataclasses import dataclass
 from functools import lru_cache, partial
 from pathlib import Path
 
+from ..core.missing import with_missing
 from ..core.model import FileErrors
 from ..core.pipeline import compute_errors, evaluate_sessions, moved_groundtruth
 from ..core.spec import EvalSpec
 from ..core.trajectory import Trajectory
+from ..core.units import check_stamp_units
 from ..errors import DataNotFoundError, LorisError, LorisWarning, ParseError
 from ..io.data import DataPaths, groundtruth_spans, load_groundtruth
 from ..io.formats import read_trajectory
 from ..io.manifest import Manifest
 from ..io.openloris import read_openloris
+from ..io.registry import hint
 from .evaluation import Failure
-from .inputs import labels
+from .inputs import labels, missing_note
 from .pool import size_of
 
 #: Files at least this large show a progress bar of their own while read (when evaluated here).
@@ -134,6 +137,12 @@ def _openloris(job: Job, progress: bool) -> FileErrors | None:
     try:
         result = read_openloris(job.path, remove_repeated=drop, warn=False, repair_stamps=spec.repair_stamps,
                                 progress=bar.update if bar is not None else None)  # fmt: skip
+    except ParseError as exc:  # a file plainly in another format: say how to score it
+        more = hint(job.path, "openloris")
+        if not more:
+            raise
+        raise ParseError(exc.path, exc.line, f"{exc.reason}{more}, and give its ground truth with --gt FILE "
+                         "(evaluate_pairs in Python)") from None  # fmt: skip
     finally:
         if bar is not None:
             bar.close()
@@ -162,6 +171,7 @@ def _pair(job: Job) -> FileErrors:
         warnings.simplefilter("always", LorisWarning)
         est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf,
                               repeated="drop" if src.fmt == "openloris" else rule)  # fmt: skip
+    check_stamp_units(est, gt, str(job.path))  # seconds against pose indices or nanoseconds: an error
     span = {1: (float(gt.stamps[0]), float(gt.stamps[-1]))} if len(gt) else {}
     return evaluate_sessions(
         {1: gt}, {1: est}, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite,
@@ -191,13 +201,24 @@ def _manifest(job: Job) -> FileErrors:
             if path.exists():
                 ests[s.seq] = read_trajectory(path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf,
                                               repeated="drop" if m.estimate_format == "openloris" else job.spec.repeated)  # fmt: skip
+                check_stamp_units(ests[s.seq], gts[s.seq], str(path))
     notes += [str(w.message) for w in caught]
-    if not ests:
-        raise ParseError(
-            job.path, None, f"no estimate of scene {job.scene!r}; expected {', '.join(s.estimate for s in sessions)}"
-        )
     spans = {k: (float(t.stamps[0]), float(t.stamps[-1])) for k, t in gts.items() if len(t)}
-    return evaluate_sessions(
-        gts, ests, job.spec, path=job.path, algorithm=algorithm, scene=job.scene, suite=suite, trial=trial,
-        notes=notes, groundtruth_spans=spans,
+    errors = None
+    if ests:
+        errors = evaluate_sessions(
+            gts, ests, job.spec, path=job.path, algorithm=algorithm, scene=job.scene, suite=suite, trial=trial,
+            notes=notes, groundtruth_spans=spans,
+        )  # fmt: skip
+    absent = [s for s in sessions if s.seq not in ests]
+    if not absent:
+        assert errors is not None
+        return errors
+    # a declared session without its estimate: a row scored as the paper scores missing output, never dropped
+    note = missing_note(job.path, algorithm, [(s.name, s.estimate) for s in absent])
+    out = with_missing(
+        errors, gts, [s.seq for s in absent], path=job.path, algorithm=algorithm, scene=job.scene, suite=suite,
+        trial=trial, lifelong=job.spec.lifelong_for(len(sessions)), note=note,
     )  # fmt: skip
+    out.groundtruth_spans = spans
+    return out

@@ -12,6 +12,7 @@ import io
 import os
 import tempfile
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,17 +25,25 @@ from ..io.writers import write_csv
 
 INPUT_ERRORS_CSV = "input_errors.csv"
 
+#: A file ``lorisnb report`` writes into every run folder (``--force`` replaces only folders that
+#: hold it); a notebook whose output folder lies directly in such a folder is part of a report.
+RUN_MARKER = ".lorisnb-run"
+
 
 class Outputs:
     """Where a notebook writes what it shows: tables as CSV, figures as PNG and SVG.
 
     ``table`` and ``figure`` return their argument so a cell can write and display at once.
     Input files that could not be evaluated go to ``input_errors.csv``, which the report lists.
+    Inside a report's run folder (:data:`RUN_MARKER` in the parent folder) a figure is stored once:
+    one PNG at 100 dpi (the size it is shown at) in 256 colours (:func:`compact_png`), which the
+    notebook (and its HTML page) shows by reference instead of embedding.
     """
 
     def __init__(self, output_dir: str | os.PathLike[str]):
         self.dir = Path(output_dir)
         self.dir.mkdir(parents=True, exist_ok=True)
+        self.in_report = (self.dir.resolve().parent / RUN_MARKER).is_file()
 
     def table(self, df: pd.DataFrame, name: str, index: bool = False) -> pd.DataFrame:
         write_csv(df.reset_index() if index else df, self.dir / f"{name}.csv", force=True)
@@ -44,6 +53,11 @@ class Outputs:
         """Save ``fig`` as PNG, SVG and PDF and show it once in the notebook (:func:`show_figure`)."""
         from .plotting import save_figure
 
+        if self.in_report:  # one PNG at 100 dpi (the size it is shown at), 256 colours: about 20 kB
+            path = self.dir / f"{name}.png"
+            path.write_bytes(compact_png(figure_png(fig, dpi=100)))
+            show_figure(fig, url=path.name)
+            return
         paths = save_figure(fig, self.dir, name)
         show_figure(fig, png=paths[0].read_bytes())  # the PNG just written: drawn once, not twice
 
@@ -59,10 +73,23 @@ def figure_png(fig: Any, dpi: int = 150) -> bytes:
     return buf.getvalue()
 
 
-def show_figure(fig: Any, dpi: int = 150, png: bytes | None = None) -> None:
+def compact_png(png: bytes) -> bytes:
+    """A PNG with its colours reduced to a 256-colour palette (Pillow's fast octree): a plot's
+    flat colours and antialiasing survive, the file is about four times smaller."""
+    from PIL import Image
+
+    out = io.BytesIO()
+    Image.open(io.BytesIO(png)).convert("RGB").quantize(256, method=Image.Quantize.FASTOCTREE).save(
+        out, format="PNG", optimize=True
+    )
+    return out.getvalue()
+
+
+def show_figure(fig: Any, dpi: int = 150, png: bytes | None = None, url: str | None = None) -> None:
     """Display a figure once, as a PNG image at its own size (not scaled to the notebook width
     unless wider), without going through pyplot; a pyplot figure is closed so that the inline
-    backend does not show it a second time. Outside IPython, nothing is shown."""
+    backend does not show it a second time. With ``url`` (a PNG beside the notebook), the image
+    is shown by reference, not embedded. Outside IPython, nothing is shown."""
     try:
         from IPython import get_ipython
         from IPython.display import Image, display
@@ -75,6 +102,9 @@ def show_figure(fig: Any, dpi: int = 150, png: bytes | None = None) -> None:
     if get_ipython() is None:
         return
     width = int(round(fig.get_figwidth() * 100))  # CSS pixels of the figure as designed
+    if url is not None:
+        display(Image(url=url, embed=False, width=width))
+        return
     display(Image(data=png if png is not None else figure_png(fig, dpi), format="png", width=width))
 
 
@@ -122,6 +152,16 @@ class Session:
     def show_inputs(self, ev: Any) -> None:
         """Show the input files that failed and the warnings about inputs (:func:`show_inputs`)."""
         show_inputs(ev, self.out)
+
+    def interactive(self, make: Callable[[], Any]) -> None:
+        """Display the widget ``make()`` builds. In a report's run folder nothing would ever move its
+        sliders (the page is static), so it is not built; a note says where it works instead."""
+        from IPython.display import display
+
+        if self.out.in_report:
+            print("(interactive explorer: open this notebook's .ipynb in Jupyter to use its sliders)")
+            return
+        display(make())
 
 
 def setup(

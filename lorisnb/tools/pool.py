@@ -5,6 +5,8 @@ the order of the inputs, one progress bar."""
 from __future__ import annotations
 
 import os
+import re
+import socket
 import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
@@ -14,6 +16,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from ..core.blocks import threads
+from ..errors import EvaluationError, ValidationError
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -143,3 +146,96 @@ def run_tasks(
             bar.close()
         if own:
             pool.shutdown(cancel_futures=True)
+
+
+#: Seconds a Dask scheduler gets to accept a connection and answer the handshake.
+SCHEDULER_TIMEOUT = 10.0
+#: Schemes :func:`connect_scheduler` accepts (``host:port`` alone means ``tcp://``).
+SCHEDULER_SCHEMES = ("tcp", "tls", "inproc")
+_HOST_PORT = re.compile(r"^(?P<host>\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):(?P<port>[0-9]{1,5})$")
+
+
+def scheduler_address(address: object) -> tuple[str, str, int]:
+    """``(scheme, host, port)`` of a Dask scheduler address (``tcp://HOST:PORT``, ``tls://HOST:PORT``,
+    ``HOST:PORT``, or ``inproc://...`` with host the rest and port 0); ValidationError naming
+    the address and the expected form otherwise."""
+    expected = "expected tcp://HOST:PORT (the scheduler's port, 8786 by default), tls://HOST:PORT or inproc://..."
+    if not isinstance(address, str) or not address.strip():
+        raise ValidationError(f"--scheduler {address!r}: {expected}")
+    text = address.strip()
+    scheme, sep, rest = text.partition("://")
+    if not sep:
+        scheme, rest = "tcp", text
+    scheme = scheme.lower()
+    if scheme not in SCHEDULER_SCHEMES:
+        raise ValidationError(f"--scheduler {text}: unknown scheme {scheme!r}; {expected}")
+    if scheme == "inproc":
+        if not rest:
+            raise ValidationError(f"--scheduler {text}: {expected}")
+        return scheme, rest, 0
+    m = _HOST_PORT.match(rest.rstrip("/"))
+    if m is None or not 0 < int(m["port"]) < 65536:
+        raise ValidationError(f"--scheduler {text}: not a HOST:PORT address; {expected}")
+    return scheme, m["host"].strip("[]"), int(m["port"])
+
+
+def probe_scheduler(address: str, timeout: float | None = None) -> None:
+    """Check, within ``timeout`` seconds, that ``address`` accepts a TCP connection and (plain
+    ``tcp``) speaks first as a Dask scheduler does (it sends its handshake on every connection):
+    a closed port, a silent server, or an HTTP server (the dashboard's port, 8787, is the usual
+    mistake) is an EvaluationError of one line naming the address. ``inproc`` is not probed.
+    ``timeout`` defaults to :data:`SCHEDULER_TIMEOUT`."""
+    timeout = SCHEDULER_TIMEOUT if timeout is None else float(timeout)
+    scheme, host, port = scheduler_address(address)
+    if scheme == "inproc":
+        return
+    try:
+        sock = socket.create_connection((host, port), timeout=timeout)
+    except TimeoutError:
+        raise EvaluationError(
+            f"--scheduler {address}: no answer within {timeout:g} s; is the scheduler running?"
+        ) from None
+    except OSError as exc:
+        reason = exc.strerror or str(exc)
+        raise EvaluationError(
+            f"--scheduler {address}: cannot reach the Dask scheduler ({reason}); is it running there?"
+        ) from None
+    with sock:
+        if scheme != "tcp":
+            return
+        sock.settimeout(timeout)
+        try:
+            head = sock.recv(8)
+        except TimeoutError:
+            head = None
+        except OSError as exc:
+            raise EvaluationError(f"--scheduler {address}: the connection failed ({exc.strerror or exc})") from None
+    hint = "the scheduler's address is printed by `dask scheduler` ('Scheduler at: tcp://HOST:8786')"
+    if head is None:
+        raise EvaluationError(
+            f"--scheduler {address}: the server there did not answer as a Dask scheduler within {timeout:g} s "
+            f"(a web server, e.g. the dashboard's port 8787?); {hint}"
+        )
+    if head.startswith(b"HTTP") or head[:1] == b"<":
+        raise EvaluationError(
+            f"--scheduler {address}: that is a web server (the dashboard?), not a Dask scheduler; {hint}"
+        )
+    frames = int.from_bytes(head.ljust(8, b"\0"), "little")
+    if len(head) < 8 or not 0 < frames < 1024:
+        raise EvaluationError(f"--scheduler {address}: the server there does not speak Dask's protocol; {hint}")
+
+
+def connect_scheduler(address: str, timeout: float | None = None) -> Any:
+    """A ``distributed.Client`` of the Dask scheduler at ``address``, after
+    :func:`scheduler_address` checked its form and :func:`probe_scheduler` its answer; every
+    failure is one lorisnb error naming the address, within about ``timeout`` seconds."""
+    from . import require
+
+    timeout = SCHEDULER_TIMEOUT if timeout is None else float(timeout)
+    distributed = require("distributed")
+    probe_scheduler(address, timeout)
+    try:
+        return distributed.Client(address.strip(), timeout=timeout)
+    except (OSError, TimeoutError, ValueError) as exc:
+        line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise EvaluationError(f"--scheduler {address}: cannot reach the Dask scheduler ({line})") from None

@@ -1,104 +1,63 @@
-"""Batch reports: run the notebooks with papermill into a new run folder under ``results/``,
-export each to HTML, and write an ``index.html`` linking everything (parameters, versions, tables,
-figures, notebooks that failed and input files that could not be read).
+"""Batch reports: evaluate the results once for the front page's leaderboard, run the notebooks
+with papermill (in parallel where cores allow) into a new run folder under ``results/``, export
+each to offline HTML, and write ``index.html`` (findings first, then the evidence), ``report.html``
+(the same page in one file) and ``run.json`` (provenance, see :mod:`lorisnb.tools.provenance`).
 
 A run is built in a temporary folder and moved into place at the end, so an interrupted run
 leaves nothing half-written, and an existing run folder is never replaced without ``force``.
+The finished folder is readable like any other output (the umask's permissions, not owner-only).
 """
 
 from __future__ import annotations
 
 import datetime as _dt
-import importlib.util
 import json
 import os
 import shutil
 import sys
 import tempfile
-import time
-import traceback
-import warnings
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterable, Mapping
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
-import pandas as pd
-
-from ..core import validate
-from ..errors import LorisError, ValidationError
-from ._extras import EXTRAS, require
-from .notebook import INPUT_ERRORS_CSV
+from ..errors import DataNotFoundError, LorisError, ValidationError
+from ..io.data import find_data
+from ..io.writers import write_csv
+from .evaluate import result_files
+from .leaderboard import report_findings
+from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
+from .provenance import checksums, input_files, run_record, write_run_json
+from .report_html import single_file, write_notebook_css
 from .report_index import versions, write_index
-
-#: Report order: the teaching notebook first, then the paper's figures, then the explorations.
-DEFAULT_NOTEBOOKS = (
-    "metrics_primer",
-    "per_sequence_benchmark",
-    "lifelong_benchmark",
-    "threshold_sensitivity",
-    "compare_algorithms",
-    "evo_crosscheck",
-    "indoor_vs_outdoor",
-    "evaluate_my_results",
+from .report_notebooks import (
+    DEFAULT_NOTEBOOKS,
+    KERNEL_ARGS,
+    NOTEBOOK_CSS,
+    NOTEBOOK_NEEDS,
+    TYPICAL_SECONDS,
+    NotebookRun,
+    available_notebooks,
+    check_parameters,
+    declared_by,
+    declared_parameters,
+    kernel_env,
+    notebook_dir,
+    notebook_path,
+    run_one,
 )
 
-#: Kernel options: its own log is silenced (the loopback-TCP 'without encryption' notice or
-#: the 'KeyboardInterrupt caught in kernel' line of a normal shutdown).
-KERNEL_ARGS = ["--IPKernelApp.log_level=CRITICAL"]
+__all__ = [
+    "DEFAULT_NOTEBOOKS", "findings_input_errors", "KERNEL_ARGS", "NOTEBOOK_NEEDS", "RUN_MARKER", "NotebookRun", "available_notebooks",
+    "check_parameters", "declared_parameters", "kernel_env", "notebook_dir", "notebook_path", "run_notebook",
+    "run_report",
+]  # fmt: skip
 
-#: Optional packages a notebook needs; without them the report skips it and says which extra to install.
-NOTEBOOK_NEEDS: dict[str, tuple[str, ...]] = {"evo_crosscheck": ("evo",)}
+#: Notebooks that need the bundled data and say nothing about a lab's own results folder: a report
+#: on ``results`` leaves them out unless they are named.
+BUNDLED_ONLY = ("metrics_primer", "evo_crosscheck", "indoor_vs_outdoor", "evaluate_my_results")
 
-#: A file lorisnb writes into every run folder; ``--force`` replaces only folders that hold it.
-RUN_MARKER = ".lorisnb-run"
-
-
-def notebook_dir(notebooks_dir: str | os.PathLike[str] | None = None) -> Path:
-    """The folder of the notebooks: ``notebooks_dir``, else the notebooks shipped with the package
-    (``lorisnb.notebooks``)."""
-    if notebooks_dir is not None:
-        d = Path(notebooks_dir)
-        if not d.is_dir():
-            raise LorisError(f"notebooks folder {d} does not exist; pass a folder holding .ipynb files")
-        return d
-    from importlib import resources
-
-    return Path(str(resources.files("lorisnb.notebooks")))
-
-
-def notebook_path(name: str, notebooks_dir: str | os.PathLike[str] | None = None) -> Path:
-    """A notebook by name (``per_sequence_benchmark``) or path (``my.ipynb``)."""
-    p = Path(name)
-    nb_dir = notebook_dir(notebooks_dir)
-    if p.suffix != ".ipynb":
-        p = nb_dir / f"{name}.ipynb"
-    if not p.is_file():
-        raise LorisError(
-            f"notebook {name!r} not found (looked for {p}); the notebooks are: "
-            + ", ".join(sorted(q.stem for q in nb_dir.glob("*.ipynb")))
-        )
-    return p
-
-
-def available_notebooks(notebooks_dir: str | os.PathLike[str] | None = None) -> list[str]:
-    """The report's notebooks that exist, in report order."""
-    d = notebook_dir(notebooks_dir)
-    return [n for n in DEFAULT_NOTEBOOKS if (d / f"{n}.ipynb").exists()]
-
-
-@dataclass
-class NotebookRun:
-    """How one notebook of a report went: status ``ok``, ``failed`` or ``skipped`` (an optional
-    package it needs is missing), the error or reason, and how many of its input files could not be
-    evaluated."""
-
-    name: str
-    status: str = "ok"
-    seconds: float = 0.0
-    error: str = ""
-    parameters: dict[str, Any] = field(default_factory=dict)
-    input_errors: int = 0
+run_notebook = run_one  # the name the report calls (tests replace it)
 
 
 def _new_run_dir(out: str | os.PathLike[str] | None) -> Path:
@@ -113,120 +72,6 @@ def _new_run_dir(out: str | os.PathLike[str] | None) -> Path:
         k += 1
         p = base.with_name(f"{base.name}-{k}")
     return p
-
-
-def kernel_env() -> None:
-    """Environment for notebook kernels: the Python running lorisnb, the Agg backend, no noise."""
-    # the kernel must be the Python that runs lorisnb (jupyter's 'python3' kernel runs `python`)
-    bindir = str(Path(sys.executable).parent)
-    if not os.environ.get("PATH", "").startswith(bindir + os.pathsep):
-        os.environ["PATH"] = bindir + os.pathsep + os.environ.get("PATH", "")
-    os.environ.setdefault("MPLBACKEND", "Agg")
-    os.environ.setdefault("PYDEVD_DISABLE_FILE_VALIDATION", "1")
-    # papermill's kernel talks over loopback TCP; its 'without encryption' notice is noise here
-    warnings.filterwarnings("ignore", message=".*without encryption.*")
-    import logging
-
-    logging.getLogger("papermill").setLevel(logging.WARNING)
-    logging.getLogger("traitlets").setLevel(logging.ERROR)
-
-
-def declared_parameters(path: Path) -> dict[str, dict[str, Any]]:
-    """The parameters a notebook declares in its cell tagged ``parameters`` (name -> papermill's
-    description: default, inferred type, help)."""
-    pm = require("papermill")
-    return dict(pm.inspect_notebook(str(path)))
-
-
-#: Notebook parameters checked with the same rules as the command line and the Python API.
-_CHECKS: dict[str, Any] = {
-    "eps": validate.eps_value,
-    "phi": lambda v: validate.threshold("phi", v),
-    "delta": lambda v: validate.threshold("delta", v),
-    "tau": lambda v: validate.threshold("tau", v),
-    "scale": validate.scale_value,
-    "eps_grid": lambda v: validate.threshold_list("eps", v),
-    "phi_grid": lambda v: validate.threshold_list("phi", v),
-    "delta_grid": lambda v: validate.threshold_list("delta", v),
-    "tau_grid": lambda v: validate.threshold_list("tau", v),
-}
-
-
-def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mapping[str, Any]]) -> None:
-    """Refuse a parameter no selected notebook declares (listing the declared names) and values
-    that the command line would refuse (``-p eps -1``), before anything runs."""
-    unknown = sorted(set(parameters) - set(declared) - {"output_dir"})
-    if unknown:
-        raise ValidationError(
-            f"parameter(s) {', '.join(unknown)} not declared by the selected notebooks; they declare: "
-            + ", ".join(sorted(declared))
-        )
-    for name, value in parameters.items():
-        if name in _CHECKS and value is not None and not (name == "eps" and value == "paper"):
-            _CHECKS[name](value)
-
-
-def _to_html(ipynb: Path) -> Path | None:
-    nbformat = require("nbformat")
-    HTMLExporter = require("nbconvert").HTMLExporter
-
-    try:
-        nb = nbformat.read(str(ipynb), as_version=4)
-        body, _ = HTMLExporter().from_notebook_node(nb)
-    except Exception:  # an HTML export failure must not lose the run
-        return None
-    out = ipynb.with_suffix(".html")
-    out.write_text(body, encoding="utf-8")
-    return out
-
-
-def run_notebook(
-    name: str,
-    out_dir: Path,
-    parameters: Mapping[str, object],
-    timeout: int = 1800,
-    notebooks_dir: str | os.PathLike[str] | None = None,
-) -> NotebookRun:
-    """Execute one notebook with papermill into ``out_dir/<name>/``; never raises for a failing
-    notebook (the error is recorded), except on KeyboardInterrupt."""
-    pm = require("papermill")
-    kernel_env()
-    src = notebook_path(name, notebooks_dir)
-    stem = src.stem
-    nb_dir = out_dir / stem
-    nb_dir.mkdir(parents=True, exist_ok=True)
-    declared = declared_parameters(src)
-    params = {k: v for k, v in parameters.items() if k in declared}
-    if "output_dir" in declared:
-        params["output_dir"] = "."  # papermill runs the notebook in its own folder of the run
-    run = NotebookRun(stem, parameters=params)
-    missing = [m for m in NOTEBOOK_NEEDS.get(stem, ()) if importlib.util.find_spec(m) is None]
-    if missing:
-        run.status = "skipped"
-        run.error = f"needs {', '.join(missing)}: pip install 'lorisnb[{EXTRAS.get(missing[0], 'all')}]'"
-        return run
-    t = time.perf_counter()
-    target = nb_dir / f"{stem}.ipynb"
-    try:
-        pm.execute_notebook(
-            str(src), str(target), parameters=params, kernel_name="python3", progress_bar=False,
-            cwd=str(nb_dir), execution_timeout=timeout, log_output=False, extra_arguments=KERNEL_ARGS,
-        )  # fmt: skip
-    except KeyboardInterrupt:
-        raise
-    except Exception as exc:  # PapermillExecutionError and kernel failures alike
-        run.status = "failed"
-        ename = getattr(exc, "ename", type(exc).__name__)
-        evalue = getattr(exc, "evalue", str(exc))
-        run.error = f"{ename}: {evalue}" if evalue else "".join(traceback.format_exception_only(exc)).strip()
-    run.seconds = time.perf_counter() - t
-    if target.exists():
-        _to_html(target)
-    errors_csv = nb_dir / INPUT_ERRORS_CSV
-    if errors_csv.exists():
-        failed = pd.read_csv(errors_csv)
-        run.input_errors = int((failed.get("status", pd.Series(dtype=str)) == "failed").sum())
-    return run
 
 
 def _protected(run_dir: Path, extra: list[Path]) -> str | None:
@@ -244,6 +89,82 @@ def _protected(run_dir: Path, extra: list[Path]) -> str | None:
     return None
 
 
+def _select(notebooks: Iterable[str] | None, notebooks_dir: Any, results: Any) -> tuple[list[str], dict[str, str]]:
+    """The notebooks to run, and those left out with the reason."""
+    if notebooks:
+        return list(notebooks), {}
+    names = available_notebooks(notebooks_dir)
+    if results is None:
+        return names, {}
+    keep = [n for n in names if n not in BUNDLED_ONLY]
+    return keep, {n: "about the bundled data; name it with --notebooks to run it" for n in names if n not in keep}
+
+
+def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_dir: Any, jobs: int,
+             progress: bool, meanwhile: Callable[[], None] = lambda: None) -> list[NotebookRun]:  # fmt: skip
+    """Run the notebooks, ``jobs`` at a time, each in its own worker process (papermill's clients
+    are not safe side by side in one process) and kernel; one at a time in this process when
+    ``jobs`` is 1. Results in ``names`` order; the longest notebooks start first. ``meanwhile()``
+    runs in this process while the workers run (before the notebooks, when ``jobs`` is 1)."""
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(names), desc="report", unit="notebook")
+    runs: dict[int, NotebookRun] = {}
+    order = sorted(range(len(names)), key=lambda i: -TYPICAL_SECONDS.get(Path(names[i]).stem, 0))
+    try:
+        if jobs <= 1 or len(names) <= 1:
+            meanwhile()
+            for i in order:
+                runs[i] = run_notebook(names[i], tmp, params, notebooks_dir=notebooks_dir)
+                if bar is not None:
+                    bar.set_postfix_str(runs[i].name)
+                    bar.update()
+            return [runs[i] for i in range(len(names))]
+        import multiprocessing
+
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+            futures = {pool.submit(run_notebook, names[i], tmp, dict(params), notebooks_dir=notebooks_dir): i
+                       for i in order}  # fmt: skip
+            try:
+                meanwhile()
+                for fut in as_completed(futures):
+                    runs[futures[fut]] = fut.result()
+                    if bar is not None:
+                        bar.set_postfix_str(runs[futures[fut]].name)
+                        bar.update()
+            except BaseException:  # Ctrl-C or an error here: stop the workers (their kernels follow them)
+                pool.shutdown(wait=False, cancel_futures=True)
+                for worker in multiprocessing.active_children():
+                    worker.terminate()
+                raise
+    finally:
+        if bar is not None:
+            bar.close()
+    return [runs[i] for i in range(len(names))]
+
+
+def _inputs(names: list[str], params: Mapping[str, Any], data: Any, source: Path | None) -> list[Path]:
+    """The files the report reads: its results, the ground truth and extrinsics, and the data
+    the selected notebooks read besides (TUM pairs, published tables, folders given as parameters)."""
+    roots = [source] if source is not None else []
+    roots += [Path(str(params[k])) for k in ("results_dir", "path", "groundtruth", "ordslam_dir") if params.get(k)]
+    if data is not None:
+        roots += [data.root / "openloris-scene" / "groundtruth", data.root / "openloris-scene" / "extrinsics.json"]
+        if source is None or any(n in names for n in BUNDLED_ONLY):
+            roots += [data.root / "openloris-scene" / "icra20_results"]
+        if any(Path(n).stem in ("evo_crosscheck", "indoor_vs_outdoor") for n in names):
+            roots += [data.root / "tum-rgbd", data.root / "published"]
+    return input_files(roots)
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def run_report(
     out: str | os.PathLike[str] | None = None,
     parameters: Mapping[str, Any] | None = None,
@@ -252,6 +173,9 @@ def run_report(
     progress: bool = True,
     notebooks_dir: str | os.PathLike[str] | None = None,
     protect: Iterable[str | os.PathLike[str]] = (),
+    results: str | os.PathLike[str] | None = None,
+    jobs: int | None = None,
+    command: list[str] | None = None,
 ) -> tuple[Path, list[NotebookRun]]:
     """Run the notebooks into a new run folder; returns (run folder, notebook runs).
 
@@ -262,50 +186,107 @@ def run_report(
             of its parents, the notebooks or a folder in ``protect`` (inputs, the data root).
         parameters: papermill parameters; each notebook gets those it declares. A parameter no
             selected notebook declares, or a value the command line would refuse, is an error.
-        notebooks: names (default: every notebook of :data:`DEFAULT_NOTEBOOKS` that exists).
+        notebooks: names or paths (default: every notebook of the folder, shipped ones in
+            :data:`DEFAULT_NOTEBOOKS` order, others alphabetically after). A notebook that cannot
+            run (invalid JSON, no kernelspec, no ``parameters`` cell) is a failed entry.
         notebooks_dir: where the notebooks are (default: those shipped with lorisnb).
+        results: a lab's results folder (``<algorithm>/*.txt``, trials allowed): the leaderboard's
+            input and the notebooks' ``results_dir``; notebooks about the bundled data only are
+            left out unless named.
+        jobs: notebooks run at a time (default: the cores, at most the number of notebooks).
+        command: the command line recorded in ``run.json`` (default ``sys.argv``).
 
-    The run is built under a hidden temporary name beside ``out`` and moved into place when
-    complete; if ``out`` appeared meanwhile (another run), this run is kept under
-    ``out-2`` (or the next free name) instead, and the returned path says so. On Ctrl-C the
-    temporary folder is removed and KeyboardInterrupt propagates.
+    The leaderboard is built when ``results`` is given or a selected notebook declares
+    ``results_dir`` (the bundled icra20 results otherwise). The run is built under a hidden
+    temporary name beside ``out`` and moved into place when complete; if ``out`` appeared
+    meanwhile (another run), this run is kept under ``out-2`` (or the next free name) instead,
+    and the returned path says so. On Ctrl-C the temporary folder is removed and
+    KeyboardInterrupt propagates.
     """
     run_dir = _new_run_dir(out)
     nb_dir = notebook_dir(notebooks_dir)
     keep_safe = [nb_dir, *map(Path, protect), Path(__file__).resolve().parents[1]]
+    if results is not None:
+        if not Path(results).is_dir() or not result_files([results]):
+            raise ValidationError(
+                f"--results {results}: {'no result files in it' if Path(results).is_dir() else 'not a folder'}; "
+                "expected a folder of <algorithm>/*.txt result files"
+            )
+        keep_safe.append(Path(results))
     if run_dir.exists():
         if not force:
             raise LorisError(f"{run_dir} exists; choose another --out or pass --force to replace it")
         why = _protected(run_dir, keep_safe)
         if why:
             raise LorisError(f"--force will not replace {run_dir}: {why}; choose another --out")
-    names = list(notebooks) if notebooks else available_notebooks(notebooks_dir)
-    declared: dict[str, dict[str, Any]] = {}
-    for n in names:
-        declared.update(declared_parameters(notebook_path(n, notebooks_dir)))
+    names, left_out = _select(notebooks, notebooks_dir, results)
+    declared = declared_by(names, notebooks_dir)
     params = dict(parameters or {})
     check_parameters(params, declared)
+    given = params.get("results_dir")
+    if results is not None and given is not None and Path(str(given)).resolve() != Path(results).resolve():
+        raise ValidationError("--results and -p results_dir name two folders; give one")
+    if results is not None and "results_dir" in declared:
+        params["results_dir"] = str(Path(results).resolve())
+    try:
+        data = find_data(params.get("data_root"))
+    except DataNotFoundError:
+        data = None  # the notebooks say so, each in its entry
+    if data is not None and "data_root" in declared:
+        params.setdefault("data_root", str(data.root))  # kernels run in the run folder, not here
+    wants_board = results is not None or "results_dir" in declared
+    source = Path(str(params["results_dir"])) if params.get("results_dir") else (data.icra20 if data else None)
     run_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
     try:
         (tmp / RUN_MARKER).write_text(json.dumps({"lorisnb": versions()["lorisnb"], "pid": os.getpid()}))
-        runs: list[NotebookRun] = []
-        if progress:
-            from tqdm.auto import tqdm
+        try:
+            write_notebook_css(tmp / NOTEBOOK_CSS)
+        except (OSError, IndexError, LorisError):  # no nbconvert templates: each page keeps its own style
+            pass
+        board: dict[str, Any] = {"spec": {"description": None, "values": {}}}
 
-            bar = tqdm(names, desc="report", unit="notebook")
-            for n in bar:
-                bar.set_postfix_str(n)
-                runs.append(run_notebook(n, tmp, params, notebooks_dir=notebooks_dir))
-        else:
-            runs = [run_notebook(n, tmp, params, notebooks_dir=notebooks_dir) for n in names]
+        def leaderboard() -> None:  # the report's own evaluation, while the notebooks run
+            if not (wants_board and source is not None and data is not None):
+                return
+            findings, ev, values = report_findings(source, data, params)
+            (tmp / "findings").mkdir()
+            per_sequence = ev.sequences(values["eps"], values["phi"], values["delta"], values["tau"])
+            failures = ev.failures_table()
+            for table, name in ((per_sequence, "sequences.csv"), (findings.board, "leaderboard.csv"),
+                                (findings.pairs, "pairwise.csv"), (failures, INPUT_ERRORS_CSV)):  # fmt: skip
+                write_csv(table, tmp / "findings" / name)
+            board.update(findings=findings, per_sequence=per_sequence, failures=failures,
+                         spec={"description": ev.conventions, "values": {**ev.spec.to_dict(), **values, "source": str(source)}})  # fmt: skip
+
+        n_jobs = jobs or min(len(names), os.cpu_count() or 1)
+        runs = _run_all(names, tmp, params, notebooks_dir, n_jobs, progress, meanwhile=leaderboard)
+        spec = board["spec"]
         (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
-        write_index(tmp, runs, params, name=run_dir.name)
+        inputs = checksums(_inputs(names, params, data, source if wants_board else None), data.root if data else None)
+        record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
+                            {r.name: r.status for r in runs})  # fmt: skip
+        write_run_json(tmp, record)
+        index = write_index(tmp, runs, params, name=run_dir.name, findings=board.get("findings"), spec=spec,
+                            failures=board.get("failures"), left_out=left_out,
+                            per_sequence=board.get("per_sequence"))  # fmt: skip
+        single_file(index, tmp / "report.html")
+        os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp made it owner-only
         final = _move_into_place(tmp, run_dir, force)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return final, runs
+
+
+def findings_input_errors(run_dir: Path) -> int:
+    """How many input files the report's own evaluation (``findings/``) could not evaluate."""
+    import pandas as pd
+
+    f = run_dir / "findings" / INPUT_ERRORS_CSV
+    if not f.is_file():
+        return 0
+    return int((pd.read_csv(f).get("status", pd.Series(dtype=str)).isin(["failed", "not scored"])).sum())
 
 
 def _move_into_place(tmp: Path, run_dir: Path, force: bool) -> Path:

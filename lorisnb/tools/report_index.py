@@ -1,5 +1,7 @@
-"""The report's front page, ``index.html``: parameters, versions, every notebook with its status,
-input files that could not be evaluated, links to every table and figure."""
+"""The report's front page, ``index.html``: what was found first (per scene a leaderboard with
+intervals, ranks with ties, coverage, the thresholds, one sentence), then the evidence behind
+each claim (timelines, threshold sensitivity, per-sequence values, failures), each figure once
+with a caption, then the notebooks, tables, parameters and versions. No script, no remote file."""
 
 from __future__ import annotations
 
@@ -7,16 +9,69 @@ import datetime as _dt
 import html
 import json
 import platform
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
 from .notebook import INPUT_ERRORS_CSV
 
 if TYPE_CHECKING:
-    from .report import NotebookRun
+    from .leaderboard import Findings
+    from .report_notebooks import NotebookRun
+
+esc = html.escape
+
+#: The "why" sections, in page order: (anchor, title, what they are evidence of).
+SECTIONS = (
+    ("timelines", "Timelines: when each algorithm tracked", "coverage and CR: when the output was there, and correct"),
+    ("thresholds", "Threshold sensitivity", "whether a ranking holds at other thresholds than the report's"),
+    ("trials", "Trials and comparisons", "run-to-run spread"),
+    ("crosscheck", "Cross-check with evo", "that the errors behind every number agree with evo"),
+    ("other", "Other figures", "the notebooks' other views"),
+)
+
+#: Captions of the shipped notebooks' figures: file stem (or stem prefix ending in '_') -> (section, caption).
+CAPTIONS: dict[str, tuple[str, str]] = {
+    "timeline_per_sequence": (
+        "timelines",
+        "Each sequence evaluated on its own (the paper's Fig. 2, no thresholds: its percentages are the time "
+        "tracked, not the leaderboards' CR): blue segments are the time covered by output poses; ATE RMSE "
+        "bottom right.",
+    ),
+    "timeline_lifelong": (
+        "timelines",
+        "Sequences fed one after another and aligned on the first (Fig. 3): "
+        "correct and wrong poses at the notebook's thresholds.",
+    ),
+    "timeline": ("timelines", "Your results over time: correct and wrong poses per sequence."),
+    "trajectories_": ("timelines", "Your trajectory against the ground truth, coloured by correctness."),
+    "cr_vs_eps": (
+        "thresholds",
+        "CR against the ATE threshold eps per scene: where curves cross, the ranking depends on eps.",
+    ),
+    "cr_heatmap_": ("thresholds", "CR of each algorithm over eps x phi in this scene."),
+    "cr_vs_delta": ("thresholds", "CR against the validity window delta."),
+    "cs_r_vs_tau": ("thresholds", "CS-R against the time factor tau."),
+    "rank_stability": (
+        "thresholds",
+        "Kendall tau between the ranking at each eps and at the paper's eps: 1 means the same order.",
+    ),
+    "cr_vs_relative_eps": ("thresholds", "CR with eps relative to each sequence's extent."),
+    "explorer_current": (
+        "thresholds",
+        "The threshold explorer's first view (the notebook's parameters); the sliders work in the .ipynb.",
+    ),
+    "simulated_trials": (
+        "trials",
+        "Simulated algorithms (not real results): spread of CR over trials with a "
+        "known difference, to show what the tests can separate.",
+    ),
+    "crosscheck_per_pose": ("crosscheck", "Per-pose errors of lorisnb against evo on the same pairs: on the diagonal."),
+    "primer_": ("other", "Teaching examples on simulated estimates (metrics primer)."),
+    "ate_pct_length": ("other", "ATE as a share of path length across datasets (published and computed)."),
+}
 
 
 def versions() -> dict[str, str]:
@@ -24,18 +79,8 @@ def versions() -> dict[str, str]:
     out = {"python": platform.python_version()}
     from importlib import metadata
 
-    for pkg in (
-        "lorisnb",
-        "numpy",
-        "scipy",
-        "pandas",
-        "matplotlib",
-        "seaborn",
-        "evo",
-        "papermill",
-        "ipywidgets",
-        "tqdm",
-    ):
+    for pkg in ("lorisnb", "numpy", "scipy", "pandas", "matplotlib", "seaborn", "evo", "papermill", "ipywidgets",
+                "nbconvert", "tqdm"):  # fmt: skip
         try:
             out[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
@@ -43,76 +88,229 @@ def versions() -> dict[str, str]:
     return out
 
 
-def _rel(p: Path, root: Path) -> str:
-    return p.relative_to(root).as_posix()
+def caption(stem: str, notebook: str) -> tuple[str, str]:
+    """(section, caption) of a figure; unknown figures go to 'other' with a plain caption."""
+    if stem in CAPTIONS:
+        return CAPTIONS[stem]
+    for key, value in CAPTIONS.items():
+        if key.endswith("_") and stem.startswith(key):
+            scene = stem[len(key) :]
+            return value[0], f"{value[1]} ({scene})" if scene else value[1]
+    return "other", f"Figure '{stem}' of the notebook {notebook}."
+
+
+def _table(df: pd.DataFrame, cls: str = "") -> str:
+    head = "".join(f"<th>{esc(str(c))}</th>" for c in df.columns)
+    rows = "".join("<tr>" + "".join(f"<td>{esc(str(v))}</td>" for v in r) + "</tr>" for r in df.itertuples(index=False))
+    return f"<table class='{cls}'><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
+
+
+def _fmt(v: float) -> str:
+    return "" if pd.isna(v) else f"{v:.3f}"
+
+
+def _board_rows(board: pd.DataFrame) -> pd.DataFrame:
+    everyone = set(board["algorithm"])
+    tied = [
+        "all others" if t and set(t.split(", ")) == everyone - {a} else t
+        for a, t in zip(
+            board["algorithm"],
+            board.get("tied_with", pd.Series("", index=board.index)).fillna("").astype(str),
+            strict=True,
+        )  # fmt: skip
+    ]
+    out = pd.DataFrame({
+        "rank": board["rank"], "algorithm": board["algorithm"], board["metric"].iloc[0]: board["value"].map(_fmt),
+        f"{board['level'].iloc[0]:.0%} interval": [
+            ("(one sequence)" if n <= 1 else "") if pd.isna(lo) else f"[{lo:.3f}, {hi:.3f}]"
+            for lo, hi, n in zip(board["low"], board["high"], board["sequences_covered"], strict=True)
+        ],
+        "coverage (sequences)": board["coverage"], "trials": board["trials"], "tied with": tied,
+    })  # fmt: skip
+    return out
+
+
+def _findings_html(f: "Findings", spec: Mapping[str, Any], evidence: Mapping[str, list[str]]) -> list[str]:
+    values = spec.get("values", {})
+    parts = ["<h2 id='findings'>What was found</h2>"]
+    parts.append(
+        f"<p class='spec'>Thresholds: eps = {esc(str(values.get('eps')))} (m; 'paper' = 1/3/5 m by scene size), "
+        f"phi = {esc(str(values.get('phi')))} deg, delta = {esc(str(values.get('delta')))} s, "
+        f"tau = {esc(str(values.get('tau')))} s; scale {esc(str(values.get('scale')))}. "
+        f"Intervals: {values.get('level', 0.95):.0%} bootstrap over sequences (and trials). "
+        f"Ranks: {esc(f.test)}. Coverage: sequences with output out of the scene's sequences with ground truth. "
+        f"{esc(str(spec.get('description', '')))}</p>"
+    )
+    for (suite, scene), g in f.board.groupby(["suite", "scene"], sort=False):
+        title = f"{scene}" + (f" ({suite})" if suite else "")
+        anchor = f"scene-{suite}-{scene}".replace("/", "-")
+        parts.append(f"<h3 id='{esc(anchor)}'>{esc(title)}</h3>")
+        parts.append(_table(_board_rows(g), "leaderboard"))
+        links = " · ".join(evidence.get(scene, []) + evidence.get(f"suite:{suite}", []) + evidence.get("*", []))
+        links += f" · <a href='#seq-{esc(anchor[6:])}'>per-sequence values</a> · <a href='#failures'>failures</a>"
+        parts.append(f"<p class='sentence'>{esc(f.sentences[(suite, scene)])}</p><p class='why'>Why: {links}</p>")
+    return parts
+
+
+def _figures(run_dir: Path, runs: Sequence["NotebookRun"]) -> dict[str, list[tuple[Path, str, str]]]:
+    """section -> [(png, notebook, caption)], each figure once (the PNG; other formats linked)."""
+    out: dict[str, list[tuple[Path, str, str]]] = {s[0]: [] for s in SECTIONS}
+    for r in runs:
+        for p in sorted((run_dir / r.name).glob("*.png")):
+            section, text = caption(p.stem, r.name)
+            out[section].append((p, r.name, text))
+    return out
+
+
+#: Figures that are evidence for every scene: the suite's timeline, the threshold curves.
+_TIMELINE = {"per-seq": "timeline_per_sequence", "lifelong": "timeline_lifelong"}
+_GENERAL = ("cr_vs_eps", "rank_stability")
+
+
+def _evidence(figures: Mapping[str, list[tuple[Path, str, str]]], scenes: Sequence[str]) -> dict[str, list[str]]:
+    """Links to the figures behind a scene's claims: its own (``cr_heatmap_<scene>``), its suite's
+    timeline (key ``suite:<suite>``; both timelines for a results folder without suites), and the
+    threshold curves (key ``*``)."""
+    ev: dict[str, list[str]] = {"*": []}
+    for items in figures.values():
+        for p, nb, _ in items:
+            link = f"<a href='#fig-{esc(nb)}-{esc(p.stem)}'>{esc(p.stem.replace('_', ' '))}</a>"
+            for s in scenes:
+                if p.stem.endswith(f"_{s}"):
+                    ev.setdefault(s, []).append(link)
+            for suite, stem in _TIMELINE.items():
+                if p.stem == stem:
+                    ev.setdefault(f"suite:{suite}", []).append(link)
+                    ev.setdefault("suite:", []).append(link)
+            if p.stem in _GENERAL:
+                ev["*"].append(link)
+    return ev
 
 
 def write_index(
-    run_dir: Path, runs: list["NotebookRun"], parameters: Mapping[str, object], name: str | None = None
+    run_dir: Path,
+    runs: list["NotebookRun"],
+    parameters: Mapping[str, object],
+    name: str | None = None,
+    findings: "Findings | None" = None,
+    spec: Mapping[str, Any] | None = None,
+    failures: pd.DataFrame | None = None,
+    left_out: Mapping[str, str] | None = None,
+    per_sequence: pd.DataFrame | None = None,
 ) -> Path:
-    """``index.html``: parameters, versions, notebooks with status, input errors, tables, figures."""
-    esc = html.escape
+    """``index.html`` (see the module docstring)."""
+    spec = spec or {}
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'><title>lorisnb report</title>",
-        "<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto}table{border-collapse:collapse}"
-        "td,th{border:1px solid #ccc;padding:3px 8px;text-align:left;vertical-align:top}"
-        ".failed{color:#b00}.ok{color:#070}.skipped{color:#b60}img{max-width:100%;border:1px solid #ddd}</style></head><body>",
+        "<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto}table{border-collapse:collapse;"
+        "margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 8px;text-align:left;vertical-align:top}"
+        ".leaderboard th{background:#eef}.sentence{font-size:1.05em}.why,.spec{color:#444}figure{margin:1em 0}"
+        "figcaption{color:#333;font-size:.95em}.failed{color:#b00}.ok{color:#070}.skipped{color:#b60}"
+        "img{max-width:100%;border:1px solid #ddd}</style></head><body>",
         f"<h1>lorisnb report</h1><p>Run folder <code>{esc(name or run_dir.name)}</code>, written "
-        f"{esc(_dt.datetime.now().isoformat(timespec='seconds'))}.</p>",
-        "<h2>Notebooks</h2><table><tr><th>notebook</th><th>status</th><th>seconds</th><th>files</th><th>error</th></tr>",
+        f"{esc(_dt.datetime.now().isoformat(timespec='seconds'))}; provenance (command, version, inputs' "
+        f"checksums) in <a href='run.json'>run.json</a>; one file for e-mail: <a href='report.html'>report.html</a>.</p>",
     ]
-    for r in runs:
-        d = run_dir / r.name
-        links = " ".join(
-            f"<a href='{esc(_rel(p, run_dir))}'>{esc(p.suffix[1:])}</a>"
-            for p in (d / f"{r.name}.html", d / f"{r.name}.ipynb")
-            if p.exists()
-        )
-        parts.append(
-            f"<tr><td>{esc(r.name)}</td><td class='{r.status}'>{r.status}</td><td>{r.seconds:.1f}</td>"
-            f"<td>{links}</td><td><pre>{esc(r.error)}</pre></td></tr>"
-        )
-    parts.append("</table>")
-    errs = []
-    for r in runs:
-        f = run_dir / r.name / INPUT_ERRORS_CSV
-        if f.exists():
-            df = pd.read_csv(f)
-            for row in df.itertuples():
-                errs.append((r.name, row))
-    failed_inputs = [(n, row) for n, row in errs if getattr(row, "status", "failed") == "failed"]
-    skipped_inputs = [(n, row) for n, row in errs if getattr(row, "status", "failed") != "failed"]
-    parts.append(f"<h2>Input files that could not be evaluated ({len(failed_inputs)})</h2>")
-    if failed_inputs:
-        parts.append("<table><tr><th>notebook</th><th>file</th><th>error</th></tr>")
-        for n, row in failed_inputs:
-            parts.append(
-                f"<tr><td>{esc(n)}</td><td>{esc(str(row.file))}</td><td class='failed'>{esc(str(row.error))}</td></tr>"
-            )
-        parts.append("</table>")
+    figures = _figures(run_dir, runs)
+    if findings is not None and not len(findings.board):
+        parts.append("<h2 id='findings'>What was found</h2><p class='failed'>No leaderboard: no result file could be "
+                     "scored (see the failures below).</p>")  # fmt: skip
+    elif findings is not None:
+        scenes = list(dict.fromkeys(findings.board["scene"]))
+        parts += _findings_html(findings, spec, _evidence(figures, scenes))
     else:
-        parts.append("<p>None.</p>")
-    if skipped_inputs:
-        reasons = sorted({str(row.error).split(":")[0] for _, row in skipped_inputs})
-        parts.append(f"<p>Skipped {len(skipped_inputs)} file(s): {esc('; '.join(reasons))}.</p>")
+        parts.append("<h2 id='findings'>What was found</h2><p>No leaderboard: none of the selected notebooks "
+                     "evaluates a results folder (run per_sequence_benchmark or compare_algorithms, or pass "
+                     "--results DIR).</p>")  # fmt: skip
+    failed = [r for r in runs if r.status == "failed"]
+    if failed:
+        parts.append(f"<p class='failed'>{len(failed)} notebook(s) failed: " + ", ".join(
+            f"<a href='#nb-{esc(r.name)}'>{esc(r.name)}</a>" for r in failed) + ".</p>")  # fmt: skip
+    parts.append("<h2 id='why'>Why: the evidence</h2>")
+    for key, title, what in SECTIONS:
+        items = figures[key]
+        if not items:
+            continue
+        parts.append(f"<h3 id='{key}'>{esc(title)}</h3><p class='why'>Evidence of {esc(what)}.</p>")
+        for p, nb, text in items:
+            rel = p.relative_to(run_dir).as_posix()
+            parts.append(
+                f"<figure id='fig-{esc(nb)}-{esc(p.stem)}'><a href='{esc(rel)}'><img src='{esc(rel)}' loading='lazy' "
+                f"alt='{esc(text)}'></a><figcaption><b>{esc(p.stem)}</b> ({esc(nb)}): {esc(text)}</figcaption></figure>"
+            )
+    parts.append("<h3 id='per-sequence'>Per-sequence values</h3>")
+    if per_sequence is not None and len(per_sequence):
+        metric = spec.get("values", {}).get("metric", "cr")
+        parts.append(f"<p class='why'>The {esc(metric)} of every sequence (the mean over its trials) behind the leaderboards (blank: no "
+                     "output); all columns in <a href='findings/sequences.csv'>findings/sequences.csv</a>.</p>")  # fmt: skip
+        for (suite, scene), g in per_sequence.groupby(["suite", "scene"], sort=False):
+            pivot = g.pivot_table(index="algorithm", columns="seq", values=metric, aggfunc="mean")
+            pivot.columns = [f"seq {c}" for c in pivot.columns]
+            parts.append(
+                f"<h4 id='seq-{esc(f'{suite}-{scene}'.replace('/', '-'))}'>{esc(scene)}"
+                + (f" ({esc(suite)})" if suite else "")
+                + "</h4>"
+            )
+            parts.append(_table(pivot.map(_fmt).reset_index(), "values"))
+    else:
+        parts.append("<p>None in this report.</p>")
+    parts += _failures(run_dir, runs, failures)
+    parts += _notebooks(run_dir, runs, left_out or {})
     parts.append("<h2>Tables (CSV)</h2><ul>")
     for p in sorted(run_dir.glob("*/*.csv")):
-        parts.append(f"<li><a href='{esc(_rel(p, run_dir))}'>{esc(_rel(p, run_dir))}</a></li>")
-    parts.append("</ul><h2>Figures</h2>")
-    for p in sorted(run_dir.glob("*/*.png")):
-        svg = p.with_suffix(".svg")
-        extra = f" (<a href='{esc(_rel(svg, run_dir))}'>svg</a>)" if svg.exists() else ""
-        parts.append(
-            f"<h3>{esc(_rel(p, run_dir))}{extra}</h3><a href='{esc(_rel(p, run_dir))}'>"
-            f"<img src='{esc(_rel(p, run_dir))}' loading='lazy'></a>"
-        )
-    parts.append("<h2>Parameters</h2><pre>" + esc(json.dumps(dict(parameters), indent=2, default=str)) + "</pre>")
-    parts.append(
-        "<h2>Versions</h2><table>"
-        + "".join(f"<tr><td>{esc(k)}</td><td>{esc(v)}</td></tr>" for k, v in versions().items())
-        + "</table>"
-    )
+        rel = p.relative_to(run_dir).as_posix()
+        parts.append(f"<li><a href='{esc(rel)}'>{esc(rel)}</a></li>")
+    parts.append("</ul><h2>Parameters</h2><pre>" + esc(json.dumps(dict(parameters), indent=2, default=str)) + "</pre>")
+    parts.append("<h2>Versions</h2>" + _table(pd.DataFrame(list(versions().items()), columns=["package", "version"])))
     parts.append("</body></html>")
     index = run_dir / "index.html"
     index.write_text("\n".join(parts), encoding="utf-8")
     return index
+
+
+def _failures(run_dir: Path, runs: Sequence["NotebookRun"], failures: pd.DataFrame | None) -> list[str]:
+    rows = [] if failures is None else [("report", r) for r in failures.itertuples()]
+    for r in runs:
+        f = run_dir / r.name / INPUT_ERRORS_CSV
+        if f.exists():
+            rows += [(r.name, row) for row in pd.read_csv(f).itertuples()]
+    failed = [(n, row) for n, row in rows if getattr(row, "status", "failed") == "failed"]
+    seen: dict[str, tuple[str, Any]] = {}
+    for n, row in failed:
+        seen.setdefault(str(row.file), (n, row))
+    skipped = {str(row.file): row for n, row in rows if getattr(row, "status", "failed") != "failed"}
+    parts = [f"<h3 id='failures'>Failures: input files that could not be evaluated ({len(seen)})</h3>"]
+    if seen:
+        parts.append("<table><tr><th>found by</th><th>file</th><th>error</th></tr>")
+        for file, (n, row) in seen.items():
+            parts.append(f"<tr><td>{esc(n)}</td><td>{esc(file)}</td><td class='failed'>{esc(str(row.error))}</td></tr>")
+        parts.append("</table>")
+    else:
+        parts.append("<p>None.</p>")
+    if skipped:
+        reasons = sorted({str(row.error).split(":")[0] for row in skipped.values()})
+        parts.append(f"<p>Skipped {len(skipped)} file(s): {esc('; '.join(reasons))}.</p>")
+    return parts
+
+
+def _notebooks(run_dir: Path, runs: Sequence["NotebookRun"], left_out: Mapping[str, str]) -> list[str]:
+    parts = ["<h2>Notebooks</h2><p>Each notebook's CR, CR-T, CS-R and C-ATE are at its own thresholds "
+             "(the per-sequence benchmark reproduces Fig. 2 without any); the leaderboards use those stated "
+             "above.</p><table><tr><th>notebook</th><th>status</th><th>seconds</th><th>thresholds</th><th>files</th>"
+             "<th>error</th></tr>"]  # fmt: skip
+    for r in runs:
+        d = run_dir / r.name
+        links = " ".join(
+            f"<a href='{esc(p.relative_to(run_dir).as_posix())}'>{esc(p.suffix[1:])}</a>"
+            for p in (d / f"{r.name}.html", d / f"{r.name}.ipynb")
+            if p.exists()
+        )
+        parts.append(
+            f"<tr id='nb-{esc(r.name)}'><td>{esc(r.name)}</td><td class='{r.status}'>{r.status}</td>"
+            f"<td>{r.seconds:.1f}</td><td>{esc(', '.join(f'{k} {v}' for k, v in r.thresholds.items()))}</td>"
+            f"<td>{links}</td><td><pre>{esc(r.error)}</pre></td></tr>"
+        )
+    parts.append("</table>")
+    if left_out:
+        parts.append("<p>Not run: " + "; ".join(f"{esc(k)} ({esc(v)})" for k, v in left_out.items()) + ".</p>")
+    return parts

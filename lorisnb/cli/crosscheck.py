@@ -1,0 +1,126 @@
+"""The ``crosscheck`` command: lorisnb against evo on one ground truth and one estimate (the
+agreement table on identical pairs, evo's own reading of each file, or a preset against evo). An
+input that cannot be read or compared is exit status 1, as for every command."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+from ..core.spec import make_spec
+from ..errors import EvaluationError, ParseError, ValidationError
+from .options import check_outputs
+
+
+def cmd_crosscheck(args: argparse.Namespace) -> int:
+    from ..io.writers import write_csv
+
+    check_outputs(args, [args.gt, args.est], ["csv"])
+    try:
+        table = _crosscheck_table(args)
+    except (ParseError, EvaluationError) as exc:  # an input that cannot be read or compared: 1, as every command
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    if isinstance(table, int):  # --conventions: printed and judged there
+        return table
+    from ..tools import require
+
+    evo_version = require("evo").__version__
+
+    with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"))
+    must = table["note"].str.startswith("identical pairs")
+    print(
+        f"\nevo {evo_version}: {int(table.loc[must, 'agrees'].sum())} of {int(must.sum())} quantities computed "
+        "on identical pairs agree; other rows explain where the definitions differ",
+        file=sys.stderr,
+    )
+    if args.csv:
+        write_csv(table, args.csv, args.force)
+    return 0 if table.loc[must, "agrees"].all() else 1
+
+
+def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame | int:
+    """The agreement table of ``crosscheck`` (reads both inputs); with ``--conventions``, that
+    comparison's exit status (it prints its own table)."""
+    from ..io.formats import read_trajectory
+    from ..io.openloris import read_openloris
+    from ..tools.crosscheck import crosscheck, crosscheck_openloris
+
+    openloris = args.format == "openloris"
+    times = [
+        o for o, v in (("--times", args.times), ("--gt-times", args.gt_times), ("--est-times", args.est_times)) if v
+    ]
+    kitti = "kitti" in (args.format, args.est_format)
+    refused = [o for o, v in (("--seq", args.seq), ("--data", args.data)) if v is not None and not openloris]
+    refused += [o for o, v in (("--est-format", args.est_format),) if v is not None and openloris]
+    refused += times if not kitti else []
+    bag = "bag" in (args.format, args.est_format)
+    refused += [o for o, v in (("--topic", args.topic), ("--gt-topic", args.gt_topic)) if v is not None and not bag]
+    if refused:
+        raise ValidationError(
+            f"{', '.join(refused)}: does not apply to --format {args.format}"
+            + (f" with --est-format {args.est_format}" if args.est_format else "")
+            + " (--seq and --data: OpenLORIS files; --est-format: TUM/KITTI/EuRoC pairs; times files: KITTI;"
+            " topics: bags)"
+        )
+    if args.align is not None and args.conventions is None:
+        raise ValidationError("--align: only with --conventions (the crosscheck's own rows use none, se3 and sim3)")
+    deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
+    gt_format = args.format
+    est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)
+    if args.conventions is not None:
+        return _crosscheck_conventions(args, gt_format, est_format)
+    if args.format == "openloris":
+        gt_file = read_openloris(args.gt) if args.gt not in ("-", "auto") else None
+        table = crosscheck_openloris(
+            args.est,
+            args.seq,
+            scale=False if args.scale is None else args.scale,
+            data_root=args.data,
+            groundtruth=gt_file,
+            rpe_deltas=deltas,
+        )
+    else:
+        gt_times, est_times = args.gt_times or args.times, args.est_times or args.times
+        by_index = "kitti" in (gt_format, est_format) and (gt_times is None or est_times is None)
+        if by_index and (gt_format != est_format or gt_times is not None or est_times is not None):
+            raise ValidationError(
+                "--gt-times and --est-times: a KITTI file has no stamps; give stamps for both files (or for "
+                "neither, to pair two KITTI files of equal length by index)"
+            )
+        gt = read_trajectory(args.gt, gt_format, stamps=gt_times if gt_format == "kitti" else None,
+                             topic=args.gt_topic if gt_format == "bag" else None)  # fmt: skip
+        est = read_trajectory(args.est, est_format, stamps=est_times if est_format == "kitti" else None,
+                              topic=args.topic if est_format == "bag" else None)  # fmt: skip
+        spec = make_spec(None, surface="cli", **({} if args.scale is None else {"scale": args.scale}))
+        with_scale = spec.alignment_for(Path(args.est).stem) == "sim3"
+        table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs)
+        from ..tools.crosscheck_reading import crosscheck_reading  # and evo's own reading of each file
+
+        parts = [crosscheck_reading(f, fm, t).assign(quantity=lambda x, w=w: w + ": " + x["quantity"])
+                 for w, f, fm, t in (("ground truth", args.gt, gt_format, args.gt_topic),
+                                     ("estimate", args.est, est_format, args.topic))]  # fmt: skip
+        table = pd.concat([table, *parts], ignore_index=True)
+    return table
+
+
+def _crosscheck_conventions(args: argparse.Namespace, gt_format: str, est_format: str) -> int:
+    """``crosscheck --conventions P``: lorisnb under preset P against evo reading the files itself."""
+    from ..io.writers import write_csv
+    from ..tools.crosscheck_evo import crosscheck_evo
+
+    spec = make_spec(args.conventions, surface="cli", **({"align": args.align} if args.align else {}))
+    table = crosscheck_evo(args.gt, args.est, spec, fmt=est_format, gt_fmt=gt_format, topic=args.topic,
+                           gt_topic=args.gt_topic, tol=1e-5 if "kitti" in (gt_format, est_format) else 1e-9)  # fmt: skip
+    with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.10g}"))
+    stats = ~table["quantity"].str.contains(":") & table["evo"].notna()
+    print(f"\n{int(table.loc[stats, 'agrees'].sum())} of {int(stats.sum())} statistics agree with evo reading the "
+          "files itself; the reading rows say where the readings differ and why", file=sys.stderr)  # fmt: skip
+    if args.csv:
+        write_csv(table, args.csv, args.force)
+    return 0 if table.loc[stats, "agrees"].all() else 1

@@ -1,0 +1,196 @@
+"""The report's findings: per scene, a leaderboard (scene value with its interval, rank with ties
+from the pairwise tests, coverage) and one sentence in plain words.
+
+Everything statistical comes from :mod:`lorisnb.core.stats` (``confidence_intervals``,
+``pairwise``) and :mod:`lorisnb.core.ranking` (``ranking``); this module only joins their
+tables with the coverage of each algorithm (sequences with output out of the scene's sequences
+with ground truth, and trials) and words the result.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..core import ranking, stats
+from ..errors import LorisWarning
+from ..io.data import DataPaths
+
+#: Names of the metrics in sentences, with whether higher is better.
+METRICS: dict[str, tuple[str, bool]] = {
+    "cr": ("correct rate CR", True),
+    "cr_t": ("correct rate after initialization CR-T", True),
+    "cs_r": ("re-localization score CS-R", True),
+    "c_ate_rmse": ("ATE RMSE over correct poses C-ATE (m)", False),
+}
+
+BOARD_COLUMNS = [
+    "suite", "scene", "rank", "algorithm", "metric", "value", "low", "high", "level", "sequences_covered",
+    "sequences_total", "coverage", "trials", "tied_with",
+]  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Findings:
+    """What the report's front page states: the leaderboard (one row per suite, scene and
+    algorithm, :data:`BOARD_COLUMNS`), the pairwise tests behind its ranks, one sentence per
+    (suite, scene), and the test the ranks come from, in words."""
+
+    board: pd.DataFrame
+    pairs: pd.DataFrame
+    sentences: dict[tuple[str, str], str]
+    test: str
+
+
+def coverage(table: pd.DataFrame, durations: pd.DataFrame) -> pd.DataFrame:
+    """Per suite, scene and algorithm: sequences with at least one matched pose (in any trial),
+    the scene's sequences with ground truth (``durations``: one row per scene and sequence), and
+    the most trials of a sequence."""
+    t = stats.with_trials(table)
+    total = durations.groupby("scene")["seq"].nunique()
+    covered = t[t["matched"] > 0].groupby(["suite", "scene", "algorithm"])["seq"].nunique()
+    trials = t.groupby(["suite", "scene", "algorithm", "seq"])["trial"].nunique().groupby(level=[0, 1, 2]).max()
+    out = trials.rename("trials").reset_index()
+    out["sequences_covered"] = [
+        int(covered.get(k, 0)) for k in zip(out["suite"], out["scene"], out["algorithm"], strict=True)
+    ]
+    out["sequences_total"] = [int(total.get(s, 0)) for s in out["scene"]]
+    return out
+
+
+def _test_words(pairs: pd.DataFrame, alpha: float) -> str:
+    tests = sorted(set(pairs["test"].dropna().astype(str))) if "test" in pairs.columns else []
+    corrections = sorted(set(pairs["correction"].dropna().astype(str))) if "correction" in pairs.columns else []
+    named = (
+        "; ".join(tests)
+        if tests
+        else "lorisnb.core.stats.pairwise (sequences paired; trials where there are 3 or more)"
+    )
+    how = corrections[0].split(" over ")[0] if corrections else "Holm"
+    return f"rank = 1 + the number of algorithms significantly better by {named}, {how}-corrected within each scene, alpha {alpha:g}"
+
+
+def findings(
+    table: pd.DataFrame,
+    durations: pd.DataFrame,
+    metric: str = "cr",
+    alpha: float = 0.05,
+    level: float = 0.95,
+    seed: int = 0,
+) -> Findings:
+    """The leaderboard of ``table`` (a per-sequence table of :meth:`Evaluation.sequences`, with
+    trials), its pairwise tests and the sentences (see the module docstring)."""
+    if table.empty:
+        return Findings(pd.DataFrame(columns=BOARD_COLUMNS), pd.DataFrame(), {}, "")
+    ci = stats.confidence_intervals(table, metrics=(metric,), level=level, seed=seed)
+    ranks = ranking.ranking(table, metric, alpha=alpha, seed=seed)
+    pairs = stats.pairwise(table, metric, alpha=alpha, seed=seed)
+    keys = ["suite", "scene", "algorithm"]
+    board = ranks.drop(columns=[c for c in ("value",) if c in ranks.columns]).merge(
+        ci[[*keys, "value", "low", "high", "level"]], on=keys, how="left"
+    )
+    board = board.merge(coverage(table, durations), on=keys, how="left")
+    board["coverage"] = [f"{c}/{n}" for c, n in zip(board["sequences_covered"], board["sequences_total"], strict=True)]
+    board["metric"] = metric
+    higher = METRICS.get(metric, ("", True))[1]
+    board = board.sort_values(["suite", "scene", "rank", "value"], ascending=[True, True, True, not higher])
+    board = board[[c for c in BOARD_COLUMNS if c in board.columns]].reset_index(drop=True)
+    sentences = {
+        (suite, scene): sentence(g, pairs[(pairs["suite"] == suite) & (pairs["scene"] == scene)], alpha)
+        for (suite, scene), g in board.groupby(["suite", "scene"], sort=False)
+    }
+    return Findings(board, pairs, sentences, _test_words(pairs, alpha))
+
+
+def _value(r: pd.Series) -> str:
+    v = f"{r['value']:.2f}"
+    if np.isfinite(r["low"]) and np.isfinite(r["high"]):
+        v += f" [{r['low']:.2f}, {r['high']:.2f}]"
+    return v
+
+
+def sentence(board: pd.DataFrame, pairs: pd.DataFrame, alpha: float = 0.05) -> str:
+    """One plain sentence (or three) about one scene's leaderboard: who is first, whether the data
+    separates it from the others, and which algorithms did not cover every sequence."""
+    scene, suite = board["scene"].iloc[0], board["suite"].iloc[0]
+    where = f"In {scene}" + (f" ({suite})" if suite else "")
+    metric = board["metric"].iloc[0]
+    name = METRICS.get(metric, (metric, True))[0]
+    if len(board) == 1:
+        r = board.iloc[0]
+        return f"{where}, only {r['algorithm']} has results: {name} {_value(r)}; there is nothing to compare it with."
+    first = board[board["rank"] == board["rank"].min()]
+    best = first.iloc[0]
+    n_seq = int(pairs["sequences"].max()) if len(pairs) and "sequences" in pairs else 0
+    trials = int(board["trials"].max()) if "trials" in board else 1
+    sample = f"{n_seq} sequence(s)" + (f" x up to {trials} trials" if trials > 1 else "")
+    if len(first) == 1:
+        text = (
+            f"{where}, {best['algorithm']} is first by {name} ({_value(best)}), and the tests separate it from "
+            f"every other algorithm ({sample})."
+        )
+    else:
+        others = [a for a in first["algorithm"] if a != best["algorithm"]]
+        shown = ", ".join(others[:4]) + (f" and {len(others) - 4} more" if len(others) > 4 else "")
+        text = (
+            f"{where}, {best['algorithm']} has the highest {name} ({_value(best)})" if METRICS.get(metric, ("", True))[1]
+            else f"{where}, {best['algorithm']} has the lowest {name} ({_value(best)})"
+        )  # fmt: skip
+        text += f", but the data cannot tell it apart from {shown} ({sample}): their order is not established."
+        floor = pairs["min_p"].min() if "min_p" in pairs and len(pairs) else np.nan
+        if np.isfinite(floor) and floor > alpha and trials < 3:
+            text += (
+                f" With one run on {n_seq} sequence(s) no paired test can reach p < {alpha:g} "
+                f"(smallest possible p {floor:.3g}); more sequences or trials are needed."
+            )
+    short = board[board["sequences_covered"] < board["sequences_total"]]
+    if len(short):
+        listed = ", ".join(f"{a} ({c})" for a, c in zip(short["algorithm"][:5], short["coverage"][:5], strict=True))
+        more = f" and {len(short) - 5} more" if len(short) > 5 else ""
+        text += f" Output missing on some sequences: {listed}{more}."
+    return text
+
+
+#: The leaderboard's settings and their defaults (the ``compare`` command's): a report parameter of
+#: the same name overrides each.
+SETTINGS: dict[str, Any] = {
+    "eps": "paper", "phi": 30.0, "delta": 1.0, "tau": 60.0, "scale": "auto", "metric": "cr", "alpha": 0.05,
+    "level": 0.95, "seed": 0, "trials_by": None, "algorithms": None, "scenes": None,
+}  # fmt: skip
+
+
+def report_findings(
+    source: Path, data: DataPaths, parameters: Mapping[str, Any]
+) -> tuple[Findings, Any, dict[str, Any]]:
+    """Evaluate ``source`` once (a results folder, trials allowed) at the report's settings
+    (:data:`SETTINGS`, overridden by ``parameters``) and build its :class:`Findings`. Returns
+    (findings, the evaluation, the settings used)."""
+    from ..core.spec import make_spec
+    from .evaluate import evaluate
+
+    values: dict[str, Any] = {k: v if parameters.get(k) is None else parameters[k] for k, v in SETTINGS.items()}
+    spec = make_spec(None, surface="notebook", **{k: values[k] for k in ("scale", "eps", "phi", "delta", "tau")})
+    with warnings.catch_warnings():  # the notebooks show the warnings about inputs, per file
+        warnings.simplefilter("ignore", LorisWarning)
+        ev = evaluate(
+            source, spec, data_root=data, trials_by=values["trials_by"], algorithms=values["algorithms"],
+            scenes=values["scenes"], jobs=1,  # beside the notebooks: one process
+        )  # fmt: skip
+    table = ev.sequences()
+    f = findings(
+        table, ev.durations() if len(table) else pd.DataFrame(columns=["scene", "seq"]), str(values["metric"]),
+        alpha=float(values["alpha"]), level=float(values["level"]), seed=int(values["seed"]),
+    )  # fmt: skip
+    return f, ev, values
+
+
+def by_algorithm(table: pd.DataFrame, values: str, columns: str = "scene") -> pd.DataFrame:
+    """Algorithms x ``columns`` of ``values``: the mean over trials where there are several
+    (a results folder with ``_trial3`` files has one row per trial), the value itself otherwise."""
+    return table.pivot_table(index="algorithm", columns=columns, values=values, aggfunc="mean")

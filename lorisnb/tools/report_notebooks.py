@@ -1,0 +1,274 @@
+"""The notebooks of a report: where they are, in which order they run, whether each can run
+(valid JSON, a kernelspec, a cell tagged ``parameters``), the parameters they declare, and one
+notebook executed with papermill into its own folder of the run, with its offline HTML page."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import sys
+import tempfile
+import time
+import traceback
+import uuid
+import warnings
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ..core import validate
+from ..errors import LorisError, ValidationError
+from ._extras import EXTRAS, require
+from .notebook import INPUT_ERRORS_CSV
+from .report_html import export_html
+
+#: The notebook pages' shared style sheet in the run folder (written once by the report).
+NOTEBOOK_CSS = "notebook.css"
+
+#: Report order: the teaching notebook first, then the paper's figures, then the explorations.
+DEFAULT_NOTEBOOKS = (
+    "metrics_primer",
+    "per_sequence_benchmark",
+    "lifelong_benchmark",
+    "threshold_sensitivity",
+    "compare_algorithms",
+    "evo_crosscheck",
+    "indoor_vs_outdoor",
+    "evaluate_my_results",
+)
+
+#: About how long each shipped notebook runs alone (seconds, 2 cores): a report starts the longest
+#: first, so that notebooks running side by side finish close together.
+TYPICAL_SECONDS = {
+    "evo_crosscheck": 20, "threshold_sensitivity": 20, "compare_algorithms": 10, "per_sequence_benchmark": 8,
+    "indoor_vs_outdoor": 7, "evaluate_my_results": 7, "metrics_primer": 6, "lifelong_benchmark": 6,
+}  # fmt: skip
+
+#: Kernel options: its own log is silenced (the loopback-TCP 'without encryption' notice or
+#: the 'KeyboardInterrupt caught in kernel' line of a normal shutdown).
+KERNEL_ARGS = ["--IPKernelApp.log_level=CRITICAL"]
+
+#: Optional packages a notebook needs; without them the report skips it and says which extra to install.
+NOTEBOOK_NEEDS: dict[str, tuple[str, ...]] = {"evo_crosscheck": ("evo",)}
+
+
+def notebook_dir(notebooks_dir: str | os.PathLike[str] | None = None) -> Path:
+    """The folder of the notebooks: ``notebooks_dir``, else the notebooks shipped with the package
+    (``lorisnb.notebooks``)."""
+    if notebooks_dir is not None:
+        d = Path(notebooks_dir)
+        if not d.is_dir():
+            raise ValidationError(f"notebooks folder {d} does not exist; pass a folder holding .ipynb files")
+        return d
+    from importlib import resources
+
+    return Path(str(resources.files("lorisnb.notebooks")))
+
+
+def notebook_path(name: str, notebooks_dir: str | os.PathLike[str] | None = None) -> Path:
+    """A notebook by name (``per_sequence_benchmark``) or path (``my.ipynb``)."""
+    p = Path(name)
+    nb_dir = notebook_dir(notebooks_dir)
+    if p.suffix != ".ipynb":
+        p = nb_dir / f"{name}.ipynb"
+    if not p.is_file():
+        raise LorisError(
+            f"notebook {name!r} not found (looked for {p}); the notebooks are: "
+            + ", ".join(sorted(q.stem for q in nb_dir.glob("*.ipynb")))
+        )
+    return p
+
+
+def available_notebooks(notebooks_dir: str | os.PathLike[str] | None = None) -> list[str]:
+    """Every notebook of the folder, in report order: those named like the shipped ones in
+    :data:`DEFAULT_NOTEBOOKS` order, then the others alphabetically. A folder without any
+    ``.ipynb`` file is an error."""
+    d = notebook_dir(notebooks_dir)
+    found = {p.stem for p in d.glob("*.ipynb") if not p.name.startswith(".")}
+    if not found:
+        raise ValidationError(f"--notebooks-dir {d}: no .ipynb file in it; pass a folder holding notebooks")
+    return [n for n in DEFAULT_NOTEBOOKS if n in found] + sorted(found - set(DEFAULT_NOTEBOOKS))
+
+
+def notebook_problem(path: Path) -> str | None:
+    """Why the notebook at ``path`` cannot run in a report (not JSON, not a notebook, no
+    kernelspec, no cell tagged ``parameters``), or None."""
+    try:
+        raw = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        return f"{path.name} is not a readable notebook (invalid JSON: {exc})"
+    if not isinstance(raw, dict) or not isinstance(raw.get("cells"), list):
+        return f"{path.name} is not a notebook (no list of cells)"
+    if not (raw.get("metadata") or {}).get("kernelspec"):
+        return f"{path.name} has no kernelspec in its metadata; open it in Jupyter, choose a kernel and save it"
+    tagged = any(
+        "parameters" in ((c.get("metadata") or {}).get("tags") or []) for c in raw["cells"] if isinstance(c, dict)
+    )
+    if not tagged:
+        return f"{path.name} has no cell tagged 'parameters' (papermill needs one to pass the report's parameters)"
+    return None
+
+
+@dataclass
+class NotebookRun:
+    """How one notebook of a report went: status ``ok``, ``failed`` or ``skipped`` (an optional
+    package it needs is missing), the error or reason, and how many of its input files could not be
+    evaluated."""
+
+    name: str
+    status: str = "ok"
+    seconds: float = 0.0
+    error: str = ""
+    parameters: dict[str, Any] = field(default_factory=dict)
+    input_errors: int = 0
+    thresholds: dict[str, str] = field(default_factory=dict)  # eps, phi, delta, tau it ran with, as written
+
+
+def kernel_env() -> None:
+    """Environment for notebook kernels: the Python running lorisnb, the Agg backend, no noise."""
+    # the kernel must be the Python that runs lorisnb (jupyter's 'python3' kernel runs `python`)
+    bindir = str(Path(sys.executable).parent)
+    if not os.environ.get("PATH", "").startswith(bindir + os.pathsep):
+        os.environ["PATH"] = bindir + os.pathsep + os.environ.get("PATH", "")
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    os.environ.setdefault("PYDEVD_DISABLE_FILE_VALIDATION", "1")
+    # papermill's kernel talks over loopback TCP; its 'without encryption' notice is noise here
+    warnings.filterwarnings("ignore", message=".*without encryption.*")
+    import logging
+
+    logging.getLogger("papermill").setLevel(logging.WARNING)
+    logging.getLogger("traitlets").setLevel(logging.ERROR)
+
+
+def kernel_manager_class() -> Any:
+    """Jupyter's kernel manager with the kernel's sockets on ipc files of a unique name (POSIX):
+    kernels started side by side by several processes never race for the same free TCP port (a
+    kernel that loses dies "before replying to kernel_info")."""
+    from jupyter_client.manager import AsyncKernelManager
+
+    if os.name != "posix":
+        return AsyncKernelManager
+    from traitlets import default
+
+    class IpcKernelManager(AsyncKernelManager):
+        @default("transport")
+        def _transport_default(self) -> str:
+            return "ipc"
+
+        @default("ip")
+        def _ip_default(self) -> str:
+            return os.path.join(tempfile.gettempdir(), f"lorisnb-kernel-{uuid.uuid4().hex[:16]}")
+
+    return IpcKernelManager
+
+
+def declared_parameters(path: Path) -> dict[str, dict[str, Any]]:
+    """The parameters a notebook declares in its cell tagged ``parameters`` (name -> papermill's
+    description: default, inferred type, help)."""
+    pm = require("papermill")
+    return dict(pm.inspect_notebook(str(path)))
+
+
+#: Notebook parameters checked with the same rules as the command line and the Python API.
+_CHECKS: dict[str, Any] = {
+    "eps": validate.eps_value,
+    "phi": lambda v: validate.threshold("phi", v),
+    "delta": lambda v: validate.threshold("delta", v),
+    "tau": lambda v: validate.threshold("tau", v),
+    "scale": validate.scale_value,
+    "eps_grid": lambda v: validate.threshold_list("eps", v),
+    "phi_grid": lambda v: validate.threshold_list("phi", v),
+    "delta_grid": lambda v: validate.threshold_list("delta", v),
+    "tau_grid": lambda v: validate.threshold_list("tau", v),
+}
+
+
+def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mapping[str, Any]]) -> None:
+    """Refuse a parameter no selected notebook declares (listing the declared names) and values
+    that the command line would refuse (``-p eps -1``), before anything runs."""
+    unknown = sorted(set(parameters) - set(declared) - {"output_dir"})
+    if unknown:
+        raise ValidationError(
+            f"parameter(s) {', '.join(unknown)} not declared by the selected notebooks; they declare: "
+            + ", ".join(sorted(declared))
+        )
+    for name, value in parameters.items():
+        if name in _CHECKS and value is not None and not (name == "eps" and value == "paper"):
+            _CHECKS[name](value)
+
+
+def run_one(
+    name: str,
+    out_dir: Path,
+    parameters: Mapping[str, object],
+    timeout: int = 1800,
+    notebooks_dir: str | os.PathLike[str] | None = None,
+) -> NotebookRun:
+    """Execute one notebook with papermill into ``out_dir/<name>/`` and export its offline HTML
+    page; never raises for a failing notebook (the error is recorded), except on KeyboardInterrupt."""
+    pm = require("papermill")
+    kernel_env()
+    src = notebook_path(name, notebooks_dir)
+    stem = src.stem
+    nb_dir = out_dir / stem
+    nb_dir.mkdir(parents=True, exist_ok=True)
+    problem = notebook_problem(src)
+    if problem:
+        return NotebookRun(stem, status="failed", error=problem)
+    declared = declared_parameters(src)
+    params = {k: v for k, v in parameters.items() if k in declared}
+    if "output_dir" in declared:
+        params["output_dir"] = "."  # papermill runs the notebook in its own folder of the run
+    run = NotebookRun(stem, parameters=params)
+    run.thresholds = {
+        k: str(params[k]) if k in params else str(declared[k].get("default"))
+        for k in ("eps", "phi", "delta", "tau")
+        if k in declared
+    }
+    missing = [m for m in NOTEBOOK_NEEDS.get(stem, ()) if importlib.util.find_spec(m) is None]
+    if missing:
+        run.status = "skipped"
+        run.error = f"needs {', '.join(missing)}: pip install 'lorisnb[{EXTRAS.get(missing[0], 'all')}]'"
+        return run
+    t = time.perf_counter()
+    target = nb_dir / f"{stem}.ipynb"
+    try:
+        pm.execute_notebook(
+            str(src), str(target), parameters=params, kernel_name="python3", progress_bar=False,
+            execution_timeout=timeout, log_output=False, extra_arguments=KERNEL_ARGS,
+            resources={"metadata": {"path": str(nb_dir)}},  # the kernel's folder; cwd= would chdir this process
+            kernel_manager_class=kernel_manager_class(),
+        )  # fmt: skip
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # PapermillExecutionError and kernel failures alike
+        run.status = "failed"
+        ename = getattr(exc, "ename", type(exc).__name__)
+        evalue = getattr(exc, "evalue", str(exc))
+        run.error = f"{ename}: {evalue}" if evalue else "".join(traceback.format_exception_only(exc)).strip()
+    run.seconds = time.perf_counter() - t
+    if target.exists():
+        try:
+            export_html(target, css=f"../{NOTEBOOK_CSS}" if (out_dir / NOTEBOOK_CSS).is_file() else None)
+        except Exception as exc:  # an HTML export failure must not lose the run: say so
+            note = f"HTML export failed: {type(exc).__name__}: {exc}"
+            run.error = f"{run.error}\n{note}" if run.error else note
+    errors_csv = nb_dir / INPUT_ERRORS_CSV
+    if errors_csv.exists():
+        failed = pd.read_csv(errors_csv)
+        run.input_errors = int(failed.get("status", pd.Series(dtype=str)).isin(["failed", "not scored"]).sum())
+    return run
+
+
+def declared_by(names: Iterable[str], notebooks_dir: str | os.PathLike[str] | None) -> dict[str, dict[str, Any]]:
+    """The parameters declared by the notebooks that can run (see :func:`notebook_problem`)."""
+    declared: dict[str, dict[str, Any]] = {}
+    for n in names:
+        p = notebook_path(n, notebooks_dir)
+        if notebook_problem(p) is None:
+            declared.update(declared_parameters(p))
+    return declared

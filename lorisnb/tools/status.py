@@ -1,0 +1,52 @@
+"""What an evaluation did not score, and the exit status every command returns from it:
+
+* 0: every input was read and matched the ground truth;
+* 1: an input failed (it could not be read or evaluated), matched no ground-truth stamp at all, or
+  a declared session had no estimate; each still appears (in the table, scored as the paper
+  scores it, or among the failures) with a one-line reason;
+* 2: a usage error (a bad option, a bad output, a manifest or ground truth that cannot be read).
+
+A file skipped because the data holds no ground truth for its scene (OpenLORIS' office) is
+reported but does not count: there is nothing it could have matched. A run that evaluated nothing
+at all (an empty folder, every file skipped) is 1.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .evaluation import Evaluation, Failure
+
+#: Exit statuses of the ``lorisnb`` commands.
+OK, UNSCORED, USAGE = 0, 1, 2
+
+
+def unscored(ev: Evaluation) -> list[Failure]:
+    """Inputs that were read but not scored: inputs none of whose poses matched the ground truth
+    in time (kind ``no-match``, with the reason the evaluation gave) and, for manifests, declared
+    sessions without an estimate (kind ``missing-estimate``: rows with 0 poses,
+    :mod:`lorisnb.core.missing`). Failures are in ``ev.failures``."""
+    from .evaluation import Failure
+
+    out = []
+    if not ev.errors and not ev.failures:  # nothing at all: an empty folder, or every file skipped
+        where = ev.root if ev.root is not None else Path(".")
+        why = "every input was skipped" if ev.skipped else "no input file was found"
+        out.append(Failure(where, f"nothing was evaluated: {why}", "nothing"))
+    for f in ev.errors:
+        absent = [e.seq for e in f.sequences if e.poses == 0] if ev.kind == "manifest" else []
+        if absent:
+            out.append(Failure(f.path, f"{f.path}: no estimate for session(s) {absent}", "missing-estimate"))
+        if any(e.matched for e in f.sequences) or not any(e.poses for e in f.sequences):
+            continue
+        why = next((w for w in f.warnings if "no estimate stamp" in w or "no pose" in w), "")
+        reason = why.split(". ")[0] if why else f"{f.algorithm} {f.file}: no pose matched the ground truth in time"
+        out.append(Failure(f.path, reason.splitlines()[0], "no-match"))  # one line; the warning has the rest
+    return out
+
+
+def exit_status(ev: Evaluation) -> int:
+    """0 if every input was read and matched the ground truth, else 1 (see the module docstring)."""
+    return UNSCORED if ev.failures or unscored(ev) else OK
