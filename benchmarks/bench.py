@@ -4,7 +4,9 @@ process (so the ratios do not depend on the machine).
 Baselines are plain-Python implementations of the same work in the style of the official tool
 (a dict per sequence, one Python iteration per line and per pose).
 
-Run: ``make bench`` (or ``python benchmarks/bench.py``).
+Run: ``make bench`` (or ``python benchmarks/bench.py``). ``LORISNB_BENCH_LIFELONG=0`` leaves out
+the 10M-pose lifelong OpenLORIS file, ``LORISNB_BENCH_HUGE=0`` the 10M-pose TUM pair. Issue 27's
+figures against the floors (pandas, evo_ape, parsing alone) are :mod:`floors`.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import time
 import warnings
 from pathlib import Path
 
+import floors
 import numpy as np
 
 from lorisnb.core import score
@@ -110,8 +113,9 @@ print(dict(seconds=took, added_bytes=mem('VmHWM:') - base))
 
 
 def bench_reading(folder: Path) -> None:
-    """A 2-million-pose OpenLORIS file: lorisnb's reader against pandas' C parser on the same pose
-    lines (in this process, best of 2), peak memory added by each (in a fresh process), stamps
+    """A 2-million-pose OpenLORIS file (one space between numbers): lorisnb's reader against pandas'
+    fastest exact call on the same pose lines (``sep=" "``, the header and 'seq:' lines skipped; in
+    this process, best of 2), peak memory added by each (in a fresh process), stamps
     equal to Python's float() of each token, nanosecond digits read exactly."""
     import pandas as pd
     from textgen import lifelong_groundtruth, write_lines
@@ -119,18 +123,18 @@ def bench_reading(folder: Path) -> None:
     from lorisnb.io.chunks import stamp_digits
 
     path = folder / "two_million.txt"
-    write_lines(path, "market", lifelong_groundtruth(2_000_000, 2), simulated=True)
+    write_lines(path, "market", lifelong_groundtruth(2_000_000, 2), simulated=True, single=True)
     size = path.stat().st_size
     skip = [0, 1, 2, 3, 1_000_004]  # header lines and the second 'seq:' line
     t_ours, f = _timed(lambda: read_openloris(path), repeat=2)
-    t_pd, df = _timed(lambda: pd.read_csv(path, sep=r"\s+", header=None, skiprows=skip, dtype=np.float64), repeat=2)
+    t_pd, df = _timed(lambda: pd.read_csv(path, sep=" ", header=None, skiprows=skip, engine="c"), repeat=2)
     ratio = t_ours / t_pd
     print(f"read 2M poses ({size / 1e6:.0f} MB)  lorisnb {t_ours:.2f} s   pandas read_csv {t_pd:.2f} s   x{ratio:.2f}")
     goal("read 2M-pose file, time vs pandas", f"x{ratio:.2f} ({t_ours:.2f} s)", "<= x1.5", ratio <= 1.5)
     ours = child(MEASURE.format(imports="from lorisnb.io import read_openloris", work=f"read_openloris({str(path)!r})"))
     theirs = child(MEASURE.format(
         imports="import numpy as np, pandas as pd",
-        work=f"pd.read_csv({str(path)!r}, sep=r'\\s+', header=None, skiprows={skip}, dtype=np.float64)",
+        work=f"pd.read_csv({str(path)!r}, sep=' ', header=None, skiprows={skip}, engine='c')",
     ))  # fmt: skip
     mem = ours["added_bytes"] / size
     print(f"  memory added: lorisnb {ours['added_bytes'] / 2**20:.0f} MiB ({mem:.2f}x the file), "
@@ -252,9 +256,13 @@ LIFELONG_RUNS = 3  # whole runs in fresh processes: the best time (this machine'
 
 def main() -> None:
     import os
+    import subprocess
+    import sys
     import tempfile
 
     warnings.simplefilter("ignore", LorisWarning)
+    lorisnb_dir = Path(__file__).resolve().parents[1] / "lorisnb"  # as `make bench` leaves it: bytecode written
+    subprocess.run([sys.executable, "-m", "compileall", "-q", str(lorisnb_dir)], check=True)
     data = find_data()
     root = data.icra20
     files = [p for p, _ in result_files([root])]
@@ -294,7 +302,7 @@ def main() -> None:
     goal("tidy sweep 50x10x5x5", f"{t_sweep:.2f} s, x{t_score * n_set / t_sweep:,.0f} vs one setting at a time",
          "faster than 2.1 s (before this change)", t_sweep < 2.1)  # fmt: skip
 
-    bench_surfaces(ev)
+    floors.bench_surfaces_runs(ev)
 
     gt_path = data.groundtruth("market")
     est_path = root / "lifelong" / "maslam" / "market.txt"
@@ -319,35 +327,15 @@ def main() -> None:
         bench_reading(Path(tmp))
         if os.environ.get("LORISNB_BENCH_LIFELONG", "1") != "0":
             bench_lifelong(Path(tmp), data.root)
+    floors.bench_small_pair_and_help(data)
+    floors.bench_nearest()
+    with tempfile.TemporaryDirectory(prefix="lorisnb-bench-") as tmp:
+        floors.bench_readers(Path(tmp))
+        floors.bench_growth(Path(tmp))
     print("\nissue-12 goals on this machine:")
     for name, figure, target, met in GOALS:
         print(f"  {'met    ' if met else 'NOT MET'}  {name:40s} {figure:45s} goal {target}")
-
-
-def bench_surfaces(ev) -> None:
-    """CR surfaces over a 1000 eps x 1000 phi grid for every algorithm and scene of the tree, by
-    dominance counting, against the tidy sweep (the baseline) on a 50 x 50 grid in the same process."""
-    import tracemalloc
-
-    from lorisnb.core.surfaces import cr_surfaces
-    from lorisnb.core.sweep import sweep
-
-    durations = ev.durations()
-    eps, phi = np.geomspace(0.01, 100, 1000), np.linspace(0.1, 180, 1000)
-    tracemalloc.start()
-    t_surf, surf = _timed(lambda: cr_surfaces(ev.errors, eps, phi, durations), repeat=1)
-    peak = tracemalloc.get_traced_memory()[1]
-    tracemalloc.stop()
-    t_small, _ = _timed(lambda: sweep(ev.errors, eps[::20], phi[::20]), repeat=1)
-    per_point_surf = t_surf / (len(eps) * len(phi))
-    per_point_sweep = t_small / (50 * 50)
-    goal("CR surfaces 1000x1000, all algorithms and scenes", f"{t_surf:.2f} s, {peak / 2**30:.2f} GiB",
-         "<= 3 s, <= 2 GB", t_surf <= 3 and peak <= 2e9)  # fmt: skip
-    print(
-        f"CR surfaces 1000x1000  lorisnb {t_surf:7.3f} s, peak {peak / 2**20:6.0f} MiB, {len(surf.groups)} surfaces "
-        f"({surf.cr.nbytes / 2**20:.0f} MiB);  tidy sweep 50x50 {t_small:.3f} s: per grid point x"
-        f"{per_point_sweep / per_point_surf:,.0f} faster"
-    )
+    floors.print_tables()
 
 
 def bench_against_evo(data, n: int = 50_000) -> None:

@@ -53,8 +53,11 @@ def pose_lines(t: Trajectory) -> bytes:
     return table.tobytes()
 
 
-def write_lines(path: Path, scene: str, sequences: dict[int, Trajectory], simulated: bool) -> None:
-    """An OpenLORIS file of the given sequences (``simulated: true`` in its header if asked)."""
+def write_lines(
+    path: Path, scene: str, sequences: dict[int, Trajectory], simulated: bool, single: bool = False
+) -> None:
+    """An OpenLORIS file of the given sequences (``simulated: true`` in its header if asked), its
+    numbers in fixed-width columns, or with ``single`` one space apart."""
     with open(path, "wb") as fh:
         fh.write(f"scene: {scene}\nframe: base_link\n".encode())
         if simulated:
@@ -64,7 +67,8 @@ def write_lines(path: Path, scene: str, sequences: dict[int, Trajectory], simula
             for lo in range(0, len(t), 1_000_000):
                 part = Trajectory(t.stamps[lo : lo + 1_000_000], t.positions[lo : lo + 1_000_000],
                                   t.quaternions[lo : lo + 1_000_000])  # fmt: skip
-                fh.write(pose_lines(part))
+                text = pose_lines(part)
+                fh.write(squeeze(np.frombuffer(text, np.uint8).reshape(len(part), -1)) if single else text)
 
 
 def lifelong_groundtruth(n_poses: int, n_sessions: int, rate_hz: float = 16.0, seed: int = 0) -> dict[int, Trajectory]:
@@ -105,3 +109,49 @@ def lifelong_files(folder: Path, n_poses: int = 10_000_000, n_sessions: int = 5)
     write_lines(gt_path, "market", gt, simulated=True)  # a known scene name; base_link frame on both sides
     write_lines(est_path, "market", est, simulated=True)
     return gt_path, est_path
+
+
+def squeeze(table: np.ndarray) -> bytes:
+    """(n, width) ASCII rows of right-aligned fixed-width fields as bytes with single spaces: the
+    padding is dropped (a space after a space or at a line's start), so each line reads as
+    ``pd.read_csv(sep=" ")`` reads it."""
+    flat = table.reshape(-1)
+    space = flat == ord(" ")
+    before = np.concatenate(([ord("\n")], flat[:-1]))
+    return flat[~(space & ((before == ord(" ")) | (before == ord("\n"))))].tobytes()
+
+
+def _columns(values: list[tuple[np.ndarray, int, int]], sep: int, n: int) -> np.ndarray:
+    """(n, width) ASCII rows of the fixed-width ``(values, decimals, width)`` fields, ``sep`` between."""
+    cut = np.full((n, 1), sep, np.uint8)
+    cols = []
+    for k, (v, decimals, width) in enumerate(values):
+        cols += ([cut] if k else []) + [fixed(v, decimals, width)]
+    return np.concatenate(cols + [np.full((n, 1), ord("\n"), np.uint8)], axis=1)
+
+
+def write_plain(path: Path, t: Trajectory, fmt: str) -> None:
+    """``t`` as a single-spaced TUM file (``stamp x y z qx qy qz qw``), a KITTI pose file (12
+    numbers of ``[R | t]`` per line, no stamps) or a EuRoC CSV (``#timestamp,...`` header, stamps in
+    nanoseconds, ``qw`` first)."""
+    from lorisnb.core.geometry import quat_to_matrix
+
+    with open(path, "wb") as fh:
+        if fmt == "euroc":
+            fh.write(
+                b"#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z []\n"
+            )
+        for lo in range(0, len(t), 1_000_000):
+            s, p, q = (a[lo : lo + 1_000_000] for a in (t.stamps, t.positions, t.quaternions))
+            n = len(s)
+            if fmt == "tum":
+                values = [(s, 9, 22)] + [(p[:, k], 4, 10) for k in range(3)] + [(q[:, k], 7, 11) for k in range(4)]
+                fh.write(squeeze(_columns(values, ord(" "), n)))
+            elif fmt == "kitti":
+                m = quat_to_matrix(q)
+                values = [(m[:, i, j] if j < 3 else p[:, i], 6, 13) for i in range(3) for j in range(4)]
+                fh.write(squeeze(_columns(values, ord(" "), n)))
+            else:
+                ns = np.rint((s - s[0]) * 1e9) + 1.4e18  # nanoseconds, 19 digits
+                values = [(ns, 0, 21)] + [(p[:, k], 4, 10) for k in range(3)] + [(q[:, k], 7, 11) for k in (3, 0, 1, 2)]
+                fh.write(squeeze(_columns(values, ord(" "), n)).replace(b". ", b" ").replace(b" ", b","))

@@ -6,52 +6,59 @@ the data; :mod:`lorisnb.tools` evaluates folders and makes figures, widgets and 
 :mod:`lorisnb.cli` is the command line. The names below are the public API.
 """
 
+from typing import TYPE_CHECKING
+
+from ._lazy import attach
 from ._version import __version__
-from .core import (
-    PAPER_EPS,
-    PAPER_PHI,
-    SCENES,
-    Conventions,
-    EvalSpec,
-    FileErrors,
-    OpenLorisFile,
-    ResultFile,
-    SequenceErrors,
-    Trajectory,
-    aggregate_scenes,
-    compute_errors,
-    evaluate_sessions,
-    make_spec,
-    pose_table,
-    score,
-    sequence_errors,
-    session_errors,
-    sweep,
-)
-from .errors import (
-    DataNotFoundError,
-    EvaluationError,
-    FrameError,
-    LorisError,
-    LorisWarning,
-    MissingDependencyError,
-    OutputError,
-    ParseError,
-    ValidationError,
-)
-from .io import (
-    find_data,
-    load_groundtruth,
-    read_euroc,
-    read_kitti,
-    read_manifest,
-    read_openloris,
-    read_ordslam,
-    read_trajectory,
-    read_tum,
-    write_openloris,
-)
-from .tools import Evaluation, evaluate, evaluate_manifest, evaluate_pairs, setup
+
+if TYPE_CHECKING:
+    from .core import (
+        PAPER_EPS,
+        PAPER_PHI,
+        SCENES,
+        Conventions,
+        EvalSpec,
+        FileErrors,
+        OpenLorisFile,
+        ResultFile,
+        SequenceErrors,
+        Trajectory,
+        aggregate_scenes,
+        compute_errors,
+        evaluate_sessions,
+        make_spec,
+        pose_table,
+        score,
+        sequence_errors,
+        session_errors,
+        sweep,
+    )
+    from .errors import (
+        DataNotFoundError,
+        EvaluationError,
+        FrameError,
+        LorisError,
+        LorisWarning,
+        MissingDependencyError,
+        OutputError,
+        ParseError,
+        ValidationError,
+    )
+    from .io import (
+        find_data,
+        load_groundtruth,
+        read_euroc,
+        read_kitti,
+        read_manifest,
+        read_openloris,
+        read_ordslam,
+        read_trajectory,
+        read_tum,
+        write_openloris,
+    )
+    from .tools import Evaluation, evaluate, evaluate_manifest, evaluate_pairs, setup
+
+__getattr__, __dir__ = attach(__name__)
 
 __all__ = [
     "DataNotFoundError", "EvaluationError", "Evaluation", "FileErrors", "FrameError", "LorisError", "LorisWarning",

@@ -8,18 +8,19 @@ from __future__ import annotations
 
 import argparse
 import gc
+import importlib
 import os
 import sys
+from collections.abc import Callable
 
 import numpy as np
 
 from ..core import validate
+from ..core.blocks import ordinary_pages
 from ..core.spec import ALIGNMENTS, PRESETS
 from ..errors import LorisError
 from ..io.ranges import keep_freed_memory
 from ..io.registry import FORMAT_NAMES
-from .commands import cmd_compare, cmd_evaluate, cmd_report, cmd_sweep, cmd_verify
-from .crosscheck import cmd_crosscheck
 from .options import (
     add_compare_options,
     add_diff_options,
@@ -30,7 +31,16 @@ from .options import (
     arg_type,
     threshold_list_type,
 )
-from .runs import cmd_diff, cmd_history
+
+
+def _command(module: str, name: str) -> Callable[[argparse.Namespace], int]:
+    """The command ``name`` of ``module``, imported when it runs (``--help`` imports neither the
+    commands nor pandas, and a command imports pandas after :func:`pandas_without_pyarrow`)."""
+
+    def run(args: argparse.Namespace) -> int:
+        return int(getattr(importlib.import_module(module, __name__), name)(args) or 0)
+
+    return run
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -40,24 +50,24 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("evaluate", help="score result files: ATE, AOE, CR, CR-T, CS-R, C-ATE, RPE")
     add_evaluation_options(p)
     add_threshold_options(p)
-    p.set_defaults(func=cmd_evaluate)
+    p.set_defaults(func=_command(".commands", "cmd_evaluate"))
 
     p = sub.add_parser("compare", help="compare algorithms over trials and sequences: intervals, tests, ranking")
     add_evaluation_options(p)
     add_threshold_options(p)
     add_compare_options(p)
-    p.set_defaults(func=cmd_compare)
+    p.set_defaults(func=_command(".commands", "cmd_compare"))
 
     p = sub.add_parser("diff", help="did CAND regress against BASE? two result folders, report runs or tables")
     add_evaluation_options(p)
     add_threshold_options(p)
     add_diff_options(p)
-    p.set_defaults(func=cmd_diff)
+    p.set_defaults(func=_command(".runs", "cmd_diff"))
     p.set_defaults(defaults=vars(p.parse_args(["BASE", "CAND"])))
 
     p = sub.add_parser("history", help="scene values over many runs: first changes, runs not comparable")
     add_history_options(p)
-    p.set_defaults(func=cmd_history)
+    p.set_defaults(func=_command(".runs", "cmd_history"))
 
     p = sub.add_parser(
         "sweep", help="every metric over grids of eps, phi, delta and tau (one row per sequence and setting)"
@@ -84,7 +94,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="read --eps as fractions of each sequence's ground-truth extent or length",
     )
-    p.set_defaults(func=cmd_sweep)
+    p.set_defaults(func=_command(".commands", "cmd_sweep"))
 
     p = sub.add_parser("crosscheck", help="compare lorisnb with evo on one ground truth and one estimate")
     p.add_argument("gt", help="ground truth (for --format openloris: gt_<scene>_1.txt, or 'auto' to find it)")
@@ -128,7 +138,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--data", default=None, metavar="DIR")
     p.add_argument("--csv", default=None, metavar="OUT")
     p.add_argument("--force", action="store_true")
-    p.set_defaults(func=cmd_crosscheck)
+    p.set_defaults(func=_command(".crosscheck", "cmd_crosscheck"))
 
     p = sub.add_parser("report", help="run the notebooks with papermill into a report folder under results/")
     p.add_argument("--out", default=None, help="run folder (default results/run-<date>-<time>)")
@@ -163,11 +173,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--force", action="store_true", help="replace --out if it is an earlier lorisnb run folder")
     p.add_argument("--no-progress", action="store_true")
-    p.set_defaults(func=cmd_report)
+    p.set_defaults(func=_command(".commands", "cmd_report"))
 
     p = sub.add_parser("verify", help="re-check a report run's inputs against the checksums in its run.json")
     p.add_argument("run", metavar="RUN", help="a run folder written by lorisnb report (or its run.json)")
-    p.set_defaults(func=cmd_verify)
+    p.set_defaults(func=_command(".commands", "cmd_verify"))
     return parser
 
 
@@ -176,6 +186,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     args.argv = ["lorisnb", *(sys.argv[1:] if argv is None else argv)]  # the command line, as run.json records it
     keep_freed_memory()  # a command is one short process: reuse freed memory (see there)
+    ordinary_pages(True)  # and new arrays in ordinary pages (see there)
+    if not (getattr(args, "parquet", None) or getattr(args, "scheduler", None) or args.command == "report"):
+        pandas_without_pyarrow()
     try:
         return int(args.func(args) or 0)
     except LorisError as exc:
@@ -184,6 +197,28 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+
+
+def pandas_without_pyarrow() -> None:
+    """Import pandas without pyarrow, for a command that writes no Parquet and sends no table to
+    Dask: pandas imports pyarrow whenever it is installed (lorisnb's ``[parquet]`` extra), which
+    costs about a fifth of a small evaluation's time and 60 MB; without it pandas keeps strings as
+    Python objects (the same tables, the same output). Nothing happens if pandas is already
+    imported (a Python session); pyarrow stays importable afterwards."""
+    if "pandas" in sys.modules:
+        return
+    before = sys.modules.get("pyarrow", _ABSENT)
+    sys.modules["pyarrow"] = None  # type: ignore[assignment]  # import pyarrow raises ImportError
+    try:
+        import pandas  # noqa: F401
+    finally:
+        if before is _ABSENT:
+            del sys.modules["pyarrow"]
+        else:
+            sys.modules["pyarrow"] = before  # type: ignore[assignment]
+
+
+_ABSENT = object()
 
 
 def run() -> None:

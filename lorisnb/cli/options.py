@@ -354,7 +354,7 @@ def add_compare_options(p: argparse.ArgumentParser) -> None:
 
 def add_diff_options(p: argparse.ArgumentParser) -> None:
     """``diff``'s own options: tolerances, the test's alpha, the seed and the verdict files."""
-    from ..core.regression import DEFAULT_TOLERANCES
+    from ..core.tolerances import DEFAULT_TOLERANCES
 
     defaults = ",".join(f"{k}={v}" for k, v in DEFAULT_TOLERANCES.items())
     p.add_argument("--tolerance", default=None, metavar="M=V,...",

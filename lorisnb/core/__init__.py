@@ -2,30 +2,37 @@
 association, the paper's metrics, the pipeline, scoring, sweeps, the simulator). Nothing here
 reads files, looks up data, draws or prints; :mod:`lorisnb.io` and :mod:`lorisnb.tools` do."""
 
-from .aggregate import aggregate_scenes, durations_table
-from .association import MAX_GAP, Association, associate, groundtruth_in_frame
-from .conventions import Conventions, associate_nearest, fit_alignment
-from .frames import FRAMES, PAPER_EPS, PAPER_PHI, SCENES
-from .geometry import Sim3, umeyama
-from .model import (
-    EXTRA_COLUMNS,
-    SCENE_COLUMNS,
-    SEQUENCE_COLUMNS,
-    FileErrors,
-    OpenLorisFile,
-    ResultFile,
-    SequenceErrors,
-    is_monocular,
-    scene_eps,
-)
-from .pipeline import compute_errors, evaluate_sessions, sequence_errors, session_errors
-from .relative import relative_table, rpg_relative_errors
-from .scoring import pose_table, score, sequence_grid
-from .simulate import Faults, simulate, simulated_errors, simulated_result
-from .spec import PRESETS, EvalSpec, make_spec
-from .surfaces import Surfaces, cr_surfaces
-from .sweep import eps_at_cr, rank_stability, rank_swaps, sweep, sweep_scenes
-from .trajectory import Trajectory, extent, path_length
+from typing import TYPE_CHECKING
+
+from .._lazy import attach
+
+if TYPE_CHECKING:
+    from .aggregate import aggregate_scenes, durations_table
+    from .association import MAX_GAP, Association, associate, groundtruth_in_frame
+    from .conventions import Conventions, associate_nearest, fit_alignment
+    from .frames import FRAMES, PAPER_EPS, PAPER_PHI, SCENES
+    from .geometry import Sim3, umeyama
+    from .model import (
+        EXTRA_COLUMNS,
+        SCENE_COLUMNS,
+        SEQUENCE_COLUMNS,
+        FileErrors,
+        OpenLorisFile,
+        ResultFile,
+        SequenceErrors,
+        is_monocular,
+        scene_eps,
+    )
+    from .pipeline import compute_errors, evaluate_sessions, sequence_errors, session_errors
+    from .relative import relative_table, rpg_relative_errors
+    from .scoring import pose_table, score, sequence_grid
+    from .simulate import Faults, simulate, simulated_errors, simulated_result
+    from .spec import PRESETS, EvalSpec, make_spec
+    from .surfaces import Surfaces, cr_surfaces
+    from .sweep import eps_at_cr, rank_stability, rank_swaps, sweep, sweep_scenes
+    from .trajectory import Trajectory, extent, path_length
+
+__getattr__, __dir__ = attach(__name__)
 
 __all__ = [
     "EXTRA_COLUMNS", "FRAMES", "MAX_GAP", "PAPER_EPS", "PAPER_PHI", "SCENES", "SCENE_COLUMNS", "SEQUENCE_COLUMNS",

@@ -10,6 +10,8 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 
+import numpy as np
+
 #: Rows per block: about a megabyte per (N, 4) float64 temporary.
 BLOCK_ROWS = 16384
 
@@ -42,3 +44,15 @@ def blockwise(fn: Callable[[int, int], None], n: int, block: int | None = None) 
     with ThreadPoolExecutor(max_workers=_threads) as pool:
         for _ in pool.map(lambda lo: fn(lo, min(lo + block, n)), starts):
             pass  # re-raises a block's exception
+
+
+def ordinary_pages(on: bool = True) -> bool:
+    """Have numpy put new large arrays in ordinary pages (``on``) or ask the kernel for huge pages
+    (numpy's default); returns the previous setting (True: ordinary pages). Where the kernel
+    compacts memory to find huge pages when they are first written (``transparent_hugepage/defrag``
+    = ``madvise``, the usual default), arrays written once in order wait for it: a first call of
+    :func:`lorisnb.core.cr_surfaces` took about four times as long on a busy machine, and a
+    3-million-pose pair about a sixth more CPU time. The command line sets it for its process."""
+    multiarray = getattr(getattr(np, "_core", None), "multiarray", None)
+    toggle = getattr(multiarray, "_set_madvise_hugepage", None)  # numpy >= 1.20; else nothing to do
+    return not toggle(not on) if toggle is not None else on

@@ -44,29 +44,101 @@ def associate_nearest(
     order of increasing difference (ties: earlier ground-truth, then earlier estimate stamp), each
     stamp used once. Returns the matched indices in increasing estimate order.
 
-    Vectorized: in each round every candidate that is the best remaining one of both its stamps
-    is accepted (for a strict order of candidates this gives exactly the greedy matching), and
-    candidates touching an accepted stamp are dropped; a few rounds suffice.
+    Linear memory, about linear time: in each round, every pair of stamps that are each other's
+    best remaining partner (found by ``searchsorted`` among the nearest stamps on either side) is
+    accepted; such a pair is the smallest candidate of both its stamps, so the greedy rule accepts
+    it too (for a strict order of candidates this gives exactly the greedy matching). Stamps left
+    without a candidate within ``max_diff`` are dropped. What the nearest neighbours cannot decide
+    (differences that round to equal values on one side, stamps out of order or repeated) goes to
+    the exact rule over every candidate (:func:`_greedy_candidates`). Rounds, not poses: a few
+    suffice unless differences grow along a long chain of alternating stamps.
     """
     g = np.asarray(gt_stamps, float)
     e = np.asarray(est_stamps, float)
-    lo = np.searchsorted(g, e - max_diff, side="left")
-    hi = np.searchsorted(g, e + max_diff, side="right")
+    if g.size == 0 or e.size == 0:
+        return np.zeros(0, int), np.zeros(0, int)
+    if not (np.all(g[1:] > g[:-1]) and np.all(e[1:] > e[:-1])):  # repeated or unsorted stamps (NaN too)
+        return _greedy_candidates(g, e, np.arange(g.size), np.arange(e.size), max_diff)
+    # differences below max_diff are exact (Sterbenz) when every stamp is at least max_diff from 0, one sign
+    exact = bool(min(g[0], e[0]) >= max_diff or max(g[-1], e[-1]) <= -max_diff)
+    gi_left, ej_left = np.arange(g.size), np.arange(e.size)
+    g_left, e_left = g, e
+    out_g, out_e = [], []
+    while gi_left.size and ej_left.size:
+        best_of_e = _nearest_best(g_left, e_left, max_diff, exact)
+        best_of_g = _nearest_best(e_left, g_left, max_diff, exact)
+        j = np.flatnonzero(best_of_e >= 0)
+        i = best_of_e[j]
+        win = best_of_g[i] == j
+        if not win.any():  # only ties of rounded differences remain undecided: the exact rule
+            mg, me = _greedy_candidates(g, e, gi_left, ej_left, max_diff)
+            out_g.append(mg)
+            out_e.append(me)
+            break
+        out_g.append(gi_left[i[win]])
+        out_e.append(ej_left[j[win]])
+        keep_e = best_of_e != -1  # stamps with a candidate left (-1: none within max_diff)
+        keep_g = best_of_g != -1
+        keep_e[j[win]] = False
+        keep_g[i[win]] = False
+        gi_left, ej_left, g_left, e_left = gi_left[keep_g], ej_left[keep_e], g_left[keep_g], e_left[keep_e]
+    partner = np.full(e.size, -1, np.int64)  # in increasing estimate order without a sort
+    for mg, me in zip(out_g, out_e, strict=True):
+        partner[me] = mg
+    me = np.flatnonzero(partner >= 0)
+    return partner[me], me
+
+
+def _nearest_best(a: np.ndarray, b: np.ndarray, max_diff: float, exact: bool) -> np.ndarray:
+    """For each stamp of ``b`` (both strictly increasing), the index in ``a`` of its best candidate
+    by (difference, stamp): the nearest stamp on the left if its difference is not larger than the
+    right one's, else the nearest on the right; -1 if neither is within ``max_diff``, -2 if the
+    best is not known: the left stamp's difference ties with the one before it (differences
+    rounded to equal values, impossible when ``exact``: every difference below ``max_diff`` is then
+    computed without rounding)."""
+    n = a.size
+    k = np.searchsorted(a, b, side="left")  # a[k - 1] < b <= a[k]; k increasing
+    first, last = np.searchsorted(k, [1, n])  # k == 0 before first, k == n from last on
+    d_left = b - a.take(k - 1, mode="clip")  # |a - b| as computed (fl(-x) = -fl(x))
+    d_left[:first] = np.inf
+    d_right = a.take(k, mode="clip") - b
+    d_right[last:] = np.inf
+    left = d_left <= d_right
+    best = k - left
+    d_best = np.minimum(d_left, d_right)
+    best[~(d_best < max_diff)] = -1
+    if not exact:
+        d_far = b - a.take(k - 2, mode="clip")
+        d_far[: np.searchsorted(k, 2)] = np.inf
+        best[left & (d_best < max_diff) & (d_far == d_left)] = -2
+    return best
+
+
+def _greedy_candidates(
+    g: np.ndarray, e: np.ndarray, g_idx: np.ndarray, e_idx: np.ndarray, max_diff: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The greedy rule over every candidate pair of the stamps ``g[g_idx]`` and ``e[e_idx]``
+    (indices increasing): in each round every candidate that is the best remaining one of both its
+    stamps is accepted, and candidates touching an accepted stamp are dropped. Returns indices
+    into ``g`` and ``e``, in increasing estimate order."""
+    gs, es = g[g_idx], e[e_idx]
+    lo = np.searchsorted(gs, es - max_diff, side="left")
+    hi = np.searchsorted(gs, es + max_diff, side="right")
     count = hi - lo
-    ej = np.repeat(np.arange(e.size), count)
+    ej = np.repeat(np.arange(es.size), count)
     gi = np.repeat(lo, count) + (np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count))
-    diff = np.abs(g[gi] - e[ej])
+    diff = np.abs(gs[gi] - es[ej])
     ok = diff < max_diff
     gi, ej, diff = gi[ok], ej[ok], diff[ok]
     # a strict order of candidates: difference, then gt stamp, then estimate stamp (TUM sorts tuples)
     rank = np.empty(gi.size, np.int64)
-    rank[np.lexsort((e[ej], g[gi], diff))] = np.arange(gi.size)
-    taken_g = np.zeros(g.size, bool)
-    taken_e = np.zeros(e.size, bool)
+    rank[np.lexsort((es[ej], gs[gi], diff))] = np.arange(gi.size)
+    taken_g = np.zeros(gs.size, bool)
+    taken_e = np.zeros(es.size, bool)
     out_g, out_e = [], []
     while gi.size:  # rounds, not poses: each round accepts at least the best candidate
-        best_g = np.full(g.size, np.iinfo(np.int64).max)
-        best_e = np.full(e.size, np.iinfo(np.int64).max)
+        best_g = np.full(gs.size, np.iinfo(np.int64).max)
+        best_e = np.full(es.size, np.iinfo(np.int64).max)
         np.minimum.at(best_g, gi, rank)
         np.minimum.at(best_e, ej, rank)
         win = (best_g[gi] == rank) & (best_e[ej] == rank)
@@ -76,8 +148,8 @@ def associate_nearest(
         taken_e[ej[win]] = True
         keep = ~taken_g[gi] & ~taken_e[ej]
         gi, ej, rank = gi[keep], ej[keep], rank[keep]
-    mg = np.concatenate(out_g) if out_g else np.zeros(0, int)
-    me = np.concatenate(out_e) if out_e else np.zeros(0, int)
+    mg = g_idx[np.concatenate(out_g)] if out_g else np.zeros(0, int)
+    me = e_idx[np.concatenate(out_e)] if out_e else np.zeros(0, int)
     order = np.argsort(me, kind="stable")
     return mg[order], me[order]
 

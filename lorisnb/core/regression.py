@@ -35,6 +35,7 @@ from ..errors import ValidationError
 from .coverage import complete, expected_from
 from .permutation import permutation_test
 from .stats import WEIGHTS, holm, scene_means, with_trials
+from .tolerances import DEFAULT_TOLERANCES
 
 #: Metrics compared, each with +1 when larger is better and -1 when smaller is better.
 METRICS: dict[str, int] = {
@@ -42,10 +43,6 @@ METRICS: dict[str, int] = {
     "rpe_trans_rmse": -1, "rpe_rot_rmse": -1,
 }  # fmt: skip
 #: The change a metric may worsen by before it is a regression: absolute (metric's unit) or "N%".
-DEFAULT_TOLERANCES: dict[str, str] = {
-    "cr": "0.02", "cr_t": "0.02", "cs_r": "0.02", "ate_rmse": "10%", "aoe_rmse": "10%", "c_ate_rmse": "10%",
-    "c_aoe_rmse": "10%", "rpe_trans_rmse": "10%", "rpe_rot_rmse": "10%",
-}  # fmt: skip
 KEYS = ["suite", "algorithm", "scene", "seq"]
 
 

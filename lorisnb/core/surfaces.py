@@ -19,6 +19,7 @@ import pandas as pd
 
 from ..errors import ValidationError
 from . import metrics
+from .blocks import blockwise, ordinary_pages
 from .model import FileErrors
 from .scoring import as_files
 from .validate import threshold, threshold_list
@@ -55,6 +56,16 @@ class Surfaces:
         return self.cr[hit[0]]
 
 
+def _outputs(count: int, shape: tuple[int, ...]) -> list[np.ndarray]:
+    """``count`` new float64 arrays of ``shape`` in ordinary pages (:func:`~lorisnb.core.blocks.ordinary_pages`:
+    they are written once, in order)."""
+    before = ordinary_pages(True)
+    try:
+        return [np.empty(shape) for _ in range(count)]
+    finally:
+        ordinary_pages(before)
+
+
 def _grid(name: str, values: object) -> np.ndarray:
     """A validated grid, sorted, without repeats."""
     items = threshold_list(name, values)
@@ -73,7 +84,8 @@ def cr_surfaces(
     """CR and CR-T surfaces over the grid ``eps`` x ``phi`` (metres, degrees; any resolution) of
     every (suite, algorithm, scene, trial), with ``delta`` the validity window (seconds) and
     ``durations`` the ground-truth durations (``Evaluation.durations()``). Each value equals the
-    scene CR that :func:`lorisnb.core.aggregate.aggregate_scenes` gives for that setting."""
+    scene CR that :func:`lorisnb.core.aggregate.aggregate_scenes` gives for that setting. Groups
+    are computed on threads within :func:`lorisnb.core.blocks.threads`."""
     files = as_files(errors)
     eps_a, phi_a = _grid("eps", eps), _grid("phi", phi)
     delta = threshold("delta", delta)
@@ -105,17 +117,23 @@ def cr_surfaces(
             weights[k].append(held[inside])
             tracked[k] += e.gt_end - float(e.stamps[0])
     groups = pd.DataFrame(list(keys), columns=["suite", "algorithm", "scene", "trial"]).assign(sequences=nseq)
-    ct = np.zeros((len(cells), E, P))
-    for k in range(len(cells)):  # per group: one histogram, then cumulative sums in place
-        if cells[k]:
-            ct[k] = np.bincount(np.concatenate(cells[k]), np.concatenate(weights[k]), minlength=E * P).reshape(E, P)
-            np.cumsum(ct[k], axis=0, out=ct[k])
-            np.cumsum(ct[k], axis=1, out=ct[k])
-    scene_time = groups["scene"].map(total).to_numpy(float)[:, None, None]
-    tr = np.asarray(tracked, float)[:, None, None]
-    cr = np.empty_like(ct)
-    cr_t = np.full_like(ct, np.nan)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        np.divide(ct, scene_time, out=cr)
-        np.divide(ct, tr, out=cr_t, where=tr > 0)
+    scene_time = groups["scene"].map(total).to_numpy(float)
+    tr = np.asarray(tracked, float)
+    ct, cr, cr_t = _outputs(3, (len(cells), E, P))
+
+    def group(k: int, _: int) -> None:  # while its histogram is in cache: cumulative sums, then CR and CR-T
+        with np.errstate(invalid="ignore", divide="ignore"):
+            if cells[k]:
+                ct[k] = np.bincount(np.concatenate(cells[k]), np.concatenate(weights[k]), minlength=E * P).reshape(E, P)
+                np.cumsum(ct[k], axis=0, out=ct[k])
+                np.cumsum(ct[k], axis=1, out=ct[k])
+            else:
+                ct[k] = 0.0
+            np.divide(ct[k], scene_time[k], out=cr[k])
+            if tr[k] > 0:
+                np.divide(ct[k], tr[k], out=cr_t[k])
+            else:
+                cr_t[k] = np.nan
+
+    blockwise(group, len(cells), 1)  # groups on threads when the caller lends them (blocks.threads)
     return Surfaces(eps=eps_a, phi=phi_a, groups=groups, correct_time=ct, cr=cr, cr_t=cr_t, delta=delta)

@@ -18,16 +18,14 @@ import stat
 from collections.abc import Callable, Generator, Sequence
 
 import numpy as np
-import pandas as pd
 
 from ..errors import ParseError
-from .ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, read_range
+from .ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, newlines, read_range
 from .rows import Rows, RowSink, line_dtype
 from .scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
 FAST_MIN_BYTES = 32 << 10
-SMALL_CHUNK = 1 << 20  # below this the numpy scanner is faster than a call of the C parser
 
 
 def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[bytes, int, int, int], None, None]:
@@ -56,7 +54,7 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[by
             if not block:
                 if data:
                     seen_text = seen_text or bool(data.strip())
-                    yield data + b"\n", line0, data.count(b"\n") + 1, fh.tell()
+                    yield data + b"\n", line0, newlines(data) + 1, fh.tell()
                 break
             cut = data.rfind(b"\n") + 1
             if cut == 0:
@@ -66,7 +64,7 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[by
                 continue
             piece, rest = data[:cut], data[cut:]
             seen_text = seen_text or bool(piece.strip())
-            n = piece.count(b"\n")
+            n = newlines(piece)
             yield piece, line0, n, fh.tell() - len(rest)
             line0 += n
         if not seen_text:
@@ -97,14 +95,16 @@ def _layout(
     return np.flatnonzero(skipped), specials, int(np.argmin(skipped))
 
 
-def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str) -> np.ndarray:
+def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str, runs: bool = False) -> np.ndarray:
     """(rows, ntok) numbers of a chunk by pandas' C parser, skipping the lines ``skip``. With
-    ``sep=" "`` runs of spaces separate fields, and a tab, a trailing space or a line of spaces
-    raises (an empty field, or a field that is not a number)."""
+    ``sep=" "``: fields one space apart, runs of spaces too with ``runs`` (a third slower); a tab, a
+    trailing space, a line of spaces (or a run of spaces without ``runs``) raise (an empty field)."""
+    import pandas as pd  # here: reading a small file needs no pandas
+
     return pd.read_csv(
         io.BytesIO(chunk),
         sep=sep,
-        skipinitialspace=sep == " ",
+        skipinitialspace=runs,
         header=None,
         names=range(ntok),
         dtype=np.float64,
@@ -112,19 +112,18 @@ def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str) -> np.ndarray:
         na_filter=False,
         engine="c",
         index_col=False,
-        low_memory=False,
         skiprows=skip.tolist() if skip.size else None,
     ).to_numpy()  # (nrows, ntok), a transposed view of pandas' column block
 
 
 def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) -> Rows | None:
     """The C-parser path for one chunk, or None when the chunk needs the exact scanner."""
+    import pandas as pd
+
     skip = np.zeros(0, np.int64)
     specials: list[tuple[int, str]] = []
     first_row = 0
     structured = b"#" in chunk or b":" in chunk or chunk[:1] in (b"\n", b"\r")
-    if not structured and len(chunk) < SMALL_CHUNK:  # small: look for blank lines now rather than parse twice
-        structured = b"\n\n" in chunk or b"\n\r\n" in chunk
     for attempt in range(2):  # plain numbers first; blank lines are found if the row count says so
         if structured:
             layout = _layout(chunk, line0, nlines, specials_ok)
@@ -145,12 +144,16 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
             # spaces only (any number): the C parser's one-character split, skipping repeated spaces, is
             # faster than its whitespace split; tabs or trailing spaces further on raise, then read as below
             single = b"\t" not in line and not line.endswith(b" ")
-            try:
-                values = _read_c(chunk, ntok, skip, " " if single else r"\s+")
-            except (ValueError, pd.errors.ParserError):
-                if not single:
-                    raise
-                values = _read_c(chunk, ntok, skip, r"\s+")  # other spacing further on
+            runs = b"  " in line or line.startswith(b" ")
+            tries = [(" ", runs)] + ([(" ", True)] if not runs else []) if single else []
+            tries.append((r"\s+", False))  # other spacing further on
+            for k, (sep, skip_runs) in enumerate(tries):
+                try:
+                    values = _read_c(chunk, ntok, skip, sep, skip_runs)
+                    break
+                except (ValueError, pd.errors.ParserError):
+                    if k == len(tries) - 1:
+                        raise
         except (ValueError, IndexError, pd.errors.ParserError, UnicodeDecodeError):
             return None
         if len(values) == nrows:
@@ -216,6 +219,7 @@ def read_rows(
     fast_min_bytes: int = FAST_MIN_BYTES,
     progress: Callable[[int], object] | None = None,
     layout: Callable[[int], Sequence[slice]] | None = None,
+    skip_lines: int = 0,
 ) -> Rows:
     """Read the numeric lines of a text file in chunks.
 
@@ -238,6 +242,8 @@ def read_rows(
         layout: the column groups the caller will :meth:`~lorisnb.io.rows.Rows.split` the rows
             into, given the lines' token count: a large file whose lines all have the same count
             is then copied into them as its chunks are parsed (:class:`~lorisnb.io.rows.RowSink`).
+        skip_lines: line ``skip_lines`` (1-based; 0: none) is skipped as a comment (a header line
+            without ``#``; the lines before it must be blank or comments).
     """
     spath = str(path)
     width = max(widths)
@@ -254,7 +260,7 @@ def read_rows(
 
     chunks = _chunks(path, what, chunk_bytes)
     first, _, first_lines, at = next(chunks)
-    parts.append(parse(first, 0, first_lines))
+    parts.append(parse(_commented(first, skip_lines), 0, first_lines))
     if progress is not None:
         progress(len(first))
     try:
@@ -262,8 +268,11 @@ def read_rows(
         regular, total = stat.S_ISREG(st.st_mode), st.st_size
     except OSError:
         regular, total = False, 0
-    if not regular or at >= total:  # a pipe or a device (or no more chunks: the end checks for an empty file)
-        parts += in_order((((parse, c, l0, n), len(c)) for c, l0, n, _ in chunks), progress)
+    if not regular or at >= total or skip_lines > first_lines:  # a pipe or a device (or no more chunks: the
+        # end checks for an empty file; or the line to skip further on): chunks one after another
+        parts += in_order(
+            (((parse, _commented(c, skip_lines - l0), l0, n), len(c)) for c, l0, n, _ in chunks), progress
+        )
         return _join(parts)
     chunks.close()
     sink, again = None, False
@@ -296,13 +305,22 @@ def read_rows(
     if again:
         del parts
         return read_rows(path, widths, what=what, numbers=numbers, bad_width=bad_width, specials=specials,
-                         separators=separators, chunk_bytes=chunk_bytes, fast_min_bytes=fast_min_bytes)  # fmt: skip
+                         separators=separators, chunk_bytes=chunk_bytes, fast_min_bytes=fast_min_bytes,
+                         skip_lines=skip_lines)  # fmt: skip
     rows = _join(parts)
     del parts
     if sink is not None and sink.ntok is not None:
         rows.filled = sink.filled()
     give_back_memory()
     return rows
+
+
+def _commented(chunk: bytes, line: int) -> bytes:
+    """``chunk`` with ``#`` put before its ``line``-th line (1-based), if the chunk holds it."""
+    parts = chunk.split(b"\n", line - 1) if line >= 1 else []
+    if len(parts) < line or line < 1 or not parts[-1]:  # not in this chunk (an empty rest: the next one's)
+        return chunk
+    return b"\n".join(parts[:-1] + [b"#" + parts[-1]])
 
 
 def _join(parts: list[Rows]) -> Rows:

@@ -7,6 +7,7 @@ All scan the file as bytes with numpy (:mod:`lorisnb.io.scanner`) and raise
 
 from __future__ import annotations
 
+import itertools
 import os
 import warnings
 from collections.abc import Callable
@@ -18,8 +19,9 @@ from ..core.validate import choice
 from ..errors import LorisWarning, ParseError, ValidationError
 from .chunks import read_rows
 from .openloris import read_openloris
+from .ranges import LINE_LIMIT
 from .registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample
-from .scanner import REPEATED, Lines, check_rows, finish, read_bytes, scan
+from .scanner import BOM, REPEATED, Lines, check_rows, finish, read_bytes, scan
 
 #: Formats :func:`read_trajectory` reads (the names of :data:`lorisnb.io.registry.FORMATS`).
 TRAJECTORY_FORMATS = FORMAT_NAMES
@@ -73,17 +75,35 @@ def read_tum(
         bad_width=lambda text, n: _width_message(text, n, expected, "tum", path),
         separators=b",",
         progress=progress,
+        layout=_pose_groups,
     )
-    values = rows.values  # (n, 8) view of the columns
+    first, positions, quaternions = rows.split(_pose_groups(8))  # row-major, filled as the chunks were read
+    return _poses(spath, first[:, 0], positions, quaternions, rows.lines, warn, repeated)
+
+
+def _pose_groups(ntok: int) -> tuple[slice, slice, slice]:
+    """The columns of a TUM line (``ntok`` is 8): stamp, position, quaternion."""
+    return slice(0, 1), slice(1, 4), slice(4, 8)
+
+
+def _poses(
+    spath: str,
+    stamps: np.ndarray,
+    positions: np.ndarray,
+    quaternions: np.ndarray,
+    line_no: np.ndarray,
+    warn: bool,
+    repeated: str,
+) -> Trajectory:
+    """A Trajectory of rows as read: checked (:func:`~lorisnb.io.scanner.check_rows`; NaN poses
+    skipped with a note), sorted (:func:`~lorisnb.io.scanner.finish`), notes issued if ``warn``."""
     notes: list[str] = []
-    keep = check_rows(spath, values[:, 0], values[:, 1:4], values[:, 4:8], rows.lines, notes)
+    keep = check_rows(spath, stamps, positions, quaternions, line_no, notes)
     nan_rows = int((~keep).sum())
     if nan_rows:
         notes.append(f"{spath}: {nan_rows} pose(s) with NaN or infinite values skipped")
-        values, line_no = values[keep], rows.lines[keep]
-    else:
-        line_no = rows.lines
-    traj = finish(spath, values[:, 0], values[:, 1:4], values[:, 4:8], line_no, "", notes, repeated)
+        stamps, positions, quaternions, line_no = stamps[keep], positions[keep], quaternions[keep], line_no[keep]
+    traj = finish(spath, stamps, positions, quaternions, line_no, "", notes, repeated)
     _warn(notes, warn)
     return traj
 
@@ -129,8 +149,10 @@ def read_kitti(
             text, n, "12 numbers per line, a 3x4 pose matrix row-major (KITTI)", "kitti", path
         ),
         separators=b",",
+        layout=_matrix_groups,
     )
-    mats = np.ascontiguousarray(rows.values).reshape(-1, 3, 4)
+    (flat,) = rows.split(_matrix_groups(12))  # row-major, filled as the chunks were read
+    mats = flat.reshape(-1, 3, 4)
     if stamps is None:
         t = np.arange(len(mats), dtype=float)
     elif isinstance(stamps, (str, os.PathLike)):
@@ -146,6 +168,11 @@ def read_kitti(
     return out
 
 
+def _matrix_groups(ntok: int) -> tuple[slice]:
+    """The columns of a KITTI line (``ntok`` is 12): the 3x4 matrix, row-major."""
+    return (slice(0, 12),)
+
+
 def read_times(path: str | os.PathLike) -> np.ndarray:
     """Read a times file: one stamp (seconds) per line, ``#`` comments allowed."""
     spath = str(path)
@@ -155,11 +182,83 @@ def read_times(path: str | os.PathLike) -> np.ndarray:
     return lines.numbers(rows, spath, "one stamp in seconds per line")
 
 
+EUROC_ROWS = (
+    "the same number (8 or more) of comma-separated numbers on every row: "
+    "'timestamp_ns,p_x,p_y,p_z,q_w,q_x,q_y,q_z,...' (EuRoC CSV)"
+)
+EUROC_NUMBERS = "numbers 'timestamp_ns,p_x,p_y,p_z,q_w,q_x,q_y,q_z'"
+
+
+def _euroc_head(path: str | os.PathLike) -> tuple[int, int]:
+    """The lines before a EuRoC CSV's rows (a header line without '#' and what precedes it; 0 if
+    none) and the number of fields of its first row (8 if there is none). Reads the first lines
+    only; anything unreadable is left to :func:`~lorisnb.io.chunks.read_rows` to report."""
+    skip, seen = 0, 0
+    try:
+        with open(path, "rb") as fh:
+            for k in itertools.count(1):
+                line = fh.readline(LINE_LIMIT)
+                if k == 1 and line.startswith(BOM):
+                    line = line[len(BOM) :]
+                if not line or b"\0" in line or not line.endswith(b"\n") and len(line) >= LINE_LIMIT:
+                    break
+                tokens = line.replace(b",", b" ").split()
+                if not tokens or tokens[0].startswith(b"#"):
+                    continue
+                seen += 1
+                if seen == 1 and len(tokens) >= 8:
+                    try:
+                        float(tokens[0].decode("utf-8", "replace"))
+                    except ValueError:
+                        skip = k  # a header line without '#'
+                        continue
+                return skip, len(tokens)
+    except (OSError, TypeError, ValueError):
+        pass
+    return skip, 8
+
+
 def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop") -> Trajectory:
     """Read a EuRoC ground-truth CSV (``state_groundtruth_estimate0/data.csv``): rows
     ``stamp_ns, p_x, p_y, p_z, q_w, q_x, q_y, q_z[, ...]`` after a ``#timestamp,...`` header;
     stamps become seconds (nanoseconds / 1e9, as evo), quaternions ``xyzw``. Further columns
-    (velocities, biases) are ignored. ``repeated``: as :func:`read_tum`."""
+    (velocities, biases) are ignored. ``repeated``: as :func:`read_tum`. Read in chunks as
+    :func:`read_tum` (the rows straight into the arrays kept)."""
+    spath = str(path)
+    skip, width = _euroc_head(path)
+    try:
+        rows = read_rows(
+            path,
+            (width if width >= 8 else 8,),  # every row as wide as the first
+            what="a trajectory file",
+            numbers=EUROC_NUMBERS,
+            bad_width=lambda text, n: _width_message(text, n, EUROC_ROWS),
+            separators=b",",
+            layout=_euroc_groups,
+            skip_lines=skip,
+        )
+    except ParseError:
+        return _read_euroc_whole(path, warn, repeated)  # the first problem of the whole file, as it always was reported
+    first, positions, wxyz = rows.split(_euroc_groups(width))
+    quaternions = wxyz[:, [1, 2, 3, 0]]  # x y z w
+    del wxyz
+    notes: list[str] = []
+    line_no = rows.lines
+    stamps = first[:, 0]
+    if (stamps != np.round(stamps)).any():  # not whole nanoseconds: reported as the whole-file reader does
+        return _read_euroc_whole(path, warn, repeated)
+    keep = check_rows(spath, stamps, positions, quaternions, line_no, notes)
+    if not keep.all():
+        stamps, positions, quaternions, line_no = stamps[keep], positions[keep], quaternions[keep], line_no[keep]
+    stamps /= 1e9
+    traj = finish(spath, stamps, positions, quaternions, line_no, "", notes, repeated)
+    _warn(notes, warn)
+    return traj
+
+
+def _read_euroc_whole(path: str | os.PathLike, warn: bool, repeated: str = "drop") -> Trajectory:
+    """:func:`read_euroc` by the byte scanner over the whole file: widths checked on every row
+    before any number is read (a file with several problems reports the same first one)."""
     spath = str(path)
     lines = scan(read_bytes(path), separators=b",")
     rows = _data_rows(lines)
@@ -170,13 +269,9 @@ def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop
         except ValueError:
             rows = rows[1:]  # a header line without '#'
     width = lines.ntok[rows]
-    _check_width(
-        lines, rows, spath, (width >= 8) & (width == (width[0] if width.size else 8)),
-        "the same number (8 or more) of comma-separated numbers on every row: "
-        "'timestamp_ns,p_x,p_y,p_z,q_w,q_x,q_y,q_z,...' (EuRoC CSV)", "euroc",
-    )  # fmt: skip
+    _check_width(lines, rows, spath, (width >= 8) & (width == (width[0] if width.size else 8)), EUROC_ROWS, "euroc")
     ncol = int(width[0]) if width.size else 8
-    values = lines.numbers(rows, spath, "numbers 'timestamp_ns,p_x,p_y,p_z,q_w,q_x,q_y,q_z'").reshape(-1, ncol)
+    values = lines.numbers(rows, spath, EUROC_NUMBERS).reshape(-1, ncol)
     fraction = np.flatnonzero(values[:, 0] != np.round(values[:, 0]))
     if fraction.size:  # EuRoC stamps are whole nanoseconds: these are seconds (or no stamps at all)
         k = int(fraction[0])
@@ -192,6 +287,11 @@ def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop
     traj = finish(spath, values[keep, 0] / 1e9, poses[keep, :3], poses[keep, 3:], line_no[keep], "", notes, repeated)
     _warn(notes, warn)
     return traj
+
+
+def _euroc_groups(ntok: int) -> tuple[slice, slice, slice]:
+    """The columns of a EuRoC row: stamp (ns), position, quaternion ``wxyz``."""
+    return slice(0, 1), slice(1, 4), slice(4, 8)
 
 
 def read_trajectory(

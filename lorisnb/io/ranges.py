@@ -58,7 +58,7 @@ def read_range(
     data = os.pread(fd, hi - lo, lo)
     if len(data) != hi - lo:
         return ParseError(path, None, "changed while being read; read it again"), 0
-    nl = int(np.count_nonzero(np.frombuffer(data, np.uint8) == 10))
+    nl = newlines(data)
     nul = data.find(b"\0")
     if nul >= 0:
         return ParseError(path, data.count(b"\n", 0, nul) + 1, f"binary data (a NUL byte); expected {what} (text)"), nl
@@ -71,6 +71,11 @@ def read_range(
         return parse(data, 0, nl), nl
     except ParseError as exc:
         return exc, nl
+
+
+def newlines(text: bytes) -> int:
+    """The number of line feeds in ``text`` (numpy: several times as fast as ``bytes.count``)."""
+    return int(np.count_nonzero(np.frombuffer(text, np.uint8) == 10))
 
 
 def in_order(tasks: Iterable[tuple[tuple, int]], progress: Callable[[int], object] | None) -> Iterator:

@@ -1,0 +1,53 @@
+"""What a fresh process imports: ``import lorisnb`` and ``lorisnb --help`` import neither pandas nor
+scipy; a command that writes no Parquet imports pandas without pyarrow; ``--parquet`` still
+writes Parquet. Each case runs in a fresh interpreter (this one has imported everything)."""
+
+from __future__ import annotations
+
+import importlib.util
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("pandas", "pyarrow", "scipy", "matplotlib", "tqdm")
+
+
+def _imported(code: str) -> list[str]:
+    """The heavy modules a fresh interpreter holds after running ``code``."""
+    probe = f"{code}\nimport sys\nprint(sorted(m for m in {HEAVY!r} if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout
+    return eval(out.strip().splitlines()[-1])  # noqa: S307 (our own list literal)
+
+
+def test_import_and_public_names_are_lazy():
+    assert _imported("import lorisnb") == []
+    assert _imported("import lorisnb as ln; ln.Trajectory; ln.read_tum") == []
+    assert "pandas" in _imported("import lorisnb as ln; ln.score")
+
+
+def test_help_imports_no_pandas():
+    code = "from lorisnb.cli import main\ntry:\n    main(['evaluate', '--help'])\nexcept SystemExit:\n    pass"
+    assert _imported(code) == []
+
+
+def test_names_and_submodules_keep_their_meaning():
+    """A name that is also a submodule's stays the name (``lorisnb.core.sweep`` the function)."""
+    code = (
+        "import lorisnb.core.sweep, lorisnb.tools.evaluate, lorisnb as ln\n"
+        "assert callable(ln.core.sweep) and callable(ln.tools.evaluate) and callable(ln.core.simulate)\n"
+        "assert ln.io.read_tum is ln.read_tum and 'read_tum' in dir(ln)"
+    )
+    _imported(code)
+
+
+@pytest.mark.skipif(importlib.util.find_spec("pyarrow") is None, reason="pyarrow is not installed")
+def test_a_pair_evaluates_with_pandas_without_pyarrow(data, tmp_path):
+    tum = data.tum
+    args = [str(tum / "fr2_desk_ORB.txt"), "--gt", str(tum / "fr2_desk_groundtruth.txt"), "--no-progress"]
+    code = f"from lorisnb.cli import main\nassert main(['evaluate', *{args!r}]) == 0"
+    assert _imported(code) == ["pandas"]
+    out = tmp_path / "table"
+    code = f"from lorisnb.cli import main\nassert main(['evaluate', *{args!r}, '--parquet', {str(out)!r}]) == 0"
+    assert "pyarrow" in _imported(code)
+    assert list(out.rglob("*.parquet"))
