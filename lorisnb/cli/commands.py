@@ -12,7 +12,8 @@ from typing import Any
 import pandas as pd
 
 from ..errors import LorisError, LorisWarning, ValidationError
-from .options import check_outputs, param_value, refuse_unused, spec_from_args
+from .options import param_value, spec_from_args
+from .outputs import check_outputs, refuse_unused
 
 
 def _executor(args: argparse.Namespace) -> Any:

@@ -12,7 +12,7 @@ import pandas as pd
 
 from ..core.spec import make_spec
 from ..errors import EvaluationError, ParseError, ValidationError
-from .options import check_outputs
+from .outputs import check_outputs
 
 
 def cmd_crosscheck(args: argparse.Namespace) -> int:

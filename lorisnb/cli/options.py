@@ -5,9 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 from ..core import validate
@@ -15,10 +13,9 @@ from ..core.evo_options import PLANES
 from ..core.relations import RELATIONS
 from ..core.rpe import RPE_PAIRS
 from ..core.spec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, make_spec
-from ..errors import OutputError, ValidationError
+from ..errors import ValidationError
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import BUILT_IN
-from ..io.registry import FORMATS
 
 
 def arg_type(func: Callable[[str], Any]) -> Callable[[str], Any]:
@@ -226,89 +223,6 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-def src_inside(target: Path, inputs: list[str]) -> bool:
-    """Whether an output folder ``target`` is an input, or contains one."""
-    return any(target == Path(i).resolve() or target in Path(i).resolve().parents for i in inputs)
-
-
-#: Suffixes of the files a folder of inputs is walked for (every format's, :mod:`lorisnb.io.registry`):
-#: an output among the inputs with one of them would be read as an input by the next run.
-INPUT_SUFFIXES = frozenset(x for f in FORMATS.values() for x in f.suffixes)
-
-
-def check_output(out: str | None, inputs: list[str], force: bool, folder: bool = False, option: str = "--csv") -> None:
-    """Refuse an output before any work: an input of the command, a folder, an existing file
-    without --force, or a place that cannot be written."""
-    if out is None:
-        return
-    if str(out).strip() == "":
-        raise OutputError(f"{option}: an empty path; expected a {'folder' if folder else 'file'} name")
-    target = Path(out).resolve()
-    for i in inputs:
-        src = Path(i).resolve()
-        if target == src:
-            raise OutputError(f"{out} is an input of this command; choose another output file")
-        if src.is_dir() and src in target.parents and target.suffix.lower() in INPUT_SUFFIXES:
-            raise OutputError(
-                f"{out} lies in the input folder {i} and ends in {target.suffix}, so it is (or would be read as) a "
-                "result file; choose another name or place"
-            )
-    if target.is_dir() and not folder:
-        raise OutputError(f"{out} is a folder; expected a file name for {option}")
-    if folder and src_inside(target, inputs):
-        raise OutputError(f"{out} is or holds an input of this command; choose another output folder")
-    if target.exists() and not force:
-        raise OutputError(f"{out} exists; choose another name or pass --force to replace it")
-    parent = target.parent
-    while not parent.exists():
-        parent = parent.parent
-    if not os.access(parent, os.W_OK):
-        raise OutputError(f"cannot write {out}: {parent} is not writable; choose another place")
-
-
-#: The file name each output option needs (any case), by its argparse name.
-OUTPUT_SUFFIXES: dict[str, tuple[str, ...]] = {
-    "csv": (".csv",),
-    "pairs_csv": (".csv",),
-    "latex": (".tex",),
-    "markdown": (".md",),
-}
-
-
-def check_outputs(args: argparse.Namespace, inputs: list[str], files: list[str], folders: tuple[str, ...] = ()) -> None:
-    """Every output of a command checked together, first, so that a refused run leaves nothing
-    behind: ``files`` and ``folders`` are the command's output options (argparse names, read from
-    ``args``); no two of them may name one place, each gets :func:`check_output` (an input, a
-    folder, an existing file without ``--force``, a place that cannot be written), a file option
-    the suffix it writes (:data:`OUTPUT_SUFFIXES`), a folder option a folder name, and no file may
-    lie inside a folder output."""
-
-    def opt(k: str) -> str:
-        return "--" + k.replace("_", "-")
-
-    given = [(k, str(getattr(args, k)), k in folders) for k in [*files, *folders] if getattr(args, k, None) is not None]
-    seen: dict[Path, str] = {}
-    for k, out, _ in given:
-        target = Path(out).resolve()
-        if target in seen:
-            raise OutputError(f"{seen[target]} and {opt(k)} both name {out}; give each output its own file or folder")
-        seen[target] = opt(k)
-    for k, out, folder in given:
-        check_output(out, inputs, args.force, folder=folder, option=opt(k))
-        name = Path(out).name.lower()
-        suffixes = OUTPUT_SUFFIXES.get(k)
-        if not folder and suffixes and not name.endswith(suffixes):
-            raise OutputError(f"{opt(k)} {out}: expected a {' or '.join(suffixes)} file name for what {opt(k)} writes")
-        if folder and name.endswith((".csv", ".tex", ".md", ".txt")):
-            raise OutputError(f"{opt(k)} {out}: expected a folder name, not a file name")
-    for k, out, folder in given:
-        inside = [(o, p) for o, p, f in given if not f and Path(out).resolve() in Path(p).resolve().parents]
-        if folder and inside:
-            raise OutputError(
-                f"{opt(inside[0][0])} {inside[0][1]} lies inside the {opt(k)} folder {out}; write it elsewhere"
-            )
-
-
 def param_value(text: str) -> Any:
     """A -p value: JSON when it parses (numbers, true/false, null, lists), else the string."""
     low = text.strip().lower()
@@ -380,11 +294,3 @@ def add_history_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--csv", default=None, metavar="OUT", help="write the history table to this CSV")
     p.add_argument("--out", default=None, metavar="DIR", help="write one figure per metric (PNG, SVG) into DIR")
     p.add_argument("--force", action="store_true", help="overwrite OUT / files in DIR")
-
-
-def refuse_unused(args: argparse.Namespace, unused: dict[str, str]) -> None:
-    """Options a command shares with ``evaluate`` but cannot apply: refused, naming what to use."""
-    given = [(k, use) for k, use in unused.items() if getattr(args, k, None)]
-    if given:
-        k, use = given[0]
-        raise ValidationError(f"--{k.replace('_', '-')}: not used by lorisnb {args.command}; use {use}")

@@ -13,7 +13,7 @@ import pandas as pd
 
 from ..errors import ValidationError
 from .commands import fmt_table, report_problems, run_evaluation
-from .options import check_outputs, refuse_unused
+from .outputs import check_outputs, refuse_unused
 
 #: diff's own options; every other option is an evaluate option (for result folders only).
 DIFF_OWN = {"paths", "tolerance", "alpha", "seed", "json", "junit", "csv", "parquet", "force", "no_progress", "func",

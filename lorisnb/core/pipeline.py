@@ -22,26 +22,29 @@ from typing import Any
 import numpy as np
 
 from ..errors import EvaluationError, LorisWarning, ParseError
-from . import checks, evo_steps, metrics, plausibility
-from .association import Association, associate, groundtruth_in_frame
-from .blocks import blockwise
-from .conventions import associate_nearest, fit_alignment
+from . import checks, evo_steps, plausibility
+from .association import Association, groundtruth_in_frame
+from .conventions import fit_alignment
 from .frames import FRAMES
-from .geometry import (
-    Sim3,
-    quat_angle_deg,
-    quat_conj_multiply,
-    quat_from_matrix,
-    quat_multiply,
-    quat_normalize,
-    quat_rotate,
-    quat_to_matrix,
-    ros_quaternion_from_matrix,
-)
+from .geometry import Sim3
 from .model import FileErrors, ResultFile, SequenceErrors
 from .spec import EvalSpec, make_spec
 from .spec_evo import EVO_ASSOCIATIONS
+from .steps import (
+    DEFAULT,
+    apply_alignment,
+    errors_after_alignment,
+    groundtruth_frame,
+    match,
+    moved_groundtruth,
+    with_transform,
+)
 from .trajectory import Trajectory
+
+__all__ = [
+    "DEFAULT", "FrameInfo", "Spans", "apply_alignment", "compute_errors", "errors_after_alignment", "evaluate_sessions",
+    "groundtruth_frame", "match", "moved_groundtruth", "session_errors", "sequence_errors", "with_transform",
+]  # fmt: skip
 
 #: Time spans (first, last stamp, seconds) of other ground-truth sequences by label (``cafe-2``),
 #: or a function returning them (called only when a check needs them).
@@ -49,75 +52,6 @@ Spans = Mapping[str, tuple[float, float]] | Callable[[], Mapping[str, tuple[floa
 #: The sensor frames of an OpenLORIS file, for its frame checks: (scene, frame, ground-truth frame,
 #: the ground truth as read, in its own frame).
 FrameInfo = tuple[str, str, str, Mapping[int, Trajectory]]
-
-DEFAULT = EvalSpec()  # lorisnb's own: interpolation within 0.5 s, SE(3) on all matched poses
-
-
-def apply_alignment(
-    sim: Sim3, positions: np.ndarray, quaternions: np.ndarray, official_interpolation: bool = False
-) -> tuple[np.ndarray, np.ndarray]:
-    """Apply an alignment to poses: positions (N, 3) metres and orientations (N, 4) quaternions
-    ``xyzw`` (normalized here); unit quaternions out. With ``official_interpolation`` and a scale,
-    the orientation is extracted from ``s * R * R_p`` as the official tool does (its slip (b))."""
-    pos = sim.apply(positions)
-    if official_interpolation and sim.scale != 1.0:
-        blocks = sim.scale * np.einsum("ij,njk->nik", sim.rotation, quat_to_matrix(quaternions))
-        return pos, quat_normalize(ros_quaternion_from_matrix(blocks))
-    return pos, quat_normalize(quat_multiply(quat_from_matrix(sim.rotation), quat_normalize(quaternions)))
-
-
-def errors_after_alignment(
-    seq: int, est: Trajectory, a: Association, sim: Sim3, official_interpolation: bool = False
-) -> SequenceErrors:
-    """Per-pose ATE (m) and AOE (deg) of the matched poses of ``est`` after alignment ``sim``
-    (in row blocks, :mod:`lorisnb.core.blocks`)."""
-    if len(a) == 0 or a.gt_quaternions is None:
-        return SequenceErrors.unmatched(seq, len(est), a.gt_start, a.gt_end)
-    m = len(a)
-    pos, q = np.empty((m, 3)), np.empty((m, 4))
-    ate, aoe = np.empty(m), np.empty(m)
-    gt_q = a.gt_quaternions
-
-    def rows(lo: int, hi: int) -> None:
-        k = a.est_index[lo:hi]
-        p_k, q_k = np.take(est.positions, k, axis=0), np.take(est.quaternions, k, axis=0)  # without the GIL
-        pos[lo:hi], q[lo:hi] = apply_alignment(sim, p_k, q_k, official_interpolation)
-        ate[lo:hi] = metrics.ate(pos[lo:hi], a.gt_positions[lo:hi])
-        aoe[lo:hi] = quat_angle_deg(quat_conj_multiply(gt_q[lo:hi], q[lo:hi]))  # unit on both sides
-
-    blockwise(rows, m)
-    return SequenceErrors(
-        seq=seq, poses=len(est), stamps=a.stamps, ate=ate, aoe=aoe, est_positions=pos, gt_positions=a.gt_positions,
-        est_quaternions=q, gt_quaternions=gt_q, gt_start=a.gt_start, gt_end=a.gt_end, scale=sim.scale,
-    )  # fmt: skip
-
-
-def match(gt: Trajectory, est: Trajectory, spec: EvalSpec = DEFAULT) -> Association:
-    """Matched poses of ``est`` and ``gt`` by the spec's association (estimate stamps shifted by
-    ``t_offset`` first); for ``nearest`` the ground-truth poses are taken as they are."""
-    stamps = est.stamps + spec.t_offset if spec.t_offset else est.stamps
-    if spec.association == "interpolate":
-        return associate(gt, stamps, spec.max_gap, spec.official_interpolation)
-    g_start = float(gt.stamps[0]) if len(gt) else np.nan
-    g_end = float(gt.stamps[-1]) if len(gt) else np.nan
-    gi, ej = associate_nearest(gt.stamps, stamps, spec.max_diff)
-    if ej.size == 0:
-        return Association(ej, np.zeros(0), np.zeros((0, 3)), None, g_start, g_end)
-    return Association(ej, stamps[ej], gt.positions[gi], quat_normalize(gt.quaternions[gi]), g_start, g_end)
-
-
-def with_transform(est: Trajectory, transform: Sim3 | np.ndarray | tuple | None) -> Trajectory:
-    """Estimate poses composed on the right with ``T_est_gt`` (poses of the ground-truth body;
-    None: unchanged). A new trajectory; ``est`` is not changed."""
-    if transform is None:
-        return est
-    m = transform.matrix() if isinstance(transform, Sim3) else np.asarray(transform, float)
-    if m.shape != (4, 4):
-        raise EvaluationError(f"transform: expected a 4x4 matrix T_est_gt, got shape {m.shape}")
-    q_off = quat_from_matrix(m[:3, :3])
-    q = quat_normalize(est.quaternions)
-    pos = est.positions + quat_rotate(q, m[:3, 3])
-    return Trajectory(est.stamps, pos, quat_multiply(q, q_off), est.lines, dict(est.meta))
 
 
 def evaluate_sessions(
@@ -270,30 +204,6 @@ def evaluate_sessions(
         trial=trial, groundtruth_spans=dict(groundtruth_spans or {}),
         groundtruth_lengths={s: evo_steps.whole_length(groundtruth[s]) for s in seqs},
     )  # fmt: skip
-
-
-def groundtruth_frame(groundtruth: ResultFile) -> str:
-    """The sensor frame an OpenLORIS ground truth is given in (``frame:`` header, default
-    ``base_link``); ParseError for an unknown frame."""
-    gt_frame = groundtruth.header.get("frame", "base_link")
-    if gt_frame not in FRAMES:
-        raise ParseError(
-            groundtruth.path, groundtruth.header_lines.get("frame"),
-            f"unknown ground-truth frame {gt_frame!r}; expected one of {', '.join(FRAMES)}",
-        )  # fmt: skip
-    return gt_frame
-
-
-def moved_groundtruth(
-    groundtruth: ResultFile, scene: str, frame: str, official_interpolation: bool = False
-) -> dict[int, Trajectory]:
-    """Every sequence of an OpenLORIS ground truth moved to sensor ``frame``
-    (:func:`~lorisnb.core.association.groundtruth_in_frame`); new trajectories."""
-    gt_frame = groundtruth_frame(groundtruth)
-    return {
-        s: groundtruth_in_frame(t, scene, frame, official_interpolation, gt_frame)
-        for s, t in groundtruth.sequences.items()
-    }
 
 
 def compute_errors(
