@@ -55,6 +55,12 @@ def test_per_sequence_benchmark(tmp_path):
     assert (scenes.loc[scenes["algorithm"] == "dso", "ate_rmse"] > 0).all()
     assert (out / "timeline_per_sequence.png").stat().st_size > 10_000
     assert (out / "timeline_per_sequence.svg").exists()
+    # the RPE step is a report parameter too: it changes the RPE columns and nothing else
+    frames = pd.read_csv(
+        run("per_sequence_benchmark", tmp_path / "f", rpe_delta=10, rpe_unit="frames") / "sequences.csv"
+    )
+    assert not np.allclose(frames["rpe_trans_rmse"], seq["rpe_trans_rmse"], equal_nan=True)
+    assert np.allclose(frames["cr"], seq["cr"]) and np.allclose(frames["ate_rmse"], seq["ate_rmse"], equal_nan=True)
 
 
 def test_lifelong_benchmark(tmp_path):

@@ -78,3 +78,16 @@ def test_widget_figures_are_not_pyplot_figures_and_not_blank():
     assert img.shape[0] > 100 and (img < 250).mean() > 0.02 and img.std() > 20
     _sliders(ex.widget())["wrong reloc at (s)"].value = 20.0
     assert ex.faults().wrong_reloc_at_s == 20.0
+
+
+def test_fault_explorer_takes_the_rpe_step_through_the_spec(data):
+    """The explorer's RPE column follows rpe_delta / rpe_unit, checked by make_spec as everywhere."""
+    gt = load_groundtruth("cafe", data)
+    default = FaultExplorer(gt, seq=1)
+    frames = FaultExplorer(gt, seq=1, rpe_delta=30, rpe_unit="f")
+    for ex in (default, frames):
+        ex.values.update(position_noise_m=0.05)
+    a, b = default.results()[0]["rpe_trans_rmse"].iloc[0], frames.results()[0]["rpe_trans_rmse"].iloc[0]
+    assert a > 0 and b > 0 and a != pytest.approx(b, rel=1e-3)
+    with pytest.raises(ln.ValidationError, match="rpe_unit=km: expected one of"):
+        FaultExplorer(gt, seq=1, rpe_unit="km")

@@ -363,3 +363,7 @@ PRESETS["tum"] = EvalSpec(association="nearest", align="se3", preset_name="tum")
 PRESETS["rpg"] = EvalSpec(association="nearest", align="sim3", preset_name="rpg")
 PRESETS["vio"] = EvalSpec(association="nearest", align="posyaw", preset_name="vio")
 PRESETS["evo"] = EvalSpec(**evo.EVO_PRESET, preset_name="evo")
+
+#: Every name :func:`make_spec` takes (the fields and :data:`ALIASES`): notebook parameters and widget
+#: values of these names are checked by it.
+SPEC_NAMES = frozenset({f.name for f in fields(EvalSpec)} - {"explicit", "preset_name"} | set(ALIASES))

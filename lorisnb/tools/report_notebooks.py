@@ -21,6 +21,7 @@ from typing import Any
 import pandas as pd
 
 from ..core import validate
+from ..core.spec import SPEC_NAMES, make_spec
 from ..errors import LorisError, ValidationError
 from ._extras import EXTRAS, require
 from .notebook import INPUT_ERRORS_CSV
@@ -175,11 +176,7 @@ def declared_parameters(path: Path) -> dict[str, dict[str, Any]]:
 
 #: Notebook parameters checked with the same rules as the command line and the Python API.
 _CHECKS: dict[str, Any] = {
-    "eps": validate.eps_value,
-    "phi": lambda v: validate.threshold("phi", v),
-    "delta": lambda v: validate.threshold("delta", v),
-    "tau": lambda v: validate.threshold("tau", v),
-    "scale": validate.scale_value,
+    **{name: (lambda v, name=name: make_spec(None, surface="notebook", **{name: v})) for name in SPEC_NAMES},
     "eps_grid": lambda v: validate.threshold_list("eps", v),
     "phi_grid": lambda v: validate.threshold_list("phi", v),
     "delta_grid": lambda v: validate.threshold_list("delta", v),
@@ -197,7 +194,7 @@ def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mappi
             + ", ".join(sorted(declared))
         )
     for name, value in parameters.items():
-        if name in _CHECKS and value is not None and not (name == "eps" and value == "paper"):
+        if name in _CHECKS and value is not None:
             _CHECKS[name](value)
 
 

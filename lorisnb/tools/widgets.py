@@ -20,6 +20,7 @@ from ..core.frames import PAPER_EPS, PAPER_PHI
 from ..core.model import FileErrors, ResultFile
 from ..core.scoring import score
 from ..core.simulate import Faults, simulated_errors
+from ..core.spec import make_spec
 from ..core.validate import threshold
 from .notebook import show_figure
 from .plotting import plot_timeline
@@ -122,7 +123,9 @@ class ThresholdExplorer:
 
 class FaultExplorer:
     """Sliders for the simulator's faults (:class:`lorisnb.core.simulate.Faults`) on one ground-truth
-    sequence: every change re-simulates, re-scores and redraws the metrics and the timeline."""
+    sequence: every change re-simulates, re-scores and redraws the metrics and the timeline. The
+    thresholds and the RPE step (``rpe_delta`` in ``rpe_unit``) are checked by
+    :func:`lorisnb.core.spec.make_spec`, as on every other surface."""
 
     def __init__(
         self,
@@ -133,12 +136,15 @@ class FaultExplorer:
         delta: float = 1.0,
         tau: float = 60.0,
         seed: int = 0,
+        rpe_delta: float = 1.0,
+        rpe_unit: str = "s",
     ):
         self.groundtruth = groundtruth
         self.seq = seq
-        self.eps, self.phi, self.delta, self.tau = (
-            threshold(name, v) for name, v in (("eps", eps), ("phi", phi), ("delta", delta), ("tau", tau))
-        )
+        spec = make_spec(None, surface="widget", eps=eps, phi=phi, delta=delta, tau=tau, rpe_delta=rpe_delta,
+                         rpe_unit=rpe_unit)  # fmt: skip
+        self.eps, self.phi, self.delta, self.tau = spec.eps, spec.phi, spec.delta, spec.tau
+        self.rpe_delta, self.rpe_unit = spec.rpe_delta, spec.rpe_unit
         self.seed = seed
         self.duration = groundtruth.sequences[seq].duration
         d = durations_table({groundtruth.scene: groundtruth})
@@ -175,7 +181,7 @@ class FaultExplorer:
     def results(self) -> tuple[pd.DataFrame, Figure]:
         """Metrics table and timeline for the current slider values."""
         fe = simulated_errors(self.groundtruth, self.faults(), seqs=[self.seq], name="sliders")
-        table = score(fe, self.eps, self.phi, self.delta, self.tau)
+        table = score(fe, self.eps, self.phi, self.delta, self.tau, rpe_delta=self.rpe_delta, rpe_unit=self.rpe_unit)
         fig = plot_timeline(
             [fe],
             self.durations,
