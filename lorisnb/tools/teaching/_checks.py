@@ -36,7 +36,7 @@ def _same(a: Any, b: Any, tol: float) -> bool:
 
 def _number(what: str, value: Any) -> float:
     if value is Ellipsis:
-        _fail(f"{what}: no answer yet (replace the `...` and the `raise NotImplementedError()` with your answer)")
+        _fail(f"{what}: no answer yet (replace the `...` and the NotImplementedError placeholder with your answer)")
     if isinstance(value, (bool, np.bool_)) or value is None:
         _fail(f"{what}: expected a number, got {value!r}")
     try:
@@ -78,7 +78,7 @@ def _check_function(
         try:
             got = fn(**args)
         except NotImplementedError:
-            _fail(f"{what}: not written yet (raise NotImplementedError is still there)")
+            _fail(f"{what}: not written yet (the NotImplementedError placeholder is still there)")
         except Exception as exc:  # the learner's code failed: say where and with what
             ambiguous = isinstance(exc, ValueError) and "truth value of an array" in str(exc)
             _fail(
@@ -325,7 +325,7 @@ def check_choice(what: str, answer: Any, expected: Any, why: str) -> bool:
     """A choice (a sequence number, an algorithm name, True/False): right when equal to
     ``expected``; else the message says what to look at (``why``)."""
     if answer is Ellipsis or answer is None:
-        _fail(f"{what}: no answer yet (replace the `...` and the `raise NotImplementedError()` with your answer)")
+        _fail(f"{what}: no answer yet (replace the `...` and the NotImplementedError placeholder with your answer)")
     norm = (lambda x: x.strip().lower()) if isinstance(expected, str) and isinstance(answer, str) else (lambda x: x)
     if norm(answer) == norm(expected):
         return _ok(f"{what}: {answer!r}")
