@@ -141,6 +141,7 @@ def _not_blank(png: bytes) -> bool:
 
 def _open_and_run(driver, url: str, name: str, timeout: float) -> None:
     from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
 
     driver.get(f"{url}/lab/tree/{name}.ipynb?token={TOKEN}")
     # the notebook in front (its tab: headless Chromium 156 no longer gets JupyterLab's document.title)
@@ -152,17 +153,33 @@ def _open_and_run(driver, url: str, name: str, timeout: float) -> None:
     time.sleep(1.0)
     tab = driver.find_element(By.CSS_SELECTOR, ".lm-DockPanel-tabBar .lm-TabBar-tab.lm-mod-current")
     assert "jp-mod-dirty" not in tab.get_attribute("class"), f"{name} is marked modified as soon as it opens"
-    driver.find_element(By.XPATH, "//div[contains(@class,'lm-MenuBar-itemLabel') and text()='Run']").click()
-    _wait(lambda: driver.find_element(By.XPATH, "//div[contains(@class,'lm-Menu-itemLabel') and text()='Run All Cells']"),
-          10, "the Run menu").click()  # fmt: skip
+
+    def run_all() -> None:
+        driver.find_element(By.XPATH, "//div[contains(@class,'lm-MenuBar-itemLabel') and text()='Run']").click()
+        _wait(lambda: driver.find_element(By.XPATH, "//div[contains(@class,'lm-Menu-itemLabel') and text()='Run All Cells']"),
+              10, "the Run menu").click()  # fmt: skip
+
+    def prompts() -> list[str]:
+        return [p.strip() for p in driver.execute_script(
+            f"return Array.from({PANEL}.querySelectorAll('.jp-CodeCell .jp-InputPrompt')).map(e => e.textContent)"
+        )]  # fmt: skip
 
     def done():
-        prompts = driver.execute_script(
-            f"return Array.from({PANEL}.querySelectorAll('.jp-CodeCell .jp-InputPrompt')).map(e => e.textContent)"
-        )
-        return prompts and all(p.strip() not in ("[ ]:", "[*]:", "") for p in prompts)
+        got = prompts()
+        return got and all(p not in ("[ ]:", "[*]:", "") for p in got)
 
-    _wait(done, timeout, f"every cell of {name} to run", interval=1.0)
+    run_all()
+    started = time.monotonic()
+    while time.monotonic() - started < 20 and all(p in ("[ ]:", "") for p in prompts()):
+        time.sleep(0.5)
+    if all(p in ("[ ]:", "") for p in prompts()):  # the menu click was lost (nothing queued): once more
+        driver.find_element(By.TAG_NAME, "body").send_keys(Keys.ESCAPE)
+        run_all()
+    try:
+        _wait(done, timeout, f"every cell of {name} to run", interval=1.0)
+    except AssertionError as exc:  # say which cells did not run, and keep a picture of it
+        _shot(driver.find_element(By.CSS_SELECTOR, ".jp-NotebookPanel:not(.lm-mod-hidden)"), f"{name}-stuck")
+        raise AssertionError(f"{exc}; cell prompts: {prompts()}") from None
 
 
 def _errors(driver) -> list[str]:
@@ -273,7 +290,16 @@ EXPLORERS = {
 @pytest.mark.parametrize("name", DEFAULT_NOTEBOOKS)
 def test_notebook_in_the_browser(lab, browser, name):
     url, _ = lab
-    _open_and_run(browser, url, name, timeout=240)
+    try:
+        _open_and_run(browser, url, name, timeout=240)
+    except AssertionError as exc:
+        if "every cell" not in str(exc):
+            raise
+        # now and then (1 run in 3 here) one notebook's Run All never finishes in headless Chromium, a
+        # different one each time, while the same notebook runs in seconds alone: its picture is kept
+        # (results/browser/NAME-stuck.png); once more, with fresh kernels, before calling it a failure
+        _shut_down_kernels(url)
+        _open_and_run(browser, url, name, timeout=240)
     errors = _errors(browser)
     assert not errors, f"{name}: error output: {errors[0][:500]}"
     assert not _duplicate_figures(browser), f"{name}: a figure shown twice in cell(s) {_duplicate_figures(browser)}"
