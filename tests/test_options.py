@@ -316,3 +316,17 @@ def test_every_crosscheck_option_changes_the_table_or_is_refused(data, tmp_path,
             assert "error" in err and (option in err or args[-1] in err or "kitti" in err.lower()), (option, err[-300:])
         else:
             assert table is not None and not table.equals(base[3]), f"crosscheck {option} changed nothing"
+
+
+def test_openloris_reading_rules_reach_pairs(data, tmp_path):
+    """An OpenLORIS file scored as a pair honours --repair-stamps and --keep-repeated as an OpenLORIS
+    folder does (they were dropped by the pair reader)."""
+    est = data.icra20 / "lifelong" / "maslam" / "home.txt"  # unpadded nanoseconds in seq 1
+    gt = data.root / "openloris-scene" / "groundtruth" / "gt_home_1.txt"
+    kw = dict(fmt="openloris")
+    plain = ln.evaluate_pairs(est, gt, **kw).sequences()
+    repaired = ln.evaluate_pairs(est, gt, repair_stamps=True, **kw).sequences()
+    assert not plain[["matched", "ate_rmse"]].equals(repaired[["matched", "ate_rmse"]])
+    with pytest.raises(ln.ValidationError, match="repair_stamps"):
+        ln.evaluate_pairs(data.root / TUM / "fr2_desk_ORB.txt", data.root / TUM / "fr2_desk_groundtruth.txt",
+                          repair_stamps=True)  # fmt: skip

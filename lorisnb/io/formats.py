@@ -302,6 +302,7 @@ def read_trajectory(
     topic: str | None = None,
     tf: str | None = None,
     repeated: str = "drop",
+    repair_stamps: bool = False,
 ) -> Trajectory:
     """Read one trajectory in any supported format.
 
@@ -311,14 +312,19 @@ def read_trajectory(
             :func:`lorisnb.io.bags.read_bag`).
         stamps: KITTI only: stamps or a times file (see :func:`read_kitti`).
         repeated: poses of a repeated stamp: ``drop`` all but the last, or ``keep`` them all (evo's
-            rule; not for OpenLORIS files, whose reader drops repeated poses as the official tool).
+            rule); for OpenLORIS files ``drop`` is the official tool's rule (a pose repeating the
+            previous one is dropped) and ``keep`` keeps such poses.
+        repair_stamps: OpenLORIS files only: read nanoseconds written without zero padding as such
+            (see :func:`lorisnb.io.read_openloris`); refused for other formats.
     """
     fmt = choice("format", fmt, TRAJECTORY_FORMATS)
+    if repair_stamps and fmt != "openloris":
+        raise ValidationError(f"repair_stamps: only OpenLORIS result files are read with it, not {fmt} files")
     found = recognise(sample(path))
     if found and fmt not in found:  # plainly another format: say which option reads it
         want = FORMATS[fmt]
         raise ParseError(path, None, f"expected the {want.name} format ({want.columns}); {FORMATS[found[0]].hint()}")
-    return _read(path, fmt, seq, stamps, topic, tf, repeated)
+    return _read(path, fmt, seq, stamps, topic, tf, repeated, repair_stamps)
 
 
 def _read(
@@ -329,6 +335,7 @@ def _read(
     topic: str | None,
     tf: str | None,
     repeated: str,
+    repair_stamps: bool = False,
 ) -> Trajectory:
     if fmt == "bag":
         from .bags import read_bag
@@ -341,7 +348,8 @@ def _read(
     if fmt == "euroc":
         return read_euroc(path, repeated=repeated)
     if fmt == "openloris":
-        f = read_openloris(path)
+        f = read_openloris(path, remove_repeated=choice("repeated", repeated, ("drop", "keep")) == "drop",
+                           repair_stamps=repair_stamps)  # fmt: skip
         if not f.sequences:
             raise ParseError(path, None, "no 'seq: N' block; expected at least one sequence")
         key = min(f.sequences) if seq is None else seq

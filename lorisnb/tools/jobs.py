@@ -169,8 +169,8 @@ def _pair(job: Job) -> FileErrors:
     gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, rule)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
-        est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf,
-                              repeated="drop" if src.fmt == "openloris" else rule)  # fmt: skip
+        est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf, repeated=rule,
+                              repair_stamps=job.spec.repair_stamps)  # fmt: skip
     check_stamp_units(est, gt, str(job.path))  # seconds against pose indices or nanoseconds: an error
     span = {1: (float(gt.stamps[0]), float(gt.stamps[-1]))} if len(gt) else {}
     return evaluate_sessions(
@@ -200,7 +200,7 @@ def _manifest(job: Job) -> FileErrors:
             path = job.path / s.estimate
             if path.exists():
                 ests[s.seq] = read_trajectory(path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf,
-                                              repeated="drop" if m.estimate_format == "openloris" else job.spec.repeated)  # fmt: skip
+                                              repeated=job.spec.repeated, repair_stamps=job.spec.repair_stamps)  # fmt: skip
                 check_stamp_units(ests[s.seq], gts[s.seq], str(path))
     notes += [str(w.message) for w in caught]
     spans = {k: (float(t.stamps[0]), float(t.stamps[-1])) for k, t in gts.items() if len(t)}
