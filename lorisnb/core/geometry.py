@@ -60,14 +60,28 @@ def degenerate_alignment(source: np.ndarray, target: np.ndarray) -> str | None:
     rotation about it is undetermined; evo refuses these too: "degenerate covariance rank")."""
     source = np.asarray(source, float)
     target = np.asarray(target, float)
-    n = len(source)
-    if n == 0:
+    if len(source) == 0:
         return "no matched position"
-    xs, xt = source - source.mean(axis=0), target - target.mean(axis=0)
+    return _degenerate(source, target, _centered(source, target)[4])
+
+
+def _centered(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Means, centred positions and the cross-covariance ``xt^T xs / N`` of (N, 3) positions
+    (N >= 1): what the fit and the degeneracy test share."""
+    mu_s, mu_t = source.mean(axis=0), target.mean(axis=0)
+    xs, xt = source - mu_s, target - mu_t
+    return mu_s, mu_t, xs, xt, xt.T @ xs / len(source)
+
+
+def _degenerate(source: np.ndarray, target: np.ndarray, cov: np.ndarray) -> str | None:
+    """:func:`degenerate_alignment` given the cross-covariance of the positions."""
+    n = len(source)
     for side, p in (("estimate", source), ("ground-truth", target)):
-        if np.ptp(p, axis=0).max() <= 1e-12 * max(1.0, float(np.abs(p).max())):
+        hi = np.array([p[:, k].max() for k in range(3)])  # per column: several times as fast as axis=0
+        lo = np.array([p[:, k].min() for k in range(3)])
+        if (hi - lo).max() <= 1e-12 * max(1.0, float(max(np.abs(hi).max(), np.abs(lo).max()))):
             return f"all {n} matched {side} positions are identical (zero spread)"
-    d = np.linalg.svd(xt.T @ xs / n, compute_uv=False)
+    d = np.linalg.svd(cov, compute_uv=False)
     if n < 3 or d[1] <= max(DEGENERATE_RATIO * d[0], np.finfo(float).eps):
         return f"the {n} matched positions lie on one line" if n >= 3 else f"only {n} matched positions (fewer than 3)"
     return None
@@ -92,17 +106,14 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False, st
     n = len(source)
     if n == 0:
         raise ValueError("umeyama needs at least one point pair")
-    if strict and (why := degenerate_alignment(source, target)) is not None:
+    mu_s, mu_t, xs, xt, cov = _centered(source, target)
+    if strict and (why := _degenerate(source, target, cov)) is not None:
         raise EvaluationError(
             f"no {'Sim(3)' if with_scale else 'SE(3)'} alignment can be determined: {why}, so the rotation "
             "about them is arbitrary; align on more poses (--align-frames N with N >= 3 poses not on one line), "
             "on the first pose's orientation (--align-frames 1), or not at all (--align none)"
         )
-    mu_s = source.mean(axis=0)
-    mu_t = target.mean(axis=0)
-    xs = source - mu_s
-    xt = target - mu_t
-    cov = xt.T @ xs / n
+    del xt
     u, d, vt = np.linalg.svd(cov)
     s_mat = np.eye(3)
     if np.linalg.det(u) * np.linalg.det(vt) < 0.0:
@@ -120,30 +131,60 @@ def quat_from_matrix(matrices: np.ndarray) -> np.ndarray:
     """Unit quaternions ``xyzw`` of rotation matrices (..., 3, 3), as scipy's
     ``Rotation.from_matrix`` computes them (the largest of the trace and the diagonal picks the
     branch; to ~1e-16). The input must be orthonormal (as Umeyama's rotations are): scipy first
-    projects other matrices onto rotations, which the readers of matrix files rely on."""
+    projects other matrices onto rotations (:func:`rotation_blocks` does too)."""
     m = np.asarray(matrices, float)
-    shape = m.shape[:-2]
-    m = m.reshape(-1, 3, 3)
-    n = len(m)
-    r = np.arange(n)
-    diag = np.stack([m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]], axis=1)
-    trace = diag.sum(axis=1)
-    choice = np.argmax(np.column_stack([diag, trace]), axis=1)
-    q = np.empty((n, 4))
-    on_trace = choice == 3
-    t = r[on_trace]
-    q[t, 0] = m[t, 2, 1] - m[t, 1, 2]
-    q[t, 1] = m[t, 0, 2] - m[t, 2, 0]
-    q[t, 2] = m[t, 1, 0] - m[t, 0, 1]
-    q[t, 3] = 1.0 + trace[t]
-    d = r[~on_trace]
-    i = choice[d]
-    j, k = (i + 1) % 3, (i + 2) % 3
-    q[d, i] = 1.0 - trace[d] + 2.0 * m[d, i, i]
-    q[d, j] = m[d, j, i] + m[d, i, j]
-    q[d, k] = m[d, k, i] + m[d, i, k]
-    q[d, 3] = m[d, k, j] - m[d, j, k]
-    return quat_normalize(q).reshape(*shape, 4)
+    return quat_normalize(_markley(m.reshape(-1, 3, 3))).reshape(*m.shape[:-2], 4)
+
+
+def _markley(m: np.ndarray) -> np.ndarray:
+    """(N, 4) quaternions ``xyzw`` of (N, 3, 3) rotation matrices before normalization (Markley
+    2008, as scipy: the largest of the trace and the diagonal picks the branch; four branches,
+    each over its blocks)."""
+    trace = m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2]
+    choice = np.argmax(np.stack([m[:, 0, 0], m[:, 1, 1], m[:, 2, 2], trace], axis=1), axis=1)
+    q = np.empty((len(m), 4))
+    for c in range(4):
+        sel = np.flatnonzero(choice == c)
+        s = m[sel]
+        if c == 3:
+            q[sel, 0] = s[:, 2, 1] - s[:, 1, 2]
+            q[sel, 1] = s[:, 0, 2] - s[:, 2, 0]
+            q[sel, 2] = s[:, 1, 0] - s[:, 0, 1]
+            q[sel, 3] = 1.0 + trace[sel]
+        else:
+            i, j, k = c, (c + 1) % 3, (c + 2) % 3
+            q[sel, i] = 1.0 - trace[sel] + 2.0 * s[:, i, i]
+            q[sel, j] = s[:, j, i] + s[:, i, j]
+            q[sel, k] = s[:, k, i] + s[:, i, k]
+            q[sel, 3] = s[:, k, j] - s[:, j, k]
+    return q
+
+
+def rotation_blocks(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit quaternions ``xyzw`` of finite (N, 3, 3) rotation blocks as scipy's
+    ``Rotation.from_matrix`` computes them (a block whose ``R R^T`` is not the identity within
+    1e-12 is first replaced by the nearest rotation, ``U V^T`` of its SVD; then Markley's method,
+    :func:`_markley`), and how far each block is from a rotation: the larger of
+    ``max |R R^T - I|`` and ``|det R - 1|``, so that a reader can refuse what is none (scipy
+    computes the same quaternions; this takes a fifth of its time on a million blocks)."""
+    m = np.asarray(blocks, float).reshape(-1, 3, 3)
+    eye = np.eye(3)
+    with np.errstate(over="ignore", invalid="ignore"):  # huge blocks: inf here, refused by the reader
+        dev = np.abs(m @ np.swapaxes(m, -1, -2) - eye)  # the Gram matrix as scipy computes it
+        det = (
+            m[:, 0, 0] * (m[:, 1, 1] * m[:, 2, 2] - m[:, 1, 2] * m[:, 2, 1])
+            - m[:, 0, 1] * (m[:, 1, 0] * m[:, 2, 2] - m[:, 1, 2] * m[:, 2, 0])
+            + m[:, 0, 2] * (m[:, 1, 0] * m[:, 2, 1] - m[:, 1, 1] * m[:, 2, 0])
+        )
+        off = np.maximum(dev.max(axis=(1, 2)), np.abs(det - 1.0)) if len(m) else np.zeros(0)
+    orthogonal = (dev <= 1e-12 + 1e-5 * eye).all(axis=(1, 2))  # np.isclose(gram, eye, atol=1e-12), as scipy
+    del dev
+    if not orthogonal.all():
+        u, _, vt = np.linalg.svd(m[~orthogonal], full_matrices=False)
+        m = m.copy()
+        m[~orthogonal] = u @ vt
+    q = _markley(m)
+    return q / np.linalg.norm(q, axis=1)[:, None], off  # scipy's normalization, to the last bit
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:

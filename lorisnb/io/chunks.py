@@ -23,6 +23,7 @@ from ..errors import ParseError
 from .ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, newlines, read_range
 from .rows import Rows, RowSink, line_dtype
 from .scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
+from .whole import read_whole
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
 FAST_MIN_BYTES = 32 << 10
@@ -221,7 +222,9 @@ def read_rows(
     layout: Callable[[int], Sequence[slice]] | None = None,
     skip_lines: int = 0,
 ) -> Rows:
-    """Read the numeric lines of a text file in chunks.
+    """Read the numeric lines of a text file in chunks (a plain file of at most
+    :data:`~lorisnb.io.whole.WHOLE_MAX_BYTES` with a ``layout``: in one call,
+    :func:`~lorisnb.io.whole.read_whole`).
 
     Blank lines and ``#`` comments are skipped. Each other line must hold a number of
     whitespace-separated tokens in ``widths``, all numbers; otherwise a ParseError names the
@@ -245,6 +248,10 @@ def read_rows(
         skip_lines: line ``skip_lines`` (1-based; 0: none) is skipped as a comment (a header line
             without ``#``; the lines before it must be blank or comments).
     """
+    if layout is not None and not specials and chunk_bytes is None:  # a plain file: pandas' parse in one call
+        whole = read_whole(path, widths, layout, separators, skip_lines, progress)
+        if whole is not None:
+            return whole
     spath = str(path)
     width = max(widths)
     chunk_bytes = chunk_bytes or CHUNK_BYTES

@@ -14,6 +14,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..core.geometry import rotation_blocks
 from ..core.trajectory import Trajectory
 from ..core.validate import choice
 from ..errors import LorisWarning, ParseError, ValidationError
@@ -109,12 +110,14 @@ def _poses(
 
 
 def _from_matrices(spath: str, stamps: np.ndarray, mats: np.ndarray, line_no: np.ndarray) -> Trajectory:
-    """Poses from (N, 3, 4) ``[R | t]`` blocks, each checked to hold a proper rotation."""
-    rot = mats[:, :, :3]
+    """Poses from (N, 3, 4) ``[R | t]`` blocks, each checked to hold a proper rotation (within
+    :data:`ROTATION_TOLERANCE`), quaternions as scipy's ``Rotation.from_matrix`` computes them
+    (:func:`lorisnb.core.geometry.rotation_blocks`)."""
     with np.errstate(all="ignore"):
-        det = np.linalg.det(rot) if len(rot) else np.zeros(0)
-        ortho = np.abs(np.einsum("nij,nkj->nik", rot, rot) - np.eye(3)).max(axis=(1, 2)) if len(rot) else det
-    bad = ~np.isfinite(mats).all(axis=(1, 2)) | (np.abs(det - 1) > ROTATION_TOLERANCE) | (ortho > ROTATION_TOLERANCE)
+        finite = np.isfinite(mats.sum()) or np.isfinite(mats).all()
+    bad = np.zeros(len(mats), bool) if finite else ~np.isfinite(mats).all(axis=(1, 2))
+    q, off = rotation_blocks(np.where(bad[:, None, None], 0.0, mats[:, :, :3]) if bad.any() else mats[:, :, :3])
+    bad |= ~(off <= ROTATION_TOLERANCE)
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise ParseError(
@@ -123,9 +126,6 @@ def _from_matrices(spath: str, stamps: np.ndarray, mats: np.ndarray, line_no: np
             "not a rotation (non-finite values, or a rotation block that is not orthonormal with determinant 1); "
             "expected a pose",
         )
-    from scipy.spatial.transform import Rotation  # here: only matrix files need it
-
-    q = Rotation.from_matrix(rot).as_quat() if len(rot) else np.zeros((0, 4))
     return Trajectory(np.asarray(stamps, float), mats[:, :, 3].copy(), q, line_no, {"source": spath})
 
 

@@ -1,0 +1,123 @@
+"""The fast path of a plain numeric file: pandas' C parser over the whole file in one call (its
+fastest exact parse, threaded), the numbers copied once into the arrays a reader keeps.
+
+A file is plain when its lines after a leading block of ``#`` comments, blank lines and a header
+line are numbers one separator apart (a space, or a comma), the same count on every line, and it
+ends with one line end at most. Anything else (a comment or blank line further on, tabs or runs
+of spaces, ``nan`` tokens, a line of another width, a byte order mark) makes the C parser refuse
+the file or is seen in its first or last bytes: then :func:`read_whole` returns None and the
+chunked reader (:func:`lorisnb.io.chunks.read_rows`) reads it, with the exact line of any error.
+Both give the same numbers (the same C parser; it rounds as Python's ``float`` does).
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import stat
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from .rows import Rows, line_dtype
+from .scanner import BOM, SNIFF_BYTES
+
+#: Files up to this size are read in one call; larger ones in chunks, in bounded memory (the C
+#: parser holds about three times the numbers while it reads a whole file).
+WHOLE_MAX_BYTES = 256 << 20
+TAIL_BYTES = 4096
+COPY_ROWS = 8192
+BLANK = b" \t\r\x0b\x0c"
+
+
+def read_whole(
+    path: str | os.PathLike,
+    widths: tuple[int, ...],
+    layout: Callable[[int], Sequence[slice]],
+    separators: bytes = b"",
+    skip_lines: int = 0,
+    progress: Callable[[int], object] | None = None,
+) -> Rows | None:
+    """The numeric lines of a plain regular file (see the module docstring) as a :class:`Rows`
+    whose numbers are already copied into ``layout``'s column groups (row-major), or None when
+    the file is not plain or too large (read it in chunks then). ``skip_lines``: the 1-based line
+    of a header without ``#`` (0: none)."""
+    try:
+        st = os.stat(path)
+        if not stat.S_ISREG(st.st_mode) or not 0 < st.st_size <= WHOLE_MAX_BYTES:
+            return None
+        with open(path, "rb") as fh:
+            head = fh.read(SNIFF_BYTES)
+            fh.seek(max(st.st_size - TAIL_BYTES, 0))
+            tail = fh.read()
+    except (OSError, TypeError, ValueError):
+        return None
+    plan = _plan(head, tail, widths, separators, skip_lines)
+    if plan is None:
+        return None
+    skip, ntok, sep = plan
+    import pandas as pd  # here: a small file read by the numpy scanner needs no pandas
+
+    try:
+        frame = pd.read_csv(
+            path, sep=sep, header=None, skiprows=skip, dtype=np.float64, quoting=csv.QUOTE_NONE, na_filter=False,
+            engine="c", index_col=False, skip_blank_lines=False, lineterminator="\n",
+        )  # fmt: skip
+    except (ValueError, OverflowError, UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError):
+        return None  # not plain after all: the chunked reader finds what and where
+    if frame.shape[1] != ntok or not all(dt == np.float64 for dt in frame.dtypes):
+        return None
+    columns = [frame[k].to_numpy() for k in range(ntok)]
+    del frame
+    n = len(columns[0])
+    groups = tuple(layout(ntok))
+    outs = [_rows_of(columns[g]) for g in groups]
+    if progress is not None:
+        progress(st.st_size)
+    last = skip + n
+    lines = np.arange(skip + 1, last + 1, dtype=line_dtype(last))
+    return Rows([], np.full(n, ntok, np.int8), lines, [], n, filled=(groups, outs))
+
+
+def _rows_of(columns: list[np.ndarray]) -> np.ndarray:
+    """(n, k) row-major array of k columns (pandas' are read-only), copied in blocks of rows that
+    stay in the CPU's cache while all their columns are written."""
+    if len(columns) == 1:
+        return columns[0].reshape(-1, 1).copy()
+    n = len(columns[0])
+    out = np.empty((n, len(columns)))
+    for lo in range(0, n, COPY_ROWS):  # a few hundred blocks, never a loop over rows
+        for j, c in enumerate(columns):
+            out[lo : lo + COPY_ROWS, j] = c[lo : lo + COPY_ROWS]
+    return out
+
+
+def _plan(
+    head: bytes, tail: bytes, widths: tuple[int, ...], separators: bytes, skip_lines: int
+) -> tuple[int, int, str] | None:
+    """From a file's first and last bytes: the lines to skip (leading comments, blank lines, the
+    header), the tokens per line and the separator, or None when the file is not plain."""
+    if head.startswith(BOM) or b"\0" in head or b"\0" in tail:
+        return None
+    body = tail[:-1] if tail.endswith(b"\n") else tail
+    body = body[:-1] if body.endswith(b"\r") else body
+    if not body or body[-1:] in BLANK + b"\n":  # blank lines or spaces at the end
+        return None
+    skip = 0
+    for k, line in enumerate(head.split(b"\n")[:-1], start=1):  # whole lines of the head
+        text = line.rstrip(b"\r")
+        stripped = text.strip(BLANK)
+        if not stripped or stripped.startswith(b"#") or k == skip_lines:
+            skip = k
+            continue
+        if skip_lines > k:
+            return None
+        seps = [s for s in (b" ", *(bytes([c]) for c in separators)) if s in text]
+        if len(seps) != 1 or text != stripped or any(c in text for c in b"\t\x0b\x0c\r"):
+            return None
+        sep = seps[0]
+        tokens = text.split(sep)
+        if b"" in tokens or len(tokens) not in widths:
+            return None
+        return skip, len(tokens), sep.decode()
+    return None

@@ -1,0 +1,150 @@
+"""The one-call reading of plain files (:mod:`lorisnb.io.whole`): the same trajectories, line
+numbers and errors as the chunked reader on every kind of file, taken exactly when the file is
+plain; and the rotation blocks of matrix files converted exactly as scipy converts them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from helpers import write
+
+from lorisnb.errors import ParseError
+from lorisnb.io import read_euroc, read_kitti, read_tum, whole
+
+N = 3000
+LIMIT = whole.WHOLE_MAX_BYTES
+
+
+def _tum_lines(rng, n=N):
+    stamps = 1.56e9 + np.cumsum(rng.uniform(0.01, 0.05, n))
+    pos = rng.normal(0, 20, (n, 3))
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    fmt = ["%.9f", "%.17g", "%.4f", "%r"]
+    return [" ".join(fmt[(k + j) % 4] % float(v) for j, v in enumerate([stamps[k], *pos[k], *q[k]])) for k in range(n)]
+
+
+def _variants():
+    rng = np.random.default_rng(7)
+    body = _tum_lines(rng)
+    head = "# ground truth trajectory\n# timestamp tx ty tz qx qy qz qw\n"
+    yield "plain", "\n".join(body) + "\n", True
+    yield "header", head + "\n".join(body) + "\n", True
+    yield "crlf", "\r\n".join(body) + "\r\n", True
+    yield "no final newline", "\n".join(body), True
+    yield "commas", "\n".join(b.replace(" ", ",") for b in body) + "\n", True
+    yield "blank line at the end", "\n".join(body) + "\n\n", False
+    yield "comment further on", "\n".join(body[:2000] + ["# pause"] + body[2000:]) + "\n", False
+    yield "blank line further on", "\n".join(body[:2000] + [""] + body[2000:]) + "\n", False
+    yield "a tab further on", "\n".join(body[:2500] + [body[2500].replace(" ", "\t", 1)] + body[2501:]) + "\n", False
+    yield "runs of spaces", "\n".join(b.replace(" ", "  ") for b in body) + "\n", False
+    yield "nan pose", "\n".join(body[:100] + [body[100].split()[0] + " nan" * 7] + body[101:]) + "\n", False
+    yield "bad number", "\n".join(body[:2999] + [body[2999].replace(" ", " x", 1)]) + "\n", False
+    yield "short line", "\n".join(body[:1500] + [" ".join(body[1500].split()[:5])] + body[1501:]) + "\n", False
+    yield "cr only", "\r".join(body) + "\r", False
+    yield "bom", "\ufeff" + "\n".join(body) + "\n", False
+
+
+def _read_both(monkeypatch, read, path):
+    """``read(path)`` in one call where the file allows and with the chunked reader: both results
+    (or both errors), and whether the one call was taken."""
+    taken = []
+    real = whole.read_whole
+
+    def spy(*a, **k):
+        got = real(*a, **k)
+        taken.append(got is not None)
+        return got
+
+    monkeypatch.setattr(whole, "read_whole", spy)
+    monkeypatch.setattr("lorisnb.io.chunks.read_whole", spy)
+    out = []
+    for limit in (LIMIT, 0):
+        monkeypatch.setattr(whole, "WHOLE_MAX_BYTES", limit)
+        try:
+            out.append(read(path))
+        except ParseError as exc:
+            out.append((exc.line, exc.reason))
+    return out, taken[0]
+
+
+def _same(a, b):
+    if isinstance(a, tuple) or isinstance(b, tuple):
+        assert a == b
+        return
+    for name in ("stamps", "positions", "quaternions", "lines"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert a.positions.flags.c_contiguous and a.quaternions.flags.c_contiguous
+    assert a.stamps.flags.writeable and a.positions.flags.writeable
+
+
+@pytest.mark.parametrize("name,text,plain", list(_variants()), ids=[v[0] for v in _variants()])
+def test_tum_file_reads_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch, name, text, plain):
+    path = tmp_path / "traj.txt"
+    path.write_bytes(text.encode())
+    (one, chunked), taken = _read_both(monkeypatch, lambda p: read_tum(p, warn=False), path)
+    assert taken == plain
+    _same(one, chunked)
+    if name == "bad number":
+        assert one[0] == N  # the line, counted from the file's first
+    if name == "header":
+        assert one.lines[0] == 3 and one.lines[-1] == N + 2
+
+
+def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch):
+    rng = np.random.default_rng(3)
+    n = 2000
+    stamps = 1403636579758555392 + np.arange(n) * 5_000_000
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    pos = rng.normal(0, 5, (n, 3))
+    rows = [
+        ",".join([str(s), *(repr(float(v)) for v in (*p, *w)), "0,0,0"]) for s, p, w in zip(stamps, pos, q, strict=True)
+    ]
+    path = write(tmp_path, "data.csv", "#timestamp,p_x,p_y,p_z,q_w,q_x,q_y,q_z,v_x,v_y,v_z\n" + "\n".join(rows) + "\n")
+    (one, chunked), taken = _read_both(monkeypatch, lambda p: read_euroc(p, warn=False), path)
+    assert taken
+    _same(one, chunked)
+    np.testing.assert_array_equal(one.stamps, stamps / 1e9)
+    np.testing.assert_array_equal(one.quaternions, q[:, [1, 2, 3, 0]])
+
+    from scipy.spatial.transform import Rotation
+
+    mats = np.concatenate([Rotation.from_quat(q).as_matrix(), pos[:, :, None]], axis=2).reshape(n, 12)
+    kitti = write(tmp_path, "poses.txt", "\n".join(" ".join(f"{v:.6e}" for v in m) for m in mats) + "\n")
+    (one, chunked), taken = _read_both(monkeypatch, read_kitti, kitti)
+    assert taken
+    _same(one, chunked)
+    printed = np.loadtxt(kitti).reshape(n, 3, 4)
+    np.testing.assert_array_equal(one.quaternions, Rotation.from_matrix(printed[:, :, :3]).as_quat())
+
+
+def test_rotation_blocks_equal_scipy_to_the_last_bit():
+    """Markley's method after scipy's projection of non-orthogonal blocks: the same quaternions as
+    ``Rotation.from_matrix`` (scipy 1.17's numpy backend, which the readers used before), in every
+    branch, on exact rotations, 6-digit ones (KITTI files) and noisy ones; the distance from a
+    rotation is the larger of max |R R^T - I| and |det R - 1|."""
+    from scipy.spatial.transform import Rotation
+
+    from lorisnb.core.geometry import rotation_blocks
+
+    rng = np.random.default_rng(11)
+    exact = np.concatenate(
+        [
+            Rotation.random(20_000, random_state=1).as_matrix(),
+            Rotation.from_euler("xyz", [[0, 0, 10], [179, 0, 0], [0, 179, 0], [0, 0, 179]], degrees=True).as_matrix(),
+        ]
+    )
+    for m in (
+        exact,
+        np.round(exact, 6),
+        exact + rng.normal(0, 1e-9, exact.shape),
+        exact + rng.normal(0, 1e-13, exact.shape),
+    ):
+        q, off = rotation_blocks(m)
+        np.testing.assert_array_equal(q, Rotation.from_matrix(m).as_quat())
+        gram = np.abs(m @ np.swapaxes(m, 1, 2) - np.eye(3)).max(axis=(1, 2))
+        np.testing.assert_allclose(off, np.maximum(gram, np.abs(np.linalg.det(m) - 1)), rtol=1e-6, atol=1e-15)
+    tilted = exact[:3] * 1.01
+    assert (rotation_blocks(tilted)[1] > 0.02).all()
+    assert rotation_blocks(np.zeros((0, 3, 3)))[0].shape == (0, 4)
