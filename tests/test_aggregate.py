@@ -97,7 +97,9 @@ def test_awkward_tables_equal_pandas_and_duplicates_are_refused():
             ate_rmse=rng.lognormal(size=n),
         )
     )  # fmt: skip
-    spans = {s: {k: (0.0, float(rng.uniform(10, 300))) for k in range(1, 6)} for s in ("market", "cafe", "garden", "attic")}
+    spans = {
+        s: {k: (0.0, float(rng.uniform(10, 300))) for k in range(1, 6)} for s in ("market", "cafe", "garden", "attic")
+    }
     durations = aggregate.spans_table(spans)
     got = _same(table, durations)
     assert got["cs_r_mean"].isna().any() or table["cs_r"].notna().all()
