@@ -1,6 +1,6 @@
 """What a fresh process imports: ``import lorisnb`` and ``lorisnb --help`` import neither pandas nor
-scipy; a command that writes no Parquet imports pandas without pyarrow; ``--parquet`` still
-writes Parquet. Each case runs in a fresh interpreter (this one has imported everything)."""
+scipy; a small pair evaluated to the terminal imports no pandas; a command that writes a table
+but no Parquet imports pandas without pyarrow; ``--parquet`` still writes Parquet. Each case runs in a fresh interpreter (this one has imported everything)."""
 
 from __future__ import annotations
 
@@ -23,7 +23,8 @@ def _imported(code: str) -> list[str]:
 def test_import_and_public_names_are_lazy():
     assert _imported("import lorisnb") == []
     assert _imported("import lorisnb as ln; ln.Trajectory; ln.read_tum") == []
-    assert "pandas" in _imported("import lorisnb as ln; ln.score")
+    assert _imported("import lorisnb as ln; ln.score") == []  # pandas only when a table is built
+    assert "pandas" in _imported("import lorisnb as ln; ln.sweep")
 
 
 def test_help_imports_no_pandas():
@@ -46,7 +47,10 @@ def test_a_pair_evaluates_with_pandas_without_pyarrow(data, tmp_path):
     tum = data.tum
     args = [str(tum / "fr2_desk_ORB.txt"), "--gt", str(tum / "fr2_desk_groundtruth.txt"), "--no-progress"]
     code = f"from lorisnb.cli import main\nassert main(['evaluate', *{args!r}]) == 0"
-    assert _imported(code) == ["pandas"]
+    assert _imported(code) == []  # printed to the terminal: read by numpy, scored and tabulated without pandas
+    csv = tmp_path / "t.csv"
+    code = f"from lorisnb.cli import main\nassert main(['evaluate', *{args!r}, '--csv', {str(csv)!r}]) == 0"
+    assert _imported(code) == ["pandas"]  # a table written: pandas, without pyarrow
     out = tmp_path / "table"
     code = f"from lorisnb.cli import main\nassert main(['evaluate', *{args!r}, '--parquet', {str(out)!r}]) == 0"
     assert "pyarrow" in _imported(code)

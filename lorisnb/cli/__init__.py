@@ -9,9 +9,12 @@ from __future__ import annotations
 import argparse
 import gc
 import importlib
+import importlib.abc
+import importlib.util
 import os
 import sys
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -200,22 +203,50 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def pandas_without_pyarrow() -> None:
-    """Import pandas without pyarrow, for a command that writes no Parquet and sends no table to
-    Dask: pandas imports pyarrow whenever it is installed (lorisnb's ``[parquet]`` extra), which
-    costs about a fifth of a small evaluation's time and 60 MB; without it pandas keeps strings as
-    Python objects (the same tables, the same output). Nothing happens if pandas is already
-    imported (a Python session); pyarrow stays importable afterwards."""
-    if "pandas" in sys.modules:
-        return
-    before = sys.modules.get("pyarrow", _ABSENT)
-    sys.modules["pyarrow"] = None  # type: ignore[assignment]  # import pyarrow raises ImportError
-    try:
-        import pandas  # noqa: F401
-    finally:
-        if before is _ABSENT:
-            del sys.modules["pyarrow"]
-        else:
-            sys.modules["pyarrow"] = before  # type: ignore[assignment]
+    """Have pandas, if this command imports it at all, imported without pyarrow: for a command
+    that writes no Parquet and sends no table to Dask. pandas imports pyarrow whenever it is
+    installed (lorisnb's ``[parquet]`` extra), which costs about a fifth of a small evaluation's
+    time and 60 MB; without it pandas keeps strings as Python objects (the same tables, the same
+    output). Nothing is imported here (an evaluation printed to the terminal needs no pandas);
+    nothing happens if pandas is already imported (a Python session); pyarrow stays importable
+    afterwards."""
+    if "pandas" not in sys.modules and not any(isinstance(f, _WithoutPyarrow) for f in sys.meta_path):
+        sys.meta_path.insert(0, _WithoutPyarrow())
+
+
+class _WithoutPyarrow(importlib.abc.MetaPathFinder):
+    """Finds pandas (once) with a loader that hides pyarrow while pandas' own import runs."""
+
+    def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
+        if name != "pandas":
+            return None
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec("pandas")
+        if spec is not None and spec.loader is not None:
+            spec.loader = _HidingLoader(spec.loader)
+        return spec
+
+
+class _HidingLoader(importlib.abc.Loader):
+    def __init__(self, real: Any) -> None:
+        self.real = real
+
+    def create_module(self, spec: Any) -> Any:
+        return self.real.create_module(spec)
+
+    def exec_module(self, module: Any) -> None:
+        before = sys.modules.get("pyarrow", _ABSENT)
+        sys.modules["pyarrow"] = None  # type: ignore[assignment]  # import pyarrow raises ImportError
+        try:
+            self.real.exec_module(module)
+        finally:
+            if before is _ABSENT:
+                del sys.modules["pyarrow"]
+            else:
+                sys.modules["pyarrow"] = before  # type: ignore[assignment]
+
+    def __getattr__(self, name: str) -> Any:  # resources and the rest: the real loader's
+        return getattr(self.real, name)
 
 
 _ABSENT = object()

@@ -7,13 +7,17 @@ import argparse
 import sys
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import pandas as pd
+import numpy as np
 
 from ..errors import LorisError, LorisWarning, ValidationError
 from .options import param_value, spec_from_args
 from .outputs import check_outputs, refuse_unused
+from .text import format_table, frame_columns
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 def _executor(args: argparse.Namespace) -> Any:
@@ -91,18 +95,18 @@ def _report_problems(ev: Any, notes: list[str]) -> None:
 
 
 def _fmt(df: pd.DataFrame, digits: int = 4) -> str:
-    with pd.option_context("display.max_rows", 500, "display.width", 200, "display.max_columns", 30):
-        return df.to_string(index=False, float_format=lambda v: f"{v:.{digits}f}")
+    return format_table(frame_columns(df), digits)
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from ..core.aggregate import aggregate_scenes
+    from ..core.aggregate import aggregate_columns, spans_columns
     from ..io.writers import write_csv, write_parquet
 
     check_outputs(args, args.paths, ["csv"], folders=("parquet",))
     ev, notes = _run_evaluation(args)
-    table = ev.sequences()
-    if not table.empty:
+    table = ev.sequences() if args.csv or args.parquet or ev.spec.relation is not None else None
+    columns = frame_columns(table) if table is not None else _rows_as_columns(ev.sequence_rows())
+    if columns and len(columns["seq"]):  # printed from the rows: pandas only for a table written
         cols = [
             "algorithm",
             "file",
@@ -118,21 +122,21 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         ]
         if ev.spec.preset_name == "evo":  # evo's statistics, as evo_ape / evo_rpe print them
             cols += ["ate_mean", "ate_median", "ate_max", "rpe_trans_rmse", "rpe_rot_rmse"]
-        print(_fmt(table[cols], args.digits))
+        print(format_table({c: columns[c] for c in cols}, args.digits))
         try:
-            scenes = aggregate_scenes(table, ev.durations())
+            scenes = aggregate_columns(columns, spans_columns(ev.spans()))
             print("\nper scene (CR over all ground-truth time of the scene; C-ATE RMSE weighted by correct poses):")
-            scenes["coverage"] = [
-                f"{k}/{n}" for k, n in zip(scenes["sequences"], scenes["scene_sequences"], strict=True)
-            ]
-            view = scenes[["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]]
-            print(_fmt(view, args.digits))
+            scenes["coverage"] = np.array(
+                [f"{k}/{n}" for k, n in zip(scenes["sequences"], scenes["scene_sequences"], strict=True)], object
+            )
+            view = ["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]
+            print(format_table({c: scenes[c] for c in view}, args.digits))
         except LorisError as exc:
             print(f"warning: no scene aggregate: {exc}", file=sys.stderr)
-    if args.csv:
+    if table is not None and args.csv:
         out = write_csv(table, args.csv, args.force)
         print(f"\nwrote {len(table)} rows to {out}", file=sys.stderr)
-    if args.parquet:
+    if table is not None and args.parquet:
         print(f"wrote {len(table)} rows to {write_parquet(table, args.parquet, force=args.force)}", file=sys.stderr)
     if getattr(args, "relative", False):
         rel = ev.relative()
@@ -144,7 +148,22 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     return ev.exit_status()
 
 
+def _rows_as_columns(rows: list[dict[str, Any]]) -> dict[str, np.ndarray]:
+    """Rows of one table (dicts with the same keys) as numpy columns, text as objects."""
+    if not rows:
+        return {}
+    out = {}
+    for k in rows[0]:
+        values = [r[k] for r in rows]
+        kinds = {type(v) for v in values}
+        numeric = all(issubclass(t, (int, float, np.number)) and not issubclass(t, (bool, np.bool_)) for t in kinds)
+        out[k] = np.array(values) if numeric else np.array(values, object)
+    return out
+
+
 def cmd_sweep(args: argparse.Namespace) -> int:
+    import pandas as pd
+
     from ..core.sweep import sweep, sweep_scenes
     from ..io.writers import write_csv, write_parquet
 
@@ -206,6 +225,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 def cmd_compare(args: argparse.Namespace) -> int:
     """Scene values with bootstrap intervals, the ranking with ties from one permutation test,
     its significant pairs; tables as CSV, LaTeX, Markdown (see :mod:`lorisnb.tools.comparison`)."""
+    import pandas as pd
+
     from ..tools.comparison import compare_table, write_outputs
     from ..tools.tables import check_table_suffix
 

@@ -20,13 +20,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from .geometry import quat_conjugate, quat_multiply, quat_normalize, quat_rotate, quat_to_matrix
 from .model import FileErrors
 from .scoring import as_files
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: rpg's default sub-trajectory lengths, fractions of the total length
 RPG_FRACTIONS = (0.1, 0.2, 0.3, 0.4, 0.5)
@@ -81,6 +84,8 @@ def rpg_relative_errors(
     :func:`rpg_lengths`), the estimate's relative translations multiplied by ``scale`` (the Sim(3)
     scale, as rpg does). One row per pair: ``length``, ``trans`` (m), ``trans_perc`` (% of the
     length), ``rot`` (deg), ``rot_deg_per_m``."""
+    import pandas as pd
+
     p_g, p_e = np.asarray(gt_positions, float), np.asarray(est_positions, float)
     q_g = quat_normalize(gt_quaternions)
     q_e = quat_normalize(est_quaternions)
@@ -128,6 +133,8 @@ def relative_table(
     Lengths: ``lengths`` (metres, rpg's preset distances; ``fraction`` is then NaN), else
     ``fractions`` of the whole ground truth's path length where the errors know it
     (``FileErrors.groundtruth_lengths``, as rpg), else of the matched ground truth's."""
+    import pandas as pd
+
     rows = []
     for f in as_files(errors):  # per file, sequence and length, never per pose
         for e in f.sequences:

@@ -9,10 +9,9 @@ seconds.
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 from numpy.typing import ArrayLike
 
 from ..errors import ValidationError
@@ -30,6 +29,9 @@ from .model import (
 from .relations import error_statistics, masked_statistics
 from .rpe import RPE_PAIRS, RPE_UNITS
 from .validate import choice, eps_value, positive, threshold
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: Metrics computed by :func:`sequence_grid`, with their dtype in tables.
 GRID_METRICS: dict[str, type] = {
@@ -189,6 +191,42 @@ def rpe_options(rpe_pairs: Any, rpe_all_pairs: Any, rpe_tolerance: Any) -> tuple
     return pairs, None if rpe_all_pairs is None else bool(rpe_all_pairs), tol
 
 
+#: The RPE settings of :func:`score` and their defaults (lorisnb's own rule over 1 s).
+RPE_DEFAULTS: dict[str, Any] = dict(
+    rpe_delta=1.0, rpe_unit="s", rpe_pairs="reference", rpe_all_pairs=None, rpe_tolerance=0.1
+)
+
+
+def score_rows(
+    errors: FileErrors | Iterable[FileErrors], eps: Eps = np.inf, phi: float = np.inf, delta: float = 1.0,
+    tau: float = 60.0, **rpe: Any,
+) -> list[dict[str, Any]]:  # fmt: skip
+    """One row per sequence (a dict of :func:`score`'s columns): every metric of the paper at one
+    threshold setting, without pandas (the command line prints these rows as they are). The
+    arguments are :func:`score`'s (the RPE settings by name)."""
+    unknown = sorted(set(rpe) - set(RPE_DEFAULTS))
+    if unknown:
+        raise ValidationError(f"{unknown[0]}: not a setting of the scores; expected one of {', '.join(RPE_DEFAULTS)}")
+    r = RPE_DEFAULTS | rpe
+    files = as_files(errors)
+    eps_v = eps_value(eps)
+    phi_v, delta_v, tau_v = threshold("phi", phi), threshold("delta", delta), threshold("tau", tau)
+    rpe_d, rpe_u = rpe_setting(r["rpe_delta"], r["rpe_unit"])
+    rpe_p, rpe_a, rpe_t = rpe_options(r["rpe_pairs"], r["rpe_all_pairs"], r["rpe_tolerance"])
+    rows = []
+    for f in files:  # one iteration per file and sequence, never per pose
+        for e in f.sequences:
+            e_scene = sequence_eps(eps_v, f.scene, e)
+            grid = sequence_grid(
+                e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u, with_stats=True,
+                rpe_pairs=rpe_p, rpe_all_pairs=rpe_a, rpe_tolerance=rpe_t,
+            )  # fmt: skip
+            row = sequence_meta(f, e) | dict(eps=e_scene, phi=phi_v, delta=delta_v, tau=tau_v)
+            row.update({k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in grid.items()})
+            rows.append(row)
+    return rows
+
+
 def score(
     errors: FileErrors | Iterable[FileErrors],
     eps: Eps = np.inf,
@@ -212,31 +250,23 @@ def score(
             :func:`lorisnb.core.rpe.rpe_indices`; defaults: lorisnb's own rule over 1 s).
 
     Columns: :data:`~lorisnb.core.model.SEQUENCE_COLUMNS`, then
-    :data:`~lorisnb.core.model.EXTRA_COLUMNS` and :data:`~lorisnb.core.model.STAT_COLUMNS`. Each row is :func:`sequence_grid` on a one-point
-    grid.
+    :data:`~lorisnb.core.model.EXTRA_COLUMNS` and :data:`~lorisnb.core.model.STAT_COLUMNS`: the
+    rows of :func:`score_rows`, each :func:`sequence_grid` on a one-point grid.
     """
-    files = as_files(errors)
-    eps_v = eps_value(eps)
-    phi_v, delta_v, tau_v = threshold("phi", phi), threshold("delta", delta), threshold("tau", tau)
-    rpe_d, rpe_u = rpe_setting(rpe_delta, rpe_unit)
-    rpe_p, rpe_a, rpe_t = rpe_options(rpe_pairs, rpe_all_pairs, rpe_tolerance)
-    rows = []
-    for f in files:  # one iteration per file and sequence, never per pose
-        for e in f.sequences:
-            e_scene = sequence_eps(eps_v, f.scene, e)
-            grid = sequence_grid(
-                e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u, with_stats=True,
-                rpe_pairs=rpe_p, rpe_all_pairs=rpe_a, rpe_tolerance=rpe_t,
-            )  # fmt: skip
-            row = sequence_meta(f, e) | dict(eps=e_scene, phi=phi_v, delta=delta_v, tau=tau_v)
-            row.update({k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in grid.items()})
-            rows.append(row)
+    import pandas as pd
+
+    rows = score_rows(
+        errors, eps, phi, delta, tau, rpe_delta=rpe_delta, rpe_unit=rpe_unit, rpe_pairs=rpe_pairs,
+        rpe_all_pairs=rpe_all_pairs, rpe_tolerance=rpe_tolerance,
+    )  # fmt: skip
     return pd.DataFrame(rows, columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS)
 
 
 def pose_table(errors: FileErrors | Iterable[FileErrors], eps: Eps = np.inf, phi: float = np.inf) -> pd.DataFrame:
     """One row per matched pose: algorithm, file, suite, scene, seq, stamp (s), t_rel (s from the
     ground truth's start), ate (m), aoe (deg), correct (Eq. 1)."""
+    import pandas as pd
+
     files = as_files(errors)
     eps_v, phi_v = eps_value(eps), threshold("phi", phi)
     parts = []

@@ -23,10 +23,13 @@ from ..errors import ParseError
 from .ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, newlines, read_range
 from .rows import Rows, RowSink, line_dtype
 from .scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
-from .whole import read_whole
+from .whole import pandas_loaded, read_whole
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
 FAST_MIN_BYTES = 32 << 10
+#: Without pandas imported, chunks below this are read by the numpy scanner (importing pandas for
+#: them would cost more than it saves: a small OpenLORIS file is evaluated without pandas).
+PANDAS_MIN_BYTES = 4 << 20
 
 
 def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[bytes, int, int, int], None, None]:
@@ -260,7 +263,8 @@ def read_rows(
     def parse(chunk: bytes, line0: int, nlines: int) -> Rows:
         if separators and any(s in chunk for s in separators):
             chunk = chunk.translate(bytes.maketrans(separators, b" " * len(separators)))
-        part = _fast(chunk, line0, nlines, width, specials) if len(chunk) >= fast_min_bytes else None
+        c_parser = len(chunk) >= fast_min_bytes and (len(chunk) >= PANDAS_MIN_BYTES or pandas_loaded())
+        part = _fast(chunk, line0, nlines, width, specials) if c_parser else None
         if part is None or not np.isin(part.ntok[:1], widths).all():
             part = _exact(chunk, line0, spath, widths, specials, bad_width, numbers)
         return part

@@ -22,14 +22,16 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import pandas as pd
-
-from ..core.aggregate import durations_table
+from ..core.aggregate import spans_table
 from ..core.frames import SCENES
 from ..core.model import ResultFile
 from ..errors import DataNotFoundError, LorisError
 from .openloris import read_openloris
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 ENV_VAR = "LORISNB_DATA"
 #: The small teaching data shipped inside the package (``teaching/make_sample_data.py`` writes it).
@@ -185,9 +187,20 @@ def groundtruth_spans(
     return spans
 
 
+def scene_spans(
+    scenes: Iterable[str], data_root: DataRoot | DataPaths | None = None, remove_repeated: bool = True
+) -> dict[str, dict[int, tuple[float, float]]]:
+    """First and last ground-truth stamp (seconds) of every sequence of each scene: scene ->
+    sequence -> span (what :func:`lorisnb.core.aggregate.spans_table` tabulates)."""
+    gts: Mapping[str, ResultFile] = {s: load_groundtruth(s, data_root, remove_repeated) for s in scenes}
+    return {
+        scene: {k: (float(t.stamps[0]), float(t.stamps[-1])) for k, t in gt.sequences.items() if len(t)}
+        for scene, gt in gts.items()
+    }
+
+
 def scene_durations(
     scenes: Iterable[str], data_root: DataRoot | DataPaths | None = None, remove_repeated: bool = True
 ) -> pd.DataFrame:
     """Ground-truth duration of every sequence of each scene (``lorisnb.core.aggregate.durations_table``)."""
-    gts: Mapping[str, ResultFile] = {s: load_groundtruth(s, data_root, remove_repeated) for s in scenes}
-    return durations_table(gts)
+    return spans_table(scene_spans(scenes, data_root, remove_repeated))

@@ -1,5 +1,6 @@
 """The fast path of a plain numeric file: pandas' C parser over the whole file in one call (its
-fastest exact parse, threaded), the numbers copied once into the arrays a reader keeps.
+fastest exact parse, threaded), the numbers copied once into the arrays a reader keeps; a small
+file, while pandas is not imported, by numpy's C reader (importing pandas would cost more).
 
 A file is plain when its lines after a leading block of ``#`` comments, blank lines and a header
 line are numbers one separator apart (a space, or a comma), the same count on every line, and it
@@ -13,8 +14,10 @@ Both give the same numbers (the same C parser; it rounds as Python's ``float`` d
 from __future__ import annotations
 
 import csv
+import io
 import os
 import stat
+import sys
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -25,6 +28,8 @@ from .scanner import BOM, SNIFF_BYTES
 #: Files up to this size are read in one call; larger ones in chunks, in bounded memory (the C
 #: parser holds about three times the numbers while it reads a whole file).
 WHOLE_MAX_BYTES = 256 << 20
+#: Without pandas imported, files up to this size are read by numpy (faster than importing pandas).
+NUMPY_MAX_BYTES = 8 << 20
 TAIL_BYTES = 4096
 COPY_ROWS = 8192
 BLANK = b" \t\r\x0b\x0c"
@@ -56,7 +61,50 @@ def read_whole(
     if plan is None:
         return None
     skip, ntok, sep = plan
-    import pandas as pd  # here: a small file read by the numpy scanner needs no pandas
+    groups = tuple(layout(ntok))
+    if not pandas_loaded() and st.st_size <= NUMPY_MAX_BYTES:  # no pandas to import for a small file
+        values = _numpy_rows(path, sep, skip, ntok)
+        if values is None:
+            return None
+        n = len(values)
+        outs = [np.ascontiguousarray(values[:, g]) for g in groups]
+    else:
+        parsed = _pandas_rows(path, sep, skip, ntok, groups)
+        if parsed is None:
+            return None
+        n, outs = parsed
+    if progress is not None:
+        progress(st.st_size)
+    last = skip + n
+    lines = np.arange(skip + 1, last + 1, dtype=line_dtype(last))
+    return Rows([], np.full(n, ntok, np.int8), lines, [], n, filled=(groups, outs))
+
+
+def pandas_loaded() -> bool:
+    """Whether pandas is imported already (then using it costs nothing more)."""
+    return "pandas" in sys.modules
+
+
+def _numpy_rows(path: str | os.PathLike, sep: str, skip: int, ntok: int) -> np.ndarray | None:
+    """(n, ntok) numbers of a small plain file by numpy's C reader (``np.loadtxt``, which rounds
+    as Python's ``float`` does), or None when it is not plain after all (it skips blank lines,
+    which the line count then shows)."""
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read()
+        values = np.loadtxt(io.BytesIO(raw), dtype=np.float64, delimiter=sep, comments=None, skiprows=skip, ndmin=2)
+    except (ValueError, OSError, UnicodeDecodeError):
+        return None
+    total = raw.count(b"\n") + (0 if raw.endswith(b"\n") else 1)
+    return values if values.shape == (total - skip, ntok) else None
+
+
+def _pandas_rows(
+    path: str | os.PathLike, sep: str, skip: int, ntok: int, groups: tuple[slice, ...]
+) -> tuple[int, list[np.ndarray]] | None:
+    """The number of rows and their numbers copied into ``groups`` (row-major) by pandas' C
+    parser in one call, or None when the file is not plain after all."""
+    import pandas as pd  # here: a small file read by numpy needs no pandas
 
     try:
         frame = pd.read_csv(
@@ -69,14 +117,7 @@ def read_whole(
         return None
     columns = [frame[k].to_numpy() for k in range(ntok)]
     del frame
-    n = len(columns[0])
-    groups = tuple(layout(ntok))
-    outs = [_rows_of(columns[g]) for g in groups]
-    if progress is not None:
-        progress(st.st_size)
-    last = skip + n
-    lines = np.arange(skip + 1, last + 1, dtype=line_dtype(last))
-    return Rows([], np.full(n, ntok, np.int8), lines, [], n, filled=(groups, outs))
+    return len(columns[0]), [_rows_of(columns[g]) for g in groups]
 
 
 def _rows_of(columns: list[np.ndarray]) -> np.ndarray:

@@ -9,12 +9,15 @@ import shutil
 import tempfile
 from collections.abc import Callable, Iterable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from ..core.trajectory import Trajectory
 from ..errors import MissingDependencyError, OutputError
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 def write_openloris(
@@ -84,6 +87,8 @@ def write_parquet(
 
 def _plain(df: pd.DataFrame) -> pd.DataFrame:
     """Categorical columns as their values, so that every part of a dataset has the same schema."""
+    import pandas as pd
+
     cats = [c for c in df.columns if isinstance(df[c].dtype, pd.CategoricalDtype)]
     return df.astype({c: df[c].cat.categories.dtype for c in cats}) if cats else df
 

@@ -6,19 +6,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from ..core.aggregate import aggregate_scenes, spans_table
 from ..core.frames import SCENES
-from ..core.model import Eps, FileErrors
-from ..core.relation_table import relation_columns
-from ..core.relative import RPG_FRACTIONS, relative_table
-from ..core.scoring import pose_table, score
+from ..core.model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, STAT_COLUMNS, Eps, FileErrors
+from ..core.relative import RPG_FRACTIONS
+from ..core.scoring import pose_table, score_rows
 from ..core.spec import EvalSpec
-from ..io.data import DataPaths, scene_durations
+from ..io.data import DataPaths, scene_spans
 from .status import exit_status, unscored
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 @dataclass
@@ -62,18 +62,38 @@ class Evaluation:
     ) -> pd.DataFrame:  # fmt: skip
         """Per-sequence table at one setting (see :func:`lorisnb.core.scoring.score`); thresholds and
         the RPE step not given are the spec's. A ``spec`` column holds the spec's exact text."""
+        import pandas as pd
+
         s = self.spec
         for k, v in s.rpe_options().items():
             kw.setdefault(k, v)
-        table = score(
+        table = pd.DataFrame(self.sequence_rows(eps, phi, delta, tau, **kw), columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS
+                             + STAT_COLUMNS + ["spec"])  # fmt: skip
+        if s.relation is not None and len(table):  # evo's -r: statistics of that pose relation
+            from ..core.relation_table import relation_columns
+
+            rel = relation_columns(self.errors, s.relation, **{k: v for k, v in kw.items() if k.startswith("rpe_")})
+            spec = table.pop("spec")
+            table = pd.concat([table, rel.set_index(table.index)], axis=1)
+            table["spec"] = spec
+        return table
+
+    def sequence_rows(
+        self, eps: Eps | None = None, phi: float | None = None, delta: float | None = None, tau: float | None = None,
+        **kw: Any,
+    ) -> list[dict[str, Any]]:  # fmt: skip
+        """:meth:`sequences` as rows (dicts), without pandas and without evo's ``relation`` columns."""
+        s = self.spec
+        for k, v in s.rpe_options().items():
+            kw.setdefault(k, v)
+        rows = score_rows(
             self.errors, s.eps if eps is None else eps, s.phi if phi is None else phi,
             s.delta if delta is None else delta, s.tau if tau is None else tau, **kw,
         )  # fmt: skip
-        if s.relation is not None and len(table):  # evo's -r: statistics of that pose relation
-            rel = relation_columns(self.errors, s.relation, **{k: v for k, v in kw.items() if k.startswith("rpe_")})
-            table = pd.concat([table, rel.set_index(table.index)], axis=1)
-        table["spec"] = s.canonical(thresholds=False)
-        return table
+        spec = s.canonical(thresholds=False)
+        for row in rows:
+            row["spec"] = spec
+        return rows
 
     def poses(self, eps: Eps | None = None, phi: float | None = None) -> pd.DataFrame:
         """Per-pose table (see :func:`lorisnb.core.scoring.pose_table`)."""
@@ -92,6 +112,8 @@ class Evaluation:
         """rpg_trajectory_evaluation's relative error per sequence and sub-trajectory length: fractions
         of the whole ground truth's length, or rpg's preset ``lengths`` in metres (see
         :func:`lorisnb.core.relative.relative_table`)."""
+        from ..core.relative import relative_table
+
         return relative_table(self.errors, fractions, lengths)
 
     @property
@@ -99,15 +121,21 @@ class Evaluation:
         return sorted({f.algorithm for f in self.errors})
 
     def durations(self) -> pd.DataFrame:
-        """Ground-truth durations of every sequence of the scenes evaluated, seconds."""
+        """Ground-truth durations of every sequence of the scenes evaluated, seconds
+        (:func:`lorisnb.core.aggregate.spans_table` of :meth:`spans`)."""
+        return spans_table(self.spans())
+
+    def spans(self) -> dict[str, dict[int, tuple[float, float]]]:
+        """First and last ground-truth stamp (seconds) of every sequence of the scenes evaluated:
+        scene -> sequence -> span."""
         known: dict[str, dict[int, tuple[float, float]]] = {}
         for f in self.errors:
             if f.groundtruth_spans:
                 known.setdefault(f.scene, {}).update(f.groundtruth_spans)
         scenes = list(dict.fromkeys(f.scene for f in self.errors))
         if set(known) == set(scenes):  # spans found while evaluating: no ground truth read again
-            return spans_table({s: dict(sorted(known[s].items())) for s in scenes})
-        return scene_durations(sorted(scenes, key=SCENES.index), self.data)
+            return {s: dict(sorted(known[s].items())) for s in scenes}
+        return scene_spans(sorted(scenes, key=SCENES.index), self.data)
 
     @property
     def warnings(self) -> list[str]:
@@ -129,6 +157,8 @@ class Evaluation:
         rows = [dict(file=str(f.path), status="failed", kind=f.kind, error=f.error) for f in self.failures]
         rows += [dict(file=str(f.path), status="skipped", kind=f.kind, error=f.error) for f in self.skipped]
         rows += [dict(file=str(f.path), status="not scored", kind=f.kind, error=f.error) for f in self.unscored]
+        import pandas as pd
+
         return pd.DataFrame(rows, columns=["file", "status", "kind", "error"])
 
     def __repr__(self) -> str:

@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import os
 import re
+import sys
 import warnings
 from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ..core.trials import split_trial
 from ..errors import LorisWarning, ValidationError
@@ -34,7 +34,7 @@ def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
         paths = paths.ravel().tolist()
     items = [paths] if isinstance(paths, (str, os.PathLike)) else None
     if items is None:
-        if isinstance(paths, (bytes, pd.DataFrame)) or not isinstance(paths, Iterable):
+        if isinstance(paths, bytes) or _is_frame(paths) or not isinstance(paths, Iterable):
             raise ValidationError(
                 f"paths: expected a file or folder path (str or pathlib.Path) or a list of them, "
                 f"got {type(paths).__name__}"
@@ -78,7 +78,7 @@ def result_files(
 def names(what: str, value: object) -> list[str]:
     """A name or a list of names (algorithms, scenes), checked."""
     items = [value] if isinstance(value, str) else value
-    if not isinstance(items, Iterable) or isinstance(items, (bytes, pd.DataFrame)):
+    if not isinstance(items, Iterable) or isinstance(items, bytes) or _is_frame(items):
         raise ValidationError(f"{what}={value!r}: expected a name or a list of names")
     names = list(items)
     bad = [n for n in names if not isinstance(n, str)]
@@ -212,3 +212,10 @@ def without_groundtruth(items: list[tuple[Path, Path | None]], groundtruth: Path
     if not kept:
         raise ValidationError(f"{groundtruth}: the only input is the ground truth itself; expected estimate files")
     return kept
+
+
+def _is_frame(value: object) -> bool:
+    """Whether ``value`` is a pandas DataFrame (iterable, but over its column names): pandas is
+    not imported for the question (a DataFrame exists only where it was)."""
+    pd = sys.modules.get("pandas")
+    return pd is not None and isinstance(value, pd.DataFrame)

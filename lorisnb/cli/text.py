@@ -1,0 +1,46 @@
+"""Tables as text for the terminal, from columns (no pandas needed): every command prints its
+tables through :func:`format_table`."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+MAX_ROWS = 500  # more rows: the first and last half of these, with a line saying how many were left out
+
+
+def format_table(columns: Mapping[str, Sequence[Any] | np.ndarray], digits: int = 4, max_rows: int = MAX_ROWS) -> str:
+    """Columns right-aligned under their names, two spaces apart; floats with ``digits``
+    decimals (NaN as ``NaN``), integers, booleans and text as they are."""
+    names = list(columns)
+    n = len(next(iter(columns.values()))) if names else 0
+    rows = list(range(n))
+    if n > max_rows:
+        rows = rows[: max_rows // 2] + [-1] + rows[n - max_rows // 2 :]
+    cells = []
+    for name in names:
+        values = columns[name]
+        cells.append([name] + ["..." if i < 0 else _cell(values[i], digits) for i in rows])
+    widths = [max(map(len, col)) for col in cells]
+    lines = ["  ".join(col[k].rjust(w) for col, w in zip(cells, widths, strict=True)) for k in range(len(rows) + 1)]
+    if n > max_rows:
+        lines.append(f"[{n} rows, {n - 2 * (max_rows // 2)} not shown]")
+    return "\n".join(lines)
+
+
+def _cell(value: Any, digits: int) -> str:
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value))
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        return "NaN" if math.isnan(value) else f"{float(value):.{digits}f}"
+    return str(value)
+
+
+def frame_columns(df: Any) -> dict[str, np.ndarray]:
+    """A DataFrame's columns as numpy arrays (for :func:`format_table`)."""
+    return {str(c): df[c].to_numpy() for c in df.columns}
