@@ -281,3 +281,21 @@ def test_lorisnb_rpe_rule_unchanged_by_default(evo_pairs):
         i, j, _, _ = e.rpe(delta, unit)
         i0, j0 = metrics.rpe_pairs(e.stamps, e.gt_positions, delta, unit)
         assert i.tolist() == i0.tolist() and j.tolist() == j0.tolist()
+
+
+def test_masked_statistics_of_full_rows_equal_the_row_computation_to_the_bit():
+    """A grid row selecting every value (no threshold) takes error_statistics' path: the same numbers
+    as the masked row computation gives it, to the last bit, on any length (pairwise sums)."""
+    from lorisnb.core import relations
+
+    rng = np.random.default_rng(0)
+    for n in (1, 2, 7, 9, 128, 129, 4097, 100_001):
+        v = rng.lognormal(size=n) * 10.0 ** rng.integers(-3, 6)
+        mask = np.stack([np.ones(n, bool), rng.uniform(size=n) < 0.7, np.zeros(n, bool)])
+        got = relations.masked_statistics(v, mask)
+        direct = {k: np.full(3, np.nan) for k in got}
+        relations._masked_rows(v, mask, direct)  # the row computation, every row
+        for k in got:
+            np.testing.assert_array_equal(got[k], direct[k])
+        whole = error_statistics(v)
+        assert all(got[k][0] == whole[k] for k in got) and np.isnan(got["mean"][2])

@@ -113,19 +113,32 @@ def error_statistics(values: np.ndarray, mask: np.ndarray | None = None) -> dict
     )  # fmt: skip
 
 
-def masked_statistics(values: np.ndarray, mask: np.ndarray) -> dict[str, np.ndarray]:
+def masked_statistics(
+    values: np.ndarray, mask: np.ndarray, whole: dict[str, float] | None = None
+) -> dict[str, np.ndarray]:
     """:func:`error_statistics` (without rmse) of ``values`` (M,) over each row of a boolean
     ``mask`` (..., M) (a threshold grid's correct poses): arrays shaped ``mask.shape[:-1]``, NaN
     where a row selects nothing. Rows are done in chunks of about 2**22 values (bounded memory
-    whatever the grid); each row's numbers are the same whatever the chunk."""
+    whatever the grid); each row's numbers are the same whatever the chunk. ``whole``:
+    :func:`error_statistics` of ``values`` if already computed (a row selecting every value has
+    those numbers)."""
     v = np.asarray(values, float)
     m = np.asarray(mask, bool)
     shape = m.shape[:-1]
     rows = m.reshape(-1, v.size)
     out = {k: np.full(rows.shape[0], np.nan) for k in ("mean", "median", "std", "min", "max", "sse")}
+    full = rows.all(axis=1) if v.size else np.zeros(rows.shape[0], bool)
+    if full.any():  # every value selected (no threshold): the same numbers as error_statistics, to the bit (tested)
+        whole = whole if whole is not None else error_statistics(v)
+        for k, a in out.items():
+            a[full] = whole[k]
+        rows = rows[~full]
+    part = {k: np.full(rows.shape[0], np.nan) for k in out}
     step = max(1, (1 << 22) // max(v.size, 1))
     for lo in range(0, rows.shape[0], step):  # chunks of grid rows, not poses
-        _masked_rows(v, np.ascontiguousarray(rows[lo : lo + step]), {k: a[lo : lo + step] for k, a in out.items()})
+        _masked_rows(v, np.ascontiguousarray(rows[lo : lo + step]), {k: a[lo : lo + step] for k, a in part.items()})
+    for k, a in out.items():
+        a[~full] = part[k]
     return {k: a.reshape(shape) for k, a in out.items()}
 
 

@@ -148,14 +148,15 @@ def sequence_grid(
     i, j, tr, rr = e.rpe(rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance)
     if with_stats:
         both_ep = c[:, :, i] & c[:, :, j]
+        whole: dict[str, dict[str, float]] = {}
         for prefix, grid_mask, pair_mask in (("", None, None), ("c_", c, both_ep)):
             for name, values, m in (("ate", e.ate, grid_mask), ("aoe", e.aoe, grid_mask), ("rpe_trans", tr, pair_mask),
                                     ("rpe_rot", rr, pair_mask)):  # fmt: skip
                 if m is None:
-                    stats = error_statistics(values)
+                    stats = whole[name] = error_statistics(values)
                     out.update({f"{name}_{k}": bc(v) for k, v in stats.items() if k != "rmse"})
                 else:
-                    ms = masked_statistics(values, m)
+                    ms = masked_statistics(values, m, whole.get(name))
                     out.update({f"{prefix}{name}_{k}": bc(v[:, :, None, None]) for k, v in ms.items()})
     if len(i) == 0:
         out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)

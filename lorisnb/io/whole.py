@@ -22,6 +22,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from .ranges import GIVE_BACK_BYTES, give_back_memory
 from .rows import Rows, line_dtype
 from .scanner import BOM, SNIFF_BYTES
 
@@ -117,7 +118,11 @@ def _pandas_rows(
         return None
     columns = [frame[k].to_numpy() for k in range(ntok)]
     del frame
-    return len(columns[0]), [_rows_of(columns[g]) for g in groups]
+    outs = [_rows_of(columns[g]) for g in groups]
+    del columns
+    if os.stat(path).st_size >= GIVE_BACK_BYTES:
+        give_back_memory()  # the parser's buffers of a large file: not kept as the process's memory
+    return len(outs[0]), outs
 
 
 def _rows_of(columns: list[np.ndarray]) -> np.ndarray:
