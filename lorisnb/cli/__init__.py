@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import gc
 import importlib
-import importlib.abc
 import importlib.util
 import os
 import sys
@@ -214,8 +213,9 @@ def pandas_without_pyarrow() -> None:
         sys.meta_path.insert(0, _WithoutPyarrow())
 
 
-class _WithoutPyarrow(importlib.abc.MetaPathFinder):
-    """Finds pandas (once) with a loader that hides pyarrow while pandas' own import runs."""
+class _WithoutPyarrow:
+    """An import finder (``sys.meta_path``): finds pandas (once) with a loader that hides pyarrow
+    while pandas' own import runs."""
 
     def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
         if name != "pandas":
@@ -223,11 +223,13 @@ class _WithoutPyarrow(importlib.abc.MetaPathFinder):
         sys.meta_path.remove(self)
         spec = importlib.util.find_spec("pandas")
         if spec is not None and spec.loader is not None:
-            spec.loader = _HidingLoader(spec.loader)
+            spec.loader = _HidingLoader(spec.loader)  # type: ignore[assignment]  # the loader protocol
         return spec
 
 
-class _HidingLoader(importlib.abc.Loader):
+class _HidingLoader:
+    """pandas' own loader, with pyarrow hidden while it runs (``importlib``'s loader protocol)."""
+
     def __init__(self, real: Any) -> None:
         self.real = real
 
