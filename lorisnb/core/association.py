@@ -91,6 +91,15 @@ class Association:
         """:attr:`gt_quaternions` as a scipy ``Rotation`` (built on request)."""
         return rotations_of(self.gt_quaternions)
 
+    def est_rows(self, values: np.ndarray) -> np.ndarray:
+        """The rows of an estimate's array (positions, quaternions) of the matched poses: a view
+        when they are consecutive (the usual case: no copy of a million rows), else a copy. Read
+        it, never write into it."""
+        i = self.est_index
+        if i.size and int(i[-1]) - int(i[0]) == i.size - 1 and (i.size < 2 or bool((i[1:] > i[:-1]).all())):
+            return values[int(i[0]) : int(i[-1]) + 1]
+        return values[i]
+
 
 def associate(
     gt: Trajectory, est_stamps: np.ndarray, max_gap: float = MAX_GAP, official_interpolation: bool = False

@@ -70,6 +70,7 @@ def evaluate_sessions(
     other_spans: Spans | None = None,
     frames: FrameInfo | None = None,
     release: Callable[[int], object] | None = None,
+    release_groundtruth: Callable[[int], object] | None = None,
     notes: list[str] | None = None,
     groundtruth_spans: dict[int, tuple[float, float]] | None = None,
 ) -> FileErrors:
@@ -86,6 +87,9 @@ def evaluate_sessions(
         frames: an OpenLORIS file's frames and raw ground truth, for its sensor-frame check.
         release: called with each sequence number once its errors are computed and the pipeline
             no longer needs its poses (the edge lets a long file's poses go).
+        release_groundtruth: called with each sequence number once the estimates are matched and
+            the pipeline no longer needs its ground truth (the edge lets a long one go before the
+            alignment and the errors are computed).
         notes: what the reader noticed, kept first in ``FileErrors.warnings``.
 
     Every note is issued as a LorisWarning and kept in ``FileErrors.warnings``.
@@ -125,10 +129,18 @@ def evaluate_sessions(
                     f"{assoc[s].gt_start:.3f}..{assoc[s].gt_end:.3f} s"
                 )
 
+    lengths = {s: evo_steps.whole_length(groundtruth[s]) for s in seqs}  # rpg's relative error needs them
+    if release_groundtruth is not None:  # matched: the ground truth's poses are not needed any more
+        del gt_s  # the loop's last references go (seqs is not empty)
+        if checks_on:
+            del raw
+        for s in seqs:
+            release_groundtruth(s)
+
     def fit(s: int) -> Sim3:
         a, e = assoc[s], est[s]
-        q_e = e.quaternions[a.est_index] if spec.align_frames == 1 or method == "origin" else None
-        return fit_alignment(e.positions[a.est_index], a.gt_positions, method, spec.align_frames, q_e, a.gt_quaternions,
+        q_e = a.est_rows(e.quaternions) if spec.align_frames == 1 or method == "origin" else None
+        return fit_alignment(a.est_rows(e.positions), a.gt_positions, method, spec.align_frames, q_e, a.gt_quaternions,
                              strict=frames is None, notes=found)  # OpenLORIS: the official tool's alignment  # fmt: skip
 
     aligned_on: int | None = None
@@ -202,7 +214,7 @@ def evaluate_sessions(
         scene=scene, frame=frame, mode="lifelong" if lifelong else "per-seq", alignment=alignment,
         aligned_on=aligned_on, official_interpolation=spec.official_interpolation, sequences=out, warnings=kept,
         trial=trial, groundtruth_spans=dict(groundtruth_spans or {}),
-        groundtruth_lengths={s: evo_steps.whole_length(groundtruth[s]) for s in seqs},
+        groundtruth_lengths=lengths,
     )  # fmt: skip
 
 

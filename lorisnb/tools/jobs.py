@@ -72,6 +72,11 @@ def _stamp(path: Path) -> tuple[float, int]:
     return st.st_mtime, st.st_size
 
 
+#: Ground-truth files up to this size are read once per process; larger ones for each input, so
+#: that the pipeline can let them go once the estimate is matched (a million poses and more).
+CACHED_BYTES = 32 << 20
+
+
 @lru_cache(maxsize=64)
 def _read_groundtruth(
     path: Path, fmt: str, stamp: tuple[float, int], times: Path | None, topic: str | None, tf: str | None,
@@ -90,7 +95,8 @@ def groundtruth_of(path: Path, fmt: str, times: Path | None = None, topic: str |
     """The ground truth of a pair or a manifest session (cached; read-only arrays); ``repeated``:
     the rule for poses of a repeated stamp (see :func:`lorisnb.io.formats.read_trajectory`)."""
     stamp = _stamp(path) if path.is_file() else (0.0, 0)
-    return _read_groundtruth(path, fmt, stamp, times, topic, tf, "drop" if fmt == "openloris" else repeated)
+    read = _read_groundtruth if stamp[1] < CACHED_BYTES else _read_groundtruth.__wrapped__  # a large one: not kept
+    return read(path, fmt, stamp, times, topic, tf, "drop" if fmt == "openloris" else repeated)
 
 
 @lru_cache(maxsize=64)
@@ -173,9 +179,11 @@ def _pair(job: Job) -> FileErrors:
                               repair_stamps=job.spec.repair_stamps)  # fmt: skip
     check_stamp_units(est, gt, str(job.path))  # seconds against pose indices or nanoseconds: an error
     span = {1: (float(gt.stamps[0]), float(gt.stamps[-1]))} if len(gt) else {}
+    gts = {1: gt}
+    del gt  # held by gts alone: let go once matched
     return evaluate_sessions(
-        {1: gt}, {1: est}, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite,
-        trial=trial, notes=[str(w.message) for w in caught], groundtruth_spans=span,
+        gts, {1: est}, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite,
+        trial=trial, notes=[str(w.message) for w in caught], groundtruth_spans=span, release_groundtruth=gts.pop,
     )  # fmt: skip
 
 
