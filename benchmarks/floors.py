@@ -13,7 +13,8 @@ either time). Baselines:
 - nearest association: the rule over every candidate pair (the implementation before issue 27).
 
 Growth from 10k to 10M poses: whole ``lorisnb evaluate`` processes on simulated TUM pairs, time,
-time per pose and peak memory per pose above the process's start-up. ``LORISNB_BENCH_HUGE=0``
+time per pose and peak memory per pose above the process's start-up (importing what the run
+imports: pandas for files larger than numpy reads). ``LORISNB_BENCH_HUGE=0``
 leaves out the 10M-pose pair (two 0.9 GB files).
 """
 
@@ -174,15 +175,26 @@ def bench_growth(folder: Path) -> None:
     """Whole ``lorisnb evaluate`` processes on TUM pairs of 10k..10M poses each: time, against a
     process that only parses both files, and peak memory per pose above the start-up's; evo_ape
     up to 100k poses."""
+    from lorisnb.io.whole import NUMPY_MAX_BYTES
+
     sizes = [10_000, 100_000, 1_000_000] + ([10_000_000] if os.environ.get("LORISNB_BENCH_HUGE", "1") != "0" else [])
-    start = [sys.executable, "-c", NO_PYARROW + "import pandas, lorisnb.cli, lorisnb.tools.evaluate"]
-    base = min(process(start)[1] for _ in range(3))
+    imports = "import lorisnb.cli, lorisnb.tools.evaluate"
+    bases = {  # the start-up of a process importing what the run imports: pandas only for files numpy does not read
+        with_pandas: min(
+            process([sys.executable, "-c", NO_PYARROW + ("import pandas\n" if with_pandas else "") + imports])[1]
+            for _ in range(3)
+        )  # fmt: skip
+        for with_pandas in (False, True)
+    }
     print(
-        f"\ngrowth: lorisnb evaluate EST --gt GT (TUM, n poses each), whole processes; start-up {base / 2**20:.0f} MiB"
+        f"\ngrowth: lorisnb evaluate EST --gt GT (TUM, n poses each), whole processes; start-up "
+        f"{bases[False] / 2**20:.0f} MiB ({bases[True] / 2**20:.0f} MiB with pandas, which files over "
+        f"{NUMPY_MAX_BYTES >> 20} MB need)"
     )
     table = []
     for n in sizes:
         gt, est = pair_files(folder, n)
+        base = bases[max(gt.stat().st_size, est.stat().st_size) > NUMPY_MAX_BYTES]
         ours = [LORISNB, "evaluate", str(est), "--gt", str(gt), "--no-progress"]
         runs = 5 if n <= 100_000 else 3 if n <= 1_000_000 else 1
         r = processes(ours, parse_only(gt, est), runs)

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import ParseError
 from .ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, newlines, read_range
-from .rows import Rows, RowSink, line_dtype
+from .rows import Group, Rows, RowSink, line_dtype
 from .scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
 from .whole import pandas_loaded, read_whole
 
@@ -222,7 +222,7 @@ def read_rows(
     chunk_bytes: int | None = None,
     fast_min_bytes: int = FAST_MIN_BYTES,
     progress: Callable[[int], object] | None = None,
-    layout: Callable[[int], Sequence[slice]] | None = None,
+    layout: Callable[[int], Sequence[Group]] | None = None,
     skip_lines: int = 0,
 ) -> Rows:
     """Read the numeric lines of a text file in chunks (a plain file of at most

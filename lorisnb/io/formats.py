@@ -239,9 +239,7 @@ def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop
         )
     except ParseError:
         return _read_euroc_whole(path, warn, repeated)  # the first problem of the whole file, as it always was reported
-    first, positions, wxyz = rows.split(_euroc_groups(width))
-    quaternions = wxyz[:, [1, 2, 3, 0]]  # x y z w
-    del wxyz
+    first, positions, quaternions = rows.split(_euroc_groups(width))  # quaternions read as x y z w
     notes: list[str] = []
     line_no = rows.lines
     stamps = first[:, 0]
@@ -289,9 +287,10 @@ def _read_euroc_whole(path: str | os.PathLike, warn: bool, repeated: str = "drop
     return traj
 
 
-def _euroc_groups(ntok: int) -> tuple[slice, slice, slice]:
-    """The columns of a EuRoC row: stamp (ns), position, quaternion ``wxyz``."""
-    return slice(0, 1), slice(1, 4), slice(4, 8)
+def _euroc_groups(ntok: int) -> tuple[slice, slice, list[int]]:
+    """The columns of a EuRoC row: stamp (ns), position, quaternion (its ``w x y z`` columns taken
+    as ``x y z w``)."""
+    return slice(0, 1), slice(1, 4), [5, 6, 7, 4]
 
 
 def read_trajectory(

@@ -35,7 +35,7 @@ class Rows:
     lines: np.ndarray
     specials: list[tuple[int, str]]
     parsed_in_c: int = 0
-    filled: tuple[tuple[slice, ...], list[np.ndarray]] | None = None
+    filled: tuple[tuple[Group, ...], list[np.ndarray]] | None = None
 
     @property
     def columns(self) -> np.ndarray:
@@ -50,7 +50,7 @@ class Rows:
         """(n, k) view of :attr:`columns`."""
         return self.columns.T
 
-    def split(self, groups: Sequence[slice]) -> list[np.ndarray]:
+    def split(self, groups: Sequence[Group]) -> list[np.ndarray]:
         """Row-major (n, stop - start) arrays of the column ``groups`` (slices of token positions
         with a stop), copied once from the blocks (on threads when many), which are let go as
         they are copied: afterwards this Rows holds no numbers. Tokens a line lacks are NaN."""
@@ -62,13 +62,13 @@ class Rows:
             return arrays
         blocks, self.blocks = self.blocks, []
         sizes = [b.shape[1] for b in blocks]
-        outs = [np.empty((sum(sizes), len(range(g.stop)[g]))) for g in groups]
+        outs = [np.empty((sum(sizes), width(g))) for g in groups]
         offsets = np.cumsum([0] + sizes)
 
         def copy(i: int) -> None:
             b, at, m = blocks[i], int(offsets[i]), sizes[i]
             for g, out in zip(groups, outs, strict=True):
-                got = b[g]  # a view: the tokens of the group this block has
+                got = b[g] if isinstance(g, slice) else b[[k for k in g if k < len(b)]]  # the tokens it has
                 out[at : at + m, : len(got)] = got.T
                 out[at : at + m, len(got) :] = np.nan
             blocks[i] = _NO_ROWS  # the block's numbers go as soon as they are copied
@@ -78,6 +78,15 @@ class Rows:
 
 
 _NO_ROWS = np.zeros((0, 0))
+
+#: A group of columns: a slice of token positions with a stop, or token positions in the order
+#: wanted (EuRoC's ``q_w`` last).
+Group = slice | list[int]
+
+
+def width(group: Group) -> int:
+    """How many columns a group has."""
+    return len(group) if isinstance(group, list) else len(range(group.stop)[group])
 
 
 def line_dtype(last: int) -> type[np.signedinteger]:
@@ -121,10 +130,10 @@ class RowSink:
     gives the groups for lines of ``ntok`` tokens; ``capacity`` is a guess of the rows (the arrays
     grow when it is short; pages past the rows are never touched)."""
 
-    def __init__(self, layout: Callable[[int], Sequence[slice]], capacity: int) -> None:
+    def __init__(self, layout: Callable[[int], Sequence[Group]], capacity: int) -> None:
         self.layout, self.capacity, self.n = layout, max(int(capacity), 1), 0
         self.ntok: int | None = None
-        self.groups: tuple[slice, ...] = ()
+        self.groups: tuple[Group, ...] = ()
         self.outs: list[np.ndarray] = []
 
     def add(self, part: Rows) -> bool:
@@ -136,7 +145,7 @@ class RowSink:
         lo, hi = int(part.ntok.min()), int(part.ntok.max())
         if self.ntok is None:
             self.ntok, self.groups = lo, tuple(self.layout(lo))
-            self.outs = [np.empty((self.capacity, len(range(g.stop)[g]))) for g in self.groups]
+            self.outs = [np.empty((self.capacity, width(g))) for g in self.groups]
         if lo != hi or lo != self.ntok:
             return False
         if self.n + m > self.capacity:
@@ -158,6 +167,6 @@ class RowSink:
         grown[: self.n] = out[: self.n]
         return grown
 
-    def filled(self) -> tuple[tuple[slice, ...], list[np.ndarray]]:
+    def filled(self) -> tuple[tuple[Group, ...], list[np.ndarray]]:
         """The groups and their arrays, trimmed to the rows added (views)."""
         return self.groups, [o[: self.n] for o in self.outs]

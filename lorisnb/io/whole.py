@@ -23,7 +23,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from .ranges import GIVE_BACK_BYTES, give_back_memory
-from .rows import Rows, line_dtype
+from .rows import Group, Rows, line_dtype
 from .scanner import BOM, SNIFF_BYTES
 
 #: Files up to this size are read in one call; larger ones in chunks, in bounded memory (the C
@@ -39,7 +39,7 @@ BLANK = b" \t\r\x0b\x0c"
 def read_whole(
     path: str | os.PathLike,
     widths: tuple[int, ...],
-    layout: Callable[[int], Sequence[slice]],
+    layout: Callable[[int], Sequence[Group]],
     separators: bytes = b"",
     skip_lines: int = 0,
     progress: Callable[[int], object] | None = None,
@@ -68,7 +68,9 @@ def read_whole(
         if values is None:
             return None
         n = len(values)
-        outs = [np.ascontiguousarray(values[:, g]) for g in groups]
+        outs = [
+            np.ascontiguousarray(values[:, g]) if isinstance(g, slice) else np.take(values, g, axis=1) for g in groups
+        ]
     else:
         parsed = _pandas_rows(path, sep, skip, ntok, groups)
         if parsed is None:
@@ -101,7 +103,7 @@ def _numpy_rows(path: str | os.PathLike, sep: str, skip: int, ntok: int) -> np.n
 
 
 def _pandas_rows(
-    path: str | os.PathLike, sep: str, skip: int, ntok: int, groups: tuple[slice, ...]
+    path: str | os.PathLike, sep: str, skip: int, ntok: int, groups: tuple[Group, ...]
 ) -> tuple[int, list[np.ndarray]] | None:
     """The number of rows and their numbers copied into ``groups`` (row-major) by pandas' C
     parser in one call, or None when the file is not plain after all."""
@@ -118,7 +120,7 @@ def _pandas_rows(
         return None
     columns = [frame[k].to_numpy() for k in range(ntok)]
     del frame
-    outs = [_rows_of(columns[g]) for g in groups]
+    outs = [_rows_of(columns[g] if isinstance(g, slice) else [columns[k] for k in g]) for g in groups]
     del columns
     if os.stat(path).st_size >= GIVE_BACK_BYTES:
         give_back_memory()  # the parser's buffers of a large file: not kept as the process's memory
