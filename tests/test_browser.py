@@ -168,6 +168,10 @@ def _open_and_run(driver, url: str, name: str, timeout: float) -> None:
         got = prompts()
         return got and all(p not in ("[ ]:", "[*]:", "") for p in got)
 
+    def stalled() -> bool:  # cells left unrun, none running or queued, no error shown: the run was dropped
+        got = prompts()
+        return "[ ]:" in got and "[*]:" not in got and not _errors(driver)
+
     run_all()
     started = time.monotonic()
     while time.monotonic() - started < 20 and all(p in ("[ ]:", "") for p in prompts()):
@@ -175,11 +179,21 @@ def _open_and_run(driver, url: str, name: str, timeout: float) -> None:
     if all(p in ("[ ]:", "") for p in prompts()):  # the menu click was lost (nothing queued): once more
         driver.find_element(By.TAG_NAME, "body").send_keys(Keys.ESCAPE)
         run_all()
-    try:
-        _wait(done, timeout, f"every cell of {name} to run", interval=1.0)
-    except AssertionError as exc:  # say which cells did not run, and keep a picture of it
-        _shot(driver.find_element(By.CSS_SELECTOR, ".jp-NotebookPanel:not(.lm-mod-hidden)"), f"{name}-stuck")
-        raise AssertionError(f"{exc}; cell prompts: {prompts()}") from None
+    deadline, still, again = time.monotonic() + timeout, None, 2
+    while not done():
+        if "[*]:" not in prompts() and _errors(driver):  # stopped at an error: the caller reports it
+            return
+        now = time.monotonic()
+        still = (still or now) if stalled() else None
+        if still is not None and now - still > 15 and again:  # dropped for 15 s (not slow): run all once more
+            driver.find_element(By.TAG_NAME, "body").send_keys(Keys.ESCAPE)
+            run_all()
+            still, again = None, again - 1
+        if now > deadline:  # say which cells did not run, and keep a picture of it
+            _shot(driver.find_element(By.CSS_SELECTOR, ".jp-NotebookPanel:not(.lm-mod-hidden)"), f"{name}-stuck")
+            raise AssertionError(f"timed out after {timeout:.0f} s waiting for every cell of {name} to run; "
+                                 f"cell prompts: {prompts()}")  # fmt: skip
+        time.sleep(1.0)
 
 
 def _errors(driver) -> list[str]:
