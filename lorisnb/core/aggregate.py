@@ -19,6 +19,7 @@ import numpy as np
 from ..errors import EvaluationError
 from .frames import SCENES
 from .model import SCENE_COLUMNS, ResultFile
+from .trajectory import time_spans
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -32,12 +33,7 @@ Columns = Mapping[str, np.ndarray]
 def durations_table(groundtruths: Mapping[str, ResultFile]) -> pd.DataFrame:
     """Ground-truth span of every sequence of each scene: first and last stamp and duration,
     seconds. ``groundtruths`` maps scene -> its ground-truth file."""
-    return spans_table(
-        {
-            scene: {s: (float(t.stamps[0]), float(t.stamps[-1])) for s, t in gt.sequences.items() if len(t)}
-            for scene, gt in groundtruths.items()
-        }
-    )
+    return spans_table({scene: time_spans(gt.sequences) for scene, gt in groundtruths.items()})
 
 
 def spans_columns(spans: Mapping[str, Mapping[int, tuple[float, float]]]) -> dict[str, np.ndarray]:

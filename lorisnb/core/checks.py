@@ -13,7 +13,7 @@ from . import metrics, plausibility
 from .association import Association, associate
 from .frames import FRAMES, relative_extrinsic
 from .geometry import Sim3, quat_angle_deg, quat_conj_multiply, quat_from_matrix, quat_multiply, quat_normalize, umeyama
-from .trajectory import Trajectory, path_length
+from .trajectory import Trajectory, path_length, time_spans
 
 PLAUSIBILITY_POSES = 300  # estimate poses a plausibility check looks at (evenly spread)
 
@@ -114,9 +114,7 @@ def other_spans(
     groundtruth: Mapping[int, Trajectory], scene: str, seq: int, more: Mapping[str, tuple[float, float]] | None
 ) -> dict[str, tuple[float, float]]:
     """Time spans of the other ground-truth sequences (this scene's first), for the time-overlap check."""
-    spans = {
-        f"{scene}-{k}": (float(t.stamps[0]), float(t.stamps[-1])) for k, t in groundtruth.items() if k != seq and len(t)
-    }
+    spans = {f"{scene}-{k}": span for k, span in time_spans(groundtruth).items() if k != seq}
     spans.update({k: v for k, v in (more or {}).items() if k not in spans and k != f"{scene}-{seq}"})
     return spans
 

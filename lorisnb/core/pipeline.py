@@ -39,7 +39,7 @@ from .steps import (
     moved_groundtruth,
     with_transform,
 )
-from .trajectory import Trajectory
+from .trajectory import Trajectory, time_spans
 
 __all__ = [
     "DEFAULT", "FrameInfo", "Spans", "apply_alignment", "compute_errors", "errors_after_alignment", "evaluate_sessions",
@@ -280,7 +280,7 @@ def compute_errors(
         algorithm=algorithm if algorithm is not None else result.path.parent.name,
         file=file, scene=scene, suite=suite, trial=trial, frame=frame, checks_on=checks,
         other_spans=other_spans, frames=frames, release=release, notes=list(result.warnings),
-        groundtruth_spans={k: (float(t.stamps[0]), float(t.stamps[-1])) for k, t in groundtruth.sequences.items() if len(t)},
+        groundtruth_spans=time_spans(groundtruth.sequences),
     )  # fmt: skip
 
 

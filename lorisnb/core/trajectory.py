@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -11,6 +12,8 @@ from .geometry import rotations_of
 
 if TYPE_CHECKING:
     from scipy.spatial.transform import Rotation
+
+K = TypeVar("K")
 
 
 def path_length(positions: np.ndarray) -> float:
@@ -29,6 +32,11 @@ def extent(positions: np.ndarray) -> float:
     if len(p) < 2:
         return 0.0
     return float(np.linalg.norm(p.max(axis=0) - p.min(axis=0)))
+
+
+def time_spans(trajectories: Mapping[K, Trajectory]) -> dict[K, tuple[float, float]]:
+    """First and last stamp (seconds) of each non-empty trajectory of a mapping, by its key."""
+    return {k: (float(t.stamps[0]), float(t.stamps[-1])) for k, t in trajectories.items() if len(t)}
 
 
 #: What a relative threshold is a fraction of: ``extent`` (bounding-box diagonal) or ``length``

@@ -18,7 +18,7 @@ place that was looked at and how to point lorisnb at the data.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 from ..core.aggregate import spans_table
 from ..core.frames import SCENES
 from ..core.model import ResultFile
+from ..core.trajectory import time_spans
 from ..errors import DataNotFoundError, LorisError
 from .openloris import read_openloris
 
@@ -181,9 +182,7 @@ def groundtruth_spans(
             gt = load_groundtruth(scene, data, remove_repeated)
         except LorisError:
             continue
-        spans.update(
-            {f"{scene}-{k}": (float(t.stamps[0]), float(t.stamps[-1])) for k, t in gt.sequences.items() if len(t)}
-        )
+        spans.update({f"{scene}-{k}": span for k, span in time_spans(gt.sequences).items()})
     return spans
 
 
@@ -192,11 +191,7 @@ def scene_spans(
 ) -> dict[str, dict[int, tuple[float, float]]]:
     """First and last ground-truth stamp (seconds) of every sequence of each scene: scene ->
     sequence -> span (what :func:`lorisnb.core.aggregate.spans_table` tabulates)."""
-    gts: Mapping[str, ResultFile] = {s: load_groundtruth(s, data_root, remove_repeated) for s in scenes}
-    return {
-        scene: {k: (float(t.stamps[0]), float(t.stamps[-1])) for k, t in gt.sequences.items() if len(t)}
-        for scene, gt in gts.items()
-    }
+    return {s: time_spans(load_groundtruth(s, data_root, remove_repeated).sequences) for s in scenes}
 
 
 def scene_durations(

@@ -17,7 +17,7 @@ from ..core.missing import with_missing
 from ..core.model import FileErrors
 from ..core.pipeline import compute_errors, evaluate_sessions, moved_groundtruth
 from ..core.spec import EvalSpec
-from ..core.trajectory import Trajectory
+from ..core.trajectory import Trajectory, time_spans
 from ..core.units import check_stamp_units
 from ..errors import DataNotFoundError, LorisError, LorisWarning, ParseError
 from ..io.data import DataPaths, groundtruth_spans, load_groundtruth
@@ -178,7 +178,7 @@ def _pair(job: Job) -> FileErrors:
         est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf, repeated=rule,
                               repair_stamps=job.spec.repair_stamps)  # fmt: skip
     check_stamp_units(est, gt, str(job.path))  # seconds against pose indices or nanoseconds: an error
-    span = {1: (float(gt.stamps[0]), float(gt.stamps[-1]))} if len(gt) else {}
+    span = time_spans({1: gt})
     gts = {1: gt}
     del gt  # held by gts alone: let go once matched
     return evaluate_sessions(
@@ -211,7 +211,7 @@ def _manifest(job: Job) -> FileErrors:
                                               repeated=job.spec.repeated, repair_stamps=job.spec.repair_stamps)  # fmt: skip
                 check_stamp_units(ests[s.seq], gts[s.seq], str(path))
     notes += [str(w.message) for w in caught]
-    spans = {k: (float(t.stamps[0]), float(t.stamps[-1])) for k, t in gts.items() if len(t)}
+    spans = time_spans(gts)
     errors = None
     if ests:
         errors = evaluate_sessions(
