@@ -77,6 +77,9 @@ def test_layout_errors(tmp_path, segment):
     scaled = _write(tmp_path / "i.txt", [[2, 0, 0, 1, 0, 2, 0, 2, 0, 0, 2, 3]])
     with pytest.raises(ParseError, match="determinant"):
         read_ordslam(scaled, fps=30)
+    sheared = _write(tmp_path / "j.txt", [[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0], [1, 0.1, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]])
+    with pytest.raises(ParseError, match=r"j.txt, line 2: 3x4 matrix has a rotation block 0.1\d* from orthonormal"):
+        read_ordslam(sheared, fps=30)  # determinant 1, but no rotation: refused as the KITTI reader refuses it
 
 
 def test_catalog_lookups():

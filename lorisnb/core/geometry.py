@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import EvaluationError
+from .matrices import BarItzhack, markley
 
 if TYPE_CHECKING:
     from scipy.spatial.transform import Rotation
@@ -133,58 +134,7 @@ def quat_from_matrix(matrices: np.ndarray) -> np.ndarray:
     branch; to ~1e-16). The input must be orthonormal (as Umeyama's rotations are): scipy first
     projects other matrices onto rotations (:func:`rotation_blocks` does too)."""
     m = np.asarray(matrices, float)
-    return quat_normalize(_markley(m.reshape(-1, 3, 3))).reshape(*m.shape[:-2], 4)
-
-
-def _markley(m: np.ndarray) -> np.ndarray:
-    """(N, 4) quaternions ``xyzw`` of (N, 3, 3) rotation matrices before normalization (Markley
-    2008, as scipy: the largest of the trace and the diagonal picks the branch; four branches,
-    each over its blocks)."""
-    trace = m[:, 0, 0] + m[:, 1, 1] + m[:, 2, 2]
-    choice = np.argmax(np.stack([m[:, 0, 0], m[:, 1, 1], m[:, 2, 2], trace], axis=1), axis=1)
-    q = np.empty((len(m), 4))
-    for c in range(4):
-        sel = np.flatnonzero(choice == c)
-        s = m[sel]
-        if c == 3:
-            q[sel, 0] = s[:, 2, 1] - s[:, 1, 2]
-            q[sel, 1] = s[:, 0, 2] - s[:, 2, 0]
-            q[sel, 2] = s[:, 1, 0] - s[:, 0, 1]
-            q[sel, 3] = 1.0 + trace[sel]
-        else:
-            i, j, k = c, (c + 1) % 3, (c + 2) % 3
-            q[sel, i] = 1.0 - trace[sel] + 2.0 * s[:, i, i]
-            q[sel, j] = s[:, j, i] + s[:, i, j]
-            q[sel, k] = s[:, k, i] + s[:, i, k]
-            q[sel, 3] = s[:, k, j] - s[:, j, k]
-    return q
-
-
-def rotation_blocks(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit quaternions ``xyzw`` of finite (N, 3, 3) rotation blocks as scipy's
-    ``Rotation.from_matrix`` computes them (a block whose ``R R^T`` is not the identity within
-    1e-12 is first replaced by the nearest rotation, ``U V^T`` of its SVD; then Markley's method,
-    :func:`_markley`), and how far each block is from a rotation: the larger of
-    ``max |R R^T - I|`` and ``|det R - 1|``, so that a reader can refuse what is none (scipy
-    computes the same quaternions; this takes a fifth of its time on a million blocks)."""
-    m = np.asarray(blocks, float).reshape(-1, 3, 3)
-    eye = np.eye(3)
-    with np.errstate(over="ignore", invalid="ignore"):  # huge blocks: inf here, refused by the reader
-        dev = np.abs(m @ np.swapaxes(m, -1, -2) - eye)  # the Gram matrix as scipy computes it
-        det = (
-            m[:, 0, 0] * (m[:, 1, 1] * m[:, 2, 2] - m[:, 1, 2] * m[:, 2, 1])
-            - m[:, 0, 1] * (m[:, 1, 0] * m[:, 2, 2] - m[:, 1, 2] * m[:, 2, 0])
-            + m[:, 0, 2] * (m[:, 1, 0] * m[:, 2, 1] - m[:, 1, 1] * m[:, 2, 0])
-        )
-        off = np.maximum(dev.max(axis=(1, 2)), np.abs(det - 1.0)) if len(m) else np.zeros(0)
-    orthogonal = (dev <= 1e-12 + 1e-5 * eye).all(axis=(1, 2))  # np.isclose(gram, eye, atol=1e-12), as scipy
-    del dev
-    if not orthogonal.all():
-        u, _, vt = np.linalg.svd(m[~orthogonal], full_matrices=False)
-        m = m.copy()
-        m[~orthogonal] = u @ vt
-    q = _markley(m)
-    return q / np.linalg.norm(q, axis=1)[:, None], off  # scipy's normalization, to the last bit
+    return quat_normalize(markley(BarItzhack(m.reshape(-1, 3, 3)))).reshape(*m.shape[:-2], 4)
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:

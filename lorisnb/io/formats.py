@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..core.geometry import rotation_blocks
+from ..core.matrices import rotation_blocks
 from ..core.trajectory import Trajectory
 from ..core.validate import choice
 from ..errors import LorisWarning, ParseError, ValidationError
@@ -112,7 +112,7 @@ def _poses(
 def _from_matrices(spath: str, stamps: np.ndarray, mats: np.ndarray, line_no: np.ndarray) -> Trajectory:
     """Poses from (N, 3, 4) ``[R | t]`` blocks, each checked to hold a proper rotation (within
     :data:`ROTATION_TOLERANCE`), quaternions as scipy's ``Rotation.from_matrix`` computes them
-    (:func:`lorisnb.core.geometry.rotation_blocks`)."""
+    (:func:`lorisnb.core.matrices.rotation_blocks`)."""
     with np.errstate(all="ignore"):
         finite = np.isfinite(mats.sum()) or np.isfinite(mats).all()
     bad = np.zeros(len(mats), bool) if finite else ~np.isfinite(mats).all(axis=(1, 2))

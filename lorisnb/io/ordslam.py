@@ -38,8 +38,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..core.matrices import rotation_blocks
 from ..core.trajectory import Trajectory
 from ..errors import DataNotFoundError, ParseError
+from .formats import ROTATION_TOLERANCE
 from .scanner import check_rows, finish, read_bytes, scan
 
 LAYOUTS = ("tum", "index", "pose", "kitti", "index-kitti")
@@ -210,9 +212,16 @@ def read_ordslam(path: str | os.PathLike, fps: float | None = None, layout: str 
                 int(line_no[i]),
                 f"3x4 matrix has a rotation block of determinant {det[i]:.4f}; expected a rotation (determinant 1)",
             )
-        from scipy.spatial.transform import Rotation  # here: only matrix files need it
-
-        quat = Rotation.from_matrix(mats[:, :, :3]).as_quat()
+        finite = np.isfinite(mats).all(axis=(1, 2))  # other rows are skipped below, with a note
+        quat, off = rotation_blocks(np.where(finite[:, None, None], mats[:, :, :3], np.eye(3)))
+        if np.any(off > ROTATION_TOLERANCE):
+            i = int(np.flatnonzero(off > ROTATION_TOLERANCE)[0])
+            raise ParseError(
+                spath,
+                int(line_no[i]),
+                f"3x4 matrix has a rotation block {off[i]:.4f} from orthonormal; expected a rotation (R R^T = I)",
+            )
+        quat[~finite] = np.nan
         pose = np.concatenate([mats[:, :, 3], quat], axis=1)
     notes: list[str] = []
     keep = check_rows(spath, stamps, pose[:, :3], pose[:, 3:7], line_no, notes)

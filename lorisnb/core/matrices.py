@@ -1,0 +1,132 @@
+"""Quaternions of rotation matrices: Markley's method (as scipy's ``Rotation.from_matrix``) and,
+for blocks that are not quite rotations (a KITTI file's printed digits), the quaternion of the
+nearest rotation by power steps on Bar-Itzhack's 4x4 matrix. Arrays in, arrays out; quaternions
+``xyzw``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["BarItzhack", "markley", "rotation_blocks"]
+
+
+class BarItzhack:
+    """The ten entries of Bar-Itzhack's symmetric 4x4 matrix ``K + I`` of (n, 3, 3) blocks ``B``
+    (J. Guid. Control Dyn. 23(6), 2000; ``q^T K q = tr(B^T R(q))`` for unit ``q``, ``xyzw``), each
+    an (n,) array, and the trace; for a rotation ``B = R(q)``, ``K + I = 4 q q^T``. The diagonal is
+    written as scipy writes Markley's quaternions (``1 - tr + 2 B_ii`` and ``1 + tr``), so that its
+    columns are those quaternions to the last bit."""
+
+    def __init__(self, m: np.ndarray) -> None:
+        a = np.ascontiguousarray(np.moveaxis(m, 0, -1))  # (3, 3, n): each entry one contiguous row
+        self.a = a
+        self.trace = a[0, 0] + a[1, 1] + a[2, 2]
+        one_minus = 1.0 - self.trace
+        self.xx, self.yy, self.zz = one_minus + 2.0 * a[0, 0], one_minus + 2.0 * a[1, 1], one_minus + 2.0 * a[2, 2]
+        self.ww = 1.0 + self.trace
+        self.xy, self.xz, self.yz = a[1, 0] + a[0, 1], a[2, 0] + a[0, 2], a[2, 1] + a[1, 2]
+        self.xw, self.yw, self.zw = a[2, 1] - a[1, 2], a[0, 2] - a[2, 0], a[1, 0] - a[0, 1]
+
+    def times(self, x: np.ndarray, y: np.ndarray, z: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``(K + I) q`` for quaternions given as four (n,) arrays."""
+        return (
+            self.xx * x + self.xy * y + self.xz * z + self.xw * w,
+            self.xy * x + self.yy * y + self.yz * z + self.yw * w,
+            self.xz * x + self.yz * y + self.zz * z + self.zw * w,
+            self.xw * x + self.yw * y + self.zw * z + self.ww * w,
+        )
+
+
+def markley(k: BarItzhack) -> np.ndarray:
+    """(n, 4) quaternions ``xyzw``, before normalization, of rotation blocks by Markley's method
+    (2008, as scipy): the largest of the trace and the diagonal picks the branch, whose quaternion
+    is that column of ``K + I``."""
+    a = k.a
+    choice = np.argmax(np.stack([a[0, 0], a[1, 1], a[2, 2], k.trace]), axis=0)
+    q = np.empty((len(choice), 4))
+    q[:, 0] = np.choose(choice, (k.xx, k.xy, k.xz, k.xw))
+    q[:, 1] = np.choose(choice, (k.xy, k.yy, k.yz, k.yw))
+    q[:, 2] = np.choose(choice, (k.xz, k.yz, k.zz, k.zw))
+    q[:, 3] = np.choose(choice, (k.xw, k.yw, k.zw, k.ww))
+    return q
+
+
+def rotation_blocks(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit quaternions ``xyzw`` of finite (N, 3, 3) rotation blocks, and how far each block is
+    from a rotation: the larger of ``max |R R^T - I|`` and ``|det R - 1|``, so that a reader can
+    refuse what is none.
+
+    A block that is a rotation within 1e-12 (every entry of ``R R^T`` against ``I``) gets
+    Markley's quaternion (:func:`markley`), as scipy's ``Rotation.from_matrix`` computes it to the
+    last bit. Any other block (a KITTI file's 6-7 printed digits) stands for the rotation nearest
+    to it in the Frobenius norm, ``U V^T`` of its SVD, which scipy computes with an SVD per block
+    (but not for a block whose rows are orthogonal and only their norms up to 1e-5 off, such as a
+    planar 6-digit one: scipy's ``np.isclose`` test passes it, and Markley's method on it is ~1e-8
+    off); here its quaternion is the top eigenvector of Bar-Itzhack's ``K + I``
+    (:class:`BarItzhack`), reached by power steps from Markley's quaternion, which is a column of
+    ``K + I``. The other eigenvalues of ``K + I`` are of the order of the block's distance from a
+    rotation while the top one is about 4, so each step shrinks the error by about that distance:
+    two to five steps give the nearest rotation to ~3e-16 (scipy's SVD: ~3e-15; both measured
+    against an extended-precision polar decomposition in ``tests/test_whole.py``), with scipy's
+    sign (the largest component positive), in a tenth of scipy's time on a million blocks."""
+    m = np.asarray(blocks, float).reshape(-1, 3, 3)
+    q, off = np.empty((len(m), 4)), np.empty(len(m))
+    for lo in range(0, len(m), _RUN):  # in cache-sized runs of blocks: no page faults, no long temporaries
+        hi = min(lo + _RUN, len(m))
+        q[lo:hi], off[lo:hi] = _rotation_run(m[lo:hi])
+    return q, off
+
+
+_RUN = 4096
+
+
+def _rotation_run(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`rotation_blocks` of a run of (n, 3, 3) blocks."""
+    k = BarItzhack(m)
+    a = k.a
+    with np.errstate(over="ignore", invalid="ignore"):  # huge blocks: inf here, refused by the reader
+        diag = [np.abs(a[i, 0] * a[i, 0] + a[i, 1] * a[i, 1] + a[i, 2] * a[i, 2] - 1.0) for i in range(3)]
+        cross = [np.abs(a[i, 0] * a[j, 0] + a[i, 1] * a[j, 1] + a[i, 2] * a[j, 2]) for i, j in ((0, 1), (0, 2), (1, 2))]
+        det = (
+            a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
+            - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+            + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])
+        )
+        off = np.maximum.reduce([*diag, *cross, np.abs(det - 1.0)])
+        # a rotation within 1e-12 in every entry of R R^T (scipy's np.isclose also lets a row norm
+        # be 1e-5 off: a planar 6-digit block would keep Markley's 1e-8 error)
+        orthogonal = np.logical_and.reduce([*(d <= 1e-12 for d in diag), *(c <= 1e-12 for c in cross)])
+    q = markley(k)
+    if not orthogonal.all():
+        rest = np.flatnonzero(~orthogonal)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            q[rest] = _nearest_rotation(k, q, rest, float(np.nanmax(off[rest], initial=0.0)))
+    return q / np.linalg.norm(q, axis=1)[:, None], off  # scipy's normalization, to the last bit
+
+
+def _nearest_rotation(k: BarItzhack, q: np.ndarray, rest: np.ndarray, off: float) -> np.ndarray:
+    """Quaternions (len(rest), 4) ``xyzw``, not normalized, of the rotations nearest to the blocks
+    ``rest`` of ``k``, at most ``off`` from a rotation: power steps on ``K + I`` from Markley's
+    ``q`` (see :func:`rotation_blocks`), whose error is about ``off`` and shrinks by about
+    ``off / 4`` a step; as many steps as bring ``off * (off / 2) ** steps`` below 2**-60 (at most
+    12, for blocks too far to be accepted; the vector grows by at most 4 a step); then the
+    largest component made positive, as scipy's Markley step on the projected block leaves it."""
+    steps = 12 if not 0 < off < 0.25 else min(12, int(np.ceil((-60 * np.log(2) - np.log(off)) / np.log(off / 2))))
+    if len(rest) < len(q):
+        k = _Subset(k, rest)
+        x, y, z, w = (q[rest, i] for i in range(4))
+    else:
+        x, y, z, w = (q[:, i] for i in range(4))
+    for _ in range(steps):
+        x, y, z, w = k.times(x, y, z, w)
+    out = np.stack([x, y, z, w], axis=1)
+    big = np.abs(out).argmax(axis=1)
+    return out * np.where(out[np.arange(len(out)), big] < 0, -1.0, 1.0)[:, None]
+
+
+class _Subset(BarItzhack):
+    """The entries of ``K + I`` of some of the blocks of another :class:`BarItzhack`."""
+
+    def __init__(self, k: BarItzhack, rows: np.ndarray) -> None:  # noqa: D107 - no super(): nothing to recompute
+        for name in ("xx", "yy", "zz", "ww", "xy", "xz", "yz", "xw", "yw", "zw"):
+            setattr(self, name, getattr(k, name)[rows])
