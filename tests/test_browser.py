@@ -155,6 +155,7 @@ def _open_and_run(driver, url: str, name: str, timeout: float) -> None:
     assert "jp-mod-dirty" not in tab.get_attribute("class"), f"{name} is marked modified as soon as it opens"
 
     def run_all() -> None:
+        _no_dialog(driver, name)
         driver.find_element(By.XPATH, "//div[contains(@class,'lm-MenuBar-itemLabel') and text()='Run']").click()
         _wait(lambda: driver.find_element(By.XPATH, "//div[contains(@class,'lm-Menu-itemLabel') and text()='Run All Cells']"),
               10, "the Run menu").click()  # fmt: skip
@@ -183,6 +184,7 @@ def _open_and_run(driver, url: str, name: str, timeout: float) -> None:
     while not done():
         if "[*]:" not in prompts() and _errors(driver):  # stopped at an error: the caller reports it
             return
+        _no_dialog(driver, name)
         now = time.monotonic()
         still = (still or now) if stalled() else None
         if still is not None and now - still > 15 and again:  # dropped for 15 s (not slow): run all once more
@@ -194,6 +196,19 @@ def _open_and_run(driver, url: str, name: str, timeout: float) -> None:
             raise AssertionError(f"timed out after {timeout:.0f} s waiting for every cell of {name} to run; "
                                  f"cell prompts: {prompts()}")  # fmt: skip
         time.sleep(1.0)
+
+
+def _no_dialog(driver, name: str) -> None:
+    """Fail with what a JupyterLab dialog says (a kernel that died, say) instead of clicking into
+    it; the dialog is pictured (results/browser/NAME-dialog.png) and closed (Escape)."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    text = driver.execute_script("const d = document.querySelector('.jp-Dialog'); return d ? d.innerText : ''")
+    if text:
+        _shot(driver.find_element(By.CSS_SELECTOR, ".jp-Dialog"), f"{name}-dialog")
+        driver.switch_to.active_element.send_keys(Keys.ESCAPE)
+        raise AssertionError(f"{name}: JupyterLab showed a dialog: {' '.join(text.split())[:500]}")
 
 
 def _errors(driver) -> list[str]:
@@ -303,17 +318,23 @@ EXPLORERS = {
 
 @pytest.mark.parametrize("name", DEFAULT_NOTEBOOKS)
 def test_notebook_in_the_browser(lab, browser, name):
-    url, _ = lab
+    url, root = lab
     try:
         _open_and_run(browser, url, name, timeout=240)
     except AssertionError as exc:
-        if "every cell" not in str(exc):
+        if "every cell" not in str(exc) and "dialog" not in str(exc):
             raise
         # now and then (1 run in 3 here) one notebook's Run All never finishes in headless Chromium, a
-        # different one each time, while the same notebook runs in seconds alone: its picture is kept
-        # (results/browser/NAME-stuck.png); once more, with fresh kernels, before calling it a failure
+        # different one each time, while the same notebook runs in seconds alone; once (CI) a dialog
+        # stood in front of the menu: its picture is kept (results/browser/NAME-stuck.png or
+        # NAME-dialog.png); once more, with fresh kernels, before calling it a failure, and then
+        # with the end of the server's log (a kernel's death, say)
         _shut_down_kernels(url)
-        _open_and_run(browser, url, name, timeout=240)
+        try:
+            _open_and_run(browser, url, name, timeout=240)
+        except AssertionError as again:
+            tail = (root / "lab.log").read_text(errors="replace")[-3000:]
+            raise AssertionError(f"{again}\n(first try: {exc})\n--- the end of JupyterLab's log ---\n{tail}") from again
     errors = _errors(browser)
     assert not errors, f"{name}: error output: {errors[0][:500]}"
     assert not _duplicate_figures(browser), f"{name}: a figure shown twice in cell(s) {_duplicate_figures(browser)}"
