@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["BarItzhack", "markley", "rotation_blocks"]
+from .blocks import blockwise
+
+__all__ = ["BarItzhack", "markley", "rotation_blocks", "times"]
 
 
 class BarItzhack:
@@ -27,14 +29,24 @@ class BarItzhack:
         self.xy, self.xz, self.yz = a[1, 0] + a[0, 1], a[2, 0] + a[0, 2], a[2, 1] + a[1, 2]
         self.xw, self.yw, self.zw = a[2, 1] - a[1, 2], a[0, 2] - a[2, 0], a[1, 0] - a[0, 1]
 
-    def times(self, x: np.ndarray, y: np.ndarray, z: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, ...]:
-        """``(K + I) q`` for quaternions given as four (n,) arrays."""
-        return (
-            self.xx * x + self.xy * y + self.xz * z + self.xw * w,
-            self.xy * x + self.yy * y + self.yz * z + self.yw * w,
-            self.xz * x + self.yz * y + self.zz * z + self.zw * w,
-            self.xw * x + self.yw * y + self.zw * z + self.ww * w,
-        )
+    @property
+    def entries(self) -> tuple[np.ndarray, ...]:
+        """``xx, yy, zz, ww, xy, xz, yz, xw, yw, zw``: what :func:`times` takes."""
+        return self.xx, self.yy, self.zz, self.ww, self.xy, self.xz, self.yz, self.xw, self.yw, self.zw
+
+
+def times(
+    k: tuple[np.ndarray, ...], x: np.ndarray, y: np.ndarray, z: np.ndarray, w: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """``(K + I) q`` for quaternions given as four (n,) arrays, ``K + I`` as its ten
+    :attr:`BarItzhack.entries` (of n blocks)."""
+    xx, yy, zz, ww, xy, xz, yz, xw, yw, zw = k
+    return (
+        xx * x + xy * y + xz * z + xw * w,
+        xy * x + yy * y + yz * z + yw * w,
+        xz * x + yz * y + zz * z + zw * w,
+        xw * x + yw * y + zw * z + ww * w,
+    )
 
 
 def markley(k: BarItzhack) -> np.ndarray:
@@ -71,13 +83,15 @@ def rotation_blocks(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     sign (the largest component positive), in a tenth of scipy's time on a million blocks."""
     m = np.asarray(blocks, float).reshape(-1, 3, 3)
     q, off = np.empty((len(m), 4)), np.empty(len(m))
-    for lo in range(0, len(m), _RUN):  # in cache-sized runs of blocks: no page faults, no long temporaries
-        hi = min(lo + _RUN, len(m))
+
+    def run(lo: int, hi: int) -> None:
         q[lo:hi], off[lo:hi] = _rotation_run(m[lo:hi])
+
+    blockwise(run, len(m), _RUN)  # in cache-sized runs of blocks: no page faults, no long temporaries
     return q, off
 
 
-_RUN = 4096
+_RUN = 8192  # blocks per run: 9 numbers each, a few dozen (n,) temporaries stay in the cache
 
 
 def _rotation_run(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -100,33 +114,31 @@ def _rotation_run(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if not orthogonal.all():
         rest = np.flatnonzero(~orthogonal)
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            q[rest] = _nearest_rotation(k, q, rest, float(np.nanmax(off[rest], initial=0.0)))
+            q[rest] = _nearest_rotation(k, q, rest, off[rest])
     return q / np.linalg.norm(q, axis=1)[:, None], off  # scipy's normalization, to the last bit
 
 
-def _nearest_rotation(k: BarItzhack, q: np.ndarray, rest: np.ndarray, off: float) -> np.ndarray:
+def _nearest_rotation(k: BarItzhack, q: np.ndarray, rest: np.ndarray, off: np.ndarray) -> np.ndarray:
     """Quaternions (len(rest), 4) ``xyzw``, not normalized, of the rotations nearest to the blocks
-    ``rest`` of ``k``, at most ``off`` from a rotation: power steps on ``K + I`` from Markley's
-    ``q`` (see :func:`rotation_blocks`), whose error is about ``off`` and shrinks by about
-    ``off / 4`` a step; as many steps as bring ``off * (off / 2) ** steps`` below 2**-60 (at most
-    12, for blocks too far to be accepted; the vector grows by at most 4 a step); then the
-    largest component made positive, as scipy's Markley step on the projected block leaves it."""
-    steps = 12 if not 0 < off < 0.25 else min(12, int(np.ceil((-60 * np.log(2) - np.log(off)) / np.log(off / 2))))
-    if len(rest) < len(q):
-        k = _Subset(k, rest)
-        x, y, z, w = (q[rest, i] for i in range(4))
-    else:
-        x, y, z, w = (q[:, i] for i in range(4))
-    for _ in range(steps):
-        x, y, z, w = k.times(x, y, z, w)
-    out = np.stack([x, y, z, w], axis=1)
+    ``rest`` of ``k``, which are ``off`` (len(rest),) from a rotation: power steps on ``K + I``
+    from Markley's ``q`` (see :func:`rotation_blocks`), whose error is about ``off / 4`` and shrinks
+    by about ``off / 4`` a step (measured); each block takes as many steps as bring
+    ``(off / 2) ** (steps + 1)`` below 2**-56 (two for 6-digit blocks, five at the readers'
+    tolerance; at most 12, for blocks too far to be accepted; the vector grows by at most 4 a
+    step), whatever the other blocks of its run need; then its largest component is made
+    positive, as scipy's Markley step on the projected block leaves it."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        need = np.ceil(56 * np.log(2) / -np.log(off / 2)) - 1
+    steps = np.where((off > 0) & (off < 0.25), need, 12).clip(1, 12).astype(np.int8)
+    entries = k.entries if len(rest) == len(q) else tuple(e[rest] for e in k.entries)
+    x, y, z, w = (q[:, i] for i in range(4)) if len(rest) == len(q) else (q[rest, i] for i in range(4))
+    out = np.empty((len(rest), 4))
+    for step in range(1, int(steps.max()) + 1):
+        x, y, z, w = times(entries, x, y, z, w)
+        done = np.flatnonzero(steps == step)
+        if len(done) == len(out):  # every block needs as many steps (as in a file of one precision)
+            out = np.stack([x, y, z, w], axis=1)
+        elif len(done):
+            out[done] = np.stack([x[done], y[done], z[done], w[done]], axis=1)
     big = np.abs(out).argmax(axis=1)
     return out * np.where(out[np.arange(len(out)), big] < 0, -1.0, 1.0)[:, None]
-
-
-class _Subset(BarItzhack):
-    """The entries of ``K + I`` of some of the blocks of another :class:`BarItzhack`."""
-
-    def __init__(self, k: BarItzhack, rows: np.ndarray) -> None:  # noqa: D107 - no super(): nothing to recompute
-        for name in ("xx", "yy", "zz", "ww", "xy", "xz", "yz", "xw", "yw", "zw"):
-            setattr(self, name, getattr(k, name)[rows])
