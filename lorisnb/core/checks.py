@@ -35,7 +35,7 @@ def scale_note(label: str, est_positions: np.ndarray, a: Association, fitted: Si
         return None
     return plausibility.scale_far_from_one(
         label, sim.scale, float(metrics.rmse(metrics.ate(fitted.apply(p_est), p_gt))),
-        float(metrics.rmse(metrics.ate(sim.apply(p_est), p_gt))), path_length(a.gt_positions), hint,
+        float(metrics.rmse(metrics.ate(sim.apply(p_est), p_gt))), lambda: path_length(a.gt_positions), hint,
     )  # fmt: skip
 
 

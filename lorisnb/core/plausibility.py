@@ -5,7 +5,7 @@ wrong, the numbers behind it, and the likely cause. :func:`lorisnb.core.pipeline
 
 from __future__ import annotations
 
-from typing import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
@@ -94,15 +94,18 @@ def scale_far_from_one(
     scale: float,
     ate_se3: float,
     ate_sim3: float,
-    path_m: float,
+    path_m: float | Callable[[], float],
     hint: str = "--scale, or --scale auto for dso/svo",
 ) -> str | None:
     """The best Sim(3) scale of an SE(3)-aligned trajectory is far from 1 and fixes most of its
     error (ATE RMSE after SE(3) and after Sim(3) alignment, metres), on a path long enough to judge
-    (``path_m``, the matched ground truth's length, at least MIN_PATH metres)."""
-    if not np.isfinite(scale) or scale <= 0 or 1 / SCALE_LIMIT <= scale <= SCALE_LIMIT or path_m < MIN_PATH:
+    (``path_m``, the matched ground truth's length, at least MIN_PATH metres; a function giving it
+    is called only when the rest says to warn: a long path costs a pass over its poses)."""
+    if not np.isfinite(scale) or scale <= 0 or 1 / SCALE_LIMIT <= scale <= SCALE_LIMIT:
         return None
     if not (np.isfinite(ate_se3) and np.isfinite(ate_sim3)) or ate_sim3 > SCALE_GAIN * ate_se3:
+        return None
+    if (path_m() if callable(path_m) else path_m) < MIN_PATH:
         return None
     return (
         f"{label}: the best-fitting scale is {scale:.3f}, far from 1, and with it the ATE RMSE drops from "
