@@ -196,15 +196,15 @@ def test_rotation_blocks_nearest_rotation_and_scipy():
             assert scipy_err[planar].max() > 1e-9
         gram = np.abs(m @ np.swapaxes(m, 1, 2) - np.eye(3)).max(axis=(1, 2))
         np.testing.assert_allclose(off, np.maximum(gram, np.abs(np.linalg.det(m) - 1)), rtol=1e-6, atol=1e-15)
-    import lorisnb.core.matrices as matrices
+    import lorisnb.core.blocks as blocks
 
     q, off = rotation_blocks(m)  # each block's numbers do not depend on the blocks run with it
-    run, matrices._RUN = matrices._RUN, 1000
+    run, blocks.BLOCK_ROWS = blocks.BLOCK_ROWS, 1000
     try:
         np.testing.assert_array_equal(rotation_blocks(m)[0], q)
         np.testing.assert_array_equal(rotation_blocks(m[::-1])[0], q[::-1])
     finally:
-        matrices._RUN = run
+        blocks.BLOCK_ROWS = run
     tilted = exact[:3] * 1.01
     assert (rotation_blocks(tilted)[1] > 0.02).all()
     assert rotation_blocks(np.zeros((0, 3, 3)))[0].shape == (0, 4)

@@ -87,11 +87,8 @@ def rotation_blocks(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     def run(lo: int, hi: int) -> None:
         q[lo:hi], off[lo:hi] = _rotation_run(m[lo:hi])
 
-    blockwise(run, len(m), _RUN)  # in cache-sized runs of blocks: no page faults, no long temporaries
+    blockwise(run, len(m))  # in cache-sized runs of blocks: no page faults, no long temporaries
     return q, off
-
-
-_RUN = 8192  # blocks per run: 9 numbers each, a few dozen (n,) temporaries stay in the cache
 
 
 def _rotation_run(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
