@@ -80,7 +80,7 @@ def rotation_blocks(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     rotation while the top one is about 4, so each step shrinks the error by about that distance:
     two to five steps give the nearest rotation to ~3e-16 (scipy's SVD: ~3e-15; both measured
     against an extended-precision polar decomposition in ``tests/test_whole.py``), with scipy's
-    sign (the largest component positive), in a tenth of scipy's time on a million blocks."""
+    sign (the largest component positive), in a thirteenth of scipy's time on a million blocks."""
     m = np.asarray(blocks, float).reshape(-1, 3, 3)
     q, off = np.empty((len(m), 4)), np.empty(len(m))
 
