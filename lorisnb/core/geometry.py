@@ -132,7 +132,7 @@ def quat_from_matrix(matrices: np.ndarray) -> np.ndarray:
     """Unit quaternions ``xyzw`` of rotation matrices (..., 3, 3), as scipy's
     ``Rotation.from_matrix`` computes them (the largest of the trace and the diagonal picks the
     branch; to ~1e-16). The input must be orthonormal (as Umeyama's rotations are): scipy first
-    projects other matrices onto rotations (:func:`rotation_blocks` does too)."""
+    projects other matrices onto rotations (:func:`lorisnb.core.matrices.rotation_blocks` does too)."""
     m = np.asarray(matrices, float)
     return quat_normalize(markley(BarItzhack(m.reshape(-1, 3, 3)))).reshape(*m.shape[:-2], 4)
 

@@ -111,8 +111,9 @@ def _poses(
 
 def _from_matrices(spath: str, stamps: np.ndarray, mats: np.ndarray, line_no: np.ndarray) -> Trajectory:
     """Poses from (N, 3, 4) ``[R | t]`` blocks, each checked to hold a proper rotation (within
-    :data:`ROTATION_TOLERANCE`), quaternions as scipy's ``Rotation.from_matrix`` computes them
-    (:func:`lorisnb.core.matrices.rotation_blocks`)."""
+    :data:`ROTATION_TOLERANCE`), quaternions of the rotations nearest to them (scipy's
+    ``Rotation.from_matrix`` quaternions of exact rotations:
+    :func:`lorisnb.core.matrices.rotation_blocks`)."""
     with np.errstate(all="ignore"):
         finite = np.isfinite(mats.sum()) or np.isfinite(mats).all()
     bad = np.zeros(len(mats), bool) if finite else ~np.isfinite(mats).all(axis=(1, 2))
