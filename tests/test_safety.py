@@ -14,6 +14,7 @@ from helpers import write
 
 import lorisnb as ln
 from lorisnb.cli import main
+from lorisnb.core.geometry import quat_to_matrix
 from lorisnb.tools import report
 
 ORB = "per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt"
@@ -101,6 +102,52 @@ def test_csv_never_replaces_an_input(tmp_path, icra20, capsys):
     assert main(["evaluate", str(tmp_path), "--csv", str(tmp_path / "orb" / "new.txt"), "--no-progress"]) == 2
     assert "lies in the input folder" in capsys.readouterr().err
     assert src.read_bytes() == before and sorted(p.name for p in (tmp_path / "orb").iterdir()) == ["cafe.txt"]
+
+
+@pytest.mark.parametrize("target", ["gt", "gt_times", "est_times", "manifest_gt"])
+def test_force_never_replaces_any_input(tmp_path, data, capsys, target):
+    """Every file a command reads is an input, not only the estimates: the ground truth, KITTI
+    times files, a manifest's ground-truth files (each given as --csv with --force: refused before
+    anything is read, the input byte for byte as it was)."""
+    est = write(tmp_path, "est.txt", (data.root / "tum-rgbd" / "freiburg1_xyz-rgbdslam.txt").read_bytes())
+    gt = write(tmp_path, "gt.txt", (data.root / "tum-rgbd" / "freiburg1_xyz-groundtruth.txt").read_bytes())
+    if target == "gt":
+        args, victim = ["evaluate", str(est), "--gt", str(gt)], gt
+    elif target == "manifest_gt":
+        gt_csv = write(tmp_path, "gt.csv", gt.read_bytes())
+        manifest = write(
+            tmp_path, "m.toml", f'name = "m"\n[[session]]\nname = "s"\nscene = "x"\ngroundtruth = "{gt_csv}"\n'
+        )
+        args, victim = ["evaluate", str(tmp_path / "algos"), "--manifest", str(manifest)], gt_csv
+        write(tmp_path, "algos/a/s.txt", est.read_bytes())
+    else:  # the same pair as KITTI poses with their times files
+        paths = {}
+        for side, src in (("est", est), ("gt", gt)):
+            rows = np.loadtxt(src)
+            mats = np.concatenate([quat_to_matrix(rows[:, 4:8]), rows[:, 1:4, None]], axis=2).reshape(-1, 12)
+            np.savetxt(tmp_path / f"{side}.kitti", mats, fmt="%.9f")
+            paths[side] = write(tmp_path, f"{side}.times.csv", "\n".join(f"{t:.6f}" for t in rows[:, 0]) + "\n")
+        args = ["evaluate", str(tmp_path / "est.kitti"), "--gt", str(tmp_path / "gt.kitti"), "--format", "kitti",
+                "--est-times", str(paths["est"]), "--gt-times", str(paths["gt"])]  # fmt: skip
+        victim = paths["est" if target == "est_times" else "gt"]
+    before = victim.read_bytes()
+    assert main([*args, "--csv", str(victim), "--force", "--no-progress"]) == 2
+    assert "is an input of this command" in capsys.readouterr().err
+    assert victim.read_bytes() == before
+
+
+def test_parquet_force_is_refused_before_the_evaluation(tmp_path, icra20, capsys):
+    """--force may replace a Parquet dataset lorisnb wrote, nothing else, and says so before
+    anything is read or written (no --csv left behind by a refused run)."""
+    user = write(tmp_path, "user/thesis.tex", "precious\n").parent
+    out = tmp_path / "table.csv"
+    assert (
+        main(["evaluate", str(icra20 / ORB), "--csv", str(out), "--parquet", str(user), "--force", "--no-progress"])
+        == 2
+    )
+    err = capsys.readouterr().err
+    assert "--force will not replace" in err and "thesis.tex" in err and "conventions:" not in err
+    assert not out.exists() and [p.name for p in user.iterdir()] == ["thesis.tex"]
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root writes anywhere; the directory case below still runs")

@@ -307,6 +307,42 @@ def test_nothing_matched_is_exit_status_1_on_every_command(pair, tmp_path, capsy
     assert _rc(["evaluate", str(data.tum / EST), "--gt", gtp, "--phi", "400"]) == 2  # usage
 
 
+def test_an_empty_estimate_is_not_scored_but_a_declared_failure_is(tmp_path, data, icra20, capsys):
+    """An estimate of a pair with no pose (a crashed run wrote nothing, or only comments) is 1 with
+    a `not scored:` line; an OpenLORIS file of `seq:` blocks without poses declares failed runs
+    (the official data's corridor-1-failed.txt files) and is scored as the paper scores them: 0."""
+    gtp = str(data.tum / GT)
+    for name, text in (("empty.txt", ""), ("comments.txt", "# only comments\n# x\n")):
+        est = write(tmp_path, name, text)
+        rc = main(["evaluate", str(est), "--gt", gtp, "--no-progress"])
+        err = _err(capsys)
+        assert rc == 1 and (f"not scored: {est}: holds no pose" in err or "empty file" in err), err
+    ev = evaluate_pairs(tmp_path / "comments.txt", gtp)
+    assert [f.kind for f in ev.unscored] == ["no-pose"] and ev.exit_status() == 1
+    failed = sorted(icra20.glob("per-seq/*/corridor-1-failed.txt"))
+    assert failed, "the official data's declared failures"
+    ev = ln.evaluate(failed[0])
+    assert ev.exit_status() == 0 and all(e.poses == 0 for f in ev.errors for e in f.sequences)
+    assert (ev.sequences()["cr"] == 0).all()
+
+
+def test_messages_name_the_real_cause(tmp_path, data, capsys):
+    """What left nothing to match is named: an option that thinned both trajectories to one pose
+    (not a clock offset), an empty folder (not "the ground truth itself"); a refused value's
+    message is whole."""
+    est, gtp = str(data.tum / EST), str(data.tum / GT)
+    for opts, named in ((["--downsample", "1"], "downsample 1"), (["--motion-filter", "100", "180"], "motion filter")):
+        assert main(["evaluate", est, "--gt", gtp, *opts, "--no-progress"]) == 1
+        err = _err(capsys)
+        assert f"after {named}" in err and "clock offset" not in err, err
+    (tmp_path / "empty").mkdir()
+    assert main(["evaluate", str(tmp_path / "empty"), "--gt", gtp, "--no-progress"]) == 1
+    err = _err(capsys)
+    assert "no input file was found" in err and "ground truth itself" not in err
+    assert _rc(["evaluate", est, "--gt", gtp, "--rpe-all-pairs", "--rpe-tolerance", "-1"]) == 2
+    assert re.search(r"--rpe-tolerance=-1: expected a positive number$", _err(capsys).strip(), re.M)
+
+
 # --- 6. degenerate alignments -----------------------------------------------------------------
 
 

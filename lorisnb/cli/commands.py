@@ -30,9 +30,12 @@ def _executor(args: argparse.Namespace) -> Any:
     return client.get_executor()
 
 
-def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
+def _run_evaluation(args: argparse.Namespace, files: list[str], folders: tuple[str, ...] = ()) -> tuple[Any, list[str]]:
     """Every input kind through one spec (:func:`spec_from_args`) and one runner: OpenLORIS result
-    files, ``--gt`` pairs or a ``--manifest``'s sessions. Prints the ``conventions:`` line."""
+    files, ``--gt`` pairs or a ``--manifest``'s sessions. The output options ``files`` and
+    ``folders`` are checked first against every input (:func:`~.outputs.check_outputs`: the
+    estimates, the ground truth, times files, the manifest and its ground-truth files, the data
+    root). Prints the ``conventions:`` line."""
     from ..io.manifest import read_manifest
     from ..tools.evaluate import evaluate, evaluate_manifest, evaluate_pairs
 
@@ -60,22 +63,24 @@ def _run_evaluation(args: argparse.Namespace) -> tuple[Any, list[str]]:
             + ("a pair's ground truth is --gt" if args.gt else "a manifest names its ground-truth files")
         )
     spec = spec_from_args(args, manifest.spec if manifest is not None else None)
+    spec.refuse_inapplicable("pair" if args.gt else "manifest" if manifest is not None else "openloris", surface="cli")
+    inputs = list(args.paths)  # the options' inputs too (check_outputs), and a manifest's ground truth
+    if manifest is not None:
+        inputs += [str(manifest.path), *(str(s.groundtruth) for s in manifest.sessions)]
+    check_outputs(args, inputs, files, folders)
     kw: dict[str, Any] = dict(trials_by=args.trials_by, progress=not args.no_progress, jobs=args.jobs,
                               executor=_executor(args))  # fmt: skip
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
         if args.gt:
-            spec.refuse_inapplicable("pair", surface="cli")
             ev = evaluate_pairs(
                 args.paths, args.gt, spec, fmt=args.format or "tum", gt_fmt=args.gt_format, scene=args.scene,
                 est_times=args.est_times, gt_times=args.gt_times, topic=args.topic, gt_topic=args.gt_topic,
                 tf=args.tf, gt_tf=args.gt_tf, **kw,
             )  # fmt: skip
         elif manifest is not None:
-            spec.refuse_inapplicable("manifest", surface="cli")
             ev = evaluate_manifest(manifest, args.paths, spec, **kw)
         else:
-            spec.refuse_inapplicable("openloris", surface="cli")
             ev = evaluate(args.paths, spec, data_root=args.data, **kw)
     notes = list(dict.fromkeys(ev.notes + ev.warnings + [str(w.message) for w in caught]))
     print(f"conventions: {ev.conventions}", file=sys.stderr)
@@ -102,8 +107,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from ..core.aggregate import aggregate_columns, spans_columns
     from ..io.writers import write_csv, write_parquet
 
-    check_outputs(args, args.paths, ["csv"], folders=("parquet",))
-    ev, notes = _run_evaluation(args)
+    ev, notes = _run_evaluation(args, ["csv"], folders=("parquet",))
     table = ev.sequences() if args.csv or args.parquet or ev.spec.relation is not None else None
     columns = frame_columns(table) if table is not None else _rows_as_columns(ev.sequence_rows())
     if columns and len(columns["seq"]):  # printed from the rows: pandas only for a table written
@@ -167,8 +171,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from ..core.sweep import sweep, sweep_scenes
     from ..io.writers import write_csv, write_parquet
 
-    check_outputs(args, args.paths, ["csv"], folders=("parquet",))
-    ev, notes = _run_evaluation(args)
+    ev, notes = _run_evaluation(args, ["csv"], folders=("parquet",))
     keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
     grid = f"{len(args.eps)} eps x {len(args.phi)} phi x {len(args.delta)} delta x {len(args.tau)} tau"
     cols = ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "cr", "cr_t", "c_ate_rmse"]
@@ -228,18 +231,13 @@ def cmd_compare(args: argparse.Namespace) -> int:
     import pandas as pd
 
     from ..tools.comparison import compare_table, write_outputs
-    from ..tools.tables import check_table_suffix
 
     rpe = [o for o, v in (("--rpe-delta", args.rpe_delta), ("--rpe-unit", args.rpe_unit), ("--rpe-pairs", args.rpe_pairs),
                           ("--rpe-all-pairs", args.rpe_all_pairs), ("--rpe-tolerance", args.rpe_tolerance)) if v is not None]  # fmt: skip
     if rpe and not args.metric.startswith(("rpe", "c_rpe")):
         raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
     refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate"})
-    check_outputs(args, args.paths, ["csv", "pairs_csv", "latex", "markdown"])
-    for out in (args.latex, args.markdown):
-        if out:
-            check_table_suffix(out)
-    ev, notes = _run_evaluation(args)
+    ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"])
     table = ev.sequences()
     if not table.empty:
         res = compare_table(table, ev.durations(), args.metric, level=args.level, alpha=args.alpha,

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from ..errors import OutputError, ValidationError
 from ..io.registry import FORMATS
+from ..io.writers import check_dataset_target
 
 
 def src_inside(target: Path, inputs: list[str]) -> bool:
@@ -52,6 +53,16 @@ def check_output(out: str | None, inputs: list[str], force: bool, folder: bool =
         raise OutputError(f"cannot write {out}: {parent} is not writable; choose another place")
 
 
+#: Options naming a file or folder a command reads (argparse names): an output never replaces them.
+INPUT_OPTIONS = ("gt", "est", "times", "gt_times", "est_times", "manifest", "data")
+
+
+def input_options(args: argparse.Namespace) -> list[str]:
+    """The existing files and folders named by the input options (:data:`INPUT_OPTIONS`) of ``args``."""
+    given = (getattr(args, k, None) for k in INPUT_OPTIONS)
+    return [str(v) for v in given if isinstance(v, (str, os.PathLike)) and str(v).strip() and Path(v).exists()]
+
+
 #: The file name each output option needs (any case), by its argparse name.
 OUTPUT_SUFFIXES: dict[str, tuple[str, ...]] = {
     "csv": (".csv",),
@@ -67,7 +78,9 @@ def check_outputs(args: argparse.Namespace, inputs: list[str], files: list[str],
     ``args``); no two of them may name one place, each gets :func:`check_output` (an input, a
     folder, an existing file without ``--force``, a place that cannot be written), a file option
     the suffix it writes (:data:`OUTPUT_SUFFIXES`), a folder option a folder name, and no file may
-    lie inside a folder output."""
+    lie inside a folder output. ``inputs`` are checked with every input option of ``args``
+    (:func:`input_options`: ground truth, times files, manifest, data root)."""
+    inputs = [*inputs, *input_options(args)]
 
     def opt(k: str) -> str:
         return "--" + k.replace("_", "-")
@@ -87,6 +100,8 @@ def check_outputs(args: argparse.Namespace, inputs: list[str], files: list[str],
             raise OutputError(f"{opt(k)} {out}: expected a {' or '.join(suffixes)} file name for what {opt(k)} writes")
         if folder and name.endswith((".csv", ".tex", ".md", ".txt")):
             raise OutputError(f"{opt(k)} {out}: expected a folder name, not a file name")
+        if k == "parquet":  # what --force may replace: a dataset lorisnb wrote, nothing else
+            check_dataset_target(out, args.force)
     for k, out, folder in given:
         inside = [(o, p) for o, p, f in given if not f and Path(out).resolve() in Path(p).resolve().parents]
         if folder and inside:

@@ -43,7 +43,7 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
         return load_run(p), {}, []
     if not p.exists():
         raise ValidationError(f"{path}: no such result folder, run folder or table")
-    ev, notes = run_evaluation(argparse.Namespace(**{**vars(args), "paths": [path]}))
+    ev, notes = run_evaluation(argparse.Namespace(**{**vars(args), "paths": [path]}), [])  # outputs: checked first
     report_problems(ev, [f"{path}: {n}" for n in notes])
     root = p if p.is_dir() else p.parent
     failed = {}

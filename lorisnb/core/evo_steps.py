@@ -35,6 +35,23 @@ def prepare(gt: Trajectory, est: Trajectory, spec: EvalSpec) -> tuple[Trajectory
     return gt, est
 
 
+def prepared_away(label: str, gt: tuple[int, int], est: tuple[int, int], spec: EvalSpec) -> str | None:
+    """Why nothing matched when :func:`prepare`'s options thinned the trajectories (``gt`` and
+    ``est``: poses before and after), or None when the spec sets none of them."""
+    steps = [
+        f"downsample {spec.downsample}" if spec.downsample is not None else "",
+        f"motion filter {spec.motion_filter[0]:g} m / {spec.motion_filter[1]:g} deg" if spec.motion_filter else "",
+        "time window" if spec.t_start is not None or spec.t_end is not None else "",
+    ]
+    steps = [x for x in steps if x]
+    if not steps:
+        return None
+    return (
+        f"{label}: no estimate stamp matches the ground truth after {' and '.join(steps)}: the ground truth keeps "
+        f"{gt[1]} of {gt[0]} pose(s), the estimate {est[1]} of {est[0]}; loosen or drop {' / '.join(steps)}"
+    )
+
+
 def evo_match(gt: Trajectory, est: Trajectory, spec: EvalSpec) -> tuple[Association, Trajectory]:
     """The matched poses by ``evo-nearest`` or ``evo-interpolate`` (:mod:`lorisnb.core.evo_sync`)
     and the estimate they index: ``est`` itself, or, when evo interpolates the estimate (its

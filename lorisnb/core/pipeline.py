@@ -122,8 +122,10 @@ def evaluate_sessions(
             if len(assoc[s]) == 0 and len(est[s]):
                 more = other_spans() if callable(other_spans) else other_spans
                 spans = checks.other_spans(frames[3] if frames is not None else groundtruth, scene, s, more)
+                thinned = (len(groundtruth[s]), len(gt_s)), (len(estimates[s]), len(est[s]))
                 found.append(
-                    plausibility.time_overlap(label, est[s].stamps, assoc[s].gt_start, assoc[s].gt_end, spans)
+                    evo_steps.prepared_away(label, *thinned, spec)
+                    or plausibility.time_overlap(label, est[s].stamps, assoc[s].gt_start, assoc[s].gt_end, spans)
                     or f"{label}: no estimate stamp matches the ground truth ({spec.describe().split(';')[0]}); "
                     f"estimate {est[s].stamps[0]:.3f}..{est[s].stamps[-1]:.3f} s, ground truth "
                     f"{assoc[s].gt_start:.3f}..{assoc[s].gt_end:.3f} s"

@@ -166,7 +166,7 @@ def positive(name: str, value: Any, unit: str, *, integer: bool = False) -> floa
     v = _number(name, value, {})
     if math.isnan(v) or v <= 0 or math.isinf(v) or (integer and v != int(v)):
         kind = "a positive whole number" if integer else "a positive number"
-        raise ValidationError(f"{name}={_show(value)}: expected {kind} of {unit}")
+        raise ValidationError(f"{name}={_show(value)}: expected {kind}" + (f" of {unit}" if unit else ""))
     return float(v)
 
 

@@ -93,6 +93,21 @@ def _plain(df: pd.DataFrame) -> pd.DataFrame:
     return df.astype({c: df[c].cat.categories.dtype for c in cats}) if cats else df
 
 
+def check_dataset_target(out: str | os.PathLike[str], force: bool) -> None:
+    """Refuse a Parquet dataset's place before anything is written: an existing ``out`` without
+    ``force``, or with it one lorisnb did not write (no :data:`TABLE_MARKER`) or holding other files."""
+    out = Path(out)
+    if not out.exists():
+        return
+    if not force:
+        raise OutputError(f"{out} exists; choose another name or pass --force to replace it")
+    files = [p for p in out.rglob("*") if p.is_file()] if out.is_dir() else [out]
+    foreign = [p for p in files if p.suffix != ".parquet" and p.name != TABLE_MARKER]
+    if foreign or not (out / TABLE_MARKER).is_file():
+        what = f"it holds other files ({foreign[0].name})" if foreign else "lorisnb did not write it"
+        raise OutputError(f"--force will not replace {out}: {what}; choose another name")
+
+
 def write_parquet_parts(
     parts: Iterable[pd.DataFrame], out: str | os.PathLike[str], partition_by: str = "algorithm", force: bool = False
 ) -> Path:
@@ -105,14 +120,7 @@ def write_parquet_parts(
     except ImportError:
         raise MissingDependencyError("writing Parquet needs pyarrow: pip install 'lorisnb[parquet]'") from None
     out = Path(out)
-    if out.exists():
-        if not force:
-            raise OutputError(f"{out} exists; choose another name or pass --force to replace it")
-        files = [p for p in out.rglob("*") if p.is_file()] if out.is_dir() else [out]
-        foreign = [p for p in files if p.suffix != ".parquet" and p.name != TABLE_MARKER]
-        if foreign or not (out / TABLE_MARKER).is_file():
-            what = f"it holds other files ({foreign[0].name})" if foreign else "lorisnb did not write it"
-            raise OutputError(f"--force will not replace {out}: {what}; choose another name")
+    check_dataset_target(out, force)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
     try:

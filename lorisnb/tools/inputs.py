@@ -204,12 +204,13 @@ def missing_note(folder: Path, algorithm: str, absent: list[tuple[str, str]]) ->
 def without_groundtruth(items: list[tuple[Path, Path | None]], groundtruth: Path) -> list[tuple[Path, Path | None]]:
     """``(file, root)`` pairs less the ground-truth file itself (a ground truth kept in the results
     folder would be scored as an estimate of itself), with a LorisWarning when it was among them;
-    nothing left is a ValidationError."""
+    nothing left but the ground truth is a ValidationError (no file at all is for the exit status
+    to say: nothing was evaluated)."""
     gt = real_path(groundtruth)
     kept = [(p, r) for p, r in items if real_path(p) != gt]
     if len(kept) < len(items):
         warnings.warn(f"{groundtruth}: the ground truth is among the estimates; left out", LorisWarning, stacklevel=3)
-    if not kept:
+    if items and not kept:
         raise ValidationError(f"{groundtruth}: the only input is the ground truth itself; expected estimate files")
     return kept
 

@@ -25,9 +25,12 @@ OK, UNSCORED, USAGE = 0, 1, 2
 
 def unscored(ev: Evaluation) -> list[Failure]:
     """Inputs that were read but not scored: inputs none of whose poses matched the ground truth
-    in time (kind ``no-match``, with the reason the evaluation gave) and, for manifests, declared
-    sessions without an estimate (kind ``missing-estimate``: rows with 0 poses,
-    :mod:`lorisnb.core.missing`). Failures are in ``ev.failures``."""
+    in time (kind ``no-match``, with the reason the evaluation gave), estimates of a pair holding
+    no pose at all (kind ``no-pose``: an empty or comments-only file; an OpenLORIS file whose
+    ``seq:`` blocks hold no pose declares failed runs, as the official data's ``*-failed.txt``
+    do, and is scored) and, for manifests, declared sessions without an estimate (kind
+    ``missing-estimate``: rows with 0 poses, :mod:`lorisnb.core.missing`). Failures are in
+    ``ev.failures``."""
     from .evaluation import Failure
 
     out = []
@@ -39,8 +42,13 @@ def unscored(ev: Evaluation) -> list[Failure]:
         absent = [e.seq for e in f.sequences if e.poses == 0] if ev.kind == "manifest" else []
         if absent:
             out.append(Failure(f.path, f"{f.path}: no estimate for session(s) {absent}", "missing-estimate"))
-        if any(e.matched for e in f.sequences) or not any(e.poses for e in f.sequences):
+        if any(e.matched for e in f.sequences):
             continue
+        if not any(e.poses for e in f.sequences):
+            if ev.kind == "pair":  # an empty estimate (a crashed run, comments only): scored as missing, and said
+                out.append(Failure(f.path, f"{f.path}: holds no pose (scored as a missing output)", "no-pose"))
+            continue  # an OpenLORIS file of seq: blocks without poses declares failed runs (the official data's
+            # *-failed.txt): scored as the paper scores them; a manifest's missing sessions are said above
         why = next((w for w in f.warnings if "no estimate stamp" in w or "no pose" in w), "")
         reason = why.split(". ")[0] if why else f"{f.algorithm} {f.file}: no pose matched the ground truth in time"
         out.append(Failure(f.path, reason.splitlines()[0], "no-match"))  # one line; the warning has the rest
