@@ -27,7 +27,7 @@ from .association import Association, groundtruth_in_frame
 from .conventions import fit_alignment
 from .frames import FRAMES
 from .geometry import Sim3
-from .model import FileErrors, ResultFile, SequenceErrors
+from .model import FileErrors, ResultFile, SequenceErrors, is_monocular
 from .spec import EvalSpec, make_spec
 from .spec_evo import EVO_ASSOCIATIONS
 from .steps import (
@@ -175,6 +175,8 @@ def evaluate_sessions(
         found += [checks.degenerate_note(f"{name}, seq {s}", est[s].positions, assoc[s]) for s in fitted]
     if checks_on and method == "se3":
         hint = "--scale, or --scale auto for dso/svo" if frames is not None else "--align sim3"
+        if is_monocular(algorithm) and "align" not in spec.explicit:  # its scale is arbitrary: said once
+            found.append(plausibility.monocular_without_scale(name, algorithm, hint))
         fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s]) > 2]
         for s in fitted:
             found.append(checks.scale_note(f"{name}, seq {s}", est[s].positions, assoc[s], per_seq[s], hint))
