@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core import validate
+from ..core.index_pairs import by_index
 from ..core.model import FileErrors
 from ..core.spec import EvalSpec, make_spec
 from ..core.trials import check_duplicates, check_trials_by, compile_trials_by
@@ -217,6 +218,8 @@ def evaluate_pairs(
     src = pair_source(groundtruth, fmt, gt_fmt, scene, est_times=est_times, gt_times=gt_times, topic=topic,
                       gt_topic=gt_topic, tf=tf, gt_tf=gt_tf)  # fmt: skip
     _refuse_reading(the_spec, src.fmt, "pair")
+    if src.fmt == src.gt_fmt == "kitti" and src.est_times is None and src.gt_times is None:
+        the_spec = by_index(the_spec)  # stamps are pose indices: pose i with pose i, on every preset
     compile_trials_by(trials_by)
     if not src.groundtruth.exists():
         raise ParseError(src.groundtruth, None, "ground truth not found; expected a file (or a ROS 2 bag folder)")
