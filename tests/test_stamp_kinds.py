@@ -169,13 +169,9 @@ def test_euroc_files_written_in_other_units_are_refused(pair, tmp_path, capsys, 
     rc, err, _ = _run(tmp_path, [str(eu), "--gt", str(gu), "--format", "euroc"], capsys)
     assert rc == 1 and "the stamps of both files look like a unit read too small" in err
     assert "EuRoC CSV stamps written in milliseconds or microseconds" in err
-    rc, err, _ = _run(tmp_path, [str(eu), "--gt", str(data_tum_gt(pair, tmp_path)), "--format", "euroc",
-                                 "--gt-format", "tum"], capsys)  # fmt: skip
+    g = write(tmp_path, "gt_tum.txt", _tum(gt))  # the estimate alone
+    rc, err, _ = _run(tmp_path, [str(eu), "--gt", str(g), "--format", "euroc", "--gt-format", "tum"], capsys)
     assert rc == 1 and "the estimate's stamps look read in too small a unit" in err
-
-
-def data_tum_gt(pair, tmp_path):
-    return write(tmp_path, "gt_tum.txt", _tum(pair[0]))
 
 
 def test_every_real_file_is_in_seconds(data):
@@ -238,3 +234,21 @@ def test_a_pose_file_given_as_times_says_so(pair, tmp_path, capsys):
     rc, err, _ = _run(tmp_path, [str(ek), "--gt", str(gk), "--format", "kitti", "--est-times", str(tum),
                                  "--gt-times", str(gtt)], capsys)  # fmt: skip
     assert rc == 1 and "TUM trajectory file" in err and "not a times file" in err
+
+
+def test_a_manifest_of_kitti_files_pairs_by_index(matched, tmp_path):
+    g, e = matched
+    write(tmp_path, "gt/xyz.kitti", _kitti(g))
+    write(tmp_path, "res/slam/xyz.txt", _kitti(e))
+    text = (f'name = "kitti"\nscene = "xyz"\nroot = "{tmp_path / "gt"}"\ngroundtruth_format = "kitti"\n'
+            'estimate_format = "kitti"\n[[session]]\nname = "xyz"\ngroundtruth = "xyz.kitti"\n')  # fmt: skip
+    m = write(tmp_path, "k.toml", text)
+    ev = ln.evaluate_manifest(m, tmp_path / "res" / "slam")
+    assert ev.exit_status() == 0 and "association: by index" in ev.conventions
+    fe = ev.errors[0].sequences[0]
+    assert fe.matched == len(e) == 786
+    ref = ln.sequence_errors(g, e, association="nearest", max_diff=1e-6)  # the same pairs, matched by stamps
+    np.testing.assert_allclose(fe.ate, ref.ate, atol=1e-9)
+    write(tmp_path, "res/slam/xyz.txt", _kitti(e.subset(np.arange(700))))  # 700 poses against 786: refused
+    ev = ln.evaluate_manifest(m, tmp_path / "res" / "slam")
+    assert ev.exit_status() == 1 and "needs files of the same length" in ev.failures[0].error

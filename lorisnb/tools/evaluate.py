@@ -279,6 +279,8 @@ def evaluate_manifest(
     the_spec = make_spec(base, **options)
     notes = the_spec.refuse_inapplicable("manifest")
     _refuse_reading(the_spec, m.estimate_format, "manifest")
+    if m.estimate_format == "kitti" and all(s.groundtruth_format == "kitti" for s in m.sessions):
+        the_spec = by_index(the_spec)  # a manifest gives KITTI files no times: pose i with pose i
     compile_trials_by(trials_by)
     for s in m.sessions:  # a missing ground truth is an error of the whole call
         if not s.groundtruth.exists():
