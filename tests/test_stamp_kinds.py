@@ -252,3 +252,18 @@ def test_a_manifest_of_kitti_files_pairs_by_index(matched, tmp_path):
     write(tmp_path, "res/slam/xyz.txt", _kitti(e.subset(np.arange(700))))  # 700 poses against 786: refused
     ev = ln.evaluate_manifest(m, tmp_path / "res" / "slam")
     assert ev.exit_status() == 1 and "needs files of the same length" in ev.failures[0].error
+
+
+def test_association_index_chosen_for_files_with_stamps(matched, pair, tmp_path, capsys):
+    g, e = matched
+    gt_t, est_t = write(tmp_path, "gt.txt", _tum(g)), write(tmp_path, "est.txt", _tum(e))
+    rc, err, table = _run(tmp_path, [str(est_t), "--gt", str(gt_t), "--association", "index"], capsys)
+    assert rc == 0 and "association: by index" in err and table is not None
+    rc, err, ref = _run(tmp_path, [str(est_t), "--gt", str(gt_t), "--association", "nearest"], capsys)
+    assert table["ate_rmse"].iloc[0] == pytest.approx(ref["ate_rmse"].iloc[0], rel=1e-12)
+    assert main(["evaluate", str(est_t), "--gt", str(gt_t), "--association", "index", "--t-offset", "0.5",
+                 "--no-progress"]) == 2  # fmt: skip
+    assert "--t-offset: poses paired by index" in capsys.readouterr().err
+    full = write(tmp_path, "gt_full.txt", _tum(pair[0]))  # 3000 poses against 786
+    rc, err, _ = _run(tmp_path, [str(est_t), "--gt", str(full), "--association", "index"], capsys)
+    assert rc == 1 and "same length" in err and "Choose the association interpolate or nearest" in err

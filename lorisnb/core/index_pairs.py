@@ -55,11 +55,14 @@ def match_by_index(gt: Trajectory, est: Trajectory, label: str = "estimate") -> 
     g_start = float(gt.stamps[0]) if len(gt) else np.nan
     g_end = float(gt.stamps[-1]) if len(gt) else np.nan
     if len(gt) != len(est):
+        fix = "Give both files their times (--est-times and --gt-times)" if indexed((gt, est)) else (
+            "Choose the association interpolate or nearest (--association)"
+        )  # fmt: skip
         raise EvaluationError(
             f"{label}: pairing by index (pose i with pose i) needs files of the same length, but the estimate has "
             f"{len(est)} poses and the ground truth {len(gt)}: pose i of one is not pose i of the other (evo_ape "
-            "refuses such KITTI files too: 'trajectories must have same number of poses'). Give both files their "
-            "times (--est-times and --gt-times) to match them in time. Nothing was compared."
+            f"refuses such KITTI files too: 'trajectories must have same number of poses'). {fix} to match them in "
+            "time. Nothing was compared."
         )
     n = len(est)
     if n == 0:

@@ -206,6 +206,8 @@ class EvalSpec:
         problems += evo.evo_refusals(self, given, name)
         if "max_gap" in given and self.association != "interpolate":
             problems.append(f"{name('max_gap')}: only for interpolation; nearest association uses {name('max_diff')}")
+        if "t_offset" in given and self.t_offset and self.association == "index":
+            problems.append(f"{name('t_offset')}: poses paired by index ({name('association')} index) use no stamps")
         if "official_interpolation" in given and self.official_interpolation and self.association != "interpolate":
             problems.append(f"{name('official_interpolation')}: the official tool's slips are those of interpolation")
         if "align_frames" in given and self.align == "none":
