@@ -186,7 +186,8 @@ def test_rows_copied_into_their_arrays_as_read_equal_a_whole_read(tmp_path, monk
                 f"{1560000000 + k * 0.05:.9f} {x[0]:.15f} {x[1]:.15f} {x[2]:.15f} 0.0000000000 0 0 1.000000000"
             )
         elif (kind == "mixed-widths" and k == 9000) or (kind == "mixed-first-chunk" and k == 0):
-            lines.append(f"{1560000000 + k * 0.05:.3f} 7 {x[0]:.4f} {x[1]:.4f} {x[2]:.4f} 0 0 0 1")
+            t = 1560000000 + k * 0.05  # a 9-number line: its output time as in the real files (days later)
+            lines.append(f"{t:.3f} {t + 8.6e6:.3f} {x[0]:.4f} {x[1]:.4f} {x[2]:.4f} 0 0 0 1")
         else:
             lines.append(f"{1560000000 + k * 0.05:.3f} {x[0]:.4f} {x[1]:.4f} {x[2]:.4f} 0 0 0 1")
         if k == 5000:

@@ -27,6 +27,7 @@ from .association import Association, groundtruth_in_frame
 from .conventions import fit_alignment
 from .frames import FRAMES
 from .geometry import Sim3
+from .index_pairs import by_index, indexed
 from .model import FileErrors, ResultFile, SequenceErrors, is_monocular
 from .spec import EvalSpec, make_spec
 from .spec_evo import EVO_ASSOCIATIONS
@@ -103,6 +104,8 @@ def evaluate_sessions(
             f"{path}: sequence {missing[0]} has no ground truth (ground truth has {sorted(groundtruth)})"
         )
     found: list[str | None] = list(notes or [])
+    if indexed([*estimates.values(), *(groundtruth[s] for s in seqs)]):  # KITTI files without times
+        spec = by_index(spec)
     name = Path(path).name
     method = spec.alignment_for(algorithm)
     lifelong = spec.lifelong_for(len(seqs))
@@ -113,7 +116,7 @@ def evaluate_sessions(
         if spec.association in EVO_ASSOCIATIONS:
             assoc[s], est[s] = evo_steps.evo_match(gt_s, est[s], spec)
         else:
-            assoc[s] = match(gt_s, est[s], spec)
+            assoc[s] = match(gt_s, est[s], spec, f"{path}, seq {s}" if len(seqs) > 1 else str(path))
         if checks_on:
             label = f"{name}, seq {s}"
             raw = frames[3][s] if frames is not None else groundtruth[s]

@@ -18,7 +18,9 @@ Association (``association``):
     stamp inside a bracket of ``max_gap`` seconds (:func:`lorisnb.core.association.associate`).
     ``nearest`` (TUM RGB-D's ``associate.py``, also rpg_trajectory_evaluation's): pairs whose stamps
     differ by less than ``max_diff`` seconds, accepted greedily by increasing difference, each
-    stamp used once. ``t_offset`` (seconds) is added to every estimate stamp first.
+    stamp used once. ``t_offset`` (seconds) is added to every estimate stamp first. ``index``: pose
+    i with pose i, files of the same length (:mod:`lorisnb.core.index_pairs`; chosen on every
+    preset for two KITTI files without times).
 
 Alignment (``align``; ``gt = s R est + t`` fitted on the matched positions):
     ``se3`` (Horn/Umeyama), ``sim3`` (with scale), ``posyaw`` (translation and yaw about gravity),
@@ -42,7 +44,7 @@ from . import spec_evo as evo
 from . import validate
 from .association import MAX_GAP
 
-ASSOCIATIONS = ("interpolate", "nearest", *evo.EVO_ASSOCIATIONS)
+ASSOCIATIONS = ("interpolate", "nearest", "index", *evo.EVO_ASSOCIATIONS)
 ALIGNMENTS = ("se3", "sim3", "posyaw", "none", "auto", *evo.EVO_ALIGNMENTS)
 RPE_UNITS = evo.RPE_UNITS
 REPEATED = ("drop", "keep")
@@ -127,6 +129,8 @@ class EvalSpec:
                 match += " (the official tool's orientation slips)"
         elif self.association in evo.EVO_ASSOCIATIONS:
             match = evo.association_words(self)
+        elif self.association == "index":
+            match = "by index, pose i with pose i (stamps are pose indices: times in s count poses)"
         else:
             match = f"nearest stamps within {self.max_diff:g} s (greedy, TUM associate.py)"
         frames = "all matched poses" if self.align_frames is None else f"the first {self.align_frames} matched poses"
@@ -194,7 +198,7 @@ class EvalSpec:
         name = _namer(surface)
         problems: list[str] = []
         notes: list[str] = []
-        if "max_diff" in given and self.association in ("interpolate",):
+        if "max_diff" in given and self.association in ("interpolate", "index"):
             problems.append(
                 f"{name('max_diff')}: only for nearest association ({name('association')} nearest); "
                 f"interpolation uses {name('max_gap')}"
@@ -202,6 +206,8 @@ class EvalSpec:
         problems += evo.evo_refusals(self, given, name)
         if "max_gap" in given and self.association != "interpolate":
             problems.append(f"{name('max_gap')}: only for interpolation; nearest association uses {name('max_diff')}")
+        if "t_offset" in given and self.t_offset and self.association == "index":
+            problems.append(f"{name('t_offset')}: poses paired by index ({name('association')} index) use no stamps")
         if "official_interpolation" in given and self.official_interpolation and self.association != "interpolate":
             problems.append(f"{name('official_interpolation')}: the official tool's slips are those of interpolation")
         if "align_frames" in given and self.align == "none":

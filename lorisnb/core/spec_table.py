@@ -10,7 +10,11 @@ from .spec import PRESETS, text
 #: What each option of the spec means, its unit, and which inputs it applies to: the README's
 #: spec table is :func:`spec_table` (a test keeps them equal).
 OPTIONS: dict[str, tuple[str, str, str]] = {
-    "association": ("how poses are matched in time: interpolate / nearest / evo-nearest / evo-interpolate", "", "all"),
+    "association": (
+        "how poses are matched in time: interpolate / nearest / index / evo-nearest / evo-interpolate",
+        "",
+        "all",
+    ),
     "max_gap": ("interpolation bracket: both neighbours within it", "s", "interpolate"),
     "max_diff": ("nearest association: largest stamp difference", "s", "nearest, evo-*"),
     "t_offset": ("added to every estimate stamp (a known clock offset)", "s", "all"),

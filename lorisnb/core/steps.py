@@ -23,6 +23,7 @@ from .geometry import (
     quat_to_matrix,
     ros_quaternion_from_matrix,
 )
+from .index_pairs import match_by_index
 from .model import ResultFile, SequenceErrors
 from .spec import EvalSpec
 from .trajectory import Trajectory
@@ -69,9 +70,12 @@ def errors_after_alignment(
     )  # fmt: skip
 
 
-def match(gt: Trajectory, est: Trajectory, spec: EvalSpec = DEFAULT) -> Association:
+def match(gt: Trajectory, est: Trajectory, spec: EvalSpec = DEFAULT, label: str = "estimate") -> Association:
     """Matched poses of ``est`` and ``gt`` by the spec's association (estimate stamps shifted by
-    ``t_offset`` first); for ``nearest`` the ground-truth poses are taken as they are."""
+    ``t_offset`` first); for ``nearest`` the ground-truth poses are taken as they are; ``index``
+    pairs pose i with pose i (an error naming ``label`` for files of different lengths)."""
+    if spec.association == "index":
+        return match_by_index(gt, est, label)
     stamps = est.stamps + spec.t_offset if spec.t_offset else est.stamps
     if spec.association == "interpolate":
         return associate(gt, stamps, spec.max_gap, spec.official_interpolation)

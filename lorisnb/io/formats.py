@@ -21,7 +21,7 @@ from ..errors import LorisWarning, ParseError, ValidationError
 from .chunks import read_rows
 from .openloris import read_openloris
 from .ranges import LINE_LIMIT
-from .registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample
+from .registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample, times_hint
 from .scanner import BOM, REPEATED, Lines, check_rows, finish, read_bytes, scan
 
 #: Formats :func:`read_trajectory` reads (the names of :data:`lorisnb.io.registry.FORMATS`).
@@ -157,6 +157,10 @@ def read_kitti(
     if stamps is None:
         t = np.arange(len(mats), dtype=float)
     elif isinstance(stamps, (str, os.PathLike)):
+        if os.path.exists(stamps) and os.path.samefile(stamps, path):  # the pose file as its own times
+            raise ParseError(spath, None, "this KITTI pose file is also given as its own times file (--est-times or "
+                             "--gt-times; stamps= in Python); a times file holds one stamp per line (KITTI's "
+                             "times.txt): give that, or no times for either file to pair two KITTI files by index")  # fmt: skip
         t = read_times(stamps)
     else:
         t = np.asarray(stamps, dtype=float).reshape(-1)
@@ -179,7 +183,12 @@ def read_times(path: str | os.PathLike) -> np.ndarray:
     spath = str(path)
     lines = scan(read_bytes(path))
     rows = _data_rows(lines)
-    _check_width(lines, rows, spath, lines.ntok[rows] == 1, "one stamp per line")
+    ok = lines.ntok[rows] == 1
+    if not ok.all():  # a pose file given as the times file: say so, not how to read it as poses
+        i = rows[np.flatnonzero(~ok)[0]]
+        text = lines.text(i)
+        raise ParseError(spath, int(i) + 1, f"{text[:80]!r} has {int(lines.ntok[i])} fields; expected one stamp per "
+                         f"line (a times file){times_hint(path, text)}")  # fmt: skip
     return lines.numbers(rows, spath, "one stamp in seconds per line")
 
 

@@ -85,11 +85,15 @@ class Format:
     reader: str
     recognise: Callable[[Sample], bool]
 
+    def looks(self) -> str:
+        """``"this looks like a KITTI pose file (12 numbers ...)"``."""
+        article = "an" if self.title.startswith(("A", "I", "O")) else "a"
+        return f"this looks like {article} {self.title} ({self.columns})"
+
     def hint(self) -> str:
         """What a file of this format looks like and how to read it, on every surface."""
-        article = "an" if self.title.startswith(("A", "I", "O")) else "a"
         return (
-            f"this looks like {article} {self.title} ({self.columns}): read it with --format {self.name} "
+            f"{self.looks()}: read it with --format {self.name} "
             f"(--gt-format {self.name} for the ground truth; fmt={self.name!r} or lorisnb.{self.reader} in Python)"
         )
 
@@ -185,3 +189,17 @@ def hint_of_sample(s: Sample, fmt: str) -> str:
     if not found or fmt in found:
         return ""
     return "; " + FORMATS[found[0]].hint()
+
+
+def times_hint(path: str | os.PathLike[str], text: str) -> str:
+    """For a times file (one stamp per line) that is plainly a pose file of some format: the
+    mistake, a pose file given where its times were asked for (else ``""``)."""
+    s = sample(path)
+    found = recognise(s) or recognise(sample_bytes(text.encode("utf-8", "replace")))
+    if not found:
+        return ""
+    return (
+        f"; {FORMATS[found[0]].looks()}, not a times file: a pose file was given where its times were asked for "
+        "(--est-times, --gt-times or --times; stamps= in Python). Give the file of the poses' stamps there, one "
+        "per line (KITTI's times.txt), and the pose file itself as the estimate or --gt"
+    )

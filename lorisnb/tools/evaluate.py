@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core import validate
+from ..core.index_pairs import by_index
 from ..core.model import FileErrors
 from ..core.spec import EvalSpec, make_spec
 from ..core.trials import check_duplicates, check_trials_by, compile_trials_by
@@ -217,6 +218,8 @@ def evaluate_pairs(
     src = pair_source(groundtruth, fmt, gt_fmt, scene, est_times=est_times, gt_times=gt_times, topic=topic,
                       gt_topic=gt_topic, tf=tf, gt_tf=gt_tf)  # fmt: skip
     _refuse_reading(the_spec, src.fmt, "pair")
+    if src.fmt == src.gt_fmt == "kitti" and src.est_times is None and src.gt_times is None:
+        the_spec = by_index(the_spec)  # stamps are pose indices: pose i with pose i, on every preset
     compile_trials_by(trials_by)
     if not src.groundtruth.exists():
         raise ParseError(src.groundtruth, None, "ground truth not found; expected a file (or a ROS 2 bag folder)")
@@ -276,6 +279,8 @@ def evaluate_manifest(
     the_spec = make_spec(base, **options)
     notes = the_spec.refuse_inapplicable("manifest")
     _refuse_reading(the_spec, m.estimate_format, "manifest")
+    if m.estimate_format == "kitti" and all(s.groundtruth_format == "kitti" for s in m.sessions):
+        the_spec = by_index(the_spec)  # a manifest gives KITTI files no times: pose i with pose i
     compile_trials_by(trials_by)
     for s in m.sessions:  # a missing ground truth is an error of the whole call
         if not s.groundtruth.exists():
