@@ -214,7 +214,7 @@ def crosscheck(
         rpe_deltas: ``(delta, unit)`` with unit ``f`` (frames) or ``m`` (metres).
         spec: the evaluation spec of the CR, CR-T and CS-R rows (lorisnb's values, as ``lorisnb
             evaluate`` gives them for the pair; evo has none); default: the OpenLORIS preset with
-            this alignment and ``max_gap``.
+            this alignment and ``max_gap`` (a spec whose alignment is ``auto``: resolved as ``scale`` says).
     """
     p = pair_poses(gt, est, max_gap, by_index)
     alignment = "sim3" if scale else "se3"
@@ -222,7 +222,10 @@ def crosscheck(
     if not by_index:
         rows += crosscheck_native(gt, est, p, alignment)
         rows += crosscheck_conventions(gt, est)
-    rows += openloris_rows(gt, est, spec or make_spec(None, align=alignment, max_gap=max_gap), by_index)
+    spec = make_spec(None, align=alignment, max_gap=max_gap) if spec is None else spec
+    if spec.align == "auto":  # resolved as here (the command line resolves it by the estimate's name)
+        spec = make_spec(spec, align=alignment)
+    rows += openloris_rows(gt, est, spec, by_index)
     return pd.DataFrame(rows, columns=CROSSCHECK_COLUMNS)
 
 
