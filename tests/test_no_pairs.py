@@ -228,3 +228,18 @@ def test_crosscheck_gives_lorisnb_cr(tum, tmp_path):
             assert t.loc[q, "lorisnb"] == pytest.approx(ref[q], rel=1e-12) and math.isnan(t.loc[q, "evo"])
             assert "evo has no equivalent" in t.loc[q, "note"]
         assert t.loc["cr", "lorisnb"] == pytest.approx(0.8839, abs=1e-4)
+
+
+def test_compare_with_a_short_and_an_empty_algorithm(tum, tmp_path, capsys):
+    """compare over trials where one algorithm has no RPE pair and the other no pose at all: every
+    metric ranks without an exception, and a test with nothing to compare says so (not 'p nan')."""
+    gt, _, five, comments = tum
+    for alg, src in (("a", five), ("b", comments)):
+        for k in (1, 2):
+            write(tmp_path, f"cmp/{alg}/t{k}.txt", src.read_text())
+    for metric in ("cr", "cs_r", "c_ate_rmse"):
+        rc = main(["compare", str(tmp_path / "cmp"), "--gt", str(gt), "--metric", metric, "--trials-by", r"t(\d+)",
+                   "--no-progress"])  # fmt: skip
+        out = capsys.readouterr()
+        assert rc in (0, 1) and "Traceback" not in out.err and "p nan" not in out.err + out.out
+    assert "no two algorithms both have a value of c_ate_rmse there" in out.err + out.out
