@@ -243,3 +243,17 @@ def test_compare_with_a_short_and_an_empty_algorithm(tum, tmp_path, capsys):
         out = capsys.readouterr()
         assert rc in (0, 1) and "Traceback" not in out.err and "p nan" not in out.err + out.out
     assert "no two algorithms both have a value of c_ate_rmse there" in out.err + out.out
+
+
+@pytest.mark.parametrize("options", [[], ["--conventions", "tum"], ["--conventions", "evo", "--rpe-delta", "10"]])
+def test_sweep_of_a_sequence_without_rpe_pair(tum, tmp_path, capsys, options):
+    gt, _, five, _ = tum
+    out = tmp_path / "sw.csv"
+    rc = main(["sweep", str(five), "--gt", str(gt), "--eps", "0.01,inf", "--phi", "5,inf", *options, "--csv", str(out),
+               "--no-progress"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc == 0 and "Traceback" not in err and "est_five.txt, seq 1: no RPE pair" in err
+    t = pd.read_csv(out)
+    assert len(t) == 4 and t.loc[np.isinf(t["eps"]) & np.isinf(t["phi"]), "cr"].iloc[0] == pytest.approx(
+        0.0377, abs=1e-4
+    )
