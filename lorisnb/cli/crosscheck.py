@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from pathlib import Path
 
 import pandas as pd
 
 from ..core.spec import make_spec
-from ..errors import EvaluationError, ParseError, ValidationError
+from ..errors import EvaluationError, LorisWarning, ParseError, ValidationError
 from .outputs import check_outputs
 
 
@@ -20,10 +21,15 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
 
     check_outputs(args, [args.gt, args.est], ["csv"])
     try:
-        table = _crosscheck_table(args)
+        with warnings.catch_warnings(record=True) as caught:  # printed as every command prints them
+            warnings.simplefilter("always", LorisWarning)
+            table = _crosscheck_table(args)
     except (ParseError, EvaluationError) as exc:  # an input that cannot be read or compared: 1, as every command
         print(f"error: {exc}", file=sys.stderr)
         return 1
+    finally:
+        for n in dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, LorisWarning)):
+            print(f"warning: {n}", file=sys.stderr)
     if isinstance(table, int):  # --conventions: printed and judged there
         return table
     from ..tools import require
@@ -40,7 +46,19 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     )
     if args.csv:
         write_csv(table, args.csv, args.force)
-    return 0 if table.loc[must, "agrees"].all() else 1
+    return 0 if table.loc[must, "agrees"].all() and not _no_pairs(table) else 1
+
+
+def _no_pairs(table: pd.DataFrame) -> int:
+    """Rows not compared because a delta gave no RPE pair: said on stderr (they make the exit status 1:
+    not everything asked was compared)."""
+    from ..tools.evo_bridge import NO_RPE_PAIR
+
+    n = int(table["note"].str.startswith(NO_RPE_PAIR).sum())
+    if n:
+        print(f"{n} RPE quantit{'y' if n == 1 else 'ies'} not compared: {NO_RPE_PAIR} at the delta asked "
+              "(see their notes; give a smaller delta)", file=sys.stderr)  # fmt: skip
+    return n
 
 
 def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame | int:
@@ -98,7 +116,8 @@ def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame | int:
                               topic=args.topic if est_format == "bag" else None)  # fmt: skip
         spec = make_spec(None, surface="cli", **({} if args.scale is None else {"scale": args.scale}))
         with_scale = spec.alignment_for(Path(args.est).stem) == "sim3"
-        table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs)
+        table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs,
+                           spec=spec)  # fmt: skip
         from ..tools.crosscheck_reading import crosscheck_reading  # and evo's own reading of each file
 
         parts = [crosscheck_reading(f, fm, t).assign(quantity=lambda x, w=w: w + ": " + x["quantity"])
@@ -123,4 +142,4 @@ def _crosscheck_conventions(args: argparse.Namespace, gt_format: str, est_format
           "files itself; the reading rows say where the readings differ and why", file=sys.stderr)  # fmt: skip
     if args.csv:
         write_csv(table, args.csv, args.force)
-    return 0 if table.loc[stats, "agrees"].all() else 1
+    return 0 if table.loc[stats, "agrees"].all() and not _no_pairs(table) else 1

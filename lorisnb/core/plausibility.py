@@ -170,3 +170,19 @@ def degenerate_fit(label: str, est_positions: np.ndarray, gt_positions: np.ndarr
         "after it (the official tool aligns all the same); check this sequence's output, or evaluate it "
         "with the conventions of pairs (--align-frames 1, --align none)."
     )
+
+
+RPE_UNIT_WORDS = {"s": "s", "f": "frame(s)", "frames": "frame(s)", "m": "m", "deg": "deg", "rad": "rad"}
+
+
+def no_rpe_pair(label: str, n_pairs: int, stamps: np.ndarray, delta: float, unit: str) -> str | None:
+    """A sequence with matched poses (their ``stamps``, seconds) but no RPE pair over ``delta``
+    ``unit`` (shorter than the step, or too few poses): its RPE statistics are NaN, said with the
+    sequence's span. None when there are pairs or no matched pose (that has its own message)."""
+    if n_pairs or not len(stamps):
+        return None
+    return (
+        f"{label}: no RPE pair over {delta:g} {RPE_UNIT_WORDS.get(unit, unit)} (its {len(stamps)} matched pose(s) "
+        f"span {float(stamps[-1] - stamps[0]):.3f} s), so its RPE statistics are NaN; the other metrics are "
+        "scored. A shorter RPE step (--rpe-delta, rpe_delta=) gives pairs"
+    )

@@ -125,7 +125,7 @@ def masked_statistics(
     v = np.asarray(values, float)
     m = np.asarray(mask, bool)
     shape = m.shape[:-1]
-    rows = m.reshape(-1, v.size)
+    rows = m.reshape(math.prod(shape), v.size)  # not reshape(-1, 0): no value (e.g. no RPE pair) is a NaN row
     out = {k: np.full(rows.shape[0], np.nan) for k in ("mean", "median", "std", "min", "max", "sse")}
     full = rows.all(axis=1) if v.size else np.zeros(rows.shape[0], bool)
     if full.any():  # every value selected (no threshold): the same numbers as error_statistics, to the bit (tested)

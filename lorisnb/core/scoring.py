@@ -99,7 +99,8 @@ def sequence_grid(
             statistics of ATE, AOE and RPE, and of the same over correct poses (pairs) only.
 
     A sequence with no matched pose has CR = CR-T = CS-R = 0, no ATE (NaN), 0 correct poses and
-    an infinite re-localization time.
+    an infinite re-localization time. One with no RPE pair (shorter than the RPE step) has 0 pairs
+    and NaN RPE statistics, its other metrics as usual (the evaluation warns, naming it).
     """
     eps_a, phi_a, delta_a, tau_a = (np.asarray(v, float).reshape(-1) for v in (eps, phi, delta, tau))
     shape = (len(eps_a), len(phi_a), len(delta_a), len(tau_a))

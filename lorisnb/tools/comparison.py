@@ -133,6 +133,8 @@ def compare_table(
             + " in "
             + "; ".join(
                 f"{scene} (smallest possible p {r.min_p:.4g}, x {r.n} pair(s) by Holm)"
+                if np.isfinite(r.min_p)
+                else f"{scene} (no two algorithms both have a value of {metric} there: nothing to test)"
                 for scene, r in blocked.iterrows()
             )
             + ": run more trials (--power DELTA says how many)"

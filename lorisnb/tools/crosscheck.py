@@ -7,6 +7,7 @@ Columns of every table: :data:`~lorisnb.tools.evo_bridge.CROSSCHECK_COLUMNS`.
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -15,16 +16,19 @@ import pandas as pd
 from ..core import metrics
 from ..core.association import MAX_GAP, groundtruth_in_frame
 from ..core.model import ResultFile, is_monocular
-from ..core.pipeline import compute_errors
-from ..core.scoring import score
+from ..core.pipeline import compute_errors, evaluate_sessions
+from ..core.scoring import score, score_rows
+from ..core.spec import EvalSpec, make_spec
 from ..core.trajectory import Trajectory
-from ..errors import EvaluationError
+from ..errors import EvaluationError, LorisWarning
 from ..io.data import DataPaths, DataRoot, load_groundtruth
 from ..io.openloris import read_openloris
 from ._extras import require
 from .evo_bridge import (
     CROSSCHECK_COLUMNS,
     EVO_MAX_DIFF,
+    NO_RPE_PAIR,
+    SMALLER_DELTA,
     PairedPoses,
     agreement_row,
     aligned_estimate,
@@ -72,21 +76,30 @@ def crosscheck_pairs(
     pos, rot, _ = aligned_estimate(p, rpe_alignment)
     e = evo_aligned(ref, est, rpe_alignment)
     for delta, unit in rpe_deltas:
-        if unit == "f":
-            i, j = metrics.rpe_pairs(p.stamps, p.gt_positions, delta, "f", all_pairs=all_pairs)
-            how = f"delta {int(delta)} frame(s), {'all' if all_pairs else 'consecutive'} pairs"
-        else:
-            i, j = evo_pairs(p.gt_positions, delta, "m", all_pairs)
-            how = f"delta {delta:g} m along the ground truth, evo's pairs ({'all' if all_pairs else 'consecutive'})"
-        if len(i) == 0:
+        kind = f"{'all' if all_pairs else 'consecutive'} pairs"
+        how = (
+            f"delta {int(delta)} frame(s), {kind}"
+            if unit == "f"
+            else f"delta {delta:g} m along the ground truth, evo's {kind}"
+        )
+        try:
+            if unit == "f":
+                i, j = metrics.rpe_pairs(p.stamps, p.gt_positions, delta, "f", all_pairs=all_pairs)
+            else:
+                i, j = evo_pairs(p.gt_positions, delta, "m", all_pairs)
+            if len(i) == 0:
+                raise EvaluationError(f"only {len(p)} paired poses; {SMALLER_DELTA}")
+        except EvaluationError as exc:  # no pair at this delta (evo raises): NaN rows that say so
+            for q in ("rpe_trans_rmse", "rpe_rot_rmse"):
+                rows.append(agreement_row(q, rpe_alignment, np.nan, np.nan, 0, f"{NO_RPE_PAIR} ({how}): {exc}"))
             continue
         tr, rr = metrics.rpe(p.gt_positions, p.gt_rotations, pos, rot, i, j)
         try:
             tr_e = evo_rpe(ref, e, "t", delta, unit, all_pairs)
             rr_e = evo_rpe(ref, e, "r", delta, unit, all_pairs)
-        except Exception as exc:  # evo refuses deltas it cannot pair
+        except EvaluationError as exc:  # evo refuses deltas it cannot pair
             rows.append(
-                agreement_row("rpe_trans_rmse", rpe_alignment, metrics.rmse(tr), np.nan, len(i), f"{how}; evo: {exc}")
+                agreement_row("rpe_trans_rmse", rpe_alignment, metrics.rmse(tr), np.nan, len(i), f"{how}; {exc}")
             )
             continue
         rows.append(
@@ -190,6 +203,7 @@ def crosscheck(
     rpe_deltas=((1, "f"), (1.0, "m")),
     all_pairs: bool = False,
     max_gap: float = MAX_GAP,
+    spec: EvalSpec | None = None,
 ) -> pd.DataFrame:
     """Cross-check lorisnb against evo on one ground truth and one estimate (see module docstring).
 
@@ -198,6 +212,9 @@ def crosscheck(
             are always given for ``none``, ``se3`` and ``sim3``.
         by_index: pair pose i with pose i (KITTI files without stamps), as evo does.
         rpe_deltas: ``(delta, unit)`` with unit ``f`` (frames) or ``m`` (metres).
+        spec: the evaluation spec of the CR, CR-T and CS-R rows (lorisnb's values, as ``lorisnb
+            evaluate`` gives them for the pair; evo has none); default: the OpenLORIS preset with
+            this alignment and ``max_gap`` (a spec whose alignment is ``auto``: resolved as ``scale`` says).
     """
     p = pair_poses(gt, est, max_gap, by_index)
     alignment = "sim3" if scale else "se3"
@@ -205,21 +222,32 @@ def crosscheck(
     if not by_index:
         rows += crosscheck_native(gt, est, p, alignment)
         rows += crosscheck_conventions(gt, est)
-    for q in ("cr", "cr_t", "cs_r"):
-        rows.append(
-            dict(
-                quantity=q,
-                alignment=alignment,
-                lorisnb=np.nan,
-                evo=np.nan,
-                abs_diff=np.nan,
-                rel_diff=np.nan,
-                agrees=False,
-                n_pairs=len(p),
-                note="OpenLORIS-Scene metric (correctness over time); evo has no equivalent",
-            )
-        )
+    spec = make_spec(None, align=alignment, max_gap=max_gap) if spec is None else spec
+    if spec.align == "auto":  # resolved as here (the command line resolves it by the estimate's name)
+        spec = make_spec(spec, align=alignment)
+    rows += openloris_rows(gt, est, spec, by_index)
     return pd.DataFrame(rows, columns=CROSSCHECK_COLUMNS)
+
+
+def openloris_rows(gt: Trajectory, est: Trajectory, spec: EvalSpec, by_index: bool = False) -> list[dict]:
+    """CR, CR-T and CS-R of the pair as ``lorisnb evaluate`` gives them under ``spec`` (its
+    association, alignment and thresholds): lorisnb's column; evo has no equivalent (NaN). Two
+    files paired by index have no times, so no CR (NaN, said in the note)."""
+    if by_index:
+        values: dict = dict.fromkeys(("cr", "cr_t", "cs_r"), np.nan)
+        n, why = 0, "paired by index: the files have no times, and these metrics are fractions of time"
+    else:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", LorisWarning)  # evaluate's checks: not this table's subject
+            fe = evaluate_sessions({1: gt}, {1: est}, spec, checks_on=False)
+        values = score_rows(fe, spec.eps, spec.phi, spec.delta, spec.tau, **spec.rpe_options())[0]
+        n = values["matched"]
+        why = (
+            f"lorisnb evaluate's value for this pair (eps {spec.eps}, phi {spec.phi:g} deg, delta {spec.delta:g} s, "
+            f"tau {spec.tau:g} s)"
+        )
+    note = f"OpenLORIS-Scene metric (correctness over time), {why}; evo has no equivalent"
+    return [agreement_row(q, spec.align, values[q], np.nan, n, note) for q in ("cr", "cr_t", "cs_r")]
 
 
 def crosscheck_poses(

@@ -9,24 +9,26 @@ from __future__ import annotations
 
 import copy
 import os
+from typing import Any
 
 import pandas as pd
 
 from ..core.relations import STATISTICS
 from ..core.spec import EvalSpec, make_spec
+from ..errors import EvaluationError
 from ._extras import require
 from .crosscheck_reading import crosscheck_reading, evo_read
-from .evo_bridge import CROSSCHECK_COLUMNS, agreement_row
+from .evo_bridge import CROSSCHECK_COLUMNS, NO_RPE_PAIR, agreement_row, evo_errors
 
 #: lorisnb's RPE units as evo's ``Unit`` names (seconds: evo has none).
 _EVO_UNITS = {"f": "frames", "frames": "frames", "m": "meters", "deg": "degrees", "rad": "radians"}
 
 
-def evo_statistics(ref, est, spec: EvalSpec) -> dict[str, float]:
+def evo_statistics(ref, est, spec: EvalSpec) -> dict[str, Any]:
     """What evo computes for trajectories it read itself, under ``spec`` (its sync, alignment,
     projection, APE and RPE; evo's CLI order): ``matched``, ``rpe_pairs`` and ``{ate, aoe, rpe_trans,
-    rpe_rot}_{statistic}``."""
-    em = require("evo.core.metrics")
+    rpe_rot}_{statistic}``; ``rpe_refused``: evo's reason when its RPE finds no pair (evo_rpe raises)."""
+    em, filters = require("evo.core.metrics"), require("evo.core.filters")
     sync = require("evo.core.sync")
     main_ape, main_rpe = require("evo.main_ape"), require("evo.main_rpe")
     from evo.core.trajectory import Plane, PoseTrajectory3D
@@ -51,7 +53,7 @@ def evo_statistics(ref, est, spec: EvalSpec) -> dict[str, float]:
         align_origin=spec.align == "origin", n_to_align=spec.align_frames or -1,
         project_to_plane=Plane(spec.project_to_plane) if spec.project_to_plane else None,
     )  # fmt: skip
-    out: dict[str, float] = {"matched": ref.num_poses}
+    out: dict[str, Any] = {"matched": ref.num_poses}
     c = copy.deepcopy
     for name, rel in (("ate", em.PoseRelation.translation_part), ("aoe", em.PoseRelation.rotation_angle_deg)):
         out.update({f"{name}_{k}": v for k, v in main_ape.ape(c(ref), c(est), rel, **align).stats.items()})
@@ -59,10 +61,15 @@ def evo_statistics(ref, est, spec: EvalSpec) -> dict[str, float]:
     if unit is not None:
         for name, rel in (("rpe_trans", em.PoseRelation.translation_part),
                           ("rpe_rot", em.PoseRelation.rotation_angle_deg)):  # fmt: skip
-            r = main_rpe.rpe(
-                c(ref), c(est), rel, delta=spec.rpe_delta, delta_unit=em.Unit[unit], rel_delta_tol=spec.rpe_tolerance,
-                all_pairs=bool(spec.rpe_all_pairs), pairs_from_reference=spec.rpe_pairs == "reference", **align,
-            )  # fmt: skip
+            try:
+                r = main_rpe.rpe(
+                    c(ref), c(est), rel, delta=spec.rpe_delta, delta_unit=em.Unit[unit],
+                    rel_delta_tol=spec.rpe_tolerance, all_pairs=bool(spec.rpe_all_pairs),
+                    pairs_from_reference=spec.rpe_pairs == "reference", **align,
+                )  # fmt: skip
+            except filters.FilterException as exc:  # evo_rpe raises where lorisnb gives NaN with a warning
+                out["rpe_refused"] = str(exc)
+                break
             out.update({f"{name}_{k}": v for k, v in r.stats.items()})
             out["rpe_pairs"] = len(r.np_arrays["error_array"])
     return out
@@ -99,7 +106,14 @@ def crosscheck_evo(
     if ev.failures:
         raise ev_error(ev)
     ours = ev.sequences().iloc[0]
-    theirs = evo_statistics(evo_read(groundtruth, gt_fmt, gt_topic), evo_read(estimate, fmt, topic), the_spec)
+    if not ours["poses"]:
+        raise EvaluationError(f"{estimate}: the estimate has no poses (only comments or blank lines?): nothing to "
+                              "compare; check that the file is the right one and that the run wrote its output")  # fmt: skip
+    ref, est = evo_read(groundtruth, gt_fmt, gt_topic), evo_read(estimate, fmt, topic)
+    with evo_errors(
+        "cannot evaluate this pair", "check the poses of both files (lorisnb skips NaN poses, evo does not)"
+    ):
+        theirs = evo_statistics(ref, est, the_spec)
     note = f"lorisnb (preset {the_spec.preset_name}, align {the_spec.align}) against evo reading the files itself"
     rows = [agreement_row("matched", the_spec.align, ours["matched"], theirs["matched"], ours["matched"], note)]
     for m in ("ate", "aoe", "rpe_trans", "rpe_rot"):
@@ -107,6 +121,10 @@ def crosscheck_evo(
             key = f"{m}_{k}"
             if key in theirs:
                 rows.append(agreement_row(key, the_spec.align, ours[key], theirs[key], ours["matched"], note, tol))
+            elif "rpe_refused" in theirs and m.startswith("rpe"):
+                rows.append(agreement_row(key, the_spec.align, ours[key], float("nan"), 0,
+                                          f"{NO_RPE_PAIR}: evo_rpe raises ({theirs['rpe_refused']}); lorisnb gives NaN "
+                                          "with a warning"))  # fmt: skip
             else:
                 rows.append(agreement_row(key, the_spec.align, ours[key], float("nan"), ours["matched"],
                                           "RPE in seconds: evo has no such unit"))  # fmt: skip
@@ -114,6 +132,4 @@ def crosscheck_evo(
 
 
 def ev_error(ev) -> Exception:
-    from ..errors import EvaluationError
-
     return EvaluationError("; ".join(f.error for f in ev.failures))

@@ -20,14 +20,21 @@ from ..errors import ParseError
 from ..io.bags import read_bag
 from ..io.formats import read_euroc, read_kitti, read_tum
 from ._extras import require
-from .evo_bridge import CROSSCHECK_COLUMNS, agreement_row
+from .evo_bridge import CROSSCHECK_COLUMNS, agreement_row, evo_errors
 
 READING_FORMATS = ("tum", "kitti", "euroc", "bag")
 
 
 def evo_read(path: str | os.PathLike, fmt: str, topic: str | None = None):
     """The trajectory as evo's own reader gives it (``PoseTrajectory3D``, or ``PosePath3D`` for
-    KITTI). ``topic``: a bag's topic or evo's TF id ``/tf:parent.child``."""
+    KITTI). ``topic``: a bag's topic or evo's TF id ``/tf:parent.child``. A file evo refuses is a
+    ParseError naming it, with evo's reason."""
+    with evo_errors(f"cannot read this file as {fmt}", "lorisnb's readers are more lenient (lorisnb evaluate reads it)",
+                    path):  # fmt: skip
+        return _evo_read(path, fmt, topic)
+
+
+def _evo_read(path: str | os.PathLike, fmt: str, topic: str | None):
     fi = require("evo.tools.file_interface")
     p = Path(path)
     if fmt == "tum":
@@ -76,9 +83,13 @@ def crosscheck_reading(path: str | os.PathLike, fmt: str = "tum", topic: str | N
     default against evo), ``poses (repeated kept)``, ``stamps``, ``positions`` (metres) and
     ``orientations`` (degrees) as the largest difference between lorisnb keeping repeated stamps
     and evo, and for KITTI ``rotation block`` (evo uses the printed 3x3 block as it is)."""
-    theirs = evo_read(path, fmt, topic)
     ours = _lorisnb_read(path, fmt, "drop", topic)
     kept = _lorisnb_read(path, fmt, "keep", topic)
+    try:
+        theirs = evo_read(path, fmt, topic)
+    except ParseError as exc:  # lorisnb reads it, evo does not (a comma-separated or empty TUM file, ...)
+        return pd.DataFrame([agreement_row("poses", "none", len(ours), np.nan, 0, f"evo refuses the file: {exc.reason}")],
+                            columns=CROSSCHECK_COLUMNS)  # fmt: skip
     n_evo = int(theirs.num_poses)
     rows = []
     dropped = n_evo - len(ours)

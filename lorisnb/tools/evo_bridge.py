@@ -8,6 +8,9 @@ pairs, and :func:`evo_ape` / :func:`evo_rpe` compute evo's numbers on them, whic
 
 from __future__ import annotations
 
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -18,7 +21,7 @@ from scipy.spatial.transform import Rotation
 from ..core.association import MAX_GAP, associate
 from ..core.geometry import Sim3, umeyama
 from ..core.trajectory import Trajectory
-from ..errors import EvaluationError
+from ..errors import EvaluationError, ParseError
 from ._extras import require
 
 CROSSCHECK_COLUMNS = ["quantity", "alignment", "lorisnb", "evo", "abs_diff", "rel_diff", "agrees", "n_pairs", "note"]
@@ -27,8 +30,30 @@ CROSSCHECK_COLUMNS = ["quantity", "alignment", "lorisnb", "evo", "abs_diff", "re
 #: so results agree to ~1e-12; 1e-9 (absolute, metres/degrees, or relative) leaves margin.
 TOLERANCE = 1e-9
 
+#: What to do when a delta gives no RPE pair; the note that starts a crosscheck row without pairs.
+SMALLER_DELTA = "give a smaller delta (--rpe-frames / --rpe-metres; rpe_deltas= in Python)"
+NO_RPE_PAIR = "no RPE pair"
+
 #: evo's default association window (``evo_ape --t_max_diff``), seconds.
 EVO_MAX_DIFF = 0.01
+
+
+@contextmanager
+def evo_errors(what: str, advice: str = "", path: str | os.PathLike[str] | None = None) -> Iterator[None]:
+    """evo's own exceptions (``evo.EvoException``: its FilterException, FileInterfaceException,
+    GeometryException, SyncException, LieAlgebraException, ...) raised inside the block, as
+    lorisnb's: a ParseError naming ``path`` when given (evo could not read that file), an
+    EvaluationError otherwise; the message says what evo was doing (``what``), evo's reason and
+    what to do (``advice``). numpy's LinAlgError inside evo's math (NaN poses, a degenerate
+    alignment) is turned alike; any other exception passes unchanged."""
+    evo = require("evo")
+    try:
+        yield
+    except (evo.EvoException, np.linalg.LinAlgError) as exc:
+        msg = f"evo {what}: {exc}" + (f"; {advice}" if advice else "")
+        if path is not None:
+            raise ParseError(path, None, msg) from None
+        raise EvaluationError(msg) from None
 
 
 def to_evo(traj: Trajectory, name: str = ""):
@@ -94,7 +119,14 @@ def pair_poses(
     official_interpolation: bool = False,
 ) -> PairedPoses:
     """lorisnb's association: ground truth interpolated at each estimate stamp within the 0.5 s
-    bracket (or, ``by_index``, pose i with pose i, as evo does for KITTI files)."""
+    bracket (or, ``by_index``, pose i with pose i, as evo does for KITTI files). A trajectory with
+    no pose is an EvaluationError saying so."""
+    for label, t in (("ground truth", gt), ("estimate", est)):
+        if not len(t):
+            raise EvaluationError(
+                f"the {label} has no poses (only comments or blank lines?): nothing to compare; "
+                "check that the file is the right one and that the run wrote its output"
+            )
     if by_index:
         if len(gt) != len(est):
             raise EvaluationError(
@@ -114,8 +146,7 @@ def pair_poses(
     if len(a) == 0:
         raise EvaluationError(
             f"no estimate stamp lies within {max_gap} s of ground truth on both sides; estimate spans "
-            f"{est.stamps[0] if len(est) else np.nan:.3f}..{est.stamps[-1] if len(est) else np.nan:.3f} s, "
-            f"ground truth {gt.stamps[0]:.3f}..{gt.stamps[-1]:.3f} s"
+            f"{est.stamps[0]:.3f}..{est.stamps[-1]:.3f} s, ground truth {gt.stamps[0]:.3f}..{gt.stamps[-1]:.3f} s"
         )
     return PairedPoses(
         a.stamps,
@@ -177,7 +208,8 @@ def evo_ape(ref, est, relation: str) -> np.ndarray:
 
     rel = em.PoseRelation.translation_part if relation == "t" else em.PoseRelation.rotation_angle_deg
     m = em.APE(rel)
-    m.process_data((ref, est))
+    with evo_errors("cannot compute the APE", "check that both trajectories hold the same number of valid poses"):
+        m.process_data((ref, est))
     return np.asarray(m.error, float)
 
 
@@ -187,7 +219,8 @@ def evo_rpe(ref, est, relation: str, delta: float, unit: str, all_pairs: bool):
     rel = em.PoseRelation.translation_part if relation == "t" else em.PoseRelation.rotation_angle_deg
     u = em.Unit.frames if unit == "f" else em.Unit.meters
     m = em.RPE(rel, delta, u, all_pairs=all_pairs, pairs_from_reference=True)  # metres along the ground truth
-    m.process_data((ref, est))
+    with evo_errors(f"found no RPE pair over {delta:g} {'frame(s)' if unit == 'f' else 'm'}", SMALLER_DELTA):
+        m.process_data((ref, est))
     return np.asarray(m.error, float)
 
 
@@ -200,6 +233,7 @@ def evo_pairs(positions: np.ndarray, delta: float, unit: str, all_pairs: bool) -
     poses = np.tile(np.eye(4), (len(positions), 1, 1))
     poses[:, :3, 3] = positions
     u = em.Unit.frames if unit == "f" else em.Unit.meters
-    pairs = em.id_pairs_from_delta(list(poses), delta, u, all_pairs=all_pairs)
+    with evo_errors(f"found no RPE pair over {delta:g} {'frame(s)' if unit == 'f' else 'm'}", SMALLER_DELTA):
+        pairs = em.id_pairs_from_delta(list(poses), delta, u, all_pairs=all_pairs)
     arr = np.asarray(pairs, int).reshape(-1, 2)
     return arr[:, 0], arr[:, 1]

@@ -16,6 +16,7 @@ from pathlib import Path
 from ..core.missing import with_missing
 from ..core.model import FileErrors
 from ..core.pipeline import compute_errors, evaluate_sessions, moved_groundtruth
+from ..core.plausibility import no_rpe_pair
 from ..core.spec import EvalSpec
 from ..core.trajectory import Trajectory, time_spans
 from ..core.units import check_stamp_units
@@ -120,9 +121,12 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
                 errors = _manifest(job)
         if errors is None:
             return "filtered", None
+        o = job.spec.rpe_options()
         for seq in errors.sequences:  # the RPE pairs of the spec, here (in a worker, when in parallel)
-            o = job.spec.rpe_options()
-            seq.rpe(o["rpe_delta"], o["rpe_unit"], o["rpe_pairs"], o["rpe_all_pairs"], o["rpe_tolerance"])
+            i = seq.rpe(o["rpe_delta"], o["rpe_unit"], o["rpe_pairs"], o["rpe_all_pairs"], o["rpe_tolerance"])[0]
+            note = no_rpe_pair(f"{errors.file}, seq {seq.seq}", len(i), seq.stamps, o["rpe_delta"], o["rpe_unit"])
+            if note is not None and note not in errors.warnings:
+                errors.warnings.append(note)
         return "ok", errors
     except DataNotFoundError as exc:
         return "skipped", Failure(job.path, str(exc), "no-groundtruth")
