@@ -159,6 +159,26 @@ def test_stamps_in_other_units_are_refused_in_one_file_or_both(pair, tmp_path, c
     assert diagnose(est) == ("seconds", "")
 
 
+def test_sparse_poses_in_the_other_files_span_are_seconds(data, tmp_path, capsys):
+    """Poses 6 s apart (a keyframe-only or re-localization output) in seconds inside the ground
+    truth's span are not "milliseconds by their spacing": they are scored; the same spacing counted
+    from 0 beside a ground truth in Unix seconds is refused as another unit (fr2_desk: 99 s)."""
+    gt, est = ln.read_tum(data.tum / "fr2_desk_groundtruth.txt"), ln.read_tum(data.tum / "fr2_desk_ORB.txt")
+    keep = [0]
+    for k in range(1, len(est)):
+        if est.stamps[k] - est.stamps[keep[-1]] >= 6.0:
+            keep.append(k)
+    sparse = est.subset(np.array(keep))
+    assert diagnose(sparse)[0] == "milliseconds"  # alone, the spacing says so
+    ln.core.units.check_stamp_units(sparse, gt)  # beside the ground truth it is seconds
+    path, gt_path = write(tmp_path, "sparse.txt", _tum(sparse)), write(tmp_path, "gt.txt", _tum(gt))
+    rc, err, table = _run(tmp_path, [str(path), "--gt", str(gt_path), "--conventions", "tum"], capsys)
+    assert rc == 0 and table is not None and table["matched"].iloc[0] == len(keep), err
+    from_zero = Trajectory(sparse.stamps - sparse.stamps[0], sparse.positions, sparse.quaternions)
+    with pytest.raises(ln.EvaluationError, match="look like milliseconds"):
+        ln.core.units.check_stamp_units(from_zero, gt)
+
+
 @pytest.mark.parametrize(("unit", "per_ns"), [("milliseconds", 1e-6), ("microseconds", 1e-3)])
 def test_euroc_files_written_in_other_units_are_refused(pair, tmp_path, capsys, unit, per_ns):
     """EuRoC CSV stamps are nanoseconds; written in ms or us they are read 1e6 or 1e3 times too

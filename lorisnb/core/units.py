@@ -13,7 +13,8 @@ clock), their spacing: the median step between poses of every real file of ../sh
 0.0033 s to 0.32 s; one above :data:`MAX_STEP` (5 s) is not seconds (milliseconds at 200 Hz or
 slower, microseconds, nanoseconds, by its size), one below :data:`MIN_STEP` (2e-4 s: faster than
 5 kHz) is a unit read too small (EuRoC CSV stamps written in milliseconds or microseconds and
-read as nanoseconds).
+read as nanoseconds). The spacing alone never refuses a file whose poses lie in the time span of
+the other file, in seconds: poses a few seconds apart there are sparse, not milliseconds.
 """
 
 from __future__ import annotations
@@ -63,6 +64,18 @@ def diagnose(traj: Trajectory) -> tuple[str, str]:
     return "seconds", ""
 
 
+def _by_spacing(why: str) -> bool:
+    """Whether :func:`diagnose` judged by the spacing of the poses alone (not by the stamps' size)."""
+    return why.startswith("poses a median")
+
+
+def _overlap(a: Trajectory, b: Trajectory) -> bool:
+    """Whether the two trajectories' time spans overlap (stamps in one unit, or a coincidence)."""
+    if len(a) == 0 or len(b) == 0:
+        return False
+    return bool(a.stamps[0] <= b.stamps[-1] and b.stamps[0] <= a.stamps[-1])
+
+
 def stamp_unit(traj: Trajectory) -> str:
     """``"index"`` (stamps made up from the pose order), ``"seconds"``, ``"milliseconds"``,
     ``"microseconds"``, ``"nanoseconds"`` or ``"too fine"`` (see the module docstring)."""
@@ -99,6 +112,8 @@ def check_stamp_units(est: Trajectory, gt: Trajectory, label: str = "estimate") 
     (ue, we), (ug, wg) = diagnose(est), diagnose(gt)
     if ue == ug and ue in ("seconds", "index"):
         return
+    if "seconds" in (ue, ug) and _by_spacing(we if ue != "seconds" else wg) and _overlap(est, gt):
+        return  # sparse poses (a keyframe every few seconds) in the time span of the other file: seconds
     if ue == ug:  # both in the same unit, not seconds
         fix = f"divide the stamps of both by {DIVISOR[ue]}" if ue in DIVISOR else ""
         if ue == "nanoseconds":
