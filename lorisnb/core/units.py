@@ -32,6 +32,9 @@ MAX_STEP = 5.0
 STEP_UNITS = ((5e3, "milliseconds"), (5e6, "microseconds"), (np.inf, "nanoseconds"))
 #: Median step below which the stamps are a unit read too small (faster than 5 kHz).
 MIN_STEP = 2e-4
+#: Poses (and steps to the next pose) a long trajectory is judged on, evenly spread: a heuristic
+#: needs no pass over millions of stamps.
+SAMPLE = 4096
 #: Steps needed before the spacing is judged (fewer poses: the size alone).
 MIN_STEPS = 10
 UNITS = ("seconds", "milliseconds", "microseconds", "nanoseconds", "index", "too fine")
@@ -44,6 +47,11 @@ def diagnose(traj: Trajectory) -> tuple[str, str]:
     if traj.meta.get("stamps") == "index":
         return "index", "pose indices 0, 1, 2, ..."
     t = np.asarray(traj.stamps, float)
+    if t.size > 2 * SAMPLE:  # a long trajectory: its size and spacing from evenly spread poses
+        k = np.linspace(0, t.size - 2, SAMPLE).astype(np.intp)
+        t, d = t[k], t[k + 1] - t[k]
+    else:
+        d = np.diff(t)
     t = t[np.isfinite(t)]
     if t.size == 0:
         return "seconds", ""
@@ -51,7 +59,6 @@ def diagnose(traj: Trajectory) -> tuple[str, str]:
     for bound, unit in MAGNITUDES:
         if size > bound:
             return unit, f"median stamp {size:.3g}"
-    d = np.diff(t)
     d = d[d > 0]
     if d.size < MIN_STEPS:
         return "seconds", ""
