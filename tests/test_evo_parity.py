@@ -227,3 +227,40 @@ def test_relation_columns_equal_evo(data, tmp_path, relation, evo_relation):
     for k in STATS:
         assert row[f"ape_{k}"] == pytest.approx(a.stats[k], rel=1e-9, abs=1e-12), k
         assert row[f"rpe_{k}"] == pytest.approx(r.stats[k], rel=1e-9, abs=1e-12), k
+
+
+@pytest.mark.parametrize(
+    ("args", "variant"),
+    [(["--rpe-frames", "10", "--all-pairs"], dict(align=False, scale=False, delta=10, unit="frames", all_pairs=True)),
+     (["--rpe-metres", "0.5"], dict(align=False, scale=False, delta=0.5, unit="m", all_pairs=False)),
+     (["--scale"], dict(align=True, scale=True, delta=1, unit="frames", all_pairs=False))],
+)  # fmt: skip
+def test_crosscheck_conventions_takes_its_options_to_both_sides(data, tmp_path, capsys, args, variant):
+    """``crosscheck --conventions evo`` with the RPE step, all pairs or scale: both columns hold
+    evo's numbers for those options (they were dropped: both sides at 1 frame, consecutive)."""
+    g, e = data.tum / "fr2_desk_groundtruth.txt", data.tum / "fr2_desk_ORB.txt"
+    out = tmp_path / "cc.csv"
+    assert main(["crosscheck", str(g), str(e), "--conventions", "evo", *args, "--csv", str(out)]) == 0
+    table = pd.read_csv(out).set_index("quantity")
+    theirs = evo_numbers(fi.read_tum_trajectory_file(g), fi.read_tum_trajectory_file(e), {**variant, "ref": False})
+    for q in ("ate_rmse", "rpe_trans_rmse", "rpe_rot_max"):
+        assert table.loc[q, "lorisnb"] == pytest.approx(theirs[q], rel=1e-9)
+        assert table.loc[q, "evo"] == pytest.approx(theirs[q], rel=1e-9)
+
+
+def test_crosscheck_conventions_refuses_what_it_cannot_apply(data, tmp_path, capsys):
+    g, e = str(data.tum / "fr2_desk_groundtruth.txt"), str(data.tum / "fr2_desk_ORB.txt")
+    assert main(["crosscheck", g, e, "--conventions", "evo", "--rpe-frames", "2", "--rpe-metres", "1"]) == 2
+    assert "one RPE step" in capsys.readouterr().err
+    times = tmp_path / "t.txt"
+    times.write_text("0\n")
+    assert main(["crosscheck", g, e, "--format", "kitti", "--conventions", "evo", "--times", str(times)]) == 2
+    assert "reads KITTI files without stamps" in capsys.readouterr().err
+
+
+def test_delta_under_evo_conventions_is_said_to_be_the_cr_window(data, capsys):
+    """evo_rpe's --delta is lorisnb's --rpe-delta: lorisnb's --delta (the CR-T window) given under
+    --conventions evo is said, and the RPE stays evo's 1-frame default."""
+    g, e = str(data.tum / "fr2_desk_groundtruth.txt"), str(data.tum / "fr2_desk_ORB.txt")
+    assert main(["evaluate", e, "--gt", g, "--conventions", "evo", "--delta", "10", "--no-progress"]) == 0
+    assert "not evo_rpe's --delta" in capsys.readouterr().err

@@ -129,6 +129,15 @@ def test_kitti_files_of_different_lengths_or_time_options_are_refused(pair, tmp_
 # --- 2. stamps not in seconds ------------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("opts", [["--motion-filter", "0.1", "5"], ["--t-start", "3"], ["--t-end", "100"]])
+def test_kitti_index_pairs_refuse_filters_and_windows(matched, tmp_path, capsys, opts):
+    """A motion filter (each file keeps other poses) or a time window (in pose indices) cannot
+    apply to pose i with pose i: refused naming the option, not blamed on the files' lengths."""
+    g, e = write(tmp_path, "gt.kitti", _kitti(matched[0])), write(tmp_path, "est.kitti", _kitti(matched[1]))
+    rc, err, _ = _run(tmp_path, [str(e), "--gt", str(g), "--format", "kitti", *opts], capsys)
+    assert rc == 2 and opts[0] in err and "pose indices" in err and "same length" not in err, err
+
+
 @pytest.mark.parametrize(("unit", "factor"), [("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9)])
 def test_stamps_in_other_units_are_refused_in_one_file_or_both(pair, tmp_path, capsys, unit, factor):
     gt, est = pair

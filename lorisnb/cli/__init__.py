@@ -127,14 +127,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--rpe-frames",
         type=arg_type(lambda t: int(validate.positive("--rpe-frames", t, "frames", integer=True))),
-        default=1,
-        help="RPE delta in frames (default 1)",
+        default=None,
+        help="RPE delta in frames (default 1; with --conventions: the RPE step, instead of the preset's)",
     )
     p.add_argument(
         "--rpe-metres",
         type=arg_type(lambda t: validate.positive("--rpe-metres", t, "metres")),
-        default=1.0,
-        help="RPE delta in metres (default 1)",
+        default=None,
+        help="RPE delta in metres (default 1; with --conventions: the RPE step, instead of the preset's)",
     )
     p.add_argument("--all-pairs", action="store_true", help="RPE over all pairs (evo's default: consecutive)")
     p.add_argument("--data", default=None, metavar="DIR")

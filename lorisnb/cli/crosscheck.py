@@ -87,7 +87,7 @@ def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame | int:
         )
     if args.align is not None and args.conventions is None:
         raise ValidationError("--align: only with --conventions (the crosscheck's own rows use none, se3 and sim3)")
-    deltas = [(int(args.rpe_frames), "f"), (float(args.rpe_metres), "m")]
+    deltas = [(int(args.rpe_frames or 1), "f"), (float(args.rpe_metres or 1.0), "m")]
     gt_format = args.format
     est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)
     if args.conventions is not None:
@@ -127,12 +127,43 @@ def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame | int:
     return table
 
 
+def _conventions_options(args: argparse.Namespace) -> dict[str, object]:
+    """The spec options ``crosscheck --conventions`` takes from its own options: ``--align``,
+    ``--scale``, the RPE step (``--rpe-frames`` or ``--rpe-metres``, one of them) and
+    ``--all-pairs``; times files are refused (evo reads the files itself, and a KITTI file has no
+    stamps for it: pose i with pose i)."""
+    times = [
+        o for o, v in (("--times", args.times), ("--gt-times", args.gt_times), ("--est-times", args.est_times)) if v
+    ]
+    if times:
+        raise ValidationError(
+            f"{', '.join(times)}: with --conventions evo reads both files itself, and evo reads KITTI files without "
+            "stamps (pose i with pose i); crosscheck without --conventions takes times files, as does lorisnb evaluate"
+        )
+    if args.rpe_frames is not None and args.rpe_metres is not None:
+        raise ValidationError(
+            "--rpe-frames and --rpe-metres: with --conventions the comparison has one RPE step; give one"
+        )
+    options: dict[str, object] = {}
+    if args.align is not None:
+        options["align"] = args.align
+    if args.scale is not None:
+        options["scale"] = args.scale
+    if args.rpe_frames is not None:
+        options.update(rpe_delta=args.rpe_frames, rpe_unit="f")
+    elif args.rpe_metres is not None:
+        options.update(rpe_delta=args.rpe_metres, rpe_unit="m")
+    if args.all_pairs:
+        options["rpe_all_pairs"] = True
+    return options
+
+
 def _crosscheck_conventions(args: argparse.Namespace, gt_format: str, est_format: str) -> int:
     """``crosscheck --conventions P``: lorisnb under preset P against evo reading the files itself."""
     from ..io.writers import write_csv
     from ..tools.crosscheck_evo import crosscheck_evo
 
-    spec = make_spec(args.conventions, surface="cli", **({"align": args.align} if args.align else {}))
+    spec = make_spec(args.conventions, surface="cli", **_conventions_options(args))
     table = crosscheck_evo(args.gt, args.est, spec, fmt=est_format, gt_fmt=gt_format, topic=args.topic,
                            gt_topic=args.gt_topic, tol=1e-5 if "kitti" in (gt_format, est_format) else 1e-9)  # fmt: skip
     with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):

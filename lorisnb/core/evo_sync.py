@@ -162,7 +162,7 @@ def time_window(traj: Trajectory, t_start: float | None = None, t_end: float | N
     lo = float(traj.stamps[0]) if t_start is None else float(t_start)
     hi = float(traj.stamps[-1]) if t_end is None else float(t_end)
     if lo > hi:
-        raise ValidationError(f"t_start {lo:.9g} s is after t_end {hi:.9g} s; expected t_start <= t_end")
+        raise ValidationError(f"t_start {lo:.17g} s is after t_end {hi:.17g} s; expected t_start <= t_end")
     return traj.subset((traj.stamps >= lo) & (traj.stamps <= hi))
 
 

@@ -23,8 +23,11 @@ from .geometry import quat_normalize
 from .spec import EvalSpec
 from .trajectory import Trajectory
 
-#: Spec options that say how stamps are matched in time: they cannot apply to pose indices.
-TIME_OPTIONS = ("association", "max_gap", "max_diff", "t_offset", "official_interpolation")
+#: Spec options that say how stamps are matched in time, or that thin each trajectory on its own
+#: (a motion filter keeps other poses of each; a time window cuts by stamps): they cannot apply to
+#: pose indices (evo_ape kitti has neither a time window nor, without stamps, a motion filter).
+TIME_OPTIONS = ("association", "max_gap", "max_diff", "t_offset", "official_interpolation", "motion_filter",
+                "t_start", "t_end")  # fmt: skip
 
 
 def indexed(trajectories: Iterable[Trajectory]) -> bool:
@@ -44,7 +47,7 @@ def by_index(spec: EvalSpec) -> EvalSpec:
         raise ValidationError(
             f"{names}: the stamps of both files are pose indices (KITTI files read without times), so poses are "
             "paired by index (pose i with pose i) and no matching in time applies; give both files their times "
-            "(--est-times and --gt-times) to match them in time"
+            "(--est-times and --gt-times) to match them in time, filter or cut them"
         )
     return replace(spec, association="index")
 

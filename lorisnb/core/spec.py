@@ -217,6 +217,11 @@ class EvalSpec:
                 f"{name('transform')}: OpenLORIS result files name their sensor frame in the header "
                 "(frame: ...); the transform comes from the robot's extrinsics"
             )
+        if self.preset_name == "evo" and "delta" in given:  # evo_rpe's --delta is lorisnb's RPE step
+            notes.append(
+                f"delta {self.delta:g}: lorisnb's validity window of CR-T (seconds), not evo_rpe's --delta; evo's RPE "
+                "step is the RPE delta (--rpe-delta with --rpe-unit; rpe_delta= and rpe_unit= in Python)"
+            )
         if kind == "pair" and "mode" in given and self.mode != "auto":
             notes.append(f"{name('mode')} {self.mode}: a pair has one sequence, so per-seq and lifelong agree")
         if problems:

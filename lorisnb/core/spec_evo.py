@@ -93,7 +93,9 @@ def check_evo_together(values: dict[str, Any], label: Any) -> None:
     """Rules between evo options (``values``: the merged spec's fields)."""
     lo, hi = values.get("t_start"), values.get("t_end")
     if lo is not None and hi is not None and lo > hi:
-        raise ValidationError(f"{label('t_start')} {lo:g} is after {label('t_end')} {hi:g}; expected t_start <= t_end")
+        raise ValidationError(
+            f"{label('t_start')} {lo:.17g} is after {label('t_end')} {hi:.17g}; expected t_start <= t_end"
+        )
     unit = values.get("rpe_unit", "s")
     if unit in ("f", "frames") and float(values.get("rpe_delta", 1.0)) % 1:
         raise ValidationError(f"{label('rpe_delta')}: expected a whole number of frames with rpe_unit {unit}")
