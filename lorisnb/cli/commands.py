@@ -320,7 +320,8 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
-    """Re-check a run's inputs against run.json: exit 1 if any changed or is missing."""
+    """Re-check a run's inputs against run.json: exit 1 if any changed, is missing, or appeared in a
+    folder the run read."""
     from ..tools.provenance import read_run_json, verify_run
 
     record = read_run_json(args.run)
@@ -329,7 +330,9 @@ def cmd_verify(args: argparse.Namespace) -> int:
         print(f"{what}: {path}")
     n = len(record["inputs"])
     if problems:
-        print(f"{len(problems)} of {n} input file(s) changed or missing since the run", file=sys.stderr)
+        added = sum(what == "added" for _, what in problems)
+        print(f"{len(problems) - added} of {n} input file(s) changed or missing since the run"
+              + (f"; {added} file(s) added to the folders it read" if added else ""), file=sys.stderr)  # fmt: skip
         return 1
     print(f"all {n} input file(s) unchanged", file=sys.stderr)
     return 0
