@@ -214,6 +214,12 @@ def run_report(
                 "expected a folder of <algorithm>/*.txt result files"
             )
         keep_safe.append(Path(results))
+    if run_dir.exists():
+        if not force:
+            raise LorisError(f"{run_dir} exists; choose another --out or pass --force to replace it")
+        why = _protected(run_dir, keep_safe)
+        if why:
+            raise LorisError(f"--force will not replace {run_dir}: {why}; choose another --out")
     names, left_out = _select(notebooks, notebooks_dir, results)
     declared = declared_by(names, notebooks_dir)
     params = check_parameters(dict(parameters or {}), declared)
@@ -234,12 +240,6 @@ def run_report(
     hit = overlap(run_dir, [*roots, *keep_safe])
     if hit:  # the run would be read as an input by the next report on the same folder, and by verify
         raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
-    if run_dir.exists():
-        if not force:
-            raise LorisError(f"{run_dir} exists; choose another --out or pass --force to replace it")
-        why = _protected(run_dir, keep_safe)
-        if why:
-            raise LorisError(f"--force will not replace {run_dir}: {why}; choose another --out")
     run_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
     try:
