@@ -212,3 +212,20 @@ def test_compare_and_diff_use_the_same_validators(results, capsys):
         err = capsys.readouterr().err
         assert exc.value.code == 2 and ("alpha=2: expected a probability between 0 and 1" in err
                                         or "seed=-1: expected a whole number >= 0" in err)  # fmt: skip
+
+
+def test_report_results_are_the_leaderboards_input_whatever_notebooks_run(tmp_path, results, monkeypatch):
+    """--results with a notebook that does not declare results_dir: the leaderboard, run.json's
+    inputs and the overlap check are about the results folder, not the bundled icra20 results."""
+    import lorisnb.tools.report as report
+
+    monkeypatch.setattr(report, "run_notebook", lambda name, out_dir, *a, **k: report.NotebookRun(name))
+    out, runs = report.run_report(tmp_path / "run", {}, ["metrics_primer"], progress=False, results=results)
+    record = json.loads((out / "run.json").read_text())
+    assert record["spec"]["values"]["source"] == str(results)
+    assert record["input_roots"][0] == str(results.resolve())
+    assert sorted(k for k in record["inputs"] if k.startswith(str(results.resolve()))) == sorted(
+        str(p.resolve()) for p in results.rglob("*.txt")
+    )
+    board = pd.read_csv(out / "findings" / "sequences.csv")
+    assert sorted(set(board["algorithm"])) == ["odom", "orbslam2_rgbd"] and len(board) == 3

@@ -235,9 +235,10 @@ def run_report(
     if data is not None and "data_root" in declared:
         params.setdefault("data_root", str(data.root))  # kernels run in the run folder, not here
     wants_board = results is not None or "results_dir" in declared
-    source = Path(str(params["results_dir"])) if params.get("results_dir") else (data.icra20 if data else None)
+    given_source = results if results is not None else params.get("results_dir")  # the leaderboard's input
+    source = Path(str(given_source)) if given_source else (data.icra20 if data else None)
     roots = _input_roots(names, params, data, source if wants_board else None)
-    hit = overlap(run_dir, [*roots, *keep_safe])
+    hit = overlap(run_dir, [*roots, nb_dir])
     if hit:  # the run would be read as an input by the next report on the same folder, and by verify
         raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
     run_dir.parent.mkdir(parents=True, exist_ok=True)
