@@ -152,6 +152,11 @@ def test_verify_notices_files_added_to_the_folders_read(tmp_path, results, table
     (res / "odom" / "cafe-1-1-odom.txt").unlink()
     rc, out, _ = run(capsys, "verify", r)
     assert rc == 1 and "missing: " in out and "cafe-1-1-odom.txt" in out
+    record = json.loads((r / "run.json").read_text())  # a run of an earlier lorisnb: says what it cannot check
+    del record["input_roots"]
+    (r / "run.json").write_text(json.dumps(record))
+    rc, _, err = run(capsys, "verify", r)
+    assert rc == 1 and "no input_roots" in err
 
 
 @pytest.mark.parametrize("where", ["out in results", "out in an algorithm folder", "results in out", "same"])

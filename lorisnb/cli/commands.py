@@ -329,6 +329,9 @@ def cmd_verify(args: argparse.Namespace) -> int:
     for path, what in problems:
         print(f"{what}: {path}")
     n = len(record["inputs"])
+    if "input_roots" not in record:
+        print("note: run.json has no input_roots (a run of an earlier lorisnb): files added to the folders it read "
+              "are not noticed; only its inputs are checked", file=sys.stderr)  # fmt: skip
     if problems:
         added = sum(what == "added" for _, what in problems)
         print(f"{len(problems) - added} of {n} input file(s) changed or missing since the run"
