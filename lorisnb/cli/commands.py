@@ -334,8 +334,13 @@ def cmd_verify(args: argparse.Namespace) -> int:
               "are not noticed; only its inputs are checked", file=sys.stderr)  # fmt: skip
     if problems:
         added = sum(what == "added" for _, what in problems)
-        print(f"{len(problems) - added} of {n} input file(s) changed or missing since the run"
-              + (f"; {added} file(s) added to the folders it read" if added else ""), file=sys.stderr)  # fmt: skip
+        said = (
+            [f"{len(problems) - added} of {n} input file(s) changed or missing since the run"]
+            if added < len(problems)
+            else []
+        )
+        said += [f"{added} file(s) added to the folders it read"] if added else []
+        print("; ".join(said), file=sys.stderr)
         return 1
     print(f"all {n} input file(s) unchanged", file=sys.stderr)
     return 0

@@ -157,7 +157,7 @@ def _input_roots(names: list[str], params: Mapping[str, Any], data: Any, source:
             roots += [data.root / "openloris-scene" / "icra20_results"]
         if any(Path(n).stem in ("evo_crosscheck", "indoor_vs_outdoor") for n in names):
             roots += [data.root / "tum-rgbd", data.root / "published"]
-    return roots
+    return list(dict.fromkeys(r.resolve() for r in roots))
 
 
 def _umask() -> int:
