@@ -166,9 +166,9 @@ def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
         (folder / "per_sequence_benchmark").mkdir(parents=True)
         assert main(["evaluate", str(src), "--eps", "paper", "--phi", "30", "--no-progress",
                      "--csv", str(folder / "per_sequence_benchmark" / "sequences.csv")]) == 0  # fmt: skip
-        meta = dict(command="lorisnb report", lorisnb_version=version, commit="abc", spec={"eps": "paper", "phi": 30},
+        meta = dict(command=["lorisnb", "report"], lorisnb_version=version, commit="abc", spec={"eps": "paper", "phi": 30},
                     data_root="/data", created=f"2026-11-0{k + 1}T02:00:00+00:00",
-                    inputs={"/data/openloris-scene/groundtruth/gt_home_1.txt": "e3b0"}, notebooks=[])  # fmt: skip
+                    inputs={"/data/openloris-scene/groundtruth/gt_home_1.txt": "e3b0"}, notebooks={})  # fmt: skip
         (folder / "run.json").write_text(json.dumps(meta))
         runs.append(folder)
     capsys.readouterr()

@@ -165,6 +165,16 @@ def test_report_on_a_results_folder_with_trials(tmp_path, icra20, data, capfd):
     capfd.readouterr()
     assert main(["verify", str(out)]) == 1
     assert f"changed: {trial.resolve()}" in capfd.readouterr().out
+    # the folders it read are listed again: a result file added since is an input of the same command
+    assert runs["input_roots"][0] == str(results.resolve())
+    added = results / "orb" / "home_1_trial4.txt"
+    added.write_text((results / "orb" / "home_1_trial1.txt").read_text())
+    assert main(["verify", str(out)]) == 1 and f"added: {added.resolve()}" in capfd.readouterr().out
+    # diff of the run against itself: each sequence once, though four of the run's tables hold it
+    per_sequence = pd.read_csv(out / "findings" / "sequences.csv")
+    assert main(["diff", str(out), str(out), "--no-progress"]) == 0
+    n = len(per_sequence.drop_duplicates(["algorithm", "scene", "seq"]))
+    assert n == 6 and f"\n{n} sequence(s);" in capfd.readouterr().out
 
 
 def test_report_notebooks_dir_runs_every_notebook(tmp_path, capfd):

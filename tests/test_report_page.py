@@ -122,7 +122,7 @@ def test_run_json_and_verify(tmp_path, data, capsys):
     run.mkdir()
     record = run_record(["lorisnb", "report"], {"description": "d", "values": {"eps": "paper"}}, root, inputs,
                         {"per_sequence_benchmark": "ok"})  # fmt: skip
-    assert tuple(record) == KEYS and record["lorisnb_version"] == ln.__version__
+    assert tuple(record) == (*KEYS, "input_roots") and record["lorisnb_version"] == ln.__version__
     write_run_json(run, record)
     assert json.loads((run / "run.json").read_text())["inputs"] == inputs
     assert main(["verify", str(run)]) == 0
@@ -197,7 +197,11 @@ def test_a_run_folder_is_readable_and_records_its_provenance(tmp_path, monkeypat
         os.umask(old)
     assert stat.S_IMODE(run_dir.stat().st_mode) == 0o750
     record = json.loads((run_dir / "run.json").read_text())
-    assert tuple(record) == KEYS and record["command"] == ["x"] and record["notebooks"] == {"metrics_primer": "ok"}
+    assert (
+        tuple(record) == (*KEYS, "input_roots")
+        and record["command"] == ["x"]
+        and record["notebooks"] == {"metrics_primer": "ok"}
+    )
     assert "openloris-scene/groundtruth/gt_cafe_1.txt" in record["inputs"]
     index = (run_dir / "index.html").read_text()
     assert "No leaderboard" in index and (run_dir / "report.html").exists()

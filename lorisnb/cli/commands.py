@@ -320,7 +320,8 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
-    """Re-check a run's inputs against run.json: exit 1 if any changed or is missing."""
+    """Re-check a run's inputs against run.json: exit 1 if any changed, is missing, or appeared in a
+    folder the run read."""
     from ..tools.provenance import read_run_json, verify_run
 
     record = read_run_json(args.run)
@@ -328,8 +329,18 @@ def cmd_verify(args: argparse.Namespace) -> int:
     for path, what in problems:
         print(f"{what}: {path}")
     n = len(record["inputs"])
+    if "input_roots" not in record:
+        print("note: run.json has no input_roots (a run of an earlier lorisnb): files added to the folders it read "
+              "are not noticed; only its inputs are checked", file=sys.stderr)  # fmt: skip
     if problems:
-        print(f"{len(problems)} of {n} input file(s) changed or missing since the run", file=sys.stderr)
+        added = sum(what == "added" for _, what in problems)
+        said = (
+            [f"{len(problems) - added} of {n} input file(s) changed or missing since the run"]
+            if added < len(problems)
+            else []
+        )
+        said += [f"{added} file(s) added to the folders it read"] if added else []
+        print("; ".join(said), file=sys.stderr)
         return 1
     print(f"all {n} input file(s) unchanged", file=sys.stderr)
     return 0

@@ -237,13 +237,12 @@ def param_value(text: str) -> Any:
 def probability_type(name: str) -> Callable[[str], Any]:
     """A probability strictly between 0 and 1 (``--level``, ``--alpha``)."""
 
-    def check(text: str) -> float:
-        v = validate.positive(name, text, "a probability")
-        if not v < 1:
-            raise ValidationError(f"{name}={text}: expected a probability between 0 and 1")
-        return v
+    return arg_type(lambda t: validate.probability(name, t))
 
-    return arg_type(check)
+
+def seed_type(name: str) -> Callable[[str], Any]:
+    """A seed, a whole number >= 0 (``--seed``)."""
+    return arg_type(lambda t: validate.seed(name, t))
 
 
 def add_compare_options(p: argparse.ArgumentParser) -> None:
@@ -255,7 +254,12 @@ def add_compare_options(p: argparse.ArgumentParser) -> None:
                    help="confidence level of the intervals (default 0.95)")  # fmt: skip
     p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
                    help="significance level of the pairwise permutation test, after Holm's correction (default 0.05)")  # fmt: skip
-    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap and of sampled relabellings (default 0)")
+    p.add_argument(
+        "--seed",
+        type=seed_type("--seed"),
+        default=0,
+        help="seed of the bootstrap and of sampled relabellings (default 0)",
+    )
     p.add_argument("--power", default=None, metavar="DELTA",
                    type=arg_type(lambda t: validate.positive("--power", t, "the metric's unit")),
                    help="for pairs not found different: the sequences or trials needed to detect a difference "
@@ -276,7 +280,7 @@ def add_diff_options(p: argparse.ArgumentParser) -> None:
                    f"or a percentage of the base value (defaults: {defaults.replace('%', '%%')})")  # fmt: skip
     p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
                    help="significance level of the permutation test across trials (default 0.05)")  # fmt: skip
-    p.add_argument("--seed", type=int, default=0, help="seed of sampled relabellings (default 0)")
+    p.add_argument("--seed", type=seed_type("--seed"), default=0, help="seed of sampled relabellings (default 0)")
     p.add_argument("--json", default=None, metavar="OUT", help="write the verdict as JSON")
     p.add_argument(
         "--junit", default=None, metavar="OUT", help="write the verdict as JUnit XML (one test per sequence)"

@@ -10,13 +10,7 @@ from pathlib import Path
 
 from ..errors import OutputError, ValidationError
 from ..io.registry import FORMATS
-from ..io.writers import check_dataset_target
-
-
-def src_inside(target: Path, inputs: list[str]) -> bool:
-    """Whether an output folder ``target`` is an input, or contains one."""
-    return any(target == Path(i).resolve() or target in Path(i).resolve().parents for i in inputs)
-
+from ..io.writers import check_dataset_target, overlap
 
 #: Suffixes of the files a folder of inputs is walked for (every format's, :mod:`lorisnb.io.registry`):
 #: an output among the inputs with one of them would be read as an input by the next run.
@@ -24,8 +18,9 @@ INPUT_SUFFIXES = frozenset(x for f in FORMATS.values() for x in f.suffixes)
 
 
 def check_output(out: str | None, inputs: list[str], force: bool, folder: bool = False, option: str = "--csv") -> None:
-    """Refuse an output before any work: an input of the command, a folder, an existing file
-    without --force, or a place that cannot be written."""
+    """Refuse an output before any work: an input of the command, a file in an input folder with
+    an input's suffix, a folder output that is, holds or lies in an input (:func:`overlap`), a
+    folder for a file, an existing file without --force, or a place that cannot be written."""
     if out is None:
         return
     if str(out).strip() == "":
@@ -42,8 +37,9 @@ def check_output(out: str | None, inputs: list[str], force: bool, folder: bool =
             )
     if target.is_dir() and not folder:
         raise OutputError(f"{out} is a folder; expected a file name for {option}")
-    if folder and src_inside(target, inputs):
-        raise OutputError(f"{out} is or holds an input of this command; choose another output folder")
+    hit = overlap(target, inputs) if folder else None
+    if hit:
+        raise OutputError(f"{option} {out} {hit[0]} the input {hit[1]} of this command; choose another output folder")
     if target.exists() and not force:
         raise OutputError(f"{out} exists; choose another name or pass --force to replace it")
     parent = target.parent

@@ -80,7 +80,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
     if problems:
         raise ValidationError(
             "BASE and CAND are not comparable (different evaluation specs): " + "; ".join(problems) + ". Compare "
-            "runs made with the same thresholds (for a result folder: --eps, --phi, --delta, --tau as the table's)"
+            "runs made with the same spec (for a result folder: --eps, --phi, --delta, --tau as the table's)"
         )
     if base.version and cand.version and base.version != cand.version:
         print(f"note: lorisnb {base.version} made BASE, {cand.version} CAND", file=sys.stderr)

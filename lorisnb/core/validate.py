@@ -170,6 +170,27 @@ def positive(name: str, value: Any, unit: str, *, integer: bool = False) -> floa
     return float(v)
 
 
+def probability(name: str, value: Any) -> float:
+    """A probability strictly between 0 and 1 (a confidence level, a test's alpha)."""
+    v = _number(name, value, {})
+    if not 0 < v < 1:  # NaN too
+        raise ValidationError(f"{name}={_show(value)}: expected a probability between 0 and 1")
+    return float(v)
+
+
+def seed(name: str, value: Any) -> int:
+    """A random seed: a whole number >= 0 (numpy's generators refuse negative seeds)."""
+    if isinstance(value, (bool, np.bool_)) or isinstance(value, float) and not value.is_integer():
+        raise ValidationError(f"{name}={_show(value)}: expected a whole number >= 0")
+    try:
+        v = int(value.strip()) if isinstance(value, str) else int(value)
+    except (TypeError, ValueError):
+        raise ValidationError(f"{name}={_show(value)}: expected a whole number >= 0") from None
+    if v < 0:
+        raise ValidationError(f"{name}={_show(value)}: expected a whole number >= 0")
+    return v
+
+
 def finite(name: str, value: Any, unit: str) -> float:
     """A finite number of any sign (for example a clock offset)."""
     v = _number(name, value, {})

@@ -93,6 +93,22 @@ def _plain(df: pd.DataFrame) -> pd.DataFrame:
     return df.astype({c: df[c].cat.categories.dtype for c in cats}) if cats else df
 
 
+def overlap(target: str | os.PathLike[str], inputs: Iterable[str | os.PathLike[str]]) -> tuple[str, str] | None:
+    """How an output folder ``target`` meets the inputs: ``("is", input)``, ``("holds", input)``
+    (the input lies inside it) or ``("lies in", input)`` (it lies inside an input folder, where a
+    later run reading that folder would read it); None when it meets none."""
+    t = Path(target).resolve()
+    for i in inputs:
+        src = Path(i).resolve()
+        if t == src:
+            return "is", str(i)
+        if t in src.parents:
+            return "holds", str(i)
+        if src in t.parents:
+            return "lies in", str(i)
+    return None
+
+
 def check_dataset_target(out: str | os.PathLike[str], force: bool) -> None:
     """Refuse a Parquet dataset's place before anything is written: an existing ``out`` without
     ``force``, or with it one lorisnb did not write (no :data:`TABLE_MARKER`) or holding other files."""

@@ -33,15 +33,13 @@ class Diff:
 
 
 def keyed(table: pd.DataFrame) -> pd.DataFrame:
-    """A run's table ready to be matched: ``suite`` and ``trial`` present; the table a row came from
-    inside a report run (``table``) is part of its suite; one row per sequence and trial, else an
+    """A run's table ready to be matched: ``suite`` and ``trial`` present; one row per sequence and
+    trial (a report run's tables are read as one, :func:`lorisnb.tools.runs.load_run`), else an
     error (a sweep holds several settings: diff one)."""
     t = with_trials(table)
     t["suite"] = t["suite"].fillna("").astype(str)
     if "table" not in t.columns and "eps_value" not in t.columns:
         check_table_duplicates(t)  # two files for one sequence: named, with what to do
-    if "table" in t.columns:
-        t["suite"] = t["table"].astype(str) + [f":{s}" if s else "" for s in t["suite"]]
     dup = t.duplicated(["suite", "algorithm", "scene", "seq", "trial"], keep=False)
     if dup.any():
         r = t[dup].iloc[0]

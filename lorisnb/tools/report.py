@@ -21,9 +21,9 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
-from ..errors import DataNotFoundError, LorisError, ValidationError
+from ..errors import DataNotFoundError, LorisError, OutputError, ValidationError
 from ..io.data import find_data
-from ..io.writers import write_csv
+from ..io.writers import overlap, write_csv
 from .evaluate import result_files
 from .leaderboard import report_findings
 from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
@@ -145,9 +145,10 @@ def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_d
     return [runs[i] for i in range(len(names))]
 
 
-def _inputs(names: list[str], params: Mapping[str, Any], data: Any, source: Path | None) -> list[Path]:
-    """The files the report reads: its results, the ground truth and extrinsics, and the data
-    the selected notebooks read besides (TUM pairs, published tables, folders given as parameters)."""
+def _input_roots(names: list[str], params: Mapping[str, Any], data: Any, source: Path | None) -> list[Path]:
+    """The files and folders the report reads (every file below them, :func:`input_files`): its
+    results, the ground truth and extrinsics, and the data the selected notebooks read besides
+    (TUM pairs, published tables, folders given as parameters)."""
     roots = [source] if source is not None else []
     roots += [Path(str(params[k])) for k in ("results_dir", "path", "groundtruth", "ordslam_dir") if params.get(k)]
     if data is not None:
@@ -156,7 +157,7 @@ def _inputs(names: list[str], params: Mapping[str, Any], data: Any, source: Path
             roots += [data.root / "openloris-scene" / "icra20_results"]
         if any(Path(n).stem in ("evo_crosscheck", "indoor_vs_outdoor") for n in names):
             roots += [data.root / "tum-rgbd", data.root / "published"]
-    return input_files(roots)
+    return list(dict.fromkeys(r.resolve() for r in roots))
 
 
 def _umask() -> int:
@@ -221,8 +222,7 @@ def run_report(
             raise LorisError(f"--force will not replace {run_dir}: {why}; choose another --out")
     names, left_out = _select(notebooks, notebooks_dir, results)
     declared = declared_by(names, notebooks_dir)
-    params = dict(parameters or {})
-    check_parameters(params, declared)
+    params = check_parameters(dict(parameters or {}), declared)
     given = params.get("results_dir")
     if results is not None and given is not None and Path(str(given)).resolve() != Path(results).resolve():
         raise ValidationError("--results and -p results_dir name two folders; give one")
@@ -235,7 +235,12 @@ def run_report(
     if data is not None and "data_root" in declared:
         params.setdefault("data_root", str(data.root))  # kernels run in the run folder, not here
     wants_board = results is not None or "results_dir" in declared
-    source = Path(str(params["results_dir"])) if params.get("results_dir") else (data.icra20 if data else None)
+    given_source = results if results is not None else params.get("results_dir")  # the leaderboard's input
+    source = Path(str(given_source)) if given_source else (data.icra20 if data else None)
+    roots = _input_roots(names, params, data, source if wants_board else None)
+    hit = overlap(run_dir, [*roots, nb_dir])
+    if hit:  # the run would be read as an input by the next report on the same folder, and by verify
+        raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
     run_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
     try:
@@ -263,9 +268,9 @@ def run_report(
         runs = _run_all(names, tmp, params, notebooks_dir, n_jobs, progress, meanwhile=leaderboard)
         spec = board["spec"]
         (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
-        inputs = checksums(_inputs(names, params, data, source if wants_board else None), data.root if data else None)
+        inputs = checksums(input_files(roots), data.root if data else None)
         record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
-                            {r.name: r.status for r in runs})  # fmt: skip
+                            {r.name: r.status for r in runs}, roots)  # fmt: skip
         write_run_json(tmp, record)
         index = write_index(tmp, runs, params, name=run_dir.name, findings=board.get("findings"), spec=spec,
                             failures=board.get("failures"), left_out=left_out,

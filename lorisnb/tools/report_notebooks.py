@@ -22,6 +22,8 @@ import pandas as pd
 
 from ..core import validate
 from ..core.spec import SPEC_NAMES, make_spec
+from ..core.stats import WEIGHTS
+from ..core.trials import compile_trials_by
 from ..errors import LorisError, ValidationError
 from ._extras import EXTRAS, require
 from .notebook import INPUT_ERRORS_CSV
@@ -181,21 +183,34 @@ _CHECKS: dict[str, Any] = {
     "phi_grid": lambda v: validate.threshold_list("phi", v),
     "delta_grid": lambda v: validate.threshold_list("delta", v),
     "tau_grid": lambda v: validate.threshold_list("tau", v),
+    "trials_by": lambda v: compile_trials_by(str(v)),
+}
+#: Parameters of the leaderboard checked and normalized by the validators of ``compare`` and ``diff``.
+_VALUES: dict[str, Any] = {
+    "metric": lambda v: validate.choice("metric", v, WEIGHTS),
+    "alpha": lambda v: validate.probability("alpha", v),
+    "level": lambda v: validate.probability("level", v),
+    "seed": lambda v: validate.seed("seed", v),
 }
 
 
-def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mapping[str, Any]]) -> None:
+def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
     """Refuse a parameter no selected notebook declares (listing the declared names) and values
-    that the command line would refuse (``-p eps -1``), before anything runs."""
+    that the command line would refuse (``-p eps -1``, ``-p alpha 2``), before anything runs.
+    Returns the parameters, the leaderboard's settings normalized (``-p metric CR`` is ``cr``)."""
     unknown = sorted(set(parameters) - set(declared) - {"output_dir"})
     if unknown:
         raise ValidationError(
             f"parameter(s) {', '.join(unknown)} not declared by the selected notebooks; they declare: "
             + ", ".join(sorted(declared))
         )
+    out = dict(parameters)
     for name, value in parameters.items():
         if name in _CHECKS and value is not None:
             _CHECKS[name](value)
+        if name in _VALUES and value is not None:
+            out[name] = _VALUES[name](value)
+    return out
 
 
 def run_one(

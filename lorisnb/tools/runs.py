@@ -2,9 +2,14 @@
 its notebooks wrote), or a per-sequence table as ``lorisnb evaluate --csv`` / ``--parquet`` writes it.
 
 A run's **spec** is what its numbers depend on besides the estimates: the ``spec`` of ``run.json``
-when there is one, and the thresholds recorded in the table's own columns (``eps``, ``phi``,
-``delta``, ``tau`` per scene, ``official_interpolation``). Two runs are comparable when their specs
-agree (:func:`spec_differences`).
+when there is one (its ``values`` but those of :data:`NOT_NUMBERS`: where the results live and the
+leaderboard's test settings), and the thresholds recorded in the table's own columns (``eps``,
+``phi``, ``delta``, ``tau`` per scene, ``official_interpolation``). Two runs are comparable when their
+specs agree (:func:`spec_differences`, which names every key that differs).
+
+A report run holds a sequence in several tables (the report's own ``findings/sequences.csv`` and
+each notebook's): it is read once, from the first table that holds it (:data:`FIRST_TABLE`, then
+the others by path).
 """
 
 from __future__ import annotations
@@ -18,13 +23,25 @@ from typing import Any
 
 import pandas as pd
 
+from ..core.regression import METRICS
+from ..core.stats import WEIGHTS as STATS_WEIGHTS
+from ..core.stats import with_trials
 from ..errors import DataNotFoundError, ParseError, ValidationError
+from .provenance import RUN_JSON, read_run_json
 
 #: Columns a per-sequence table must have to be read as one.
 REQUIRED = ["algorithm", "scene", "seq", "cr", "eps", "phi", "delta", "tau"]
+#: Columns that hold numbers besides the metrics (:data:`lorisnb.core.regression.METRICS`) and weights.
+NUMBERS = ["matched", *(w for w in STATS_WEIGHTS.values() if w)]
 #: Table columns that are part of the spec (per scene).
 SPEC_COLUMNS = ["eps", "phi", "delta", "tau", "official_interpolation", "spec"]
-RUN_JSON = "run.json"
+#: A row's key: one row per sequence and trial of a suite.
+KEYS = ["suite", "algorithm", "scene", "seq", "trial"]
+#: The report's own per-sequence table, read first (evaluated at run.json's spec).
+FIRST_TABLE = "findings/sequences.csv"
+#: Keys of run.json's ``spec.values`` that do not change a per-sequence number: the results folder
+#: (``source``), the leaderboard's test settings and its selection of rows.
+NOT_NUMBERS = frozenset({"source", "metric", "alpha", "level", "seed", "algorithms", "scenes"})
 
 
 @dataclass
@@ -99,15 +116,27 @@ def read_table(path: Path) -> pd.DataFrame:
     for c in ("algorithm", "scene", "suite", "file"):
         if c in df.columns:
             df[c] = df[c].astype(str).where(df[c].notna(), "")
+    for c in [*NUMBERS, *METRICS]:
+        if c in df.columns and not pd.api.types.is_numeric_dtype(df[c]):
+            values = pd.to_numeric(df[c].astype(str).str.strip().replace({"": None}), errors="coerce")
+            bad = values.isna() & df[c].notna() & (df[c].astype(str).str.strip().str.lower() != "nan")
+            if bad.any():
+                i = int(bad.to_numpy().nonzero()[0][0])
+                line = i + 2 if path.suffix.lower() == ".csv" else None  # the header is line 1
+                raise ParseError(path, line, f"column {c}: {df[c].iloc[i]!r} is not a number; expected a per-sequence "
+                                 "table as written by lorisnb evaluate --csv / --parquet")  # fmt: skip
+            df[c] = values
     return df
 
 
 def _report_tables(folder: Path, notes: list[str]) -> pd.DataFrame:
-    """Every per-sequence CSV table of a report run, stacked, with a ``table`` column (its path in the
-    run); tables that are not per-sequence (scenes, pairs, ...) are left out, and so are tables with
-    several rows per sequence and trial (sweeps), with a note in ``notes``."""
+    """Every per-sequence CSV table of a report run, stacked, one row per sequence and trial (from
+    the first table that holds it: :data:`FIRST_TABLE`, then by path), with a ``table`` column (its
+    path in the run); tables that are not per-sequence (scenes, pairs, ...) are left out, and so are
+    tables with several rows per sequence and trial (sweeps), with a note in ``notes``."""
     parts = []
-    for csv in sorted(folder.rglob("*.csv")):
+    csvs = sorted(folder.rglob("*.csv"), key=lambda c: (c.relative_to(folder).as_posix() != FIRST_TABLE, c))
+    for csv in csvs:
         if any(part.startswith(".") for part in csv.relative_to(folder).parts):
             continue
         try:
@@ -115,16 +144,15 @@ def _report_tables(folder: Path, notes: list[str]) -> pd.DataFrame:
         except (ValueError, OSError):
             continue
         if all(c in head.columns for c in REQUIRED):
-            t = read_table(csv)
-            keys = [c for c in ("suite", "algorithm", "scene", "seq", "trial") if c in t.columns]
-            if t.duplicated(keys).any():
+            t = with_trials(read_table(csv))
+            if t.duplicated(KEYS).any():
                 notes.append(f"{csv}: several rows per sequence (a sweep?); left out")
                 continue
             parts.append(t.assign(table=csv.relative_to(folder).as_posix()))
     if not parts:
         raise DataNotFoundError(f"{folder}: a report run (run.json) without a per-sequence CSV table "
                                 f"(columns {', '.join(REQUIRED)})")  # fmt: skip
-    return pd.concat(parts, ignore_index=True)
+    return pd.concat(parts, ignore_index=True).drop_duplicates(KEYS).reset_index(drop=True)
 
 
 def load_run(path: str | os.PathLike[str]) -> Run:
@@ -133,12 +161,7 @@ def load_run(path: str | os.PathLike[str]) -> Run:
     if not p.exists():
         raise DataNotFoundError(f"{p}: no such file or folder")
     if is_report_run(p):
-        try:
-            meta = json.loads((p / RUN_JSON).read_text(encoding="utf-8"))
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise ParseError(p / RUN_JSON, None, f"not valid JSON ({exc})") from None
-        if not isinstance(meta, dict):
-            raise ParseError(p / RUN_JSON, None, "expected a JSON object (command, lorisnb_version, spec, ...)")
+        meta = read_run_json(p)
         created, source = _parse_time(meta.get("created")), "run.json"
         if created is None:
             created, source = _mtime(p / RUN_JSON), "modification time of run.json"
@@ -163,12 +186,27 @@ def _mtime(p: Path) -> datetime:
     return datetime.fromtimestamp(p.stat().st_mtime, tz=timezone.utc)
 
 
+def spec_values(spec: Any) -> dict[str, Any]:
+    """What of a run.json ``spec`` changes the numbers: its ``values`` (the whole spec when it has
+    none), without :data:`NOT_NUMBERS`; the ``description`` is these values in words."""
+    values = spec.get("values", spec) if isinstance(spec, dict) else {"spec": spec}
+    if not isinstance(values, dict):
+        values = {"values": values}
+    return {k: v for k, v in values.items() if k not in NOT_NUMBERS and (values is not spec or k != "description")}
+
+
 def spec_differences(a: Run, b: Run) -> list[str]:
-    """What makes two runs not comparable: their run.json specs differ, or the thresholds recorded
-    in their tables differ for a scene both have. Empty when they agree."""
+    """What makes two runs not comparable: a key of their run.json specs that changes the numbers
+    differs (:func:`spec_values`; each such key named, with both values whole), or the thresholds
+    recorded in their tables differ for a scene both have. Empty when they agree."""
     out = []
-    if a.spec is not None and b.spec is not None and a.spec != b.spec:
-        out.append(f"spec: {_short(a.spec)} in {a.path} against {_short(b.spec)} in {b.path}")
+    if a.spec is not None and b.spec is not None:
+        va, vb = spec_values(a.spec), spec_values(b.spec)
+        missing = object()
+        for k in sorted(set(va) | set(vb)):
+            x, y = va.get(k, missing), vb.get(k, missing)
+            if x != y:
+                out.append(f"spec {k}: {_json(x, missing)} in {a.path} against {_json(y, missing)} in {b.path}")
     sa, sb = a.table_spec(), b.table_spec()
     both = sorted(set(sa["scene"]) & set(sb["scene"]))
     for scene in both:
@@ -182,10 +220,9 @@ def spec_differences(a: Run, b: Run) -> list[str]:
     return out
 
 
+def _json(value: Any, missing: object) -> str:
+    return "(not set)" if value is missing else json.dumps(value, sort_keys=True, default=str)
+
+
 def _rows(rows: list[tuple]) -> str:
     return "; ".join("/".join(map(str, r)) for r in rows[:3]) + (" ..." if len(rows) > 3 else "")
-
-
-def _short(spec: Any) -> str:
-    text = json.dumps(spec, sort_keys=True, default=str) if not isinstance(spec, str) else spec
-    return text if len(text) <= 120 else text[:117] + "..."
