@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ValidationError
+from .aggregate import scene_mean
 
 #: Scene metrics and the per-sequence weight of each (None: a plain mean).
 WEIGHTS: dict[str, str | None] = {"cr": "gt_duration", "cr_t": "track_time", "c_ate_rmse": "c_matched", "cs_r": None}
@@ -107,7 +108,7 @@ def scene_values(table: pd.DataFrame, metrics: Sequence[str], by: Sequence[str])
         ok = np.isfinite(v) & (wt > 0) if m == "c_ate_rmse" else np.isfinite(v)
         num = pd.Series(np.where(ok, v * wt, 0.0)).groupby([t[c].to_numpy() for c in by]).sum()
         den = pd.Series(np.where(ok, wt, 0.0)).groupby([t[c].to_numpy() for c in by]).sum()
-        parts[m] = (num / den.where(den > 0)).to_numpy()
+        parts[m] = scene_mean(num.to_numpy(), den.to_numpy())
         index = num.index
     out = pd.DataFrame(parts, index=index).reset_index()
     out.columns = list(by) + list(metrics)
@@ -154,8 +155,10 @@ def _nested_resample(values: np.ndarray, weights: np.ndarray, counts: np.ndarray
 
 
 def _weighted_mean(v: np.ndarray, w: np.ndarray, axis: int = -1) -> np.ndarray:
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.sum(v * w, axis=axis) / np.sum(w, axis=axis)
+    """The scene value of sequences' values ``v`` and weights ``w`` (the table completed with the
+    missing sequences as failed runs): :func:`lorisnb.core.aggregate.scene_mean`."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        return scene_mean(np.sum(v * w, axis=axis), np.sum(w, axis=axis))
 
 
 def confidence_intervals(
