@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ValidationError
+from . import validate
 from .aggregate import scene_mean
 
 #: Scene metrics and the per-sequence weight of each (None: a plain mean).
@@ -177,7 +178,7 @@ def confidence_intervals(
     if not 0 < level < 1:
         raise ValidationError(f"level={level}: expected a confidence level between 0 and 1")
     t = with_trials(table)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(validate.seed(seed))
     rows = []
     for key, g in t.groupby(GROUP, sort=False, observed=True):
         for m in metrics:
@@ -286,6 +287,7 @@ def pairwise(
     better_high = (metric != "c_ate_rmse") if higher_is_better is None else higher_is_better
     t = with_trials(table)
     _need(t, ["algorithm", "scene", "seq", metric] + ([_metric(metric) or metric]))
+    seed = validate.seed(seed)
     rng = np.random.default_rng(seed)
     rows = []
     for (suite, scene), g in t.groupby(["suite", "scene"], sort=False, observed=True):

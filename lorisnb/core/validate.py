@@ -178,6 +178,26 @@ def finite(name: str, value: Any, unit: str) -> float:
     return float(v)
 
 
+def seed(value: Any, label: str = "seed") -> int:
+    """A random seed (bootstrap, sampled relabellings, simulator): a whole number >= 0 (numpy's
+    ``default_rng`` refuses a negative one with a traceback). Accepts ints, numpy integers and
+    whole-number strings ("7", as typed on the command line); refuses bools, fractions, NaN."""
+    if isinstance(value, (bool, np.bool_)) or value is None:
+        raise ValidationError(f"{label}={_show(value)}: expected a whole number >= 0")
+    v: int | None = None
+    if isinstance(value, (int, np.integer)):
+        v = int(value)
+    elif isinstance(value, str) and value.strip().lstrip("+-").isdigit():
+        v = int(value.strip())
+    elif isinstance(value, (float, np.floating)) and math.isfinite(value) and value == int(value):
+        v = int(value)
+    if v is None:
+        raise ValidationError(f"{label}={_show(value)}: expected a whole number >= 0")
+    if v < 0:
+        raise ValidationError(f"{label}={_show(value)}: expected a whole number >= 0 (a seed is not negative)")
+    return v
+
+
 def flag(label: str, value: Any) -> bool:
     """A yes/no value: a bool (numpy's too); strings are refused, never truth-tested."""
     if isinstance(value, (bool, np.bool_)):

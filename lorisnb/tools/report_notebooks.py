@@ -181,6 +181,7 @@ _CHECKS: dict[str, Any] = {
     "phi_grid": lambda v: validate.threshold_list("phi", v),
     "delta_grid": lambda v: validate.threshold_list("delta", v),
     "tau_grid": lambda v: validate.threshold_list("tau", v),
+    "seed": validate.seed,
 }
 
 
