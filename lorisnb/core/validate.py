@@ -127,9 +127,13 @@ def relative_fraction(name: str, fraction: float, shown: Any) -> float:
 
 def threshold_list(name: str, values: Any) -> list[Any]:
     """A non-empty list of thresholds (for sweeps): one value or an iterable of them; ``eps``
-    values may be ``"paper"``. A string is split at commas, as on the command line."""
+    values may be ``"paper"``. A string is split at commas, as on the command line; an empty item
+    (``1,,2``, a trailing comma) is refused, not dropped."""
     if isinstance(values, str):
-        items: list[Any] = [p for p in values.split(",") if p.strip()]
+        items: list[Any] = values.split(",")
+        if values.strip() and not all(p.strip() for p in items):
+            raise ValidationError(f"{name}={values}: an empty item between commas; expected values separated by commas")
+        items = [p for p in items if p.strip()]
     elif isinstance(values, Iterable) and not isinstance(values, Mapping):
         items = list(values)
     else:
@@ -196,6 +200,30 @@ def seed(value: Any, label: str = "seed") -> int:
     if v < 0:
         raise ValidationError(f"{label}={_show(value)}: expected a whole number >= 0 (a seed is not negative)")
     return v
+
+
+def present(what: str, given: Iterable[str], there: Iterable[str], where: str = "the inputs") -> list[str]:
+    """A filter (``scenes``, ``algorithms``) whose every value names something ``there``: a value
+    that names nothing would drop every input silently, so it is refused, listing what is there,
+    with a hint for a difference of case (``Cafe`` for ``cafe``) or a near miss. Returns ``given``
+    as a list."""
+    import difflib
+
+    wanted, have = list(given), sorted(set(there))
+    absent = [n for n in wanted if n not in have]
+    if not absent:
+        return wanted
+    hints = []
+    for n in absent:
+        same_case = [h for h in have if h.lower() == n.strip().lower()]
+        near = same_case or difflib.get_close_matches(n, have, n=1, cutoff=0.75)
+        if near:
+            hints.append(f"{n!r}: did you mean {near[0]!r}?" + (" (names are case-sensitive)" if same_case else ""))
+    listed = ", ".join(have) if have else "none"
+    raise ValidationError(
+        f"{what}: {', '.join(repr(n) for n in absent)} name(s) nothing in {where}, which hold {what}: {listed}"
+        + ("; " + "; ".join(hints) if hints else "")
+    )
 
 
 def flag(label: str, value: Any) -> bool:

@@ -24,7 +24,7 @@ from typing import Any
 from ..errors import DataNotFoundError, LorisError, ValidationError
 from ..io.data import find_data
 from ..io.writers import write_csv
-from .evaluate import result_files
+from .evaluate import check_filters, result_files
 from .leaderboard import report_findings
 from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
 from .provenance import checksums, input_files, run_record, write_run_json
@@ -236,6 +236,8 @@ def run_report(
         params.setdefault("data_root", str(data.root))  # kernels run in the run folder, not here
     wants_board = results is not None or "results_dir" in declared
     source = Path(str(params["results_dir"])) if params.get("results_dir") else (data.icra20 if data else None)
+    if source is not None:  # a filter naming nothing there is refused now, not by each notebook later
+        check_filters(source, params.get("algorithms"), params.get("scenes"), params.get("trials_by"))
     run_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
     try:

@@ -24,6 +24,8 @@ from ..core import validate
 from ..core.spec import SPEC_NAMES, make_spec
 from ..errors import LorisError, ValidationError
 from ._extras import EXTRAS, require
+from .grids import check_grid
+from .inputs import names
 from .notebook import INPUT_ERRORS_CSV
 from .report_html import export_html
 
@@ -181,8 +183,34 @@ _CHECKS: dict[str, Any] = {
     "phi_grid": lambda v: validate.threshold_list("phi", v),
     "delta_grid": lambda v: validate.threshold_list("delta", v),
     "tau_grid": lambda v: validate.threshold_list("tau", v),
+    "relative_grid": lambda v: check_grid("relative_grid", v),
     "seed": validate.seed,
+    "quick": lambda v: validate.flag("quick", v),
+    "simulated": lambda v: validate.flag("simulated", v),
+    "algorithms": lambda v: names("algorithms", v),
+    "scenes": lambda v: names("scenes", v),
+    "results_dir": lambda v: existing("results_dir", v, folder=True),
+    "path": lambda v: existing("path", v),
 }
+
+
+def existing(name: str, value: Any, folder: bool = False) -> Path:
+    """A path parameter that must exist (a folder where ``folder``): a missing one would leave a
+    notebook with nothing to evaluate and empty tables."""
+    p = Path(str(value)).expanduser()
+    if not (p.is_dir() if folder else p.exists()):
+        what = "folder" if folder else "file or folder"
+        raise ValidationError(f"{name}={value}: no such {what}; expected an existing {what}")
+    return p
+
+
+def check_values(values: Mapping[str, Any]) -> None:
+    """Check notebook parameter values with the command line's rules (None: the notebook's default).
+    Every notebook calls it through :func:`lorisnb.tools.notebook.setup` (``parameters=``), and the
+    report through :func:`check_parameters`, before anything runs."""
+    for name, value in values.items():
+        if name in _CHECKS and value is not None:
+            _CHECKS[name](value)
 
 
 def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mapping[str, Any]]) -> None:
@@ -194,9 +222,7 @@ def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mappi
             f"parameter(s) {', '.join(unknown)} not declared by the selected notebooks; they declare: "
             + ", ".join(sorted(declared))
         )
-    for name, value in parameters.items():
-        if name in _CHECKS and value is not None:
-            _CHECKS[name](value)
+    check_values(parameters)
 
 
 def run_one(
