@@ -131,7 +131,7 @@ def threshold_list(name: str, values: Any) -> list[Any]:
     (``1,,2``, a trailing comma) is refused, not dropped."""
     if isinstance(values, str):
         items: list[Any] = values.split(",")
-        if values.strip() and not all(p.strip() for p in items):
+        if any(p.strip() for p in items) and not all(p.strip() for p in items):  # all empty: below
             raise ValidationError(f"{name}={values}: an empty item between commas; expected values separated by commas")
         items = [p for p in items if p.strip()]
     elif isinstance(values, Iterable) and not isinstance(values, Mapping):
