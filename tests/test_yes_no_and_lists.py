@@ -77,3 +77,13 @@ def test_a_negative_value_that_is_valid_is_taken(icra20, tmp_path, capsys):
     got = pd.read_csv(csv).iloc[0]
     want = ln.evaluate(one, t_offset=-1e-3).sequences().iloc[0]
     assert got["matched"] == want["matched"] > 0 and got["ate_rmse"] == pytest.approx(want["ate_rmse"], rel=1e-9)
+
+
+def test_quick_keeps_a_count_given():
+    from lorisnb.tools.grids import quick_default
+
+    assert quick_default("sim_trials", None, 6, 5, True) == 5 and quick_default("sim_trials", None, 6, 5, False) == 6
+    assert quick_default("sim_trials", 8, 6, 5, True) == 8  # given: kept, quick or not
+    for bad in (0, 2.5, -3):
+        with pytest.raises(ValidationError, match="sim_trials=.*positive whole number"):
+            quick_default("sim_trials", bad, 6, 5, True)

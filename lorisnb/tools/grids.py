@@ -48,3 +48,11 @@ def notebook_grids(notebook: str, quick: Any, **given: Any) -> dict[str, list[An
         name: list(default[1] if quick else default[0]) if given.get(name) is None else check_grid(name, given[name])
         for name, default in grids.items()
     }
+
+
+def quick_default(name: str, value: Any, full: int, trimmed: int, quick: Any) -> int:
+    """A count parameter (``sim_trials``): the value given (a positive whole number), kept with
+    ``quick`` too; None: ``full``, or ``trimmed`` when ``quick``."""
+    if value is None:
+        return trimmed if validate.flag("quick", quick) else full
+    return int(validate.positive(name, value, "", integer=True))
