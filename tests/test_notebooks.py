@@ -245,3 +245,30 @@ def test_metrics_primer_prose_follows_the_parameters(tmp_path):
     cr_noise = cases.loc[cases["case"] == "noise 0.1 m", "cr"].iloc[0]
     assert cr_noise < 0.99 and f"CR = {cr_noise:.3f}, not 1" in text
     assert f"exp(-30 / 30) = {np.exp(-1):.3f}" in text and "CS-R = 0.000" in text
+
+
+def test_threshold_sensitivity_keeps_the_grids_given_with_quick(tmp_path):
+    """quick trims the default grids only: a grid the user gives is swept as given (trial finding 11)."""
+    out = run("threshold_sensitivity", tmp_path, eps_grid=[1, 3], phi_grid=[30], scenes=["home"])
+    curve = pd.read_csv(out / "cr_vs_eps.csv")
+    assert sorted(set(curve["eps"])) == [1.0, 3.0] and set(curve["scene"]) == {"home"}
+    row = curve[(curve["algorithm"] == "vins_mono_color_imu_with_loop") & (curve["eps"] == 3.0)]
+    assert row["cr"].iloc[0] == pytest.approx(0.335952, abs=1e-6)  # the paper's setting, as above
+
+
+@pytest.mark.parametrize(
+    ("name", "params", "message"),
+    [
+        ("per_sequence_benchmark", {"scenes": ["nope"]}, "'nope' name(s) nothing in the inputs, which hold scenes"),
+        ("lifelong_benchmark", {"scenes": ["Cafe"]}, "did you mean 'cafe'?"),
+        ("threshold_sensitivity", {"algorithms": ["nope"]}, "which hold algorithms"),
+        ("compare_algorithms", {"results_dir": "/nonexistent/lorisnb"}, "results_dir=/nonexistent/lorisnb: no such"),
+        ("threshold_sensitivity", {"quick": "maybe"}, "quick='maybe' (str): expected True or False"),
+        ("compare_algorithms", {"seed": -1}, "seed=-1: expected a whole number >= 0"),
+    ],
+)
+def test_bad_parameters_stop_a_notebook_with_a_validation_error(tmp_path, name, params, message):
+    """Trial findings 4, 6 and 11: a KeyError or an empty table (exit 0) before."""
+    with pytest.raises(pm.PapermillExecutionError) as exc:
+        run(name, tmp_path, **params)
+    assert exc.value.ename == "ValidationError" and message in exc.value.evalue

@@ -11,6 +11,7 @@ import gc
 import importlib
 import importlib.util
 import os
+import re
 import sys
 from collections.abc import Callable
 from typing import Any
@@ -183,9 +184,44 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: A value that starts like a negative number or list of them (``-1,1``, ``-1e-3``, ``-inf``), which
+#: argparse would take for an option (its own test accepts only ``-1`` and ``-1.5``).
+NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d|inf|nan)", re.IGNORECASE)
+
+
+def glue_negative_values(parser: argparse.ArgumentParser, argv: list[str]) -> list[str]:
+    """``--eps -1,1`` as ``--eps=-1,1``: an option that takes one value, followed by a value that
+    starts like a negative number, gets it, so that the option's validator says what is wrong with
+    it (argparse would say "expected one argument")."""
+    takes_value: set[str] = set()
+
+    def walk(p: argparse.ArgumentParser) -> None:
+        for action in p._actions:  # argparse has no public list of a parser's options
+            if action.option_strings and action.nargs is None:
+                takes_value.update(action.option_strings)
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in action.choices.values():
+                    walk(sub)
+
+    walk(parser)
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        token = argv[i]
+        if token == "--":  # everything after is positional
+            return out + argv[i:]
+        if token in takes_value and i + 1 < len(argv) and NEGATIVE_VALUE.match(argv[i + 1]):
+            out.append(f"{token}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(token)
+        i += 1
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(glue_negative_values(parser, list(sys.argv[1:] if argv is None else argv)))
     args.argv = ["lorisnb", *(sys.argv[1:] if argv is None else argv)]  # the command line, as run.json records it
     keep_freed_memory()  # a command is one short process: reuse freed memory (see there)
     ordinary_pages(True)  # and new arrays in ordinary pages (see there)

@@ -129,11 +129,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(format_table({c: columns[c] for c in cols}, args.digits))
         try:
             scenes = aggregate_columns(columns, spans_columns(ev.spans()))
-            print("\nper scene (CR over all ground-truth time of the scene; C-ATE RMSE weighted by correct poses):")
+            print(
+                "\nper scene (CR over all ground-truth time of the scene; CS-R the mean over all its sequences, "
+                "one without output counting 0; C-ATE RMSE weighted by correct poses):"
+            )
             scenes["coverage"] = np.array(
                 [f"{k}/{n}" for k, n in zip(scenes["sequences"], scenes["scene_sequences"], strict=True)], object
             )
-            view = ["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r_mean"]
+            view = ["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r"]
             print(format_table({c: scenes[c] for c in view}, args.digits))
         except LorisError as exc:
             print(f"warning: no scene aggregate: {exc}", file=sys.stderr)

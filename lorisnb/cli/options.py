@@ -240,9 +240,7 @@ def probability_type(name: str) -> Callable[[str], Any]:
     return arg_type(lambda t: validate.probability(name, t))
 
 
-def seed_type(name: str) -> Callable[[str], Any]:
-    """A seed, a whole number >= 0 (``--seed``)."""
-    return arg_type(lambda t: validate.seed(name, t))
+seed_type = arg_type(lambda text: validate.seed(text, "--seed"))
 
 
 def add_compare_options(p: argparse.ArgumentParser) -> None:
@@ -254,12 +252,8 @@ def add_compare_options(p: argparse.ArgumentParser) -> None:
                    help="confidence level of the intervals (default 0.95)")  # fmt: skip
     p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
                    help="significance level of the pairwise permutation test, after Holm's correction (default 0.05)")  # fmt: skip
-    p.add_argument(
-        "--seed",
-        type=seed_type("--seed"),
-        default=0,
-        help="seed of the bootstrap and of sampled relabellings (default 0)",
-    )
+    p.add_argument("--seed", type=seed_type, default=0, metavar="N",
+                   help="seed of the bootstrap and of sampled relabellings, a whole number >= 0 (default 0)")  # fmt: skip
     p.add_argument("--power", default=None, metavar="DELTA",
                    type=arg_type(lambda t: validate.positive("--power", t, "the metric's unit")),
                    help="for pairs not found different: the sequences or trials needed to detect a difference "
@@ -280,7 +274,8 @@ def add_diff_options(p: argparse.ArgumentParser) -> None:
                    f"or a percentage of the base value (defaults: {defaults.replace('%', '%%')})")  # fmt: skip
     p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
                    help="significance level of the permutation test across trials (default 0.05)")  # fmt: skip
-    p.add_argument("--seed", type=seed_type("--seed"), default=0, help="seed of sampled relabellings (default 0)")
+    p.add_argument("--seed", type=seed_type, default=0, metavar="N",
+                   help="seed of sampled relabellings, a whole number >= 0 (default 0)")  # fmt: skip
     p.add_argument("--json", default=None, metavar="OUT", help="write the verdict as JSON")
     p.add_argument(
         "--junit", default=None, metavar="OUT", help="write the verdict as JUnit XML (one test per sequence)"

@@ -66,7 +66,11 @@ def aggregate_scenes(sequences: pd.DataFrame, durations: pd.DataFrame) -> pd.Dat
     - ``c_ate_rmse``: mean of per-sequence C-ATE RMSE weighted by their correct-pose counts (the
       paper's figure value); ``c_ate_rmse_pooled``: RMSE over all correct poses of the scene;
     - ``ate_rmse``: the same weighted mean of ATE RMSE over matched poses (Fig. 2's value);
-    - ``cs_r_mean``: mean CS-R over the sequences evaluated.
+    - ``cs_r``: the scene's CS-R, :func:`scene_mean` over *all* the scene's sequences, a sequence
+      without output counting as a failed run (CS-R 0), as ``compare``, the report leaderboard and
+      ``diff`` count it (:func:`lorisnb.core.coverage.complete`);
+    - ``cs_r_with_output``: mean CS-R over the sequences with output only (how quickly the
+      algorithm re-localized where it ran; not the scene value).
 
     Args:
         sequences: a per-sequence table (:func:`lorisnb.core.scoring.score` or a sweep).
@@ -162,18 +166,33 @@ def aggregate_columns(sequences: Mapping[str, Any], durations: Columns) -> dict[
         c_w = _kahan(rows, np.where(c_matched > 0, c_ate * c_matched, 0.0))[0]
         a_w = _kahan(rows, np.where(matched > 0, ate * matched, 0.0))[0]
         cs_sum, cs_n = _kahan(rows, np.asarray(sequences["cs_r"], float))
-        out["cs_r_mean"] = np.where(cs_n > 0, cs_sum / np.maximum(cs_n, 1), np.nan)
         g_scene = scene_names[labels["scene"].codes[first]]
         out["scene_sequences"] = np.array([count[s] for s in g_scene.tolist()], np.int64)  # one per group
         out["scene_duration"] = np.array([by_scene[s] for s in g_scene.tolist()], float)
         m_c, m_a = out["c_matched"], out["matched"]
-        out["cr"] = out["correct_time"] / out["scene_duration"]
-        out["cr_t"] = np.where(out["track_time"] > 0, out["correct_time"] / out["track_time"], np.nan)
-        out["c_ate_rmse"] = np.where(m_c > 0, c_w / m_c, np.nan)
+        out["cr"] = scene_mean(out["correct_time"], out["scene_duration"])
+        out["cr_t"] = scene_mean(out["correct_time"], out["track_time"])
+        out["c_ate_rmse"] = scene_mean(c_w, m_c)
         out["c_ate_rmse_pooled"] = np.where(m_c > 0, np.sqrt(c_sq / m_c), np.nan)
-        out["ate_rmse"] = np.where(m_a > 0, a_w / m_a, np.nan)
+        out["ate_rmse"] = scene_mean(a_w, m_a)
+        out["cs_r"] = scene_mean(cs_sum, out["scene_sequences"])  # a sequence without output: CS-R 0
+        out["cs_r_with_output"] = scene_mean(cs_sum, cs_n)
     order = _scene_order(out, "trial" in keys)
     return {c: np.asarray(out[c])[order] for c in SCENE_COLUMNS + keys[7:]}
+
+
+def scene_mean(weighted_sum: Any, total_weight: Any) -> np.ndarray:
+    """A scene value: the sum over its sequences of value x weight divided by the total weight of
+    *all* the scene's sequences, NaN where that weight is 0. The one definition behind every scene
+    value (:func:`aggregate_columns` for ``evaluate`` and ``Evaluation.scenes``,
+    :func:`lorisnb.core.stats.scene_means` for ``compare``, the report leaderboard and ``diff``).
+    Weights (:data:`lorisnb.core.stats.WEIGHTS`): CR ground-truth duration (paper Eq. 2: correct
+    time over the scene's ground-truth time), CR-T tracked time (Eq. 3), C-ATE correct poses, CS-R
+    1 per sequence (Eq. 4 averaged over the scene). A sequence without output is a failed run: value
+    0 with its whole weight (its duration for CR, 1 for CS-R; tracked time and correct poses 0)."""
+    s, w = np.asarray(weighted_sum, float), np.asarray(total_weight, float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(w > 0, s / np.where(w > 0, w, 1.0), np.nan)
 
 
 def _strings(values: Any) -> np.ndarray:

@@ -48,7 +48,7 @@ STAT_COLUMNS = [
 SCENE_COLUMNS = [
     "suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "sequences", "scene_sequences", "matched",
     "c_matched", "correct_time", "track_time", "scene_duration", "cr", "cr_t", "c_ate_rmse",
-    "c_ate_rmse_pooled", "ate_rmse", "cs_r_mean",
+    "c_ate_rmse_pooled", "ate_rmse", "cs_r", "cs_r_with_output",
 ]  # fmt: skip
 #: Columns of the per-pose table (:func:`lorisnb.core.scoring.pose_table`).
 POSE_COLUMNS = ["algorithm", "file", "suite", "scene", "seq", "stamp", "t_rel", "ate", "aoe", "correct"]

@@ -28,6 +28,8 @@ from itertools import combinations
 
 import numpy as np
 
+from . import validate
+
 #: Enumerate every relabelling up to this many (the exact test); sample beyond.
 EXACT_LIMIT = 200_000
 
@@ -188,6 +190,7 @@ def difference_interval(
     decision of the test on the data as reported elsewhere (it may have used other random
     relabellings); the interval is then made to contain 0 exactly when it was not rejected, so the
     two always agree."""
+    seed = validate.seed(seed)
     if not a or not any(len(x) for x in a):
         return np.nan, np.nan
     # the shift moves T by d through the strata that vary (all-equal ones stay out of the test, as in it)

@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ValidationError
+from . import validate
 from .coverage import complete, expected_from
 from .permutation import permutation_test
 from .stats import WEIGHTS, holm, scene_means, with_trials
@@ -126,6 +127,7 @@ def sequence_changes(
     ``worse_by``, ``tolerance``, ``trials_base``, ``trials_cand``, ``p``, ``min_p``, ``status``
     (``ok``, ``improvement``, ``regression``, ``missing``, ``failed``, ``new``) and ``decided_by``."""
     tols = parse_tolerances() if tolerances is None else dict(tolerances)
+    seed = validate.seed(seed)
     b, c = _per_sequence(base), _per_sequence(cand)
     rows = []
     for key in list(b) + [k for k in c if k not in b]:
@@ -172,6 +174,7 @@ def scene_changes(
     across trials where both runs have them (``p``, ``min_p``, ``p_holm``: Holm across the scenes of
     each algorithm and metric), ``status`` and ``decided_by``."""
     tols = parse_tolerances() if tolerances is None else dict(tolerances)
+    seed = validate.seed(seed)
     expected = expected_from(base)
     b = with_trials(base)
     kept = set(zip(b["suite"], b["algorithm"], b["scene"], strict=True))

@@ -29,6 +29,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ..errors import ValidationError
+from . import validate
 from .model import FileErrors, ResultFile
 from .pipeline import compute_errors
 from .trajectory import Trajectory
@@ -75,8 +76,9 @@ class Faults:
             )
         for v in offset:
             finite("wrong_reloc_offset_m", v, "metres")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+        if not isinstance(self.seed, (int, np.integer)):  # a whole number, not "3" or 3.0
             raise ValidationError(f"Faults(seed={self.seed!r}): expected a whole number >= 0")
+        object.__setattr__(self, "seed", validate.seed(self.seed, "Faults(seed)"))
         object.__setattr__(self, "lost", lost_intervals(self.lost))
 
     def describe(self) -> str:

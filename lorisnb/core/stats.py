@@ -33,6 +33,8 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ValidationError
+from . import validate
+from .aggregate import scene_mean
 
 #: Scene metrics and the per-sequence weight of each (None: a plain mean).
 WEIGHTS: dict[str, str | None] = {"cr": "gt_duration", "cr_t": "track_time", "c_ate_rmse": "c_matched", "cs_r": None}
@@ -107,7 +109,7 @@ def scene_values(table: pd.DataFrame, metrics: Sequence[str], by: Sequence[str])
         ok = np.isfinite(v) & (wt > 0) if m == "c_ate_rmse" else np.isfinite(v)
         num = pd.Series(np.where(ok, v * wt, 0.0)).groupby([t[c].to_numpy() for c in by]).sum()
         den = pd.Series(np.where(ok, wt, 0.0)).groupby([t[c].to_numpy() for c in by]).sum()
-        parts[m] = (num / den.where(den > 0)).to_numpy()
+        parts[m] = scene_mean(num.to_numpy(), den.to_numpy())
         index = num.index
     out = pd.DataFrame(parts, index=index).reset_index()
     out.columns = list(by) + list(metrics)
@@ -154,8 +156,10 @@ def _nested_resample(values: np.ndarray, weights: np.ndarray, counts: np.ndarray
 
 
 def _weighted_mean(v: np.ndarray, w: np.ndarray, axis: int = -1) -> np.ndarray:
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.sum(v * w, axis=axis) / np.sum(w, axis=axis)
+    """The scene value of sequences' values ``v`` and weights ``w`` (the table completed with the
+    missing sequences as failed runs): :func:`lorisnb.core.aggregate.scene_mean`."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        return scene_mean(np.sum(v * w, axis=axis), np.sum(w, axis=axis))
 
 
 def confidence_intervals(
@@ -174,7 +178,7 @@ def confidence_intervals(
     if not 0 < level < 1:
         raise ValidationError(f"level={level}: expected a confidence level between 0 and 1")
     t = with_trials(table)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(validate.seed(seed))
     rows = []
     for key, g in t.groupby(GROUP, sort=False, observed=True):
         for m in metrics:
@@ -283,6 +287,7 @@ def pairwise(
     better_high = (metric != "c_ate_rmse") if higher_is_better is None else higher_is_better
     t = with_trials(table)
     _need(t, ["algorithm", "scene", "seq", metric] + ([_metric(metric) or metric]))
+    seed = validate.seed(seed)
     rng = np.random.default_rng(seed)
     rows = []
     for (suite, scene), g in t.groupby(["suite", "scene"], sort=False, observed=True):

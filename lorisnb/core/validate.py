@@ -127,9 +127,13 @@ def relative_fraction(name: str, fraction: float, shown: Any) -> float:
 
 def threshold_list(name: str, values: Any) -> list[Any]:
     """A non-empty list of thresholds (for sweeps): one value or an iterable of them; ``eps``
-    values may be ``"paper"``. A string is split at commas, as on the command line."""
+    values may be ``"paper"``. A string is split at commas, as on the command line; an empty item
+    (``1,,2``, a trailing comma) is refused, not dropped."""
     if isinstance(values, str):
-        items: list[Any] = [p for p in values.split(",") if p.strip()]
+        items: list[Any] = values.split(",")
+        if any(p.strip() for p in items) and not all(p.strip() for p in items):  # all empty: below
+            raise ValidationError(f"{name}={values}: an empty item between commas; expected values separated by commas")
+        items = [p for p in items if p.strip()]
     elif isinstance(values, Iterable) and not isinstance(values, Mapping):
         items = list(values)
     else:
@@ -178,25 +182,56 @@ def probability(name: str, value: Any) -> float:
     return float(v)
 
 
-def seed(name: str, value: Any) -> int:
-    """A random seed: a whole number >= 0 (numpy's generators refuse negative seeds)."""
-    if isinstance(value, (bool, np.bool_)) or isinstance(value, float) and not value.is_integer():
-        raise ValidationError(f"{name}={_show(value)}: expected a whole number >= 0")
-    try:
-        v = int(value.strip()) if isinstance(value, str) else int(value)
-    except (TypeError, ValueError):
-        raise ValidationError(f"{name}={_show(value)}: expected a whole number >= 0") from None
-    if v < 0:
-        raise ValidationError(f"{name}={_show(value)}: expected a whole number >= 0")
-    return v
-
-
 def finite(name: str, value: Any, unit: str) -> float:
     """A finite number of any sign (for example a clock offset)."""
     v = _number(name, value, {})
     if math.isnan(v) or math.isinf(v):
         raise ValidationError(f"{name}={_show(value)}: expected a finite number of {unit}")
     return float(v)
+
+
+def seed(value: Any, label: str = "seed") -> int:
+    """A random seed (bootstrap, sampled relabellings, simulator): a whole number >= 0 (numpy's
+    ``default_rng`` refuses a negative one with a traceback). Accepts ints, numpy integers and
+    whole-number strings ("7", as typed on the command line); refuses bools, fractions, NaN."""
+    if isinstance(value, (bool, np.bool_)) or value is None:
+        raise ValidationError(f"{label}={_show(value)}: expected a whole number >= 0")
+    v: int | None = None
+    if isinstance(value, (int, np.integer)):
+        v = int(value)
+    elif isinstance(value, str) and value.strip().lstrip("+-").isdigit():
+        v = int(value.strip())
+    elif isinstance(value, (float, np.floating)) and math.isfinite(value) and value == int(value):
+        v = int(value)
+    if v is None:
+        raise ValidationError(f"{label}={_show(value)}: expected a whole number >= 0")
+    if v < 0:
+        raise ValidationError(f"{label}={_show(value)}: expected a whole number >= 0 (a seed is not negative)")
+    return v
+
+
+def present(what: str, given: Iterable[str], there: Iterable[str], where: str = "the inputs") -> list[str]:
+    """A filter (``scenes``, ``algorithms``) whose every value names something ``there``: a value
+    that names nothing would drop every input silently, so it is refused, listing what is there,
+    with a hint for a difference of case (``Cafe`` for ``cafe``) or a near miss. Returns ``given``
+    as a list."""
+    import difflib
+
+    wanted, have = list(given), sorted(set(there))
+    absent = [n for n in wanted if n not in have]
+    if not absent:
+        return wanted
+    hints = []
+    for n in absent:
+        same_case = [h for h in have if h.lower() == n.strip().lower()]
+        near = same_case or difflib.get_close_matches(n, have, n=1, cutoff=0.75)
+        if near:
+            hints.append(f"{n!r}: did you mean {near[0]!r}?" + (" (names are case-sensitive)" if same_case else ""))
+    listed = ", ".join(have) if have else "none"
+    raise ValidationError(
+        f"{what}: {', '.join(repr(n) for n in absent)} name(s) nothing in {where}, which hold {what}: {listed}"
+        + ("; " + "; ".join(hints) if hints else "")
+    )
 
 
 def flag(label: str, value: Any) -> bool:

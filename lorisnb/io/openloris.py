@@ -69,6 +69,26 @@ def _unpadded_stamps(
         )
 
 
+def declared_scene(path: str | os.PathLike[str], max_lines: int = 200) -> str | None:
+    """The scene a result file's ``scene:`` header names (matched as :func:`read_openloris` matches
+    it), read from the lines before its first ``seq:`` or pose line; None where the file cannot be
+    read or names none (reading it in full then says why)."""
+    from ..core.frames import match_scene
+
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            for _, text in zip(range(max_lines), f, strict=False):
+                key, colon, value = text.partition(":")
+                key = key.strip().lower()
+                if key == "scene" and colon:
+                    return match_scene(value.strip())
+                if key == "seq" or text[:1].isdigit():
+                    return None
+    except OSError:
+        return None
+    return None
+
+
 def _pose_groups(ntok: int) -> tuple[slice, ...]:
     """The tokens of a pose line of ``ntok`` tokens: stamp, position, quaternion (the last 7), and
     for 9 tokens the output time (the second)."""

@@ -26,6 +26,7 @@ from ..errors import LorisWarning, ParseError, ValidationError
 from ..io.data import DataPaths, DataRoot, find_data
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import SUFFIX, Manifest, read_manifest
+from ..io.openloris import declared_scene
 from .evaluation import Evaluation, Failure
 from .inputs import algorithm_folders, as_paths, labels, names, result_files, scene_label, without_groundtruth
 from .jobs import BIG_FILE_BYTES, Job, PairSource, run_job
@@ -67,6 +68,33 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
 def _check_trials(items: list[tuple[Path, Path | None]], trials_by: str | None) -> None:
     """A ``trials_by`` that matches none of the inputs' paths is an error (:func:`check_trials_by`)."""
     check_trials_by([labels(p, r, trials_by)[1] if r else "/".join(p.parts[-3:]) for p, r in items], trials_by)
+
+
+def _filtered(
+    items: list[tuple[Path, Path | None]], algorithms: Any, scenes: Any, trials_by: str | None
+) -> tuple[list[tuple[Path, Path | None]], frozenset[str] | None]:
+    """The inputs the ``algorithms`` and ``scenes`` filters keep, and the scene set the jobs check.
+    A filter value naming no algorithm folder (or no scene a file declares in its ``scene:``
+    header) is refused by :func:`lorisnb.core.validate.present`, listing what the inputs hold."""
+    if algorithms is not None:
+        have = [labels(p, r, trials_by)[0] for p, r in items]
+        wanted = set(validate.present("algorithms", names("algorithms", algorithms), have))
+        items = [item for item, alg in zip(items, have, strict=True) if alg in wanted]
+    if scenes is None:
+        return items, None
+    declared = [declared_scene(p) for p, _ in items]
+    scene_set = frozenset(validate.present("scenes", names("scenes", scenes), [s for s in declared if s]))
+    # a file whose header names another scene is not read; one whose header is unclear is (and says why)
+    return [item for item, s in zip(items, declared, strict=True) if s is None or s in scene_set], scene_set
+
+
+def check_filters(
+    paths: PathArg | Iterable[PathArg], algorithms: Any = None, scenes: Any = None, trials_by: str | None = None
+) -> None:
+    """Refuse an ``algorithms`` or ``scenes`` value that names nothing in ``paths`` (as
+    :func:`evaluate` does), before anything is evaluated (``lorisnb report -p scenes``)."""
+    if algorithms is not None or scenes is not None:
+        _filtered(result_files(as_paths(paths)), algorithms, scenes, trials_by)
 
 
 def evaluate(
@@ -111,10 +139,7 @@ def evaluate(
     items = result_files(paths)
     _check_trials(items, trials_by)
     data = find_data(data_root)  # no data at all is an error for the whole call, not per file
-    if algorithms is not None:
-        wanted = set(names("algorithms", algorithms))
-        items = [(p, r) for p, r in items if labels(p, r, trials_by)[0] in wanted]
-    scene_set = None if scenes is None else frozenset(names("scenes", scenes))
+    items, scene_set = _filtered(items, algorithms, scenes, trials_by)
     template = Job(kind="openloris", path=Path(), root=None, spec=the_spec, trials_by=trials_by, data=data,
                    scenes=scene_set)  # fmt: skip
     work = [replace(template, path=p, root=r) for p, r in items]

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..core import stats
+from ..core import stats, validate
 from ..errors import LorisWarning
 from ..io.data import DataPaths
 from .comparison import compare_table
@@ -183,7 +183,7 @@ def report_findings(
     table = ev.sequences()
     f = findings(
         table, ev.durations() if len(table) else pd.DataFrame(columns=["scene", "seq"]), str(values["metric"]),
-        alpha=float(values["alpha"]), level=float(values["level"]), seed=int(values["seed"]),
+        alpha=float(values["alpha"]), level=float(values["level"]), seed=validate.seed(values["seed"]),
     )  # fmt: skip
     return f, ev, values
 

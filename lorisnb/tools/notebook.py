@@ -12,7 +12,7 @@ import io
 import os
 import tempfile
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -169,13 +169,20 @@ def setup(
     data_root: DataRoot | None = None,
     output_dir: str | os.PathLike[str] | None = None,
     sample: bool = False,
+    parameters: Mapping[str, Any] | None = None,
 ) -> Session:
     """The first call of every notebook: find the data (``data_root``, else ``$LORISNB_DATA``, else
     ``../shared/data``), create the output folder (``output_dir``, else :func:`default_output_dir`),
     and keep lorisnb's warnings about input files out of the cell output as Python warnings (they are
     summarized per file by :func:`show_inputs`). With ``sample=True`` (the primer and the labs), a
     notebook given no ``data_root`` that finds no data runs on the small data shipped with lorisnb
-    (:func:`lorisnb.io.data.sample_data`) and says so."""
+    (:func:`lorisnb.io.data.sample_data`) and says so. ``parameters``: the notebook's parameters,
+    checked first with the command line's rules (:func:`lorisnb.tools.report_notebooks.check_values`:
+    thresholds, grids, seed, yes/no values such as ``quick``, folders that must exist, ...)."""
+    if parameters is not None:
+        from .report_notebooks import check_values
+
+        check_values(parameters)
     try:
         data = find_data(data_root)
     except DataNotFoundError:

@@ -206,7 +206,7 @@ def plot_metric_vs_threshold(
     ylabel: str | None = None,
     col_wrap: int = 4,
 ):
-    """Lines of a scene metric (``cr``, ``cr_t``, ``cs_r_mean``, ...) against one threshold, one
+    """Lines of a scene metric (``cr``, ``cr_t``, ``cs_r``, ...) against one threshold, one
     panel per scene, one line per algorithm; ``marks`` draws the paper's value (a number, or one
     per scene) as a dashed line. ``scenes`` is a scene aggregate of a sweep."""
     sns.set_theme(style="whitegrid", context="paper")

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from ..core.blocks import threads
+from ..core.validate import flag
 from ..errors import EvaluationError, ValidationError
 
 T = TypeVar("T")
@@ -105,7 +106,9 @@ def run_tasks(
     ``progress=`` too, for bars of its own, and long computations run on ``n_jobs`` threads,
     :mod:`lorisnb.core.blocks`), in a local pool of ``n_jobs`` processes, or on
     ``executor``. ``fn`` must be a module-level function (it is pickled by name). ``sizes`` are
-    the items' bytes, for scheduling."""
+    the items' bytes, for scheduling. ``progress`` is a yes/no value (:func:`lorisnb.core.validate.flag`:
+    ``progress="no"`` is refused, not truth-tested)."""
+    progress = flag("progress", progress)
 
     def new_bar() -> Any:
         if not progress:

@@ -24,7 +24,7 @@ from typing import Any
 from ..errors import DataNotFoundError, LorisError, OutputError, ValidationError
 from ..io.data import find_data
 from ..io.writers import overlap, write_csv
-from .evaluate import result_files
+from .evaluate import check_filters, result_files
 from .leaderboard import report_findings
 from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
 from .provenance import checksums, input_files, run_record, write_run_json
@@ -241,6 +241,8 @@ def run_report(
     hit = overlap(run_dir, [*roots, nb_dir])
     if hit:  # the run would be read as an input by the next report on the same folder, and by verify
         raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
+    if source is not None:  # a filter naming nothing there is refused now, not by each notebook later
+        check_filters(source, params.get("algorithms"), params.get("scenes"), params.get("trials_by"))
     run_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
     try:

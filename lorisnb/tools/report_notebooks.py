@@ -26,6 +26,8 @@ from ..core.stats import WEIGHTS
 from ..core.trials import compile_trials_by
 from ..errors import LorisError, ValidationError
 from ._extras import EXTRAS, require
+from .grids import check_grid
+from .inputs import names
 from .notebook import INPUT_ERRORS_CSV
 from .report_html import export_html
 
@@ -184,14 +186,41 @@ _CHECKS: dict[str, Any] = {
     "delta_grid": lambda v: validate.threshold_list("delta", v),
     "tau_grid": lambda v: validate.threshold_list("tau", v),
     "trials_by": lambda v: compile_trials_by(str(v)),
+    "relative_grid": lambda v: check_grid("relative_grid", v),
+    "seed": validate.seed,
+    "quick": lambda v: validate.flag("quick", v),
+    "simulated": lambda v: validate.flag("simulated", v),
+    "algorithms": lambda v: names("algorithms", v),
+    "scenes": lambda v: names("scenes", v),
+    "results_dir": lambda v: existing("results_dir", v, folder=True),
+    "path": lambda v: existing("path", v),
 }
 #: Parameters of the leaderboard checked and normalized by the validators of ``compare`` and ``diff``.
 _VALUES: dict[str, Any] = {
     "metric": lambda v: validate.choice("metric", v, WEIGHTS),
     "alpha": lambda v: validate.probability("alpha", v),
     "level": lambda v: validate.probability("level", v),
-    "seed": lambda v: validate.seed("seed", v),
+    "seed": lambda v: validate.seed(v, "seed"),
 }
+
+
+def existing(name: str, value: Any, folder: bool = False) -> Path:
+    """A path parameter that must exist (a folder where ``folder``): a missing one would leave a
+    notebook with nothing to evaluate and empty tables."""
+    p = Path(str(value)).expanduser()
+    if not (p.is_dir() if folder else p.exists()):
+        what = "folder" if folder else "file or folder"
+        raise ValidationError(f"{name}={value}: no such {what}; expected an existing {what}")
+    return p
+
+
+def check_values(values: Mapping[str, Any]) -> None:
+    """Check notebook parameter values with the command line's rules (None: the notebook's default).
+    Every notebook calls it through :func:`lorisnb.tools.notebook.setup` (``parameters=``), and the
+    report through :func:`check_parameters`, before anything runs."""
+    for name, value in values.items():
+        if name in _CHECKS and value is not None:
+            _CHECKS[name](value)
 
 
 def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
@@ -205,9 +234,8 @@ def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mappi
             + ", ".join(sorted(declared))
         )
     out = dict(parameters)
+    check_values(parameters)
     for name, value in parameters.items():
-        if name in _CHECKS and value is not None:
-            _CHECKS[name](value)
         if name in _VALUES and value is not None:
             out[name] = _VALUES[name](value)
     return out

@@ -12,7 +12,7 @@ import pandas as pd
 
 from ..core.model import FileErrors
 from ..core.sweep import MAX_SWEEP_BYTES, check_sweep_size, sweep, sweep_groups
-from ..core.validate import threshold_list
+from ..core.validate import flag, threshold_list
 from ..io.writers import write_parquet_parts
 
 
@@ -47,6 +47,7 @@ def sweep_to_parquet(
     Returns:
         the dataset's path and the number of rows written.
     """
+    progress = flag("progress", progress)
     groups = sweep_groups(errors)
     shape = tuple(len(threshold_list(n, v)) for n, v in (("eps", eps), ("phi", phi), ("delta", delta), ("tau", tau)))
     for g in groups:  # every group checked before anything is written

@@ -94,7 +94,7 @@ class ThresholdExplorer:
             self.delta,
             title=f"{self.scene}: eps {self.eps:g} m, phi {self.phi:g} deg, delta {self.delta:g} s, tau {self.tau:g} s",
         )
-        cols = ["algorithm", "cr", "cr_t", "cs_r_mean", "c_ate_rmse", "c_matched", "matched"]
+        cols = ["algorithm", "cr", "cr_t", "cs_r", "c_ate_rmse", "c_matched", "matched"]
         return table[cols].sort_values("cr", ascending=False).reset_index(drop=True), fig
 
     def widget(self) -> Any:

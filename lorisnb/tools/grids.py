@@ -1,0 +1,58 @@
+"""The threshold grids of the notebooks that sweep (``threshold_sensitivity``,
+``compare_algorithms``): their full and ``quick`` defaults, and :func:`notebook_grids`, which gives
+a grid the user set unchanged (checked) and the default only where the user set none. ``quick``
+trims the work of the defaults; it never drops or trims a grid the user gave."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from ..core import validate
+from ..errors import ValidationError
+
+#: notebook -> grid parameter -> (full default, quick default). eps in metres, phi in degrees,
+#: delta and tau in seconds, relative as fractions of each sequence's ground-truth extent.
+GRIDS: dict[str, dict[str, tuple[list[float], list[float]]]] = {
+    "threshold_sensitivity": {
+        "eps_grid": ([0.1, 0.2, 0.3, 0.5, 0.75, 1, 1.5, 2, 3, 4, 5, 7.5, 10, 15, 20, 30, 50], [0.3, 1, 3, 10, 50]),
+        "phi_grid": ([5, 10, 15, 20, 30, 45, 60, 90, 180], [10, 30, 180]),
+        "delta_grid": ([0.1, 0.2, 0.5, 1, 2, 5, 10], [0.2, 1, 5]),
+        "tau_grid": ([5, 10, 20, 30, 60, 120, 300, 600], [10, 60, 300]),
+        "relative_grid": ([0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5], [0.05, 0.2]),
+    },
+    "compare_algorithms": {
+        "eps_grid": ([0.3, 0.5, 1, 2, 3, 5], [0.3, 0.5, 1]),
+        "phi_grid": ([10, 20, 30, 60], [10, 20]),
+    },
+}  # fmt: skip
+
+
+def check_grid(name: str, values: Any) -> list[Any]:
+    if name == "relative_grid":
+        items = validate.threshold_list("eps", values)  # numbers, a non-empty list
+        return [validate.relative_fraction(name, validate.positive(name, v, "(a fraction)"), v) for v in items]
+    return validate.threshold_list(name.removesuffix("_grid"), values)
+
+
+def notebook_grids(notebook: str, quick: Any, **given: Any) -> dict[str, list[Any]]:
+    """The grids ``notebook`` sweeps: each grid ``given`` (not None) checked and kept as given,
+    every other one its default (the ``quick`` one when ``quick``). ``quick`` is a yes/no value
+    (:func:`lorisnb.core.validate.flag`). A grid the notebook does not sweep is refused."""
+    quick = validate.flag("quick", quick)
+    grids: Mapping[str, tuple[list[float], list[float]]] = GRIDS[notebook]
+    unknown = sorted(set(given) - set(grids))
+    if unknown:
+        raise ValidationError(f"{', '.join(unknown)}: not a grid of {notebook}; its grids: {', '.join(grids)}")
+    return {
+        name: list(default[1] if quick else default[0]) if given.get(name) is None else check_grid(name, given[name])
+        for name, default in grids.items()
+    }
+
+
+def quick_default(name: str, value: Any, full: int, trimmed: int, quick: Any) -> int:
+    """A count parameter (``sim_trials``): the value given (a positive whole number), kept with
+    ``quick`` too; None: ``full``, or ``trimmed`` when ``quick``."""
+    if value is None:
+        return trimmed if validate.flag("quick", quick) else full
+    return int(validate.positive(name, value, "", integer=True))

@@ -1,0 +1,89 @@
+"""Yes/no values and lists (trial finding 11): ``progress`` and a notebook's ``quick`` go through the
+flag validator (a string is refused, never truth-tested); ``quick`` never drops a grid the user
+gave; a comma list with an empty item is refused; a negative value after an option reaches the
+option's validator (``--eps -1,1``) instead of argparse's "expected one argument"."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+
+import lorisnb as ln
+from lorisnb.cli import main
+from lorisnb.core import validate
+from lorisnb.errors import ValidationError
+from lorisnb.tools.grids import GRIDS, notebook_grids
+from lorisnb.tools.report_notebooks import check_values
+
+
+def test_progress_is_a_flag(icra20, capsys):
+    one = icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt"
+    for value in ("no", "false", 0, 1, None):
+        with pytest.raises(ValidationError, match=r"progress=.*expected True or False"):
+            ln.evaluate(one, progress=value)
+    ev = ln.evaluate(one, progress=False)
+    assert len(ev.errors) == 1 and "evaluating" not in capsys.readouterr().err  # no bar
+
+
+def test_quick_is_a_flag_and_never_drops_a_given_grid():
+    for value in ("maybe", "yes", 1, None):
+        with pytest.raises(ValidationError, match="quick=.*expected True or False"):
+            notebook_grids("threshold_sensitivity", value)
+        if value is not None:
+            with pytest.raises(ValidationError, match="quick="):
+                check_values({"quick": value})
+    mine = notebook_grids("threshold_sensitivity", True, eps_grid=[0.25, 2], phi_grid="15,45")
+    assert mine["eps_grid"] == [0.25, 2.0] and mine["phi_grid"] == [15.0, 45.0]  # given: kept, quick or not
+    assert mine["delta_grid"] == GRIDS["threshold_sensitivity"]["delta_grid"][1]  # not given: the quick default
+    full = notebook_grids("compare_algorithms", False)
+    assert full == {k: v[0] for k, v in GRIDS["compare_algorithms"].items()}
+    with pytest.raises(ValidationError, match="eps=-1"):
+        notebook_grids("threshold_sensitivity", True, eps_grid=[-1, 2])
+    with pytest.raises(ValidationError, match=r"relative_grid=5(\.0)?: a fraction .* at most 1"):
+        notebook_grids("threshold_sensitivity", True, relative_grid=[0.1, 5])
+    with pytest.raises(ValidationError, match="tau_grid: not a grid of compare_algorithms"):
+        notebook_grids("compare_algorithms", True, tau_grid=[10])
+
+
+@pytest.mark.parametrize("text", ["1,,2", "1,2,", ",1", " , "])
+def test_an_empty_list_item_is_refused(text):
+    with pytest.raises(ValidationError, match="an empty item between commas|an empty list"):
+        validate.threshold_list("eps", text)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--eps", "1,,2"], "argument --eps: eps=1,,2: an empty item between commas"),
+        (["--eps", "-1,1"], "argument --eps: eps=-1: expected 'paper', 'relative:F', a number of metres >= 0"),
+        (["--eps=-1,1"], "argument --eps: eps=-1: expected 'paper', 'relative:F', a number of metres >= 0"),
+        (["--phi", "-inf"], "argument --phi: phi=-inf: expected a number of degrees >= 0"),
+        (["--delta", "-1e-3,1"], "argument --delta: delta=-1e-3: expected a number of seconds > 0"),
+    ],
+)
+def test_sweep_lists_reach_their_validator(icra20, capsys, args, message):
+    with pytest.raises(SystemExit) as exc:
+        main(["sweep", str(icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt"), *args, "--no-progress"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and message in err and "expected one argument" not in err
+
+
+def test_a_negative_value_that_is_valid_is_taken(icra20, tmp_path, capsys):
+    """``--t-offset -1e-3`` (argparse alone took it for an option) shifts the estimate's clock."""
+    one = icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt"
+    csv = tmp_path / "t.csv"
+    assert main(["evaluate", str(one), "--t-offset", "-1e-3", "--csv", str(csv), "--no-progress"]) == 0
+    capsys.readouterr()
+    got = pd.read_csv(csv).iloc[0]
+    want = ln.evaluate(one, t_offset=-1e-3).sequences().iloc[0]
+    assert got["matched"] == want["matched"] > 0 and got["ate_rmse"] == pytest.approx(want["ate_rmse"], rel=1e-9)
+
+
+def test_quick_keeps_a_count_given():
+    from lorisnb.tools.grids import quick_default
+
+    assert quick_default("sim_trials", None, 6, 5, True) == 5 and quick_default("sim_trials", None, 6, 5, False) == 6
+    assert quick_default("sim_trials", 8, 6, 5, True) == 8  # given: kept, quick or not
+    for bad in (0, 2.5, -3):
+        with pytest.raises(ValidationError, match="sim_trials=.*positive whole number"):
+            quick_default("sim_trials", bad, 6, 5, True)
