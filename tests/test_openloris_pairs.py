@@ -90,3 +90,14 @@ def test_crosscheck_evo_of_openloris_files_says_why(icra20, data, capsys):
                  "--conventions", "evo"])  # fmt: skip
     err = capsys.readouterr().err
     assert code == 2 and "evo reads no OpenLORIS files" in err and "ROS bag" not in err
+
+
+def test_a_declared_failure_as_a_pair_is_scored_as_the_native_route_scores_it(icra20, data, tmp_path):
+    """``*-failed.txt``: ``seq:`` blocks without poses, the official data's declared failed runs."""
+    failed = icra20 / "per-seq/vins_mono_color_imu_with_loop/corridor-1-failed.txt"
+    pair = ln.evaluate_pairs(failed, data.groundtruth("corridor"), fmt="openloris", jobs=1)
+    native = ln.evaluate(failed, data_root=data, jobs=1)
+    pd.testing.assert_frame_equal(_numbers(pair), _numbers(native))
+    assert list(_numbers(pair)["seq"]) == [2, 3]
+    args = [str(failed), "--gt", str(data.groundtruth("corridor")), "--format", "openloris", "--jobs", "1"]
+    assert main(["evaluate", *args]) == 0  # a declared failure is scored, as with --data
