@@ -37,7 +37,7 @@ def _run_evaluation(args: argparse.Namespace, files: list[str], folders: tuple[s
     estimates, the ground truth, times files, the manifest and its ground-truth files, the data
     root). Prints the ``conventions:`` line."""
     from ..io.manifest import read_manifest
-    from ..tools.evaluate import evaluate, evaluate_manifest, evaluate_pairs
+    from ..tools.evaluate import evaluate, evaluate_manifest, evaluate_pairs, pair_kind
 
     if args.gt and args.manifest:
         raise ValidationError("--gt and --manifest: give one (a manifest names the ground truth of each session)")
@@ -63,7 +63,10 @@ def _run_evaluation(args: argparse.Namespace, files: list[str], folders: tuple[s
             + ("a pair's ground truth is --gt" if args.gt else "a manifest names its ground-truth files")
         )
     spec = spec_from_args(args, manifest.spec if manifest is not None else None)
-    spec.refuse_inapplicable("pair" if args.gt else "manifest" if manifest is not None else "openloris", surface="cli")
+    spec.refuse_inapplicable(
+        pair_kind(args.format or "tum") if args.gt else "manifest" if manifest is not None else "openloris",
+        surface="cli",
+    )
     inputs = list(args.paths)  # the options' inputs too (check_outputs), and a manifest's ground truth
     if manifest is not None:
         inputs += [str(manifest.path), *(str(s.groundtruth) for s in manifest.sessions)]

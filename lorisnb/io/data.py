@@ -159,7 +159,13 @@ def load_groundtruth(
     the file changes). Repeated poses are dropped from ground truth too, as the official tool does.
     Each call returns a new object whose arrays are read-only (they are shared with every other
     caller): copy an array to change it."""
-    path = find_data(data_root).groundtruth(scene)
+    return read_groundtruth_file(find_data(data_root).groundtruth(scene), remove_repeated)
+
+
+def read_groundtruth_file(path: str | os.PathLike, remove_repeated: bool = True) -> ResultFile:
+    """An OpenLORIS ground-truth file (every ``seq:`` block), read once and cached as
+    :func:`load_groundtruth` reads a scene's; a new object over read-only arrays each call."""
+    path = Path(path)
     st = path.stat()
     gt = _read_gt_cached(str(path), st.st_mtime, st.st_size, remove_repeated)
     return replace(  # a fresh object over read-only arrays: a caller's edits never reach the next caller

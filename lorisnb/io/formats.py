@@ -316,8 +316,8 @@ def read_trajectory(
     """Read one trajectory in any supported format.
 
     Args:
-        fmt: ``tum``, ``kitti``, ``euroc``, ``openloris`` (``seq`` picks the sequence; default
-            the lowest-numbered one) or ``bag`` (ROS 1 or ROS 2; ``topic`` or ``tf``, see
+        fmt: ``tum``, ``kitti``, ``euroc``, ``openloris`` (``seq`` picks the sequence; needed
+            when the file has several) or ``bag`` (ROS 1 or ROS 2; ``topic`` or ``tf``, see
             :func:`lorisnb.io.bags.read_bag`).
         stamps: KITTI only: stamps or a times file (see :func:`read_kitti`).
         repeated: poses of a repeated stamp: ``drop`` all but the last, or ``keep`` them all (evo's
@@ -361,6 +361,9 @@ def _read(
                            repair_stamps=repair_stamps)  # fmt: skip
         if not f.sequences:
             raise ParseError(path, None, "no 'seq: N' block; expected at least one sequence")
+        if seq is None and len(f.sequences) > 1:  # never one block of several, silently
+            raise ParseError(path, None, f"sequences {', '.join(map(str, sorted(f.sequences)))}: expected one, or "
+                             "the sequence to read (seq=N); read_openloris reads them all")  # fmt: skip
         key = min(f.sequences) if seq is None else seq
         if key not in f.sequences:
             raise ParseError(path, None, f"no sequence {key}; the file has {sorted(f.sequences)}")

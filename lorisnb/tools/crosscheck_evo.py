@@ -15,7 +15,7 @@ import pandas as pd
 
 from ..core.relations import STATISTICS
 from ..core.spec import EvalSpec, make_spec
-from ..errors import EvaluationError
+from ..errors import EvaluationError, ValidationError
 from ._extras import require
 from .crosscheck_reading import crosscheck_reading, evo_read
 from .evo_bridge import CROSSCHECK_COLUMNS, NO_RPE_PAIR, agreement_row, evo_errors
@@ -95,6 +95,13 @@ def crosscheck_evo(
 
     the_spec = make_spec(spec)
     gt_fmt = gt_fmt or fmt
+    if "openloris" in (fmt, gt_fmt):
+        raise ValidationError(
+            "format openloris: evo reads no OpenLORIS files (scene: and frame: headers, seq: blocks, ground truth in "
+            "base_link); compare one with evo on identical pairs, each sequence in its sensor frame, with "
+            "lorisnb crosscheck GT EST --format openloris [--seq N] without --conventions (crosscheck_openloris "
+            "in Python), or write each sequence as a TUM file"
+        )
     if the_spec.rpe_all_pairs is None and the_spec.rpe_unit != "s":
         the_spec = make_spec(the_spec, rpe_all_pairs=False)  # lorisnb's own pairs have no evo equivalent
     reading = []

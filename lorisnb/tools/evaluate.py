@@ -172,6 +172,9 @@ def pair_source(
             raise ValidationError(
                 f"{name} (command line --{name.replace('_', '-')}): only for {needs} files; {side} are read as {has}"
             )
+    if scene is not None and fmt == "openloris":
+        raise ValidationError("scene (command line --scene): OpenLORIS result files name their scene in their "
+                              "header (scene: ...), which is used")  # fmt: skip
     gt_paths = as_paths(groundtruth)
     if len(gt_paths) != 1:
         raise ValidationError(f"groundtruth: {len(gt_paths)} paths given; expected one ground-truth file")
@@ -181,6 +184,12 @@ def pair_source(
         est_times=None if est_times is None else Path(est_times), gt_times=None if gt_times is None else Path(gt_times),
         topic=topic, gt_topic=gt_topic, tf=tf, gt_tf=gt_tf,
     )  # fmt: skip
+
+
+def pair_kind(fmt: str) -> str:
+    """The input kind whose options apply to pairs of estimates in ``fmt``: OpenLORIS result files
+    are scored as the native route scores them (their frames, every sequence), other files as pairs."""
+    return "openloris" if fmt == "openloris" else "pair"
 
 
 def _pair_suffixes(fmt: str) -> tuple[str, ...]:
@@ -239,9 +248,9 @@ def evaluate_pairs(
         jobs, executor, progress, trials_by: as for :func:`evaluate`.
     """
     the_spec = _spec(spec, conventions, options)
-    notes = the_spec.refuse_inapplicable("pair")
     src = pair_source(groundtruth, fmt, gt_fmt, scene, est_times=est_times, gt_times=gt_times, topic=topic,
                       gt_topic=gt_topic, tf=tf, gt_tf=gt_tf)  # fmt: skip
+    notes = the_spec.refuse_inapplicable(pair_kind(src.fmt))
     _refuse_reading(the_spec, src.fmt, "pair")
     if src.fmt == src.gt_fmt == "kitti" and src.est_times is None and src.gt_times is None:
         the_spec = by_index(the_spec)  # stamps are pose indices: pose i with pose i, on every preset

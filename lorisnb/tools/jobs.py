@@ -14,14 +14,14 @@ from functools import lru_cache, partial
 from pathlib import Path
 
 from ..core.missing import with_missing
-from ..core.model import FileErrors
+from ..core.model import FileErrors, ResultFile
 from ..core.pipeline import compute_errors, evaluate_sessions, moved_groundtruth
 from ..core.plausibility import no_rpe_pair
 from ..core.spec import EvalSpec
 from ..core.trajectory import Trajectory, time_spans
 from ..core.units import check_stamp_units
-from ..errors import DataNotFoundError, LorisError, LorisWarning, ParseError
-from ..io.data import DataPaths, groundtruth_spans, load_groundtruth
+from ..errors import DataNotFoundError, LorisError, LorisWarning, ParseError, ValidationError
+from ..io.data import DataPaths, groundtruth_spans, load_groundtruth, read_groundtruth_file
 from ..io.formats import read_trajectory
 from ..io.manifest import Manifest
 from ..io.openloris import read_openloris
@@ -134,28 +134,33 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
         return "failed", Failure(job.path, str(exc), type(exc).__name__)
 
 
-def _openloris(job: Job, progress: bool) -> FileErrors | None:
-    assert job.data is not None
-    spec = job.spec
-    algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
-    drop = spec.repeated == "drop"
+def _read_result(job: Job, progress: bool = False) -> ResultFile:
+    """The job's OpenLORIS result file, every ``seq:`` block (a progress bar for a big one)."""
     bar = None
     if progress and size_of(job.path) >= BIG_FILE_BYTES:
         from tqdm.auto import tqdm
 
         bar = tqdm(total=size_of(job.path), desc=f"reading {job.path.name}", unit="B", unit_scale=True, leave=False)
     try:
-        result = read_openloris(job.path, remove_repeated=drop, warn=False, repair_stamps=spec.repair_stamps,
-                                progress=bar.update if bar is not None else None)  # fmt: skip
+        return read_openloris(job.path, remove_repeated=job.spec.repeated == "drop", warn=False,
+                              repair_stamps=job.spec.repair_stamps, progress=bar.update if bar is not None else None)  # fmt: skip
     except ParseError as exc:  # a file plainly in another format: say how to score it
         more = hint(job.path, "openloris")
         if not more:
             raise
-        raise ParseError(exc.path, exc.line, f"{exc.reason}{more}, and give its ground truth with --gt FILE "
-                         "(evaluate_pairs in Python)") from None  # fmt: skip
+        more += "" if job.kind == "pair" else ", and give its ground truth with --gt FILE (evaluate_pairs in Python)"
+        raise ParseError(exc.path, exc.line, f"{exc.reason}{more}") from None
     finally:
         if bar is not None:
             bar.close()
+
+
+def _openloris(job: Job, progress: bool) -> FileErrors | None:
+    assert job.data is not None
+    spec = job.spec
+    algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
+    drop = spec.repeated == "drop"
+    result = _read_result(job, progress)
     if job.scenes is not None and result.scene not in job.scenes:
         return None
     gt = load_groundtruth(result.scene, job.data, drop)
@@ -175,6 +180,8 @@ def _pair(job: Job) -> FileErrors:
         algorithm = job.path.stem
     if src.label_topic and src.topic:
         algorithm = src.topic
+    if "openloris" in (src.fmt, src.gt_fmt):  # every seq: block with its own number, as the native route
+        return _openloris_pair(job, algorithm, rel, suite, trial)
     rule = job.spec.repeated
     gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, rule)
     with warnings.catch_warnings(record=True) as caught:
@@ -188,6 +195,64 @@ def _pair(job: Job) -> FileErrors:
     return evaluate_sessions(
         gts, {1: est}, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite,
         trial=trial, notes=[str(w.message) for w in caught], groundtruth_spans=span, release_groundtruth=gts.pop,
+    )  # fmt: skip
+
+
+NATIVE = "score the result file as OpenLORIS files are scored: lorisnb evaluate FILE --data DIR (evaluate in Python)"
+
+
+def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) -> FileErrors:
+    """A pair with an OpenLORIS file on either side, scored as the native route scores it: every
+    ``seq:`` block with its own number against the same-numbered block of an OpenLORIS ground
+    truth moved to the estimate's declared frame (:func:`compute_errors`); a plain file on the
+    other side only where one trajectory and one frame make the pairing certain, else refused."""
+    src = job.source
+    assert src is not None
+    drop = job.spec.repeated == "drop"
+    if src.fmt == src.gt_fmt == "openloris":
+        result = _read_result(job)
+        gt_file = read_groundtruth_file(src.groundtruth, drop)
+        return compute_errors(result, gt_file, job.spec, algorithm=algorithm, file=rel, suite=suite, trial=trial,
+                              release=result.sequences.pop)  # fmt: skip
+    if src.fmt == "openloris":  # against a plain trajectory: one block, in the ground truth's frame
+        result = _read_result(job)
+        seqs = sorted(result.sequences)
+        if len(seqs) != 1:
+            raise ValidationError(
+                f"{job.path}: {len(seqs)} sequences (seq: {', '.join(map(str, seqs))}) against one {src.gt_fmt} "
+                f"ground-truth trajectory ({src.groundtruth}), which has no seq: blocks to pair them with; give the "
+                f"OpenLORIS ground truth (--gt-format openloris), or {NATIVE}"
+            )
+        if result.frame != "base_link":
+            raise ValidationError(
+                f"{job.path}: poses of frame {result.frame} (its frame: header); a {src.gt_fmt} ground truth names "
+                f"no frame, so it cannot be moved there: give the OpenLORIS ground truth (--gt-format openloris; moved "
+                f"with the robot's extrinsics), or {NATIVE}; a ground truth already in {result.frame}: write the "
+                f"estimate in {src.gt_fmt} too"
+            )
+        est, notes = {seqs[0]: result.sequences[seqs[0]]}, list(result.warnings)
+        gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, job.spec.repeated)
+        gts = {seqs[0]: gt}
+    else:  # a plain estimate against an OpenLORIS ground truth: one block
+        gt_file = read_groundtruth_file(src.groundtruth, drop)
+        seqs = sorted(gt_file.sequences)
+        if len(seqs) != 1:
+            raise ValidationError(
+                f"{job.path}: one {src.fmt} trajectory against {len(seqs)} ground-truth sequences (seq: "
+                f"{', '.join(map(str, seqs))} in {src.groundtruth}); a {src.fmt} file names no sequence: write the "
+                f"estimate as an OpenLORIS result file (scene:, frame: and seq: N blocks) and {NATIVE}, or give one "
+                "sequence's ground truth"
+            )
+        gts = dict(gt_file.sequences)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", LorisWarning)
+            est = {seqs[0]: read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf,
+                                            repeated=job.spec.repeated)}  # fmt: skip
+        notes = [str(w.message) for w in caught]
+    check_stamp_units(est[seqs[0]], gts[seqs[0]], str(job.path))
+    return evaluate_sessions(
+        gts, est, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite, trial=trial,
+        notes=notes, groundtruth_spans=time_spans(gts), release_groundtruth=gts.pop,
     )  # fmt: skip
 
 

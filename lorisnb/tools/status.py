@@ -45,7 +45,8 @@ def unscored(ev: Evaluation) -> list[Failure]:
         if any(e.matched for e in f.sequences):
             continue
         if not any(e.poses for e in f.sequences):
-            if ev.kind == "pair":  # an empty estimate (a crashed run, comments only): scored as missing, and said
+            if ev.kind == "pair" and not f.frame:  # an empty estimate (a crashed run, comments only): scored as
+                # missing, and said; an OpenLORIS file (its frame: header) given as a pair: as below
                 out.append(Failure(f.path, f"{f.path}: holds no pose (scored as a missing output)", "no-pose"))
             continue  # an OpenLORIS file of seq: blocks without poses declares failed runs (the official data's
             # *-failed.txt): scored as the paper scores them; a manifest's missing sessions are said above
