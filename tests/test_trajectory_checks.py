@@ -150,3 +150,23 @@ def test_bag_with_repeated_stamps_warns_as_read_tum(fr1, tmp_path):
         t = read_bag(bag, topic="/pose")
     assert len(t) == len(est) - 10
     np.testing.assert_allclose(t.positions[100], est.positions[110])  # the last pose of the repeated stamp
+
+
+def test_tf_chain_with_unset_header_stamps_is_refused_naming_the_link(fr1, tmp_path):
+    _, est = fr1
+    zero = ln.Trajectory.from_checked(np.zeros(50), est.positions[:50], est.quaternions[:50])
+    bag = write_bag(tmp_path / "tf.bag", zero, 1, tf=("world", "odom", "base"))
+    with pytest.raises(ParseError, match=r"all 50 messages of the TF link odom->base have header stamp 0"):
+        read_bag(bag, tf="world:base")
+
+
+def test_kitti_stamps_given_must_be_finite(fr1, tmp_path):
+    _, est = fr1
+    t = est.subset(np.arange(20))
+    mats = np.concatenate([t.rotations().as_matrix(), t.positions[:, :, None]], axis=2).reshape(-1, 12)
+    k = write(tmp_path, "poses.txt", "\n".join(" ".join(f"{v:.9f}" for v in m) for m in mats) + "\n")
+    stamps = t.stamps.copy()
+    stamps[3] = np.nan
+    with pytest.raises(ParseError, match="stamp 4 given for this KITTI file is not finite"):
+        ln.read_kitti(k, stamps=stamps)
+    np.testing.assert_allclose(ln.read_kitti(k, stamps=t.stamps).positions, t.positions, atol=1e-9)
