@@ -53,7 +53,9 @@ def test_repeated_stamps_kept_as_evo_reads_them(data, tmp_path):
 
 def test_euroc_and_kitti_read_as_evo(tmp_path):
     t = _traj(80, 3)
-    t = Trajectory(np.repeat(t.stamps, [2] + [1] * 79)[:80], t.positions, t.quaternions)  # one repeated stamp
+    t = Trajectory.from_checked(
+        np.repeat(t.stamps, [2] + [1] * 79)[:80], t.positions, t.quaternions
+    )  # a repeated stamp
     rows = [f"{int(round(s * 1e9))}," + ",".join(f"{v:.17g}" for v in (*p, q[3], q[0], q[1], q[2])) + ",0,0,0"
             for s, p, q in zip(t.stamps, t.positions, t.quaternions, strict=True)]  # fmt: skip
     f = tmp_path / "data.csv"

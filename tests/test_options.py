@@ -115,10 +115,10 @@ def kinds(tmp_path_factory, data):
     man.mkdir(parents=True)
     # a repeated stamp (for --keep-repeated: evo's rule keeps both poses) in every input kind
     rep = np.insert(np.arange(len(est)), 100, 100)
-    est = Trajectory(est.stamps[rep], est.positions[rep], est.quaternions[rep])
+    est = Trajectory.from_checked(est.stamps[rep], est.positions[rep], est.quaternions[rep])  # kept: no check
     half = len(est) // 2
     for k, sl in ((1, slice(0, half)), (2, slice(half, None))):
-        sub = Trajectory(est.stamps[sl], est.positions[sl], est.quaternions[sl])
+        sub = Trajectory.from_checked(est.stamps[sl], est.positions[sl], est.quaternions[sl])
         write(man, f"s{k}_x1.txt", "".join(f"{t} {' '.join(map(str, p))} {' '.join(map(str, q))}\n"
                                           for t, p, q in zip(sub.stamps.tolist(), sub.positions.tolist(),
                                                              sub.quaternions.tolist(), strict=True)))  # fmt: skip

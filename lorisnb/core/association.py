@@ -56,7 +56,7 @@ def groundtruth_in_frame(
     quats = quat_normalize(quat_multiply(q, q_off))
     if official_interpolation:
         quats = ros_quaternion_from_matrix(quat_to_matrix(quats))
-    return Trajectory(gt.stamps, positions, quats, gt.lines, dict(gt.meta))
+    return Trajectory.from_checked(gt.stamps, positions, quats, gt.lines, dict(gt.meta))
 
 
 @dataclass(frozen=True)

@@ -118,7 +118,7 @@ def evo_interpolate(traj: Trajectory, stamps: np.ndarray) -> Trajectory:
     frac = np.clip(np.where(dt > 0.0, frac, 0.0), 0.0, 1.0)
     xyz = p[idx - 1] + frac[:, None] * (p[idx] - p[idx - 1])
     q = evo_slerp(traj.quaternions[idx - 1], traj.quaternions[idx], frac)
-    return Trajectory(t, xyz, q, None, dict(traj.meta))
+    return Trajectory.from_checked(t, xyz, q, None, dict(traj.meta))  # stamps of a checked trajectory
 
 
 def evo_sync(

@@ -40,7 +40,7 @@ from .steps import (
     moved_groundtruth,
     with_transform,
 )
-from .trajectory import Trajectory, time_spans
+from .trajectory import Trajectory, sessions, time_spans
 
 __all__ = [
     "DEFAULT", "FrameInfo", "Spans", "apply_alignment", "compute_errors", "errors_after_alignment", "evaluate_sessions",
@@ -56,8 +56,8 @@ FrameInfo = tuple[str, str, str, Mapping[int, Trajectory]]
 
 
 def evaluate_sessions(
-    groundtruth: Mapping[int, Trajectory],
-    estimates: Mapping[int, Trajectory],
+    groundtruth: Mapping[int, Trajectory] | Trajectory,
+    estimates: Mapping[int, Trajectory] | Trajectory,
     spec: EvalSpec = DEFAULT,
     *,
     path: str | Path = "estimate",
@@ -79,8 +79,9 @@ def evaluate_sessions(
 
     Args:
         groundtruth: sequence number -> ground truth in the estimate's frame (every estimate
-            sequence needs one).
-        estimates: sequence number -> estimate poses (the edge's objects; never changed here).
+            sequence needs one); one Trajectory is sequence 1.
+        estimates: sequence number -> estimate poses (the edge's objects; never changed here);
+            one Trajectory is sequence 1.
         spec: association, alignment, mode and the rest (:class:`~lorisnb.core.spec.EvalSpec`).
         path, algorithm, file, scene, suite, trial, frame: labels of the result.
         checks_on: run the plausibility checks (:mod:`lorisnb.core.checks`; warnings only).
@@ -95,6 +96,7 @@ def evaluate_sessions(
 
     Every note is issued as a LorisWarning and kept in ``FileErrors.warnings``.
     """
+    groundtruth, estimates = sessions("groundtruth", groundtruth), sessions("estimates", estimates)
     seqs = sorted(estimates)
     if not seqs:
         raise EvaluationError(f"{path}: no sequence to evaluate")
@@ -292,8 +294,8 @@ def compute_errors(
 
 
 def session_errors(
-    groundtruth: Mapping[int, Trajectory],
-    estimates: Mapping[int, Trajectory],
+    groundtruth: Mapping[int, Trajectory] | Trajectory,
+    estimates: Mapping[int, Trajectory] | Trajectory,
     conventions: EvalSpec | str | None = None,
     *,
     lifelong: bool = False,
@@ -306,8 +308,9 @@ def session_errors(
     frame: str = "",
     checks: bool = True,
 ) -> FileErrors:
-    """Errors of estimate sessions against their ground truth (every estimate session needs a
-    ground-truth session of the same number), through :func:`evaluate_sessions`: ``lifelong`` fits
+    """Errors of estimate sessions against their ground truth, each a dict ``{session number:
+    Trajectory}`` (every estimate session needs a ground-truth session of the same number; one
+    Trajectory on either side is session 1), through :func:`evaluate_sessions`: ``lifelong`` fits
     one alignment on the first session with matches; ``transform`` (``T_est_gt``, the ground-truth
     body's pose in the estimate's body frame) is composed with each estimate pose first."""
     spec = make_spec(conventions, lifelong=lifelong, transform=transform)

@@ -14,6 +14,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
+
 from ..errors import ValidationError
 from . import validate
 from .evo_options import PLANES
@@ -79,7 +81,12 @@ def check_evo(key: str, v: Any, label: str) -> Any:
     if key == "motion_filter":
         if v is None:
             return None
-        parts = v.replace(",", " ").split() if isinstance(v, str) else list(v)
+        if isinstance(v, str):
+            parts = v.replace(",", " ").split()
+        elif isinstance(v, (list, tuple, np.ndarray)):
+            parts = list(np.ravel(v)) if isinstance(v, np.ndarray) else list(v)
+        else:  # one number, a dict, ...
+            parts = [v]
         if len(parts) != 2:
             raise ValidationError(f"{label}: expected two numbers, metres and degrees (e.g. 0.1 5), got {v!r}")
         d, a = (float(validate.finite(label, x, "metres, degrees")) for x in parts)

@@ -98,7 +98,7 @@ def with_transform(est: Trajectory, transform: Sim3 | np.ndarray | tuple | None)
     q_off = quat_from_matrix(m[:3, :3])
     q = quat_normalize(est.quaternions)
     pos = est.positions + quat_rotate(q, m[:3, 3])
-    return Trajectory(est.stamps, pos, quat_multiply(q, q_off), est.lines, dict(est.meta))
+    return Trajectory.from_checked(est.stamps, pos, quat_multiply(q, q_off), est.lines, dict(est.meta))
 
 
 def groundtruth_frame(groundtruth: ResultFile) -> str:

@@ -3,7 +3,10 @@ a ``geometry_msgs/PoseStamped``, ``PoseWithCovarianceStamped``, ``TransformStamp
 ``PointStamped`` (positions only: the identity orientation, as evo) or ``nav_msgs/Odometry`` topic, or a TF chain ``parent:child`` (evo's ``/tf:parent.child``) from ``/tf``
 and ``/tf_static``; several of one bag at once with :func:`read_bag_topics`.
 
-Stamps are the messages' header stamps (seconds); quaternions ``xyzw``. A TF chain may pass
+Stamps are the messages' header stamps (seconds); quaternions ``xyzw``. Messages are checked as
+the text readers check lines (a message's number on its topic stands for the line): repeated or
+decreasing stamps are sorted with a warning, NaN poses skipped with a warning, and a topic whose
+header stamps are all zero (headers never set) is refused. A TF chain may pass
 through several frames: its poses are taken at the stamps of its busiest moving link, the other
 moving links interpolated there (linear positions, slerp), the static ones applied as they are.
 """
@@ -11,6 +14,7 @@ moving links interpolated there (linear positions, slerp), the static ones appli
 from __future__ import annotations
 
 import os
+import warnings
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
@@ -19,8 +23,8 @@ import numpy as np
 
 from ..core.geometry import quat_multiply, quat_rotate, slerp
 from ..core.trajectory import Trajectory
-from ..errors import MissingDependencyError, ParseError
-from .scanner import finish
+from ..errors import LorisWarning, MissingDependencyError, ParseError
+from .scanner import check_rows, finish
 
 POSE_TYPES = {
     "geometry_msgs/msg/PoseStamped": lambda m: m.pose,
@@ -152,11 +156,34 @@ def _read_topic(reader, spath: str, topic: str | None, repeated: str = "drop") -
     if not stamps:
         raise ParseError(spath, None, f"topic {topic!r} holds no message")
     notes: list[str] = []
+    where = f"{spath} {topic}"
+    t = np.array(stamps, float)
+    _unset_stamps(spath, topic, t)
     line_no = np.arange(1, len(stamps) + 1)  # message number on the topic
     pose = np.array(poses, float).reshape(-1, 7)
-    traj = finish(f"{spath} {topic}", np.array(stamps, float), pose[:, :3], pose[:, 3:], line_no, "", notes, repeated)
+    keep = check_rows(where, t, pose[:, :3], pose[:, 3:], line_no, notes)
+    if not keep.all():
+        notes.append(f"{where}: {int((~keep).sum())} pose(s) with NaN or infinite values skipped (message numbers "
+                     "stand for line numbers)")  # fmt: skip
+        t, pose, line_no = t[keep], pose[keep], line_no[keep]
+    traj = finish(where, t, pose[:, :3], pose[:, 3:], line_no, "", notes, repeated)
     traj.meta.update(source=spath, topic=topic, notes=notes)
+    for note in notes:
+        warnings.warn(note.replace(" at line ", " at message "), LorisWarning, stacklevel=4)
     return traj
+
+
+def _unset_stamps(spath: str, topic: str, stamps: np.ndarray) -> None:
+    """ParseError if every one of several messages has header stamp 0: headers never set, so the
+    poses have no time to be matched at."""
+    if stamps.size > 1 and not stamps.any():
+        raise ParseError(
+            spath,
+            None,
+            f"all {stamps.size} messages of {topic} have header stamp 0 (the header was never set); lorisnb "
+            "pairs poses by their header stamps: record with header.stamp set, or rewrite the stamps (for "
+            "example from the bag's receive times, with rosbags) before evaluating",
+        )
 
 
 def _read_tf(reader, spath: str, chain: str) -> Trajectory:
@@ -185,7 +212,16 @@ def _read_tf(reader, spath: str, chain: str) -> Trajectory:
     if not moving:
         raise ParseError(spath, None, f"the TF chain {parent}->{child} is static; expected a moving frame")
     base = max(moving, key=lambda e: len(edges[e]))
-    stamps = np.unique(np.array([s for s, _ in edges[base]]))
+    raw_stamps = np.array([s for s, _ in edges[base]])
+    _unset_stamps(spath, f"the TF link {base[0]}->{base[1]}", raw_stamps)
+    stamps = np.unique(raw_stamps)
+    if stamps.size < raw_stamps.size:
+        warnings.warn(
+            f"{spath} TF link {base[0]}->{base[1]}: {raw_stamps.size - stamps.size} of {raw_stamps.size} transforms "
+            "repeat a stamp; kept one pose per stamp",
+            LorisWarning,
+            stacklevel=4,
+        )
     pos = np.zeros((stamps.size, 3))
     quat = np.tile([0.0, 0.0, 0.0, 1.0], (stamps.size, 1))
     keep = np.ones(stamps.size, bool)

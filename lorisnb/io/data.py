@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 from ..core.aggregate import spans_table
 from ..core.frames import SCENES
 from ..core.model import ResultFile
-from ..core.trajectory import time_spans
+from ..core.trajectory import Trajectory, time_spans
 from ..errors import DataNotFoundError, LorisError
 from .openloris import read_openloris
 
@@ -170,7 +170,8 @@ def read_groundtruth_file(path: str | os.PathLike, remove_repeated: bool = True)
     gt = _read_gt_cached(str(path), st.st_mtime, st.st_size, remove_repeated)
     return replace(  # a fresh object over read-only arrays: a caller's edits never reach the next caller
         gt, header=dict(gt.header), header_lines=dict(gt.header_lines),
-        sequences={k: replace(t, meta=dict(t.meta)) for k, t in gt.sequences.items()},
+        sequences={k: Trajectory.from_checked(t.stamps, t.positions, t.quaternions, t.lines, dict(t.meta))
+                   for k, t in gt.sequences.items()},
         seq_info={k: dict(v) for k, v in gt.seq_info.items()}, seq_lines=dict(gt.seq_lines),
         removed_repeats=dict(gt.removed_repeats), warnings=list(gt.warnings),
     )  # fmt: skip

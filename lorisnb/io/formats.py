@@ -127,7 +127,7 @@ def _from_matrices(spath: str, stamps: np.ndarray, mats: np.ndarray, line_no: np
             "not a rotation (non-finite values, or a rotation block that is not orthonormal with determinant 1); "
             "expected a pose",
         )
-    return Trajectory(np.asarray(stamps, float), mats[:, :, 3].copy(), q, line_no, {"source": spath})
+    return Trajectory.from_checked(np.asarray(stamps, float), mats[:, :, 3].copy(), q, line_no, {"source": spath})
 
 
 def read_kitti(
@@ -166,10 +166,13 @@ def read_kitti(
         t = np.asarray(stamps, dtype=float).reshape(-1)
     if len(t) != len(mats):
         raise ParseError(spath, None, f"{len(mats)} poses but {len(t)} stamps; expected one stamp per pose")
-    out = _from_matrices(spath, t, mats, rows.lines)
-    out.meta["stamps"] = "index" if stamps is None else "given"
+    if not np.isfinite(t).all():
+        raise ParseError(spath, None, f"stamp {int(np.flatnonzero(~np.isfinite(t))[0]) + 1} given for this KITTI "
+                         "file is not finite; expected seconds")  # fmt: skip
     if stamps is not None and len(t) > 1 and not np.all(np.diff(t) >= 0 if keep_all else np.diff(t) > 0):
         raise ParseError(spath, None, "the stamps given for this KITTI file are not strictly increasing")
+    out = _from_matrices(spath, t, mats, rows.lines)
+    out.meta["stamps"] = "index" if stamps is None else "given"
     return out
 
 

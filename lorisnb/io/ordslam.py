@@ -226,7 +226,7 @@ def read_ordslam(path: str | os.PathLike, fps: float | None = None, layout: str 
     notes: list[str] = []
     keep = check_rows(spath, stamps, pose[:, :3], pose[:, 3:7], line_no, notes)
     traj = finish(spath, stamps[keep], pose[keep, :3], pose[keep, 3:7], line_no[keep], "", notes)
-    return Trajectory(
+    return Trajectory.from_checked(  # checked and sorted by check_rows and finish
         traj.stamps,
         traj.positions,
         traj.quaternions,

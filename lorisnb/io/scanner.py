@@ -13,8 +13,7 @@ from typing import BinaryIO
 
 import numpy as np
 
-from ..core.blocks import blockwise
-from ..core.trajectory import Trajectory
+from ..core.trajectory import QUAT_EPS, Trajectory, quaternion_norms_fit
 from ..core.validate import choice
 from ..errors import ParseError
 
@@ -23,7 +22,6 @@ REPEATED = ("drop", "keep")
 
 WHITESPACE = np.zeros(256, dtype=bool)
 WHITESPACE[[9, 10, 11, 12, 13, 32]] = True
-QUAT_EPS = np.finfo(float).eps * 4.0  # below this squared norm a quaternion has no direction
 
 POSE_FIELDS = "stamp [output_time] x y z qx qy qz qw"
 
@@ -191,7 +189,8 @@ def finish(
     1-based source lines): sorted by stamp keeping the last pose of a repeated stamp (as a dict
     keyed by stamp would), or with ``repeated="keep"`` every pose of a repeated stamp, in file
     order (as evo reads them). Contiguous arrays are kept as they are (a reader passes arrays of
-    its own), others copied."""
+    its own), others copied. The rows must have passed :func:`check_rows` (nothing is checked
+    again)."""
     keep_all = choice("repeated", repeated, REPEATED) == "keep"
     if stamps.size > 1 and not (np.all(np.diff(stamps) >= 0) if keep_all else np.all(np.diff(stamps) > 0)):
         back = np.flatnonzero(np.diff(stamps) < 0 if keep_all else np.diff(stamps) <= 0)
@@ -212,7 +211,7 @@ def finish(
             order = order[np.concatenate((s[1:] != s[:-1], [True]))]
         stamps, positions, quaternions, lines = stamps[order], positions[order], quaternions[order], lines[order]
     small = lines.size == 0 or int(lines.max()) < 2**31  # line numbers in 4 bytes: 40 MB less per 10M poses
-    return Trajectory(
+    return Trajectory.from_checked(  # rows checked by check_rows, sorted above
         np.ascontiguousarray(stamps, float),
         np.ascontiguousarray(positions, float),
         np.ascontiguousarray(quaternions, float),
@@ -244,7 +243,7 @@ def check_rows(
             f"{path}: {int(inf_rows.sum())} pose(s) with infinite values skipped "
             f"(first at line {lines[np.flatnonzero(inf_rows)[0]]})"
         )
-    if _norms_fit(quaternions):
+    if quaternion_norms_fit(quaternions):
         return finite
     with np.errstate(over="ignore"):
         nq = np.einsum("ij,ij->i", quaternions, quaternions)
@@ -259,18 +258,3 @@ def check_rows(
             path, int(lines[i]), "quaternion is too large to normalize; expected a rotation qx qy qz qw of unit norm"
         )
     return finite
-
-
-def _norms_fit(quaternions: np.ndarray) -> bool:
-    """Whether every quaternion's squared norm is finite and at least :data:`QUAT_EPS` (the usual
-    case), looked at in row blocks on threads without a temporary of the file's length."""
-    fits = [True]
-
-    def rows(lo: int, hi: int) -> None:
-        with np.errstate(over="ignore", invalid="ignore"):
-            nq = np.einsum("ij,ij->i", quaternions[lo:hi], quaternions[lo:hi])
-            if not (nq.min() >= QUAT_EPS and np.isfinite(nq.max())):  # NaN compares False
-                fits[0] = False
-
-    blockwise(rows, len(quaternions), 1 << 16)
-    return fits[0]
