@@ -158,6 +158,18 @@ def test_indoor_vs_outdoor_published_only(tmp_path):
     nb = (tmp_path / "indoor_vs_outdoor.ipynb").read_text()
     assert "No ORDSLAM data" in nb
     assert not (out / "ordslam_motion_by_difficulty_and_light.csv").exists()
+    assert pd.read_csv(out / "input_errors.csv").empty
+
+
+def test_indoor_vs_outdoor_bad_ordslam_catalog_is_an_input_error(tmp_path):
+    folder = tmp_path / "ordslam"
+    folder.mkdir()
+    (folder / "s5_13-00_fill.txt").write_text("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n")
+    (folder / "catalog.csv").write_text("file,scenario,time,depth_mode\ns5_13-00_fill.txt,five,13:00,fill\n")
+    out = run("indoor_vs_outdoor", tmp_path / "nb", ordslam_dir=str(folder))
+    errors = pd.read_csv(out / "input_errors.csv")
+    assert list(errors["kind"]) == ["ORDSLAM folder"] and list(errors["status"]) == ["failed"]
+    assert "catalog.csv, line 2: row 1, column scenario: 'five'" in errors["error"].iloc[0]
 
 
 def test_indoor_vs_outdoor_with_synthetic_ordslam_folder(tmp_path):
@@ -169,7 +181,14 @@ def test_indoor_vs_outdoor_with_synthetic_ordslam_folder(tmp_path):
     gt = load_groundtruth("cafe").sequences[1]
     seg = gt.subset(np.flatnonzero(gt.stamps - gt.stamps[0] < 60)[::3])
     folder = make_synthetic_ordslam(tmp_path / "ordslam", seg)
+    stray = folder / "estimates" / "synthetic_slam" / "s9" / "s5_13-00_fill.txt"  # no ground truth at that path
+    stray.parent.mkdir()
+    stray.write_text((folder / "s5_13-00_fill.txt").read_text())
     out = run("indoor_vs_outdoor", tmp_path / "nb", ordslam_dir=str(folder))
+    errors = pd.read_csv(out / "input_errors.csv")  # what `lorisnb report` counts for its exit status
+    assert list(errors["file"]) == [str(stray)] and list(errors["status"]) == ["failed"]
+    assert errors["error"].iloc[0].startswith("no ground-truth file s9/s5_13-00_fill.txt")
+    assert len(pd.read_csv(out / "difficulty_per_sequence.csv").query("dataset == 'ORDSLAM'")) == 4
     motion = pd.read_csv(out / "ordslam_motion_by_difficulty_and_light.csv")
     assert set(motion["group"]) == {"difficult", "very difficult"} and set(motion["light"]) == {"day", "night"}
     assert motion["length_m"].iloc[0] == pytest.approx(seg.path_length)

@@ -109,6 +109,60 @@ def test_catalog_lookups():
     assert describe_sequence("x.txt", cat)["difficulty"] == "medium"
 
 
+def test_reader_values_are_validated(tmp_path, segment):
+    mats = np.concatenate([segment.rotations().as_matrix(), segment.positions[:, :, None]], axis=2).reshape(-1, 12)
+    kitti = _write(tmp_path / "k.txt", mats[:5])
+    with pytest.raises(ln.ValidationError, match="layout=kiti: expected one of tum, index, pose, kitti, index-kitti"):
+        read_ordslam(kitti, fps=30, layout="kiti")
+    for fps in (0, -30, float("nan"), float("inf")):
+        with pytest.raises(ln.ValidationError, match=r"fps=.*: expected a positive number of frames per second"):
+            read_ordslam(kitti, fps=fps)
+    with pytest.raises(ln.ValidationError, match=r"^fps=abc is not a number; expected a number$"):
+        read_ordslam(kitti, fps="abc")
+    q = segment.quaternions[:5] / np.linalg.norm(segment.quaternions[:5], axis=1, keepdims=True)
+    tum = _write(tmp_path / "t.txt", np.column_stack([np.arange(5) * 0.25, segment.positions[:5], q]))
+    assert read_ordslam(tum).meta["layout"] == "tum"
+    with pytest.raises(ParseError, match=r"t.txt, line 2: frame number 0.25 is not a whole number; layout 'index'"):
+        read_ordslam(tum, fps=30, layout="index")
+    frac = _write(tmp_path / "u.txt", np.column_stack([[0, 1, 2.5, 3, 4], mats[:5]]))
+    with pytest.raises(
+        ParseError, match=r"u.txt, line 3: frame number 2.5 is not a whole number; layout 'index-kitti'"
+    ):
+        read_ordslam(frac, fps=30)
+
+
+def test_reader_warns_like_read_tum(tmp_path, segment):
+    """Repeated frame numbers and NaN rows: the same notes, with the same rule, as read_tum."""
+    q = segment.quaternions[:10] / np.linalg.norm(segment.quaternions[:10], axis=1, keepdims=True)
+    frames = np.array([0, 1, 2, 3, 3, 4, 5, 5, 6, 7])
+    rows = np.column_stack([frames, segment.positions[:10], q])
+    rows[1, 1] = np.nan
+    f = _write(tmp_path / "r.txt", rows)
+    with pytest.warns(ln.LorisWarning) as rec:
+        t = read_ordslam(f, fps=10)
+    notes = [str(w.message) for w in rec]
+    assert any("r.txt: 1 pose(s) with NaN or infinite values skipped" in n for n in notes)
+    assert any(
+        "r.txt: timestamps are not increasing (2 times; first at line 5: 0.300000000 repeats" in n
+        and "kept the last pose of each repeated stamp" in n
+        for n in notes
+    )
+    assert len(t) == 7  # 10 lines - 1 NaN - 2 repeats; the last pose of a repeated frame is kept
+    np.testing.assert_allclose(t.positions[t.stamps == 0.3], segment.positions[4:5])
+    tum = tmp_path / "r_tum.txt"
+    tum.write_text(f.read_text())
+    with pytest.warns(ln.LorisWarning) as rec_tum:
+        ln.read_tum(tum)
+    tum_note = next(str(w.message) for w in rec_tum if "not increasing" in str(w.message))
+    ord_note = next(n for n in notes if "not increasing" in n)
+    assert ord_note.split("); ")[1] == tum_note.split("); ")[1]  # the same rule in the same words
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(read_ordslam(f, fps=10, warn=False)) == 7
+
+
 def test_find_ordslam_errors(tmp_path):
     assert find_ordslam(None) is None
     with pytest.raises(ln.DataNotFoundError, match="does not exist"):
@@ -188,7 +242,7 @@ def test_ordslam_folder_measures(tmp_path, segment):
     assert set(stats["group"]) == {"difficult", "very difficult"} and set(stats["light"]) == {"day", "night"}
     assert stats["length_m"].iloc[0] == pytest.approx(segment.path_length)
     table, problems = ordslam_difficulty(folder)
-    assert problems == [] and len(table) == 4
+    assert problems.empty and len(table) == 4
     by = table.groupby("group")["ate_rmse_m"].median()
     assert by["very difficult"] > by["difficult"]
 

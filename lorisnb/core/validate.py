@@ -62,7 +62,8 @@ def _number(name: str, value: Any, words: Mapping[str, Any]) -> Any:
             return float(text)
         except ValueError:
             extra = "".join(f", '{w}'" for w in words if w not in ("inf", "+inf", "infinity"))
-            raise ValidationError(f"{name}={_show(value)} is not a number; expected a number, 'inf'{extra}") from None
+            extra = (", 'inf'" if "inf" in words else "") + extra  # only where infinity is allowed
+            raise ValidationError(f"{name}={_show(value)} is not a number; expected a number{extra}") from None
     if isinstance(value, Real):
         return float(value)
     try:  # numpy 0-d arrays and the like

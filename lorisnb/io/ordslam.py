@@ -22,16 +22,17 @@ Values may be separated by spaces, tabs, commas or semicolons; ``#`` comments an
 column names are skipped. Anything else raises :class:`~lorisnb.errors.ParseError` naming the file
 and what was expected. Every returned trajectory records its layout in ``meta["layout"]``.
 
-File names are not documented either. :func:`describe_sequence` reads the scenario number, time of
-day and depth mode from tokens in a name such as ``s5_13-00_fill.txt`` or
-``scenario6/20h/standard.txt``; a ``catalog.csv`` (``file,scenario,time,depth_mode``) next to the
-files overrides what the names say.
+File names are not documented either. :func:`~lorisnb.io.ordslam_names.describe_sequence` reads
+the scenario number, time of day and depth mode from tokens of a path such as
+``s5_13-00_fill.txt`` or ``scenario6/20h/standard.txt`` (the accepted tokens are listed in
+:mod:`lorisnb.io.ordslam_names`); a ``catalog.csv`` (``file,scenario,time,depth_mode``) in the
+folder overrides what the names say.
 """
 
 from __future__ import annotations
 
 import os
-import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -40,93 +41,26 @@ import pandas as pd
 
 from ..core.matrices import rotation_blocks
 from ..core.trajectory import Trajectory
-from ..errors import DataNotFoundError, ParseError
+from ..core.validate import choice, positive
+from ..errors import DataNotFoundError, LorisWarning, ParseError
 from .formats import ROTATION_TOLERANCE
+from .ordslam_names import (
+    PAPER_TO_PAGE,
+    SCENARIOS,
+    Scenario,
+    describe_sequence,
+    light_period,
+    read_catalog,
+    scenario,
+)
 from .scanner import check_rows, finish, read_bytes, scan
 
+__all__ = [
+    "LAYOUTS", "PAPER_TO_PAGE", "SCENARIOS", "OrdslamFolder", "Scenario", "describe_sequence", "find_ordslam",
+    "light_period", "read_ordslam", "scenario",
+]  # fmt: skip
+
 LAYOUTS = ("tum", "index", "pose", "kitti", "index-kitti")
-
-
-@dataclass(frozen=True)
-class Scenario:
-    number: int
-    difficulty: str
-    motion: str
-
-
-#: Motion scenarios as listed on the dataset page (six; ``ordslam-facts.md``). The published
-#: Table 3 calls 5 "difficult" and 6 "very difficult" (``../shared/data/published/README.md``).
-SCENARIOS: dict[int, Scenario] = {
-    1: Scenario(1, "simple", "smooth rotation in a circle without translation"),
-    2: Scenario(2, "simple", "vertical or horizontal translation without rotation"),
-    3: Scenario(3, "simple", "vertical or horizontal translation, returning to the start position"),
-    4: Scenario(4, "medium", "moving towards / away from the scene without rotation"),
-    5: Scenario(5, "difficult", "smooth free motion (translation and rotation)"),
-    6: Scenario(6, "very difficult", "free motion with shaking or strong wind"),
-}
-#: The paper's own list has five scenarios (no separate "returning" one): paper number -> page number.
-PAPER_TO_PAGE = {1: 1, 2: 2, 3: 4, 4: 5, 5: 6}
-
-
-def scenario(number: int, numbering: str = "page") -> Scenario:
-    """The scenario with this number, in the dataset page's numbering (1-6) or the paper's (1-5)."""
-    n = PAPER_TO_PAGE.get(number) if numbering == "paper" else number
-    if n not in SCENARIOS:
-        valid = sorted(PAPER_TO_PAGE) if numbering == "paper" else sorted(SCENARIOS)
-        raise KeyError(f"no ORDSLAM scenario {number} in the {numbering} numbering; expected one of {valid}")
-    return SCENARIOS[n]
-
-
-def light_period(time: str | float | None) -> str:
-    """Illumination class of a capture time (``"13:00"`` or hours as a number): ``day`` (07-17 h),
-    ``dusk`` (17-20 h, low sun) or ``night`` (20 h and later, before 07 h)."""
-    if time is None or (isinstance(time, float) and np.isnan(time)):
-        return "unknown"
-    if isinstance(time, str):
-        h, _, m = time.partition(":")
-        hours = int(h) + (int(m) / 60 if m else 0)
-    else:
-        hours = float(time)
-    if 7 <= hours < 17:
-        return "day"
-    if 17 <= hours < 20:
-        return "dusk"
-    return "night"
-
-
-_SCEN = re.compile(r"(?:scenario|scen|sc|s)[ _-]?([1-6])(?![0-9])", re.I)
-_TIME = re.compile(r"(?<![0-9])([01]?[0-9]|2[0-3])(?:[:_.-]?([0-5][0-9]))?\s*h?(?![0-9])", re.I)
-_DEPTH = re.compile(r"(fill(?:ed)?|standard|std)", re.I)
-
-
-def describe_sequence(name: str | os.PathLike, catalog: pd.DataFrame | None = None) -> dict:
-    """Scenario, difficulty, motion, capture time, light period and depth mode of a sequence, from
-    the catalog if it lists the file, else from tokens of its path (see the module docstring)."""
-    p = Path(name)
-    info = dict(
-        file=p.name, scenario=np.nan, difficulty="unknown", motion="", time=None, light="unknown", depth_mode="unknown"
-    )
-    if catalog is not None and p.name in set(catalog["file"]):
-        row = catalog[catalog["file"] == p.name].iloc[0]
-        time: str | None
-        depth: str | None
-        sc = int(row["scenario"]) if pd.notna(row.get("scenario")) else None
-        time = str(row["time"]) if pd.notna(row.get("time")) else None
-        depth = str(row["depth_mode"]) if pd.notna(row.get("depth_mode")) else "unknown"
-    else:
-        text = "/".join(p.with_suffix("").parts[-3:])
-        m = _SCEN.search(text)
-        sc = int(m.group(1)) if m else None
-        rest = _SCEN.sub(" ", text)
-        t = _TIME.search(rest)
-        time = f"{int(t.group(1)):02d}:{t.group(2) or '00'}" if t else None
-        d = _DEPTH.search(rest)
-        depth = None if d is None else ("fill" if d.group(1).lower().startswith("fill") else "standard")
-        depth = depth or "unknown"
-    if sc is not None and sc in SCENARIOS:
-        info.update(scenario=sc, difficulty=SCENARIOS[sc].difficulty, motion=SCENARIOS[sc].motion)
-    info.update(time=time, light=light_period(time), depth_mode=depth)
-    return info
 
 
 def _detect(values: np.ndarray, ncol: int, path: str) -> str:
@@ -149,19 +83,32 @@ def _detect(values: np.ndarray, ncol: int, path: str) -> str:
     )
 
 
-def read_ordslam(path: str | os.PathLike, fps: float | None = None, layout: str | None = None) -> Trajectory:
+def read_ordslam(
+    path: str | os.PathLike, fps: float | None = None, layout: str | None = None, warn: bool = True
+) -> Trajectory:
     """Read an ORDSLAM ground-truth (or estimate) trajectory, detecting its layout.
 
     Args:
         path: the ``.txt`` file.
         fps: frame rate, needed when the file has frame numbers or no stamps (layouts ``index``,
             ``pose``, ``kitti``, ``index-kitti``): stamp = frame / fps, seconds.
-        layout: force one of :data:`LAYOUTS` instead of detecting it.
+        layout: force one of :data:`LAYOUTS` instead of detecting it (``index`` and
+            ``index-kitti`` need whole frame numbers).
+        warn: issue the notes about the file as :class:`~lorisnb.errors.LorisWarning` (as
+            :func:`~lorisnb.io.formats.read_tum` does): poses with NaN or infinite values skipped,
+            frame numbers or stamps not increasing (sorted; the last pose of a repeated one kept).
+
+    Raises ValidationError for a bad ``fps`` or ``layout``, ParseError (file and line) for a file
+    that does not fit the layout.
 
     Returns a :class:`~lorisnb.core.trajectory.Trajectory` with ``meta = {"dataset": "ORDSLAM",
     "layout": ..., "fps": ...}``.
     """
     spath = str(path)
+    if layout is not None:
+        layout = choice("layout", layout, LAYOUTS)
+    if fps is not None:
+        fps = positive("fps", fps, "frames per second")
     lines = scan(read_bytes(path), separators=b",;")
     rows = np.flatnonzero((lines.first >= 0) & (lines.first != ord("#")))
     if rows.size and not (chr(lines.first[rows[0]]).isdigit() or chr(lines.first[rows[0]]) in "+-."):
@@ -180,8 +127,6 @@ def read_ordslam(path: str | os.PathLike, fps: float | None = None, layout: str 
         )
     values = lines.numbers(rows, spath, f"{ncol} numbers per line").reshape(-1, ncol)
     found = _detect(values, ncol, spath) if layout is None else layout
-    if found not in LAYOUTS:
-        raise ValueError(f"unknown layout {layout!r}; expected one of {LAYOUTS}")
     expected = {"tum": 8, "index": 8, "pose": 7, "kitti": 12, "index-kitti": 13}[found]
     if ncol != expected:
         raise ParseError(spath, int(rows[0]) + 1, f"layout {found!r} needs {expected} numbers per line, found {ncol}")
@@ -193,6 +138,16 @@ def read_ordslam(path: str | os.PathLike, fps: float | None = None, layout: str 
             "stamps); pass fps=... (frames per second) to turn frames into seconds",
         )
     line_no = rows + 1
+    if found in ("index", "index-kitti"):
+        frac = np.flatnonzero(~(np.abs(values[:, 0] - np.round(values[:, 0])) < 1e-9))
+        if frac.size:
+            i = int(frac[0])
+            raise ParseError(
+                spath,
+                int(line_no[i]),
+                f"frame number {float(values[i, 0])!r} is not a whole number; layout {found!r} expects a frame "
+                "index first (stamps in seconds: layout 'tum')",
+            )
     rate = float(fps) if fps is not None else np.nan  # fps is required for every layout but tum
     if found == "tum":
         stamps, pose = values[:, 0], values[:, 1:8]
@@ -225,7 +180,13 @@ def read_ordslam(path: str | os.PathLike, fps: float | None = None, layout: str 
         pose = np.concatenate([mats[:, :, 3], quat], axis=1)
     notes: list[str] = []
     keep = check_rows(spath, stamps, pose[:, :3], pose[:, 3:7], line_no, notes)
+    nan_rows = int((~keep).sum())
+    if nan_rows:
+        notes.append(f"{spath}: {nan_rows} pose(s) with NaN or infinite values skipped")
     traj = finish(spath, stamps[keep], pose[keep, :3], pose[keep, 3:7], line_no[keep], "", notes)
+    if warn:
+        for note in notes:
+            warnings.warn(note, LorisWarning, stacklevel=2)
     return Trajectory.from_checked(  # checked and sorted by check_rows and finish
         traj.stamps,
         traj.positions,
@@ -240,8 +201,10 @@ class OrdslamFolder:
     """An ORDSLAM folder: ground-truth files and, optionally, estimates of algorithms.
 
     Layout lorisnb expects (documented in the README): ground-truth ``.txt`` files anywhere below
-    ``root`` except under ``estimates/``; estimates in ``root/estimates/<algorithm>/`` with the same
-    file names as the ground truth they belong to; an optional ``root/catalog.csv``.
+    ``root`` except under ``estimates/``; the estimate of ground truth ``root/REL`` is
+    ``root/estimates/<algorithm>/REL`` (the same path relative to the folder; a bare file name is
+    enough when only one ground-truth file has that name); an optional ``root/catalog.csv``
+    (:func:`~lorisnb.io.ordslam_names.read_catalog`).
     """
 
     root: Path
@@ -249,17 +212,56 @@ class OrdslamFolder:
     estimates: dict[str, list[Path]]
     catalog: pd.DataFrame | None
 
+    def relative(self, path: Path) -> str:
+        """The ground-truth file's path relative to the folder, ``/``-separated (its key)."""
+        return path.relative_to(self.root).as_posix()
+
+    def describe(self, path: Path) -> dict:
+        """:func:`describe_sequence` of a ground-truth file of this folder."""
+        return describe_sequence(self.relative(path), self.catalog)
+
     def sequences(self) -> pd.DataFrame:
         """One row per ground-truth file with its scenario, difficulty, time, light and depth mode."""
-        rows = [
-            dict(path=str(p), **describe_sequence(p.relative_to(self.root), self.catalog)) for p in self.groundtruth
-        ]
-        return pd.DataFrame(rows)
+        return pd.DataFrame([dict(path=str(p), **self.describe(p)) for p in self.groundtruth])
+
+    def pairs(self) -> tuple[list[tuple[str, Path, Path]], list[tuple[Path, str]]]:
+        """(algorithm, estimate, ground truth) for every estimate, and (estimate, why) for those
+        without exactly one ground truth: none at the same relative path, or a bare name that
+        several ground-truth files share (all of them named). Never matched by name alone when
+        the estimate sits in sub-folders."""
+        by_rel = {self.relative(p): p for p in self.groundtruth}
+        by_name: dict[str, list[Path]] = {}
+        for p in self.groundtruth:
+            by_name.setdefault(p.name, []).append(p)
+        pairs, problems = [], []
+        for alg, files in self.estimates.items():
+            base = self.root / "estimates" / alg
+            for est in files:
+                rel = est.relative_to(base).as_posix()
+                gt = by_rel.get(rel)
+                if gt is None and "/" not in rel and len(by_name.get(rel, [])) == 1:
+                    gt = by_name[rel][0]
+                if gt is not None:
+                    pairs.append((alg, est, gt))
+                    continue
+                same = sorted(self.relative(p) for p in by_name.get(est.name, []))
+                if "/" not in rel and len(same) > 1:
+                    why = (
+                        f"ambiguous: ground-truth files {', '.join(same)} are all named {est.name}; put the "
+                        f"estimate at estimates/{alg}/<the same relative path>"
+                    )
+                else:
+                    why = f"no ground-truth file {rel} (expected estimates/{alg}/<path of the ground truth>)"
+                    if same:
+                        why += f"; ground truth with that name: {', '.join(same)}"
+                problems.append((est, why))
+        return pairs, problems
 
 
 def find_ordslam(root: str | os.PathLike | None) -> OrdslamFolder | None:
     """The ORDSLAM folder at ``root``, or None when ``root`` is None. Raises DataNotFoundError
-    (naming the folder) when it is given but holds no trajectory file."""
+    (naming the folder) when it is given but holds no trajectory file, ParseError when its
+    ``catalog.csv`` has a bad row."""
     if root is None:
         return None
     root = Path(root).expanduser()
@@ -276,5 +278,6 @@ def find_ordslam(root: str | os.PathLike | None) -> OrdslamFolder | None:
     if est_dir.is_dir():
         for alg in sorted(d for d in est_dir.iterdir() if d.is_dir()):
             estimates[alg.name] = sorted(alg.rglob("*.txt"))
-    catalog = pd.read_csv(root / "catalog.csv") if (root / "catalog.csv").exists() else None
+    cat = root / "catalog.csv"
+    catalog = read_catalog(cat, [p.relative_to(root).as_posix() for p in gt]) if cat.is_file() else None
     return OrdslamFolder(root, gt, estimates, catalog)

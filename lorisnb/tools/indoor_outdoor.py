@@ -15,7 +15,7 @@ from ..core.pipeline import sequence_errors
 from ..errors import LorisError, LorisWarning
 from ..io.data import DataPaths, load_groundtruth
 from ..io.formats import read_tum
-from ..io.ordslam import OrdslamFolder, describe_sequence, read_ordslam
+from ..io.ordslam import OrdslamFolder, read_ordslam
 from .evaluation import Evaluation
 
 #: The bundled TUM RGB-D pairs: (sequence, ground truth, estimate, algorithm).
@@ -45,12 +45,12 @@ def tum_stats(data: DataPaths) -> pd.DataFrame:
 def ordslam_stats(folder: OrdslamFolder, fps: float | None = None) -> pd.DataFrame:
     rows = []
     for p in folder.groundtruth:
-        info = describe_sequence(p.relative_to(folder.root), folder.catalog)
+        info = folder.describe(p)
         rows.append(
             dict(
                 dataset="ORDSLAM",
                 group=info["difficulty"],
-                sequence=str(p.relative_to(folder.root)),
+                sequence=folder.relative(p),
                 scenario=info["scenario"],
                 time=info["time"],
                 light=info["light"],
@@ -108,40 +108,38 @@ def ordslam_difficulty(
     eps_fraction: float = 0.1,
     rpe_metres: float = 1.0,
     relative_to: str = "extent",
-) -> tuple[pd.DataFrame, list[str]]:
-    """Measures of every ORDSLAM estimate (``estimates/<algorithm>/<same name as its ground truth>``).
-    Returns (table, problems): an estimate without ground truth or unreadable is listed, not fatal."""
-    by_name = {p.name: p for p in folder.groundtruth}
-    rows, problems = [], []
-    for alg, files in folder.estimates.items():
-        for est_path in files:
-            gt_path = by_name.get(est_path.name)
-            if gt_path is None:
-                problems.append(f"{est_path}: no ground-truth file named {est_path.name}")
-                continue
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", LorisWarning)
-                    gt, est = read_ordslam(gt_path, fps), read_ordslam(est_path, fps)
-            except LorisError as exc:
-                problems.append(str(exc))
-                continue
-            info = describe_sequence(gt_path.relative_to(folder.root), folder.catalog)
-            e = sequence_errors(gt, est, scale=scale, max_gap=max_gap)
-            rows.append(
-                dict(
-                    dataset="ORDSLAM",
-                    group=info["difficulty"],
-                    sequence=str(gt_path.relative_to(folder.root)),
-                    algorithm=alg,
-                    scenario=info["scenario"],
-                    time=info["time"],
-                    light=info["light"],
-                    depth_mode=info["depth_mode"],
-                    **difficulty_measures(e, gt, eps_fraction, rpe_metres, relative_to=relative_to),
-                )
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Measures of every ORDSLAM estimate (``estimates/<algorithm>/<path of its ground truth>``,
+    :meth:`~lorisnb.io.ordslam.OrdslamFolder.pairs`). Returns (table, problems): an estimate
+    without exactly one ground truth, or unreadable, is a row of ``problems`` (columns ``file,
+    status, kind, error``, as :meth:`~lorisnb.tools.evaluation.Evaluation.failures_table`), not fatal."""
+    pairs, unmatched = folder.pairs()
+    rows = []
+    problems = [dict(file=str(p), status="failed", kind="ORDSLAM estimate", error=why) for p, why in unmatched]
+    for alg, est_path, gt_path in pairs:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", LorisWarning)
+                gt, est = read_ordslam(gt_path, fps), read_ordslam(est_path, fps)
+        except LorisError as exc:
+            problems.append(dict(file=str(est_path), status="failed", kind="ORDSLAM estimate", error=str(exc)))
+            continue
+        info = folder.describe(gt_path)
+        e = sequence_errors(gt, est, scale=scale, max_gap=max_gap)
+        rows.append(
+            dict(
+                dataset="ORDSLAM",
+                group=info["difficulty"],
+                sequence=folder.relative(gt_path),
+                algorithm=alg,
+                scenario=info["scenario"],
+                time=info["time"],
+                light=info["light"],
+                depth_mode=info["depth_mode"],
+                **difficulty_measures(e, gt, eps_fraction, rpe_metres, relative_to=relative_to),
             )
-    return pd.DataFrame(rows), problems
+        )
+    return pd.DataFrame(rows), pd.DataFrame(problems, columns=["file", "status", "kind", "error"])
 
 
 def headline(measures: pd.DataFrame, published_ate: pd.DataFrame) -> dict[str, dict]:
