@@ -2,12 +2,14 @@
 
     python teaching/book.py OUT          # `make book`: OUT = build/book
 
-The sources are staged in ``OUT-src/``: the primer as it is, and each lab's instructor notebook with
+The sources are staged in a fresh temporary folder: the primer as it is, and each lab's instructor notebook with
 every exercise in a sphinx-exercise ``exercise`` block and its solution in a ``solution`` dropdown
 (hidden tests removed). Jupyter Book executes them (on the sample data shipped with lorisnb when no
 data root is found) and writes HTML into ``OUT/``. MathJax 3 is served from the book's own
 ``_static/mathjax/`` (copied from the django-static-mathjax package), never from a CDN, and no
 widget JavaScript is loaded from the network (the build fails if a page loads a script from it).
+``OUT`` is replaced only when the kit created it (it holds ``offline.BUILD_MARKER``); any other
+existing folder is refused before the build, and left as it is.
 """
 
 from __future__ import annotations
@@ -16,10 +18,14 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import nbformat
-from offline import mathjax_dir, refuse_remote
+from offline import BUILD_MARKER, mathjax_dir, refuse_remote
+
+from lorisnb.errors import OutputError
+from lorisnb.io.writers import check_owned_folder, replace_folder
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -117,33 +123,37 @@ def book_notebook(source: Path) -> nbformat.NotebookNode:
 
 
 def main(out: Path) -> int:
-    src = out.with_name(out.name + "-src")
-    if src.exists():
-        shutil.rmtree(src)
-    src.mkdir(parents=True)  # not in _static/: Jupyter Book would load every .js file found there
-    shutil.copytree(mathjax_dir(), src / "mathjax_static" / "mathjax")
-    shutil.copyfile(ROOT / "notebooks" / "metrics_primer.ipynb", src / "metrics_primer.ipynb")
-    labs = sorted(p for p in (HERE / "source").iterdir() if p.is_dir())
-    for lab in labs:
-        nbformat.write(book_notebook(lab / f"{lab.name}.ipynb"), src / f"{lab.name}.ipynb")
-    (src / "_config.yml").write_text(CONFIG)
-    (src / "_toc.yml").write_text(TOC.format(labs="\n".join(f"  - file: {lab.name}" for lab in labs)))
-    (src / "intro.md").write_text(INTRO)
-    if out.exists():
-        shutil.rmtree(out)
-    subprocess.run(
-        ["jupyter-book", "build", str(src), "--path-output", str(src), "-W", "-n", "--keep-going"], check=False
-    )
-    html = src / "_build" / "html"
-    if not (html / "index.html").is_file():
-        print("the book did not build", file=sys.stderr)
-        return 1
-    shutil.copytree(html, out)
-    if refuse_remote(sorted(out.rglob("*.html"))):
-        return 1
+    try:
+        check_owned_folder(out, BUILD_MARKER)  # before the build: a folder the kit did not make is refused
+    except OutputError as exc:
+        print(f"book: {exc}", file=sys.stderr)
+        return 2
+    with tempfile.TemporaryDirectory(prefix="lorisnb-book-") as tmp:
+        src = Path(tmp) / "src"  # not in _static/: Jupyter Book would load every .js file found there
+        shutil.copytree(mathjax_dir(), src / "mathjax_static" / "mathjax")
+        shutil.copyfile(ROOT / "notebooks" / "metrics_primer.ipynb", src / "metrics_primer.ipynb")
+        labs = sorted(p for p in (HERE / "source").iterdir() if p.is_dir())
+        for lab in labs:
+            nbformat.write(book_notebook(lab / f"{lab.name}.ipynb"), src / f"{lab.name}.ipynb")
+        (src / "_config.yml").write_text(CONFIG)
+        (src / "_toc.yml").write_text(TOC.format(labs="\n".join(f"  - file: {lab.name}" for lab in labs)))
+        (src / "intro.md").write_text(INTRO)
+        subprocess.run(
+            ["jupyter-book", "build", str(src), "--path-output", str(src), "-W", "-n", "--keep-going"], check=False
+        )
+        html = src / "_build" / "html"
+        if not (html / "index.html").is_file():
+            print("the book did not build", file=sys.stderr)
+            return 1
+        if refuse_remote(sorted(html.rglob("*.html"))):
+            return 1
+        try:
+            replace_folder(html, out, BUILD_MARKER)
+        except OutputError as exc:
+            print(f"book: {exc}", file=sys.stderr)
+            return 2
     print(f"book: {out / 'index.html'}")
     return 0
-
 
 if __name__ == "__main__":
     sys.exit(main(Path(sys.argv[1] if len(sys.argv) > 1 else "build/book").resolve()))

@@ -7,6 +7,7 @@ import re
 import sys
 from pathlib import Path
 
+BUILD_MARKER = ".lorisnb-teaching"  # in every folder book.py / slides.py built: only those are replaced
 REMOTE_SCRIPT = re.compile(r"<script[^>]*\ssrc=\"((?:https?:)?//[^\"]+)\"")
 
 

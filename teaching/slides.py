@@ -8,7 +8,8 @@ a new slide starts at every heading, and the slides are exported with nbconvert'
 exporter through ``teaching/slides_template/offline`` (no jQuery, require.js, mermaid or widget
 scripts). reveal.js (from the sphinx-revealjs package) and MathJax 3 (django-static-mathjax) are
 copied into ``OUT/reveal.js`` and ``OUT/mathjax``; the build fails if a page loads a script from the
-network.
+network. ``OUT`` is replaced only when the kit created it (it holds ``offline.BUILD_MARKER``); any
+other existing folder is refused before the build, and left as it is.
 """
 
 from __future__ import annotations
@@ -16,12 +17,16 @@ from __future__ import annotations
 import re
 import shutil
 import sys
+import tempfile
 from pathlib import Path
 
 import nbformat
 from nbclient import NotebookClient
 from nbconvert import SlidesExporter
-from offline import mathjax_dir, refuse_remote
+from offline import BUILD_MARKER, mathjax_dir, refuse_remote
+
+from lorisnb.errors import OutputError
+from lorisnb.io.writers import check_owned_folder, replace_folder
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -50,10 +55,11 @@ def assets(out: Path) -> None:
 
 
 def main(out: Path) -> int:
-    if out.exists():
-        shutil.rmtree(out)
-    out.mkdir(parents=True)
-    assets(out)
+    try:
+        check_owned_folder(out, BUILD_MARKER)  # before the build: a folder the kit did not make is refused
+    except OutputError as exc:
+        print(f"slides: {exc}", file=sys.stderr)
+        return 2
     notebooks = [ROOT / "notebooks" / "metrics_primer.ipynb"]
     notebooks += [p / f"{p.name}.ipynb" for p in sorted((HERE / "source").iterdir()) if p.is_dir()]
     exporter = SlidesExporter(
@@ -63,17 +69,28 @@ def main(out: Path) -> int:
         reveal_scroll=True,
         mathjax_url="mathjax/tex-chtml.js",
     )
-    pages = []
+    with tempfile.TemporaryDirectory(prefix="lorisnb-slides-") as tmp:
+        built = Path(tmp) / "slides"
+        built.mkdir()
+        assets(built)
+        pages = []
+        for path in notebooks:
+            nb = slide_notebook(path)
+            NotebookClient(nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": tmp}}).execute()
+            html, _ = exporter.from_notebook_node(nb)
+            page = built / f"{path.stem}.slides.html"
+            page.write_text(html)
+            pages.append(page)
+        if refuse_remote(pages):
+            return 1
+        try:
+            replace_folder(built, out, BUILD_MARKER)
+        except OutputError as exc:
+            print(f"slides: {exc}", file=sys.stderr)
+            return 2
     for path in notebooks:
-        nb = slide_notebook(path)
-        NotebookClient(nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": str(out)}}).execute()
-        html, _ = exporter.from_notebook_node(nb)
-        page = out / f"{path.stem}.slides.html"
-        page.write_text(html)
-        pages.append(page)
-        print(f"slides: {page}")
-    return refuse_remote(pages)
-
+        print(f"slides: {out / f'{path.stem}.slides.html'}")
+    return 0
 
 if __name__ == "__main__":
     sys.exit(main(Path(sys.argv[1] if len(sys.argv) > 1 else "build/slides").resolve()))

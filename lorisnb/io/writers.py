@@ -159,3 +159,36 @@ def write_parquet_parts(
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return out
+
+
+def check_owned_folder(out: str | os.PathLike[str], marker: str) -> None:
+    """Refuse, before anything is built, to replace an existing ``out`` that does not hold the
+    file ``marker`` (written by the tool that made it): lorisnb replaces only what it created."""
+    out = Path(out)
+    if out.exists() and not (out.is_dir() and (out / marker).is_file()):
+        raise OutputError(
+            f"{out} exists and lorisnb did not create it (no {marker} file in it); it is left as it is: "
+            "choose another output folder"
+        )
+
+
+def replace_folder(built: str | os.PathLike[str], out: str | os.PathLike[str], marker: str) -> Path:
+    """Move the finished folder ``built`` to ``out`` with ``marker`` in it, replacing an earlier
+    ``out`` only when it holds ``marker`` (:func:`check_owned_folder`, checked again here)."""
+    built, out = Path(built), Path(out)
+    check_owned_folder(out, marker)
+    (built / marker).write_text("created by lorisnb; this folder is replaced by the next build\n")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
+    try:
+        if out.exists():
+            os.replace(out, old / out.name)
+        try:
+            shutil.move(str(built), str(out))
+        except BaseException:
+            if (old / out.name).exists() and not out.exists():
+                os.replace(old / out.name, out)  # the earlier build back in place
+            raise
+    finally:
+        shutil.rmtree(old, ignore_errors=True)
+    return out
