@@ -331,9 +331,10 @@ def make_spec(preset: str | EvalSpec | None = None, *, surface: str = "python", 
     known = {f.name for f in fields(EvalSpec)} - {"explicit", "preset_name"}
     unknown = sorted(set(given) - known - set(ALIASES))
     if unknown:
+        hint = validate.near_miss(unknown[0], known | set(ALIASES))
         raise ValidationError(
-            f"{name(unknown[0])}: not an option of the evaluation spec; expected one of "
-            f"{', '.join(sorted(known | set(ALIASES)))}"
+            f"{name(unknown[0])}: not an option of the evaluation spec{f' ({hint})' if hint else ''}; expected one "
+            f"of {', '.join(sorted(known | set(ALIASES)))}"
         )
     changes = {k: v for k, v in given.items() if k in known}
     if "scale" in given:

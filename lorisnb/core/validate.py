@@ -216,23 +216,27 @@ def present(what: str, given: Iterable[str], there: Iterable[str], where: str = 
     that names nothing would drop every input silently, so it is refused, listing what is there,
     with a hint for a difference of case (``Cafe`` for ``cafe``) or a near miss. Returns ``given``
     as a list."""
-    import difflib
-
     wanted, have = list(given), sorted(set(there))
     absent = [n for n in wanted if n not in have]
     if not absent:
         return wanted
-    hints = []
-    for n in absent:
-        same_case = [h for h in have if h.lower() == n.strip().lower()]
-        near = same_case or difflib.get_close_matches(n, have, n=1, cutoff=0.75)
-        if near:
-            hints.append(f"{n!r}: did you mean {near[0]!r}?" + (" (names are case-sensitive)" if same_case else ""))
+    hints = [f"{n!r}: {hint}" for n in absent if (hint := near_miss(n, have))]
     listed = ", ".join(have) if have else "none"
     raise ValidationError(
         f"{what}: {', '.join(repr(n) for n in absent)} name(s) nothing in {where}, which hold {what}: {listed}"
         + ("; " + "; ".join(hints) if hints else "")
     )
+
+
+def near_miss(name: str, known: Iterable[str]) -> str:
+    """``did you mean 'x'?`` for a name differing from a known one only in case or by a typo (the
+    one rule of filters, manifest keys and spec options), else an empty string."""
+    import difflib
+
+    have = sorted(known)
+    same_case = [h for h in have if h.lower() == name.strip().lower()]
+    near = same_case or difflib.get_close_matches(name, have, n=1, cutoff=0.75)
+    return f"did you mean {near[0]!r}?" + (" (names are case-sensitive)" if same_case else "") if near else ""
 
 
 def flag(label: str, value: Any) -> bool:

@@ -24,6 +24,7 @@ import numpy as np
 from ..core.geometry import quat_multiply, quat_rotate, slerp
 from ..core.trajectory import Trajectory
 from ..errors import LorisWarning, MissingDependencyError, ParseError
+from .reading_options import check_reading
 from .scanner import check_rows, finish
 
 POSE_TYPES = {
@@ -99,7 +100,9 @@ def read_bag(
     or ``.mcap`` file): the poses of ``topic``, or the transform chain ``tf="parent:child"`` (evo's
     ``/tf:parent.child`` is accepted as ``topic`` or ``tf``). Without either, the bag's only pose
     topic. ParseError names what the bag holds when the choice is missing or wrong. ``repeated``:
-    poses of a repeated stamp, as :func:`lorisnb.io.formats.read_tum`."""
+    poses of a repeated stamp, as :func:`lorisnb.io.formats.read_tum`. ``topic`` and ``tf`` together
+    are refused (ValidationError)."""
+    check_reading({"topic": topic, "tf": tf})
     reader = _open(path)
     try:
         return _read_one(reader, str(path), topic, tf, repeated)

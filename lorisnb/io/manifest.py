@@ -42,10 +42,12 @@ from typing import Any
 
 import numpy as np
 
+from ..core import validate
 from ..core.geometry import Sim3
 from ..core.spec import EvalSpec, make_spec
 from ..errors import ParseError, ValidationError
 from .formats import TRAJECTORY_FORMATS
+from .reading_options import check_reading
 from .registry import suffixes
 
 BUILT_IN = ("openloris", "euroc-vicon-room1", "euroc-vicon-room2", "tum-fr1-office")
@@ -54,6 +56,13 @@ TOP_KEYS = {"name", "scene", "root", "lifelong", "groundtruth_format", "estimate
             "conventions", "transform", "session", "groundtruth_topic", "estimate_topic", "groundtruth_tf",
             "estimate_tf", "openloris"}  # fmt: skip
 SESSION_KEYS = {"name", "seq", "scene", "groundtruth", "estimate", "groundtruth_format"}
+TRANSFORM_KEYS = {"translation", "quaternion"}
+READING_KEYS = {
+    "topic": "estimate_topic",
+    "tf": "estimate_tf",
+    "gt_topic": "groundtruth_topic",
+    "gt_tf": "groundtruth_tf",
+}
 
 
 @dataclass(frozen=True)
@@ -138,9 +147,7 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
         raise ParseError(path, None, f"cannot be read ({exc})") from None
     except tomllib.TOMLDecodeError as exc:
         raise ParseError(path, getattr(exc, "lineno", None), f"not valid TOML ({exc})") from None
-    unknown = sorted(set(raw) - TOP_KEYS)
-    if unknown:
-        raise ParseError(path, None, f"unknown key {unknown[0]!r}; expected keys among {', '.join(sorted(TOP_KEYS))}")
+    check_keys(raw, TOP_KEYS, path)
     if raw.get("openloris"):
         return Manifest(path=path, name=str(raw.get("name", "OpenLORIS-Scene")), sessions=[], openloris=True,
                         source=str(raw.get("source", "")), groundtruth_format="openloris", estimate_format="openloris")  # fmt: skip
@@ -161,11 +168,7 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
     for k, item in enumerate(items, start=1):
         if not isinstance(item, dict) or "groundtruth" not in item:
             raise ParseError(path, None, f"session {k}: expected a table with at least 'groundtruth = \"file\"'")
-        bad = sorted(set(item) - SESSION_KEYS)
-        if bad:
-            raise ParseError(
-                path, None, f"session {k}: unknown key {bad[0]!r}; expected {', '.join(sorted(SESSION_KEYS))}"
-            )
+        check_keys(item, SESSION_KEYS, path, f"[[session]] {k}: ")
         name = str(item.get("name", f"session{k}"))
         seq = item.get("seq", k)
         if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
@@ -190,6 +193,12 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
     if not isinstance(table, dict):
         raise ParseError(path, None, "conventions: expected a [conventions] table of spec options")
     transform = _transform(raw.get("transform"), path)
+    reading = {k: raw.get(key) for k, key in READING_KEYS.items()}
+    try:  # the command line's rule: topics and TF chains only for bags, a topic or a chain, not both
+        for gt_format in dict.fromkeys(s.groundtruth_format for s in sessions):
+            check_reading(reading, est_fmt, gt_format, name=lambda k: READING_KEYS[k])
+    except ValidationError as exc:
+        raise ParseError(path, None, str(exc)) from None
     options = {k: v for k, v in table.items() if k != "preset"}
     try:
         top = {k: raw[k] for k in ("eps", "phi") if k in raw}
@@ -228,9 +237,25 @@ def check_repeats(sessions: list[Session], path: Path) -> None:
             first[k] = s
 
 
+def check_keys(table: dict[str, Any], allowed: set[str], path: Path, where: str = "") -> None:
+    """Refuse a key of a manifest's table that lorisnb does not know (a typo would be ignored):
+    ParseError naming the file, the table (``where``, e.g. ``"[transform]: "``; none at the top
+    level), the key, the nearest known key and all of them."""
+    for key in sorted(set(table) - allowed):
+        hint = validate.near_miss(key, allowed)
+        raise ParseError(
+            path,
+            None,
+            f"{where}unknown key {key!r}{f' ({hint})' if hint else ''}; expected {', '.join(sorted(allowed))}",
+        )
+
+
 def _transform(raw: Any, path: Path) -> Sim3 | None:
     if raw is None:
         return None
+    if not isinstance(raw, dict):
+        raise ParseError(path, None, "transform: expected a [transform] table (translation, quaternion)")
+    check_keys(raw, TRANSFORM_KEYS, path, "[transform]: ")
     try:
         t = np.asarray(raw.get("translation", [0.0, 0.0, 0.0]), float).reshape(3)
         q = np.asarray(raw.get("quaternion", [0.0, 0.0, 0.0, 1.0]), float).reshape(4)

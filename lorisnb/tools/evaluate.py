@@ -27,6 +27,7 @@ from ..io.data import DataPaths, DataRoot, find_data
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import SUFFIX, Manifest, read_manifest
 from ..io.openloris import declared_scene
+from ..io.reading_options import check_reading
 from .evaluation import Evaluation, Failure
 from .inputs import algorithm_folders, as_paths, labels, names, result_files, scene_label, without_groundtruth
 from .jobs import BIG_FILE_BYTES, Job, PairSource, run_job
@@ -162,16 +163,10 @@ def pair_source(
     files to KITTI, topics and TF chains to bags), or it is refused."""
     fmt = _format("format", fmt)
     gt_fmt = _format("gt_format", gt_fmt if gt_fmt is not None else fmt)
-    for name, value, needs, has in (
-        ("est_times", est_times, "kitti", fmt), ("gt_times", gt_times, "kitti", gt_fmt),
-        ("topic", topic, "bag", fmt), ("tf", tf, "bag", fmt),
-        ("gt_topic", gt_topic, "bag", gt_fmt), ("gt_tf", gt_tf, "bag", gt_fmt),
-    ):  # fmt: skip
-        if value is not None and has != needs:
-            side = "the ground truth" if name.startswith("gt_") else "the estimates"
-            raise ValidationError(
-                f"{name} (command line --{name.replace('_', '-')}): only for {needs} files; {side} are read as {has}"
-            )
+    check_reading(
+        {"est_times": est_times, "gt_times": gt_times, "topic": topic, "tf": tf, "gt_topic": gt_topic, "gt_tf": gt_tf},
+        fmt, gt_fmt, name=lambda k: f"{k} (command line --{k.replace('_', '-')})",
+    )  # fmt: skip
     if scene is not None and fmt == "openloris":
         raise ValidationError("scene (command line --scene): OpenLORIS result files name their scene in their "
                               "header (scene: ...), which is used")  # fmt: skip
