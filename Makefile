@@ -78,23 +78,33 @@ $(TEACH_STAMP): $(STAMP) teaching/requirements.txt
 	$(TEACH)/bin/python -m pip install --no-deps django-static-mathjax==3.2.2.1 sphinx-revealjs==3.2.1
 	touch $@
 
-# the student version of every lab (no solutions, no hidden tests) into teaching/release/
+# where the teaching targets write (default: the checkout, as before). COURSE: nbgrader's course
+# folder (release/, submitted/, autograded/, feedback/, gradebook.db, grades.csv); the labs' sources
+# stay in teaching/source. BOOK_OUT and SLIDES_OUT are replaced only when the kit built them.
+COURSE ?= teaching
+BOOK_OUT ?= build/book
+SLIDES_OUT ?= build/slides
+NBGRADER = cd "$(COURSE)" && $(TEACH_ENV) JUPYTER_CONFIG_PATH="$(abspath teaching)" nbgrader
+NBGRADER_ARGS = --CourseDirectory.source_directory="$(abspath teaching/source)"
+
+# the student version of every lab (no solutions, no hidden tests) into $(COURSE)/release/
 student: $(TEACH_STAMP)
-	cd teaching && $(TEACH_ENV) nbgrader generate_assignment $(LAB) --force
+	mkdir -p "$(COURSE)"
+	$(NBGRADER) generate_assignment $(LAB) --force $(NBGRADER_ARGS)
 
-# autograde teaching/submitted/ (demo students written when it holds none), then the grades CSV
-# (teaching/grades.csv) and per-student feedback HTML (teaching/feedback/<student>/<lab>/)
+# autograde $(COURSE)/submitted/ (demo students written when it holds none), then the grades CSV
+# ($(COURSE)/grades.csv) and per-student feedback HTML ($(COURSE)/feedback/<student>/<lab>/)
 grade: student
-	cd teaching && ls -d submitted/*/ >/dev/null 2>&1 || $(TEACH_ENV) python demo_submissions.py
-	cd teaching && $(TEACH_ENV) nbgrader autograde $(LAB) --create --force
-	cd teaching && $(TEACH_ENV) nbgrader generate_feedback $(LAB) --force
-	cd teaching && $(TEACH_ENV) python offline_feedback.py
-	cd teaching && $(TEACH_ENV) nbgrader export --to grades.csv
+	cd "$(COURSE)" && ls -d submitted/*/ >/dev/null 2>&1 || $(TEACH_ENV) python "$(abspath teaching/demo_submissions.py)" .
+	$(NBGRADER) autograde $(LAB) --create --force $(NBGRADER_ARGS)
+	$(NBGRADER) generate_feedback $(LAB) --force $(NBGRADER_ARGS)
+	cd "$(COURSE)" && $(TEACH_ENV) python "$(abspath teaching/offline_feedback.py)" feedback
+	$(NBGRADER) export --to grades.csv $(NBGRADER_ARGS)
 
-# the offline book of the primer and the labs (Jupyter Book 1 + sphinx-exercise) into build/book/
+# the offline book of the primer and the labs (Jupyter Book 1 + sphinx-exercise) into $(BOOK_OUT)/
 book: $(TEACH_STAMP)
-	$(TEACH_ENV) python teaching/book.py build/book
+	$(TEACH_ENV) python teaching/book.py "$(BOOK_OUT)"
 
-# reveal.js slides of the primer and the labs (executed), reveal.js and MathJax beside them: build/slides/
+# reveal.js slides of the primer and the labs (executed), reveal.js and MathJax beside them: $(SLIDES_OUT)/
 slides: $(TEACH_STAMP)
-	$(TEACH_ENV) python teaching/slides.py build/slides
+	$(TEACH_ENV) python teaching/slides.py "$(SLIDES_OUT)"

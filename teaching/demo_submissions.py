@@ -78,8 +78,9 @@ def fill_cells(nb: nbformat.NotebookNode, answers: dict[str, str]) -> nbformat.N
     return nb
 
 
-def main() -> int:
-    release = HERE / "release"
+def main(course: Path = HERE) -> int:
+    """Demo students in ``course``'s submitted/ from its release/ (``make grade``: the COURSE folder)."""
+    release = course / "release"
     labs = sorted(p for p in release.iterdir() if p.is_dir()) if release.is_dir() else []
     if not labs:
         print("no released lab: run `make student` first", file=sys.stderr)
@@ -88,18 +89,18 @@ def main() -> int:
         for nb_path in sorted(lab.glob("*.ipynb")):
             sols = solutions(HERE / "source" / lab.name / nb_path.name)
             for student, answers, use_solution in (("demo-correct", sols, True), ("demo-mistakes", sols, True)):
-                dest = HERE / "submitted" / student / lab.name / nb_path.name
+                dest = course / "submitted" / student / lab.name / nb_path.name
                 if dest.exists():
-                    print(f"kept {dest.relative_to(HERE)} (exists)")
+                    print(f"kept {dest.relative_to(course)} (exists)")
                     continue
                 dest.parent.mkdir(parents=True, exist_ok=True)
                 nb = fill(nb_path, answers, use_solution)
                 if student == "demo-mistakes":  # the solutions, except the typical mistakes
                     nb = fill_cells(nb, MISTAKES)
                 nbformat.write(nb, dest)
-                print(f"wrote {dest.relative_to(HERE)}")
+                print(f"wrote {dest.relative_to(course)}")
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(Path(sys.argv[1]).resolve() if len(sys.argv) > 1 else HERE))

@@ -4,7 +4,7 @@ MathJax 3 (django-static-mathjax) into ``feedback/mathjax/`` and points each pag
 there, with a MathJax 3 configuration for ``$...$``. Only the pages under ``feedback/`` (written by
 ``make grade`` just before) are touched, and only that one script tag.
 
-    python offline_feedback.py            # from teaching/ (`make grade` does)
+    python offline_feedback.py [FEEDBACK]   # default teaching/feedback; `make grade`: COURSE/feedback
 """
 
 from __future__ import annotations
@@ -41,4 +41,4 @@ def main(feedback: Path) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(HERE / "feedback"))
+    sys.exit(main(Path(sys.argv[1]).resolve() if len(sys.argv) > 1 else HERE / "feedback"))

@@ -100,9 +100,12 @@ def _copy_checkout(dest: Path) -> None:
 def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path):
     copy = tmp_path / "lorisnb"
     _copy_checkout(copy)
+    before = sorted(copy.rglob("*"))
     venv = Path(sys.prefix)
     env = {k: v for k, v in os.environ.items() if k not in ("LORISNB_DATA", "PYTHONPATH")}
-    args = [f"VENV={venv}", f"TEACH={ROOT / '.venv-teach'}", "-o", f"{venv}/.installed-stamp"]
+    course, out = tmp_path / "course", tmp_path / "site"  # an instructor's folders, outside the checkout
+    args = [f"VENV={venv}", f"TEACH={ROOT / '.venv-teach'}", "-o", f"{venv}/.installed-stamp", f"COURSE={course}",
+            f"BOOK_OUT={out / 'book'}", f"SLIDES_OUT={out / 'slides'}"]  # fmt: skip
     r = subprocess.run(
         ["make", "-C", str(copy), *args, "student", "grade", "book", "slides"],
         env=env,
@@ -111,7 +114,9 @@ def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path):
         timeout=1800,
     )
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
-    teaching = copy / "teaching"
+    # nothing written into the checkout: the course and the builds are where the instructor said
+    assert sorted(copy.rglob("*")) == before
+    teaching = course
     for lab in LABS:
         # student version: every answer cell is a stub, no solution line and no hidden test left
         source = nbformat.read(SOURCE / lab / f"{lab}.ipynb", as_version=4)
@@ -136,7 +141,8 @@ def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path):
         assert (teaching / "feedback" / "demo-correct" / lab / f"{lab}.html").exists()
         assert "../../mathjax/tex-chtml.js" in feedback and not re.search(r"<script[^>]*src=\"https?:", feedback)
     # the book: every page, exercises with dropdown solutions, executed checks, local MathJax only
-    out = copy / "build" / "book"
+    slides = out / "slides"
+    out = out / "book"
     assert (out / "index.html").exists() and (out / "metrics_primer.html").exists()
     page = (out / f"{LABS[0]}.html").read_text()
     assert "exercise" in page and "dropdown" in page and "✓ correct_rate matches lorisnb" in page
@@ -144,7 +150,6 @@ def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path):
     assert _teaching_module("offline").remote_scripts(sorted(out.rglob("*.html"))) == []
     assert list((out / "_images").glob("*.png")), "figures of the executed notebooks"
     # the slides: one per notebook, reveal.js and MathJax beside them, nothing from the network
-    slides = copy / "build" / "slides"
     for name in ("metrics_primer", *LABS):
         html = (slides / f"{name}.slides.html").read_text()
         assert 'src="reveal.js/dist/reveal.js"' in html and 'src="mathjax/tex-chtml.js"' in html
