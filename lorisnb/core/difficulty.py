@@ -86,9 +86,9 @@ def difficulty_measures(
     ate_rmse = float(metrics.rmse(e.ate))
     i, j, tr, _ = e.rpe(rpe_metres, "m")
     span = (e.gt_start, e.gt_end)
-    held_all = metrics.correct_time(e.stamps, np.ones(e.matched, bool), e.gt_end, delta)
+    held_all = metrics.correct_time(e.stamps, np.ones(e.matched, bool), e.gt_end, delta, e.gt_start)
     ok = metrics.correctness(e.ate, e.aoe, eps, np.inf)
-    held_ok = metrics.correct_time(e.stamps, ok, e.gt_end, delta)
+    held_ok = metrics.correct_time(e.stamps, ok, e.gt_end, delta, e.gt_start)
     return out | dict(
         ate_rmse_m=ate_rmse,
         ate_pct_length=100.0 * ate_rmse / st["length_m"] if st["length_m"] > 0 else np.nan,

@@ -42,20 +42,26 @@ def correctness(ate_m: np.ndarray, aoe_deg: np.ndarray, eps, phi) -> np.ndarray:
     return (np.asarray(ate_m) <= eps) & (np.asarray(aoe_deg) <= phi)
 
 
-def valid_intervals(stamps: np.ndarray, t_end: float) -> np.ndarray:
-    """``t_{k+1} - t_k`` for each matched pose, with ``t_{N+1} = t_end`` (Eq. 2), seconds."""
+def valid_intervals(stamps: np.ndarray, t_end: float, t_start: float = -np.inf) -> np.ndarray:
+    """``t_{k+1} - t_k`` for each matched pose, with ``t_{N+1} = t_end`` (Eq. 2), seconds.
+
+    Stamps are first clipped to the ground truth's span ``[t_start, t_end]``: a pose matched by
+    nearest stamps may lie up to ``max_diff`` outside it, and its time counts only inside (no
+    interval is negative, and the correct time never exceeds the span: CR <= 1). Interpolated
+    poses always lie inside, so the official tool's numbers are unchanged."""
     stamps = np.asarray(stamps, float)
     if stamps.size == 0:
         return stamps
-    return np.diff(np.append(stamps, t_end))
+    return np.diff(np.append(np.clip(stamps, t_start, t_end), t_end))
 
 
-def correct_time(stamps: np.ndarray, correct: np.ndarray, t_end: float, delta) -> np.ndarray:
-    """Numerator of Eq. (2)/(3): sum over poses of ``min(t_{k+1} - t_k, delta) * c_k``, seconds.
+def correct_time(stamps: np.ndarray, correct: np.ndarray, t_end: float, delta, t_start: float = -np.inf) -> np.ndarray:
+    """Numerator of Eq. (2)/(3): sum over poses of ``min(t_{k+1} - t_k, delta) * c_k``, seconds,
+    inside the ground truth's span ``[t_start, t_end]`` (:func:`valid_intervals`).
 
     ``correct`` may carry leading grid axes (``(..., N)``); ``delta`` broadcasts against them.
     """
-    dt = valid_intervals(stamps, t_end)
+    dt = valid_intervals(stamps, t_end, t_start)
     delta = np.asarray(delta, float)
     held = np.minimum(dt, delta[..., None]) if delta.ndim else np.minimum(dt, delta)
     return np.sum(np.where(correct, held, 0.0), axis=-1)

@@ -123,14 +123,14 @@ def sequence_grid(
     # correctness of every pose at every (eps, phi), Eq. (1): (E, P, M)
     c = (e.ate[None, None, :] <= eps_a[:, None, None]) & (e.aoe[None, None, :] <= phi_a[None, :, None])
     cf = c.reshape(E * P, -1).astype(float)
-    held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end)[None, :], delta_a[:, None])  # (D, M)
+    held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end, e.gt_start)[None, :], delta_a[:, None])  # (D, M)
     ct = (cf @ held.T).reshape(E, P, D)  # correct time, numerator of Eq. (2) and (3)
     n_c = cf.sum(axis=1).reshape(E, P)
     with np.errstate(invalid="ignore", divide="ignore"):
         c_ate = np.where(n_c > 0, np.sqrt((cf @ (e.ate**2)).reshape(E, P) / n_c), np.nan)
         c_aoe = np.where(n_c > 0, np.sqrt((cf @ (e.aoe**2)).reshape(E, P) / n_c), np.nan)
     t0 = float(e.stamps[0])
-    track = e.gt_end - t0
+    track = e.gt_end - max(t0, e.gt_start)  # tracked time inside the span, as the correct time
     rt = metrics.relocalization_time(t0, e.gt_start)
     first = c[:, :, 0]
     csr = metrics.relocalization_score(t0, e.gt_start, first[:, :, None], tau_a[None, None, :])  # Eq. (4), (E, P, T)
@@ -139,7 +139,7 @@ def sequence_grid(
         c_ate_rmse=bc(c_ate[:, :, None, None]), c_aoe_rmse=bc(c_aoe[:, :, None, None]),
         c_matched=bc(n_c[:, :, None, None]), correct_time=bc(ct[:, :, :, None]),
         cr=bc(metrics.correct_rate(ct, e.gt_start, e.gt_end)[:, :, :, None]),
-        cr_t=bc(metrics.correct_rate_tracking(ct, t0, e.gt_end)[:, :, :, None]),
+        cr_t=bc(metrics.correct_rate_tracking(ct, max(t0, e.gt_start), e.gt_end)[:, :, :, None]),
         reloc_time=bc(rt), cs_r=bc(csr[:, :, None, :]), t0=bc(t0), track_time=bc(track),
         first_correct=bc(first[:, :, None, None]),
     )  # fmt: skip

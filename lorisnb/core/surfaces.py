@@ -109,13 +109,13 @@ def cr_surfaces(
             nseq[k] += 1
             if e.matched == 0:
                 continue
-            held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end), delta)
+            held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end, e.gt_start), delta)
             i = np.searchsorted(eps_a, e.ate, side="left")  # first eps with ATE <= eps
             j = np.searchsorted(phi_a, e.aoe, side="left")
             inside = (i < E) & (j < P)
             cells[k].append(i[inside] * P + j[inside])
             weights[k].append(held[inside])
-            tracked[k] += e.gt_end - float(e.stamps[0])
+            tracked[k] += e.gt_end - max(float(e.stamps[0]), e.gt_start)
     groups = pd.DataFrame(list(keys), columns=["suite", "algorithm", "scene", "trial"]).assign(sequences=nseq)
     scene_time = groups["scene"].map(total).to_numpy(float)
     tr = np.asarray(tracked, float)

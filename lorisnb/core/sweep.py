@@ -223,7 +223,7 @@ def eps_at_cr(
         for e in f.sequences:
             if e.matched == 0:
                 continue
-            held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end), delta)
+            held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end, e.gt_start), delta)
             ok = e.aoe <= phi
             parts.setdefault((f.suite, f.algorithm, f.scene), []).append((e.ate[ok], held[ok]))
     rows = []

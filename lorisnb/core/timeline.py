@@ -19,10 +19,11 @@ from .model import FileErrors, sequence_eps
 
 
 def pose_segments(
-    stamps: np.ndarray, correct: np.ndarray, t_end: float, delta: float
+    stamps: np.ndarray, correct: np.ndarray, t_end: float, delta: float, t_start: float = -np.inf
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Merged segments (start, end, correct) of one sequence, seconds. Vectorized."""
-    stamps = np.asarray(stamps, float)
+    """Merged segments (start, end, correct) of one sequence inside the ground truth's span
+    ``[t_start, t_end]``, seconds. Vectorized."""
+    stamps = np.clip(np.asarray(stamps, float), t_start, t_end)
     if stamps.size == 0:
         return np.zeros(0), np.zeros(0), np.zeros(0, bool)
     dt = metrics.valid_intervals(stamps, t_end)
@@ -57,7 +58,7 @@ def timeline_table(
             if e.matched == 0:
                 continue
             c = metrics.correctness(e.ate, e.aoe, sequence_eps(eps, f.scene, e), phi)
-            s, t, ok = pose_segments(e.stamps, c, e.gt_end, delta)
+            s, t, ok = pose_segments(e.stamps, c, e.gt_end, delta, e.gt_start)
             segs.append(
                 pd.DataFrame(
                     {

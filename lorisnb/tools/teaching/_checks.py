@@ -199,12 +199,16 @@ CR_CASES: list[dict[str, Any]] = [
 
 def _cr(stamps: Any, correct: Any, t_min: float, t_max: float, delta: float) -> float:
     """CR as lorisnb computes it (Eq. 2)."""
-    return float(metrics.correct_rate(metrics.correct_time(stamps, correct, t_max, delta), t_min, t_max))
+    return float(metrics.correct_rate(metrics.correct_time(stamps, correct, t_max, delta, t_min), t_min, t_max))
 
 
 def _cr_t(stamps: Any, correct: Any, t_min: float, t_max: float, delta: float) -> float:
     """CR-T as lorisnb computes it (Eq. 3)."""
-    return float(metrics.correct_rate_tracking(metrics.correct_time(stamps, correct, t_max, delta), stamps[0], t_max))
+    return float(
+        metrics.correct_rate_tracking(
+            metrics.correct_time(stamps, correct, t_max, delta, t_min), max(stamps[0], t_min), t_max
+        )
+    )
 
 
 def _no_last(stamps: Any, correct: Any, t_min: float, t_max: float, delta: float) -> float:
