@@ -16,11 +16,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from . import metrics
+from . import metrics, validate
 from .geometry import quat_angle_deg, quat_conjugate, quat_multiply, quat_normalize
 from .model import SequenceErrors
 from .trajectory import Trajectory, size
-from .validate import choice, positive, relative_fraction
+from .validate import choice
 
 
 def trajectory_stats(traj: Trajectory) -> dict:
@@ -71,7 +71,7 @@ def difficulty_measures(
         rpe_metres: distance along the ground truth over which the RPE is taken, metres.
     """
     relative_to = choice("relative_to", relative_to, ("extent", "length"))
-    fraction = relative_fraction("eps_fraction", positive("eps_fraction", eps_fraction, "(a fraction)"), eps_fraction)
+    fraction = validate.fraction("eps_fraction", eps_fraction)
     st = trajectory_stats(gt)
     eps = fraction * size(gt.positions, relative_to)  # of the whole sequence, whatever was tracked
     out = dict(

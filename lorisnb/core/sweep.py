@@ -30,7 +30,7 @@ from .model import (
 )  # fmt: skip
 from .scoring import GRID_METRICS, as_files, rpe_options, rpe_setting, sequence_grid, sequence_meta
 from .trajectory import RELATIVE
-from .validate import choice, relative_fraction, threshold, threshold_list
+from .validate import choice, fraction, threshold, threshold_list
 
 #: Columns of the default (lean) sweep table: identity, thresholds, and the metrics that depend on
 #: them, plus what scene aggregation needs. ``columns="all"`` gives every column of ``score``.
@@ -121,7 +121,7 @@ def sweep(
     if relative_to is not None and any(isinstance(v, (str, Mapping)) for v in eps_l):
         raise ValidationError("eps: with relative_to, eps values are fractions (numbers), not 'paper' or a mapping")
     if relative_to is not None:
-        eps_l = [relative_fraction("eps", v, v) if np.isfinite(v) else v for v in eps_l]
+        eps_l = [fraction("eps", v) if np.isfinite(v) else v for v in eps_l]  # inf: every pose correct
     phi_a = np.array(threshold_list("phi", phi))
     delta_a = np.array(threshold_list("delta", delta))
     tau_a = np.array(threshold_list("tau", tau))

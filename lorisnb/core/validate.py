@@ -105,14 +105,28 @@ def eps_value(value: Any) -> float | str | dict[str, float]:
     if isinstance(value, str) and value.strip().lower() == "paper":
         return "paper"
     if isinstance(value, str) and value.strip().lower().startswith("relative:"):
-        fraction = positive("eps", value.strip()[len("relative:") :], "(a fraction of the ground truth's extent)")
-        return f"relative:{relative_fraction('eps', fraction, value.strip())!r}"
+        return f"relative:{fraction('eps', value.strip()[len('relative:') :], value.strip())!r}"
     try:
         return threshold("eps", value)
     except ValidationError as exc:
         raise ValidationError(
             str(exc).replace("expected a number", "expected 'paper', 'relative:F', a number", 1)
         ) from None
+
+
+def fraction(name: str, value: Any, shown: Any = None) -> float:
+    """A fraction of the ground truth's size (``relative:F`` eps, relative grids, ``eps_fraction``):
+    a finite number from 0 to :data:`MAX_FRACTION`. 0 is allowed as ``eps = 0`` is (only poses
+    with no error at all are correct), in every form and on every surface."""
+    shown = value if shown is None else shown
+    why = f"{name}={_show(shown)}: expected a fraction of the ground truth's size, a number from 0 to {MAX_FRACTION:g}"
+    try:
+        v = _number(name, value, {})
+    except ValidationError:
+        raise ValidationError(why) from None
+    if not (math.isfinite(v) and v >= 0):  # NaN too
+        raise ValidationError(why)
+    return relative_fraction(name, v, shown)
 
 
 def relative_fraction(name: str, fraction: float, shown: Any) -> float:

@@ -31,7 +31,7 @@ GRIDS: dict[str, dict[str, tuple[list[float], list[float]]]] = {
 def check_grid(name: str, values: Any) -> list[Any]:
     if name == "relative_grid":
         items = validate.threshold_list("eps", values)  # numbers, a non-empty list
-        return [validate.relative_fraction(name, validate.positive(name, v, "(a fraction)"), v) for v in items]
+        return [validate.fraction(name, v) for v in items]
     return validate.threshold_list(name.removesuffix("_grid"), values)
 
 
