@@ -198,6 +198,25 @@ def test_check_choice():
     assert teach.check_choice("algorithm", " ORB ", "orb", "")
     with pytest.raises(AnswerError, match="look for the red cross"):
         teach.check_choice("visit", 1, 2, "look for the red cross")
+    # numpy's numbers and bools are Python's; True is not the visit 1, nor 1 the answer True
+    assert teach.check_choice("visit", np.int64(2), 2, "")
+    assert teach.check_choice("re-localized", np.bool_(True), True, "")
+    for answer, expected, kind in ((True, 1, "a number"), (1, True, "True or False"), ("2", 2, "a number"),
+                                   (2, "orb", "a text"), ([2], 2, "a number")):  # fmt: skip
+        with pytest.raises(AnswerError, match=f"expected {kind}. look"):
+            teach.check_choice("visit", answer, expected, "look for the red cross")
+
+
+def test_check_correctness_wants_booleans():
+    """Numbers per pose would be truth-tested (any non-zero ATE counted correct): refused, saying
+    what to return; the right comparison passes."""
+    assert teach.check_correctness(lambda ate_m, aoe_deg, eps, phi: (ate_m <= eps) & (aoe_deg <= phi))
+    for wrong in (
+        lambda ate_m, aoe_deg, eps, phi: ((ate_m <= eps) & (aoe_deg <= phi)).astype(int),
+        lambda ate_m, aoe_deg, eps, phi: np.minimum(eps - ate_m, phi - aoe_deg),
+    ):
+        with pytest.raises(AnswerError, match="expected True/False per pose"):
+            teach.check_correctness(wrong)
 
 
 def test_checks_on_cases_from_a_real_sequence():

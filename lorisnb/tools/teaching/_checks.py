@@ -92,7 +92,12 @@ def _check_function(
                 _fail(
                     f"{what} returned shape {got_a.shape} on case {k + 1}; expected one value per pose, {np.shape(want)}"
                 )
-            got = got_a.astype(bool)
+            if got_a.dtype != bool:  # numbers would be truth-tested: 0.3 or -1 would count as correct
+                _fail(
+                    f"{what} returned {got_a.dtype} values on case {k + 1}; expected True/False per pose "
+                    "(a comparison such as `ate_m <= eps`, combined with `&`)"
+                )
+            got = got_a
         elif got is None:
             _fail(f"{what} returned None on case {k + 1}: did you forget `return`?")
         else:
@@ -330,11 +335,25 @@ def check_choice(what: str, answer: Any, expected: Any, why: str) -> bool:
     ``expected``; else the message says what to look at (``why``)."""
     if answer is Ellipsis or answer is None:
         _fail(f"{what}: no answer yet (replace the `...` and the NotImplementedError placeholder with your answer)")
+    kind = _kind(expected)
+    if _kind(answer) != kind:  # True == 1 in Python: a yes/no answer to "which sequence?" is not 1
+        _fail(f"{what}: you answered {answer!r} ({type(answer).__name__}); expected {kind}. {why}")
     norm = (lambda x: x.strip().lower()) if isinstance(expected, str) and isinstance(answer, str) else (lambda x: x)
     if norm(answer) == norm(expected):
         return _ok(f"{what}: {answer!r}")
     _fail(f"{what}: you answered {answer!r}, which is not right. {why}")
     return False  # not reached
+
+
+def _kind(value: Any) -> str:
+    """What sort of answer ``value`` is: numpy's bools and numbers count as Python's."""
+    if isinstance(value, (bool, np.bool_)):
+        return "True or False"
+    if isinstance(value, (int, float, np.integer, np.floating)):
+        return "a number"
+    if isinstance(value, str):
+        return "a text"
+    return f"a {type(value).__name__}"
 
 
 # --- cases from real sequences (the labs' hidden tests) ------------------------------------------
