@@ -20,7 +20,9 @@ from lorisnb.errors import EvaluationError
 def _pandas_aggregate(sequences: pd.DataFrame, durations: pd.DataFrame) -> pd.DataFrame:
     """``aggregate_scenes`` as written with pandas' groupby before issue 27 (lorisnb 7224ec8), with
     one fix: a categorical scene column (sweep tables) was sorted by its categories' order, not
-    the paper's (``c.map(order)`` keeps a Categorical); the values are mapped here."""
+    the paper's (``c.map(order)`` keeps a Categorical); the values are mapped here. Since then: a
+    sequence "with output" has a matched pose (``sequences_with_output``; ``cs_r_with_output`` is
+    the mean over those, no longer over rows with nothing matched)."""
     total = durations.groupby("scene")["gt_duration"].sum()
     nseq = durations.groupby("scene")["seq"].count()
     keys = ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau"]
@@ -29,10 +31,11 @@ def _pandas_aggregate(sequences: pd.DataFrame, durations: pd.DataFrame) -> pd.Da
     df["_c_sq"] = np.where(df["c_matched"] > 0, df["c_ate_rmse"] ** 2 * df["c_matched"], 0.0)
     df["_c_w"] = np.where(df["c_matched"] > 0, df["c_ate_rmse"] * df["c_matched"], 0.0)
     df["_a_w"] = np.where(df["matched"] > 0, df["ate_rmse"] * df["matched"], 0.0)
+    df["_out"] = (df["matched"] > 0).astype(int)
     g = df.groupby(keys, sort=False, dropna=False, observed=True)
     out = g.agg(
         sequences=("seq", "count"), matched=("matched", "sum"), c_matched=("c_matched", "sum"),
-        correct_time=("correct_time", "sum"), track_time=("track_time", "sum"), cs_r_with_output=("cs_r", "mean"),
+        correct_time=("correct_time", "sum"), track_time=("track_time", "sum"), sequences_with_output=("_out", "sum"),
         _cs_sum=("cs_r", "sum"), _c_sq=("_c_sq", "sum"), _c_w=("_c_w", "sum"), _a_w=("_a_w", "sum"),
     ).reset_index()  # fmt: skip
     out["scene_sequences"] = out["scene"].astype(str).map(nseq).astype(int)
@@ -44,6 +47,8 @@ def _pandas_aggregate(sequences: pd.DataFrame, durations: pd.DataFrame) -> pd.Da
         out["c_ate_rmse_pooled"] = np.where(out["c_matched"] > 0, np.sqrt(out["_c_sq"] / out["c_matched"]), np.nan)
         out["ate_rmse"] = np.where(out["matched"] > 0, out["_a_w"] / out["matched"], np.nan)
         out["cs_r"] = out["_cs_sum"] / out["scene_sequences"]  # a sequence without output counts 0
+        out["cs_r_with_output"] = np.where(out["sequences_with_output"] > 0,
+                                           out["_cs_sum"] / out["sequences_with_output"], np.nan)  # fmt: skip
     order = {s: i for i, s in enumerate(SCENES)}
     out = out.drop(columns=["_c_sq", "_c_w", "_a_w", "_cs_sum"])[SCENE_COLUMNS + keys[7:]]
     out = out.sort_values(
@@ -91,19 +96,20 @@ def test_awkward_tables_equal_pandas_and_duplicates_are_refused():
             suite=rng.choice(["", "lab"], n), algorithm=rng.choice(["b", "a", "c10", "c9"], n),
             scene=rng.choice(["market", "cafe", "garden", "attic"], n), eps=0.5, phi=30.0, delta=1.0, tau=60.0,
             seq=np.arange(n), file=[f"f{k}.txt" for k in range(n)],
-            matched=rng.integers(0, 5000, n), c_matched=rng.integers(0, 3, n) * rng.integers(0, 5000, n),
+            matched=rng.integers(0, 5000, n) * (rng.uniform(size=n) > 0.2), c_matched=rng.integers(0, 3, n) * rng.integers(0, 5000, n),
             correct_time=rng.uniform(0, 100, n) * 1e-3 ** rng.integers(0, 3, n), track_time=rng.uniform(-1, 100, n),
             cs_r=np.where(rng.uniform(size=n) < 0.3, np.nan, rng.uniform(size=n)),
             c_ate_rmse=np.where(rng.uniform(size=n) < 0.2, np.nan, rng.lognormal(size=n)),
             ate_rmse=rng.lognormal(size=n),
         )
     )  # fmt: skip
+    table.loc[table["matched"] == 0, ["c_matched", "correct_time", "cs_r"]] = 0  # a failed run, as scored
     spans = {
         s: {k: (0.0, float(rng.uniform(10, 300))) for k in range(1, 6)} for s in ("market", "cafe", "garden", "attic")
     }
     durations = aggregate.spans_table(spans)
     got = _same(table, durations)
-    assert got["cs_r_with_output"].isna().any() or table["cs_r"].notna().all()
+    assert (got["cs_r_with_output"].isna() == (got["sequences_with_output"] == 0)).all()  # no output: no mean
     assert (got["cs_r"] <= got["cs_r_with_output"].fillna(0) + 1e-12).all()  # missing sequences count 0
     assert list(got["scene"][got["algorithm"] == "a"].drop_duplicates())[:2] == ["cafe", "market"]  # the paper's order
     twice = pd.concat([table, table.iloc[[7]]], ignore_index=True)

@@ -137,7 +137,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                 "one without output counting 0; C-ATE RMSE weighted by correct poses):"
             )
             scenes["coverage"] = np.array(
-                [f"{k}/{n}" for k, n in zip(scenes["sequences"], scenes["scene_sequences"], strict=True)], object
+                [f"{k}/{n}" for k, n in zip(scenes["sequences_with_output"], scenes["scene_sequences"], strict=True)],
+                object,
             )
             view = ["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r"]
             print(format_table({c: scenes[c] for c in view}, args.digits))

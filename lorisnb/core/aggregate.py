@@ -154,6 +154,7 @@ def aggregate_columns(sequences: Mapping[str, Any], durations: Columns) -> dict[
     out["sequences"] = np.bincount(group, minlength=m).astype(np.int64)
     rows = _Sorted(group, m)
     matched, c_matched = np.asarray(sequences["matched"]), np.asarray(sequences["c_matched"])
+    out["sequences_with_output"] = np.bincount(group, weights=has_output(matched), minlength=m).astype(np.int64)
     for name in ("matched", "c_matched", "correct_time", "track_time"):
         out[name] = _sums(rows, group, np.asarray(sequences[name]))
     d_group, d_first = _groups([Labels.of(gt_scene).codes])
@@ -165,7 +166,7 @@ def aggregate_columns(sequences: Mapping[str, Any], durations: Columns) -> dict[
         c_sq = _kahan(rows, np.where(c_matched > 0, c_ate**2 * c_matched, 0.0))[0]
         c_w = _kahan(rows, np.where(c_matched > 0, c_ate * c_matched, 0.0))[0]
         a_w = _kahan(rows, np.where(matched > 0, ate * matched, 0.0))[0]
-        cs_sum, cs_n = _kahan(rows, np.asarray(sequences["cs_r"], float))
+        cs_sum, _ = _kahan(rows, np.asarray(sequences["cs_r"], float))
         g_scene = scene_names[labels["scene"].codes[first]]
         out["scene_sequences"] = np.array([count[s] for s in g_scene.tolist()], np.int64)  # one per group
         out["scene_duration"] = np.array([by_scene[s] for s in g_scene.tolist()], float)
@@ -176,9 +177,17 @@ def aggregate_columns(sequences: Mapping[str, Any], durations: Columns) -> dict[
         out["c_ate_rmse_pooled"] = np.where(m_c > 0, np.sqrt(c_sq / m_c), np.nan)
         out["ate_rmse"] = scene_mean(a_w, m_a)
         out["cs_r"] = scene_mean(cs_sum, out["scene_sequences"])  # a sequence without output: CS-R 0
-        out["cs_r_with_output"] = scene_mean(cs_sum, cs_n)
+        out["cs_r_with_output"] = scene_mean(cs_sum, out["sequences_with_output"])  # failed rows' CS-R is 0
     order = _scene_order(out, "trial" in keys)
     return {c: np.asarray(out[c])[order] for c in SCENE_COLUMNS + keys[7:]}
+
+
+def has_output(matched: Any) -> np.ndarray:
+    """The one rule of "a sequence with output" (coverage in ``evaluate``, ``compare``, the report
+    leaderboard and ``diff``; ``cs_r_with_output``): a row with at least one pose matched to the
+    ground truth. A row with none (an empty file, a declared failed run, no pose inside the ground
+    truth's span) is a failed run: it scores 0, as a sequence without a row does (paper, Sec. IV)."""
+    return np.asarray(matched, float) > 0
 
 
 def scene_mean(weighted_sum: Any, total_weight: Any) -> np.ndarray:

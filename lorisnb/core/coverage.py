@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ValidationError
+from .aggregate import has_output
 
 #: Values of a sequence without output (the columns not listed: NaN, or copied: labels, thresholds).
 FAILED_RUN = {"poses": 0, "matched": 0, "c_matched": 0, "correct_time": 0.0, "track_time": 0.0, "cr": 0.0,
@@ -75,7 +76,9 @@ def complete(table: pd.DataFrame, expected: pd.DataFrame) -> tuple[pd.DataFrame,
                         row.update(FAILED_RUN, suite=suite, algorithm=alg, scene=template["scene"], seq=seq,
                                    trial=trial, gt_duration=float(duration), file="", missing=True)  # fmt: skip
                         added.append(row)
-                lacking = sorted(set(lacking))
+                if "matched" in rows.columns:  # a row without a matched pose is a failed run: no output either
+                    lacking += rows.loc[~has_output(rows["matched"]), "seq"].tolist()
+                lacking = sorted(set(lacking) & set(want["seq"]))
                 cover.append(dict(suite=suite, algorithm=alg, scene=scene, sequences=len(want) - len(lacking),
                                   expected=len(want), coverage=(len(want) - len(lacking)) / len(want),
                                   missing_seqs=", ".join(str(s) for s in lacking)))  # fmt: skip

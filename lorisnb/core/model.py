@@ -46,7 +46,7 @@ STAT_COLUMNS = [
 ]  # fmt: skip
 #: Columns of the per-scene table (:func:`lorisnb.core.aggregate.aggregate_scenes`).
 SCENE_COLUMNS = [
-    "suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "sequences", "scene_sequences", "matched",
+    "suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "sequences", "sequences_with_output", "scene_sequences", "matched",
     "c_matched", "correct_time", "track_time", "scene_duration", "cr", "cr_t", "c_ate_rmse",
     "c_ate_rmse_pooled", "ate_rmse", "cs_r", "cs_r_with_output",
 ]  # fmt: skip

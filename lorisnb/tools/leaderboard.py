@@ -49,20 +49,11 @@ class Findings:
     test: str
 
 
-def coverage(table: pd.DataFrame, durations: pd.DataFrame) -> pd.DataFrame:
-    """Per suite, scene and algorithm: sequences with at least one matched pose (in any trial),
-    the scene's sequences with ground truth (``durations``: one row per scene and sequence), and
-    the most trials of a sequence."""
+def most_trials(table: pd.DataFrame) -> pd.DataFrame:
+    """Per suite, scene and algorithm: the most trials of a sequence (``trials``)."""
     t = stats.with_trials(table)
-    total = durations.groupby("scene")["seq"].nunique()
-    covered = t[t["matched"] > 0].groupby(["suite", "scene", "algorithm"])["seq"].nunique()
     trials = t.groupby(["suite", "scene", "algorithm", "seq"])["trial"].nunique().groupby(level=[0, 1, 2]).max()
-    out = trials.rename("trials").reset_index()
-    out["sequences_covered"] = [
-        int(covered.get(k, 0)) for k in zip(out["suite"], out["scene"], out["algorithm"], strict=True)
-    ]
-    out["sequences_total"] = [int(total.get(s, 0)) for s in out["scene"]]
-    return out
+    return trials.rename("trials").reset_index()
 
 
 def _test_words(pairs: pd.DataFrame, alpha: float) -> str:
@@ -93,8 +84,10 @@ def findings(
         return Findings(pd.DataFrame(columns=BOARD_COLUMNS), pd.DataFrame(), {}, "")
     res = compare_table(table, durations, metric, level=level, alpha=alpha, seed=seed)  # what compare ranks on
     pairs = res.pairs
-    board = res.algorithms.drop(columns=["trials", "coverage", "sequences_with_output", "scene_sequences"])
-    board = board.merge(coverage(table, durations), on=["suite", "scene", "algorithm"], how="left")  # matched poses
+    board = res.algorithms.drop(columns=["trials", "coverage"]).rename(
+        columns={"sequences_with_output": "sequences_covered", "scene_sequences": "sequences_total"}
+    )  # compare's coverage (lorisnb.core.coverage.complete: the one rule of sequences with output)
+    board = board.merge(most_trials(table), on=["suite", "scene", "algorithm"], how="left")
     board["coverage"] = [f"{c}/{n}" for c, n in zip(board["sequences_covered"], board["sequences_total"], strict=True)]
     higher = METRICS.get(metric, ("", True))[1]
     board = board.sort_values(["suite", "scene", "rank", "value"], ascending=[True, True, True, not higher])
