@@ -208,3 +208,33 @@ def test_rotation_blocks_nearest_rotation_and_scipy():
     tilted = exact[:3] * 1.01
     assert (rotation_blocks(tilted)[1] > 0.02).all()
     assert rotation_blocks(np.zeros((0, 3, 3)))[0].shape == (0, 4)
+
+
+def test_rotation_blocks_the_same_for_any_memory_order_threads_and_mixed_runs():
+    """KITTI's one-call read hands the parser's column-major numbers to the rotation step and runs
+    it on threads: every block's quaternion and distance are those of the block alone (exact,
+    6- and 3-digit, noisy and non-finite blocks mixed in one run)."""
+    from scipy.spatial.transform import Rotation
+
+    import lorisnb.core.blocks as blocks
+    from lorisnb.core.matrices import rotation_blocks
+
+    rng = np.random.default_rng(5)
+    r = Rotation.random(40_000, random_state=7).as_matrix()
+    m = np.concatenate([r[:10_000], np.round(r[10_000:20_000], 6), np.round(r[20_000:30_000], 3), r[30_000:] + 1e-4])
+    m = m[rng.permutation(len(m))]
+    m[5], m[7] = np.nan, m[7] * 1e300
+    with np.errstate(all="ignore"):
+        q, off = rotation_blocks(m)
+        column_major = np.asfortranarray(np.concatenate([m, np.zeros((len(m), 3, 1))], axis=2).reshape(-1, 12))
+        view = column_major.reshape(-1, 3, 4)[:, :, :3]  # as read_kitti sees pandas' block: no copy
+        assert np.shares_memory(view, column_major)
+        with blocks.threads(2):
+            qf, offf = rotation_blocks(view)
+        one = [rotation_blocks(m[i : i + 1]) for i in (0, 1, 2, 9, 10_001, 39_999)]
+    np.testing.assert_array_equal(qf, q)
+    np.testing.assert_array_equal(offf, off)
+    for i, (qi, oi) in zip((0, 1, 2, 9, 10_001, 39_999), one, strict=True):
+        np.testing.assert_array_equal(qi[0], q[i])
+        np.testing.assert_array_equal(oi[0], off[i])
+    assert np.isnan(q[5]).all() and not off[7] <= 1e-3

@@ -53,14 +53,22 @@ def markley(k: BarItzhack) -> np.ndarray:
     """(n, 4) quaternions ``xyzw``, before normalization, of rotation blocks by Markley's method
     (2008, as scipy): the largest of the trace and the diagonal picks the branch, whose quaternion
     is that column of ``K + I``."""
+    return np.stack(_markley_parts(k), axis=1)
+
+
+def _markley_parts(k: BarItzhack) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`markley`'s quaternions as four (n,) arrays ``x, y, z, w``: the branch is the first
+    of ``B_00, B_11, B_22, tr`` that is largest (``np.argmax``'s choice, NaN first)."""
     a = k.a
-    choice = np.argmax(np.stack([a[0, 0], a[1, 1], a[2, 2], k.trace]), axis=0)
-    q = np.empty((len(choice), 4))
-    q[:, 0] = np.choose(choice, (k.xx, k.xy, k.xz, k.xw))
-    q[:, 1] = np.choose(choice, (k.xy, k.yy, k.yz, k.yw))
-    q[:, 2] = np.choose(choice, (k.xz, k.yz, k.zz, k.zw))
-    q[:, 3] = np.choose(choice, (k.xw, k.yw, k.zw, k.ww))
-    return q
+    d0, d1, d2, tr = a[0, 0], a[1, 1], a[2, 2], k.trace
+    choice = np.argmax(np.stack([d0, d1, d2, tr]), axis=0)
+    c0, c1, c2 = choice == 0, choice == 1, choice == 2
+    return (
+        np.where(c0, k.xx, np.where(c1, k.xy, np.where(c2, k.xz, k.xw))),
+        np.where(c0, k.xy, np.where(c1, k.yy, np.where(c2, k.yz, k.yw))),
+        np.where(c0, k.xz, np.where(c1, k.yz, np.where(c2, k.zz, k.zw))),
+        np.where(c0, k.xw, np.where(c1, k.yw, np.where(c2, k.zw, k.ww))),
+    )
 
 
 def rotation_blocks(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -92,7 +100,8 @@ def rotation_blocks(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _rotation_run(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`rotation_blocks` of a run of (n, 3, 3) blocks."""
+    """:func:`rotation_blocks` of a run of (n, 3, 3) blocks, computed on one (n,) array per
+    component (no (n, 4) temporaries until the result)."""
     k = BarItzhack(m)
     a = k.a
     with np.errstate(over="ignore", invalid="ignore"):  # huge blocks: inf here, refused by the reader
@@ -107,35 +116,58 @@ def _rotation_run(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         # a rotation within 1e-12 in every entry of R R^T (scipy's np.isclose also lets a row norm
         # be 1e-5 off: a planar 6-digit block would keep Markley's 1e-8 error)
         orthogonal = np.logical_and.reduce([*(d <= 1e-12 for d in diag), *(c <= 1e-12 for c in cross)])
-    q = markley(k)
+    q = list(_markley_parts(k))
     if not orthogonal.all():
-        rest = np.flatnonzero(~orthogonal)
+        rest = None if not orthogonal.any() else np.flatnonzero(~orthogonal)
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            q[rest] = _nearest_rotation(k, q, rest, off[rest])
-    return q / np.linalg.norm(q, axis=1)[:, None], off  # scipy's normalization, to the last bit
+            near = _nearest_rotation(k, q, rest, off if rest is None else off[rest])
+        if rest is None:
+            q = list(near)
+        else:
+            for c, v in zip(q, near, strict=True):
+                c[rest] = v
+    x, y, z, w = q
+    norm = np.sqrt(x * x + y * y + z * z + w * w)  # as np.linalg.norm(q, axis=1) sums: in order, to the last bit
+    out = np.empty((len(x), 4))
+    for i, c in enumerate(q):
+        np.divide(c, norm, out=out[:, i])
+    return out, off
 
 
-def _nearest_rotation(k: BarItzhack, q: np.ndarray, rest: np.ndarray, off: np.ndarray) -> np.ndarray:
-    """Quaternions (len(rest), 4) ``xyzw``, not normalized, of the rotations nearest to the blocks
-    ``rest`` of ``k``, which are ``off`` (len(rest),) from a rotation: power steps on ``K + I``
-    from Markley's ``q`` (see :func:`rotation_blocks`), whose error is about ``off / 4`` and shrinks
-    by about ``off / 4`` a step (measured); each block takes as many steps as bring
-    ``(off / 2) ** (steps + 1)`` below 2**-56 (two for 6-digit blocks, five at the readers'
-    tolerance; at most 12, for blocks too far to be accepted; the vector grows by at most 4 a
-    step), whatever the other blocks of its run need; then its largest component is made
-    positive, as scipy's Markley step on the projected block leaves it."""
+def _nearest_rotation(
+    k: BarItzhack, q: list[np.ndarray], rest: np.ndarray | None, off: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """Quaternions ``x, y, z, w`` (four arrays), not normalized, of the rotations nearest to the
+    blocks ``rest`` of ``k`` (None: all), which are ``off`` from a rotation: power steps on ``K + I``
+    from Markley's ``q`` (four arrays, see :func:`rotation_blocks`), whose error is about
+    ``off / 4`` and shrinks by about ``off / 4`` a step (measured); each block takes as many steps
+    as bring ``(off / 2) ** (steps + 1)`` below 2**-56 (two for 6-digit blocks, five at the
+    readers' tolerance; at most 12, for blocks too far to be accepted; the vector grows by at most
+    4 a step), whatever the other blocks of its run need; then its largest component (the first
+    of equal ones) is made positive, as scipy's Markley step on the projected block leaves it."""
     with np.errstate(divide="ignore", invalid="ignore"):
         need = np.ceil(56 * np.log(2) / -np.log(off / 2)) - 1
     steps = np.where((off > 0) & (off < 0.25), need, 12).clip(1, 12).astype(np.int8)
-    entries = k.entries if len(rest) == len(q) else tuple(e[rest] for e in k.entries)
-    x, y, z, w = (q[:, i] for i in range(4)) if len(rest) == len(q) else (q[rest, i] for i in range(4))
-    out = np.empty((len(rest), 4))
-    for step in range(1, int(steps.max()) + 1):
+    entries = k.entries if rest is None else tuple(e[rest] for e in k.entries)
+    x, y, z, w = q if rest is None else (c[rest] for c in q)
+    first, last = int(steps.min()), int(steps.max())
+    out = None
+    for step in range(1, last + 1):
         x, y, z, w = times(entries, x, y, z, w)
-        done = np.flatnonzero(steps == step)
-        if len(done) == len(out):  # every block needs as many steps (as in a file of one precision)
-            out = np.stack([x, y, z, w], axis=1)
-        elif len(done):
-            out[done] = np.stack([x[done], y[done], z[done], w[done]], axis=1)
-    big = np.abs(out).argmax(axis=1)
-    return out * np.where(out[np.arange(len(out)), big] < 0, -1.0, 1.0)[:, None]
+        if step < first:
+            continue
+        if first == last:  # every block needs as many steps (as in a file of one precision)
+            out = [x, y, z, w]
+            break
+        if out is None:
+            out = [np.empty_like(x) for _ in range(4)]
+        done = steps == step
+        for o, c in zip(out, (x, y, z, w), strict=True):
+            np.copyto(o, c, where=done)
+    assert out is not None
+    ax, ay, az, aw = (np.abs(c) for c in out)
+    big = np.where(
+        (ax >= ay) & (ax >= az) & (ax >= aw), out[0], np.where((ay >= az) & (ay >= aw), out[1], np.where(az >= aw, out[2], out[3]))
+    )  # fmt: skip
+    sign = np.where(big < 0, -1.0, 1.0)
+    return tuple(c * sign for c in out)

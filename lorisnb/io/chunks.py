@@ -224,6 +224,7 @@ def read_rows(
     progress: Callable[[int], object] | None = None,
     layout: Callable[[int], Sequence[Group]] | None = None,
     skip_lines: int = 0,
+    row_major: bool = True,
 ) -> Rows:
     """Read the numeric lines of a text file in chunks (a plain file of at most
     :data:`~lorisnb.io.whole.WHOLE_MAX_BYTES` with a ``layout``: in one call,
@@ -250,9 +251,12 @@ def read_rows(
             is then copied into them as its chunks are parsed (:class:`~lorisnb.io.rows.RowSink`).
         skip_lines: line ``skip_lines`` (1-based; 0: none) is skipped as a comment (a header line
             without ``#``; the lines before it must be blank or comments).
+        row_major: False for a reader that only computes from the groups' arrays and keeps none of
+            them: a plain file read in one call then gives views of the parser's own numbers
+            (column-major, read-only; no copy), chunked reading row-major arrays as always.
     """
     if layout is not None and not specials and chunk_bytes is None:  # a plain file: pandas' parse in one call
-        whole = read_whole(path, widths, layout, separators, skip_lines, progress)
+        whole = read_whole(path, widths, layout, separators, skip_lines, progress, row_major)
         if whole is not None:
             return whole
     spath = str(path)

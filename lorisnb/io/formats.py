@@ -151,8 +151,9 @@ def read_kitti(
         ),
         separators=b",",
         layout=_matrix_groups,
+        row_major=False,
     )
-    (flat,) = rows.split(_matrix_groups(12))  # row-major, filled as the chunks were read
+    (flat,) = rows.split(_matrix_groups(12))  # the parser's own numbers (a plain file), else row-major
     mats = flat.reshape(-1, 3, 4)
     if stamps is None:
         t = np.arange(len(mats), dtype=float)

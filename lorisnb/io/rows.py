@@ -73,7 +73,7 @@ class Rows:
                 out[at : at + m, len(got) :] = np.nan
             blocks[i] = _NO_ROWS  # the block's numbers go as soon as they are copied
 
-        _each(copy, len(blocks))
+        each(copy, len(blocks))
         return outs
 
 
@@ -95,7 +95,7 @@ def line_dtype(last: int) -> type[np.signedinteger]:
     return np.int32 if last < 2**31 else np.int64
 
 
-def _each(fn: Callable[[int], None], n: int) -> None:
+def each(fn: Callable[[int], None], n: int) -> None:
     """``fn(i)`` for ``i`` in ``range(n)``, on threads when there are many (numpy's copies release
     the GIL)."""
     if n > 2 * PARSE_THREADS:
@@ -120,7 +120,7 @@ def _join_blocks(blocks: list[np.ndarray]) -> np.ndarray:
         columns[len(b) :, at : at + m] = np.nan
         blocks[i] = _NO_ROWS
 
-    _each(copy, len(blocks))
+    each(copy, len(blocks))
     return columns
 
 

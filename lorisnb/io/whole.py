@@ -23,7 +23,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from .ranges import GIVE_BACK_BYTES, give_back_memory
-from .rows import Group, Rows, line_dtype
+from .rows import Group, Rows, each, line_dtype
 from .scanner import BOM, SNIFF_BYTES
 
 #: Files up to this size are read in one call; larger ones in chunks, in bounded memory (the C
@@ -43,11 +43,14 @@ def read_whole(
     separators: bytes = b"",
     skip_lines: int = 0,
     progress: Callable[[int], object] | None = None,
+    row_major: bool = True,
 ) -> Rows | None:
     """The numeric lines of a plain regular file (see the module docstring) as a :class:`Rows`
     whose numbers are already copied into ``layout``'s column groups (row-major), or None when
     the file is not plain or too large (read it in chunks then). ``skip_lines``: the 1-based line
-    of a header without ``#`` (0: none)."""
+    of a header without ``#`` (0: none). ``row_major=False``: groups that are slices come as
+    read-only views of the parser's numbers instead (no copy; pandas' are column-major), for a
+    reader that keeps none of them."""
     try:
         st = os.stat(path)
         if not stat.S_ISREG(st.st_mode) or not 0 < st.st_size <= WHOLE_MAX_BYTES:
@@ -69,10 +72,12 @@ def read_whole(
             return None
         n = len(values)
         outs = [
-            np.ascontiguousarray(values[:, g]) if isinstance(g, slice) else np.take(values, g, axis=1) for g in groups
-        ]
+            np.take(values, g, axis=1) if not isinstance(g, slice) else
+            np.ascontiguousarray(values[:, g]) if row_major else values[:, g]
+            for g in groups
+        ]  # fmt: skip
     else:
-        parsed = _pandas_rows(path, sep, skip, ntok, groups)
+        parsed = _pandas_rows(path, sep, skip, ntok, groups, row_major)
         if parsed is None:
             return None
         n, outs = parsed
@@ -103,10 +108,12 @@ def _numpy_rows(path: str | os.PathLike, sep: str, skip: int, ntok: int) -> np.n
 
 
 def _pandas_rows(
-    path: str | os.PathLike, sep: str, skip: int, ntok: int, groups: tuple[Group, ...]
+    path: str | os.PathLike, sep: str, skip: int, ntok: int, groups: tuple[Group, ...], row_major: bool = True
 ) -> tuple[int, list[np.ndarray]] | None:
     """The number of rows and their numbers copied into ``groups`` (row-major) by pandas' C
-    parser in one call, or None when the file is not plain after all."""
+    parser in one call, or None when the file is not plain after all. ``row_major=False``: groups
+    that are slices are views of the parser's (n, ntok) numbers (column-major when pandas holds
+    them as one block, as it does a frame of one dtype), not copies."""
     import pandas as pd  # here: a small file read by numpy needs no pandas
 
     try:
@@ -118,10 +125,15 @@ def _pandas_rows(
         return None  # not plain after all: the chunked reader finds what and where
     if frame.shape[1] != ntok or not all(dt == np.float64 for dt in frame.dtypes):
         return None
-    columns = [frame[k].to_numpy() for k in range(ntok)]
-    del frame
-    outs = [_rows_of(columns[g] if isinstance(g, slice) else [columns[k] for k in g]) for g in groups]
-    del columns
+    if not row_major and all(isinstance(g, slice) for g in groups):
+        values = frame.to_numpy()  # (n, ntok): a view of pandas' one block, or one copy
+        del frame
+        outs = [values[:, g] for g in groups]
+    else:
+        columns = [frame[k].to_numpy() for k in range(ntok)]
+        del frame
+        outs = [_rows_of(columns[g] if isinstance(g, slice) else [columns[k] for k in g]) for g in groups]
+        del columns
     if os.stat(path).st_size >= GIVE_BACK_BYTES:
         give_back_memory()  # the parser's buffers of a large file: not kept as the process's memory
     return len(outs[0]), outs
@@ -129,14 +141,19 @@ def _pandas_rows(
 
 def _rows_of(columns: list[np.ndarray]) -> np.ndarray:
     """(n, k) row-major array of k columns (pandas' are read-only), copied in blocks of rows that
-    stay in the CPU's cache while all their columns are written."""
+    stay in the CPU's cache while all their columns are written, on the parse's threads (numpy's
+    copies release the GIL)."""
     if len(columns) == 1:
         return columns[0].reshape(-1, 1).copy()
     n = len(columns[0])
     out = np.empty((n, len(columns)))
-    for lo in range(0, n, COPY_ROWS):  # a few hundred blocks, never a loop over rows
+
+    def copy(b: int) -> None:
+        lo = b * COPY_ROWS
         for j, c in enumerate(columns):
             out[lo : lo + COPY_ROWS, j] = c[lo : lo + COPY_ROWS]
+
+    each(copy, -(-n // COPY_ROWS))  # a few hundred blocks, never a loop over rows
     return out
 
 
