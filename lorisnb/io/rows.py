@@ -53,7 +53,9 @@ class Rows:
     def split(self, groups: Sequence[Group]) -> list[np.ndarray]:
         """Row-major (n, stop - start) arrays of the column ``groups`` (slices of token positions
         with a stop), copied once from the blocks (on threads when many), which are let go as
-        they are copied: afterwards this Rows holds no numbers. Tokens a line lacks are NaN."""
+        they are copied: afterwards this Rows holds no numbers. Tokens a line lacks are NaN. Rows
+        read in one call come as filled (:func:`~lorisnb.io.whole.read_whole`: views of the
+        parser's column-major numbers where the reader asked ``row_major=False``)."""
         if self.filled is not None:
             filled, arrays = self.filled
             if tuple(groups) != filled:
