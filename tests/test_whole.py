@@ -4,6 +4,8 @@ plain; and the rotation blocks of matrix files converted exactly as scipy conver
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from helpers import write
@@ -238,3 +240,8 @@ def test_rotation_blocks_the_same_for_any_memory_order_threads_and_mixed_runs():
         np.testing.assert_array_equal(qi[0], q[i])
         np.testing.assert_array_equal(oi[0], off[i])
     assert np.isnan(q[5]).all() and not off[7] <= 1e-3
+    # ties between the diagonal and the trace (90 and 180 degree turns): Markley's branch is the
+    # first largest, as scipy's np.argmax picks it, to the last bit
+    turns = Rotation.from_euler("xyz", list(itertools.product([0, 45, 90, 180, -90], repeat=3)), degrees=True)
+    blocks_ = turns.as_matrix()
+    np.testing.assert_array_equal(rotation_blocks(blocks_)[0], Rotation.from_matrix(blocks_).as_quat())

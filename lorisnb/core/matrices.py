@@ -58,11 +58,13 @@ def markley(k: BarItzhack) -> np.ndarray:
 
 def _markley_parts(k: BarItzhack) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`markley`'s quaternions as four (n,) arrays ``x, y, z, w``: the branch is the first
-    of ``B_00, B_11, B_22, tr`` that is largest (``np.argmax``'s choice, NaN first)."""
+    of ``B_00, B_11, B_22, tr`` that is largest (``np.argmax``'s choice; a block with NaN on its
+    diagonal gets NaN in every branch)."""
     a = k.a
     d0, d1, d2, tr = a[0, 0], a[1, 1], a[2, 2], k.trace
-    choice = np.argmax(np.stack([d0, d1, d2, tr]), axis=0)
-    c0, c1, c2 = choice == 0, choice == 1, choice == 2
+    c0 = (d0 >= d1) & (d0 >= d2) & (d0 >= tr)  # np.argmax's first largest, without stacking
+    c1 = ~c0 & (d1 >= d2) & (d1 >= tr)
+    c2 = ~c0 & ~c1 & (d2 >= tr)
     return (
         np.where(c0, k.xx, np.where(c1, k.xy, np.where(c2, k.xz, k.xw))),
         np.where(c0, k.xy, np.where(c1, k.yy, np.where(c2, k.yz, k.yw))),
@@ -112,10 +114,13 @@ def _rotation_run(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
             + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])
         )
-        off = np.maximum.reduce([*diag, *cross, np.abs(det - 1.0)])
+        gram = diag[0]  # the largest entry of |R R^T - I|, in place over the new arrays
+        for d in (*diag[1:], *cross):
+            np.maximum(gram, d, out=gram)
         # a rotation within 1e-12 in every entry of R R^T (scipy's np.isclose also lets a row norm
-        # be 1e-5 off: a planar 6-digit block would keep Markley's 1e-8 error)
-        orthogonal = np.logical_and.reduce([*(d <= 1e-12 for d in diag), *(c <= 1e-12 for c in cross)])
+        # be 1e-5 off: a planar 6-digit block would keep Markley's 1e-8 error); NaN is none
+        orthogonal = gram <= 1e-12
+        off = np.maximum(gram, np.abs(det - 1.0, out=det), out=gram)
     q = list(_markley_parts(k))
     if not orthogonal.all():
         rest = None if not orthogonal.any() else np.flatnonzero(~orthogonal)
