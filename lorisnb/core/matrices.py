@@ -20,7 +20,9 @@ class BarItzhack:
     columns are those quaternions to the last bit."""
 
     def __init__(self, m: np.ndarray) -> None:
-        a = np.ascontiguousarray(np.moveaxis(m, 0, -1))  # (3, 3, n): each entry one contiguous row
+        a = np.moveaxis(m, 0, -1)  # (3, 3, n): each entry one contiguous row (a column-major
+        if a.strides[-1] != a.itemsize:  # file's numbers are already; a row-major array is copied)
+            a = np.ascontiguousarray(a)
         self.a = a
         self.trace = a[0, 0] + a[1, 1] + a[2, 2]
         one_minus = 1.0 - self.trace
