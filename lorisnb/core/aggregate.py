@@ -147,10 +147,17 @@ def aggregate_columns(sequences: Mapping[str, Any], durations: Columns) -> dict[
     missing = sorted(set(scene_names.tolist()) - set(gt_scene.tolist()))
     if missing:
         raise EvaluationError(f"no ground-truth durations for scene(s) {', '.join(missing)}; pass their durations")
-    _refuse_duplicates(labels, keys)
-    group, first = _groups([labels[k].codes for k in keys])
+    by = _setting_keys(labels, keys)
+    _refuse_duplicates(labels, by)
+    group, first = _groups([labels[k].codes for k in by])
     m = len(first)
     out: dict[str, Any] = {k: labels[k].at(first) for k in keys}
+    if "eps" not in by:  # the setting's eps in metres where its sequences share one, else NaN
+        eps = labels["eps"].codes
+        lo, hi = np.full(m, np.iinfo(np.int64).max), np.full(m, -1)
+        np.minimum.at(lo, group, eps)
+        np.maximum.at(hi, group, eps)
+        out["eps"] = np.where(lo == hi, np.asarray(out["eps"], float), np.nan)
     out["sequences"] = np.bincount(group, minlength=m).astype(np.int64)
     rows = _Sorted(group, m)
     matched, c_matched = np.asarray(sequences["matched"]), np.asarray(sequences["c_matched"])
@@ -272,6 +279,19 @@ def _scene_order(out: Mapping[str, np.ndarray], trials: bool) -> np.ndarray:
     if trials:
         keys.append(np.asarray(out["trial"]))
     return np.lexsort(keys[::-1])
+
+
+def _setting_keys(labels: Mapping[str, Labels], keys: list[str]) -> list[str]:
+    """The keys of a scene group: suite, algorithm, scene, trial and the threshold setting. Of eps
+    the setting is the value as given (a sweep's ``eps_value``) where the table has it, else eps in
+    metres, unless that is each sequence's own (``relative:F`` eps, a fraction of each sequence's
+    size): a table whose sequences are each there once without it is one setting, whose scene
+    rows sum all its sequences (eps NaN where they differ)."""
+    if "eps_value" in keys:
+        return [k for k in keys if k != "eps"]
+    without = [k for k in keys if k != "eps"]
+    group, _ = _groups([labels[k].codes for k in [*without, "seq"]])
+    return without if (np.bincount(group) < 2).all() else keys
 
 
 def _refuse_duplicates(labels: Mapping[str, Labels], keys: list[str]) -> None:

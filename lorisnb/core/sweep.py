@@ -248,6 +248,15 @@ def eps_at_cr(
     return pd.DataFrame(rows, columns=["suite", "algorithm", "scene", "target_cr", "phi", "delta", "eps", "max_cr"])
 
 
+def _absolute_eps(scenes: pd.DataFrame, name: str) -> None:
+    """Refuse scene rows without one eps in metres (a relative sweep's: each sequence had its own)."""
+    if "eps" in scenes.columns and scenes["eps"].isna().any():
+        raise ValidationError(
+            f"{name}: ranks algorithms along eps in metres, but some scene rows have none (a sweep of "
+            "relative eps gives each sequence its own); sweep absolute eps (metres) for this"
+        )
+
+
 def rank_stability(
     scenes: pd.DataFrame, metric: str = "cr", reference: Mapping[str, float] | None = None
 ) -> pd.DataFrame:
@@ -259,6 +268,7 @@ def rank_stability(
     """
     from scipy import stats  # here, not at the top: scipy.stats takes half a second to import
 
+    _absolute_eps(scenes, "rank_stability")
     keys = ["suite", "scene", "phi", "delta", "tau"]
     rows = []
     for key, grp in scenes.groupby(keys, sort=False, observed=True):
@@ -292,6 +302,7 @@ def rank_stability(
 def rank_swaps(scenes: pd.DataFrame, metric: str = "cr") -> pd.DataFrame:
     """Where two algorithms swap rank as eps grows: one row per scene, pair and eps interval in
     which their order of ``metric`` reverses."""
+    _absolute_eps(scenes, "rank_swaps")
     rows = []
     for (suite, scene, phi, delta, tau), grp in scenes.groupby(
         ["suite", "scene", "phi", "delta", "tau"], sort=False, observed=True

@@ -32,6 +32,14 @@ def subplots(nrows: int = 1, ncols: int = 1, **kw: Any) -> tuple[Figure, Any]:
     return fig, fig.subplots(nrows, ncols, **kw)
 
 
+def _theme(style: str) -> None:
+    """seaborn's paper theme, with titles at the top of their axes (``axes.titley`` 1.0): where
+    nothing is drawn above an axes (none of these figures has tick labels on top) that is where
+    matplotlib would place them, but finding it out measures every tick label of every axes at
+    each draw, a fifth of the time of a figure of many panels."""
+    sns.set_theme(style=style, context="paper", rc={"axes.titley": 1.0})
+
+
 CORRECT = "#1f5fbf"
 WRONG = "#d62728"
 
@@ -68,7 +76,7 @@ def plot_timeline(
     labels = dict(labels or {})
     n = len(algorithms)
     width = max(8.0, 0.006 * (layout["offset"].iloc[-1] + layout["duration"].iloc[-1]) + 3) if len(layout) else 8
-    sns.set_theme(style="white", context="paper")
+    _theme("white")
     fig, ax = subplots(figsize=(min(width, MAX_WIDTH_IN), 0.55 * n + 1.7))
     off = {(r.scene, r.seq): r.offset for r in layout.itertuples()}
     y_of = {a: n - i for i, a in enumerate(algorithms)}
@@ -144,7 +152,7 @@ def plot_trajectories(
     n = max(1, len(seqs))
     cols = min(max_cols, n)
     rows = int(np.ceil(n / cols))
-    sns.set_theme(style="whitegrid", context="paper")
+    _theme("whitegrid")
     fig, axes = subplots(rows, cols, figsize=(3.9 * cols, 3.8 * rows), squeeze=False)
     for ax, e in zip(axes.flat, seqs, strict=False):
         c = correctness(e.ate, e.aoe, sequence_eps(eps, errors.scene, e), phi)
@@ -209,7 +217,7 @@ def plot_metric_vs_threshold(
     """Lines of a scene metric (``cr``, ``cr_t``, ``cs_r``, ...) against one threshold, one
     panel per scene, one line per algorithm; ``marks`` draws the paper's value (a number, or one
     per scene) as a dashed line. ``scenes`` is a scene aggregate of a sweep."""
-    sns.set_theme(style="whitegrid", context="paper")
+    _theme("whitegrid")
     data = scenes.replace([np.inf], np.nan).dropna(subset=[x]) if log else scenes
     g = sns.relplot(
         data=data,
@@ -245,7 +253,7 @@ def plot_cr_heatmaps(
     algs = sorted(d["algorithm"].unique())
     cols = min(max_cols, max(1, len(algs)))
     rows = int(np.ceil(len(algs) / cols)) or 1
-    sns.set_theme(style="white", context="paper")
+    _theme("white")
     fig, axes = subplots(rows, cols, figsize=(3.9 * cols, 3.3 * rows), squeeze=False)  # 3 columns fit 12 in
     for ax, alg in zip(axes.flat, algs, strict=False):
         wide = (
@@ -280,7 +288,7 @@ def plot_cr_heatmaps(
 
 def plot_rank_stability(stability: pd.DataFrame):
     """Kendall's tau between the ranking at each eps and at the reference (paper) eps, per scene."""
-    sns.set_theme(style="whitegrid", context="paper")
+    _theme("whitegrid")
     fig, ax = subplots(figsize=(6.5, 3.6))
     d = stability[np.isfinite(stability["eps"])]
     sns.lineplot(data=d, x="eps", y="kendall_tau", hue="scene", marker="o", ax=ax)
@@ -299,7 +307,7 @@ def plot_crosscheck_scatter(per_pose: Mapping[str, pd.DataFrame]):
     """lorisnb ATE against evo APE (and AOE against evo's rotation angle), per pose, one column
     per dataset: points lie on the diagonal where the association coincides."""
     n = len(per_pose)
-    sns.set_theme(style="whitegrid", context="paper")
+    _theme("whitegrid")
     fig, axes = subplots(2, n, figsize=(min(3.6 * n, MAX_WIDTH_IN), 6.6), squeeze=False)
     for k, (name, df) in enumerate(per_pose.items()):
         for r, (ours, theirs, unit) in enumerate((("ate_lorisnb", "ate_evo", "m"), ("aoe_lorisnb", "aoe_evo", "deg"))):
@@ -318,7 +326,7 @@ def plot_crosscheck_scatter(per_pose: Mapping[str, pd.DataFrame]):
 def plot_normalized_accuracy(measures: pd.DataFrame, published: pd.DataFrame):
     """ATE RMSE as % of the distance travelled: computed sequences as points (one row per
     dataset, coloured by scene or sequence), published values as black diamonds on their own rows."""
-    sns.set_theme(style="whitegrid", context="paper")
+    _theme("whitegrid")
     fig, ax = subplots(figsize=(8, 3.8))
     pts = measures.dropna(subset=["ate_pct_length"])
     sns.stripplot(data=pts, y="dataset", x="ate_pct_length", hue="group", dodge=False, alpha=0.6, ax=ax, size=4)
