@@ -13,6 +13,7 @@ import importlib.util
 import os
 import re
 import sys
+import weakref
 from collections.abc import Callable
 from typing import Any
 
@@ -181,7 +182,39 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("verify", help="re-check a report run's inputs against the checksums in its run.json")
     p.add_argument("run", metavar="RUN", help="a run folder written by lorisnb report (or its run.json)")
     p.set_defaults(func=_command(".commands", "cmd_verify"))
+    given_once(parser)
     return parser
+
+
+def given_once(parser: argparse.ArgumentParser) -> None:
+    """Every option of one value (of ``parser`` and its subcommands) refuses a second, different
+    value: argparse keeps the last, silently dropping the first (``sweep --eps 0.05 --eps 0.1``
+    swept 0.1 only). The same value twice is harmless and accepted."""
+    seen: dict[int, tuple[weakref.ref, dict[str, tuple[Any]]]] = {}
+
+    class Once(argparse._StoreAction):  # argparse has no hook for a repeated option
+        def __call__(self, p: Any, namespace: Any, values: Any, option_string: Any = None) -> None:
+            ref, given = seen.get(id(namespace), (None, {}))
+            if ref is None or ref() is not namespace:  # a new parse
+                given = {}
+                seen[id(namespace)] = (weakref.ref(namespace), given)
+            if self.dest in given and given[self.dest][0] != values:
+                first = given[self.dest][0]
+                lists = " (a list is one value, comma-separated: --eps 0.05,0.1)" if isinstance(values, list) else ""
+                p.error(f"{option_string} given twice ({first!r}, then {values!r}); the last would silently replace "
+                        f"the first: give it once{lists}")  # fmt: skip
+            given[self.dest] = (values,)
+            super().__call__(p, namespace, values, option_string)
+
+    def walk(p: argparse.ArgumentParser) -> None:
+        for action in p._actions:  # argparse has no public list of a parser's options
+            if type(action) is argparse._StoreAction and action.option_strings and action.nargs is None:
+                action.__class__ = Once
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in action.choices.values():
+                    walk(sub)
+
+    walk(parser)
 
 
 #: A value that starts like a negative number or list of them (``-1,1``, ``-1e-3``, ``-inf``), which

@@ -1,0 +1,57 @@
+"""An option of one value given twice with different values is refused on every subcommand:
+argparse keeps the last and drops the first, so ``sweep --eps 0.05 --eps 0.1`` swept 0.1 alone
+and ``evaluate --eps relative:0.1 --eps 1`` scored eps 1 m, both with exit status 0."""
+
+from __future__ import annotations
+
+import argparse
+
+import pytest
+
+from lorisnb.cli import build_parser, main
+
+
+def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
+
+
+def test_every_single_value_option_of_every_command_refuses_a_second_value():
+    subs = _subparsers(build_parser())
+    checked = 0
+    for name, sub in subs.items():
+        for action in sub._actions:
+            if action.option_strings and action.nargs is None and isinstance(action, argparse._StoreAction):
+                assert type(action).__name__ == "Once", (name, action.option_strings)
+                checked += 1
+    assert checked > 50 and {"evaluate", "sweep", "compare", "diff", "report", "crosscheck"} <= set(subs)
+
+
+@pytest.mark.parametrize(
+    "argv, flag",
+    [
+        (["sweep", "x", "--eps", "0.05", "--eps", "0.1"], "--eps"),
+        (["evaluate", "x", "--eps", "relative:0.1", "--eps", "1"], "--eps"),
+        (["evaluate", "x", "--phi=10", "--phi=20"], "--phi"),
+        (["compare", "x", "--conventions", "tum", "--conventions", "rpg"], "--conventions"),
+        (["report", "--jobs", "1", "--jobs", "2"], "--jobs"),
+    ],
+)
+def test_a_second_different_value_is_a_usage_error(argv, flag, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert f"{flag} given twice" in err and "give it once" in err
+    if argv[0] == "sweep":
+        assert "comma-separated" in err
+
+
+def test_the_same_value_twice_and_separate_parses_are_accepted():
+    parser = build_parser()
+    args = parser.parse_args(["evaluate", "x", "--phi", "10", "--phi", "10"])
+    assert args.phi == 10.0
+    again = parser.parse_args(["evaluate", "x", "--phi", "20"])  # a new parse forgets the last one's values
+    assert again.phi == 20.0
