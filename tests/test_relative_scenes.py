@@ -78,3 +78,14 @@ def test_rankings_along_eps_refuse_a_relative_sweep(maslam):
     for fn in (rank_stability, rank_swaps):
         with pytest.raises(ValidationError, match="relative eps"):
             fn(scenes)
+
+
+def test_sweep_prints_the_fraction_of_each_relative_scene_row(icra20, capsys):
+    main(
+        ["sweep", str(icra20 / "lifelong" / "maslam"), "--eps", "0.05,0.1", "--relative-to", "extent", "--no-progress"]
+    )
+    lines = capsys.readouterr().out.splitlines()
+    header = next(line for line in lines if line.split()[:1] == ["suite"])
+    assert "eps_value" in header.split()
+    corridor = [line.split() for line in lines if " corridor " in line]
+    assert len(corridor) == 2 and {row[row.index("corridor") + 2] for row in corridor} == {"0.05", "0.1"}

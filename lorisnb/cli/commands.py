@@ -182,6 +182,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
     grid = f"{len(args.eps)} eps x {len(args.phi)} phi x {len(args.delta)} delta x {len(args.tau)} tau"
     cols = ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "cr", "cr_t", "c_ate_rmse"]
+    if keep_label:  # eps as given (a fraction, 'paper'): what tells the rows apart where eps in metres does not
+        cols.insert(4, "eps_value")
     if args.parquet and not args.csv:  # streamed, one group of files at a time: any grid size
         from ..tools.streaming import sweep_to_parquet
 
