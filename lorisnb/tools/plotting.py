@@ -4,6 +4,8 @@ correctness, and helpers to save figures. Every function returns the Figure; non
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
@@ -38,6 +40,19 @@ def _theme(style: str) -> None:
     matplotlib would place them, but finding it out measures every tick label of every axes at
     each draw, a fifth of the time of a figure of many panels."""
     sns.set_theme(style=style, context="paper", rc={"axes.titley": 1.0})
+
+
+@contextmanager
+def same_jitter(seed: int = 0) -> Iterator[None]:
+    """Within the block, seaborn's strip plots jitter their points the same way at every run
+    (they draw from numpy's global generator, which is seeded here and restored afterwards: the
+    caller's random numbers are not touched), so that a report's figures are the same each night."""
+    state = np.random.get_state()
+    np.random.seed(seed)
+    try:
+        yield
+    finally:
+        np.random.set_state(state)
 
 
 CORRECT = "#1f5fbf"
@@ -232,6 +247,7 @@ def plot_metric_vs_threshold(
         height=2.8,
         aspect=1.15,
         facet_kws={"sharey": True, "sharex": True},
+        seed=0,  # the interval band of several rows per point (trials): the same at every run
     )
     for key, ax in g.axes_dict.items():
         if log:
@@ -291,7 +307,7 @@ def plot_rank_stability(stability: pd.DataFrame):
     _theme("whitegrid")
     fig, ax = subplots(figsize=(6.5, 3.6))
     d = stability[np.isfinite(stability["eps"])]
-    sns.lineplot(data=d, x="eps", y="kendall_tau", hue="scene", marker="o", ax=ax)
+    sns.lineplot(data=d, x="eps", y="kendall_tau", hue="scene", marker="o", ax=ax, seed=0)
     for scene, ref in d.groupby("scene")["reference_eps"].first().items():
         ax.axvline(ref, color=sns.color_palette()[list(d["scene"].unique()).index(scene) % 10], ls="--", lw=0.8)
     ax.set_xscale("log")
@@ -329,7 +345,8 @@ def plot_normalized_accuracy(measures: pd.DataFrame, published: pd.DataFrame):
     _theme("whitegrid")
     fig, ax = subplots(figsize=(8, 3.8))
     pts = measures.dropna(subset=["ate_pct_length"])
-    sns.stripplot(data=pts, y="dataset", x="ate_pct_length", hue="group", dodge=False, alpha=0.6, ax=ax, size=4)
+    with same_jitter():
+        sns.stripplot(data=pts, y="dataset", x="ate_pct_length", hue="group", dodge=False, alpha=0.6, ax=ax, size=4)
     rows = [f"{d} (published)" for d in published["dataset"]]
     ax.scatter(published["ate_pct_length"], rows, marker="D", color="black", label="published values")
     ax.set_xscale("log")

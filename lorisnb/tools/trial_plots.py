@@ -9,7 +9,7 @@ import seaborn as sns
 from matplotlib.figure import Figure
 
 from ..core.stats import scene_values, with_trials
-from .plotting import MAX_WIDTH_IN, subplots
+from .plotting import MAX_WIDTH_IN, same_jitter, subplots
 from .tables import LABELS
 
 
@@ -26,7 +26,8 @@ def plot_trials(table: pd.DataFrame, metric: str = "cr", scenes: Sequence[str] |
     for ax, scene in zip(axes[0], panels, strict=False):
         d = values[values["scene"] == scene]
         sns.boxplot(data=d, x=metric, y="algorithm", order=algs, ax=ax, color="#dde6f3", fliersize=0, width=0.6)
-        sns.stripplot(data=d, x=metric, y="algorithm", order=algs, ax=ax, color="#1f5fbf", size=4, jitter=0.15)
+        with same_jitter():
+            sns.stripplot(data=d, x=metric, y="algorithm", order=algs, ax=ax, color="#1f5fbf", size=4, jitter=0.15)
         ax.set_title(scene)
         ax.set_xlabel(LABELS.get(metric, metric))
         ax.set_ylabel("")
