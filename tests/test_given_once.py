@@ -55,3 +55,10 @@ def test_the_same_value_twice_and_separate_parses_are_accepted():
     assert args.phi == 10.0
     again = parser.parse_args(["evaluate", "x", "--phi", "20"])  # a new parse forgets the last one's values
     assert again.phi == 20.0
+
+
+def test_a_report_parameter_given_twice_with_different_values_is_refused(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["report", "--out", str(out), "--no-progress", "-p", "eps", "3", "-p", "eps", "5"]) == 2
+    assert "-p eps given twice (3, then 5)" in capsys.readouterr().err
+    assert not out.exists()  # refused before any notebook ran

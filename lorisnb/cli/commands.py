@@ -295,7 +295,12 @@ def cmd_report(args: argparse.Namespace) -> int:
     from ..io.data import find_data
     from ..tools.report import findings_input_errors, run_report
 
-    params = {k: param_value(v) for k, v in (args.parameter or [])}
+    params: dict[str, Any] = {}
+    for k, v in args.parameter or []:  # a name given twice: refused, as a repeated option is (cli.given_once)
+        if k in params and params[k] != param_value(v):
+            raise ValidationError(f"-p {k} given twice ({params[k]!r}, then {param_value(v)!r}); the last would "
+                                  "silently replace the first: give each parameter once")  # fmt: skip
+        params[k] = param_value(v)
     if args.data and "data_root" not in params:
         params["data_root"] = args.data
     protect = [str(find_data(params.get("data_root")).root)]
