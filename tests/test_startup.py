@@ -55,3 +55,25 @@ def test_a_pair_evaluates_with_pandas_without_pyarrow(data, tmp_path):
     code = f"from lorisnb.cli import main\nassert main(['evaluate', *{args!r}, '--parquet', {str(out)!r}]) == 0"
     assert "pyarrow" in _imported(code)
     assert list(out.rglob("*.parquet"))
+
+
+@pytest.mark.skipif(importlib.util.find_spec("rfc3987_syntax") is None, reason="rfc3987_syntax is not installed")
+def test_report_processes_import_papermill_without_the_iri_grammars():
+    """jsonschema (imported by nbformat, papermill, nbconvert) imports rfc3987_syntax, about 2 s of
+    grammar compilation, only to check 'iri' strings; lorisnb's command and a report's workers
+    import it without, notebooks still validate, and the module stays importable."""
+    probe = (
+        "import sys\n{setup}\nimport papermill, nbformat\n"
+        "nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell('1')])\nnbformat.validate(nb)\n"
+        "print('rfc3987_syntax' in sys.modules)\nimport rfc3987_syntax\nprint(callable(rfc3987_syntax.is_valid_syntax))"
+    )
+
+    def run(setup: str) -> list[str]:
+        code = probe.format(setup=setup)
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+        return out.split()[-2:]
+
+    assert run("") == ["True", "True"]  # what a plain process pays
+    assert run("from lorisnb.tools.report import _worker_start\n_worker_start(None)") == ["False", "True"]
+    cli = "from lorisnb.cli import main\nassert main(['report', '--out', '']) == 2"  # refused, after the set-up
+    assert run(cli) == ["False", "True"]

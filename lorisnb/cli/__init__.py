@@ -25,6 +25,7 @@ from ..core.spec import ALIGNMENTS, PRESETS
 from ..errors import LorisError
 from ..io.ranges import keep_freed_memory
 from ..io.registry import FORMAT_NAMES
+from ..tools.lean_imports import jsonschema_without_iri_grammars, pandas_without_pyarrow
 from .options import (
     add_compare_options,
     add_diff_options,
@@ -260,6 +261,7 @@ def main(argv: list[str] | None = None) -> int:
     ordinary_pages(True)  # and new arrays in ordinary pages (see there)
     if not (getattr(args, "parquet", None) or getattr(args, "scheduler", None) or args.command == "report"):
         pandas_without_pyarrow()
+    jsonschema_without_iri_grammars()
     try:
         return int(args.func(args) or 0)
     except LorisError as exc:
@@ -268,59 +270,6 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
-
-
-def pandas_without_pyarrow() -> None:
-    """Have pandas, if this command imports it at all, imported without pyarrow: for a command
-    that writes no Parquet and sends no table to Dask. pandas imports pyarrow whenever it is
-    installed (lorisnb's ``[parquet]`` extra), which costs about a fifth of a small evaluation's
-    time and 60 MB; without it pandas keeps strings as Python objects (the same tables, the same
-    output). Nothing is imported here (an evaluation printed to the terminal needs no pandas);
-    nothing happens if pandas is already imported (a Python session); pyarrow stays importable
-    afterwards."""
-    if "pandas" not in sys.modules and not any(isinstance(f, _WithoutPyarrow) for f in sys.meta_path):
-        sys.meta_path.insert(0, _WithoutPyarrow())
-
-
-class _WithoutPyarrow:
-    """An import finder (``sys.meta_path``): finds pandas (once) with a loader that hides pyarrow
-    while pandas' own import runs."""
-
-    def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
-        if name != "pandas":
-            return None
-        sys.meta_path.remove(self)
-        spec = importlib.util.find_spec("pandas")
-        if spec is not None and spec.loader is not None:
-            spec.loader = _HidingLoader(spec.loader)  # type: ignore[assignment]  # the loader protocol
-        return spec
-
-
-class _HidingLoader:
-    """pandas' own loader, with pyarrow hidden while it runs (``importlib``'s loader protocol)."""
-
-    def __init__(self, real: Any) -> None:
-        self.real = real
-
-    def create_module(self, spec: Any) -> Any:
-        return self.real.create_module(spec)
-
-    def exec_module(self, module: Any) -> None:
-        before = sys.modules.get("pyarrow", _ABSENT)
-        sys.modules["pyarrow"] = None  # type: ignore[assignment]  # import pyarrow raises ImportError
-        try:
-            self.real.exec_module(module)
-        finally:
-            if before is _ABSENT:
-                del sys.modules["pyarrow"]
-            else:
-                sys.modules["pyarrow"] = before  # type: ignore[assignment]
-
-    def __getattr__(self, name: str) -> Any:  # resources and the rest: the real loader's
-        return getattr(self.real, name)
-
-
-_ABSENT = object()
 
 
 def run() -> None:

@@ -10,6 +10,7 @@ The finished folder is readable like any other output (the umask's permissions, 
 
 from __future__ import annotations
 
+import contextlib
 import datetime as _dt
 import json
 import os
@@ -24,8 +25,10 @@ from typing import Any
 from ..errors import DataNotFoundError, LorisError, OutputError, ValidationError
 from ..io.data import find_data
 from ..io.writers import overlap, write_csv
+from . import warm_kernels
 from .evaluate import check_filters, result_files
 from .leaderboard import report_findings
+from .lean_imports import jsonschema_without_iri_grammars
 from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
 from .provenance import checksums, input_files, run_record, write_run_json
 from .report_html import single_file, write_notebook_css
@@ -45,6 +48,7 @@ from .report_notebooks import (
     notebook_dir,
     notebook_path,
     run_one,
+    warm_kernels_for_report,
 )
 
 __all__ = [
@@ -114,35 +118,53 @@ def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_d
     runs: dict[int, NotebookRun] = {}
     order = sorted(range(len(names)), key=lambda i: -TYPICAL_SECONDS.get(Path(names[i]).stem, 0))
     try:
-        if jobs <= 1 or len(names) <= 1:
-            meanwhile()
-            for i in order:
-                runs[i] = run_notebook(names[i], tmp, params, notebooks_dir=notebooks_dir)
-                if bar is not None:
-                    bar.set_postfix_str(runs[i].name)
-                    bar.update()
-            return [runs[i] for i in range(len(names))]
-        import multiprocessing
-
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-            futures = {pool.submit(run_notebook, names[i], tmp, dict(params), notebooks_dir=notebooks_dir): i
-                       for i in order}  # fmt: skip
-            try:
+        with contextlib.ExitStack() as stack:
+            zygote = stack.enter_context(warm_kernels_for_report()) if len(names) > 1 else None
+            if jobs <= 1 or len(names) <= 1:
                 meanwhile()
-                for fut in as_completed(futures):
-                    runs[futures[fut]] = fut.result()
+                warm_kernels.use(zygote)
+                stack.callback(warm_kernels.use, None)
+                for i in order:
+                    runs[i] = run_notebook(names[i], tmp, params, notebooks_dir=notebooks_dir)
                     if bar is not None:
-                        bar.set_postfix_str(runs[futures[fut]].name)
+                        bar.set_postfix_str(runs[i].name)
                         bar.update()
-            except BaseException:  # Ctrl-C or an error here: stop the workers (their kernels follow them)
-                pool.shutdown(wait=False, cancel_futures=True)
-                for worker in multiprocessing.active_children():
-                    worker.terminate()
-                raise
+            else:
+                _run_pool(names, order, runs, tmp, params, notebooks_dir, jobs, bar, meanwhile, zygote)
     finally:
         if bar is not None:
             bar.close()
     return [runs[i] for i in range(len(names))]
+
+
+def _run_pool(names: list[str], order: list[int], runs: dict[int, NotebookRun], tmp: Path, params: Mapping[str, Any],
+              notebooks_dir: Any, jobs: int, bar: Any, meanwhile: Callable[[], None], zygote: Any) -> None:  # fmt: skip
+    """:func:`_run_all`'s notebooks in ``jobs`` worker processes, their kernels forked from ``zygote``."""
+    import multiprocessing
+
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
+                             initializer=_worker_start, initargs=(zygote,)) as pool:  # fmt: skip
+        futures = {pool.submit(run_notebook, names[i], tmp, dict(params), notebooks_dir=notebooks_dir): i
+                       for i in order}  # fmt: skip
+        try:
+            meanwhile()
+            for fut in as_completed(futures):
+                runs[futures[fut]] = fut.result()
+                if bar is not None:
+                    bar.set_postfix_str(runs[futures[fut]].name)
+                    bar.update()
+        except BaseException:  # Ctrl-C or an error here: stop the workers (their kernels follow them)
+            pool.shutdown(wait=False, cancel_futures=True)
+            for worker in multiprocessing.active_children():
+                worker.terminate()
+            raise
+
+
+def _worker_start(zygote: warm_kernels.Zygote | None) -> None:
+    """A report worker's set-up: papermill's imports without what they need not import
+    (:mod:`lorisnb.tools.lean_imports`), kernels forked from ``zygote``."""
+    jsonschema_without_iri_grammars()
+    warm_kernels.use(zygote)
 
 
 def _input_roots(names: list[str], params: Mapping[str, Any], data: Any, source: Path | None) -> list[Path]:

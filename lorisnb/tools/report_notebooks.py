@@ -25,6 +25,7 @@ from ..core.spec import SPEC_NAMES, make_spec
 from ..core.stats import WEIGHTS
 from ..core.trials import compile_trials_by
 from ..errors import LorisError, ValidationError
+from . import warm_kernels
 from ._extras import EXTRAS, require
 from .grids import check_grid
 from .inputs import names
@@ -133,14 +134,22 @@ class NotebookRun:
     thresholds: dict[str, str] = field(default_factory=dict)  # eps, phi, delta, tau it ran with, as written
 
 
-def kernel_env() -> None:
-    """Environment for notebook kernels: the Python running lorisnb, the Agg backend, no noise."""
+def kernel_environ(environ: Mapping[str, str]) -> dict[str, str]:
+    """``environ`` as notebook kernels get it: the Python running lorisnb first on PATH, the Agg
+    backend unless one is set, no debugger file check."""
+    env = dict(environ)
     # the kernel must be the Python that runs lorisnb (jupyter's 'python3' kernel runs `python`)
     bindir = str(Path(sys.executable).parent)
-    if not os.environ.get("PATH", "").startswith(bindir + os.pathsep):
-        os.environ["PATH"] = bindir + os.pathsep + os.environ.get("PATH", "")
-    os.environ.setdefault("MPLBACKEND", "Agg")
-    os.environ.setdefault("PYDEVD_DISABLE_FILE_VALIDATION", "1")
+    if not env.get("PATH", "").startswith(bindir + os.pathsep):
+        env["PATH"] = bindir + os.pathsep + env.get("PATH", "")
+    env.setdefault("MPLBACKEND", "Agg")
+    env.setdefault("PYDEVD_DISABLE_FILE_VALIDATION", "1")
+    return env
+
+
+def kernel_env() -> None:
+    """This process's environment set up for notebook kernels (:func:`kernel_environ`), without noise."""
+    os.environ.update(kernel_environ(os.environ))
     # papermill's kernel talks over loopback TCP; its 'without encryption' notice is noise here
     warnings.filterwarnings("ignore", message=".*without encryption.*")
     import logging
@@ -152,7 +161,8 @@ def kernel_env() -> None:
 def kernel_manager_class() -> Any:
     """Jupyter's kernel manager with the kernel's sockets on ipc files of a unique name (POSIX):
     kernels started side by side by several processes never race for the same free TCP port (a
-    kernel that loses dies "before replying to kernel_info")."""
+    kernel that loses dies "before replying to kernel_info"). During a report, its kernels are
+    forked warm (:mod:`lorisnb.tools.warm_kernels`)."""
     from jupyter_client.manager import AsyncKernelManager
 
     if os.name != "posix":
@@ -168,7 +178,23 @@ def kernel_manager_class() -> Any:
         def _ip_default(self) -> str:
             return os.path.join(tempfile.gettempdir(), f"lorisnb-kernel-{uuid.uuid4().hex[:16]}")
 
+        async def _async_pre_start_kernel(self, **kw: Any) -> Any:
+            if self.provisioner is None and warm_kernels.current() is not None:
+                self.kernel_id = self.kernel_id or kw.pop("kernel_id", str(uuid.uuid4()))
+                self.provisioner = warm_kernels.provisioner_class()(
+                    kernel_id=self.kernel_id, kernel_spec=self.kernel_spec, parent=self
+                )
+            return await super()._async_pre_start_kernel(**kw)
+
     return IpcKernelManager
+
+
+def warm_kernels_for_report() -> Any:
+    """A context giving the zygote a report's kernels are forked from (see
+    :mod:`lorisnb.tools.warm_kernels`; None where they cannot be), started with the kernels' own
+    command and environment."""
+    argv = kernel_manager_class()(kernel_name="python3").format_kernel_cmd()
+    return warm_kernels.zygote(argv, kernel_environ(os.environ))
 
 
 def declared_parameters(path: Path) -> dict[str, dict[str, Any]]:
