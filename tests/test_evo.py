@@ -192,3 +192,34 @@ def test_kitti_pairs_by_index(tmp_path):
     df = pd.read_csv(out)
     assert df.loc[(df["quantity"] == "ate_max") & (df["alignment"] == "none"), "lorisnb"].iloc[0] == 0.0
     assert (df["n_pairs"].iloc[0]) == 30
+
+
+def test_evo_ape_runs_evo_once_per_input(data, monkeypatch):
+    """A cross-check table and its per-pose plot ask evo for the same APE: evo's per-pose loop runs
+    once, the second answer is the same numbers (a copy), and other poses are computed afresh."""
+    from lorisnb.tools import evo_bridge
+    from lorisnb.tools.crosscheck import crosscheck_poses
+
+    gt, est = (
+        ln.read_tum(data.tum / "freiburg1_xyz-groundtruth.txt"),
+        ln.read_tum(data.tum / "freiburg1_xyz-rgbdslam.txt"),
+    )
+    runs = []
+    real = em.APE.process_data
+    monkeypatch.setattr(em.APE, "process_data", lambda self, d: (runs.append(1), real(self, d))[1])
+    monkeypatch.setattr(evo_bridge, "_APE_SEEN", {})
+    table = crosscheck(gt, est)
+    n = len(runs)
+    poses = crosscheck_poses(gt, est)
+    assert len(runs) == n  # the SE(3) APE of the table's identical pairs, not run again
+    se3 = table[
+        (table["quantity"] == "ate_rmse") & (table["alignment"] == "se3") & table["note"].str.startswith("identical")
+    ]
+    assert np.sqrt(np.mean(poses["ate_evo"] ** 2)) == se3["evo"].iloc[0]
+    ref, e = to_evo(gt), to_evo(gt)
+    first = evo_bridge.evo_ape(ref, e, "t")
+    first[:] = 99.0  # the caller's copy
+    assert np.all(evo_bridge.evo_ape(ref, e, "t") == 0.0)
+    moved = to_evo(Trajectory(gt.stamps, gt.positions + np.array([0.0, 0.0, 0.5]), gt.quaternions))
+    assert np.allclose(evo_bridge.evo_ape(ref, moved, "t"), 0.5)  # other poses: evo runs again
+    assert np.allclose(evo_bridge.evo_ape(ref, moved, "t"), _evo_ape(ref, moved, em.PoseRelation.translation_part))

@@ -34,6 +34,8 @@ FACTS = textwrap.dedent(
     """
     import json, os, sys, threading, warnings
     import numpy as np, pandas as pd, matplotlib, scipy.stats, tqdm.auto  # what lorisnb's notebooks import
+    import matplotlib.pyplot as plt
+    plt.close(plt.figure())  # pyplot chooses its backend and display hook at its first figure
     print(json.dumps({
         "argv": [os.path.basename(sys.argv[0])] + [a for a in sys.argv[1:] if not a.endswith(".json")],
         "executable": sys.executable, "flags": list(sys.flags),
@@ -44,6 +46,10 @@ FACTS = textwrap.dedent(
         "max_columns": pd.get_option("display.max_columns"),
         "tqdm": tqdm.auto.tqdm.__module__,
         "backend": matplotlib.get_backend(),
+        "interactive": matplotlib.is_interactive(),
+        "rcparams": {k: repr(v) for k, v in matplotlib.rcParams.items()},
+        "displayhook": plt._REPL_DISPLAYHOOK.name,
+        "post_execute": sorted(getattr(f, "__qualname__", repr(f)) for f in get_ipython().events.callbacks["post_execute"]),
         "warnings": sorted(map(str, warnings.filters)),
         "main": type(sys.modules["__main__"]).__name__,
         "threads": sorted(type(t).__name__ if t.name.startswith("Thread-") else t.name for t in threading.enumerate()),

@@ -48,7 +48,8 @@ from typing import Any
 #: What the zygote imports: the kernel itself and the heavy modules notebooks import through
 #: pandas, seaborn and lorisnb, none of which looks at whether it runs in a kernel or starts a
 #: thread a fork would lose (pyarrow, which pandas imports where installed, starts jemalloc's).
-PRELOAD = ("ipykernel.kernelapp", "numpy", "scipy.stats", "matplotlib")
+#: pyplot chooses its backend and display hook at its first figure, in the kernel.
+PRELOAD = ("ipykernel.kernelapp", "numpy", "scipy.stats", "matplotlib", "matplotlib.pyplot")
 
 #: The module a kernel command must run (``python [flags] -m ipykernel_launcher ARGS``).
 LAUNCHER = "ipykernel_launcher"
