@@ -196,7 +196,8 @@ def test_kitti_pairs_by_index(tmp_path):
 
 def test_evo_ape_runs_evo_once_per_input(data, monkeypatch):
     """A cross-check table and its per-pose plot ask evo for the same APE: evo's per-pose loop runs
-    once, the second answer is the same numbers (a copy), and other poses are computed afresh."""
+    once, the second answer is the same numbers (a copy), and other poses are computed afresh; the
+    angle of a Sim(3) alignment is that of the SE(3) one (the same rotations), bit for bit."""
     from lorisnb.tools import evo_bridge
     from lorisnb.tools.crosscheck import crosscheck_poses
 
@@ -223,3 +224,13 @@ def test_evo_ape_runs_evo_once_per_input(data, monkeypatch):
     moved = to_evo(Trajectory(gt.stamps, gt.positions + np.array([0.0, 0.0, 0.5]), gt.quaternions))
     assert np.allclose(evo_bridge.evo_ape(ref, moved, "t"), 0.5)  # other poses: evo runs again
     assert np.allclose(evo_bridge.evo_ape(ref, moved, "t"), _evo_ape(ref, moved, em.PoseRelation.translation_part))
+    # the angle is keyed by the rotations alone: Sim(3)'s aligned rotations are SE(3)'s, and evo's
+    # own angles for them are the same to the last bit
+    p = evo_bridge.pair_poses(gt, est, 0.5, False)
+    ref_t, est_t = (to_evo(t) for t in p.as_trajectories())
+    se3, sim3 = (evo_bridge.evo_aligned(ref_t, est_t, a) for a in ("se3", "sim3"))
+    assert not np.array_equal(se3.positions_xyz, sim3.positions_xyz)
+    fresh = _evo_ape(ref_t, sim3, em.PoseRelation.rotation_angle_deg)
+    assert np.array_equal(evo_bridge.evo_ape(ref_t, se3, "r"), fresh)
+    n = len(runs)
+    assert np.array_equal(evo_bridge.evo_ape(ref_t, sim3, "r"), fresh) and len(runs) == n
