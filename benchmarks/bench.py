@@ -332,6 +332,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="lorisnb-bench-") as tmp:
         floors.bench_readers(Path(tmp))
         floors.bench_growth(Path(tmp))
+        if os.environ.get("LORISNB_BENCH_REPORT", "1") != "0":
+            floors.bench_report(Path(tmp))
     print("\nissue-12 goals on this machine:")
     for name, figure, target, met in GOALS:
         print(f"  {'met    ' if met else 'NOT MET'}  {name:40s} {figure:45s} goal {target}")
