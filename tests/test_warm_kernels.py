@@ -211,6 +211,7 @@ def test_the_zygote_ends_with_the_report(tmp_path):
     while os.path.exists(address) and time.monotonic() < deadline:
         time.sleep(0.2)
     assert not os.path.exists(address), "the zygote outlived the report"
+    assert not os.path.exists(os.path.dirname(address))  # nor its folder
 
 
 def test_what_the_zygote_forks():
@@ -269,3 +270,63 @@ def test_a_preload_that_warns_or_fails_keeps_kernels_cold(tmp_path):
     assert why("warns_at_import") == "importing warns_at_import warned: deprecated thing"
     assert why("fails_at_import") == "importing fails_at_import failed: RuntimeError: broken install"
     assert why("not_installed_anywhere") == "None"  # left to the kernel, whose import fails the same way
+
+
+def _status(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/status").read_text().lower()
+    except OSError:
+        return "zombie"  # gone meanwhile
+
+
+def _descendants(pid: int) -> set[int]:
+    """Every process below ``pid`` (from /proc)."""
+    children: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                stat = Path(f"/proc/{entry}/stat").read_text()
+            except OSError:
+                continue
+            children.setdefault(int(stat.rsplit(")", 1)[1].split()[1]), []).append(int(entry))
+    out, todo = set(), [pid]
+    while todo:
+        for c in children.get(todo.pop(), []):
+            out.add(c)
+            todo.append(c)
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("how", ["SIGTERM", "SIGINT"])
+def test_a_report_stopped_midway_leaves_nothing_running_or_half_written(tmp_path, how):
+    """`lorisnb report` ended by SIGTERM (a CI time-out) or Ctrl-C while its notebooks run: exit
+    status 143 or 130 at once, its workers, zygote and kernels gone, no run folder, whole or partial."""
+    out = tmp_path / "run"
+    cmd = [str(Path(sys.executable).with_name("lorisnb")), "report", "--out", str(out), "--no-progress"]
+    report = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 60  # its workers, zygote and first kernels start
+        while time.monotonic() < deadline and len(_descendants(report.pid)) < 5:
+            time.sleep(0.2)
+        time.sleep(3)  # notebooks running in kernels
+        below = _descendants(report.pid)
+        assert len(below) >= 5  # resource tracker, workers, zygote, kernels
+        if how == "SIGTERM":
+            report.send_signal(signal.SIGTERM)
+        else:
+            os.killpg(report.pid, signal.SIGINT)  # Ctrl-C in a terminal: the whole foreground group
+        assert report.wait(30) == (143 if how == "SIGTERM" else 130)
+        assert ("terminated" if how == "SIGTERM" else "interrupted") in report.stderr.read()
+        deadline = time.monotonic() + 15
+        while time.monotonic() < deadline and any(os.path.exists(f"/proc/{p}") for p in below):
+            time.sleep(0.2)
+        alive = [
+            p
+            for p in below
+            if os.path.exists(f"/proc/{p}") and "zombie" not in Path(f"/proc/{p}/status").read_text().lower()
+        ]
+        assert not alive, f"left running: {alive}"
+        assert list(tmp_path.iterdir()) == []  # no run folder, no partial one
+    finally:
+        report.kill()

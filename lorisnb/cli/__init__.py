@@ -12,6 +12,7 @@ import importlib
 import importlib.util
 import os
 import re
+import signal
 import sys
 import weakref
 from collections.abc import Callable
@@ -262,14 +263,44 @@ def main(argv: list[str] | None = None) -> int:
     if not (getattr(args, "parquet", None) or getattr(args, "scheduler", None) or args.command == "report"):
         pandas_without_pyarrow()
     jsonschema_without_iri_grammars()
+    previous = _terminate_as_interrupt()
     try:
         return int(args.func(args) or 0)
     except LorisError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        terminated = isinstance(exc, Terminated)
+        print("terminated" if terminated else "interrupted", file=sys.stderr)
+        return 128 + signal.SIGTERM if terminated else 130
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (a CI job's time-out, ``kill``), raised where Ctrl-C would be: a command cleans up
+    the same way (a report removes its unfinished run folder and stops its workers and kernels)."""
+
+
+def _terminate_as_interrupt() -> Any:
+    """Have SIGTERM raise :class:`Terminated` in this process (its main thread); the handler it
+    replaces, or None where signals cannot be set. A process forked from this one (a worker)
+    keeps dying of SIGTERM as before."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    me = os.getpid()
+
+    def handler(signum: int, frame: Any) -> None:
+        if os.getpid() != me:  # a forked worker: the default, as if no handler were set
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            os.kill(os.getpid(), signal.SIGTERM)
+            return
+        raise Terminated
+
+    return signal.signal(signal.SIGTERM, handler)
 
 
 def run() -> None:

@@ -326,6 +326,7 @@ def _serve(address: str, parent: int) -> dict[str, Any] | None:
         if os.getpid() == me:  # the zygote itself, not a child returning its request
             with contextlib.suppress(OSError):
                 os.unlink(address)
+                os.rmdir(os.path.dirname(address))  # its folder, if the report could not remove it
     return None
 
 
