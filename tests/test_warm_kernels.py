@@ -330,3 +330,50 @@ def test_a_report_stopped_midway_leaves_nothing_running_or_half_written(tmp_path
         assert list(tmp_path.iterdir()) == []  # no run folder, no partial one
     finally:
         report.kill()
+
+
+def test_no_zygote_without_a_kernel_to_fork(monkeypatch):
+    """No Jupyter client or no ``python3`` kernel: no zygote (each notebook then fails in its own
+    entry, as before); a kernel command that is not ipykernel's launcher: no zygote either."""
+    from jupyter_client.kernelspec import NoSuchKernel
+
+    from lorisnb.tools import report_notebooks
+
+    def missing():
+        raise NoSuchKernel("python3")
+
+    monkeypatch.setattr(report_notebooks, "kernel_manager_class", missing)
+    with warm_kernels_for_report() as zygote:
+        assert zygote is None
+    with warm_kernels.zygote(["/usr/bin/env", "R", "--slave", "-f", "{connection_file}"], dict(os.environ)) as z:
+        assert z is None
+
+
+def test_a_forked_kernels_exit_status_comes_from_the_zygote():
+    """Liveness from the pidfd; the status from the zygote's line, read with the pid when the kernel
+    ended at once (both in one message) or later on the connection; 1 when the zygote cannot say."""
+    for received, later, expected in (
+        (b'{"returncode": 3}\n', b"", 3),
+        (b"", b'{"returncode": 0}\n', 0),
+        (b"", b"", 1),
+    ):
+        ended = subprocess.Popen(["true"])
+        pidfd = os.pidfd_open(ended.pid)
+        ended.wait()
+        ours, zygote_end = socket.socketpair()
+        zygote_end.sendall(later)
+        zygote_end.close()
+        handle = warm_kernels.Forked(ours, ended.pid, pidfd, received)
+        assert handle.poll() == expected and handle.wait() == expected
+    running = subprocess.Popen(["sleep", "30"])
+    try:
+        ours, zygote_end = socket.socketpair()
+        handle = warm_kernels.Forked(ours, running.pid, os.pidfd_open(running.pid))
+        assert handle.poll() is None
+        with pytest.raises(subprocess.TimeoutExpired):
+            handle.wait(0.1)
+        handle.kill()
+        assert running.wait(10) == -signal.SIGKILL
+    finally:
+        running.kill()
+        zygote_end.close()

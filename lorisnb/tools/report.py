@@ -145,7 +145,7 @@ def _run_pool(names: list[str], order: list[int], runs: dict[int, NotebookRun], 
     with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
                              initializer=_worker_start, initargs=(zygote,)) as pool:  # fmt: skip
         futures = {pool.submit(run_notebook, names[i], tmp, dict(params), notebooks_dir=notebooks_dir): i
-                       for i in order}  # fmt: skip
+                   for i in order}  # fmt: skip
         try:
             meanwhile()
             for fut in as_completed(futures):

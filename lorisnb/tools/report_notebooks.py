@@ -4,6 +4,7 @@ notebook executed with papermill into its own folder of the run, with its offlin
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import json
 import os
@@ -192,8 +193,12 @@ def kernel_manager_class() -> Any:
 def warm_kernels_for_report() -> Any:
     """A context giving the zygote a report's kernels are forked from (see
     :mod:`lorisnb.tools.warm_kernels`; None where they cannot be), started with the kernels' own
-    command and environment."""
-    argv = kernel_manager_class()(kernel_name="python3").format_kernel_cmd()
+    command and environment. Without Jupyter's client or a ``python3`` kernel, None: each notebook
+    then fails in its own entry, saying why, as without this."""
+    try:
+        argv = kernel_manager_class()(kernel_name="python3").format_kernel_cmd()
+    except Exception:  # noqa: BLE001 - no jupyter_client, no such kernel: the notebooks say so
+        return contextlib.nullcontext(None)
     return warm_kernels.zygote(argv, kernel_environ(os.environ))
 
 

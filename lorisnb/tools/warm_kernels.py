@@ -142,8 +142,8 @@ class Forked:
 
     stdin = stdout = stderr = None
 
-    def __init__(self, conn: socket.socket, pid: int, pidfd: int) -> None:
-        self.pid, self._conn, self._pidfd = pid, conn, pidfd
+    def __init__(self, conn: socket.socket, pid: int, pidfd: int, received: bytes = b"") -> None:
+        self.pid, self._conn, self._pidfd, self._received = pid, conn, pidfd, received
         self.returncode: int | None = None
 
     def _gone(self, timeout: float | None) -> bool:
@@ -153,9 +153,11 @@ class Forked:
         """The exit status the zygote reports once it has reaped the kernel (1 when it cannot)."""
         code = 1
         try:
-            self._conn.settimeout(10)
-            line = self._conn.makefile("rb").readline()
-            code = int(json.loads(line)["returncode"]) if line else 1
+            line = self._received
+            if not line.endswith(b"\n"):
+                self._conn.settimeout(10)
+                line += self._conn.makefile("rb").readline()
+            code = int(json.loads(line)["returncode"]) if line.strip() else 1
         except (OSError, ValueError, KeyError):
             pass
         self._conn.close()
@@ -199,7 +201,8 @@ def _fork(address: str, argv: list[str], cwd: str, env: Mapping[str, str]) -> Fo
     if not fds:  # the zygote does not fork (its preload failed or warned): launch as usual
         conn.close()
         return None
-    return Forked(conn, int(json.loads(msg)["pid"]), fds[0])
+    first, _, rest = msg.partition(b"\n")  # rest: the exit status, if the kernel ended at once
+    return Forked(conn, int(json.loads(first)["pid"]), fds[0], rest)
 
 
 def provisioner_class() -> Any:
@@ -307,17 +310,20 @@ def _serve(address: str, parent: int) -> dict[str, Any] | None:
                 try:
                     socket.send_fds(conn, [json.dumps({"pid": pid}).encode() + b"\n"], [pidfd])
                     kernels[pid] = conn
-                except OSError:
+                except OSError:  # the manager is gone: so is the kernel it asked for
+                    os.kill(pid, signal.SIGKILL)
                     conn.close()
                 finally:
                     os.close(pidfd)
-            while kernels:  # report the status of every kernel that ended
+            while True:  # reap every child that ended, and report the status of each kernel
                 try:
                     pid, status = os.waitpid(-1, os.WNOHANG)
                 except ChildProcessError:
                     break
                 if pid == 0:
                     break
+                if pid not in kernels:  # a kernel whose manager was gone
+                    continue
                 conn = kernels.pop(pid)
                 with contextlib.suppress(OSError):
                     conn.sendall(json.dumps({"returncode": os.waitstatus_to_exitcode(status)}).encode() + b"\n")
