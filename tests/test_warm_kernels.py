@@ -272,6 +272,13 @@ def test_a_preload_that_warns_or_fails_keeps_kernels_cold(tmp_path):
     assert why("not_installed_anywhere") == "None"  # left to the kernel, whose import fails the same way
 
 
+def _cmdline(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+    except OSError:
+        return ""
+
+
 def _status(pid: int) -> str:
     try:
         return Path(f"/proc/{pid}/status").read_text().lower()
@@ -312,6 +319,9 @@ def test_a_report_stopped_midway_leaves_nothing_running_or_half_written(tmp_path
         time.sleep(3)  # notebooks running in kernels
         below = _descendants(report.pid)
         assert len(below) >= 5  # resource tracker, workers, zygote, kernels
+        commands = [_cmdline(p) for p in below]
+        assert sum("lorisnb.tools.warm_kernels" in c for c in commands) >= 2  # the zygote and kernels forked from it
+        assert not any("ipykernel_launcher" in c for c in commands)  # no kernel fell back to a launch
         if how == "SIGTERM":
             report.send_signal(signal.SIGTERM)
         else:
