@@ -159,6 +159,17 @@ def test_static_widgets_and_offline_export(tmp_path):
     assert "<script src" not in page and "cdn" not in page.lower() and "require.js" not in page
     assert '<details class="lorisnb-code">' in page and "hidden code" in page and WIDGET_NOTE in page
     assert 'href="../notebook.css"' in page and "a printed line" in page
+    # one exporter serves every page of a process: a second notebook's page holds its own cells and
+    # style, and the first page exported again is the same, byte for byte
+    other = tmp_path / "nb2" / "other.ipynb"
+    other.parent.mkdir()
+    nb2 = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("print('second notebook')")])
+    nb2.metadata["kernelspec"] = nb.metadata["kernelspec"]
+    nbformat.write(nb2, other)
+    page2 = export_html(other).read_text()
+    assert "second notebook" in page2 and "hidden code" not in page2 and "../notebook.css" not in page2
+    assert "<title>other</title>" in page2 and "<title>page</title>" in page
+    assert export_html(path, css="../notebook.css").read_text() == page
 
 
 def test_single_file_inlines_images(tmp_path):

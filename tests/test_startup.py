@@ -77,3 +77,19 @@ def test_report_processes_import_papermill_without_the_iri_grammars():
     assert run("from lorisnb.tools.report import _worker_start\n_worker_start(None)") == ["False", "True"]
     cli = "from lorisnb.cli import main\nassert main(['report', '--out', '']) == 2"  # refused, after the set-up
     assert run(cli) == ["False", "True"]
+
+
+def test_workers_are_forked_with_their_modules_where_the_process_runs_one_thread():
+    """A pool's workers are forked (no interpreter to start, the modules they need already imported)
+    while this process runs a single thread, else started from a fork server (evaluation) or
+    spawned (a report's workers), as in a Jupyter kernel, which runs threads."""
+    code = (
+        "import sys, threading\nfrom lorisnb.tools.pool import start_context\n"
+        "ctx = start_context(('xml.dom.minidom', 'not_installed_anywhere'), fallback='spawn')  # the task says what is missing\n"
+        "print(ctx.get_start_method(), 'xml.dom.minidom' in sys.modules)\n"
+        "threading.Thread(target=threading.Event().wait, daemon=True).start()\n"
+        "print(start_context(('wave',), fallback='spawn').get_start_method(), 'wave' in sys.modules)\n"
+        "print(start_context(('wave',)).get_start_method(), 'wave' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["fork", "True", "spawn", "False", "forkserver", "False"]

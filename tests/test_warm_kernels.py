@@ -322,6 +322,7 @@ def test_a_report_stopped_midway_leaves_nothing_running_or_half_written(tmp_path
         commands = [_cmdline(p) for p in below]
         assert sum("lorisnb.tools.warm_kernels" in c for c in commands) >= 2  # the zygote and kernels forked from it
         assert not any("ipykernel_launcher" in c for c in commands)  # no kernel fell back to a launch
+        assert not any("multiprocessing.spawn" in c for c in commands)  # workers forked from the report
         if how == "SIGTERM":
             report.send_signal(signal.SIGTERM)
         else:

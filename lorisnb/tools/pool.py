@@ -4,6 +4,8 @@ the order of the inputs, one progress bar."""
 
 from __future__ import annotations
 
+import contextlib
+import importlib
 import os
 import re
 import socket
@@ -62,16 +64,27 @@ def batches(sizes: Sequence[int], n_jobs: int) -> list[list[int]]:
     return out
 
 
-def start_context() -> Any:
+def can_fork() -> bool:
+    """Whether worker processes can be forked from this one: the platform forks, and this process
+    runs a single thread (forking a threaded process is unsafe)."""
+    return "fork" in get_all_start_methods() and threading.active_count() == 1
+
+
+def start_context(preload: Sequence[str] = ("lorisnb.tools.evaluate",), fallback: str = "forkserver") -> Any:
     """How worker processes start: forked when this process runs a single thread (the command
     line, scripts: cheapest), else from a fork server (a Jupyter kernel runs threads, and forking
-    a threaded process is unsafe), else spawned (platforms without fork)."""
+    a threaded process is unsafe) or spawned, as ``fallback`` says (spawned where neither is
+    available). Workers start with the modules ``preload`` names imported: forked ones inherit
+    them (they are imported here first), a fork server imports them once for all its workers."""
     methods = get_all_start_methods()
-    if "fork" in methods and threading.active_count() == 1:
+    if can_fork():
+        for name in preload:
+            with contextlib.suppress(ImportError):  # as a fork server does: the task says what is missing
+                importlib.import_module(name)
         return get_context("fork")
-    if "forkserver" in methods:
+    if fallback == "forkserver" and "forkserver" in methods:
         ctx = get_context("forkserver")
-        ctx.set_forkserver_preload(["lorisnb.tools.evaluate"])
+        ctx.set_forkserver_preload(list(preload))
         return ctx
     return get_context("spawn")
 
@@ -81,7 +94,7 @@ def worth_processes(sizes: Sequence[int], n_jobs: int) -> bool:
     workers (cheap) or enough input to outweigh starting interpreters."""
     if n_jobs <= 1 or len(sizes) < 2 * n_jobs:
         return False
-    if start_context().get_start_method() == "fork":
+    if can_fork():
         return True
     return sum(sizes) >= PARALLEL_MIN_BYTES
 

@@ -17,7 +17,7 @@ import os
 import shutil
 import sys
 import tempfile
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
@@ -30,6 +30,7 @@ from .evaluate import check_filters, result_files
 from .leaderboard import report_findings
 from .lean_imports import jsonschema_without_iri_grammars
 from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
+from .pool import start_context
 from .provenance import checksums, input_files, run_record, write_run_json
 from .report_html import single_file, write_notebook_css
 from .report_index import versions, write_index
@@ -62,6 +63,10 @@ __all__ = [
 BUNDLED_ONLY = ("metrics_primer", "evo_crosscheck", "indoor_vs_outdoor", "evaluate_my_results")
 
 run_notebook = run_one  # the name the report calls (tests replace it)
+
+#: What a worker imports to run a notebook and export its page: imported once here before the
+#: workers are forked from this process (where it runs a single thread; spawned otherwise).
+WORKER_MODULES = ("papermill", "nbclient", "nbconvert", "jupyter_client.manager")
 
 
 def _new_run_dir(out: str | os.PathLike[str] | None) -> Path:
@@ -105,54 +110,68 @@ def _select(notebooks: Iterable[str] | None, notebooks_dir: Any, results: Any) -
 
 
 def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_dir: Any, jobs: int,
-             progress: bool, meanwhile: Callable[[], None] = lambda: None) -> list[NotebookRun]:  # fmt: skip
+             progress: bool, zygote: warm_kernels.Zygote | None = None,
+             meanwhile: Callable[[], None] = lambda: None) -> list[NotebookRun]:  # fmt: skip
     """Run the notebooks, ``jobs`` at a time, each in its own worker process (papermill's clients
     are not safe side by side in one process) and kernel; one at a time in this process when
-    ``jobs`` is 1. Results in ``names`` order; the longest notebooks start first. ``meanwhile()``
-    runs in this process while the workers run (before the notebooks, when ``jobs`` is 1)."""
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=len(names), desc="report", unit="notebook")
+    ``jobs`` is 1. Kernels are forked from ``zygote`` where given. Results in ``names`` order; the
+    longest notebooks start first. ``meanwhile()`` runs in this process while the workers run
+    (before the notebooks, when ``jobs`` is 1)."""
     runs: dict[int, NotebookRun] = {}
     order = sorted(range(len(names)), key=lambda i: -TYPICAL_SECONDS.get(Path(names[i]).stem, 0))
+    if jobs > 1 and len(names) > 1:
+        _run_pool(names, order, runs, tmp, params, notebooks_dir, jobs, progress, meanwhile, zygote)
+        return [runs[i] for i in range(len(names))]
+    meanwhile()
+    warm_kernels.use(zygote)
     try:
-        with contextlib.ExitStack() as stack:
-            zygote = stack.enter_context(warm_kernels_for_report()) if len(names) > 1 else None
-            if jobs <= 1 or len(names) <= 1:
-                meanwhile()
-                warm_kernels.use(zygote)
-                stack.callback(warm_kernels.use, None)
-                for i in order:
-                    runs[i] = run_notebook(names[i], tmp, params, notebooks_dir=notebooks_dir)
-                    if bar is not None:
-                        bar.set_postfix_str(runs[i].name)
-                        bar.update()
-            else:
-                _run_pool(names, order, runs, tmp, params, notebooks_dir, jobs, bar, meanwhile, zygote)
+        with _bar(progress, len(names)) as bar:
+            for i in order:
+                runs[i] = run_notebook(names[i], tmp, params, notebooks_dir=notebooks_dir)
+                bar(runs[i].name)
     finally:
-        if bar is not None:
-            bar.close()
+        warm_kernels.use(None)
     return [runs[i] for i in range(len(names))]
 
 
+@contextlib.contextmanager
+def _bar(progress: bool, total: int) -> Iterator[Callable[[str], None]]:
+    """A progress bar over the notebooks (none without ``progress``); yields ``done(name)``."""
+    if not progress:
+        yield lambda name: None
+        return
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=total, desc="report", unit="notebook")
+
+    def done(name: str) -> None:
+        bar.set_postfix_str(name)
+        bar.update()
+
+    try:
+        yield done
+    finally:
+        bar.close()
+
+
 def _run_pool(names: list[str], order: list[int], runs: dict[int, NotebookRun], tmp: Path, params: Mapping[str, Any],
-              notebooks_dir: Any, jobs: int, bar: Any, meanwhile: Callable[[], None], zygote: Any) -> None:  # fmt: skip
-    """:func:`_run_all`'s notebooks in ``jobs`` worker processes, their kernels forked from ``zygote``."""
+              notebooks_dir: Any, jobs: int, progress: bool, meanwhile: Callable[[], None], zygote: Any) -> None:  # fmt: skip
+    """:func:`_run_all`'s notebooks in ``jobs`` worker processes, their kernels forked from ``zygote``.
+    The workers start (forked where this process runs a single thread) before the progress bar,
+    whose monitor thread would otherwise rule out forking."""
     import multiprocessing
 
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
-                             initializer=_worker_start, initargs=(zygote,)) as pool:  # fmt: skip
+    context = start_context(WORKER_MODULES, fallback="spawn")  # forked: no interpreter to start, nothing to import
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_worker_start,
+                             initargs=(zygote,)) as pool:  # fmt: skip
         futures = {pool.submit(run_notebook, names[i], tmp, dict(params), notebooks_dir=notebooks_dir): i
                    for i in order}  # fmt: skip
         try:
-            meanwhile()
-            for fut in as_completed(futures):
-                runs[futures[fut]] = fut.result()
-                if bar is not None:
-                    bar.set_postfix_str(runs[futures[fut]].name)
-                    bar.update()
+            with _bar(progress, len(names)) as bar:
+                meanwhile()
+                for fut in as_completed(futures):
+                    runs[futures[fut]] = fut.result()
+                    bar(runs[futures[fut]].name)
         except BaseException:  # Ctrl-C or an error here: stop the workers (their kernels follow them)
             pool.shutdown(wait=False, cancel_futures=True)
             for worker in multiprocessing.active_children():
@@ -243,69 +262,71 @@ def run_report(
         if why:
             raise LorisError(f"--force will not replace {run_dir}: {why}; choose another --out")
     names, left_out = _select(notebooks, notebooks_dir, results)
-    declared = declared_by(names, notebooks_dir)
-    params = check_parameters(dict(parameters or {}), declared)
-    given = params.get("results_dir")
-    if results is not None and given is not None and Path(str(given)).resolve() != Path(results).resolve():
-        raise ValidationError("--results and -p results_dir name two folders; give one")
-    if results is not None and "results_dir" in declared:
-        params["results_dir"] = str(Path(results).resolve())
-    try:
-        data = find_data(params.get("data_root"))
-    except DataNotFoundError:
-        data = None  # the notebooks say so, each in its entry
-    if data is not None and "data_root" in declared:
-        params.setdefault("data_root", str(data.root))  # kernels run in the run folder, not here
-    wants_board = results is not None or "results_dir" in declared
-    given_source = results if results is not None else params.get("results_dir")  # the leaderboard's input
-    source = Path(str(given_source)) if given_source else (data.icra20 if data else None)
-    roots = _input_roots(names, params, data, source if wants_board else None)
-    hit = overlap(run_dir, [*roots, nb_dir])
-    if hit:  # the run would be read as an input by the next report on the same folder, and by verify
-        raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
-    if source is not None:  # a filter naming nothing there is refused now, not by each notebook later
-        check_filters(source, params.get("algorithms"), params.get("scenes"), params.get("trials_by"))
-    run_dir.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
-    try:
-        (tmp / RUN_MARKER).write_text(json.dumps({"lorisnb": versions()["lorisnb"], "pid": os.getpid()}))
+    with warm_kernels_for_report() if len(names) > 1 else contextlib.nullcontext(None) as zygote:
+        # the zygote starts now: it imports the kernels' modules while the notebooks are checked
+        declared = declared_by(names, notebooks_dir)
+        params = check_parameters(dict(parameters or {}), declared)
+        given = params.get("results_dir")
+        if results is not None and given is not None and Path(str(given)).resolve() != Path(results).resolve():
+            raise ValidationError("--results and -p results_dir name two folders; give one")
+        if results is not None and "results_dir" in declared:
+            params["results_dir"] = str(Path(results).resolve())
         try:
-            write_notebook_css(tmp / NOTEBOOK_CSS)
-        except (OSError, IndexError, LorisError):  # no nbconvert templates: each page keeps its own style
-            pass
-        board: dict[str, Any] = {"spec": {"description": None, "values": {}}}
+            data = find_data(params.get("data_root"))
+        except DataNotFoundError:
+            data = None  # the notebooks say so, each in its entry
+        if data is not None and "data_root" in declared:
+            params.setdefault("data_root", str(data.root))  # kernels run in the run folder, not here
+        wants_board = results is not None or "results_dir" in declared
+        given_source = results if results is not None else params.get("results_dir")  # the leaderboard's input
+        source = Path(str(given_source)) if given_source else (data.icra20 if data else None)
+        roots = _input_roots(names, params, data, source if wants_board else None)
+        hit = overlap(run_dir, [*roots, nb_dir])
+        if hit:  # the run would be read as an input by the next report on the same folder, and by verify
+            raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
+        if source is not None:  # a filter naming nothing there is refused now, not by each notebook later
+            check_filters(source, params.get("algorithms"), params.get("scenes"), params.get("trials_by"))
+        run_dir.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
+        try:
+            (tmp / RUN_MARKER).write_text(json.dumps({"lorisnb": versions()["lorisnb"], "pid": os.getpid()}))
+            try:
+                write_notebook_css(tmp / NOTEBOOK_CSS)
+            except (OSError, IndexError, LorisError):  # no nbconvert templates: each page keeps its own style
+                pass
+            board: dict[str, Any] = {"spec": {"description": None, "values": {}}}
 
-        def leaderboard() -> None:  # the report's own evaluation, while the notebooks run
-            if not (wants_board and source is not None and data is not None):
-                return
-            findings, ev, values = report_findings(source, data, params)
-            (tmp / "findings").mkdir()
-            per_sequence = ev.sequences(values["eps"], values["phi"], values["delta"], values["tau"])
-            failures = ev.failures_table()
-            for table, name in ((per_sequence, "sequences.csv"), (findings.board, "leaderboard.csv"),
-                                (findings.pairs, "pairwise.csv"), (failures, INPUT_ERRORS_CSV)):  # fmt: skip
-                write_csv(table, tmp / "findings" / name)
-            board.update(findings=findings, per_sequence=per_sequence, failures=failures,
-                         spec={"description": ev.conventions, "values": {**ev.spec.to_dict(), **values, "source": str(source)}})  # fmt: skip
+            def leaderboard() -> None:  # the report's own evaluation, while the notebooks run
+                if not (wants_board and source is not None and data is not None):
+                    return
+                findings, ev, values = report_findings(source, data, params)
+                (tmp / "findings").mkdir()
+                per_sequence = ev.sequences(values["eps"], values["phi"], values["delta"], values["tau"])
+                failures = ev.failures_table()
+                for table, name in ((per_sequence, "sequences.csv"), (findings.board, "leaderboard.csv"),
+                                    (findings.pairs, "pairwise.csv"), (failures, INPUT_ERRORS_CSV)):  # fmt: skip
+                    write_csv(table, tmp / "findings" / name)
+                board.update(findings=findings, per_sequence=per_sequence, failures=failures,
+                             spec={"description": ev.conventions, "values": {**ev.spec.to_dict(), **values, "source": str(source)}})  # fmt: skip
 
-        n_jobs = jobs or min(len(names), os.cpu_count() or 1)
-        runs = _run_all(names, tmp, params, notebooks_dir, n_jobs, progress, meanwhile=leaderboard)
-        spec = board["spec"]
-        (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
-        inputs = checksums(input_files(roots), data.root if data else None)
-        record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
-                            {r.name: r.status for r in runs}, roots)  # fmt: skip
-        write_run_json(tmp, record)
-        index = write_index(tmp, runs, params, name=run_dir.name, findings=board.get("findings"), spec=spec,
-                            failures=board.get("failures"), left_out=left_out,
-                            per_sequence=board.get("per_sequence"))  # fmt: skip
-        single_file(index, tmp / "report.html")
-        os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp made it owner-only
-        final = _move_into_place(tmp, run_dir, force)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    return final, runs
+            n_jobs = jobs or min(len(names), os.cpu_count() or 1)
+            runs = _run_all(names, tmp, params, notebooks_dir, n_jobs, progress, zygote, meanwhile=leaderboard)
+            spec = board["spec"]
+            (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
+            inputs = checksums(input_files(roots), data.root if data else None)
+            record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
+                                {r.name: r.status for r in runs}, roots)  # fmt: skip
+            write_run_json(tmp, record)
+            index = write_index(tmp, runs, params, name=run_dir.name, findings=board.get("findings"), spec=spec,
+                                failures=board.get("failures"), left_out=left_out,
+                                per_sequence=board.get("per_sequence"))  # fmt: skip
+            single_file(index, tmp / "report.html")
+            os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp made it owner-only
+            final = _move_into_place(tmp, run_dir, force)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        return final, runs
 
 
 def findings_input_errors(run_dir: Path) -> int:

@@ -7,6 +7,7 @@ note; and ``report.html``, the front page with every image and style inlined, fo
 from __future__ import annotations
 
 import base64
+import functools
 import mimetypes
 import re
 import sys
@@ -97,22 +98,30 @@ def export_html(ipynb: Path, css: str | None = None) -> Path:
     ``css``: a style sheet to link (a relative URL, see :func:`write_notebook_css`) instead of
     inlining nbconvert's (about 280 kB per page)."""
     nbformat = require("nbformat")
+
+    nb = static_widgets(nbformat.read(str(ipynb), as_version=4))
+    resources = {"metadata": {"name": ipynb.stem}, "lorisnb_css": css or ""}
+    body, _ = _exporter().from_notebook_node(nb, resources=resources)
+    out = ipynb.with_suffix(".html")
+    out.write_text(body, encoding="utf-8")
+    return out
+
+
+@functools.lru_cache(maxsize=1)
+def _exporter() -> Any:
+    """nbconvert's HTML exporter with lorisnb's template, made once per process: its templates are
+    compiled at the first page and reused by the next (as nbconvert's own command does for several
+    notebooks); each page's lexer and widget state are set per page by nbconvert."""
     nbconvert = require("nbconvert")
     jinja2 = require("jinja2")
 
-    nb = static_widgets(nbformat.read(str(ipynb), as_version=4))
-    exporter = nbconvert.HTMLExporter(
+    return nbconvert.HTMLExporter(
         template_name="lab",
         template_file=TEMPLATE,
         extra_loaders=[jinja2.DictLoader({TEMPLATE: _TEMPLATE_TEXT})],
         extra_template_basedirs=_template_dirs(),
         extra_template_paths=_template_dirs(),
     )
-    resources = {"metadata": {"name": ipynb.stem}, "lorisnb_css": css or ""}
-    body, _ = exporter.from_notebook_node(nb, resources=resources)
-    out = ipynb.with_suffix(".html")
-    out.write_text(body, encoding="utf-8")
-    return out
 
 
 _SRC = re.compile(r"""(<img\b[^>]*?\bsrc=)(['"])([^'"]+)\2""", re.IGNORECASE)
