@@ -23,3 +23,27 @@ def test_trial_figure_is_the_same_at_every_run_and_leaves_numpys_generator_alone
     assert np.random.random() == expected  # the caller's random numbers are untouched
     np.random.seed(7)  # another global state: the same figure
     assert figure_png(plot_trials(table, "cr"), dpi=60) == first
+
+
+def test_heatmaps_measure_their_texts_with_one_renderer_and_look_the_same(icra20, monkeypatch):
+    """A figure outside pyplot measures its texts with one kept renderer
+    (:class:`lorisnb.tools.plotting._MeasuredFigure`) instead of a new one per text: seaborn's
+    heatmaps, which measure every tick label, come out pixel for pixel as with matplotlib's own."""
+    import matplotlib.backends.backend_agg as agg
+    from matplotlib.figure import Figure
+
+    from lorisnb.core.sweep import sweep, sweep_scenes
+    from lorisnb.tools import plotting
+
+    ev = evaluate([icra20 / "lifelong" / "maslam", icra20 / "lifelong" / "ds-slam"], jobs=1, progress=False)
+    grid = sweep_scenes(sweep(ev.errors, [0.1, 0.3, 1.0, 3.0, 10.0], [10.0, 30.0, 90.0], [1.0], [60.0]), ev.durations())
+    made = []
+    monkeypatch.setattr(agg, "RendererAgg", lambda *a, _real=agg.RendererAgg: made.append(a) or _real(*a))
+    fig = plotting.plot_cr_heatmaps(grid, "cafe", mark=(3.0, 30.0))
+    assert type(fig) is plotting._MeasuredFigure and len(made) == 1  # one renderer measured every text
+    ours = figure_png(fig, dpi=60)
+    monkeypatch.setattr(plotting, "_MeasuredFigure", Figure)  # matplotlib's: a new renderer per text
+    made.clear()
+    plain = plotting.plot_cr_heatmaps(grid, "cafe", mark=(3.0, 30.0))
+    assert type(plain) is Figure and len(made) > 10  # one per tick label measured
+    assert figure_png(plain, dpi=60) == ours

