@@ -17,7 +17,7 @@ from lorisnb.cli import main
 from lorisnb.core import score
 from lorisnb.core.trajectory import Trajectory
 from lorisnb.io import load_groundtruth, read_openloris
-from lorisnb.tools.crosscheck import crosscheck, crosscheck_openloris
+from lorisnb.tools.crosscheck import crosscheck, crosscheck_openloris, crosscheck_sample
 from lorisnb.tools.evo_bridge import CROSSCHECK_COLUMNS, evo_result_table, from_evo, to_evo
 
 
@@ -234,3 +234,23 @@ def test_evo_ape_runs_evo_once_per_input(data, monkeypatch):
     assert np.array_equal(evo_bridge.evo_ape(ref_t, se3, "r"), fresh)
     n = len(runs)
     assert np.array_equal(evo_bridge.evo_ape(ref_t, sim3, "r"), fresh) and len(runs) == n
+
+
+def test_crosscheck_sample_covers_every_algorithm_and_scene_with_few_short_files(icra20):
+    """The notebook's default sample: as many files as algorithms (or scenes, if more), every
+    algorithm and every scene among them; within one scene, each algorithm's shortest file."""
+    algorithms = ["orbslam2_rgbd", "vins_mono_color_imu_with_loop", "dso", "odom"]
+    files = sorted(p for a in algorithms for p in (icra20 / "per-seq" / a).glob("*.txt"))
+    results = [read_openloris(p) for p in files]
+    for scenes in (["cafe", "market"], ["cafe", "corridor", "home", "market"], ["market"]):
+        chosen = [r for r in results if r.scene in scenes]
+        sample = crosscheck_sample(chosen)
+        assert {r.path.parent.name for r in sample} == set(algorithms)
+        assert {r.scene for r in sample} == set(scenes)
+        assert len(sample) == max(len(algorithms), len(scenes))
+        assert [str(r.path) for r in sample] == sorted(str(r.path) for r in sample)
+    one_scene = crosscheck_sample([r for r in results if r.scene == "market"])
+    by_alg = {r.path.parent.name: r for r in one_scene}
+    for a in algorithms:  # one scene: each algorithm's shortest file
+        sizes = [p.stat().st_size for p in files if p.parent.name == a and read_openloris(p).scene == "market"]
+        assert by_alg[a].path.stat().st_size == min(sizes)
