@@ -211,7 +211,8 @@ _APE_SEEN: dict[tuple[str, bytes], np.ndarray] = {}
 def evo_ape(ref, est, relation: str) -> np.ndarray:
     """evo's APE per pose (``t``: metres, ``r``: degrees) of ``est`` against ``ref``. evo computes it
     once per input: a cross-check that asks again for the same poses (a table and its per-pose
-    plot) gets the same array back (a copy) instead of evo's per-pose loop run twice. The angle
+    plot) gets the same array back (a copy) instead of evo's per-pose loop run twice. The
+    translation APE is keyed by the positions, which are all evo reads for it. The angle
     depends on the rotations alone (the rotation block of ``inv(ref) @ est`` is ``R_ref^T R_est``,
     the translations meeting only exact zeros), so it is keyed by them: an estimate aligned with
     Sim(3), whose rotations are those of its SE(3) alignment, gets that alignment's angles."""
@@ -219,9 +220,12 @@ def evo_ape(ref, est, relation: str) -> np.ndarray:
 
     digest = hashlib.blake2b(digest_size=20)
     for traj in (ref, est):
-        poses = np.asarray(traj.poses_se3, float)
-        if relation == "r" and poses.ndim == 3 and np.isfinite(poses[:, :3, 3]).all():
-            poses = np.ascontiguousarray(poses[:, :3, :3])  # (a non-finite translation would not meet zeros)
+        if relation == "t":  # evo's translation APE reads the positions alone (no per-pose matrices built)
+            poses = np.ascontiguousarray(traj.positions_xyz, float)
+        else:
+            poses = np.asarray(traj.poses_se3, float)
+            if poses.ndim == 3 and np.isfinite(poses[:, :3, 3]).all():
+                poses = np.ascontiguousarray(poses[:, :3, :3])  # (a non-finite translation would not meet zeros)
         digest.update(np.asarray(poses.shape).tobytes() + poses.tobytes())
     key = (relation, digest.digest())
     if key not in _APE_SEEN:
