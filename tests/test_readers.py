@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -159,3 +160,34 @@ def test_bom_header_case_binary_and_openloris_hint(tmp_path, data):
         read_openloris(binary)
     with pytest.raises(ParseError, match=r"looks like an OpenLORIS file .*--format openloris.*read_openloris"):
         read_tum(data.groundtruth("cafe"))
+
+
+ROW = "{t} {x} 2 3 0 0 0 1\n"
+
+
+@pytest.mark.parametrize(
+    ("bad", "kinds"), [(("nan",), "NaN"), (("inf",), "infinite"), (("nan", "-inf"), r"NaN or infinite \(1 infinite\)")]
+)
+@pytest.mark.parametrize("fmt", ["tum", "euroc", "openloris"])
+def test_every_reader_notes_skipped_poses_once(tmp_path, fmt, bad, kinds):
+    """A pose with NaN or infinite values is skipped with one note saying how many, of which kind
+    and the first line, whichever reader reads it (EuRoC and OpenLORIS skipped NaN poses silently)."""
+    xs = ["1", *bad, "4", "5"]
+    if fmt == "euroc":
+        text = "#timestamp,x,y,z,qw,qx,qy,qz\n" + "".join(
+            f"{k}000000000,{x},2,3,1,0,0,0\n" for k, x in enumerate(xs, 1)
+        )
+        first = 3  # the header is line 1
+    elif fmt == "openloris":
+        text = HEAD + "seq: 1\n" + "".join(ROW.format(t=k, x=x) for k, x in enumerate(xs, 1))
+        first = 5  # two header lines and "seq: 1" before the first pose
+    else:
+        text = "".join(ROW.format(t=k, x=x) for k, x in enumerate(xs, 1))
+        first = 2
+    p = write(tmp_path, f"r.{'csv' if fmt == 'euroc' else 'txt'}", text)
+    with pytest.warns(LorisWarning) as rec:
+        t = read_trajectory(p, fmt) if fmt != "openloris" else read_openloris(p).sequences[1]
+    notes = [str(w.message) for w in rec if "skipped" in str(w.message)]
+    assert len(notes) == 1, notes
+    assert re.search(rf"r\.\w+: {len(bad)} pose\(s\) with {kinds} values skipped \(first at line {first}\)", notes[0])
+    np.testing.assert_array_equal(t.positions[:, 0], [1.0, 4.0, 5.0])

@@ -166,8 +166,6 @@ def _read_topic(reader, spath: str, topic: str | None, repeated: str = "drop") -
     pose = np.array(poses, float).reshape(-1, 7)
     keep = check_rows(where, t, pose[:, :3], pose[:, 3:], line_no, notes)
     if not keep.all():
-        notes.append(f"{where}: {int((~keep).sum())} pose(s) with NaN or infinite values skipped (message numbers "
-                     "stand for line numbers)")  # fmt: skip
         t, pose, line_no = t[keep], pose[keep], line_no[keep]
     traj = finish(where, t, pose[:, :3], pose[:, 3:], line_no, "", notes, repeated)
     traj.meta.update(source=spath, topic=topic, notes=notes)

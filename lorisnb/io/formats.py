@@ -100,9 +100,7 @@ def _poses(
     skipped with a note), sorted (:func:`~lorisnb.io.scanner.finish`), notes issued if ``warn``."""
     notes: list[str] = []
     keep = check_rows(spath, stamps, positions, quaternions, line_no, notes)
-    nan_rows = int((~keep).sum())
-    if nan_rows:
-        notes.append(f"{spath}: {nan_rows} pose(s) with NaN or infinite values skipped")
+    if not keep.all():
         stamps, positions, quaternions, line_no = stamps[keep], positions[keep], quaternions[keep], line_no[keep]
     traj = finish(spath, stamps, positions, quaternions, line_no, "", notes, repeated)
     _warn(notes, warn)

@@ -180,9 +180,6 @@ def read_ordslam(
         pose = np.concatenate([mats[:, :, 3], quat], axis=1)
     notes: list[str] = []
     keep = check_rows(spath, stamps, pose[:, :3], pose[:, 3:7], line_no, notes)
-    nan_rows = int((~keep).sum())
-    if nan_rows:
-        notes.append(f"{spath}: {nan_rows} pose(s) with NaN or infinite values skipped")
     traj = finish(spath, stamps[keep], pose[keep, :3], pose[keep, 3:7], line_no[keep], "", notes)
     if warn:
         for note in notes:

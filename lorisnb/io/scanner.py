@@ -223,7 +223,8 @@ def check_rows(
     path: str, stamps: np.ndarray, positions: np.ndarray, quaternions: np.ndarray, lines: np.ndarray, notes: list[str]
 ) -> np.ndarray:
     """Validate rows (stamps (N,), positions (N, 3), quaternions (N, 4)); return the mask of rows
-    to keep (NaN poses are skipped)."""
+    to keep: poses with NaN or infinite values are skipped, with one note in ``notes`` saying how
+    many and the first line."""
     bad_stamp = ~np.isfinite(stamps)
     if bad_stamp.any():
         i = np.flatnonzero(bad_stamp)[0]
@@ -235,14 +236,17 @@ def check_rows(
         finite = np.ones(n, bool)
     else:
         finite = np.isfinite(positions).all(axis=1) & np.isfinite(quaternions).all(axis=1)
-    inf_rows = np.zeros(n, bool)
-    if not finite.all():
-        inf_rows = ~finite & ~(np.isnan(positions).any(axis=1) | np.isnan(quaternions).any(axis=1))
-    if inf_rows.any():
-        notes.append(
-            f"{path}: {int(inf_rows.sum())} pose(s) with infinite values skipped "
-            f"(first at line {lines[np.flatnonzero(inf_rows)[0]]})"
+    if not finite.all():  # one note for every skipped pose, whichever reader skipped it
+        skipped = np.flatnonzero(~finite)
+        inf_rows = int((~(np.isnan(positions[skipped]).any(axis=1) | np.isnan(quaternions[skipped]).any(axis=1))).sum())
+        kinds = (
+            "infinite"
+            if inf_rows == skipped.size
+            else "NaN"
+            if inf_rows == 0
+            else f"NaN or infinite ({inf_rows} infinite)"
         )
+        notes.append(f"{path}: {skipped.size} pose(s) with {kinds} values skipped (first at line {lines[skipped[0]]})")
     if quaternion_norms_fit(quaternions):
         return finite
     with np.errstate(over="ignore"):
