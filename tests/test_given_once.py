@@ -62,3 +62,31 @@ def test_a_report_parameter_given_twice_with_different_values_is_refused(tmp_pat
     assert main(["report", "--out", str(out), "--no-progress", "-p", "eps", "3", "-p", "eps", "5"]) == 2
     assert "-p eps given twice (3, then 5)" in capsys.readouterr().err
     assert not out.exists()  # refused before any notebook ran
+
+
+def test_every_value_of_every_command_refuses_to_be_empty(capsys):
+    """``--gt "$GT"`` with ``GT`` unset: ``--gt ""`` was read as no ``--gt`` (the file scored as an
+    OpenLORIS result against the data root's ground truth, exit 0). Every option and argument
+    that takes a value now refuses an empty one, as the Python API refuses an empty path."""
+    parser = build_parser()
+    subs = _subparsers(parser)
+    checked = 0
+    for name, sub in subs.items():
+        for action in sub._actions:
+            if type(action) is argparse._HelpAction or not isinstance(action, argparse._StoreAction):
+                continue
+            assert type(action).__name__ in ("Once", "Given"), (name, action.dest)
+            checked += 1
+    assert checked > 80
+    for argv, name in [
+        (["evaluate", "est.txt", "--gt", ""], "--gt"),
+        (["evaluate", "est.txt", "--gt", "gt.txt", "--gt-times", " "], "--gt-times"),
+        (["evaluate", ""], "FILE_OR_DIR"),
+        (["crosscheck", "", "est.txt"], "gt"),
+        (["report", "--notebooks", "metrics_primer", ""], "--notebooks"),
+        (["sweep", "x", "--trials-by", ""], "--trials-by"),
+    ]:
+        with pytest.raises(SystemExit) as exc:
+            parser.parse_args(argv)
+        assert exc.value.code == 2
+        assert f"{name}: an empty value (an unset shell variable?)" in capsys.readouterr().err

@@ -191,10 +191,20 @@ def build_parser() -> argparse.ArgumentParser:
 def given_once(parser: argparse.ArgumentParser) -> None:
     """Every option of one value (of ``parser`` and its subcommands) refuses a second, different
     value: argparse keeps the last, silently dropping the first (``sweep --eps 0.05 --eps 0.1``
-    swept 0.1 only). The same value twice is harmless and accepted."""
+    swept 0.1 only). The same value twice is harmless and accepted. Every value, of an option or
+    an argument, refuses to be empty (``--gt "$GT"`` with ``GT`` unset was read as no ``--gt``)."""
     seen: dict[int, tuple[weakref.ref, dict[str, tuple[Any]]]] = {}
 
-    class Once(argparse._StoreAction):  # argparse has no hook for a repeated option
+    class Given(argparse._StoreAction):  # an argument's value (or values) as typed: not empty
+        def __call__(self, p: Any, namespace: Any, values: Any, option_string: Any = None) -> None:
+            for value in values if isinstance(values, list) else [values]:
+                if isinstance(value, str) and not value.strip():
+                    name = option_string or self.metavar or self.dest
+                    p.error(f"{name}: an empty value (an unset shell variable?); give a value, or leave {name} out"
+                            if option_string else f"{name}: an empty value (an unset shell variable?); give a value")  # fmt: skip
+            super().__call__(p, namespace, values, option_string)
+
+    class Once(Given):  # argparse has no hook for a repeated option
         def __call__(self, p: Any, namespace: Any, values: Any, option_string: Any = None) -> None:
             ref, given = seen.get(id(namespace), (None, {}))
             if ref is None or ref() is not namespace:  # a new parse
@@ -212,6 +222,8 @@ def given_once(parser: argparse.ArgumentParser) -> None:
         for action in p._actions:  # argparse has no public list of a parser's options
             if type(action) is argparse._StoreAction and action.option_strings and action.nargs is None:
                 action.__class__ = Once
+            elif type(action) is argparse._StoreAction:  # arguments, and options of several values
+                action.__class__ = Given
             if isinstance(action, argparse._SubParsersAction):
                 for sub in action.choices.values():
                     walk(sub)
