@@ -162,7 +162,9 @@ def test_csv_into_read_only_folder(tmp_path, icra20, capsys):
 def test_csv_onto_a_folder_or_empty_name(tmp_path, icra20, capsys):
     assert main(["evaluate", str(icra20 / ORB), "--csv", str(tmp_path), "--no-progress"]) == 2
     assert "is a folder; expected a file name" in capsys.readouterr().err
-    assert main(["evaluate", str(icra20 / ORB), "--csv", "", "--no-progress"]) == 2
+    with pytest.raises(SystemExit) as exc:  # an empty value: a usage error, as for every option
+        main(["evaluate", str(icra20 / ORB), "--csv", "", "--no-progress"])
+    assert exc.value.code == 2 and "--csv: an empty value" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
 
 
@@ -251,8 +253,9 @@ def test_crosscheck_euroc_follows_evo(tmp_path, data, capsys):
 
 def test_empty_path_is_an_error(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    assert main(["evaluate", "", "--no-progress"]) == 2
-    assert "an empty path" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:  # a usage error on the command line, as for every argument
+        main(["evaluate", "", "--no-progress"])
+    assert exc.value.code == 2 and "FILE_OR_DIR: an empty value" in capsys.readouterr().err
     with pytest.raises(ln.ValidationError, match="an empty path"):
         ln.evaluate("")
 

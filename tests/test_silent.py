@@ -476,10 +476,13 @@ def test_scheduler_addresses_are_checked_and_time_out(http_port, monkeypatch, da
     assert time.monotonic() - start < 5
     monkeypatch.setattr(pool, "SCHEDULER_TIMEOUT", 1.0)
     odom = str(data.icra20 / "per-seq" / "odom")
-    for address in ("not-an-address", "", f"127.0.0.1:{http_port}", f"tcp://127.0.0.1:{_closed_port()}"):
+    for address in ("not-an-address", f"127.0.0.1:{http_port}", f"tcp://127.0.0.1:{_closed_port()}"):
         assert main(["evaluate", odom, "--scheduler", address, "--no-progress"]) == 2
         err = _err(capsys).strip().splitlines()
         assert len(err) == 1 and address in err[0] and "Traceback" not in err[0]
+    with pytest.raises(SystemExit) as exc:  # an empty value: a usage error, as every option's
+        main(["evaluate", odom, "--scheduler", "", "--no-progress"])
+    assert exc.value.code == 2 and "--scheduler: an empty value" in _err(capsys)
 
 
 def test_a_real_scheduler_on_loopback_connects():
