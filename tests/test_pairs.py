@@ -394,3 +394,24 @@ def test_openloris_manifest_takes_lifelong_and_refuses_conventions(icra20):
     assert {f.mode for f in per.errors} == {"per-seq"}
     with pytest.raises(ln.ValidationError, match="official conventions"):
         evaluate_manifest("openloris", src, conventions="tum")
+
+
+@pytest.mark.parametrize(("rows", "says"), [(0, "no pose"), (1, "one pose")])
+def test_a_ground_truth_of_fewer_than_two_poses_fails_the_pair_cleanly(tum_pairs, tmp_path, capsys, rows, says):
+    """A ground truth of only comments crashed every table (a traceback from the scene lookup);
+    one of a single pose was taken for a clock offset. Both fail the pair with what is wrong, the
+    same from Python and the command line, and the scene table stays the pair's own (the data
+    root's ``cafe`` is not looked up for a pair labelled cafe)."""
+    gt, est = tum_pairs["fr1_xyz"]
+    lines = "".join(f"{t:.4f} {p[0]} {p[1]} {p[2]} 0 0 0 1\n" for t, p in zip(gt.stamps[:rows], gt.positions[:rows]))
+    bad = write(tmp_path, "gt_bad.txt", "# ground truth\n" + lines)
+    good = write(tmp_path, "est.txt", "".join(f"{t:.4f} 1 2 3 0 0 0 1\n" for t in est.stamps[:50]))
+    ev = evaluate_pairs([good], bad, scene="cafe", progress=False)
+    assert [f.error for f in ev.failures] == [
+        f"{bad}: the ground truth has {says} (comments, blank lines and skipped poses aside); expected at least two "
+        "poses spanning the estimate's time"
+    ]
+    assert ev.spans() == {} and ev.scenes().empty
+    assert main(["evaluate", str(good), "--gt", str(bad), "--scene", "cafe", "--no-progress"]) == 1
+    err = capsys.readouterr().err
+    assert f"the ground truth has {says}" in err and "Traceback" not in err and "clock offset" not in err

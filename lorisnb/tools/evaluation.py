@@ -127,14 +127,16 @@ class Evaluation:
 
     def spans(self) -> dict[str, dict[int, tuple[float, float]]]:
         """First and last ground-truth stamp (seconds) of every sequence of the scenes evaluated:
-        scene -> sequence -> span."""
+        scene -> sequence -> span. A pair's or a manifest's scene has the spans of its own ground
+        truth as read while evaluating (none where no input of it was evaluated), never the data
+        root's scene of the same name; an OpenLORIS scene's come from the data root if needed."""
         known: dict[str, dict[int, tuple[float, float]]] = {}
         for f in self.errors:
             if f.groundtruth_spans:
                 known.setdefault(f.scene, {}).update(f.groundtruth_spans)
         scenes = list(dict.fromkeys(f.scene for f in self.errors))
-        if set(known) == set(scenes):  # spans found while evaluating: no ground truth read again
-            return {s: dict(sorted(known[s].items())) for s in scenes}
+        if set(known) == set(scenes) or self.kind != "openloris":  # no ground truth read again
+            return {s: dict(sorted(known.get(s, {}).items())) for s in scenes}
         return scene_spans(sorted(scenes, key=SCENES.index), self.data)
 
     @property

@@ -97,7 +97,11 @@ def groundtruth_of(path: Path, fmt: str, times: Path | None = None, topic: str |
     the rule for poses of a repeated stamp (see :func:`lorisnb.io.formats.read_trajectory`)."""
     stamp = _stamp(path) if path.is_file() else (0.0, 0)
     read = _read_groundtruth if stamp[1] < CACHED_BYTES else _read_groundtruth.__wrapped__  # a large one: not kept
-    return read(path, fmt, stamp, times, topic, tf, "drop" if fmt == "openloris" else repeated)
+    gt = read(path, fmt, stamp, times, topic, tf, "drop" if fmt == "openloris" else repeated)
+    if len(gt) < 2:  # nothing to match an estimate to, or one instant: every later message would mislead
+        raise ParseError(str(path), None, f"the ground truth has {'no pose' if not len(gt) else 'one pose'} (comments, "
+                         "blank lines and skipped poses aside); expected at least two poses spanning the estimate's time")  # fmt: skip
+    return gt
 
 
 @lru_cache(maxsize=64)
