@@ -403,7 +403,9 @@ def test_a_ground_truth_of_fewer_than_two_poses_fails_the_pair_cleanly(tum_pairs
     same from Python and the command line, and the scene table stays the pair's own (the data
     root's ``cafe`` is not looked up for a pair labelled cafe)."""
     gt, est = tum_pairs["fr1_xyz"]
-    lines = "".join(f"{t:.4f} {p[0]} {p[1]} {p[2]} 0 0 0 1\n" for t, p in zip(gt.stamps[:rows], gt.positions[:rows]))
+    lines = "".join(
+        f"{t:.4f} {p[0]} {p[1]} {p[2]} 0 0 0 1\n" for t, p in zip(gt.stamps[:rows], gt.positions[:rows], strict=True)
+    )
     bad = write(tmp_path, "gt_bad.txt", "# ground truth\n" + lines)
     good = write(tmp_path, "est.txt", "".join(f"{t:.4f} 1 2 3 0 0 0 1\n" for t in est.stamps[:50]))
     ev = evaluate_pairs([good], bad, scene="cafe", progress=False)
