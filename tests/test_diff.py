@@ -247,3 +247,25 @@ def test_diff_in_python(versions):
     assert not diff_tables(a, a).regressed
     with pytest.raises(ValidationError, match="tolerance cr=x"):
         diff_tables(a, b, {"cr": "x"})
+
+
+def test_diff_with_an_empty_or_broken_side(versions, tmp_path, capsys):
+    """An empty BASE said "verdict: ok" (every CAND sequence "new"), exit 0; an empty CAND folder,
+    or one whose every file is broken (the usual CI failure), crashed with a KeyError (pandas
+    selecting columns by an empty list). Now: an empty BASE compares nothing, exit 1 with why; an
+    empty or broken CAND fails every BASE sequence, exit 1."""
+    a, _ = versions
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    rc, out, err = run(capsys, empty, a)
+    assert rc == 1 and "verdict" not in out
+    assert f"error: BASE {empty} holds no scored sequence: nothing was compared" in err
+    broken = tmp_path / "broken" / "odom"
+    broken.mkdir(parents=True)
+    for f in (a / "odom").iterdir():
+        (broken / f.name).write_text("")
+    for cand in (empty, broken.parent):
+        rc, out, err = run(capsys, a, cand)
+        assert rc == 1 and "Traceback" not in err and "verdict: regression" in out
+        flagged = int(out.split("verdict: regression (")[1].split()[0])
+        assert flagged == int(out.split(" sequence(s); per metric")[0].split()[-1])  # every BASE sequence

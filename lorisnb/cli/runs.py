@@ -76,6 +76,11 @@ def cmd_diff(args: argparse.Namespace) -> int:
     (base, _, base_failed), (cand, cand_failed, _) = (_side(p, args) for p in args.paths)
     for note in base.notes + cand.notes:
         print(f"note: {note}", file=sys.stderr)
+    if base.table.empty:  # nothing to compare against: never a verdict of "ok"
+        print(f"error: BASE {args.paths[0]} holds no scored sequence" + (f" ({len(base_failed)} file(s) could not be "
+              "evaluated)" if base_failed else "") + ": nothing was compared; give a run with results as BASE",
+              file=sys.stderr)  # fmt: skip
+        return 1
     problems = spec_differences(base, cand)
     if problems:
         raise ValidationError(

@@ -179,11 +179,13 @@ def scene_changes(
     b = with_trials(base)
     kept = set(zip(b["suite"], b["algorithm"], b["scene"], strict=True))
     c = with_trials(cand)
-    c = c[[k in kept for k in zip(c["suite"], c["algorithm"], c["scene"], strict=True)]]
+    c = c[
+        np.array([k in kept for k in zip(c["suite"], c["algorithm"], c["scene"], strict=True)], bool)
+    ]  # a mask, also when empty
     c = c[c.set_index(KEYS).index.isin(b.set_index(KEYS).index)]  # the base's sequences
     lost = kept - set(zip(c["suite"], c["algorithm"], c["scene"], strict=True))
     if lost:  # a scene without any output in the candidate: all its sequences failed
-        gone = b[[k in lost for k in zip(b["suite"], b["algorithm"], b["scene"], strict=True)]]
+        gone = b[np.array([k in lost for k in zip(b["suite"], b["algorithm"], b["scene"], strict=True)], bool)]
         c = pd.concat([c, _failed_copy(gone)], ignore_index=True)
     fb, _ = complete(b, expected)
     fc, _ = complete(c, expected)

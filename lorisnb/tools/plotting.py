@@ -130,7 +130,9 @@ def plot_timeline(
         if not show_wrong and not correct_flag:
             continue
         s = segments[(segments["correct"] == correct_flag) & segments["algorithm"].isin(algorithms)]
-        s = s[[(sc, q) in off for sc, q in zip(s["scene"], s["seq"], strict=True)]]
+        s = s[
+            np.array([(sc, q) in off for sc, q in zip(s["scene"], s["seq"], strict=True)], bool)
+        ]  # a mask, also when empty
         if s.empty:
             continue
         base = np.array([off[(sc, q)] for sc, q in zip(s["scene"], s["seq"], strict=True)])
@@ -138,7 +140,7 @@ def plot_timeline(
         lines = np.stack([np.stack([base + s["start"], y], 1), np.stack([base + s["end"], y], 1)], 1)
         ax.add_collection(LineCollection(list(lines), colors=color, linewidths=2.2))
     f = firsts[firsts["algorithm"].isin(algorithms)]
-    f = f[[(sc, q) in off for sc, q in zip(f["scene"], f["seq"], strict=True)]]
+    f = f[np.array([(sc, q) in off for sc, q in zip(f["scene"], f["seq"], strict=True)], bool)]
     if len(f):
         x = np.array([off[(sc, q)] for sc, q in zip(f["scene"], f["seq"], strict=True)]) + f["t"].to_numpy()
         y = f["algorithm"].map(y_of).to_numpy(float)
