@@ -369,6 +369,7 @@ def test_degenerate_alignments_are_refused_or_warned(pair, data, tmp_path):
     # through the pipeline: the file fails with the reason, the exit status is 1
     ev = evaluate_pairs(data.tum / EST, data.tum / GT, conventions=ln.Conventions.preset("tum", align_frames=2))
     assert ev.exit_status() == 1 and "no SE(3) alignment can be determined" in ev.failures[0].error
+    assert ev.failures[0].error.startswith(f"{data.tum / EST}: ")  # which input, among many, failed
     # through a manifest's [conventions]: the same refusal
     write(tmp_path, "res/slam/xyz.txt", (data.tum / EST).read_bytes())
     m = write(tmp_path, "m.toml", MANIFEST.format(root=data.tum, gt=GT) + "")

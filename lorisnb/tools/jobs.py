@@ -134,8 +134,11 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
         return "ok", errors
     except DataNotFoundError as exc:
         return "skipped", Failure(job.path, str(exc), "no-groundtruth")
-    except LorisError as exc:
-        return "failed", Failure(job.path, str(exc), type(exc).__name__)
+    except LorisError as exc:  # said with the input it is about (an alignment's or an option's error names none)
+        said = str(exc)
+        if str(job.path) not in said and job.path.name not in said:
+            said = f"{job.path}: {said}"
+        return "failed", Failure(job.path, said, type(exc).__name__)
 
 
 def _read_result(job: Job, progress: bool = False) -> ResultFile:
