@@ -87,3 +87,25 @@ def test_quick_keeps_a_count_given():
     for bad in (0, 2.5, -3):
         with pytest.raises(ValidationError, match="sim_trials=.*positive whole number"):
             quick_default("sim_trials", bad, 6, 5, True)
+
+
+@pytest.mark.parametrize(
+    ("name", "values", "said"),
+    [("eps", "1,1", "1 and 1"), ("eps", "inf,1e400", "inf and 1e400"), ("tau", [60, 60.0], "60 and 60.0"),
+     ("delta", "0.5,1,0.50", "0.5 and 0.50"), ("eps", ["paper", 1, "paper"], "paper and paper")],
+)  # fmt: skip
+def test_a_value_twice_in_a_list_is_refused_everywhere(icra20, capsys, name, values, said):
+    """``sweep --eps 1,1`` printed its rows and then failed on "several results" (exit 2), and
+    ``ln.sweep(errors, eps=[1, 1])`` returned every row twice: one check refuses a setting given
+    twice, for the command line, Python's sweep and the notebooks' grids."""
+    with pytest.raises(ValidationError, match=f"{said} are the same value; expected each value once"):
+        validate.threshold_list(name, values)
+    one = icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt"
+    with pytest.raises(ValidationError, match="are the same value"):
+        ln.sweep(ln.evaluate(one, progress=False).errors, **{name: values})
+    with pytest.raises(ValidationError, match="are the same value"):
+        notebook_grids("threshold_sensitivity", False, **{f"{name}_grid": values})
+    if isinstance(values, str):
+        with pytest.raises(SystemExit) as exc:
+            main(["sweep", str(one), f"--{name}", values, "--no-progress"])
+        assert exc.value.code == 2 and f"{said} are the same value" in capsys.readouterr().err
