@@ -9,6 +9,7 @@ import argparse
 import pytest
 
 from lorisnb.cli import build_parser, main
+from lorisnb.core import validate
 
 
 def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
@@ -90,3 +91,28 @@ def test_every_value_of_every_command_refuses_to_be_empty(capsys):
             parser.parse_args(argv)
         assert exc.value.code == 2
         assert f"{name}: an empty value (an unset shell variable?)" in capsys.readouterr().err
+
+
+def test_words_are_read_as_python_reads_them():
+    """``ln.make_spec(align="SE3")`` was accepted and ``--align SE3`` refused; ``rpe_unit="M"`` was
+    kept as "M" and failed every file later. Every option of fixed words now goes through
+    ``validate.choice`` (any case, spaces around), on the command line as in Python."""
+    parser = build_parser()
+    checked = 0
+    for sub in _subparsers(parser).values():
+        for action in sub._actions:
+            if isinstance(action.choices, (list, tuple)):
+                func = action.type.__closure__[0].cell_contents if action.type and action.type.__closure__ else None
+                assert getattr(func, "func", None) is validate.choice, action.dest
+                checked += 1
+    assert checked > 20
+    args = parser.parse_args(["evaluate", "x", "--align", "SE3", "--format", " TUM", "--rpe-unit", "M",
+                              "--conventions", "Tum"])  # fmt: skip
+    assert (args.align, args.format, args.rpe_unit, args.conventions) == ("se3", "tum", "m", "tum")
+    from lorisnb.core.spec import make_spec
+
+    assert make_spec("openloris", rpe_unit="M").rpe_unit == "m"
+    assert make_spec("openloris", rpe_unit="D").rpe_unit == "deg"
+    assert make_spec("openloris", align="SE3").align == "se3"
+    with pytest.raises(SystemExit):
+        parser.parse_args(["evaluate", "x", "--align", "rotate"])

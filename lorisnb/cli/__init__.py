@@ -16,6 +16,7 @@ import signal
 import sys
 import weakref
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -220,6 +221,11 @@ def given_once(parser: argparse.ArgumentParser) -> None:
 
     def walk(p: argparse.ArgumentParser) -> None:
         for action in p._actions:  # argparse has no public list of a parser's options
+            words = action.choices
+            if action.type is None and isinstance(words, (list, tuple)) and all(isinstance(w, str) for w in words):
+                # a word read as Python reads it (validate.choice: any case, spaces around): --align SE3 too
+                label = action.option_strings[0] if action.option_strings else action.dest
+                action.type = arg_type(partial(validate.choice, label, options=tuple(words)))
             if type(action) is argparse._StoreAction and action.option_strings and action.nargs is None:
                 action.__class__ = Once
             elif type(action) is argparse._StoreAction:  # arguments, and options of several values

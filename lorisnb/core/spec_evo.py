@@ -61,7 +61,8 @@ def rpe_options(spec: Any) -> dict[str, Any]:
 def check_evo(key: str, v: Any, label: str) -> Any:
     """One evo option or RPE setting validated and normalized (``label``: how the surface names it)."""
     if key == "rpe_unit":  # evo's letters d and r are its deg and rad
-        return {"d": "deg", "r": "rad"}.get(validate.choice(label, v, (*RPE_UNITS, "d", "r")), v)
+        unit = validate.choice(label, v, (*RPE_UNITS, "d", "r"))
+        return {"d": "deg", "r": "rad"}.get(unit, unit)  # the word as checked ('M' is 'm'), never as given
     if key == "rpe_delta":
         return validate.positive(label, v, "steps")
     if key == "rpe_pairs":

@@ -155,7 +155,7 @@ def threshold_list(name: str, values: Any) -> list[Any]:
         items = [values]
     if not items:
         raise ValidationError(f"{name}: an empty list; expected at least one value")
-    out = [eps_value(v) for v in items] if name == "eps" else [threshold(name, v) for v in items]
+    out: list[Any] = [eps_value(v) for v in items] if name == "eps" else [threshold(name, v) for v in items]
     for k, v in enumerate(out):  # the same setting twice (60 and 60.0, inf and 1e400): rows twice, refused
         if v in out[:k]:
             raise ValidationError(f"{name}={_show(values)}: {_show(items[out.index(v)])} and {_show(items[k])} are the "
