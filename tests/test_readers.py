@@ -131,6 +131,9 @@ def test_kitti_with_and_without_stamps_equals_evo(tmp_path):
     np.testing.assert_allclose(np.abs(t.rotations().as_quat()[:, [3, 0, 1, 2]]), np.abs(ref.orientations_quat_wxyz))
     with pytest.raises(ParseError, match="line 1: .* has 3 fields; expected 12 numbers"):
         read_kitti(write(tmp_path, "bad.txt", "1 2 3\n"))
+    short = write(tmp_path, "times_other.txt", "0.5\n0.6\n0.7\n")  # another sequence's times: named
+    with pytest.raises(ParseError, match=r"k.txt: 2 poses but 3 stamps in the times file .*times_other.txt; expected"):
+        read_kitti(p, stamps=short)
 
 
 def test_euroc_equals_evo(tmp_path):

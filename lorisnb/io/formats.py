@@ -163,8 +163,10 @@ def read_kitti(
         t = read_times(stamps)
     else:
         t = np.asarray(stamps, dtype=float).reshape(-1)
-    if len(t) != len(mats):
-        raise ParseError(spath, None, f"{len(mats)} poses but {len(t)} stamps; expected one stamp per pose")
+    if len(t) != len(mats):  # a times file: named, it may be the one at fault (another sequence's, swapped)
+        given = f"the times file {stamps}" if isinstance(stamps, (str, os.PathLike)) else "the stamps given"
+        raise ParseError(spath, None, f"{len(mats)} poses but {len(t)} stamps in {given}; expected one stamp per pose "
+                         "(is it this sequence's times file?)")  # fmt: skip
     if not np.isfinite(t).all():
         raise ParseError(spath, None, f"stamp {int(np.flatnonzero(~np.isfinite(t))[0]) + 1} given for this KITTI "
                          "file is not finite; expected seconds")  # fmt: skip
