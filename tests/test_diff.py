@@ -233,6 +233,12 @@ def test_regression_core_on_trials():
     with pytest.raises(ValidationError, match="not a compared metric"):
         parse_tolerances("speed=3")
     assert str(parse_tolerances("ate_rmse=5%")["ate_rmse"]) == "5%"
+    # one value given twice in one list kept the last silently; an empty item was dropped
+    with pytest.raises(ValidationError, match="cr given twice; expected each metric once"):
+        parse_tolerances("cr=0.5,cr=0.1")
+    for empty in ("cr=0.1,,cs_r=0.1", "cr=0.1,"):
+        with pytest.raises(ValidationError, match="an empty item between commas"):
+            parse_tolerances(empty)
 
 
 def test_diff_in_python(versions):

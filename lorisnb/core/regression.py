@@ -67,10 +67,17 @@ def parse_tolerances(spec: str | Mapping[str, str | float] | None = None) -> dic
     non-negative number in the metric's unit or a percentage of the base value (``"5%"``)."""
     items: dict[str, str | float] = dict(DEFAULT_TOLERANCES)
     if isinstance(spec, str):
-        for part in filter(None, (p.strip() for p in spec.split(","))):
+        parts = [p.strip() for p in spec.split(",")]
+        if any(parts) and not all(parts):  # as every comma list: an empty item is refused, not dropped
+            raise ValidationError(f"tolerance {spec!r}: an empty item between commas; expected METRIC=VALUE,...")
+        given: set[str] = set()
+        for part in filter(None, parts):
             name, sep, text = part.partition("=")
             if not sep:
                 raise ValidationError(f"tolerance {part!r}: expected METRIC=VALUE, e.g. cr=0.02 or ate_rmse=5%")
+            if name.strip() in given:  # the last would silently replace the first
+                raise ValidationError(f"tolerance {spec!r}: {name.strip()} given twice; expected each metric once")
+            given.add(name.strip())
             items[name.strip()] = text.strip()
     elif spec is not None:
         if not isinstance(spec, Mapping):
