@@ -154,6 +154,21 @@ def test_diff_of_tables_and_a_missing_sequence(versions, tmp_path, capsys):
     assert rc == 2 and "--scale" in err
     rc, _, err = run(capsys, ta, tb, "--tolerance", "cr=-1")
     assert rc == 2 and "tolerance cr=-1" in err
+    # a damaged table: named, with the line of a number no evaluation gives (cr 1.7 said "ok")
+    damaged = pd.read_csv(ta)
+    damaged.loc[2, "cr"] = 1.7
+    damaged.to_csv(tmp_path / "cr17.csv", index=False)
+    rc, _, err = run(capsys, ta, tmp_path / "cr17.csv")
+    assert rc == 2 and f"{tmp_path / 'cr17.csv'}, line 4: column cr: 1.7 is not a rate between 0 and 1" in err
+    damaged = pd.read_csv(ta)
+    damaged.loc[0, "ate_rmse"] = -0.5
+    damaged.to_csv(tmp_path / "neg.csv", index=False)
+    rc, _, err = run(capsys, tmp_path / "neg.csv", ta)
+    assert rc == 2 and "line 2: column ate_rmse: -0.5 is not an RMSE >= 0" in err
+    twice = pd.read_csv(ta)  # one sequence's row twice: which table says so
+    pd.concat([twice, twice.iloc[[3]]]).to_csv(tmp_path / "twice.csv", index=False)
+    rc, _, err = run(capsys, ta, tmp_path / "twice.csv")
+    assert rc == 2 and f"error: CAND {tmp_path / 'twice.csv'}: " in err and "has several rows" in err
 
 
 @pytest.mark.slow

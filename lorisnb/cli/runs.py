@@ -89,7 +89,8 @@ def cmd_diff(args: argparse.Namespace) -> int:
         )
     if base.version and cand.version and base.version != cand.version:
         print(f"note: lorisnb {base.version} made BASE, {cand.version} CAND", file=sys.stderr)
-    d = diff_tables(base.table, cand.table, tolerances, args.alpha, args.seed, cand_failed)
+    d = diff_tables(base.table, cand.table, tolerances, args.alpha, args.seed, cand_failed,
+                    names=(f"BASE {args.paths[0]}", f"CAND {args.paths[1]}"))  # fmt: skip
     bad = d.sequences[d.sequences["status"].isin(["regression", "missing", "failed"])]
     scene_bad = d.scenes[d.scenes["status"] == "regression"]
     print(f"BASE {args.paths[0]} ({base.kind}) against CAND {args.paths[1]} ({cand.kind}); tolerances: "

@@ -32,10 +32,19 @@ class Diff:
         return self.verdict["verdict"] == "regression"
 
 
-def keyed(table: pd.DataFrame) -> pd.DataFrame:
+def keyed(table: pd.DataFrame, name: str | None = None) -> pd.DataFrame:
     """A run's table ready to be matched: ``suite`` and ``trial`` present; one row per sequence and
     trial (a report run's tables are read as one, :func:`lorisnb.tools.runs.load_run`), else an
-    error (a sweep holds several settings: diff one)."""
+    error (a sweep holds several settings: diff one) that begins with ``name`` (the run) if given."""
+    try:
+        return _keyed(table)
+    except ValidationError as exc:
+        if name is None:
+            raise
+        raise ValidationError(f"{name}: {exc}") from None
+
+
+def _keyed(table: pd.DataFrame) -> pd.DataFrame:
     t = with_trials(table)
     t["suite"] = t["suite"].fillna("").astype(str)
     if "table" not in t.columns and "eps_value" not in t.columns:
@@ -58,18 +67,19 @@ def diff_tables(
     alpha: float = 0.05,
     seed: int = 0,
     cand_failures: Mapping[str, str] | None = None,
+    names: tuple[str, str] = ("BASE", "CAND"),
 ) -> Diff:
     """Compare two per-sequence tables (``Evaluation.sequences(...)``, or tables read back).
     ``tolerances``: :func:`lorisnb.core.regression.parse_tolerances` of them, or the parsed ones
     (None: the defaults). ``cand_failures`` maps a result file (relative path, as in the ``file``
     column) that the candidate could not evaluate to the reason: a base sequence from that file is
-    reported as failed, with the reason."""
+    reported as failed, with the reason. ``names``: how a table's own error names it."""
     tols: dict[str, Tolerance]
     if isinstance(tolerances, Mapping) and all(isinstance(v, Tolerance) for v in tolerances.values()):
         tols = {k: v for k, v in tolerances.items() if isinstance(v, Tolerance)}
     else:
         tols = parse_tolerances(tolerances)  # type: ignore[arg-type]
-    b, c = keyed(base), keyed(cand)
+    b, c = keyed(base, names[0]), keyed(cand, names[1])
     seqs = sequence_changes(b, c, tols, alpha, seed)
     if cand_failures and "file" in b.columns and len(seqs):
         files = b.drop_duplicates(["suite", "algorithm", "scene", "seq"]).set_index(

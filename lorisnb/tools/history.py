@@ -59,7 +59,7 @@ def history_table(
     bad = [m for m in metrics if m not in WEIGHTS]
     if bad:
         raise ValidationError(f"history metric(s) {', '.join(bad)}: expected scene metrics {', '.join(WEIGHTS)}")
-    tables = [keyed(r.table) for r in runs]
+    tables = [keyed(r.table, str(r.path)) for r in runs]
     expected = expected_from(*tables)
     rows = []
     for k, (run, table) in enumerate(zip(runs, tables, strict=True)):

@@ -126,6 +126,15 @@ def read_table(path: Path) -> pd.DataFrame:
                 raise ParseError(path, line, f"column {c}: {df[c].iloc[i]!r} is not a number; expected a per-sequence "
                                  "table as written by lorisnb evaluate --csv / --parquet")  # fmt: skip
             df[c] = values
+    for c in (c for c in METRICS if c in df.columns):  # a number no evaluation gives: a damaged table
+        v = df[c].to_numpy(float)
+        bad = (v < 0) | (v > 1) if c in ("cr", "cr_t", "cs_r") else v < 0  # NaN: not scored, allowed
+        if bad.any():
+            i = int(bad.nonzero()[0][0])
+            line = i + 2 if path.suffix.lower() == ".csv" else None
+            expected = "a rate between 0 and 1" if c in ("cr", "cr_t", "cs_r") else "an RMSE >= 0"
+            raise ParseError(path, line, f"column {c}: {v[i]:g} is not {expected}; expected a per-sequence "
+                             "table as written by lorisnb evaluate --csv / --parquet")  # fmt: skip
     return df
 
 
