@@ -138,6 +138,9 @@ def test_diff_of_tables_and_a_missing_sequence(versions, tmp_path, capsys):
     capsys.readouterr()
     rc, _, err = run(capsys, ta, other)
     assert rc == 2 and "not comparable" in err and "eps" in err
+    # only what differs (eps paper: 3 m in cafe and home, 5 m in corridor and market), scenes grouped
+    assert (f"cafe, home: eps = 3.0 in {ta} against 1.0 in {other}; corridor, market: eps = 5.0 in {ta} against "
+            f"1.0 in {other}. Compare") in err  # fmt: skip
     # history over bare tables: ordered by modification time, the change found, other thresholds marked
     for k, f in enumerate((ta, tb, other)):
         os.utime(f, (1.7e9 + 100 * k, 1.7e9 + 100 * k))

@@ -218,15 +218,19 @@ def spec_differences(a: Run, b: Run) -> list[str]:
                 out.append(f"spec {k}: {_json(x, missing)} in {a.path} against {_json(y, missing)} in {b.path}")
     sa, sb = a.table_spec(), b.table_spec()
     both = sorted(set(sa["scene"]) & set(sb["scene"]))
+    said: dict[str, list[str]] = {}  # what differs -> the scenes it differs in (said once for all of them)
     for scene in both:
         x = sa[sa["scene"] == scene].drop(columns=["table"], errors="ignore").drop_duplicates()
         y = sb[sb["scene"] == scene].drop(columns=["table"], errors="ignore").drop_duplicates()
         cols = [c for c in x.columns if c in y.columns and c != "scene"]
         xs = sorted(map(tuple, x[cols].to_numpy().tolist()))
         ys = sorted(map(tuple, y[cols].to_numpy().tolist()))
-        if xs != ys:
-            out.append(f"{scene}: {', '.join(cols)} = {_rows(xs)} in {a.path} against {_rows(ys)} in {b.path}")
-    return out
+        if xs != ys:  # only the columns whose values differ (all of them if only their combination does)
+            keep = [i for i in range(len(cols)) if {r[i] for r in xs} != {r[i] for r in ys}] or list(range(len(cols)))
+            xk, yk = (sorted({tuple(r[i] for i in keep) for r in rows}) for rows in (xs, ys))
+            text = f"{', '.join(cols[i] for i in keep)} = {_rows(xk)} in {a.path} against {_rows(yk)} in {b.path}"
+            said.setdefault(text, []).append(scene)
+    return out + [f"{', '.join(scenes)}: {text}" for text, scenes in said.items()]
 
 
 def _json(value: Any, missing: object) -> str:
