@@ -167,13 +167,16 @@ def test_duplicate_files_and_unmatched_trials_by_are_errors(tmp_path, icra20, da
     rc, out, err = compare(capsys, tmp_path / "res", "--trials-by", r"cafe_([ab])")
     assert rc == 2 and "not a whole number" in err
     rc, out, err = compare(capsys, tmp_path / "res", "--trials-by", r"seed(\d+)")
-    assert rc == 2 and r"trials_by=seed(\d+): matches none of the 2 result file path(s)" in err
+    assert rc == 2 and r"trials_by=seed(\d+): matches none of the file or folder names of the 2 result file" in err
     with pytest.raises(ln.ValidationError, match="matches none"):
         ln.evaluate(tmp_path / "res", trials_by=r"seed(\d+)")
     tum = data.tum  # estimates against a --gt: the same rule
     rc = main(["evaluate", str(tum / "freiburg1_xyz-rgbdslam.txt"),
                "--gt", str(tum / "freiburg1_xyz-groundtruth.txt"), "--trials-by", r"seed(\d+)", "--no-progress"])  # fmt: skip
-    assert rc == 2 and "matches none of the 1 result file path(s)" in capsys.readouterr().err
+    assert rc == 2 and "matches none of the file or folder names of the 1 result file" in capsys.readouterr().err
+    # searched in one name at a time: a '/' never matches (a path that visibly matches was refused)
+    with pytest.raises(ln.ValidationError, match="one file or folder name at a time, so '/' never matches"):
+        ln.evaluate(tmp_path / "res", trials_by=r"orb/cafe_seed(\d)")
     (tmp_path / "res" / "orb" / "cafe_b.txt").rename(tmp_path / "res" / "orb" / "cafe_seed2.txt")
     (tmp_path / "res" / "orb" / "cafe_a.txt").rename(tmp_path / "res" / "orb" / "cafe_seed1.txt")
     ev = ln.evaluate(tmp_path / "res", trials_by=r"seed(\d+)")

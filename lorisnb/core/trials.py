@@ -22,9 +22,13 @@ TRIAL_PATTERNS = (
 
 
 def compile_trials_by(regex: str | None) -> re.Pattern[str] | None:
-    """A user's ``--trials-by`` expression, checked: it must compile and have a group."""
+    """A user's ``--trials-by`` expression, checked: it must compile and have a group. It is
+    searched in one file or folder name at a time (the file's name first), so a ``/`` is refused."""
     if regex is None:
         return None
+    if "/" in regex:
+        raise ValidationError(f"trials_by={regex}: it is searched in one file or folder name at a time, so '/' never "
+                              "matches; expected an expression for the name that holds the trial, e.g. 'run_(\\d+)'")  # fmt: skip
     try:
         pat = re.compile(regex)
     except re.error as exc:
@@ -73,8 +77,8 @@ def check_trials_by(relpaths: list[str], trials_by: str | None) -> None:
     if not any(names_a_trial(p, trials_by) for p in relpaths):
         shown = ", ".join(relpaths[:3]) + (f" and {len(relpaths) - 3} more" if len(relpaths) > 3 else "")
         raise ValidationError(
-            f"trials_by={trials_by}: matches none of the {len(relpaths)} result file path(s) ({shown}); "
-            "expected an expression that finds the trial number in them, e.g. 'run(\\d+)'"
+            f"trials_by={trials_by}: matches none of the file or folder names of the {len(relpaths)} result file "
+            f"path(s) ({shown}); expected an expression that finds the trial number in one of them, e.g. 'run(\\d+)'"
         )
 
 
