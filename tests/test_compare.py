@@ -229,3 +229,22 @@ def test_tables_keep_suites_apart(tmp_path, icra20, capsys):
     rc, _, _ = compare(capsys, tmp_path / "res", "--markdown", md)
     rows = [line.split("|")[1].strip() for line in md.read_text().splitlines()[2:] if line.startswith("|")]
     assert rc == 0 and rows == ["odom (v1)", "odom (v2)"]
+
+
+def test_power_with_one_algorithm_and_a_difference_a_rate_cannot_show(icra20, capsys):
+    """``compare`` of one algorithm with ``--power`` crashed with a KeyError: the pairs not found
+    different were picked from an empty table by an object-dtype column, which pandas took for
+    column labels. A difference above 1 of a rate (CR) is refused, from Python too."""
+    odom = icra20 / "per-seq" / "odom"
+    rc, out, err = compare(capsys, odom, "--power", "0.1")
+    assert rc == 0 and "Traceback" not in err
+    assert "--power 0.1: every pair of algorithms differs, or no scene has two: nothing to size" in out
+    rc, out, err = compare(capsys, odom, "--power", "2")
+    assert rc == 2 and "power delta=2: cr is a rate between 0 and 1" in err
+    from lorisnb.tools.comparison import compare_table
+
+    ev = ln.evaluate(odom, progress=False)
+    with pytest.raises(ln.ValidationError, match="a difference above 1 cannot happen"):
+        compare_table(ev.sequences(), ev.durations(), "cr_t", power_delta=1.5)
+    res = compare_table(ev.sequences(), ev.durations(), "cr", power_delta=0.1)
+    assert res.power is not None and res.power.empty and {"scene", "a", "b", "needed"} <= set(res.power.columns)

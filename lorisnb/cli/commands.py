@@ -280,10 +280,12 @@ def cmd_compare(args: argparse.Namespace) -> int:
                     res.significant[["scene", "a", "b", "value_a", "value_b", "difference", "p", "p_holm"]], args.digits
                 )
             )
-        if res.power is not None:
+        if res.power is not None and len(res.power):
             print(f"\nruns needed to detect a difference of {args.power} in {args.metric} (power 0.8, alpha "
                   f"{args.alpha}) where no difference was found:")  # fmt: skip
             print(_fmt(res.power[["scene", "a", "b", "unit", "have", "needed"]], args.digits))
+        elif res.power is not None:
+            print(f"\n--power {args.power}: every pair of algorithms differs, or no scene has two: nothing to size")
         for path in write_outputs(res, args.metric, args.csv, args.pairs_csv, args.latex, args.markdown, args.force,
                                   args.alpha):  # fmt: skip
             print(f"wrote {path}", file=sys.stderr)

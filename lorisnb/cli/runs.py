@@ -157,7 +157,7 @@ def cmd_history(args: argparse.Namespace) -> int:
         print(f"\n{m} per scene:")
         print(fmt_table(view[[r.name for r in runs if r.name in view.columns]].reset_index()))
     lost = h.drop_duplicates("run")
-    for r in lost[~lost["comparable"]].itertuples():
+    for r in lost[~lost["comparable"].astype(bool)].itertuples():
         print(f"\nnot comparable: {r.run} with the run before it ({r.not_comparable})")
     lines = first_changes(h)
     print("\n" + ("\n".join(lines) if lines else "no value changed beyond its tolerance"))

@@ -10,10 +10,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..core import ranking, stats
+from ..core import ranking, stats, validate
 from ..core.coverage import complete, coverage_notes
 from ..core.power import runs_for_power
 from ..core.trials import check_duplicates
+from ..errors import ValidationError
 from ..io.writers import write_csv
 from .tables import interval, write_comparison
 
@@ -89,6 +90,11 @@ def compare_table(
 ) -> Comparison:
     """Everything ``compare`` shows, from a per-sequence table and the ground-truth durations of its
     scenes (the sequences every algorithm is expected to have)."""
+    if power_delta is not None:  # a difference the metric can show: a rate moves by 1 at most
+        power_delta = validate.positive("power delta", power_delta, "the metric's unit")
+        if metric in ("cr", "cr_t", "cs_r") and power_delta > 1:
+            raise ValidationError(f"power delta={power_delta:g}: {metric} is a rate between 0 and 1, so a difference "
+                                  "above 1 cannot happen; expected a difference in (0, 1]")  # fmt: skip
     check_table_duplicates(table)
     full, cover = complete(table, durations)
     notes = coverage_notes(cover)
@@ -121,11 +127,11 @@ def compare_table(
         "the scene's first algorithm, with the interval that inverts the same test (it holds 0 exactly when the "
         "test does not separate the two):"
     )
-    sig = pairs[pairs["significant"]]
+    sig = pairs[pairs["significant"].astype(bool)]  # a mask also when empty (object dtype)
     summary = f"{len(sig)} of {len(pairs)} pairs differ significantly (the test behind the ranks and bold marks)"
     summary += ":" if len(sig) else "."
     blocked = pairs.groupby("scene").agg(reachable=("reachable", "any"), min_p=("min_p", "min"), n=("p", "size"))
-    blocked = blocked[~blocked["reachable"]]
+    blocked = blocked[~blocked["reachable"].astype(bool)]
     if len(blocked):
         summary += (
             "\nno pair can reach alpha "
@@ -141,7 +147,7 @@ def compare_table(
         )
     power = None
     if power_delta is not None:
-        power = runs_for_power(full, pairs[~pairs["significant"]], power_delta, alpha)
+        power = runs_for_power(full, pairs[~pairs["significant"].astype(bool)], power_delta, alpha)
     return Comparison(algs, pairs, sig, ci, cover, power, header, summary, notes)
 
 

@@ -95,7 +95,7 @@ def history_table(
 def first_changes(history: pd.DataFrame) -> list[str]:
     """One line per series with the first run where it changed."""
     lines = []
-    first = history[history["first_change"]]
+    first = history[history["first_change"].astype(bool)]
     for r in first.itertuples():
         i = history.index.get_loc(r.Index)
         before = history.iloc[:i]
@@ -126,7 +126,7 @@ def plot_history(history: pd.DataFrame, metric: str):
             line = ax.plot(
                 xs, g["value"].to_numpy(float), marker="o", ms=3, label=f"{alg}{f' ({suite})' if suite else ''}"
             )
-            ch = g[g["changed"]]
+            ch = g[g["changed"].astype(bool)]
             ax.plot(ch["run"].map(x), ch["value"], "o", mfc="none", ms=9, color=line[0].get_color())
         for r in s.loc[~s["comparable"], "run"].unique():
             ax.axvline(x[r] - 0.5, color="0.4", ls="--", lw=1)
