@@ -109,3 +109,15 @@ def test_a_value_twice_in_a_list_is_refused_everywhere(icra20, capsys, name, val
         with pytest.raises(SystemExit) as exc:
             main(["sweep", str(one), f"--{name}", values, "--no-progress"])
         assert exc.value.code == 2 and f"{said} are the same value" in capsys.readouterr().err
+
+
+def test_digits_are_decimals_a_float_holds(icra20, capsys):
+    """``--digits 100`` printed 100 decimals of float noise; 0 (whole numbers) was refused."""
+    one = str(icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt")
+    for bad in ("18", "100", "-1", "2.5", "nan"):
+        with pytest.raises(SystemExit):
+            main(["evaluate", one, f"--digits={bad}", "--no-progress"])
+        assert "expected a whole number of decimals from 0 to 17" in capsys.readouterr().err
+    assert main(["evaluate", one, "--digits", "0", "--no-progress"]) == 0
+    row = capsys.readouterr().out.splitlines()[1].split()  # the sequence row: whole numbers, no point
+    assert row[0] == "odom" and all("." not in v for v in row[5:])

@@ -158,7 +158,7 @@ def add_rpe_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rpe-tolerance", default=None, type=arg_type(lambda t: validate.positive("--rpe-tolerance", t, "")),
                    help="evo's --delta_tol for --rpe-all-pairs, a fraction of the delta (default 0.1)")  # fmt: skip
     p.add_argument("--digits", default=4, metavar="N",
-                   type=arg_type(lambda t: int(validate.positive("--digits", t, "digits", integer=True))),
+                   type=arg_type(lambda t: validate.decimals("--digits", t)),
                    help="decimals of the printed tables (default 4; the CSV keeps every digit)")  # fmt: skip
 
 

@@ -192,6 +192,15 @@ def positive(name: str, value: Any, unit: str, *, integer: bool = False) -> floa
     return float(v)
 
 
+def decimals(name: str, value: Any) -> int:
+    """How many decimals to print: a whole number from 0 to 17 (a float64 holds 17 significant
+    digits; more print noise, never information)."""
+    v = _number(name, value, {})
+    if not (0 <= v <= 17 and v == int(v)):  # NaN too
+        raise ValidationError(f"{name}={_show(value)}: expected a whole number of decimals from 0 to 17")
+    return int(v)
+
+
 def probability(name: str, value: Any) -> float:
     """A probability strictly between 0 and 1 (a confidence level, a test's alpha)."""
     v = _number(name, value, {})
