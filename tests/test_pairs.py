@@ -410,10 +410,23 @@ def test_a_ground_truth_of_fewer_than_two_poses_fails_the_pair_cleanly(tum_pairs
     good = write(tmp_path, "est.txt", "".join(f"{t:.4f} 1 2 3 0 0 0 1\n" for t in est.stamps[:50]))
     ev = evaluate_pairs([good], bad, scene="cafe", progress=False)
     assert [f.error for f in ev.failures] == [
-        f"{bad}: the ground truth has {says} (comments, blank lines and skipped poses aside); expected at least two "
+        f"{good}: {bad}: the ground truth has {says} (comments, blank lines and skipped poses aside); expected at least two "
         "poses spanning the estimate's time"
     ]
     assert ev.spans() == {} and ev.scenes().empty
     assert main(["evaluate", str(good), "--gt", str(bad), "--scene", "cafe", "--no-progress"]) == 1
     err = capsys.readouterr().err
     assert f"the ground truth has {says}" in err and "Traceback" not in err and "clock offset" not in err
+
+
+def test_a_folder_as_a_text_ground_truth_is_refused_before_any_estimate(tum_pairs, tmp_path, capsys):
+    """``--gt FOLDER`` failed each estimate in turn (exit 1, the failure recorded against the
+    estimate) while a missing ground truth was refused at once (exit 2): both are refused at once."""
+    _, est = tum_pairs["fr1_xyz"]
+    good = write(tmp_path, "est.txt", "".join(f"{t:.4f} 1 2 3 0 0 0 1\n" for t in est.stamps[:50]))
+    folder = tmp_path / "gt_folder"
+    folder.mkdir()
+    with pytest.raises(ln.ParseError, match=r"gt_folder: is a folder; expected a TUM ground-truth file"):
+        evaluate_pairs([good], folder, progress=False)
+    assert main(["evaluate", str(good), "--gt", str(folder), "--no-progress"]) == 2
+    assert "is a folder; expected a TUM ground-truth file" in capsys.readouterr().err

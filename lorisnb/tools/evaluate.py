@@ -252,6 +252,10 @@ def evaluate_pairs(
     compile_trials_by(trials_by)
     if not src.groundtruth.exists():
         raise ParseError(src.groundtruth, None, "ground truth not found; expected a file (or a ROS 2 bag folder)")
+    if src.groundtruth.is_dir() and src.gt_fmt != "bag":  # refused once, before any estimate is read
+        kind = {"euroc": "EuRoC", "openloris": "OpenLORIS"}.get(src.gt_fmt, src.gt_fmt.upper())
+        raise ParseError(src.groundtruth, None, f"is a folder; expected a {kind} ground-truth file (a folder is a "
+                         "ground truth only as a ROS 2 bag, --gt-format bag)")  # fmt: skip
     items = result_files(estimates, _pair_suffixes(src.fmt))
     if "bag" not in (src.fmt, src.gt_fmt):  # (one bag may hold both, on other topics)
         items = without_groundtruth(items, src.groundtruth)
