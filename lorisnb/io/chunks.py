@@ -124,6 +124,9 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
     """The C-parser path for one chunk, or None when the chunk needs the exact scanner."""
     import pandas as pd
 
+    if b"\r" in chunk and chunk.count(b"\r") != chunk.count(b"\r\n"):  # a lone CR: pandas ends a line there
+        return None  # (its row count can come out right all the same, and a pose be dropped): the scanner says where
+
     skip = np.zeros(0, np.int64)
     specials: list[tuple[int, str]] = []
     first_row = 0
@@ -193,15 +196,16 @@ def _exact(
     rows = np.flatnonzero(~comment & ~blank & ~colon)
     ntok = lines.ntok[rows]
     bad = ~np.isin(ntok, widths)
-    if bad.any():
-        i = int(rows[np.flatnonzero(bad)[0]])
-        raise ParseError(path, line0 + i + 1, bad_width(lines.text(i), int(lines.ntok[i])))
-    try:
-        flat = lines.numbers(rows, path, numbers)
+    first_bad = int(np.flatnonzero(bad)[0]) if bad.any() else rows.size
+    try:  # the first problem in file order, whatever the chunks: a token before a line of another width
+        flat = lines.numbers(rows[:first_bad], path, numbers)
     except ParseError as exc:
         if exc.line is not None:
             raise ParseError(path, line0 + exc.line, exc.reason) from None
         raise
+    if first_bad < rows.size:
+        i = int(rows[first_bad])
+        raise ParseError(path, line0 + i + 1, bad_width(lines.text(i), int(lines.ntok[i])))
     width = max(widths)
     columns = np.full((width, rows.size), np.nan)
     offs = np.cumsum(ntok) - ntok

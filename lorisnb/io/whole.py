@@ -34,6 +34,8 @@ NUMPY_MAX_BYTES = 8 << 20
 TAIL_BYTES = 4096
 COPY_ROWS = 8192
 BLANK = b" \t\r\x0b\x0c"
+#: The bytes of a plain file's numeric lines: numbers (``nan``, ``inf``, ``infinity`` too), separators, line ends.
+PLAIN_BYTES = b"0123456789+-.eE ,\r\nnaifNAIFtyTY"
 
 
 def read_whole(
@@ -100,6 +102,9 @@ def _numpy_rows(path: str | os.PathLike, sep: str, skip: int, ntok: int) -> np.n
     try:
         with open(path, "rb") as fh:
             raw = fh.read()
+        body = raw.split(b"\n", skip)[-1] if skip else raw
+        if body.translate(None, PLAIN_BYTES) or body.count(b"\r") != body.count(b"\r\n"):  # numpy strips bytes
+            return None  # Python's float refuses ('0.5\x1c') and ends a line at a lone CR: not plain after all
         values = np.loadtxt(io.BytesIO(raw), dtype=np.float64, delimiter=sep, comments=None, skiprows=skip, ndmin=2)
     except (ValueError, OSError, UnicodeDecodeError):
         return None
