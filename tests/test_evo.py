@@ -194,6 +194,20 @@ def test_kitti_pairs_by_index(tmp_path):
     assert (df["n_pairs"].iloc[0]) == 30
 
 
+def test_crosscheck_says_stamps_in_other_units_as_evaluate_does(data, tmp_path, capsys):
+    """An estimate in nanoseconds against a ground truth in seconds: crosscheck said only that no
+    stamp lies within 0.5 s; it now names the file and the unit, with the same rule as evaluate."""
+    gt = data.tum / "freiburg1_xyz-groundtruth.txt"
+    rows = [r.split() for r in (data.tum / "freiburg1_xyz-rgbdslam.txt").read_text().splitlines() if r[:1] != "#"]
+    ns = tmp_path / "est_ns.txt"
+    ns.write_text("".join(f"{int(round(float(r[0]) * 1e9))} {' '.join(r[1:])}\n" for r in rows))
+    assert main(["crosscheck", str(gt), str(ns)]) == 1  # cannot be paired: exit 1, as evaluate
+    said = capsys.readouterr().err
+    assert f"error: {ns}: stamps in different units: the estimate's stamps look like nanoseconds" in said
+    assert main(["evaluate", str(ns), "--gt", str(gt), "--no-progress"]) == 1
+    assert "the estimate's stamps look like nanoseconds" in capsys.readouterr().err
+
+
 def test_evo_ape_runs_evo_once_per_input(data, monkeypatch):
     """A cross-check table and its per-pose plot ask evo for the same APE: evo's per-pose loop runs
     once, the second answer is the same numbers (a copy), and other poses are computed afresh; the

@@ -12,6 +12,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..core.spec import make_spec
+from ..core.units import check_stamp_units
 from ..errors import EvaluationError, LorisWarning, ParseError, ValidationError
 from .outputs import check_outputs
 
@@ -114,6 +115,8 @@ def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame | int:
                              topic=args.gt_topic if gt_format == "bag" else None)  # fmt: skip
         est = read_trajectory(args.est, est_format, stamps=est_times if est_format == "kitti" else None,
                               topic=args.topic if est_format == "bag" else None)  # fmt: skip
+        if len(gt) and len(est):  # stamps in other units than seconds: said as evaluate says it (one rule)
+            check_stamp_units(est, gt, str(args.est))
         spec = make_spec(None, surface="cli", **({} if args.scale is None else {"scale": args.scale}))
         with_scale = spec.alignment_for(Path(args.est).stem) == "sim3"
         table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs,
