@@ -75,7 +75,7 @@ def test_report_processes_import_papermill_without_the_iri_grammars():
 
     assert run("") == ["True", "True"]  # what a plain process pays
     assert run("from lorisnb.tools.report import _worker_start\n_worker_start(None)") == ["False", "True"]
-    cli = "from lorisnb.cli import main\nassert main(['report', '--out', '']) == 2"  # refused, after the set-up
+    cli = "from lorisnb.cli import main\nassert main(['report', '--notebooks', 'no_such_notebook']) == 2"  # refused, after the set-up
     assert run(cli) == ["False", "True"]
 
 
