@@ -26,6 +26,8 @@ def compile_trials_by(regex: str | None) -> re.Pattern[str] | None:
     searched in one file or folder name at a time (the file's name first), so a ``/`` is refused."""
     if regex is None:
         return None
+    if not isinstance(regex, str):
+        raise ValidationError(f"trials_by={regex!r}: expected a regular expression (a string), e.g. 'run(\\d+)'")
     if "/" in regex:
         raise ValidationError(f"trials_by={regex}: it is searched in one file or folder name at a time, so '/' never "
                               "matches; expected an expression for the name that holds the trial, e.g. 'run_(\\d+)'")  # fmt: skip

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..core.matrices import rotation_blocks
 from ..core.trajectory import Trajectory
-from ..core.validate import choice
+from ..core.validate import choice, flag
 from ..errors import LorisWarning, ParseError, ValidationError
 from .chunks import read_rows
 from .openloris import read_openloris
@@ -330,9 +330,17 @@ def read_trajectory(
         repair_stamps: OpenLORIS files only: read nanoseconds written without zero padding as such
             (see :func:`lorisnb.io.read_openloris`); refused for other formats.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise ValidationError(f"path={path!r}: expected the path of a trajectory file (str or pathlib.Path)")
     fmt = choice("format", fmt, TRAJECTORY_FORMATS)
-    if repair_stamps and fmt != "openloris":
+    if flag("repair_stamps", repair_stamps) and fmt != "openloris":
         raise ValidationError(f"repair_stamps: only OpenLORIS result files are read with it, not {fmt} files")
+    for name, value, fmts in (("seq", seq, ("openloris",)), ("stamps", stamps, ("kitti",)), ("topic", topic, ("bag",)),
+                              ("tf", tf, ("bag",))):  # fmt: skip
+        if value is not None and fmt not in fmts:  # an argument that cannot apply: refused, never dropped
+            raise ValidationError(f"{name}: only for {' and '.join(fmts)} files, not {fmt} files")
+    if seq is not None and (isinstance(seq, (bool, np.bool_)) or not isinstance(seq, (int, np.integer)) or seq < 0):
+        raise ValidationError(f"seq={seq!r}: expected the whole number of a 'seq: N' block")
     found = recognise(sample(path))
     if found and fmt not in found:  # plainly another format: say which option reads it
         want = FORMATS[fmt]

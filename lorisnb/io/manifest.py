@@ -123,6 +123,8 @@ def manifest_path(name_or_path: str | os.PathLike[str]) -> Path:
     """A built-in manifest's file (by name) or the given path."""
     if isinstance(name_or_path, str) and name_or_path in BUILT_IN:
         return Path(str(resources.files("lorisnb.manifests").joinpath(f"{name_or_path}.toml")))
+    if not isinstance(name_or_path, (str, os.PathLike)) or not str(name_or_path).strip():
+        raise ValidationError(f"manifest={name_or_path!r}: expected a TOML file's path or one of {', '.join(BUILT_IN)}")
     return Path(name_or_path)
 
 
@@ -148,6 +150,10 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
     except tomllib.TOMLDecodeError as exc:
         raise ParseError(path, getattr(exc, "lineno", None), f"not valid TOML ({exc})") from None
     check_keys(raw, TOP_KEYS, path)
+    for key in ("name", "scene", "root", "source", *READING_KEYS.values()):  # text, never str() of a list or a number
+        _text(raw, key, path)
+    if "openloris" in raw and not isinstance(raw["openloris"], bool):  # "false" is not truth-tested
+        raise ParseError(path, None, f"openloris = {raw['openloris']!r}: expected true or false")
     if raw.get("openloris"):
         return Manifest(path=path, name=str(raw.get("name", "OpenLORIS-Scene")), sessions=[], openloris=True,
                         source=str(raw.get("source", "")), groundtruth_format="openloris", estimate_format="openloris")  # fmt: skip
@@ -169,6 +175,8 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
         if not isinstance(item, dict) or "groundtruth" not in item:
             raise ParseError(path, None, f"session {k}: expected a table with at least 'groundtruth = \"file\"'")
         check_keys(item, SESSION_KEYS, path, f"[[session]] {k}: ")
+        for key in ("name", "scene", "groundtruth", "estimate"):
+            _text(item, key, path, f"[[session]] {k}: ")
         name = str(item.get("name", f"session{k}"))
         seq = item.get("seq", k)
         if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
@@ -200,12 +208,19 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
     except ValidationError as exc:
         raise ParseError(path, None, str(exc)) from None
     options = {k: v for k, v in table.items() if k != "preset"}
+    elsewhere = {"transform": "the [transform] table", "surface": None}
+    for key in sorted(set(options) & set(elsewhere)):
+        where = elsewhere[key]
+        raise ParseError(path, None, f"[conventions]: {key} " + (f"is given in {where}" if where else
+                         "is not an option of the evaluation spec") + "; expected spec options (align, association, ...)")  # fmt: skip
+    for key in ("eps", "phi", "lifelong"):  # top-level keys; in [conventions] too, but not in both
+        if key in raw and key in options:
+            raise ParseError(path, None, f"{key} is given at the top and in [conventions]; give it once")
+        if key in raw:
+            options[key] = raw[key]
+    options.setdefault("lifelong", False)
     try:
-        top = {k: raw[k] for k in ("eps", "phi") if k in raw}
-        spec = make_spec(
-            table.get("preset"), surface="manifest", **options, **top, lifelong=raw.get("lifelong", False),
-            transform=transform,
-        )  # fmt: skip
+        spec = make_spec(table.get("preset"), surface="manifest", **options, transform=transform)
     except ValidationError as exc:
         raise ParseError(path, None, str(exc)) from None
     return Manifest(
@@ -216,6 +231,13 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
         estimate_topic=raw.get("estimate_topic"), groundtruth_tf=raw.get("groundtruth_tf"),
         estimate_tf=raw.get("estimate_tf"), source=str(raw.get("source", "")),
     )  # fmt: skip
+
+
+def _text(table: dict[str, Any], key: str, path: Path, where: str = "") -> None:
+    """A key whose value must be text (a name, a file, a topic): anything else is refused, never
+    turned into the text of a list or a number."""
+    if key in table and not isinstance(table[key], str):
+        raise ParseError(path, None, f"{where}{key} = {table[key]!r}: expected a string (in quotes)")
 
 
 def check_repeats(sessions: list[Session], path: Path) -> None:
@@ -257,8 +279,12 @@ def _transform(raw: Any, path: Path) -> Sim3 | None:
         raise ParseError(path, None, "transform: expected a [transform] table (translation, quaternion)")
     check_keys(raw, TRANSFORM_KEYS, path, "[transform]: ")
     try:
-        t = np.asarray(raw.get("translation", [0.0, 0.0, 0.0]), float).reshape(3)
-        q = np.asarray(raw.get("quaternion", [0.0, 0.0, 0.0, 1.0]), float).reshape(4)
+        given = [raw.get("translation", [0.0, 0.0, 0.0]), raw.get("quaternion", [0.0, 0.0, 0.0, 1.0])]
+        if any(not isinstance(v, list) or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v)
+               for v in given):  # fmt: skip
+            raise TypeError  # true is not 1 m
+        t = np.asarray(given[0], float).reshape(3)
+        q = np.asarray(given[1], float).reshape(4)
     except (AttributeError, ValueError, TypeError):
         raise ParseError(
             path, None, "[transform]: expected translation = [x, y, z] and quaternion = [x, y, z, w]"

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..core.model import ResultFile
 from ..core.trajectory import Trajectory
+from ..core.validate import flag
 from ..errors import LorisWarning, ParseError
 from .chunks import read_rows, stamp_digits
 from .ranges import GIVE_BACK_BYTES, give_back_memory
@@ -148,6 +149,8 @@ def read_openloris(
     Raises:
         ParseError: malformed line, pose before any ``seq:``, zero-norm quaternion, ...
     """
+    remove_repeated, warn = flag("remove_repeated", remove_repeated), flag("warn", warn)
+    repair_stamps = flag("repair_stamps", repair_stamps)  # "no" is refused, never truth-tested
     spath = str(path)
     rows = read_rows(
         path,

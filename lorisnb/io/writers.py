@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.trajectory import Trajectory
+from ..core.validate import flag
 from ..errors import MissingDependencyError, OutputError
 
 if TYPE_CHECKING:
@@ -31,7 +32,7 @@ def write_openloris(
     """Write trajectories as an OpenLORIS result file (a simulated one says ``simulated: true`` in
     its header). Written to a temporary name and moved into place; an existing file is kept unless
     ``overwrite``."""
-    if Path(path).exists() and not overwrite:
+    if Path(path).exists() and not flag("overwrite", overwrite):  # "no" is refused, never truth-tested
         raise OutputError(f"{path} exists; choose another name or pass overwrite=True to replace it")
     lines = [f"scene: {scene}", f"frame: {frame}"]
     extra = dict(header or {})

@@ -12,11 +12,13 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..core import validate
 from ..core.regression import Tolerance, parse_tolerances, scene_changes, sequence_changes, verdict
 from ..core.stats import with_trials
 from ..errors import ValidationError
 from ..io.writers import write_text
 from .comparison import check_table_duplicates
+from .runs import setting_differences
 
 
 @dataclass
@@ -79,6 +81,11 @@ def diff_tables(
         tols = {k: v for k, v in tolerances.items() if isinstance(v, Tolerance)}
     else:
         tols = parse_tolerances(tolerances)  # type: ignore[arg-type]
+    alpha = validate.probability("alpha", alpha)
+    differ = setting_differences(base, cand, *names)  # the CLI says it for runs; Python callers too
+    if differ:
+        raise ValidationError(f"{names[0]} and {names[1]} are not comparable (scored with different settings): "
+                              + "; ".join(differ) + ". Compare tables scored with the same spec")  # fmt: skip
     b, c = keyed(base, names[0]), keyed(cand, names[1])
     seqs = sequence_changes(b, c, tols, alpha, seed)
     if cand_failures and "file" in b.columns and len(seqs):

@@ -80,9 +80,15 @@ class Run:
 
     def table_spec(self) -> pd.DataFrame:
         """The spec columns per scene (one row per distinct setting)."""
-        cols = [c for c in SPEC_COLUMNS if c in self.table.columns]
-        keys = ["table"] if "table" in self.table.columns else []
-        return self.table[keys + ["scene"] + cols].astype(str).drop_duplicates().sort_values(keys + ["scene"] + cols)
+        return table_settings(self.table)
+
+
+def table_settings(table: pd.DataFrame) -> pd.DataFrame:
+    """A per-sequence table's spec columns (:data:`SPEC_COLUMNS`) per scene, one row per distinct
+    setting, as text."""
+    cols = [c for c in SPEC_COLUMNS if c in table.columns]
+    keys = ["table"] if "table" in table.columns else []
+    return table[keys + ["scene"] + cols].astype(str).drop_duplicates().sort_values(keys + ["scene"] + cols)
 
 
 def is_table(path: Path) -> bool:
@@ -216,7 +222,13 @@ def spec_differences(a: Run, b: Run) -> list[str]:
             x, y = va.get(k, missing), vb.get(k, missing)
             if x != y:
                 out.append(f"spec {k}: {_json(x, missing)} in {a.path} against {_json(y, missing)} in {b.path}")
-    sa, sb = a.table_spec(), b.table_spec()
+    return out + setting_differences(a.table, b.table, str(a.path), str(b.path))
+
+
+def setting_differences(a: pd.DataFrame, b: pd.DataFrame, name_a: str = "BASE", name_b: str = "CAND") -> list[str]:
+    """What makes two per-sequence tables not comparable: the settings (:data:`SPEC_COLUMNS`)
+    differ for a scene both have; each difference said once, with the scenes it is found in."""
+    sa, sb = table_settings(a), table_settings(b)
     both = sorted(set(sa["scene"]) & set(sb["scene"]))
     said: dict[str, list[str]] = {}  # what differs -> the scenes it differs in (said once for all of them)
     for scene in both:
@@ -228,9 +240,9 @@ def spec_differences(a: Run, b: Run) -> list[str]:
         if xs != ys:  # only the columns whose values differ (all of them if only their combination does)
             keep = [i for i in range(len(cols)) if {r[i] for r in xs} != {r[i] for r in ys}] or list(range(len(cols)))
             xk, yk = (sorted({tuple(r[i] for i in keep) for r in rows}) for rows in (xs, ys))
-            text = f"{', '.join(cols[i] for i in keep)} = {_rows(xk)} in {a.path} against {_rows(yk)} in {b.path}"
+            text = f"{', '.join(cols[i] for i in keep)} = {_rows(xk)} in {name_a} against {_rows(yk)} in {name_b}"
             said.setdefault(text, []).append(scene)
-    return out + [f"{', '.join(scenes)}: {text}" for text, scenes in said.items()]
+    return [f"{', '.join(scenes)}: {text}" for text, scenes in said.items()]
 
 
 def _json(value: Any, missing: object) -> str:

@@ -29,7 +29,8 @@ def unscored(ev: Evaluation) -> list[Failure]:
     no pose at all (kind ``no-pose``: an empty or comments-only file; an OpenLORIS file whose
     ``seq:`` blocks hold no pose declares failed runs, as the official data's ``*-failed.txt``
     do, and is scored) and, for manifests, declared sessions without an estimate (kind
-    ``missing-estimate``: rows with 0 poses, :mod:`lorisnb.core.missing`). Failures are in
+    ``missing-estimate``: rows with 0 poses, :mod:`lorisnb.core.missing`) or sessions with poses
+    none of which matched (kind ``no-match``, as a pair's file). Failures are in
     ``ev.failures``."""
     from .evaluation import Failure
 
@@ -42,6 +43,11 @@ def unscored(ev: Evaluation) -> list[Failure]:
         absent = [e.seq for e in f.sequences if e.poses == 0] if ev.kind == "manifest" else []
         if absent:
             out.append(Failure(f.path, f"{f.path}: no estimate for session(s) {absent}", "missing-estimate"))
+        unmatched = [e.seq for e in f.sequences if e.poses and not e.matched] if ev.kind == "manifest" else []
+        if unmatched and len(unmatched) < len(f.sequences):  # a session is an input of its own, as a pair's file:
+            out.append(Failure(f.path, f"{f.path}: session(s) {unmatched} matched no ground-truth stamp in time",
+                               "no-match"))  # fmt: skip
+            continue  # (every session unmatched: said below, with the evaluation's reason)
         if any(e.matched for e in f.sequences):
             continue
         if not any(e.poses for e in f.sequences):
