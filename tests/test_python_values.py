@@ -126,3 +126,15 @@ def test_diff_tables_refuses_tables_of_other_settings_from_python(icra20):
             diff_tables(a, a, alpha=alpha)
     assert diff_tables(a, a).verdict["verdict"] == "ok"
     assert isinstance(diff_tables(a, pd.DataFrame(columns=a.columns)).sequences, pd.DataFrame)
+
+
+def test_an_rpe_tolerance_without_evo_all_pairs_is_refused_by_every_table(data):
+    """The command line and the spec refuse ``rpe_tolerance`` without evo's all pairs; ``score``,
+    ``Evaluation.sequences`` and ``sweep`` accepted it and ignored it."""
+    ev = ln.evaluate_pairs([data.tum / EST], data.tum / GT, progress=False)
+    for call in (lambda: ev.sequences(rpe_tolerance=0.2), lambda: ln.score(ev.errors, rpe_tolerance=0.2),
+                 lambda: ln.sweep(ev.errors, rpe_tolerance=0.2)):  # fmt: skip
+        with pytest.raises(ln.ValidationError, match="rpe_tolerance=0.2: only for evo's all pairs"):
+            call()
+    with_tol = ev.sequences(rpe_tolerance=0.2, rpe_all_pairs=True, rpe_unit="m")
+    assert with_tol["rpe_trans_rmse"].iloc[0] > 0

@@ -121,3 +121,54 @@ def test_digits_are_decimals_a_float_holds(icra20, capsys):
     assert main(["evaluate", one, "--digits", "0", "--no-progress"]) == 0
     row = capsys.readouterr().out.splitlines()[1].split()  # the sequence row: whole numbers, no point
     assert row[0] == "odom" and all("." not in v for v in row[5:])
+
+
+@pytest.mark.parametrize(
+    ("notebook", "parameters", "said"),
+    [
+        ("evo_crosscheck", {"all_files": "no"}, "all_files='no' \\(str\\): expected True or False"),
+        ("indoor_vs_outdoor", {"rpe_metres": -1}, "rpe_metres=-1: expected a positive number of metres"),
+        ("indoor_vs_outdoor", {"relative_to": "bogus"}, "relative_to=bogus: expected one of extent, length"),
+        ("indoor_vs_outdoor", {"ordslam_fps": 30}, "-p ordslam_fps: only applies with -p ordslam_dir"),
+        ("evaluate_my_results", {"fmt": "kitti"}, "-p fmt: only applies with -p groundtruth"),
+        ("evaluate_my_results", {"conventions": "tumm"}, "conventions=tumm: expected one of"),
+        ("compare_algorithms", {"sim_trials": -3}, "sim_trials=-3: expected a positive whole number"),
+        ("metrics_primer", {"scene": "kitchen"}, "scene=kitchen: expected one of"),
+        ("metrics_primer", {"tau": None}, "-p tau null: the notebooks need a value \\(default 60.0\\)"),
+    ],
+)
+def test_report_parameters_are_checked_before_any_notebook_runs(notebook, parameters, said):
+    """Each ran its notebook and failed inside it (exit 1), or was used as given: ``all_files="no"``
+    ran every file, ``rpe_metres -1`` gave negative RPE percentages, ``fmt`` without ``groundtruth``
+    was ignored, ``null`` replaced the notebook's default with None."""
+    from lorisnb.tools.report_notebooks import check_parameters, declared_by
+
+    with pytest.raises(ValidationError, match=said):
+        check_parameters(parameters, declared_by([notebook], None))
+
+
+def test_report_parameters_reach_the_notebook_normalized(tmp_path, monkeypatch, data):
+    """A relative ``--data``/``results_dir`` named the current folder's at the check and none in the
+    notebook, which runs in its own folder; ``-p scene Cafe`` and ``-p eps '"1"'`` were checked but
+    passed on as typed (the primer failed on them)."""
+    from lorisnb.tools.report_notebooks import check_parameters, declared_by
+
+    monkeypatch.chdir(data.root.parent)
+    rel = data.root.name
+    out = check_parameters({"data_root": rel, "scene": "Cafe", "eps": "1"}, declared_by(["metrics_primer"], None))
+    assert out["data_root"] == str(data.root.resolve()) and out["scene"] == "cafe" and out["eps"] == 1.0
+    assert check_parameters({"eps": "paper"}, declared_by(["metrics_primer"], None))["eps"] == "paper"
+
+
+def test_a_report_run_may_not_lie_in_the_data_root(tmp_path, data):
+    """``--out`` inside the data root wrote the run among the data, exit 0."""
+    from lorisnb.tools.report import run_report
+
+    copy = tmp_path / "data"
+    (copy / "openloris-scene").mkdir(parents=True)
+    for part in ("groundtruth", "extrinsics.json", "icra20_results"):
+        src = data.root / "openloris-scene" / part
+        (copy / "openloris-scene" / part).symlink_to(src)
+    with pytest.raises(ln.OutputError, match="lies in the input .*data of this report"):
+        run_report(copy / "run", parameters={"data_root": str(copy)}, notebooks=["metrics_primer"], progress=False)
+    assert not (copy / "run").exists()

@@ -72,6 +72,8 @@ def difficulty_measures(
     """
     relative_to = choice("relative_to", relative_to, ("extent", "length"))
     fraction = validate.fraction("eps_fraction", eps_fraction)
+    rpe_metres = validate.positive("rpe_metres", rpe_metres, "metres")  # -1 gave negative RPE percentages
+    delta = validate.threshold("delta", delta)
     st = trajectory_stats(gt)
     eps = fraction * size(gt.positions, relative_to)  # of the whole sequence, whatever was tracked
     out = dict(

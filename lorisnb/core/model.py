@@ -287,7 +287,10 @@ def scene_eps(eps: Eps, scene: str) -> float:
                     "give eps in metres or as 'relative:F' (a fraction of the ground truth's extent)"
                 )
             return PAPER_EPS[scene]
-        return float(eps)
+        try:
+            return float(eps)
+        except ValueError:  # relative:F is a fraction of each sequence's extent (sequence_eps)
+            raise ValidationError(f"eps={eps!r}: expected metres or 'paper' for a scene's threshold") from None
     if isinstance(eps, Mapping):
         return float(eps[scene])
     return float(eps)

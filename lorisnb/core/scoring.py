@@ -185,11 +185,14 @@ def rpe_setting(rpe_delta: Any, rpe_unit: Any) -> tuple[float, str]:
 
 def rpe_options(rpe_pairs: Any, rpe_all_pairs: Any, rpe_tolerance: Any) -> tuple[str, bool | None, float]:
     """Validated RPE pair options: along ``reference`` or ``estimate``; all pairs True / False
-    (evo's rules) or None (lorisnb's); a positive relative tolerance."""
+    (evo's rules) or None (lorisnb's); a positive relative tolerance, other than the default only
+    with evo's all pairs (as the spec refuses it, :func:`lorisnb.core.spec_evo.evo_refusals`)."""
     pairs = choice("rpe_pairs", rpe_pairs, RPE_PAIRS)
     if rpe_all_pairs is not None and not isinstance(rpe_all_pairs, (bool, np.bool_)):
         raise ValidationError(f"rpe_all_pairs: expected True, False or None, got {rpe_all_pairs!r}")
     tol = positive("rpe_tolerance", rpe_tolerance, "(a fraction of delta)")
+    if tol != RPE_DEFAULTS["rpe_tolerance"] and rpe_all_pairs is not True:
+        raise ValidationError(f"rpe_tolerance={rpe_tolerance!r}: only for evo's all pairs (rpe_all_pairs=True)")
     return pairs, None if rpe_all_pairs is None else bool(rpe_all_pairs), tol
 
 

@@ -281,7 +281,7 @@ def run_report(
         given_source = results if results is not None else params.get("results_dir")  # the leaderboard's input
         source = Path(str(given_source)) if given_source else (data.icra20 if data else None)
         roots = _input_roots(names, params, data, source if wants_board else None)
-        hit = overlap(run_dir, [*roots, nb_dir])
+        hit = overlap(run_dir, [*roots, nb_dir, *([data.root.resolve()] if data is not None else [])])  # the data root
         if hit:  # the run would be read as an input by the next report on the same folder, and by verify
             raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
         if source is not None:  # a filter naming nothing there is refused now, not by each notebook later
