@@ -138,3 +138,29 @@ def test_an_rpe_tolerance_without_evo_all_pairs_is_refused_by_every_table(data):
             call()
     with_tol = ev.sequences(rpe_tolerance=0.2, rpe_all_pairs=True, rpe_unit="m")
     assert with_tol["rpe_trans_rmse"].iloc[0] > 0
+
+
+def test_numpy_values_are_read_as_python_values(data, icra20):
+    """``np.True_`` was the number 1 for eps, phi, ``max_diff``, ... while Python's True was refused;
+    ``scale=np.int64(1)`` was refused while ``scale=1`` was Sim(3); complex stamps lost their
+    imaginary part; ``compare_table(metric="CR")`` was refused while ``--metric CR`` was not."""
+    import numpy as np
+
+    from lorisnb.tools.comparison import compare_table
+
+    for name in ("eps", "phi", "delta", "tau", "max_diff", "t_offset"):
+        with pytest.raises(ln.ValidationError, match=f"{name}=(np.)?True_?: expected .*a number"):
+            ln.make_spec("tum", **{name: np.True_})
+    assert ln.make_spec("openloris", scale=np.int64(1)).align == ln.make_spec("openloris", scale=1).align == "sim3"
+    with pytest.raises(ln.ValidationError, match="values of type complex128; expected real numbers"):
+        ln.Trajectory(np.array([1.0, 2.0], complex), np.zeros((2, 3)), np.tile([0, 0, 0, 1.0], (2, 1)))
+    ev = ln.evaluate(icra20 / "per-seq" / "odom", progress=False)
+    assert compare_table(ev.sequences(), ev.durations(), "CR").algorithms["metric"].iloc[0] == "cr"
+    with pytest.raises(ln.ValidationError, match="durations: expected a DataFrame"):
+        compare_table(ev.sequences(), None)
+    with pytest.raises(ln.ValidationError, match="max_bytes=1e9 is not|max_bytes="):
+        ln.sweep(ev.errors, max_bytes=[1])
+    for kw, said in (({"fractions": 0.1}, "non-empty list"), ({"fractions": (2,)}, "at most 1"),
+                     ({"lengths": [-1]}, "expected a positive number")):  # fmt: skip
+        with pytest.raises(ln.ValidationError, match=said):
+            ev.relative(**kw)

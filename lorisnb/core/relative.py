@@ -20,10 +20,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..errors import ValidationError
+from . import validate
 from .geometry import quat_conjugate, quat_multiply, quat_normalize, quat_rotate, quat_to_matrix
 from .model import FileErrors
 from .scoring import as_files
@@ -120,6 +122,18 @@ def rpg_relative_errors(
     return pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(columns=cols)
 
 
+def _positive_list(name: str, values: Any, most: float = math.inf) -> tuple[float, ...]:
+    """A non-empty list of positive numbers (at most ``most``): ``fractions=2`` or ``lengths=[-1]``
+    gave an empty table, ``fractions=0.1`` a TypeError."""
+    items = list(values) if isinstance(values, (list, tuple, np.ndarray)) else None
+    if not items:
+        raise ValidationError(f"{name}={values!r}: expected a non-empty list of positive numbers")
+    out = tuple(validate.positive(name, v, "") for v in items)
+    if any(v > most for v in out):
+        raise ValidationError(f"{name}={values!r}: each is a fraction of the path length, at most {most:g}")
+    return out
+
+
 def relative_table(
     errors: FileErrors | Iterable[FileErrors],
     fractions: tuple[float, ...] = RPG_FRACTIONS,
@@ -135,6 +149,8 @@ def relative_table(
     (``FileErrors.groundtruth_lengths``, as rpg), else of the matched ground truth's."""
     import pandas as pd
 
+    fractions = _positive_list("fractions", fractions, most=1.0)
+    lengths = None if lengths is None else _positive_list("lengths", lengths)
     rows = []
     for f in as_files(errors):  # per file, sequence and length, never per pose
         for e in f.sequences:

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ValidationError
-from . import metrics
+from . import metrics, validate
 from .aggregate import aggregate_scenes
 from .frames import PAPER_EPS
 from .model import (
@@ -117,6 +117,7 @@ def sweep(
     if relative_to is not None:
         relative_to = choice("relative_to", relative_to, RELATIVE)
     columns = choice("columns", columns, ("all", "metrics"))
+    max_bytes = validate.positive("max_bytes", max_bytes, "bytes")
     eps_l = threshold_list("eps", eps)
     if relative_to is not None and any(isinstance(v, (str, Mapping)) for v in eps_l):
         raise ValidationError("eps: with relative_to, eps values are fractions (numbers), not 'paper' or a mapping")

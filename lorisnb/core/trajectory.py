@@ -212,6 +212,9 @@ def sessions(name: str, value: Any) -> Mapping[int, Trajectory]:
 
 
 def _array(name: str, value: Any, dtype: type = float) -> np.ndarray:
+    kind = getattr(value, "dtype", None)
+    if kind is not None and kind.kind in "cbOSUMm":  # complex (its imaginary part dropped), bool, text, dates
+        raise ValidationError(f"Trajectory {name}: values of type {kind}; expected real numbers")
     try:
         return np.asarray(value, dtype)
     except (TypeError, ValueError):

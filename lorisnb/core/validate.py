@@ -52,7 +52,7 @@ def _show(value: Any) -> str:
 
 
 def _number(name: str, value: Any, words: Mapping[str, Any]) -> Any:
-    if isinstance(value, bool) or value is None:
+    if isinstance(value, (bool, np.bool_)) or value is None:  # numpy's True is no more a number than Python's
         raise ValidationError(f"{name}={_show(value)}: expected a number")
     if isinstance(value, str):
         text = value.strip().lower()
@@ -170,7 +170,7 @@ def scale_value(value: Any) -> bool | str:
         return value
     if isinstance(value, str) and value.strip().lower() in SCALE_WORDS:
         return SCALE_WORDS[value.strip().lower()]
-    if isinstance(value, int) and value in (0, 1):
+    if isinstance(value, (bool, np.bool_, int, np.integer)) and value in (0, 1):  # numpy's as Python's
         return bool(value)
     raise ValidationError(f"scale={_show(value)}: expected True, False, 'auto', or one of {', '.join(SCALE_WORDS)}")
 

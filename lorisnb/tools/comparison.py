@@ -90,6 +90,13 @@ def compare_table(
 ) -> Comparison:
     """Everything ``compare`` shows, from a per-sequence table and the ground-truth durations of its
     scenes (the sequences every algorithm is expected to have)."""
+    for name, value in (("table", table), ("durations", durations)):
+        if not isinstance(value, pd.DataFrame):
+            raise ValidationError(f"{name}: expected a DataFrame (Evaluation.sequences() / .durations()), got "
+                                  f"{type(value).__name__}")  # fmt: skip
+    metric = validate.choice("metric", metric, tuple(stats.WEIGHTS))  # CR as the command line reads it
+    if table.empty:
+        raise ValidationError("table: no sequence to compare (nothing was scored)")
     if power_delta is not None:  # a difference the metric can show: a rate moves by 1 at most
         power_delta = validate.positive("power delta", power_delta, "the metric's unit")
         if metric in ("cr", "cr_t", "cs_r") and power_delta > 1:

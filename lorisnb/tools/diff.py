@@ -81,6 +81,9 @@ def diff_tables(
         tols = {k: v for k, v in tolerances.items() if isinstance(v, Tolerance)}
     else:
         tols = parse_tolerances(tolerances)  # type: ignore[arg-type]
+    for name, value in zip(names, (base, cand), strict=True):
+        if not isinstance(value, pd.DataFrame):
+            raise ValidationError(f"{name}: expected a per-sequence table (a DataFrame), got {type(value).__name__}")
     alpha = validate.probability("alpha", alpha)
     differ = setting_differences(base, cand, *names)  # the CLI says it for runs; Python callers too
     if differ:
