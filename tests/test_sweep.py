@@ -118,7 +118,7 @@ def test_rank_stability_and_swaps(ev):
     assert len(swaps) > 0 and (swaps["eps_from"] < swaps["eps_to"]).all()
 
 
-def test_sweep_cli_row_equals_evaluate_cli_row(icra20, tmp_path):
+def test_sweep_cli_row_equals_evaluate_cli_row(icra20, tmp_path, capsys):
     f = str(icra20 / "lifelong" / "maslam" / "cafe.txt")
     assert (
         main(
@@ -140,6 +140,8 @@ def test_sweep_cli_row_equals_evaluate_cli_row(icra20, tmp_path):
         )
         == 0
     )
+    # the conventions line says the grid swept, not the spec's default thresholds (eps inf, phi inf)
+    assert "; swept eps 0.3,1,inf m, phi 10,inf deg, delta 1 s, tau 60 s; RPE" in capsys.readouterr().err
     assert main(["evaluate", f, "--eps", "0.3", "--phi", "10", "--csv", str(tmp_path / "e.csv"), "--no-progress"]) == 0
     s = pd.read_csv(tmp_path / "s.csv")
     e = pd.read_csv(tmp_path / "e.csv")

@@ -30,7 +30,9 @@ def _executor(args: argparse.Namespace) -> Any:
     return client.get_executor()
 
 
-def _run_evaluation(args: argparse.Namespace, files: list[str], folders: tuple[str, ...] = ()) -> tuple[Any, list[str]]:
+def _run_evaluation(
+    args: argparse.Namespace, files: list[str], folders: tuple[str, ...] = (), swept: str | None = None
+) -> tuple[Any, list[str]]:
     """Every input kind through one spec (:func:`spec_from_args`) and one runner: OpenLORIS result
     files, ``--gt`` pairs or a ``--manifest``'s sessions. The output options ``files`` and
     ``folders`` are checked first against every input (:func:`~.outputs.check_outputs`: the
@@ -86,7 +88,7 @@ def _run_evaluation(args: argparse.Namespace, files: list[str], folders: tuple[s
         else:
             ev = evaluate(args.paths, spec, data_root=args.data, **kw)
     notes = list(dict.fromkeys(ev.notes + ev.warnings + [str(w.message) for w in caught]))
-    print(f"conventions: {ev.conventions}", file=sys.stderr)
+    print(f"conventions: {ev.describe(swept)}", file=sys.stderr)  # a sweep: its grid, not the spec's thresholds
     return ev, notes
 
 
@@ -178,7 +180,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from ..core.sweep import sweep, sweep_scenes
     from ..io.writers import write_csv, write_parquet
 
-    ev, notes = _run_evaluation(args, ["csv"], folders=("parquet",))
+    relative = f" (fractions of each sequence's {args.relative_to})" if args.relative_to is not None else " m"
+    units = {"eps": relative, "phi": " deg", "delta": " s", "tau": " s"}
+    swept = "swept " + ", ".join(f"{k} " + ",".join(f"{v:g}" if isinstance(v, float) else str(v) for v in getattr(args, k))
+                                 + unit for k, unit in units.items())  # fmt: skip
+    ev, notes = _run_evaluation(args, ["csv"], folders=("parquet",), swept=swept)
     keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
     grid = f"{len(args.eps)} eps x {len(args.phi)} phi x {len(args.delta)} delta x {len(args.tau)} tau"
     cols = ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "cr", "cr_t", "c_ate_rmse"]

@@ -121,8 +121,9 @@ class EvalSpec:
         """Whether one alignment serves all sequences of an input with ``sequences`` of them."""
         return self.mode == "lifelong" or (self.mode == "auto" and sequences > 1)
 
-    def describe(self) -> str:
-        """One line saying what is used (the command line's ``conventions:``)."""
+    def describe(self, swept: str | None = None) -> str:
+        """One line saying what is used (the command line's ``conventions:``); ``swept``: the
+        thresholds a sweep used instead of the spec's (its grid, in words)."""
         if self.association == "interpolate":
             match = f"interpolated ground truth within {self.max_gap:g} s"
             if self.official_interpolation:
@@ -145,9 +146,8 @@ class EvalSpec:
         extra = ", stamps repaired" if self.repair_stamps else ""
         transform = ", estimate composed with T_est_gt" if self.transform is not None else ""
         thresholds = (
-            f"eps {text(self.eps)}, phi {text(self.phi)} deg, delta {self.delta:g} s, tau {self.tau:g} s; "
-            f"RPE over {self.rpe_delta:g} {self.rpe_unit}"
-        )
+            swept or f"eps {text(self.eps)}, phi {text(self.phi)} deg, delta {self.delta:g} s, tau {self.tau:g} s"
+        ) + f"; RPE over {self.rpe_delta:g} {self.rpe_unit}"
         evo_words = evo.describe_evo(self)
         return (
             f"association: {match}{offset}; alignment: {align} on {frames}{transform}; {mode}; "

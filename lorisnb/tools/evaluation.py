@@ -48,8 +48,12 @@ class Evaluation:
     @property
     def conventions(self) -> str:
         """What was used, in words (the command line's ``conventions:`` line)."""
+        return self.describe()
+
+    def describe(self, swept: str | None = None) -> str:
+        """:attr:`conventions`, with a sweep's grid in words (``swept``) for the spec's thresholds."""
         moved = "OpenLORIS: ground truth moved to each file's sensor frame; " if self.kind == "openloris" else ""
-        return moved + self.spec.describe()
+        return moved + self.spec.describe(swept)
 
     @property
     def thresholds(self) -> dict[str, Any]:
