@@ -164,3 +164,10 @@ def test_numpy_values_are_read_as_python_values(data, icra20):
                      ({"lengths": [-1]}, "expected a positive number")):  # fmt: skip
         with pytest.raises(ln.ValidationError, match=said):
             ev.relative(**kw)
+
+
+def test_a_pair_scene_is_a_name(data):
+    """``scene=5`` put an ``np.int64`` in the scene column."""
+    for scene in (5, "", ["a"]):
+        with pytest.raises(ln.ValidationError, match="expected a scene name"):
+            ln.evaluate_pairs([data.tum / EST], data.tum / GT, scene=scene, progress=False)

@@ -167,6 +167,8 @@ def pair_source(
         {"est_times": est_times, "gt_times": gt_times, "topic": topic, "tf": tf, "gt_topic": gt_topic, "gt_tf": gt_tf},
         fmt, gt_fmt, name=lambda k: f"{k} (command line --{k.replace('_', '-')})",
     )  # fmt: skip
+    if scene is not None and (not isinstance(scene, str) or not scene.strip()):  # a label, never str() of a number
+        raise ValidationError(f"scene={scene!r}: expected a scene name (a non-empty string)")
     if scene is not None and fmt == "openloris":
         raise ValidationError("scene (command line --scene): OpenLORIS result files name their scene in their "
                               "header (scene: ...), which is used")  # fmt: skip
