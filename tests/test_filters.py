@@ -15,7 +15,7 @@ from lorisnb.cli import main
 from lorisnb.core import validate
 from lorisnb.errors import ValidationError
 from lorisnb.tools.notebook import setup
-from lorisnb.tools.report_notebooks import check_values
+from lorisnb.tools.notebook_params import check_values
 
 
 @pytest.fixture

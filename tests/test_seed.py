@@ -14,7 +14,7 @@ from lorisnb.core import regression, stats, validate
 from lorisnb.core.permutation import difference_interval
 from lorisnb.core.simulate import Faults
 from lorisnb.errors import ValidationError
-from lorisnb.tools.report_notebooks import check_parameters
+from lorisnb.tools.notebook_params import check_parameters
 
 BAD = [-1, "-1", 1.5, "1.5", True, "x", None, float("nan")]
 

@@ -13,7 +13,7 @@ from lorisnb.cli import main
 from lorisnb.core import validate
 from lorisnb.errors import ValidationError
 from lorisnb.tools.grids import GRIDS, notebook_grids
-from lorisnb.tools.report_notebooks import check_values
+from lorisnb.tools.notebook_params import check_values
 
 
 def test_progress_is_a_flag(icra20, capsys):
@@ -141,7 +141,8 @@ def test_report_parameters_are_checked_before_any_notebook_runs(notebook, parame
     """Each ran its notebook and failed inside it (exit 1), or was used as given: ``all_files="no"``
     ran every file, ``rpe_metres -1`` gave negative RPE percentages, ``fmt`` without ``groundtruth``
     was ignored, ``null`` replaced the notebook's default with None."""
-    from lorisnb.tools.report_notebooks import check_parameters, declared_by
+    from lorisnb.tools.notebook_params import check_parameters
+    from lorisnb.tools.report_notebooks import declared_by
 
     with pytest.raises(ValidationError, match=said):
         check_parameters(parameters, declared_by([notebook], None))
@@ -151,7 +152,8 @@ def test_report_parameters_reach_the_notebook_normalized(tmp_path, monkeypatch, 
     """A relative ``--data``/``results_dir`` named the current folder's at the check and none in the
     notebook, which runs in its own folder; ``-p scene Cafe`` and ``-p eps '"1"'`` were checked but
     passed on as typed (the primer failed on them)."""
-    from lorisnb.tools.report_notebooks import check_parameters, declared_by
+    from lorisnb.tools.notebook_params import check_parameters
+    from lorisnb.tools.report_notebooks import declared_by
 
     monkeypatch.chdir(data.root.parent)
     rel = data.root.name

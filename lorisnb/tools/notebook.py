@@ -177,10 +177,10 @@ def setup(
     summarized per file by :func:`show_inputs`). With ``sample=True`` (the primer and the labs), a
     notebook given no ``data_root`` that finds no data runs on the small data shipped with lorisnb
     (:func:`lorisnb.io.data.sample_data`) and says so. ``parameters``: the notebook's parameters,
-    checked first with the command line's rules (:func:`lorisnb.tools.report_notebooks.check_values`:
+    checked first with the command line's rules (:func:`lorisnb.tools.notebook_params.check_values`:
     thresholds, grids, seed, yes/no values such as ``quick``, folders that must exist, ...)."""
     if parameters is not None:
-        from .report_notebooks import check_values
+        from .notebook_params import check_values
 
         check_values(parameters)
     try:

@@ -30,6 +30,7 @@ from .evaluate import check_filters, result_files
 from .leaderboard import report_findings
 from .lean_imports import jsonschema_without_iri_grammars
 from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
+from .notebook_params import check_parameters
 from .pool import start_context
 from .provenance import checksums, input_files, run_record, write_run_json
 from .report_html import single_file, write_notebook_css
@@ -42,7 +43,6 @@ from .report_notebooks import (
     TYPICAL_SECONDS,
     NotebookRun,
     available_notebooks,
-    check_parameters,
     declared_by,
     declared_parameters,
     kernel_env,

@@ -1,0 +1,136 @@
+"""The notebooks' parameters, checked as the command line and the Python API check the same values:
+by each notebook (:func:`lorisnb.tools.notebook.setup`) and by the report before any notebook runs
+(:func:`check_parameters`, which also passes them on normalized: words in their case, thresholds as
+numbers, paths absolute, since a notebook runs in its own folder of the run)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from ..core import validate
+from ..core.frames import SCENES
+from ..core.spec import PRESETS, SPEC_NAMES, make_spec
+from ..core.stats import WEIGHTS
+from ..core.trajectory import RELATIVE
+from ..core.trials import compile_trials_by
+from ..errors import ValidationError
+from ..io.formats import TRAJECTORY_FORMATS
+from ..io.manifest import BUILT_IN
+from .grids import check_grid
+from .inputs import names
+
+__all__ = ["check_parameters", "check_values", "existing"]
+
+
+#: Notebook parameters checked with the same rules as the command line and the Python API.
+_CHECKS: dict[str, Any] = {
+    **{name: (lambda v, name=name: make_spec(None, surface="notebook", **{name: v})) for name in SPEC_NAMES},
+    "eps_grid": lambda v: validate.threshold_list("eps", v),
+    "phi_grid": lambda v: validate.threshold_list("phi", v),
+    "delta_grid": lambda v: validate.threshold_list("delta", v),
+    "tau_grid": lambda v: validate.threshold_list("tau", v),
+    "trials_by": lambda v: compile_trials_by(str(v)),
+    "relative_grid": lambda v: check_grid("relative_grid", v),
+    "seed": validate.seed,
+    "quick": lambda v: validate.flag("quick", v),
+    "simulated": lambda v: validate.flag("simulated", v),
+    "algorithms": lambda v: names("algorithms", v),
+    "scenes": lambda v: names("scenes", v),
+    "results_dir": lambda v: existing("results_dir", v, folder=True),
+    "path": lambda v: existing("path", v),
+    "data_root": lambda v: existing("data_root", v, folder=True),
+    "groundtruth": lambda v: existing("groundtruth", v),
+    "ordslam_dir": lambda v: existing("ordslam_dir", v, folder=True),
+    "manifest": lambda v: v if isinstance(v, str) and v in BUILT_IN else existing("manifest", v),
+    "all_files": lambda v: validate.flag("all_files", v),
+    "eps_fraction": lambda v: validate.fraction("eps_fraction", v),
+    "rpe_metres": lambda v: validate.positive("rpe_metres", v, "metres"),
+    "ordslam_fps": lambda v: validate.positive("ordslam_fps", v, "frames per second"),
+    "ordslam_max_gap": lambda v: validate.positive("ordslam_max_gap", v, "seconds"),
+    "sim_eps": lambda v: validate.threshold("eps", v),
+    "sim_trials": lambda v: validate.positive("sim_trials", v, "trials", integer=True),
+}
+#: Parameters that only apply together with another one (the notebook ignores them without it).
+NEEDS = {"fmt": "groundtruth", "gt_fmt": "groundtruth", "ordslam_fps": "ordslam_dir",
+         "ordslam_max_gap": "ordslam_dir"}  # fmt: skip
+#: Parameters of the leaderboard checked and normalized by the validators of ``compare`` and ``diff``.
+_VALUES: dict[str, Any] = {
+    "metric": lambda v: validate.choice("metric", v, WEIGHTS),
+    "alpha": lambda v: validate.probability("alpha", v),
+    "level": lambda v: validate.probability("level", v),
+    "seed": lambda v: validate.seed(v, "seed"),
+    "scene": lambda v: validate.choice("scene", v, SCENES),
+    **{
+        k: (lambda v, k=k: _plain(validate.eps_value(v) if k == "eps" else validate.threshold(k, v), v))
+        for k in ("eps", "phi", "delta", "tau")
+    },  # '"1"' reaches the notebook as 1.0, "paper" as itself
+    "sim_scene": lambda v: validate.choice("sim_scene", v, SCENES),
+    "conventions": lambda v: validate.choice("conventions", v, tuple(PRESETS)),
+    "fmt": lambda v: validate.choice("fmt", v, TRAJECTORY_FORMATS),
+    "gt_fmt": lambda v: validate.choice("gt_fmt", v, TRAJECTORY_FORMATS),
+    "relative_to": lambda v: validate.choice("relative_to", v, RELATIVE),
+    **{
+        k: (lambda v: v if isinstance(v, str) and v in BUILT_IN else str(Path(str(v)).expanduser().resolve()))
+        for k in ("manifest",)
+    },  # fmt: skip
+    **{
+        k: (lambda v: str(Path(str(v)).expanduser().resolve()))
+        for k in ("data_root", "results_dir", "path", "groundtruth", "ordslam_dir")
+    },  # fmt: skip
+}
+
+
+def _plain(checked: Any, given: Any) -> Any:
+    """A checked threshold as the notebook gets it: a number as a float, a word as given."""
+    return float(checked) if isinstance(checked, (int, float)) and not isinstance(checked, bool) else given
+
+
+def existing(name: str, value: Any, folder: bool = False) -> Path:
+    """A path parameter that must exist (a folder where ``folder``): a missing one would leave a
+    notebook with nothing to evaluate and empty tables."""
+    p = Path(str(value)).expanduser()
+    if not (p.is_dir() if folder else p.exists()):
+        what = "folder" if folder else "file or folder"
+        raise ValidationError(f"{name}={value}: no such {what}; expected an existing {what}")
+    return p
+
+
+def check_values(values: Mapping[str, Any]) -> None:
+    """Check notebook parameter values with the command line's rules (None: the notebook's default).
+    Every notebook calls it through :func:`lorisnb.tools.notebook.setup` (``parameters=``), and the
+    report through :func:`check_parameters`, before anything runs."""
+    for name, value in values.items():
+        if value is None:
+            continue
+        if name in _CHECKS:
+            _CHECKS[name](value)
+        if name in _VALUES:  # checked as the report normalizes them (-p scene Cafe is cafe)
+            _VALUES[name](value)
+
+
+def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
+    """Refuse a parameter no selected notebook declares (listing the declared names) and values
+    that the command line would refuse (``-p eps -1``, ``-p alpha 2``), before anything runs.
+    Returns the parameters, the leaderboard's settings normalized (``-p metric CR`` is ``cr``)."""
+    unknown = sorted(set(parameters) - set(declared) - {"output_dir"})
+    if unknown:
+        raise ValidationError(
+            f"parameter(s) {', '.join(unknown)} not declared by the selected notebooks; they declare: "
+            + ", ".join(sorted(declared))
+        )
+    out = dict(parameters)
+    for name, value in parameters.items():  # null reaches the notebook as None, not as its default
+        defaults = {str(declared.get(name, {}).get("default"))} - {"None"}
+        if value is None and defaults:
+            raise ValidationError(f"-p {name} null: the notebooks need a value (default {', '.join(sorted(defaults))}); "
+                                  f"leave -p {name} out for the default")  # fmt: skip
+    for name, partner in NEEDS.items():  # given, it would be ignored without its partner: refused
+        if parameters.get(name) is not None and parameters.get(partner) is None and name in declared:
+            raise ValidationError(f"-p {name}: only applies with -p {partner} (the notebook ignores it otherwise)")
+    check_values(parameters)
+    for name, value in parameters.items():
+        if name in _VALUES and value is not None:
+            out[name] = _VALUES[name](value)
+    return out
