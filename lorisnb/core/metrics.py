@@ -103,6 +103,8 @@ def rmse(values: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
 
 
 RPE_UNITS = ("s", "f", "m")
+#: The metrics that are rates between 0 and 1 (CR, CR-T, CS-R); the others are errors (RMSE >= 0).
+RATES = ("cr", "cr_t", "cs_r")
 
 
 def rpe_pairs(

@@ -12,6 +12,7 @@ import pandas as pd
 
 from ..core import ranking, stats, validate
 from ..core.coverage import complete, coverage_notes
+from ..core.metrics import RATES
 from ..core.power import runs_for_power
 from ..core.trials import check_duplicates
 from ..errors import ValidationError
@@ -99,7 +100,7 @@ def compare_table(
         raise ValidationError("table: no sequence to compare (nothing was scored)")
     if power_delta is not None:  # a difference the metric can show: a rate moves by 1 at most
         power_delta = validate.positive("power delta", power_delta, "the metric's unit")
-        if metric in ("cr", "cr_t", "cs_r") and power_delta > 1:
+        if metric in RATES and power_delta > 1:
             raise ValidationError(f"power delta={power_delta:g}: {metric} is a rate between 0 and 1, so a difference "
                                   "above 1 cannot happen; expected a difference in (0, 1]")  # fmt: skip
     check_table_duplicates(table)

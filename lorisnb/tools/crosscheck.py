@@ -234,7 +234,7 @@ def openloris_rows(gt: Trajectory, est: Trajectory, spec: EvalSpec, by_index: bo
     association, alignment and thresholds): lorisnb's column; evo has no equivalent (NaN). Two
     files paired by index have no times, so no CR (NaN, said in the note)."""
     if by_index:
-        values: dict = dict.fromkeys(("cr", "cr_t", "cs_r"), np.nan)
+        values: dict = dict.fromkeys(metrics.RATES, np.nan)
         n, why = 0, "paired by index: the files have no times, and these metrics are fractions of time"
     else:
         with warnings.catch_warnings():
@@ -247,7 +247,7 @@ def openloris_rows(gt: Trajectory, est: Trajectory, spec: EvalSpec, by_index: bo
             f"tau {spec.tau:g} s)"
         )
     note = f"OpenLORIS-Scene metric (correctness over time), {why}; evo has no equivalent"
-    return [agreement_row(q, spec.align, values[q], np.nan, n, note) for q in ("cr", "cr_t", "cs_r")]
+    return [agreement_row(q, spec.align, values[q], np.nan, n, note) for q in metrics.RATES]
 
 
 def crosscheck_poses(

@@ -23,6 +23,7 @@ from typing import Any
 
 import pandas as pd
 
+from ..core.metrics import RATES
 from ..core.regression import METRICS
 from ..core.stats import WEIGHTS as STATS_WEIGHTS
 from ..core.stats import with_trials
@@ -134,11 +135,11 @@ def read_table(path: Path) -> pd.DataFrame:
             df[c] = values
     for c in (c for c in METRICS if c in df.columns):  # a number no evaluation gives: a damaged table
         v = df[c].to_numpy(float)
-        bad = (v < 0) | (v > 1) if c in ("cr", "cr_t", "cs_r") else v < 0  # NaN: not scored, allowed
+        bad = (v < 0) | (v > 1) if c in RATES else v < 0  # NaN: not scored, allowed
         if bad.any():
             i = int(bad.nonzero()[0][0])
             line = i + 2 if path.suffix.lower() == ".csv" else None
-            expected = "a rate between 0 and 1" if c in ("cr", "cr_t", "cs_r") else "an RMSE >= 0"
+            expected = "a rate between 0 and 1" if c in RATES else "an RMSE >= 0"
             raise ParseError(path, line, f"column {c}: {v[i]:g} is not {expected}; expected a per-sequence "
                              "table as written by lorisnb evaluate --csv / --parquet")  # fmt: skip
     return df

@@ -8,6 +8,7 @@ import pandas as pd
 import seaborn as sns
 from matplotlib.figure import Figure
 
+from ..core.metrics import RATES
 from ..core.stats import scene_values, with_trials
 from .plotting import MAX_WIDTH_IN, same_jitter, subplots
 from .tables import LABELS
@@ -31,7 +32,7 @@ def plot_trials(table: pd.DataFrame, metric: str = "cr", scenes: Sequence[str] |
         ax.set_title(scene)
         ax.set_xlabel(LABELS.get(metric, metric))
         ax.set_ylabel("")
-        if metric in ("cr", "cr_t", "cs_r"):
+        if metric in RATES:
             ax.set_xlim(-0.03, 1.03)
     fig.tight_layout()
     return fig
