@@ -24,6 +24,10 @@ from .inputs import names
 __all__ = ["check_parameters", "check_values", "existing"]
 
 
+#: Path parameters: that must exist (a folder: ``True``), passed on absolute (a built-in manifest
+#: by its name).
+PATHS = {"results_dir": True, "data_root": True, "ordslam_dir": True, "path": False, "groundtruth": False,
+         "manifest": False}  # fmt: skip
 #: Notebook parameters checked with the same rules as the command line and the Python API.
 _CHECKS: dict[str, Any] = {
     **{name: (lambda v, name=name: make_spec(None, surface="notebook", **{name: v})) for name in SPEC_NAMES},
@@ -38,12 +42,6 @@ _CHECKS: dict[str, Any] = {
     "simulated": lambda v: validate.flag("simulated", v),
     "algorithms": lambda v: names("algorithms", v),
     "scenes": lambda v: names("scenes", v),
-    "results_dir": lambda v: existing("results_dir", v, folder=True),
-    "path": lambda v: existing("path", v),
-    "data_root": lambda v: existing("data_root", v, folder=True),
-    "groundtruth": lambda v: existing("groundtruth", v),
-    "ordslam_dir": lambda v: existing("ordslam_dir", v, folder=True),
-    "manifest": lambda v: v if isinstance(v, str) and v in BUILT_IN else existing("manifest", v),
     "all_files": lambda v: validate.flag("all_files", v),
     "eps_fraction": lambda v: validate.fraction("eps_fraction", v),
     "rpe_metres": lambda v: validate.positive("rpe_metres", v, "metres"),
@@ -71,20 +69,20 @@ _VALUES: dict[str, Any] = {
     "fmt": lambda v: validate.choice("fmt", v, TRAJECTORY_FORMATS),
     "gt_fmt": lambda v: validate.choice("gt_fmt", v, TRAJECTORY_FORMATS),
     "relative_to": lambda v: validate.choice("relative_to", v, RELATIVE),
-    **{
-        k: (lambda v: v if isinstance(v, str) and v in BUILT_IN else str(Path(str(v)).expanduser().resolve()))
-        for k in ("manifest",)
-    },  # fmt: skip
-    **{
-        k: (lambda v: str(Path(str(v)).expanduser().resolve()))
-        for k in ("data_root", "results_dir", "path", "groundtruth", "ordslam_dir")
-    },  # fmt: skip
+    **{k: (lambda v, k=k: _absolute(k, v)) for k in PATHS},  # a notebook runs in its own folder of the run
 }
 
 
 def _plain(checked: Any, given: Any) -> Any:
     """A checked threshold as the notebook gets it: a number as a float, a word as given."""
     return float(checked) if isinstance(checked, (int, float)) and not isinstance(checked, bool) else given
+
+
+def _absolute(name: str, value: Any) -> str:
+    """A path parameter checked (:func:`existing`) and made absolute; a built-in manifest's name as given."""
+    if name == "manifest" and isinstance(value, str) and value in BUILT_IN:
+        return value
+    return str(existing(name, value, folder=PATHS[name]).resolve())
 
 
 def existing(name: str, value: Any, folder: bool = False) -> Path:
