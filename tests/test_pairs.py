@@ -426,7 +426,9 @@ def test_a_folder_as_a_text_ground_truth_is_refused_before_any_estimate(tum_pair
     good = write(tmp_path, "est.txt", "".join(f"{t:.4f} 1 2 3 0 0 0 1\n" for t in est.stamps[:50]))
     folder = tmp_path / "gt_folder"
     folder.mkdir()
-    with pytest.raises(ln.ParseError, match=r"gt_folder: is a folder; expected a TUM ground-truth file"):
+    with pytest.raises(
+        ln.ParseError, match=r"gt_folder: is a folder; expected the ground truth as a TUM trajectory file"
+    ):
         evaluate_pairs([good], folder, progress=False)
     assert main(["evaluate", str(good), "--gt", str(folder), "--no-progress"]) == 2
-    assert "is a folder; expected a TUM ground-truth file" in capsys.readouterr().err
+    assert "is a folder; expected the ground truth as a TUM trajectory file" in capsys.readouterr().err

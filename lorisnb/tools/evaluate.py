@@ -28,6 +28,7 @@ from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import SUFFIX, Manifest, read_manifest
 from ..io.openloris import declared_scene
 from ..io.reading_options import check_reading
+from ..io.registry import FORMATS
 from .evaluation import Evaluation, Failure
 from .inputs import algorithm_folders, as_paths, labels, names, result_files, scene_label, without_groundtruth
 from .jobs import BIG_FILE_BYTES, Job, PairSource, run_job
@@ -255,9 +256,8 @@ def evaluate_pairs(
     if not src.groundtruth.exists():
         raise ParseError(src.groundtruth, None, "ground truth not found; expected a file (or a ROS 2 bag folder)")
     if src.groundtruth.is_dir() and src.gt_fmt != "bag":  # refused once, before any estimate is read
-        kind = {"euroc": "EuRoC", "openloris": "OpenLORIS"}.get(src.gt_fmt, src.gt_fmt.upper())
-        raise ParseError(src.groundtruth, None, f"is a folder; expected a {kind} ground-truth file (a folder is a "
-                         "ground truth only as a ROS 2 bag, --gt-format bag)")  # fmt: skip
+        raise ParseError(src.groundtruth, None, f"is a folder; expected the ground truth as a {FORMATS[src.gt_fmt].title} "
+                         "(a folder is a ground truth only as a ROS 2 bag, --gt-format bag)")  # fmt: skip
     items = result_files(estimates, _pair_suffixes(src.fmt))
     if "bag" not in (src.fmt, src.gt_fmt):  # (one bag may hold both, on other topics)
         items = without_groundtruth(items, src.groundtruth)
