@@ -19,8 +19,6 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-import numpy as np
-
 from ..core import validate
 from ..core.blocks import ordinary_pages
 from ..core.spec import ALIGNMENTS, PRESETS
@@ -80,21 +78,16 @@ def build_parser() -> argparse.ArgumentParser:
         "sweep", help="every metric over grids of eps, phi, delta and tau (one row per sequence and setting)"
     )
     add_evaluation_options(p)
-    p.add_argument(
-        "--eps",
-        type=threshold_list_type("eps"),
-        default=[np.inf],
-        help="comma-separated ATE thresholds in metres ('inf', 'paper' allowed)",
-    )
-    p.add_argument(
-        "--phi", type=threshold_list_type("phi"), default=[np.inf], help="comma-separated AOE thresholds, degrees"
-    )
-    p.add_argument(
-        "--delta", type=threshold_list_type("delta"), default=[1.0], help="comma-separated validity windows, s"
-    )
-    p.add_argument(
-        "--tau", type=threshold_list_type("tau"), default=[60.0], help="comma-separated re-localization factors, s"
-    )
+    default = "; default the spec's: a manifest's, else {:g}"
+    d = PRESETS["openloris"]
+    p.add_argument("--eps", type=threshold_list_type("eps"), default=None,
+                   help="comma-separated ATE thresholds in metres ('inf', 'paper' allowed)" + default.format(d.eps))  # fmt: skip
+    p.add_argument("--phi", type=threshold_list_type("phi"), default=None,
+                   help="comma-separated AOE thresholds, degrees" + default.format(d.phi))  # fmt: skip
+    p.add_argument("--delta", type=threshold_list_type("delta"), default=None,
+                   help="comma-separated validity windows, s" + default.format(d.delta))  # fmt: skip
+    p.add_argument("--tau", type=threshold_list_type("tau"), default=None,
+                   help="comma-separated re-localization factors, s" + default.format(d.tau))  # fmt: skip
     p.add_argument(
         "--relative-to",
         choices=["extent", "length"],

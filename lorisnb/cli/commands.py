@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -31,8 +32,9 @@ def _executor(args: argparse.Namespace) -> Any:
 
 
 def _run_evaluation(
-    args: argparse.Namespace, files: list[str], folders: tuple[str, ...] = (), swept: str | None = None
-) -> tuple[Any, list[str]]:
+    args: argparse.Namespace, files: list[str], folders: tuple[str, ...] = (),
+    swept: Callable[[Any], str] | None = None,
+) -> tuple[Any, list[str]]:  # fmt: skip
     """Every input kind through one spec (:func:`spec_from_args`) and one runner: OpenLORIS result
     files, ``--gt`` pairs or a ``--manifest``'s sessions. The output options ``files`` and
     ``folders`` are checked first against every input (:func:`~.outputs.check_outputs`: the
@@ -44,6 +46,7 @@ def _run_evaluation(
     if args.gt and args.manifest:
         raise ValidationError("--gt and --manifest: give one (a manifest names the ground truth of each session)")
     manifest = read_manifest(args.manifest) if args.manifest else None
+    base = manifest.spec if manifest is not None else None  # its thresholds, mode and [conventions]
     if manifest is not None and manifest.openloris:
         if args.conventions:
             raise ValidationError(
@@ -64,7 +67,7 @@ def _run_evaluation(
             "--data: the data root holds OpenLORIS ground truth; "
             + ("a pair's ground truth is --gt" if args.gt else "a manifest names its ground-truth files")
         )
-    spec = spec_from_args(args, manifest.spec if manifest is not None else None)
+    spec = spec_from_args(args, base)
     spec.refuse_inapplicable(
         pair_kind(args.format or "tum") if args.gt else "manifest" if manifest is not None else "openloris",
         surface="cli",
@@ -88,7 +91,8 @@ def _run_evaluation(
         else:
             ev = evaluate(args.paths, spec, data_root=args.data, **kw)
     notes = list(dict.fromkeys(ev.notes + ev.warnings + [str(w.message) for w in caught]))
-    print(f"conventions: {ev.describe(swept)}", file=sys.stderr)  # a sweep: its grid, not the spec's thresholds
+    grid = swept(ev.spec) if swept is not None else None  # a sweep: its grid, not the spec's thresholds
+    print(f"conventions: {ev.describe(grid)}", file=sys.stderr)
     return ev, notes
 
 
@@ -182,8 +186,15 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
     relative = f" (fractions of each sequence's {args.relative_to})" if args.relative_to is not None else " m"
     units = {"eps": relative, "phi": " deg", "delta": " s", "tau": " s"}
-    swept = "swept " + ", ".join(f"{k} " + ",".join(f"{v:g}" if isinstance(v, float) else str(v) for v in getattr(args, k))
-                                 + unit for k, unit in units.items())  # fmt: skip
+
+    def swept(spec: Any) -> str:
+        """The grid: each threshold's list, or the spec's one value (a manifest's, a preset's)."""
+        for k in units:
+            if getattr(args, k) is None:
+                setattr(args, k, [getattr(spec, k)])
+        return "swept " + ", ".join(f"{k} " + ",".join(f"{v:g}" if isinstance(v, float) else str(v) for v in getattr(args, k))
+                                    + unit for k, unit in units.items())  # fmt: skip
+
     ev, notes = _run_evaluation(args, ["csv"], folders=("parquet",), swept=swept)
     keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
     grid = f"{len(args.eps)} eps x {len(args.phi)} phi x {len(args.delta)} delta x {len(args.tau)} tau"

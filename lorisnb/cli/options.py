@@ -12,7 +12,7 @@ from ..core import validate
 from ..core.evo_options import PLANES
 from ..core.relations import RELATIONS
 from ..core.rpe import RPE_PAIRS
-from ..core.spec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, make_spec
+from ..core.spec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, make_spec, preset_over
 from ..errors import ValidationError
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import BUILT_IN
@@ -137,7 +137,11 @@ def spec_from_args(args: argparse.Namespace, base: EvalSpec | str | None = None)
         and not (dest in flags and getattr(args, dest) is False)
         and not (isinstance(getattr(args, dest), list) and dest != "motion_filter")
     }
-    preset = getattr(args, "conventions", None) or base
+    preset = getattr(args, "conventions", None)
+    if preset is None:
+        preset = base
+    elif isinstance(base, EvalSpec):  # over a manifest's spec: as in Python (preset_over)
+        preset = preset_over(base, preset)
     return make_spec(preset, surface="cli", **given)
 
 

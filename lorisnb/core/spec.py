@@ -349,7 +349,7 @@ def make_spec(preset: str | EvalSpec | None = None, *, surface: str = "python", 
             changes["align"] = align
     if "lifelong" in given:
         mode = "lifelong" if validate.flag(name("lifelong"), given["lifelong"]) else "per-seq"
-        if "mode" in changes and changes["mode"] != mode:
+        if "mode" in changes and validate.choice(name("mode"), changes["mode"], MODES) != mode:
             raise ValidationError(f"{name('lifelong')} and {name('mode')}: give one")
         changes["mode"] = mode
     for word, keep_when in (("keep_repeated", True), ("remove_repeated", False)):
@@ -364,6 +364,16 @@ def make_spec(preset: str | EvalSpec | None = None, *, surface: str = "python", 
         raise ValidationError(f"{name('align_frames')} 1 with {name('align')} sim3: a scale needs at least 2 poses")
     merged["explicit"] = frozenset(base.explicit | set(checked))
     return EvalSpec(**merged)
+
+
+def preset_over(base: EvalSpec, preset: str | EvalSpec) -> EvalSpec:
+    """A preset given over a manifest's spec ``base`` (Python's ``conventions=``, the command
+    line's ``--conventions``): its conventions replace the manifest's, whose thresholds, body
+    transform and mode stay where the manifest gives them. A spec object is used as it is."""
+    if isinstance(preset, EvalSpec):
+        return preset
+    kept = {k: getattr(base, k) for k in ("eps", "phi", "transform", "mode") if k in base.explicit}
+    return make_spec(preset, **kept)
 
 
 #: The named specs: ``openloris`` (the official tool: interpolation within 0.5 s, SE(3), repeated

@@ -134,6 +134,43 @@ def _fmt(value: Any, key: str, path: Path) -> str:
     return str(value)
 
 
+#: What a manifest of the built-in OpenLORIS evaluation may hold: its scenes, ground truth, frames
+#: and formats come from the data root and the result files' headers.
+OPENLORIS_KEYS = {"name", "source", "openloris", "eps", "phi", "lifelong", "conventions"}
+
+
+def _openloris_manifest(raw: dict, path: Path) -> Manifest:
+    """A manifest with ``openloris = true``: its thresholds, mode and ``[conventions]`` make its
+    spec (as the command line's options would: no preset, nothing OpenLORIS files cannot take);
+    any other key is refused."""
+    other = sorted(set(raw) - OPENLORIS_KEYS)
+    if other:
+        raise ParseError(path, None, f"{', '.join(other)}: cannot apply with openloris = true (the built-in OpenLORIS "
+                         "evaluation takes the scenes, ground truth, frames and formats from the data root and the "
+                         f"result files); expected only {', '.join(sorted(OPENLORIS_KEYS))}")  # fmt: skip
+    table = raw.get("conventions", {})
+    if not isinstance(table, dict):
+        raise ParseError(path, None, "conventions: expected a [conventions] table of spec options")
+    if "preset" in table:
+        raise ParseError(path, None, "[conventions] preset: OpenLORIS result files are scored with the official "
+                         "conventions; give single options (max_gap, scale, ...) instead")  # fmt: skip
+    options = dict(table)
+    for key in ("eps", "phi", "lifelong"):
+        if key in raw and key in options:
+            raise ParseError(path, None, f"{key} is given at the top and in [conventions]; give it once")
+        if key in raw:
+            options[key] = raw[key]
+    try:
+        spec = make_spec(None, surface="manifest", **options)
+        spec.refuse_inapplicable("openloris", surface="manifest")
+    except ValidationError as exc:
+        raise ParseError(path, None, str(exc)) from None
+    return Manifest(path=path, name=str(raw.get("name", "OpenLORIS-Scene")), sessions=[], openloris=True, spec=spec,
+                    lifelong=spec.mode == "lifelong", source=str(raw.get("source", "")),
+                    groundtruth_format="openloris", estimate_format="openloris",
+                    eps=spec.eps if "eps" in spec.explicit else None, phi=spec.phi if "phi" in spec.explicit else None)  # fmt: skip
+
+
 def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
     """Read and check a manifest (a built-in name or a TOML file). ParseError names the file, the
     key and what was expected; environment variables in ``root`` (``${EUROC_ROOT}``) are expanded
@@ -155,8 +192,7 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
     if "openloris" in raw and not isinstance(raw["openloris"], bool):  # "false" is not truth-tested
         raise ParseError(path, None, f"openloris = {raw['openloris']!r}: expected true or false")
     if raw.get("openloris"):
-        return Manifest(path=path, name=str(raw.get("name", "OpenLORIS-Scene")), sessions=[], openloris=True,
-                        source=str(raw.get("source", "")), groundtruth_format="openloris", estimate_format="openloris")  # fmt: skip
+        return _openloris_manifest(raw, path)
     root_text = str(raw.get("root", "."))
     expanded = os.path.expandvars(root_text)
     if "$" in expanded:
@@ -218,7 +254,8 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
             raise ParseError(path, None, f"{key} is given at the top and in [conventions]; give it once")
         if key in raw:
             options[key] = raw[key]
-    options.setdefault("lifelong", False)
+    if "lifelong" not in options and "mode" not in options:  # per session unless the manifest says otherwise
+        options["lifelong"] = False
     try:
         spec = make_spec(table.get("preset"), surface="manifest", **options, transform=transform)
     except ValidationError as exc:

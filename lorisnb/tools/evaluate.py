@@ -20,7 +20,7 @@ from typing import Any
 from ..core import validate
 from ..core.index_pairs import by_index
 from ..core.model import FileErrors
-from ..core.spec import EvalSpec, make_spec
+from ..core.spec import EvalSpec, make_spec, preset_over
 from ..core.trials import check_duplicates, check_trials_by, compile_trials_by
 from ..errors import LorisWarning, ParseError, ValidationError
 from ..io.data import DataPaths, DataRoot, find_data
@@ -303,14 +303,14 @@ def evaluate_manifest(
                 "conventions: OpenLORIS result files are scored with the official conventions "
                 "(choose max_gap, scale and lifelong instead)"
             )
-        return evaluate(results, data_root=data_root, trials_by=trials_by, progress=progress, jobs=jobs,
+        return evaluate(results, m.spec, data_root=data_root, trials_by=trials_by, progress=progress, jobs=jobs,
                         executor=executor, **options)  # fmt: skip
     if data_root is not None:
         raise ValidationError("data_root: a manifest names its own ground-truth files (root and groundtruth)")
-    base = _spec(spec, conventions, {}) if spec is not None or conventions is not None else m.spec
-    if isinstance(spec if spec is not None else conventions, str):  # a preset by name: over the manifest's
-        kept = {k: getattr(m.spec, k) for k in ("eps", "phi", "transform", "mode") if k in m.spec.explicit}
-        base = make_spec(base, **kept)  # thresholds, body transform and mode
+    if spec is not None and conventions is not None:
+        _spec(spec, conventions, {})  # refused: give one
+    given = spec if spec is not None else conventions
+    base = m.spec if given is None else preset_over(m.spec, given)
     the_spec = make_spec(base, **options)
     notes = the_spec.refuse_inapplicable("manifest")
     _refuse_reading(the_spec, m.estimate_format, "manifest")
