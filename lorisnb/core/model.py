@@ -11,7 +11,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -254,6 +254,10 @@ class FileErrors:
     #: path length (metres) of every sequence's whole ground truth as read, before association:
     #: what rpg's relative error takes its sub-trajectory lengths from (empty when not known)
     groundtruth_lengths: dict[int, float] = field(default_factory=dict)
+    #: the RPE settings of the spec the errors were computed under (``EvalSpec.rpe_options()``):
+    #: what :func:`lorisnb.core.scoring.score` and :func:`lorisnb.core.sweep.sweep` use unless
+    #: given (empty when not known: lorisnb's own rule over 1 s)
+    rpe: dict[str, Any] = field(default_factory=dict)
 
     def __repr__(self) -> str:
         n = len(self.sequences)

@@ -223,7 +223,7 @@ def evaluate_sessions(
         scene=scene, frame=frame, mode="lifelong" if lifelong else "per-seq", alignment=alignment,
         aligned_on=aligned_on, official_interpolation=spec.official_interpolation, sequences=out, warnings=kept,
         trial=trial, groundtruth_spans=dict(groundtruth_spans or {}),
-        groundtruth_lengths=lengths,
+        groundtruth_lengths=lengths, rpe=spec.rpe_options(),
     )  # fmt: skip
 
 

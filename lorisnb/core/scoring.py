@@ -202,6 +202,34 @@ RPE_DEFAULTS: dict[str, Any] = dict(
 )
 
 
+class _OfSpec:
+    """The default of an RPE setting of :func:`score` and :func:`~lorisnb.core.sweep.sweep`: the
+    errors' own spec's (:attr:`~lorisnb.core.model.FileErrors.rpe`)."""
+
+    def __repr__(self) -> str:
+        return "<the errors' spec>"
+
+
+OF_SPEC: Any = _OfSpec()
+
+
+def rpe_of(files: list[FileErrors], given: dict[str, Any]) -> dict[str, Any]:
+    """The RPE settings to score ``files`` with: those ``given`` (not :data:`OF_SPEC`), the rest
+    from the spec the errors were computed under (:attr:`FileErrors.rpe`; files of different
+    settings need them given), else :data:`RPE_DEFAULTS`."""
+    unknown = sorted(set(given) - set(RPE_DEFAULTS))
+    if unknown:
+        raise ValidationError(f"{unknown[0]}: not a setting of the scores; expected one of {', '.join(RPE_DEFAULTS)}")
+    given = {k: v for k, v in given.items() if v is not OF_SPEC}
+    recorded = {tuple(sorted(f.rpe.items())) for f in files if f.rpe}
+    if len(recorded) > 1:
+        differ = sorted({k for r in recorded for k, v in r if any(dict(o).get(k) != v for o in recorded)} - set(given))
+        if differ:
+            raise ValidationError(f"{', '.join(differ)}: the errors were computed under different RPE settings; "
+                                  "give them to score all the files alike")  # fmt: skip
+    return RPE_DEFAULTS | (dict(next(iter(recorded))) if recorded else {}) | given
+
+
 def score_rows(
     errors: FileErrors | Iterable[FileErrors], eps: Eps = np.inf, phi: float = np.inf, delta: float = 1.0,
     tau: float = 60.0, **rpe: Any,
@@ -209,11 +237,8 @@ def score_rows(
     """One row per sequence (a dict of :func:`score`'s columns): every metric of the paper at one
     threshold setting, without pandas (the command line prints these rows as they are). The
     arguments are :func:`score`'s (the RPE settings by name)."""
-    unknown = sorted(set(rpe) - set(RPE_DEFAULTS))
-    if unknown:
-        raise ValidationError(f"{unknown[0]}: not a setting of the scores; expected one of {', '.join(RPE_DEFAULTS)}")
-    r = RPE_DEFAULTS | rpe
     files = as_files(errors)
+    r = rpe_of(files, rpe)
     eps_v = eps_value(eps)
     phi_v, delta_v, tau_v = threshold("phi", phi), threshold("delta", delta), threshold("tau", tau)
     rpe_d, rpe_u = rpe_setting(r["rpe_delta"], r["rpe_unit"])
@@ -238,11 +263,11 @@ def score(
     phi: float = np.inf,
     delta: float = 1.0,
     tau: float = 60.0,
-    rpe_delta: float = 1.0,
-    rpe_unit: str = "s",
-    rpe_pairs: str = "reference",
-    rpe_all_pairs: bool | None = None,
-    rpe_tolerance: float = 0.1,
+    rpe_delta: float = OF_SPEC,
+    rpe_unit: str = OF_SPEC,
+    rpe_pairs: str = OF_SPEC,
+    rpe_all_pairs: bool | None = OF_SPEC,
+    rpe_tolerance: float = OF_SPEC,
 ) -> pd.DataFrame:
     """One row per sequence: every metric of the paper at one threshold setting.
 
@@ -252,7 +277,8 @@ def score(
         delta: validity window of a pose, seconds (Eq. 2). Default 1 s.
         tau: re-localization time factor, seconds (Eq. 4). Default 60 s.
         rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance: the RPE pairs (see
-            :func:`lorisnb.core.rpe.rpe_indices`; defaults: lorisnb's own rule over 1 s).
+            :func:`lorisnb.core.rpe.rpe_indices`); each not given is that of the spec the errors
+            were computed under (:func:`rpe_of`; lorisnb's own rule over 1 s when not known).
 
     Columns: :data:`~lorisnb.core.model.SEQUENCE_COLUMNS`, then
     :data:`~lorisnb.core.model.EXTRA_COLUMNS` and :data:`~lorisnb.core.model.STAT_COLUMNS`: the

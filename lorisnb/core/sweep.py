@@ -28,7 +28,7 @@ from .model import (
     sequence_eps,
     sequence_size,
 )  # fmt: skip
-from .scoring import GRID_METRICS, as_files, rpe_options, rpe_setting, sequence_grid, sequence_meta
+from .scoring import GRID_METRICS, OF_SPEC, as_files, rpe_of, rpe_options, rpe_setting, sequence_grid, sequence_meta
 from .trajectory import RELATIVE
 from .validate import choice, fraction, threshold, threshold_list
 
@@ -91,13 +91,13 @@ def sweep(
     delta: Any = (1.0,),
     tau: Any = (60.0,),
     relative_to: str | None = None,
-    rpe_delta: float = 1.0,
-    rpe_unit: str = "s",
+    rpe_delta: float = OF_SPEC,
+    rpe_unit: str = OF_SPEC,
     columns: str = "metrics",
     max_bytes: float = MAX_SWEEP_BYTES,
-    rpe_pairs: str = "reference",
-    rpe_all_pairs: bool | None = None,
-    rpe_tolerance: float = 0.1,
+    rpe_pairs: str = OF_SPEC,
+    rpe_all_pairs: bool | None = OF_SPEC,
+    rpe_tolerance: float = OF_SPEC,
 ) -> pd.DataFrame:
     """One row per sequence and per combination of thresholds. With ``columns="all"`` the columns
     are those of :func:`lorisnb.core.scoring.score` (a row equals ``score`` at that setting, RPE
@@ -112,6 +112,8 @@ def sweep(
             time factors, seconds. Each a value or a list (validated like the command line's).
         max_bytes: refuse (with the size it would need) a sweep whose table or working arrays
             would take more memory than this.
+        rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance: as :func:`~lorisnb.core.scoring.score`'s
+            (not given: the errors' own spec's).
     """
     files = as_files(errors)
     if relative_to is not None:
@@ -126,8 +128,10 @@ def sweep(
     phi_a = np.array(threshold_list("phi", phi))
     delta_a = np.array(threshold_list("delta", delta))
     tau_a = np.array(threshold_list("tau", tau))
-    rpe_d, rpe_u = rpe_setting(rpe_delta, rpe_unit)
-    rpe_p, rpe_a, rpe_t = rpe_options(rpe_pairs, rpe_all_pairs, rpe_tolerance)
+    r = rpe_of(files, dict(rpe_delta=rpe_delta, rpe_unit=rpe_unit, rpe_pairs=rpe_pairs, rpe_all_pairs=rpe_all_pairs,
+                           rpe_tolerance=rpe_tolerance))  # fmt: skip
+    rpe_d, rpe_u = rpe_setting(r["rpe_delta"], r["rpe_unit"])
+    rpe_p, rpe_a, rpe_t = rpe_options(r["rpe_pairs"], r["rpe_all_pairs"], r["rpe_tolerance"])
     E, P, D, T = len(eps_l), len(phi_a), len(delta_a), len(tau_a)
     n_set = E * P * D * T
     check_sweep_size(files, (E, P, D, T), columns, max_bytes)

@@ -13,7 +13,7 @@ from ..core.frames import SCENES
 from ..core.model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, STAT_COLUMNS, Eps, FileErrors
 from ..core.relative import RPG_FRACTIONS
 from ..core.scoring import pose_table, score_rows
-from ..core.spec import EvalSpec
+from ..core.spec import EvalSpec, make_spec
 from ..io.data import DataPaths, scene_spans
 from .status import exit_status, unscored
 
@@ -94,7 +94,8 @@ class Evaluation:
             self.errors, s.eps if eps is None else eps, s.phi if phi is None else phi,
             s.delta if delta is None else delta, s.tau if tau is None else tau, **kw,
         )  # fmt: skip
-        spec = s.canonical(thresholds=False)
+        changed = {k: v for k, v in kw.items() if k in s.rpe_options() and v != getattr(s, k)}
+        spec = (make_spec(s, **changed) if changed else s).canonical(thresholds=False)  # the RPE asked for
         for row in rows:
             row["spec"] = spec
         return rows

@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.model import FileErrors
+from ..core.scoring import OF_SPEC
 from ..core.sweep import MAX_SWEEP_BYTES, check_sweep_size, sweep, sweep_groups
 from ..core.validate import flag, threshold_list
 from ..io.writers import write_parquet_parts
@@ -30,8 +31,8 @@ def sweep_to_parquet(
     progress: bool = False,
     max_bytes: float = MAX_SWEEP_BYTES,
     on_part: Any = None,
-    rpe_delta: float = 1.0,
-    rpe_unit: str = "s",
+    rpe_delta: float = OF_SPEC,
+    rpe_unit: str = OF_SPEC,
     **rpe: Any,
 ) -> tuple[Path, int]:
     """The table of :func:`lorisnb.core.sweep.sweep` (same columns, same values), written to a
