@@ -127,3 +127,44 @@ def test_manifest_and_python_take_the_preset(data, tmp_path):
     assert via_manifest["ate_rmse"] == pytest.approx(row["ate_rmse"], rel=1e-12)
     assert via_manifest["matched"] == row["matched"]
     assert isinstance(ev.sequences(), pd.DataFrame)
+
+
+@pytest.mark.parametrize(
+    ("preset", "align", "expected"),
+    [("evo", None, "none"), ("openloris", None, "se3"), ("rpg", None, "se3"), ("vio", None, "posyaw"),
+     ("evo", "origin", "origin"), ("openloris", "none", "none")],
+)  # fmt: skip
+def test_scale_off_takes_the_scale_out_of_the_alignment_and_nothing_else(preset, align, expected):
+    """``--scale off`` was SE(3) whatever the alignment: ``--conventions evo --scale off`` (no scale
+    correction, evo's default) aligned the trajectories and gave ``evo_ape -a``'s number."""
+    given = {} if align is None else {"align": align}
+    assert make_spec(preset, scale="off", **given).align == expected
+    for scaled in ("sim3", "scale"):  # an alignment with a scale, and no scale: refused
+        with pytest.raises(ValidationError, match="give one"):
+            make_spec(preset, scale="off", align=scaled)
+
+
+def test_evo_with_scale_off_is_evos_default(data, tmp_path):
+    t = data.tum
+    pair = [str(t / "freiburg1_xyz-rgbdslam.txt"), "--gt", str(t / "freiburg1_xyz-groundtruth.txt")]
+    tables = []
+    for extra in ([], ["--scale", "off"]):
+        out = tmp_path / f"t{len(extra)}.csv"
+        assert main(["evaluate", *pair, "--conventions", "evo", *extra, "--csv", str(out), "--no-progress"]) == 0
+        tables.append(pd.read_csv(out))
+    assert tables[0]["ate_rmse"][0] == tables[1]["ate_rmse"][0]
+    ape = _evo_ape_rmse(t / "freiburg1_xyz-groundtruth.txt", t / "freiburg1_xyz-rgbdslam.txt")
+    assert tables[1]["ate_rmse"][0] == pytest.approx(ape, rel=1e-12)
+
+
+def _evo_ape_rmse(gt_path, est_path) -> float:
+    """evo_ape's translation RMSE without alignment (its default), by evo's Python API."""
+    from evo.core import metrics, sync
+    from evo.tools import file_interface
+
+    ref = file_interface.read_tum_trajectory_file(str(gt_path))
+    est = file_interface.read_tum_trajectory_file(str(est_path))
+    ref, est = sync.associate_trajectories(ref, est, max_diff=0.01)
+    ape = metrics.APE(metrics.PoseRelation.translation_part)
+    ape.process_data((ref, est))
+    return float(ape.get_statistic(metrics.StatisticsType.rmse))

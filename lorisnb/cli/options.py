@@ -174,7 +174,8 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
     )  # fmt: skip
     add_input_options(p)
     add_rpe_options(p)
-    add_scale_option(p, "align with Sim(3) (scale); 'auto': only for monocular algorithms (dso, svo)")
+    add_scale_option(p, "align with Sim(3) (scale); 'auto': only for monocular algorithms (dso, svo); 'off': the "
+                     "alignment without a scale (sim3 becomes se3; evo's default, none, stays none)")  # fmt: skip
     g = p.add_mutually_exclusive_group()
     g.add_argument(
         "--per-seq", dest="mode", action="store_const", const="per-seq", help="align every sequence on itself"

@@ -49,6 +49,8 @@ ALIGNMENTS = ("se3", "sim3", "posyaw", "none", "auto", *evo.EVO_ALIGNMENTS)
 RPE_UNITS = evo.RPE_UNITS
 REPEATED = ("drop", "keep")
 MODES = ("auto", "per-seq", "lifelong")
+#: An alignment without its scale (``scale`` off): what each scaled one becomes; the others stay.
+UNSCALED = {"sim3": "se3", "auto": "se3", "scale": "none"}
 MAX_DIFF = 0.02  # seconds; TUM's and rpg's default
 THRESHOLD_NAMES = ("eps", "phi", "delta", "tau")
 #: Input kinds a spec is applied to (see :meth:`EvalSpec.refuse_inapplicable`).
@@ -337,16 +339,17 @@ def make_spec(preset: str | EvalSpec | None = None, *, surface: str = "python", 
             f"of {', '.join(sorted(known | set(ALIASES)))}"
         )
     changes = {k: v for k, v in given.items() if k in known}
-    if "scale" in given:
+    if "scale" in given:  # on: sim3; auto: sim3 for monocular algorithms; off: the alignment without its scale
         s = validate.scale_value(given["scale"])
-        align = "auto" if s == "auto" else ("sim3" if s else "se3")
-        if "align" in changes and validate.choice(name("align"), changes["align"], ALIGNMENTS) != align:
+        current = validate.choice(name("align"), changes.get("align", base.align), ALIGNMENTS)
+        align = "auto" if s == "auto" else "sim3" if s else UNSCALED.get(current, current)
+        if "align" in changes and current != align:
             raise ValidationError(
                 f"{name('scale')} {given['scale']} and {name('align')} {changes['align']}: give one "
-                "(scale on = sim3, off = se3, auto = sim3 for monocular algorithms)"
+                "(scale on = sim3, auto = sim3 for monocular algorithms, off = the alignment without a scale: "
+                "sim3 becomes se3, evo's scale-only none)"
             )
-        if s is not False or "align" not in changes:
-            changes["align"] = align
+        changes["align"] = align
     if "lifelong" in given:
         mode = "lifelong" if validate.flag(name("lifelong"), given["lifelong"]) else "per-seq"
         if "mode" in changes and validate.choice(name("mode"), changes["mode"], MODES) != mode:
