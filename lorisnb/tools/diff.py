@@ -9,6 +9,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
@@ -19,6 +20,10 @@ from ..errors import ValidationError
 from ..io.writers import write_text
 from .comparison import check_table_duplicates
 from .runs import setting_differences
+from .status import OK, UNSCORED
+
+if TYPE_CHECKING:
+    from .evaluation import Evaluation
 
 
 @dataclass
@@ -101,6 +106,33 @@ def diff_tables(
                 seqs.loc[i, ["status", "cand"]] = ["failed", f"failed: {cand_failures[f]}"]
     scenes = scene_changes(b, c, tols, alpha, seed)
     return Diff(seqs, scenes, verdict(seqs, scenes))
+
+
+def unevaluated(ev: Evaluation, root: str | os.PathLike[str]) -> dict[str, str]:
+    """The inputs of a result folder's evaluation that were not scored, as ``diff`` counts them for
+    its exit status: the failures (a file that could not be read or evaluated) and the inputs read
+    but not scored (:attr:`~lorisnb.tools.evaluation.Evaluation.unscored`: no pose matched the
+    ground truth in time, a declared manifest session without an estimate, an empty estimate, an
+    evaluation of nothing), each by its path relative to ``root`` (its name if outside) with the
+    reasons. ``evaluate``, ``sweep`` and ``compare`` exit 1 on the same inputs
+    (:func:`lorisnb.tools.status.exit_status`); so does ``diff`` (:func:`exit_status`)."""
+    base = Path(root)
+    base = base if base.is_dir() else base.parent
+    out: dict[str, str] = {}
+    for f in [*ev.failures, *ev.unscored]:
+        try:
+            key = Path(f.path).relative_to(base).as_posix()
+        except ValueError:
+            key = Path(f.path).name
+        out[key] = f"{out[key]}; {f.error}" if key in out else f.error
+    return out
+
+
+def exit_status(d: Diff, base_failed: Mapping[str, str], cand_failed: Mapping[str, str]) -> int:
+    """``diff``'s exit status: 1 when CAND regressed or an input of either run was not evaluated or
+    not scored (:func:`unevaluated`), so that 0 tells a script that every input was scored and
+    nothing regressed; else 0."""
+    return UNSCORED if d.regressed or base_failed or cand_failed else OK
 
 
 def write_json(d: Diff, out: str | os.PathLike[str], force: bool, extra: Mapping[str, object]) -> Path:
