@@ -197,7 +197,7 @@ def test_crosscheck_under_the_evo_preset_agrees_and_explains_reading(data, fr2, 
     g, e = data.tum / "fr2_desk_groundtruth.txt", data.tum / "fr2_desk_ORB.txt"
     assert main(["crosscheck", str(g), str(e), "--conventions", "evo", "--align", "sim3", "--csv", str(out)]) == 0
     table = pd.read_csv(out).set_index("quantity")
-    assert "29 of 29 statistics agree" in capsys.readouterr().err
+    assert "30 of 30 statistics agree" in capsys.readouterr().err
     assert not table.loc["ground truth: poses", "agrees"]  # the repeated stamp: lorisnb's default drops it
     assert "repeated" in table.loc["ground truth: poses", "note"]
     assert table.loc["ate_rmse", "agrees"] and table.loc["rpe_rot_max", "agrees"]

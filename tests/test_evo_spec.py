@@ -86,7 +86,10 @@ def test_the_command_line_refuses_them_the_same_way(data, capsys):
 def test_each_option_equals_evo(data, options):
     table = crosscheck_evo(data.tum / GT, data.tum / EST, make_spec("evo", **options))
     stats = table[~table["quantity"].str.contains(":")]
-    assert len(stats) == 29 and stats["agrees"].all(), stats[~stats["agrees"]]
+    assert len(stats) == 30 and stats["agrees"].all(), stats[~stats["agrees"]]
+    pairs = stats.set_index("quantity").loc["rpe_pairs", "evo"]  # evo's count: len(error_array)
+    rpe = stats[stats["quantity"].str.startswith("rpe_") & (stats["quantity"] != "rpe_pairs")]
+    assert (rpe["n_pairs"] == pairs).all()
     first = next(iter(options))  # the option under test: without it, other numbers
     plain = crosscheck_evo(
         data.tum / GT, data.tum / EST, make_spec("evo", **{k: v for k, v in options.items() if k != first})

@@ -123,17 +123,21 @@ def crosscheck_evo(
         theirs = evo_statistics(ref, est, the_spec)
     note = f"lorisnb (preset {the_spec.preset_name}, align {the_spec.align}) against evo reading the files itself"
     rows = [agreement_row("matched", the_spec.align, ours["matched"], theirs["matched"], ours["matched"], note)]
+    if "rpe_pairs" in theirs:
+        rows.append(agreement_row("rpe_pairs", the_spec.align, ours["rpe_pairs"], theirs["rpe_pairs"],
+                                  ours["rpe_pairs"], note))  # fmt: skip
     for m in ("ate", "aoe", "rpe_trans", "rpe_rot"):
+        n = ours["rpe_pairs"] if m.startswith("rpe") else ours["matched"]  # what the statistics are over
         for k in STATISTICS:
             key = f"{m}_{k}"
             if key in theirs:
-                rows.append(agreement_row(key, the_spec.align, ours[key], theirs[key], ours["matched"], note, tol))
+                rows.append(agreement_row(key, the_spec.align, ours[key], theirs[key], n, note, tol))
             elif "rpe_refused" in theirs and m.startswith("rpe"):
                 rows.append(agreement_row(key, the_spec.align, ours[key], float("nan"), 0,
                                           f"{NO_RPE_PAIR}: evo_rpe raises ({theirs['rpe_refused']}); lorisnb gives NaN "
                                           "with a warning"))  # fmt: skip
             else:
-                rows.append(agreement_row(key, the_spec.align, ours[key], float("nan"), ours["matched"],
+                rows.append(agreement_row(key, the_spec.align, ours[key], float("nan"), n,
                                           "RPE in seconds: evo has no such unit"))  # fmt: skip
     return pd.concat([*reading, pd.DataFrame(rows, columns=CROSSCHECK_COLUMNS)], ignore_index=True)
 
