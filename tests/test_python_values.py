@@ -13,6 +13,7 @@ from helpers import write
 
 import lorisnb as ln
 from lorisnb.cli import main
+from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_openloris
 from lorisnb.tools.diff import diff_tables
 from lorisnb.tools.evaluate import evaluate_manifest
@@ -171,3 +172,14 @@ def test_a_pair_scene_is_a_name(data):
     for scene in (5, "", ["a"]):
         with pytest.raises(ln.ValidationError, match="expected a scene name"):
             ln.evaluate_pairs([data.tum / EST], data.tum / GT, scene=scene, progress=False)
+
+
+def test_evaluate_takes_conventions_as_the_other_evaluations_do(icra20, data):
+    """``conventions=`` (the README's Python examples) was a ValidationError for ``evaluate`` alone."""
+    f = icra20 / "per-seq" / "orbslam2_rgbd" / "cafe_1_1_orbslam2-original.txt"
+    a = ln.evaluate(f, conventions="tum", data_root=data.root, jobs=1).sequences()
+    b = ln.evaluate(f, "tum", data_root=data.root, jobs=1).sequences()
+    assert a["ate_rmse"][0] == b["ate_rmse"][0] and a["spec"][0] == b["spec"][0]
+    assert a["ate_rmse"][0] != ln.evaluate(f, data_root=data.root, jobs=1).sequences()["ate_rmse"][0]
+    with pytest.raises(ValidationError, match="spec and conventions: give one"):
+        ln.evaluate(f, "tum", conventions="evo", data_root=data.root)

@@ -110,6 +110,7 @@ def evaluate(
     progress: bool = False,
     jobs: int | None = None,
     executor: Executor | None = None,
+    conventions: EvalSpec | str | None = None,
     **options: Any,
 ) -> Evaluation:
     """Evaluate OpenLORIS result files and folders. A file that fails (bad line, unknown frame,
@@ -118,7 +119,8 @@ def evaluate(
 
     Args:
         paths: files, or folders walked as ``<algorithm>/*.txt`` (see :func:`lorisnb.tools.inputs.result_files`).
-        spec: the evaluation spec or a preset name (default ``openloris``); ``options`` are spec
+        spec: the evaluation spec or a preset name (default ``openloris``; ``conventions``, its
+            older name, as :func:`evaluate_pairs` and :func:`evaluate_manifest` take it); ``options`` are spec
             options over it (``mode``, ``scale``, ``official_interpolation``, ``max_gap``,
             ``remove_repeated``, ``repair_stamps``, ``eps``, ``phi``, ...; see
             :func:`lorisnb.core.spec.make_spec`). Options that cannot apply to OpenLORIS files
@@ -134,7 +136,7 @@ def evaluate(
             Dask cluster's (``distributed.Client(address).get_executor()``). Results are the same
             and in the same order as one process gives.
     """
-    the_spec = make_spec(spec, **options)
+    the_spec = _spec(spec, conventions, options)
     notes = the_spec.refuse_inapplicable("openloris")
     compile_trials_by(trials_by)
     paths = as_paths(paths)  # once: a generator is read once
