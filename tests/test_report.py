@@ -132,7 +132,7 @@ def test_report_on_a_results_folder_with_trials(tmp_path, icra20, data, capfd):
     assert "metrics_primer (about the bundled data" in index  # left out, and said so
     # the leaderboard is the statistics API's on the same table
     ev = ln.evaluate(results, scale="auto")
-    expected = findings(ev.sequences("paper", 30), ev.durations()).board
+    expected = findings(ev.sequences(), ev.durations()).board  # at compare's defaults (eps = phi = inf)
     board = pd.read_csv(out / "findings" / "leaderboard.csv")
     assert len(board) == len(expected) == 4
     assert np.allclose(board["value"], expected["value"]) and (board["trials"] == 3).all()
@@ -155,7 +155,7 @@ def test_report_on_a_results_folder_with_trials(tmp_path, icra20, data, capfd):
     assert single.count("data:image/png;base64,") == len(pngs) and not re.search(r"src='(?!data:)", single)
     # provenance: every result file and the ground truth, with their checksums; verify
     assert set(runs) >= {"command", "lorisnb_version", "commit", "spec", "data_root", "created", "inputs", "notebooks"}
-    assert runs["command"][:2] == ["lorisnb", "report"] and runs["spec"]["values"]["eps"] == "paper"
+    assert runs["command"][:2] == ["lorisnb", "report"] and runs["spec"]["values"]["eps"] == "inf"
     trial = results / "orb" / "cafe_1_trial2.txt"
     assert runs["inputs"][str(trial.resolve())] == sha256(trial)
     assert runs["inputs"]["openloris-scene/groundtruth/gt_cafe_1.txt"] == sha256(data.groundtruth("cafe"))

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from ..core import stats, validate
+from ..core.spec import EvalSpec
 from ..errors import LorisWarning
 from ..io.data import DataPaths
 from .comparison import compare_table
@@ -148,32 +149,52 @@ def sentence(board: pd.DataFrame, pairs: pd.DataFrame, alpha: float = 0.05) -> s
     return text
 
 
-#: The leaderboard's settings and their defaults (the ``compare`` command's): a report parameter of
-#: the same name overrides each.
+#: The leaderboard's own settings and their defaults (the ``compare`` command's): a report
+#: parameter of the same name overrides each. What the numbers are computed with is the evaluation
+#: spec of the report's parameters (:func:`leaderboard_spec`).
 SETTINGS: dict[str, Any] = {
-    "eps": "paper", "phi": 30.0, "delta": 1.0, "tau": 60.0, "scale": "auto", "metric": "cr", "alpha": 0.05,
-    "level": 0.95, "seed": 0, "trials_by": None, "algorithms": None, "scenes": None,
+    "metric": "cr", "alpha": 0.05, "level": 0.95, "seed": 0, "trials_by": None, "algorithms": None, "scenes": None,
 }  # fmt: skip
+#: Spec options whose default differs from the spec's: ``scale`` is ``auto`` (Sim(3) for monocular
+#: algorithms), as in every notebook that evaluates results and in the paper.
+SPEC_DEFAULTS: dict[str, Any] = {"scale": "auto"}
+
+
+def leaderboard_spec(parameters: Mapping[str, Any]) -> EvalSpec:
+    """The evaluation spec of the report's parameters, built as each notebook builds its own
+    (:func:`lorisnb.tools.notebook_params.evaluation_spec`): every ``-p`` that is an option of the
+    spec (thresholds, ``scale``, ``official_interpolation``, the RPE step, ``conventions``, ...)
+    reaches the leaderboard, ``findings/`` and ``run.json`` as it reaches the notebooks; the
+    thresholds not given are the spec's (eps = phi = inf, delta 1 s, tau 60 s: the ``compare``
+    command's and ``per_sequence_benchmark``'s), ``scale`` is ``auto``. An option that cannot apply
+    to OpenLORIS result files is refused, naming it."""
+    from .notebook_params import evaluation_spec
+
+    given = {k: v for k, v in parameters.items() if v is not None}
+    spec = evaluation_spec({**SPEC_DEFAULTS, **given})
+    spec.refuse_inapplicable("openloris", surface="notebook")
+    return spec
 
 
 def report_findings(
     source: Path, data: DataPaths, parameters: Mapping[str, Any]
 ) -> tuple[Findings, Any, dict[str, Any]]:
-    """Evaluate ``source`` once (a results folder, trials allowed) at the report's settings
-    (:data:`SETTINGS`, overridden by ``parameters``) and build its :class:`Findings`. Returns
-    (findings, the evaluation, the settings used)."""
-    from ..core.spec import make_spec
+    """Evaluate ``source`` once (a results folder, trials allowed) with the spec of the report's
+    parameters (:func:`leaderboard_spec`) and build its :class:`Findings` at the leaderboard's
+    settings (:data:`SETTINGS`, overridden by ``parameters``). Returns (findings, the evaluation,
+    the settings used, with ``scale`` as given: run.json's values)."""
     from .evaluate import evaluate
 
     values: dict[str, Any] = {k: v if parameters.get(k) is None else parameters[k] for k, v in SETTINGS.items()}
-    spec = make_spec(None, surface="notebook", **{k: values[k] for k in ("scale", "eps", "phi", "delta", "tau")})
+    values["scale"] = SPEC_DEFAULTS["scale"] if parameters.get("scale") is None else parameters["scale"]
+    spec = leaderboard_spec(parameters)
     with warnings.catch_warnings():  # the notebooks show the warnings about inputs, per file
         warnings.simplefilter("ignore", LorisWarning)
         ev = evaluate(
             source, spec, data_root=data, trials_by=values["trials_by"], algorithms=values["algorithms"],
             scenes=values["scenes"], jobs=1,  # beside the notebooks: one process
         )  # fmt: skip
-    table = ev.sequences()
+    table = ev.sequences()  # at the spec's thresholds and RPE step
     f = findings(
         table, ev.durations() if len(table) else pd.DataFrame(columns=["scene", "seq"]), str(values["metric"]),
         alpha=float(values["alpha"]), level=float(values["level"]), seed=validate.seed(values["seed"]),

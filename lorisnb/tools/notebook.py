@@ -13,15 +13,18 @@ import os
 import tempfile
 import warnings
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
 from ..errors import DataNotFoundError, LorisWarning
 from ..io.data import DataPaths, DataRoot, find_data, sample_data
 from ..io.writers import write_csv
+
+if TYPE_CHECKING:
+    from ..core.spec import EvalSpec
 
 INPUT_ERRORS_CSV = "input_errors.csv"
 
@@ -143,11 +146,21 @@ def default_output_dir(name: str, start: Path | None = None) -> Path:
 
 @dataclass(frozen=True)
 class Session:
-    """What :func:`setup` returns: the data root and the notebook's outputs."""
+    """What :func:`setup` returns: the data root, the notebook's outputs and its parameters (as
+    checked), whose evaluation spec :meth:`spec` builds."""
 
     data: DataPaths
     out: Outputs
     name: str
+    parameters: Mapping[str, Any] = field(default_factory=dict)
+
+    def spec(self, **fixed: Any) -> EvalSpec:
+        """The evaluation spec of the notebook's parameters, with ``fixed`` (the notebook's own
+        choices, such as ``mode="per-seq"``) over them: built by the same function as the report's
+        leaderboard (:func:`lorisnb.tools.notebook_params.evaluation_spec`)."""
+        from .notebook_params import evaluation_spec
+
+        return evaluation_spec(self.parameters, **fixed)
 
     def show_inputs(self, ev: Any) -> None:
         """Show the input files that failed and the warnings about inputs (:func:`show_inputs`)."""
@@ -194,4 +207,4 @@ def setup(
     warnings.filterwarnings("ignore", category=LorisWarning)
     shown = out.dir.resolve() if output_dir is None else out.dir  # as given (a report passes ".")
     print(f"data root: {data.root}\noutputs:   {shown}")
-    return Session(data, out, name)
+    return Session(data, out, name, dict(parameters or {}))

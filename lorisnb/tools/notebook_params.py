@@ -11,7 +11,7 @@ from typing import Any
 
 from ..core import validate
 from ..core.frames import SCENES
-from ..core.spec import PRESETS, SPEC_NAMES, make_spec
+from ..core.spec import PRESETS, SPEC_NAMES, EvalSpec, make_spec
 from ..core.stats import WEIGHTS
 from ..core.trajectory import RELATIVE
 from ..core.trials import compile_trials_by
@@ -21,7 +21,7 @@ from ..io.manifest import BUILT_IN
 from .grids import check_grid
 from .inputs import names
 
-__all__ = ["check_parameters", "check_values", "existing"]
+__all__ = ["check_parameters", "check_values", "evaluation_spec", "existing"]
 
 
 #: Path parameters: that must exist (a folder: ``True``), passed on absolute (a built-in manifest
@@ -61,9 +61,9 @@ _VALUES: dict[str, Any] = {
     "seed": lambda v: validate.seed(v, "seed"),
     "scene": lambda v: validate.choice("scene", v, SCENES),
     **{
-        k: (lambda v, k=k: _plain(validate.eps_value(v) if k == "eps" else validate.threshold(k, v), v))
+        k: (lambda v, k=k: _plain(validate.eps_value(v) if k == "eps" else validate.threshold(k, v)))
         for k in ("eps", "phi", "delta", "tau")
-    },  # '"1"' reaches the notebook as 1.0, "paper" as itself
+    },  # '"1"' reaches the notebook as 1.0, "PAPER" as "paper"
     "sim_scene": lambda v: validate.choice("sim_scene", v, SCENES),
     "conventions": lambda v: validate.choice("conventions", v, tuple(PRESETS)),
     "fmt": lambda v: validate.choice("fmt", v, TRAJECTORY_FORMATS),
@@ -73,9 +73,23 @@ _VALUES: dict[str, Any] = {
 }
 
 
-def _plain(checked: Any, given: Any) -> Any:
-    """A checked threshold as the notebook gets it: a number as a float, a word as given."""
-    return float(checked) if isinstance(checked, (int, float)) and not isinstance(checked, bool) else given
+def _plain(checked: Any) -> Any:
+    """A checked threshold as the notebook gets it: a number as a float, anything else normalized as
+    the check spells it (``PAPER`` is ``paper``, `` relative:0.05`` is ``relative:0.05``), never as
+    given: a notebook compares what it receives with the normalized words."""
+    return float(checked) if isinstance(checked, (int, float)) and not isinstance(checked, bool) else checked
+
+
+def evaluation_spec(values: Mapping[str, Any], **fixed: Any) -> EvalSpec:
+    """The one evaluation spec of notebook (and report) parameters: the preset ``conventions``
+    (None: lorisnb's own) with every parameter that is an option of the spec
+    (:data:`lorisnb.core.spec.SPEC_NAMES`: thresholds, ``scale``, ``official_interpolation``, the
+    RPE step, ...) given over it, None meaning the spec's default, and ``fixed`` (a notebook's own
+    choices, such as ``mode="per-seq"``) last, by :func:`lorisnb.core.spec.make_spec`. The
+    notebooks (``session.spec()``) and the report's leaderboard build their spec here, so a ``-p``
+    reaches both alike."""
+    given = {k: v for k, v in values.items() if k in SPEC_NAMES and v is not None}
+    return make_spec(values.get("conventions"), surface="notebook", **{**given, **fixed})
 
 
 def _absolute(name: str, value: Any) -> str:

@@ -27,7 +27,7 @@ from ..io.data import find_data
 from ..io.writers import overlap, write_csv
 from . import warm_kernels
 from .evaluate import check_filters, result_files
-from .leaderboard import report_findings
+from .leaderboard import leaderboard_spec, report_findings
 from .lean_imports import jsonschema_without_iri_grammars
 from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
 from .notebook_params import check_parameters
@@ -286,6 +286,8 @@ def run_report(
             raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
         if source is not None:  # a filter naming nothing there is refused now, not by each notebook later
             check_filters(source, params.get("algorithms"), params.get("scenes"), params.get("trials_by"))
+        if wants_board:  # the notebooks' spec (one from the parameters): refused now if it cannot apply
+            leaderboard_spec(params)
         run_dir.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
         try:
@@ -301,7 +303,7 @@ def run_report(
                     return
                 findings, ev, values = report_findings(source, data, params)
                 (tmp / "findings").mkdir()
-                per_sequence = ev.sequences(values["eps"], values["phi"], values["delta"], values["tau"])
+                per_sequence = ev.sequences()  # the spec of the parameters, as the notebooks' (leaderboard_spec)
                 failures = ev.failures_table()
                 for table, name in ((per_sequence, "sequences.csv"), (findings.board, "leaderboard.csv"),
                                     (findings.pairs, "pairwise.csv"), (failures, INPUT_ERRORS_CSV)):  # fmt: skip

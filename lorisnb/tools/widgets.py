@@ -8,7 +8,7 @@ when it runs in batch (papermill has no widget front end).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -17,11 +17,10 @@ from matplotlib.figure import Figure
 
 from ..core.aggregate import aggregate_scenes, durations_table
 from ..core.frames import PAPER_EPS, PAPER_PHI
-from ..core.model import FileErrors, ResultFile
+from ..core.model import Eps, FileErrors, ResultFile, scene_eps
 from ..core.scoring import score
 from ..core.simulate import Faults, simulated_errors
 from ..core.spec import make_spec
-from ..core.validate import threshold
 from .notebook import show_figure
 from .plotting import plot_timeline
 
@@ -30,18 +29,37 @@ OFF = -1.0  # the "off" position of the wrong re-localization slider
 SLIDER_WIDTH = "460px"  # long enough for about 80 positions
 
 
-def value_slider(description: str, value: float, grid: Iterable[float], exact: Iterable[float] = ()) -> Any:
+def value_slider(description: str, value: float | str, grid: Iterable[float], exact: Iterable[float] = ()) -> Any:
     """A slider over a fixed list of values (a log or linear grid, rounded to 3 significant
     digits, plus ``value`` and the ``exact`` values themselves), so that it starts at ``value``
-    exactly and offers the paper's values exactly; updates when released."""
+    exactly and offers the paper's values exactly; updates when released. A ``value`` that is not a
+    number (eps ``relative:F``) is the slider's first position, under its own name."""
     import ipywidgets as w
 
     rounded = {float(f"{v:.3g}") for v in grid}
-    values = sorted(rounded | {float(value)} | {float(v) for v in exact})
+    word = isinstance(value, str)
+    values = sorted(rounded | {float(v) for v in exact} | (set() if word else {float(value)}))
     return w.SelectionSlider(
-        options=[(f"{v:g}", v) for v in values], value=float(value), description=description, style=STYLE,
+        options=([(value, value)] if word else []) + [(f"{v:g}", v) for v in values],
+        value=value if word else float(value), description=description, style=STYLE,
         continuous_update=False, layout=w.Layout(width=SLIDER_WIDTH),
     )  # fmt: skip
+
+
+def explorer_eps(eps: Eps, scene: str | None) -> float | str:
+    """The eps an explorer of ``scene`` starts at, from a value checked by
+    :func:`lorisnb.core.spec.make_spec`: metres as given, ``paper`` (or a mapping scene -> metres) as
+    that scene's metres (:func:`lorisnb.core.model.scene_eps`), ``relative:F`` as itself (a fraction
+    of each sequence's extent, which the slider offers as its first position)."""
+    if isinstance(eps, str) and eps.startswith("relative:"):
+        return eps
+    if isinstance(eps, (str, Mapping)) and scene is not None:
+        return scene_eps(eps, scene)
+    return float(eps)  # type: ignore[arg-type]
+
+
+def _eps_text(eps: float | str) -> str:
+    return eps if isinstance(eps, str) else f"{eps:g} m"
 
 
 def _render(out: Any, results: Callable[[], tuple[pd.DataFrame, Figure]]) -> None:
@@ -58,13 +76,16 @@ def _render(out: Any, results: Callable[[], tuple[pd.DataFrame, Figure]]) -> Non
 
 
 class ThresholdExplorer:
-    """Sliders for eps (m), phi (deg), delta (s), tau (s) and a scene dropdown."""
+    """Sliders for eps (m), phi (deg), delta (s), tau (s) and a scene dropdown. The thresholds are
+    checked by :func:`lorisnb.core.spec.make_spec`, as on every other surface: eps takes metres,
+    ``inf``, ``paper`` in any case (the scene's 1/3/5 m), a mapping scene -> metres, or
+    ``relative:F`` (:func:`explorer_eps`)."""
 
     def __init__(
         self,
         errors: Sequence[FileErrors],
         durations: pd.DataFrame,
-        eps: float = 3.0,
+        eps: Eps = 3.0,
         phi: float = 30.0,
         delta: float = 1.0,
         tau: float = 60.0,
@@ -73,10 +94,10 @@ class ThresholdExplorer:
         self.errors = list(errors)
         self.durations = durations
         self.scenes = [s for s in durations["scene"].unique() if any(f.scene == s for f in self.errors)]
-        self.eps, self.phi, self.delta, self.tau = (
-            threshold(name, v) for name, v in (("eps", eps), ("phi", phi), ("delta", delta), ("tau", tau))
-        )
+        spec = make_spec(None, surface="widget", eps=eps, phi=phi, delta=delta, tau=tau)
         self.scene = scene if scene is not None else (self.scenes[0] if self.scenes else None)
+        self.eps: float | str = explorer_eps(spec.eps, self.scene)
+        self.phi, self.delta, self.tau = float(spec.phi), float(spec.delta), float(spec.tau)
 
     def results(self) -> tuple[pd.DataFrame, Figure]:
         """Scene table and timeline figure for the current values."""
@@ -92,7 +113,7 @@ class ThresholdExplorer:
             self.eps,
             self.phi,
             self.delta,
-            title=f"{self.scene}: eps {self.eps:g} m, phi {self.phi:g} deg, delta {self.delta:g} s, tau {self.tau:g} s",
+            title=f"{self.scene}: eps {_eps_text(self.eps)}, phi {self.phi:g} deg, delta {self.delta:g} s, tau {self.tau:g} s",
         )
         cols = ["algorithm", "cr", "cr_t", "cs_r", "c_ate_rmse", "c_matched", "matched"]
         return table[cols].sort_values("cr", ascending=False).reset_index(drop=True), fig

@@ -1,0 +1,69 @@
+"""One spec per run: the report's own tables are computed with the spec the notebooks build from the
+same parameters, and a threshold word reaches notebooks and widgets normalized, checked by the same
+code."""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+import pytest
+
+import lorisnb as ln
+from lorisnb.tools.leaderboard import leaderboard_spec, report_findings
+from lorisnb.tools.notebook_params import check_parameters, evaluation_spec
+from lorisnb.tools.widgets import ThresholdExplorer
+
+ORB = "cafe_1_1_orbslam2-original.txt"
+
+
+def test_the_reports_tables_use_the_notebooks_spec(icra20, data):
+    """-p official_interpolation, rpe_unit, rpe_delta reach findings/ and run.json's spec as they
+    reach the notebooks; the thresholds not given are compare's (the spec's: inf, inf)."""
+    source = icra20 / "per-seq"
+    params = {"official_interpolation": True, "rpe_unit": "m", "rpe_delta": 2, "eps": 3, "scenes": ["cafe"],
+              "algorithms": ["orbslam2_rgbd"]}  # fmt: skip
+    f, ev, values = report_findings(source, data, params)
+    assert ev.spec == evaluation_spec({"scale": "auto", **params})  # the notebooks' function
+    assert ev.spec.official_interpolation and (ev.spec.rpe_unit, ev.spec.rpe_delta) == ("m", 2.0)
+    assert ev.spec.eps == 3.0 and math.isinf(ev.spec.phi) and values["scale"] == "auto"
+    table = ev.sequences()
+    plain = ln.evaluate(source / "orbslam2_rgbd" / ORB, scale="auto").sequences(3.0)
+    nb = ln.evaluate(source / "orbslam2_rgbd" / ORB, evaluation_spec(params, mode="per-seq"), scale="auto").sequences()
+    row = table[table["seq"] == 1].iloc[0]
+    assert row["official_interpolation"] and row["aoe_rmse"] == pytest.approx(nb["aoe_rmse"].iloc[0], abs=1e-9)
+    assert row["rpe_trans_rmse"] == pytest.approx(nb["rpe_trans_rmse"].iloc[0], abs=1e-9)
+    # the official tool's slips and RPE over 2 m: not the plain numbers (1.992166 deg, RPE per second)
+    assert row["aoe_rmse"] == pytest.approx(2.003032, abs=1e-6) and plain["aoe_rmse"].iloc[0] == pytest.approx(
+        1.992166, abs=1e-6
+    )
+    assert row["rpe_trans_rmse"] != pytest.approx(plain["rpe_trans_rmse"].iloc[0], rel=1e-3)
+    assert '"rpe_unit":"m"' in row["spec"] and f.board["value"].between(0, 1).all()
+    # the defaults: compare's and the per-sequence notebook's (eps = phi = inf)
+    spec = leaderboard_spec({})
+    assert (spec.eps, spec.phi, spec.delta, spec.tau, spec.align) == (math.inf, math.inf, 1.0, 60.0, "auto")
+
+
+@pytest.mark.parametrize("given, expected", [("PAPER", "paper"), (" Paper ", "paper"),
+                                             (" relative:0.05", "relative:0.05"), ("3", 3.0)])  # fmt: skip
+def test_threshold_words_reach_the_notebooks_normalized(given, expected):
+    declared = {"eps": {"default": '"paper"'}}
+    assert check_parameters({"eps": given}, declared)["eps"] == expected
+
+
+def test_threshold_explorer_takes_every_eps_the_readme_names(icra20):
+    ev = ln.evaluate(icra20 / "lifelong", algorithms=["vins_mono_color_imu_with_loop"], scenes=["home"])
+    d = ev.durations()
+    metres = ThresholdExplorer(ev.errors, d, eps=3.0).results()[0]
+    for eps in ("paper", "PAPER", {"home": 3.0}):  # home's paper eps is 3 m
+        ex = ThresholdExplorer(ev.errors, d, eps=eps)
+        assert ex.eps == 3.0
+        pd.testing.assert_frame_equal(ex.results()[0], metres)
+    rel = ThresholdExplorer(ev.errors, d, eps="relative:0.05")
+    assert rel.eps == "relative:0.05"
+    expected = ln.aggregate_scenes(ln.score(ev.errors, "relative:0.05", 30.0, 1.0, 60.0), d)["cr"].iloc[0]
+    assert rel.results()[0]["cr"].iloc[0] == pytest.approx(expected, abs=1e-12)
+    slider = next(c for c in rel.widget().children[0].children[0].children if c.description == "eps (m)")
+    assert slider.value == "relative:0.05" and 5.0 in [v for _, v in slider.options]
+    with pytest.raises(ln.errors.ValidationError, match="relative:2"):
+        ThresholdExplorer(ev.errors, d, eps="relative:2")
