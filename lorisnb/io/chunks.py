@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import ParseError
 from .ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, newlines, read_range
-from .rows import Group, Rows, RowSink, line_dtype
+from .rows import Convert, Group, Rows, RowSink, line_dtype
 from .scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
 from .whole import pandas_loaded, read_whole
 
@@ -229,6 +229,7 @@ def read_rows(
     layout: Callable[[int], Sequence[Group]] | None = None,
     skip_lines: int = 0,
     row_major: bool = True,
+    convert: Convert | None = None,
 ) -> Rows:
     """Read the numeric lines of a text file in chunks (a plain file of at most
     :data:`~lorisnb.io.whole.WHOLE_MAX_BYTES` with a ``layout``: in one call,
@@ -258,9 +259,11 @@ def read_rows(
         row_major: False for a reader that only computes from the groups' arrays and keeps none of
             them: a plain file read in one call then gives views of the parser's own numbers
             (column-major, read-only; no copy), chunked reading row-major arrays as always.
+        convert: what the reader computes from the groups (:meth:`Rows.convert`): a large plain
+            file read on threads computes it on each range as it is read.
     """
     if layout is not None and not specials and chunk_bytes is None:  # a plain file: pandas' parse in one call
-        whole = read_whole(path, widths, layout, separators, skip_lines, progress, row_major)
+        whole = read_whole(path, widths, layout, separators, skip_lines, progress, row_major, convert)
         if whole is not None:
             return whole
     spath = str(path)

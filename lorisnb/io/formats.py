@@ -107,16 +107,26 @@ def _poses(
     return traj
 
 
-def _from_matrices(spath: str, stamps: np.ndarray, mats: np.ndarray, line_no: np.ndarray) -> Trajectory:
-    """Poses from (N, 3, 4) ``[R | t]`` blocks, each checked to hold a proper rotation (within
-    :data:`ROTATION_TOLERANCE`), quaternions of the rotations nearest to them (scipy's
-    ``Rotation.from_matrix`` quaternions of exact rotations:
+def _pose_blocks(flat: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Positions, quaternions and refusals of (m, 12) rows of ``[R | t]`` blocks, row-major, row by
+    row (a :data:`~lorisnb.io.rows.Convert`: a large file computes it on each range as it is
+    read): a row is refused unless finite and its block a proper rotation within
+    :data:`ROTATION_TOLERANCE`; the quaternions are those of the rotations nearest to the blocks
+    (scipy's ``Rotation.from_matrix`` quaternions of exact rotations:
     :func:`lorisnb.core.matrices.rotation_blocks`)."""
+    mats = flat.reshape(-1, 3, 4)
     with np.errstate(all="ignore"):
         finite = np.isfinite(mats.sum()) or np.isfinite(mats).all()
     bad = np.zeros(len(mats), bool) if finite else ~np.isfinite(mats).all(axis=(1, 2))
     q, off = rotation_blocks(np.where(bad[:, None, None], 0.0, mats[:, :, :3]) if bad.any() else mats[:, :, :3])
     bad |= ~(off <= ROTATION_TOLERANCE)
+    return mats[:, :, 3].copy(), q, bad
+
+
+def _from_matrices(spath: str, stamps: np.ndarray, poses: list[np.ndarray], line_no: np.ndarray) -> Trajectory:
+    """The trajectory of :func:`_pose_blocks`' ``poses``, or a ParseError naming the first line
+    refused."""
+    positions, q, bad = poses
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise ParseError(
@@ -125,7 +135,7 @@ def _from_matrices(spath: str, stamps: np.ndarray, mats: np.ndarray, line_no: np
             "not a rotation (non-finite values, or a rotation block that is not orthonormal with determinant 1); "
             "expected a pose",
         )
-    return Trajectory.from_checked(np.asarray(stamps, float), mats[:, :, 3].copy(), q, line_no, {"source": spath})
+    return Trajectory.from_checked(np.asarray(stamps, float), positions, q, line_no, {"source": spath})
 
 
 def read_kitti(
@@ -150,11 +160,12 @@ def read_kitti(
         separators=b",",
         layout=_matrix_groups,
         row_major=False,
+        convert=_pose_blocks,
     )
-    (flat,) = rows.split(_matrix_groups(12))  # the parser's own numbers (a plain file), else row-major
-    mats = flat.reshape(-1, 3, 4)
+    poses = rows.convert(_matrix_groups(12), _pose_blocks)  # of the parser's own numbers (a plain file)
+    n = len(poses[0])
     if stamps is None:
-        t = np.arange(len(mats), dtype=float)
+        t = np.arange(n, dtype=float)
     elif isinstance(stamps, (str, os.PathLike)):
         if os.path.exists(stamps) and os.path.samefile(stamps, path):  # the pose file as its own times
             raise ParseError(spath, None, "this KITTI pose file is also given as its own times file (--est-times or "
@@ -163,16 +174,16 @@ def read_kitti(
         t = read_times(stamps)
     else:
         t = np.asarray(stamps, dtype=float).reshape(-1)
-    if len(t) != len(mats):  # a times file: named, it may be the one at fault (another sequence's, swapped)
+    if len(t) != n:  # a times file: named, it may be the one at fault (another sequence's, swapped)
         given = f"the times file {stamps}" if isinstance(stamps, (str, os.PathLike)) else "the stamps given"
-        raise ParseError(spath, None, f"{len(mats)} poses but {len(t)} stamps in {given}; expected one stamp per pose "
+        raise ParseError(spath, None, f"{n} poses but {len(t)} stamps in {given}; expected one stamp per pose "
                          "(is it this sequence's times file?)")  # fmt: skip
     if not np.isfinite(t).all():
         raise ParseError(spath, None, f"stamp {int(np.flatnonzero(~np.isfinite(t))[0]) + 1} given for this KITTI "
                          "file is not finite; expected seconds")  # fmt: skip
     if stamps is not None and len(t) > 1 and not np.all(np.diff(t) >= 0 if keep_all else np.diff(t) > 0):
         raise ParseError(spath, None, "the stamps given for this KITTI file are not strictly increasing")
-    out = _from_matrices(spath, t, mats, rows.lines)
+    out = _from_matrices(spath, t, poses, rows.lines)
     out.meta["stamps"] = "index" if stamps is None else "given"
     return out
 

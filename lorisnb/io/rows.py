@@ -28,6 +28,8 @@ class Rows:
         parsed_in_c: how many of the lines pandas' C parser read (the others: the numpy scanner).
         filled: the column groups and their arrays when the numbers were copied into them as they
             were read (:class:`RowSink`; then ``blocks`` is empty and :meth:`split` returns them).
+        converted: a reader's :data:`Convert` and what it gave, when it was applied to ranges of
+            rows as they were read (:func:`~lorisnb.io.whole.read_whole`; see :meth:`convert`).
     """
 
     blocks: list[np.ndarray]
@@ -36,6 +38,7 @@ class Rows:
     specials: list[tuple[int, str]]
     parsed_in_c: int = 0
     filled: tuple[tuple[Group, ...], list[np.ndarray]] | None = None
+    converted: tuple[Convert, list[np.ndarray]] | None = None
 
     @property
     def columns(self) -> np.ndarray:
@@ -49,6 +52,15 @@ class Rows:
     def values(self) -> np.ndarray:
         """(n, k) view of :attr:`columns`."""
         return self.columns.T
+
+    def convert(self, groups: Sequence[Group], fn: Convert) -> list[np.ndarray]:
+        """``fn`` of the :meth:`split` groups' arrays: what it gave on ranges of rows as they were
+        read, or its result on all of them (the same arrays: it works row by row)."""
+        if self.converted is not None and self.converted[0] is fn:
+            arrays = self.converted[1]
+            self.converted = None
+            return arrays
+        return list(fn(*self.split(groups)))
 
     def split(self, groups: Sequence[Group]) -> list[np.ndarray]:
         """Row-major (n, stop - start) arrays of the column ``groups`` (slices of token positions
@@ -84,6 +96,9 @@ _NO_ROWS = np.zeros((0, 0))
 #: A group of columns: a slice of token positions with a stop, or token positions in the order
 #: wanted (EuRoC's ``q_w`` last).
 Group = slice | list[int]
+#: What a reader computes from its groups' arrays (one per group, (m, width) each, any memory
+#: order), row by row: arrays of m rows each, the same whichever rows it is given at once.
+Convert = Callable[..., Sequence[np.ndarray]]
 
 
 def width(group: Group) -> int:
