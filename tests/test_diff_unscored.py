@@ -49,3 +49,21 @@ def test_diff_of_inputs_not_scored_exits_1(tmp_path, data):
     failed = unevaluated(ev, est)
     assert failed == {"algo": f"{est / 'algo'}: no estimate for session(s) [2]"}
     assert exit_status(diff_tables(table, table), failed, failed) == 1
+
+
+def test_the_command_line_diff_exits_1_on_inputs_not_scored(tmp_path, data, capsys):
+    from lorisnb.cli import main
+
+    tum = data.root / "tum-rgbd"
+    gt = tum / "fr2_desk_groundtruth.txt"
+    folder = tmp_path / "shifted"
+    write(folder, "a/x.txt", _shifted(tum / "fr2_desk_ORB.txt", 100_000.0))
+    assert main(["diff", str(folder), str(folder), "--gt", str(gt), "--no-progress"]) == 1
+    err = capsys.readouterr().err
+    assert "could not be evaluated or were not scored" in err
+    scored = tmp_path / "scored"
+    write(scored, "a/x.txt", (tum / "fr2_desk_ORB.txt").read_bytes())
+    assert main(["diff", str(scored), str(scored), "--gt", str(gt), "--no-progress"]) == 0
+    # CAND's unscored input also counts when BASE was scored
+    write(tmp_path / "mixed", "a/x.txt", _shifted(tum / "fr2_desk_ORB.txt", 100_000.0))
+    assert main(["diff", str(scored), str(tmp_path / "mixed"), "--gt", str(gt), "--no-progress"]) == 1

@@ -36,6 +36,7 @@ def _short(v: object) -> str:
 def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], list[str]]:
     """A run (report run or table as read, or a result folder evaluated with the options), the
     files of it that failed (relative path -> reason), and notes."""
+    from ..tools.diff import unevaluated
     from ..tools.runs import Run, is_report_run, is_table, load_run
 
     p = Path(path)
@@ -45,22 +46,16 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
         raise ValidationError(f"{path}: no such result folder, run folder or table")
     ev, notes = run_evaluation(argparse.Namespace(**{**vars(args), "paths": [path]}), [])  # outputs: checked first
     report_problems(ev, [f"{path}: {n}" for n in notes])
-    root = p if p.is_dir() else p.parent
-    failed = {}
-    for f in ev.failures:
-        try:
-            failed[f.path.relative_to(root).as_posix()] = f.error
-        except ValueError:
-            failed[f.path.name] = f.error
+    failed = unevaluated(ev, p)  # not evaluated, or evaluated but not scored: as evaluate's exit status counts
     table = ev.sequences()  # at the spec's thresholds (the options', else the defaults)
-    return Run(p, "results", table), failed, [str(f.path) for f in ev.failures]
+    return Run(p, "results", table), failed, sorted(failed)
 
 
 def cmd_diff(args: argparse.Namespace) -> int:
     """``lorisnb diff BASE CAND`` (see the README's exit-status table)."""
     from ..core.regression import parse_tolerances
     from ..io.writers import write_csv, write_parquet
-    from ..tools.diff import diff_tables, write_json, write_junit
+    from ..tools.diff import diff_tables, exit_status, write_json, write_junit
     from ..tools.runs import is_report_run, is_table, spec_differences
 
     refuse_unused(args, {"relative": "lorisnb evaluate (diff compares the RPE columns)"})
@@ -77,8 +72,8 @@ def cmd_diff(args: argparse.Namespace) -> int:
     for note in base.notes + cand.notes:
         print(f"note: {note}", file=sys.stderr)
     if base.table.empty:  # nothing to compare against: never a verdict of "ok"
-        print(f"error: BASE {args.paths[0]} holds no scored sequence" + (f" ({len(base_failed)} file(s) could not be "
-              "evaluated)" if base_failed else "") + ": nothing was compared; give a run with results as BASE",
+        print(f"error: BASE {args.paths[0]} holds no scored sequence" + (f" ({len(base_failed)} input(s) could not be "
+              "evaluated or were not scored)" if base_failed else "") + ": nothing was compared; give a run with results as BASE",
               file=sys.stderr)  # fmt: skip
         return 1
     problems = spec_differences(base, cand)
@@ -124,12 +119,10 @@ def cmd_diff(args: argparse.Namespace) -> int:
         written.append(write_parquet(both, args.parquet, force=args.force))
     for w in written:
         print(f"wrote {w}", file=sys.stderr)
-    base_files = set(base.table["file"].astype(str)) if "file" in base.table.columns else set()
-    cand_other = sorted(f for f in cand_failed if f not in base_files)  # not matched to a BASE sequence
-    if base_failed or cand_other:
-        print(f"error: {len(base_failed)} file(s) of BASE and {len(cand_other)} other file(s) of CAND could not be "
-              "evaluated: not every sequence was compared", file=sys.stderr)  # fmt: skip
-    return 1 if d.regressed or base_failed or cand_other else 0
+    if base_failed or cand_failed:
+        print(f"error: {len(base_failed)} input(s) of BASE and {len(cand_failed)} of CAND could not be evaluated or "
+              "were not scored: not every sequence was compared", file=sys.stderr)  # fmt: skip
+    return exit_status(d, base_failed, cand_failed)
 
 
 def cmd_history(args: argparse.Namespace) -> int:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 import os
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -128,7 +128,7 @@ def unevaluated(ev: Evaluation, root: str | os.PathLike[str]) -> dict[str, str]:
     return out
 
 
-def exit_status(d: Diff, base_failed: Mapping[str, str], cand_failed: Mapping[str, str]) -> int:
+def exit_status(d: Diff, base_failed: Collection[str], cand_failed: Collection[str]) -> int:
     """``diff``'s exit status: 1 when CAND regressed or an input of either run was not evaluated or
     not scored (:func:`unevaluated`), so that 0 tells a script that every input was scored and
     nothing regressed; else 0."""
