@@ -67,3 +67,22 @@ def test_threshold_explorer_takes_every_eps_the_readme_names(icra20):
     assert slider.value == "relative:0.05" and 5.0 in [v for _, v in slider.options]
     with pytest.raises(ln.errors.ValidationError, match="relative:2"):
         ThresholdExplorer(ev.errors, d, eps="relative:2")
+
+
+def test_a_relative_eps_is_refused_before_anything_runs_where_a_notebook_quotes_metres(tmp_path, data):
+    """``-p eps relative:0.05`` passed the report's check and failed metrics_primer inside its kernel
+    (its prose quotes eps in metres of one scene); the other notebooks take it."""
+    from lorisnb.cli import main
+    from lorisnb.errors import ValidationError
+    from lorisnb.tools.notebook import setup
+
+    declared = {"eps": {"default": "1.0"}}
+    with pytest.raises(ValidationError, match="metrics_primer quotes eps in metres"):
+        check_parameters({"eps": "relative:0.05"}, declared, ["metrics_primer", "threshold_sensitivity"])
+    assert check_parameters({"eps": "relative:0.05"}, declared, ["threshold_sensitivity"])["eps"] == "relative:0.05"
+    assert check_parameters({"eps": "PAPER"}, declared, ["metrics_primer"])["eps"] == "paper"
+    with pytest.raises(ValidationError, match="metrics_primer quotes eps in metres"):
+        setup("metrics_primer", data.root, tmp_path / "out", parameters={"eps": " relative:0.05"})
+    out = tmp_path / "report"
+    assert main(["report", "--notebooks", "metrics_primer", "-p", "eps", "relative:0.05", "--out", str(out)]) == 2
+    assert not out.exists()

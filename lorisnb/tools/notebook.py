@@ -195,7 +195,7 @@ def setup(
     if parameters is not None:
         from .notebook_params import check_values
 
-        check_values(parameters)
+        check_values(parameters, [name])
     try:
         data = find_data(data_root)
     except DataNotFoundError:

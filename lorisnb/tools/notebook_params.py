@@ -5,7 +5,7 @@ numbers, paths absolute, since a notebook runs in its own folder of the run)."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -109,10 +109,21 @@ def existing(name: str, value: Any, folder: bool = False) -> Path:
     return p
 
 
-def check_values(values: Mapping[str, Any]) -> None:
-    """Check notebook parameter values with the command line's rules (None: the notebook's default).
-    Every notebook calls it through :func:`lorisnb.tools.notebook.setup` (``parameters=``), and the
-    report through :func:`check_parameters`, before anything runs."""
+#: Notebooks whose ``eps`` is one scene's threshold in metres (their prose quotes it so): a relative
+#: eps (a fraction of each sequence's size) cannot apply to them.
+EPS_IN_METRES = ("metrics_primer",)
+
+
+def check_values(values: Mapping[str, Any], notebooks: Iterable[str] = ()) -> None:
+    """Check notebook parameter values with the command line's rules (None: the notebook's default),
+    and those the ``notebooks`` named cannot take. Every notebook calls it through
+    :func:`lorisnb.tools.notebook.setup` (``parameters=``), and the report through
+    :func:`check_parameters`, before anything runs."""
+    eps = values.get("eps")
+    metres = [n for n in notebooks if n in EPS_IN_METRES]
+    if metres and isinstance(eps, str) and validate.eps_value(eps) != "paper":  # relative:F
+        raise ValidationError(f"eps={eps!r}: {', '.join(metres)} quotes eps in metres of its scene; give metres or "
+                              "paper (a relative eps is for the other notebooks: leave this one out with --notebooks)")  # fmt: skip
     for name, value in values.items():
         if value is None:
             continue
@@ -122,9 +133,12 @@ def check_values(values: Mapping[str, Any]) -> None:
             _VALUES[name](value)
 
 
-def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
+def check_parameters(
+    parameters: Mapping[str, Any], declared: Mapping[str, Mapping[str, Any]], notebooks: Iterable[str] = ()
+) -> dict[str, Any]:
     """Refuse a parameter no selected notebook declares (listing the declared names) and values
-    that the command line would refuse (``-p eps -1``, ``-p alpha 2``), before anything runs.
+    that the command line would refuse (``-p eps -1``, ``-p alpha 2``) or the selected ``notebooks``
+    cannot take (:func:`check_values`), before anything runs.
     Returns the parameters, the leaderboard's settings normalized (``-p metric CR`` is ``cr``)."""
     unknown = sorted(set(parameters) - set(declared) - {"output_dir"})
     if unknown:
@@ -141,7 +155,7 @@ def check_parameters(parameters: Mapping[str, Any], declared: Mapping[str, Mappi
     for name, partner in NEEDS.items():  # given, it would be ignored without its partner: refused
         if parameters.get(name) is not None and parameters.get(partner) is None and name in declared:
             raise ValidationError(f"-p {name}: only applies with -p {partner} (the notebook ignores it otherwise)")
-    check_values(parameters)
+    check_values(parameters, notebooks)
     for name, value in parameters.items():
         if name in _VALUES and value is not None:
             out[name] = _VALUES[name](value)

@@ -265,7 +265,7 @@ def run_report(
     with warm_kernels_for_report() if len(names) > 1 else contextlib.nullcontext(None) as zygote:
         # the zygote starts now: it imports the kernels' modules while the notebooks are checked
         declared = declared_by(names, notebooks_dir)
-        params = check_parameters(dict(parameters or {}), declared)
+        params = check_parameters(dict(parameters or {}), declared, [Path(n).stem for n in names])
         given = params.get("results_dir")
         if results is not None and given is not None and Path(str(given)).resolve() != Path(results).resolve():
             raise ValidationError("--results and -p results_dir name two folders; give one")
