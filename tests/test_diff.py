@@ -225,6 +225,27 @@ def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
     assert "first change" in out and (figs / "history_cr.png").is_file() and (figs / "history_cr.svg").is_file()
 
 
+def test_diff_of_report_runs_counts_the_inputs_their_findings_did_not_score(versions, tmp_path, capsys):
+    """A report run lists the inputs its own evaluation could not score in
+    ``findings/input_errors.csv``: diff of such a run exits 1, as diff of its result folder does
+    (and as the report itself did); a skipped input (no ground truth for its scene) does not count."""
+    a, _ = versions
+    folder = tmp_path / "run"
+    (folder / "findings").mkdir(parents=True)
+    assert main(["evaluate", str(a), "--no-progress", "--csv", str(folder / "findings" / "sequences.csv")]) == 0
+    meta = dict(command=["lorisnb", "report"], lorisnb_version="0.3.0", commit="abc", spec={}, data_root="/data",
+                created="2026-11-01T02:00:00+00:00", inputs={}, notebooks={})  # fmt: skip
+    (folder / "run.json").write_text(json.dumps(meta))
+    errors = folder / "findings" / "input_errors.csv"
+    errors.write_text("file,status,kind,error\n/r/odom/office-1.txt,skipped,no-groundtruth,no ground truth\n")
+    capsys.readouterr()
+    rc, _, err = run(capsys, folder, folder)
+    assert rc == 0, err
+    errors.write_text(errors.read_text() + "/r/odom/cafe-1.txt,not scored,no-overlap,no estimate stamp falls inside\n")
+    rc, out, err = run(capsys, folder, folder)
+    assert rc == 1 and "verdict: ok" in out and "1 input(s) of BASE and 1 of CAND" in err
+
+
 def test_regression_core_on_trials():
     """Three trials a side: a shift the tolerance allows is no regression; a shift beyond it on every
     trial is one, found by the permutation test; identical trials change nothing."""

@@ -41,7 +41,8 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
 
     p = Path(path)
     if is_report_run(p) or is_table(p):
-        return load_run(p), {}, []
+        run = load_run(p)  # a report run: the inputs its own evaluation did not score
+        return run, dict(run.unscored), sorted(run.unscored)
     if not p.exists():
         raise ValidationError(f"{path}: no such result folder, run folder or table")
     ev, notes = run_evaluation(argparse.Namespace(**{**vars(args), "paths": [path]}), [])  # outputs: checked first

@@ -332,13 +332,10 @@ def run_report(
 
 
 def findings_input_errors(run_dir: Path) -> int:
-    """How many input files the report's own evaluation (``findings/``) could not evaluate."""
-    import pandas as pd
+    """How many input files the report's own evaluation (``findings/``) could not evaluate or score."""
+    from .runs import unscored_inputs
 
-    f = run_dir / "findings" / INPUT_ERRORS_CSV
-    if not f.is_file():
-        return 0
-    return int((pd.read_csv(f).get("status", pd.Series(dtype=str)).isin(["failed", "not scored"])).sum())
+    return len(unscored_inputs(run_dir))
 
 
 def _move_into_place(tmp: Path, run_dir: Path, force: bool) -> Path:

@@ -28,6 +28,7 @@ from ..core.regression import METRICS
 from ..core.stats import WEIGHTS as STATS_WEIGHTS
 from ..core.stats import with_trials
 from ..errors import DataNotFoundError, ParseError, ValidationError
+from .notebook import INPUT_ERRORS_CSV
 from .provenance import RUN_JSON, read_run_json
 
 #: Columns a per-sequence table must have to be read as one.
@@ -58,6 +59,8 @@ class Run:
     created: datetime | None = None
     created_from: str = ""
     notes: list[str] = field(default_factory=list)
+    #: inputs of a report run's own evaluation that failed or were not scored (file -> reason)
+    unscored: dict[str, str] = field(default_factory=dict)
 
     @property
     def name(self) -> str:
@@ -182,10 +185,30 @@ def load_run(path: str | os.PathLike[str]) -> Run:
         if created is None:
             created, source = _mtime(p / RUN_JSON), "modification time of run.json"
         notes: list[str] = []
-        return Run(p, "report", _report_tables(p, notes), meta, created, source, notes)
+        return Run(p, "report", _report_tables(p, notes), meta, created, source, notes, unscored_inputs(p))
     if is_table(p):
         return Run(p, "table", read_table(p), {}, _mtime(p), "modification time")
     raise ValidationError(f"{p}: not a report run (no {RUN_JSON}) and not a CSV/Parquet table")
+
+
+#: What a report run's ``findings/input_errors.csv`` says of an input that was not scored.
+NOT_SCORED = ("failed", "not scored")
+
+
+def unscored_inputs(run_dir: Path) -> dict[str, str]:
+    """The inputs of a report run's own evaluation (``findings/input_errors.csv``) that failed or
+    were not scored, file -> reason (skipped ones, such as a scene without ground truth, are not)."""
+    f = run_dir / "findings" / INPUT_ERRORS_CSV
+    if not f.is_file():
+        return {}
+    try:
+        t = pd.read_csv(f, dtype=str, keep_default_na=False)
+    except (ValueError, pd.errors.ParserError) as exc:
+        raise ParseError(f, None, f"not a table of input errors ({exc}); expected the report's own") from None
+    if not {"file", "status", "error"} <= set(t.columns):
+        raise ParseError(f, None, "expected the columns file, status, error (the report's own table)")
+    bad = t[t["status"].isin(NOT_SCORED).to_numpy()]
+    return dict(zip(bad["file"], bad["error"], strict=True))
 
 
 def _parse_time(value: Any) -> datetime | None:
