@@ -189,10 +189,9 @@ def _ranged_rows(
     (as fast as one call on the file), copying each chunk into row-major arrays of the groups
     (``convert``: of what it computes from them) at its rows: a range starts after the lines of
     the ranges before it, each counted by the thread of the range after it while its own thread
-    reads it. The arrays hold as many rows as the
-    file could (each line at least a digit and a separator per number) and are returned trimmed
-    (views; pages past the rows are never touched, so not resident). None when a range is not
-    plain numbers after all."""
+    reads it. The arrays hold as many rows as the file could (each line at least a digit and a
+    separator per number) and are returned trimmed (views; pages past the rows are never touched,
+    so not resident). None when a range is not plain numbers after all."""
     fd = os.open(path, os.O_RDONLY)
     try:
         ranges = _shares(fd, start, size, PARSE_THREADS)
