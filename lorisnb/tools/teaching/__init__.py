@@ -8,7 +8,9 @@ the typical mistake when the answer is what that mistake gives (:data:`MISTAKES`
 
 - :mod:`._checks`: the formulas (Eq. 1-4) and plain numbers and choices;
 - :mod:`._labs`: lab answers whose reference lorisnb computes from the lab's inputs (so that the
-  student version's test cells hold no solution).
+  student version's test cells hold no solution);
+- :mod:`._prose`: the labs' data (:func:`lab_data`: the same for students and the grader) and the
+  explanations shown after a check, computed from the lab's parameters.
 """
 
 from ._checks import (
@@ -25,9 +27,11 @@ from ._checks import (
 )
 from ._labs import check_alignment_cr, check_ate_percent, check_best_cr, check_eps_at_cr, check_silent_sequences
 from ._mistakes import MISTAKES
+from ._prose import explain_ate_percent, explain_gap, explain_wrong_reloc, lab_data, wrong_reloc_question
 
 __all__ = [
     "CORRECTNESS_CASES", "CR_CASES", "CSR_CASES", "MISTAKES", "cases_from", "check_alignment_cr", "check_ate_percent",
     "check_best_cr", "check_choice", "check_correct_rate", "check_correct_rate_tracking", "check_correctness",
-    "check_cs_r", "check_eps_at_cr", "check_silent_sequences", "check_value",
+    "check_cs_r", "check_eps_at_cr", "check_silent_sequences", "check_value", "explain_ate_percent", "explain_gap",
+    "explain_wrong_reloc", "lab_data", "wrong_reloc_question",
 ]  # fmt: skip

@@ -1,0 +1,83 @@
+"""What the labs show around their questions, computed: the data every student and the grader
+use, and the explanations printed after a check (their formulas live here, not in a cell of the
+student version, where they would give the answer away). Each returns Markdown text."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ...io.data import DataPaths, find_data, sample_data
+
+SAMPLE_NOTE = (
+    "using the small sample data shipped with lorisnb (cafe scene only): every student and the grader "
+    "evaluate on the same data. To use other data, set `data_root` in the parameters cell of the lab "
+    "you hand out: every student and the grader then need that folder."
+)
+
+
+def lab_data(data_root: str | os.PathLike[str] | DataPaths | None = None) -> DataPaths:
+    """The data of a lab: the sample data shipped with lorisnb unless the lab's ``data_root``
+    parameter names a folder. Never ``$LORISNB_DATA`` or ``../shared/data``: the answers' reference
+    numbers depend on the data, and the grader must see the data the student saw."""
+    if data_root is None:
+        print(SAMPLE_NOTE)
+        return sample_data()
+    return find_data(data_root)
+
+
+def explain_gap(cr: float, ate_rmse: float, gap: tuple[float, float], delta: float, duration: float) -> str:
+    """Question B1: a perfect estimate with no output during ``gap`` (seconds from the start)."""
+    lost = gap[1] - gap[0]
+    held = min(delta, lost)
+    return (
+        f"CR = {cr:.3f}: the {lost:g} s without output are lost except the last pose before the gap, which holds "
+        f"for min(delta, {lost:g} s) = {held:g} s; so CR is about 1 - ({lost:g} - {held:g}) / {duration:.1f} = "
+        f"{1 - (lost - held) / duration:.3f}. The ATE RMSE ({ate_rmse:.3f} m) does not see the gap at all: "
+        "missing poses are simply not counted."
+    )
+
+
+def wrong_reloc_question(offset_m: float, yaw_deg: float, eps: float, phi: float) -> str:
+    """Question C2's text, with the scenario's numbers and where they stand against the thresholds."""
+    return (
+        "**Question C2 (predict, then run).** A lifelong run of two visits of cafe: the first visit is fine; on "
+        f"the second the algorithm re-localizes {offset_m:g} m off ({offset_m / eps:g} times eps = {eps:g} m) and "
+        f"turned by {yaw_deg:g} degrees (phi = {phi:g} degrees), and stays there. The whole run is aligned once, "
+        "on visit 1 (as the paper's lifelong evaluation does). Predict CS-R of visit 2."
+    )
+
+
+def explain_wrong_reloc(visit: Mapping[str, Any], errors: Any, eps: float, phi: float, tau: float) -> str:
+    """Question C2: ``visit``, the scored row of visit 2; ``errors``, its per-pose errors (``.ate``, ``.aoe``)."""
+    t0 = float(visit["reloc_time"])
+    ate, aoe = np.asarray(errors.ate), np.asarray(errors.aoe)
+    ate_cmp = "≤" if ate[0] <= eps else ">"
+    aoe_cmp = "≤" if aoe[0] <= phi else ">"
+    correct = int(np.count_nonzero((ate <= eps) & (aoe <= phi)))
+    verdict = "correct" if visit["first_correct"] else "wrong"
+    why = (
+        "Eq. (4) rewards it"
+        if visit["first_correct"]
+        else "a confident pose in the wrong place is worse than no pose, and Eq. (4) gives it nothing"
+    )
+    return (
+        f"Visit 2 starts after {t0:.2f} s, so exp(-t/tau) = {np.exp(-t0 / tau):.3f} would reward a fast start; "
+        f"but its first pose is {verdict} (ATE {ate[0]:.2f} m {ate_cmp} eps = {eps:g} m, AOE {aoe[0]:.1f} "
+        f"degrees {aoe_cmp} phi = {phi:g} degrees), so CS-R = {float(visit['cs_r']):.3f}: {why}. "
+        f"{correct} of its {len(ate)} poses are correct, so CR = {float(visit['cr']):.3f}."
+    )
+
+
+def explain_ate_percent(ate_rmse: float, path_length: float, outdoor: Mapping[str, float], outdoor_path: float) -> str:
+    """Part G: indoor cafe-1 against ORDSLAM's published percentages (``outdoor``: difficulty -> %)."""
+    return (
+        f"ORB-SLAM2 on indoor cafe-1: ATE RMSE {ate_rmse:.3f} m over {path_length:.1f} m travelled, i.e. "
+        f"{100 * ate_rmse / path_length:.2f} % of the distance; outdoors in ORDSLAM (published, on its mean "
+        f"{outdoor_path:g} m path) "
+        + ", ".join(f"{v:.2f} % ({k})" for k, v in outdoor.items())
+        + ". **Discuss:** is outdoor harder? What else differs (ground truth, motion, length, the robot)?"
+    )
