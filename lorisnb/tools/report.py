@@ -306,7 +306,8 @@ def run_report(
                 per_sequence = ev.sequences()  # the spec of the parameters, as the notebooks' (leaderboard_spec)
                 failures = ev.failures_table()
                 for table, name in ((per_sequence, "sequences.csv"), (findings.board, "leaderboard.csv"),
-                                    (findings.pairs, "pairwise.csv"), (failures, INPUT_ERRORS_CSV)):  # fmt: skip
+                                    (findings.pairs, "pairwise.csv"), (failures, INPUT_ERRORS_CSV),
+                                    (ev.durations(), "durations.csv")):  # fmt: skip  # every sequence: diff, history
                     write_csv(table, tmp / "findings" / name)
                 board.update(findings=findings, per_sequence=per_sequence, failures=failures,
                              spec={"description": ev.conventions, "values": {**ev.spec.to_dict(), **values, "source": str(source)}})  # fmt: skip
