@@ -246,6 +246,53 @@ def test_diff_of_report_runs_counts_the_inputs_their_findings_did_not_score(vers
     assert rc == 1 and "verdict: ok" in out and "1 input(s) of BASE and 1 of CAND" in err
 
 
+def test_scene_values_of_diff_and_history_are_the_leaderboards(tmp_path, icra20, data, capsys):
+    """Scene values counted only the sequences some row held: with home's sequences 3-5 lacking
+    for every algorithm, diff and history gave home CR 0.0341 where evaluate, compare and the
+    leaderboard give 0.0197 (2 of 5). And a report run was read from every notebook's table (other
+    thresholds, simulated algorithms: 380 sequences for 216): it is the report's own findings."""
+    import lorisnb as ln
+
+    res = tmp_path / "res"
+    for alg in ALGORITHMS:
+        (res / alg).mkdir(parents=True)
+        for f in sorted((icra20 / "per-seq" / alg).iterdir()):
+            if f.name.replace("_", "-").startswith(("home-1-1", "home-1-2", "cafe")):
+                shutil.copy(f, res / alg / f.name)
+    ev = ln.evaluate(res, data_root=data.root, jobs=1)
+    scenes = ev.scenes().set_index(["algorithm", "scene"])
+    assert list(scenes.xs("home", level="scene")["scene_sequences"]) == [5, 5]  # home: 5 sequences, 2 with output
+    # a report run: the findings, and a notebook's table at other thresholds with a simulated algorithm
+    run = tmp_path / "run"
+    (run / "findings").mkdir(parents=True)
+    (run / "per_sequence_benchmark").mkdir()
+    ev.sequences().to_csv(run / "findings" / "sequences.csv", index=False)
+    ev.durations().to_csv(run / "findings" / "durations.csv", index=False)
+    other = ev.sequences(eps=1.0, phi=30.0).assign(algorithm=lambda t: "simulated: " + t["algorithm"])
+    other.to_csv(run / "per_sequence_benchmark" / "sequences.csv", index=False)
+    meta = dict(command=["lorisnb", "report"], lorisnb_version="0.3.0", commit="abc", spec={}, data_root="/data",
+                created="2026-11-01T02:00:00+00:00", inputs={}, notebooks={})  # fmt: skip
+    (run / "run.json").write_text(json.dumps(meta))
+    for base in (res, run):  # a result folder and a report run: the same scene values as evaluate's
+        out = tmp_path / f"d-{base.name}.csv"
+        capsys.readouterr()
+        assert main(["diff", str(base), str(base), "--csv", str(out), "--no-progress"]) == 0, capsys.readouterr().err
+        d = pd.read_csv(out)
+        rows = d[(d["level"] == "scene") & d["metric"].isin(["cr", "cs_r"])]
+        for r in rows.itertuples():
+            assert r.base == pytest.approx(scenes.loc[(r.algorithm, r.scene), r.metric], rel=1e-12), r
+        assert len(rows) == 2 * len(scenes)
+        seq = d[d["level"] == "sequence"].drop_duplicates(["algorithm", "scene", "seq"])
+        assert len(seq) == len(ev.sequences())  # the findings only, not the notebook's simulated rows
+    hist = tmp_path / "history.csv"
+    assert main(["history", str(run), "--csv", str(hist)]) == 0
+    h = pd.read_csv(hist)
+    h = h[h["metric"] == "cr"].set_index(["algorithm", "scene"])["value"]
+    assert set(h.index) == set(scenes.index)
+    for key, v in h.items():
+        assert v == pytest.approx(scenes.loc[key, "cr"], rel=1e-12)
+
+
 def test_regression_core_on_trials():
     """Three trials a side: a shift the tolerance allows is no regression; a shift beyond it on every
     trial is one, found by the permutation test; identical trials change nothing."""

@@ -49,7 +49,7 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
     report_problems(ev, [f"{path}: {n}" for n in notes])
     failed = unevaluated(ev, p)  # not evaluated, or evaluated but not scored: as evaluate's exit status counts
     table = ev.sequences()  # at the spec's thresholds (the options', else the defaults)
-    return Run(p, "results", table), failed, sorted(failed)
+    return Run(p, "results", table, expected=ev.durations()), failed, sorted(failed)
 
 
 def cmd_diff(args: argparse.Namespace) -> int:
@@ -85,8 +85,10 @@ def cmd_diff(args: argparse.Namespace) -> int:
         )
     if base.version and cand.version and base.version != cand.version:
         print(f"note: lorisnb {base.version} made BASE, {cand.version} CAND", file=sys.stderr)
+    known = [r.expected for r in (base, cand) if r.expected is not None]  # every ground-truth sequence
     d = diff_tables(base.table, cand.table, tolerances, args.alpha, args.seed, cand_failed,
-                    names=(f"BASE {args.paths[0]}", f"CAND {args.paths[1]}"))  # fmt: skip
+                    names=(f"BASE {args.paths[0]}", f"CAND {args.paths[1]}"),
+                    expected=pd.concat(known, ignore_index=True) if known else None)  # fmt: skip
     bad = d.sequences[d.sequences["status"].isin(["regression", "missing", "failed"])]
     scene_bad = d.scenes[d.scenes["status"] == "regression"]
     print(f"BASE {args.paths[0]} ({base.kind}) against CAND {args.paths[1]} ({cand.kind}); tolerances: "

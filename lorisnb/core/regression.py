@@ -174,15 +174,18 @@ def sequence_changes(
 
 def scene_changes(
     base: pd.DataFrame, cand: pd.DataFrame, tolerances: Mapping[str, Tolerance] | None = None, alpha: float = 0.05,
-    seed: int = 0,
+    seed: int = 0, expected: pd.DataFrame | None = None,
 ) -> pd.DataFrame:  # fmt: skip
     """One row per suite, algorithm, scene and scene metric: the scene values of both runs over the
     base's sequences (a sequence the candidate lacks counts as failed), ``worse_by``, the test
     across trials where both runs have them (``p``, ``min_p``, ``p_holm``: Holm across the scenes of
-    each algorithm and metric), ``status`` and ``decided_by``."""
+    each algorithm and metric), ``status`` and ``decided_by``. ``expected``: every ground-truth
+    sequence of the scenes (``scene``, ``seq``, ``gt_duration``, as
+    :func:`lorisnb.core.aggregate.durations_table`), when known: a sequence no row of a run holds
+    then counts as failed in its scene value, as in ``compare``; else the sequences of ``base``."""
     tols = parse_tolerances() if tolerances is None else dict(tolerances)
     seed = validate.seed(seed)
-    expected = expected_from(base)
+    expected = expected_from(base, *([] if expected is None else [expected]))
     b = with_trials(base)
     kept = set(zip(b["suite"], b["algorithm"], b["scene"], strict=True))
     c = with_trials(cand)

@@ -75,12 +75,16 @@ def diff_tables(
     seed: int = 0,
     cand_failures: Mapping[str, str] | None = None,
     names: tuple[str, str] = ("BASE", "CAND"),
+    expected: pd.DataFrame | None = None,
 ) -> Diff:
     """Compare two per-sequence tables (``Evaluation.sequences(...)``, or tables read back).
     ``tolerances``: :func:`lorisnb.core.regression.parse_tolerances` of them, or the parsed ones
     (None: the defaults). ``cand_failures`` maps a result file (relative path, as in the ``file``
     column) that the candidate could not evaluate to the reason: a base sequence from that file is
-    reported as failed, with the reason. ``names``: how a table's own error names it."""
+    reported as failed, with the reason. ``names``: how a table's own error names it. ``expected``:
+    every ground-truth sequence of the scenes (``Evaluation.durations()``, a report run's
+    ``findings/durations.csv``), so that scene values count the sequences without a row as failed,
+    as ``compare`` and the leaderboard do (see :func:`lorisnb.core.regression.scene_changes`)."""
     tols: dict[str, Tolerance]
     if isinstance(tolerances, Mapping) and all(isinstance(v, Tolerance) for v in tolerances.values()):
         tols = {k: v for k, v in tolerances.items() if isinstance(v, Tolerance)}
@@ -104,7 +108,7 @@ def diff_tables(
             f = files.get(tuple(seqs.loc[i, ["suite", "algorithm", "scene", "seq"]]))
             if f in cand_failures:
                 seqs.loc[i, ["status", "cand"]] = ["failed", f"failed: {cand_failures[f]}"]
-    scenes = scene_changes(b, c, tols, alpha, seed)
+    scenes = scene_changes(b, c, tols, alpha, seed, expected)
     return Diff(seqs, scenes, verdict(seqs, scenes))
 
 

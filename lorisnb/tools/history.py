@@ -60,7 +60,7 @@ def history_table(
     if bad:
         raise ValidationError(f"history metric(s) {', '.join(bad)}: expected scene metrics {', '.join(WEIGHTS)}")
     tables = [keyed(r.table, str(r.path)) for r in runs]
-    expected = expected_from(*tables)
+    expected = expected_from(*tables, *(r.expected for r in runs if r.expected is not None))  # as the leaderboard
     rows = []
     for k, (run, table) in enumerate(zip(runs, tables, strict=True)):
         reasons = comparability(runs[k - 1], run) if k else []

@@ -8,8 +8,11 @@ leaderboard's test settings), and the thresholds recorded in the table's own col
 specs agree (:func:`spec_differences`, which names every key that differs).
 
 A report run holds a sequence in several tables (the report's own ``findings/sequences.csv`` and
-each notebook's): it is read once, from the first table that holds it (:data:`FIRST_TABLE`, then
-the others by path).
+each notebook's, at the notebook's own settings, simulated algorithms too): the report's own table
+(:data:`FIRST_TABLE`) is the run, with the report's ``findings/durations.csv`` (every ground-truth
+sequence of its scenes: a sequence no row holds counts as failed in a scene value, as in the
+leaderboard). A run without findings (made by an older lorisnb) is read from its notebooks'
+tables, each sequence once, from the first table that holds it by path.
 """
 
 from __future__ import annotations
@@ -61,6 +64,9 @@ class Run:
     notes: list[str] = field(default_factory=list)
     #: inputs of a report run's own evaluation that failed or were not scored (file -> reason)
     unscored: dict[str, str] = field(default_factory=dict)
+    #: every ground-truth sequence of the scenes evaluated (``scene``, ``seq``, ``gt_duration``), when
+    #: known: a scene value counts the sequences no row holds as failed, as ``compare`` does
+    expected: pd.DataFrame | None = None
 
     @property
     def name(self) -> str:
@@ -149,12 +155,15 @@ def read_table(path: Path) -> pd.DataFrame:
 
 
 def _report_tables(folder: Path, notes: list[str]) -> pd.DataFrame:
-    """Every per-sequence CSV table of a report run, stacked, one row per sequence and trial (from
-    the first table that holds it: :data:`FIRST_TABLE`, then by path), with a ``table`` column (its
+    """The report's own per-sequence table (:data:`FIRST_TABLE`), else every per-sequence CSV table
+    of the run, stacked, one row per sequence and trial (from the first table that holds it, by
+    path), with a ``table`` column (its
     path in the run); tables that are not per-sequence (scenes, pairs, ...) are left out, and so are
     tables with several rows per sequence and trial (sweeps), with a note in ``notes``."""
     parts = []
     csvs = sorted(folder.rglob("*.csv"), key=lambda c: (c.relative_to(folder).as_posix() != FIRST_TABLE, c))
+    if (folder / FIRST_TABLE).is_file():  # the report's own evaluation: the notebooks' tables hold other settings
+        csvs = [folder / FIRST_TABLE]
     for csv in csvs:
         if any(part.startswith(".") for part in csv.relative_to(folder).parts):
             continue
@@ -185,10 +194,29 @@ def load_run(path: str | os.PathLike[str]) -> Run:
         if created is None:
             created, source = _mtime(p / RUN_JSON), "modification time of run.json"
         notes: list[str] = []
-        return Run(p, "report", _report_tables(p, notes), meta, created, source, notes, unscored_inputs(p))
+        return Run(p, "report", _report_tables(p, notes), meta, created, source, notes, unscored_inputs(p),
+                   _durations(p))  # fmt: skip
     if is_table(p):
         return Run(p, "table", read_table(p), {}, _mtime(p), "modification time")
     raise ValidationError(f"{p}: not a report run (no {RUN_JSON}) and not a CSV/Parquet table")
+
+
+#: A report run's table of every ground-truth sequence of the scenes its findings evaluated.
+DURATIONS = "findings/durations.csv"
+
+
+def _durations(run_dir: Path) -> pd.DataFrame | None:
+    """:data:`DURATIONS` of a report run (None for a run without it)."""
+    f = run_dir / DURATIONS
+    if not f.is_file():
+        return None
+    try:
+        t = pd.read_csv(f)
+    except (ValueError, pd.errors.ParserError) as exc:
+        raise ParseError(f, None, f"not a durations table ({exc}); expected the report's own") from None
+    if not {"scene", "seq", "gt_duration"} <= set(t.columns):
+        raise ParseError(f, None, "expected the columns scene, seq, gt_duration (the report's own table)")
+    return t.astype({"scene": str})
 
 
 #: What a report run's ``findings/input_errors.csv`` says of an input that was not scored.
