@@ -3,6 +3,7 @@ and checks the outcome: the data still there, the error text, the exit status.""
 
 from __future__ import annotations
 
+import json
 import os
 import stat
 from pathlib import Path
@@ -16,6 +17,7 @@ import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.core.geometry import quat_to_matrix
 from lorisnb.tools import report
+from lorisnb.tools.provenance import sha256
 
 ORB = "per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt"
 DSO = "per-seq/dso/corridor-1-1-all.txt"
@@ -64,10 +66,60 @@ def test_report_force_replaces_its_own_run_folder(tmp_path, monkeypatch):
     out = tmp_path / "run"
     first, _ = report.run_report(out, {}, ["metrics_primer"], progress=False)
     assert (first / report.RUN_MARKER).is_file()
-    (out / "stale.txt").write_text("from the first run")
+    (out / "metrics_primer" / "stale.csv").write_text("written by the first run")
+    marker = json.loads((out / report.RUN_MARKER).read_text())
+    assert "metrics_primer/stale.csv" not in marker["files"] and "index.html" in marker["files"]
+    # what the first run wrote (its marker lists it) is replaced as a whole ...
+    (out / "metrics_primer" / "stale.csv").unlink()
     second, _ = report.run_report(out, {}, ["metrics_primer"], force=True, progress=False)
-    assert second == out and not (out / "stale.txt").exists() and (out / "index.html").exists()
+    assert second == out and (out / "index.html").exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+@pytest.mark.parametrize("added", ["NOTES.txt", "metrics_primer/mine.csv", "empty/", "index.html"])
+def test_report_force_keeps_a_run_folder_holding_what_its_run_did_not_write(tmp_path, monkeypatch, capsys, added):
+    """A file added to an old run folder (or one of its files changed since) is the user's: --force
+    refuses (exit 2, naming it) and removes nothing; the run's own files are left too."""
+    monkeypatch.setattr(report, "run_notebook", _fake_run([]))
+    out = tmp_path / "run"
+    report.run_report(out, {}, ["metrics_primer"], progress=False)
+    if added.endswith("/"):
+        (out / added).mkdir()
+    else:
+        (out / added).write_text("my notes")
+    before = sorted(p.relative_to(out).as_posix() for p in out.rglob("*"))
+    rc = main(["report", "--out", str(out), "--force", "--notebooks", "metrics_primer", "--no-progress"])
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert "--force will not replace" in err and added.rstrip("/") in err and "did not write" in err
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")) == before
+    if not added.endswith("/"):
+        assert (out / added).read_text() == "my notes"
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]
+
+
+def test_report_force_keeps_an_earlier_run_folder_whose_marker_lists_nothing(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(report, "run_notebook", _fake_run([]))
+    out = tmp_path / "run"
+    write(out, report.RUN_MARKER, json.dumps({"lorisnb": "0.3.0", "pid": 1}))
+    write(out, "index.html", "an earlier run")
+    write(out, "NOTES.txt", "my notes")
+    assert main(["report", "--out", str(out), "--force", "--notebooks", "metrics_primer", "--no-progress"]) == 2
+    assert "does not list the files" in capsys.readouterr().err
+    assert (out / "NOTES.txt").read_text() == "my notes" and (out / "index.html").read_text() == "an earlier run"
+
+
+def test_report_force_keeps_a_file_added_while_it_runs(tmp_path, monkeypatch, capsys):
+    """A file added to the old run folder while the new run is built: the old folder stays as it is
+    and the new run lands beside it, saying so."""
+    out = tmp_path / "run"
+    monkeypatch.setattr(report, "run_notebook", _fake_run([]))
+    report.run_report(out, {}, ["metrics_primer"], progress=False)
+    monkeypatch.setattr(report, "run_notebook", _fake_run([], lambda: write(out, "NOTES.txt", "my notes")))
+    assert main(["report", "--out", str(out), "--force", "--notebooks", "metrics_primer", "--no-progress"]) == 0
+    assert (out / "NOTES.txt").read_text() == "my notes" and (out / "index.html").exists()
+    assert (tmp_path / "run-2" / "index.html").exists()
+    assert "appeared while this report ran" in capsys.readouterr().err
 
 
 def test_two_reports_into_one_folder_keep_both(tmp_path, monkeypatch, capsys):
@@ -82,6 +134,11 @@ def test_two_reports_into_one_folder_keep_both(tmp_path, monkeypatch, capsys):
     assert (out / "index.html").read_text() == "the other run"
     assert (tmp_path / "run-2" / "index.html").exists()
     assert "appeared while this report ran" in capsys.readouterr().err
+    for page in ("index.html", "report.html"):  # the pages name the folder they are in
+        text = (tmp_path / "run-2" / page).read_text()
+        assert "Run folder <code>run-2</code>" in text and "Run folder <code>run</code>" not in text
+    marker = json.loads((tmp_path / "run-2" / report.RUN_MARKER).read_text())
+    assert marker["files"]["index.html"] == sha256(tmp_path / "run-2" / "index.html")  # --force may replace it
 
 
 def test_interrupted_report_cleans_up(tmp_path, monkeypatch, capsys):

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
+import hashlib
 import json
 import os
 import shutil
@@ -32,7 +33,7 @@ from .lean_imports import jsonschema_without_iri_grammars
 from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
 from .notebook_params import check_parameters
 from .pool import start_context
-from .provenance import checksums, input_files, run_record, write_run_json
+from .provenance import checksums, input_files, run_record, sha256, write_run_json
 from .report_html import single_file, write_notebook_css
 from .report_index import versions, write_index
 from .report_notebooks import (
@@ -45,10 +46,12 @@ from .report_notebooks import (
     available_notebooks,
     declared_by,
     declared_parameters,
+    input_roots,
     kernel_env,
     notebook_dir,
     notebook_path,
     run_one,
+    select_notebooks,
     warm_kernels_for_report,
 )
 
@@ -57,10 +60,6 @@ __all__ = [
     "check_parameters", "declared_parameters", "kernel_env", "notebook_dir", "notebook_path", "run_notebook",
     "run_report",
 ]  # fmt: skip
-
-#: Notebooks that need the bundled data and say nothing about a lab's own results folder: a report
-#: on ``results`` leaves them out unless they are named.
-BUNDLED_ONLY = ("metrics_primer", "evo_crosscheck", "indoor_vs_outdoor", "evaluate_my_results")
 
 run_notebook = run_one  # the name the report calls (tests replace it)
 
@@ -88,25 +87,58 @@ def _protected(run_dir: Path, extra: list[Path]) -> str | None:
     target = run_dir.resolve()
     cwd = Path.cwd().resolve()
     if target == cwd or target in cwd.parents:
-        return "it is the current folder or one of its parents"
+        return "it is the current folder or one of its parents; choose another --out"
     for p in extra:
         p = p.resolve()
         if target == p or target in p.parents or p in target.parents:
-            return f"it holds or is inside {p}"
+            return f"it holds or is inside {p}; choose another --out"
     if not (run_dir / RUN_MARKER).is_file():
-        return f"it is not a lorisnb run folder (no {RUN_MARKER} file in it)"
-    return None
+        return f"it is not a lorisnb run folder (no {RUN_MARKER} file in it); choose another --out"
+    return _not_written(run_dir)
 
 
-def _select(notebooks: Iterable[str] | None, notebooks_dir: Any, results: Any) -> tuple[list[str], dict[str, str]]:
-    """The notebooks to run, and those left out with the reason."""
-    if notebooks:
-        return list(notebooks), {}
-    names = available_notebooks(notebooks_dir)
-    if results is None:
-        return names, {}
-    keep = [n for n in names if n not in BUNDLED_ONLY]
-    return keep, {n: "about the bundled data; name it with --notebooks to run it" for n in names if n not in keep}
+def _files(folder: Path) -> dict[str, str]:
+    """Every file, link and empty folder below ``folder`` (its path inside, POSIX) -> its SHA-256
+    (a link's: of its target's name; an empty folder's: "folder"); the run marker aside."""
+    out: dict[str, str] = {}
+    for top, dirs, files in os.walk(folder):
+        here = Path(top)
+        for n in files + [d for d in dirs if (here / d).is_symlink()]:
+            p = here / n
+            rel = p.relative_to(folder).as_posix()
+            if rel != RUN_MARKER:
+                out[rel] = hashlib.sha256(os.readlink(p).encode()).hexdigest() if p.is_symlink() else sha256(p)
+        if not dirs and not files and here != folder:
+            out[here.relative_to(folder).as_posix() + "/"] = "folder"
+    return out
+
+
+def _write_marker(folder: Path, files: Mapping[str, str] | None = None) -> None:
+    """The run marker: lorisnb's version, the pid and, once the run is complete, every file it wrote
+    (``files``: :func:`_files`), which is all ``--force`` may later remove."""
+    record: dict[str, Any] = {"lorisnb": versions()["lorisnb"], "pid": os.getpid()}
+    if files is not None:
+        record["files"] = dict(files)
+    (folder / RUN_MARKER).write_text(json.dumps(record, indent=0))
+
+
+def _not_written(run_dir: Path) -> str | None:
+    """Why ``--force`` may not replace the run folder ``run_dir``: it holds a file its run did not
+    write (added or changed since, as its marker lists them), or its marker lists nothing; else None."""
+    try:
+        wrote = json.loads((run_dir / RUN_MARKER).read_text()).get("files")
+    except (OSError, ValueError, AttributeError):
+        wrote = None
+    if not isinstance(wrote, dict):
+        return (f"its {RUN_MARKER} marker does not list the files its run wrote (a run of an earlier lorisnb, "
+                "or a damaged marker), so files added to it cannot be told apart; move what you keep out of it "
+                "and remove it yourself, or choose another --out")  # fmt: skip
+    foreign = sorted(rel for rel, digest in _files(run_dir).items() if wrote.get(rel) != digest)
+    if not foreign:
+        return None
+    shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more" if len(foreign) > 5 else "")
+    return (f"it holds {len(foreign)} file(s) that its run did not write or that changed since ({shown}); nothing "
+            "was removed: move them out of it and run again, or choose another --out")  # fmt: skip
 
 
 def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_dir: Any, jobs: int,
@@ -186,21 +218,6 @@ def _worker_start(zygote: warm_kernels.Zygote | None) -> None:
     warm_kernels.use(zygote)
 
 
-def _input_roots(names: list[str], params: Mapping[str, Any], data: Any, source: Path | None) -> list[Path]:
-    """The files and folders the report reads (every file below them, :func:`input_files`): its
-    results, the ground truth and extrinsics, and the data the selected notebooks read besides
-    (TUM pairs, published tables, folders given as parameters)."""
-    roots = [source] if source is not None else []
-    roots += [Path(str(params[k])) for k in ("results_dir", "path", "groundtruth", "ordslam_dir") if params.get(k)]
-    if data is not None:
-        roots += [data.root / "openloris-scene" / "groundtruth", data.root / "openloris-scene" / "extrinsics.json"]
-        if source is None or any(n in names for n in BUNDLED_ONLY):
-            roots += [data.root / "openloris-scene" / "icra20_results"]
-        if any(Path(n).stem in ("evo_crosscheck", "indoor_vs_outdoor") for n in names):
-            roots += [data.root / "tum-rgbd", data.root / "published"]
-    return list(dict.fromkeys(r.resolve() for r in roots))
-
-
 def _umask() -> int:
     mask = os.umask(0o022)
     os.umask(mask)
@@ -260,8 +277,8 @@ def run_report(
             raise LorisError(f"{run_dir} exists; choose another --out or pass --force to replace it")
         why = _protected(run_dir, keep_safe)
         if why:
-            raise LorisError(f"--force will not replace {run_dir}: {why}; choose another --out")
-    names, left_out = _select(notebooks, notebooks_dir, results)
+            raise LorisError(f"--force will not replace {run_dir}: {why}")
+    names, left_out = select_notebooks(notebooks, notebooks_dir, results)
     with warm_kernels_for_report() if len(names) > 1 else contextlib.nullcontext(None) as zygote:
         # the zygote starts now: it imports the kernels' modules while the notebooks are checked
         declared = declared_by(names, notebooks_dir)
@@ -280,7 +297,7 @@ def run_report(
         wants_board = results is not None or "results_dir" in declared
         given_source = results if results is not None else params.get("results_dir")  # the leaderboard's input
         source = Path(str(given_source)) if given_source else (data.icra20 if data else None)
-        roots = _input_roots(names, params, data, source if wants_board else None)
+        roots = input_roots(names, params, data, source if wants_board else None)
         hit = overlap(run_dir, [*roots, nb_dir, *([data.root.resolve()] if data is not None else [])])  # the data root
         if hit:  # the run would be read as an input by the next report on the same folder, and by verify
             raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
@@ -291,7 +308,7 @@ def run_report(
         run_dir.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
         try:
-            (tmp / RUN_MARKER).write_text(json.dumps({"lorisnb": versions()["lorisnb"], "pid": os.getpid()}))
+            _write_marker(tmp)
             try:
                 write_notebook_css(tmp / NOTEBOOK_CSS)
             except (OSError, IndexError, LorisError):  # no nbconvert templates: each page keeps its own style
@@ -320,15 +337,22 @@ def run_report(
             record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
                                 {r.name: r.status for r in runs}, roots)  # fmt: skip
             write_run_json(tmp, record)
-            index = write_index(tmp, runs, params, name=run_dir.name, findings=board.get("findings"), spec=spec,
-                                failures=board.get("failures"), left_out=left_out,
-                                per_sequence=board.get("per_sequence"))  # fmt: skip
-            single_file(index, tmp / "report.html")
+
+            def pages(folder: Path) -> None:  # the pages name the folder they are in; the marker lists all
+                index = write_index(folder, runs, params, name=folder.name, findings=board.get("findings"), spec=spec,
+                                    failures=board.get("failures"), left_out=left_out,
+                                    per_sequence=board.get("per_sequence"), wanted=run_dir.name)  # fmt: skip
+                single_file(index, folder / "report.html")
+                _write_marker(folder, _files(folder))
+
+            pages(tmp)
             os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp made it owner-only
             final = _move_into_place(tmp, run_dir, force)
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
+        if final.name != run_dir.name:  # another run took the name meanwhile: this one's pages say where it is
+            pages(final)
         return final, runs
 
 
@@ -342,12 +366,15 @@ def findings_input_errors(run_dir: Path) -> int:
 def _move_into_place(tmp: Path, run_dir: Path, force: bool) -> Path:
     """Rename the finished run to ``run_dir``; links inside the report are relative, so the
     folder moves as a whole. Never clobbers a folder that appeared meanwhile."""
-    if run_dir.exists() and force and (run_dir / RUN_MARKER).is_file():
+    if run_dir.exists() and force and (run_dir / RUN_MARKER).is_file() and _not_written(run_dir) is None:
         old = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.old-", dir=run_dir.parent))
         os.replace(run_dir, old / run_dir.name)
-        os.rename(tmp, run_dir)
-        shutil.rmtree(old, ignore_errors=True)
-        return run_dir
+        if _not_written(old / run_dir.name) is None:  # checked again once moved aside: nothing added meanwhile
+            os.rename(tmp, run_dir)
+            shutil.rmtree(old, ignore_errors=True)
+            return run_dir
+        os.replace(old / run_dir.name, run_dir)  # a file appeared in it: kept, as the folder is
+        old.rmdir()
     candidate, k = run_dir, 1
     while True:
         try:

@@ -197,9 +197,14 @@ def write_index(
     failures: pd.DataFrame | None = None,
     left_out: Mapping[str, str] | None = None,
     per_sequence: pd.DataFrame | None = None,
+    wanted: str | None = None,
 ) -> Path:
-    """``index.html`` (see the module docstring)."""
+    """``index.html`` (see the module docstring). ``name``: the run folder's name (``run_dir``'s by
+    default); ``wanted``: the name asked for, when another run took it and this one is ``name``."""
     spec = spec or {}
+    name = name or run_dir.name
+    moved = (f" (<code>{esc(wanted)}</code> appeared while this report ran, another run's: this run is "
+             f"<code>{esc(name)}</code>)") if wanted and wanted != name else ""  # fmt: skip
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'><title>lorisnb report</title>",
         "<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto}table{border-collapse:collapse;"
@@ -207,7 +212,7 @@ def write_index(
         ".leaderboard th{background:#eef}.sentence{font-size:1.05em}.why,.spec{color:#444}figure{margin:1em 0}"
         "figcaption{color:#333;font-size:.95em}.failed{color:#b00}.ok{color:#070}.skipped{color:#b60}"
         "img{max-width:100%;border:1px solid #ddd}</style></head><body>",
-        f"<h1>lorisnb report</h1><p>Run folder <code>{esc(name or run_dir.name)}</code>, written "
+        f"<h1>lorisnb report</h1><p>Run folder <code>{esc(name)}</code>{moved}, written "
         f"{esc(_dt.datetime.now().isoformat(timespec='seconds'))}; provenance (command, version, inputs' "
         f"checksums) in <a href='run.json'>run.json</a>; one file for e-mail: <a href='report.html'>report.html</a>.</p>",
     ]

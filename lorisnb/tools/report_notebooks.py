@@ -53,6 +53,10 @@ TYPICAL_SECONDS = {
 #: the 'KeyboardInterrupt caught in kernel' line of a normal shutdown).
 KERNEL_ARGS = ["--IPKernelApp.log_level=CRITICAL"]
 
+#: Notebooks that need the bundled data and say nothing about a lab's own results folder: a report
+#: on ``results`` leaves them out unless they are named.
+BUNDLED_ONLY = ("metrics_primer", "evo_crosscheck", "indoor_vs_outdoor", "evaluate_my_results")
+
 #: Optional packages a notebook needs; without them the report skips it and says which extra to install.
 NOTEBOOK_NEEDS: dict[str, tuple[str, ...]] = {"evo_crosscheck": ("evo",)}
 
@@ -274,3 +278,31 @@ def declared_by(names: Iterable[str], notebooks_dir: str | os.PathLike[str] | No
         if notebook_problem(p) is None:
             declared.update(declared_parameters(p))
     return declared
+
+
+def select_notebooks(
+    notebooks: Iterable[str] | None, notebooks_dir: Any, results: Any
+) -> tuple[list[str], dict[str, str]]:
+    """The notebooks to run, and those left out with the reason."""
+    if notebooks:
+        return list(notebooks), {}
+    names = available_notebooks(notebooks_dir)
+    if results is None:
+        return names, {}
+    keep = [n for n in names if n not in BUNDLED_ONLY]
+    return keep, {n: "about the bundled data; name it with --notebooks to run it" for n in names if n not in keep}
+
+
+def input_roots(names: list[str], params: Mapping[str, Any], data: Any, source: Path | None) -> list[Path]:
+    """The files and folders the report reads (every file below them, :func:`lorisnb.tools.provenance.input_files`): its
+    results, the ground truth and extrinsics, and the data the selected notebooks read besides
+    (TUM pairs, published tables, folders given as parameters)."""
+    roots = [source] if source is not None else []
+    roots += [Path(str(params[k])) for k in ("results_dir", "path", "groundtruth", "ordslam_dir") if params.get(k)]
+    if data is not None:
+        roots += [data.root / "openloris-scene" / "groundtruth", data.root / "openloris-scene" / "extrinsics.json"]
+        if source is None or any(n in names for n in BUNDLED_ONLY):
+            roots += [data.root / "openloris-scene" / "icra20_results"]
+        if any(Path(n).stem in ("evo_crosscheck", "indoor_vs_outdoor") for n in names):
+            roots += [data.root / "tum-rgbd", data.root / "published"]
+    return list(dict.fromkeys(r.resolve() for r in roots))
