@@ -44,14 +44,17 @@ from .report_notebooks import (
     TYPICAL_SECONDS,
     NotebookRun,
     available_notebooks,
+    current_kernel_files,
     declared_by,
     declared_parameters,
     input_roots,
     kernel_env,
+    kernel_files,
     notebook_dir,
     notebook_path,
     run_one,
     select_notebooks,
+    use_kernel_files,
     warm_kernels_for_report,
 )
 
@@ -195,7 +198,7 @@ def _run_pool(names: list[str], order: list[int], runs: dict[int, NotebookRun], 
 
     context = start_context(WORKER_MODULES, fallback="spawn")  # forked: no interpreter to start, nothing to import
     with ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_worker_start,
-                             initargs=(zygote,)) as pool:  # fmt: skip
+                             initargs=(zygote, current_kernel_files())) as pool:  # fmt: skip
         futures = {pool.submit(run_notebook, names[i], tmp, dict(params), notebooks_dir=notebooks_dir): i
                    for i in order}  # fmt: skip
         try:
@@ -211,11 +214,13 @@ def _run_pool(names: list[str], order: list[int], runs: dict[int, NotebookRun], 
             raise
 
 
-def _worker_start(zygote: warm_kernels.Zygote | None) -> None:
+def _worker_start(zygote: warm_kernels.Zygote | None, kernel_dir: str | None = None) -> None:
     """A report worker's set-up: papermill's imports without what they need not import
-    (:mod:`lorisnb.tools.lean_imports`), kernels forked from ``zygote``."""
+    (:mod:`lorisnb.tools.lean_imports`), kernels forked from ``zygote``, their connection files and
+    sockets in the report's ``kernel_dir`` (:func:`kernel_files`)."""
     jsonschema_without_iri_grammars()
     warm_kernels.use(zygote)
+    use_kernel_files(kernel_dir)
 
 
 def _umask() -> int:
@@ -279,7 +284,7 @@ def run_report(
         if why:
             raise LorisError(f"--force will not replace {run_dir}: {why}")
     names, left_out = select_notebooks(notebooks, notebooks_dir, results)
-    with warm_kernels_for_report() if len(names) > 1 else contextlib.nullcontext(None) as zygote:
+    with kernel_files(), warm_kernels_for_report() if len(names) > 1 else contextlib.nullcontext(None) as zygote:
         # the zygote starts now: it imports the kernels' modules while the notebooks are checked
         declared = declared_by(names, notebooks_dir)
         params = check_parameters(dict(parameters or {}), declared, [Path(n).stem for n in names])

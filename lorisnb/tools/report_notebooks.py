@@ -8,13 +8,14 @@ import contextlib
 import importlib.util
 import json
 import os
+import shutil
 import sys
 import tempfile
 import time
 import traceback
 import uuid
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -157,6 +158,37 @@ def kernel_env() -> None:
     logging.getLogger("traitlets").setLevel(logging.ERROR)
 
 
+#: The folder of this process's kernels' connection files and ipc sockets (:func:`kernel_files`), or None.
+_kernel_files: str | None = None
+
+
+def use_kernel_files(folder: str | None) -> None:
+    """Put this process's kernels' connection files and sockets in ``folder`` (a report's workers get
+    it from their initializer), or in the temporary folder as Jupyter does (None)."""
+    global _kernel_files
+    _kernel_files = folder
+
+
+def current_kernel_files() -> str | None:
+    """The folder of this process's kernel files (:func:`use_kernel_files`), or None."""
+    return _kernel_files
+
+
+@contextlib.contextmanager
+def kernel_files() -> Iterator[str]:
+    """A private folder for a report's kernel connection files (they hold each kernel's key) and
+    ipc sockets, used by this process and the workers given it (:func:`use_kernel_files`), and
+    removed on leaving: a kernel whose run is interrupted (Ctrl-C, SIGTERM) cannot remove its own."""
+    folder = tempfile.mkdtemp(prefix="lorisnb-k-")
+    previous = _kernel_files
+    use_kernel_files(folder)
+    try:
+        yield folder
+    finally:
+        use_kernel_files(previous)
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def kernel_manager_class() -> Any:
     """Jupyter's kernel manager with the kernel's sockets on ipc files of a unique name (POSIX):
     kernels started side by side by several processes never race for the same free TCP port (a
@@ -175,7 +207,13 @@ def kernel_manager_class() -> Any:
 
         @default("ip")
         def _ip_default(self) -> str:
+            if _kernel_files:  # short: a socket's path has at most 107 bytes
+                return os.path.join(_kernel_files, f"kernel-{uuid.uuid4().hex[:8]}")
             return os.path.join(tempfile.gettempdir(), f"lorisnb-kernel-{uuid.uuid4().hex[:16]}")
+
+        @default("connection_file")
+        def _connection_file_default(self) -> str:  # "": Jupyter's own temporary file
+            return os.path.join(_kernel_files, f"kernel-{uuid.uuid4().hex}.json") if _kernel_files else ""
 
         async def _async_pre_start_kernel(self, **kw: Any) -> Any:
             if self.provisioner is None and warm_kernels.current() is not None:

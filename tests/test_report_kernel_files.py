@@ -1,0 +1,59 @@
+"""A report's kernels keep their connection files (each holds its kernel's key) and ipc sockets in
+one private folder that the report removes when it ends, also when it is interrupted and the
+kernels could not remove their own (Ctrl-C, SIGTERM)."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import tempfile
+
+import pytest
+
+from lorisnb.cli import main
+from lorisnb.tools import report, report_notebooks
+
+
+@pytest.mark.skipif(os.name != "posix", reason="ipc sockets: POSIX")
+def test_interrupted_report_leaves_no_kernel_files(tmp_path, monkeypatch, capsys):
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp))  # Jupyter's and lorisnb's temporary files go here
+    seen: dict[str, list[str]] = {}
+    managers = []
+
+    def run(name, out_dir, parameters, timeout=1800, notebooks_dir=None):
+        km = report_notebooks.kernel_manager_class()(kernel_name="python3")
+        managers.append(km)
+        asyncio.run(km.start_kernel(extra_arguments=report_notebooks.KERNEL_ARGS))
+        asyncio.run(asyncio.sleep(1))  # the kernel binds its sockets
+        seen["files"] = sorted(str(p.relative_to(tmp)) for p in tmp.rglob("*"))
+        raise KeyboardInterrupt  # Ctrl-C while the notebook runs: its kernel is not shut down
+
+    monkeypatch.setattr(report, "run_notebook", run)
+    try:
+        rc = main(["report", "--out", str(tmp_path / "run"), "--notebooks", "metrics_primer", "--no-progress"])
+    finally:
+        for km in managers:
+            if km.provisioner is not None and km.provisioner.process is not None:
+                km.provisioner.process.kill()
+    assert rc == 130
+    assert any(f.endswith(".json") for f in seen["files"]), seen  # the connection file was there ...
+    assert sum("kernel-" in f and not f.endswith(".json") for f in seen["files"]) >= 5, seen  # ... sockets
+    assert list(tmp.iterdir()) == []  # ... and nothing is left
+    assert [p.name for p in tmp_path.iterdir()] == ["tmp"]
+
+
+def test_kernel_files_go_to_the_report_folder_and_only_there(tmp_path, monkeypatch):
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    km = report_notebooks.kernel_manager_class()(kernel_name="python3")
+    assert km.connection_file == ""  # outside a report: Jupyter's own temporary file
+    with report_notebooks.kernel_files() as folder:
+        km = report_notebooks.kernel_manager_class()(kernel_name="python3")
+        assert os.path.dirname(km.connection_file) == folder
+        if os.name == "posix":
+            assert os.path.dirname(km.ip) == folder
+        assert oct(os.stat(folder).st_mode & 0o777) == "0o700"
+        mine = tmp_path / "mine.json"
+        mine.write_text("not the report's")
+    assert not os.path.exists(folder) and mine.read_text() == "not the report's"
