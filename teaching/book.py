@@ -7,13 +7,16 @@ every exercise in a sphinx-exercise ``exercise`` block and its solution in a ``s
 (hidden tests removed). Jupyter Book executes them (on the sample data shipped with lorisnb when no
 data root is found) and writes HTML into ``OUT/``. MathJax 3 is served from the book's own
 ``_static/mathjax/`` (copied from the django-static-mathjax package), never from a CDN, and no
-widget JavaScript is loaded from the network (the build fails if a page loads a script from it).
+widget JavaScript is loaded from the network; sphinx-thebe's scripts (thebe is off) are removed, and the
+build fails if a page, style sheet or script references anything on the network. A notebook that
+fails to execute fails the build (exit 1, naming it), and ``OUT`` is then left as it was.
 ``OUT`` is replaced only when the kit created it (it holds ``offline.BUILD_MARKER``); any other
 existing folder is refused before the build, and left as it is.
 """
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -22,7 +25,7 @@ import tempfile
 from pathlib import Path
 
 import nbformat
-from offline import BUILD_MARKER, mathjax_dir, refuse_remote
+from offline import BUILD_MARKER, built_files, mathjax_dir, offline_mathjax, refuse_remote
 
 from lorisnb.errors import OutputError
 from lorisnb.io.writers import check_owned_folder, replace_folder
@@ -71,20 +74,30 @@ chapters:
 INTRO = """\
 # Lifelong SLAM evaluation
 
-The primer and the labs of lorisnb's teaching kit, executed. Each lab has exercises with their
-solutions in dropdowns; the labs themselves, with their checks, are in `teaching/` of the lorisnb
-repository (`make student` gives the student version).
+The primer and the labs of lorisnb's teaching kit, executed: **the instructor's copy**. Each lab
+has exercises with their solutions in dropdowns, and its checks show the answers; hand it to
+students after the lab, not before. The labs themselves, with their checks, are in `teaching/` of
+the lorisnb repository (`make student` gives the student version).
 
 ```{tableofcontents}
 ```
 """
 
+# sphinx-thebe's scripts, added to every page although thebe is off (launch_buttons.thebe: false):
+# a CDN URL, declared twice (a JavaScript error), for a button the book does not have
+THEBE = re.compile(
+    r'[ \t]*<script>const THEBE_JS_URL = [^<]*</script>\n?|[ \t]*<script[^>]*src="[^"]*sphinx-thebe\.js[^"]*"[^>]*></script>\n?'
+)
 SOLUTION_MARKERS = re.compile(r"^[ \t]*### (BEGIN|END) SOLUTION[ \t]*\n?", re.M)
 HIDDEN = re.compile(r"^[ \t]*### BEGIN HIDDEN TESTS.*?### END HIDDEN TESTS[ \t]*\n?", re.S | re.M)
 
 
 def _md(text: str) -> nbformat.NotebookNode:
     return nbformat.v4.new_markdown_cell(text)
+
+
+def _is_prompt(cell: nbformat.NotebookNode) -> bool:
+    return cell.cell_type == "markdown" or "question" in cell.get("metadata", {}).get("tags", [])
 
 
 def book_notebook(source: Path) -> nbformat.NotebookNode:
@@ -98,7 +111,8 @@ def book_notebook(source: Path) -> nbformat.NotebookNode:
             cell.source = HIDDEN.sub("", cell.source).rstrip()
         if meta.get("solution") and cell.cell_type == "code":
             label = f"ex-{meta['grade_id'].lower().replace('_', '-')}"
-            prompt = next((k for k in range(len(cells) - 1, -1, -1) if cells[k].cell_type == "markdown"), None)
+            # the question: the last markdown cell, or a code cell tagged "question" (its text computed)
+            prompt = next((k for k in range(len(cells) - 1, -1, -1) if _is_prompt(cells[k])), None)
             if prompt is not None and "{exercise-" not in cells[prompt].source:
                 text = cells[prompt].source
                 at = min((i for i in (text.find("**Exercise"), text.find("**Question")) if i >= 0), default=0)
@@ -122,6 +136,32 @@ def book_notebook(source: Path) -> nbformat.NotebookNode:
     return nb
 
 
+def without_thebe(html: Path) -> None:
+    """Remove sphinx-thebe's scripts from every page of ``html`` (the book's thebe is off)."""
+    for page in html.rglob("*.html"):
+        text = page.read_text()
+        if THEBE.search(text):
+            page.write_text(THEBE.sub("", text))
+
+
+def build_problems(html: Path, returncode: int) -> str | None:
+    """What went wrong in a Jupyter Book build (None: nothing): the notebooks that failed to
+    execute, with the end of their tracebacks, else jupyter-book's own failure."""
+    failed = sorted((html / "reports").glob("*.err.log"))
+    if failed:
+        tails = "".join(
+            f"\n--- {log.name.removesuffix('.err.log')}.ipynb:\n" + "\n".join(log.read_text().splitlines()[-12:])
+            for log in failed
+        )
+        names = ", ".join(log.name.removesuffix(".err.log") + ".ipynb" for log in failed)
+        return f"the book did not build: {names} failed to execute (fix it and run `make book` again){tails}"
+    if returncode != 0:
+        return f"the book did not build: jupyter-book exited with {returncode} (its warnings, above, are errors here)"
+    if not (html / "index.html").is_file():
+        return "the book did not build: jupyter-book wrote no index.html (see its output above)"
+    return None
+
+
 def main(out: Path) -> int:
     try:
         check_owned_folder(out, BUILD_MARKER)  # before the build: a folder the kit did not make is refused
@@ -131,6 +171,7 @@ def main(out: Path) -> int:
     with tempfile.TemporaryDirectory(prefix="lorisnb-book-") as tmp:
         src = Path(tmp) / "src"  # not in _static/: Jupyter Book would load every .js file found there
         shutil.copytree(mathjax_dir(), src / "mathjax_static" / "mathjax")
+        offline_mathjax(src / "mathjax_static" / "mathjax")
         shutil.copyfile(ROOT / "notebooks" / "metrics_primer.ipynb", src / "metrics_primer.ipynb")
         labs = sorted(p for p in (HERE / "source").iterdir() if p.is_dir())
         for lab in labs:
@@ -138,14 +179,20 @@ def main(out: Path) -> int:
         (src / "_config.yml").write_text(CONFIG)
         (src / "_toc.yml").write_text(TOC.format(labs="\n".join(f"  - file: {lab.name}" for lab in labs)))
         (src / "intro.md").write_text(INTRO)
-        subprocess.run(
-            ["jupyter-book", "build", str(src), "--path-output", str(src), "-W", "-n", "--keep-going"], check=False
+        kernel_tmp = Path(tmp) / "tmp"  # what the notebooks write to a temporary folder goes with this one
+        kernel_tmp.mkdir()
+        r = subprocess.run(
+            ["jupyter-book", "build", str(src), "--path-output", str(src), "-W", "-n", "--keep-going"],
+            check=False,
+            env={**os.environ, "TMPDIR": str(kernel_tmp)},
         )
         html = src / "_build" / "html"
-        if not (html / "index.html").is_file():
-            print("the book did not build", file=sys.stderr)
+        problem = build_problems(html, r.returncode)
+        if problem:
+            print(f"book: {problem}\nbook: {out} is left as it was", file=sys.stderr)
             return 1
-        if refuse_remote(sorted(html.rglob("*.html"))):
+        without_thebe(html)
+        if refuse_remote(built_files(html)):
             return 1
         try:
             replace_folder(html, out, BUILD_MARKER)
@@ -154,6 +201,7 @@ def main(out: Path) -> int:
             return 2
     print(f"book: {out / 'index.html'}")
     return 0
+
 
 if __name__ == "__main__":
     sys.exit(main(Path(sys.argv[1] if len(sys.argv) > 1 else "build/book").resolve()))

@@ -1,5 +1,7 @@
 """What the teaching scripts (book.py, slides.py, offline_feedback.py) share to keep their HTML
-offline: where MathJax 3's files are, and which ``<script src>`` of a page would load from the network."""
+offline: where MathJax 3's files are, and which references of a built file would load something
+from the network (scripts, style sheets, ``@import``, fonts, images, or a script's URL string of a
+.js/.css/font file, such as sphinx-thebe's ``THEBE_JS_URL``)."""
 
 from __future__ import annotations
 
@@ -8,7 +10,17 @@ import sys
 from pathlib import Path
 
 BUILD_MARKER = ".lorisnb-teaching"  # in every folder book.py / slides.py built: only those are replaced
-REMOTE_SCRIPT = re.compile(r"<script[^>]*\ssrc=\"((?:https?:)?//[^\"]+)\"")
+_URL = r"((?:https?:)?//[^\"'`\s>)]+)"
+REMOTE = [
+    re.compile(r"<script[^>]*\ssrc=[\"']?" + _URL, re.I),
+    re.compile(r"<link[^>]*\shref=[\"']?" + _URL, re.I),
+    re.compile(r"<(?:img|iframe|source|video|audio|embed|object)[^>]*\s(?:src|data)=[\"']?" + _URL, re.I),
+    re.compile(r"@import\s+(?:url\()?\s*[\"']?" + _URL, re.I),
+    re.compile(r"url\(\s*[\"']?" + _URL, re.I),
+    re.compile(r"[\"'`]((?:https?:)?//[^\"'`\s]+\.(?:m?js|css|woff2?|ttf|otf|eot)(?:\?[^\"'`\s]*)?)[\"'`]", re.I),
+]
+CHECKED = (".html", ".css", ".js")  # the files a browser reads when a page opens
+REMOTE_PREFIX = "https://cdn.jsdelivr.net/npm/"  # where MathJax 3 would fetch what it lacks
 
 
 def mathjax_dir() -> Path:
@@ -22,15 +34,42 @@ def mathjax_dir() -> Path:
     return d
 
 
+def offline_mathjax(folder: Path) -> None:
+    """MathJax's own files in ``folder`` (a copy) with its CDN fallbacks (the speech rule engine,
+    an XPath polyfill) pointed at a local path: what they would fetch fails on the machine instead
+    of leaving it. Only used by the menu's speech options, which the pages do not enable."""
+    for js in folder.rglob("*.js"):
+        text = js.read_text(errors="surrogateescape")
+        if REMOTE_PREFIX in text:
+            js.write_text(text.replace(REMOTE_PREFIX, "./offline-npm/"), errors="surrogateescape")
+
+
+def remote_references(files: list[Path]) -> list[str]:
+    """``file: url`` for every reference of these files (.html, .css, .js) that loads from the network."""
+    out = []
+    for f in files:
+        if f.suffix not in CHECKED:
+            continue
+        text = f.read_text(errors="replace")
+        patterns = REMOTE[-1:] if f.suffix == ".js" else REMOTE
+        out += [f"{f}: {url}" for p in patterns for url in p.findall(text)]
+    return out
+
+
 def remote_scripts(pages: list[Path]) -> list[str]:
-    """``page: url`` for every script of these HTML pages that is not a local file."""
-    return [f"{p}: {src}" for p in pages for src in REMOTE_SCRIPT.findall(p.read_text(errors="replace"))]
+    """The same as :func:`remote_references` (kept for the scripts' callers)."""
+    return remote_references(pages)
 
 
-def refuse_remote(pages: list[Path]) -> int:
-    """0 when no page loads a script from the network; else list them on stderr and return 1."""
-    bad = remote_scripts(pages)
+def refuse_remote(files: list[Path]) -> int:
+    """0 when no file loads anything from the network; else list them on stderr and return 1."""
+    bad = remote_references(files)
     if bad:
-        print("scripts loaded from the network:\n  " + "\n  ".join(bad), file=sys.stderr)
+        print("references to the network (nothing may load from it):\n  " + "\n  ".join(bad), file=sys.stderr)
         return 1
     return 0
+
+
+def built_files(folder: Path) -> list[Path]:
+    """Every file of a build a browser may read (``CHECKED``)."""
+    return sorted(p for p in folder.rglob("*") if p.suffix in CHECKED and p.is_file())

@@ -6,14 +6,17 @@ slides that open offline.
 Each notebook is executed (on the sample data shipped with lorisnb when no data root is found),
 a new slide starts at every heading, and the slides are exported with nbconvert's reveal.js
 exporter through ``teaching/slides_template/offline`` (no jQuery, require.js, mermaid or widget
-scripts). reveal.js (from the sphinx-revealjs package) and MathJax 3 (django-static-mathjax) are
-copied into ``OUT/reveal.js`` and ``OUT/mathjax``; the build fails if a page loads a script from the
-network. ``OUT`` is replaced only when the kit created it (it holds ``offline.BUILD_MARKER``); any
+scripts) with reveal.js's ``white`` theme (its fonts are local). reveal.js (from the sphinx-revealjs
+package, the Google Fonts imports of its other themes removed) and MathJax 3 (django-static-mathjax)
+are copied into ``OUT/reveal.js`` and ``OUT/mathjax``; the build fails if a page, style sheet or
+script references anything on the network. What the notebooks write to a temporary folder is removed
+with the build's own. ``OUT`` is replaced only when the kit created it (it holds ``offline.BUILD_MARKER``); any
 other existing folder is refused before the build, and left as it is.
 """
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import sys
@@ -23,7 +26,7 @@ from pathlib import Path
 import nbformat
 from nbclient import NotebookClient
 from nbconvert import SlidesExporter
-from offline import BUILD_MARKER, mathjax_dir, refuse_remote
+from offline import BUILD_MARKER, built_files, mathjax_dir, offline_mathjax, refuse_remote
 
 from lorisnb.errors import OutputError
 from lorisnb.io.writers import check_owned_folder, replace_folder
@@ -47,11 +50,23 @@ def slide_notebook(path: Path) -> nbformat.NotebookNode:
     return nb
 
 
+REMOTE_IMPORT = re.compile(r"^[ \t]*@import url\((?:https?:)?//[^)]*\);?[ \t]*\n?", re.M)
+THEME = "white"  # reveal.js's theme with its fonts beside it (simple, the default, imports Google Fonts)
+
+
 def assets(out: Path) -> None:
+    """reveal.js and MathJax beside the slides, with no reference to the network: the themes that
+    import Google Fonts fall back to the browser's fonts (the slides use ``THEME``, whose fonts are local)."""
     import sphinx_revealjs
 
     shutil.copytree(Path(sphinx_revealjs.__file__).parent / "_static" / "revealjs", out / "reveal.js")
+    shutil.rmtree(out / "reveal.js" / "plugin" / "math")  # unused (MathJax is beside it), it loads from a CDN
+    for css in (out / "reveal.js").rglob("*.css"):
+        text = css.read_text()
+        if REMOTE_IMPORT.search(text):
+            css.write_text(REMOTE_IMPORT.sub("", text))
     shutil.copytree(mathjax_dir(), out / "mathjax")
+    offline_mathjax(out / "mathjax")
 
 
 def main(out: Path) -> int:
@@ -66,6 +81,7 @@ def main(out: Path) -> int:
         extra_template_basedirs=[str(HERE / "slides_template")],
         template_name="offline",
         reveal_url_prefix="reveal.js",
+        reveal_theme=THEME,
         reveal_scroll=True,
         mathjax_url="mathjax/tex-chtml.js",
     )
@@ -73,15 +89,22 @@ def main(out: Path) -> int:
         built = Path(tmp) / "slides"
         built.mkdir()
         assets(built)
-        pages = []
-        for path in notebooks:
-            nb = slide_notebook(path)
-            NotebookClient(nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": tmp}}).execute()
-            html, _ = exporter.from_notebook_node(nb)
-            page = built / f"{path.stem}.slides.html"
-            page.write_text(html)
-            pages.append(page)
-        if refuse_remote(pages):
+        kernel_tmp = Path(tmp) / "tmp"  # what the notebooks write to a temporary folder goes with this one
+        kernel_tmp.mkdir()
+        before = os.environ.get("TMPDIR")
+        os.environ["TMPDIR"] = str(kernel_tmp)  # the kernels inherit it
+        try:
+            for path in notebooks:
+                nb = slide_notebook(path)
+                NotebookClient(nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": tmp}}).execute()
+                html, _ = exporter.from_notebook_node(nb)
+                (built / f"{path.stem}.slides.html").write_text(html)
+        finally:
+            if before is None:
+                os.environ.pop("TMPDIR", None)
+            else:
+                os.environ["TMPDIR"] = before
+        if refuse_remote(built_files(built)):
             return 1
         try:
             replace_folder(built, out, BUILD_MARKER)
@@ -91,6 +114,7 @@ def main(out: Path) -> int:
     for path in notebooks:
         print(f"slides: {out / f'{path.stem}.slides.html'}")
     return 0
+
 
 if __name__ == "__main__":
     sys.exit(main(Path(sys.argv[1] if len(sys.argv) > 1 else "build/slides").resolve()))
