@@ -85,10 +85,16 @@ def findings(
         return Findings(pd.DataFrame(columns=BOARD_COLUMNS), pd.DataFrame(), {}, "")
     res = compare_table(table, durations, metric, level=level, alpha=alpha, seed=seed)  # what compare ranks on
     pairs = res.pairs
-    board = res.algorithms.drop(columns=["trials", "coverage"]).rename(
-        columns={"sequences_with_output": "sequences_covered", "scene_sequences": "sequences_total"}
+    board = res.algorithms.drop(columns=["coverage"]).rename(
+        columns={
+            "sequences_with_output": "sequences_covered",
+            "scene_sequences": "sequences_total",
+            "trials": "compare_trials",
+        }
     )  # compare's coverage (lorisnb.core.coverage.complete: the one rule of sequences with output)
     board = board.merge(most_trials(table), on=["suite", "scene", "algorithm"], how="left")
+    # an algorithm without any row in the scene (its files failed) ran as compare counts it: one failed run
+    board["trials"] = board["trials"].fillna(board["compare_trials"]).astype(int)
     board["coverage"] = [f"{c}/{n}" for c, n in zip(board["sequences_covered"], board["sequences_total"], strict=True)]
     higher = METRICS.get(metric, ("", True))[1]
     board = board.sort_values(["suite", "scene", "rank", "value"], ascending=[True, True, True, not higher])

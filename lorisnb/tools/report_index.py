@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 import pandas as pd
 
 from .notebook import INPUT_ERRORS_CSV
+from .runs import NOT_SCORED
 
 if TYPE_CHECKING:
     from .leaderboard import Findings
@@ -274,27 +275,35 @@ def write_index(
 
 
 def _failures(run_dir: Path, runs: Sequence["NotebookRun"], failures: pd.DataFrame | None) -> list[str]:
+    """Every input file the report's own evaluation or a notebook did not score (failed, or not
+    scored: :data:`lorisnb.tools.runs.NOT_SCORED`, as the terminal counts them), each once with its
+    path, status and reason; then the files skipped on purpose (a scene without ground truth, ...),
+    each with its path and reason too."""
     rows = [] if failures is None else [("report", r) for r in failures.itertuples()]
     for r in runs:
         f = run_dir / r.name / INPUT_ERRORS_CSV
         if f.exists():
-            rows += [(r.name, row) for row in pd.read_csv(f).itertuples()]
-    failed = [(n, row) for n, row in rows if getattr(row, "status", "failed") == "failed"]
-    seen: dict[str, tuple[str, Any]] = {}
-    for n, row in failed:
-        seen.setdefault(str(row.file), (n, row))
-    skipped = {str(row.file): row for n, row in rows if getattr(row, "status", "failed") != "failed"}
-    parts = [f"<h3 id='failures'>Failures: input files that could not be evaluated ({len(seen)})</h3>"]
-    if seen:
-        parts.append("<table><tr><th>found by</th><th>file</th><th>error</th></tr>")
-        for file, (n, row) in seen.items():
-            parts.append(f"<tr><td>{esc(n)}</td><td>{esc(file)}</td><td class='failed'>{esc(str(row.error))}</td></tr>")
+            rows += [(r.name, row) for row in pd.read_csv(f, dtype=str, keep_default_na=False).itertuples()]
+    unscored: dict[str, tuple[str, Any]] = {}
+    skipped: dict[str, tuple[str, Any]] = {}
+    for n, row in rows:
+        status = str(getattr(row, "status", "failed"))
+        (unscored if status in NOT_SCORED else skipped).setdefault(str(row.file), (n, row))
+    for file in unscored:
+        skipped.pop(file, None)
+    parts = [f"<h3 id='failures'>Failures: input files that could not be evaluated or scored ({len(unscored)})</h3>"]
+    for rows_, cls in ((unscored, "failed"), (skipped, "skipped")):
+        if not rows_:
+            continue
+        if cls == "skipped":
+            parts.append(f"<p>Skipped on purpose ({len(skipped)} file(s), not counted as failures):</p>")
+        parts.append("<table><tr><th>found by</th><th>file</th><th>status</th><th>reason</th></tr>")
+        for file, (n, row) in rows_.items():
+            parts.append(f"<tr><td>{esc(n)}</td><td>{esc(file)}</td><td>{esc(str(getattr(row, 'status', 'failed')))}"
+                         f"</td><td class='{cls}'>{esc(str(row.error))}</td></tr>")  # fmt: skip
         parts.append("</table>")
-    else:
-        parts.append("<p>None.</p>")
-    if skipped:
-        reasons = sorted({str(row.error).split(":")[0] for row in skipped.values()})
-        parts.append(f"<p>Skipped {len(skipped)} file(s): {esc('; '.join(reasons))}.</p>")
+    if not unscored:
+        parts.insert(1, "<p>None.</p>")
     return parts
 
 

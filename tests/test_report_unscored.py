@@ -1,0 +1,58 @@
+"""Inputs the report did not score: index.html lists every one (path, status, reason) and counts
+them as the terminal does; an algorithm whose only file in a scene failed ran once (trials 1)."""
+
+from __future__ import annotations
+
+import html
+import re
+
+import pandas as pd
+from helpers import write
+
+from lorisnb.io.data import find_data
+from lorisnb.tools.leaderboard import report_findings
+from lorisnb.tools.report_index import write_index
+from lorisnb.tools.runs import unscored_inputs
+
+PER_SEQ = "per-seq"
+
+
+def _results(root, icra20):
+    s = icra20 / PER_SEQ
+    for name in ("cafe-1-1.txt", "cafe-1-2.txt"):
+        write(root, f"algA/{name}", (s / "ds-slam" / name).read_bytes())
+    for name in ("cafe_1_1_orbslam2-original.txt", "cafe_1_2_orbslam2-original.txt"):
+        write(root, f"algB/{name}", (s / "orbslam2_rgbd" / name).read_bytes())
+    shifted = [  # every stamp 1e6 s later: no overlap with the ground truth
+        f"{float(line.split()[0]) + 1e6:.6f} {' '.join(line.split()[1:])}" if line[:1].isdigit() else line
+        for line in (s / "ds-slam" / "market-1-1.txt").read_text().splitlines()
+    ]
+    write(root, "algA/market-1-1.txt", "\n".join(shifted) + "\n")
+    text = (s / "orbslam2_rgbd" / "market_1_1_orbslam2-original.txt").read_text()
+    write(root, "algB/market_1_9_orbslam2-original.txt", text.replace("seq: 1", "seq: 9", 1))  # no such sequence
+    write(root, "algB/office_1_1.txt", (s / "orbslam2_rgbd" / "office_1_1_orbslam2-original.txt").read_bytes())
+    return root
+
+
+def test_every_unscored_input_is_listed_with_its_path_and_reason(tmp_path, icra20, data):
+    source = _results(tmp_path / "res", icra20)
+    f, ev, values = report_findings(source, find_data(data.root), {})
+    run = tmp_path / "run"
+    (run / "findings").mkdir(parents=True)
+    failures = ev.failures_table()
+    failures.to_csv(run / "findings" / "input_errors.csv", index=False)
+    counted = unscored_inputs(run)  # what the terminal counts
+    assert len(counted) == 2
+    page = write_index(run, [], {}, findings=f, spec={}, failures=failures).read_text()
+    assert "could not be evaluated or scored (2)" in page
+    text = html.unescape(page)
+    for file, reason in counted.items():
+        assert file in text and reason in text  # the whole path and the whole reason
+    assert "not scored" in text and "no estimate stamp falls inside" in text
+    skipped = failures[~failures["status"].isin(["failed", "not scored"])]
+    for file in skipped["file"]:  # skipped on purpose (a scene without ground truth): listed apart, with its path
+        assert str(file) in text
+    # the leaderboard: algB's only market file failed, so it ran once there, as compare counts it
+    board = f.board.set_index(["scene", "algorithm"])
+    assert board.loc[("market", "algB"), "trials"] == 1 and pd.api.types.is_integer_dtype(f.board["trials"])
+    assert len(skipped) == 1 and not re.search(r"<td>nan</td>", page)
