@@ -56,3 +56,24 @@ def test_every_unscored_input_is_listed_with_its_path_and_reason(tmp_path, icra2
     board = f.board.set_index(["scene", "algorithm"])
     assert board.loc[("market", "algB"), "trials"] == 1 and pd.api.types.is_integer_dtype(f.board["trials"])
     assert len(skipped) == 1 and not re.search(r"<td>nan</td>", page)
+
+
+def test_a_scene_filter_without_ground_truth_is_refused_before_anything_runs(tmp_path, icra20, data, monkeypatch,
+                                                                             capsys):  # fmt: skip
+    """-p scenes naming only a scene the results hold but the data has no ground truth for (office):
+    nothing could be scored, so the report refuses it up front (exit 2), saying why."""
+    from lorisnb.cli import main
+    from lorisnb.tools import report
+
+    source = _results(tmp_path / "res", icra20)
+    started: list = []
+    monkeypatch.setattr(report, "run_notebook", lambda name, *a, **k: started.append(name) or report.NotebookRun(name))
+    out = tmp_path / "run"
+    args = ["report", "--results", str(source), "--out", str(out), "--data", str(data.root), "--no-progress"]
+    assert main([*args, "-p", "scenes", '["office"]']) == 2
+    err = capsys.readouterr().err
+    assert "office" in err and "no ground truth" in err and "cafe" in err
+    assert not started and sorted(p.name for p in tmp_path.iterdir()) == ["res"]
+    # a filter keeping one scene with ground truth runs (office is skipped as usual)
+    assert main([*args, "-p", "scenes", '["office", "cafe"]', "--notebooks", "per_sequence_benchmark"]) in (0, 1)
+    assert started and (out / "index.html").exists()

@@ -20,7 +20,7 @@ import pandas as pd
 
 from ..core import stats, validate
 from ..core.spec import EvalSpec
-from ..errors import LorisWarning
+from ..errors import LorisWarning, ValidationError
 from ..io.data import DataPaths
 from .comparison import compare_table
 
@@ -180,6 +180,24 @@ def leaderboard_spec(parameters: Mapping[str, Any]) -> EvalSpec:
     spec = evaluation_spec({**SPEC_DEFAULTS, **given})
     spec.refuse_inapplicable("openloris", surface="notebook")
     return spec
+
+
+def refuse_unscorable_scenes(scenes: Any, data: DataPaths) -> None:
+    """Refuse a ``scenes`` filter none of whose scenes has ground truth in ``data`` (OpenLORIS'
+    office in the bundled data): nothing would be scored, and every notebook would fail or show
+    nothing. Called before anything runs; a filter keeping at least one scene with ground truth passes."""
+    from .inputs import names
+
+    if scenes is None:
+        return
+    wanted = names("scenes", scenes)
+    have = data.scenes_with_groundtruth()
+    if wanted and not set(wanted) & set(have):
+        raise ValidationError(
+            f"-p scenes {list(wanted)}: the data root {data.root} holds no ground truth for "
+            f"{', '.join(wanted)} (it has {', '.join(have) or 'none'}), so no result file would be scored; "
+            "name a scene with ground truth"
+        )
 
 
 def report_findings(

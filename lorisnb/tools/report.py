@@ -28,7 +28,7 @@ from ..io.data import find_data
 from ..io.writers import overlap, write_csv
 from . import warm_kernels
 from .evaluate import check_filters, result_files
-from .leaderboard import leaderboard_spec, report_findings
+from .leaderboard import leaderboard_spec, refuse_unscorable_scenes, report_findings
 from .lean_imports import jsonschema_without_iri_grammars
 from .notebook import INPUT_ERRORS_CSV, RUN_MARKER
 from .notebook_params import check_parameters
@@ -308,6 +308,8 @@ def run_report(
             raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
         if source is not None:  # a filter naming nothing there is refused now, not by each notebook later
             check_filters(source, params.get("algorithms"), params.get("scenes"), params.get("trials_by"))
+            if data is not None:  # a filter on scenes without ground truth only: nothing to score
+                refuse_unscorable_scenes(params.get("scenes"), data)
         if wants_board:  # the notebooks' spec (one from the parameters): refused now if it cannot apply
             leaderboard_spec(params)
         run_dir.parent.mkdir(parents=True, exist_ok=True)
