@@ -77,3 +77,20 @@ def test_a_scene_filter_without_ground_truth_is_refused_before_anything_runs(tmp
     # a filter keeping one scene with ground truth runs (office is skipped as usual)
     assert main([*args, "-p", "scenes", '["office", "cafe"]', "--notebooks", "per_sequence_benchmark"]) in (0, 1)
     assert started and (out / "index.html").exists()
+
+
+def test_the_per_sequence_values_show_every_sequence_with_ground_truth(tmp_path, icra20, data):
+    """home has 5 sequences with ground truth; the results cover seq 1 only: the table behind the
+    leaderboard (coverage 1/5) has a column for each of the 5, the missing ones marked 'no output'."""
+    from report_fixtures import trial_results
+
+    source = trial_results(tmp_path / "mine", icra20)
+    f, ev, _ = report_findings(source, find_data(data.root), {})
+    run = tmp_path / "run"
+    run.mkdir()
+    page = write_index(run, [], {}, findings=f, spec={}, per_sequence=ev.sequences(), expected=ev.spans()).read_text()
+    home = page.split("<h4 id='seq--home'>")[1].split("</table>")[0]
+    assert [f"seq {k}" in home for k in range(1, 6)] == [True] * 5
+    assert home.count("no output") == 2 * 4  # two algorithms, four sequences without output each
+    cafe = page.split("<h4 id='seq--cafe'>")[1].split("</table>")[0]
+    assert "no output" not in cafe and "seq 2" in cafe

@@ -333,7 +333,7 @@ def run_report(
                                     (findings.pairs, "pairwise.csv"), (failures, INPUT_ERRORS_CSV),
                                     (ev.durations(), "durations.csv")):  # fmt: skip  # every sequence: diff, history
                     write_csv(table, tmp / "findings" / name)
-                board.update(findings=findings, per_sequence=per_sequence, failures=failures,
+                board.update(findings=findings, per_sequence=per_sequence, failures=failures, expected=ev.spans(),
                              spec={"description": ev.conventions, "values": {**ev.spec.to_dict(), **values, "source": str(source)}})  # fmt: skip
 
             n_jobs = jobs or min(len(names), os.cpu_count() or 1)
@@ -348,7 +348,8 @@ def run_report(
             def pages(folder: Path) -> None:  # the pages name the folder they are in; the marker lists all
                 index = write_index(folder, runs, params, name=folder.name, findings=board.get("findings"), spec=spec,
                                     failures=board.get("failures"), left_out=left_out,
-                                    per_sequence=board.get("per_sequence"), wanted=run_dir.name)  # fmt: skip
+                                    per_sequence=board.get("per_sequence"), wanted=run_dir.name,
+                                    expected=board.get("expected"))  # fmt: skip
                 single_file(index, folder / "report.html")
                 _write_marker(folder, _files(folder))
 

@@ -199,9 +199,12 @@ def write_index(
     left_out: Mapping[str, str] | None = None,
     per_sequence: pd.DataFrame | None = None,
     wanted: str | None = None,
+    expected: Mapping[str, Any] | None = None,
 ) -> Path:
     """``index.html`` (see the module docstring). ``name``: the run folder's name (``run_dir``'s by
-    default); ``wanted``: the name asked for, when another run took it and this one is ``name``."""
+    default); ``wanted``: the name asked for, when another run took it and this one is ``name``;
+    ``expected``: scene -> its sequences with ground truth (each one gets a column of the
+    per-sequence values, with or without output)."""
     spec = spec or {}
     name = name or run_dir.name
     moved = (f" (<code>{esc(wanted)}</code> appeared while this report ran, another run's: this run is "
@@ -247,17 +250,17 @@ def write_index(
     parts.append("<h3 id='per-sequence'>Per-sequence values</h3>")
     if per_sequence is not None and len(per_sequence):
         metric = spec.get("values", {}).get("metric", "cr")
-        parts.append(f"<p class='why'>The {esc(metric)} of every sequence (the mean over its trials) behind the leaderboards (blank: no "
-                     "output); all columns in <a href='findings/sequences.csv'>findings/sequences.csv</a>.</p>")  # fmt: skip
+        parts.append(f"<p class='why'>The {esc(metric)} of every sequence with ground truth (the mean over its trials) behind "
+                     "the leaderboards ('no output': the algorithm has no result for it, counted as a failed run; "
+                     "blank: not defined); all columns in <a href='findings/sequences.csv'>findings/sequences.csv</a>.</p>")  # fmt: skip
         for (suite, scene), g in per_sequence.groupby(["suite", "scene"], sort=False):
-            pivot = g.pivot_table(index="algorithm", columns="seq", values=metric, aggfunc="mean")
-            pivot.columns = [f"seq {c}" for c in pivot.columns]
+            pivot = _per_sequence(g, metric, (expected or {}).get(scene, ()), findings, suite, scene)
             parts.append(
                 f"<h4 id='seq-{esc(f'{suite}-{scene}'.replace('/', '-'))}'>{esc(scene)}"
                 + (f" ({esc(suite)})" if suite else "")
                 + "</h4>"
             )
-            parts.append(_table(pivot.map(_fmt).reset_index(), "values"))
+            parts.append(_table(pivot.reset_index(), "values"))
     else:
         parts.append("<p>None in this report.</p>")
     parts += _failures(run_dir, runs, failures)
@@ -272,6 +275,23 @@ def write_index(
     index = run_dir / "index.html"
     index.write_text("\n".join(parts), encoding="utf-8")
     return index
+
+
+def _per_sequence(g: pd.DataFrame, metric: str, expected: Any, findings: "Findings | None", suite: str,
+                  scene: str) -> pd.DataFrame:  # fmt: skip
+    """Algorithms (every one of the scene's leaderboard) x every sequence of the scene (``expected``,
+    and any with a row): the metric as text, 'no output' where the algorithm has no row."""
+    values = g.pivot_table(index="algorithm", columns="seq", values=metric, aggfunc="mean", dropna=False)
+    rows = g.pivot_table(index="algorithm", columns="seq", values=metric, aggfunc="size", dropna=False)
+    algorithms = list(values.index)
+    if findings is not None and len(findings.board):
+        b = findings.board
+        algorithms += [a for a in b[(b["suite"] == suite) & (b["scene"] == scene)]["algorithm"] if a not in algorithms]
+    seqs = sorted(set(values.columns) | {int(s) for s in expected})
+    values, rows = values.reindex(index=algorithms, columns=seqs), rows.reindex(index=algorithms, columns=seqs)
+    text = values.map(_fmt).where(rows.fillna(0).to_numpy() > 0, "no output")
+    text.columns = [f"seq {c}" for c in seqs]
+    return text
 
 
 def _failures(run_dir: Path, runs: Sequence["NotebookRun"], failures: pd.DataFrame | None) -> list[str]:
