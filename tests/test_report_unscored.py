@@ -7,6 +7,7 @@ import html
 import re
 
 import pandas as pd
+import pytest
 from helpers import write
 
 from lorisnb.io.data import find_data
@@ -94,3 +95,19 @@ def test_the_per_sequence_values_show_every_sequence_with_ground_truth(tmp_path,
     assert home.count("no output") == 2 * 4  # two algorithms, four sequences without output each
     cafe = page.split("<h4 id='seq--cafe'>")[1].split("</table>")[0]
     assert "no output" not in cafe and "seq 2" in cafe
+
+
+@pytest.mark.slow
+def test_compare_algorithms_reports_its_failed_inputs_as_the_other_notebooks(tmp_path, icra20, data):
+    """compare_algorithms writes input_errors.csv through the session as the other notebooks do, so
+    the report counts its failed inputs ('ok, N input file(s) failed') instead of a plain 'ok'."""
+    from lorisnb.tools.report_notebooks import run_one
+
+    source = _results(tmp_path / "res", icra20)
+    write(source, "algA/cafe-1-3.txt", "scene: cafe\nseq: 1\nnot a pose line\n")  # a broken file
+    run = run_one("compare_algorithms", tmp_path / "run", {"results_dir": str(source), "data_root": str(data.root),
+                                                           "quick": True})  # fmt: skip
+    assert run.status == "ok", run.error
+    table = pd.read_csv(tmp_path / "run" / "compare_algorithms" / "input_errors.csv")
+    assert run.input_errors == int(table["status"].isin(["failed", "not scored"]).sum()) >= 3
+    assert any("cafe-1-3.txt" in f for f in table["file"])
