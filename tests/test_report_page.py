@@ -209,7 +209,8 @@ def test_a_run_folder_is_readable_and_records_its_provenance(tmp_path, monkeypat
     assert stat.S_IMODE(run_dir.stat().st_mode) == 0o750
     record = json.loads((run_dir / "run.json").read_text())
     assert (
-        tuple(record) == (*KEYS, "input_roots")
+        tuple(record) == (*KEYS, "input_roots", *(["dirty"] if record["commit"] else []))
+        and record.get("dirty") in ((True, False, None) if record["commit"] else (None,))
         and record["command"] == ["x"]
         and record["notebooks"] == {"metrics_primer": "ok"}
     )

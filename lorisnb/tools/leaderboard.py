@@ -128,7 +128,9 @@ def sentence(board: pd.DataFrame, pairs: pd.DataFrame, alpha: float = 0.05) -> s
     n_seq = int(pairs["sequences"].max()) if len(pairs) and "sequences" in pairs else 0
     trials = int(board["trials"].max()) if "trials" in board else 1
     sample = f"{n_seq} sequence(s)" + (f" x up to {trials} trials" if trials > 1 else "")
-    if len(first) == 1:
+    if METRICS.get(metric, ("", True))[1] and (board["value"].fillna(0) == 0).all():
+        text = f"{where}, no algorithm scored: {name} is 0 for every one ({sample}), so there is no order to tell."
+    elif len(first) == 1:
         text = (
             f"{where}, {best['algorithm']} is first by {name} ({_value(best)}), and the tests separate it from "
             f"every other algorithm ({sample})."
@@ -143,10 +145,14 @@ def sentence(board: pd.DataFrame, pairs: pd.DataFrame, alpha: float = 0.05) -> s
         text += f", but the data cannot tell it apart from {shown} ({sample}): their order is not established."
         floor = pairs["min_p"].min() if "min_p" in pairs and len(pairs) else np.nan
         if np.isfinite(floor) and floor > alpha and trials < 3:
+            dropped = n_seq > 0 and floor > 2.0 / 2**n_seq * (1 + 1e-9)  # 2 / 2^n with every sequence counted
             text += (
                 f" With one run on {n_seq} sequence(s) no paired test can reach p < {alpha:g} "
-                f"(smallest possible p {floor:.3g}); more sequences or trials are needed."
-            )
+                f"(smallest possible p {floor:.3g}"
+                + ("; sequences on which two algorithms score the same, such as both 0, carry no evidence and "
+                   "drop out of the paired test" if dropped else "")
+                + "); more sequences or trials are needed."
+            )  # fmt: skip
     short = board[board["sequences_covered"] < board["sequences_total"]]
     if len(short):
         listed = ", ".join(f"{a} ({c})" for a, c in zip(short["algorithm"][:5], short["coverage"][:5], strict=True))

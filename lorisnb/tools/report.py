@@ -35,7 +35,7 @@ from .notebook_params import check_parameters
 from .pool import start_context
 from .provenance import checksums, input_files, run_record, sha256, write_run_json
 from .report_html import single_file, write_notebook_css
-from .report_index import versions, write_index
+from .report_index import git_dirty, versions, write_index
 from .report_notebooks import (
     DEFAULT_NOTEBOOKS,
     KERNEL_ARGS,
@@ -343,6 +343,8 @@ def run_report(
             inputs = checksums(input_files(roots), data.root if data else None)
             record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
                                 {r.name: r.status for r in runs}, roots)  # fmt: skip
+            if record.get("commit"):  # the commit alone does not say what ran if the checkout had changes
+                record["dirty"] = git_dirty()
             write_run_json(tmp, record)
 
             def pages(folder: Path) -> None:  # the pages name the folder they are in; the marker lists all

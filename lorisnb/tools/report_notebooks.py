@@ -8,6 +8,7 @@ import contextlib
 import importlib.util
 import json
 import os
+import re
 import shutil
 import sys
 import tempfile
@@ -245,6 +246,17 @@ def declared_parameters(path: Path) -> dict[str, dict[str, Any]]:
     return dict(pm.inspect_notebook(str(path)))
 
 
+def shown_default(source: Any) -> str:
+    """A parameter's default as papermill reads it (the cell's source text) shown as a value:
+    ``float("inf")`` as ``inf``, ``"paper"`` as ``paper``, ``30.0`` as is."""
+    text = str(source).strip()
+    m = re.fullmatch(r"""float\(\s*(['"])([^'"]*)\1\s*\)""", text)
+    if m:
+        return m.group(2)
+    m = re.fullmatch(r"""(['"])([^'"]*)\1""", text)
+    return m.group(2) if m else text
+
+
 def run_one(
     name: str,
     out_dir: Path,
@@ -269,7 +281,7 @@ def run_one(
         params["output_dir"] = "."  # papermill runs the notebook in its own folder of the run
     run = NotebookRun(stem, parameters=params)
     run.thresholds = {
-        k: str(params[k]) if k in params else str(declared[k].get("default"))
+        k: str(params[k]) if k in params else shown_default(declared[k].get("default"))
         for k in ("eps", "phi", "delta", "tau")
         if k in declared
     }
