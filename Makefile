@@ -66,8 +66,9 @@ clean-venv:
 # Jupyter Book 1 needs markdown-it-py < 4; nbgrader runs from teaching/ (its nbgrader_config.py)
 TEACH := .venv-teach
 TEACH_STAMP := $(TEACH)/.installed-stamp
+# (absolute paths: the nbgrader commands run after `cd "$(COURSE)"`)
 TEACH_ENV = PATH="$(abspath $(TEACH))/bin:$(abspath $(BIN)):$$PATH" \
-	JUPYTER_PATH="$$($(BIN)/python -c 'import nbconvert, pathlib; print(pathlib.Path(nbconvert.__file__).parents[4] / "share" / "jupyter")')"
+	JUPYTER_PATH="$$("$(abspath $(BIN))/python" -c 'import nbconvert, pathlib; print(pathlib.Path(nbconvert.__file__).parents[4] / "share" / "jupyter")')"
 LAB := lab1_lifelong_metrics
 
 $(TEACH_STAMP): $(STAMP) teaching/requirements.txt
@@ -96,7 +97,8 @@ student: $(TEACH_STAMP)
 # ($(COURSE)/grades.csv) and per-student feedback HTML ($(COURSE)/feedback/<student>/<lab>/)
 grade: student
 	cd "$(COURSE)" && ls -d submitted/*/ >/dev/null 2>&1 || $(TEACH_ENV) python "$(abspath teaching/demo_submissions.py)" .
-	$(NBGRADER) autograde $(LAB) --create --force $(NBGRADER_ARGS)
+	tmp=$$(mktemp -d) && export TMPDIR="$$tmp" && $(NBGRADER) autograde $(LAB) --create --force $(NBGRADER_ARGS); \
+	  rc=$$?; rm -rf "$$tmp"; exit $$rc
 	$(NBGRADER) generate_feedback $(LAB) --force $(NBGRADER_ARGS)
 	cd "$(COURSE)" && $(TEACH_ENV) python "$(abspath teaching/offline_feedback.py)" feedback
 	$(NBGRADER) export --to grades.csv $(NBGRADER_ARGS)

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import nbformat
 import pytest
+from test_teaching_lab import solution_expressions, solution_leaks
 
 ROOT = Path(__file__).resolve().parents[1]
 SOURCE = ROOT / "teaching" / "source"
@@ -79,6 +80,17 @@ def test_book_notebook_has_exercises_and_dropdown_solutions_without_hidden_tests
     assert ":class: dropdown" in text
     assert "HIDDEN TESTS" not in text and "BEGIN SOLUTION" not in text and "_fe = simulated_errors" not in text
     assert not any(_nbgrader(c) for c in nb.cells)
+    # the gated blocks follow each other, never nested: exercise (its question inside), then its solution
+    gates = re.findall(r"\{(exercise|solution)-(start|end)\}", text)
+    assert gates == [("exercise", "start"), ("exercise", "end"), ("solution", "start"), ("solution", "end")] * n_answers
+    for k, c in enumerate(nb.cells):
+        if "{exercise-start}" in c.source:
+            question = nb.cells[k + 1]
+            assert (
+                "**Exercise" in question.source
+                or "**Question" in question.source
+                or ("question" in question.metadata.get("tags", []))
+            ), question.source
     # no exercise block opens before a section heading and closes after it
     for c in nb.cells:
         if c.cell_type == "markdown" and c.source.startswith("**"):
@@ -96,16 +108,28 @@ def _copy_checkout(dest: Path) -> None:
             shutil.copy2(ROOT / f, dest / f)
 
 
+def _tree(folder: Path) -> list[str]:
+    """Every path under ``folder``, not following links (the copy's .venv links to the checkout's)."""
+    return sorted(
+        os.path.relpath(os.path.join(d, n), folder) for d, dirs, files in os.walk(folder) for n in dirs + files
+    )
+
+
 @pytest.mark.slow
 def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path):
+    """As a fresh clone runs them: the Makefile's own (relative) VENV and TEACH, here links to the
+    checkout's environments (a clone creates them), and the course and builds given as relative paths."""
     copy = tmp_path / "lorisnb"
     _copy_checkout(copy)
-    before = sorted(copy.rglob("*"))
-    venv = Path(sys.prefix)
-    env = {k: v for k, v in os.environ.items() if k not in ("LORISNB_DATA", "PYTHONPATH")}
+    for env_dir in (".venv", ".venv-teach"):
+        (copy / env_dir).symlink_to(ROOT / env_dir, target_is_directory=True)
+    before = _tree(copy)
+    env = {k: v for k, v in os.environ.items() if k not in ("LORISNB_DATA", "PYTHONPATH", "VIRTUAL_ENV")}
+    env["TMPDIR"] = str(tmp_path / "tmp")  # where the notebooks' temporary folders would be left
+    (tmp_path / "tmp").mkdir()
     course, out = tmp_path / "course", tmp_path / "site"  # an instructor's folders, outside the checkout
-    args = [f"VENV={venv}", f"TEACH={ROOT / '.venv-teach'}", "-o", f"{venv}/.installed-stamp", f"COURSE={course}",
-            f"BOOK_OUT={out / 'book'}", f"SLIDES_OUT={out / 'slides'}"]  # fmt: skip
+    args = ["-o", ".venv/.installed-stamp", "-o", ".venv-teach/.installed-stamp", "COURSE=../course",
+            "BOOK_OUT=../site/book", "SLIDES_OUT=../site/slides"]  # fmt: skip
     r = subprocess.run(
         ["make", "-C", str(copy), *args, "student", "grade", "book", "slides"],
         env=env,
@@ -114,15 +138,19 @@ def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path):
         timeout=1800,
     )
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    assert "not found" not in r.stderr, r.stderr[-3000:]  # e.g. "/bin/sh: .venv/bin/python: not found"
     # nothing written into the checkout: the course and the builds are where the instructor said
-    assert sorted(copy.rglob("*")) == before
+    assert _tree(copy) == before
+    assert not list((tmp_path / "tmp").glob("lorisnb-*")), "the builds leave no temporary folder behind"
     teaching = course
+    offline = _teaching_module("offline")
     for lab in LABS:
-        # student version: every answer cell is a stub, no solution line and no hidden test left
+        # student version: every answer cell is a stub, no solution (in any spelling) and no hidden test left
         source = nbformat.read(SOURCE / lab / f"{lab}.ipynb", as_version=4)
         release = nbformat.read(teaching / "release" / lab / f"{lab}.ipynb", as_version=4)
         text = "\n".join(c.source for c in release.cells)
         assert "BEGIN SOLUTION" not in text and "HIDDEN TESTS" not in text
+        assert solution_leaks(release, solution_expressions(source)) == []
         for c in source.cells:
             m = re.search(r"### BEGIN SOLUTION\n(.*?)### END SOLUTION", c.source, re.S)
             if m:
@@ -139,7 +167,11 @@ def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path):
         hints = set(re.findall(r"Hint \(([a-z ]+)\)", re.sub(r"<[^>]+>", "", feedback)))
         assert {"delta cap", "cr vs crt", "degrees radians", "first pose", "alignment"} <= hints, hints
         assert (teaching / "feedback" / "demo-correct" / lab / f"{lab}.html").exists()
-        assert "../../mathjax/tex-chtml.js" in feedback and not re.search(r"<script[^>]*src=\"https?:", feedback)
+        # each page on its own (release_feedback hands out the .html only): MathJax inline, nothing beside it
+        assert '<script id="lorisnb-mathjax">' in feedback and "mathjax/tex-chtml.js" not in feedback
+        assert "Cell output is True" not in r.stderr
+    assert not (teaching / "feedback" / "mathjax").exists()
+    assert offline.remote_references(offline.built_files(teaching / "feedback")) == []
     # the book: every page, exercises with dropdown solutions, executed checks, local MathJax only
     slides = out / "slides"
     out = out / "book"
@@ -147,14 +179,16 @@ def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path):
     page = (out / f"{LABS[0]}.html").read_text()
     assert "exercise" in page and "dropdown" in page and "✓ correct_rate matches lorisnb" in page
     assert "_static/mathjax/tex-chtml.js" in page and (out / "_static" / "mathjax" / "tex-chtml.js").is_file()
-    assert _teaching_module("offline").remote_scripts(sorted(out.rglob("*.html"))) == []
+    assert "THEBE_JS_URL" not in page and re.search(r"instructor\S{1,8}s copy", (out / "intro.html").read_text())
+    assert offline.remote_references(offline.built_files(out)) == []
     assert list((out / "_images").glob("*.png")), "figures of the executed notebooks"
-    # the slides: one per notebook, reveal.js and MathJax beside them, nothing from the network
+    # the slides: one per notebook, reveal.js and MathJax beside them, nothing from the network (fonts included)
     for name in ("metrics_primer", *LABS):
         html = (slides / f"{name}.slides.html").read_text()
         assert 'src="reveal.js/dist/reveal.js"' in html and 'src="mathjax/tex-chtml.js"' in html
-        assert not re.search(r"<script[^>]*src=\"(https?:)?//", html) and "<section" in html
+        assert "reveal.js/dist/theme/white.css" in html and "<section" in html
     assert (slides / "reveal.js" / "dist" / "reveal.js").is_file() and (slides / "mathjax" / "tex-chtml.js").is_file()
+    assert offline.remote_references(offline.built_files(slides)) == []
 
 
 def test_sample_data_is_small_and_a_verbatim_subset_of_the_data(data):
