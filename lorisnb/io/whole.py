@@ -41,8 +41,9 @@ NUMPY_MAX_BYTES = 8 << 20
 #: arrays (:func:`_ranged_rows`): about as fast as pandas' own threaded read of the whole file,
 #: in a third of its memory (it maps the file and holds its numbers twice before the copy: about
 #: 210 MiB for an 85 MB file of a million TUM poses, against about 80 MiB), and a matrix file's
-#: quaternions computed on the threads as the ranges are read.
-RANGED_MIN_BYTES = 8 << 20
+#: quaternions computed on the threads as the ranges are read. Below this size the threads' chunk
+#: buffers (about 20 MB each) would cost more memory than pandas' one call.
+RANGED_MIN_BYTES = 32 << 20
 TAIL_BYTES = 4096
 COPY_ROWS = 8192
 BLANK = b" \t\r\x0b\x0c"
