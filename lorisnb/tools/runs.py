@@ -157,13 +157,12 @@ def read_table(path: Path) -> pd.DataFrame:
 def _report_tables(folder: Path, notes: list[str]) -> pd.DataFrame:
     """The report's own per-sequence table (:data:`FIRST_TABLE`), else every per-sequence CSV table
     of the run, stacked, one row per sequence and trial (from the first table that holds it, by
-    path), with a ``table`` column (its
-    path in the run); tables that are not per-sequence (scenes, pairs, ...) are left out, and so are
-    tables with several rows per sequence and trial (sweeps), with a note in ``notes``."""
+    path), with a ``table`` column (its path in the run); tables that are not per-sequence (scenes,
+    pairs, ...) are left out, and so are tables with several rows per sequence and trial (sweeps),
+    with a note in ``notes``."""
     parts = []
-    csvs = sorted(folder.rglob("*.csv"), key=lambda c: (c.relative_to(folder).as_posix() != FIRST_TABLE, c))
-    if (folder / FIRST_TABLE).is_file():  # the report's own evaluation: the notebooks' tables hold other settings
-        csvs = [folder / FIRST_TABLE]
+    own = folder / FIRST_TABLE  # the report's own evaluation: the notebooks' tables hold other settings
+    csvs = [own] if own.is_file() else sorted(folder.rglob("*.csv"))
     for csv in csvs:
         if any(part.startswith(".") for part in csv.relative_to(folder).parts):
             continue
