@@ -279,6 +279,27 @@ def test_rotation_blocks_nearest_rotation_and_scipy():
     assert rotation_blocks(np.zeros((0, 3, 3)))[0].shape == (0, 4)
 
 
+def test_power_steps_bring_the_error_below_the_last_bit():
+    """The power steps a block ``off`` from a rotation takes: the fewest ``s`` (1 to 12) with
+    ``(off / 2) ** (s + 1)`` below 2**-56, by the closed form ``ceil(56 ln 2 / -ln(off / 2)) - 1``
+    (12 at 0.25 or more, or NaN); the same counts as the thresholds the runs compare against."""
+    from lorisnb.core.matrices import power_steps
+
+    rng = np.random.default_rng(2)
+    off = np.concatenate(
+        [10 ** rng.uniform(-17, 0, 100_000), [1e-300, 1e-12, 1e-6, 1e-3, 0.2499, 0.25, 0.5, np.nan, np.inf]]
+    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        closed = np.ceil(56 * np.log(2) / -np.log(off / 2)) - 1
+    expected = np.where((off > 0) & (off < 0.25), closed, 12).clip(1, 12)
+    np.testing.assert_array_equal(power_steps(off), expected)
+    assert list(power_steps(np.array([1e-6, 1e-3]))) == [2, 5]  # 6-digit blocks, the readers' tolerance
+    s = power_steps(off).astype(float)
+    fine = (off > 0) & (s < 12)  # 12 at most: blocks that far are refused anyway
+    assert ((off[fine] / 2) ** (s[fine] + 1) < 2.0**-56).all()
+    assert ((s[fine] == 1) | ((off[fine] / 2) ** s[fine] >= 2.0**-56)).all()
+
+
 def test_rotation_blocks_the_same_for_any_memory_order_threads_and_mixed_runs():
     """KITTI's one-call read hands the parser's column-major numbers to the rotation step and runs
     it on threads: every block's quaternion and distance are those of the block alone (exact,
