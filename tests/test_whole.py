@@ -279,6 +279,28 @@ def test_rotation_blocks_nearest_rotation_and_scipy():
     assert rotation_blocks(np.zeros((0, 3, 3)))[0].shape == (0, 4)
 
 
+def test_rotation_entries_of_a_files_columns_as_rotation_blocks():
+    """Blocks given entry by entry (a parser's separate columns: contiguous, strided, float32)
+    get the quaternions and distances of the same blocks as one (N, 3, 3) array, to the last bit."""
+    from scipy.spatial.transform import Rotation
+
+    from lorisnb.core.matrices import rotation_blocks, rotation_entries
+
+    m = np.round(Rotation.random(40_000, random_state=3).as_matrix(), 6)
+    m[::7] = Rotation.random(len(m[::7]), random_state=4).as_matrix()  # exact rotations mixed in
+    q, off = rotation_blocks(m)
+    columns = [[np.ascontiguousarray(m[:, i, j]) for j in range(3)] for i in range(3)]
+    qc, offc = rotation_entries(columns)
+    np.testing.assert_array_equal(qc, q)
+    np.testing.assert_array_equal(offc, off)
+    columns[1][2] = np.repeat(m[:, 1, 2], 2)[::2]  # a strided column
+    np.testing.assert_array_equal(rotation_entries(columns)[0], q)
+    m32 = m.astype(np.float32)
+    np.testing.assert_array_equal(
+        rotation_entries([[m32[:, i, j] for j in range(3)] for i in range(3)])[0], rotation_blocks(m32)[0]
+    )
+
+
 def test_power_steps_bring_the_error_below_the_last_bit():
     """The power steps a block ``off`` from a rotation takes: the fewest ``s`` (1 to 12) with
     ``(off / 2) ** (s + 1)`` below 2**-56, by the closed form ``ceil(56 ln 2 / -ln(off / 2)) - 1``

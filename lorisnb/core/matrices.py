@@ -6,12 +6,16 @@ nearest rotation by power steps on Bar-Itzhack's 4x4 matrix. Arrays in, arrays o
 from __future__ import annotations
 
 import threading
+from collections.abc import Sequence
 
 import numpy as np
 
 from .blocks import blockwise
 
-__all__ = ["BarItzhack", "markley", "rotation_blocks", "times"]
+__all__ = ["BarItzhack", "markley", "rotation_blocks", "rotation_entries", "times"]
+
+#: Blocks given entry by entry: ``a[i][j]`` the (n,) entries ``B_ij`` of n 3x3 blocks.
+Entries = Sequence[Sequence[np.ndarray]] | np.ndarray
 
 
 class BarItzhack:
@@ -36,17 +40,32 @@ class BarItzhack:
     zw: np.ndarray
 
     def __init__(self, m: np.ndarray, rows: np.ndarray | None = None) -> None:
-        a = np.moveaxis(m, 0, -1)  # (3, 3, n): each entry one contiguous row (a column-major
-        n = a.shape[-1]  # file's numbers are already; a row-major array is copied)
-        if a.strides[-1] != a.itemsize:
-            a = np.ascontiguousarray(a) if rows is None else _copied(a, rows[11:20].reshape(3, 3, n))
+        self._build(np.moveaxis(m, 0, -1), rows)  # (3, 3, n): each entry a row
+
+    @classmethod
+    def of_entries(cls, a: Entries, rows: np.ndarray | None = None) -> BarItzhack:
+        """Of blocks given entry by entry: ``a[i][j]`` the (n,) entries ``B_ij`` (a (3, 3, n)
+        array, or nested sequences of (n,) arrays such as a file's columns)."""
+        k = cls.__new__(cls)
+        k._build(a, rows)
+        return k
+
+    def _build(self, a: Entries, rows: np.ndarray | None) -> None:
+        n = len(a[0][0])
+        # each entry one contiguous float row, as a file's columns are; else (a row-major array) copied
+        if any(e.dtype != np.float64 or e.strides[-1] != e.itemsize for row in a for e in row):
+            copy = np.empty((3, 3, n)) if rows is None else rows[11:20].reshape(3, 3, n)
+            for i in range(3):
+                for j in range(3):
+                    np.copyto(copy[i, j], a[i][j])
+            a = copy
         self.a = a
         e = np.empty((11, n)) if rows is None else rows[:11]
         self.trace, self.xx, self.yy, self.zz, self.ww, self.xy, self.xz, self.yz, self.xw, self.yw, self.zw = e
-        np.add(np.add(a[0, 0], a[1, 1], out=self.trace), a[2, 2], out=self.trace)
+        np.add(np.add(a[0][0], a[1][1], out=self.trace), a[2][2], out=self.trace)
         one_minus = np.subtract(1.0, self.trace, out=self.ww)  # 1 - tr, until ww is written
         for d, i in ((self.xx, 0), (self.yy, 1), (self.zz, 2)):
-            np.add(one_minus, np.multiply(a[i, i], 2.0, out=d), out=d)
+            np.add(one_minus, np.multiply(a[i][i], 2.0, out=d), out=d)
         np.add(self.trace, 1.0, out=self.ww)
         for out, (i, j), sign in zip(
             (self.xy, self.xz, self.yz, self.xw, self.yw, self.zw),
@@ -54,7 +73,7 @@ class BarItzhack:
             (1, 1, 1, -1, -1, -1),
             strict=True,
         ):
-            (np.add if sign > 0 else np.subtract)(a[i, j], a[j, i], out=out)
+            (np.add if sign > 0 else np.subtract)(a[i][j], a[j][i], out=out)
 
     @property
     def entries(self) -> tuple[np.ndarray, ...]:
@@ -70,11 +89,6 @@ class BarItzhack:
             (self.xz, self.yz, self.zz, self.zw),
             (self.xw, self.yw, self.zw, self.ww),
         )
-
-
-def _copied(a: np.ndarray, out: np.ndarray) -> np.ndarray:
-    np.copyto(out, a)
-    return out
 
 
 def times(
@@ -114,7 +128,7 @@ def _markley_into(k: BarItzhack, q: np.ndarray, masks: np.ndarray) -> None:
     (3, n) booleans to compute in: the branch is the first of ``B_00, B_11, B_22, tr`` that is
     largest (``np.argmax``'s choice; a block with NaN on its diagonal gets NaN in every branch)."""
     a = k.a
-    d0, d1, d2, tr = a[0, 0], a[1, 1], a[2, 2], k.trace
+    d0, d1, d2, tr = a[0][0], a[1][1], a[2][2], k.trace
     c0, c1, c2 = masks
     _first_largest(d0, d1, d2, tr, masks)
     columns = k.columns
@@ -159,12 +173,19 @@ def rotation_blocks(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     against an extended-precision polar decomposition in ``tests/test_whole.py``), with scipy's
     sign (the largest component positive), in about a twentieth of scipy's time on a million blocks."""
     m = np.asarray(blocks, float).reshape(-1, 3, 3)
-    q, off = np.empty((len(m), 4)), np.empty(len(m))
+    return rotation_entries(np.moveaxis(m, 0, -1))
+
+
+def rotation_entries(a: Entries) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`rotation_blocks` of blocks given entry by entry (``a[i][j]`` the (N,) entries
+    ``B_ij``: a (3, 3, N) array, or a file's columns as they were read, with no copy)."""
+    n = len(a[0][0])
+    q, off = np.empty((n, 4)), np.empty(n)
 
     def run(lo: int, hi: int) -> None:
-        _rotation_run(m[lo:hi], q[lo:hi], off[lo:hi])
+        _rotation_run([[a[i][j][lo:hi] for j in range(3)] for i in range(3)], q[lo:hi], off[lo:hi])
 
-    blockwise(run, len(m))  # in cache-sized runs of blocks: no page faults, no long temporaries
+    blockwise(run, n)  # in cache-sized runs of blocks: no page faults, no long temporaries
     return q, off
 
 
@@ -203,22 +224,22 @@ def power_steps(off: np.ndarray) -> np.ndarray:
     return np.where((off > 0) & (off < 0.25), steps, 12).astype(np.int8)
 
 
-def _rotation_run(m: np.ndarray, q: np.ndarray, off: np.ndarray) -> None:
-    """:func:`rotation_blocks` of a run of (n, 3, 3) blocks into ``q`` (n, 4) and ``off`` (n,),
-    computed on one (n,) row per component in the thread's scratch memory (nothing allocated)."""
-    n = len(m)
+def _rotation_run(entries: Entries, q: np.ndarray, off: np.ndarray) -> None:
+    """:func:`rotation_entries` of a run of n blocks into ``q`` (n, 4) and ``off`` (n,), computed
+    on one (n,) row per component in the thread's scratch memory (nothing allocated)."""
+    n = len(q)
     rows = _scratch_rows(_FLOAT_ROWS, n)
     masks = _scratch_rows(6, n, np.bool_)  # branches (3), orthogonal, sign, a comparison
-    k = BarItzhack(m, rows[:20])
+    k = BarItzhack.of_entries(entries, rows[:20])
     a = k.a
     t, u, det = rows[20:23]
     with np.errstate(over="ignore", invalid="ignore"):  # huge blocks: inf here, refused by the reader
         gram = off  # the largest entry of |R R^T - I|, then the distance
         for i, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)):
             d = gram if (i, j) == (0, 0) else t
-            np.multiply(a[i, 0], a[j, 0], out=d)
-            np.add(d, np.multiply(a[i, 1], a[j, 1], out=u), out=d)
-            np.add(d, np.multiply(a[i, 2], a[j, 2], out=u), out=d)
+            np.multiply(a[i][0], a[j][0], out=d)
+            np.add(d, np.multiply(a[i][1], a[j][1], out=u), out=d)
+            np.add(d, np.multiply(a[i][2], a[j][2], out=u), out=d)
             if i == j:
                 np.subtract(d, 1.0, out=d)
             np.abs(d, out=d)
@@ -227,9 +248,9 @@ def _rotation_run(m: np.ndarray, q: np.ndarray, off: np.ndarray) -> None:
         # a rotation within 1e-12 in every entry of R R^T (scipy's np.isclose also lets a row norm
         # be 1e-5 off: a planar 6-digit block would keep Markley's 1e-8 error); NaN is none
         orthogonal = np.less_equal(gram, 1e-12, out=masks[3])
-        np.multiply(a[0, 0], _minor(a, 1, 1, 2, 2, t, u), out=det)
-        np.subtract(det, np.multiply(a[0, 1], _minor(a, 1, 0, 2, 2, t, u), out=t), out=det)
-        np.add(det, np.multiply(a[0, 2], _minor(a, 1, 0, 2, 1, t, u), out=t), out=det)
+        np.multiply(a[0][0], _minor(a, 1, 1, 2, 2, t, u), out=det)
+        np.subtract(det, np.multiply(a[0][1], _minor(a, 1, 0, 2, 2, t, u), out=t), out=det)
+        np.add(det, np.multiply(a[0][2], _minor(a, 1, 0, 2, 1, t, u), out=t), out=det)
         np.maximum(gram, np.abs(np.subtract(det, 1.0, out=det), out=det), out=off)
     quat = rows[23:27]
     _markley_into(k, quat, masks[:3])
@@ -249,10 +270,10 @@ def _rotation_run(m: np.ndarray, q: np.ndarray, off: np.ndarray) -> None:
         np.divide(c, norm, out=q[:, i])
 
 
-def _minor(a: np.ndarray, i: int, j: int, k: int, m: int, out: np.ndarray, tmp: np.ndarray) -> np.ndarray:
-    """``a[i, j] * a[k, m] - a[i, m] * a[k, j]`` of the (3, 3, n) entries, into ``out``."""
-    np.multiply(a[i, j], a[k, m], out=out)
-    return np.subtract(out, np.multiply(a[i, m], a[k, j], out=tmp), out=out)
+def _minor(a: Entries, i: int, j: int, k: int, m: int, out: np.ndarray, tmp: np.ndarray) -> np.ndarray:
+    """``a[i][j] * a[k][m] - a[i][m] * a[k][j]`` of the (3, 3, n) entries, into ``out``."""
+    np.multiply(a[i][j], a[k][m], out=out)
+    return np.subtract(out, np.multiply(a[i][m], a[k][j], out=tmp), out=out)
 
 
 def _nearest_rotation(
