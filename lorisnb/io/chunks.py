@@ -38,15 +38,17 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[by
     (binary data) are refused in the chunk where they appear, before reading on."""
     spath = str(path)
     with open_input(path, what) as fh:
-        line0, rest, first, seen_text = 0, b"", True, False
+        line0, rest, first, seen_text, offset = 0, b"", True, False, 0  # offset: bytes read (a pipe has no tell)
         while True:
             try:
                 block = fh.read(SNIFF_BYTES if first else size)
+                offset += len(block)
                 if first and block.startswith(BOM):
                     block = block[len(BOM) :]
                 nul = block.find(b"\0")
                 if first and nul < 0 and len(block) >= SNIFF_BYTES - len(BOM):  # text so far: the rest of a chunk
-                    block += fh.read(max(size - SNIFF_BYTES, 0))
+                    more = fh.read(max(size - SNIFF_BYTES, 0))
+                    block, offset = block + more, offset + len(more)
                     nul = block.find(b"\0", SNIFF_BYTES - len(BOM))
             except OSError as exc:
                 raise ParseError(spath, None, f"cannot be read ({exc.strerror})") from None
@@ -58,7 +60,7 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[by
             if not block:
                 if data:
                     seen_text = seen_text or bool(data.strip())
-                    yield data + b"\n", line0, newlines(data) + 1, fh.tell()
+                    yield data + b"\n", line0, newlines(data) + 1, offset
                 break
             cut = data.rfind(b"\n") + 1
             if cut == 0:
@@ -69,7 +71,7 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[by
             piece, rest = data[:cut], data[cut:]
             seen_text = seen_text or bool(piece.strip())
             n = newlines(piece)
-            yield piece, line0, n, fh.tell() - len(rest)
+            yield piece, line0, n, offset - len(rest)
             line0 += n
         if not seen_text:
             raise ParseError(spath, None, f"empty file; expected {what}")

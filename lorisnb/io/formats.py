@@ -22,7 +22,7 @@ from .chunks import read_rows
 from .openloris import read_openloris
 from .ranges import LINE_LIMIT
 from .registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample, times_hint
-from .scanner import BOM, REPEATED, Lines, check_rows, finish, read_bytes, scan
+from .scanner import BOM, REPEATED, Lines, check_rows, finish, read_bytes, regular_file, scan
 
 #: Formats :func:`read_trajectory` reads (the names of :data:`lorisnb.io.registry.FORMATS`).
 TRAJECTORY_FORMATS = FORMAT_NAMES
@@ -250,6 +250,8 @@ def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop
     (velocities, biases) are ignored. ``repeated``: as :func:`read_tum`. Read in chunks as
     :func:`read_tum` (the rows straight into the arrays kept)."""
     spath = str(path)
+    if not regular_file(path):  # a pipe is read once: by the byte scanner, not after a look at its head
+        return _read_euroc_whole(path, warn, repeated)
     skip, width = _euroc_head(path)
     try:
         rows = read_rows(

@@ -33,7 +33,7 @@ from ..core.validate import flag
 from ..errors import LorisWarning, ParseError
 from .chunks import read_rows, stamp_digits
 from .ranges import GIVE_BACK_BYTES, give_back_memory
-from .scanner import check_rows, finish, nanosecond_pattern
+from .scanner import check_rows, finish, nanosecond_pattern, regular_file
 
 POSE_FIELDS = "stamp [output_time] x y z qx qy qz qw"
 
@@ -76,6 +76,8 @@ def declared_scene(path: str | os.PathLike[str], max_lines: int = 200) -> str | 
     read or names none (reading it in full then says why)."""
     from ..core.frames import match_scene
 
+    if not regular_file(path):  # a pipe: its lines are the reader's, not to be taken by a look
+        return None
     try:
         with open(path, encoding="utf-8", errors="replace") as f:
             for _, text in zip(range(max_lines), f, strict=False):
@@ -218,7 +220,11 @@ def read_openloris(
         _check_output_times(spath, stamps, np.where(ntok == 9, columns[1], np.nan), line_no)
         del columns, poses
     del rows
-    if repair_stamps or (stamps.size > 1 and not (np.diff(stamps) > 0).all()):
+    if repair_stamps and not regular_file(path):  # a pipe's bytes are gone: the digits cannot be read again
+        raise ParseError(
+            spath, None, "repair_stamps reads the stamps' digits again; expected a regular file, not a pipe"
+        )
+    if (repair_stamps or (stamps.size > 1 and not (np.diff(stamps) > 0).all())) and regular_file(path):
         # stamps out of order: perhaps nanoseconds printed without zero padding (read the digits)
         ndig, frac = stamp_digits(path, line_no)
         _unpadded_stamps(spath, stamps, line_no, ndig, frac, repair_stamps, notes)

@@ -16,6 +16,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from .scanner import regular_file
+
 #: Bytes of a file's beginning that :func:`sample` looks at.
 SAMPLE_BYTES = 64 * 1024
 #: Data lines of that beginning that the recognisers look at.
@@ -128,12 +130,14 @@ def suffixes(fmt: str) -> tuple[str, ...]:
 
 
 def sample(path: str | os.PathLike[str]) -> Sample | None:
-    """The beginning of a file (None if it cannot be read); a folder holding ``metadata.yaml`` is
+    """The beginning of a regular file (None if it cannot be read, or is a pipe); a folder holding ``metadata.yaml`` is
     a ROS 2 bag."""
     p = Path(path)
     try:
         if p.is_dir():
             return Sample(b"", (), (), False, folder=(p / "metadata.yaml").is_file())
+        if not regular_file(p):  # a pipe: its bytes are the reader's (a peek would take them)
+            return None
         with open(p, "rb") as f:
             head = f.read(SAMPLE_BYTES)
     except OSError:

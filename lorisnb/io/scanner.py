@@ -8,6 +8,7 @@ Errors are :class:`~lorisnb.errors.ParseError` naming the file, the line and wha
 from __future__ import annotations
 
 import os
+import stat
 from dataclasses import dataclass
 from typing import BinaryIO
 
@@ -151,6 +152,15 @@ def open_input(path: str | os.PathLike[str], what: str) -> BinaryIO:
         raise ParseError(path, None, f"is a folder; expected {what}") from None
     except OSError as exc:
         raise ParseError(path, None, f"cannot be read ({exc.strerror})") from None
+
+
+def regular_file(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path`` is a regular file, which can be read more than once: a pipe (a FIFO, the
+    shell's ``<(...)``) gives its bytes once, so nothing may peek at its start before it is read."""
+    try:
+        return stat.S_ISREG(os.stat(path).st_mode)
+    except (OSError, TypeError, ValueError):
+        return False
 
 
 def read_bytes(path: str | os.PathLike[str], what: str = "a trajectory file") -> bytes:
