@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from lorisnb.errors import ParseError
-from lorisnb.io import read_euroc, read_openloris, read_times, read_trajectory, read_tum
+from lorisnb.io import read_euroc, read_kitti, read_openloris, read_times, read_trajectory, read_tum
 
 ROWS = 3000
 
@@ -102,3 +102,96 @@ def test_an_openloris_pipe_out_of_order_is_read_once(tmp_path):
             read_openloris(path, repair_stamps=True)
     finally:
         os.close(fd)
+
+
+def _paths(monkeypatch, parser: str) -> None:
+    """Read plain files by ``parser``: numpy's reader, pandas' one call, pandas on 3 ranges of 100
+    rows at a time, or in chunks (the byte scanner where pandas refuses)."""
+    from lorisnb.io import whole
+
+    monkeypatch.setattr(whole, "pandas_loaded", lambda: parser != "numpy")
+    monkeypatch.setattr(whole, "RANGED_MIN_BYTES", 0 if parser == "ranges" else whole.WHOLE_MAX_BYTES + 1)
+    monkeypatch.setattr(whole, "CHUNK_ROWS", 100)
+    monkeypatch.setattr(whole, "PARSE_THREADS", 3)
+    if parser == "chunks":
+        monkeypatch.setattr(whole, "WHOLE_MAX_BYTES", 0)
+
+
+PARSERS = ["numpy", "pandas", "ranges", "chunks"]
+
+
+@pytest.mark.parametrize("parser", PARSERS)
+@pytest.mark.parametrize("token", ["1560000059_5", "1_000", "0_5"])
+def test_a_number_with_an_underscore_is_refused_on_every_path(tmp_path, monkeypatch, parser, token):
+    """Python's ``float`` reads ``1_000`` as 1000 (PEP 515), and so did the byte scanner every path
+    falls back to: a stamp ``1560000059_5`` became 15600000595 (a pose sorted to the end, with
+    only an out-of-order warning). No trajectory writer puts ``_`` in a number: now the line is
+    named, as pandas' and numpy's parsers would."""
+    _paths(monkeypatch, parser)
+    lines = _tum_text().decode().splitlines()
+    lines[2500] = " ".join([token, *lines[2500].split()[1:]])
+    path = tmp_path / "traj.txt"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ParseError) as info:
+        read_tum(path)
+    assert info.value.line == 2501
+    assert f"'{token}' is not a number" in info.value.reason
+    times = tmp_path / "times.txt"
+    times.write_text("".join(f"{k}.5\n" for k in range(20)) + "2_1\n")
+    with pytest.raises(ParseError, match="'2_1' is not a number") as info:
+        read_times(times)
+    assert info.value.line == 21
+
+
+@pytest.mark.parametrize("parser", PARSERS)
+def test_a_euroc_nan_stamp_is_named_as_not_finite(tmp_path, monkeypatch, parser):
+    """A EuRoC row stamped ``nan`` was refused as "stamp nan has a fraction; expected whole
+    nanoseconds ... a TUM file (stamps in seconds)": a wrong diagnosis. Now: not finite."""
+    _paths(monkeypatch, parser)
+    rows = _euroc_text(_tum_text()).decode().splitlines()
+    rows[2001] = "nan" + rows[2001][rows[2001].index(",") :]
+    path = tmp_path / "data.csv"
+    path.write_text("\n".join(rows) + "\n")
+    with pytest.raises(ParseError) as info:
+        read_euroc(path)
+    assert (info.value.line, info.value.reason) == (2002, "timestamp nan is not finite; expected whole nanoseconds")
+
+
+@pytest.mark.parametrize("parser", PARSERS)
+@pytest.mark.parametrize(
+    "case,line,reason",
+    [
+        ("nan", 1502, "stamp nan is not finite; expected a times file, one stamp in seconds per line"),
+        ("back", 1503, "stamp 150.0 goes backwards after 150.1; expected increasing stamps, one per pose (KITTI's "
+         "times.txt)"),
+        ("repeat", 1502, "stamp 149.9 repeats after 149.9; expected increasing stamps, one per pose (KITTI's times.txt)"),
+        ("empty", None, "empty file; expected a times file, one stamp in seconds per line"),
+    ],
+)  # fmt: skip
+def test_a_bad_kitti_times_file_is_named_with_its_line(tmp_path, monkeypatch, parser, case, line, reason):
+    """A times file's NaN or out-of-order stamp was reported against the pose file, with no line
+    ("the stamps given for this KITTI file are not strictly increasing"; "stamp 1501 given ...":
+    its index, not its line when the file has comments), and an empty times file as "expected a
+    trajectory file". Now the times file and the line are named."""
+    from scipy.spatial.transform import Rotation
+
+    _paths(monkeypatch, parser)
+    rng = np.random.default_rng(2)
+    mats = np.concatenate([Rotation.random(ROWS, rng).as_matrix(), rng.normal(size=(ROWS, 3, 1))], axis=2)
+    poses = tmp_path / "poses.txt"
+    np.savetxt(poses, mats.reshape(ROWS, 12), fmt="%.17g")
+    stamps = [f"{k * 0.1:.1f}" for k in range(ROWS)]
+    if case == "nan":
+        stamps[1500] = "nan"
+    elif case == "back":
+        stamps[1500], stamps[1501] = stamps[1501], stamps[1500]
+    elif case == "repeat":
+        stamps[1500] = stamps[1499]
+    times = tmp_path / "times.txt"
+    times.write_text("" if case == "empty" else "# times\n" + "\n".join(stamps) + "\n")
+    with pytest.raises(ParseError) as info:
+        read_kitti(poses, stamps=times)
+    assert (info.value.path, info.value.line, info.value.reason) == (str(times), line, reason)
+    if case == "repeat":  # repeated stamps are kept with repeated="keep"; a stamp going back is not
+        got = read_kitti(poses, stamps=times, repeated="keep")
+        assert got.stamps[1500] == got.stamps[1499] == 149.9 and len(got.stamps) == ROWS

@@ -50,14 +50,17 @@ class Lines:
         keep[rows] = True
         b = self.buf.copy()
         b[~keep[self.line_of]] = 32
-        toks = b.tobytes().split()
-        try:
-            return np.array(toks, dtype=np.float64)
-        except (ValueError, TypeError):
-            pass
+        data = b.tobytes()
+        if b"_" not in data:  # Python's float reads '1_000' as 1000 (PEP 515); a number in a file has no '_'
+            try:
+                return np.array(data.split(), dtype=np.float64)
+            except (ValueError, TypeError):
+                pass
         for i in rows:  # error path only: find the first offending line
             for tok in self.raw[self.starts[i] : self.ends[i]].split():
                 try:
+                    if b"_" in tok:
+                        raise ValueError(tok)
                     float(tok)
                 except ValueError:
                     shown = tok.decode("utf-8", "replace")
