@@ -21,8 +21,9 @@ from ..errors import LorisWarning, ParseError, ValidationError
 from .chunks import read_rows
 from .openloris import read_openloris
 from .ranges import LINE_LIMIT
-from .registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample, times_hint
+from .registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample
 from .scanner import BOM, REPEATED, Lines, check_rows, finish, read_bytes, regular_file, scan
+from .times import check_times, read_times, times_lines  # noqa: F401 (read_times: still lorisnb.io.formats.read_times)
 
 #: Formats :func:`read_trajectory` reads (the names of :data:`lorisnb.io.registry.FORMATS`).
 TRAJECTORY_FORMATS = FORMAT_NAMES
@@ -171,7 +172,8 @@ def read_kitti(
             raise ParseError(spath, None, "this KITTI pose file is also given as its own times file (--est-times or "
                              "--gt-times; stamps= in Python); a times file holds one stamp per line (KITTI's "
                              "times.txt): give that, or no times for either file to pair two KITTI files by index")  # fmt: skip
-        t = read_times(stamps)
+        t, t_lines = times_lines(stamps)
+        check_times(str(stamps), t, t_lines, keep_all)  # the times file and its line named
     else:
         t = np.asarray(stamps, dtype=float).reshape(-1)
     if len(t) != n:  # a times file: named, it may be the one at fault (another sequence's, swapped)
@@ -191,20 +193,6 @@ def read_kitti(
 def _matrix_groups(ntok: int) -> tuple[slice]:
     """The columns of a KITTI line (``ntok`` is 12): the 3x4 matrix, row-major."""
     return (slice(0, 12),)
-
-
-def read_times(path: str | os.PathLike) -> np.ndarray:
-    """Read a times file: one stamp (seconds) per line, ``#`` comments allowed."""
-    spath = str(path)
-    lines = scan(read_bytes(path))
-    rows = _data_rows(lines)
-    ok = lines.ntok[rows] == 1
-    if not ok.all():  # a pose file given as the times file: say so, not how to read it as poses
-        i = rows[np.flatnonzero(~ok)[0]]
-        text = lines.text(i)
-        raise ParseError(spath, int(i) + 1, f"{text[:80]!r} has {int(lines.ntok[i])} fields; expected one stamp per "
-                         f"line (a times file){times_hint(path, text)}")  # fmt: skip
-    return lines.numbers(rows, spath, "one stamp in seconds per line")
 
 
 EUROC_ROWS = (
@@ -297,7 +285,10 @@ def _read_euroc_whole(path: str | os.PathLike, warn: bool, repeated: str = "drop
     _check_width(lines, rows, spath, (width >= 8) & (width == (width[0] if width.size else 8)), EUROC_ROWS, "euroc")
     ncol = int(width[0]) if width.size else 8
     values = lines.numbers(rows, spath, EUROC_NUMBERS).reshape(-1, ncol)
-    fraction = np.flatnonzero(values[:, 0] != np.round(values[:, 0]))
+    fraction = np.flatnonzero(values[:, 0] != np.round(values[:, 0]))  # NaN too (inf: by check_rows)
+    if fraction.size and np.isnan(values[fraction[0], 0]):
+        k = int(fraction[0])
+        raise ParseError(spath, int(rows[k]) + 1, "timestamp nan is not finite; expected whole nanoseconds")
     if fraction.size:  # EuRoC stamps are whole nanoseconds: these are seconds (or no stamps at all)
         k = int(fraction[0])
         raise ParseError(
