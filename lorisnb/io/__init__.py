@@ -8,10 +8,11 @@ from .._lazy import attach
 if TYPE_CHECKING:
     from .bags import read_bag
     from .data import DataPaths, find_data, groundtruth_spans, load_groundtruth, scene_durations
-    from .formats import TRAJECTORY_FORMATS, read_euroc, read_kitti, read_times, read_trajectory, read_tum
+    from .formats import TRAJECTORY_FORMATS, read_euroc, read_kitti, read_trajectory, read_tum
     from .manifest import Manifest, read_manifest
     from .openloris import read_openloris
     from .ordslam import read_ordslam
+    from .times import read_times
     from .writers import write_csv, write_openloris
 
 __getattr__, __dir__ = attach(__name__)
