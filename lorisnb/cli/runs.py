@@ -49,6 +49,10 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
     report_problems(ev, [f"{path}: {n}" for n in notes])
     failed = unevaluated(ev, p)  # not evaluated, or evaluated but not scored: as evaluate's exit status counts
     table = ev.sequences()  # at the spec's thresholds (the options', else the defaults)
+    if isinstance(ev.spec.eps, str) and ev.spec.eps.startswith("relative:"):
+        # each row's eps in metres follows the extent the estimate matched, so it differs wherever
+        # CAND tracked more or less than BASE; both sides were scored with this one fraction
+        table = table.assign(eps=ev.spec.eps)
     return Run(p, "results", table, expected=ev.durations()), failed, sorted(failed)
 
 
