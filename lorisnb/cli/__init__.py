@@ -141,7 +141,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_command(".crosscheck", "cmd_crosscheck"))
 
     p = sub.add_parser("report", help="run the notebooks with papermill into a report folder under results/")
-    p.add_argument("--out", default=None, help="run folder (default results/run-<date>-<time>)")
+    p.add_argument("--out", default=None, help="run folder (default results/run-<date>-<time> in the current folder)")
     p.add_argument(
         "-p",
         "--parameter",

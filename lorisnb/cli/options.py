@@ -207,7 +207,8 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
         "--data",
         default=None,
         metavar="DIR",
-        help="data root (default: $LORISNB_DATA, else ../shared/data next to the project)",
+        help="data root (default: $LORISNB_DATA, else a shared/data folder beside the current folder or a parent, "
+        "else beside the lorisnb checkout)",
     )
     p.add_argument(
         "--jobs",
