@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..core.matrices import rotation_blocks
+from ..core.matrices import rotation_entries
 from ..core.trajectory import Trajectory
 from ..core.validate import choice, flag
 from ..errors import LorisWarning, ParseError, ValidationError
@@ -22,6 +22,7 @@ from .chunks import read_rows
 from .openloris import read_openloris
 from .ranges import LINE_LIMIT
 from .registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample
+from .rows import Part
 from .scanner import BOM, REPEATED, Lines, check_rows, finish, read_bytes, regular_file, scan
 from .times import check_times, read_times, times_lines  # noqa: F401 (read_times: still lorisnb.io.formats.read_times)
 
@@ -108,20 +109,25 @@ def _poses(
     return traj
 
 
-def _pose_blocks(flat: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Positions, quaternions and refusals of (m, 12) rows of ``[R | t]`` blocks, row-major, row by
-    row (a :data:`~lorisnb.io.rows.Convert`: a large file computes it on each range as it is
-    read): a row is refused unless finite and its block a proper rotation within
-    :data:`ROTATION_TOLERANCE`; the quaternions are those of the rotations nearest to the blocks
-    (scipy's ``Rotation.from_matrix`` quaternions of exact rotations:
-    :func:`lorisnb.core.matrices.rotation_blocks`)."""
-    mats = flat.reshape(-1, 3, 4)
+def _pose_blocks(flat: Part) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Positions, quaternions and refusals of m rows of ``[R | t]`` blocks, row-major (an (m, 12)
+    array, or the parser's 12 columns as read), row by row (a :data:`~lorisnb.io.rows.Convert`: a
+    large file computes it on each range as it is read): a row is refused unless finite and its
+    block a proper rotation within :data:`ROTATION_TOLERANCE`; the quaternions are those of the
+    rotations nearest to the blocks (scipy's ``Rotation.from_matrix`` quaternions of exact
+    rotations: :func:`lorisnb.core.matrices.rotation_entries`, on the columns with no copy)."""
+    cols = list(flat) if isinstance(flat, list) else [flat[:, k] for k in range(12)]
     with np.errstate(all="ignore"):
-        finite = np.isfinite(mats.sum()) or np.isfinite(mats).all()
-    bad = np.zeros(len(mats), bool) if finite else ~np.isfinite(mats).all(axis=(1, 2))
-    q, off = rotation_blocks(np.where(bad[:, None, None], 0.0, mats[:, :, :3]) if bad.any() else mats[:, :, :3])
+        finite = all(np.isfinite(c.sum()) for c in cols) or all(np.isfinite(c).all() for c in cols)
+    n = len(cols[0])
+    bad = np.zeros(n, bool)
+    if not finite:
+        for c in cols:
+            bad |= ~np.isfinite(c)
+        cols = [np.where(bad, 0.0, c) for c in cols]
+    q, off = rotation_entries([cols[4 * i : 4 * i + 3] for i in range(3)])
     bad |= ~(off <= ROTATION_TOLERANCE)
-    return mats[:, :, 3].copy(), q, bad
+    return np.column_stack([cols[3], cols[7], cols[11]]), q, bad
 
 
 def _from_matrices(spath: str, stamps: np.ndarray, poses: list[np.ndarray], line_no: np.ndarray) -> Trajectory:

@@ -5,7 +5,7 @@ either way (on threads for a large file).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -37,7 +37,7 @@ class Rows:
     lines: np.ndarray
     specials: list[tuple[int, str]]
     parsed_in_c: int = 0
-    filled: tuple[tuple[Group, ...], list[np.ndarray]] | None = None
+    filled: tuple[tuple[Group, ...], Sequence[Part]] | None = None
     converted: tuple[Convert, list[np.ndarray]] | None = None
 
     @property
@@ -60,14 +60,18 @@ class Rows:
             arrays = self.converted[1]
             self.converted = None
             return arrays
-        return list(fn(*self.split(groups)))
+        return list(fn(*self._parts(groups)))
 
     def split(self, groups: Sequence[Group]) -> list[np.ndarray]:
         """Row-major (n, stop - start) arrays of the column ``groups`` (slices of token positions
         with a stop), copied once from the blocks (on threads when many), which are let go as
         they are copied: afterwards this Rows holds no numbers. Tokens a line lacks are NaN. Rows
-        read in one call come as filled (:func:`~lorisnb.io.whole.read_whole`: views of the
-        parser's column-major numbers where the reader asked ``row_major=False``)."""
+        read in one call come as filled (:func:`~lorisnb.io.whole.read_whole`)."""
+        return [np.column_stack(p) if isinstance(p, list) else p for p in self._parts(groups)]
+
+    def _parts(self, groups: Sequence[Group]) -> Sequence[Part]:
+        """:meth:`split`'s numbers as they are held: a group read in one call where the reader
+        asked ``row_major=False`` is the parser's own columns (:data:`Part`), not copied."""
         if self.filled is not None:
             filled, arrays = self.filled
             if tuple(groups) != filled:
@@ -96,8 +100,11 @@ _NO_ROWS = np.zeros((0, 0))
 #: A group of columns: a slice of token positions with a stop, or token positions in the order
 #: wanted (EuRoC's ``q_w`` last).
 Group = slice | list[int]
-#: What a reader computes from its groups' arrays (one per group, (m, width) each, any memory
-#: order), row by row: arrays of m rows each, the same whichever rows it is given at once.
+#: A group's numbers: an (m, width) array (any memory order), or its ``width`` columns of m
+#: numbers each (a parser's columns as it read them, no copy).
+Part = np.ndarray | list[np.ndarray]
+#: What a reader computes from its groups' numbers (one :data:`Part` per group), row by row:
+#: arrays of m rows each, the same whichever rows it is given at once.
 Convert = Callable[..., Sequence[np.ndarray]]
 
 
@@ -187,3 +194,33 @@ class RowSink:
     def filled(self) -> tuple[tuple[Group, ...], list[np.ndarray]]:
         """The groups and their arrays, trimmed to the rows added (views)."""
         return self.groups, [o[: self.n] for o in self.outs]
+
+
+#: Rows copied at a time from columns into a row-major array (see :func:`copy_rows`).
+COPY_ROWS = 8192
+
+
+def group_columns(columns: list[np.ndarray], g: Group) -> list[np.ndarray]:
+    """The columns of group ``g``."""
+    return columns[g] if isinstance(g, slice) else [columns[k] for k in g]
+
+
+def rows_of(columns: list[np.ndarray]) -> np.ndarray:
+    """(n, k) row-major array of k columns (pandas' are read-only), copied in blocks of rows on
+    threads when many (numpy's copies release the GIL)."""
+    if len(columns) == 1:
+        return columns[0].reshape(-1, 1).copy()
+    n = len(columns[0])
+    out = np.empty((n, len(columns)))
+    each(lambda b: copy_rows(columns, out, (b * COPY_ROWS,)), -(-n // COPY_ROWS))
+    return out
+
+
+def copy_rows(columns: list[np.ndarray], out: np.ndarray, starts: Iterable[int] | None = None) -> None:
+    """Rows of ``columns`` into the row-major ``out`` (as many rows), :data:`COPY_ROWS` at a time
+    from each of ``starts`` (all of them: every block): each block of rows stays in the CPU's
+    cache while all its columns are written (a few hundred blocks, never a loop over rows)."""
+    for lo in range(0, len(out), COPY_ROWS) if starts is None else starts:
+        block = out[lo : lo + COPY_ROWS]
+        for j, c in enumerate(columns):
+            block[:, j] = c[lo : lo + COPY_ROWS]

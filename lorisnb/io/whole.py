@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from .ranges import GIVE_BACK_BYTES, PARSE_THREADS, give_back_memory, line_ranges
-from .rows import Convert, Group, Rows, each, line_dtype
+from .rows import Convert, Group, Part, Rows, copy_rows, group_columns, line_dtype, rows_of
 from .scanner import BOM, SNIFF_BYTES
 
 #: Files up to this size are read in one call; larger ones in chunks, in bounded memory (the C
@@ -45,7 +45,6 @@ NUMPY_MAX_BYTES = 8 << 20
 #: buffers (about 20 MB each) would cost more memory than pandas' one call.
 RANGED_MIN_BYTES = 32 << 20
 TAIL_BYTES = 4096
-COPY_ROWS = 8192
 BLANK = b" \t\r\x0b\x0c"
 #: The bytes of a plain file's numeric lines: numbers (``nan``, ``inf``, ``infinity`` too), separators, line ends.
 PLAIN_BYTES = b"0123456789+-.eE ,\r\nnaifNAIFtyTY"
@@ -83,6 +82,7 @@ def read_whole(
         return None
     skip, ntok, sep = plan
     groups = tuple(layout(ntok))
+    outs: Sequence[Part]
     if not pandas_loaded() and st.st_size <= NUMPY_MAX_BYTES:  # no pandas to import for a small file
         values = _numpy_rows(path, sep, skip, ntok)
         if values is None:
@@ -101,15 +101,15 @@ def read_whole(
         if convert is not None:
             return _rows(n, ntok, skip, (), [], (convert, outs), progress, st.st_size)
     else:
-        parsed = _pandas_rows(path, sep, skip, ntok, groups, row_major)
-        if parsed is None:
+        whole = _pandas_rows(path, sep, skip, ntok, groups, row_major)
+        if whole is None:
             return None
-        n, outs = parsed
+        n, outs = whole
     return _rows(n, ntok, skip, groups, outs, None, progress, st.st_size)
 
 
 def _rows(
-    n: int, ntok: int, skip: int, groups: tuple[Group, ...], outs: list[np.ndarray],
+    n: int, ntok: int, skip: int, groups: tuple[Group, ...], outs: Sequence[Part],
     converted: tuple[Convert, list[np.ndarray]] | None, progress: Callable[[int], object] | None, size: int,
 ) -> Rows:  # fmt: skip
     """The :class:`Rows` of ``n`` lines of ``ntok`` numbers after ``skip`` lines."""
@@ -145,11 +145,10 @@ def _numpy_rows(path: str | os.PathLike, sep: str, skip: int, ntok: int) -> np.n
 
 def _pandas_rows(
     path: str | os.PathLike, sep: str, skip: int, ntok: int, groups: tuple[Group, ...], row_major: bool = True
-) -> tuple[int, list[np.ndarray]] | None:
+) -> tuple[int, list[Part]] | None:
     """The number of rows and their numbers copied into ``groups`` (row-major) by pandas' C
     parser in one call, or None when the file is not plain after all. ``row_major=False``: groups
-    that are slices are views of the parser's (n, ntok) numbers (column-major when pandas holds
-    them as one block, as it does a frame of one dtype), not copies."""
+    that are slices are the parser's own columns (a :data:`~lorisnb.io.rows.Part`), not copies."""
     import pandas as pd  # here: a small file read by numpy needs no pandas
 
     try:
@@ -158,18 +157,15 @@ def _pandas_rows(
         return None  # not plain after all: the chunked reader finds what and where
     if frame.shape[1] != ntok or not all(dt == np.float64 for dt in frame.dtypes):
         return None
-    if not row_major and all(isinstance(g, slice) for g in groups):
-        values = frame.to_numpy()  # (n, ntok): a view of pandas' one block, or one copy
-        del frame
-        outs = [values[:, g] for g in groups]
-    else:
-        columns = [frame[k].to_numpy() for k in range(ntok)]
-        del frame
-        outs = [_rows_of(columns[g] if isinstance(g, slice) else [columns[k] for k in g]) for g in groups]
-        del columns
+    columns = _columns(frame)
+    del frame
+    n = len(columns[0])
+    copy = row_major or not all(isinstance(g, slice) for g in groups)  # else the parser's own columns
+    outs: list[Part] = [rows_of(group_columns(columns, g)) if copy else group_columns(columns, g) for g in groups]
+    del columns
     if os.stat(path).st_size >= GIVE_BACK_BYTES:
         give_back_memory()  # the parser's buffers of a large file: not kept as the process's memory
-    return len(outs[0]), outs
+    return n, outs
 
 
 def _line_start(head: bytes, skip: int) -> int:
@@ -278,19 +274,25 @@ def _parse_range(
             for frame in chunks:
                 if frame.shape[1] != ntok or not all(dt == np.float64 for dt in frame.dtypes):
                     return None
-                values = frame.to_numpy()  # (m, ntok): a view of pandas' one column-major block
+                columns = _columns(frame)
                 del frame
-                parts = [values[:, g] for g in groups]
+                parts: Sequence[Part] = [group_columns(columns, g) for g in groups]
                 if convert is not None:
-                    parts = list(convert(*parts))
-                m = len(values)
+                    parts = convert(*parts)
+                m = len(columns[0])
                 if at + m > capacity:
                     return None
                 with turn:
                     if not outs:
-                        outs.extend(np.empty((capacity, *p.shape[1:]), p.dtype) for p in parts)
+                        outs.extend(
+                            np.empty((capacity, len(p))) if isinstance(p, list) else np.empty((capacity, *p.shape[1:]), p.dtype)
+                            for p in parts
+                        )  # fmt: skip
                 for part, out in zip(parts, outs, strict=True):
-                    out[at : at + m] = part
+                    if isinstance(part, list):
+                        copy_rows(part, out[at : at + m])
+                    else:
+                        out[at : at + m] = part
                 at += m
     except _parser_errors():
         return None
@@ -344,22 +346,9 @@ def _parser_errors() -> tuple[type[BaseException], ...]:
     return ValueError, OverflowError, UnicodeDecodeError, errors.ParserError, errors.EmptyDataError
 
 
-def _rows_of(columns: list[np.ndarray]) -> np.ndarray:
-    """(n, k) row-major array of k columns (pandas' are read-only), copied in blocks of rows that
-    stay in the CPU's cache while all their columns are written, on the parse's threads (numpy's
-    copies release the GIL)."""
-    if len(columns) == 1:
-        return columns[0].reshape(-1, 1).copy()
-    n = len(columns[0])
-    out = np.empty((n, len(columns)))
-
-    def copy(b: int) -> None:
-        lo = b * COPY_ROWS
-        for j, c in enumerate(columns):
-            out[lo : lo + COPY_ROWS, j] = c[lo : lo + COPY_ROWS]
-
-    each(copy, -(-n // COPY_ROWS))  # a few hundred blocks, never a loop over rows
-    return out
+def _columns(frame: Any) -> list[np.ndarray]:
+    """A parsed frame's columns as pandas holds them (read-only views: no copy)."""
+    return [c.to_numpy() for _, c in frame.items()]
 
 
 def _plan(
