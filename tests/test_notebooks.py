@@ -63,6 +63,25 @@ def test_per_sequence_benchmark(tmp_path):
     assert np.allclose(frames["cr"], seq["cr"]) and np.allclose(frames["ate_rmse"], seq["ate_rmse"], equal_nan=True)
 
 
+def test_quick_takes_your_results_whole(tmp_path, icra20):
+    """``quick`` trims the bundled results only: results of cafe alone (no home) with quick are
+    evaluated whole, where the notebooks used to choose cafe and home and fail ('home' names
+    nothing in the inputs)."""
+    import shutil
+
+    mine = tmp_path / "mine" / "orbslam2_rgbd"
+    mine.mkdir(parents=True)
+    for f in sorted((icra20 / "per-seq" / "orbslam2_rgbd").glob("*.txt")):
+        if f.name.startswith(("cafe", "corridor")):
+            shutil.copy(f, mine / f.name)
+    seq = pd.read_csv(run("per_sequence_benchmark", tmp_path, results_dir=str(mine.parent)) / "sequences.csv")
+    assert set(seq["scene"]) == {"cafe", "corridor"} and len(seq) == 7
+    row = seq[(seq["scene"] == "cafe") & (seq["seq"] == 1)].iloc[0]
+    assert row["ate_rmse"] == pytest.approx(0.472544, abs=1e-6)  # as on the bundled data, above
+    sens = run("threshold_sensitivity", tmp_path / "t", results_dir=str(mine.parent))
+    assert sens.is_dir()
+
+
 def test_lifelong_benchmark(tmp_path):
     out = run("lifelong_benchmark", tmp_path)
     scenes = pd.read_csv(out / "scenes.csv").set_index(["algorithm", "scene"])

@@ -67,6 +67,12 @@ def test_trajectories_and_sensitivity_figures(ev):
     assert len([a for a in fig.axes if a.get_title()]) >= 2
     plt.close(fig)
     fig = plotting.plot_rank_stability(rank_stability(scenes[scenes["phi"] == 30]))
+    assert fig.axes[0].has_data()
+    plt.close(fig)
+    alone = rank_stability(scenes[(scenes["phi"] == 30) & (scenes["algorithm"] == f.algorithm)])
+    assert alone.empty  # one algorithm: no ranking; the figure says so instead of failing
+    fig = plotting.plot_rank_stability(alone)
+    assert "two or more algorithms" in fig.axes[0].texts[0].get_text()
     plt.close(fig)
 
 

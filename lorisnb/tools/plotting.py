@@ -331,7 +331,11 @@ def plot_rank_stability(stability: pd.DataFrame):
     """Kendall's tau between the ranking at each eps and at the reference (paper) eps, per scene."""
     _theme("whitegrid")
     fig, ax = subplots(figsize=(6.5, 3.6))
-    d = stability[np.isfinite(stability["eps"])]
+    d = stability[np.isfinite(stability["eps"].astype(float))]
+    if d.empty:  # one algorithm per scene: no ranking to compare
+        ax.text(0.5, 0.5, "a ranking needs two or more algorithms in a scene", ha="center", va="center")
+        ax.set_axis_off()
+        return fig
     sns.lineplot(data=d, x="eps", y="kendall_tau", hue="scene", marker="o", ax=ax, seed=0)
     for scene, ref in d.groupby("scene")["reference_eps"].first().items():
         ax.axvline(ref, color=sns.color_palette()[list(d["scene"].unique()).index(scene) % 10], ls="--", lw=0.8)
