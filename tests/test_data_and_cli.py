@@ -26,9 +26,18 @@ def test_find_data_order_and_error(tmp_path, monkeypatch, data):
     assert find_data().root == data.root
     assert find_data(data.root).root == data.root
     monkeypatch.setenv("LORISNB_DATA", str(tmp_path / "missing"))
-    # the environment variable is tried first, then ../shared/data next to the project
+    # the environment variable set to no data root is an error, not passed over for ../shared/data
+    # (a typo would quietly evaluate against other data)
+    with pytest.raises(DataNotFoundError, match=r"LORISNB_DATA=.*missing: does not exist"):
+        find_data()
+    (tmp_path / "empty").mkdir()
+    monkeypatch.setenv("LORISNB_DATA", str(tmp_path / "empty"))
+    with pytest.raises(DataNotFoundError, match="empty: not a data root"):
+        find_data()
+    assert find_data(data.root).root == data.root  # an explicit root comes first
+    monkeypatch.setenv("LORISNB_DATA", "")  # empty: not set
     if fallback is None:
-        with pytest.raises(DataNotFoundError, match="missing"):
+        with pytest.raises(DataNotFoundError):
             find_data()
     else:
         assert find_data().root == fallback

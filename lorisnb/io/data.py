@@ -4,7 +4,8 @@ the published tables; and the ground truth read from there.
 The data root is found, in this order, from
 
 1. an explicit ``data_root`` argument (command line ``--data DIR``),
-2. the environment variable ``LORISNB_DATA``,
+2. the environment variable ``LORISNB_DATA`` (set to a folder that is not a data root, it is an
+   error: it is not passed over for the next place),
 3. a ``shared/data`` folder beside the current folder or one of its parents (``../shared/data``
    seen from a checkout of lorisnb, or from its ``notebooks/`` folder), then beside the checkout
    lorisnb runs from, if it runs from one.
@@ -118,6 +119,14 @@ def find_data(data_root: DataRoot | DataPaths | None = None) -> DataPaths:
     if data_root is not None and not isinstance(data_root, (str, os.PathLike)):
         raise DataNotFoundError(
             f"data_root={data_root!r}: expected a folder path (str or pathlib.Path), or None to look in the usual places"
+        )
+    env = os.environ.get(ENV_VAR)  # set, but to no data root: said, not passed over for the next place
+    if data_root is None and env and not _looks_like_root(Path(env).expanduser()):
+        where = Path(env).expanduser()
+        raise DataNotFoundError(
+            f"{ENV_VAR}={env}: {'not a data root' if where.is_dir() else 'does not exist'}. A data root holds "
+            "openloris-scene/ (groundtruth/, icra20_results/), tum-rgbd/ or published/. Set it to one, unset it to "
+            "use a shared/data folder beside the current folder, or pass data_root=... (command line: --data DIR)."
         )
     looked = []
     for how, cand in _candidates(data_root):
