@@ -106,11 +106,12 @@ def error_statistics(values: np.ndarray, mask: np.ndarray | None = None) -> dict
         v = v[np.asarray(mask, bool).reshape(-1)]
     if v.size == 0:
         return dict.fromkeys(STATISTICS, math.nan)
-    sq = np.power(v, 2)
-    return dict(
-        rmse=math.sqrt(np.mean(sq)), mean=float(np.mean(v)), median=float(np.median(v)), std=float(np.std(v)),
-        min=float(np.min(v)), max=float(np.max(v)), sse=float(np.sum(sq)),
-    )  # fmt: skip
+    with np.errstate(over="ignore", invalid="ignore"):  # a diverged pose (1e160 m): inf / NaN, no warning
+        sq = np.power(v, 2)
+        return dict(
+            rmse=math.sqrt(np.mean(sq)), mean=float(np.mean(v)), median=float(np.median(v)), std=float(np.std(v)),
+            min=float(np.min(v)), max=float(np.max(v)), sse=float(np.sum(sq)),
+        )  # fmt: skip
 
 
 def masked_statistics(

@@ -70,6 +70,22 @@ def sequence_meta(f: FileErrors, e: SequenceErrors) -> dict[str, Any]:
     )  # fmt: skip
 
 
+def selected_squares(selected: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Sum of ``values**2`` over the entries each row of ``selected`` (R, M; 0 or 1) selects: (R,).
+
+    A matrix product, except that a value whose square is not finite (an ATE past 1e154 m: a
+    diverged pose) counts only in the rows that select it; in a product its 0 weight would make
+    every row NaN (0 * inf), and the C-ATE of a sequence whose wrong pose is huge NaN."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        sq = np.asarray(values, float) ** 2
+    bad = ~np.isfinite(sq)
+    if not bad.any():
+        return selected @ sq
+    total = selected @ np.where(bad, 0.0, sq)
+    with np.errstate(invalid="ignore"):
+        return total + np.where(selected[:, bad] > 0, sq[bad], 0.0).sum(axis=1)
+
+
 def sequence_grid(
     e: SequenceErrors,
     eps: ArrayLike,
@@ -127,8 +143,8 @@ def sequence_grid(
     ct = (cf @ held.T).reshape(E, P, D)  # correct time, numerator of Eq. (2) and (3)
     n_c = cf.sum(axis=1).reshape(E, P)
     with np.errstate(invalid="ignore", divide="ignore"):
-        c_ate = np.where(n_c > 0, np.sqrt((cf @ (e.ate**2)).reshape(E, P) / n_c), np.nan)
-        c_aoe = np.where(n_c > 0, np.sqrt((cf @ (e.aoe**2)).reshape(E, P) / n_c), np.nan)
+        c_ate = np.where(n_c > 0, np.sqrt(selected_squares(cf, e.ate).reshape(E, P) / n_c), np.nan)
+        c_aoe = np.where(n_c > 0, np.sqrt(selected_squares(cf, e.aoe).reshape(E, P) / n_c), np.nan)
     t0 = float(e.stamps[0])
     track = e.gt_end - max(t0, e.gt_start)  # tracked time inside the span, as the correct time
     rt = metrics.relocalization_time(t0, e.gt_start)
@@ -165,8 +181,8 @@ def sequence_grid(
     both = (c[:, :, i] & c[:, :, j]).reshape(E * P, -1).astype(float)
     nb = both.sum(axis=1).reshape(E, P)
     with np.errstate(invalid="ignore", divide="ignore"):
-        ctr = np.where(nb > 0, np.sqrt((both @ tr**2).reshape(E, P) / nb), np.nan)
-        crr = np.where(nb > 0, np.sqrt((both @ rr**2).reshape(E, P) / nb), np.nan)
+        ctr = np.where(nb > 0, np.sqrt(selected_squares(both, tr).reshape(E, P) / nb), np.nan)
+        crr = np.where(nb > 0, np.sqrt(selected_squares(both, rr).reshape(E, P) / nb), np.nan)
     out.update(
         rpe_trans_rmse=bc(float(metrics.rmse(tr))), rpe_rot_rmse=bc(float(metrics.rmse(rr))),
         c_rpe_trans_rmse=bc(ctr[:, :, None, None]), c_rpe_rot_rmse=bc(crr[:, :, None, None]),
