@@ -13,8 +13,10 @@ time or a scenario. A field that no token gives, or that two tokens give differe
 ``unknown`` with a :class:`~lorisnb.errors.LorisWarning` naming the file and the forms expected;
 so is a scenario number outside the dataset page's 1-6.
 
-A ``catalog.csv`` (columns ``file,scenario,time,depth_mode``; ``file`` is the path relative to
-the folder, or a bare file name when only one ground-truth file has it) overrides the names. Its
+A ``catalog.csv`` (columns ``file,scenario,time,depth_mode`` and optionally ``fps``; ``file`` is
+the path relative to the folder, or a bare file name when only one ground-truth file has it)
+overrides the names; its ``fps`` (frames per second of a file of frame numbers, and of that file's
+estimates) overrides the one given for the whole folder, for folders of mixed frame rates. Its
 values are checked when the folder is opened: a bad one is a :class:`~lorisnb.errors.ParseError`
 naming ``catalog.csv``, the row, the column and the form expected.
 """
@@ -53,7 +55,7 @@ SCENARIOS: dict[int, Scenario] = {
 #: The paper's own list has five scenarios (no separate "returning" one): paper number -> page number.
 PAPER_TO_PAGE = {1: 1, 2: 2, 3: 4, 4: 5, 5: 6}
 
-CATALOG_COLUMNS = ("file", "scenario", "time", "depth_mode")
+CATALOG_COLUMNS = ("file", "scenario", "time", "depth_mode", "fps")
 EXPECTED_SCENARIO = "a scenario token s1..s6 (also sc5, scen5, scenario5)"
 EXPECTED_TIME = "a time of day HH-MM, HH:MM, HHhMM or HHh (e.g. 13-00, 20h)"
 EXPECTED_DEPTH = "a depth mode fill, filled, standard or std"
@@ -143,25 +145,27 @@ def describe_sequence(name: str | os.PathLike, catalog: pd.DataFrame | None = No
     info = dict(
         file=p.name, scenario=np.nan, difficulty="unknown", motion="", time=None, light="unknown", depth_mode="unknown"
     )
+    fps = None
     listed = catalog[catalog["file"] == p.as_posix()] if catalog is not None else None
     if listed is not None and len(listed):
         row = listed.iloc[0]
         sc = int(row["scenario"]) if pd.notna(row.get("scenario")) else None
         time = str(row["time"]) if pd.notna(row.get("time")) else None
         depth = str(row["depth_mode"]) if pd.notna(row.get("depth_mode")) else None
+        fps = float(row["fps"]) if pd.notna(row.get("fps")) else None
     else:
         sc, time, depth = _from_name(p)
     if sc is not None and sc in SCENARIOS:
         info.update(scenario=sc, difficulty=SCENARIOS[sc].difficulty, motion=SCENARIOS[sc].motion)
-    info.update(time=time, light=light_period(time), depth_mode=depth or "unknown")
+    info.update(time=time, light=light_period(time), depth_mode=depth or "unknown", fps=fps)
     return info
 
 
 def read_catalog(path: str | os.PathLike, groundtruth: list[str]) -> pd.DataFrame:
     """``catalog.csv`` checked and normalized: ``file`` as the ground truth's path relative to the
     folder (``groundtruth``: those paths, ``/``-separated), ``scenario`` 1-6 (the dataset page's
-    numbering), ``time`` as ``HH:MM``, ``depth_mode`` ``fill`` or ``standard``; empty cells stay
-    unknown. Raises ParseError naming the file, the row (its line) and the column."""
+    numbering), ``time`` as ``HH:MM``, ``depth_mode`` ``fill`` or ``standard``, the optional ``fps``
+    a positive number (the file's frame rate); empty cells stay unknown (fps: the folder's). Raises ParseError naming the file, the row (its line) and the column."""
     spath = str(path)
     try:
         df = pd.read_csv(path, dtype=str, skipinitialspace=True)
@@ -173,7 +177,9 @@ def read_catalog(path: str | os.PathLike, groundtruth: list[str]) -> pd.DataFram
     unknown = [c for c in df.columns if c not in CATALOG_COLUMNS]
     if "file" not in df.columns or unknown:
         what = f"unknown column(s) {unknown}" if unknown else "no column 'file'"
-        raise ParseError(spath, 1, f"{what}; expected columns {', '.join(CATALOG_COLUMNS)} (file required)")
+        raise ParseError(
+            spath, 1, f"{what}; expected columns {', '.join(CATALOG_COLUMNS)} (file required, fps optional)"
+        )
     by_name: dict[str, list[str]] = {}
     for g in groundtruth:
         by_name.setdefault(PurePath(g).name, []).append(g)
@@ -218,5 +224,14 @@ def read_catalog(path: str | os.PathLike, groundtruth: list[str]) -> pd.DataFram
         depth = cell.get("depth_mode")
         if depth is not None and (depth := parse_depth(depth)) is None:
             raise bad("depth_mode", cell["depth_mode"], EXPECTED_DEPTH)
-        rows.append(dict(file=name, scenario=sc, time=time, depth_mode=depth))
+        fps = cell.get("fps")
+        rate: float | None = None
+        if fps is not None:
+            try:
+                rate = float(fps)
+            except ValueError:
+                rate = None
+            if rate is None or not (np.isfinite(rate) and rate > 0):
+                raise bad("fps", fps, "a positive number of frames per second (empty: the folder's fps)")
+        rows.append(dict(file=name, scenario=sc, time=time, depth_mode=depth, fps=rate))
     return pd.DataFrame(rows, columns=list(CATALOG_COLUMNS))

@@ -7,11 +7,14 @@ from __future__ import annotations
 import warnings
 from typing import Iterable
 
+import numpy as np
 import pandas as pd
 
 from ..core.association import groundtruth_in_frame
 from ..core.difficulty import difficulty_measures, trajectory_stats
 from ..core.pipeline import sequence_errors
+from ..core.plausibility import time_overlap
+from ..core.trajectory import Trajectory
 from ..errors import LorisError, LorisWarning
 from ..io.data import DataPaths, load_groundtruth
 from ..io.formats import read_tum
@@ -42,10 +45,21 @@ def tum_stats(data: DataPaths) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def ordslam_stats(folder: OrdslamFolder, fps: float | None = None) -> pd.DataFrame:
+def ordslam_stats(folder: OrdslamFolder, fps: float | None = None, problems: list[dict] | None = None) -> pd.DataFrame:
+    """Trajectory statistics of every ORDSLAM ground-truth file, with its scenario, time, light,
+    depth mode and the fps it was read with (the catalog's, else ``fps``). A file that cannot be
+    read raises, or, when a ``problems`` list is given, is appended to it (``file, status, kind,
+    error``, as :func:`ordslam_difficulty`'s) and left out."""
     rows = []
     for p in folder.groundtruth:
         info = folder.describe(p)
+        try:
+            traj = read_ordslam(p, info["fps"] or fps)
+        except LorisError as exc:
+            if problems is None:
+                raise
+            problems.append(dict(file=str(p), status="failed", kind="ORDSLAM ground truth", error=str(exc)))
+            continue
         rows.append(
             dict(
                 dataset="ORDSLAM",
@@ -55,7 +69,8 @@ def ordslam_stats(folder: OrdslamFolder, fps: float | None = None) -> pd.DataFra
                 time=info["time"],
                 light=info["light"],
                 depth_mode=info["depth_mode"],
-                **trajectory_stats(read_ordslam(p, fps)),
+                fps=info["fps"] or fps,
+                **trajectory_stats(traj),
             )
         )
     return pd.DataFrame(rows)
@@ -112,20 +127,27 @@ def ordslam_difficulty(
     """Measures of every ORDSLAM estimate (``estimates/<algorithm>/<path of its ground truth>``,
     :meth:`~lorisnb.io.ordslam.OrdslamFolder.pairs`). Returns (table, problems): an estimate
     without exactly one ground truth, or unreadable, is a row of ``problems`` (columns ``file,
-    status, kind, error``, as :meth:`~lorisnb.tools.evaluation.Evaluation.failures_table`), not fatal."""
+    status, kind, error``, as :meth:`~lorisnb.tools.evaluation.Evaluation.failures_table`), not fatal;
+    so is ("not scored", :func:`unmatched_reason`) one of which no pose could be matched: its stamps
+    outside the ground truth's time span or the ground truth sparser than ``max_gap``."""
     pairs, unmatched = folder.pairs()
     rows = []
     problems = [dict(file=str(p), status="failed", kind="ORDSLAM estimate", error=why) for p, why in unmatched]
     for alg, est_path, gt_path in pairs:
+        info = folder.describe(gt_path)
+        rate = info["fps"] or fps  # the catalog's fps of this sequence, else the folder's
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", LorisWarning)
-                gt, est = read_ordslam(gt_path, fps), read_ordslam(est_path, fps)
+                gt, est = read_ordslam(gt_path, rate), read_ordslam(est_path, rate)
         except LorisError as exc:
             problems.append(dict(file=str(est_path), status="failed", kind="ORDSLAM estimate", error=str(exc)))
             continue
-        info = folder.describe(gt_path)
         e = sequence_errors(gt, est, scale=scale, max_gap=max_gap)
+        if e.matched == 0:  # a time base or max_gap that does not fit, not an algorithm lost all along
+            why = unmatched_reason(str(est_path), gt, est, max_gap)
+            problems.append(dict(file=str(est_path), status="not scored", kind="ORDSLAM estimate", error=why))
+            continue
         rows.append(
             dict(
                 dataset="ORDSLAM",
@@ -140,6 +162,23 @@ def ordslam_difficulty(
             )
         )
     return pd.DataFrame(rows), pd.DataFrame(problems, columns=["file", "status", "kind", "error"])
+
+
+def unmatched_reason(label: str, gt: Trajectory, est: Trajectory, max_gap: float) -> str:
+    """Why no estimate pose of an ORDSLAM pair was matched: stamps outside the ground truth's time
+    span (another time base: seconds against frame numbers, a clock offset), or ground-truth poses
+    further apart than ``max_gap`` (sparse key frames)."""
+    outside = time_overlap(label, est.stamps, float(gt.stamps[0]), float(gt.stamps[-1]))
+    if outside is not None:
+        return (
+            outside + " (ORDSLAM: the ground truth and the estimate need the same time base; a file of frame "
+            "numbers is turned into seconds with fps)"
+        )
+    spacing = float(np.median(np.diff(gt.stamps))) if len(gt) > 1 else float("nan")
+    return (
+        f"{label}: no estimate pose matched a ground-truth pose within max_gap={max_gap:g} s; the ground truth's "
+        f"poses are {spacing:.3g} s apart (median): raise max_gap (ordslam_max_gap) above that spacing"
+    )
 
 
 def headline(measures: pd.DataFrame, published_ate: pd.DataFrame) -> dict[str, dict]:
