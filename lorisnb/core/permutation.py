@@ -131,15 +131,18 @@ def permutation_test(
 def holm_levels(p: np.ndarray, alpha: float) -> np.ndarray:
     """The level at which Holm's procedure (at family level ``alpha``) decides each p-value:
     alpha / (m - j) for the j-th smallest while all before it are rejected, and, for the first not
-    rejected and all after it, the level of that first step. A test inverted at these levels
+    rejected and all after it, the level of that first step. Equal p-values share the level of the
+    first of them (Holm rejects them together), so a pair's level does not depend on the order the
+    pairs are listed in. A test inverted at these levels
     (:func:`lorisnb.core.permutation.difference_interval`) agrees with Holm's decisions."""
     p = np.asarray(p, float)
     out = np.full(p.shape, np.nan)
     ok = np.flatnonzero(np.isfinite(p))
-    order = ok[np.argsort(p[ok])]
-    m, stop = order.size, None
+    order = ok[np.argsort(p[ok], kind="stable")]
+    m, stop, level = order.size, None, np.nan
     for j, i in enumerate(order):
-        level = alpha / (m - j)
+        if j == 0 or p[i] != p[order[j - 1]]:  # a tie keeps the level of its first p-value
+            level = alpha / (m - j)
         if stop is None and p[i] > level:
             stop = level
         out[i] = level if stop is None else stop
@@ -149,6 +152,7 @@ def holm_levels(p: np.ndarray, alpha: float) -> np.ndarray:
 def runs_needed(alpha: float, paired: bool, strata: int = 1) -> int:
     """The fewest units that can reach ``alpha`` at all: paired sequences n with 2 / 2^n <= alpha,
     or trials per group m (m vs m in each of ``strata`` sequences) with min_p <= alpha."""
+    alpha = validate.probability("alpha", alpha)  # alpha 0 is never reached, 1 always
     n = 1
     while (2.0 / 2**n if paired else min_p([(n, n)] * strata)) > alpha:
         n += 1
@@ -166,6 +170,7 @@ def units_for_power(
     never fewer than :func:`runs_needed`. NaN spread or zero delta: -1 (cannot say)."""
     from scipy.stats import norm  # here, not at the top: scipy.stats takes half a second to import
 
+    alpha, power = validate.probability("alpha", alpha), validate.probability("power", power)
     if not (np.isfinite(sd) and np.isfinite(delta)) or delta == 0:
         return -1
     z = norm.ppf(1 - alpha / 2) + norm.ppf(power)

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ValidationError
+from . import validate
 from .permutation import units_for_power
 from .stats import WEIGHTS, with_trials
 
@@ -34,6 +35,7 @@ def runs_for_power(
         raise ValidationError(f"power delta={delta}: expected a positive difference in the metric's unit")
     if not 0 < power < 1:
         raise ValidationError(f"power={power}: expected a probability between 0 and 1")
+    alpha = validate.probability("alpha", alpha)
     t = with_trials(table)
     rows = []
     for r in pairs.itertuples():

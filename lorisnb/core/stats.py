@@ -130,8 +130,8 @@ def _units(g: pd.DataFrame, metric: str) -> tuple[np.ndarray, np.ndarray, np.nda
     if g.empty:
         return np.zeros((0, 1)), np.zeros(0), np.zeros(0, int), "sequences"
     if g["seq"].nunique() < 2 and g["trial"].nunique() >= 2:  # one sequence, several runs
-        v = g[metric].to_numpy(float)
-        return v[:, None], g["_w"].to_numpy(float), np.ones(len(v), int), "trials"
+        v = g[metric].to_numpy(float)  # its value is the plain mean of the trials, as with several sequences
+        return v[:, None], np.full(len(v), float(g["_w"].mean())), np.ones(len(v), int), "trials"
     per = [(d[metric].to_numpy(float), float(d["_w"].mean())) for _, d in g.groupby("seq", sort=True)]
     k = max(len(v) for v, _ in per)
     values = np.full((len(per), k), np.nan)
@@ -288,6 +288,7 @@ def pairwise(
     t = with_trials(table)
     _need(t, ["algorithm", "scene", "seq", metric] + ([_metric(metric) or metric]))
     seed = validate.seed(seed)
+    alpha = validate.probability("alpha", alpha)
     rng = np.random.default_rng(seed)
     rows = []
     for (suite, scene), g in t.groupby(["suite", "scene"], sort=False, observed=True):
