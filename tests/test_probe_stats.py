@@ -141,3 +141,16 @@ def test_bootstrap_interval_is_scipys():
     ci = stats.confidence_intervals(t, ["cr"], level=0.9, seed=3).iloc[0]
     assert ci["value"] == pytest.approx(0.85) and ci["low"] == pytest.approx(0.74)
     assert ci["high"] == pytest.approx(0.9095238095238095)
+
+
+def test_an_interval_does_not_depend_on_the_other_algorithms():
+    """Two algorithms with the same values got different intervals (one random stream ran through
+    every algorithm in turn), and adding an algorithm changed the others' intervals at one seed;
+    each interval now draws from its own stream of the seed."""
+    same = [[0.6], [0.7], [0.8], [0.9], [0.95]]
+    t = _table({"A": same, "B": same, "C": [[0.1], [0.5], [0.2], [0.4], [0.3]]})
+    ci = stats.confidence_intervals(t, ["cs_r", "cr"], seed=5)
+    ci = ci[ci["metric"] == "cr"].set_index("algorithm")
+    alone = stats.confidence_intervals(t[t["algorithm"] == "B"], ["cr"], seed=5).iloc[0]
+    assert ci.loc["A", "low"] == ci.loc["B", "low"] == alone["low"]
+    assert ci.loc["A", "high"] == ci.loc["B", "high"] == alone["high"]

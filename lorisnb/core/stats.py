@@ -178,10 +178,11 @@ def confidence_intervals(
     if not 0 < level < 1:
         raise ValidationError(f"level={level}: expected a confidence level between 0 and 1")
     t = with_trials(table)
-    rng = np.random.default_rng(validate.seed(seed))
+    seed = validate.seed(seed)
     rows = []
     for key, g in t.groupby(GROUP, sort=False, observed=True):
         for m in metrics:
+            rng = np.random.default_rng(seed)  # each interval its own draws: the same data, the same interval
             values, w, counts, unit = _units(g, m)
             seq_means = np.nanmean(values, axis=1) if len(values) else np.zeros(0)
             value = float(_weighted_mean(seq_means, w)) if len(w) and w.sum() > 0 else np.nan
