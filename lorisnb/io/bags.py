@@ -64,8 +64,8 @@ def _open(path: str | os.PathLike):
     file (read with its folder when the folder has the bag's ``metadata.yaml``)."""
     spath = str(path)
     p = Path(path)
-    if p.suffix in (".db3", ".mcap") and (p.parent / "metadata.yaml").is_file():
-        p = p.parent  # a file of a ROS 2 bag folder: the whole bag
+    if p.suffix in (".db3", ".mcap") and p.is_file() and (p.parent / "metadata.yaml").is_file():
+        p = p.parent  # a file of a ROS 2 bag folder: the whole bag (a misspelt file is not found)
     if not p.exists():
         raise ParseError(
             spath, None, "file not found; expected a ROS 1 bag (.bag), a ROS 2 bag folder or a .db3 / .mcap file"
@@ -138,17 +138,33 @@ def _pose_topics(reader) -> dict[str, str]:
     return {c.topic: c.msgtype for c in reader.connections if c.msgtype in POSE_TYPES}
 
 
+#: How to choose, on either side of a pair (the ground truth's options are --gt-topic, --gt-tf).
+CHOOSE = "--topic or --tf parent:child; --gt-topic or --gt-tf for the ground truth"
+
+
+def _listing(reader, topics: dict[str, str]) -> str:
+    """The bag's pose topics; when it has none, every topic with its type (and the TF hint)."""
+    if topics:
+        return "pose topics in this bag: " + ", ".join(f"{t} ({m.split('/')[-1]})" for t, m in sorted(topics.items()))
+    every = sorted({(c.topic, c.msgtype) for c in reader.connections})
+    tf = " (read a TF chain with --tf parent:child)" if any(t in TF_TOPICS for t, _ in every) else ""
+    return "no pose topic in this bag; its topics: " + (", ".join(f"{t} ({m})" for t, m in every) or "none") + tf
+
+
 def _read_topic(reader, spath: str, topic: str | None, repeated: str = "drop") -> Trajectory:
     topics = _pose_topics(reader)
-    listing = ", ".join(f"{t} ({m.split('/')[-1]})" for t, m in sorted(topics.items())) or "none"
+    listing = _listing(reader, topics)
     if topic is None:
         if len(topics) != 1:
-            raise ParseError(
-                spath, None, f"choose a pose topic (--topic) or a TF chain (--tf parent:child); pose topics: {listing}"
-            )
+            raise ParseError(spath, None, f"choose a pose topic or a TF chain ({CHOOSE}); {listing}")
         topic = next(iter(topics))
     if topic not in topics:
-        raise ParseError(spath, None, f"no pose topic {topic!r}; pose topics in this bag: {listing}")
+        kinds = sorted({c.msgtype for c in reader.connections if c.topic == topic})
+        if not kinds:
+            raise ParseError(spath, None, f"no pose topic {topic!r}; {listing}")
+        expected = ", ".join(m.split("/")[-1] for m in POSE_TYPES)
+        what = f"; expected {expected}" if topic not in TF_TOPICS else "" if "--tf" in listing else " (TF: use --tf)"
+        raise ParseError(spath, None, f"topic {topic!r} holds {', '.join(kinds)} messages, not poses{what}; {listing}")
     conns = [c for c in reader.connections if c.topic == topic]
     get = POSE_TYPES[topics[topic]]
     stamps, poses = [], []
@@ -164,7 +180,10 @@ def _read_topic(reader, spath: str, topic: str | None, repeated: str = "drop") -
     _unset_stamps(spath, topic, t)
     line_no = np.arange(1, len(stamps) + 1)  # message number on the topic
     pose = np.array(poses, float).reshape(-1, 7)
-    keep = check_rows(where, t, pose[:, :3], pose[:, 3:], line_no, notes)
+    try:  # a message's number stands for the line of a text file
+        keep = check_rows(where, t, pose[:, :3], pose[:, 3:], line_no, notes)
+    except ParseError as exc:
+        raise ParseError(where if exc.line is None else f"{where}, message {exc.line}", None, exc.reason) from None
     if not keep.all():
         t, pose, line_no = t[keep], pose[keep], line_no[keep]
     traj = finish(where, t, pose[:, :3], pose[:, 3:], line_no, "", notes, repeated)

@@ -179,9 +179,11 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
     try:
         raw = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
-        raise ParseError(
-            path, None, f"manifest not found; expected a TOML file or one of {', '.join(BUILT_IN)}"
-        ) from None
+        given = Path(str(name_or_path)).name.removesuffix(".toml")
+        same = [b for b in BUILT_IN if b == given.lower().replace("_", "-")]  # a built-in's file name, or its case
+        hint = f"did you mean {same[0]!r}?" if same else validate.near_miss(given, BUILT_IN)
+        raise ParseError(path, None, f"manifest not found{f' ({hint})' if hint else ''}; expected a TOML file or one "
+                         f"of {', '.join(BUILT_IN)}") from None  # fmt: skip
     except (OSError, UnicodeDecodeError) as exc:
         raise ParseError(path, None, f"cannot be read ({exc})") from None
     except tomllib.TOMLDecodeError as exc:
@@ -205,7 +207,9 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
     scene = str(raw.get("scene", path.stem))
     items = raw.get("session")
     if not isinstance(items, list) or not items:
-        raise ParseError(path, None, "no [[session]] table; expected one per session, in order")
+        one = " ([session] is one table: write [[session]], two brackets, before each session)"
+        raise ParseError(path, None, f"no [[session]] table{one if isinstance(items, dict) else ''}; expected one per "
+                         "session, in order")  # fmt: skip
     sessions: list[Session] = []
     for k, item in enumerate(items, start=1):
         if not isinstance(item, dict) or "groundtruth" not in item:
@@ -213,6 +217,8 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
         check_keys(item, SESSION_KEYS, path, f"[[session]] {k}: ")
         for key in ("name", "scene", "groundtruth", "estimate"):
             _text(item, key, path, f"[[session]] {k}: ")
+            if key in item and not item[key].strip():  # "" would name the root folder, or a file ".txt"
+                raise ParseError(path, None, f"[[session]] {k}: {key} = {item[key]!r}: expected a non-empty name")
         name = str(item.get("name", f"session{k}"))
         seq = item.get("seq", k)
         if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:

@@ -252,6 +252,12 @@ def connect_scheduler(address: str, timeout: float | None = None) -> Any:
     probe_scheduler(address, timeout)
     try:
         return distributed.Client(address.strip(), timeout=timeout)
+    except TypeError as exc:  # tls:// without a TLS configuration: distributed's own TypeError
+        if scheduler_address(address)[0] != "tls":
+            raise
+        line = str(exc).splitlines()[0]
+        raise EvaluationError(f"--scheduler {address}: tls:// needs Dask's TLS settings (distributed.comm.tls in "
+                              f"the Dask configuration: ca-file, client cert and key), none found ({line})") from None  # fmt: skip
     except (OSError, TimeoutError, ValueError) as exc:
         line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise EvaluationError(f"--scheduler {address}: cannot reach the Dask scheduler ({line})") from None
