@@ -45,3 +45,29 @@ def test_a_session_without_a_matched_pose_is_not_covered_anywhere(data, tmp_path
     lines = [ln for ln in capsys.readouterr().out.splitlines() if " xyz " in f" {ln} " and "/2" in ln]
     assert any(" slam " in f" {ln} " and " 1/2 " in f" {ln} " for ln in lines), lines
     assert any(" other " in f" {ln} " and " 2/2 " in f" {ln} " for ln in lines), lines
+
+
+def test_a_sequence_lacking_some_trials_has_output_and_its_missing_trials_are_named():
+    """With trials, a sequence one of whose trials has output is covered; the trials it lacks are
+    failed runs of those trials, named as such (it was "no output for sequence(s) 1, 3, 4, 5 (1 of
+    5)" for a sequence 3 that has trial 1)."""
+    import pandas as pd
+
+    from lorisnb.core.coverage import coverage_notes
+
+    rows = [("orb", 2, t) for t in (1, 2, 3)] + [("orb", 3, 1)] + [("vins", s, 1) for s in range(1, 6)]
+    table = pd.DataFrame(
+        [dict(algorithm=a, scene="home", seq=s, trial=t, matched=100, cr=0.5, gt_duration=10.0) for a, s, t in rows]
+    )
+    expected = pd.DataFrame(dict(scene="home", seq=range(1, 6), gt_duration=10.0))
+    full, cover = complete(table, expected)
+    orb = cover[cover["algorithm"] == "orb"].iloc[0]
+    assert (orb["sequences"], orb["missing_seqs"], orb["missing_trials"]) == (2, "1, 4, 5", "3: 2, 3")
+    added = full[(full["algorithm"] == "orb") & full["missing"]]
+    assert sorted(zip(added["seq"], added["trial"], strict=True)) == [
+        (s, t) for s in (1, 3, 4, 5) for t in (1, 2, 3) if (s, t) not in {(3, 1)}
+    ]
+    notes = coverage_notes(cover)
+    assert any("orb has no output for home sequence(s) 1, 4, 5 (2 of 5)" in n for n in notes), notes
+    assert any("orb lacks trials of home (sequence: trials) 3: 2, 3" in n for n in notes), notes
+    assert cover[cover["algorithm"] == "vins"].iloc[0]["missing_trials"] == ""

@@ -39,8 +39,10 @@ def complete(table: pd.DataFrame, expected: pd.DataFrame) -> tuple[pd.DataFrame,
 
     Returns:
         (the table with a ``missing`` column, True on the added rows; the coverage, one row per
-        suite, algorithm and scene: ``sequences`` with output, ``expected``, ``coverage`` (a share),
-        ``missing_seqs`` (the sequence numbers without output, as text)).
+        suite, algorithm and scene: ``sequences`` with output (some trial matched a pose),
+        ``expected``, ``coverage`` (a share), ``missing_seqs`` (the sequence numbers without output,
+        as text), ``missing_trials`` (``"seq: trials"`` of sequences lacking some of the scene's
+        trials, each added as a failed run of that trial)).
     """
     for c in ("algorithm", "scene", "seq"):
         if c not in table.columns:
@@ -66,22 +68,24 @@ def complete(table: pd.DataFrame, expected: pd.DataFrame) -> tuple[pd.DataFrame,
                 trials = sorted(set(rows["trial"])) or sorted(set(mine["trial"])) or [0]
                 template = (rows if len(rows) else g[g["scene"].astype(str) == scene]).iloc[0]
                 have = set(zip(rows["seq"], rows["trial"], strict=True))
-                lacking = []
+                partial = {}  # a sequence with some of the scene's trials: the others count as failed runs
                 for seq, duration in zip(want["seq"], want["gt_duration"], strict=True):
-                    for trial in trials:
-                        if (seq, trial) in have:
-                            continue
-                        lacking.append(seq)
+                    absent = [trial for trial in trials if (seq, trial) not in have]
+                    if absent and len(absent) < len(trials):
+                        partial[seq] = absent
+                    for trial in absent:
                         row = {c: template[c] for c in COPIED if c in t.columns}
                         row.update(FAILED_RUN, suite=suite, algorithm=alg, scene=template["scene"], seq=seq,
                                    trial=trial, gt_duration=float(duration), file="", missing=True)  # fmt: skip
                         added.append(row)
-                if "matched" in rows.columns:  # a row without a matched pose is a failed run: no output either
-                    lacking += rows.loc[~has_output(rows["matched"]), "seq"].tolist()
-                lacking = sorted(set(lacking) & set(want["seq"]))
+                # with output: some trial of the sequence matched a pose (a row without one is a failed run)
+                ran = rows if "matched" not in rows.columns else rows[has_output(rows["matched"])]
+                lacking = sorted(set(want["seq"]) - set(ran["seq"]))
                 cover.append(dict(suite=suite, algorithm=alg, scene=scene, sequences=len(want) - len(lacking),
                                   expected=len(want), coverage=(len(want) - len(lacking)) / len(want),
-                                  missing_seqs=", ".join(str(s) for s in lacking)))  # fmt: skip
+                                  missing_seqs=", ".join(str(s) for s in lacking),
+                                  missing_trials="; ".join(f"{q}: {', '.join(str(x) for x in v)}"
+                                                           for q, v in partial.items())))  # fmt: skip
     if added:
         extra = pd.DataFrame(added).reindex(columns=t.columns)
         for c in FAILED_RUN:
@@ -89,7 +93,7 @@ def complete(table: pd.DataFrame, expected: pd.DataFrame) -> tuple[pd.DataFrame,
                 extra[c] = extra[c].astype(float)
         t = pd.concat([t, extra], ignore_index=True) if len(t) else extra
         t = t.sort_values(["suite", "algorithm", "scene", "seq", "trial"], key=_sortable, kind="stable")
-    cols = ["suite", "algorithm", "scene", "sequences", "expected", "coverage", "missing_seqs"]
+    cols = ["suite", "algorithm", "scene", "sequences", "expected", "coverage", "missing_seqs", "missing_trials"]
     return t.reset_index(drop=True), pd.DataFrame(cover, columns=cols)
 
 
@@ -98,14 +102,19 @@ def _sortable(c: pd.Series) -> pd.Series:
 
 
 def coverage_notes(cover: pd.DataFrame) -> list[str]:
-    """One line per algorithm and scene that lacks sequences, naming them."""
-    lack = cover[cover["coverage"] < 1]
-    return [
-        f"{r.algorithm}{f' ({r.suite})' if r.suite else ''} has no output for {r.scene} sequence(s) "
-        f"{r.missing_seqs} ({r.sequences} of {r.expected}); they count as failed runs (CR 0, their duration "
-        "counted), as evaluate counts them"
-        for r in lack.itertuples()
-    ]
+    """One line per algorithm and scene that lacks sequences (naming them), and one per algorithm
+    and scene whose sequences lack some of its trials (naming sequence and trials)."""
+    notes = []
+    for r in cover.itertuples():
+        who = f"{r.algorithm}{f' ({r.suite})' if r.suite else ''}"
+        if r.coverage < 1:
+            notes.append(f"{who} has no output for {r.scene} sequence(s) {r.missing_seqs} ({r.sequences} of "
+                         f"{r.expected}); they count as failed runs (CR 0, their duration counted), as evaluate "
+                         "counts them")  # fmt: skip
+        if getattr(r, "missing_trials", ""):
+            notes.append(f"{who} lacks trials of {r.scene} (sequence: trials) {r.missing_trials}; each counts as a "
+                         "failed run of that trial")  # fmt: skip
+    return notes
 
 
 def expected_from(*tables: pd.DataFrame) -> pd.DataFrame:

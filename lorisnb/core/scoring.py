@@ -70,20 +70,36 @@ def sequence_meta(f: FileErrors, e: SequenceErrors) -> dict[str, Any]:
     )  # fmt: skip
 
 
-def selected_squares(selected: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Sum of ``values**2`` over the entries each row of ``selected`` (R, M; 0 or 1) selects: (R,).
+def row_sums(weights: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``weights @ values`` for (R, M) weights and (M, k) values: (R, k), always by BLAS's matrix
+    product, whose threads split R and k, never the sum over M: a sum is the same to the last bit
+    in one process, a pool of processes or a Dask worker (which runs BLAS on one thread), and for
+    one column as for several (a sweep's grid point as its direct evaluation). One column gets a
+    zero column beside it: numpy would call BLAS's matrix-vector product, whose threads each sum
+    a share of M (the last digits then followed the thread count)."""
+    if values.shape[1] == 1:
+        return (weights @ np.column_stack([values[:, 0], np.zeros(len(values))]))[:, :1]
+    return weights @ values
+
+
+def selected_squares(selected: np.ndarray, *values: np.ndarray) -> np.ndarray:
+    """Sums of ``v**2`` over the entries each row of ``selected`` (R, M; 0 or 1) selects, for each
+    of ``values`` ((M,) each): (R, len(values)), by :func:`row_sums`.
 
     A matrix product, except that a value whose square is not finite (an ATE past 1e154 m: a
     diverged pose) counts only in the rows that select it; in a product its 0 weight would make
     every row NaN (0 * inf), and the C-ATE of a sequence whose wrong pose is huge NaN."""
     with np.errstate(over="ignore", invalid="ignore"):
-        sq = np.asarray(values, float) ** 2
+        sq = np.column_stack([np.asarray(v, float) ** 2 for v in values])
     bad = ~np.isfinite(sq)
     if not bad.any():
-        return selected @ sq
-    total = selected @ np.where(bad, 0.0, sq)
+        return row_sums(selected, sq)
+    total = row_sums(selected, np.where(bad, 0.0, sq))
     with np.errstate(invalid="ignore"):
-        return total + np.where(selected[:, bad] > 0, sq[bad], 0.0).sum(axis=1)
+        for k in range(sq.shape[1]):
+            rows = bad[:, k]
+            total[:, k] += np.where(selected[:, rows] > 0, sq[rows, k], 0.0).sum(axis=1)
+    return total
 
 
 def sequence_grid(
@@ -140,11 +156,12 @@ def sequence_grid(
     c = (e.ate[None, None, :] <= eps_a[:, None, None]) & (e.aoe[None, None, :] <= phi_a[None, :, None])
     cf = c.reshape(E * P, -1).astype(float)
     held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end, e.gt_start)[None, :], delta_a[:, None])  # (D, M)
-    ct = (cf @ held.T).reshape(E, P, D)  # correct time, numerator of Eq. (2) and (3)
+    ct = row_sums(cf, held.T).reshape(E, P, D)  # correct time, numerator of Eq. (2) and (3)
     n_c = cf.sum(axis=1).reshape(E, P)
+    sums = selected_squares(cf, e.ate, e.aoe)
     with np.errstate(invalid="ignore", divide="ignore"):
-        c_ate = np.where(n_c > 0, np.sqrt(selected_squares(cf, e.ate).reshape(E, P) / n_c), np.nan)
-        c_aoe = np.where(n_c > 0, np.sqrt(selected_squares(cf, e.aoe).reshape(E, P) / n_c), np.nan)
+        c_ate = np.where(n_c > 0, np.sqrt(sums[:, 0].reshape(E, P) / n_c), np.nan)
+        c_aoe = np.where(n_c > 0, np.sqrt(sums[:, 1].reshape(E, P) / n_c), np.nan)
     t0 = float(e.stamps[0])
     track = e.gt_end - max(t0, e.gt_start)  # tracked time inside the span, as the correct time
     rt = metrics.relocalization_time(t0, e.gt_start)
@@ -181,8 +198,9 @@ def sequence_grid(
     both = (c[:, :, i] & c[:, :, j]).reshape(E * P, -1).astype(float)
     nb = both.sum(axis=1).reshape(E, P)
     with np.errstate(invalid="ignore", divide="ignore"):
-        ctr = np.where(nb > 0, np.sqrt(selected_squares(both, tr).reshape(E, P) / nb), np.nan)
-        crr = np.where(nb > 0, np.sqrt(selected_squares(both, rr).reshape(E, P) / nb), np.nan)
+        sums = selected_squares(both, tr, rr)
+        ctr = np.where(nb > 0, np.sqrt(sums[:, 0].reshape(E, P) / nb), np.nan)
+        crr = np.where(nb > 0, np.sqrt(sums[:, 1].reshape(E, P) / nb), np.nan)
     out.update(
         rpe_trans_rmse=bc(float(metrics.rmse(tr))), rpe_rot_rmse=bc(float(metrics.rmse(rr))),
         c_rpe_trans_rmse=bc(ctr[:, :, None, None]), c_rpe_rot_rmse=bc(crr[:, :, None, None]),
