@@ -219,3 +219,18 @@ def test_a_tls_scheduler_without_tls_settings_is_one_error(monkeypatch):
         for s in accepted:
             s.close()
         server.close()
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_a_bag_folder_in_a_walked_folder_is_one_input(tmp_path, storage):
+    """A ROS 2 bag folder found by walking a results folder is one input, not also its .db3 /
+    .mcap file (both held the same run: "... both hold ..." and exit status 2)."""
+    from lorisnb.tools.inputs import result_files
+
+    t, gp, gq, ep, eq = _trajectories()
+    gt = _tum(tmp_path / "gt.txt", t, gp, gq)
+    (tmp_path / "runs" / "alg").mkdir(parents=True)
+    bag = _bag(tmp_path / "runs" / "alg" / "run_3", 2, {"/est": (PS, _poses(t, ep, eq))}, storage)
+    assert [f for f, _ in result_files([tmp_path / "runs"], (".txt", ".bag", ".db3", ".mcap"))] == [bag]
+    got = ln.evaluate_pairs([tmp_path / "runs"], gt, "tum", fmt="bag", gt_fmt="tum").sequences()
+    assert len(got) == 1 and int(got["matched"].iloc[0]) == 200

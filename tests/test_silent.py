@@ -571,3 +571,20 @@ def test_any_iterable_of_paths_works(icra20):
     for bad in (42, pd.DataFrame({"a": files}), [files[0], 3], ""):
         with pytest.raises(ln.ValidationError):
             result_files(bad)
+
+
+def test_a_missing_estimate_is_never_offered_another_sessions_file(data, tmp_path):
+    """Session s2's missing ``s2.txt`` got the hint "found s1.txt: names are case-sensitive; rename
+    it", naming session s1's own estimate; another session's file is never the one meant."""
+    gt = ln.read_tum(data.tum / GT)
+    half = len(gt) // 2
+    for k, part in ((1, slice(0, half)), (2, slice(half, None))):
+        write(tmp_path, f"gt/s{k}.txt", _tum(Trajectory(gt.stamps[part], gt.positions[part], gt.quaternions[part])))
+    write(tmp_path, "res/slam/s1.txt", (data.tum / EST).read_text())
+    m = write(tmp_path, "two.toml", (
+        f'name = "two"\nscene = "xyz"\nroot = "{tmp_path / "gt"}"\nlifelong = false\n'
+        '[[session]]\nname = "s1"\ngroundtruth = "s1.txt"\n[[session]]\nname = "s2"\ngroundtruth = "s2.txt"\n'
+    ))  # fmt: skip
+    ev = evaluate_manifest(m, tmp_path / "res")
+    notes = [w for w in ev.warnings if "no estimate for 1 session" in w]
+    assert notes and "s2.txt not found" in notes[0] and "found s1.txt" not in notes[0], notes

@@ -66,8 +66,9 @@ def result_files(
     for p in as_paths(paths):
         if p.is_dir() and not (bags and (p / "metadata.yaml").is_file()):
             found = [f for f in p.rglob("*") if f.suffix in suffixes and f.is_file()]
-            if bags:
-                found += [m.parent for m in p.rglob("metadata.yaml")]
+            if bags:  # a bag folder is one input: not also its .db3 / .mcap files
+                folders = [m.parent for m in p.rglob("metadata.yaml")]
+                found = [f for f in found if not any(d in f.parents for d in folders)] + folders
             files = sorted(f for f in found if not any(is_hidden(Path(part)) for part in f.relative_to(p).parts))
             out.extend((f, p) for f in files)
         else:
@@ -184,13 +185,16 @@ def holds_any(folder: Path, names: Iterable[str]) -> bool:
     return any(n.lower() in present for n in names)
 
 
-def missing_note(folder: Path, algorithm: str, absent: list[tuple[str, str]]) -> str:
-    """A warning for sessions without an estimate file: ``absent`` holds (session, expected file)."""
+def missing_note(folder: Path, algorithm: str, absent: list[tuple[str, str]], taken: Iterable[str] = ()) -> str:
+    """A warning for sessions without an estimate file: ``absent`` holds (session, expected file);
+    a file of another session (``taken``) is never offered as the one meant."""
+    used = set(taken)
     parts = []
     for session, name in absent:
-        near = near_names(folder, name)
+        near = [n for n in near_names(folder, name) if n not in used]
+        how = "names are case-sensitive" if near and near[0].lower() == name.lower() else "a close name"
         hint = (
-            f" (found {', '.join(near)}: names are case-sensitive; rename it or set estimate = '{near[0]}' in the manifest)"
+            f" (found {', '.join(near)}: {how}; rename it or set estimate = '{near[0]}' in the manifest)"
             if near
             else ""
         )

@@ -299,7 +299,7 @@ def _manifest(job: Job) -> FileErrors:
         assert errors is not None
         return errors
     # a declared session without its estimate: a row scored as the paper scores missing output, never dropped
-    note = missing_note(job.path, algorithm, [(s.name, s.estimate) for s in absent])
+    note = missing_note(job.path, algorithm, [(s.name, s.estimate) for s in absent], [s.estimate for s in sessions])
     out = with_missing(
         errors, gts, [s.seq for s in absent], path=job.path, algorithm=algorithm, scene=job.scene, suite=suite,
         trial=trial, lifelong=job.spec.lifelong_for(len(sessions)), note=note,
