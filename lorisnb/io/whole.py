@@ -1,5 +1,5 @@
 """The fast path of a plain numeric file: pandas' C parser over the whole file in one call (its
-fastest exact parse, threaded), the numbers copied once into the arrays a reader keeps; a large
+fastest exact parse), the numbers copied once into the arrays a reader keeps; a large
 file by the same parser on ranges of its lines on threads, each range copied straight into those
 arrays (as fast, in a third of the memory); a small file, while pandas is not imported, by
 numpy's C reader (importing pandas would cost more).
@@ -38,7 +38,7 @@ WHOLE_MAX_BYTES = 256 << 20
 NUMPY_MAX_BYTES = 8 << 20
 #: Files from this size whose numbers are copied into row-major groups (or converted) are parsed
 #: in ranges of whole lines on threads, each range's numbers copied straight into the reader's
-#: arrays (:func:`_ranged_rows`): about as fast as pandas' own threaded read of the whole file,
+#: arrays (:func:`_ranged_rows`): about as fast as pandas' own read of the whole file,
 #: in a third of its memory (it maps the file and holds its numbers twice before the copy: about
 #: 210 MiB for an 85 MB file of a million TUM poses, against about 80 MiB), and a matrix file's
 #: quaternions computed on the threads as the ranges are read. Below this size the threads' chunk
