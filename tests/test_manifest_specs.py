@@ -141,3 +141,18 @@ def test_a_manifest_mode_is_any_mode_in_any_case(tmp_path, data, mode, expected)
     else:
         with pytest.raises(ParseError, match="give one"):
             ln.read_manifest(write(tmp_path, "both.toml", both))
+
+
+@pytest.mark.parametrize("openloris", [False, True])
+@pytest.mark.parametrize(("key", "where"), [("lifelong", "top"), ("official_interpolation", "conventions")])
+def test_a_quoted_boolean_in_a_manifest_is_told_in_toml_spelling(tmp_path, openloris, key, where):
+    """``lifelong = "false"`` (a string) is refused; the message spells the two values as TOML does
+    (``true or false``, without quotes), not as Python does (it said "expected True or False")."""
+    head = "openloris = true\n" if openloris else 'scene = "xyz"\nroot = "."\n'
+    body = f'{key} = "false"\n' if where == "top" else f'[conventions]\n{key} = "false"\n'
+    sessions = "" if openloris else '[[session]]\nname = "a"\ngroundtruth = "a.txt"\n'
+    m = write(tmp_path, "m.toml", head + (body + sessions if where == "top" else sessions + body))
+    with pytest.raises(
+        ParseError, match=rf"{key}='false' \(str\): expected true or false \(TOML booleans, without quotes\)"
+    ):
+        ln.read_manifest(m)

@@ -61,7 +61,7 @@ def test_the_same_rule_on_every_surface(tmp_path, data, capsys):
     assert main(["evaluate", tum, "--gt", gt, "--max-diff", "0.01", "--no-progress"]) == 2
     assert "--max-diff: only for nearest association (--association nearest)" in capsys.readouterr().err
     m = write(tmp_path, "m.toml", "lifelong = 'false'\n[[session]]\ngroundtruth = 'gt.txt'\n")
-    with pytest.raises(ln.ParseError, match=r"m.toml: lifelong='false' \(str\): expected True or False"):
+    with pytest.raises(ln.ParseError, match=r"m.toml: lifelong='false' \(str\): expected true or false \(TOML"):
         ln.read_manifest(m)
     m = write(
         tmp_path, "m2.toml", "[conventions]\nassociation = 'nearest'\nmax_gap = 0.1\n[[session]]\ngroundtruth = 'g'\n"

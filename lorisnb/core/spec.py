@@ -259,6 +259,11 @@ def _jsonable(v: Any) -> Any:
     return v
 
 
+def _yes_no(surface: str) -> str:
+    """How a surface spells a yes/no value, for messages."""
+    return "true or false (TOML booleans, without quotes)" if surface == "manifest" else "True or False"
+
+
 def _namer(surface: str) -> Any:
     """How an option is spelled on a surface, for messages."""
     if surface == "cli":
@@ -290,7 +295,7 @@ def _checked(values: Mapping[str, Any], surface: str) -> dict[str, Any]:
         elif key == "mode":
             out[key] = validate.choice(label, v, MODES)
         elif key in ("official_interpolation", "repair_stamps"):
-            out[key] = validate.flag(label, v)
+            out[key] = validate.flag(label, v, _yes_no(surface))
         elif key == "eps":
             out[key] = validate.eps_value(v)
         elif key in ("phi", "delta", "tau"):
@@ -351,13 +356,13 @@ def make_spec(preset: str | EvalSpec | None = None, *, surface: str = "python", 
             )
         changes["align"] = align
     if "lifelong" in given:
-        mode = "lifelong" if validate.flag(name("lifelong"), given["lifelong"]) else "per-seq"
+        mode = "lifelong" if validate.flag(name("lifelong"), given["lifelong"], _yes_no(surface)) else "per-seq"
         if "mode" in changes and validate.choice(name("mode"), changes["mode"], MODES) != mode:
             raise ValidationError(f"{name('lifelong')} and {name('mode')}: give one")
         changes["mode"] = mode
     for word, keep_when in (("keep_repeated", True), ("remove_repeated", False)):
         if word in given:
-            rule = "keep" if validate.flag(name(word), given[word]) == keep_when else "drop"
+            rule = "keep" if validate.flag(name(word), given[word], _yes_no(surface)) == keep_when else "drop"
             if "repeated" in changes and changes["repeated"] != rule:
                 raise ValidationError(f"{name(word)} and {name('repeated')}: give one")
             changes["repeated"] = rule

@@ -265,11 +265,12 @@ def near_miss(name: str, known: Iterable[str]) -> str:
     return f"did you mean {near[0]!r}?" + (" (names are case-sensitive)" if same_case else "") if near else ""
 
 
-def flag(label: str, value: Any) -> bool:
-    """A yes/no value: a bool (numpy's too); strings are refused, never truth-tested."""
+def flag(label: str, value: Any, expected: str = "True or False") -> bool:
+    """A yes/no value: a bool (numpy's too); strings are refused, never truth-tested. ``expected``:
+    how the surface spells the two (a TOML manifest: ``true or false``)."""
     if isinstance(value, (bool, np.bool_)):
         return bool(value)
-    raise ValidationError(f"{label}={value!r} ({type(value).__name__}): expected True or False")
+    raise ValidationError(f"{label}={value!r} ({type(value).__name__}): expected {expected}")
 
 
 def rigid_transform(value: Any, label: str = "transform") -> tuple[tuple[float, ...], ...] | None:
