@@ -248,3 +248,16 @@ def test_power_with_one_algorithm_and_a_difference_a_rate_cannot_show(icra20, ca
         compare_table(ev.sequences(), ev.durations(), "cr_t", power_delta=1.5)
     res = compare_table(ev.sequences(), ev.durations(), "cr", power_delta=0.1)
     assert res.power is not None and res.power.empty and {"scene", "a", "b", "needed"} <= set(res.power.columns)
+
+
+def test_identical_algorithms_are_said_to_be_identical_not_short_of_trials(tmp_path, icra20, capsys):
+    """Two copies of one algorithm: no test can separate them, and the output says so instead of
+    "run more trials" (no number of trials would help); their difference prints as +0.000, never
+    -0.000."""
+    res = tmp_path / "results"
+    shutil.copytree(icra20 / "per-seq" / "orbslam2_rgbd", res / "orb")
+    shutil.copytree(icra20 / "per-seq" / "orbslam2_rgbd", res / "orb_copy")
+    rc, out, err = compare(capsys, res)
+    assert rc == 0
+    assert "every pair's results are the same on every sequence: no test can separate them" in out + err
+    assert "run more trials" not in out + err and "-0.000" not in out

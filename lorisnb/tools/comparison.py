@@ -54,7 +54,12 @@ def check_table_duplicates(table: pd.DataFrame) -> None:
 
 def _bound(v: float) -> str:
     return "n/a" if not np.isfinite(v) and not np.isinf(v) else ("-inf" if v == -np.inf else "inf" if v == np.inf
-                                                                  else f"{v:+.3f}")  # fmt: skip
+                                                                  else _signed(v))  # fmt: skip
+
+
+def _signed(v: float) -> str:
+    """``v`` to three decimals with its sign, ``+0.000`` for what rounds to zero (not ``-0.000``)."""
+    return f"{round(float(v), 3) + 0.0:+.3f}"
 
 
 def _versus_top(rank: pd.DataFrame, pairs: pd.DataFrame) -> pd.DataFrame:
@@ -118,7 +123,7 @@ def compare_table(
     ]
     algs["covered"] = [f"{s}/{e}" for s, e in zip(algs["sequences"], algs["expected"], strict=True)]
     algs["vs top [test interval]"] = [
-        "" if not np.isfinite(d) else f"{d:+.3f} [{_bound(lo)}, {_bound(hi)}]"
+        "" if not np.isfinite(d) else f"{_signed(d)} [{_bound(lo)}, {_bound(hi)}]"
         for d, lo, hi in zip(
             algs["difference_vs_top"], algs["difference_low_vs_top"], algs["difference_high_vs_top"], strict=True
         )
@@ -146,12 +151,14 @@ def compare_table(
             + str(alpha)
             + " in "
             + "; ".join(
-                f"{scene} (smallest possible p {r.min_p:.4g}, x {r.n} pair(s) by Holm)"
-                if np.isfinite(r.min_p)
-                else f"{scene} (no two algorithms both have a value of {metric} there: nothing to test)"
+                f"{scene} (no two algorithms both have a value of {metric} there: nothing to test)"
+                if not np.isfinite(r.min_p)
+                else f"{scene} (every pair's results are the same on every sequence: no test can separate them)"
+                if r.min_p >= 1
+                else f"{scene} (smallest possible p {r.min_p:.4g}, x {r.n} pair(s) by Holm)"
                 for scene, r in blocked.iterrows()
             )
-            + ": run more trials (--power DELTA says how many)"
+            + (": run more trials (--power DELTA says how many)" if (blocked["min_p"] < 1).any() else "")
         )
     power = None
     if power_delta is not None:
