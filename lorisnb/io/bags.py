@@ -187,6 +187,11 @@ def _read_topic(reader, spath: str, topic: str | None, repeated: str = "drop") -
     if not keep.all():
         t, pose, line_no = t[keep], pose[keep], line_no[keep]
     traj = finish(where, t, pose[:, :3], pose[:, 3:], line_no, "", notes, repeated)
+    if topics[topic] == "geometry_msgs/msg/PointStamped":  # positions only: AOE would look like a measurement
+        notes.append(f"{topic} holds PointStamped messages (positions, no orientation): read with the identity "
+                     "orientation, as evo reads them; AOE and anything with phi measure nothing (use --phi inf and "
+                     "ATE only)")  # fmt: skip
+        traj.meta["positions_only"] = True
     traj.meta.update(source=spath, topic=topic, notes=notes)
     for note in notes:
         warnings.warn(note.replace(" at line ", " at message "), LorisWarning, stacklevel=4)
