@@ -174,3 +174,20 @@ def test_a_report_run_may_not_lie_in_the_data_root(tmp_path, data):
     with pytest.raises(ln.OutputError, match="lies in the input .*data of this report"):
         run_report(copy / "run", parameters={"data_root": str(copy)}, notebooks=["metrics_primer"], progress=False)
     assert not (copy / "run").exists()
+
+
+def test_quick_trims_the_bundled_results_only():
+    """``quick`` keeps a few scenes and algorithms of the bundled results where none are given;
+    what the user gives, and results the user gives, are evaluated whole."""
+    from lorisnb.tools.grids import QUICK_INPUTS, quick_inputs
+
+    assert quick_inputs("lifelong_benchmark", True, None, None, None) == QUICK_INPUTS["lifelong_benchmark"]
+    assert quick_inputs("lifelong_benchmark", True, None, ["market"], None) == (
+        ["market"],
+        QUICK_INPUTS["lifelong_benchmark"][1],
+    )
+    assert quick_inputs("per_sequence_benchmark", True, "/my/results", None, None) == (None, None)
+    assert quick_inputs("per_sequence_benchmark", False, None, None, None) == (None, None)
+    assert quick_inputs("threshold_sensitivity", True, None, None, None) == (["cafe", "home"], None)
+    with pytest.raises(ValidationError, match="quick='yes'"):
+        quick_inputs("threshold_sensitivity", "yes", None, None, None)

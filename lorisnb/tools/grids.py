@@ -1,7 +1,9 @@
-"""The threshold grids of the notebooks that sweep (``threshold_sensitivity``,
-``compare_algorithms``): their full and ``quick`` defaults, and :func:`notebook_grids`, which gives
-a grid the user set unchanged (checked) and the default only where the user set none. ``quick``
-trims the work of the defaults; it never drops or trims a grid the user gave."""
+"""What ``quick`` trims in the notebooks: the threshold grids of the notebooks that sweep
+(``threshold_sensitivity``, ``compare_algorithms``), their full and ``quick`` defaults, and
+:func:`notebook_grids`, which gives a grid the user set unchanged (checked) and the default only
+where the user set none; and the scenes and algorithms of the bundled results (:func:`quick_inputs`),
+never of results the user gives. ``quick`` trims the work of the defaults; it never drops or trims
+what the user gave."""
 
 from __future__ import annotations
 
@@ -56,3 +58,23 @@ def quick_default(name: str, value: Any, full: int, trimmed: int, quick: Any) ->
     if value is None:
         return trimmed if validate.flag("quick", quick) else full
     return int(validate.positive(name, value, "", integer=True))
+
+
+#: notebook -> (scenes, algorithms) its ``quick`` run keeps of the bundled icra20 results (None:
+#: every algorithm).
+QUICK_INPUTS: dict[str, tuple[list[str], list[str] | None]] = {
+    "per_sequence_benchmark": (["cafe", "home"], ["dso", "orbslam2_rgbd", "vins_mono_color_imu_with_loop"]),
+    "lifelong_benchmark": (["home", "cafe"], ["maslam", "vins_mono_color_imu_with_loop"]),
+    "threshold_sensitivity": (["cafe", "home"], None),
+    "compare_algorithms": (["home", "corridor"], ["orbslam2_rgbd", "vins_mono_color_imu_with_loop", "odom", "dso"]),
+}
+
+
+def quick_inputs(notebook: str, quick: Any, results_dir: Any, scenes: Any, algorithms: Any) -> tuple[Any, Any]:
+    """The ``scenes`` and ``algorithms`` a notebook evaluates: as given, except that a ``quick``
+    run on the bundled results (``results_dir`` None) keeps a few (:data:`QUICK_INPUTS`) where none
+    were given; results the user gives are evaluated whole, quick or not."""
+    if not validate.flag("quick", quick) or results_dir is not None:
+        return scenes, algorithms
+    keep_scenes, keep_algorithms = QUICK_INPUTS[notebook]
+    return scenes or keep_scenes, algorithms or keep_algorithms
