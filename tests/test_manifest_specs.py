@@ -144,7 +144,9 @@ def test_a_manifest_mode_is_any_mode_in_any_case(tmp_path, data, mode, expected)
 
 
 @pytest.mark.parametrize("openloris", [False, True])
-@pytest.mark.parametrize(("key", "where"), [("lifelong", "top"), ("official_interpolation", "conventions")])
+@pytest.mark.parametrize(
+    ("key", "where"), [("lifelong", "top"), ("official_interpolation", "conventions"), ("rpe_all_pairs", "conventions")]
+)
 def test_a_quoted_boolean_in_a_manifest_is_told_in_toml_spelling(tmp_path, openloris, key, where):
     """``lifelong = "false"`` (a string) is refused; the message spells the two values as TOML does
     (``true or false``, without quotes), not as Python does (it said "expected True or False")."""

@@ -303,7 +303,7 @@ def _checked(values: Mapping[str, Any], surface: str) -> dict[str, Any]:
         elif key == "transform":
             out[key] = validate.rigid_transform(v, label)
         elif key in evo.EVO_DEFAULTS or key.startswith("rpe_"):  # the RPE step and evo's options
-            out[key] = evo.check_evo(key, v, label)
+            out[key] = evo.check_evo(key, v, label, _yes_no(surface))
         elif key == "preset_name":
             if not isinstance(v, str) or not v:
                 raise ValidationError(f"preset_name={v!r}: expected the name of a preset")

@@ -58,8 +58,9 @@ def rpe_options(spec: Any) -> dict[str, Any]:
     return {k: getattr(spec, k) for k in ("rpe_delta", "rpe_unit", "rpe_pairs", "rpe_all_pairs", "rpe_tolerance")}
 
 
-def check_evo(key: str, v: Any, label: str) -> Any:
-    """One evo option or RPE setting validated and normalized (``label``: how the surface names it)."""
+def check_evo(key: str, v: Any, label: str, yes_no: str = "True or False") -> Any:
+    """One evo option or RPE setting validated and normalized (``label``: how the surface names it;
+    ``yes_no``: how it spells a yes/no value)."""
     if key == "rpe_unit":  # evo's letters d and r are its deg and rad
         unit = validate.choice(label, v, (*RPE_UNITS, "d", "r"))
         return {"d": "deg", "r": "rad"}.get(unit, unit)  # the word as checked ('M' is 'm'), never as given
@@ -68,7 +69,7 @@ def check_evo(key: str, v: Any, label: str) -> Any:
     if key == "rpe_pairs":
         return validate.choice(label, v, RPE_PAIRS)
     if key == "rpe_all_pairs":
-        return None if v is None else validate.flag(label, v)
+        return None if v is None else validate.flag(label, v, yes_no)
     if key == "rpe_tolerance":
         return validate.positive(label, v, "(a fraction of the RPE step)")
     if key in ("t_start", "t_end"):
