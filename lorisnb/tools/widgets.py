@@ -21,6 +21,9 @@ from ..core.model import Eps, FileErrors, ResultFile, scene_eps
 from ..core.scoring import score
 from ..core.simulate import Faults, simulated_errors
 from ..core.spec import make_spec
+from ..core.validate import present
+from ..core.validate import seed as check_seed
+from ..errors import ValidationError
 from .notebook import show_figure
 from .plotting import plot_timeline
 
@@ -79,7 +82,9 @@ class ThresholdExplorer:
     """Sliders for eps (m), phi (deg), delta (s), tau (s) and a scene dropdown. The thresholds are
     checked by :func:`lorisnb.core.spec.make_spec`, as on every other surface: eps takes metres,
     ``inf``, ``paper`` in any case (the scene's 1/3/5 m), a mapping scene -> metres, or
-    ``relative:F`` (:func:`explorer_eps`)."""
+    ``relative:F`` (:func:`explorer_eps`). With ``paper`` or a mapping, eps follows the scene: a
+    scene change moves it to the new scene's metres while it still sits at the old scene's (a
+    value moved by hand stays). ``scene`` must be one of the explored scenes (:attr:`scenes`)."""
 
     def __init__(
         self,
@@ -95,9 +100,40 @@ class ThresholdExplorer:
         self.durations = durations
         self.scenes = [s for s in durations["scene"].unique() if any(f.scene == s for f in self.errors)]
         spec = make_spec(None, surface="widget", eps=eps, phi=phi, delta=delta, tau=tau)
-        self.scene = scene if scene is not None else (self.scenes[0] if self.scenes else None)
-        self.eps: float | str = explorer_eps(spec.eps, self.scene)
+        if not self.scenes:
+            have = sorted({f.scene for f in self.errors})
+            raise ValidationError(
+                "ThresholdExplorer: nothing to explore: "
+                + (f"durations has no sequence of the errors' scenes ({', '.join(have)})" if have else "no errors")
+                + "; pass an evaluation's errors and its durations() (ev.errors, ev.durations())"
+            )
+        self.given: Eps = spec.eps  # the eps as given (checked): "paper" or a mapping follows the scene
+        if isinstance(self.given, Mapping) and (missing := [s for s in self.scenes if s not in self.given]):
+            raise ValidationError(
+                f"eps: no metres for scene(s) {', '.join(missing)}; the explorer shows {', '.join(self.scenes)}: "
+                "give eps for each of them, or one number, or 'paper'"
+            )
+        self._scene = self.scenes[0] if scene is None else present("scene", [scene], self.scenes)[0]
+        self.eps: float | str = explorer_eps(self.given, self._scene)
         self.phi, self.delta, self.tau = float(spec.phi), float(spec.delta), float(spec.tau)
+
+    @property
+    def scene(self) -> str:
+        """The scene shown (one of :attr:`scenes`)."""
+        return self._scene
+
+    @scene.setter
+    def scene(self, scene: str) -> None:
+        new = present("scene", [scene], self.scenes)[0]
+        if isinstance(self.given, (str, Mapping)) and self.eps == explorer_eps(self.given, self._scene):
+            self.eps = explorer_eps(self.given, new)  # still the scene's eps: the new scene's
+        self._scene = new
+
+    def eps_positions(self) -> list[float]:
+        """The eps slider's values besides its grid, metres: the paper's 1/3/5 m, every scene's value
+        of a mapping eps, and ``inf`` (no ATE threshold, as ``--eps inf``)."""
+        given = list(self.given.values()) if isinstance(self.given, Mapping) else []
+        return [*PAPER_EPS.values(), *given, float("inf")]
 
     def results(self) -> tuple[pd.DataFrame, Figure]:
         """Scene table and timeline figure for the current values."""
@@ -121,19 +157,29 @@ class ThresholdExplorer:
     def widget(self) -> Any:
         """The interactive controls and their output (for JupyterLab). Each slider starts exactly at
         the explorer's value and offers the paper's values (eps 1/3/5 m, phi 30 deg, delta 1 s,
-        tau 60 s) exactly."""
+        tau 60 s) exactly; eps also offers ``inf`` (no ATE threshold) and follows the scene as
+        :class:`ThresholdExplorer` says."""
         import ipywidgets as w
 
-        eps = value_slider("eps (m)", self.eps, np.geomspace(0.01, 100, 81), PAPER_EPS.values())
+        eps = value_slider("eps (m)", self.eps, np.geomspace(0.01, 100, 81), self.eps_positions())
         phi = value_slider("phi (deg)", self.phi, np.arange(1, 181), [PAPER_PHI])
         delta = value_slider("delta (s)", self.delta, np.geomspace(0.05, 10, 47), [1.0])
         tau = value_slider("tau (s)", self.tau, np.geomspace(1, 1000, 61), [60.0])
         scene = w.Dropdown(options=self.scenes, value=self.scene, description="scene", style=STYLE)
         out = w.Output()
+        moving = [False]  # the scene moves the eps slider: one redraw, not two
 
-        def update(_: Any = None) -> None:
+        def update(change: Any = None) -> None:
+            if moving[0]:
+                return
+            if change is not None and change["owner"] is scene:
+                self.scene = scene.value  # eps follows the scene where it should (the setter)
+                moving[0] = True
+                try:
+                    eps.value = self.eps
+                finally:
+                    moving[0] = False
             self.eps, self.phi, self.delta, self.tau = eps.value, phi.value, delta.value, tau.value
-            self.scene = scene.value
             _render(out, self.results)
 
         for c in (eps, phi, delta, tau, scene):
@@ -146,13 +192,14 @@ class FaultExplorer:
     """Sliders for the simulator's faults (:class:`lorisnb.core.simulate.Faults`) on one ground-truth
     sequence: every change re-simulates, re-scores and redraws the metrics and the timeline. The
     thresholds and the RPE step (``rpe_delta`` in ``rpe_unit``) are checked by
-    :func:`lorisnb.core.spec.make_spec`, as on every other surface."""
+    :func:`lorisnb.core.spec.make_spec`, as on every other surface; ``seq`` must be a sequence of the
+    ground truth and ``seed`` a whole number >= 0 (:func:`lorisnb.core.validate.seed`)."""
 
     def __init__(
         self,
         groundtruth: ResultFile,
         seq: int = 1,
-        eps: float = 1.0,
+        eps: Eps = 1.0,
         phi: float = 30.0,
         delta: float = 1.0,
         tau: float = 60.0,
@@ -160,13 +207,16 @@ class FaultExplorer:
         rpe_delta: float = 1.0,
         rpe_unit: str = "s",
     ):
+        if seq not in groundtruth.sequences:
+            have = ", ".join(str(k) for k in sorted(groundtruth.sequences))
+            raise ValidationError(f"seq={seq!r}: the ground truth of {groundtruth.scene} has sequence(s) {have}")
         self.groundtruth = groundtruth
         self.seq = seq
         spec = make_spec(None, surface="widget", eps=eps, phi=phi, delta=delta, tau=tau, rpe_delta=rpe_delta,
                          rpe_unit=rpe_unit)  # fmt: skip
         self.eps, self.phi, self.delta, self.tau = spec.eps, spec.phi, spec.delta, spec.tau
         self.rpe_delta, self.rpe_unit = spec.rpe_delta, spec.rpe_unit
-        self.seed = seed
+        self.seed = check_seed(seed)
         self.duration = groundtruth.sequences[seq].duration
         d = durations_table({groundtruth.scene: groundtruth})
         self.durations = d[d["seq"] == seq]
@@ -210,7 +260,8 @@ class FaultExplorer:
             self.eps,
             self.phi,
             self.delta,
-            title=self.faults().describe(),
+            title=f"{self.faults().describe()}\neps {_eps_text(explorer_eps(self.eps, self.groundtruth.scene))}, "
+            f"phi {self.phi:g} deg, delta {self.delta:g} s, tau {self.tau:g} s",
         )
         cols = ["matched", "ate_rmse", "aoe_rmse", "c_ate_rmse", "cr", "cr_t", "reloc_time", "cs_r", "rpe_trans_rmse"]
         return table[cols], fig

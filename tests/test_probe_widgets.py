@@ -1,0 +1,140 @@
+"""The explorers driven as a notebook user drives them (slider values set, observers fired), checked
+against lorisnb's own evaluation at the same thresholds on the real icra20 lifelong results."""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+import pytest
+
+import lorisnb as ln
+from lorisnb.io import load_groundtruth
+from lorisnb.tools import widgets
+from lorisnb.tools.widgets import FaultExplorer, ThresholdExplorer
+
+ALGOS = ["maslam", "vins_mono_color_imu_with_loop"]
+METRICS = ["cr", "cr_t", "cs_r", "c_ate_rmse", "c_matched", "matched"]
+
+
+@pytest.fixture(scope="module")
+def ev(icra20):
+    return ln.evaluate(icra20 / "lifelong", algorithms=ALGOS, scenes=["home", "corridor"], progress=False)
+
+
+@pytest.fixture
+def renders(monkeypatch):
+    """Count the redraws (nothing is displayed: no front end here)."""
+    calls: list[int] = []
+    monkeypatch.setattr(widgets, "_render", lambda out, results: calls.append(1))
+    return calls
+
+
+def _controls(box):
+    found, stack = [], [box]
+    while stack:
+        w = stack.pop()
+        if hasattr(w, "children"):
+            stack.extend(w.children)
+        elif hasattr(w, "value") and hasattr(w, "description"):
+            found.append(w)
+    return {w.description: w for w in found}
+
+
+def _same_as_evaluation(ex: ThresholdExplorer, ev, eps) -> None:
+    """The explorer's table equals ``ev.scenes`` at the same thresholds, for its current scene."""
+    shown = ex.results()[0].set_index("algorithm").sort_index()
+    ref = ev.scenes(eps, ex.phi, ex.delta, ex.tau)
+    ref = ref[ref["scene"] == ex.scene].set_index("algorithm").sort_index()
+    pd.testing.assert_frame_equal(shown[METRICS], ref[METRICS], check_dtype=False)
+
+
+def test_paper_eps_follows_the_scene_dropdown(ev, renders):
+    """eps = "paper" (threshold_sensitivity's default) started the slider at the first scene's
+    metres and kept them after a scene change: corridor was scored at home's 3 m, not its 5 m."""
+    ex = ThresholdExplorer(ev.errors, ev.durations(), "paper", 30.0, 1.0, 60.0, scene="home")
+    c = _controls(ex.widget())
+    assert c["eps (m)"].value == 3.0
+    renders.clear()
+    c["scene"].value = "corridor"
+    assert (c["eps (m)"].value, ex.eps, len(renders)) == (5.0, 5.0, 1)  # one redraw for the change
+    table = ex.results()[0].set_index("algorithm")
+    assert table.loc["vins_mono_color_imu_with_loop", "cr"] == pytest.approx(0.381027, abs=1e-6)
+    assert table.loc["maslam", "cr"] == pytest.approx(0.201301, abs=1e-6)
+    _same_as_evaluation(ex, ev, "paper")
+    c["scene"].value = "home"
+    assert ex.eps == 3.0
+    _same_as_evaluation(ex, ev, "paper")
+    c["eps (m)"].value = 2.0  # moved by hand: it stays
+    c["scene"].value = "corridor"
+    assert (c["eps (m)"].value, ex.eps) == (2.0, 2.0)
+    _same_as_evaluation(ex, ev, 2.0)
+
+
+def test_paper_eps_follows_the_scene_without_widgets(ev):
+    """In batch (no front end) the scene is set on the explorer: the same rule."""
+    ex = ThresholdExplorer(ev.errors, ev.durations(), "paper", scene="home")
+    ex.scene = "corridor"
+    assert ex.eps == 5.0
+    _same_as_evaluation(ex, ev, "paper")
+    assert "eps 5 m" in ex.results()[1].axes[0].get_title()
+
+
+def test_a_mapping_eps_offers_and_follows_every_scene(ev, renders):
+    eps = {"home": 2.5, "corridor": 7.3}
+    ex = ThresholdExplorer(ev.errors, ev.durations(), eps, scene="home")
+    c = _controls(ex.widget())
+    assert c["eps (m)"].value == 2.5 and 7.3 in [v for _, v in c["eps (m)"].options]
+    c["scene"].value = "corridor"
+    assert ex.eps == 7.3
+    _same_as_evaluation(ex, ev, 7.3)
+    with pytest.raises(ln.ValidationError, match="no metres for scene.s. corridor"):
+        ThresholdExplorer(ev.errors, ev.durations(), {"home": 3.0})
+
+
+def test_the_eps_slider_reaches_no_threshold(ev, renders):
+    """``--eps inf`` is a value of the command line; the slider offers it (its largest is 100 m,
+    below the 729 m ATE RMSE of a vins corridor sequence)."""
+    ex = ThresholdExplorer(ev.errors, ev.durations(), 3.0, scene="corridor")
+    c = _controls(ex.widget())
+    c["eps (m)"].value = math.inf
+    table = ex.results()[0].set_index("algorithm")
+    assert table.loc["vins_mono_color_imu_with_loop", "cr"] == pytest.approx(0.753784, abs=1e-6)
+    _same_as_evaluation(ex, ev, math.inf)
+
+
+def test_sliders_at_other_values_equal_the_evaluation(ev, renders):
+    ex = ThresholdExplorer(ev.errors, ev.durations(), 3.0, scene="corridor")
+    c = _controls(ex.widget())
+    c["phi (deg)"].value, c["delta (s)"].value, c["tau (s)"].value = 10.0, 0.05, 1000.0
+    assert (ex.phi, ex.delta, ex.tau) == (10.0, 0.05, 1000.0)
+    _same_as_evaluation(ex, ev, 3.0)
+
+
+def test_a_scene_the_inputs_do_not_hold_is_refused_with_the_names(ev):
+    for scene in ("office", "Home"):
+        with pytest.raises(ln.ValidationError, match=r"'(office|Home)' name\(s\) nothing .* corridor, home"):
+            ThresholdExplorer(ev.errors, ev.durations(), scene=scene)
+    ex = ThresholdExplorer(ev.errors, ev.durations())
+    with pytest.raises(ln.ValidationError, match="did you mean 'home'"):
+        ex.scene = "Home"
+
+
+def test_nothing_to_explore_is_said(ev):
+    for eps in ("paper", 3.0):
+        with pytest.raises(ln.ValidationError, match="nothing to explore"):
+            ThresholdExplorer([], ev.durations(), eps)
+    with pytest.raises(ln.ValidationError, match="nothing to explore.*corridor, home"):
+        ThresholdExplorer(ev.errors, ev.durations().iloc[:0])
+
+
+def test_fault_explorer_checks_seq_and_seed_when_built_and_labels_its_thresholds(data):
+    gt = load_groundtruth("cafe", data)
+    with pytest.raises(ln.ValidationError, match="seq=3: the ground truth of cafe has sequence.s. 1, 2"):
+        FaultExplorer(gt, seq=3)
+    with pytest.raises(ln.ValidationError, match="seed=-1"):
+        FaultExplorer(gt, seed=-1)
+    ex = FaultExplorer(gt, seq=1, eps="paper", phi=30.0)
+    table, fig = ex.results()
+    assert table["cr"].iloc[0] == pytest.approx(1.0, abs=1e-3)
+    assert "eps 3 m, phi 30 deg, delta 1 s, tau 60 s" in fig.axes[0].get_title()
