@@ -57,6 +57,12 @@ class LorisWarning(UserWarning):
     """Something in the input deserves a look, but the evaluation went on."""
 
 
+class FailedInputsWarning(LorisWarning):
+    """Inputs of an evaluation failed (could not be read or evaluated) and are in no table: in
+    Python, where nothing else would say so (``Evaluation.failures`` lists them with the reason).
+    The command line prints each as an ``error:`` line instead."""
+
+
 class AnswerError(LorisError, AssertionError):
     """A learner's answer to an exercise (``lorisnb.tools.teaching``) is not right: says what is
     wrong, with the numbers, and hints at the typical mistake. An AssertionError, so a grader

@@ -29,7 +29,7 @@ from ..core.aggregate import spans_table
 from ..core.frames import SCENES
 from ..core.model import ResultFile
 from ..core.trajectory import Trajectory, time_spans
-from ..errors import DataNotFoundError, LorisError
+from ..errors import DataNotFoundError, LorisError, ValidationError
 from .openloris import read_openloris
 
 if TYPE_CHECKING:
@@ -71,10 +71,10 @@ class DataPaths:
 
     root: Path
 
-    def _need(self, p: Path, what: str) -> Path:
+    def _need(self, p: Path, what: str, why: str = "") -> Path:
         if not p.exists():
             raise DataNotFoundError(
-                f"{what} not found: looked for {p} (data root {self.root}). "
+                f"{what} not found: looked for {p} (data root {self.root}). {why}"
                 f"Point lorisnb at a folder laid out like ../shared/data with the data_root "
                 f"argument (--data DIR) or the {ENV_VAR} environment variable."
             )
@@ -85,10 +85,21 @@ class DataPaths:
         return self._need(self.root / "openloris-scene", "OpenLORIS-Scene folder")
 
     def groundtruth(self, scene: str) -> Path:
-        """``gt_<scene>_1.txt`` (base_link poses of every sequence of the scene)."""
-        return self._need(
-            self.root / "openloris-scene" / "groundtruth" / f"gt_{scene}_1.txt", f"ground truth of scene {scene!r}"
-        )
+        """``gt_<scene>_1.txt`` (base_link poses of every sequence of the scene). Missing, the
+        error says why it may be (a scene name in another case or not OpenLORIS', office's ground
+        truth not public) and which scenes this root has."""
+        if not isinstance(scene, str):
+            raise ValidationError(f"scene={scene!r}: expected an OpenLORIS scene name ({', '.join(SCENES)})")
+        p = self.root / "openloris-scene" / "groundtruth" / f"gt_{scene}_1.txt"
+        if p.exists():
+            return p
+        have = f"this data root ({self.root}) has the ground truth of {', '.join(self.scenes_with_groundtruth()) or 'no scene'}"
+        if scene not in SCENES:  # a name, not the data: no word on where the data is
+            case = f"scene names are lower case: {scene.lower()!r}" if scene.lower() in SCENES else ""
+            raise DataNotFoundError(f"ground truth of scene {scene!r} not found: "
+                                    f"{case or 'expected an OpenLORIS scene: ' + ', '.join(SCENES)}; {have}")  # fmt: skip
+        why = "the office ground truth (motion capture) is not public; " if scene == "office" else ""
+        return self._need(p, f"ground truth of scene {scene!r}", f"{(why + have)[:1].upper()}{(why + have)[1:]}. ")
 
     @property
     def icra20(self) -> Path:

@@ -22,7 +22,7 @@ from ..core.index_pairs import by_index
 from ..core.model import FileErrors
 from ..core.spec import EvalSpec, make_spec, preset_over
 from ..core.trials import check_duplicates, check_trials_by, compile_trials_by
-from ..errors import LorisWarning, ParseError, ValidationError
+from ..errors import FailedInputsWarning, LorisWarning, ParseError, ValidationError
 from ..io.data import DataPaths, DataRoot, find_data
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import SUFFIX, Manifest, read_manifest
@@ -64,6 +64,11 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
                       for f in done])  # fmt: skip
     for w in dict.fromkeys(w for f in done for w in f.warnings):
         warnings.warn(w, LorisWarning, stacklevel=3)
+    if failed:  # tables without them would look complete: a notebook says so at the call
+        more = f" (and {len(failed) - 1} more)" if len(failed) > 1 else ""
+        warnings.warn(f"{len(failed)} of {len(jobs)} inputs could not be evaluated and are in no table; "
+                      f"Evaluation.failures lists them with the reason, exit_status() is 1: "
+                      f"{failed[0].error}{more}", FailedInputsWarning, stacklevel=3)  # fmt: skip
     return Evaluation(done, failed, root, skipped, data, spec=spec, kind=kind, notes=list(notes or []))
 
 
