@@ -138,3 +138,21 @@ def test_fault_explorer_checks_seq_and_seed_when_built_and_labels_its_thresholds
     table, fig = ex.results()
     assert table["cr"].iloc[0] == pytest.approx(1.0, abs=1e-3)
     assert "eps 3 m, phi 30 deg, delta 1 s, tau 60 s" in fig.axes[0].get_title()
+
+
+def test_trials_of_an_algorithm_are_told_apart(tmp_path, icra20):
+    """Two trials of one algorithm were two rows both named ``vins`` in the table and one timeline
+    row with both CRs printed over each other."""
+    import shutil
+
+    (tmp_path / "vins").mkdir()
+    lifelong = icra20 / "lifelong"
+    shutil.copy(lifelong / "vins_mono_color_imu_with_loop" / "cafe-1.txt", tmp_path / "vins" / "cafe_trial1.txt")
+    shutil.copy(lifelong / "vins_mono_fisheye_imu_with_loop" / "cafe-1.txt", tmp_path / "vins" / "cafe_trial2.txt")
+    ev = ln.evaluate(tmp_path, progress=False)
+    table, fig = ThresholdExplorer(ev.errors, ev.durations(), "paper").results()
+    shown = table.set_index("trial")["cr"]
+    ref = ev.scenes("paper", 30.0, 1.0, 60.0).set_index("trial")["cr"]
+    assert shown.loc[1] == pytest.approx(0.913326, abs=1e-6) and shown.loc[2] == pytest.approx(0.961911, abs=1e-6)
+    pd.testing.assert_series_equal(shown.sort_index(), ref.sort_index())
+    assert sorted(t.get_text() for t in fig.axes[0].get_yticklabels()) == ["vins trial 1", "vins trial 2"]

@@ -204,9 +204,15 @@ def given_once(parser: argparse.ArgumentParser) -> None:
             if ref is None or ref() is not namespace:  # a new parse
                 given = {}
                 seen[id(namespace)] = (weakref.ref(namespace), given)
+            several = self.nargs in ("+", "*")  # --metric cr cs_r: several values after one option
+            if several and len(set(map(str, values))) < len(values):
+                twice = next(str(v) for i, v in enumerate(values) if str(v) in map(str, values[:i]))
+                p.error(f"{option_string}: {twice} given twice in {' '.join(map(str, values))}; give each once")
             if self.dest in given and given[self.dest][0] != values:
                 first = given[self.dest][0]
-                lists = " (a list is one value, comma-separated: --eps 0.05,0.1)" if isinstance(values, list) else ""
+                lists = (f" (several values follow one {option_string}: {option_string} A B)" if several
+                         else " (a list is one value, comma-separated: --eps 0.05,0.1)" if isinstance(values, list) and self.nargs is None
+                         else "")  # fmt: skip
                 p.error(f"{option_string} given twice ({first!r}, then {values!r}); the last would silently replace "
                         f"the first: give it once{lists}")  # fmt: skip
             given[self.dest] = (values,)
@@ -219,8 +225,8 @@ def given_once(parser: argparse.ArgumentParser) -> None:
                 # a word read as Python reads it (validate.choice: any case, spaces around): --align SE3 too
                 label = action.option_strings[0] if action.option_strings else action.dest
                 action.type = arg_type(partial(validate.choice, label, options=tuple(words)))
-            if type(action) is argparse._StoreAction and action.option_strings and action.nargs is None:
-                action.__class__ = Once
+            if type(action) is argparse._StoreAction and action.option_strings:
+                action.__class__ = Once  # one value, an optional one (--scale) or several (--metric cr cs_r): once
             elif type(action) is argparse._StoreAction:  # arguments, and options of several values
                 action.__class__ = Given
             if isinstance(action, argparse._SubParsersAction):

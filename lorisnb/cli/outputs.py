@@ -65,6 +65,8 @@ OUTPUT_SUFFIXES: dict[str, tuple[str, ...]] = {
     "pairs_csv": (".csv",),
     "latex": (".tex",),
     "markdown": (".md",),
+    "json": (".json",),  # diff's verdict: a --json notes.txt --force replaced any file with JSON
+    "junit": (".xml",),
 }
 
 

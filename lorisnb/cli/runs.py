@@ -136,7 +136,7 @@ def cmd_history(args: argparse.Namespace) -> int:
     """``lorisnb history RUN...``: scene values over runs, first changes, runs not comparable."""
     from ..core.regression import parse_tolerances
     from ..io.writers import write_csv
-    from ..tools.history import first_changes, history_table, load_runs, write_figures
+    from ..tools.history import first_changes, history_table, load_runs, run_labels, write_figures
 
     check_outputs(args, args.runs, ["csv"], folders=("out",))
     tolerances = parse_tolerances(args.tolerance)
@@ -146,16 +146,16 @@ def cmd_history(args: argparse.Namespace) -> int:
     h = history_table(runs, args.metric, tolerances)
     how = sorted({r.created_from for r in runs})
     print(f"{len(runs)} run(s), oldest first, ordered by {' and '.join(how)}")
-    for r in runs:
+    names = run_labels(runs)  # as the table names them: two nightly tables of one file name apart
+    for r, name in zip(runs, names, strict=True):
         print(
-            f"  {r.name}: {r.created.isoformat() if r.created else '?'}"
-            + (f", lorisnb {r.version}" if r.version else "")
+            f"  {name}: {r.created.isoformat() if r.created else '?'}" + (f", lorisnb {r.version}" if r.version else "")
         )
     for m in args.metric:
         view = h[h["metric"] == m].pivot_table(index=["suite", "algorithm", "scene"], columns="run", values="value",
                                               sort=False)  # fmt: skip
         print(f"\n{m} per scene:")
-        print(fmt_table(view[[r.name for r in runs if r.name in view.columns]].reset_index()))
+        print(fmt_table(view[[n for n in names if n in view.columns]].reset_index()))
     lost = h.drop_duplicates("run")
     for r in lost[~lost["comparable"].astype(bool)].itertuples():
         print(f"\nnot comparable: {r.run} with the run before it ({r.not_comparable})")

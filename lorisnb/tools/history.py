@@ -39,6 +39,20 @@ def load_runs(paths: Iterable[str | os.PathLike[str]]) -> list[Run]:
     return sorted(runs, key=lambda r: (r.created is None, r.created, r.name))
 
 
+def run_labels(runs: Sequence[Run]) -> list[str]:
+    """A name per run, unique: its file or folder name, or, where two runs share it (nightly
+    ``2026-02-01/sequences.csv`` and ``2026-02-02/sequences.csv``), as many of the last parts of
+    their paths as tell them apart (the whole path if nothing shorter does)."""
+    parts = [r.path.resolve().parts for r in runs]
+    labels = [r.name for r in runs]
+    for depth in range(2, max((len(p) for p in parts), default=0) + 1):
+        clash = {x for x in labels if labels.count(x) > 1}
+        if not clash:
+            break
+        labels = ["/".join(p[-depth:]) if lab in clash else lab for p, lab in zip(parts, labels, strict=True)]
+    return [lab if labels.count(lab) == 1 else str(r.path.resolve()) for r, lab in zip(runs, labels, strict=True)]
+
+
 def comparability(prev: Run, run: Run) -> list[str]:
     """Why ``run`` cannot be compared with ``prev`` (empty: it can)."""
     reasons = spec_differences(prev, run)
@@ -62,12 +76,13 @@ def history_table(
     tables = [keyed(r.table, str(r.path)) for r in runs]
     expected = expected_from(*tables, *(r.expected for r in runs if r.expected is not None))  # as the leaderboard
     rows = []
+    names = run_labels(runs)  # the run column: one name per run, or two runs' rows would merge
     for k, (run, table) in enumerate(zip(runs, tables, strict=True)):
         reasons = comparability(runs[k - 1], run) if k else []
         full, _ = complete(table, expected)
         for m in metrics:
             for r in scene_means(full, m).itertuples():
-                rows.append(dict(run=run.name, path=str(run.path), created=run.created.isoformat() if run.created else "",
+                rows.append(dict(run=names[k], path=str(run.path), created=run.created.isoformat() if run.created else "",
                                  created_from=run.created_from, lorisnb_version=run.version or "",
                                  comparable=not reasons, not_comparable="; ".join(reasons), suite=r.suite,
                                  algorithm=r.algorithm, scene=r.scene, metric=m, value=r.value))  # fmt: skip

@@ -6,13 +6,17 @@
   scores it, or among the failures) with a one-line reason;
 * 2: a usage error (a bad option, a bad output, a manifest or ground truth that cannot be read).
 
-A file skipped because the data holds no ground truth for its scene (OpenLORIS' office) is
-reported but does not count: there is nothing it could have matched. A run that evaluated nothing
-at all (an empty folder, every file skipped) is 1.
+A file skipped because the data holds no ground truth for its scene is reported; it does not
+count when the scene is OpenLORIS' office (:data:`NOT_PUBLIC`: its ground truth was never
+published, there is nothing it could have matched), and counts as not scored (1) for any other
+scene: a data root missing ``gt_cafe_1.txt`` (a partial copy, a renamed file) left every cafe file
+out of the tables with exit status 0. A run that evaluated nothing at all (an empty folder, every
+file skipped) is 1.
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -22,6 +26,10 @@ if TYPE_CHECKING:
 #: Exit statuses of the ``lorisnb`` commands.
 OK, UNSCORED, USAGE = 0, 1, 2
 
+#: OpenLORIS scenes whose ground truth is not public: their files are skipped without counting.
+NOT_PUBLIC = ("office",)
+_NO_GROUNDTRUTH = re.compile(r"ground truth of scene '([^']*)' not found")
+
 
 def unscored(ev: Evaluation) -> list[Failure]:
     """Inputs that were read but not scored: inputs none of whose poses matched the ground truth
@@ -30,8 +38,9 @@ def unscored(ev: Evaluation) -> list[Failure]:
     ``seq:`` blocks hold no pose declares failed runs, as the official data's ``*-failed.txt``
     do, and is scored) and, for manifests, declared sessions without an estimate (kind
     ``missing-estimate``: rows with 0 poses, :mod:`lorisnb.core.missing`) or sessions with poses
-    none of which matched (kind ``no-match``, as a pair's file). Failures are in
-    ``ev.failures``."""
+    none of which matched (kind ``no-match``, as a pair's file), and files skipped for want of
+    their scene's ground truth where the scene is not one of :data:`NOT_PUBLIC` (kind
+    ``no-groundtruth``; they stay in ``ev.skipped`` too). Failures are in ``ev.failures``."""
     from .evaluation import Failure
 
     out = []
@@ -59,6 +68,12 @@ def unscored(ev: Evaluation) -> list[Failure]:
         why = next((w for w in f.warnings if "no estimate stamp" in w or "no pose" in w), "")
         reason = why.split(". ")[0] if why else f"{f.algorithm} {f.file}: no pose matched the ground truth in time"
         out.append(Failure(f.path, reason.splitlines()[0], "no-match"))  # one line; the warning has the rest
+    for s in ev.skipped:  # no ground truth in the data: only a scene never published is expected
+        m = _NO_GROUNDTRUTH.search(s.error)
+        if m is None or m.group(1) not in NOT_PUBLIC:
+            out.append(
+                Failure(s.path, f"{s.path}: skipped, {s.error.splitlines()[0].split('. ')[0]}", "no-groundtruth")
+            )
     return out
 
 

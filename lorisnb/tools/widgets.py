@@ -9,6 +9,7 @@ when it runs in batch (papermill has no widget front end).
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -59,6 +60,12 @@ def explorer_eps(eps: Eps, scene: str | None) -> float | str:
     if isinstance(eps, (str, Mapping)) and scene is not None:
         return scene_eps(eps, scene)
     return float(eps)  # type: ignore[arg-type]
+
+
+def _label(algorithm: str, keys: Mapping[str, Any]) -> str:
+    """A timeline row's name: the algorithm, then its suite and trial where there are several."""
+    parts = [str(v) if k == "suite" else f"trial {v}" for k, v in keys.items() if k == "suite" or v != 0]
+    return " ".join([algorithm, *parts])  # trial 0: a file without a trial number
 
 
 def _eps_text(eps: float | str) -> str:
@@ -136,22 +143,30 @@ class ThresholdExplorer:
         return [*PAPER_EPS.values(), *given, float("inf")]
 
     def results(self) -> tuple[pd.DataFrame, Figure]:
-        """Scene table and timeline figure for the current values."""
+        """Scene table and timeline figure for the current values. Several trials (or suites) of an
+        algorithm are a row each: the table has a ``trial`` (``suite``) column and the timeline a
+        row per trial, named ``algorithm trial N``."""
         files = [f for f in self.errors if f.scene == self.scene]
-        table = aggregate_scenes(
-            score(files, self.eps, self.phi, self.delta, self.tau),
-            self.durations[self.durations["scene"] == self.scene],
-        )
+        durations = self.durations[self.durations["scene"] == self.scene]
+        table = aggregate_scenes(score(files, self.eps, self.phi, self.delta, self.tau), durations)
+        keys = [k for k in ("suite", "trial") if k in table.columns and table[k].nunique() > 1]
+        shown, labelled = files, table
+        if keys:  # one timeline row per trial: the same name would draw them on one row
+            shown = [replace(f, algorithm=_label(f.algorithm, {k: getattr(f, k) for k in keys})) for f in files]
+            names = [
+                _label(r["algorithm"], {k: r[k] for k in keys}) for r in table[["algorithm", *keys]].to_dict("records")
+            ]
+            labelled = table.assign(algorithm=names)
         fig = plot_timeline(
-            files,
-            self.durations[self.durations["scene"] == self.scene],
-            table,
+            shown,
+            durations,
+            labelled,
             self.eps,
             self.phi,
             self.delta,
             title=f"{self.scene}: eps {_eps_text(self.eps)}, phi {self.phi:g} deg, delta {self.delta:g} s, tau {self.tau:g} s",
         )
-        cols = ["algorithm", "cr", "cr_t", "cs_r", "c_ate_rmse", "c_matched", "matched"]
+        cols = ["algorithm", *keys, "cr", "cr_t", "cs_r", "c_ate_rmse", "c_matched", "matched"]
         return table[cols].sort_values("cr", ascending=False).reset_index(drop=True), fig
 
     def widget(self) -> Any:

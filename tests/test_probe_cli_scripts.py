@@ -1,0 +1,163 @@
+"""The command line as a CI script or a lab's nightly job uses it, on the real OpenLORIS results:
+what each mistake did before (a plausible result with exit status 0, a silently dropped option,
+a file replaced) and what it does now."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from lorisnb.cli import main
+
+ORB = "per-seq/orbslam2_rgbd"
+HOME = [f"home_1_{k}_orbslam2-original.txt" for k in range(1, 6)]
+CAFE = [f"cafe_1_{k}_orbslam2-original.txt" for k in (1, 2)]
+
+
+def _results(icra20: Path, root: Path, files: list[str], half: str | None = None) -> Path:
+    """A results folder ``root/orb/`` of real ORB-SLAM2 files; ``half``: that file cut to its first
+    half of lines (a run that lost track earlier: its CR drops)."""
+    (root / "orb").mkdir(parents=True)
+    for name in files:
+        text = (icra20 / ORB / name).read_text()
+        if name == half:
+            lines = text.splitlines(keepends=True)
+            text = "".join(lines[: len(lines) // 2])
+        (root / "orb" / name).write_text(text)
+    return root
+
+
+def _rc(argv: list[str | Path]) -> int:
+    try:
+        return main([str(a) for a in argv])
+    except SystemExit as exc:  # argparse's usage errors
+        return int(exc.code or 0)
+
+
+def test_history_tells_apart_nightly_tables_of_one_file_name(icra20, data, tmp_path, capsys):
+    """A nightly job writes ``<date>/sequences.csv``: history named every run ``sequences.csv``,
+    so the three runs became one column whose cells were arrays, the history CSV's ``run`` column
+    could not tell them apart, and the scene value printed was the mean of the three runs. Each
+    run is now named by as much of its path as tells it apart, with its own values."""
+    good = _results(icra20, tmp_path / "good", HOME)
+    worse = _results(icra20, tmp_path / "worse", HOME, half="home_1_4_orbslam2-original.txt")
+    nights = []
+    for k, results in enumerate((good, worse, good), start=1):
+        table = tmp_path / f"night{k}" / "sequences.csv"
+        table.parent.mkdir()
+        assert _rc(["evaluate", results, "--data", data.root, "--no-progress", "--jobs", "1", "--csv", table]) == 0
+        stamp = time.time() - 86400 * (4 - k)  # ordered by modification time: night 1 oldest
+        os.utime(table, (stamp, stamp))
+        nights.append(table)
+    capsys.readouterr()
+    hist = tmp_path / "history.csv"
+    assert _rc(["history", *nights, "--metric", "cr", "--csv", hist]) == 0
+    out = capsys.readouterr().out
+    assert "night1/sequences.csv" in out and "night3/sequences.csv" in out and "[" not in out
+    h = pd.read_csv(hist)
+    assert list(h["run"]) == ["night1/sequences.csv", "night2/sequences.csv", "night3/sequences.csv"]
+    assert h["value"].round(4).tolist() == [0.2712, 0.2290, 0.2712]  # home CR of each night, as evaluate prints it
+    assert h["changed"].tolist() == [False, True, True] and h["first_change"].tolist() == [False, True, False]
+    assert "orb home cr: first change in night2/sequences.csv (0.2712 -> 0.2290, worse)" in out
+
+
+@pytest.mark.parametrize(
+    "argv, said",
+    [
+        (["history", "a.csv", "b.csv", "--metric", "cr", "--metric", "cs_r"], "--metric given twice"),
+        (["history", "a.csv", "b.csv", "--metric", "cr", "cr"], "--metric: cr given twice in cr cr"),
+        (["evaluate", "x", "--scale", "auto", "--scale", "off"], "--scale given twice"),
+        (
+            ["evaluate", "x", "--motion-filter", "0.1", "5", "--motion-filter", "0.2", "5"],
+            "--motion-filter given twice",
+        ),
+        (["report", "--notebooks", "a", "b", "--notebooks", "c"], "--notebooks given twice"),
+    ],
+)
+def test_an_option_of_several_values_given_twice_is_refused(argv, said, capsys):
+    """``history --metric cr --metric cs_r`` followed cs_r alone (argparse keeps the last),
+    ``--metric cr cr`` printed and wrote every cr row twice, ``--scale auto --scale off`` scored
+    without a scale: all with exit status 0. Options of several values (or an optional value) are
+    now refused when repeated, as options of one value are."""
+    assert _rc(argv) == 2
+    err = capsys.readouterr().err
+    assert said in err
+    assert "comma-separated" not in err  # the hint of lists written as one value is not theirs
+
+
+def test_several_metrics_after_one_option_are_followed(icra20, data, tmp_path, capsys):
+    results = _results(icra20, tmp_path / "r", CAFE)
+    table = tmp_path / "t.csv"
+    assert _rc(["evaluate", results, "--data", data.root, "--no-progress", "--jobs", "1", "--csv", table]) == 0
+    capsys.readouterr()
+    assert _rc(["history", table, "--metric", "cr", "cs_r"]) == 0
+    out = capsys.readouterr().out
+    assert "cr per scene:" in out and "cs_r per scene:" in out and "cr_t per scene:" not in out
+
+
+def test_diff_verdict_files_need_their_suffix(icra20, data, tmp_path, capsys):
+    """``diff --json notes.txt --force`` replaced a file of the user's with the verdict, and
+    ``--junit verdict.json`` wrote XML into a .json file; both are now refused before anything is
+    read, and the file is left as it was."""
+    base = _results(icra20, tmp_path / "base", CAFE)
+    tb, tc = tmp_path / "b.csv", tmp_path / "c.csv"
+    for table in (tb, tc):
+        assert _rc(["evaluate", base, "--data", data.root, "--no-progress", "--jobs", "1", "--csv", table]) == 0
+    notes = tmp_path / "notes.txt"
+    notes.write_text("my notes\n")
+    capsys.readouterr()
+    assert _rc(["diff", tb, tc, "--json", notes, "--force"]) == 2
+    assert "--json" in capsys.readouterr().err and notes.read_text() == "my notes\n"
+    assert _rc(["diff", tb, tc, "--junit", tmp_path / "verdict.json"]) == 2
+    assert "expected a .xml file name" in capsys.readouterr().err
+    assert not (tmp_path / "verdict.json").exists()
+    assert _rc(["diff", tb, tc, "--json", tmp_path / "V.JSON", "--junit", tmp_path / "v.xml"]) == 0
+    assert (tmp_path / "V.JSON").is_file() and (tmp_path / "v.xml").is_file()
+
+
+def _data_root_without(data, tmp_path: Path, scene: str) -> Path:
+    """A data root like the real one whose ground truth of ``scene`` is missing (a partial copy)."""
+    root = tmp_path / "partial data"
+    gt = root / "openloris-scene" / "groundtruth"
+    gt.mkdir(parents=True)
+    (root / "openloris-scene" / "icra20_results").mkdir()
+    for f in (data.root / "openloris-scene" / "groundtruth").glob("gt_*_1.txt"):
+        if f.name != f"gt_{scene}_1.txt":
+            os.symlink(f, gt / f.name)
+    return root
+
+
+def test_a_scene_whose_ground_truth_is_missing_from_the_data_is_not_scored(icra20, data, tmp_path, capsys):
+    """A data root without ``gt_cafe_1.txt`` (a partial copy, a renamed file): every cafe file was
+    skipped and left out of the table, the run exited 0, as for office (whose ground truth was
+    never published). Such files now count as not scored: exit status 1, a ``not scored:`` line
+    naming the missing file; office files are still skipped without counting."""
+    results = _results(icra20, tmp_path / "results", CAFE + HOME)
+    partial = _data_root_without(data, tmp_path, "cafe")
+    argv = ["evaluate", results, "--no-progress", "--jobs", "1"]
+    assert _rc([*argv, "--data", partial]) == 1
+    cap = capsys.readouterr()
+    assert "cafe" not in cap.out and "home" in cap.out  # the table holds what was scored
+    lines = [x for x in cap.err.splitlines() if x.startswith("not scored:")]
+    assert len(lines) == 2 and all("ground truth of scene 'cafe' not found" in x for x in lines)
+    assert all("gt_cafe_1.txt" in x for x in lines)
+    assert "5 file(s) evaluated, 0 failed, 2 not scored, 0 skipped" in cap.err
+    assert _rc([*argv, "--data", data.root]) == 0  # the same files with the whole data: all scored
+    capsys.readouterr()
+
+    # office: no public ground truth, skipped as before, exit 0
+    shutil.copy(icra20 / ORB / "office_1_1_orbslam2-original.txt", results / "orb")
+    assert _rc([*argv, "--data", data.root]) == 0
+    err = capsys.readouterr().err
+    assert "skipped 1 file(s): ground truth of scene 'office' not found" in err and "not scored:" not in err
+    assert "7 file(s) evaluated, 0 failed, 0 not scored, 1 skipped" in err
+
+    # diff of two runs over the partial data: cafe compared in neither, so not a clean 0
+    assert _rc(["diff", results, results, "--data", partial, "--no-progress", "--jobs", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "2 input(s) of BASE and 2 of CAND could not be evaluated or were not scored" in err
