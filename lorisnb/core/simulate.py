@@ -144,9 +144,27 @@ def lost_intervals(lost: object) -> tuple[tuple[float, float], ...]:
     return tuple(out)
 
 
+def _within(faults: Faults, duration: float) -> None:
+    """Refuse fault times (seconds from the start) after the end of a sequence lasting ``duration``
+    seconds: such a loss interval or wrong re-localization would change nothing, such an
+    initialization delay would leave no pose; most often they are stamps typed for seconds."""
+    late = [f"lost interval ({a:.1f}, {b:.1f})" for a, b in faults.lost if a > duration]
+    if faults.wrong_reloc_at_s is not None and faults.wrong_reloc_at_s > duration:
+        late.append(f"wrong_reloc_at_s={faults.wrong_reloc_at_s:.1f}")
+    if faults.init_delay_s > duration:
+        late.append(f"init_delay_s={faults.init_delay_s:.1f}")
+    if late:
+        raise ValidationError(
+            f"Faults({', '.join(late)}): after the end of the sequence, which lasts {duration:.1f} s. Fault times are "
+            f"seconds from the start of the sequence (0 to {duration:.1f}), not stamps; a fault after the end would "
+            "change nothing (an init delay would leave no pose: lost=((0, inf),) says 'no output at all')"
+        )
+
+
 def simulate(gt: Trajectory, faults: Faults = Faults()) -> Trajectory:
     """An estimate of ``gt`` with the given faults (see the module docstring). Deterministic for
-    ``faults.seed``; the result's ``meta`` says ``simulated: True`` and lists the faults."""
+    ``faults.seed``; the result's ``meta`` says ``simulated: True`` and lists the faults. A fault
+    time (seconds from the start) after the end of ``gt`` is a ValidationError."""
     from scipy.spatial.transform import Rotation  # here: a simulation, not the evaluation's path
 
     rng = np.random.default_rng(faults.seed)
@@ -155,6 +173,8 @@ def simulate(gt: Trajectory, faults: Faults = Faults()) -> Trajectory:
     rot = gt.rotations()
     n = len(t)
     rel = t - t[0] if n else t
+    if n:
+        _within(faults, float(rel[-1]))
     step = np.linalg.norm(np.diff(p, axis=0), axis=1) if n > 1 else np.zeros(0)
     dist = np.concatenate(([0.0], np.cumsum(step))) if n else np.zeros(0)
 
@@ -235,7 +255,12 @@ def simulated_result(
             raise ValidationError(
                 f"faults for sequence {q}: expected a Faults(...) object, got {type(f).__name__} {f!r}"
             )
-    sequences = {q: simulate(groundtruth.sequences[q], per[q]) for q in seqs}
+    sequences = {}
+    for q in seqs:  # a few sequences
+        try:
+            sequences[q] = simulate(groundtruth.sequences[q], per[q])
+        except ValidationError as exc:
+            raise ValidationError(f"{scene}-{q}: {exc}") from None
     label = (
         f"simulated: {name}"
         if name

@@ -7,7 +7,6 @@ sequences (:func:`cases_from`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -15,133 +14,12 @@ import numpy as np
 
 from ...core import metrics
 from ...core.model import FileErrors
-from ...errors import AnswerError
+from ._grading import Variants
+from ._grading import check_function as _check_function
+from ._grading import fail as _fail
+from ._grading import number as _number
+from ._grading import ok as _ok
 from ._mistakes import MISTAKES
-
-
-def _fail(message: str, mistake: str | None = None) -> None:
-    hint = f"\nHint ({mistake.replace('_', ' ')}): {MISTAKES[mistake]}" if mistake else ""
-    raise AnswerError(f"✗ {message}{hint}")
-
-
-def _ok(message: str) -> bool:
-    print(f"✓ {message}")
-    return True
-
-
-def _same(a: Any, b: Any, tol: float) -> bool:
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    return a.shape == b.shape and bool(np.all((np.isclose(a, b, rtol=tol, atol=tol)) | (np.isnan(a) & np.isnan(b))))
-
-
-def _number(what: str, value: Any) -> float:
-    if value is Ellipsis:
-        _fail(f"{what}: no answer yet (replace the `...` and the NotImplementedError placeholder with your answer)")
-    if isinstance(value, (bool, np.bool_)) or value is None:
-        _fail(f"{what}: expected a number, got {value!r}")
-    try:
-        v = float(np.asarray(value, float).reshape(()))
-    except (TypeError, ValueError):
-        _fail(f"{what}: expected one number, got {type(value).__name__} {value!r}")
-    if math.isnan(v):
-        _fail(f"{what}: your answer is NaN")
-    return v
-
-
-Variants = Sequence[tuple[str, Callable[..., Any]]]
-
-
-def _match_mistake(answers: list[Any], variants: Sequence[tuple[str, list[Any]]], tol: float) -> str | None:
-    """The first mistake whose values the answers match on every case."""
-    for name, values in variants:
-        if all(_same(a, v, tol) for a, v in zip(answers, values, strict=True)):
-            return name
-    return None
-
-
-def _check_function(
-    what: str,
-    fn: Callable[..., Any],
-    cases: Sequence[Mapping[str, Any]],
-    reference: Callable[..., Any],
-    variants: Variants,
-    boolean: bool = False,
-    tol: float = 1e-9,
-) -> bool:
-    """Call ``fn(**case)`` on each case; compare with ``reference(**case)``; name a mistake whose
-    ``variant(**case)`` the answers match on every case."""
-    if not callable(fn):
-        _fail(f"{what}: expected the function you wrote, got {type(fn).__name__} {fn!r}")
-    answers, wrong = [], None
-    for k, case in enumerate(cases):
-        args = {n: (np.array(v, copy=True) if isinstance(v, np.ndarray) else v) for n, v in case.items()}
-        try:
-            got = fn(**args)
-        except NotImplementedError:
-            _fail(f"{what}: not written yet (the NotImplementedError placeholder is still there)")
-        except Exception as exc:  # the learner's code failed: say where and with what
-            ambiguous = isinstance(exc, ValueError) and "truth value of an array" in str(exc)
-            _fail(
-                f"{what} raised {type(exc).__name__}: {exc} on case {k + 1} ({_describe(case)})",
-                "elementwise" if ambiguous else None,
-            )
-        want = reference(**case)
-        if boolean:
-            got_a = np.asarray(got)
-            if got_a.shape != np.shape(want):
-                _fail(
-                    f"{what} returned shape {got_a.shape} on case {k + 1}; expected one value per pose, {np.shape(want)}"
-                )
-            if got_a.dtype != bool:  # numbers would be truth-tested: 0.3 or -1 would count as correct
-                _fail(
-                    f"{what} returned {got_a.dtype} values on case {k + 1}; expected True/False per pose "
-                    "(a comparison such as `ate_m <= eps`, combined with `&`)"
-                )
-            got = got_a
-        elif got is None:
-            _fail(f"{what} returned None on case {k + 1}: did you forget `return`?")
-        else:
-            got = _number(f"{what} on case {k + 1}", got)
-        answers.append(got)
-        if wrong is None and not _same(got, want, tol):
-            wrong = (k, got, want)
-    if wrong is None:
-        return _ok(f"{what} matches lorisnb on {len(cases)} case(s)")
-    k, got, want = wrong
-    mistake = _match_mistake(answers, [(n, vals) for n, v in variants if (vals := _values(v, cases)) is not None], tol)
-    if boolean:
-        bad = np.flatnonzero(np.asarray(got) != np.asarray(want))
-        i = int(bad[0])
-        c = cases[k]
-        detail = (
-            f"{len(bad)} of {len(want)} poses differ on case {k + 1}; e.g. pose {i} with ATE {c['ate_m'][i]:g} m, "
-            f"AOE {c['aoe_deg'][i]:g} deg (eps {c['eps']:g} m, phi {c['phi']:g} deg): you say {bool(got[i])}, "
-            f"Eq. (1) says {bool(want[i])}"
-        )
-    else:
-        detail = f"on case {k + 1} ({_describe(cases[k])}) you return {got:.6g}; lorisnb gives {float(want):.6g}"
-    _fail(f"{what}: {detail}", mistake)
-    return False  # not reached
-
-
-def _values(variant: Callable[..., Any], cases: Sequence[Mapping[str, Any]]) -> list[Any] | None:
-    """A mistake's values on every case (None where the mistake itself cannot be computed)."""
-    try:
-        with np.errstate(all="ignore"):
-            return [variant(**c) for c in cases]
-    except (ArithmeticError, ValueError):
-        return None
-
-
-def _describe(case: Mapping[str, Any]) -> str:
-    parts = []
-    for n, v in case.items():
-        if isinstance(v, np.ndarray):
-            parts.append(f"{n}: {v.size} values")
-        else:
-            parts.append(f"{n}={v!r}")
-    return ", ".join(parts)
-
 
 # --- Eq. (1): per-pose correctness ---------------------------------------------------------------
 
@@ -199,6 +77,15 @@ CR_CASES: list[dict[str, Any]] = [
         t_max=6.0,
         delta=1.0,
     ),
+    # uneven intervals, a wrong pose after each correct run, the last interval under delta: a pose's
+    # time given to the next pose, or the last pose held for delta, each give their own number
+    dict(
+        stamps=np.array([10.0, 10.5, 11.0, 14.0, 14.2, 18.0]),
+        correct=np.array([True, False, True, True, False, True]),
+        t_min=9.0,
+        t_max=18.4,
+        delta=1.0,
+    ),
 ]
 
 
@@ -216,40 +103,54 @@ def _cr_t(stamps: Any, correct: Any, t_min: float, t_max: float, delta: float) -
     )
 
 
-def _no_last(stamps: Any, correct: Any, t_min: float, t_max: float, delta: float) -> float:
-    return float(np.sum(np.minimum(np.diff(stamps), delta) * correct[:-1]) / (t_max - t_min))
+# The numerators the typical mistakes compute instead of Eq. (2)'s correct time (seconds):
+# (name in MISTAKES, numerator(stamps, correct, t_start, t_max, delta)), t_start the ground truth's first stamp;
+# over t_max - t_min for CR, t_max - t0 for CR-T.
+_NUMERATORS: list[tuple[str, Callable[..., Any]]] = [
+    ("delta_cap", lambda s, c, t_start, t_max, d: np.sum(np.diff(np.append(s, t_max)) * c)),
+    ("wrong_poses_count", lambda s, c, t_start, t_max, d: np.sum(np.minimum(np.diff(np.append(s, t_max)), d))),
+    ("last_pose", lambda s, c, t_start, t_max, d: np.sum(np.minimum(np.diff(s), d) * c[:-1])),  # the last pose dropped
+    ("last_pose", lambda s, c, t_start, t_max, d: np.sum(np.append(np.minimum(np.diff(s), d), t_max - s[-1]) * c)),  # uncapped
+    ("last_pose", lambda s, c, t_start, t_max, d: np.sum(np.append(np.minimum(np.diff(s), d), d) * c)),  # held delta
+    ("held_backward", lambda s, c, t_start, t_max, d: np.sum(np.minimum(np.diff(s, prepend=t_start), d) * c)),  # t_k - t_{k-1}
+    ("held_backward", lambda s, c, t_start, t_max, d: np.sum(np.minimum(np.diff(s), d) * c[1:])),  # the first holds 0
+    ("held_delta", lambda s, c, t_start, t_max, d: np.count_nonzero(c) * d),
+    ("delta_cut", lambda s, c, t_start, t_max, d: np.sum(np.where(np.diff(np.append(s, t_max)) <= d, np.diff(np.append(s, t_max)), 0) * c)),
+]  # fmt: skip
 
 
-def _last_uncapped(stamps: Any, correct: Any, t_min: float, t_max: float, delta: float) -> float:
-    held = np.append(np.minimum(np.diff(stamps), delta), t_max - stamps[-1])
-    return float(np.sum(held * correct) / (t_max - t_min))
+def _over(numerator: Callable[..., Any], tracking: bool) -> Callable[..., float]:
+    """A mistaken numerator over CR's denominator (t_max - t_min) or CR-T's (t_max - t0)."""
+
+    def rate(stamps: Any, correct: Any, t_min: float, t_max: float, delta: float) -> float:
+        s, c = np.asarray(stamps, float), np.asarray(correct, bool)
+        return float(numerator(s, c, t_min, t_max, delta) / (t_max - (max(s[0], t_min) if tracking else t_min)))
+
+    return rate
 
 
-def _held_backward(stamps: Any, correct: Any, t_min: float, t_max: float, delta: float) -> float:
-    held = np.minimum(np.diff(np.asarray(stamps, float), prepend=t_min), delta)
-    return float(np.sum(held * correct) / (t_max - t_min))
+def _rate_variants(tracking: bool) -> list[tuple[str, Callable[..., Any]]]:
+    """The mistakes shared by CR and CR-T: how time is counted, per pose or as a whole."""
+    right = _cr_t if tracking else _cr
+    return [
+        *[(name, _over(num, tracking)) for name, num in _NUMERATORS],
+        ("poses_not_time", lambda stamps, correct, t_min, t_max, delta: float(np.mean(correct))),
+        ("gt_span", lambda stamps, correct, t_min, t_max, delta: _cr(stamps, correct, stamps[0], stamps[-1], delta)),
+        ("gt_span", lambda stamps, correct, t_min, t_max, delta: float(
+            metrics.correct_time(stamps, correct, t_max, delta, t_min) / (stamps[-1] - stamps[0]))),
+        ("absolute_time", lambda stamps, correct, t_min, t_max, delta: float(
+            metrics.correct_time(stamps, correct, t_max, delta, t_min) / t_max)),
+        ("fraction", lambda stamps, correct, t_min, t_max, delta: 100.0 * right(stamps, correct, t_min, t_max, delta)),
+    ]  # fmt: skip
 
 
 def check_correct_rate(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]] = CR_CASES) -> bool:
     """``fn(stamps, correct, t_min, t_max, delta)`` -> CR, Eq. (2), against
     :func:`lorisnb.core.metrics.correct_time` and :func:`~lorisnb.core.metrics.correct_rate`."""
     variants: Variants = [
-        ("delta_cap", lambda stamps, correct, t_min, t_max, delta: _cr(stamps, correct, t_min, t_max, np.inf)),
         ("cr_vs_crt", _cr_t),
         ("delta_cap", lambda stamps, correct, t_min, t_max, delta: _cr_t(stamps, correct, t_min, t_max, np.inf)),
-        ("poses_not_time", lambda stamps, correct, t_min, t_max, delta: float(np.mean(correct))),
-        ("wrong_poses_count", lambda stamps, correct, t_min, t_max, delta: _cr(stamps, True, t_min, t_max, delta)),
-        ("last_pose", _no_last),
-        ("last_pose", _last_uncapped),
-        ("held_backward", _held_backward),
-        ("gt_span", lambda stamps, correct, t_min, t_max, delta: _cr(stamps, correct, stamps[0], stamps[-1], delta)),
-        (
-            "gt_span",
-            lambda stamps, correct, t_min, t_max, delta: (
-                _cr(stamps, correct, t_min, t_max, delta) * (t_max - t_min) / (stamps[-1] - stamps[0])
-            ),
-        ),  # fmt: skip
-        ("fraction", lambda stamps, correct, t_min, t_max, delta: 100.0 * _cr(stamps, correct, t_min, t_max, delta)),
+        *_rate_variants(tracking=False),
     ]
     return _check_function("correct_rate", fn, cases, _cr, variants)
 
@@ -259,10 +160,8 @@ def check_correct_rate_tracking(fn: Callable[..., Any], cases: Sequence[Mapping[
     :func:`lorisnb.core.metrics.correct_rate_tracking`."""
     variants: Variants = [
         ("crt_vs_cr", _cr),
-        ("delta_cap", lambda stamps, correct, t_min, t_max, delta: _cr_t(stamps, correct, t_min, t_max, np.inf)),
         ("delta_cap", lambda stamps, correct, t_min, t_max, delta: _cr(stamps, correct, t_min, t_max, np.inf)),
-        ("wrong_poses_count", lambda stamps, correct, t_min, t_max, delta: _cr_t(stamps, True, t_min, t_max, delta)),
-        ("fraction", lambda stamps, correct, t_min, t_max, delta: 100.0 * _cr_t(stamps, correct, t_min, t_max, delta)),
+        *_rate_variants(tracking=True),
     ]
     return _check_function("correct_rate_tracking", fn, cases, _cr_t, variants)
 
@@ -287,6 +186,8 @@ def check_cs_r(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]] = CSR_
     :func:`lorisnb.core.metrics.relocalization_score`."""
     variants: Variants = [
         ("first_pose", lambda t0, t_min, first_correct, tau: _csr(t0, t_min, True, tau)),
+        ("absolute_time", lambda t0, t_min, first_correct, tau: float(np.exp(-np.float64(t0) / tau) * first_correct)),
+        ("absolute_time", lambda t0, t_min, first_correct, tau: float(np.exp(-np.float64(t0) / tau))),
         (
             "tau_inverted",
             lambda t0, t_min, first_correct, tau: float(np.exp(-np.float64(tau) / (t0 - t_min)) * first_correct),

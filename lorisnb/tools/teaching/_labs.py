@@ -95,12 +95,18 @@ def check_best_cr(answer: Any, scenes: pd.DataFrame) -> bool:
     return check_choice("algorithm with the highest scene CR", answer, best, why)
 
 
-def check_ate_percent(answer: Any, ate_rmse: float, c_ate_rmse: float, groundtruth: Trajectory) -> bool:
-    """ATE RMSE as a percentage of the ground truth's path length (metres travelled)."""
+def check_ate_percent(
+    answer: Any, ate_rmse: float, c_ate_rmse: float, groundtruth: Trajectory, ate_mean: float | None = None
+) -> bool:
+    """ATE RMSE (metres) as a percentage of the ground truth's path length (metres travelled).
+    ``ate_mean`` (metres, the scored table's ``ate_mean``): an answer made of the mean ATE gets the
+    RMSE-vs-mean hint."""
     want = 100.0 * ate_rmse / groundtruth.path_length
     mistakes = {
         "percent": want / 100.0,
         "extent_vs_length": 100.0 * ate_rmse / groundtruth.extent,
         "c_ate": 100.0 * c_ate_rmse / groundtruth.path_length,
     }
+    if ate_mean is not None:
+        mistakes["rmse_vs_mean"] = 100.0 * float(ate_mean) / groundtruth.path_length
     return check_value("ATE RMSE as % of path length", answer, want, tol=0.05, mistakes=_differs(mistakes, want, 0.05))

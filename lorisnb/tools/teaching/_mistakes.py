@@ -27,6 +27,14 @@ MISTAKES: dict[str, str] = {
     "gt_span": "the denominator is the ground truth's span, t_max - t_min, not the span of the estimate's own stamps",
     "held_backward": "each pose holds FORWARD, until the next pose: min(t_{k+1} - t_k, delta), not the time since "
     "the previous pose",
+    "held_delta": "delta is a cap, not the time a pose holds: each pose holds until the next one, "
+    "min(t_{k+1} - t_k, delta), often much less than delta",
+    "delta_cut": "a pose whose next one comes more than delta later still holds for delta seconds: "
+    "min(t_{k+1} - t_k, delta) caps its time, it does not drop it",
+    "absolute_time": "stamps are absolute times (OpenLORIS: seconds since 1970): a duration is a difference of two "
+    "stamps, t0 - t_min or t_max - t_min, never one stamp alone",
+    "nan": "NaN comes from 0 / 0, or from a mean or maximum of no values (np.mean of an empty selection): find where "
+    "your formula divides or averages; Eq. (1)-(4) are a comparison, a sum over a duration, an exponential",
     "gap_last_pose": "the last pose before the gap still holds for delta seconds into it (Eq. 2)",
     "wrong_poses_count": "only correct poses earn time: multiply each pose's held time by c_k (0 or 1)",
     "last_pose": "the last pose holds too: its next time is t_{N+1} = t_max, and it is capped at delta like the others",
@@ -43,5 +51,7 @@ MISTAKES: dict[str, str] = {
     "phi_ignored": "the orientation threshold phi applies too: a pose needs AOE <= phi to count",
     "percent": "a percentage is 100 x the ratio",
     "extent_vs_length": "normalize by the distance travelled (path length), not by the size of the area (extent)",
+    "rmse_vs_mean": "RMSE is the root of the mean SQUARE, sqrt(mean(ATE^2)) (the `ate_rmse` column), not the mean "
+    "ATE (`ate_mean`): squaring weighs large errors more",
     "c_ate": "use the ATE RMSE over all matched poses here, not the C-ATE over correct poses only",
 }

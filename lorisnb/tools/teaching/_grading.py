@@ -1,0 +1,211 @@
+"""How a formula check grades a learner's function: call it on each case (watching that it does not
+call lorisnb, whose numbers it is checked against), compare with lorisnb's answer, and name every
+typical mistake whose values the answers match. Used by :mod:`._checks`."""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from types import FrameType
+from typing import Any, NoReturn
+
+import numpy as np
+
+from ...errors import AnswerError
+from ._mistakes import MISTAKES
+
+#: (mistake name in MISTAKES, the function that makes it), in the order their hints are given
+Variants = Sequence[tuple[str, Callable[..., Any]]]
+
+_PACKAGE = Path(__file__).resolve().parents[2]  # lorisnb/
+_PACKAGE_DIRS = tuple({str(_PACKAGE) + os.sep, str(Path(__file__).parents[2]) + os.sep})
+
+
+def fail(message: str, mistakes: str | Sequence[str] | None = None) -> NoReturn:
+    """Raise the AnswerError of a wrong answer, with the hint of each mistake named."""
+    names = [mistakes] if isinstance(mistakes, str) else list(mistakes or [])
+    hints = "".join(f"\nHint ({m.replace('_', ' ')}): {MISTAKES[m]}" for m in names)
+    raise AnswerError(f"✗ {message}{hints}")
+
+
+def ok(message: str) -> bool:
+    print(f"✓ {message}")
+    return True
+
+
+def same(a: Any, b: Any, tol: float) -> bool:
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return a.shape == b.shape and bool(np.all((np.isclose(a, b, rtol=tol, atol=tol)) | (np.isnan(a) & np.isnan(b))))
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def number(what: str, value: Any) -> float:
+    """``value`` as one finite-or-infinite number; anything else fails with what was given."""
+    if value is Ellipsis:
+        fail(f"{what}: no answer yet (replace the `...` and the NotImplementedError placeholder with your answer)")
+    if isinstance(value, (bool, np.bool_)) or value is None:
+        fail(f"{what}: expected a number, got {value!r}")
+    try:
+        a = np.asarray(value, float)
+    except (TypeError, ValueError):
+        fail(f"{what}: expected one number, got {type(value).__name__} {_short(value)}")
+    if a.size != 1:
+        fail(
+            f"{what}: expected one number, got {type(value).__name__} of shape {a.shape} ({a.size} values); "
+            "is a sum (np.sum) or a selection ([0], .iloc[0]) missing?"
+        )
+    v = float(a.reshape(()))
+    if math.isnan(v):
+        fail(f"{what}: your answer is NaN", "nan")
+    return v
+
+
+def _in_package(filename: str) -> bool:
+    return filename.startswith(_PACKAGE_DIRS)
+
+
+def call_watched(fn: Callable[..., Any], args: Mapping[str, Any]) -> tuple[Any, str | None]:
+    """``fn(**args)``, and the first lorisnb function it called itself (None when it called none):
+    a learner's formula that hands its inputs to lorisnb (or to the check's own reference, reached
+    through the call stack) returns lorisnb's answer without computing anything. Module-level
+    ``__getattr__`` (lazy imports) and module bodies run by an import do not count."""
+    entered: list[str] = []
+
+    def watch(frame: FrameType, event: str, _arg: Any) -> None:
+        code = frame.f_code
+        if event != "call" or entered or not _in_package(code.co_filename):
+            return
+        if code.co_name in ("__getattr__", "<module>"):
+            return
+        caller = frame.f_back
+        if caller is not None and _in_package(caller.f_code.co_filename):
+            return  # lorisnb calling itself: the entry was reported (or was a lazy import)
+        entered.append(f"{frame.f_globals.get('__name__', 'lorisnb')}.{code.co_qualname}")
+
+    previous = sys.getprofile()
+    sys.setprofile(watch)
+    try:
+        got = fn(**args)
+    finally:
+        sys.setprofile(previous)
+    return got, (entered[0] if entered else None)
+
+
+def describe(case: Mapping[str, Any]) -> str:
+    parts = []
+    for n, v in case.items():
+        if isinstance(v, np.ndarray):
+            parts.append(f"{n}: {v.size} values")
+        else:
+            parts.append(f"{n}={v!r}")
+    return ", ".join(parts)
+
+
+def _values(variant: Callable[..., Any], cases: Sequence[Mapping[str, Any]]) -> list[Any] | None:
+    """A mistake's values on every case (None where the mistake itself cannot be computed)."""
+    try:
+        with np.errstate(all="ignore"):
+            return [variant(**c) for c in cases]
+    except (ArithmeticError, ValueError, IndexError):
+        return None
+
+
+def matching_mistakes(
+    answers: list[Any], cases: Sequence[Mapping[str, Any]], variants: Variants, tol: float
+) -> list[str]:
+    """Every mistake (once, in the order of ``variants``) whose values the answers match on every
+    case: on cases that cannot tell two mistakes apart, both are named, not the first one alone."""
+    names: list[str] = []
+    for name, variant in variants:
+        values = _values(variant, cases)
+        if name in names or values is None:
+            continue
+        if all(same(a, v, tol) for a, v in zip(answers, values, strict=True)):
+            names.append(name)
+    return names
+
+
+def check_function(
+    what: str,
+    fn: Callable[..., Any],
+    cases: Sequence[Mapping[str, Any]],
+    reference: Callable[..., Any],
+    variants: Variants,
+    boolean: bool = False,
+    tol: float = 1e-9,
+) -> bool:
+    """Call ``fn(**case)`` on each case; compare with ``reference(**case)``; name the mistakes whose
+    ``variant(**case)`` the answers match on every case."""
+    if not callable(fn):
+        fail(f"{what}: expected the function you wrote, got {type(fn).__name__} {_short(fn)}")
+    answers, wrong = [], None
+    for k, case in enumerate(cases):
+        args = {n: (np.array(v, copy=True) if isinstance(v, np.ndarray) else v) for n, v in case.items()}
+        try:
+            got, used = call_watched(fn, args)
+        except NotImplementedError:
+            fail(f"{what}: not written yet (the NotImplementedError placeholder is still there)")
+        except Exception as exc:  # the learner's code failed: say where and with what
+            ambiguous = isinstance(exc, ValueError) and "truth value of an array" in str(exc)
+            fail(
+                f"{what} raised {type(exc).__name__}: {exc} on case {k + 1} ({describe(case)})",
+                "elementwise" if ambiguous else None,
+            )
+        if used is not None:
+            fail(
+                f"{what} calls lorisnb's own `{used}` (case {k + 1}): it then returns lorisnb's answer "
+                "without computing it. Write the formula yourself, with numpy."
+            )
+        want = reference(**case)
+        if boolean:
+            got_a = np.asarray(got)
+            if got_a.shape != np.shape(want):
+                fail(
+                    f"{what} returned shape {got_a.shape} on case {k + 1}; expected one value per pose, {np.shape(want)}"
+                )
+            if got_a.dtype != bool:  # numbers would be truth-tested: 0.3 or -1 would count as correct
+                fail(
+                    f"{what} returned {got_a.dtype} values on case {k + 1}; expected True/False per pose "
+                    "(a comparison such as `ate_m <= eps`, combined with `&`)"
+                )
+            got = got_a
+        elif got is None:
+            fail(f"{what} returned None on case {k + 1}: did you forget `return`?")
+        else:
+            if _is_nan(got):
+                fail(f"{what} returned NaN on case {k + 1} ({describe(case)}); lorisnb gives {float(want):.6g}", "nan")
+            got = number(f"{what} on case {k + 1}", got)
+        answers.append(got)
+        if wrong is None and not same(got, want, tol):
+            wrong = (k, got, want)
+    if wrong is None:
+        return ok(f"{what} matches lorisnb on {len(cases)} case(s)")
+    k, got, want = wrong
+    mistakes = matching_mistakes(answers, cases, variants, tol)
+    if boolean:
+        bad = np.flatnonzero(np.asarray(got) != np.asarray(want))
+        i = int(bad[0])
+        c = cases[k]
+        detail = (
+            f"{len(bad)} of {len(want)} poses differ on case {k + 1}; e.g. pose {i} with ATE {c['ate_m'][i]:g} m, "
+            f"AOE {c['aoe_deg'][i]:g} deg (eps {c['eps']:g} m, phi {c['phi']:g} deg): you say {bool(got[i])}, "
+            f"Eq. (1) says {bool(want[i])}"
+        )
+    else:
+        detail = f"on case {k + 1} ({describe(cases[k])}) you return {got:.6g}; lorisnb gives {float(want):.6g}"
+    fail(f"{what}: {detail}", mistakes)
+
+
+def _is_nan(value: Any) -> bool:
+    try:
+        a = np.asarray(value, float)
+    except (TypeError, ValueError):
+        return False
+    return a.size == 1 and bool(np.isnan(a.reshape(())))

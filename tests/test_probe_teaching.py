@@ -1,0 +1,230 @@
+"""The lab's checks as students meet them: a formula that hands its inputs to lorisnb (or reads the
+check's own reference through the call stack) is refused, not given full marks; the usual
+off-by-one and unit slips are named, also on the hidden tests' real sequences; a NaN or an array
+answer is told with lorisnb's number; the simulator refuses fault times after the end of the
+sequence (stamps typed for seconds), which changed nothing. Runs on the sample data shipped with
+lorisnb (a verbatim subset of OpenLORIS-Scene), so it needs no data folder."""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+
+import lorisnb as ln
+from lorisnb.core import metrics
+from lorisnb.core.simulate import Faults, simulated_errors
+from lorisnb.errors import AnswerError, ValidationError
+from lorisnb.io.data import sample_data
+from lorisnb.tools import teaching as teach
+
+
+@pytest.fixture(scope="module")
+def gt():
+    return ln.load_groundtruth("cafe", sample_data())
+
+
+@pytest.fixture(scope="module")
+def hidden(gt):
+    """The lab's hidden cases (its test cells' own faults and thresholds), on cafe-1 and cafe-2."""
+    a = simulated_errors(gt, Faults(position_noise_m=0.4, orientation_noise_deg=12.0, seed=7), seqs=[1])
+    b = simulated_errors(
+        gt,
+        {1: Faults(position_noise_m=0.3, lost=((5.0, 9.0),), rate_hz=2.0, seed=3),
+         2: Faults(init_delay_s=12.0, yaw_drift_deg_per_m=1.0)},
+        seqs=[1, 2],
+    )  # fmt: skip
+    c = simulated_errors(
+        gt, {1: Faults(init_delay_s=7.0), 2: Faults(wrong_reloc_at_s=0.0, init_delay_s=3.0)}, seqs=[1, 2]
+    )
+    return dict(
+        correctness=teach.cases_from(a, 0.5, 15.0, 1.0, 60.0)["correctness"],
+        correct_rate=teach.cases_from(b, 0.5, 10.0, 0.3, 60.0)["correct_rate"],
+        cs_r=teach.cases_from(c, 1.0, 30.0, 1.0, 25.0)["cs_r"],
+    )
+
+
+def _fails(check, fn, *cases) -> str:
+    with pytest.raises(AnswerError) as exc:
+        check(fn, *cases)
+    return str(exc.value)
+
+
+def _right_cr(stamps, correct, t_min, t_max, delta):
+    return float(np.sum(np.minimum(np.diff(np.append(stamps, t_max)), delta) * correct) / (t_max - t_min))
+
+
+# --- a solution that reads the answer ------------------------------------------------------------
+
+
+def _delegates_correctness(ate_m, aoe_deg, eps, phi):
+    return metrics.correctness(ate_m, aoe_deg, eps, phi)
+
+
+def _delegates_cr(stamps, correct, t_min, t_max, delta):
+    return teach._checks._cr(stamps, correct, t_min, t_max, delta)
+
+
+def _reads_the_reference(t0, t_min, first_correct, tau):
+    checker = next(f.frame for f in inspect.stack() if "reference" in f.frame.f_locals)
+    return checker.f_locals["reference"](t0=t0, t_min=t_min, first_correct=first_correct, tau=tau)
+
+
+@pytest.mark.parametrize(
+    ("check", "fn", "kind", "called"),
+    [
+        (teach.check_correctness, _delegates_correctness, "correctness", "lorisnb.core.metrics.correctness"),
+        (teach.check_correct_rate, _delegates_cr, "correct_rate", "lorisnb.tools.teaching._checks._cr"),
+        (teach.check_cs_r, _reads_the_reference, "cs_r", "lorisnb.tools.teaching._checks._csr"),
+    ],
+)
+def test_a_formula_that_returns_lorisnbs_own_answer_is_refused(check, fn, kind, called, hidden):
+    """It scored full marks (18/18 in `make grade`); now the visible and the hidden checks both say
+    which lorisnb function it called."""
+    for cases in ((), (hidden[kind],)):
+        msg = _fails(check, fn, *cases)
+        assert f"calls lorisnb's own `{called}`" in msg and "Write the formula yourself" in msg, msg
+
+
+def test_a_formula_using_only_numpy_still_passes_and_a_lazy_lorisnb_attribute_is_not_a_call(hidden, capsys):
+    def right(stamps, correct, t_min, t_max, delta):
+        ln.core  # a lazy attribute of lorisnb (module __getattr__), no lorisnb function called  # noqa: B018
+        return _right_cr(stamps, correct, t_min, t_max, delta)
+
+    assert teach.check_correct_rate(right) and teach.check_correct_rate(right, hidden["correct_rate"])
+    assert capsys.readouterr().out.count("✓ correct_rate matches lorisnb") == 2
+
+
+# --- the usual slips, named ----------------------------------------------------------------------
+
+
+def _shifted(stamps, correct, t_min, t_max, delta):  # off by one: each interval credited to the next pose
+    return float(np.sum(np.minimum(np.diff(stamps), delta) * correct[1:]) / (t_max - t_min))
+
+
+def _last_holds_delta(stamps, correct, t_min, t_max, delta):  # off by one: the last pose holds delta, not to t_max
+    held = np.append(np.minimum(np.diff(stamps), delta), delta)
+    return float(np.sum(held * correct) / (t_max - t_min))
+
+
+def _cut_at_delta(stamps, correct, t_min, t_max, delta):  # a pose longer than delta dropped, not capped
+    dt = np.diff(np.append(stamps, t_max))
+    return float(np.sum(np.where(dt < delta, dt, 0.0) * correct) / (t_max - t_min))
+
+
+def _each_holds_delta(stamps, correct, t_min, t_max, delta):
+    return float(np.count_nonzero(correct) * delta / (t_max - t_min))
+
+
+def _crt_counts_poses(stamps, correct, t_min, t_max, delta):
+    return float(np.mean(correct))
+
+
+def _csr_absolute_time(t0, t_min, first_correct, tau):  # forgot t_min: exp(-stamp / tau)
+    return float(np.exp(-t0 / tau)) if first_correct else 0.0
+
+
+@pytest.mark.parametrize(
+    ("check", "fn", "kind", "hint"),
+    [
+        (teach.check_correct_rate, _shifted, "correct_rate", "held backward"),
+        (teach.check_correct_rate, _last_holds_delta, "correct_rate", "last pose"),
+        (teach.check_correct_rate, _cut_at_delta, "correct_rate", "delta cut"),
+        (teach.check_correct_rate, _each_holds_delta, "correct_rate", "held delta"),
+        (teach.check_correct_rate_tracking, _crt_counts_poses, "correct_rate", "poses not time"),
+        (teach.check_cs_r, _csr_absolute_time, "cs_r", "absolute time"),
+    ],
+)
+def test_off_by_one_and_unit_slips_are_named(check, fn, kind, hint, hidden):
+    msg = _fails(check, fn)
+    assert f"\nHint ({hint}):" in msg, msg
+    if fn is not _last_holds_delta:  # the hidden sequences end on a wrong pose: its time is 0 either way
+        msg = _fails(check, fn, hidden[kind])
+        assert f"\nHint ({hint}):" in msg, msg
+
+
+def test_forgetting_t_min_on_real_stamps_is_not_told_tau_inverted_alone(hidden):
+    """On real stamps (1.56e9 s) exp(-t0 / tau) is 0, as is exp(-(t0 - t_min) * tau): the answer
+    matches both mistakes, and the hint names the one the learner most likely made too."""
+    msg = _fails(teach.check_cs_r, _csr_absolute_time, hidden["cs_r"])
+    assert "you return 0; lorisnb gives 0.755114" in msg
+    assert "\nHint (absolute time):" in msg and "t0 - t_min" in msg
+
+
+def test_nan_and_array_answers_say_what_lorisnb_gives():
+    def nan_when_wrong(t0, t_min, first_correct, tau):
+        return float(np.exp(-(t0 - t_min) / tau)) if first_correct else float("nan")
+
+    msg = _fails(teach.check_cs_r, nan_when_wrong)
+    assert "cs_r returned NaN on case 3 (t0=130.0, t_min=100.0, first_correct=False, tau=60.0); lorisnb gives 0" in msg
+    assert "\nHint (nan):" in msg
+
+    def per_pose(stamps, correct, t_min, t_max, delta):  # the sum forgotten
+        return np.minimum(np.diff(np.append(stamps, t_max)), delta) * correct / (t_max - t_min)
+
+    msg = _fails(teach.check_correct_rate, per_pose)
+    assert "expected one number, got ndarray of shape (171,) (171 values)" in msg and "np.sum" in msg
+    assert len(msg) < 300, msg  # not the array's repr
+
+
+def test_ate_percent_made_of_the_mean_ate_gets_the_rmse_hint():
+    data = sample_data()
+    gt = ln.load_groundtruth("cafe", data)
+    files = sorted((data.icra20 / "per-seq" / "orbslam2_rgbd").glob("cafe*.txt"))
+    row = ln.evaluate(files, data_root=data).sequences(eps=1.0, phi=30.0, delta=1.0, tau=60.0).set_index("seq").loc[1]
+    seq1 = gt.sequences[1]
+    mean_answer = 100 * row["ate_mean"] / seq1.path_length
+    assert mean_answer == pytest.approx(1.4429, abs=1e-3) and 100 * row["ate_rmse"] / seq1.path_length == pytest.approx(
+        1.5496, abs=1e-3
+    )
+    with pytest.raises(AnswerError) as exc:
+        teach.check_ate_percent(mean_answer, row["ate_rmse"], row["c_ate_rmse"], seq1, ate_mean=row["ate_mean"])
+    assert "you answered 1.443; lorisnb computes 1.55" in str(exc.value)
+    assert "\nHint (rmse vs mean):" in str(exc.value)
+
+
+def test_the_hidden_tests_fail_a_solution_fitted_to_the_visible_cases(hidden, capsys):
+    """A learner who copies lorisnb's numbers from the visible checks' messages passes them; the
+    hidden cases (real sequences) do not let it through."""
+    visible = {(c["t_min"], c["delta"]): _right_cr(**c) for c in teach.CR_CASES}
+
+    def fitted(stamps, correct, t_min, t_max, delta):
+        return visible.get((t_min, delta), 0.5)
+
+    assert teach.check_correct_rate(fitted)
+    msg = _fails(teach.check_correct_rate, fitted, hidden["correct_rate"])
+    assert "you return 0.5; lorisnb gives 0.347498" in msg
+
+
+# --- the simulator: fault times are seconds from the start ---------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("faults", "said"),
+    [
+        (lambda t0: Faults(lost=((t0 + 15.0, t0 + 35.0),)), "lost interval (1560004900.4, 1560004920.4)"),
+        (lambda t0: Faults(wrong_reloc_at_s=t0 + 10.0), "wrong_reloc_at_s=1560004895.4"),
+        (lambda t0: Faults(init_delay_s=t0 + 20.0), "init_delay_s=1560004905.4"),
+        (lambda t0: Faults(lost=((60.0, 80.0),)), "lost interval (60.0, 80.0)"),
+    ],
+)
+def test_fault_times_after_the_end_are_refused_not_ignored(gt, faults, said):
+    """Stamps typed for seconds: the loss interval and the wrong re-localization changed nothing
+    (2281 of 2281 poses kept, exit 0), the init delay left no pose."""
+    seq1 = gt.sequences[1]
+    assert len(seq1) == 2281 and seq1.duration == pytest.approx(56.98, abs=0.01)
+    with pytest.raises(ValidationError) as exc:
+        simulated_errors(gt, faults(float(seq1.stamps[0])), seqs=[1])
+    msg = str(exc.value)
+    assert msg.startswith("cafe-1: Faults(") and said in msg, msg
+    assert "lasts 57.0 s" in msg and "seconds from the start of the sequence" in msg and "not stamps" in msg
+
+
+def test_fault_times_up_to_the_end_still_work(gt):
+    """The fault explorer's sliders reach the sequence's duration; a loss to infinity is fine."""
+    d = gt.sequences[1].duration
+    s = ln.score(simulated_errors(gt, Faults(init_delay_s=d, lost=((d, d + 5.0),)), seqs=[1]), 1.0, 30.0, 1.0, 60.0)
+    assert int(s["matched"].iloc[0]) <= 1
+    s = ln.score(simulated_errors(gt, Faults(lost=((15.0, np.inf),)), seqs=[1]), 1.0, 30.0, 1.0, 60.0).iloc[0]
+    assert s["matched"] == 601 and s["cr"] == pytest.approx((15.0 + 1.0) / d, abs=0.005)  # + delta: the last pose holds
