@@ -156,3 +156,13 @@ def test_trials_of_an_algorithm_are_told_apart(tmp_path, icra20):
     assert shown.loc[1] == pytest.approx(0.913326, abs=1e-6) and shown.loc[2] == pytest.approx(0.961911, abs=1e-6)
     pd.testing.assert_series_equal(shown.sort_index(), ref.sort_index())
     assert sorted(t.get_text() for t in fig.axes[0].get_yticklabels()) == ["vins trial 1", "vins trial 2"]
+
+
+def test_what_to_pass_is_said(ev):
+    """``ev.durations`` without the call, or the Evaluation for its errors: a TypeError deep inside."""
+    with pytest.raises(ln.ValidationError, match=r"call it: ev.durations\(\)"):
+        ThresholdExplorer(ev.errors, ev.durations)
+    with pytest.raises(ln.ValidationError, match=r"ev.durations\(\) \(columns scene, .*got DataFrame without seq"):
+        ThresholdExplorer(ev.errors, ev.scenes())
+    with pytest.raises(ln.ValidationError, match=r"lorisnb.evaluate\(...\).errors\), got Evaluation"):
+        ThresholdExplorer(ev, ev.durations())

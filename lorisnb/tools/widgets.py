@@ -16,10 +16,10 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from ..core.aggregate import aggregate_scenes, durations_table
+from ..core.aggregate import DURATION_COLUMNS, aggregate_scenes, durations_table
 from ..core.frames import PAPER_EPS, PAPER_PHI
 from ..core.model import Eps, FileErrors, ResultFile, scene_eps
-from ..core.scoring import score
+from ..core.scoring import as_files, score
 from ..core.simulate import Faults, simulated_errors
 from ..core.spec import make_spec
 from ..core.validate import present
@@ -60,6 +60,21 @@ def explorer_eps(eps: Eps, scene: str | None) -> float | str:
     if isinstance(eps, (str, Mapping)) and scene is not None:
         return scene_eps(eps, scene)
     return float(eps)  # type: ignore[arg-type]
+
+
+def checked_durations(durations: Any) -> pd.DataFrame:
+    """``durations`` if it is a table of ground-truth spans (:data:`DURATION_COLUMNS`, seconds), as
+    ``ev.durations()`` returns, else a :class:`ValidationError` saying what to pass."""
+    if callable(durations):
+        raise ValidationError("durations: got a method; call it: ev.durations() (ground-truth spans, seconds)")
+    missing = [c for c in DURATION_COLUMNS if c not in getattr(durations, "columns", ())]
+    if not isinstance(durations, pd.DataFrame) or missing:
+        raise ValidationError(
+            f"durations: expected the ground-truth spans of an evaluation, ev.durations() (columns "
+            f"{', '.join(DURATION_COLUMNS)}), got {type(durations).__name__}"
+            + (f" without {', '.join(missing)}" if isinstance(durations, pd.DataFrame) else "")
+        )
+    return durations
 
 
 def _label(algorithm: str, keys: Mapping[str, Any]) -> str:
@@ -103,8 +118,8 @@ class ThresholdExplorer:
         tau: float = 60.0,
         scene: str | None = None,
     ):
-        self.errors = list(errors)
-        self.durations = durations
+        self.errors = as_files(errors)
+        self.durations = checked_durations(durations)
         self.scenes = [s for s in durations["scene"].unique() if any(f.scene == s for f in self.errors)]
         spec = make_spec(None, surface="widget", eps=eps, phi=phi, delta=delta, tau=tau)
         if not self.scenes:
