@@ -65,3 +65,46 @@ def test_an_evaluation_without_failures_issues_no_such_warning(data):
         ev = ln.evaluate_pairs(est, gt)
     assert ev.exit_status() == 0
     assert not [w for w in caught if issubclass(w.category, FailedInputsWarning)]
+
+
+@pytest.fixture(scope="module")
+def orbslam2(data, icra20):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return ln.evaluate(icra20 / "per-seq" / "orbslam2_rgbd", data_root=data, scenes=["cafe"])
+
+
+@pytest.mark.parametrize(
+    ("kw", "said"),
+    [
+        (dict(eps=1, phi=-1), "phi=-1: expected a number of degrees >= 0"),
+        (dict(eps=1, phi=float("nan")), "phi=nan: expected a number of degrees, not NaN"),
+        (dict(eps=-2, phi=30), "eps=-2: expected 'paper', 'relative:F', a number of metres >= 0"),
+        (dict(eps="paper", phi=400), "phi=400: expected at most 180 degrees"),
+    ],
+)
+def test_figures_validate_their_thresholds_as_the_tables_do(orbslam2, kw, said):
+    from lorisnb.core.timeline import timeline_table
+    from lorisnb.tools.plotting import plot_timeline, plot_trajectories
+
+    with pytest.raises(ln.ValidationError) as table_error:
+        orbslam2.sequences(**kw)
+    assert said in str(table_error.value)
+    for draw in (
+        lambda: plot_trajectories(orbslam2.errors[0], **kw),
+        lambda: timeline_table(orbslam2.errors, **kw),
+        lambda: plot_timeline(orbslam2.errors, orbslam2.durations(), orbslam2.scenes(), **kw),
+    ):
+        with pytest.raises(ln.ValidationError) as exc:
+            draw()
+        assert str(exc.value) == str(table_error.value)
+
+
+def test_a_zero_validity_window_is_refused_by_the_timeline_as_by_score(orbslam2):
+    from lorisnb.core.timeline import timeline_table
+
+    with pytest.raises(ln.ValidationError, match="delta=0: expected a number of seconds > 0"):
+        timeline_table(orbslam2.errors, eps=1, phi=30, delta=0)
+    segments, firsts = timeline_table(orbslam2.errors, eps="1", phi="30", delta="1")  # number strings, as score takes
+    paper = orbslam2.sequences(eps=1, phi=30, delta=1)
+    assert len(firsts) == int((paper["matched"] > 0).sum())

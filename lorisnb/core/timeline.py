@@ -16,6 +16,7 @@ import pandas as pd
 from . import metrics
 from .frames import SCENES
 from .model import FileErrors, sequence_eps
+from .validate import eps_value, threshold
 
 
 def pose_segments(
@@ -52,13 +53,14 @@ def timeline_table(
         firsts: algorithm, suite, scene, seq, t (first matched pose, seconds from the start),
             correct (a dot in the figure if correct, a cross if not).
     """
+    eps_v, phi_v, delta_v = eps_value(eps), threshold("phi", phi), threshold("delta", delta)  # as score's
     segs, firsts = [], []
     for f in errors:
         for e in f.sequences:
             if e.matched == 0:
                 continue
-            c = metrics.correctness(e.ate, e.aoe, sequence_eps(eps, f.scene, e), phi)
-            s, t, ok = pose_segments(e.stamps, c, e.gt_end, delta, e.gt_start)
+            c = metrics.correctness(e.ate, e.aoe, sequence_eps(eps_v, f.scene, e), phi_v)
+            s, t, ok = pose_segments(e.stamps, c, e.gt_end, delta_v, e.gt_start)
             segs.append(
                 pd.DataFrame(
                     {

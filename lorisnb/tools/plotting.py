@@ -20,6 +20,7 @@ from matplotlib.patches import Rectangle
 from ..core.metrics import correctness
 from ..core.model import FileErrors, sequence_eps
 from ..core.timeline import sequence_layout, timeline_table
+from ..core.validate import eps_value, threshold
 
 #: Widest figure, inches (about 1,200 px in a notebook): wider ones would be shrunk to unreadable text.
 MAX_WIDTH_IN = 12.0
@@ -188,6 +189,7 @@ def plot_trajectories(
 ):
     """Top view (x-y, metres) of each sequence: interpolated ground truth in grey, the aligned
     estimate as points coloured by correctness (blue correct, red wrong)."""
+    eps, phi = eps_value(eps), threshold("phi", phi)  # validated as score's
     seqs = [e for e in errors.sequences if e.matched]
     n = max(1, len(seqs))
     cols = min(max_cols, n)
