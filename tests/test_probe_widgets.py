@@ -132,6 +132,8 @@ def test_fault_explorer_checks_seq_and_seed_when_built_and_labels_its_thresholds
     gt = load_groundtruth("cafe", data)
     with pytest.raises(ln.ValidationError, match="seq=3: the ground truth of cafe has sequence.s. 1, 2"):
         FaultExplorer(gt, seq=3)
+    with pytest.raises(ln.ValidationError, match=r"got str: pass lorisnb.load_groundtruth\(scene"):
+        FaultExplorer("cafe")  # type: ignore[arg-type]
     with pytest.raises(ln.ValidationError, match="seed=-1"):
         FaultExplorer(gt, seed=-1)
     ex = FaultExplorer(gt, seq=1, eps="paper", phi=30.0)

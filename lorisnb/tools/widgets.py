@@ -237,6 +237,11 @@ class FaultExplorer:
         rpe_delta: float = 1.0,
         rpe_unit: str = "s",
     ):
+        if not isinstance(groundtruth, ResultFile):
+            raise ValidationError(
+                f"groundtruth: expected a scene's ground truth (a ResultFile), got {type(groundtruth).__name__}: "
+                "pass lorisnb.load_groundtruth(scene, data_root) or lorisnb.read_openloris(path)"
+            )
         if seq not in groundtruth.sequences:
             have = ", ".join(str(k) for k in sorted(groundtruth.sequences))
             raise ValidationError(f"seq={seq!r}: the ground truth of {groundtruth.scene} has sequence(s) {have}")
