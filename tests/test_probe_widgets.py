@@ -133,7 +133,7 @@ def test_fault_explorer_checks_seq_and_seed_when_built_and_labels_its_thresholds
     with pytest.raises(ln.ValidationError, match="seq=3: the ground truth of cafe has sequence.s. 1, 2"):
         FaultExplorer(gt, seq=3)
     with pytest.raises(ln.ValidationError, match=r"got str: pass lorisnb.load_groundtruth\(scene"):
-        FaultExplorer("cafe")  # type: ignore[arg-type]
+        FaultExplorer("cafe")
     with pytest.raises(ln.ValidationError, match="seed=-1"):
         FaultExplorer(gt, seed=-1)
     ex = FaultExplorer(gt, seq=1, eps="paper", phi=30.0)
@@ -168,3 +168,15 @@ def test_what_to_pass_is_said(ev):
         ThresholdExplorer(ev.errors, ev.scenes())
     with pytest.raises(ln.ValidationError, match=r"lorisnb.evaluate\(...\).errors\), got Evaluation"):
         ThresholdExplorer(ev, ev.durations())
+
+
+def test_paper_eps_on_a_scene_without_one_is_refused_when_built(ev, data):
+    """OpenLORIS and TUM errors in one explorer with eps "paper": building it worked, and choosing
+    fr2_desk in the dropdown raised inside the observer (in JupyterLab: only in the kernel's log)."""
+    tum = data.tum
+    pair = ln.evaluate_pairs(tum / "fr2_desk_ORB.txt", tum / "fr2_desk_groundtruth.txt", "tum", jobs=1)
+    errors, durations = ev.errors + pair.errors, pd.concat([ev.durations(), pair.durations()], ignore_index=True)
+    with pytest.raises(ln.ValidationError, match="scene 'fr2_desk' is not one"):
+        ThresholdExplorer(errors, durations, "paper", scene="home")
+    ex = ThresholdExplorer(errors, durations, 0.05, scene="fr2_desk")
+    assert ex.results()[0]["cr"].iloc[0] == pytest.approx(pair.scenes(0.05, 30.0, 1.0, 60.0)["cr"].iloc[0])

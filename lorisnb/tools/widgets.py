@@ -93,8 +93,8 @@ def _render(out: Any, results: Callable[[], tuple[pd.DataFrame, Figure]]) -> Non
     backend redraw can race with it (fast drags never show a blank or half-drawn figure)."""
     from IPython.display import display
 
-    table, fig = results()
-    with out:
+    with out:  # in a kernel, an error shows in the output area, not only in the kernel's log
+        table, fig = results()
         out.clear_output(wait=True)
         display(table.round(3))
         show_figure(fig)
@@ -136,6 +136,8 @@ class ThresholdExplorer:
                 "give eps for each of them, or one number, or 'paper'"
             )
         self._scene = self.scenes[0] if scene is None else present("scene", [scene], self.scenes)[0]
+        for s in self.scenes:  # every scene's eps now: a scene change cannot fail inside the dropdown
+            explorer_eps(self.given, s)
         self.eps: float | str = explorer_eps(self.given, self._scene)
         self.phi, self.delta, self.tau = float(spec.phi), float(spec.delta), float(spec.tau)
 
