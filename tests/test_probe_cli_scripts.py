@@ -161,3 +161,28 @@ def test_a_scene_whose_ground_truth_is_missing_from_the_data_is_not_scored(icra2
     assert _rc(["diff", results, results, "--data", partial, "--no-progress", "--jobs", "1"]) == 1
     err = capsys.readouterr().err
     assert "2 input(s) of BASE and 2 of CAND could not be evaluated or were not scored" in err
+
+
+def test_an_output_that_cannot_be_written_is_an_output_error(icra20, data, tmp_path, monkeypatch, capsys):
+    """``--csv /proc/x.csv`` (any place the system refuses though ``os.access`` says yes, as it
+    does to root) evaluated everything, then ended in a traceback with exit status 1, which a
+    script reads as "an input failed". Now refused before any work (exit 2); a write failing
+    later (a full disk) is one ``error:`` line with exit status 2, never a traceback."""
+    results = _results(icra20, tmp_path / "r", CAFE)
+    argv = ["evaluate", results, "--data", data.root, "--no-progress", "--jobs", "1"]
+    if Path("/proc/self").is_dir():
+        assert _rc([*argv, "--csv", "/proc/lorisnb-probe.csv"]) == 2
+        cap = capsys.readouterr()
+        assert "cannot write /proc/lorisnb-probe.csv" in cap.err and cap.out == ""  # before any work
+
+    import lorisnb.io.writers as writers
+
+    def full_disk(table, out, force=False):
+        raise OSError(28, "No space left on device", str(out))
+
+    monkeypatch.setattr(writers, "write_csv", full_disk)
+    out = tmp_path / "t.csv"
+    assert _rc([*argv, "--csv", out]) == 2
+    err = capsys.readouterr().err
+    assert f"error: {out}: No space left on device" in err and "Traceback" not in err
+    assert not out.exists()

@@ -286,6 +286,12 @@ def main(argv: list[str] | None = None) -> int:
     except LorisError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # writing an output failed once checked (a full disk, a file system that refuses)
+        if isinstance(exc, BrokenPipeError):  # stdout closed by the reader: run() ends quietly
+            raise
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt as exc:
         terminated = isinstance(exc, Terminated)
         print("terminated" if terminated else "interrupted", file=sys.stderr)

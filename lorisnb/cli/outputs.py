@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import tempfile
 from pathlib import Path
 
 from ..errors import OutputError, ValidationError
@@ -47,6 +48,12 @@ def check_output(out: str | None, inputs: list[str], force: bool, folder: bool =
         parent = parent.parent
     if not os.access(parent, os.W_OK):
         raise OutputError(f"cannot write {out}: {parent} is not writable; choose another place")
+    try:  # os.access answers yes to root everywhere (/proc, a full or read-only file system for some)
+        fd, probe = tempfile.mkstemp(prefix=".lorisnb-probe-", dir=parent)
+    except OSError as exc:
+        raise OutputError(f"cannot write {out}: {parent}: {exc.strerror or exc}; choose another place") from None
+    os.close(fd)
+    os.unlink(probe)  # the file this check made, and nothing else
 
 
 #: Options naming a file or folder a command reads (argparse names): an output never replaces them.
