@@ -31,6 +31,9 @@ from .plotting import plot_timeline
 STYLE = {"description_width": "110px"}
 OFF = -1.0  # the "off" position of the wrong re-localization slider
 SLIDER_WIDTH = "460px"  # long enough for about 80 positions
+#: The paper's other ATE thresholds, metres: Table III's re-localization scores (0.3 m) and its
+#: C^0.1-RPE example (0.1 m); its Fig. 3 uses PAPER_EPS, its Fig. 2 CR^inf (no threshold).
+PAPER_OTHER_EPS = (0.1, 0.3)
 
 
 def value_slider(description: str, value: float | str, grid: Iterable[float], exact: Iterable[float] = ()) -> Any:
@@ -154,10 +157,11 @@ class ThresholdExplorer:
         self._scene = new
 
     def eps_positions(self) -> list[float]:
-        """The eps slider's values besides its grid, metres: the paper's 1/3/5 m, every scene's value
-        of a mapping eps, and ``inf`` (no ATE threshold, as ``--eps inf``)."""
+        """The eps slider's values besides its grid, metres: the paper's (1/3/5 m of Fig. 3, 0.1 and
+        0.3 m, ``inf``: no ATE threshold, as ``--eps inf`` and Fig. 2's CR^inf) and every scene's
+        value of a mapping eps."""
         given = list(self.given.values()) if isinstance(self.given, Mapping) else []
-        return [*PAPER_EPS.values(), *given, float("inf")]
+        return [*PAPER_EPS.values(), *PAPER_OTHER_EPS, *given, float("inf")]
 
     def results(self) -> tuple[pd.DataFrame, Figure]:
         """Scene table and timeline figure for the current values. Several trials (or suites) of an
@@ -188,8 +192,8 @@ class ThresholdExplorer:
 
     def widget(self) -> Any:
         """The interactive controls and their output (for JupyterLab). Each slider starts exactly at
-        the explorer's value and offers the paper's values (eps 1/3/5 m, phi 30 deg, delta 1 s,
-        tau 60 s) exactly; eps also offers ``inf`` (no ATE threshold) and follows the scene as
+        the explorer's value and offers the paper's values exactly (eps 0.1, 0.3, 1, 3, 5 m and
+        ``inf``, :meth:`eps_positions`; phi 30 deg, delta 1 s, tau 60 s); eps follows the scene as
         :class:`ThresholdExplorer` says."""
         import ipywidgets as w
 
