@@ -22,7 +22,8 @@ from . import metrics
 from .blocks import blockwise, ordinary_pages
 from .model import FileErrors
 from .scoring import as_files
-from .validate import threshold, threshold_list
+from .sweep import grid_values, scene_totals
+from .validate import threshold
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -68,7 +69,7 @@ def _outputs(count: int, shape: tuple[int, ...]) -> list[np.ndarray]:
 
 def _grid(name: str, values: object) -> np.ndarray:
     """A validated grid, sorted, without repeats."""
-    items = threshold_list(name, values)
+    items = grid_values(name, values)
     if any(isinstance(x, (str, dict)) for x in items):
         raise ValidationError(f"{name}: a surface's grid is numbers (metres or degrees), not 'paper' or a mapping")
     return np.unique(np.asarray(items, float))
@@ -89,7 +90,7 @@ def cr_surfaces(
     files = as_files(errors)
     eps_a, phi_a = _grid("eps", eps), _grid("phi", phi)
     delta = threshold("delta", delta)
-    total = durations.groupby("scene")["gt_duration"].sum()
+    total = scene_totals(durations, (f.scene for f in files))
     E, P = len(eps_a), len(phi_a)
     keys: dict[tuple[str, str, str, int], int] = {}
     cells: list[list[np.ndarray]] = []  # per group: the grid cell of each pose, and its held time

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..errors import ValidationError
+from ..errors import EvaluationError, ValidationError
 from . import metrics, validate
 from .aggregate import aggregate_scenes
 from .frames import PAPER_EPS
@@ -73,6 +73,34 @@ def check_sweep_size(
         )
 
 
+def grid_values(name: str, values: Any) -> list[Any]:
+    """A validated threshold grid (:func:`lorisnb.core.validate.threshold_list`, the single
+    evaluation's rules); a 0-d numpy array (``np.array(0.3)``, ``arr.max()`` of an array) is one
+    value, as a number is."""
+    if isinstance(values, np.ndarray) and values.ndim == 0:
+        values = values.item()
+    return threshold_list(name, values)
+
+
+def scene_totals(durations: pd.DataFrame, scenes: Iterable[str]) -> pd.Series:
+    """Ground-truth time of each scene (the denominator of scene CR, Eq. 2), seconds; a scene of
+    the inputs without durations is refused as :func:`lorisnb.core.aggregate.aggregate_scenes`
+    refuses it (its rates would be NaN or a KeyError)."""
+    total = durations.groupby("scene")["gt_duration"].sum()
+    missing = sorted(set(scenes) - set(total.index))
+    if missing:
+        raise EvaluationError(f"no ground-truth durations for scene(s) {', '.join(missing)}; pass their durations")
+    return total
+
+
+def _eps_label(v: Any) -> Any:
+    """An eps grid value as the ``eps_value`` column shows it: metres as a number, a word as
+    given, a scene mapping as ``scene:metres`` pairs."""
+    if isinstance(v, Mapping):
+        return ",".join(f"{k}:{x:g}" for k, x in v.items())
+    return v if isinstance(v, str) else float(v)
+
+
 def _eps_values(eps: list[Any], scene: str, e: SequenceErrors, relative_to: str | None) -> np.ndarray:
     """The eps of each grid value for one sequence, metres."""
     size = sequence_size(e, relative_to) if relative_to is not None else np.nan
@@ -120,14 +148,21 @@ def sweep(
         relative_to = choice("relative_to", relative_to, RELATIVE)
     columns = choice("columns", columns, ("all", "metrics"))
     max_bytes = validate.positive("max_bytes", max_bytes, "bytes")
-    eps_l = threshold_list("eps", eps)
+    eps_l = grid_values("eps", eps)
     if relative_to is not None and any(isinstance(v, (str, Mapping)) for v in eps_l):
         raise ValidationError("eps: with relative_to, eps values are fractions (numbers), not 'paper' or a mapping")
     if relative_to is not None:
         eps_l = [fraction("eps", v) if np.isfinite(v) else v for v in eps_l]  # inf: every pose correct
-    phi_a = np.array(threshold_list("phi", phi))
-    delta_a = np.array(threshold_list("delta", delta))
-    tau_a = np.array(threshold_list("tau", tau))
+    phi_a = np.array(grid_values("phi", phi))
+    delta_a = np.array(grid_values("delta", delta))
+    tau_a = np.array(grid_values("tau", tau))
+    scenes = sorted({f.scene for f in files})
+    for v in eps_l:  # a scene mapping (accepted by score) must name every scene swept
+        if isinstance(v, Mapping) and set(scenes) - set(v):
+            raise ValidationError(
+                f"eps={_eps_label(v)}: no eps for scene(s) {', '.join(sorted(set(scenes) - set(v)))} of the "
+                f"inputs; give metres for every scene swept ({', '.join(scenes)}), or 'paper'"
+            )
     r = rpe_of(files, dict(rpe_delta=rpe_delta, rpe_unit=rpe_unit, rpe_pairs=rpe_pairs, rpe_all_pairs=rpe_all_pairs,
                            rpe_tolerance=rpe_tolerance))  # fmt: skip
     rpe_d, rpe_u = rpe_setting(r["rpe_delta"], r["rpe_unit"])
@@ -176,8 +211,8 @@ def sweep(
     data["phi"] = np.tile(phi_a[grid_idx[1]], S)
     data["delta"] = np.tile(delta_a[grid_idx[2]], S)
     data["tau"] = np.tile(tau_a[grid_idx[3]], S)
-    labels = np.array([v if isinstance(v, str) else float(v) for v in eps_l], dtype=object)
-    if any(isinstance(v, str) for v in eps_l):
+    labels = np.array([_eps_label(v) for v in eps_l], dtype=object)
+    if any(isinstance(v, str) for v in labels):
         data["eps_value"] = pd.Categorical(np.tile(labels[grid_idx[0]], S).astype(str))
     else:
         data["eps_value"] = np.tile(labels[grid_idx[0]].astype(float), S)
@@ -210,47 +245,56 @@ def sweep_scenes(table: pd.DataFrame, durations: pd.DataFrame) -> pd.DataFrame:
     return aggregate_scenes(plain, durations)
 
 
+def _target_cr(target: Any) -> float:
+    """A correct rate to reach: a number above 0 and at most 1."""
+    try:
+        v = validate.positive("target", target, "")
+    except ValidationError:
+        v = np.nan
+    if not 0 < v <= 1:
+        raise ValidationError(f"target={target!r}: expected a correct rate above 0 and at most 1 (0.5 for 50 %)")
+    return v
+
+
 def eps_at_cr(
     errors: Iterable[FileErrors], target: float, durations: pd.DataFrame, phi: float = np.inf, delta: float = 1.0
 ) -> pd.DataFrame:
-    """The smallest eps (metres) at which each algorithm reaches scene CR >= ``target``, exactly.
+    """The smallest eps (metres) at which each algorithm reaches scene CR >= ``target`` (a rate
+    above 0, at most 1), exactly, per suite, algorithm, scene and trial (each trial is one run,
+    scored alone, as :func:`sweep_scenes` does).
 
     Scene CR grows with eps as a step function that steps at the poses' ATE values: sorting the
     poses of a scene by ATE and accumulating the time they hold gives the answer without a grid.
-    NaN where even eps = infinity does not reach the target (not enough tracking time).
+    NaN where even eps = infinity does not reach the target (not enough tracking time; ``max_cr``
+    says how much there is, 0 for a run without a matched pose).
     ``durations``: the ground-truth durations (``Evaluation.durations()``).
     """
     files = as_files(errors)
+    target = _target_cr(target)
     phi, delta = threshold("phi", phi), threshold("delta", delta)
-    total = durations.groupby("scene")["gt_duration"].sum()
-    parts: dict[tuple[str, str, str], list[tuple[np.ndarray, np.ndarray]]] = {}
+    total = scene_totals(durations, (f.scene for f in files))
+    parts: dict[tuple[str, str, str, int], list[tuple[np.ndarray, np.ndarray]]] = {}
     for f in files:
+        chunks = parts.setdefault((f.suite, f.algorithm, f.scene, f.trial), [])  # listed even if never matched
         for e in f.sequences:
             if e.matched == 0:
                 continue
             held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end, e.gt_start), delta)
             ok = e.aoe <= phi
-            parts.setdefault((f.suite, f.algorithm, f.scene), []).append((e.ate[ok], held[ok]))
+            chunks.append((e.ate[ok], held[ok]))
     rows = []
-    for (suite, alg, scene), chunks in parts.items():
-        ate = np.concatenate([a for a, _ in chunks])
-        held = np.concatenate([h for _, h in chunks])
+    for (suite, alg, scene, trial), chunks in parts.items():
+        ate = np.concatenate([a for a, _ in chunks] or [np.zeros(0)])
+        held = np.concatenate([h for _, h in chunks] or [np.zeros(0)])
         order = np.argsort(ate, kind="stable")
         cr = np.cumsum(held[order]) / total[scene]
         k = np.searchsorted(cr, target - 1e-12)
-        rows.append(
-            dict(
-                suite=suite,
-                algorithm=alg,
-                scene=scene,
-                target_cr=target,
-                phi=phi,
-                delta=delta,
-                eps=float(ate[order][k]) if k < len(cr) else np.nan,
-                max_cr=float(cr[-1]) if len(cr) else 0.0,
-            )
-        )
-    return pd.DataFrame(rows, columns=["suite", "algorithm", "scene", "target_cr", "phi", "delta", "eps", "max_cr"])
+        eps = float(ate[order][k]) if k < len(cr) else np.nan
+        max_cr = float(cr[-1]) if len(cr) else 0.0
+        rows.append(dict(suite=suite, algorithm=alg, scene=scene, trial=trial, target_cr=target, phi=phi,
+                         delta=delta, eps=eps, max_cr=max_cr))  # fmt: skip
+    columns = ["suite", "algorithm", "scene", "trial", "target_cr", "phi", "delta", "eps", "max_cr"]
+    return pd.DataFrame(rows, columns=columns)
 
 
 def _absolute_eps(scenes: pd.DataFrame, name: str) -> None:
