@@ -228,3 +228,20 @@ def test_fault_times_up_to_the_end_still_work(gt):
     assert int(s["matched"].iloc[0]) <= 1
     s = ln.score(simulated_errors(gt, Faults(lost=((15.0, np.inf),)), seqs=[1]), 1.0, 30.0, 1.0, 60.0).iloc[0]
     assert s["matched"] == 601 and s["cr"] == pytest.approx((15.0 + 1.0) / d, abs=0.005)  # + delta: the last pose holds
+
+
+# --- an answer cell that disables the checks -----------------------------------------------------
+
+
+def test_an_answer_cell_cannot_replace_or_empty_the_checks(capsys):
+    """`teach.check_correctness = lambda *a, **k: True` in an answer cell scored full marks (the
+    grader runs the notebook in one kernel); emptying the default cases passed a constant."""
+    namespace = {"teach": teach}
+    for cell in ("teach.check_correctness = lambda *a, **k: True", "del teach.check_value", "teach.CR_CASES = []"):
+        with pytest.raises(AnswerError, match="cannot be (replaced|removed): the checks grade your answers"):
+            exec(cell, namespace)
+    assert teach.check_correctness.__module__ == "lorisnb.tools.teaching._checks"
+    msg = _fails(teach.check_correct_rate, lambda **kw: 0.0, [])
+    assert "no case to check it on" in msg
+    teach.learner_note = "other names are free"  # a learner's own attribute is not refused
+    del teach.learner_note

@@ -13,6 +13,10 @@ the typical mistake when the answer is what that mistake gives (:data:`MISTAKES`
   explanations shown after a check, computed from the lab's parameters.
 """
 
+import sys
+from types import ModuleType
+
+from ...errors import AnswerError
 from ._checks import (
     CORRECTNESS_CASES,
     CR_CASES,
@@ -35,3 +39,25 @@ __all__ = [
     "check_cs_r", "check_eps_at_cr", "check_silent_sequences", "check_value", "explain_ate_percent", "explain_gap",
     "explain_wrong_reloc", "lab_data", "wrong_reloc_question",
 ]  # fmt: skip
+
+
+class _Checks(ModuleType):
+    """This module, whose checks and cases an answer cell cannot replace: ``teach.check_value =
+    lambda *a, **k: True`` would pass every later check (the learner's notebook and the grader's
+    run share one kernel). Rebinding ``teach`` itself, or the private modules, is not prevented."""
+
+    def __setattr__(self, name: str, value: object) -> None:
+        if name in __all__ and name in self.__dict__:
+            raise AnswerError(
+                f"✗ lorisnb.tools.teaching.{name} cannot be replaced: the checks grade your answers. "
+                "Remove this assignment and answer the question instead."
+            )
+        super().__setattr__(name, value)
+
+    def __delattr__(self, name: str) -> None:
+        if name in __all__:
+            raise AnswerError(f"✗ lorisnb.tools.teaching.{name} cannot be removed: the checks grade your answers.")
+        super().__delattr__(name)
+
+
+sys.modules[__name__].__class__ = _Checks
