@@ -140,6 +140,10 @@ def test_fault_explorer_checks_seq_and_seed_when_built_and_labels_its_thresholds
         FaultExplorer("cafe")
     with pytest.raises(ln.ValidationError, match="seed=-1"):
         FaultExplorer(gt, seed=-1)
+    with pytest.raises(ln.ValidationError, match="eps: no metres for scene cafe"):
+        FaultExplorer(gt, eps={"home": 3.0})
+    assert FaultExplorer(gt, eps={"cafe": 2.0}).results()[1].axes[0].get_title().endswith("eps 2 m, phi 30 deg, "
+                                                                                         "delta 1 s, tau 60 s")  # fmt: skip
     ex = FaultExplorer(gt, seq=1, eps="paper", phi=30.0)
     table, fig = ex.results()
     assert table["cr"].iloc[0] == pytest.approx(1.0, abs=1e-3)

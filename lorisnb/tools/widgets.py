@@ -257,6 +257,10 @@ class FaultExplorer:
                          rpe_unit=rpe_unit)  # fmt: skip
         self.eps, self.phi, self.delta, self.tau = spec.eps, spec.phi, spec.delta, spec.tau
         self.rpe_delta, self.rpe_unit = spec.rpe_delta, spec.rpe_unit
+        if isinstance(self.eps, Mapping) and groundtruth.scene not in self.eps:
+            raise ValidationError(f"eps: no metres for scene {groundtruth.scene} (the ground truth's); give eps for it, "
+                                  "or one number, or 'paper'")  # fmt: skip
+        explorer_eps(self.eps, groundtruth.scene)  # 'paper' on a scene without a paper eps: refused now
         self.seed = check_seed(seed)
         self.duration = groundtruth.sequences[seq].duration
         d = durations_table({groundtruth.scene: groundtruth})
