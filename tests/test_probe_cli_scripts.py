@@ -186,3 +186,21 @@ def test_an_output_that_cannot_be_written_is_an_output_error(icra20, data, tmp_p
     err = capsys.readouterr().err
     assert f"error: {out}: No space left on device" in err and "Traceback" not in err
     assert not out.exists()
+
+
+def test_an_unreadable_file_among_good_ones_is_said_once_on_the_command_line(icra20, data, tmp_path, capsys):
+    """One broken file among good ones: exit status 1, the good files' rows on stdout, and on
+    stderr one ``error:`` line naming the file and line; the Python callers' warning
+    (``Evaluation.failures lists them ..., exit_status() is 1``) said it a second time, in terms
+    of an API the command line's user does not call."""
+    results = _results(icra20, tmp_path / "r", CAFE + HOME)
+    (results / "orb" / HOME[2]).write_text("garbage\n")
+    for extra in ([], ["--csv", tmp_path / "t.csv"]):
+        assert _rc(["evaluate", results, "--data", data.root, "--no-progress", "--jobs", "1", *extra]) == 1
+        cap = capsys.readouterr()
+        assert sum(name in cap.out for name in CAFE + HOME) == 6 and HOME[2] not in cap.out
+        assert [x for x in cap.err.splitlines() if HOME[2] in x] == [
+            f"error: {results / 'orb' / HOME[2]}, line 1: 'garbage' has 1 fields; expected 8 or 9 numbers 'stamp "
+            "[output_time] x y z qx qy qz qw', a 'key: value' line, a 'seq: N' line or a '#' comment"
+        ]
+        assert "Evaluation.failures" not in cap.err and "6 file(s) evaluated, 1 failed" in cap.err

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import LorisError, LorisWarning, ValidationError
+from ..errors import FailedInputsWarning, LorisError, LorisWarning, ValidationError
 from .options import param_value, spec_from_args
 from .outputs import check_outputs, refuse_unused
 from .text import format_table, frame_columns
@@ -90,7 +90,9 @@ def _run_evaluation(
             ev = evaluate_manifest(manifest, args.paths, spec, **kw)
         else:
             ev = evaluate(args.paths, spec, data_root=args.data, **kw)
-    notes = list(dict.fromkeys(ev.notes + ev.warnings + [str(w.message) for w in caught]))
+    # FailedInputsWarning speaks to Python callers (Evaluation.failures); here each failure is an error: line
+    said = [str(w.message) for w in caught if not issubclass(w.category, FailedInputsWarning)]
+    notes = list(dict.fromkeys(ev.notes + ev.warnings + said))
     grid = swept(ev.spec) if swept is not None else None  # a sweep: its grid, not the spec's thresholds
     print(f"conventions: {ev.describe(grid)}", file=sys.stderr)
     return ev, notes
