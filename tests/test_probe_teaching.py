@@ -245,3 +245,19 @@ def test_an_answer_cell_cannot_replace_or_empty_the_checks(capsys):
     assert "no case to check it on" in msg
     teach.learner_note = "other names are free"  # a learner's own attribute is not refused
     del teach.learner_note
+
+
+def test_eps_at_cr_with_phi_in_radians_is_told_degrees_not_a_formula_nan():
+    """Exercise E1 with np.radians(phi): eps_at_cr finds no eps (NaN), and the check said only
+    'your answer is NaN'."""
+    from lorisnb.core.sweep import eps_at_cr
+
+    data = sample_data()
+    ev = ln.evaluate(sorted((data.icra20 / "per-seq" / "orbslam2_rgbd").glob("cafe*.txt")), data_root=data)
+    answer = eps_at_cr(ev.errors, 0.4, ev.durations(), np.radians(30.0), 1.0)["eps"].iloc[0]
+    assert np.isnan(answer)
+    with pytest.raises(AnswerError) as exc:
+        teach.check_eps_at_cr(answer, ev.errors, ev.durations(), 0.4, 30.0, 1.0)
+    msg = str(exc.value)
+    assert "your answer is NaN" in msg and "lorisnb computes 0.6265 with phi = 30 degrees" in msg
+    assert "\nHint (degrees radians):" in msg and "Hint (nan)" not in msg

@@ -63,7 +63,7 @@ def number(what: str, value: Any) -> float:
         )
     v = float(a.reshape(()))
     if math.isnan(v):
-        fail(f"{what}: your answer is NaN", "nan")
+        fail(f"{what}: your answer is NaN")
     return v
 
 
