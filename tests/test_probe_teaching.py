@@ -261,3 +261,13 @@ def test_eps_at_cr_with_phi_in_radians_is_told_degrees_not_a_formula_nan():
     msg = str(exc.value)
     assert "your answer is NaN" in msg and "lorisnb computes 0.6265 with phi = 30 degrees" in msg
     assert "\nHint (degrees radians):" in msg and "Hint (nan)" not in msg
+
+
+def test_a_rounded_answer_is_not_told_two_equal_numbers():
+    """`round(cr, 6)`: the message read 'you return 0.366667; lorisnb gives 0.366667'."""
+
+    def rounded(stamps, correct, t_min, t_max, delta):
+        return round(_right_cr(stamps, correct, t_min, t_max, delta), 6)
+
+    msg = _fails(teach.check_correct_rate, rounded)
+    assert "you return 0.366667; lorisnb gives 0.366666667 (they differ by 3.3e-07" in msg and "rounded?" in msg

@@ -201,8 +201,20 @@ def check_function(
             f"Eq. (1) says {bool(want[i])}"
         )
     else:
-        detail = f"on case {k + 1} ({describe(cases[k])}) you return {got:.6g}; lorisnb gives {float(want):.6g}"
+        mine, theirs = distinct(got, float(want))
+        detail = f"on case {k + 1} ({describe(cases[k])}) you return {mine}; lorisnb gives {theirs}"
+        if abs(got - float(want)) <= 1e-4 * max(1.0, abs(float(want))):  # the 6-digit forms would be equal
+            detail += f" (they differ by {abs(got - float(want)):.2g}, more than the tolerance {tol:g}: rounded?)"
     fail(f"{what}: {detail}", mistakes)
+
+
+def distinct(a: float, b: float) -> tuple[str, str]:
+    """``a`` and ``b`` printed with 6 significant digits, or as many more as it takes to tell them apart."""
+    for digits in (6, 9, 12, 17):
+        x, y = f"{a:.{digits}g}", f"{b:.{digits}g}"
+        if x != y:
+            break
+    return x, y
 
 
 def _is_nan(value: Any) -> bool:
