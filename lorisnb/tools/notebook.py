@@ -162,6 +162,20 @@ class Session:
 
         return evaluation_spec(self.parameters, **fixed)
 
+    def filters(
+        self, source: Any, algorithms: Any = None, scenes: Any = None
+    ) -> tuple[list[str] | None, list[str] | None]:
+        """``algorithms`` and ``scenes`` (None: all) as lists of names (one name: a list of one), each
+        refused if it names nothing in ``source`` (result files or folders), as :func:`lorisnb.evaluate`
+        and ``lorisnb report`` refuse them: for a notebook that reads its inputs later than its first cell."""
+        from .evaluate import check_filters
+        from .inputs import names
+
+        algorithms = None if algorithms is None else names("algorithms", algorithms)
+        scenes = None if scenes is None else names("scenes", scenes)
+        check_filters(source, algorithms, scenes)
+        return algorithms, scenes
+
     def show_inputs(self, ev: Any) -> None:
         """Show the input files that failed and the warnings about inputs (:func:`show_inputs`)."""
         show_inputs(ev, self.out)
@@ -175,6 +189,36 @@ class Session:
             print("(interactive explorer: open this notebook's .ipynb in Jupyter to use its sliders)")
             return
         display(make())
+
+
+def check_notebook_parameters(name: str, parameters: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Check a notebook's parameters with the command line's rules
+    (:func:`lorisnb.tools.notebook_params.check_values`): ``parameters``, and in a kernel every
+    parameter its ``parameters`` cell declares, as the kernel holds it now. Under papermill, the
+    names given with ``-p`` are checked as ``lorisnb report`` checks them
+    (:func:`lorisnb.tools.notebook_params.check_parameters`): a name the notebook does not declare
+    (``-p epss 3``: papermill only logs it) is refused, listing the declared names, as are ``-p NAME
+    null`` for a parameter with a default and an option given without the one it needs. Returns
+    the values checked, name -> value."""
+    from .notebook_params import check_parameters, check_values, papermill_parameters
+
+    values = dict(parameters or {})
+    try:
+        from IPython import get_ipython
+    except ImportError:
+        get_ipython = None
+    shell = get_ipython() if get_ipython is not None else None
+    history = getattr(shell, "user_ns", {}).get("In") if shell is not None else None
+    found = papermill_parameters(history) if isinstance(history, list) else None
+    if found is not None:
+        assert shell is not None
+        declared, injected = found
+        namespace = shell.user_ns
+        check_parameters({n: namespace.get(n) for n in injected}, {n: {"default": d} for n, d in declared.items()},
+                         [name], by=name)  # fmt: skip
+        values = {**{n: namespace[n] for n in declared if n in namespace and n != "output_dir"}, **values}
+    check_values(values, [name])
+    return values
 
 
 def setup(
@@ -192,10 +236,7 @@ def setup(
     (:func:`lorisnb.io.data.sample_data`) and says so. ``parameters``: the notebook's parameters,
     checked first with the command line's rules (:func:`lorisnb.tools.notebook_params.check_values`:
     thresholds, grids, seed, yes/no values such as ``quick``, folders that must exist, ...)."""
-    if parameters is not None:
-        from .notebook_params import check_values
-
-        check_values(parameters, [name])
+    values = check_notebook_parameters(name, parameters)
     try:
         data = find_data(data_root)
     except DataNotFoundError:
@@ -203,6 +244,10 @@ def setup(
             raise
         data = sample_data()
         print("no data root found: using the small sample data shipped with lorisnb (cafe scene only)")
+    if values.get("scenes") is not None:
+        from .leaderboard import refuse_unscorable_scenes
+
+        refuse_unscorable_scenes(values["scenes"], data)  # office only: nothing would be scored
     out = Outputs(output_dir if output_dir is not None else default_output_dir(name))
     warnings.filterwarnings("ignore", category=LorisWarning)
     shown = out.dir.resolve() if output_dir is None else out.dir  # as given (a report passes ".")

@@ -5,7 +5,10 @@ numbers, paths absolute, since a notebook runs in its own folder of the run)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+import ast
+import io
+import tokenize
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +24,7 @@ from ..io.manifest import BUILT_IN
 from .grids import check_grid
 from .inputs import names
 
-__all__ = ["check_parameters", "check_values", "evaluation_spec", "existing"]
+__all__ = ["check_parameters", "check_values", "evaluation_spec", "existing", "papermill_parameters"]
 
 
 #: Path parameters: that must exist (a folder: ``True``), passed on absolute (a built-in manifest
@@ -134,7 +137,10 @@ def check_values(values: Mapping[str, Any], notebooks: Iterable[str] = ()) -> No
 
 
 def check_parameters(
-    parameters: Mapping[str, Any], declared: Mapping[str, Mapping[str, Any]], notebooks: Iterable[str] = ()
+    parameters: Mapping[str, Any],
+    declared: Mapping[str, Mapping[str, Any]],
+    notebooks: Iterable[str] = (),
+    by: str = "the selected notebooks",
 ) -> dict[str, Any]:
     """Refuse a parameter no selected notebook declares (listing the declared names) and values
     that the command line would refuse (``-p eps -1``, ``-p alpha 2``) or the selected ``notebooks``
@@ -143,8 +149,8 @@ def check_parameters(
     unknown = sorted(set(parameters) - set(declared) - {"output_dir"})
     if unknown:
         raise ValidationError(
-            f"parameter(s) {', '.join(unknown)} not declared by the selected notebooks; they declare: "
-            + ", ".join(sorted(declared))
+            f"parameter(s) {', '.join(unknown)} not declared by {by}; "
+            f"{'they declare' if by == 'the selected notebooks' else 'it declares'}: " + ", ".join(sorted(declared))
         )
     out = dict(parameters)
     for name, value in parameters.items():  # null reaches the notebook as None, not as its default
@@ -160,3 +166,46 @@ def check_parameters(
         if name in _VALUES and value is not None:
             out[name] = _VALUES[name](value)
     return out
+
+
+#: The first line of the cell papermill injects after a notebook's ``parameters`` cell (Python).
+INJECTED_HEADER = "# Parameters"
+
+
+def _assignments(source: str) -> dict[str, str] | None:
+    """name -> its value as written, for a cell of assignments to plain names only; None otherwise."""
+    try:
+        body = ast.parse(source).body
+    except SyntaxError:
+        return None
+    out = {}
+    for node in body:
+        if not (isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)):
+            return None
+        out[node.targets[0].id] = ast.unparse(node.value)
+    return out
+
+
+def _comments(source: str) -> int:
+    try:
+        return sum(t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(source).readline))
+    except (tokenize.TokenError, SyntaxError):
+        return -1
+
+
+def papermill_parameters(history: Sequence[str]) -> tuple[dict[str, str], list[str]] | None:
+    """A notebook's declared parameters (name -> default as written) and the names papermill
+    injected (``-p NAME VALUE``), read from a kernel's input history (IPython's ``In``, the cell
+    running now last): the cell before it is the ``parameters`` cell (its first line starts with
+    ``# Parameters``, only assignments follow), or papermill's injected cell (``# Parameters``, then
+    ``name = value`` lines without comments) right after the ``parameters`` cell. None when the
+    history shows neither (the setup cell run out of order): nothing can be said about names."""
+    if len(history) >= 3 and history[-2].startswith(INJECTED_HEADER + "\n") and _comments(history[-2]) == 1:
+        declared, injected = _assignments(history[-3]), _assignments(history[-2])
+        if declared is not None and injected is not None and history[-3].lstrip().startswith(INJECTED_HEADER):
+            return declared, list(injected)
+    if len(history) >= 2 and history[-2].lstrip().startswith(INJECTED_HEADER):
+        declared = _assignments(history[-2])
+        if declared is not None:
+            return declared, []
+    return None

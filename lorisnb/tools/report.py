@@ -347,22 +347,22 @@ def run_report(
                 record["dirty"] = git_dirty()
             write_run_json(tmp, record)
 
-            def pages(folder: Path) -> None:  # the pages name the folder they are in; the marker lists all
-                index = write_index(folder, runs, params, name=folder.name, findings=board.get("findings"), spec=spec,
+            def pages(folder: Path, name: str) -> None:  # the pages name the run's folder; the marker lists all
+                index = write_index(folder, runs, params, name=name, findings=board.get("findings"), spec=spec,
                                     failures=board.get("failures"), left_out=left_out,
                                     per_sequence=board.get("per_sequence"), wanted=run_dir.name,
                                     expected=board.get("expected"))  # fmt: skip
                 single_file(index, folder / "report.html")
                 _write_marker(folder, _files(folder))
 
-            pages(tmp)
+            pages(tmp, run_dir.name)  # the name it is moved to (not the temporary one it is written under)
             os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp made it owner-only
             final = _move_into_place(tmp, run_dir, force)
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
         if final.name != run_dir.name:  # another run took the name meanwhile: this one's pages say where it is
-            pages(final)
+            pages(final, final.name)
         return final, runs
 
 

@@ -1,0 +1,138 @@
+"""Notebooks run with papermill as a lab runs them (``papermill NB out.ipynb -p NAME VALUE``), and
+the report's pages: what a user gives wrong is refused in the notebook's first cell, by the checks
+``lorisnb report`` uses, and a report's pages name the folder it lands in."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import nbformat
+import papermill as pm
+import pytest
+
+import lorisnb as ln
+from lorisnb.cli import main
+from lorisnb.errors import ValidationError
+from lorisnb.tools import notebook as notebook_module
+from lorisnb.tools import report
+from lorisnb.tools.report import KERNEL_ARGS, kernel_env, notebook_dir
+
+DECLARED = '# Parameters\neps = "paper"  # ATE threshold\nphi = 30.0  # degrees\nscenes = None  # scenes\nquick = False  # trim\n'
+SETUP = 'session = ln.setup("per_sequence_benchmark", data_root, output_dir, parameters=dict(eps=eps))'
+
+
+class _Shell:
+    """What :func:`lorisnb.tools.notebook.setup` sees of a kernel: its namespace with ``In``."""
+
+    def __init__(self, history: list[str], **namespace):
+        self.user_ns = {"In": ["", *history], **namespace}
+
+
+def _setup_in(monkeypatch, tmp_path, history, **namespace):
+    import IPython
+
+    monkeypatch.setattr(IPython, "get_ipython", lambda: _Shell(history, **namespace))
+    root = namespace.get("data_root")
+    return ln.setup("per_sequence_benchmark", root, tmp_path / "out", parameters=dict(eps=namespace.get("eps")))
+
+
+def test_history_gives_declared_and_injected_names():
+    from lorisnb.tools.notebook_params import papermill_parameters
+
+    injected = "# Parameters\nepss = 3\nphi = 10\n"
+    declared, given = papermill_parameters(["", DECLARED, injected, SETUP])
+    assert list(declared) == ["eps", "phi", "scenes", "quick"] and declared["scenes"] == "None"
+    assert given == ["epss", "phi"]
+    assert papermill_parameters(["", DECLARED, SETUP]) == (declared, [])  # run by hand: nothing injected
+    assert papermill_parameters(["", "x = 1\nprint(x)", SETUP]) is None  # not after a parameters cell
+
+
+@pytest.mark.parametrize(
+    ("injected", "values", "message"),
+    [
+        ("epss = 3", dict(epss=3), "epss not declared by per_sequence_benchmark"),  # a misspelt name
+        ("quick = 'maybe'", dict(quick="maybe"), "quick='maybe'"),  # checked though not passed to setup
+        ("eps = None", dict(eps=None), "-p eps null"),
+        ("scenes = ['office']", dict(scenes=["office"]), "no ground truth for office"),
+    ],
+)
+def test_papermill_parameters_refused_in_the_first_cell(monkeypatch, tmp_path, data, injected, values, message):
+    namespace = dict(eps="paper", phi=30.0, scenes=None, quick=False, data_root=str(data.root), output_dir=None)
+    with pytest.raises(ValidationError, match=message.replace("[", r"\[").replace("(", r"\(")):
+        _setup_in(monkeypatch, tmp_path, [DECLARED, f"# Parameters\n{injected}\n", SETUP], **{**namespace, **values})
+
+
+def test_declared_parameters_with_good_values_pass(monkeypatch, tmp_path, data):
+    namespace = dict(
+        eps=3.0, phi=30.0, scenes=["cafe", "office"], quick=True, data_root=str(data.root), output_dir=None
+    )
+    session = _setup_in(monkeypatch, tmp_path, [DECLARED, "# Parameters\neps = 3\nscenes = ['cafe', 'office']\n", SETUP],
+                        **namespace)  # fmt: skip
+    assert session.data.root == data.root and session.spec().eps == 3.0
+
+
+def test_session_filters_refuse_a_name_that_is_in_no_input(tmp_path, data, icra20):
+    session = notebook_module.Session(data, notebook_module.Outputs(tmp_path), "evo_crosscheck")
+    assert session.filters(icra20 / "per-seq", "dso", "cafe") == (["dso"], ["cafe"])  # one name: a list of one
+    with pytest.raises(ValidationError, match="'nope' name"):
+        session.filters(icra20 / "per-seq", ["nope"], None)
+
+
+def _fake_run(name, out_dir, parameters, timeout=1800, notebooks_dir=None):
+    (out_dir / name).mkdir(parents=True, exist_ok=True)
+    return report.NotebookRun(name)
+
+
+def test_report_pages_name_the_folder_the_run_lands_in(tmp_path, monkeypatch, capsys):
+    """Every report's pages were written under the temporary name and said the run was there, as if
+    another run had taken the folder ('.run.partial-xyz (run appeared while this report ran')."""
+    monkeypatch.setattr(report, "run_notebook", _fake_run)
+    out = tmp_path / "run"
+    assert main(["report", "--out", str(out), "--notebooks", "metrics_primer", "--no-progress"]) == 0
+    assert "appeared" not in capsys.readouterr().err
+    for page in ("index.html", "report.html"):
+        text = (out / page).read_text()
+        assert "Run folder <code>run</code>, written" in text
+        assert "partial" not in text and "appeared while" not in text
+
+
+# --- papermill, as a lab runs the shipped notebooks -----------------------------------------
+
+
+def _first_cells(name: str, tmp_path: Path) -> Path:
+    """The notebook up to its first cell after the parameters (where it checks them)."""
+    nb = nbformat.read(notebook_dir() / f"{name}.ipynb", as_version=4)
+    cells, seen = [], False
+    for cell in nb.cells:
+        cells.append(cell)
+        if cell.cell_type == "code":
+            if "parameters" in cell.metadata.get("tags", []):
+                seen = True
+            elif seen:
+                break
+    nb.cells = cells
+    path = tmp_path / f"{name}_first.ipynb"
+    nbformat.write(nb, path)
+    return path
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("name", "params", "message"),
+    [
+        ("per_sequence_benchmark", dict(epss=3.0), "epss not declared by per_sequence_benchmark"),
+        ("lifelong_benchmark", dict(scenes=["office"]), "no ground truth for office"),
+        ("compare_algorithms", dict(metric="foo"), "metric=foo"),
+        ("evo_crosscheck", dict(algorithms=["nope"]), "'nope' name"),
+        ("indoor_vs_outdoor", dict(ordslam_fps=30), "ordslam_fps: only applies with -p ordslam_dir"),
+    ],
+)
+def test_papermill_refuses_in_the_first_cell(tmp_path, data, name, params, message):
+    kernel_env()
+    with pytest.raises(pm.PapermillExecutionError) as info:
+        pm.execute_notebook(
+            str(_first_cells(name, tmp_path)), str(tmp_path / "out.ipynb"), kernel_name="python3",
+            parameters=dict(quick=True, output_dir=str(tmp_path / "out"), **params), progress_bar=False,
+            cwd=str(tmp_path), extra_arguments=KERNEL_ARGS, execution_timeout=300,
+        )  # fmt: skip
+    assert info.value.ename == "ValidationError" and message in info.value.evalue
