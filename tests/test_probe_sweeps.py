@@ -209,3 +209,23 @@ def test_a_sweep_takes_the_eps_values_score_takes(ev):
     assert s.cr.shape == (len(s.groups), 1, 1)
     with pytest.raises(ln.ValidationError, match="expected at most 180 degrees"):
         cr_surfaces(files, [1.0], np.array(200.0), ev.durations())
+
+
+def test_a_fine_grid_is_scored_in_chunks_within_bounded_memory(ev):
+    """The kernel's (eps, phi, pose) arrays made a fine sweep need E x P x poses x 9 bytes (a
+    1000 x 1000 sweep of maslam's cafe: 14.5 GiB, refused with advice to stream to Parquet, which
+    needs the same); the grid is now scored in chunks of :data:`CHUNK_BYTES`."""
+    from lorisnb.core.sweep import sweep_bytes
+
+    f = _maslam(ev, "cafe")
+    eps, phi = np.geomspace(0.05, 20, 300), np.linspace(0, 180, 100)
+    assert 300 * 100 * max(e.matched for e in f.sequences) * 9 > 2**28  # more than one chunk (CHUNK_BYTES)
+    table = sweep(f, eps, phi, max_bytes=400 * 2**20)
+    assert sweep_bytes([f], (300, 100, 1, 1)) < 400 * 2**20 and len(table) == 2 * 300 * 100
+    for i, j in ((0, 0), (123, 17), (299, 99), (250, 40)):
+        direct = score(f, eps[i], phi[j])
+        at = table[(table["eps"] == eps[i]) & (table["phi"] == phi[j])]
+        np.testing.assert_array_equal(at["c_matched"], direct["c_matched"])
+        np.testing.assert_allclose(at["cr"], direct["cr"], rtol=1e-13)
+    with pytest.raises(ln.ValidationError, match=r"about 0\.3 GiB .* stream the table to Parquet"):
+        sweep(f, eps, phi, max_bytes=100 * 2**20)

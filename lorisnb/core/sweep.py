@@ -42,15 +42,30 @@ METRIC_COLUMNS = [
 #: Memory a sweep may use by default (table plus working arrays), bytes.
 MAX_SWEEP_BYTES = 4 * 2**30
 
+#: Working memory of one call of the scoring kernel in a sweep, bytes (its (eps, phi, pose)
+#: arrays, 9 bytes an entry): a sequence's grid is scored in chunks of eps (and phi) values of
+#: about this size, the same chunks whatever else is swept, so a fine grid needs no more.
+CHUNK_BYTES = 2**28
+
+
+def _chunks(E: int, P: int, poses: int) -> list[tuple[int, int, int, int]]:
+    """Index ranges ``(eps from, eps to, phi from, phi to)`` covering an E x P grid, each needing
+    at most :data:`CHUNK_BYTES` for ``poses`` matched poses (one point at least)."""
+    per = max(poses, 1) * 9.0
+    cp = P if P * per <= CHUNK_BYTES else max(1, int(CHUNK_BYTES // per))
+    ce = max(1, int(CHUNK_BYTES // (cp * per)))
+    return [(a, min(a + ce, E), b, min(b + cp, P)) for a in range(0, E, ce) for b in range(0, P, cp)]
+
 
 def sweep_bytes(files: list[FileErrors], shape: tuple[int, int, int, int], columns: str = "metrics") -> float:
     """Memory a sweep of ``files`` over an eps x phi x delta x tau grid of ``shape`` needs, bytes:
-    the larger of its tidy table (rows x columns x 8) and its per-sequence working arrays."""
+    its tidy table (rows x columns x 8) plus the working arrays of one chunk of the grid
+    (:data:`CHUNK_BYTES`, or less for a small grid)."""
     E, P, D, T = shape
     n_seq = sum(len(f.sequences) for f in files)
     longest = max((e.matched for f in files for e in f.sequences), default=0)
     ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
-    return max(n_seq * E * P * D * T * ncol * 8.0, E * P * longest * 9.0 + E * P * D * T * len(GRID_METRICS) * 8.0)
+    return n_seq * E * P * D * T * ncol * 8.0 + min(E * P * longest * 9.0, max(CHUNK_BYTES, longest * 9.0))
 
 
 def check_sweep_size(
@@ -171,35 +186,28 @@ def sweep(
     n_set = E * P * D * T
     check_sweep_size(files, (E, P, D, T), columns, max_bytes)
     with_rpe = columns == "all"
-    seq_meta, blocks = [], []
-    for f in files:  # per sequence, never per pose
-        for e in f.sequences:
-            eps_m = _eps_values(eps_l, f.scene, e, relative_to)
-            blocks.append(
-                sequence_grid(
-                    e,
-                    eps_m,
-                    phi_a,
-                    delta_a,
-                    tau_a,
-                    rpe_delta=rpe_d,
-                    rpe_unit=rpe_u,
-                    with_rpe=with_rpe,
-                    with_stats=with_rpe,
-                    rpe_pairs=rpe_p,
-                    rpe_all_pairs=rpe_a,
-                    rpe_tolerance=rpe_t,
-                )  # fmt: skip
-            )
-            blocks[-1]["eps"] = np.broadcast_to(eps_m[:, None, None, None], (E, P, D, T))
-            seq_meta.append(sequence_meta(f, e))
     cols = SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS + ["eps_value"] if columns == "all" else METRIC_COLUMNS
-    if not blocks:
+    pairs = [(f, e) for f in files for e in f.sequences]
+    if not pairs:
         return pd.DataFrame(columns=cols)
-    S = len(blocks)
-    meta = pd.DataFrame(seq_meta)
-    rep = np.repeat(np.arange(S), n_set)
+    S = len(pairs)
     data: dict[str, Any] = {}
+    views: dict[str, np.ndarray] = {}
+    for s_i, (f, e) in enumerate(pairs):  # per sequence and chunk of the grid, never per pose
+        eps_m = _eps_values(eps_l, f.scene, e, relative_to)
+        for a, b, p0, p1 in _chunks(E, P, e.matched):
+            block = sequence_grid(
+                e, eps_m[a:b], phi_a[p0:p1], delta_a, tau_a, rpe_delta=rpe_d, rpe_unit=rpe_u, with_rpe=with_rpe,
+                with_stats=with_rpe, rpe_pairs=rpe_p, rpe_all_pairs=rpe_a, rpe_tolerance=rpe_t,
+            )  # fmt: skip
+            block["eps"] = eps_m[a:b, None, None, None]
+            for k in (k for k in block if k in cols):
+                if k not in views:
+                    data[k] = np.empty(S * n_set, dtype=GRID_METRICS.get(k, float))
+                    views[k] = data[k].reshape(S, E, P, D, T)
+                views[k][s_i, a:b, p0:p1] = block[k]  # broadcast straight into the column
+    meta = pd.DataFrame([sequence_meta(f, e) for f, e in pairs])
+    rep = np.repeat(np.arange(S), n_set)
     for k in [c for c in meta.columns if c in cols]:
         col = meta[k]
         if col.dtype == object or isinstance(col.dtype, pd.StringDtype):
@@ -216,12 +224,6 @@ def sweep(
         data["eps_value"] = pd.Categorical(np.tile(labels[grid_idx[0]], S).astype(str))
     else:
         data["eps_value"] = np.tile(labels[grid_idx[0]].astype(float), S)
-    for k in [c for c in blocks[0] if c in cols]:
-        col = np.empty(S * n_set, dtype=GRID_METRICS.get(k, float))
-        view = col.reshape(S, E, P, D, T)
-        for s_i, b in enumerate(blocks):  # per sequence: broadcast straight into the column
-            view[s_i] = b[k]
-        data[k] = col
     # columns in final order, no consolidation copy: the table is large for big grids
     return pd.DataFrame({k: data[k] for k in cols}, copy=False)
 
