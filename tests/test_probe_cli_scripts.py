@@ -204,3 +204,30 @@ def test_an_unreadable_file_among_good_ones_is_said_once_on_the_command_line(icr
             "[output_time] x y z qx qy qz qw', a 'key: value' line, a 'seq: N' line or a '#' comment"
         ]
         assert "Evaluation.failures" not in cap.err and "6 file(s) evaluated, 1 failed" in cap.err
+
+
+def test_diff_prints_with_digits_and_names_a_real_regression(icra20, data, tmp_path, capsys):
+    """``diff --digits N`` was refused with two tables ("evaluate options apply to result
+    folders": it computes nothing) and ignored with two folders (4 decimals always). A run that
+    lost track earlier on home 4 (its file cut in half) is a regression with exit status 1 and a
+    line per metric; the same change the other way is an improvement of CR, not a failure of CR."""
+    good = _results(icra20, tmp_path / "good", HOME)
+    worse = _results(icra20, tmp_path / "worse", HOME, half="home_1_4_orbslam2-original.txt")
+    tg, tw = tmp_path / "good.csv", tmp_path / "worse.csv"
+    for results, table in ((good, tg), (worse, tw)):
+        assert _rc(["evaluate", results, "--data", data.root, "--no-progress", "--jobs", "1", "--csv", table]) == 0
+    capsys.readouterr()
+    assert _rc(["diff", tg, tw, "--digits", "2"]) == 1
+    out = capsys.readouterr().out.splitlines()
+    assert [x.split() for x in out if " home    4 " in x] == [
+        ["orb", "home", "4", "cr", "0.53", "0.27", "0.26", "0.02", "regression"],
+        ["orb", "home", "4", "cr_t", "0.53", "0.27", "0.26", "0.02", "regression"],
+    ]
+    assert "verdict: regression (1 sequence(s) regressed)" in out
+    assert _rc(["diff", good, worse, "--data", data.root, "--no-progress", "--jobs", "1", "--digits", "6"]) == 1
+    out = capsys.readouterr().out
+    assert "0.528713  0.269056" in out  # home 4's CR in BASE and CAND, to 6 decimals
+    assert _rc(["diff", tw, tg, "--tolerance", "ate_rmse=50%,aoe_rmse=100%,c_ate_rmse=50%,c_aoe_rmse=100%,"
+                "rpe_rot_rmse=50%"]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    assert "verdict: ok" in out and "improvement" in out

@@ -17,7 +17,7 @@ from .outputs import check_outputs, refuse_unused
 
 #: diff's own options; every other option is an evaluate option (for result folders only).
 DIFF_OWN = {"paths", "tolerance", "alpha", "seed", "json", "junit", "csv", "parquet", "force", "no_progress", "func",
-            "command", "eps_default", "phi_default", "defaults"}  # fmt: skip
+            "command", "eps_default", "phi_default", "defaults", "digits"}  # fmt: skip
 
 
 def _given_evaluate_options(args: argparse.Namespace, defaults: dict[str, Any]) -> list[str]:
@@ -25,10 +25,11 @@ def _given_evaluate_options(args: argparse.Namespace, defaults: dict[str, Any]) 
             if k not in DIFF_OWN and k in defaults and v != defaults[k]]  # fmt: skip
 
 
-def _short(v: object) -> str:
-    """A value for the terminal: numbers to 4 decimals, long text cut (the JSON keeps it whole)."""
+def _short(v: object, digits: int = 4) -> str:
+    """A value for the terminal: numbers to ``digits`` decimals (``--digits``), long text cut (the
+    JSON keeps it whole)."""
     if isinstance(v, float):
-        return f"{v:.4f}"
+        return "NaN" if v != v else f"{v:.{digits}f}"
     text = str(v)
     return text if len(text) <= 60 else text[:57] + "..."
 
@@ -103,12 +104,13 @@ def cmd_diff(args: argparse.Namespace) -> int:
     if len(bad):
         print("\nregressions per sequence:")
         shown = bad[["algorithm", "scene", "seq", "metric", "base", "cand", "worse_by", "tolerance", "status"]]
-        shown = shown.assign(base=[_short(v) for v in shown["base"]], cand=[_short(v) for v in shown["cand"]])
-        print(fmt_table(shown))
+        shown = shown.assign(base=[_short(v, args.digits) for v in shown["base"]],
+                             cand=[_short(v, args.digits) for v in shown["cand"]])  # fmt: skip
+        print(fmt_table(shown, args.digits))
     if len(scene_bad):
         print("\nregressions per scene:")
         print(fmt_table(scene_bad[["algorithm", "scene", "metric", "base", "cand", "worse_by", "p_holm",
-                                   "decided_by"]]))  # fmt: skip
+                                   "decided_by"]], args.digits))  # fmt: skip
     n = d.verdict["regressed_sequences"]
     print(f"\nverdict: {d.verdict['verdict']}" + (f" ({n} sequence(s) regressed)" if d.regressed else ""))
     extra = dict(base=args.paths[0], cand=args.paths[1], tolerances={k: str(v) for k, v in tolerances.items()},
