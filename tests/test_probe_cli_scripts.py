@@ -225,8 +225,10 @@ def test_diff_prints_with_digits_and_names_a_real_regression(icra20, data, tmp_p
     ]
     assert "verdict: regression (1 sequence(s) regressed)" in out
     assert _rc(["diff", good, worse, "--data", data.root, "--no-progress", "--jobs", "1", "--digits", "6"]) == 1
-    out = capsys.readouterr().out
-    assert "0.528713  0.269056" in out  # home 4's CR in BASE and CAND, to 6 decimals
+    cap = capsys.readouterr()
+    assert "0.528713  0.269056" in cap.out  # home 4's CR in BASE and CAND, to 6 decimals
+    said = [x.split(":")[0] for x in cap.err.splitlines() if x.startswith("conventions")]
+    assert said == [f"conventions of {good}", f"conventions of {worse}"]  # which run each line is about
     assert _rc(["diff", tw, tg, "--tolerance", "ate_rmse=50%,aoe_rmse=100%,c_ate_rmse=50%,c_aoe_rmse=100%,"
                 "rpe_rot_rmse=50%"]) == 0  # fmt: skip
     out = capsys.readouterr().out

@@ -33,13 +33,13 @@ def _executor(args: argparse.Namespace) -> Any:
 
 def _run_evaluation(
     args: argparse.Namespace, files: list[str], folders: tuple[str, ...] = (),
-    swept: Callable[[Any], str] | None = None,
+    swept: Callable[[Any], str] | None = None, side: str = "",
 ) -> tuple[Any, list[str]]:  # fmt: skip
     """Every input kind through one spec (:func:`spec_from_args`) and one runner: OpenLORIS result
     files, ``--gt`` pairs or a ``--manifest``'s sessions. The output options ``files`` and
     ``folders`` are checked first against every input (:func:`~.outputs.check_outputs`: the
     estimates, the ground truth, times files, the manifest and its ground-truth files, the data
-    root). Prints the ``conventions:`` line."""
+    root). Prints the ``conventions:`` line (``side``: which run, for ``diff``'s two)."""
     from ..io.manifest import read_manifest
     from ..tools.evaluate import evaluate, evaluate_manifest, evaluate_pairs, pair_kind
 
@@ -94,7 +94,7 @@ def _run_evaluation(
     said = [str(w.message) for w in caught if not issubclass(w.category, FailedInputsWarning)]
     notes = list(dict.fromkeys(ev.notes + ev.warnings + said))
     grid = swept(ev.spec) if swept is not None else None  # a sweep: its grid, not the spec's thresholds
-    print(f"conventions: {ev.describe(grid)}", file=sys.stderr)
+    print(f"conventions{side}: {ev.describe(grid)}", file=sys.stderr)
     return ev, notes
 
 

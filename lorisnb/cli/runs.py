@@ -46,7 +46,9 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
         return run, dict(run.unscored), sorted(run.unscored)
     if not p.exists():
         raise ValidationError(f"{path}: no such result folder, run folder or table")
-    ev, notes = run_evaluation(argparse.Namespace(**{**vars(args), "paths": [path]}), [])  # outputs: checked first
+    ev, notes = run_evaluation(
+        argparse.Namespace(**{**vars(args), "paths": [path]}), [], side=f" of {path}"
+    )  # outputs: checked first
     report_problems(ev, [f"{path}: {n}" for n in notes])
     failed = unevaluated(ev, p)  # not evaluated, or evaluated but not scored: as evaluate's exit status counts
     table = ev.sequences()  # at the spec's thresholds (the options', else the defaults)
