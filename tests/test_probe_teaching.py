@@ -271,3 +271,14 @@ def test_a_rounded_answer_is_not_told_two_equal_numbers():
 
     msg = _fails(teach.check_correct_rate, rounded)
     assert "you return 0.366667; lorisnb gives 0.366666667 (they differ by 3.3e-07" in msg and "rounded?" in msg
+
+
+def test_lorisnbs_own_function_given_as_the_answer_is_refused(hidden):
+    """`correctness = ln.core.metrics.correctness` in the answer cell: the check called lorisnb's
+    function from lorisnb, which did not look like the learner calling it."""
+    import functools
+
+    for fn in (metrics.correctness, functools.partial(metrics.correctness)):
+        for cases in ((), (hidden["correctness"],)):
+            msg = _fails(teach.check_correctness, fn, *cases)
+            assert "calls lorisnb's own `lorisnb.core.metrics.correctness`" in msg, msg

@@ -74,9 +74,11 @@ def _in_package(filename: str) -> bool:
 def call_watched(fn: Callable[..., Any], args: Mapping[str, Any]) -> tuple[Any, str | None]:
     """``fn(**args)``, and the first lorisnb function it called itself (None when it called none):
     a learner's formula that hands its inputs to lorisnb (or to the check's own reference, reached
-    through the call stack) returns lorisnb's answer without computing anything. Module-level
+    through the call stack, or given as the answer itself) returns lorisnb's answer without
+    computing anything. Module-level
     ``__getattr__`` (lazy imports) and module bodies run by an import do not count."""
     entered: list[str] = []
+    own_code = sys._getframe().f_code  # a lorisnb function given as the answer is called from here
 
     def watch(frame: FrameType, event: str, _arg: Any) -> None:
         code = frame.f_code
@@ -85,7 +87,7 @@ def call_watched(fn: Callable[..., Any], args: Mapping[str, Any]) -> tuple[Any, 
         if code.co_name in ("__getattr__", "<module>"):
             return
         caller = frame.f_back
-        if caller is not None and _in_package(caller.f_code.co_filename):
+        if caller is not None and _in_package(caller.f_code.co_filename) and caller.f_code is not own_code:
             return  # lorisnb calling itself: the entry was reported (or was a lazy import)
         entered.append(f"{frame.f_globals.get('__name__', 'lorisnb')}.{code.co_qualname}")
 
