@@ -15,7 +15,7 @@ import pytest
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core import score
+from lorisnb.core import aggregate_scenes, score
 from lorisnb.core.surfaces import cr_surfaces
 from lorisnb.core.sweep import eps_at_cr, sweep, sweep_scenes
 
@@ -229,3 +229,24 @@ def test_a_fine_grid_is_scored_in_chunks_within_bounded_memory(ev):
         np.testing.assert_allclose(at["cr"], direct["cr"], rtol=1e-13)
     with pytest.raises(ln.ValidationError, match=r"about 0\.3 GiB .* stream the table to Parquet"):
         sweep(f, eps, phi, max_bytes=100 * 2**20)
+
+
+def test_ranking_and_surface_lookups_refuse_what_they_cannot_answer(ev):
+    """rank_stability on a sweep's own table (one row per sequence) ranked the sequences averaged,
+    with exit status 0; a metric's typo was a KeyError; Surfaces.at found nothing for an evaluation
+    of icra20_results (suite 'lifelong') unless given the suite, and said so with a KeyError."""
+    from lorisnb.core.sweep import rank_stability, rank_swaps
+
+    files = [f for f in ev.errors if f.algorithm == "maslam"]
+    table = sweep(files, [1.0, 3.0, 5.0], [30.0])
+    with pytest.raises(ln.ValidationError, match=r"expected scene rows \(sweep_scenes\(table, durations\)\)"):
+        rank_stability(table)
+    scenes = sweep_scenes(table, ev.durations())
+    for rank in (rank_stability, rank_swaps):
+        with pytest.raises(ln.ValidationError, match=r"metric='CR' is no numeric column .* expected one of cr, cr_t"):
+            rank(scenes, metric="CR")
+    s = cr_surfaces(files, [1.0, 3.0], [30.0], ev.durations())
+    lookup = aggregate_scenes(score(files, 3.0, 30.0), ev.durations()).set_index("scene")
+    assert s.at("maslam", "cafe")[1, 0] == pytest.approx(lookup.loc["cafe", "cr"], abs=1e-12)
+    with pytest.raises(ln.ValidationError, match=r"no surface for 'masla' in 'cafe' .* algorithms 'maslam'; scenes"):
+        s.at("masla", "cafe")

@@ -46,15 +46,22 @@ class Surfaces:
     cr_t: np.ndarray
     delta: float
 
-    def at(self, algorithm: str, scene: str, suite: str = "", trial: int = 0) -> np.ndarray:
-        """The CR surface (E, P) of one algorithm and scene."""
+    def at(self, algorithm: str, scene: str, suite: str | None = None, trial: int | None = None) -> np.ndarray:
+        """The CR surface (E, P) of one algorithm and scene; ``suite`` and ``trial`` needed only
+        where several surfaces have that algorithm and scene (an error lists them)."""
         g = self.groups
-        hit = np.flatnonzero(
-            (g["algorithm"] == algorithm) & (g["scene"] == scene) & (g["suite"] == suite) & (g["trial"] == trial)
-        )
-        if hit.size == 0:
-            raise KeyError(f"no surface for {algorithm!r} in {scene!r} (suite {suite!r}, trial {trial})")
-        return self.cr[hit[0]]
+        hit = (g["algorithm"] == algorithm) & (g["scene"] == scene)
+        hit &= (g["suite"] == suite) if suite is not None else True
+        hit &= (g["trial"] == trial) if trial is not None else True
+        rows = np.flatnonzero(hit)
+        if rows.size != 1:
+            have = "; ".join(
+                f"{k}s {', '.join(map(repr, sorted(set(g[k]))))}" for k in ("algorithm", "scene", "suite", "trial")
+            )
+            what = "no surface" if rows.size == 0 else f"{rows.size} surfaces (give suite= and trial=)"
+            raise ValidationError(f"{what} for {algorithm!r} in {scene!r} (suite {suite!r}, trial {trial}); "
+                                  f"the surfaces hold {have}")  # fmt: skip
+        return self.cr[rows[0]]
 
 
 def _outputs(count: int, shape: tuple[int, ...]) -> list[np.ndarray]:

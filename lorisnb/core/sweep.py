@@ -299,8 +299,15 @@ def eps_at_cr(
     return pd.DataFrame(rows, columns=columns)
 
 
-def _absolute_eps(scenes: pd.DataFrame, name: str) -> None:
-    """Refuse scene rows without one eps in metres (a relative sweep's: each sequence had its own)."""
+def _scene_rows(scenes: pd.DataFrame, metric: str, name: str) -> None:
+    """Refuse what ``name`` cannot rank: rows per sequence (a sweep's own table: ranked, they gave
+    plausible numbers of the sequences averaged), a ``metric`` that is no numeric column, scene
+    rows without one eps in metres (a relative sweep's: each sequence had its own)."""
+    if "seq" in scenes.columns or "sequences" not in scenes.columns:
+        raise ValidationError(f"{name}: expected scene rows (sweep_scenes(table, durations)), not one row per sequence")
+    if metric not in scenes.columns or not pd.api.types.is_numeric_dtype(scenes[metric]):
+        raise ValidationError(f"{name}: metric={metric!r} is no numeric column of the scene rows; expected one of "
+                              f"{', '.join(c for c in ('cr', 'cr_t', 'cs_r', 'c_ate_rmse') if c in scenes.columns)}")  # fmt: skip
     if "eps" in scenes.columns and scenes["eps"].isna().any():
         raise ValidationError(
             f"{name}: ranks algorithms along eps in metres, but some scene rows have none (a sweep of "
@@ -319,7 +326,7 @@ def rank_stability(
     """
     from scipy import stats  # here, not at the top: scipy.stats takes half a second to import
 
-    _absolute_eps(scenes, "rank_stability")
+    _scene_rows(scenes, metric, "rank_stability")
     keys = ["suite", "scene", "phi", "delta", "tau"]
     rows = []
     for key, grp in scenes.groupby(keys, sort=False, observed=True):
@@ -353,7 +360,7 @@ def rank_stability(
 def rank_swaps(scenes: pd.DataFrame, metric: str = "cr") -> pd.DataFrame:
     """Where two algorithms swap rank as eps grows: one row per scene, pair and eps interval in
     which their order of ``metric`` reverses."""
-    _absolute_eps(scenes, "rank_swaps")
+    _scene_rows(scenes, metric, "rank_swaps")
     rows = []
     for (suite, scene, phi, delta, tau), grp in scenes.groupby(
         ["suite", "scene", "phi", "delta", "tau"], sort=False, observed=True
