@@ -233,3 +233,32 @@ def test_diff_prints_with_digits_and_names_a_real_regression(icra20, data, tmp_p
                 "rpe_rot_rmse=50%"]) == 0  # fmt: skip
     out = capsys.readouterr().out
     assert "verdict: ok" in out and "improvement" in out
+
+
+def test_history_says_when_a_run_lost_a_scene(icra20, data, tmp_path, capsys):
+    """A nightly run that scored cafe but lost every home file (its job died half-way): history
+    printed NaN in the table and "no value changed beyond its tolerance", where ``diff`` of the
+    same two runs is a regression. The scene's value going missing is now its first change."""
+    full = _results(icra20, tmp_path / "full", CAFE + HOME)
+    cafe = _results(icra20, tmp_path / "cafe", CAFE)
+    nights = []
+    for k, results in enumerate((full, cafe, full), start=1):
+        table = tmp_path / f"n{k}.csv"
+        assert _rc(["evaluate", results, "--data", data.root, "--no-progress", "--jobs", "1", "--csv", table]) == 0
+        stamp = time.time() - 86400 * (4 - k)
+        os.utime(table, (stamp, stamp))
+        nights.append(table)
+    capsys.readouterr()
+    assert _rc(["diff", nights[0], nights[1]]) == 1  # diff: five home sequences missing
+    capsys.readouterr()
+    hist = tmp_path / "history.csv"
+    assert _rc(["history", *nights, "--metric", "cr", "c_ate_rmse", "--csv", hist]) == 0
+    out = capsys.readouterr().out
+    assert "orb home cr: first change in n2.csv (0.2712 -> no value, worse)" in out
+    assert "orb home c_ate_rmse: first change in n2.csv (0.1414 -> no value, worse)" in out
+    assert "cafe" not in "".join(x for x in out.splitlines() if "first change" in x)  # cafe did not change
+    h = pd.read_csv(hist)
+    home = h[(h["scene"] == "home") & (h["metric"] == "cr")]
+    assert home["run"].tolist() == ["n1.csv", "n2.csv", "n3.csv"]
+    assert home["value"].round(4).tolist()[::2] == [0.2712, 0.2712] and home["value"].isna().tolist()[1]
+    assert home["changed"].tolist() == [False, True, False]

@@ -156,8 +156,9 @@ def cmd_history(args: argparse.Namespace) -> int:
             f"  {name}: {r.created.isoformat() if r.created else '?'}" + (f", lorisnb {r.version}" if r.version else "")
         )
     for m in args.metric:
+        # dropna=False: a run whose values are all missing keeps its column
         view = h[h["metric"] == m].pivot_table(index=["suite", "algorithm", "scene"], columns="run", values="value",
-                                              sort=False)  # fmt: skip
+                                              sort=False, dropna=False)  # fmt: skip
         print(f"\n{m} per scene:")
         print(fmt_table(view[[n for n in names if n in view.columns]].reset_index()))
     lost = h.drop_duplicates("run")

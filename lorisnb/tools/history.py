@@ -77,15 +77,22 @@ def history_table(
     expected = expected_from(*tables, *(r.expected for r in runs if r.expected is not None))  # as the leaderboard
     rows = []
     names = run_labels(runs)  # the run column: one name per run, or two runs' rows would merge
+    seen_series: dict[tuple, int] = {}  # (suite, algorithm, scene, metric) -> the first run that has it
     for k, (run, table) in enumerate(zip(runs, tables, strict=True)):
         reasons = comparability(runs[k - 1], run) if k else []
+        meta = dict(run=names[k], path=str(run.path), created=run.created.isoformat() if run.created else "",
+                    created_from=run.created_from, lorisnb_version=run.version or "", comparable=not reasons,
+                    not_comparable="; ".join(reasons))  # fmt: skip
         full, _ = complete(table, expected)
+        here = set()
         for m in metrics:
             for r in scene_means(full, m).itertuples():
-                rows.append(dict(run=names[k], path=str(run.path), created=run.created.isoformat() if run.created else "",
-                                 created_from=run.created_from, lorisnb_version=run.version or "",
-                                 comparable=not reasons, not_comparable="; ".join(reasons), suite=r.suite,
-                                 algorithm=r.algorithm, scene=r.scene, metric=m, value=r.value))  # fmt: skip
+                key = (r.suite, r.algorithm, r.scene, m)
+                here.add(key)
+                seen_series.setdefault(key, k)
+                rows.append(dict(meta, suite=r.suite, algorithm=r.algorithm, scene=r.scene, metric=m, value=r.value))
+        for key in (key for key in seen_series if key not in here):  # a scene the run lost: no value, a change
+            rows.append(dict(meta, suite=key[0], algorithm=key[1], scene=key[2], metric=key[3], value=np.nan))
     out = pd.DataFrame(rows, columns=COLUMNS[:12])
     out["change"], out["changed"], out["first_change"] = np.nan, False, False
     for (_, _, _, m), g in out.groupby(["suite", "algorithm", "scene", "metric"], sort=False):
@@ -96,13 +103,16 @@ def history_table(
             if not out.at[i, "comparable"]:
                 prev = v  # a new series starts here
                 continue
-            if np.isfinite(prev) and np.isfinite(v):
+            gone = np.isfinite(prev) and not np.isfinite(v)  # no value now (a lost scene, no correct pose): worse,
+            if np.isfinite(prev) and np.isfinite(v):  # as diff counts a value defined in BASE, undefined in CAND
                 change = v - prev
                 out.at[i, "change"] = change
-                if abs(change) > tols[m].of(prev) + 1e-12 * max(1.0, abs(prev)):
-                    out.at[i, "changed"] = True
-                    out.at[i, "first_change"] = not seen
-                    seen = True
+            if gone or (
+                np.isfinite(prev) and np.isfinite(v) and abs(v - prev) > tols[m].of(prev) + 1e-12 * max(1.0, abs(prev))
+            ):
+                out.at[i, "changed"] = True
+                out.at[i, "first_change"] = not seen
+                seen = True
             prev = v
     return out
 
@@ -117,9 +127,10 @@ def first_changes(history: pd.DataFrame) -> list[str]:
         before = before[(before["suite"] == r.suite) & (before["algorithm"] == r.algorithm)
                         & (before["scene"] == r.scene) & (before["metric"] == r.metric)]  # fmt: skip
         was = before["value"].iloc[-1] if len(before) else np.nan
-        sign = "better" if (r.change > 0) == (METRICS[r.metric] > 0) else "worse"
+        sign = "better" if np.isfinite(r.value) and (r.change > 0) == (METRICS[r.metric] > 0) else "worse"
+        now = f"{r.value:.4f}" if np.isfinite(r.value) else "no value"
         lines.append(f"{r.algorithm}{f' ({r.suite})' if r.suite else ''} {r.scene} {r.metric}: first change in "
-                     f"{r.run} ({was:.4f} -> {r.value:.4f}, {sign})")  # fmt: skip
+                     f"{r.run} ({was:.4f} -> {now}, {sign})")  # fmt: skip
     return lines
 
 
