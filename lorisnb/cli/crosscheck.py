@@ -172,8 +172,11 @@ def _crosscheck_conventions(args: argparse.Namespace, gt_format: str, est_format
     with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
         print(table.to_string(index=False, float_format=lambda v: f"{v:.10g}"))
     stats = ~table["quantity"].str.contains(":") & table["evo"].notna()
+    differ = table.loc[stats, "note"].str.startswith("definitions differ")
     print(f"\n{int(table.loc[stats, 'agrees'].sum())} of {int(stats.sum())} statistics agree with evo reading the "
-          "files itself; the reading rows say where the readings differ and why", file=sys.stderr)  # fmt: skip
+          "files itself; the reading rows say where the readings differ and why"
+          + ("; definitions differ (these conventions are not evo's: see the notes; --conventions evo gives evo's)"
+             if differ.any() else ""), file=sys.stderr)  # fmt: skip
     if args.csv:
         write_csv(table, args.csv, args.force)
     return 0 if table.loc[stats, "agrees"].all() and not _no_pairs(table) else 1

@@ -22,8 +22,12 @@ def scale_alignment(est_positions: np.ndarray, gt_positions: np.ndarray, frames:
     translation): ``p -> s p``."""
     p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
     n = len(p_e) if frames is None else min(int(frames), len(p_e))
+    if n < 2 and len(p_e) >= 2:  # (frames=1: the spec refuses it for sim3, and for the scale alone)
+        raise ValidationError(f"align_frames={frames} with align='scale': a scale needs at least 2 poses; give "
+                              "align_frames >= 2 (--align-frames), or leave it out to fit on all matched poses")  # fmt: skip
     if n < 2:
-        raise ValidationError("a scale correction needs at least 2 matched poses")
+        raise ValidationError(f"a scale correction needs at least 2 matched poses, got {len(p_e)}; align='none' "
+                              "scores them without it")  # fmt: skip
     return Sim3(np.eye(3), np.zeros(3), umeyama(p_e[:n], p_g[:n], with_scale=True).scale)
 
 

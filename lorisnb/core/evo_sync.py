@@ -162,7 +162,14 @@ def time_window(traj: Trajectory, t_start: float | None = None, t_end: float | N
     lo = float(traj.stamps[0]) if t_start is None else float(t_start)
     hi = float(traj.stamps[-1]) if t_end is None else float(t_end)
     if lo > hi:
-        raise ValidationError(f"t_start {lo:.17g} s is after t_end {hi:.17g} s; expected t_start <= t_end")
+        if t_start is not None and t_end is not None:
+            raise ValidationError(f"t_start {lo:.17g} s is after t_end {hi:.17g} s; expected t_start <= t_end")
+        first, last = float(traj.stamps[0]), float(traj.stamps[-1])
+        given = f"t_start {lo:.17g} s is after" if t_end is None else f"t_end {hi:.17g} s is before"
+        edge = f"last stamp {last:.17g} s" if t_end is None else f"first stamp {first:.17g} s"
+        raise ValidationError(f"{given} the ground truth's {edge}: no ground-truth pose is left; give a "
+                              f"{'t_start' if t_end is None else 't_end'} within its span {first:.17g}..{last:.17g} s "
+                              "(stamps on the ground truth's clock)")  # fmt: skip
     return traj.subset((traj.stamps >= lo) & (traj.stamps <= hi))
 
 

@@ -3,6 +3,9 @@ evaluates the pair with the spec (the ``evo`` preset and its options), evo reads
 readers and runs what ``evo_ape`` / ``evo_rpe`` run (sync, alignment, projection, APE and RPE), and
 every statistic of ATE, AOE and RPE is compared; the reading rows of
 :func:`lorisnb.tools.crosscheck_reading.crosscheck_reading` say where the readings differ and why.
+Alignment ``auto`` is the alignment lorisnb chose for the estimate's algorithm, on both sides; what
+evo has no equivalent for (lorisnb's own associations, dropped repeated poses, ``posyaw``, a
+``transform``) is run the nearest evo way and said in every row's note (:func:`evo_lacks`).
 """
 
 from __future__ import annotations
@@ -24,10 +27,31 @@ from .evo_bridge import CROSSCHECK_COLUMNS, NO_RPE_PAIR, agreement_row, evo_erro
 _EVO_UNITS = {"f": "frames", "frames": "frames", "m": "meters", "deg": "degrees", "rad": "radians"}
 
 
-def evo_statistics(ref, est, spec: EvalSpec) -> dict[str, Any]:
+def evo_lacks(spec: EvalSpec) -> list[str]:
+    """What of ``spec`` evo has no equivalent for, and what evo does instead (one phrase each; empty
+    for the ``evo`` preset and its options)."""
+    out = []
+    if spec.association == "nearest":
+        out.append(f"lorisnb pairs stamps by TUM's greedy one-to-one rule within {spec.max_diff:g} s (association "
+                   "nearest), evo each pose of the shorter trajectory with its nearest stamp (evo-nearest)")  # fmt: skip
+    elif spec.association == "interpolate":
+        out.append(f"lorisnb interpolates the ground truth at each estimate stamp within {spec.max_gap:g} s "
+                   f"(association interpolate), evo pairs nearest stamps within {spec.max_diff:g} s")  # fmt: skip
+    if spec.repeated == "drop":
+        out.append("lorisnb drops poses repeating the previous one or its stamp (repeated drop), evo keeps all")
+    if spec.align == "posyaw":
+        out.append("lorisnb aligns position and yaw (posyaw), which evo has not: evo's column is its SE(3) alignment")
+    if spec.transform is not None:
+        out.append("lorisnb moves the ground truth by the transform T_est_gt, evo reads it as it is")
+    return out
+
+
+def evo_statistics(ref, est, spec: EvalSpec, alignment: str | None = None) -> dict[str, Any]:
     """What evo computes for trajectories it read itself, under ``spec`` (its sync, alignment,
     projection, APE and RPE; evo's CLI order): ``matched``, ``rpe_pairs`` and ``{ate, aoe, rpe_trans,
-    rpe_rot}_{statistic}``; ``rpe_refused``: evo's reason when its RPE finds no pair (evo_rpe raises)."""
+    rpe_rot}_{statistic}``; ``rpe_refused``: evo's reason when its RPE finds no pair (evo_rpe raises).
+    ``alignment``: the one to run (default ``spec.align``; ``auto`` must be resolved first, and
+    ``posyaw``, which evo has not, runs as ``se3``)."""
     em, filters = require("evo.core.metrics"), require("evo.core.filters")
     sync = require("evo.core.sync")
     main_ape, main_rpe = require("evo.main_ape"), require("evo.main_rpe")
@@ -48,9 +72,12 @@ def evo_statistics(ref, est, spec: EvalSpec) -> dict[str, Any]:
         )
         ref, est = sync.associate_trajectories(ref, est, max_diff=spec.max_diff, offset_2=spec.t_offset,
                                                sync_method=method)  # fmt: skip
+    how = {"posyaw": "se3"}.get(alignment or spec.align, alignment or spec.align)
+    if how == "auto":
+        raise ValidationError("align 'auto': resolve it for the algorithm first (EvalSpec.alignment_for)")
     align = dict(
-        align=spec.align in ("se3", "sim3"), correct_scale=spec.align in ("sim3", "scale"),
-        align_origin=spec.align == "origin", n_to_align=spec.align_frames or -1,
+        align=how in ("se3", "sim3"), correct_scale=how in ("sim3", "scale"),
+        align_origin=how == "origin", n_to_align=spec.align_frames or -1,
         project_to_plane=Plane(spec.project_to_plane) if spec.project_to_plane else None,
     )  # fmt: skip
     out: dict[str, Any] = {"matched": ref.num_poses}
@@ -116,28 +143,36 @@ def crosscheck_evo(
     if not ours["poses"]:
         raise EvaluationError(f"{estimate}: the estimate has no poses (only comments or blank lines?): nothing to "
                               "compare; check that the file is the right one and that the run wrote its output")  # fmt: skip
+    if not ours["matched"]:  # lorisnb's reason (with its advice) rather than evo's SyncException
+        why = [w for w in ev.warnings if any(w.startswith(f.error) for f in ev.unscored)] or [
+            f.error for f in ev.unscored] or [f"{estimate}: no pose matched the ground truth"]  # fmt: skip
+        raise EvaluationError(f"{why[0]} Nothing to compare with evo.")
+    how = the_spec.alignment_for(str(ours["algorithm"]))  # auto: what lorisnb chose for this algorithm
+    shown = how if how == the_spec.align else f"{how} ({the_spec.align})"
     ref, est = evo_read(groundtruth, gt_fmt, gt_topic), evo_read(estimate, fmt, topic)
     with evo_errors(
         "cannot evaluate this pair", "check the poses of both files (lorisnb skips NaN poses, evo does not)"
     ):
-        theirs = evo_statistics(ref, est, the_spec)
-    note = f"lorisnb (preset {the_spec.preset_name}, align {the_spec.align}) against evo reading the files itself"
-    rows = [agreement_row("matched", the_spec.align, ours["matched"], theirs["matched"], ours["matched"], note)]
+        theirs = evo_statistics(ref, est, the_spec, how)
+    lacks = evo_lacks(the_spec)
+    note = (f"definitions differ: {'; '.join(lacks)}" if lacks else
+            f"lorisnb (preset {the_spec.preset_name}, align {shown}) against evo reading the files itself")  # fmt: skip
+    rows = [agreement_row("matched", shown, ours["matched"], theirs["matched"], ours["matched"], note)]
     if "rpe_pairs" in theirs:
-        rows.append(agreement_row("rpe_pairs", the_spec.align, ours["rpe_pairs"], theirs["rpe_pairs"],
+        rows.append(agreement_row("rpe_pairs", shown, ours["rpe_pairs"], theirs["rpe_pairs"],
                                   ours["rpe_pairs"], note))  # fmt: skip
     for m in ("ate", "aoe", "rpe_trans", "rpe_rot"):
         n = ours["rpe_pairs"] if m.startswith("rpe") else ours["matched"]  # what the statistics are over
         for k in STATISTICS:
             key = f"{m}_{k}"
             if key in theirs:
-                rows.append(agreement_row(key, the_spec.align, ours[key], theirs[key], n, note, tol))
+                rows.append(agreement_row(key, shown, ours[key], theirs[key], n, note, tol))
             elif "rpe_refused" in theirs and m.startswith("rpe"):
-                rows.append(agreement_row(key, the_spec.align, ours[key], float("nan"), 0,
+                rows.append(agreement_row(key, shown, ours[key], float("nan"), 0,
                                           f"{NO_RPE_PAIR}: evo_rpe raises ({theirs['rpe_refused']}); lorisnb gives NaN "
                                           "with a warning"))  # fmt: skip
             else:
-                rows.append(agreement_row(key, the_spec.align, ours[key], float("nan"), n,
+                rows.append(agreement_row(key, shown, ours[key], float("nan"), n,
                                           "RPE in seconds: evo has no such unit"))  # fmt: skip
     return pd.concat([*reading, pd.DataFrame(rows, columns=CROSSCHECK_COLUMNS)], ignore_index=True)
 
