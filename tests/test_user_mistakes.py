@@ -108,3 +108,44 @@ def test_a_zero_validity_window_is_refused_by_the_timeline_as_by_score(orbslam2)
     segments, firsts = timeline_table(orbslam2.errors, eps="1", phi="30", delta="1")  # number strings, as score takes
     paper = orbslam2.sequences(eps=1, phi=30, delta=1)
     assert len(firsts) == int((paper["matched"] > 0).sum())
+
+
+def test_an_eps_mapping_without_a_scene_of_the_inputs_says_which(data, icra20):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ev = ln.evaluate(icra20 / "per-seq" / "orbslam2_rgbd", data_root=data, scenes=["cafe", "home"])
+    with pytest.raises(ln.ValidationError, match="gives no threshold for scene 'home'"):
+        ev.scenes(eps={"cafe": 2})
+    both = ev.scenes(eps={"cafe": 2, "home": 3}).set_index("scene")
+    assert both.loc["cafe", "eps"] == 2 and both.loc["home", "eps"] == 3
+    assert both.loc["home", "cr"] == ev.scenes(eps=3).set_index("scene").loc["home", "cr"]
+
+
+def test_the_timeline_draws_each_trial_on_its_own_row_with_its_own_numbers(tmp_path, icra20):
+    """Two trials of one algorithm (the lifelong notebook's and evaluate_my_results' plot_timeline):
+    one row named ``vins`` with both trials' segments and both CRs printed over each other."""
+    import shutil
+
+    from lorisnb.tools.plotting import plot_timeline
+
+    (tmp_path / "vins").mkdir()
+    lifelong = icra20 / "lifelong"
+    shutil.copy(lifelong / "vins_mono_color_imu_with_loop" / "cafe-1.txt", tmp_path / "vins" / "cafe_trial1.txt")
+    shutil.copy(lifelong / "vins_mono_fisheye_imu_with_loop" / "cafe-1.txt", tmp_path / "vins" / "cafe_trial2.txt")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ev = ln.evaluate(tmp_path, progress=False)
+    table = ev.scenes(eps="paper", phi=30)
+    fig = plot_timeline(ev.errors, ev.durations(), table, "paper", 30)
+    ax = fig.axes[0]
+    rows = {t.get_text(): y for t, y in zip(ax.get_yticklabels(), ax.get_yticks(), strict=True)}
+    assert sorted(rows) == ["vins trial 1", "vins trial 2"]
+    cr_texts = {round(t.get_position()[1] - 0.12, 6): t.get_text() for t in ax.texts if t.get_text().endswith("%")}
+    rmse_texts = [t.get_text() for t in ax.texts if t.get_text().endswith(" m")]
+    for r in table.to_dict("records"):
+        y = rows[f"vins trial {r['trial']}"]
+        assert cr_texts[round(y, 6)] == f"{100 * r['cr']:.1f}%"
+        assert f"{r['c_ate_rmse']:.3f} m" in rmse_texts
+    segments = [c for c in ax.collections if len(c.get_segments())]
+    heights = {round(s[0][1], 6) for c in segments for s in c.get_segments()}
+    assert heights == {round(y, 6) for y in rows.values()}  # each trial's segments on its row

@@ -296,6 +296,9 @@ def scene_eps(eps: Eps, scene: str) -> float:
         except ValueError:  # relative:F is a fraction of each sequence's extent (sequence_eps)
             raise ValidationError(f"eps={eps!r}: expected metres or 'paper' for a scene's threshold") from None
     if isinstance(eps, Mapping):
+        if scene not in eps:
+            raise ValidationError(f"eps={dict(eps)!r} gives no threshold for scene {scene!r}, which the inputs "
+                                  f"hold: add {scene!r} to the mapping, or give one eps for every scene")  # fmt: skip
         return float(eps[scene])
     return float(eps)
 

@@ -48,10 +48,10 @@ def timeline_table(
     """Segments and first poses of every sequence.
 
     Returns:
-        segments: algorithm, suite, scene, seq, start, end (seconds from the sequence's
+        segments: algorithm, suite, trial, scene, seq, start, end (seconds from the sequence's
             ground-truth start), correct.
-        firsts: algorithm, suite, scene, seq, t (first matched pose, seconds from the start),
-            correct (a dot in the figure if correct, a cross if not).
+        firsts: algorithm, suite, trial, scene, seq, t (first matched pose, seconds from the
+            start), correct (a dot in the figure if correct, a cross if not).
     """
     eps_v, phi_v, delta_v = eps_value(eps), threshold("phi", phi), threshold("delta", delta)  # as score's
     segs, firsts = [], []
@@ -66,6 +66,7 @@ def timeline_table(
                     {
                         "algorithm": f.algorithm,
                         "suite": f.suite,
+                        "trial": f.trial,
                         "scene": f.scene,
                         "seq": e.seq,
                         "start": s - e.gt_start,
@@ -78,15 +79,34 @@ def timeline_table(
                 dict(
                     algorithm=f.algorithm,
                     suite=f.suite,
+                    trial=f.trial,
                     scene=f.scene,
                     seq=e.seq,
                     t=max(0.0, e.stamps[0] - e.gt_start),
                     correct=bool(c[0]),
                 )
             )
-    seg_cols = ["algorithm", "suite", "scene", "seq", "start", "end", "correct"]
+    seg_cols = ["algorithm", "suite", "trial", "scene", "seq", "start", "end", "correct"]
     segments = pd.concat(segs, ignore_index=True) if segs else pd.DataFrame(columns=seg_cols)
-    return segments, pd.DataFrame(firsts, columns=["algorithm", "suite", "scene", "seq", "t", "correct"])
+    return segments, pd.DataFrame(firsts, columns=["algorithm", "suite", "trial", "scene", "seq", "t", "correct"])
+
+
+def timeline_rows(errors: Iterable[FileErrors], algorithms: Iterable[str]) -> dict[tuple[str, str, int], str]:
+    """The timeline's rows, top to bottom: ``(algorithm, suite, trial)`` -> the row's name. An
+    algorithm run once is one row named after it; several suites or trials of it are a row each,
+    named ``algorithm suite trial N`` (by what tells them apart), so they are never drawn over
+    each other. Only ``algorithms`` are shown, in that order."""
+    runs: dict[str, list[tuple[str, int]]] = {}
+    for f in errors:
+        if (f.suite, f.trial) not in runs.setdefault(f.algorithm, []):
+            runs[f.algorithm].append((f.suite, f.trial))
+    rows = {}
+    for a in algorithms:
+        these = sorted(runs.get(a, [("", 0)]))
+        suites, trials = len({s for s, _ in these}) > 1, len({t for _, t in these}) > 1
+        for suite, trial in these:
+            rows[(a, suite, trial)] = " ".join([a] + [suite] * suites + [f"trial {trial}"] * trials)
+    return rows
 
 
 def sequence_layout(

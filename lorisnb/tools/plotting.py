@@ -19,7 +19,7 @@ from matplotlib.patches import Rectangle
 
 from ..core.metrics import correctness
 from ..core.model import FileErrors, sequence_eps
-from ..core.timeline import sequence_layout, timeline_table
+from ..core.timeline import sequence_layout, timeline_rows, timeline_table
 from ..core.validate import eps_value, threshold
 
 #: Widest figure, inches (about 1,200 px in a notebook): wider ones would be shrunk to unreadable text.
@@ -106,19 +106,28 @@ def plot_timeline(
     segments, incorrect estimates as red ones (``show_wrong``, Fig. 3); the first pose of each
     sequence is a blue dot if correct (initialization / correct re-localization) or a red cross.
     Per scene, the CR is printed at the top left of each row and the C-ATE RMSE (metres) at the
-    bottom right, from ``scene_table`` (:func:`lorisnb.core.aggregate.aggregate_scenes`).
+    bottom right, from ``scene_table`` (:func:`lorisnb.core.aggregate.aggregate_scenes`; with
+    several trials of an algorithm, its ``suite`` and ``trial`` columns tell their rows apart).
+    Several suites or trials of an algorithm are a row each (:func:`~lorisnb.core.timeline.timeline_rows`).
     """
+    errors = list(errors)
     segments, firsts = timeline_table(errors, eps, phi, delta)
     layout = sequence_layout(durations)
     if algorithms is None:
         algorithms = sorted({f.algorithm for f in errors})
     labels = dict(labels or {})
-    n = len(algorithms)
+    rows = timeline_rows(errors, algorithms)
+    n = len(rows)
     width = max(8.0, 0.006 * (layout["offset"].iloc[-1] + layout["duration"].iloc[-1]) + 3) if len(layout) else 8
     _theme("white")
     fig, ax = subplots(figsize=(min(width, MAX_WIDTH_IN), 0.55 * n + 1.7))
     off = {(r.scene, r.seq): r.offset for r in layout.itertuples()}
-    y_of = {a: n - i for i, a in enumerate(algorithms)}
+    y_of = {key: n - i for i, key in enumerate(rows)}
+
+    def row_y(d: pd.DataFrame) -> np.ndarray:  # each segment's or first pose's row (NaN: not shown)
+        keys = zip(d["algorithm"], d["suite"], d["trial"], strict=True)
+        return np.array([y_of.get(k, np.nan) for k in keys], float)
+
     top = n + 0.8
     for scene, d in layout.groupby("scene", sort=False):
         x0, x1 = d["offset"].min(), (d["offset"] + d["duration"]).max()
@@ -130,36 +139,37 @@ def plot_timeline(
     for correct_flag, color in ((True, CORRECT), (False, WRONG)):
         if not show_wrong and not correct_flag:
             continue
-        s = segments[(segments["correct"] == correct_flag) & segments["algorithm"].isin(algorithms)]
+        s = segments[segments["correct"] == correct_flag]
         s = s[
-            np.array([(sc, q) in off for sc, q in zip(s["scene"], s["seq"], strict=True)], bool)
+            np.array([(sc, q) in off for sc, q in zip(s["scene"], s["seq"], strict=True)], bool) & ~np.isnan(row_y(s))
         ]  # a mask, also when empty
         if s.empty:
             continue
         base = np.array([off[(sc, q)] for sc, q in zip(s["scene"], s["seq"], strict=True)])
-        y = s["algorithm"].map(y_of).to_numpy(float)
+        y = row_y(s)
         lines = np.stack([np.stack([base + s["start"], y], 1), np.stack([base + s["end"], y], 1)], 1)
         ax.add_collection(LineCollection(list(lines), colors=color, linewidths=2.2))
-    f = firsts[firsts["algorithm"].isin(algorithms)]
+    f = firsts[~np.isnan(row_y(firsts))]
     f = f[np.array([(sc, q) in off for sc, q in zip(f["scene"], f["seq"], strict=True)], bool)]
     if len(f):
         x = np.array([off[(sc, q)] for sc, q in zip(f["scene"], f["seq"], strict=True)]) + f["t"].to_numpy()
-        y = f["algorithm"].map(y_of).to_numpy(float)
+        y = row_y(f)
         ok = f["correct"].to_numpy(bool)
         ax.plot(x[ok], y[ok], "o", color=CORRECT, ms=4)
         ax.plot(x[~ok], y[~ok], "x", color=WRONG, ms=6, mew=1.5)
-    for r in scene_table[scene_table["algorithm"].isin(algorithms)].itertuples():
-        d = layout[layout["scene"] == r.scene]
-        if d.empty:
+    told_at = {"suite": 0, "trial": 1}
+    told = [k for k in told_at if k in scene_table.columns]  # what tells a row's runs apart
+    for r in scene_table[scene_table["algorithm"].isin(algorithms)].to_dict("records"):
+        d = layout[layout["scene"] == r["scene"]]
+        at = [y for (a, *run), y in y_of.items() if a == r["algorithm"] and all(r[k] == run[told_at[k]] for k in told)]
+        if d.empty or len(at) != 1:  # a table over all trials of a run drawn a row each: no row is its
             continue
         x0, x1 = d["offset"].min(), (d["offset"] + d["duration"]).max()
-        yy = y_of[r.algorithm]
-        ax.text(x0 + 2, yy + 0.12, _pct(r.cr), fontsize=7, ha="left", va="bottom")
-        rmse = r.c_ate_rmse
-        ax.text(
-            x1 - 2, yy - 0.42, "N/A" if not np.isfinite(rmse) else f"{rmse:.3f}", fontsize=7, ha="right", va="bottom"
-        )
-    ax.set_yticks([y_of[a] for a in algorithms], [labels.get(a, a) for a in algorithms])
+        ax.text(x0 + 2, at[0] + 0.12, _pct(r["cr"]), fontsize=7, ha="left", va="bottom")
+        rmse = r["c_ate_rmse"]
+        ax.text(x1 - 2, at[0] - 0.42, "N/A" if not np.isfinite(rmse) else f"{rmse:.3f} m", fontsize=7, ha="right",
+                va="bottom")  # fmt: skip
+    ax.set_yticks(list(y_of.values()), [labels.get(a, a) + name[len(a) :] for (a, _, _), name in rows.items()])
     ax.set_ylim(0.4, n + 1.5)
     if len(layout):
         ax.set_xlim(layout["offset"].min() - 5, (layout["offset"] + layout["duration"]).max() + 5)

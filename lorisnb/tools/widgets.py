@@ -9,7 +9,6 @@ when it runs in batch (papermill has no widget front end).
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -78,12 +77,6 @@ def checked_durations(durations: Any) -> pd.DataFrame:
             + (f" without {', '.join(missing)}" if isinstance(durations, pd.DataFrame) else "")
         )
     return durations
-
-
-def _label(algorithm: str, keys: Mapping[str, Any]) -> str:
-    """A timeline row's name: the algorithm, then its suite and trial where there are several."""
-    parts = [str(v) if k == "suite" else f"trial {v}" for k, v in keys.items() if k == "suite" or v != 0]
-    return " ".join([algorithm, *parts])  # trial 0: a file without a trial number
 
 
 def _eps_text(eps: float | str) -> str:
@@ -171,17 +164,10 @@ class ThresholdExplorer:
         durations = self.durations[self.durations["scene"] == self.scene]
         table = aggregate_scenes(score(files, self.eps, self.phi, self.delta, self.tau), durations)
         keys = [k for k in ("suite", "trial") if k in table.columns and table[k].nunique() > 1]
-        shown, labelled = files, table
-        if keys:  # one timeline row per trial: the same name would draw them on one row
-            shown = [replace(f, algorithm=_label(f.algorithm, {k: getattr(f, k) for k in keys})) for f in files]
-            names = [
-                _label(r["algorithm"], {k: r[k] for k in keys}) for r in table[["algorithm", *keys]].to_dict("records")
-            ]
-            labelled = table.assign(algorithm=names)
-        fig = plot_timeline(
-            shown,
+        fig = plot_timeline(  # a row per trial (timeline_rows), as the table has
+            files,
             durations,
-            labelled,
+            table,
             self.eps,
             self.phi,
             self.delta,
