@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import nbformat
+import pandas as pd
 import papermill as pm
 import pytest
 
@@ -156,3 +157,27 @@ def test_per_sequence_prose_quotes_odom_values_it_computed(tmp_path, data, icra2
                            scenes=["corridor"]).scenes(eps=0.5, phi=30.0)  # fmt: skip
     assert round(float(expected["cr"].iloc[0]), 3) == pytest.approx(0.271)
     assert shown and f"{expected['cr'].iloc[0]:.3f}" in shown[0]["data"]["text/plain"]
+
+
+@pytest.mark.parametrize(
+    ("scenes", "said"),
+    [(None, "corridor (5 sequences), home (5 sequences), market (3 sequences)"), (["cafe"], None)],
+)
+def test_report_names_scenes_with_ground_truth_that_no_result_file_is_of(tmp_path, monkeypatch, icra20, scenes, said):
+    """One algorithm's results for cafe only: the leaderboard had cafe and nothing said that the
+    other scenes with ground truth were never scored (the exit status was 0)."""
+    monkeypatch.setattr(report, "run_notebook", _fake_run)
+    results = tmp_path / "res" / "orbslam2_rgbd"
+    results.mkdir(parents=True)
+    for f in (icra20 / "per-seq" / "orbslam2_rgbd").glob("cafe_*"):
+        (results / f.name).write_bytes(f.read_bytes())
+    args = ["report", "--results", str(tmp_path / "res"), "--out", str(tmp_path / "run"), "--notebooks",
+            "per_sequence_benchmark", "--no-progress", "--data", str(icra20.parents[1])]  # fmt: skip
+    assert main(args + (["-p", "scenes", '["cafe"]'] if scenes else [])) == 0
+    text = (tmp_path / "run" / "index.html").read_text()
+    if said is None:  # the scenes asked for: nothing left out
+        assert "No result file for" not in text
+    else:
+        assert f"No result file for {said} with ground truth: not scored, on no leaderboard." in text
+    board = pd.read_csv(tmp_path / "run" / "findings" / "leaderboard.csv")
+    assert board["scene"].tolist() == ["cafe"] and board["value"].round(4).tolist() == [0.4860]

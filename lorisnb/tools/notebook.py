@@ -244,10 +244,13 @@ def setup(
             raise
         data = sample_data()
         print("no data root found: using the small sample data shipped with lorisnb (cafe scene only)")
-    if values.get("scenes") is not None:
+    if values.get("scenes") is not None:  # OpenLORIS scenes, none with ground truth (office): nothing to score
+        from ..core.frames import SCENES
+        from .inputs import names
         from .leaderboard import refuse_unscorable_scenes
 
-        refuse_unscorable_scenes(values["scenes"], data)  # office only: nothing would be scored
+        if set(names("scenes", values["scenes"])) <= set(SCENES):  # any other name: refused naming the inputs' scenes
+            refuse_unscorable_scenes(values["scenes"], data)
     out = Outputs(output_dir if output_dir is not None else default_output_dir(name))
     warnings.filterwarnings("ignore", category=LorisWarning)
     shown = out.dir.resolve() if output_dir is None else out.dir  # as given (a report passes ".")

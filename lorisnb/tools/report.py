@@ -35,7 +35,7 @@ from .notebook_params import check_parameters
 from .pool import start_context
 from .provenance import checksums, input_files, run_record, sha256, write_run_json
 from .report_html import single_file, write_notebook_css
-from .report_index import git_dirty, versions, write_index
+from .report_index import expected_spans, git_dirty, versions, write_index
 from .report_notebooks import (
     DEFAULT_NOTEBOOKS,
     KERNEL_ARGS,
@@ -333,7 +333,7 @@ def run_report(
                                     (findings.pairs, "pairwise.csv"), (failures, INPUT_ERRORS_CSV),
                                     (ev.durations(), "durations.csv")):  # fmt: skip  # every sequence: diff, history
                     write_csv(table, tmp / "findings" / name)
-                board.update(findings=findings, per_sequence=per_sequence, failures=failures, expected=ev.spans(),
+                board.update(findings=findings, per_sequence=per_sequence, failures=failures, expected=expected_spans(ev, data, values["scenes"]),
                              spec={"description": ev.conventions, "values": {**ev.spec.to_dict(), **values, "source": str(source)}})  # fmt: skip
 
             n_jobs = jobs or min(len(names), os.cpu_count() or 1)

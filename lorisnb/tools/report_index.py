@@ -245,6 +245,11 @@ def write_index(
         parts.append("<h2 id='findings'>What was found</h2><p>No leaderboard: none of the selected notebooks "
                      "evaluates a results folder (run per_sequence_benchmark or compare_algorithms, or pass "
                      "--results DIR).</p>")  # fmt: skip
+    seen = set(per_sequence["scene"]) if per_sequence is not None and len(per_sequence) else set()
+    missing = [f"{esc(s)} ({len(seqs)} sequences)" for s, seqs in (expected or {}).items() if s not in seen]
+    if findings is not None and missing:  # a scene with ground truth that no result file is of: said, not left out
+        parts.append(f"<p class='failed'>No result file for {', '.join(missing)} with ground truth: not scored, on no "
+                     "leaderboard.</p>")  # fmt: skip
     failed = [r for r in runs if r.status == "failed"]
     if failed:
         parts.append(f"<p class='failed'>{len(failed)} notebook(s) failed: " + ", ".join(
@@ -289,6 +294,19 @@ def write_index(
     index = run_dir / "index.html"
     index.write_text("\n".join(parts), encoding="utf-8")
     return index
+
+
+def expected_spans(ev: Any, data: Any, scenes: Any = None) -> dict[str, dict[int, tuple[float, float]]]:
+    """scene -> sequence -> ground-truth span (s) of every scene evaluated (``ev.spans()``), and of
+    every other scene with ground truth in ``data`` that the ``scenes`` filter (None: all) keeps:
+    the scenes no result file is of, which the front page names instead of leaving them out."""
+    from ..io.data import scene_spans
+    from .inputs import names
+
+    spans = dict(ev.spans())
+    kept = None if scenes is None else set(names("scenes", scenes))
+    other = [s for s in data.scenes_with_groundtruth() if s not in spans and (kept is None or s in kept)]
+    return {**spans, **(scene_spans(other, data) if other else {})}
 
 
 def _per_sequence(g: pd.DataFrame, metric: str, expected: Any, findings: "Findings | None", suite: str,
