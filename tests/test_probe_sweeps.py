@@ -250,3 +250,22 @@ def test_ranking_and_surface_lookups_refuse_what_they_cannot_answer(ev):
     assert s.at("maslam", "cafe")[1, 0] == pytest.approx(lookup.loc["cafe", "cr"], abs=1e-12)
     with pytest.raises(ln.ValidationError, match=r"no surface for 'masla' in 'cafe' .* algorithms 'maslam'; scenes"):
         s.at("masla", "cafe")
+
+
+def test_a_sweep_carries_evos_pose_relation_columns_as_evaluate_does(icra20):
+    """``sweep --relation R`` said 'pose relation R (ape_*, rpe_* columns)' and wrote none:
+    sweep(relation=R) now adds them (threshold-free, per sequence), so a row equals evaluate's.
+    (The command line must pass ``relation=ev.spec.relation``: see the report.)"""
+    from lorisnb.core.relation_table import RELATION_COLUMNS
+
+    ev = ln.evaluate(icra20 / "lifelong" / "maslam" / "cafe.txt", relation="angle_deg", jobs=1)
+    direct = ev.sequences(eps=1.0, phi=30.0)
+    swept = sweep(ev.errors, [3.0, 1.0], [30.0], columns="all", relation="angle_deg")
+    at = swept[swept["eps"] == 1.0].reset_index(drop=True)
+    assert [c for c in at.columns if c != "eps_value"] == [c for c in direct.columns if c != "spec"]
+    for c in RELATION_COLUMNS[1:]:
+        np.testing.assert_array_equal(at[c], direct[c], err_msg=c)
+    assert (at["relation"] == "angle_deg").all() and at["ape_max"].between(0, 180).all()
+    np.testing.assert_allclose(at["cr"], direct["cr"], rtol=1e-13)
+    with pytest.raises(ln.ValidationError, match="pose relation 'angle': expected one of trans_part, angle_deg"):
+        sweep(ev.errors, [1.0], relation="angle")

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from .model import FileErrors
-from .relations import STATISTICS, ape_relation, error_statistics, rpe_relation
+from .relations import STATISTICS, ape_relation, check_relation, error_statistics, rpe_relation
 from .scoring import as_files
 
 #: Columns :func:`relation_columns` adds.
@@ -22,6 +22,7 @@ def relation_columns(errors: FileErrors | Iterable[FileErrors], relation: str, *
     """One row per sequence (in the order of :func:`lorisnb.core.scoring.score`): ``relation`` and
     evo's statistics of the APE (``ape_*``) and of the RPE (``rpe_*``) by ``relation``; ``rpe``:
     ``rpe_delta``, ``rpe_unit``, ``rpe_pairs``, ``rpe_all_pairs``, ``rpe_tolerance`` (the table's)."""
+    relation = check_relation(relation)  # also where no sequence has a matched pose
     rows = []
     setting = (float(rpe.get("rpe_delta", 1.0)), str(rpe.get("rpe_unit", "s")), str(rpe.get("rpe_pairs", "reference")),
                rpe.get("rpe_all_pairs"), float(rpe.get("rpe_tolerance", 0.1)))  # fmt: skip
@@ -38,3 +39,12 @@ def relation_columns(errors: FileErrors | Iterable[FileErrors], relation: str, *
             row.update({f"rpe_{k}": v for k, v in error_statistics(rel).items()})
             rows.append(row)
     return pd.DataFrame(rows, columns=RELATION_COLUMNS)
+
+
+def repeated_relation_columns(
+    errors: FileErrors | Iterable[FileErrors], relation: str, times: int, **rpe: Any
+) -> dict[str, np.ndarray]:
+    """:func:`relation_columns` as arrays, each sequence's value repeated ``times`` times (the
+    settings of a sweep, whose rows run sequence by sequence): threshold-free, as in ``evaluate``."""
+    rel = relation_columns(errors, relation, **rpe)
+    return {c: np.repeat(rel[c].to_numpy(), times) for c in rel.columns}

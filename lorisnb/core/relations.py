@@ -30,7 +30,8 @@ RELATION_UNITS = {
 STATISTICS = ("rmse", "mean", "median", "std", "min", "max", "sse")
 
 
-def _check(relation: str) -> str:
+def check_relation(relation: str) -> str:
+    """``relation`` if it is one of :data:`RELATIONS`, else a ValidationError naming them."""
     if relation not in RELATIONS:
         raise ValidationError(f"pose relation {relation!r}: expected one of {', '.join(RELATIONS)}")
     return relation
@@ -66,7 +67,7 @@ def ape_relation(
 ) -> np.ndarray:  # fmt: skip
     """Absolute pose error of each matched pose by ``relation`` (see the module docstring).
     Positions (N, 3) metres; quaternions (N, 4) ``xyzw`` (normalized here)."""
-    relation = _check(relation)
+    relation = check_relation(relation)
     d = np.asarray(est_positions, float) - np.asarray(gt_positions, float)
     trans = np.sqrt(np.einsum("ij,ij->i", d, d))
     if relation in ("trans_part", "point_distance"):
@@ -80,7 +81,7 @@ def rpe_relation(
     i: np.ndarray, j: np.ndarray, relation: str = "trans_part",
 ) -> np.ndarray:  # fmt: skip
     """Relative pose error of pairs (i, j) by ``relation`` (see the module docstring)."""
-    relation = _check(relation)
+    relation = check_relation(relation)
     i, j = np.asarray(i, np.intp), np.asarray(j, np.intp)
     pg, pe = np.asarray(gt_positions, float), np.asarray(est_positions, float)
     if relation == "point_distance":

@@ -28,6 +28,7 @@ from .model import (
     sequence_eps,
     sequence_size,
 )  # fmt: skip
+from .relation_table import RELATION_COLUMNS, repeated_relation_columns
 from .scoring import GRID_METRICS, OF_SPEC, as_files, rpe_of, rpe_options, rpe_setting, sequence_grid, sequence_meta
 from .trajectory import RELATIVE
 from .validate import choice, fraction, threshold, threshold_list
@@ -73,15 +74,14 @@ def check_sweep_size(
 ) -> None:
     """Refuse a sweep that would need more than ``max_bytes`` (:func:`sweep_bytes`), saying how much
     it would need and how to stream it instead."""
-    E, P, D, T = shape
-    n_seq = sum(len(f.sequences) for f in files)
-    longest = max((e.matched for f in files for e in f.sequences), default=0)
-    ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
-    rows = n_seq * E * P * D * T
     need = sweep_bytes(files, shape, columns)
     if need > max_bytes:
+        E, P, D, T = shape
+        n_seq = sum(len(f.sequences) for f in files)
+        longest = max((e.matched for f in files for e in f.sequences), default=0)
+        ncol = len(SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS) + 1 if columns == "all" else len(METRIC_COLUMNS)
         raise ValidationError(
-            f"this sweep would need about {need / 2**30:.1f} GiB ({rows:,} rows of {ncol} columns; "
+            f"this sweep would need about {need / 2**30:.1f} GiB ({n_seq * E * P * D * T:,} rows of {ncol} columns; "
             f"{E} eps x {P} phi x {D} delta x {T} tau over {n_seq} sequences, up to {longest:,} poses each), "
             f"more than the {max_bytes / 2**30:.1f} GiB allowed (max_bytes); use fewer thresholds or files, "
             "or stream the table to Parquet (command line: --parquet DIR; Python: lorisnb.tools.sweep_to_parquet)"
@@ -141,6 +141,7 @@ def sweep(
     rpe_pairs: str = OF_SPEC,
     rpe_all_pairs: bool | None = OF_SPEC,
     rpe_tolerance: float = OF_SPEC,
+    relation: str | None = None,
 ) -> pd.DataFrame:
     """One row per sequence and per combination of thresholds. With ``columns="all"`` the columns
     are those of :func:`lorisnb.core.scoring.score` (a row equals ``score`` at that setting, RPE
@@ -157,6 +158,7 @@ def sweep(
             would take more memory than this.
         rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance: as :func:`~lorisnb.core.scoring.score`'s
             (not given: the errors' own spec's).
+        relation: evo's pose relation (``evaluate --relation``): its ``ape_*``/``rpe_*`` columns last.
     """
     files = as_files(errors)
     if relative_to is not None:
@@ -224,6 +226,10 @@ def sweep(
         data["eps_value"] = pd.Categorical(np.tile(labels[grid_idx[0]], S).astype(str))
     else:
         data["eps_value"] = np.tile(labels[grid_idx[0]].astype(float), S)
+    if relation is not None:  # threshold-free, per sequence, as evaluate's
+        data |= repeated_relation_columns(files, relation, n_set, rpe_delta=rpe_d, rpe_unit=rpe_u, rpe_pairs=rpe_p,
+                                          rpe_all_pairs=rpe_a, rpe_tolerance=rpe_t)  # fmt: skip
+        cols = cols + RELATION_COLUMNS
     # columns in final order, no consolidation copy: the table is large for big grids
     return pd.DataFrame({k: data[k] for k in cols}, copy=False)
 
