@@ -20,7 +20,7 @@ from evo.tools import file_interface as fi
 
 from lorisnb.cli import main
 from lorisnb.core.spec import make_spec
-from lorisnb.errors import EvaluationError
+from lorisnb.errors import EvaluationError, ValidationError
 from lorisnb.tools.crosscheck_evo import crosscheck_evo
 from lorisnb.tools.evo_import import evo_results_table
 
@@ -146,3 +146,18 @@ def test_time_window_and_scale_say_what_went_wrong(data, capsys):
     assert main(["evaluate", e, "--gt", g, "--conventions", "evo", "--align", "scale", "--align-frames", "1",
                  "--no-progress"]) == 1  # fmt: skip
     assert "align_frames=1 with align='scale'" in capsys.readouterr().err
+
+
+def test_to_evo_of_an_empty_trajectory_is_lorisnbs_error(data, tmp_path):
+    """A TUM file of comments only, read and handed to evo: lorisnb's ValidationError naming it
+    (it was evo's TrajectoryException, 'pose data is empty'); a real one converts both ways."""
+    from lorisnb.io import read_tum
+    from lorisnb.tools.evo_bridge import from_evo, to_evo
+
+    empty = tmp_path / "empty.txt"
+    empty.write_text("# timestamp tx ty tz qx qy qz qw\n")
+    with pytest.raises(ValidationError, match="'est' has no poses"):
+        to_evo(read_tum(empty), "est")
+    t = read_tum(data.tum / EST)
+    back = from_evo(to_evo(t, "est"))
+    assert len(back) == 788 and back.positions[0, 0] == pytest.approx(1.344379, abs=1e-12)

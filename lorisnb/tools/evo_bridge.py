@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation
 from ..core.association import MAX_GAP, associate
 from ..core.geometry import Sim3, umeyama
 from ..core.trajectory import Trajectory
-from ..errors import EvaluationError, ParseError
+from ..errors import EvaluationError, ParseError, ValidationError
 from ._extras import require
 
 CROSSCHECK_COLUMNS = ["quantity", "alignment", "lorisnb", "evo", "abs_diff", "rel_diff", "agrees", "n_pairs", "note"]
@@ -58,8 +58,12 @@ def evo_errors(what: str, advice: str = "", path: str | os.PathLike[str] | None 
 
 
 def to_evo(traj: Trajectory, name: str = ""):
-    """A lorisnb Trajectory as evo's ``PoseTrajectory3D`` (quaternions become ``wxyz``)."""
+    """A lorisnb Trajectory as evo's ``PoseTrajectory3D`` (quaternions become ``wxyz``). evo holds
+    no empty trajectory: one without poses is a ValidationError (it was evo's TrajectoryException)."""
     PoseTrajectory3D = require("evo.core.trajectory").PoseTrajectory3D
+    if not len(traj):
+        raise ValidationError(f"to_evo: the trajectory{f' {name!r}' if name else ''} has no poses, and evo's "
+                              "PoseTrajectory3D needs at least one; check the file it was read from")  # fmt: skip
 
     q = traj.rotations().as_quat() if len(traj) else np.zeros((0, 4))
     out = PoseTrajectory3D(
