@@ -55,6 +55,11 @@ def test_history_gives_declared_and_injected_names():
         ("quick = 'maybe'", dict(quick="maybe"), "quick='maybe'"),  # checked though not passed to setup
         ("eps = None", dict(eps=None), "-p eps null"),
         ("scenes = ['office']", dict(scenes=["office"]), "no ground truth for office"),
+        (
+            """scenes = '["cafe"]'""",
+            dict(scenes='["cafe"]'),
+            "a list written as text",
+        ),  # papermill -p scenes '["cafe"]'
     ],
 )
 def test_papermill_parameters_refused_in_the_first_cell(monkeypatch, tmp_path, data, injected, values, message):

@@ -53,6 +53,8 @@ _CHECKS: dict[str, Any] = {
     "sim_eps": lambda v: validate.threshold("eps", v),
     "sim_trials": lambda v: validate.positive("sim_trials", v, "trials", integer=True),
 }
+#: Parameters that take a list (one name or number stands for a list of one).
+LISTS = ("algorithms", "scenes", "eps_grid", "phi_grid", "delta_grid", "tau_grid", "relative_grid")
 #: Parameters that only apply together with another one (the notebook ignores them without it).
 NEEDS = {"fmt": "groundtruth", "gt_fmt": "groundtruth", "ordslam_fps": "ordslam_dir",
          "ordslam_max_gap": "ordslam_dir"}  # fmt: skip
@@ -130,6 +132,9 @@ def check_values(values: Mapping[str, Any], notebooks: Iterable[str] = ()) -> No
     for name, value in values.items():
         if value is None:
             continue
+        if name in LISTS and isinstance(value, str) and value.lstrip().startswith(("[", "(")):
+            raise ValidationError(f"{name}={value!r}: a list written as text (papermill's -p passes text); give a list: "
+                                  f"papermill -y '{name}: [a, b]', or lorisnb report -p {name} '[\"a\", \"b\"]'")  # fmt: skip
         if name in _CHECKS:
             _CHECKS[name](value)
         if name in _VALUES:  # checked as the report normalizes them (-p scene Cafe is cafe)
