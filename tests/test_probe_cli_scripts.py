@@ -262,3 +262,25 @@ def test_history_says_when_a_run_lost_a_scene(icra20, data, tmp_path, capsys):
     assert home["run"].tolist() == ["n1.csv", "n2.csv", "n3.csv"]
     assert home["value"].round(4).tolist()[::2] == [0.2712, 0.2712] and home["value"].isna().tolist()[1]
     assert home["changed"].tolist() == [False, True, False]
+
+
+def test_sweep_writes_the_relation_it_names(data, tmp_path, capsys):
+    """``sweep --relation trans_part`` named the relation in its ``conventions:`` line but wrote
+    none of its columns (``ape_*``, ``rpe_*`` of evo's pose relation): the option was dropped.
+    Each sweep row now carries them, equal to ``evaluate --relation``'s, in CSV and Parquet."""
+    tum = data.root / "tum-rgbd"
+    results = tmp_path / "r" / "orb"
+    results.mkdir(parents=True)
+    shutil.copy(tum / "fr2_desk_ORB.txt", results)
+    argv = [results.parent, "--gt", tum / "fr2_desk_groundtruth.txt", "--relation", "trans_part", "--no-progress"]
+    ev, sw = tmp_path / "ev.csv", tmp_path / "sw.csv"
+    assert _rc(["evaluate", *argv, "--csv", ev]) == 0
+    assert _rc(["sweep", *argv, "--eps", "0.01,0.1", "--csv", sw]) == 0
+    assert "relation" in capsys.readouterr().err
+    e, s = pd.read_csv(ev), pd.read_csv(sw)
+    assert len(s) == 2 and s["ape_rmse"].round(6).tolist() == [0.008171] * 2  # ORB-SLAM2 on fr2/desk, metres
+    for c in ("ape_rmse", "ape_max", "rpe_rmse", "rpe_mean"):
+        assert (s[c] == e[c].iloc[0]).all(), c
+    pytest.importorskip("pyarrow")
+    assert _rc(["sweep", *argv, "--eps", "0.01,0.1", "--parquet", tmp_path / "pq"]) == 0
+    assert (pd.read_parquet(tmp_path / "pq")["ape_rmse"] == e["ape_rmse"].iloc[0]).all()

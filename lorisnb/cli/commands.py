@@ -230,7 +230,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
         path, rows = sweep_to_parquet(
             ev.errors, args.parquet, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
-            force=args.force, progress=not args.no_progress, on_part=summarize, **ev.spec.rpe_options(),
+            force=args.force, progress=not args.no_progress, on_part=summarize, relation=ev.spec.relation,
+            **ev.spec.rpe_options(),
         )  # fmt: skip
         print(f"{rows} rows: {len(ev.errors)} file(s) x {grid}")
         if shown:
@@ -242,7 +243,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         return ev.exit_status()
     table = sweep(
         ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all",
-        **ev.spec.rpe_options(),
+        relation=ev.spec.relation, **ev.spec.rpe_options(),
     )  # fmt: skip
     table["spec"] = ev.spec.canonical(thresholds=False)
     print(f"{len(table)} rows: {len(ev.errors)} file(s) x {grid}")
