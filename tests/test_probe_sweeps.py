@@ -201,8 +201,13 @@ def test_a_sweep_takes_the_eps_values_score_takes(ev):
     np.testing.assert_allclose(at["cr"], direct["cr"], rtol=1e-13)
     np.testing.assert_array_equal(at["eps"], direct["eps"])
     assert set(at["eps"]) == {1.0, 5.0, 2.0, 4.0}
-    with pytest.raises(ln.ValidationError, match=r"no eps for scene\(s\) corridor, home, market of the inputs"):
+    with pytest.raises(ln.ValidationError) as swept_error:  # refused as score refuses it (model.scene_eps)
         sweep(files, [{"cafe": 1.0}], [30.0])
+    with pytest.raises(ln.ValidationError) as direct_error:
+        score(files, {"cafe": 1.0}, 30.0)
+    assert str(swept_error.value) == str(direct_error.value) and "gives no threshold for scene" in str(
+        swept_error.value
+    )
     zero_d = np.asarray([0.3, 1.0]).max()[()]  # a numpy scalar ...
     assert sweep(files, np.array(1.0))["cr"].tolist() == sweep(files, 1.0)["cr"].tolist() == sweep(files, zero_d)["cr"].tolist()  # fmt: skip
     s = cr_surfaces(files, np.array(1.0), np.array(30.0), ev.durations())

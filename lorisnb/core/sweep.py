@@ -173,13 +173,6 @@ def sweep(
     phi_a = np.array(grid_values("phi", phi))
     delta_a = np.array(grid_values("delta", delta))
     tau_a = np.array(grid_values("tau", tau))
-    scenes = sorted({f.scene for f in files})
-    for v in eps_l:  # a scene mapping (accepted by score) must name every scene swept
-        if isinstance(v, Mapping) and set(scenes) - set(v):
-            raise ValidationError(
-                f"eps={_eps_label(v)}: no eps for scene(s) {', '.join(sorted(set(scenes) - set(v)))} of the "
-                f"inputs; give metres for every scene swept ({', '.join(scenes)}), or 'paper'"
-            )
     r = rpe_of(files, dict(rpe_delta=rpe_delta, rpe_unit=rpe_unit, rpe_pairs=rpe_pairs, rpe_all_pairs=rpe_all_pairs,
                            rpe_tolerance=rpe_tolerance))  # fmt: skip
     rpe_d, rpe_u = rpe_setting(r["rpe_delta"], r["rpe_unit"])
