@@ -161,3 +161,16 @@ def test_to_evo_of_an_empty_trajectory_is_lorisnbs_error(data, tmp_path):
     t = read_tum(data.tum / EST)
     back = from_evo(to_evo(t, "est"))
     assert len(back) == 788 and back.positions[0, 0] == pytest.approx(1.344379, abs=1e-12)
+
+
+def test_crosscheck_evo_checks_its_format_and_tolerance(data):
+    """``crosscheck_evo(..., fmt="TUM")`` read the TUM files as a ROS bag ('not a readable ROS bag');
+    ``tol=-1`` was taken (2 of 30 statistics 'agreed')."""
+    table = crosscheck_evo(data.tum / GT, data.tum / EST, fmt="TUM", gt_fmt=" tum")
+    stats = _stats(table)
+    assert stats["agrees"].all() and stats.loc["matched", "evo"] == 785
+    for bad in (-1, float("nan"), "1e-9"):
+        with pytest.raises(ValidationError, match="expected a tolerance in"):
+            crosscheck_evo(data.tum / GT, data.tum / EST, tol=bad)
+    with pytest.raises(ValidationError, match="fmt=tumm: expected one of tum, kitti"):
+        crosscheck_evo(data.tum / GT, data.tum / EST, fmt="tumm")

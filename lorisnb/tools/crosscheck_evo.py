@@ -16,9 +16,11 @@ from typing import Any
 
 import pandas as pd
 
+from ..core import validate
 from ..core.relations import STATISTICS
 from ..core.spec import EvalSpec, make_spec
 from ..errors import EvaluationError, ValidationError
+from ..io.formats import TRAJECTORY_FORMATS
 from ._extras import require
 from .crosscheck_reading import crosscheck_reading, evo_read
 from .evo_bridge import CROSSCHECK_COLUMNS, NO_RPE_PAIR, agreement_row, evo_errors
@@ -121,7 +123,10 @@ def crosscheck_evo(
     from .evaluate import evaluate_pairs
 
     the_spec = make_spec(spec)
-    gt_fmt = gt_fmt or fmt
+    fmt = validate.choice("fmt", fmt, TRAJECTORY_FORMATS)  # ('TUM' was read as a bag)
+    gt_fmt = validate.choice("gt_fmt", gt_fmt, TRAJECTORY_FORMATS) if gt_fmt is not None else fmt
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0.0 <= tol < 1.0:  # (NaN too)
+        raise ValidationError(f"tol={tol!r}: expected a tolerance in [0, 1) (1e-9; 1e-5 for KITTI's 7 digits)")
     if "openloris" in (fmt, gt_fmt):
         raise ValidationError(
             "format openloris: evo reads no OpenLORIS files (scene: and frame: headers, seq: blocks, ground truth in "
