@@ -284,3 +284,19 @@ def test_sweep_writes_the_relation_it_names(data, tmp_path, capsys):
     pytest.importorskip("pyarrow")
     assert _rc(["sweep", *argv, "--eps", "0.01,0.1", "--parquet", tmp_path / "pq"]) == 0
     assert (pd.read_parquet(tmp_path / "pq")["ape_rmse"] == e["ape_rmse"].iloc[0]).all()
+
+
+@pytest.mark.parametrize("command", ["compare", "diff"])
+def test_a_pose_relation_is_refused_where_nothing_uses_it(command, data, tmp_path, capsys):
+    """``compare --relation R`` ranked CR and ``diff --relation R`` compared CR ... RPE, exit 0,
+    with a ``conventions:`` line saying ``pose relation R (ape_*, rpe_* columns)``: neither uses
+    evo's relation columns. Refused now, naming the commands that do."""
+    tum = data.root / "tum-rgbd"
+    results = tmp_path / "r" / "orb"
+    results.mkdir(parents=True)
+    shutil.copy(tum / "fr2_desk_ORB.txt", results)
+    runs = [results.parent] * (2 if command == "diff" else 1)
+    argv = [command, *runs, "--gt", tum / "fr2_desk_groundtruth.txt", "--relation", "trans_part", "--no-progress"]
+    assert _rc(argv) == 2
+    cap = capsys.readouterr()
+    assert f"--relation: not used by lorisnb {command}; use lorisnb evaluate" in cap.err and cap.out == ""

@@ -273,7 +273,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
                           ("--rpe-all-pairs", args.rpe_all_pairs), ("--rpe-tolerance", args.rpe_tolerance)) if v is not None]  # fmt: skip
     if rpe and not args.metric.startswith(("rpe", "c_rpe")):
         raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
-    refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate"})
+    refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate",
+                         "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)"})  # fmt: skip
     ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"])
     table = ev.sequences()
     if not table.empty:

@@ -66,7 +66,9 @@ def cmd_diff(args: argparse.Namespace) -> int:
     from ..tools.diff import diff_tables, exit_status, write_json, write_junit
     from ..tools.runs import is_report_run, is_table, spec_differences
 
-    refuse_unused(args, {"relative": "lorisnb evaluate (diff compares the RPE columns)"})
+    refuse_unused(args, {"relative": "lorisnb evaluate (diff compares the RPE columns)",
+                         "relation": "lorisnb evaluate (diff compares CR, CR-T, CS-R, ATE, AOE and RPE, not evo's "
+                         "pose-relation columns)"})  # fmt: skip
     if len(args.paths) != 2:
         raise ValidationError(f"diff takes two runs, BASE and CAND; got {len(args.paths)} path(s)")
     check_outputs(args, args.paths, ["json", "junit", "csv"], folders=("parquet",))
