@@ -286,17 +286,19 @@ def test_sweep_writes_the_relation_it_names(data, tmp_path, capsys):
     assert (pd.read_parquet(tmp_path / "pq")["ape_rmse"] == e["ape_rmse"].iloc[0]).all()
 
 
-@pytest.mark.parametrize("command", ["compare", "diff"])
-def test_a_pose_relation_is_refused_where_nothing_uses_it(command, data, tmp_path, capsys):
+@pytest.mark.parametrize("command, option", [("compare", ["--relation", "trans_part"]),
+                                             ("diff", ["--relation", "trans_part"]), ("sweep", ["--relative"])])  # fmt: skip
+def test_an_option_is_refused_where_nothing_uses_it(command, option, data, tmp_path, capsys):
     """``compare --relation R`` ranked CR and ``diff --relation R`` compared CR ... RPE, exit 0,
     with a ``conventions:`` line saying ``pose relation R (ape_*, rpe_* columns)``: neither uses
-    evo's relation columns. Refused now, naming the commands that do."""
+    evo's relation columns; ``sweep --relative`` printed no relative error. Refused now, naming
+    the command that does."""
     tum = data.root / "tum-rgbd"
     results = tmp_path / "r" / "orb"
     results.mkdir(parents=True)
     shutil.copy(tum / "fr2_desk_ORB.txt", results)
     runs = [results.parent] * (2 if command == "diff" else 1)
-    argv = [command, *runs, "--gt", tum / "fr2_desk_groundtruth.txt", "--relation", "trans_part", "--no-progress"]
+    argv = [command, *runs, "--gt", tum / "fr2_desk_groundtruth.txt", *option, "--no-progress"]
     assert _rc(argv) == 2
     cap = capsys.readouterr()
-    assert f"--relation: not used by lorisnb {command}; use lorisnb evaluate" in cap.err and cap.out == ""
+    assert f"{option[0]}: not used by lorisnb {command}; use lorisnb evaluate" in cap.err and cap.out == ""

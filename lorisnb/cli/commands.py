@@ -194,6 +194,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from ..core.sweep import sweep, sweep_scenes
     from ..io.writers import write_csv, write_parquet
 
+    refuse_unused(args, {"relative": "lorisnb evaluate (rpg's relative error has no threshold to sweep)"})
     relative = f" (fractions of each sequence's {args.relative_to})" if args.relative_to is not None else " m"
     units = {"eps": relative, "phi": " deg", "delta": " s", "tau": " s"}
 
