@@ -174,3 +174,28 @@ def test_crosscheck_evo_checks_its_format_and_tolerance(data):
             crosscheck_evo(data.tum / GT, data.tum / EST, tol=bad)
     with pytest.raises(ValidationError, match="fmt=tumm: expected one of tum, kitti"):
         crosscheck_evo(data.tum / GT, data.tum / EST, fmt="tumm")
+
+
+def test_classic_crosscheck_checks_its_rpe_steps_and_flags(data):
+    """``crosscheck(..., rpe_deltas=[(1, "frames")])`` was scored as 1 *metre* (any unit but 'f' was
+    metres: 's', 'deg' too); ``(0, 'f')`` raised ValueError and ``(1.5, 'f')`` evo's
+    MetricsException; ``all_pairs="no"`` meant all pairs and ``crosscheck_openloris(scale="no")``
+    Sim(3) (strings truth-tested)."""
+    from lorisnb.io import read_tum
+    from lorisnb.tools.crosscheck import crosscheck, crosscheck_openloris
+
+    gt, est = read_tum(data.tum / GT), read_tum(data.tum / EST)
+    rows = crosscheck(gt, est, rpe_deltas=[(1, "frames")]).set_index("quantity")
+    one_frame = crosscheck(gt, est, rpe_deltas=[(1, "f")]).set_index("quantity")
+    assert "delta 1 frame(s)" in rows.loc["rpe_trans_rmse", "note"]
+    assert rows.loc["rpe_trans_rmse", "lorisnb"] == one_frame.loc["rpe_trans_rmse", "lorisnb"]
+    assert rows.loc["rpe_trans_rmse", "n_pairs"] == 787 and rows.loc["rpe_trans_rmse", "agrees"]
+    for bad, words in (([(0.5, "s")], "unit 's'"), ([(5, "deg")], "unit 'deg'"), ([(0, "f")], "positive whole"),
+                       ([(1.5, "f")], "positive whole"), ([(-1, "m")], "positive number of metres")):  # fmt: skip
+        with pytest.raises(ValidationError, match=words):
+            crosscheck(gt, est, rpe_deltas=bad)
+    with pytest.raises(ValidationError, match="all_pairs='no'"):
+        crosscheck(gt, est, all_pairs="no")
+    dso = data.icra20 / "per-seq" / "dso" / "cafe-1-1-all.txt"
+    table = crosscheck_openloris(dso, scale="no", data_root=data.root, rpe_deltas=[(1, "f")])
+    assert set(table.loc[table["quantity"] == "rpe_trans_rmse", "alignment"]) == {"se3"}

@@ -13,7 +13,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from ..core import metrics
+from ..core import metrics, validate
 from ..core.association import MAX_GAP, groundtruth_in_frame
 from ..core.model import ResultFile, is_monocular
 from ..core.pipeline import compute_errors, evaluate_sessions
@@ -32,6 +32,8 @@ from .evo_bridge import (
     PairedPoses,
     agreement_row,
     aligned_estimate,
+    check_rpe_deltas,
+    crosscheck_flags,
     evo_aligned,
     evo_ape,
     evo_pairs,
@@ -216,9 +218,10 @@ def crosscheck(
             evaluate`` gives them for the pair; evo has none); default: the OpenLORIS preset with
             this alignment and ``max_gap`` (a spec whose alignment is ``auto``: resolved as ``scale`` says).
     """
-    p = pair_poses(gt, est, max_gap, by_index)
+    scale, by_index, all_pairs = crosscheck_flags(scale, by_index=by_index, all_pairs=all_pairs)
+    p = pair_poses(gt, est, validate.positive("max_gap", max_gap, "seconds"), by_index)
     alignment = "sim3" if scale else "se3"
-    rows = crosscheck_pairs(p, rpe_deltas, alignment, all_pairs)
+    rows = crosscheck_pairs(p, check_rpe_deltas(rpe_deltas), alignment, all_pairs)
     if not by_index:
         rows += crosscheck_native(gt, est, p, alignment)
         rows += crosscheck_conventions(gt, est)
@@ -255,7 +258,8 @@ def crosscheck_poses(
 ) -> pd.DataFrame:
     """Per pose, on identical pairs after alignment: stamp, lorisnb ATE, evo APE (metres), lorisnb
     AOE, evo APE angle (degrees). They lie on the diagonal."""
-    p = pair_poses(gt, est, max_gap, by_index)
+    scale, by_index = crosscheck_flags(scale, by_index=by_index)
+    p = pair_poses(gt, est, validate.positive("max_gap", max_gap, "seconds"), by_index)
     alignment = "sim3" if scale else "se3"
     pos, rot, _ = aligned_estimate(p, alignment)
     ref_t, est_t = p.as_trajectories()
@@ -325,9 +329,10 @@ def crosscheck_openloris(
             f"{result_path}: sequence {s} is not in both the result ({sorted(res.sequences)}) "
             f"and the ground truth ({sorted(gt_file.sequences)})"
         )
+    scale, deltas = validate.scale_value(scale), check_rpe_deltas(rpe_deltas)  # ('no' was truth-tested: Sim(3))
     with_scale = is_monocular(result_path.parent.name) if scale == "auto" else bool(scale)
     gt = groundtruth_in_frame(gt_file.sequences[s], scene, frame)
-    table = crosscheck(gt, res.sequences[s], scale=with_scale, rpe_deltas=rpe_deltas)
+    table = crosscheck(gt, res.sequences[s], scale=with_scale, rpe_deltas=deltas)
     extra = []
     alignment = "sim3" if with_scale else "se3"
     ref_rows = table[(table["quantity"] == "ate_rmse") & (table["alignment"] == alignment)].iloc[0]

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation
 
+from ..core import validate
 from ..core.association import MAX_GAP, associate
 from ..core.geometry import Sim3, umeyama
 from ..core.trajectory import Trajectory
@@ -55,6 +56,41 @@ def evo_errors(what: str, advice: str = "", path: str | os.PathLike[str] | None 
         if path is not None:
             raise ParseError(path, None, msg) from None
         raise EvaluationError(msg) from None
+
+
+def check_rpe_deltas(value: Any) -> list[tuple[float, str]]:
+    """A crosscheck's RPE steps ``[(delta, unit), ...]``, unit ``f`` (``frames``: a positive whole
+    number) or ``m`` (metres, positive); anything else is a ValidationError (a unit ``frames``,
+    ``s`` or ``deg`` was taken as metres)."""
+    try:
+        items = [tuple(x) for x in value]
+    except TypeError:
+        items = [()]
+    out = []
+    for item in items:
+        if len(item) != 2:
+            raise ValidationError(f"rpe_deltas={value!r}: expected pairs (delta, unit), e.g. [(1, 'f'), (1.0, 'm')]")
+        unit = {"frames": "f", "metres": "m", "meters": "m"}.get(
+            str(item[1]).strip().lower(), str(item[1]).strip().lower()
+        )
+        if unit not in ("f", "m"):
+            raise ValidationError(f"rpe_deltas: unit {item[1]!r}: expected 'f' (frames) or 'm' (metres); evo's other "
+                                  "units (deg, rad) are lorisnb evaluate's --rpe-unit under --conventions evo")  # fmt: skip
+        delta = validate.positive(f"rpe_deltas ({item[1]})", item[0], "frames" if unit == "f" else "metres",
+                                  integer=unit == "f")  # fmt: skip
+        out.append((int(delta) if unit == "f" else delta, unit))
+    return out
+
+
+def crosscheck_flags(scale: Any, **flags: Any) -> tuple[bool, ...]:
+    """A crosscheck's yes/no options checked (strings are never truth-tested: ``all_pairs="no"``
+    was all pairs): ``scale`` True, False or a scale word (not ``auto``: two trajectories have no
+    algorithm name), then each of ``flags`` True or False."""
+    s = validate.scale_value(scale)
+    if s == "auto":
+        raise ValidationError("scale='auto': two trajectories have no algorithm name; give True or False "
+                              "(crosscheck_openloris and lorisnb crosscheck take 'auto')")  # fmt: skip
+    return (bool(s), *(validate.flag(k, v) for k, v in flags.items()))
 
 
 def to_evo(traj: Trajectory, name: str = ""):
