@@ -186,3 +186,21 @@ def test_report_names_scenes_with_ground_truth_that_no_result_file_is_of(tmp_pat
         assert f"No result file for {said} with ground truth: not scored, on no leaderboard." in text
     board = pd.read_csv(tmp_path / "run" / "findings" / "leaderboard.csv")
     assert board["scene"].tolist() == ["cafe"] and board["value"].round(4).tolist() == [0.4860]
+
+
+@pytest.mark.slow
+def test_indoor_vs_outdoor_prose_quotes_no_parameter_or_data_value(tmp_path, data):
+    """Its text said the RPE 'is taken over `rpe_metres` = 5 m' whatever -p rpe_metres was, and
+    quoted ratios of the data ('about 1 %', '10 to 20 times longer'): now printed from the run."""
+    kernel_env()
+    pm.execute_notebook(
+        str(notebook_dir() / "indoor_vs_outdoor.ipynb"), str(tmp_path / "nb.ipynb"), kernel_name="python3",
+        parameters=dict(quick=True, output_dir=str(tmp_path / "out"), rpe_metres=2.0), progress_bar=False,
+        cwd=str(tmp_path), extra_arguments=KERNEL_ARGS, execution_timeout=300,
+    )  # fmt: skip
+    nb = nbformat.read(tmp_path / "nb.ipynb", as_version=4)
+    prose = "\n".join(c.source for c in nb.cells if c.cell_type == "markdown")
+    assert "= 5 m" not in prose and "10 to 20 times" not in prose and "about 1 % of the path" not in prose
+    printed = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.outputs)
+    assert "RPE over rpe_metres = 2 m along the ground truth." in printed
+    assert "OpenLORIS against TUM RGB-D (computed):" in printed
