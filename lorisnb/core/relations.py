@@ -144,11 +144,20 @@ def masked_statistics(
     return {k: a.reshape(shape) for k, a in out.items()}
 
 
+def masked_sum(mask: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The sum of ``x`` (broadcast to ``mask``'s (R, M)) over the entries each row of the boolean
+    ``mask`` selects: (R,). Each row is numpy's pairwise sum of its M entries in order (those not
+    selected as 0), so a row's sum is the same to the last bit whatever the other rows are (a
+    threshold setting alone, in a sweep's grid or a chunk of it), on any BLAS and thread count;
+    an entry that is not finite (a diverged pose's square) counts only in the rows selecting it."""
+    return np.ascontiguousarray(np.where(mask, x, 0.0)).sum(axis=1)
+
+
 def _masked_rows(v: np.ndarray, rows: np.ndarray, out: dict[str, np.ndarray]) -> None:
     """The statistics of ``v`` over each row of ``rows`` (R, M), written into ``out``'s (R,) views."""
 
-    def row_sums(x: np.ndarray) -> np.ndarray:  # contiguous rows: each row summed alike, whatever the chunk
-        return np.ascontiguousarray(np.where(rows, x, 0.0)).sum(axis=1)
+    def row_sums(x: np.ndarray) -> np.ndarray:
+        return masked_sum(rows, x)
 
     n = rows.sum(axis=1)
     some = n > 0

@@ -26,7 +26,7 @@ from .model import (
     SequenceErrors,
     sequence_eps,
 )
-from .relations import error_statistics, masked_statistics
+from .relations import error_statistics, masked_statistics, masked_sum
 from .rpe import RPE_PAIRS, RPE_UNITS
 from .validate import choice, eps_value, positive, threshold
 
@@ -70,36 +70,38 @@ def sequence_meta(f: FileErrors, e: SequenceErrors) -> dict[str, Any]:
     )  # fmt: skip
 
 
-def row_sums(weights: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """``weights @ values`` for (R, M) weights and (M, k) values: (R, k), always by BLAS's matrix
-    product, whose threads split R and k, never the sum over M: a sum is the same to the last bit
-    in one process, a pool of processes or a Dask worker (which runs BLAS on one thread), and for
-    one column as for several (a sweep's grid point as its direct evaluation). One column gets a
-    zero column beside it: numpy would call BLAS's matrix-vector product, whose threads each sum
-    a share of M (the last digits then followed the thread count)."""
-    if values.shape[1] == 1:
-        return (weights @ np.column_stack([values[:, 0], np.zeros(len(values))]))[:, :1]
-    return weights @ values
+#: Values (grid rows x poses) :func:`row_sums` selects from at once: bounded temporaries whatever the grid.
+ROW_CHUNK = 1 << 22
+
+
+def row_sums(selected: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Sums of each column of ``values`` (M, k) over the entries each row of ``selected`` (R, M;
+    boolean, or 0 and 1) selects: (R, k). Each row is :func:`~lorisnb.core.relations.masked_sum`,
+    numpy's pairwise sum in pose order, so a sum is the same to the last bit for a threshold
+    setting alone (:func:`score`) and in any sweep's grid, in one process, a pool of processes or
+    a Dask worker, whatever BLAS and its threads (a matrix product summed a row of a large grid in
+    another order than a one-row product: sweeps and scores differed in the last digits, and a
+    larger threshold could give a smaller correct time). A value that is not finite (a diverged
+    pose's ATE squared) counts only in the rows that select it, never as 0 * inf = NaN elsewhere.
+    Rows are done in chunks of about :data:`ROW_CHUNK` values."""
+    sel = np.asarray(selected) > 0
+    vals = np.asarray(values, float).reshape(sel.shape[1], -1)
+    out = np.zeros((sel.shape[0], vals.shape[1]))
+    step = max(1, ROW_CHUNK // max(sel.shape[1], 1))
+    for lo in range(0, sel.shape[0], step):  # chunks of grid rows, and value columns: never poses
+        for k in range(vals.shape[1]):
+            out[lo : lo + step, k] = masked_sum(sel[lo : lo + step], vals[:, k])
+    return out
 
 
 def selected_squares(selected: np.ndarray, *values: np.ndarray) -> np.ndarray:
-    """Sums of ``v**2`` over the entries each row of ``selected`` (R, M; 0 or 1) selects, for each
-    of ``values`` ((M,) each): (R, len(values)), by :func:`row_sums`.
-
-    A matrix product, except that a value whose square is not finite (an ATE past 1e154 m: a
-    diverged pose) counts only in the rows that select it; in a product its 0 weight would make
-    every row NaN (0 * inf), and the C-ATE of a sequence whose wrong pose is huge NaN."""
+    """Sums of ``v**2`` over the entries each row of ``selected`` (R, M) selects, for each of
+    ``values`` ((M,) each): (R, len(values)), by :func:`row_sums` (a square that is not finite
+    counts only where selected: the C-ATE of a sequence with a diverged wrong pose is the RMSE of
+    its correct poses, Eq. 1)."""
     with np.errstate(over="ignore", invalid="ignore"):
         sq = np.column_stack([np.asarray(v, float) ** 2 for v in values])
-    bad = ~np.isfinite(sq)
-    if not bad.any():
-        return row_sums(selected, sq)
-    total = row_sums(selected, np.where(bad, 0.0, sq))
-    with np.errstate(invalid="ignore"):
-        for k in range(sq.shape[1]):
-            rows = bad[:, k]
-            total[:, k] += np.where(selected[:, rows] > 0, sq[rows, k], 0.0).sum(axis=1)
-    return total
+    return row_sums(selected, sq)
 
 
 def sequence_grid(
@@ -154,10 +156,10 @@ def sequence_grid(
         return out
     # correctness of every pose at every (eps, phi), Eq. (1): (E, P, M)
     c = (e.ate[None, None, :] <= eps_a[:, None, None]) & (e.aoe[None, None, :] <= phi_a[None, :, None])
-    cf = c.reshape(E * P, -1).astype(float)
+    cf = c.reshape(E * P, -1)
     held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end, e.gt_start)[None, :], delta_a[:, None])  # (D, M)
     ct = row_sums(cf, held.T).reshape(E, P, D)  # correct time, numerator of Eq. (2) and (3)
-    n_c = cf.sum(axis=1).reshape(E, P)
+    n_c = cf.sum(axis=1).reshape(E, P).astype(float)
     sums = selected_squares(cf, e.ate, e.aoe)
     with np.errstate(invalid="ignore", divide="ignore"):
         c_ate = np.where(n_c > 0, np.sqrt(sums[:, 0].reshape(E, P) / n_c), np.nan)
@@ -195,8 +197,8 @@ def sequence_grid(
     if len(i) == 0:
         out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)
         return out
-    both = (c[:, :, i] & c[:, :, j]).reshape(E * P, -1).astype(float)
-    nb = both.sum(axis=1).reshape(E, P)
+    both = (c[:, :, i] & c[:, :, j]).reshape(E * P, -1)
+    nb = both.sum(axis=1).reshape(E, P).astype(float)
     with np.errstate(invalid="ignore", divide="ignore"):
         sums = selected_squares(both, tr, rr)
         ctr = np.where(nb > 0, np.sqrt(sums[:, 0].reshape(E, P) / nb), np.nan)
