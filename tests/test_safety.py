@@ -339,7 +339,9 @@ def test_bad_options_are_usage_errors(capsys, args, message):
 def test_huge_sweep_is_refused_up_front(icra20):
     ev = ln.evaluate(icra20 / ORB)
     with pytest.raises(ln.ValidationError, match=r"would need about .* GiB"):
-        ln.sweep(ev.errors, np.linspace(0.1, 10, 1000), np.linspace(1, 180, 1000), [1, 2], [60])
+        ln.sweep(
+            ev.errors, np.linspace(0.1, 10, 2000), np.linspace(1, 180, 1000), [1, 2, 3, 4, 5], [10, 30, 60, 90, 120]
+        )
 
 
 def test_hidden_and_editor_files_are_skipped(tmp_path, icra20):
