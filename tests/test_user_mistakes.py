@@ -149,3 +149,67 @@ def test_the_timeline_draws_each_trial_on_its_own_row_with_its_own_numbers(tmp_p
     segments = [c for c in ax.collections if len(c.get_segments())]
     heights = {round(s[0][1], 6) for c in segments for s in c.get_segments()}
     assert heights == {round(y, 6) for y in rows.values()}  # each trial's segments on its row
+
+
+def test_a_dangling_link_in_a_results_folder_fails_saying_so(tmp_path, data, icra20, capsys):
+    """A results folder holding a link to a file that is gone (a moved run): the link was left out
+    of the walk (Path.is_file is False), its sequence shown as 'no output', exit status 0."""
+    from lorisnb.cli import main
+
+    (tmp_path / "orb").mkdir()
+    good = icra20 / "per-seq" / "orbslam2_rgbd" / "cafe_1_1_orbslam2-original.txt"
+    (tmp_path / "orb" / good.name).symlink_to(good)
+    (tmp_path / "orb" / "cafe_1_2.txt").symlink_to(tmp_path / "moved" / "cafe_1_2.txt")
+    with pytest.warns(FailedInputsWarning, match=r"1 of 2 inputs.*cafe_1_2.txt: a link to .*moved.*does not exist"):
+        ev = ln.evaluate(tmp_path, data_root=data)
+    assert len(ev.errors) == 1 and ev.exit_status() == 1
+    assert main(["evaluate", str(tmp_path), "--data", str(data.root), "--no-progress"]) == 1
+    assert "cafe_1_2.txt: a link to" in capsys.readouterr().err
+
+
+def test_a_file_without_its_scenes_ground_truth_is_listed_once(tmp_path, icra20):
+    """A data root without gt_cafe_1.txt: the cafe file is not scored (exit 1), and the failures
+    table and the repr listed it twice, as skipped and as not scored."""
+    import shutil
+
+    root = tmp_path / "data"
+    shutil.copytree(icra20.parents[1] / "openloris-scene" / "groundtruth", root / "openloris-scene" / "groundtruth")
+    (root / "openloris-scene" / "groundtruth" / "gt_cafe_1.txt").unlink()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ev = ln.evaluate(icra20 / "per-seq" / "orbslam2_rgbd", data_root=root, scenes=["cafe", "home"])
+    table = ev.failures_table()
+    cafe = table[table["file"].str.contains("cafe_")]
+    assert len(cafe) == 2 and set(cafe["status"]) == {"not scored"}  # cafe-1-1 and cafe-1-2, once each
+    assert table["file"].is_unique and ev.exit_status() == 1
+    assert "2 unscored" in repr(ev) and "skipped" not in repr(ev)
+
+
+def test_a_conflicting_scale_is_told_in_the_command_lines_words(data, capsys):
+    from lorisnb.cli import main
+
+    est, gt = data.tum / "fr2_desk_ORB.txt", data.tum / "fr2_desk_groundtruth.txt"
+    argv = ["evaluate", str(est), "--gt", str(gt), "--scale", "off", "--align", "sim3", "--no-progress"]
+    assert main(argv) == 2
+    assert "--scale off and --align sim3: give one" in capsys.readouterr().err
+
+
+def test_a_zero_d_array_is_one_threshold_on_every_grid_path(tmp_path, data):
+    import numpy as np
+
+    from lorisnb.core.validate import threshold_list
+    from lorisnb.tools.streaming import sweep_to_parquet
+
+    assert threshold_list("eps", np.array(0.3)) == [0.3] and threshold_list("phi", np.float64(30)) == [30.0]
+    est, gt = data.tum / "fr2_desk_ORB.txt", data.tum / "fr2_desk_groundtruth.txt"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ev = ln.evaluate_pairs(est, gt)
+    pytest.importorskip("pyarrow")
+    out, n = sweep_to_parquet(ev.errors, tmp_path / "sweep", eps=np.array(0.05), phi=np.array([10.0, 30.0]))
+    import pandas as pd
+
+    table = pd.read_parquet(out)
+    direct = ln.sweep(ev.errors, eps=[0.05], phi=[10.0, 30.0])
+    assert n == len(table) == len(direct) == 2
+    assert sorted(table["cr"]) == sorted(direct["cr"])

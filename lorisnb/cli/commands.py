@@ -105,17 +105,12 @@ def _report_problems(ev: Any, notes: list[str]) -> None:
         print(f"error: {f.error}", file=sys.stderr)
     for f in ev.unscored:  # in the table, scored as the paper scores it; the exit status says so
         print(f"not scored: {f.error}", file=sys.stderr)
-    skipped = _skipped_only(ev)
+    from ..tools.status import skipped_only
+
+    skipped = skipped_only(ev)
     if skipped:
         reasons = sorted({f.error.split(":")[0] for f in skipped})
         print(f"skipped {len(skipped)} file(s): " + "; ".join(reasons), file=sys.stderr)
-
-
-def _skipped_only(ev: Any) -> list[Any]:
-    """The skipped inputs not already said as not scored (a scene's ground truth missing from the
-    data root counts as not scored, :func:`lorisnb.tools.status.unscored`): each counted once."""
-    said = {str(f.path) for f in ev.unscored}
-    return [f for f in ev.skipped if str(f.path) not in said]
 
 
 def _fmt(df: pd.DataFrame, digits: int = 4) -> str:
@@ -169,9 +164,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         rel = ev.relative()
         print("\nrelative error (rpg_trajectory_evaluation: sub-trajectories of 10..50 % of the length):")
         print(_fmt(rel.drop(columns=["suite", "trial"]), args.digits) if not rel.empty else "(no sequence long enough)")
+    from ..tools.status import skipped_only
+
     _report_problems(ev, notes)
     print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.unscored)} not scored, "
-          f"{len(_skipped_only(ev))} skipped", file=sys.stderr)  # fmt: skip
+          f"{len(skipped_only(ev))} skipped", file=sys.stderr)  # fmt: skip
     return ev.exit_status()
 
 

@@ -349,8 +349,9 @@ def make_spec(preset: str | EvalSpec | None = None, *, surface: str = "python", 
         current = validate.choice(name("align"), changes.get("align", base.align), ALIGNMENTS)
         align = "auto" if s == "auto" else "sim3" if s else UNSCALED.get(current, current)
         if "align" in changes and current != align:
+            word = {True: "on", False: "off"}.get(given["scale"]) if surface == "cli" else None  # --scale off
             raise ValidationError(
-                f"{name('scale')} {given['scale']} and {name('align')} {changes['align']}: give one "
+                f"{name('scale')} {word or given['scale']} and {name('align')} {changes['align']}: give one "
                 "(scale on = sim3, auto = sim3 for monocular algorithms, off = the alignment without a scale: "
                 "sim3 becomes se3, evo's scale-only none)"
             )

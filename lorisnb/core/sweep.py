@@ -89,11 +89,8 @@ def check_sweep_size(
 
 
 def grid_values(name: str, values: Any) -> list[Any]:
-    """A validated threshold grid (:func:`lorisnb.core.validate.threshold_list`, the single
-    evaluation's rules); a 0-d numpy array (``np.array(0.3)``, ``arr.max()`` of an array) is one
-    value, as a number is."""
-    if isinstance(values, np.ndarray) and values.ndim == 0:
-        values = values.item()
+    """A validated threshold grid: :func:`lorisnb.core.validate.threshold_list`, the single
+    evaluation's rules (a 0-d numpy array, ``arr.max()`` of an array, is one value)."""
     return threshold_list(name, values)
 
 

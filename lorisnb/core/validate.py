@@ -143,7 +143,9 @@ def relative_fraction(name: str, fraction: float, shown: Any) -> float:
 def threshold_list(name: str, values: Any) -> list[Any]:
     """A non-empty list of thresholds (for sweeps): one value or an iterable of them; ``eps``
     values may be ``"paper"``. A string is split at commas, as on the command line; an empty item
-    (``1,,2``, a trailing comma) is refused, not dropped."""
+    (``1,,2``, a trailing comma) is refused, not dropped; a 0-d numpy array is one value."""
+    if isinstance(values, np.ndarray) and values.ndim == 0:
+        values = values.item()
     if isinstance(values, str):
         items: list[Any] = values.split(",")
         if any(p.strip() for p in items) and not all(p.strip() for p in items):  # all empty: below

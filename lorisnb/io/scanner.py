@@ -150,6 +150,9 @@ def open_input(path: str | os.PathLike[str], what: str) -> BinaryIO:
     try:
         return open(path, "rb")  # noqa: SIM115 (the caller closes it)
     except FileNotFoundError:
+        if os.path.islink(path):  # a dangling link: where it points is what is missing
+            raise ParseError(path, None, f"a link to {os.readlink(path)}, which does not exist; expected {what} "
+                             "there (fix or remove the link)") from None  # fmt: skip
         raise ParseError(path, None, f"file not found; expected {what} at this path") from None
     except IsADirectoryError:
         raise ParseError(path, None, f"is a folder; expected {what}") from None

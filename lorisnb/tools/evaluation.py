@@ -15,7 +15,7 @@ from ..core.relative import RPG_FRACTIONS
 from ..core.scoring import pose_table, score_rows
 from ..core.spec import EvalSpec, make_spec
 from ..io.data import DataPaths, scene_spans
-from .status import exit_status, unscored
+from .status import exit_status, skipped_only, unscored
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -161,9 +161,12 @@ class Evaluation:
 
     def failures_table(self) -> pd.DataFrame:
         """Failed, skipped and unscored inputs (:attr:`unscored`) with the reason, one row each."""
+        unscored = self.unscored
         rows = [dict(file=str(f.path), status="failed", kind=f.kind, error=f.error) for f in self.failures]
-        rows += [dict(file=str(f.path), status="skipped", kind=f.kind, error=f.error) for f in self.skipped]
-        rows += [dict(file=str(f.path), status="not scored", kind=f.kind, error=f.error) for f in self.unscored]
+        rows += [
+            dict(file=str(f.path), status="skipped", kind=f.kind, error=f.error) for f in skipped_only(self, unscored)
+        ]
+        rows += [dict(file=str(f.path), status="not scored", kind=f.kind, error=f.error) for f in unscored]
         import pandas as pd
 
         return pd.DataFrame(rows, columns=["file", "status", "kind", "error"])
@@ -175,6 +178,7 @@ class Evaluation:
         scenes = len({f.scene for f in self.errors})
         parts = [f"{count(len(self.errors), 'input')} ({count(len(self.algorithms), 'algorithm')}, "
                  f"{count(scenes, 'scene')})"]  # fmt: skip
-        parts += [f"{n} {w}" for n, w in ((len(self.failures), "failed"), (len(self.unscored), "unscored"),
-                                          (len(self.skipped), "skipped")) if n]  # fmt: skip
+        unscored = self.unscored
+        parts += [f"{n} {w}" for n, w in ((len(self.failures), "failed"), (len(unscored), "unscored"),
+                                          (len(skipped_only(self, unscored)), "skipped")) if n]  # fmt: skip
         return f"<Evaluation: {', '.join(parts)}; {self.spec!r}>"

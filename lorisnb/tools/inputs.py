@@ -65,7 +65,10 @@ def result_files(
     bags = ".bag" in suffixes
     for p in as_paths(paths):
         if p.is_dir() and not (bags and (p / "metadata.yaml").is_file()):
-            found = [f for f in p.rglob("*") if f.suffix in suffixes and f.is_file()]
+            # a dangling link is an input that fails (saying so), never silently no input
+            found = [
+                f for f in p.rglob("*") if f.suffix in suffixes and (f.is_file() or f.is_symlink() and not f.exists())
+            ]
             if bags:  # a bag folder is one input: not also its .db3 / .mcap files
                 folders = [m.parent for m in p.rglob("metadata.yaml")]
                 found = [f for f in found if not any(d in f.parents for d in folders)] + folders

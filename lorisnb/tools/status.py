@@ -77,6 +77,14 @@ def unscored(ev: Evaluation) -> list[Failure]:
     return out
 
 
+def skipped_only(ev: Evaluation, said: list[Failure] | None = None) -> list[Failure]:
+    """The skipped inputs that are not also among the not scored (``said``, default
+    :func:`unscored`): a public scene's ground truth missing from the data root is both, and each
+    input is said and counted once."""
+    paths = {str(f.path) for f in (unscored(ev) if said is None else said)}
+    return [f for f in ev.skipped if str(f.path) not in paths]
+
+
 def exit_status(ev: Evaluation) -> int:
     """0 if every input was read and matched the ground truth, else 1 (see the module docstring)."""
     return UNSCORED if ev.failures or unscored(ev) else OK
