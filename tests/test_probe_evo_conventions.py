@@ -144,8 +144,8 @@ def test_time_window_and_scale_say_what_went_wrong(data, capsys):
     err = capsys.readouterr().err
     assert "after the ground truth's last stamp 1305031128.7555001 s" in err and "t_end" not in err
     assert main(["evaluate", e, "--gt", g, "--conventions", "evo", "--align", "scale", "--align-frames", "1",
-                 "--no-progress"]) == 1  # fmt: skip
-    assert "align_frames=1 with align='scale'" in capsys.readouterr().err
+                 "--no-progress"]) == 2  # fmt: skip  (refused before any file is read, as sim3 is)
+    assert "--align-frames 1 with --align scale: a scale needs 2 poses" in capsys.readouterr().err
 
 
 def test_to_evo_of_an_empty_trajectory_is_lorisnbs_error(data, tmp_path):

@@ -213,3 +213,23 @@ def test_a_zero_d_array_is_one_threshold_on_every_grid_path(tmp_path, data):
     direct = ln.sweep(ev.errors, eps=[0.05], phi=[10.0, 30.0])
     assert n == len(table) == len(direct) == 2
     assert sorted(table["cr"]) == sorted(direct["cr"])
+
+
+def test_evos_align_frames_minus_one_and_a_one_pose_scale_are_refused_up_front(data, capsys, tmp_path):
+    """evo's --n_to_align -1 means every pose: the message says to leave the option out. A scale
+    fitted on one pose was refused up front for sim3 only; for align scale each file failed."""
+    from lorisnb.cli import main
+
+    est, gt = data.tum / "fr2_desk_ORB.txt", data.tum / "fr2_desk_groundtruth.txt"
+    for surface in (lambda: ln.make_spec("evo", align_frames=-1), lambda: ln.evaluate_pairs(est, gt, align_frames=-1)):
+        with pytest.raises(ln.ValidationError, match=r"align_frames=-1: .*leave it out to fit on all matched poses"):
+            surface()
+    base = ["evaluate", str(est), "--gt", str(gt), "--no-progress"]
+    with pytest.raises(SystemExit) as stop:  # argparse's usage error
+        main([*base, "--align-frames", "-1"])
+    assert stop.value.code == 2 and "leave it out to fit on all matched poses: evo's -1" in capsys.readouterr().err
+    assert main([*base, "--align", "scale", "--align-frames", "1"]) == 2  # usage, before any file: not 1
+    err = capsys.readouterr().err
+    assert "--align-frames 1 with --align scale: a scale needs 2 poses" in err and "evaluated" not in err
+    with pytest.raises(ln.ValidationError, match="align_frames 1 with align scale: a scale needs 2 poses"):
+        ln.EvalSpec.preset("evo", align="scale", align_frames=1)

@@ -87,7 +87,7 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     a.add_argument("--align-origin", dest="align", action="store_const", const="origin",
                    help="align the first matched estimate pose onto the first ground-truth pose (evo's --align_origin)")  # fmt: skip
     g.add_argument("--align-frames", default=None, metavar="N",
-                   type=arg_type(lambda t: int(validate.positive("--align-frames", t, "poses", integer=True))),
+                   type=arg_type(lambda t: int(validate.positive("--align-frames", t, validate.ALL_POSES, integer=True))),
                    help="fit the alignment on the first N matched poses only")  # fmt: skip
     g.add_argument("--t-start", default=None, type=arg_type(lambda t: validate.finite("--t-start", t, "seconds")),
                    help="leave out ground-truth poses before this stamp, seconds (evo's --t_start)")  # fmt: skip

@@ -23,12 +23,12 @@ Association (``association``):
     preset for two KITTI files without times).
 
 Alignment (``align``; ``gt = s R est + t`` fitted on the matched positions):
-    ``se3`` (Horn/Umeyama), ``sim3`` (with scale), ``posyaw`` (translation and yaw about gravity),
-    ``none``, ``auto`` (``sim3`` for monocular algorithms, ``dso`` and ``svo``, as the official
-    tool; else ``se3``). ``align_frames=N`` fits on the first N matched poses only. ``mode``:
-    ``per-seq`` aligns each sequence (session) on itself, ``lifelong`` fits one alignment on the
-    first sequence with matches and applies it to all, ``auto`` is lifelong for inputs with
-    several sequences.
+    ``se3`` (Horn/Umeyama), ``sim3`` (with scale), ``scale`` (the scale only), ``origin`` (the first
+    pose onto the first), ``posyaw`` (translation and yaw about gravity), ``none``, ``auto`` (``sim3``
+    for monocular algorithms, ``dso`` and ``svo``, as the official tool; else ``se3``).
+    ``align_frames=N`` fits on the first N matched poses. ``mode``: ``per-seq`` aligns each sequence
+    (session) on itself, ``lifelong`` fits one alignment on the first sequence with matches and
+    applies it to all, ``auto`` is lifelong for inputs with several sequences.
 """
 
 from __future__ import annotations
@@ -97,8 +97,8 @@ class EvalSpec:
     def __post_init__(self) -> None:
         for name, value in _checked(vars(self), "python").items():
             object.__setattr__(self, name, value)
-        if self.align == "sim3" and self.align_frames == 1:
-            raise ValidationError("align_frames=1 with align='sim3': a scale needs at least 2 poses")
+        if self.align in ("sim3", "scale") and self.align_frames == 1:
+            raise ValidationError(f"align_frames=1 with align={self.align!r}: a scale needs 2 poses")
 
     # -- the presets ------------------------------------------------------------------------
     @classmethod
@@ -291,7 +291,7 @@ def _checked(values: Mapping[str, Any], surface: str) -> dict[str, Any]:
         elif key == "align":
             out[key] = validate.choice(label, v, ALIGNMENTS)
         elif key == "align_frames":
-            out[key] = None if v is None else int(validate.positive(label, v, "poses", integer=True))
+            out[key] = None if v is None else int(validate.positive(label, v, validate.ALL_POSES, integer=True))
         elif key == "mode":
             out[key] = validate.choice(label, v, MODES)
         elif key in ("official_interpolation", "repair_stamps"):
@@ -369,8 +369,8 @@ def make_spec(preset: str | EvalSpec | None = None, *, surface: str = "python", 
             changes["repeated"] = rule
     checked = _checked(changes, surface)
     merged = {**{f.name: getattr(base, f.name) for f in fields(EvalSpec)}, **checked}
-    if merged["align"] == "sim3" and merged["align_frames"] == 1:
-        raise ValidationError(f"{name('align_frames')} 1 with {name('align')} sim3: a scale needs at least 2 poses")
+    if merged["align"] in ("sim3", "scale") and merged["align_frames"] == 1:  # before any file is read
+        raise ValidationError(f"{name('align_frames')} 1 with {name('align')} {merged['align']}: a scale needs 2 poses")
     merged["explicit"] = frozenset(base.explicit | set(checked))
     return EvalSpec(**merged)
 

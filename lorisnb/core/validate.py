@@ -42,6 +42,9 @@ LIMITS: dict[str, tuple[float, str]] = {
     "tau": (86400.0, "more than a day: milliseconds instead of seconds? (the paper uses 60 s)"),
 }
 
+#: The unit of ``align_frames`` in messages: no value (not evo's -1) fits on every matched pose.
+ALL_POSES = "poses (leave it out to fit on all matched poses: evo's -1)"
+
 #: A relative eps (``relative:F``) is a fraction of the ground truth's extent, at most this.
 MAX_FRACTION = 1.0
 
