@@ -143,8 +143,8 @@ def test_time_window_and_scale_say_what_went_wrong(data, capsys):
     assert main(["evaluate", e, "--gt", g, "--conventions", "evo", "--t-start", "1305031200", "--no-progress"]) == 1
     err = capsys.readouterr().err
     assert "after the ground truth's last stamp 1305031128.7555001 s" in err and "t_end" not in err
-    assert main(["evaluate", e, "--gt", g, "--conventions", "evo", "--align", "scale", "--align-frames", "1",
-                 "--no-progress"]) == 2  # fmt: skip  (refused before any file is read, as sim3 is)
+    one_pose_scale = ["--conventions", "evo", "--align", "scale", "--align-frames", "1", "--no-progress"]
+    assert main(["evaluate", e, "--gt", g, *one_pose_scale]) == 2  # refused before any file is read, as sim3 is
     assert "--align-frames 1 with --align scale: a scale needs 2 poses" in capsys.readouterr().err
 
 
