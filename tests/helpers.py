@@ -162,3 +162,15 @@ def write_bag(path: Path, traj, ros: int, msgtype: str = "geometry_msgs/msg/Pose
                 m = TS(header=header(float(t), tf[1]), child_frame_id=tf[2], transform=moved)
                 writer.write(tf_conn, ns, ser(T[kind](transforms=[m]), kind))
     return path
+
+
+def widget_controls(box) -> dict:
+    """The controls (sliders, dropdowns) below an ipywidgets box, by description."""
+    found, stack = [], [box]
+    while stack:
+        w = stack.pop()
+        if hasattr(w, "children"):
+            stack.extend(w.children)
+        elif hasattr(w, "value") and hasattr(w, "description"):
+            found.append(w)
+    return {w.description: w for w in found}

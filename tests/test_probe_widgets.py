@@ -7,6 +7,7 @@ import math
 
 import pandas as pd
 import pytest
+from helpers import widget_controls
 
 import lorisnb as ln
 from lorisnb.io import load_groundtruth
@@ -30,17 +31,6 @@ def renders(monkeypatch):
     return calls
 
 
-def _controls(box):
-    found, stack = [], [box]
-    while stack:
-        w = stack.pop()
-        if hasattr(w, "children"):
-            stack.extend(w.children)
-        elif hasattr(w, "value") and hasattr(w, "description"):
-            found.append(w)
-    return {w.description: w for w in found}
-
-
 def _same_as_evaluation(ex: ThresholdExplorer, ev, eps) -> None:
     """The explorer's table equals ``ev.scenes`` at the same thresholds, for its current scene."""
     shown = ex.results()[0].set_index("algorithm").sort_index()
@@ -53,7 +43,7 @@ def test_paper_eps_follows_the_scene_dropdown(ev, renders):
     """eps = "paper" (threshold_sensitivity's default) started the slider at the first scene's
     metres and kept them after a scene change: corridor was scored at home's 3 m, not its 5 m."""
     ex = ThresholdExplorer(ev.errors, ev.durations(), "paper", 30.0, 1.0, 60.0, scene="home")
-    c = _controls(ex.widget())
+    c = widget_controls(ex.widget())
     assert c["eps (m)"].value == 3.0
     renders.clear()
     c["scene"].value = "corridor"
@@ -83,7 +73,7 @@ def test_paper_eps_follows_the_scene_without_widgets(ev):
 def test_a_mapping_eps_offers_and_follows_every_scene(ev, renders):
     eps = {"home": 2.5, "corridor": 7.3}
     ex = ThresholdExplorer(ev.errors, ev.durations(), eps, scene="home")
-    c = _controls(ex.widget())
+    c = widget_controls(ex.widget())
     assert c["eps (m)"].value == 2.5 and 7.3 in [v for _, v in c["eps (m)"].options]
     c["scene"].value = "corridor"
     assert ex.eps == 7.3
@@ -97,7 +87,7 @@ def test_the_eps_slider_reaches_the_papers_values_and_no_threshold(ev, renders):
     largest was 100 m, below the 729 m ATE RMSE of a vins corridor sequence), and the paper's 0.3 m
     (Table III) and 0.1 m (its C^0.1-RPE), which its log grid missed (0.282, 0.316 m)."""
     ex = ThresholdExplorer(ev.errors, ev.durations(), 3.0, scene="corridor")
-    c = _controls(ex.widget())
+    c = widget_controls(ex.widget())
     assert {0.1, 0.3, 1.0, 3.0, 5.0, math.inf} <= {v for _, v in c["eps (m)"].options}
     c["eps (m)"].value = 0.3
     _same_as_evaluation(ex, ev, 0.3)
@@ -109,7 +99,7 @@ def test_the_eps_slider_reaches_the_papers_values_and_no_threshold(ev, renders):
 
 def test_sliders_at_other_values_equal_the_evaluation(ev, renders):
     ex = ThresholdExplorer(ev.errors, ev.durations(), 3.0, scene="corridor")
-    c = _controls(ex.widget())
+    c = widget_controls(ex.widget())
     c["phi (deg)"].value, c["delta (s)"].value, c["tau (s)"].value = 10.0, 0.05, 1000.0
     assert (ex.phi, ex.delta, ex.tau) == (10.0, 0.05, 1000.0)
     _same_as_evaluation(ex, ev, 3.0)

@@ -3,22 +3,11 @@
 from __future__ import annotations
 
 import pytest
+from helpers import widget_controls
 
 import lorisnb as ln
 from lorisnb.io import load_groundtruth
 from lorisnb.tools.widgets import FaultExplorer, ThresholdExplorer
-
-
-def _sliders(box):
-    out = []
-    stack = [box]
-    while stack:
-        w = stack.pop()
-        if hasattr(w, "children"):
-            stack.extend(w.children)
-        elif hasattr(w, "value") and hasattr(w, "description"):
-            out.append(w)
-    return {w.description: w for w in out}
 
 
 def test_threshold_explorer_updates_without_recomputing(icra20):
@@ -27,18 +16,18 @@ def test_threshold_explorer_updates_without_recomputing(icra20):
     box = ex.widget()
     table, _ = ex.results()
     assert table.set_index("algorithm").loc["vins_mono_color_imu_with_loop", "cr"] == pytest.approx(0.335952, abs=1e-6)
-    _sliders(box)["phi (deg)"].value = 180.0
+    widget_controls(box)["phi (deg)"].value = 180.0
     assert ex.phi == 180.0
     table2, _ = ex.results()
     assert table2["cr"].iloc[0] > table["cr"].iloc[0]
 
 
-def test_fault_explorer_sliders():
+def test_fault_explorerwidget_controls():
     ex = FaultExplorer(load_groundtruth("cafe"), seq=1, eps=1.0, phi=30.0)
     box = ex.widget()
     t0, _ = ex.results()
     assert t0["cr"].iloc[0] == pytest.approx(1.0, abs=1e-3)
-    _sliders(box)["init delay (s)"].value = 30.0
+    widget_controls(box)["init delay (s)"].value = 30.0
     t1, _ = ex.results()
     assert t1["cs_r"].iloc[0] == pytest.approx(0.6065, abs=2e-3) and t1["cr_t"].iloc[0] == pytest.approx(1.0)
 
@@ -46,7 +35,7 @@ def test_fault_explorer_sliders():
 def test_sliders_start_exactly_at_the_parameters_and_offer_the_papers_values(icra20):
     ev = ln.evaluate(icra20 / "lifelong", algorithms=["vins_mono_color_imu_with_loop"], scenes=["home"])
     ex = ThresholdExplorer(ev.errors, ev.durations(), eps=5.0, phi=30.0, delta=1.0, tau=60.0)
-    s = _sliders(ex.widget())
+    s = widget_controls(ex.widget())
     assert (s["eps (m)"].value, s["phi (deg)"].value, s["delta (s)"].value, s["tau (s)"].value) == (
         5.0,
         30.0,
@@ -57,7 +46,7 @@ def test_sliders_start_exactly_at_the_parameters_and_offer_the_papers_values(icr
                                   [v for _, v in s["eps (m)"].options])  # fmt: skip
     assert ex.results()[0]["cr"].iloc[0] == pytest.approx(ex.results()[0]["cr"].iloc[0])
     odd = ThresholdExplorer(ev.errors, ev.durations(), eps=2.345, phi=17.5, tau=63.0)
-    s = _sliders(odd.widget())
+    s = widget_controls(odd.widget())
     assert (s["eps (m)"].value, s["phi (deg)"].value, s["tau (s)"].value) == (2.345, 17.5, 63.0)
 
 
@@ -76,7 +65,7 @@ def test_widget_figures_are_not_pyplot_figures_and_not_blank():
     assert plt.get_fignums() == before  # outside pyplot: no backend redraws it behind the widget's back
     img = np.asarray(Image.open(io.BytesIO(figure_png(fig))).convert("L"), float)
     assert img.shape[0] > 100 and (img < 250).mean() > 0.02 and img.std() > 20
-    _sliders(ex.widget())["wrong reloc at (s)"].value = 20.0
+    widget_controls(ex.widget())["wrong reloc at (s)"].value = 20.0
     assert ex.faults().wrong_reloc_at_s == 20.0
 
 
