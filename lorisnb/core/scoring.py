@@ -70,38 +70,53 @@ def sequence_meta(f: FileErrors, e: SequenceErrors) -> dict[str, Any]:
     )  # fmt: skip
 
 
-#: Values (grid rows x poses) :func:`row_sums` selects from at once: bounded temporaries whatever the grid.
-ROW_CHUNK = 1 << 22
+#: Grid rows and value columns of each matrix product of :func:`row_sums`: every product has
+#: this shape (padded with zeros), so each row is summed by the same kernel in the same order.
+ROW_BLOCK, COLUMN_BLOCK = 64, 8
 
 
 def row_sums(selected: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Sums of each column of ``values`` (M, k) over the entries each row of ``selected`` (R, M;
-    boolean, or 0 and 1) selects: (R, k). Each row is :func:`~lorisnb.core.relations.masked_sum`,
-    numpy's pairwise sum in pose order, so a sum is the same to the last bit for a threshold
-    setting alone (:func:`score`) and in any sweep's grid, in one process, a pool of processes or
-    a Dask worker, whatever BLAS and its threads (a matrix product summed a row of a large grid in
-    another order than a one-row product: sweeps and scores differed in the last digits, and a
-    larger threshold could give a smaller correct time). A value that is not finite (a diverged
-    pose's ATE squared) counts only in the rows that select it, never as 0 * inf = NaN elsewhere.
-    Rows are done in chunks of about :data:`ROW_CHUNK` values."""
-    sel = np.asarray(selected) > 0
+    boolean, or 0 and 1) selects: (R, k), by BLAS's matrix product on blocks of exactly
+    :data:`ROW_BLOCK` rows and a multiple of :data:`COLUMN_BLOCK` columns (zeros padded). Every
+    row is then summed by the same kernel in the same order, whatever the grid it belongs to: a
+    threshold setting alone (:func:`score`) equals its point in any sweep to the last bit, a
+    larger threshold never gives a smaller sum, and BLAS's threads (which split rows and
+    columns, never the sum over M) change nothing. (Products of other shapes summed a one-row
+    grid in another order than a large one: sweeps and scores differed in the last digits.)"""
+    sel = np.asarray(selected, float)
     vals = np.asarray(values, float).reshape(sel.shape[1], -1)
-    out = np.zeros((sel.shape[0], vals.shape[1]))
-    step = max(1, ROW_CHUNK // max(sel.shape[1], 1))
-    for lo in range(0, sel.shape[0], step):  # chunks of grid rows, and value columns: never poses
-        for k in range(vals.shape[1]):
-            out[lo : lo + step, k] = masked_sum(sel[lo : lo + step], vals[:, k])
+    R, k = sel.shape[0], vals.shape[1]
+    cols = -(-max(k, 1) // COLUMN_BLOCK) * COLUMN_BLOCK
+    padded = np.zeros((vals.shape[0], cols))
+    padded[:, :k] = vals
+    out = np.empty((R, k))
+    block = np.zeros((ROW_BLOCK, sel.shape[1]))
+    for lo in range(0, R, ROW_BLOCK):  # blocks of grid rows: never poses
+        n = min(ROW_BLOCK, R - lo)
+        if n < ROW_BLOCK:
+            block[n:] = 0.0
+        block[:n] = sel[lo : lo + n]
+        out[lo : lo + n] = (block @ padded)[:n, :k]
     return out
 
 
 def selected_squares(selected: np.ndarray, *values: np.ndarray) -> np.ndarray:
-    """Sums of ``v**2`` over the entries each row of ``selected`` (R, M) selects, for each of
-    ``values`` ((M,) each): (R, len(values)), by :func:`row_sums` (a square that is not finite
-    counts only where selected: the C-ATE of a sequence with a diverged wrong pose is the RMSE of
-    its correct poses, Eq. 1)."""
+    """Sums of ``v**2`` over the entries each row of ``selected`` (R, M; 0 or 1) selects, for each
+    of ``values`` ((M,) each): (R, len(values)), by :func:`row_sums`, except that a value whose
+    square is not finite (an ATE past 1e154 m: a diverged pose) counts only in the rows that
+    select it: in a product its 0 weight would make every row NaN (0 * inf)."""
     with np.errstate(over="ignore", invalid="ignore"):
         sq = np.column_stack([np.asarray(v, float) ** 2 for v in values])
-    return row_sums(selected, sq)
+    bad = ~np.isfinite(sq)
+    if not bad.any():
+        return row_sums(selected, sq)
+    total = row_sums(selected, np.where(bad, 0.0, sq))
+    with np.errstate(invalid="ignore"):
+        for k in range(sq.shape[1]):
+            rows = bad[:, k]
+            total[:, k] += masked_sum(np.asarray(selected)[:, rows] > 0, sq[rows, k])
+    return total
 
 
 def sequence_grid(
