@@ -84,7 +84,7 @@ def row_sums(selected: np.ndarray, values: np.ndarray) -> np.ndarray:
     larger threshold never gives a smaller sum, and BLAS's threads (which split rows and
     columns, never the sum over M) change nothing. (Products of other shapes summed a one-row
     grid in another order than a large one: sweeps and scores differed in the last digits.)"""
-    sel = np.asarray(selected, float)
+    sel = np.asarray(selected)  # booleans are cast into each block: no float copy of the whole grid
     vals = np.asarray(values, float).reshape(sel.shape[1], -1)
     R, k = sel.shape[0], vals.shape[1]
     cols = -(-max(k, 1) // COLUMN_BLOCK) * COLUMN_BLOCK
@@ -96,7 +96,7 @@ def row_sums(selected: np.ndarray, values: np.ndarray) -> np.ndarray:
         n = min(ROW_BLOCK, R - lo)
         if n < ROW_BLOCK:
             block[n:] = 0.0
-        block[:n] = sel[lo : lo + n]
+        block[:n] = sel[lo : lo + n] > 0
         out[lo : lo + n] = (block @ padded)[:n, :k]
     return out
 
