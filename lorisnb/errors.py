@@ -27,7 +27,10 @@ class ParseError(LorisError, ValueError):
 
 
 class DataNotFoundError(LorisError, FileNotFoundError):
-    """Data (ground truth, results, extrinsics) could not be found; lists where it looked."""
+    """Data (ground truth, results, extrinsics) could not be found; lists where it looked.
+    ``scene``: the OpenLORIS scene whose ground truth is missing, where that is what is missing."""
+
+    scene: str | None = None
 
 
 class FrameError(LorisError, ValueError):

@@ -99,7 +99,11 @@ class DataPaths:
             raise DataNotFoundError(f"ground truth of scene {scene!r} not found: "
                                     f"{case or 'expected an OpenLORIS scene: ' + ', '.join(SCENES)}; {have}")  # fmt: skip
         why = "the office ground truth (motion capture) is not public; " if scene == "office" else ""
-        return self._need(p, f"ground truth of scene {scene!r}", f"{(why + have)[:1].upper()}{(why + have)[1:]}. ")
+        try:
+            return self._need(p, f"ground truth of scene {scene!r}", f"{(why + have)[:1].upper()}{(why + have)[1:]}. ")
+        except DataNotFoundError as exc:
+            exc.scene = scene  # what is missing, for the exit status (office's is expected to be)
+            raise
 
     @property
     def icra20(self) -> Path:

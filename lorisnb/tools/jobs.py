@@ -29,6 +29,7 @@ from ..io.registry import hint
 from .evaluation import Failure
 from .inputs import labels, missing_note
 from .pool import size_of
+from .status import NOT_PUBLIC
 
 #: Files at least this large show a progress bar of their own while read (when evaluated here).
 BIG_FILE_BYTES = 64 * 2**20
@@ -133,7 +134,7 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
                 errors.warnings.append(note)
         return "ok", errors
     except DataNotFoundError as exc:
-        return "skipped", Failure(job.path, str(exc), "no-groundtruth")
+        return "skipped", Failure(job.path, str(exc), "not-public" if exc.scene in NOT_PUBLIC else "no-groundtruth")
     except LorisError as exc:  # said with the input it is about (an alignment's or an option's error names none)
         said = str(exc)
         if str(job.path) not in said and job.path.name not in said:

@@ -16,7 +16,6 @@ file skipped) is 1.
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -26,9 +25,9 @@ if TYPE_CHECKING:
 #: Exit statuses of the ``lorisnb`` commands.
 OK, UNSCORED, USAGE = 0, 1, 2
 
-#: OpenLORIS scenes whose ground truth is not public: their files are skipped without counting.
+#: OpenLORIS scenes whose ground truth is not public: their files are skipped without counting
+#: (kind ``not-public``; another scene's missing ground truth is kind ``no-groundtruth``).
 NOT_PUBLIC = ("office",)
-_NO_GROUNDTRUTH = re.compile(r"ground truth of scene '([^']*)' not found")
 
 
 def unscored(ev: Evaluation) -> list[Failure]:
@@ -69,8 +68,7 @@ def unscored(ev: Evaluation) -> list[Failure]:
         reason = why.split(". ")[0] if why else f"{f.algorithm} {f.file}: no pose matched the ground truth in time"
         out.append(Failure(f.path, reason.splitlines()[0], "no-match"))  # one line; the warning has the rest
     for s in ev.skipped:  # no ground truth in the data: only a scene never published is expected
-        m = _NO_GROUNDTRUTH.search(s.error)
-        if m is None or m.group(1) not in NOT_PUBLIC:
+        if s.kind != "not-public":
             out.append(
                 Failure(s.path, f"{s.path}: skipped, {s.error.splitlines()[0].split('. ')[0]}", "no-groundtruth")
             )
