@@ -40,7 +40,7 @@ def _run_evaluation(
     ``folders`` are checked first against every input (:func:`~.outputs.check_outputs`: the
     estimates, the ground truth, times files, the manifest and its ground-truth files, the data
     root). Prints the ``conventions:`` line (``side``: which run, for ``diff``'s two)."""
-    from ..io.manifest import read_manifest
+    from ..io.manifest import openloris_preset_refusal, read_manifest
     from ..tools.evaluate import evaluate, evaluate_manifest, evaluate_pairs, pair_kind
 
     if args.gt and args.manifest:
@@ -49,10 +49,7 @@ def _run_evaluation(
     base = manifest.spec if manifest is not None else None  # its thresholds, mode and [conventions]
     if manifest is not None and manifest.openloris:
         if args.conventions:
-            raise ValidationError(
-                "--conventions: OpenLORIS result files are scored with the official conventions "
-                "(choose --max-gap, --scale, --per-seq or --lifelong instead)"
-            )
+            raise ValidationError(openloris_preset_refusal("--conventions", args.conventions))
         manifest = None
     reading = ["format", "gt_format", "topic", "gt_topic", "tf", "gt_tf", "gt_times", "est_times", "scene"]
     if not args.gt:

@@ -16,8 +16,9 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -44,8 +45,10 @@ from .trajectory import Trajectory, sessions, time_spans
 
 __all__ = [
     "DEFAULT", "FrameInfo", "Spans", "apply_alignment", "compute_errors", "errors_after_alignment", "evaluate_sessions",
-    "groundtruth_frame", "match", "moved_groundtruth", "session_errors", "sequence_errors", "with_transform",
+    "groundtruth_frame", "match", "moved_groundtruth", "session_errors", "sequence_errors", "window_spans", "with_transform",
 ]  # fmt: skip
+
+K = TypeVar("K")
 
 #: Time spans (first, last stamp, seconds) of other ground-truth sequences by label (``cafe-2``),
 #: or a function returning them (called only when a check needs them).
@@ -113,12 +116,15 @@ def evaluate_sessions(
     lifelong = spec.lifelong_for(len(seqs))
     est = {s: with_transform(estimates[s], spec.transform) for s in seqs}
     assoc: dict[int, Association] = {}
+    durations = window_spans({s: groundtruth[s] for s in seqs}, spec)  # each sequence's time (CR's denominator)
     for s in seqs:  # one iteration per sequence
         gt_s, est[s] = evo_steps.prepare(groundtruth[s], est[s], spec)  # evo's downsample, motion filter, window
         if spec.association in EVO_ASSOCIATIONS:
             assoc[s], est[s] = evo_steps.evo_match(gt_s, est[s], spec)
         else:
             assoc[s] = match(gt_s, est[s], spec, f"{path}, seq {s}" if len(seqs) > 1 else str(path))
+        if s in durations and (assoc[s].gt_start, assoc[s].gt_end) != durations[s]:  # thinned: its time stays
+            assoc[s] = replace(assoc[s], gt_start=durations[s][0], gt_end=durations[s][1])
         if checks_on:
             label = f"{name}, seq {s}"
             raw = frames[3][s] if frames is not None else groundtruth[s]
@@ -222,9 +228,33 @@ def evaluate_sessions(
         path=Path(path), algorithm=algorithm, file=file if file is not None else Path(path).name, suite=suite,
         scene=scene, frame=frame, mode="lifelong" if lifelong else "per-seq", alignment=alignment,
         aligned_on=aligned_on, official_interpolation=spec.official_interpolation, sequences=out, warnings=kept,
-        trial=trial, groundtruth_spans=dict(groundtruth_spans or {}),
+        trial=trial, groundtruth_spans={**(groundtruth_spans or {}), **durations},
         groundtruth_lengths=lengths, rpe=spec.rpe_options(),
     )  # fmt: skip
+
+
+def window_spans(groundtruth: Mapping[K, Trajectory], spec: EvalSpec) -> dict[K, tuple[float, float]]:
+    """Each ground-truth sequence's time span as the spec evaluates it (first and last stamp,
+    seconds): within evo's time window (``t_start``/``t_end``) when one is set, and never shortened
+    by ``downsample`` or ``motion_filter``, which thin the poses but not the sequence's time. A
+    sequence's rows (CR = correct time / this duration) and its scene's total
+    (:meth:`~lorisnb.tools.evaluation.Evaluation.durations`) both use it; a sequence with no
+    ground-truth stamp in the window has no duration (its span starts and ends at the window)."""
+    if spec.t_start is None and spec.t_end is None:
+        return time_spans(groundtruth)
+    lo = -np.inf if spec.t_start is None else spec.t_start
+    hi = np.inf if spec.t_end is None else spec.t_end
+    out: dict[K, tuple[float, float]] = {}
+    for k, t in groundtruth.items():
+        if not len(t):
+            continue
+        first, last = np.searchsorted(t.stamps, lo, "left"), np.searchsorted(t.stamps, hi, "right") - 1
+        if first <= last:
+            out[k] = (float(t.stamps[first]), float(t.stamps[last]))
+        else:  # nothing of this sequence inside the window
+            edge = float(min(max(lo, t.stamps[0]), hi))
+            out[k] = (edge, edge)
+    return out
 
 
 def compute_errors(
@@ -289,7 +319,7 @@ def compute_errors(
         algorithm=algorithm if algorithm is not None else result.path.parent.name,
         file=file, scene=scene, suite=suite, trial=trial, frame=frame, checks_on=checks,
         other_spans=other_spans, frames=frames, release=release, notes=list(result.warnings),
-        groundtruth_spans=time_spans(groundtruth.sequences),
+        groundtruth_spans=window_spans(groundtruth.sequences, spec),
     )  # fmt: skip
 
 

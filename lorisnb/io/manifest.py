@@ -139,6 +139,21 @@ def _fmt(value: Any, key: str, path: Path) -> str:
 OPENLORIS_KEYS = {"name", "source", "openloris", "eps", "phi", "lifelong", "conventions"}
 
 
+def openloris_preset_refusal(name: str, preset: object) -> str:
+    """Why a preset is refused with the built-in OpenLORIS evaluation (a manifest with ``openloris =
+    true``, ``--manifest openloris``, ``evaluate_manifest("openloris", ...)``): one message on every
+    path, ``name`` being how the path spells the option (``--conventions``, ``conventions``,
+    ``[conventions] preset``), and the route that does score OpenLORIS files under a preset."""
+    shown = preset if isinstance(preset, str) else "PRESET"
+    given = f"{name} {preset}" if isinstance(preset, str) else f"{name} (a {type(preset).__name__})"
+    return (
+        f"{given}: the built-in OpenLORIS evaluation (openloris = true) is the official conventions with "
+        "single options over them (max_gap, scale, lifelong, ...), not a preset; to score OpenLORIS result files "
+        f"under the {shown} preset, evaluate them without the manifest (lorisnb evaluate FILES --conventions "
+        f"{shown}; lorisnb.evaluate(files, {shown!r}) in Python)"
+    )
+
+
 def _openloris_manifest(raw: dict, path: Path) -> Manifest:
     """A manifest with ``openloris = true``: its thresholds, mode and ``[conventions]`` make its
     spec (as the command line's options would: no preset, nothing OpenLORIS files cannot take);
@@ -152,8 +167,7 @@ def _openloris_manifest(raw: dict, path: Path) -> Manifest:
     if not isinstance(table, dict):
         raise ParseError(path, None, "conventions: expected a [conventions] table of spec options")
     if "preset" in table:
-        raise ParseError(path, None, "[conventions] preset: OpenLORIS result files are scored with the official "
-                         "conventions; give single options (max_gap, scale, ...) instead")  # fmt: skip
+        raise ParseError(path, None, openloris_preset_refusal("[conventions] preset", table["preset"]))
     options = dict(table)
     for key in ("eps", "phi", "lifelong"):
         if key in raw and key in options:

@@ -25,7 +25,7 @@ from ..core.trials import check_duplicates, check_trials_by, compile_trials_by
 from ..errors import FailedInputsWarning, LorisWarning, ParseError, ValidationError
 from ..io.data import DataPaths, DataRoot, find_data
 from ..io.formats import TRAJECTORY_FORMATS
-from ..io.manifest import SUFFIX, Manifest, read_manifest
+from ..io.manifest import SUFFIX, Manifest, openloris_preset_refusal, read_manifest
 from ..io.openloris import declared_scene
 from ..io.reading_options import check_reading
 from ..io.registry import FORMATS
@@ -306,10 +306,8 @@ def evaluate_manifest(
         options["lifelong"] = lifelong
     if m.openloris:
         if spec is not None or conventions is not None:
-            raise ValidationError(
-                "conventions: OpenLORIS result files are scored with the official conventions "
-                "(choose max_gap, scale and lifelong instead)"
-            )
+            given = spec if spec is not None else conventions
+            raise ValidationError(openloris_preset_refusal("spec" if spec is not None else "conventions", given))
         return evaluate(results, m.spec, data_root=data_root, trials_by=trials_by, progress=progress, jobs=jobs,
                         executor=executor, **options)  # fmt: skip
     if data_root is not None:

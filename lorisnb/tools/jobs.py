@@ -9,16 +9,16 @@ from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache, partial
 from pathlib import Path
 
 from ..core.missing import with_missing
 from ..core.model import FileErrors, ResultFile
-from ..core.pipeline import compute_errors, evaluate_sessions, moved_groundtruth
+from ..core.pipeline import compute_errors, evaluate_sessions, moved_groundtruth, window_spans
 from ..core.plausibility import no_rpe_pair
 from ..core.spec import EvalSpec
-from ..core.trajectory import Trajectory, time_spans
+from ..core.trajectory import Trajectory
 from ..core.units import check_stamp_units
 from ..errors import DataNotFoundError, LorisError, LorisWarning, ParseError, ValidationError
 from ..io.data import DataPaths, groundtruth_spans, load_groundtruth, read_groundtruth_file
@@ -197,7 +197,7 @@ def _pair(job: Job) -> FileErrors:
         est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf, repeated=rule,
                               repair_stamps=job.spec.repair_stamps)  # fmt: skip
     check_stamp_units(est, gt, str(job.path))  # seconds against pose indices or nanoseconds: an error
-    span = time_spans({1: gt})
+    span = window_spans({1: gt}, job.spec)
     gts = {1: gt}
     del gt  # held by gts alone: let go once matched
     return evaluate_sessions(
@@ -260,7 +260,7 @@ def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) 
     check_stamp_units(est[seqs[0]], gts[seqs[0]], str(job.path))
     return evaluate_sessions(
         gts, est, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite, trial=trial,
-        notes=notes, groundtruth_spans=time_spans(gts), release_groundtruth=gts.pop,
+        notes=notes, groundtruth_spans=window_spans(gts, job.spec), release_groundtruth=gts.pop,
     )  # fmt: skip
 
 
@@ -288,7 +288,7 @@ def _manifest(job: Job) -> FileErrors:
                                               repeated=job.spec.repeated, repair_stamps=job.spec.repair_stamps)  # fmt: skip
                 check_stamp_units(ests[s.seq], gts[s.seq], str(path))
     notes += [str(w.message) for w in caught]
-    spans = time_spans(gts)
+    spans = window_spans(gts, job.spec)
     errors = None
     if ests:
         errors = evaluate_sessions(
@@ -306,4 +306,8 @@ def _manifest(job: Job) -> FileErrors:
         trial=trial, lifelong=job.spec.lifelong_for(len(sessions)), note=note,
     )  # fmt: skip
     out.groundtruth_spans = spans
+    out.sequences = [  # a missing session's duration is its ground truth's time as the spec evaluates it
+        replace(e, gt_start=spans[e.seq][0], gt_end=spans[e.seq][1]) if e.matched == 0 and e.seq in spans else e
+        for e in out.sequences
+    ]
     return out
