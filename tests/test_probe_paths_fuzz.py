@@ -322,3 +322,21 @@ def test_random_options_give_the_same_numbers_on_a_dask_cluster(data, tmp_path, 
                 assert code in (0, 1)
                 assert f"conventions: {one.conventions}" in capsys.readouterr().err
                 _same_numbers(one.sequences(), pd.read_csv(csv))
+
+
+# --- the report's leaderboard: a preset's alignment holds, as on every other path -----------------------
+
+
+@pytest.mark.parametrize("preset", ["evo", "tum", "vio"])
+def test_the_report_leaderboard_scores_a_preset_as_evaluate_and_the_notebook_do(data, preset):
+    from lorisnb.tools.leaderboard import leaderboard_spec
+    from lorisnb.tools.notebook_params import evaluation_spec
+
+    spec = leaderboard_spec({"conventions": preset})
+    notebook = evaluation_spec({"conventions": preset, "scale": None})  # evaluate_my_results' parameters
+    assert spec == notebook == ln.make_spec(preset)  # the leaderboard aligned by 'auto' (scale auto over the preset)
+    dso = data.icra20 / "per-seq" / "dso" / "home-1-3-all.txt"
+    board = ln.evaluate(dso, spec, data_root=data.root, jobs=1).sequences()
+    command = ln.evaluate(dso, preset, data_root=data.root, jobs=1).sequences()
+    _same_numbers(board, command)
+    assert leaderboard_spec({}).align == "auto"  # without a choice of alignment: scale auto, as the paper

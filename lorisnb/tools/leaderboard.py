@@ -168,8 +168,11 @@ SETTINGS: dict[str, Any] = {
     "metric": "cr", "alpha": 0.05, "level": 0.95, "seed": 0, "trials_by": None, "algorithms": None, "scenes": None,
 }  # fmt: skip
 #: Spec options whose default differs from the spec's: ``scale`` is ``auto`` (Sim(3) for monocular
-#: algorithms), as in every notebook that evaluates results and in the paper.
+#: algorithms), as in every notebook that evaluates results and in the paper, unless the parameters
+#: choose the alignment (``scale``, ``align``) or a preset (``conventions``), whose alignment holds.
 SPEC_DEFAULTS: dict[str, Any] = {"scale": "auto"}
+#: The parameters that choose the alignment: given any, :data:`SPEC_DEFAULTS` does not apply.
+ALIGNMENT_CHOICES = ("scale", "align", "conventions")
 
 
 def leaderboard_spec(parameters: Mapping[str, Any]) -> EvalSpec:
@@ -178,12 +181,15 @@ def leaderboard_spec(parameters: Mapping[str, Any]) -> EvalSpec:
     spec (thresholds, ``scale``, ``official_interpolation``, the RPE step, ``conventions``, ...)
     reaches the leaderboard, ``findings/`` and ``run.json`` as it reaches the notebooks; the
     thresholds not given are the spec's (eps = phi = inf, delta 1 s, tau 60 s: the ``compare``
-    command's and ``per_sequence_benchmark``'s), ``scale`` is ``auto``. An option that cannot apply
+    command's and ``per_sequence_benchmark``'s), ``scale`` is ``auto`` unless the parameters choose
+    the alignment or a preset (``-p conventions evo`` aligns nothing, as ``evaluate --conventions
+    evo`` and the notebook do). An option that cannot apply
     to OpenLORIS result files is refused, naming it."""
     from .notebook_params import evaluation_spec
 
     given = {k: v for k, v in parameters.items() if v is not None}
-    spec = evaluation_spec({**SPEC_DEFAULTS, **given})
+    defaults = {} if any(k in given for k in ALIGNMENT_CHOICES) else SPEC_DEFAULTS  # -p conventions evo: no alignment
+    spec = evaluation_spec({**defaults, **given})
     spec.refuse_inapplicable("openloris", surface="notebook")
     return spec
 
