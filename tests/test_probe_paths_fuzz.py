@@ -205,7 +205,8 @@ def _message(text: str) -> str:
     """A refusal without the way each surface spells an option (``--max-diff`` is ``max_diff``)."""
     import re
 
-    text = re.sub(r"^(error: )?(\S+\.toml: )?", "", text.strip().splitlines()[-1] if text.strip() else "")
+    text = text.strip().splitlines()[-1] if text.strip() else ""
+    text = re.sub(r"^(lorisnb \w+: )?(error: )?(argument [^:]+: )?(\S+\.toml: )?", "", text)
     text = re.sub(r"--([a-z-]+)", lambda m: m.group(1).replace("-", "_"), text)
     return text.replace("per_seq/lifelong", "mode").replace("keep_repeated", "repeated")
 
@@ -340,3 +341,41 @@ def test_the_report_leaderboard_scores_a_preset_as_evaluate_and_the_notebook_do(
     command = ln.evaluate(dso, preset, data_root=data.root, jobs=1).sequences()
     _same_numbers(board, command)
     assert leaderboard_spec({}).align == "auto"  # without a choice of alignment: scale auto, as the paper
+
+
+# --- a value refused is refused alike, whichever path; one accepted is read alike -----------------------
+
+BAD_VALUES = [("rpe_tolerance", -1), ("rpe_delta", 0), ("rpe_unit", "km"), ("rpe_pairs", "both"), ("eps", -1),
+              ("phi", 200), ("downsample", 0), ("align", "sim4"), ("max_diff", -0.1), ("t_start", "x")]  # fmt: skip
+
+
+@pytest.mark.parametrize(("name", "value"), BAD_VALUES)
+def test_a_bad_value_gets_one_message_on_every_path(data, tmp_path, capsys, name, value):
+    est, gt = str(data.tum / "freiburg1_xyz-rgbdslam.txt"), str(data.tum / "freiburg1_xyz-groundtruth.txt")
+    said = {}
+    with pytest.raises(ValidationError) as exc:
+        ln.evaluate_pairs(est, gt, jobs=1, **{name: value})
+    said["evaluate_pairs"] = str(exc.value)
+    if name.startswith("rpe_"):  # a table's own RPE step: Evaluation.sequences
+        ev = ln.evaluate_pairs(est, gt, jobs=1)
+        with pytest.raises(ValidationError) as exc:
+            ev.sequences(**{name: value})
+        said["sequences"] = str(exc.value)
+    toml = tmp_path / "m.toml"
+    shown = f'"{value}"' if isinstance(value, str) else value
+    toml.write_text(f'name = "x"\n[conventions]\n{name} = {shown}\n[[session]]\nname = "a"\ngroundtruth = "{gt}"\n')
+    with pytest.raises(ParseError) as exc2:
+        ln.read_manifest(toml)
+    said["manifest"] = str(exc2.value)
+    with pytest.raises(SystemExit):
+        main(["evaluate", est, "--gt", gt, f"--{name.replace('_', '-')}={value}", "--no-progress"])
+    said["command line"] = capsys.readouterr().err
+    assert len({_message(m) for m in said.values()}) == 1, said
+
+
+def test_a_table_reads_an_rpe_unit_as_the_spec_does(data):
+    est, gt = str(data.tum / "freiburg1_xyz-rgbdslam.txt"), str(data.tum / "freiburg1_xyz-groundtruth.txt")
+    spec = ln.evaluate_pairs(est, gt, jobs=1, rpe_delta=10, rpe_unit="d").sequences()  # evo's -u d: degrees
+    table = ln.evaluate_pairs(est, gt, jobs=1).sequences(rpe_delta=10, rpe_unit="d")  # was refused: 'd' unknown
+    assert table["rpe_rot_rmse"].iloc[0] == spec["rpe_rot_rmse"].iloc[0] == pytest.approx(0.920387, abs=1e-6)
+    assert table["spec"].iloc[0] == spec["spec"].iloc[0] and '"rpe_unit":"deg"' in spec["spec"].iloc[0]

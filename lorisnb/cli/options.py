@@ -13,6 +13,7 @@ from ..core.evo_options import PLANES
 from ..core.relations import RELATIONS
 from ..core.rpe import RPE_PAIRS
 from ..core.spec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, make_spec, preset_over
+from ..core.spec_evo import check_evo
 from ..errors import ValidationError
 from ..io.formats import TRAJECTORY_FORMATS
 from ..io.manifest import BUILT_IN
@@ -89,14 +90,14 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--align-frames", default=None, metavar="N",
                    type=arg_type(lambda t: int(validate.positive("--align-frames", t, validate.ALL_POSES, integer=True))),
                    help="fit the alignment on the first N matched poses only")  # fmt: skip
-    g.add_argument("--t-start", default=None, type=arg_type(lambda t: validate.finite("--t-start", t, "seconds")),
+    g.add_argument("--t-start", default=None, type=arg_type(lambda t: check_evo("t_start", t, "--t-start")),
                    help="leave out ground-truth poses before this stamp, seconds (evo's --t_start)")  # fmt: skip
-    g.add_argument("--t-end", default=None, type=arg_type(lambda t: validate.finite("--t-end", t, "seconds")),
+    g.add_argument("--t-end", default=None, type=arg_type(lambda t: check_evo("t_end", t, "--t-end")),
                    help="leave out ground-truth poses after this stamp, seconds (evo's --t_end)")  # fmt: skip
     g.add_argument("--project-to-plane", default=None, choices=PLANES,
                    help="errors of the aligned poses projected to a plane (evo's --project_to_plane)")  # fmt: skip
     g.add_argument("--downsample", default=None, metavar="N",
-                   type=arg_type(lambda t: int(validate.positive("--downsample", t, "poses", integer=True))),
+                   type=arg_type(lambda t: check_evo("downsample", t, "--downsample")),
                    help="reduce both trajectories to N evenly spaced poses first (evo's --downsample)")  # fmt: skip
     g.add_argument("--motion-filter", default=None, nargs=2, metavar=("METRES", "DEGREES"),
                    help="keep poses that moved or turned at least this much (evo's --motion_filter)")  # fmt: skip
@@ -148,7 +149,7 @@ def spec_from_args(args: argparse.Namespace, base: EvalSpec | str | None = None)
 def add_rpe_options(p: argparse.ArgumentParser) -> None:
     """``--rpe-delta`` and ``--rpe-unit``: the RPE step of the tables."""
     d = PRESETS["openloris"]
-    p.add_argument("--rpe-delta", default=None, type=arg_type(lambda t: validate.positive("--rpe-delta", t, "steps")),
+    p.add_argument("--rpe-delta", default=None, type=arg_type(lambda t: check_evo("rpe_delta", t, "--rpe-delta")),
                    help=f"RPE step (default {d.rpe_delta:g}, in --rpe-unit)")  # fmt: skip
     p.add_argument("--rpe-unit", default=None, choices=(*RPE_UNITS, "d", "r"),
                    help=f"unit of the RPE step: s, m, f or frames, deg (d), rad (r); default {d.rpe_unit} (evo: frames)")  # fmt: skip
@@ -159,7 +160,7 @@ def add_rpe_options(p: argparse.ArgumentParser) -> None:
                    help="evo's all pairs (--all_pairs): in m, the pose closest to delta within the tolerance")  # fmt: skip
     g.add_argument("--rpe-consecutive", dest="rpe_all_pairs", action="store_const", const=False,
                    help="evo's consecutive pairs (evo's default; the evo preset's)")  # fmt: skip
-    p.add_argument("--rpe-tolerance", default=None, type=arg_type(lambda t: validate.positive("--rpe-tolerance", t, "")),
+    p.add_argument("--rpe-tolerance", default=None, type=arg_type(lambda t: check_evo("rpe_tolerance", t, "--rpe-tolerance")),
                    help="evo's --delta_tol for --rpe-all-pairs, a fraction of the delta (default 0.1)")  # fmt: skip
     p.add_argument("--digits", default=4, metavar="N",
                    type=arg_type(lambda t: validate.decimals("--digits", t)),

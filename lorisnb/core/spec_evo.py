@@ -70,8 +70,8 @@ def check_evo(key: str, v: Any, label: str, yes_no: str = "True or False") -> An
         return validate.choice(label, v, RPE_PAIRS)
     if key == "rpe_all_pairs":
         return None if v is None else validate.flag(label, v, yes_no)
-    if key == "rpe_tolerance":
-        return validate.positive(label, v, "(a fraction of the RPE step)")
+    if key == "rpe_tolerance":  # evo's --delta_tol: a fraction of the step, no unit (the command line's words)
+        return validate.positive(label, v, "")
     if key in ("t_start", "t_end"):
         return None if v is None else validate.finite(label, v, "seconds")
     if key == "project_to_plane":

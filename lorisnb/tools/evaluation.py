@@ -69,8 +69,7 @@ class Evaluation:
         import pandas as pd
 
         s = self.spec
-        for k, v in s.rpe_options().items():
-            kw.setdefault(k, v)
+        kw = self._rpe(kw)
         table = pd.DataFrame(self.sequence_rows(eps, phi, delta, tau, **kw), columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS
                              + STAT_COLUMNS + ["spec"])  # fmt: skip
         if s.relation is not None and len(table):  # evo's -r: statistics of that pose relation
@@ -88,8 +87,7 @@ class Evaluation:
     ) -> list[dict[str, Any]]:  # fmt: skip
         """:meth:`sequences` as rows (dicts), without pandas and without evo's ``relation`` columns."""
         s = self.spec
-        for k, v in s.rpe_options().items():
-            kw.setdefault(k, v)
+        kw = self._rpe(kw)
         rows = score_rows(
             self.errors, s.eps if eps is None else eps, s.phi if phi is None else phi,
             s.delta if delta is None else delta, s.tau if tau is None else tau, **kw,
@@ -99,6 +97,15 @@ class Evaluation:
         for row in rows:
             row["spec"] = spec
         return rows
+
+    def _rpe(self, kw: dict[str, Any]) -> dict[str, Any]:
+        """The RPE settings of a table: the spec's, with those given checked and normalized by the
+        spec's own rules (:func:`lorisnb.core.spec.make_spec`), so a value is read as in
+        ``evaluate(..., rpe_unit=...)`` and on the command line (``rpe_unit='d'`` is degrees) and
+        refused with the same message."""
+        given = {k: kw[k] for k in self.spec.rpe_options() if k in kw}
+        checked = make_spec(self.spec, **given).rpe_options() if given else self.spec.rpe_options()
+        return {**kw, **checked}
 
     def poses(self, eps: Eps | None = None, phi: float | None = None) -> pd.DataFrame:
         """Per-pose table (see :func:`lorisnb.core.scoring.pose_table`)."""
