@@ -77,6 +77,7 @@ def evaluate_sessions(
     release_groundtruth: Callable[[int], object] | None = None,
     notes: list[str] | None = None,
     groundtruth_spans: dict[int, tuple[float, float]] | None = None,
+    sources: Mapping[int, str] | None = None,
 ) -> FileErrors:
     """Per-pose errors of estimate sequences against their ground truth: the one pipeline.
 
@@ -96,6 +97,8 @@ def evaluate_sessions(
             the pipeline no longer needs its ground truth (the edge lets a long one go before the
             alignment and the errors are computed).
         notes: what the reader noticed, kept first in ``FileErrors.warnings``.
+        sources: sequence number -> the file it was read from (a manifest's sessions), named in the
+            errors about that sequence (default ``path``, with the sequence number if several).
 
     Every note is issued as a LorisWarning and kept in ``FileErrors.warnings``.
     """
@@ -113,6 +116,10 @@ def evaluate_sessions(
         spec = by_index(spec)
     name = Path(path).name
     method = spec.alignment_for(algorithm)
+
+    def where(s: int) -> str:  # the input a sequence's error is about: its file (a manifest's session), or path, seq
+        return (sources or {}).get(s) or (f"{path}, seq {s}" if len(seqs) > 1 else str(path))
+
     lifelong = spec.lifelong_for(len(seqs))
     est = {s: with_transform(estimates[s], spec.transform) for s in seqs}
     assoc: dict[int, Association] = {}
@@ -122,7 +129,7 @@ def evaluate_sessions(
         if spec.association in EVO_ASSOCIATIONS:
             assoc[s], est[s] = evo_steps.evo_match(gt_s, est[s], spec)
         else:
-            assoc[s] = match(gt_s, est[s], spec, f"{path}, seq {s}" if len(seqs) > 1 else str(path))
+            assoc[s] = match(gt_s, est[s], spec, where(s))
         if s in durations and (assoc[s].gt_start, assoc[s].gt_end) != durations[s]:  # thinned: its time stays
             assoc[s] = replace(assoc[s], gt_start=durations[s][0], gt_end=durations[s][1])
         if checks_on:
@@ -153,8 +160,11 @@ def evaluate_sessions(
     def fit(s: int) -> Sim3:
         a, e = assoc[s], est[s]
         q_e = a.est_rows(e.quaternions) if spec.align_frames == 1 or method == "origin" else None
-        return fit_alignment(a.est_rows(e.positions), a.gt_positions, method, spec.align_frames, q_e, a.gt_quaternions,
-                             strict=frames is None, notes=found)  # OpenLORIS: the official tool's alignment  # fmt: skip
+        try:  # an OpenLORIS file (frames given) is aligned as the official tool aligns it
+            return fit_alignment(a.est_rows(e.positions), a.gt_positions, method, spec.align_frames, q_e,
+                                 a.gt_quaternions, strict=frames is None, notes=found)  # fmt: skip
+        except EvaluationError as exc:  # named with the sequence (the session's file) it is about
+            raise EvaluationError(f"{where(s)}: {exc}") from None
 
     aligned_on: int | None = None
     alignment = Sim3.identity()

@@ -293,7 +293,7 @@ def _manifest(job: Job) -> FileErrors:
     if ests:
         errors = evaluate_sessions(
             gts, ests, job.spec, path=job.path, algorithm=algorithm, scene=job.scene, suite=suite, trial=trial,
-            notes=notes, groundtruth_spans=spans,
+            notes=notes, groundtruth_spans=spans, sources={s.seq: str(job.path / s.estimate) for s in sessions},
         )  # fmt: skip
     absent = [s for s in sessions if s.seq not in ests]
     if not absent:
