@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import atexit
+import fcntl
 import os
 import shutil
+import subprocess
 import tempfile
 import warnings
 from pathlib import Path
@@ -40,6 +42,23 @@ def data():
 @pytest.fixture(scope="session")
 def icra20(data) -> Path:
     return data.icra20
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="session")
+def teaching_python() -> Path:
+    """The teaching kit's environment (.venv-teach, layered on .venv), made as a fresh clone's first
+    `make student` makes it, once for every test process (a lock: pytest-xdist's workers share it)."""
+    with open(ROOT / ".venv" / ".teaching-lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        made = subprocess.run(
+            ["make", "-C", str(ROOT), "-o", ".venv/.installed-stamp", ".venv-teach/.installed-stamp"],
+            capture_output=True, text=True, timeout=1800,
+        )  # fmt: skip
+    assert made.returncode == 0, made.stdout[-3000:] + made.stderr[-3000:]
+    return ROOT / ".venv-teach" / "bin" / "python"
 
 
 @pytest.fixture(autouse=True)

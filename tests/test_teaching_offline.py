@@ -1,7 +1,8 @@
 """The teaching kit's builds open offline and fail loudly (teaching/offline.py, book.py, slides.py,
 offline_feedback.py): nothing a page, style sheet or script loads comes from the network; the book
 drops sphinx-thebe's scripts; a notebook that fails to execute fails `make book` without replacing
-the previous book; each feedback page carries its own MathJax. Fast: no notebook is executed."""
+the previous book; each feedback page carries its own MathJax. No notebook is executed; the two
+that run the kit's own environment are slow (the `teaching_python` fixture makes .venv-teach)."""
 
 from __future__ import annotations
 
@@ -14,8 +15,6 @@ import pytest
 from test_teaching_kit import _teaching_module
 
 ROOT = Path(__file__).resolve().parents[1]
-TEACH_PY = ROOT / ".venv-teach" / "bin" / "python"
-needs_teach = pytest.mark.skipif(not TEACH_PY.exists(), reason="needs .venv-teach (make student creates it)")
 
 PAGE = """<html><head>
 <link rel="stylesheet" href="_static/local.css" />
@@ -98,8 +97,8 @@ def test_a_notebook_that_fails_fails_the_book_and_keeps_the_previous_one(tmp_pat
     assert book.build_problems(tmp_path / "good", 0) is None
 
 
-@needs_teach
-def test_slides_assets_load_nothing_from_the_network(tmp_path):
+@pytest.mark.slow
+def test_slides_assets_load_nothing_from_the_network(tmp_path, teaching_python):
     """reveal.js's themes import Google Fonts (simple, the nbconvert default, among them)."""
     code = (
         "import sys, pathlib, slides, offline\n"
@@ -108,7 +107,7 @@ def test_slides_assets_load_nothing_from_the_network(tmp_path):
         "print('theme', slides.THEME, (out / 'reveal.js' / 'dist' / 'theme' / (slides.THEME + '.css')).is_file())\n"
     )
     r = subprocess.run(
-        [str(TEACH_PY), "-c", code, str(tmp_path / "slides")],
+        [str(teaching_python), "-c", code, str(tmp_path / "slides")],
         cwd=ROOT / "teaching",
         capture_output=True,
         text=True,
@@ -120,8 +119,8 @@ def test_slides_assets_load_nothing_from_the_network(tmp_path):
     assert "@import url(./fonts/source-sans-pro/source-sans-pro.css)" in css
 
 
-@needs_teach
-def test_each_feedback_page_carries_its_own_mathjax(tmp_path):
+@pytest.mark.slow
+def test_each_feedback_page_carries_its_own_mathjax(tmp_path, teaching_python):
     """`nbgrader release_feedback` hands out the .html files only: a MathJax folder beside them is lost."""
     feedback = tmp_path / "feedback"
     page = feedback / "student" / "lab" / "lab.html"
@@ -133,7 +132,7 @@ def test_each_feedback_page_carries_its_own_mathjax(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     for _ in range(2):  # a second run leaves the pages as they are
         r = subprocess.run(
-            [str(TEACH_PY), str(ROOT / "teaching" / "offline_feedback.py"), str(feedback)],
+            [str(teaching_python), str(ROOT / "teaching" / "offline_feedback.py"), str(feedback)],
             capture_output=True,
             text=True,
             timeout=300,
