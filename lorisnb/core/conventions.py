@@ -204,6 +204,13 @@ def fit_alignment(
     if frames is None and method in ("se3", "sim3"):  # all matched poses: Horn/Umeyama, as the official tool
         return umeyama(p_e, p_g, method == "sim3", strict=strict)
     n = len(p_e) if frames is None else min(int(frames), len(p_e))
+    if frames is not None and int(frames) > len(p_e):  # evo slices silently, rpg asserts: said, not dropped
+        _say(
+            f"align_frames={int(frames)} (--align-frames) but only {len(p_e)} poses are matched: the {method} "
+            f"alignment is fitted on all {len(p_e)} (rpg_trajectory_evaluation refuses a count above the matched "
+            "poses); give --align-frames at most the matched count, or leave it out to align on all",
+            notes,
+        )
     if n == 1 and method in ("se3", "posyaw"):
         if est_quaternions is None or gt_quaternions is None:
             raise EvaluationError(f"align={method!r} on one pose needs the orientations")

@@ -109,10 +109,12 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False, st
         raise ValueError("umeyama needs at least one point pair")
     mu_s, mu_t, xs, xt, cov = _centered(source, target)
     if strict and (why := _degenerate(source, target, cov)) is not None:
+        # a Sim(3) fit on one pose is refused (a scale needs 2 poses): its first-pose remedy drops the scale
+        first = "without scale (--align se3 --align-frames 1)" if with_scale else "(--align-frames 1)"
         raise EvaluationError(
             f"no {'Sim(3)' if with_scale else 'SE(3)'} alignment can be determined: {why}, so the rotation "
             "about them is arbitrary; align on more poses (--align-frames N with N >= 3 poses not on one line), "
-            "on the first pose's orientation (--align-frames 1), or not at all (--align none)"
+            f"on the first pose's orientation {first}, or not at all (--align none)"
         )
     del xt
     u, d, vt = np.linalg.svd(cov)
