@@ -207,6 +207,7 @@ def _message(text: str) -> str:
 
     text = text.strip().splitlines()[-1] if text.strip() else ""
     text = re.sub(r"^(lorisnb \w+: )?(error: )?(argument [^:]+: )?(\S+\.toml: )?", "", text)
+    text = re.sub(r" \([\w, ]+: set by the manifest \S+\)$", "", text)  # where a manifest's option came from
     text = re.sub(r"--([a-z-]+)", lambda m: m.group(1).replace("-", "_"), text)
     return text.replace("per_seq/lifelong", "mode").replace("keep_repeated", "repeated")
 
@@ -400,3 +401,26 @@ def test_a_session_that_cannot_be_aligned_is_named_as_its_pair_is(data, tmp_path
     pair = ln.evaluate_pairs(est, gt, jobs=1, align_frames=2)
     assert [f.error for f in manifest.failures] == [f.error for f in pair.failures]  # was '.../res/alg: no SE(3)...'
     assert pair.failures[0].error.startswith(f"{est}: no SE(3) alignment can be determined: only 2 matched")
+
+
+@pytest.mark.parametrize("openloris", [False, True])
+def test_an_option_the_manifest_set_is_refused_naming_the_manifest(data, tmp_path, capsys, openloris):
+    gt = data.tum / "freiburg1_xyz-groundtruth.txt"
+    toml = tmp_path / "m.toml"
+    if openloris:  # [conventions] max_gap, then nearest association on the call: max_gap cannot apply
+        toml.write_text("openloris = true\n[conventions]\nmax_gap = 0.1\n")
+        results, over, flag, key = data.icra20 / "per-seq" / "odom", {"association": "nearest"}, "nearest", "max_gap"
+    else:  # [conventions] nearest within 0.05 s, then interpolation on the call: max_diff cannot apply
+        toml.write_text(f'name = "x"\n[conventions]\nassociation = "nearest"\nmax_diff = 0.05\n'
+                        f'[[session]]\nname = "xyz"\ngroundtruth = "{gt}"\n')  # fmt: skip
+        (tmp_path / "res" / "alg").mkdir(parents=True)
+        (tmp_path / "res" / "alg" / "xyz.txt").write_text((data.tum / "freiburg1_xyz-rgbdslam.txt").read_text())
+        results, over, flag, key = tmp_path / "res", {"association": "interpolate"}, "interpolate", "max_diff"
+    with pytest.raises(ValidationError) as exc:
+        ln.evaluate_manifest(toml, results, jobs=1, **over)
+    python = str(exc.value)
+    assert main(["evaluate", str(results), "--manifest", str(toml), "--association", flag, "--no-progress"]) == 2
+    command = capsys.readouterr().err
+    said = f"({key}: set by the manifest {toml})"
+    assert python.endswith(said) and said in command  # it named --max-diff, which was not on the command line
+    assert _message(python) == _message(command)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import FailedInputsWarning, LorisError, LorisWarning, ValidationError
-from .options import param_value, spec_from_args
+from .options import param_value, spec_from_args, spec_given
 from .outputs import check_outputs, refuse_unused
 from .text import format_table, frame_columns
 
@@ -41,7 +41,7 @@ def _run_evaluation(
     estimates, the ground truth, times files, the manifest and its ground-truth files, the data
     root). Prints the ``conventions:`` line (``side``: which run, for ``diff``'s two)."""
     from ..io.manifest import openloris_preset_refusal, read_manifest
-    from ..tools.evaluate import evaluate, evaluate_manifest, evaluate_pairs, pair_kind
+    from ..tools.evaluate import evaluate, evaluate_manifest, evaluate_pairs, pair_kind, refuse_over_manifest
 
     if args.gt and args.manifest:
         raise ValidationError("--gt and --manifest: give one (a manifest names the ground truth of each session)")
@@ -65,10 +65,10 @@ def _run_evaluation(
             + ("a pair's ground truth is --gt" if args.gt else "a manifest names its ground-truth files")
         )
     spec = spec_from_args(args, base)
-    spec.refuse_inapplicable(
-        pair_kind(args.format or "tum") if args.gt else "manifest" if manifest is not None else "openloris",
-        surface="cli",
-    )
+    kind = pair_kind(args.format or "tum") if args.gt else "manifest" if manifest is not None else "openloris"
+    if base is not None:  # refused options the manifest set are said to be its own
+        refuse_over_manifest(spec, read_manifest(args.manifest), spec_given(args), kind, surface="cli")
+    spec.refuse_inapplicable(kind, surface="cli")
     inputs = list(args.paths)  # the options' inputs too (check_outputs), and a manifest's ground truth
     if manifest is not None:
         inputs += [str(manifest.path), *(str(s.groundtruth) for s in manifest.sessions)]

@@ -126,18 +126,23 @@ SPEC_OPTIONS = {
 }  # fmt: skip
 
 
-def spec_from_args(args: argparse.Namespace, base: EvalSpec | str | None = None) -> EvalSpec:
-    """The evaluation spec the options ask for: ``--conventions`` (or ``base``, a manifest's spec),
-    then every single option over it, validated by :func:`lorisnb.core.spec.make_spec` as in Python.
-    A sweep's threshold lists are its grid, not the spec's thresholds."""
+def spec_given(args: argparse.Namespace) -> dict[str, Any]:
+    """The spec options given on the command line (name -> value); a sweep's lists are its grid."""
     flags = ("official_interpolation", "repair_stamps", "keep_repeated")  # store_true: given when set
-    given = {
+    return {
         name: getattr(args, dest)
         for dest, name in SPEC_OPTIONS.items()
         if getattr(args, dest, None) is not None
         and not (dest in flags and getattr(args, dest) is False)
         and not (isinstance(getattr(args, dest), list) and dest != "motion_filter")
     }
+
+
+def spec_from_args(args: argparse.Namespace, base: EvalSpec | str | None = None) -> EvalSpec:
+    """The evaluation spec the options ask for: ``--conventions`` (or ``base``, a manifest's spec),
+    then every single option over it, validated by :func:`lorisnb.core.spec.make_spec` as in Python.
+    A sweep's threshold lists are its grid, not the spec's thresholds."""
+    given = spec_given(args)
     preset = getattr(args, "conventions", None)
     if preset is None:
         preset = base

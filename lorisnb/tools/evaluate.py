@@ -10,6 +10,7 @@ cores or on any executor (a Dask cluster's), collecting failures instead of stop
 from __future__ import annotations
 
 import os
+import re
 import warnings
 from collections.abc import Iterable
 from concurrent.futures import Executor
@@ -156,6 +157,29 @@ def evaluate(
     root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
     return _run(work, the_spec, "openloris", n_jobs=jobs, executor=executor, progress=progress, root=root, data=data,
                 notes=notes)  # fmt: skip
+
+
+#: The spec field each alias of :func:`lorisnb.core.spec.make_spec` sets.
+ALIAS_OF = {"scale": "align", "lifelong": "mode", "keep_repeated": "repeated", "remove_repeated": "repeated"}
+
+
+def refuse_over_manifest(
+    spec: EvalSpec, manifest: Manifest, given: Iterable[str], kind: str = "manifest", surface: str = "python"
+) -> list[str]:
+    """:meth:`~lorisnb.core.spec.EvalSpec.refuse_inapplicable` of a spec built over a manifest's,
+    saying which refused options the manifest set (its ``[conventions]``), not the call (``given``:
+    the options of the call or the command line): ``max_diff`` from the manifest with
+    ``--association interpolate`` is refused naming the manifest, on every path alike."""
+    try:
+        return spec.refuse_inapplicable(kind, surface=surface)
+    except ValidationError as exc:
+        theirs = (spec.explicit & manifest.spec.explicit) - {ALIAS_OF.get(k, k) for k in given}
+        spelled = {**{n: n for n in theirs}, **{"--" + n.replace("_", "-"): n for n in theirs}}
+        heads = [re.match(r"([\w-]+):", part.strip()) for part in str(exc).split("; ")]  # each problem: 'name: why'
+        named = list(dict.fromkeys(spelled[h.group(1)] for h in heads if h and h.group(1) in spelled))
+        if not named:
+            raise
+        raise ValidationError(f"{exc} ({', '.join(named)}: set by the manifest {manifest.path})") from None
 
 
 def _format(name: str, value: Any) -> str:
@@ -308,6 +332,7 @@ def evaluate_manifest(
         if spec is not None or conventions is not None:
             given = spec if spec is not None else conventions
             raise ValidationError(openloris_preset_refusal("spec" if spec is not None else "conventions", given))
+        refuse_over_manifest(make_spec(m.spec, **options), m, options, "openloris")
         return evaluate(results, m.spec, data_root=data_root, trials_by=trials_by, progress=progress, jobs=jobs,
                         executor=executor, **options)  # fmt: skip
     if data_root is not None:
@@ -317,7 +342,7 @@ def evaluate_manifest(
     given = spec if spec is not None else conventions
     base = m.spec if given is None else preset_over(m.spec, given)
     the_spec = make_spec(base, **options)
-    notes = the_spec.refuse_inapplicable("manifest")
+    notes = refuse_over_manifest(the_spec, m, options)
     _refuse_reading(the_spec, m.estimate_format, "manifest")
     if m.estimate_format == "kitti" and all(s.groundtruth_format == "kitti" for s in m.sessions):
         the_spec = by_index(the_spec)  # a manifest gives KITTI files no times: pose i with pose i
