@@ -70,34 +70,42 @@ def sequence_meta(f: FileErrors, e: SequenceErrors) -> dict[str, Any]:
     )  # fmt: skip
 
 
-#: Grid rows and value columns of each matrix product of :func:`row_sums`: every product has
-#: this shape (padded with zeros), so each row is summed by the same kernel in the same order.
-ROW_BLOCK, COLUMN_BLOCK = 64, 8
+#: Grid rows, poses and value columns of each matrix product of :func:`row_sums`: every product
+#: has this shape (zeros padded; a sequence's last poses a shorter block, the same for every grid),
+#: so each row is summed by the same kernel in the same order. Small, so that one setting's products
+#: cost a few multiply-adds per pose and a few MB, not the grid's work.
+ROW_BLOCK, POSE_BLOCK, COLUMN_BLOCK = 8, 1 << 14, 8
 
 
 def row_sums(selected: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Sums of each column of ``values`` (M, k) over the entries each row of ``selected`` (R, M;
     boolean, or 0 and 1) selects: (R, k), by BLAS's matrix product on blocks of exactly
-    :data:`ROW_BLOCK` rows and a multiple of :data:`COLUMN_BLOCK` columns (zeros padded). Every
-    row is then summed by the same kernel in the same order, whatever the grid it belongs to: a
-    threshold setting alone (:func:`score`) equals its point in any sweep to the last bit, a
-    larger threshold never gives a smaller sum, and BLAS's threads (which split rows and
-    columns, never the sum over M) change nothing. (Products of other shapes summed a one-row
+    :data:`ROW_BLOCK` rows, :data:`POSE_BLOCK` poses (the last block of a sequence shorter) and a
+    multiple of :data:`COLUMN_BLOCK` columns (zeros padded), each row's block sums added in pose
+    order. Every row is then summed by the same kernels in the same order, whatever the grid it
+    belongs to: a threshold setting alone (:func:`score`) equals its point in any sweep to the last
+    bit, a larger threshold never gives a smaller sum, and BLAS's threads (which split rows and
+    columns, never the sum over poses) change nothing. (Products of other shapes summed a one-row
     grid in another order than a large one: sweeps and scores differed in the last digits.)"""
     sel = np.asarray(selected)  # booleans are cast into each block: no float copy of the whole grid
-    vals = np.asarray(values, float).reshape(sel.shape[1], -1)
-    R, k = sel.shape[0], vals.shape[1]
+    R, M = sel.shape
+    vals = np.asarray(values, float).reshape(M, -1)
+    k = vals.shape[1]
     cols = -(-max(k, 1) // COLUMN_BLOCK) * COLUMN_BLOCK
-    padded = np.zeros((vals.shape[0], cols))
-    padded[:, :k] = vals
-    out = np.empty((R, k))
-    block = np.zeros((ROW_BLOCK, sel.shape[1]))
-    for lo in range(0, R, ROW_BLOCK):  # blocks of grid rows: never poses
-        n = min(ROW_BLOCK, R - lo)
-        if n < ROW_BLOCK:
-            block[n:] = 0.0
-        block[:n] = sel[lo : lo + n] > 0
-        out[lo : lo + n] = (block @ padded)[:n, :k]
+    out = np.zeros((R, k))
+    width = min(POSE_BLOCK, M)
+    padded, block = np.zeros((width, cols)), np.zeros((ROW_BLOCK, width))  # reused: one allocation
+    for p0 in range(0, M, POSE_BLOCK):  # blocks of poses and of grid rows: each holds many
+        m = min(POSE_BLOCK, M - p0)
+        if m < width:  # a sequence's last, shorter block of poses: arrays of its own shape
+            padded, block = np.zeros((m, cols)), np.zeros((ROW_BLOCK, m))
+        padded[:, :k] = vals[p0 : p0 + m]
+        for lo in range(0, R, ROW_BLOCK):
+            n = min(ROW_BLOCK, R - lo)
+            if n < ROW_BLOCK:
+                block[n:] = 0.0
+            block[:n] = sel[lo : lo + n, p0 : p0 + m] > 0
+            out[lo : lo + n] += (block @ padded)[:n, :k]
     return out
 
 
