@@ -443,3 +443,49 @@ def test_align_frames_above_the_matched_poses_is_said(cases, capsys):
     ref = REF["fr1_short"]["rpg sim3 -1"]
     _, row = _row(est, gt, "rpg", align_frames=50)
     assert row["ate_rmse"] == pytest.approx(ref[1], rel=REL)
+
+
+#: TUM's ``evaluate_rpe.py`` (same repository and commit as ``tum`` above, Python 3 by lib2to3, its h5py
+#: import left out): ``evaluate_trajectory(read_trajectory(GT), read_trajectory(EST), param_max_pairs=0,
+#: param_fixed_delta=True, param_delta=D, param_delta_unit=U, param_offset=O, param_scale=S)``, i.e.
+#: ``evaluate_rpe.py GT EST --fixed_delta --max_pairs 0 --delta D --delta_unit U --offset O --scale S``.
+#: Key: (pair, D, U, O, S); value: (pairs, translational RMSE m, translational mean m, rotational RMSE deg).
+#: "fr1" / "fr2" are the bundled files themselves, the others the generated files above.
+TUM_RPE = {
+    ("fr1", 1.0, "s", 0.0, 1.0): (753, 0.021217444079126714, 0.019523663952437948, 0.9344804594167394),
+    ("fr1", 10, "f", 0.0, 2.0): (773, 0.1099321789184242, 0.09902233562036222, 0.6764570545074282),
+    ("fr2", 0.5, "s", 0.013, 1.0): (2028, 0.0064727356662098645, 0.005782303361957811, 0.5064276505822543),
+    ("fr2", 0.2, "m", 0.0, 1.0): (1960, 0.006977650253406777, 0.006364731846856918, 0.4464054848481982),
+    ("fr2", 5, "deg", 0.0, 1.0): (2003, 0.006340114555308015, 0.00566805331073827, 0.3955631998589287),
+    ("fr2_gaps", 1, "f", 0.0, 1.0): (1856, 0.0033973014329903603, 0.002976152530949805, 0.2659596638345321),
+    ("fr1_many", 1.0, "s", 0.0, 1.0): (1496, 0.025880299332099573, 0.023724428231943106, 2.846047350559436),
+    ("fr2_late_scaled", 1.0, "s", -1.7, 1 / 3.7): (
+        1998,
+        0.007161111774263525,
+        0.006501852131797886,
+        0.45500542298954605,
+    ),
+}
+
+
+@pytest.mark.parametrize("key", list(TUM_RPE), ids=lambda k: "-".join(map(str, k)))
+def test_tum_evaluate_rpe_is_reproduced(data, cases, key):
+    """lorisnb's own RPE (the presets' default) pairs associated poses and composes the paper's
+    error; TUM's evaluate_rpe.py pairs every estimate pose, matches the ground truth within two of
+    its median steps, never ends a pair at the last pose and composes B A^-1: rpe.tum_rpe is that
+    tool, to the pair (there was no way to get its numbers)."""
+    from lorisnb.core.rpe import tum_rpe
+
+    name, delta, unit, offset, scale = key
+    files = {"fr1": (data.tum / FR1[0], data.tum / FR1[1]), "fr2": (data.tum / FR2[0], data.tum / FR2[1])}
+    gt_path, est_path = files.get(name) or cases[name]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ln.LorisWarning)  # fr2's ground truth repeats a stamp: its last pose
+        gt, est = ln.read_trajectory(gt_path, "tum"), ln.read_trajectory(est_path, "tum")
+    r = tum_rpe(gt.stamps, gt.positions, gt.quaternions, est.stamps, est.positions, est.quaternions,
+                delta, unit, offset, scale)  # fmt: skip
+    pairs, trans_rmse, trans_mean, rot_rmse = TUM_RPE[key]
+    assert r["trans"].size == pairs
+    assert np.sqrt(np.mean(r["trans"] ** 2)) == pytest.approx(trans_rmse, rel=1e-12)
+    assert np.mean(r["trans"]) == pytest.approx(trans_mean, rel=1e-12)
+    assert np.sqrt(np.mean(r["rot"] ** 2)) == pytest.approx(rot_rmse, rel=1e-9)

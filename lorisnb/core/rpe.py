@@ -22,7 +22,7 @@ import numpy as np
 from ..errors import ValidationError
 from . import metrics
 from .evo_sync import accumulated_distances, rotation_angles
-from .geometry import quat_normalize
+from .geometry import quat_normalize, quat_to_matrix
 
 RPE_UNITS = ("frames", "m", "deg", "rad", "s")
 #: lorisnb's own rules (``all_pairs=None``): every start, along the reference (see :func:`rpe_indices`).
@@ -189,3 +189,104 @@ def _angle_all_pairs(q: np.ndarray, lower: float, upper: float) -> tuple[np.ndar
     if not out_i:
         return np.zeros(0, np.intp), np.zeros(0, np.intp)
     return np.concatenate(out_i).astype(np.intp), np.concatenate(out_j).astype(np.intp)
+
+
+#: The units of TUM's ``evaluate_rpe.py --delta_unit``.
+TUM_RPE_UNITS = ("s", "m", "rad", "deg", "f")
+
+
+def _tum_closest(values: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """TUM's ``find_closest_index`` for every target at once: the same binary search, so a tie
+    between two stamps goes to the one the search visits first, as in the tool. ``values``
+    increasing; one vector step per halving (about log2 N), not per target."""
+    n = values.size
+    t = np.asarray(targets, float)
+    lo = np.zeros(t.size, np.intp)
+    hi = np.full(t.size, n, np.intp)
+    best = np.zeros(t.size, np.intp)
+    diff = np.abs(values[0] - t)
+    active = lo < hi
+    while active.any():
+        mid = (lo + hi) // 2
+        v = values[np.minimum(mid, n - 1)]
+        d = np.abs(v - t)
+        better = active & (d < diff)
+        best[better], diff[better] = mid[better], d[better]
+        hit = active & (v == t)
+        best[hit] = mid[hit]
+        left = active & ~hit & (v > t)
+        right = active & ~hit & ~(v > t)
+        hi[left], lo[right] = mid[left], mid[right] + 1
+        active = right | left
+        active &= lo < hi
+    return best
+
+
+def tum_rpe(
+    gt_stamps: np.ndarray,
+    gt_positions: np.ndarray,
+    gt_quaternions: np.ndarray,
+    est_stamps: np.ndarray,
+    est_positions: np.ndarray,
+    est_quaternions: np.ndarray,
+    delta: float = 1.0,
+    unit: str = "s",
+    offset: float = 0.0,
+    scale: float = 1.0,
+) -> dict[str, np.ndarray]:
+    """The relative pose error exactly as TUM's ``evaluate_rpe.py --fixed_delta --max_pairs 0``
+    computes it (its ``evaluate_trajectory``), which is not lorisnb's own RPE (:func:`rpe_indices`
+    over associated poses, the paper's ``(Q_i^-1 Q_j)^-1 (P_i^-1 P_j)``):
+
+    - pairs over *every* estimate pose (increasing, unique stamps: a TUM file read with the last
+      pose of a repeated stamp, as its dict keeps): from each pose i, the pose j whose index value
+      (unit ``s``: stamp; ``m``: path length of the estimate; ``rad``/``deg``: summed rotation
+      angles of the estimate; ``f``: pose number) is closest to that of i plus ``delta``; a pair
+      whose j is the last estimate pose is dropped, and j may equal i;
+    - each estimate stamp + ``offset`` (s) takes the closest ground-truth stamp; a pair is skipped
+      when either differs by more than twice the median ground-truth step;
+    - the error is ``B_s A^-1`` with ``B = P_i^-1 P_j`` (its translation times ``scale``) and
+      ``A = Q_i^-1 Q_j``: translation ``|s t_B - R_B R_A^T t_A|`` (m), angle of ``R_B R_A^T``.
+
+    Positions in metres, quaternions ``xyzw``. Returns arrays ``est_i``, ``est_j``, ``gt_i``,
+    ``gt_j`` (indices), ``trans`` (m) and ``rot`` (deg); raises ValidationError for an unknown unit
+    or fewer than two estimate poses, and, as the tool, when fewer than two pairs remain."""
+    if unit not in TUM_RPE_UNITS:
+        raise ValidationError(f"TUM RPE unit {unit!r}: expected one of {', '.join(TUM_RPE_UNITS)}")
+    tg, te = np.asarray(gt_stamps, float), np.asarray(est_stamps, float)
+    if te.size < 2 or tg.size < 2:
+        raise ValidationError("TUM's RPE needs at least two estimate and two ground-truth poses")
+    r_e = quat_to_matrix(quat_normalize(est_quaternions))
+    r_g = quat_to_matrix(quat_normalize(gt_quaternions))
+    p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
+    n = te.size
+    if unit == "s":
+        index = te
+    elif unit == "m":  # |translation of P_{k+1}^-1 P_k| = |p_k - p_{k+1}|, summed in order as the tool
+        index = np.concatenate(([0.0], np.cumsum(np.linalg.norm(p_e[:-1] - p_e[1:], axis=1))))
+    elif unit in ("rad", "deg"):
+        rel = np.einsum("kji,kjl->kil", r_e[1:], r_e[:-1])  # R_{k+1}^T R_k
+        ang = np.arccos(np.clip((np.trace(rel, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0))
+        index = np.concatenate(([0.0], np.cumsum(ang * (180.0 / np.pi if unit == "deg" else 1.0))))
+    else:
+        index = np.arange(n, dtype=float)
+    i = np.arange(n)
+    j = _tum_closest(index, index + float(delta))
+    i, j = i[j != n - 1], j[j != n - 1]
+    gi, gj = _tum_closest(tg, te[i] + offset), _tum_closest(tg, te[j] + offset)
+    limit = 2.0 * float(np.median(np.diff(tg)))
+    ok = (np.abs(tg[gi] - (te[i] + offset)) <= limit) & (np.abs(tg[gj] - (te[j] + offset)) <= limit)
+    i, j, gi, gj = i[ok], j[ok], gi[ok], gj[ok]
+    if i.size < 2:
+        raise ValidationError(
+            f"TUM's RPE over {delta:g} {unit}: fewer than two pose pairs match the ground truth (the tool: "
+            "'Couldn't find matching timestamp pairs'); is it the right ground truth, delta or offset?"
+        )
+    r_b = np.einsum("kji,kjl->kil", r_e[i], r_e[j])  # R_Ei^T R_Ej
+    t_b = np.einsum("kji,kj->ki", r_e[i], p_e[j] - p_e[i])
+    r_a = np.einsum("kji,kjl->kil", r_g[gi], r_g[gj])
+    t_a = np.einsum("kji,kj->ki", r_g[gi], p_g[gj] - p_g[gi])
+    r_err = np.einsum("kij,klj->kil", r_b, r_a)  # R_B R_A^T
+    t_err = scale * t_b - np.einsum("kij,kj->ki", r_err, t_a)
+    angle = np.arccos(np.clip((np.trace(r_err, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0))
+    return dict(est_i=i, est_j=j, gt_i=gi, gt_j=gj, trans=np.linalg.norm(t_err, axis=1), rot=np.degrees(angle))
