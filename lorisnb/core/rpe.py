@@ -1,6 +1,8 @@
 """The pose pairs of a relative pose error, every rule: evo's (``evo_rpe --delta D --delta_unit
 f|m|d|r [--all_pairs] [--pairs_from_reference]``, evo 1.38 ``evo.core.filters``) and lorisnb's
-seconds (:func:`lorisnb.core.metrics.rpe_pairs`, TUM's closest stamp to ``t_i + delta``).
+seconds (:func:`lorisnb.core.metrics.rpe_pairs`: the associated pose closest to ``t_i + delta``, as
+TUM picks it, but over associated poses only). TUM's ``evaluate_rpe.py`` itself, which pairs every
+estimate pose and composes its error in the other order, is :func:`tum_rpe`.
 
 Units (:data:`RPE_UNITS`): ``frames``, ``m`` (path length), ``deg`` and ``rad`` (rotation), ``s``.
 The path length and rotation are measured along the trajectory the pairs are taken from: evo's
@@ -46,7 +48,7 @@ def rpe_indices(
     """The RPE pairs of matched poses under every rule.
 
     ``all_pairs=None`` is lorisnb's own rule (its default, unchanged): every start pose, for ``s``
-    the pose closest to ``t_i + delta`` (TUM), ``frames`` ``i + delta``, ``m`` the first pose at
+    the associated pose closest to ``t_i + delta`` (TUM's choice of j, not its tool: :func:`tum_rpe`), ``frames`` ``i + delta``, ``m`` the first pose at
     least ``delta`` metres further along the reference (:func:`lorisnb.core.metrics.rpe_pairs`);
     ``deg`` / ``rad`` take evo's all pairs. ``True`` / ``False`` are evo's all pairs (within
     ``tolerance``) / consecutive pairs (:func:`evo_rpe_pairs`; ``s``: lorisnb's seconds rule, with
