@@ -388,15 +388,13 @@ def test_tum_preset_keeps_the_last_row_of_a_repeated_stamp_as_tum(cases):
     assert REF["fr1_limit_0.01"]["rpg se3 -1"][0] == 300  # rpg: every row
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the rpg and vio presets drop the earlier rows of a repeated stamp (spec.py PRESETS: repeated='drop'); "
-    "rpg_trajectory_evaluation reads every row (np.loadtxt) and pairs each: 296 pairs instead of rpg's 300",
-)
-def test_rpg_preset_pairs_every_row_as_rpg(cases):
+@pytest.mark.parametrize("preset, ref", [("rpg", "rpg sim3 -1"), ("vio", "rpg posyaw -1")])
+def test_rpg_preset_pairs_every_row_as_rpg(cases, preset, ref):
+    """rpg_trajectory_evaluation reads every row (``np.loadtxt``) and pairs each: the rpg and vio
+    presets dropped the earlier rows of a repeated stamp (296 pairs instead of rpg's 300)."""
     gt, est = cases["fr1_limit_0.01"]
-    pairs, ate, _, scale = REF["fr1_limit_0.01"]["rpg sim3 -1"]
-    _, row = _row(est, gt, "rpg", max_diff=0.01)
+    pairs, ate, _, scale = REF["fr1_limit_0.01"][ref]
+    _, row = _row(est, gt, preset, max_diff=0.01)
     assert row["matched"] == pairs
     assert row["ate_rmse"] == pytest.approx(ate, rel=REL)
 

@@ -386,13 +386,13 @@ def preset_over(base: EvalSpec, preset: str | EvalSpec) -> EvalSpec:
 
 
 #: The named specs: ``openloris`` (the official tool: interpolation within 0.5 s, SE(3), repeated
-#: poses dropped), ``tum`` (``evaluate_ate.py``: nearest within 0.02 s, SE(3)), ``rpg``
-#: (rpg_trajectory_evaluation: nearest, Sim(3)), ``vio`` (nearest, ``posyaw``).
+#: poses dropped), ``tum`` (``evaluate_ate.py``: nearest within 0.02 s, SE(3), a repeated stamp's
+#: last pose), ``rpg`` (rpg_trajectory_evaluation: nearest, Sim(3), every row), ``vio`` (rpg's, ``posyaw``).
 PRESETS: dict[str, EvalSpec] = {}
 PRESETS["openloris"] = EvalSpec()
 PRESETS["tum"] = EvalSpec(association="nearest", align="se3", preset_name="tum")
-PRESETS["rpg"] = EvalSpec(association="nearest", align="sim3", preset_name="rpg")
-PRESETS["vio"] = EvalSpec(association="nearest", align="posyaw", preset_name="vio")
+PRESETS["rpg"] = EvalSpec(association="nearest", align="sim3", repeated="keep", preset_name="rpg")
+PRESETS["vio"] = EvalSpec(association="nearest", align="posyaw", repeated="keep", preset_name="vio")
 PRESETS["evo"] = EvalSpec(**evo.EVO_PRESET, preset_name="evo")
 
 #: Every name :func:`make_spec` takes (the fields and :data:`ALIASES`): notebook parameters and widget
