@@ -439,11 +439,6 @@ def test_command_line_prints_and_writes_the_official_numbers(cases, tmp_path):
         assert _differences(name, table, REFERENCE[f"{name} tight"]) == []
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="keep_repeated also keeps the ground truth's repeated poses (lorisnb/tools/jobs.py reads the "
-    "OpenLORIS ground truth with the spec's 'repeated'); the official -k keeps the estimate's only",
-)
 def test_keep_repeated_keeps_the_estimates_repeats_only(cases):
     path, root, scale = cases["gt_frozen"]
     assert (

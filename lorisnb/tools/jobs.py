@@ -79,6 +79,12 @@ def _stamp(path: Path) -> tuple[float, int]:
 CACHED_BYTES = 32 << 20
 
 
+#: An OpenLORIS ground truth (official format) loses its repeated poses whatever the spec's rule,
+#: which is the estimate's: the official tool reads it so with or without ``-k`` (its
+#: ``--keep-repeated``), and :func:`groundtruth_of` reads one given as a pair's so.
+GT_DROP = True
+
+
 @lru_cache(maxsize=64)
 def _read_groundtruth(
     path: Path, fmt: str, stamp: tuple[float, int], times: Path | None, topic: str | None, tf: str | None,
@@ -167,16 +173,15 @@ def _openloris(job: Job, progress: bool) -> FileErrors | None:
     assert job.data is not None
     spec = job.spec
     algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
-    drop = spec.repeated == "drop"
-    result = _read_result(job, progress)
+    result = _read_result(job, progress)  # the estimate's repeated poses: by the spec's rule
     if job.scenes is not None and result.scene not in job.scenes:
         return None
-    gt = load_groundtruth(result.scene, job.data, drop)
-    moved = _moved(job.data, result.scene, drop, result.frame, spec.official_interpolation,
+    gt = load_groundtruth(result.scene, job.data, GT_DROP)
+    moved = _moved(job.data, result.scene, GT_DROP, result.frame, spec.official_interpolation,
                    _stamp(job.data.groundtruth(result.scene)))  # fmt: skip
     return compute_errors(
         result, gt, spec, algorithm=algorithm, file=rel, suite=suite, trial=trial, in_frame=moved,
-        other_spans=partial(groundtruth_spans, job.data, drop), release=result.sequences.pop,
+        other_spans=partial(groundtruth_spans, job.data, GT_DROP), release=result.sequences.pop,
     )  # fmt: skip
 
 
@@ -216,10 +221,9 @@ def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) 
     other side only where one trajectory and one frame make the pairing certain, else refused."""
     src = job.source
     assert src is not None
-    drop = job.spec.repeated == "drop"
     if src.fmt == src.gt_fmt == "openloris":
         result = _read_result(job)
-        gt_file = read_groundtruth_file(src.groundtruth, drop)
+        gt_file = read_groundtruth_file(src.groundtruth, GT_DROP)
         return compute_errors(result, gt_file, job.spec, algorithm=algorithm, file=rel, suite=suite, trial=trial,
                               release=result.sequences.pop)  # fmt: skip
     if src.fmt == "openloris":  # against a plain trajectory: one block, in the ground truth's frame
@@ -242,7 +246,7 @@ def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) 
         gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, job.spec.repeated)
         gts = {seqs[0]: gt}
     else:  # a plain estimate against an OpenLORIS ground truth: one block
-        gt_file = read_groundtruth_file(src.groundtruth, drop)
+        gt_file = read_groundtruth_file(src.groundtruth, GT_DROP)
         seqs = sorted(gt_file.sequences)
         if len(seqs) != 1:
             raise ValidationError(
