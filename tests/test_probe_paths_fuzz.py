@@ -368,6 +368,10 @@ def test_a_bad_value_gets_one_message_on_every_path(data, tmp_path, capsys, name
         with pytest.raises(ValidationError) as exc:
             ev.sequences(**{name: value})
         said["sequences"] = str(exc.value)
+        for fn in (ln.score, ln.sweep):  # the core's own entry points: the same rules (they had theirs)
+            with pytest.raises(ValidationError) as exc:
+                fn(ev.errors, **{name: value})
+            said[fn.__name__] = str(exc.value)
     toml = tmp_path / "m.toml"
     shown = f'"{value}"' if isinstance(value, str) else value
     toml.write_text(f'name = "x"\n[conventions]\n{name} = {shown}\n[[session]]\nname = "a"\ngroundtruth = "{gt}"\n')
@@ -385,6 +389,10 @@ def test_a_table_reads_an_rpe_unit_as_the_spec_does(data):
     spec = ln.evaluate_pairs(est, gt, jobs=1, rpe_delta=10, rpe_unit="d").sequences()  # evo's -u d: degrees
     table = ln.evaluate_pairs(est, gt, jobs=1).sequences(rpe_delta=10, rpe_unit="d")  # was refused: 'd' unknown
     assert table["rpe_rot_rmse"].iloc[0] == spec["rpe_rot_rmse"].iloc[0] == pytest.approx(0.920387, abs=1e-6)
+    errors = ln.evaluate_pairs(est, gt, jobs=1).errors
+    scored = ln.score(errors, rpe_delta=10, rpe_unit="d")  # the core's entry points refused 'd'
+    assert scored["rpe_rot_rmse"].iloc[0] == spec["rpe_rot_rmse"].iloc[0]
+    assert len(ln.sweep(errors, [0.1, 1.0], rpe_delta=10, rpe_unit="d")) == 2
     assert table["spec"].iloc[0] == spec["spec"].iloc[0] and '"rpe_unit":"deg"' in spec["spec"].iloc[0]
 
 

@@ -27,8 +27,8 @@ from .model import (
     sequence_eps,
 )
 from .relations import error_statistics, masked_statistics, masked_sum
-from .rpe import RPE_PAIRS, RPE_UNITS
-from .validate import choice, eps_value, positive, threshold
+from .spec_evo import check_evo, check_evo_together
+from .validate import eps_value, threshold
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -235,24 +235,25 @@ def sequence_grid(
 
 
 def rpe_setting(rpe_delta: Any, rpe_unit: Any) -> tuple[float, str]:
-    """Validated RPE step: a positive delta in ``s`` (seconds), ``f`` or ``frames`` (whole),
-    ``m`` (metres), ``deg`` or ``rad`` (rotation)."""
-    unit = choice("rpe_unit", rpe_unit, ("f", *RPE_UNITS))
-    names = {"s": "seconds", "f": "frames", "frames": "frames", "m": "metres", "deg": "degrees", "rad": "radians"}
-    return positive("rpe_delta", rpe_delta, names[unit], integer=unit in ("f", "frames")), unit
+    """Validated RPE step by the spec's own rules (:func:`lorisnb.core.spec_evo.check_evo`): a
+    positive delta in ``s`` (seconds), ``f`` or ``frames`` (whole), ``m`` (metres), ``deg``/``d`` or
+    ``rad``/``r`` (rotation, at most half a turn)."""
+    unit = check_evo("rpe_unit", rpe_unit, "rpe_unit")
+    delta = float(check_evo("rpe_delta", rpe_delta, "rpe_delta"))
+    check_evo_together({"rpe_delta": delta, "rpe_unit": unit}, str)
+    return delta, unit
 
 
 def rpe_options(rpe_pairs: Any, rpe_all_pairs: Any, rpe_tolerance: Any) -> tuple[str, bool | None, float]:
-    """Validated RPE pair options: along ``reference`` or ``estimate``; all pairs True / False
-    (evo's rules) or None (lorisnb's); a positive relative tolerance, other than the default only
-    with evo's all pairs (as the spec refuses it, :func:`lorisnb.core.spec_evo.evo_refusals`)."""
-    pairs = choice("rpe_pairs", rpe_pairs, RPE_PAIRS)
-    if rpe_all_pairs is not None and not isinstance(rpe_all_pairs, (bool, np.bool_)):
-        raise ValidationError(f"rpe_all_pairs: expected True, False or None, got {rpe_all_pairs!r}")
-    tol = positive("rpe_tolerance", rpe_tolerance, "(a fraction of delta)")
-    if tol != RPE_DEFAULTS["rpe_tolerance"] and rpe_all_pairs is not True:
-        raise ValidationError(f"rpe_tolerance={rpe_tolerance!r}: only for evo's all pairs (rpe_all_pairs=True)")
-    return pairs, None if rpe_all_pairs is None else bool(rpe_all_pairs), tol
+    """Validated RPE pair options, by the spec's own rules: along ``reference`` or ``estimate``;
+    all pairs True / False (evo's rules) or None (lorisnb's); a positive relative tolerance, other
+    than the default only with evo's all pairs (:func:`lorisnb.core.spec_evo.evo_refusals`)."""
+    pairs = check_evo("rpe_pairs", rpe_pairs, "rpe_pairs")
+    all_pairs = check_evo("rpe_all_pairs", rpe_all_pairs, "rpe_all_pairs")
+    tol = float(check_evo("rpe_tolerance", rpe_tolerance, "rpe_tolerance"))
+    if tol != RPE_DEFAULTS["rpe_tolerance"] and all_pairs is not True:
+        raise ValidationError("rpe_tolerance: only for evo's all pairs (rpe_all_pairs)")
+    return pairs, all_pairs, tol
 
 
 #: The RPE settings of :func:`score` and their defaults (lorisnb's own rule over 1 s).
