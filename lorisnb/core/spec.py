@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
@@ -191,34 +191,31 @@ class EvalSpec:
         changed = {f.name for f in fields(full) if f.compare and getattr(full, f.name) != getattr(base, f.name)}
         return replace(full, explicit=frozenset(changed - {"preset_name"}))
 
-    def refuse_inapplicable(self, kind: str, *, surface: str = "python") -> list[str]:
+    def refuse_inapplicable(self, kind: str, *, surface: str = "python", set_by: tuple[Iterable[str], str] = ((), "")) -> list[str]:  # fmt: skip
         """Refuse options the user set that cannot apply to an input ``kind`` (``openloris``,
-        ``pair``, ``manifest``): a ValidationError naming the option and why. Returns one-line
-        notes for options that are harmless there."""
+        ``pair``, ``manifest``): a ValidationError naming the option and why, and those of them
+        ``set_by`` another source (``(options, "the manifest PATH")``). Returns one-line notes for
+        options that are harmless there."""
         kind = validate.choice("input kind", kind, INPUT_KINDS)
         given = self.explicit
         name = _namer(surface)
-        problems: list[str] = []
+        problems: dict[str, str] = {}  # the option refused: why
         notes: list[str] = []
         if "max_diff" in given and self.association in ("interpolate", "index"):
-            problems.append(
-                f"{name('max_diff')}: only for nearest association ({name('association')} nearest); "
-                f"interpolation uses {name('max_gap')}"
-            )
-        problems += evo.evo_refusals(self, given, name)
+            problems["max_diff"] = (f"{name('max_diff')}: only for nearest association ({name('association')} nearest); "
+                                    f"interpolation uses {name('max_gap')}")  # fmt: skip
+        problems.update(evo.evo_refusals(self, given, name))
         if "max_gap" in given and self.association != "interpolate":
-            problems.append(f"{name('max_gap')}: only for interpolation; nearest association uses {name('max_diff')}")
+            problems["max_gap"] = f"{name('max_gap')}: only for interpolation; nearest association uses {name('max_diff')}"  # fmt: skip
         if "t_offset" in given and self.t_offset and self.association == "index":
-            problems.append(f"{name('t_offset')}: poses paired by index ({name('association')} index) use no stamps")
+            problems["t_offset"] = f"{name('t_offset')}: poses paired by index ({name('association')} index) use no stamps"  # fmt: skip
         if "official_interpolation" in given and self.official_interpolation and self.association != "interpolate":
-            problems.append(f"{name('official_interpolation')}: the official tool's slips are those of interpolation")
+            problems["official_interpolation"] = f"{name('official_interpolation')}: the official tool's slips are those of interpolation"  # fmt: skip
         if "align_frames" in given and self.align == "none":
-            problems.append(f"{name('align_frames')}: nothing is fitted with {name('align')} none")
+            problems["align_frames"] = f"{name('align_frames')}: nothing is fitted with {name('align')} none"
         if kind == "openloris" and "transform" in given and self.transform is not None:
-            problems.append(
-                f"{name('transform')}: OpenLORIS result files name their sensor frame in the header "
-                "(frame: ...); the transform comes from the robot's extrinsics"
-            )
+            problems["transform"] = (f"{name('transform')}: OpenLORIS result files name their sensor frame in the header "
+                                     "(frame: ...); the transform comes from the robot's extrinsics")  # fmt: skip
         if self.preset_name == "evo" and "delta" in given:  # evo_rpe's --delta is lorisnb's RPE step
             notes.append(
                 f"delta {self.delta:g}: lorisnb's validity window of CR-T (seconds), not evo_rpe's --delta; evo's RPE "
@@ -227,7 +224,8 @@ class EvalSpec:
         if kind == "pair" and "mode" in given and self.mode != "auto":
             notes.append(f"{name('mode')} {self.mode}: a pair has one sequence, so per-seq and lifelong agree")
         if problems:
-            raise ValidationError("; ".join(problems))
+            theirs = [k for k in problems if k in set(set_by[0])]
+            raise ValidationError("; ".join(problems.values()) + (f" ({', '.join(theirs)}: set by {set_by[1]})" * bool(theirs)))  # fmt: skip
         return notes
 
     def __repr__(self) -> str:

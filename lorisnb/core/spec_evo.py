@@ -142,14 +142,14 @@ def association_words(spec: Any) -> str:
     return f"evo's interpolation at matched stamps within {spec.max_diff:g} s"
 
 
-def evo_refusals(spec: Any, given: frozenset[str], name: Any) -> list[str]:
-    """Evo options the user set that cannot apply with the rest of ``spec`` (one line each)."""
-    out = []
+def evo_refusals(spec: Any, given: frozenset[str], name: Any) -> dict[str, str]:
+    """Evo options the user set that cannot apply with the rest of ``spec``: option -> why."""
+    out = {}
     if "rpe_tolerance" in given and spec.rpe_all_pairs is not True:
-        out.append(f"{name('rpe_tolerance')}: only for evo's all pairs ({name('rpe_all_pairs')})")
+        out["rpe_tolerance"] = f"{name('rpe_tolerance')}: only for evo's all pairs ({name('rpe_all_pairs')})"
     if "rpe_pairs" in given and spec.rpe_unit in ("s", "f", "frames"):
-        out.append(f"{name('rpe_pairs')}: pairs in {spec.rpe_unit} are the same along either trajectory; "
-                   f"it applies to {name('rpe_unit')} m, deg or rad")  # fmt: skip
+        out["rpe_pairs"] = (f"{name('rpe_pairs')}: pairs in {spec.rpe_unit} are the same along either trajectory; "
+                            f"it applies to {name('rpe_unit')} m, deg or rad")  # fmt: skip
     if "align_frames" in given and spec.align == "origin":
-        out.append(f"{name('align_frames')}: {name('align')} origin uses the first pose only")
+        out["align_frames"] = f"{name('align_frames')}: {name('align')} origin uses the first pose only"
     return out

@@ -10,7 +10,6 @@ cores or on any executor (a Dask cluster's), collecting failures instead of stop
 from __future__ import annotations
 
 import os
-import re
 import warnings
 from collections.abc import Iterable
 from concurrent.futures import Executor
@@ -170,16 +169,8 @@ def refuse_over_manifest(
     saying which refused options the manifest set (its ``[conventions]``), not the call (``given``:
     the options of the call or the command line): ``max_diff`` from the manifest with
     ``--association interpolate`` is refused naming the manifest, on every path alike."""
-    try:
-        return spec.refuse_inapplicable(kind, surface=surface)
-    except ValidationError as exc:
-        theirs = (spec.explicit & manifest.spec.explicit) - {ALIAS_OF.get(k, k) for k in given}
-        spelled = {**{n: n for n in theirs}, **{"--" + n.replace("_", "-"): n for n in theirs}}
-        heads = [re.match(r"([\w-]+):", part.strip()) for part in str(exc).split("; ")]  # each problem: 'name: why'
-        named = list(dict.fromkeys(spelled[h.group(1)] for h in heads if h and h.group(1) in spelled))
-        if not named:
-            raise
-        raise ValidationError(f"{exc} ({', '.join(named)}: set by the manifest {manifest.path})") from None
+    theirs = (spec.explicit & manifest.spec.explicit) - {ALIAS_OF.get(k, k) for k in given}
+    return spec.refuse_inapplicable(kind, surface=surface, set_by=(theirs, f"the manifest {manifest.path}"))
 
 
 def _format(name: str, value: Any) -> str:
