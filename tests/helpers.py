@@ -174,3 +174,32 @@ def widget_controls(box) -> dict:
         elif hasattr(w, "value") and hasattr(w, "description"):
             found.append(w)
     return {w.description: w for w in found}
+
+
+#: The routes of a plain file (:func:`use_parser`).
+PARSERS = ["numpy", "pandas", "pieces", "read_csv", "chunks"]
+
+
+def use_parser(monkeypatch, parser: str) -> list:
+    """Read plain files by ``parser``: numpy's reader (a small file while pandas is not imported),
+    pandas in one piece, pandas' buffer route on pieces of about 4 KB on 3 threads (``pieces``),
+    the same pieces each read by ``read_csv`` (``read_csv``: a pandas without the buffer route),
+    or the chunked reader (``chunks``). Returns the list of what the piece reads returned (None:
+    not plain after all)."""
+    from lorisnb.io import pieces, whole
+
+    monkeypatch.setattr(whole, "pandas_loaded", lambda: parser != "numpy")
+    read = []
+    if parser in ("pieces", "read_csv"):
+        monkeypatch.setattr(pieces, "PIECE_BYTES", 4096)
+        monkeypatch.setattr(pieces, "PARSE_THREADS", 3)
+        real = pieces.piece_rows
+        monkeypatch.setattr(whole, "piece_rows", lambda *a: read.append(real(*a)) or read[-1])
+    else:
+        monkeypatch.setattr(pieces, "PIECE_BYTES", whole.WHOLE_MAX_BYTES + 1)
+        monkeypatch.setattr(pieces, "SPLIT_MIN_BYTES", whole.WHOLE_MAX_BYTES + 1)
+    if parser == "read_csv":
+        monkeypatch.setattr(pieces, "buffers_work", lambda: False)
+    if parser == "chunks":
+        monkeypatch.setattr(whole, "WHOLE_MAX_BYTES", 0)
+    return read

@@ -1,5 +1,5 @@
 """Probes of the file readers on unusual inputs: every reading path (numpy, pandas in one call,
-pandas on ranges, chunks) and pipes give the same numbers and the same errors."""
+pandas on pieces, chunks) and pipes give the same numbers and the same errors."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import warnings
 
 import numpy as np
 import pytest
+from helpers import PARSERS, use_parser
 
 from lorisnb.errors import ParseError
 from lorisnb.io import read_euroc, read_kitti, read_openloris, read_times, read_trajectory, read_tum
@@ -104,22 +105,6 @@ def test_an_openloris_pipe_out_of_order_is_read_once(tmp_path):
         os.close(fd)
 
 
-def _paths(monkeypatch, parser: str) -> None:
-    """Read plain files by ``parser``: numpy's reader, pandas' one call, pandas on 3 ranges of 100
-    rows at a time, or in chunks (the byte scanner where pandas refuses)."""
-    from lorisnb.io import whole
-
-    monkeypatch.setattr(whole, "pandas_loaded", lambda: parser != "numpy")
-    monkeypatch.setattr(whole, "RANGED_MIN_BYTES", 0 if parser == "ranges" else whole.WHOLE_MAX_BYTES + 1)
-    monkeypatch.setattr(whole, "CHUNK_ROWS", 100)
-    monkeypatch.setattr(whole, "PARSE_THREADS", 3)
-    if parser == "chunks":
-        monkeypatch.setattr(whole, "WHOLE_MAX_BYTES", 0)
-
-
-PARSERS = ["numpy", "pandas", "ranges", "chunks"]
-
-
 @pytest.mark.parametrize("parser", PARSERS)
 @pytest.mark.parametrize("token", ["1560000059_5", "1_000", "0_5"])
 def test_a_number_with_an_underscore_is_refused_on_every_path(tmp_path, monkeypatch, parser, token):
@@ -127,7 +112,7 @@ def test_a_number_with_an_underscore_is_refused_on_every_path(tmp_path, monkeypa
     falls back to: a stamp ``1560000059_5`` became 15600000595 (a pose sorted to the end, with
     only an out-of-order warning). No trajectory writer puts ``_`` in a number: now the line is
     named, as pandas' and numpy's parsers would."""
-    _paths(monkeypatch, parser)
+    use_parser(monkeypatch, parser)
     lines = _tum_text().decode().splitlines()
     lines[2500] = " ".join([token, *lines[2500].split()[1:]])
     path = tmp_path / "traj.txt"
@@ -147,7 +132,7 @@ def test_a_number_with_an_underscore_is_refused_on_every_path(tmp_path, monkeypa
 def test_a_euroc_nan_stamp_is_named_as_not_finite(tmp_path, monkeypatch, parser):
     """A EuRoC row stamped ``nan`` was refused as "stamp nan has a fraction; expected whole
     nanoseconds ... a TUM file (stamps in seconds)": a wrong diagnosis. Now: not finite."""
-    _paths(monkeypatch, parser)
+    use_parser(monkeypatch, parser)
     rows = _euroc_text(_tum_text()).decode().splitlines()
     rows[2001] = "nan" + rows[2001][rows[2001].index(",") :]
     path = tmp_path / "data.csv"
@@ -175,7 +160,7 @@ def test_a_bad_kitti_times_file_is_named_with_its_line(tmp_path, monkeypatch, pa
     trajectory file". Now the times file and the line are named."""
     from scipy.spatial.transform import Rotation
 
-    _paths(monkeypatch, parser)
+    use_parser(monkeypatch, parser)
     rng = np.random.default_rng(2)
     mats = np.concatenate([Rotation.random(ROWS, rng).as_matrix(), rng.normal(size=(ROWS, 3, 1))], axis=2)
     poses = tmp_path / "poses.txt"

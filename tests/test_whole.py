@@ -8,7 +8,7 @@ import itertools
 
 import numpy as np
 import pytest
-from helpers import write
+from helpers import use_parser, write
 
 from lorisnb.errors import ParseError
 from lorisnb.io import read_euroc, read_kitti, read_tum, whole
@@ -88,28 +88,12 @@ def _same(a, b):
     assert a.stamps.flags.writeable and a.positions.flags.writeable
 
 
-def _use(monkeypatch, parser) -> list:
-    """Read plain files with ``parser``: pandas' one call, numpy's (a small file while pandas is not
-    imported) or pandas on ranges of lines on threads (a large file; here 3 ranges read 100 rows
-    at a time). Returns the list of what the ranged reads returned (None: not plain after all)."""
-    monkeypatch.setattr(whole, "pandas_loaded", lambda: parser != "numpy")
-    ranged = []
-    if parser == "ranges":
-        monkeypatch.setattr(whole, "RANGED_MIN_BYTES", 0)
-        monkeypatch.setattr(whole, "CHUNK_ROWS", 100)
-        monkeypatch.setattr(whole, "PARSE_THREADS", 3)
-        real = whole._ranged_rows
-        monkeypatch.setattr(whole, "_ranged_rows", lambda *a: ranged.append(real(*a)) or ranged[-1])
-    else:
-        monkeypatch.setattr(whole, "RANGED_MIN_BYTES", LIMIT + 1)
-    return ranged
-
-
-@pytest.mark.parametrize("parser", ["pandas", "numpy", "ranges"])
+@pytest.mark.parametrize("parser", ["pandas", "numpy", "pieces", "read_csv"])
 @pytest.mark.parametrize("name,text,plain", list(_variants()), ids=[v[0] for v in _variants()])
 def test_tum_file_reads_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch, name, text, plain, parser):
-    """Every one-call parser: pandas' whole file, numpy's, and pandas' on ranges (see :func:`_use`)."""
-    ranged = _use(monkeypatch, parser)
+    """Every one-call parser: pandas in one piece, numpy's, and pandas on pieces on threads, by its
+    buffer route or by ``read_csv`` (see :func:`helpers.use_parser`)."""
+    ranged = use_parser(monkeypatch, parser)
     path = tmp_path / "traj.txt"
     path.write_bytes(text.encode())
     (one, chunked), taken = _read_both(monkeypatch, lambda p: read_tum(p, warn=False), path)
@@ -123,13 +107,13 @@ def test_tum_file_reads_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch,
         assert one[0] == expected[name][0] and expected[name][1] in one[1]
     if name == "header":
         assert one.lines[0] == 3 and one.lines[-1] == N + 2
-    if parser == "ranges" and plain:  # read on ranges, not by another path
+    if parser in ("pieces", "read_csv") and plain:  # read on pieces, not by another path
         assert len(ranged) == 1 and ranged[0] is not None and ranged[0][0] == N
 
 
-@pytest.mark.parametrize("parser", ["pandas", "numpy", "ranges"])
+@pytest.mark.parametrize("parser", ["pandas", "numpy", "pieces", "read_csv"])
 def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch, parser):
-    ranged = _use(monkeypatch, parser)
+    ranged = use_parser(monkeypatch, parser)
     rng = np.random.default_rng(3)
     n = 2000
     stamps = 1403636579758555392 + np.arange(n) * 5_000_000
@@ -145,7 +129,8 @@ def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkey
     _same(one, chunked)
     np.testing.assert_array_equal(one.stamps, stamps / 1e9)
     np.testing.assert_array_equal(one.quaternions, q[:, [1, 2, 3, 0]])
-    assert [r[0] for r in ranged] == ([n] if parser == "ranges" else [])  # EuRoC's one call was on ranges
+    on_pieces = parser in ("pieces", "read_csv")
+    assert [r[0] for r in ranged] == ([n] if on_pieces else [])  # EuRoC's one call was on pieces
 
     from scipy.spatial.transform import Rotation
 
@@ -154,43 +139,48 @@ def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkey
     (one, chunked), taken = _read_both(monkeypatch, read_kitti, kitti)
     assert taken
     _same(one, chunked)
-    assert [r[0] for r in ranged] == ([n, n] if parser == "ranges" else [])  # KITTI's too, quaternions on the threads
+    assert [r[0] for r in ranged] == ([n, n] if on_pieces else [])  # KITTI's too, quaternions on the threads
     printed = np.loadtxt(kitti).reshape(n, 3, 4)
     np.testing.assert_allclose(one.quaternions, Rotation.from_matrix(printed[:, :, :3]).as_quat(), rtol=0, atol=5e-15)
 
 
-@pytest.mark.parametrize("parser", ["pandas", "numpy", "ranges"])
+@pytest.mark.parametrize("parser", ["pandas", "numpy", "pieces", "read_csv"])
 def test_kitti_block_not_a_rotation_named_by_its_line_on_every_path(tmp_path, monkeypatch, parser):
-    """The quaternions of a large KITTI file are computed on each range as it is read: a block
-    that is no rotation, in a late range, is still named by its line in the file."""
-    ranged = _use(monkeypatch, parser)
+    """The quaternions of a KITTI file are computed on each piece as it is read: a block that is
+    no rotation, in a late piece, is still named by its line in the file."""
+    ranged = use_parser(monkeypatch, parser)
     rows = ["1 0 0 %d 0 1 0 0 0 0 1 0" % k for k in range(3000)]
     rows[2345] = "1 0 0 1 0 1 0 0 0 0 1.01 0"  # a scaled block
     path = write(tmp_path, "poses.txt", "# KITTI\n" + "\n".join(rows) + "\n")
     (one, chunked), taken = _read_both(monkeypatch, read_kitti, path)
     assert taken and one == chunked and one[0] == 2347 and "not a rotation" in one[1]
-    assert len(ranged) == (1 if parser == "ranges" else 0)
+    assert len(ranged) == (1 if parser in ("pieces", "read_csv") else 0)
 
 
-@pytest.mark.parametrize("where", ["_line_count", "_parse_range"])
-def test_ranges_a_failing_range_neither_hangs_nor_passes(tmp_path, monkeypatch, where):
-    """An error on one range's thread (not a parse error: say the disk), while it counts its lines
-    or reads them, reaches the caller while the ranges after it stop waiting for its count."""
-    _use(monkeypatch, "ranges")
+@pytest.mark.parametrize("parser", ["pieces", "read_csv"])
+@pytest.mark.parametrize("which", ["first", "later"])
+def test_pieces_a_failing_piece_neither_hangs_nor_passes(tmp_path, monkeypatch, parser, which):
+    """An error on one piece's thread that is not a parse error (say the disk), in the first piece
+    or a later one, reaches the caller; the other threads stop (the next read works)."""
+    from lorisnb.io import pieces
+
+    use_parser(monkeypatch, parser)
     path = tmp_path / "traj.txt"
     path.write_text("\n".join(_tum_lines(np.random.default_rng(1))) + "\n")
-    real, calls = getattr(whole, where), []
+    real, calls = pieces._read, []
 
-    def flaky(fd, lo, *rest):
+    def flaky(fd, lo, hi):
         calls.append(lo)
-        if lo == 0:
+        if (lo == 0) == (which == "first"):
             raise OSError("the disk went away")
-        return real(fd, lo, *rest)
+        return real(fd, lo, hi)
 
-    monkeypatch.setattr(whole, where, flaky)
+    monkeypatch.setattr(pieces, "_read", flaky)
     with pytest.raises(OSError, match="disk went away"):
         read_tum(path, warn=False)
     assert calls
+    monkeypatch.setattr(pieces, "_read", real)
+    assert len(read_tum(path, warn=False)) == N
 
 
 def _polar_quaternions(m: np.ndarray) -> np.ndarray:

@@ -234,8 +234,8 @@ def read_rows(
     convert: Convert | None = None,
 ) -> Rows:
     """Read the numeric lines of a text file in chunks (a plain file of at most
-    :data:`~lorisnb.io.whole.WHOLE_MAX_BYTES` with a ``layout``: in one call,
-    :func:`~lorisnb.io.whole.read_whole`).
+    :data:`~lorisnb.io.whole.WHOLE_MAX_BYTES` with a ``layout``: by pandas' parser in pieces on
+    threads, :func:`~lorisnb.io.whole.read_whole`).
 
     Blank lines and ``#`` comments are skipped. Each other line must hold a number of
     whitespace-separated tokens in ``widths``, all numbers; otherwise a ParseError names the
@@ -259,12 +259,12 @@ def read_rows(
         skip_lines: line ``skip_lines`` (1-based; 0: none) is skipped as a comment (a header line
             without ``#``; the lines before it must be blank or comments).
         row_major: False for a reader that only computes from the groups' arrays and keeps none of
-            them: a plain file read in one call then gives views of the parser's own numbers
+            them: a small plain file read in one piece then gives views of the parser's own numbers
             (column-major, read-only; no copy), chunked reading row-major arrays as always.
-        convert: what the reader computes from the groups (:meth:`Rows.convert`): a large plain
-            file read on threads computes it on each range as it is read.
+        convert: what the reader computes from the groups (:meth:`Rows.convert`): a plain file
+            read in pieces computes it on each piece as it is read.
     """
-    if layout is not None and not specials and chunk_bytes is None:  # a plain file: pandas' parse in one call
+    if layout is not None and not specials and chunk_bytes is None:  # a plain file: pandas' parse in pieces
         whole = read_whole(path, widths, layout, separators, skip_lines, progress, row_major, convert)
         if whole is not None:
             return whole

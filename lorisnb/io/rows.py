@@ -66,12 +66,12 @@ class Rows:
         """Row-major (n, stop - start) arrays of the column ``groups`` (slices of token positions
         with a stop), copied once from the blocks (on threads when many), which are let go as
         they are copied: afterwards this Rows holds no numbers. Tokens a line lacks are NaN. Rows
-        read in one call come as filled (:func:`~lorisnb.io.whole.read_whole`)."""
+        read by :func:`~lorisnb.io.whole.read_whole` come as filled."""
         return [np.column_stack(p) if isinstance(p, list) else p for p in self._parts(groups)]
 
     def _parts(self, groups: Sequence[Group]) -> Sequence[Part]:
-        """:meth:`split`'s numbers as they are held: a group read in one call where the reader
-        asked ``row_major=False`` is the parser's own columns (:data:`Part`), not copied."""
+        """:meth:`split`'s numbers as they are held: a group of a small file read in one piece
+        where the reader asked ``row_major=False`` is the parser's own columns (:data:`Part`)."""
         if self.filled is not None:
             filled, arrays = self.filled
             if tuple(groups) != filled:
