@@ -13,6 +13,7 @@ import pandas as pd
 import pytest
 from helpers import use_parser
 
+from lorisnb.errors import ParseError
 from lorisnb.io import pieces, read_tum, whole
 
 
@@ -29,7 +30,8 @@ def test_the_buffer_route_is_taken_where_pandas_has_it():
 @pytest.mark.parametrize("buffers", [True, False])
 def test_a_kept_parser_leaves_the_numbers_it_gave_before(buffers):
     """A thread keeps its parser for the next piece: the columns of one piece stay as they were
-    after the same parser reads a longer one (they are copied into place later, in file order)."""
+    after the same parser reads a longer one (they are copied into place later, in file order),
+    and after a piece it refuses (a file that is not plain) it reads the next plain one."""
     if buffers and not pieces.buffers_work():
         pytest.skip("this pandas has no buffer route")
     rng = np.random.default_rng(5)
@@ -43,6 +45,10 @@ def test_a_kept_parser_leaves_the_numbers_it_gave_before(buffers):
     np.testing.assert_array_equal(np.column_stack(again), second)
     assert parser.columns(b"1 2 3\n4 5\n") is None  # a short line: not plain, whichever route
     assert parser.columns(b"1 2 3\n4 5 x\n") is None
+    assert parser.columns(b"1 2 3 4\n") is None
+    again = parser.columns(text[0])  # a parser that refused a piece reads the next (it broke, once)
+    assert again is not None
+    np.testing.assert_array_equal(np.column_stack(again), first)
 
 
 @pytest.mark.parametrize("parser", ["pieces", "read_csv"])
@@ -90,3 +96,27 @@ def test_a_forked_child_reads_in_pieces(tmp_path, monkeypatch):
     if alive:
         child.kill()
     assert not alive and child.exitcode == 0 and out.get(timeout=5) == 3000
+
+
+@pytest.mark.parametrize("parser", ["pieces", "read_csv"])
+def test_a_plain_file_after_one_that_is_not_is_still_read_in_pieces(tmp_path, monkeypatch, parser):
+    """A file with a bad number late on is refused by a piece (the chunked reader names its line);
+    the plain files read after it are read in pieces again, by the same threads, with their
+    numbers (a parser that refused a piece refused every piece after it: each later file went the
+    slow way, silently)."""
+    read = use_parser(monkeypatch, parser)
+    rng = np.random.default_rng(4)
+    rows = np.column_stack(
+        [1000 + np.arange(2000) * 0.1, rng.normal(size=(2000, 3)), np.tile([0, 0, 0, 1.0], (2000, 1))]
+    )
+    lines = [" ".join(repr(float(v)) for v in row) for row in rows]
+    good, bad = tmp_path / "good.txt", tmp_path / "bad.txt"
+    good.write_text("\n".join(lines) + "\n")
+    bad.write_text("\n".join(lines[:1500] + [lines[1500].replace(" ", " x", 1)] + lines[1501:]) + "\n")
+    with pytest.raises(ParseError) as err:
+        read_tum(bad, warn=False)
+    assert err.value.line == 1501 and read == [None]
+    for _ in range(6):  # every thread's parser used again
+        got = read_tum(good, warn=False)
+        np.testing.assert_array_equal(got.positions, rows[:, 1:4])
+    assert len(read) == 7 and all(r is not None and r[0] == 2000 for r in read[1:])

@@ -3,7 +3,8 @@ numbers grouped (or converted) on its thread and copied into the reader's arrays
 
 Where the installed pandas has it (3.1 and later), each piece is tokenised from its bytes with no
 GIL held (``TextReader.load_buffer``: the buffer route of pandas' own threaded ``read_csv``), so
-the pieces are parsed and converted side by side on every core; otherwise each piece is read by
+the pieces are parsed side by side on every core (what is computed from them too, as far as
+numpy's operations hand the GIL back and forth); otherwise each piece is read by
 ``pandas.read_csv`` on its bytes. Both give the numbers of one ``read_csv`` call on the whole
 file: the same C tokenizer and float conversion, with the same options (:func:`c_options`). A
 piece whose rows are not its lines (a line the parser reads otherwise) makes the whole read
@@ -54,13 +55,18 @@ class _Parser:
     ``buffers`` (one reader kept for every piece), else ``read_csv`` on each piece's bytes."""
 
     def __init__(self, sep: str, ntok: int, buffers: bool) -> None:
-        import pandas as pd
-
         self.sep, self.ntok, self.reader = sep, ntok, None
         if buffers:
-            options = c_options(sep) | {"names": list(range(ntok)), "low_memory": False}
-            self.reader = pd.read_csv(io.BytesIO(b""), iterator=True, **options)
-            self.reader._engine._reader.trim_after_read = False  # its buffers kept for the next piece
+            self.reader = self._reader()
+
+    def _reader(self) -> Any:
+        """A pandas reader of buffers of lines of ``ntok`` numbers."""
+        import pandas as pd
+
+        options = c_options(self.sep) | {"names": list(range(self.ntok)), "low_memory": False}
+        reader = pd.read_csv(io.BytesIO(b""), iterator=True, **options)
+        reader._engine._reader.trim_after_read = False  # its buffers kept for the next piece
+        return reader
 
     def columns(self, data: bytes) -> list[np.ndarray] | None:
         """The ``ntok`` float64 columns of ``data``'s lines (whole lines), or None when they are not
@@ -78,10 +84,13 @@ class _Parser:
                 frame = pd.read_csv(io.BytesIO(data), **c_options(self.sep))
                 columns = [c.to_numpy() for _, c in frame.items()]
         except parser_errors():
-            return None
+            columns = []
         rows = newlines(data) + (not data.endswith(b"\n"))
-        ok = len(columns) == self.ntok and all(c.dtype == np.float64 and len(c) == rows for c in columns)
-        return columns if ok else None
+        if len(columns) == self.ntok and all(c.dtype == np.float64 and len(c) == rows for c in columns):
+            return columns
+        if self.reader is not None:  # a reader that refused text refuses everything after it: a new one
+            self.reader = self._reader()
+        return None
 
 
 #: Each parsing thread's parser, kept for its next piece (a new reader costs about half as much
