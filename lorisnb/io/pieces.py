@@ -27,8 +27,12 @@ import numpy as np
 from .ranges import GIVE_BACK_BYTES, PARSE_THREADS, give_back_memory, line_ranges, newlines
 from .rows import Convert, Group, Part, copy_rows, group_columns, rows_of
 
-#: Bytes of a piece: each thread's parser keeps buffers of about four times this for the next.
-PIECE_BYTES = 1 << 20
+#: Bytes of a piece at most (as pandas' own threaded read): numpy's work on a piece's rows runs in
+#: few operations on long arrays (on 256 KB pieces a million KITTI poses took twice as long).
+PIECE_BYTES = 4 << 20
+#: A thread's parser is kept for the next file when its pieces were at most this long (it keeps
+#: buffers of about four times a piece).
+KEEP_PIECE_BYTES = 1 << 20
 #: Files from this size are parsed in at least :data:`PARSE_THREADS` pieces side by side.
 SPLIT_MIN_BYTES = 128 << 10
 #: Pieces parsed ahead of the first not yet placed, per thread (memory holds about this many).
@@ -94,7 +98,8 @@ class _Parser:
 
 
 #: Each parsing thread's parser, kept for its next piece (a new reader costs about half as much
-#: again on its first megabyte as one that has read before); let go after a large file.
+#: again on its first megabyte as one that has read before); let go after a file of pieces longer
+#: than :data:`KEEP_PIECE_BYTES`.
 _parsers: dict[int, _Parser] = {}
 
 
@@ -151,7 +156,9 @@ def piece_rows(
     could (each line at least a digit and a separator per number) and are trimmed views (pages
     past the rows are never touched, so not resident)."""
     total = size - start
-    count = max(-(-total // PIECE_BYTES), PARSE_THREADS if total >= SPLIT_MIN_BYTES else 1)
+    count = -(-total // PIECE_BYTES)
+    if total >= SPLIT_MIN_BYTES:  # as many pieces on each thread
+        count = -(-count // PARSE_THREADS) * PARSE_THREADS
     fd = os.open(path, os.O_RDONLY)
     try:
         pieces = list(line_ranges(fd, start, size, -(-total // count)))
@@ -162,8 +169,9 @@ def piece_rows(
         got = _on_threads(fd, [(lo, hi) for lo, hi, _ in pieces], sep, ntok, groups, convert, total // (2 * ntok) + 1)
     finally:
         os.close(fd)
+    if total > count * KEEP_PIECE_BYTES:
+        _parsers.clear()  # their buffers (up to 16 MB each), not kept through what the caller does next
     if size >= GIVE_BACK_BYTES:
-        _parsers.clear()  # their buffers (a few MB each), not kept through what the caller does next
         give_back_memory()
     return got
 
