@@ -161,24 +161,39 @@ def test_kitti_block_not_a_rotation_named_by_its_line_on_every_path(tmp_path, mo
 @pytest.mark.parametrize("which", ["first", "later"])
 def test_pieces_a_failing_piece_neither_hangs_nor_passes(tmp_path, monkeypatch, parser, which):
     """An error on one piece's thread that is not a parse error (say the disk), in the first piece
-    or a later one, reaches the caller; the other threads stop (the next read works)."""
+    or a later one, reaches the caller once the other threads have stopped (none reads the file
+    after the reader closes it); the next read works."""
+    import os
+    import threading
+    import time
+
     from lorisnb.io import pieces
 
     use_parser(monkeypatch, parser)
     path = tmp_path / "traj.txt"
     path.write_text("\n".join(_tum_lines(np.random.default_rng(1))) + "\n")
-    real, calls = pieces._read, []
+    real, calls, closed = pieces._read, [], []
+
+    reading = threading.Event()
 
     def flaky(fd, lo, hi):
         calls.append(lo)
         if (lo == 0) == (which == "first"):
+            reading.wait(5)  # fails while another thread reads a piece
             raise OSError("the disk went away")
+        reading.set()
+        time.sleep(0.1)  # a slow read, still going when the failing piece fails
+        try:
+            os.fstat(fd)
+        except OSError:
+            closed.append(lo)
         return real(fd, lo, hi)
 
     monkeypatch.setattr(pieces, "_read", flaky)
     with pytest.raises(OSError, match="disk went away"):
         read_tum(path, warn=False)
-    assert calls
+    time.sleep(0.2)
+    assert calls and not closed
     monkeypatch.setattr(pieces, "_read", real)
     assert len(read_tum(path, warn=False)) == N
 

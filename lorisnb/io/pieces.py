@@ -19,7 +19,7 @@ import io
 import os
 import threading
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 from typing import Any
 
 import numpy as np
@@ -113,14 +113,16 @@ def _parser(sep: str, ntok: int) -> _Parser:
 
 
 _pool: ThreadPoolExecutor | None = None
+_pool_lock = threading.Lock()
 
 
 def _threads() -> ThreadPoolExecutor:
     """The threads that parse pieces, started once (each keeps its parser)."""
     global _pool
-    if _pool is None:
-        _pool = ThreadPoolExecutor(max_workers=PARSE_THREADS, thread_name_prefix="lorisnb-pieces")
-    return _pool
+    with _pool_lock:  # one pool, whichever threads read files at once
+        if _pool is None:
+            _pool = ThreadPoolExecutor(max_workers=PARSE_THREADS, thread_name_prefix="lorisnb-pieces")
+        return _pool
 
 
 def _forget_threads() -> None:
@@ -275,6 +277,7 @@ def _on_threads(
             future.result()
     except BaseException:  # an interrupt here, or a thread's error: the others stop at their next piece
         fail()
+        wait(futures)  # and none reads the file after the caller closes it
         raise
     if state["failed"]:
         return None
