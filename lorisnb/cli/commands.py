@@ -114,6 +114,15 @@ def _fmt(df: pd.DataFrame, digits: int = 4) -> str:
     return format_table(frame_columns(df), digits)
 
 
+def _with_trial(ev: Any, cols: list[str]) -> list[str]:
+    """A printed scene table's columns, with ``trial`` after ``scene`` when the files are several
+    trials (each trial's scene row is its own: without it two rows would look alike)."""
+    if len({f.trial for f in ev.errors}) < 2:
+        return cols
+    at = cols.index("scene") + 1
+    return [*cols[:at], "trial", *cols[at:]]
+
+
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from ..core.aggregate import aggregate_columns, spans_columns
     from ..io.writers import write_csv, write_parquet
@@ -148,7 +157,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                 [f"{k}/{n}" for k, n in zip(scenes["sequences_with_output"], scenes["scene_sequences"], strict=True)],
                 object,
             )
-            view = ["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r"]
+            view = _with_trial(ev, ["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r"])
             print(format_table({c: scenes[c] for c in view}, args.digits))
         except LorisError as exc:
             print(f"warning: no scene aggregate: {exc}", file=sys.stderr)
@@ -203,7 +212,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     ev, notes = _run_evaluation(args, ["csv"], folders=("parquet",), swept=swept)
     keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
     grid = f"{len(args.eps)} eps x {len(args.phi)} phi x {len(args.delta)} delta x {len(args.tau)} tau"
-    cols = ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "cr", "cr_t", "c_ate_rmse"]
+    cols = _with_trial(ev, ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "cr", "cr_t", "c_ate_rmse"])
     if keep_label:  # eps as given (a fraction, 'paper'): what tells the rows apart where eps in metres does not
         cols.insert(4, "eps_value")
     if args.parquet and not args.csv:  # streamed, one group of files at a time: any grid size
