@@ -61,6 +61,19 @@ def teaching_python() -> Path:
     return ROOT / ".venv-teach" / "bin" / "python"
 
 
+@pytest.fixture(params=["kernel", "numpy"])
+def rotation_route(request, monkeypatch) -> str:
+    """Rotation blocks' quaternions by the compiled kernel (``lorisnb.core._rotations``, skipped
+    where the install built none) or by the numpy code it mirrors."""
+    from lorisnb.core import matrices
+
+    if request.param == "kernel" and matrices._kernel is None:
+        pytest.skip("lorisnb.core._rotations was not built (no C compiler at install)")
+    if request.param == "numpy":
+        monkeypatch.setattr(matrices, "_kernel", None)
+    return request.param
+
+
 @pytest.fixture(autouse=True)
 def _quiet_lorisnb_warnings():
     with warnings.catch_warnings():

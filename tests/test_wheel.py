@@ -154,3 +154,22 @@ def test_wheel_runs_the_primer_and_a_lab_with_no_data_folder(installed, tmp_path
         c.source.count("teach.check_") for c in nbformat.read(lab, as_version=4).cells if c.cell_type == "code"
     )
     assert "✗" not in lab_out and lab_out.count("✓") >= checks, lab_out  # check_alignment_cr prints two
+
+
+def test_wheel_carries_the_compiled_rotation_kernel(installed, tmp_path):
+    """The wheel built here (a C compiler at hand) holds lorisnb.core._rotations, which the
+    installed lorisnb uses for KITTI's rotation blocks."""
+    venv, _ = installed
+    if shutil.which((sysconfig.get_config_var("CC") or "cc").split()[0]) is None:
+        pytest.skip("no C compiler here: the wheel is built without the kernel")
+    r = subprocess.run(
+        [
+            str(venv / "bin" / "python"),
+            "-c",
+            "import sys; from lorisnb.core import matrices; print(sys.modules[matrices._kernel.__module__].__file__)",
+        ],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+    )
+    assert r.returncode == 0 and "site-packages" in r.stdout and str(ROOT) not in r.stdout, r.stderr

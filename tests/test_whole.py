@@ -112,7 +112,7 @@ def test_tum_file_reads_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch,
 
 
 @pytest.mark.parametrize("parser", ["pandas", "numpy", "pieces", "read_csv"])
-def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch, parser):
+def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch, parser, rotation_route):
     ranged = use_parser(monkeypatch, parser)
     rng = np.random.default_rng(3)
     n = 2000
@@ -145,7 +145,7 @@ def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkey
 
 
 @pytest.mark.parametrize("parser", ["pandas", "numpy", "pieces", "read_csv"])
-def test_kitti_block_not_a_rotation_named_by_its_line_on_every_path(tmp_path, monkeypatch, parser):
+def test_kitti_block_not_a_rotation_named_by_its_line_on_every_path(tmp_path, monkeypatch, parser, rotation_route):
     """The quaternions of a KITTI file are computed on each piece as it is read: a block that is
     no rotation, in a late piece, is still named by its line in the file."""
     ranged = use_parser(monkeypatch, parser)
@@ -222,7 +222,7 @@ def _polar_quaternions(m: np.ndarray) -> np.ndarray:
     return q / np.sqrt((q * q).sum(axis=1))[:, None]
 
 
-def test_rotation_blocks_nearest_rotation_and_scipy():
+def test_rotation_blocks_nearest_rotation_and_scipy(rotation_route):
     """Blocks that are rotations within 1e-12 get scipy's ``Rotation.from_matrix`` quaternions to
     the last bit (Markley's method, in every branch). Other blocks (6-digit KITTI files, noise up
     to the readers' tolerance) get the quaternion of the nearest rotation: within 5e-16 of an
@@ -284,7 +284,7 @@ def test_rotation_blocks_nearest_rotation_and_scipy():
     assert rotation_blocks(np.zeros((0, 3, 3)))[0].shape == (0, 4)
 
 
-def test_rotation_entries_of_a_files_columns_as_rotation_blocks():
+def test_rotation_entries_of_a_files_columns_as_rotation_blocks(rotation_route):
     """Blocks given entry by entry (a parser's separate columns: contiguous, strided, float32)
     get the quaternions and distances of the same blocks as one (N, 3, 3) array, to the last bit."""
     from scipy.spatial.transform import Rotation
@@ -327,7 +327,7 @@ def test_power_steps_bring_the_error_below_the_last_bit():
     assert ((s[fine] == 1) | ((off[fine] / 2) ** s[fine] >= 2.0**-56)).all()
 
 
-def test_rotation_blocks_the_same_for_any_memory_order_threads_and_mixed_runs():
+def test_rotation_blocks_the_same_for_any_memory_order_threads_and_mixed_runs(rotation_route):
     """KITTI's one-call read hands the parser's column-major numbers to the rotation step and runs
     it on threads: every block's quaternion and distance are those of the block alone (exact,
     6- and 3-digit, noisy and non-finite blocks mixed in one run)."""

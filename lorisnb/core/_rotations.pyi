@@ -1,0 +1,5 @@
+from collections.abc import Sequence
+
+import numpy as np
+
+def nearest(entries: Sequence[np.ndarray], thresholds: np.ndarray, q: np.ndarray, off: np.ndarray) -> None: ...
