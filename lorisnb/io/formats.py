@@ -11,6 +11,7 @@ import itertools
 import os
 import warnings
 from collections.abc import Callable
+from typing import cast
 
 import numpy as np
 
@@ -22,8 +23,8 @@ from .chunks import read_rows
 from .openloris import read_openloris
 from .ranges import LINE_LIMIT
 from .registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample
-from .rows import Part
-from .scanner import BOM, REPEATED, Lines, check_rows, finish, read_bytes, regular_file, scan
+from .rows import Group, Part, Rows, rows_of
+from .scanner import BOM, REPEATED, Lines, check_rows, finish, read_bytes, regular_file, rows_fit, scan
 from .times import check_times, read_times, times_lines  # noqa: F401 (read_times: still lorisnb.io.formats.read_times)
 
 #: Formats :func:`read_trajectory` reads (the names of :data:`lorisnb.io.registry.FORMATS`).
@@ -79,9 +80,10 @@ def read_tum(
         separators=b",",
         progress=progress,
         layout=_pose_groups,
+        convert=rows_fit,
     )
-    first, positions, quaternions = rows.split(_pose_groups(8))  # row-major, filled as the chunks were read
-    return _poses(spath, first[:, 0], positions, quaternions, rows.lines, warn, repeated)
+    first, positions, quaternions, unsure = _fit_groups(rows, _pose_groups(8))  # row-major, filled as read
+    return _poses(spath, first[:, 0], positions, quaternions, rows.lines, warn, repeated, unsure)
 
 
 def _pose_groups(ntok: int) -> tuple[slice, slice, slice]:
@@ -89,20 +91,23 @@ def _pose_groups(ntok: int) -> tuple[slice, slice, slice]:
     return slice(0, 1), slice(1, 4), slice(4, 8)
 
 
+def _fit_groups(rows: Rows, groups: tuple[Group, ...]) -> list[np.ndarray]:
+    """The row-major stamp, position and quaternion arrays of ``rows`` and :func:`rows_fit`'s
+    flags (computed on each piece as it was read, else on all rows now)."""
+    *parts, unsure = rows.convert(groups, rows_fit)
+    return [rows_of(p) if isinstance(p, list) else p for p in parts] + [cast(np.ndarray, unsure)]
+
+
 def _poses(
-    spath: str,
-    stamps: np.ndarray,
-    positions: np.ndarray,
-    quaternions: np.ndarray,
-    line_no: np.ndarray,
-    warn: bool,
-    repeated: str,
-) -> Trajectory:
-    """A Trajectory of rows as read: checked (:func:`~lorisnb.io.scanner.check_rows`; NaN poses
-    skipped with a note), sorted (:func:`~lorisnb.io.scanner.finish`), notes issued if ``warn``."""
+    spath: str, stamps: np.ndarray, positions: np.ndarray, quaternions: np.ndarray, line_no: np.ndarray, warn: bool,
+    repeated: str, unsure: np.ndarray | None = None,
+) -> Trajectory:  # fmt: skip
+    """A Trajectory of rows as read: checked (:func:`~lorisnb.io.scanner.check_rows`, unless
+    ``unsure`` (:func:`rows_fit`) says it has nothing to say; NaN poses skipped with a note),
+    sorted (:func:`~lorisnb.io.scanner.finish`), notes issued if ``warn``."""
     notes: list[str] = []
-    keep = check_rows(spath, stamps, positions, quaternions, line_no, notes)
-    if not keep.all():
+    keep = check_rows(spath, stamps, positions, quaternions, line_no, notes) if unsure is None or unsure.any() else None
+    if keep is not None and not keep.all():
         stamps, positions, quaternions, line_no = stamps[keep], positions[keep], quaternions[keep], line_no[keep]
     traj = finish(spath, stamps, positions, quaternions, line_no, "", notes, repeated)
     _warn(notes, warn)
@@ -169,7 +174,7 @@ def read_kitti(
         row_major=False,
         convert=_pose_blocks,
     )
-    poses = rows.convert(_matrix_groups(12), _pose_blocks)  # of the parser's own numbers (a plain file)
+    poses = cast(list[np.ndarray], rows.convert(_matrix_groups(12), _pose_blocks))  # arrays, of the parser's numbers
     n = len(poses[0])
     if stamps is None:
         t = np.arange(n, dtype=float)
@@ -257,17 +262,18 @@ def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop
             separators=b",",
             layout=_euroc_groups,
             skip_lines=skip,
+            convert=rows_fit,
         )
     except ParseError:
         return _read_euroc_whole(path, warn, repeated)  # the first problem of the whole file, as it always was reported
-    first, positions, quaternions = rows.split(_euroc_groups(width))  # quaternions read as x y z w
+    first, positions, quaternions, unsure = _fit_groups(rows, _euroc_groups(width))  # quaternions read as x y z w
     notes: list[str] = []
     line_no = rows.lines
     stamps = first[:, 0]
     if (stamps != np.round(stamps)).any():  # not whole nanoseconds: reported as the whole-file reader does
         return _read_euroc_whole(path, warn, repeated)
-    keep = check_rows(spath, stamps, positions, quaternions, line_no, notes)
-    if not keep.all():
+    keep = check_rows(spath, stamps, positions, quaternions, line_no, notes) if unsure.any() else None
+    if keep is not None and not keep.all():
         stamps, positions, quaternions, line_no = stamps[keep], positions[keep], quaternions[keep], line_no[keep]
     stamps /= 1e9
     traj = finish(spath, stamps, positions, quaternions, line_no, "", notes, repeated)

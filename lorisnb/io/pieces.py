@@ -168,10 +168,13 @@ def piece_rows(
             return None
         if len(pieces) == 1:
             return _one_piece(fd, *pieces[0][:2], sep, ntok, groups, convert, row_major)
-        got = _on_threads(fd, [(lo, hi) for lo, hi, _ in pieces], sep, ntok, groups, convert, total // (2 * ntok) + 1)
+        keep = total <= count * KEEP_PIECE_BYTES
+        got = _on_threads(
+            fd, [(lo, hi) for lo, hi, _ in pieces], sep, ntok, groups, convert, total // (2 * ntok) + 1, keep
+        )
     finally:
         os.close(fd)
-    if total > count * KEEP_PIECE_BYTES:
+    if not keep:
         _parsers.clear()  # their buffers (up to 16 MB each), not kept through what the caller does next
     if size >= GIVE_BACK_BYTES:
         give_back_memory()
@@ -203,11 +206,13 @@ def _one_piece(
 
 def _on_threads(
     fd: int, pieces: list[tuple[int, int]], sep: str, ntok: int, groups: tuple[Group, ...],
-    convert: Convert | None, capacity: int,
+    convert: Convert | None, capacity: int, keep: bool = True,
 ) -> tuple[int, list[Part]] | None:  # fmt: skip
     """:func:`piece_rows` of several pieces on :data:`PARSE_THREADS` threads: each takes the next
     piece in file order, parses (and converts) it, and copies every piece whose rows' place is now
-    known (all pieces before it done) into the arrays, made by the first such copy."""
+    known (all pieces before it done) into the arrays, made by the first such copy. Unless
+    ``keep``, each thread lets its parser go when it has no piece left (its buffers freed there,
+    while the other threads still parse, not after the file on the caller's thread)."""
     turn = threading.Condition()
     state: dict[str, Any] = {"taken": 0, "placed": 0, "at": 0, "failed": False}
     done: dict[int, tuple[int, Sequence[Part]]] = {}
@@ -225,6 +230,8 @@ def _on_threads(
             with turn:
                 turn.wait_for(lambda: state["failed"] or len(done) < AHEAD * threads)
                 if state["failed"] or state["taken"] == len(pieces):
+                    if not keep:
+                        _parsers.pop(threading.get_ident(), None)
                     return
                 i = state["taken"]
                 state["taken"] += 1

@@ -38,7 +38,7 @@ class Rows:
     specials: list[tuple[int, str]]
     parsed_in_c: int = 0
     filled: tuple[tuple[Group, ...], Sequence[Part]] | None = None
-    converted: tuple[Convert, list[np.ndarray]] | None = None
+    converted: tuple[Convert, list[Part]] | None = None
 
     @property
     def columns(self) -> np.ndarray:
@@ -53,7 +53,7 @@ class Rows:
         """(n, k) view of :attr:`columns`."""
         return self.columns.T
 
-    def convert(self, groups: Sequence[Group], fn: Convert) -> list[np.ndarray]:
+    def convert(self, groups: Sequence[Group], fn: Convert) -> list[Part]:
         """``fn`` of the :meth:`split` groups' arrays: what it gave on ranges of rows as they were
         read, or its result on all of them (the same arrays: it works row by row)."""
         if self.converted is not None and self.converted[0] is fn:
@@ -104,8 +104,9 @@ Group = slice | list[int]
 #: numbers each (a parser's columns as it read them, no copy).
 Part = np.ndarray | list[np.ndarray]
 #: What a reader computes from its groups' numbers (one :data:`Part` per group), row by row:
-#: arrays of m rows each, the same whichever rows it is given at once.
-Convert = Callable[..., Sequence[np.ndarray]]
+#: arrays of m rows each (or a group's :data:`Part` as given), the same whichever rows it is given
+#: at once.
+Convert = Callable[..., Sequence[Part]]
 
 
 def width(group: Group) -> int:

@@ -10,13 +10,16 @@ from __future__ import annotations
 import os
 import stat
 from dataclasses import dataclass
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 
 from ..core.trajectory import QUAT_EPS, Trajectory, quaternion_norms_fit
 from ..core.validate import choice
 from ..errors import ParseError
+
+if TYPE_CHECKING:
+    from .rows import Part
 
 #: Rules for poses of a repeated stamp: keep the last (the official tool's), or every one (evo's).
 REPEATED = ("drop", "keep")
@@ -278,3 +281,24 @@ def check_rows(
             path, int(lines[i]), "quaternion is too large to normalize; expected a rotation qx qy qz qw of unit norm"
         )
     return finite
+
+
+def rows_fit(first: Part, positions: Part, quaternions: Part) -> list[Part]:
+    """A :data:`~lorisnb.io.rows.Convert` of a pose file's groups (stamp, position, quaternion
+    ``xyzw``), computed on each piece of a plain file on its thread as it is parsed: the groups as
+    given, and a flag for each row, set on all rows given together unless every number is finite
+    and every quaternion's squared norm finite and clearly (by 1e-9 of it) at least
+    :data:`~lorisnb.core.trajectory.QUAT_EPS`, so that :func:`check_rows` would pass them all as
+    they are. A reader looks at the rows with it only where a row is
+    flagged (then check_rows decides, with its notes and errors, as without this)."""
+    cols = [c for p in (first, positions, quaternions) for c in (p if isinstance(p, list) else p.T)]
+    n = len(cols[0])
+    with np.errstate(all="ignore"):
+        fine = all(np.isfinite(c.sum()) for c in cols)  # an overflowing sum: flagged, check_rows decides
+        if fine and n:
+            x, y, z, w = cols[-4:]
+            nq = x * x
+            for c in (y, z, w):
+                nq += c * c
+            fine = bool(nq.min() >= QUAT_EPS * (1 + 1e-9)) and bool(np.isfinite(nq.max()))
+    return [first, positions, quaternions, np.full(n, not fine)]

@@ -19,7 +19,6 @@ import os
 import stat
 import sys
 from collections.abc import Callable, Sequence
-from typing import cast
 
 import numpy as np
 
@@ -85,14 +84,14 @@ def read_whole(
         if parsed is None:
             return None
         n, outs = parsed
-        if convert is not None:  # what it gave: arrays
-            return _rows(n, ntok, skip, (), [], (convert, cast(list[np.ndarray], outs)), progress, st.st_size)
+        if convert is not None:  # what it gave
+            return _rows(n, ntok, skip, (), [], (convert, list(outs)), progress, st.st_size)
     return _rows(n, ntok, skip, groups, outs, None, progress, st.st_size)
 
 
 def _rows(
     n: int, ntok: int, skip: int, groups: tuple[Group, ...], outs: Sequence[Part],
-    converted: tuple[Convert, list[np.ndarray]] | None, progress: Callable[[int], object] | None, size: int,
+    converted: tuple[Convert, list[Part]] | None, progress: Callable[[int], object] | None, size: int,
 ) -> Rows:  # fmt: skip
     """The :class:`Rows` of ``n`` lines of ``ntok`` numbers after ``skip`` lines."""
     if progress is not None:
