@@ -193,3 +193,17 @@ def replace_folder(built: str | os.PathLike[str], out: str | os.PathLike[str], m
     finally:
         shutil.rmtree(old, ignore_errors=True)
     return out
+
+
+def remove_partial(tmp: Path, seconds: float = 10.0) -> None:
+    """Remove an unfinished output folder lorisnb made, again while a process being stopped (a
+    report's kernel) still writes in it, for up to ``seconds`` (a SIGTERM'd report once left its
+    ``.partial`` folder: rmtree met a file written after it listed the folder)."""
+    import time
+
+    deadline = time.monotonic() + seconds
+    while True:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if not tmp.exists() or time.monotonic() > deadline:
+            return
+        time.sleep(0.1)

@@ -25,7 +25,7 @@ from typing import Any
 
 from ..errors import DataNotFoundError, LorisError, OutputError, ValidationError
 from ..io.data import find_data
-from ..io.writers import overlap, write_csv
+from ..io.writers import overlap, remove_partial, write_csv
 from . import warm_kernels
 from .evaluate import check_filters, result_files
 from .leaderboard import leaderboard_spec, refuse_unscorable_scenes, report_findings
@@ -209,8 +209,11 @@ def _run_pool(names: list[str], order: list[int], runs: dict[int, NotebookRun], 
                     bar(runs[futures[fut]].name)
         except BaseException:  # Ctrl-C or an error here: stop the workers (their kernels follow them)
             pool.shutdown(wait=False, cancel_futures=True)
-            for worker in multiprocessing.active_children():
+            workers = multiprocessing.active_children()
+            for worker in workers:
                 worker.terminate()
+            for worker in workers:  # gone before the caller removes the run folder they write in
+                worker.join(5)
             raise
 
 
@@ -359,7 +362,7 @@ def run_report(
             os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp made it owner-only
             final = _move_into_place(tmp, run_dir, force)
         except BaseException:
-            shutil.rmtree(tmp, ignore_errors=True)
+            remove_partial(tmp)
             raise
         if final.name != run_dir.name:  # another run took the name meanwhile: this one's pages say where it is
             pages(final, final.name)
