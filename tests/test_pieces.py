@@ -120,3 +120,21 @@ def test_a_plain_file_after_one_that_is_not_is_still_read_in_pieces(tmp_path, mo
         got = read_tum(good, warn=False)
         np.testing.assert_array_equal(got.positions, rows[:, 1:4])
     assert len(read) == 7 and all(r is not None and r[0] == 2000 for r in read[1:])
+
+
+def test_a_file_whose_arrays_the_system_refuses_is_read_in_chunks(data, monkeypatch):
+    """The arrays of a file read in pieces are reserved for as many rows as it could hold: where the
+    system refuses that much (a large file on a small machine), the chunked reader reads it, with
+    the same numbers."""
+    path = Path(data.tum) / "fr2_desk_groundtruth.txt"
+    expected = read_tum(path, warn=False)
+    read = use_parser(monkeypatch, "pieces")
+
+    def refuse(parts, capacity):
+        raise MemoryError(f"cannot reserve {capacity} rows")
+
+    monkeypatch.setattr(pieces, "_arrays", refuse)
+    got = read_tum(path, warn=False)
+    assert read == [None]  # the pieces gave up, the chunked reader read it
+    for name in ("stamps", "positions", "quaternions", "lines"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(expected, name))

@@ -181,6 +181,15 @@ def piece_rows(
     return got
 
 
+def _arrays(parts: Sequence[Part], capacity: int) -> list[np.ndarray]:
+    """The arrays of a file's rows, ``capacity`` rows each (as many as it could hold; pages past
+    the rows read are never written, so never resident), shaped as a piece's ``parts``."""
+    return [
+        np.empty((capacity, len(p))) if isinstance(p, list) else np.empty((capacity, *p.shape[1:]), p.dtype)
+        for p in parts
+    ]
+
+
 def _read(fd: int, lo: int, hi: int) -> bytes | None:
     """Bytes ``[lo, hi)`` of a file (None when it is shorter now)."""
     data = os.pread(fd, hi - lo, lo)
@@ -270,10 +279,11 @@ def _on_threads(
                 state["failed"] = True
                 placed = []
             elif placed and not outs:
-                outs.extend(
-                    np.empty((capacity, len(p))) if isinstance(p, list) else np.empty((capacity, *p.shape[1:]), p.dtype)
-                    for p in placed[0][2]
-                )  # fmt: skip
+                try:
+                    outs.extend(_arrays(placed[0][2], capacity))
+                except MemoryError:  # the system refuses to reserve that much: the chunked reader then
+                    state["failed"] = True
+                    placed = []
             turn.notify_all()
         return placed
 
