@@ -289,8 +289,8 @@ def rows_fit(first: Part, positions: Part, quaternions: Part) -> list[Part]:
     given, and a flag for each row, set on all rows given together unless every number is finite
     and every quaternion's squared norm finite and clearly (by 1e-9 of it) at least
     :data:`~lorisnb.core.trajectory.QUAT_EPS`, so that :func:`check_rows` would pass them all as
-    they are. A reader looks at the rows with it only where a row is
-    flagged (then check_rows decides, with its notes and errors, as without this)."""
+    they are. A reader looks at the rows with it only where a row is flagged (then check_rows
+    decides, with its notes and errors, as without this)."""
     cols = [c for p in (first, positions, quaternions) for c in (p if isinstance(p, list) else p.T)]
     n = len(cols[0])
     with np.errstate(all="ignore"):
