@@ -136,3 +136,31 @@ def test_quaternions_written_w_first(icra20, tmp_path):
     msgs = _warned(f)
     assert any("look like 'qw qx qy qz' instead of 'qx qy qz qw'" in m for m in msgs), msgs
     assert not any("'qw qx qy qz'" in m for m in _warned(icra20 / ORB_CAFE))
+
+
+def test_median_above_is_the_median_compared():
+    """The orientation checks' trigger skips the median's partition when fewer than half of the
+    AOEs exceed the limit: it says what ``np.median(v) > limit`` says on every array (odd and
+    even lengths, the limit itself among the values, NaN, infinities, empty)."""
+    from lorisnb.core.plausibility import median_above
+
+    rng = np.random.default_rng(3)
+    cases = [np.zeros(0), np.array([45.0]), np.array([45.0, 45.0]), np.array([44.0, 46.0]), np.array([45.0, 47.0]),
+             np.array([np.inf, -np.inf]), np.array([np.nan, 90.0, 90.0]), np.array([np.inf, 50.0])]  # fmt: skip
+    for _ in range(3000):
+        n = int(rng.integers(1, 12))
+        v = rng.choice(
+            [0.0, 10.0, 44.999, 45.0, 45.001, 90.0, 180.0, np.inf, np.nan],
+            n,
+            p=[0.1, 0.1, 0.1, 0.2, 0.1, 0.2, 0.1, 0.05, 0.05],
+        )
+        cases.append(v)
+    cases += [rng.uniform(0, 90, n) for n in (999, 1000, 100_001)]
+    above = 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # the median of nothing
+        for v in cases:
+            expected = bool(np.median(v) > 45.0)
+            assert median_above(v, 45.0) is expected, v
+            above += expected
+    assert 100 < above < len(cases) - 100  # both answers are exercised

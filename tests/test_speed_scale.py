@@ -60,6 +60,17 @@ def test_row_blocks_and_threads_give_the_same_numbers(icra20, monkeypatch):
                 np.testing.assert_array_equal(getattr(ea, name), getattr(eb, name))
             for x, y in zip(ea.rpe(), eb.rpe(), strict=True):
                 np.testing.assert_array_equal(x, y)
+    # the statistics of the tables, computed side by side on threads (blocks.each): the same numbers
+    from lorisnb.core.scoring import score_rows
+
+    alone = score_rows(whole.errors)
+    with blocks.threads(3):
+        beside = score_rows(whole.errors)
+    assert len(alone) == 3 and "ate_median" in alone[0] and "c_rpe_rot_max" in alone[0]
+    for ra, rb in zip(alone, beside, strict=True):
+        assert ra.keys() == rb.keys()
+        for key in ra:
+            np.testing.assert_array_equal(np.asarray(ra[key]), np.asarray(rb[key]), err_msg=key)
 
 
 def test_releasing_the_result_gives_the_same_errors(icra20, data):

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
+from typing import TypeVar
 
 import numpy as np
 
@@ -44,6 +45,19 @@ def blockwise(fn: Callable[[int, int], None], n: int, block: int | None = None) 
     with ThreadPoolExecutor(max_workers=_threads) as pool:
         for _ in pool.map(lambda lo: fn(lo, min(lo + block, n)), starts):
             pass  # re-raises a block's exception
+
+
+R = TypeVar("R")
+
+
+def each(*fns: Callable[[], R]) -> list[R]:
+    """``[fn() for fn in fns]``, on threads when the caller lends them (:func:`threads`): for
+    independent whole-array computations that each hold no GIL for long (a median's partition,
+    a mean), so that they run side by side. Each result is the one computed alone."""
+    if len(fns) <= 1 or _threads == 1:
+        return [fn() for fn in fns]
+    with ThreadPoolExecutor(max_workers=min(_threads, len(fns))) as pool:
+        return list(pool.map(lambda fn: fn(), fns))
 
 
 def ordinary_pages(on: bool = True) -> bool:

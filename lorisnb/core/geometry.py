@@ -10,11 +10,13 @@ tests check every function here against ``scipy.spatial.transform``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import EvaluationError
+from .blocks import each
 from .matrices import BarItzhack, markley
 
 if TYPE_CHECKING:
@@ -69,9 +71,14 @@ def degenerate_alignment(source: np.ndarray, target: np.ndarray) -> str | None:
 def _centered(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, ...]:
     """Means, centred positions and the cross-covariance ``xt^T xs / N`` of (N, 3) positions
     (N >= 1): what the fit and the degeneracy test share."""
-    mu_s, mu_t = source.mean(axis=0), target.mean(axis=0)
-    xs, xt = source - mu_s, target - mu_t
+    (mu_s, xs), (mu_t, xt) = each(partial(_center, source), partial(_center, target))  # side by side
     return mu_s, mu_t, xs, xt, xt.T @ xs / len(source)
+
+
+def _center(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mean of (N, 3) points and the points less it."""
+    mu = points.mean(axis=0)
+    return mu, points - mu
 
 
 def _degenerate(source: np.ndarray, target: np.ndarray, cov: np.ndarray) -> str | None:

@@ -212,7 +212,7 @@ def evaluate_sessions(
         out.append(e)
         if checks_on and not first_seen and e.matched > 10:
             first_seen = True
-            suspect = (e, a) if np.median(e.aoe) > 45.0 else None
+            suspect = (e, a) if plausibility.median_above(e.aoe, plausibility.SUSPECT_AOE) else None
         if suspect is None or suspect[0] is not e:
             if release is not None:
                 release(s)

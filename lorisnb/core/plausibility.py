@@ -18,6 +18,8 @@ from .trajectory import Trajectory
 SCALE_LIMIT = 1.5
 SCALE_GAIN = 1 / 3
 MIN_PATH = 2.0
+#: The median AOE (degrees) above which a sequence's orientations are checked further (frame, quaternion order).
+SUSPECT_AOE = 45.0
 
 
 def _span(t0: float, t1: float) -> str:
@@ -133,12 +135,21 @@ def frame_mismatch(label: str, declared: str, median_aoe: Mapping[str, float]) -
         return None
     own = median_aoe[declared]
     best = min(median_aoe, key=lambda k: median_aoe[k])
-    if best == declared or own < 45.0 or median_aoe[best] > 10.0:
+    if best == declared or own < SUSPECT_AOE or median_aoe[best] > 10.0:
         return None
     return (
         f"{label}: the header says frame {declared!r}, but the orientations fit {best!r} much better (median "
         f"AOE {median_aoe[best]:.1f} deg against {own:.1f} deg). Is the frame: header right?"
     )
+
+
+def median_above(values: np.ndarray, limit: float) -> bool:
+    """``np.median(values) > limit``, without the median's partition when fewer than half of the
+    values exceed ``limit`` (the median then cannot: the upper middle value would not)."""
+    v = np.asarray(values)
+    if np.count_nonzero(v > limit) < len(v) // 2:
+        return False
+    return bool(np.median(v) > limit)
 
 
 def quaternion_order(label: str, median_aoe: float, median_aoe_swapped: float) -> str | None:
@@ -148,7 +159,7 @@ def quaternion_order(label: str, median_aoe: float, median_aoe_swapped: float) -
     print ``w x y z``)."""
     if not (np.isfinite(median_aoe) and np.isfinite(median_aoe_swapped)):
         return None
-    if median_aoe < 45.0 or median_aoe_swapped > 10.0:
+    if median_aoe < SUSPECT_AOE or median_aoe_swapped > 10.0:
         return None
     return (
         f"{label}: the quaternions look like 'qw qx qy qz' instead of 'qx qy qz qw': read that way the median "

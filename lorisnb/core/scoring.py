@@ -9,6 +9,7 @@ seconds.
 from __future__ import annotations
 
 from collections.abc import Iterable
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -16,6 +17,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import ValidationError
 from . import metrics
+from .blocks import each
 from .model import (
     EXTRA_COLUMNS,
     POSE_COLUMNS,
@@ -205,22 +207,20 @@ def sequence_grid(
         return out
     # RPE: pairs fixed per sequence; C-RPE over the pairs whose two poses are correct
     i, j, tr, rr = e.rpe(rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance)
+    pairs_c = c[:, :, i] & c[:, :, j]  # (E, P, pairs): the pairs whose two poses are correct
     if with_stats:
-        both_ep = c[:, :, i] & c[:, :, j]
-        whole: dict[str, dict[str, float]] = {}
-        for prefix, grid_mask, pair_mask in (("", None, None), ("c_", c, both_ep)):
-            for name, values, m in (("ate", e.ate, grid_mask), ("aoe", e.aoe, grid_mask), ("rpe_trans", tr, pair_mask),
-                                    ("rpe_rot", rr, pair_mask)):  # fmt: skip
-                if m is None:
-                    stats = whole[name] = error_statistics(values)
-                    out.update({f"{name}_{k}": bc(v) for k, v in stats.items() if k != "rmse"})
-                else:
-                    ms = masked_statistics(values, m, whole.get(name))
-                    out.update({f"{prefix}{name}_{k}": bc(v[:, :, None, None]) for k, v in ms.items()})
+        named = {"ate": (e.ate, c), "aoe": (e.aoe, c), "rpe_trans": (tr, pairs_c), "rpe_rot": (rr, pairs_c)}
+        # the whole arrays' statistics side by side (a median each); the masked ones after, in order
+        whole = dict(zip(named, each(*(partial(error_statistics, v) for v, _ in named.values())), strict=True))
+        for name, stats in whole.items():
+            out.update({f"{name}_{k}": bc(v) for k, v in stats.items() if k != "rmse"})
+        for name, (values, m) in named.items():
+            ms = masked_statistics(values, m, whole[name])
+            out.update({f"c_{name}_{k}": bc(v[:, :, None, None]) for k, v in ms.items()})
     if len(i) == 0:
         out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)
         return out
-    both = (c[:, :, i] & c[:, :, j]).reshape(E * P, -1)
+    both = pairs_c.reshape(E * P, -1)
     nb = both.sum(axis=1).reshape(E, P).astype(float)
     with np.errstate(invalid="ignore", divide="ignore"):
         sums = selected_squares(both, tr, rr)

@@ -9,12 +9,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..core.aggregate import aggregate_scenes, spans_table
+from ..core.blocks import threads
 from ..core.frames import SCENES
 from ..core.model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, STAT_COLUMNS, Eps, FileErrors
 from ..core.relative import RPG_FRACTIONS
 from ..core.scoring import pose_table, score_rows
 from ..core.spec import EvalSpec, make_spec
 from ..io.data import DataPaths, scene_spans
+from .pool import default_jobs
 from .status import exit_status, skipped_only, unscored
 
 if TYPE_CHECKING:
@@ -88,10 +90,11 @@ class Evaluation:
         """:meth:`sequences` as rows (dicts), without pandas and without evo's ``relation`` columns."""
         s = self.spec
         kw = self._rpe(kw)
-        rows = score_rows(
-            self.errors, s.eps if eps is None else eps, s.phi if phi is None else phi,
-            s.delta if delta is None else delta, s.tau if tau is None else tau, **kw,
-        )  # fmt: skip
+        with threads(default_jobs()):  # a long sequence's statistics side by side (lorisnb.core.blocks)
+            rows = score_rows(
+                self.errors, s.eps if eps is None else eps, s.phi if phi is None else phi,
+                s.delta if delta is None else delta, s.tau if tau is None else tau, **kw,
+            )  # fmt: skip
         changed = {k: v for k, v in kw.items() if k in s.rpe_options() and v != getattr(s, k)}
         spec = (make_spec(s, **changed) if changed else s).canonical(thresholds=False)  # the RPE asked for
         for row in rows:
