@@ -64,6 +64,7 @@ def test_row_blocks_and_threads_give_the_same_numbers(icra20, monkeypatch):
     from lorisnb.core.scoring import score_rows
 
     alone = score_rows(whole.errors)
+    monkeypatch.setattr(blocks, "BLOCK_ROWS", 7)  # each sequence's arrays long enough for threads
     with blocks.threads(3):
         beside = score_rows(whole.errors)
     assert len(alone) == 3 and "ate_median" in alone[0] and "c_rpe_rot_max" in alone[0]

@@ -50,11 +50,13 @@ def blockwise(fn: Callable[[int, int], None], n: int, block: int | None = None) 
 R = TypeVar("R")
 
 
-def each(*fns: Callable[[], R]) -> list[R]:
-    """``[fn() for fn in fns]``, on threads when the caller lends them (:func:`threads`): for
-    independent whole-array computations that each hold no GIL for long (a median's partition,
-    a mean), so that they run side by side. Each result is the one computed alone."""
-    if len(fns) <= 1 or _threads == 1:
+def each(*fns: Callable[[], R], rows: int) -> list[R]:
+    """``[fn() for fn in fns]``, on threads when the caller lends them (:func:`threads`) and each
+    works on ``rows`` of at least :data:`BLOCK_ROWS` (on fewer, starting threads costs more than
+    it saves): for independent whole-array computations that each hold no GIL for long (a
+    median's partition, a mean), so that they run side by side. Each result is the one computed
+    alone."""
+    if len(fns) <= 1 or _threads == 1 or rows < BLOCK_ROWS:
         return [fn() for fn in fns]
     with ThreadPoolExecutor(max_workers=min(_threads, len(fns))) as pool:
         return list(pool.map(lambda fn: fn(), fns))

@@ -71,7 +71,7 @@ def degenerate_alignment(source: np.ndarray, target: np.ndarray) -> str | None:
 def _centered(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, ...]:
     """Means, centred positions and the cross-covariance ``xt^T xs / N`` of (N, 3) positions
     (N >= 1): what the fit and the degeneracy test share."""
-    (mu_s, xs), (mu_t, xt) = each(partial(_center, source), partial(_center, target))  # side by side
+    (mu_s, xs), (mu_t, xt) = each(partial(_center, source), partial(_center, target), rows=len(source))
     return mu_s, mu_t, xs, xt, xt.T @ xs / len(source)
 
 

@@ -211,7 +211,9 @@ def sequence_grid(
     if with_stats:
         named = {"ate": (e.ate, c), "aoe": (e.aoe, c), "rpe_trans": (tr, pairs_c), "rpe_rot": (rr, pairs_c)}
         # the whole arrays' statistics side by side (a median each); the masked ones after, in order
-        whole = dict(zip(named, each(*(partial(error_statistics, v) for v, _ in named.values())), strict=True))
+        whole = dict(
+            zip(named, each(*(partial(error_statistics, v) for v, _ in named.values()), rows=e.matched), strict=True)
+        )
         for name, stats in whole.items():
             out.update({f"{name}_{k}": bc(v) for k, v in stats.items() if k != "rmse"})
         for name, (values, m) in named.items():
