@@ -123,7 +123,7 @@ def bench_readers(folder: Path) -> None:
 
     print("\nreading, lorisnb / pandas.read_csv(sep=' ', header=None, engine='c') on the same file:")
     readers = {"tum": read_tum, "kitti": read_kitti, "euroc": read_euroc}
-    for n, runs in ((10_000, 25), (1_000_000, 5)):
+    for n, runs in ((10_000, 25), (1_000_000, 9)):
         traj = lifelong_groundtruth(n, 1)[1]
         for fmt, read in readers.items():
             path = folder / f"{fmt}_{n}.txt"
@@ -198,7 +198,7 @@ def bench_growth(folder: Path) -> None:
         gt, est = pair_files(folder, n)
         base = bases[max(gt.stat().st_size, est.stat().st_size) > NUMPY_MAX_BYTES]
         ours = [LORISNB, "evaluate", str(est), "--gt", str(gt), "--no-progress"]
-        runs = 5 if n <= 100_000 else 3 if n <= 1_000_000 else 1
+        runs = 5 if n <= 1_000_000 else 1
         r = processes(ours, parse_only(gt, est), runs)
         evo = process([EVO_APE, "tum", str(gt), str(est), "-a"])[0] if n <= 100_000 else None
         lo, med = ratios(r["t_ours"], r["t_theirs"])
