@@ -194,3 +194,38 @@ def test_a_sweep_too_large_for_memory_streams_to_parquet_with_the_same_rows(icra
     out = capsys.readouterr().out
     assert "rows:" in out and "cr_t" in out
     assert len(pd.read_parquet(tmp_path / "cli")) == len(sweep(ln.evaluate(args[1]).errors, [0.5, 1, 2], [10, 30]))
+
+
+def test_lent_threads_belong_to_the_thread_that_lent_them():
+    """blocks.threads(n) lends n threads to the computations of the thread that lent them; another
+    thread (a file's parsing thread converting its piece, a block's own thread) runs its blocks one
+    after another on itself, not in a pool inside the pool."""
+    import threading
+    import time
+    from concurrent.futures import ThreadPoolExecutor
+
+    from lorisnb.core import blocks
+
+    def where() -> tuple[int, set[int], set[int]]:
+        ran: set[int] = set()
+        gave: set[int] = set()
+
+        def fn(lo: int, hi: int) -> None:
+            ran.add(threading.get_ident())
+            time.sleep(0.005)  # long enough that a pool's threads share the blocks
+
+        def each_fn() -> None:
+            gave.add(threading.get_ident())
+            time.sleep(0.005)
+
+        blocks.blockwise(fn, 12, block=1)
+        blocks.each(each_fn, each_fn, each_fn, rows=blocks.BLOCK_ROWS)
+        return threading.get_ident(), ran, gave
+
+    with blocks.threads(3):
+        me, ran, gave = where()
+        with ThreadPoolExecutor(1) as pool:
+            other, ran_there, gave_there = pool.submit(where).result()
+    assert len(ran) > 1 and me not in ran and len(gave) > 1
+    assert ran_there == gave_there == {other}
+    assert where()[1:] == ({me}, {me})  # none lent any more

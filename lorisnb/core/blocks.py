@@ -6,6 +6,7 @@ releases the GIL inside its loops). Every row's result is the same whatever the 
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
@@ -16,20 +17,27 @@ import numpy as np
 #: Rows per block: about a megabyte per (N, 4) float64 temporary.
 BLOCK_ROWS = 16384
 
-#: Threads for the blocks of one computation: 1 unless the caller lends its cores (:func:`threads`;
-#: the evaluation does when it runs files in this process rather than in a pool of processes).
-_threads = 1
+#: Threads for the blocks of one computation, per thread: 1 unless that thread lends its cores
+#: (:func:`threads`; the evaluation does when it runs files in this process rather than in a pool
+#: of processes). Other threads (a file's parsing threads, the blocks' own) run theirs one after
+#: another: they are the lent cores already.
+_lent = threading.local()
+
+
+def _threads() -> int:
+    """The threads this thread lent (:func:`threads`), else 1."""
+    return getattr(_lent, "n", 1)
 
 
 @contextmanager
 def threads(n: int) -> Iterator[None]:
-    """Within the block, :func:`blockwise` runs blocks on ``n`` threads (1: one after another)."""
-    global _threads
-    before, _threads = _threads, max(1, int(n))
+    """Within the block, :func:`blockwise` and :func:`each` called on this thread run on ``n``
+    threads (1: one after another)."""
+    before, _lent.n = _threads(), max(1, int(n))
     try:
         yield
     finally:
-        _threads = before
+        _lent.n = before
 
 
 def blockwise(fn: Callable[[int, int], None], n: int, block: int | None = None) -> None:
@@ -38,11 +46,12 @@ def blockwise(fn: Callable[[int, int], None], n: int, block: int | None = None) 
     ``fn`` writes its rows of preallocated outputs."""
     block = block or BLOCK_ROWS
     starts = range(0, n, block)
-    if len(starts) <= 1 or _threads == 1:
+    lent = _threads()
+    if len(starts) <= 1 or lent == 1:
         for lo in starts:
             fn(lo, min(lo + block, n))
         return
-    with ThreadPoolExecutor(max_workers=_threads) as pool:
+    with ThreadPoolExecutor(max_workers=lent) as pool:
         for _ in pool.map(lambda lo: fn(lo, min(lo + block, n)), starts):
             pass  # re-raises a block's exception
 
@@ -56,9 +65,10 @@ def each(*fns: Callable[[], R], rows: int) -> list[R]:
     it saves): for independent whole-array computations that each hold no GIL for long (a
     median's partition, a mean), so that they run side by side. Each result is the one computed
     alone."""
-    if len(fns) <= 1 or _threads == 1 or rows < BLOCK_ROWS:
+    lent = _threads()
+    if len(fns) <= 1 or lent == 1 or rows < BLOCK_ROWS:
         return [fn() for fn in fns]
-    with ThreadPoolExecutor(max_workers=min(_threads, len(fns))) as pool:
+    with ThreadPoolExecutor(max_workers=min(lent, len(fns))) as pool:
         return list(pool.map(lambda fn: fn(), fns))
 
 
