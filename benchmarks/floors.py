@@ -123,7 +123,7 @@ def bench_readers(folder: Path) -> None:
 
     print("\nreading, lorisnb / pandas.read_csv(sep=' ', header=None, engine='c') on the same file:")
     readers = {"tum": read_tum, "kitti": read_kitti, "euroc": read_euroc}
-    for n, runs in ((10_000, 25), (1_000_000, 9)):
+    for n, runs in ((10_000, 75), (1_000_000, 9)):
         traj = lifelong_groundtruth(n, 1)[1]
         for fmt, read in readers.items():
             path = folder / f"{fmt}_{n}.txt"
