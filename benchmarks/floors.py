@@ -6,8 +6,8 @@ over the runs (this machine is shared; a ratio of two runs next to each other dr
 either time). Baselines:
 
 - reading: pandas' fastest exact parse of the same file, ``pd.read_csv(path, sep=" ",
-  header=None, engine="c")`` (``sep=","`` and the header line skipped for EuRoC), in a new process
-  where both run (:func:`bench_readers`);
+  header=None, engine="c")`` (``sep=","`` and the header line skipped for EuRoC), each file in a
+  new process where both run (:func:`bench_readers`);
 - a small pair, ``--help``: ``evo_ape`` (evo's command line), whole processes, wall time and peak
   resident memory;
 - a large pair: a process that only parses both files with that pandas call;
@@ -114,50 +114,53 @@ def parse_only(*paths: Path) -> list[str]:
     return [sys.executable, "-c", code]
 
 
-ROWS_LINE = "floors rows: "
+READ_LINE = "floors read: "
 
 
 def bench_readers(folder: Path) -> None:
-    """TUM, KITTI, EuRoC readers against pandas on the same file, 10k and 1M poses, in a new
-    process of their own (both sides in it, in alternation): in a process that has done other
-    work, pandas' columns of a million rows (8 MB each) reuse the heap memory freed before it,
-    while the readers' larger arrays are new pages, so the figures would depend on what the bench
-    measured first (the 1M rows read 1.14-1.30x in the bench's own process, 0.9-1.2x in a new one)."""
-    got = subprocess.run([sys.executable, __file__, "readers", str(folder)], capture_output=True, text=True, check=True)
-    for line in got.stdout.splitlines():
-        if line.startswith(ROWS_LINE):
-            ROWS.extend(tuple(r) for r in json.loads(line[len(ROWS_LINE) :]))
-        else:
-            print(line)
-
-
-def _readers(folder: Path) -> None:
-    """:func:`bench_readers`' measurements, in this process."""
-    import warnings
-
-    import pandas as pd
+    """TUM, KITTI, EuRoC readers against pandas on the same file, 10k and 1M poses, each file in a
+    new process that only reads it (both sides, in alternation): in a process that has done other
+    work, freed memory may be reused or not depending on how its heap lies (after the bench's other
+    figures, pandas' columns of a million rows, 8 MB each, took about 7,000 new pages per read
+    against 22,000 in a new process, and read the 1M-pose files 10-25% faster, while the readers'
+    arrays are new pages either way), so the figures would depend on what ran before them."""
     from textgen import lifelong_groundtruth, write_plain
 
-    from lorisnb.io import read_euroc, read_kitti, read_tum
-
-    print("\nreading, lorisnb / pandas.read_csv(sep=' ', header=None, engine='c') on the same file:")
-    readers = {"tum": read_tum, "kitti": read_kitti, "euroc": read_euroc}
+    print(
+        "\nreading, lorisnb / pandas.read_csv(sep=' ', header=None, engine='c') on the same file, a new process each:"
+    )
     for n, runs in ((10_000, 75), (1_000_000, 9)):
         traj = lifelong_groundtruth(n, 1)[1]
-        for fmt, read in readers.items():
+        for fmt in ("tum", "kitti", "euroc"):
             path = folder / f"{fmt}_{n}.txt"
             write_plain(path, traj, fmt)
-            sep, skip = (",", 1) if fmt == "euroc" else (" ", 0)
-            theirs = lambda p=path, s=sep, k=skip: pd.read_csv(p, sep=s, header=None, engine="c", skiprows=k)  # noqa: E731
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                a, b = alternate(lambda r=read, p=path: r(p), theirs, runs)
+            cmd = [sys.executable, __file__, "read", fmt, str(path), str(runs)]
+            out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
+            a, b = json.loads(next(ln for ln in out.splitlines() if ln.startswith(READ_LINE))[len(READ_LINE) :])
             lo, med = ratios(a, b)
             print(
                 f"  {fmt} {n:>9,} poses ({path.stat().st_size / 1e6:.0f} MB): lorisnb {min(a):.4f} s, pandas {min(b):.4f} s"
             )
             row(f"read {fmt.upper() if fmt != 'euroc' else 'EuRoC'} {n:,} poses / pandas", lo, med, "<= 1.2x", 1.2)
             path.unlink()
+
+
+def _read(fmt: str, path: Path, runs: int) -> None:
+    """One file of :func:`bench_readers`, in this process: the times of both sides, printed."""
+    import warnings
+
+    import pandas as pd
+
+    from lorisnb.io import read_euroc, read_kitti, read_tum
+
+    read = {"tum": read_tum, "kitti": read_kitti, "euroc": read_euroc}[fmt]
+    sep, skip = (",", 1) if fmt == "euroc" else (" ", 0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a, b = alternate(
+            lambda: read(path), lambda: pd.read_csv(path, sep=sep, header=None, engine="c", skiprows=skip), runs
+        )
+    print(READ_LINE + json.dumps([a, b]))
 
 
 def bench_small_pair_and_help(data) -> None:
@@ -351,8 +354,7 @@ def print_tables() -> None:
 
 if __name__ == "__main__":
     sys.path.insert(0, str(Path(__file__).parent))
-    if sys.argv[1:2] == ["readers"]:  # bench_readers' own process
-        _readers(Path(sys.argv[2]))
-        print(ROWS_LINE + json.dumps(ROWS))
+    if sys.argv[1:2] == ["read"]:  # a process of bench_readers
+        _read(sys.argv[2], Path(sys.argv[3]), int(sys.argv[4]))
     else:
         main()
