@@ -9,7 +9,7 @@ export MPLBACKEND ?= Agg
 
 .PHONY: report test test-fast test-slow test-browser browser-deps lint format evaluate bench bytecode clean-venv student grade book slides
 
-$(STAMP): pyproject.toml lorisnb/_version.py lorisnb/core/_rotations.c
+$(STAMP): pyproject.toml lorisnb/_version.py lorisnb/core/trajectory/_rotations.c
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade pip
 	$(BIN)/python -m pip install -e '.[all,dev]'

@@ -22,7 +22,7 @@ import numpy as np
 from lorisnb.core import score
 from lorisnb.errors import LorisWarning
 from lorisnb.io import find_data, read_openloris
-from lorisnb.tools.evaluate import evaluate, result_files
+from lorisnb.tools.evaluation.runner import evaluate, result_files
 
 
 def _timed(fn, repeat: int = 3):
@@ -120,7 +120,7 @@ def bench_reading(folder: Path) -> None:
     import pandas as pd
     from textgen import lifelong_groundtruth, write_lines
 
-    from lorisnb.io.chunks import stamp_digits
+    from lorisnb.io.parsing.chunks import stamp_digits
 
     path = folder / "two_million.txt"
     write_lines(path, "market", lifelong_groundtruth(2_000_000, 2), simulated=True, single=True)
@@ -192,7 +192,7 @@ def bench_whole_tree(root: Path) -> None:
 def bench_checks(root: Path) -> None:
     """The plausibility checks' share of a run: every file's errors with and without them, against
     a whole evaluation of the tree in one process (reading, errors, default RPE)."""
-    from lorisnb.core.pipeline import compute_errors
+    from lorisnb.core.pipeline.sessions import compute_errors
     from lorisnb.io import load_groundtruth
 
     files = [read_openloris(p, warn=False) for p, _ in result_files([root])]
@@ -284,7 +284,7 @@ def main() -> None:
     )
     print("                     (the official tool needs about 270 s for one setting over the same files)")
 
-    from lorisnb.core.sweep import sweep
+    from lorisnb.core.lifelong.sweep import sweep
 
     grid = (np.geomspace(0.05, 50, 50), np.linspace(5, 180, 10), [0.1, 0.5, 1.0, 2.0, 5.0], [10, 30, 60, 120, 300])
     ev.sequences()  # the threshold-free RPE pairs are computed once here, as in a session
@@ -309,7 +309,7 @@ def main() -> None:
     gt_b = baseline_parse(gt_path)
     est_b = baseline_parse(est_path)
     t_base_assoc, _ = _timed(lambda: [baseline_associate(gt_b[s], est_b[s]) for s in est_b], repeat=1)
-    from lorisnb.core.association import associate
+    from lorisnb.core.alignment.association import associate
     from lorisnb.io import load_groundtruth
 
     gt = load_groundtruth("market")
@@ -348,11 +348,11 @@ def bench_against_evo(data, n: int = 50_000) -> None:
     from evo.core import metrics as em
     from scipy.spatial.transform import Rotation, Slerp
 
-    from lorisnb.core import metrics
-    from lorisnb.core.geometry import umeyama
-    from lorisnb.core.trajectory import Trajectory
+    from lorisnb.core.alignment.geometry import umeyama
+    from lorisnb.core.metrics import openloris as metrics
+    from lorisnb.core.trajectory.poses import Trajectory
     from lorisnb.io import read_tum
-    from lorisnb.tools.evo_bridge import to_evo
+    from lorisnb.tools.peers.evo_bridge import to_evo
 
     gt0 = read_tum(data.tum / "fr2_desk_groundtruth.txt")
     t = np.linspace(gt0.stamps[0], gt0.stamps[-1], n)

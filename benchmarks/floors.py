@@ -198,10 +198,10 @@ def bench_growth(folder: Path) -> None:
     process that only parses both files, and peak memory per pose above the start-up's (the
     parse-only process's too, above a process importing pandas); evo_ape
     up to 100k poses."""
-    from lorisnb.io.whole import NUMPY_MAX_BYTES
+    from lorisnb.io.parsing.whole import NUMPY_MAX_BYTES
 
     sizes = [10_000, 100_000, 1_000_000] + ([10_000_000] if os.environ.get("LORISNB_BENCH_HUGE", "1") != "0" else [])
-    imports = "import lorisnb.cli, lorisnb.tools.evaluate"
+    imports = "import lorisnb.cli, lorisnb.tools.evaluation.runner"
     bases = {  # the start-up of a process importing what the run imports: pandas only for files numpy does not read
         with_pandas: min(
             process([sys.executable, "-c", NO_PYARROW + ("import pandas\n" if with_pandas else "") + imports])[1]
@@ -250,7 +250,7 @@ def bench_nearest(n: int = 1_000_000) -> None:
     memory (tracemalloc), the same pairs."""
     import tracemalloc
 
-    from lorisnb.core import conventions
+    from lorisnb.core.conventions import choices as conventions
 
     rng = np.random.default_rng(0)
     g = 1.56e9 + np.arange(n) / 100.0
@@ -277,7 +277,7 @@ def bench_surfaces_runs(ev, runs: int = 3) -> None:
     process and the next ones (min, median), peak memory (tracemalloc)."""
     import tracemalloc
 
-    from lorisnb.core.surfaces import cr_surfaces
+    from lorisnb.core.lifelong.surfaces import cr_surfaces
 
     durations = ev.durations()
     eps, phi = np.geomspace(0.01, 100, 1000), np.linspace(0.1, 180, 1000)
@@ -322,7 +322,7 @@ def main() -> None:
 
     from lorisnb.errors import LorisWarning
     from lorisnb.io import find_data
-    from lorisnb.tools.evaluate import evaluate
+    from lorisnb.tools.evaluation.runner import evaluate
 
     warnings.simplefilter("ignore", LorisWarning)
     subprocess.run([sys.executable, "-m", "compileall", "-q", str(Path(__file__).parents[1] / "lorisnb")], check=True)

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from lorisnb.core.simulate import Faults, simulate
-from lorisnb.core.trajectory import Trajectory
+from lorisnb.core.trajectory.poses import Trajectory
 
 
 def fixed(values: np.ndarray, decimals: int, width: int) -> np.ndarray:
@@ -134,7 +134,7 @@ def write_plain(path: Path, t: Trajectory, fmt: str) -> None:
     """``t`` as a single-spaced TUM file (``stamp x y z qx qy qz qw``), a KITTI pose file (12
     numbers of ``[R | t]`` per line, no stamps) or a EuRoC CSV (``#timestamp,...`` header, stamps in
     nanoseconds, ``qw`` first)."""
-    from lorisnb.core.geometry import quat_to_matrix
+    from lorisnb.core.alignment.geometry import quat_to_matrix
 
     with open(path, "wb") as fh:
         if fmt == "euroc":

@@ -8,11 +8,14 @@ the data; :mod:`lorisnb.tools` evaluates folders and makes figures, widgets and 
 
 from typing import TYPE_CHECKING
 
-from ._lazy import attach
-from ._version import __version__
+from lorisnb._lazy import attach
+from lorisnb._moved import install
+from lorisnb._version import __version__
+
+install()  # the former flat modules' names (lorisnb.core.scoring, ...) still import, with a warning
 
 if TYPE_CHECKING:
-    from .core import (
+    from lorisnb.core import (
         PAPER_EPS,
         PAPER_PHI,
         SCENES,
@@ -33,7 +36,7 @@ if TYPE_CHECKING:
         session_errors,
         sweep,
     )
-    from .errors import (
+    from lorisnb.errors import (
         DataNotFoundError,
         EvaluationError,
         FrameError,
@@ -44,7 +47,7 @@ if TYPE_CHECKING:
         ParseError,
         ValidationError,
     )
-    from .io import (
+    from lorisnb.io import (
         find_data,
         load_groundtruth,
         read_euroc,
@@ -56,7 +59,7 @@ if TYPE_CHECKING:
         read_tum,
         write_openloris,
     )
-    from .tools import Evaluation, evaluate, evaluate_manifest, evaluate_pairs, setup
+    from lorisnb.tools import Evaluation, evaluate, evaluate_manifest, evaluate_pairs, setup
 
 __getattr__, __dir__ = attach(__name__)
 

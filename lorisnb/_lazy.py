@@ -21,7 +21,7 @@ def attach(package: str) -> tuple[Callable[[str], Any], Callable[[], list[str]]]
     """``__getattr__`` and ``__dir__`` for the package ``package`` (its ``__name__``): each name
     imported under its ``if TYPE_CHECKING:`` block is imported from its module on first use (and
     kept in the package), and each submodule on first attribute access. A name that is also a
-    submodule's (``lorisnb.core.sweep``, the function, and ``lorisnb/core/sweep.py``) stays the
+    submodule's (``lorisnb.core.lifelong.sweep``, the function, and ``lorisnb/core/lifelong/sweep.py``) stays the
     name when the submodule is imported, as with eager imports."""
     module = sys.modules[package]
     source = module.__spec__.loader.get_source(package)  # type: ignore[union-attr]

@@ -63,12 +63,12 @@ def teaching_python() -> Path:
 
 @pytest.fixture(params=["kernel", "numpy"])
 def rotation_route(request, monkeypatch) -> str:
-    """Rotation blocks' quaternions by the compiled kernel (``lorisnb.core._rotations``, skipped
+    """Rotation blocks' quaternions by the compiled kernel (``lorisnb.core.trajectory._rotations``, skipped
     where the install built none) or by the numpy code it mirrors."""
-    from lorisnb.core import matrices
+    from lorisnb.core.trajectory import rotations as matrices
 
     if request.param == "kernel" and matrices._kernel is None:
-        pytest.skip("lorisnb.core._rotations was not built (no C compiler at install)")
+        pytest.skip("lorisnb.core.trajectory._rotations was not built (no C compiler at install)")
     if request.param == "numpy":
         monkeypatch.setattr(matrices, "_kernel", None)
     return request.param

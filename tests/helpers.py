@@ -186,7 +186,7 @@ def use_parser(monkeypatch, parser: str) -> list:
     the same pieces each read by ``read_csv`` (``read_csv``: a pandas without the buffer route),
     or the chunked reader (``chunks``). Returns the list of what the piece reads returned (None:
     not plain after all)."""
-    from lorisnb.io import pieces, whole
+    from lorisnb.io.parsing import pieces, whole
 
     monkeypatch.setattr(whole, "pandas_loaded", lambda: parser != "numpy")
     read = []

@@ -1,4 +1,4 @@
-"""The per-scene aggregate on numpy columns (:func:`lorisnb.core.aggregate.aggregate_columns`)
+"""The per-scene aggregate on numpy columns (:func:`lorisnb.core.lifelong.aggregate.aggregate_columns`)
 gives pandas' numbers to the last bit: compared with the pandas ``groupby`` implementation it
 replaced (kept below as the oracle, as it stood before issue 27) on the bundled results, on
 sweeps with trials, and on awkward tables (NaN, no correct pose, unknown scenes, duplicates)."""
@@ -10,10 +10,10 @@ import pandas as pd
 import pytest
 
 import lorisnb as ln
-from lorisnb.core import aggregate
-from lorisnb.core.frames import SCENES
-from lorisnb.core.model import SCENE_COLUMNS
-from lorisnb.core.sweep import sweep
+from lorisnb.core.lifelong import aggregate
+from lorisnb.core.lifelong.sweep import sweep
+from lorisnb.core.pipeline.model import SCENE_COLUMNS
+from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import EvaluationError
 
 

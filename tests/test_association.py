@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_pairs import _greedy
 
-from lorisnb.core.conventions import associate_nearest
+from lorisnb.core.conventions.choices import associate_nearest
 
 PROPERTY = settings(max_examples=400, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 
@@ -72,7 +72,7 @@ def test_large_sets_match_every_candidate_rule(seed):
     """100,000 ground-truth stamps at 100 Hz and jittered estimate stamps at about 30 Hz and at
     100 Hz: the pairs of the rule over every candidate (the previous implementation, kept for
     what nearest neighbours cannot decide)."""
-    from lorisnb.core import conventions
+    from lorisnb.core.conventions import choices as conventions
 
     rng = np.random.default_rng(seed)
     g = 1.56e9 + np.arange(100_000) / 100.0

@@ -2,7 +2,7 @@
 Dask worker (which runs BLAS on one thread) write the same table to the last digit, as the README's
 "Many files" promises. A matrix-vector product's threads each sum a share of the poses, so the sums
 behind correct time, C-ATE, C-AOE and C-RPE took their last digits from the thread count
-(``lorisnb.core.scoring.row_sums``)."""
+(``lorisnb.core.lifelong.scoring.row_sums``)."""
 
 from __future__ import annotations
 

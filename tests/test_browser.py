@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lorisnb.core.frames import PAPER_EPS
-from lorisnb.tools.report import DEFAULT_NOTEBOOKS, notebook_dir
+from lorisnb.core.trajectory.frames import PAPER_EPS
+from lorisnb.tools.report.build import DEFAULT_NOTEBOOKS, notebook_dir
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
@@ -361,7 +361,7 @@ def offline_report(tmp_path_factory, icra20):
     """A report on a lab's results folder with trials (copies of bundled files, in a temporary folder)."""
     from report_fixtures import trial_results
 
-    from lorisnb.tools.report import run_report
+    from lorisnb.tools.report.build import run_report
 
     root = tmp_path_factory.mktemp("report")
     results = trial_results(root / "mine", icra20)

@@ -10,8 +10,8 @@ from helpers import write
 
 from lorisnb.errors import ParseError
 from lorisnb.io import read_openloris, read_tum
-from lorisnb.io.chunks import read_rows
-from lorisnb.tools.evaluate import result_files
+from lorisnb.io.parsing.chunks import read_rows
+from lorisnb.tools.evaluation.runner import result_files
 
 WIDTHS = (8, 9)
 
@@ -45,7 +45,7 @@ def _same(a, b):
 
 
 def test_fast_path_equals_exact_path_on_every_bundled_file(data, monkeypatch):
-    from lorisnb.io import chunks
+    from lorisnb.io.parsing import chunks
 
     monkeypatch.setattr(chunks, "pandas_loaded", lambda: True)  # as in a process that has imported pandas
     files = [p for p, _ in result_files([data.icra20])] + [data.groundtruth(s) for s in ("cafe", "market")]
@@ -144,7 +144,7 @@ def test_binary_data_after_the_first_chunk_is_refused_where_it_appears(tmp_path)
 def test_later_chunks_read_on_threads_name_the_same_lines(tmp_path, fault, monkeypatch):
     """Past the first chunk a regular file is read and parsed on threads, each range on its own;
     rows, line numbers and errors are those of reading it whole."""
-    from lorisnb.io import ranges
+    from lorisnb.io.parsing import ranges
 
     monkeypatch.setattr(ranges, "LINE_LIMIT", 3000)
     rows = [f"seq: {k // 5000 + 1}" if k % 5000 == 0 else f"{k}.5 0.25 1 2 0 0 0 1" for k in range(30_000)]
@@ -176,7 +176,7 @@ def test_rows_copied_into_their_arrays_as_read_equal_a_whole_read(tmp_path, monk
     chunk as it is parsed (RowSink): the same trajectories as reading it in one chunk, when the
     first chunk's lines are longer than the rest (the row guess is short: the arrays grow) and when
     lines of 8 and 9 numbers mix, later (read again the general way) or in the first chunk."""
-    from lorisnb.io import chunks
+    from lorisnb.io.parsing import chunks
 
     rng = np.random.default_rng(5)
     lines = ["scene: cafe", "frame: d400_color"]
@@ -210,7 +210,7 @@ def test_rows_copied_into_their_arrays_as_read_equal_a_whole_read(tmp_path, monk
 
 
 def test_a_large_file_without_poses_reads_as_empty_sequences(tmp_path, monkeypatch):
-    from lorisnb.io import chunks
+    from lorisnb.io.parsing import chunks
 
     monkeypatch.setattr(chunks, "CHUNK_BYTES", 4096)
     path = write(tmp_path, "cafe.txt", "scene: cafe\nseq: 1\n" + "# a comment, no pose\n" * 20_000)

@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from lorisnb.cli import main
-from lorisnb.tools import report
+from lorisnb.tools.report import build as report
 
 ORB = "per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt"
 

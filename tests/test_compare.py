@@ -16,7 +16,7 @@ from scipy import stats as sps
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core.permutation import min_p, permutation_test, runs_needed
+from lorisnb.core.stats.permutation import min_p, permutation_test, runs_needed
 
 HOME = {"odom": "home-1-{}-odom.txt", "orbslam2_rgbd": "home_1_{}_orbslam2-original.txt"}
 
@@ -204,7 +204,7 @@ def test_options_compare_and_diff_cannot_apply_are_refused(tmp_path, icra20, cap
 def test_difference_interval_inverts_the_test():
     """Paired, eight sequences (256 sign flips): the interval holds the shifts the exact test accepts;
     just inside a bound p > alpha, just outside p <= alpha; 0 is outside as the test rejects."""
-    from lorisnb.core.permutation import difference_interval, holm_levels
+    from lorisnb.core.stats.permutation import difference_interval, holm_levels
 
     x = np.array([0.9, 0.8, 0.85, 0.7, 0.75, 0.95, 0.6, 0.88])
     y = x - np.array([0.2, 0.1, 0.25, 0.15, 0.3, 0.12, 0.18, 0.22])
@@ -241,7 +241,7 @@ def test_power_with_one_algorithm_and_a_difference_a_rate_cannot_show(icra20, ca
     assert "--power 0.1: every pair of algorithms differs, or no scene has two: nothing to size" in out
     rc, out, err = compare(capsys, odom, "--power", "2")
     assert rc == 2 and "power delta=2: cr is a rate between 0 and 1" in err
-    from lorisnb.tools.comparison import compare_table
+    from lorisnb.tools.decisions.comparison import compare_table
 
     ev = ln.evaluate(odom, progress=False)
     with pytest.raises(ln.ValidationError, match="a difference above 1 cannot happen"):

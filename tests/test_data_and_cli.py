@@ -10,8 +10,8 @@ import pytest
 from helpers import write
 
 from lorisnb.cli import main
-from lorisnb.core.frames import extrinsic
-from lorisnb.core.model import SEQUENCE_COLUMNS
+from lorisnb.core.pipeline.model import SEQUENCE_COLUMNS
+from lorisnb.core.trajectory.frames import extrinsic
 from lorisnb.errors import DataNotFoundError
 from lorisnb.io import find_data
 

@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from lorisnb.cli import main
-from lorisnb.core.regression import parse_tolerances, scene_changes, sequence_changes
+from lorisnb.core.stats.regression import parse_tolerances, scene_changes, sequence_changes
 from lorisnb.errors import ValidationError
 
 ALGORITHMS = ("odom", "orbslam2_rgbd")
@@ -328,9 +328,9 @@ def test_regression_core_on_trials():
 
 
 def test_diff_in_python(versions):
-    """The same verdict through Python: two Evaluations' tables and lorisnb.tools.diff.diff_tables."""
+    """The same verdict through Python: two Evaluations' tables and lorisnb.tools.decisions.diff.diff_tables."""
     import lorisnb as ln
-    from lorisnb.tools.diff import diff_tables
+    from lorisnb.tools.decisions.diff import diff_tables
 
     a, b = (ln.evaluate(v).sequences(eps="paper", phi=30) for v in versions)
     d = diff_tables(a, b, "cr=0.02,ate_rmse=10%")

@@ -7,7 +7,7 @@ from __future__ import annotations
 from helpers import write
 
 import lorisnb as ln
-from lorisnb.tools.diff import diff_tables, exit_status, unevaluated
+from lorisnb.tools.decisions.diff import diff_tables, exit_status, unevaluated
 
 
 def _shifted(src, seconds: float) -> str:

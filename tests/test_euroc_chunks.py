@@ -11,7 +11,8 @@ import pytest
 from helpers import write
 
 from lorisnb.errors import LorisWarning, ParseError
-from lorisnb.io import formats, read_euroc
+from lorisnb.io import read_euroc
+from lorisnb.io.readers import plain as formats
 
 HEADER = "timestamp,p_x,p_y,p_z,q_w,q_x,q_y,q_z"
 

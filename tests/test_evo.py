@@ -15,10 +15,10 @@ from scipy.spatial.transform import Rotation
 import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.core import score
-from lorisnb.core.trajectory import Trajectory
+from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.io import load_groundtruth, read_openloris
-from lorisnb.tools.crosscheck import crosscheck, crosscheck_openloris, crosscheck_sample
-from lorisnb.tools.evo_bridge import CROSSCHECK_COLUMNS, evo_result_table, from_evo, to_evo
+from lorisnb.tools.peers.crosscheck import crosscheck, crosscheck_openloris, crosscheck_sample
+from lorisnb.tools.peers.evo_bridge import CROSSCHECK_COLUMNS, evo_result_table, from_evo, to_evo
 
 
 def _evo_ape(ref, est, rel):
@@ -212,8 +212,8 @@ def test_evo_ape_runs_evo_once_per_input(data, monkeypatch):
     """A cross-check table and its per-pose plot ask evo for the same APE: evo's per-pose loop runs
     once, the second answer is the same numbers (a copy), and other poses are computed afresh; the
     angle of a Sim(3) alignment is that of the SE(3) one (the same rotations), bit for bit."""
-    from lorisnb.tools import evo_bridge
-    from lorisnb.tools.crosscheck import crosscheck_poses
+    from lorisnb.tools.peers import evo_bridge
+    from lorisnb.tools.peers.crosscheck import crosscheck_poses
 
     gt, est = (
         ln.read_tum(data.tum / "freiburg1_xyz-groundtruth.txt"),

@@ -16,13 +16,13 @@ from evo.main_rpe import rpe
 from evo.tools import file_interface as fi
 from rosbags.rosbag2 import Reader as Rosbag2Reader
 
-from lorisnb.core.trajectory import Trajectory
+from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.errors import LorisWarning, ParseError, ValidationError
 from lorisnb.io import read_tum
-from lorisnb.io.bags import read_bag, read_bag_topics, tf_chain
-from lorisnb.io.evo_results import read_evo_result
-from lorisnb.io.formats import read_euroc, read_kitti, read_trajectory
-from lorisnb.tools.evo_import import evo_results_table
+from lorisnb.io.readers.bags import read_bag, read_bag_topics, tf_chain
+from lorisnb.io.readers.evo_results import read_evo_result
+from lorisnb.io.readers.plain import read_euroc, read_kitti, read_trajectory
+from lorisnb.tools.peers.evo_import import evo_results_table
 
 
 def _traj(n=60, seed=0, t0=100.0):
@@ -176,7 +176,7 @@ def test_evo_result_zips_become_table_rows(data, tmp_path):
 
 
 def test_crosscheck_reading_shows_where_and_why(data, tmp_path):
-    from lorisnb.tools.crosscheck_reading import crosscheck_reading
+    from lorisnb.tools.peers.crosscheck_reading import crosscheck_reading
 
     t = crosscheck_reading(data.tum / "fr2_desk_groundtruth.txt").set_index("quantity")
     assert not t.loc["poses", "agrees"] and "repeated" in t.loc["poses", "note"]

@@ -21,7 +21,7 @@ from evo.main_rpe import rpe
 from evo.tools import file_interface as fi
 
 from lorisnb.cli import main
-from lorisnb.core.trajectory import Trajectory
+from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.io import read_tum
 
 STATS = ("rmse", "mean", "median", "std", "min", "max", "sse")

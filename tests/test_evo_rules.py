@@ -14,8 +14,8 @@ from evo.core.trajectory import Plane
 from evo.tools import file_interface as fi
 from scipy.spatial.transform import Rotation
 
-from lorisnb.core.evo_options import project_to_plane as lorisnb_project
-from lorisnb.core.evo_sync import (
+from lorisnb.core.conventions.evo_options import project_to_plane as lorisnb_project
+from lorisnb.core.conventions.evo_sync import (
     evo_associate,
     evo_downsample,
     evo_match_indices,
@@ -23,11 +23,11 @@ from lorisnb.core.evo_sync import (
     evo_sync,
     time_window,
 )
-from lorisnb.core.relations import RELATIONS, ape_relation, error_statistics, rpe_relation
-from lorisnb.core.rpe import evo_rpe_pairs
-from lorisnb.core.trajectory import Trajectory
+from lorisnb.core.metrics.pairs import evo_rpe_pairs
+from lorisnb.core.metrics.relations import RELATIONS, ape_relation, error_statistics, rpe_relation
+from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.io import read_tum
-from lorisnb.tools.evo_bridge import to_evo
+from lorisnb.tools.peers.evo_bridge import to_evo
 
 TOL = 1e-9
 PAIRS = {
@@ -211,9 +211,9 @@ def test_random_trajectories_all_units():
 
 def test_statistics_columns_of_the_sequence_table(evo_pairs):
     from lorisnb.core import score
-    from lorisnb.core.conventions import Conventions
-    from lorisnb.core.model import STAT_COLUMNS
-    from lorisnb.core.pipeline import session_errors
+    from lorisnb.core.conventions.choices import Conventions
+    from lorisnb.core.pipeline.model import STAT_COLUMNS
+    from lorisnb.core.pipeline.sessions import session_errors
 
     ref, est, gt, es = evo_pairs["fr1_xyz"]
     f = session_errors({1: gt}, {1: es}, Conventions.preset("tum"))
@@ -251,8 +251,8 @@ def test_statistics_columns_of_the_sequence_table(evo_pairs):
 )  # fmt: skip
 def test_score_rpe_options_equal_evo_rpe(evo_pairs, delta, unit, pairs, all_pairs):
     from lorisnb.core import score
-    from lorisnb.core.conventions import Conventions
-    from lorisnb.core.pipeline import session_errors
+    from lorisnb.core.conventions.choices import Conventions
+    from lorisnb.core.pipeline.sessions import session_errors
 
     _, _, gt, es = evo_pairs["fr1_xyz"]
     f = session_errors({1: gt}, {1: es}, Conventions.preset("tum"))
@@ -270,11 +270,11 @@ def test_score_rpe_options_equal_evo_rpe(evo_pairs, delta, unit, pairs, all_pair
 
 
 def test_lorisnb_rpe_rule_unchanged_by_default(evo_pairs):
-    from lorisnb.core import metrics
+    from lorisnb.core.metrics import openloris as metrics
 
     _, _, gt, es = evo_pairs["fr1_xyz"]
-    from lorisnb.core.conventions import Conventions
-    from lorisnb.core.pipeline import session_errors
+    from lorisnb.core.conventions.choices import Conventions
+    from lorisnb.core.pipeline.sessions import session_errors
 
     e = session_errors({1: gt}, {1: es}, Conventions.preset("tum")).sequences[0]
     for delta, unit in ((1.0, "s"), (0.5, "m"), (3, "f")):
@@ -286,7 +286,7 @@ def test_lorisnb_rpe_rule_unchanged_by_default(evo_pairs):
 def test_masked_statistics_of_full_rows_equal_the_row_computation_to_the_bit():
     """A grid row selecting every value (no threshold) takes error_statistics' path: the same numbers
     as the masked row computation gives it, to the last bit, on any length (pairwise sums)."""
-    from lorisnb.core import relations
+    from lorisnb.core.metrics import relations
 
     rng = np.random.default_rng(0)
     for n in (1, 2, 7, 9, 128, 129, 4097, 100_001):

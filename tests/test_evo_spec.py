@@ -1,6 +1,6 @@
 """evo's options in the evaluation spec (issue 23): the ``evo`` preset's values, validation and
 refusals with one message on every surface, and each option against evo itself (evo's readers and
-API run as evo_ape / evo_rpe run them: :func:`lorisnb.tools.crosscheck_evo.evo_statistics`)."""
+API run as evo_ape / evo_rpe run them: :func:`lorisnb.tools.peers.crosscheck_evo.evo_statistics`)."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ import pandas as pd
 import pytest
 
 from lorisnb.cli import main
-from lorisnb.core.spec import EvalSpec, make_spec
+from lorisnb.core.spec.evalspec import EvalSpec, make_spec
 from lorisnb.errors import ValidationError
-from lorisnb.tools.crosscheck_evo import crosscheck_evo
+from lorisnb.tools.peers.crosscheck_evo import crosscheck_evo
 
 GT, EST = "freiburg1_xyz-groundtruth.txt", "freiburg1_xyz-rgbdslam.txt"
 T0 = 1305031102.1758  # the first ground-truth stamp of fr1_xyz, seconds

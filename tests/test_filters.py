@@ -1,5 +1,5 @@
 """A ``scenes`` or ``algorithms`` filter that names nothing in the inputs is refused (trial finding
-6), by one validator (``lorisnb.core.validate.present``) behind every entry point: Python's
+6), by one validator (``lorisnb.core.spec.validate.present``) behind every entry point: Python's
 ``evaluate``, ``lorisnb report -p scenes/algorithms`` (before any notebook runs) and the notebooks
 (through ``evaluate``); a notebook's ``results_dir`` must exist. It used to drop every input and
 say "no input file was found"."""
@@ -12,10 +12,10 @@ import pytest
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core import validate
+from lorisnb.core.spec import validate
 from lorisnb.errors import ValidationError
-from lorisnb.tools.notebook import setup
-from lorisnb.tools.notebook_params import check_values
+from lorisnb.tools.notebook.params import check_values
+from lorisnb.tools.notebook.start import setup
 
 
 @pytest.fixture

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from lorisnb.errors import LorisError, LorisWarning, ParseError
 from lorisnb.io import load_groundtruth, read_euroc, read_kitti, read_openloris, read_times, read_tum
-from lorisnb.io.ordslam import read_ordslam
+from lorisnb.io.readers.ordslam import read_ordslam
 
 FUZZ = settings(
     max_examples=200,

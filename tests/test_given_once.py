@@ -9,7 +9,7 @@ import argparse
 import pytest
 
 from lorisnb.cli import build_parser, main
-from lorisnb.core import validate
+from lorisnb.core.spec import validate
 
 
 def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
@@ -109,7 +109,7 @@ def test_words_are_read_as_python_reads_them():
     args = parser.parse_args(["evaluate", "x", "--align", "SE3", "--format", " TUM", "--rpe-unit", "M",
                               "--conventions", "Tum"])  # fmt: skip
     assert (args.align, args.format, args.rpe_unit, args.conventions) == ("se3", "tum", "m", "tum")
-    from lorisnb.core.spec import make_spec
+    from lorisnb.core.spec.evalspec import make_spec
 
     assert make_spec("openloris", rpe_unit="M").rpe_unit == "m"
     assert make_spec("openloris", rpe_unit="D").rpe_unit == "deg"

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from lorisnb.core import metrics
-from lorisnb.core.association import associate
-from lorisnb.core.geometry import official_slerp, ros_quaternion_from_matrix, umeyama
-from lorisnb.core.trajectory import Trajectory
+from lorisnb.core.alignment.association import associate
+from lorisnb.core.alignment.geometry import official_slerp, ros_quaternion_from_matrix, umeyama
+from lorisnb.core.metrics import openloris as metrics
+from lorisnb.core.trajectory.poses import Trajectory
 
 
 def test_correct_time_cr_crt_by_hand():
@@ -123,7 +123,7 @@ def test_rpe_translation_by_hand():
 
 
 def test_groundtruth_in_another_frame_composes_extrinsics():
-    from lorisnb.core.association import groundtruth_in_frame
+    from lorisnb.core.alignment.association import groundtruth_in_frame
 
     gt = _gt()
     via_base = groundtruth_in_frame(gt, "cafe", "t265_fisheye1")
@@ -134,11 +134,11 @@ def test_groundtruth_in_another_frame_composes_extrinsics():
 
 
 def test_quaternion_helpers_equal_scipy():
-    """The quaternion algebra the evaluation runs on (lorisnb.core.geometry) is scipy's Rotation:
+    """The quaternion algebra the evaluation runs on (lorisnb.core.alignment.geometry) is scipy's Rotation:
     products, inverses, angles, vector rotation, matrices both ways and Slerp."""
     from scipy.spatial.transform import Rotation, Slerp
 
-    from lorisnb.core.geometry import (
+    from lorisnb.core.alignment.geometry import (
         as_quaternions,
         quat_angle_deg,
         quat_conj_multiply,

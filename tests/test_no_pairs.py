@@ -15,8 +15,8 @@ from helpers import write
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core.relations import error_statistics, masked_statistics
-from lorisnb.core.sweep import sweep
+from lorisnb.core.lifelong.sweep import sweep
+from lorisnb.core.metrics.relations import error_statistics, masked_statistics
 
 ORB = "per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt"
 RPE = ["rpe_trans_rmse", "rpe_rot_rmse", "c_rpe_trans_rmse", "rpe_trans_mean", "rpe_rot_max", "c_rpe_rot_median"]
@@ -192,7 +192,7 @@ def test_evo_errors_become_lorisnb_errors(tum, tmp_path, capsys):
     """A file evo's reader refuses (commas) and poses evo cannot compute with (NaN rows): one line,
     exit status 1, naming the file or what evo was doing; the classic crosscheck shows lorisnb's
     rows and says evo refuses the file."""
-    from lorisnb.tools.crosscheck_reading import crosscheck_reading, evo_read
+    from lorisnb.tools.peers.crosscheck_reading import crosscheck_reading, evo_read
 
     gt, est, _, _ = tum
     lines = est.read_text().splitlines()

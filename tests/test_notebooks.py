@@ -11,7 +11,7 @@ import pandas as pd
 import papermill as pm
 import pytest
 
-from lorisnb.tools.report import KERNEL_ARGS, kernel_env, notebook_dir
+from lorisnb.tools.report.build import KERNEL_ARGS, kernel_env, notebook_dir
 
 NOTEBOOK_DIR = notebook_dir()
 pytestmark = pytest.mark.slow

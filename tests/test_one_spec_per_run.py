@@ -10,9 +10,9 @@ import pandas as pd
 import pytest
 
 import lorisnb as ln
-from lorisnb.tools.leaderboard import leaderboard_spec, report_findings
-from lorisnb.tools.notebook_params import check_parameters, evaluation_spec
-from lorisnb.tools.widgets import ThresholdExplorer
+from lorisnb.tools.notebook.params import check_parameters, evaluation_spec
+from lorisnb.tools.notebook.widgets import ThresholdExplorer
+from lorisnb.tools.report.leaderboard import leaderboard_spec, report_findings
 
 ORB = "cafe_1_1_orbslam2-original.txt"
 
@@ -74,7 +74,7 @@ def test_a_relative_eps_is_refused_before_anything_runs_where_a_notebook_quotes_
     (its prose quotes eps in metres of one scene); the other notebooks take it."""
     from lorisnb.cli import main
     from lorisnb.errors import ValidationError
-    from lorisnb.tools.notebook import setup
+    from lorisnb.tools.notebook.start import setup
 
     declared = {"eps": {"default": "1.0"}}
     with pytest.raises(ValidationError, match="metrics_primer quotes eps in metres"):

@@ -11,7 +11,7 @@ import pytest
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.io.formats import read_trajectory
+from lorisnb.io.readers.plain import read_trajectory
 
 DSS = "lifelong/ds-slam/cafe-1.txt"  # two blocks, seq 1 and 2, frame d400_color
 ORB_2 = "per-seq/orbslam2_rgbd/cafe_1_2_orbslam2-original.txt"  # one block, seq: 2, frame d400_color

@@ -15,7 +15,7 @@ from helpers import write, write_bag
 
 import lorisnb as ln
 from lorisnb.cli import build_parser, main
-from lorisnb.core.trajectory import Trajectory
+from lorisnb.core.trajectory.poses import Trajectory
 
 TUM = "tum-rgbd"
 
@@ -220,7 +220,7 @@ def test_reading_options_are_refused_where_they_cannot_apply(kind, kinds, tmp_pa
 def test_jobs_fan_out_every_input_kind(kinds, tmp_path, capsys, monkeypatch):
     import importlib
 
-    evaluate_module = importlib.import_module("lorisnb.tools.evaluate")
+    evaluate_module = importlib.import_module("lorisnb.tools.evaluation.runner")
 
     seen = []
     real = evaluate_module.run_tasks

@@ -13,13 +13,13 @@ from scipy.spatial.transform import Rotation
 
 import lorisnb as ln
 from lorisnb.core import sequence_errors
-from lorisnb.core.difficulty import difficulty_measures, trajectory_stats
+from lorisnb.core.metrics.difficulty import difficulty_measures, trajectory_stats
 from lorisnb.errors import ParseError
 from lorisnb.io import load_groundtruth
-from lorisnb.io.ordslam import SCENARIOS, describe_sequence, find_ordslam, light_period, read_ordslam, scenario
-from lorisnb.io.published import ordslam_table3, ordslam_table4_tum, published_ate
-from lorisnb.tools.evo_bridge import to_evo
-from lorisnb.tools.indoor_outdoor import TUM_PAIRS
+from lorisnb.io.datasets.published import ordslam_table3, ordslam_table4_tum, published_ate
+from lorisnb.io.readers.ordslam import SCENARIOS, describe_sequence, find_ordslam, light_period, read_ordslam, scenario
+from lorisnb.tools.notebook.indoor_outdoor import TUM_PAIRS
+from lorisnb.tools.peers.evo_bridge import to_evo
 
 
 @pytest.fixture(scope="module")
@@ -234,7 +234,7 @@ def make_synthetic_ordslam(root, segment):
 
 
 def test_ordslam_folder_measures(tmp_path, segment):
-    from lorisnb.tools.indoor_outdoor import ordslam_difficulty, ordslam_stats
+    from lorisnb.tools.notebook.indoor_outdoor import ordslam_difficulty, ordslam_stats
 
     folder = find_ordslam(make_synthetic_ordslam(tmp_path, segment))
     assert len(folder.groundtruth) == 4 and list(folder.estimates) == ["synthetic_slam"]
@@ -248,7 +248,7 @@ def test_ordslam_folder_measures(tmp_path, segment):
 
 
 def test_headline_numbers(data):
-    from lorisnb.tools.indoor_outdoor import headline, tum_difficulty
+    from lorisnb.tools.notebook.indoor_outdoor import headline, tum_difficulty
 
     meas = tum_difficulty(data)
     h = headline(meas, published_ate())

@@ -13,8 +13,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import lorisnb as ln
-from lorisnb.io.ordslam import describe_sequence, find_ordslam
-from lorisnb.tools.indoor_outdoor import ordslam_difficulty, ordslam_stats
+from lorisnb.io.readers.ordslam import describe_sequence, find_ordslam
+from lorisnb.tools.notebook.indoor_outdoor import ordslam_difficulty, ordslam_stats
 
 
 @pytest.fixture(scope="module")

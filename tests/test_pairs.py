@@ -12,13 +12,13 @@ from reference_tools import REFERENCE
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core.conventions import Conventions, associate_nearest
-from lorisnb.core.metrics import rmse
-from lorisnb.core.pipeline import match, session_errors
-from lorisnb.core.relative import rpg_relative_errors
-from lorisnb.core.trajectory import Trajectory
+from lorisnb.core.conventions.choices import Conventions, associate_nearest
+from lorisnb.core.metrics.openloris import rmse
+from lorisnb.core.metrics.relative import rpg_relative_errors
+from lorisnb.core.pipeline.sessions import match, session_errors
+from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.io import read_tum
-from lorisnb.tools.evaluate import evaluate_manifest, evaluate_pairs
+from lorisnb.tools.evaluation.runner import evaluate_manifest, evaluate_pairs
 
 PAIRS = {
     "fr2_desk": ("fr2_desk_groundtruth.txt", "fr2_desk_ORB.txt"),
@@ -338,7 +338,7 @@ def test_relative_table_equals_rpg_from_the_command_line_path(data):
 def test_transform_between_estimate_and_ground_truth_body_frames(tum_pairs):
     from scipy.spatial.transform import Rotation
 
-    from lorisnb.core.geometry import Sim3
+    from lorisnb.core.alignment.geometry import Sim3
 
     gt, _ = tum_pairs["fr1_xyz"]
     t_gt_est = Sim3(Rotation.from_euler("zyx", [30, -10, 5], degrees=True).as_matrix(), np.array([0.1, -0.05, 0.2]))

@@ -1,4 +1,4 @@
-"""A plain file parsed in pieces on threads (:mod:`lorisnb.io.pieces`): pandas' buffer route where
+"""A plain file parsed in pieces on threads (:mod:`lorisnb.io.parsing.pieces`): pandas' buffer route where
 the installed pandas has it, parsers kept between pieces and reads without one piece's numbers
 reaching another's, the real TUM files read as the chunked reader reads them, and a forked child
 that reads after its parent did."""
@@ -14,7 +14,8 @@ import pytest
 from helpers import use_parser
 
 from lorisnb.errors import ParseError
-from lorisnb.io import pieces, read_tum, whole
+from lorisnb.io import read_tum
+from lorisnb.io.parsing import pieces, whole
 
 
 def test_the_buffer_route_is_taken_where_pandas_has_it():

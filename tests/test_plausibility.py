@@ -10,7 +10,7 @@ import pytest
 from helpers import errors_of
 
 import lorisnb as ln
-from lorisnb.core.trajectory import Trajectory
+from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.errors import LorisWarning
 from lorisnb.io import load_groundtruth, read_openloris
 
@@ -142,7 +142,7 @@ def test_median_above_is_the_median_compared():
     """The orientation checks' trigger skips the median's partition when fewer than half of the
     AOEs exceed the limit: it says what ``np.median(v) > limit`` says on every array (odd and
     even lengths, the limit itself among the values, NaN, infinities, empty)."""
-    from lorisnb.core.plausibility import median_above
+    from lorisnb.core.pipeline.plausibility import median_above
 
     rng = np.random.default_rng(3)
     cases = [np.zeros(0), np.array([45.0]), np.array([45.0, 45.0]), np.array([44.0, 46.0]), np.array([45.0, 47.0]),

@@ -13,9 +13,9 @@ import pytest  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
 import lorisnb as ln  # noqa: E402
-from lorisnb.core.sweep import rank_stability, sweep, sweep_scenes  # noqa: E402
-from lorisnb.core.timeline import pose_segments, sequence_layout, timeline_table  # noqa: E402
-from lorisnb.tools import plotting  # noqa: E402
+from lorisnb.core.lifelong.sweep import rank_stability, sweep, sweep_scenes  # noqa: E402
+from lorisnb.core.lifelong.timeline import pose_segments, sequence_layout, timeline_table  # noqa: E402
+from lorisnb.tools.figures import plotting
 
 
 def test_pose_segments_by_hand():

@@ -17,8 +17,8 @@ from scipy.spatial.transform import Rotation
 
 import lorisnb as ln
 from lorisnb.errors import EvaluationError, ParseError
-from lorisnb.io.bags import read_bag
-from lorisnb.io.manifest import read_manifest
+from lorisnb.io.datasets.manifest import read_manifest
+from lorisnb.io.readers.bags import read_bag
 
 pytest.importorskip("rosbags")
 
@@ -201,7 +201,7 @@ def test_a_tls_scheduler_without_tls_settings_is_one_error(monkeypatch):
     pytest.importorskip("distributed")
     import dask
 
-    from lorisnb.tools.pool import connect_scheduler
+    from lorisnb.tools.evaluation.pool import connect_scheduler
 
     server = socket.create_server(("127.0.0.1", 0))  # loopback: accepts, then says nothing
     port = server.getsockname()[1]
@@ -225,7 +225,7 @@ def test_a_tls_scheduler_without_tls_settings_is_one_error(monkeypatch):
 def test_a_bag_folder_in_a_walked_folder_is_one_input(tmp_path, storage):
     """A ROS 2 bag folder found by walking a results folder is one input, not also its .db3 /
     .mcap file (both held the same run: "... both hold ..." and exit status 2)."""
-    from lorisnb.tools.inputs import result_files
+    from lorisnb.tools.evaluation.inputs import result_files
 
     t, gp, gq, ep, eq = _trajectories()
     gt = _tum(tmp_path / "gt.txt", t, gp, gq)

@@ -19,10 +19,10 @@ from evo.main_rpe import rpe
 from evo.tools import file_interface as fi
 
 from lorisnb.cli import main
-from lorisnb.core.spec import make_spec
+from lorisnb.core.spec.evalspec import make_spec
 from lorisnb.errors import EvaluationError, ValidationError
-from lorisnb.tools.crosscheck_evo import crosscheck_evo
-from lorisnb.tools.evo_import import evo_results_table
+from lorisnb.tools.peers.crosscheck_evo import crosscheck_evo
+from lorisnb.tools.peers.evo_import import evo_results_table
 
 GT, EST = "freiburg1_xyz-groundtruth.txt", "freiburg1_xyz-rgbdslam.txt"
 
@@ -154,7 +154,7 @@ def test_to_evo_of_an_empty_trajectory_is_lorisnbs_error(data, tmp_path):
     """A TUM file of comments only, read and handed to evo: lorisnb's ValidationError naming it
     (it was evo's TrajectoryException, 'pose data is empty'); a real one converts both ways."""
     from lorisnb.io import read_tum
-    from lorisnb.tools.evo_bridge import from_evo, to_evo
+    from lorisnb.tools.peers.evo_bridge import from_evo, to_evo
 
     empty = tmp_path / "empty.txt"
     empty.write_text("# timestamp tx ty tz qx qy qz qw\n")
@@ -184,7 +184,7 @@ def test_classic_crosscheck_checks_its_rpe_steps_and_flags(data):
     MetricsException; ``all_pairs="no"`` meant all pairs and ``crosscheck_openloris(scale="no")``
     Sim(3) (strings truth-tested)."""
     from lorisnb.io import read_tum
-    from lorisnb.tools.crosscheck import crosscheck, crosscheck_openloris
+    from lorisnb.tools.peers.crosscheck import crosscheck, crosscheck_openloris
 
     gt, est = read_tum(data.tum / GT), read_tum(data.tum / EST)
     rows = crosscheck(gt, est, rpe_deltas=[(1, "frames")]).set_index("quantity")

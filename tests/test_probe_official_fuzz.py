@@ -38,8 +38,8 @@ import numpy as np
 import pytest
 
 import lorisnb as ln
-from lorisnb.core.frames import extrinsic
-from lorisnb.core.geometry import quat_multiply, quat_normalize, quat_rotate
+from lorisnb.core.alignment.geometry import quat_multiply, quat_normalize, quat_rotate
+from lorisnb.core.trajectory.frames import extrinsic
 
 SEED = 20261126
 INF = math.inf

@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 
 from lorisnb.errors import ParseError
-from lorisnb.io.ordslam import find_ordslam
-from lorisnb.tools.indoor_outdoor import ordslam_difficulty, ordslam_stats
+from lorisnb.io.readers.ordslam import find_ordslam
+from lorisnb.tools.notebook.indoor_outdoor import ordslam_difficulty, ordslam_stats
 
 QUAT = [0.0, 0.0, 0.0, 1.0]
 
@@ -124,7 +124,7 @@ def test_unreadable_groundtruth_is_listed_not_fatal(tmp_path):
 def test_notebook_on_an_awkward_ordslam_folder(tmp_path):
     from test_notebooks import _kernel, run  # noqa: F401  (the kernel fixture of the notebook tests)
 
-    from lorisnb.tools.report import kernel_env
+    from lorisnb.tools.report.build import kernel_env
 
     kernel_env()
     root = _mixed_rates(tmp_path / "ordslam")

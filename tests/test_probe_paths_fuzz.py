@@ -337,8 +337,8 @@ def test_random_options_give_the_same_numbers_on_a_dask_cluster(data, tmp_path, 
 
 @pytest.mark.parametrize("preset", ["evo", "tum", "vio"])
 def test_the_report_leaderboard_scores_a_preset_as_evaluate_and_the_notebook_do(data, preset):
-    from lorisnb.tools.leaderboard import leaderboard_spec
-    from lorisnb.tools.notebook_params import evaluation_spec
+    from lorisnb.tools.notebook.params import evaluation_spec
+    from lorisnb.tools.report.leaderboard import leaderboard_spec
 
     spec = leaderboard_spec({"conventions": preset})
     notebook = evaluation_spec({"conventions": preset, "scale": None})  # evaluate_my_results' parameters

@@ -14,16 +14,16 @@ import pytest
 import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.errors import ValidationError
-from lorisnb.tools import notebook as notebook_module
-from lorisnb.tools import report
-from lorisnb.tools.report import KERNEL_ARGS, kernel_env, notebook_dir
+from lorisnb.tools.notebook import start as notebook_module
+from lorisnb.tools.report import build as report
+from lorisnb.tools.report.build import KERNEL_ARGS, kernel_env, notebook_dir
 
 DECLARED = '# Parameters\neps = "paper"  # ATE threshold\nphi = 30.0  # degrees\nscenes = None  # scenes\nquick = False  # trim\n'
 SETUP = 'session = ln.setup("per_sequence_benchmark", data_root, output_dir, parameters=dict(eps=eps))'
 
 
 class _Shell:
-    """What :func:`lorisnb.tools.notebook.setup` sees of a kernel: its namespace with ``In``."""
+    """What :func:`lorisnb.tools.notebook.start.setup` sees of a kernel: its namespace with ``In``."""
 
     def __init__(self, history: list[str], **namespace):
         self.user_ns = {"In": ["", *history], **namespace}
@@ -38,7 +38,7 @@ def _setup_in(monkeypatch, tmp_path, history, **namespace):
 
 
 def test_history_gives_declared_and_injected_names():
-    from lorisnb.tools.notebook_params import papermill_parameters
+    from lorisnb.tools.notebook.params import papermill_parameters
 
     injected = "# Parameters\nepss = 3\nphi = 10\n"
     declared, given = papermill_parameters(["", DECLARED, injected, SETUP])

@@ -10,8 +10,15 @@ import pandas as pd
 import pytest
 
 import lorisnb as ln
-from lorisnb.core import power, stats
-from lorisnb.core.permutation import difference_interval, holm_levels, permutation_test, runs_needed, units_for_power
+from lorisnb.core.stats import inference as stats
+from lorisnb.core.stats import power
+from lorisnb.core.stats.permutation import (
+    difference_interval,
+    holm_levels,
+    permutation_test,
+    runs_needed,
+    units_for_power,
+)
 
 
 def _one(values: list[float]) -> list[np.ndarray]:

@@ -16,8 +16,8 @@ import pytest
 import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.core import aggregate_scenes, score
-from lorisnb.core.surfaces import cr_surfaces
-from lorisnb.core.sweep import eps_at_cr, sweep, sweep_scenes
+from lorisnb.core.lifelong.surfaces import cr_surfaces
+from lorisnb.core.lifelong.sweep import eps_at_cr, sweep, sweep_scenes
 
 EPS = [np.inf, 0.3, 0.0, "paper", "relative:0.05"]  # unsorted on purpose
 PHI = [180.0, 0.0, 30.0, np.inf]
@@ -224,7 +224,7 @@ def test_a_fine_grid_is_scored_in_chunks_within_bounded_memory(ev):
     """The kernel's (eps, phi, pose) arrays made a fine sweep need E x P x poses x 9 bytes (a
     1000 x 1000 sweep of maslam's cafe: 14.5 GiB, refused with advice to stream to Parquet, which
     needs the same); the grid is now scored in chunks of :data:`CHUNK_BYTES`."""
-    from lorisnb.core.sweep import sweep_bytes
+    from lorisnb.core.lifelong.sweep import sweep_bytes
 
     f = _maslam(ev, "cafe")
     eps, phi = np.geomspace(0.05, 20, 300), np.linspace(0, 180, 100)
@@ -244,7 +244,7 @@ def test_ranking_and_surface_lookups_refuse_what_they_cannot_answer(ev):
     """rank_stability on a sweep's own table (one row per sequence) ranked the sequences averaged,
     with exit status 0; a metric's typo was a KeyError; Surfaces.at found nothing for an evaluation
     of icra20_results (suite 'lifelong') unless given the suite, and said so with a KeyError."""
-    from lorisnb.core.sweep import rank_stability, rank_swaps
+    from lorisnb.core.lifelong.sweep import rank_stability, rank_swaps
 
     files = [f for f in ev.errors if f.algorithm == "maslam"]
     table = sweep(files, [1.0, 3.0, 5.0], [30.0])
@@ -265,7 +265,7 @@ def test_a_sweep_carries_evos_pose_relation_columns_as_evaluate_does(icra20):
     """``sweep --relation R`` said 'pose relation R (ape_*, rpe_* columns)' and wrote none:
     sweep(relation=R) now adds them (threshold-free, per sequence), so a row equals evaluate's.
     (The command line must pass ``relation=ev.spec.relation``: see the report.)"""
-    from lorisnb.core.relation_table import RELATION_COLUMNS
+    from lorisnb.core.metrics.relation_table import RELATION_COLUMNS
 
     ev = ln.evaluate(icra20 / "lifelong" / "maslam" / "cafe.txt", relation="angle_deg", jobs=1)
     direct = ev.sequences(eps=1.0, phi=30.0)

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 import lorisnb as ln
-from lorisnb.core import metrics
+from lorisnb.core.metrics import openloris as metrics
 from lorisnb.core.simulate import Faults, simulated_errors
 from lorisnb.errors import AnswerError, ValidationError
-from lorisnb.io.data import sample_data
+from lorisnb.io.datasets.paths import sample_data
 from lorisnb.tools import teaching as teach
 
 
@@ -74,7 +74,7 @@ def _reads_the_reference(t0, t_min, first_correct, tau):
 @pytest.mark.parametrize(
     ("check", "fn", "kind", "called"),
     [
-        (teach.check_correctness, _delegates_correctness, "correctness", "lorisnb.core.metrics.correctness"),
+        (teach.check_correctness, _delegates_correctness, "correctness", "lorisnb.core.metrics.openloris.correctness"),
         (teach.check_correct_rate, _delegates_cr, "correct_rate", "lorisnb.tools.teaching._checks._cr"),
         (teach.check_cs_r, _reads_the_reference, "cs_r", "lorisnb.tools.teaching._checks._csr"),
     ],
@@ -250,7 +250,7 @@ def test_an_answer_cell_cannot_replace_or_empty_the_checks(capsys):
 def test_eps_at_cr_with_phi_in_radians_is_told_degrees_not_a_formula_nan():
     """Exercise E1 with np.radians(phi): eps_at_cr finds no eps (NaN), and the check said only
     'your answer is NaN'."""
-    from lorisnb.core.sweep import eps_at_cr
+    from lorisnb.core.lifelong.sweep import eps_at_cr
 
     data = sample_data()
     ev = ln.evaluate(sorted((data.icra20 / "per-seq" / "orbslam2_rgbd").glob("cafe*.txt")), data_root=data)
@@ -281,4 +281,4 @@ def test_lorisnbs_own_function_given_as_the_answer_is_refused(hidden):
     for fn in (metrics.correctness, functools.partial(metrics.correctness)):
         for cases in ((), (hidden["correctness"],)):
             msg = _fails(teach.check_correctness, fn, *cases)
-            assert "calls lorisnb's own `lorisnb.core.metrics.correctness`" in msg, msg
+            assert "calls lorisnb's own `lorisnb.core.metrics.openloris.correctness`" in msg, msg

@@ -472,7 +472,7 @@ def test_tum_evaluate_rpe_is_reproduced(data, cases, key):
     error; TUM's evaluate_rpe.py pairs every estimate pose, matches the ground truth within two of
     its median steps, never ends a pair at the last pose and composes B A^-1: rpe.tum_rpe is that
     tool, to the pair (there was no way to get its numbers)."""
-    from lorisnb.core.rpe import tum_rpe
+    from lorisnb.core.metrics.pairs import tum_rpe
 
     name, delta, unit, offset, scale = key
     files = {"fr1": (data.tum / FR1[0], data.tum / FR1[1]), "fr2": (data.tum / FR2[0], data.tum / FR2[1])}

@@ -11,8 +11,8 @@ from helpers import widget_controls
 
 import lorisnb as ln
 from lorisnb.io import load_groundtruth
-from lorisnb.tools import widgets
-from lorisnb.tools.widgets import FaultExplorer, ThresholdExplorer
+from lorisnb.tools.notebook import widgets
+from lorisnb.tools.notebook.widgets import FaultExplorer, ThresholdExplorer
 
 ALGOS = ["maslam", "vins_mono_color_imu_with_loop"]
 METRICS = ["cr", "cr_t", "cs_r", "c_ate_rmse", "c_matched", "matched"]

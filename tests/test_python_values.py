@@ -15,8 +15,8 @@ import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_openloris
-from lorisnb.tools.diff import diff_tables
-from lorisnb.tools.evaluate import evaluate_manifest
+from lorisnb.tools.decisions.diff import diff_tables
+from lorisnb.tools.evaluation.runner import evaluate_manifest
 
 GT, EST = "freiburg1_xyz-groundtruth.txt", "freiburg1_xyz-rgbdslam.txt"
 
@@ -147,7 +147,7 @@ def test_numpy_values_are_read_as_python_values(data, icra20):
     imaginary part; ``compare_table(metric="CR")`` was refused while ``--metric CR`` was not."""
     import numpy as np
 
-    from lorisnb.tools.comparison import compare_table
+    from lorisnb.tools.decisions.comparison import compare_table
 
     for name in ("eps", "phi", "delta", "tau", "max_diff", "t_offset"):
         with pytest.raises(ln.ValidationError, match=f"{name}=(np.)?True_?: expected .*a number"):

@@ -11,8 +11,8 @@ from helpers import write, write_bag
 import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.errors import ParseError, ValidationError
-from lorisnb.io.bags import read_bag
-from lorisnb.tools.evaluate import evaluate_manifest, evaluate_pairs
+from lorisnb.io.readers.bags import read_bag
+from lorisnb.tools.evaluation.runner import evaluate_manifest, evaluate_pairs
 
 GT = "freiburg1_xyz-groundtruth.txt"
 MANIFEST = """

@@ -12,9 +12,9 @@ import pandas as pd
 import pytest
 
 from lorisnb.cli import main
-from lorisnb.core.aggregate import aggregate_scenes
-from lorisnb.core.sweep import sweep, sweep_scenes
-from lorisnb.tools.evaluate import evaluate
+from lorisnb.core.lifelong.aggregate import aggregate_scenes
+from lorisnb.core.lifelong.sweep import sweep, sweep_scenes
+from lorisnb.tools.evaluation.runner import evaluate
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +70,7 @@ def test_evaluate_prints_one_row_per_scene_for_relative_eps(icra20, capsys):
 
 
 def test_rankings_along_eps_refuse_a_relative_sweep(maslam):
-    from lorisnb.core.sweep import rank_stability, rank_swaps
+    from lorisnb.core.lifelong.sweep import rank_stability, rank_swaps
     from lorisnb.errors import ValidationError
 
     grid = sweep(maslam.errors, [0.05, 0.1], [np.inf], [1.0], [60.0], relative_to="extent")

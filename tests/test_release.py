@@ -8,12 +8,12 @@ import weakref
 
 import numpy as np
 
-from lorisnb.core import pipeline
-from lorisnb.core.association import Association
-from lorisnb.core.pipeline import evaluate_sessions
+from lorisnb.core.alignment.association import Association
+from lorisnb.core.pipeline import sessions as pipeline
+from lorisnb.core.pipeline.sessions import evaluate_sessions
 from lorisnb.core.simulate import Faults, simulate
 from lorisnb.io import read_tum
-from lorisnb.tools import jobs
+from lorisnb.tools.evaluation import jobs
 
 
 def test_matched_rows_are_a_view_when_consecutive():

@@ -18,7 +18,7 @@ from helpers import write
 import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.errors import LorisError
-from lorisnb.tools.report import run_report
+from lorisnb.tools.report.build import run_report
 
 pytestmark = pytest.mark.slow
 
@@ -110,8 +110,8 @@ def test_report_on_a_results_folder_with_trials(tmp_path, icra20, data, capfd):
     pages, a world-readable folder, run.json with every input's checksum, and verify."""
     from report_fixtures import trial_results
 
-    from lorisnb.tools.leaderboard import findings
-    from lorisnb.tools.provenance import sha256
+    from lorisnb.tools.report.leaderboard import findings
+    from lorisnb.tools.report.provenance import sha256
 
     results = trial_results(tmp_path / "mine", icra20)
     out = tmp_path / "run"

@@ -11,7 +11,8 @@ import tempfile
 import pytest
 
 from lorisnb.cli import main
-from lorisnb.tools import report, report_notebooks
+from lorisnb.tools.report import build as report
+from lorisnb.tools.report import notebooks as report_notebooks
 
 
 @pytest.mark.skipif(os.name != "posix", reason="ipc sockets: POSIX")

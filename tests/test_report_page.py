@@ -16,10 +16,10 @@ from report_fixtures import trial_results
 import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.errors import ValidationError
-from lorisnb.tools.leaderboard import BOARD_COLUMNS, findings
-from lorisnb.tools.provenance import KEYS, checksums, run_record, verify_run, write_run_json
-from lorisnb.tools.report_html import WIDGET_NOTE, export_html, single_file, static_widgets
-from lorisnb.tools.report_notebooks import available_notebooks, notebook_problem
+from lorisnb.tools.report.html import WIDGET_NOTE, export_html, single_file, static_widgets
+from lorisnb.tools.report.leaderboard import BOARD_COLUMNS, findings
+from lorisnb.tools.report.notebooks import available_notebooks, notebook_problem
+from lorisnb.tools.report.provenance import KEYS, checksums, run_record, verify_run, write_run_json
 
 
 @pytest.fixture(scope="module")
@@ -197,7 +197,7 @@ def test_a_run_folder_is_readable_and_records_its_provenance(tmp_path, monkeypat
     import os
     import stat
 
-    from lorisnb.tools import report
+    from lorisnb.tools.report import build as report
 
     monkeypatch.setattr(report, "run_notebook", lambda name, out_dir, parameters, timeout=1800, notebooks_dir=None:
                         report.NotebookRun(name))  # fmt: skip

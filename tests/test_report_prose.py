@@ -10,9 +10,9 @@ import subprocess
 import pandas as pd
 import pytest
 
-from lorisnb.tools.leaderboard import sentence
-from lorisnb.tools.report_index import git_dirty, write_index
-from lorisnb.tools.report_notebooks import NotebookRun, shown_default
+from lorisnb.tools.report.index import git_dirty, write_index
+from lorisnb.tools.report.leaderboard import sentence
+from lorisnb.tools.report.notebooks import NotebookRun, shown_default
 
 
 def _board(values, n=5):

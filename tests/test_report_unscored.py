@@ -10,10 +10,10 @@ import pandas as pd
 import pytest
 from helpers import write
 
-from lorisnb.io.data import find_data
-from lorisnb.tools.leaderboard import report_findings
-from lorisnb.tools.report_index import write_index
-from lorisnb.tools.runs import unscored_inputs
+from lorisnb.io.datasets.paths import find_data
+from lorisnb.tools.decisions.runs import unscored_inputs
+from lorisnb.tools.report.index import write_index
+from lorisnb.tools.report.leaderboard import report_findings
 
 PER_SEQ = "per-seq"
 
@@ -64,7 +64,7 @@ def test_a_scene_filter_without_ground_truth_is_refused_before_anything_runs(tmp
     """-p scenes naming only a scene the results hold but the data has no ground truth for (office):
     nothing could be scored, so the report refuses it up front (exit 2), saying why."""
     from lorisnb.cli import main
-    from lorisnb.tools import report
+    from lorisnb.tools.report import build as report
 
     source = _results(tmp_path / "res", icra20)
     started: list = []
@@ -101,7 +101,7 @@ def test_the_per_sequence_values_show_every_sequence_with_ground_truth(tmp_path,
 def test_compare_algorithms_reports_its_failed_inputs_as_the_other_notebooks(tmp_path, icra20, data):
     """compare_algorithms writes input_errors.csv through the session as the other notebooks do, so
     the report counts its failed inputs ('ok, N input file(s) failed') instead of a plain 'ok'."""
-    from lorisnb.tools.report_notebooks import run_one
+    from lorisnb.tools.report.notebooks import run_one
 
     source = _results(tmp_path / "res", icra20)
     write(source, "algA/cafe-1-3.txt", "scene: cafe\nseq: 1\nnot a pose line\n")  # a broken file

@@ -1,5 +1,5 @@
-"""The compiled rotation kernel (``lorisnb/core/_rotations.c``) against the numpy code it mirrors
-(``lorisnb.core.matrices._rotation_run``): the same quaternion and distance bits for every block
+"""The compiled rotation kernel (``lorisnb/core/trajectory/_rotations.c``) against the numpy code it mirrors
+(``lorisnb.core.trajectory.rotations._rotation_run``): the same quaternion and distance bits for every block
 (exact, printed to 3-12 digits, noisy, far from any rotation, huge, zero, non-finite, ties), and
 the same trajectories from real files read as KITTI."""
 
@@ -13,10 +13,10 @@ import pytest
 from helpers import use_parser
 from scipy.spatial.transform import Rotation
 
-from lorisnb.core import matrices
+from lorisnb.core.trajectory import rotations as matrices
 from lorisnb.io import read_kitti, read_tum
 
-needs_kernel = pytest.mark.skipif(matrices._kernel is None, reason="lorisnb.core._rotations was not built")
+needs_kernel = pytest.mark.skipif(matrices._kernel is None, reason="lorisnb.core.trajectory._rotations was not built")
 
 
 def _compiler() -> str | None:
@@ -29,7 +29,7 @@ def test_the_install_built_the_kernel_where_a_compiler_is():
     silently (the numpy code would give the same numbers, at about twice the time, holding the GIL)."""
     if _compiler() is None:
         pytest.skip("no C compiler here: the numpy code is used")
-    assert matrices._kernel is not None, "reinstall (make bytecode): lorisnb/core/_rotations.c was not built"
+    assert matrices._kernel is not None, "reinstall (make bytecode): lorisnb/core/trajectory/_rotations.c was not built"
 
 
 def _both(blocks: np.ndarray):

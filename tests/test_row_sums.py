@@ -11,8 +11,8 @@ import tracemalloc
 
 import numpy as np
 
-from lorisnb.core import scoring
-from lorisnb.core.scoring import row_sums
+from lorisnb.core.lifelong import scoring
+from lorisnb.core.lifelong.scoring import row_sums
 
 
 def _grid(rows: int, poses: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:

@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 from helpers import PARSERS, use_parser, write
 
-from lorisnb.core.trajectory import QUAT_EPS
+from lorisnb.core.trajectory.poses import QUAT_EPS
 from lorisnb.errors import ParseError
-from lorisnb.io import formats, read_euroc, read_tum
+from lorisnb.io import read_euroc, read_tum
+from lorisnb.io.readers import plain as formats
 
 N = 1000
 EDGE = float(np.sqrt(QUAT_EPS))

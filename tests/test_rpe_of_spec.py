@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 import lorisnb as ln
-from lorisnb.core.spec import EvalSpec
+from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.errors import ValidationError
 
 RPE = ["rpe_trans_rmse", "rpe_rot_rmse", "rpe_pairs"]

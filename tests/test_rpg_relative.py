@@ -9,9 +9,9 @@ import math
 import pytest
 from reference_tools import REFERENCE
 
-from lorisnb.core.conventions import Conventions
-from lorisnb.core.pipeline import session_errors
-from lorisnb.core.relative import relative_table, rpg_lengths
+from lorisnb.core.conventions.choices import Conventions
+from lorisnb.core.metrics.relative import relative_table, rpg_lengths
+from lorisnb.core.pipeline.sessions import session_errors
 from lorisnb.io import read_tum
 
 PAIRS = {

@@ -14,8 +14,8 @@ import pytest
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.tools.provenance import checksums, input_files, run_record, verify_run, write_run_json
-from lorisnb.tools.runs import load_run, spec_differences
+from lorisnb.tools.decisions.runs import load_run, spec_differences
+from lorisnb.tools.report.provenance import checksums, input_files, run_record, verify_run, write_run_json
 
 #: The tables a report run holds the same sequences in (the report's own, then the notebooks').
 TABLES = ("findings/sequences.csv", "per_sequence_benchmark/sequences.csv", "lifelong_benchmark/sequences.csv")
@@ -166,7 +166,7 @@ def test_verify_notices_files_added_to_the_folders_read(tmp_path, results, table
 
 @pytest.mark.parametrize("where", ["out in results", "out in an algorithm folder", "results in out", "same"])
 def test_report_output_overlapping_the_results_is_refused_first(tmp_path, results, capsys, monkeypatch, where):
-    import lorisnb.tools.report as report
+    import lorisnb.tools.report.build as report
 
     monkeypatch.setattr(report, "run_notebook", lambda *a, **k: pytest.fail("a notebook ran"))
     res = tmp_path / "res"
@@ -204,7 +204,7 @@ def test_folder_outputs_inside_an_input_folder_are_refused(tmp_path, results, ca
     ],
 )
 def test_report_parameters_are_checked_before_anything_runs(tmp_path, capsys, monkeypatch, name, value, message):
-    import lorisnb.tools.report as report
+    import lorisnb.tools.report.build as report
 
     monkeypatch.setattr(report, "run_notebook", lambda *a, **k: pytest.fail("a notebook ran"))
     out = tmp_path / "run"
@@ -227,7 +227,7 @@ def test_compare_and_diff_use_the_same_validators(results, capsys):
 def test_report_results_are_the_leaderboards_input_whatever_notebooks_run(tmp_path, results, monkeypatch):
     """--results with a notebook that does not declare results_dir: the leaderboard, run.json's
     inputs and the overlap check are about the results folder, not the bundled icra20 results."""
-    import lorisnb.tools.report as report
+    import lorisnb.tools.report.build as report
 
     monkeypatch.setattr(report, "run_notebook", lambda name, out_dir, *a, **k: report.NotebookRun(name))
     out, runs = report.run_report(tmp_path / "run", {}, ["metrics_primer"], progress=False, results=results)

@@ -15,9 +15,9 @@ from helpers import write
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core.geometry import quat_to_matrix
-from lorisnb.tools import report
-from lorisnb.tools.provenance import sha256
+from lorisnb.core.alignment.geometry import quat_to_matrix
+from lorisnb.tools.report import build as report
+from lorisnb.tools.report.provenance import sha256
 
 ORB = "per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt"
 DSO = "per-seq/dso/corridor-1-1-all.txt"
@@ -263,7 +263,7 @@ def test_thresholds_are_validated_everywhere(icra20):
             ev.sequences(**kw)
         with pytest.raises(ln.ValidationError):
             ln.sweep(ev.errors, **{k: [v] for k, v in kw.items()})
-    from lorisnb.tools.widgets import ThresholdExplorer
+    from lorisnb.tools.notebook.widgets import ThresholdExplorer
 
     with pytest.raises(ln.ValidationError, match="tau=0"):
         ThresholdExplorer(ev.errors, ev.durations(), tau=0)

@@ -1,14 +1,14 @@
 """A report's figures are the same at every run: seaborn's strip-plot jitter is seeded by
-:func:`lorisnb.tools.plotting.same_jitter`, which leaves numpy's global generator as it was."""
+:func:`lorisnb.tools.figures.plotting.same_jitter`, which leaves numpy's global generator as it was."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
-from lorisnb.tools.evaluate import evaluate
-from lorisnb.tools.notebook import figure_png
-from lorisnb.tools.trial_plots import plot_trials
+from lorisnb.tools.evaluation.runner import evaluate
+from lorisnb.tools.figures.trials import plot_trials
+from lorisnb.tools.notebook.start import figure_png
 
 
 def test_trial_figure_is_the_same_at_every_run_and_leaves_numpys_generator_alone(icra20):
@@ -27,13 +27,13 @@ def test_trial_figure_is_the_same_at_every_run_and_leaves_numpys_generator_alone
 
 def test_heatmaps_measure_their_texts_with_one_renderer_and_look_the_same(icra20, monkeypatch):
     """A figure outside pyplot measures its texts with one kept renderer
-    (:class:`lorisnb.tools.plotting._MeasuredFigure`) instead of a new one per text: seaborn's
+    (:class:`lorisnb.tools.figures.plotting._MeasuredFigure`) instead of a new one per text: seaborn's
     heatmaps, which measure every tick label, come out pixel for pixel as with matplotlib's own."""
     import matplotlib.backends.backend_agg as agg
     from matplotlib.figure import Figure
 
-    from lorisnb.core.sweep import sweep, sweep_scenes
-    from lorisnb.tools import plotting
+    from lorisnb.core.lifelong.sweep import sweep, sweep_scenes
+    from lorisnb.tools.figures import plotting
 
     ev = evaluate([icra20 / "lifelong" / "maslam", icra20 / "lifelong" / "ds-slam"], jobs=1, progress=False)
     grid = sweep_scenes(sweep(ev.errors, [0.1, 0.3, 1.0, 3.0, 10.0], [10.0, 30.0, 90.0], [1.0], [60.0]), ev.durations())

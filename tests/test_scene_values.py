@@ -1,6 +1,6 @@
 """One scene value for every path (trial finding 3): ``evaluate``'s scene table, ``Evaluation.scenes``,
 ``compare``, the report leaderboard and ``diff`` give a scene's CS-R (and CR) through
-:func:`lorisnb.core.aggregate.scene_mean`, a sequence without output counting as a failed run
+:func:`lorisnb.core.lifelong.aggregate.scene_mean`, a sequence without output counting as a failed run
 (CS-R 0), on real results with sequences missing."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import pytest
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.tools.leaderboard import findings
+from lorisnb.tools.report.leaderboard import findings
 
 ORB = "home_1_{}_orbslam2-original.txt"
 

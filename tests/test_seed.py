@@ -1,4 +1,4 @@
-"""A seed is checked by one validator (``lorisnb.core.validate.seed``) at every entry point
+"""A seed is checked by one validator (``lorisnb.core.spec.validate.seed``) at every entry point
 (trial finding 4): the command line's ``--seed`` of compare and diff, report ``-p seed``, the
 Python functions that take a seed and a notebook's ``seed`` parameter. A negative seed was a
 numpy traceback (``np.random.default_rng(-1)``)."""
@@ -10,11 +10,13 @@ import pandas as pd
 import pytest
 
 from lorisnb.cli import main
-from lorisnb.core import regression, stats, validate
-from lorisnb.core.permutation import difference_interval
 from lorisnb.core.simulate import Faults
+from lorisnb.core.spec import validate
+from lorisnb.core.stats import inference as stats
+from lorisnb.core.stats import regression
+from lorisnb.core.stats.permutation import difference_interval
 from lorisnb.errors import ValidationError
-from lorisnb.tools.notebook_params import check_parameters
+from lorisnb.tools.notebook.params import check_parameters
 
 BAD = [-1, "-1", 1.5, "1.5", True, "x", None, float("nan")]
 

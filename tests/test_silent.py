@@ -19,14 +19,14 @@ from scipy.spatial.transform import Rotation
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core.conventions import fit_alignment
-from lorisnb.core.geometry import degenerate_alignment, umeyama
-from lorisnb.core.trajectory import Trajectory
-from lorisnb.core.units import check_stamp_units, stamp_unit
-from lorisnb.io import registry
-from lorisnb.tools import pool
-from lorisnb.tools.evaluate import evaluate_manifest, evaluate_pairs
-from lorisnb.tools.inputs import result_files
+from lorisnb.core.alignment.geometry import degenerate_alignment, umeyama
+from lorisnb.core.conventions.choices import fit_alignment
+from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.core.trajectory.units import check_stamp_units, stamp_unit
+from lorisnb.io.readers import registry
+from lorisnb.tools.evaluation import pool
+from lorisnb.tools.evaluation.inputs import result_files
+from lorisnb.tools.evaluation.runner import evaluate_manifest, evaluate_pairs
 
 GT, EST = "freiburg1_xyz-groundtruth.txt", "freiburg1_xyz-rgbdslam.txt"
 
@@ -227,7 +227,7 @@ def test_evo_tf_spelling_is_read_as_lorisnb_spelling(pair, tmp_path):
 
 def test_the_registry_is_the_one_source_of_format_knowledge():
     from lorisnb.cli import build_parser
-    from lorisnb.io.manifest import SUFFIX
+    from lorisnb.io.datasets.manifest import SUFFIX
 
     assert set(registry.FORMAT_NAMES) == set(registry.FORMATS) == set(ln.io.TRAJECTORY_FORMATS)
     sub = build_parser()._subparsers._group_actions[0].choices  # type: ignore[union-attr]
@@ -514,7 +514,7 @@ def test_a_real_scheduler_on_loopback_connects():
 def test_outputs_are_refused_before_any_work(data, tmp_path, monkeypatch, capsys, outputs, message):
     monkeypatch.chdir(tmp_path)
     called = []
-    monkeypatch.setattr("lorisnb.tools.jobs.read_trajectory", lambda *a, **k: called.append(a))
+    monkeypatch.setattr("lorisnb.tools.evaluation.jobs.read_trajectory", lambda *a, **k: called.append(a))
     rc = main(["compare", str(data.tum / EST), "--gt", str(data.tum / GT), *outputs, "--no-progress"])
     assert rc == 2 and message in _err(capsys)
     assert called == [] and list(tmp_path.iterdir()) == []  # nothing read, nothing left behind

@@ -3,7 +3,7 @@ pose may be matched up to ``max_diff`` before the first or after the last ground
 time used to count outside the span (CR 1.0002 on fr1_xyz read the other way round) and a last
 pose after the span took time away (a negative interval). Every place that sums correct time
 (per-sequence scores, sweeps, CR surfaces, timelines) follows the one rule,
-:func:`lorisnb.core.metrics.valid_intervals`."""
+:func:`lorisnb.core.metrics.openloris.valid_intervals`."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 import lorisnb as ln
-from lorisnb.core.surfaces import cr_surfaces
-from lorisnb.core.sweep import sweep
-from lorisnb.core.timeline import timeline_table
-from lorisnb.tools.evaluate import evaluate_pairs
+from lorisnb.core.lifelong.surfaces import cr_surfaces
+from lorisnb.core.lifelong.sweep import sweep
+from lorisnb.core.lifelong.timeline import timeline_table
+from lorisnb.tools.evaluation.runner import evaluate_pairs
 
 GT, EST = "freiburg1_xyz-groundtruth.txt", "freiburg1_xyz-rgbdslam.txt"
 
@@ -67,7 +67,7 @@ def test_estimate_and_ground_truth_read_the_other_way_round_score_at_most_1(data
 
 def test_a_last_pose_after_the_span_holds_no_time(data, tmp_path):
     """Only the last pose correct, matched 3 ms after the span: it held -3 ms (a negative CR)."""
-    from lorisnb.core import metrics
+    from lorisnb.core.metrics import openloris as metrics
 
     e = _shifted(data, tmp_path, 0.003).errors[0].sequences[0]
     assert e.stamps[-1] > e.gt_end

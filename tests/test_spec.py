@@ -11,9 +11,9 @@ from helpers import write
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core.spec import PRESETS, EvalSpec, make_spec
-from lorisnb.core.spec_table import spec_table
-from lorisnb.core.trajectory import Trajectory
+from lorisnb.core.spec.evalspec import PRESETS, EvalSpec, make_spec
+from lorisnb.core.spec.table import spec_table
+from lorisnb.core.trajectory.poses import Trajectory
 
 TUM = "tum-rgbd"
 
@@ -118,4 +118,4 @@ def test_readme_holds_the_spec_table():
     from pathlib import Path
 
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    assert spec_table() in readme, "README: paste lorisnb.core.spec_table.spec_table() into the evaluation section"
+    assert spec_table() in readme, "README: paste lorisnb.core.spec.table.spec_table() into the evaluation section"

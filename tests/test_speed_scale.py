@@ -29,7 +29,7 @@ def test_local_processes_equal_one_process(icra20):
 def test_durations_come_from_the_workers_and_equal_reading_the_ground_truth(icra20):
     """Scene durations (the CR denominators) are the spans the workers saw, not a second read of
     every ground truth in the parent; they equal reading it."""
-    from lorisnb.core.aggregate import durations_table
+    from lorisnb.core.lifelong.aggregate import durations_table
     from lorisnb.io import load_groundtruth
 
     ev = ln.evaluate(icra20 / "lifelong", jobs=2, progress=False)
@@ -41,9 +41,9 @@ def test_durations_come_from_the_workers_and_equal_reading_the_ground_truth(icra
 
 
 def test_row_blocks_and_threads_give_the_same_numbers(icra20, monkeypatch):
-    """Long per-pose computations run in row blocks, on threads (lorisnb.core.blocks): every
+    """Long per-pose computations run in row blocks, on threads (lorisnb.core.trajectory.blocks): every
     error, RPE included, is the same whatever the block size and thread count."""
-    from lorisnb.core import blocks
+    from lorisnb.core.trajectory import blocks
 
     path = icra20 / "lifelong" / "maslam" / "market.txt"  # 3 sequences, about 11,000 poses
     whole = ln.evaluate(path, jobs=1, progress=False, official_interpolation=False)
@@ -61,7 +61,7 @@ def test_row_blocks_and_threads_give_the_same_numbers(icra20, monkeypatch):
             for x, y in zip(ea.rpe(), eb.rpe(), strict=True):
                 np.testing.assert_array_equal(x, y)
     # the statistics of the tables, computed side by side on threads (blocks.each): the same numbers
-    from lorisnb.core.scoring import score_rows
+    from lorisnb.core.lifelong.scoring import score_rows
 
     alone = score_rows(whole.errors)
     monkeypatch.setattr(blocks, "BLOCK_ROWS", 7)  # each sequence's arrays long enough for threads
@@ -78,7 +78,7 @@ def test_releasing_the_result_gives_the_same_errors(icra20, data):
     """compute_errors(release=result.sequences.pop), as evaluate() calls it to let a long file's poses
     go sequence by sequence (the edge drops its own object; the core writes into nothing): the same
     errors, every sequence released once, the last only after the frame checks would have looked."""
-    from lorisnb.core.pipeline import compute_errors
+    from lorisnb.core.pipeline.sessions import compute_errors
 
     path = icra20 / "lifelong" / "maslam" / "market.txt"
     gt = ln.load_groundtruth("market", data)
@@ -168,8 +168,8 @@ def test_parquet_force_never_replaces_a_foreign_dataset(icra20, tmp_path, capsys
 
 
 def test_a_sweep_too_large_for_memory_streams_to_parquet_with_the_same_rows(icra20, tmp_path, capsys):
-    from lorisnb.core.sweep import sweep, sweep_bytes, sweep_groups
-    from lorisnb.tools.streaming import sweep_to_parquet
+    from lorisnb.core.lifelong.sweep import sweep, sweep_bytes, sweep_groups
+    from lorisnb.tools.evaluation.streaming import sweep_to_parquet
 
     ev = ln.evaluate(icra20 / "lifelong", scale="auto", jobs=1)
     grid = (np.geomspace(0.1, 10, 12), [10.0, 30.0, 90.0], [0.5, 1.0], [30.0, 60.0])
@@ -204,7 +204,7 @@ def test_lent_threads_belong_to_the_thread_that_lent_them():
     import time
     from concurrent.futures import ThreadPoolExecutor
 
-    from lorisnb.core import blocks
+    from lorisnb.core.trajectory import blocks
 
     def where() -> tuple[int, set[int], set[int]]:
         ran: set[int] = set()

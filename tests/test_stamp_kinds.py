@@ -19,11 +19,11 @@ from helpers import write
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core.conventions import associate_nearest
-from lorisnb.core.spec import PRESETS
-from lorisnb.core.trajectory import Trajectory
-from lorisnb.core.units import diagnose
-from lorisnb.tools.evaluate import evaluate_pairs
+from lorisnb.core.conventions.choices import associate_nearest
+from lorisnb.core.spec.evalspec import PRESETS
+from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.core.trajectory.units import diagnose
+from lorisnb.tools.evaluation.runner import evaluate_pairs
 
 GT, EST = "freiburg1_xyz-groundtruth.txt", "freiburg1_xyz-rgbdslam.txt"
 ORB_CAFE = "per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt"

@@ -33,9 +33,9 @@ def test_help_imports_no_pandas():
 
 
 def test_names_and_submodules_keep_their_meaning():
-    """A name that is also a submodule's stays the name (``lorisnb.core.sweep`` the function)."""
+    """A name that is also a submodule's stays the name (``lorisnb.core.lifelong.sweep`` the function)."""
     code = (
-        "import lorisnb.core.sweep, lorisnb.tools.evaluate, lorisnb as ln\n"
+        "import lorisnb.core.lifelong.sweep, lorisnb.tools.evaluation.runner, lorisnb as ln\n"
         "assert callable(ln.core.sweep) and callable(ln.tools.evaluate) and callable(ln.core.simulate)\n"
         "assert ln.io.read_tum is ln.read_tum and 'read_tum' in dir(ln)"
     )
@@ -74,7 +74,7 @@ def test_report_processes_import_papermill_without_the_iri_grammars():
         return out.split()[-2:]
 
     assert run("") == ["True", "True"]  # what a plain process pays
-    assert run("from lorisnb.tools.report import _worker_start\n_worker_start(None)") == ["False", "True"]
+    assert run("from lorisnb.tools.report.build import _worker_start\n_worker_start(None)") == ["False", "True"]
     cli = "from lorisnb.cli import main\nassert main(['report', '--notebooks', 'no_such_notebook']) == 2"  # refused, after the set-up
     assert run(cli) == ["False", "True"]
 
@@ -84,7 +84,7 @@ def test_workers_are_forked_with_their_modules_where_the_process_runs_one_thread
     while this process runs a single thread, else started from a fork server (evaluation) or
     spawned (a report's workers), as in a Jupyter kernel, which runs threads."""
     code = (
-        "import sys, threading\nfrom lorisnb.tools.pool import start_context\n"
+        "import sys, threading\nfrom lorisnb.tools.evaluation.pool import start_context\n"
         "ctx = start_context(('xml.dom.minidom', 'not_installed_anywhere'), fallback='spawn')  # the task says what is missing\n"
         "print(ctx.get_start_method(), 'xml.dom.minidom' in sys.modules)\n"
         "threading.Thread(target=threading.Event().wait, daemon=True).start()\n"

@@ -11,9 +11,10 @@ from helpers import write
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core import ranking, stats
-from lorisnb.core.trials import split_trial
-from lorisnb.tools.tables import comparison_table, interval, to_latex, to_markdown
+from lorisnb.core.stats import inference as stats
+from lorisnb.core.stats import ranking
+from lorisnb.core.stats.trials import split_trial
+from lorisnb.tools.report.tables import comparison_table, interval, to_latex, to_markdown
 
 ORB = "per-seq/orbslam2_rgbd/cafe_1_1_orbslam2-original.txt"
 

@@ -7,7 +7,7 @@ import pytest
 
 import lorisnb as ln
 from lorisnb.core import aggregate_scenes
-from lorisnb.core.surfaces import cr_surfaces
+from lorisnb.core.lifelong.surfaces import cr_surfaces
 
 
 @pytest.fixture(scope="module")

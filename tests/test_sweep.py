@@ -10,7 +10,7 @@ from helpers import durations_of
 import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.core import aggregate_scenes, score
-from lorisnb.core.sweep import eps_at_cr, rank_stability, rank_swaps, sequence_size, sweep, sweep_scenes
+from lorisnb.core.lifelong.sweep import eps_at_cr, rank_stability, rank_swaps, sequence_size, sweep, sweep_scenes
 
 EPS = [0.1, 0.3, 1.0, 3.0, 10.0, np.inf]
 PHI = [5.0, 30.0, np.inf]

@@ -224,7 +224,7 @@ def test_checks_on_cases_from_a_real_sequence():
     second visit re-localizes wrongly; the right functions pass, the no-cap CR and the CS-R that
     ignores the first pose fail with their hints."""
     import lorisnb as ln
-    from lorisnb.io.data import sample_data
+    from lorisnb.io.datasets.paths import sample_data
 
     gt = ln.load_groundtruth("cafe", sample_data())
     fe = simulated_errors(
@@ -247,7 +247,7 @@ def test_checks_on_cases_from_a_real_sequence():
 
 @pytest.fixture(scope="module")
 def sample():
-    from lorisnb.io.data import sample_data
+    from lorisnb.io.datasets.paths import sample_data
 
     return sample_data()
 
@@ -256,7 +256,7 @@ def test_lab_checks_compute_their_reference_and_name_the_mistake(sample):
     """The lab checks whose reference lorisnb computes (so the student version shows no solution):
     the right answers pass; the typical wrong ones get their hint."""
     import lorisnb as ln
-    from lorisnb.core.sweep import eps_at_cr
+    from lorisnb.core.lifelong.sweep import eps_at_cr
 
     gt = ln.load_groundtruth("cafe", sample)
     faults = {1: Faults(position_noise_m=0.05), 2: Faults(wrong_reloc_at_s=0.0, wrong_reloc_offset_m=(4.0, 0.0, 0.0))}

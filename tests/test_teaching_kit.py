@@ -195,7 +195,7 @@ def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path, teaching_p
 def test_sample_data_is_small_and_a_verbatim_subset_of_the_data(data):
     """The teaching data shipped in the package: every file under 512 KiB, about 1.4 MB in all,
     each a byte-for-byte copy of the file of the same path in the full data (teaching/make_sample_data.py)."""
-    from lorisnb.io.data import sample_data
+    from lorisnb.io.datasets.paths import sample_data
 
     root = sample_data().root
     files = [p for p in root.rglob("*") if p.is_file() and p != root / "README.md"]  # that one is the sample's own

@@ -15,7 +15,7 @@ import pytest
 
 import lorisnb as ln
 from lorisnb.core.simulate import Faults, simulated_errors
-from lorisnb.io.data import sample_data
+from lorisnb.io.datasets.paths import sample_data
 from lorisnb.tools import teaching as teach
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -84,8 +84,8 @@ def orbslam2(data, icra20):
     ],
 )
 def test_figures_validate_their_thresholds_as_the_tables_do(orbslam2, kw, said):
-    from lorisnb.core.timeline import timeline_table
-    from lorisnb.tools.plotting import plot_timeline, plot_trajectories
+    from lorisnb.core.lifelong.timeline import timeline_table
+    from lorisnb.tools.figures.plotting import plot_timeline, plot_trajectories
 
     with pytest.raises(ln.ValidationError) as table_error:
         orbslam2.sequences(**kw)
@@ -101,7 +101,7 @@ def test_figures_validate_their_thresholds_as_the_tables_do(orbslam2, kw, said):
 
 
 def test_a_zero_validity_window_is_refused_by_the_timeline_as_by_score(orbslam2):
-    from lorisnb.core.timeline import timeline_table
+    from lorisnb.core.lifelong.timeline import timeline_table
 
     with pytest.raises(ln.ValidationError, match="delta=0: expected a number of seconds > 0"):
         timeline_table(orbslam2.errors, eps=1, phi=30, delta=0)
@@ -126,7 +126,7 @@ def test_the_timeline_draws_each_trial_on_its_own_row_with_its_own_numbers(tmp_p
     one row named ``vins`` with both trials' segments and both CRs printed over each other."""
     import shutil
 
-    from lorisnb.tools.plotting import plot_timeline
+    from lorisnb.tools.figures.plotting import plot_timeline
 
     (tmp_path / "vins").mkdir()
     lifelong = icra20 / "lifelong"
@@ -197,8 +197,8 @@ def test_a_conflicting_scale_is_told_in_the_command_lines_words(data, capsys):
 def test_a_zero_d_array_is_one_threshold_on_every_grid_path(tmp_path, data):
     import numpy as np
 
-    from lorisnb.core.validate import threshold_list
-    from lorisnb.tools.streaming import sweep_to_parquet
+    from lorisnb.core.spec.validate import threshold_list
+    from lorisnb.tools.evaluation.streaming import sweep_to_parquet
 
     assert threshold_list("eps", np.array(0.3)) == [0.3] and threshold_list("phi", np.float64(30)) == [30.0]
     est, gt = data.tum / "fr2_desk_ORB.txt", data.tum / "fr2_desk_groundtruth.txt"

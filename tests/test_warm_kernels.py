@@ -1,4 +1,4 @@
-"""A report's kernels forked from a zygote (lorisnb.tools.warm_kernels) are the kernels Jupyter
+"""A report's kernels forked from a zygote (lorisnb.tools.report.kernels) are the kernels Jupyter
 would have launched: the same facts seen from inside (argv, folder, path, environment, process
 group, pandas' display width, tqdm's bar, matplotlib's backend, warnings filters), a fresh random
 state each, interrupts, shutdown, the end of the kernel with its manager; and kernels are
@@ -25,8 +25,8 @@ import pytest
 pytest.importorskip("ipykernel")
 pytest.importorskip("jupyter_client")
 
-from lorisnb.tools import warm_kernels  # noqa: E402
-from lorisnb.tools.report_notebooks import KERNEL_ARGS, kernel_manager_class, warm_kernels_for_report  # noqa: E402
+from lorisnb.tools.report import kernels as warm_kernels
+from lorisnb.tools.report.notebooks import KERNEL_ARGS, kernel_manager_class, warm_kernels_for_report  # noqa: E402
 
 pytestmark = pytest.mark.skipif(not warm_kernels.supported(), reason="forking kernels needs Linux")
 
@@ -95,7 +95,7 @@ def _kernels(cwd: Path, zygote) -> list[tuple[dict, object]]:
 
 
 def test_a_forked_kernel_is_the_kernel_jupyter_launches(tmp_path):
-    from lorisnb.tools.report_notebooks import kernel_env
+    from lorisnb.tools.report.notebooks import kernel_env
 
     kernel_env()
     (launched, launched_proc), _ = _kernels(tmp_path, None)
@@ -147,7 +147,7 @@ MANAGER = textwrap.dedent(
     """
     import asyncio, json, sys, time
     from lorisnb.tools import warm_kernels
-    from lorisnb.tools.report_notebooks import KERNEL_ARGS, kernel_manager_class
+    from lorisnb.tools.report.notebooks import KERNEL_ARGS, kernel_manager_class
     z = json.loads(sys.argv[1])
     warm_kernels.use(warm_kernels.Zygote(z["address"], tuple(z["interpreter"]), tuple(map(tuple, z["env"]))))
     async def main():
@@ -163,7 +163,7 @@ MANAGER = textwrap.dedent(
 
 def test_a_forked_kernel_ends_with_the_process_managing_it(tmp_path):
     """A launched kernel's parent poller ends it when its manager dies; a forked one's watcher does."""
-    from lorisnb.tools.report_notebooks import kernel_environ
+    from lorisnb.tools.report.notebooks import kernel_environ
 
     with warm_kernels_for_report() as zygote:
         assert zygote is not None
@@ -193,7 +193,7 @@ def test_the_zygote_ends_with_the_report(tmp_path):
     code = textwrap.dedent(
         """
         import os, sys, time
-        from lorisnb.tools.report_notebooks import warm_kernels_for_report
+        from lorisnb.tools.report.notebooks import warm_kernels_for_report
         with warm_kernels_for_report() as z:
             print(z.address, flush=True)
             time.sleep(600)
@@ -320,7 +320,7 @@ def test_a_report_stopped_midway_leaves_nothing_running_or_half_written(tmp_path
         below = _descendants(report.pid)
         assert len(below) >= 5  # resource tracker, workers, zygote, kernels
         commands = [_cmdline(p) for p in below]
-        assert sum("lorisnb.tools.warm_kernels" in c for c in commands) >= 2  # the zygote and kernels forked from it
+        assert sum("lorisnb.tools.report.kernels" in c for c in commands) >= 2  # the zygote and kernels forked from it
         assert not any("ipykernel_launcher" in c for c in commands)  # no kernel fell back to a launch
         assert not any("multiprocessing.spawn" in c for c in commands)  # workers forked from the report
         if how == "SIGTERM":
@@ -348,7 +348,7 @@ def test_no_zygote_without_a_kernel_to_fork(monkeypatch):
     entry, as before); a kernel command that is not ipykernel's launcher: no zygote either."""
     from jupyter_client.kernelspec import NoSuchKernel
 
-    from lorisnb.tools import report_notebooks
+    from lorisnb.tools.report import notebooks as report_notebooks
 
     def missing():
         raise NoSuchKernel("python3")

@@ -157,7 +157,7 @@ def test_wheel_runs_the_primer_and_a_lab_with_no_data_folder(installed, tmp_path
 
 
 def test_wheel_carries_the_compiled_rotation_kernel(installed, tmp_path):
-    """The wheel built here (a C compiler at hand) holds lorisnb.core._rotations, which the
+    """The wheel built here (a C compiler at hand) holds lorisnb.core.trajectory._rotations, which the
     installed lorisnb uses for KITTI's rotation blocks."""
     venv, _ = installed
     if shutil.which((sysconfig.get_config_var("CC") or "cc").split()[0]) is None:

@@ -1,4 +1,4 @@
-"""The one-call reading of plain files (:mod:`lorisnb.io.whole`): the same trajectories, line
+"""The one-call reading of plain files (:mod:`lorisnb.io.parsing.whole`): the same trajectories, line
 numbers and errors as the chunked reader on every kind of file, taken exactly when the file is
 plain; and the rotation blocks of matrix files converted exactly as scipy converts them."""
 
@@ -11,7 +11,8 @@ import pytest
 from helpers import use_parser, write
 
 from lorisnb.errors import ParseError
-from lorisnb.io import read_euroc, read_kitti, read_tum, whole
+from lorisnb.io import read_euroc, read_kitti, read_tum
+from lorisnb.io.parsing import whole
 
 N = 3000
 LIMIT = whole.WHOLE_MAX_BYTES
@@ -67,7 +68,7 @@ def _read_both(monkeypatch, read, path):
         return got
 
     monkeypatch.setattr(whole, "read_whole", spy)
-    monkeypatch.setattr("lorisnb.io.chunks.read_whole", spy)
+    monkeypatch.setattr("lorisnb.io.parsing.chunks.read_whole", spy)
     out = []
     for limit in (LIMIT, 0):
         monkeypatch.setattr(whole, "WHOLE_MAX_BYTES", limit)
@@ -167,7 +168,7 @@ def test_pieces_a_failing_piece_neither_hangs_nor_passes(tmp_path, monkeypatch, 
     import threading
     import time
 
-    from lorisnb.io import pieces
+    from lorisnb.io.parsing import pieces
 
     use_parser(monkeypatch, parser)
     path = tmp_path / "traj.txt"
@@ -233,7 +234,7 @@ def test_rotation_blocks_nearest_rotation_and_scipy(rotation_route):
     rotation is the larger of max |R R^T - I| and |det R - 1|."""
     from scipy.spatial.transform import Rotation
 
-    from lorisnb.core.matrices import rotation_blocks
+    from lorisnb.core.trajectory.rotations import rotation_blocks
 
     rng = np.random.default_rng(11)
     exact = np.concatenate(
@@ -270,7 +271,7 @@ def test_rotation_blocks_nearest_rotation_and_scipy(rotation_route):
             assert scipy_err[planar].max() > 1e-9
         gram = np.abs(m @ np.swapaxes(m, 1, 2) - np.eye(3)).max(axis=(1, 2))
         np.testing.assert_allclose(off, np.maximum(gram, np.abs(np.linalg.det(m) - 1)), rtol=1e-6, atol=1e-15)
-    import lorisnb.core.blocks as blocks
+    import lorisnb.core.trajectory.blocks as blocks
 
     q, off = rotation_blocks(m)  # each block's numbers do not depend on the blocks run with it
     run, blocks.BLOCK_ROWS = blocks.BLOCK_ROWS, 1000
@@ -289,7 +290,7 @@ def test_rotation_entries_of_a_files_columns_as_rotation_blocks(rotation_route):
     get the quaternions and distances of the same blocks as one (N, 3, 3) array, to the last bit."""
     from scipy.spatial.transform import Rotation
 
-    from lorisnb.core.matrices import rotation_blocks, rotation_entries
+    from lorisnb.core.trajectory.rotations import rotation_blocks, rotation_entries
 
     m = np.round(Rotation.random(40_000, random_state=3).as_matrix(), 6)
     m[::7] = Rotation.random(len(m[::7]), random_state=4).as_matrix()  # exact rotations mixed in
@@ -310,7 +311,7 @@ def test_power_steps_bring_the_error_below_the_last_bit():
     """The power steps a block ``off`` from a rotation takes: the fewest ``s`` (1 to 12) with
     ``(off / 2) ** (s + 1)`` below 2**-56, by the closed form ``ceil(56 ln 2 / -ln(off / 2)) - 1``
     (12 at 0.25 or more, or NaN); the same counts as the thresholds the runs compare against."""
-    from lorisnb.core.matrices import power_steps
+    from lorisnb.core.trajectory.rotations import power_steps
 
     rng = np.random.default_rng(2)
     off = np.concatenate(
@@ -333,8 +334,8 @@ def test_rotation_blocks_the_same_for_any_memory_order_threads_and_mixed_runs(ro
     6- and 3-digit, noisy and non-finite blocks mixed in one run)."""
     from scipy.spatial.transform import Rotation
 
-    import lorisnb.core.blocks as blocks
-    from lorisnb.core.matrices import rotation_blocks
+    import lorisnb.core.trajectory.blocks as blocks
+    from lorisnb.core.trajectory.rotations import rotation_blocks
 
     rng = np.random.default_rng(5)
     r = Rotation.random(40_000, random_state=7).as_matrix()

@@ -7,7 +7,7 @@ from helpers import widget_controls
 
 import lorisnb as ln
 from lorisnb.io import load_groundtruth
-from lorisnb.tools.widgets import FaultExplorer, ThresholdExplorer
+from lorisnb.tools.notebook.widgets import FaultExplorer, ThresholdExplorer
 
 
 def test_threshold_explorer_updates_without_recomputing(icra20):
@@ -57,7 +57,7 @@ def test_widget_figures_are_not_pyplot_figures_and_not_blank():
     import numpy as np
     from PIL import Image
 
-    from lorisnb.tools.notebook import figure_png
+    from lorisnb.tools.notebook.start import figure_png
 
     ex = FaultExplorer(load_groundtruth("cafe"), seq=1)
     before = plt.get_fignums()

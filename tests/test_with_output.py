@@ -1,5 +1,5 @@
-"""One rule of "a sequence with output" (a matched pose, :func:`lorisnb.core.aggregate.has_output`):
-``evaluate``'s per-scene coverage, ``compare``'s (:func:`lorisnb.core.coverage.complete`), the
+"""One rule of "a sequence with output" (a matched pose, :func:`lorisnb.core.lifelong.aggregate.has_output`):
+``evaluate``'s per-scene coverage, ``compare``'s (:func:`lorisnb.core.lifelong.coverage.complete`), the
 report leaderboard and ``cs_r_with_output`` agree. ``evaluate`` counted a session whose estimate has
 no pose in the ground truth's span as covered ("2/2") while the leaderboard said 1/2."""
 
@@ -9,9 +9,9 @@ import pytest
 from helpers import write
 
 from lorisnb.cli import main
-from lorisnb.core.coverage import complete
-from lorisnb.tools.evaluate import evaluate_manifest
-from lorisnb.tools.leaderboard import findings
+from lorisnb.core.lifelong.coverage import complete
+from lorisnb.tools.evaluation.runner import evaluate_manifest
+from lorisnb.tools.report.leaderboard import findings
 
 GT, EST = "freiburg1_xyz-groundtruth.txt", "freiburg1_xyz-rgbdslam.txt"
 
@@ -53,7 +53,7 @@ def test_a_sequence_lacking_some_trials_has_output_and_its_missing_trials_are_na
     5)" for a sequence 3 that has trial 1)."""
     import pandas as pd
 
-    from lorisnb.core.coverage import coverage_notes
+    from lorisnb.core.lifelong.coverage import coverage_notes
 
     rows = [("orb", 2, t) for t in (1, 2, 3)] + [("orb", 3, 1)] + [("vins", s, 1) for s in range(1, 6)]
     table = pd.DataFrame(

@@ -10,10 +10,10 @@ import pytest
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core import validate
+from lorisnb.core.spec import validate
 from lorisnb.errors import ValidationError
-from lorisnb.tools.grids import GRIDS, notebook_grids
-from lorisnb.tools.notebook_params import check_values
+from lorisnb.tools.notebook.grids import GRIDS, notebook_grids
+from lorisnb.tools.notebook.params import check_values
 
 
 def test_progress_is_a_flag(icra20, capsys):
@@ -80,7 +80,7 @@ def test_a_negative_value_that_is_valid_is_taken(icra20, tmp_path, capsys):
 
 
 def test_quick_keeps_a_count_given():
-    from lorisnb.tools.grids import quick_default
+    from lorisnb.tools.notebook.grids import quick_default
 
     assert quick_default("sim_trials", None, 6, 5, True) == 5 and quick_default("sim_trials", None, 6, 5, False) == 6
     assert quick_default("sim_trials", 8, 6, 5, True) == 8  # given: kept, quick or not
@@ -141,8 +141,8 @@ def test_report_parameters_are_checked_before_any_notebook_runs(notebook, parame
     """Each ran its notebook and failed inside it (exit 1), or was used as given: ``all_files="no"``
     ran every file, ``rpe_metres -1`` gave negative RPE percentages, ``fmt`` without ``groundtruth``
     was ignored, ``null`` replaced the notebook's default with None."""
-    from lorisnb.tools.notebook_params import check_parameters
-    from lorisnb.tools.report_notebooks import declared_by
+    from lorisnb.tools.notebook.params import check_parameters
+    from lorisnb.tools.report.notebooks import declared_by
 
     with pytest.raises(ValidationError, match=said):
         check_parameters(parameters, declared_by([notebook], None))
@@ -152,8 +152,8 @@ def test_report_parameters_reach_the_notebook_normalized(tmp_path, monkeypatch, 
     """A relative ``--data``/``results_dir`` named the current folder's at the check and none in the
     notebook, which runs in its own folder; ``-p scene Cafe`` and ``-p eps '"1"'`` were checked but
     passed on as typed (the primer failed on them)."""
-    from lorisnb.tools.notebook_params import check_parameters
-    from lorisnb.tools.report_notebooks import declared_by
+    from lorisnb.tools.notebook.params import check_parameters
+    from lorisnb.tools.report.notebooks import declared_by
 
     monkeypatch.chdir(data.root.parent)
     rel = data.root.name
@@ -164,7 +164,7 @@ def test_report_parameters_reach_the_notebook_normalized(tmp_path, monkeypatch, 
 
 def test_a_report_run_may_not_lie_in_the_data_root(tmp_path, data):
     """``--out`` inside the data root wrote the run among the data, exit 0."""
-    from lorisnb.tools.report import run_report
+    from lorisnb.tools.report.build import run_report
 
     copy = tmp_path / "data"
     (copy / "openloris-scene").mkdir(parents=True)
@@ -179,7 +179,7 @@ def test_a_report_run_may_not_lie_in_the_data_root(tmp_path, data):
 def test_quick_trims_the_bundled_results_only():
     """``quick`` keeps a few scenes and algorithms of the bundled results where none are given;
     what the user gives, and results the user gives, are evaluated whole."""
-    from lorisnb.tools.grids import QUICK_INPUTS, quick_inputs
+    from lorisnb.tools.notebook.grids import QUICK_INPUTS, quick_inputs
 
     assert quick_inputs("lifelong_benchmark", True, None, None, None) == QUICK_INPUTS["lifelong_benchmark"]
     assert quick_inputs("lifelong_benchmark", True, None, ["market"], None) == (

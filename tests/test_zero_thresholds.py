@@ -1,7 +1,7 @@
 """eps = 0 (only poses without any position error are correct) is one value in every form and on
 every surface: metres, ``relative:0`` (it was refused while ``--eps 0`` was accepted), relative
 grids, sweeps relative to the extent, ``eps_fraction``; negative and NaN fractions are refused by
-the same rule (:func:`lorisnb.core.validate.fraction`)."""
+the same rule (:func:`lorisnb.core.spec.validate.fraction`)."""
 
 from __future__ import annotations
 
@@ -10,11 +10,11 @@ from helpers import write
 
 import lorisnb as ln
 from lorisnb.cli import main
-from lorisnb.core.difficulty import difficulty_measures
-from lorisnb.core.sweep import sweep
+from lorisnb.core.lifelong.sweep import sweep
+from lorisnb.core.metrics.difficulty import difficulty_measures
 from lorisnb.errors import ValidationError
-from lorisnb.tools.evaluate import evaluate_manifest, evaluate_pairs
-from lorisnb.tools.grids import check_grid
+from lorisnb.tools.evaluation.runner import evaluate_manifest, evaluate_pairs
+from lorisnb.tools.notebook.grids import check_grid
 
 GT = "freiburg1_xyz-groundtruth.txt"
 

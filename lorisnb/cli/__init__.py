@@ -19,14 +19,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-from ..core import validate
-from ..core.blocks import ordinary_pages
-from ..core.spec import ALIGNMENTS, PRESETS
-from ..errors import LorisError
-from ..io.ranges import keep_freed_memory
-from ..io.registry import FORMAT_NAMES
-from ..tools.lean_imports import jsonschema_without_iri_grammars, pandas_without_pyarrow
-from .options import (
+from lorisnb.cli.options import (
     add_compare_options,
     add_diff_options,
     add_evaluation_options,
@@ -36,6 +29,13 @@ from .options import (
     arg_type,
     threshold_list_type,
 )
+from lorisnb.core.spec import validate
+from lorisnb.core.spec.evalspec import ALIGNMENTS, PRESETS
+from lorisnb.core.trajectory.blocks import ordinary_pages
+from lorisnb.errors import LorisError
+from lorisnb.io.parsing.ranges import keep_freed_memory
+from lorisnb.io.readers.registry import FORMAT_NAMES
+from lorisnb.tools.report.lean_imports import jsonschema_without_iri_grammars, pandas_without_pyarrow
 
 
 def _command(module: str, name: str) -> Callable[[argparse.Namespace], int]:

@@ -1,5 +1,5 @@
 """``python -m lorisnb.cli``: the command line."""
 
-from . import run
+from lorisnb.cli import run
 
 run()

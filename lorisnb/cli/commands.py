@@ -12,10 +12,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import FailedInputsWarning, LorisError, LorisWarning, ValidationError
-from .options import param_value, spec_from_args, spec_given
-from .outputs import check_outputs, refuse_unused
-from .text import format_table, frame_columns
+from lorisnb.cli.options import param_value, spec_from_args, spec_given
+from lorisnb.cli.outputs import check_outputs, refuse_unused
+from lorisnb.cli.text import format_table, frame_columns
+from lorisnb.errors import FailedInputsWarning, LorisError, LorisWarning, ValidationError
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -25,7 +25,7 @@ def _executor(args: argparse.Namespace) -> Any:
     """A Dask cluster's executor for ``--scheduler ADDRESS`` (None without it)."""
     if getattr(args, "scheduler", None) is None:
         return None
-    from ..tools.pool import connect_scheduler
+    from lorisnb.tools.evaluation.pool import connect_scheduler
 
     client = connect_scheduler(args.scheduler)  # checked and probed: one line, never a hang
     return client.get_executor()
@@ -40,8 +40,14 @@ def _run_evaluation(
     ``folders`` are checked first against every input (:func:`~.outputs.check_outputs`: the
     estimates, the ground truth, times files, the manifest and its ground-truth files, the data
     root). Prints the ``conventions:`` line (``side``: which run, for ``diff``'s two)."""
-    from ..io.manifest import openloris_preset_refusal, read_manifest
-    from ..tools.evaluate import evaluate, evaluate_manifest, evaluate_pairs, pair_kind, refuse_over_manifest
+    from lorisnb.io.datasets.manifest import openloris_preset_refusal, read_manifest
+    from lorisnb.tools.evaluation.runner import (
+        evaluate,
+        evaluate_manifest,
+        evaluate_pairs,
+        pair_kind,
+        refuse_over_manifest,
+    )
 
     if args.gt and args.manifest:
         raise ValidationError("--gt and --manifest: give one (a manifest names the ground truth of each session)")
@@ -102,7 +108,7 @@ def _report_problems(ev: Any, notes: list[str]) -> None:
         print(f"error: {f.error}", file=sys.stderr)
     for f in ev.unscored:  # in the table, scored as the paper scores it; the exit status says so
         print(f"not scored: {f.error}", file=sys.stderr)
-    from ..tools.status import skipped_only
+    from lorisnb.tools.evaluation.status import skipped_only
 
     skipped = skipped_only(ev)
     if skipped:
@@ -124,8 +130,8 @@ def _with_trial(ev: Any, cols: list[str]) -> list[str]:
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from ..core.aggregate import aggregate_columns, spans_columns
-    from ..io.writers import write_csv, write_parquet
+    from lorisnb.core.lifelong.aggregate import aggregate_columns, spans_columns
+    from lorisnb.io.writers import write_csv, write_parquet
 
     ev, notes = _run_evaluation(args, ["csv"], folders=("parquet",))
     table = ev.sequences() if args.csv or args.parquet or ev.spec.relation is not None else None
@@ -170,7 +176,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         rel = ev.relative()
         print("\nrelative error (rpg_trajectory_evaluation: sub-trajectories of 10..50 % of the length):")
         print(_fmt(rel.drop(columns=["suite", "trial"]), args.digits) if not rel.empty else "(no sequence long enough)")
-    from ..tools.status import skipped_only
+    from lorisnb.tools.evaluation.status import skipped_only
 
     _report_problems(ev, notes)
     print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.unscored)} not scored, "
@@ -194,8 +200,8 @@ def _rows_as_columns(rows: list[dict[str, Any]]) -> dict[str, np.ndarray]:
 def cmd_sweep(args: argparse.Namespace) -> int:
     import pandas as pd
 
-    from ..core.sweep import sweep, sweep_scenes
-    from ..io.writers import write_csv, write_parquet
+    from lorisnb.core.lifelong.sweep import sweep, sweep_scenes
+    from lorisnb.io.writers import write_csv, write_parquet
 
     refuse_unused(args, {"relative": "lorisnb evaluate (rpg's relative error has no threshold to sweep)"})
     relative = f" (fractions of each sequence's {args.relative_to})" if args.relative_to is not None else " m"
@@ -216,7 +222,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if keep_label:  # eps as given (a fraction, 'paper'): what tells the rows apart where eps in metres does not
         cols.insert(4, "eps_value")
     if args.parquet and not args.csv:  # streamed, one group of files at a time: any grid size
-        from ..tools.streaming import sweep_to_parquet
+        from lorisnb.tools.evaluation.streaming import sweep_to_parquet
 
         durations = ev.durations()
         shown: list[pd.DataFrame] = []
@@ -268,10 +274,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 def cmd_compare(args: argparse.Namespace) -> int:
     """Scene values with bootstrap intervals, the ranking with ties from one permutation test,
-    its significant pairs; tables as CSV, LaTeX, Markdown (see :mod:`lorisnb.tools.comparison`)."""
+    its significant pairs; tables as CSV, LaTeX, Markdown (see :mod:`lorisnb.tools.decisions.comparison`)."""
     import pandas as pd
 
-    from ..tools.comparison import compare_table, write_outputs
+    from lorisnb.tools.decisions.comparison import compare_table, write_outputs
 
     rpe = [o for o, v in (("--rpe-delta", args.rpe_delta), ("--rpe-unit", args.rpe_unit), ("--rpe-pairs", args.rpe_pairs),
                           ("--rpe-all-pairs", args.rpe_all_pairs), ("--rpe-tolerance", args.rpe_tolerance)) if v is not None]  # fmt: skip
@@ -327,8 +333,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from ..io.data import find_data
-    from ..tools.report import findings_input_errors, run_report
+    from lorisnb.io.datasets.paths import find_data
+    from lorisnb.tools.report.build import findings_input_errors, run_report
 
     params: dict[str, Any] = {}
     for k, v in args.parameter or []:  # a name given twice: refused, as a repeated option is (cli.given_once)
@@ -371,7 +377,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 def cmd_verify(args: argparse.Namespace) -> int:
     """Re-check a run's inputs against run.json: exit 1 if any changed, is missing, or appeared in a
     folder the run read."""
-    from ..tools.provenance import read_run_json, verify_run
+    from lorisnb.tools.report.provenance import read_run_json, verify_run
 
     record = read_run_json(args.run)
     problems = verify_run(args.run)

@@ -11,14 +11,14 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..core.spec import make_spec
-from ..core.units import check_stamp_units
-from ..errors import EvaluationError, LorisWarning, ParseError, ValidationError
-from .outputs import check_outputs
+from lorisnb.cli.outputs import check_outputs
+from lorisnb.core.spec.evalspec import make_spec
+from lorisnb.core.trajectory.units import check_stamp_units
+from lorisnb.errors import EvaluationError, LorisWarning, ParseError, ValidationError
 
 
 def cmd_crosscheck(args: argparse.Namespace) -> int:
-    from ..io.writers import write_csv
+    from lorisnb.io.writers import write_csv
 
     check_outputs(args, [args.gt, args.est], ["csv"])
     try:
@@ -33,7 +33,7 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
             print(f"warning: {n}", file=sys.stderr)
     if isinstance(table, int):  # --conventions: printed and judged there
         return table
-    from ..tools import require
+    from lorisnb.tools import require
 
     evo_version = require("evo").__version__
 
@@ -53,7 +53,7 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
 def _no_pairs(table: pd.DataFrame) -> int:
     """Rows not compared because a delta gave no RPE pair: said on stderr (they make the exit status 1:
     not everything asked was compared)."""
-    from ..tools.evo_bridge import NO_RPE_PAIR
+    from lorisnb.tools.peers.evo_bridge import NO_RPE_PAIR
 
     n = int(table["note"].str.startswith(NO_RPE_PAIR).sum())
     if n:
@@ -65,9 +65,9 @@ def _no_pairs(table: pd.DataFrame) -> int:
 def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame | int:
     """The agreement table of ``crosscheck`` (reads both inputs); with ``--conventions``, that
     comparison's exit status (it prints its own table)."""
-    from ..io.formats import read_trajectory
-    from ..io.openloris import read_openloris
-    from ..tools.crosscheck import crosscheck, crosscheck_openloris
+    from lorisnb.io.readers.openloris import read_openloris
+    from lorisnb.io.readers.plain import read_trajectory
+    from lorisnb.tools.peers.crosscheck import crosscheck, crosscheck_openloris
 
     openloris = args.format == "openloris"
     times = [
@@ -121,7 +121,7 @@ def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame | int:
         with_scale = spec.alignment_for(Path(args.est).stem) == "sim3"
         table = crosscheck(gt, est, scale=with_scale, by_index=by_index, rpe_deltas=deltas, all_pairs=args.all_pairs,
                            spec=spec)  # fmt: skip
-        from ..tools.crosscheck_reading import crosscheck_reading  # and evo's own reading of each file
+        from lorisnb.tools.peers.crosscheck_reading import crosscheck_reading  # and evo's own reading of each file
 
         parts = [crosscheck_reading(f, fm, t).assign(quantity=lambda x, w=w: w + ": " + x["quantity"])
                  for w, f, fm, t in (("ground truth", args.gt, gt_format, args.gt_topic),
@@ -163,8 +163,8 @@ def _conventions_options(args: argparse.Namespace) -> dict[str, object]:
 
 def _crosscheck_conventions(args: argparse.Namespace, gt_format: str, est_format: str) -> int:
     """``crosscheck --conventions P``: lorisnb under preset P against evo reading the files itself."""
-    from ..io.writers import write_csv
-    from ..tools.crosscheck_evo import crosscheck_evo
+    from lorisnb.io.writers import write_csv
+    from lorisnb.tools.peers.crosscheck_evo import crosscheck_evo
 
     spec = make_spec(args.conventions, surface="cli", **_conventions_options(args))
     table = crosscheck_evo(args.gt, args.est, spec, fmt=est_format, gt_fmt=gt_format, topic=args.topic,

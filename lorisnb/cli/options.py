@@ -1,4 +1,4 @@
-"""Command-line option types and checks: every value goes through :mod:`lorisnb.core.validate`,
+"""Command-line option types and checks: every value goes through :mod:`lorisnb.core.spec.validate`,
 the same rules as the Python API, notebook parameters and widgets."""
 
 from __future__ import annotations
@@ -8,19 +8,19 @@ import json
 from collections.abc import Callable
 from typing import Any
 
-from ..core import validate
-from ..core.evo_options import PLANES
-from ..core.relations import RELATIONS
-from ..core.rpe import RPE_PAIRS
-from ..core.spec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, make_spec, preset_over
-from ..core.spec_evo import check_evo
-from ..errors import ValidationError
-from ..io.formats import TRAJECTORY_FORMATS
-from ..io.manifest import BUILT_IN
+from lorisnb.core.conventions.evo_options import PLANES
+from lorisnb.core.metrics.pairs import RPE_PAIRS
+from lorisnb.core.metrics.relations import RELATIONS
+from lorisnb.core.spec import validate
+from lorisnb.core.spec.evalspec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, make_spec, preset_over
+from lorisnb.core.spec.evo import check_evo
+from lorisnb.errors import ValidationError
+from lorisnb.io.datasets.manifest import BUILT_IN
+from lorisnb.io.readers.plain import TRAJECTORY_FORMATS
 
 
 def arg_type(func: Callable[[str], Any]) -> Callable[[str], Any]:
-    """An argparse type from a validator of :mod:`lorisnb.core.validate` (same rules as Python)."""
+    """An argparse type from a validator of :mod:`lorisnb.core.spec.validate` (same rules as Python)."""
 
     def parse(text: str) -> Any:
         try:
@@ -41,7 +41,7 @@ def threshold_list_type(name: str) -> Callable[[str], Any]:
 
 
 def add_scale_option(p: argparse.ArgumentParser, help: str) -> None:
-    """``--scale [auto|on|off|...]``: the words of :func:`lorisnb.core.validate.scale_value`."""
+    """``--scale [auto|on|off|...]``: the words of :func:`lorisnb.core.spec.validate.scale_value`."""
     p.add_argument("--scale", nargs="?", const=True, default=None, type=arg_type(validate.scale_value), help=help)
 
 
@@ -140,7 +140,7 @@ def spec_given(args: argparse.Namespace) -> dict[str, Any]:
 
 def spec_from_args(args: argparse.Namespace, base: EvalSpec | str | None = None) -> EvalSpec:
     """The evaluation spec the options ask for: ``--conventions`` (or ``base``, a manifest's spec),
-    then every single option over it, validated by :func:`lorisnb.core.spec.make_spec` as in Python.
+    then every single option over it, validated by :func:`lorisnb.core.spec.evalspec.make_spec` as in Python.
     A sweep's threshold lists are its grid, not the spec's thresholds."""
     given = spec_given(args)
     preset = getattr(args, "conventions", None)
@@ -278,7 +278,7 @@ def add_compare_options(p: argparse.ArgumentParser) -> None:
 
 def add_diff_options(p: argparse.ArgumentParser) -> None:
     """``diff``'s own options: tolerances, the test's alpha, the seed and the verdict files."""
-    from ..core.tolerances import DEFAULT_TOLERANCES
+    from lorisnb.core.stats.tolerances import DEFAULT_TOLERANCES
 
     defaults = ",".join(f"{k}={v}" for k, v in DEFAULT_TOLERANCES.items())
     p.add_argument("--tolerance", default=None, metavar="M=V,...",

@@ -9,11 +9,11 @@ import os
 import tempfile
 from pathlib import Path
 
-from ..errors import OutputError, ValidationError
-from ..io.registry import FORMATS
-from ..io.writers import check_dataset_target, overlap
+from lorisnb.errors import OutputError, ValidationError
+from lorisnb.io.readers.registry import FORMATS
+from lorisnb.io.writers import check_dataset_target, overlap
 
-#: Suffixes of the files a folder of inputs is walked for (every format's, :mod:`lorisnb.io.registry`):
+#: Suffixes of the files a folder of inputs is walked for (every format's, :mod:`lorisnb.io.readers.registry`):
 #: an output among the inputs with one of them would be read as an input by the next run.
 INPUT_SUFFIXES = frozenset(x for f in FORMATS.values() for x in f.suffixes)
 

@@ -11,9 +11,9 @@ from typing import Any
 
 import pandas as pd
 
-from ..errors import ValidationError
-from .commands import fmt_table, report_problems, run_evaluation
-from .outputs import check_outputs, refuse_unused
+from lorisnb.cli.commands import fmt_table, report_problems, run_evaluation
+from lorisnb.cli.outputs import check_outputs, refuse_unused
+from lorisnb.errors import ValidationError
 
 #: diff's own options; every other option is an evaluate option (for result folders only).
 DIFF_OWN = {"paths", "tolerance", "alpha", "seed", "json", "junit", "csv", "parquet", "force", "no_progress", "func",
@@ -37,8 +37,8 @@ def _short(v: object, digits: int = 4) -> str:
 def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], list[str]]:
     """A run (report run or table as read, or a result folder evaluated with the options), the
     files of it that failed (relative path -> reason), and notes."""
-    from ..tools.diff import unevaluated
-    from ..tools.runs import Run, is_report_run, is_table, load_run
+    from lorisnb.tools.decisions.diff import unevaluated
+    from lorisnb.tools.decisions.runs import Run, is_report_run, is_table, load_run
 
     p = Path(path)
     if is_report_run(p) or is_table(p):
@@ -61,10 +61,10 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
 
 def cmd_diff(args: argparse.Namespace) -> int:
     """``lorisnb diff BASE CAND`` (see the README's exit-status table)."""
-    from ..core.regression import parse_tolerances
-    from ..io.writers import write_csv, write_parquet
-    from ..tools.diff import diff_tables, exit_status, write_json, write_junit
-    from ..tools.runs import is_report_run, is_table, spec_differences
+    from lorisnb.core.stats.regression import parse_tolerances
+    from lorisnb.io.writers import write_csv, write_parquet
+    from lorisnb.tools.decisions.diff import diff_tables, exit_status, write_json, write_junit
+    from lorisnb.tools.decisions.runs import is_report_run, is_table, spec_differences
 
     refuse_unused(args, {"relative": "lorisnb evaluate (diff compares the RPE columns)",
                          "relation": "lorisnb evaluate (diff compares CR, CR-T, CS-R, ATE, AOE and RPE, not evo's "
@@ -140,9 +140,9 @@ def cmd_diff(args: argparse.Namespace) -> int:
 
 def cmd_history(args: argparse.Namespace) -> int:
     """``lorisnb history RUN...``: scene values over runs, first changes, runs not comparable."""
-    from ..core.regression import parse_tolerances
-    from ..io.writers import write_csv
-    from ..tools.history import first_changes, history_table, load_runs, run_labels, write_figures
+    from lorisnb.core.stats.regression import parse_tolerances
+    from lorisnb.io.writers import write_csv
+    from lorisnb.tools.decisions.history import first_changes, history_table, load_runs, run_labels, write_figures
 
     check_outputs(args, args.runs, ["csv"], folders=("out",))
     tolerances = parse_tolerances(args.tolerance)

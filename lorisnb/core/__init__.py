@@ -4,15 +4,18 @@ reads files, looks up data, draws or prints; :mod:`lorisnb.io` and :mod:`lorisnb
 
 from typing import TYPE_CHECKING
 
-from .._lazy import attach
+from lorisnb._lazy import attach
 
 if TYPE_CHECKING:
-    from .aggregate import aggregate_scenes, durations_table
-    from .association import MAX_GAP, Association, associate, groundtruth_in_frame
-    from .conventions import Conventions, associate_nearest, fit_alignment
-    from .frames import FRAMES, PAPER_EPS, PAPER_PHI, SCENES
-    from .geometry import Sim3, umeyama
-    from .model import (
+    from lorisnb.core.alignment.association import MAX_GAP, Association, associate, groundtruth_in_frame
+    from lorisnb.core.alignment.geometry import Sim3, umeyama
+    from lorisnb.core.conventions.choices import Conventions, associate_nearest, fit_alignment
+    from lorisnb.core.lifelong.aggregate import aggregate_scenes, durations_table
+    from lorisnb.core.lifelong.scoring import pose_table, score, sequence_grid
+    from lorisnb.core.lifelong.surfaces import Surfaces, cr_surfaces
+    from lorisnb.core.lifelong.sweep import eps_at_cr, rank_stability, rank_swaps, sweep, sweep_scenes
+    from lorisnb.core.metrics.relative import relative_table, rpg_relative_errors
+    from lorisnb.core.pipeline.model import (
         EXTRA_COLUMNS,
         SCENE_COLUMNS,
         SEQUENCE_COLUMNS,
@@ -23,14 +26,11 @@ if TYPE_CHECKING:
         is_monocular,
         scene_eps,
     )
-    from .pipeline import compute_errors, evaluate_sessions, sequence_errors, session_errors
-    from .relative import relative_table, rpg_relative_errors
-    from .scoring import pose_table, score, sequence_grid
-    from .simulate import Faults, simulate, simulated_errors, simulated_result
-    from .spec import PRESETS, EvalSpec, make_spec
-    from .surfaces import Surfaces, cr_surfaces
-    from .sweep import eps_at_cr, rank_stability, rank_swaps, sweep, sweep_scenes
-    from .trajectory import Trajectory, extent, path_length
+    from lorisnb.core.pipeline.sessions import compute_errors, evaluate_sessions, sequence_errors, session_errors
+    from lorisnb.core.simulate import Faults, simulate, simulated_errors, simulated_result
+    from lorisnb.core.spec.evalspec import PRESETS, EvalSpec, make_spec
+    from lorisnb.core.trajectory.frames import FRAMES, PAPER_EPS, PAPER_PHI, SCENES
+    from lorisnb.core.trajectory.poses import Trajectory, extent, path_length
 
 __getattr__, __dir__ = attach(__name__)
 

@@ -28,12 +28,12 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..errors import ValidationError
-from . import validate
-from .model import FileErrors, ResultFile
-from .pipeline import compute_errors
-from .trajectory import Trajectory
-from .validate import finite, positive
+from lorisnb.core.pipeline.model import FileErrors, ResultFile
+from lorisnb.core.pipeline.sessions import compute_errors
+from lorisnb.core.spec import validate
+from lorisnb.core.spec.validate import finite, positive
+from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.errors import ValidationError
 
 
 @dataclass(frozen=True)
@@ -287,7 +287,7 @@ def simulated_errors(
     mode: str = "auto",
     scale: bool = False,
 ) -> FileErrors:
-    """Simulate and evaluate with the real pipeline (:func:`lorisnb.core.pipeline.compute_errors`):
+    """Simulate and evaluate with the real pipeline (:func:`lorisnb.core.pipeline.sessions.compute_errors`):
     the algorithm is labelled ``simulated: ...`` and the suite ``simulated``. Several sequences
     are evaluated in lifelong mode (aligned on the first) unless ``mode="per-seq"``."""
     res = simulated_result(groundtruth, faults, seqs, name)

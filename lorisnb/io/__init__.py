@@ -3,17 +3,17 @@ lookup of the data root and its ground truth."""
 
 from typing import TYPE_CHECKING
 
-from .._lazy import attach
+from lorisnb._lazy import attach
 
 if TYPE_CHECKING:
-    from .bags import read_bag
-    from .data import DataPaths, find_data, groundtruth_spans, load_groundtruth, scene_durations
-    from .formats import TRAJECTORY_FORMATS, read_euroc, read_kitti, read_trajectory, read_tum
-    from .manifest import Manifest, read_manifest
-    from .openloris import read_openloris
-    from .ordslam import read_ordslam
-    from .times import read_times
-    from .writers import write_csv, write_openloris
+    from lorisnb.io.datasets.manifest import Manifest, read_manifest
+    from lorisnb.io.datasets.paths import DataPaths, find_data, groundtruth_spans, load_groundtruth, scene_durations
+    from lorisnb.io.readers.bags import read_bag
+    from lorisnb.io.readers.openloris import read_openloris
+    from lorisnb.io.readers.ordslam import read_ordslam
+    from lorisnb.io.readers.plain import TRAJECTORY_FORMATS, read_euroc, read_kitti, read_trajectory, read_tum
+    from lorisnb.io.readers.times import read_times
+    from lorisnb.io.writers import write_csv, write_openloris
 
 __getattr__, __dir__ = attach(__name__)
 

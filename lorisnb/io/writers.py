@@ -13,9 +13,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.trajectory import Trajectory
-from ..core.validate import flag
-from ..errors import MissingDependencyError, OutputError
+from lorisnb.core.spec.validate import flag
+from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.errors import MissingDependencyError, OutputError
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -1,1 +1,1 @@
-"""Built-in dataset manifests (TOML), read with :func:`lorisnb.io.manifest.read_manifest`."""
+"""Built-in dataset manifests (TOML), read with :func:`lorisnb.io.datasets.manifest.read_manifest`."""

@@ -3,15 +3,15 @@ bridge to evo. Optional dependencies (evo, papermill, ipywidgets) are imported w
 
 from typing import TYPE_CHECKING
 
-from .._lazy import attach
+from lorisnb._lazy import attach
 
 if TYPE_CHECKING:
-    from ._extras import require
-    from .evaluate import evaluate, evaluate_manifest, evaluate_pairs
-    from .evaluation import Evaluation, Failure
-    from .inputs import result_files
-    from .notebook import Outputs, setup
-    from .streaming import sweep_to_parquet
+    from lorisnb.tools._extras import require
+    from lorisnb.tools.evaluation.inputs import result_files
+    from lorisnb.tools.evaluation.result import Evaluation, Failure
+    from lorisnb.tools.evaluation.runner import evaluate, evaluate_manifest, evaluate_pairs
+    from lorisnb.tools.evaluation.streaming import sweep_to_parquet
+    from lorisnb.tools.notebook.start import Outputs, setup
 
 __getattr__, __dir__ = attach(__name__)
 

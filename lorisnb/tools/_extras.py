@@ -5,7 +5,7 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-from ..errors import MissingDependencyError
+from lorisnb.errors import MissingDependencyError
 
 #: Which extra of lorisnb brings which top-level package.
 EXTRAS: dict[str, str] = {

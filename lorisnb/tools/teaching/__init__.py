@@ -11,13 +11,15 @@ the typical mistake when the answer is what that mistake gives (:data:`MISTAKES`
   student version's test cells hold no solution);
 - :mod:`._prose`: the labs' data (:func:`lab_data`: the same for students and the grader) and the
   explanations shown after a check, computed from the lab's parameters.
+
+May import: :mod:`lorisnb.io`, :mod:`lorisnb.core` and :mod:`lorisnb.errors` (never the report or the command line).
 """
 
 import sys
 from types import ModuleType
 
-from ...errors import AnswerError
-from ._checks import (
+from lorisnb.errors import AnswerError
+from lorisnb.tools.teaching._checks import (
     CORRECTNESS_CASES,
     CR_CASES,
     CSR_CASES,
@@ -29,9 +31,21 @@ from ._checks import (
     check_cs_r,
     check_value,
 )
-from ._labs import check_alignment_cr, check_ate_percent, check_best_cr, check_eps_at_cr, check_silent_sequences
-from ._mistakes import MISTAKES
-from ._prose import explain_ate_percent, explain_gap, explain_wrong_reloc, lab_data, wrong_reloc_question
+from lorisnb.tools.teaching._labs import (
+    check_alignment_cr,
+    check_ate_percent,
+    check_best_cr,
+    check_eps_at_cr,
+    check_silent_sequences,
+)
+from lorisnb.tools.teaching._mistakes import MISTAKES
+from lorisnb.tools.teaching._prose import (
+    explain_ate_percent,
+    explain_gap,
+    explain_wrong_reloc,
+    lab_data,
+    wrong_reloc_question,
+)
 
 __all__ = [
     "CORRECTNESS_CASES", "CR_CASES", "CSR_CASES", "MISTAKES", "cases_from", "check_alignment_cr", "check_ate_percent",

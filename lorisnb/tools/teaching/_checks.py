@@ -12,14 +12,14 @@ from typing import Any
 
 import numpy as np
 
-from ...core import metrics
-from ...core.model import FileErrors
-from ._grading import Variants
-from ._grading import check_function as _check_function
-from ._grading import fail as _fail
-from ._grading import number as _number
-from ._grading import ok as _ok
-from ._mistakes import MISTAKES
+from lorisnb.core.metrics import openloris as metrics
+from lorisnb.core.pipeline.model import FileErrors
+from lorisnb.tools.teaching._grading import Variants
+from lorisnb.tools.teaching._grading import check_function as _check_function
+from lorisnb.tools.teaching._grading import fail as _fail
+from lorisnb.tools.teaching._grading import number as _number
+from lorisnb.tools.teaching._grading import ok as _ok
+from lorisnb.tools.teaching._mistakes import MISTAKES
 
 # --- Eq. (1): per-pose correctness ---------------------------------------------------------------
 
@@ -38,7 +38,7 @@ CORRECTNESS_CASES: list[dict[str, Any]] = [
 
 def check_correctness(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]] = CORRECTNESS_CASES) -> bool:
     """``fn(ate_m, aoe_deg, eps, phi)`` -> one boolean per pose, Eq. (1), against
-    :func:`lorisnb.core.metrics.correctness` (ATE in metres, AOE and phi in degrees)."""
+    :func:`lorisnb.core.metrics.openloris.correctness` (ATE in metres, AOE and phi in degrees)."""
     variants: Variants = [
         ("and_or", lambda ate_m, aoe_deg, eps, phi: (ate_m <= eps) | (aoe_deg <= phi)),
         ("inclusive", lambda ate_m, aoe_deg, eps, phi: (ate_m < eps) & (aoe_deg < phi)),
@@ -146,7 +146,7 @@ def _rate_variants(tracking: bool) -> list[tuple[str, Callable[..., Any]]]:
 
 def check_correct_rate(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]] = CR_CASES) -> bool:
     """``fn(stamps, correct, t_min, t_max, delta)`` -> CR, Eq. (2), against
-    :func:`lorisnb.core.metrics.correct_time` and :func:`~lorisnb.core.metrics.correct_rate`."""
+    :func:`lorisnb.core.metrics.openloris.correct_time` and :func:`~lorisnb.core.metrics.openloris.correct_rate`."""
     variants: Variants = [
         ("cr_vs_crt", _cr_t),
         ("delta_cap", lambda stamps, correct, t_min, t_max, delta: _cr_t(stamps, correct, t_min, t_max, np.inf)),
@@ -157,7 +157,7 @@ def check_correct_rate(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]
 
 def check_correct_rate_tracking(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]] = CR_CASES) -> bool:
     """``fn(stamps, correct, t_min, t_max, delta)`` -> CR-T, Eq. (3), against
-    :func:`lorisnb.core.metrics.correct_rate_tracking`."""
+    :func:`lorisnb.core.metrics.openloris.correct_rate_tracking`."""
     variants: Variants = [
         ("crt_vs_cr", _cr),
         ("delta_cap", lambda stamps, correct, t_min, t_max, delta: _cr(stamps, correct, t_min, t_max, np.inf)),
@@ -183,7 +183,7 @@ def _csr(t0: float, t_min: float, first_correct: bool, tau: float) -> float:
 
 def check_cs_r(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]] = CSR_CASES) -> bool:
     """``fn(t0, t_min, first_correct, tau)`` -> CS-R, Eq. (4), against
-    :func:`lorisnb.core.metrics.relocalization_score`."""
+    :func:`lorisnb.core.metrics.openloris.relocalization_score`."""
     variants: Variants = [
         ("first_pose", lambda t0, t_min, first_correct, tau: _csr(t0, t_min, True, tau)),
         ("absolute_time", lambda t0, t_min, first_correct, tau: float(np.exp(-np.float64(t0) / tau) * first_correct)),

@@ -14,8 +14,8 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from ...errors import AnswerError
-from ._mistakes import MISTAKES
+from lorisnb.errors import AnswerError
+from lorisnb.tools.teaching._mistakes import MISTAKES
 
 #: (mistake name in MISTAKES, the function that makes it), in the order their hints are given
 Variants = Sequence[tuple[str, Callable[..., Any]]]

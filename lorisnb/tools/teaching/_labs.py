@@ -9,14 +9,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...core.model import FileErrors, ResultFile
-from ...core.scoring import score
-from ...core.simulate import Faults, simulated_errors
-from ...core.sweep import eps_at_cr
-from ...core.trajectory import Trajectory
-from ...errors import AnswerError
-from ._checks import check_choice, check_value
-from ._mistakes import MISTAKES
+from lorisnb.core.lifelong.scoring import score
+from lorisnb.core.lifelong.sweep import eps_at_cr
+from lorisnb.core.pipeline.model import FileErrors, ResultFile
+from lorisnb.core.simulate import Faults, simulated_errors
+from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.errors import AnswerError
+from lorisnb.tools.teaching._checks import check_choice, check_value
+from lorisnb.tools.teaching._mistakes import MISTAKES
 
 
 def _differs(values: Mapping[str, float], expected: float, tol: float) -> dict[str, float]:
@@ -55,7 +55,7 @@ def check_eps_at_cr(
     answer: Any, errors: Iterable[FileErrors], durations: pd.DataFrame, target: float, phi: float, delta: float
 ) -> bool:
     """The smallest eps (metres) at which one algorithm's scene CR reaches ``target``
-    (:func:`lorisnb.core.sweep.eps_at_cr`); hints when the answer ignores phi or the delta cap."""
+    (:func:`lorisnb.core.lifelong.sweep.eps_at_cr`); hints when the answer ignores phi or the delta cap."""
     errors = list(errors)
 
     def at(p: float, d: float) -> float:

@@ -39,7 +39,7 @@ MISTAKES: dict[str, str] = {
     "wrong_poses_count": "only correct poses earn time: multiply each pose's held time by c_k (0 or 1)",
     "last_pose": "the last pose holds too: its next time is t_{N+1} = t_max, and it is capped at delta like the others",
     "coarse_grid": "your eps reaches the target but is not the smallest: refine the grid of eps you scanned, "
-    "or use lorisnb.core.sweep.eps_at_cr, which is exact",
+    "or use lorisnb.core.lifelong.sweep.eps_at_cr, which is exact",
     "first_pose": "CS-R is 0 when the first pose is wrong: Eq. (4) multiplies by c(p_0); a system that "
     "re-localizes to a wrong place must not score",
     "tau_inverted": "the exponent is -(t0 - t_min) / tau (Eq. 4): the waiting time over the time factor, not the "

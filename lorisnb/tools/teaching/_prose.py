@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ...io.data import DataPaths, find_data, sample_data
+from lorisnb.io.datasets.paths import DataPaths, find_data, sample_data
 
 SAMPLE_NOTE = (
     "using the small sample data shipped with lorisnb (cafe scene only): every student and the grader "

@@ -1,0 +1,380 @@
+"""Scoring: every threshold-dependent metric of the paper, from per-pose errors.
+
+One implementation: :func:`sequence_grid` scores a sequence over a grid of eps x phi x delta x tau
+(Eq. 1-4 of the paper, C-ATE, C-AOE and C-RPE); :func:`score` is that kernel on a one-point grid,
+and :func:`lorisnb.core.lifelong.sweep.sweep` is the same kernel on a larger grid. Units: metres, degrees,
+seconds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from functools import partial
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from lorisnb.core.metrics import openloris as metrics
+from lorisnb.core.metrics.relations import error_statistics, masked_statistics, masked_sum
+from lorisnb.core.pipeline.model import (
+    EXTRA_COLUMNS,
+    POSE_COLUMNS,
+    SEQUENCE_COLUMNS,
+    STAT_COLUMNS,
+    Eps,
+    FileErrors,
+    SequenceErrors,
+    sequence_eps,
+)
+from lorisnb.core.spec.evo import check_evo, check_evo_together
+from lorisnb.core.spec.validate import eps_value, threshold
+from lorisnb.core.trajectory.blocks import each
+from lorisnb.errors import ValidationError
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: Metrics computed by :func:`sequence_grid`, with their dtype in tables.
+GRID_METRICS: dict[str, type] = {
+    "ate_rmse": float, "aoe_rmse": float, "c_ate_rmse": float, "c_aoe_rmse": float, "c_matched": int,
+    "correct_time": float, "cr": float, "cr_t": float, "reloc_time": float, "cs_r": float, "t0": float,
+    "track_time": float, "first_correct": bool, "rpe_trans_rmse": float, "rpe_rot_rmse": float,
+    "c_rpe_trans_rmse": float, "c_rpe_rot_rmse": float, "rpe_pairs": int, "c_rpe_pairs": int,
+}  # fmt: skip
+GRID_METRICS.update(dict.fromkeys(STAT_COLUMNS, float))
+RPE_METRICS = ("rpe_trans_rmse", "rpe_rot_rmse", "c_rpe_trans_rmse", "c_rpe_rot_rmse", "rpe_pairs", "c_rpe_pairs")
+
+
+def as_files(errors: FileErrors | Iterable[FileErrors]) -> list[FileErrors]:
+    """One FileErrors or several, as a list; anything else is an error that says what is expected."""
+    files = [errors] if isinstance(errors, FileErrors) else None
+    if files is None:
+        if isinstance(errors, (str, bytes)) or not isinstance(errors, Iterable):
+            raise ValidationError(
+                f"expected evaluated errors (FileErrors, or lorisnb.evaluate(...).errors), got {type(errors).__name__}"
+                " (to score a file, evaluate it first: lorisnb.evaluate(path).sequences(...))"
+            )
+        files = list(errors)
+        bad = [type(f).__name__ for f in files if not isinstance(f, FileErrors)]
+        if bad:
+            raise ValidationError(f"expected FileErrors items, got {bad[0]}")
+    return files
+
+
+def sequence_meta(f: FileErrors, e: SequenceErrors) -> dict[str, Any]:
+    """The threshold-free columns of a sequence's row."""
+    return dict(
+        algorithm=f.algorithm, file=f.file, scene=f.scene, seq=e.seq, frame=f.frame, poses=e.poses,
+        matched=e.matched, suite=f.suite, mode=f.mode, aligned_on=f.aligned_on, scale=e.scale,
+        gt_start=e.gt_start, gt_end=e.gt_end, gt_duration=e.gt_end - e.gt_start,
+        official_interpolation=f.official_interpolation, trial=f.trial,
+    )  # fmt: skip
+
+
+#: Grid rows, poses and value columns of each matrix product of :func:`row_sums`: every product
+#: has this shape (zeros padded; a sequence's last poses a shorter block, the same for every grid),
+#: so each row is summed by the same kernel in the same order. Small, so that one setting's products
+#: cost a few multiply-adds per pose and a few MB, not the grid's work.
+ROW_BLOCK, POSE_BLOCK, COLUMN_BLOCK = 8, 1 << 14, 8
+
+
+def row_sums(selected: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Sums of each column of ``values`` (M, k) over the entries each row of ``selected`` (R, M;
+    boolean, or 0 and 1) selects: (R, k), by BLAS's matrix product on blocks of exactly
+    :data:`ROW_BLOCK` rows, :data:`POSE_BLOCK` poses (the last block of a sequence shorter) and a
+    multiple of :data:`COLUMN_BLOCK` columns (zeros padded), each row's block sums added in pose
+    order. Every row is then summed by the same kernels in the same order, whatever the grid it
+    belongs to: a threshold setting alone (:func:`score`) equals its point in any sweep to the last
+    bit, a larger threshold never gives a smaller sum, and BLAS's threads (which split rows and
+    columns, never the sum over poses) change nothing. (Products of other shapes summed a one-row
+    grid in another order than a large one: sweeps and scores differed in the last digits.)"""
+    sel = np.asarray(selected)  # booleans are cast into each block: no float copy of the whole grid
+    R, M = sel.shape
+    vals = np.asarray(values, float).reshape(M, -1)
+    k = vals.shape[1]
+    cols = -(-max(k, 1) // COLUMN_BLOCK) * COLUMN_BLOCK
+    out = np.zeros((R, k))
+    width = min(POSE_BLOCK, M)
+    padded, block = np.zeros((width, cols)), np.zeros((ROW_BLOCK, width))  # reused: one allocation
+    for p0 in range(0, M, POSE_BLOCK):  # blocks of poses and of grid rows: each holds many
+        m = min(POSE_BLOCK, M - p0)
+        if m < width:  # a sequence's last, shorter block of poses: arrays of its own shape
+            padded, block = np.zeros((m, cols)), np.zeros((ROW_BLOCK, m))
+        padded[:, :k] = vals[p0 : p0 + m]
+        for lo in range(0, R, ROW_BLOCK):
+            n = min(ROW_BLOCK, R - lo)
+            if n < ROW_BLOCK:
+                block[n:] = 0.0
+            block[:n] = sel[lo : lo + n, p0 : p0 + m] > 0
+            out[lo : lo + n] += (block @ padded)[:n, :k]
+    return out
+
+
+def selected_squares(selected: np.ndarray, *values: np.ndarray) -> np.ndarray:
+    """Sums of ``v**2`` over the entries each row of ``selected`` (R, M; 0 or 1) selects, for each
+    of ``values`` ((M,) each): (R, len(values)), by :func:`row_sums`, except that a value whose
+    square is not finite (an ATE past 1e154 m: a diverged pose) counts only in the rows that
+    select it: in a product its 0 weight would make every row NaN (0 * inf)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        sq = np.column_stack([np.asarray(v, float) ** 2 for v in values])
+    bad = ~np.isfinite(sq)
+    if not bad.any():
+        return row_sums(selected, sq)
+    total = row_sums(selected, np.where(bad, 0.0, sq))
+    with np.errstate(invalid="ignore"):
+        for k in range(sq.shape[1]):
+            rows = bad[:, k]
+            total[:, k] += masked_sum(np.asarray(selected)[:, rows] > 0, sq[rows, k])
+    return total
+
+
+def sequence_grid(
+    e: SequenceErrors,
+    eps: ArrayLike,
+    phi: ArrayLike,
+    delta: ArrayLike,
+    tau: ArrayLike,
+    *,
+    rpe_delta: float = 1.0,
+    rpe_unit: str = "s",
+    with_rpe: bool = True,
+    with_stats: bool = False,
+    rpe_pairs: str = "reference",
+    rpe_all_pairs: bool | None = None,
+    rpe_tolerance: float = 0.1,
+) -> dict[str, np.ndarray]:
+    """Every metric of one sequence over a grid, as arrays of shape (E, P, D, T).
+
+    Args:
+        e: per-pose errors of the sequence.
+        eps: (E,) ATE thresholds in metres (already resolved for this sequence's scene).
+        phi: (P,) AOE thresholds, degrees. delta: (D,) validity windows, seconds (Eq. 2).
+        tau: (T,) re-localization time factors, seconds (Eq. 4).
+        rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance: the RPE pairs (see
+            :func:`lorisnb.core.metrics.pairs.rpe_indices`).
+        with_rpe: also the RPE columns (their pairs are computed once per sequence and kept).
+        with_stats: also :data:`~lorisnb.core.pipeline.model.STAT_COLUMNS` (needs ``with_rpe``): evo's
+            statistics of ATE, AOE and RPE, and of the same over correct poses (pairs) only.
+
+    A sequence with no matched pose has CR = CR-T = CS-R = 0, no ATE (NaN), 0 correct poses and
+    an infinite re-localization time. One with no RPE pair (shorter than the RPE step) has 0 pairs
+    and NaN RPE statistics, its other metrics as usual (the evaluation warns, naming it).
+    """
+    eps_a, phi_a, delta_a, tau_a = (np.asarray(v, float).reshape(-1) for v in (eps, phi, delta, tau))
+    shape = (len(eps_a), len(phi_a), len(delta_a), len(tau_a))
+    E, P, D, T = shape
+
+    def bc(a: Any) -> np.ndarray:
+        return np.broadcast_to(a, shape)
+
+    nan, zero = bc(np.nan), bc(0.0)
+    if e.matched == 0:
+        out = dict(
+            ate_rmse=nan, aoe_rmse=nan, c_ate_rmse=nan, c_aoe_rmse=nan, c_matched=zero, correct_time=zero, cr=zero,
+            cr_t=zero, reloc_time=bc(np.inf), cs_r=zero, t0=nan, track_time=zero, first_correct=bc(False),
+        )  # fmt: skip
+        if with_rpe:
+            out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)
+        if with_stats:
+            out.update(dict.fromkeys(STAT_COLUMNS, nan))
+        return out
+    # correctness of every pose at every (eps, phi), Eq. (1): (E, P, M)
+    c = (e.ate[None, None, :] <= eps_a[:, None, None]) & (e.aoe[None, None, :] <= phi_a[None, :, None])
+    cf = c.reshape(E * P, -1)
+    held = np.minimum(metrics.valid_intervals(e.stamps, e.gt_end, e.gt_start)[None, :], delta_a[:, None])  # (D, M)
+    ct = row_sums(cf, held.T).reshape(E, P, D)  # correct time, numerator of Eq. (2) and (3)
+    n_c = cf.sum(axis=1).reshape(E, P).astype(float)
+    sums = selected_squares(cf, e.ate, e.aoe)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c_ate = np.where(n_c > 0, np.sqrt(sums[:, 0].reshape(E, P) / n_c), np.nan)
+        c_aoe = np.where(n_c > 0, np.sqrt(sums[:, 1].reshape(E, P) / n_c), np.nan)
+    t0 = float(e.stamps[0])
+    track = e.gt_end - max(t0, e.gt_start)  # tracked time inside the span, as the correct time
+    rt = metrics.relocalization_time(t0, e.gt_start)
+    first = c[:, :, 0]
+    csr = metrics.relocalization_score(t0, e.gt_start, first[:, :, None], tau_a[None, None, :])  # Eq. (4), (E, P, T)
+    out = dict(
+        ate_rmse=bc(float(metrics.rmse(e.ate))), aoe_rmse=bc(float(metrics.rmse(e.aoe))),
+        c_ate_rmse=bc(c_ate[:, :, None, None]), c_aoe_rmse=bc(c_aoe[:, :, None, None]),
+        c_matched=bc(n_c[:, :, None, None]), correct_time=bc(ct[:, :, :, None]),
+        cr=bc(metrics.correct_rate(ct, e.gt_start, e.gt_end)[:, :, :, None]),
+        cr_t=bc(metrics.correct_rate_tracking(ct, max(t0, e.gt_start), e.gt_end)[:, :, :, None]),
+        reloc_time=bc(rt), cs_r=bc(csr[:, :, None, :]), t0=bc(t0), track_time=bc(track),
+        first_correct=bc(first[:, :, None, None]),
+    )  # fmt: skip
+    if not with_rpe:
+        return out
+    # RPE: pairs fixed per sequence; C-RPE over the pairs whose two poses are correct
+    i, j, tr, rr = e.rpe(rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance)
+    pairs_c = c[:, :, i] & c[:, :, j]  # (E, P, pairs): the pairs whose two poses are correct
+    if with_stats:
+        named = {"ate": (e.ate, c), "aoe": (e.aoe, c), "rpe_trans": (tr, pairs_c), "rpe_rot": (rr, pairs_c)}
+        # the whole arrays' statistics side by side (a median each); the masked ones after, in order
+        whole = dict(
+            zip(named, each(*(partial(error_statistics, v) for v, _ in named.values()), rows=e.matched), strict=True)
+        )
+        for name, stats in whole.items():
+            out.update({f"{name}_{k}": bc(v) for k, v in stats.items() if k != "rmse"})
+        for name, (values, m) in named.items():
+            ms = masked_statistics(values, m, whole[name])
+            out.update({f"c_{name}_{k}": bc(v[:, :, None, None]) for k, v in ms.items()})
+    if len(i) == 0:
+        out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)
+        return out
+    both = pairs_c.reshape(E * P, -1)
+    nb = both.sum(axis=1).reshape(E, P).astype(float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sums = selected_squares(both, tr, rr)
+        ctr = np.where(nb > 0, np.sqrt(sums[:, 0].reshape(E, P) / nb), np.nan)
+        crr = np.where(nb > 0, np.sqrt(sums[:, 1].reshape(E, P) / nb), np.nan)
+    out.update(
+        rpe_trans_rmse=bc(float(metrics.rmse(tr))), rpe_rot_rmse=bc(float(metrics.rmse(rr))),
+        c_rpe_trans_rmse=bc(ctr[:, :, None, None]), c_rpe_rot_rmse=bc(crr[:, :, None, None]),
+        rpe_pairs=bc(float(len(i))), c_rpe_pairs=bc(nb[:, :, None, None]),
+    )  # fmt: skip
+    return out
+
+
+def rpe_setting(rpe_delta: Any, rpe_unit: Any) -> tuple[float, str]:
+    """Validated RPE step by the spec's own rules (:func:`lorisnb.core.spec.evo.check_evo`): a
+    positive delta in ``s`` (seconds), ``f`` or ``frames`` (whole), ``m`` (metres), ``deg``/``d`` or
+    ``rad``/``r`` (rotation, at most half a turn)."""
+    unit = check_evo("rpe_unit", rpe_unit, "rpe_unit")
+    delta = float(check_evo("rpe_delta", rpe_delta, "rpe_delta"))
+    check_evo_together({"rpe_delta": delta, "rpe_unit": unit}, str)
+    return delta, unit
+
+
+def rpe_options(rpe_pairs: Any, rpe_all_pairs: Any, rpe_tolerance: Any) -> tuple[str, bool | None, float]:
+    """Validated RPE pair options, by the spec's own rules: along ``reference`` or ``estimate``;
+    all pairs True / False (evo's rules) or None (lorisnb's); a positive relative tolerance, other
+    than the default only with evo's all pairs (:func:`lorisnb.core.spec.evo.evo_refusals`)."""
+    pairs = check_evo("rpe_pairs", rpe_pairs, "rpe_pairs")
+    all_pairs = check_evo("rpe_all_pairs", rpe_all_pairs, "rpe_all_pairs")
+    tol = float(check_evo("rpe_tolerance", rpe_tolerance, "rpe_tolerance"))
+    if tol != RPE_DEFAULTS["rpe_tolerance"] and all_pairs is not True:
+        raise ValidationError("rpe_tolerance: only for evo's all pairs (rpe_all_pairs)")
+    return pairs, all_pairs, tol
+
+
+#: The RPE settings of :func:`score` and their defaults (lorisnb's own rule over 1 s).
+RPE_DEFAULTS: dict[str, Any] = dict(
+    rpe_delta=1.0, rpe_unit="s", rpe_pairs="reference", rpe_all_pairs=None, rpe_tolerance=0.1
+)
+
+
+class _OfSpec:
+    """The default of an RPE setting of :func:`score` and :func:`~lorisnb.core.lifelong.sweep.sweep`: the
+    errors' own spec's (:attr:`~lorisnb.core.pipeline.model.FileErrors.rpe`)."""
+
+    def __repr__(self) -> str:
+        return "<the errors' spec>"
+
+
+OF_SPEC: Any = _OfSpec()
+
+
+def rpe_of(files: list[FileErrors], given: dict[str, Any]) -> dict[str, Any]:
+    """The RPE settings to score ``files`` with: those ``given`` (not :data:`OF_SPEC`), the rest
+    from the spec the errors were computed under (:attr:`FileErrors.rpe`; files of different
+    settings need them given), else :data:`RPE_DEFAULTS`."""
+    unknown = sorted(set(given) - set(RPE_DEFAULTS))
+    if unknown:
+        raise ValidationError(f"{unknown[0]}: not a setting of the scores; expected one of {', '.join(RPE_DEFAULTS)}")
+    given = {k: v for k, v in given.items() if v is not OF_SPEC}
+    recorded = {tuple(sorted(f.rpe.items())) for f in files if f.rpe}
+    if len(recorded) > 1:
+        differ = sorted({k for r in recorded for k, v in r if any(dict(o).get(k) != v for o in recorded)} - set(given))
+        if differ:
+            raise ValidationError(f"{', '.join(differ)}: the errors were computed under different RPE settings; "
+                                  "give them to score all the files alike")  # fmt: skip
+    return RPE_DEFAULTS | (dict(next(iter(recorded))) if recorded else {}) | given
+
+
+def score_rows(
+    errors: FileErrors | Iterable[FileErrors], eps: Eps = np.inf, phi: float = np.inf, delta: float = 1.0,
+    tau: float = 60.0, **rpe: Any,
+) -> list[dict[str, Any]]:  # fmt: skip
+    """One row per sequence (a dict of :func:`score`'s columns): every metric of the paper at one
+    threshold setting, without pandas (the command line prints these rows as they are). The
+    arguments are :func:`score`'s (the RPE settings by name)."""
+    files = as_files(errors)
+    r = rpe_of(files, rpe)
+    eps_v = eps_value(eps)
+    phi_v, delta_v, tau_v = threshold("phi", phi), threshold("delta", delta), threshold("tau", tau)
+    rpe_d, rpe_u = rpe_setting(r["rpe_delta"], r["rpe_unit"])
+    rpe_p, rpe_a, rpe_t = rpe_options(r["rpe_pairs"], r["rpe_all_pairs"], r["rpe_tolerance"])
+    rows = []
+    for f in files:  # one iteration per file and sequence, never per pose
+        for e in f.sequences:
+            e_scene = sequence_eps(eps_v, f.scene, e)
+            grid = sequence_grid(
+                e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u, with_stats=True,
+                rpe_pairs=rpe_p, rpe_all_pairs=rpe_a, rpe_tolerance=rpe_t,
+            )  # fmt: skip
+            row = sequence_meta(f, e) | dict(eps=e_scene, phi=phi_v, delta=delta_v, tau=tau_v)
+            row.update({k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in grid.items()})
+            rows.append(row)
+    return rows
+
+
+def score(
+    errors: FileErrors | Iterable[FileErrors],
+    eps: Eps = np.inf,
+    phi: float = np.inf,
+    delta: float = 1.0,
+    tau: float = 60.0,
+    rpe_delta: float = OF_SPEC,
+    rpe_unit: str = OF_SPEC,
+    rpe_pairs: str = OF_SPEC,
+    rpe_all_pairs: bool | None = OF_SPEC,
+    rpe_tolerance: float = OF_SPEC,
+) -> pd.DataFrame:
+    """One row per sequence: every metric of the paper at one threshold setting.
+
+    Args:
+        eps: ATE threshold, metres (number, ``"paper"`` or scene -> metres). Default infinity.
+        phi: AOE threshold, degrees. Default infinity.
+        delta: validity window of a pose, seconds (Eq. 2). Default 1 s.
+        tau: re-localization time factor, seconds (Eq. 4). Default 60 s.
+        rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance: the RPE pairs (see
+            :func:`lorisnb.core.metrics.pairs.rpe_indices`); each not given is that of the spec the errors
+            were computed under (:func:`rpe_of`; lorisnb's own rule over 1 s when not known).
+
+    Columns: :data:`~lorisnb.core.pipeline.model.SEQUENCE_COLUMNS`, then
+    :data:`~lorisnb.core.pipeline.model.EXTRA_COLUMNS` and :data:`~lorisnb.core.pipeline.model.STAT_COLUMNS`: the
+    rows of :func:`score_rows`, each :func:`sequence_grid` on a one-point grid.
+    """
+    import pandas as pd
+
+    rows = score_rows(
+        errors, eps, phi, delta, tau, rpe_delta=rpe_delta, rpe_unit=rpe_unit, rpe_pairs=rpe_pairs,
+        rpe_all_pairs=rpe_all_pairs, rpe_tolerance=rpe_tolerance,
+    )  # fmt: skip
+    return pd.DataFrame(rows, columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS + STAT_COLUMNS)
+
+
+def pose_table(errors: FileErrors | Iterable[FileErrors], eps: Eps = np.inf, phi: float = np.inf) -> pd.DataFrame:
+    """One row per matched pose: algorithm, file, suite, scene, seq, stamp (s), t_rel (s from the
+    ground truth's start), ate (m), aoe (deg), correct (Eq. 1)."""
+    import pandas as pd
+
+    files = as_files(errors)
+    eps_v, phi_v = eps_value(eps), threshold("phi", phi)
+    parts = []
+    for f in files:
+        for e in f.sequences:
+            if e.matched == 0:
+                continue
+            e_scene = sequence_eps(eps_v, f.scene, e)
+            parts.append(
+                pd.DataFrame(
+                    {
+                        "algorithm": f.algorithm, "file": f.file, "suite": f.suite, "scene": f.scene, "seq": e.seq,
+                        "stamp": e.stamps, "t_rel": e.stamps - e.gt_start, "ate": e.ate, "aoe": e.aoe,
+                        "correct": metrics.correctness(e.ate, e.aoe, e_scene, phi_v),
+                    }
+                )
+            )  # fmt: skip
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=POSE_COLUMNS)

@@ -1,0 +1,50 @@
+"""The error metrics on matched poses: the OpenLORIS-Scene paper's per-pose and threshold
+metrics (:mod:`.openloris`, Eq. 1-4), the pose pairs of every RPE rule (:mod:`.pairs`), evo's
+pose relations (:mod:`.relations`, :mod:`.relation_table`), rpg's relative error over
+sub-trajectories (:mod:`.relative`), and difficulty measures across datasets (:mod:`.difficulty`).
+
+May import: the other core sub-packages but :mod:`lorisnb.core.stats` (enforced).
+"""
+
+from typing import TYPE_CHECKING
+
+from lorisnb._lazy import attach
+
+if TYPE_CHECKING:
+    from lorisnb.core.metrics.openloris import (
+        RATES,
+        RPE_UNITS,
+        Orientations,
+        aoe,
+        ate,
+        correct_rate,
+        correct_rate_tracking,
+        correct_time,
+        correctness,
+        relocalization_score,
+        relocalization_time,
+        rmse,
+        rpe,
+        rpe_pairs,
+        valid_intervals,
+    )
+
+__getattr__, __dir__ = attach(__name__)
+
+__all__ = [
+    "Orientations",
+    "RATES",
+    "RPE_UNITS",
+    "aoe",
+    "ate",
+    "correct_rate",
+    "correct_rate_tracking",
+    "correct_time",
+    "correctness",
+    "relocalization_score",
+    "relocalization_time",
+    "rmse",
+    "rpe",
+    "rpe_pairs",
+    "valid_intervals",
+]

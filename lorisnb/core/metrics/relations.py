@@ -1,0 +1,182 @@
+"""Pose relations and error statistics as evo defines them (evo 1.38, ``evo.core.metrics``), on
+quaternion arrays, vectorized.
+
+Relations (``evo_ape/evo_rpe -r``): for APE the error pose is ``E = P^-1 Q`` (estimate P, reference
+Q; Kümmerle et al.), for RPE ``E = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)`` (TUM RGB-D). ``trans_part``:
+``|t_E|`` metres; ``rot_part``: ``|R_E - I|_F`` (no unit; ``2 sqrt(2) sin(theta / 2)`` for a
+rotation by theta); ``full``: ``|E - I|_F`` = ``sqrt(rot_part^2 + trans_part^2)``; ``angle_deg``
+and ``angle_rad``: theta; ``point_distance``: for APE the distance of the positions (as
+``trans_part``), for RPE ``| |q_j - q_i| - |p_j - p_i| |`` metres.
+
+Statistics (:func:`error_statistics`): rmse, mean, median, std (population, ddof 0), min, max and
+sse (sum of squares), evo's ``get_all_statistics``.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+from lorisnb.core.alignment.geometry import (
+    as_quaternions,
+    quat_conj_multiply,
+    quat_conjugate,
+    quat_multiply,
+    quat_rotate,
+)
+from lorisnb.errors import ValidationError
+
+RELATIONS = ("trans_part", "angle_deg", "angle_rad", "rot_part", "full", "point_distance")
+#: Unit of each relation's values (evo's).
+RELATION_UNITS = {
+    "trans_part": "m", "angle_deg": "deg", "angle_rad": "rad", "rot_part": "", "full": "", "point_distance": "m",
+}  # fmt: skip
+STATISTICS = ("rmse", "mean", "median", "std", "min", "max", "sse")
+
+
+def check_relation(relation: str) -> str:
+    """``relation`` if it is one of :data:`RELATIONS`, else a ValidationError naming them."""
+    if relation not in RELATIONS:
+        raise ValidationError(f"pose relation {relation!r}: expected one of {', '.join(RELATIONS)}")
+    return relation
+
+
+def _half_sine(q: np.ndarray) -> np.ndarray:
+    """``|sin(theta / 2)|`` of unit quaternions ``xyzw``: the length of their vector part."""
+    xyz = q[..., :3]
+    return np.sqrt(np.einsum("...i,...i->...", xyz, xyz))
+
+
+def _angle(q: np.ndarray) -> np.ndarray:
+    """Rotation angle of unit quaternions, radians in [0, pi]."""
+    return 2.0 * np.arctan2(_half_sine(q), np.abs(q[..., 3]))
+
+
+def _from_parts(relation: str, trans: np.ndarray, q_err: np.ndarray) -> np.ndarray:
+    if relation == "trans_part":
+        return trans
+    if relation == "angle_rad":
+        return _angle(q_err)
+    if relation == "angle_deg":
+        return np.rad2deg(_angle(q_err))
+    rot = 2.0 * math.sqrt(2.0) * _half_sine(q_err)
+    if relation == "rot_part":
+        return rot
+    return np.sqrt(rot * rot + trans * trans)  # full
+
+
+def ape_relation(
+    gt_positions: np.ndarray, gt_quaternions: np.ndarray, est_positions: np.ndarray, est_quaternions: np.ndarray,
+    relation: str = "trans_part",
+) -> np.ndarray:  # fmt: skip
+    """Absolute pose error of each matched pose by ``relation`` (see the module docstring).
+    Positions (N, 3) metres; quaternions (N, 4) ``xyzw`` (normalized here)."""
+    relation = check_relation(relation)
+    d = np.asarray(est_positions, float) - np.asarray(gt_positions, float)
+    trans = np.sqrt(np.einsum("ij,ij->i", d, d))
+    if relation in ("trans_part", "point_distance"):
+        return trans
+    q_err = quat_conj_multiply(as_quaternions(est_quaternions), as_quaternions(gt_quaternions))
+    return _from_parts(relation, trans, q_err)
+
+
+def rpe_relation(
+    gt_positions: np.ndarray, gt_quaternions: np.ndarray, est_positions: np.ndarray, est_quaternions: np.ndarray,
+    i: np.ndarray, j: np.ndarray, relation: str = "trans_part",
+) -> np.ndarray:  # fmt: skip
+    """Relative pose error of pairs (i, j) by ``relation`` (see the module docstring)."""
+    relation = check_relation(relation)
+    i, j = np.asarray(i, np.intp), np.asarray(j, np.intp)
+    pg, pe = np.asarray(gt_positions, float), np.asarray(est_positions, float)
+    if relation == "point_distance":
+        dg, de = pg[j] - pg[i], pe[j] - pe[i]
+        return np.abs(np.sqrt(np.einsum("ij,ij->i", dg, dg)) - np.sqrt(np.einsum("ij,ij->i", de, de)))
+    qg, qe = as_quaternions(gt_quaternions), as_quaternions(est_quaternions)
+    rel_g = quat_conj_multiply(qg[i], qg[j])  # Q_i^-1 Q_j
+    rel_e = quat_conj_multiply(qe[i], qe[j])  # P_i^-1 P_j
+    t_g = quat_rotate(quat_conjugate(qg[i]), pg[j] - pg[i])
+    t_e = quat_rotate(quat_conjugate(qe[i]), pe[j] - pe[i])
+    err_t = quat_rotate(quat_conjugate(rel_g), t_e - t_g)  # E = rel_g^-1 rel_e
+    trans = np.sqrt(np.einsum("ij,ij->i", err_t, err_t))
+    if relation == "trans_part":
+        return trans
+    return _from_parts(relation, trans, quat_multiply(quat_conjugate(rel_g), rel_e))
+
+
+def error_statistics(values: np.ndarray, mask: np.ndarray | None = None) -> dict[str, float]:
+    """evo's statistics of an error array (of its entries where ``mask`` is true): rmse, mean,
+    median, std (ddof 0), min, max, sse; NaN for each when there is no value."""
+    v = np.asarray(values, float).reshape(-1)
+    if mask is not None:
+        v = v[np.asarray(mask, bool).reshape(-1)]
+    if v.size == 0:
+        return dict.fromkeys(STATISTICS, math.nan)
+    with np.errstate(over="ignore", invalid="ignore"):  # a diverged pose (1e160 m): inf / NaN, no warning
+        sq = np.power(v, 2)
+        return dict(
+            rmse=math.sqrt(np.mean(sq)), mean=float(np.mean(v)), median=float(np.median(v)), std=float(np.std(v)),
+            min=float(np.min(v)), max=float(np.max(v)), sse=float(np.sum(sq)),
+        )  # fmt: skip
+
+
+def masked_statistics(
+    values: np.ndarray, mask: np.ndarray, whole: dict[str, float] | None = None
+) -> dict[str, np.ndarray]:
+    """:func:`error_statistics` (without rmse) of ``values`` (M,) over each row of a boolean
+    ``mask`` (..., M) (a threshold grid's correct poses): arrays shaped ``mask.shape[:-1]``, NaN
+    where a row selects nothing. Rows are done in chunks of about 2**22 values (bounded memory
+    whatever the grid); each row's numbers are the same whatever the chunk. ``whole``:
+    :func:`error_statistics` of ``values`` if already computed (a row selecting every value has
+    those numbers)."""
+    v = np.asarray(values, float)
+    m = np.asarray(mask, bool)
+    shape = m.shape[:-1]
+    rows = m.reshape(math.prod(shape), v.size)  # not reshape(-1, 0): no value (e.g. no RPE pair) is a NaN row
+    out = {k: np.full(rows.shape[0], np.nan) for k in ("mean", "median", "std", "min", "max", "sse")}
+    full = rows.all(axis=1) if v.size else np.zeros(rows.shape[0], bool)
+    if full.any():  # every value selected (no threshold): the same numbers as error_statistics, to the bit (tested)
+        whole = whole if whole is not None else error_statistics(v)
+        for k, a in out.items():
+            a[full] = whole[k]
+        rows = rows[~full]
+    part = {k: np.full(rows.shape[0], np.nan) for k in out}
+    step = max(1, (1 << 22) // max(v.size, 1))
+    for lo in range(0, rows.shape[0], step):  # chunks of grid rows, not poses
+        _masked_rows(v, np.ascontiguousarray(rows[lo : lo + step]), {k: a[lo : lo + step] for k, a in part.items()})
+    for k, a in out.items():
+        a[~full] = part[k]
+    return {k: a.reshape(shape) for k, a in out.items()}
+
+
+def masked_sum(mask: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The sum of ``x`` (broadcast to ``mask``'s (R, M)) over the entries each row of the boolean
+    ``mask`` selects: (R,). Each row is numpy's pairwise sum of its M entries in order (those not
+    selected as 0), so a row's sum is the same to the last bit whatever the other rows are (a
+    threshold setting alone, in a sweep's grid or a chunk of it), on any BLAS and thread count;
+    an entry that is not finite (a diverged pose's square) counts only in the rows selecting it."""
+    return np.ascontiguousarray(np.where(mask, x, 0.0)).sum(axis=1)
+
+
+def _masked_rows(v: np.ndarray, rows: np.ndarray, out: dict[str, np.ndarray]) -> None:
+    """The statistics of ``v`` over each row of ``rows`` (R, M), written into ``out``'s (R,) views."""
+
+    def row_sums(x: np.ndarray) -> np.ndarray:
+        return masked_sum(rows, x)
+
+    n = rows.sum(axis=1)
+    some = n > 0
+    if not v.size or not some.any():
+        return
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = row_sums(np.broadcast_to(v, rows.shape)) / n
+        dev = v[None, :] - mean[:, None]
+        out["mean"][some] = mean[some]
+        out["std"][some] = np.sqrt(row_sums(dev * dev) / n)[some]
+        out["sse"][some] = row_sums(np.broadcast_to(v * v, rows.shape))[some]
+        out["min"][some] = np.where(rows, v, np.inf).min(axis=1)[some]
+        out["max"][some] = np.where(rows, v, -np.inf).max(axis=1)[some]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # rows with no value: NaN, said above
+            out["median"][some] = np.nanmedian(np.where(rows, v, np.nan), axis=1)[some]

@@ -1,0 +1,187 @@
+"""rpg_trajectory_evaluation's relative error: over sub-trajectories of given lengths (metres
+travelled along the ground truth, by default 10, 20, 30, 40 and 50 % of the total length), the
+error of the estimate's relative motion, reported per metre travelled as rpg reports it
+(translation in % of the length, rotation in degrees per metre).
+
+The lengths (:func:`rpg_preset_lengths`) are fractions of the path length of the *whole* ground
+truth as read (rpg's ``traj_length``, before association), truncated to centimetres, unless preset
+distances are given (rpg's ``preset_boxplot_distances``); distances along the path are measured on
+the matched ground truth.
+
+For each start pose i, the end pose is the first j >= i whose distance from the start is closest
+to ``d_i + L``, within ``0.2 L``. Like rpg, the pairs are then numbered in order of the starts that
+found an end (rpg's ``compute_relative_error`` pairs the k-th found end with the k-th pose); the
+two agree whenever the ends missing are all at the end of the trajectory, as they are unless the
+ground truth jumps by more than 0.2 L. The rotation angle is ``arccos((trace R - 1) / 2)`` as rpg
+computes it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from lorisnb.core.alignment.geometry import quat_conjugate, quat_multiply, quat_normalize, quat_rotate, quat_to_matrix
+from lorisnb.core.lifelong.scoring import as_files
+from lorisnb.core.pipeline.model import FileErrors
+from lorisnb.core.spec import validate
+from lorisnb.errors import ValidationError
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+#: rpg's default sub-trajectory lengths, fractions of the total length
+RPG_FRACTIONS = (0.1, 0.2, 0.3, 0.4, 0.5)
+
+
+def distances(positions: np.ndarray) -> np.ndarray:
+    """Distance travelled from the first position to each, metres."""
+    steps = np.linalg.norm(np.diff(np.asarray(positions, float), axis=0), axis=1)
+    return np.concatenate(([0.0], np.cumsum(steps)))
+
+
+def rpg_preset_lengths(total: float, fractions: tuple[float, ...] = RPG_FRACTIONS) -> list[float]:
+    """rpg's sub-trajectory lengths of a ground truth ``total`` metres long: each fraction of it,
+    truncated to centimetres (rpg's ``compute_boxplot_distances``)."""
+    return [math.trunc(f * float(total) * 100.0) / 100.0 for f in fractions]
+
+
+def rpg_lengths(gt_positions: np.ndarray, fractions: tuple[float, ...] = RPG_FRACTIONS) -> list[float]:
+    """:func:`rpg_preset_lengths` of the path length of ``gt_positions`` (pass the whole ground
+    truth, as rpg does, for rpg's lengths)."""
+    return rpg_preset_lengths(float(distances(gt_positions)[-1]) if len(gt_positions) else 0.0, fractions)
+
+
+def rpg_pairs(dist: np.ndarray, length: float, max_dist_diff: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Start and end indices of the sub-trajectories of ``length`` metres (see the module docstring)."""
+    if max_dist_diff is None:
+        max_dist_diff = 0.2 * length
+    n = dist.size
+    target = dist + length
+    k = np.searchsorted(dist, target, side="left")  # first with distance >= target
+    before = np.clip(k - 1, 0, n - 1)
+    before = np.searchsorted(dist, dist[before], side="left")  # earliest of equal distances
+    before = np.maximum(before, np.arange(n))
+    after = np.minimum(k, n - 1)
+    err_b = np.abs(dist[before] - target)
+    err_a = np.abs(dist[after] - target)
+    best = np.where(err_b <= err_a, before, after)
+    err = np.minimum(err_b, err_a)
+    found = best[err < max_dist_diff]
+    return np.arange(found.size), found
+
+
+def rpg_relative_errors(
+    gt_positions: np.ndarray,
+    gt_quaternions: np.ndarray,
+    est_positions: np.ndarray,
+    est_quaternions: np.ndarray,
+    lengths: list[float] | None = None,
+    scale: float = 1.0,
+) -> pd.DataFrame:
+    """rpg's relative errors of matched poses for each sub-trajectory length (metres; default
+    :func:`rpg_lengths`), the estimate's relative translations multiplied by ``scale`` (the Sim(3)
+    scale, as rpg does). One row per pair: ``length``, ``trans`` (m), ``trans_perc`` (% of the
+    length), ``rot`` (deg), ``rot_deg_per_m``."""
+    import pandas as pd
+
+    p_g, p_e = np.asarray(gt_positions, float), np.asarray(est_positions, float)
+    q_g = quat_normalize(gt_quaternions)
+    q_e = quat_normalize(est_quaternions)
+    dist = distances(p_g)
+    rows = []
+    for length in rpg_lengths(p_g) if lengths is None else lengths:  # a handful of lengths
+        i, j = rpg_pairs(dist, float(length))
+        if i.size < 2:  # rpg: "Too few samples! Will not compute."
+            continue
+        inv_e, inv_g = quat_conjugate(q_e[i]), quat_conjugate(q_g[i])
+        rel_e_t = scale * quat_rotate(inv_e, p_e[j] - p_e[i])
+        rel_g_t = quat_rotate(inv_g, p_g[j] - p_g[i])
+        rel_g_q = quat_multiply(inv_g, q_g[j])
+        inv_rel_g = quat_conjugate(rel_g_q)
+        err_t = quat_rotate(inv_rel_g, rel_e_t - rel_g_t)
+        err_q = quat_multiply(inv_rel_g, quat_multiply(inv_e, q_e[j]))
+        trace = quat_to_matrix(err_q).trace(axis1=1, axis2=2)
+        rot = np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0)))
+        trans = np.linalg.norm(err_t, axis=1)
+        rows.append(
+            pd.DataFrame(
+                dict(
+                    length=float(length),
+                    trans=trans,
+                    trans_perc=trans / length * 100,
+                    rot=rot,
+                    rot_deg_per_m=rot / length,
+                )
+            )  # fmt: skip
+        )
+    cols = ["length", "trans", "trans_perc", "rot", "rot_deg_per_m"]
+    return pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(columns=cols)
+
+
+def _positive_list(name: str, values: Any, most: float = math.inf) -> tuple[float, ...]:
+    """A non-empty list of positive numbers (at most ``most``): ``fractions=2`` or ``lengths=[-1]``
+    gave an empty table, ``fractions=0.1`` a TypeError."""
+    items = list(values) if isinstance(values, (list, tuple, np.ndarray)) else None
+    if not items:
+        raise ValidationError(f"{name}={values!r}: expected a non-empty list of positive numbers")
+    out = tuple(validate.positive(name, v, "") for v in items)
+    if any(v > most for v in out):
+        raise ValidationError(f"{name}={values!r}: each is a fraction of the path length, at most {most:g}")
+    return out
+
+
+def relative_table(
+    errors: FileErrors | Iterable[FileErrors],
+    fractions: tuple[float, ...] = RPG_FRACTIONS,
+    lengths: Sequence[float] | None = None,
+) -> pd.DataFrame:
+    """rpg's relative error of every sequence, per sub-trajectory length: samples, mean and RMSE of
+    the translation error in % of the length, mean rotation error in degrees per metre. Computed on
+    the aligned poses (a rigid alignment leaves relative motion unchanged, and a Sim(3)
+    alignment's scale is rpg's ``scale``).
+
+    Lengths: ``lengths`` (metres, rpg's preset distances; ``fraction`` is then NaN), else
+    ``fractions`` of the whole ground truth's path length where the errors know it
+    (``FileErrors.groundtruth_lengths``, as rpg), else of the matched ground truth's."""
+    import pandas as pd
+
+    fractions = _positive_list("fractions", fractions, most=1.0)
+    lengths = None if lengths is None else _positive_list("lengths", lengths)
+    rows = []
+    for f in as_files(errors):  # per file, sequence and length, never per pose
+        for e in f.sequences:
+            if e.matched < 2 or e.gt_quaternions is None or e.est_quaternions is None:
+                continue
+            if lengths is not None:
+                use = [float(x) for x in lengths]
+                fraction_of = dict.fromkeys(use, math.nan)
+            else:
+                total = f.groundtruth_lengths.get(e.seq)
+                use = rpg_lengths(e.gt_positions, fractions) if total is None else rpg_preset_lengths(total, fractions)
+                fraction_of = dict(zip(use, fractions, strict=True))
+            rel = rpg_relative_errors(e.gt_positions, e.gt_quaternions, e.est_positions, e.est_quaternions,
+                                      [x for x in use if x > 0])  # fmt: skip
+            for length, g in rel.groupby("length", sort=False):
+                rows.append(
+                    dict(
+                        algorithm=f.algorithm,
+                        file=f.file,
+                        suite=f.suite,
+                        scene=f.scene,
+                        trial=f.trial,
+                        seq=e.seq,
+                        fraction=fraction_of[float(length)],
+                        length=length,
+                        samples=len(g),
+                        trans_perc_mean=g["trans_perc"].mean(),
+                        trans_perc_rmse=float(np.sqrt(np.mean(g["trans_perc"] ** 2))),
+                        rot_deg_per_m_mean=g["rot_deg_per_m"].mean(),
+                    )  # fmt: skip
+                )
+    cols = ["algorithm", "file", "suite", "scene", "trial", "seq", "fraction", "length", "samples", "trans_perc_mean",
+            "trans_perc_rmse", "rot_deg_per_m_mean"]  # fmt: skip
+    return pd.DataFrame(rows, columns=cols)

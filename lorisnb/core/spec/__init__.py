@@ -1,0 +1,56 @@
+"""The evaluation spec: every choice that decides a number, in one frozen validated value
+(:mod:`.evalspec`), its evo options (:mod:`.evo`), its documentation table (:mod:`.table`), and the
+validation of every user value (:mod:`.validate`).
+
+May import: the other core sub-packages but :mod:`lorisnb.core.stats` (enforced); the spec's
+values name the choices the conventions and metrics define.
+"""
+
+from typing import TYPE_CHECKING
+
+from lorisnb._lazy import attach
+
+if TYPE_CHECKING:
+    from lorisnb.core.spec.evalspec import (
+        ALIASES,
+        ALIGNMENTS,
+        ASSOCIATIONS,
+        INPUT_KINDS,
+        MAX_DIFF,
+        MODES,
+        PRESETS,
+        REPEATED,
+        RPE_UNITS,
+        SPEC_NAMES,
+        THRESHOLD_NAMES,
+        UNSCALED,
+        Conventions,
+        EvalSpec,
+        Transform,
+        make_spec,
+        preset_over,
+        text,
+    )
+
+__getattr__, __dir__ = attach(__name__)
+
+__all__ = [
+    "ALIASES",
+    "ALIGNMENTS",
+    "ASSOCIATIONS",
+    "Conventions",
+    "EvalSpec",
+    "INPUT_KINDS",
+    "MAX_DIFF",
+    "MODES",
+    "PRESETS",
+    "REPEATED",
+    "RPE_UNITS",
+    "SPEC_NAMES",
+    "THRESHOLD_NAMES",
+    "Transform",
+    "UNSCALED",
+    "make_spec",
+    "preset_over",
+    "text",
+]

@@ -1,0 +1,296 @@
+"""Validation of every user value, in one place.
+
+The command line, the Python API, sweeps, notebook parameters and widgets all pass user values
+through these functions, so the same value is accepted or refused with the same message
+everywhere. Each returns the normalized value or raises :class:`~lorisnb.errors.ValidationError`
+naming the value, what was given and what is expected.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from numbers import Real
+from typing import Any
+
+import numpy as np
+
+from lorisnb.core.trajectory.frames import SCENES
+from lorisnb.errors import ValidationError
+
+#: The words accepted for ``scale`` (command line ``--scale WORD``, Python ``scale=``), any case.
+SCALE_WORDS: dict[str, bool | str] = {
+    "auto": "auto",
+    "on": True, "yes": True, "true": True, "1": True, "sim3": True,
+    "off": False, "no": False, "false": False, "0": False, "se3": False,
+}  # fmt: skip
+
+#: Thresholds: name -> (unit, whether 0 is allowed). Infinity is allowed for all of them.
+THRESHOLDS: dict[str, tuple[str, bool]] = {
+    "eps": ("metres", True),
+    "phi": ("degrees", True),
+    "delta": ("seconds", False),
+    "tau": ("seconds", False),
+}
+
+#: Largest finite value that still has a meaning, with what a larger one probably is: an AOE
+#: is at most 180 degrees; a validity window or time factor of more than a day is a value in
+#: milliseconds (or a typo). ``inf`` (no threshold) stays allowed.
+LIMITS: dict[str, tuple[float, str]] = {
+    "phi": (180.0, "an orientation error is at most 180 degrees; use 180 or 'inf' for no AOE threshold"),
+    "delta": (86400.0, "more than a day: milliseconds instead of seconds? (the paper uses 1 s)"),
+    "tau": (86400.0, "more than a day: milliseconds instead of seconds? (the paper uses 60 s)"),
+}
+
+#: The unit of ``align_frames`` in messages: no value (not evo's -1) fits on every matched pose.
+ALL_POSES = "poses (leave it out to fit on all matched poses: evo's -1)"
+
+#: A relative eps (``relative:F``) is a fraction of the ground truth's extent, at most this.
+MAX_FRACTION = 1.0
+
+
+def _show(value: Any) -> str:
+    """A value as the user typed it (strings without quotes, so command-line values read naturally)."""
+    return value if isinstance(value, str) else repr(value)
+
+
+def _number(name: str, value: Any, words: Mapping[str, Any]) -> Any:
+    if isinstance(value, (bool, np.bool_)) or value is None:  # numpy's True is no more a number than Python's
+        raise ValidationError(f"{name}={_show(value)}: expected a number")
+    if isinstance(value, str):
+        text = value.strip().lower()
+        if text in words:
+            return words[text]
+        try:
+            return float(text)
+        except ValueError:
+            extra = "".join(f", '{w}'" for w in words if w not in ("inf", "+inf", "infinity"))
+            extra = (", 'inf'" if "inf" in words else "") + extra  # only where infinity is allowed
+            raise ValidationError(f"{name}={_show(value)} is not a number; expected a number{extra}") from None
+    if isinstance(value, Real):
+        return float(value)
+    try:  # numpy 0-d arrays and the like
+        return float(value)
+    except (TypeError, ValueError):
+        raise ValidationError(f"{name}={_show(value)} ({type(value).__name__}): expected a number") from None
+
+
+_INF = {"inf": math.inf, "+inf": math.inf, "infinity": math.inf}
+
+
+def threshold(name: str, value: Any) -> float:
+    """One threshold: ``eps`` (metres), ``phi`` (degrees), ``delta`` or ``tau`` (seconds).
+
+    Accepts numbers and number strings, ``"inf"`` in any case. Refuses NaN, negative values, and
+    zero for ``delta`` and ``tau`` (a zero validity window or time factor has no meaning)."""
+    unit, zero_ok = THRESHOLDS[name]
+    v = _number(name, value, _INF)
+    if math.isnan(v):
+        raise ValidationError(f"{name}={_show(value)}: expected a number of {unit}, not NaN")
+    if v < 0 or (v == 0 and not zero_ok):
+        bound = ">= 0" if zero_ok else "> 0"
+        raise ValidationError(f"{name}={_show(value)}: expected a number of {unit} {bound}")
+    if name in LIMITS and math.isfinite(v) and v > LIMITS[name][0]:
+        top, why = LIMITS[name]
+        raise ValidationError(f"{name}={_show(value)}: expected at most {top:g} {unit} (or 'inf'); {why}")
+    return float(v)
+
+
+def eps_value(value: Any) -> float | str | dict[str, float]:
+    """The ATE threshold: metres (as :func:`threshold`), ``"paper"`` in any case (1/3/5 m by
+    scene), ``"relative:F"`` (F times each sequence's ground-truth extent, the diagonal of its
+    bounding box), or a mapping scene -> metres."""
+    if isinstance(value, Mapping):
+        unknown = [k for k in value if k not in SCENES]
+        if unknown:
+            raise ValidationError(f"eps: unknown scene(s) {unknown}; expected keys among {', '.join(SCENES)}")
+        return {str(k): threshold("eps", v) for k, v in value.items()}
+    if isinstance(value, str) and value.strip().lower() == "paper":
+        return "paper"
+    if isinstance(value, str) and value.strip().lower().startswith("relative:"):
+        return f"relative:{fraction('eps', value.strip()[len('relative:') :], value.strip())!r}"
+    try:
+        return threshold("eps", value)
+    except ValidationError as exc:
+        raise ValidationError(
+            str(exc).replace("expected a number", "expected 'paper', 'relative:F', a number", 1)
+        ) from None
+
+
+def fraction(name: str, value: Any, shown: Any = None) -> float:
+    """A fraction of the ground truth's size (``relative:F`` eps, relative grids, ``eps_fraction``):
+    a finite number from 0 to :data:`MAX_FRACTION`. 0 is allowed as ``eps = 0`` is (only poses
+    with no error at all are correct), in every form and on every surface."""
+    shown = value if shown is None else shown
+    why = f"{name}={_show(shown)}: expected a fraction of the ground truth's size, a number from 0 to {MAX_FRACTION:g}"
+    try:
+        v = _number(name, value, {})
+    except ValidationError:
+        raise ValidationError(why) from None
+    if not (math.isfinite(v) and v >= 0):  # NaN too
+        raise ValidationError(why)
+    return relative_fraction(name, v, shown)
+
+
+def relative_fraction(name: str, fraction: float, shown: Any) -> float:
+    """A fraction of a sequence's size (relative eps, ``--relative-to``): in (0, 1]; 5 meant as
+    5 % is refused with the fraction it probably meant."""
+    if fraction > MAX_FRACTION:
+        raise ValidationError(
+            f"{name}={_show(shown)}: a fraction of the ground truth's size is at most {MAX_FRACTION:g}; "
+            f"for {fraction:g} % write {fraction / 100:g} (relative:{fraction / 100:g})"
+        )
+    return fraction
+
+
+def threshold_list(name: str, values: Any) -> list[Any]:
+    """A non-empty list of thresholds (for sweeps): one value or an iterable of them; ``eps``
+    values may be ``"paper"``. A string is split at commas, as on the command line; an empty item
+    (``1,,2``, a trailing comma) is refused, not dropped; a 0-d numpy array is one value."""
+    if isinstance(values, np.ndarray) and values.ndim == 0:
+        values = values.item()
+    if isinstance(values, str):
+        items: list[Any] = values.split(",")
+        if any(p.strip() for p in items) and not all(p.strip() for p in items):  # all empty: below
+            raise ValidationError(f"{name}={values}: an empty item between commas; expected values separated by commas")
+        items = [p for p in items if p.strip()]
+    elif isinstance(values, Iterable) and not isinstance(values, Mapping):
+        items = list(values)
+    else:
+        items = [values]
+    if not items:
+        raise ValidationError(f"{name}: an empty list; expected at least one value")
+    out: list[Any] = [eps_value(v) for v in items] if name == "eps" else [threshold(name, v) for v in items]
+    for k, v in enumerate(out):  # the same setting twice (60 and 60.0, inf and 1e400): rows twice, refused
+        if v in out[:k]:
+            raise ValidationError(f"{name}={_show(values)}: {_show(items[out.index(v)])} and {_show(items[k])} are the "
+                                  "same value; expected each value once")  # fmt: skip
+    return out
+
+
+def scale_value(value: Any) -> bool | str:
+    """Alignment scale: True (Sim(3)), False (SE(3)) or ``"auto"`` (Sim(3) for monocular
+    algorithms). Accepts booleans and the words of :data:`SCALE_WORDS` in any case."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, str) and value.strip().lower() in SCALE_WORDS:
+        return SCALE_WORDS[value.strip().lower()]
+    if isinstance(value, (bool, np.bool_, int, np.integer)) and value in (0, 1):  # numpy's as Python's
+        return bool(value)
+    raise ValidationError(f"scale={_show(value)}: expected True, False, 'auto', or one of {', '.join(SCALE_WORDS)}")
+
+
+def choice(name: str, value: Any, options: Iterable[str]) -> str:
+    """One of a fixed set of words (case-insensitive)."""
+    opts = tuple(options)
+    if isinstance(value, str) and value.strip().lower() in opts:
+        return value.strip().lower()
+    raise ValidationError(f"{name}={_show(value)}: expected one of {', '.join(opts)}")
+
+
+def positive(name: str, value: Any, unit: str, *, integer: bool = False) -> float:
+    """A positive number (for example an RPE step), optionally a whole number."""
+    v = _number(name, value, {})
+    if math.isnan(v) or v <= 0 or math.isinf(v) or (integer and v != int(v)):
+        kind = "a positive whole number" if integer else "a positive number"
+        raise ValidationError(f"{name}={_show(value)}: expected {kind}" + (f" of {unit}" if unit else ""))
+    return float(v)
+
+
+def decimals(name: str, value: Any) -> int:
+    """How many decimals to print: a whole number from 0 to 17 (a float64 holds 17 significant
+    digits; more print noise, never information)."""
+    v = _number(name, value, {})
+    if not (0 <= v <= 17 and v == int(v)):  # NaN too
+        raise ValidationError(f"{name}={_show(value)}: expected a whole number of decimals from 0 to 17")
+    return int(v)
+
+
+def probability(name: str, value: Any) -> float:
+    """A probability strictly between 0 and 1 (a confidence level, a test's alpha)."""
+    v = _number(name, value, {})
+    if not 0 < v < 1:  # NaN too
+        raise ValidationError(f"{name}={_show(value)}: expected a probability between 0 and 1")
+    return float(v)
+
+
+def finite(name: str, value: Any, unit: str) -> float:
+    """A finite number of any sign (for example a clock offset)."""
+    v = _number(name, value, {})
+    if math.isnan(v) or math.isinf(v):
+        raise ValidationError(f"{name}={_show(value)}: expected a finite number of {unit}")
+    return float(v)
+
+
+def seed(value: Any, label: str = "seed") -> int:
+    """A random seed (bootstrap, sampled relabellings, simulator): a whole number >= 0 (numpy's
+    ``default_rng`` refuses a negative one with a traceback). Accepts ints, numpy integers and
+    whole-number strings ("7", as typed on the command line); refuses bools, fractions, NaN."""
+    if isinstance(value, (bool, np.bool_)) or value is None:
+        raise ValidationError(f"{label}={_show(value)}: expected a whole number >= 0")
+    v: int | None = None
+    if isinstance(value, (int, np.integer)):
+        v = int(value)
+    elif isinstance(value, str) and value.strip().lstrip("+-").isdigit():
+        v = int(value.strip())
+    elif isinstance(value, (float, np.floating)) and math.isfinite(value) and value == int(value):
+        v = int(value)
+    if v is None:
+        raise ValidationError(f"{label}={_show(value)}: expected a whole number >= 0")
+    if v < 0:
+        raise ValidationError(f"{label}={_show(value)}: expected a whole number >= 0 (a seed is not negative)")
+    return v
+
+
+def present(what: str, given: Iterable[str], there: Iterable[str], where: str = "the inputs") -> list[str]:
+    """A filter (``scenes``, ``algorithms``) whose every value names something ``there``: a value
+    that names nothing would drop every input silently, so it is refused, listing what is there,
+    with a hint for a difference of case (``Cafe`` for ``cafe``) or a near miss. Returns ``given``
+    as a list."""
+    wanted, have = list(given), sorted(set(there))
+    absent = [n for n in wanted if n not in have]
+    if not absent:
+        return wanted
+    hints = [f"{n!r}: {hint}" for n in absent if (hint := near_miss(n, have))]
+    listed = ", ".join(have) if have else "none"
+    raise ValidationError(
+        f"{what}: {', '.join(repr(n) for n in absent)} name(s) nothing in {where}, which hold {what}: {listed}"
+        + ("; " + "; ".join(hints) if hints else "")
+    )
+
+
+def near_miss(name: str, known: Iterable[str]) -> str:
+    """``did you mean 'x'?`` for a name differing from a known one only in case or by a typo (the
+    one rule of filters, manifest keys and spec options), else an empty string."""
+    import difflib
+
+    have = sorted(known)
+    same_case = [h for h in have if h.lower() == name.strip().lower()]
+    near = same_case or difflib.get_close_matches(name, have, n=1, cutoff=0.75)
+    return f"did you mean {near[0]!r}?" + (" (names are case-sensitive)" if same_case else "") if near else ""
+
+
+def flag(label: str, value: Any, expected: str = "True or False") -> bool:
+    """A yes/no value: a bool (numpy's too); strings are refused, never truth-tested. ``expected``:
+    how the surface spells the two (a TOML manifest: ``true or false``)."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise ValidationError(f"{label}={value!r} ({type(value).__name__}): expected {expected}")
+
+
+def rigid_transform(value: Any, label: str = "transform") -> tuple[tuple[float, ...], ...] | None:
+    """``T_est_gt`` as a 4x4 tuple (from a :class:`~lorisnb.core.alignment.geometry.Sim3`, an array or nested
+    lists); None stays None. A rigid transform is expected: a rotation block and a last row 0 0 0 1."""
+    if value is None:
+        return None
+    m = value.matrix() if hasattr(value, "matrix") else value  # a Sim3
+    try:
+        arr = np.asarray(m, float)
+    except (TypeError, ValueError):
+        raise ValidationError(f"{label}: expected a 4x4 matrix T_est_gt, got {type(value).__name__}") from None
+    if arr.shape != (4, 4) or not np.isfinite(arr).all():
+        raise ValidationError(f"{label}: expected a finite 4x4 matrix T_est_gt, got shape {arr.shape}")
+    r = arr[:3, :3]
+    if not np.allclose(arr[3], [0, 0, 0, 1]) or not np.allclose(r @ r.T, np.eye(3), atol=1e-6):
+        raise ValidationError(f"{label}: expected a rigid transform (a rotation block and last row 0 0 0 1)")
+    return tuple(tuple(float(x) for x in row) for row in arr)

@@ -1,0 +1,65 @@
+"""How many runs would a comparison need? For each pair of algorithms of
+:func:`lorisnb.core.stats.inference.pairwise`, the sequences (one trial each: the paired test) or the trials
+per sequence (with trials: the stratified test) that would detect a difference ``delta`` of the
+scene metric with probability ``power`` at ``alpha``, by
+:func:`lorisnb.core.stats.permutation.units_for_power`. The spread is the one observed: of the
+per-sequence differences, or of the trials within each sequence (pooled). A design too small to
+ever reach ``alpha`` (:func:`lorisnb.core.stats.permutation.runs_needed`) is the floor."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from lorisnb.core.spec import validate
+from lorisnb.core.stats.inference import WEIGHTS, with_trials
+from lorisnb.core.stats.permutation import units_for_power
+from lorisnb.errors import ValidationError
+
+
+def _within_sd(g: pd.DataFrame, metric: str) -> float:
+    """Pooled standard deviation of the trials within each sequence (NaN with single trials)."""
+    parts = [d[metric].dropna().to_numpy(float) for _, d in g.groupby("seq")]
+    dof = sum(len(x) - 1 for x in parts if len(x) > 1)
+    if dof == 0:
+        return np.nan
+    return float(np.sqrt(sum(((x - x.mean()) ** 2).sum() for x in parts if len(x) > 1) / dof))
+
+
+def runs_for_power(
+    table: pd.DataFrame, pairs: pd.DataFrame, delta: float, alpha: float = 0.05, power: float = 0.8
+) -> pd.DataFrame:
+    """``pairs`` with the columns ``delta``, ``power``, ``unit`` ("sequences" or "trials per
+    sequence"), ``have`` (how many there are) and ``needed`` (-1: the spread is unknown)."""
+    if not (np.isfinite(delta) and delta > 0):
+        raise ValidationError(f"power delta={delta}: expected a positive difference in the metric's unit")
+    if not 0 < power < 1:
+        raise ValidationError(f"power={power}: expected a probability between 0 and 1")
+    alpha = validate.probability("alpha", alpha)
+    t = with_trials(table)
+    rows = []
+    for r in pairs.itertuples():
+        metric = r.metric
+        w_col = WEIGHTS[metric]
+        g = t[(t["suite"] == r.suite) & (t["scene"] == r.scene)]
+        ga, gb = g[g["algorithm"] == r.a], g[g["algorithm"] == r.b]
+        common = sorted(set(ga["seq"]) & set(gb["seq"]))
+        if max(r.trials_a, r.trials_b) <= 1:
+            ma = ga.groupby("seq")[metric].mean().reindex(common)
+            mb = gb.groupby("seq")[metric].mean().reindex(common)
+            d = (ma - mb).dropna().to_numpy(float)
+            sd = float(np.std(d, ddof=1)) if len(d) > 1 else np.nan
+            rows.append(dict(unit="sequences", have=len(common),
+                             needed=units_for_power(sd, delta, alpha, power, groups=1)))  # fmt: skip
+        else:
+            w = (np.ones(len(common)) if w_col is None else
+                 g[g["seq"].isin(common)].groupby("seq")[w_col].mean().reindex(common).to_numpy(float))  # fmt: skip
+            w = w / w.sum() if len(w) and w.sum() > 0 else w
+            sa, sb = _within_sd(ga[ga["seq"].isin(common)], metric), _within_sd(gb[gb["seq"].isin(common)], metric)
+            sd = float(np.sqrt(np.sum(w**2) * (sa**2 + sb**2) / 2)) if len(w) else np.nan
+            both = g[g["algorithm"].isin([r.a, r.b]) & g["seq"].isin(common)]
+            moving = int((both.groupby("seq")[metric].agg(np.ptp) > 0).sum())  # all-equal sequences cannot help
+            rows.append(dict(unit="trials per sequence", have=min(r.trials_a, r.trials_b),
+                             needed=units_for_power(sd, delta, alpha, power, groups=2, strata=max(moving, 1))))  # fmt: skip
+    extra = pd.DataFrame(rows, columns=["unit", "have", "needed"], index=pairs.index)
+    return pairs.assign(delta=delta, power=power).join(extra)

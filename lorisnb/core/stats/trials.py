@@ -1,0 +1,105 @@
+"""Repeated trials: several result files of one algorithm on one sequence.
+
+A trial number is read from a file's path relative to the results folder: a token such as
+``cafe_trial3.txt``, ``cafe-trial-3.txt``, ``trial3/cafe.txt``, ``run_2/cafe.txt``, ``run-2/`` or
+rpg_trajectory_evaluation's ``stamped_traj_estimate3.txt``; or by a user's regular expression whose
+first group (or group named ``trial``) is the number. A path without a trial token is trial 0 (the
+only trial). The token is removed from the path to tell which files belong together.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import PurePosixPath
+
+from lorisnb.errors import ValidationError
+
+#: Trial tokens recognized by default, in a file name or as a folder of their own.
+TRIAL_PATTERNS = (
+    re.compile(r"(?:^|[_\-./])(?:trial|run)[_\-]?(?P<trial>\d+)(?=$|[_\-./])", re.IGNORECASE),
+    re.compile(r"(?<=^stamped_traj_estimate)(?P<trial>\d+)(?=\.)"),
+)
+
+
+def compile_trials_by(regex: str | None) -> re.Pattern[str] | None:
+    """A user's ``--trials-by`` expression, checked: it must compile and have a group. It is
+    searched in one file or folder name at a time (the file's name first), so a ``/`` is refused."""
+    if regex is None:
+        return None
+    if not isinstance(regex, str):
+        raise ValidationError(f"trials_by={regex!r}: expected a regular expression (a string), e.g. 'run(\\d+)'")
+    if "/" in regex:
+        raise ValidationError(f"trials_by={regex}: it is searched in one file or folder name at a time, so '/' never "
+                              "matches; expected an expression for the name that holds the trial, e.g. 'run_(\\d+)'")  # fmt: skip
+    try:
+        pat = re.compile(regex)
+    except re.error as exc:
+        raise ValidationError(f"trials_by={regex}: not a regular expression ({exc})") from None
+    if pat.groups < 1:
+        raise ValidationError(f"trials_by={regex}: expected a group around the trial number, e.g. 'run(\\d+)'")
+    return pat
+
+
+def split_trial(relpath: str, trials_by: str | re.Pattern[str] | None = None) -> tuple[str, int]:
+    """(the path without its trial token, the trial number) of a result file's relative path
+    (``/``-separated); trial 0 when the path names none."""
+    pattern = compile_trials_by(trials_by) if isinstance(trials_by, str) else trials_by
+    parts = list(PurePosixPath(relpath).parts)
+    for k in range(len(parts) - 1, -1, -1):  # the file name first, then its folders
+        for pat in [pattern] if pattern is not None else TRIAL_PATTERNS:
+            m = pat.search(parts[k])
+            if m is None:
+                continue
+            number = m.group("trial") if "trial" in pat.groupindex else m.group(1)
+            try:
+                trial = int(number)
+            except (TypeError, ValueError):
+                raise ValidationError(f"trials_by: matched {m.group(0)!r} in {relpath}, not a whole number") from None
+            cut = re.sub(r"[_\-]+(?=\.|$)", "", parts[k][: m.start()] + parts[k][m.end() :]).strip("_-")
+            if k == len(parts) - 1 and (not cut or cut.startswith(".")):
+                cut = "estimate" + cut  # the whole name was the trial token
+            rest = cut if k == len(parts) - 1 or cut not in (".", "") else ""
+            kept = parts[:k] + ([rest] if rest else []) + parts[k + 1 :]
+            return "/".join(kept), trial
+    return relpath, 0
+
+
+def names_a_trial(relpath: str, trials_by: str | re.Pattern[str] | None = None) -> bool:
+    """Whether a result file's relative path carries a trial token (the user's or the defaults)."""
+    pattern = compile_trials_by(trials_by) if isinstance(trials_by, str) else trials_by
+    pats = [pattern] if pattern is not None else list(TRIAL_PATTERNS)
+    return any(p.search(part) for part in PurePosixPath(relpath).parts for p in pats)
+
+
+def check_trials_by(relpaths: list[str], trials_by: str | None) -> None:
+    """A ``--trials-by`` expression that matches none of the files is an error (it was meant to
+    number them)."""
+    if trials_by is None or not relpaths:
+        return
+    if not any(names_a_trial(p, trials_by) for p in relpaths):
+        shown = ", ".join(relpaths[:3]) + (f" and {len(relpaths) - 3} more" if len(relpaths) > 3 else "")
+        raise ValidationError(
+            f"trials_by={trials_by}: matches none of the file or folder names of the {len(relpaths)} result file "
+            f"path(s) ({shown}); expected an expression that finds the trial number in one of them, e.g. 'run(\\d+)'"
+        )
+
+
+def check_duplicates(keys: list[tuple[str, tuple, tuple[int, ...]]]) -> None:
+    """Several files for one sequence and trial are an error, never averaged: ``keys`` holds, per
+    evaluated file, (its path, its labels (suite, algorithm, scene, trial), its sequence numbers).
+    The message names the files and suggests ``--trials-by``."""
+    seen: dict[tuple, tuple[int, str]] = {}
+    for k, (path, label, seqs) in enumerate(keys):
+        for s in dict.fromkeys(seqs):
+            j, other = seen.setdefault((*label, s), (k, path))
+            if j == k:
+                continue
+            suite, algorithm, scene, trial = label
+            held = f"{algorithm}{f' ({suite})' if suite else ''} {scene}-{s}{f' trial {trial}' if trial else ''}"
+            if PurePosixPath(other) == PurePosixPath(path):
+                raise ValidationError(f"{path} is given twice (it holds {held}); give each file or folder once")
+            raise ValidationError(
+                f"{other} and {path} both hold {held}, with no trial number to tell them apart; name the trials "
+                "(cafe_trial1.txt, run_2/, ...) or give --trials-by REGEX (trials_by= in Python) whose group is "
+                "the trial number, or evaluate them separately"
+            )

@@ -1,0 +1,353 @@
+"""Multi-session datasets described by a small TOML manifest: sessions in order, each with its
+ground-truth file and format, a shared map frame or not, scene names, thresholds, conventions and
+the transform between estimate and ground truth. A manifest is read by :func:`read_manifest`;
+built-in ones (``lorisnb.io.datasets.manifest.BUILT_IN``) ship with lorisnb: ``openloris`` (the default
+OpenLORIS evaluation), ``euroc-vicon-room1``, ``euroc-vicon-room2`` and ``tum-fr1-office``.
+
+Example (every key but ``[[session]]`` optional)::
+
+    name = "EuRoC Vicon room 1"
+    scene = "vicon-room-1"          # the scene of every session (a session may set its own)
+    root = "${EUROC_ROOT}"          # where ground-truth paths start (default: the manifest's folder)
+    lifelong = true                 # one map frame: align on the first session, apply to all
+    groundtruth_format = "euroc"    # tum, euroc, kitti, bag, openloris
+    estimate_format = "tum"
+    eps = 0.3                       # default thresholds, metres / degrees
+    phi = 10.0
+
+    [conventions]                   # see lorisnb.core.conventions.choices
+    association = "nearest"
+    max_diff = 0.02
+    align = "se3"
+
+    [transform]                     # T_est_gt: the ground-truth body's pose in the estimate's body frame
+    translation = [0.0, 0.0, 0.0]
+    quaternion = [0.0, 0.0, 0.0, 1.0]   # x y z w
+
+    [[session]]
+    name = "V1_01_easy"
+    groundtruth = "V1_01_easy/mav0/state_groundtruth_estimate0/data.csv"
+    # estimate = "V1_01_easy.txt"   # default: the session name with the estimate format's suffix
+    # groundtruth_format = "euroc"  # default: the manifest's groundtruth_format
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lorisnb.core.alignment.geometry import Sim3
+from lorisnb.core.spec import validate
+from lorisnb.core.spec.evalspec import EvalSpec, make_spec
+from lorisnb.errors import ParseError, ValidationError
+from lorisnb.io.readers.options import check_reading
+from lorisnb.io.readers.plain import TRAJECTORY_FORMATS
+from lorisnb.io.readers.registry import suffixes
+
+BUILT_IN = ("openloris", "euroc-vicon-room1", "euroc-vicon-room2", "tum-fr1-office")
+SUFFIX = {name: suffixes(name)[0] for name in TRAJECTORY_FORMATS}  # an estimate file's default suffix
+TOP_KEYS = {"name", "scene", "root", "lifelong", "groundtruth_format", "estimate_format", "eps", "phi", "source",
+            "conventions", "transform", "session", "groundtruth_topic", "estimate_topic", "groundtruth_tf",
+            "estimate_tf", "openloris"}  # fmt: skip
+SESSION_KEYS = {"name", "seq", "scene", "groundtruth", "estimate", "groundtruth_format"}
+TRANSFORM_KEYS = {"translation", "quaternion"}
+READING_KEYS = {
+    "topic": "estimate_topic",
+    "tf": "estimate_tf",
+    "gt_topic": "groundtruth_topic",
+    "gt_tf": "groundtruth_tf",
+}
+
+
+@dataclass(frozen=True)
+class Session:
+    """One session: its number (order), name, scene, ground-truth file and its format, and the
+    estimate file's name."""
+
+    seq: int
+    name: str
+    scene: str
+    groundtruth: Path
+    estimate: str
+    groundtruth_format: str = "tum"
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """A dataset's sessions and how to evaluate them (see the module docstring)."""
+
+    path: Path
+    name: str
+    sessions: list[Session]
+    lifelong: bool = False
+    groundtruth_format: str = "tum"
+    estimate_format: str = "tum"
+    spec: EvalSpec = field(default_factory=EvalSpec)  # [conventions], lifelong, transform, eps, phi
+    transform: Sim3 | None = None
+    eps: float | None = None
+    phi: float | None = None
+    groundtruth_topic: str | None = None
+    estimate_topic: str | None = None
+    groundtruth_tf: str | None = None
+    estimate_tf: str | None = None
+    source: str = ""
+    openloris: bool = False  # the built-in OpenLORIS evaluation (lorisnb.evaluate's own path)
+
+    @property
+    def conventions(self) -> EvalSpec:
+        """The manifest's spec (its older name)."""
+        return self.spec
+
+    @property
+    def scenes(self) -> list[str]:
+        return list(dict.fromkeys(s.scene for s in self.sessions))
+
+    def __repr__(self) -> str:
+        if self.openloris:
+            return f"<Manifest {self.name!r}: the built-in OpenLORIS evaluation>"
+        n, k = len(self.sessions), len(self.scenes)
+        return (
+            f"<Manifest {self.name!r}: {n} session{'' if n == 1 else 's'} ({k} scene{'' if k == 1 else 's'}), "
+            f"{'lifelong' if self.lifelong else 'per session'}, {self.groundtruth_format} ground truth, "
+            f"{self.estimate_format} estimates>"
+        )
+
+
+def manifest_path(name_or_path: str | os.PathLike[str]) -> Path:
+    """A built-in manifest's file (by name) or the given path."""
+    if isinstance(name_or_path, str) and name_or_path in BUILT_IN:
+        return Path(str(resources.files("lorisnb.manifests").joinpath(f"{name_or_path}.toml")))
+    if not isinstance(name_or_path, (str, os.PathLike)) or not str(name_or_path).strip():
+        raise ValidationError(f"manifest={name_or_path!r}: expected a TOML file's path or one of {', '.join(BUILT_IN)}")
+    return Path(name_or_path)
+
+
+def _fmt(value: Any, key: str, path: Path) -> str:
+    if value not in TRAJECTORY_FORMATS:
+        raise ParseError(path, None, f"{key} = {value!r}: expected one of {', '.join(TRAJECTORY_FORMATS)}")
+    return str(value)
+
+
+#: What a manifest of the built-in OpenLORIS evaluation may hold: its scenes, ground truth, frames
+#: and formats come from the data root and the result files' headers.
+OPENLORIS_KEYS = {"name", "source", "openloris", "eps", "phi", "lifelong", "conventions"}
+
+
+def openloris_preset_refusal(name: str, preset: object) -> str:
+    """Why a preset is refused with the built-in OpenLORIS evaluation (a manifest with ``openloris =
+    true``, ``--manifest openloris``, ``evaluate_manifest("openloris", ...)``): one message on every
+    path, ``name`` being how the path spells the option (``--conventions``, ``conventions``,
+    ``[conventions] preset``), and the route that does score OpenLORIS files under a preset."""
+    shown = preset if isinstance(preset, str) else "PRESET"
+    given = f"{name} {preset}" if isinstance(preset, str) else f"{name} (a {type(preset).__name__})"
+    return (
+        f"{given}: the built-in OpenLORIS evaluation (openloris = true) is the official conventions with "
+        "single options over them (max_gap, scale, lifelong, ...), not a preset; to score OpenLORIS result files "
+        f"under the {shown} preset, evaluate them without the manifest (lorisnb evaluate FILES --conventions "
+        f"{shown}; lorisnb.evaluate(files, {shown!r}) in Python)"
+    )
+
+
+def _openloris_manifest(raw: dict, path: Path) -> Manifest:
+    """A manifest with ``openloris = true``: its thresholds, mode and ``[conventions]`` make its
+    spec (as the command line's options would: no preset, nothing OpenLORIS files cannot take);
+    any other key is refused."""
+    other = sorted(set(raw) - OPENLORIS_KEYS)
+    if other:
+        raise ParseError(path, None, f"{', '.join(other)}: cannot apply with openloris = true (the built-in OpenLORIS "
+                         "evaluation takes the scenes, ground truth, frames and formats from the data root and the "
+                         f"result files); expected only {', '.join(sorted(OPENLORIS_KEYS))}")  # fmt: skip
+    table = raw.get("conventions", {})
+    if not isinstance(table, dict):
+        raise ParseError(path, None, "conventions: expected a [conventions] table of spec options")
+    if "preset" in table:
+        raise ParseError(path, None, openloris_preset_refusal("[conventions] preset", table["preset"]))
+    options = dict(table)
+    for key in ("eps", "phi", "lifelong"):
+        if key in raw and key in options:
+            raise ParseError(path, None, f"{key} is given at the top and in [conventions]; give it once")
+        if key in raw:
+            options[key] = raw[key]
+    try:
+        spec = make_spec(None, surface="manifest", **options)
+        spec.refuse_inapplicable("openloris", surface="manifest")
+    except ValidationError as exc:
+        raise ParseError(path, None, str(exc)) from None
+    return Manifest(path=path, name=str(raw.get("name", "OpenLORIS-Scene")), sessions=[], openloris=True, spec=spec,
+                    lifelong=spec.mode == "lifelong", source=str(raw.get("source", "")),
+                    groundtruth_format="openloris", estimate_format="openloris",
+                    eps=spec.eps if "eps" in spec.explicit else None, phi=spec.phi if "phi" in spec.explicit else None)  # fmt: skip
+
+
+def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
+    """Read and check a manifest (a built-in name or a TOML file). ParseError names the file, the
+    key and what was expected; environment variables in ``root`` (``${EUROC_ROOT}``) are expanded
+    and an unset one is named."""
+    path = manifest_path(name_or_path)
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        given = Path(str(name_or_path)).name.removesuffix(".toml")
+        same = [b for b in BUILT_IN if b == given.lower().replace("_", "-")]  # a built-in's file name, or its case
+        hint = f"did you mean {same[0]!r}?" if same else validate.near_miss(given, BUILT_IN)
+        raise ParseError(path, None, f"manifest not found{f' ({hint})' if hint else ''}; expected a TOML file or one "
+                         f"of {', '.join(BUILT_IN)}") from None  # fmt: skip
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParseError(path, None, f"cannot be read ({exc})") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ParseError(path, getattr(exc, "lineno", None), f"not valid TOML ({exc})") from None
+    check_keys(raw, TOP_KEYS, path)
+    for key in ("name", "scene", "root", "source", *READING_KEYS.values()):  # text, never str() of a list or a number
+        _text(raw, key, path)
+    if "openloris" in raw and not isinstance(raw["openloris"], bool):  # "false" is not truth-tested
+        raise ParseError(path, None, f"openloris = {raw['openloris']!r}: expected true or false")
+    if raw.get("openloris"):
+        return _openloris_manifest(raw, path)
+    root_text = str(raw.get("root", "."))
+    expanded = os.path.expandvars(root_text)
+    if "$" in expanded:
+        raise ParseError(
+            path, None, f"root = {root_text!r}: environment variable not set; set it to the dataset's folder"
+        )
+    root = (path.parent / Path(expanded).expanduser()).resolve()
+    gt_fmt = _fmt(raw.get("groundtruth_format", "tum"), "groundtruth_format", path)
+    est_fmt = _fmt(raw.get("estimate_format", "tum"), "estimate_format", path)
+    scene = str(raw.get("scene", path.stem))
+    items = raw.get("session")
+    if not isinstance(items, list) or not items:
+        one = " ([session] is one table: write [[session]], two brackets, before each session)"
+        raise ParseError(path, None, f"no [[session]] table{one if isinstance(items, dict) else ''}; expected one per "
+                         "session, in order")  # fmt: skip
+    sessions: list[Session] = []
+    for k, item in enumerate(items, start=1):
+        if not isinstance(item, dict) or "groundtruth" not in item:
+            raise ParseError(path, None, f"session {k}: expected a table with at least 'groundtruth = \"file\"'")
+        check_keys(item, SESSION_KEYS, path, f"[[session]] {k}: ")
+        for key in ("name", "scene", "groundtruth", "estimate"):
+            _text(item, key, path, f"[[session]] {k}: ")
+            if key in item and not item[key].strip():  # "" would name the root folder, or a file ".txt"
+                raise ParseError(path, None, f"[[session]] {k}: {key} = {item[key]!r}: expected a non-empty name")
+        name = str(item.get("name", f"session{k}"))
+        seq = item.get("seq", k)
+        if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
+            raise ParseError(path, None, f"session {name!r}: seq = {seq!r}; expected a whole number")
+        sessions.append(
+            Session(
+                seq=seq,
+                name=name,
+                scene=str(item.get("scene", scene)),
+                groundtruth=root / str(item["groundtruth"]),
+                estimate=str(item.get("estimate", name + SUFFIX[est_fmt])),
+                groundtruth_format=_fmt(
+                    item.get("groundtruth_format", gt_fmt), f"session {name!r}: groundtruth_format", path
+                ),
+            )  # fmt: skip
+        )
+    seqs = [s.seq for s in sessions]
+    if len(set(seqs)) != len(seqs):
+        raise ParseError(path, None, f"session numbers repeat ({seqs}); expected each session once")
+    check_repeats(sessions, path)
+    table = raw.get("conventions", {})
+    if not isinstance(table, dict):
+        raise ParseError(path, None, "conventions: expected a [conventions] table of spec options")
+    transform = _transform(raw.get("transform"), path)
+    reading = {k: raw.get(key) for k, key in READING_KEYS.items()}
+    try:  # the command line's rule: topics and TF chains only for bags, a topic or a chain, not both
+        for gt_format in dict.fromkeys(s.groundtruth_format for s in sessions):
+            check_reading(reading, est_fmt, gt_format, name=lambda k: READING_KEYS[k])
+    except ValidationError as exc:
+        raise ParseError(path, None, str(exc)) from None
+    options = {k: v for k, v in table.items() if k != "preset"}
+    elsewhere = {"transform": "the [transform] table", "surface": None}
+    for key in sorted(set(options) & set(elsewhere)):
+        where = elsewhere[key]
+        raise ParseError(path, None, f"[conventions]: {key} " + (f"is given in {where}" if where else
+                         "is not an option of the evaluation spec") + "; expected spec options (align, association, ...)")  # fmt: skip
+    for key in ("eps", "phi", "lifelong"):  # top-level keys; in [conventions] too, but not in both
+        if key in raw and key in options:
+            raise ParseError(path, None, f"{key} is given at the top and in [conventions]; give it once")
+        if key in raw:
+            options[key] = raw[key]
+    if "lifelong" not in options and "mode" not in options:  # per session unless the manifest says otherwise
+        options["lifelong"] = False
+    try:
+        spec = make_spec(table.get("preset"), surface="manifest", **options, transform=transform)
+    except ValidationError as exc:
+        raise ParseError(path, None, str(exc)) from None
+    return Manifest(
+        path=path, name=str(raw.get("name", path.stem)), sessions=sessions, lifelong=spec.mode == "lifelong",
+        groundtruth_format=gt_fmt, estimate_format=est_fmt, spec=spec,
+        transform=transform, eps=spec.eps if "eps" in spec.explicit else None,
+        phi=spec.phi if "phi" in spec.explicit else None, groundtruth_topic=raw.get("groundtruth_topic"),
+        estimate_topic=raw.get("estimate_topic"), groundtruth_tf=raw.get("groundtruth_tf"),
+        estimate_tf=raw.get("estimate_tf"), source=str(raw.get("source", "")),
+    )  # fmt: skip
+
+
+def _text(table: dict[str, Any], key: str, path: Path, where: str = "") -> None:
+    """A key whose value must be text (a name, a file, a topic): anything else is refused, never
+    turned into the text of a list or a number."""
+    if key in table and not isinstance(table[key], str):
+        raise ParseError(path, None, f"{where}{key} = {table[key]!r}: expected a string (in quotes)")
+
+
+def check_repeats(sessions: list[Session], path: Path) -> None:
+    """A session listed twice (the same name or estimate file in two ``[[session]]`` tables) is an
+    error: it would be scored twice."""
+    for what, key in (
+        ("name", lambda s: s.name),
+        ("estimate file", lambda s: s.estimate),
+    ):  # (a ground-truth file may serve several sessions: one long recording, runs in its time windows)
+        first: dict[object, Session] = {}
+        for s in sessions:
+            k = key(s)
+            if k in first:
+                raise ParseError(
+                    path, None,
+                    f"sessions {first[k].seq} ({first[k].name!r}) and {s.seq} ({s.name!r}) have the same {what} "
+                    f"({k}): a session listed twice? Each session must be listed once, with its own files",
+                )  # fmt: skip
+            first[k] = s
+
+
+def check_keys(table: dict[str, Any], allowed: set[str], path: Path, where: str = "") -> None:
+    """Refuse a key of a manifest's table that lorisnb does not know (a typo would be ignored):
+    ParseError naming the file, the table (``where``, e.g. ``"[transform]: "``; none at the top
+    level), the key, the nearest known key and all of them."""
+    for key in sorted(set(table) - allowed):
+        hint = validate.near_miss(key, allowed)
+        raise ParseError(
+            path,
+            None,
+            f"{where}unknown key {key!r}{f' ({hint})' if hint else ''}; expected {', '.join(sorted(allowed))}",
+        )
+
+
+def _transform(raw: Any, path: Path) -> Sim3 | None:
+    if raw is None:
+        return None
+    if not isinstance(raw, dict):
+        raise ParseError(path, None, "transform: expected a [transform] table (translation, quaternion)")
+    check_keys(raw, TRANSFORM_KEYS, path, "[transform]: ")
+    try:
+        given = [raw.get("translation", [0.0, 0.0, 0.0]), raw.get("quaternion", [0.0, 0.0, 0.0, 1.0])]
+        if any(not isinstance(v, list) or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v)
+               for v in given):  # fmt: skip
+            raise TypeError  # true is not 1 m
+        t = np.asarray(given[0], float).reshape(3)
+        q = np.asarray(given[1], float).reshape(4)
+    except (AttributeError, ValueError, TypeError):
+        raise ParseError(
+            path, None, "[transform]: expected translation = [x, y, z] and quaternion = [x, y, z, w]"
+        ) from None
+    if not np.isfinite(t).all() or not np.isfinite(q).all() or np.linalg.norm(q) < 1e-9:
+        raise ParseError(path, None, "[transform]: expected finite values and a non-zero quaternion x y z w")
+    from scipy.spatial.transform import Rotation
+
+    return Sim3(Rotation.from_quat(q).as_matrix(), t, 1.0)

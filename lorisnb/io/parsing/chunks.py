@@ -1,0 +1,377 @@
+"""Streamed reading of numeric line files: the file is read in chunks of whole lines, each chunk's
+numbers parsed by pandas' C parser, so memory grows only with the numbers kept and speed is the C
+parser's.
+
+A chunk that is not plain numbers (blank or indented lines, ``nan`` tokens, short or long rows,
+separators other than whitespace, anything the C parser refuses) is read again by the exact numpy
+byte scanner (:mod:`lorisnb.io.parsing.scanner`), which accepts what Python's ``float`` accepts and names
+the line and the token of any error. Both paths give the same numbers: pandas' default float
+conversion and Python's ``float`` are both correctly rounded.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+import stat
+from collections.abc import Callable, Generator, Sequence
+
+import numpy as np
+
+from lorisnb.errors import ParseError
+from lorisnb.io.parsing.ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, newlines, read_range
+from lorisnb.io.parsing.rows import Convert, Group, Rows, RowSink, line_dtype
+from lorisnb.io.parsing.scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
+from lorisnb.io.parsing.whole import pandas_loaded, read_whole
+
+CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
+FAST_MIN_BYTES = 32 << 10
+#: Without pandas imported, chunks below this are read by the numpy scanner (importing pandas for
+#: them would cost more than it saves: a small OpenLORIS file is evaluated without pandas).
+PANDAS_MIN_BYTES = 4 << 20
+
+
+def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[bytes, int, int, int], None, None]:
+    """Chunks of whole lines, the 0-based line number each starts at, its number of lines and the
+    byte offset in the file where the next chunk starts. A UTF-8 BOM is dropped; NUL bytes
+    (binary data) are refused in the chunk where they appear, before reading on."""
+    spath = str(path)
+    with open_input(path, what) as fh:
+        line0, rest, first, seen_text, offset = 0, b"", True, False, 0  # offset: bytes read (a pipe has no tell)
+        while True:
+            try:
+                block = fh.read(SNIFF_BYTES if first else size)
+                offset += len(block)
+                if first and block.startswith(BOM):
+                    block = block[len(BOM) :]
+                nul = block.find(b"\0")
+                if first and nul < 0 and len(block) >= SNIFF_BYTES - len(BOM):  # text so far: the rest of a chunk
+                    more = fh.read(max(size - SNIFF_BYTES, 0))
+                    block, offset = block + more, offset + len(more)
+                    nul = block.find(b"\0", SNIFF_BYTES - len(BOM))
+            except OSError as exc:
+                raise ParseError(spath, None, f"cannot be read ({exc.strerror})") from None
+            first = False
+            if nul >= 0:
+                line = line0 + rest.count(b"\n") + block.count(b"\n", 0, nul) + 1
+                raise ParseError(spath, line, f"binary data (a NUL byte); expected {what} (text)")
+            data = rest + block if rest else block
+            if not block:
+                if data:
+                    seen_text = seen_text or bool(data.strip())
+                    yield data + b"\n", line0, newlines(data) + 1, offset
+                break
+            cut = data.rfind(b"\n") + 1
+            if cut == 0:
+                if len(data) > LINE_LIMIT:
+                    raise ParseError(spath, line0 + 1, f"a line longer than {LINE_LIMIT} bytes; expected {what} (text)")
+                rest = data
+                continue
+            piece, rest = data[:cut], data[cut:]
+            seen_text = seen_text or bool(piece.strip())
+            n = newlines(piece)
+            yield piece, line0, n, offset - len(rest)
+            line0 += n
+        if not seen_text:
+            raise ParseError(spath, None, f"empty file; expected {what}")
+
+
+def _layout(
+    chunk: bytes, line0: int, nlines: int, specials_ok: bool
+) -> tuple[np.ndarray, list[tuple[int, str]], int] | None:
+    """Lines of a chunk the C parser must skip (comments, ``key: value`` lines, blank lines), the
+    special lines' text, and the first line it reads; None if special lines are not allowed."""
+    buf = np.frombuffer(chunk, np.uint8)
+    nl = np.flatnonzero(buf == 10)
+    starts = np.concatenate(([0], nl[:-1] + 1))
+    length = nl - starts
+    head = buf[np.minimum(starts, buf.size - 1)]
+    blank = (length == 0) | ((length == 1) & (head == 13))
+    comment = head == ord("#")
+    colon = np.zeros(nlines, bool)
+    colon[np.searchsorted(nl, np.flatnonzero(buf == 58))] = True
+    colon &= ~comment
+    if colon.any() and not specials_ok:
+        return None
+    specials = [
+        (line0 + int(i) + 1, chunk[starts[i] : nl[i]].decode("utf-8", "replace").strip()) for i in np.flatnonzero(colon)
+    ]  # a handful per file
+    skipped = comment | colon | blank
+    return np.flatnonzero(skipped), specials, int(np.argmin(skipped))
+
+
+def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str, runs: bool = False) -> np.ndarray:
+    """(rows, ntok) numbers of a chunk by pandas' C parser, skipping the lines ``skip``. With
+    ``sep=" "``: fields one space apart, runs of spaces too with ``runs`` (a third slower); a tab, a
+    trailing space, a line of spaces (or a run of spaces without ``runs``) raise (an empty field)."""
+    import pandas as pd  # here: reading a small file needs no pandas
+
+    return pd.read_csv(
+        io.BytesIO(chunk),
+        sep=sep,
+        skipinitialspace=runs,
+        header=None,
+        names=range(ntok),
+        dtype=np.float64,
+        quoting=csv.QUOTE_NONE,
+        na_filter=False,
+        engine="c",
+        index_col=False,
+        skiprows=skip.tolist() if skip.size else None,
+    ).to_numpy()  # (nrows, ntok), a transposed view of pandas' column block
+
+
+def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) -> Rows | None:
+    """The C-parser path for one chunk, or None when the chunk needs the exact scanner."""
+    import pandas as pd
+
+    if b"\r" in chunk and chunk.count(b"\r") != chunk.count(b"\r\n"):  # a lone CR: pandas ends a line there
+        return None  # (its row count can come out right all the same, and a pose be dropped): the scanner says where
+
+    skip = np.zeros(0, np.int64)
+    specials: list[tuple[int, str]] = []
+    first_row = 0
+    structured = b"#" in chunk or b":" in chunk or chunk[:1] in (b"\n", b"\r")
+    for attempt in range(2):  # plain numbers first; blank lines are found if the row count says so
+        if structured:
+            layout = _layout(chunk, line0, nlines, specials_ok)
+            if layout is None:
+                return None
+            skip, specials, first_row = layout
+        nrows = nlines - len(skip)
+        if nrows == 0:
+            return Rows([np.zeros((width, 0))], np.zeros(0, np.int64), np.zeros(0, np.int64), specials)
+        try:
+            at = 0
+            for _ in range(first_row):
+                at = chunk.index(b"\n", at) + 1
+            line = chunk[at : chunk.index(b"\n", at)].rstrip(b"\r")
+            ntok = len(line.split())
+            if ntok > width or ntok == 0:
+                return None
+            # spaces only (any number): the C parser's one-character split, skipping repeated spaces, is
+            # faster than its whitespace split; tabs or trailing spaces further on raise, then read as below
+            single = b"\t" not in line and not line.endswith(b" ")
+            runs = b"  " in line or line.startswith(b" ")
+            tries = [(" ", runs)] + ([(" ", True)] if not runs else []) if single else []
+            tries.append((r"\s+", False))  # other spacing further on
+            for k, (sep, skip_runs) in enumerate(tries):
+                try:
+                    values = _read_c(chunk, ntok, skip, sep, skip_runs)
+                    break
+                except (ValueError, pd.errors.ParserError):
+                    if k == len(tries) - 1:
+                        raise
+        except (ValueError, IndexError, pd.errors.ParserError, UnicodeDecodeError):
+            return None
+        if len(values) == nrows:
+            break
+        if structured or attempt:  # whitespace-only lines were skipped: line numbers unknown
+            return None
+        structured = True  # blank lines: find them, and read again with their numbers known
+    columns = values.T  # (ntok, nrows): read_rows pads short rows' columns with NaN when it joins chunks
+    if skip.size:
+        keep = np.ones(nlines, bool)
+        keep[skip] = False
+        lines = (line0 + 1 + np.flatnonzero(keep)).astype(line_dtype(line0 + nlines))
+    else:
+        lines = np.arange(line0 + 1, line0 + 1 + nlines, dtype=line_dtype(line0 + nlines))
+    return Rows([columns], np.full(nrows, ntok, np.int8), lines, specials, nrows)
+
+
+def _exact(
+    chunk: bytes,
+    line0: int,
+    path: str,
+    widths: tuple[int, ...],
+    specials_ok: bool,
+    bad_width: Callable[[str, int], str],
+    numbers: str,
+) -> Rows:
+    """The numpy byte-scanner path for one chunk (any whitespace, ``nan``, exact error lines)."""
+    lines = scan(chunk)
+    comment = lines.first == ord("#")
+    blank = lines.first < 0
+    colon = lines.has_colon & ~comment & ~blank if specials_ok else np.zeros_like(blank)
+    specials = [(line0 + int(i) + 1, lines.text(int(i))) for i in np.flatnonzero(colon)]
+    rows = np.flatnonzero(~comment & ~blank & ~colon)
+    ntok = lines.ntok[rows]
+    bad = ~np.isin(ntok, widths)
+    first_bad = int(np.flatnonzero(bad)[0]) if bad.any() else rows.size
+    try:  # the first problem in file order, whatever the chunks: a token before a line of another width
+        flat = lines.numbers(rows[:first_bad], path, numbers)
+    except ParseError as exc:
+        if exc.line is not None:
+            raise ParseError(path, line0 + exc.line, exc.reason) from None
+        raise
+    if first_bad < rows.size:
+        i = int(rows[first_bad])
+        raise ParseError(path, line0 + i + 1, bad_width(lines.text(i), int(lines.ntok[i])))
+    width = max(widths)
+    columns = np.full((width, rows.size), np.nan)
+    offs = np.cumsum(ntok) - ntok
+    col = np.arange(flat.size) - np.repeat(offs, ntok)
+    columns[col, np.repeat(np.arange(rows.size), ntok)] = flat
+    return Rows([columns], ntok.astype(np.int8), line0 + rows + 1, specials)
+
+
+def read_rows(
+    path: str | os.PathLike,
+    widths: tuple[int, ...],
+    *,
+    what: str,
+    numbers: str,
+    bad_width: Callable[[str, int], str],
+    specials: bool = False,
+    separators: bytes = b"",
+    chunk_bytes: int | None = None,
+    fast_min_bytes: int = FAST_MIN_BYTES,
+    progress: Callable[[int], object] | None = None,
+    layout: Callable[[int], Sequence[Group]] | None = None,
+    skip_lines: int = 0,
+    row_major: bool = True,
+    convert: Convert | None = None,
+) -> Rows:
+    """Read the numeric lines of a text file in chunks (a plain file of at most
+    :data:`~lorisnb.io.parsing.whole.WHOLE_MAX_BYTES` with a ``layout``: by pandas' parser in pieces on
+    threads, :func:`~lorisnb.io.parsing.whole.read_whole`).
+
+    Blank lines and ``#`` comments are skipped. Each other line must hold a number of
+    whitespace-separated tokens in ``widths``, all numbers; otherwise a ParseError names the
+    line, using ``bad_width(text, ntok)`` or ``numbers`` (what was expected) for the message.
+
+    Args:
+        path: the file.
+        widths: allowed token counts per line.
+        what: what the file should be, for messages ("a TUM trajectory file").
+        numbers: the numbers expected on a line, for messages.
+        bad_width: message for a line of ``ntok`` tokens.
+        specials: return lines holding a colon (``key: value``) in ``Rows.specials`` instead of
+            reading them as numbers.
+        separators: bytes read as whitespace too (``b","``).
+        chunk_bytes: chunk size (default :data:`CHUNK_BYTES`).
+        fast_min_bytes: chunks smaller than this skip the C parser (0: always try it first).
+        progress: called with the bytes of each chunk read.
+        layout: the column groups the caller will :meth:`~lorisnb.io.parsing.rows.Rows.split` the rows
+            into, given the lines' token count: a large file whose lines all have the same count
+            is then copied into them as its chunks are parsed (:class:`~lorisnb.io.parsing.rows.RowSink`).
+        skip_lines: line ``skip_lines`` (1-based; 0: none) is skipped as a comment (a header line
+            without ``#``; the lines before it must be blank or comments).
+        row_major: False for a reader that only computes from the groups' arrays and keeps none of
+            them: a small plain file read in one piece then gives views of the parser's own numbers
+            (column-major, read-only; no copy), chunked reading row-major arrays as always.
+        convert: what the reader computes from the groups (:meth:`Rows.convert`): a plain file
+            read in pieces computes it on each piece as it is read.
+    """
+    if layout is not None and not specials and chunk_bytes is None:  # a plain file: pandas' parse in pieces
+        whole = read_whole(path, widths, layout, separators, skip_lines, progress, row_major, convert)
+        if whole is not None:
+            return whole
+    spath = str(path)
+    width = max(widths)
+    chunk_bytes = chunk_bytes or CHUNK_BYTES
+    parts: list[Rows] = []
+
+    def parse(chunk: bytes, line0: int, nlines: int) -> Rows:
+        if separators and any(s in chunk for s in separators):
+            chunk = chunk.translate(bytes.maketrans(separators, b" " * len(separators)))
+        c_parser = len(chunk) >= fast_min_bytes and (len(chunk) >= PANDAS_MIN_BYTES or pandas_loaded())
+        part = _fast(chunk, line0, nlines, width, specials) if c_parser else None
+        if part is None or not np.isin(part.ntok[:1], widths).all():
+            part = _exact(chunk, line0, spath, widths, specials, bad_width, numbers)
+        return part
+
+    chunks = _chunks(path, what, chunk_bytes)
+    first, _, first_lines, at = next(chunks)
+    parts.append(parse(_commented(first, skip_lines), 0, first_lines))
+    if progress is not None:
+        progress(len(first))
+    try:
+        st = os.stat(path)
+        regular, total = stat.S_ISREG(st.st_mode), st.st_size
+    except OSError:
+        regular, total = False, 0
+    if not regular or at >= total or skip_lines > first_lines:  # a pipe or a device (or no more chunks: the
+        # end checks for an empty file; or the line to skip further on): chunks one after another
+        parts += in_order(
+            (((parse, _commented(c, skip_lines - l0), l0, n), len(c)) for c, l0, n, _ in chunks), progress
+        )
+        return _join(parts)
+    chunks.close()
+    sink, again = None, False
+    if layout is not None:  # the rows of the whole file, guessed from the first chunk's lines per byte
+        sink = RowSink(layout, int(total * (first_lines + 1) / max(len(first), 1) * 1.05) + 1024)
+        if not sink.add(parts[0]):
+            sink = None  # lines of several token counts at once: nothing copied yet, read on as usual
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        tasks = (
+            ((read_range, fd, lo, hi, overlong, parse, spath, what), hi - lo)
+            for lo, hi, overlong in line_ranges(fd, at, total, chunk_bytes)
+        )
+        line0 = first_lines
+        for part, nlines in in_order(tasks, progress):  # chunks read and parsed on threads, joined in order
+            if isinstance(part, ParseError):
+                raise ParseError(spath, None if part.line is None else part.line + line0, part.reason)
+            if part.lines.dtype == np.int64 or line_dtype(line0 + nlines) == np.int32:
+                part.lines += line0
+            else:
+                part.lines = part.lines + np.int64(line0)
+            part.specials = [(k + line0, text) for k, text in part.specials]
+            if sink is not None and not sink.add(part):
+                again = True  # lines of another token count: read the file again without the sink
+                break
+            parts.append(part)
+            line0 += nlines
+    finally:
+        os.close(fd)
+    if again:
+        del parts
+        return read_rows(path, widths, what=what, numbers=numbers, bad_width=bad_width, specials=specials,
+                         separators=separators, chunk_bytes=chunk_bytes, fast_min_bytes=fast_min_bytes,
+                         skip_lines=skip_lines)  # fmt: skip
+    rows = _join(parts)
+    del parts
+    if sink is not None and sink.ntok is not None:
+        rows.filled = sink.filled()
+    give_back_memory()
+    return rows
+
+
+def _commented(chunk: bytes, line: int) -> bytes:
+    """``chunk`` with ``#`` put before its ``line``-th line (1-based), if the chunk holds it."""
+    parts = chunk.split(b"\n", line - 1) if line >= 1 else []
+    if len(parts) < line or line < 1 or not parts[-1]:  # not in this chunk (an empty rest: the next one's)
+        return chunk
+    return b"\n".join(parts[:-1] + [b"#" + parts[-1]])
+
+
+def _join(parts: list[Rows]) -> Rows:
+    """One Rows of all chunks (their blocks kept as they are: joined when :attr:`Rows.columns` is
+    asked for, or copied once by :meth:`Rows.split`)."""
+    if len(parts) == 1:
+        return parts[0]
+    return Rows(
+        [b for p in parts for b in p.blocks],
+        np.concatenate([p.ntok for p in parts]),
+        np.concatenate([p.lines for p in parts]),
+        [s for p in parts for s in p.specials],
+        sum(p.parsed_in_c for p in parts),
+    )
+
+
+def stamp_digits(
+    path: str | os.PathLike, lines: np.ndarray, chunk_bytes: int = CHUNK_BYTES
+) -> tuple[np.ndarray, np.ndarray]:
+    """For the given 1-based ``lines`` (increasing) of a file: the digits after the decimal point
+    of each line's first token (-1 if none) and those digits as an integer, read exactly from the
+    bytes (nanosecond digits included). Streams the file again; used only when needed."""
+    ndig = np.full(lines.size, -1, np.int64)
+    frac = np.zeros(lines.size, np.int64)
+    for chunk, line0, n, _ in _chunks(path, "a text file", chunk_bytes):
+        lo, hi = np.searchsorted(lines, [line0 + 1, line0 + n + 1])
+        if hi > lo:
+            scanned = scan(chunk)
+            ndig[lo:hi], frac[lo:hi] = stamp_fractions(scanned, lines[lo:hi] - line0 - 1)
+    return ndig, frac

@@ -1,0 +1,209 @@
+"""The one registry of trajectory formats: for each its name, file suffixes, column layout, reader,
+how to recognise a file of it from its first bytes, and the option that reads it. Readers, the
+command line's choices and the error messages all take their knowledge from here, so a file that is
+plainly in another format is answered with the option that would read it::
+
+    data.csv, line 2: '1403636579763555584,4.68,-1.78,...' has 17 fields; expected 8 numbers ...;
+    this looks like a EuRoC CSV file ('timestamp_ns,p_x,p_y,p_z,q_w,q_x,q_y,q_z,...'): read it with
+    --format euroc (--gt-format euroc for the ground truth; fmt='euroc' in Python)
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from lorisnb.io.parsing.scanner import regular_file
+
+#: Bytes of a file's beginning that :func:`sample` looks at.
+SAMPLE_BYTES = 64 * 1024
+#: Data lines of that beginning that the recognisers look at.
+SAMPLE_LINES = 20
+
+
+@dataclass(frozen=True)
+class Sample:
+    """The beginning of a file: its first bytes, its ``#`` comment lines and its first data lines
+    split into tokens (at spaces, tabs and commas), and whether commas separate the values."""
+
+    head: bytes
+    comments: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+    commas: bool
+    folder: bool = False
+
+
+_NUMBER = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+
+
+def _numbers(row: tuple[str, ...]) -> list[float] | None:
+    return [float(t) for t in row] if row and all(_NUMBER.match(t) for t in row) else None
+
+
+def _is_bag(s: Sample) -> bool:
+    return s.folder or s.head.startswith((b"#ROSBAG", b"SQLite format 3", b"\x89MCAP"))
+
+
+def _is_openloris(s: Sample) -> bool:
+    return any(r and r[0].lower() in ("scene:", "frame:", "seq:") for r in s.rows)
+
+
+def _is_euroc(s: Sample) -> bool:
+    header = any(c.lstrip("#").strip().lower().startswith("timestamp") for c in s.comments[:3])
+    rows = [r for r in s.rows if _numbers(r) is not None]
+    if not rows or not all(len(r) >= 8 for r in rows):
+        return False
+    ns = all(re.fullmatch(r"\d{16,}", r[0]) for r in rows)  # integer nanoseconds since 1970 (> 1e15)
+    return s.commas and (header or ns)
+
+
+def _is_kitti(s: Sample) -> bool:
+    rows = [_numbers(r) for r in s.rows]
+    if not rows or any(v is None or len(v) != 12 for v in rows):
+        return False
+    return all(abs(sum(x * x for x in v[0:3]) - 1) < 1e-2 for v in rows if v is not None)  # rotation rows
+
+
+def _is_tum(s: Sample) -> bool:
+    rows = [_numbers(r) for r in s.rows]
+    if not rows or any(v is None or len(v) != 8 for v in rows):
+        return False
+    return all(abs(sum(x * x for x in v[4:8]) - 1) < 1e-2 for v in rows if v is not None) and not _is_euroc(s)
+
+
+@dataclass(frozen=True)
+class Format:
+    """One trajectory format: ``name`` (the ``--format`` value), ``suffixes`` of its files,
+    ``title`` and ``columns`` (its layout, in words), ``reader`` (the :mod:`lorisnb.io` function),
+    and ``recognise`` (whether a :class:`Sample` is plainly of this format)."""
+
+    name: str
+    title: str
+    suffixes: tuple[str, ...]
+    columns: str
+    reader: str
+    recognise: Callable[[Sample], bool]
+
+    def looks(self) -> str:
+        """``"this looks like a KITTI pose file (12 numbers ...)"``."""
+        article = "an" if self.title.startswith(("A", "I", "O")) else "a"
+        return f"this looks like {article} {self.title} ({self.columns})"
+
+    def hint(self) -> str:
+        """What a file of this format looks like and how to read it, on every surface."""
+        return (
+            f"{self.looks()}: read it with --format {self.name} "
+            f"(--gt-format {self.name} for the ground truth; fmt={self.name!r} or lorisnb.{self.reader} in Python)"
+        )
+
+
+#: Every format lorisnb reads, in the order files are tried for recognition (most specific first).
+FORMATS: dict[str, Format] = {
+    f.name: f
+    for f in (
+        Format("bag", "ROS bag", (".bag", ".db3", ".mcap"), "ROS 1 .bag or ROS 2 bag (a pose topic or TF chain)",
+               "read_bag", _is_bag),
+        Format("openloris", "OpenLORIS file", (".txt",),
+               "'scene:' and 'frame:' headers, 'seq: N' blocks of 'stamp x y z qx qy qz qw'", "read_openloris",
+               _is_openloris),
+        Format("euroc", "EuRoC CSV file", (".csv",), "'timestamp_ns,p_x,p_y,p_z,q_w,q_x,q_y,q_z,...'",
+               "read_euroc", _is_euroc),
+        Format("kitti", "KITTI pose file", (".txt",), "12 numbers per line, a 3x4 pose matrix row-major",
+               "read_kitti", _is_kitti),
+        Format("tum", "TUM trajectory file", (".txt", ".csv"), "'stamp tx ty tz qx qy qz qw', seconds",
+               "read_tum", _is_tum),
+    )
+}  # fmt: skip
+
+#: The format names, for option choices and messages.
+FORMAT_NAMES: tuple[str, ...] = ("tum", "kitti", "euroc", "openloris", "bag")
+#: Formats of plain text files (``crosscheck`` reads these).
+TEXT_FORMATS: tuple[str, ...] = ("tum", "kitti", "euroc", "openloris")
+
+
+def suffixes(fmt: str) -> tuple[str, ...]:
+    """File suffixes of a format (the first is the one its files are usually given)."""
+    return FORMATS[fmt].suffixes
+
+
+def sample(path: str | os.PathLike[str]) -> Sample | None:
+    """The beginning of a regular file (None if it cannot be read, or is a pipe); a folder holding ``metadata.yaml`` is
+    a ROS 2 bag."""
+    p = Path(path)
+    try:
+        if p.is_dir():
+            return Sample(b"", (), (), False, folder=(p / "metadata.yaml").is_file())
+        if not regular_file(p):  # a pipe: its bytes are the reader's (a peek would take them)
+            return None
+        with open(p, "rb") as f:
+            head = f.read(SAMPLE_BYTES)
+    except OSError:
+        return None
+    return sample_bytes(head)
+
+
+def sample_bytes(head: bytes) -> Sample:
+    """A :class:`Sample` of a file's first bytes."""
+    if b"\0" in head[:512]:
+        return Sample(head, (), (), False)
+    text = head.decode("utf-8", "replace").lstrip("\ufeff")
+    lines = text.splitlines()[:-1] if len(head) == SAMPLE_BYTES else text.splitlines()  # the last may be cut
+    comments, rows, commas = [], [], False
+    for line in lines:
+        stripped = line.strip()
+        if not stripped:
+            continue
+        if stripped.startswith("#"):
+            comments.append(stripped)
+            continue
+        commas = commas or "," in stripped
+        rows.append(tuple(t for t in re.split(r"[\s,]+", stripped) if t))
+        if len(rows) >= SAMPLE_LINES:
+            break
+    if rows and _numbers(rows[0]) is None and len(rows) > 1 and _numbers(rows[1]) is not None and "," in lines[0]:
+        rows = rows[1:]  # a CSV header line without '#'
+    return Sample(head, tuple(comments), tuple(rows), commas)
+
+
+def recognise(s: Sample | None) -> list[str]:
+    """The formats a sample is plainly in (usually one; none for text of no known layout)."""
+    if s is None:
+        return []
+    return [name for name, f in FORMATS.items() if f.recognise(s)]
+
+
+def hint(path: str | os.PathLike[str], fmt: str) -> str:
+    """``"; this looks like a KITTI pose file (...): read it with --format kitti ..."`` when the
+    file is plainly in another format than ``fmt``, else ``""``."""
+    s = sample(path)
+    return "" if s is None else hint_of_sample(s, fmt)
+
+
+def line_hint(text: str, fmt: str) -> str:
+    """The same as :func:`hint` for one offending line of a file (the readers' width errors)."""
+    return hint_of_sample(sample_bytes(text.encode("utf-8", "replace")), fmt)
+
+
+def hint_of_sample(s: Sample, fmt: str) -> str:
+    """:func:`hint` of a sample already taken."""
+    found = recognise(s)
+    if not found or fmt in found:
+        return ""
+    return "; " + FORMATS[found[0]].hint()
+
+
+def times_hint(path: str | os.PathLike[str], text: str) -> str:
+    """For a times file (one stamp per line) that is plainly a pose file of some format: the
+    mistake, a pose file given where its times were asked for (else ``""``)."""
+    s = sample(path)
+    found = recognise(s) or recognise(sample_bytes(text.encode("utf-8", "replace")))
+    if not found:
+        return ""
+    return (
+        f"; {FORMATS[found[0]].looks()}, not a times file: a pose file was given where its times were asked for "
+        "(--est-times, --gt-times or --times; stamps= in Python). Give the file of the poses' stamps there, one "
+        "per line (KITTI's times.txt), and the pose file itself as the estimate or --gt"
+    )

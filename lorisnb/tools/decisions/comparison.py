@@ -1,0 +1,195 @@
+"""What ``lorisnb compare`` computes and writes: coverage made explicit, intervals, one permutation
+test for the pairs, the ranking and the bold marks from that test, and the tables."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from lorisnb.core.lifelong.coverage import complete, coverage_notes
+from lorisnb.core.metrics.openloris import RATES
+from lorisnb.core.spec import validate
+from lorisnb.core.stats import inference as stats
+from lorisnb.core.stats import ranking
+from lorisnb.core.stats.power import runs_for_power
+from lorisnb.core.stats.trials import check_duplicates
+from lorisnb.errors import ValidationError
+from lorisnb.io.writers import write_csv
+from lorisnb.tools.report.tables import interval, write_comparison
+
+
+@dataclass
+class Comparison:
+    """``algorithms``: one row per suite, scene and algorithm (value, interval, coverage, rank,
+    p-value and effect against the scene's top algorithm); ``pairs``: the pairwise test;
+    ``significant``: its significant rows; ``ci``: intervals of every metric; ``coverage``;
+    ``power`` (with a power delta); ``header``, ``summary``: what the command prints; ``notes``:
+    warnings (missing sequences)."""
+
+    algorithms: pd.DataFrame
+    pairs: pd.DataFrame
+    significant: pd.DataFrame
+    ci: pd.DataFrame
+    coverage: pd.DataFrame
+    power: pd.DataFrame | None
+    header: str
+    summary: str
+    notes: list[str]
+
+
+def check_table_duplicates(table: pd.DataFrame) -> None:
+    """Several files for one sequence and trial in a per-sequence table are an error (see
+    :func:`lorisnb.core.stats.trials.check_duplicates`)."""
+    t = stats.with_trials(table)
+    if "file" not in t.columns or t.empty:
+        return
+    keys = [
+        (str(f), (su, a, sc, int(tr)), tuple(g["seq"]))
+        for (f, su, a, sc, tr), g in t.groupby(["file", "suite", "algorithm", "scene", "trial"], sort=False)
+    ]
+    check_duplicates(keys)
+
+
+def _bound(v: float) -> str:
+    return "n/a" if not np.isfinite(v) and not np.isinf(v) else ("-inf" if v == -np.inf else "inf" if v == np.inf
+                                                                  else _signed(v))  # fmt: skip
+
+
+def _signed(v: float) -> str:
+    """``v`` to three decimals with its sign, ``+0.000`` for what rounds to zero (not ``-0.000``)."""
+    return f"{round(float(v), 3) + 0.0:+.3f}"
+
+
+def _versus_top(rank: pd.DataFrame, pairs: pd.DataFrame) -> pd.DataFrame:
+    """Each algorithm against the top-ranked algorithm of its scene (best value among rank 1)."""
+    out = []
+    for (suite, scene), r in rank.groupby(["suite", "scene"], sort=False):
+        top = r.iloc[0]["algorithm"]  # ranking sorts by rank, then value
+        p = pairs[(pairs["suite"] == suite) & (pairs["scene"] == scene)]
+        for alg in r["algorithm"]:
+            row = dict(suite=suite, scene=scene, algorithm=alg, top=top, difference_vs_top=np.nan,
+                       difference_low_vs_top=np.nan, difference_high_vs_top=np.nan, cliffs_delta_vs_top=np.nan,
+                       p_vs_top=np.nan, p_holm_vs_top=np.nan, min_p_vs_top=np.nan)  # fmt: skip
+            hit = p[((p["a"] == alg) & (p["b"] == top)) | ((p["a"] == top) & (p["b"] == alg))]
+            if alg != top and len(hit):
+                h = hit.iloc[0]
+                sign = 1.0 if h["a"] == alg else -1.0
+                low, high = (h["difference_low"], h["difference_high"])
+                row.update(difference_vs_top=sign * h["difference"], cliffs_delta_vs_top=sign * h["cliffs_delta"],
+                           difference_low_vs_top=low if sign > 0 else -high,
+                           difference_high_vs_top=high if sign > 0 else -low,
+                           p_vs_top=h["p"], p_holm_vs_top=h["p_holm"], min_p_vs_top=h["min_p"])  # fmt: skip
+            out.append(row)
+    return pd.DataFrame(out)
+
+
+def compare_table(
+    table: pd.DataFrame,
+    durations: pd.DataFrame,
+    metric: str = "cr",
+    level: float = 0.95,
+    alpha: float = 0.05,
+    seed: int = 0,
+    power_delta: float | None = None,
+) -> Comparison:
+    """Everything ``compare`` shows, from a per-sequence table and the ground-truth durations of its
+    scenes (the sequences every algorithm is expected to have)."""
+    for name, value in (("table", table), ("durations", durations)):
+        if not isinstance(value, pd.DataFrame):
+            raise ValidationError(f"{name}: expected a DataFrame (Evaluation.sequences() / .durations()), got "
+                                  f"{type(value).__name__}")  # fmt: skip
+    metric = validate.choice("metric", metric, tuple(stats.WEIGHTS))  # CR as the command line reads it
+    if table.empty:
+        raise ValidationError("table: no sequence to compare (nothing was scored)")
+    if power_delta is not None:  # a difference the metric can show: a rate moves by 1 at most
+        power_delta = validate.positive("power delta", power_delta, "the metric's unit")
+        if metric in RATES and power_delta > 1:
+            raise ValidationError(f"power delta={power_delta:g}: {metric} is a rate between 0 and 1, so a difference "
+                                  "above 1 cannot happen; expected a difference in (0, 1]")  # fmt: skip
+    check_table_duplicates(table)
+    full, cover = complete(table, durations)
+    notes = coverage_notes(cover)
+    ci = stats.confidence_intervals(full, level=level, seed=seed)
+    pairs = stats.pairwise(full, metric, alpha=alpha, seed=seed)
+    rank = ranking.ranking(full, metric, alpha=alpha, seed=seed, pairs=pairs)
+    keys = ["suite", "scene", "algorithm"]
+    c = ci[ci["metric"] == metric].drop(columns=["metric"])
+    algs = rank.merge(c.drop(columns=["value"]), on=keys, how="left").merge(cover, on=keys, how="left")
+    algs = algs.merge(_versus_top(rank, pairs), on=keys, how="left")
+    algs["value [CI]"] = [
+        interval(v, lo, hi, 3) for v, lo, hi in zip(algs["value"], algs["low"], algs["high"], strict=True)
+    ]
+    algs["covered"] = [f"{s}/{e}" for s, e in zip(algs["sequences"], algs["expected"], strict=True)]
+    algs["vs top [test interval]"] = [
+        "" if not np.isfinite(d) else f"{_signed(d)} [{_bound(lo)}, {_bound(hi)}]"
+        for d, lo, hi in zip(
+            algs["difference_vs_top"], algs["difference_low_vs_top"], algs["difference_high_vs_top"], strict=True
+        )
+    ]
+    algs = algs.rename(columns={"sequences": "sequences_with_output", "expected": "scene_sequences"})
+    per_seq = stats.with_trials(full).groupby(["algorithm", "scene", "seq"])["trial"].nunique()
+    lo, hi = int(per_seq.min()), int(per_seq.max())
+    trials = f"{lo} trial(s) per sequence" if lo == hi else f"{lo} to {hi} trials per sequence"
+    units = ", ".join(sorted(set(ci["unit"])))
+    header = (
+        f"{metric} per algorithm and scene, {level:.0%} bootstrap intervals over {units} ({trials}); "
+        f"missing sequences count as failed runs; rank = 1 + algorithms significantly better by a permutation "
+        f"test (exact where the relabellings are few; Holm per scene, alpha {alpha}); 'vs top': the difference to "
+        "the scene's first algorithm, with the interval that inverts the same test (it holds 0 exactly when the "
+        "test does not separate the two):"
+    )
+    sig = pairs[pairs["significant"].astype(bool)]  # a mask also when empty (object dtype)
+    summary = f"{len(sig)} of {len(pairs)} pairs differ significantly (the test behind the ranks and bold marks)"
+    summary += ":" if len(sig) else "."
+    blocked = pairs.groupby("scene").agg(reachable=("reachable", "any"), min_p=("min_p", "min"), n=("p", "size"))
+    blocked = blocked[~blocked["reachable"].astype(bool)]
+    if len(blocked):
+        summary += (
+            "\nno pair can reach alpha "
+            + str(alpha)
+            + " in "
+            + "; ".join(
+                f"{scene} (no two algorithms both have a value of {metric} there: nothing to test)"
+                if not np.isfinite(r.min_p)
+                else f"{scene} (every pair's results are the same on every sequence: no test can separate them)"
+                if r.min_p >= 1
+                else f"{scene} (smallest possible p {r.min_p:.4g}, x {r.n} pair(s) by Holm)"
+                for scene, r in blocked.iterrows()
+            )
+            + (": run more trials (--power DELTA says how many)" if (blocked["min_p"] < 1).any() else "")
+        )
+    power = None
+    if power_delta is not None:
+        power = runs_for_power(full, pairs[~pairs["significant"].astype(bool)], power_delta, alpha)
+    return Comparison(algs, pairs, sig, ci, cover, power, header, summary, notes)
+
+
+def write_outputs(
+    res: Comparison,
+    metric: str,
+    csv: str | os.PathLike[str] | None,
+    pairs_csv: str | os.PathLike[str] | None,
+    latex: str | os.PathLike[str] | None,
+    markdown: str | os.PathLike[str] | None,
+    force: bool,
+    alpha: float,
+) -> list[Path]:
+    """The tables asked for: per algorithm (value, interval, coverage, rank, p and effect against
+    the top), per pair (the test), LaTeX and Markdown (bold from the ranking)."""
+    written = []
+    if csv:
+        written.append(
+            write_csv(res.algorithms.drop(columns=["value [CI]", "covered", "vs top [test interval]"]), csv, force)
+        )
+    if pairs_csv:
+        pairs = res.pairs if res.power is None else res.pairs.join(res.power[["unit", "have", "needed"]])
+        written.append(write_csv(pairs, pairs_csv, force))
+    rank = res.algorithms[["suite", "scene", "metric", "algorithm", "rank"]]
+    for out in (latex, markdown):
+        if out:
+            written.append(write_comparison(res.ci, metric, out, force, ranks=rank, alpha=alpha))
+    return written

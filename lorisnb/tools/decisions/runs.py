@@ -1,0 +1,304 @@
+"""Runs as ``diff`` and ``history`` read them: a report run folder (``run.json`` and the CSV tables
+its notebooks wrote), or a per-sequence table as ``lorisnb evaluate --csv`` / ``--parquet`` writes it.
+
+A run's **spec** is what its numbers depend on besides the estimates: the ``spec`` of ``run.json``
+when there is one (its ``values`` but those of :data:`NOT_NUMBERS`: where the results live and the
+leaderboard's test settings), and the thresholds recorded in the table's own columns (``eps``,
+``phi``, ``delta``, ``tau`` per scene, ``official_interpolation``). Two runs are comparable when their
+specs agree (:func:`spec_differences`, which names every key that differs).
+
+A report run holds a sequence in several tables (the report's own ``findings/sequences.csv`` and
+each notebook's, at the notebook's own settings, simulated algorithms too): the report's own table
+(:data:`FIRST_TABLE`) is the run, with the report's ``findings/durations.csv`` (every ground-truth
+sequence of its scenes: a sequence no row holds counts as failed in a scene value, as in the
+leaderboard). A run without findings (made by an older lorisnb) is read from its notebooks'
+tables, each sequence once, from the first table that holds it by path.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from lorisnb.core.metrics.openloris import RATES
+from lorisnb.core.stats.inference import WEIGHTS as STATS_WEIGHTS
+from lorisnb.core.stats.inference import with_trials
+from lorisnb.core.stats.regression import METRICS
+from lorisnb.errors import DataNotFoundError, ParseError, ValidationError
+from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV
+from lorisnb.tools.report.provenance import RUN_JSON, read_run_json
+
+#: Columns a per-sequence table must have to be read as one.
+REQUIRED = ["algorithm", "scene", "seq", "cr", "eps", "phi", "delta", "tau"]
+#: Columns that hold numbers besides the metrics (:data:`lorisnb.core.stats.regression.METRICS`) and weights.
+NUMBERS = ["matched", *(w for w in STATS_WEIGHTS.values() if w)]
+#: Table columns that are part of the spec (per scene).
+SPEC_COLUMNS = ["eps", "phi", "delta", "tau", "official_interpolation", "spec"]
+#: A row's key: one row per sequence and trial of a suite.
+KEYS = ["suite", "algorithm", "scene", "seq", "trial"]
+#: The report's own per-sequence table, read first (evaluated at run.json's spec).
+FIRST_TABLE = "findings/sequences.csv"
+#: Keys of run.json's ``spec.values`` that do not change a per-sequence number: the results folder
+#: (``source``), the leaderboard's test settings and its selection of rows.
+NOT_NUMBERS = frozenset({"source", "metric", "alpha", "level", "seed", "algorithms", "scenes"})
+
+
+@dataclass
+class Run:
+    """One run: its per-sequence ``table`` (a ``table`` column names the CSV it came from inside a
+    report run), the ``meta`` of its run.json ({} for a bare table), when it was made (``created``:
+    run.json's, else the file's modification time; ``created_from`` says which), and ``kind``."""
+
+    path: Path
+    kind: str  # "report", "table"
+    table: pd.DataFrame
+    meta: dict[str, Any] = field(default_factory=dict)
+    created: datetime | None = None
+    created_from: str = ""
+    notes: list[str] = field(default_factory=list)
+    #: inputs of a report run's own evaluation that failed or were not scored (file -> reason)
+    unscored: dict[str, str] = field(default_factory=dict)
+    #: every ground-truth sequence of the scenes evaluated (``scene``, ``seq``, ``gt_duration``), when
+    #: known: a scene value counts the sequences no row holds as failed, as ``compare`` does
+    expected: pd.DataFrame | None = None
+
+    @property
+    def name(self) -> str:
+        return self.path.name
+
+    @property
+    def version(self) -> str | None:
+        v = self.meta.get("lorisnb_version")
+        return None if v is None else str(v)
+
+    @property
+    def spec(self) -> Any:
+        return self.meta.get("spec")
+
+    def groundtruth_sums(self) -> dict[str, str]:
+        """name -> sha256 of the ground-truth files among run.json's inputs."""
+        inputs = self.meta.get("inputs") or {}
+        if not isinstance(inputs, dict):
+            return {}
+        return {Path(p).name: str(h) for p, h in inputs.items() if "groundtruth" in str(p) or "gt_" in Path(p).name}
+
+    def table_spec(self) -> pd.DataFrame:
+        """The spec columns per scene (one row per distinct setting)."""
+        return table_settings(self.table)
+
+
+def table_settings(table: pd.DataFrame) -> pd.DataFrame:
+    """A per-sequence table's spec columns (:data:`SPEC_COLUMNS`) per scene, one row per distinct
+    setting, as text."""
+    cols = [c for c in SPEC_COLUMNS if c in table.columns]
+    keys = ["table"] if "table" in table.columns else []
+    return table[keys + ["scene"] + cols].astype(str).drop_duplicates().sort_values(keys + ["scene"] + cols)
+
+
+def is_table(path: Path) -> bool:
+    """A CSV or Parquet file, or a Parquet dataset folder (``algorithm=NAME/`` parts)."""
+    if path.is_file():
+        return path.suffix.lower() in (".csv", ".parquet")
+    return path.is_dir() and (any(path.glob("algorithm=*")) or any(path.glob("*.parquet")))
+
+
+def is_report_run(path: Path) -> bool:
+    return path.is_dir() and (path / RUN_JSON).is_file()
+
+
+def read_table(path: Path) -> pd.DataFrame:
+    """A per-sequence table from CSV or Parquet; its columns are checked."""
+    try:
+        if path.is_file() and path.suffix.lower() == ".csv":
+            df = pd.read_csv(path)
+        else:
+            df = pd.read_parquet(path)
+    except ImportError:
+        from lorisnb.errors import MissingDependencyError
+
+        raise MissingDependencyError("reading Parquet needs pyarrow: pip install 'lorisnb[parquet]'") from None
+    except (ValueError, OSError) as exc:
+        raise ParseError(path, None, f"not a readable CSV or Parquet table ({exc})") from None
+    missing = [c for c in REQUIRED if c not in df.columns]
+    if missing:
+        raise ParseError(path, None, f"lacks column(s) {', '.join(missing)}; expected a per-sequence table as "
+                         "written by lorisnb evaluate --csv / --parquet")  # fmt: skip
+    for c in ("algorithm", "scene", "suite", "file"):
+        if c in df.columns:
+            df[c] = df[c].astype(str).where(df[c].notna(), "")
+    for c in [*NUMBERS, *METRICS]:
+        if c in df.columns and not pd.api.types.is_numeric_dtype(df[c]):
+            values = pd.to_numeric(df[c].astype(str).str.strip().replace({"": None}), errors="coerce")
+            bad = values.isna() & df[c].notna() & (df[c].astype(str).str.strip().str.lower() != "nan")
+            if bad.any():
+                i = int(bad.to_numpy().nonzero()[0][0])
+                line = i + 2 if path.suffix.lower() == ".csv" else None  # the header is line 1
+                raise ParseError(path, line, f"column {c}: {df[c].iloc[i]!r} is not a number; expected a per-sequence "
+                                 "table as written by lorisnb evaluate --csv / --parquet")  # fmt: skip
+            df[c] = values
+    for c in (c for c in METRICS if c in df.columns):  # a number no evaluation gives: a damaged table
+        v = df[c].to_numpy(float)
+        bad = (v < 0) | (v > 1) if c in RATES else v < 0  # NaN: not scored, allowed
+        if bad.any():
+            i = int(bad.nonzero()[0][0])
+            line = i + 2 if path.suffix.lower() == ".csv" else None
+            expected = "a rate between 0 and 1" if c in RATES else "an RMSE >= 0"
+            raise ParseError(path, line, f"column {c}: {v[i]:g} is not {expected}; expected a per-sequence "
+                             "table as written by lorisnb evaluate --csv / --parquet")  # fmt: skip
+    return df
+
+
+def _report_tables(folder: Path, notes: list[str]) -> pd.DataFrame:
+    """The report's own per-sequence table (:data:`FIRST_TABLE`), else every per-sequence CSV table
+    of the run, stacked, one row per sequence and trial (from the first table that holds it, by
+    path), with a ``table`` column (its path in the run); tables that are not per-sequence (scenes,
+    pairs, ...) are left out, and so are tables with several rows per sequence and trial (sweeps),
+    with a note in ``notes``."""
+    parts = []
+    own = folder / FIRST_TABLE  # the report's own evaluation: the notebooks' tables hold other settings
+    csvs = [own] if own.is_file() else sorted(folder.rglob("*.csv"))
+    for csv in csvs:
+        if any(part.startswith(".") for part in csv.relative_to(folder).parts):
+            continue
+        try:
+            head = pd.read_csv(csv, nrows=0)
+        except (ValueError, OSError):
+            continue
+        if all(c in head.columns for c in REQUIRED):
+            t = with_trials(read_table(csv))
+            if t.duplicated(KEYS).any():
+                notes.append(f"{csv}: several rows per sequence (a sweep?); left out")
+                continue
+            parts.append(t.assign(table=csv.relative_to(folder).as_posix()))
+    if not parts:
+        raise DataNotFoundError(f"{folder}: a report run (run.json) without a per-sequence CSV table "
+                                f"(columns {', '.join(REQUIRED)})")  # fmt: skip
+    return pd.concat(parts, ignore_index=True).drop_duplicates(KEYS).reset_index(drop=True)
+
+
+def load_run(path: str | os.PathLike[str]) -> Run:
+    """A report run folder or a table (see the module docstring)."""
+    p = Path(path)
+    if not p.exists():
+        raise DataNotFoundError(f"{p}: no such file or folder")
+    if is_report_run(p):
+        meta = read_run_json(p)
+        created, source = _parse_time(meta.get("created")), "run.json"
+        if created is None:
+            created, source = _mtime(p / RUN_JSON), "modification time of run.json"
+        notes: list[str] = []
+        return Run(p, "report", _report_tables(p, notes), meta, created, source, notes, unscored_inputs(p),
+                   _durations(p))  # fmt: skip
+    if is_table(p):
+        return Run(p, "table", read_table(p), {}, _mtime(p), "modification time")
+    raise ValidationError(f"{p}: not a report run (no {RUN_JSON}) and not a CSV/Parquet table")
+
+
+#: A report run's table of every ground-truth sequence of the scenes its findings evaluated.
+DURATIONS = "findings/durations.csv"
+
+
+def _durations(run_dir: Path) -> pd.DataFrame | None:
+    """:data:`DURATIONS` of a report run (None for a run without it)."""
+    f = run_dir / DURATIONS
+    if not f.is_file():
+        return None
+    try:
+        t = pd.read_csv(f)
+    except (ValueError, pd.errors.ParserError) as exc:
+        raise ParseError(f, None, f"not a durations table ({exc}); expected the report's own") from None
+    if not {"scene", "seq", "gt_duration"} <= set(t.columns):
+        raise ParseError(f, None, "expected the columns scene, seq, gt_duration (the report's own table)")
+    return t.astype({"scene": str})
+
+
+#: What a report run's ``findings/input_errors.csv`` says of an input that was not scored.
+NOT_SCORED = ("failed", "not scored")
+
+
+def unscored_inputs(run_dir: Path) -> dict[str, str]:
+    """The inputs of a report run's own evaluation (``findings/input_errors.csv``) that failed or
+    were not scored, file -> reason (skipped ones, such as a scene without ground truth, are not)."""
+    f = run_dir / "findings" / INPUT_ERRORS_CSV
+    if not f.is_file():
+        return {}
+    try:
+        t = pd.read_csv(f, dtype=str, keep_default_na=False)
+    except (ValueError, pd.errors.ParserError) as exc:
+        raise ParseError(f, None, f"not a table of input errors ({exc}); expected the report's own") from None
+    if not {"file", "status", "error"} <= set(t.columns):
+        raise ParseError(f, None, "expected the columns file, status, error (the report's own table)")
+    bad = t[t["status"].isin(NOT_SCORED).to_numpy()]
+    return dict(zip(bad["file"], bad["error"], strict=True))
+
+
+def _parse_time(value: Any) -> datetime | None:
+    if not isinstance(value, str):
+        return None
+    try:
+        t = datetime.fromisoformat(value.replace("Z", "+00:00"))
+    except ValueError:
+        return None
+    return t if t.tzinfo else t.replace(tzinfo=timezone.utc)
+
+
+def _mtime(p: Path) -> datetime:
+    return datetime.fromtimestamp(p.stat().st_mtime, tz=timezone.utc)
+
+
+def spec_values(spec: Any) -> dict[str, Any]:
+    """What of a run.json ``spec`` changes the numbers: its ``values`` (the whole spec when it has
+    none), without :data:`NOT_NUMBERS`; the ``description`` is these values in words."""
+    values = spec.get("values", spec) if isinstance(spec, dict) else {"spec": spec}
+    if not isinstance(values, dict):
+        values = {"values": values}
+    return {k: v for k, v in values.items() if k not in NOT_NUMBERS and (values is not spec or k != "description")}
+
+
+def spec_differences(a: Run, b: Run) -> list[str]:
+    """What makes two runs not comparable: a key of their run.json specs that changes the numbers
+    differs (:func:`spec_values`; each such key named, with both values whole), or the thresholds
+    recorded in their tables differ for a scene both have. Empty when they agree."""
+    out = []
+    if a.spec is not None and b.spec is not None:
+        va, vb = spec_values(a.spec), spec_values(b.spec)
+        missing = object()
+        for k in sorted(set(va) | set(vb)):
+            x, y = va.get(k, missing), vb.get(k, missing)
+            if x != y:
+                out.append(f"spec {k}: {_json(x, missing)} in {a.path} against {_json(y, missing)} in {b.path}")
+    return out + setting_differences(a.table, b.table, str(a.path), str(b.path))
+
+
+def setting_differences(a: pd.DataFrame, b: pd.DataFrame, name_a: str = "BASE", name_b: str = "CAND") -> list[str]:
+    """What makes two per-sequence tables not comparable: the settings (:data:`SPEC_COLUMNS`)
+    differ for a scene both have; each difference said once, with the scenes it is found in."""
+    sa, sb = table_settings(a), table_settings(b)
+    both = sorted(set(sa["scene"]) & set(sb["scene"]))
+    said: dict[str, list[str]] = {}  # what differs -> the scenes it differs in (said once for all of them)
+    for scene in both:
+        x = sa[sa["scene"] == scene].drop(columns=["table"], errors="ignore").drop_duplicates()
+        y = sb[sb["scene"] == scene].drop(columns=["table"], errors="ignore").drop_duplicates()
+        cols = [c for c in x.columns if c in y.columns and c != "scene"]
+        xs = sorted(map(tuple, x[cols].to_numpy().tolist()))
+        ys = sorted(map(tuple, y[cols].to_numpy().tolist()))
+        if xs != ys:  # only the columns whose values differ (all of them if only their combination does)
+            keep = [i for i in range(len(cols)) if {r[i] for r in xs} != {r[i] for r in ys}] or list(range(len(cols)))
+            xk, yk = (sorted({tuple(r[i] for i in keep) for r in rows}) for rows in (xs, ys))
+            text = f"{', '.join(cols[i] for i in keep)} = {_rows(xk)} in {name_a} against {_rows(yk)} in {name_b}"
+            said.setdefault(text, []).append(scene)
+    return [f"{', '.join(scenes)}: {text}" for text, scenes in said.items()]
+
+
+def _json(value: Any, missing: object) -> str:
+    return "(not set)" if value is missing else json.dumps(value, sort_keys=True, default=str)
+
+
+def _rows(rows: list[tuple]) -> str:
+    return "; ".join("/".join(map(str, r)) for r in rows[:3]) + (" ..." if len(rows) > 3 else "")

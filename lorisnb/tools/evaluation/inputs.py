@@ -1,0 +1,229 @@
+"""Inputs of an evaluation: paths given by the user (any iterable of them), the result files and
+folders they hold, each counted once (the same file or folder named twice, a file and its folder,
+a link and its target: kept once, with a note), and the labels (algorithm, file, suite, trial,
+scene) read from their names."""
+
+from __future__ import annotations
+
+import os
+import re
+import sys
+import warnings
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+
+from lorisnb.core.stats.trials import split_trial
+from lorisnb.errors import LorisWarning, ValidationError
+from lorisnb.io.datasets.manifest import Manifest
+
+PathArg = str | os.PathLike[str]
+
+
+def is_hidden(path: Path) -> bool:
+    """Hidden files and editor leftovers (``.x.txt``, ``.#x.txt``, ``~x.txt``) are not results."""
+    return path.name.startswith((".", "~"))
+
+
+def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
+    """One path or several, as Paths: a str or Path, or any iterable of them (list, tuple,
+    generator, set (sorted), numpy array of str, pandas Series or Index). An empty path or
+    another type is a ValidationError."""
+    if isinstance(paths, np.ndarray):
+        paths = paths.ravel().tolist()
+    items = [paths] if isinstance(paths, (str, os.PathLike)) else None
+    if items is None:
+        if isinstance(paths, bytes) or _is_frame(paths) or not isinstance(paths, Iterable):
+            raise ValidationError(
+                f"paths: expected a file or folder path (str or pathlib.Path) or a list of them, "
+                f"got {type(paths).__name__}"
+            )
+        items = list(paths)
+        if isinstance(paths, (set, frozenset)):
+            items = sorted(items, key=str)  # the same order every run
+    out = []
+    for p in items:
+        if not isinstance(p, (str, os.PathLike)):
+            raise ValidationError(f"paths: expected str or pathlib.Path items, got {type(p).__name__} ({p!r:.60})")
+        if str(p).strip() == "":
+            raise ValidationError("paths: an empty path (an unset shell variable?); expected a file or folder")
+        out.append(Path(p))
+    if not out:
+        raise ValidationError("paths: no path given; expected at least one file or folder")
+    return out
+
+
+def result_files(
+    paths: PathArg | Iterable[PathArg], suffixes: tuple[str, ...] = (".txt",)
+) -> list[tuple[Path, Path | None]]:
+    """Expand files and folders into ``(file, root)`` pairs; a folder is walked for files ending in
+    ``suffixes`` below it (``root/<algorithm>/*.txt``, or deeper: ``root/<suite>/<algorithm>/*.txt``),
+    hidden files and folders left out. A ROS 2 bag (a folder holding ``metadata.yaml``) is one
+    file when ``.bag`` is among the suffixes."""
+    out: list[tuple[Path, Path | None]] = []
+    bags = ".bag" in suffixes
+    for p in as_paths(paths):
+        if p.is_dir() and not (bags and (p / "metadata.yaml").is_file()):
+            # a dangling link is an input that fails (saying so), never silently no input
+            found = [
+                f for f in p.rglob("*") if f.suffix in suffixes and (f.is_file() or f.is_symlink() and not f.exists())
+            ]
+            if bags:  # a bag folder is one input: not also its .db3 / .mcap files
+                folders = [m.parent for m in p.rglob("metadata.yaml")]
+                found = [f for f in found if not any(d in f.parents for d in folders)] + folders
+            files = sorted(f for f in found if not any(is_hidden(Path(part)) for part in f.relative_to(p).parts))
+            out.extend((f, p) for f in files)
+        else:
+            out.append((p, None))
+    return unique_files(out)
+
+
+def names(what: str, value: object) -> list[str]:
+    """A name or a list of names (algorithms, scenes), checked."""
+    items = [value] if isinstance(value, str) else value
+    if not isinstance(items, Iterable) or isinstance(items, bytes) or _is_frame(items):
+        raise ValidationError(f"{what}={value!r}: expected a name or a list of names")
+    names = list(items)
+    bad = [n for n in names if not isinstance(n, str)]
+    if bad:
+        raise ValidationError(f"{what}: expected names (str), got {bad[0]!r}")
+    return names
+
+
+def labels(path: Path, root: Path | None, trials_by: str | None = None) -> tuple[str, str, str, int]:
+    """(algorithm, file relative to the root, suite, trial) for a result file; a trial token in
+    the path (:func:`lorisnb.core.stats.trials.split_trial`) is not part of the algorithm or suite."""
+    if root is None:  # a file given alone: its algorithm is its folder, or the folder above a trial folder
+        base, trial = split_trial("/".join(path.parts[-3:]), trials_by)
+        parts = base.split("/")
+        return (parts[-2] if len(parts) >= 2 else path.parent.name), path.name, "", trial
+    rel = path.relative_to(root).as_posix()
+    base, trial = split_trial(rel, trials_by)
+    parts = base.split("/")
+    algorithm = parts[-2] if len(parts) >= 2 else root.name
+    return algorithm, rel, "/".join(parts[:-2]), trial
+
+
+def scene_label(gt_path: Path) -> str:
+    """A scene name from a ground-truth path: ``fr2_desk_groundtruth.txt`` -> ``fr2_desk``;
+    EuRoC's ``V1_01_easy/mav0/state_groundtruth_estimate0/data.csv`` -> ``V1_01_easy``."""
+    generic = {"data", "groundtruth", "gt", "mav0", "state_groundtruth_estimate0", "poses", "metadata"}
+    for part in [gt_path.stem, *[p.name for p in gt_path.parents]]:
+        name = re.sub(r"[-_.]?(groundtruth|ground_truth|gt)$", "", part, flags=re.IGNORECASE)
+        if name and name.lower() not in generic:
+            return name
+    return gt_path.stem
+
+
+def algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> list[tuple[Path, Path | None]]:
+    """Folders holding estimate files of the manifest's sessions: each given folder if it holds
+    one itself, else its sub-folders that do."""
+    names = {s.estimate for s in m.sessions}
+    out: list[tuple[Path, Path | None]] = []
+    for p in as_paths(results):
+        if not p.is_dir():
+            raise ValidationError(f"{p}: expected a folder of estimates (one per session, named as in {m.path.name})")
+        if holds_any(p, names):
+            out.append((p, None))
+            continue
+        subs = sorted(d for d in p.rglob("*") if d.is_dir() and holds_any(d, names))
+        out.extend((d, p) for d in subs)
+        if not subs:
+            raise ValidationError(f"{p}: no estimate named {', '.join(sorted(names))} in it or below it")
+    return unique_files(out)  # a folder named twice is scored once
+
+
+def real_path(path: Path) -> Path:
+    """The file a path names (links resolved), for comparing inputs."""
+    try:
+        return path.resolve()
+    except OSError:
+        return path.absolute()
+
+
+def unique_files(items: list[tuple[Path, Path | None]]) -> list[tuple[Path, Path | None]]:
+    """``(file, root)`` pairs with every file kept once (compared by real path, the first naming
+    kept), with a LorisWarning listing what was named more than once: an input is never scored
+    twice, nor called a duplicate (a second trial) of itself."""
+    seen: dict[Path, Path] = {}
+    out: list[tuple[Path, Path | None]] = []
+    again: list[str] = []
+    for path, root in items:
+        key = real_path(path)
+        if key in seen:
+            again.append(str(path) if str(path) == str(seen[key]) else f"{path} (= {seen[key]})")
+            continue
+        seen[key] = path
+        out.append((path, root))
+    if again:
+        shown = "; ".join(again[:5]) + (f"; and {len(again) - 5} more" if len(again) > 5 else "")
+        warnings.warn(
+            f"{len(again)} input(s) named more than once, each counted once: {shown}",
+            LorisWarning,
+            stacklevel=3,
+        )
+    return out
+
+
+def near_names(folder: Path, name: str) -> list[str]:
+    """Files in ``folder`` whose names differ from ``name`` only in case, or are close to it
+    (``XYZ.txt``, ``xyz.TXT``, ``xyz .txt``, ``xzy.txt`` for ``xyz.txt``): what the user meant."""
+    import difflib
+
+    try:
+        names = sorted(p.name for p in folder.iterdir() if not p.name.startswith("."))
+    except OSError:
+        return []
+    same = [n for n in names if n.lower() == name.lower() and n != name]
+    return same or difflib.get_close_matches(name, names, n=3, cutoff=0.75)
+
+
+def holds_any(folder: Path, names: Iterable[str]) -> bool:
+    """Whether ``folder`` holds one of ``names``, or a file differing from one only in case."""
+    try:
+        present = {p.name.lower() for p in folder.iterdir()}
+    except OSError:
+        return False
+    return any(n.lower() in present for n in names)
+
+
+def missing_note(folder: Path, algorithm: str, absent: list[tuple[str, str]], taken: Iterable[str] = ()) -> str:
+    """A warning for sessions without an estimate file: ``absent`` holds (session, expected file);
+    a file of another session (``taken``) is never offered as the one meant."""
+    used = set(taken)
+    parts = []
+    for session, name in absent:
+        near = [n for n in near_names(folder, name) if n not in used]
+        how = "names are case-sensitive" if near and near[0].lower() == name.lower() else "a close name"
+        hint = (
+            f" (found {', '.join(near)}: {how}; rename it or set estimate = '{near[0]}' in the manifest)"
+            if near
+            else ""
+        )
+        parts.append(f"{session}: {folder / name} not found{hint}")
+    return (
+        f"{algorithm}: no estimate for {len(absent)} session(s), scored as missing output (0 poses, CR 0): "
+        + "; ".join(parts)
+    )
+
+
+def without_groundtruth(items: list[tuple[Path, Path | None]], groundtruth: Path) -> list[tuple[Path, Path | None]]:
+    """``(file, root)`` pairs less the ground-truth file itself (a ground truth kept in the results
+    folder would be scored as an estimate of itself), with a LorisWarning when it was among them;
+    nothing left but the ground truth is a ValidationError (no file at all is for the exit status
+    to say: nothing was evaluated)."""
+    gt = real_path(groundtruth)
+    kept = [(p, r) for p, r in items if real_path(p) != gt]
+    if len(kept) < len(items):
+        warnings.warn(f"{groundtruth}: the ground truth is among the estimates; left out", LorisWarning, stacklevel=3)
+    if items and not kept:
+        raise ValidationError(f"{groundtruth}: the only input is the ground truth itself; expected estimate files")
+    return kept
+
+
+def _is_frame(value: object) -> bool:
+    """Whether ``value`` is a pandas DataFrame (iterable, but over its column names): pandas is
+    not imported for the question (a DataFrame exists only where it was)."""
+    pd = sys.modules.get("pandas")
+    return pd is not None and isinstance(value, pd.DataFrame)

@@ -1,0 +1,317 @@
+"""One unit of evaluation work per input, for every input kind: an OpenLORIS result file, an
+estimate of a plain pair, or one algorithm's sessions of a manifest scene. A :class:`Job` is
+picklable (process pools, Dask); :func:`run_job` reads what it needs (the edge: files, the data
+root, caches of ground truth), runs the one pipeline
+(:func:`lorisnb.core.pipeline.sessions.evaluate_sessions`) and never raises for bad input.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import dataclass, replace
+from functools import lru_cache, partial
+from pathlib import Path
+
+from lorisnb.core.lifelong.missing import with_missing
+from lorisnb.core.pipeline.model import FileErrors, ResultFile
+from lorisnb.core.pipeline.plausibility import no_rpe_pair
+from lorisnb.core.pipeline.sessions import compute_errors, evaluate_sessions, moved_groundtruth, window_spans
+from lorisnb.core.spec.evalspec import EvalSpec
+from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.core.trajectory.units import check_stamp_units
+from lorisnb.errors import DataNotFoundError, LorisError, LorisWarning, ParseError, ValidationError
+from lorisnb.io.datasets.manifest import Manifest
+from lorisnb.io.datasets.paths import DataPaths, groundtruth_spans, load_groundtruth, read_groundtruth_file
+from lorisnb.io.readers.openloris import read_openloris
+from lorisnb.io.readers.plain import read_trajectory
+from lorisnb.io.readers.registry import hint
+from lorisnb.tools.evaluation.inputs import labels, missing_note
+from lorisnb.tools.evaluation.pool import size_of
+from lorisnb.tools.evaluation.result import Failure
+from lorisnb.tools.evaluation.status import NOT_PUBLIC
+
+#: Files at least this large show a progress bar of their own while read (when evaluated here).
+BIG_FILE_BYTES = 64 * 2**20
+
+
+@dataclass(frozen=True, kw_only=True)
+class PairSource:
+    """How the files of a pair are read: the ground truth, the formats, KITTI times files, bag
+    topics or TF chains, and the scene label of the rows."""
+
+    groundtruth: Path
+    fmt: str = "tum"
+    gt_fmt: str = "tum"
+    scene: str = "sequence"
+    est_times: Path | None = None
+    gt_times: Path | None = None
+    topic: str | None = None
+    gt_topic: str | None = None
+    tf: str | None = None
+    gt_tf: str | None = None
+    label_topic: bool = False  # one of several topics of the bag: the rows' algorithm is the topic
+
+
+@dataclass(frozen=True, kw_only=True)
+class Job:
+    """Everything one worker needs to evaluate one input (picklable)."""
+
+    kind: str  # openloris, pair or manifest
+    path: Path  # the result or estimate file; a manifest: the algorithm's folder
+    root: Path | None
+    spec: EvalSpec
+    trials_by: str | None = None
+    data: DataPaths | None = None  # openloris: where the ground truth is
+    scenes: frozenset[str] | None = None  # openloris: evaluate only these
+    source: PairSource | None = None  # pair
+    manifest: Manifest | None = None  # manifest
+    scene: str = ""  # manifest: the scene of this job
+
+
+def _stamp(path: Path) -> tuple[float, int]:
+    st = os.stat(path)
+    return st.st_mtime, st.st_size
+
+
+#: Ground-truth files up to this size are read once per process; larger ones for each input, so
+#: that the pipeline can let them go once the estimate is matched (a million poses and more).
+CACHED_BYTES = 32 << 20
+
+
+#: An OpenLORIS ground truth (official format) loses its repeated poses whatever the spec's rule,
+#: which is the estimate's: the official tool reads it so with or without ``-k`` (its
+#: ``--keep-repeated``), and :func:`groundtruth_of` reads one given as a pair's so.
+GT_DROP = True
+
+
+@lru_cache(maxsize=64)
+def _read_groundtruth(
+    path: Path, fmt: str, stamp: tuple[float, int], times: Path | None, topic: str | None, tf: str | None,
+    repeated: str = "drop",
+) -> Trajectory:  # fmt: skip
+    """A ground-truth trajectory, read once per process (until the file changes), arrays read-only."""
+    gt = read_trajectory(path, fmt, stamps=times, topic=topic, tf=tf, repeated=repeated)
+    for a in (gt.stamps, gt.positions, gt.quaternions, gt.lines):
+        if a is not None:
+            a.setflags(write=False)
+    return gt
+
+
+def groundtruth_of(path: Path, fmt: str, times: Path | None = None, topic: str | None = None,
+                   tf: str | None = None, repeated: str = "drop") -> Trajectory:  # fmt: skip
+    """The ground truth of a pair or a manifest session (cached; read-only arrays); ``repeated``:
+    the rule for poses of a repeated stamp (see :func:`lorisnb.io.readers.plain.read_trajectory`)."""
+    stamp = _stamp(path) if path.is_file() else (0.0, 0)
+    read = _read_groundtruth if stamp[1] < CACHED_BYTES else _read_groundtruth.__wrapped__  # a large one: not kept
+    gt = read(path, fmt, stamp, times, topic, tf, "drop" if fmt == "openloris" else repeated)
+    if len(gt) < 2:  # nothing to match an estimate to, or one instant: every later message would mislead
+        raise ParseError(str(path), None, f"the ground truth has {'no pose' if not len(gt) else 'one pose'} (comments, "
+                         "blank lines and skipped poses aside); expected at least two poses spanning the estimate's time")  # fmt: skip
+    return gt
+
+
+@lru_cache(maxsize=64)
+def _moved(data: DataPaths, scene: str, drop_repeated: bool, frame: str, official: bool, stamp: tuple[float, int]
+           ) -> dict[int, Trajectory]:  # fmt: skip
+    """The scene's ground truth moved to a sensor frame, once per process (until the file changes)."""
+    return moved_groundtruth(load_groundtruth(scene, data, drop_repeated), scene, frame, official)
+
+
+def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure | None]:
+    """Evaluate one input: ``("ok", FileErrors)``, ``("failed" | "skipped", Failure)`` or
+    ``("filtered", None)`` when its scene is not wanted. Never raises for bad input."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", LorisWarning)  # kept in FileErrors.warnings
+            if job.kind == "openloris":
+                errors = _openloris(job, progress)
+            elif job.kind == "pair":
+                errors = _pair(job)
+            else:
+                errors = _manifest(job)
+        if errors is None:
+            return "filtered", None
+        o = job.spec.rpe_options()
+        for seq in errors.sequences:  # the RPE pairs of the spec, here (in a worker, when in parallel)
+            i = seq.rpe(o["rpe_delta"], o["rpe_unit"], o["rpe_pairs"], o["rpe_all_pairs"], o["rpe_tolerance"])[0]
+            note = no_rpe_pair(f"{errors.file}, seq {seq.seq}", len(i), seq.stamps, o["rpe_delta"], o["rpe_unit"])
+            if note is not None and note not in errors.warnings:
+                errors.warnings.append(note)
+        return "ok", errors
+    except DataNotFoundError as exc:
+        return "skipped", Failure(job.path, str(exc), "not-public" if exc.scene in NOT_PUBLIC else "no-groundtruth")
+    except LorisError as exc:  # said with the input it is about (an alignment's or an option's error names none)
+        said = str(exc)
+        if str(job.path) not in said and job.path.name not in said:
+            said = f"{job.path}: {said}"
+        return "failed", Failure(job.path, said, type(exc).__name__)
+
+
+def _read_result(job: Job, progress: bool = False) -> ResultFile:
+    """The job's OpenLORIS result file, every ``seq:`` block (a progress bar for a big one)."""
+    bar = None
+    if progress and size_of(job.path) >= BIG_FILE_BYTES:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=size_of(job.path), desc=f"reading {job.path.name}", unit="B", unit_scale=True, leave=False)
+    try:
+        return read_openloris(job.path, remove_repeated=job.spec.repeated == "drop", warn=False,
+                              repair_stamps=job.spec.repair_stamps, progress=bar.update if bar is not None else None)  # fmt: skip
+    except ParseError as exc:  # a file plainly in another format: say how to score it
+        more = hint(job.path, "openloris")
+        if not more:
+            raise
+        more += "" if job.kind == "pair" else ", and give its ground truth with --gt FILE (evaluate_pairs in Python)"
+        raise ParseError(exc.path, exc.line, f"{exc.reason}{more}") from None
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _openloris(job: Job, progress: bool) -> FileErrors | None:
+    assert job.data is not None
+    spec = job.spec
+    algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
+    result = _read_result(job, progress)  # the estimate's repeated poses: by the spec's rule
+    if job.scenes is not None and result.scene not in job.scenes:
+        return None
+    gt = load_groundtruth(result.scene, job.data, GT_DROP)
+    moved = _moved(job.data, result.scene, GT_DROP, result.frame, spec.official_interpolation,
+                   _stamp(job.data.groundtruth(result.scene)))  # fmt: skip
+    return compute_errors(
+        result, gt, spec, algorithm=algorithm, file=rel, suite=suite, trial=trial, in_frame=moved,
+        other_spans=partial(groundtruth_spans, job.data, GT_DROP), release=result.sequences.pop,
+    )  # fmt: skip
+
+
+def _pair(job: Job) -> FileErrors:
+    src = job.source
+    assert src is not None
+    algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
+    if job.root is None:  # a file given alone: its name says which estimate it is
+        algorithm = job.path.stem
+    if src.label_topic and src.topic:
+        algorithm = src.topic
+    if "openloris" in (src.fmt, src.gt_fmt):  # every seq: block with its own number, as the native route
+        return _openloris_pair(job, algorithm, rel, suite, trial)
+    rule = job.spec.repeated
+    gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, rule)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf, repeated=rule,
+                              repair_stamps=job.spec.repair_stamps)  # fmt: skip
+    check_stamp_units(est, gt, str(job.path))  # seconds against pose indices or nanoseconds: an error
+    span = window_spans({1: gt}, job.spec)
+    gts = {1: gt}
+    del gt  # held by gts alone: let go once matched
+    return evaluate_sessions(
+        gts, {1: est}, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite,
+        trial=trial, notes=[str(w.message) for w in caught], groundtruth_spans=span, release_groundtruth=gts.pop,
+    )  # fmt: skip
+
+
+NATIVE = "score the result file as OpenLORIS files are scored: lorisnb evaluate FILE --data DIR (evaluate in Python)"
+
+
+def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) -> FileErrors:
+    """A pair with an OpenLORIS file on either side, scored as the native route scores it: every
+    ``seq:`` block with its own number against the same-numbered block of an OpenLORIS ground
+    truth moved to the estimate's declared frame (:func:`compute_errors`); a plain file on the
+    other side only where one trajectory and one frame make the pairing certain, else refused."""
+    src = job.source
+    assert src is not None
+    if src.fmt == src.gt_fmt == "openloris":
+        result = _read_result(job)
+        gt_file = read_groundtruth_file(src.groundtruth, GT_DROP)
+        return compute_errors(result, gt_file, job.spec, algorithm=algorithm, file=rel, suite=suite, trial=trial,
+                              release=result.sequences.pop)  # fmt: skip
+    if src.fmt == "openloris":  # against a plain trajectory: one block, in the ground truth's frame
+        result = _read_result(job)
+        seqs = sorted(result.sequences)
+        if len(seqs) != 1:
+            raise ValidationError(
+                f"{job.path}: {len(seqs)} sequences (seq: {', '.join(map(str, seqs))}) against one {src.gt_fmt} "
+                f"ground-truth trajectory ({src.groundtruth}), which has no seq: blocks to pair them with; give the "
+                f"OpenLORIS ground truth (--gt-format openloris), or {NATIVE}"
+            )
+        if result.frame != "base_link":
+            raise ValidationError(
+                f"{job.path}: poses of frame {result.frame} (its frame: header); a {src.gt_fmt} ground truth names "
+                f"no frame, so it cannot be moved there: give the OpenLORIS ground truth (--gt-format openloris; moved "
+                f"with the robot's extrinsics), or {NATIVE}; a ground truth already in {result.frame}: write the "
+                f"estimate in {src.gt_fmt} too"
+            )
+        est, notes = {seqs[0]: result.sequences[seqs[0]]}, list(result.warnings)
+        gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, job.spec.repeated)
+        gts = {seqs[0]: gt}
+    else:  # a plain estimate against an OpenLORIS ground truth: one block
+        gt_file = read_groundtruth_file(src.groundtruth, GT_DROP)
+        seqs = sorted(gt_file.sequences)
+        if len(seqs) != 1:
+            raise ValidationError(
+                f"{job.path}: one {src.fmt} trajectory against {len(seqs)} ground-truth sequences (seq: "
+                f"{', '.join(map(str, seqs))} in {src.groundtruth}); a {src.fmt} file names no sequence: write the "
+                f"estimate as an OpenLORIS result file (scene:, frame: and seq: N blocks) and {NATIVE}, or give one "
+                "sequence's ground truth"
+            )
+        gts = dict(gt_file.sequences)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", LorisWarning)
+            est = {seqs[0]: read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf,
+                                            repeated=job.spec.repeated)}  # fmt: skip
+        notes = [str(w.message) for w in caught]
+    check_stamp_units(est[seqs[0]], gts[seqs[0]], str(job.path))
+    return evaluate_sessions(
+        gts, est, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite, trial=trial,
+        notes=notes, groundtruth_spans=window_spans(gts, job.spec), release_groundtruth=gts.pop,
+    )  # fmt: skip
+
+
+def _manifest(job: Job) -> FileErrors:
+    m = job.manifest
+    assert m is not None
+    algorithm, _, suite, trial = labels(job.path / "x", job.root, job.trials_by)
+    sessions = [s for s in m.sessions if s.scene == job.scene]
+    gts: dict[int, Trajectory] = {}
+    for s in sessions:  # a handful of sessions
+        if not s.groundtruth.exists():
+            raise ParseError(
+                s.groundtruth, None, f"ground truth of session {s.name!r} not found ({m.path}: root and groundtruth)"
+            )
+        gts[s.seq] = groundtruth_of(s.groundtruth, s.groundtruth_format, None, m.groundtruth_topic, m.groundtruth_tf,
+                                    job.spec.repeated)  # fmt: skip
+    ests: dict[int, Trajectory] = {}
+    notes: list[str] = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        for s in sessions:
+            path = job.path / s.estimate
+            if path.exists():
+                ests[s.seq] = read_trajectory(path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf,
+                                              repeated=job.spec.repeated, repair_stamps=job.spec.repair_stamps)  # fmt: skip
+                check_stamp_units(ests[s.seq], gts[s.seq], str(path))
+    notes += [str(w.message) for w in caught]
+    spans = window_spans(gts, job.spec)
+    errors = None
+    if ests:
+        errors = evaluate_sessions(
+            gts, ests, job.spec, path=job.path, algorithm=algorithm, scene=job.scene, suite=suite, trial=trial,
+            notes=notes, groundtruth_spans=spans, sources={s.seq: str(job.path / s.estimate) for s in sessions},
+        )  # fmt: skip
+    absent = [s for s in sessions if s.seq not in ests]
+    if not absent:
+        assert errors is not None
+        return errors
+    # a declared session without its estimate: a row scored as the paper scores missing output, never dropped
+    note = missing_note(job.path, algorithm, [(s.name, s.estimate) for s in absent], [s.estimate for s in sessions])
+    out = with_missing(
+        errors, gts, [s.seq for s in absent], path=job.path, algorithm=algorithm, scene=job.scene, suite=suite,
+        trial=trial, lifelong=job.spec.lifelong_for(len(sessions)), note=note,
+    )  # fmt: skip
+    out.groundtruth_spans = spans
+    out.sequences = [  # a missing session's duration is its ground truth's time as the spec evaluates it
+        replace(e, gt_start=spans[e.seq][0], gt_end=spans[e.seq][1]) if e.matched == 0 and e.seq in spans else e
+        for e in out.sequences
+    ]
+    return out

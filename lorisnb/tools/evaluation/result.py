@@ -1,0 +1,194 @@
+"""What an evaluation returns: the errors of every input evaluated, the failures, and the spec
+they were computed under (:class:`~lorisnb.core.spec.evalspec.EvalSpec`), whose thresholds are the
+defaults of every table."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from lorisnb.core.lifelong.aggregate import aggregate_scenes, spans_table
+from lorisnb.core.lifelong.scoring import pose_table, score_rows
+from lorisnb.core.metrics.relative import RPG_FRACTIONS
+from lorisnb.core.pipeline.model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, STAT_COLUMNS, Eps, FileErrors
+from lorisnb.core.spec.evalspec import EvalSpec, make_spec
+from lorisnb.core.trajectory.blocks import threads
+from lorisnb.core.trajectory.frames import SCENES
+from lorisnb.io.datasets.paths import DataPaths, scene_spans
+from lorisnb.tools.evaluation.pool import default_jobs
+from lorisnb.tools.evaluation.status import exit_status, skipped_only, unscored
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+
+@dataclass
+class Failure:
+    """An input that could not be evaluated, with the reason (file, line, what was expected)."""
+
+    path: Path
+    error: str
+    kind: str
+
+
+@dataclass
+class Evaluation:
+    """What :func:`lorisnb.evaluate`, :func:`lorisnb.evaluate_pairs` and
+    :func:`lorisnb.evaluate_manifest` return: the errors of every input evaluated, the failures,
+    and the spec (``spec``) whose thresholds and RPE step the tables use unless given."""
+
+    errors: list[FileErrors]
+    failures: list[Failure]
+    root: Path | None = None
+    skipped: list[Failure] = field(default_factory=list)
+    data: DataPaths | None = None
+    spec: EvalSpec = field(default_factory=EvalSpec)
+    kind: str = "openloris"  # openloris, pair or manifest
+    notes: list[str] = field(default_factory=list)  # one-line notes on the options (harmless ones)
+
+    @property
+    def conventions(self) -> str:
+        """What was used, in words (the command line's ``conventions:`` line)."""
+        return self.describe()
+
+    def describe(self, swept: str | None = None) -> str:
+        """:attr:`conventions`, with a sweep's grid in words (``swept``) for the spec's thresholds."""
+        moved = "OpenLORIS: ground truth moved to each file's sensor frame; " if self.kind == "openloris" else ""
+        return moved + self.spec.describe(swept)
+
+    @property
+    def thresholds(self) -> dict[str, Any]:
+        """The default thresholds of the tables (the spec's)."""
+        return {k: getattr(self.spec, k) for k in ("eps", "phi", "delta", "tau")}
+
+    def sequences(
+        self, eps: Eps | None = None, phi: float | None = None, delta: float | None = None, tau: float | None = None,
+        **kw: Any,
+    ) -> pd.DataFrame:  # fmt: skip
+        """Per-sequence table at one setting (see :func:`lorisnb.core.lifelong.scoring.score`); thresholds and
+        the RPE step not given are the spec's. A ``spec`` column holds the spec's exact text."""
+        import pandas as pd
+
+        s = self.spec
+        kw = self._rpe(kw)
+        table = pd.DataFrame(self.sequence_rows(eps, phi, delta, tau, **kw), columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS
+                             + STAT_COLUMNS + ["spec"])  # fmt: skip
+        if s.relation is not None and len(table):  # evo's -r: statistics of that pose relation
+            from lorisnb.core.metrics.relation_table import relation_columns
+
+            rel = relation_columns(self.errors, s.relation, **{k: v for k, v in kw.items() if k.startswith("rpe_")})
+            spec = table.pop("spec")
+            table = pd.concat([table, rel.set_index(table.index)], axis=1)
+            table["spec"] = spec
+        return table
+
+    def sequence_rows(
+        self, eps: Eps | None = None, phi: float | None = None, delta: float | None = None, tau: float | None = None,
+        **kw: Any,
+    ) -> list[dict[str, Any]]:  # fmt: skip
+        """:meth:`sequences` as rows (dicts), without pandas and without evo's ``relation`` columns."""
+        s = self.spec
+        kw = self._rpe(kw)
+        with threads(default_jobs()):  # a long sequence's statistics side by side (lorisnb.core.trajectory.blocks)
+            rows = score_rows(
+                self.errors, s.eps if eps is None else eps, s.phi if phi is None else phi,
+                s.delta if delta is None else delta, s.tau if tau is None else tau, **kw,
+            )  # fmt: skip
+        changed = {k: v for k, v in kw.items() if k in s.rpe_options() and v != getattr(s, k)}
+        spec = (make_spec(s, **changed) if changed else s).canonical(thresholds=False)  # the RPE asked for
+        for row in rows:
+            row["spec"] = spec
+        return rows
+
+    def _rpe(self, kw: dict[str, Any]) -> dict[str, Any]:
+        """The RPE settings of a table: the spec's, with those given checked and normalized by the
+        spec's own rules (:func:`lorisnb.core.spec.evalspec.make_spec`), so a value is read as in
+        ``evaluate(..., rpe_unit=...)`` and on the command line (``rpe_unit='d'`` is degrees) and
+        refused with the same message."""
+        given = {k: kw[k] for k in self.spec.rpe_options() if k in kw}
+        checked = make_spec(self.spec, **given).rpe_options() if given else self.spec.rpe_options()
+        return {**kw, **checked}
+
+    def poses(self, eps: Eps | None = None, phi: float | None = None) -> pd.DataFrame:
+        """Per-pose table (see :func:`lorisnb.core.lifelong.scoring.pose_table`)."""
+        return pose_table(self.errors, self.spec.eps if eps is None else eps, self.spec.phi if phi is None else phi)
+
+    def scenes(
+        self, eps: Eps | None = None, phi: float | None = None, delta: float | None = None, tau: float | None = None
+    ) -> pd.DataFrame:
+        """Per algorithm and scene, as in the paper's figures (see
+        :func:`lorisnb.core.lifelong.aggregate.aggregate_scenes`)."""
+        return aggregate_scenes(self.sequences(eps, phi, delta, tau), self.durations())
+
+    def relative(
+        self, fractions: tuple[float, ...] = RPG_FRACTIONS, lengths: list[float] | None = None
+    ) -> pd.DataFrame:
+        """rpg_trajectory_evaluation's relative error per sequence and sub-trajectory length: fractions
+        of the whole ground truth's length, or rpg's preset ``lengths`` in metres (see
+        :func:`lorisnb.core.metrics.relative.relative_table`)."""
+        from lorisnb.core.metrics.relative import relative_table
+
+        return relative_table(self.errors, fractions, lengths)
+
+    @property
+    def algorithms(self) -> list[str]:
+        return sorted({f.algorithm for f in self.errors})
+
+    def durations(self) -> pd.DataFrame:
+        """Ground-truth durations of every sequence of the scenes evaluated, seconds
+        (:func:`lorisnb.core.lifelong.aggregate.spans_table` of :meth:`spans`)."""
+        return spans_table(self.spans())
+
+    def spans(self) -> dict[str, dict[int, tuple[float, float]]]:
+        """First and last ground-truth stamp (seconds) of every sequence of the scenes evaluated:
+        scene -> sequence -> span. A pair's or a manifest's scene has the spans of its own ground
+        truth as read while evaluating (none where no input of it was evaluated), never the data
+        root's scene of the same name; an OpenLORIS scene's come from the data root if needed."""
+        known: dict[str, dict[int, tuple[float, float]]] = {}
+        for f in self.errors:
+            if f.groundtruth_spans:
+                known.setdefault(f.scene, {}).update(f.groundtruth_spans)
+        scenes = list(dict.fromkeys(f.scene for f in self.errors))
+        if set(known) == set(scenes) or self.kind != "openloris":  # no ground truth read again
+            return {s: dict(sorted(known.get(s, {}).items())) for s in scenes}
+        return scene_spans(sorted(scenes, key=SCENES.index), self.data)
+
+    @property
+    def warnings(self) -> list[str]:
+        return [w for f in self.errors for w in f.warnings]
+
+    @property
+    def unscored(self) -> list[Failure]:
+        """Inputs read but not scored (no pose matched; manifest sessions without an estimate),
+        each with a one-line reason: see :func:`lorisnb.tools.evaluation.status.unscored`."""
+        return unscored(self)
+
+    def exit_status(self) -> int:
+        """0 if every input was read and matched the ground truth, else 1: every command's exit
+        status (:mod:`lorisnb.tools.evaluation.status`)."""
+        return exit_status(self)
+
+    def failures_table(self) -> pd.DataFrame:
+        """Failed, skipped and unscored inputs (:attr:`unscored`) with the reason, one row each."""
+        unscored = self.unscored
+        rows = [dict(file=str(f.path), status="failed", kind=f.kind, error=f.error) for f in self.failures]
+        rows += [
+            dict(file=str(f.path), status="skipped", kind=f.kind, error=f.error) for f in skipped_only(self, unscored)
+        ]
+        rows += [dict(file=str(f.path), status="not scored", kind=f.kind, error=f.error) for f in unscored]
+        import pandas as pd
+
+        return pd.DataFrame(rows, columns=["file", "status", "kind", "error"])
+
+    def __repr__(self) -> str:
+        def count(n: int, word: str) -> str:
+            return f"{n} {word}{'' if n == 1 else 's'}"
+
+        scenes = len({f.scene for f in self.errors})
+        parts = [f"{count(len(self.errors), 'input')} ({count(len(self.algorithms), 'algorithm')}, "
+                 f"{count(scenes, 'scene')})"]  # fmt: skip
+        unscored = self.unscored
+        parts += [f"{n} {w}" for n, w in ((len(self.failures), "failed"), (len(unscored), "unscored"),
+                                          (len(skipped_only(self, unscored)), "skipped")) if n]  # fmt: skip
+        return f"<Evaluation: {', '.join(parts)}; {self.spec!r}>"

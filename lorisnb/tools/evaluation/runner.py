@@ -1,0 +1,361 @@
+"""Evaluation of every input kind through one runner: OpenLORIS result files and folders
+(:func:`evaluate`), plain estimate / ground-truth pairs (:func:`evaluate_pairs`: TUM, EuRoC,
+KITTI, ROS bags, OpenLORIS) and multi-session datasets described by a manifest
+(:func:`evaluate_manifest`). Each builds the one evaluation spec
+(:func:`lorisnb.core.spec.evalspec.make_spec`) from its keywords, refuses options that cannot apply to its
+inputs, turns its inputs into jobs (:mod:`lorisnb.tools.evaluation.jobs`) and runs them here, on all local
+cores or on any executor (a Dask cluster's), collecting failures instead of stopping.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Iterable
+from concurrent.futures import Executor
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from lorisnb.core.alignment.index_pairs import by_index
+from lorisnb.core.pipeline.model import FileErrors
+from lorisnb.core.spec import validate
+from lorisnb.core.spec.evalspec import EvalSpec, make_spec, preset_over
+from lorisnb.core.stats.trials import check_duplicates, check_trials_by, compile_trials_by
+from lorisnb.errors import FailedInputsWarning, LorisWarning, ParseError, ValidationError
+from lorisnb.io.datasets.manifest import SUFFIX, Manifest, openloris_preset_refusal, read_manifest
+from lorisnb.io.datasets.paths import DataPaths, DataRoot, find_data
+from lorisnb.io.readers.openloris import declared_scene
+from lorisnb.io.readers.options import check_reading
+from lorisnb.io.readers.plain import TRAJECTORY_FORMATS
+from lorisnb.io.readers.registry import FORMATS
+from lorisnb.tools.evaluation.inputs import (
+    algorithm_folders,
+    as_paths,
+    labels,
+    names,
+    result_files,
+    scene_label,
+    without_groundtruth,
+)
+from lorisnb.tools.evaluation.jobs import BIG_FILE_BYTES, Job, PairSource, run_job
+from lorisnb.tools.evaluation.pool import default_jobs, run_tasks, size_of
+from lorisnb.tools.evaluation.result import Evaluation, Failure
+
+PathArg = str | os.PathLike[str]
+__all__ = ["BIG_FILE_BYTES", "Evaluation", "Failure", "evaluate", "evaluate_manifest", "evaluate_pairs"]
+
+
+def _spec(spec: EvalSpec | str | None, conventions: EvalSpec | str | None, options: dict[str, Any]) -> EvalSpec:
+    if spec is not None and conventions is not None:
+        raise ValidationError("spec and conventions: give one (conventions is the older name of spec)")
+    return make_spec(spec if spec is not None else conventions, **options)
+
+
+def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, executor: Executor | None,
+         progress: bool, root: Path | None = None, data: Any = None, notes: list[str] | None = None) -> Evaluation:  # fmt: skip
+    """Run the jobs here, in a local pool or on ``executor``; results in the order of the jobs."""
+    n = default_jobs() if n_jobs is None else int(validate.positive("jobs", n_jobs, "processes", integer=True))
+    if executor is not None and not isinstance(executor, Executor):
+        raise ValidationError(f"executor: expected a concurrent.futures.Executor, got {type(executor).__name__}")
+    done: list[FileErrors] = []
+    failed: list[Failure] = []
+    skipped: list[Failure] = []
+    sizes = [size_of(j.path) if j.path.is_file() else 1 for j in jobs]
+    unit = "file" if kind != "manifest" else "session set"
+    for status, value in run_tasks(run_job, jobs, sizes, n, executor, progress, desc="evaluating", unit=unit):
+        if isinstance(value, FileErrors):
+            done.append(value)
+        elif isinstance(value, Failure):
+            (failed if status == "failed" else skipped).append(value)
+    check_duplicates([(str(f.path), (f.suite, f.algorithm, f.scene, f.trial), tuple(e.seq for e in f.sequences))
+                      for f in done])  # fmt: skip
+    for w in dict.fromkeys(w for f in done for w in f.warnings):
+        warnings.warn(w, LorisWarning, stacklevel=3)
+    if failed:  # tables without them would look complete: a notebook says so at the call
+        more = f" (and {len(failed) - 1} more)" if len(failed) > 1 else ""
+        warnings.warn(f"{len(failed)} of {len(jobs)} inputs could not be evaluated and are in no table; "
+                      f"Evaluation.failures lists them with the reason, exit_status() is 1: "
+                      f"{failed[0].error}{more}", FailedInputsWarning, stacklevel=3)  # fmt: skip
+    return Evaluation(done, failed, root, skipped, data, spec=spec, kind=kind, notes=list(notes or []))
+
+
+def _check_trials(items: list[tuple[Path, Path | None]], trials_by: str | None) -> None:
+    """A ``trials_by`` that matches none of the inputs' paths is an error (:func:`check_trials_by`)."""
+    check_trials_by([labels(p, r, trials_by)[1] if r else "/".join(p.parts[-3:]) for p, r in items], trials_by)
+
+
+def _filtered(
+    items: list[tuple[Path, Path | None]], algorithms: Any, scenes: Any, trials_by: str | None
+) -> tuple[list[tuple[Path, Path | None]], frozenset[str] | None]:
+    """The inputs the ``algorithms`` and ``scenes`` filters keep, and the scene set the jobs check.
+    A filter value naming no algorithm folder (or no scene a file declares in its ``scene:``
+    header) is refused by :func:`lorisnb.core.spec.validate.present`, listing what the inputs hold."""
+    if algorithms is not None:
+        have = [labels(p, r, trials_by)[0] for p, r in items]
+        wanted = set(validate.present("algorithms", names("algorithms", algorithms), have))
+        items = [item for item, alg in zip(items, have, strict=True) if alg in wanted]
+    if scenes is None:
+        return items, None
+    declared = [declared_scene(p) for p, _ in items]
+    scene_set = frozenset(validate.present("scenes", names("scenes", scenes), [s for s in declared if s]))
+    # a file whose header names another scene is not read; one whose header is unclear is (and says why)
+    return [item for item, s in zip(items, declared, strict=True) if s is None or s in scene_set], scene_set
+
+
+def check_filters(
+    paths: PathArg | Iterable[PathArg], algorithms: Any = None, scenes: Any = None, trials_by: str | None = None
+) -> None:
+    """Refuse an ``algorithms`` or ``scenes`` value that names nothing in ``paths`` (as
+    :func:`evaluate` does), before anything is evaluated (``lorisnb report -p scenes``)."""
+    if algorithms is not None or scenes is not None:
+        _filtered(result_files(as_paths(paths)), algorithms, scenes, trials_by)
+
+
+def evaluate(
+    paths: PathArg | Iterable[PathArg],
+    spec: EvalSpec | str | None = None,
+    *,
+    data_root: DataRoot | DataPaths | None = None,
+    algorithms: Iterable[str] | None = None,
+    scenes: Iterable[str] | None = None,
+    trials_by: str | None = None,
+    progress: bool = False,
+    jobs: int | None = None,
+    executor: Executor | None = None,
+    conventions: EvalSpec | str | None = None,
+    **options: Any,
+) -> Evaluation:
+    """Evaluate OpenLORIS result files and folders. A file that fails (bad line, unknown frame,
+    ...) is recorded in ``failures`` with its reason and the rest go on; a file whose scene has no
+    ground truth in the data (office, in the bundled data) is recorded in ``skipped``.
+
+    Args:
+        paths: files, or folders walked as ``<algorithm>/*.txt`` (see :func:`lorisnb.tools.evaluation.inputs.result_files`).
+        spec: the evaluation spec or a preset name (default ``openloris``; ``conventions``, its
+            older name, as :func:`evaluate_pairs` and :func:`evaluate_manifest` take it); ``options`` are spec
+            options over it (``mode``, ``scale``, ``official_interpolation``, ``max_gap``,
+            ``remove_repeated``, ``repair_stamps``, ``eps``, ``phi``, ...; see
+            :func:`lorisnb.core.spec.evalspec.make_spec`). Options that cannot apply to OpenLORIS files
+            (``transform``) are refused.
+        data_root: where the ground truth is (see :func:`lorisnb.io.find_data`).
+        algorithms, scenes: evaluate only these (None: all).
+        trials_by: a regular expression whose first group is the trial number in a file's path
+            (default: the tokens of :mod:`lorisnb.core.stats.trials`: ``_trial3``, ``run_2/``, ...).
+        progress: show a progress bar over files (tqdm; notebook-aware).
+        jobs: processes evaluating files in parallel; default all local cores, 1 for one process.
+            Small inputs run in this process (see :mod:`lorisnb.tools.evaluation.pool`).
+        executor: any ``concurrent.futures.Executor`` to run the files on instead, for example a
+            Dask cluster's (``distributed.Client(address).get_executor()``). Results are the same
+            and in the same order as one process gives.
+    """
+    the_spec = _spec(spec, conventions, options)
+    notes = the_spec.refuse_inapplicable("openloris")
+    compile_trials_by(trials_by)
+    paths = as_paths(paths)  # once: a generator is read once
+    items = result_files(paths)
+    _check_trials(items, trials_by)
+    data = find_data(data_root)  # no data at all is an error for the whole call, not per file
+    items, scene_set = _filtered(items, algorithms, scenes, trials_by)
+    template = Job(kind="openloris", path=Path(), root=None, spec=the_spec, trials_by=trials_by, data=data,
+                   scenes=scene_set)  # fmt: skip
+    work = [replace(template, path=p, root=r) for p, r in items]
+    roots = as_paths(paths)
+    root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
+    return _run(work, the_spec, "openloris", n_jobs=jobs, executor=executor, progress=progress, root=root, data=data,
+                notes=notes)  # fmt: skip
+
+
+#: The spec field each alias of :func:`lorisnb.core.spec.evalspec.make_spec` sets.
+ALIAS_OF = {"scale": "align", "lifelong": "mode", "keep_repeated": "repeated", "remove_repeated": "repeated"}
+
+
+def refuse_over_manifest(
+    spec: EvalSpec, manifest: Manifest, given: Iterable[str], kind: str = "manifest", surface: str = "python"
+) -> list[str]:
+    """:meth:`~lorisnb.core.spec.evalspec.EvalSpec.refuse_inapplicable` of a spec built over a manifest's,
+    saying which refused options the manifest set (its ``[conventions]``), not the call (``given``:
+    the options of the call or the command line): ``max_diff`` from the manifest with
+    ``--association interpolate`` is refused naming the manifest, on every path alike."""
+    theirs = (spec.explicit & manifest.spec.explicit) - {ALIAS_OF.get(k, k) for k in given}
+    return spec.refuse_inapplicable(kind, surface=surface, set_by=(theirs, f"the manifest {manifest.path}"))
+
+
+def _format(name: str, value: Any) -> str:
+    return validate.choice(name, value, TRAJECTORY_FORMATS)
+
+
+def pair_source(
+    groundtruth: PathArg, fmt: str = "tum", gt_fmt: str | None = None, scene: str | None = None, *,
+    est_times: PathArg | None = None, gt_times: PathArg | None = None, topic: str | None = None,
+    gt_topic: str | None = None, tf: str | None = None, gt_tf: str | None = None,
+) -> PairSource:  # fmt: skip
+    """How a pair's files are read, checked: each reading option must apply to its format (times
+    files to KITTI, topics and TF chains to bags), or it is refused."""
+    fmt = _format("format", fmt)
+    gt_fmt = _format("gt_format", gt_fmt if gt_fmt is not None else fmt)
+    check_reading(
+        {"est_times": est_times, "gt_times": gt_times, "topic": topic, "tf": tf, "gt_topic": gt_topic, "gt_tf": gt_tf},
+        fmt, gt_fmt, name=lambda k: f"{k} (command line --{k.replace('_', '-')})",
+    )  # fmt: skip
+    if scene is not None and (not isinstance(scene, str) or not scene.strip()):  # a label, never str() of a number
+        raise ValidationError(f"scene={scene!r}: expected a scene name (a non-empty string)")
+    if scene is not None and fmt == "openloris":
+        raise ValidationError("scene (command line --scene): OpenLORIS result files name their scene in their "
+                              "header (scene: ...), which is used")  # fmt: skip
+    gt_paths = as_paths(groundtruth)
+    if len(gt_paths) != 1:
+        raise ValidationError(f"groundtruth: {len(gt_paths)} paths given; expected one ground-truth file")
+    gt_path = gt_paths[0]
+    return PairSource(
+        groundtruth=gt_path, fmt=fmt, gt_fmt=gt_fmt, scene=scene or scene_label(gt_path),
+        est_times=None if est_times is None else Path(est_times), gt_times=None if gt_times is None else Path(gt_times),
+        topic=topic, gt_topic=gt_topic, tf=tf, gt_tf=gt_tf,
+    )  # fmt: skip
+
+
+def pair_kind(fmt: str) -> str:
+    """The input kind whose options apply to pairs of estimates in ``fmt``: OpenLORIS result files
+    are scored as the native route scores them (their frames, every sequence), other files as pairs."""
+    return "openloris" if fmt == "openloris" else "pair"
+
+
+def _pair_suffixes(fmt: str) -> tuple[str, ...]:
+    return (".bag", ".mcap", ".db3") if fmt == "bag" else tuple(dict.fromkeys((SUFFIX[fmt], ".txt", ".csv")))
+
+
+def _refuse_reading(spec: EvalSpec, fmt: str, kind: str) -> None:
+    """Spec options that only OpenLORIS' reader honours, refused for other formats (``repeated``
+    keep: every reader keeps the poses of a repeated stamp, as evo)."""
+    if fmt == "openloris":
+        return
+    for name, flag, on in (("repair_stamps", "--repair-stamps", spec.repair_stamps),):  # fmt: skip
+        if name in spec.explicit and on:
+            raise ValidationError(
+                f"{name} (command line {flag}): only OpenLORIS result files are read with this rule; the {kind}'s "
+                f"estimates are {fmt} files"
+            )
+
+
+def evaluate_pairs(
+    estimates: PathArg | Iterable[PathArg],
+    groundtruth: PathArg,
+    spec: EvalSpec | str | None = None,
+    *,
+    fmt: str = "tum",
+    gt_fmt: str | None = None,
+    conventions: EvalSpec | str | None = None,
+    scene: str | None = None,
+    est_times: PathArg | None = None,
+    gt_times: PathArg | None = None,
+    topic: str | None = None,
+    gt_topic: str | None = None,
+    tf: str | None = None,
+    gt_tf: str | None = None,
+    trials_by: str | None = None,
+    progress: bool = False,
+    jobs: int | None = None,
+    executor: Executor | None = None,
+    **options: Any,
+) -> Evaluation:
+    """Score estimate files against one ground truth with every metric of lorisnb.
+
+    Args:
+        estimates: files, or folders of files (one sub-folder per algorithm).
+        groundtruth: the ground-truth file (a ROS 2 bag: its folder).
+        spec, conventions: the evaluation spec or a preset name (``tum``, ``rpg``, ``vio``,
+            ``openloris``; default lorisnb's: interpolation, SE(3)); ``options`` are spec options
+            over it (``association``, ``max_diff``, ``align``, ``transform``, ``eps``, ...).
+        fmt, gt_fmt: formats of the estimates and of the ground truth (``tum``, ``euroc``,
+            ``kitti``, ``bag``, ``openloris``); ``gt_fmt`` defaults to ``fmt``.
+        scene: the scene label of the rows (default: the ground-truth file's name).
+        est_times, gt_times: times files for KITTI poses (one stamp per line).
+        topic, gt_topic, tf, gt_tf: what to read from bags (see :func:`lorisnb.io.readers.bags.read_bag`);
+            ``topic`` may name several topics (or evo's TF ids) separated by commas: one row each, its
+            ``algorithm`` the topic.
+        jobs, executor, progress, trials_by: as for :func:`evaluate`.
+    """
+    the_spec = _spec(spec, conventions, options)
+    src = pair_source(groundtruth, fmt, gt_fmt, scene, est_times=est_times, gt_times=gt_times, topic=topic,
+                      gt_topic=gt_topic, tf=tf, gt_tf=gt_tf)  # fmt: skip
+    notes = the_spec.refuse_inapplicable(pair_kind(src.fmt))
+    _refuse_reading(the_spec, src.fmt, "pair")
+    if src.fmt == src.gt_fmt == "kitti" and src.est_times is None and src.gt_times is None:
+        the_spec = by_index(the_spec)  # stamps are pose indices: pose i with pose i, on every preset
+    compile_trials_by(trials_by)
+    if not src.groundtruth.exists():
+        raise ParseError(src.groundtruth, None, "ground truth not found; expected a file (or a ROS 2 bag folder)")
+    if src.groundtruth.is_dir() and src.gt_fmt != "bag":  # refused once, before any estimate is read
+        raise ParseError(src.groundtruth, None, f"is a folder; expected the ground truth as a {FORMATS[src.gt_fmt].title} "
+                         "(a folder is a ground truth only as a ROS 2 bag, --gt-format bag)")  # fmt: skip
+    items = result_files(estimates, _pair_suffixes(src.fmt))
+    if "bag" not in (src.fmt, src.gt_fmt):  # (one bag may hold both, on other topics)
+        items = without_groundtruth(items, src.groundtruth)
+    _check_trials(items, trials_by)
+    topics = [t.strip() for t in src.topic.split(",")] if src.topic and "," in src.topic else [src.topic]
+    if len(topics) > 1 and not all(topics):
+        raise ValidationError(f"topic {src.topic!r}: expected topics separated by commas, none empty")
+    sources = [src] if len(topics) == 1 else [replace(src, topic=t, label_topic=True) for t in topics]
+    work = [  # several topics of one bag: one row each, labelled with its topic
+        Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=one)
+        for p, r in items
+        for one in sources
+    ]
+    return _run(work, the_spec, "pair", n_jobs=jobs, executor=executor, progress=progress, notes=notes)
+
+
+def evaluate_manifest(
+    manifest: Manifest | PathArg,
+    results: PathArg | Iterable[PathArg],
+    spec: EvalSpec | str | None = None,
+    *,
+    conventions: EvalSpec | str | None = None,
+    lifelong: bool | None = None,
+    trials_by: str | None = None,
+    progress: bool = False,
+    jobs: int | None = None,
+    executor: Executor | None = None,
+    data_root: DataRoot | DataPaths | None = None,
+    **options: Any,
+) -> Evaluation:
+    """Score the results of a multi-session dataset: ``results`` holds one folder per algorithm
+    with one estimate file per session (named as the manifest says), or is one such folder.
+    The manifest's spec (its ``[conventions]``, ``lifelong``, ``transform``, thresholds) is the
+    default; a preset name (``spec``/``conventions``) replaces its conventions and keeps the rest, a
+    spec object is used as it is, and ``lifelong`` and ``options`` go over either. The built-in
+    ``openloris`` manifest runs :func:`evaluate` (``data_root`` is its data)."""
+    m = manifest if isinstance(manifest, Manifest) else read_manifest(manifest)
+    if lifelong is not None:
+        options["lifelong"] = lifelong
+    if m.openloris:
+        if spec is not None or conventions is not None:
+            given = spec if spec is not None else conventions
+            raise ValidationError(openloris_preset_refusal("spec" if spec is not None else "conventions", given))
+        refuse_over_manifest(make_spec(m.spec, **options), m, options, "openloris")
+        return evaluate(results, m.spec, data_root=data_root, trials_by=trials_by, progress=progress, jobs=jobs,
+                        executor=executor, **options)  # fmt: skip
+    if data_root is not None:
+        raise ValidationError("data_root: a manifest names its own ground-truth files (root and groundtruth)")
+    if spec is not None and conventions is not None:
+        _spec(spec, conventions, {})  # refused: give one
+    given = spec if spec is not None else conventions
+    base = m.spec if given is None else preset_over(m.spec, given)
+    the_spec = make_spec(base, **options)
+    notes = refuse_over_manifest(the_spec, m, options)
+    _refuse_reading(the_spec, m.estimate_format, "manifest")
+    if m.estimate_format == "kitti" and all(s.groundtruth_format == "kitti" for s in m.sessions):
+        the_spec = by_index(the_spec)  # a manifest gives KITTI files no times: pose i with pose i
+    compile_trials_by(trials_by)
+    for s in m.sessions:  # a missing ground truth is an error of the whole call
+        if not s.groundtruth.exists():
+            raise ParseError(
+                s.groundtruth, None, f"ground truth of session {s.name!r} not found ({m.path}: root and groundtruth)"
+            )
+    folders = algorithm_folders(results, m)
+    _check_trials([(f / "x", r) for f, r in folders], trials_by)
+    work = [
+        Job(kind="manifest", path=folder, root=root, spec=the_spec, trials_by=trials_by, manifest=m, scene=scene)
+        for folder, root in folders
+        for scene in m.scenes
+    ]
+    return _run(work, the_spec, "manifest", n_jobs=jobs, executor=executor, progress=progress, notes=notes)

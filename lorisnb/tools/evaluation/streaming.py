@@ -1,0 +1,82 @@
+"""Sweeps larger than memory, streamed to a Parquet dataset one group of files at a time."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from lorisnb.core.lifelong.scoring import OF_SPEC
+from lorisnb.core.lifelong.sweep import MAX_SWEEP_BYTES, check_sweep_size, sweep, sweep_groups
+from lorisnb.core.pipeline.model import FileErrors
+from lorisnb.core.spec.validate import flag, threshold_list
+from lorisnb.io.writers import write_parquet_parts
+
+
+def sweep_to_parquet(
+    errors: FileErrors | Iterable[FileErrors],
+    out: str | os.PathLike[str],
+    eps: Any = (np.inf,),
+    phi: Any = (np.inf,),
+    delta: Any = (1.0,),
+    tau: Any = (60.0,),
+    *,
+    relative_to: str | None = None,
+    columns: str = "all",
+    force: bool = False,
+    progress: bool = False,
+    max_bytes: float = MAX_SWEEP_BYTES,
+    on_part: Any = None,
+    rpe_delta: float = OF_SPEC,
+    rpe_unit: str = OF_SPEC,
+    **rpe: Any,
+) -> tuple[Path, int]:
+    """The table of :func:`lorisnb.core.lifelong.sweep.sweep` (same columns, same values), written to a
+    Parquet dataset partitioned by algorithm, one group of files (suite, algorithm, scene, trial)
+    at a time: memory holds one group's rows, never the whole table. Each group must fit in
+    ``max_bytes`` (refused up front, with the size it would need, otherwise).
+
+    Args:
+        rpe: ``rpe_pairs``, ``rpe_all_pairs``, ``rpe_tolerance`` (see :func:`lorisnb.core.lifelong.sweep.sweep`).
+        on_part: called with each group's table before it is written (for example to keep its
+            scene aggregate); a DataFrame it returns is written instead of the table.
+
+    Returns:
+        the dataset's path and the number of rows written.
+    """
+    progress = flag("progress", progress)
+    groups = sweep_groups(errors)
+    shape = tuple(len(threshold_list(n, v)) for n, v in (("eps", eps), ("phi", phi), ("delta", delta), ("tau", tau)))
+    for g in groups:  # every group checked before anything is written
+        check_sweep_size(g, shape, columns, max_bytes)  # type: ignore[arg-type]
+    rows = 0
+
+    def parts() -> Iterator[pd.DataFrame]:
+        nonlocal rows
+        bar = None
+        if progress:
+            from tqdm.auto import tqdm
+
+            bar = tqdm(total=len(groups), desc="sweeping", unit="group")
+        try:
+            for g in groups:
+                table = sweep(
+                    g, eps, phi, delta, tau, relative_to=relative_to, columns=columns, max_bytes=max_bytes,
+                    rpe_delta=rpe_delta, rpe_unit=rpe_unit, **rpe,
+                )  # fmt: skip
+                rows += len(table)
+                if on_part is not None:
+                    replaced = on_part(table)
+                    table = replaced if isinstance(replaced, pd.DataFrame) else table
+                yield table
+                if bar is not None:
+                    bar.update()
+        finally:
+            if bar is not None:
+                bar.close()
+
+    return write_parquet_parts(parts(), out, force=force), rows

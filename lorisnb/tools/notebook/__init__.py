@@ -1,0 +1,43 @@
+"""What the notebooks use: the one set-up call (:mod:`.start`), their parameters checked like any
+option (:mod:`.params`), the threshold explorer's widgets (:mod:`.widgets`), the grids ``quick``
+trims (:mod:`.grids`) and the indoor / outdoor tables (:mod:`.indoor_outdoor`).
+
+May import: the other tools sub-packages, :mod:`lorisnb.io`, :mod:`lorisnb.core`.
+"""
+
+from typing import TYPE_CHECKING
+
+from lorisnb._lazy import attach
+
+if TYPE_CHECKING:
+    from lorisnb.tools.notebook.start import (
+        INPUT_ERRORS_CSV,
+        RUN_MARKER,
+        Outputs,
+        Session,
+        check_notebook_parameters,
+        compact_png,
+        default_output_dir,
+        figure_png,
+        setup,
+        show_figure,
+        show_inputs,
+        warnings_table,
+    )
+
+__getattr__, __dir__ = attach(__name__)
+
+__all__ = [
+    "INPUT_ERRORS_CSV",
+    "Outputs",
+    "RUN_MARKER",
+    "Session",
+    "check_notebook_parameters",
+    "compact_png",
+    "default_output_dir",
+    "figure_png",
+    "setup",
+    "show_figure",
+    "show_inputs",
+    "warnings_table",
+]

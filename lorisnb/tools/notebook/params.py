@@ -1,0 +1,216 @@
+"""The notebooks' parameters, checked as the command line and the Python API check the same values:
+by each notebook (:func:`lorisnb.tools.notebook.start.setup`) and by the report before any notebook runs
+(:func:`check_parameters`, which also passes them on normalized: words in their case, thresholds as
+numbers, paths absolute, since a notebook runs in its own folder of the run)."""
+
+from __future__ import annotations
+
+import ast
+import io
+import tokenize
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from lorisnb.core.spec import validate
+from lorisnb.core.spec.evalspec import PRESETS, SPEC_NAMES, EvalSpec, make_spec
+from lorisnb.core.stats.inference import WEIGHTS
+from lorisnb.core.stats.trials import compile_trials_by
+from lorisnb.core.trajectory.frames import SCENES
+from lorisnb.core.trajectory.poses import RELATIVE
+from lorisnb.errors import ValidationError
+from lorisnb.io.datasets.manifest import BUILT_IN
+from lorisnb.io.readers.plain import TRAJECTORY_FORMATS
+from lorisnb.tools.evaluation.inputs import names
+from lorisnb.tools.notebook.grids import check_grid
+
+__all__ = ["check_parameters", "check_values", "evaluation_spec", "existing", "papermill_parameters"]
+
+
+#: Path parameters: that must exist (a folder: ``True``), passed on absolute (a built-in manifest
+#: by its name).
+PATHS = {"results_dir": True, "data_root": True, "ordslam_dir": True, "path": False, "groundtruth": False,
+         "manifest": False}  # fmt: skip
+#: Notebook parameters checked with the same rules as the command line and the Python API.
+_CHECKS: dict[str, Any] = {
+    **{name: (lambda v, name=name: make_spec(None, surface="notebook", **{name: v})) for name in SPEC_NAMES},
+    "eps_grid": lambda v: validate.threshold_list("eps", v),
+    "phi_grid": lambda v: validate.threshold_list("phi", v),
+    "delta_grid": lambda v: validate.threshold_list("delta", v),
+    "tau_grid": lambda v: validate.threshold_list("tau", v),
+    "trials_by": lambda v: compile_trials_by(str(v)),
+    "relative_grid": lambda v: check_grid("relative_grid", v),
+    "seed": validate.seed,
+    "quick": lambda v: validate.flag("quick", v),
+    "simulated": lambda v: validate.flag("simulated", v),
+    "algorithms": lambda v: names("algorithms", v),
+    "scenes": lambda v: names("scenes", v),
+    "all_files": lambda v: validate.flag("all_files", v),
+    "eps_fraction": lambda v: validate.fraction("eps_fraction", v),
+    "rpe_metres": lambda v: validate.positive("rpe_metres", v, "metres"),
+    "ordslam_fps": lambda v: validate.positive("ordslam_fps", v, "frames per second"),
+    "ordslam_max_gap": lambda v: validate.positive("ordslam_max_gap", v, "seconds"),
+    "sim_eps": lambda v: validate.threshold("eps", v),
+    "sim_trials": lambda v: validate.positive("sim_trials", v, "trials", integer=True),
+}
+#: Parameters that take a list (one name or number stands for a list of one).
+LISTS = ("algorithms", "scenes", "eps_grid", "phi_grid", "delta_grid", "tau_grid", "relative_grid")
+#: Parameters that only apply together with another one (the notebook ignores them without it).
+NEEDS = {"fmt": "groundtruth", "gt_fmt": "groundtruth", "ordslam_fps": "ordslam_dir",
+         "ordslam_max_gap": "ordslam_dir"}  # fmt: skip
+#: Parameters of the leaderboard checked and normalized by the validators of ``compare`` and ``diff``.
+_VALUES: dict[str, Any] = {
+    "metric": lambda v: validate.choice("metric", v, WEIGHTS),
+    "alpha": lambda v: validate.probability("alpha", v),
+    "level": lambda v: validate.probability("level", v),
+    "seed": lambda v: validate.seed(v, "seed"),
+    "scene": lambda v: validate.choice("scene", v, SCENES),
+    **{
+        k: (lambda v, k=k: _plain(validate.eps_value(v) if k == "eps" else validate.threshold(k, v)))
+        for k in ("eps", "phi", "delta", "tau")
+    },  # '"1"' reaches the notebook as 1.0, "PAPER" as "paper"
+    "sim_scene": lambda v: validate.choice("sim_scene", v, SCENES),
+    "conventions": lambda v: validate.choice("conventions", v, tuple(PRESETS)),
+    "fmt": lambda v: validate.choice("fmt", v, TRAJECTORY_FORMATS),
+    "gt_fmt": lambda v: validate.choice("gt_fmt", v, TRAJECTORY_FORMATS),
+    "relative_to": lambda v: validate.choice("relative_to", v, RELATIVE),
+    **{k: (lambda v, k=k: _absolute(k, v)) for k in PATHS},  # a notebook runs in its own folder of the run
+}
+
+
+def _plain(checked: Any) -> Any:
+    """A checked threshold as the notebook gets it: a number as a float, anything else normalized as
+    the check spells it (``PAPER`` is ``paper``, `` relative:0.05`` is ``relative:0.05``), never as
+    given: a notebook compares what it receives with the normalized words."""
+    return float(checked) if isinstance(checked, (int, float)) and not isinstance(checked, bool) else checked
+
+
+def evaluation_spec(values: Mapping[str, Any], **fixed: Any) -> EvalSpec:
+    """The one evaluation spec of notebook (and report) parameters: the preset ``conventions``
+    (None: lorisnb's own) with every parameter that is an option of the spec
+    (:data:`lorisnb.core.spec.evalspec.SPEC_NAMES`: thresholds, ``scale``, ``official_interpolation``, the
+    RPE step, ...) given over it, None meaning the spec's default, and ``fixed`` (a notebook's own
+    choices, such as ``mode="per-seq"``) last, by :func:`lorisnb.core.spec.evalspec.make_spec`. The
+    notebooks (``session.spec()``) and the report's leaderboard build their spec here, so a ``-p``
+    reaches both alike."""
+    given = {k: v for k, v in values.items() if k in SPEC_NAMES and v is not None}
+    return make_spec(values.get("conventions"), surface="notebook", **{**given, **fixed})
+
+
+def _absolute(name: str, value: Any) -> str:
+    """A path parameter checked (:func:`existing`) and made absolute; a built-in manifest's name as given."""
+    if name == "manifest" and isinstance(value, str) and value in BUILT_IN:
+        return value
+    return str(existing(name, value, folder=PATHS[name]).resolve())
+
+
+def existing(name: str, value: Any, folder: bool = False) -> Path:
+    """A path parameter that must exist (a folder where ``folder``): a missing one would leave a
+    notebook with nothing to evaluate and empty tables."""
+    p = Path(str(value)).expanduser()
+    if not (p.is_dir() if folder else p.exists()):
+        what = "folder" if folder else "file or folder"
+        raise ValidationError(f"{name}={value}: no such {what}; expected an existing {what}")
+    return p
+
+
+#: Notebooks whose ``eps`` is one scene's threshold in metres (their prose quotes it so): a relative
+#: eps (a fraction of each sequence's size) cannot apply to them.
+EPS_IN_METRES = ("metrics_primer",)
+
+
+def check_values(values: Mapping[str, Any], notebooks: Iterable[str] = ()) -> None:
+    """Check notebook parameter values with the command line's rules (None: the notebook's default),
+    and those the ``notebooks`` named cannot take. Every notebook calls it through
+    :func:`lorisnb.tools.notebook.start.setup` (``parameters=``), and the report through
+    :func:`check_parameters`, before anything runs."""
+    eps = values.get("eps")
+    metres = [n for n in notebooks if n in EPS_IN_METRES]
+    if metres and isinstance(eps, str) and validate.eps_value(eps) != "paper":  # relative:F
+        raise ValidationError(f"eps={eps!r}: {', '.join(metres)} quotes eps in metres of its scene; give metres or "
+                              "paper (a relative eps is for the other notebooks: leave this one out with --notebooks)")  # fmt: skip
+    for name, value in values.items():
+        if value is None:
+            continue
+        if name in LISTS and isinstance(value, str) and value.lstrip().startswith(("[", "(")):
+            raise ValidationError(f"{name}={value!r}: a list written as text (papermill's -p passes text); give a list: "
+                                  f"papermill -y '{name}: [a, b]', or lorisnb report -p {name} '[\"a\", \"b\"]'")  # fmt: skip
+        if name in _CHECKS:
+            _CHECKS[name](value)
+        if name in _VALUES:  # checked as the report normalizes them (-p scene Cafe is cafe)
+            _VALUES[name](value)
+
+
+def check_parameters(
+    parameters: Mapping[str, Any],
+    declared: Mapping[str, Mapping[str, Any]],
+    notebooks: Iterable[str] = (),
+    by: str = "the selected notebooks",
+) -> dict[str, Any]:
+    """Refuse a parameter no selected notebook declares (listing the declared names) and values
+    that the command line would refuse (``-p eps -1``, ``-p alpha 2``) or the selected ``notebooks``
+    cannot take (:func:`check_values`), before anything runs.
+    Returns the parameters, the leaderboard's settings normalized (``-p metric CR`` is ``cr``)."""
+    unknown = sorted(set(parameters) - set(declared) - {"output_dir"})
+    if unknown:
+        raise ValidationError(
+            f"parameter(s) {', '.join(unknown)} not declared by {by}; "
+            f"{'they declare' if by == 'the selected notebooks' else 'it declares'}: " + ", ".join(sorted(declared))
+        )
+    out = dict(parameters)
+    for name, value in parameters.items():  # null reaches the notebook as None, not as its default
+        defaults = {str(declared.get(name, {}).get("default"))} - {"None"}
+        if value is None and defaults:
+            raise ValidationError(f"-p {name} null: the notebooks need a value (default {', '.join(sorted(defaults))}); "
+                                  f"leave -p {name} out for the default")  # fmt: skip
+    for name, partner in NEEDS.items():  # given, it would be ignored without its partner: refused
+        if parameters.get(name) is not None and parameters.get(partner) is None and name in declared:
+            raise ValidationError(f"-p {name}: only applies with -p {partner} (the notebook ignores it otherwise)")
+    check_values(parameters, notebooks)
+    for name, value in parameters.items():
+        if name in _VALUES and value is not None:
+            out[name] = _VALUES[name](value)
+    return out
+
+
+#: The first line of the cell papermill injects after a notebook's ``parameters`` cell (Python).
+INJECTED_HEADER = "# Parameters"
+
+
+def _assignments(source: str) -> dict[str, str] | None:
+    """name -> its value as written, for a cell of assignments to plain names only; None otherwise."""
+    try:
+        body = ast.parse(source).body
+    except SyntaxError:
+        return None
+    out = {}
+    for node in body:
+        if not (isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)):
+            return None
+        out[node.targets[0].id] = ast.unparse(node.value)
+    return out
+
+
+def _comments(source: str) -> int:
+    try:
+        return sum(t.type == tokenize.COMMENT for t in tokenize.generate_tokens(io.StringIO(source).readline))
+    except (tokenize.TokenError, SyntaxError):
+        return -1
+
+
+def papermill_parameters(history: Sequence[str]) -> tuple[dict[str, str], list[str]] | None:
+    """A notebook's declared parameters (name -> default as written) and the names papermill
+    injected (``-p NAME VALUE``), read from a kernel's input history (IPython's ``In``, the cell
+    running now last): the cell before it is the ``parameters`` cell (its first line starts with
+    ``# Parameters``, only assignments follow), or papermill's injected cell (``# Parameters``, then
+    ``name = value`` lines without comments) right after the ``parameters`` cell. None when the
+    history shows neither (the setup cell run out of order): nothing can be said about names."""
+    if len(history) >= 3 and history[-2].startswith(INJECTED_HEADER + "\n") and _comments(history[-2]) == 1:
+        declared, injected = _assignments(history[-3]), _assignments(history[-2])
+        if declared is not None and injected is not None and history[-3].lstrip().startswith(INJECTED_HEADER):
+            return declared, list(injected)
+    if len(history) >= 2 and history[-2].lstrip().startswith(INJECTED_HEADER):
+        declared = _assignments(history[-2])
+        if declared is not None:
+            return declared, []
+    return None

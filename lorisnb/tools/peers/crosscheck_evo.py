@@ -1,0 +1,186 @@
+"""lorisnb under evo's conventions against evo itself, each reading the files its own way: lorisnb
+evaluates the pair with the spec (the ``evo`` preset and its options), evo reads the files with its
+readers and runs what ``evo_ape`` / ``evo_rpe`` run (sync, alignment, projection, APE and RPE), and
+every statistic of ATE, AOE and RPE is compared; the reading rows of
+:func:`lorisnb.tools.peers.crosscheck_reading.crosscheck_reading` say where the readings differ and why.
+Alignment ``auto`` is the alignment lorisnb chose for the estimate's algorithm, on both sides; what
+evo has no equivalent for (lorisnb's own associations, dropped repeated poses, ``posyaw``, a
+``transform``) is run the nearest evo way and said in every row's note (:func:`evo_lacks`).
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from typing import Any
+
+import pandas as pd
+
+from lorisnb.core.metrics.relations import STATISTICS
+from lorisnb.core.spec import validate
+from lorisnb.core.spec.evalspec import EvalSpec, make_spec
+from lorisnb.errors import EvaluationError, ValidationError
+from lorisnb.io.readers.plain import TRAJECTORY_FORMATS
+from lorisnb.tools._extras import require
+from lorisnb.tools.peers.crosscheck_reading import crosscheck_reading, evo_read
+from lorisnb.tools.peers.evo_bridge import CROSSCHECK_COLUMNS, NO_RPE_PAIR, agreement_row, evo_errors
+
+#: lorisnb's RPE units as evo's ``Unit`` names (seconds: evo has none).
+_EVO_UNITS = {"f": "frames", "frames": "frames", "m": "meters", "deg": "degrees", "rad": "radians"}
+
+
+def evo_lacks(spec: EvalSpec) -> list[str]:
+    """What of ``spec`` evo has no equivalent for, and what evo does instead (one phrase each; empty
+    for the ``evo`` preset and its options)."""
+    out = []
+    if spec.association == "nearest":
+        out.append(f"lorisnb pairs stamps by TUM's greedy one-to-one rule within {spec.max_diff:g} s (association "
+                   "nearest), evo each pose of the shorter trajectory with its nearest stamp (evo-nearest)")  # fmt: skip
+    elif spec.association == "interpolate":
+        out.append(f"lorisnb interpolates the ground truth at each estimate stamp within {spec.max_gap:g} s "
+                   f"(association interpolate), evo pairs nearest stamps within {spec.max_diff:g} s")  # fmt: skip
+    if spec.repeated == "drop":
+        out.append("lorisnb drops poses repeating the previous one or its stamp (repeated drop), evo keeps all")
+    if spec.align == "posyaw":
+        out.append("lorisnb aligns position and yaw (posyaw), which evo has not: evo's column is its SE(3) alignment")
+    if spec.transform is not None:
+        out.append("lorisnb moves the ground truth by the transform T_est_gt, evo reads it as it is")
+    return out
+
+
+def evo_statistics(ref, est, spec: EvalSpec, alignment: str | None = None) -> dict[str, Any]:
+    """What evo computes for trajectories it read itself, under ``spec`` (its sync, alignment,
+    projection, APE and RPE; evo's CLI order): ``matched``, ``rpe_pairs`` and ``{ate, aoe, rpe_trans,
+    rpe_rot}_{statistic}``; ``rpe_refused``: evo's reason when its RPE finds no pair (evo_rpe raises).
+    ``alignment``: the one to run (default ``spec.align``; ``auto`` must be resolved first, and
+    ``posyaw``, which evo has not, runs as ``se3``)."""
+    em, filters = require("evo.core.metrics"), require("evo.core.filters")
+    sync = require("evo.core.sync")
+    main_ape, main_rpe = require("evo.main_ape"), require("evo.main_rpe")
+    from evo.core.trajectory import Plane, PoseTrajectory3D
+
+    ref, est = copy.deepcopy(ref), copy.deepcopy(est)
+    if spec.downsample is not None:
+        ref.downsample(spec.downsample)
+        est.downsample(spec.downsample)
+    if spec.motion_filter is not None:
+        ref.motion_filter(*spec.motion_filter, True)
+        est.motion_filter(*spec.motion_filter, True)
+    if isinstance(ref, PoseTrajectory3D) and isinstance(est, PoseTrajectory3D):
+        if spec.t_start is not None or spec.t_end is not None:
+            ref.reduce_to_time_range(spec.t_start, spec.t_end)
+        method = (
+            sync.SyncMethod.interpolation if spec.association == "evo-interpolate" else sync.SyncMethod.nearest_time
+        )
+        ref, est = sync.associate_trajectories(ref, est, max_diff=spec.max_diff, offset_2=spec.t_offset,
+                                               sync_method=method)  # fmt: skip
+    how = {"posyaw": "se3"}.get(alignment or spec.align, alignment or spec.align)
+    if how == "auto":
+        raise ValidationError("align 'auto': resolve it for the algorithm first (EvalSpec.alignment_for)")
+    align = dict(
+        align=how in ("se3", "sim3"), correct_scale=how in ("sim3", "scale"),
+        align_origin=how == "origin", n_to_align=spec.align_frames or -1,
+        project_to_plane=Plane(spec.project_to_plane) if spec.project_to_plane else None,
+    )  # fmt: skip
+    out: dict[str, Any] = {"matched": ref.num_poses}
+    c = copy.deepcopy
+    for name, rel in (("ate", em.PoseRelation.translation_part), ("aoe", em.PoseRelation.rotation_angle_deg)):
+        out.update({f"{name}_{k}": v for k, v in main_ape.ape(c(ref), c(est), rel, **align).stats.items()})
+    unit = _EVO_UNITS.get(spec.rpe_unit)
+    if unit is not None:
+        for name, rel in (("rpe_trans", em.PoseRelation.translation_part),
+                          ("rpe_rot", em.PoseRelation.rotation_angle_deg)):  # fmt: skip
+            try:
+                r = main_rpe.rpe(
+                    c(ref), c(est), rel, delta=spec.rpe_delta, delta_unit=em.Unit[unit],
+                    rel_delta_tol=spec.rpe_tolerance, all_pairs=bool(spec.rpe_all_pairs),
+                    pairs_from_reference=spec.rpe_pairs == "reference", **align,
+                )  # fmt: skip
+            except filters.FilterException as exc:  # evo_rpe raises where lorisnb gives NaN with a warning
+                out["rpe_refused"] = str(exc)
+                break
+            out.update({f"{name}_{k}": v for k, v in r.stats.items()})
+            out["rpe_pairs"] = len(r.np_arrays["error_array"])
+    return out
+
+
+def crosscheck_evo(
+    groundtruth: str | os.PathLike,
+    estimate: str | os.PathLike,
+    spec: EvalSpec | str | None = "evo",
+    *,
+    fmt: str = "tum",
+    gt_fmt: str | None = None,
+    topic: str | None = None,
+    gt_topic: str | None = None,
+    tol: float = 1e-9,
+) -> pd.DataFrame:
+    """Reading rows of both files, then every statistic lorisnb gives under ``spec`` against what
+    evo gives reading the files itself (see the module docstring). ``fmt``: the estimate's format
+    (``tum``, ``kitti``, ``euroc``, ``bag``), ``gt_fmt`` the ground truth's (default ``fmt``).
+    KITTI files print rotations to 7 digits: evo computes with those blocks as they are, lorisnb
+    with the nearest rotation, so pass ``tol=1e-5`` for them."""
+    from lorisnb.tools.evaluation.runner import evaluate_pairs
+
+    the_spec = make_spec(spec)
+    fmt = validate.choice("fmt", fmt, TRAJECTORY_FORMATS)  # ('TUM' was read as a bag)
+    gt_fmt = validate.choice("gt_fmt", gt_fmt, TRAJECTORY_FORMATS) if gt_fmt is not None else fmt
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0.0 <= tol < 1.0:  # (NaN too)
+        raise ValidationError(f"tol={tol!r}: expected a tolerance in [0, 1) (1e-9; 1e-5 for KITTI's 7 digits)")
+    if "openloris" in (fmt, gt_fmt):
+        raise ValidationError(
+            "format openloris: evo reads no OpenLORIS files (scene: and frame: headers, seq: blocks, ground truth in "
+            "base_link); compare one with evo on identical pairs, each sequence in its sensor frame, with "
+            "lorisnb crosscheck GT EST --format openloris [--seq N] without --conventions (crosscheck_openloris "
+            "in Python), or write each sequence as a TUM file"
+        )
+    if the_spec.rpe_all_pairs is None and the_spec.rpe_unit != "s":
+        the_spec = make_spec(the_spec, rpe_all_pairs=False)  # lorisnb's own pairs have no evo equivalent
+    reading = []
+    for label, path, f, t in (("ground truth", groundtruth, gt_fmt, gt_topic), ("estimate", estimate, fmt, topic)):
+        r = crosscheck_reading(path, f, t)
+        r["quantity"] = label + ": " + r["quantity"]
+        reading.append(r)
+    ev = evaluate_pairs(estimate, groundtruth, the_spec, fmt=fmt, gt_fmt=gt_fmt, topic=topic, gt_topic=gt_topic)
+    if ev.failures:
+        raise ev_error(ev)
+    ours = ev.sequences().iloc[0]
+    if not ours["poses"]:
+        raise EvaluationError(f"{estimate}: the estimate has no poses (only comments or blank lines?): nothing to "
+                              "compare; check that the file is the right one and that the run wrote its output")  # fmt: skip
+    if not ours["matched"]:  # lorisnb's reason (with its advice) rather than evo's SyncException
+        why = [w for w in ev.warnings if any(w.startswith(f.error) for f in ev.unscored)] or [
+            f.error for f in ev.unscored] or [f"{estimate}: no pose matched the ground truth"]  # fmt: skip
+        raise EvaluationError(f"{why[0]} Nothing to compare with evo.")
+    how = the_spec.alignment_for(str(ours["algorithm"]))  # auto: what lorisnb chose for this algorithm
+    shown = how if how == the_spec.align else f"{how} ({the_spec.align})"
+    ref, est = evo_read(groundtruth, gt_fmt, gt_topic), evo_read(estimate, fmt, topic)
+    with evo_errors(
+        "cannot evaluate this pair", "check the poses of both files (lorisnb skips NaN poses, evo does not)"
+    ):
+        theirs = evo_statistics(ref, est, the_spec, how)
+    lacks = evo_lacks(the_spec)
+    note = (f"definitions differ: {'; '.join(lacks)}" if lacks else
+            f"lorisnb (preset {the_spec.preset_name}, align {shown}) against evo reading the files itself")  # fmt: skip
+    rows = [agreement_row("matched", shown, ours["matched"], theirs["matched"], ours["matched"], note)]
+    if "rpe_pairs" in theirs:
+        rows.append(agreement_row("rpe_pairs", shown, ours["rpe_pairs"], theirs["rpe_pairs"],
+                                  ours["rpe_pairs"], note))  # fmt: skip
+    for m in ("ate", "aoe", "rpe_trans", "rpe_rot"):
+        n = ours["rpe_pairs"] if m.startswith("rpe") else ours["matched"]  # what the statistics are over
+        for k in STATISTICS:
+            key = f"{m}_{k}"
+            if key in theirs:
+                rows.append(agreement_row(key, shown, ours[key], theirs[key], n, note, tol))
+            elif "rpe_refused" in theirs and m.startswith("rpe"):
+                rows.append(agreement_row(key, shown, ours[key], float("nan"), 0,
+                                          f"{NO_RPE_PAIR}: evo_rpe raises ({theirs['rpe_refused']}); lorisnb gives NaN "
+                                          "with a warning"))  # fmt: skip
+            else:
+                rows.append(agreement_row(key, shown, ours[key], float("nan"), n,
+                                          "RPE in seconds: evo has no such unit"))  # fmt: skip
+    return pd.concat([*reading, pd.DataFrame(rows, columns=CROSSCHECK_COLUMNS)], ignore_index=True)
+
+
+def ev_error(ev) -> Exception:
+    return EvaluationError("; ".join(f.error for f in ev.failures))

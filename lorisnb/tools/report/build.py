@@ -1,0 +1,400 @@
+"""Batch reports: evaluate the results once for the front page's leaderboard, run the notebooks
+with papermill (in parallel where cores allow) into a new run folder under ``results/``, export
+each to offline HTML, and write ``index.html`` (findings first, then the evidence), ``report.html``
+(the same page in one file) and ``run.json`` (provenance, see :mod:`lorisnb.tools.report.provenance`).
+
+A run is built in a temporary folder and moved into place at the end, so an interrupted run
+leaves nothing half-written, and an existing run folder is never replaced without ``force``.
+The finished folder is readable like any other output (the umask's permissions, not owner-only).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import hashlib
+import json
+import os
+import shutil
+import sys
+import tempfile
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any
+
+from lorisnb.errors import DataNotFoundError, LorisError, OutputError, ValidationError
+from lorisnb.io.datasets.paths import find_data
+from lorisnb.io.writers import overlap, remove_partial, write_csv
+from lorisnb.tools.evaluation.pool import start_context
+from lorisnb.tools.evaluation.runner import check_filters, result_files
+from lorisnb.tools.notebook.params import check_parameters
+from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV, RUN_MARKER
+from lorisnb.tools.report import kernels as warm_kernels
+from lorisnb.tools.report.html import single_file, write_notebook_css
+from lorisnb.tools.report.index import expected_spans, git_dirty, versions, write_index
+from lorisnb.tools.report.leaderboard import leaderboard_spec, refuse_unscorable_scenes, report_findings
+from lorisnb.tools.report.lean_imports import jsonschema_without_iri_grammars
+from lorisnb.tools.report.notebooks import (
+    DEFAULT_NOTEBOOKS,
+    KERNEL_ARGS,
+    NOTEBOOK_CSS,
+    NOTEBOOK_NEEDS,
+    TYPICAL_SECONDS,
+    NotebookRun,
+    available_notebooks,
+    current_kernel_files,
+    declared_by,
+    declared_parameters,
+    input_roots,
+    kernel_env,
+    kernel_files,
+    notebook_dir,
+    notebook_path,
+    run_one,
+    select_notebooks,
+    use_kernel_files,
+    warm_kernels_for_report,
+)
+from lorisnb.tools.report.provenance import checksums, input_files, run_record, sha256, write_run_json
+
+__all__ = [
+    "DEFAULT_NOTEBOOKS", "findings_input_errors", "KERNEL_ARGS", "NOTEBOOK_NEEDS", "RUN_MARKER", "NotebookRun", "available_notebooks",
+    "check_parameters", "declared_parameters", "kernel_env", "notebook_dir", "notebook_path", "run_notebook",
+    "run_report",
+]  # fmt: skip
+
+run_notebook = run_one  # the name the report calls (tests replace it)
+
+#: What a worker imports to run a notebook and export its page: imported once here before the
+#: workers are forked from this process (where it runs a single thread; spawned otherwise).
+WORKER_MODULES = ("papermill", "nbclient", "nbconvert", "jupyter_client.manager")
+
+
+def _new_run_dir(out: str | os.PathLike[str] | None) -> Path:
+    if out is not None:
+        if str(out).strip() == "":
+            raise ValidationError("--out: an empty path; expected a folder for the run")
+        return Path(out)
+    stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+    base = Path.cwd() / "results" / f"run-{stamp}"
+    p, k = base, 1
+    while p.exists():
+        k += 1
+        p = base.with_name(f"{base.name}-{k}")
+    return p
+
+
+def _protected(run_dir: Path, extra: list[Path]) -> str | None:
+    """Why ``run_dir`` may not be replaced, or None."""
+    target = run_dir.resolve()
+    cwd = Path.cwd().resolve()
+    if target == cwd or target in cwd.parents:
+        return "it is the current folder or one of its parents; choose another --out"
+    for p in extra:
+        p = p.resolve()
+        if target == p or target in p.parents or p in target.parents:
+            return f"it holds or is inside {p}; choose another --out"
+    if not (run_dir / RUN_MARKER).is_file():
+        return f"it is not a lorisnb run folder (no {RUN_MARKER} file in it); choose another --out"
+    return _not_written(run_dir)
+
+
+def _files(folder: Path) -> dict[str, str]:
+    """Every file, link and empty folder below ``folder`` (its path inside, POSIX) -> its SHA-256
+    (a link's: of its target's name; an empty folder's: "folder"); the run marker aside."""
+    out: dict[str, str] = {}
+    for top, dirs, files in os.walk(folder):
+        here = Path(top)
+        for n in files + [d for d in dirs if (here / d).is_symlink()]:
+            p = here / n
+            rel = p.relative_to(folder).as_posix()
+            if rel != RUN_MARKER:
+                out[rel] = hashlib.sha256(os.readlink(p).encode()).hexdigest() if p.is_symlink() else sha256(p)
+        if not dirs and not files and here != folder:
+            out[here.relative_to(folder).as_posix() + "/"] = "folder"
+    return out
+
+
+def _write_marker(folder: Path, files: Mapping[str, str] | None = None) -> None:
+    """The run marker: lorisnb's version, the pid and, once the run is complete, every file it wrote
+    (``files``: :func:`_files`), which is all ``--force`` may later remove."""
+    record: dict[str, Any] = {"lorisnb": versions()["lorisnb"], "pid": os.getpid()}
+    if files is not None:
+        record["files"] = dict(files)
+    (folder / RUN_MARKER).write_text(json.dumps(record, indent=0))
+
+
+def _not_written(run_dir: Path) -> str | None:
+    """Why ``--force`` may not replace the run folder ``run_dir``: it holds a file its run did not
+    write (added or changed since, as its marker lists them), or its marker lists nothing; else None."""
+    try:
+        wrote = json.loads((run_dir / RUN_MARKER).read_text()).get("files")
+    except (OSError, ValueError, AttributeError):
+        wrote = None
+    if not isinstance(wrote, dict):
+        return (f"its {RUN_MARKER} marker does not list the files its run wrote (a run of an earlier lorisnb, "
+                "or a damaged marker), so files added to it cannot be told apart; move what you keep out of it "
+                "and remove it yourself, or choose another --out")  # fmt: skip
+    foreign = sorted(rel for rel, digest in _files(run_dir).items() if wrote.get(rel) != digest)
+    if not foreign:
+        return None
+    shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more" if len(foreign) > 5 else "")
+    return (f"it holds {len(foreign)} file(s) that its run did not write or that changed since ({shown}); nothing "
+            "was removed: move them out of it and run again, or choose another --out")  # fmt: skip
+
+
+def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_dir: Any, jobs: int,
+             progress: bool, zygote: warm_kernels.Zygote | None = None,
+             meanwhile: Callable[[], None] = lambda: None) -> list[NotebookRun]:  # fmt: skip
+    """Run the notebooks, ``jobs`` at a time, each in its own worker process (papermill's clients
+    are not safe side by side in one process) and kernel; one at a time in this process when
+    ``jobs`` is 1. Kernels are forked from ``zygote`` where given. Results in ``names`` order; the
+    longest notebooks start first. ``meanwhile()`` runs in this process while the workers run
+    (before the notebooks, when ``jobs`` is 1)."""
+    runs: dict[int, NotebookRun] = {}
+    order = sorted(range(len(names)), key=lambda i: -TYPICAL_SECONDS.get(Path(names[i]).stem, 0))
+    if jobs > 1 and len(names) > 1:
+        _run_pool(names, order, runs, tmp, params, notebooks_dir, jobs, progress, meanwhile, zygote)
+        return [runs[i] for i in range(len(names))]
+    meanwhile()
+    warm_kernels.use(zygote)
+    try:
+        with _bar(progress, len(names)) as bar:
+            for i in order:
+                runs[i] = run_notebook(names[i], tmp, params, notebooks_dir=notebooks_dir)
+                bar(runs[i].name)
+    finally:
+        warm_kernels.use(None)
+    return [runs[i] for i in range(len(names))]
+
+
+@contextlib.contextmanager
+def _bar(progress: bool, total: int) -> Iterator[Callable[[str], None]]:
+    """A progress bar over the notebooks (none without ``progress``); yields ``done(name)``."""
+    if not progress:
+        yield lambda name: None
+        return
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=total, desc="report", unit="notebook")
+
+    def done(name: str) -> None:
+        bar.set_postfix_str(name)
+        bar.update()
+
+    try:
+        yield done
+    finally:
+        bar.close()
+
+
+def _run_pool(names: list[str], order: list[int], runs: dict[int, NotebookRun], tmp: Path, params: Mapping[str, Any],
+              notebooks_dir: Any, jobs: int, progress: bool, meanwhile: Callable[[], None], zygote: Any) -> None:  # fmt: skip
+    """:func:`_run_all`'s notebooks in ``jobs`` worker processes, their kernels forked from ``zygote``.
+    The workers start (forked where this process runs a single thread) before the progress bar,
+    whose monitor thread would otherwise rule out forking."""
+    import multiprocessing
+
+    context = start_context(WORKER_MODULES, fallback="spawn")  # forked: no interpreter to start, nothing to import
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_worker_start,
+                             initargs=(zygote, current_kernel_files())) as pool:  # fmt: skip
+        futures = {pool.submit(run_notebook, names[i], tmp, dict(params), notebooks_dir=notebooks_dir): i
+                   for i in order}  # fmt: skip
+        try:
+            with _bar(progress, len(names)) as bar:
+                meanwhile()
+                for fut in as_completed(futures):
+                    runs[futures[fut]] = fut.result()
+                    bar(runs[futures[fut]].name)
+        except BaseException:  # Ctrl-C or an error here: stop the workers (their kernels follow them)
+            pool.shutdown(wait=False, cancel_futures=True)
+            workers = multiprocessing.active_children()
+            for worker in workers:
+                worker.terminate()
+            for worker in workers:  # gone before the caller removes the run folder they write in
+                worker.join(5)
+            raise
+
+
+def _worker_start(zygote: warm_kernels.Zygote | None, kernel_dir: str | None = None) -> None:
+    """A report worker's set-up: papermill's imports without what they need not import
+    (:mod:`lorisnb.tools.report.lean_imports`), kernels forked from ``zygote``, their connection files and
+    sockets in the report's ``kernel_dir`` (:func:`kernel_files`)."""
+    jsonschema_without_iri_grammars()
+    warm_kernels.use(zygote)
+    use_kernel_files(kernel_dir)
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def run_report(
+    out: str | os.PathLike[str] | None = None,
+    parameters: Mapping[str, Any] | None = None,
+    notebooks: Iterable[str] | None = None,
+    force: bool = False,
+    progress: bool = True,
+    notebooks_dir: str | os.PathLike[str] | None = None,
+    protect: Iterable[str | os.PathLike[str]] = (),
+    results: str | os.PathLike[str] | None = None,
+    jobs: int | None = None,
+    command: list[str] | None = None,
+) -> tuple[Path, list[NotebookRun]]:
+    """Run the notebooks into a new run folder; returns (run folder, notebook runs).
+
+    Args:
+        out: the run folder; default ``results/run-<date>-<time>`` below the current folder. An
+            existing folder is an error unless ``force``, and even then only a run folder that
+            lorisnb wrote (it holds :data:`RUN_MARKER`) is replaced, never the current folder, one
+            of its parents, the notebooks or a folder in ``protect`` (inputs, the data root).
+        parameters: papermill parameters; each notebook gets those it declares. A parameter no
+            selected notebook declares, or a value the command line would refuse, is an error.
+        notebooks: names or paths (default: every notebook of the folder, shipped ones in
+            :data:`DEFAULT_NOTEBOOKS` order, others alphabetically after). A notebook that cannot
+            run (invalid JSON, no kernelspec, no ``parameters`` cell) is a failed entry.
+        notebooks_dir: where the notebooks are (default: those shipped with lorisnb).
+        results: a lab's results folder (``<algorithm>/*.txt``, trials allowed): the leaderboard's
+            input and the notebooks' ``results_dir``; notebooks about the bundled data only are
+            left out unless named.
+        jobs: notebooks run at a time (default: the cores, at most the number of notebooks).
+        command: the command line recorded in ``run.json`` (default ``sys.argv``).
+
+    The leaderboard is built when ``results`` is given or a selected notebook declares
+    ``results_dir`` (the bundled icra20 results otherwise). The run is built under a hidden
+    temporary name beside ``out`` and moved into place when complete; if ``out`` appeared
+    meanwhile (another run), this run is kept under ``out-2`` (or the next free name) instead,
+    and the returned path says so. On Ctrl-C the temporary folder is removed and
+    KeyboardInterrupt propagates.
+    """
+    run_dir = _new_run_dir(out)
+    nb_dir = notebook_dir(notebooks_dir)
+    keep_safe = [nb_dir, *map(Path, protect), Path(__file__).resolve().parents[2]]
+    if results is not None:
+        if not Path(results).is_dir() or not result_files([results]):
+            raise ValidationError(
+                f"--results {results}: {'no result files in it' if Path(results).is_dir() else 'not a folder'}; "
+                "expected a folder of <algorithm>/*.txt result files"
+            )
+        keep_safe.append(Path(results))
+    if run_dir.exists():
+        if not force:
+            raise LorisError(f"{run_dir} exists; choose another --out or pass --force to replace it")
+        why = _protected(run_dir, keep_safe)
+        if why:
+            raise LorisError(f"--force will not replace {run_dir}: {why}")
+    names, left_out = select_notebooks(notebooks, notebooks_dir, results)
+    with kernel_files(), warm_kernels_for_report() if len(names) > 1 else contextlib.nullcontext(None) as zygote:
+        # the zygote starts now: it imports the kernels' modules while the notebooks are checked
+        declared = declared_by(names, notebooks_dir)
+        params = check_parameters(dict(parameters or {}), declared, [Path(n).stem for n in names])
+        given = params.get("results_dir")
+        if results is not None and given is not None and Path(str(given)).resolve() != Path(results).resolve():
+            raise ValidationError("--results and -p results_dir name two folders; give one")
+        if results is not None and "results_dir" in declared:
+            params["results_dir"] = str(Path(results).resolve())
+        try:
+            data = find_data(params.get("data_root"))
+        except DataNotFoundError:
+            data = None  # the notebooks say so, each in its entry
+        if data is not None and "data_root" in declared:
+            params.setdefault("data_root", str(data.root))  # kernels run in the run folder, not here
+        wants_board = results is not None or "results_dir" in declared
+        given_source = results if results is not None else params.get("results_dir")  # the leaderboard's input
+        source = Path(str(given_source)) if given_source else (data.icra20 if data else None)
+        roots = input_roots(names, params, data, source if wants_board else None)
+        hit = overlap(run_dir, [*roots, nb_dir, *([data.root.resolve()] if data is not None else [])])  # the data root
+        if hit:  # the run would be read as an input by the next report on the same folder, and by verify
+            raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
+        if source is not None:  # a filter naming nothing there is refused now, not by each notebook later
+            check_filters(source, params.get("algorithms"), params.get("scenes"), params.get("trials_by"))
+            if data is not None:  # a filter on scenes without ground truth only: nothing to score
+                refuse_unscorable_scenes(params.get("scenes"), data)
+        if wants_board:  # the notebooks' spec (one from the parameters): refused now if it cannot apply
+            leaderboard_spec(params)
+        run_dir.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
+        try:
+            _write_marker(tmp)
+            try:
+                write_notebook_css(tmp / NOTEBOOK_CSS)
+            except (OSError, IndexError, LorisError):  # no nbconvert templates: each page keeps its own style
+                pass
+            board: dict[str, Any] = {"spec": {"description": None, "values": {}}}
+
+            def leaderboard() -> None:  # the report's own evaluation, while the notebooks run
+                if not (wants_board and source is not None and data is not None):
+                    return
+                findings, ev, values = report_findings(source, data, params)
+                (tmp / "findings").mkdir()
+                per_sequence = ev.sequences()  # the spec of the parameters, as the notebooks' (leaderboard_spec)
+                failures = ev.failures_table()
+                for table, name in ((per_sequence, "sequences.csv"), (findings.board, "leaderboard.csv"),
+                                    (findings.pairs, "pairwise.csv"), (failures, INPUT_ERRORS_CSV),
+                                    (ev.durations(), "durations.csv")):  # fmt: skip  # every sequence: diff, history
+                    write_csv(table, tmp / "findings" / name)
+                board.update(findings=findings, per_sequence=per_sequence, failures=failures, expected=expected_spans(ev, data, values["scenes"]),
+                             spec={"description": ev.conventions, "values": {**ev.spec.to_dict(), **values, "source": str(source)}})  # fmt: skip
+
+            n_jobs = jobs or min(len(names), os.cpu_count() or 1)
+            runs = _run_all(names, tmp, params, notebooks_dir, n_jobs, progress, zygote, meanwhile=leaderboard)
+            spec = board["spec"]
+            (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
+            inputs = checksums(input_files(roots), data.root if data else None)
+            record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
+                                {r.name: r.status for r in runs}, roots)  # fmt: skip
+            if record.get("commit"):  # the commit alone does not say what ran if the checkout had changes
+                record["dirty"] = git_dirty()
+            write_run_json(tmp, record)
+
+            def pages(folder: Path, name: str) -> None:  # the pages name the run's folder; the marker lists all
+                index = write_index(folder, runs, params, name=name, findings=board.get("findings"), spec=spec,
+                                    failures=board.get("failures"), left_out=left_out,
+                                    per_sequence=board.get("per_sequence"), wanted=run_dir.name,
+                                    expected=board.get("expected"))  # fmt: skip
+                single_file(index, folder / "report.html")
+                _write_marker(folder, _files(folder))
+
+            pages(tmp, run_dir.name)  # the name it is moved to (not the temporary one it is written under)
+            os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp made it owner-only
+            final = _move_into_place(tmp, run_dir, force)
+        except BaseException:
+            remove_partial(tmp)
+            raise
+        if final.name != run_dir.name:  # another run took the name meanwhile: this one's pages say where it is
+            pages(final, final.name)
+        return final, runs
+
+
+def findings_input_errors(run_dir: Path) -> int:
+    """How many input files the report's own evaluation (``findings/``) could not evaluate or score."""
+    from lorisnb.tools.decisions.runs import unscored_inputs
+
+    return len(unscored_inputs(run_dir))
+
+
+def _move_into_place(tmp: Path, run_dir: Path, force: bool) -> Path:
+    """Rename the finished run to ``run_dir``; links inside the report are relative, so the
+    folder moves as a whole. Never clobbers a folder that appeared meanwhile."""
+    if run_dir.exists() and force and (run_dir / RUN_MARKER).is_file() and _not_written(run_dir) is None:
+        old = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.old-", dir=run_dir.parent))
+        os.replace(run_dir, old / run_dir.name)
+        if _not_written(old / run_dir.name) is None:  # checked again once moved aside: nothing added meanwhile
+            os.rename(tmp, run_dir)
+            shutil.rmtree(old, ignore_errors=True)
+            return run_dir
+        os.replace(old / run_dir.name, run_dir)  # a file appeared in it: kept, as the folder is
+        old.rmdir()
+    candidate, k = run_dir, 1
+    while True:
+        try:
+            if candidate.exists():
+                raise FileExistsError(candidate)
+            os.rename(tmp, candidate)  # fails on a non-empty folder that appeared meanwhile
+            return candidate
+        except OSError:
+            k += 1
+            candidate = run_dir.with_name(f"{run_dir.name}-{k}")
