@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND ?= Agg
 
-.PHONY: report test test-fast test-slow test-browser browser-deps lint format evaluate bench bytecode clean-venv student grade book slides
+.PHONY: report test test-fast test-slow test-browser browser-deps lint format evaluate bench calibrate bytecode clean-venv student grade book slides
 
 $(STAMP): pyproject.toml lorisnb/_version.py lorisnb/core/trajectory/_rotations.c
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -58,6 +58,10 @@ format: $(STAMP)
 
 bench: bytecode
 	$(BIN)/python benchmarks/bench.py
+
+# the regression gate's measured error rates: false alarms and power by trial count (README: Regression gating)
+calibrate: bytecode
+	$(BIN)/python benchmarks/calibrate.py
 
 clean-venv:
 	rm -rf $(VENV)

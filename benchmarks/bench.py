@@ -334,6 +334,12 @@ def main() -> None:
         floors.bench_growth(Path(tmp))
         if os.environ.get("LORISNB_BENCH_REPORT", "1") != "0":
             floors.bench_report(Path(tmp))
+    if os.environ.get("LORISNB_BENCH_CALIBRATE", "1") != "0":
+        # the regression gate's error rates, a small run of `make calibrate` (the README quotes the full run)
+        import calibrate
+
+        print("\nregression gate: measured error rates (a small run of make calibrate)")
+        calibrate.main(["--quick", "--trials", "1", "3"])
     print("\nissue-12 goals on this machine:")
     for name, figure, target, met in GOALS:
         print(f"  {'met    ' if met else 'NOT MET'}  {name:40s} {figure:45s} goal {target}")

@@ -371,6 +371,20 @@ def offline_report(tmp_path_factory, icra20):
     return run_dir
 
 
+def _offline_options(tmp_path):
+    """Chromium's options for pages opened from file:// with nothing reachable outside the machine."""
+    from selenium import webdriver
+
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--proxy-server=127.0.0.1:9", "--window-size=1300,1000"):  # fmt: skip
+        opts.add_argument(arg)
+    opts.add_argument(f"--user-data-dir={tmp_path / 'chromium'}")
+    return opts
+
+
 def test_report_opens_offline(offline_report, tmp_path):
     """index.html and a notebook page from file://, with every http(s) request blocked and every
     request recorded (Chrome's performance log): none leaves the machine, nothing fails to load,
@@ -380,13 +394,7 @@ def test_report_opens_offline(offline_report, tmp_path):
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = CHROMIUM
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
-                "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                "--proxy-server=127.0.0.1:9", "--window-size=1300,1000"):  # fmt: skip
-        opts.add_argument(arg)
-    opts.add_argument(f"--user-data-dir={tmp_path / 'chromium'}")
+    opts = _offline_options(tmp_path)
     opts.set_capability("goog:loggingPrefs", {"performance": "ALL"})
     driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
     try:
@@ -421,3 +429,60 @@ def test_report_opens_offline(offline_report, tmp_path):
         assert any(u.endswith(".png") for u in requested)  # the figures came from the run folder
     finally:
         driver.quit()
+
+
+@pytest.fixture(scope="module")
+def baseline_report(tmp_path_factory, offline_report, icra20):
+    """A second report on the same results with ``--baseline``: the folder of earlier runs holds the
+    first report with a fourth trial of ORB-SLAM2 on cafe 1 (which this run lacks: a failed run, so
+    it regressed there), and a run at other thresholds (passed over as not comparable)."""
+    import pandas as pd
+
+    from lorisnb.tools.report.build import run_report
+
+    root = tmp_path_factory.mktemp("baseline")
+    earlier = root / "nightly"
+    shutil.copytree(offline_report, earlier / "2026-11-01")
+    table = earlier / "2026-11-01" / "findings" / "sequences.csv"
+    t = pd.read_csv(table)
+    here = (t["algorithm"] == "orb") & (t["scene"] == "cafe") & (t["seq"] == 1) & (t["trial"] == 1)
+    pd.concat([t, t[here].assign(trial=4)], ignore_index=True).to_csv(table, index=False)
+    t.assign(eps=0.5).to_csv(earlier / "other-thresholds.csv", index=False)
+    results = Path(json.loads((offline_report / "run.json").read_text())["spec"]["values"]["source"])
+    run_dir, runs = run_report(root / "run", {"quick": True}, ["per_sequence_benchmark"], progress=False,
+                               results=results, baseline=earlier, label="abc123")  # fmt: skip
+    assert [r.status for r in runs] == ["ok"], [r.error for r in runs]
+    return run_dir
+
+
+def test_report_shows_what_changed_since_the_baseline(baseline_report, tmp_path):
+    """The front page's "Since the baseline" in a real browser, offline: the verdict against the
+    newest comparable earlier run, the regression named, the run at other thresholds passed over,
+    the code under test, and the trend figure loaded."""
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    opts = _offline_options(tmp_path)
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    try:
+        driver.get((baseline_report / "index.html").as_uri())
+        _wait(lambda: driver.execute_script("return document.readyState") == "complete", 30, "index.html")
+        section = driver.execute_script(
+            "const h = document.getElementById('since-baseline'); let t = ''; let e = h;"
+            "while (e && (e === h || e.tagName !== 'H2')) { t += e.innerText + '\\n'; e = e.nextElementSibling; }"
+            "return t;"
+        )
+        assert "Since the baseline" in section and "Against 2026-11-01" in section, section
+        assert "regression" in section and "orb" in section and "cafe-1" in section, section
+        assert "missing trial 4" in section, section
+        assert "other-thresholds.csv" in section and "eps" in section, section  # passed over, with why
+        assert "Code under test: abc123" in driver.find_element("tag name", "body").text
+        loaded = driver.execute_script(
+            "const i = document.querySelector(\"img[src='findings/trend_cr.svg']\"); return i && i.complete && i.naturalWidth"
+        )
+        assert loaded and loaded > 100, loaded
+        driver.save_screenshot(str(SHOTS / "since_baseline.png")) if SHOTS.is_dir() else None
+    finally:
+        driver.quit()
+    verdict = json.loads((baseline_report / "findings" / "since_baseline.json").read_text())
+    assert verdict["baseline"] == "2026-11-01" and verdict["verdict"]["verdict"] == "regression"

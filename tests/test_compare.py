@@ -21,21 +21,16 @@ from lorisnb.core.stats.permutation import min_p, permutation_test, runs_needed
 HOME = {"odom": "home-1-{}-odom.txt", "orbslam2_rgbd": "home_1_{}_orbslam2-original.txt"}
 
 
-def noisy_copy(src, dst, sd: float, seed: int) -> None:
-    """A copy of a result file with Gaussian noise (metres) on every position."""
-    rng = np.random.default_rng(seed)
-    lines = src.read_text().splitlines()
-    for i, line in enumerate(lines):
-        parts = line.split()
-        if len(parts) in (8, 9):
-            try:
-                xyz = np.array(parts[-7:-4], float) + rng.normal(0, sd, 3)
-            except ValueError:
-                continue
-            parts[-7:-4] = [f"{v:.6f}" for v in xyz]
-            lines[i] = " ".join(parts)
+def rerun_copy(src, dst, seed: int) -> None:
+    """A rerun of the system behind a result file (:func:`lorisnb.core.stats.reruns.rerun`: another
+    start delay, other dropouts, other jitter), written as a result file: trials that differ as
+    reruns do, not copies of one run."""
+    from lorisnb.core.stats.reruns import RerunNoise, rerun
+
+    rf = ln.read_openloris(src, warn=False)
     dst.parent.mkdir(parents=True, exist_ok=True)
-    dst.write_text("\n".join(lines) + "\n")
+    again = {q: rerun(tr, RerunNoise(), seed + q) for q, tr in rf.sequences.items()}
+    ln.write_openloris(dst, again, scene=rf.header["scene"], frame=rf.header["frame"])
 
 
 def compare(capsys, *args) -> tuple[int, str, str]:
@@ -45,15 +40,17 @@ def compare(capsys, *args) -> tuple[int, str, str]:
 
 
 def test_ranks_summary_bold_and_csv_agree(tmp_path, icra20, capsys):
-    """Five noisy trials of odom, of a twin of odom (other seeds) and of ORB-SLAM2 on the five home
+    """Five reruns of odom, of a twin of odom (other seeds) and of ORB-SLAM2 on the five home
     sequences: the test separates ORB-SLAM2 from both, not the twins; the printed ranks, the
-    summary sentence, the CSV ranks and p-values, and the bold cells of LaTeX and Markdown agree."""
+    summary sentence, the CSV ranks and p-values, and the bold cells of LaTeX and Markdown agree.
+    (Noisy copies of one file are pseudo-replicates, which compare warns about instead of testing:
+    the trials here are reruns.)"""
     res = tmp_path / "results"
     for alg, src_alg, base_seed in (("odom", "odom", 0), ("odom_twin", "odom", 1000), ("orb", "orbslam2_rgbd", 0)):
         for seq in range(1, 6):
             for trial in range(1, 6):
                 src = icra20 / "per-seq" / src_alg / HOME[src_alg].format(seq)
-                noisy_copy(src, res / alg / f"trial{trial}" / src.name, 0.05, base_seed + 10 * seq + trial)
+                rerun_copy(src, res / alg / f"trial{trial}" / src.name, base_seed + 10 * seq + trial)
     csv, pairs_csv, md, tex = (tmp_path / n for n in ("c.csv", "p.csv", "t.md", "t.tex"))
     rc, out, _ = compare(capsys, res, "--csv", csv, "--pairs-csv", pairs_csv, "--markdown", md, "--latex", tex)
     assert rc == 0

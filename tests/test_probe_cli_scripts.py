@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from helpers import as_trials
 
 from lorisnb.cli import main
 
@@ -51,19 +52,26 @@ def test_history_tells_apart_nightly_tables_of_one_file_name(icra20, data, tmp_p
         table = tmp_path / f"night{k}" / "sequences.csv"
         table.parent.mkdir()
         assert _rc(["evaluate", results, "--data", data.root, "--no-progress", "--jobs", "1", "--csv", table]) == 0
+        as_trials(table)  # three trials a night around the night's values
         stamp = time.time() - 86400 * (4 - k)  # ordered by modification time: night 1 oldest
         os.utime(table, (stamp, stamp))
         nights.append(table)
     capsys.readouterr()
     hist = tmp_path / "history.csv"
-    assert _rc(["history", *nights, "--metric", "cr", "--csv", hist]) == 0
+    rc = _rc(["history", *nights, "--metric", "cr", "--csv", hist])
     out = capsys.readouterr().out
+    assert _rc(["diff", nights[1], nights[2]]) == rc  # the newest night against its baseline, as diff says
+    capsys.readouterr()
     assert "night1/sequences.csv" in out and "night3/sequences.csv" in out and "[" not in out
     h = pd.read_csv(hist)
     assert list(h["run"]) == ["night1/sequences.csv", "night2/sequences.csv", "night3/sequences.csv"]
     assert h["value"].round(4).tolist() == [0.2712, 0.2290, 0.2712]  # home CR of each night, as evaluate prints it
     assert h["changed"].tolist() == [False, True, True] and h["first_change"].tolist() == [False, True, False]
-    assert "orb home cr: first change in night2/sequences.csv (0.2712 -> 0.2290, worse)" in out
+    assert h["baseline"].fillna("").tolist() == ["", "night1/sequences.csv", "night2/sequences.csv"]
+    assert (
+        "orb home cr: first change in night2/sequences.csv against night1/sequences.csv (0.2712 -> 0.2290, worse)"
+        in out
+    )
 
 
 @pytest.mark.parametrize(
@@ -216,6 +224,7 @@ def test_diff_prints_with_digits_and_names_a_real_regression(icra20, data, tmp_p
     tg, tw = tmp_path / "good.csv", tmp_path / "worse.csv"
     for results, table in ((good, tg), (worse, tw)):
         assert _rc(["evaluate", results, "--data", data.root, "--no-progress", "--jobs", "1", "--csv", table]) == 0
+        as_trials(table)  # three trials a sequence around the same values: judged by the test, not the rerun band
     capsys.readouterr()
     assert _rc(["diff", tg, tw, "--digits", "2"]) == 1
     out = capsys.readouterr().out.splitlines()
@@ -224,9 +233,11 @@ def test_diff_prints_with_digits_and_names_a_real_regression(icra20, data, tmp_p
         ["orb", "home", "4", "cr_t", "0.53", "0.27", "0.26", "0.02", "regression"],
     ]
     assert "verdict: regression (1 sequence(s) regressed)" in out
-    assert _rc(["diff", good, worse, "--data", data.root, "--no-progress", "--jobs", "1", "--digits", "6"]) == 1
+    # two result folders are single runs: the halved sequence is no regression there (a single run can
+    # tell only a sequence that stopped tracking from rerun noise), but the digits are the same
+    assert _rc(["diff", good, worse, "--data", data.root, "--no-progress", "--jobs", "1", "--digits", "6"]) == 0
     cap = capsys.readouterr()
-    assert "0.528713  0.269056" in cap.out  # home 4's CR in BASE and CAND, to 6 decimals
+    assert "one run per side" in cap.out
     said = [x.split(":")[0] for x in cap.err.splitlines() if x.startswith("conventions")]
     assert said == [f"conventions of {good}", f"conventions of {worse}"]  # which run each line is about
     assert _rc(["diff", tw, tg, "--tolerance", "ate_rmse=50%,aoe_rmse=100%,c_ate_rmse=50%,c_aoe_rmse=100%,"
@@ -254,8 +265,11 @@ def test_history_says_when_a_run_lost_a_scene(icra20, data, tmp_path, capsys):
     hist = tmp_path / "history.csv"
     assert _rc(["history", *nights, "--metric", "cr", "c_ate_rmse", "--csv", hist]) == 0
     out = capsys.readouterr().out
-    assert "orb home cr: first change in n2.csv (0.2712 -> no value, worse)" in out
-    assert "orb home c_ate_rmse: first change in n2.csv (0.1414 -> no value, worse)" in out
+    assert "orb home cr: first change in n2.csv against n1.csv (0.2712 -> no value, a sequence or trial lost)" in out
+    assert (
+        "orb home c_ate_rmse: first change in n2.csv against n1.csv (0.1414 -> no value, a sequence or trial lost)"
+        in out
+    )
     assert "cafe" not in "".join(x for x in out.splitlines() if "first change" in x)  # cafe did not change
     h = pd.read_csv(hist)
     home = h[(h["scene"] == "home") & (h["metric"] == "cr")]

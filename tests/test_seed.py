@@ -13,7 +13,6 @@ from lorisnb.cli import main
 from lorisnb.core.simulate import Faults
 from lorisnb.core.spec import validate
 from lorisnb.core.stats import inference as stats
-from lorisnb.core.stats import regression
 from lorisnb.core.stats.permutation import difference_interval
 from lorisnb.errors import ValidationError
 from lorisnb.tools.notebook.params import check_parameters
@@ -47,8 +46,6 @@ def test_python_functions_refuse(value):
     for call in (
         lambda: stats.confidence_intervals(t, metrics=["cr"], seed=value),
         lambda: stats.pairwise(t, "cr", seed=value),
-        lambda: regression.sequence_changes(t, t, seed=value),
-        lambda: regression.scene_changes(t, t, seed=value),
         lambda: difference_interval([np.array([1.0, 2.0])], [np.array([0.0, 1.0])], None, 0.05, seed=value),
         lambda: Faults(seed=value),
     ):
@@ -58,20 +55,21 @@ def test_python_functions_refuse(value):
 
 
 @pytest.mark.parametrize("value", ["-1", "1.5", "x"])
-def test_command_line_refuses_with_usage_error(tmp_path, icra20, capsys, value):
-    from report_fixtures import trial_results
+def test_command_line_refuses_with_usage_error(icra20, capsys, value):
+    with pytest.raises(SystemExit) as exc:
+        main(["compare", str(icra20 / "per-seq"), "--seed", value, "--no-progress"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert f"--seed={value}: expected a whole number >= 0" in err and "Traceback" not in err
 
-    trials = trial_results(tmp_path / "t", icra20)  # diff with trials: the test is sampled with the seed
-    for argv in (
-        ["compare", str(icra20 / "per-seq"), "--seed", value],
-        ["diff", str(trials), str(trials), "--seed", value],
-        ["diff", str(icra20 / "per-seq" / "odom"), str(icra20 / "per-seq" / "odom"), f"--seed={value}"],
-    ):
-        with pytest.raises(SystemExit) as exc:
-            main([*argv, "--no-progress"])
-        assert exc.value.code == 2
-        err = capsys.readouterr().err
-        assert f"--seed={value}: expected a whole number >= 0" in err and "Traceback" not in err
+
+def test_diff_takes_no_seed(icra20, capsys):
+    """diff's verdict samples nothing (issue 44: one t-test per comparison, Holm over the diff), so a
+    seed cannot apply to it and is refused, not dropped."""
+    odom = str(icra20 / "per-seq" / "odom")
+    with pytest.raises(SystemExit) as exc:
+        main(["diff", odom, odom, "--seed", "1", "--no-progress"])
+    assert exc.value.code == 2 and "unrecognized arguments: --seed" in capsys.readouterr().err
 
 
 def test_report_and_notebook_parameter_refused_before_anything_runs(tmp_path, capsys):

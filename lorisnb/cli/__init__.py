@@ -171,6 +171,12 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="notebooks run at a time (default: the cores)",
     )
+    p.add_argument("--label", default=None, metavar="TEXT", type=arg_type(validate.code_label),
+                   help="the code under test (a commit, tag or name, e.g. $GITHUB_SHA): recorded in run.json, shown on "
+                   "the front page and by history")  # fmt: skip
+    p.add_argument("--baseline", default=None, metavar="DIR",
+                   help="a folder of earlier runs: the front page shows this run against the newest comparable one "
+                   "(verdict, what changed, a trend of the last comparable runs)")  # fmt: skip
     p.add_argument("--force", action="store_true", help="replace --out if it is an earlier lorisnb run folder")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=_command(".commands", "cmd_report"))

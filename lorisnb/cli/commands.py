@@ -358,6 +358,8 @@ def cmd_report(args: argparse.Namespace) -> int:
         results=args.results,
         jobs=args.jobs,
         command=getattr(args, "argv", None),
+        label=args.label,
+        baseline=args.baseline,
     )
     for r in runs:
         status = r.status if r.status != "ok" or not r.input_errors else f"ok, {r.input_errors} input file(s) failed"

@@ -277,7 +277,7 @@ def add_compare_options(p: argparse.ArgumentParser) -> None:
 
 
 def add_diff_options(p: argparse.ArgumentParser) -> None:
-    """``diff``'s own options: tolerances, the test's alpha, the seed and the verdict files."""
+    """``diff``'s own options: tolerances, the family-wise alpha and the verdict files."""
     from lorisnb.core.stats.tolerances import DEFAULT_TOLERANCES
 
     defaults = ",".join(f"{k}={v}" for k, v in DEFAULT_TOLERANCES.items())
@@ -285,13 +285,20 @@ def add_diff_options(p: argparse.ArgumentParser) -> None:
                    help="how much worse a metric may get before it is a regression: an amount in the metric's unit "
                    f"or a percentage of the base value (defaults: {defaults.replace('%', '%%')})")  # fmt: skip
     p.add_argument("--alpha", type=probability_type("--alpha"), default=0.05,
-                   help="significance level of the permutation test across trials (default 0.05)")  # fmt: skip
-    p.add_argument("--seed", type=seed_type, default=0, metavar="N",
-                   help="seed of sampled relabellings, a whole number >= 0 (default 0)")  # fmt: skip
+                   help="family-wise error rate of the verdict: the share of noise-only diffs that may end in a "
+                   "regression, over all its sequences, scenes and metrics (default 0.05)")  # fmt: skip
     p.add_argument("--json", default=None, metavar="OUT", help="write the verdict as JSON")
     p.add_argument(
         "--junit", default=None, metavar="OUT", help="write the verdict as JUnit XML (one test per sequence)"
     )
+    p.add_argument("--markdown", default=None, metavar="OUT",
+                   help="write the verdict as Markdown (.md), for a pull-request comment or a CI job summary")  # fmt: skip
+    p.add_argument("--badge", default=None, metavar="OUT", help="write an SVG badge of the verdict (.svg)")
+    p.add_argument("--annotations", action="store_true",
+                   help="print GitHub Actions annotations (::error per regression, ::notice per improvement)")  # fmt: skip
+    p.add_argument("--baseline", choices=["last-comparable"], default=None,
+                   help="last-comparable: BASE is a folder of earlier runs (report run folders or tables); the newest "
+                   "one comparable with CAND is the baseline")  # fmt: skip
 
 
 def add_history_options(p: argparse.ArgumentParser) -> None:

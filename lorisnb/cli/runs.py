@@ -13,10 +13,11 @@ import pandas as pd
 
 from lorisnb.cli.commands import fmt_table, report_problems, run_evaluation
 from lorisnb.cli.outputs import check_outputs, refuse_unused
+from lorisnb.cli.text import clean
 from lorisnb.errors import ValidationError
 
 #: diff's own options; every other option is an evaluate option (for result folders only).
-DIFF_OWN = {"paths", "tolerance", "alpha", "seed", "json", "junit", "csv", "parquet", "force", "no_progress", "func",
+DIFF_OWN = {"paths", "tolerance", "alpha", "markdown", "badge", "annotations", "baseline", "json", "junit", "csv", "parquet", "force", "no_progress", "func",
             "command", "eps_default", "phi_default", "defaults", "digits"}  # fmt: skip
 
 
@@ -59,11 +60,31 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
     return Run(p, "results", table, expected=ev.durations()), failed, sorted(failed)
 
 
+def _last_comparable(folder: Path, cand: Any) -> Any:
+    """The newest run in ``folder`` comparable with ``cand`` (:func:`lorisnb.tools.decisions.history.last_comparable`),
+    named on stderr."""
+    from lorisnb.tools.decisions.history import last_comparable
+
+    base, runs = last_comparable(folder, cand)
+    print(
+        f"baseline: {clean(base.path)} (the newest of {len(runs)} earlier run(s) comparable with CAND)", file=sys.stderr
+    )
+    return base
+
+
 def cmd_diff(args: argparse.Namespace) -> int:
     """``lorisnb diff BASE CAND`` (see the README's exit-status table)."""
     from lorisnb.core.stats.regression import parse_tolerances
-    from lorisnb.io.writers import write_csv, write_parquet
-    from lorisnb.tools.decisions.diff import diff_tables, exit_status, write_json, write_junit
+    from lorisnb.io.writers import write_csv, write_parquet, write_text
+    from lorisnb.tools.decisions.diff import (
+        badge,
+        diff_tables,
+        exit_status,
+        github_annotations,
+        markdown,
+        write_json,
+        write_junit,
+    )
     from lorisnb.tools.decisions.runs import is_report_run, is_table, spec_differences
 
     refuse_unused(args, {"relative": "lorisnb evaluate (diff compares the RPE columns)",
@@ -71,14 +92,20 @@ def cmd_diff(args: argparse.Namespace) -> int:
                          "pose-relation columns)"})  # fmt: skip
     if len(args.paths) != 2:
         raise ValidationError(f"diff takes two runs, BASE and CAND; got {len(args.paths)} path(s)")
-    check_outputs(args, args.paths, ["json", "junit", "csv"], folders=("parquet",))
+    check_outputs(args, args.paths, ["json", "junit", "csv", "markdown", "badge"], folders=("parquet",))
     tolerances = parse_tolerances(args.tolerance)
     tables = [is_report_run(Path(p)) or is_table(Path(p)) for p in args.paths]
     given = _given_evaluate_options(args, args.defaults)
     if all(tables) and given:
         raise ValidationError(f"{', '.join(given)}: evaluate options apply to result folders; BASE and CAND are "
                               "tables or report runs, whose numbers are already computed")  # fmt: skip
-    (base, _, base_failed), (cand, cand_failed, _) = (_side(p, args) for p in args.paths)
+    if args.baseline == "last-comparable":
+        (cand, cand_failed, _) = _side(args.paths[1], args)
+        base = _last_comparable(Path(args.paths[0]), cand)
+        base_failed = sorted(base.unscored)
+        args.paths[0] = str(base.path)
+    else:
+        (base, _, base_failed), (cand, cand_failed, _) = (_side(p, args) for p in args.paths)
     for note in base.notes + cand.notes:
         print(f"note: {note}", file=sys.stderr)
     if base.table.empty:  # nothing to compare against: never a verdict of "ok"
@@ -95,11 +122,11 @@ def cmd_diff(args: argparse.Namespace) -> int:
     if base.version and cand.version and base.version != cand.version:
         print(f"note: lorisnb {base.version} made BASE, {cand.version} CAND", file=sys.stderr)
     known = [r.expected for r in (base, cand) if r.expected is not None]  # every ground-truth sequence
-    d = diff_tables(base.table, cand.table, tolerances, args.alpha, args.seed, cand_failed,
+    d = diff_tables(base.table, cand.table, tolerances, args.alpha, cand_failed,
                     names=(f"BASE {args.paths[0]}", f"CAND {args.paths[1]}"),
                     expected=pd.concat(known, ignore_index=True) if known else None)  # fmt: skip
     bad = d.sequences[d.sequences["status"].isin(["regression", "missing", "failed"])]
-    scene_bad = d.scenes[d.scenes["status"] == "regression"]
+    scene_bad = d.scenes[d.scenes["status"].isin(["regression", "missing", "failed"])]
     print(f"BASE {args.paths[0]} ({base.kind}) against CAND {args.paths[1]} ({cand.kind}); tolerances: "
           + ", ".join(f"{k} {v}" for k, v in tolerances.items()))  # fmt: skip
     counts = d.verdict["counts"]
@@ -113,8 +140,25 @@ def cmd_diff(args: argparse.Namespace) -> int:
         print(fmt_table(shown, args.digits))
     if len(scene_bad):
         print("\nregressions per scene:")
-        print(fmt_table(scene_bad[["algorithm", "scene", "metric", "base", "cand", "worse_by", "p_holm",
+        print(fmt_table(scene_bad[["algorithm", "scene", "metric", "base", "cand", "worse_by", "p_adj",
                                    "decided_by"]], args.digits))  # fmt: skip
+    better = d.verdict["improvements"]
+    if better:
+        print(f"\nimprovements ({len(better)}):")
+        for r in better[:50]:
+            where = f"{r['scene']}-{r['seq']}" if r["seq"] is not None else f"{r['scene']} (scene)"
+            print(f"  {clean(r['algorithm'])} {clean(where)} {r['metric']}: {_short(r['base'], args.digits)} -> "
+                  f"{_short(r['cand'], args.digits)}")  # fmt: skip
+        if len(better) > 50:
+            print(f"  ... {len(better) - 50} more (--json lists all)")
+    for tr in d.verdict["tradeoffs"]:
+        print(
+            f"trade-off: {clean(tr['algorithm'])} worse in {', '.join(tr['worse'])}; better in {', '.join(tr['better'])}"
+        )
+    if d.verdict["unjudged"]:
+        print(f"{len(d.verdict['unjudged'])} comparison(s) too little to judge (fewer than 50 matched or correct "
+              "poses): listed in --json, never a regression")  # fmt: skip
+    print(f"rule: {d.verdict['rule']}")
     n = d.verdict["regressed_sequences"]
     print(f"\nverdict: {d.verdict['verdict']}" + (f" ({n} sequence(s) regressed)" if d.regressed else ""))
     extra = dict(base=args.paths[0], cand=args.paths[1], tolerances={k: str(v) for k, v in tolerances.items()},
@@ -130,6 +174,13 @@ def cmd_diff(args: argparse.Namespace) -> int:
         written.append(write_csv(both, args.csv, args.force))
     if args.parquet:
         written.append(write_parquet(both, args.parquet, force=args.force))
+    if args.markdown:
+        written.append(write_text(markdown(d, args.paths[0], args.paths[1], cand.label), args.markdown, args.force))
+    if args.badge:
+        written.append(write_text(badge(d), args.badge, args.force))
+    if args.annotations:
+        for line in github_annotations(d):
+            print(line)
     for w in written:
         print(f"wrote {w}", file=sys.stderr)
     if base_failed or cand_failed:
@@ -139,7 +190,8 @@ def cmd_diff(args: argparse.Namespace) -> int:
 
 
 def cmd_history(args: argparse.Namespace) -> int:
-    """``lorisnb history RUN...``: scene values over runs, first changes, runs not comparable."""
+    """``lorisnb history RUN...``: scene values over runs, each run against its last comparable run
+    by diff's rule; exit 1 when the newest run regressed against its baseline."""
     from lorisnb.core.stats.regression import parse_tolerances
     from lorisnb.io.writers import write_csv
     from lorisnb.tools.decisions.history import first_changes, history_table, load_runs, run_labels, write_figures
@@ -149,28 +201,39 @@ def cmd_history(args: argparse.Namespace) -> int:
     runs = load_runs(args.runs)
     for note in (n for r in runs for n in r.notes):
         print(f"note: {note}", file=sys.stderr)
-    h = history_table(runs, args.metric, tolerances)
+    h, diffs = history_table(runs, args.metric, tolerances)
     how = sorted({r.created_from for r in runs})
     print(f"{len(runs)} run(s), oldest first, ordered by {' and '.join(how)}")
     names = run_labels(runs)  # as the table names them: two nightly tables of one file name apart
+    first = h.drop_duplicates("run").set_index("run")
     for r, name in zip(runs, names, strict=True):
-        print(
-            f"  {name}: {r.created.isoformat() if r.created else '?'}" + (f", lorisnb {r.version}" if r.version else "")
-        )
+        base = first.loc[name, "baseline"] if name in first.index else ""
+        print(f"  {clean(name)}: {r.created.isoformat() if r.created else '?'}" + (f", lorisnb {r.version}" if r.version else "")
+              + (f", code {clean(r.label)}" if r.label else "") + (f", against {clean(base)}" if base else ""))  # fmt: skip
     for m in args.metric:
         # dropna=False: a run whose values are all missing keeps its column
         view = h[h["metric"] == m].pivot_table(index=["suite", "algorithm", "scene"], columns="run", values="value",
                                               sort=False, dropna=False)  # fmt: skip
         print(f"\n{m} per scene:")
         print(fmt_table(view[[n for n in names if n in view.columns]].reset_index()))
-    lost = h.drop_duplicates("run")
-    for r in lost[~lost["comparable"].astype(bool)].itertuples():
-        print(f"\nnot comparable: {r.run} with the run before it ({r.not_comparable})")
+    for r in first[first["not_comparable"].astype(str) != ""].itertuples():
+        then = f"; compared with {clean(r.baseline)} instead" if r.baseline else "; a new series starts here"
+        print(f"\nnot comparable: {clean(r.Index)} with the run before it ({clean(r.not_comparable)}){then}")
     lines = first_changes(h)
-    print("\n" + ("\n".join(lines) if lines else "no value changed beyond its tolerance"))
+    print("\n" + ("\n".join(clean(x) for x in lines) if lines else "no value changed by diff's rule"))
+    newest = len(runs) - 1
+    rc = 0
+    if newest in diffs:
+        d = diffs[newest]
+        n = d.verdict["regressed_sequences"]
+        print(f"\nnewest run {clean(names[newest])} against {clean(first.loc[names[newest], 'baseline'])}: {d.verdict['verdict']}"
+              + (f" ({n} sequence(s) regressed)" if d.regressed else ""))  # fmt: skip
+        rc = 1 if d.regressed else 0
+    elif runs:
+        print(f"\nnewest run {clean(names[newest])}: no earlier run is comparable with it; nothing judged")
     if args.csv:
         print(f"wrote {write_csv(h, args.csv, args.force)}", file=sys.stderr)
     if args.out:
         paths = write_figures(h, args.out)
         print(f"wrote {len(paths)} figure file(s) to {args.out}", file=sys.stderr)
-    return 0
+    return rc

@@ -44,3 +44,12 @@ def _cell(value: Any, digits: int) -> str:
 def frame_columns(df: Any) -> dict[str, np.ndarray]:
     """A DataFrame's columns as numpy arrays (for :func:`format_table`)."""
     return {str(c): df[c].to_numpy() for c in df.columns}
+
+
+def clean(text: object) -> str:
+    """Text for one terminal line: control characters (a newline in a folder name, an escape
+    sequence) shown escaped, as ``\\n`` or ``\\x1b``, so that tables and lists keep their lines."""
+    s = str(text)
+    if s.isprintable():
+        return s
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in s)

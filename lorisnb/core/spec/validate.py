@@ -294,3 +294,15 @@ def rigid_transform(value: Any, label: str = "transform") -> tuple[tuple[float, 
     if not np.allclose(arr[3], [0, 0, 0, 1]) or not np.allclose(r @ r.T, np.eye(3), atol=1e-6):
         raise ValidationError(f"{label}: expected a rigid transform (a rotation block and last row 0 0 0 1)")
     return tuple(tuple(float(x) for x in row) for row in arr)
+
+
+def code_label(value: Any, label: str = "label") -> str:
+    """The name of the code under test (``report --label``: a commit, a tag, ``$GITHUB_SHA``): text
+    of 1 to 200 characters on one line, no control characters (it is shown on pages and in
+    terminal tables)."""
+    if not isinstance(value, str) or not value.strip():
+        raise ValidationError(f"{label}={_show(value)}: expected the name of the code under test, e.g. a commit hash")
+    text = value.strip()
+    if len(text) > 200 or not text.isprintable():
+        raise ValidationError(f"{label}={_show(value)}: expected one printable line of at most 200 characters")
+    return text

@@ -1,25 +1,49 @@
-"""Did a candidate run regress against a base run? The verdict of ``lorisnb diff``.
+"""Did a candidate run regress against a base run? The verdict of ``lorisnb diff``, ``history``
+and the report's "since the baseline": one decision rule for every sequence, scene and metric.
 
-Both runs are per-sequence tables (:func:`lorisnb.core.lifelong.scoring.score`, with trials or not). A
-sequence is matched by (suite, algorithm, scene, seq); with trials its value is the mean over them.
+Both runs are per-sequence tables (:func:`lorisnb.core.lifelong.scoring.score`, with trials or not).
+A sequence is matched by (suite, algorithm, scene, seq). Every comparison of a diff is one test of
+one **family**, and the family-wise error rate is held at ``alpha`` (Holm's step-down correction
+over all of them): a noise-only diff ends in "regression" in at most ``alpha`` of the cases,
+however many sequences, scenes and metrics it holds. The harness that measures this on reruns
+made from the bundled real outputs is ``make calibrate`` (``benchmarks/calibrate.py``).
 
-- **Per sequence**, every metric of :data:`METRICS`: the change and whether the candidate is
-  worse by more than the metric's tolerance (:data:`DEFAULT_TOLERANCES`; an absolute amount in
-  the metric's unit, or a share of the base value such as ``10%``). With at least two trials on
-  each side, the two-sample permutation test of :mod:`lorisnb.core.stats.permutation` must also find
-  the change (p <= alpha) unless the design cannot reach alpha (then ``decided_by`` says that the
-  tolerance alone decided).
-- **Per scene**, the scene values of :data:`lorisnb.core.stats.inference.WEIGHTS` (CR by duration, ...),
-  both runs completed by :func:`lorisnb.core.lifelong.coverage.complete` with the base's sequences (a
-  sequence the candidate lacks counts as a failed run); with trials, the stratified permutation
-  test (trials relabelled within each sequence), Holm-corrected across the scenes of each
-  algorithm and metric.
-- A sequence the base has and the candidate lacks (``missing``) or scores with nothing matched
-  (``failed``) is a regression whatever the tolerances. A candidate's new sequence is listed, not
-  judged.
+**What is compared.** Per sequence every metric of :data:`METRICS`; per scene the scene values of
+:data:`lorisnb.core.stats.inference.WEIGHTS` (CR by duration, ...), computed for each trial over
+all the scene's sequences (a sequence or trial the run lacks counts as a failed run). Rates (CR,
+CR-T, CS-R) are compared as they are; errors (ATE, AOE, RPE: :data:`LOG_METRICS`) on a log scale,
+as relative changes, because their rerun spread grows with their size.
 
-A value that is defined in the base and undefined (NaN) in the candidate (C-ATE once no pose is
-correct) is worse. Identical runs give no change at all, so no regression.
+**The rule.** ``d`` is how much worse the candidate is (mean over trials; + is worse) and ``tol``
+the metric's tolerance (:data:`~lorisnb.core.stats.tolerances.DEFAULT_TOLERANCES`). The test asks
+whether the change is *beyond the tolerance*: ``z = (d - tol) / se``, one-sided.
+
+- **With trials** (at least three values over both sides): ``se`` from the trials' own spread,
+  moderated across the diff's comparisons of the same metric and level (the empirical-Bayes
+  variance of Smyth 2004, limma's ``squeezeVar``: each comparison's variance is pulled towards the
+  spread typical of the diff, with the prior's degrees of freedom estimated from how much the
+  variances differ); a t distribution with the pooled degrees of freedom gives p. Tied trial values
+  (all CR 1.0) have variance 0 and still get the prior's spread, never p = 1 or a division by 0.
+- **One run per side**: no significance can be claimed. ``se`` is the rerun spread: the larger of
+  :data:`~lorisnb.core.stats.tolerances.RERUN_SPREAD` (what real reruns of the icra20 systems show)
+  and the spread of this diff's own changes (their 90th percentile, robust to a few real changes);
+  the output says that the tolerance was widened by the rerun spread, not tested.
+
+A comparison is a regression when its Holm-adjusted p is at most ``alpha`` (so ``d > tol``); an
+improvement likewise in the other direction (a separate family). An algorithm with both is a
+**trade-off** (:func:`verdict`).
+
+**Coverage and failures** (no test needed; always a regression): a sequence the base has and the
+candidate lacks (``missing``), scores with nothing matched (``failed``), or lacks a trial the base
+has (``missing trial``: the trial counts as a failed run in every value, and is named). A
+candidate's new sequence is listed, not judged.
+
+**Too little to judge** (``unjudged``, never a regression): a sequence whose base matched fewer
+than :data:`MIN_MATCHED` poses (its alignment is unstable: 5 mm of position noise can move a
+15-pose sequence's AOE by 10 degrees) for every metric; its error metrics (ATE, AOE, RPE, C-*) also
+when the candidate matched fewer, or for C-* metrics fewer than :data:`MIN_MATCHED` correct poses.
+Its rates are still judged when only the candidate is short: a sequence that stopped tracking
+regressed.
 """
 
 from __future__ import annotations
@@ -30,12 +54,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+from scipy import special, stats
 
-from lorisnb.core.lifelong.coverage import complete, expected_from
+from lorisnb.core.lifelong.coverage import FAILED_RUN, complete, expected_from
 from lorisnb.core.spec import validate
-from lorisnb.core.stats.inference import WEIGHTS, holm, scene_means, with_trials
-from lorisnb.core.stats.permutation import permutation_test
-from lorisnb.core.stats.tolerances import DEFAULT_TOLERANCES
+from lorisnb.core.stats.inference import WEIGHTS, holm, scene_values, with_trials
+from lorisnb.core.stats.tolerances import DEFAULT_TOLERANCES, MIN_MATCHED, RERUN_SPREAD, SINGLE_RUN_BAND
 from lorisnb.errors import ValidationError
 
 #: Metrics compared, each with +1 when larger is better and -1 when smaller is better.
@@ -43,8 +67,15 @@ METRICS: dict[str, int] = {
     "cr": 1, "cr_t": 1, "cs_r": 1, "ate_rmse": -1, "aoe_rmse": -1, "c_ate_rmse": -1, "c_aoe_rmse": -1,
     "rpe_trans_rmse": -1, "rpe_rot_rmse": -1,
 }  # fmt: skip
-#: The change a metric may worsen by before it is a regression: absolute (metric's unit) or "N%".
+#: Metrics judged on a log scale (relative changes): the errors. The others are rates in [0, 1].
+LOG_METRICS = frozenset(m for m, s in METRICS.items() if s < 0)
 KEYS = ["suite", "algorithm", "scene", "seq"]
+#: Statuses that fail a diff.
+BAD = ("regression", "missing", "failed")
+#: Columns of the change tables.
+SEQUENCE_COLUMNS = KEYS + ["metric", "base", "cand", "worse_by", "tolerance", "trials_base", "trials_cand", "p_adj",
+                           "status", "decided_by"]  # fmt: skip
+SCENE_COLUMNS = SEQUENCE_COLUMNS
 
 
 @dataclass(frozen=True)
@@ -60,6 +91,15 @@ class Tolerance:
 
     def __str__(self) -> str:
         return f"{100 * self.amount:g}%" if self.relative else f"{self.amount:g}"
+
+    def scaled(self, metric: str, base: float) -> float:
+        """The tolerance on the scale the metric is judged on: the amount for a rate, the log of
+        the allowed ratio for an error (``10%`` -> log 1.1; an absolute amount relative to ``base``)."""
+        if metric not in LOG_METRICS:
+            return self.of(base)
+        if self.relative:
+            return float(np.log1p(self.amount))
+        return float(np.log1p(self.amount / base)) if base > 0 and np.isfinite(base) else np.inf
 
 
 def parse_tolerances(spec: str | Mapping[str, str | float] | None = None) -> dict[str, Tolerance]:
@@ -101,185 +141,470 @@ def parse_tolerances(spec: str | Mapping[str, str | float] | None = None) -> dic
     return out
 
 
-def _per_sequence(table: pd.DataFrame) -> dict[tuple, pd.DataFrame]:
-    t = with_trials(table)
-    return {k: g for k, g in t.groupby(KEYS, sort=False, observed=True)}
+# --- the statistics -------------------------------------------------------------------------------
 
 
-def _judge(base: float, cand: float, sign: int, tol: Tolerance) -> tuple[float, str]:
-    """(how much worse the candidate is, in the metric's unit, + = worse; status)."""
-    if not np.isfinite(base):
-        return np.nan, "ok"
-    if not np.isfinite(cand):
-        return np.inf, "regression"
-    worse = sign * (base - cand)
-    slack = tol.of(base) + 1e-12 * max(1.0, abs(base))
-    return worse, "regression" if worse > slack else ("improvement" if -worse > slack else "ok")
+@dataclass
+class _Comparison:
+    """One comparison waiting for the family's decision: its row, and the values of each side on
+    the judged scale (log for errors), signed so that larger ``d`` is worse."""
+
+    row: dict
+    base: np.ndarray
+    cand: np.ndarray
+    sign: int
+    tol: float
+    floor: float
+
+    @property
+    def d(self) -> float:
+        return self.sign * (float(self.base.mean()) - float(self.cand.mean()))
 
 
-def _test(base: list[np.ndarray], cand: list[np.ndarray], weights: np.ndarray, seed: int) -> tuple[float, float]:
-    """(p, min_p) of the permutation test, when both sides have at least two trials everywhere."""
-    if not base or min(min(len(x) for x in base), min(len(x) for x in cand)) < 2:
-        return np.nan, np.nan
-    res = permutation_test(base, cand, weights, rng=np.random.default_rng(seed))
-    return res.pvalue, res.min_p
+def _trigamma_inverse(x: float) -> float:
+    """y with trigamma(y) = x (x > 0), by Newton's method as in limma's ``trigammaInverse``."""
+    if x > 1e7:
+        return 1.0 / np.sqrt(x)
+    if x < 1e-6:
+        return 1.0 / x
+    y = 0.5 + 1.0 / x
+    for _ in range(50):
+        tri = float(special.polygamma(1, y))
+        step = tri * (1 - tri / x) / float(special.polygamma(2, y))
+        y += step
+        if -step / y < 1e-8:
+            break
+    return y
 
 
-def sequence_changes(
-    base: pd.DataFrame, cand: pd.DataFrame, tolerances: Mapping[str, Tolerance] | None = None, alpha: float = 0.05,
-    seed: int = 0,
-) -> pd.DataFrame:  # fmt: skip
-    """One row per sequence of either run and metric (and one ``sequence`` row per sequence
-    missing or failed in the candidate, or new in it): ``base``, ``cand`` (means over trials),
-    ``worse_by``, ``tolerance``, ``trials_base``, ``trials_cand``, ``p``, ``min_p``, ``status``
-    (``ok``, ``improvement``, ``regression``, ``missing``, ``failed``, ``new``) and ``decided_by``."""
-    tols = parse_tolerances() if tolerances is None else dict(tolerances)
-    seed = validate.seed(seed)
-    b, c = _per_sequence(base), _per_sequence(cand)
-    rows = []
-    for key in list(b) + [k for k in c if k not in b]:
-        label = dict(zip(KEYS, key, strict=True))
-        gb, gc = b.get(key), c.get(key)
-        if gb is None or gc is None or not len(gc):
-            status = "new" if gb is None else "missing"
-            rows.append(dict(label, metric="sequence", base="absent" if gb is None else "present",
-                             cand="present" if gb is None else "missing", status=status, decided_by="coverage"))  # fmt: skip
+def variance_prior(s2: np.ndarray, df: np.ndarray) -> tuple[float, float]:
+    """(s0^2, d0): the scaled inverse chi-square prior of the comparisons' variances, fitted by
+    moments of log s^2 (Smyth 2004, limma's ``fitFDist``). Variances of 0 (tied trials) and
+    comparisons without degrees of freedom are left out of the fit. (nan, 0) when fewer than three
+    remain: no prior, each comparison on its own."""
+    s2, df = np.asarray(s2, float), np.asarray(df, float)
+    ok = (df > 0) & np.isfinite(s2) & (s2 > 0)
+    if ok.sum() < 3:
+        return np.nan, 0.0
+    z = np.log(s2[ok])
+    e = z - special.digamma(df[ok] / 2) + np.log(df[ok] / 2)
+    emean = float(e.mean())
+    evar = float(np.var(e, ddof=1) - np.mean(special.polygamma(1, df[ok] / 2)))
+    if evar > 0:
+        d0 = 2 * _trigamma_inverse(evar)
+        s0 = float(np.exp(emean + special.digamma(d0 / 2) - np.log(d0 / 2)))
+    else:  # the variances differ no more than chance: one common spread
+        d0, s0 = np.inf, float(np.exp(emean))
+    return s0, float(min(d0, 1e6))
+
+
+def _family_p(comps: list[_Comparison], levels: list[str]) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """p-values (worse, better) of comparisons with trials, before the family's correction: the
+    change beyond the tolerance over its standard error, whose variance is the comparison's own
+    trial variance moderated upwards towards the spread of its metric and level across the diff
+    (Smyth 2004, limma's ``squeezeVar``, taken only where it is larger than the comparison's own;
+    never below a quarter of the rerun variance), with a t distribution of the pooled degrees of
+    freedom."""
+    p_w, p_b = np.full(len(comps), np.nan), np.full(len(comps), np.nan)
+    how = [""] * len(comps)
+    groups: dict[tuple[str, str], list[int]] = {}
+    for i, (c, level) in enumerate(zip(comps, levels, strict=True)):
+        groups.setdefault((c.row["metric"], level), []).append(i)
+    for idx in groups.values():
+        cs = [comps[i] for i in idx]
+        nb = np.array([len(c.base) for c in cs], float)
+        nc = np.array([len(c.cand) for c in cs], float)
+        df = nb + nc - 2
+        ss = np.array(
+            [float(((c.base - c.base.mean()) ** 2).sum() + ((c.cand - c.cand.mean()) ** 2).sum()) for c in cs]
+        )
+        with np.errstate(invalid="ignore", divide="ignore"):
+            s2 = np.where(df > 0, ss / np.maximum(df, 1), np.nan)
+        s0, d0 = variance_prior(s2, df)
+        floor = cs[0].floor
+        if not np.isfinite(s0):  # too few spreads to pool: the rerun variance as a prior of 4 degrees of freedom
+            s0, d0 = floor**2, 4.0
+        post = s0 if not np.isfinite(d0) else (d0 * s0 + df * np.nan_to_num(s2)) / (d0 + df)
+        # pulled up towards the diff's spread, never down: a sequence whose reruns flip between tracking
+        # and not (its own spread far above the others') keeps its own spread
+        post = np.maximum(np.maximum(post, np.nan_to_num(s2)), (floor / 2) ** 2)
+        se = np.sqrt(post * (1 / nb + 1 / nc))
+        dof = np.minimum(df + d0, 1e6)
+        d = np.array([c.d for c in cs])
+        tol = np.array([c.tol for c in cs])
+        p_w[idx] = stats.t.sf((d - tol) / se, dof)
+        p_b[idx] = stats.t.sf((-d - tol) / se, dof)
+        for k, i in enumerate(idx):
+            how[i] = (
+                f"{int(nb[k])} vs {int(nc[k])} trials, spread pooled over {len(cs)} comparisons (prior df {min(d0, 999):.3g})"
+            )
+    return p_w, p_b, how
+
+
+def _single_bands(comps: list[_Comparison], levels: list[str]) -> list[float]:
+    """The band a change of a single run per side must exceed beyond its tolerance (on the judged
+    scale): :data:`~lorisnb.core.stats.tolerances.SINGLE_RUN_BAND` of its level and metric, widened
+    to four times the 90th percentile of this diff's own changes of that metric and level where
+    those are larger (a noisier system than the calibration's)."""
+    groups: dict[tuple[str, str], list[int]] = {}
+    for i, (c, level) in enumerate(zip(comps, levels, strict=True)):
+        groups.setdefault((c.row["metric"], level), []).append(i)
+    bands = [0.0] * len(comps)
+    for (metric, level), idx in groups.items():
+        band = SINGLE_RUN_BAND[level][metric]
+        ds = np.abs([comps[i].d for i in idx])
+        if ds.size >= 10:
+            band = max(band, 4 * float(np.quantile(ds, 0.9)))
+        for i in idx:
+            bands[i] = band
+    return bands
+
+
+def _transform(metric: str, x: np.ndarray) -> np.ndarray:
+    """Values on the scale a metric is judged on: the log of an error (positive values only), a rate as it is."""
+    x = np.asarray(x, float)
+    if metric in LOG_METRICS:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.log(np.where(x > 0, x, np.nan))
+    return x
+
+
+class _Comparisons:
+    """Every comparison of one diff, in order, with the families the tests are pooled in."""
+
+    def __init__(self, tolerances: Mapping[str, Tolerance]) -> None:
+        self.tols = tolerances
+        self.rows: dict[str, list[dict]] = {"sequence": [], "scene": []}
+        self.waiting: list[_Comparison] = []
+
+    def coverage(self, level: str, label: dict, metric: str, base: str, cand: str, status: str, why: str) -> None:
+        """A comparison decided by coverage alone (a sequence or trial missing, failed or new)."""
+        self.rows[level].append(dict(label, metric=metric, base=base, cand=cand, status=status, decided_by=why))
+
+    def add(self, level: str, label: dict, metric: str, xb: np.ndarray, xc: np.ndarray, unjudged: str | None) -> None:
+        """One metric of one sequence or scene: the values of its trials on each side (NaN where
+        undefined); tested later, with its family, unless decided here."""
+        tol = self.tols[metric]
+        fb, fc = xb[np.isfinite(xb)], xc[np.isfinite(xc)]
+        vb = float(fb.mean()) if fb.size else np.nan
+        vc = float(fc.mean()) if fc.size else np.nan
+        sign = METRICS[metric]
+        row = dict(label, metric=metric, base=vb, cand=vc, tolerance=str(tol), trials_base=len(xb),
+                   trials_cand=len(xc), p_adj=np.nan, status="ok", decided_by="")  # fmt: skip
+        row["worse_by"] = sign * (vb - vc) if np.isfinite(vb) and np.isfinite(vc) else np.nan
+        self.rows[level].append(row)
+        if unjudged:
+            row.update(status="unjudged", decided_by=f"too little to judge: {unjudged}")
+            return
+        if not np.isfinite(vb):
+            row["decided_by"] = "undefined in the base: nothing to compare"
+            return
+        if not np.isfinite(vc):  # no correct pose left: the rates say how much worse
+            row.update(status="unjudged", decided_by="too little to judge: undefined in the candidate (no pose to "
+                       "take it over); its rates are judged")  # fmt: skip
+            return
+        gb, gc = _transform(metric, fb), _transform(metric, fc)
+        gb, gc = gb[np.isfinite(gb)], gc[np.isfinite(gc)]
+        if not gb.size or not gc.size:
+            row.update(status="unjudged", decided_by="too little to judge: an error of 0 on one side")
+            return
+        floor = RERUN_SPREAD["log" if metric in LOG_METRICS else "rate"]
+        self.waiting.append(_Comparison(row, gb, gc, sign, tol.scaled(metric, vb), floor))
+
+    def judge(self, alpha: float) -> tuple[pd.DataFrame, pd.DataFrame]:
+        """Decide every waiting comparison as one family (see the module docstring) and return
+        the two tables."""
+        trials = [c for c in self.waiting if len(c.base) + len(c.cand) >= 3]
+        single = [c for c in self.waiting if len(c.base) + len(c.cand) < 3]
+        levels = ["scene" if c.row["seq"] is None else "sequence" for c in single]
+        if trials:
+            levels_t = ["scene" if c.row["seq"] is None else "sequence" for c in trials]
+            p_w, p_b, how = _family_p(trials, levels_t)
+            adj_w, adj_b = holm(p_w), holm(p_b)
+            for c, pw, pb, h in zip(trials, adj_w, adj_b, how, strict=True):
+                self._decide(c, pw, pb, alpha, f"t-test of the change beyond the tolerance ({h}); Holm over the "
+                             f"diff's {len(trials)} tests, family-wise alpha {alpha:g}")  # fmt: skip
+        if single:
+            for c, band in zip(single, _single_bands(single, levels), strict=True):
+                shown = f"{band:.3g}" if c.floor == RERUN_SPREAD["rate"] else f"x{np.exp(band):.3g}"
+                up, down = c.d - c.tol > band, -c.d - c.tol > band
+                c.row.update(status="regression" if up else ("improvement" if down else "ok"),
+                             decided_by=f"single run per side: no significance claimed; judged by the tolerance "
+                             f"widened by the rerun band ({shown}: the largest change noise-only single runs show)")  # fmt: skip
+        seqs = pd.DataFrame(self.rows["sequence"], columns=SEQUENCE_COLUMNS)
+        scenes = pd.DataFrame(self.rows["scene"], columns=SCENE_COLUMNS)
+        parts = []
+        if trials:
+            parts.append(f"{len(trials)} comparison(s) with trials by t-tests of the change beyond the tolerance, "
+                         f"spreads pooled per metric, Holm over all of them (family-wise alpha {alpha:g})")  # fmt: skip
+        if single:
+            parts.append(f"{len(single)} comparison(s) of one run per side by the tolerance widened by the rerun "
+                         "band (no significance claimed)")  # fmt: skip
+        parts.append("a missing or failed sequence or trial always regresses; too little to judge never does")
+        seqs.attrs["rule"] = scenes.attrs["rule"] = "; ".join(parts)
+        return seqs, scenes
+
+    @staticmethod
+    def _decide(c: _Comparison, p_worse: float, p_better: float, alpha: float, how: str) -> None:
+        worse, better = p_worse <= alpha, p_better <= alpha
+        c.row.update(p_adj=float(p_worse if worse or not better else p_better), decided_by=how,
+                     status="regression" if worse else ("improvement" if better else "ok"))  # fmt: skip
+
+
+def _trial_sets(b: pd.DataFrame, c: pd.DataFrame) -> dict[tuple, list]:
+    """The trials of each (suite, algorithm) over both runs: every one of them is expected of every
+    sequence; one a run lacks is a failed run of that sequence."""
+    both = pd.concat([b[["suite", "algorithm", "trial"]], c[["suite", "algorithm", "trial"]]])
+    return {k: sorted(set(g["trial"])) for k, g in both.groupby(["suite", "algorithm"], sort=False, observed=True)}
+
+
+def _padded(t: pd.DataFrame, trials: Mapping[tuple, list]) -> tuple[pd.DataFrame, dict[tuple, list]]:
+    """The table with each sequence's missing trials added as failed runs (paper: missing output
+    scores 0), and which trials each sequence lacked."""
+    added, lacking = [], {}
+    trial_col = t["trial"].to_numpy()
+    for key, rows in t.groupby(KEYS, sort=False, observed=True, dropna=False).indices.items():
+        have = set(trial_col[rows])
+        absent = [k for k in trials.get((key[0], key[1]), []) if k not in have]
+        if not absent:
             continue
-        nothing_b = float(gb["matched"].sum()) == 0 if "matched" in gb else False
-        if "matched" in gc and float(gc["matched"].sum()) == 0 and not nothing_b:
-            rows.append(dict(label, metric="sequence", base="matched", cand="nothing matched", status="failed",
-                             decided_by="coverage"))  # fmt: skip
-        for metric, sign in METRICS.items():
-            if metric not in gb.columns or metric not in gc.columns:
-                continue
-            xb, xc = gb[metric].to_numpy(float), gc[metric].to_numpy(float)
-            vb = float(np.nanmean(xb)) if np.isfinite(xb).any() else np.nan
-            vc = float(np.nanmean(xc)) if np.isfinite(xc).any() else np.nan
-            worse, status = _judge(vb, vc, sign, tols[metric])
-            p, floor = _test([xb[np.isfinite(xb)]], [xc[np.isfinite(xc)]], np.ones(1), seed)
-            decided = "tolerance"
-            if np.isfinite(p):
-                if floor <= alpha:
-                    decided = f"tolerance and permutation test (alpha {alpha})"
-                    status = status if p <= alpha or status == "ok" else "ok"
-                else:
-                    decided = f"tolerance (trials cannot reach alpha {alpha}: smallest p {floor:.3g})"
-            rows.append(dict(label, metric=metric, base=vb, cand=vc, worse_by=worse, tolerance=str(tols[metric]),
-                             trials_base=len(xb), trials_cand=len(xc), p=p, min_p=floor, status=status,
-                             decided_by=decided))  # fmt: skip
-    cols = KEYS + ["metric", "base", "cand", "worse_by", "tolerance", "trials_base", "trials_cand", "p", "min_p",
-                   "status", "decided_by"]  # fmt: skip
-    return pd.DataFrame(rows, columns=cols)
+        lacking[key] = absent
+        template = t.iloc[rows[0]].to_dict()
+        for k in absent:
+            row = {c: template[c] for c in ("suite", "algorithm", "scene", "seq", "gt_duration", "eps", "phi",
+                                             "delta", "tau", "frame", "mode") if c in t.columns}  # fmt: skip
+            row.update({c: v for c, v in FAILED_RUN.items() if c in t.columns}, trial=k, file="")
+            added.append(row)
+    if added:
+        extra = pd.DataFrame(added).reindex(columns=t.columns)
+        t = pd.concat([t, extra.astype({c: float for c in FAILED_RUN if c in extra.columns})], ignore_index=True)
+    return t, lacking
 
 
-def scene_changes(
+def _unjudged(metric: str, matched: tuple[float, float], correct: tuple[float, float], fragile: bool = False
+              ) -> str | None:  # fmt: skip
+    """Why a sequence's metric is too little to judge (None: it is judged), from the mean matched
+    and correct poses of (base, candidate) and whether the base's own trials disagree on tracking
+    its first pose is correct (``fragile``, for CS-R); see the module docstring."""
+    nb, nc = matched
+    if nb < MIN_MATCHED:
+        return f"the base matched {nb:.0f} poses (fewer than {MIN_MATCHED}: its alignment is unstable)"
+    if metric in LOG_METRICS and nc < MIN_MATCHED:
+        return f"the candidate matched {nc:.0f} poses (fewer than {MIN_MATCHED}); its rates are judged"
+    if metric.startswith("c_") and min(correct) < MIN_MATCHED:
+        return f"{min(correct):.0f} correct poses on one side (fewer than {MIN_MATCHED})"
+    if metric == "cs_r" and fragile:
+        return ("its trials disagree on whether the first pose is correct, on which CS-R hinges (0 when it is "
+                "not): a yes/no outcome of a few runs; CR judges the tracking")  # fmt: skip
+    return None
+
+
+class _Side:
+    """One run's per-sequence table as arrays: the rows of each sequence, and its columns."""
+
+    def __init__(self, table: pd.DataFrame) -> None:
+        self.table = table
+        self.rows = {k: v for k, v in table.groupby(KEYS, sort=False, observed=True, dropna=False).indices.items()}
+        self.cols = {c: pd.to_numeric(table[c], errors="coerce").to_numpy(float)
+                     for c in (*METRICS, "matched", "c_matched", "first_correct") if c in table.columns}  # fmt: skip
+        self.trials = table["trial"].to_numpy()
+
+    def mean(self, key: tuple, column: str) -> float:
+        v = self.cols.get(column)
+        return float(v[self.rows[key]].mean()) if v is not None else np.inf
+
+
+def _flips(sb: _Side, sc: _Side, key: tuple, rb: np.ndarray, rc: np.ndarray) -> bool:
+    """Whether the trials of a sequence, over both runs, disagree on whether its first pose is
+    correct, on which CS-R (Eq. 4) hinges (0 when it is not): a binary outcome of a few trials,
+    which no test can call significant."""
+    vb, vc = sb.cols.get("first_correct"), sc.cols.get("first_correct")
+    if vb is None or vc is None:
+        return False
+    x = np.concatenate([vb[rb], vc[rc]])
+    x = x[np.isfinite(x)]
+    return bool(x.size and (x > 0).any() and (x <= 0).any())
+
+
+def changes(
     base: pd.DataFrame, cand: pd.DataFrame, tolerances: Mapping[str, Tolerance] | None = None, alpha: float = 0.05,
-    seed: int = 0, expected: pd.DataFrame | None = None,
-) -> pd.DataFrame:  # fmt: skip
-    """One row per suite, algorithm, scene and scene metric: the scene values of both runs over the
-    base's sequences (a sequence the candidate lacks counts as failed), ``worse_by``, the test
-    across trials where both runs have them (``p``, ``min_p``, ``p_holm``: Holm across the scenes of
-    each algorithm and metric), ``status`` and ``decided_by``. ``expected``: every ground-truth
-    sequence of the scenes (``scene``, ``seq``, ``gt_duration``, as
-    :func:`lorisnb.core.lifelong.aggregate.durations_table`), when known: a sequence no row of a run holds
-    then counts as failed in its scene value, as in ``compare``; else the sequences of ``base``."""
+    expected: pd.DataFrame | None = None,
+) -> tuple[pd.DataFrame, pd.DataFrame]:  # fmt: skip
+    """The changes from ``base`` to ``cand`` per sequence and per scene, every metric, decided by
+    the one rule of the module docstring: (sequences, scenes), each one row per comparison with
+    ``base``, ``cand`` (means over trials), ``worse_by``, ``tolerance``, ``trials_base``,
+    ``trials_cand``, ``p_adj`` (the family-wise adjusted p; empty for single runs), ``status`` (``ok``,
+    ``improvement``, ``regression``, ``missing``, ``failed``, ``new``, ``unjudged``) and
+    ``decided_by``. ``expected``: every ground-truth sequence of the scenes (``scene``, ``seq``,
+    ``gt_duration``, as :func:`lorisnb.core.lifelong.aggregate.durations_table`), when known: a
+    sequence no row of a run holds then counts as failed in its scene value; else the base's."""
     tols = parse_tolerances() if tolerances is None else dict(tolerances)
-    seed = validate.seed(seed)
-    expected = expected_from(base, *([] if expected is None else [expected]))
-    b = with_trials(base)
-    kept = set(zip(b["suite"], b["algorithm"], b["scene"], strict=True))
-    c = with_trials(cand)
-    c = c[
-        np.array([k in kept for k in zip(c["suite"], c["algorithm"], c["scene"], strict=True)], bool)
-    ]  # a mask, also when empty
-    c = c[c.set_index(KEYS).index.isin(b.set_index(KEYS).index)]  # the base's sequences
+    alpha = validate.probability("alpha", alpha)
+    b, c = with_trials(base), with_trials(cand)
+    trials = _trial_sets(b, c)
+    b, lack_b = _padded(b, trials)
+    c, lack_c = _padded(c, trials)
+    comp = _Comparisons(tols)
+    sb, sc = _Side(b), _Side(c)
+    for key in list(sb.rows) + [k for k in sc.rows if k not in sb.rows]:
+        label = dict(zip(KEYS, key, strict=True))
+        rb, rc = sb.rows.get(key), sc.rows.get(key)
+        if rb is None:
+            comp.coverage("sequence", label, "sequence", "absent", "present", "new", "coverage: new in the candidate")
+            continue
+        if rc is None or len(lack_c.get(key, [])) == len(rc):
+            comp.coverage("sequence", label, "sequence", "present", "missing", "missing",
+                          "coverage: in the base, not in the candidate")  # fmt: skip
+            continue
+        fresh = [k for k in lack_c.get(key, []) if k not in lack_b.get(key, [])]
+        if fresh:
+            names = ", ".join(str(k) for k in fresh)
+            comp.coverage("sequence", label, "trial", "present", f"missing trial {names}", "missing",
+                          f"coverage: trial {names} missing in the candidate (the base has it): a failed run")  # fmt: skip
+        matched = (sb.mean(key, "matched"), sc.mean(key, "matched"))
+        if "matched" in sc.cols and not (sc.cols["matched"][rc] > 0).any() and (sb.cols["matched"][rb] > 0).any():
+            comp.coverage("sequence", label, "sequence", "matched", "nothing matched", "failed",
+                          "coverage: no pose of the candidate matched the ground truth")  # fmt: skip
+        correct = (sb.mean(key, "c_matched"), sc.mean(key, "c_matched"))
+        for metric in METRICS:
+            if metric in sb.cols and metric in sc.cols:
+                comp.add("sequence", label, metric, sb.cols[metric][rb], sc.cols[metric][rc],
+                         _unjudged(metric, matched, correct, _flips(sb, sc, key, rb, rc)))  # fmt: skip
+    fragile = {k[:3] for k in sb.rows if k in sc.rows and _flips(sb, sc, k, sb.rows[k], sc.rows[k])}
+    _scenes(comp, b, c, expected, fragile)
+    _scene_coverage(comp)
+    return comp.judge(alpha)
+
+
+def _scene_coverage(comp: _Comparisons) -> None:
+    """A sequence or trial missing or failed in the candidate fails its scene too, with a row that
+    names it (a scene value over a failed run can still look unchanged)."""
+    lost: dict[tuple, list[str]] = {}
+    for r in comp.rows["sequence"]:
+        if r["status"] in ("missing", "failed"):
+            what = f"{r['scene']}-{r['seq']}: {r['cand']}"
+            lost.setdefault((r["suite"], r["algorithm"], r["scene"]), []).append(what)
+    for (suite, alg, scene), whats in lost.items():
+        label = dict(suite=suite, algorithm=alg, scene=scene, seq=None)
+        comp.coverage("scene", label, "coverage", "complete", "; ".join(whats), "missing",
+                      "coverage: a sequence or trial of the scene is missing or failed in the candidate")  # fmt: skip
+
+
+def _scenes(comp: _Comparisons, b: pd.DataFrame, c: pd.DataFrame, expected: pd.DataFrame | None,
+            fragile: set[tuple] | None = None) -> None:  # fmt: skip
+    """The scene values of each trial on both sides (over the base's sequences; a sequence or trial
+    a run lacks is a failed run), added to ``comp``."""
+    expected = expected_from(b, *([] if expected is None else [expected]))
+    scenes = list(dict.fromkeys(zip(b["suite"], b["algorithm"], b["scene"], strict=True)))
+    kept = set(scenes)
+    c = c[np.array([k in kept for k in zip(c["suite"], c["algorithm"], c["scene"], strict=True)], bool)]
+    c = c[c.set_index(KEYS).index.isin(b.set_index(KEYS).index)]  # the base's sequences only
     lost = kept - set(zip(c["suite"], c["algorithm"], c["scene"], strict=True))
     if lost:  # a scene without any output in the candidate: all its sequences failed
         gone = b[np.array([k in lost for k in zip(b["suite"], b["algorithm"], b["scene"], strict=True)], bool)]
         c = pd.concat([c, _failed_copy(gone)], ignore_index=True)
-    fb, _ = complete(b, expected)
-    fc, _ = complete(c, expected)
-    rows = []
-    for metric in (m for m in WEIGHTS if m in b.columns):
-        vb = scene_means(fb, metric).set_index(["suite", "scene", "algorithm"])["value"]
-        vc = scene_means(fc, metric).set_index(["suite", "scene", "algorithm"])["value"]
-        block = []
-        for (suite, scene, alg), v0 in vb.items():
-            v1 = float(vc.get((suite, scene, alg), np.nan))
-            worse, status = _judge(float(v0), v1, METRICS[metric], tols[metric])
-            p, floor = _scene_test(fb, fc, suite, alg, scene, metric, seed)
-            block.append(dict(suite=suite, algorithm=alg, scene=scene, seq=None, metric=metric, base=float(v0),
-                              cand=v1, worse_by=worse, tolerance=str(tols[metric]), p=p, min_p=floor, status=status))  # fmt: skip
-        for _, grp in pd.DataFrame(block).groupby(["suite", "algorithm"], sort=False) if block else []:
-            adj = holm(grp["p"].to_numpy(float))
-            for i, pa in zip(grp.index, adj, strict=True):
-                r = block[i]
-                r["p_holm"] = pa
-                r["decided_by"] = "tolerance"
-                if np.isfinite(pa):
-                    if r["min_p"] * len(grp) <= alpha:
-                        r["decided_by"] = f"tolerance and permutation test (Holm across scenes, alpha {alpha})"
-                        r["status"] = r["status"] if pa <= alpha or r["status"] == "ok" else "ok"
-                    else:
-                        r["decided_by"] = f"tolerance (trials cannot reach alpha {alpha} after Holm)"
-        rows += block
-    cols = KEYS + ["metric", "base", "cand", "worse_by", "tolerance", "p", "min_p", "p_holm", "status", "decided_by"]
-    return pd.DataFrame(rows, columns=cols)
+    metrics = [m for m in WEIGHTS if m in b.columns and m in c.columns and (WEIGHTS[m] or m) in b.columns]
+    if not metrics or expected.empty:
+        return
+    by = ["suite", "algorithm", "scene", "trial"]
+    fb, fc = complete(b, expected)[0], complete(c, expected)[0]
+    vb, vc = scene_values(fb, metrics, by), scene_values(fc, metrics, by)
+    counts = [_counts(f, by[:3]) for f in (fb, fc)]
+    gb = {k: g for k, g in vb.groupby(by[:3], sort=False)}
+    gc = {k: g for k, g in vc.groupby(by[:3], sort=False)}
+    for key in scenes:
+        if key not in gb:
+            continue
+        label = dict(suite=key[0], algorithm=key[1], scene=key[2], seq=None)
+        matched = tuple(float(n["matched"].get(key, 0.0)) for n in counts)
+        correct = tuple(float(n["c_matched"].get(key, 0.0)) for n in counts)
+        for metric in metrics:
+            xc = gc[key][metric].to_numpy(float) if key in gc else np.full(1, np.nan)
+            why = _unjudged(metric, (matched[0], matched[1]), (correct[0], correct[1]), key in (fragile or set()))
+            comp.add("scene", label, metric, gb[key][metric].to_numpy(float), xc, why)
+
+
+def _counts(table: pd.DataFrame, by: list[str]) -> pd.DataFrame:
+    """Matched and correct poses of each scene, summed over its sequences and averaged over trials."""
+    cols = [c for c in ("matched", "c_matched") if c in table.columns]
+    per = table.groupby([*by, "trial"], sort=False)[cols].sum().groupby(level=list(range(len(by)))).mean()
+    for c in ("matched", "c_matched"):
+        if c not in per.columns:
+            per[c] = np.inf
+    return per
+
+
+def sequence_changes(
+    base: pd.DataFrame, cand: pd.DataFrame, tolerances: Mapping[str, Tolerance] | None = None, alpha: float = 0.05,
+    expected: pd.DataFrame | None = None,
+) -> pd.DataFrame:  # fmt: skip
+    """The per-sequence table of :func:`changes` (the same family: the scenes are tested too)."""
+    return changes(base, cand, tolerances, alpha, expected)[0]
+
+
+def scene_changes(
+    base: pd.DataFrame, cand: pd.DataFrame, tolerances: Mapping[str, Tolerance] | None = None, alpha: float = 0.05,
+    expected: pd.DataFrame | None = None,
+) -> pd.DataFrame:  # fmt: skip
+    """The per-scene table of :func:`changes` (the same family: the sequences are tested too)."""
+    return changes(base, cand, tolerances, alpha, expected)[1]
 
 
 def _failed_copy(rows: pd.DataFrame) -> pd.DataFrame:
     """The base's rows as failed runs (a candidate without any output for them)."""
     out = rows.copy()
-    for col, v in (("cr", 0.0), ("cr_t", 0.0), ("cs_r", 0.0), ("matched", 0), ("correct_time", 0.0),
-                   ("track_time", 0.0), ("c_matched", 0)):  # fmt: skip
+    for col, v in FAILED_RUN.items():
         if col in out.columns:
             out[col] = v
-    for col in ("c_ate_rmse", "ate_rmse", "aoe_rmse", "c_aoe_rmse"):
+    for col in ("c_ate_rmse", "ate_rmse", "aoe_rmse", "c_aoe_rmse", "rpe_trans_rmse", "rpe_rot_rmse"):
         if col in out.columns:
             out[col] = np.nan
     return out
 
 
-def _scene_test(fb: pd.DataFrame, fc: pd.DataFrame, suite: str, alg: str, scene: str, metric: str, seed: int
-                ) -> tuple[float, float]:  # fmt: skip
-    """The stratified permutation test of one scene, base against candidate, when both have trials."""
-    sel_b = fb[(fb["suite"] == suite) & (fb["algorithm"] == alg) & (fb["scene"] == scene)]
-    sel_c = fc[(fc["suite"] == suite) & (fc["algorithm"] == alg) & (fc["scene"] == scene)]
-    w_col = WEIGHTS[metric]
-    xb, xc, w = [], [], []
-    for seq, g in sel_b.groupby("seq", sort=True):
-        h = sel_c[sel_c["seq"] == seq]
-        vb, vc = g[metric].to_numpy(float), h[metric].to_numpy(float)
-        vb, vc = vb[np.isfinite(vb)], vc[np.isfinite(vc)]
-        if len(vb) and len(vc):
-            xb.append(vb)
-            xc.append(vc)
-            w.append(1.0 if w_col is None else float(g[w_col].mean()))
-    weights = np.array(w)
-    if not len(weights) or not np.all(np.isfinite(weights)) or weights.sum() <= 0:
-        return np.nan, np.nan
-    return _test(xb, xc, weights, seed)
-
-
 def verdict(sequences: pd.DataFrame, scenes: pd.DataFrame) -> dict:
-    """The machine-readable verdict: ``verdict`` ("ok" or "regression"), ``regressions`` (objects
-    with algorithm, scene, seq (null for a scene value), metric, base, cand, and suite, level,
-    worse_by, tolerance, p), and counts."""
-    bad = {"regression", "missing", "failed"}
-    regs = []
+    """The machine-readable verdict: ``verdict`` ("ok" or "regression"); ``regressions`` and
+    ``improvements`` (objects with algorithm, scene, seq (null for a scene value), metric, base,
+    cand, suite, level, status, worse_by, tolerance, p_adj, decided_by); ``tradeoffs`` (per
+    suite and algorithm with both: what got worse and what got better); ``unjudged`` (too little
+    to judge, with the reason); ``counts`` of each status over the per-sequence comparisons."""
+
+    def entry(level: str, r: dict) -> dict:
+        return dict(algorithm=r["algorithm"], scene=r["scene"], seq=_plain(r["seq"]), metric=r["metric"],
+                    base=_plain(r["base"]), cand=_plain(r["cand"]), suite=r["suite"], level=level,
+                    status=r["status"], worse_by=_plain(r.get("worse_by")), tolerance=_plain(r.get("tolerance")),
+                    p_adj=_plain(r.get("p_adj")), decided_by=r.get("decided_by"))  # fmt: skip
+
+    regs, better, unjudged = [], [], []
     for level, t in (("sequence", sequences), ("scene", scenes)):
-        for r in t[t["status"].isin(bad)].to_dict("records"):
-            regs.append(dict(algorithm=r["algorithm"], scene=r["scene"], seq=_plain(r["seq"]), metric=r["metric"],
-                             base=_plain(r["base"]), cand=_plain(r["cand"]), suite=r["suite"], level=level,
-                             status=r["status"], worse_by=_plain(r.get("worse_by")),
-                             tolerance=_plain(r.get("tolerance")), p=_plain(r.get("p")),
-                             decided_by=r.get("decided_by")))  # fmt: skip
+        for r in t.to_dict("records"):
+            if r["status"] in BAD:
+                regs.append(entry(level, r))
+            elif r["status"] == "improvement":
+                better.append(entry(level, r))
+            elif r["status"] == "unjudged":
+                unjudged.append(entry(level, r))
+    trade = []
+    for suite, alg in dict.fromkeys((r["suite"], r["algorithm"]) for r in regs + better):
+        w = [r for r in regs if (r["suite"], r["algorithm"]) == (suite, alg)]
+        g = [r for r in better if (r["suite"], r["algorithm"]) == (suite, alg)]
+        if w and g:
+            trade.append(dict(suite=suite, algorithm=alg, worse=sorted({_what(r) for r in w}),
+                              better=sorted({_what(r) for r in g})))  # fmt: skip
     counts = {s: int((sequences["status"] == s).sum()) for s in ("ok", "improvement", "regression", "missing",
-                                                                   "failed", "new")}  # fmt: skip
-    n_seq = sequences[["suite", "algorithm", "scene", "seq"]].drop_duplicates().shape[0] if len(sequences) else 0
-    return dict(verdict="regression" if regs else "ok", regressions=regs, sequences=n_seq, counts=counts,
+                                                                   "failed", "new", "unjudged")}  # fmt: skip
+    scene_counts = {s: int((scenes["status"] == s).sum()) for s in ("ok", "improvement", "regression")}
+    n_seq = sequences[KEYS].drop_duplicates().shape[0] if len(sequences) else 0
+    return dict(verdict="regression" if regs else "ok", rule=sequences.attrs.get("rule", ""), regressions=regs,
+                improvements=better, tradeoffs=trade,
+                unjudged=unjudged, sequences=n_seq, counts=counts, scene_counts=scene_counts,
                 regressed_sequences=len({(r["suite"], r["algorithm"], r["scene"], r["seq"]) for r in regs
                                          if r["level"] == "sequence"}))  # fmt: skip
+
+
+def _what(r: dict) -> str:
+    where = f"{r['scene']}-{r['seq']}" if r["seq"] is not None else f"{r['scene']} (scene)"
+    return f"{r['metric']} {where}"
 
 
 def _plain(v: object) -> object:

@@ -1,11 +1,35 @@
-"""The default tolerances of ``lorisnb diff`` (:mod:`lorisnb.core.stats.regression`), in a module of
-their own so that the command line's parser (its help text) does not import pandas."""
+"""The default tolerances and rerun spreads of ``lorisnb diff`` (:mod:`lorisnb.core.stats.regression`),
+in a module of their own so that the command line's parser (its help text) does not import pandas."""
 
 from __future__ import annotations
 
 #: How much worse each metric may get before it is a regression: an amount in the metric's unit, or
-#: a share of the base value (``10%``).
+#: a share of the base value (``10%``). A change is a regression when the data show it *beyond* this
+#: amount (the rule of :mod:`lorisnb.core.stats.regression`).
 DEFAULT_TOLERANCES: dict[str, str] = {
     "cr": "0.02", "cr_t": "0.02", "cs_r": "0.02", "ate_rmse": "10%", "aoe_rmse": "10%", "c_ate_rmse": "10%",
     "c_aoe_rmse": "10%", "rpe_trans_rmse": "10%", "rpe_rot_rmse": "10%",
 }  # fmt: skip
+
+#: The spread of one rerun (standard deviation of a run's value about the system's mean) taken at
+#: the least: "rate" for CR, CR-T and CS-R (in CR units), "log" for the errors (ATE, AOE, RPE; the
+#: log of the ratio, 0.1 is about 10 %). From the 20 real rerun pairs of the icra20 results (the
+#: median |change| over sqrt(2) x 0.674): with trials, half of it is added to every comparison's
+#: own spread (:mod:`lorisnb.core.stats.regression`).
+RERUN_SPREAD: dict[str, float] = {"rate": 0.017, "log": 0.19}
+
+#: How far beyond its tolerance a change of a single run per side must go to be a regression, by
+#: level and metric (on the judged scale: CR units for the rates, the log of the ratio for the
+#: errors): the largest change that noise-only single-run diffs show in 95 % of them, on reruns of
+#: the icra20 outputs under the noise of their real rerun pairs (``make calibrate`` measures and
+#: prints these). Real reruns of one sequence can flip between tracking and not (CS-R 0.95 -> 0),
+#: so a single run can tell only a sequence that stopped tracking, or a scene-wide change, from noise.
+SINGLE_RUN_BAND: dict[str, dict[str, float]] = {
+    "sequence": {"cr": 0.8, "cr_t": 0.9, "cs_r": 1.0, "ate_rmse": 1.8, "aoe_rmse": 1.8, "c_ate_rmse": 1.8,
+                 "c_aoe_rmse": 1.8, "rpe_trans_rmse": 0.65, "rpe_rot_rmse": 0.35},
+    "scene": {"cr": 0.2, "cr_t": 0.3, "cs_r": 0.5, "c_ate_rmse": 0.65},
+}  # fmt: skip
+
+#: Fewer matched poses than this in the base (or, for the errors, in either run) and a sequence is
+#: too little to judge: an alignment on a handful of poses is unstable.
+MIN_MATCHED = 50

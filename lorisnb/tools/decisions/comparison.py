@@ -16,6 +16,7 @@ from lorisnb.core.spec import validate
 from lorisnb.core.stats import inference as stats
 from lorisnb.core.stats import ranking
 from lorisnb.core.stats.power import runs_for_power
+from lorisnb.core.stats.tolerances import RERUN_SPREAD
 from lorisnb.core.stats.trials import check_duplicates
 from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_csv
@@ -87,6 +88,27 @@ def _versus_top(rank: pd.DataFrame, pairs: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def trial_spread(table: pd.DataFrame) -> tuple[pd.DataFrame, set[str]]:
+    """What varies between trials: per algorithm with trials, the median over its sequences of the
+    standard deviation of CR between trials and of the log of ATE RMSE (about a relative spread),
+    and the algorithms whose trials are **near-identical copies**: both spreads below a quarter of
+    real rerun spreads (:data:`~lorisnb.core.stats.tolerances.RERUN_SPREAD`)."""
+    t = stats.with_trials(table)
+    rows = []
+    for alg, g in t.groupby("algorithm", sort=True):
+        per = g.groupby(["suite", "scene", "seq"])
+        if per["trial"].nunique().max() < 2:
+            continue
+        cr = float(per["cr"].std().median()) if "cr" in g else np.nan
+        ate = np.log(g["ate_rmse"].where(g["ate_rmse"] > 0)) if "ate_rmse" in g else pd.Series(np.nan, g.index)
+        ate_s = float(ate.groupby([g["suite"], g["scene"], g["seq"]]).std().median())
+        rows.append(dict(algorithm=alg, cr_spread=cr, ate_spread=ate_s))
+    spread = pd.DataFrame(rows, columns=["algorithm", "cr_spread", "ate_spread"])
+    copies = {r.algorithm for r in spread.itertuples()
+              if r.cr_spread < RERUN_SPREAD["rate"] / 4 and r.ate_spread < RERUN_SPREAD["log"] / 4}  # fmt: skip
+    return spread, copies
+
+
 def compare_table(
     table: pd.DataFrame,
     durations: pd.DataFrame,
@@ -115,6 +137,17 @@ def compare_table(
     notes = coverage_notes(cover)
     ci = stats.confidence_intervals(full, level=level, seed=seed)
     pairs = stats.pairwise(full, metric, alpha=alpha, seed=seed)
+    spread, copies = trial_spread(table)
+    if copies:  # pseudo-replicates: their test would claim a significance that reruns would not show
+        mask = pairs["a"].isin(copies) | pairs["b"].isin(copies)
+        pairs.loc[mask, "significant"] = False
+        pairs.loc[mask, "better"] = ""
+        notes += [f"the trials of {', '.join(sorted(copies))} are near-identical: " + "; ".join(
+            f"{r.algorithm}: CR varies by {r.cr_spread:.2g}, ATE by {100 * r.ate_spread:.2g} %"
+            for r in spread.itertuples() if r.algorithm in copies)
+            + f" between trials (median over sequences), where real reruns of the icra20 systems vary by "
+            f"{RERUN_SPREAD['rate']:g} and {100 * RERUN_SPREAD['log']:.0f} %: they look like copies of one run, "
+            "not reruns, so no significance is claimed for their pairs; run the system again for each trial"]  # fmt: skip
     rank = ranking.ranking(full, metric, alpha=alpha, seed=seed, pairs=pairs)
     keys = ["suite", "scene", "algorithm"]
     c = ci[ci["metric"] == metric].drop(columns=["metric"])
@@ -142,6 +175,10 @@ def compare_table(
         "the scene's first algorithm, with the interval that inverts the same test (it holds 0 exactly when the "
         "test does not separate the two):"
     )
+    if len(spread):
+        header += "\nwhat varies between trials (median over sequences of the trials' spread): " + "; ".join(
+            f"{r.algorithm} CR {r.cr_spread:.2g}, ATE {100 * r.ate_spread:.2g} %" for r in spread.itertuples()
+        ) + f" (real reruns: CR {RERUN_SPREAD['rate']:g}, ATE {100 * RERUN_SPREAD['log']:.0f} %)"  # fmt: skip
     sig = pairs[pairs["significant"].astype(bool)]  # a mask also when empty (object dtype)
     summary = f"{len(sig)} of {len(pairs)} pairs differ significantly (the test behind the ranks and bold marks)"
     summary += ":" if len(sig) else "."

@@ -15,7 +15,7 @@ import pandas as pd
 
 from lorisnb.core.spec import validate
 from lorisnb.core.stats.inference import with_trials
-from lorisnb.core.stats.regression import Tolerance, parse_tolerances, scene_changes, sequence_changes, verdict
+from lorisnb.core.stats.regression import Tolerance, changes, parse_tolerances, verdict
 from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_text
 from lorisnb.tools.decisions.comparison import check_table_duplicates
@@ -72,7 +72,6 @@ def diff_tables(
     cand: pd.DataFrame,
     tolerances: Mapping[str, Tolerance] | Mapping[str, str | float] | str | None = None,
     alpha: float = 0.05,
-    seed: int = 0,
     cand_failures: Mapping[str, str] | None = None,
     names: tuple[str, str] = ("BASE", "CAND"),
     expected: pd.DataFrame | None = None,
@@ -99,7 +98,7 @@ def diff_tables(
         raise ValidationError(f"{names[0]} and {names[1]} are not comparable (scored with different settings): "
                               + "; ".join(differ) + ". Compare tables scored with the same spec")  # fmt: skip
     b, c = keyed(base, names[0]), keyed(cand, names[1])
-    seqs = sequence_changes(b, c, tols, alpha, seed)
+    seqs, scenes = changes(b, c, tols, alpha, expected)
     if cand_failures and "file" in b.columns and len(seqs):
         files = b.drop_duplicates(["suite", "algorithm", "scene", "seq"]).set_index(
             ["suite", "algorithm", "scene", "seq"]
@@ -108,7 +107,6 @@ def diff_tables(
             f = files.get(tuple(seqs.loc[i, ["suite", "algorithm", "scene", "seq"]]))
             if f in cand_failures:
                 seqs.loc[i, ["status", "cand"]] = ["failed", f"failed: {cand_failures[f]}"]
-    scenes = scene_changes(b, c, tols, alpha, seed, expected)
     return Diff(seqs, scenes, verdict(seqs, scenes))
 
 
@@ -147,7 +145,8 @@ def write_json(d: Diff, out: str | os.PathLike[str], force: bool, extra: Mapping
 
 def write_junit(d: Diff, out: str | os.PathLike[str], force: bool) -> Path:
     """JUnit XML: one test case per sequence and per scene value compared (class
-    ``suite.algorithm.scene``), failed when it regressed, with each metric's base and candidate."""
+    ``suite.algorithm.scene``), failed when it regressed, with each metric's base and candidate;
+    improvements and comparisons too little to judge as the case's properties."""
     cases = []
     for level, t in (("sequence", d.sequences), ("scene", d.scenes)):
         if t.empty:
@@ -158,13 +157,19 @@ def write_junit(d: Diff, out: str | os.PathLike[str], force: bool) -> Path:
             name = f"{scene}-{key[3]}" if level == "sequence" else f"{scene} (scene)"
             bad = g[g["status"].isin(["regression", "missing", "failed"])]
             new = bool((g["status"] == "new").all())
-            cases.append((".".join(x for x in (str(suite), str(alg), str(scene)) if x), name, bad, new))
+            notes = [f"{r.status}: {r.metric} {r.base} -> {r.cand}" for r in g.itertuples()
+                     if r.status in ("improvement", "unjudged")]  # fmt: skip
+            cases.append((".".join(x for x in (str(suite), str(alg), str(scene)) if x), name, bad, new, notes))
     root = ET.Element("testsuites", name="lorisnb diff")
     suite_el = ET.SubElement(root, "testsuite", name="lorisnb diff", tests=str(len(cases)),
-                             failures=str(sum(len(b) > 0 for _, _, b, _ in cases)),
-                             skipped=str(sum(n for *_, n in cases)), errors="0")  # fmt: skip
-    for cls, name, bad, new in cases:
+                             failures=str(sum(len(c[2]) > 0 for c in cases)),
+                             skipped=str(sum(c[3] for c in cases)), errors="0")  # fmt: skip
+    for cls, name, bad, new, notes in cases:
         case = ET.SubElement(suite_el, "testcase", classname=cls, name=name)
+        if notes:  # improvements and what was too little to judge, named beside the verdict
+            props = ET.SubElement(case, "properties")
+            for k, note in enumerate(notes):
+                ET.SubElement(props, "property", name=f"note{k + 1}", value=note)
         if len(bad):
             lines = [f"{r.metric}: {r.status}, base {r.base}, cand {r.cand}" for r in bad.itertuples()]
             fail = ET.SubElement(case, "failure", message="; ".join(lines)[:500], type="regression")
@@ -174,3 +179,88 @@ def write_junit(d: Diff, out: str | os.PathLike[str], force: bool) -> Path:
     ET.indent(root)
     text = '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
     return write_text(text, out, force)
+
+
+def _where(r: Mapping) -> str:
+    return f"{r['scene']}-{r['seq']}" if r["seq"] is not None else f"{r['scene']} (scene)"
+
+
+def _value(v: object) -> str:
+    return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+
+def _md(text: object) -> str:
+    """A table cell: pipes and line breaks escaped, HTML special characters too."""
+    s = str(text).replace("\\", "\\\\").replace("|", "\\|").replace("\n", " ").replace("\r", " ")
+    return s.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+def markdown(d: Diff, base: str, cand: str, label: str | None = None) -> str:
+    """The verdict as Markdown, for a pull-request comment or a CI job summary: the verdict, the
+    counts, regressions, improvements, trade-offs and what was too little to judge."""
+    v = d.verdict
+    icon = "❌" if d.regressed else "✅"
+    lines = [f"## {icon} lorisnb diff: {v['verdict']}", ""]
+    lines.append(f"`{_md(base)}` → `{_md(cand)}`" + (f" (code under test: `{_md(label)}`)" if label else ""))
+    lines.append("")
+    counts = ", ".join(f"{n} {k}" for k, n in v["counts"].items() if n)
+    lines.append(f"{v['sequences']} sequence(s); per metric and sequence: {counts or 'nothing compared'}.")
+    if v.get("rule"):
+        lines.append(f"Rule: {_md(v['rule'])}")
+    for title, rows in (("Regressions", v["regressions"]), ("Improvements", v["improvements"])):
+        if not rows:
+            continue
+        lines += ["", f"### {title} ({len(rows)})", "", "| algorithm | where | metric | base | cand | decided by |",
+                  "|---|---|---|---|---|---|"]  # fmt: skip
+        for r in rows[:200]:
+            lines.append(f"| {_md(r['algorithm'])} | {_md(_where(r))} | {_md(r['metric'])} | {_md(_value(r['base']))} | "
+                         f"{_md(_value(r['cand']))} | {_md(r['decided_by'] or '')} |")  # fmt: skip
+        if len(rows) > 200:
+            lines.append(f"| … {len(rows) - 200} more (the JSON has all) | | | | | |")
+    if v["tradeoffs"]:
+        lines += ["", "### Trade-offs", ""]
+        for t in v["tradeoffs"]:
+            lines.append(
+                f"- **{_md(t['algorithm'])}**: worse {_md(', '.join(t['worse']))}; better {_md(', '.join(t['better']))}"
+            )
+    if v["unjudged"]:
+        lines += [
+            "",
+            f"{len(v['unjudged'])} comparison(s) too little to judge (few matched poses); the JSON lists them.",
+        ]
+    return "\n".join(lines) + "\n"
+
+
+def github_annotations(d: Diff) -> list[str]:
+    """GitHub Actions workflow commands: an ``::error`` per regression, a ``::notice`` per
+    improvement (values escaped as the runner expects)."""
+
+    def esc(s: str) -> str:
+        return s.replace("%", "%25").replace("\r", "%0D").replace("\n", "%0A")
+
+    def prop(s: str) -> str:
+        return esc(s).replace(":", "%3A").replace(",", "%2C")
+
+    out = []
+    for kind, rows in (("error", d.verdict["regressions"]), ("notice", d.verdict["improvements"])):
+        for r in rows:
+            title = prop(f"lorisnb diff: {r['status']} {r['algorithm']} {_where(r)}")
+            message = esc(f"{r['metric']}: {_value(r['base'])} -> {_value(r['cand'])}")
+            out.append(f"::{kind} title={title}::{message}")
+    return out
+
+
+def badge(d: Diff) -> str:
+    """An SVG badge (flat, offline: no font or script fetched): ``lorisnb diff | ok`` in green, or
+    ``regression (N)`` in red."""
+    from xml.sax.saxutils import escape
+
+    n = d.verdict["regressed_sequences"] + len([r for r in d.verdict["regressions"] if r["seq"] is None])
+    right, colour = ("ok", "#2e7d32") if not d.regressed else (f"regression ({n})", "#c62828")
+    left = "lorisnb diff"
+    wl, wr = 6 * len(left) + 12, 6 * len(right) + 12
+    return (f'<svg xmlns="http://www.w3.org/2000/svg" width="{wl + wr}" height="20" role="img" '
+            f'aria-label="{escape(left)}: {escape(right)}"><title>{escape(left)}: {escape(right)}</title>'
+            f'<rect width="{wl}" height="20" fill="#555"/><rect x="{wl}" width="{wr}" height="20" fill="{colour}"/>'
+            f'<g fill="#fff" font-family="DejaVu Sans,Verdana,sans-serif" font-size="11">'
+            f'<text x="6" y="14">{escape(left)}</text><text x="{wl + 6}" y="14">{escape(right)}</text></g></svg>\n')  # fmt: skip

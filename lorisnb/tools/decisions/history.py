@@ -3,12 +3,15 @@ per-sequence CSV/Parquet tables), where a value first changed, and which runs ca
 with the run before them.
 
 Runs are ordered by ``created`` of their run.json; runs without one (bare tables) by the file's
-modification time, and the table says which (``created_from``). A run is **not comparable** with
-the run before it when their specs differ (:func:`lorisnb.tools.decisions.runs.spec_differences`), when
-lorisnb's version differs, or when the checksums of their ground-truth files differ (run.json's
-``inputs``); its change is then not computed and a new series starts there. A value **changed**
-when it moved by more than its tolerance (:mod:`lorisnb.core.stats.regression`) against the previous
-comparable run; scene values count missing sequences as failed runs (:mod:`lorisnb.core.lifelong.coverage`).
+modification time, and the table says which (``created_from``). Two runs are **not comparable**
+when their specs differ (:func:`lorisnb.tools.decisions.runs.spec_differences`), when lorisnb's
+version differs, or when the checksums of their ground-truth files differ (run.json's ``inputs``);
+each break is named. Each run is compared with its **baseline**, the last earlier run it is
+comparable with (not only the run just before it: a run with other thresholds in between hides
+nothing), by the one decision rule of ``lorisnb diff`` (:mod:`lorisnb.core.stats.regression`): a
+value **changed** when that rule calls it a regression or an improvement, or a sequence or trial of
+its scene was lost. Scene values count missing sequences as failed runs
+(:mod:`lorisnb.core.lifelong.coverage`).
 """
 
 from __future__ import annotations
@@ -22,13 +25,14 @@ import pandas as pd
 
 from lorisnb.core.lifelong.coverage import complete, expected_from
 from lorisnb.core.stats.inference import WEIGHTS, scene_means
-from lorisnb.core.stats.regression import METRICS, Tolerance, parse_tolerances
+from lorisnb.core.stats.regression import BAD, Tolerance, parse_tolerances
 from lorisnb.errors import ValidationError
-from lorisnb.tools.decisions.diff import keyed
+from lorisnb.tools.decisions.diff import Diff, diff_tables, keyed
 from lorisnb.tools.decisions.runs import Run, load_run, spec_differences
 
-COLUMNS = ["run", "path", "created", "created_from", "lorisnb_version", "comparable", "not_comparable", "suite",
-           "algorithm", "scene", "metric", "value", "change", "changed", "first_change"]  # fmt: skip
+COLUMNS = ["run", "path", "created", "created_from", "lorisnb_version", "label", "comparable", "not_comparable",
+           "baseline", "suite", "algorithm", "scene", "metric", "value", "status", "change", "changed",
+           "first_change"]  # fmt: skip
 
 
 def load_runs(paths: Iterable[str | os.PathLike[str]]) -> list[Run]:
@@ -65,10 +69,59 @@ def comparability(prev: Run, run: Run) -> list[str]:
     return reasons
 
 
+def earlier_runs(folder: str | os.PathLike[str]) -> list[Run]:
+    """The runs kept in ``folder`` (report run folders and per-sequence tables directly in it),
+    oldest first; an error naming the folder when it holds none."""
+    from lorisnb.tools.decisions.runs import is_report_run, is_table
+
+    f = Path(folder)
+    if not f.is_dir():
+        raise ValidationError(f"{f}: not a folder of earlier runs (report run folders or per-sequence tables)")
+    # hidden names are left out: a report's unfinished run folder (.NAME.partial-*) is not an earlier run
+    found = sorted(p for p in f.iterdir() if not p.name.startswith(".") and (is_report_run(p) or is_table(p)))
+    if not found:
+        raise ValidationError(f"{f} holds no run folder (run.json) and no per-sequence table (.csv, .parquet); give "
+                              "the folder the nightly runs are kept in")  # fmt: skip
+    return load_runs(found)
+
+
+def last_comparable(folder: str | os.PathLike[str], cand: Run) -> tuple[Run, list[Run]]:
+    """The newest run in ``folder`` comparable with ``cand`` (:func:`comparability`: same spec,
+    lorisnb version and ground truth), and every run there comparable with it, oldest first; an
+    error naming the nearest runs and why when none is."""
+    runs = [r for r in earlier_runs(folder) if r.path.resolve() != Path(cand.path).resolve()]
+    fits = [r for r in runs if not comparability(r, cand)]
+    if not fits:
+        why = "; ".join(f"{r.name}: {', '.join(comparability(r, cand))}" for r in runs[-3:])
+        raise ValidationError(f"none of the {len(runs)} run(s) in {folder} is comparable with {cand.name} ({why}); "
+                              "compare runs made with the same spec, lorisnb version and ground truth")  # fmt: skip
+    return fits[-1], fits
+
+
+def baselines(runs: Sequence[Run]) -> list[tuple[int | None, str]]:
+    """For each run (oldest first), the index of its **baseline**, the last earlier run it can be
+    compared with (None: none, a new series starts), and why it cannot be compared with the run
+    just before it ("" when it can). A run with other thresholds between two comparable runs does
+    not hide a change between them: the later one is compared with the earlier one."""
+    out: list[tuple[int | None, str]] = []
+    for k, run in enumerate(runs):
+        before = "; ".join(comparability(runs[k - 1], run)) if k else ""
+        base = next((j for j in range(k - 1, -1, -1) if not comparability(runs[j], run)), None)
+        out.append((base, before))
+    return out
+
+
 def history_table(
-    runs: Sequence[Run], metrics: Sequence[str] = tuple(WEIGHTS), tolerances: Mapping[str, Tolerance] | None = None
-) -> pd.DataFrame:
-    """One row per run, suite, algorithm, scene and metric (see :data:`COLUMNS`)."""
+    runs: Sequence[Run], metrics: Sequence[str] = tuple(WEIGHTS), tolerances: Mapping[str, Tolerance] | None = None,
+    alpha: float = 0.05,
+) -> tuple[pd.DataFrame, dict[int, Diff]]:  # fmt: skip
+    """One row per run, suite, algorithm, scene and metric (see :data:`COLUMNS`), and each run's
+    diff against its baseline (by the run's index). A value's ``status`` is the verdict of
+    ``lorisnb diff`` of the run against its baseline (:func:`baselines`) for that scene value:
+    ``regression``, ``improvement``, ``missing`` (a sequence or trial of the scene lost), ``ok``,
+    ``unjudged``; empty where the run has no baseline. A scene value's status is also that of any of
+    its sequences' values of the metric (a sequence that regressed in CR makes its scene's CR row a
+    regression, though the scene's mean may hide it)."""
     tols = parse_tolerances() if tolerances is None else dict(tolerances)
     bad = [m for m in metrics if m not in WEIGHTS]
     if bad:
@@ -78,11 +131,25 @@ def history_table(
     rows = []
     names = run_labels(runs)  # the run column: one name per run, or two runs' rows would merge
     seen_series: dict[tuple, int] = {}  # (suite, algorithm, scene, metric) -> the first run that has it
-    for k, (run, table) in enumerate(zip(runs, tables, strict=True)):
-        reasons = comparability(runs[k - 1], run) if k else []
+    diffs: dict[int, Diff] = {}
+    for k, ((base, before), run, table) in enumerate(zip(baselines(runs), runs, tables, strict=True)):
+        status: dict[tuple, str] = {}
+        if base is not None:
+            diffs[k] = diff_tables(tables[base], table, tols, alpha, names=(names[base], names[k]), expected=expected)
+            for r in diffs[k].scenes.itertuples():
+                key = (r.suite, r.algorithm, r.scene, r.metric)
+                status[key] = r.status if key not in status or r.status in BAD else status[key]
+            for r in diffs[k].sequences.itertuples():  # a sequence's change of a metric is its scene's too
+                key = (r.suite, r.algorithm, r.scene, r.metric)
+                if r.status in (*BAD, "improvement") and status.get(key) not in BAD:
+                    status[key] = r.status
+            for r in diffs[k].scenes[diffs[k].scenes["metric"] == "coverage"].itertuples():
+                for m in metrics:  # a lost sequence or trial fails every value of its scene
+                    status[(r.suite, r.algorithm, r.scene, m)] = "missing"
         meta = dict(run=names[k], path=str(run.path), created=run.created.isoformat() if run.created else "",
-                    created_from=run.created_from, lorisnb_version=run.version or "", comparable=not reasons,
-                    not_comparable="; ".join(reasons))  # fmt: skip
+                    created_from=run.created_from, lorisnb_version=run.version or "", label=run.label or "",
+                    comparable=base is not None and base == k - 1, not_comparable=before,
+                    baseline="" if base is None else names[base])  # fmt: skip
         full, _ = complete(table, expected)
         here = set()
         for m in metrics:
@@ -90,47 +157,41 @@ def history_table(
                 key = (r.suite, r.algorithm, r.scene, m)
                 here.add(key)
                 seen_series.setdefault(key, k)
-                rows.append(dict(meta, suite=r.suite, algorithm=r.algorithm, scene=r.scene, metric=m, value=r.value))
+                rows.append(dict(meta, suite=r.suite, algorithm=r.algorithm, scene=r.scene, metric=m, value=r.value,
+                                 status="" if base is None else status.get(key, "")))  # fmt: skip
         for key in (key for key in seen_series if key not in here):  # a scene the run lost: no value, a change
-            rows.append(dict(meta, suite=key[0], algorithm=key[1], scene=key[2], metric=key[3], value=np.nan))
-    out = pd.DataFrame(rows, columns=COLUMNS[:12])
+            rows.append(dict(meta, suite=key[0], algorithm=key[1], scene=key[2], metric=key[3], value=np.nan,
+                             status="" if base is None else "missing"))  # fmt: skip
+    out = pd.DataFrame(rows, columns=COLUMNS[:-3])
     out["change"], out["changed"], out["first_change"] = np.nan, False, False
-    for (_, _, _, m), g in out.groupby(["suite", "algorithm", "scene", "metric"], sort=False):
-        prev = np.nan
+    for _, g in out.groupby(["suite", "algorithm", "scene", "metric"], sort=False):
+        by_run = dict(zip(g["run"], g["value"], strict=True))
         seen = False
         for i in g.index:
-            v = out.at[i, "value"]
-            if not out.at[i, "comparable"]:
-                prev = v  # a new series starts here
-                continue
-            gone = np.isfinite(prev) and not np.isfinite(v)  # no value now (a lost scene, no correct pose): worse,
-            if np.isfinite(prev) and np.isfinite(v):  # as diff counts a value defined in BASE, undefined in CAND
-                change = v - prev
-                out.at[i, "change"] = change
-            if gone or (
-                np.isfinite(prev) and np.isfinite(v) and abs(v - prev) > tols[m].of(prev) + 1e-12 * max(1.0, abs(prev))
-            ):
+            base_value = by_run.get(out.at[i, "baseline"], np.nan)
+            if np.isfinite(base_value) and np.isfinite(out.at[i, "value"]):
+                out.at[i, "change"] = out.at[i, "value"] - base_value
+            if out.at[i, "status"] in ("regression", "improvement", "missing"):
                 out.at[i, "changed"] = True
                 out.at[i, "first_change"] = not seen
                 seen = True
-            prev = v
-    return out
+            if not out.at[i, "baseline"]:
+                seen = False  # a new series starts here
+    return out, diffs
 
 
 def first_changes(history: pd.DataFrame) -> list[str]:
-    """One line per series with the first run where it changed."""
+    """One line per value that changed (regression, improvement or a lost sequence), each against
+    the run's baseline; a series' first change says so."""
     lines = []
-    first = history[history["first_change"].astype(bool)]
-    for r in first.itertuples():
-        i = history.index.get_loc(r.Index)
-        before = history.iloc[:i]
-        before = before[(before["suite"] == r.suite) & (before["algorithm"] == r.algorithm)
-                        & (before["scene"] == r.scene) & (before["metric"] == r.metric)]  # fmt: skip
-        was = before["value"].iloc[-1] if len(before) else np.nan
-        sign = "better" if np.isfinite(r.value) and (r.change > 0) == (METRICS[r.metric] > 0) else "worse"
+    by_key = history.set_index(["run", "suite", "algorithm", "scene", "metric"])["value"]
+    for r in history[history["changed"].astype(bool)].itertuples():
+        was = by_key.get((r.baseline, r.suite, r.algorithm, r.scene, r.metric), np.nan)
         now = f"{r.value:.4f}" if np.isfinite(r.value) else "no value"
-        lines.append(f"{r.algorithm}{f' ({r.suite})' if r.suite else ''} {r.scene} {r.metric}: first change in "
-                     f"{r.run} ({was:.4f} -> {now}, {sign})")  # fmt: skip
+        word = {"regression": "worse", "improvement": "better"}.get(r.status, "a sequence or trial lost")
+        first = "first change" if r.first_change else "change"
+        lines.append(f"{r.algorithm}{f' ({r.suite})' if r.suite else ''} {r.scene} {r.metric}: {first} in {r.run} "
+                     f"against {r.baseline} ({was:.4f} -> {now}, {word})")  # fmt: skip
     return lines
 
 

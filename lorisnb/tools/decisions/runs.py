@@ -81,6 +81,12 @@ class Run:
     def spec(self) -> Any:
         return self.meta.get("spec")
 
+    @property
+    def label(self) -> str | None:
+        """The code under test, as the run recorded it (``report --label``, run.json's ``label``)."""
+        v = self.meta.get("label")
+        return None if v in (None, "") else str(v)
+
     def groundtruth_sums(self) -> dict[str, str]:
         """name -> sha256 of the ground-truth files among run.json's inputs."""
         inputs = self.meta.get("inputs") or {}

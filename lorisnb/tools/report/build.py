@@ -23,14 +23,17 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
+from lorisnb.core.spec import validate
 from lorisnb.errors import DataNotFoundError, LorisError, OutputError, ValidationError
 from lorisnb.io.datasets.paths import find_data
 from lorisnb.io.writers import overlap, remove_partial, write_csv
+from lorisnb.tools.decisions.history import earlier_runs
 from lorisnb.tools.evaluation.pool import start_context
 from lorisnb.tools.evaluation.runner import check_filters, result_files
 from lorisnb.tools.notebook.params import check_parameters
 from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV, RUN_MARKER
 from lorisnb.tools.report import kernels as warm_kernels
+from lorisnb.tools.report.baseline import since_baseline
 from lorisnb.tools.report.html import single_file, write_notebook_css
 from lorisnb.tools.report.index import expected_spans, git_dirty, versions, write_index
 from lorisnb.tools.report.leaderboard import leaderboard_spec, refuse_unscorable_scenes, report_findings
@@ -243,6 +246,8 @@ def run_report(
     results: str | os.PathLike[str] | None = None,
     jobs: int | None = None,
     command: list[str] | None = None,
+    label: str | None = None,
+    baseline: str | os.PathLike[str] | None = None,
 ) -> tuple[Path, list[NotebookRun]]:
     """Run the notebooks into a new run folder; returns (run folder, notebook runs).
 
@@ -262,6 +267,10 @@ def run_report(
             left out unless named.
         jobs: notebooks run at a time (default: the cores, at most the number of notebooks).
         command: the command line recorded in ``run.json`` (default ``sys.argv``).
+        label: the code under test (its commit, tag or any name, e.g. ``$GITHUB_SHA``), recorded in
+            ``run.json`` and shown on the front page and in ``history``.
+        baseline: a folder of earlier runs: the front page gains "Since the baseline", this run
+            against the newest comparable one there (:mod:`lorisnb.tools.report.baseline`).
 
     The leaderboard is built when ``results`` is given or a selected notebook declares
     ``results_dir`` (the bundled icra20 results otherwise). The run is built under a hidden
@@ -270,6 +279,12 @@ def run_report(
     and the returned path says so. On Ctrl-C the temporary folder is removed and
     KeyboardInterrupt propagates.
     """
+    label = None if label is None else validate.code_label(label)
+    if baseline is not None:
+        earlier_runs(baseline)  # a folder without earlier runs: refused before anything runs
+        if results is None:
+            raise ValidationError("--baseline: compares the report's own evaluation of a results folder with earlier "
+                                  "runs; give --results DIR too")  # fmt: skip
     run_dir = _new_run_dir(out)
     nb_dir = notebook_dir(notebooks_dir)
     keep_safe = [nb_dir, *map(Path, protect), Path(__file__).resolve().parents[2]]
@@ -348,13 +363,16 @@ def run_report(
                                 {r.name: r.status for r in runs}, roots)  # fmt: skip
             if record.get("commit"):  # the commit alone does not say what ran if the checkout had changes
                 record["dirty"] = git_dirty()
+            if label is not None:
+                record["label"] = label
             write_run_json(tmp, record)
+            since = since_baseline(tmp, baseline, name=run_dir.name) if baseline is not None else None
 
             def pages(folder: Path, name: str) -> None:  # the pages name the run's folder; the marker lists all
-                index = write_index(folder, runs, params, name=name, findings=board.get("findings"), spec=spec,
+                index = write_index(folder, runs, params, name=name, findings=board.get("findings"), spec=spec, label=label,
                                     failures=board.get("failures"), left_out=left_out,
                                     per_sequence=board.get("per_sequence"), wanted=run_dir.name,
-                                    expected=board.get("expected"))  # fmt: skip
+                                    expected=board.get("expected"), since=since)  # fmt: skip
                 single_file(index, folder / "report.html")
                 _write_marker(folder, _files(folder))
 

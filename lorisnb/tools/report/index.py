@@ -214,8 +214,11 @@ def write_index(
     per_sequence: pd.DataFrame | None = None,
     wanted: str | None = None,
     expected: Mapping[str, Any] | None = None,
+    label: str | None = None,
+    since: Mapping[str, Any] | None = None,
 ) -> Path:
-    """``index.html`` (see the module docstring). ``name``: the run folder's name (``run_dir``'s by
+    """``index.html`` (see the module docstring). ``label``: the code under test, shown in the header;
+    ``since``: this run against its baseline (:func:`lorisnb.tools.report.baseline.since_baseline`). ``name``: the run folder's name (``run_dir``'s by
     default); ``wanted``: the name asked for, when another run took it and this one is ``name``;
     ``expected``: scene -> its sequences with ground truth (each one gets a column of the
     per-sequence values, with or without output)."""
@@ -230,10 +233,13 @@ def write_index(
         ".leaderboard th{background:#eef}.sentence{font-size:1.05em}.why,.spec{color:#444}figure{margin:1em 0}"
         "figcaption{color:#333;font-size:.95em}.failed{color:#b00}.ok{color:#070}.skipped{color:#b60}"
         "img{max-width:100%;border:1px solid #ddd}</style></head><body>",
-        f"<h1>lorisnb report</h1><p>Run folder <code>{esc(name)}</code>{moved}, written "
+        f"<h1>lorisnb report</h1><p>{f'Code under test: <code class=label>{esc(label)}</code>. ' if label else ''}"
+        f"Run folder <code>{esc(name)}</code>{moved}, written "
         f"{esc(_dt.datetime.now().isoformat(timespec='seconds'))}; provenance (command, version, inputs' "
         f"checksums) in <a href='run.json'>run.json</a>; one file for e-mail: <a href='report.html'>report.html</a>.</p>",
     ]
+    if since:
+        parts += _since_html(since)
     figures = _figures(run_dir, runs)
     if findings is not None and not len(findings.board):
         parts.append("<h2 id='findings'>What was found</h2><p class='failed'>No leaderboard: no result file could be "
@@ -383,3 +389,53 @@ def _notebooks(run_dir: Path, runs: Sequence["NotebookRun"], left_out: Mapping[s
     if left_out:
         parts.append("<p>Not run: " + "; ".join(f"{esc(k)} ({esc(v)})" for k, v in left_out.items()) + ".</p>")
     return parts
+
+
+def _since_html(since: Mapping[str, Any]) -> list[str]:
+    """The "Since the baseline" section: the verdict of diff against the baseline, what changed, and
+    the trend figure (a file of the run folder: opens offline)."""
+    v = since["verdict"]
+    ok = v["verdict"] == "ok"
+    who = esc(str(since["baseline"])) + (f" (code <code>{esc(str(since['baseline_label']))}</code>)"
+                                         if since.get("baseline_label") else "")  # fmt: skip
+    parts = [
+        "<h2 id='since-baseline'>Since the baseline</h2>",
+        f"<p class='verdict {'ok' if ok else 'failed'}'>Against <code>{who}</code>: <b>{esc(v['verdict'])}</b>"
+        + ("" if ok else f" ({v['regressed_sequences']} sequence(s) regressed)")
+        + ". "
+        + esc(", ".join(f"{n} {k}" for k, n in v["counts"].items() if n))
+        + ".</p>",
+        f"<p class='why'>{esc(v.get('rule', ''))}</p>",
+    ]
+    for title, rows in (("Regressions", v["regressions"]), ("Improvements", v["improvements"])):
+        if not rows:
+            continue
+        parts.append(f"<h3>{title} ({len(rows)})</h3><table class='changes'><tr><th>algorithm</th><th>where</th>"
+                     "<th>metric</th><th>baseline</th><th>this run</th></tr>")  # fmt: skip
+        for r in rows[:50]:
+            where = f"{r['scene']}-{r['seq']}" if r["seq"] is not None else f"{r['scene']} (scene)"
+            cells = [r["algorithm"], where, r["metric"], _num(r["base"]), _num(r["cand"])]
+            parts.append("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in cells) + "</tr>")
+        parts.append("</table>" + (f"<p>... {len(rows) - 50} more in findings/since_baseline.json</p>"
+                                   if len(rows) > 50 else ""))  # fmt: skip
+    for t in v.get("tradeoffs", []):
+        parts.append(f"<p>Trade-off: <b>{esc(t['algorithm'])}</b> worse in {esc(', '.join(t['worse']))}; "
+                     f"better in {esc(', '.join(t['better']))}.</p>")  # fmt: skip
+    if since.get("new_algorithms"):
+        parts.append("<p>New algorithms (not in the baseline): " + esc(", ".join(since["new_algorithms"])) + ".</p>")
+    if since.get("passed_over"):
+        parts.append("<p>Earlier runs passed over, not comparable with this one (changed settings): " + esc("; ".join(
+            f"{p['run']}: {p['why']}" for p in since["passed_over"])) + ".</p>")  # fmt: skip
+    if since.get("failed_inputs"):
+        parts.append(
+            f"<p class='failed'>Inputs this run could not score: {esc(', '.join(since['failed_inputs']))}.</p>"
+        )
+    if since.get("trend"):
+        parts.append(f"<figure><img src='{esc(since['trend'])}' alt='CR per scene over the last comparable runs'>"
+                     "<figcaption>CR per scene over the last comparable runs (ring: changed by diff's rule).</figcaption>"
+                     "</figure>")  # fmt: skip
+    return parts
+
+
+def _num(v: Any) -> str:
+    return f"{v:.4g}" if isinstance(v, float) else ("" if v is None else str(v))

@@ -126,6 +126,7 @@ SHAPES: dict[str, tuple[Any, str]] = {
     "command": (lambda v: isinstance(v, list) and all(isinstance(x, str) for x in v), "a list of strings"),
     "lorisnb_version": (_is_text_or_null, "a version string or null"),
     "commit": (_is_text_or_null, "a git commit or null"),
+    "label": (_is_text_or_null, "the name of the code under test or null"),
     "spec": (
         lambda v: (
             isinstance(v, dict) and isinstance(v.get("values", {}), dict) and _is_text_or_null(v.get("description"))

@@ -1,0 +1,94 @@
+"""``make calibrate``: the measured error rates of ``lorisnb diff``'s verdict (the regression gate).
+
+Reruns of the bundled real SLAM outputs under two noise models, nights of noise only and nights
+with one change of known size, and the share of each the verdict calls a regression
+(:mod:`lorisnb.tools.decisions.calibration`). Prints the noise models against the real rerun pairs
+of the icra20 data, then the table of false-alarm rates and power by trial count. Targets: false
+alarms at most 5 % at every trial count; power at least 90 % with 3 or more trials for CR -0.05
+and ATE +50 % on one sequence.
+
+    python benchmarks/calibrate.py [--pool 24] [--nights 200] [--power-nights 60] [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+
+from tqdm import tqdm
+
+from lorisnb.core.stats.tolerances import SINGLE_RUN_BAND
+from lorisnb.errors import LorisWarning
+from lorisnb.tools.decisions.calibration import (
+    MODELS,
+    calibrate,
+    generator_pairs,
+    make_pool,
+    pair_spread,
+    real_pairs,
+    single_run_bands,
+)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--pool", type=int, default=24, help="reruns of every sequence per noise model (default 24)")
+    p.add_argument("--nights", type=int, default=200, help="noise-only nights per model and trial count")
+    p.add_argument("--power-nights", type=int, default=60, help="nights per change, model and trial count")
+    p.add_argument("--trials", type=int, nargs="+", default=[1, 3, 5], help="trial counts (default 1 3 5)")
+    p.add_argument("--quick", action="store_true", help="a small run (pool 12, 40 nights, 12 per change)")
+    args = p.parse_args(argv)
+    if args.quick:
+        args.pool, args.nights, args.power_nights = 12, 40, 12
+    warnings.simplefilter("ignore", LorisWarning)
+    start = time.perf_counter()
+    real = real_pairs()
+    pools = {}
+    for name, noise in MODELS.items():
+        pools[name] = make_pool(noise, args.pool, progress=lambda x, n=name: tqdm(x, desc=f"reruns ({n})"))
+    print("\nHow two runs of one system on one recording differ (median, 90th percentile; |dCR| and |log ATE ratio|):")
+    rows = [("real pairs (icra20 per-seq vs lifelong)", pair_spread(real["cr_a"], real["cr_b"], real["ate_rmse_a"],
+                                                                    real["ate_rmse_b"]))]  # fmt: skip
+    rows += [(f"generator, model {name}", generator_pairs(pool)) for name, pool in pools.items()]
+    print(f"  {'':44s} {'CR med':>7s} {'CR p90':>7s} {'CR>0.3':>7s} {'ATE med':>8s} {'ATE p90':>8s}")
+    for label, s in rows:
+        print(f"  {label:44s} {s['cr_median']:7.4f} {s['cr_p90']:7.4f} {s['cr_over_0_3']:7.2f} "
+              f"{s['ate_median']:8.3f} {s['ate_p90']:8.3f}")  # fmt: skip
+    bands = single_run_bands(pools["real"], nights=min(args.nights, 100))
+    print("\nThe largest change of a noise-only single-run night (model real; CR units, or log ratio for errors):")
+    print("  what sizes lorisnb.core.stats.tolerances.SINGLE_RUN_BAND: the 95th percentiles times one factor "
+          f"({bands['factor'].iloc[0]:.2f}) so that 95 % of the nights stay within every band")  # fmt: skip
+    for r in bands.itertuples():
+        have = SINGLE_RUN_BAND[r.level].get(r.metric, float("nan"))
+        print(f"  {r.level:8s} {r.metric:15s} median {r.median:6.3f}  95th percentile {r.p95:6.3f}  band {r.band:6.3f}"
+              f"  in use {have:.2f}")  # fmt: skip
+    table = calibrate(pools, trials=args.trials, nights=args.nights, power_nights=args.power_nights,
+                      progress=lambda x: tqdm(x, desc="nights", leave=False))  # fmt: skip
+    print("\nThe verdict of lorisnb diff (default tolerances, alpha 0.05), share of nights [95 % interval]:")
+    checks = list(dict.fromkeys(table["check"]))
+    print(f"  {'model':6s} {'trials':>6s} " + " ".join(f"{c:>22s}" for c in checks))
+    for (model, n), g in table.groupby(["model", "trials"], sort=False):
+        cells = []
+        for c in checks:
+            r = g[g["check"] == c]
+            cells.append(f"{'-':>22s}" if r.empty else
+                         f"{100 * r['rate'].iloc[0]:5.1f}% [{100 * r['low'].iloc[0]:4.1f},{100 * r['high'].iloc[0]:5.1f}] "
+                         f"n{int(r['nights'].iloc[0]):<3d}")  # fmt: skip
+        print(f"  {model:6s} {n:6d} " + " ".join(cells))
+    fa = table[table["check"] == "false alarm"]
+    print(
+        f"\nfalse alarms at most 5 % everywhere: {'met' if (fa['rate'] <= 0.05).all() else 'NOT MET'} "
+        f"(largest {100 * fa['rate'].max():.1f} %)"
+    )
+    for c in ("cr -0.05", "ate x1.5"):
+        pw = table[(table["check"] == c) & (table["trials"] >= 3)]
+        if len(pw):
+            print(f"power for {c} with 3+ trials at least 90 %: {'met' if (pw['rate'] >= 0.9).all() else 'NOT MET'} "
+                  f"(smallest {100 * pw['rate'].min():.1f} %)")  # fmt: skip
+    print(f"({time.perf_counter() - start:.0f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,313 @@
+"""The measured error rates of the regression gate (``lorisnb diff``): reruns made from the bundled
+real SLAM outputs, nights of noise only and nights with a change of known size, and the share of
+each that the verdict calls a regression. ``make calibrate`` prints the table
+(``benchmarks/calibrate.py``); the README quotes it.
+
+- **Reruns** (:mod:`lorisnb.core.stats.reruns`): every sequence of the chosen algorithms'
+  ``per-seq`` results rerun ``pool`` times under a noise model, each rerun evaluated by the real
+  pipeline and scored at the paper's thresholds. A **night** draws ``2 n`` distinct reruns of every
+  sequence: ``n`` trials for BASE, ``n`` for CAND.
+- **False alarms**: the share of noise-only nights whose verdict is "regression" (anything at
+  all); the target is at most 5 % at every trial count.
+- **Power** per change: the share of nights whose verdict names the changed sequence (or its
+  scene). The changes (:data:`CHANGES`), on one target sequence of an algorithm at a time: its CR
+  lowered by 0.05, 0.15 or 0.3 (output removed over that share of its duration where it was
+  correct), its ATE multiplied by 1.5, 2 or 3 (every aligned position's error scaled), one of its
+  trials missing, one stopped at half time.
+- **The noise model checked against real reruns**: the icra20 ``lifelong`` runs start each scene
+  with its first sequence, which the ``per-seq`` runs also ran on its own: 20 pairs of real runs of
+  one system on one recording. :func:`real_pairs` gives their differences, :func:`pair_spread`
+  the same statistics of two reruns of the generator, side by side in the printed table.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from lorisnb.core.lifelong.aggregate import durations_table
+from lorisnb.core.lifelong.scoring import score
+from lorisnb.core.pipeline.model import ResultFile
+from lorisnb.core.pipeline.sessions import compute_errors
+from lorisnb.core.stats.regression import parse_tolerances
+from lorisnb.core.stats.reruns import RerunNoise, rerun
+from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.io.datasets.paths import find_data, load_groundtruth
+from lorisnb.io.readers.openloris import read_openloris
+from lorisnb.tools.decisions.diff import diff_tables
+
+#: Algorithms of ``icra20_results/per-seq`` the nights are made of (good, medium and poor trackers).
+ALGORITHMS = ("vins_mono_color_imu_with_loop", "orbslam2_rgbd", "infinitam_aligned_depth")
+#: Noise models: "real" has the median spread of the 20 real rerun pairs (its sizes chosen so that
+#: :func:`pair_spread` matches :func:`real_pairs`' medians); "heavy" adds a 10 % chance per run of
+#: losing track for good, the tail the real pairs show (2 of 20 differ in CR by more than 0.3).
+MODELS: dict[str, RerunNoise] = {
+    "real": RerunNoise(),
+    "heavy": RerunNoise(lost_rest=0.1),
+}
+#: The changes injected on one target sequence: CR lowered by a share of its duration, ATE
+#: multiplied, a trial missing, a trial stopped at half time.
+CR_DROPS = (0.05, 0.15, 0.3)
+ATE_FACTORS = (1.5, 2.0, 3.0)
+CHANGES = (*(f"cr -{x:g}" for x in CR_DROPS), *(f"ate x{x:g}" for x in ATE_FACTORS), "missing trial", "truncated trial")
+#: The paper's thresholds (eps per scene, phi 30 degrees), at which the nights are scored.
+THRESHOLDS: dict[str, Any] = {"eps": "paper", "phi": 30.0}
+
+
+@dataclass
+class Pool:
+    """Reruns of every sequence: ``tables[k]`` is rerun k's per-sequence table (all algorithms),
+    ``changed[(change, target)][k]`` the target's rows of rerun k under a change."""
+
+    tables: list[pd.DataFrame]
+    changed: dict[tuple[str, tuple], list[pd.DataFrame]]
+    expected: pd.DataFrame
+    targets: dict[str, list[tuple]]
+
+
+def _files(root: Path, algorithms: Sequence[str]) -> list[tuple[str, ResultFile]]:
+    out = []
+    for alg in algorithms:
+        for path in sorted((root / "per-seq" / alg).glob("*.txt")):
+            out.append((alg, read_openloris(path, warn=False)))
+    return out
+
+
+def _table(alg: str, rf: ResultFile, gt: ResultFile, trial: int) -> pd.DataFrame:
+    fe = compute_errors(rf, gt, algorithm=alg, file=rf.path.name, trial=trial, checks=False)
+    return score([fe], **THRESHOLDS)
+
+
+def _cr_change(traj: Trajectory, gt_span: tuple[float, float], drop: float) -> Trajectory:
+    """The estimate without output over ``drop`` of the ground truth's duration, in the middle of
+    its own span (where the targets track correctly): CR lower by about ``drop``."""
+    span = gt_span[1] - gt_span[0]
+    mid = 0.5 * (float(traj.stamps[0]) + float(traj.stamps[-1]))
+    keep = np.abs(traj.stamps - mid) >= 0.5 * drop * span
+    return Trajectory.from_checked(traj.stamps[keep], traj.positions[keep], traj.quaternions[keep], None, traj.meta)
+
+
+def _ate_change(alg: str, rf: ResultFile, gt: ResultFile, seq: int, factor: float) -> Trajectory:
+    """The estimate whose every aligned position is ``factor`` times as far from the ground truth
+    (ATE times ``factor``), orientations unchanged, in the ground truth's frame (the alignment is
+    then near identity)."""
+    e = next(s for s in compute_errors(rf, gt, algorithm=alg, checks=False).sequences if s.seq == seq)
+    pos = e.gt_positions + factor * (e.est_positions - e.gt_positions)
+    return Trajectory.from_checked(np.array(e.stamps), pos, np.array(e.est_quaternions), None, {})
+
+
+def _targets(base: pd.DataFrame) -> dict[str, list[tuple]]:
+    """One target sequence per algorithm and change: the longest well-tracked one (CR at least
+    0.8 for the CR changes, at least 300 matched poses)."""
+    out: dict[str, list[tuple]] = {c: [] for c in CHANGES}
+    for alg, g in base.groupby("algorithm", sort=False):
+        g = g[g["matched"] >= 300].sort_values("gt_duration", ascending=False)
+        good = g[g["cr"] >= 0.8]
+        for change in CHANGES:
+            pick = good if change.startswith("cr") else g
+            if len(pick):
+                r = pick.iloc[0]
+                out[change].append((alg, r["file"], r["scene"], int(r["seq"])))
+    return out
+
+
+def make_pool(noise: RerunNoise, size: int, algorithms: Sequence[str] = ALGORITHMS, data_root: str | None = None,
+              seed: int = 0, progress: Callable[[Iterable], Iterable] = lambda x: x) -> Pool:  # fmt: skip
+    """``size`` reruns of every sequence of ``algorithms`` (and of each change's targets) under
+    ``noise``, each scored."""
+    data = find_data(data_root)
+    have = set(data.scenes_with_groundtruth())
+    files = [(a, rf) for a, rf in _files(data.icra20, algorithms) if rf.scene in have]  # office: no public ground truth
+    gts = {s: load_groundtruth(s, data) for s in sorted({rf.scene for _, rf in files})}
+    base = pd.concat([_table(a, rf, gts[rf.scene], 0) for a, rf in files], ignore_index=True)
+    targets = _targets(base)
+    by_file = {(a, rf.path.name): rf for a, rf in files}
+    changed_files: dict[tuple[str, tuple], ResultFile] = {}
+    for change, tlist in targets.items():
+        for t in tlist:
+            alg, name, scene, seq = t
+            rf, gt = by_file[(alg, name)], gts[scene]
+            if change.startswith("cr -"):
+                g = gt.sequences[seq]
+                new = _cr_change(rf.sequences[seq], (float(g.stamps[0]), float(g.stamps[-1])), float(change[4:]))
+            elif change.startswith("ate x"):
+                new = _ate_change(alg, rf, gt, seq, float(change[5:]))
+            else:
+                continue
+            changed_files[(change, t)] = replace(rf, sequences={seq: new})
+    tables: list[pd.DataFrame] = []
+    changed: dict[tuple[str, tuple], list[pd.DataFrame]] = {k: [] for k in changed_files}
+    rng = np.random.default_rng(seed)
+    error = {(r["algorithm"], r["file"], int(r["seq"])): float(r["ate_rmse"]) for _, r in base.iterrows()}
+
+    def again(alg: str, rf: ResultFile, s: int) -> ResultFile:
+        return replace(rf, sequences={q: rerun(tr, noise, s + q, _finite(error.get((alg, rf.path.name, q))))
+                                      for q, tr in rf.sequences.items()})  # fmt: skip
+
+    for k in progress(range(size)):
+        seeds = rng.integers(2**31, size=len(files) + len(changed_files))
+        parts = []
+        for (alg, rf), s in zip(files, seeds, strict=False):
+            parts.append(_table(alg, again(alg, rf, int(s)), gts[rf.scene], k + 1))
+        tables.append(pd.concat(parts, ignore_index=True))
+        for (key, rf), s in zip(changed_files.items(), seeds[len(files) :], strict=True):
+            changed[key].append(_table(key[1][0], again(key[1][0], rf, int(s)), gts[key[1][2]], k + 1))
+    return Pool(tables, changed, durations_table(gts), targets)
+
+
+def _finite(v: float | None) -> float | None:
+    return v if v is not None and np.isfinite(v) and v > 0 else None
+
+
+def _night(pool: Pool, n: int, rng: np.random.Generator, change: str | None = None, target: tuple | None = None
+           ) -> tuple[pd.DataFrame, pd.DataFrame]:  # fmt: skip
+    """BASE and CAND of one night: ``n`` distinct reruns each (trials 1..n), CAND's target changed."""
+    picks = rng.choice(len(pool.tables), size=2 * n, replace=False)
+
+    def side(ks: np.ndarray, changed: bool) -> pd.DataFrame:
+        parts = []
+        for trial, k in enumerate(ks, start=1):
+            t = pool.tables[k].assign(trial=trial if n > 1 else 0)
+            if changed and target is not None:
+                alg, name, scene, seq = target
+                here = (t["algorithm"] == alg) & (t["scene"] == scene) & (t["seq"] == seq)
+                if change is not None and (change, target) in pool.changed:
+                    new = pool.changed[(change, target)][k].assign(trial=trial if n > 1 else 0)
+                    t = pd.concat([t[~here], new], ignore_index=True)
+                elif change == "missing trial" and trial == max(1, n // 2 + 1):
+                    t = t[~here]
+                elif change == "truncated trial" and trial == max(1, n // 2 + 1):
+                    t = _truncated(t, here)
+            parts.append(t)
+        return pd.concat(parts, ignore_index=True)
+
+    return side(picks[:n], False), side(picks[n:], True)
+
+
+def _truncated(t: pd.DataFrame, here: pd.Series) -> pd.DataFrame:
+    """A trial that stopped at half time: its correct and tracked time halved, as its CR and CR-T."""
+    t = t.copy()
+    for c in ("cr", "correct_time", "track_time", "matched", "c_matched"):
+        if c in t.columns:
+            t[c] = t[c].astype(float)
+            t.loc[here, c] = t.loc[here, c] * 0.5
+    return t
+
+
+def _names(verdict: Mapping, target: tuple) -> bool:
+    alg, _, scene, seq = target
+    return any(
+        r["algorithm"] == alg and r["scene"] == scene and r["seq"] in (seq, None) for r in verdict["regressions"]
+    )
+
+
+def calibrate(pools: Mapping[str, Pool], trials: Sequence[int] = (1, 3, 5), nights: int = 200,
+              power_nights: int = 60, seed: int = 1,
+              progress: Callable[[Iterable], Iterable] = lambda x: x) -> pd.DataFrame:  # fmt: skip
+    """One row per noise model, trial count and check: ``nights``, ``hits`` and ``rate`` (false
+    alarms: any regression on a noise-only night; power: the change named), with a 95 % Wilson
+    interval."""
+    tol = parse_tolerances()
+    rng = np.random.default_rng(seed)
+    rows = []
+    for model, pool in pools.items():
+        for n in trials:
+            if 2 * n > len(pool.tables):
+                continue
+            jobs: list[tuple[str, tuple | None, int]] = [("false alarm", None, nights)]
+            for change, tlist in pool.targets.items():
+                jobs += [(change, t, max(1, power_nights // max(1, len(tlist)))) for t in tlist]
+            hits: dict[str, list[int]] = {}
+            for what, target, count in progress(jobs):
+                for _ in range(count):
+                    b, c = _night(pool, n, rng, None if target is None else what, target)
+                    d = diff_tables(b, c, tol, expected=pool.expected)
+                    hit = d.regressed if target is None else _names(d.verdict, target)
+                    hits.setdefault(what, []).append(int(hit))
+            for what, h in hits.items():
+                lo, hi = wilson(sum(h), len(h))
+                rows.append(dict(model=model, trials=n, check=what, nights=len(h), hits=sum(h), rate=sum(h) / len(h),
+                                 low=lo, high=hi))  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def single_run_bands(pool: Pool, nights: int = 100, seed: int = 2) -> pd.DataFrame:
+    """What sizes :data:`~lorisnb.core.stats.tolerances.SINGLE_RUN_BAND`: over noise-only nights of
+    one run per side, the largest change of each metric at each level in a night (on the judged
+    scale: CR units, or the log of the ratio for the errors), its median and 95th percentile, and
+    the band to use: the 95th percentiles scaled by one common factor so that in 95 % of the nights
+    no metric at any level goes beyond its band (one night, one verdict over all of them)."""
+    from lorisnb.core.stats.regression import LOG_METRICS
+
+    rng = np.random.default_rng(seed)
+    nightly: list[dict[tuple[str, str], float]] = []
+    for _ in range(nights):
+        b, c = _night(pool, 1, rng)
+        d = diff_tables(b, c, expected=pool.expected)
+        night: dict[tuple[str, str], float] = {}
+        for level, t in (("sequence", d.sequences), ("scene", d.scenes)):
+            t = t[t["status"].isin(["ok", "regression", "improvement"])]
+            for metric, g in t.groupby("metric", sort=False):
+                x, y = g["base"].astype(float).to_numpy(), g["cand"].astype(float).to_numpy()
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    w = np.abs(np.log(y / x)) if metric in LOG_METRICS else np.abs(y - x)
+                if np.isfinite(w).any():
+                    night[(level, str(metric))] = float(np.nanmax(w))
+        nightly.append(night)
+    keys = sorted({k for n in nightly for k in n})
+    p95 = {k: float(np.quantile([n[k] for n in nightly if k in n], 0.95)) for k in keys}
+    ratio = [max((n[k] / p95[k] for k in n if p95[k] > 0), default=0.0) for n in nightly]
+    factor = float(np.quantile(ratio, 0.95))
+    return pd.DataFrame([dict(level=k[0], metric=k[1], median=float(np.median([n[k] for n in nightly if k in n])),
+                              p95=p95[k], band=factor * p95[k], factor=factor) for k in keys])  # fmt: skip
+
+
+def wilson(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
+    """The 95 % Wilson score interval of a share k / n."""
+    if n == 0:
+        return np.nan, np.nan
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return float(max(0.0, centre - half)), float(min(1.0, centre + half))
+
+
+def real_pairs(data_root: str | None = None) -> pd.DataFrame:
+    """The 20 pairs of real runs of one system on one recording in the icra20 results (the first
+    sequence of each scene, run on its own in ``per-seq`` and first in ``lifelong``): CR and ATE
+    RMSE of both at the paper's thresholds."""
+    from lorisnb.tools.evaluation.runner import evaluate
+
+    root = find_data(data_root).icra20
+    per = evaluate(root / "per-seq", data_root=data_root, progress=False).sequences(**THRESHOLDS)
+    life = evaluate(root / "lifelong", data_root=data_root, progress=False).sequences(**THRESHOLDS)
+    keys = ["algorithm", "scene", "seq"]
+    both = per[keys + ["cr", "ate_rmse"]].merge(life[life["seq"] == 1][keys + ["cr", "ate_rmse"]], on=keys,
+                                               suffixes=("_a", "_b"))  # fmt: skip
+    return both
+
+
+def pair_spread(a_cr: np.ndarray, b_cr: np.ndarray, a_ate: np.ndarray, b_ate: np.ndarray) -> dict[str, float]:
+    """How two runs of one system differ: the median and 90th percentile of |difference of CR| and
+    of |log ratio of ATE|, and the share of pairs whose CR differs by more than 0.3."""
+    dcr = np.abs(np.asarray(a_cr, float) - np.asarray(b_cr, float))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rat = np.abs(np.log(np.asarray(a_ate, float) / np.asarray(b_ate, float)))
+    rat = rat[np.isfinite(rat)]
+    return dict(cr_median=float(np.median(dcr)), cr_p90=float(np.quantile(dcr, 0.9)),
+                cr_over_0_3=float(np.mean(dcr > 0.3)), ate_median=float(np.median(rat)),
+                ate_p90=float(np.quantile(rat, 0.9)))  # fmt: skip
+
+
+def generator_pairs(pool: Pool) -> dict[str, float]:
+    """:func:`pair_spread` of two reruns of every sequence (rerun 1 against rerun 2, 3 against 4, ...)."""
+    a, b = pool.tables[0::2], pool.tables[1::2]
+    keys = ["algorithm", "scene", "seq"]
+    merged = pd.concat([x[keys + ["cr", "ate_rmse"]].merge(y[keys + ["cr", "ate_rmse"]], on=keys, suffixes=("_a", "_b"))
+                        for x, y in zip(a, b, strict=False)], ignore_index=True)  # fmt: skip
+    return pair_spread(merged["cr_a"], merged["cr_b"], merged["ate_rmse_a"], merged["ate_rmse_b"])
