@@ -150,7 +150,9 @@ def test_diff_of_tables_and_a_missing_sequence(versions, tmp_path, capsys):
     assert main(["history", str(other), str(tb), str(ta), "--metric", "cr", "--csv", str(hist)]) == 0
     out = capsys.readouterr().out
     assert "ordered by modification time" in out
-    assert "orbslam2_rgbd cafe cr: first change in b.csv against a.csv (0.4860 -> 0.0985, a sequence or trial lost)" in out
+    assert (
+        "orbslam2_rgbd cafe cr: first change in b.csv against a.csv (0.4860 -> 0.0985, a sequence or trial lost)" in out
+    )
     h = pd.read_csv(hist)
     assert list(h.drop_duplicates("run")["run"]) == ["a.csv", "b.csv", "other.csv"]
     mark = h.drop_duplicates("run").set_index("run")
