@@ -148,7 +148,7 @@ def history_table(
                     status[(r.suite, r.algorithm, r.scene, m)] = "missing"
         meta = dict(run=names[k], path=str(run.path), created=run.created.isoformat() if run.created else "",
                     created_from=run.created_from, lorisnb_version=run.version or "", label=run.label or "",
-                    comparable=base is not None and base == k - 1, not_comparable=before,
+                    comparable=not before, not_comparable=before,
                     baseline="" if base is None else names[base])  # fmt: skip
         full, _ = complete(table, expected)
         here = set()
@@ -197,7 +197,8 @@ def first_changes(history: pd.DataFrame) -> list[str]:
 
 def plot_history(history: pd.DataFrame, metric: str):
     """One panel per scene, one line per algorithm over the runs; runs not comparable with the one
-    before are marked with a dashed line, changes with a ring."""
+    before are marked with a dashed line, changes by diff's rule against each run's baseline with a
+    ring."""
     from lorisnb.tools.figures.plotting import MAX_WIDTH_IN, subplots
 
     h = history[history["metric"] == metric]
@@ -221,7 +222,7 @@ def plot_history(history: pd.DataFrame, metric: str):
         ax.set_xticks(range(len(runs)), runs, rotation=45, ha="right", fontsize=7)
     axes[0][0].set_ylabel(metric)
     handles, labels = axes[0][0].get_legend_handles_labels()
-    fig.suptitle(f"{metric} over runs (ring: changed beyond tolerance; dashed: not comparable with the run before)",
+    fig.suptitle(f"{metric} over runs (ring: changed by diff's rule; dashed: not comparable with the run before)",
                  fontsize=8)  # fmt: skip
     fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 3) or 1, fontsize=7, frameon=False)
     fig.tight_layout(rect=(0, 0.08 + 0.05 * ((len(labels) - 1) // 3), 1, 1))
