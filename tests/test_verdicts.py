@@ -276,3 +276,19 @@ def test_the_code_under_test_is_recorded_shown_and_followed(trials, tmp_path, ca
     assert "run-0: 2026-11-01T02:00:00+00:00, lorisnb 0.3.0, code v1.0" in out
     assert "run-1: 2026-11-02T02:00:00+00:00, lorisnb 0.3.0, code v1.1, against run-0" in out
     assert "newest run run-1 against run-0: ok" in out
+
+
+def test_a_single_run_against_a_baseline_of_numbered_trials(trials):
+    """A nightly single run (trial 0, unnumbered) against a baseline of five numbered trials: no
+    trial number of one run means anything in the other, so nothing is "missing"; the comparisons
+    use the baseline's trials (five against one) and a lost sequence still regresses."""
+    single = trials[trials["trial"] == 1].assign(trial=0)
+    seqs, _ = changes(trials, single)
+    assert not (seqs["metric"] == "trial").any() and set(seqs["status"]) <= {"ok", "unjudged", "improvement"}
+    judged = seqs[seqs["status"] == "ok"]
+    assert (judged["trials_base"] == 5).all() and (judged["trials_cand"] == 1).all()
+    assert judged["decided_by"].str.contains("5 vs 1 trials").all()
+    lost = single[~((single["algorithm"] == "odom") & (single["scene"] == "cafe") & (single["seq"] == 1))]
+    seqs, _ = changes(trials, lost)
+    row = seqs[(seqs["algorithm"] == "odom") & (seqs["scene"] == "cafe") & (seqs["seq"] == 1)]
+    assert row["status"].tolist() == ["missing"]

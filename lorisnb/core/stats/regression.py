@@ -353,11 +353,20 @@ class _Comparisons:
                      status="regression" if worse else ("improvement" if better else "ok"))  # fmt: skip
 
 
-def _trial_sets(b: pd.DataFrame, c: pd.DataFrame) -> dict[tuple, list]:
-    """The trials of each (suite, algorithm) over both runs: every one of them is expected of every
-    sequence; one a run lacks is a failed run of that sequence."""
-    both = pd.concat([b[["suite", "algorithm", "trial"]], c[["suite", "algorithm", "trial"]]])
-    return {k: sorted(set(g["trial"])) for k, g in both.groupby(["suite", "algorithm"], sort=False, observed=True)}
+def _trial_sets(b: pd.DataFrame, c: pd.DataFrame) -> tuple[dict[tuple, list], dict[tuple, list]]:
+    """The trials expected of every sequence of each (suite, algorithm), for BASE and for CAND: the
+    trials of both runs, so that one a run lacks is a failed run of that sequence; but where one
+    run's trials are unnumbered (trial 0: a single run, as against a baseline of numbered trials),
+    each run is expected to have only its own (no number of one run means anything in the other)."""
+    tb = {k: set(g["trial"]) for k, g in b.groupby(["suite", "algorithm"], sort=False, observed=True)}
+    tc = {k: set(g["trial"]) for k, g in c.groupby(["suite", "algorithm"], sort=False, observed=True)}
+    eb, ec = {}, {}
+    for k in dict.fromkeys([*tb, *tc]):
+        x, y = tb.get(k, set()), tc.get(k, set())
+        shared = x == {0} or y == {0} or not x or not y
+        eb[k] = sorted(x if shared else x | y)
+        ec[k] = sorted(y if shared else x | y)
+    return eb, ec
 
 
 def _padded(t: pd.DataFrame, trials: Mapping[tuple, list]) -> tuple[pd.DataFrame, dict[tuple, list]]:
@@ -386,8 +395,8 @@ def _padded(t: pd.DataFrame, trials: Mapping[tuple, list]) -> tuple[pd.DataFrame
 def _unjudged(metric: str, matched: tuple[float, float], correct: tuple[float, float], fragile: bool = False
               ) -> str | None:  # fmt: skip
     """Why a sequence's metric is too little to judge (None: it is judged), from the mean matched
-    and correct poses of (base, candidate) and whether the base's own trials disagree on tracking
-    its first pose is correct (``fragile``, for CS-R); see the module docstring."""
+    and correct poses of (base, candidate) and whether the trials of both runs disagree on whether
+    the first pose is correct (``fragile``, for CS-R); see the module docstring."""
     nb, nc = matched
     if nb < MIN_MATCHED:
         return f"the base matched {nb:.0f} poses (fewer than {MIN_MATCHED}: its alignment is unstable)"
@@ -443,9 +452,9 @@ def changes(
     tols = parse_tolerances() if tolerances is None else dict(tolerances)
     alpha = validate.probability("alpha", alpha)
     b, c = with_trials(base), with_trials(cand)
-    trials = _trial_sets(b, c)
-    b, lack_b = _padded(b, trials)
-    c, lack_c = _padded(c, trials)
+    trials_b, trials_c = _trial_sets(b, c)
+    b, lack_b = _padded(b, trials_b)
+    c, lack_c = _padded(c, trials_c)
     comp = _Comparisons(tols)
     sb, sc = _Side(b), _Side(c)
     for key in list(sb.rows) + [k for k in sc.rows if k not in sb.rows]:
