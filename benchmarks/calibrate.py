@@ -16,13 +16,17 @@ import argparse
 import time
 import warnings
 
+import numpy as np
 from tqdm import tqdm
 
-from lorisnb.core.stats.tolerances import SINGLE_RUN_BAND
+from lorisnb.core.stats.power import detectable_change
+from lorisnb.core.stats.regression import parse_tolerances
+from lorisnb.core.stats.tolerances import RERUN_SPREAD, SINGLE_RUN_BAND
 from lorisnb.errors import LorisWarning
 from lorisnb.tools.decisions.calibration import (
     MODELS,
     calibrate,
+    family_size,
     generator_pairs,
     make_pool,
     pair_spread,
@@ -86,8 +90,31 @@ def main(argv: list[str] | None = None) -> int:
         if len(pw):
             print(f"power for {c} with 3+ trials at least 90 %: {'met' if (pw['rate'] >= 0.9).all() else 'NOT MET'} "
                   f"(smallest {100 * pw['rate'].min():.1f} %)")  # fmt: skip
+    bound_table(pools["real"], args.trials)
     print(f"({time.perf_counter() - start:.0f} s)")
     return 0
+
+
+def bound_table(pool: object, trials: list[int]) -> None:
+    """The smallest change on one sequence that any test could find with 90 % power, at the real
+    rerun spread (RERUN_SPREAD) and the default tolerances: with one test alone, and with the
+    family of comparisons one night's verdict holds (Bonferroni; Holm is no better for one change)."""
+    tol = parse_tolerances()
+    cr_tol, ate_tol = tol["cr"].scaled("cr", 1.0), tol["ate_rmse"].scaled("ate_rmse", 1.0)
+    print(
+        "\nThe smallest change any test could find with 90 % power (oracle z-test knowing the real rerun spread, "
+        f"{RERUN_SPREAD['rate']} CR and {RERUN_SPREAD['log']} log ATE per run; default tolerances):"
+    )
+    print(
+        f"  {'trials':>6s} {'tests':>6s} {'CR drop, 1 test':>16s} {'CR drop, family':>16s} "
+        f"{'ATE factor, 1 test':>19s} {'ATE factor, family':>19s}"
+    )
+    for n in trials:
+        m = family_size(pool, n)  # type: ignore[arg-type]
+        cr1, crm = (detectable_change(RERUN_SPREAD["rate"], n, cr_tol, comparisons=k) for k in (1, max(m, 1)))
+        a1, am = (np.exp(detectable_change(RERUN_SPREAD["log"], n, ate_tol, comparisons=k)) for k in (1, max(m, 1)))
+        print(f"  {n:6d} {m:6d} {cr1:16.3f} {crm:16.3f} {a1:19.2f} {am:19.2f}")
+    print("  (a single run per side has no family: its tests are not significance tests; its bands are above)")
 
 
 if __name__ == "__main__":

@@ -112,6 +112,40 @@ def test_an_ill_conditioned_sequence_is_too_little_to_judge(icra20, data):
     assert seqs["decided_by"].str.contains("the base matched 14 poses \\(fewer than 50").all()
 
 
+def test_a_tiny_near_straight_piece_is_too_little_to_judge(icra20, data, monkeypatch):
+    """80 matched poses (enough by count) of a real sequence's first seconds, which barely move: the
+    positions hold the alignment's rotation by a lever of centimetres, so 5 mm of position noise in
+    three trials turns the fit and moves AOE by degrees. The diff says too little to judge, naming
+    the lever, where without the rule the same values would be judged like any others."""
+    import lorisnb.core.stats.regression as regression
+    from lorisnb.core.stats.tolerances import MIN_LEVER
+
+    rf = ln.read_openloris(icra20 / "per-seq" / "orbslam2_rgbd" / "home_1_1_orbslam2-original.txt", warn=False)
+    gt = ln.load_groundtruth("home", data)
+    seq = next(iter(rf.sequences))
+    est = rf.sequences[seq]
+    piece = Trajectory(est.stamps[:80], est.positions[:80], est.quaternions[:80])
+    rng = np.random.default_rng(3)
+
+    def run(noise_m: float) -> pd.DataFrame:
+        parts = []
+        for k in range(1, 4):
+            t = Trajectory(piece.stamps, piece.positions + rng.normal(0, noise_m, piece.positions.shape),
+                           piece.quaternions)  # fmt: skip
+            parts.append(score([compute_errors(replace(rf, sequences={seq: t}), gt, checks=False)]).assign(trial=k))
+        return pd.concat(parts, ignore_index=True)
+
+    base, cand = run(0.0005), run(0.005)
+    assert (base["matched"] >= 50).all()
+    assert base["rotation_lever"].max() < MIN_LEVER
+    assert np.ptp(cand["aoe_rmse"]) > 10  # the fit turns: AOE swings by tens of degrees between trials
+    seqs, _ = changes(base, cand)
+    assert set(seqs["status"]) == {"unjudged"}
+    assert seqs["decided_by"].str.contains("lever of").all()
+    monkeypatch.setattr(regression, "MIN_LEVER", 0.0)  # without the rule the same values are judged
+    assert "unjudged" not in set(changes(base, cand)[0]["status"])
+
+
 def test_improvements_and_trade_offs_are_named(trials, tmp_path, capsys):
     """ATE 45 % better and CR 0.3 lower on the same sequence (five trials a side): the text, the JSON, the JUnit
     properties and the Markdown name the improvement and the trade-off, not only the regression."""

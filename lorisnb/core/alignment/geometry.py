@@ -68,6 +68,24 @@ def degenerate_alignment(source: np.ndarray, target: np.ndarray) -> str | None:
     return _degenerate(source, target, _centered(source, target)[4])
 
 
+def rotation_lever(positions: np.ndarray) -> float:
+    """How firmly (N, 3) matched positions hold the rotation of an alignment fitted on them, in
+    metres: ``sqrt(N (l2 + l3))`` with ``l1 >= l2 >= l3`` the variances of the centred positions
+    along their principal axes. With position noise ``sigma`` (m) on the points, the fitted
+    rotation about the least-held axis (the path's main direction) scatters by about
+    ``sigma / lever`` radians (the Fisher information of a small rotation of point sets is
+    ``N (tr C - C) / sigma^2``). A 1 km drive: hundreds of metres; 15 poses along a
+    near-straight centimetre: a few centimetres, where 5 mm of noise turns the fit by degrees.
+    0 for fewer than 3 positions or points on a line; NaN for none."""
+    p = np.asarray(positions, float).reshape(-1, 3)
+    if len(p) == 0:
+        return float("nan")
+    if len(p) < 3:
+        return 0.0
+    var = np.linalg.eigvalsh(np.cov(p, rowvar=False, bias=True))  # ascending
+    return float(np.sqrt(len(p) * max(var[0] + var[1], 0.0)))
+
+
 def _centered(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, ...]:
     """Means, centred positions and the cross-covariance ``xt^T xs / N`` of (N, 3) positions
     (N >= 1): what the fit and the degeneracy test share."""

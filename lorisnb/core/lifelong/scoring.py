@@ -68,7 +68,7 @@ def sequence_meta(f: FileErrors, e: SequenceErrors) -> dict[str, Any]:
         algorithm=f.algorithm, file=f.file, scene=f.scene, seq=e.seq, frame=f.frame, poses=e.poses,
         matched=e.matched, suite=f.suite, mode=f.mode, aligned_on=f.aligned_on, scale=e.scale,
         gt_start=e.gt_start, gt_end=e.gt_end, gt_duration=e.gt_end - e.gt_start,
-        official_interpolation=f.official_interpolation, trial=f.trial,
+        official_interpolation=f.official_interpolation, trial=f.trial, rotation_lever=e.rotation_lever,
     )  # fmt: skip
 
 

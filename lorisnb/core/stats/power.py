@@ -63,3 +63,30 @@ def runs_for_power(
                              needed=units_for_power(sd, delta, alpha, power, groups=2, strata=max(moving, 1))))  # fmt: skip
     extra = pd.DataFrame(rows, columns=["unit", "have", "needed"], index=pairs.index)
     return pairs.assign(delta=delta, power=power).join(extra)
+
+
+def detectable_change(spread: float, trials: int, tolerance: float = 0.0, alpha: float = 0.05,
+                      power: float = 0.9, comparisons: int = 1) -> float:  # fmt: skip
+    """The smallest worsening (on the judged scale: CR units for a rate, the log of the ratio for an
+    error) that *any* one-sided test at family-wise ``alpha`` over ``comparisons`` tests could find
+    with probability ``power``, given ``trials`` runs per side whose rerun spread (standard deviation
+    of one run about the system's mean) is ``spread`` and known exactly: the oracle z-test of
+    ``d - tolerance`` with Bonferroni's level ``alpha / comparisons``,
+
+        tolerance + (z(1 - alpha / comparisons) + z(power)) * spread * sqrt(2 / trials).
+
+    A bound, not a rule: a test that must estimate the spread from the trials (a t-test) needs more.
+    ``make calibrate`` prints it beside the measured power of ``lorisnb diff``."""
+    from scipy import stats
+
+    if not (np.isfinite(spread) and spread > 0):
+        raise ValidationError(f"spread={spread}: expected a positive standard deviation")
+    if int(trials) < 1:
+        raise ValidationError(f"trials={trials}: expected at least one run per side")
+    if int(comparisons) < 1:
+        raise ValidationError(f"comparisons={comparisons}: expected at least one")
+    if not 0 < power < 1:
+        raise ValidationError(f"power={power}: expected a probability between 0 and 1")
+    alpha = validate.probability("alpha", alpha)
+    z = stats.norm.isf(alpha / int(comparisons)) + stats.norm.ppf(power)
+    return float(tolerance + z * spread * np.sqrt(2.0 / int(trials)))

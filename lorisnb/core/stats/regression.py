@@ -40,9 +40,12 @@ has (``missing trial``: the trial counts as a failed run in every value, and is 
 candidate's new sequence is listed, not judged.
 
 **Too little to judge** (``unjudged``, never a regression): a sequence whose base matched fewer
-than :data:`MIN_MATCHED` poses (its alignment is unstable: 5 mm of position noise can move a
-15-pose sequence's AOE by 10 degrees) for every metric; its error metrics (ATE, AOE, RPE, C-*) also
-when the candidate matched fewer, or for C-* metrics fewer than :data:`MIN_MATCHED` correct poses.
+than :data:`MIN_MATCHED` poses, or whose matched positions hold the alignment's rotation by a
+lever under :data:`~lorisnb.core.stats.tolerances.MIN_LEVER` (column ``rotation_lever``: a tiny or
+near-straight piece, where 5 mm of position noise turns the fit by more than a degree and can
+move a 15-pose sequence's AOE by 10 degrees), for every metric; its error metrics (ATE, AOE, RPE,
+C-*) also when the candidate's are short or ill-held likewise, or for C-* metrics fewer than
+:data:`MIN_MATCHED` correct poses.
 Its rates are still judged when only the candidate is short: a sequence that stopped tracking
 regressed. CS-R where the trials (of both runs) disagree on whether the first pose is correct: CS-R
 is 0 when it is not (Eq. 4 as the official tool computes it), a yes/no outcome of a few runs.
@@ -61,7 +64,7 @@ from scipy import special, stats
 from lorisnb.core.lifelong.coverage import FAILED_RUN, complete, expected_from
 from lorisnb.core.spec import validate
 from lorisnb.core.stats.inference import WEIGHTS, holm, scene_values, with_trials
-from lorisnb.core.stats.tolerances import DEFAULT_TOLERANCES, MIN_MATCHED, RERUN_SPREAD, SINGLE_RUN_BAND
+from lorisnb.core.stats.tolerances import DEFAULT_TOLERANCES, MIN_LEVER, MIN_MATCHED, RERUN_SPREAD, SINGLE_RUN_BAND
 from lorisnb.errors import ValidationError
 
 #: Metrics compared, each with +1 when larger is better and -1 when smaller is better.
@@ -392,16 +395,23 @@ def _padded(t: pd.DataFrame, trials: Mapping[tuple, list]) -> tuple[pd.DataFrame
     return t, lacking
 
 
-def _unjudged(metric: str, matched: tuple[float, float], correct: tuple[float, float], fragile: bool = False
-              ) -> str | None:  # fmt: skip
+def _unjudged(metric: str, matched: tuple[float, float], correct: tuple[float, float], fragile: bool = False,
+              lever: tuple[float, float] = (np.inf, np.inf)) -> str | None:  # fmt: skip
     """Why a sequence's metric is too little to judge (None: it is judged), from the mean matched
-    and correct poses of (base, candidate) and whether the trials of both runs disagree on whether
-    the first pose is correct (``fragile``, for CS-R); see the module docstring."""
+    and correct poses of (base, candidate), whether the trials of both runs disagree on whether
+    the first pose is correct (``fragile``, for CS-R) and the smallest rotation lever of each side
+    (metres; infinite where the table has none); see the module docstring."""
     nb, nc = matched
     if nb < MIN_MATCHED:
         return f"the base matched {nb:.0f} poses (fewer than {MIN_MATCHED}: its alignment is unstable)"
+    if lever[0] < MIN_LEVER:
+        return (f"the base's matched positions hold its alignment by a lever of {lever[0]:.3g} m (under {MIN_LEVER} m: "
+                f"5 mm of position noise turns the fit by {np.degrees(0.005 / max(lever[0], 1e-9)):.2g} deg)")  # fmt: skip
     if metric in LOG_METRICS and nc < MIN_MATCHED:
         return f"the candidate matched {nc:.0f} poses (fewer than {MIN_MATCHED}); its rates are judged"
+    if metric in LOG_METRICS and lever[1] < MIN_LEVER:
+        return (f"the candidate's matched positions hold its alignment by a lever of {lever[1]:.3g} m (under "
+                f"{MIN_LEVER} m); its rates are judged")  # fmt: skip
     if metric.startswith("c_") and min(correct) < MIN_MATCHED:
         return f"{min(correct):.0f} correct poses on one side (fewer than {MIN_MATCHED})"
     if metric == "cs_r" and fragile:
@@ -417,12 +427,20 @@ class _Side:
         self.table = table
         self.rows = {k: v for k, v in table.groupby(KEYS, sort=False, observed=True, dropna=False).indices.items()}
         self.cols = {c: pd.to_numeric(table[c], errors="coerce").to_numpy(float)
-                     for c in (*METRICS, "matched", "c_matched", "first_correct") if c in table.columns}  # fmt: skip
+                     for c in (*METRICS, "matched", "c_matched", "first_correct", "rotation_lever")
+                     if c in table.columns}  # fmt: skip
         self.trials = table["trial"].to_numpy()
 
     def mean(self, key: tuple, column: str) -> float:
         v = self.cols.get(column)
         return float(v[self.rows[key]].mean()) if v is not None else np.inf
+
+    def least(self, key: tuple, column: str) -> float:
+        """The smallest finite value of ``column`` over the sequence's trials (inf: none)."""
+        v = self.cols.get(column)
+        x = v[self.rows[key]] if v is not None else np.zeros(0)
+        x = x[np.isfinite(x)]
+        return float(x.min()) if x.size else np.inf
 
 
 def _flips(sb: _Side, sc: _Side, key: tuple, rb: np.ndarray, rc: np.ndarray) -> bool:
@@ -477,10 +495,11 @@ def changes(
             comp.coverage("sequence", label, "sequence", "matched", "nothing matched", "failed",
                           "coverage: no pose of the candidate matched the ground truth")  # fmt: skip
         correct = (sb.mean(key, "c_matched"), sc.mean(key, "c_matched"))
+        lever = (sb.least(key, "rotation_lever"), sc.least(key, "rotation_lever"))
         for metric in METRICS:
             if metric in sb.cols and metric in sc.cols:
                 comp.add("sequence", label, metric, sb.cols[metric][rb], sc.cols[metric][rc],
-                         _unjudged(metric, matched, correct, _flips(sb, sc, key, rb, rc)))  # fmt: skip
+                         _unjudged(metric, matched, correct, _flips(sb, sc, key, rb, rc), lever))  # fmt: skip
     fragile = {k[:3] for k in sb.rows if k in sc.rows and _flips(sb, sc, k, sb.rows[k], sc.rows[k])}
     _scenes(comp, b, c, expected, fragile)
     _scene_coverage(comp)

@@ -36,3 +36,10 @@ SINGLE_RUN_BAND: dict[str, dict[str, float]] = {
 #: Fewer matched poses than this in the base (or, for the errors, in either run) and a sequence is
 #: too little to judge: an alignment on a handful of poses is unstable.
 MIN_MATCHED = 50
+
+#: A lever (:func:`lorisnb.core.alignment.geometry.rotation_lever`, metres) below this and a sequence's
+#: alignment is too unstable to judge: 5 mm of position noise would turn a fit on its matched
+#: positions by more than 1 degree (0.005 / 0.29 rad), which moves AOE, ATE and what counts as
+#: correct. The real icra20 sequences have levers of 2.7 m and more; a 15-pose, near-straight
+#: 30 cm piece has a few millimetres.
+MIN_LEVER = 0.29

@@ -236,6 +236,14 @@ def calibrate(pools: Mapping[str, Pool], trials: Sequence[int] = (1, 3, 5), nigh
     return pd.DataFrame(rows)
 
 
+def family_size(pool: Pool, trials: int, seed: int = 3) -> int:
+    """How many comparisons one night's verdict tests (those with a p value: the family over which
+    Holm holds the false-alarm rate), for :func:`lorisnb.core.stats.power.detectable_change`."""
+    b, c = _night(pool, trials, np.random.default_rng(seed))
+    d = diff_tables(b, c, expected=pool.expected)
+    return int(sum(t["p_adj"].notna().sum() for t in (d.sequences, d.scenes)))
+
+
 def single_run_bands(pool: Pool, nights: int = 100, seed: int = 2) -> pd.DataFrame:
     """What sizes :data:`~lorisnb.core.stats.tolerances.SINGLE_RUN_BAND`: over noise-only nights of
     one run per side, the largest change of each metric at each level in a night (on the judged
