@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND ?= Agg
 
-.PHONY: report test test-fast test-slow test-browser browser-deps lint format evaluate bench calibrate bytecode clean-venv student grade book slides
+.PHONY: report test test-all test-fast test-slow test-browser browser-deps lint format evaluate bench calibrate bytecode clean-venv student grade book slides
 
 $(STAMP): pyproject.toml lorisnb/_version.py lorisnb/core/trajectory/_rotations.c
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -26,15 +26,23 @@ report: bytecode
 evaluate: bytecode
 	$(BIN)/lorisnb evaluate --scale auto --csv results/evaluate.csv $(or $(DATA),../shared/data)/openloris-scene/icra20_results
 
-# everything: fast tests, then the slow ones (notebooks, reports, the installed wheel)
+# the tests on every core (pytest-xdist). PYTEST_WORKERS=1 runs them in one process.
+PYTEST_WORKERS ?= auto
+PYTEST = $(BIN)/python -m pytest -q -n $(PYTEST_WORKERS)
+
+# the newcomer's command (README): the fast tests and one run of each notebook, a few minutes
 test: bytecode
-	$(BIN)/python -m pytest -q -m "not browser"
+	$(PYTEST) -m "(not slow or smoke) and not browser"
+
+# everything but the browser: fast tests, then the slow ones (notebooks, reports, the installed wheel); CI
+test-all: bytecode
+	$(PYTEST) -m "not browser"
 
 test-fast: bytecode
-	$(BIN)/python -m pytest -q -m "not slow and not browser"
+	$(PYTEST) -m "not slow and not browser"
 
 test-slow: bytecode
-	$(BIN)/python -m pytest -q -m "slow and not browser"
+	$(PYTEST) -m "slow and not browser"
 
 # Debian's Chromium and its driver (apt, as root or with sudo), where missing
 browser-deps:

@@ -40,6 +40,7 @@ def run(name: str, tmp_path: Path, **params) -> Path:
     return out
 
 
+@pytest.mark.smoke
 def test_per_sequence_benchmark(tmp_path):
     out = run("per_sequence_benchmark", tmp_path)
     seq = pd.read_csv(out / "sequences.csv")
@@ -82,6 +83,7 @@ def test_quick_takes_your_results_whole(tmp_path, icra20):
     assert sens.is_dir()
 
 
+@pytest.mark.smoke
 def test_lifelong_benchmark(tmp_path):
     out = run("lifelong_benchmark", tmp_path)
     scenes = pd.read_csv(out / "scenes.csv").set_index(["algorithm", "scene"])
@@ -102,6 +104,7 @@ def test_lifelong_benchmark_with_other_thresholds(tmp_path):
     assert seq.loc[2, "c_ate_rmse"] == pytest.approx(0.186973, abs=1e-6)
 
 
+@pytest.mark.smoke
 def test_evaluate_my_results_default_and_broken_input(tmp_path, icra20):
     out = run("evaluate_my_results", tmp_path)
     seq = pd.read_csv(out / "sequences.csv").set_index("seq")
@@ -131,6 +134,7 @@ def test_evaluate_my_results_with_a_tum_pair(tmp_path, data):
     assert "conventions: association: nearest stamps within 0.02 s" in text
 
 
+@pytest.mark.smoke
 def test_threshold_sensitivity(tmp_path):
     out = run("threshold_sensitivity", tmp_path)
     curve = pd.read_csv(out / "cr_vs_eps.csv")
@@ -151,6 +155,7 @@ def test_threshold_sensitivity(tmp_path):
     assert (out / "cr_heatmap_home.png").exists() and (out / "cs_r_vs_tau.png").exists()
 
 
+@pytest.mark.smoke
 def test_evo_crosscheck(tmp_path):
     out = run("evo_crosscheck", tmp_path)
     tum = pd.read_csv(out / "crosscheck_tum.csv")
@@ -165,6 +170,7 @@ def test_evo_crosscheck(tmp_path):
     assert "evo version:" in html
 
 
+@pytest.mark.smoke
 def test_indoor_vs_outdoor_published_only(tmp_path):
     out = run("indoor_vs_outdoor", tmp_path)
     side = pd.read_csv(out / "ate_pct_side_by_side.csv")
@@ -218,6 +224,7 @@ def test_indoor_vs_outdoor_with_synthetic_ordslam_folder(tmp_path):
 CAFE_VINS_LIFELONG_CR1 = 0.855196  # lorisnb evaluate lifelong/vins_mono_color_imu_with_loop/cafe-1.txt --eps paper
 
 
+@pytest.mark.smoke
 def test_metrics_primer(tmp_path):
     out = run("metrics_primer", tmp_path)
     cases = pd.read_csv(out / "primer_cases.csv")
@@ -242,6 +249,7 @@ def test_metrics_primer(tmp_path):
     assert set(cases.dropna(subset=["expected"])["expected_metric"]) == {"ate_rmse", "cr", "cr_t", "cs_r"}
 
 
+@pytest.mark.smoke
 def test_compare_algorithms(tmp_path):
     out = run("compare_algorithms", tmp_path)
     rank = pd.read_csv(out / "simulated_ranking.csv").set_index("algorithm")
