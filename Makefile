@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND ?= Agg
 
-.PHONY: report test test-all test-fast test-slow test-browser browser-deps lint format evaluate bench calibrate bytecode clean-venv student grade book slides
+.PHONY: report test test-all test-fast test-slow test-browser browser-deps lint format evaluate bench calibrate bytecode clean-venv student grade book slides docs
 
 $(STAMP): pyproject.toml lorisnb/_version.py lorisnb/core/trajectory/_rotations.c
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -55,14 +55,14 @@ test-browser: $(STAMP) browser-deps
 	$(BIN)/python -m pytest -q -m browser
 
 lint: $(STAMP)
-	$(BIN)/ruff check lorisnb tests benchmarks notebooks
-	$(BIN)/ruff format --check lorisnb tests benchmarks notebooks
+	$(BIN)/ruff check lorisnb tests benchmarks notebooks docs/*.py
+	$(BIN)/ruff format --check lorisnb tests benchmarks notebooks docs/*.py
 	$(BIN)/mypy
 	$(BIN)/lint-imports
 
 format: $(STAMP)
-	$(BIN)/ruff format lorisnb tests benchmarks notebooks
-	$(BIN)/ruff check --fix lorisnb tests benchmarks notebooks
+	$(BIN)/ruff format lorisnb tests benchmarks notebooks docs/*.py
+	$(BIN)/ruff check --fix lorisnb tests benchmarks notebooks docs/*.py
 
 bench: bytecode
 	$(BIN)/python benchmarks/bench.py
@@ -122,3 +122,21 @@ book: $(TEACH_STAMP)
 # reveal.js slides of the primer and the labs (executed), reveal.js and MathJax beside them: $(SLIDES_OUT)/
 slides: $(TEACH_STAMP)
 	$(TEACH_ENV) python teaching/slides.py "$(SLIDES_OUT)"
+
+# --- the manual (docs/build.py): Sphinx + MyST + myst-nb in .venv-docs/, layered on .venv (myst-parser 3
+# needs markdown-it-py < 4, as the teaching book does); MathJax served from the manual itself
+DOCS := .venv-docs
+DOCS_STAMP := $(DOCS)/.installed-stamp
+DOCS_OUT ?= build/docs
+
+$(DOCS_STAMP): $(STAMP) docs/requirements.txt
+	test -x $(DOCS)/bin/python || $(PYTHON) -m venv $(DOCS)
+	$(BIN)/python -c "import sysconfig; print('import site; site.addsitedir(%r)' % sysconfig.get_paths()['purelib'])" \
+	  > "$$($(DOCS)/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')/lorisnb-venv.pth"
+	$(DOCS)/bin/python -m pip install -r docs/requirements.txt
+	$(DOCS)/bin/python -m pip install --no-deps django-static-mathjax==3.2.2.1
+	touch $@
+
+# the manual, built offline with warnings as errors and the notebooks executed, into $(DOCS_OUT)/
+docs: $(DOCS_STAMP) bytecode
+	PATH="$(abspath $(DOCS))/bin:$(abspath $(BIN)):$$PATH" $(DOCS)/bin/python docs/build.py "$(DOCS_OUT)"

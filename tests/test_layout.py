@@ -41,7 +41,10 @@ def test_version_is_defined_once():
 
 
 def test_names_the_readme_shows_exist():
-    text = (ROOT / "README.md").read_text()
+    """The names the README and the manual's pages (docs/**/*.md) show exist."""
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+    assert len(pages) > 10, pages  # the manual's pages are found
+    text = "\n".join(p.read_text() for p in pages)
     for name in set(re.findall(r"\blorisnb\.([A-Za-z_][A-Za-z0-9_]*)\(", text)) | set(
         re.findall(r"\bln\.([A-Za-z_][A-Za-z0-9_]*)\b", text)
     ):

@@ -1,0 +1,172 @@
+"""The manual (``make docs``: docs/build.py): the pages it generates from the code, and the built
+site in headless Chromium, offline (marker ``browser``: it opens build/docs/, which CI's `make docs`
+builds before `make test-browser`)."""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import os
+import re
+import time
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from lorisnb.cli import build_parser
+
+ROOT = Path(__file__).resolve().parents[2]
+SITE = Path(os.environ.get("LORISNB_DOCS", ROOT / "build" / "docs"))
+CHROMIUM = os.environ.get("LORISNB_CHROMIUM", "/usr/bin/chromium")
+CHROMEDRIVER = os.environ.get("LORISNB_CHROMEDRIVER", "/usr/bin/chromedriver")
+#: hosts that serve scripts, styles and fonts to pages (none may appear in a built page)
+CDN = re.compile(
+    r"(?:https?:)?//[^\s\"'<>]*(?:cdn|jsdelivr|unpkg|googleapis|gstatic|bootstrapcdn|cloudflare)[^\s\"'<>]*", re.I
+)
+
+
+def _module(path: Path, name: str):
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def build():
+    return _module(ROOT / "docs" / "build.py", "lorisnb_docs_build")
+
+
+def subcommands() -> list[str]:
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return list(sub.choices)
+
+
+def test_layers_table_holds_every_sub_package_and_what_it_may_import(build):
+    table = build.layers_table()
+    for layer in build.LAYERS:
+        assert f"### `lorisnb.{layer}`" in table
+        for sub in (ROOT / "lorisnb" / layer).iterdir():
+            if (sub / "__init__.py").is_file():
+                row = next(line for line in table.splitlines() if f"`lorisnb.{layer}.{sub.name}`" in line)
+                assert row.count(" | ") == 2, row  # holds | may import: no cell split by a stray bar
+    # what the docstrings say, not a summary of them
+    row = next(line for line in table.splitlines() if line.startswith("| {mod}`lorisnb.core.stats` |"))
+    assert "none of them imports it (enforced)" in row
+    row = next(line for line in table.splitlines() if line.startswith("| {mod}`lorisnb.io.parsing` |"))
+    assert "no reader or dataset (enforced)" in row
+    # reST roles become MyST roles, relative names absolute
+    assert "{mod}`lorisnb.io.parsing.scanner`" in row and ":mod:" not in table
+
+
+def test_package_pages_list_every_module_and_its_public_functions(build):
+    pages = {".".join(p.relative_to(ROOT).parts): p for p in build.packages()}
+    assert "lorisnb.core.metrics" in pages and "lorisnb.cli" in pages
+    text = build.package_page(pages["lorisnb.core.metrics"])
+    assert ".. py:module:: lorisnb.core.metrics.openloris" in text
+    assert "- ``correctness``: Eq. (1): c = (ATE <= eps) and (AOE <= phi)." in text
+    # absolute values are escaped (not reST substitutions), inline literals left as they are
+    assert build.rst_text("|T| and ``a|b``") == "\\|T\\| and ``a|b``"
+
+
+def test_staged_notebook_writes_into_the_build_and_hides_it(build, tmp_path):
+    source = ROOT / "notebooks" / "metrics_primer.ipynb"
+    build.stage_notebook(source, tmp_path / "nb.ipynb", tmp_path / "out")
+    nb = nbformat.read(tmp_path / "nb.ipynb", as_version=4)
+    at = next(i for i, c in enumerate(nb.cells) if "parameters" in c.metadata.get("tags", []))
+    cell = nb.cells[at + 1]
+    assert cell.source.startswith(f"output_dir = {str(tmp_path / 'out')!r}")
+    assert cell.metadata["tags"] == ["remove-cell"]
+    assert len(nb.cells) == len(nbformat.read(source, as_version=4).cells) + 1
+
+
+def test_build_refuses_a_folder_it_did_not_make(build, tmp_path, capsys):
+    mine = tmp_path / "docs"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("kept")
+    assert build.main([str(mine)]) == 2  # refused before anything is built
+    assert "lorisnb did not create it" in capsys.readouterr().err
+    assert (mine / "notes.txt").read_text() == "kept" and len(list(mine.iterdir())) == 1
+
+
+@pytest.mark.browser
+@pytest.mark.slow
+def test_manual_opens_offline(tmp_path):
+    """build/docs from file:// with every http(s) request blocked and recorded: nothing leaves the
+    machine, no page refers to a CDN or loads anything from the network, the math is typeset by
+    the manual's own MathJax, and the command-line reference lists every subcommand of the parser."""
+    if not (SITE / "index.html").is_file():
+        pytest.fail(f"{SITE / 'index.html'} missing: run `make docs` first (`make test-browser` does)")
+    if not (Path(CHROMIUM).exists() and Path(CHROMEDRIVER).exists()):
+        pytest.fail(f"{CHROMIUM} / {CHROMEDRIVER} missing: run `make test-browser` (installs Debian's chromium)")
+    offline = _module(ROOT / "teaching" / "offline.py", "lorisnb_offline_for_docs")
+    html = sorted(SITE.rglob("*.html"))
+    assert len(html) > 30, html
+    assert offline.remote_references(offline.built_files(SITE)) == []
+    cdn = [f"{p.relative_to(SITE)}: {m}" for p in html for m in CDN.findall(p.read_text(errors="replace"))]
+    assert cdn == [], cdn
+
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--proxy-server=127.0.0.1:9", "--window-size=1300,1000", f"--user-data-dir={tmp_path / 'chromium'}"):  # fmt: skip
+        opts.add_argument(arg)
+    opts.set_capability("goog:loggingPrefs", {"performance": "ALL"})
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    requested: list[str] = []
+
+    def open_page(page: Path) -> None:
+        driver.get(page.as_uri())
+        end = time.monotonic() + 30
+        while driver.execute_script("return document.readyState") != "complete":
+            assert time.monotonic() < end, f"{page} did not load"
+            time.sleep(0.2)
+        time.sleep(0.5)
+        for entry in driver.get_log("performance"):
+            msg = json.loads(entry["message"])["message"]
+            if msg["method"] == "Network.requestWillBeSent":
+                requested.append(msg["params"]["request"]["url"])
+        broken = driver.execute_script(
+            "return Array.from(document.images).filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.src)"
+        )
+        assert broken == [], f"{page.name}: images that did not load: {broken}"
+
+    try:
+        driver.execute_cdp_cmd("Network.enable", {})
+        driver.execute_cdp_cmd("Network.setBlockedURLs", {"urls": ["http://*", "https://*", "ws://*", "wss://*"]})
+        open_page(SITE / "index.html")
+        nav = driver.execute_script("return Array.from(document.querySelectorAll('nav a')).map(a => a.textContent)")
+        for title in ("Command line", "Python API", "Conventions and semantics", "Architecture"):
+            assert any(title in t for t in nav), (title, nav)
+
+        open_page(SITE / "reference" / "cli.html")
+        headings = driver.execute_script(
+            "return Array.from(document.querySelectorAll('article h2, article h3')).map(h => h.textContent)"
+        )
+        for command in subcommands():
+            assert any(h.strip().rstrip("#¶").strip() == command for h in headings), (command, headings)
+        options = driver.execute_script("return document.querySelector('article').innerText")
+        assert "--eps" in options and "--official-interpolation" in options and "--notebooks-dir" in options
+
+        open_page(SITE / "notebooks" / "metrics_primer.html")
+        end = time.monotonic() + 30  # MathJax typesets after the page has loaded
+        while not driver.execute_script("return document.querySelectorAll('mjx-container').length"):
+            assert time.monotonic() < end, "metrics_primer: no formula typeset (MathJax did not run)"
+            time.sleep(0.2)
+        outputs = driver.execute_script("return document.querySelectorAll('.cell_output img').length")
+        assert outputs > 0, "metrics_primer: no figure among the outputs (not executed?)"
+        open_page(SITE / "architecture.html")
+        open_page(SITE / "reference" / "api.html")
+    finally:
+        driver.quit()
+    outside = [u for u in requested if not u.startswith(("file:", "data:", "about:", "chrome", "blob:"))]
+    assert outside == [], f"requests that would leave the machine: {outside}"
+    assert any(u.endswith("tex-chtml.js") for u in requested)  # MathJax came from the manual itself
