@@ -7,14 +7,13 @@ odometry's estimates, from kitti-odom-eval; see tests/peers.py for where the pee
 from __future__ import annotations
 
 import importlib.util
-import shutil
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from peers import peer
+from peers import KITTI_SEQUENCES as SEQUENCES
+from peers import build_devkit, kitti_pair, peer, run_devkit
 
 from lorisnb.core.metrics.kitti import (
     KITTI_LENGTHS,
@@ -23,65 +22,15 @@ from lorisnb.core.metrics.kitti import (
     kitti_summary,
 )
 
-#: our driver: the devkit's functions on two files, every segment at float precision (%.9g round-trips
-#: a float), its stats.txt and per-length files written by its own saveStats / saveErrorPlots
-DRIVER = r"""
-#define main devkit_main
-#include "evaluate_odometry.cpp"
-#undef main
-int main(int argc, char *argv[]) {
-  vector<Matrix> gt = loadPoses(argv[1]);
-  vector<Matrix> est = loadPoses(argv[2]);
-  vector<errors> err = calcSequenceErrors(gt, est);
-  for (vector<errors>::iterator it = err.begin(); it != err.end(); it++)
-    printf("%d %.9g %.9g %.9g %.9g\n", it->first_frame, it->r_err, it->t_err, it->len, it->speed);
-  float t = 0, r = 0;
-  for (vector<errors>::iterator it = err.begin(); it != err.end(); it++) { t += it->t_err; r += it->r_err; }
-  float num = err.size();
-  fprintf(stderr, "%.9g %.9g\n", t / num, r / num);
-  char prefix[] = "seq";
-  saveStats(err, argv[3]);
-  saveErrorPlots(err, argv[3], prefix);
-  return 0;
-}
-"""
-
-SEQUENCES = ("09", "10")
-
 
 @pytest.fixture(scope="module")
 def devkit(tmp_path_factory) -> Path:
-    src = peer("kitti_devkit")
-    gxx = shutil.which("g++")
-    if gxx is None:
-        pytest.skip("no C++ compiler (g++) to build the KITTI devkit")
-    out = tmp_path_factory.mktemp("devkit")
-    (out / "driver.cpp").write_text(DRIVER)
-    exe = out / "evaluate"
-    built = subprocess.run(
-        [gxx, "-O2", "-w", "-I", str(src), str(out / "driver.cpp"), str(src / "matrix.cpp"), "-o", str(exe)],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
-    assert built.returncode == 0, built.stderr[-3000:]
-    return exe
+    return build_devkit(tmp_path_factory.mktemp("devkit"))
 
 
 @pytest.fixture(scope="module")
 def kitti_files() -> dict[str, tuple[Path, Path]]:
-    root = peer("kitti-odom-eval")
-    return {
-        s: (root / "dataset" / "kitti_odom" / "gt_poses" / f"{s}.txt", root / "result" / "example_1" / f"{s}.txt")
-        for s in SEQUENCES
-    }
-
-
-def run_devkit(exe: Path, gt: Path, est: Path, out: Path) -> tuple[np.ndarray, tuple[float, float]]:
-    out.mkdir()
-    done = subprocess.run([str(exe), str(gt), str(est), str(out)], capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr[-2000:]
-    rows = np.loadtxt(done.stdout.splitlines(), ndmin=2)
-    t, r = (float(v) for v in done.stderr.split())
-    return rows, (t, r)
+    return {s: kitti_pair(s) for s in SEQUENCES}
 
 
 def matrices(path: Path) -> np.ndarray:
