@@ -52,6 +52,8 @@ CASES: dict[str, tuple[list[str], list[str]]] = {
     "--downsample": (["--downsample", "50"], []),
     "--motion-filter": (["--motion-filter", "0.05", "5"], []),
     "--relation": (["--relation", "full"], []),
+    # the KITTI metric's (issue 45): refused without --conventions kitti (tests/cli/test_kitti_conventions.py)
+    "--kitti-precision": (["--kitti-precision", "double"], []),
     "--rpe-pairs": (["--rpe-unit", "m", "--rpe-pairs", "estimate"], ["--rpe-unit", "m"]),
     "--rpe-all-pairs": (["--rpe-unit", "m", "--rpe-all-pairs"], ["--rpe-unit", "m"]),
     "--rpe-consecutive": (["--rpe-consecutive"], []),
@@ -64,7 +66,8 @@ CASES: dict[str, tuple[list[str], list[str]]] = {
 #: where to write (checked by their own tests: test_speed_scale, test_safety, test_data_and_cli).
 READING = {"--gt", "--format", "--gt-format", "--manifest", "--topic", "--gt-topic", "--tf", "--gt-tf", "--gt-times",
            "--est-times", "--data"}  # fmt: skip
-RUNNING = {"--jobs", "--scheduler", "--no-progress", "--csv", "--parquet", "--force", "--help", "--digits"}
+RUNNING = {"--jobs", "--scheduler", "--no-progress", "--csv", "--parquet", "--force", "--help", "--digits",
+           "--kitti-plot"}  # fmt: skip
 OWN = {  # options of one command, with their cases
     "sweep": {"--relative-to": (["--eps", "0.1", "--relative-to", "extent"], ["--eps", "0.1"])},
     "compare": {

@@ -133,8 +133,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from lorisnb.core.lifelong.aggregate import aggregate_columns, spans_columns
     from lorisnb.io.writers import write_csv, write_parquet
 
-    ev, notes = _run_evaluation(args, ["csv"], folders=("parquet",))
-    table = ev.sequences() if args.csv or args.parquet or ev.spec.relation is not None else None
+    ev, notes = _run_evaluation(args, ["csv", "kitti_plot"], folders=("parquet",))
+    kitti = ev.spec.preset_name == "kitti"
+    if args.kitti_plot and not kitti:
+        raise ValidationError("--kitti-plot: the KITTI metric's plot, only with --conventions kitti")
+    table = ev.sequences() if args.csv or args.parquet or ev.spec.relation is not None or kitti else None
     columns = frame_columns(table) if table is not None else _rows_as_columns(ev.sequence_rows())
     if columns and len(columns["seq"]):  # printed from the rows: pandas only for a table written
         cols = [
@@ -152,6 +155,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         ]
         if ev.spec.preset_name == "evo":  # evo's statistics, as evo_ape / evo_rpe print them
             cols += ["ate_mean", "ate_median", "ate_max", "rpe_trans_rmse", "rpe_rot_rmse"]
+        if kitti:  # the devkit's numbers: % and deg/100 m
+            cols += ["kitti_t_err", "kitti_r_err", "kitti_segments", "kitti_matrices"]
         print(format_table({c: columns[c] for c in cols}, args.digits))
         try:
             scenes = aggregate_columns(columns, spans_columns(ev.spans()))
@@ -172,6 +177,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(f"\nwrote {len(table)} rows to {out}", file=sys.stderr)
     if table is not None and args.parquet:
         print(f"wrote {len(table)} rows to {write_parquet(table, args.parquet, force=args.force)}", file=sys.stderr)
+    if kitti:
+        _print_kitti(ev, args)
     if getattr(args, "relative", False):
         rel = ev.relative()
         print("\nrelative error (rpg_trajectory_evaluation: sub-trajectories of 10..50 % of the length):")
@@ -182,6 +189,26 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.unscored)} not scored, "
           f"{len(skipped_only(ev))} skipped", file=sys.stderr)  # fmt: skip
     return ev.exit_status()
+
+
+def _print_kitti(ev: Any, args: argparse.Namespace) -> None:
+    """The KITTI devkit's summary over all sequences of each algorithm (the leaderboard's numbers) and
+    its per-length errors; the per-length plot with ``--kitti-plot``."""
+    totals = ev.kitti_totals()
+    print(f"\nKITTI odometry (devkit, {ev.spec.kitti_precision} precision; every segment of all sequences: t_err %, "
+          "r_err deg/100 m):")  # fmt: skip
+    print(_fmt(totals, args.digits))
+    lengths = ev.kitti_lengths()
+    overall = lengths[lengths.seq == ""].drop(columns=["file", "seq"])
+    print("\nper segment length (all sequences; the devkit plots lengths with at least 3 segments):")
+    print(_fmt(overall, args.digits))
+    if args.kitti_plot:
+        from lorisnb.io.writers import write_atomically
+        from lorisnb.tools.figures.kitti import kitti_length_figure
+
+        fig = kitti_length_figure(lengths)
+        out = write_atomically(args.kitti_plot, lambda p: fig.savefig(p, dpi=150, bbox_inches="tight", format="png"), args.force)  # fmt: skip
+        print(f"wrote the per-length plot to {out}", file=sys.stderr)
 
 
 def _rows_as_columns(rows: list[dict[str, Any]]) -> dict[str, np.ndarray]:
@@ -203,7 +230,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from lorisnb.core.lifelong.sweep import sweep, sweep_scenes
     from lorisnb.io.writers import write_csv, write_parquet
 
-    refuse_unused(args, {"relative": "lorisnb evaluate (rpg's relative error has no threshold to sweep)"})
+    refuse_unused(args, {"relative": "lorisnb evaluate (rpg's relative error has no threshold to sweep)",
+                         "kitti_plot": "lorisnb evaluate --conventions kitti"})  # fmt: skip
     relative = f" (fractions of each sequence's {args.relative_to})" if args.relative_to is not None else " m"
     units = {"eps": relative, "phi": " deg", "delta": " s", "tau": " s"}
 
@@ -284,6 +312,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if rpe and not args.metric.startswith(("rpe", "c_rpe")):
         raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
     refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate",
+                         "kitti_plot": "lorisnb evaluate --conventions kitti",
                          "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)"})  # fmt: skip
     ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"])
     table = ev.sequences()

@@ -12,7 +12,16 @@ from lorisnb.core.conventions.evo_options import PLANES
 from lorisnb.core.metrics.pairs import RPE_PAIRS
 from lorisnb.core.metrics.relations import RELATIONS
 from lorisnb.core.spec import validate
-from lorisnb.core.spec.evalspec import ALIGNMENTS, ASSOCIATIONS, PRESETS, RPE_UNITS, EvalSpec, make_spec, preset_over
+from lorisnb.core.spec.evalspec import (
+    ALIGNMENTS,
+    ASSOCIATIONS,
+    KITTI_PRECISIONS,
+    PRESETS,
+    RPE_UNITS,
+    EvalSpec,
+    make_spec,
+    preset_over,
+)
 from lorisnb.core.spec.evo import check_evo
 from lorisnb.errors import ValidationError
 from lorisnb.io.datasets.manifest import BUILT_IN
@@ -72,7 +81,8 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--scene", default=None, help="scene label of a pair's rows (default: the ground truth's file name)")
     g.add_argument("--conventions", default=None, choices=list(PRESETS),
                    help="a preset of the evaluation spec (openloris: the official tool; tum: evaluate_ate.py; "
-                   "rpg: rpg_trajectory_evaluation; vio: posyaw; evo: evo_ape/evo_rpe's defaults)")  # fmt: skip
+                   "rpg: rpg_trajectory_evaluation; vio: posyaw; evo: evo_ape/evo_rpe's defaults; kitti: the KITTI "
+                   "odometry devkit's kitti_t_err and kitti_r_err)")  # fmt: skip
     g.add_argument("--association", default=None, choices=ASSOCIATIONS,
                    help="interpolate (default), nearest (TUM's greedy), evo-nearest or evo-interpolate (evo's sync)")  # fmt: skip
     g.add_argument("--max-gap", default=None, type=arg_type(lambda t: validate.positive("--max-gap", t, "seconds")),
@@ -110,6 +120,10 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--gt-tf", default=None, metavar="PARENT:CHILD", help="bags: the ground truth as a TF chain")
     g.add_argument("--relative", action="store_true",
                    help="also print rpg's relative error (10..50 %% of each sequence's length; %% and deg/m)")  # fmt: skip
+    g.add_argument("--kitti-precision", default=None, choices=KITTI_PRECISIONS,
+                   help="--conventions kitti: the devkit's single-precision arithmetic (default) or double")  # fmt: skip
+    g.add_argument("--kitti-plot", default=None, metavar="PNG",
+                   help="--conventions kitti: write the devkit's per-length plot (translation and rotation error)")  # fmt: skip
     g.add_argument("--gt-times", default=None, metavar="FILE", help="KITTI: the ground truth's times file")
     g.add_argument("--est-times", default=None, metavar="FILE", help="KITTI: the estimates' times file")
 
@@ -123,6 +137,7 @@ SPEC_OPTIONS = {
     "rpe_delta": "rpe_delta", "rpe_unit": "rpe_unit", "rpe_pairs": "rpe_pairs", "rpe_all_pairs": "rpe_all_pairs",
     "rpe_tolerance": "rpe_tolerance", "t_start": "t_start", "t_end": "t_end", "project_to_plane": "project_to_plane",
     "downsample": "downsample", "motion_filter": "motion_filter", "relation": "relation",
+    "kitti_precision": "kitti_precision",
 }  # fmt: skip
 
 

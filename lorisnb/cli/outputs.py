@@ -74,6 +74,7 @@ OUTPUT_SUFFIXES: dict[str, tuple[str, ...]] = {
     "markdown": (".md",),
     "json": (".json",),  # diff's verdict: a --json notes.txt --force replaced any file with JSON
     "junit": (".xml",),
+    "kitti_plot": (".png",),
 }
 
 

@@ -9,7 +9,7 @@ are ignored (not counted wrong).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -70,6 +70,9 @@ class Association:
         gt_quaternions: (M, 4) interpolated ground-truth orientations, unit quaternions ``xyzw``
             (None if M = 0); ``gt_rotations`` gives them as a scipy ``Rotation``.
         gt_start, gt_end: first and last ground-truth stamp of the sequence, seconds.
+        gt_blocks: (M, 3, 3) the matched ground-truth poses' rotation blocks as their file wrote
+            them (:func:`lorisnb.core.trajectory.poses.written_blocks`), where a convention
+            composes the matrices as written and they are known; else None.
     """
 
     est_index: np.ndarray
@@ -78,6 +81,7 @@ class Association:
     gt_quaternions: np.ndarray | None
     gt_start: float
     gt_end: float
+    gt_blocks: np.ndarray | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return len(self.stamps)

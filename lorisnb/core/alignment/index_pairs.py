@@ -20,7 +20,7 @@ import numpy as np
 from lorisnb.core.alignment.association import Association
 from lorisnb.core.alignment.geometry import quat_normalize
 from lorisnb.core.spec.evalspec import EvalSpec
-from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.core.trajectory.poses import Trajectory, written_blocks
 from lorisnb.errors import EvaluationError, ValidationError
 
 #: Spec options that say how stamps are matched in time, or that thin each trajectory on its own
@@ -52,9 +52,10 @@ def by_index(spec: EvalSpec) -> EvalSpec:
     return replace(spec, association="index")
 
 
-def match_by_index(gt: Trajectory, est: Trajectory, label: str = "estimate") -> Association:
+def match_by_index(gt: Trajectory, est: Trajectory, label: str = "estimate", as_written: bool = False) -> Association:
     """Pose i of ``est`` with pose i of ``gt`` (the estimate's stamps kept); an EvaluationError
-    naming ``label`` when the two have different lengths (see the module docstring)."""
+    naming ``label`` when the two have different lengths (see the module docstring).
+    ``as_written``: the ground truth's rotation blocks as written kept too (where known)."""
     g_start = float(gt.stamps[0]) if len(gt) else np.nan
     g_end = float(gt.stamps[-1]) if len(gt) else np.nan
     if len(gt) != len(est):
@@ -70,4 +71,5 @@ def match_by_index(gt: Trajectory, est: Trajectory, label: str = "estimate") -> 
     n = len(est)
     if n == 0:
         return Association(np.zeros(0, np.intp), np.zeros(0), np.zeros((0, 3)), None, g_start, g_end)
-    return Association(np.arange(n), est.stamps, gt.positions, quat_normalize(gt.quaternions), g_start, g_end)
+    blocks = written_blocks(gt) if as_written else None
+    return Association(np.arange(n), est.stamps, gt.positions, quat_normalize(gt.quaternions), g_start, g_end, blocks)

@@ -1,7 +1,8 @@
 """The error metrics on matched poses: the OpenLORIS-Scene paper's per-pose and threshold
 metrics (:mod:`.openloris`, Eq. 1-4), the pose pairs of every RPE rule (:mod:`.pairs`), evo's
 pose relations (:mod:`.relations`, :mod:`.relation_table`), rpg's relative error over
-sub-trajectories (:mod:`.relative`), and difficulty measures across datasets (:mod:`.difficulty`).
+sub-trajectories (:mod:`.relative`), the KITTI odometry devkit's segment errors (:mod:`.kitti`), and difficulty
+measures across datasets (:mod:`.difficulty`).
 
 May import: the other core sub-packages but :mod:`lorisnb.core.stats` (enforced).
 """

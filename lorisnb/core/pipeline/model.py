@@ -148,6 +148,10 @@ class SequenceErrors:
             (None if M = 0); ``est_rotations`` and ``gt_rotations`` give them as scipy ``Rotation``.
         gt_start, gt_end: ground-truth time span of the sequence, seconds.
         scale: the scale of the alignment applied to this sequence (1 for SE(3)).
+        est_blocks, gt_blocks: (M, 3, 3) the matched poses' rotation blocks as their files wrote
+            them (the estimate's turned by the alignment's rotation), where the spec composes the
+            matrices as written (``EvalSpec.as_written``) and both files are KITTI files; else None
+            (the orientations are then the quaternions').
     """
 
     seq: int
@@ -162,6 +166,8 @@ class SequenceErrors:
     gt_start: float
     gt_end: float
     scale: float = 1.0
+    est_blocks: np.ndarray | None = field(default=None, repr=False)
+    gt_blocks: np.ndarray | None = field(default=None, repr=False)
     _rpe_cache: dict[tuple[float, str, str, bool | None, float], tuple[np.ndarray, ...]] = field(
         default_factory=dict, repr=False, compare=False
     )

@@ -25,7 +25,7 @@ from lorisnb.core.pipeline.model import ResultFile, SequenceErrors
 from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.trajectory.blocks import blockwise
 from lorisnb.core.trajectory.frames import FRAMES
-from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.core.trajectory.poses import Trajectory, written_blocks
 from lorisnb.errors import EvaluationError, ParseError
 
 DEFAULT = EvalSpec()  # lorisnb's own: interpolation within 0.5 s, SE(3) on all matched poses
@@ -64,9 +64,13 @@ def errors_after_alignment(
         aoe[lo:hi] = quat_angle_deg(quat_conj_multiply(gt_q[lo:hi], q[lo:hi]))  # unit on both sides
 
     blockwise(rows, m)
+    est_blocks = written_blocks(est) if a.gt_blocks is not None else None
+    if est_blocks is not None:  # as written, turned by the alignment's rotation (as evo and the devkit compose them)
+        est_blocks = np.einsum("ij,njk->nik", sim.rotation, est_blocks[a.est_index])
     return SequenceErrors(
         seq=seq, poses=len(est), stamps=a.stamps, ate=ate, aoe=aoe, est_positions=pos, gt_positions=a.gt_positions,
         est_quaternions=q, gt_quaternions=gt_q, gt_start=a.gt_start, gt_end=a.gt_end, scale=sim.scale,
+        est_blocks=est_blocks, gt_blocks=a.gt_blocks if est_blocks is not None else None,
     )  # fmt: skip
 
 
@@ -75,7 +79,7 @@ def match(gt: Trajectory, est: Trajectory, spec: EvalSpec = DEFAULT, label: str 
     ``t_offset`` first); for ``nearest`` the ground-truth poses are taken as they are; ``index``
     pairs pose i with pose i (an error naming ``label`` for files of different lengths)."""
     if spec.association == "index":
-        return match_by_index(gt, est, label)
+        return match_by_index(gt, est, label, spec.as_written)
     stamps = est.stamps + spec.t_offset if spec.t_offset else est.stamps
     if spec.association == "interpolate":
         return associate(gt, stamps, spec.max_gap, spec.official_interpolation)
@@ -84,7 +88,9 @@ def match(gt: Trajectory, est: Trajectory, spec: EvalSpec = DEFAULT, label: str 
     gi, ej = associate_nearest(gt.stamps, stamps, spec.max_diff)
     if ej.size == 0:
         return Association(ej, np.zeros(0), np.zeros((0, 3)), None, g_start, g_end)
-    return Association(ej, stamps[ej], gt.positions[gi], quat_normalize(gt.quaternions[gi]), g_start, g_end)
+    blocks = written_blocks(gt) if spec.as_written else None
+    return Association(ej, stamps[ej], gt.positions[gi], quat_normalize(gt.quaternions[gi]), g_start, g_end,
+                       None if blocks is None else blocks[gi])  # fmt: skip
 
 
 def with_transform(est: Trajectory, transform: Sim3 | np.ndarray | tuple | None) -> Trajectory:

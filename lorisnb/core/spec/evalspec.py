@@ -6,7 +6,7 @@ which poses count as repeated, the thresholds of the paper's metrics and the RPE
 built by one function, :func:`make_spec`, from every surface (command-line options, Python
 keywords, manifest tables, notebook parameters, widget values), so a value is accepted or refused
 with the same message everywhere. The presets (:data:`PRESETS`: ``openloris``, ``tum``, ``rpg``,
-``vio``) are values of it.
+``vio``, ``evo``, ``kitti``) are values of it.
 
 :meth:`EvalSpec.describe` is the one line the command line prints as ``conventions:``;
 :meth:`EvalSpec.canonical` is the exact text written next to every output (the ``spec`` column of
@@ -47,6 +47,10 @@ ASSOCIATIONS = ("interpolate", "nearest", "index", *evo.EVO_ASSOCIATIONS)
 ALIGNMENTS = ("se3", "sim3", "posyaw", "none", "auto", *evo.EVO_ALIGNMENTS)
 RPE_UNITS = evo.RPE_UNITS
 REPEATED = ("drop", "keep")
+#: The KITTI metric's arithmetic: the devkit's single precision, or double.
+KITTI_PRECISIONS = ("single", "double")
+#: Presets that compose KITTI files' matrices as written (:attr:`EvalSpec.as_written`).
+AS_WRITTEN = ("kitti",)
 MODES = ("auto", "per-seq", "lifelong")
 #: An alignment without its scale (``scale`` off): what each scaled one becomes; the others stay.
 UNSCALED = {"sim3": "se3", "auto": "se3", "scale": "none"}
@@ -90,6 +94,7 @@ class EvalSpec:
     downsample: int | None = None
     motion_filter: tuple[float, float] | None = None
     relation: str | None = None
+    kitti_precision: str = "single"
     preset_name: str = "openloris"
     explicit: frozenset[str] = field(default=frozenset(), compare=False, repr=False)
 
@@ -108,6 +113,12 @@ class EvalSpec:
     def preset(cls, name: str, **changes: Any) -> EvalSpec:
         """A named spec (:data:`PRESETS`), with ``changes`` over it (validated as by :func:`make_spec`)."""
         return make_spec(name, **changes)
+
+    @property
+    def as_written(self) -> bool:
+        """Whether this convention composes KITTI files' pose matrices as written (the devkit's:
+        the ``kitti`` preset), not the rotations nearest to their 7-digit blocks."""
+        return self.preset_name in AS_WRITTEN
 
     # -- what it says ------------------------------------------------------------------------
     def alignment_for(self, algorithm: str) -> str:
@@ -152,8 +163,19 @@ class EvalSpec:
         evo_words = evo.describe_evo(self)
         return (
             f"association: {match}{offset}; alignment: {align} on {frames}{transform}; {mode}; "
-            f"{repeated}{extra}; {thresholds}{'; ' + evo_words if evo_words else ''} (preset {self.preset_name})"
+            f"{repeated}{extra}; {thresholds}{'; ' + evo_words if evo_words else ''}{self._matrices_words()} "
+            f"(preset {self.preset_name})"
         )
+
+    def _matrices_words(self) -> str:
+        """How KITTI files' rotation blocks are taken (said wherever it matters), and the KITTI metric's settings."""
+        if self.preset_name == "kitti":
+            return (
+                f"; KITTI odometry metric (devkit evaluate_odometry.cpp): segments of 100..800 m every 10 frames, "
+                f"{self.kitti_precision} precision{' as the devkit' if self.kitti_precision == 'single' else ''}, "
+                "KITTI matrices as written (other inputs: their quaternions' rotations)"
+            )
+        return ""
 
     rpe_options = evo.rpe_options  # the RPE settings, as lorisnb.core.lifelong.scoring.score takes them
 
@@ -215,6 +237,8 @@ class EvalSpec:
         if kind == "openloris" and "transform" in given and self.transform is not None:
             problems["transform"] = (f"{name('transform')}: OpenLORIS result files name their sensor frame in the header "
                                      "(frame: ...); the transform comes from the robot's extrinsics")  # fmt: skip
+        if "kitti_precision" in given and self.preset_name != "kitti":
+            problems["kitti_precision"] = f"{name('kitti_precision')}: only for the KITTI metric (--conventions kitti)"
         if self.preset_name == "evo" and "delta" in given:  # evo_rpe's --delta is lorisnb's RPE step
             notes.append(
                 f"delta {self.delta:g}: lorisnb's validity window of CR-T (seconds), not evo_rpe's --delta; evo's RPE "
@@ -297,6 +321,8 @@ def _checked(values: Mapping[str, Any], surface: str) -> dict[str, Any]:
             out[key] = validate.eps_value(v)
         elif key in ("phi", "delta", "tau"):
             out[key] = validate.threshold(key, v)
+        elif key == "kitti_precision":
+            out[key] = validate.choice(label, v, KITTI_PRECISIONS)
         elif key == "transform":
             out[key] = validate.rigid_transform(v, label)
         elif key in evo.EVO_DEFAULTS or key.startswith("rpe_"):  # the RPE step and evo's options
@@ -391,6 +417,11 @@ PRESETS["tum"] = EvalSpec(association="nearest", align="se3", preset_name="tum")
 PRESETS["rpg"] = EvalSpec(association="nearest", align="sim3", repeated="keep", preset_name="rpg")
 PRESETS["vio"] = EvalSpec(association="nearest", align="posyaw", repeated="keep", preset_name="vio")
 PRESETS["evo"] = EvalSpec(**evo.EVO_PRESET, preset_name="evo")
+#: ``kitti``: the KITTI odometry devkit's metric (``kitti_t_err``, ``kitti_r_err`` columns): poses paired
+#: one to one (by index for KITTI files without times, else nearest stamps), no alignment, the
+#: matrices as written (:mod:`lorisnb.core.metrics.kitti`)
+PRESETS["kitti"] = EvalSpec(association="nearest", align="none", repeated="keep", rpe_unit="frames",
+                            preset_name="kitti")  # fmt: skip
 
 #: Every name :func:`make_spec` takes (the fields and :data:`ALIASES`): notebook parameters and widget
 #: values of these names are checked by it.

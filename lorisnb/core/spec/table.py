@@ -31,6 +31,7 @@ OPTIONS: dict[str, tuple[str, str, str]] = {
     "rpe_delta": ("RPE step", "rpe_unit", "all"),
     "rpe_unit": ("unit of the RPE step: s / m / f or frames / deg / rad", "", "all"),
     **evo.EVO_OPTIONS,
+    "kitti_precision": ("the KITTI metric's arithmetic: single (the devkit's floats) / double", "", "kitti preset"),
     "transform": ("T_est_gt: the ground-truth body's pose in the estimate's body frame", "4x4", "pairs, manifests"),
 }
 

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
-from lorisnb.core.alignment.geometry import rotations_of
+from lorisnb.core.alignment.geometry import quat_to_matrix, rotations_of
 from lorisnb.core.trajectory.blocks import blockwise
 from lorisnb.errors import LorisWarning, ValidationError
 
@@ -187,6 +187,41 @@ class Trajectory:
     def extent(self) -> float:
         """Bounding-box diagonal of the positions, metres (:func:`extent`)."""
         return extent(self.positions)
+
+
+#: How far (max abs entry) a block as written may be from the rotation of its pose's quaternion and
+#: still be that pose's block: a reader's tolerance (1e-3) with a margin; an orientation changed since
+#: (a body transform, an alignment) is further and drops the blocks.
+WRITTEN_TOLERANCE = 2e-3
+
+
+def keep_written_blocks(traj: Trajectory, blocks: np.ndarray) -> Trajectory:
+    """``traj`` with the rotation blocks of its file as written ((N, 9) or (N, 3, 3), row-major),
+    kept in its ``meta`` beside the line numbers they were read from (so every subset of the poses
+    finds its own: :func:`written_blocks`). Returns ``traj`` (its meta updated)."""
+    if traj.lines is not None and len(blocks) == len(traj):
+        traj.meta["written_blocks"] = np.asarray(blocks, float).reshape(-1, 9)
+        traj.meta["written_lines"] = traj.lines
+    return traj
+
+
+def written_blocks(traj: Trajectory) -> np.ndarray | None:
+    """The (N, 3, 3) rotation blocks of ``traj``'s poses as its file wrote them (a KITTI file's
+    7-digit matrices, not their nearest rotations), or None where they are not known: no blocks
+    kept by the reader, poses without line numbers, or orientations changed since reading (a
+    block further than :data:`WRITTEN_TOLERANCE` from its pose's quaternion)."""
+    kept, lines = traj.meta.get("written_blocks"), traj.meta.get("written_lines")
+    if kept is None or lines is None or traj.lines is None:
+        return None
+    if len(traj) == 0:
+        return np.zeros((0, 3, 3))
+    at = np.searchsorted(lines, traj.lines)
+    if at.max() >= len(lines) or not np.array_equal(lines[at], traj.lines):
+        return None
+    blocks = kept[at].reshape(-1, 3, 3)
+    if not np.abs(blocks - quat_to_matrix(traj.quaternions)).max() <= WRITTEN_TOLERANCE:
+        return None
+    return blocks
 
 
 def sessions(name: str, value: Any) -> Mapping[int, Trajectory]:

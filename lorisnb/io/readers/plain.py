@@ -16,7 +16,7 @@ from typing import cast
 import numpy as np
 
 from lorisnb.core.spec.validate import choice, flag
-from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.core.trajectory.poses import Trajectory, keep_written_blocks
 from lorisnb.core.trajectory.rotations import rotation_entries
 from lorisnb.errors import LorisWarning, ParseError, ValidationError
 from lorisnb.io.parsing.chunks import read_rows
@@ -124,8 +124,9 @@ def _poses(
     return traj
 
 
-def _pose_blocks(flat: Part) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Positions, quaternions and refusals of m rows of ``[R | t]`` blocks, row-major (an (m, 12)
+def _pose_blocks(flat: Part) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Positions, quaternions, refusals and the rotation blocks as written ((m, 9), row-major) of m
+    rows of ``[R | t]`` blocks, row-major (an (m, 12)
     array, or the parser's 12 columns as read), row by row (a :data:`~lorisnb.io.parsing.rows.Convert`: a
     large file computes it on each range as it is read): a row is refused unless finite and its
     block a proper rotation within :data:`ROTATION_TOLERANCE`; the quaternions are those of the
@@ -142,13 +143,16 @@ def _pose_blocks(flat: Part) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         cols = [np.where(bad, 0.0, c) for c in cols]
     q, off = rotation_entries([cols[4 * i : 4 * i + 3] for i in range(3)])
     bad |= ~(off <= ROTATION_TOLERANCE)
-    return np.column_stack([cols[3], cols[7], cols[11]]), q, bad
+    written = np.column_stack([cols[4 * i + j] for i in range(3) for j in range(3)])
+    return np.column_stack([cols[3], cols[7], cols[11]]), q, bad, written
 
 
 def _from_matrices(spath: str, stamps: np.ndarray, poses: list[np.ndarray], line_no: np.ndarray) -> Trajectory:
     """The trajectory of :func:`_pose_blocks`' ``poses``, or a ParseError naming the first line
-    refused."""
-    positions, q, bad = poses
+    refused. The rotation blocks as written are kept beside the quaternions of their nearest
+    rotations (:func:`lorisnb.core.trajectory.poses.keep_written_blocks`), for the conventions
+    that compose the matrices as written (the KITTI devkit's)."""
+    positions, q, bad, written = poses
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise ParseError(
@@ -157,7 +161,8 @@ def _from_matrices(spath: str, stamps: np.ndarray, poses: list[np.ndarray], line
             "not a rotation (non-finite values, or a rotation block that is not orthonormal with determinant 1); "
             "expected a pose",
         )
-    return Trajectory.from_checked(np.asarray(stamps, float), positions, q, line_no, {"source": spath})
+    traj = Trajectory.from_checked(np.asarray(stamps, float), positions, q, line_no, {"source": spath})
+    return keep_written_blocks(traj, written)
 
 
 def read_kitti(

@@ -81,7 +81,27 @@ class Evaluation:
             spec = table.pop("spec")
             table = pd.concat([table, rel.set_index(table.index)], axis=1)
             table["spec"] = spec
+        if s.preset_name == "kitti" and len(table):  # the KITTI devkit's metric
+            from lorisnb.core.metrics.kitti_table import kitti_columns
+
+            spec = table.pop("spec")
+            table = pd.concat([table, kitti_columns(self.errors, s.kitti_precision).set_index(table.index)], axis=1)
+            table["spec"] = spec
         return table
+
+    def kitti_lengths(self) -> pd.DataFrame:
+        """The KITTI devkit's per-length errors of every sequence and of every algorithm over all its
+        sequences (:func:`lorisnb.core.metrics.kitti_table.kitti_lengths`), in the spec's precision."""
+        from lorisnb.core.metrics.kitti_table import kitti_lengths
+
+        return kitti_lengths(self.errors, self.spec.kitti_precision)
+
+    def kitti_totals(self) -> pd.DataFrame:
+        """The KITTI leaderboard's numbers per algorithm: the devkit's summary over every segment of
+        all its sequences (:func:`lorisnb.core.metrics.kitti_table.kitti_totals`)."""
+        from lorisnb.core.metrics.kitti_table import kitti_totals
+
+        return kitti_totals(self.errors, self.spec.kitti_precision)
 
     def sequence_rows(
         self, eps: Eps | None = None, phi: float | None = None, delta: float | None = None, tau: float | None = None,

@@ -1,0 +1,105 @@
+"""The peers' own code, for tests that run it: kept OUTSIDE the repository (their licences differ
+from lorisnb's, and tests use no network), in ``$LORISNB_PEERS`` or ``~/.cache/lorisnb/peers``.
+A test that needs a peer missing there skips, saying how to fetch it (once, by hand):
+
+- ``kitti_devkit/``: the KITTI odometry devkit's C++ (``evaluate_odometry.cpp``, ``matrix.h``,
+  ``matrix.cpp``, ``mail.h``; GPL), e.g. from the devkit zip of cvlibs.net (``devkit/cpp``) or
+  github.com/TurtleZhong/ORB_SLAM2_Evaluation at 152c8641ef7f6a549add6d881bc9fc90cead666a
+  (``devkit/cpp``: the devkit's metric code unchanged, its ``eval()`` paths edited).
+- ``kitti-odom-eval/``: github.com/Huangying-Zhan/kitti-odom-eval at
+  4b850b0815dcd28edef893ca3422125b04a02397 (MIT): its Python evaluator and real KITTI poses
+  (``dataset/kitti_odom/gt_poses/00..10.txt``, ``result/example_1/09.txt`` and ``10.txt``: a
+  learned visual odometry's estimates).
+
+``git clone URL DIR && git -C DIR checkout COMMIT`` into the peers folder does it.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+#: peer -> (a file that must exist in it, where to get it)
+PEERS = {
+    "kitti_devkit": ("evaluate_odometry.cpp", "the KITTI odometry devkit's devkit/cpp folder"),
+    "kitti-odom-eval": ("kitti_odometry.py", "github.com/Huangying-Zhan/kitti-odom-eval"),
+    "tartanair_tools": ("evaluation/tartanair_evaluator.py", "github.com/castacks/tartanair_tools"),
+}
+
+
+def peers_root() -> Path:
+    return Path(os.environ.get("LORISNB_PEERS") or Path.home() / ".cache" / "lorisnb" / "peers")
+
+
+def peer(name: str) -> Path:
+    """The folder of peer ``name`` (see the module docstring); skips the test when it is missing."""
+    must, where = PEERS[name]
+    folder = peers_root() / name
+    if not (folder / must).is_file():
+        pytest.skip(f"{name} is not in {peers_root()} (LORISNB_PEERS): fetch {where} there (see tests/peers.py)")
+    return folder
+
+
+#: Our driver of the KITTI devkit: the devkit's functions on two files, every segment at float precision (%.9g round-trips
+#: a float), its stats.txt and per-length files written by its own saveStats / saveErrorPlots
+DRIVER = r"""
+#define main devkit_main
+#include "evaluate_odometry.cpp"
+#undef main
+int main(int argc, char *argv[]) {
+  vector<Matrix> gt = loadPoses(argv[1]);
+  vector<Matrix> est = loadPoses(argv[2]);
+  vector<errors> err = calcSequenceErrors(gt, est);
+  for (vector<errors>::iterator it = err.begin(); it != err.end(); it++)
+    printf("%d %.9g %.9g %.9g %.9g\n", it->first_frame, it->r_err, it->t_err, it->len, it->speed);
+  float t = 0, r = 0;
+  for (vector<errors>::iterator it = err.begin(); it != err.end(); it++) { t += it->t_err; r += it->r_err; }
+  float num = err.size();
+  fprintf(stderr, "%.9g %.9g\n", t / num, r / num);
+  char prefix[] = "seq";
+  saveStats(err, argv[3]);
+  saveErrorPlots(err, argv[3], prefix);
+  return 0;
+}
+"""
+
+#: Real KITTI sequences with an estimate of the same length (kitti-odom-eval's example_1).
+KITTI_SEQUENCES = ("09", "10")
+
+
+def kitti_pair(seq: str) -> tuple[Path, Path]:
+    """Ground truth and estimate of a KITTI sequence (:data:`KITTI_SEQUENCES`), from kitti-odom-eval."""
+    root = peer("kitti-odom-eval")
+    return root / "dataset" / "kitti_odom" / "gt_poses" / f"{seq}.txt", root / "result" / "example_1" / f"{seq}.txt"
+
+
+def build_devkit(out: Path) -> Path:
+    """The KITTI devkit compiled with g++ into ``out`` with :data:`DRIVER` (skips without a compiler)."""
+    src = peer("kitti_devkit")
+    gxx = shutil.which("g++")
+    if gxx is None:
+        pytest.skip("no C++ compiler (g++) to build the KITTI devkit")
+    (out / "driver.cpp").write_text(DRIVER)
+    exe = out / "evaluate"
+    built = subprocess.run(
+        [gxx, "-O2", "-w", "-I", str(src), str(out / "driver.cpp"), str(src / "matrix.cpp"), "-o", str(exe)],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert built.returncode == 0, built.stderr[-3000:]
+    return exe
+
+
+def run_devkit(exe: Path, gt: Path, est: Path, out: Path) -> tuple[np.ndarray, tuple[float, float]]:
+    """The devkit's segments (first frame, r_err rad/m, t_err m/m, length, speed; one row each) and
+    its mean t_err and r_err over them; its stats.txt and seq_tl/seq_rl.txt are written in ``out``."""
+    out.mkdir()
+    done = subprocess.run([str(exe), str(gt), str(est), str(out)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    rows = np.loadtxt(done.stdout.splitlines(), ndmin=2)
+    t, r = (float(v) for v in done.stderr.split())
+    return rows, (t, r)
