@@ -14,7 +14,7 @@ import numpy as np
 
 from lorisnb.cli.options import param_value, spec_from_args, spec_given
 from lorisnb.cli.outputs import check_outputs, refuse_unused
-from lorisnb.cli.text import format_table, frame_columns
+from lorisnb.cli.text import clean, format_table, frame_columns
 from lorisnb.errors import FailedInputsWarning, LorisError, LorisWarning, ValidationError
 
 if TYPE_CHECKING:
@@ -360,6 +360,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         command=getattr(args, "argv", None),
         label=args.label,
         baseline=args.baseline,
+        absolute_paths=args.absolute_paths,
     )
     for r in runs:
         status = r.status if r.status != "ok" or not r.input_errors else f"ok, {r.input_errors} input file(s) failed"
@@ -382,9 +383,16 @@ def cmd_verify(args: argparse.Namespace) -> int:
     from lorisnb.tools.report.provenance import read_run_json, verify_run
 
     record = read_run_json(args.run)
-    problems = verify_run(args.run)
+    roots = {name: folder for name, folder in args.root or []}
+    for name in ("data", "results"):
+        folder = getattr(args, name)
+        if folder is not None:
+            if roots.get(name, folder) != folder:
+                raise ValidationError(f"--{name} {folder} and --root {name} {roots[name]} name two folders; give one")
+            roots[name] = folder
+    problems = verify_run(args.run, roots)
     for path, what in problems:
-        print(f"{what}: {path}")
+        print(f"{what}: {clean(path)}")
     n = len(record["inputs"])
     if "input_roots" not in record:
         print("note: run.json has no input_roots (a run of an earlier lorisnb): files added to the folders it read "
@@ -400,6 +408,15 @@ def cmd_verify(args: argparse.Namespace) -> int:
         print("; ".join(said), file=sys.stderr)
         return 1
     print(f"all {n} input file(s) unchanged", file=sys.stderr)
+    return 0
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    """Render a run folder's pages again from its own files."""
+    from lorisnb.tools.report.build import render_run
+
+    for page in render_run(args.run):
+        print(f"wrote {clean(page)}")
     return 0
 
 
