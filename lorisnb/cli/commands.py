@@ -51,7 +51,10 @@ def _run_evaluation(
 
     if args.gt and args.manifest:
         raise ValidationError("--gt and --manifest: give one (a manifest names the ground truth of each session)")
-    manifest = read_manifest(args.manifest) if args.manifest else None
+    if getattr(args, "manifest_outside", False) and not args.manifest:
+        raise ValidationError("--manifest-outside: applies to the ground-truth files of a --manifest; give one")
+    outside = bool(getattr(args, "manifest_outside", False))
+    manifest = read_manifest(args.manifest, outside=outside) if args.manifest else None
     base = manifest.spec if manifest is not None else None  # its thresholds, mode and [conventions]
     if manifest is not None and manifest.openloris:
         if args.conventions:
@@ -73,7 +76,7 @@ def _run_evaluation(
     spec = spec_from_args(args, base)
     kind = pair_kind(args.format or "tum") if args.gt else "manifest" if manifest is not None else "openloris"
     if base is not None:  # refused options the manifest set are said to be its own
-        refuse_over_manifest(spec, read_manifest(args.manifest), spec_given(args), kind, surface="cli")
+        refuse_over_manifest(spec, read_manifest(args.manifest, outside=outside), spec_given(args), kind, surface="cli")
     spec.refuse_inapplicable(kind, surface="cli")
     inputs = list(args.paths)  # the options' inputs too (check_outputs), and a manifest's ground truth
     if manifest is not None:
