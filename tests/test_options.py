@@ -65,7 +65,7 @@ CASES: dict[str, tuple[list[str], list[str]]] = {
 #: Options that say what to read (checked below: refused where they cannot apply), how to run, or
 #: where to write (checked by their own tests: test_speed_scale, test_safety, test_data_and_cli).
 READING = {"--gt", "--format", "--gt-format", "--manifest", "--topic", "--gt-topic", "--tf", "--gt-tf", "--gt-times",
-           "--est-times", "--data"}  # fmt: skip
+           "--est-times", "--data", "--manifest-outside"}  # fmt: skip  # --manifest-outside: tests/io/test_manifest_reach.py
 RUNNING = {"--jobs", "--scheduler", "--no-progress", "--csv", "--parquet", "--force", "--help", "--digits",
            "--kitti-plot"}  # fmt: skip
 OWN = {  # options of one command, with their cases

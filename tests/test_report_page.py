@@ -125,13 +125,13 @@ def test_run_json_and_verify(tmp_path, data, capsys):
     assert tuple(record) == (*KEYS, "input_roots") and record["lorisnb_version"] == ln.__version__
     write_run_json(run, record)
     assert json.loads((run / "run.json").read_text())["inputs"] == inputs
-    assert main(["verify", str(run)]) == 0
+    assert main(["verify", str(run), "--data", str(root), "--results", str(outside.parent)]) == 0
     assert "all 2 input file(s) unchanged" in capsys.readouterr().err
     outside.write_text(outside.read_text().replace("seq: 1", "seq: 1\n# edited"))
     gt.unlink()
     problems = {("openloris-scene/groundtruth/gt_cafe_1.txt", "missing"), (str(outside.resolve()), "changed")}
-    assert set(verify_run(run)) == problems
-    assert main(["verify", str(run)]) == 1
+    assert set(verify_run(run, {"data": root, "results": outside.parent})) == problems
+    assert main(["verify", str(run), "--data", str(root), "--results", str(outside.parent)]) == 1
     out = capsys.readouterr()
     assert f"changed: {outside.resolve()}" in out.out and "missing: openloris-scene" in out.out
     assert main(["verify", str(tmp_path)]) == 2 and "no run.json" in capsys.readouterr().err
@@ -209,12 +209,12 @@ def test_a_run_folder_is_readable_and_records_its_provenance(tmp_path, monkeypat
     assert stat.S_IMODE(run_dir.stat().st_mode) == 0o750
     record = json.loads((run_dir / "run.json").read_text())
     assert (
-        tuple(record) == (*KEYS, "input_roots", *(["dirty"] if record["commit"] else []))
+        tuple(record) == (*KEYS, "input_roots", "roots", *(["dirty"] if record["commit"] else []))
         and record.get("dirty") in ((True, False, None) if record["commit"] else (None,))
         and record["command"] == ["x"]
         and record["notebooks"] == {"metrics_primer": "ok"}
     )
-    assert "openloris-scene/groundtruth/gt_cafe_1.txt" in record["inputs"]
+    assert "{data}/openloris-scene/groundtruth/gt_cafe_1.txt" in record["inputs"]
     index = (run_dir / "index.html").read_text()
     assert "No leaderboard" in index and (run_dir / "report.html").exists()
     (tmp_path / "empty").mkdir()

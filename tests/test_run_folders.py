@@ -145,22 +145,24 @@ def test_text_in_a_number_column_is_refused_with_file_and_line(tmp_path, table, 
 def test_verify_notices_files_added_to_the_folders_read(tmp_path, results, table, capsys):
     res = tmp_path / "res"
     shutil.copytree(results, res)
-    r = make_run(tmp_path / "run", table, spec(res), roots=[res])
+    r = make_run(tmp_path / "run", table, spec(res), roots=[res])  # absolute paths: read only below --results
     rc, _, err = run(capsys, "verify", r)
+    assert rc == 2 and "outside the run folder and the roots given here" in err
+    rc, _, err = run(capsys, "verify", r, "--results", res)
     assert rc == 0 and "all 3 input file(s) unchanged" in err
     extra = res / "orbslam2_rgbd" / "home_1_3_orbslam2-original.txt"
     shutil.copy(res / "orbslam2_rgbd" / "home_1_2_orbslam2-original.txt", extra)
-    assert verify_run(r) == [(str(extra.resolve()), "added")]
-    rc, out, err = run(capsys, "verify", r)
+    assert verify_run(r, {"results": res}) == [(str(extra.resolve()), "added")]
+    rc, out, err = run(capsys, "verify", r, "--results", res)
     assert rc == 1 and f"added: {extra.resolve()}" in out and "1 file(s) added" in err
     extra.unlink()
     (res / "odom" / "cafe-1-1-odom.txt").unlink()
-    rc, out, _ = run(capsys, "verify", r)
+    rc, out, _ = run(capsys, "verify", r, "--results", res)
     assert rc == 1 and "missing: " in out and "cafe-1-1-odom.txt" in out
     record = json.loads((r / "run.json").read_text())  # a run of an earlier lorisnb: says what it cannot check
     del record["input_roots"]
     (r / "run.json").write_text(json.dumps(record))
-    rc, _, err = run(capsys, "verify", r)
+    rc, _, err = run(capsys, "verify", r, "--results", res)
     assert rc == 1 and "no input_roots" in err
 
 
@@ -230,7 +232,9 @@ def test_report_results_are_the_leaderboards_input_whatever_notebooks_run(tmp_pa
     import lorisnb.tools.report.build as report
 
     monkeypatch.setattr(report, "run_notebook", lambda name, out_dir, *a, **k: report.NotebookRun(name))
-    out, runs = report.run_report(tmp_path / "run", {}, ["metrics_primer"], progress=False, results=results)
+    out, runs = report.run_report(
+        tmp_path / "run", {}, ["metrics_primer"], progress=False, results=results, absolute_paths=True
+    )
     record = json.loads((out / "run.json").read_text())
     assert record["spec"]["values"]["source"] == str(results)
     assert record["input_roots"][0] == str(results.resolve())

@@ -177,13 +177,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--baseline", default=None, metavar="DIR",
                    help="a folder of earlier runs: the front page shows this run against the newest comparable one "
                    "(verdict, what changed, a trend of the last comparable runs)")  # fmt: skip
+    p.add_argument("--absolute-paths", action="store_true",
+                   help="write the absolute paths of the inputs, the data root and the results into the run (default: "
+                   "each path below a named root, {data} or {results}, so the run folder can travel)")  # fmt: skip
     p.add_argument("--force", action="store_true", help="replace --out if it is an earlier lorisnb run folder")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=_command(".commands", "cmd_report"))
 
     p = sub.add_parser("verify", help="re-check a report run's inputs against the checksums in its run.json")
     p.add_argument("run", metavar="RUN", help="a run folder written by lorisnb report (or its run.json)")
+    p.add_argument("--data", default=None, metavar="DIR", help="where the run's data root ({data}) is here")
+    p.add_argument("--results", default=None, metavar="DIR", help="where the run's results folder ({results}) is here")
+    p.add_argument("--root", nargs=2, action="append", metavar=("NAME", "DIR"),
+                   help="where another named root of the run ({NAME}, e.g. groundtruth) is here (repeatable); verify "
+                   "reads nothing outside the run folder and the roots given")  # fmt: skip
     p.set_defaults(func=_command(".commands", "cmd_verify"))
+
+    p = sub.add_parser("render", help="render a run folder's pages again from its own files (e.g. where it was copied)")
+    p.add_argument("run", metavar="RUN", help="a run folder written by lorisnb report")
+    p.set_defaults(func=_command(".commands", "cmd_render"))
     given_once(parser)
     return parser
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from lorisnb.cli.options import param_value, spec_from_args, spec_given
 from lorisnb.cli.outputs import check_outputs, refuse_unused
-from lorisnb.cli.text import format_table, frame_columns
+from lorisnb.cli.text import clean, format_table, frame_columns
 from lorisnb.errors import FailedInputsWarning, LorisError, LorisWarning, ValidationError
 
 if TYPE_CHECKING:
@@ -51,7 +51,10 @@ def _run_evaluation(
 
     if args.gt and args.manifest:
         raise ValidationError("--gt and --manifest: give one (a manifest names the ground truth of each session)")
-    manifest = read_manifest(args.manifest) if args.manifest else None
+    if getattr(args, "manifest_outside", False) and not args.manifest:
+        raise ValidationError("--manifest-outside: applies to the ground-truth files of a --manifest; give one")
+    outside = bool(getattr(args, "manifest_outside", False))
+    manifest = read_manifest(args.manifest, outside=outside) if args.manifest else None
     base = manifest.spec if manifest is not None else None  # its thresholds, mode and [conventions]
     if manifest is not None and manifest.openloris:
         if args.conventions:
@@ -73,7 +76,7 @@ def _run_evaluation(
     spec = spec_from_args(args, base)
     kind = pair_kind(args.format or "tum") if args.gt else "manifest" if manifest is not None else "openloris"
     if base is not None:  # refused options the manifest set are said to be its own
-        refuse_over_manifest(spec, read_manifest(args.manifest), spec_given(args), kind, surface="cli")
+        refuse_over_manifest(spec, read_manifest(args.manifest, outside=outside), spec_given(args), kind, surface="cli")
     spec.refuse_inapplicable(kind, surface="cli")
     inputs = list(args.paths)  # the options' inputs too (check_outputs), and a manifest's ground truth
     if manifest is not None:
@@ -389,6 +392,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         command=getattr(args, "argv", None),
         label=args.label,
         baseline=args.baseline,
+        absolute_paths=args.absolute_paths,
     )
     for r in runs:
         status = r.status if r.status != "ok" or not r.input_errors else f"ok, {r.input_errors} input file(s) failed"
@@ -411,9 +415,16 @@ def cmd_verify(args: argparse.Namespace) -> int:
     from lorisnb.tools.report.provenance import read_run_json, verify_run
 
     record = read_run_json(args.run)
-    problems = verify_run(args.run)
+    roots = {name: folder for name, folder in args.root or []}
+    for name in ("data", "results"):
+        folder = getattr(args, name)
+        if folder is not None:
+            if roots.get(name, folder) != folder:
+                raise ValidationError(f"--{name} {folder} and --root {name} {roots[name]} name two folders; give one")
+            roots[name] = folder
+    problems = verify_run(args.run, roots)
     for path, what in problems:
-        print(f"{what}: {path}")
+        print(f"{what}: {clean(path)}")
     n = len(record["inputs"])
     if "input_roots" not in record:
         print("note: run.json has no input_roots (a run of an earlier lorisnb): files added to the folders it read "
@@ -429,6 +440,15 @@ def cmd_verify(args: argparse.Namespace) -> int:
         print("; ".join(said), file=sys.stderr)
         return 1
     print(f"all {n} input file(s) unchanged", file=sys.stderr)
+    return 0
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    """Render a run folder's pages again from its own files."""
+    from lorisnb.tools.report.build import render_run
+
+    for page in render_run(args.run):
+        print(f"wrote {clean(page)}")
     return 0
 
 

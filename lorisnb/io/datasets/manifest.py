@@ -185,10 +185,12 @@ def _openloris_manifest(raw: dict, path: Path) -> Manifest:
                     eps=spec.eps if "eps" in spec.explicit else None, phi=spec.phi if "phi" in spec.explicit else None)  # fmt: skip
 
 
-def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
+def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -> Manifest:
     """Read and check a manifest (a built-in name or a TOML file). ParseError names the file, the
     key and what was expected; environment variables in ``root`` (``${EUROC_ROOT}``) are expanded
-    and an unset one is named."""
+    and an unset one is named. A ground-truth file must lie inside the manifest's folder or its
+    ``root`` (links resolved: ``groundtruth = "../../etc/passwd"`` is refused before anything is
+    read) unless ``outside`` (``--manifest-outside``)."""
     path = manifest_path(name_or_path)
     try:
         raw = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -234,6 +236,8 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
             if key in item and not item[key].strip():  # "" would name the root folder, or a file ".txt"
                 raise ParseError(path, None, f"[[session]] {k}: {key} = {item[key]!r}: expected a non-empty name")
         name = str(item.get("name", f"session{k}"))
+        if not outside:
+            _confined(root / str(item["groundtruth"]), [root, path.parent.resolve()], path, f"[[session]] {k}")
         seq = item.get("seq", k)
         if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
             raise ParseError(path, None, f"session {name!r}: seq = {seq!r}; expected a whole number")
@@ -288,6 +292,16 @@ def read_manifest(name_or_path: str | os.PathLike[str]) -> Manifest:
         estimate_topic=raw.get("estimate_topic"), groundtruth_tf=raw.get("groundtruth_tf"),
         estimate_tf=raw.get("estimate_tf"), source=str(raw.get("source", "")),
     )  # fmt: skip
+
+
+def _confined(file: Path, folders: list[Path], path: Path, where: str) -> None:
+    """Refuse a ground-truth ``file`` that lies (links resolved) outside ``folders``: a manifest
+    received from someone else reads nothing elsewhere. The file is not opened."""
+    p = file.resolve()
+    if not any(p == f or f in p.parents for f in folders):
+        raise ParseError(path, None, f"{where}: groundtruth lies outside the manifest's folder and its root "
+                         f"({', '.join(map(str, dict.fromkeys(folders)))}); expected a file inside them (pass "
+                         "--manifest-outside, or outside=True, to read it anyway)")  # fmt: skip
 
 
 def _text(table: dict[str, Any], key: str, path: Path, where: str = "") -> None:

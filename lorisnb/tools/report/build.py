@@ -59,12 +59,13 @@ from lorisnb.tools.report.notebooks import (
     use_kernel_files,
     warm_kernels_for_report,
 )
+from lorisnb.tools.report.portable import make_portable, named_roots, root_key
 from lorisnb.tools.report.provenance import checksums, input_files, run_record, sha256, write_run_json
 
 __all__ = [
     "DEFAULT_NOTEBOOKS", "findings_input_errors", "KERNEL_ARGS", "NOTEBOOK_NEEDS", "RUN_MARKER", "NotebookRun", "available_notebooks",
     "check_parameters", "declared_parameters", "kernel_env", "notebook_dir", "notebook_path", "run_notebook",
-    "run_report",
+    "render_run", "run_report",
 ]  # fmt: skip
 
 run_notebook = run_one  # the name the report calls (tests replace it)
@@ -248,6 +249,7 @@ def run_report(
     command: list[str] | None = None,
     label: str | None = None,
     baseline: str | os.PathLike[str] | None = None,
+    absolute_paths: bool = False,
 ) -> tuple[Path, list[NotebookRun]]:
     """Run the notebooks into a new run folder; returns (run folder, notebook runs).
 
@@ -271,6 +273,10 @@ def run_report(
             ``run.json`` and shown on the front page and in ``history``.
         baseline: a folder of earlier runs: the front page gains "Since the baseline", this run
             against the newest comparable one there (:mod:`lorisnb.tools.report.baseline`).
+        absolute_paths: write the absolute paths of the inputs, the data root and the results
+            folder into the run; by default every path is written below a named root (``{data}``,
+            ``{results}``...) and the run folder holds no absolute path of this machine's
+            (:mod:`lorisnb.tools.report.portable`).
 
     The leaderboard is built when ``results`` is given or a selected notebook declares
     ``results_dir`` (the bundled icra20 results otherwise). The run is built under a hidden
@@ -357,10 +363,13 @@ def run_report(
             n_jobs = jobs or min(len(names), os.cpu_count() or 1)
             runs = _run_all(names, tmp, params, notebooks_dir, n_jobs, progress, zygote, meanwhile=leaderboard)
             spec = board["spec"]
+            named = named_roots(params, data.root if data else None, given_source, nb_dir if notebooks_dir else None)
+            if not absolute_paths and source is not None and "source" in spec["values"]:
+                spec["values"]["source"] = root_key(source, named)  # the leaderboard's input, by its root's name
             (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
-            inputs = checksums(input_files(roots), data.root if data else None)
+            inputs = checksums(input_files(roots), None if absolute_paths else named)
             record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
-                                {r.name: r.status for r in runs}, roots)  # fmt: skip
+                                {r.name: r.status for r in runs}, roots, named, absolute=absolute_paths)  # fmt: skip
             if record.get("commit"):  # the commit alone does not say what ran if the checkout had changes
                 record["dirty"] = git_dirty()
             if label is not None:
@@ -374,6 +383,8 @@ def run_report(
                                     per_sequence=board.get("per_sequence"), wanted=run_dir.name,
                                     expected=board.get("expected"), since=since)  # fmt: skip
                 single_file(index, folder / "report.html")
+                if not absolute_paths:  # every path below a named root, whatever wrote it (a notebook's printout)
+                    make_portable(folder, [*named.items(), ("run", folder), ("run", run_dir)])
                 _write_marker(folder, _files(folder))
 
             pages(tmp, run_dir.name)  # the name it is moved to (not the temporary one it is written under)
@@ -385,6 +396,27 @@ def run_report(
         if final.name != run_dir.name:  # another run took the name meanwhile: this one's pages say where it is
             pages(final, final.name)
         return final, runs
+
+
+def render_run(run: str | os.PathLike[str]) -> list[Path]:
+    """Render a run folder's pages again from its own files (wherever it was copied to): each
+    notebook's HTML page from the notebook executed into it, then ``report.html`` from
+    ``index.html``; returns the pages written. Reads nothing outside the run folder. Only a run
+    folder lorisnb wrote is rendered, and only if its pages are as its run wrote them (an edited
+    page is kept, and the run refused, naming it)."""
+    from lorisnb.tools.report.html import export_html
+
+    folder = Path(run)
+    if not (folder / RUN_MARKER).is_file() or not (folder / "index.html").is_file():
+        raise LorisError(f"{folder}: not a run folder written by lorisnb report (no {RUN_MARKER} and index.html)")
+    why = _not_written(folder)
+    if why:
+        raise LorisError(f"{folder} will not be rendered again: {why}")
+    css = f"../{NOTEBOOK_CSS}" if (folder / NOTEBOOK_CSS).is_file() else None
+    pages = [export_html(nb, css=css) for nb in sorted(folder.glob("*/*.ipynb")) if nb.parent.name == nb.stem]
+    pages.append(single_file(folder / "index.html", folder / "report.html"))
+    _write_marker(folder, _files(folder))
+    return pages
 
 
 def findings_input_errors(run_dir: Path) -> int:

@@ -138,7 +138,8 @@ def single_file(index: Path, out: Path) -> Path:
     def inline(m: re.Match[str]) -> str:
         src = m.group(3)
         path = root / src
-        if src.startswith(("data:", "http:", "https:")) or not path.is_file():
+        inside = root.resolve() in path.resolve().parents  # nothing outside the run folder is read into it
+        if src.startswith(("data:", "http:", "https:")) or not inside or not path.is_file():
             return m.group(0)
         kind = mimetypes.guess_type(path.name)[0] or "application/octet-stream"
         data = base64.b64encode(path.read_bytes()).decode("ascii")

@@ -10,7 +10,14 @@ conventions in words; ``values``: thresholds eps, phi, delta, tau, the scale mod
 conventions, the metric and test settings of the leaderboard), ``data_root``, ``created`` (ISO
 8601, UTC), ``inputs`` (path -> sha256; relative paths are below ``data_root``), ``notebooks``
 (name -> status), ``input_roots`` (the files and folders whose listing gave ``inputs``, so that
-:func:`verify_run` notices a file added to them; absent in runs of lorisnb 0.x before it).
+:func:`verify_run` notices a file added to them; absent in runs of lorisnb 0.x before it),
+``roots`` (root name -> its absolute path, or null where the run is portable: see
+:mod:`lorisnb.tools.report.portable`; absent in runs before named roots).
+
+In a portable run (the default) the paths of ``inputs``, ``input_roots`` and ``data_root`` are
+written ``{name}/inside`` below a named root (``{data}``, ``{results}``...), and :func:`verify_run`
+reads them below the folders its caller names for those roots, never below a folder the file
+names: a received run.json cannot make verify read outside the run folder and those roots.
 """
 
 from __future__ import annotations
@@ -25,7 +32,8 @@ from pathlib import Path
 from typing import Any
 
 from lorisnb._version import __version__
-from lorisnb.errors import LorisError, ParseError
+from lorisnb.errors import LorisError, ParseError, ValidationError
+from lorisnb.tools.report.portable import mark, resolve_key, root_key, split_key
 
 RUN_JSON = "run.json"
 KEYS = ("command", "lorisnb_version", "commit", "spec", "data_root", "created", "inputs", "notebooks")
@@ -55,22 +63,25 @@ def git_commit(start: Path | None = None) -> str | None:
     return commit if out.returncode == 0 and len(commit) == 40 else None
 
 
-def input_files(roots: Iterable[Path]) -> list[Path]:
-    """Every regular file of ``roots`` (files, or folders walked recursively), hidden files
-    left out, sorted, each once."""
+def input_files(roots: Iterable[Path], resolve: bool = True) -> list[Path]:
+    """Every regular file of ``roots`` (files, or folders walked recursively without following
+    links to folders), hidden files left out, sorted, each once; resolved (a link to a file: its
+    target) unless not ``resolve``."""
     found: dict[Path, None] = {}
     for root in roots:
         if root.is_file():
-            found[root.resolve()] = None
+            found[root.resolve() if resolve else root] = None
         elif root.is_dir():
             for p in sorted(root.rglob("*")):
                 rel = p.relative_to(root).parts
                 if p.is_file() and not any(part.startswith(".") for part in rel):
-                    found[p.resolve()] = None
+                    found[p.resolve() if resolve else p] = None
     return sorted(found)
 
 
-def _key(path: Path, data_root: Path | None) -> str:
+def _key(path: Path, data_root: Path | Mapping[str, Path] | None) -> str:
+    if isinstance(data_root, Mapping):
+        return root_key(path, data_root)
     if data_root is not None:
         try:
             return path.relative_to(data_root.resolve()).as_posix()
@@ -79,8 +90,9 @@ def _key(path: Path, data_root: Path | None) -> str:
     return str(path)
 
 
-def checksums(files: Iterable[Path], data_root: Path | None) -> dict[str, str]:
-    """path -> sha256; paths below ``data_root`` relative to it, others absolute."""
+def checksums(files: Iterable[Path], data_root: Path | Mapping[str, Path] | None) -> dict[str, str]:
+    """path -> sha256; paths below ``data_root`` relative to it, others absolute; with named
+    roots (name -> folder), ``{name}/inside`` (:func:`~lorisnb.tools.report.portable.root_key`)."""
     return {_key(p, data_root): sha256(p) for p in files}
 
 
@@ -91,9 +103,19 @@ def run_record(
     inputs: Mapping[str, str],
     notebooks: Mapping[str, str],
     roots: Iterable[Path] = (),
+    named: Mapping[str, Path] | None = None,
+    absolute: bool = True,
 ) -> dict[str, Any]:
     """The content of ``run.json`` (see the module docstring); ``roots``: the files and folders
-    whose listing gave the inputs (:func:`input_files`)."""
+    whose listing gave the inputs (:func:`input_files`); ``named``: the named roots (name ->
+    folder) the keys of ``inputs`` were written below, recorded by name only unless ``absolute``
+    (then every path is absolute)."""
+    if named is not None:
+        record = run_record(command, spec, data_root, inputs, notebooks, (), None)
+        record["data_root"] = (str(data_root) if absolute else mark("data")) if data_root is not None else None
+        record["input_roots"] = [str(r.resolve()) if absolute else root_key(r, named) for r in roots]
+        record["roots"] = {k: str(v.resolve()) if absolute else None for k, v in named.items()}
+        return record
     return {
         "command": list(command),
         "lorisnb_version": __version__,
@@ -165,26 +187,74 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
     return record
 
 
-def _path(key: str, data_root: Path | None) -> Path:
-    p = Path(key)
-    return (data_root / p) if not p.is_absolute() and data_root is not None else p
+def _inside(p: Path, folders: Iterable[Path]) -> bool:
+    return any(p == f or f in p.parents for f in folders)
 
 
-def verify_run(run: str | os.PathLike[str]) -> list[tuple[str, str]]:
-    """Re-check every input of a run: a list of (path, 'changed', 'missing' or 'added'); empty if
-    all inputs still have their recorded SHA-256 and the folders the report read
-    (``input_roots``, listed as the report listed them, :func:`input_files`) hold no other file.
-    Relative paths are read below the run's data root."""
+def verify_run(
+    run: str | os.PathLike[str], roots: Mapping[str, str | os.PathLike[str]] | None = None
+) -> list[tuple[str, str]]:
+    """Re-check every input of a run: a list of (path, 'changed', 'missing', 'added' or
+    'outside'); empty if all inputs still have their recorded SHA-256 and the folders the report
+    read (``input_roots``, listed as the report listed them, :func:`input_files`) hold no other
+    file.
+
+    Args:
+        run: the run folder (or its run.json).
+        roots: where the run's named roots are here (name -> folder: ``data``, ``results``...).
+            ``{name}/inside`` keys are read below them; a key relative to no root (a run of an
+            earlier lorisnb) below ``roots["data"]``; an absolute key only if it lies inside one
+            of ``roots`` or the run folder (a run made with ``--absolute-paths``).
+
+    Nothing outside the run folder and ``roots`` is read, whatever run.json says: a root it names
+    elsewhere is a :class:`~lorisnb.errors.ValidationError` before any file is read, and a file
+    found through a link that leads outside is listed as 'outside', unread."""
     record = read_run_json(run)
-    root = Path(record["data_root"]) if record.get("data_root") else None
+    folder = Path(run) if Path(run).is_dir() else Path(run).parent
+    given = {k: Path(v).resolve() for k, v in (roots or {}).items()}
+    for name, p in given.items():
+        if not p.exists():
+            raise ValidationError(f"--{name if name in ('data', 'results') else 'root ' + name} {p}: no such folder")
+    allowed = [folder.resolve(), *given.values()]
+    given.setdefault("run", folder.resolve())
+
+    def place(key: str) -> Path:
+        named = split_key(key)
+        if named is None and not Path(key).is_absolute():  # an earlier run's key, below its data root
+            if "data" not in given:
+                raise ValidationError(f"{key}: run.json reads it below the run's data root; give the data root here "
+                                      "with --data DIR")  # fmt: skip
+            return resolve_key(f"{mark('data')}/{key}", given) or Path(key)
+        p = resolve_key(key, given)
+        if p is None:
+            name = named[0] if named else ""
+            option = f"--{name} DIR" if name in ("data", "results") else f"--root {name} DIR"
+            raise ValidationError(f"{key}: run.json reads it below the root {mark(name)}; say where that root is "
+                                  f"here with {option}")  # fmt: skip
+        if not _inside(Path(os.path.abspath(p)), allowed):
+            raise ValidationError(f"{key}: run.json names a file outside the run folder and the roots given here; "
+                                  "verify reads only those: give a folder holding it with --data, --results or --root, "
+                                  "if you trust it")  # fmt: skip
+        return p
+
+    inputs = {key: place(key) for key in sorted(record["inputs"])}
+    listed = [place(r) for r in record.get("input_roots", [])]
     problems = []
-    for key, digest in sorted(record["inputs"].items()):
-        p = _path(key, root)
+    for key, p in inputs.items():
         if not p.is_file():
             problems.append((key, "missing"))
-        elif sha256(p) != digest:
+        elif not _inside(p.resolve(), allowed):
+            problems.append((key, "outside"))
+        elif sha256(p) != record["inputs"][key]:
             problems.append((key, "changed"))
     if "input_roots" in record:
-        now = {_key(p, root) for p in input_files(_path(r, root) for r in record["input_roots"])}
-        problems += [(key, "added") for key in sorted(now - set(record["inputs"]))]
+        # keys as the run wrote them: below named roots, absolute (--absolute-paths) or below the data root (earlier runs)
+        named = any(split_key(k) for k in [*record["inputs"], *record["input_roots"]])
+        style: Mapping[str, Path] | Path | None = given if named else None if "roots" in record else given.get("data")
+        keyed = {}
+        for p in input_files(listed, resolve=False):
+            inside = _inside(p.resolve(), allowed)
+            key = _key(p.resolve() if inside else p.parent.resolve() / p.name, style)  # a link leading out: where it is
+            keyed[key] = inside
+        problems += [(key, "added" if keyed[key] else "outside") for key in sorted(set(keyed) - set(record["inputs"]))]
     return problems

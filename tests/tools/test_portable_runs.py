@@ -1,0 +1,192 @@
+"""Runs that travel and are safe to receive: a report run written below named roots ({data},
+{results}) holds no absolute path of the machine it was made on, is verified and rendered again
+where it was moved to; verify reads nothing outside the run folder and the roots named on its
+command line, whatever run.json says."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+from lorisnb.cli import main
+from lorisnb.errors import OutputError, ValidationError
+from lorisnb.tools.report.portable import held_paths, make_portable, root_key, spellings
+from lorisnb.tools.report.provenance import checksums, input_files, run_record, verify_run, write_run_json
+
+ORB = "cafe_1_1_orbslam2-original.txt"
+ODOM = "cafe-1-1-odom.txt"
+
+
+def lab(where: Path, data, icra20) -> Path:
+    """A lab folder: ``res/<alg>/*.txt`` (two real results) and ``data/`` (the real ground truth
+    and extrinsics), as a user keeps them."""
+    for alg, src, name in (("orb", "orbslam2_rgbd", ORB), ("odom", "odom", ODOM)):
+        (where / "res" / alg).mkdir(parents=True)
+        shutil.copy(icra20 / "per-seq" / src / name, where / "res" / alg / name)
+    shutil.copytree(data.root / "openloris-scene", where / "data" / "openloris-scene")
+    return where
+
+
+def run(capsys, *args):
+    rc = main([*map(str, args)])
+    out = capsys.readouterr()
+    return rc, out.out, out.err
+
+
+@pytest.mark.slow
+def test_a_run_moved_elsewhere_is_verified_and_rendered_there_and_names_no_path_of_the_first(
+    tmp_path, data, icra20, capsys
+):
+    first = lab(tmp_path / "first-place", data, icra20)
+    rc, out, err = run(capsys, "report", "--results", first / "res", "--data", first / "data", "--out",
+                       first / "runs" / "r1", "--notebooks", "compare_algorithms", "evaluate_my_results", "--no-progress")  # fmt: skip
+    assert rc == 0, out + err
+    record = json.loads((first / "runs" / "r1" / "run.json").read_text())
+    assert record["data_root"] == "{data}" and record["roots"] == {"data": None, "results": None}
+    assert record["inputs"]["{results}/orb/" + ORB] and record["spec"]["values"]["source"] == "{results}"
+    assert "{results}/odom" not in record["input_roots"] and "{results}" in record["input_roots"]
+    second = tmp_path / "elsewhere" / "other-name"
+    second.parent.mkdir()
+    shutil.move(first, second)
+    r1 = second / "runs" / "r1"
+    rc, _, err = run(capsys, "verify", r1)  # the roots are not guessed from the file
+    assert rc == 2 and "--data DIR" in err
+    rc, _, err = run(capsys, "verify", r1, "--data", second / "data", "--results", second / "res")
+    assert rc == 0 and "all 230 input file(s) unchanged" in err, err  # with the bundled results
+    (second / "res" / "orb" / ORB).write_text((second / "res" / "orb" / ORB).read_text() + "\n")
+    rc, out, _ = run(capsys, "verify", r1, "--data", second / "data", "--results", second / "res")
+    assert rc == 1 and out.strip() == "changed: {results}/orb/" + ORB
+    before = (r1 / "compare_algorithms" / "compare_algorithms.html").read_bytes()
+    (r1 / "compare_algorithms" / "compare_algorithms.html").write_bytes(before + b"<p>my note</p>")
+    rc, _, err = run(capsys, "render", r1)  # a page edited since the run: kept, not rendered over
+    assert rc == 2 and "compare_algorithms.html" in err
+    assert (r1 / "compare_algorithms" / "compare_algorithms.html").read_bytes().endswith(b"my note</p>")
+    (r1 / "compare_algorithms" / "compare_algorithms.html").unlink()
+    rc, out, _ = run(capsys, "render", r1)
+    assert rc == 0 and "compare_algorithms.html" in out and "report.html" in out
+    again = (r1 / "compare_algorithms" / "compare_algorithms.html").read_text()
+    assert (
+        "data root: {data}" in again
+        and again.count("jp-OutputArea-output") == before.decode().count("jp-OutputArea-output") > 0
+    )
+    everything = [p for p in r1.rglob("*") if p.is_file()]
+    assert len(everything) >= 8 and {".ipynb", ".png", ".csv", ".json", ".tex"} <= {p.suffix for p in everything}
+    firsts = [tmp_path / "first-place", (tmp_path / "first-place").resolve()]
+    assert held_paths(r1, firsts) == []
+    for p in everything:  # every spelling of the first place, in every file, binary or not
+        blob = p.read_bytes()
+        for s in {x for f in firsts for x in spellings(f)} | {str(tmp_path)}:
+            assert s.encode() not in blob, (p, s)
+    assert b"{data}" in (r1 / "compare_algorithms" / "compare_algorithms.ipynb").read_bytes()
+
+
+def fake_notebook(name, out_dir, params, **kw):
+    """A notebook that prints its parameters (absolute paths) into its output and a PNG."""
+    from lorisnb.tools.report.notebooks import NotebookRun
+
+    folder = out_dir / name
+    folder.mkdir()
+    (folder / f"{name}.ipynb").write_text(json.dumps({"cells": [{"outputs": [{"text": f"data root: {params}"}]}]}))
+    (folder / f"{name}.html").write_text(f"<pre>{params.get('results_dir')}</pre>")
+    return NotebookRun(name)
+
+
+def test_absolute_paths_only_when_asked_through_python(tmp_path, data, icra20, monkeypatch):
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    out, _ = report.run_report(here / "runs" / "p", {"data_root": str(here / "data")}, ["compare_algorithms"],
+                               progress=False, results=here / "res")  # fmt: skip
+    assert held_paths(out, [here]) == []
+    assert "{results}" in (out / "compare_algorithms" / "compare_algorithms.html").read_text()
+    out, _ = report.run_report(here / "runs" / "a", {"data_root": str(here / "data")}, ["compare_algorithms"],
+                               progress=False, results=here / "res", absolute_paths=True)  # fmt: skip
+    record = json.loads((out / "run.json").read_text())
+    assert record["roots"] == {"data": str((here / "data").resolve()), "results": str((here / "res").resolve())}
+    assert str((here / "res" / "orb" / ORB).resolve()) in record["inputs"]
+    assert held_paths(out, [here])  # the pages say where, as asked
+    assert verify_run(out, {"data": here / "data", "results": here / "res"}) == []
+
+
+def test_absolute_paths_through_the_command_line(tmp_path, data, icra20, monkeypatch, capsys):
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    rc, _, err = run(capsys, "report", "--results", here / "res", "--data", here / "data", "--out", here / "r",
+                     "--notebooks", "compare_algorithms", "--no-progress", "--absolute-paths")  # fmt: skip
+    assert rc == 0, err
+    assert str(here.resolve()) in (here / "r" / "run.json").read_text()
+    rc, _, err = run(capsys, "verify", here / "r")  # absolute roots in run.json: not read without being named
+    assert rc == 2 and "outside the run folder and the roots given here" in err
+    rc, _, err = run(capsys, "verify", here / "r", "--data", here / "data", "--results", here / "res")
+    assert rc == 0 and "all 7 input file(s) unchanged" in err
+
+
+def received(tmp_path, record_changes, roots=("res",)):
+    """A run folder as received: run.json written by lorisnb, then edited."""
+    res = tmp_path / "res"
+    (res / "orb").mkdir(parents=True)
+    (res / "orb" / "a.txt").write_text("1 0 0 0 0 0 0 1\n")
+    named = {"results": res}
+    record = run_record(["lorisnb", "report"], {"description": "d", "values": {}}, None,
+                        checksums(input_files([res]), named), {}, [res], named, absolute=False)  # fmt: skip
+    record.update(record_changes)
+    folder = tmp_path / "run"
+    folder.mkdir()
+    write_run_json(folder, record)
+    return folder, res
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        ({"input_roots": ["/etc"]}, "outside the run folder"),
+        ({"input_roots": ["/"]}, "outside the run folder"),
+        ({"input_roots": ["{results}/../../../../etc"]}, "leaves its root {results}"),
+        ({"inputs": {"/etc/passwd": "0" * 64}}, "outside the run folder"),
+        ({"inputs": {"{data}/passwd": "0" * 64}}, "--data DIR"),
+        ({"inputs": {"{etc}/passwd": "0" * 64}}, "--root etc DIR"),
+    ],
+)
+def test_verify_refuses_roots_from_run_json_outside_those_it_was_given(tmp_path, capsys, monkeypatch, edit, message):
+    folder, res = received(tmp_path, edit)
+    opened = []
+    real = Path.rglob
+    monkeypatch.setattr(Path, "rglob", lambda self, pat: opened.append(self) or real(self, pat))
+    with pytest.raises(ValidationError, match=message.replace("{", r"\{").replace("}", r"\}")):
+        verify_run(folder, {"results": res})
+    assert opened == []  # refused before any folder was walked
+    rc, out, err = run(capsys, "verify", folder, "--results", res)
+    assert rc == 2 and message in err and out == "" and "root:x:" not in err
+
+
+def test_a_link_inside_a_root_to_a_file_outside_is_listed_not_read(tmp_path, capsys):
+    folder, res = received(tmp_path, {})
+    secret = tmp_path / "secret.txt"
+    secret.write_text("private")
+    os.symlink(secret, res / "orb" / "b.txt")
+    assert verify_run(folder, {"results": res}) == [("{results}/orb/b.txt", "outside")]
+    rc, out, _ = run(capsys, "verify", folder, "--results", res)
+    assert rc == 1 and "outside: {results}/orb/b.txt" in out and "private" not in out
+
+
+def test_make_portable_replaces_each_spelling_at_path_ends_only(tmp_path):
+    root = tmp_path / "a b&c"
+    root.mkdir()
+    page = tmp_path / "run" / "page.html"
+    page.parent.mkdir()
+    import html
+
+    page.write_text(f"{root}/x {html.escape(str(root))}/y {json.dumps(str(root))} {root}2/z")
+    assert make_portable(page.parent, [("results", root)]) == [page]
+    assert page.read_text() == f'{{results}}/x {{results}}/y "{{results}}" {root}2/z'
+    (page.parent / "f.png").write_bytes(b"\x89PNG\r\n\x1a\n\xff" + str(root).encode())
+    with pytest.raises(OutputError, match="f.png: a binary file"):
+        make_portable(page.parent, [("results", root)])
+    assert root_key(root / "q" / "r.txt", {"results": root, "data": tmp_path}) == "{results}/q/r.txt"
