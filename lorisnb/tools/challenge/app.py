@@ -265,10 +265,10 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
 
     @app.get("/api/health")
     async def health() -> JSONResponse:
-        return JSONResponse({"queue": store.queue_counts(engine), "now": clock()})
+        return JSONResponse({"queue": store.queue_counts(engine), "now": server.clock()})
 
     def submit_page(status: int = 200, error: str | None = None) -> HTMLResponse:
-        return server.page("submit.html", "Submit", status, phase=challenge.phase_at(clock()),
+        return server.page("submit.html", "Submit", status, phase=challenge.phase_at(server.clock()),
                            limits=challenge.limits, error=error)  # fmt: skip
 
     @app.get("/submit", response_class=HTMLResponse)
@@ -328,7 +328,9 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
         return server.page("token.html", "Team", action="/team", label="Team token")
 
     def team_data(team: dict[str, Any]) -> dict[str, Any]:
-        left = challenge.limits["submissions_per_day"] - store.submissions_since(engine, team["id"], clock() - DAY)
+        left = challenge.limits["submissions_per_day"] - store.submissions_since(
+            engine, team["id"], server.clock() - DAY
+        )
         subs = listing(store.all_submissions(engine, team["id"]))
         return dict(team={k: team[k] for k in ("name", "expires", "admin")}, left=max(left, 0), subs=subs)
 

@@ -145,6 +145,13 @@ def _text(raw: Mapping[str, Any], key: str, path: Path, where: str, default: str
     return value
 
 
+def _choice(name: str, value: Any, options: tuple[str, ...], path: Path) -> str:
+    try:
+        return validate.choice(name, value, options)
+    except LorisError as exc:
+        raise ParseError(path, None, str(exc)) from None
+
+
 def _table(raw: Mapping[str, Any], key: str, path: Path) -> dict[str, Any]:
     value = raw.get(key, {})
     if not isinstance(value, dict):
@@ -186,7 +193,7 @@ def _phase(raw: Any, k: int, challenge: tuple[float, float], have: list[str], pa
     closes = _time(raw, "closes", path, where, challenge[1])
     if closes <= opens:
         raise ParseError(path, None, f"{where}closes is not after opens; expected closes later than opens")
-    board = validate.choice(f"{where}leaderboard", raw.get("leaderboard", "live"), BOARDS)
+    board = _choice(f"{where}leaderboard", raw.get("leaderboard", "live"), BOARDS, path)
     return Phase(name, tuple(s for s in SCENES if s in scenes), kept, opens, closes, board)
 
 
@@ -219,7 +226,7 @@ def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
     if folder == gt or gt in folder.parents:
         raise ParseError(path, None, f"{where}folder: inside the ground-truth folder; expected a folder of its own")
     database = _text(top, "database", path, where, f"sqlite:///{folder / 'challenge.db'}")
-    metric = validate.choice(f"{where}metric", top.get("metric", "cr"), tuple(WEIGHTS))
+    metric = _choice(f"{where}metric", top.get("metric", "cr"), tuple(WEIGHTS), path)
     opens = _time(top, "opens", path, where)
     closes = _time(top, "closes", path, where)
     if closes <= opens:

@@ -125,7 +125,7 @@ def _unzip(src: IO[bytes], label: str, dest: Path, limits: Limits, taken: set[st
             mode = m.external_attr >> 16
             if stat.S_ISLNK(mode):
                 raise UploadRefused(f"{where}: a symbolic link; expected regular files")
-            if mode and not stat.S_ISREG(mode):
+            if stat.S_IFMT(mode) and not stat.S_ISREG(mode):  # no type bits (writestr's): a file
                 raise UploadRefused(f"{where}: not a regular file; expected regular files")
             if m.flag_bits & 0x1:
                 raise UploadRefused(f"{where}: encrypted; expected an archive without a password")
