@@ -11,6 +11,7 @@ import stat
 import threading
 import time
 import zipfile
+from pathlib import Path
 
 import pytest
 from challenge_fixtures import cafe_files, challenge_file
@@ -20,6 +21,7 @@ import uvicorn  # noqa: E402
 from fastapi.testclient import TestClient  # noqa: E402
 
 from lorisnb.errors import ParseError  # noqa: E402
+from lorisnb.io.datasets.paths import SAMPLE_DATA  # noqa: E402
 from lorisnb.tools.challenge import store  # noqa: E402
 from lorisnb.tools.challenge.app import create_app  # noqa: E402
 from lorisnb.tools.challenge.config import read_challenge  # noqa: E402
@@ -221,6 +223,20 @@ def test_challenge_file_refused(tmp_path, data):
         with pytest.raises(ParseError, match=None) as err:
             read_challenge(path)
         assert words in str(err.value) and str(path) in str(err.value)
+
+
+def test_bundled_class_challenge():
+    """The README's class challenge reads: the bundled cafe ground truth, cafe-1 in development
+    (live), both sequences in the final (after it closes), the paper's thresholds; reading it
+    creates nothing."""
+    path = Path(__file__).resolve().parents[2] / "teaching" / "challenge" / "class.toml"
+    c = read_challenge(path)
+    assert c.data.root == SAMPLE_DATA and c.data.scenes_with_groundtruth() == ["cafe"]
+    dev, final = c.phases
+    assert dev.keeps("cafe", 1) and not dev.keeps("cafe", 2) and dev.leaderboard == "live"
+    assert final.keeps("cafe", 2) and final.leaderboard == "after-close" and dev.closes == final.opens
+    assert c.spec.eps == "paper" and c.spec.phi == 30.0 and c.metric == "cr"
+    assert not c.folder.exists()
 
 
 def test_slow_client_refused_and_server_serves_on(tmp_path, data):

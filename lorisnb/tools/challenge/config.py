@@ -216,13 +216,13 @@ def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
     check_keys(top, CHALLENGE_KEYS, path, "[challenge]: ")
     where = "[challenge]: "
     title = _text(top, "title", path, where, "lorisnb challenge")
-    gt = (path.parent / _text(top, "groundtruth", path, where)).resolve()
+    gt = (path.parent / Path(_text(top, "groundtruth", path, where)).expanduser()).resolve()
     try:
         data = find_data(gt)
     except LorisError as exc:
         raise ParseError(path, None, f"{where}groundtruth = {top['groundtruth']!r}: {exc}") from None
     have = data.scenes_with_groundtruth()
-    folder = (path.parent / _text(top, "folder", path, where, f"{path.stem}-data")).resolve()
+    folder = (path.parent / Path(_text(top, "folder", path, where, f"{path.stem}-data")).expanduser()).resolve()
     if folder == gt or gt in folder.parents:
         raise ParseError(path, None, f"{where}folder: inside the ground-truth folder; expected a folder of its own")
     database = _text(top, "database", path, where, f"sqlite:///{folder / 'challenge.db'}")

@@ -132,7 +132,7 @@ class Scorer:
         self._thread: threading.Thread | None = None
         self._running: dict[str, _Running] = {}
         self._context = multiprocessing.get_context("forkserver")
-        self._context.set_forkserver_preload(["lorisnb.tools.challenge.scoring", "matplotlib.pyplot"])
+        self._context.set_forkserver_preload(["lorisnb.tools.challenge.preload"])
         self.requeued = 0
 
     def start(self) -> None:
