@@ -5,7 +5,8 @@ Baselines are plain-Python implementations of the same work in the style of the 
 (a dict per sequence, one Python iteration per line and per pose).
 
 Run: ``make bench`` (or ``python benchmarks/bench.py``). ``LORISNB_BENCH_LIFELONG=0`` leaves out
-the 10M-pose lifelong OpenLORIS file, ``LORISNB_BENCH_HUGE=0`` the 10M-pose TUM pair. Issue 27's
+the 10M-pose lifelong OpenLORIS file, ``LORISNB_BENCH_HUGE=0`` the 10M-pose TUM pair,
+``LORISNB_BENCH_SERVE=0`` the challenge server's load run (:mod:`challenge_load`). Issue 27's
 figures against the floors (pandas, evo_ape, parsing alone) are :mod:`floors`.
 """
 
@@ -334,6 +335,8 @@ def main() -> None:
         floors.bench_growth(Path(tmp))
         if os.environ.get("LORISNB_BENCH_REPORT", "1") != "0":
             floors.bench_report(Path(tmp))
+    if os.environ.get("LORISNB_BENCH_SERVE", "1") != "0":
+        bench_challenge_server(data)
     if os.environ.get("LORISNB_BENCH_CALIBRATE", "1") != "0":
         # the regression gate's error rates, a small run of `make calibrate` (the README quotes the full run)
         import calibrate
@@ -344,6 +347,25 @@ def main() -> None:
     for name, figure, target, met in GOALS:
         print(f"  {'met    ' if met else 'NOT MET'}  {name:40s} {figure:45s} goal {target}")
     floors.print_tables()
+
+
+def bench_challenge_server(data, n: int = 50) -> None:
+    """The challenge server under load on loopback (:mod:`challenge_load`): optional, needs the
+    ``serve`` extra; ``LORISNB_BENCH_SERVE=0`` leaves it out."""
+    import importlib.util
+    import tempfile
+
+    if importlib.util.find_spec("fastapi") is None:
+        print("\nchallenge server: skipped (pip install 'lorisnb[serve]')")
+        return
+    import challenge_load
+
+    with tempfile.TemporaryDirectory(prefix="lorisnb-bench-serve-") as tmp:
+        f = challenge_load.run_load(Path(tmp), data, n=n, workers=2)
+    print("\n" + challenge_load.describe(f))
+    goal("challenge server, 50 concurrent uploads", f"{f['once']}/{n} scored once in {f['all_scored_s']:.0f} s, "
+         f"page max {f['page_max']:.1f} s", "all scored exactly once, page < 10 s",
+         f["once"] == n and f["page_max"] < 10)  # fmt: skip
 
 
 def bench_against_evo(data, n: int = 50_000) -> None:

@@ -1,4 +1,5 @@
-"""The ``lorisnb`` command line: ``evaluate``, ``sweep``, ``compare``, ``crosscheck``, ``report`` and ``verify``.
+"""The ``lorisnb`` command line: ``evaluate``, ``sweep``, ``compare``, ``crosscheck``, ``report``, ``verify``, and
+the challenge server's ``serve``, ``challenge add-team|export`` and ``submit``.
 
 The command line is where lorisnb reports: tables on stdout, warnings and failures on stderr,
 a non-zero exit status when any input failed (2 for a usage or output error, 130 on Ctrl-C).
@@ -19,6 +20,8 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
+from lorisnb.cli.challenge import expiry as challenge_expiry
+from lorisnb.cli.challenge import port as challenge_port
 from lorisnb.cli.options import (
     add_compare_options,
     add_diff_options,
@@ -183,6 +186,38 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="replace --out if it is an earlier lorisnb run folder")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=_command(".commands", "cmd_report"))
+
+    p = sub.add_parser("serve", help="a challenge server: teams upload results, scored against hidden ground truth")
+    p.add_argument("challenge", metavar="CHALLENGE.toml", help="the challenge file (docs/guide/challenge-server.md)")
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1: this machine only)")
+    p.add_argument("--port", type=arg_type(challenge_port), default=8000, help="port (default 8000)")
+    p.add_argument("--max-connections", type=arg_type(lambda t: int(validate.positive("--max-connections", t,
+                   "connections", integer=True))), default=200,
+                   help="connections served at once; more are answered 503 (default 200)")  # fmt: skip
+    p.set_defaults(func=_command(".challenge", "cmd_serve"))
+
+    p = sub.add_parser("challenge", help="a challenge's teams and results: add-team, export")
+    csub = p.add_subparsers(dest="action", required=True)
+    q = csub.add_parser("add-team", help="add a team (or the admin) and print its token, stored hashed only")
+    q.add_argument("challenge", metavar="CHALLENGE.toml")
+    q.add_argument("name", metavar="NAME", help="the team's name on the leaderboard")
+    q.add_argument("--admin", action="store_true", help="the admin's token (the admin page and API), not a team's")
+    q.add_argument("--expires", type=arg_type(challenge_expiry), default=None, metavar="WHEN",
+                   help="when the token stops working, e.g. 2026-12-01T18:00:00Z (default: the challenge's close)")  # fmt: skip
+    q.set_defaults(func=_command(".challenge", "cmd_add_team"))
+    q = csub.add_parser("export", help="every submission and its per-sequence scores as one CSV table")
+    q.add_argument("challenge", metavar="CHALLENGE.toml")
+    q.add_argument("--csv", required=True, metavar="OUT", help="the CSV file to write")
+    q.add_argument("--force", action="store_true", help="replace OUT if it exists")
+    q.set_defaults(func=_command(".challenge", "cmd_export"))
+
+    p = sub.add_parser("submit", help="send result files to a challenge server (lorisnb serve)")
+    p.add_argument("url", metavar="URL", help="the server, http://HOST:PORT")
+    p.add_argument("files", nargs="+", metavar="FILES", help="result files (.txt), a folder of them or a .zip")
+    p.add_argument("--token", default=None, help="your team's token (default: $LORISNB_TOKEN)")
+    p.add_argument("--wait", type=arg_type(lambda t: validate.positive("--wait", t, "seconds")), default=None,
+                   metavar="SECONDS", help="wait up to SECONDS for the score and print it")  # fmt: skip
+    p.set_defaults(func=_command(".challenge", "cmd_submit"))
 
     p = sub.add_parser("verify", help="re-check a report run's inputs against the checksums in its run.json")
     p.add_argument("run", metavar="RUN", help="a run folder written by lorisnb report (or its run.json)")

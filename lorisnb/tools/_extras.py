@@ -19,6 +19,12 @@ EXTRAS: dict[str, str] = {
     "distributed": "dask",
     "pyarrow": "parquet",
     "rosbags": "bags",
+    "fastapi": "serve",
+    "starlette": "serve",
+    "uvicorn": "serve",
+    "sqlalchemy": "serve",
+    "multipart": "serve",
+    "httpx": "serve",
 }
 
 

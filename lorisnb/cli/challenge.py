@@ -1,0 +1,124 @@
+"""The challenge commands: ``serve``, ``challenge add-team``, ``challenge export`` and ``submit``
+(see :mod:`lorisnb.tools.challenge`)."""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import os
+import sys
+import time
+from typing import Any
+
+from lorisnb.core.spec import validate
+from lorisnb.errors import ValidationError
+from lorisnb.tools._extras import require
+
+TOKEN_VAR = "LORISNB_TOKEN"
+
+
+def port(text: str) -> int:
+    value = int(validate.positive("--port", text, "port number", integer=True))
+    if value > 65535:
+        raise ValidationError(f"--port {text}: expected a port number from 1 to 65535")
+    return value
+
+
+def expiry(text: str) -> float:
+    """An ISO date and time with its offset (``2026-12-01T18:00:00+00:00``, ``...Z``), epoch seconds."""
+    try:
+        when = dt.datetime.fromisoformat(text.strip())
+    except ValueError:
+        raise ValidationError(f"--expires {text!r}: expected a date and time, e.g. 2026-12-01T18:00:00Z") from None
+    if when.tzinfo is None:
+        raise ValidationError(f"--expires {text!r}: no offset; expected one, e.g. 2026-12-01T18:00:00Z")
+    return when.timestamp()
+
+
+def _engine(challenge: Any) -> Any:
+    from lorisnb.tools.challenge import store
+
+    challenge.folder.mkdir(parents=True, exist_ok=True)
+    return store.connect(challenge.database)
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    for module in ("fastapi", "uvicorn", "sqlalchemy", "multipart", "jinja2"):
+        require(module, "serve")
+    import uvicorn
+
+    from lorisnb.tools.challenge.app import create_app
+    from lorisnb.tools.challenge.config import read_challenge
+
+    challenge = read_challenge(args.challenge)
+    app = create_app(challenge)
+    phases = "; ".join(p.name for p in challenge.phases)
+    print(f"lorisnb serve: {challenge.title!r} on http://{args.host}:{args.port}/ (phases: {phases}); database "
+          f"{challenge.database.split('@')[-1]}; uploads in {challenge.folder / 'uploads'}", file=sys.stderr)  # fmt: skip
+    uvicorn.run(app, host=args.host, port=args.port, log_level="warning", timeout_keep_alive=5,
+                limit_concurrency=args.max_connections)  # fmt: skip
+    return 0
+
+
+def cmd_add_team(args: argparse.Namespace) -> int:
+    require("sqlalchemy", "serve")
+    from lorisnb.tools.challenge import store
+    from lorisnb.tools.challenge.config import read_challenge
+
+    challenge = read_challenge(args.challenge)
+    expires = args.expires if args.expires is not None else challenge.closes
+    if expires <= time.time():
+        raise ValidationError(f"--expires: {dt.datetime.fromtimestamp(expires, dt.UTC).isoformat()} is past; "
+                              "expected a later time")  # fmt: skip
+    token = store.add_team(_engine(challenge), args.name, expires, admin=args.admin)
+    what = "admin" if args.admin else "team"
+    print(f"{what} {args.name!r} added; its token (shown once, stored hashed only):", file=sys.stderr)
+    print(token)
+    return 0
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    require("sqlalchemy", "serve")
+    import pandas as pd
+
+    from lorisnb.cli.outputs import check_outputs
+    from lorisnb.io.writers import write_csv
+    from lorisnb.tools.challenge import store
+    from lorisnb.tools.challenge.board import PUBLIC_COLUMNS
+    from lorisnb.tools.challenge.config import read_challenge
+
+    challenge = read_challenge(args.challenge)
+    check_outputs(args, [args.challenge], ["csv"])
+    rows = []
+    for s in store.all_submissions(_engine(challenge)):
+        base = dict(submission=s["id"], team=s["team"], phase=s["phase"], status=s["status"],
+                    submitted=dt.datetime.fromtimestamp(s["created"], dt.UTC).isoformat(), error=s["error"] or "")  # fmt: skip
+        result = json.loads(s["result"]) if s["result"] else {"rows": []}
+        rows += [base | {k: r.get(k) for k in PUBLIC_COLUMNS} for r in result["rows"]] or [base]
+    table = pd.DataFrame(rows, columns=["submission", "team", "phase", "status", "submitted", "error", *PUBLIC_COLUMNS])
+    out = write_csv(table, args.csv, args.force)
+    print(f"wrote {len(table)} rows ({table['submission'].nunique()} submissions) to {out}", file=sys.stderr)
+    return 0
+
+
+def cmd_submit(args: argparse.Namespace) -> int:
+    from lorisnb.tools.challenge.client import submit
+
+    token = args.token or os.environ.get(TOKEN_VAR)
+    if not token:
+        raise ValidationError(f"no token: give --token TOKEN or set {TOKEN_VAR} (your team's token)")
+    view = submit(args.url, args.files, token, wait=args.wait)
+    print(f"submission {view['id']}: {view['status']} ({view['url']})", file=sys.stderr)
+    for r in view.get("rows", []):
+        print(f"{r['scene']} {r['seq']}: CR {r['cr']:.3f}, C-ATE RMSE {r['c_ate_rmse'] or float('nan'):.3f} m "
+              f"({r['file']})")  # fmt: skip
+    for m in view.get("missing", []):
+        print(f"error: {m['scene']} {m['seq']}: {m['error']}", file=sys.stderr)
+    for f in view.get("failures", []):
+        print(f"error: {f['file']}: {f['error']}", file=sys.stderr)
+    if view.get("error"):
+        print(f"error: {view['error']}", file=sys.stderr)
+    if view["status"] in ("queued", "scoring"):
+        return 0 if args.wait is None else 1
+    return 0 if view["status"] == "scored" and not view.get("failures") and not view.get("missing") else 1

@@ -1,0 +1,254 @@
+"""The challenge file (``CHALLENGE.toml``): where the hidden ground truth is, the phases and the
+sequences each ranks on, the metric and the evaluation spec, the limits and the opening and
+closing times. Every key is checked here; a wrong one is a :class:`~lorisnb.errors.ParseError`
+naming the file, the key and what was expected.
+
+Example::
+
+    [challenge]
+    title = "Lifelong SLAM, class of 2026"
+    groundtruth = "../shared/data"      # a data root (openloris-scene/groundtruth/gt_<scene>_1.txt): hidden
+    folder = "challenge-data"          # the server's own folder: database, uploads (default: beside the file)
+    metric = "cr"                      # cr, cr_t, cs_r or c_ate_rmse
+    opens = 2026-11-01T00:00:00Z
+    closes = 2026-12-01T00:00:00Z
+
+    [spec]                             # any lorisnb evaluation spec: a preset and its options
+    mode = "per-seq"
+    eps = 1.0
+
+    [limits]
+    submissions_per_day = 5
+    upload_mb = 20
+
+    [[phase]]
+    name = "development"
+    scenes = ["cafe"]
+    sequences = { cafe = [1] }         # default: every sequence of the scenes
+    leaderboard = "live"               # or "after-close": scores and figures hidden until it closes
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from lorisnb.core.spec import validate
+from lorisnb.core.spec.evalspec import EvalSpec
+from lorisnb.core.stats.inference import WEIGHTS
+from lorisnb.core.trajectory.frames import SCENES
+from lorisnb.errors import LorisError, ParseError
+from lorisnb.io.datasets.manifest import check_keys
+from lorisnb.io.datasets.paths import DataPaths, find_data
+
+CHALLENGE_KEYS = {"title", "groundtruth", "folder", "database", "metric", "opens", "closes"}
+#: The limits and their defaults: submissions per team in any 24 hours, the upload's size (MB),
+#: the files in it, their unpacked size (MB), a submission's scoring time (CPU seconds) and memory
+#: (MB), the scoring processes at a time, and the time a client may take to send its upload (s).
+LIMITS: dict[str, int] = {
+    "submissions_per_day": 5,
+    "upload_mb": 20,
+    "files": 200,
+    "unpacked_mb": 200,
+    "score_seconds": 300,
+    "score_memory_mb": 3072,
+    "workers": 1,
+    "upload_seconds": 60,
+}
+PHASE_KEYS = {"name", "scenes", "sequences", "opens", "closes", "leaderboard"}
+BOARDS = ("live", "after-close")
+
+
+@dataclass(frozen=True)
+class Phase:
+    """A phase: its name, the scenes and sequences its leaderboard ranks on (None: every sequence
+    of the scene), its opening and closing times (UTC, epoch seconds) and whether its scores show
+    while it runs (``live``) or only once it has closed (``after-close``)."""
+
+    name: str
+    scenes: tuple[str, ...]
+    sequences: Mapping[str, tuple[int, ...]] | None
+    opens: float
+    closes: float
+    leaderboard: str = "live"
+
+    def is_open(self, now: float) -> bool:
+        return self.opens <= now < self.closes
+
+    def shows_scores(self, now: float) -> bool:
+        """Scores, tables and figures of this phase may be shown (live, or closed)."""
+        return self.leaderboard == "live" or now >= self.closes
+
+    def keeps(self, scene: str, seq: int) -> bool:
+        if scene not in self.scenes:
+            return False
+        # a scene not named in ``sequences`` ranks on all its sequences
+        return self.sequences is None or scene not in self.sequences or seq in self.sequences[scene]
+
+
+@dataclass(frozen=True)
+class Challenge:
+    """A checked challenge file (see the module docstring)."""
+
+    path: Path
+    title: str
+    data: DataPaths  # the hidden ground truth
+    folder: Path
+    database: str
+    metric: str
+    opens: float
+    closes: float
+    spec_options: Mapping[str, Any]
+    spec: EvalSpec
+    limits: Mapping[str, int]
+    phases: tuple[Phase, ...] = field(default_factory=tuple)
+
+    def phase_at(self, now: float) -> Phase | None:
+        """The phase open at ``now`` (the first, if several overlap), None between phases."""
+        if not self.opens <= now < self.closes:
+            return None
+        return next((p for p in self.phases if p.is_open(now)), None)
+
+    def phase(self, name: str) -> Phase:
+        for p in self.phases:
+            if p.name == name:
+                return p
+        raise LorisError(f"no phase {name!r}; the phases are {', '.join(p.name for p in self.phases)}")
+
+    @property
+    def scenes(self) -> tuple[str, ...]:
+        return tuple(s for s in SCENES if any(s in p.scenes for p in self.phases))
+
+
+def _time(raw: Mapping[str, Any], key: str, path: Path, where: str, default: float | None = None) -> float:
+    value = raw.get(key)
+    if value is None:
+        if default is not None:
+            return default
+        raise ParseError(path, None, f"{where}{key}: missing; expected a date and time with its offset, "
+                         "e.g. 2026-12-01T18:00:00Z")  # fmt: skip
+    if not isinstance(value, dt.datetime) or value.tzinfo is None:
+        raise ParseError(path, None, f"{where}{key} = {value!r}: expected a date and time with its offset "
+                         "(TOML, unquoted), e.g. 2026-12-01T18:00:00Z or 2026-12-01T18:00:00+01:00")  # fmt: skip
+    return value.timestamp()
+
+
+def _text(raw: Mapping[str, Any], key: str, path: Path, where: str, default: str | None = None) -> str:
+    value = raw.get(key, default)
+    if not isinstance(value, str) or not value.strip():
+        raise ParseError(path, None, f"{where}{key} = {value!r}: expected a non-empty text in quotes")
+    return value
+
+
+def _choice(name: str, value: Any, options: tuple[str, ...], path: Path) -> str:
+    try:
+        return validate.choice(name, value, options)
+    except LorisError as exc:
+        raise ParseError(path, None, str(exc)) from None
+
+
+def _table(raw: Mapping[str, Any], key: str, path: Path) -> dict[str, Any]:
+    value = raw.get(key, {})
+    if not isinstance(value, dict):
+        raise ParseError(path, None, f"{key}: expected a table [{key}], got {value!r}")
+    return value
+
+
+def _phase(raw: Any, k: int, challenge: tuple[float, float], have: list[str], path: Path) -> Phase:
+    where = f"[[phase]] {k}: "
+    if not isinstance(raw, dict):
+        raise ParseError(path, None, f"{where}expected a table with name, scenes, ...")
+    check_keys(raw, PHASE_KEYS, path, where)
+    name = _text(raw, "name", path, where)
+    scenes = raw.get("scenes")
+    if isinstance(scenes, str):
+        scenes = [scenes]
+    if not isinstance(scenes, list) or not scenes or not all(isinstance(s, str) for s in scenes):
+        raise ParseError(path, None, f'{where}scenes = {scenes!r}: expected a list of scene names, e.g. ["cafe"]')
+    for s in scenes:
+        if s not in have:
+            hint = validate.near_miss(s, have)
+            raise ParseError(path, None, f"{where}scenes: {s!r} has no ground truth in the challenge's groundtruth "
+                             f"folder{f' ({hint})' if hint else ''}; it has {', '.join(have) or 'none'}")  # fmt: skip
+    sequences = raw.get("sequences")
+    kept: dict[str, tuple[int, ...]] | None = None
+    if sequences is not None:
+        if not isinstance(sequences, dict):
+            raise ParseError(path, None, f"{where}sequences = {sequences!r}: expected a table scene = [numbers]")
+        kept = {}
+        for s, seqs in sequences.items():
+            if s not in scenes:
+                raise ParseError(path, None, f"{where}sequences: {s!r} is not one of the phase's scenes "
+                                 f"({', '.join(scenes)})")  # fmt: skip
+            if not isinstance(seqs, list) or not seqs or not all(isinstance(q, int) and q > 0 for q in seqs):
+                raise ParseError(path, None, f"{where}sequences.{s} = {seqs!r}: expected a list of sequence "
+                                 "numbers (1, 2, ...)")  # fmt: skip
+            kept[s] = tuple(sorted(set(seqs)))
+    opens = _time(raw, "opens", path, where, challenge[0])
+    closes = _time(raw, "closes", path, where, challenge[1])
+    if closes <= opens:
+        raise ParseError(path, None, f"{where}closes is not after opens; expected closes later than opens")
+    board = _choice(f"{where}leaderboard", raw.get("leaderboard", "live"), BOARDS, path)
+    return Phase(name, tuple(s for s in SCENES if s in scenes), kept, opens, closes, board)
+
+
+def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
+    """Read and check a challenge file (see the module docstring)."""
+    from lorisnb.tools.report.leaderboard import leaderboard_spec
+
+    path = Path(path_like).expanduser().resolve()
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ParseError(path, None, "challenge file not found; expected a TOML file (see docs/guide/"
+                         "challenge-server.md)") from None  # fmt: skip
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParseError(path, None, f"cannot be read ({exc})") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ParseError(path, getattr(exc, "lineno", None), f"not valid TOML ({exc})") from None
+    check_keys(raw, {"challenge", "spec", "limits", "phase"}, path)
+    top = _table(raw, "challenge", path)
+    check_keys(top, CHALLENGE_KEYS, path, "[challenge]: ")
+    where = "[challenge]: "
+    title = _text(top, "title", path, where, "lorisnb challenge")
+    gt = (path.parent / Path(_text(top, "groundtruth", path, where)).expanduser()).resolve()
+    try:
+        data = find_data(gt)
+    except LorisError as exc:
+        raise ParseError(path, None, f"{where}groundtruth = {top['groundtruth']!r}: {exc}") from None
+    have = data.scenes_with_groundtruth()
+    folder = (path.parent / Path(_text(top, "folder", path, where, f"{path.stem}-data")).expanduser()).resolve()
+    if folder == gt or gt in folder.parents:
+        raise ParseError(path, None, f"{where}folder: inside the ground-truth folder; expected a folder of its own")
+    database = _text(top, "database", path, where, f"sqlite:///{folder / 'challenge.db'}")
+    metric = _choice(f"{where}metric", top.get("metric", "cr"), tuple(WEIGHTS), path)
+    opens = _time(top, "opens", path, where)
+    closes = _time(top, "closes", path, where)
+    if closes <= opens:
+        raise ParseError(path, None, f"{where}closes is not after opens; expected closes later than opens")
+    options = _table(raw, "spec", path)
+    try:
+        spec = leaderboard_spec(options)
+    except LorisError as exc:
+        raise ParseError(path, None, f"[spec]: {exc}") from None
+    given = _table(raw, "limits", path)
+    check_keys(given, set(LIMITS), path, "[limits]: ")
+    limits = dict(LIMITS)
+    for key, value in given.items():
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ParseError(path, None, f"[limits]: {key} = {value!r}: expected a whole number of 1 or more")
+        limits[key] = value
+    items = raw.get("phase")
+    if not isinstance(items, list) or not items:
+        raise ParseError(path, None, "no [[phase]] table; expected at least one, with name and scenes")
+    phases = tuple(_phase(item, k, (opens, closes), have, path) for k, item in enumerate(items, start=1))
+    names = [p.name for p in phases]
+    if len(set(names)) < len(names):
+        raise ParseError(path, None, f"[[phase]]: two phases named {next(n for n in names if names.count(n) > 1)!r}; "
+                         "expected distinct names")  # fmt: skip
+    return Challenge(path, title, data, folder, database, metric, opens, closes, dict(options), spec, limits, phases)

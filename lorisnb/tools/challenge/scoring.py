@@ -1,0 +1,202 @@
+"""Scoring: each submission in a process of its own, forked from a server that has lorisnb's
+evaluation already imported (``forkserver``), with a CPU-time and a memory limit
+(``resource.setrlimit``) and a wall-clock deadline. The process scores the uploaded files with
+:func:`lorisnb.tools.evaluation.runner.evaluate` (the pipeline of ``lorisnb evaluate``) against the
+hidden ground truth, draws the paper's timeline figure, and writes its outcome to a JSON file
+named for its claim; the server commits that outcome to the database (:func:`.store.finish`).
+
+:class:`Scorer` is the server's loop over the persisted queue (:mod:`.store`): it puts back what a
+killed server left half-scored, runs up to ``workers`` processes at a time and commits each
+outcome once.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import multiprocessing
+import os
+import resource
+import threading
+import time
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy import Engine
+
+from lorisnb.core.spec.evalspec import EvalSpec
+from lorisnb.errors import LorisError, LorisWarning
+from lorisnb.io.datasets.paths import DataPaths
+from lorisnb.tools.challenge import store
+from lorisnb.tools.challenge.config import Challenge
+from lorisnb.tools.evaluation.runner import evaluate
+from lorisnb.tools.evaluation.status import skipped_only
+
+FILES = "files"  # a submission's folder: files/ (as uploaded), result-<claim>.json, timeline.png
+
+
+def _plain(value: Any) -> Any:
+    """A table value as JSON holds it (numpy scalars as Python ones; NaN and infinities as None)."""
+    if hasattr(value, "item"):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value if isinstance(value, (int, float, str, bool)) or value is None else str(value)
+
+
+def scrub(text: str, folder: Path, data: DataPaths) -> str:
+    """A message with the server's paths taken out: the upload's folder (its files by name) and
+    the hidden ground truth's folder (never named to a team)."""
+    text = text.replace(f"{folder}{os.sep}", "").replace(str(folder), "the upload")
+    return text.replace(str(data.root.resolve()), "<ground truth>").replace(str(data.root), "<ground truth>")
+
+
+def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figure: Path | None = None) -> dict[str, Any]:
+    """Score the result files in ``folder`` as ``lorisnb evaluate`` does: per-sequence rows (every
+    column of :meth:`Evaluation.sequence_rows`), each file that failed or was not scored with its
+    reason (paths scrubbed, :func:`scrub`), and the timeline figure written to ``figure``."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        ev = evaluate([folder], spec, data_root=data, jobs=1, progress=False)
+        rows = ev.sequence_rows()
+    problems = [("failed", f) for f in ev.failures] + [("not scored", f) for f in ev.unscored]
+    problems += [("skipped", f) for f in skipped_only(ev)]
+    failures = [dict(file=Path(f.path).name, status=s, error=scrub(f.error, folder, data)) for s, f in problems]
+    notes = list(dict.fromkeys(scrub(str(w.message), folder, data) for w in caught
+                               if "could not be evaluated" not in str(w.message)))  # fmt: skip
+    out: dict[str, Any] = dict(
+        rows=[{k: _plain(v) for k, v in r.items() if k != "spec"} | {"file": Path(str(r["file"])).name} for r in rows],
+        failures=failures, notes=notes, conventions=ev.describe(), figure=False,
+    )  # fmt: skip
+    if figure is not None and ev.errors:
+        try:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            from lorisnb.tools.figures.plotting import plot_timeline
+
+            fig = plot_timeline(ev.errors, ev.durations(), ev.scenes(), spec.eps, spec.phi, spec.delta,
+                                title="this submission")  # fmt: skip
+            fig.savefig(figure, dpi=80)
+            out["figure"] = True
+        except (LorisError, ValueError) as exc:
+            out["notes"].append(f"no timeline figure: {scrub(str(exc), folder, data)}")
+    return out
+
+
+def _limit(cpu_seconds: int, memory_bytes: int) -> None:
+    resource.setrlimit(resource.RLIMIT_CPU, (cpu_seconds, cpu_seconds + 5))  # SIGXCPU, then SIGKILL
+    resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
+
+
+def _write(path: Path, outcome: dict[str, Any]) -> None:
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(outcome), encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def score_in_child(folder: str, data: DataPaths, spec: EvalSpec, out: str, cpu_seconds: int, memory_bytes: int) -> None:
+    """The scoring process: limits set, then :func:`score_folder`, its outcome written to ``out``."""
+    _limit(cpu_seconds, memory_bytes)
+    sub = Path(folder)
+    try:
+        outcome = score_folder(sub / FILES, data, spec, sub / "timeline.png")
+    except MemoryError:
+        outcome = dict(error=f"scoring needed more than the challenge's memory limit of {memory_bytes / 1e6:g} MB")
+    except LorisError as exc:
+        outcome = dict(error=scrub(str(exc), sub / FILES, data))
+    except Exception as exc:  # any other error of the scorer: said by its type only (no server detail)
+        outcome = dict(error=f"the scorer could not score this upload ({type(exc).__name__}); tell the organizers")
+    _write(Path(out), outcome)
+
+
+@dataclass
+class _Running:
+    process: Any
+    claim: str
+    started: float
+    out: Path
+
+
+class Scorer:
+    """The queue's loop (a thread of the server): see the module docstring."""
+
+    def __init__(self, challenge: Challenge, engine: Engine, poll: float = 0.1):
+        self.challenge = challenge
+        self.engine = engine
+        self.poll = poll
+        self.limits = challenge.limits
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._running: dict[str, _Running] = {}
+        self._context = multiprocessing.get_context("forkserver")
+        self._context.set_forkserver_preload(["lorisnb.tools.challenge.preload"])
+        self.requeued = 0
+
+    def start(self) -> None:
+        self.requeued = store.requeue_unfinished(self.engine)  # what a killed server left half-scored
+        self._thread = threading.Thread(target=self._loop, name="lorisnb-scorer", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Stop taking work; scorings under way are stopped and stay queued for the next start."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=10)
+        for r in self._running.values():
+            r.process.kill()
+            r.process.join(timeout=5)
+        self._running.clear()
+
+    def _loop(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self._reap()
+                while len(self._running) < self.limits["workers"] and not self._stop.is_set():
+                    claimed = store.claim_next(self.engine)
+                    if claimed is None:
+                        break
+                    self._start(*claimed)
+            except Exception as exc:  # the database busy or gone for a moment: try again, say so
+                print(f"lorisnb serve: scorer: {type(exc).__name__}: {exc}", flush=True)
+            self._stop.wait(self.poll)
+
+    def _start(self, sid: str, claim: str) -> None:
+        folder = self.challenge.folder / "uploads" / sid
+        out = folder / f"result-{claim}.json"
+        memory = self.limits["score_memory_mb"] * 1_000_000
+        p = self._context.Process(
+            target=score_in_child,
+            args=(str(folder), self.challenge.data, self.challenge.spec, str(out), self.limits["score_seconds"], memory),
+            name=f"lorisnb-score-{sid}", daemon=True,
+        )  # fmt: skip
+        p.start()
+        self._running[sid] = _Running(p, claim, time.monotonic(), out)
+
+    def _reap(self) -> None:
+        deadline = 2 * self.limits["score_seconds"] + 30  # wall clock: a scorer asleep uses no CPU time
+        for sid, r in list(self._running.items()):
+            took = time.monotonic() - r.started
+            if r.process.is_alive():
+                if took > deadline:
+                    r.process.kill()
+                    r.process.join(5)
+                    self._done(sid, r, "failed", None, f"scoring took longer than {deadline} s; stopped", took)
+                continue
+            r.process.join()
+            outcome = json.loads(r.out.read_text(encoding="utf-8")) if r.out.is_file() else None
+            if outcome is not None and "rows" in outcome:
+                self._done(sid, r, "scored", outcome, None, took)
+            elif outcome is not None:
+                self._done(sid, r, "failed", None, str(outcome["error"]), took)
+            else:
+                code = r.process.exitcode
+                why = (f"scoring exceeded the challenge's limit of {self.limits['score_seconds']} CPU seconds"
+                       if code in (-24, -9) else f"the scorer stopped (exit status {code})")  # fmt: skip
+                self._done(sid, r, "failed", None, why, took)
+
+    def _done(self, sid: str, r: _Running, status: str, result: Any, error: str | None, took: float) -> None:
+        store.finish(self.engine, sid, r.claim, status, result, error, took)
+        del self._running[sid]

@@ -1,0 +1,244 @@
+"""The challenge's database (SQLAlchemy; SQLite in WAL mode by default, any SQLAlchemy URL such as
+``postgresql://...`` otherwise): teams with their tokens stored as SHA-256 hashes, submissions,
+and the scoring queue, which lives in the submissions' ``status`` so that a server killed while
+scoring resumes on restart.
+
+A submission goes ``queued`` -> ``scoring`` -> ``scored`` (or ``failed``: the scorer ran and
+refused it, with the reason). A result is committed by one conditional update (only a
+submission still ``scoring`` under the same claim takes it) together with its row in
+``scorings``, whose primary key is the submission: a submission is scored at most once, and the
+queue scores it at least once.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import secrets
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+from sqlalchemy import (
+    Boolean,
+    Column,
+    Engine,
+    Float,
+    ForeignKey,
+    Integer,
+    MetaData,
+    String,
+    Table,
+    Text,
+    create_engine,
+    event,
+    func,
+    select,
+    update,
+)
+from sqlalchemy.engine import Connection
+
+from lorisnb.errors import ValidationError
+
+metadata = MetaData()
+
+teams = Table(
+    "teams",
+    metadata,
+    Column("id", Integer, primary_key=True),
+    Column("name", String(80), unique=True, nullable=False),
+    Column("token_hash", String(64), unique=True, nullable=False),
+    Column("admin", Boolean, nullable=False, default=False),
+    Column("created", Float, nullable=False),
+    Column("expires", Float, nullable=False),  # epoch seconds, UTC
+)
+
+submissions = Table(
+    "submissions",
+    metadata,
+    Column("id", String(32), primary_key=True),  # random: a submission's page is not guessable
+    Column("team_id", Integer, ForeignKey("teams.id"), nullable=False, index=True),
+    Column("phase", String(80), nullable=False),
+    Column("created", Float, nullable=False, index=True),
+    Column("status", String(16), nullable=False, index=True),  # queued, scoring, scored, failed
+    Column("files", Text, nullable=False),  # JSON list of the names accepted
+    Column("bytes", Integer, nullable=False),
+    Column("claim", String(32), nullable=True),  # the scorer's claim while scoring
+    Column("attempts", Integer, nullable=False, default=0),
+    Column("error", Text, nullable=True),  # why the scorer refused it (public words)
+    Column("result", Text, nullable=True),  # JSON: per-sequence rows and failures (server-side)
+    Column("finished", Float, nullable=True),
+)
+
+scorings = Table(  # one row per scored submission: the ledger behind "each scored exactly once"
+    "scorings",
+    metadata,
+    Column("submission_id", String(32), ForeignKey("submissions.id"), primary_key=True),
+    Column("finished", Float, nullable=False),
+    Column("seconds", Float, nullable=False),
+)
+
+STATUSES = ("queued", "scoring", "scored", "failed")
+
+
+def hash_token(token: str) -> str:
+    """The stored form of a token: its SHA-256 in hex (tokens are 32 random bytes: no salt needed)."""
+    return hashlib.sha256(token.encode("utf-8", "surrogatepass")).hexdigest()
+
+
+def new_token() -> str:
+    return secrets.token_urlsafe(32)
+
+
+def connect(url: str) -> Engine:
+    """The engine of ``url``, its tables created; SQLite in WAL mode (readers never block the
+    writer, a backup can run while the server does) with a busy timeout."""
+    sqlite = url.startswith("sqlite")
+    engine = create_engine(url, connect_args={"timeout": 30, "check_same_thread": False} if sqlite else {})
+    if sqlite:
+
+        @event.listens_for(engine, "connect")
+        def _pragmas(dbapi_connection: Any, _record: Any) -> None:
+            cur = dbapi_connection.cursor()
+            cur.execute("PRAGMA journal_mode=WAL")
+            cur.execute("PRAGMA synchronous=FULL")  # a committed upload survives a power cut
+            cur.execute("PRAGMA foreign_keys=ON")
+            cur.close()
+
+    metadata.create_all(engine)
+    return engine
+
+
+@contextmanager
+def transaction(engine: Engine) -> Iterator[Connection]:
+    with engine.begin() as conn:
+        yield conn
+
+
+def add_team(engine: Engine, name: str, expires: float, admin: bool = False) -> str:
+    """Add a team (or the admin, ``admin``); returns its token, which is stored hashed only."""
+    name = name.strip()
+    if not name or len(name) > 80 or any(not (c.isalnum() or c in " -_.") for c in name):
+        raise ValidationError(f"team name {name!r}: expected 1 to 80 letters, digits, spaces, '-', '_' or '.'")
+    token = new_token()
+    with transaction(engine) as conn:
+        if conn.execute(select(teams.c.id).where(teams.c.name == name)).first() is not None:
+            raise ValidationError(f"team name {name!r}: a team of that name exists; choose another name")
+        conn.execute(teams.insert().values(name=name, token_hash=hash_token(token), admin=admin, created=time.time(),
+                                           expires=expires))  # fmt: skip
+    return token
+
+
+def team_of(engine: Engine, token: str | None) -> dict[str, Any] | None:
+    """The team whose token this is (any expiry), None for no such token."""
+    if not token:
+        return None
+    with engine.connect() as conn:
+        row = conn.execute(select(teams).where(teams.c.token_hash == hash_token(token))).mappings().first()
+    return dict(row) if row is not None else None
+
+
+def submissions_since(engine: Engine, team_id: int, since: float) -> int:
+    with engine.connect() as conn:
+        q = (
+            select(func.count())
+            .select_from(submissions)
+            .where((submissions.c.team_id == team_id) & (submissions.c.created >= since))
+        )
+        return int(conn.execute(q).scalar_one())
+
+
+def add_submission(engine: Engine, sid: str, team_id: int, phase: str, files: list[str], size: int) -> None:
+    with transaction(engine) as conn:
+        conn.execute(submissions.insert().values(id=sid, team_id=team_id, phase=phase, created=time.time(),
+                                                 status="queued", files=json.dumps(files), bytes=size,
+                                                 attempts=0))  # fmt: skip
+
+
+def requeue_unfinished(engine: Engine) -> int:
+    """Put back in the queue every submission a killed server left ``scoring`` (no result was
+    committed for it); the number put back."""
+    with transaction(engine) as conn:
+        res = conn.execute(
+            update(submissions).where(submissions.c.status == "scoring").values(status="queued", claim=None)
+        )
+        return int(res.rowcount or 0)
+
+
+def claim_next(engine: Engine) -> tuple[str, str] | None:
+    """Take the oldest queued submission for scoring: (its id, the claim), or None if none waits.
+    The update is conditional on ``queued``, so two scorers never take the same one."""
+    with transaction(engine) as conn:
+        while True:
+            row = conn.execute(
+                select(submissions.c.id).where(submissions.c.status == "queued").order_by(submissions.c.created)
+                .limit(1)
+            ).first()  # fmt: skip
+            if row is None:
+                return None
+            claim = secrets.token_hex(8)
+            res = conn.execute(
+                update(submissions).where((submissions.c.id == row.id) & (submissions.c.status == "queued"))
+                .values(status="scoring", claim=claim, attempts=submissions.c.attempts + 1)
+            )  # fmt: skip
+            if res.rowcount == 1:
+                return row.id, claim
+
+
+def finish(engine: Engine, sid: str, claim: str, status: str, result: dict[str, Any] | None, error: str | None,
+           seconds: float) -> bool:  # fmt: skip
+    """Commit a scoring's outcome (``scored`` with its result, or ``failed`` with the reason) and
+    its ledger row, in one transaction; False if the claim is no longer the submission's."""
+    if status not in ("scored", "failed"):
+        raise ValueError(status)
+    now = time.time()
+    with transaction(engine) as conn:
+        res = conn.execute(
+            update(submissions).where((submissions.c.id == sid) & (submissions.c.status == "scoring")
+                                      & (submissions.c.claim == claim))
+            .values(status=status, result=None if result is None else json.dumps(result), error=error,
+                    finished=now, claim=None)
+        )  # fmt: skip
+        if res.rowcount != 1:
+            return False
+        conn.execute(scorings.insert().values(submission_id=sid, finished=now, seconds=seconds))
+    return True
+
+
+def submission(engine: Engine, sid: str) -> dict[str, Any] | None:
+    with engine.connect() as conn:
+        row = conn.execute(
+            select(submissions, teams.c.name.label("team")).join(teams).where(submissions.c.id == sid)
+        ).mappings().first()  # fmt: skip
+    return dict(row) if row is not None else None
+
+
+def all_submissions(engine: Engine, team_id: int | None = None) -> list[dict[str, Any]]:
+    q = select(submissions, teams.c.name.label("team")).join(teams).order_by(submissions.c.created)
+    if team_id is not None:
+        q = q.where(submissions.c.team_id == team_id)
+    with engine.connect() as conn:
+        return [dict(r) for r in conn.execute(q).mappings()]
+
+
+def all_teams(engine: Engine) -> list[dict[str, Any]]:
+    with engine.connect() as conn:
+        rows = conn.execute(select(teams.c.id, teams.c.name, teams.c.admin, teams.c.created, teams.c.expires)
+                            .order_by(teams.c.id)).mappings()  # fmt: skip
+        return [dict(r) for r in rows]
+
+
+def queue_counts(engine: Engine) -> dict[str, int]:
+    with engine.connect() as conn:
+        rows = conn.execute(select(submissions.c.status, func.count()).group_by(submissions.c.status)).all()
+    counts = {s: 0 for s in STATUSES}
+    counts.update({str(s): int(n) for s, n in rows})
+    return counts
+
+
+def scoring_ledger(engine: Engine) -> dict[str, int]:
+    """Submission id -> how many results were committed for it (each scored exactly once: all 1)."""
+    with engine.connect() as conn:
+        rows = conn.execute(select(scorings.c.submission_id, func.count()).group_by(scorings.c.submission_id)).all()
+    return {str(s): int(n) for s, n in rows}

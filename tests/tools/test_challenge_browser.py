@@ -1,0 +1,95 @@
+"""The challenge server in a real browser (Debian's headless Chromium through selenium, the
+server on 127.0.0.1): a team opens the submit page, types its token, chooses its result files and
+submits; the submission page shows the status, then the score (it reloads itself, no script);
+the leaderboard then lists the team with that score. Every page is offline: no resource is loaded
+from anywhere but the server."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from challenge_fixtures import cafe_files, challenge_file
+
+pytest.importorskip("fastapi")
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+from challenge_load import free_port, kill, start_server  # noqa: E402
+
+from lorisnb.tools.challenge import store  # noqa: E402
+from lorisnb.tools.challenge.config import read_challenge  # noqa: E402
+
+pytestmark = [pytest.mark.browser, pytest.mark.slow]
+
+CHROMIUM = os.environ.get("LORISNB_CHROMIUM", "/usr/bin/chromium")
+CHROMEDRIVER = os.environ.get("LORISNB_CHROMEDRIVER", "/usr/bin/chromedriver")
+
+
+def _until(cond, timeout: float, what: str):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        value = cond()
+        if value:
+            return value
+        time.sleep(0.25)
+    raise AssertionError(f"{what}: not within {timeout} s")
+
+
+def test_team_submits_in_the_page_and_sees_its_score(tmp_path, data):
+    if not (Path(CHROMIUM).exists() and Path(CHROMEDRIVER).exists()):
+        pytest.fail(f"{CHROMIUM} / {CHROMEDRIVER} missing: run `make test-browser` (installs Debian's chromium)")
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+    from selenium.webdriver.common.by import By
+
+    path = challenge_file(tmp_path, data)
+    challenge = read_challenge(path)
+    challenge.folder.mkdir(parents=True)
+    engine = store.connect(challenge.database)
+    token = store.add_team(engine, "browsers", time.time() + 7000)
+    port = free_port()
+    url = f"http://127.0.0.1:{port}"
+    proc = start_server(path, port, tmp_path / "server.log")
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--window-size=1200,900", f"--user-data-dir={tmp_path / 'chromium'}"):  # fmt: skip
+        opts.add_argument(arg)
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    try:
+        driver.get(url + "/")
+        assert "No scored submission yet" in driver.find_element(By.ID, "phase-development").text
+        driver.get(url + "/submit")
+        driver.find_element(By.ID, "token").send_keys(token)
+        files = cafe_files(data, "orbslam2_rgbd")
+        driver.find_element(By.ID, "files").send_keys("\n".join(str(p) for p in files))
+        driver.find_element(By.ID, "send").click()
+        _until(lambda: "/submissions/" in driver.current_url, 60, "the submission page")
+        assert driver.find_element(By.ID, "team").text == "browsers"
+        _until(lambda: driver.find_element(By.ID, "status").text == "scored", 240, "the score on the page")
+        cells = driver.find_elements(By.CSS_SELECTOR, "#sequences td.cr")
+        assert [c.text for c in cells] == ["0.999", "0.161"]  # ORB-SLAM2 on cafe-1 and cafe-2
+        image = driver.find_element(By.CSS_SELECTOR, "img")
+        assert driver.execute_script("return arguments[0].naturalWidth", image) > 100  # the timeline figure drawn
+
+        def listed():
+            driver.get(url + "/")
+            board = driver.find_element(By.ID, "phase-development")
+            return board if "browsers" in board.text else None
+
+        board = _until(listed, 120, "the team on the leaderboard")
+        row = board.find_element(By.CSS_SELECTOR, "table.board tr:nth-child(2)")
+        assert row.find_element(By.CSS_SELECTOR, "td.team").text == "browsers"
+        assert row.find_element(By.CSS_SELECTOR, "td.value").text == "0.999"
+        resources = driver.execute_script("return performance.getEntriesByType('resource').map(e => e.name)")
+        assert all(r.startswith(url) for r in resources)  # offline: nothing from a CDN
+        driver.get(url + "/team")
+        driver.find_element(By.ID, "token").send_keys(token)
+        driver.find_element(By.ID, "open").click()
+        assert "4 submission(s) left" in driver.find_element(By.TAG_NAME, "body").text
+    finally:
+        driver.quit()
+        kill(proc)

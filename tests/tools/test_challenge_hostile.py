@@ -1,0 +1,277 @@
+"""Hostile uploads and requests to the challenge server: each refused with its status and a
+message saying what was expected, nothing of it kept on disk or in the database, and the server
+serving on. Most run in one process (TestClient, no scoring); the slow client needs a real
+socket (uvicorn on 127.0.0.1)."""
+
+from __future__ import annotations
+
+import io
+import socket
+import stat
+import threading
+import time
+import zipfile
+from pathlib import Path
+
+import pytest
+from challenge_fixtures import cafe_files, challenge_file
+
+pytest.importorskip("fastapi")
+import uvicorn  # noqa: E402
+from fastapi.testclient import TestClient  # noqa: E402
+
+from lorisnb.errors import ParseError  # noqa: E402
+from lorisnb.io.datasets.paths import SAMPLE_DATA  # noqa: E402
+from lorisnb.tools.challenge import store  # noqa: E402
+from lorisnb.tools.challenge.app import create_app  # noqa: E402
+from lorisnb.tools.challenge.config import read_challenge  # noqa: E402
+
+LIMITS = "upload_mb = 1\nunpacked_mb = 2\nfiles = 5\nsubmissions_per_day = 3\nupload_seconds = 1"
+
+
+@pytest.fixture()
+def hostile(tmp_path, data):
+    challenge = read_challenge(challenge_file(tmp_path, data, limits=LIMITS))
+    app = create_app(challenge, score=False)
+    engine = app.state.server.engine
+    token = store.add_team(engine, "team", time.time() + 7000)
+    with TestClient(app) as client:
+        yield dict(client=client, token=token, engine=engine, challenge=challenge, app=app)
+
+
+def post(h, files, token=None, **kw):
+    headers = {"Authorization": f"Bearer {h['token'] if token is None else token}"} if token != "" else {}
+    return h["client"].post("/api/submissions", files=files, headers=headers, **kw)
+
+
+def zipped(members: dict[str, bytes], compression=zipfile.ZIP_DEFLATED) -> bytes:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression) as z:
+        for name, body in members.items():
+            z.writestr(name, body)
+    return buf.getvalue()
+
+
+def nothing_kept(h) -> None:
+    uploads = h["challenge"].folder / "uploads"
+    assert not uploads.exists() or list(uploads.iterdir()) == []
+    assert store.all_submissions(h["engine"]) == []
+
+
+RESULT = b"scene: cafe\nframe: base_link\n\nseq: 1\n1560004885.5 1 2 3 0 0 0 1\n"
+
+
+@pytest.mark.parametrize(
+    "members, status, words",
+    [
+        ({"../evil.txt": RESULT}, 400, "climbs out"),
+        ({"a/../../evil.txt": RESULT}, 400, "climbs out"),
+        ({"/etc/evil.txt": RESULT}, 400, "absolute path"),
+        ({"a\\..\\evil.txt": RESULT}, 400, "Windows path"),
+        ({"C:evil.txt": RESULT}, 400, "Windows path"),
+        ({".hidden.txt": RESULT}, 400, "not starting with '.'"),
+        ({"x.pdf": RESULT}, 415, "expected OpenLORIS result files (.txt)"),
+        ({"inner.zip": zipped({"a.txt": RESULT})}, 415, "expected OpenLORIS result files (.txt)"),
+        ({"a.txt": RESULT, "b/a.txt": RESULT}, 400, "a second file named 'a.txt'"),
+        ({"bin.txt": b"\x00\x01binary" * 10}, 400, "a binary file"),
+        ({"empty.txt": b"  \n"}, 400, "empty"),
+        ({f"f{i}.txt": RESULT for i in range(6)}, 413, "at most 5"),
+        ({"bomb.txt": b"0" * 1_500_000}, 413, "zip bomb"),  # 1.5 MB of one byte: ~1000x
+        ({"big.txt": b"0" * 3_000_000}, 413, "over the challenge's limit of 2 MB"),  # declared size
+    ],
+)
+def test_archive_refused(hostile, members, status, words):
+    r = post(hostile, [("files", ("r.zip", zipped(members)))])
+    assert r.status_code == status, r.text
+    assert words in r.json()["error"]
+    nothing_kept(hostile)
+
+
+def test_archive_of_links_refused(hostile):
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as z:
+        link = zipfile.ZipInfo("link.txt")
+        link.external_attr = (stat.S_IFLNK | 0o777) << 16
+        z.writestr(link, "/work/shared/data/openloris-scene/groundtruth/gt_cafe_1.txt")
+    r = post(hostile, [("files", ("r.zip", buf.getvalue()))])
+    assert r.status_code == 400 and "symbolic link" in r.json()["error"]
+    nothing_kept(hostile)
+
+
+def test_archive_that_lies_about_its_size(hostile):
+    """A member whose header declares a small size but holds more is stopped at the limit while
+    being read (the declared sizes are not trusted)."""
+    body = bytes(range(256)) * 12_000  # 3 MB, not compressible below the ratio check
+    raw = bytearray(zipped({"big.txt": body}, zipfile.ZIP_STORED))
+    info = zipfile.ZipFile(io.BytesIO(bytes(raw))).getinfo("big.txt")
+    # no honest archive: the sizes in the central directory say 100 bytes
+    at = bytes(raw).rfind(b"PK\x01\x02")
+    raw[at + 24 : at + 28] = (100).to_bytes(4, "little")
+    raw[at + 20 : at + 24] = (100).to_bytes(4, "little")
+    r = post(hostile, [("files", ("r.zip", bytes(raw)))])
+    assert r.status_code in (400, 413), r.text
+    assert info.file_size == len(body)
+    nothing_kept(hostile)
+
+
+def test_encrypted_and_broken_archives(hostile):
+    raw = bytearray(zipped({"a.txt": RESULT}, zipfile.ZIP_STORED))
+    at = bytes(raw).rfind(b"PK\x01\x02")
+    raw[at + 8] |= 0x1  # the central directory's flag: encrypted
+    r = post(hostile, [("files", ("r.zip", bytes(raw)))])
+    assert r.status_code == 400 and "encrypted" in r.json()["error"]
+    r = post(hostile, [("files", ("r.zip", b"PK\x03\x04 not really a zip"))])
+    assert r.status_code == 400 and "not a readable zip archive" in r.json()["error"]
+    nothing_kept(hostile)
+
+
+@pytest.mark.parametrize(
+    "name, body, status, words",
+    [
+        ("../../x.txt", RESULT, 400, "climbs out"),
+        ("notes.docx", RESULT, 415, "expected OpenLORIS result files (.txt) or one .zip"),
+        ("x.txt", b"\x89PNG\r\n\x1a\n\x00\x00", 400, "binary"),
+        ("x.txt", "é".encode("latin-1") * 20, 400, "not UTF-8 text"),
+    ],
+)
+def test_file_refused(hostile, name, body, status, words):
+    r = post(hostile, [("files", (name, body))])
+    assert r.status_code == status and words in r.json()["error"], r.text
+    nothing_kept(hostile)
+
+
+def test_huge_upload_refused_before_it_is_read(hostile, data):
+    big = b"1560004885.5 1 2 3 0 0 0 1\n" * 60_000  # 1.6 MB, over upload_mb = 1
+    r = post(hostile, [("files", ("big.txt", big))])
+    assert r.status_code == 413 and "over the challenge's limit of 1 MB" in r.json()["error"]
+
+    def chunks():  # no Content-Length: counted while it arrives
+        for _ in range(40):
+            yield b"x" * 50_000
+
+    r = hostile["client"].post("/api/submissions", content=chunks(),
+                               headers={"Authorization": f"Bearer {hostile['token']}",
+                                        "Content-Type": "multipart/form-data; boundary=b"})  # fmt: skip
+    assert r.status_code == 413 and "limit of 1 MB" in r.json()["error"]
+    nothing_kept(hostile)
+
+
+def test_malformed_requests(hostile):
+    h = hostile
+    auth = {"Authorization": f"Bearer {h['token']}"}
+    bad = b'--b\r\nContent-Disposition: form-data; name="files"; filename="a.txt"\r\n\r\nabc'  # never ends
+    r = h["client"].post("/api/submissions", content=bad, headers=auth | {"Content-Type": "multipart/form-data"})
+    assert r.status_code == 400 and "malformed upload" in r.json()["error"]
+    r = h["client"].post("/api/submissions", content=b"{}", headers=auth | {"Content-Type": "application/json"})
+    assert r.status_code == 400 and "no file in the upload" in r.json()["error"]
+    r = h["client"].post("/api/submissions", data={"files": "not a file"}, headers=auth)
+    assert r.status_code == 400 and "holds text, not files" in r.json()["error"]
+    r = h["client"].post("/api/submissions", content=b"x", headers=auth | {"Content-Length": "lots"})
+    assert r.status_code == 400 and "expected a number of bytes" in r.json()["error"]
+    nothing_kept(h)
+
+
+def test_tokens_refused(hostile):
+    h = hostile
+    files = [("files", ("a.txt", RESULT))]
+    assert "no token" in post(h, files, token="").json()["error"]
+    r = post(h, files, token="guessed-token")
+    assert r.status_code == 401 and "unknown token" in r.json()["error"]
+    old = store.add_team(h["engine"], "late", time.time() - 1)
+    r = post(h, files, token=old)
+    assert r.status_code == 401 and "expired" in r.json()["error"] and "'late'" in r.json()["error"]
+    r = h["client"].get("/api/admin", headers={"Authorization": f"Bearer {h['token']}"})
+    assert r.status_code == 403 and "needs the admin token" in r.json()["error"]
+    page = h["client"].post("/submit", files=files, data={"token": "wrong"})  # the browser form
+    assert page.status_code == 401 and 'id="error"' in page.text and "unknown token" in page.text
+    nothing_kept(h)
+
+
+def test_too_many_submissions(hostile, data):
+    h = hostile
+    files = [("files", (p.name, p.read_bytes())) for p in cafe_files(data, "ds-slam")]
+    for _ in range(3):
+        assert post(h, files).status_code == 201
+    r = post(h, files)
+    assert r.status_code == 429 and "3 submissions in the last 24 hours" in r.json()["error"]
+    assert len(store.all_submissions(h["engine"])) == 3
+    assert store.queue_counts(h["engine"])["queued"] == 3
+
+
+def test_closed_challenge(hostile):
+    server = hostile["app"].state.server
+    server.clock = lambda: hostile["challenge"].opens - 1  # not open yet
+    r = post(hostile, [("files", ("a.txt", RESULT))])
+    assert r.status_code == 403 and "no phase is open now" in r.json()["error"]
+    assert "No phase is open now" in hostile["client"].get("/submit").text
+    nothing_kept(hostile)
+
+
+def test_challenge_file_refused(tmp_path, data):
+    path = challenge_file(tmp_path, data)
+    text = path.read_text()
+    for old, new, words in [
+        ('title = "Class', 'titel = "Class', "unknown key 'titel'"),
+        ('scenes = ["cafe"]', 'scenes = ["office"]', "'office' has no ground truth"),
+        ("sequences = { cafe = [1] }", "sequences = { cafe = [0] }", "expected a list of sequence numbers"),
+        ('leaderboard = "after-close"', 'leaderboard = "never"', "leaderboard"),
+        ("workers = 1", "workers = 0", "expected a whole number of 1 or more"),
+        ("[limits]", '[spec]\nmode = "sideways"\n[limits]', "[spec]"),
+    ]:
+        assert old in text
+        path.write_text(text.replace(old, new, 1))
+        with pytest.raises(ParseError, match=None) as err:
+            read_challenge(path)
+        assert words in str(err.value) and str(path) in str(err.value)
+
+
+def test_bundled_class_challenge():
+    """The README's class challenge reads: the bundled cafe ground truth, cafe-1 in development
+    (live), both sequences in the final (after it closes), the paper's thresholds; reading it
+    creates nothing."""
+    path = Path(__file__).resolve().parents[2] / "teaching" / "challenge" / "class.toml"
+    c = read_challenge(path)
+    assert c.data.root == SAMPLE_DATA and c.data.scenes_with_groundtruth() == ["cafe"]
+    dev, final = c.phases
+    assert dev.keeps("cafe", 1) and not dev.keeps("cafe", 2) and dev.leaderboard == "live"
+    assert final.keeps("cafe", 2) and final.leaderboard == "after-close" and dev.closes == final.opens
+    assert c.spec.eps == "paper" and c.spec.phi == 30.0 and c.metric == "cr"
+    assert not c.folder.exists()
+
+
+def test_slow_client_refused_and_server_serves_on(tmp_path, data):
+    """A client that sends its headers and then trickles (slowloris) is answered 408 after the
+    challenge's upload_seconds, while another client is served meanwhile."""
+    challenge = read_challenge(challenge_file(tmp_path, data, limits=LIMITS))
+    app = create_app(challenge, score=False)
+    token = store.add_team(app.state.server.engine, "slow", time.time() + 7000)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="error"))
+    thread = threading.Thread(target=server.run, daemon=True)
+    thread.start()
+    try:
+        for _ in range(100):
+            if server.started:
+                break
+            time.sleep(0.05)
+        slow = socket.create_connection(("127.0.0.1", port), timeout=10)
+        slow.sendall(b"POST /api/submissions HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer " + token.encode()
+                     + b"\r\nContent-Type: multipart/form-data; boundary=b\r\nContent-Length: 100000\r\n\r\n--b\r\n")  # fmt: skip
+        import httpx
+
+        t0 = time.monotonic()
+        assert httpx.get(f"http://127.0.0.1:{port}/api/health", timeout=5).status_code == 200
+        got = b""
+        while not (b"\r\n\r\n" in got and got.rstrip().endswith(b"}")) and (chunk := slow.recv(4096)):
+            got += chunk  # headers, then the JSON body
+        reply = got.decode()
+        took = time.monotonic() - t0
+        slow.close()
+        assert reply.startswith("HTTP/1.1 408") and "longer than the challenge's 1 s" in reply
+        assert took < 5
+        assert httpx.get(f"http://127.0.0.1:{port}/", timeout=5).status_code == 200
+    finally:
+        server.should_exit = True
+        thread.join(10)
