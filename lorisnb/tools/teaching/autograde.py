@@ -227,13 +227,14 @@ def _package_paths() -> tuple[Path, list[Path]]:
     import lorisnb
 
     pkg = Path(lorisnb.__file__).resolve().parent
-    keep = {pkg, Path(sys.prefix).resolve()}
+    needed = [pkg, Path(sys.prefix).resolve(), Path(sys.base_prefix).resolve(), Path(sys.executable).resolve()]
+    needed += [Path(p).resolve() for p in sys.path if p and Path(p).is_dir()]
     hide: list[Path] = []
-    for root in {pkg.parent, Path(sys.prefix).resolve().parent}:
+    for root in {pkg.parent, *(p.parent for p in needed[1:3])}:
         if not (root / "pyproject.toml").is_file():
             continue
         for entry in root.iterdir():
-            if entry.is_dir() and not entry.is_symlink() and entry.resolve() not in keep:
+            if entry.is_dir() and not entry.is_symlink() and not any(n.is_relative_to(entry.resolve()) for n in needed):
                 hide.append(entry.resolve())
         git = root / ".git"
         if git.is_file():  # a worktree: its git database is elsewhere
@@ -244,7 +245,7 @@ def _package_paths() -> tuple[Path, list[Path]]:
                     d = d.parent
                 if d.name == ".git":
                     hide.append(d)
-    return pkg.parent, hide
+    return pkg.parent, list(dict.fromkeys(hide))
 
 
 @dataclass(frozen=True)
@@ -274,7 +275,7 @@ def grade_submission(
     hidden = [*settings.hidden, *checkout_dirs]
     notes: list[str] = []
     params = {"student_id": student}
-    with tempfile.TemporaryDirectory(prefix="lorisnb-grade-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="lorisnb-grade-", dir=_reachable_tmp()) as tmp:
         root = Path(tmp)
         root.chmod(0o711)
         work = root / "work"
@@ -303,6 +304,8 @@ def grade_submission(
                     functions.update({d: RemoteFunction(None, d, f"TimeoutError: {exc}") for d in defs})
                     continue
                 err = None if reply.get("ok") else str(reply.get("error"))
+                if err:  # the cell failed on its own, with numpy only: say so, then its error
+                    err = f"RuntimeError: the answer cell, run alone with numpy only (no lorisnb, as graded), failed: {err}"
                 functions.update({d: RemoteFunction(None if err else box, d, err) for d in defs})
             scores = _run_checks(
                 spec,
@@ -315,6 +318,16 @@ def grade_submission(
             for box in boxes:
                 box.close()
     return SubmissionResult(student, spec.name, scores, isolation, round(time.monotonic() - t0, 2), notes)
+
+
+def _reachable_tmp() -> str:
+    """A temporary folder the sandbox's user can enter: ``$TMPDIR`` unless it (or a folder above it)
+    is closed to other users (then /tmp, /var/tmp)."""
+    for d in (tempfile.gettempdir(), "/tmp", "/var/tmp"):
+        p = Path(d).resolve()
+        if p.is_dir() and all(q.stat().st_mode & 0o001 for q in (p, *p.parents)):
+            return str(p)
+    return tempfile.gettempdir()
 
 
 def _isolated() -> bool:
@@ -357,7 +370,7 @@ def _run_student(
             source, gid, cell_name = cells[k]
             capture: Sequence[str] = spec.values.get(gid, ()) if gid else ()
             try:
-                reply = box.run(source, capture, cell_name)
+                reply = box.run(source, capture, cell_name, locked=gid is None)
             except SandboxError as exc:
                 where = gid or cell_name
                 notes.append(f"{where}: {exc}")
@@ -369,7 +382,7 @@ def _run_student(
                 for j in range(k):
                     if j not in skipped:
                         try:
-                            box.run(cells[j][0], (), cells[j][2])
+                            box.run(cells[j][0], (), cells[j][2], locked=cells[j][1] is None)
                         except SandboxError:
                             skipped.add(j)
                 k += 1

@@ -43,10 +43,13 @@ CHILD = Path(__file__).with_name("_sandbox_child.py")
 
 @dataclass(frozen=True)
 class Limits:
-    """The sandbox's limits: seconds per cell (``cell_timeout_s``), bytes of address space
-    (``memory_bytes``, RLIMIT_AS), bytes per written file, processes of its user, CPU seconds."""
+    """The sandbox's limits: seconds per answer cell or call (``cell_timeout_s``), seconds per
+    instructor cell (``locked_timeout_s``: the lab's own cells, its imports and data; at least
+    ``cell_timeout_s``), bytes of address space (``memory_bytes``, RLIMIT_AS), bytes per written file,
+    processes of its user, CPU seconds."""
 
     cell_timeout_s: float = 60.0
+    locked_timeout_s: float = 120.0
     memory_bytes: int = 3 * 1024**3
     file_bytes: int = 64 * 1024**2
     processes: int = 64
@@ -160,6 +163,10 @@ class Sandbox:
     def start(self) -> None:
         shutil.copyfile(CHILD, self.work / CHILD.name)  # lorisnb's folder may be hidden from the child
         if self.isolation == "full":
+            closed = [p for p in self.work.parents if not p.stat().st_mode & 0o001]
+            if closed:
+                raise OSError(f"the sandbox's folder {self.work} is under {closed[0]}, which its user cannot enter "
+                              "(mode without o+x): make the folder elsewhere (the grader uses $TMPDIR)")  # fmt: skip
             os.chown(self.work, self.uid, self.uid)
             for p in self.work.rglob("*"):
                 os.chown(p, self.uid, self.uid, follow_symlinks=False)
@@ -253,10 +260,14 @@ class Sandbox:
             raise SandboxError("the sandbox's reply was garbled (the code wrote into the grader's pipe)")
         return reply
 
-    def run(self, source: str, capture: Sequence[str] = (), name: str = "<cell>") -> dict[str, Any]:
-        """Run one cell; the reply: ``ok``, ``error`` (the cell's exception), ``values`` (captured)."""
-        return self._ask({"op": "exec", "source": source, "capture": list(capture), "name": name},
-                         self.limits.cell_timeout_s)  # fmt: skip
+    def run(
+        self, source: str, capture: Sequence[str] = (), name: str = "<cell>", locked: bool = False
+    ) -> dict[str, Any]:
+        """Run one cell (``locked``: the instructor's, with its own time limit); the reply: ``ok``,
+        ``error`` (the cell's exception), ``values`` (captured)."""
+        lim = self.limits
+        timeout = max(lim.cell_timeout_s, lim.locked_timeout_s) if locked else lim.cell_timeout_s
+        return self._ask({"op": "exec", "source": source, "capture": list(capture), "name": name}, timeout)
 
     def call(self, name: str, args: dict[str, Any]) -> dict[str, Any]:
         """Call the function ``name`` the cells defined with these (numpy or plain) arguments."""
