@@ -105,15 +105,12 @@ student: $(TEACH_STAMP)
 	mkdir -p "$(COURSE)"
 	$(NBGRADER) generate_assignment $(LAB) --force $(NBGRADER_ARGS)
 
-# autograde $(COURSE)/submitted/ (demo students written when it holds none), then the grades CSV
-# ($(COURSE)/grades.csv) and per-student feedback HTML ($(COURSE)/feedback/<student>/<lab>/)
+# grade $(COURSE)/submitted/ in the sandbox (demo students written when it holds none): grades.csv,
+# exports/ (Canvas, Moodle, Gradescope), graded/<student>/<lab>/ (teaching/README.md, "Grading");
+# GRADE_ARGS: more options of teaching/grade.py (--roster, --due, --late-per-day, --timeout, ...)
 grade: student
 	cd "$(COURSE)" && ls -d submitted/*/ >/dev/null 2>&1 || $(TEACH_ENV) python "$(abspath teaching/demo_submissions.py)" .
-	tmp=$$(mktemp -d) && export TMPDIR="$$tmp" && $(NBGRADER) autograde $(LAB) --create --force $(NBGRADER_ARGS); \
-	  rc=$$?; rm -rf "$$tmp"; exit $$rc
-	$(NBGRADER) generate_feedback $(LAB) --force $(NBGRADER_ARGS)
-	cd "$(COURSE)" && $(TEACH_ENV) python "$(abspath teaching/offline_feedback.py)" feedback
-	$(NBGRADER) export --to grades.csv $(NBGRADER_ARGS)
+	$(TEACH_ENV) python teaching/grade.py "$(COURSE)" --source teaching/source --lab $(LAB) $(GRADE_ARGS)
 
 # the offline book of the primer and the labs (Jupyter Book 1 + sphinx-exercise) into $(BOOK_OUT)/
 book: $(TEACH_STAMP)

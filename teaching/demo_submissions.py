@@ -29,7 +29,7 @@ MISTAKES = {
         "    held = np.minimum(np.diff(np.append(stamps, t_max)), delta)\n"
         "    return float(np.sum(held * correct) / (t_max - stamps[0]))\n"
     ),
-    "B3_prediction": "predicted_cr_t_late = 1 - 20 / T\n",
+    "B3_prediction": "predicted_cr_t_late = 1 - late_start / T\n",
     "C1_cs_r": "def cs_r(t0, t_min, first_correct, tau):\n    return float(np.exp(-(t0 - t_min) / tau))\n",
     "D1_alignment": (
         "per_seq = ln.score(simulated_errors(gt, wrong_reloc, seqs=[1, 2], mode='per-seq'), eps, phi, delta, tau)\n"

@@ -8,6 +8,6 @@ c.CourseDirectory.course_id = "lorisnb-lifelong-slam"
 c.CourseDirectory.db_url = "sqlite:///gradebook.db"
 c.ClearSolutions.code_stub = {"python": "# YOUR CODE HERE\nraise NotImplementedError()"}
 c.ClearSolutions.text_stub = "YOUR ANSWER HERE"
-c.Execute.timeout = 900
+c.Execute.timeout = 60  # seconds per cell (nbgrader autograde, if used; `make grade` has its own sandbox limits)
 c.Execute.interrupt_on_timeout = True
 c.ExportApp.plugin_class = "nbgrader.plugins.CsvExportPlugin"

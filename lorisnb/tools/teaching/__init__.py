@@ -44,6 +44,7 @@ from lorisnb.tools.teaching._prose import (
     explain_gap,
     explain_wrong_reloc,
     lab_data,
+    lab_variant,
     wrong_reloc_question,
 )
 
@@ -51,7 +52,7 @@ __all__ = [
     "CORRECTNESS_CASES", "CR_CASES", "CSR_CASES", "MISTAKES", "cases_from", "check_alignment_cr", "check_ate_percent",
     "check_best_cr", "check_choice", "check_correct_rate", "check_correct_rate_tracking", "check_correctness",
     "check_cs_r", "check_eps_at_cr", "check_silent_sequences", "check_value", "explain_ate_percent", "explain_gap",
-    "explain_wrong_reloc", "lab_data", "wrong_reloc_question",
+    "explain_wrong_reloc", "lab_data", "lab_variant", "wrong_reloc_question",
 ]  # fmt: skip
 
 

@@ -4,8 +4,10 @@ student version, where they would give the answer away). Each returns Markdown t
 
 from __future__ import annotations
 
+import hashlib
 import os
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -27,6 +29,39 @@ def lab_data(data_root: str | os.PathLike[str] | DataPaths | None = None) -> Dat
         print(SAMPLE_NOTE)
         return sample_data()
     return find_data(data_root)
+
+
+@dataclass(frozen=True)
+class LabVariant:
+    """One student's data: the simulator's ``seed``, Part B's ``lost_window`` (seconds after the
+    start) and ``late_start`` (seconds), all drawn from the student id."""
+
+    student_id: str
+    seed: int
+    lost_window: tuple[float, float]
+    late_start: float
+
+    def describe(self) -> str:
+        who = f"student id `{self.student_id}`" if self.student_id else "no student id (set `student_id`)"
+        return (
+            f"Your data variant ({who}): simulator seed {self.seed}; in B1 tracking is lost from "
+            f"{self.lost_window[0]:g} s to {self.lost_window[1]:g} s; in B3 the estimate starts {self.late_start:g} s late."
+        )
+
+
+def lab_variant(
+    student_id: str | None = None, seed: int | None = None, lab: str = "lab1_lifelong_metrics"
+) -> LabVariant:
+    """The data variant of a student: drawn from a seed derived from ``student_id`` (else
+    ``$JUPYTERHUB_USER``), so that the grader, who knows the id, draws the same data; answers
+    differ between students while the checks and their hints apply to every variant. ``seed``:
+    given, it is used instead (the instructor's runs)."""
+    sid = str(student_id if student_id is not None else os.environ.get("JUPYTERHUB_USER", ""))
+    if seed is None:
+        seed = int(hashlib.sha256(f"{lab}\0{sid}".encode()).hexdigest()[:8], 16) % 2**31
+    rng = np.random.default_rng(int(seed))
+    start, length, late = (float(rng.integers(a, b + 1)) for a, b in ((10, 20), (15, 25), (10, 30)))
+    return LabVariant(sid, int(seed), (start, start + length), late)
 
 
 def explain_gap(cr: float, ate_rmse: float, gap: tuple[float, float], delta: float, duration: float) -> str:

@@ -1,0 +1,341 @@
+"""Grade a class and write grades an LMS takes (``teaching/README.md``, "Grading").
+
+:func:`grade_class` grades every ``submitted/<student>/<lab>/<lab>.ipynb`` of a course folder with
+:func:`~lorisnb.tools.teaching.autograde.grade_submission`, in parallel, regrading only what changed
+(the digest of the submission, the lab, the release and the settings is kept in each result), and
+writes, all in the course folder:
+
+- ``graded/<student>/<lab>/result.json`` and ``feedback.html`` (each question: points, the checks' messages);
+- ``grades.csv``: one row per student and lab, every question's points, the late penalty, the score;
+- ``exports/<lab>-canvas.csv``, ``-moodle.csv``, ``-gradescope.csv``: the LMS' CSV layouts;
+- ``grades-demo.csv``: the demonstration students (``demo-*``), never in the LMS exports.
+
+Names and e-mails come from a roster CSV (``id,name,email``, optional ``sis_id``, ``login_id``,
+``section``); a student missing from a given roster is graded but left out of the exports (and named).
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import math
+import os
+import re
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
+
+from lorisnb.errors import ValidationError
+from lorisnb.tools.teaching.autograde import (
+    GradeSettings,
+    LabSpec,
+    SubmissionResult,
+    digest,
+    grade_submission,
+    lab_spec,
+)
+
+DEMO_PREFIX = "demo-"  # the students demo_submissions.py writes
+ROSTER_COLUMNS = ("id", "name", "email")
+ROSTER_OPTIONAL = ("sis_id", "login_id", "section")
+
+
+@dataclass(frozen=True)
+class Student:
+    id: str
+    name: str = ""
+    email: str = ""
+    sis_id: str = ""
+    login_id: str = ""
+    section: str = ""
+
+
+def read_roster(path: Path) -> dict[str, Student]:
+    """The roster CSV: a header with ``id,name,email`` (and optionally ``sis_id``, ``login_id``,
+    ``section``), one row per student; refused with the line when a column or an id is wrong."""
+    with open(path, newline="", encoding="utf-8-sig") as f:
+        rows = list(csv.reader(f))
+    if not rows:
+        raise ValidationError(f"{path}: empty roster; expected a header line {','.join(ROSTER_COLUMNS)}")
+    header = [h.strip().lower() for h in rows[0]]
+    missing = [c for c in ROSTER_COLUMNS if c not in header]
+    unknown = [h for h in header if h not in ROSTER_COLUMNS + ROSTER_OPTIONAL]
+    if missing or unknown:
+        raise ValidationError(
+            f"{path}, line 1: roster header {rows[0]}: missing {missing or 'nothing'}, unknown {unknown or 'nothing'}; "
+            f"expected {', '.join(ROSTER_COLUMNS)} and optionally {', '.join(ROSTER_OPTIONAL)}"
+        )
+    out: dict[str, Student] = {}
+    for line, row in enumerate(rows[1:], start=2):
+        if not any(cell.strip() for cell in row):
+            continue
+        if len(row) != len(header):
+            raise ValidationError(
+                f"{path}, line {line}: {len(row)} fields, expected {len(header)} ({','.join(header)})"
+            )
+        rec = {h: v.strip() for h, v in zip(header, row, strict=True)}
+        if not re.fullmatch(r"[A-Za-z0-9._@+-]+", rec["id"]):
+            raise ValidationError(
+                f"{path}, line {line}: student id {rec['id']!r} (expected letters, digits, . _ @ + -)"
+            )
+        if rec["id"] in out:
+            raise ValidationError(f"{path}, line {line}: student id {rec['id']!r} appears twice")
+        if rec["email"] and "@" not in rec["email"]:
+            raise ValidationError(f"{path}, line {line}: e-mail {rec['email']!r} has no @")
+        out[rec["id"]] = Student(**rec)
+    return out
+
+
+@dataclass(frozen=True)
+class LatePolicy:
+    """Due date (aware datetime) and the penalty: ``per_day`` of the points per started day late
+    (0.1: 10 %), nothing after ``max_days`` days (None: no limit). A submission without a time
+    (no nbgrader ``timestamp.txt``) counts as on time, and is named in the notes."""
+
+    due: datetime
+    per_day: float = 0.0
+    max_days: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.due.tzinfo is None:
+            raise ValidationError(
+                f"due date {self.due.isoformat()} has no time zone (write e.g. 2026-12-01T23:59+01:00)"
+            )
+        if not 0 <= self.per_day <= 1:
+            raise ValidationError(f"late penalty per day must be within [0, 1] (a fraction), got {self.per_day}")
+        if self.max_days is not None and self.max_days < 0:
+            raise ValidationError(f"late days allowed must be >= 0, got {self.max_days}")
+
+    def days_late(self, submitted: datetime) -> int:
+        late = (submitted - self.due).total_seconds()
+        return max(0, math.ceil(late / 86400.0))
+
+    def factor(self, submitted: datetime | None) -> tuple[float, int]:
+        """(fraction of the points kept, whole days late) for a submission at ``submitted``."""
+        if submitted is None:
+            return 1.0, 0
+        days = self.days_late(submitted)
+        if self.max_days is not None and days > self.max_days:
+            return 0.0, days
+        return max(0.0, 1.0 - self.per_day * days), days
+
+
+def submission_time(folder: Path) -> datetime | None:
+    """When a submission was made: nbgrader's ``timestamp.txt`` (``nbgrader collect``/``submit``)."""
+    f = folder / "timestamp.txt"
+    if not f.is_file():
+        return None
+    text = f.read_text().strip()
+    text = re.sub(r"\s*UTC$", "+00:00", text)
+    try:
+        t = datetime.fromisoformat(text)
+    except ValueError:
+        raise ValidationError(f"{f}: {text!r} is not a time (expected e.g. 2026-12-01 23:59:00.000000 UTC)") from None
+    return t if t.tzinfo else t.replace(tzinfo=timezone.utc)
+
+
+@dataclass
+class Graded:
+    """A graded submission with what the gradebook adds: its time, lateness, final score."""
+
+    result: SubmissionResult
+    submitted: datetime | None
+    days_late: int
+    factor: float
+    lateness_s: float = 0.0
+
+    @property
+    def score(self) -> float:
+        return round(self.result.points * self.factor, 4)
+
+
+def _release_bytes(release: Path) -> bytes:
+    return b"".join(p.relative_to(release).as_posix().encode() + p.read_bytes()
+                    for p in sorted(release.rglob("*")) if p.is_file())  # fmt: skip
+
+
+def _grade_one(args: tuple[LabSpec, Path, Path, str, GradeSettings]) -> SubmissionResult:
+    spec, release, notebook, student, settings = args
+    uid = settings.uid + 2 * (os.getpid() % 1000)  # a user per worker: concurrent sandboxes cannot read each other
+    return grade_submission(
+        spec, release, notebook, student, GradeSettings(settings.limits, settings.hidden, settings.secret, uid)
+    )
+
+
+def _secret(course: Path) -> str:
+    """The course's secret (``.grading-secret``, made once, readable by its owner only)."""
+    f = course / ".grading-secret"
+    if not f.is_file():
+        fd = os.open(f, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        with os.fdopen(fd, "w") as out:
+            out.write(os.urandom(16).hex())
+    return f.read_text().strip()
+
+
+def grade_class(
+    course: Path,
+    source: Path,
+    labs: Sequence[str] | None = None,
+    *,
+    settings: GradeSettings | None = None,
+    jobs: int = 2,
+    late: Mapping[str, LatePolicy] | None = None,
+    progress: bool = True,
+) -> list[Graded]:
+    """Grade every submission of ``course`` (``submitted/<student>/<lab>/<lab>.ipynb``) against
+    ``source/<lab>/<lab>.ipynb`` and ``course/release/<lab>/``; regrade only what changed."""
+    course, source = course.resolve(), source.resolve()
+    labs = list(labs) if labs else sorted(p.name for p in source.iterdir() if (p / f"{p.name}.ipynb").is_file())
+    secret = _secret(course)
+    settings = settings or GradeSettings()
+    hidden = (course, source, *settings.hidden)
+    settings = GradeSettings(settings.limits, tuple(Path(h) for h in hidden), secret, settings.uid)
+    todo, done = [], []
+    for lab in labs:
+        src_nb = source / lab / f"{lab}.ipynb"
+        if not src_nb.is_file():
+            raise ValidationError(f"lab {lab!r}: no {src_nb}")
+        spec = lab_spec(src_nb)
+        release = course / "release" / lab
+        if not release.is_dir():
+            raise ValidationError(f"lab {lab!r}: no release folder {release} (run `make student` first)")
+        base = digest(src_nb.read_bytes(), _release_bytes(release), repr(settings.limits))
+        for nb in sorted(course.glob(f"submitted/*/{lab}/{lab}.ipynb")):
+            student = nb.parents[1].name
+            key = digest(base, nb.read_bytes(), student)
+            out = course / "graded" / student / lab / "result.json"
+            if out.is_file():
+                old = SubmissionResult.from_json(out.read_text())
+                if old.digest == key:
+                    done.append(old)
+                    continue
+            todo.append(((spec, release, nb, student, settings), key))
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=len(todo), desc="grading", unit="submission", disable=not progress or not todo)
+    with bar, ProcessPoolExecutor(max_workers=max(1, jobs)) as pool:
+        futures = {pool.submit(_grade_one, args): key for args, key in todo}
+        for fut in as_completed(futures):
+            res = fut.result()
+            res.digest = futures[fut]
+            _write_result(course, res)
+            done.append(res)
+            bar.update()
+    graded = []
+    for res in sorted(done, key=lambda r: (r.lab, r.student)):
+        when = submission_time(course / "submitted" / res.student / res.lab)
+        policy = (late or {}).get(res.lab)
+        factor, days = policy.factor(when) if policy else (1.0, 0)
+        lateness = max(0.0, (when - policy.due).total_seconds()) if policy and when else 0.0
+        graded.append(Graded(res, when, days, factor, lateness))
+    return graded
+
+
+def _write_result(course: Path, res: SubmissionResult) -> None:
+    folder = course / "graded" / res.student / res.lab
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "result.json").write_text(res.to_json())
+    rows = "".join(
+        f"<tr><td>{html.escape(s.question)}</td><td>{s.points:g} / {s.max_points:g}</td>"
+        f"<td><pre>{html.escape(s.message)}</pre></td></tr>"
+        for s in res.scores
+    )
+    notes = "".join(f"<li>{html.escape(n)}</li>" for n in res.notes)
+    (folder / "feedback.html").write_text(
+        f"<!doctype html><meta charset='utf-8'><title>{html.escape(res.lab)}: {html.escape(res.student)}</title>"
+        f"<h1>{html.escape(res.lab)}: {res.points:g} / {res.max_points:g}</h1>"
+        f"<table border=1><tr><th>question</th><th>points</th><th>what the checks said</th></tr>{rows}</table>"
+        + (f"<h2>Notes</h2><ul>{notes}</ul>" if notes else "")
+    )
+
+
+def _n(x: float) -> str:
+    """A number as the LMS reads it: 4, 4.5, 0.8333 (no trailing .0)."""
+    return f"{round(float(x), 4):g}"
+
+
+def _split(name: str) -> tuple[str, str]:
+    first, _, last = name.strip().rpartition(" ")
+    return (first, last) if first else (last, "")
+
+
+def write_exports(course: Path, graded: Sequence[Graded], roster: Mapping[str, Student] | None = None) -> list[str]:
+    """``grades.csv``, ``grades-demo.csv`` and the LMS exports; returns the students left out of
+    the exports (not on the roster)."""
+    demo = [g for g in graded if g.result.student.startswith(DEMO_PREFIX)]
+    real = [g for g in graded if not g.result.student.startswith(DEMO_PREFIX)]
+    left_out = sorted({g.result.student for g in real if roster is not None and g.result.student not in roster})
+    for rows, name in ((real, "grades.csv"), (demo, "grades-demo.csv")):
+        _write_grades(course / name, rows, roster or {})
+    exports = course / "exports"
+    exports.mkdir(exist_ok=True)
+    for lab in sorted({g.result.lab for g in real}):
+        rows = [g for g in real if g.result.lab == lab and g.result.student not in left_out]
+        people = [(roster or {}).get(g.result.student, Student(g.result.student)) for g in rows]
+        _canvas(exports / f"{lab}-canvas.csv", lab, rows, people)
+        _moodle(exports / f"{lab}-moodle.csv", lab, rows, people)
+        _gradescope(exports / f"{lab}-gradescope.csv", rows, people)
+    return left_out
+
+
+def _write_grades(path: Path, rows: Sequence[Graded], roster: Mapping[str, Student]) -> None:
+    questions = list(dict.fromkeys(s.question for g in rows for s in g.result.scores))
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(["student", "name", "email", "lab", *questions, "raw_score", "submitted", "days_late",
+                    "late_factor", "score", "max_score", "isolation"])  # fmt: skip
+        for g in rows:
+            who = roster.get(g.result.student, Student(g.result.student))
+            per = {s.question: s.points for s in g.result.scores}
+            w.writerow([g.result.student, who.name, who.email, g.result.lab,
+                        *[_n(per[q]) if q in per else "" for q in questions], _n(g.result.points),
+                        g.submitted.isoformat() if g.submitted else "", g.days_late, _n(g.factor),
+                        _n(g.score), _n(g.result.max_points), g.result.isolation])  # fmt: skip
+
+
+def _canvas(path: Path, lab: str, rows: Sequence[Graded], people: Sequence[Student]) -> None:
+    """Canvas' gradebook import layout: Student, ID, SIS User ID, SIS Login ID, Section, then one
+    column per assignment; a "Points Possible" row first."""
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(["Student", "ID", "SIS User ID", "SIS Login ID", "Section", lab])
+        w.writerow(["    Points Possible", "", "", "", "", _n(rows[0].result.max_points) if rows else ""])
+        for g, p in zip(rows, people, strict=True):
+            w.writerow([p.name or p.id, "", p.sis_id or p.id, p.login_id or p.email, p.section, _n(g.score)])
+
+
+def _moodle(path: Path, lab: str, rows: Sequence[Graded], people: Sequence[Student]) -> None:
+    """Moodle's grade import (Grades > Import > CSV file): a header, a user identifier column
+    (map "Email address" to email), a grade column and its feedback column."""
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(["First name", "Last name", "ID number", "Email address", lab, f"{lab} feedback"])
+        for g, p in zip(rows, people, strict=True):
+            first, last = _split(p.name)
+            fb = "; ".join(f"{s.question}: {s.points:g}/{s.max_points:g}" for s in g.result.scores)
+            if g.days_late:
+                fb += f"; {g.days_late} day(s) late: x{g.factor:g}"
+            w.writerow([first, last, p.sis_id or p.id, p.email, _n(g.score), fb])
+
+
+def _gradescope(path: Path, rows: Sequence[Graded], people: Sequence[Student]) -> None:
+    """Gradescope's assignment score layout: First Name, Last Name, SID, Email, Total Score, Max
+    Points, Status, Submission Time, Lateness (H:M:S), then one column per question
+    ("1: name (p pts)")."""
+    questions = list(dict.fromkeys(s.question for g in rows for s in g.result.scores))
+    maxp = {s.question: s.max_points for g in rows for s in g.result.scores}
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(["First Name", "Last Name", "SID", "Email", "Total Score", "Max Points", "Status",
+                    "Submission Time", "Lateness (H:M:S)",
+                    *[f"{k}: {q} ({maxp[q]:g} pts)" for k, q in enumerate(questions, 1)]])  # fmt: skip
+        for g, p in zip(rows, people, strict=True):
+            first, last = _split(p.name)
+            per = {s.question: s.points for s in g.result.scores}
+            sec = int(g.lateness_s)
+            hms = f"{sec // 3600}:{sec % 3600 // 60:02d}:{sec % 60:02d}"
+            w.writerow([first, last, p.sis_id or p.id, p.email, _n(g.score), _n(g.result.max_points), "Graded",
+                        g.submitted.isoformat() if g.submitted else "", hms,
+                        *[_n(per[q]) if q in per else "" for q in questions]])  # fmt: skip

@@ -1,0 +1,306 @@
+"""Run a student's code in a sandbox: its own folder, an unprivileged user, no network, a time
+limit per cell and a memory limit, with the instructor's files out of reach.
+
+:class:`Sandbox` starts one child process (:mod:`._sandbox_child`) and talks to it over pipes, a
+request per cell. When the grader runs as root on Linux with ``unshare`` and ``setpriv`` (CI, a
+course server), the child gets (``isolation == "full"``):
+
+- its own network namespace (no interface but a loopback that is down: no network at all);
+- its own mount namespace in which the whole file system is read-only except its working folder
+  (and a fresh 64 MB ``/dev/shm`` for multiprocessing's locks),
+  and the folders named ``hidden`` (the course folder, the labs' sources, the checkout lorisnb runs
+  from) are replaced by empty, unreadable folders;
+- its own PID namespace (it sees and signals no other process);
+- a user id of its own (``uid``, owning nothing else), no capabilities, ``no_new_privs``;
+- limits: address space (``memory_bytes``), file size, number of processes, CPU time.
+
+Otherwise (not root, or no ``unshare``) the child runs as the grader's user in its working folder
+with the same limits and time-outs but none of the isolation (``isolation == "limits"``); the
+grader says so. The time limit is enforced by the parent, which kills the child's whole process
+group; the sandbox can then be restarted (:meth:`Sandbox.restart`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import resource
+import select
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+CHILD = Path(__file__).with_name("_sandbox_child.py")
+
+
+@dataclass(frozen=True)
+class Limits:
+    """The sandbox's limits: seconds per answer cell or call (``cell_timeout_s``), seconds per
+    instructor cell (``locked_timeout_s``: the lab's own cells, its imports and data; at least
+    ``cell_timeout_s``), bytes of address space (``memory_bytes``, RLIMIT_AS), bytes per written file,
+    processes of its user, CPU seconds."""
+
+    cell_timeout_s: float = 60.0
+    locked_timeout_s: float = 120.0
+    memory_bytes: int = 3 * 1024**3
+    file_bytes: int = 64 * 1024**2
+    processes: int = 64
+    cpu_s: int = 1800
+
+    def __post_init__(self) -> None:
+        if not self.cell_timeout_s > 0:
+            raise ValueError(f"cell_timeout_s must be > 0 seconds, got {self.cell_timeout_s!r}")
+        if self.memory_bytes < 256 * 1024**2:
+            raise ValueError(f"memory_bytes must be at least 256 MiB, got {self.memory_bytes!r}")
+
+
+class SandboxError(RuntimeError):
+    """The child died or broke the protocol (a time-out, the memory limit, ``os._exit``...)."""
+
+
+def can_isolate() -> bool:
+    """Whether :class:`Sandbox` can isolate (root on Linux, with unshare and setpriv)."""
+    return (
+        sys.platform == "linux"
+        and os.geteuid() == 0
+        and shutil.which("unshare") is not None
+        and shutil.which("setpriv") is not None
+    )
+
+
+# the child's mount namespace, as root before dropping to the student's uid: everything read-only,
+# the hidden folders emptied, only the working folder writable
+_SETUP = r"""set -e
+work="$1"; uid="$2"; shift 2
+mount --make-rprivate /
+for m in $(awk '{print $5}' /proc/self/mountinfo | sort -u); do
+  case "$m" in /proc|/proc/*|/sys|/sys/*|/dev|/dev/pts) continue;; esac
+  mount -o remount,bind,ro "$m" 2>/dev/null || true
+done
+mount -t tmpfs -o size=64m,mode=1777,nosuid,nodev lorisnb-shm /dev/shm  # its own (multiprocessing's locks)
+while [ "$1" != "--" ]; do
+  if [ -d "$1" ]; then mount -t tmpfs -o size=4k,mode=0700,ro lorisnb-hidden "$1"; fi
+  shift
+done
+shift
+mount --bind "$work" "$work"
+mount -o remount,bind,rw "$work"
+mount -t proc proc /proc
+cd "$work"
+exec setpriv --reuid="$uid" --regid="$uid" --clear-groups --no-new-privs --inh-caps=-all --bounding-set=-all -- "$@"
+"""
+
+
+class Sandbox:
+    """One child process running a student's cells in ``work`` (a folder the grader made: it is
+    given to ``uid`` and is the only place the child can write).
+
+    ``no_lorisnb``: lorisnb cannot be imported (and, isolated, its folder is hidden): for formula
+    answers, which must be written with numpy. ``hidden``: folders the child must not read."""
+
+    def __init__(
+        self,
+        work: Path,
+        *,
+        limits: Limits = Limits(),
+        hidden: Sequence[Path] = (),
+        uid: int = 62000,
+        no_lorisnb: bool = False,
+        python_path: Sequence[Path] = (),
+    ) -> None:
+        self.work = Path(work).resolve()
+        self.limits = limits
+        self.hidden = [Path(h).resolve() for h in hidden]
+        self.uid = uid
+        self.no_lorisnb = no_lorisnb
+        self.python_path = [str(p) for p in python_path]
+        self.isolation = "full" if can_isolate() else "limits"
+        self._proc: subprocess.Popen[bytes] | None = None
+        self._buffer = b""
+        self.start()
+
+    # --- life cycle ------------------------------------------------------------------------------
+
+    def _command(self) -> list[str]:
+        # without lorisnb: no site (an editable install's path hook would find it), numpy's folder only
+        child = [sys.executable, *(["-S"] if self.no_lorisnb else []), "-B", str(self.work / CHILD.name)] + (
+            ["--no-lorisnb"] if self.no_lorisnb else []
+        )
+        if self.isolation != "full":
+            return child
+        hidden = [str(h) for h in self.hidden if not self.work.is_relative_to(h)]
+        if self.no_lorisnb:
+            import lorisnb
+
+            hidden.append(str(Path(lorisnb.__file__).resolve().parent))
+        return [
+            "unshare", "--mount", "--net", "--pid", "--fork", "--kill-child", "--",
+            "sh", "-c", _SETUP, "sh", str(self.work), str(self.uid), *hidden, "--", *child,
+        ]  # fmt: skip
+
+    def _limit(self) -> None:  # runs in the child before exec
+        os.setsid()
+        lim = self.limits
+        for which, value in (
+            (resource.RLIMIT_AS, lim.memory_bytes),
+            (resource.RLIMIT_FSIZE, lim.file_bytes),
+            (resource.RLIMIT_NPROC, lim.processes),
+            (resource.RLIMIT_CPU, lim.cpu_s),
+            (resource.RLIMIT_CORE, 0),
+        ):
+            if which == resource.RLIMIT_NPROC and self.isolation != "full":
+                continue  # counted per user: the grader's own user has other processes
+            resource.setrlimit(which, (value, value))
+
+    def start(self) -> None:
+        shutil.copyfile(CHILD, self.work / CHILD.name)  # lorisnb's folder may be hidden from the child
+        if self.isolation == "full":
+            closed = [p for p in self.work.parents if not p.stat().st_mode & 0o001]
+            if closed:
+                raise OSError(f"the sandbox's folder {self.work} is under {closed[0]}, which its user cannot enter "
+                              "(mode without o+x): make the folder elsewhere (the grader uses $TMPDIR)")  # fmt: skip
+            os.chown(self.work, self.uid, self.uid)
+            for p in self.work.rglob("*"):
+                os.chown(p, self.uid, self.uid, follow_symlinks=False)
+            self.work.chmod(0o700)
+        env = {
+            "PATH": os.environ.get("PATH", "/usr/bin:/bin"),
+            "HOME": str(self.work),
+            "TMPDIR": str(self.work),
+            "MPLBACKEND": "Agg",
+            "MPLCONFIGDIR": str(self.work / ".matplotlib"),
+            "OPENBLAS_NUM_THREADS": "1",
+            "OMP_NUM_THREADS": "1",
+            "MKL_NUM_THREADS": "1",
+            "PYTHONHASHSEED": "0",
+            "PYTHONDONTWRITEBYTECODE": "1",
+            "LANG": "C.UTF-8",
+        }
+        if self.no_lorisnb:
+            env["PYTHONPATH"] = str(Path(np.__file__).resolve().parents[1])
+        elif self.python_path:
+            env["PYTHONPATH"] = os.pathsep.join(self.python_path)
+        self._proc = subprocess.Popen(  # noqa: S603 (our own child, its command built above)
+            self._command(),
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            cwd=self.work,
+            env=env,
+            preexec_fn=self._limit,  # noqa: PLW1509 (the limits must be set between fork and exec)
+        )
+        self._buffer = b""
+
+    def close(self) -> None:
+        """Kill the child and everything it started (its process group)."""
+        proc, self._proc = self._proc, None
+        if proc is None:
+            return
+        if proc.poll() is None:
+            try:
+                os.killpg(proc.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+        proc.wait()
+        for f in (proc.stdin, proc.stdout):
+            if f is not None:
+                f.close()
+
+    def restart(self) -> None:
+        self.close()
+        self.start()
+
+    def __enter__(self) -> Sandbox:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
+
+    # --- requests --------------------------------------------------------------------------------
+
+    def _ask(self, request: dict[str, Any], timeout_s: float) -> dict[str, Any]:
+        proc = self._proc
+        if proc is None or proc.poll() is not None or proc.stdin is None or proc.stdout is None:
+            raise SandboxError("the sandbox is not running (it ended earlier)")
+        try:
+            proc.stdin.write((json.dumps(request) + "\n").encode())
+            proc.stdin.flush()
+        except BrokenPipeError:
+            self.close()
+            raise SandboxError("the sandbox ended (memory limit, or the code ended its process)") from None
+        deadline = time.monotonic() + timeout_s
+        fd = proc.stdout.fileno()
+        while b"\n" not in self._buffer:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                self.close()
+                raise SandboxError(f"time limit: the cell ran for more than {timeout_s:g} s and was stopped")
+            ready, _, _ = select.select([fd], [], [], left)
+            if ready:
+                chunk = os.read(fd, 1 << 16)
+                if not chunk:
+                    self.close()
+                    raise SandboxError("the sandbox ended (memory limit, or the code ended its process)")
+                self._buffer += chunk
+        line, self._buffer = self._buffer.split(b"\n", 1)
+        try:
+            reply = json.loads(line)
+        except ValueError:
+            self.close()
+            raise SandboxError("the sandbox's reply was garbled (the code wrote into the grader's pipe)") from None
+        if not isinstance(reply, dict):
+            raise SandboxError("the sandbox's reply was garbled (the code wrote into the grader's pipe)")
+        return reply
+
+    def run(
+        self, source: str, capture: Sequence[str] = (), name: str = "<cell>", locked: bool = False
+    ) -> dict[str, Any]:
+        """Run one cell (``locked``: the instructor's, with its own time limit); the reply: ``ok``,
+        ``error`` (the cell's exception), ``values`` (captured)."""
+        lim = self.limits
+        timeout = max(lim.cell_timeout_s, lim.locked_timeout_s) if locked else lim.cell_timeout_s
+        return self._ask({"op": "exec", "source": source, "capture": list(capture), "name": name}, timeout)
+
+    def call(self, name: str, args: dict[str, Any]) -> dict[str, Any]:
+        """Call the function ``name`` the cells defined with these (numpy or plain) arguments."""
+        encoded = {k: _encode(v) for k, v in args.items()}
+        return self._ask({"op": "call", "name": name, "args": encoded}, self.limits.cell_timeout_s)
+
+
+def _encode(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return {"array": value.tolist(), "dtype": value.dtype.str}
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def decode(plain: dict[str, Any]) -> Any:
+    """A value the child described (``_plain``) as the grader sees it: the number, string or array;
+    ``...`` for a missing answer; :class:`NotPlain` for anything else."""
+    if plain.get("missing"):
+        return Ellipsis
+    if "value" in plain:
+        return plain["value"]
+    if "array" in plain:
+        return np.array(plain["array"], dtype=plain["dtype"])
+    return NotPlain(str(plain.get("not_plain", "unknown")))
+
+
+class NotPlain:
+    """An answer that was not a plain value (a number, a string, a numpy array of numbers): a
+    prediction is a value, decided before the reference exists; an object is never asked later."""
+
+    def __init__(self, type_name: str) -> None:
+        self.type_name = type_name
+
+    def __repr__(self) -> str:
+        return f"<a {self.type_name} object, not a plain value>"

@@ -1,0 +1,84 @@
+"""Grade a class in the sandbox and write the grades an LMS takes (`make grade`; teaching/README.md,
+"Grading").
+
+    python grade.py COURSE [--lab LAB] [--jobs 2] [--timeout 60] [--memory-mb 3072]
+                    [--roster roster.csv] [--due 2026-12-01T23:59+01:00 --late-per-day 0.1 --late-max-days 5]
+                    [--hide FOLDER ...]
+
+COURSE holds release/<lab>/ and submitted/<student>/<lab>/<lab>.ipynb; the labs' sources are
+teaching/source/ (``--source``). Writes COURSE/graded/, grades.csv, grades-demo.csv, exports/.
+Exit status 0 when every submission was graded, 1 otherwise (a message says why).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from datetime import datetime
+from pathlib import Path
+
+from lorisnb.errors import ValidationError
+from lorisnb.tools.teaching.autograde import GradeSettings
+from lorisnb.tools.teaching.gradebook import LatePolicy, grade_class, read_roster, write_exports
+from lorisnb.tools.teaching.sandbox import Limits, can_isolate
+
+HERE = Path(__file__).resolve().parent
+
+
+def _positive(kind: type) -> object:
+    def parse(text: str) -> object:
+        value = kind(text)
+        if not value > 0:
+            raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+        return value
+
+    return parse
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("course", type=Path, nargs="?", default=HERE, help="the course folder (default: teaching/)")
+    ap.add_argument("--source", type=Path, default=HERE / "source", help="the labs' instructor versions")
+    ap.add_argument("--lab", action="append", help="grade this lab only (repeatable; default: every lab)")
+    ap.add_argument("--jobs", type=_positive(int), default=2, help="submissions graded at once (default 2)")
+    ap.add_argument("--timeout", type=_positive(float), default=60.0, help="seconds per cell (default 60)")
+    ap.add_argument("--memory-mb", type=_positive(int), default=3072, help="address space per sandbox, MiB")
+    ap.add_argument("--roster", type=Path, help="CSV with id,name,email[,sis_id,login_id,section]")
+    ap.add_argument("--due", help="due date, ISO 8601 with a time zone (e.g. 2026-12-01T23:59+01:00)")
+    ap.add_argument("--late-per-day", type=float, help="fraction of the points lost per started day late")
+    ap.add_argument("--late-max-days", type=int, help="no points after this many days late")
+    ap.add_argument("--hide", type=Path, action="append", default=[], help="another folder the sandbox must hide")
+    ap.add_argument("--no-progress", action="store_true")
+    a = ap.parse_args(argv)
+    if (a.late_per_day is not None or a.late_max_days is not None) and a.due is None:
+        ap.error("--late-per-day and --late-max-days need --due")
+    try:
+        late = None
+        if a.due is not None:
+            policy = LatePolicy(datetime.fromisoformat(a.due), a.late_per_day or 0.0, a.late_max_days)
+            late = {lab: policy for lab in (a.lab or [p.name for p in a.source.iterdir() if p.is_dir()])}
+        roster = read_roster(a.roster) if a.roster else None
+        limits = Limits(cell_timeout_s=a.timeout, memory_bytes=a.memory_mb * 1024**2)
+        if not can_isolate():
+            print(
+                "warning: not root on Linux with unshare/setpriv: submissions run with time and memory limits "
+                "but WITHOUT isolation (they can read and write what this user can; teaching/README.md)",
+                file=sys.stderr,
+            )
+        graded = grade_class(a.course, a.source, a.lab, settings=GradeSettings(limits, tuple(a.hide)),
+                             jobs=a.jobs, late=late, progress=not a.no_progress)  # fmt: skip
+        left_out = write_exports(a.course, graded, roster)
+    except (ValidationError, ValueError, OSError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    for g in graded:
+        print(f"{g.result.student:24s} {g.result.lab}: {g.score:g} / {g.result.max_points:g}"
+              + (f" ({g.days_late} day(s) late)" if g.days_late else ""))  # fmt: skip
+    if left_out:
+        print(f"not on the roster, left out of the LMS exports: {', '.join(left_out)}", file=sys.stderr)
+    print(f"{len(graded)} submission(s) graded: {a.course / 'grades.csv'}, {a.course / 'exports'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,325 @@
+"""The grading sandbox and the tamper-proof grader (issue 46): adversarial submissions get the score
+an honest grader gives, a class is graded within minutes, and nothing outside each submission's
+output folder changes."""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import os
+import shutil
+import tempfile
+import time
+import uuid
+from datetime import datetime, timedelta, timezone
+from pathlib import Path
+
+import nbformat
+import numpy as np
+import pytest
+
+from lorisnb.errors import ValidationError
+from lorisnb.tools.teaching.autograde import GradeSettings, Score, SubmissionResult, lab_spec
+from lorisnb.tools.teaching.gradebook import LatePolicy, grade_class, read_roster, write_exports
+from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, can_isolate, decode
+
+ROOT = Path(__file__).resolve().parents[2]
+LAB = "lab1_lifelong_metrics"
+SOURCE_NB = ROOT / "teaching" / "source" / LAB / f"{LAB}.ipynb"
+isolated = pytest.mark.skipif(not can_isolate(), reason="needs root on Linux with unshare and setpriv (as CI runs)")
+
+
+@isolated
+def test_sandbox_has_no_network_no_writes_outside_its_folder_and_limits(tmp_path):
+    secret = tmp_path / "instructor"
+    secret.mkdir()
+    (secret / "solutions.txt").write_text("the answers")
+    work = Path(tempfile.mkdtemp(prefix="lorisnb-sandbox-test-"))  # its user must reach it (tmp_path is 0700)
+    outside = Path("/tmp") / f"lorisnb-pwned-{uuid.uuid4().hex}"
+    with Sandbox(work, limits=Limits(cell_timeout_s=3), hidden=[secret], no_lorisnb=True) as box:
+        assert box.isolation == "full"
+        r = box.run("import os\nx = os.getuid()", ["x"])
+        assert r["ok"] and r["values"]["x"]["value"] not in (0, os.getuid())
+        r = box.run(f"x = open({str(secret / 'solutions.txt')!r}).read()", ["x"])
+        assert not r["ok"] and "Permission" in r["error"]
+        r = box.run(f"open({str(outside)!r}, 'w').write('x')")
+        assert not r["ok"] and "Read-only" in r["error"]
+        r = box.run("import socket\nsocket.create_connection(('1.1.1.1', 80), timeout=2)")
+        assert not r["ok"] and "unreachable" in r["error"].lower()
+        r = box.run("import lorisnb")
+        assert not r["ok"] and "lorisnb" in r["error"]
+        r = box.run("x = bytearray(8 * 1024**3)", ["x"])
+        assert not r["ok"] and "MemoryError" in r["error"]
+        r = box.run("open('mine.txt', 'w').write('ok')\nclass Lazy:\n    pass\nx = Lazy()", ["x"])
+        assert r["ok"] and isinstance(decode(r["values"]["x"]), NotPlain)
+        t0 = time.monotonic()
+        with pytest.raises(SandboxError, match="time limit"):
+            box.run("while True:\n    pass")
+        assert time.monotonic() - t0 < 10
+    assert (work / "mine.txt").read_text() == "ok" and not outside.exists()
+    shutil.rmtree(work)
+    assert (secret / "solutions.txt").read_text() == "the answers"
+
+
+# --- adversarial submissions ---------------------------------------------------------------------
+
+CHEATS = {
+    # overwritten checks (every name a check could be reached by), and a wrong formula: 0 / 2
+    "A1_correctness": (
+        "from lorisnb.tools import teaching as teach\n"
+        "import lorisnb.tools.teaching._checks as _c\n"
+        "import lorisnb.tools.teaching._grading as _g\n"
+        "_g.check_function = lambda *a, **k: True\n"
+        "_c.check_value = lambda *a, **k: True\n"
+        "class _Pass:\n"
+        "    def __getattr__(self, name):\n"
+        "        return lambda *a, **k: True\n"
+        "teach = _Pass()\n"
+        "def correctness(ate_m, aoe_deg, eps, phi):\n"
+        "    return ate_m <= eps\n"
+    ),
+    # a prediction that fills itself in from the check's frame when it is compared: 0 / 1
+    "B1_prediction": (
+        "import sys\n"
+        "class _Lazy:\n"
+        "    def _v(self):\n"
+        "        f = sys._getframe(1)\n"
+        "        while f is not None:\n"
+        "            if 'expected' in f.f_locals:\n"
+        "                return float(f.f_locals['expected'])\n"
+        "            f = f.f_back\n"
+        "        return 0.5\n"
+        "    def __float__(self):\n"
+        "        return self._v()\n"
+        "    def __array__(self, *a, **k):\n"
+        "        import numpy\n"
+        "        return numpy.array(self._v())\n"
+        "predicted_cr_lost = _Lazy()\n"
+    ),
+    # lorisnb's own formula copied at run time with inspect.getsource: 0 / 3
+    "B2_correct_rate": (
+        "import inspect\n"
+        "from lorisnb.core.metrics import openloris as _m\n"
+        "_ns = {}\n"
+        "exec(inspect.getsource(_m), _ns)\n"
+        "def correct_rate(stamps, correct, t_min, t_max, delta):\n"
+        "    return float(_ns['correct_rate'](_ns['correct_time'](stamps, correct, t_max, delta, t_min), t_min, t_max))\n"
+    ),
+    # an endless loop (the right formula after it never counts): 0 / 2
+    "C1_cs_r": (
+        "while True:\n"
+        "    pass\n"
+        "def cs_r(t0, t_min, first_correct, tau):\n"
+        "    return float(np.exp(-(t0 - t_min) / tau)) if first_correct else 0.0\n"
+    ),
+    # what the edited (locked) scenario below gives, not the lab's: 0 / 1
+    "C2_prediction": "predicted_cs_r_wrong = 0.6\n",
+}
+
+
+def _reads_and_writes(course: Path, source: Path) -> str:
+    """D1's answer: read the solutions through ../ and absolute paths, write outside its folder; the
+    answer is the solution's only if a read succeeded (honest: 0 / 2)."""
+    targets = [str(source / LAB / f"{LAB}.ipynb"), str(ROOT / "teaching" / "source" / LAB / f"{LAB}.ipynb"),
+               f"../../../source/{LAB}/{LAB}.ipynb", f"../source/{LAB}/{LAB}.ipynb", f"../../source/{LAB}/{LAB}.ipynb"]  # fmt: skip
+    writes = [str(course / "pwned.txt"), str(source / "pwned.txt"), str(ROOT / "pwned.txt"), "../pwned.txt",
+              "../../pwned.txt", "/tmp/lorisnb-pwned.txt", str(course / "graded" / "pwned.txt")]  # fmt: skip
+    return (
+        "import json, re\n"
+        "cr_visit2_lifelong = cr_visit2_per_seq = 0.5\n"
+        f"for _p in {targets!r}:\n"
+        "    try:\n"
+        "        _nb = json.load(open(_p))\n"
+        "    except OSError:\n"
+        "        continue\n"
+        "    for _c in _nb['cells']:\n"
+        "        _s = ''.join(_c['source'])\n"
+        "        if 'cr_visit2_lifelong = lifelong' in _s:\n"
+        "            exec(re.search(r'### BEGIN SOLUTION\\n(.*)### END SOLUTION', _s, re.S).group(1))\n"
+        f"for _p in {writes!r}:\n"
+        "    try:\n"
+        "        open(_p, 'w').write('pwned')\n"
+        "    except OSError:\n"
+        "        pass\n"
+    )
+
+
+def _cheater(course: Path, source: Path) -> nbformat.NotebookNode:
+    nb = nbformat.read(SOURCE_NB, as_version=4)
+    for cell in nb.cells:
+        meta = cell.get("metadata", {}).get("nbgrader", {})
+        gid = meta.get("grade_id")
+        if gid in CHEATS:
+            cell.source = CHEATS[gid]
+        elif gid == "D1_alignment":
+            cell.source = _reads_and_writes(course, source)
+        elif "parameters" in cell.metadata.get("tags", []):
+            cell.source += "\neps = 100.0  # every pose correct\n"
+        elif "wrong_reloc = {" in cell.source:  # a locked cell: the wrong re-localization edited away
+            cell.source = cell.source.replace("wrong_reloc_at_s=0.0", "init_delay_s=30.0")
+        elif meta.get("grade") and gid in ("test_C2_prediction", "test_B1_prediction"):
+            cell.source = "pass"  # a locked check cell emptied
+    return nb
+
+
+# honest points per question: B3, E1, F, G1 answered right; every other one cheats or fails
+CHEATER_POINTS = {
+    "test_A1_correctness": 0, "test_B1_prediction": 0, "test_B2_correct_rate": 0, "test_B3_prediction": 1,
+    "test_C1_cs_r": 0, "test_C2_prediction": 0, "test_D1_alignment": 0, "test_E1_threshold": 2,
+    "test_F_timeline": 2, "test_G1_difficulty": 2,
+}  # fmt: skip
+
+
+def _snapshot(*folders: Path, skip: Path | None = None) -> dict[str, str]:
+    out = {}
+    for folder in folders:
+        for p in sorted(folder.rglob("*")):
+            if p.is_file() and not (skip and p.is_relative_to(skip)):
+                out[str(p)] = hashlib.sha256(p.read_bytes()).hexdigest()
+    return out
+
+
+@pytest.mark.slow
+@isolated
+def test_adversarial_submissions_get_the_honest_score_and_change_nothing(tmp_path):
+    course, source = tmp_path / "course", tmp_path / "source"
+    shutil.copytree(SOURCE_NB.parent, source / LAB)
+    (course / "release" / LAB).mkdir(parents=True)
+    (course / "release" / LAB / "README.txt").write_text("handed out with the lab\n")
+    correct = course / "submitted" / "demo-correct" / LAB / f"{LAB}.ipynb"
+    cheat = course / "submitted" / "s-cheater" / LAB / f"{LAB}.ipynb"
+    for nb_path, nb in ((correct, nbformat.read(SOURCE_NB, as_version=4)), (cheat, _cheater(course, source))):
+        nb_path.parent.mkdir(parents=True)
+        nbformat.write(nb, nb_path)
+    (cheat.parent / "timestamp.txt").write_text("2026-12-02 10:00:00.000000 UTC\n")
+    before = _snapshot(course, source)
+    t0 = time.monotonic()
+    limits = Limits(cell_timeout_s=5, locked_timeout_s=180)
+    due = {LAB: LatePolicy(datetime(2026, 12, 1, 23, 59, tzinfo=timezone.utc), per_day=0.25)}
+    graded = grade_class(course, source, settings=GradeSettings(limits), jobs=2, late=due, progress=False)
+    seconds = time.monotonic() - t0
+    assert seconds < 240, f"two submissions took {seconds:.0f} s"
+    by = {g.result.student: g for g in graded}
+    assert by["demo-correct"].result.points == by["demo-correct"].result.max_points == 18
+    cheater = by["s-cheater"].result
+    assert cheater.isolation == "full"
+    assert {s.question: s.points for s in cheater.scores} == CHEATER_POINTS, [
+        (s.question, s.message) for s in cheater.scores
+    ]
+    msg = {s.question: s.message for s in cheater.scores}
+    assert "not a plain value" in msg["test_B1_prediction"]
+    assert "time limit" in msg["test_C1_cs_r"]
+    assert "no lorisnb" in msg["test_A1_correctness"] and "no lorisnb" in msg["test_B2_correct_rate"]
+    assert by["s-cheater"].days_late == 1 and by["s-cheater"].score == pytest.approx(7 * 0.75)
+    # nothing changed outside the submissions' output folders (graded/) and the grader's exports
+    write_exports(course, graded)
+    after = _snapshot(course, source)
+    changed = {p for p in set(before) | set(after) if before.get(p) != after.get(p)}
+    allowed = {course / n for n in ("grades.csv", "grades-demo.csv", ".grading-secret")}
+    assert {p for p in changed if not Path(p).is_relative_to(course / "graded")
+            and not Path(p).is_relative_to(course / "exports") and Path(p) not in allowed} == set()  # fmt: skip
+    assert not list(course.rglob("pwned*")) and not Path("/tmp/lorisnb-pwned.txt").exists()
+    assert not (ROOT / "pwned.txt").exists() and not (ROOT / "teaching" / "pwned.txt").exists()
+    # a second run regrades nothing (nothing changed)
+    t0 = time.monotonic()
+    again = grade_class(course, source, settings=GradeSettings(limits), jobs=2, late=due, progress=False)
+    assert time.monotonic() - t0 < 5 and [g.result.scores for g in again] == [g.result.scores for g in graded]
+
+
+# --- the gradebook: roster, late policy, LMS layouts ---------------------------------------------
+
+
+def _result(student: str, points: list[float]) -> SubmissionResult:
+    scores = [Score(f"test_Q{k}", p, 2.0, "✓" if p else "✗") for k, p in enumerate(points, 1)]
+    return SubmissionResult(student, LAB, scores, "full", 1.0)
+
+
+def test_exports_follow_the_lms_layouts_with_roster_names_and_late_policy(tmp_path):
+    from lorisnb.tools.teaching.gradebook import Graded
+
+    roster_csv = tmp_path / "roster.csv"
+    roster_csv.write_text(
+        "id,name,email,sis_id\ns1,Ada Lovelace,ada@uni.example,1001\ns2,Alan Turing,alan@uni.example,1002\n"
+    )
+    roster = read_roster(roster_csv)
+    policy = LatePolicy(datetime(2026, 12, 1, 12, 0, tzinfo=timezone.utc), per_day=0.1, max_days=2)
+    on_time = policy.due - timedelta(hours=1)
+    assert policy.factor(on_time) == (1.0, 0)
+    assert policy.factor(policy.due + timedelta(hours=1)) == (0.9, 1)
+    assert policy.factor(policy.due + timedelta(days=2, hours=1)) == (0.0, 3)
+    graded = [
+        Graded(_result("s1", [2, 2, 0]), on_time, 0, 1.0),
+        Graded(_result("s2", [2, 2, 2]), policy.due + timedelta(hours=25), 2, 0.8, 25 * 3600.0),
+        Graded(_result("demo-correct", [2, 2, 2]), None, 0, 1.0),
+        Graded(_result("s9", [2, 0, 0]), None, 0, 1.0),
+    ]
+    left_out = write_exports(tmp_path, graded, roster)
+    assert left_out == ["s9"]
+
+    def rows(name: str) -> list[list[str]]:
+        return list(csv.reader((tmp_path / name).open(encoding="utf-8")))
+
+    grades = rows("grades.csv")
+    assert grades[0][:7] == ["student", "name", "email", "lab", "test_Q1", "test_Q2", "test_Q3"]
+    assert grades[1][:8] == ["s1", "Ada Lovelace", "ada@uni.example", LAB, "2", "2", "0", "4"]
+    assert [r[0] for r in rows("grades-demo.csv")[1:]] == ["demo-correct"]
+    canvas = rows(f"exports/{LAB}-canvas.csv")  # Canvas gradebook import: these five columns, then the assignment
+    assert canvas[0] == ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", LAB]
+    assert canvas[1][0].strip() == "Points Possible" and canvas[1][-1] == "6"
+    assert canvas[2:] == [["Ada Lovelace", "", "1001", "ada@uni.example", "", "4"],
+                          ["Alan Turing", "", "1002", "alan@uni.example", "", "4.8"]]  # fmt: skip
+    moodle = rows(f"exports/{LAB}-moodle.csv")
+    assert moodle[0] == ["First name", "Last name", "ID number", "Email address", LAB, f"{LAB} feedback"]
+    assert moodle[2][:5] == ["Alan", "Turing", "1002", "alan@uni.example", "4.8"] and "2 day(s) late" in moodle[2][5]
+    gs = rows(f"exports/{LAB}-gradescope.csv")
+    assert gs[0][:9] == ["First Name", "Last Name", "SID", "Email", "Total Score", "Max Points", "Status",
+                         "Submission Time", "Lateness (H:M:S)"]  # fmt: skip
+    assert gs[0][9] == "1: test_Q1 (2 pts)" and gs[2][8] == "25:00:00" and gs[2][4] == "4.8"
+    assert all("demo-" not in "".join(r) and "s9" not in r for f in ("canvas", "moodle", "gradescope")
+               for r in rows(f"exports/{LAB}-{f}.csv"))  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("id,name\ns1,Ada\n", "missing"),
+        ("id,name,email,phone\ns1,Ada,a@b.c,1\n", "unknown"),
+        ("id,name,email\ns1,Ada,a@b.c\ns1,Bob,b@b.c\n", "line 3.*twice"),
+        ("id,name,email\ns 1,Ada,a@b.c\n", "line 2.*student id"),
+        ("id,name,email\ns1,Ada,not-an-email\n", "line 2.*e-mail"),
+    ],
+)
+def test_roster_errors_name_the_line(tmp_path, text, match):
+    f = tmp_path / "roster.csv"
+    f.write_text(text)
+    with pytest.raises(ValidationError, match=match):
+        read_roster(f)
+
+
+def test_late_policy_and_limits_are_validated():
+    with pytest.raises(ValidationError, match="time zone"):
+        LatePolicy(datetime(2026, 12, 1))
+    with pytest.raises(ValidationError, match="within"):
+        LatePolicy(datetime(2026, 12, 1, tzinfo=timezone.utc), per_day=10)
+    with pytest.raises(ValueError, match="cell_timeout_s"):
+        Limits(cell_timeout_s=0)
+
+
+def test_lab_spec_maps_each_check_to_its_answers():
+    spec = lab_spec(SOURCE_NB)
+    q = {x.grade_id: x for x in spec.questions}
+    assert spec.max_points == 18
+    assert q["test_D1_alignment"].names == ("cr_visit2_lifelong", "cr_visit2_per_seq")
+    assert spec.functions["B2_correct_rate"] == ("correct_rate",) and spec.values["B2_correct_rate"] == ()
+    assert q["test_F_timeline"].answers == ("F_timeline",)
+
+
+def test_student_variants_differ_between_students_and_repeat_for_one():
+    from lorisnb.tools.teaching import lab_variant
+
+    a, b = lab_variant("s1001"), lab_variant("s1002")
+    assert a == lab_variant("s1001") and (a.seed, a.lost_window, a.late_start) != (b.seed, b.lost_window, b.late_start)
+    seeds = {lab_variant(f"s{k}").lost_window for k in range(30)}
+    assert len(seeds) >= 20  # a class of 30 gets many different B1 questions
+    assert lab_variant(None, seed=5).seed == 5
+    assert np.all([10 <= lab_variant(f"x{k}").lost_window[0] <= 20 for k in range(10)])
