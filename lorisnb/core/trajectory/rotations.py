@@ -178,7 +178,7 @@ def rotation_blocks(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ``K + I``. The other eigenvalues of ``K + I`` are of the order of the block's distance from a
     rotation while the top one is about 4, so each step shrinks the error by about that distance:
     two to five steps give the nearest rotation to ~3e-16 (scipy's SVD: ~3e-15; both measured
-    against an extended-precision polar decomposition in ``tests/test_whole.py``), with scipy's
+    against an extended-precision polar decomposition in ``tests/io/test_whole.py``), with scipy's
     sign (the largest component positive), in about a twentieth of scipy's time on a million blocks.
 
     Where the install compiled ``_rotations.c`` (setuptools builds it where a C compiler is), each

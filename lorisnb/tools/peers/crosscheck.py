@@ -122,7 +122,7 @@ def crosscheck_conventions(gt: Trajectory, est: Trajectory) -> list[dict]:
     """lorisnb under TUM's and rpg's conventions (:mod:`lorisnb.core.conventions.choices`), against evo
     on the same matched pairs and alignment; and rpg's relative error (no evo equivalent).
     lorisnb reproduces TUM's ``evaluate_ate.py`` and rpg_trajectory_evaluation on the bundled
-    TUM pairs to 1e-12 (``tests/test_pairs.py``, values from the tools themselves)."""
+    TUM pairs to 1e-12 (``tests/tools/test_pairs.py``, values from the tools themselves)."""
     from scipy.spatial.transform import Rotation
 
     from lorisnb.core.conventions.choices import Conventions

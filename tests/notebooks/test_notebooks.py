@@ -1,5 +1,5 @@
 """Execute every notebook with papermill (small parameters, Agg backend) and assert on what it
-recorded, in the style of pyhf's tests/test_notebooks.py. Reference values are the official
+recorded, in the style of pyhf's tests/notebooks/test_notebooks.py. Reference values are the official
 tool's numbers quoted in issue #2."""
 
 from __future__ import annotations

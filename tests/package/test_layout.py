@@ -15,7 +15,7 @@ import pytest
 import lorisnb as ln
 from lorisnb.tools.report.build import DEFAULT_NOTEBOOKS, notebook_dir
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 PUBLIC_API = [
     "DataNotFoundError", "EvaluationError", "Evaluation", "FileErrors", "FrameError", "LorisError", "LorisWarning",
@@ -155,3 +155,19 @@ def test_a_former_module_that_is_now_a_package_exports_its_names():
 
     assert spec.EvalSpec is evalspec.EvalSpec and spec.make_spec is evalspec.make_spec
     assert report.notebook_dir is build.notebook_dir and report.DEFAULT_NOTEBOOKS is build.DEFAULT_NOTEBOOKS
+
+
+def test_tests_mirror_the_layout():
+    """Tests live beside the layer they test (tests/core, io, tools, cli; the notebooks, the package
+    as installed and the manual have folders of their own), named for what they test, not for the
+    probe that found a bug; no two test files share a name (pytest imports them by name)."""
+    layers = {"core", "io", "tools", "cli", "notebooks", "package", "docs"}
+    files = sorted((ROOT / "tests").rglob("test_*.py"))
+    assert files
+    assert not [f.name for f in files if f.parent == ROOT / "tests"], "put a new test in tests/<layer>/"
+    assert {f.parent.name for f in files} <= layers
+    assert not [f.name for f in files if f.name.startswith("test_probe_")]
+    names = [f.name for f in files]
+    assert len(names) == len(set(names)), sorted({n for n in names if names.count(n) > 1})
+    for layer in ("core", "io", "tools", "cli"):
+        assert (ROOT / "lorisnb" / layer).is_dir() and (ROOT / "tests" / layer).is_dir()

@@ -92,7 +92,7 @@ def _options(command: str) -> set[str]:
 @pytest.mark.parametrize("command", ["evaluate", "sweep", "compare"])
 def test_every_option_has_a_case(command):
     missing = _options(command) - set(CASES) - READING - RUNNING - set(OWN.get(command, {}))
-    assert not missing, f"options of {command} without a case in tests/test_options.py: {sorted(missing)}"
+    assert not missing, f"options of {command} without a case in tests/cli/test_options.py: {sorted(missing)}"
 
 
 @pytest.fixture(scope="module")
@@ -309,7 +309,7 @@ CROSSCHECK = {
 
 def test_every_crosscheck_option_changes_the_table_or_is_refused(data, tmp_path, capsys):
     missing = _options("crosscheck") - set(CROSSCHECK) - RUNNING
-    assert not missing, f"options of crosscheck without a case in tests/test_options.py: {sorted(missing)}"
+    assert not missing, f"options of crosscheck without a case in tests/cli/test_options.py: {sorted(missing)}"
     gt, est = (str(data.root / TUM / f) for f in ("freiburg1_xyz-groundtruth.txt", "freiburg1_xyz-rgbdslam.txt"))
     base = _run(["crosscheck", gt, est], tmp_path / "b.csv", capsys)
     assert base[0] == 0 and base[3] is not None

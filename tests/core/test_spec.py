@@ -117,5 +117,5 @@ def test_plausibility_checks_run_for_pairs(data):
 def test_manual_holds_the_spec_table():
     from pathlib import Path
 
-    page = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "evaluation-spec.md").read_text()
+    page = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "evaluation-spec.md").read_text()
     assert spec_table() in page, "docs/guide/evaluation-spec.md: paste lorisnb.core.spec.table.spec_table() into it"

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from test_teaching_kit import _teaching_module
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 PAGE = """<html><head>
 <link rel="stylesheet" href="_static/local.css" />

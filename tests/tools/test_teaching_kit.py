@@ -19,7 +19,7 @@ import nbformat
 import pytest
 from test_teaching_lab import solution_expressions, solution_leaks
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SOURCE = ROOT / "teaching" / "source"
 LABS = sorted(p.name for p in SOURCE.iterdir() if p.is_dir())
 

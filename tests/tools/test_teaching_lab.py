@@ -18,7 +18,7 @@ from lorisnb.core.simulate import Faults, simulated_errors
 from lorisnb.io.datasets.paths import sample_data
 from lorisnb.tools import teaching as teach
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SOURCE = ROOT / "teaching" / "source"
 LABS = sorted(p.name for p in SOURCE.iterdir() if p.is_dir())
 SOLUTION = re.compile(r"^([ \t]*)### BEGIN SOLUTION[ \t]*\n(.*?)^[ \t]*### END SOLUTION[ \t]*\n?", re.S | re.M)

@@ -34,7 +34,7 @@ PANEL = "document.querySelector('.jp-NotebookPanel:not(.lm-mod-hidden)')"  # the
 CURRENT_TAB = "(document.querySelector('#jp-main-dock-panel .lm-TabBar-tab.lm-mod-current .lm-TabBar-tabLabel') || {}).textContent || ''"
 CHROMIUM = os.environ.get("LORISNB_CHROMIUM", "/usr/bin/chromium")
 CHROMEDRIVER = os.environ.get("LORISNB_CHROMEDRIVER", "/usr/bin/chromedriver")
-SHOTS = Path(__file__).resolve().parents[1] / "results" / "browser"
+SHOTS = Path(__file__).resolve().parents[2] / "results" / "browser"
 TOKEN = "lorisnb-browser-test"
 
 
