@@ -17,6 +17,7 @@ import math
 import multiprocessing
 import os
 import resource
+import signal
 import threading
 import time
 import warnings
@@ -112,6 +113,14 @@ def score_in_child(folder: str, data: DataPaths, spec: EvalSpec, out: str, cpu_s
     _write(Path(out), outcome)
 
 
+def stopped(exitcode: int | None, cpu_seconds: int) -> str:
+    """Why a scoring process ended without an outcome: killed at its CPU-time limit (SIGXCPU at
+    the soft limit, SIGKILL at the hard one), or another exit status."""
+    if exitcode in (-signal.SIGXCPU, -signal.SIGKILL):
+        return f"scoring exceeded the challenge's limit of {cpu_seconds} CPU seconds"
+    return f"the scorer stopped (exit status {exitcode}); tell the organizers"
+
+
 @dataclass
 class _Running:
     process: Any
@@ -192,10 +201,7 @@ class Scorer:
             elif outcome is not None:
                 self._done(sid, r, "failed", None, str(outcome["error"]), took)
             else:
-                code = r.process.exitcode
-                why = (f"scoring exceeded the challenge's limit of {self.limits['score_seconds']} CPU seconds"
-                       if code in (-24, -9) else f"the scorer stopped (exit status {code})")  # fmt: skip
-                self._done(sid, r, "failed", None, why, took)
+                self._done(sid, r, "failed", None, stopped(r.process.exitcode, self.limits["score_seconds"]), took)
 
     def _done(self, sid: str, r: _Running, status: str, result: Any, error: str | None, took: float) -> None:
         store.finish(self.engine, sid, r.claim, status, result, error, took)
