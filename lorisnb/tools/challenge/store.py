@@ -214,8 +214,11 @@ def submission(engine: Engine, sid: str) -> dict[str, Any] | None:
     return dict(row) if row is not None else None
 
 
-def all_submissions(engine: Engine, team_id: int | None = None) -> list[dict[str, Any]]:
-    q = select(submissions, teams.c.name.label("team")).join(teams).order_by(submissions.c.created)
+def all_submissions(engine: Engine, team_id: int | None = None, results: bool = True) -> list[dict[str, Any]]:
+    """Every submission (of one team), oldest first, with its team's name; without the results'
+    JSON unless ``results``."""
+    cols = [c for c in submissions.c if results or c.name != "result"]
+    q = select(*cols, teams.c.name.label("team")).join(teams).order_by(submissions.c.created)
     if team_id is not None:
         q = q.where(submissions.c.team_id == team_id)
     with engine.connect() as conn:
