@@ -167,7 +167,11 @@ class Scorer:
                     claimed = store.claim_next(self.engine)
                     if claimed is None:
                         break
-                    self._start(*claimed)
+                    try:
+                        self._start(*claimed)
+                    except Exception:
+                        store.release(self.engine, *claimed)  # queued again, not left half-taken
+                        raise
             except Exception as exc:  # the database busy or gone for a moment: try again, say so
                 print(f"lorisnb serve: scorer: {type(exc).__name__}: {exc}", flush=True)
             self._stop.wait(self.poll)

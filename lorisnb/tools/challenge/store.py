@@ -186,6 +186,15 @@ def claim_next(engine: Engine) -> tuple[str, str] | None:
                 return row.id, claim
 
 
+def release(engine: Engine, sid: str, claim: str) -> None:
+    """Put a claimed submission back in the queue (its scoring could not start)."""
+    with transaction(engine) as conn:
+        conn.execute(
+            update(submissions).where((submissions.c.id == sid) & (submissions.c.claim == claim)
+                                      & (submissions.c.status == "scoring")).values(status="queued", claim=None)
+        )  # fmt: skip
+
+
 def finish(engine: Engine, sid: str, claim: str, status: str, result: dict[str, Any] | None, error: str | None,
            seconds: float) -> bool:  # fmt: skip
     """Commit a scoring's outcome (``scored`` with its result, or ``failed`` with the reason) and
