@@ -52,6 +52,11 @@ def cmd_serve(args: argparse.Namespace) -> int:
     from lorisnb.tools.challenge.config import read_challenge
 
     challenge = read_challenge(args.challenge)
+    if challenge.scheduler is not None:  # an unreachable cluster: one line now, not a failed start-up
+        from lorisnb.tools.evaluation.pool import probe_scheduler
+
+        require("distributed", "dask")
+        probe_scheduler(challenge.scheduler, 10.0)
     app = create_app(challenge)
     phases = "; ".join(p.name for p in challenge.phases)
     print(f"lorisnb serve: {challenge.title!r} on http://{args.host}:{args.port}/ (phases: {phases}); database "

@@ -275,3 +275,46 @@ def test_slow_client_refused_and_server_serves_on(tmp_path, data):
     finally:
         server.should_exit = True
         thread.join(10)
+
+
+def test_scoring_over_its_memory_limit_fails_with_the_reason(tmp_path, data):
+    """A submission whose scoring needs more memory than the challenge allows (here 64 MB of
+    address space, far below what numpy alone maps) is failed with the limit named."""
+    challenge = read_challenge(challenge_file(tmp_path, data, limits="score_memory_mb = 64"))
+    app = create_app(challenge)
+    token = store.add_team(app.state.server.engine, "greedy", time.time() + 7000)
+    with TestClient(app) as client:
+        files = [("files", (p.name, p.read_bytes())) for p in cafe_files(data, "ds-slam")]
+        r = client.post("/api/submissions", files=files, headers={"Authorization": f"Bearer {token}"})
+        assert r.status_code == 201
+        end = time.monotonic() + 120
+        while (view := client.get(f"/api/submissions/{r.json()['id']}").json())["status"] in ("queued", "scoring"):
+            assert time.monotonic() < end
+            time.sleep(0.2)
+        assert view["status"] == "failed", view
+        assert "memory limit of 64 MB" in view["error"], view["error"]
+        assert client.get("/api/health").json()["queue"]["failed"] == 1
+
+
+def _spin(cpu_seconds: int) -> None:
+    from lorisnb.tools.challenge.scoring import _limit
+
+    _limit(cpu_seconds, 4_000_000_000)
+    while True:
+        pass
+
+
+def test_scoring_over_its_time_limit_is_stopped():
+    """The CPU-time limit of a scoring process stops a process that runs on (here one spinning past
+    1 CPU second), and its end is told as that limit."""
+    import multiprocessing
+
+    from lorisnb.tools.challenge.scoring import stopped
+
+    p = multiprocessing.get_context("fork").Process(target=_spin, args=(1,))
+    t = time.monotonic()
+    p.start()
+    p.join(30)
+    assert not p.is_alive() and time.monotonic() - t < 20
+    assert stopped(p.exitcode, 1) == "scoring exceeded the challenge's limit of 1 CPU seconds"
+    assert "exit status 3" in stopped(3, 1)

@@ -65,7 +65,7 @@ def boards(client) -> list[dict]:
 @pytest.fixture(scope="module")
 def served(tmp_path_factory, data):
     tmp = tmp_path_factory.mktemp("challenge")
-    path = challenge_file(tmp, data, final_closed=False)
+    path = challenge_file(tmp, data, final_closed=False, workers=2)
     challenge = read_challenge(path)
     app = create_app(challenge)
     engine = app.state.server.engine
@@ -196,6 +196,8 @@ def test_no_response_holds_a_groundtruth_coordinate(served, data):
     view = wait_scored(client, r.json()["id"])
     assert view["status"] == "scored" and view["failures"] and "nosuchframe" in view["failures"][0]["error"]
     assert str(data.root) not in view["failures"][0]["error"]
+    dev = boards(client)[0]  # dslam's latest submission is the one that counts: no output on cafe-1
+    assert [r["team"] for r in dev["rows"]] == ["orbs"] and dev["without_output"] == ["dslam"]
     gt = groundtruth_numbers(data)
     assert len(gt) > 10_000
     bodies = client.bodies + [client.get(f"/submissions/{r.json()['id']}").text]

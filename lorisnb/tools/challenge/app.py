@@ -150,7 +150,8 @@ class Server:
             raise Refused(403, f"{team['name']!r} is a team token; this page needs the admin token")
         return team
 
-    def _compute(self, key: Any, subs: list[dict[str, Any]], now: float) -> None:
+    def _compute(self, key: Any, now: float) -> None:
+        subs = store.all_submissions(self.engine)  # with results (a scoring finished since: a newer key next time)
         boards = [leaderboard(self.challenge, p, subs, self.durations, now) for p in self.challenge.phases]
         with self._board_lock:
             self._board = (key, boards)
@@ -160,7 +161,7 @@ class Server:
         """Every phase's leaderboard. A new one (a submission scored since) is computed in a thread
         of its own; a page waits for it up to ``wait`` seconds, then shows the one before, saying
         so (``updating``): the ranks' tests take seconds with many teams, and pages stay quick."""
-        subs = store.all_submissions(self.engine)
+        subs = store.all_submissions(self.engine, results=False)
         now = self.clock()
         key = tuple((p.name, p.shows_scores(now)) for p in self.challenge.phases) + tuple(
             (s["id"], s["status"]) for s in subs
@@ -169,7 +170,7 @@ class Server:
             if self._board is not None and self._board[0] == key:
                 return self._board[1]
             if self._computing is None:  # one at a time: the next request starts the next one
-                thread = threading.Thread(target=self._compute, args=(key, subs, now), daemon=True)
+                thread = threading.Thread(target=self._compute, args=(key, now), daemon=True)
                 self._computing = (key, thread)
                 thread.start()
             thread = self._computing[1]
@@ -354,7 +355,7 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
         left = challenge.limits["submissions_per_day"] - store.submissions_since(
             engine, team["id"], server.clock() - DAY
         )
-        subs = listing(store.all_submissions(engine, team["id"]))
+        subs = listing(store.all_submissions(engine, team["id"], results=False))
         return dict(team={k: team[k] for k in ("name", "expires", "admin")}, left=max(left, 0), subs=subs)
 
     @app.post("/team", response_class=HTMLResponse)
@@ -375,7 +376,7 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
 
     def admin_data() -> dict[str, Any]:
         return dict(queue=store.queue_counts(engine), teams=store.all_teams(engine),
-                    subs=listing(store.all_submissions(engine)))  # fmt: skip
+                    subs=listing(store.all_submissions(engine, results=False)))  # fmt: skip
 
     @app.post("/admin", response_class=HTMLResponse)
     async def admin_page(request: Request) -> HTMLResponse:

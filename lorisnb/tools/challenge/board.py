@@ -75,14 +75,16 @@ def leaderboard(challenge: Challenge, phase: Phase, subs: list[dict[str, Any]], 
     sentences and the test behind the ranks; empty with a reason while scores are hidden."""
     out: dict[str, Any] = dict(phase=phase.name, metric=challenge.metric, opens=phase.opens, closes=phase.closes,
                                metric_name=METRICS.get(challenge.metric, (challenge.metric, True))[0],
-                               rows=[], sentences=[], test="", hidden=None)  # fmt: skip
+                               rows=[], sentences=[], test="", hidden=None, without_output=[])  # fmt: skip
     if not phase.shows_scores(now):
         out["hidden"] = f"the leaderboard of phase {phase.name!r} is shown once it closes"
         return out
     latest = latest_scored(subs, phase.name)
     wanted = phase_sequences(phase, durations)
-    rows = [dict(r, algorithm=s["team"], suite="", trial=0) for s in latest for r in json.loads(s["result"])["rows"]
+    # a team's trials (files named ..._trial2.txt) stay trials: the ranks' tests use them
+    rows = [dict(r, algorithm=s["team"], suite="") for s in latest for r in json.loads(s["result"])["rows"]
             if phase.keeps(r["scene"], int(r["seq"]))]  # fmt: skip
+    out["without_output"] = sorted(s["team"] for s in latest if s["team"] not in {r["algorithm"] for r in rows})
     if not rows:
         return out
     table = pd.DataFrame(rows)

@@ -46,7 +46,7 @@ from lorisnb.errors import LorisError, ParseError
 from lorisnb.io.datasets.manifest import check_keys
 from lorisnb.io.datasets.paths import DataPaths, find_data
 
-CHALLENGE_KEYS = {"title", "groundtruth", "folder", "database", "metric", "opens", "closes"}
+CHALLENGE_KEYS = {"title", "groundtruth", "folder", "database", "metric", "opens", "closes", "scheduler"}
 #: The limits and their defaults: submissions per team in any 24 hours, the upload's size (MB),
 #: the files in it, their unpacked size (MB), a submission's scoring time (CPU seconds) and memory
 #: (MB), the scoring processes at a time, and the time a client may take to send its upload (s).
@@ -107,6 +107,7 @@ class Challenge:
     spec: EvalSpec
     limits: Mapping[str, int]
     phases: tuple[Phase, ...] = field(default_factory=tuple)
+    scheduler: str | None = None  # a Dask scheduler's address: scoring there instead of here
 
     def phase_at(self, now: float) -> Phase | None:
         """The phase open at ``now`` (the first, if several overlap), None between phases."""
@@ -251,4 +252,14 @@ def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
     if len(set(names)) < len(names):
         raise ParseError(path, None, f"[[phase]]: two phases named {next(n for n in names if names.count(n) > 1)!r}; "
                          "expected distinct names")  # fmt: skip
-    return Challenge(path, title, data, folder, database, metric, opens, closes, dict(options), spec, limits, phases)
+    scheduler = None
+    if "scheduler" in top:
+        from lorisnb.tools.evaluation.pool import scheduler_address
+
+        scheduler = _text(top, "scheduler", path, where)
+        try:
+            scheduler_address(scheduler)
+        except LorisError as exc:
+            raise ParseError(path, None, f"{where}scheduler: {exc}") from None
+    return Challenge(path, title, data, folder, database, metric, opens, closes, dict(options), spec, limits, phases,
+                     scheduler)  # fmt: skip

@@ -7,7 +7,8 @@ named for its claim; the server commits that outcome to the database (:func:`.st
 
 :class:`Scorer` is the server's loop over the persisted queue (:mod:`.store`): it puts back what a
 killed server left half-scored, runs up to ``workers`` processes at a time and commits each
-outcome once.
+outcome once. With ``[challenge] scheduler`` each scoring is a task of that Dask cluster
+(:func:`score_on_worker`: a fresh process on the worker, under the same limits).
 """
 
 from __future__ import annotations
@@ -16,7 +17,11 @@ import json
 import math
 import multiprocessing
 import os
+import pickle
 import resource
+import signal
+import subprocess
+import sys
 import threading
 import time
 import warnings
@@ -112,6 +117,57 @@ def score_in_child(folder: str, data: DataPaths, spec: EvalSpec, out: str, cpu_s
     _write(Path(out), outcome)
 
 
+def stopped(exitcode: int | None, cpu_seconds: int) -> str:
+    """Why a scoring process ended without an outcome: killed at its CPU-time limit (SIGXCPU at
+    the soft limit, SIGKILL at the hard one), or another exit status."""
+    if exitcode in (-signal.SIGXCPU, -signal.SIGKILL):
+        return f"scoring exceeded the challenge's limit of {cpu_seconds} CPU seconds"
+    return f"the scorer stopped (exit status {exitcode}); tell the organizers"
+
+
+def score_on_worker(folder: str, data: DataPaths, spec: EvalSpec, out: str, cpu_seconds: int,
+                    memory_bytes: int) -> int:  # fmt: skip
+    """On a Dask worker (``[challenge] scheduler``): :func:`score_in_child` in a fresh Python
+    process of its own, so that the limits bind that process and not the worker; its exit status
+    (negative: the signal that ended it). The upload's folder and the ground truth must be at the
+    same paths on the worker (a shared file system)."""
+    args = pickle.dumps((folder, data, spec, out, cpu_seconds, memory_bytes))
+    cmd = [sys.executable, "-c", "from lorisnb.tools.challenge.scoring import child_main; child_main()"]
+    try:
+        done = subprocess.run(cmd, input=args, capture_output=True, timeout=2 * cpu_seconds + 30)
+    except subprocess.TimeoutExpired:
+        return -int(signal.SIGKILL)
+    return int(done.returncode)
+
+
+def child_main() -> None:
+    """The process :func:`score_on_worker` starts: its arguments pickled on stdin (from the server
+    itself, never from an upload)."""
+    score_in_child(*pickle.loads(sys.stdin.buffer.read()))
+
+
+class _Remote:
+    """A scoring on the Dask cluster, seen as a process (is_alive, kill, join, exitcode)."""
+
+    def __init__(self, future: Any):
+        self.future = future
+
+    def is_alive(self) -> bool:
+        return not self.future.done()
+
+    def kill(self) -> None:
+        self.future.cancel()
+
+    def join(self, timeout: float | None = None) -> None:
+        return None
+
+    @property
+    def exitcode(self) -> int | None:
+        if self.future.status != "finished":
+            return None
+        return int(self.future.result())
+
+
 @dataclass
 class _Running:
     process: Any
@@ -133,6 +189,11 @@ class Scorer:
         self._running: dict[str, _Running] = {}
         self._context = multiprocessing.get_context("forkserver")
         self._context.set_forkserver_preload(["lorisnb.tools.challenge.preload"])
+        self._client: Any = None
+        if challenge.scheduler is not None:  # scoring on the Dask cluster lorisnb evaluates on
+            from lorisnb.tools.evaluation.pool import connect_scheduler
+
+            self._client = connect_scheduler(challenge.scheduler)
         self.requeued = 0
 
     def start(self) -> None:
@@ -149,6 +210,8 @@ class Scorer:
             r.process.kill()
             r.process.join(timeout=5)
         self._running.clear()
+        if self._client is not None:
+            self._client.close()
 
     def _loop(self) -> None:
         while not self._stop.is_set():
@@ -158,7 +221,11 @@ class Scorer:
                     claimed = store.claim_next(self.engine)
                     if claimed is None:
                         break
-                    self._start(*claimed)
+                    try:
+                        self._start(*claimed)
+                    except Exception:
+                        store.release(self.engine, *claimed)  # queued again, not left half-taken
+                        raise
             except Exception as exc:  # the database busy or gone for a moment: try again, say so
                 print(f"lorisnb serve: scorer: {type(exc).__name__}: {exc}", flush=True)
             self._stop.wait(self.poll)
@@ -167,6 +234,11 @@ class Scorer:
         folder = self.challenge.folder / "uploads" / sid
         out = folder / f"result-{claim}.json"
         memory = self.limits["score_memory_mb"] * 1_000_000
+        args = (str(folder), self.challenge.data, self.challenge.spec, str(out), self.limits["score_seconds"], memory)
+        if self._client is not None:
+            future = self._client.submit(score_on_worker, *args, key=f"lorisnb-score-{sid}-{claim}", pure=False)
+            self._running[sid] = _Running(_Remote(future), claim, time.monotonic(), out)
+            return
         p = self._context.Process(
             target=score_in_child,
             args=(str(folder), self.challenge.data, self.challenge.spec, str(out), self.limits["score_seconds"], memory),
@@ -192,10 +264,7 @@ class Scorer:
             elif outcome is not None:
                 self._done(sid, r, "failed", None, str(outcome["error"]), took)
             else:
-                code = r.process.exitcode
-                why = (f"scoring exceeded the challenge's limit of {self.limits['score_seconds']} CPU seconds"
-                       if code in (-24, -9) else f"the scorer stopped (exit status {code})")  # fmt: skip
-                self._done(sid, r, "failed", None, why, took)
+                self._done(sid, r, "failed", None, stopped(r.process.exitcode, self.limits["score_seconds"]), took)
 
     def _done(self, sid: str, r: _Running, status: str, result: Any, error: str | None, took: float) -> None:
         store.finish(self.engine, sid, r.claim, status, result, error, took)

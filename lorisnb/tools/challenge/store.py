@@ -186,6 +186,15 @@ def claim_next(engine: Engine) -> tuple[str, str] | None:
                 return row.id, claim
 
 
+def release(engine: Engine, sid: str, claim: str) -> None:
+    """Put a claimed submission back in the queue (its scoring could not start)."""
+    with transaction(engine) as conn:
+        conn.execute(
+            update(submissions).where((submissions.c.id == sid) & (submissions.c.claim == claim)
+                                      & (submissions.c.status == "scoring")).values(status="queued", claim=None)
+        )  # fmt: skip
+
+
 def finish(engine: Engine, sid: str, claim: str, status: str, result: dict[str, Any] | None, error: str | None,
            seconds: float) -> bool:  # fmt: skip
     """Commit a scoring's outcome (``scored`` with its result, or ``failed`` with the reason) and
@@ -214,8 +223,11 @@ def submission(engine: Engine, sid: str) -> dict[str, Any] | None:
     return dict(row) if row is not None else None
 
 
-def all_submissions(engine: Engine, team_id: int | None = None) -> list[dict[str, Any]]:
-    q = select(submissions, teams.c.name.label("team")).join(teams).order_by(submissions.c.created)
+def all_submissions(engine: Engine, team_id: int | None = None, results: bool = True) -> list[dict[str, Any]]:
+    """Every submission (of one team), oldest first, with its team's name; without the results'
+    JSON unless ``results``."""
+    cols = [c for c in submissions.c if results or c.name != "result"]
+    q = select(*cols, teams.c.name.label("team")).join(teams).order_by(submissions.c.created)
     if team_id is not None:
         q = q.where(submissions.c.team_id == team_id)
     with engine.connect() as conn:

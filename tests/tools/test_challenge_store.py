@@ -1,0 +1,61 @@
+"""The challenge database's queue: claims are exclusive under concurrency, a result is committed
+once, a killed server's half-scored submissions go back to the queue, a claim that could not
+start is released; tokens are stored as their SHA-256 only."""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+import time
+
+import pytest
+
+pytest.importorskip("sqlalchemy")
+from lorisnb.errors import ValidationError  # noqa: E402
+from lorisnb.tools.challenge import store  # noqa: E402
+
+
+@pytest.fixture()
+def engine(tmp_path):
+    return store.connect(f"sqlite:///{tmp_path / 'c.db'}")
+
+
+def test_claims_are_exclusive_and_results_committed_once(engine):
+    team = store.add_team(engine, "t", time.time() + 60)
+    tid = store.team_of(engine, team)["id"]
+    for i in range(40):
+        store.add_submission(engine, f"s{i:02d}", tid, "p", ["a.txt"], 1)
+    taken: list[tuple[str, str]] = []
+    lock = threading.Lock()
+
+    def worker():
+        while (c := store.claim_next(engine)) is not None:
+            with lock:
+                taken.append(c)
+
+    threads = [threading.Thread(target=worker) for _ in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert sorted(s for s, _ in taken) == [f"s{i:02d}" for i in range(40)]  # each once, none twice
+    sid, claim = taken[0]
+    assert store.finish(engine, sid, claim, "scored", {"rows": []}, None, 0.1)
+    assert not store.finish(engine, sid, claim, "scored", {"rows": []}, None, 0.1)  # once only
+    assert not store.finish(engine, taken[1][0], "not-its-claim", "scored", {"rows": []}, None, 0.1)
+    store.release(engine, *taken[1])
+    assert store.submission(engine, taken[1][0])["status"] == "queued"
+    assert store.requeue_unfinished(engine) == 38  # what a killed server left half-scored
+    assert store.queue_counts(engine) == {"queued": 39, "scoring": 0, "scored": 1, "failed": 0}
+    assert store.scoring_ledger(engine) == {sid: 1}
+
+
+def test_tokens_hashed_and_names_checked(engine):
+    token = store.add_team(engine, "Team A-1", time.time() + 60)
+    row = store.team_of(engine, token)
+    assert row["token_hash"] == hashlib.sha256(token.encode()).hexdigest() and len(token) >= 40
+    assert store.team_of(engine, token + "x") is None and store.team_of(engine, "") is None
+    with pytest.raises(ValidationError, match="exists"):
+        store.add_team(engine, "Team A-1", time.time() + 60)
+    with pytest.raises(ValidationError, match="letters, digits"):
+        store.add_team(engine, "<script>", time.time() + 60)
