@@ -34,3 +34,27 @@ def test_refuses_values_that_cannot_apply(kw):
     args = dict(spread=0.017, trials=3) | kw
     with pytest.raises(ValidationError):
         detectable_change(**args)
+
+
+def test_the_manual_quotes_the_bound_it_computes():
+    """docs/guide/regression-gating.md's table of the smallest detectable change is computed, not typed."""
+    import re
+    from pathlib import Path
+
+    from lorisnb.core.stats.regression import parse_tolerances
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "regression-gating.md").read_text()
+    rows = re.findall(r"^\s*\| (\d+) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \|$", page, re.M)
+    assert len(rows) == 4
+    tol = parse_tolerances()
+    cr_tol, ate_tol = tol["cr"].scaled("cr", 1.0), tol["ate_rmse"].scaled("ate_rmse", 1.0)
+    for n, cr1, crm, a1, am in rows:
+        n = int(n)
+        assert float(cr1) == pytest.approx(detectable_change(RERUN_SPREAD["rate"], n, cr_tol), abs=6e-4)
+        assert float(crm) == pytest.approx(
+            detectable_change(RERUN_SPREAD["rate"], n, cr_tol, comparisons=450), abs=6e-4
+        )
+        assert float(a1) == pytest.approx(np.exp(detectable_change(RERUN_SPREAD["log"], n, ate_tol)), abs=6e-3)
+        assert float(am) == pytest.approx(
+            np.exp(detectable_change(RERUN_SPREAD["log"], n, ate_tol, comparisons=450)), abs=6e-3
+        )
