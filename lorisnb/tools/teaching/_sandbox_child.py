@@ -45,6 +45,8 @@ def _decode(arg: Any) -> Any:
 
     if isinstance(arg, dict) and "array" in arg:
         return np.array(arg["array"], dtype=arg["dtype"])
+    if isinstance(arg, dict) and "scalar" in arg:
+        return np.dtype(arg["dtype"]).type(arg["scalar"])
     return arg
 
 
