@@ -104,8 +104,8 @@ def exercise_title(grade_id: str, prompt: str) -> str:
 
 
 STATIC_EXPLORER = (
-    "# In the book the page is static: the explorer's figure and table at its starting faults stand in for the\n"
-    "# sliders (open the notebook in Jupyter to move them).\n"
+    "# In the book the page is static: the explorer's figure and table at its starting values (no fault) stand in\n"
+    "# for its sliders (open the notebook in Jupyter to move them).\n"
 )
 
 
@@ -117,8 +117,8 @@ def book_primer(source: Path) -> nbformat.NotebookNode:
     for cell in nb.cells:
         if cell.cell_type == "code" and "session.interactive(explorer.widget)" in cell.source:
             head = cell.source.split("session.interactive(explorer.widget)")[0]
-            cell.source = (STATIC_EXPLORER + "from IPython.display import display\n\n" + head
-                           + "explorer_table, explorer_figure = explorer.results()\ndisplay(explorer_figure)\nexplorer_table")  # fmt: skip
+            cell.source = (STATIC_EXPLORER + head + "explorer_table, explorer_figure = explorer.results()\n"
+                           + 'out.figure(explorer_figure, "primer_fault_explorer")\nexplorer_table')  # fmt: skip
     return nb
 
 
