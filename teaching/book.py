@@ -114,8 +114,11 @@ def book_primer(source: Path) -> nbformat.NotebookNode:
     (and which would render blank), replaced by the explorer's figure and table at its starting values,
     with a note saying so."""
     nb = nbformat.read(source, as_version=4)
-    for cell in nb.cells:
+    for k, cell in enumerate(list(nb.cells)):
         if cell.cell_type == "code" and "session.interactive(explorer.widget)" in cell.source:
+            nb.cells.insert(k, _md("*In the book the sliders cannot move (the page is static): below, the explorer's "
+                                   "figure and table at its starting values, with no fault. Open the notebook in "
+                                   "Jupyter to play with the faults.*"))  # fmt: skip
             head = cell.source.split("session.interactive(explorer.widget)")[0]
             cell.source = (STATIC_EXPLORER + head + "explorer_table, explorer_figure = explorer.results()\n"
                            + 'out.figure(explorer_figure, "primer_fault_explorer")\nexplorer_table')  # fmt: skip
