@@ -22,6 +22,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+from datetime import date
 from pathlib import Path
 
 import nbformat
@@ -36,6 +37,7 @@ ROOT = HERE.parent
 CONFIG = """\
 title: "Lifelong SLAM evaluation: the OpenLORIS-Scene metrics"
 author: lorisnb
+copyright: "{year}"
 only_build_toc_files: true
 execute:
   execute_notebooks: force
@@ -92,6 +94,37 @@ SOLUTION_MARKERS = re.compile(r"^[ \t]*### (BEGIN|END) SOLUTION[ \t]*\n?", re.M)
 HIDDEN = re.compile(r"^[ \t]*### BEGIN HIDDEN TESTS.*?### END HIDDEN TESTS[ \t]*\n?", re.S | re.M)
 
 
+def exercise_title(grade_id: str, prompt: str) -> str:
+    """The lab's own label of an exercise (A1, B2, F1 and F2, ...): from the bold "Exercise A1" /
+    "Question F1" names in its text, else from its grade_id (``A1_correctness`` -> A1)."""
+    names = re.findall(r"\*\*(?:Exercise|Question)?\s*([A-G][0-9])\b", prompt)
+    if names:
+        return " and ".join(dict.fromkeys(names))
+    return grade_id.split("_", 1)[0]
+
+
+STATIC_EXPLORER = (
+    "# In the book the page is static: the explorer's figure and table at its starting values (no fault) stand in\n"
+    "# for its sliders (open the notebook in Jupyter to move them).\n"
+)
+
+
+def book_primer(source: Path) -> nbformat.NotebookNode:
+    """The primer for the book: the sliders ("Play with the faults"), which a static page cannot move
+    (and which would render blank), replaced by the explorer's figure and table at its starting values,
+    with a note saying so."""
+    nb = nbformat.read(source, as_version=4)
+    for k, cell in enumerate(list(nb.cells)):
+        if cell.cell_type == "code" and "session.interactive(explorer.widget)" in cell.source:
+            nb.cells.insert(k, _md("*In the book the sliders cannot move (the page is static): below, the explorer's "
+                                   "figure and table at its starting values, with no fault. Open the notebook in "
+                                   "Jupyter to play with the faults.*"))  # fmt: skip
+            head = cell.source.split("session.interactive(explorer.widget)")[0]
+            cell.source = (STATIC_EXPLORER + head + "explorer_table, explorer_figure = explorer.results()\n"
+                           + 'out.figure(explorer_figure, "primer_fault_explorer")\nexplorer_table')  # fmt: skip
+    return nb
+
+
 def _md(text: str) -> nbformat.NotebookNode:
     return nbformat.v4.new_markdown_cell(text)
 
@@ -120,10 +153,12 @@ def book_notebook(source: Path) -> nbformat.NotebookNode:
                     cells[prompt].source = text[:at].rstrip()
                     prompt += 1
                     cells.insert(prompt, _md(text[at:]))
-                cells.insert(prompt, _md(f"```{{exercise-start}}\n:label: {label}\n```"))
+                title = exercise_title(meta["grade_id"], cells[prompt].source)
+                cells.insert(prompt, _md(f"```{{exercise-start}} {title}\n:label: {label}\n:nonumber:\n```"))
                 cells.insert(prompt + 2, _md("```{exercise-end}\n```"))
             else:  # a second answer cell under the same text: a block of its own
-                cells.append(_md(f"```{{exercise-start}}\n:label: {label}\n```"))
+                title = exercise_title(meta["grade_id"], "")
+                cells.append(_md(f"```{{exercise-start}} {title}\n:label: {label}\n:nonumber:\n```"))
                 cells.append(_md("Complete the cell below.\n\n```{exercise-end}\n```"))
             cells.append(_md(f"```{{solution-start}} {label}\n:class: dropdown\n```"))
             cell.source = SOLUTION_MARKERS.sub("", cell.source)
@@ -172,11 +207,11 @@ def main(out: Path) -> int:
         src = Path(tmp) / "src"  # not in _static/: Jupyter Book would load every .js file found there
         shutil.copytree(mathjax_dir(), src / "mathjax_static" / "mathjax")
         offline_mathjax(src / "mathjax_static" / "mathjax")
-        shutil.copyfile(ROOT / "notebooks" / "metrics_primer.ipynb", src / "metrics_primer.ipynb")
+        nbformat.write(book_primer(ROOT / "notebooks" / "metrics_primer.ipynb"), src / "metrics_primer.ipynb")
         labs = sorted(p for p in (HERE / "source").iterdir() if p.is_dir())
         for lab in labs:
             nbformat.write(book_notebook(lab / f"{lab.name}.ipynb"), src / f"{lab.name}.ipynb")
-        (src / "_config.yml").write_text(CONFIG)
+        (src / "_config.yml").write_text(CONFIG.replace("{year}", str(date.today().year)))  # the footer's year: this one
         (src / "_toc.yml").write_text(TOC.format(labs="\n".join(f"  - file: {lab.name}" for lab in labs)))
         (src / "intro.md").write_text(INTRO)
         kernel_tmp = Path(tmp) / "tmp"  # what the notebooks write to a temporary folder goes with this one

@@ -1,5 +1,6 @@
 """Slides for projecting: the primer and the labs (instructor versions, executed) as reveal.js
-slides that open offline.
+slides that open offline, and for each lab a deck without its solutions (``<lab>.projector.slides.html``:
+the answer cells as students have them, only the figures of the outputs) to project during the lab.
 
     python teaching/slides.py OUT        # `make slides`: OUT = build/slides
 
@@ -16,6 +17,7 @@ other existing folder is refused before the build, and left as it is.
 
 from __future__ import annotations
 
+import copy
 import os
 import re
 import shutil
@@ -47,6 +49,30 @@ def slide_notebook(path: Path) -> nbformat.NotebookNode:
             cell.source = re.sub(r"^\w+ = \.\.\.\n", "", cell.source, flags=re.M)
         heading = cell.cell_type == "markdown" and re.match(r"#{1,3} ", cell.source)
         cell.metadata["slideshow"] = {"slide_type": "slide" if heading else "-"}
+    return nb
+
+
+SOLUTION = re.compile(r"^([ \t]*)### BEGIN SOLUTION.*?### END SOLUTION[ \t]*\n?", re.S | re.M)
+
+
+def projector_notebook(executed: nbformat.NotebookNode, source: Path) -> nbformat.NotebookNode:
+    """The lab's deck to project during the lab: each answer cell as the students have it (the
+    stub, no solution, no output), and after the first answer only the figures of the outputs
+    kept (the tables, the checks' lines and the explanations give the answers away)."""
+    src = nbformat.read(source, as_version=4)
+    nb = copy.deepcopy(executed)
+    started = False
+    for cell, orig in zip(nb.cells, src.cells, strict=True):
+        if cell.cell_type != "code":
+            continue
+        meta = orig.get("metadata", {}).get("nbgrader", {})
+        if meta.get("solution"):
+            started = True
+            stub = SOLUTION.sub(lambda m: f"{m.group(1)}# YOUR CODE HERE\n{m.group(1)}raise NotImplementedError()\n",
+                                HIDDEN.sub("", orig.source))  # fmt: skip
+            cell.source, cell.outputs, cell.execution_count = stub.rstrip(), [], None
+        elif started or meta.get("grade"):
+            cell.outputs = [o for o in cell.get("outputs", []) if "image/png" in o.get("data", {})]
     return nb
 
 
@@ -99,6 +125,9 @@ def main(out: Path) -> int:
                 NotebookClient(nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": tmp}}).execute()
                 html, _ = exporter.from_notebook_node(nb)
                 (built / f"{path.stem}.slides.html").write_text(html)
+                if path.parent.parent == HERE / "source":  # a lab: its deck without solutions, to project
+                    html, _ = exporter.from_notebook_node(projector_notebook(nb, path))
+                    (built / f"{path.stem}.projector.slides.html").write_text(html)
         finally:
             if before is None:
                 os.environ.pop("TMPDIR", None)
@@ -113,6 +142,8 @@ def main(out: Path) -> int:
             return 2
     for path in notebooks:
         print(f"slides: {out / f'{path.stem}.slides.html'}")
+        if path.parent.parent == HERE / "source":
+            print(f"slides: {out / f'{path.stem}.projector.slides.html'} (no solutions: for projecting during the lab)")
     return 0
 
 

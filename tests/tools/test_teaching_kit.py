@@ -13,6 +13,7 @@ import re
 import shutil
 import subprocess
 import sys
+from datetime import date
 from pathlib import Path
 
 import nbformat
@@ -182,6 +183,13 @@ def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path, teaching_p
     assert offline.remote_references(offline.built_files(out)) == []
     assert list((out / "_images").glob("*.png")), "figures of the executed notebooks"
     # the slides: one per notebook, reveal.js and MathJax beside them, nothing from the network (fonts included)
+    assert "F1 and F2" in page  # the exercises are titled as in the lab (F's is two questions), not numbered 1-10
+    assert "\\tag{1}" in page and "\\cr" in page  # Eq. (1) with no \\ row break: Sphinx does not wrap it in split
+    assert re.search(r"&#169; Copyright \d{4}|© Copyright \d{4}", page) and str(date.today().year) in page
+    for lab in LABS:  # the deck to project during the lab: no solution, no check's answer
+        html = (slides / f"{lab}.projector.slides.html").read_text()
+        assert "YOUR CODE HERE" in html and "eps_at_cr(ev_orb.errors" not in html
+        assert "computed by lorisnb:" not in html and "matches lorisnb on" not in html and "<img" in html
     for name in ("metrics_primer", *LABS):
         html = (slides / f"{name}.slides.html").read_text()
         assert 'src="reveal.js/dist/reveal.js"' in html and 'src="mathjax/tex-chtml.js"' in html

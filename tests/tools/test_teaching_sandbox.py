@@ -323,3 +323,21 @@ def test_student_variants_differ_between_students_and_repeat_for_one():
     assert len(seeds) >= 20  # a class of 30 gets many different B1 questions
     assert lab_variant(None, seed=5).seed == 5
     assert np.all([10 <= lab_variant(f"x{k}").lost_window[0] <= 20 for k in range(10)])
+
+
+def test_answers_are_read_back_as_plain_values_only():
+    """What the sandbox reads back after an answer cell: numbers, strings, numpy and pandas numbers;
+    an object of the student's (a lazy prediction, a float subclass) only by its type."""
+    import pandas as pd
+
+    from lorisnb.tools.teaching._sandbox_child import _plain
+
+    class Sneaky(float):
+        pass
+
+    assert _plain(0.25) == {"value": 0.25} and _plain("vins") == {"value": "vins"}
+    assert _plain(np.float64(0.5)) == {"value": 0.5} and _plain(np.bool_(True)) == {"value": True}
+    assert _plain(pd.Series([0.627], name="eps")) == {"array": [0.627], "dtype": "<f8"}
+    assert _plain(...) == {"missing": True}
+    assert "not_plain" in _plain(Sneaky(0.5)) and "not_plain" in _plain([0.5]) and "not_plain" in _plain(object())
+    assert isinstance(decode(_plain(Sneaky(0.5))), NotPlain) and decode(_plain(np.float64(2.0))) == 2.0

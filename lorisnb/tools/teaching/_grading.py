@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -161,17 +162,23 @@ def check_function(
         raise AnswerError(f"✗ {what}: no case to check it on (the list of cases is empty); it is not graded")
     answers, wrong = [], None
     for k, case in enumerate(cases):
-        args = {n: (np.array(v, copy=True) if isinstance(v, np.ndarray) else v) for n, v in case.items()}
+        # numpy numbers, as lorisnb's data are: a division by zero gives inf (and the mistake's hint), not an error
+        args = {n: (np.array(v, copy=True) if isinstance(v, np.ndarray) else np.float64(v) if type(v) is float else v)
+                for n, v in case.items()}  # fmt: skip
         try:
             got, used = call_watched(fn, args)
         except NotImplementedError:
             fail(f"{what}: not written yet (the NotImplementedError placeholder is still there)")
         except Exception as exc:  # the learner's code failed: say where and with what
             ambiguous = isinstance(exc, ValueError) and "truth value of an array" in str(exc)
-            fail(
-                f"{what} raised {type(exc).__name__}: {exc} on case {k + 1} ({describe(case)})",
-                "elementwise" if ambiguous else None,
+            renamed = isinstance(exc, TypeError) and re.search(
+                r"unexpected keyword argument|required positional", str(exc)
             )
+            with np.errstate(all="ignore"):
+                fail(
+                    f"{what} raised {type(exc).__name__}: {exc} on case {k + 1} ({describe(case)})",
+                    "elementwise" if ambiguous else "signature" if renamed else None,
+                )
         if used is not None:
             fail(
                 f"{what} calls lorisnb's own `{used}` (case {k + 1}): it then returns lorisnb's answer "

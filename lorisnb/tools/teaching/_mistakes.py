@@ -53,5 +53,7 @@ MISTAKES: dict[str, str] = {
     "extent_vs_length": "normalize by the distance travelled (path length), not by the size of the area (extent)",
     "rmse_vs_mean": "RMSE is the root of the mean SQUARE, sqrt(mean(ATE^2)) (the `ate_rmse` column), not the mean "
     "ATE (`ate_mean`): squaring weighs large errors more",
+    "signature": "the checks call your function with the exercise's argument names, by keyword (`ate_m=...`): keep "
+    "them as the exercise writes them; a renamed, missing or extra argument is not found",
     "c_ate": "use the ATE RMSE over all matched poses here, not the C-ATE over correct poses only",
 }

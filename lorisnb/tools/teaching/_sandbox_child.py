@@ -35,6 +35,9 @@ def _plain(value: Any) -> Any:
         return {"value": value}
     if isinstance(value, np.generic) and t.__module__ == "numpy" and value.dtype.kind in "biuf":
         return {"value": value.item()}
+    pd = sys.modules.get("pandas")
+    if pd is not None and t in (pd.Series, pd.DataFrame, pd.Index):  # pandas' own types (no subclass): their numbers
+        value, t = value.to_numpy(), np.ndarray
     if t is np.ndarray and value.dtype.kind in "biuf":
         return {"array": value.tolist(), "dtype": value.dtype.str}
     return {"not_plain": f"{t.__module__}.{t.__qualname__}"}
@@ -45,6 +48,8 @@ def _decode(arg: Any) -> Any:
 
     if isinstance(arg, dict) and "array" in arg:
         return np.array(arg["array"], dtype=arg["dtype"])
+    if isinstance(arg, dict) and "scalar" in arg:
+        return np.dtype(arg["dtype"]).type(arg["scalar"])
     return arg
 
 

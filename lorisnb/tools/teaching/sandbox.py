@@ -279,7 +279,7 @@ def _encode(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return {"array": value.tolist(), "dtype": value.dtype.str}
     if isinstance(value, np.generic):
-        return value.item()
+        return {"scalar": value.item(), "dtype": value.dtype.str}
     return value
 
 
