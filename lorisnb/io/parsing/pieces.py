@@ -11,7 +11,11 @@ which this replaced, is gone: issue 47; the figures of both are in ``make bench`
 
 The pieces' own threads (rather than pyarrow's threaded read of the whole file) keep memory at
 the arrays a reader keeps: each piece is converted and copied into place as soon as it is parsed,
-while a whole-file table would hold every column once more.
+while a whole-file table would hold every column once more. Measured on 1M-pose files (2 shared
+cores, both in one process, in alternation, medians): lorisnb's whole read (pieces, grouping,
+KITTI's rotations, the pose checks) took 0.90x, 0.78x and 1.02x (TUM, KITTI, EuRoC; 5 runs) and
+0.91x, 0.88x and 0.74x (3 runs, a busier machine) of ``pyarrow.csv.read_csv`` with its own threads
+and the columns to numpy, which does none of that work.
 """
 
 from __future__ import annotations
