@@ -4,6 +4,10 @@ process (so the ratios do not depend on the machine).
 Baselines are plain-Python implementations of the same work in the style of the official tool
 (a dict per sequence, one Python iteration per line and per pose).
 
+It opens with the real workload, the bundled icra20 tree as users run it (:mod:`workload`: the
+whole tree in a whole process, its files parsed, one threshold setting, one slider change, the
+report), before the synthetic files.
+
 Run: ``make bench`` (or ``python benchmarks/bench.py``). ``LORISNB_BENCH_LIFELONG=0`` leaves out
 the 10M-pose lifelong OpenLORIS file, ``LORISNB_BENCH_HUGE=0`` the 10M-pose TUM pair,
 ``LORISNB_BENCH_SERVE=0`` the challenge server's load run (:mod:`challenge_load`). Issue 27's
@@ -19,6 +23,7 @@ from pathlib import Path
 
 import floors
 import numpy as np
+import workload
 
 from lorisnb.core import score
 from lorisnb.errors import LorisWarning
@@ -168,28 +173,6 @@ def bench_reading(folder: Path) -> None:
     goal("200 MB binary file rejected", f"{t_bin * 1000:.1f} ms ({kind})", "after the first few KB", t_bin < 0.05)
 
 
-def bench_whole_tree(root: Path) -> None:
-    """``lorisnb evaluate --scale auto`` over the bundled tree, whole process, against the floor
-    (an interpreter importing numpy and pandas, which any evaluation needs)."""
-    import subprocess
-    import sys
-
-    def run(args: list[str]) -> float:
-        t = time.perf_counter()
-        subprocess.run(args, capture_output=True, check=False)
-        return time.perf_counter() - t
-
-    exe = str(Path(sys.executable).with_name("lorisnb"))
-    t_tree = min(
-        run([exe, "evaluate", "--scale", "auto", "--no-progress", str(root)]) for _ in range(5)
-    )  # the best of 5: this machine's speed drifts
-    t_floor = min(run([sys.executable, "-c", "import numpy, pandas"]) for _ in range(5))
-    print(
-        f"whole tree, whole process  {t_tree:.2f} s   (imports of numpy+pandas alone {t_floor:.2f} s, x{t_tree / t_floor:.1f})"
-    )
-    goal("whole tree, whole process", f"{t_tree:.2f} s", "<= 1.5 s (was 4.3 s)", t_tree <= 1.5)
-
-
 def bench_checks(root: Path) -> None:
     """The plausibility checks' share of a run: every file's errors with and without them, against
     a whole evaluation of the tree in one process (reading, errors, default RPE)."""
@@ -266,8 +249,10 @@ def main() -> None:
     subprocess.run([sys.executable, "-m", "compileall", "-q", str(lorisnb_dir)], check=True)
     data = find_data()
     root = data.icra20
+    with tempfile.TemporaryDirectory(prefix="lorisnb-bench-") as tmp:  # the real workload first (issue 47)
+        workload.main(root, Path(tmp))
     files = [p for p, _ in result_files([root])]
-    print(f"icra20_results: {len(files)} files")
+    print(f"\nicra20_results: {len(files)} files")
 
     t_parse, parsed = _timed(lambda: [read_openloris(p) for p in files])
     t_base_parse, _ = _timed(lambda: [baseline_parse(p) for p in files], repeat=1)
@@ -322,7 +307,6 @@ def main() -> None:
     )
 
     bench_against_evo(data)
-    bench_whole_tree(root)
     bench_checks(root)
     with tempfile.TemporaryDirectory(prefix="lorisnb-bench-") as tmp:
         bench_reading(Path(tmp))
@@ -333,8 +317,6 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="lorisnb-bench-") as tmp:
         floors.bench_readers(Path(tmp))
         floors.bench_growth(Path(tmp))
-        if os.environ.get("LORISNB_BENCH_REPORT", "1") != "0":
-            floors.bench_report(Path(tmp))
     if os.environ.get("LORISNB_BENCH_SERVE", "1") != "0":
         bench_challenge_server(data)
     if os.environ.get("LORISNB_BENCH_CALIBRATE", "1") != "0":

@@ -182,13 +182,15 @@ PARSERS = ["numpy", "pandas", "pieces", "read_csv", "chunks"]
 
 def use_parser(monkeypatch, parser: str) -> list:
     """Read plain files by ``parser``: numpy's reader (a small file while pandas is not imported),
-    pandas in one piece, pandas' buffer route on pieces of about 4 KB on 3 threads (``pieces``),
-    the same pieces each read by ``read_csv`` (``read_csv``: a pandas without the buffer route),
-    or the chunked reader (``chunks``). Returns the list of what the piece reads returned (None:
-    not plain after all)."""
+    the piece parser in one piece, pyarrow's CSV reader on pieces of about 4 KB on 3 threads
+    (``pieces``), the same pieces each read by pandas' ``read_csv`` (``read_csv``: a machine
+    without pyarrow), or the chunked reader (``chunks``). Returns the list of what the piece reads
+    returned (None: not plain after all)."""
     from lorisnb.io.parsing import pieces, whole
 
     monkeypatch.setattr(whole, "pandas_loaded", lambda: parser != "numpy")
+    if parser == "numpy":  # numpy's reader is for a machine without pyarrow
+        monkeypatch.setattr(whole, "pyarrow_installed", lambda: False)
     read = []
     if parser in ("pieces", "read_csv"):
         monkeypatch.setattr(pieces, "PIECE_BYTES", 4096)
@@ -199,7 +201,7 @@ def use_parser(monkeypatch, parser: str) -> list:
         monkeypatch.setattr(pieces, "PIECE_BYTES", whole.WHOLE_MAX_BYTES + 1)
         monkeypatch.setattr(pieces, "SPLIT_MIN_BYTES", whole.WHOLE_MAX_BYTES + 1)
     if parser == "read_csv":
-        monkeypatch.setattr(pieces, "buffers_work", lambda: False)
+        monkeypatch.setattr(pieces, "pyarrow_installed", lambda: False)
     if parser == "chunks":
         monkeypatch.setattr(whole, "WHOLE_MAX_BYTES", 0)
     return read

@@ -44,10 +44,17 @@ def _same(a, b):
     assert np.array_equal(a.ntok, b.ntok)
 
 
-def test_fast_path_equals_exact_path_on_every_bundled_file(data, monkeypatch):
-    from lorisnb.io.parsing import chunks
+@pytest.mark.parametrize("arrow", [True, False], ids=["pyarrow", "pandas"])
+def test_fast_path_equals_exact_path_on_every_bundled_file(data, monkeypatch, arrow):
+    """Every bundled file by the C parser (pyarrow's, or pandas' in a process that has imported
+    pandas and has no pyarrow) gives the exact scanner's rows, lines and special lines."""
+    from lorisnb.io.parsing import chunks, pieces
 
-    monkeypatch.setattr(chunks, "pandas_loaded", lambda: True)  # as in a process that has imported pandas
+    if arrow and not pieces.pyarrow_installed():
+        pytest.skip("pyarrow is not installed")
+    monkeypatch.setattr(chunks, "pandas_loaded", lambda: not arrow)
+    monkeypatch.setattr(chunks, "pyarrow_installed", lambda: arrow)
+    monkeypatch.setattr(pieces, "pyarrow_installed", lambda: arrow)
     files = [p for p, _ in result_files([data.icra20])] + [data.groundtruth(s) for s in ("cafe", "market")]
     for path in files:
         fast, exact = _read(path, fast_min_bytes=0), _read(path, fast_min_bytes=1 << 40)

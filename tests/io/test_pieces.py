@@ -1,15 +1,15 @@
-"""A plain file parsed in pieces on threads (:mod:`lorisnb.io.parsing.pieces`): pandas' buffer route where
-the installed pandas has it, parsers kept between pieces and reads without one piece's numbers
-reaching another's, the real TUM files read as the chunked reader reads them, and a forked child
-that reads after its parent did."""
+"""A plain file parsed in pieces on threads (:mod:`lorisnb.io.parsing.pieces`): public readers only
+(pyarrow's CSV reader, pandas' ``read_csv`` without pyarrow) giving ``float``'s numbers, the real
+TUM files read as the chunked reader reads them, and a forked child that reads after its parent
+did."""
 
 from __future__ import annotations
 
+import ast
 import multiprocessing
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
 from helpers import use_parser
 
@@ -18,38 +18,43 @@ from lorisnb.io import read_tum
 from lorisnb.io.parsing import pieces, whole
 
 
-def test_the_buffer_route_is_taken_where_pandas_has_it():
-    """pandas 3.1 parses a buffer with no GIL held (its threaded ``read_csv`` does): where it is
-    installed, lorisnb's pieces take that route (else each piece is a ``read_csv`` call), and the
-    check gives the numbers of ``read_csv``."""
-    major, minor = (int(v) for v in pd.__version__.split(".")[:2])
-    if (major, minor) < (3, 1):
-        pytest.skip(f"pandas {pd.__version__} has no buffer route: pieces are read by read_csv")
-    assert pieces.buffers_work()
+def test_no_private_attribute_of_pandas_is_used():
+    """The pieces are parsed through public APIs only (issue 47): no attribute of the module's code
+    reaches into pandas' engine, its reader or ``load_buffer``, and pandas' private modules are
+    not imported."""
+    tree = ast.parse(Path(pieces.__file__).read_text())
+    attributes = {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)}
+    assert not attributes & {"_engine", "_reader", "load_buffer", "trim_after_read"}
+    modules = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)} | {
+        a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names
+    }
+    assert not any("._" in m or m.startswith("_") for m in modules - {"__future__"} if m)
 
 
-@pytest.mark.parametrize("buffers", [True, False])
-def test_a_kept_parser_leaves_the_numbers_it_gave_before(buffers):
-    """A thread keeps its parser for the next piece: the columns of one piece stay as they were
-    after the same parser reads a longer one (they are copied into place later, in file order),
-    and after a piece it refuses (a file that is not plain) it reads the next plain one."""
-    if buffers and not pieces.buffers_work():
-        pytest.skip("this pandas has no buffer route")
+@pytest.mark.parametrize("arrow", [True, False])
+def test_a_piece_gives_the_numbers_of_float_or_none(monkeypatch, arrow):
+    """A piece's columns by pyarrow (or by pandas' ``read_csv`` without pyarrow) are Python's
+    ``float`` of each token, to the last bit, and None where a line is not plain: a short or long
+    line, a word, an empty line (skipped by both readers unless told), C's ``nan(...)`` (which
+    pyarrow reads and ``float`` refuses), a lone CR (a line end for pyarrow)."""
+    if arrow and not pieces.pyarrow_installed():
+        pytest.skip("pyarrow is not installed")
+    monkeypatch.setattr(pieces, "pyarrow_installed", lambda: arrow)
     rng = np.random.default_rng(5)
-    first, second = rng.normal(size=(50, 3)), rng.normal(size=(400, 3))
-    text = [("\n".join(" ".join(repr(float(v)) for v in row) for row in a) + "\n").encode() for a in (first, second)]
-    parser = pieces._Parser(" ", 3, buffers)
-    got = parser.columns(text[0])
-    again = parser.columns(text[1])
-    assert got is not None and again is not None
-    np.testing.assert_array_equal(np.column_stack(got), first)  # repr round-trips: the exact numbers
-    np.testing.assert_array_equal(np.column_stack(again), second)
-    assert parser.columns(b"1 2 3\n4 5\n") is None  # a short line: not plain, whichever route
-    assert parser.columns(b"1 2 3\n4 5 x\n") is None
-    assert parser.columns(b"1 2 3 4\n") is None
-    again = parser.columns(text[0])  # a parser that refused a piece reads the next (it broke, once)
-    assert again is not None
-    np.testing.assert_array_equal(np.column_stack(again), first)
+    values = rng.normal(scale=1e3, size=(400, 3))
+    tokens = [[repr(float(v)) for v in row] for row in values] + [["inf", "-inf", "1e-320"], ["+1", "5.", ".5"]]
+    text = ("\n".join(" ".join(row) for row in tokens) + "\n").encode()
+    got = pieces.piece_columns(text, " ", 3)
+    assert got is not None
+    expected = np.array([[float(t) for t in row] for row in tokens])
+    np.testing.assert_array_equal(np.column_stack(got), expected)
+    if arrow:  # a nan token is a number, as float() reads it (pandas' C parser refuses it: read in chunks)
+        assert np.isnan(pieces.piece_columns(b"nan 1 -NaN\n", " ", 3)).tolist() == [[True], [False], [True]]
+    assert np.signbit(got[1][-2]) and got[2][-2] == 1e-320
+    for bad in (b"1 2 3\n4 5\n", b"1 2 3\n4 5 x\n", b"1 2 3 4\n", b"1 2 3\n\n4 5 6\n", b"nan(1) 2 3\n",
+                b"1 2 3\r4 5 6\n", b"1 2 3\n4 5 6\x1c\n"):  # fmt: skip
+        assert pieces.piece_columns(bad, " ", 3) is None, bad
+    assert pieces.piece_columns(b"1,2.5,3\n", ",", 3) is not None
 
 
 @pytest.mark.parametrize("parser", ["pieces", "read_csv"])

@@ -1,20 +1,21 @@
-"""A plain file parsed by pandas' C parser in pieces of whole lines on threads, each piece's
-numbers grouped (or converted) on its thread and copied into the reader's arrays in file order.
+"""A plain file parsed in pieces of whole lines on threads, each piece's numbers grouped (or
+converted) on its thread and copied into the reader's arrays in file order.
 
-Where the installed pandas has it (3.1 and later), each piece is tokenised from its bytes with no
-GIL held (``TextReader.load_buffer``: the buffer route of pandas' own threaded ``read_csv``), so
-the pieces are parsed side by side on every core (what is computed from them too, as far as
-numpy's operations hand the GIL back and forth); otherwise each piece is read by
-``pandas.read_csv`` on its bytes. Both give the numbers of one ``read_csv`` call on the whole
-file: the same C tokenizer and float conversion, with the same options (:func:`c_options`). A
-piece whose rows are not its lines (a line the parser reads otherwise) makes the whole read
-return None: the caller's chunked reader then names the line.
+Each piece is parsed by a public reader: ``pyarrow.csv.read_csv`` on its bytes where pyarrow is
+installed (it holds no GIL while it parses, so the pieces are parsed side by side on every core),
+else ``pandas.read_csv`` (C engine) on its bytes. Both round as Python's ``float`` does, so both
+give the numbers of the exact byte scanner. A piece whose rows are not its lines (a line the
+parser reads otherwise) makes the whole read return None: the caller's chunked reader then names
+the line. (pandas' private buffer route, ``TextReader.load_buffer`` through ``engine._reader``,
+which this replaced, is gone: issue 47; the figures of both are in ``make bench``'s reading rows.)
 
-The buffer route is pandas' private API (``engine._reader``), kept for the large-file reading rows
-of ``make bench`` ("read TUM/KITTI/EuRoC 1M" within 1.2x of pandas: 0.90x, 1.04x, 0.96x in the
-README's last run); replacing it by a public reader (pyarrow.csv, measured side by side on the
-bundled workload and the large files) is issue 47's open work. A pandas without it takes the
-public ``read_csv`` route above, with the same numbers.
+The pieces' own threads (rather than pyarrow's threaded read of the whole file) keep memory at
+the arrays a reader keeps: each piece is converted and copied into place as soon as it is parsed,
+while a whole-file table would hold every column once more. Measured on 1M-pose files (2 shared
+cores, both in one process, in alternation, medians): lorisnb's whole read (pieces, grouping,
+KITTI's rotations, the pose checks) took 0.90x, 0.78x and 1.02x (TUM, KITTI, EuRoC; 5 runs) and
+0.91x, 0.88x and 0.74x (3 runs, a busier machine) of ``pyarrow.csv.read_csv`` with its own threads
+and the columns to numpy, which does none of that work.
 """
 
 from __future__ import annotations
@@ -36,9 +37,6 @@ from lorisnb.io.parsing.rows import Convert, Group, Part, copy_rows, group_colum
 #: Bytes of a piece at most (as pandas' own threaded read): numpy's work on a piece's rows runs in
 #: few operations on long arrays (on 256 KB pieces a million KITTI poses took twice as long).
 PIECE_BYTES = 4 << 20
-#: A thread's parser is kept for the next file when its pieces were at most this long (it keeps
-#: buffers of about four times a piece).
-KEEP_PIECE_BYTES = 1 << 20
 #: Files from this size are parsed in at least :data:`PARSE_THREADS` pieces side by side.
 SPLIT_MIN_BYTES = 128 << 10
 #: Pieces parsed ahead of the first not yet placed, per thread (memory holds about this many).
@@ -54,68 +52,74 @@ def c_options(sep: str) -> dict:
 
 
 def parser_errors() -> tuple[type[BaseException], ...]:
-    """What pandas' C parser raises for text that is not plain numbers."""
-    from pandas import errors
+    """What the piece parser (:func:`piece_columns`) raises for text that is not plain numbers
+    (pyarrow's ``ArrowInvalid`` and pandas' ``ParserError`` and ``EmptyDataError`` are ValueErrors)."""
+    return ValueError, OverflowError, UnicodeDecodeError
 
-    return ValueError, OverflowError, UnicodeDecodeError, errors.ParserError, errors.EmptyDataError
+
+@functools.cache
+def pyarrow_installed() -> bool:
+    """Whether pyarrow (the ``parquet`` extra) is installed: its CSV reader then parses the pieces."""
+    try:
+        import pyarrow.csv  # noqa: F401
+    except ImportError:
+        return False
+    return True
 
 
-class _Parser:
-    """One thread's parser of pieces of ``ntok`` numbers per line: pandas' buffer route where
-    ``buffers`` (one reader kept for every piece), else ``read_csv`` on each piece's bytes."""
+@functools.cache
+def _arrow_options(sep: str, ntok: int) -> tuple[Any, Any]:
+    """pyarrow's CSV options as lorisnb reads a plain file: ``ntok`` float64 columns, one separator,
+    no quoting, no header, no null value (``nan`` is read as a number, as ``float`` reads it), and
+    an empty line refused, not skipped (the row count then shows it)."""
+    import pyarrow as pa
+    import pyarrow.csv as pc
 
-    def __init__(self, sep: str, ntok: int, buffers: bool) -> None:
-        self.sep, self.ntok, self.reader = sep, ntok, None
-        if buffers:
-            self.reader = self._reader()
+    names = [str(k) for k in range(ntok)]
+    return (
+        pc.ParseOptions(delimiter=sep, quote_char=False, double_quote=False, escape_char=False,
+                        ignore_empty_lines=False),
+        pc.ConvertOptions(column_types=dict.fromkeys(names, pa.float64()), null_values=[], true_values=[],
+                          false_values=[], strings_can_be_null=False, quoted_strings_can_be_null=False),
+    )  # fmt: skip
 
-    def _reader(self) -> Any:
-        """A pandas reader of buffers of lines of ``ntok`` numbers."""
-        import pandas as pd
 
-        options = c_options(self.sep) | {"names": list(range(self.ntok)), "low_memory": False}
-        reader = pd.read_csv(io.BytesIO(b""), iterator=True, **options)
-        reader._engine._reader.trim_after_read = False  # its buffers kept for the next piece
-        return reader
+def _floats(column: Any) -> np.ndarray:
+    """A float64 pyarrow column without nulls as a numpy array (read-only, no copy for a column of
+    one block), from its data buffer (``ChunkedArray.to_numpy`` imports pandas: 0.6 s)."""
+    parts = [np.frombuffer(a.buffers()[1], np.float64, len(a), a.offset * 8) for a in column.chunks if len(a)]
+    return parts[0] if len(parts) == 1 else np.concatenate(parts) if parts else np.zeros(0)
 
-    def columns(self, data: bytes) -> list[np.ndarray] | None:
-        """The ``ntok`` float64 columns of ``data``'s lines (whole lines), or None when they are not
-        plain numbers, one row per line."""
-        try:
-            if self.reader is not None:
-                engine = self.reader._engine
-                engine._reader.load_buffer(data)
-                engine._first_chunk = True  # a reused reader reads a new piece from its start
-                _, _, by_name = engine.read()
-                columns = [by_name[k] for k in range(self.ntok)]
-            else:
-                import pandas as pd
 
-                frame = pd.read_csv(io.BytesIO(data), **c_options(self.sep))
-                columns = [c.to_numpy() for _, c in frame.items()]
-        except parser_errors():
-            columns = []
-        rows = newlines(data) + (not data.endswith(b"\n"))
-        if len(columns) == self.ntok and all(c.dtype == np.float64 and len(c) == rows for c in columns):
-            return columns
-        if self.reader is not None:  # a reader that refused text refuses everything after it: a new one
-            self.reader = self._reader()
+def piece_columns(data: bytes, sep: str, ntok: int) -> list[np.ndarray] | None:
+    """The ``ntok`` float64 columns of ``data``'s lines (whole lines), one row per line, or None
+    when they are not plain numbers: by ``pyarrow.csv.read_csv`` where pyarrow is installed (with
+    no GIL held: pieces on threads are parsed side by side), else ``pandas.read_csv`` (C engine).
+    Both round as Python's ``float`` does. A token ``float`` refuses is refused here too: pyarrow's
+    ``nan(...)`` (C's form) is not plain, nor a line pyarrow ends at a lone CR (the row count
+    differs from the line count)."""
+    try:
+        if pyarrow_installed():
+            if b"(" in data:
+                return None
+            import pyarrow as pa
+            import pyarrow.csv as pc
+
+            names = [str(k) for k in range(ntok)]  # one block (one array per column), on this thread
+            read = pc.ReadOptions(column_names=names, use_threads=False, block_size=max(len(data) + 1, 1 << 16))
+            table = pc.read_csv(pa.py_buffer(data), read, *_arrow_options(sep, ntok))
+            columns = [_floats(c) for c in table.columns]
+        else:
+            import pandas as pd
+
+            frame = pd.read_csv(io.BytesIO(data), **c_options(sep))
+            columns = [c.to_numpy() for _, c in frame.items()]
+    except parser_errors():
         return None
-
-
-#: Each parsing thread's parser, kept for its next piece (a new reader costs about half as much
-#: again on its first megabyte as one that has read before); let go after a file of pieces longer
-#: than :data:`KEEP_PIECE_BYTES`.
-_parsers: dict[int, _Parser] = {}
-
-
-def _parser(sep: str, ntok: int) -> _Parser:
-    """This parsing thread's parser of lines of ``ntok`` numbers (see :data:`_parsers`)."""
-    buffers, me = buffers_work(), threading.get_ident()
-    got = _parsers.get(me)
-    if got is None or (got.sep, got.ntok, got.reader is not None) != (sep, ntok, buffers):
-        got = _parsers[me] = _Parser(sep, ntok, buffers)
-    return got
+    rows = newlines(data) + (not data.endswith(b"\n"))
+    if len(columns) == ntok and all(c.dtype == np.float64 and len(c) == rows for c in columns):
+        return columns
+    return None
 
 
 _pool: ThreadPoolExecutor | None = None
@@ -123,7 +127,7 @@ _pool_lock = threading.Lock()
 
 
 def _threads() -> ThreadPoolExecutor:
-    """The threads that parse pieces, started once (each keeps its parser)."""
+    """The threads that parse pieces, started once."""
     global _pool
     with _pool_lock:  # one pool, whichever threads read files at once
         if _pool is None:
@@ -135,21 +139,9 @@ def _forget_threads() -> None:
     """In a forked child: the parent's threads are not there (new ones start when needed)."""
     global _pool
     _pool = None
-    _parsers.clear()
 
 
 os.register_at_fork(after_in_child=_forget_threads)
-
-
-@functools.cache
-def buffers_work() -> bool:
-    """Whether the installed pandas parses a buffer as its threaded reader does (checked once, on a
-    two-line text): else each piece is read by ``read_csv``."""
-    try:
-        got = _Parser(" ", 2, True).columns(b"1 2.5\n3 4\n")
-    except Exception:  # noqa: BLE001 - another pandas (no buffer route, or other internals)
-        return False
-    return got is not None and [c.tolist() for c in got] == [[1.0, 3.0], [2.5, 4.0]]
 
 
 def piece_rows(
@@ -174,14 +166,9 @@ def piece_rows(
             return None
         if len(pieces) == 1:
             return _one_piece(fd, *pieces[0][:2], sep, ntok, groups, convert, row_major)
-        keep = total <= count * KEEP_PIECE_BYTES
-        got = _on_threads(
-            fd, [(lo, hi) for lo, hi, _ in pieces], sep, ntok, groups, convert, total // (2 * ntok) + 1, keep
-        )
+        got = _on_threads(fd, [(lo, hi) for lo, hi, _ in pieces], sep, ntok, groups, convert, total // (2 * ntok) + 1)
     finally:
         os.close(fd)
-    if not keep:
-        _parsers.clear()  # their buffers (up to 16 MB each), not kept through what the caller does next
     if size >= GIVE_BACK_BYTES:
         give_back_memory()
     return got
@@ -208,7 +195,7 @@ def _one_piece(
 ) -> tuple[int, list[Part]] | None:  # fmt: skip
     """:func:`piece_rows` of a file read in one piece, on the calling thread."""
     data = _read(fd, lo, hi)
-    columns = None if data is None else _Parser(sep, ntok, buffers_work()).columns(data)  # a small file
+    columns = None if data is None else piece_columns(data, sep, ntok)
     if columns is None:
         return None
     del data
@@ -221,13 +208,11 @@ def _one_piece(
 
 def _on_threads(
     fd: int, pieces: list[tuple[int, int]], sep: str, ntok: int, groups: tuple[Group, ...],
-    convert: Convert | None, capacity: int, keep: bool = True,
+    convert: Convert | None, capacity: int,
 ) -> tuple[int, list[Part]] | None:  # fmt: skip
     """:func:`piece_rows` of several pieces on :data:`PARSE_THREADS` threads: each takes the next
     piece in file order, parses (and converts) it, and copies every piece whose rows' place is now
-    known (all pieces before it done) into the arrays, made by the first such copy. Unless
-    ``keep``, each thread lets its parser go when it has no piece left (its buffers freed there,
-    while the other threads still parse, not after the file on the caller's thread)."""
+    known (all pieces before it done) into the arrays, made by the first such copy."""
     turn = threading.Condition()
     state: dict[str, Any] = {"taken": 0, "placed": 0, "at": 0, "failed": False}
     done: dict[int, tuple[int, Sequence[Part]]] = {}
@@ -240,19 +225,16 @@ def _on_threads(
             turn.notify_all()
 
     def work() -> None:
-        parser = _parser(sep, ntok)
         while True:
             with turn:
                 turn.wait_for(lambda: state["failed"] or len(done) < AHEAD * threads)
                 if state["failed"] or state["taken"] == len(pieces):
-                    if not keep:
-                        _parsers.pop(threading.get_ident(), None)
                     return
                 i = state["taken"]
                 state["taken"] += 1
             try:
                 data = _read(fd, *pieces[i])
-                columns = None if data is None else parser.columns(data)
+                columns = None if data is None else piece_columns(data, sep, ntok)
                 del data
                 if columns is None:
                     fail()
