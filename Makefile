@@ -42,8 +42,10 @@ browser-deps:
 	  SUDO=$$(test "$$(id -u)" = 0 || echo sudo); \
 	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq chromium chromium-driver; }
 
-# the notebooks in JupyterLab in headless Chromium (screenshots in results/browser/)
+# the notebooks in JupyterLab in headless Chromium (screenshots in results/browser/), a report and the
+# manual offline (built first where build/docs/ has none)
 test-browser: $(STAMP) browser-deps
+	test -f "$(DOCS_OUT)/index.html" || $(MAKE) docs
 	$(BIN)/python -m pytest -q -m browser
 
 lint: $(STAMP)
