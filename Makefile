@@ -1,4 +1,4 @@
-# Two entry points (see README): `make report` (the batch report on the bundled data) and
+# Two entry points (see README), and the manual (`make docs`): `make report` (the batch report on the bundled data) and
 # `make test`. Both create or refresh the local virtual environment .venv first.
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
@@ -61,7 +61,7 @@ format: $(STAMP)
 bench: bytecode
 	$(BIN)/python benchmarks/bench.py
 
-# the regression gate's measured error rates: false alarms and power by trial count (README: Regression gating)
+# the regression gate's measured error rates: false alarms and power by trial count (docs/guide/regression-gating.md)
 calibrate: bytecode
 	$(BIN)/python benchmarks/calibrate.py
 

@@ -335,7 +335,7 @@ def main() -> None:
         if os.environ.get("LORISNB_BENCH_REPORT", "1") != "0":
             floors.bench_report(Path(tmp))
     if os.environ.get("LORISNB_BENCH_CALIBRATE", "1") != "0":
-        # the regression gate's error rates, a small run of `make calibrate` (the README quotes the full run)
+        # the regression gate's error rates, a small run of `make calibrate` (docs/guide/regression-gating.md quotes the full run)
         import calibrate
 
         print("\nregression gate: measured error rates (a small run of make calibrate)")

@@ -12,7 +12,7 @@ return None: the caller's chunked reader then names the line.
 
 The buffer route is pandas' private API (``engine._reader``), kept for the large-file reading rows
 of ``make bench`` ("read TUM/KITTI/EuRoC 1M" within 1.2x of pandas: 0.90x, 1.04x, 0.96x in the
-README's last run); replacing it by a public reader (pyarrow.csv, measured side by side on the
+guide's last run, docs/guide/many-files.md); replacing it by a public reader (pyarrow.csv, measured side by side on the
 bundled workload and the large files) is issue 47's open work. A pandas without it takes the
 public ``read_csv`` route above, with the same numbers.
 """
