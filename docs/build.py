@@ -187,8 +187,9 @@ def execute_notebooks(paths: list[Path], jobs: int, env: dict[str, str]) -> list
         start = time.perf_counter()
         try:
             NotebookClient(
-                nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": str(path.parent)}}
-            ).execute()
+                nb, timeout=600, startup_timeout=300, kernel_name="python3",
+                resources={"metadata": {"path": str(path.parent)}},
+            ).execute()  # fmt: skip
         except Exception as exc:  # a cell's error, a timeout, a kernel that died: the build fails naming it
             return f"{path.stem}: {' '.join(str(exc).split())[-1500:]}"
         nbformat.write(nb, path)
