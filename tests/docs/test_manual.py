@@ -46,6 +46,18 @@ def subcommands() -> list[str]:
     return list(sub.choices)
 
 
+def test_the_readme_tour_runs_on_the_parser():
+    """Every ``lorisnb ...`` line of the README's tour is a command the parser accepts as written."""
+    readme = (ROOT / "README.md").read_text()
+    tour = readme.split("## A short tour", 1)[1].split("```sh", 1)[1].split("```", 1)[0]
+    lines = [line.split("#", 1)[0].split() for line in tour.splitlines() if line.startswith("lorisnb ")]
+    assert {words[1] for words in lines} >= {"evaluate", "sweep", "compare", "diff", "report"}, lines
+    parser = build_parser()
+    for words in lines:
+        args = parser.parse_args(words[1:])  # a usage error would exit 2 here
+        assert args.command == words[1]
+
+
 def test_layers_table_holds_every_sub_package_and_what_it_may_import(build):
     table = build.layers_table()
     for layer in build.LAYERS:
