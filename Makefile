@@ -1,4 +1,4 @@
-# Two entry points (see README): `make report` (the batch report on the bundled data) and
+# Two entry points (see README), and the manual (`make docs`): `make report` (the batch report on the bundled data) and
 # `make test`. Both create or refresh the local virtual environment .venv first.
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
@@ -50,8 +50,10 @@ browser-deps:
 	  SUDO=$$(test "$$(id -u)" = 0 || echo sudo); \
 	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq chromium chromium-driver; }
 
-# the notebooks in JupyterLab in headless Chromium (screenshots in results/browser/)
+# the notebooks in JupyterLab in headless Chromium (screenshots in results/browser/), a report and the
+# manual offline (built first where build/docs/ has none)
 test-browser: $(STAMP) browser-deps
+	test -f "$(DOCS_OUT)/index.html" || $(MAKE) docs
 	$(BIN)/python -m pytest -q -m browser
 
 lint: $(STAMP)
@@ -67,7 +69,7 @@ format: $(STAMP)
 bench: bytecode
 	$(BIN)/python benchmarks/bench.py
 
-# the regression gate's measured error rates: false alarms and power by trial count (README: Regression gating)
+# the regression gate's measured error rates: false alarms and power by trial count (docs/guide/regression-gating.md)
 calibrate: bytecode
 	$(BIN)/python benchmarks/calibrate.py
 

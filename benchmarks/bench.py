@@ -320,7 +320,7 @@ def main() -> None:
     if os.environ.get("LORISNB_BENCH_SERVE", "1") != "0":
         bench_challenge_server(data)
     if os.environ.get("LORISNB_BENCH_CALIBRATE", "1") != "0":
-        # the regression gate's error rates, a small run of `make calibrate` (the README quotes the full run)
+        # the regression gate's error rates, a small run of `make calibrate` (docs/guide/regression-gating.md quotes the full run)
         import calibrate
 
         print("\nregression gate: measured error rates (a small run of make calibrate)")

@@ -46,6 +46,11 @@ from lorisnb.io.writers import check_owned_folder, replace_folder  # noqa: E402
 BUILD_MARKER = ".lorisnb-docs"  # in every folder this script built: only those are replaced
 #: the layers, top first, as the import contract in pyproject.toml orders them
 LAYERS = ["cli", "tools", "io", "core"]
+#: the guide's pages in reading order (index.md's ``guide/*``); any other page follows, alphabetically
+GUIDE_ORDER = [
+    "installing", "command-line", "datasets", "evaluation-spec", "python", "many-files", "sweeps", "comparing",
+    "regression-gating", "history", "reports", "evo", "ordslam", "errors", "teaching", "testing",
+]  # fmt: skip
 #: the hidden cell after a notebook's parameters: what it writes goes to the build's temporary folder
 OUTPUT_CELL = "output_dir = {path!r}  # the manual's build: outputs into a temporary folder"
 
@@ -182,8 +187,9 @@ def execute_notebooks(paths: list[Path], jobs: int, env: dict[str, str]) -> list
         start = time.perf_counter()
         try:
             NotebookClient(
-                nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": str(path.parent)}}
-            ).execute()
+                nb, timeout=600, startup_timeout=300, kernel_name="python3",
+                resources={"metadata": {"path": str(path.parent)}},
+            ).execute()  # fmt: skip
         except Exception as exc:  # a cell's error, a timeout, a kernel that died: the build fails naming it
             return f"{path.stem}: {' '.join(str(exc).split())[-1500:]}"
         nbformat.write(nb, path)
@@ -193,6 +199,20 @@ def execute_notebooks(paths: list[Path], jobs: int, env: dict[str, str]) -> list
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
         done = list(tqdm(pool.map(run, paths), total=len(paths), desc="notebooks", unit="nb"))
     return [d for d in done if d]
+
+
+def reading_order(index: str, src: Path) -> str:
+    """``index.md`` with its globs ``guide/*`` and ``notebooks/*`` written out: the pages in reading
+    order (:data:`GUIDE_ORDER`, the notebooks in a report's order), then every other page of the
+    folder, alphabetically (a glob alone sorts by file name; Sphinx warns on a glob that matches
+    nothing after an explicit list, so the list is written here, not beside the glob)."""
+    from lorisnb.tools.report.build import DEFAULT_NOTEBOOKS
+
+    for folder, order in (("guide", GUIDE_ORDER), ("notebooks", DEFAULT_NOTEBOOKS)):
+        names = {p.stem for p in (src / folder).iterdir() if p.suffix in (".md", ".ipynb", ".rst")}
+        listed = [n for n in order if n in names] + sorted(names - set(order))
+        index = index.replace(f"\n{folder}/*\n", "\n" + "".join(f"{folder}/{n}\n" for n in listed))
+    return index
 
 
 def stage(src: Path, work: Path, notebooks: bool) -> None:
@@ -215,8 +235,12 @@ def stage(src: Path, work: Path, notebooks: bool) -> None:
             out = work / "outputs" / nb.stem
             out.mkdir(parents=True)
             stage_notebook(nb, src / "notebooks" / nb.name, out)
-    else:
-        (src / "notebooks" / "left_out.md").write_text("# Notebooks\n\nLeft out of this build (`--no-notebooks`).\n")
+    else:  # a page each, in their place
+        for nb in sorted((ROOT / "notebooks").glob("*.ipynb")):
+            (src / "notebooks" / f"{nb.stem}.md").write_text(
+                f"# {nb.stem}\n\nLeft out of this draft (`--no-notebooks`).\n"
+            )
+    (src / "index.md").write_text(reading_order((src / "index.md").read_text(), src))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -273,7 +297,7 @@ def main(argv: list[str] | None = None) -> int:
         except OutputError as exc:
             print(f"docs: {exc}", file=sys.stderr)
             return 2
-    print(f"docs: {out / 'index.html'} ({time.perf_counter() - start:.0f} s: notebooks {executed - start:.0f} s, "
+    print(f"docs: {out / 'index.html'} ({time.perf_counter() - start:.0f} s: staged and executed {executed - start:.0f} s, "
           f"Sphinx {time.perf_counter() - executed:.0f} s)")  # fmt: skip
     return 0
 

@@ -1,6 +1,6 @@
 """lorisnb: evaluate SLAM the way lifelong robots need it (OpenLORIS-Scene metrics).
 
-Layers (enforced by an import contract, see the README's Layout section): :mod:`lorisnb.core`
+Layers (enforced by an import contract; see the manual's Architecture page, docs/architecture.md): :mod:`lorisnb.core`
 holds pure functions on arrays and dataclasses; :mod:`lorisnb.io` reads and writes files and finds
 the data; :mod:`lorisnb.tools` evaluates folders and makes figures, widgets and reports;
 :mod:`lorisnb.cli` is the command line. The names below are the public API.

@@ -73,7 +73,7 @@ def _last_comparable(folder: Path, cand: Any) -> Any:
 
 
 def cmd_diff(args: argparse.Namespace) -> int:
-    """``lorisnb diff BASE CAND`` (see the README's exit-status table)."""
+    """``lorisnb diff BASE CAND`` (see the exit-status table of docs/guide/regression-gating.md)."""
     from lorisnb.core.stats.regression import parse_tolerances
     from lorisnb.io.writers import write_csv, write_parquet, write_text
     from lorisnb.tools.decisions.diff import (

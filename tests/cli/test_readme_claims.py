@@ -1,4 +1,4 @@
-"""What the README says the command line does, checked where the tool disagreed with it."""
+"""What the manual says the command line does (docs/guide/*.md, once the README), checked where the tool disagreed with it."""
 
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ def base_and_cand(icra20, tmp_path):
 
 
 def test_diff_of_result_folders_at_a_relative_eps_judges_the_change(base_and_cand, tmp_path, capsys):
-    """README (diff): BASE and CAND are result folders evaluated with the same options, and every
+    """The guide (docs/guide/regression-gating.md, diff): BASE and CAND are result folders evaluated with the same options, and every
     option of evaluate applies. With `--eps relative:F` each sequence's eps in metres follows the
     extent the estimate matched, so a CAND that tracked less has other metres: diff refused the
     pair as "not comparable" (exit 2) instead of finding the regression (exit 1)."""

@@ -46,6 +46,18 @@ def subcommands() -> list[str]:
     return list(sub.choices)
 
 
+def test_the_readme_tour_runs_on_the_parser():
+    """Every ``lorisnb ...`` line of the README's tour is a command the parser accepts as written."""
+    readme = (ROOT / "README.md").read_text()
+    tour = readme.split("## A short tour", 1)[1].split("```sh", 1)[1].split("```", 1)[0]
+    lines = [line.split("#", 1)[0].split() for line in tour.splitlines() if line.startswith("lorisnb ")]
+    assert {words[1] for words in lines} >= {"evaluate", "sweep", "compare", "diff", "report"}, lines
+    parser = build_parser()
+    for words in lines:
+        args = parser.parse_args(words[1:])  # a usage error would exit 2 here
+        assert args.command == words[1]
+
+
 def test_layers_table_holds_every_sub_package_and_what_it_may_import(build):
     table = build.layers_table()
     for layer in build.LAYERS:
@@ -82,6 +94,24 @@ def test_staged_notebook_writes_into_the_build_and_hides_it(build, tmp_path):
     assert cell.source.startswith(f"output_dir = {str(tmp_path / 'out')!r}")
     assert cell.metadata["tags"] == ["remove-cell"]
     assert len(nb.cells) == len(nbformat.read(source, as_version=4).cells) + 1
+
+
+def test_every_guide_page_is_in_the_manual_in_reading_order(build, tmp_path):
+    """index.md's ``guide/*``: the known pages in reading order, then any page another worker adds."""
+    (tmp_path / "guide").mkdir()
+    (tmp_path / "notebooks").mkdir()
+    for name in [*build.GUIDE_ORDER, "zeta", "alpha-new"]:
+        (tmp_path / "guide" / f"{name}.md").write_text(f"# {name}\n")
+    (tmp_path / "notebooks" / "lifelong_benchmark.ipynb").write_text("{}")
+    (tmp_path / "notebooks" / "metrics_primer.ipynb").write_text("{}")
+    index = build.reading_order((ROOT / "docs" / "index.md").read_text(), tmp_path)
+    guide = [line for line in index.splitlines() if line.startswith("guide/")]
+    assert guide == [f"guide/{n}" for n in [*build.GUIDE_ORDER, "alpha-new", "zeta"]]
+    notebooks = [line for line in index.splitlines() if line.startswith("notebooks/")]
+    assert notebooks == ["notebooks/metrics_primer", "notebooks/lifelong_benchmark"]  # a report's order
+    # and the checkout's own pages are all in GUIDE_ORDER's list or follow it
+    pages = {p.stem for p in (ROOT / "docs" / "guide").glob("*.md")}
+    assert set(build.GUIDE_ORDER) <= pages, set(build.GUIDE_ORDER) - pages
 
 
 def test_build_refuses_a_folder_it_did_not_make(build, tmp_path, capsys):
@@ -169,4 +199,4 @@ def test_manual_opens_offline(tmp_path):
         driver.quit()
     outside = [u for u in requested if not u.startswith(("file:", "data:", "about:", "chrome", "blob:"))]
     assert outside == [], f"requests that would leave the machine: {outside}"
-    assert any(u.endswith("tex-chtml.js") for u in requested)  # MathJax came from the manual itself
+    assert any("/_static/mathjax/tex-chtml.js" in u for u in requested)  # MathJax came from the manual itself

@@ -48,7 +48,7 @@ def test_names_the_readme_shows_exist():
     for name in set(re.findall(r"\blorisnb\.([A-Za-z_][A-Za-z0-9_]*)\(", text)) | set(
         re.findall(r"\bln\.([A-Za-z_][A-Za-z0-9_]*)\b", text)
     ):
-        assert hasattr(ln, name), f"the README uses lorisnb.{name}, which is not exported"
+        assert hasattr(ln, name), f"the README or a page of docs/ uses lorisnb.{name}, which is not exported"
     for module in set(re.findall(r"`(lorisnb(?:\.[a-z_]+)+)`", text)):
         parts = module.split(".")
         for k in range(len(parts), 0, -1):  # a module, or a name in a module (or in lorisnb itself)
@@ -58,11 +58,11 @@ def test_names_the_readme_shows_exist():
                 continue
             obj = m
             for attr in parts[k:]:
-                assert hasattr(obj, attr), f"the README names {module}, which does not exist"
+                assert hasattr(obj, attr), f"the README or a page of docs/ names {module}, which does not exist"
                 obj = getattr(obj, attr)
             break
         else:
-            pytest.fail(f"the README names {module}, which does not exist")
+            pytest.fail(f"the README or a page of docs/ names {module}, which does not exist")
 
 
 def _imports(path: Path):

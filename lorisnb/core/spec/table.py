@@ -1,5 +1,5 @@
 """The evaluation spec documented: what each option means, its unit and the inputs it applies to,
-and the README's table of it (:func:`spec_table`, every preset's default; a test keeps the README
+and the manual's table of it (:func:`spec_table`, every preset's default; a test keeps docs/guide/evaluation-spec.md
 equal to it)."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ from __future__ import annotations
 from lorisnb.core.spec import evo
 from lorisnb.core.spec.evalspec import PRESETS, text
 
-#: What each option of the spec means, its unit, and which inputs it applies to: the README's
+#: What each option of the spec means, its unit, and which inputs it applies to: the manual's
 #: spec table is :func:`spec_table` (a test keeps them equal).
 OPTIONS: dict[str, tuple[str, str, str]] = {
     "association": (
@@ -37,7 +37,7 @@ OPTIONS: dict[str, tuple[str, str, str]] = {
 
 
 def spec_table() -> str:
-    """The README's table of the spec: option, meaning, unit, default per preset, inputs."""
+    """The manual's table of the spec: option, meaning, unit, default per preset, inputs."""
     names = list(PRESETS)
     head = "| option | meaning | unit | " + " | ".join(f"`{n}`" for n in names) + " | applies to |"
     rows = [head, "|" + "---|" * (len(names) + 4)]

@@ -197,7 +197,7 @@ def read_ordslam(
 class OrdslamFolder:
     """An ORDSLAM folder: ground-truth files and, optionally, estimates of algorithms.
 
-    Layout lorisnb expects (documented in the README): ground-truth ``.txt`` files anywhere below
+    Layout lorisnb expects (documented in docs/guide/ordslam.md): ground-truth ``.txt`` files anywhere below
     ``root`` except under ``estimates/``; the estimate of ground truth ``root/REL`` is
     ``root/estimates/<algorithm>/REL`` (the same path relative to the folder; a bare file name is
     enough when only one ground-truth file has that name); an optional ``root/catalog.csv``

@@ -1,7 +1,7 @@
 """The measured error rates of the regression gate (``lorisnb diff``): reruns made from the bundled
 real SLAM outputs, nights of noise only and nights with a change of known size, and the share of
 each that the verdict calls a regression. ``make calibrate`` prints the table
-(``benchmarks/calibrate.py``); the README quotes it.
+(``benchmarks/calibrate.py``); docs/guide/regression-gating.md quotes it.
 
 - **Reruns** (:mod:`lorisnb.core.stats.reruns`): every sequence of the chosen algorithms'
   ``per-seq`` results rerun ``pool`` times under a noise model, each rerun evaluated by the real
