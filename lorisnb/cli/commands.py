@@ -97,7 +97,11 @@ def _run_evaluation(
     said = [str(w.message) for w in caught if not issubclass(w.category, FailedInputsWarning)]
     notes = list(dict.fromkeys(ev.notes + ev.warnings + said))
     grid = swept(ev.spec) if swept is not None else None  # a sweep: its grid, not the spec's thresholds
-    print(f"conventions{side}: {ev.describe(grid)}", file=sys.stderr)
+    kitti_files = args.gt and "kitti" in (args.format, args.gt_format or args.format)
+    projected = "; KITTI files: each rotation block projected to its nearest rotation" * bool(
+        kitti_files and not ev.spec.as_written
+    )  # evo and kitti compose them as written (said in the spec's words)
+    print(f"conventions{side}: {ev.describe(grid)}{projected}", file=sys.stderr)
     return ev, notes
 
 

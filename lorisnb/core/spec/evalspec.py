@@ -50,7 +50,7 @@ REPEATED = ("drop", "keep")
 #: The KITTI metric's arithmetic: the devkit's single precision, or double.
 KITTI_PRECISIONS = ("single", "double")
 #: Presets that compose KITTI files' matrices as written (:attr:`EvalSpec.as_written`).
-AS_WRITTEN = ("kitti",)
+AS_WRITTEN = ("kitti", "evo")
 MODES = ("auto", "per-seq", "lifelong")
 #: An alignment without its scale (``scale`` off): what each scaled one becomes; the others stay.
 UNSCALED = {"sim3": "se3", "auto": "se3", "scale": "none"}
@@ -169,6 +169,8 @@ class EvalSpec:
 
     def _matrices_words(self) -> str:
         """How KITTI files' rotation blocks are taken (said wherever it matters), and the KITTI metric's settings."""
+        if self.preset_name == "evo":
+            return "; KITTI files' matrices composed as written, as evo (other inputs: their quaternions' rotations)"
         if self.preset_name == "kitti":
             return (
                 f"; KITTI odometry metric (devkit evaluate_odometry.cpp): segments of 100..800 m every 10 frames, "
