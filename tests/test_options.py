@@ -54,6 +54,7 @@ CASES: dict[str, tuple[list[str], list[str]]] = {
     "--relation": (["--relation", "full"], []),
     # the KITTI metric's (issue 45): refused without --conventions kitti (tests/cli/test_kitti_conventions.py)
     "--kitti-precision": (["--kitti-precision", "double"], []),
+    "--change-unit": (["--relation", "trans_part", "--change-unit", "mm"], ["--relation", "trans_part"]),
     "--rpe-pairs": (["--rpe-unit", "m", "--rpe-pairs", "estimate"], ["--rpe-unit", "m"]),
     "--rpe-all-pairs": (["--rpe-unit", "m", "--rpe-all-pairs"], ["--rpe-unit", "m"]),
     "--rpe-consecutive": (["--rpe-consecutive"], []),

@@ -273,6 +273,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         path, rows = sweep_to_parquet(
             ev.errors, args.parquet, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
             force=args.force, progress=not args.no_progress, on_part=summarize, relation=ev.spec.relation,
+            change_unit=ev.spec.change_unit,
             **ev.spec.rpe_options(),
         )  # fmt: skip
         print(f"{rows} rows: {len(ev.errors)} file(s) x {grid}")
@@ -285,7 +286,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         return ev.exit_status()
     table = sweep(
         ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all",
-        relation=ev.spec.relation, **ev.spec.rpe_options(),
+        relation=ev.spec.relation, change_unit=ev.spec.change_unit, **ev.spec.rpe_options(),
     )  # fmt: skip
     table["spec"] = ev.spec.canonical(thresholds=False)
     print(f"{len(table)} rows: {len(ev.errors)} file(s) x {grid}")
@@ -317,7 +318,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
     refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate",
                          "kitti_plot": "lorisnb evaluate --conventions kitti",
-                         "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)"})  # fmt: skip
+                         "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)",
+                         "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)"})  # fmt: skip
     ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"])
     table = ev.sequences()
     if not table.empty:

@@ -10,7 +10,7 @@ from typing import Any
 
 from lorisnb.core.conventions.evo_options import PLANES
 from lorisnb.core.metrics.pairs import RPE_PAIRS
-from lorisnb.core.metrics.relations import RELATIONS
+from lorisnb.core.metrics.relations import RELATIONS, UNITS
 from lorisnb.core.spec import validate
 from lorisnb.core.spec.evalspec import (
     ALIGNMENTS,
@@ -113,6 +113,8 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
                    help="keep poses that moved or turned at least this much (evo's --motion_filter)")  # fmt: skip
     g.add_argument("--relation", default=None, choices=RELATIONS,
                    help="also the ape_* and rpe_* statistics of this pose relation (evo's -r)")  # fmt: skip
+    g.add_argument("--change-unit", default=None, choices=UNITS,
+                   help="the --relation columns in this unit: mm, cm, m, km or deg, rad (evo's --change_unit)")  # fmt: skip
     g.add_argument("--topic", default=None,
                    help="bags: the estimate's pose topic (evo's TF id /tf:parent.child too); several, comma-separated: a row each")  # fmt: skip
     g.add_argument("--gt-topic", default=None, help="bags: the ground truth's pose topic")
@@ -137,7 +139,7 @@ SPEC_OPTIONS = {
     "rpe_delta": "rpe_delta", "rpe_unit": "rpe_unit", "rpe_pairs": "rpe_pairs", "rpe_all_pairs": "rpe_all_pairs",
     "rpe_tolerance": "rpe_tolerance", "t_start": "t_start", "t_end": "t_end", "project_to_plane": "project_to_plane",
     "downsample": "downsample", "motion_filter": "motion_filter", "relation": "relation",
-    "kitti_precision": "kitti_precision",
+    "kitti_precision": "kitti_precision", "change_unit": "change_unit",
 }  # fmt: skip
 
 

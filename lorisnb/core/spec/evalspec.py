@@ -94,6 +94,7 @@ class EvalSpec:
     downsample: int | None = None
     motion_filter: tuple[float, float] | None = None
     relation: str | None = None
+    change_unit: str | None = None
     kitti_precision: str = "single"
     preset_name: str = "openloris"
     explicit: frozenset[str] = field(default=frozenset(), compare=False, repr=False)

@@ -77,7 +77,8 @@ class Evaluation:
         if s.relation is not None and len(table):  # evo's -r: statistics of that pose relation
             from lorisnb.core.metrics.relation_table import relation_columns
 
-            rel = relation_columns(self.errors, s.relation, **{k: v for k, v in kw.items() if k.startswith("rpe_")})
+            rpe = {k: v for k, v in kw.items() if k.startswith("rpe_")}
+            rel = relation_columns(self.errors, s.relation, s.change_unit, **rpe)
             spec = table.pop("spec")
             table = pd.concat([table, rel.set_index(table.index)], axis=1)
             table["spec"] = spec
