@@ -183,9 +183,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(f"wrote {len(table)} rows to {write_parquet(table, args.parquet, force=args.force)}", file=sys.stderr)
     if kitti:
         _print_kitti(ev, args)
-    if getattr(args, "relative", False):
-        rel = ev.relative()
-        print("\nrelative error (rpg_trajectory_evaluation: sub-trajectories of 10..50 % of the length):")
+    if getattr(args, "relative", False) or args.relative_lengths:
+        rel = ev.relative(lengths=args.relative_lengths)
+        which = (f"{', '.join(f'{v:g}' for v in args.relative_lengths)} m" if args.relative_lengths
+                 else "10..50 % of the length")  # fmt: skip
+        print(f"\nrelative error (rpg_trajectory_evaluation: sub-trajectories of {which}; yaw and gravity: its "
+              "split of the rotation error, deg):")  # fmt: skip
         print(_fmt(rel.drop(columns=["suite", "trial"]), args.digits) if not rel.empty else "(no sequence long enough)")
     from lorisnb.tools.evaluation.status import skipped_only
 
@@ -235,6 +238,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from lorisnb.io.writers import write_csv, write_parquet
 
     refuse_unused(args, {"relative": "lorisnb evaluate (rpg's relative error has no threshold to sweep)",
+                         "relative_lengths": "lorisnb evaluate --relative-lengths",
                          "kitti_plot": "lorisnb evaluate --conventions kitti"})  # fmt: skip
     relative = f" (fractions of each sequence's {args.relative_to})" if args.relative_to is not None else " m"
     units = {"eps": relative, "phi": " deg", "delta": " s", "tau": " s"}
@@ -317,7 +321,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if rpe and not args.metric.startswith(("rpe", "c_rpe")):
         raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
     refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate",
-                         "kitti_plot": "lorisnb evaluate --conventions kitti",
+                         "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
                          "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)",
                          "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)"})  # fmt: skip
     ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"])

@@ -122,6 +122,10 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--gt-tf", default=None, metavar="PARENT:CHILD", help="bags: the ground truth as a TF chain")
     g.add_argument("--relative", action="store_true",
                    help="also print rpg's relative error (10..50 %% of each sequence's length; %% and deg/m)")  # fmt: skip
+    g.add_argument("--relative-lengths", default=None, metavar="M,M,...",
+                   type=arg_type(lambda t: [validate.positive("--relative-lengths", v, "metres") for v in t.split(",")]),
+                   help="rpg's relative error at these sub-trajectory lengths, metres (rpg's preset_boxplot_distances; "
+                   "implies --relative)")  # fmt: skip
     g.add_argument("--kitti-precision", default=None, choices=KITTI_PRECISIONS,
                    help="--conventions kitti: the devkit's single-precision arithmetic (default) or double")  # fmt: skip
     g.add_argument("--kitti-plot", default=None, metavar="PNG",
