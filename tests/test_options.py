@@ -54,6 +54,8 @@ CASES: dict[str, tuple[list[str], list[str]]] = {
     "--relation": (["--relation", "full"], []),
     # the KITTI metric's (issue 45): refused without --conventions kitti (tests/cli/test_kitti_conventions.py)
     "--kitti-precision": (["--kitti-precision", "double"], []),
+    "--tartanair-scale": (["--tartanair-scale"], []),  # refused without --conventions tartanair
+    "--tartanair-seed": (["--tartanair-seed", "3"], []),
     "--relative-lengths": (["--relative-lengths", "0.5,1"], []),
     "--change-unit": (["--relation", "trans_part", "--change-unit", "mm"], ["--relation", "trans_part"]),
     "--rpe-pairs": (["--rpe-unit", "m", "--rpe-pairs", "estimate"], ["--rpe-unit", "m"]),

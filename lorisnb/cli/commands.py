@@ -141,7 +141,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     kitti = ev.spec.preset_name == "kitti"
     if args.kitti_plot and not kitti:
         raise ValidationError("--kitti-plot: the KITTI metric's plot, only with --conventions kitti")
-    table = ev.sequences() if args.csv or args.parquet or ev.spec.relation is not None or kitti else None
+    table = (ev.sequences() if args.csv or args.parquet or ev.spec.relation is not None or kitti
+             or ev.spec.preset_name == "tartanair" else None)  # fmt: skip
     columns = frame_columns(table) if table is not None else _rows_as_columns(ev.sequence_rows())
     if columns and len(columns["seq"]):  # printed from the rows: pandas only for a table written
         cols = [
@@ -161,6 +162,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             cols += ["ate_mean", "ate_median", "ate_max", "rpe_trans_rmse", "rpe_rot_rmse"]
         if kitti:  # the devkit's numbers: % and deg/100 m
             cols += ["kitti_t_err", "kitti_r_err", "kitti_segments", "kitti_matrices"]
+        if ev.spec.preset_name == "tartanair":  # tartanair_tools' ate_score, rpe_score, kitti_score
+            cols += [
+                "tartanair_ate",
+                "tartanair_rpe_rot",
+                "tartanair_rpe_trans",
+                "tartanair_kitti_r",
+                "tartanair_kitti_t",
+            ]
         print(format_table({c: columns[c] for c in cols}, args.digits))
         try:
             scenes = aggregate_columns(columns, spans_columns(ev.spans()))

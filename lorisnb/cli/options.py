@@ -82,7 +82,7 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--conventions", default=None, choices=list(PRESETS),
                    help="a preset of the evaluation spec (openloris: the official tool; tum: evaluate_ate.py; "
                    "rpg: rpg_trajectory_evaluation; vio: posyaw; evo: evo_ape/evo_rpe's defaults; kitti: the KITTI "
-                   "odometry devkit's kitti_t_err and kitti_r_err)")  # fmt: skip
+                   "odometry devkit's kitti_t_err and kitti_r_err; tartanair: tartanair_tools' scores)")  # fmt: skip
     g.add_argument("--association", default=None, choices=ASSOCIATIONS,
                    help="interpolate (default), nearest (TUM's greedy), evo-nearest or evo-interpolate (evo's sync)")  # fmt: skip
     g.add_argument("--max-gap", default=None, type=arg_type(lambda t: validate.positive("--max-gap", t, "seconds")),
@@ -128,6 +128,11 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
                    "implies --relative)")  # fmt: skip
     g.add_argument("--kitti-precision", default=None, choices=KITTI_PRECISIONS,
                    help="--conventions kitti: the devkit's single-precision arithmetic (default) or double")  # fmt: skip
+    g.add_argument("--tartanair-scale", action="store_true", default=None,
+                   help="--conventions tartanair: its scale (monocular track) for the ATE, RPE and KITTI score")  # fmt: skip
+    g.add_argument("--tartanair-seed", default=None, metavar="N",
+                   type=arg_type(lambda t: int(validate.finite("--tartanair-seed", t, ""))),
+                   help="--conventions tartanair: the seed of its random RPE pairs (default 0)")  # fmt: skip
     g.add_argument("--kitti-plot", default=None, metavar="PNG",
                    help="--conventions kitti: write the devkit's per-length plot (translation and rotation error)")  # fmt: skip
     g.add_argument("--gt-times", default=None, metavar="FILE", help="KITTI: the ground truth's times file")
@@ -143,7 +148,8 @@ SPEC_OPTIONS = {
     "rpe_delta": "rpe_delta", "rpe_unit": "rpe_unit", "rpe_pairs": "rpe_pairs", "rpe_all_pairs": "rpe_all_pairs",
     "rpe_tolerance": "rpe_tolerance", "t_start": "t_start", "t_end": "t_end", "project_to_plane": "project_to_plane",
     "downsample": "downsample", "motion_filter": "motion_filter", "relation": "relation",
-    "kitti_precision": "kitti_precision", "change_unit": "change_unit",
+    "kitti_precision": "kitti_precision", "change_unit": "change_unit", "tartanair_scale": "tartanair_scale",
+    "tartanair_seed": "tartanair_seed",
 }  # fmt: skip
 
 
