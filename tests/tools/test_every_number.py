@@ -45,3 +45,17 @@ def test_a_preset_that_cannot_pair_says_why(data, tmp_path):
     table = every_number(late, gt, presets=("tum",))
     assert table.set_index("quantity").loc["matched poses", "value"] == 0
     assert table["value"].iloc[1:].isna().all() and "not scored" in table["why"].iloc[0]
+
+
+def test_the_numbers_the_guide_quotes():
+    """docs/guide/conventions-kitti-tartanair.md quotes these on KITTI 09 (kitti-odom-eval's example)."""
+    from peers import kitti_pair
+
+    gt, est = kitti_pair("09")
+    wide = side_by_side(every_number(est, gt, fmt="kitti"))
+    ate = wide.loc[("ATE RMSE", "m")]
+    assert round(ate["openloris"], 2) == round(ate["tum"], 2) == 10.88
+    assert round(wide.loc[("TartanAir ATE", "m")]["tartanair"], 2) == 10.88
+    assert round(ate["rpg"], 2) == 10.73 and round(ate["evo"], 2) == round(ate["kitti"], 2) == 17.92
+    assert round(wide.loc[("KITTI translational error", "%")]["kitti"], 2) == 2.61
+    assert round(wide.loc[("KITTI rotational error", "deg/100 m")]["kitti"], 3) == 0.288
