@@ -199,6 +199,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(f"\nrelative error (rpg_trajectory_evaluation: sub-trajectories of {which}; yaw and gravity: its "
               "split of the rotation error, deg):")  # fmt: skip
         print(_fmt(rel.drop(columns=["suite", "trial"]), args.digits) if not rel.empty else "(no sequence long enough)")
+        print("\nabsolute error and scale error (rpg_trajectory_evaluation's compute_absolute_error; scale in %):")
+        print(_fmt(ev.rpg_absolute().drop(columns=["trial"]), args.digits))
     from lorisnb.tools.evaluation.status import skipped_only
 
     _report_problems(ev, notes)

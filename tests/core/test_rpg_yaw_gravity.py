@@ -42,3 +42,21 @@ def test_yaw_and_gravity_equal_rpg(data, rpg_errors, length, capsys):
     np.testing.assert_allclose(ours["yaw"], yaw, rtol=1e-9, atol=1e-10)
     np.testing.assert_allclose(ours["gravity"], gravity, rtol=1e-9, atol=1e-10)
     assert (ours["gravity"] > 0).any() and (ours["yaw"] > 0).any()
+
+
+def test_scale_error_equals_rpg(data, rpg_errors):
+    """rpg's absolute scale error (its e_scale_perc) on the same aligned poses, as rpg computes it."""
+    from lorisnb.core.metrics.relative import rpg_absolute_table, rpg_scale_errors
+
+    tum = data.tum
+    ev = lorisnb.evaluate_pairs(tum / "freiburg1_xyz-rgbdslam.txt", tum / "freiburg1_xyz-groundtruth.txt", "rpg")
+    e = ev.errors[0].sequences[0]
+    trans, _, rot, _, scale = rpg_errors.compute_absolute_error(
+        e.est_positions, e.est_quaternions, e.gt_positions, e.gt_quaternions
+    )
+    np.testing.assert_allclose(rpg_scale_errors(e.gt_positions, e.est_positions), scale, rtol=1e-12, atol=1e-12)
+    row = rpg_absolute_table(ev.errors).iloc[0]
+    assert row["scale_perc_mean"] == pytest.approx(np.mean(scale), rel=1e-12)
+    assert row["trans_rmse"] == pytest.approx(np.sqrt(np.mean(trans**2)), rel=1e-9)
+    assert row["rot_rmse"] == pytest.approx(np.sqrt(np.mean(rot**2)), rel=1e-6)
+    assert ev.rpg_absolute().equals(rpg_absolute_table(ev.errors))

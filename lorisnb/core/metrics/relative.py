@@ -130,6 +130,39 @@ def rpg_relative_errors(
     return pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(columns=cols)
 
 
+def rpg_scale_errors(gt_positions: np.ndarray, est_positions: np.ndarray) -> np.ndarray:
+    """rpg's scale error of each aligned pose (its ``compute_absolute_error``'s ``e_scale_perc``),
+    percent: ``|(|p_est| / |p_gt|) - 1| x 100``. rpg means the ratio of distances travelled, but its
+    ``np.diff(p, 0)`` is a difference of order 0, the positions themselves, so the ratio is that of the
+    positions' distances from the world origin; reproduced as rpg computes it (a ground-truth position
+    at the origin gives inf or NaN, as in rpg)."""
+    g = np.sqrt(np.einsum("ij,ij->i", gt_positions, gt_positions))
+    e = np.sqrt(np.einsum("ij,ij->i", est_positions, est_positions))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.abs((e / g - 1.0) * 100)
+
+
+def rpg_absolute_table(errors: FileErrors | Iterable[FileErrors]) -> pd.DataFrame:
+    """rpg's absolute errors of every sequence on the aligned poses: ``trans_rmse`` (m), ``rot_rmse``
+    (deg) and its scale error (:func:`rpg_scale_errors`, percent): ``scale_perc_rmse``,
+    ``scale_perc_mean``, ``scale_perc_median``."""
+    import pandas as pd
+
+    from lorisnb.core.metrics.relations import error_statistics
+
+    rows = []
+    for f in as_files(errors):
+        for e in f.sequences:
+            scale = error_statistics(rpg_scale_errors(e.gt_positions, e.est_positions))
+            rows.append(dict(algorithm=f.algorithm, file=f.file, trial=f.trial, seq=e.seq, matched=e.matched,
+                             trans_rmse=error_statistics(e.ate)["rmse"], rot_rmse=error_statistics(e.aoe)["rmse"],
+                             scale_perc_rmse=scale["rmse"], scale_perc_mean=scale["mean"],
+                             scale_perc_median=scale["median"]))  # fmt: skip
+    cols = ["algorithm", "file", "trial", "seq", "matched", "trans_rmse", "rot_rmse", "scale_perc_rmse",
+            "scale_perc_mean", "scale_perc_median"]  # fmt: skip
+    return pd.DataFrame(rows, columns=cols)
+
+
 def _yaw_gravity(r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """rpg's split of (N, 3, 3) world-frame error rotations: ``|yaw|`` and ``sqrt(pitch^2 + roll^2)``,
     degrees, of ``euler_from_matrix(R, 'rzyx')`` (transformations.py; its branch for a pitch of

@@ -174,6 +174,13 @@ class Evaluation:
 
         return relative_table(self.errors, fractions, lengths)
 
+    def rpg_absolute(self) -> pd.DataFrame:
+        """rpg_trajectory_evaluation's absolute errors and its scale error per sequence
+        (:func:`lorisnb.core.metrics.relative.rpg_absolute_table`)."""
+        from lorisnb.core.metrics.relative import rpg_absolute_table
+
+        return rpg_absolute_table(self.errors)
+
     @property
     def algorithms(self) -> list[str]:
         return sorted({f.algorithm for f in self.errors})
