@@ -11,6 +11,9 @@ A test that needs a peer missing there skips, saying how to fetch it (once, by h
   (``dataset/kitti_odom/gt_poses/00..10.txt``, ``result/example_1/09.txt`` and ``10.txt``: a
   learned visual odometry's estimates).
 
+- ``rpg_trajectory_evaluation/``: github.com/uzh-rpg/rpg_trajectory_evaluation at
+  8c8ceec55c5c5094a6494208cfc5f54afe0bbc4d (MIT): its ``src/rpg_trajectory_evaluation`` modules.
+
 ``git clone URL DIR && git -C DIR checkout COMMIT`` into the peers folder does it.
 """
 
@@ -28,6 +31,10 @@ import pytest
 PEERS = {
     "kitti_devkit": ("evaluate_odometry.cpp", "the KITTI odometry devkit's devkit/cpp folder"),
     "kitti-odom-eval": ("kitti_odometry.py", "github.com/Huangying-Zhan/kitti-odom-eval"),
+    "rpg_trajectory_evaluation": (
+        "src/rpg_trajectory_evaluation/compute_trajectory_errors.py",
+        "github.com/uzh-rpg/rpg_trajectory_evaluation",
+    ),
     "tartanair_tools": ("evaluation/tartanair_evaluator.py", "github.com/castacks/tartanair_tools"),
 }
 

@@ -100,7 +100,11 @@ def _run_evaluation(
     said = [str(w.message) for w in caught if not issubclass(w.category, FailedInputsWarning)]
     notes = list(dict.fromkeys(ev.notes + ev.warnings + said))
     grid = swept(ev.spec) if swept is not None else None  # a sweep: its grid, not the spec's thresholds
-    print(f"conventions{side}: {ev.describe(grid)}", file=sys.stderr)
+    kitti_files = args.gt and "kitti" in (args.format, args.gt_format or args.format)
+    projected = "; KITTI files: each rotation block projected to its nearest rotation" * bool(
+        kitti_files and not ev.spec.as_written
+    )  # evo and kitti compose them as written (said in the spec's words)
+    print(f"conventions{side}: {ev.describe(grid)}{projected}", file=sys.stderr)
     return ev, notes
 
 
@@ -140,7 +144,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     kitti = ev.spec.preset_name == "kitti"
     if args.kitti_plot and not kitti:
         raise ValidationError("--kitti-plot: the KITTI metric's plot, only with --conventions kitti")
-    table = ev.sequences() if args.csv or args.parquet or ev.spec.relation is not None or kitti else None
+    table = (ev.sequences() if args.csv or args.parquet or ev.spec.relation is not None or kitti
+             or ev.spec.preset_name == "tartanair" else None)  # fmt: skip
     columns = frame_columns(table) if table is not None else _rows_as_columns(ev.sequence_rows())
     if columns and len(columns["seq"]):  # printed from the rows: pandas only for a table written
         cols = [
@@ -160,6 +165,14 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             cols += ["ate_mean", "ate_median", "ate_max", "rpe_trans_rmse", "rpe_rot_rmse"]
         if kitti:  # the devkit's numbers: % and deg/100 m
             cols += ["kitti_t_err", "kitti_r_err", "kitti_segments", "kitti_matrices"]
+        if ev.spec.preset_name == "tartanair":  # tartanair_tools' ate_score, rpe_score, kitti_score
+            cols += [
+                "tartanair_ate",
+                "tartanair_rpe_rot",
+                "tartanair_rpe_trans",
+                "tartanair_kitti_r",
+                "tartanair_kitti_t",
+            ]
         print(format_table({c: columns[c] for c in cols}, args.digits))
         try:
             scenes = aggregate_columns(columns, spans_columns(ev.spans()))
@@ -182,10 +195,15 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(f"wrote {len(table)} rows to {write_parquet(table, args.parquet, force=args.force)}", file=sys.stderr)
     if kitti:
         _print_kitti(ev, args)
-    if getattr(args, "relative", False):
-        rel = ev.relative()
-        print("\nrelative error (rpg_trajectory_evaluation: sub-trajectories of 10..50 % of the length):")
+    if getattr(args, "relative", False) or args.relative_lengths:
+        rel = ev.relative(lengths=args.relative_lengths)
+        which = (f"{', '.join(f'{v:g}' for v in args.relative_lengths)} m" if args.relative_lengths
+                 else "10..50 % of the length")  # fmt: skip
+        print(f"\nrelative error (rpg_trajectory_evaluation: sub-trajectories of {which}; yaw and gravity: its "
+              "split of the rotation error, deg):")  # fmt: skip
         print(_fmt(rel.drop(columns=["suite", "trial"]), args.digits) if not rel.empty else "(no sequence long enough)")
+        print("\nabsolute error and scale error (rpg_trajectory_evaluation's compute_absolute_error; scale in %):")
+        print(_fmt(ev.rpg_absolute().drop(columns=["trial"]), args.digits))
     from lorisnb.tools.evaluation.status import skipped_only
 
     _report_problems(ev, notes)
@@ -234,6 +252,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from lorisnb.io.writers import write_csv, write_parquet
 
     refuse_unused(args, {"relative": "lorisnb evaluate (rpg's relative error has no threshold to sweep)",
+                         "relative_lengths": "lorisnb evaluate --relative-lengths",
                          "kitti_plot": "lorisnb evaluate --conventions kitti"})  # fmt: skip
     relative = f" (fractions of each sequence's {args.relative_to})" if args.relative_to is not None else " m"
     units = {"eps": relative, "phi": " deg", "delta": " s", "tau": " s"}
@@ -272,6 +291,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         path, rows = sweep_to_parquet(
             ev.errors, args.parquet, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
             force=args.force, progress=not args.no_progress, on_part=summarize, relation=ev.spec.relation,
+            change_unit=ev.spec.change_unit,
             **ev.spec.rpe_options(),
         )  # fmt: skip
         print(f"{rows} rows: {len(ev.errors)} file(s) x {grid}")
@@ -284,7 +304,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         return ev.exit_status()
     table = sweep(
         ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all",
-        relation=ev.spec.relation, **ev.spec.rpe_options(),
+        relation=ev.spec.relation, change_unit=ev.spec.change_unit, **ev.spec.rpe_options(),
     )  # fmt: skip
     table["spec"] = ev.spec.canonical(thresholds=False)
     print(f"{len(table)} rows: {len(ev.errors)} file(s) x {grid}")
@@ -315,8 +335,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if rpe and not args.metric.startswith(("rpe", "c_rpe")):
         raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
     refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate",
-                         "kitti_plot": "lorisnb evaluate --conventions kitti",
-                         "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)"})  # fmt: skip
+                         "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
+                         "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)",
+                         "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)"})  # fmt: skip
     ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"])
     table = ev.sequences()
     if not table.empty:

@@ -10,7 +10,7 @@ from typing import Any
 
 from lorisnb.core.conventions.evo_options import PLANES
 from lorisnb.core.metrics.pairs import RPE_PAIRS
-from lorisnb.core.metrics.relations import RELATIONS
+from lorisnb.core.metrics.relations import RELATIONS, UNITS
 from lorisnb.core.spec import validate
 from lorisnb.core.spec.evalspec import (
     ALIGNMENTS,
@@ -85,7 +85,7 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--conventions", default=None, choices=list(PRESETS),
                    help="a preset of the evaluation spec (openloris: the official tool; tum: evaluate_ate.py; "
                    "rpg: rpg_trajectory_evaluation; vio: posyaw; evo: evo_ape/evo_rpe's defaults; kitti: the KITTI "
-                   "odometry devkit's kitti_t_err and kitti_r_err)")  # fmt: skip
+                   "odometry devkit's kitti_t_err and kitti_r_err; tartanair: tartanair_tools' scores)")  # fmt: skip
     g.add_argument("--association", default=None, choices=ASSOCIATIONS,
                    help="interpolate (default), nearest (TUM's greedy), evo-nearest or evo-interpolate (evo's sync)")  # fmt: skip
     g.add_argument("--max-gap", default=None, type=arg_type(lambda t: validate.positive("--max-gap", t, "seconds")),
@@ -116,6 +116,8 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
                    help="keep poses that moved or turned at least this much (evo's --motion_filter)")  # fmt: skip
     g.add_argument("--relation", default=None, choices=RELATIONS,
                    help="also the ape_* and rpe_* statistics of this pose relation (evo's -r)")  # fmt: skip
+    g.add_argument("--change-unit", default=None, choices=UNITS,
+                   help="the --relation columns in this unit: mm, cm, m, km or deg, rad (evo's --change_unit)")  # fmt: skip
     g.add_argument("--topic", default=None,
                    help="bags: the estimate's pose topic (evo's TF id /tf:parent.child too); several, comma-separated: a row each")  # fmt: skip
     g.add_argument("--gt-topic", default=None, help="bags: the ground truth's pose topic")
@@ -123,8 +125,17 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--gt-tf", default=None, metavar="PARENT:CHILD", help="bags: the ground truth as a TF chain")
     g.add_argument("--relative", action="store_true",
                    help="also print rpg's relative error (10..50 %% of each sequence's length; %% and deg/m)")  # fmt: skip
+    g.add_argument("--relative-lengths", default=None, metavar="M,M,...",
+                   type=arg_type(lambda t: [validate.positive("--relative-lengths", v, "metres") for v in t.split(",")]),
+                   help="rpg's relative error at these sub-trajectory lengths, metres (rpg's preset_boxplot_distances; "
+                   "implies --relative)")  # fmt: skip
     g.add_argument("--kitti-precision", default=None, choices=KITTI_PRECISIONS,
                    help="--conventions kitti: the devkit's single-precision arithmetic (default) or double")  # fmt: skip
+    g.add_argument("--tartanair-scale", action="store_true", default=None,
+                   help="--conventions tartanair: its scale (monocular track) for the ATE, RPE and KITTI score")  # fmt: skip
+    g.add_argument("--tartanair-seed", default=None, metavar="N",
+                   type=arg_type(lambda t: int(validate.finite("--tartanair-seed", t, ""))),
+                   help="--conventions tartanair: the seed of its random RPE pairs (default 0)")  # fmt: skip
     g.add_argument("--kitti-plot", default=None, metavar="PNG",
                    help="--conventions kitti: write the devkit's per-length plot (translation and rotation error)")  # fmt: skip
     g.add_argument("--gt-times", default=None, metavar="FILE", help="KITTI: the ground truth's times file")
@@ -140,7 +151,8 @@ SPEC_OPTIONS = {
     "rpe_delta": "rpe_delta", "rpe_unit": "rpe_unit", "rpe_pairs": "rpe_pairs", "rpe_all_pairs": "rpe_all_pairs",
     "rpe_tolerance": "rpe_tolerance", "t_start": "t_start", "t_end": "t_end", "project_to_plane": "project_to_plane",
     "downsample": "downsample", "motion_filter": "motion_filter", "relation": "relation",
-    "kitti_precision": "kitti_precision",
+    "kitti_precision": "kitti_precision", "change_unit": "change_unit", "tartanair_scale": "tartanair_scale",
+    "tartanair_seed": "tartanair_seed",
 }  # fmt: skip
 
 

@@ -88,7 +88,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
     from lorisnb.tools.decisions.runs import is_report_run, is_table, spec_differences
 
     refuse_unused(args, {"relative": "lorisnb evaluate (diff compares the RPE columns)",
-                         "kitti_plot": "lorisnb evaluate --conventions kitti",
+                         "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
                          "relation": "lorisnb evaluate (diff compares CR, CR-T, CS-R, ATE, AOE and RPE, not evo's "
                          "pose-relation columns)"})  # fmt: skip
     if len(args.paths) != 2:

@@ -54,6 +54,10 @@ CASES: dict[str, tuple[list[str], list[str]]] = {
     "--relation": (["--relation", "full"], []),
     # the KITTI metric's (issue 45): refused without --conventions kitti (tests/cli/test_kitti_conventions.py)
     "--kitti-precision": (["--kitti-precision", "double"], []),
+    "--tartanair-scale": (["--tartanair-scale"], []),  # refused without --conventions tartanair
+    "--tartanair-seed": (["--tartanair-seed", "3"], []),
+    "--relative-lengths": (["--relative-lengths", "0.5,1"], []),
+    "--change-unit": (["--relation", "trans_part", "--change-unit", "mm"], ["--relation", "trans_part"]),
     "--rpe-pairs": (["--rpe-unit", "m", "--rpe-pairs", "estimate"], ["--rpe-unit", "m"]),
     "--rpe-all-pairs": (["--rpe-unit", "m", "--rpe-all-pairs"], ["--rpe-unit", "m"]),
     "--rpe-consecutive": (["--rpe-consecutive"], []),
@@ -171,7 +175,7 @@ def _honoured(option: str, a: tuple, b: tuple) -> str:
     assert rc in (0, 1), (option, err)
     if f"note: {option}" in err or f"{option} " in err.split("conventions:")[0]:
         return "noted"
-    if option == "--relative":
+    if option in ("--relative", "--relative-lengths"):
         assert out != b[1], "--relative printed nothing more"
         return "changed"
     assert table is not None and b[3] is not None, (option, err)

@@ -201,3 +201,31 @@ def test_classic_crosscheck_checks_its_rpe_steps_and_flags(data):
     dso = data.icra20 / "per-seq" / "dso" / "cafe-1-1-all.txt"
     table = crosscheck_openloris(dso, scale="no", data_root=data.root, rpe_deltas=[(1, "f")])
     assert set(table.loc[table["quantity"] == "rpe_trans_rmse", "alignment"]) == {"se3"}
+
+
+def test_evo_zips_of_other_settings_are_not_joined(data, tmp_path):
+    """Issue 45: an APE of a --t_start/--t_end run sat next to a full-range RPE in one row, and one RPE
+    was copied into two rows. Now each run is its own row with its settings (t_first, t_last), and APE
+    and RPE are joined only when the same poses and the same alignment were used."""
+
+    ref, est = _evo_synced(data)
+    c = copy.deepcopy
+    t0 = float(ref.timestamps[0])
+    window_ref, window_est = c(ref), c(est)
+    keep = [i for i, t in enumerate(window_ref.timestamps) if t0 + 5 <= t <= t0 + 20]
+    window_ref.reduce_to_ids(keep)
+    window_est.reduce_to_ids(keep)
+    a_window = ape(c(window_ref), c(window_est), em.PoseRelation.translation_part, align=True)
+    a_full = ape(c(ref), c(est), em.PoseRelation.translation_part, align=True)
+    r_full = rpe(c(ref), c(est), em.PoseRelation.translation_part, delta=1, delta_unit=em.Unit.frames, align=True)
+    for name, res in (("ape_window", a_window), ("ape_full", a_full), ("rpe_full", r_full)):
+        _save(res, tmp_path / f"{name}.zip")
+    table = evo_results_table([tmp_path])
+    assert len(table) == 2
+    joined = table[table["rpe_trans_rmse"].notna()]
+    assert len(joined) == 1  # the RPE once, next to the full-range APE only
+    assert joined.iloc[0]["ate_rmse"] == pytest.approx(a_full.stats["rmse"], rel=1e-15)
+    alone = table[table["rpe_trans_rmse"].isna()].iloc[0]
+    assert alone["ate_rmse"] == pytest.approx(a_window.stats["rmse"], rel=1e-15)
+    assert alone["matched"] == len(keep) and alone["t_first"] == pytest.approx(window_est.timestamps[0], abs=1e-6)
+    assert joined.iloc[0]["t_first"] == pytest.approx(est.timestamps[0], abs=1e-6)

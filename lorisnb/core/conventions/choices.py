@@ -173,6 +173,7 @@ def fit_alignment(
     gt_quaternions: np.ndarray | None = None,
     strict: bool = True,
     notes: list[str | None] | None = None,
+    origin_blocks: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> Sim3:
     """The alignment ``gt = s R est + t`` of matched poses by ``method`` (see the module
     docstring), fitted on the first ``frames`` matched poses (None: all). Positions in metres;
@@ -183,7 +184,8 @@ def fit_alignment(
     fits se3/sim3 on all poses all the same, as the official OpenLORIS tool does (the pipeline then
     says so: :func:`lorisnb.core.pipeline.plausibility.degenerate_fit`). posyaw on an estimate tilted
     against the ground truth, or an alignment on all of fewer than :data:`FEW_POSES` poses, is
-    warned about (appended to ``notes`` when given, else a LorisWarning)."""
+    warned about (appended to ``notes`` when given, else a LorisWarning). ``origin_blocks``: the first
+    matched estimate and ground-truth rotation blocks as written, for ``origin`` (evo composes them)."""
     method = choice("align", method, ALIGNMENTS)
     p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
     if method == "none" or len(p_e) == 0:
@@ -193,7 +195,7 @@ def fit_alignment(
     if method == "origin":
         if est_quaternions is None or gt_quaternions is None:
             raise EvaluationError("align='origin' needs the orientations")
-        return origin_alignment(p_e[0], est_quaternions[0], p_g[0], gt_quaternions[0])
+        return origin_alignment(p_e[0], est_quaternions[0], p_g[0], gt_quaternions[0], *(origin_blocks or (None, None)))
     if frames is None and 3 <= len(p_e) < FEW_POSES:
         _say(
             f"the {method} alignment is fitted on all of only {len(p_e)} matched poses, so it absorbs most of their "

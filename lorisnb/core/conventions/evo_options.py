@@ -32,12 +32,18 @@ def scale_alignment(est_positions: np.ndarray, gt_positions: np.ndarray, frames:
 
 
 def origin_alignment(
-    est_position: np.ndarray, est_quaternion: np.ndarray, gt_position: np.ndarray, gt_quaternion: np.ndarray
-) -> Sim3:
+    est_position: np.ndarray, est_quaternion: np.ndarray, gt_position: np.ndarray, gt_quaternion: np.ndarray,
+    est_block: np.ndarray | None = None, gt_block: np.ndarray | None = None,
+) -> Sim3:  # fmt: skip
     """evo's ``--align_origin``: the rigid transform taking the first matched estimate pose onto the
-    first matched reference pose, ``T_gt0 T_est0^-1`` (quaternions ``xyzw``, positions metres)."""
-    r_g = quat_to_matrix(quat_normalize(np.asarray(gt_quaternion, float)))
-    r_e = quat_to_matrix(quat_normalize(np.asarray(est_quaternion, float)))
+    first matched reference pose, ``T_gt0 T_est0^-1`` (quaternions ``xyzw``, positions metres); with
+    both poses' rotation blocks as written (KITTI files, ``est_block``, ``gt_block``), of those, the
+    inverse a transpose, as evo composes them (the rotation is then not quite one)."""
+    if est_block is not None and gt_block is not None:
+        r_g, r_e = np.asarray(gt_block, float), np.asarray(est_block, float)
+    else:
+        r_g = quat_to_matrix(quat_normalize(np.asarray(gt_quaternion, float)))
+        r_e = quat_to_matrix(quat_normalize(np.asarray(est_quaternion, float)))
     rot = r_g @ r_e.T
     return Sim3(rot, np.asarray(gt_position, float) - rot @ np.asarray(est_position, float), 1.0)
 

@@ -24,7 +24,7 @@ from lorisnb.core.conventions.evo_sync import (
 from lorisnb.core.metrics import openloris as metrics
 from lorisnb.core.pipeline.model import SequenceErrors
 from lorisnb.core.spec.evalspec import EvalSpec
-from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.core.trajectory.poses import Trajectory, written_blocks
 
 
 def prepare(gt: Trajectory, est: Trajectory, spec: EvalSpec) -> tuple[Trajectory, Trajectory]:
@@ -76,8 +76,9 @@ def evo_match(gt: Trajectory, est: Trajectory, spec: EvalSpec) -> tuple[Associat
                                g_start, g_end), e2  # fmt: skip
         g2 = evo_interpolate(gt, est.stamps[ej] + spec.t_offset)
         return Association(ej, est.stamps[ej] + spec.t_offset, g2.positions, g2.quaternions, g_start, g_end), est
+    blocks = written_blocks(gt) if spec.as_written else None  # nearest stamps: poses as written (interpolated: not)
     return Association(ej, est.stamps[ej] + spec.t_offset, gt.positions[gi], quat_normalize(gt.quaternions[gi]),
-                       g_start, g_end), est  # fmt: skip
+                       g_start, g_end, None if blocks is None else blocks[gi]), est  # fmt: skip
 
 
 def whole_length(traj: Trajectory) -> float:

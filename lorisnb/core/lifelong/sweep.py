@@ -149,6 +149,7 @@ def sweep(
     rpe_all_pairs: bool | None = OF_SPEC,
     rpe_tolerance: float = OF_SPEC,
     relation: str | None = None,
+    change_unit: str | None = None,
 ) -> pd.DataFrame:
     """One row per sequence and per combination of thresholds. With ``columns="all"`` the columns
     are those of :func:`lorisnb.core.lifelong.scoring.score` (a row equals ``score`` at that setting, RPE
@@ -165,7 +166,8 @@ def sweep(
             would take more memory than this.
         rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance: as :func:`~lorisnb.core.lifelong.scoring.score`'s
             (not given: the errors' own spec's).
-        relation: evo's pose relation (``evaluate --relation``): its ``ape_*``/``rpe_*`` columns last.
+        relation: evo's pose relation (``evaluate --relation``): its ``ape_*``/``rpe_*`` columns last,
+            in ``change_unit`` (evo's ``--change_unit``; None: the relation's own).
     """
     files = as_files(errors)
     if relative_to is not None:
@@ -227,7 +229,7 @@ def sweep(
     else:
         data["eps_value"] = np.tile(labels[grid_idx[0]].astype(float), S)
     if relation is not None:  # threshold-free, per sequence, as evaluate's
-        data |= repeated_relation_columns(files, relation, n_set, rpe_delta=rpe_d, rpe_unit=rpe_u, rpe_pairs=rpe_p,
+        data |= repeated_relation_columns(files, relation, n_set, change_unit, rpe_delta=rpe_d, rpe_unit=rpe_u, rpe_pairs=rpe_p,
                                           rpe_all_pairs=rpe_a, rpe_tolerance=rpe_t)  # fmt: skip
         cols = cols + RELATION_COLUMNS
     # columns in final order, no consolidation copy: the table is large for big grids

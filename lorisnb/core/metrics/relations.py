@@ -6,7 +6,14 @@ Q; Kümmerle et al.), for RPE ``E = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j)`` (TUM RGB-D). 
 ``|t_E|`` metres; ``rot_part``: ``|R_E - I|_F`` (no unit; ``2 sqrt(2) sin(theta / 2)`` for a
 rotation by theta); ``full``: ``|E - I|_F`` = ``sqrt(rot_part^2 + trans_part^2)``; ``angle_deg``
 and ``angle_rad``: theta; ``point_distance``: for APE the distance of the positions (as
-``trans_part``), for RPE ``| |q_j - q_i| - |p_j - p_i| |`` metres.
+``trans_part``), for RPE ``| |q_j - q_i| - |p_j - p_i| |`` metres. ``point_distance_error_ratio``
+(RPE only, as ``evo_rpe -r``; evo_ape has no such relation, so its APE values are none): that
+difference in percent of the reference's distance ``|q_j - q_i|``, pairs with a zero reference
+distance left out (evo warns "Ignoring N zero divisions").
+
+Units (:func:`change_unit`, evo's ``--change_unit``): a relation in metres can be given in mm, cm,
+m or km, one in degrees or radians in the other; the others (``rot_part``, ``full``, the ratio)
+have none to change, as evo refuses them.
 
 Statistics (:func:`error_statistics`): rmse, mean, median, std (population, ddof 0), min, max and
 sse (sum of squares), evo's ``get_all_statistics``.
@@ -28,11 +35,46 @@ from lorisnb.core.alignment.geometry import (
 )
 from lorisnb.errors import ValidationError
 
-RELATIONS = ("trans_part", "angle_deg", "angle_rad", "rot_part", "full", "point_distance")
+RELATIONS = ("trans_part", "angle_deg", "angle_rad", "rot_part", "full", "point_distance", "point_distance_error_ratio")
 #: Unit of each relation's values (evo's).
 RELATION_UNITS = {
     "trans_part": "m", "angle_deg": "deg", "angle_rad": "rad", "rot_part": "", "full": "", "point_distance": "m",
+    "point_distance_error_ratio": "%",
 }  # fmt: skip
+#: evo's ``--change_unit`` units: metres per length unit, and the angle units.
+LENGTH_UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "km": 1e3}
+ANGLE_UNITS = ("deg", "rad")
+UNITS = (*LENGTH_UNITS, *ANGLE_UNITS)
+
+
+def unit_refusal(relation: str | None, unit: str) -> str | None:
+    """Why ``unit`` cannot be the unit of ``relation``'s values (evo's ``change_unit`` rules), or None."""
+    if relation is None:
+        return "evo's --change_unit changes the unit of the pose relation's columns: give a relation (--relation)"
+    have = RELATION_UNITS[check_relation(relation)]
+    if have in ("", "%"):
+        return f"relation {relation} has {'no unit' if not have else 'percent'}: evo does not convert it"
+    if (have in LENGTH_UNITS) != (unit in LENGTH_UNITS):
+        return (
+            f"relation {relation} is in {have}: cannot convert it to {unit} (evo: lengths to lengths, angles to angles)"
+        )
+    return None
+
+
+def change_unit(values: np.ndarray, relation: str, unit: str | None) -> np.ndarray:
+    """``values`` of ``relation`` in ``unit`` (evo's ``Metric.change_unit``; None: unchanged). A
+    ValidationError where the unit cannot apply (:func:`unit_refusal`)."""
+    if unit is None or unit == RELATION_UNITS[relation]:
+        return values
+    why = unit_refusal(relation, unit)
+    if why is not None:
+        raise ValidationError(why)
+    have = RELATION_UNITS[relation]
+    if have in LENGTH_UNITS:
+        return values * (LENGTH_UNITS[have] / LENGTH_UNITS[unit])
+    return np.rad2deg(values) if unit == "deg" else np.deg2rad(values)
+
+
 STATISTICS = ("rmse", "mean", "median", "std", "min", "max", "sse")
 
 
@@ -74,6 +116,8 @@ def ape_relation(
     """Absolute pose error of each matched pose by ``relation`` (see the module docstring).
     Positions (N, 3) metres; quaternions (N, 4) ``xyzw`` (normalized here)."""
     relation = check_relation(relation)
+    if relation == "point_distance_error_ratio":  # evo_rpe's only: no APE value
+        return np.zeros(0)
     d = np.asarray(est_positions, float) - np.asarray(gt_positions, float)
     trans = np.sqrt(np.einsum("ij,ij->i", d, d))
     if relation in ("trans_part", "point_distance"):
@@ -90,9 +134,14 @@ def rpe_relation(
     relation = check_relation(relation)
     i, j = np.asarray(i, np.intp), np.asarray(j, np.intp)
     pg, pe = np.asarray(gt_positions, float), np.asarray(est_positions, float)
-    if relation == "point_distance":
+    if relation in ("point_distance", "point_distance_error_ratio"):
         dg, de = pg[j] - pg[i], pe[j] - pe[i]
-        return np.abs(np.sqrt(np.einsum("ij,ij->i", dg, dg)) - np.sqrt(np.einsum("ij,ij->i", de, de)))
+        ref = np.sqrt(np.einsum("ij,ij->i", dg, dg))
+        diff = np.abs(ref - np.sqrt(np.einsum("ij,ij->i", de, de)))
+        if relation == "point_distance":
+            return diff
+        nz = ref != 0
+        return diff[nz] / ref[nz] * 100
     qg, qe = as_quaternions(gt_quaternions), as_quaternions(est_quaternions)
     rel_g = quat_conj_multiply(qg[i], qg[j])  # Q_i^-1 Q_j
     rel_e = quat_conj_multiply(qe[i], qe[j])  # P_i^-1 P_j

@@ -13,7 +13,10 @@ to ``d_i + L``, within ``0.2 L``. Like rpg, the pairs are then numbered in order
 found an end (rpg's ``compute_relative_error`` pairs the k-th found end with the k-th pose); the
 two agree whenever the ends missing are all at the end of the trajectory, as they are unless the
 ground truth jumps by more than 0.2 L. The rotation angle is ``arccos((trace R - 1) / 2)`` as rpg
-computes it.
+computes it. The error is also split as rpg splits it (``rel_yaw``, ``rel_gravity``): the error
+rotation expressed in the world frame, ``R_w = R_est,j R_E R_est,j^T``, as z-y-x Euler angles
+(``euler_from_matrix(R_w, 'rzyx')``): ``yaw`` the absolute yaw, ``gravity`` the root of the
+squared pitch and roll (the part gravity makes observable to a visual-inertial system), degrees.
 """
 
 from __future__ import annotations
@@ -104,8 +107,11 @@ def rpg_relative_errors(
         inv_rel_g = quat_conjugate(rel_g_q)
         err_t = quat_rotate(inv_rel_g, rel_e_t - rel_g_t)
         err_q = quat_multiply(inv_rel_g, quat_multiply(inv_e, q_e[j]))
-        trace = quat_to_matrix(err_q).trace(axis1=1, axis2=2)
+        r_err = quat_to_matrix(err_q)
+        trace = r_err.trace(axis1=1, axis2=2)
         rot = np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0)))
+        r_j = quat_to_matrix(q_e[j])
+        yaw, gravity = _yaw_gravity(np.einsum("nij,njk,nlk->nil", r_j, r_err, r_j))
         trans = np.linalg.norm(err_t, axis=1)
         rows.append(
             pd.DataFrame(
@@ -115,11 +121,58 @@ def rpg_relative_errors(
                     trans_perc=trans / length * 100,
                     rot=rot,
                     rot_deg_per_m=rot / length,
+                    yaw=yaw,
+                    gravity=gravity,
                 )
             )  # fmt: skip
         )
-    cols = ["length", "trans", "trans_perc", "rot", "rot_deg_per_m"]
+    cols = ["length", "trans", "trans_perc", "rot", "rot_deg_per_m", "yaw", "gravity"]
     return pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(columns=cols)
+
+
+def rpg_scale_errors(gt_positions: np.ndarray, est_positions: np.ndarray) -> np.ndarray:
+    """rpg's scale error of each aligned pose (its ``compute_absolute_error``'s ``e_scale_perc``),
+    percent: ``|(|p_est| / |p_gt|) - 1| x 100``. rpg means the ratio of distances travelled, but its
+    ``np.diff(p, 0)`` is a difference of order 0, the positions themselves, so the ratio is that of the
+    positions' distances from the world origin; reproduced as rpg computes it (a ground-truth position
+    at the origin gives inf or NaN, as in rpg)."""
+    g = np.sqrt(np.einsum("ij,ij->i", gt_positions, gt_positions))
+    e = np.sqrt(np.einsum("ij,ij->i", est_positions, est_positions))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.abs((e / g - 1.0) * 100)
+
+
+def rpg_absolute_table(errors: FileErrors | Iterable[FileErrors]) -> pd.DataFrame:
+    """rpg's absolute errors of every sequence on the aligned poses: ``trans_rmse`` (m), ``rot_rmse``
+    (deg) and its scale error (:func:`rpg_scale_errors`, percent): ``scale_perc_rmse``,
+    ``scale_perc_mean``, ``scale_perc_median``."""
+    import pandas as pd
+
+    from lorisnb.core.metrics.relations import error_statistics
+
+    rows = []
+    for f in as_files(errors):
+        for e in f.sequences:
+            scale = error_statistics(rpg_scale_errors(e.gt_positions, e.est_positions))
+            rows.append(dict(algorithm=f.algorithm, file=f.file, trial=f.trial, seq=e.seq, matched=e.matched,
+                             trans_rmse=error_statistics(e.ate)["rmse"], rot_rmse=error_statistics(e.aoe)["rmse"],
+                             scale_perc_rmse=scale["rmse"], scale_perc_mean=scale["mean"],
+                             scale_perc_median=scale["median"]))  # fmt: skip
+    cols = ["algorithm", "file", "trial", "seq", "matched", "trans_rmse", "rot_rmse", "scale_perc_rmse",
+            "scale_perc_mean", "scale_perc_median"]  # fmt: skip
+    return pd.DataFrame(rows, columns=cols)
+
+
+def _yaw_gravity(r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """rpg's split of (N, 3, 3) world-frame error rotations: ``|yaw|`` and ``sqrt(pitch^2 + roll^2)``,
+    degrees, of ``euler_from_matrix(R, 'rzyx')`` (transformations.py; its branch for a pitch of
+    +-90 deg, where yaw and roll are not separable, included)."""
+    cy = np.hypot(r[:, 0, 0], r[:, 1, 0])
+    regular = cy > np.finfo(float).eps * 4.0
+    yaw = np.where(regular, np.arctan2(r[:, 1, 0], r[:, 0, 0]), 0.0)
+    pitch = np.arctan2(-r[:, 2, 0], cy)
+    roll = np.where(regular, np.arctan2(r[:, 2, 1], r[:, 2, 2]), np.arctan2(-r[:, 1, 2], r[:, 1, 1]))
+    return np.degrees(np.abs(yaw)), np.degrees(np.sqrt(pitch**2 + roll**2))
 
 
 def _positive_list(name: str, values: Any, most: float = math.inf) -> tuple[float, ...]:
@@ -180,8 +233,10 @@ def relative_table(
                         trans_perc_mean=g["trans_perc"].mean(),
                         trans_perc_rmse=float(np.sqrt(np.mean(g["trans_perc"] ** 2))),
                         rot_deg_per_m_mean=g["rot_deg_per_m"].mean(),
+                        yaw_mean=g["yaw"].mean(),
+                        gravity_mean=g["gravity"].mean(),
                     )  # fmt: skip
                 )
     cols = ["algorithm", "file", "suite", "scene", "trial", "seq", "fraction", "length", "samples", "trans_perc_mean",
-            "trans_perc_rmse", "rot_deg_per_m_mean"]  # fmt: skip
+            "trans_perc_rmse", "rot_deg_per_m_mean", "yaw_mean", "gravity_mean"]  # fmt: skip
     return pd.DataFrame(rows, columns=cols)

@@ -18,6 +18,7 @@ import numpy as np
 from lorisnb.core.alignment.geometry import Sim3, rotation_lever, rotations_of
 from lorisnb.core.metrics import openloris as metrics
 from lorisnb.core.metrics.pairs import rpe_indices
+from lorisnb.core.metrics.written import written_rpe
 from lorisnb.core.trajectory.frames import FRAMES, PAPER_EPS, SCENES, match_scene
 from lorisnb.core.trajectory.poses import Trajectory, size
 from lorisnb.errors import ParseError, ValidationError
@@ -236,10 +237,15 @@ class SequenceErrors:
                     self.stamps, self.gt_positions, self.gt_quaternions, self.est_positions, self.est_quaternions,
                     delta, unit, pairs, all_pairs, tolerance,
                 )  # fmt: skip
-                tr, rr = metrics.rpe(
-                    self.gt_positions, self.gt_quaternions, self.est_positions, self.est_quaternions, i, j,
-                    assume_unit=True,
-                )  # fmt: skip
+                if (
+                    self.gt_blocks is not None and self.est_blocks is not None
+                ):  # evo's products of the blocks as written
+                    tr, rr = written_rpe(self.gt_positions, self.gt_blocks, self.est_positions, self.est_blocks, i, j)
+                else:
+                    tr, rr = metrics.rpe(
+                        self.gt_positions, self.gt_quaternions, self.est_positions, self.est_quaternions, i, j,
+                        assume_unit=True,
+                    )  # fmt: skip
                 if self.matched < 2**31:  # kept: indices in 4 bytes
                     i, j = i.astype(np.int32), j.astype(np.int32)
                 self._rpe_cache[key] = (i, j, tr, rr)

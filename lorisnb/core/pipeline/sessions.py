@@ -41,7 +41,7 @@ from lorisnb.core.pipeline.steps import (
 from lorisnb.core.spec.evalspec import EvalSpec, make_spec
 from lorisnb.core.spec.evo import EVO_ASSOCIATIONS
 from lorisnb.core.trajectory.frames import FRAMES
-from lorisnb.core.trajectory.poses import Trajectory, sessions, time_spans
+from lorisnb.core.trajectory.poses import Trajectory, sessions, time_spans, written_blocks
 from lorisnb.errors import EvaluationError, LorisWarning, ParseError
 
 __all__ = [
@@ -161,9 +161,11 @@ def evaluate_sessions(
     def fit(s: int) -> Sim3:
         a, e = assoc[s], est[s]
         q_e = a.est_rows(e.quaternions) if spec.align_frames == 1 or method == "origin" else None
+        written = written_blocks(e) if method == "origin" and a.gt_blocks is not None and len(a) else None
+        origin = None if written is None or a.gt_blocks is None else (written[a.est_index[0]], a.gt_blocks[0])
         try:  # an OpenLORIS file (frames given) is aligned as the official tool aligns it
             return fit_alignment(a.est_rows(e.positions), a.gt_positions, method, spec.align_frames, q_e,
-                                 a.gt_quaternions, strict=frames is None, notes=found)  # fmt: skip
+                                 a.gt_quaternions, strict=frames is None, notes=found, origin_blocks=origin)  # fmt: skip
         except EvaluationError as exc:  # named with the sequence (the session's file) it is about
             raise EvaluationError(f"{where(s)}: {exc}") from None
 

@@ -21,6 +21,7 @@ from lorisnb.core.alignment.geometry import (
 from lorisnb.core.alignment.index_pairs import match_by_index
 from lorisnb.core.conventions.choices import associate_nearest
 from lorisnb.core.metrics import openloris as metrics
+from lorisnb.core.metrics.written import written_aoe
 from lorisnb.core.pipeline.model import ResultFile, SequenceErrors
 from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.trajectory.blocks import blockwise
@@ -65,8 +66,11 @@ def errors_after_alignment(
 
     blockwise(rows, m)
     est_blocks = written_blocks(est) if a.gt_blocks is not None else None
-    if est_blocks is not None:  # as written, turned by the alignment's rotation (as evo and the devkit compose them)
+    if (
+        est_blocks is not None and a.gt_blocks is not None
+    ):  # as written, turned by the alignment's rotation (as evo and the devkit compose them)
         est_blocks = np.einsum("ij,njk->nik", sim.rotation, est_blocks[a.est_index])
+        aoe = written_aoe(a.gt_blocks, est_blocks)  # evo's angle of R_est^T R_gt, the blocks as written
     return SequenceErrors(
         seq=seq, poses=len(est), stamps=a.stamps, ate=ate, aoe=aoe, est_positions=pos, gt_positions=a.gt_positions,
         est_quaternions=q, gt_quaternions=gt_q, gt_start=a.gt_start, gt_end=a.gt_end, scale=sim.scale,

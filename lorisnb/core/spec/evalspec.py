@@ -6,7 +6,7 @@ which poses count as repeated, the thresholds of the paper's metrics and the RPE
 built by one function, :func:`make_spec`, from every surface (command-line options, Python
 keywords, manifest tables, notebook parameters, widget values), so a value is accepted or refused
 with the same message everywhere. The presets (:data:`PRESETS`: ``openloris``, ``tum``, ``rpg``,
-``vio``, ``evo``, ``kitti``) are values of it.
+``vio``, ``evo``, ``tartanair``, ``kitti``) are values of it.
 
 :meth:`EvalSpec.describe` is the one line the command line prints as ``conventions:``;
 :meth:`EvalSpec.canonical` is the exact text written next to every output (the ``spec`` column of
@@ -50,7 +50,7 @@ REPEATED = ("drop", "keep")
 #: The KITTI metric's arithmetic: the devkit's single precision, or double.
 KITTI_PRECISIONS = ("single", "double")
 #: Presets that compose KITTI files' matrices as written (:attr:`EvalSpec.as_written`).
-AS_WRITTEN = ("kitti",)
+AS_WRITTEN = ("kitti", "evo")
 MODES = ("auto", "per-seq", "lifelong")
 #: An alignment without its scale (``scale`` off): what each scaled one becomes; the others stay.
 UNSCALED = {"sim3": "se3", "auto": "se3", "scale": "none"}
@@ -94,7 +94,10 @@ class EvalSpec:
     downsample: int | None = None
     motion_filter: tuple[float, float] | None = None
     relation: str | None = None
+    change_unit: str | None = None
     kitti_precision: str = "single"
+    tartanair_scale: bool = False
+    tartanair_seed: int = 0
     preset_name: str = "openloris"
     explicit: frozenset[str] = field(default=frozenset(), compare=False, repr=False)
 
@@ -169,6 +172,14 @@ class EvalSpec:
 
     def _matrices_words(self) -> str:
         """How KITTI files' rotation blocks are taken (said wherever it matters), and the KITTI metric's settings."""
+        if self.preset_name == "evo":
+            return "; KITTI files' matrices composed as written, as evo (other inputs: their quaternions' rotations)"
+        if self.preset_name == "tartanair":
+            return (
+                f"; TartanAir (tartanair_tools): ATE with Horn's rotation{' and its scale' if self.tartanair_scale else ''}, "
+                f"RPE over its 10000 random pairs (seed {self.tartanair_seed}), KITTI score over 5..40 m"
+                f"{', the estimate scaled by its rule' if self.tartanair_scale else ''}"
+            )
         if self.preset_name == "kitti":
             return (
                 f"; KITTI odometry metric (devkit evaluate_odometry.cpp): segments of 100..800 m every 10 frames, "
@@ -237,6 +248,9 @@ class EvalSpec:
         if kind == "openloris" and "transform" in given and self.transform is not None:
             problems["transform"] = (f"{name('transform')}: OpenLORIS result files name their sensor frame in the header "
                                      "(frame: ...); the transform comes from the robot's extrinsics")  # fmt: skip
+        for key in ("tartanair_scale", "tartanair_seed"):
+            if key in given and self.preset_name != "tartanair":
+                problems[key] = f"{name(key)}: only for TartanAir's metrics (--conventions tartanair)"
         if "kitti_precision" in given and self.preset_name != "kitti":
             problems["kitti_precision"] = f"{name('kitti_precision')}: only for the KITTI metric (--conventions kitti)"
         if self.preset_name == "evo" and "delta" in given:  # evo_rpe's --delta is lorisnb's RPE step
@@ -321,6 +335,13 @@ def _checked(values: Mapping[str, Any], surface: str) -> dict[str, Any]:
             out[key] = validate.eps_value(v)
         elif key in ("phi", "delta", "tau"):
             out[key] = validate.threshold(key, v)
+        elif key == "tartanair_scale":
+            out[key] = validate.flag(label, v, _yes_no(surface))
+        elif key == "tartanair_seed":
+            seed = validate.finite(label, v, "")
+            if seed < 0 or seed != int(seed):
+                raise ValidationError(f"{label}={v!r}: expected a whole number >= 0 (the RPE pairs' seed)")
+            out[key] = int(seed)
         elif key == "kitti_precision":
             out[key] = validate.choice(label, v, KITTI_PRECISIONS)
         elif key == "transform":
@@ -420,6 +441,10 @@ PRESETS["evo"] = EvalSpec(**evo.EVO_PRESET, preset_name="evo")
 #: ``kitti``: the KITTI odometry devkit's metric (``kitti_t_err``, ``kitti_r_err`` columns): poses paired
 #: one to one (by index for KITTI files without times, else nearest stamps), no alignment, the
 #: matrices as written (:mod:`lorisnb.core.metrics.kitti`)
+#: ``tartanair``: tartanair_tools' ATE, RPE and KITTI score (``tartanair_*`` columns,
+#: :mod:`lorisnb.core.metrics.tartanair`): poses paired one to one, lorisnb's own alignment none
+PRESETS["tartanair"] = EvalSpec(association="nearest", align="none", repeated="keep", rpe_unit="frames",
+                                preset_name="tartanair")  # fmt: skip
 PRESETS["kitti"] = EvalSpec(association="nearest", align="none", repeated="keep", rpe_unit="frames",
                             preset_name="kitti")  # fmt: skip
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from lorisnb.core.conventions.evo_options import PLANES
 from lorisnb.core.metrics.pairs import RPE_PAIRS
-from lorisnb.core.metrics.relations import RELATIONS
+from lorisnb.core.metrics.relations import RELATIONS, UNITS, unit_refusal
 from lorisnb.core.spec import validate
 from lorisnb.errors import ValidationError
 
@@ -30,7 +30,7 @@ EVO_MAX_DIFF = 0.01  # seconds: evo's --t_max_diff
 #: Default of each evo field (lorisnb's own: nothing of evo's applies).
 EVO_DEFAULTS: dict[str, Any] = dict(
     rpe_pairs="reference", rpe_all_pairs=None, rpe_tolerance=0.1, t_start=None, t_end=None,
-    project_to_plane=None, downsample=None, motion_filter=None, relation=None,
+    project_to_plane=None, downsample=None, motion_filter=None, relation=None, change_unit=None,
 )  # fmt: skip
 
 #: The ``evo`` preset: evo_ape's and evo_rpe's defaults.
@@ -50,6 +50,7 @@ EVO_OPTIONS: dict[str, tuple[str, str, str]] = {
     "downsample": ("both trajectories reduced to N evenly spaced poses first (evo's --downsample)", "poses", "all"),
     "motion_filter": ("poses kept when moved >= D m or turned >= A deg (evo's --motion_filter)", "m, deg", "all"),
     "relation": ("evo's pose relation (-r) of the ape_* and rpe_* columns it adds", "", "all"),
+    "change_unit": ("evo's --change_unit: the relation columns in mm / cm / m / km or deg / rad", "", "relation"),
 }
 
 
@@ -80,6 +81,8 @@ def check_evo(key: str, v: Any, label: str, yes_no: str = "True or False") -> An
         return None if v is None else int(validate.positive(label, v, "poses", integer=True))
     if key == "relation":
         return None if v is None else validate.choice(label, v, RELATIONS)
+    if key == "change_unit":
+        return None if v is None else validate.choice(label, v, UNITS)
     if key == "motion_filter":
         if v is None:
             return None
@@ -131,7 +134,8 @@ def describe_evo(spec: Any) -> str:
     if spec.project_to_plane is not None:
         words.append(f"projected to the {spec.project_to_plane} plane")
     if spec.relation is not None:
-        words.append(f"pose relation {spec.relation} (ape_*, rpe_* columns)")
+        unit = f" in {spec.change_unit}" if spec.change_unit is not None else ""
+        words.append(f"pose relation {spec.relation} (ape_*, rpe_* columns{unit})")
     return "; ".join(words)
 
 
@@ -150,6 +154,10 @@ def evo_refusals(spec: Any, given: frozenset[str], name: Any) -> dict[str, str]:
     if "rpe_pairs" in given and spec.rpe_unit in ("s", "f", "frames"):
         out["rpe_pairs"] = (f"{name('rpe_pairs')}: pairs in {spec.rpe_unit} are the same along either trajectory; "
                             f"it applies to {name('rpe_unit')} m, deg or rad")  # fmt: skip
+    if "change_unit" in given and spec.change_unit is not None:
+        why = unit_refusal(spec.relation, spec.change_unit)
+        if why is not None:
+            out["change_unit"] = f"{name('change_unit')} {spec.change_unit}: {why}"
     if "align_frames" in given and spec.align == "origin":
         out["align_frames"] = f"{name('align_frames')}: {name('align')} origin uses the first pose only"
     return out

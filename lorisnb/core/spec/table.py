@@ -32,6 +32,12 @@ OPTIONS: dict[str, tuple[str, str, str]] = {
     "rpe_unit": ("unit of the RPE step: s / m / f or frames / deg / rad", "", "all"),
     **evo.EVO_OPTIONS,
     "kitti_precision": ("the KITTI metric's arithmetic: single (the devkit's floats) / double", "", "kitti preset"),
+    "tartanair_scale": (
+        "TartanAir's scale (its monocular track): its ATE scale and its rule for RPE, KITTI",
+        "",
+        "tartanair preset",
+    ),
+    "tartanair_seed": ("seed of TartanAir's random RPE pairs (Python's random)", "", "tartanair preset"),
     "transform": ("T_est_gt: the ground-truth body's pose in the estimate's body frame", "4x4", "pairs, manifests"),
 }
 

@@ -77,9 +77,14 @@ class Evaluation:
         if s.relation is not None and len(table):  # evo's -r: statistics of that pose relation
             from lorisnb.core.metrics.relation_table import relation_columns
 
-            rel = relation_columns(self.errors, s.relation, **{k: v for k, v in kw.items() if k.startswith("rpe_")})
+            rpe = {k: v for k, v in kw.items() if k.startswith("rpe_")}
+            rel = relation_columns(self.errors, s.relation, s.change_unit, **rpe)
             spec = table.pop("spec")
             table = pd.concat([table, rel.set_index(table.index)], axis=1)
+            table["spec"] = spec
+        if s.preset_name == "tartanair" and len(table):  # tartanair_tools' numbers
+            spec = table.pop("spec")
+            table = pd.concat([table, self.tartanair().set_index(table.index)], axis=1)
             table["spec"] = spec
         if s.preset_name == "kitti" and len(table):  # the KITTI devkit's metric
             from lorisnb.core.metrics.kitti_table import kitti_columns
@@ -88,6 +93,24 @@ class Evaluation:
             table = pd.concat([table, kitti_columns(self.errors, s.kitti_precision).set_index(table.index)], axis=1)
             table["spec"] = spec
         return table
+
+    def tartanair(self) -> pd.DataFrame:
+        """tartanair_tools' numbers of every sequence (:func:`lorisnb.core.metrics.tartanair.tartanair_scores`),
+        one row each in the order of :meth:`sequences`, with the spec's scale and seed."""
+        import pandas as pd
+
+        from lorisnb.core.lifelong.scoring import as_files
+        from lorisnb.core.metrics.tartanair import TARTANAIR_COLUMNS, tartanair_scores
+
+        rows = []
+        for f in as_files(self.errors):
+            for e in f.sequences:
+                if e.matched < 2 or e.gt_quaternions is None or e.est_quaternions is None:
+                    rows.append(dict.fromkeys(TARTANAIR_COLUMNS, float("nan")))
+                    continue
+                rows.append(tartanair_scores(e.gt_positions, e.gt_quaternions, e.est_positions, e.est_quaternions,
+                                             self.spec.tartanair_scale, self.spec.tartanair_seed))  # fmt: skip
+        return pd.DataFrame(rows, columns=TARTANAIR_COLUMNS)
 
     def kitti_lengths(self) -> pd.DataFrame:
         """The KITTI devkit's per-length errors of every sequence and of every algorithm over all its
@@ -150,6 +173,13 @@ class Evaluation:
         from lorisnb.core.metrics.relative import relative_table
 
         return relative_table(self.errors, fractions, lengths)
+
+    def rpg_absolute(self) -> pd.DataFrame:
+        """rpg_trajectory_evaluation's absolute errors and its scale error per sequence
+        (:func:`lorisnb.core.metrics.relative.rpg_absolute_table`)."""
+        from lorisnb.core.metrics.relative import rpg_absolute_table
+
+        return rpg_absolute_table(self.errors)
 
     @property
     def algorithms(self) -> list[str]:

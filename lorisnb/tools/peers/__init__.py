@@ -1,6 +1,7 @@
 """The peers' own tools: a bridge to evo (:mod:`.evo_bridge`), evo's result zips as tables
-(:mod:`.evo_import`) and the cross-checks of lorisnb against evo (:mod:`.crosscheck`,
-:mod:`.crosscheck_evo`, :mod:`.crosscheck_reading`).
+(:mod:`.evo_import`), the cross-checks of lorisnb against evo (:mod:`.crosscheck`,
+:mod:`.crosscheck_evo`, :mod:`.crosscheck_reading`), and one pair under every peer's preset side by
+side (:mod:`.every_number`).
 
 May import: :mod:`lorisnb.tools.evaluation`, :mod:`lorisnb.io`, :mod:`lorisnb.core`; evo only when called.
 """

@@ -1,0 +1,137 @@
+"""TartanAir's metrics, as tartanair_tools' ``TartanAirEvaluator.evaluate_one_trajectory`` computes
+them (github.com/castacks/tartanair_tools, ``evaluation/``) on two trajectories of the same length,
+pose i with pose i.
+
+- **ATE** (``ate_score``): Horn's rotation between the centred positions, the ground truth turned
+  onto the estimate, and with ``scale`` the estimate multiplied by TartanAir's own scale
+  ``s = sum |g_c|^2 / sum e_c . (R g_c)`` (not Umeyama's: it scales the estimate to the ground
+  truth so that a small estimate cannot make the error small); the RMS of ``R g_c - s e_c``, metres.
+- **Scale rule** (``rescale``), for the RPE and the KITTI score: both trajectories expressed
+  relative to their first pose, the estimate's positions multiplied by ``1 / mean(|dp_est| / |dp_gt|)``
+  over the steps where the ground truth moved more than 0.1 mm.
+- **RPE** (``rpe_score``): over 10,000 random pairs (i, j) drawn with Python's ``random.randint``
+  (all n^2 pairs below 100 poses; i = j allowed), ``E = (E_j^-1 E_i)^-1 (G_j^-1 G_i)``: the mean
+  rotation angle (radians) and the mean translation norm (metres). The pairs come from
+  ``random.Random(seed)``, so that a seed reproduces tartanair_tools run after ``random.seed(seed)``.
+- **KITTI score** (``kitti_score``): the KITTI devkit's segment errors in double precision over
+  5, 10, ..., 40 m from every frame (step 1), the mean over lengths of each length's mean: rotation in
+  degrees per metre, translation as a fraction (m/m).
+"""
+
+from __future__ import annotations
+
+import random
+
+import numpy as np
+
+from lorisnb.core.alignment.geometry import quat_to_matrix
+from lorisnb.core.metrics.kitti import kitti_segments
+from lorisnb.errors import EvaluationError
+
+#: TartanAir's KITTI-style segment lengths, metres (evaluate_kitti.py's ``lens``).
+TARTANAIR_LENGTHS = (5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0)
+#: Random RPE pairs (evaluate_rpe.py's ``param_max_pairs``).
+TARTANAIR_PAIRS = 10000
+#: The columns :func:`tartanair_scores` gives (the ``tartanair`` preset's in the sequence table).
+TARTANAIR_COLUMNS = ["tartanair_ate", "tartanair_ate_scale", "tartanair_scale", "tartanair_rpe_rot",
+                     "tartanair_rpe_trans", "tartanair_kitti_r", "tartanair_kitti_t"]  # fmt: skip
+#: Ground-truth steps shorter than this are left out of the scale, metres.
+TARTANAIR_STILL = 1e-4
+
+
+def tartanair_ate(gt_positions: np.ndarray, est_positions: np.ndarray, scale: bool = False) -> tuple[float, float]:
+    """TartanAir's ATE (metres) and its scale (1 without ``scale``); see the module docstring."""
+    g, e = np.asarray(gt_positions, float), np.asarray(est_positions, float)
+    g_c, e_c = g - g.mean(axis=0), e - e.mean(axis=0)
+    w = g_c.T @ e_c  # sum of outer(model_c, data_c)
+    u, _, vh = np.linalg.svd(w.T)
+    s_mat = np.eye(3)
+    if np.linalg.det(u) * np.linalg.det(vh) < 0:
+        s_mat[2, 2] = -1
+    rot = u @ s_mat @ vh
+    rg = g_c @ rot.T
+    s = float(np.sum(g_c * g_c) / np.sum(e_c * rg)) if scale else 1.0
+    err = rg - s * e_c
+    return float(np.sqrt(np.sum(err * err) / len(err))), s
+
+
+def tartanair_poses(gt: np.ndarray, est: np.ndarray, scale: bool = False) -> tuple[np.ndarray, np.ndarray, float]:
+    """Both (N, 4, 4) trajectories relative to their first pose, and with ``scale`` the estimate's
+    positions multiplied by TartanAir's scale rule; returns them and the scale (1 without)."""
+    g0 = np.linalg.inv(gt[0]) @ gt
+    e0 = np.linalg.inv(est[0]) @ est
+    s = 1.0
+    if scale:
+        sg = np.linalg.norm(np.diff(g0[:, :3, 3], axis=0), axis=1)
+        se = np.linalg.norm(np.diff(e0[:, :3, 3], axis=0), axis=1)
+        moving = sg > TARTANAIR_STILL
+        s = 1.0 / float(np.mean(se[moving] / sg[moving]))
+        e0 = e0.copy()
+        e0[:, :3, 3] *= s
+    return g0, e0, s
+
+
+def matrices(positions: np.ndarray, quaternions: np.ndarray) -> np.ndarray:
+    """(N, 4, 4) poses of positions and ``xyzw`` quaternions."""
+    out = np.zeros((len(positions), 4, 4))
+    out[:, :3, :3] = quat_to_matrix(np.asarray(quaternions, float))
+    out[:, :3, 3] = positions
+    out[:, 3, 3] = 1.0
+    return out
+
+
+def tartanair_rpe_pairs(n: int, seed: int = 0, pairs: int = TARTANAIR_PAIRS) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs tartanair_tools draws (see the module docstring), from ``random.Random(seed)``."""
+    if pairs == 0 or n < np.sqrt(pairs):
+        i, j = np.divmod(np.arange(n * n), n)
+        return i, j
+    rng = random.Random(seed)
+    drawn = [rng.randint(0, n - 1) for _ in range(2 * pairs)]  # i then j for each pair, as its list comprehension
+    return np.asarray(drawn[0::2]), np.asarray(drawn[1::2])
+
+
+def tartanair_rpe(gt: np.ndarray, est: np.ndarray, seed: int = 0) -> tuple[float, float]:
+    """TartanAir's RPE of (N, 4, 4) poses (as :func:`tartanair_poses` gives them): mean rotation
+    angle (radians) and mean translation error (metres) over its random pairs."""
+    if len(gt) != len(est):
+        raise EvaluationError(
+            f"TartanAir pairs pose i with pose i: {len(est)} estimate and {len(gt)} ground-truth poses"
+        )
+    i, j = tartanair_rpe_pairs(len(est), seed)
+    inv = np.linalg.inv
+    err = inv(inv(est[j]) @ est[i]) @ (inv(gt[j]) @ gt[i])
+    trans = np.linalg.norm(err[:, :3, 3], axis=1)
+    rot = np.arccos(np.clip((np.trace(err[:, :3, :3], axis1=1, axis2=2) - 1) / 2, -1.0, 1.0))
+    if len(trans) < 2:
+        raise EvaluationError("TartanAir's RPE needs at least 2 pairs (its 'Couldn't find pairs')")
+    return float(np.mean(rot)), float(np.mean(trans))
+
+
+def tartanair_kitti(gt: np.ndarray, est: np.ndarray) -> tuple[float, float]:
+    """TartanAir's KITTI score: mean over its lengths of each length's mean rotation error (degrees
+    per metre) and translation error (m/m); NaN where no segment fits."""
+    seg = kitti_segments(gt, est, precision="double", lengths=TARTANAIR_LENGTHS, step=1)
+    rot, tra = [], []
+    for length in TARTANAIR_LENGTHS:
+        sel = np.abs(seg.length - length) < 0.1
+        if sel.any():
+            rot.append(sum(seg.r_err[sel].tolist()) / int(sel.sum()))  # Python's sum, as calculate_ave_errors
+            tra.append(sum(seg.t_err[sel].tolist()) / int(sel.sum()))
+    if not rot:
+        return float("nan"), float("nan")
+    return float(np.mean(np.array(rot) * 180 / np.pi)), float(np.mean(tra))
+
+
+def tartanair_scores(
+    gt_positions: np.ndarray, gt_quaternions: np.ndarray, est_positions: np.ndarray, est_quaternions: np.ndarray,
+    scale: bool = False, seed: int = 0,
+) -> dict[str, float]:  # fmt: skip
+    """Every TartanAir number of paired poses: ``tartanair_ate`` (m), ``tartanair_ate_scale``,
+    ``tartanair_scale`` (the scale rule's, for RPE and KITTI), ``tartanair_rpe_rot`` (rad),
+    ``tartanair_rpe_trans`` (m), ``tartanair_kitti_r`` (deg/m), ``tartanair_kitti_t`` (m/m)."""
+    ate, ate_s = tartanair_ate(gt_positions, est_positions, scale)
+    g, e, s = tartanair_poses(matrices(gt_positions, gt_quaternions), matrices(est_positions, est_quaternions), scale)
+    rot, trans = tartanair_rpe(g, e, seed)
+    kr, kt = tartanair_kitti(g, e)
+    return dict(tartanair_ate=ate, tartanair_ate_scale=ate_s, tartanair_scale=s, tartanair_rpe_rot=rot,
+                tartanair_rpe_trans=trans, tartanair_kitti_r=kr, tartanair_kitti_t=kt)  # fmt: skip
