@@ -23,6 +23,7 @@ import os
 import shutil
 import subprocess
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -110,3 +111,39 @@ def run_devkit(exe: Path, gt: Path, est: Path, out: Path) -> tuple[np.ndarray, t
     rows = np.loadtxt(done.stdout.splitlines(), ndmin=2)
     t, r = (float(v) for v in done.stderr.split())
     return rows, (t, r)
+
+
+#: An OpenLORIS pair written as KITTI files (:func:`openloris_kitti_pair`), long enough for the
+#: devkit's 100 m segments (the only icra20 ORB-SLAM2 output tracked over 100 m): market-3 and its
+#: ground truth, from ../shared/data (so the test that compares it with the devkit's recorded
+#: numbers runs wherever the data is, with or without the peers).
+OPENLORIS_KITTI = (("market", "market_1_3_orbslam2-original.txt"),)
+
+
+def openloris_kitti_pair(data: Any, scene: str, result: str, out: Path) -> tuple[Path, Path]:
+    """An icra20 result and its ground truth as two KITTI pose files in ``out``: each estimate
+    pose paired with the ground-truth pose of the nearest stamp (within 0.02 s), written as 12
+    numbers ``%.6e`` (as KITTI's files are), plain numpy and scipy: no lorisnb association or
+    alignment (the devkit's errors are relative, so none is needed)."""
+    from scipy.spatial.transform import Rotation
+
+    from lorisnb.io import load_groundtruth, read_openloris
+
+    rf = read_openloris(data.icra20 / "per-seq" / "orbslam2_rgbd" / result, warn=False)
+    seq, est = next(iter(rf.sequences.items()))
+    gt = load_groundtruth(scene, data).sequences[seq]
+    k = np.clip(np.searchsorted(gt.stamps, est.stamps), 1, len(gt.stamps) - 1)
+    k = np.where(np.abs(gt.stamps[k - 1] - est.stamps) < np.abs(gt.stamps[k] - est.stamps), k - 1, k)
+    keep = np.abs(gt.stamps[k] - est.stamps) < 0.02
+
+    def blocks(positions: np.ndarray, quaternions: np.ndarray) -> np.ndarray:
+        m = np.concatenate([Rotation.from_quat(quaternions).as_matrix(), positions[:, :, None]], axis=2)
+        return m.reshape(len(m), 12)
+
+    files = []
+    for name, (p, q) in (("gt", (gt.positions[k[keep]], gt.quaternions[k[keep]])),
+                         ("est", (est.positions[keep], est.quaternions[keep]))):  # fmt: skip
+        path = out / f"{Path(result).stem}_{name}.txt"
+        np.savetxt(path, blocks(p, q), fmt="%.6e")
+        files.append(path)
+    return files[0], files[1]
