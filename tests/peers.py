@@ -120,13 +120,10 @@ def run_devkit(exe: Path, gt: Path, est: Path, out: Path) -> tuple[np.ndarray, t
 OPENLORIS_KITTI = (("market", "market_1_3_orbslam2-original.txt"),)
 
 
-def openloris_kitti_pair(data: Any, scene: str, result: str, out: Path) -> tuple[Path, Path]:
-    """An icra20 result and its ground truth as two KITTI pose files in ``out``: each estimate
-    pose paired with the ground-truth pose of the nearest stamp (within 0.02 s), written as 12
-    numbers ``%.6e`` (as KITTI's files are), plain numpy and scipy: no lorisnb association or
-    alignment (the devkit's errors are relative, so none is needed)."""
-    from scipy.spatial.transform import Rotation
-
+def openloris_pose_pair(data: Any, scene: str, result: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """An icra20 ORB-SLAM2 result and its ground truth as paired poses: each estimate pose with the
+    ground-truth pose of the nearest stamp (within 0.02 s), plain numpy (no lorisnb association or
+    alignment): ground-truth positions (N, 3), quaternions (N, 4, xyzw), then the estimate's."""
     from lorisnb.io import load_groundtruth, read_openloris
 
     rf = read_openloris(data.icra20 / "per-seq" / "orbslam2_rgbd" / result, warn=False)
@@ -135,15 +132,19 @@ def openloris_kitti_pair(data: Any, scene: str, result: str, out: Path) -> tuple
     k = np.clip(np.searchsorted(gt.stamps, est.stamps), 1, len(gt.stamps) - 1)
     k = np.where(np.abs(gt.stamps[k - 1] - est.stamps) < np.abs(gt.stamps[k] - est.stamps), k - 1, k)
     keep = np.abs(gt.stamps[k] - est.stamps) < 0.02
+    return gt.positions[k[keep]], gt.quaternions[k[keep]], est.positions[keep], est.quaternions[keep]
 
-    def blocks(positions: np.ndarray, quaternions: np.ndarray) -> np.ndarray:
-        m = np.concatenate([Rotation.from_quat(quaternions).as_matrix(), positions[:, :, None]], axis=2)
-        return m.reshape(len(m), 12)
 
+def openloris_kitti_pair(data: Any, scene: str, result: str, out: Path) -> tuple[Path, Path]:
+    """:func:`openloris_pose_pair` as two KITTI pose files in ``out``, 12 numbers ``%.6e`` a line
+    (as KITTI's files are; the devkit's errors are relative, so no alignment is needed)."""
+    from scipy.spatial.transform import Rotation
+
+    gp, gq, ep, eq = openloris_pose_pair(data, scene, result)
     files = []
-    for name, (p, q) in (("gt", (gt.positions[k[keep]], gt.quaternions[k[keep]])),
-                         ("est", (est.positions[keep], est.quaternions[keep]))):  # fmt: skip
+    for name, (p, q) in (("gt", (gp, gq)), ("est", (ep, eq))):
+        m = np.concatenate([Rotation.from_quat(q).as_matrix(), p[:, :, None]], axis=2)
         path = out / f"{Path(result).stem}_{name}.txt"
-        np.savetxt(path, blocks(p, q), fmt="%.6e")
+        np.savetxt(path, m.reshape(len(m), 12), fmt="%.6e")
         files.append(path)
     return files[0], files[1]

@@ -1,4 +1,4 @@
-"""The KITTI metric against the devkit's own numbers on data every machine with ../shared has: the
+"""The KITTI metric (and TartanAir's) against the peers' own numbers on data every machine with ../shared has: the
 icra20 ORB-SLAM2 output of market-3 and its ground truth written as KITTI files
 (:func:`peers.openloris_kitti_pair`, plain numpy), on which the official ``evaluate_odometry.cpp``
 (compiled with g++ by :func:`peers.build_devkit`, run by :func:`peers.run_devkit` on 2026-11-28)
@@ -59,3 +59,29 @@ def test_equals_the_devkit_run_live(pair, tmp_path):
     np.testing.assert_allclose(ours.t_err, theirs[:, 2], rtol=1e-6)
     np.testing.assert_allclose(ours.r_err, theirs[:, 1], rtol=1e-6)
     assert (t_mean, r_mean) == pytest.approx((DEVKIT["t_err"], DEVKIT["r_err"]), rel=1e-8)
+
+
+#: What tartanair_tools' ``TartanAirEvaluator.evaluate_one_trajectory`` returned on 2026-11-28 for
+#: the same pair (positions and xyzw quaternions written with ``np.savetxt``, which round-trips),
+#: after ``random.seed(0)``, without and with its scale: ate_score, rpe_score (rot, trans),
+#: kitti_score (r, t).
+TARTANAIR = {
+    False: (2.1257302185826727, (1.878151479747989, 30.609313857710106), (5.560753242653356, 1.2172105568273834)),
+    True: (2.1169955296593135, (1.878151479747989, 27.883943179949398), (5.560753242653356, 1.1084883406022232)),
+}
+
+
+@pytest.mark.parametrize("scale", [False, True])
+def test_tartanair_equals_its_tools_recorded_numbers(data, scale):
+    from peers import openloris_pose_pair
+
+    from lorisnb.core.metrics.tartanair import tartanair_scores
+
+    gp, gq, ep, eq = openloris_pose_pair(data, *OPENLORIS_KITTI[0])
+    ours = tartanair_scores(gp, gq, ep, eq, scale=scale, seed=0)
+    ate, (rpe_rot, rpe_trans), (kitti_r, kitti_t) = TARTANAIR[scale]
+    assert ours["tartanair_ate"] == pytest.approx(ate, rel=1e-9)
+    assert ours["tartanair_rpe_rot"] == pytest.approx(rpe_rot, rel=1e-9)
+    assert ours["tartanair_rpe_trans"] == pytest.approx(rpe_trans, rel=1e-9)
+    assert ours["tartanair_kitti_r"] == pytest.approx(kitti_r, rel=1e-9)
+    assert ours["tartanair_kitti_t"] == pytest.approx(kitti_t, rel=1e-9)
