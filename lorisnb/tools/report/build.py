@@ -384,7 +384,8 @@ def run_report(
                                     expected=board.get("expected"), since=since)  # fmt: skip
                 single_file(index, folder / "report.html")
                 if not absolute_paths:  # every path below a named root, whatever wrote it (a notebook's printout)
-                    make_portable(folder, [*named.items(), ("run", folder), ("run", run_dir)])
+                    others = [("baseline", Path(baseline))] if baseline is not None else []
+                    make_portable(folder, [*named.items(), *others, ("run", folder), ("run", run_dir)])
                 _write_marker(folder, _files(folder))
 
             pages(tmp, run_dir.name)  # the name it is moved to (not the temporary one it is written under)
