@@ -52,3 +52,20 @@ def test_control_characters_in_a_name_are_escaped_in_terminal_tables(tmp_path, d
     lines = out.splitlines()
     row = next(line for line in lines if "orb\\nslam" in line)
     assert "cafe" in row  # the name and the rest of its row on one line
+
+
+def test_tables_written_with_either_normal_form_are_one_algorithm_to_diff(tmp_path, data, icra20, capsys):
+    """A table written where the folder was NFD (an older lorisnb, another tool) against one in NFC:
+    diff compares the algorithm's sequences, it does not call them missing and added."""
+    res = tmp_path / "res" / NFC
+    res.mkdir(parents=True)
+    shutil.copy(icra20 / "per-seq" / "orbslam2_rgbd" / FILES[0], res / FILES[0])
+    table = ln.evaluate(res.parent, data_root=data, progress=False).sequences()
+    table.to_csv(tmp_path / "nfc.csv", index=False)
+    table.assign(algorithm=NFD).to_csv(tmp_path / "nfd.csv", index=False)
+    from lorisnb.tools.decisions.runs import read_table
+
+    assert list(read_table(tmp_path / "nfd.csv")["algorithm"]) == [NFC]
+    rc = main(["diff", str(tmp_path / "nfc.csv"), str(tmp_path / "nfd.csv")])
+    out = capsys.readouterr().out
+    assert rc == 0 and "verdict: ok" in out and "regressed" not in out

@@ -27,6 +27,7 @@ from typing import Any
 import pandas as pd
 
 from lorisnb.core.metrics.openloris import RATES
+from lorisnb.core.spec import validate
 from lorisnb.core.stats.inference import WEIGHTS as STATS_WEIGHTS
 from lorisnb.core.stats.inference import with_trials
 from lorisnb.core.stats.regression import METRICS
@@ -135,9 +136,9 @@ def read_table(path: Path) -> pd.DataFrame:
     if missing:
         raise ParseError(path, None, f"lacks column(s) {', '.join(missing)}; expected a per-sequence table as "
                          "written by lorisnb evaluate --csv / --parquet")  # fmt: skip
-    for c in ("algorithm", "scene", "suite", "file"):
-        if c in df.columns:
-            df[c] = df[c].astype(str).where(df[c].notna(), "")
+    for c in ("algorithm", "scene", "suite", "file"):  # labels as evaluations make them (NFC): one algorithm
+        if c in df.columns:  # whether a table was written from an NFD folder name or not
+            df[c] = df[c].astype(str).where(df[c].notna(), "").map(validate.label)
     for c in [*NUMBERS, *METRICS]:
         if c in df.columns and not pd.api.types.is_numeric_dtype(df[c]):
             values = pd.to_numeric(df[c].astype(str).str.strip().replace({"": None}), errors="coerce")
