@@ -171,7 +171,9 @@ def test_report_on_a_results_folder_with_trials(tmp_path, icra20, data, capfd):
     assert runs["input_roots"][0] == "{results}"
     added = results / "orb" / "home_1_trial4.txt"
     added.write_text((results / "orb" / "home_1_trial1.txt").read_text())
-    assert main(["verify", str(out), *roots]) == 1 and "added: {results}/orb/home_1_trial4.txt" in capfd.readouterr().out
+    assert (
+        main(["verify", str(out), *roots]) == 1 and "added: {results}/orb/home_1_trial4.txt" in capfd.readouterr().out
+    )
     # diff of the run against itself: each sequence once, though four of the run's tables hold it
     per_sequence = pd.read_csv(out / "findings" / "sequences.csv")
     assert main(["diff", str(out), str(out), "--no-progress"]) == 0
