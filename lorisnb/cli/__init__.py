@@ -32,6 +32,7 @@ from lorisnb.cli.options import (
     arg_type,
     threshold_list_type,
 )
+from lorisnb.cli.text import clean
 from lorisnb.core.spec import validate
 from lorisnb.core.spec.evalspec import ALIGNMENTS, PRESETS
 from lorisnb.core.trajectory.blocks import ordinary_pages
@@ -342,7 +343,7 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # writing an output failed once checked (a full disk, a file system that refuses)
         if isinstance(exc, BrokenPipeError):  # stdout closed by the reader: run() ends quietly
             raise
-        where = f"{exc.filename}: " if exc.filename else ""
+        where = f"{clean(exc.filename)}: " if exc.filename else "an output (the system named no file): "
         print(f"error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:

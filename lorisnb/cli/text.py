@@ -14,7 +14,8 @@ MAX_ROWS = 500  # more rows: the first and last half of these, with a line sayin
 
 def format_table(columns: Mapping[str, Sequence[Any] | np.ndarray], digits: int = 4, max_rows: int = MAX_ROWS) -> str:
     """Columns right-aligned under their names, two spaces apart; floats with ``digits``
-    decimals (NaN as ``NaN``), integers, booleans and text as they are."""
+    decimals (NaN as ``NaN``), integers, booleans and text as they are, control characters in
+    names and cells escaped (:func:`clean`: a newline in a folder name keeps its row on one line)."""
     names = list(columns)
     n = len(next(iter(columns.values()))) if names else 0
     rows = list(range(n))
@@ -23,7 +24,7 @@ def format_table(columns: Mapping[str, Sequence[Any] | np.ndarray], digits: int 
     cells = []
     for name in names:
         values = columns[name]
-        cells.append([name] + ["..." if i < 0 else _cell(values[i], digits) for i in rows])
+        cells.append([clean(name)] + ["..." if i < 0 else _cell(values[i], digits) for i in rows])
     widths = [max(map(len, col)) for col in cells]
     lines = ["  ".join(col[k].rjust(w) for col, w in zip(cells, widths, strict=True)) for k in range(len(rows) + 1)]
     if n > max_rows:
@@ -38,7 +39,7 @@ def _cell(value: Any, digits: int) -> str:
         return str(int(value))
     if isinstance(value, (float, np.floating)):
         return "NaN" if math.isnan(value) else f"{float(value):.{digits}f}"
-    return str(value)
+    return clean(value)
 
 
 def frame_columns(df: Any) -> dict[str, np.ndarray]:

@@ -4,10 +4,11 @@ never replacing an existing file unless asked.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -46,6 +47,27 @@ def write_openloris(
     write_text("\n".join(lines) + "\n", path, force=True)
 
 
+@contextlib.contextmanager
+def naming(out: str | os.PathLike[str]) -> Iterator[None]:
+    """An :class:`OSError` raised inside names the output ``out`` when the system named no file
+    (a full disk, ENOSPC, or a quota, EDQUOT, is raised by ``write()`` with no file name), or
+    named the temporary file it is written under: "No space left on device" alone does not say
+    which output could not be written."""
+    try:
+        yield
+    except OSError as exc:
+        name_output(exc, out)
+        raise
+
+
+def name_output(exc: BaseException, out: str | os.PathLike[str]) -> None:
+    """:func:`naming`'s rule for one exception: an :class:`OSError` without a file name, or with
+    a temporary one, is given ``out``'s."""
+    if isinstance(exc, OSError) and not isinstance(exc, OutputError):
+        if exc.filename is None or ".tmp-" in str(exc.filename) or ".partial-" in str(exc.filename):
+            exc.filename = str(out)
+
+
 def write_atomically(out: str | os.PathLike[str], write: Callable[[Path], object], force: bool = False) -> Path:
     """Call ``write(tmp)`` on a temporary name beside ``out``, then move it into place; refuse to
     replace an existing file unless ``force``; never leave the temporary file behind."""
@@ -55,8 +77,9 @@ def write_atomically(out: str | os.PathLike[str], write: Callable[[Path], object
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
     try:
-        write(tmp)
-        os.replace(tmp, out)
+        with naming(out):
+            write(tmp)
+            os.replace(tmp, out)
     finally:
         tmp.unlink(missing_ok=True)
     return out
@@ -141,22 +164,25 @@ def write_parquet_parts(
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
     try:
-        data = tmp / "data"
-        data.mkdir()
-        for n, df in enumerate(parts):
-            if partition_by not in df.columns:
-                pq.write_table(pa.Table.from_pandas(_plain(df), preserve_index=False), data / f"part-{n:05d}.parquet")
-                continue
-            df = _plain(df)
-            for value, group in df.groupby(partition_by, observed=True, sort=False):
-                folder = data / f"{partition_by}={value}"
-                folder.mkdir(exist_ok=True)
-                table = pa.Table.from_pandas(group.drop(columns=[partition_by]), preserve_index=False)
-                pq.write_table(table, folder / f"part-{n:05d}.parquet")
-        (data / TABLE_MARKER).write_text("written by lorisnb\n")  # hidden: Parquet readers skip it
-        if out.exists():
-            shutil.rmtree(out)
-        os.rename(data, out)
+        with naming(out):
+            data = tmp / "data"
+            data.mkdir()
+            for n, df in enumerate(parts):
+                if partition_by not in df.columns:
+                    pq.write_table(
+                        pa.Table.from_pandas(_plain(df), preserve_index=False), data / f"part-{n:05d}.parquet"
+                    )
+                    continue
+                df = _plain(df)
+                for value, group in df.groupby(partition_by, observed=True, sort=False):
+                    folder = data / f"{partition_by}={value}"
+                    folder.mkdir(exist_ok=True)
+                    table = pa.Table.from_pandas(group.drop(columns=[partition_by]), preserve_index=False)
+                    pq.write_table(table, folder / f"part-{n:05d}.parquet")
+            (data / TABLE_MARKER).write_text("written by lorisnb\n")  # hidden: Parquet readers skip it
+            if out.exists():
+                shutil.rmtree(out)
+            os.rename(data, out)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return out

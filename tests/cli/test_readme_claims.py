@@ -57,3 +57,31 @@ def test_diff_of_result_folders_at_a_relative_eps_judges_the_change(base_and_can
     assert cr["decided_by"].item().startswith("single run per side: no significance claimed")
     # a folder against itself at the same fraction: no regression
     assert _rc(["diff", str(base), str(base), "--eps", "relative:0.05", "--no-progress"]) == 0
+
+
+@pytest.mark.slow
+def test_readme_report_figures_are_the_measured_ones(tmp_path, data):
+    """The manual (docs/guide/reports.md, once the README): the size of the run `make report` writes on the bundled data,
+    its figures, CSV tables, report.html and notebook.css, as measured on a run made here (the
+    README said 3.7 MB when the run was 4.7 MB)."""
+    import re
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "reports.md").read_text()
+    m = re.search(r"`make report` on the bundled data writes a ([\d.]+) MB\s+folder \(it was 12 MB\): (\d+) figures "
+                  r"of about (\d+) kB, the notebooks' CSV tables \(([\d.]+) MB,.*?`report.html` ([\d.]+) MB, "
+                  r"`notebook.css` ([\d.]+) MB", readme, re.S)  # fmt: skip
+    assert m, "docs/guide/reports.md's sentence on the report's size moved: update this test with it"
+    total, figures, figure_kb, csv_mb, page_mb, css_mb = m.groups()
+    run = tmp_path / "run"
+    assert _rc(["report", "--out", str(run), "--data", str(data.root), "--no-progress"]) == 0
+    files = [p for p in run.rglob("*") if p.is_file()]
+    mb = lambda n: n / 1e6  # noqa: E731
+    pngs = [p for p in files if p.suffix == ".png"]
+    said = lambda text: pytest.approx(float(text), abs=0.6 * 10 ** -len(text.split(".")[1]))  # noqa: E731  # as rounded
+    assert mb(sum(p.stat().st_size for p in files)) == said(total)
+    assert len(pngs) == int(figures)
+    assert round(sum(p.stat().st_size for p in pngs) / len(pngs) / 1e3, -1) == pytest.approx(int(figure_kb), abs=10)
+    assert mb(sum(p.stat().st_size for p in files if p.suffix == ".csv")) == said(csv_mb)
+    assert mb((run / "report.html").stat().st_size) == said(page_mb)
+    assert mb((run / "notebook.css").stat().st_size) == said(css_mb)

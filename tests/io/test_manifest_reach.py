@@ -39,7 +39,7 @@ def test_ground_truth_outside_the_manifest_folder_and_root_is_refused_unread(tmp
     m = manifest(folder, gt)
     if how == "link":
         (folder / "gt.txt").symlink_to(secret)
-    with pytest.raises(ParseError, match="groundtruth lies outside the manifest's folder and its root"):
+    with pytest.raises(ParseError, match="groundtruth lies outside the manifest's folder, its root"):
         read_manifest(m)
     res = tmp_path / "res" / "alg"
     res.mkdir(parents=True)
@@ -69,3 +69,14 @@ def test_ground_truth_in_the_root_or_the_manifest_folder_is_read(tmp_path, data,
 def test_manifest_outside_needs_a_manifest(capsys, tmp_path):
     rc = main(["evaluate", str(tmp_path), "--manifest-outside", "--no-progress"])
     assert rc == 2 and "--manifest-outside: applies to" in capsys.readouterr().err
+
+
+def test_a_root_written_in_the_manifest_elsewhere_is_refused_one_from_the_environment_is_not(
+    tmp_path, secret, monkeypatch, capsys
+):
+    m = manifest(tmp_path / "shared" / "m", "notes.txt", root=str(secret.parent))
+    with pytest.raises(ParseError, match="root = .* lies outside the manifest's folder"):
+        read_manifest(m)
+    monkeypatch.setenv("LAB_ROOT", str(secret.parent))  # the user's own setting: trusted
+    m = manifest(tmp_path / "shared" / "m", "notes.txt", root="${LAB_ROOT}")
+    assert read_manifest(m).sessions[0].groundtruth == secret.resolve()

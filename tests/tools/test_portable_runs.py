@@ -190,3 +190,17 @@ def test_make_portable_replaces_each_spelling_at_path_ends_only(tmp_path):
     with pytest.raises(OutputError, match="f.png: a binary file"):
         make_portable(page.parent, [("results", root)])
     assert root_key(root / "q" / "r.txt", {"results": root, "data": tmp_path}) == "{results}/q/r.txt"
+
+
+def test_a_run_against_a_baseline_names_the_baseline_folder_by_its_root(tmp_path, data, icra20, monkeypatch):
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    common = dict(progress=False, results=here / "res")
+    report.run_report(here / "earlier" / "r0", {"data_root": str(here / "data")}, ["compare_algorithms"], **common)
+    out, _ = report.run_report(here / "runs" / "r1", {"data_root": str(here / "data")}, ["compare_algorithms"],
+                               baseline=here / "earlier", command=["lorisnb", "report", "--baseline",
+                                                                  str(here / "earlier")], **common)  # fmt: skip
+    assert held_paths(out, [here, here / "earlier"]) == []
+    assert "{baseline}" in (out / "run.json").read_text()

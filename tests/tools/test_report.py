@@ -157,19 +157,23 @@ def test_report_on_a_results_folder_with_trials(tmp_path, icra20, data, capfd):
     assert set(runs) >= {"command", "lorisnb_version", "commit", "spec", "data_root", "created", "inputs", "notebooks"}
     assert runs["command"][:2] == ["lorisnb", "report"] and runs["spec"]["values"]["eps"] == "inf"
     trial = results / "orb" / "cafe_1_trial2.txt"
-    assert runs["inputs"][str(trial.resolve())] == sha256(trial)
-    assert runs["inputs"]["openloris-scene/groundtruth/gt_cafe_1.txt"] == sha256(data.groundtruth("cafe"))
-    assert len([k for k in runs["inputs"] if k.startswith(str(results.resolve()))]) == 18
-    assert main(["verify", str(out)]) == 0
+    # (paths below named roots: the run names no absolute path of this machine, tests/tools/test_portable_runs.py)
+    assert runs["inputs"]["{results}/orb/cafe_1_trial2.txt"] == sha256(trial)
+    assert runs["inputs"]["{data}/openloris-scene/groundtruth/gt_cafe_1.txt"] == sha256(data.groundtruth("cafe"))
+    assert len([k for k in runs["inputs"] if k.startswith("{results}/")]) == 18
+    roots = ["--data", str(data.root), "--results", str(results)]
+    assert main(["verify", str(out), *roots]) == 0
     trial.write_text(trial.read_text() + "\n")
     capfd.readouterr()
-    assert main(["verify", str(out)]) == 1
-    assert f"changed: {trial.resolve()}" in capfd.readouterr().out
+    assert main(["verify", str(out), *roots]) == 1
+    assert "changed: {results}/orb/cafe_1_trial2.txt" in capfd.readouterr().out
     # the folders it read are listed again: a result file added since is an input of the same command
-    assert runs["input_roots"][0] == str(results.resolve())
+    assert runs["input_roots"][0] == "{results}"
     added = results / "orb" / "home_1_trial4.txt"
     added.write_text((results / "orb" / "home_1_trial1.txt").read_text())
-    assert main(["verify", str(out)]) == 1 and f"added: {added.resolve()}" in capfd.readouterr().out
+    assert (
+        main(["verify", str(out), *roots]) == 1 and "added: {results}/orb/home_1_trial4.txt" in capfd.readouterr().out
+    )
     # diff of the run against itself: each sequence once, though four of the run's tables hold it
     per_sequence = pd.read_csv(out / "findings" / "sequences.csv")
     assert main(["diff", str(out), str(out), "--no-progress"]) == 0

@@ -3,8 +3,13 @@
 Association (OpenLORIS-Scene paper Sec. V-A; official tool ``associate_with_interpolation``): an
 estimate stamp t inside the ground-truth time span is matched when its two bracketing
 ground-truth stamps k1 <= t <= k2 satisfy ``max(t - k1, k2 - t) < max_gap`` (0.5 s). The
-ground-truth position is interpolated linearly and the orientation by slerp. Unmatched estimates
-are ignored (not counted wrong).
+ground-truth position is interpolated linearly and the orientation by slerp. Where the ground
+truth is sparser than the bracket (:func:`sparser_than`: its median interval is ``max_gap`` or
+more, e.g. 1 Hz against 0.5 s), the bracket matches almost nothing, and a stamp equal to a
+ground-truth stamp is matched whatever its bracket: its ground truth is that pose, interpolated
+from nothing (an estimate at 100 Hz against a ground truth at 1 Hz matches at every ground-truth
+stamp it shares). Denser ground truth (OpenLORIS's) keeps the official rule unchanged, gaps
+included. Unmatched estimates are ignored (not counted wrong).
 """
 
 from __future__ import annotations
@@ -105,6 +110,13 @@ class Association:
         return values[i]
 
 
+def sparser_than(gt_stamps: np.ndarray, max_gap: float) -> bool:
+    """Whether ground truth of these stamps (seconds, increasing) is sparser than the bracket: its
+    median interval is ``max_gap`` or more, so that interpolation within the bracket can match
+    (almost) no estimate stamp, and :func:`associate` matches equal stamps whatever their bracket."""
+    return len(gt_stamps) >= 2 and bool(np.median(np.diff(gt_stamps)) >= max_gap)
+
+
 def associate(
     gt: Trajectory, est_stamps: np.ndarray, max_gap: float = MAX_GAP, official_interpolation: bool = False
 ) -> Association:
@@ -113,7 +125,9 @@ def associate(
     Args:
         gt: ground truth in the estimate's frame, stamps strictly increasing.
         est_stamps: (N,) estimate stamps, seconds, strictly increasing.
-        max_gap: the bracket in seconds (strict: ``max(t - k1, k2 - t) < max_gap``).
+        max_gap: the bracket in seconds (strict: ``max(t - k1, k2 - t) < max_gap``); a stamp equal to a
+            ground-truth stamp is matched whatever its bracket where the ground truth is sparser
+            than it (:func:`sparser_than`).
         official_interpolation: interpolate orientations as the official tool does (slip (a): see
             :func:`lorisnb.core.alignment.geometry.official_slerp`; at a stamp equal to a ground-truth stamp it
             uses the interval ending there). Positions are the same either way.
@@ -128,6 +142,7 @@ def associate(
     ok = np.empty(len(t), bool)
 
     increasing = bool(np.all(t[1:] >= t[:-1]))  # as a Trajectory's stamps are
+    sparse = sparser_than(g, max_gap)
 
     def bracket(lo: int, hi: int) -> None:  # the ground-truth interval of each stamp, and whether it matches
         tt = t[lo:hi]
@@ -135,7 +150,9 @@ def associate(
         # increasing stamps: only the ground truth between the block's first and last stamp can bracket them
         k = np.clip(np.searchsorted(g[w0 : w1 + 1], tt, side="left") + (w0 - 1), 0, len(g) - 2)
         i[lo:hi] = k
-        ok[lo:hi] = (tt >= g[0]) & (tt <= g[-1]) & (np.maximum(tt - np.take(g, k), np.take(g, k + 1) - tt) < max_gap)
+        g1, g2 = np.take(g, k), np.take(g, k + 1)
+        exact = ((tt == g1) | (tt == g2)) & sparse  # the ground-truth pose itself: no interpolation, no bracket
+        ok[lo:hi] = (tt >= g[0]) & (tt <= g[-1]) & ((np.maximum(tt - g1, g2 - tt) < max_gap) | exact)
 
     blockwise(bracket, len(t))
     idx = np.flatnonzero(ok)

@@ -19,6 +19,7 @@ from lorisnb.core.alignment.geometry import Sim3, rotation_lever, rotations_of
 from lorisnb.core.metrics import openloris as metrics
 from lorisnb.core.metrics.pairs import rpe_indices
 from lorisnb.core.metrics.written import written_rpe
+from lorisnb.core.spec.validate import label
 from lorisnb.core.trajectory.frames import FRAMES, PAPER_EPS, SCENES, match_scene
 from lorisnb.core.trajectory.poses import Trajectory, size
 from lorisnb.errors import ParseError, ValidationError
@@ -280,6 +281,10 @@ class FileErrors:
     #: what :func:`lorisnb.core.lifelong.scoring.score` and :func:`lorisnb.core.lifelong.sweep.sweep` use unless
     #: given (empty when not known: lorisnb's own rule over 1 s)
     rpe: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:  # the one place a row's labels are made: compared and grouped as NFC
+        self.algorithm, self.file, self.suite, self.scene = map(label, (self.algorithm, self.file, self.suite,
+                                                                     self.scene))  # fmt: skip
 
     def __repr__(self) -> str:
         n = len(self.sequences)

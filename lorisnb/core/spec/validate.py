@@ -9,6 +9,7 @@ naming the value, what was given and what is expected.
 from __future__ import annotations
 
 import math
+import unicodedata
 from collections.abc import Iterable, Mapping
 from numbers import Real
 from typing import Any
@@ -17,6 +18,16 @@ import numpy as np
 
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import ValidationError
+
+
+def label(text: object) -> str:
+    """An algorithm, scene or file label as lorisnb compares and groups it: Unicode NFC, so that
+    ``algé`` typed (one code point) and ``algé`` from a macOS folder name (``e`` and a combining
+    accent) are one algorithm, not two that look alike. Control characters are kept (they are
+    escaped where printed, :func:`lorisnb.cli.text.clean`)."""
+    s = str(text)
+    return s if s.isascii() else unicodedata.normalize("NFC", s)
+
 
 #: The words accepted for ``scale`` (command line ``--scale WORD``, Python ``scale=``), any case.
 SCALE_WORDS: dict[str, bool | str] = {

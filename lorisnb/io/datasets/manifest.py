@@ -188,9 +188,11 @@ def _openloris_manifest(raw: dict, path: Path) -> Manifest:
 def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -> Manifest:
     """Read and check a manifest (a built-in name or a TOML file). ParseError names the file, the
     key and what was expected; environment variables in ``root`` (``${EUROC_ROOT}``) are expanded
-    and an unset one is named. A ground-truth file must lie inside the manifest's folder or its
-    ``root`` (links resolved: ``groundtruth = "../../etc/passwd"`` is refused before anything is
-    read) unless ``outside`` (``--manifest-outside``)."""
+    and an unset one is named. A ground-truth file must lie inside the manifest's folder, its
+    ``root`` or lorisnb's data root, and a ``root`` written in the manifest (not taken from an
+    environment variable) inside the manifest's folder or the data root (links resolved:
+    ``groundtruth = "../../etc/passwd"`` is refused before anything is read), unless ``outside``
+    (``--manifest-outside``)."""
     path = manifest_path(name_or_path)
     try:
         raw = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -218,6 +220,10 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
             path, None, f"root = {root_text!r}: environment variable not set; set it to the dataset's folder"
         )
     root = (path.parent / Path(expanded).expanduser()).resolve()
+    trusted = [path.parent.resolve(), *_data_root()]  # the manifest's folder and lorisnb's data root
+    if not outside and expanded == root_text:  # a root from an environment variable is the user's own
+        _confined(root, trusted, path, f"root = {root_text!r}")
+    allowed = [root, *trusted]
     gt_fmt = _fmt(raw.get("groundtruth_format", "tum"), "groundtruth_format", path)
     est_fmt = _fmt(raw.get("estimate_format", "tum"), "estimate_format", path)
     scene = str(raw.get("scene", path.stem))
@@ -237,7 +243,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
                 raise ParseError(path, None, f"[[session]] {k}: {key} = {item[key]!r}: expected a non-empty name")
         name = str(item.get("name", f"session{k}"))
         if not outside:
-            _confined(root / str(item["groundtruth"]), [root, path.parent.resolve()], path, f"[[session]] {k}")
+            _confined(root / str(item["groundtruth"]), allowed, path, f"[[session]] {k}: groundtruth")
         seq = item.get("seq", k)
         if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
             raise ParseError(path, None, f"session {name!r}: seq = {seq!r}; expected a whole number")
@@ -294,13 +300,24 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     )  # fmt: skip
 
 
+def _data_root() -> list[Path]:
+    """lorisnb's data root (:func:`~lorisnb.io.datasets.paths.find_data`), where one is found."""
+    from lorisnb.errors import DataNotFoundError
+    from lorisnb.io.datasets.paths import find_data
+
+    try:
+        return [find_data(None).root.resolve()]
+    except DataNotFoundError:
+        return []
+
+
 def _confined(file: Path, folders: list[Path], path: Path, where: str) -> None:
-    """Refuse a ground-truth ``file`` that lies (links resolved) outside ``folders``: a manifest
-    received from someone else reads nothing elsewhere. The file is not opened."""
+    """Refuse a ``file`` (a ground truth, or the root) that lies (links resolved) outside
+    ``folders``: a manifest received from someone else reads nothing elsewhere. Nothing is opened."""
     p = file.resolve()
     if not any(p == f or f in p.parents for f in folders):
-        raise ParseError(path, None, f"{where}: groundtruth lies outside the manifest's folder and its root "
-                         f"({', '.join(map(str, dict.fromkeys(folders)))}); expected a file inside them (pass "
+        raise ParseError(path, None, f"{where} lies outside the manifest's folder, its root and lorisnb's data root "
+                         f"({', '.join(map(str, dict.fromkeys(folders)))}); expected a place inside them (pass "
                          "--manifest-outside, or outside=True, to read it anyway)")  # fmt: skip
 
 

@@ -27,6 +27,7 @@ from typing import Any
 import pandas as pd
 
 from lorisnb.core.metrics.openloris import RATES
+from lorisnb.core.spec import validate
 from lorisnb.core.stats.inference import WEIGHTS as STATS_WEIGHTS
 from lorisnb.core.stats.inference import with_trials
 from lorisnb.core.stats.regression import METRICS
@@ -135,9 +136,9 @@ def read_table(path: Path) -> pd.DataFrame:
     if missing:
         raise ParseError(path, None, f"lacks column(s) {', '.join(missing)}; expected a per-sequence table as "
                          "written by lorisnb evaluate --csv / --parquet")  # fmt: skip
-    for c in ("algorithm", "scene", "suite", "file"):
-        if c in df.columns:
-            df[c] = df[c].astype(str).where(df[c].notna(), "")
+    for c in ("algorithm", "scene", "suite", "file"):  # labels as evaluations make them (NFC): one algorithm
+        if c in df.columns:  # whether a table was written from an NFD folder name or not
+            df[c] = df[c].astype(str).where(df[c].notna(), "").map(validate.label)
     for c in [*NUMBERS, *METRICS]:
         if c in df.columns and not pd.api.types.is_numeric_dtype(df[c]):
             values = pd.to_numeric(df[c].astype(str).str.strip().replace({"": None}), errors="coerce")
@@ -148,16 +149,41 @@ def read_table(path: Path) -> pd.DataFrame:
                 raise ParseError(path, line, f"column {c}: {df[c].iloc[i]!r} is not a number; expected a per-sequence "
                                  "table as written by lorisnb evaluate --csv / --parquet")  # fmt: skip
             df[c] = values
-    for c in (c for c in METRICS if c in df.columns):  # a number no evaluation gives: a damaged table
-        v = df[c].to_numpy(float)
-        bad = (v < 0) | (v > 1) if c in RATES else v < 0  # NaN: not scored, allowed
+    for c in (c for c in [*METRICS, *COUNTS] if c in df.columns):  # a number no evaluation gives: a damaged table
+        bad, expected = out_of_domain(df, c)
         if bad.any():
             i = int(bad.nonzero()[0][0])
             line = i + 2 if path.suffix.lower() == ".csv" else None
-            expected = "a rate between 0 and 1" if c in RATES else "an RMSE >= 0"
-            raise ParseError(path, line, f"column {c}: {v[i]:g} is not {expected}; expected a per-sequence "
+            raise ParseError(path, line, f"column {c}: {df[c].iloc[i]:g} is not {expected}; expected a per-sequence "
                              "table as written by lorisnb evaluate --csv / --parquet")  # fmt: skip
     return df
+
+
+#: Counts of a per-sequence table, and the count each error metric is NaN with (no pose or pair to
+#: take it over): the only place an evaluation writes NaN in the columns diff and history judge.
+COUNTS = ("matched", "c_matched", "rpe_pairs", "c_rpe_pairs")
+NAN_WHEN_NONE = {"ate_rmse": "matched", "aoe_rmse": "matched", "c_ate_rmse": "c_matched", "c_aoe_rmse": "c_matched",
+                 "rpe_trans_rmse": "rpe_pairs", "rpe_rot_rmse": "rpe_pairs"}  # fmt: skip
+
+
+def out_of_domain(df: pd.DataFrame, c: str) -> tuple[Any, str]:
+    """Which values of column ``c`` no evaluation writes (a boolean array), and what it writes in
+    words; the one rule every number :func:`read_table` reads passes. A rate (CR, CR-T, CS-R) is in
+    [0, 1], never NaN (a sequence without a match has CR 0); a count is a whole number >= 0; an
+    RMSE is finite and >= 0, NaN only where its count (:data:`NAN_WHEN_NONE`) is 0 (or absent)."""
+    import numpy as np
+
+    v = df[c].to_numpy(float)
+    nan = np.isnan(v)
+    if c in RATES:
+        return nan | (v < 0) | (v > 1), "a rate between 0 and 1 (NaN is none: a sequence without a match has 0)"
+    if c in COUNTS:
+        return nan | (v < 0) | ~np.isfinite(v) | (np.mod(np.where(nan, 0, v), 1) != 0), "a count (a whole number >= 0)"
+    count = NAN_WHEN_NONE.get(c)
+    may_be_nan = df[count].to_numpy(float) == 0 if count in df.columns else np.ones(len(v), bool)
+    with np.errstate(invalid="ignore"):
+        bad = (nan & ~may_be_nan) | (v < 0) | np.isinf(v)
+    return bad, f"an RMSE >= 0 (NaN only where {count or 'its count'} is 0)"
 
 
 def _report_tables(folder: Path, notes: list[str]) -> pd.DataFrame:

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from lorisnb.core.spec import validate
 from lorisnb.core.stats.trials import split_trial
 from lorisnb.errors import LorisWarning, ValidationError
 from lorisnb.io.datasets.manifest import Manifest
@@ -88,7 +89,7 @@ def names(what: str, value: object) -> list[str]:
     bad = [n for n in names if not isinstance(n, str)]
     if bad:
         raise ValidationError(f"{what}: expected names (str), got {bad[0]!r}")
-    return names
+    return [validate.label(n) for n in names]  # as the labels they are compared with (NFC)
 
 
 def labels(path: Path, root: Path | None, trials_by: str | None = None) -> tuple[str, str, str, int]:
@@ -97,12 +98,12 @@ def labels(path: Path, root: Path | None, trials_by: str | None = None) -> tuple
     if root is None:  # a file given alone: its algorithm is its folder, or the folder above a trial folder
         base, trial = split_trial("/".join(path.parts[-3:]), trials_by)
         parts = base.split("/")
-        return (parts[-2] if len(parts) >= 2 else path.parent.name), path.name, "", trial
+        return validate.label(parts[-2] if len(parts) >= 2 else path.parent.name), validate.label(path.name), "", trial
     rel = path.relative_to(root).as_posix()
     base, trial = split_trial(rel, trials_by)
     parts = base.split("/")
     algorithm = parts[-2] if len(parts) >= 2 else root.name
-    return algorithm, rel, "/".join(parts[:-2]), trial
+    return validate.label(algorithm), validate.label(rel), validate.label("/".join(parts[:-2])), trial
 
 
 def scene_label(gt_path: Path) -> str:

@@ -160,7 +160,7 @@ def crosscheck_evo(
     ):
         theirs = evo_statistics(ref, est, the_spec, how)
     lacks = evo_lacks(the_spec)
-    note = (f"definitions differ: {'; '.join(lacks)}" if lacks else
+    note = (f"{DEFINITIONS_DIFFER}: {'; '.join(lacks)}" if lacks else
             f"lorisnb (preset {the_spec.preset_name}, align {shown}) against evo reading the files itself")  # fmt: skip
     rows = [agreement_row("matched", shown, ours["matched"], theirs["matched"], ours["matched"], note)]
     if "rpe_pairs" in theirs:
@@ -178,8 +178,21 @@ def crosscheck_evo(
                                           "with a warning"))  # fmt: skip
             else:
                 rows.append(agreement_row(key, shown, ours[key], float("nan"), n,
-                                          "RPE in seconds: evo has no such unit"))  # fmt: skip
+                                          NO_SUCH_UNIT))  # fmt: skip
     return pd.concat([*reading, pd.DataFrame(rows, columns=CROSSCHECK_COLUMNS)], ignore_index=True)
+
+
+#: How a row's note states the definition that explains a difference from evo.
+DEFINITIONS_DIFFER = "definitions differ"
+NO_SUCH_UNIT = "RPE in seconds: evo has no such unit"
+
+
+def explained(table: pd.DataFrame) -> pd.Series:
+    """Which rows of a :func:`crosscheck_evo` table differ from evo (or have no evo value) for a
+    reason their note states: the conventions are not evo's (``definitions differ: ...``), or evo
+    has no such quantity (RPE in seconds). A row that disagrees without one is unexplained."""
+    note = table["note"].astype(str)
+    return ~table["agrees"].astype(bool) & (note.str.startswith(DEFINITIONS_DIFFER) | (note == NO_SUCH_UNIT))
 
 
 def ev_error(ev) -> Exception:

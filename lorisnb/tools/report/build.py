@@ -26,7 +26,7 @@ from typing import Any
 from lorisnb.core.spec import validate
 from lorisnb.errors import DataNotFoundError, LorisError, OutputError, ValidationError
 from lorisnb.io.datasets.paths import find_data
-from lorisnb.io.writers import overlap, remove_partial, write_csv
+from lorisnb.io.writers import name_output, overlap, remove_partial, write_csv
 from lorisnb.tools.decisions.history import earlier_runs
 from lorisnb.tools.evaluation.pool import start_context
 from lorisnb.tools.evaluation.runner import check_filters, result_files
@@ -384,14 +384,16 @@ def run_report(
                                     expected=board.get("expected"), since=since)  # fmt: skip
                 single_file(index, folder / "report.html")
                 if not absolute_paths:  # every path below a named root, whatever wrote it (a notebook's printout)
-                    make_portable(folder, [*named.items(), ("run", folder), ("run", run_dir)])
+                    others = [("baseline", Path(baseline))] if baseline is not None else []
+                    make_portable(folder, [*named.items(), *others, ("run", folder), ("run", run_dir)])
                 _write_marker(folder, _files(folder))
 
             pages(tmp, run_dir.name)  # the name it is moved to (not the temporary one it is written under)
             os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp made it owner-only
             final = _move_into_place(tmp, run_dir, force)
-        except BaseException:
+        except BaseException as exc:
             remove_partial(tmp)
+            name_output(exc, run_dir)  # a full disk names the run folder, not its temporary name
             raise
         if final.name != run_dir.name:  # another run took the name meanwhile: this one's pages say where it is
             pages(final, final.name)

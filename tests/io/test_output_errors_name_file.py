@@ -1,0 +1,50 @@
+"""A write that fails where the system names no file (a full disk: ENOSPC is raised by write()
+without a file name) names the output it was writing, through Python and the command line;
+never the temporary name it was written under."""
+
+from __future__ import annotations
+
+import errno
+import shutil
+
+import pandas as pd
+import pytest
+
+from lorisnb.cli import main
+from lorisnb.io.writers import write_csv, write_parquet, write_text
+
+
+def full_disk(*a, **k):
+    raise OSError(errno.ENOSPC, "No space left on device")
+
+
+@pytest.mark.parametrize("writer", ["csv", "text", "parquet"])
+def test_a_full_disk_names_the_output_in_python(tmp_path, monkeypatch, writer):
+    out = tmp_path / f"table.{writer}"
+    if writer == "csv":
+        monkeypatch.setattr(pd.DataFrame, "to_csv", full_disk)
+        call = lambda: write_csv(pd.DataFrame({"a": [1]}), out)  # noqa: E731
+    elif writer == "text":
+        monkeypatch.setattr("pathlib.Path.write_text", full_disk)
+        call = lambda: write_text("x", out)  # noqa: E731
+    else:
+        pytest.importorskip("pyarrow")
+        import pyarrow.parquet as pq
+
+        monkeypatch.setattr(pq, "write_table", full_disk)
+        call = lambda: write_parquet(pd.DataFrame({"algorithm": ["a"], "x": [1.0]}), out)  # noqa: E731
+    with pytest.raises(OSError) as exc:
+        call()
+    assert exc.value.errno == errno.ENOSPC and exc.value.filename == str(out)
+    assert list(tmp_path.iterdir()) == []  # nothing half-written left
+
+
+def test_a_full_disk_names_the_output_on_the_command_line(tmp_path, data, icra20, monkeypatch, capsys):
+    res = tmp_path / "res" / "orb"
+    res.mkdir(parents=True)
+    shutil.copy(icra20 / "per-seq" / "orbslam2_rgbd" / "cafe_1_1_orbslam2-original.txt", res)
+    monkeypatch.setattr(pd.DataFrame, "to_csv", full_disk)
+    out = tmp_path / "seq.csv"
+    rc = main(["evaluate", str(res.parent), "--data", str(data.root), "--csv", str(out), "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2 and f"error: {out}: No space left on device" in err and ".tmp-" not in err
