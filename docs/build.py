@@ -171,33 +171,40 @@ def stage_notebook(source: Path, dest: Path, output_dir: Path) -> None:
     nbformat.write(nb, dest)
 
 
-def execute_notebooks(paths: list[Path], jobs: int, env: dict[str, str]) -> list[str]:
-    """Execute the staged notebooks in place, ``jobs`` at a time (each in its own kernel, in its own
-    folder), with a progress bar; the problems (``name: error``), none when all ran. Sphinx then
-    renders their outputs as they are (myst-nb does not execute again)."""
-    from concurrent.futures import ThreadPoolExecutor
-
+def _execute(path: Path, env: dict[str, str]) -> str | None:
+    """Execute one staged notebook in place in this process's own kernel client; its problem
+    (``name: error``) or None."""
     from nbclient import NotebookClient
     from tqdm import tqdm
 
-    os.environ.update(env)  # the kernels' environment: TMPDIR of the build, MPLBACKEND
+    os.environ.update(env)  # the kernel's environment: TMPDIR of the build, MPLBACKEND
+    nb = nbformat.read(path, as_version=4)
+    start = time.perf_counter()
+    try:
+        NotebookClient(
+            nb, timeout=600, startup_timeout=300, kernel_name="python3",
+            resources={"metadata": {"path": str(path.parent)}},
+        ).execute()  # fmt: skip
+    except Exception as exc:  # a cell's error, a timeout, a kernel that died: the build fails naming it
+        return f"{path.stem}: {' '.join(str(exc).split())[-1500:]}"
+    nbformat.write(nb, path)
+    tqdm.write(f"docs: {path.stem} executed in {time.perf_counter() - start:.0f} s")
+    return None
 
-    def run(path: Path) -> str | None:
-        nb = nbformat.read(path, as_version=4)
-        start = time.perf_counter()
-        try:
-            NotebookClient(
-                nb, timeout=600, startup_timeout=300, kernel_name="python3",
-                resources={"metadata": {"path": str(path.parent)}},
-            ).execute()  # fmt: skip
-        except Exception as exc:  # a cell's error, a timeout, a kernel that died: the build fails naming it
-            return f"{path.stem}: {' '.join(str(exc).split())[-1500:]}"
-        nbformat.write(nb, path)
-        tqdm.write(f"docs: {path.stem} executed in {time.perf_counter() - start:.0f} s")
-        return None
 
-    with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
-        done = list(tqdm(pool.map(run, paths), total=len(paths), desc="notebooks", unit="nb"))
+def execute_notebooks(paths: list[Path], jobs: int, env: dict[str, str]) -> list[str]:
+    """Execute the staged notebooks in place, ``jobs`` at a time, each in a process of its own
+    (a kernel client per process: nbclient's clients in threads of one process stalled with an
+    idle kernel now and then), with a progress bar; the problems (``name: error``), none when all
+    ran. Sphinx then renders their outputs as they are (myst-nb does not execute again)."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+    from functools import partial
+
+    from tqdm import tqdm
+
+    with ProcessPoolExecutor(max_workers=max(1, jobs), mp_context=multiprocessing.get_context("spawn")) as pool:
+        done = list(tqdm(pool.map(partial(_execute, env=env), paths), total=len(paths), desc="notebooks", unit="nb"))
     return [d for d in done if d]
 
 
