@@ -121,7 +121,9 @@ class Timeline:
     in the same figure. The figure drawn equals :func:`plot_timeline`'s at the same thresholds,
     pixel for pixel (a test compares their PNGs). A threshold explorer's slider change on icra20's
     market scene (benchmarks/workload.py's slider row): the figure made anew took 0.21 s of CPU,
-    while re-scoring, re-aggregating and redrawing it in place take 0.16 s in all."""
+    while re-scoring, re-aggregating and redrawing it in place take 0.08 s in all. Rendering it
+    (:func:`~lorisnb.tools.notebook.start.figure_png`) is not changed: about 0.3 s of CPU, most of
+    it Agg drawing the figure's texts."""
 
     def __init__(
         self,
