@@ -165,8 +165,11 @@ def sequence_grid(
     shape = (len(eps_a), len(phi_a), len(delta_a), len(tau_a))
     E, P, D, T = shape
 
-    def bc(a: Any) -> np.ndarray:
-        return np.broadcast_to(a, shape)
+    one = shape == (1, 1, 1, 1)  # one setting (score): each metric one value
+
+    def bc(a: Any) -> np.ndarray:  # for one setting a reshape, a third of a broadcast view's cost:
+        # score over the icra20 tree 0.38-0.67 -> 0.33-0.46 s of CPU (side by side, 2 shared cores)
+        return np.reshape(a, shape) if one else np.broadcast_to(a, shape)
 
     nan, zero = bc(np.nan), bc(0.0)
     if e.matched == 0:
