@@ -178,3 +178,30 @@ def test_paper_eps_on_a_scene_without_one_is_refused_when_built(ev, data):
         ThresholdExplorer(errors, durations, "paper", scene="home")
     ex = ThresholdExplorer(errors, durations, 0.05, scene="fr2_desk")
     assert ex.results()[0]["cr"].iloc[0] == pytest.approx(pair.scenes(0.05, 30.0, 1.0, 60.0)["cr"].iloc[0])
+
+
+def test_a_slider_change_redraws_the_figure_in_place_as_drawn_anew(ev):
+    """A slider change redraws the scene's figure in place (Timeline.draw: the axes, rows and
+    legend kept); its PNG equals plot_timeline's figure made anew at the same thresholds, pixel
+    for pixel, after moves that turn segments from correct to wrong and back, and after a scene
+    change and back."""
+    from lorisnb.tools.figures.plotting import plot_timeline
+    from lorisnb.tools.notebook.start import figure_png
+
+    ex = ThresholdExplorer(ev.errors, ev.durations(), "paper", 30.0, 1.0, 60.0, scene="home")
+    _, fig = ex.results()
+    steps = [("phi", 2.0), ("eps", 0.1), ("delta", 5.0), ("scene", "corridor"), ("scene", "home"), ("eps", 3.0)]
+    for name, value in steps:
+        setattr(ex, name, value)
+        table, again = ex.results()
+        if name != "scene":
+            assert again is fig  # the same figure, redrawn
+        fig = again
+        files = [f for f in ev.errors if f.scene == ex.scene]
+        durations = ev.durations()[ev.durations()["scene"] == ex.scene]
+        scenes = ev.scenes(ex.eps, ex.phi, ex.delta, ex.tau)
+        fresh = plot_timeline(files, durations, scenes[scenes["scene"] == ex.scene], ex.eps, ex.phi, ex.delta,
+                              title=fig.axes[0].get_title())  # fmt: skip
+        assert figure_png(fig, dpi=60) == figure_png(fresh, dpi=60), (name, value)
+    texts = sorted(t.get_text() for t in fig.axes[0].texts)
+    assert "100.0%" not in texts and any(t.endswith("%") for t in texts)  # eps 3 m, phi 2 deg: the CRs drawn

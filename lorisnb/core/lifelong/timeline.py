@@ -54,27 +54,19 @@ def timeline_table(
             start), correct (a dot in the figure if correct, a cross if not).
     """
     eps_v, phi_v, delta_v = eps_value(eps), threshold("phi", phi), threshold("delta", delta)  # as score's
-    segs, firsts = [], []
+    labels: list[tuple[str, str, int, str, int]] = []  # each sequence's, then repeated per segment
+    counts, starts, ends, oks, firsts = [], [], [], [], []
     for f in errors:
         for e in f.sequences:
             if e.matched == 0:
                 continue
             c = metrics.correctness(e.ate, e.aoe, sequence_eps(eps_v, f.scene, e), phi_v)
             s, t, ok = pose_segments(e.stamps, c, e.gt_end, delta_v, e.gt_start)
-            segs.append(
-                pd.DataFrame(
-                    {
-                        "algorithm": f.algorithm,
-                        "suite": f.suite,
-                        "trial": f.trial,
-                        "scene": f.scene,
-                        "seq": e.seq,
-                        "start": s - e.gt_start,
-                        "end": t - e.gt_start,
-                        "correct": ok,
-                    }
-                )
-            )
+            labels.append((f.algorithm, f.suite, f.trial, f.scene, e.seq))
+            counts.append(len(s))
+            starts.append(s - e.gt_start)
+            ends.append(t - e.gt_start)
+            oks.append(np.asarray(ok, bool))
             firsts.append(
                 dict(
                     algorithm=f.algorithm,
@@ -87,7 +79,22 @@ def timeline_table(
                 )
             )
     seg_cols = ["algorithm", "suite", "trial", "scene", "seq", "start", "end", "correct"]
-    segments = pd.concat(segs, ignore_index=True) if segs else pd.DataFrame(columns=seg_cols)
+    if labels:  # one table of all the segments (a table per sequence, concatenated, took 5x longer)
+        names = list(zip(*labels, strict=True))
+        segments = pd.DataFrame(
+            {
+                "algorithm": np.repeat(np.array(names[0], object), counts),
+                "suite": np.repeat(np.array(names[1], object), counts),
+                "trial": np.repeat(np.array(names[2], np.int64), counts),
+                "scene": np.repeat(np.array(names[3], object), counts),
+                "seq": np.repeat(np.array(names[4], np.int64), counts),
+                "start": np.concatenate(starts).astype(float),
+                "end": np.concatenate(ends).astype(float),
+                "correct": np.concatenate(oks),
+            }
+        )
+    else:
+        segments = pd.DataFrame(columns=seg_cols)
     return segments, pd.DataFrame(firsts, columns=["algorithm", "suite", "trial", "scene", "seq", "t", "correct"])
 
 

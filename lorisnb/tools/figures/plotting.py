@@ -109,89 +109,145 @@ def plot_timeline(
     bottom right, from ``scene_table`` (:func:`lorisnb.core.lifelong.aggregate.aggregate_scenes`; with
     several trials of an algorithm, its ``suite`` and ``trial`` columns tell their rows apart).
     Several suites or trials of an algorithm are a row each (:func:`~lorisnb.core.lifelong.timeline.timeline_rows`).
+    A figure to redraw at other thresholds: :class:`Timeline`.
     """
-    errors = list(errors)
-    segments, firsts = timeline_table(errors, eps, phi, delta)
-    layout = sequence_layout(durations)
-    if algorithms is None:
-        algorithms = sorted({f.algorithm for f in errors})
-    labels = dict(labels or {})
-    rows = timeline_rows(errors, algorithms)
-    n = len(rows)
-    width = max(8.0, 0.006 * (layout["offset"].iloc[-1] + layout["duration"].iloc[-1]) + 3) if len(layout) else 8
-    _theme("white")
-    fig, ax = subplots(figsize=(min(width, MAX_WIDTH_IN), 0.55 * n + 1.7))
-    off = {(r.scene, r.seq): r.offset for r in layout.itertuples()}
-    y_of = {key: n - i for i, key in enumerate(rows)}
+    return Timeline(errors, durations, algorithms, labels, show_wrong).draw(scene_table, eps, phi, delta, title)
 
-    def row_y(d: pd.DataFrame) -> np.ndarray:  # each segment's or first pose's row (NaN: not shown)
+
+class Timeline:
+    """:func:`plot_timeline`'s figure, kept to be redrawn at other thresholds: the axes, the scenes'
+    spans, the rows and the legend are made once (:meth:`__init__`); :meth:`draw` replaces only
+    what the thresholds change (the segments, the first poses, the CR and C-ATE texts, the title)
+    in the same figure. The figure drawn equals :func:`plot_timeline`'s at the same thresholds,
+    pixel for pixel (a test compares their PNGs). A threshold explorer's slider change on icra20's
+    market scene (benchmarks/workload.py's slider row): the figure made anew took 0.21 s of CPU,
+    while re-scoring, re-aggregating and redrawing it in place take 0.08 s in all. Rendering it
+    (:func:`~lorisnb.tools.notebook.start.figure_png`) is not changed: about 0.3 s of CPU, most of
+    it Agg drawing the figure's texts."""
+
+    def __init__(
+        self,
+        errors: Sequence[FileErrors],
+        durations: pd.DataFrame,
+        algorithms: Sequence[str] | None = None,
+        labels: Mapping[str, str] | None = None,
+        show_wrong: bool = True,
+    ):
+        self.errors = list(errors)
+        self.layout = layout = sequence_layout(durations)
+        self.algorithms = sorted({f.algorithm for f in self.errors}) if algorithms is None else algorithms
+        labels = dict(labels or {})
+        rows = timeline_rows(self.errors, self.algorithms)
+        n = len(rows)
+        width = max(8.0, 0.006 * (layout["offset"].iloc[-1] + layout["duration"].iloc[-1]) + 3) if len(layout) else 8
+        _theme("white")
+        self.figure, ax = subplots(figsize=(min(width, MAX_WIDTH_IN), 0.55 * n + 1.7))
+        self.ax = ax
+        self.show_wrong = show_wrong
+        self.off = {(r.scene, r.seq): r.offset for r in layout.itertuples()}
+        self.y_of = {key: n - i for i, key in enumerate(rows)}
+        top = n + 0.8
+        for scene, d in layout.groupby("scene", sort=False):
+            x0, x1 = d["offset"].min(), (d["offset"] + d["duration"]).max()
+            ax.plot([x0, x1], [top, top], "-k", lw=1)
+            ax.plot(d["offset"], np.full(len(d), top), "ok", ms=3)
+            ax.text((x0 + x1) / 2, top + 0.25, scene, ha="center", va="bottom", fontsize=9)
+            ax.axvline(x0, color="0.7", lw=0.6)
+            ax.axvline(x1, color="0.7", lw=0.6)
+        self._drawn: list[Any] = []  # the artists that the thresholds change
+        self._laid_out: tuple[bool, int] | None = None  # the title tight_layout measured
+        self.rows, self.labels = rows, labels
+
+    def _row_y(self, d: pd.DataFrame) -> np.ndarray:  # each segment's or first pose's row (NaN: not shown)
         keys = zip(d["algorithm"], d["suite"], d["trial"], strict=True)
-        return np.array([y_of.get(k, np.nan) for k in keys], float)
+        return np.array([self.y_of.get(k, np.nan) for k in keys], float)
 
-    top = n + 0.8
-    for scene, d in layout.groupby("scene", sort=False):
-        x0, x1 = d["offset"].min(), (d["offset"] + d["duration"]).max()
-        ax.plot([x0, x1], [top, top], "-k", lw=1)
-        ax.plot(d["offset"], np.full(len(d), top), "ok", ms=3)
-        ax.text((x0 + x1) / 2, top + 0.25, scene, ha="center", va="bottom", fontsize=9)
-        ax.axvline(x0, color="0.7", lw=0.6)
-        ax.axvline(x1, color="0.7", lw=0.6)
-    for correct_flag, color in ((True, CORRECT), (False, WRONG)):
-        if not show_wrong and not correct_flag:
-            continue
-        s = segments[segments["correct"] == correct_flag]
-        s = s[
-            np.array([(sc, q) in off for sc, q in zip(s["scene"], s["seq"], strict=True)], bool) & ~np.isnan(row_y(s))
-        ]  # a mask, also when empty
-        if s.empty:
-            continue
-        base = np.array([off[(sc, q)] for sc, q in zip(s["scene"], s["seq"], strict=True)])
-        y = row_y(s)
-        lines = np.stack([np.stack([base + s["start"], y], 1), np.stack([base + s["end"], y], 1)], 1)
-        ax.add_collection(LineCollection(list(lines), colors=color, linewidths=2.2))
-    f = firsts[~np.isnan(row_y(firsts))]
-    f = f[np.array([(sc, q) in off for sc, q in zip(f["scene"], f["seq"], strict=True)], bool)]
-    if len(f):
-        x = np.array([off[(sc, q)] for sc, q in zip(f["scene"], f["seq"], strict=True)]) + f["t"].to_numpy()
-        y = row_y(f)
-        ok = f["correct"].to_numpy(bool)
-        ax.plot(x[ok], y[ok], "o", color=CORRECT, ms=4)
-        ax.plot(x[~ok], y[~ok], "x", color=WRONG, ms=6, mew=1.5)
-    told_at = {"suite": 0, "trial": 1}
-    told = [k for k in told_at if k in scene_table.columns]  # what tells a row's runs apart
-    for r in scene_table[scene_table["algorithm"].isin(algorithms)].to_dict("records"):
-        d = layout[layout["scene"] == r["scene"]]
-        at = [y for (a, *run), y in y_of.items() if a == r["algorithm"] and all(r[k] == run[told_at[k]] for k in told)]
-        if d.empty or len(at) != 1:  # a table over all trials of a run drawn a row each: no row is its
-            continue
-        x0, x1 = d["offset"].min(), (d["offset"] + d["duration"]).max()
-        ax.text(x0 + 2, at[0] + 0.12, _pct(r["cr"]), fontsize=7, ha="left", va="bottom")
-        rmse = r["c_ate_rmse"]
-        ax.text(x1 - 2, at[0] - 0.42, "N/A" if not np.isfinite(rmse) else f"{rmse:.3f} m", fontsize=7, ha="right",
-                va="bottom")  # fmt: skip
-    ax.set_yticks(list(y_of.values()), [labels.get(a, a) + name[len(a) :] for (a, _, _), name in rows.items()])
-    ax.set_ylim(0.4, n + 1.5)
-    if len(layout):
-        ax.set_xlim(layout["offset"].min() - 5, (layout["offset"] + layout["duration"]).max() + 5)
-    ax.set_xticks([])
-    ax.set_xlabel("time (each sequence to scale; black dots mark sequence starts)")
-    sns.despine(ax=ax, left=True, bottom=True)
-    handles = [
-        Line2D([], [], color=CORRECT, lw=2.2, label="correct pose estimates"),
-        Line2D([], [], color=CORRECT, marker="o", ls="", label="correct (re-)localization"),
-    ]
-    if show_wrong:
-        handles += [
-            Line2D([], [], color=WRONG, lw=2.2, label="incorrect pose estimates"),
-            Line2D([], [], color=WRONG, marker="x", ls="", label="incorrect (re-)localization"),
+    def draw(
+        self,
+        scene_table: pd.DataFrame,
+        eps: float | str | Mapping[str, float] = np.inf,
+        phi: float = np.inf,
+        delta: float = 1.0,
+        title: str | None = None,
+    ) -> Figure:
+        """The figure at these thresholds (``scene_table`` at the same ones), drawn in place."""
+        segments, firsts = timeline_table(self.errors, eps, phi, delta)
+        ax, off, y_of, layout, row_y = self.ax, self.off, self.y_of, self.layout, self._row_y
+        for artist in self._drawn:
+            artist.remove()
+        drawn = []
+        for correct_flag, color in ((True, CORRECT), (False, WRONG)):
+            if not self.show_wrong and not correct_flag:
+                continue
+            s = segments[segments["correct"] == correct_flag]
+            s = s[
+                np.array([(sc, q) in off for sc, q in zip(s["scene"], s["seq"], strict=True)], bool)
+                & ~np.isnan(row_y(s))
+            ]  # a mask, also when empty
+            if s.empty:
+                continue
+            base = np.array([off[(sc, q)] for sc, q in zip(s["scene"], s["seq"], strict=True)])
+            y = row_y(s)
+            lines = np.stack([np.stack([base + s["start"], y], 1), np.stack([base + s["end"], y], 1)], 1)
+            drawn.append(ax.add_collection(LineCollection(list(lines), colors=color, linewidths=2.2)))
+        f = firsts[~np.isnan(row_y(firsts))]
+        f = f[np.array([(sc, q) in off for sc, q in zip(f["scene"], f["seq"], strict=True)], bool)]
+        if len(f):
+            x = np.array([off[(sc, q)] for sc, q in zip(f["scene"], f["seq"], strict=True)]) + f["t"].to_numpy()
+            y = row_y(f)
+            ok = f["correct"].to_numpy(bool)
+            drawn += ax.plot(x[ok], y[ok], "o", color=CORRECT, ms=4)
+            drawn += ax.plot(x[~ok], y[~ok], "x", color=WRONG, ms=6, mew=1.5)
+        told_at = {"suite": 0, "trial": 1}
+        told = [k for k in told_at if k in scene_table.columns]  # what tells a row's runs apart
+        for r in scene_table[scene_table["algorithm"].isin(self.algorithms)].to_dict("records"):
+            d = layout[layout["scene"] == r["scene"]]
+            at = [
+                y for (a, *run), y in y_of.items() if a == r["algorithm"] and all(r[k] == run[told_at[k]] for k in told)
+            ]
+            if d.empty or len(at) != 1:  # a table over all trials of a run drawn a row each: no row is its
+                continue
+            x0, x1 = d["offset"].min(), (d["offset"] + d["duration"]).max()
+            drawn.append(ax.text(x0 + 2, at[0] + 0.12, _pct(r["cr"]), fontsize=7, ha="left", va="bottom"))
+            rmse = r["c_ate_rmse"]
+            drawn.append(ax.text(x1 - 2, at[0] - 0.42, "N/A" if not np.isfinite(rmse) else f"{rmse:.3f} m", fontsize=7,
+                                 ha="right", va="bottom"))  # fmt: skip
+        self._drawn = drawn
+        if self._laid_out is None:
+            self._finish()
+        if title or self._laid_out is not None:
+            ax.set_title(title or "", fontsize=10, pad=18)
+        # the title's height (its lines) is what moves the layout: a title narrower than the axes
+        # and their row names (as these figures' are) leaves it where it was
+        laid_out = (bool(title), (title or "").count("\n"))
+        if laid_out != self._laid_out:
+            self.figure.tight_layout(rect=(0, 0.3 / self.figure.get_figheight(), 1, 1))
+            self._laid_out = laid_out
+        return self.figure
+
+    def _finish(self) -> None:
+        """The axis, its row names and the legend: after the first thresholds' artists, as
+        :func:`plot_timeline` always made them."""
+        ax, layout, rows, labels = self.ax, self.layout, self.rows, self.labels
+        ax.set_yticks(list(self.y_of.values()), [labels.get(a, a) + name[len(a) :] for (a, _, _), name in rows.items()])
+        ax.set_ylim(0.4, len(rows) + 1.5)
+        if len(layout):
+            ax.set_xlim(layout["offset"].min() - 5, (layout["offset"] + layout["duration"]).max() + 5)
+        ax.set_xticks([])
+        ax.set_xlabel("time (each sequence to scale; black dots mark sequence starts)")
+        sns.despine(ax=ax, left=True, bottom=True)
+        handles = [
+            Line2D([], [], color=CORRECT, lw=2.2, label="correct pose estimates"),
+            Line2D([], [], color=CORRECT, marker="o", ls="", label="correct (re-)localization"),
         ]
-    # the legend gets its own strip under the axis label, so the two never overlap
-    fig.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=len(handles), frameon=False,
-               fontsize=8)  # fmt: skip
-    if title:
-        ax.set_title(title, fontsize=10, pad=18)
-    fig.tight_layout(rect=(0, 0.3 / fig.get_figheight(), 1, 1))
-    return fig
+        if self.show_wrong:
+            handles += [
+                Line2D([], [], color=WRONG, lw=2.2, label="incorrect pose estimates"),
+                Line2D([], [], color=WRONG, marker="x", ls="", label="incorrect (re-)localization"),
+            ]
+        # the legend gets its own strip under the axis label, so the two never overlap
+        self.figure.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=len(handles),
+                           frameon=False, fontsize=8)  # fmt: skip
 
 
 def plot_trajectories(

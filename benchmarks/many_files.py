@@ -1,0 +1,60 @@
+"""Many small files (issues 47 and 48): a folder of N copies of one real icra20 result file (each in
+its own algorithm folder, as a lab's sweep of configurations writes them) evaluated by ``lorisnb
+evaluate`` in a whole process, against parsing the same files alone (:func:`lorisnb.io.read_openloris`
+in a loop), for several N: the time per file must stay flat as N grows (linear in the files), and
+the evaluation within 2x of the parsing (issue 47: "a folder of 5,000 small files within 2x of only
+parsing them").
+
+    python benchmarks/many_files.py [N ...]      (default 500 2000 5000)
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from lorisnb.io import find_data, read_openloris
+
+SOURCE = ("per-seq", "orbslam2_rgbd", "cafe_1_1_orbslam2-original.txt")
+
+
+def make_folder(root: Path, n: int) -> list[Path]:
+    src = find_data().icra20.joinpath(*SOURCE)
+    files = []
+    for i in range(n):
+        d = root / f"config_{i:05d}"
+        d.mkdir(parents=True)
+        files.append(Path(shutil.copy(src, d / src.name)))
+    return files
+
+
+def main(sizes: list[int]) -> int:
+    lorisnb = [sys.executable, "-m", "lorisnb.cli"]
+    print(f"{'files':>7s} {'evaluate s':>11s} {'ms/file':>8s} {'parse s':>8s} {'ms/file':>8s} {'ratio':>6s}")
+    per_file = []
+    for n in sizes:
+        with tempfile.TemporaryDirectory(prefix="lorisnb-many-") as tmp:
+            files = make_folder(Path(tmp) / "results", n)
+            t = time.perf_counter()
+            done = subprocess.run([*lorisnb, "evaluate", "--no-progress", "--csv", str(Path(tmp) / "out.csv"),
+                                   str(Path(tmp) / "results")], capture_output=True, text=True)  # fmt: skip
+            ev = time.perf_counter() - t
+            if done.returncode != 0:
+                print(done.stderr[-2000:], file=sys.stderr)
+                return 1
+            t = time.perf_counter()
+            for f in files:
+                read_openloris(f, warn=False)
+            parse = time.perf_counter() - t
+        per_file.append(ev / n)
+        print(f"{n:7d} {ev:11.2f} {1e3 * ev / n:8.2f} {parse:8.2f} {1e3 * parse / n:8.2f} {ev / parse:6.2f}")
+    print(f"time per file, largest N over smallest: {per_file[-1] / per_file[0]:.2f} (linear: about 1)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main([int(a) for a in sys.argv[1:]] or [500, 2000, 5000]))

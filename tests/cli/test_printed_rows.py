@@ -1,0 +1,37 @@
+"""``lorisnb evaluate``'s printed tables: scored without the error statistics unless printed (evo's
+conventions print some), the same text as the table that is written with ``--csv``."""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from lorisnb.cli import main
+
+
+def _printed(capsys, args: list[str]) -> str:
+    assert main(["evaluate", *args, "--no-progress"]) == 0
+    return capsys.readouterr().out
+
+
+def test_printed_without_statistics_as_with_the_written_table(icra20, tmp_path, capsys):
+    """Real icra20 results: the per-sequence and per-scene tables printed from the lean rows (no
+    ``--csv``) are the text printed from the full table when one is written."""
+    args = [str(icra20 / "lifelong" / "maslam"), str(icra20 / "lifelong" / "orbslam2_t265"), "--scale", "auto"]
+    lean = _printed(capsys, args)
+    full = _printed(capsys, [*args, "--csv", str(tmp_path / "t.csv")])
+    assert lean == full and "per scene" in lean and lean.count("maslam") >= 10
+    table = pd.read_csv(tmp_path / "t.csv")
+    assert len(table) == 30 and table["ate_median"].notna().sum() >= 10  # the statistics written
+    assert "ate_median" not in lean
+
+
+def test_evo_conventions_print_their_statistics(data, tmp_path, capsys):
+    """Under evo's conventions the printed rows keep evo's statistics (ate_mean, ate_median,
+    ate_max), the values of the table written."""
+    g, e = data.tum / "fr2_desk_groundtruth.txt", data.tum / "fr2_desk_ORB.txt"
+    args = [str(e), "--gt", str(g), "--conventions", "evo"]
+    lean = _printed(capsys, args)
+    full = _printed(capsys, [*args, "--csv", str(tmp_path / "t.csv")])
+    assert lean == full and "ate_median" in lean
+    row = pd.read_csv(tmp_path / "t.csv").iloc[0]
+    assert f"{row['ate_median']:.4f}" in lean and row["ate_median"] > 0
