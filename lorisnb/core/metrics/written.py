@@ -9,12 +9,15 @@ rotations both agree to rounding, on KITTI files they differ by up to about 2e-5
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 
 def block_angles_deg(blocks: np.ndarray) -> np.ndarray:
     """(N,) angle of each (N, 3, 3) block, degrees: scipy's ``Rotation.from_matrix(b).magnitude()``
     (evo's ``so3_log_angle(b, degrees=True)``)."""
+    from scipy.spatial.transform import (
+        Rotation,
+    )  # here: reading a file imports no scipy (tests/package/test_startup.py)
+
     b = np.asarray(blocks, float)
     if len(b) == 0:
         return np.zeros(0)
