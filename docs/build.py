@@ -177,6 +177,8 @@ def _execute(path: Path, env: dict[str, str]) -> str | None:
     from nbclient import NotebookClient
     from tqdm import tqdm
 
+    from lorisnb.tools.report.notebooks import kernel_manager_class
+
     os.environ.update(env)  # the kernel's environment: TMPDIR of the build, MPLBACKEND
     nb = nbformat.read(path, as_version=4)
     start = time.perf_counter()
@@ -184,6 +186,7 @@ def _execute(path: Path, env: dict[str, str]) -> str | None:
         NotebookClient(
             nb, timeout=600, startup_timeout=300, kernel_name="python3",
             resources={"metadata": {"path": str(path.parent)}},
+            kernel_manager_class=kernel_manager_class(),  # ipc sockets: no race for a TCP port between two kernels
         ).execute()  # fmt: skip
     except Exception as exc:  # a cell's error, a timeout, a kernel that died: the build fails naming it
         return f"{path.stem}: {' '.join(str(exc).split())[-1500:]}"

@@ -12,6 +12,7 @@ import papermill as pm
 import pytest
 
 from lorisnb.tools.report.build import KERNEL_ARGS, kernel_env, notebook_dir
+from lorisnb.tools.report.notebooks import kernel_manager_class
 
 NOTEBOOK_DIR = notebook_dir()
 pytestmark = pytest.mark.slow
@@ -35,6 +36,7 @@ def run(name: str, tmp_path: Path, **params) -> Path:
         progress_bar=False,
         cwd=str(tmp_path),
         extra_arguments=KERNEL_ARGS,
+        kernel_manager_class=kernel_manager_class(),  # ipc sockets: kernels of two test workers never race for a TCP port
         execution_timeout=900,  # a cell that never answers (jupyter/nbclient#312) fails instead of hanging
     )
     return out

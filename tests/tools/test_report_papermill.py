@@ -17,6 +17,7 @@ from lorisnb.errors import ValidationError
 from lorisnb.tools.notebook import start as notebook_module
 from lorisnb.tools.report import build as report
 from lorisnb.tools.report.build import KERNEL_ARGS, kernel_env, notebook_dir
+from lorisnb.tools.report.notebooks import kernel_manager_class
 
 DECLARED = '# Parameters\neps = "paper"  # ATE threshold\nphi = 30.0  # degrees\nscenes = None  # scenes\nquick = False  # trim\n'
 SETUP = 'session = ln.setup("per_sequence_benchmark", data_root, output_dir, parameters=dict(eps=eps))'
@@ -139,7 +140,7 @@ def test_papermill_refuses_in_the_first_cell(tmp_path, data, name, params, messa
         pm.execute_notebook(
             str(_first_cells(name, tmp_path)), str(tmp_path / "out.ipynb"), kernel_name="python3",
             parameters=dict(quick=True, output_dir=str(tmp_path / "out"), **params), progress_bar=False,
-            cwd=str(tmp_path), extra_arguments=KERNEL_ARGS, execution_timeout=300,
+            cwd=str(tmp_path), extra_arguments=KERNEL_ARGS, kernel_manager_class=kernel_manager_class(), execution_timeout=300,
         )  # fmt: skip
     assert info.value.ename == "ValidationError" and message in info.value.evalue
 
@@ -153,7 +154,7 @@ def test_per_sequence_prose_quotes_odom_values_it_computed(tmp_path, data, icra2
     pm.execute_notebook(
         str(notebook_dir() / "per_sequence_benchmark.ipynb"), str(tmp_path / "nb.ipynb"), kernel_name="python3",
         parameters=dict(quick=True, output_dir=str(out), eps=0.5, phi=30.0, algorithms=["odom"], scenes=["corridor"]),
-        progress_bar=False, cwd=str(tmp_path), extra_arguments=KERNEL_ARGS, execution_timeout=300,
+        progress_bar=False, cwd=str(tmp_path), extra_arguments=KERNEL_ARGS, kernel_manager_class=kernel_manager_class(), execution_timeout=300,
     )  # fmt: skip
     nb = nbformat.read(tmp_path / "nb.ipynb", as_version=4)
     assert not any("~100 %" in c.source for c in nb.cells if c.cell_type == "markdown")
@@ -196,7 +197,7 @@ def test_indoor_vs_outdoor_prose_quotes_no_parameter_or_data_value(tmp_path, dat
     pm.execute_notebook(
         str(notebook_dir() / "indoor_vs_outdoor.ipynb"), str(tmp_path / "nb.ipynb"), kernel_name="python3",
         parameters=dict(quick=True, output_dir=str(tmp_path / "out"), rpe_metres=2.0), progress_bar=False,
-        cwd=str(tmp_path), extra_arguments=KERNEL_ARGS, execution_timeout=300,
+        cwd=str(tmp_path), extra_arguments=KERNEL_ARGS, kernel_manager_class=kernel_manager_class(), execution_timeout=300,
     )  # fmt: skip
     nb = nbformat.read(tmp_path / "nb.ipynb", as_version=4)
     prose = "\n".join(c.source for c in nb.cells if c.cell_type == "markdown")
