@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import asyncio
 import os
+import shutil
 import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -17,8 +19,9 @@ from lorisnb.tools.report import notebooks as report_notebooks
 
 @pytest.mark.skipif(os.name != "posix", reason="ipc sockets: POSIX")
 def test_interrupted_report_leaves_no_kernel_files(tmp_path, monkeypatch, capsys):
-    tmp = tmp_path / "tmp"
-    tmp.mkdir()
+    # a short temporary folder of its own (a test runner's deep tmp_path would be too long for the
+    # kernels' ipc sockets, which then go to /tmp: test_a_deep_temporary_folder_puts_sockets_in_tmp)
+    tmp = Path(tempfile.mkdtemp(prefix="lk-", dir="/tmp" if os.name == "posix" else None))
     monkeypatch.setattr(tempfile, "tempdir", str(tmp))  # Jupyter's and lorisnb's temporary files go here
     seen: dict[str, list[str]] = {}
     managers = []
@@ -41,8 +44,28 @@ def test_interrupted_report_leaves_no_kernel_files(tmp_path, monkeypatch, capsys
     assert rc == 130
     assert any(f.endswith(".json") for f in seen["files"]), seen  # the connection file was there ...
     assert sum("kernel-" in f and not f.endswith(".json") for f in seen["files"]) >= 5, seen  # ... sockets
-    assert list(tmp.iterdir()) == []  # ... and nothing is left
-    assert [p.name for p in tmp_path.iterdir()] == ["tmp"]
+    try:
+        assert list(tmp.iterdir()) == []  # ... and nothing is left
+        assert [p.name for p in tmp_path.iterdir()] == []
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def test_a_deep_temporary_folder_puts_sockets_in_tmp(tmp_path, monkeypatch):
+    """A TMPDIR too deep for an ipc socket's path (108 bytes): the kernels' files go to /tmp, and a
+    kernel starts (it failed with "File name too long")."""
+    deep = tmp_path / ("d" * 60) / ("e" * 40)
+    deep.mkdir(parents=True)
+    monkeypatch.setattr(tempfile, "tempdir", str(deep))
+    with report_notebooks.kernel_files() as folder:
+        assert os.path.dirname(folder) == ("/tmp" if os.name == "posix" else str(deep))
+        km = report_notebooks.kernel_manager_class()(kernel_name="python3")
+        asyncio.run(km.start_kernel(extra_arguments=report_notebooks.KERNEL_ARGS))
+        try:
+            assert asyncio.run(km.is_alive())
+        finally:
+            asyncio.run(km.shutdown_kernel(now=True))
+    assert not os.path.exists(folder)
 
 
 def test_kernel_files_go_to_the_report_folder_and_only_there(tmp_path, monkeypatch):

@@ -175,12 +175,30 @@ def current_kernel_files() -> str | None:
     return _kernel_files
 
 
+#: The longest path of an ipc socket (``sun_path`` holds 108 bytes with its NUL on Linux).
+SOCKET_PATH_MAX = 107
+
+
+def _socket_dir() -> str:
+    """The temporary folder, or ``/tmp`` where a kernel's ipc socket below it (``lorisnb-k-XXXXXXXX/
+    kernel-XXXXXXXX-N``, or ``lorisnb-kernel-`` and 16 hex digits) would be longer than a socket's
+    path may be: a deep ``TMPDIR`` (a test runner's, a job scheduler's) made every kernel fail with
+    "File name too long"."""
+    base = tempfile.gettempdir()
+    if (
+        os.name == "posix"
+        and len(os.path.join(base, "lorisnb-k-" + "x" * 8, "kernel-" + "x" * 8 + "-99")) > SOCKET_PATH_MAX
+    ):
+        return "/tmp"
+    return base
+
+
 @contextlib.contextmanager
 def kernel_files() -> Iterator[str]:
     """A private folder for a report's kernel connection files (they hold each kernel's key) and
     ipc sockets, used by this process and the workers given it (:func:`use_kernel_files`), and
     removed on leaving: a kernel whose run is interrupted (Ctrl-C, SIGTERM) cannot remove its own."""
-    folder = tempfile.mkdtemp(prefix="lorisnb-k-")
+    folder = tempfile.mkdtemp(prefix="lorisnb-k-", dir=_socket_dir())
     previous = _kernel_files
     use_kernel_files(folder)
     try:
@@ -210,7 +228,7 @@ def kernel_manager_class() -> Any:
         def _ip_default(self) -> str:
             if _kernel_files:  # short: a socket's path has at most 107 bytes
                 return os.path.join(_kernel_files, f"kernel-{uuid.uuid4().hex[:8]}")
-            return os.path.join(tempfile.gettempdir(), f"lorisnb-kernel-{uuid.uuid4().hex[:16]}")
+            return os.path.join(_socket_dir(), f"lorisnb-kernel-{uuid.uuid4().hex[:16]}")
 
         @default("connection_file")
         def _connection_file_default(self) -> str:  # "": Jupyter's own temporary file
