@@ -28,7 +28,7 @@ evaluate: bytecode
 
 # the tests on every core (pytest-xdist). PYTEST_WORKERS=1 runs them in one process.
 PYTEST_WORKERS ?= auto
-PYTEST = $(BIN)/python -m pytest -q -n $(PYTEST_WORKERS)
+PYTEST = $(BIN)/python -m pytest -q -n $(PYTEST_WORKERS) --dist loadgroup
 
 # the newcomer's command (README): the fast tests and one run of each notebook, a few minutes
 test: bytecode

@@ -13,6 +13,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 from datetime import date
 from pathlib import Path
 
@@ -116,11 +117,23 @@ def _tree(folder: Path) -> list[str]:
     )
 
 
+@pytest.fixture
+def open_tmp_path():
+    """A temporary folder other users may enter (pytest's tmp_path is closed to them), removed after."""
+    d = Path(tempfile.mkdtemp(prefix="lorisnb-kit-", dir="/tmp" if os.name == "posix" else None))
+    d.chmod(0o755)
+    yield d
+    shutil.rmtree(d, ignore_errors=True)
+
+
 @pytest.mark.slow
-def test_make_student_grade_book_and_slides_on_a_fresh_copy(tmp_path, teaching_python):
+@pytest.mark.xdist_group("grading")  # one grader at a time (tests/tools/test_teaching_sandbox.py)
+def test_make_student_grade_book_and_slides_on_a_fresh_copy(open_tmp_path, teaching_python):
     """As a fresh clone runs them: the Makefile's own (relative) VENV and TEACH, here links to the
     checkout's environments (a clone creates them: ``teaching_python``), and the course and builds
-    given as relative paths."""
+    given as relative paths. The clone lies where others may enter (the sandbox's own user imports
+    its lorisnb; pytest's tmp_path is closed to other users)."""
+    tmp_path = open_tmp_path
     copy = tmp_path / "lorisnb"
     _copy_checkout(copy)
     for env_dir in (".venv", ".venv-teach"):

@@ -181,6 +181,7 @@ def _snapshot(*folders: Path, skip: Path | None = None) -> dict[str, str]:
 
 @pytest.mark.slow
 @isolated
+@pytest.mark.xdist_group("grading")  # one grader at a time (tests/tools/test_teaching_kit.py)
 def test_adversarial_submissions_get_the_honest_score_and_change_nothing(tmp_path):
     course, source = tmp_path / "course", tmp_path / "source"
     shutil.copytree(SOURCE_NB.parent, source / LAB)
