@@ -4,6 +4,7 @@ typical mistake whose values the answers match. Used by :mod:`._checks`."""
 
 from __future__ import annotations
 
+import abc
 import math
 import os
 import re
@@ -25,12 +26,13 @@ _PACKAGE = Path(__file__).resolve().parents[2]  # lorisnb/
 _PACKAGE_DIRS = tuple({str(_PACKAGE) + os.sep, str(Path(__file__).parents[2]) + os.sep})
 
 
-class SandboxedAnswer:
+class SandboxedAnswer(abc.ABC):
     """A learner's function that runs in the grading sandbox (:mod:`.autograde`), where lorisnb
     cannot be imported: it is called as it is, with no watch on what it calls."""
 
+    @abc.abstractmethod
     def __call__(self, **kwargs: Any) -> Any:
-        raise NotImplementedError
+        """The learner's function called in the sandbox with ``kwargs``; its value."""
 
 
 def fail(message: str, mistakes: str | Sequence[str] | None = None) -> NoReturn:
