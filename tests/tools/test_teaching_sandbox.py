@@ -342,3 +342,45 @@ def test_answers_are_read_back_as_plain_values_only():
     assert _plain(...) == {"missing": True}
     assert "not_plain" in _plain(Sneaky(0.5)) and "not_plain" in _plain([0.5]) and "not_plain" in _plain(object())
     assert isinstance(decode(_plain(Sneaky(0.5))), NotPlain) and decode(_plain(np.float64(2.0))) == 2.0
+
+
+@pytest.fixture
+def open_base():
+    """A folder under /tmp that other users may enter (pytest's tmp_path is closed to them)."""
+    import shutil
+    import tempfile
+
+    d = Path(tempfile.mkdtemp(prefix="lorisnb-open-", dir="/tmp" if os.name == "posix" else None))
+    d.chmod(0o755)
+    yield d
+    for q in d.rglob("*"):
+        if q.is_dir():
+            q.chmod(0o755)
+    shutil.rmtree(d, ignore_errors=True)
+
+
+def test_folders_closed_to_others_are_named(open_base):
+    """What the sandbox's user could not pass on the way to a path (lorisnb in a checkout inside a
+    folder closed to others made every answer score 0, silently)."""
+    from lorisnb.tools.teaching.sandbox import closed_to_others
+
+    closed, open_ = open_base / "closed", open_base / "open"
+    (closed / "lorisnb").mkdir(parents=True)
+    open_.mkdir()
+    closed.chmod(0o700)
+    open_.chmod(0o755)
+    assert closed_to_others([closed / "lorisnb", open_]) == [closed.resolve()]
+    assert closed_to_others([open_]) == []
+
+
+@isolated
+def test_grading_refuses_when_the_sandbox_cannot_read_lorisnb(open_base):
+    from lorisnb.errors import ValidationError
+    from lorisnb.tools.teaching import autograde
+
+    closed = open_base / "closed"
+    (closed / "lorisnb").mkdir(parents=True)
+    closed.chmod(0o700)
+    with pytest.raises(ValidationError, match=f"cannot read {closed.resolve()} "):
+        autograde._check_reachable(closed, GradeSettings())
+    autograde._check_reachable(Path(autograde.__file__).resolve().parents[3], GradeSettings())  # lorisnb's own: fine

@@ -273,6 +273,7 @@ def grade_submission(
     answers = student_answers(nb)
     py_path, checkout_dirs = _package_paths()
     hidden = [*settings.hidden, *checkout_dirs]
+    _check_reachable(py_path, settings)
     notes: list[str] = []
     params = {"student_id": student}
     with tempfile.TemporaryDirectory(prefix="lorisnb-grade-", dir=_reachable_tmp()) as tmp:
@@ -318,6 +319,29 @@ def grade_submission(
             for box in boxes:
                 box.close()
     return SubmissionResult(student, spec.name, scores, isolation, round(time.monotonic() - t0, 2), notes)
+
+
+def _check_reachable(py_path: Path, settings: GradeSettings) -> None:
+    """Refuse to grade when the sandbox's user (an unprivileged uid) could not read lorisnb or the
+    Python environment (a checkout in a folder closed to others): every answer would fail and score
+    0 without a word about why."""
+    import sys
+
+    from lorisnb.errors import ValidationError
+    from lorisnb.tools.teaching.sandbox import closed_to_others
+
+    if not (settings.uid and _isolated()):
+        return
+    # lorisnb and the environment's packages (the interpreter itself may lie in a closed home: a
+    # child that cannot follow its link runs the system's Python of the same version, as CI's does)
+    need = [py_path / "lorisnb", Path(sys.prefix)]
+    closed = closed_to_others(need)
+    if closed:
+        raise ValidationError(
+            f"the grading sandbox runs each answer as an unprivileged user, which cannot read {closed[0]} "
+            "(closed to other users): lorisnb and its Python environment must be readable by others "
+            "(chmod o+rx on that folder, or install them elsewhere) before grading"
+        )
 
 
 def _reachable_tmp() -> str:

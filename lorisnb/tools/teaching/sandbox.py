@@ -76,6 +76,22 @@ def can_isolate() -> bool:
     )
 
 
+def closed_to_others(paths: Sequence[Path]) -> list[Path]:
+    """The first folder (or file) on the way to each of ``paths`` that a user other than its owner
+    cannot pass (a folder without ``o+x``, or the path itself without ``o+r``): the sandbox's own
+    user could not read what lies behind it. Empty when every path is reachable."""
+    closed: list[Path] = []
+    for path in paths:
+        p = Path(path).resolve()
+        for q in (*reversed(p.parents), p):
+            mode = q.stat().st_mode
+            need = 0o005 if q.is_dir() else 0o004
+            if mode & need != need:
+                closed.append(q)
+                break
+    return list(dict.fromkeys(closed))
+
+
 # the child's mount namespace, as root before dropping to the student's uid: everything read-only,
 # the hidden folders emptied, only the working folder writable
 _SETUP = r"""set -e
