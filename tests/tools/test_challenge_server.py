@@ -197,7 +197,9 @@ def test_no_response_holds_a_groundtruth_coordinate(served, data):
     assert view["status"] == "scored" and view["failures"] and "nosuchframe" in view["failures"][0]["error"]
     assert str(data.root) not in view["failures"][0]["error"]
     dev = boards(client)[0]  # dslam's latest submission is the one that counts: no output on cafe-1
-    assert [r["team"] for r in dev["rows"]] == ["orbs"] and dev["without_output"] == ["dslam"]
+    assert dev["without_output"] == ["dslam"]  # named, and ranked with every sequence a failed run
+    assert [r["team"] for r in dev["rows"]] == ["orbs", "dslam"]
+    assert dev["rows"][1]["cr"] == 0 and dev["rows"][1]["coverage"].startswith("0/")
     gt = groundtruth_numbers(data)
     assert len(gt) > 10_000
     bodies = client.bodies + [client.get(f"/submissions/{r.json()['id']}").text]

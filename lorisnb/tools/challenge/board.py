@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from lorisnb.core.lifelong.aggregate import aggregate_scenes
+from lorisnb.core.lifelong.coverage import COPIED, FAILED_RUN
 from lorisnb.tools.challenge.config import Challenge, Phase
 from lorisnb.tools.report.leaderboard import METRICS, findings
 
@@ -87,6 +88,7 @@ def leaderboard(challenge: Challenge, phase: Phase, subs: list[dict[str, Any]], 
     out["without_output"] = sorted(s["team"] for s in latest if s["team"] not in {r["algorithm"] for r in rows})
     if not rows:
         return out
+    rows += _failed_teams(out["without_output"], rows, wanted)
     table = pd.DataFrame(rows)
     f = findings(table, wanted, challenge.metric)
     board = f.board.rename(columns={"algorithm": "team"})
@@ -110,6 +112,19 @@ def leaderboard(challenge: Challenge, phase: Phase, subs: list[dict[str, Any]], 
     out["sentences"] = [f.sentences[k] for k in f.sentences]
     out["test"] = f.test
     return out
+
+
+def _failed_teams(teams: list[str], rows: list[dict[str, Any]], wanted: pd.DataFrame) -> list[dict[str, Any]]:
+    """A failed run of the phase's first sequence for each team whose latest submission has no
+    output on the phase: the leaderboard's coverage rule (:func:`lorisnb.core.lifelong.coverage.complete`)
+    then counts every other sequence of theirs as failed too, so they are ranked (CR 0), not left out."""
+    if not teams or wanted.empty:
+        return []
+    first = wanted.iloc[0]
+    like = next((r for r in rows if r["scene"] == first["scene"]), rows[0])
+    copied = {k: like[k] for k in COPIED if k in like}
+    return [copied | FAILED_RUN | dict(algorithm=team, suite="", file="", scene=first["scene"], seq=int(first["seq"]),
+                                       trial=0, gt_duration=float(first["gt_duration"])) for team in teams]  # fmt: skip
 
 
 def _plain(v: Any) -> Any:
