@@ -157,6 +157,22 @@ def test_export_csv(served, tmp_path):
     assert main(["challenge", "export", str(served["path"]), "--csv", str(out)]) == 2  # no overwrite without --force
 
 
+def test_the_database_backs_up_while_the_server_runs(served, tmp_path):
+    """SQLite's online backup (the guide's ``.backup``; here Python's ``sqlite3`` backup API) copies
+    the database while the server holds it open and answers: every team and submission is in the copy."""
+    import sqlite3
+
+    db = served["challenge"].database.removeprefix("sqlite:///")
+    copy = tmp_path / "backup.db"
+    with sqlite3.connect(db) as live, sqlite3.connect(copy) as out:
+        live.backup(out)
+    assert served["client"].get("/api/leaderboard").status_code == 200  # still serving
+    with sqlite3.connect(copy) as out:
+        teams = {r[0] for r in out.execute("select name from teams")}
+        subs = out.execute("select count(*) from submissions where status = 'scored'").fetchone()[0]
+    assert {"orbs", "dslam"} <= teams and subs >= 2
+
+
 def test_final_scores_hidden_until_it_closes(served, data):
     """A submission to the final phase (after-close) is scored, but neither its page nor the
     leaderboard shows a score, a table or the figure before the phase closes."""
