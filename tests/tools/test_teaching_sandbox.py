@@ -26,6 +26,10 @@ from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxErr
 ROOT = Path(__file__).resolve().parents[2]
 LAB = "lab1_lifelong_metrics"
 SOURCE_NB = ROOT / "teaching" / "source" / LAB / f"{LAB}.ipynb"
+# the sandboxes of this module and the kit's grading test run one at a time (make test* use pytest-xdist
+# with --dist loadgroup): side by side, two sandboxes of one uid disturbed each other's answers
+pytestmark = pytest.mark.xdist_group("grading")
+
 isolated = pytest.mark.skipif(not can_isolate(), reason="needs root on Linux with unshare and setpriv (as CI runs)")
 
 
@@ -181,7 +185,6 @@ def _snapshot(*folders: Path, skip: Path | None = None) -> dict[str, str]:
 
 @pytest.mark.slow
 @isolated
-@pytest.mark.xdist_group("grading")  # one grader at a time (tests/tools/test_teaching_kit.py)
 def test_adversarial_submissions_get_the_honest_score_and_change_nothing(tmp_path):
     course, source = tmp_path / "course", tmp_path / "source"
     shutil.copytree(SOURCE_NB.parent, source / LAB)
