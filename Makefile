@@ -32,7 +32,8 @@ PYTEST = $(BIN)/python -m pytest -q -n $(PYTEST_WORKERS) --dist loadgroup
 
 # the newcomer's command (README): the fast tests and one run of each notebook, a few minutes
 test: bytecode
-	$(PYTEST) -m "(not slow or smoke) and not browser"
+	$(PYTEST) -m "not slow and not browser"
+	$(BIN)/python -m pytest -q -m "smoke and not browser"
 
 # everything but the browser: the fast tests on every core, then the slow ones (notebooks, reports, the
 # installed wheel) one at a time: papermill kernels run side by side under pytest-xdist stalled now and
