@@ -185,7 +185,9 @@ def _snapshot(*folders: Path, skip: Path | None = None) -> dict[str, str]:
 
 @pytest.mark.slow
 @isolated
-def test_adversarial_submissions_get_the_honest_score_and_change_nothing(tmp_path):
+def test_adversarial_submissions_get_the_honest_score_and_change_nothing(tmp_path, monkeypatch):
+    # as `python teaching/grade.py` runs: teaching/ (the labs' solutions) first on sys.path
+    monkeypatch.syspath_prepend(str(ROOT / "teaching"))
     course, source = tmp_path / "course", tmp_path / "source"
     shutil.copytree(SOURCE_NB.parent, source / LAB)
     (course / "release" / LAB).mkdir(parents=True)
@@ -387,3 +389,24 @@ def test_grading_refuses_when_the_sandbox_cannot_read_lorisnb(open_base):
     with pytest.raises(ValidationError, match=f"cannot read {closed.resolve()} "):
         autograde._check_reachable(closed, GradeSettings())
     autograde._check_reachable(Path(autograde.__file__).resolve().parents[3], GradeSettings())  # lorisnb's own: fine
+
+
+def test_a_script_folder_on_sys_path_does_not_open_the_checkout(monkeypatch):
+    """``python teaching/grade.py`` puts teaching/ first on sys.path (so did a kit test, once, before
+    the adversarial test in one process): the sandbox must still hide teaching/ (the labs' solutions),
+    tests/ and the git database; only lorisnb and its Python environment stay readable."""
+    import sys
+
+    import lorisnb
+    from lorisnb.tools.teaching import autograde
+
+    pkg = Path(lorisnb.__file__).resolve().parent
+    if not (pkg.parent / "pyproject.toml").is_file():
+        pytest.skip("lorisnb is installed, not run from a checkout: no checkout folder to hide")
+    monkeypatch.setattr(sys, "path", [str(pkg.parent / "teaching"), str(pkg.parent / "tests"), *sys.path])
+    py_path, hidden = autograde._package_paths()
+    assert py_path == pkg.parent
+    for name in ("teaching", "tests", ".git"):
+        if (pkg.parent / name).is_dir():
+            assert (pkg.parent / name).resolve() in hidden, name
+    assert not any(pkg.is_relative_to(h) or Path(sys.prefix).resolve().is_relative_to(h) for h in hidden)

@@ -221,14 +221,20 @@ def hidden_seed(secret: str, student: str, lab: str) -> int:
 def _package_paths() -> tuple[Path, list[Path]]:
     """The folder to put on the sandbox's PYTHONPATH (holding lorisnb), and the folders to hide from
     it: in each checkout lorisnb or the Python environment lives in (a folder with pyproject.toml),
-    every sub-folder except the package and the environment (sources, tests, the git database)."""
+    every sub-folder except the package and the environment (sources, tests, the lab sources, the
+    git database). Only the package and the environment's folders count as needed: its prefixes and
+    every folder holding installed distributions (site-packages, also one a ``.pth`` file adds, as
+    the teaching environment adds lorisnb's). Other ``sys.path`` entries do not, or a grader started
+    as ``python teaching/grade.py`` (its folder first on ``sys.path``) would open the labs' solutions."""
+    import importlib.metadata
     import sys
 
     import lorisnb
 
     pkg = Path(lorisnb.__file__).resolve().parent
     needed = [pkg, Path(sys.prefix).resolve(), Path(sys.base_prefix).resolve(), Path(sys.executable).resolve()]
-    needed += [Path(p).resolve() for p in sys.path if p and Path(p).is_dir()]
+    sites = {Path(str(d.locate_file(""))).resolve() for d in importlib.metadata.distributions()}
+    needed += sorted(p for p in sites if p.is_dir())
     hide: list[Path] = []
     for root in {pkg.parent, *(p.parent for p in needed[1:3])}:
         if not (root / "pyproject.toml").is_file():
