@@ -410,3 +410,29 @@ def test_a_script_folder_on_sys_path_does_not_open_the_checkout(monkeypatch):
         if (pkg.parent / name).is_dir():
             assert (pkg.parent / name).resolve() in hidden, name
     assert not any(pkg.is_relative_to(h) or Path(sys.prefix).resolve().is_relative_to(h) for h in hidden)
+
+
+def test_concurrent_graders_get_sandbox_users_of_their_own():
+    """Each grading process holds its pair of sandbox user ids until it ends (a lock per id): two
+    workers of one class, or two graders started side by side, never share one (the old rule, the
+    pid modulo 1000, gave two workers the same user now and then). Ids of existing accounts are
+    skipped."""
+    import pwd
+    import subprocess
+    import sys
+
+    from lorisnb.tools.teaching.sandbox import claim_uids
+
+    base = 64000 + 2 * (os.getpid() % 500) * 8  # apart from other runs of this test
+    code = "import sys; from lorisnb.tools.teaching.sandbox import claim_uids as c; print(c(%d), flush=True); sys.stdin.read()"
+    procs = [subprocess.Popen([sys.executable, "-c", code % base], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                              text=True) for _ in range(3)]  # fmt: skip
+    try:
+        firsts = [int(p.stdout.readline()) for p in procs]
+    finally:
+        for p in procs:
+            p.communicate("", timeout=60)
+    assert len(set(firsts)) == 3 and all(f % 2 == base % 2 and base <= f < base + 4000 for f in firsts), firsts
+    mine = claim_uids(base)
+    assert claim_uids(base) == mine  # the same pair for every call of one process
+    assert pwd.getpwuid(0) and claim_uids(0, 2, span=4000) != 0  # root's id is never a sandbox's

@@ -36,6 +36,7 @@ from lorisnb.tools.teaching.autograde import (
     grade_submission,
     lab_spec,
 )
+from lorisnb.tools.teaching.sandbox import can_isolate, claim_uids
 
 DEMO_PREFIX = "demo-"  # the students demo_submissions.py writes
 ROSTER_COLUMNS = ("id", "name", "email")
@@ -158,7 +159,8 @@ def _release_bytes(release: Path) -> bytes:
 
 def _grade_one(args: tuple[LabSpec, Path, Path, str, GradeSettings]) -> SubmissionResult:
     spec, release, notebook, student, settings = args
-    uid = settings.uid + 2 * (os.getpid() % 1000)  # a user per worker: concurrent sandboxes cannot read each other
+    # a pair of users per worker, held until it ends: concurrent sandboxes cannot read each other
+    uid = claim_uids(settings.uid, 2) if settings.uid and can_isolate() else settings.uid
     return grade_submission(
         spec, release, notebook, student, GradeSettings(settings.limits, settings.hidden, settings.secret, uid)
     )

@@ -92,6 +92,47 @@ def closed_to_others(paths: Sequence[Path]) -> list[Path]:
     return list(dict.fromkeys(closed))
 
 
+_CLAIMED: dict[tuple[int, int, int], int] = {}  # (pid, base, count) -> first uid (its lock's fd stays open)
+
+
+def claim_uids(base: int, count: int = 2, span: int = 4000) -> int:
+    """The first of ``count`` consecutive user ids, from ``base`` up in steps of ``count`` within
+    ``span``, that no other process on this machine holds and no account uses: held (an exclusive
+    ``flock`` on ``lorisnb-sandbox-uid-<uid>.lock`` in /run/lock or the temporary folder) until this
+    process ends, so concurrent graders (workers of one class, or two instructors' graders) never
+    share a sandbox user, which could read the other's working folder. The same ids for every call
+    of one process."""
+    import fcntl
+    import pwd
+    import tempfile
+
+    key = (os.getpid(), base, count)  # a forked worker claims its own (the parent's lock is not its)
+    if key in _CLAIMED:
+        return _CLAIMED[key]
+    lock_dir = Path("/run/lock") if os.access("/run/lock", os.W_OK) else Path(tempfile.gettempdir())
+    for first in range(base, base + span, count):
+        ids = range(first, first + count)
+        if any(_account_exists(u, pwd) for u in ids):
+            continue
+        fd = os.open(lock_dir / f"lorisnb-sandbox-uid-{first}.lock", os.O_RDWR | os.O_CREAT, 0o600)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            continue
+        _CLAIMED[key] = first
+        return first
+    raise SandboxError(f"no free sandbox user id in {base}..{base + span - 1}: {span // count} graders already run")
+
+
+def _account_exists(uid: int, pwd: Any) -> bool:
+    try:
+        pwd.getpwuid(uid)
+    except KeyError:
+        return False
+    return True
+
+
 # the child's mount namespace, as root before dropping to the student's uid: everything read-only,
 # the hidden folders emptied, only the working folder writable
 _SETUP = r"""set -e
