@@ -275,7 +275,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     cols = _with_trial(ev, ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "cr", "cr_t", "c_ate_rmse"])
     if keep_label:  # eps as given (a fraction, 'paper'): what tells the rows apart where eps in metres does not
         cols.insert(4, "eps_value")
-    if args.parquet and not args.csv:  # streamed, one group of files at a time: any grid size
+    if bool(args.parquet) != bool(args.csv):  # one output: streamed, one group of files at a time
         from lorisnb.tools.evaluation.streaming import sweep_to_parquet
 
         durations = ev.durations()
@@ -293,16 +293,17 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             return part
 
         path, rows = sweep_to_parquet(
-            ev.errors, args.parquet, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
+            ev.errors, args.parquet or args.csv, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
             force=args.force, progress=not args.no_progress, on_part=summarize, relation=ev.spec.relation,
-            change_unit=ev.spec.change_unit,
+            change_unit=ev.spec.change_unit, fmt="parquet" if args.parquet else "csv",
             **ev.spec.rpe_options(),
         )  # fmt: skip
         print(f"{rows} rows: {len(ev.errors)} file(s) x {grid}")
         if shown:
             print(_fmt(pd.concat(shown).head(60), args.digits))
             if scene_rows > 60:
-                print(f"... {scene_rows - 60} more scene rows (in the Parquet dataset, aggregate with sweep_scenes)")
+                where = "Parquet dataset" if args.parquet else "CSV"
+                print(f"... {scene_rows - 60} more scene rows (in the {where}, aggregate with sweep_scenes)")
         print(f"wrote {rows} rows to {path}", file=sys.stderr)
         _report_problems(ev, notes)
         return ev.exit_status()

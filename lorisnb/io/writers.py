@@ -5,6 +5,7 @@ never replacing an existing file unless asked.
 from __future__ import annotations
 
 import contextlib
+import io
 import os
 import shutil
 import tempfile
@@ -86,8 +87,56 @@ def write_atomically(out: str | os.PathLike[str], write: Callable[[Path], object
 
 
 def write_csv(df: pd.DataFrame, out: str | os.PathLike[str], force: bool = False) -> Path:
-    """Write a table as CSV (:func:`write_atomically`)."""
-    return write_atomically(out, lambda p: df.to_csv(p, index=False), force)
+    """Write a table as CSV (:func:`write_csv_parts` with one part)."""
+    return write_csv_parts([df], out, force)
+
+
+def write_csv_parts(parts: Iterable[pd.DataFrame], out: str | os.PathLike[str], force: bool = False) -> Path:
+    """Write tables with the same columns one after the other into one CSV file, holding one part
+    at a time (a sweep larger than memory is streamed), through :func:`write_atomically`.
+
+    The text is pyarrow's CSV writer's where pyarrow is installed (numbers in the shortest text
+    that reads back to the same float, text quoted, ``true``/``false``, missing values empty),
+    about 10x faster than pandas' ``to_csv`` on large tables; the header is plain (a name quoted
+    only where it needs it). Without pyarrow, or for a part pyarrow cannot convert (Python objects),
+    pandas writes it. Either way ``pandas.read_csv`` reads back the same values."""
+
+    def write(tmp: Path) -> None:
+        import csv
+
+        header: list[str] | None = None
+        with open(tmp, "wb") as f:
+            for df in parts:
+                names = [str(c) for c in df.columns]
+                if header is None:
+                    header = names
+                    line = io.StringIO()
+                    csv.writer(line, lineterminator="\n").writerow(names)
+                    f.write(line.getvalue().encode())
+                elif names != header:
+                    raise OutputError(f"{out}: a part has columns {names}, the first had {header}")
+                table = _arrow_table(df)
+                if table is None:
+                    f.write(df.to_csv(index=False, header=False, lineterminator="\n").encode())
+                else:
+                    import pyarrow.csv as pa_csv
+
+                    pa_csv.write_csv(table, f, pa_csv.WriteOptions(include_header=False))
+
+    return write_atomically(out, write, force)
+
+
+def _arrow_table(df: pd.DataFrame) -> object | None:
+    """``df`` as a pyarrow table for the CSV writer, or None (no pyarrow, or a column of Python
+    objects it does not convert)."""
+    try:
+        import pyarrow as pa
+    except ImportError:
+        return None
+    try:
+        return pa.Table.from_pandas(df, preserve_index=False)
+    except (pa.ArrowInvalid, pa.ArrowTypeError, pa.ArrowNotImplementedError):
+        return None
 
 
 def write_text(text: str, out: str | os.PathLike[str], force: bool = False) -> Path:

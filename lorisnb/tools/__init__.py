@@ -10,7 +10,7 @@ if TYPE_CHECKING:
     from lorisnb.tools.evaluation.inputs import result_files
     from lorisnb.tools.evaluation.result import Evaluation, Failure
     from lorisnb.tools.evaluation.runner import evaluate, evaluate_manifest, evaluate_pairs
-    from lorisnb.tools.evaluation.streaming import sweep_to_parquet
+    from lorisnb.tools.evaluation.streaming import sweep_to_csv, sweep_to_parquet
     from lorisnb.tools.notebook.start import Outputs, setup
 
 __getattr__, __dir__ = attach(__name__)
@@ -24,6 +24,7 @@ __all__ = [
     "result_files",
     "setup",
     "sweep_to_parquet",
+    "sweep_to_csv",
     "evaluate_pairs",
     "evaluate_manifest",
 ]

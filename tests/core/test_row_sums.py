@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import tracemalloc
 
+import hypothesis.extra.numpy as hnp
+import hypothesis.strategies as st
 import numpy as np
+from hypothesis import given, settings
 
 from lorisnb.core.lifelong import scoring
 from lorisnb.core.lifelong.scoring import row_sums
@@ -50,3 +53,26 @@ def test_a_superset_of_poses_never_sums_to_less():
     nested[1] |= nested[0]
     sums = row_sums(nested, values)
     assert (np.diff(sums, axis=0) >= 0).all()
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    v=hnp.arrays(np.float64, st.integers(1, 300),
+                 elements=st.one_of(st.floats(-1e6, 1e6), st.sampled_from([np.nan, np.inf, -np.inf, 0.0, 1.0]))),
+    seed=st.integers(0, 2**32 - 1),
+)  # fmt: skip
+def test_masked_medians_equal_numpys_nanmedian_to_the_bit(v, seed):
+    """The grid's medians (sorted once, the middle ranks found from running counts) are numpy's
+    ``nanmedian`` of each row's selected values to the last bit: ties, NaN (left out), infinities,
+    empty rows and rows selecting everything included."""
+    import warnings
+
+    from lorisnb.core.metrics.relations import _masked_medians
+
+    rng = np.random.default_rng(seed)
+    rows = rng.uniform(size=(6, v.size)) < rng.uniform(size=(6, 1))
+    rows[0], rows[1] = False, True
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        want = np.nanmedian(np.where(rows, v, np.nan), axis=1)
+    np.testing.assert_array_equal(_masked_medians(v, rows), want)

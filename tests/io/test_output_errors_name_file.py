@@ -18,11 +18,21 @@ def full_disk(*a, **k):
     raise OSError(errno.ENOSPC, "No space left on device")
 
 
+def csv_disk_full(monkeypatch) -> None:
+    """Every CSV writer lorisnb may use (pyarrow's where installed, pandas') fails as on a full disk."""
+    monkeypatch.setattr(pd.DataFrame, "to_csv", full_disk)
+    try:
+        import pyarrow.csv
+    except ImportError:
+        return
+    monkeypatch.setattr(pyarrow.csv, "write_csv", full_disk)
+
+
 @pytest.mark.parametrize("writer", ["csv", "text", "parquet"])
 def test_a_full_disk_names_the_output_in_python(tmp_path, monkeypatch, writer):
     out = tmp_path / f"table.{writer}"
     if writer == "csv":
-        monkeypatch.setattr(pd.DataFrame, "to_csv", full_disk)
+        csv_disk_full(monkeypatch)
         call = lambda: write_csv(pd.DataFrame({"a": [1]}), out)  # noqa: E731
     elif writer == "text":
         monkeypatch.setattr("pathlib.Path.write_text", full_disk)
@@ -43,7 +53,7 @@ def test_a_full_disk_names_the_output_on_the_command_line(tmp_path, data, icra20
     res = tmp_path / "res" / "orb"
     res.mkdir(parents=True)
     shutil.copy(icra20 / "per-seq" / "orbslam2_rgbd" / "cafe_1_1_orbslam2-original.txt", res)
-    monkeypatch.setattr(pd.DataFrame, "to_csv", full_disk)
+    csv_disk_full(monkeypatch)
     out = tmp_path / "seq.csv"
     rc = main(["evaluate", str(res.parent), "--data", str(data.root), "--csv", str(out), "--no-progress"])
     err = capsys.readouterr().err

@@ -1,4 +1,4 @@
-"""Sweeps larger than memory, streamed to a Parquet dataset one group of files at a time."""
+"""Sweeps larger than memory, streamed to a Parquet dataset or a CSV file one group of files at a time."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ import pandas as pd
 from lorisnb.core.lifelong.scoring import OF_SPEC
 from lorisnb.core.lifelong.sweep import MAX_SWEEP_BYTES, check_sweep_size, sweep, sweep_groups
 from lorisnb.core.pipeline.model import FileErrors
-from lorisnb.core.spec.validate import flag, threshold_list
-from lorisnb.io.writers import write_parquet_parts
+from lorisnb.core.spec.validate import choice, flag, threshold_list
+from lorisnb.io.writers import write_csv_parts, write_parquet_parts
 
 
 def sweep_to_parquet(
@@ -33,6 +33,7 @@ def sweep_to_parquet(
     on_part: Any = None,
     rpe_delta: float = OF_SPEC,
     rpe_unit: str = OF_SPEC,
+    fmt: str = "parquet",
     **rpe: Any,
 ) -> tuple[Path, int]:
     """The table of :func:`lorisnb.core.lifelong.sweep.sweep` (same columns, same values), written to a
@@ -44,11 +45,14 @@ def sweep_to_parquet(
         rpe: ``rpe_pairs``, ``rpe_all_pairs``, ``rpe_tolerance`` (see :func:`lorisnb.core.lifelong.sweep.sweep`).
         on_part: called with each group's table before it is written (for example to keep its
             scene aggregate); a DataFrame it returns is written instead of the table.
+        fmt: ``"parquet"`` (a dataset) or ``"csv"`` (one file, :func:`lorisnb.io.writers.write_csv_parts`;
+            use :func:`sweep_to_csv`).
 
     Returns:
         the dataset's path and the number of rows written.
     """
     progress = flag("progress", progress)
+    fmt = choice("fmt", fmt, ("parquet", "csv"))
     groups = sweep_groups(errors)
     shape = tuple(len(threshold_list(n, v)) for n, v in (("eps", eps), ("phi", phi), ("delta", delta), ("tau", tau)))
     for g in groups:  # every group checked before anything is written
@@ -63,7 +67,7 @@ def sweep_to_parquet(
 
             bar = tqdm(total=len(groups), desc="sweeping", unit="group")
         try:
-            for g in groups:
+            for g in groups or [[]]:  # no file scored: an empty table, its header still written
                 table = sweep(
                     g, eps, phi, delta, tau, relative_to=relative_to, columns=columns, max_bytes=max_bytes,
                     rpe_delta=rpe_delta, rpe_unit=rpe_unit, **rpe,
@@ -79,4 +83,13 @@ def sweep_to_parquet(
             if bar is not None:
                 bar.close()
 
+    if fmt == "csv":
+        return write_csv_parts(parts(), out, force=force), rows
     return write_parquet_parts(parts(), out, force=force), rows
+
+
+def sweep_to_csv(errors: FileErrors | Iterable[FileErrors], out: str | os.PathLike[str], *args: Any,
+                 **kwargs: Any) -> tuple[Path, int]:  # fmt: skip
+    """:func:`sweep_to_parquet`'s table streamed to one CSV file (same arguments): one group of
+    files in memory at a time, the text written by pyarrow where installed."""
+    return sweep_to_parquet(errors, out, *args, fmt="csv", **kwargs)
