@@ -448,7 +448,8 @@ def baseline_report(tmp_path_factory, offline_report, icra20):
     here = (t["algorithm"] == "orb") & (t["scene"] == "cafe") & (t["seq"] == 1) & (t["trial"] == 1)
     pd.concat([t, t[here].assign(trial=4)], ignore_index=True).to_csv(table, index=False)
     t.assign(eps=0.5).to_csv(earlier / "other-thresholds.csv", index=False)
-    results = Path(json.loads((offline_report / "run.json").read_text())["spec"]["values"]["source"])
+    results = offline_report.parent / "mine"  # the first report's results (its run.json says "{results}")
+    assert json.loads((offline_report / "run.json").read_text())["spec"]["values"]["source"] == "{results}"
     run_dir, runs = run_report(root / "run", {"quick": True}, ["per_sequence_benchmark"], progress=False,
                                results=results, baseline=earlier, label="abc123")  # fmt: skip
     assert [r.status for r in runs] == ["ok"], [r.error for r in runs]
