@@ -1,0 +1,47 @@
+"""CSV tables are written in pandas' ``to_csv(index=False)`` text, byte for byte, whether pandas or
+pyarrow's compute functions build the lines (:func:`lorisnb.io.writers.write_csv_parts`): a whole
+float keeps its ``.0`` (so ``eps`` 3.0 is read back as a float, as a ``diff`` message quotes it), small
+and large magnitudes take Python's exponent form, text is quoted only where it must be."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from lorisnb.io.writers import write_csv, write_csv_parts
+
+
+def _table(n: int, seed: int) -> pd.DataFrame:
+    rng = np.random.default_rng(seed)
+    x = rng.standard_normal(n) * 10.0 ** rng.integers(-22, 22, n)
+    x[rng.integers(0, n, n // 10)] = np.round(x[rng.integers(0, n, n // 10)])  # whole floats
+    x[rng.integers(0, n, n // 20)] = np.nan
+    x[:8] = [0.0, -0.0, 1e-4, 9.99e-5, 1e16, 9.999e15, np.inf, -np.inf]
+    words = np.array(["cafe", "home, 2", 'say "hi"', "two\nlines", "", "x"], dtype=object)
+    return pd.DataFrame({
+        "x": x, "whole": np.round(x), "n": np.arange(n), "ok": rng.uniform(size=n) < 0.5,
+        "scene": pd.Categorical(words[rng.integers(0, len(words), n)]),
+        "label": pd.array(np.where(rng.uniform(size=n) < 0.1, None, words[rng.integers(0, len(words), n)]), dtype="string"),
+        "count": pd.array(np.where(rng.uniform(size=n) < 0.1, None, rng.integers(0, 9, n)), dtype="Int64"),
+        "f32": np.float32(x),
+    })  # fmt: skip
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_csv_text_is_pandas_to_csv_byte_for_byte(tmp_path, seed):
+    df = _table(20_000, seed)
+    for k, cols in enumerate(
+        (list(df.columns), ["x", "whole", "n", "ok", "scene", "label", "count"], ["x"], ["label"])
+    ):
+        out = write_csv(df[cols], tmp_path / f"{seed}-{k}.csv")
+        assert out.read_bytes() == df[cols].to_csv(index=False).encode(), cols
+
+
+def test_parts_are_one_table_and_read_back_as_written(tmp_path):
+    df = _table(5_000, 3).drop(columns=["f32"])
+    out = write_csv_parts([df.iloc[:1234], df.iloc[1234:1234], df.iloc[1234:]], tmp_path / "parts.csv")
+    assert out.read_bytes() == df.to_csv(index=False).encode()
+    back = pd.read_csv(out, keep_default_na=False, na_values=[""])
+    assert back["whole"].dtype == np.float64 and back["n"].dtype == np.int64 and back["ok"].dtype == bool
+    np.testing.assert_array_equal(back["x"].to_numpy(), df["x"].to_numpy())
