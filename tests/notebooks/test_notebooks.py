@@ -322,3 +322,39 @@ def test_bad_parameters_stop_a_notebook_with_a_validation_error(tmp_path, name, 
     with pytest.raises(pm.PapermillExecutionError) as exc:
         run(name, tmp_path, **params)
     assert exc.value.ename == "ValidationError" and message in exc.value.evalue
+
+
+@pytest.mark.smoke
+def test_every_number_on_the_bundled_pair(tmp_path, data):
+    """One trajectory, every benchmark's number: the table is every_number's on the bundled fr2/desk
+    pair (TUM's evaluate_ate.py pairs and ATE under the tum preset), and the prose quotes the table's
+    own numbers."""
+    import nbformat
+    from reference_tools import REFERENCE
+
+    from lorisnb.tools.peers.every_number import every_number, side_by_side
+
+    out = run("every_number", tmp_path)
+    got = pd.read_csv(out / "every_number.csv")
+    want = every_number(data.tum / "fr2_desk_ORB.txt", data.tum / "fr2_desk_groundtruth.txt")
+    assert list(got.columns) == list(want.columns) and len(got) == len(want)
+    np.testing.assert_allclose(got["value"], want["value"], rtol=1e-12, equal_nan=True)
+    wide = side_by_side(want)
+    pairs, ate = REFERENCE["fr2_desk"]["tum_ate offset=0.0 max_diff=0.02"]  # TUM's evaluate_ate.py
+    assert wide.loc[("matched poses", ""), "tum"] == pairs
+    assert wide.loc[("ATE RMSE", "m"), "tum"] == pytest.approx(ate, rel=1e-9)
+    nb = nbformat.read(tmp_path / "every_number.ipynb", as_version=4)
+    prose = "".join(o.get("data", {}).get("text/markdown", "") for c in nb.cells for o in c.get("outputs", []))
+    assert f"matched {wide.loc[('matched poses', ''), 'openloris']:.0f} poses" in prose
+    assert f"it is {wide.loc[('ATE RMSE', 'm'), ['evo', 'kitti']].max():.4f} m" in prose
+    assert "0 segments and no KITTI error" in prose  # a 20 m desk path: no 100 m segment
+    assert (out / "every_number_ate.png").is_file()
+
+
+def test_every_number_on_a_pair_of_ones_own_and_half_a_pair_refused(tmp_path, data):
+    out = run("every_number", tmp_path / "a", path=str(data.tum / "freiburg1_xyz-rgbdslam.txt"),
+              groundtruth=str(data.tum / "freiburg1_xyz-groundtruth.txt"))  # fmt: skip
+    got = pd.read_csv(out / "every_number.csv")
+    assert set(got["preset"]) == {"openloris", "tum", "rpg", "evo", "kitti", "tartanair"}
+    with pytest.raises(pm.PapermillExecutionError, match="give both path and groundtruth"):
+        run("every_number", tmp_path / "b", path=str(data.tum / "freiburg1_xyz-rgbdslam.txt"))

@@ -40,6 +40,7 @@ DEFAULT_NOTEBOOKS = (
     "threshold_sensitivity",
     "compare_algorithms",
     "evo_crosscheck",
+    "every_number",
     "indoor_vs_outdoor",
     "evaluate_my_results",
 )
@@ -49,6 +50,7 @@ DEFAULT_NOTEBOOKS = (
 TYPICAL_SECONDS = {
     "evo_crosscheck": 20, "threshold_sensitivity": 20, "compare_algorithms": 10, "per_sequence_benchmark": 8,
     "indoor_vs_outdoor": 7, "evaluate_my_results": 7, "metrics_primer": 6, "lifelong_benchmark": 6,
+    "every_number": 5,
 }  # fmt: skip
 
 #: Kernel options: its own log is silenced (the loopback-TCP 'without encryption' notice or
@@ -57,7 +59,7 @@ KERNEL_ARGS = ["--IPKernelApp.log_level=CRITICAL"]
 
 #: Notebooks that need the bundled data and say nothing about a lab's own results folder: a report
 #: on ``results`` leaves them out unless they are named.
-BUNDLED_ONLY = ("metrics_primer", "evo_crosscheck", "indoor_vs_outdoor", "evaluate_my_results")
+BUNDLED_ONLY = ("metrics_primer", "evo_crosscheck", "every_number", "indoor_vs_outdoor", "evaluate_my_results")
 
 #: Optional packages a notebook needs; without them the report skips it and says which extra to install.
 NOTEBOOK_NEEDS: dict[str, tuple[str, ...]] = {"evo_crosscheck": ("evo",)}
