@@ -108,6 +108,8 @@ def api_page(template: str) -> str:
 
 
 _LITERAL = re.compile(r"(``.+?``)")
+#: A docutils system message printed past Sphinx's logging (``:1: (WARNING/2) Inline emphasis ...``).
+DOCUTILS_MESSAGE = re.compile(r"\((WARNING|ERROR|SEVERE)/[2-4]\)")
 
 
 def rst_text(text: str) -> str:
@@ -295,7 +297,12 @@ def main(argv: list[str] | None = None) -> int:
             "-d",
             str(work / "doctrees"),
         ]
-        r = subprocess.run([*cmd, str(src), str(html)], check=False, env={**os.environ, **env})
+        r = subprocess.run([*cmd, str(src), str(html)], check=False, env={**os.environ, **env}, stderr=subprocess.PIPE,
+                           text=True)  # fmt: skip
+        sys.stderr.write(r.stderr)
+        # docutils' own messages (a help text parsed by sphinx-argparse) bypass Sphinx's -W: errors too
+        if DOCUTILS_MESSAGE.search(r.stderr) and r.returncode == 0:
+            r.returncode = 1
         if r.returncode != 0 or not (html / "index.html").is_file():
             print(f"docs: the manual did not build (sphinx exited with {r.returncode}; its warnings, above, "
                   f"are errors here); {out} is left as it was", file=sys.stderr)  # fmt: skip

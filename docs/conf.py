@@ -4,7 +4,12 @@ from the manual itself: MathJax 3 from ``_static/mathjax``, no widget script fro
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import lorisnb
+
+sys.path.insert(0, str(Path(__file__).parent))  # cli_parser: the command line's parser for the reference
 
 project = "lorisnb"
 author = "lorisnb"
@@ -54,3 +59,4 @@ html_theme_options = {
 html_last_updated_fmt = None
 html_show_sourcelink = False
 html_copy_source = False
+smartquotes = False  # "--eps" stays two hyphens (not an en dash) in the command line's help and in prose
