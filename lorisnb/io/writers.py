@@ -132,8 +132,8 @@ def _arrow_lines(df: pd.DataFrame) -> bytes | None:
         import pyarrow.compute as pc
     except ImportError:
         return None
-    if df.shape[1] < 2:
-        return None  # one column: pandas writes a missing value as "" (not an empty line)
+    if df.shape[1] < 2 or df.columns.duplicated().any():
+        return None  # one column: pandas writes a missing value as "" (not an empty line); a name twice
     try:
         table = pa.Table.from_pandas(df, preserve_index=False)
     except (pa.ArrowInvalid, pa.ArrowTypeError, pa.ArrowNotImplementedError):

@@ -38,6 +38,16 @@ def test_csv_text_is_pandas_to_csv_byte_for_byte(tmp_path, seed):
         assert out.read_bytes() == df[cols].to_csv(index=False).encode(), cols
 
 
+def test_odd_tables_are_written_as_pandas_writes_them(tmp_path):
+    """A column name twice, names that are numbers, time stamps: pandas' text too."""
+    for k, df in enumerate((
+        pd.DataFrame([[1.0, 2.0, "a"]], columns=["x", "x", "s"]),
+        pd.DataFrame({1: [1.5, np.nan], 2: [2.5, 3.0]}),
+        pd.DataFrame({"a": [1.5, 2.0], "t": pd.to_datetime(["2026-01-01 10:00", "2026-11-28"], utc=True)}),
+    )):  # fmt: skip
+        assert write_csv(df, tmp_path / f"{k}.csv").read_bytes() == df.to_csv(index=False).encode()
+
+
 def test_parts_are_one_table_and_read_back_as_written(tmp_path):
     df = _table(5_000, 3).drop(columns=["f32"])
     out = write_csv_parts([df.iloc[:1234], df.iloc[1234:1234], df.iloc[1234:]], tmp_path / "parts.csv")
