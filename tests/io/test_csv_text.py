@@ -43,7 +43,7 @@ def test_odd_tables_are_written_as_pandas_writes_them(tmp_path):
     for k, df in enumerate((
         pd.DataFrame([[1.0, 2.0, "a"]], columns=["x", "x", "s"]),
         pd.DataFrame({1: [1.5, np.nan], 2: [2.5, 3.0]}),
-        pd.DataFrame({"a": [1.5, 2.0], "t": pd.to_datetime(["2026-01-01 10:00", "2026-11-28"], utc=True)}),
+        pd.DataFrame({"a": [1.5, 2.0], "t": pd.to_datetime(["2026-01-01 10:00", "2026-11-28 00:00"], utc=True)}),
     )):  # fmt: skip
         assert write_csv(df, tmp_path / f"{k}.csv").read_bytes() == df.to_csv(index=False).encode()
 
