@@ -6,21 +6,18 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import json
 import os
 import re
-import time
 from pathlib import Path
 
 import nbformat
 import pytest
+from browser import need_chromium, offline_pages, wait
 
 from lorisnb.cli import build_parser
 
 ROOT = Path(__file__).resolve().parents[2]
 SITE = Path(os.environ.get("LORISNB_DOCS", ROOT / "build" / "docs"))
-CHROMIUM = os.environ.get("LORISNB_CHROMIUM", "/usr/bin/chromium")
-CHROMEDRIVER = os.environ.get("LORISNB_CHROMEDRIVER", "/usr/bin/chromedriver")
 #: hosts that serve scripts, styles and fonts to pages (none may appear in a built page)
 CDN = re.compile(
     r"(?:https?:)?//[^\s\"'<>]*(?:cdn|jsdelivr|unpkg|googleapis|gstatic|bootstrapcdn|cloudflare)[^\s\"'<>]*", re.I
@@ -131,8 +128,7 @@ def test_manual_opens_offline(tmp_path):
     the manual's own MathJax, and the command-line reference lists every subcommand of the parser."""
     if not (SITE / "index.html").is_file():
         pytest.fail(f"{SITE / 'index.html'} missing: run `make docs` first (`make test-browser` does)")
-    if not (Path(CHROMIUM).exists() and Path(CHROMEDRIVER).exists()):
-        pytest.fail(f"{CHROMIUM} / {CHROMEDRIVER} missing: run `make test-browser` (installs Debian's chromium)")
+    need_chromium()
     offline = _module(ROOT / "teaching" / "offline.py", "lorisnb_offline_for_docs")
     html = sorted(SITE.rglob("*.html"))
     assert len(html) > 30, html
@@ -140,44 +136,14 @@ def test_manual_opens_offline(tmp_path):
     cdn = [f"{p.relative_to(SITE)}: {m}" for p in html for m in CDN.findall(p.read_text(errors="replace"))]
     assert cdn == [], cdn
 
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = CHROMIUM
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
-                "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                "--proxy-server=127.0.0.1:9", "--window-size=1300,1000", f"--user-data-dir={tmp_path / 'chromium'}"):  # fmt: skip
-        opts.add_argument(arg)
-    opts.set_capability("goog:loggingPrefs", {"performance": "ALL"})
-    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
-    requested: list[str] = []
-
-    def open_page(page: Path) -> None:
-        driver.get(page.as_uri())
-        end = time.monotonic() + 30
-        while driver.execute_script("return document.readyState") != "complete":
-            assert time.monotonic() < end, f"{page} did not load"
-            time.sleep(0.2)
-        time.sleep(0.5)
-        for entry in driver.get_log("performance"):
-            msg = json.loads(entry["message"])["message"]
-            if msg["method"] == "Network.requestWillBeSent":
-                requested.append(msg["params"]["request"]["url"])
-        broken = driver.execute_script(
-            "return Array.from(document.images).filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.src)"
-        )
-        assert broken == [], f"{page.name}: images that did not load: {broken}"
-
-    try:
-        driver.execute_cdp_cmd("Network.enable", {})
-        driver.execute_cdp_cmd("Network.setBlockedURLs", {"urls": ["http://*", "https://*", "ws://*", "wss://*"]})
-        open_page(SITE / "index.html")
+    with offline_pages(tmp_path / "chromium") as pages:
+        driver = pages.driver
+        pages.open(SITE / "index.html")
         nav = driver.execute_script("return Array.from(document.querySelectorAll('nav a')).map(a => a.textContent)")
         for title in ("Command line", "Python API", "Conventions and semantics", "Architecture"):
             assert any(title in t for t in nav), (title, nav)
 
-        open_page(SITE / "reference" / "cli.html")
+        pages.open(SITE / "reference" / "cli.html")
         headings = driver.execute_script(
             "return Array.from(document.querySelectorAll('article h2, article h3')).map(h => h.textContent)"
         )
@@ -186,17 +152,13 @@ def test_manual_opens_offline(tmp_path):
         options = driver.execute_script("return document.querySelector('article').innerText")
         assert "--eps" in options and "--official-interpolation" in options and "--notebooks-dir" in options
 
-        open_page(SITE / "notebooks" / "metrics_primer.html")
-        end = time.monotonic() + 30  # MathJax typesets after the page has loaded
-        while not driver.execute_script("return document.querySelectorAll('mjx-container').length"):
-            assert time.monotonic() < end, "metrics_primer: no formula typeset (MathJax did not run)"
-            time.sleep(0.2)
+        pages.open(SITE / "notebooks" / "metrics_primer.html")
+        wait(lambda: driver.execute_script("return document.querySelectorAll('mjx-container').length"), 30,
+             "metrics_primer: a formula typeset (MathJax)")  # fmt: skip
         outputs = driver.execute_script("return document.querySelectorAll('.cell_output img').length")
         assert outputs > 0, "metrics_primer: no figure among the outputs (not executed?)"
-        open_page(SITE / "architecture.html")
-        open_page(SITE / "reference" / "api.html")
-    finally:
-        driver.quit()
-    outside = [u for u in requested if not u.startswith(("file:", "data:", "about:", "chrome", "blob:"))]
-    assert outside == [], f"requests that would leave the machine: {outside}"
+        pages.open(SITE / "architecture.html")
+        pages.open(SITE / "reference" / "api.html")
+    assert pages.outside() == [], f"requests that would leave the machine: {pages.outside()}"
+    requested = pages.requested
     assert any("/_static/mathjax/tex-chtml.js" in u for u in requested)  # MathJax came from the manual itself

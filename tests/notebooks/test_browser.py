@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from browser import chromium, need_chromium, offline_pages, wait
 
 from lorisnb.core.trajectory.frames import PAPER_EPS
 from lorisnb.tools.report.build import DEFAULT_NOTEBOOKS, notebook_dir
@@ -32,8 +33,6 @@ pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
 PANEL = "document.querySelector('.jp-NotebookPanel:not(.lm-mod-hidden)')"  # the notebook in front
 CURRENT_TAB = "(document.querySelector('#jp-main-dock-panel .lm-TabBar-tab.lm-mod-current .lm-TabBar-tabLabel') || {}).textContent || ''"
-CHROMIUM = os.environ.get("LORISNB_CHROMIUM", "/usr/bin/chromium")
-CHROMEDRIVER = os.environ.get("LORISNB_CHROMEDRIVER", "/usr/bin/chromedriver")
 SHOTS = Path(__file__).resolve().parents[2] / "results" / "browser"
 TOKEN = "lorisnb-browser-test"
 
@@ -47,8 +46,7 @@ def _free_port() -> int:
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory, data):
     """A JupyterLab server on 127.0.0.1 over a copy of the notebooks; stopped at the end."""
-    if not (Path(CHROMIUM).exists() and Path(CHROMEDRIVER).exists()):
-        pytest.fail(f"{CHROMIUM} / {CHROMEDRIVER} missing: run `make test-browser` (installs Debian's chromium)")
+    need_chromium()
     root = tmp_path_factory.mktemp("lab")
     for p in notebook_dir().glob("*.ipynb"):
         shutil.copy(p, root / p.name)
@@ -96,33 +94,10 @@ def lab(tmp_path_factory, data):
 
 @pytest.fixture(scope="module")
 def browser(lab):
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = CHROMIUM
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
-                "--disable-background-networking", "--disable-component-update", "--disable-sync", "--disable-quic",
-                "--window-size=1500,1100"):  # fmt: skip
-        opts.add_argument(arg)
-    opts.add_argument(f"--user-data-dir={lab[1] / '.chromium'}")
-    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    driver = chromium(lab[1] / ".chromium", size="1500,1100")
     driver.set_script_timeout(30)
     yield driver
     driver.quit()
-
-
-def _wait(cond, timeout: float, what: str, interval: float = 0.25):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        try:
-            got = cond()
-        except Exception:  # the page is still changing under us
-            got = None
-        if got:
-            return got
-        time.sleep(interval)
-    raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}")
 
 
 def _shot(el, name: str) -> bytes:
@@ -145,9 +120,9 @@ def _open_and_run(driver, url: str, name: str, timeout: float) -> None:
 
     driver.get(f"{url}/lab/tree/{name}.ipynb?token={TOKEN}")
     # the notebook in front (its tab: headless Chromium 156 no longer gets JupyterLab's document.title)
-    _wait(lambda: driver.execute_script(f"const p = {PANEL}; return p && p.querySelector('.jp-Cell') && "
+    wait(lambda: driver.execute_script(f"const p = {PANEL}; return p && p.querySelector('.jp-Cell') && "
                                         f"{CURRENT_TAB}.startsWith('{name}.ipynb')"), 60, f"{name} to open")  # fmt: skip
-    _wait(lambda: "Idle" in driver.execute_script(
+    wait(lambda: "Idle" in driver.execute_script(
         "const s = document.querySelector('.jp-Notebook-ExecutionIndicator, .jp-Toolbar-kernelStatus');"
         "return s ? (s.getAttribute('title') || s.textContent || '') + ' Idle' : '';"), 60, "the kernel")  # fmt: skip
     time.sleep(1.0)
@@ -157,7 +132,7 @@ def _open_and_run(driver, url: str, name: str, timeout: float) -> None:
     def run_all() -> None:
         _no_dialog(driver, name)
         driver.find_element(By.XPATH, "//div[contains(@class,'lm-MenuBar-itemLabel') and text()='Run']").click()
-        _wait(lambda: driver.find_element(By.XPATH, "//div[contains(@class,'lm-Menu-itemLabel') and text()='Run All Cells']"),
+        wait(lambda: driver.find_element(By.XPATH, "//div[contains(@class,'lm-Menu-itemLabel') and text()='Run All Cells']"),
               10, "the Run menu").click()  # fmt: skip
 
     def prompts() -> list[str]:
@@ -250,7 +225,7 @@ def _figure(box):
 def _changes_figure(driver, box, act, label: str, name: str) -> None:
     before = _figure(box).get_attribute("src")
     act()
-    img = _wait(lambda: (f := _figure(box)) is not None and f.get_attribute("src") != before and f, 30,
+    img = wait(lambda: (f := _figure(box)) is not None and f.get_attribute("src") != before and f, 30,
                 f"the figure to change after {label}")  # fmt: skip
     time.sleep(0.3)
     png = _shot(box, f"{name}-after-{label}")
@@ -283,7 +258,7 @@ def _drive_explorer(driver, name: str, expected: dict[str, str], dropdown: bool)
     from selenium.webdriver.support.ui import Select
 
     box = _explorer(driver)
-    _wait(lambda: _figure(box), 30, "the explorer's figure")
+    wait(lambda: _figure(box), 30, "the explorer's figure")
     assert _not_blank(_shot(_figure(box), f"{name}-figure-before")), "blank figure before any input"
     _shot(box, f"{name}-before")
     shown = _readouts(box)
@@ -371,52 +346,16 @@ def offline_report(tmp_path_factory, icra20):
     return run_dir
 
 
-def _offline_options(tmp_path):
-    """Chromium's options for pages opened from file:// with nothing reachable outside the machine."""
-    from selenium import webdriver
-
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = CHROMIUM
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
-                "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                "--proxy-server=127.0.0.1:9", "--window-size=1300,1000"):  # fmt: skip
-        opts.add_argument(arg)
-    opts.add_argument(f"--user-data-dir={tmp_path / 'chromium'}")
-    return opts
-
-
 def test_report_opens_offline(offline_report, tmp_path):
     """index.html and a notebook page from file://, with every http(s) request blocked and every
     request recorded (Chrome's performance log): none leaves the machine, nothing fails to load,
     and the first table of the page is a leaderboard."""
-    if not (Path(CHROMIUM).exists() and Path(CHROMEDRIVER).exists()):
-        pytest.fail(f"{CHROMIUM} / {CHROMEDRIVER} missing: run `make test-browser` (installs Debian's chromium)")
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-
-    opts = _offline_options(tmp_path)
-    opts.set_capability("goog:loggingPrefs", {"performance": "ALL"})
-    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
-    try:
-        driver.execute_cdp_cmd("Network.enable", {})
-        driver.execute_cdp_cmd("Network.setBlockedURLs", {"urls": ["http://*", "https://*", "ws://*", "wss://*"]})
-        pages = [offline_report / "index.html", offline_report / "report.html",
-                 offline_report / "per_sequence_benchmark" / "per_sequence_benchmark.html",
-                 offline_report / "threshold_sensitivity" / "threshold_sensitivity.html"]  # fmt: skip
-        requested: list[str] = []
-        for page in pages:
-            driver.get(page.as_uri())
-            _wait(lambda: driver.execute_script("return document.readyState") == "complete", 30, f"{page.name}")
-            driver.execute_script("window.scrollTo(0, document.body.scrollHeight)")  # lazy images load
-            time.sleep(1.0)
-            for entry in driver.get_log("performance"):
-                msg = json.loads(entry["message"])["message"]
-                if msg["method"] == "Network.requestWillBeSent":
-                    requested.append(msg["params"]["request"]["url"])
-            broken = driver.execute_script(
-                "return Array.from(document.images).filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.src)"
-            )
-            assert broken == [], f"{page.name}: images that did not load: {broken}"
+    with offline_pages(tmp_path / "chromium") as pages:
+        driver = pages.driver
+        for page in [offline_report / "index.html", offline_report / "report.html",
+                     offline_report / "per_sequence_benchmark" / "per_sequence_benchmark.html",
+                     offline_report / "threshold_sensitivity" / "threshold_sensitivity.html"]:  # fmt: skip
+            pages.open(page, scroll=True, settle_s=1.0)  # scrolled: lazy images load
             if page.name in ("index.html", "report.html"):
                 first = driver.execute_script("const t = document.querySelector('table'); return t && t.className")
                 assert first == "leaderboard", f"{page.name}: the first table is {first!r}, not the leaderboard"
@@ -424,11 +363,8 @@ def test_report_opens_offline(offline_report, tmp_path):
                     "return Array.from(document.querySelector('table').querySelectorAll('th')).map(t => t.textContent)"
                 )
                 assert head[:3] == ["rank", "algorithm", "cr"] and "coverage (sequences)" in head
-        outside = [u for u in requested if not u.startswith(("file:", "data:", "about:", "chrome"))]
-        assert outside == [], f"requests that would leave the machine: {outside}"
-        assert any(u.endswith(".png") for u in requested)  # the figures came from the run folder
-    finally:
-        driver.quit()
+    assert pages.outside() == [], f"requests that would leave the machine: {pages.outside()}"
+    assert any(u.endswith(".png") for u in pages.requested)  # the figures came from the run folder
 
 
 @pytest.fixture(scope="module")
@@ -460,14 +396,10 @@ def test_report_shows_what_changed_since_the_baseline(baseline_report, tmp_path)
     """The front page's "Since the baseline" in a real browser, offline: the verdict against the
     newest comparable earlier run, the regression named, the run at other thresholds passed over,
     the code under test, and the trend figure loaded."""
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-
-    opts = _offline_options(tmp_path)
-    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    driver = chromium(tmp_path / "chromium", offline=True)
     try:
         driver.get((baseline_report / "index.html").as_uri())
-        _wait(lambda: driver.execute_script("return document.readyState") == "complete", 30, "index.html")
+        wait(lambda: driver.execute_script("return document.readyState") == "complete", 30, "index.html")
         section = driver.execute_script(
             "const h = document.getElementById('since-baseline'); let t = ''; let e = h;"
             "while (e && (e === h || e.tagName !== 'H2')) { t += e.innerText + '\\n'; e = e.nextElementSibling; }"

@@ -6,12 +6,12 @@ from anywhere but the server."""
 
 from __future__ import annotations
 
-import os
 import sys
 import time
 from pathlib import Path
 
 import pytest
+from browser import chromium, need_chromium, wait
 from challenge_fixtures import cafe_files, challenge_file
 
 pytest.importorskip("fastapi")
@@ -23,25 +23,9 @@ from lorisnb.tools.challenge.config import read_challenge  # noqa: E402
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
-CHROMIUM = os.environ.get("LORISNB_CHROMIUM", "/usr/bin/chromium")
-CHROMEDRIVER = os.environ.get("LORISNB_CHROMEDRIVER", "/usr/bin/chromedriver")
-
-
-def _until(cond, timeout: float, what: str):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        value = cond()
-        if value:
-            return value
-        time.sleep(0.25)
-    raise AssertionError(f"{what}: not within {timeout} s")
-
 
 def test_team_submits_in_the_page_and_sees_its_score(tmp_path, data):
-    if not (Path(CHROMIUM).exists() and Path(CHROMEDRIVER).exists()):
-        pytest.fail(f"{CHROMIUM} / {CHROMEDRIVER} missing: run `make test-browser` (installs Debian's chromium)")
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
+    need_chromium()
     from selenium.webdriver.common.by import By
 
     path = challenge_file(tmp_path, data)
@@ -52,13 +36,7 @@ def test_team_submits_in_the_page_and_sees_its_score(tmp_path, data):
     port = free_port()
     url = f"http://127.0.0.1:{port}"
     proc = start_server(path, port, tmp_path / "server.log")
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = CHROMIUM
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
-                "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                "--window-size=1200,900", f"--user-data-dir={tmp_path / 'chromium'}"):  # fmt: skip
-        opts.add_argument(arg)
-    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=opts)
+    driver = chromium(tmp_path / "chromium", size="1200,900")
     try:
         driver.get(url + "/")
         assert "No scored submission yet" in driver.find_element(By.ID, "phase-development").text
@@ -67,9 +45,9 @@ def test_team_submits_in_the_page_and_sees_its_score(tmp_path, data):
         files = cafe_files(data, "orbslam2_rgbd")
         driver.find_element(By.ID, "files").send_keys("\n".join(str(p) for p in files))
         driver.find_element(By.ID, "send").click()
-        _until(lambda: "/submissions/" in driver.current_url, 60, "the submission page")
+        wait(lambda: "/submissions/" in driver.current_url, 60, "the submission page")
         assert driver.find_element(By.ID, "team").text == "browsers"
-        _until(lambda: driver.find_element(By.ID, "status").text == "scored", 240, "the score on the page")
+        wait(lambda: driver.find_element(By.ID, "status").text == "scored", 240, "the score on the page")
         cells = driver.find_elements(By.CSS_SELECTOR, "#sequences td.cr")
         assert [c.text for c in cells] == ["0.999", "0.161"]  # ORB-SLAM2 on cafe-1 and cafe-2
         image = driver.find_element(By.CSS_SELECTOR, "img")
@@ -80,7 +58,7 @@ def test_team_submits_in_the_page_and_sees_its_score(tmp_path, data):
             board = driver.find_element(By.ID, "phase-development")
             return board if "browsers" in board.text else None
 
-        board = _until(listed, 120, "the team on the leaderboard")
+        board = wait(listed, 120, "the team on the leaderboard")
         row = board.find_element(By.CSS_SELECTOR, "table.board tr:nth-child(2)")
         assert row.find_element(By.CSS_SELECTOR, "td.team").text == "browsers"
         assert row.find_element(By.CSS_SELECTOR, "td.value").text == "0.999"
