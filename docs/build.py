@@ -36,12 +36,12 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(ROOT / "teaching"))  # the offline checks and MathJax lookup the teaching book uses
 
-from offline import built_files, mathjax_dir, offline_mathjax, refuse_remote  # noqa: E402
+from offline import mathjax_dir, offline_mathjax, publish  # noqa: E402
 
 import lorisnb  # noqa: E402
 from lorisnb.core.spec.table import spec_table  # noqa: E402
 from lorisnb.errors import OutputError  # noqa: E402
-from lorisnb.io.writers import check_owned_folder, replace_folder  # noqa: E402
+from lorisnb.io.writers import check_owned_folder  # noqa: E402
 
 BUILD_MARKER = ".lorisnb-docs"  # in every folder this script built: only those are replaced
 #: the layers, top first, as the import contract in pyproject.toml orders them
@@ -307,13 +307,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"docs: the manual did not build (sphinx exited with {r.returncode}; its warnings, above, "
                   f"are errors here); {out} is left as it was", file=sys.stderr)  # fmt: skip
             return 1
-        if refuse_remote(built_files(html)):
-            return 1
-        try:
-            replace_folder(html, out, BUILD_MARKER)
-        except OutputError as exc:
-            print(f"docs: {exc}", file=sys.stderr)
-            return 2
+        published = publish(html, out, "docs", BUILD_MARKER)
+        if published:
+            return published
     print(f"docs: {out / 'index.html'} ({time.perf_counter() - start:.0f} s: staged and executed {executed - start:.0f} s, "
           f"Sphinx {time.perf_counter() - executed:.0f} s)")  # fmt: skip
     return 0

@@ -26,10 +26,10 @@ from datetime import date
 from pathlib import Path
 
 import nbformat
-from offline import BUILD_MARKER, built_files, mathjax_dir, offline_mathjax, refuse_remote
+from offline import BUILD_MARKER, mathjax_dir, offline_mathjax, publish
 
 from lorisnb.errors import OutputError
-from lorisnb.io.writers import check_owned_folder, replace_folder
+from lorisnb.io.writers import check_owned_folder
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -227,13 +227,9 @@ def main(out: Path) -> int:
             print(f"book: {problem}\nbook: {out} is left as it was", file=sys.stderr)
             return 1
         without_thebe(html)
-        if refuse_remote(built_files(html)):
-            return 1
-        try:
-            replace_folder(html, out, BUILD_MARKER)
-        except OutputError as exc:
-            print(f"book: {exc}", file=sys.stderr)
-            return 2
+        published = publish(html, out, "book")
+        if published:
+            return published
     print(f"book: {out / 'index.html'}")
     return 0
 

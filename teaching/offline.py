@@ -73,3 +73,21 @@ def refuse_remote(files: list[Path]) -> int:
 def built_files(folder: Path) -> list[Path]:
     """Every file of a build a browser may read (``CHECKED``)."""
     return sorted(p for p in folder.rglob("*") if p.suffix in CHECKED and p.is_file())
+
+
+def publish(built: Path, out: Path, tool: str, marker: str = BUILD_MARKER) -> int:
+    """The last step of every offline build (the book, the slides, the manual): refuse a build that
+    would load anything from the network, then move it to ``out`` with ``marker`` in it (an earlier
+    ``out`` is replaced only if it holds ``marker``). 0, else the exit status with the reason on
+    stderr: 1 (the network), 2 (an ``out`` the tool did not make)."""
+    from lorisnb.errors import OutputError
+    from lorisnb.io.writers import replace_folder
+
+    if refuse_remote(built_files(built)):
+        return 1
+    try:
+        replace_folder(built, out, marker)
+    except OutputError as exc:
+        print(f"{tool}: {exc}", file=sys.stderr)
+        return 2
+    return 0

@@ -28,10 +28,10 @@ from pathlib import Path
 import nbformat
 from nbclient import NotebookClient
 from nbconvert import SlidesExporter
-from offline import BUILD_MARKER, built_files, mathjax_dir, offline_mathjax, refuse_remote
+from offline import BUILD_MARKER, mathjax_dir, offline_mathjax, publish
 
 from lorisnb.errors import OutputError
-from lorisnb.io.writers import check_owned_folder, replace_folder
+from lorisnb.io.writers import check_owned_folder
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -133,13 +133,9 @@ def main(out: Path) -> int:
                 os.environ.pop("TMPDIR", None)
             else:
                 os.environ["TMPDIR"] = before
-        if refuse_remote(built_files(built)):
-            return 1
-        try:
-            replace_folder(built, out, BUILD_MARKER)
-        except OutputError as exc:
-            print(f"slides: {exc}", file=sys.stderr)
-            return 2
+        published = publish(built, out, "slides")
+        if published:
+            return published
     for path in notebooks:
         print(f"slides: {out / f'{path.stem}.slides.html'}")
         if path.parent.parent == HERE / "source":
