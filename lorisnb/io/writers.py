@@ -166,8 +166,15 @@ def _arrow_lines(df: pd.DataFrame) -> bytes | None:
         else:
             return None  # dates, lists...: pandas writes them
         texts.append(text)
-    lines = pc.binary_join_element_wise(*texts, ",", null_handling="replace", null_replacement="")
-    return "\n".join(lines.to_pylist()).encode() + b"\n"
+    texts = [pc.cast(t, pa.large_string()) for t in texts]  # 64-bit offsets: a part of any size
+    text = lambda v: pa.scalar(v, pa.large_string())  # noqa: E731
+    lines = pc.binary_join_element_wise(*texts, text(","), null_handling="replace", null_replacement="")
+    lines = pc.binary_join_element_wise(
+        lines, text(""), text("\n")
+    )  # each line and its end, then the lines end to end:
+    lines = lines.combine_chunks() if isinstance(lines, pa.ChunkedArray) else lines  # the array's own bytes
+    ends = np.frombuffer(lines.buffers()[1], np.int64, len(lines) + 1, lines.offset * 8)
+    return lines.buffers()[2][int(ends[0]) : int(ends[-1])].to_pybytes()
 
 
 def write_text(text: str, out: str | os.PathLike[str], force: bool = False) -> Path:
