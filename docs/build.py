@@ -173,25 +173,39 @@ def stage_notebook(source: Path, dest: Path, output_dir: Path) -> None:
     nbformat.write(nb, dest)
 
 
+#: Seconds a cell may take in the manual's build (the longest notebook takes about 35 s in all): a
+#: cell past it is taken for a stalled kernel client (an idle kernel, the client still waiting: seen
+#: now and then under load, cause not found) and the notebook is run once more in a fresh kernel.
+CELL_TIMEOUT_S = 180
+
+
 def _execute(path: Path, env: dict[str, str]) -> str | None:
     """Execute one staged notebook in place in this process's own kernel client; its problem
-    (``name: error``) or None."""
+    (``name: error``) or None. A cell that times out is retried once with the whole notebook."""
     from nbclient import NotebookClient
+    from nbclient.exceptions import CellTimeoutError
     from tqdm import tqdm
 
     from lorisnb.tools.report.notebooks import kernel_manager_class
 
     os.environ.update(env)  # the kernel's environment: TMPDIR of the build, MPLBACKEND
-    nb = nbformat.read(path, as_version=4)
     start = time.perf_counter()
-    try:
-        NotebookClient(
-            nb, timeout=600, startup_timeout=300, kernel_name="python3",
-            resources={"metadata": {"path": str(path.parent)}},
-            kernel_manager_class=kernel_manager_class(),  # ipc sockets: no race for a TCP port between two kernels
-        ).execute()  # fmt: skip
-    except Exception as exc:  # a cell's error, a timeout, a kernel that died: the build fails naming it
-        return f"{path.stem}: {' '.join(str(exc).split())[-1500:]}"
+    for attempt in (1, 2):
+        nb = nbformat.read(path, as_version=4)
+        try:
+            NotebookClient(
+                nb, timeout=CELL_TIMEOUT_S, startup_timeout=300, kernel_name="python3",
+                resources={"metadata": {"path": str(path.parent)}},
+                kernel_manager_class=kernel_manager_class(),  # ipc sockets: no race for a TCP port between two kernels
+            ).execute()  # fmt: skip
+        except CellTimeoutError as exc:
+            if attempt == 1:
+                tqdm.write(f"docs: {path.stem}: a cell did not answer in {CELL_TIMEOUT_S} s; running it once more")
+                continue
+            return f"{path.stem}: {' '.join(str(exc).split())[-1500:]}"
+        except Exception as exc:  # a cell's error, a kernel that died: the build fails naming it
+            return f"{path.stem}: {' '.join(str(exc).split())[-1500:]}"
+        break
     nbformat.write(nb, path)
     tqdm.write(f"docs: {path.stem} executed in {time.perf_counter() - start:.0f} s")
     return None
