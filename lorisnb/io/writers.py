@@ -97,7 +97,7 @@ def write_csv_parts(parts: Iterable[pd.DataFrame], out: str | os.PathLike[str], 
     The text is pandas' ``to_csv(index=False)`` dialect: a value quoted only when it holds a comma, a
     quote or a line break, ``True``/``False``, missing values empty, a whole float with ``.0`` (read
     back as a float). Where pyarrow is installed the lines are built by its compute functions
-    (:func:`_arrow_lines`: about 10x faster on large tables; numbers in the shortest text that reads
+    (:func:`_arrow_lines`: 4-5x faster than pandas on a 200,000-row table; numbers in the shortest text that reads
     back to the same float, ``1e-07`` as Python writes it); without pyarrow, or for a column it does
     not convert (Python objects), pandas writes the part. ``pandas.read_csv`` reads back the same
     values either way (tested)."""
@@ -146,8 +146,9 @@ def _arrow_lines(df: pd.DataFrame) -> bytes | None:
         if pa.types.is_boolean(kind):
             text = pc.if_else(column, "True", "False")
         elif pa.types.is_float64(kind):  # (float32: pandas writes its own shortest text, below)
-            text = pc.if_else(pc.match_substring_regex(text := pc.cast(column, pa.string()), r"^-?[0-9]+$"),
-                              pc.binary_join_element_wise(text, ".0", ""), text)  # fmt: skip
+            text = pc.cast(column, pa.string())  # 3.0 as "3": given its ".0" below, as pandas writes it
+            text = pc.if_else(pc.match_substring_regex(text, r"^-?[0-9]+$"), pc.binary_join_element_wise(text, ".0", ""),
+                              text)  # fmt: skip
             # Python's repr writes magnitudes below 1e-4 or from 1e16 with an exponent, pyarrow from other
             # bounds: those values (few in real tables) written by repr, as pandas writes them all
             x = np.abs(column.to_numpy(zero_copy_only=False))
@@ -167,12 +168,11 @@ def _arrow_lines(df: pd.DataFrame) -> bytes | None:
             return None  # dates, lists...: pandas writes them
         texts.append(text)
     texts = [pc.cast(t, pa.large_string()) for t in texts]  # 64-bit offsets: a part of any size
-    text = lambda v: pa.scalar(v, pa.large_string())  # noqa: E731
-    lines = pc.binary_join_element_wise(*texts, text(","), null_handling="replace", null_replacement="")
-    lines = pc.binary_join_element_wise(
-        lines, text(""), text("\n")
-    )  # each line and its end, then the lines end to end:
-    lines = lines.combine_chunks() if isinstance(lines, pa.ChunkedArray) else lines  # the array's own bytes
+    comma, empty, newline = (pa.scalar(v, pa.large_string()) for v in (",", "", "\n"))
+    lines = pc.binary_join_element_wise(*texts, comma, null_handling="replace", null_replacement="")
+    # each line with its end; the array's own bytes are then the lines end to end
+    lines = pc.binary_join_element_wise(lines, empty, newline)
+    lines = lines.combine_chunks() if isinstance(lines, pa.ChunkedArray) else lines
     ends = np.frombuffer(lines.buffers()[1], np.int64, len(lines) + 1, lines.offset * 8)
     return lines.buffers()[2][int(ends[0]) : int(ends[-1])].to_pybytes()
 
