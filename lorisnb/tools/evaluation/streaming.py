@@ -91,5 +91,5 @@ def sweep_to_parquet(
 def sweep_to_csv(errors: FileErrors | Iterable[FileErrors], out: str | os.PathLike[str], *args: Any,
                  **kwargs: Any) -> tuple[Path, int]:  # fmt: skip
     """:func:`sweep_to_parquet`'s table streamed to one CSV file (same arguments): one group of
-    files in memory at a time, the text written by pyarrow where installed."""
+    files in memory at a time, in pandas' CSV text (:func:`lorisnb.io.writers.write_csv_parts`)."""
     return sweep_to_parquet(errors, out, *args, fmt="csv", **kwargs)

@@ -114,7 +114,10 @@ def claim_uids(base: int, count: int = 2, span: int = 4000) -> int:
         ids = range(first, first + count)
         if any(_account_exists(u, pwd) for u in ids):
             continue
-        fd = os.open(lock_dir / f"lorisnb-sandbox-uid-{first}.lock", os.O_RDWR | os.O_CREAT, 0o600)
+        try:
+            fd = os.open(lock_dir / f"lorisnb-sandbox-uid-{first}.lock", os.O_RDWR | os.O_CREAT, 0o600)
+        except OSError:  # another user's lock file: not ours to take
+            continue
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
