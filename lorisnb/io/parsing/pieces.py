@@ -6,8 +6,8 @@ installed (it holds no GIL while it parses, so the pieces are parsed side by sid
 else ``pandas.read_csv`` (C engine) on its bytes. Both round as Python's ``float`` does, so both
 give the numbers of the exact byte scanner. A piece whose rows are not its lines (a line the
 parser reads otherwise) makes the whole read return None: the caller's chunked reader then names
-the line. (pandas' private buffer route, ``TextReader.load_buffer`` through ``engine._reader``,
-which this replaced, is gone: issue 47; the figures of both are in ``make bench``'s reading rows.)
+the line. (The route through pandas' private parser internals that this replaced is gone: issue
+47; the figures of both are in ``make bench``'s reading rows.)
 
 The pieces' own threads (rather than pyarrow's threaded read of the whole file) keep memory at
 the arrays a reader keeps: each piece is converted and copied into place as soon as it is parsed,
