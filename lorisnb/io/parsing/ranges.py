@@ -115,7 +115,8 @@ def keep_freed_memory() -> None:
     text, the parser's buffers, row blocks' temporaries) from memory freed earlier instead of new
     pages, and gives memory back only when :func:`give_back_memory` says so (after a large file).
     By default it unmaps and trims such blocks again and again, and each new page is zeroed by the
-    kernel: about a third less system time on a 1 GB file. One heap for every thread: memory the
+    kernel: about a third less system time on a 1 GB file (the bench figure that keeps this glibc
+    tuning: ``make bench``'s rows of the 10M-pose pair, time and peak memory per pose). One heap for every thread: memory the
     parse threads free is what the main thread reuses next, and :func:`give_back_memory` can
     return it (glibc's ``malloc_trim`` leaves the free top of a thread's own heap resident: about
     55 MiB after a million-pose file, for the rest of the run). Nothing outside glibc."""
