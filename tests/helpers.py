@@ -91,11 +91,12 @@ def openloris_fixture(tmp_path: Path) -> tuple[Path, Path]:
 
 
 def write_bag(path: Path, traj, ros: int, msgtype: str = "geometry_msgs/msg/PoseStamped", topic: str = "/pose",
-              tf: tuple[str, str, str] | None = None) -> Path:  # fmt: skip
+              tf: tuple[str, str, str] | None = None, covariances=None) -> Path:  # fmt: skip
     """Write ``traj`` to a ROS 1 bag (``ros=1``, a .bag file) or a ROS 2 bag (``ros=2``, a folder) as
     ``msgtype`` messages on ``topic``; with ``tf=(parent, middle, child)`` also as TF: a static
     ``parent -> middle`` offset (1 m along x) and ``middle -> child`` moving so that the chain
-    ``parent -> child`` equals the trajectory."""
+    ``parent -> child`` equals the trajectory. ``covariances``: (N, 36) pose covariances of a
+    ``PoseWithCovarianceStamped`` or ``Odometry`` topic (default zeros)."""
     import numpy as np
     from rosbags.typesys import Stores, get_typestore
 
@@ -113,10 +114,11 @@ def write_bag(path: Path, traj, ros: int, msgtype: str = "geometry_msgs/msg/Pose
     def pose(p, q):
         return Pose(position=Point(x=p[0], y=p[1], z=p[2]), orientation=Quat(x=q[0], y=q[1], z=q[2], w=q[3]))
 
-    def msg(t, p, q):
+    def msg(t, p, q, i):
         if msgtype.endswith("PoseStamped") and "Covariance" not in msgtype:
             return T[msgtype](header=header(t), pose=pose(p, q))
-        cov = T["geometry_msgs/msg/PoseWithCovariance"](pose=pose(p, q), covariance=np.zeros(36))
+        c = np.zeros(36) if covariances is None else np.asarray(covariances[i], float)
+        cov = T["geometry_msgs/msg/PoseWithCovariance"](pose=pose(p, q), covariance=c)
         if msgtype.endswith("PoseWithCovarianceStamped"):
             return T[msgtype](header=header(t), pose=cov)
         twist = T["geometry_msgs/msg/TwistWithCovariance"](
@@ -154,9 +156,9 @@ def write_bag(path: Path, traj, ros: int, msgtype: str = "geometry_msgs/msg/Pose
             static = TS(header=header(t0, parent), child_frame_id=middle,
                         transform=Tr(translation=Vec(x=1.0, y=0.0, z=0.0), rotation=Quat(x=0.0, y=0.0, z=0.0, w=1.0)))  # fmt: skip
             writer.write(static_conn, int(t0 * 1e9), ser(T[kind](transforms=[static]), kind))
-        for t, p, q in zip(traj.stamps, traj.positions, traj.quaternions, strict=True):
+        for i, (t, p, q) in enumerate(zip(traj.stamps, traj.positions, traj.quaternions, strict=True)):
             ns = int(round(t * 1e9))
-            writer.write(conn, ns, ser(msg(float(t), p, q), msgtype))
+            writer.write(conn, ns, ser(msg(float(t), p, q, i), msgtype))
             if tf is not None:
                 moved = Tr(translation=Vec(x=p[0] - 1.0, y=p[1], z=p[2]), rotation=Quat(x=q[0], y=q[1], z=q[2], w=q[3]))
                 m = TS(header=header(float(t), tf[1]), child_frame_id=tf[2], transform=moved)
@@ -225,3 +227,30 @@ def as_trials(table_csv, out_csv=None, spread: float = 0.005) -> None:
                 x[c] = x[c] * (1 + step * spread)
         parts.append(x)
     pd.concat(parts, ignore_index=True).to_csv(out_csv or table_csv, index=False)
+
+
+def synthetic_covariances(stamps) -> tuple:
+    """Pose covariances for a real trajectory that has none (plain numpy, deterministic): orientation
+    (N, 3, 3) rad^2 about 0.8 deg and position (N, 3, 3) m^2 about 1 cm per axis, correlated between
+    axes, each growing by 5 % a second and turning with time."""
+    import numpy as np
+
+    t = np.asarray(stamps, float) - float(stamps[0])
+
+    def cov(scale: float, rate: float):
+        a = np.stack([np.sin(rate * t + j) for j in range(9)], 1).reshape(-1, 3, 3) * 0.5 + np.eye(3)
+        return scale**2 * (1 + 0.05 * t)[:, None, None] * (a @ a.transpose(0, 2, 1))
+
+    return cov(np.radians(0.8), 0.7), cov(0.01, 1.3)
+
+
+def write_ov_eval_file(path: Path, traj, orientation, position) -> Path:
+    """``traj`` with its covariances in ov_eval's text layout (``stamp tx ty tz qx qy qz qw``, then the
+    upper triangles of the orientation and position blocks), every number as repr (round-trips)."""
+    iu = ([0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2])
+    lines = ["# timestamp(s) tx ty tz qx qy qz qw Pr11 Pr12 Pr13 Pr22 Pr23 Pr33 Pt11 Pt12 Pt13 Pt22 Pt23 Pt33"]
+    for i in range(len(traj.stamps)):
+        vals = [traj.stamps[i], *traj.positions[i], *traj.quaternions[i], *orientation[i][iu], *position[i][iu]]
+        lines.append(" ".join(repr(float(v)) for v in vals))
+    path.write_text("\n".join(lines) + "\n")
+    return path

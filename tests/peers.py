@@ -13,6 +13,10 @@ A test that needs a peer missing there skips, saying how to fetch it (once, by h
 
 - ``rpg_trajectory_evaluation/``: github.com/uzh-rpg/rpg_trajectory_evaluation at
   8c8ceec55c5c5094a6494208cfc5f54afe0bbc4d (MIT): its ``src/rpg_trajectory_evaluation`` modules.
+- ``open_vins/``: github.com/rpng/open_vins at 6948812 (GPL): its ``ov_eval/src`` and
+  ``ov_core/src/utils`` folders (``git archive HEAD ov_eval/src ov_core/src/utils``); built by
+  :func:`build_ov_eval` with g++ where Eigen and Boost.Filesystem are installed (Debian:
+  ``libeigen3-dev libboost-filesystem-dev``).
 
 ``git clone URL DIR && git -C DIR checkout COMMIT`` into the peers folder does it.
 """
@@ -37,6 +41,10 @@ PEERS = {
         "github.com/uzh-rpg/rpg_trajectory_evaluation",
     ),
     "tartanair_tools": ("evaluation/tartanair_evaluator.py", "github.com/castacks/tartanair_tools"),
+    "open_vins": (
+        "ov_eval/src/calc/ResultTrajectory.cpp",
+        "github.com/rpng/open_vins (ov_eval/src, ov_core/src/utils)",
+    ),
 }
 
 
@@ -148,3 +156,72 @@ def openloris_kitti_pair(data: Any, scene: str, result: str, out: Path) -> tuple
         np.savetxt(path, m.reshape(len(m), 12), fmt="%.6e")
         files.append(path)
     return files[0], files[1]
+
+
+#: Our driver of ov_eval: its ``ResultTrajectory`` on an estimate, a ground truth and an alignment, every
+#: statistic and every per-pose value (with its 3-sigma bound, -1 where none) of each series, ``%.17g``.
+OV_DRIVER = r"""
+#include "calc/ResultTrajectory.h"
+#include <cstdio>
+using namespace ov_eval;
+static void put(const char *name, const Statistics &s) {
+  printf("stat %s %.17g %.17g %.17g %.17g %.17g %.17g %zu\n", name, s.rmse, s.mean, s.median, s.std, s.min, s.max,
+         s.values.size());
+  for (size_t i = 0; i < s.values.size(); i++)
+    printf("val %s %.17g %.17g %.17g\n", name, s.timestamps[i], s.values[i],
+           i < s.values_bound.size() ? s.values_bound[i] : -1.0);
+}
+int main(int argc, char **argv) {
+  ResultTrajectory traj(argv[1], argv[2], argv[3]);
+  Statistics ao, ap, bo, bp, no, np, px, py, pz, ox, oy, oz, r, p, y;
+  traj.calculate_ate(ao, ap); put("ate_ori", ao); put("ate_pos", ap);
+  traj.calculate_ate_2d(bo, bp); put("ate2d_yaw", bo); put("ate2d_pos", bp);
+  traj.calculate_nees(no, np); put("nees_ori", no); put("nees_pos", np);
+  traj.calculate_error(px, py, pz, ox, oy, oz, r, p, y);
+  put("pos_x", px); put("pos_y", py); put("pos_z", pz); put("ori_x", ox); put("ori_y", oy); put("ori_z", oz);
+  put("roll", r); put("pitch", p); put("yaw", y);
+  return 0;
+}
+"""
+
+
+def build_ov_eval(out: Path) -> Path:
+    """ov_eval's ``ResultTrajectory`` compiled with g++ into ``out`` with :data:`OV_DRIVER` (skips without
+    a compiler, Eigen or Boost.Filesystem)."""
+    src = peer("open_vins")
+    gxx = shutil.which("g++")
+    if gxx is None:
+        pytest.skip("no C++ compiler (g++) to build ov_eval")
+    eigen = next((d for d in (Path("/usr/include/eigen3"), Path("/usr/local/include/eigen3")) if d.is_dir()), None)
+    if eigen is None or not Path("/usr/include/boost/filesystem.hpp").is_file():
+        pytest.skip(
+            "ov_eval needs Eigen and Boost.Filesystem (Debian: apt install libeigen3-dev libboost-filesystem-dev)"
+        )
+    (out / "driver.cpp").write_text(OV_DRIVER)
+    exe = out / "ov_eval"
+    ev, core = src / "ov_eval" / "src", src / "ov_core" / "src"
+    sources = [ev / "alignment" / "AlignTrajectory.cpp", ev / "alignment" / "AlignUtils.cpp",
+               ev / "calc" / "ResultTrajectory.cpp", ev / "utils" / "Loader.cpp", core / "utils" / "print.cpp"]  # fmt: skip
+    built = subprocess.run(
+        [gxx, "-O2", "-w", "-std=c++14", "-I", str(ev), "-I", str(core), "-I", str(eigen), str(out / "driver.cpp"),
+         *map(str, sources), "-lboost_filesystem", "-o", str(exe)],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert built.returncode == 0, built.stderr[-3000:]
+    return exe
+
+
+def run_ov_eval(exe: Path, est: Path, gt: Path, align: str) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """ov_eval's statistics (rmse, mean, median, std, min, max, count) and per-pose rows (stamp, value,
+    bound) of each series, by the names of :data:`lorisnb.core.metrics.consistency.SERIES`."""
+    done = subprocess.run([str(exe), str(est), str(gt), align], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    stats: dict[str, np.ndarray] = {}
+    rows: dict[str, list[list[float]]] = {}
+    for line in done.stdout.splitlines():  # ov_eval prints its warnings on stdout too
+        p = line.split()
+        if p and p[0] == "stat":
+            stats[p[1]] = np.array(p[2:], float)
+        elif p and p[0] == "val":
+            rows.setdefault(p[1], []).append([float(x) for x in p[2:]])
+    return stats, {k: np.array(v) for k, v in rows.items()}

@@ -34,7 +34,7 @@ from lorisnb.cli.options import (
 )
 from lorisnb.cli.text import clean
 from lorisnb.core.spec import validate
-from lorisnb.core.spec.evalspec import ALIGNMENTS, PRESETS
+from lorisnb.core.spec.evalspec import ALIGNMENTS, OV_ALIGNMENTS, PRESETS
 from lorisnb.core.trajectory.blocks import ordinary_pages
 from lorisnb.errors import LorisError
 from lorisnb.io.parsing.ranges import keep_freed_memory
@@ -143,6 +143,39 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--csv", default=None, metavar="OUT")
     p.add_argument("--force", action="store_true")
     p.set_defaults(func=_command(".crosscheck", "cmd_crosscheck"))
+
+    p = sub.add_parser(
+        "consistency",
+        help="an estimate with pose covariances (OpenVINS ov_eval's metrics): NEES, per-axis errors with 3-sigma "
+        "bounds, yaw-only and 2D ATE",
+    )
+    p.add_argument("est", help="estimate: ov_eval's text layout (stamp, pose, 12 covariance numbers a line), a TUM file "
+                   "(no covariances: no NEES or bounds) or a ROS bag (PoseWithCovarianceStamped or Odometry)")  # fmt: skip
+    p.add_argument("gt", help="ground truth (--gt-format)")
+    p.add_argument("--gt-format", choices=FORMAT_NAMES, default="tum", help="format of GT (default tum)")
+    p.add_argument("--topic", default=None, help="bags: the estimate's topic")
+    p.add_argument("--gt-topic", default=None, help="bags (--gt-format bag): the ground truth's topic")
+    p.add_argument("--align", choices=OV_ALIGNMENTS, default="posyaw",
+                   help="alignment, fitted both ways on all matched positions (ov_eval's; default posyaw: yaw-only)")  # fmt: skip
+    p.add_argument(
+        "--max-diff",
+        type=arg_type(lambda t: validate.positive("--max-diff", t, "seconds")),
+        default=0.02,
+        help="association: at most this many seconds between paired stamps (ov_eval's 0.02)",
+    )
+    p.add_argument("--csv", default=None, metavar="OUT", help="the per-pose errors, bounds and NEES")
+    p.add_argument("--summary-csv", default=None, metavar="OUT", help="the statistics of each series")
+    p.add_argument(
+        "--plot", default=None, metavar="OUT", help="the per-axis errors with their bounds (.png, .svg, .pdf)"
+    )
+    p.add_argument(
+        "--digits",
+        type=arg_type(lambda t: int(validate.positive("--digits", t, "significant digits", integer=True))),
+        default=6,
+        help="significant digits printed (default 6)",
+    )
+    p.add_argument("--force", action="store_true", help="overwrite outputs")
+    p.set_defaults(func=_command(".consistency", "cmd_consistency"))
 
     p = sub.add_parser("report", help="run the notebooks with papermill into a report folder under results/")
     p.add_argument("--out", default=None, help="run folder (default results/run-<date>-<time> in the current folder)")

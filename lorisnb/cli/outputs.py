@@ -75,6 +75,8 @@ OUTPUT_SUFFIXES: dict[str, tuple[str, ...]] = {
     "json": (".json",),  # diff's verdict: a --json notes.txt --force replaced any file with JSON
     "junit": (".xml",),
     "kitti_plot": (".png",),
+    "summary_csv": (".csv",),
+    "plot": (".png", ".svg", ".pdf"),
 }
 
 

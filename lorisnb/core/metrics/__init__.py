@@ -1,8 +1,9 @@
 """The error metrics on matched poses: the OpenLORIS-Scene paper's per-pose and threshold
 metrics (:mod:`.openloris`, Eq. 1-4), the pose pairs of every RPE rule (:mod:`.pairs`), evo's
 pose relations (:mod:`.relations`, :mod:`.relation_table`), rpg's relative error over
-sub-trajectories (:mod:`.relative`), the KITTI odometry devkit's segment errors (:mod:`.kitti`), and difficulty
-measures across datasets (:mod:`.difficulty`).
+sub-trajectories (:mod:`.relative`), the KITTI odometry devkit's segment errors (:mod:`.kitti`), OpenVINS
+ov_eval's NEES and per-axis errors of an estimate with pose covariances (:mod:`.consistency`), and
+difficulty measures across datasets (:mod:`.difficulty`).
 
 May import: the other core sub-packages but :mod:`lorisnb.core.stats` (enforced).
 """
@@ -12,6 +13,7 @@ from typing import TYPE_CHECKING
 from lorisnb._lazy import attach
 
 if TYPE_CHECKING:
+    from lorisnb.core.metrics.consistency import Consistency, PoseCovariances, ov_eval_errors
     from lorisnb.core.metrics.openloris import (
         RATES,
         RPE_UNITS,
@@ -33,6 +35,9 @@ if TYPE_CHECKING:
 __getattr__, __dir__ = attach(__name__)
 
 __all__ = [
+    "Consistency",
+    "PoseCovariances",
+    "ov_eval_errors",
     "Orientations",
     "RATES",
     "RPE_UNITS",

@@ -45,6 +45,8 @@ from lorisnb.errors import ValidationError
 
 ASSOCIATIONS = ("interpolate", "nearest", "index", *evo.EVO_ASSOCIATIONS)
 ALIGNMENTS = ("se3", "sim3", "posyaw", "none", "auto", *evo.EVO_ALIGNMENTS)
+#: The alignments OpenVINS ov_eval offers for its metrics (``lorisnb consistency``; its ``*single`` variants aside).
+OV_ALIGNMENTS = ("posyaw", "se3", "sim3", "none")
 RPE_UNITS = evo.RPE_UNITS
 REPEATED = ("drop", "keep")
 #: The KITTI metric's arithmetic: the devkit's single precision, or double.

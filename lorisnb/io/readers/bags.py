@@ -35,6 +35,8 @@ POSE_TYPES = {
     "geometry_msgs/msg/PointStamped": lambda m: m.point,  # no orientation: the identity, as evo reads it
 }
 TF_TOPICS = ("/tf", "/tf_static")
+#: The message types that carry a pose covariance (read by :func:`covariance_messages`).
+COVARIANCE_TYPES = ("geometry_msgs/msg/PoseWithCovarianceStamped", "nav_msgs/msg/Odometry")
 
 
 def _reader(path: Path):
@@ -80,6 +82,51 @@ def _open(path: str | os.PathLike):
             spath, None, f"not a readable ROS bag ({exc}); expected a ROS 1 .bag, a ROS 2 bag folder or .db3/.mcap"
         ) from None
     return reader
+
+
+def message_types(path: str | os.PathLike) -> dict[str, str]:
+    """Each topic of a bag with its message type (``geometry_msgs/msg/PoseStamped``, ...)."""
+    reader = _open(path)
+    try:
+        return {c.topic: c.msgtype for c in reader.connections}
+    finally:
+        reader.close()
+
+
+def covariance_messages(path: str | os.PathLike, topic: str | None = None) -> tuple[str, np.ndarray, np.ndarray]:
+    """The messages of a bag's ``topic`` of :data:`COVARIANCE_TYPES` (None: its only such topic), as
+    read: where they are (the bag and the topic, for messages), their header stamps (N,) and rows
+    (N, 43): position, quaternion ``xyzw`` and the 36 numbers of ``pose.covariance``. ParseError names
+    the bag's topics with covariances when the choice is missing or wrong, and refuses header stamps
+    never set. :func:`lorisnb.io.readers.covariance.read_covariance_bag` checks and sorts them."""
+    spath = str(path)
+    reader = _open(path)
+    try:
+        have = {c.topic: c.msgtype for c in reader.connections if c.msgtype in COVARIANCE_TYPES}
+        listing = ", ".join(f"{t} ({m.split('/')[-1]})" for t, m in sorted(have.items())) or "none"
+        if topic is None:
+            if len(have) != 1:
+                raise ParseError(spath, None, f"choose a topic with covariances (--topic); such topics in this bag: "
+                                              f"{listing}")  # fmt: skip
+            topic = next(iter(have))
+        if topic not in have:
+            kinds = sorted({c.msgtype for c in reader.connections if c.topic == topic})
+            held = f"holds {', '.join(kinds)} messages" if kinds else "is not in this bag"
+            raise ParseError(spath, None, f"topic {topic!r} {held}; expected PoseWithCovarianceStamped or Odometry "
+                                          f"(a pose with its covariance); such topics in this bag: {listing}")  # fmt: skip
+        conns = [c for c in reader.connections if c.topic == topic]
+        stamps, rows = [], []
+        for conn, _, raw in reader.messages(connections=conns):  # rosbags deserializes one message at a time
+            msg = reader.deserialize(raw, conn.msgtype)
+            rows.append([*_pose(msg.pose.pose), *np.asarray(msg.pose.covariance, float)])
+            stamps.append(_stamp(msg))
+    finally:
+        reader.close()
+    if not stamps:
+        raise ParseError(spath, None, f"topic {topic!r} holds no message")
+    t = np.array(stamps, float)
+    _unset_stamps(spath, topic, t)
+    return f"{spath} {topic}", t, np.array(rows, float).reshape(-1, 43)
 
 
 def tf_chain(text: str) -> str | None:

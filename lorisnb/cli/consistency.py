@@ -1,0 +1,62 @@
+"""The ``consistency`` command: OpenVINS ``ov_eval``'s metrics of one estimate that carries pose
+covariances (:mod:`lorisnb.core.metrics.consistency`): NEES, per-axis errors with their 3-sigma
+bounds, yaw-only and 2D ATE. Exit status 0 when the pair was scored, 1 when an input could not be
+read or paired, 2 for a usage or output error."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+
+import pandas as pd
+
+from lorisnb.cli.outputs import check_outputs
+from lorisnb.errors import EvaluationError, LorisWarning, ParseError
+
+
+def cmd_consistency(args: argparse.Namespace) -> int:
+    from lorisnb.core.metrics.consistency import ov_eval_errors
+    from lorisnb.io.readers.covariance import read_covariances
+    from lorisnb.io.readers.plain import read_trajectory
+    from lorisnb.io.writers import write_csv
+
+    check_outputs(args, [args.est, args.gt], ["csv", "summary_csv", "plot"])
+    if args.gt_topic is not None and args.gt_format != "bag":
+        from lorisnb.errors import ValidationError
+
+        raise ValidationError(f"--gt-topic applies to a ground truth in a bag (--gt-format bag), not {args.gt_format}")
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", LorisWarning)
+            est, cov = read_covariances(args.est, args.topic, required=False)
+            gt = read_trajectory(args.gt, args.gt_format, topic=args.gt_topic)
+            result = ov_eval_errors(est, gt, cov, align=args.align, max_diff=args.max_diff)
+    except (ParseError, EvaluationError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    finally:
+        for n in dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, LorisWarning)):
+            print(f"warning: {n}", file=sys.stderr)
+    for note in result.notes:
+        print(f"note: {note}", file=sys.stderr)
+    if cov is None:
+        print(f"note: {args.est} carries no covariances: errors without 3-sigma bounds, no NEES", file=sys.stderr)
+    print(f"ov_eval's metrics ({args.align} alignment, {len(result.poses)} of {len(est)} estimate poses matched "
+          f"within {args.max_diff:g} s):")  # fmt: skip
+    with pd.option_context("display.width", 200):
+        print(result.summary.to_string(index=False, float_format=lambda v: f"{v:.{args.digits}g}"))
+    if cov is not None:
+        s = result.summary.set_index("series")
+        print(f"\nNEES mean: orientation {s.loc['nees_ori', 'mean']:.{args.digits}g}, position "
+              f"{s.loc['nees_pos', 'mean']:.{args.digits}g} (3 for an estimator whose covariance matches its errors; "
+              "above: overconfident, below: too cautious)")  # fmt: skip
+    if args.csv:
+        write_csv(result.poses, args.csv, args.force)
+    if args.summary_csv:
+        write_csv(result.summary, args.summary_csv, args.force)
+    if args.plot:
+        from lorisnb.tools.figures.consistency import consistency_figure
+
+        consistency_figure(result, title=f"{args.est}: per-axis errors ({args.align})").savefig(args.plot, dpi=120)
+    return 0
