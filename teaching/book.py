@@ -211,7 +211,9 @@ def main(out: Path) -> int:
         labs = sorted(p for p in (HERE / "source").iterdir() if p.is_dir())
         for lab in labs:
             nbformat.write(book_notebook(lab / f"{lab.name}.ipynb"), src / f"{lab.name}.ipynb")
-        (src / "_config.yml").write_text(CONFIG.replace("{year}", str(date.today().year)))  # the footer's year: this one
+        (src / "_config.yml").write_text(
+            CONFIG.replace("{year}", str(date.today().year))
+        )  # the footer's year: this one
         (src / "_toc.yml").write_text(TOC.format(labs="\n".join(f"  - file: {lab.name}" for lab in labs)))
         (src / "intro.md").write_text(INTRO)
         kernel_tmp = Path(tmp) / "tmp"  # what the notebooks write to a temporary folder goes with this one

@@ -31,6 +31,9 @@ FILES = [
     "openloris-scene/icra20_results/per-seq/dso/cafe-1-1-all.txt",
     "openloris-scene/icra20_results/per-seq/infinitam_aligned_depth/cafe-1-1_infinitam-cuda.txt",
     "openloris-scene/icra20_results/per-seq/infinitam_aligned_depth/cafe-1-2_infinitam-cuda.txt",
+    # exercise E1: an orientation that drifts, so that a scan ignoring phi finds another eps
+    "openloris-scene/icra20_results/per-seq/orbslam2_t265/cafe_1_1_orbslam2-original.txt",
+    "openloris-scene/icra20_results/per-seq/orbslam2_t265/cafe_1_2_orbslam2-original.txt",
     "openloris-scene/icra20_results/lifelong/vins_mono_color_imu_with_loop/cafe-1.txt",
     "openloris-scene/icra20_results/lifelong/ds-slam/cafe-1.txt",
     "openloris-scene/icra20_results/lifelong/orbslam2_t265/cafe_1_orbslam2-original.txt",

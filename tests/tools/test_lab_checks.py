@@ -247,20 +247,42 @@ def test_an_answer_cell_cannot_replace_or_empty_the_checks(capsys):
     del teach.learner_note
 
 
+def _e1():
+    """Exercise E1's data: ORB-SLAM2 on the T265 per sequence, cafe (the sample data)."""
+    data = sample_data()
+    ev = ln.evaluate(sorted((data.icra20 / "per-seq" / "orbslam2_t265").glob("cafe*.txt")), data_root=data)
+    return ev.errors, ev.durations()
+
+
 def test_eps_at_cr_with_phi_in_radians_is_told_degrees_not_a_formula_nan():
     """Exercise E1 with np.radians(phi): eps_at_cr finds no eps (NaN), and the check said only
     'your answer is NaN'."""
     from lorisnb.core.lifelong.sweep import eps_at_cr
 
-    data = sample_data()
-    ev = ln.evaluate(sorted((data.icra20 / "per-seq" / "orbslam2_rgbd").glob("cafe*.txt")), data_root=data)
-    answer = eps_at_cr(ev.errors, 0.4, ev.durations(), np.radians(30.0), 1.0)["eps"].iloc[0]
+    errors, durations = _e1()
+    answer = eps_at_cr(errors, 0.3, durations, np.radians(30.0), 1.0)["eps"].iloc[0]
     assert np.isnan(answer)
     with pytest.raises(AnswerError) as exc:
-        teach.check_eps_at_cr(answer, ev.errors, ev.durations(), 0.4, 30.0, 1.0)
+        teach.check_eps_at_cr(answer, errors, durations, 0.3, 30.0, 1.0)
     msg = str(exc.value)
-    assert "your answer is NaN" in msg and "lorisnb computes 0.6265 with phi = 30 degrees" in msg
+    want = eps_at_cr(errors, 0.3, durations, 30.0, 1.0)["eps"].iloc[0]
+    assert "your answer is NaN" in msg and f"lorisnb computes {want:.4g} with phi = 30 degrees" in msg
     assert "\nHint (degrees radians):" in msg and "Hint (nan)" not in msg
+
+
+def test_e1_scan_without_phi_fails_on_the_sample_data_with_its_hint():
+    """Issue 46: each typical mistake of E1 must fail on the data the lab runs on. ORB-SLAM2 on the
+    T265 drifts in orientation, so a scan that leaves phi out finds a smaller eps (about 0.53 m
+    against 0.63 m); the right scan passes."""
+    from lorisnb.core.lifelong.sweep import eps_at_cr
+
+    errors, durations = _e1()
+    right = eps_at_cr(errors, 0.3, durations, 30.0, 1.0)["eps"].iloc[0]
+    no_phi = eps_at_cr(errors, 0.3, durations, np.inf, 1.0)["eps"].iloc[0]
+    assert right - no_phi > 0.05
+    assert teach.check_eps_at_cr(right, errors, durations, 0.3, 30.0, 1.0)
+    with pytest.raises(AnswerError, match=r"Hint \(phi ignored\)"):
+        teach.check_eps_at_cr(no_phi, errors, durations, 0.3, 30.0, 1.0)
 
 
 def test_a_rounded_answer_is_not_told_two_equal_numbers():
