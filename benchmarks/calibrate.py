@@ -32,6 +32,7 @@ from lorisnb.tools.decisions.calibration import (
     pair_spread,
     real_pairs,
     single_run_bands,
+    stopped_early,
 )
 
 
@@ -48,6 +49,7 @@ def main(argv: list[str] | None = None) -> int:
     warnings.simplefilter("ignore", LorisWarning)
     start = time.perf_counter()
     real = real_pairs()
+    early = stopped_early()
     pools = {}
     for name, noise in MODELS.items():
         pools[name] = make_pool(noise, args.pool, progress=lambda x, n=name: tqdm(x, desc=f"reruns ({n})"))
@@ -59,6 +61,9 @@ def main(argv: list[str] | None = None) -> int:
     for label, s in rows:
         print(f"  {label:44s} {s['cr_median']:7.4f} {s['cr_p90']:7.4f} {s['cr_over_0_3']:7.2f} "
               f"{s['ate_median']:8.3f} {s['ate_p90']:8.3f}")  # fmt: skip
+    print("\nReal outputs that stop before 75 % of their recording (a trial stopped halfway looks like these):")
+    for r in early.itertuples():
+        print(f"  {r.mode:9s} {r.stopped} of {r.runs} runs ({100 * r.share:.0f} %)")
     bands = single_run_bands(pools["real"], nights=min(args.nights, 100))
     print("\nThe largest change of a noise-only single-run night (model real; CR units, or log ratio for errors):")
     print("  what sizes lorisnb.core.stats.tolerances.SINGLE_RUN_BAND: the 95th percentiles times one factor "

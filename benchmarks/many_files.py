@@ -5,7 +5,10 @@ in a loop), for several N: the time per file must stay flat as N grows (linear i
 the evaluation within 2x of the parsing (issue 47: "a folder of 5,000 small files within 2x of only
 parsing them").
 
-    python benchmarks/many_files.py [N ...]      (default 500 2000 5000)
+    python benchmarks/many_files.py [--poses P] [N ...]      (default 500 2000 5000)
+
+``--poses P`` keeps only the file's first P poses (its header kept): tiny files, where the
+per-file cost is all there is.
 """
 
 from __future__ import annotations
@@ -22,23 +25,32 @@ from lorisnb.io import find_data, read_openloris
 SOURCE = ("per-seq", "orbslam2_rgbd", "cafe_1_1_orbslam2-original.txt")
 
 
-def make_folder(root: Path, n: int) -> list[Path]:
+def make_folder(root: Path, n: int, poses: int | None = None) -> list[Path]:
     src = find_data().icra20.joinpath(*SOURCE)
+    text = None
+    if poses is not None:  # the header (key: value lines and blanks) and the first poses
+        lines = src.read_text().splitlines(keepends=True)
+        head = next(i for i, line in enumerate(lines) if line.strip() and ":" not in line)
+        text = "".join(lines[: head + poses])
     files = []
     for i in range(n):
         d = root / f"config_{i:05d}"
         d.mkdir(parents=True)
-        files.append(Path(shutil.copy(src, d / src.name)))
+        if text is None:
+            files.append(Path(shutil.copy(src, d / src.name)))
+        else:
+            (d / src.name).write_text(text)
+            files.append(d / src.name)
     return files
 
 
-def main(sizes: list[int]) -> int:
+def main(sizes: list[int], poses: int | None = None) -> int:
     lorisnb = [sys.executable, "-m", "lorisnb.cli"]
     print(f"{'files':>7s} {'evaluate s':>11s} {'ms/file':>8s} {'parse s':>8s} {'ms/file':>8s} {'ratio':>6s}")
     per_file = []
     for n in sizes:
         with tempfile.TemporaryDirectory(prefix="lorisnb-many-") as tmp:
-            files = make_folder(Path(tmp) / "results", n)
+            files = make_folder(Path(tmp) / "results", n, poses)
             t = time.perf_counter()
             done = subprocess.run([*lorisnb, "evaluate", "--no-progress", "--csv", str(Path(tmp) / "out.csv"),
                                    str(Path(tmp) / "results")], capture_output=True, text=True)  # fmt: skip
@@ -57,4 +69,8 @@ def main(sizes: list[int]) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main([int(a) for a in sys.argv[1:]] or [500, 2000, 5000]))
+    argv = sys.argv[1:]
+    poses = None
+    if argv[:1] == ["--poses"]:
+        poses, argv = int(argv[1]), argv[2:]
+    raise SystemExit(main([int(a) for a in argv] or [500, 2000, 5000], poses))

@@ -283,6 +283,19 @@ def test_the_calibration_harness_measures_what_it_says(data):
     assert (table.loc[table["check"] == "missing trial", "rate"] == 1.0).all()
 
 
+def test_the_guides_share_of_real_outputs_that_stop_early_is_the_measured_one(data):
+    """docs/guide/regression-gating.md says why a trial stopped halfway is not flagged: real outputs
+    stop early as often as it quotes (computed here from the real data, not typed)."""
+    from pathlib import Path
+
+    from lorisnb.tools.decisions.calibration import stopped_early
+
+    text = " ".join((Path(__file__).resolve().parents[2] / "docs/guide/regression-gating.md").read_text().split())
+    for r in stopped_early(data.root).itertuples():
+        assert f"{r.stopped} of {r.runs} `{r.mode}` runs ({100 * r.share:.0f} %)" in text, r
+    assert stopped_early(data.root).set_index("mode").loc["per-seq", "share"] > 0.3
+
+
 def test_the_code_under_test_is_recorded_shown_and_followed(trials, tmp_path, capsys):
     """``report --label`` records the code under test in run.json (checked like every key), the front
     page shows it, history names it beside each run; a label with a newline is refused."""

@@ -319,3 +319,31 @@ def generator_pairs(pool: Pool) -> dict[str, float]:
     merged = pd.concat([x[keys + ["cr", "ate_rmse"]].merge(y[keys + ["cr", "ate_rmse"]], on=keys, suffixes=("_a", "_b"))
                         for x, y in zip(a, b, strict=False)], ignore_index=True)  # fmt: skip
     return pair_spread(merged["cr_a"], merged["cr_b"], merged["ate_rmse_a"], merged["ate_rmse_b"])
+
+
+def stopped_early(data_root: str | None = None, before: float = 0.75) -> pd.DataFrame:
+    """How often a real SLAM output stops before its recording ends: per icra20 mode (``per-seq``,
+    ``lifelong``), the runs (one algorithm on one sequence with ground truth and any output) and the
+    share whose last pose comes before ``before`` of the ground truth's span. A trial that stopped
+    halfway looks exactly like these (a system that lost track for good), so the gate cannot tell
+    a crash from a loss of tracking by where the output ends; CR judges both."""
+    data = find_data(data_root)
+    have = set(data.scenes_with_groundtruth())
+    gts = {s: load_groundtruth(s, data) for s in sorted(have)}
+    rows = []
+    for mode in ("per-seq", "lifelong"):
+        ends = []
+        for path in sorted((data.icra20 / mode).rglob("*.txt")):
+            rf = read_openloris(path, warn=False)
+            if rf.scene not in have:
+                continue
+            for q, traj in rf.sequences.items():
+                g = gts[rf.scene].sequences.get(q)
+                if g is None or len(traj) == 0:
+                    continue
+                g0, g1 = float(g.stamps[0]), float(g.stamps[-1])
+                ends.append((float(traj.stamps[-1]) - g0) / (g1 - g0))
+        e = np.array(ends)
+        rows.append(dict(mode=mode, runs=len(e), before=before, stopped=int(np.sum(e < before)),
+                         share=float(np.mean(e < before)) if len(e) else np.nan))  # fmt: skip
+    return pd.DataFrame(rows)
