@@ -174,7 +174,7 @@ def _associate_in_order(g: np.ndarray, e: np.ndarray, max_diff: float) -> tuple[
     out_g, out_e = [], []
     start = 0  # the first ground-truth stamp the next match may take
     for i, t in enumerate(e):  # an estimate denser than its ground truth: rare, and what the rule is
-        j = max(start, int(np.searchsorted(g, t - max_diff, side="right")) if start < g.size else start)
+        j = max(start, int(np.searchsorted(g, t - max_diff, side="right")))  # ov_eval skips what is too early
         best, best_j = max_diff, -1
         while j < g.size and abs(g[j] - t) < best:
             best, best_j = abs(g[j] - t), j

@@ -65,7 +65,8 @@ def read_covariance_text(path: str | os.PathLike) -> tuple[Trajectory, PoseCovar
             f"{text[:80]!r} has {n} fields; expected 20 numbers '{LAYOUT}' (ov_eval's layout: the pose, then the "
             "upper triangles of the orientation and position covariances)"
             + (
-                "; a file without covariances is read as TUM (--format tum), but has no NEES or 3-sigma bounds"
+                "; these are TUM poses without covariances: read them with required=False (lorisnb consistency "
+                "does), for errors without NEES or 3-sigma bounds"
                 if n == 8
                 else ""
             )
@@ -89,10 +90,12 @@ def read_covariance_bag(path: str | os.PathLike, topic: str | None = None) -> tu
     from lorisnb.io.readers.bags import covariance_messages
 
     where, t, a = covariance_messages(path, topic)
-    six = PoseCovariances.from_ros(a[:, 7:43])  # position block top left, orientation bottom right
-    iu = ([0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2])
-    upper = np.concatenate([six.orientation[:, iu[0], iu[1]], six.position[:, iu[0], iu[1]]], axis=1)
-    return _checked(where, t, _pose_cov(a[:, :7], upper), np.arange(1, len(t) + 1), "message")
+    # the upper triangles OpenVINS' Recorder writes: orientation (bottom right), then position (top left)
+    upper = a[:, 7:][:, [21, 22, 23, 28, 29, 35, 0, 1, 2, 7, 8, 14]]
+    try:  # a message's number stands for the line of a text file, as in read_bag
+        return _checked(where, t, _pose_cov(a[:, :7], upper), np.arange(1, len(t) + 1), "message")
+    except ParseError as exc:
+        raise ParseError(where if exc.line is None else f"{where}, message {exc.line}", None, exc.reason) from None
 
 
 def _text_fields(path: str | os.PathLike) -> int:
