@@ -1,4 +1,5 @@
-"""The ``lorisnb`` command line: ``evaluate``, ``sweep``, ``compare``, ``crosscheck``, ``report``, ``verify``, and
+"""The ``lorisnb`` command line: ``evaluate``, ``sweep``, ``compare``, ``diff``, ``history``, ``crosscheck``,
+``consistency``, ``report``, ``verify``, ``render``, and
 the challenge server's ``serve``, ``challenge add-team|export`` and ``submit``.
 
 The command line is where lorisnb reports: tables on stdout, warnings and failures on stderr,

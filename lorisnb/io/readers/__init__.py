@@ -1,7 +1,8 @@
 """Readers of every trajectory format: the format registry (:mod:`.registry`), plain TUM / KITTI /
 EuRoC files (:mod:`.plain`), OpenLORIS result files (:mod:`.openloris`), ORDSLAM (:mod:`.ordslam`),
-ROS bags (:mod:`.bags`), times files (:mod:`.times`), evo result zips (:mod:`.evo_results`), and
-which reading options apply to which format (:mod:`.options`).
+ROS bags (:mod:`.bags`), trajectories with pose covariances (:mod:`.covariance`), times files
+(:mod:`.times`), evo result zips (:mod:`.evo_results`), and which reading options apply to which
+format (:mod:`.options`).
 
 May import: :mod:`lorisnb.io.parsing`, :mod:`lorisnb.io.datasets`, :mod:`lorisnb.core` and
 :mod:`lorisnb.errors`.
