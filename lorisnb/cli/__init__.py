@@ -156,6 +156,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gt-format", choices=FORMAT_NAMES, default="tum", help="format of GT (default tum)")
     p.add_argument("--topic", default=None, help="bags: the estimate's topic")
     p.add_argument("--gt-topic", default=None, help="bags (--gt-format bag): the ground truth's topic")
+    p.add_argument(
+        "--seq",
+        type=arg_type(lambda t: int(validate.positive("--seq", t, "", integer=True))),
+        default=None,
+        help="an OpenLORIS ground truth (--gt-format openloris) of several sequences: the estimate's",
+    )
     p.add_argument("--align", choices=OV_ALIGNMENTS, default="posyaw",
                    help="alignment, fitted both ways on all matched positions (ov_eval's; default posyaw: yaw-only)")  # fmt: skip
     p.add_argument(

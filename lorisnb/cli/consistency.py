@@ -22,15 +22,19 @@ def cmd_consistency(args: argparse.Namespace) -> int:
     from lorisnb.io.writers import write_csv
 
     check_outputs(args, [args.est, args.gt], ["csv", "summary_csv", "plot"])
-    if args.gt_topic is not None and args.gt_format != "bag":
-        from lorisnb.errors import ValidationError
+    from lorisnb.errors import ValidationError
 
+    if args.gt_topic is not None and args.gt_format != "bag":
         raise ValidationError(f"--gt-topic applies to a ground truth in a bag (--gt-format bag), not {args.gt_format}")
+    if args.seq is not None and args.gt_format != "openloris":
+        raise ValidationError(
+            f"--seq applies to an OpenLORIS ground truth (--gt-format openloris), not {args.gt_format}"
+        )
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", LorisWarning)
             est, cov = read_covariances(args.est, args.topic, required=False)
-            gt = read_trajectory(args.gt, args.gt_format, topic=args.gt_topic)
+            gt = read_trajectory(args.gt, args.gt_format, seq=args.seq, topic=args.gt_topic)
             result = ov_eval_errors(est, gt, cov, align=args.align, max_diff=args.max_diff)
     except (ParseError, EvaluationError) as exc:
         print(f"error: {exc}", file=sys.stderr)

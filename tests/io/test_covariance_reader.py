@@ -150,3 +150,23 @@ def test_command_line(real, data, tmp_path, capsys):
     assert main(["consistency", str(data.tum / EST), str(data.tum / GT), "--align", "se3"]) == 0
     err = capsys.readouterr().err
     assert "carries no covariances" in err
+    assert main(["consistency", str(path), str(data.tum / GT), "--seq", "2"]) == 2  # a TUM ground truth has no seq
+    assert "--seq applies to an OpenLORIS ground truth" in capsys.readouterr().err
+
+
+def test_command_line_on_an_openloris_ground_truth_takes_its_sequence(data, tmp_path, capsys):
+    """A ground truth of several sequences (OpenLORIS cafe): --seq names the estimate's; without it
+    the reader asks for it (exit 1, nothing scored)."""
+    from lorisnb.io import load_groundtruth
+
+    g = load_groundtruth("cafe", data).sequences[2]
+    est = tmp_path / "cafe2.txt"
+    rng = np.random.default_rng(0)
+    np.savetxt(est, np.column_stack([g.stamps, g.positions + rng.normal(0, 0.02, g.positions.shape), g.quaternions]),
+               fmt="%.9f")  # fmt: skip
+    gt = data.root / "openloris-scene" / "groundtruth" / "gt_cafe_1.txt"
+    assert main(["consistency", str(est), str(gt), "--gt-format", "openloris"]) == 1
+    assert "seq" in capsys.readouterr().err
+    assert main(["consistency", str(est), str(gt), "--gt-format", "openloris", "--seq", "2", "--align", "none"]) == 0
+    out = capsys.readouterr().out
+    assert f"{len(g)} of {len(g)} estimate poses matched" in out
