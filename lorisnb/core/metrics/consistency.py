@@ -417,4 +417,4 @@ def ov_eval_errors(
         if covariances is not None and name in BOUNDED:
             row["within_3sigma"] = float(np.mean(np.abs(poses[name]) <= poses[f"{name}_3sigma"]))
         rows.append(row)
-    return Consistency(poses, pd.DataFrame(rows), to_gt, to_est, [n for n in notes if n])
+    return Consistency(poses, pd.DataFrame(rows), to_gt, to_est, list(dict.fromkeys(n for n in notes if n)))
