@@ -60,7 +60,10 @@ def cmd_consistency(args: argparse.Namespace) -> int:
     if args.summary_csv:
         write_csv(result.summary, args.summary_csv, args.force)
     if args.plot:
+        from lorisnb.io.writers import write_atomically
         from lorisnb.tools.figures.consistency import consistency_figure
 
-        consistency_figure(result, title=f"{args.est}: per-axis errors ({args.align})").savefig(args.plot, dpi=120)
+        fig = consistency_figure(result, title=f"{args.est}: per-axis errors ({args.align})")
+        suffix = str(args.plot).lower().rsplit(".", 1)[-1]
+        write_atomically(args.plot, lambda p: fig.savefig(p, dpi=120, format=suffix), args.force)
     return 0
