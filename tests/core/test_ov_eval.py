@@ -85,6 +85,7 @@ def same_as_ov_eval(res, stats: dict, rows: dict) -> None:
     assert compared == len(stats) - sum(1 for v in stats.values() if v[-1] == 0) >= 13
 
 
+@pytest.mark.slow  # builds ov_eval from source (about a minute of Eigen); make test-all runs it
 @pytest.mark.parametrize("align", ["posyaw", "se3", "sim3", "none"])
 def test_every_series_equals_ov_eval(ov, pair, align):
     est, gt = pair
@@ -95,6 +96,7 @@ def test_every_series_equals_ov_eval(ov, pair, align):
     assert res.summary.set_index("series").loc["nees_pos", "count"] == 786
 
 
+@pytest.mark.slow
 def test_an_estimate_denser_than_its_ground_truth_pairs_as_ov_eval(ov, data, tmp_path):
     """Three estimate poses near each 100 Hz ground-truth pose: ov_eval's rule gives each ground-truth
     pose to one of them only (the nearest after the previous match), not to the nearest of all."""
