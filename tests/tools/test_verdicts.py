@@ -294,6 +294,8 @@ def test_the_guides_share_of_real_outputs_that_stop_early_is_the_measured_one(da
     for r in stopped_early(data.root).itertuples():
         assert f"{r.stopped} of {r.runs} `{r.mode}` runs ({100 * r.share:.0f} %)" in text, r
     assert stopped_early(data.root).set_index("mode").loc["per-seq", "share"] > 0.3
+    with pytest.raises(ln.ValidationError, match="share of the recording"):
+        stopped_early(data.root, before=75)
 
 
 def test_the_code_under_test_is_recorded_shown_and_followed(trials, tmp_path, capsys):

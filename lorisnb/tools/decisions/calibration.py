@@ -34,9 +34,11 @@ from lorisnb.core.lifelong.aggregate import durations_table
 from lorisnb.core.lifelong.scoring import score
 from lorisnb.core.pipeline.model import ResultFile
 from lorisnb.core.pipeline.sessions import compute_errors
+from lorisnb.core.spec.validate import finite
 from lorisnb.core.stats.regression import parse_tolerances
 from lorisnb.core.stats.reruns import RerunNoise, rerun
 from lorisnb.core.trajectory.poses import Trajectory
+from lorisnb.errors import ValidationError
 from lorisnb.io.datasets.paths import find_data, load_groundtruth
 from lorisnb.io.readers.openloris import read_openloris
 from lorisnb.tools.decisions.diff import diff_tables
@@ -327,6 +329,8 @@ def stopped_early(data_root: str | None = None, before: float = 0.75) -> pd.Data
     share whose last pose comes before ``before`` of the ground truth's span. A trial that stopped
     halfway looks exactly like these (a system that lost track for good), so the gate cannot tell
     a crash from a loss of tracking by where the output ends; CR judges both."""
+    if not 0 < finite("before", before, "a share of the recording") <= 1:
+        raise ValidationError(f"before={before!r}: expected a share of the recording, more than 0 and at most 1")
     data = find_data(data_root)
     have = set(data.scenes_with_groundtruth())
     gts = {s: load_groundtruth(s, data) for s in sorted(have)}
