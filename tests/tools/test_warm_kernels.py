@@ -122,7 +122,7 @@ def test_interrupt_and_shutdown_of_a_forked_kernel(tmp_path):
         warm_kernels.use(zygote)
         try:
             async with _kernel(tmp_path, now=True) as (km, kc):  # now: SIGKILL to its process group
-                assert isinstance(km.provisioner.process, warm_kernels.Forked)
+                assert isinstance(km.provisioner.process, warm_kernels.Forked), (zygote, warm_kernels.refusal())
                 pid = km.provisioner.process.pid
                 kc.execute("import time; time.sleep(120)")
                 await asyncio.sleep(1.0)

@@ -74,6 +74,13 @@ class Zygote:
 
 
 _current: Zygote | None = None
+_refused: str | None = None
+
+
+def refusal() -> str | None:
+    """Why this process's last kernel was launched as usual rather than forked from the zygote in
+    use (None: it was forked, or no zygote is in use); for messages and tests."""
+    return _refused
 
 
 def _own(env: Mapping[str, str]) -> tuple[tuple[str, str], ...]:
@@ -194,17 +201,23 @@ class Forked:
 
 def _fork(address: str, argv: list[str], cwd: str, env: Mapping[str, str]) -> Forked | None:
     """Ask the zygote at ``address`` for a kernel; None when no zygote answers there or it does not fork."""
+    global _refused
     conn = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     try:
         conn.connect(address)
-    except OSError:
+    except OSError as exc:
         conn.close()
+        _refused = f"no zygote answers at {address}: {exc}"
         return None
     conn.settimeout(300)  # the zygote answers once it has imported PRELOAD (seconds)
     conn.sendall(json.dumps({"argv": argv, "cwd": cwd, "env": dict(env)}).encode() + b"\n")
     msg, fds, _, _ = socket.recv_fds(conn, 4096, 1)
     if not fds:  # the zygote does not fork (its preload failed or warned): launch as usual
         conn.close()
+        try:
+            _refused = str(json.loads(msg.partition(b"\n")[0])["cold"])
+        except (ValueError, KeyError, TypeError):
+            _refused = f"the zygote answered {msg[:200]!r}"
         return None
     first, _, rest = msg.partition(b"\n")  # rest: the exit status, if the kernel ended at once
     return Forked(conn, int(json.loads(first)["pid"]), fds[0], rest)
@@ -217,8 +230,17 @@ def provisioner_class() -> Any:
 
     class WarmProvisioner(LocalProvisioner):
         async def launch_kernel(self, cmd: list[str], **kwargs: Any) -> Any:
+            global _refused
             zyg, env = current(), dict(kwargs.get("env") or os.environ)
-            if zyg is None or not zyg.forks(cmd, env):
+            _refused = None
+            if zyg is None:
+                return await super().launch_kernel(cmd, **kwargs)
+            if not zyg.forks(cmd, env):
+                own, theirs = dict(_own(env)), dict(zyg.env)
+                _refused = "the kernel's command or environment is not the zygote's" + (
+                    f" (variables that differ: {', '.join(sorted(k for k in own.keys() | theirs.keys() if own.get(k) != theirs.get(k)))})"
+                    if own != theirs else f" (command {cmd[:3]})"
+                )  # fmt: skip
                 return await super().launch_kernel(cmd, **kwargs)
             if not kwargs.get("independent"):
                 env["JPY_PARENT_PID"] = str(os.getpid())  # as jupyter_client's launch_kernel sets it
