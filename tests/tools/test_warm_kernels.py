@@ -118,6 +118,10 @@ def test_a_forked_kernel_is_the_kernel_jupyter_launches(tmp_path):
 
 
 def test_interrupt_and_shutdown_of_a_forked_kernel(tmp_path):
+    from lorisnb.tools.report.notebooks import kernel_env
+
+    kernel_env()  # this process's environment as a report's (the zygote is started in it): as the test above
+
     async def run(zygote):
         warm_kernels.use(zygote)
         try:
