@@ -4,7 +4,7 @@ student folder that exists):
 - ``submitted/demo-correct/<lab>/``: the release with every answer cell filled with the
   instructor's solution (must score full marks);
 - ``submitted/demo-mistakes/<lab>/``: the release with the typical wrong answers of
-  :data:`MISTAKES` (the forgotten delta cap, CR-T for CR, radians, per-sequence alignment, ...),
+  :data:`MISTAKES` (the forgotten delta cap, CR-T for CR in B2 and F2, radians, per-sequence alignment, ...),
   so the feedback shows the checks' hints.
 
     python demo_submissions.py            # from teaching/, after `nbgrader generate_assignment`
@@ -39,6 +39,11 @@ MISTAKES = {
         "per_seq = ln.score(simulated_errors(gt, wrong_reloc, seqs=[1, 2], mode='per-seq'), eps, phi, delta, tau)\n"
         "cr_visit2_lifelong = cr_visit2_per_seq = per_seq.set_index('seq').loc[2, 'cr']\n"
         "print(f'CR of visit 2: {cr_visit2_lifelong:.3f}')\n"
+    ),
+    "F_timeline": (  # F2 read off the CR-T column: the right algorithm, its CR-T for its CR
+        "silent_in_visit2 = int(((life['seq'] == 2) & (life['matched'] == 0)).sum())\n"
+        "best_row = life_scenes.sort_values('cr_t', ascending=False).iloc[0]\n"
+        "best_algorithm, best_cr = best_row['algorithm'], best_row['cr_t']\n"
     ),
 }
 

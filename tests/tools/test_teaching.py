@@ -302,3 +302,29 @@ def test_lab_checks_compute_their_reference_and_name_the_mistake(sample):
     toy = pd.DataFrame({"algorithm": ["steady", "late"], "cr": [0.6, 0.4], "cr_t": [0.7, 0.95]})
     with pytest.raises(AnswerError, match=r"Hint \(cr vs crt\)"):
         teach.check_best_cr("late", toy)
+
+
+def test_f2_cr_read_off_as_cr_t_fails_with_its_hint_on_the_sample_data(sample):
+    """F2 asks the best algorithm's CR over cafe too: there the best by CR is also the best by CR-T,
+    so only the number can tell the two apart. On the sample data its CR-T is more than ten times
+    the check's tolerance (0.005) away from its CR; the CR-T, the CR in percent and the row's other
+    number (its C-ATE RMSE) each fail with their hint."""
+    import lorisnb as ln
+
+    lifelong = ln.evaluate(sorted((sample.icra20 / "lifelong").glob("*/cafe*.txt")), data_root=sample)
+    scenes = ln.aggregate_scenes(lifelong.sequences(eps=1.0, phi=30.0, delta=1.0, tau=60.0), lifelong.durations())
+    row = scenes.set_index("algorithm").loc["vins_mono_color_imu_with_loop"]
+    assert scenes.sort_values("cr_t")["algorithm"].iloc[-1] == row.name  # the name alone cannot tell
+    assert row["cr_t"] - row["cr"] > 10 * 0.005, (row["cr"], row["cr_t"])
+    assert teach.check_best_cr(row.name, scenes, cr=row["cr"])
+    assert teach.check_best_cr(row.name, scenes, cr=round(row["cr"], 3))  # the figure's label, 83.7 %
+    assert teach.check_best_cr(row.name, scenes, cr=round(row["cr"], 2))
+    for wrong, hint in (
+        (row["cr_t"], "cr vs crt"),
+        (100 * row["cr"], "fraction"),
+        (row["c_ate_rmse"], "timeline label"),
+    ):
+        with pytest.raises(AnswerError, match=rf"Hint \({hint}\)"):
+            teach.check_best_cr(row.name, scenes, cr=wrong)
+    with pytest.raises(AnswerError, match="no answer yet"):
+        teach.check_best_cr(row.name, scenes, cr=...)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import importlib.util
+import json
 import os
 import re
 import shutil
@@ -24,6 +25,7 @@ from test_teaching_lab import solution_expressions, solution_leaks
 ROOT = Path(__file__).resolve().parents[2]
 SOURCE = ROOT / "teaching" / "source"
 LABS = sorted(p.name for p in SOURCE.iterdir() if p.is_dir())
+LAB1 = "lab1_lifelong_metrics"
 
 
 def _teaching_module(name: str):
@@ -97,6 +99,46 @@ def test_book_notebook_has_exercises_and_dropdown_solutions_without_hidden_tests
     for c in nb.cells:
         if c.cell_type == "markdown" and c.source.startswith("**"):
             assert not re.search(r"^#+ ", c.source, re.M)
+
+
+def _run_part_f(answer: str) -> str:
+    """Part F of lab 1 as the grader runs it, on the sample data: the parameters, the timeline's cell
+    (its figure not drawn), ``answer`` as the answer cell, then the test cell; what the checks print."""
+    import contextlib
+    import io
+    from types import SimpleNamespace
+
+    import lorisnb as ln
+    from lorisnb.tools import teaching as teach
+
+    cells = {
+        _nbgrader(c).get("grade_id"): c for c in nbformat.read(SOURCE / LAB1 / f"{LAB1}.ipynb", as_version=4).cells
+    }
+    params = next(c.source for c in cells.values() if "parameters" in c.metadata.get("tags", []))
+    out = SimpleNamespace(figure=lambda *a, **k: None)
+    scope = {"ln": ln, "teach": teach, "out": out, "plot_timeline": lambda *a, **k: None}
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        exec(params, scope)  # noqa: S102 (the lab's own cells)
+        scope["data"] = teach.lab_data(scope["data_root"])
+        for source in (cells["locked_cell_38"].source, answer, cells["test_F_timeline"].source):
+            exec(source, scope)  # noqa: S102
+    return buf.getvalue()
+
+
+def test_part_f_demo_mistake_cr_t_for_cr_fails_with_its_hint():
+    """F2's CR-T-for-CR confusion fails on the lab's own data with its hint (on cafe the best
+    algorithm by CR is also the best by CR-T: the name alone passed by luck, so F2 asks its CR too);
+    the instructor's solution passes."""
+    from lorisnb.errors import AnswerError
+
+    demo = _teaching_module("demo_submissions")
+    solution = demo.solutions(SOURCE / LAB1 / f"{LAB1}.ipynb")["F_timeline"]
+    printed = _run_part_f(solution)
+    assert "✓ algorithm with the highest scene CR" in printed and "✓ CR of vins_mono_color_imu_with_loop" in printed
+    with pytest.raises(AnswerError, match=r"you answered 0\.89.*\nHint \(cr vs crt\)") as exc:
+        _run_part_f(demo.MISTAKES["F_timeline"])
+    assert "lorisnb computes 0.837" in str(exc.value)
 
 
 def _copy_checkout(dest: Path) -> None:
@@ -183,6 +225,10 @@ def test_make_student_grade_book_and_slides_on_a_fresh_copy(open_tmp_path, teach
         feedback = (teaching / "graded" / "demo-mistakes" / lab / "feedback.html").read_text()
         hints = set(re.findall(r"Hint \(([a-z ]+)\)", re.sub(r"<[^>]+>", "", feedback)))
         assert {"delta cap", "cr vs crt", "degrees radians", "first pose", "alignment", "phi ignored"} <= hints, hints
+        if lab == LAB1:  # F2's CR-T for CR gets its own hint, not only B2's formula
+            scores = json.loads((teaching / "graded" / "demo-mistakes" / lab / "result.json").read_text())["scores"]
+            f = next(s for s in scores if s["question"] == "test_F_timeline")
+            assert f["points"] == 0 and "Hint (cr vs crt)" in f["message"], f
         assert (teaching / "graded" / "demo-correct" / lab / "feedback.html").exists()
     assert offline.remote_references(offline.built_files(teaching / "graded")) == []
     # the book: every page, exercises with dropdown solutions, executed checks, local MathJax only

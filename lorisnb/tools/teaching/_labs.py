@@ -90,15 +90,28 @@ def check_silent_sequences(answer: Any, sequences: pd.DataFrame, seq: int) -> bo
     return check_value(f"algorithms with no pose in sequence {seq}", answer, want, tol=0.1, source="the timeline")
 
 
-def check_best_cr(answer: Any, scenes: pd.DataFrame) -> bool:
-    """The algorithm with the highest scene CR (one scene); an answer that is the best by CR-T
-    gets the CR vs CR-T hint."""
-    best = str(scenes.sort_values("cr", ascending=False)["algorithm"].iloc[0])
+def check_best_cr(answer: Any, scenes: pd.DataFrame, cr: Any = None) -> bool:
+    """The algorithm with the highest scene CR (one scene) and, when ``cr`` is given, that CR: a
+    fraction, as the timeline prints it (in percent) at the top left of the algorithm's row. A name
+    that is the best by CR-T, or a CR that is the algorithm's CR-T, gets the CR vs CR-T hint; a CR in
+    percent, or the row's other number (its C-ATE RMSE, metres), get theirs. The tolerance, 0.005,
+    takes the printed percentage read as a fraction (0.1 % steps) or rounded to two decimals."""
+    ranked = scenes.sort_values("cr", ascending=False)
+    best = str(ranked["algorithm"].iloc[0])
     best_t = str(scenes.sort_values("cr_t", ascending=False)["algorithm"].iloc[0])
     why = "CR counts correct time over all the scene's sequences: look for the longest blue bars."
     if isinstance(answer, str) and answer.strip().lower() == best_t.lower() != best.lower():
         why += f"\nHint (cr vs crt): {MISTAKES['cr_vs_crt']}"
-    return check_choice("algorithm with the highest scene CR", answer, best, why)
+    check_choice("algorithm with the highest scene CR", answer, best, why)
+    if cr is None:
+        return True
+    row, tol = ranked.iloc[0], 0.005
+    want = float(row["cr"])
+    mistakes = {"cr_vs_crt": float(row["cr_t"])}
+    if "c_ate_rmse" in row.index:
+        mistakes["timeline_label"] = float(row["c_ate_rmse"])
+    return check_value(f"CR of {best} over the scene", cr, want, tol=tol, fraction=True,
+                       mistakes=_differs(mistakes, want, tol))  # fmt: skip
 
 
 def check_ate_percent(

@@ -56,4 +56,6 @@ MISTAKES: dict[str, str] = {
     "signature": "the checks call your function with the exercise's argument names, by keyword (`ate_m=...`): keep "
     "them as the exercise writes them; a renamed, missing or extra argument is not found",
     "c_ate": "use the ATE RMSE over all matched poses here, not the C-ATE over correct poses only",
+    "timeline_label": "in the timeline the percentage at the top left of a row is the algorithm's CR over the scene; "
+    "the number at the bottom right is its C-ATE RMSE, in metres, not a rate",
 }
