@@ -217,6 +217,10 @@ def test_challenge_file_refused(tmp_path, data):
         ('leaderboard = "after-close"', 'leaderboard = "never"', "leaderboard"),
         ("workers = 1", "workers = 0", "expected a whole number of 1 or more"),
         ("[limits]", '[spec]\nmode = "sideways"\n[limits]', "[spec]"),
+        # a typo'd option would be dropped: phi inf, orientation never checked, the ranking changed
+        ("[limits]", "[spec]\nphy = 30\n[limits]", "[spec]: unknown key 'phy'"),
+        # a sequence the ground truth does not have: the phase would rank on nothing
+        ("sequences = { cafe = [1] }", "sequences = { cafe = [1, 7] }", "sequence(s) 7 of cafe; expected some of 1, 2"),
     ]:
         assert old in text
         path.write_text(text.replace(old, new, 1))
@@ -318,3 +322,20 @@ def test_scoring_over_its_time_limit_is_stopped():
     assert not p.is_alive() and time.monotonic() - t < 20
     assert stopped(p.exitcode, 1) == "scoring exceeded the challenge's limit of 1 CPU seconds"
     assert "exit status 3" in stopped(3, 1)
+
+
+def test_framework_refusals_in_the_server_s_words(hostile):
+    """A route that does not exist, a method a route does not take and a form that does not parse
+    are answered as the server's own refusals: ``{"error": ...}`` naming the request on the API,
+    the error page elsewhere; and the server serves on."""
+    client = hostile["client"]
+    r = client.get("/api/nosuch")
+    assert r.status_code == 404 and "GET /api/nosuch: no such page" in r.json()["error"]
+    assert "/api/leaderboard" in r.json()["error"]
+    r = client.get("/api/submissions")
+    assert r.status_code == 405 and r.json()["error"] == "GET /api/submissions: not allowed; expected POST"
+    r = client.get("/nosuch")
+    assert r.status_code == 404 and 'id="error"' in r.text and "no such page" in r.text
+    r = client.post("/team", content=b"xx", headers={"Content-Type": "multipart/form-data"})
+    assert r.status_code == 400 and 'id="error"' in r.text and "POST /team" in r.text
+    assert client.get("/api/health").status_code == 200

@@ -278,6 +278,22 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
     async def _upload_refused(request: Request, exc: UploadRefused) -> Response:
         return await _refused(request, Refused(exc.status, str(exc)))
 
+    @app.exception_handler(HTTPException)
+    async def _http_error(request: Request, exc: HTTPException) -> Response:
+        """The framework's own refusals (no such route, a method a route does not take, a form
+        that does not parse) in the server's words: ``{"error": ...}`` on the API, a page otherwise."""
+        where = f"{request.method} {request.url.path}"
+        if exc.status_code == 404:
+            message = (f"{where}: no such page; the pages are /, /submit, /team, /admin and /submissions/ID, "
+                       "the API /api/leaderboard, /api/submissions, /api/team, /api/admin and /api/health")  # fmt: skip
+        elif exc.status_code == 405:
+            message = f"{where}: not allowed; expected {(exc.headers or {}).get('Allow', 'another method')}"
+        else:
+            message = f"{where}: {exc.detail}"
+        response = await _refused(request, Refused(exc.status_code, message))
+        response.headers.update(exc.headers or {})
+        return response
+
     @app.get("/", response_class=HTMLResponse)
     async def board_page() -> HTMLResponse:
         return server.page("leaderboard.html", "Leaderboard", boards=await run_in_threadpool(server.boards))

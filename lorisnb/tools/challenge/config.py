@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from lorisnb.core.spec import validate
-from lorisnb.core.spec.evalspec import EvalSpec
+from lorisnb.core.spec.evalspec import SPEC_NAMES, EvalSpec
 from lorisnb.core.stats.inference import WEIGHTS
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import LorisError, ParseError
@@ -198,6 +198,22 @@ def _phase(raw: Any, k: int, challenge: tuple[float, float], have: list[str], pa
     return Phase(name, tuple(s for s in SCENES if s in scenes), kept, opens, closes, board)
 
 
+def _check_sequences(phases: tuple[Phase, ...], data: DataPaths, path: Path) -> None:
+    """Refuse a phase's ``sequences`` naming a sequence its scene's ground truth does not have
+    (the phase would rank on nothing). Only the scenes with a ``sequences`` table are read (cached:
+    the server reads them again for the durations)."""
+    from lorisnb.io.datasets.paths import load_groundtruth
+
+    for k, phase in enumerate(phases, start=1):
+        for scene, seqs in (phase.sequences or {}).items():
+            have = sorted(int(q) for q in load_groundtruth(scene, data).sequences)
+            absent = [q for q in seqs if q not in have]
+            if absent:
+                raise ParseError(path, None, f"[[phase]] {k}: sequences.{scene}: no ground truth for sequence(s) "
+                                 f"{', '.join(map(str, absent))} of {scene}; expected some of "
+                                 f"{', '.join(map(str, have))}")  # fmt: skip
+
+
 def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
     """Read and check a challenge file (see the module docstring)."""
     from lorisnb.tools.report.leaderboard import leaderboard_spec
@@ -233,6 +249,7 @@ def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
     if closes <= opens:
         raise ParseError(path, None, f"{where}closes is not after opens; expected closes later than opens")
     options = _table(raw, "spec", path)
+    check_keys(options, set(SPEC_NAMES) | {"conventions"}, path, "[spec]: ")  # a typo would be ignored
     try:
         spec = leaderboard_spec(options)
     except LorisError as exc:
@@ -248,6 +265,7 @@ def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
     if not isinstance(items, list) or not items:
         raise ParseError(path, None, "no [[phase]] table; expected at least one, with name and scenes")
     phases = tuple(_phase(item, k, (opens, closes), have, path) for k, item in enumerate(items, start=1))
+    _check_sequences(phases, data, path)
     names = [p.name for p in phases]
     if len(set(names)) < len(names):
         raise ParseError(path, None, f"[[phase]]: two phases named {next(n for n in names if names.count(n) > 1)!r}; "
