@@ -102,6 +102,8 @@ def cmd_export(args: argparse.Namespace) -> int:
         result = json.loads(s["result"]) if s["result"] else {"rows": []}
         rows += [base | {k: r.get(k) for k in PUBLIC_COLUMNS} for r in result["rows"]] or [base]
     table = pd.DataFrame(rows, columns=["submission", "team", "phase", "status", "submitted", "error", *PUBLIC_COLUMNS])
+    for column in ("seq", "poses", "matched"):  # counts stay whole numbers beside a submission without rows
+        table[column] = table[column].astype("Int64")
     out = write_csv(table, args.csv, args.force)
     print(f"wrote {len(table)} rows ({table['submission'].nunique()} submissions) to {out}", file=sys.stderr)
     return 0
@@ -124,6 +126,8 @@ def cmd_submit(args: argparse.Namespace) -> int:
         print(f"error: {f['file']}: {f['error']}", file=sys.stderr)
     if view.get("error"):
         print(f"error: {view['error']}", file=sys.stderr)
+    if view.get("hidden"):  # scored, but its phase shows scores once it closes
+        print(f"{view['hidden']}", file=sys.stderr)
     if view["status"] in ("queued", "scoring"):
         return 0 if args.wait is None else 1
     return 0 if view["status"] == "scored" and not view.get("failures") and not view.get("missing") else 1

@@ -240,3 +240,38 @@ def test_zip_and_folder_submit(served, data, tmp_path):
     view = wait_scored(client, r.json()["id"])
     assert view["files"] == sorted(p.name for p in cafe_files(data, "orbslam2_rgbd"))
     assert [x["cr"] for x in view["rows"]] == [x["cr"] for x in served["views"]["orbs"]["rows"]]
+
+
+def test_export_keeps_counts_whole_beside_a_failed_submission(tmp_path, data):
+    """A submission without rows (failed) is one row of the export with its counts empty, and the
+    counts of the others stay whole numbers (seq 1, not 1.0: a join on the sequence still works)."""
+    path = challenge_file(tmp_path, data)
+    challenge = read_challenge(path)
+    challenge.folder.mkdir(parents=True)
+    engine = store.connect(challenge.database)
+    store.add_team(engine, "exporters", time.time() + 7000)
+    team = next(t for t in store.all_teams(engine) if t["name"] == "exporters")
+    row = dict(file="a.txt", scene="cafe", seq=1, poses=68, matched=68, cr=0.5, cr_t=0.5, cs_r=1.0, ate_rmse=0.1,
+               c_ate_rmse=0.1, aoe_rmse=3.0, reloc_time=0.0)  # fmt: skip
+    for sid, status, result in (("a" * 16, "scored", {"rows": [row]}), ("b" * 16, "failed", None)):
+        store.add_submission(engine, sid, team["id"], "development", ["a.txt"], 10)
+        claimed, claim = store.claim_next(engine)
+        assert claimed == sid and store.finish(engine, sid, claim, status, result, "no" if result is None else None, 1)
+    out = tmp_path / "all.csv"
+    assert main(["challenge", "export", str(path), "--csv", str(out)]) == 0
+    rows = {r["submission"]: r for r in csv.DictReader(out.open())}
+    assert (rows["a" * 16]["seq"], rows["a" * 16]["poses"], rows["a" * 16]["matched"]) == ("1", "68", "68")
+    assert (rows["b" * 16]["seq"], rows["b" * 16]["status"], rows["b" * 16]["error"]) == ("", "failed", "no")
+
+
+def test_submit_says_why_a_scored_submission_shows_no_score(monkeypatch, capsys):
+    """A submission to a phase whose scores show once it closes: ``lorisnb submit --wait`` says so,
+    not just "scored" with nothing under it."""
+    from lorisnb.tools.challenge import client
+
+    view = dict(id="f" * 16, status="scored", url="http://127.0.0.1:1/submissions/ffff", error=None,
+                hidden="scores of phase 'final' are shown once it closes")  # fmt: skip
+    monkeypatch.setattr(client, "submit", lambda *a, **kw: dict(view))
+    assert main(["submit", "http://127.0.0.1:1", "x.txt", "--token", "t", "--wait", "1"]) == 0
+    err = capsys.readouterr().err
+    assert "scored" in err and "scores of phase 'final' are shown once it closes" in err
