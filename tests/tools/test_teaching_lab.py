@@ -11,6 +11,7 @@ import textwrap
 from pathlib import Path
 
 import nbformat
+import numpy as np
 import pytest
 
 import lorisnb as ln
@@ -137,3 +138,97 @@ def test_explanations_quote_their_numbers():
     assert f"{100 * 0.473 / 30.5:.2f} %" in g and "0.76 % (difficult)" in g and "12 m path" in g
     lab = "\n".join(c.source for c in _source("lab1_lifelong_metrics").cells)
     assert "1 % of a 12 m path" not in lab and "eps_for_half" not in lab
+
+
+def _between(text: str, start: str, end: str) -> str:
+    return " ".join(text[text.index(start) : text.index(end, text.index(start))].split())
+
+
+def test_readme_says_with_computed_numbers_why_e1s_delta_cap_cannot_show():
+    """Issue 46 asks each typical mistake to fail on the lab's data. E1's "delta cap" (the eps a scan
+    without the cap finds) cannot, on the sample data, without losing the mistake E1 was chosen for
+    (phi left out): the README says why, with these numbers, computed here (and the answer's others:
+    E1's phi left out, F2's CR and CR-T)."""
+    from lorisnb.core.lifelong.sweep import eps_at_cr
+
+    lab = _source("lab1_lifelong_metrics")
+    scope: dict = {}
+    exec(next(c.source for c in lab.cells if "parameters" in c.metadata.get("tags", [])), scope)  # noqa: S102
+    phi, delta = scope["phi"], scope["delta"]
+    check = next(c.source for c in lab.cells if "check_eps_at_cr(" in c.source)
+    target = float(re.search(r"durations\(\), ([0-9.]+), phi, delta\)", check).group(1))
+    data = sample_data()
+
+    def run(algorithm: str, **kw):
+        ev = ln.evaluate(sorted((data.icra20 / "per-seq" / algorithm).glob("cafe*.txt")), data_root=data, **kw)
+        return ev.errors, ev.durations(), ev
+
+    def eps(errors, durations, t, p, d):
+        return float(eps_at_cr(errors, t, durations, p, d)["eps"].iloc[0])
+
+    def both(errors, durations, p: float) -> list[tuple[float, float]]:
+        """(target CR, eps) where a scan without the cap and one without phi both find another eps."""
+        out = []
+        for t in np.round(np.arange(0.01, 0.96, 0.01), 2):
+            w = eps(errors, durations, t, p, delta)
+            if not np.isfinite(w):
+                break
+            no_cap, no_phi = eps(errors, durations, t, p, np.inf), eps(errors, durations, t, np.inf, delta)
+            if min(abs(no_cap - w), abs(no_phi - w)) > 0.01:
+                out.append((t, w))
+        return out
+
+    errors, durations, ev = run("orbslam2_t265")  # E1's
+    # every pose's held time: the gaps longer than delta (to the next pose, the last one to t_max)
+    gaps = [(e.seq, k, g, e.ate[k], e.aoe[k], e.matched)
+            for fe in errors for e in fe.sequences if e.matched
+            for k, g in enumerate(np.diff(np.append(e.stamps, e.gt_end))) if g > delta]  # fmt: skip
+    assert len(gaps) == 1
+    seq, k, gap, ate, aoe, n = gaps[0]
+    assert k == n - 1 and aoe > phi  # the last pose of its sequence, wrong at every eps
+    top = float(ev.scenes(eps=np.inf, phi=phi, delta=delta)["cr"].iloc[0])  # the highest CR any eps gives
+    targets = np.round(np.arange(0.01, top, 0.01), 2)
+    assert target in targets
+    assert all(eps(errors, durations, t, phi, delta) == eps(errors, durations, t, phi, np.inf) for t in targets)
+    assert both(errors, durations, np.floor(aoe * 10) / 10 - 0.1) == []  # just under the pose's AOE: never
+    shown = [x for p in (round(aoe, 1), 70.0, 90.0, 180.0) for x in both(errors, durations, p)]
+    first_target, first_eps = min(t for t, _ in shown), min(w for _, w in shown)
+    # the sample's other algorithms, at the lab's phi: only DSO (monocular, aligned with its scale) shows both
+    others = sorted(p.name for p in (data.icra20 / "per-seq").iterdir() if p.name != "orbslam2_t265")
+    shown_by = {a: both(*run(a, scale="auto")[:2], phi) for a in others}
+    assert {a for a, x in shown_by.items() if x} == {"dso"}
+    dso_eps = min(w for _, w in shown_by["dso"])
+    ds_errors, ds_durations, _ = run("ds-slam")  # the cap shows, phi left out does not
+    ds_right, ds_no_cap = eps(ds_errors, ds_durations, 0.1, phi, delta), eps(ds_errors, ds_durations, 0.1, phi, np.inf)
+    assert ds_right - ds_no_cap > 0.01 and eps(ds_errors, ds_durations, 0.1, np.inf, delta) == ds_right
+    stops = [e.stamps[-1] - e.gt_start for fe in ds_errors for e in fe.sequences if e.matched]
+    # the answer's other numbers: E1's phi left out, F2's best algorithm by CR and CR-T
+    e1_right, e1_no_phi = eps(errors, durations, target, phi, delta), eps(errors, durations, target, np.inf, delta)
+    life = ln.evaluate(sorted((data.icra20 / "lifelong").glob("*/cafe*.txt")), data_root=data)
+    scenes = life.scenes(eps=scope["eps"], phi=phi, delta=delta, tau=scope["tau"]).set_index("algorithm")
+    best = scenes.loc["vins_mono_color_imu_with_loop"]
+    assert scenes["cr"].idxmax() == scenes["cr_t"].idxmax() == best.name
+    visits = life.sequences(eps=scope["eps"], phi=phi, delta=delta, tau=scope["tau"])
+    for _, v in visits.groupby("seq"):  # "and for each visit", at the lab's thresholds
+        assert v.set_index("algorithm")["cr"].idxmax() == v.set_index("algorithm")["cr_t"].idxmax()
+    for e in np.round(np.arange(0.3, 3.01, 0.1), 1):  # "the sample's scene alike at every eps from 0.3 to 3 m"
+        at = life.scenes(eps=e, phi=phi, delta=delta, tau=scope["tau"]).set_index("algorithm")
+        assert at["cr"].idxmax() == at["cr_t"].idxmax() == best.name, e
+
+    text = _between(
+        (ROOT / "teaching" / "README.md").read_text(), "**Does every typical mistake", "**I changed the lab"
+    )
+    for quoted in (
+        f"a scan that leaves phi out finds {e1_no_phi:.2f} m instead of {e1_right:.2f} m",
+        "the sample's scene alike at every eps from 0.3 to 3 m",
+        f"(VINS-Mono's CR is {best['cr']:.3f}, the figure's {100 * best['cr']:.1f} %, its CR-T {best['cr_t']:.3f};",
+        f"only gap longer than delta ({delta:g} s) is the {gap:.1f} s after the last pose of cafe-{seq}",
+        f"(ATE {ate:.2f} m, AOE {aoe:.1f} degrees, beyond phi = {phi:g})",
+        f"at every target CR from 0.01 to {targets[-1]:.2f} (its CR at any eps is {top:.3f})",
+        f"a phi of {aoe:.1f} degrees or more",
+        f"from a target CR of {first_target:.2f} and an eps of {first_eps:.1f} m",
+        f"DSO (monocular, aligned with its scale) shows both, from an eps of {dso_eps:.1f} m",
+        f"after {stops[0]:.1f} s and {stops[1]:.1f} s, so a scan without the cap finds {ds_no_cap:.3f} m instead of "
+        f"{ds_right:.3f} m for a CR of 0.1",
+    ):
+        assert quoted in text, quoted
