@@ -5,9 +5,11 @@ with one change of known size, and the share of each the verdict calls a regress
 (:mod:`lorisnb.tools.decisions.calibration`). Prints the noise models against the real rerun pairs
 of the icra20 data, then the table of false-alarm rates and power by trial count. Targets: false
 alarms at most 5 % at every trial count; power at least 90 % with 3 or more trials for CR -0.05
-and ATE +50 % on one sequence.
+and ATE +50 % on one sequence. Then the same for ``lorisnb compare``: how often it calls one system
+run twice significantly different (target at most 5 %), and how many real differences of scene CR
+(0.05 or more) between two systems it finds.
 
-    python benchmarks/calibrate.py [--pool 24] [--nights 200] [--power-nights 60] [--quick]
+    python benchmarks/calibrate.py [--pool 24] [--nights 200] [--power-nights 60] [--compare-nights 60] [--quick]
 """
 
 from __future__ import annotations
@@ -25,7 +27,9 @@ from lorisnb.core.stats.tolerances import RERUN_SPREAD, SINGLE_RUN_BAND
 from lorisnb.errors import LorisWarning
 from lorisnb.tools.decisions.calibration import (
     MODELS,
+    REAL_DIFFERENCE,
     calibrate,
+    compare_rates,
     family_size,
     generator_pairs,
     make_pool,
@@ -41,11 +45,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--pool", type=int, default=24, help="reruns of every sequence per noise model (default 24)")
     p.add_argument("--nights", type=int, default=200, help="noise-only nights per model and trial count")
     p.add_argument("--power-nights", type=int, default=60, help="nights per change, model and trial count")
+    p.add_argument("--compare-nights", type=int, default=60, help="nights of compare per trial count (default 60)")
     p.add_argument("--trials", type=int, nargs="+", default=[1, 3, 5], help="trial counts (default 1 3 5)")
-    p.add_argument("--quick", action="store_true", help="a small run (pool 12, 40 nights, 12 per change)")
+    p.add_argument("--quick", action="store_true", help="a small run (pool 12, 40 nights, 12 per change, 10 compares)")
     args = p.parse_args(argv)
     if args.quick:
-        args.pool, args.nights, args.power_nights = 12, 40, 12
+        args.pool, args.nights, args.power_nights, args.compare_nights = 12, 40, 12, 10
     warnings.simplefilter("ignore", LorisWarning)
     start = time.perf_counter()
     real = real_pairs()
@@ -96,6 +101,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"power for {c} with 3+ trials at least 90 %: {'met' if (pw['rate'] >= 0.9).all() else 'NOT MET'} "
                   f"(smallest {100 * pw['rate'].min():.1f} %)")  # fmt: skip
     bound_table(pools["real"], args.trials)
+    compare_table(pools["real"], args.trials, args.compare_nights)
     print(f"({time.perf_counter() - start:.0f} s)")
     return 0
 
@@ -120,6 +126,24 @@ def bound_table(pool: object, trials: list[int]) -> None:
         a1, am = (np.exp(detectable_change(RERUN_SPREAD["log"], n, ate_tol, comparisons=k)) for k in (1, max(m, 1)))
         print(f"  {n:6d} {m:6d} {cr1:16.3f} {crm:16.3f} {a1:19.2f} {am:19.2f}")
     print("  (a single run per side has no family: its tests are not significance tests; its bands are above)")
+
+
+def compare_table(pool: object, trials: list[int], nights: int) -> None:
+    """``lorisnb compare``'s error rates (:func:`compare_rates`): every algorithm of the pool twice."""
+    rates = compare_rates(pool, trials, nights, progress=lambda x: tqdm(x, desc="compares", leave=False))  # type: ignore[arg-type]
+    print(
+        "\nThe decision of lorisnb compare (CR, alpha 0.05), each algorithm of the pool run twice under two labels:"
+        f"\n  false claim: one system's two runs called different anywhere; found: real differences of scene CR"
+        f" >= {REAL_DIFFERENCE} between two systems called, the better one named right"
+    )
+    for n, g in rates.groupby("trials", sort=False):
+        cells = []
+        for r in g.itertuples():
+            cells.append(f"{r.check} {100 * r.rate:5.1f}% [{100 * r.low:4.1f},{100 * r.high:5.1f}] of {r.nights}")
+        print(f"  {n} trial(s): " + "; ".join(cells))
+    fa = rates[rates["check"] == "false claim"]
+    print(f"compare's false claims at most 5 %: {'met' if (fa['rate'] <= 0.05).all() else 'NOT MET'} "
+          f"(largest {100 * fa['rate'].max():.1f} %)")  # fmt: skip
 
 
 if __name__ == "__main__":

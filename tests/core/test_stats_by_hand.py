@@ -107,6 +107,19 @@ def test_equal_p_values_share_their_holm_level():
     assert pw["interval_level"].tolist() == pytest.approx([1 - 0.2 / 3] * 3)
 
 
+def test_one_holm_family_over_every_scene_of_a_comparison():
+    """Two scenes, one pair each, A better on all six sequences of both: p = 2/64 in each. Holm per
+    scene called both pairs significant at 0.05, so a comparison of several scenes claimed a
+    difference somewhere more often than alpha; over one family, 2 * 2/64 = 0.0625 > 0.05."""
+    one = _table({"A": [[0.6], [0.7], [0.8], [0.9], [0.95], [0.99]], "B": [[0.1], [0.2], [0.3], [0.4], [0.5], [0.6]]})
+    t = pd.concat([one, one.assign(scene="t")], ignore_index=True)
+    pw = stats.pairwise(t)
+    assert pw["p"].tolist() == [2 / 64] * 2
+    assert pw["p_holm"].tolist() == pytest.approx([0.0625] * 2) and not pw["significant"].any()
+    assert not pw["reachable"].any() and set(pw["correction"]) == {"Holm over 2 pair(s) of 2 scene(s), alpha 0.05"}
+    assert stats.pairwise(t, alpha=0.1)["significant"].all()  # 0.0625 <= 0.1
+
+
 @pytest.mark.parametrize("alpha", [1.5, 1.0, 0.0, -0.1, float("nan")])
 def test_alpha_outside_0_1_is_refused(alpha):
     """pairwise(alpha=1.5) called two identical algorithms significantly different (p_holm 1 <=

@@ -267,9 +267,17 @@ def test_tolerance_scaling_of_the_judged_scale():
 def test_the_calibration_harness_measures_what_it_says(data):
     """A small run of ``make calibrate``'s harness: the generator's reruns differ about as the real
     rerun pairs do (medians within a factor of 3), a noise-only night with trials is no regression,
-    a missing trial always is."""
+    a missing trial always is; compare calls neither one system run twice different nor misses
+    most real differences."""
     from lorisnb.core.stats.reruns import RerunNoise
-    from lorisnb.tools.decisions.calibration import calibrate, generator_pairs, make_pool, pair_spread, real_pairs
+    from lorisnb.tools.decisions.calibration import (
+        calibrate,
+        compare_rates,
+        generator_pairs,
+        make_pool,
+        pair_spread,
+        real_pairs,
+    )
 
     pool = make_pool(RerunNoise(), 6, algorithms=("vins_mono_color_imu_with_loop", "orbslam2_rgbd"), data_root=data)
     real = real_pairs(data)
@@ -281,6 +289,10 @@ def test_the_calibration_harness_measures_what_it_says(data):
     fa = table[table["check"] == "false alarm"]
     assert fa["hits"].item() == 0
     assert (table.loc[table["check"] == "missing trial", "rate"] == 1.0).all()
+    # compare: one system run twice is never called different here; two systems that differ are
+    rates = compare_rates(pool, trials=(3,), nights=3).set_index("check")
+    assert (rates.loc["false claim", "hits"], rates.loc["false claim", "nights"]) == (0, 3)
+    assert rates.loc["real difference found", "nights"] > 0 and rates.loc["real difference found", "rate"] > 0.3
 
 
 def test_the_guides_share_of_real_outputs_that_stop_early_is_the_measured_one(data):

@@ -17,9 +17,12 @@ of :mod:`lorisnb.core.stats.permutation` on the sequences both algorithms have: 
 trials of A and B are relabelled, the statistic is the difference of the scene values. With one
 trial each it is the paired permutation test over sequences (exact: all 2^n sign flips); with
 trials it uses the run-to-run spread of every sequence. Ties need no correction. Holm's correction
-over the pairs of a scene. The smallest p-value the design can give (``min_p``) is stated: n paired
-sequences cannot go below 2 / 2^n (0.0625 for OpenLORIS' five corridor or home sequences), 3 vs 3
-trials of one sequence not below 0.1. The ranking (:mod:`lorisnb.core.stats.ranking`), the summary of
+over every pair of every scene of the comparison: one family, as the verdict of ``diff``
+(:mod:`lorisnb.core.stats.regression`), so a comparison of systems that do not differ claims a
+difference anywhere in at most ``alpha`` of the cases (measured by ``make calibrate``). The
+smallest p-value the design can give (``min_p``) is stated: n paired sequences cannot go below
+2 / 2^n (0.0625 for OpenLORIS' five corridor or home sequences), 3 vs 3 trials of one sequence not
+below 0.1. The ranking (:mod:`lorisnb.core.stats.ranking`), the summary of
 ``compare`` and the bold marks of :mod:`lorisnb.tools.report.tables` all read this one test.
 """
 
@@ -276,10 +279,10 @@ def pairwise(
     Columns: the scene values (``value_a``, ``value_b``: weighted means over the common sequences
     of each sequence's mean over trials), ``difference`` (A - B, the test statistic, in the
     metric's unit), ``cliffs_delta`` (effect size, -1..1), ``p`` (two-sided), ``min_p`` (the
-    smallest p the design can give), ``exact``, ``p_holm`` (Holm over the scene's pairs),
+    smallest p the design can give), ``exact``, ``p_holm`` (Holm over every pair of every scene),
     ``significant`` (p_holm <= alpha), ``better`` (the significantly better algorithm, or ""),
-    ``reachable`` (whether min_p, Holm-corrected as if it were the scene's smallest p, can reach
-    alpha), ``difference_low``, ``difference_high`` (with ``intervals``: the interval of the
+    ``reachable`` (whether min_p, Holm-corrected as if it were the comparison's smallest p, can
+    reach alpha), ``difference_low``, ``difference_high`` (with ``intervals``: the interval of the
     difference that inverts the same test at the level Holm decided it at, ``interval_level``; it
     holds 0 exactly when the pair is not significant) and ``p_a_better`` (bootstrap probability
     that A is better, descriptive)."""
@@ -291,7 +294,8 @@ def pairwise(
     seed = validate.seed(seed)
     alpha = validate.probability("alpha", alpha)
     rng = np.random.default_rng(seed)
-    rows = []
+    rows: list[dict] = []
+    tested: list[tuple] = []
     for (suite, scene), g in t.groupby(["suite", "scene"], sort=False, observed=True):
         per = _sequence_trials(g, metric)
         scene_rows, samples = [], []
@@ -322,18 +326,21 @@ def pairwise(
                      relabellings=res.relabellings, exact=res.exact, p=res.pvalue, min_p=res.min_p,
                      p_a_better=p_better)
             )  # fmt: skip
-        adj = holm(np.array([r["p"] for r in scene_rows]))
-        levels = holm_levels(np.array([r["p"] for r in scene_rows]), alpha)
-        for r, pa, level, (xa, xb, w) in zip(scene_rows, adj, levels, samples, strict=True):
-            sig = bool(np.isfinite(pa) and pa <= alpha)
-            low, high = (difference_interval(xa, xb, w, level, n_resamples=1000, seed=seed, iterations=20, rejected=sig)
-                         if intervals and np.isfinite(level) else (np.nan, np.nan))  # fmt: skip
-            r.update(difference_low=low, difference_high=high, interval_level=1 - level)
-            a_wins = (r["difference"] > 0) == better_high
-            r.update(p_holm=pa, significant=sig, better=(r["a"] if a_wins else r["b"]) if sig else "",
-                     reachable=bool(np.isfinite(r["min_p"]) and r["min_p"] * len(scene_rows) <= alpha),
-                     correction=f"Holm over {len(scene_rows)} pair(s) of this scene, alpha {alpha}")  # fmt: skip
         rows += scene_rows
+        tested += samples
+    # one family: every pair of every scene of the call (the whole comparison), as diff's verdict
+    adj = holm(np.array([r["p"] for r in rows]))
+    levels = holm_levels(np.array([r["p"] for r in rows]), alpha)
+    scenes = len({(r["suite"], r["scene"]) for r in rows})
+    for r, pa, level, (xa, xb, w) in zip(rows, adj, levels, tested, strict=True):
+        sig = bool(np.isfinite(pa) and pa <= alpha)
+        low, high = (difference_interval(xa, xb, w, level, n_resamples=1000, seed=seed, iterations=20, rejected=sig)
+                     if intervals and np.isfinite(level) else (np.nan, np.nan))  # fmt: skip
+        r.update(difference_low=low, difference_high=high, interval_level=1 - level)
+        a_wins = (r["difference"] > 0) == better_high
+        r.update(p_holm=pa, significant=sig, better=(r["a"] if a_wins else r["b"]) if sig else "",
+                 reachable=bool(np.isfinite(r["min_p"]) and r["min_p"] * len(rows) <= alpha),
+                 correction=f"Holm over {len(rows)} pair(s) of {scenes} scene(s), alpha {alpha}")  # fmt: skip
     cols = ["suite", "scene", "metric", "a", "b", "sequences", "trials_a", "trials_b", "value_a", "value_b",
             "difference", "difference_low", "difference_high", "interval_level", "cliffs_delta", "test", "relabellings",
             "exact", "p", "min_p", "p_holm", "significant", "better", "reachable", "p_a_better", "correction"]  # fmt: skip

@@ -31,16 +31,19 @@ import numpy as np
 import pandas as pd
 
 from lorisnb.core.lifelong.aggregate import durations_table
+from lorisnb.core.lifelong.coverage import complete
 from lorisnb.core.lifelong.scoring import score
 from lorisnb.core.pipeline.model import ResultFile
 from lorisnb.core.pipeline.sessions import compute_errors
 from lorisnb.core.spec.validate import finite
+from lorisnb.core.stats.inference import scene_means, with_trials
 from lorisnb.core.stats.regression import parse_tolerances
 from lorisnb.core.stats.reruns import RerunNoise, rerun
 from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.errors import ValidationError
 from lorisnb.io.datasets.paths import find_data, load_groundtruth
 from lorisnb.io.readers.openloris import read_openloris
+from lorisnb.tools.decisions.comparison import decide
 from lorisnb.tools.decisions.diff import diff_tables
 
 #: Algorithms of ``icra20_results/per-seq`` the nights are made of (good, medium and poor trackers).
@@ -235,6 +238,58 @@ def calibrate(pools: Mapping[str, Pool], trials: Sequence[int] = (1, 3, 5), nigh
                 lo, hi = wilson(sum(h), len(h))
                 rows.append(dict(model=model, trials=n, check=what, nights=len(h), hits=sum(h), rate=sum(h) / len(h),
                                  low=lo, high=hi))  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+#: The smallest difference of scene CR between two systems counted as a real one when measuring
+#: how many of them ``compare`` finds (:func:`compare_rates`).
+REAL_DIFFERENCE = 0.05
+
+
+def compare_rates(pool: Pool, trials: Sequence[int] = (1, 3, 5), nights: int = 100, seed: int = 4,
+                  alpha: float = 0.05, progress: Callable[[Iterable], Iterable] = lambda x: x) -> pd.DataFrame:  # fmt: skip
+    """The measured error rates of ``lorisnb compare``'s decision
+    (:func:`~lorisnb.tools.decisions.comparison.decide`, metric CR, the command's defaults). A night compares every algorithm of the pool **twice**,
+    under two labels with ``n`` distinct reruns each: the same system, so calling the two labels
+    different is a false claim. One row per trial count and check, as :func:`calibrate`:
+
+    - ``false claim``: the share of nights in which any pair of one system's two labels is called
+      significantly different, in any scene (the family the comparison's Holm correction holds at
+      ``alpha``);
+    - ``real difference found``: of the pairs of two different systems whose scene CR differs by at
+      least :data:`REAL_DIFFERENCE` over the whole pool (their true difference), the share called
+      significantly different with the better one named right."""
+    truth_table = pd.concat([t.assign(trial=k + 1) for k, t in enumerate(pool.tables)], ignore_index=True)
+    truth = scene_means(with_trials(truth_table), "cr").set_index(["scene", "algorithm"])["value"]
+    rng = np.random.default_rng(seed)
+    rows = []
+    for n in trials:
+        if 2 * n > len(pool.tables):
+            continue
+        false, found, real = [], 0, 0
+        for _ in progress(range(nights)):
+            a, b = _night(pool, n, rng)
+            table = pd.concat([a.assign(algorithm=a["algorithm"] + " (1)"), b.assign(algorithm=b["algorithm"] + " (2)")],
+                              ignore_index=True)  # fmt: skip
+            full, _ = complete(table, pool.expected)
+            pairs, _, _ = decide(table, full, "cr", alpha, int(rng.integers(2**31)), intervals=False)
+            system_a, system_b = pairs["a"].str[:-4], pairs["b"].str[:-4]
+            same = (system_a == system_b).to_numpy()
+            sig = pairs["significant"].astype(bool).to_numpy()
+            false.append(int((sig & same).any()))
+            for r, sa, sb, sg in zip(pairs.itertuples(), system_a, system_b, sig, strict=True):
+                if sa == sb:
+                    continue
+                d = truth[(r.scene, sa)] - truth[(r.scene, sb)]
+                if abs(d) >= REAL_DIFFERENCE:
+                    real += 1
+                    found += int(sg and r.better == (r.a if d > 0 else r.b))
+        lo, hi = wilson(sum(false), len(false))
+        rows.append(dict(trials=n, check="false claim", nights=len(false), hits=sum(false),
+                         rate=sum(false) / len(false), low=lo, high=hi))  # fmt: skip
+        lo, hi = wilson(found, real)
+        rows.append(dict(trials=n, check="real difference found", nights=real, hits=found,
+                         rate=found / real if real else np.nan, low=lo, high=hi))  # fmt: skip
     return pd.DataFrame(rows)
 
 

@@ -109,6 +109,22 @@ def trial_spread(table: pd.DataFrame) -> tuple[pd.DataFrame, set[str]]:
     return spread, copies
 
 
+def decide(table: pd.DataFrame, full: pd.DataFrame, metric: str, alpha: float, seed: int, intervals: bool = True
+           ) -> tuple[pd.DataFrame, pd.DataFrame, set[str]]:  # fmt: skip
+    """The decision of ``compare``: the pairwise test on ``full`` (the table with missing sequences
+    as failed runs, :func:`lorisnb.core.lifelong.coverage.complete`), no significance for the pairs
+    of an algorithm whose trials are near-identical copies (:func:`trial_spread` of ``table``).
+    Returns the pairs, the trial spread and those algorithms. ``intervals=False`` skips the test
+    intervals (the decision is the same): what ``make calibrate`` measures."""
+    pairs = stats.pairwise(full, metric, alpha=alpha, seed=seed, intervals=intervals)
+    spread, copies = trial_spread(table)
+    if copies:  # pseudo-replicates: their test would claim a significance that reruns would not show
+        mask = pairs["a"].isin(copies) | pairs["b"].isin(copies)
+        pairs.loc[mask, "significant"] = False
+        pairs.loc[mask, "better"] = ""
+    return pairs, spread, copies
+
+
 def compare_table(
     table: pd.DataFrame,
     durations: pd.DataFrame,
@@ -136,12 +152,8 @@ def compare_table(
     full, cover = complete(table, durations)
     notes = coverage_notes(cover)
     ci = stats.confidence_intervals(full, level=level, seed=seed)
-    pairs = stats.pairwise(full, metric, alpha=alpha, seed=seed)
-    spread, copies = trial_spread(table)
-    if copies:  # pseudo-replicates: their test would claim a significance that reruns would not show
-        mask = pairs["a"].isin(copies) | pairs["b"].isin(copies)
-        pairs.loc[mask, "significant"] = False
-        pairs.loc[mask, "better"] = ""
+    pairs, spread, copies = decide(table, full, metric, alpha, seed)
+    if copies:
         notes += [f"the trials of {', '.join(sorted(copies))} are near-identical: " + "; ".join(
             f"{r.algorithm}: CR varies by {r.cr_spread:.2g}, ATE by {100 * r.ate_spread:.2g} %"
             for r in spread.itertuples() if r.algorithm in copies)
@@ -171,7 +183,7 @@ def compare_table(
     header = (
         f"{metric} per algorithm and scene, {level:.0%} bootstrap intervals over {units} ({trials}); "
         f"missing sequences count as failed runs; rank = 1 + algorithms significantly better by a permutation "
-        f"test (exact where the relabellings are few; Holm per scene, alpha {alpha}); 'vs top': the difference to "
+        f"test (exact where the relabellings are few; Holm over every pair of every scene, alpha {alpha}); 'vs top': the difference to "
         "the scene's first algorithm, with the interval that inverts the same test (it holds 0 exactly when the "
         "test does not separate the two):"
     )
@@ -182,7 +194,7 @@ def compare_table(
     sig = pairs[pairs["significant"].astype(bool)]  # a mask also when empty (object dtype)
     summary = f"{len(sig)} of {len(pairs)} pairs differ significantly (the test behind the ranks and bold marks)"
     summary += ":" if len(sig) else "."
-    blocked = pairs.groupby("scene").agg(reachable=("reachable", "any"), min_p=("min_p", "min"), n=("p", "size"))
+    blocked = pairs.groupby("scene").agg(reachable=("reachable", "any"), min_p=("min_p", "min"))
     blocked = blocked[~blocked["reachable"].astype(bool)]
     if len(blocked):
         summary += (
@@ -194,7 +206,7 @@ def compare_table(
                 if not np.isfinite(r.min_p)
                 else f"{scene} (every pair's results are the same on every sequence: no test can separate them)"
                 if r.min_p >= 1
-                else f"{scene} (smallest possible p {r.min_p:.4g}, x {r.n} pair(s) by Holm)"
+                else f"{scene} (smallest possible p {r.min_p:.4g}, x {len(pairs)} pair(s) by Holm)"
                 for scene, r in blocked.iterrows()
             )
             + (": run more trials (--power DELTA says how many)" if (blocked["min_p"] < 1).any() else "")
