@@ -74,8 +74,15 @@ def main(argv: list[str] | None = None) -> int:
     for g in graded:
         print(f"{g.result.student:24s} {g.result.lab}: {g.score:g} / {g.result.max_points:g}"
               + (f" ({g.days_late} day(s) late)" if g.days_late else ""))  # fmt: skip
-    if left_out:
-        print(f"not on the roster, left out of the LMS exports: {', '.join(left_out)}", file=sys.stderr)
+    if left_out.not_on_roster:
+        print(f"not on the roster, left out of the LMS exports: {', '.join(left_out.not_on_roster)}", file=sys.stderr)
+    if left_out.no_email and roster is None:
+        print(
+            "no --roster: the Moodle and Gradescope exports, which find students by e-mail, are empty", file=sys.stderr
+        )
+    elif left_out.no_email:
+        print(f"no e-mail on the roster, left out of the Moodle and Gradescope exports (they find students by "
+              f"e-mail): {', '.join(left_out.no_email)}", file=sys.stderr)  # fmt: skip
     print(f"{len(graded)} submission(s) graded: {a.course / 'grades.csv'}, {a.course / 'exports'}")
     return 0
 

@@ -260,7 +260,7 @@ def test_exports_follow_the_lms_layouts_with_roster_names_and_late_policy(tmp_pa
         Graded(_result("s9", [2, 0, 0]), None, 0, 1.0),
     ]
     left_out = write_exports(tmp_path, graded, roster)
-    assert left_out == ["s9"]
+    assert left_out.not_on_roster == ["s9"] and left_out.no_email == []
 
     def rows(name: str) -> list[list[str]]:
         return list(csv.reader((tmp_path / name).open(encoding="utf-8")))

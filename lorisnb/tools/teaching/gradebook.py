@@ -69,6 +69,7 @@ def read_roster(path: Path) -> dict[str, Student]:
             f"expected {', '.join(ROSTER_COLUMNS)} and optionally {', '.join(ROSTER_OPTIONAL)}"
         )
     out: dict[str, Student] = {}
+    seen: dict[tuple[str, str], int] = {}  # (column, value) -> the line that has it
     for line, row in enumerate(rows[1:], start=2):
         if not any(cell.strip() for cell in row):
             continue
@@ -85,6 +86,14 @@ def read_roster(path: Path) -> dict[str, Student]:
             raise ValidationError(f"{path}, line {line}: student id {rec['id']!r} appears twice")
         if rec["email"] and "@" not in rec["email"]:
             raise ValidationError(f"{path}, line {line}: e-mail {rec['email']!r} has no @")
+        for column, what in (("email", "e-mail"), ("sis_id", "sis_id"), ("login_id", "login_id")):
+            key = (column, rec.get(column, "").lower() if column == "email" else rec.get(column, ""))
+            if key[1] and key in seen:  # the LMSs find a student by these: two would get each other's grades
+                raise ValidationError(
+                    f"{path}, line {line}: {what} {rec[column]!r} is also on line {seen[key]}; "
+                    "each student needs their own (the LMS exports identify students by it)"
+                )
+            seen[key] = line
         out[rec["id"]] = Student(**rec)
     return out
 
@@ -259,13 +268,30 @@ def _n(x: float) -> str:
 
 
 def _split(name: str) -> tuple[str, str]:
+    """(first, last) of a roster name: "Last, First" as written, else the last word is the last name
+    (a name of one word is all last name)."""
+    last, comma, first = name.strip().partition(",")
+    if comma:
+        return first.strip(), last.strip()
     first, _, last = name.strip().rpartition(" ")
-    return (first, last) if first else (last, "")
+    return first.strip(), last
 
 
-def write_exports(course: Path, graded: Sequence[Graded], roster: Mapping[str, Student] | None = None) -> list[str]:
-    """``grades.csv``, ``grades-demo.csv`` and the LMS exports; returns the students left out of
-    the exports (not on the roster)."""
+@dataclass(frozen=True)
+class LeftOut:
+    """Who the LMS exports leave out: students not on the roster (every export), and students with no
+    e-mail on it (Moodle's and Gradescope's, which find a student by e-mail: Moodle gives a row with
+    no identifier to the user of the row before)."""
+
+    not_on_roster: list[str]
+    no_email: list[str]
+
+    def __bool__(self) -> bool:
+        return bool(self.not_on_roster or self.no_email)
+
+
+def write_exports(course: Path, graded: Sequence[Graded], roster: Mapping[str, Student] | None = None) -> LeftOut:
+    """``grades.csv``, ``grades-demo.csv`` and the LMS exports; returns whom the exports leave out."""
     demo = [g for g in graded if g.result.student.startswith(DEMO_PREFIX)]
     real = [g for g in graded if not g.result.student.startswith(DEMO_PREFIX)]
     left_out = sorted({g.result.student for g in real if roster is not None and g.result.student not in roster})
@@ -273,13 +299,16 @@ def write_exports(course: Path, graded: Sequence[Graded], roster: Mapping[str, S
         _write_grades(course / name, rows, roster or {})
     exports = course / "exports"
     exports.mkdir(exist_ok=True)
+    no_email: set[str] = set()
     for lab in sorted({g.result.lab for g in real}):
         rows = [g for g in real if g.result.lab == lab and g.result.student not in left_out]
         people = [(roster or {}).get(g.result.student, Student(g.result.student)) for g in rows]
         _canvas(exports / f"{lab}-canvas.csv", lab, rows, people)
-        _moodle(exports / f"{lab}-moodle.csv", lab, rows, people)
-        _gradescope(exports / f"{lab}-gradescope.csv", rows, people)
-    return left_out
+        mailed = [(g, p) for g, p in zip(rows, people, strict=True) if p.email]
+        no_email |= {p.id for p in people if not p.email}
+        _moodle(exports / f"{lab}-moodle.csv", lab, [g for g, _ in mailed], [p for _, p in mailed])
+        _gradescope(exports / f"{lab}-gradescope.csv", [g for g, _ in mailed], [p for _, p in mailed])
+    return LeftOut(left_out, sorted(no_email))
 
 
 def _write_grades(path: Path, rows: Sequence[Graded], roster: Mapping[str, Student]) -> None:
