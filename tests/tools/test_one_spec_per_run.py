@@ -86,3 +86,29 @@ def test_a_relative_eps_is_refused_before_anything_runs_where_a_notebook_quotes_
     out = tmp_path / "report"
     assert main(["report", "--notebooks", "metrics_primer", "-p", "eps", "relative:0.05", "--out", str(out)]) == 2
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "command",
+    [["evaluate"], ["sweep", "--eps", "0.5,1", "--phi", "30"], ["compare"], ["evaluate", "--rpe-unit", "m"]],
+)
+def test_a_command_builds_its_spec_once_at_the_edge(command, monkeypatch, capsys):
+    """The options enter once: the command line builds the spec and every layer below takes it as
+    it is. ``evaluate()`` validated it again from scratch, and ``compare`` once more per table for
+    the RPE options it already held (three specs for one command)."""
+    from lorisnb.cli import main
+    from lorisnb.core.spec.evalspec import EvalSpec
+    from lorisnb.io.datasets.paths import sample_data
+
+    built = []
+    original = EvalSpec.__post_init__
+
+    def counted(self):
+        built.append(self)
+        original(self)
+
+    monkeypatch.setattr(EvalSpec, "__post_init__", counted)
+    sample = sample_data()
+    rc = main([*command, str(sample.icra20 / "per-seq" / "orbslam2_rgbd"), "--data", str(sample.root), "--jobs", "1"])
+    capsys.readouterr()
+    assert rc == 0 and len(built) == 1, (rc, len(built))

@@ -376,6 +376,8 @@ def make_spec(preset: str | EvalSpec | None = None, *, surface: str = "python", 
     if preset is None:
         base = PRESETS["openloris"]
     elif isinstance(preset, EvalSpec):
+        if not options:  # a spec built at the edge is passed down as it is, not validated again
+            return preset
         base = preset
     else:
         base = PRESETS[validate.choice("conventions", preset, tuple(PRESETS))]

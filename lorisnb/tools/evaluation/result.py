@@ -23,6 +23,11 @@ if TYPE_CHECKING:
     import pandas as pd
 
 
+def _same(given: Any, held: Any) -> bool:
+    """``given`` is the value the spec holds, of the same type: nothing to check again."""
+    return type(given) is type(held) and bool(given == held)
+
+
 @dataclass
 class Failure:
     """An input that could not be evaluated, with the reason (file, line, what was expected)."""
@@ -149,8 +154,9 @@ class Evaluation:
         spec's own rules (:func:`lorisnb.core.spec.evalspec.make_spec`), so a value is read as in
         ``evaluate(..., rpe_unit=...)`` and on the command line (``rpe_unit='d'`` is degrees) and
         refused with the same message."""
-        given = {k: kw[k] for k in self.spec.rpe_options() if k in kw}
-        checked = make_spec(self.spec, **given).rpe_options() if given else self.spec.rpe_options()
+        have = self.spec.rpe_options()
+        given = {k: kw[k] for k in have if k in kw and not _same(kw[k], have[k])}  # the spec's own: checked
+        checked = make_spec(self.spec, **given).rpe_options() if given else have
         return {**kw, **checked}
 
     def poses(self, eps: Eps | None = None, phi: float | None = None) -> pd.DataFrame:
