@@ -55,6 +55,20 @@ def test_the_readme_tour_runs_on_the_parser():
         assert args.command == words[1]
 
 
+def test_the_readmes_error_rates_are_the_guides_measured_ones():
+    """The README's table of decision error rates is typed once, in the guides, from ``make
+    calibrate``'s output: the front page quotes the regression guide's false alarms (model "real")
+    and the comparing guide's false claims for every trial count, not numbers of its own."""
+    readme = (ROOT / "README.md").read_text()
+    gate = (ROOT / "docs/guide/regression-gating.md").read_text()
+    compare = (ROOT / "docs/guide/comparing.md").read_text()
+    rows = re.findall(r"^\| (\d+) \| ([\d.]+ %) \| ([\d.]+ %) \|$", readme, re.M)
+    assert [r[0] for r in rows] == ["1", "3", "5"], rows
+    for trials, diff_rate, compare_rate in rows:
+        assert re.search(rf"^\| real \| {trials} \| \*\*{re.escape(diff_rate)}\*\* ", gate, re.M), (trials, diff_rate)
+        assert re.search(rf"^\| {trials} \| \*\*{re.escape(compare_rate)}\*\* ", compare, re.M), (trials, compare_rate)
+
+
 def test_layers_table_holds_every_sub_package_and_what_it_may_import(build):
     table = build.layers_table()
     for layer in build.LAYERS:
