@@ -254,8 +254,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("submit", help="send result files to a challenge server (lorisnb serve)")
     p.add_argument("url", metavar="URL", help="the server, http://HOST:PORT")
-    p.add_argument("files", nargs="+", metavar="FILES", help="result files (.txt), a folder of them or a .zip")
+    p.add_argument("files", nargs="+", metavar="FILES", help="result files (.txt, .csv), a folder of them or a .zip")
     p.add_argument("--token", default=None, help="your team's token (default: $LORISNB_TOKEN)")
+    p.add_argument("--format", choices=("auto", "openloris", "tum", "euroc"), default=None,
+                   help="the files' format (default auto: recognised by the server from each file; TUM and EuRoC "
+                   "files are named after their sequence, cafe-1-2.txt)")  # fmt: skip
     p.add_argument("--wait", type=arg_type(lambda t: validate.positive("--wait", t, "seconds")), default=None,
                    metavar="SECONDS", help="wait up to SECONDS for the score and print it")  # fmt: skip
     p.set_defaults(func=_command(".challenge", "cmd_submit"))

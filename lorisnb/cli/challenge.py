@@ -115,11 +115,13 @@ def cmd_submit(args: argparse.Namespace) -> int:
     token = args.token or os.environ.get(TOKEN_VAR)
     if not token:
         raise ValidationError(f"no token: give --token TOKEN or set {TOKEN_VAR} (your team's token)")
-    view = submit(args.url, args.files, token, wait=args.wait)
+    view = submit(args.url, args.files, token, wait=args.wait, fmt=args.format)
     print(f"submission {view['id']}: {view['status']} ({view['url']})", file=sys.stderr)
     for r in view.get("rows", []):
         print(f"{r['scene']} {r['seq']}: CR {r['cr']:.3f}, C-ATE RMSE {r['c_ate_rmse'] or float('nan'):.3f} m "
               f"({r['file']})")  # fmt: skip
+    for h in view.get("hidden_sequences", []):  # scored, shown once a phase closes: no value here
+        print(f"{h['scene']} {h['seq']}: scored, {h['shown']} ({', '.join(h['files'])})", file=sys.stderr)
     for m in view.get("missing", []):
         print(f"error: {m['scene']} {m['seq']}: {m['error']}", file=sys.stderr)
     for f in view.get("failures", []):

@@ -49,7 +49,11 @@ def test_team_submits_in_the_page_and_sees_its_score(tmp_path, data):
         assert driver.find_element(By.ID, "team").text == "browsers"
         wait(lambda: driver.find_element(By.ID, "status").text == "scored", 240, "the score on the page")
         cells = driver.find_elements(By.CSS_SELECTOR, "#sequences td.cr")
-        assert [c.text for c in cells] == ["0.999", "0.161"]  # ORB-SLAM2 on cafe-1 and cafe-2
+        assert [c.text for c in cells] == ["0.999"]  # ORB-SLAM2 on cafe-1; cafe-2 is the final's, shown once it closes
+        assert (
+            "cafe 2 (cafe_1_2_orbslam2-original.txt): shown once phase 'final' closes"
+            in driver.find_element(By.ID, "hidden-sequences").text
+        )
         image = driver.find_element(By.CSS_SELECTOR, "img")
         assert driver.execute_script("return arguments[0].naturalWidth", image) > 100  # the timeline figure drawn
 

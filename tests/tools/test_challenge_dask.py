@@ -4,6 +4,7 @@ real uploads in processes of its workers' own, with the numbers the server's own
 
 from __future__ import annotations
 
+import json
 import time
 
 import pytest
@@ -49,7 +50,9 @@ def test_scoring_on_a_dask_cluster(tmp_path, data):
     for alg, v in views.items():
         assert v["status"] == "scored", v
         expected = evaluate(cafe_files(data, alg), challenge.spec, data_root=data, jobs=1).sequences()
-        assert [r["cr"] for r in v["rows"]] == pytest.approx(list(expected["cr"]), abs=1e-12)
+        result = json.loads(store.submission(app.state.server.engine, v["id"])["result"])  # every sequence scored
+        assert [r["cr"] for r in result["rows"]] == pytest.approx(list(expected["cr"]), abs=1e-12)
+        assert [r["seq"] for r in v["rows"]] == [1]  # shown: cafe-1 (cafe-2 is the final's, not closed)
     assert store.scoring_ledger(app.state.server.engine) == {sid: 1 for sid in sids.values()}
 
 

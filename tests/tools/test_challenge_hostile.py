@@ -6,6 +6,7 @@ socket (uvicorn on 127.0.0.1)."""
 from __future__ import annotations
 
 import io
+import json
 import socket
 import stat
 import threading
@@ -70,8 +71,9 @@ RESULT = b"scene: cafe\nframe: base_link\n\nseq: 1\n1560004885.5 1 2 3 0 0 0 1\n
         ({"a\\..\\evil.txt": RESULT}, 400, "Windows path"),
         ({"C:evil.txt": RESULT}, 400, "Windows path"),
         ({".hidden.txt": RESULT}, 400, "not starting with '.'"),
-        ({"x.pdf": RESULT}, 415, "expected OpenLORIS result files (.txt)"),
-        ({"inner.zip": zipped({"a.txt": RESULT})}, 415, "expected OpenLORIS result files (.txt)"),
+        ({"x.pdf": RESULT}, 415, "expected result files in a format lorisnb reads: OpenLORIS result files (.txt)"),
+        ({"inner.zip": zipped({"a.txt": RESULT})}, 415, "an archive inside the archive"),
+        ({"run.bag": b"#ROSBAG V2.0\n"}, 415, "a ROS bag; the challenge takes no ROS bags"),
         ({"a.txt": RESULT, "b/a.txt": RESULT}, 400, "a second file named 'a.txt'"),
         ({"bin.txt": b"\x00\x01binary" * 10}, 400, "a binary file"),
         ({"empty.txt": b"  \n"}, 400, "empty"),
@@ -129,7 +131,8 @@ def test_encrypted_and_broken_archives(hostile):
     "name, body, status, words",
     [
         ("../../x.txt", RESULT, 400, "climbs out"),
-        ("notes.docx", RESULT, 415, "expected OpenLORIS result files (.txt) or one .zip"),
+        ("notes.docx", RESULT, 415, "TUM (.txt, .csv) or EuRoC CSV (.csv) files named after their sequence"),
+        ("run.mcap", b"\x89MCAP0\r\n", 415, "the challenge takes no ROS bags"),
         ("x.txt", b"\x89PNG\r\n\x1a\n\x00\x00", 400, "binary"),
         ("x.txt", "é".encode("latin-1") * 20, 400, "not UTF-8 text"),
     ],
@@ -185,6 +188,61 @@ def test_tokens_refused(hostile):
     page = h["client"].post("/submit", files=files, data={"token": "wrong"})  # the browser form
     assert page.status_code == 401 and 'id="error"' in page.text and "unknown token" in page.text
     nothing_kept(h)
+
+
+TUM = b"1560004885.5 1 2 3 0 0 0 1\n1560004885.7 1 2 3 0 0 0 1\n"
+KITTI = b"1 0 0 1 0 1 0 2 0 0 1 3\n1 0 0 1.1 0 1 0 2 0 0 1 3\n"
+EUROC = b"#timestamp [ns],p_x,p_y,p_z,q_w,q_x,q_y,q_z\n1560004885500000000,1,2,3,1,0,0,0\n"
+
+
+@pytest.mark.parametrize(
+    "name, body, fmt, status, words",
+    [
+        ("cafe-1-2.txt", KITTI, None, 415, "a KITTI pose file holds no stamps, and the correct rate (CR) is taken over time"),
+        ("my-run.txt", TUM, None, 400, "a TUM trajectory file names no sequence; expected its name to name it as "
+         "OpenLORIS names sequences, <scene>-1-<seq> (e.g. cafe-1-2.txt)"),
+        ("run.csv", EUROC, None, 400, "a EuRoC CSV file names no sequence"),
+        ("cafe-1-3.txt", TUM, None, 400, "names sequence cafe-1-3, which is not one of this challenge's; expected one "
+         "of cafe-1-1, cafe-1-2"),
+        ("office-1-1.csv", EUROC, None, 400, "expected one of cafe-1-1, cafe-1-2"),
+        ("cafe-1-2.txt", b"hello world\n", None, 415, "not recognised as any format lorisnb reads"),
+        ("cafe-1-2.txt", RESULT, "tum", 415, "this looks like an OpenLORIS file ('scene:' and 'frame:' headers, "
+         "'seq: N' blocks of 'stamp x y z qx qy qz qw'), but the upload's format is tum"),
+        ("cafe-1-2.txt", TUM, "euroc", 415, "this looks like a TUM trajectory file"),
+        ("cafe-1-2.txt", TUM, "kitti", 415, "format kitti: a KITTI pose file holds no stamps"),
+        ("cafe-1-2.txt", TUM, "bag", 415, "format bag: the challenge takes no ROS bags"),
+        ("cafe-1-2.txt", TUM, "xyz", 400, "format 'xyz': expected auto (each file's format recognised from its "
+         "content), openloris, tum or euroc"),
+    ],
+)  # fmt: skip
+def test_formats_refused(hostile, name, body, fmt, status, words):
+    """A file of a format the challenge cannot score, a plain trajectory file whose name names no
+    sequence of the challenge, a file of no format lorisnb reads and a format field that does not
+    fit are refused, saying what is taken; nothing is kept."""
+    r = post(hostile, [("files", (name, body))], data={"format": fmt} if fmt else None)
+    assert r.status_code == status and words in r.json()["error"], r.text
+    nothing_kept(hostile)
+
+
+def test_formats_taken(hostile):
+    """TUM and EuRoC files named after their sequence are taken, their format recognised or given,
+    with their plan beside them; OpenLORIS files need none."""
+    r = post(hostile, [("files", ("cafe-1-2.txt", TUM)), ("files", ("cafe_1_1_v2.csv", EUROC)),
+                       ("files", ("a.txt", RESULT))])  # fmt: skip
+    assert r.status_code == 201, r.text
+    folder = hostile["challenge"].folder / "uploads" / r.json()["id"]
+    assert json.loads((folder / "plan.json").read_text()) == {
+        "cafe-1-2.txt": {"format": "tum", "scene": "cafe", "seq": 2},
+        "cafe_1_1_v2.csv": {"format": "euroc", "scene": "cafe", "seq": 1},
+    }
+    r = post(hostile, [("files", ("Cafe-1-1_trial2.txt", TUM))], data={"format": "tum"})
+    assert r.status_code == 201, r.text
+    plan = hostile["challenge"].folder / "uploads" / r.json()["id"] / "plan.json"
+    assert json.loads(plan.read_text()) == {"Cafe-1-1_trial2.txt": {"format": "tum", "scene": "cafe", "seq": 1}}
+    r = post(hostile, [("files", ("a.txt", RESULT))], data={"format": "openloris"})
+    assert (
+        r.status_code == 201 and not (hostile["challenge"].folder / "uploads" / r.json()["id"] / "plan.json").exists()
+    )
 
 
 def test_too_many_submissions(hostile, data):

@@ -7,6 +7,7 @@ coordinate."""
 from __future__ import annotations
 
 import csv
+import json
 import time
 import zipfile
 
@@ -19,6 +20,7 @@ from fastapi.testclient import TestClient  # noqa: E402
 from lorisnb.cli import main  # noqa: E402
 from lorisnb.tools.challenge import store  # noqa: E402
 from lorisnb.tools.challenge.app import create_app  # noqa: E402
+from lorisnb.tools.challenge.board import when  # noqa: E402
 from lorisnb.tools.challenge.config import read_challenge  # noqa: E402
 from lorisnb.tools.evaluation.runner import evaluate  # noqa: E402
 from lorisnb.tools.report.leaderboard import leaderboard_spec  # noqa: E402
@@ -84,16 +86,40 @@ def served(tmp_path_factory, data):
                    engine=engine)  # fmt: skip
 
 
+def closed_final(served):
+    """The server's clock set past the final's close for a ``with`` block (restored after)."""
+    import contextlib
+
+    server = served["client"].client.app.state.server
+
+    @contextlib.contextmanager
+    def past():
+        real = server.clock
+        server.clock = lambda: server.challenge.phase("final").closes + 1
+        try:
+            yield
+        finally:
+            server.clock = real
+
+    return past()
+
+
 def test_scores_are_evaluate_s(served, data):
-    """Each submission's per-sequence rows are those of evaluate() on the same files with the
-    challenge's spec; both files count, seq 2 is scored but not ranked in development."""
+    """Each submission is scored on both its files by the pipeline of evaluate() with the
+    challenge's spec, but while the final phase, the only one holding cafe-2, has not closed, its
+    view holds cafe-1 alone and names cafe-2 without a value; once the final closes, both rows."""
     spec = leaderboard_spec({})
     for team, alg in (("orbs", "orbslam2_rgbd"), ("dslam", "ds-slam")):
         view = served["views"][team]
         assert view["status"] == "scored" and view["failures"] == [] and view["missing"] == []
         expected = evaluate(cafe_files(data, alg), spec, data_root=data, jobs=1).sequences()
-        got = {(r["scene"], r["seq"]): r for r in view["rows"]}
-        assert len(got) == len(expected) == 2
+        assert [(r["scene"], r["seq"], r["ranked"]) for r in view["rows"]] == [("cafe", 1, True)]
+        assert view["hidden_sequences"] == [dict(scene="cafe", seq=2, files=[cafe_files(data, alg)[1].name],
+                                                 shown="shown once phase 'final' closes (" f"{when(served['challenge'].phase('final').closes)})")]  # fmt: skip
+        with closed_final(served):
+            after = served["client"].get(f"/api/submissions/{view['id']}").json()
+        got = {(r["scene"], r["seq"]): r for r in after["rows"]}
+        assert len(got) == len(expected) == 2 and after["hidden_sequences"] == []
         for e in expected.itertuples():
             r = got[(e.scene, e.seq)]
             assert r["cr"] == pytest.approx(e.cr, abs=1e-12)
@@ -275,3 +301,79 @@ def test_submit_says_why_a_scored_submission_shows_no_score(monkeypatch, capsys)
     assert main(["submit", "http://127.0.0.1:1", "x.txt", "--token", "t", "--wait", "1"]) == 0
     err = capsys.readouterr().err
     assert "scored" in err and "scores of phase 'final' are shown once it closes" in err
+
+
+def test_hidden_sequence_leaves_the_server_only_after_the_final_closes(served, data, monkeypatch, capsys):
+    """No response before the final closes holds a value of cafe-2 (the final's alone) as the pages
+    print it (3 decimals) or the API writes it (every digit): the submission pages and their JSON,
+    the team's and the leaderboard's pages and API, ``lorisnb submit --wait``'s output, and the
+    figure served (drawn without cafe-2); the admin's page holds them and says so. Once the final
+    closes they appear (so the test can fail)."""
+    import httpx
+
+    client, tokens, sids = served["client"], served["tokens"], served["sids"]
+    app = client.client.app
+
+    class Unstarted:  # lorisnb submit's httpx.Client, answered by the app in this process
+        def __init__(self, base_url: str, timeout: float):
+            self.client = TestClient(app, base_url=base_url)
+
+        def __enter__(self):
+            return self.client
+
+        def __exit__(self, *exc):
+            return False
+
+    monkeypatch.setattr(httpx, "Client", Unstarted)
+    folder = served["tmp"] / "submit-hidden"
+    folder.mkdir()
+    for p in cafe_files(data, "infinitam_aligned_depth"):
+        (folder / p.name).write_bytes(p.read_bytes())
+    capsys.readouterr()
+    assert main(["submit", "http://127.0.0.1:9", str(folder), "--token", tokens["dslam"], "--wait", "120"]) == 0
+    out = capsys.readouterr()
+    sid = out.err.split()[1].rstrip(":")
+    subs = [store.submission(served["engine"], x) for x in (sids["orbs"], sids["dslam"], sid)]
+    rows = [r for s in subs for r in json.loads(s["result"])["rows"]]
+    columns = ("cr", "cr_t", "cs_r", "ate_rmse", "c_ate_rmse", "aoe_rmse", "reloc_time")
+
+    def forms(seq: int, form) -> set[str]:
+        return {form(r[k]) for r in rows if r["seq"] == seq for k in columns if isinstance(r[k], float)}
+
+    common = {"0.000", "1.000", "0.0", "1.0"}
+    full = forms(2, repr) - forms(1, repr) - common  # as the API writes them
+    printed = forms(2, "{:.3f}".format) - forms(1, "{:.3f}".format) - common  # as the pages and submit print them
+    assert len(full) > 15 and len(printed) > 10  # the values of cafe-2 of three submissions
+    team_form = {"token": tokens["dslam"]}
+    auth = {"Authorization": f"Bearer {tokens['dslam']}"}
+
+    def responses() -> tuple[list[str], list[str]]:
+        """The pages (HTML) and the API's answers (JSON)."""
+        pages = [client.get(f"/submissions/{x}").text for x in (sids["orbs"], sids["dslam"], sid)]
+        pages += [client.get("/").text, client.post("/team", data=team_form).text]
+        api = [client.get(f"/api/submissions/{x}").text for x in (sids["orbs"], sids["dslam"], sid)]
+        api += [client.get("/api/leaderboard").text, client.get("/api/team", headers=auth).text]
+        return pages, api
+
+    pages, api = responses()
+    shown = pages + [out.out, out.err]
+    assert [f for f in printed if any(f in b for b in shown)] == []
+    assert [f for f in full if any(f in b for b in shown + api)] == []
+    assert "cafe 2: scored, shown once phase 'final' closes" in out.err and "cafe 2: CR" not in out.out
+    assert "cafe 1: CR " in out.out  # InfiniTAM on cafe-1, shown
+    # the figure served is the one drawn of cafe-1 alone
+    result = json.loads(subs[2]["result"])
+    png = client.get(f"/submissions/{sid}/timeline.png")
+    drawn = {f["file"]: f["sequences"] for f in result["figures"]}
+    assert png.status_code == 200 and png.headers["cache-control"] == "no-store"
+    name = next(n for n in drawn if (served["challenge"].folder / "uploads" / sid / n).read_bytes() == png.content)
+    assert drawn[name] == [["cafe", 1]] and len(drawn) == 2
+    # the admin sees every value, and its page says which teams do not
+    admin = client.post("/admin", data={"token": tokens["admin"]}).text
+    assert 'id="admin-only"' in admin and all('id="admin-only"' not in b and "admin only" not in b for b in pages)
+    assert f"cafe 2: {result['rows'][1]['cr']:.3f} (hidden from teams)" in admin
+    with closed_final(served):
+        pages, api = responses()
+        png_after = client.get(f"/submissions/{sid}/timeline.png")
+    assert all(any(f in b for b in api) for f in full)  # every value of cafe-2, in full
+    assert png_after.status_code == 200 and png_after.content != png.content  # drawn with cafe-2

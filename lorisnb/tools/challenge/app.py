@@ -4,18 +4,19 @@ no CDN: they open offline) and a JSON API for the same data.
 Pages: ``/`` leaderboard of every phase, ``/submit`` upload form, ``/submissions/{id}`` a
 submission (reloads itself while it waits), ``/team`` and ``/admin`` (token in a form).
 API: ``GET /api/leaderboard``, ``POST /api/submissions`` (``Authorization: Bearer TOKEN``,
-multipart ``files``), ``GET /api/submissions/{id}``, ``GET /api/team``, ``GET /api/admin``,
-``GET /api/health``.
+multipart ``files`` and an optional ``format``), ``GET /api/submissions/{id}``, ``GET /api/team``,
+``GET /api/admin``, ``GET /api/health``. Scores leave the server only for the sequences visible
+now (:mod:`.board`); the admin's page and API alone hold the others, saying so.
 
 An upload is refused before it is read where its headers say so (size, token), and while it is
-read where it grows past the limit or comes too slowly (:class:`BodyLimit`); then checked and
-unpacked (:mod:`.uploads`), written to disk and committed to the database before the response.
+read where it grows past the limit or comes too slowly (:class:`BodyLimit`); then checked,
+unpacked and planned (:mod:`.uploads`), written to disk and committed to the database before the
+response.
 """
 
 from __future__ import annotations
 
 import asyncio
-import datetime as dt
 import json
 import secrets
 import shutil
@@ -36,19 +37,12 @@ from starlette.formparsers import MultiPartException
 
 from lorisnb.io.datasets.paths import scene_durations
 from lorisnb.tools.challenge import store
-from lorisnb.tools.challenge.board import leaderboard, submission_view
-from lorisnb.tools.challenge.config import Challenge
-from lorisnb.tools.challenge.uploads import Limits, UploadRefused, unpack
+from lorisnb.tools.challenge.board import admin_scores, figure_file, leaderboard, submission_view, when
+from lorisnb.tools.challenge.config import Challenge, sequences_of
+from lorisnb.tools.challenge.uploads import Limits, UploadRefused, keep_upload, upload_format
 
 DAY = 24 * 3600.0
 Clock = Callable[[], float]
-
-
-def when(ts: float | None) -> str:
-    """An epoch time as the pages show it (UTC, to the minute)."""
-    if ts is None:
-        return ""
-    return dt.datetime.fromtimestamp(ts, dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
 
 
 def num(v: Any, digits: int = 3) -> str:
@@ -188,8 +182,9 @@ class Server:
             raise Refused(404, f"no submission {sid!r}")
         return submission_view(sub, self.challenge, self.durations, self.clock())
 
-    async def accept(self, team: dict[str, Any], files: list[tuple[str, Any]]) -> str:
-        """Check the phase and the team's daily limit, unpack, and commit the submission; its id."""
+    async def accept(self, team: dict[str, Any], files: list[tuple[str, Any]], fmt: str = "auto") -> str:
+        """Check the phase and the team's daily limit, unpack and plan the files (``fmt``: the
+        upload's format, :func:`.uploads.plan`), and commit the submission; its id."""
         now = self.clock()
         phase = self.challenge.phase_at(now)
         if phase is None:
@@ -207,7 +202,7 @@ class Server:
             folder = self.challenge.folder / "uploads" / sid
             lim = Limits(limits["files"], limits["unpacked_mb"] * 1_000_000)
             try:
-                names = await run_in_threadpool(unpack, files, folder / "files", lim)
+                names = await run_in_threadpool(keep_upload, files, folder, lim, fmt, sequences_of(self.durations))
             except UploadRefused:
                 shutil.rmtree(folder, ignore_errors=True)
                 raise
@@ -216,8 +211,9 @@ class Server:
         return sid
 
 
-async def _form(request: Request) -> tuple[str | None, list[tuple[str, Any]], Any]:
-    """The multipart form: its token field, its files, and the form (closed by the caller)."""
+async def _form(request: Request) -> tuple[str | None, list[tuple[str, Any]], str, Any]:
+    """The multipart form: its token field, its files, its format (:func:`.uploads.upload_format`)
+    and the form (closed by the caller)."""
     limits = request.app.state.server.challenge.limits
     try:
         form = await request.form(max_files=limits["files"] + 1, max_fields=10, max_part_size=64 * 1024)
@@ -229,7 +225,12 @@ async def _form(request: Request) -> tuple[str | None, list[tuple[str, Any]], An
     if any(not isinstance(v, UploadFile) for v in form.getlist("files")):
         await form.close()
         raise Refused(400, "'files' holds text, not files; expected files sent as multipart/form-data")
-    return token if isinstance(token, str) else None, files, form
+    try:
+        fmt = upload_format(form.get("format"))
+    except UploadRefused:
+        await form.close()
+        raise
+    return token if isinstance(token, str) else None, files, fmt, form
 
 
 def _bearer(request: Request) -> str | None:
@@ -318,10 +319,10 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
     async def receive(request: Request, token: str | None) -> str:
         if token is not None:  # the API's header: refused before the body is read
             server.team(token)
-        field, files, form = await _form(request)
+        field, files, fmt, form = await _form(request)
         try:
             team = server.team(token if token is not None else field)
-            return await server.accept(team, files)
+            return await server.accept(team, files, fmt)
         finally:
             await form.close()
 
@@ -352,12 +353,15 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
 
     @app.get("/submissions/{sid}/timeline.png")
     async def timeline(sid: str) -> Response:
+        """The figure of the sequences visible now (:func:`.board.figure_file`), never kept by a browser."""
         s = await run_in_threadpool(server.view, sid)
-        figure = challenge.folder / "uploads" / s["id"] / "timeline.png"
-        if not s.get("figure") or not figure.is_file():
+        sub = store.submission(engine, sid) if s.get("figure") else None
+        name = figure_file(json.loads(sub["result"]), challenge, server.durations, server.clock()) if sub else None
+        figure = challenge.folder / "uploads" / s["id"] / name if name else None
+        if figure is None or not figure.is_file():
             raise Refused(404, "no timeline figure for this submission (not scored, or its phase shows scores "
                           "once it closes)")  # fmt: skip
-        return FileResponse(figure, media_type="image/png")
+        return FileResponse(figure, media_type="image/png", headers={"Cache-Control": "no-store"})
 
     def listing(subs: list[dict[str, Any]]) -> list[dict[str, Any]]:
         keep = ("id", "team", "phase", "created", "status", "error", "finished", "bytes")
@@ -391,15 +395,22 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
         return server.page("token.html", "Admin", action="/admin", label="Admin token")
 
     def admin_data() -> dict[str, Any]:
+        """The queue, the teams and every submission, with each one's scores of every sequence and
+        whether teams see them now (the admin's view alone holds the hidden ones)."""
+        subs = store.all_submissions(engine)
+        now = server.clock()
+        scores = {s["id"]: admin_scores(s, challenge, now) for s in subs}
         return dict(queue=store.queue_counts(engine), teams=store.all_teams(engine),
-                    subs=listing(store.all_submissions(engine, results=False)))  # fmt: skip
+                    subs=[s | {"scores": scores[s["id"]]} for s in listing(subs)],
+                    note="scores with shown false are hidden from teams until a phase holding their sequence "
+                    "closes: only the admin's view holds them")  # fmt: skip
 
     @app.post("/admin", response_class=HTMLResponse)
     async def admin_page(request: Request) -> HTMLResponse:
         form = await request.form(max_files=0, max_fields=5)
         token = form.get("token")
         server.team(token if isinstance(token, str) else None, admin=True)
-        return server.page("admin.html", "Admin", **admin_data())
+        return server.page("admin.html", "Admin", admin=True, **admin_data())
 
     @app.get("/api/admin")
     async def admin_api(request: Request) -> JSONResponse:

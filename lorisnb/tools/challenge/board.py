@@ -9,11 +9,21 @@ algorithm, on the phase's sequences, a sequence without output counting as a fai
 rank). The order within a rank, the paper's (Sec. IV: robustness first, then accuracy of the
 correct poses): the metric's scene value, then the C-ATE RMSE (lower first; the CR, higher first,
 when the metric is C-ATE itself), then the earlier submission.
+
+Hidden stays hidden: a submission is scored on every sequence it has output for, but its page, its
+JSON and its figure show only the sequences whose scores are visible now
+(:meth:`.config.Challenge.visible`: held by a phase that is live or has closed); the others are
+named, without a value, with the phase whose close shows them. Its timeline figure was drawn for
+each set of visible sequences the challenge goes through (:meth:`.config.Challenge.views`), and
+the one of the set visible now is shown (:func:`figure_file`). Only the admin's view
+(:func:`admin_scores`) holds scores of sequences not yet shown, and says which.
 """
 
 from __future__ import annotations
 
+import datetime as dt
 import json
+import re
 from typing import Any
 
 import numpy as np
@@ -21,7 +31,7 @@ import pandas as pd
 
 from lorisnb.core.lifelong.aggregate import aggregate_scenes
 from lorisnb.core.lifelong.coverage import COPIED, FAILED_RUN
-from lorisnb.tools.challenge.config import Challenge, Phase
+from lorisnb.tools.challenge.config import Challenge, Phase, sequences_of
 from lorisnb.tools.report.leaderboard import METRICS, findings
 
 #: The per-sequence columns a team sees: rates and errors of its own estimate, nothing of the ground truth.
@@ -37,8 +47,40 @@ def phase_sequences(phase: Phase, durations: pd.DataFrame) -> pd.DataFrame:
     return durations[np.array(keep, bool)].reset_index(drop=True)
 
 
+def when(ts: float | None) -> str:
+    """An epoch time as the pages show it (UTC, to the minute)."""
+    if ts is None:
+        return ""
+    return dt.datetime.fromtimestamp(ts, dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+
+
+def _scored(result: dict[str, Any]) -> set[tuple[str, int]]:
+    return {(r["scene"], int(r["seq"])) for r in result["rows"]}
+
+
+def _shown_notes(notes: list[Any], shown: frozenset[tuple[str, int]], all_shown: bool) -> list[str]:
+    """The notes about sequences shown: a note names the sequences it is about (a file's, or the
+    ``seq N`` it names); one of a result scored before notes did is shown only if every sequence is."""
+    out = []
+    for n in notes:
+        if isinstance(n, str):
+            if all_shown:
+                out.append(n)
+        elif {(s, int(q)) for s, q in n["sequences"]} <= shown:
+            out.append(n["text"])
+    return out
+
+
+def _hidden_note(challenge: Challenge, scene: str, seq: int) -> str:
+    phase = challenge.shown_by(scene, seq)
+    if phase is None:
+        return "in no phase of this challenge: never shown"
+    return f"shown once phase {phase.name!r} closes ({when(phase.closes)})"
+
+
 def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.DataFrame, now: float) -> dict[str, Any]:
-    """A submission as its page and the API show it (see the module docstring)."""
+    """A submission as its page and the API show it (see the module docstring): the rows of the
+    sequences visible now; ``hidden`` lists the others scored (scene, seq, file, when shown), no value."""
     phase = challenge.phase(sub["phase"])
     view: dict[str, Any] = dict(
         id=sub["id"], team=sub["team"], phase=sub["phase"], status=sub["status"], submitted=sub["created"],
@@ -50,15 +92,45 @@ def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.Dat
             view["hidden"] = f"scores of phase {phase.name!r} are shown once it closes"
         return view
     result = json.loads(sub["result"])
+    scored = _scored(result)
+    shown = challenge.visible(scored, now)
     wanted = phase_sequences(phase, durations)
     rows = [{k: r.get(k) for k in PUBLIC_COLUMNS} | {"ranked": phase.keeps(r["scene"], int(r["seq"]))}
-            for r in result["rows"]]  # fmt: skip
-    have = {(r["scene"], int(r["seq"])) for r in rows}
+            for r in result["rows"] if (r["scene"], int(r["seq"])) in shown]  # fmt: skip
+    hidden = [dict(scene=s, seq=q, files=sorted({r["file"] for r in result["rows"] if (r["scene"], int(r["seq"])) == (s, q)}),
+                   shown=_hidden_note(challenge, s, q)) for s, q in sorted(scored - shown)]  # fmt: skip
     missing = [dict(scene=s, seq=int(q), error="no output for this sequence: it counts as a failed run")
-               for s, q in zip(wanted["scene"], wanted["seq"], strict=True) if (s, int(q)) not in have]  # fmt: skip
-    view.update(rows=rows, failures=result["failures"], missing=missing, notes=result["notes"],
-                conventions=result["conventions"], figure=bool(result.get("figure")))  # fmt: skip
+               for s, q in zip(wanted["scene"], wanted["seq"], strict=True) if (s, int(q)) not in scored]  # fmt: skip
+    view.update(rows=rows, hidden_sequences=hidden, failures=result["failures"], missing=missing,
+                notes=_shown_notes(result["notes"], shown, not hidden), conventions=result["conventions"],
+                figure=figure_file(result, challenge, durations, now) is not None)  # fmt: skip
     return view
+
+
+def figure_file(result: dict[str, Any], challenge: Challenge, durations: pd.DataFrame, now: float) -> str | None:
+    """The file name of the submission's timeline figure of the sequences visible now (in its
+    folder), None if it has none: one drawn for exactly the set visible now, or, for a result scored
+    before figures were drawn per set, its one figure if every sequence it holds is visible."""
+    visible = challenge.visible(sequences_of(durations), now)
+    figures = result.get("figures")
+    if figures is None:
+        return "timeline.png" if result.get("figure") and _scored(result) <= visible else None
+    for f in figures:
+        if {(s, int(q)) for s, q in f["sequences"]} == visible and re.fullmatch(r"timeline-\d+\.png", f["file"]):
+            return str(f["file"])
+    return None
+
+
+def admin_scores(sub: dict[str, Any], challenge: Challenge, now: float) -> list[dict[str, Any]]:
+    """Every scored sequence of a submission with its CR and C-ATE RMSE and whether teams see it
+    now (``shown``): the admin's view, which alone holds scores not yet shown."""
+    if sub["status"] != "scored" or not sub.get("result"):
+        return []
+    phase = challenge.phase(sub["phase"])
+    result = json.loads(sub["result"])
+    shown = challenge.visible(_scored(result), now) if phase.shows_scores(now) else frozenset()
+    return [dict(scene=r["scene"], seq=int(r["seq"]), file=r.get("file"), cr=r.get("cr"), c_ate_rmse=r.get("c_ate_rmse"),
+                 shown=(r["scene"], int(r["seq"])) in shown) for r in result["rows"]]  # fmt: skip
 
 
 def latest_scored(subs: list[dict[str, Any]], phase: str) -> list[dict[str, Any]]:

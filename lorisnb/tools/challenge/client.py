@@ -1,5 +1,6 @@
-"""``lorisnb submit URL FILES``: send result files (``.txt`` files, a folder of them, or a
-``.zip``) to a challenge server's API and, with ``wait``, follow the submission until it is scored."""
+"""``lorisnb submit URL FILES``: send result files (files, a folder of them, or a ``.zip``; their
+format recognised by the server, or given) to a challenge server's API and, with ``wait``, follow
+the submission until it is scored."""
 
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ def _parts(paths: list[str]) -> list[tuple[str, tuple[str, bytes]]]:
             buf = io.BytesIO()
             files = sorted(f for f in p.rglob("*") if f.is_file() and not f.name.startswith("."))
             if not files:
-                raise ValidationError(f"{given}: a folder without files; expected result files (.txt)")
+                raise ValidationError(f"{given}: a folder without files; expected result files (.txt, .csv)")
             with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
                 for f in files:
                     z.write(f, f.relative_to(p).as_posix())
@@ -34,10 +35,12 @@ def _parts(paths: list[str]) -> list[tuple[str, tuple[str, bytes]]]:
     return out
 
 
-def submit(url: str, paths: list[str], token: str, wait: float | None = None, poll: float = 1.0) -> dict[str, Any]:
-    """Upload ``paths`` to the server at ``url`` with the team's ``token``; the submission as the
-    API shows it, after it is scored if ``wait`` (seconds) is given. A refusal is a LorisError
-    with the server's message."""
+def submit(url: str, paths: list[str], token: str, wait: float | None = None, poll: float = 1.0,
+           fmt: str | None = None) -> dict[str, Any]:  # fmt: skip
+    """Upload ``paths`` to the server at ``url`` with the team's ``token`` (``fmt``: the files'
+    format, default recognised by the server from each file); the submission as the API shows it,
+    after it is scored if ``wait`` (seconds) is given. A refusal is a LorisError with the server's
+    message."""
     httpx = require("httpx", "serve")
     base = url.rstrip("/")
     if not base.startswith(("http://", "https://")):
@@ -45,7 +48,8 @@ def submit(url: str, paths: list[str], token: str, wait: float | None = None, po
     parts = _parts(paths)
     try:
         with httpx.Client(base_url=base, timeout=60.0) as client:
-            r = client.post("/api/submissions", files=parts, headers={"Authorization": f"Bearer {token}"})
+            r = client.post("/api/submissions", files=parts, data={"format": fmt} if fmt else None,
+                            headers={"Authorization": f"Bearer {token}"})  # fmt: skip
             if r.status_code != 201:
                 raise LorisError(f"{base} refused the submission ({r.status_code}): {_message(r)}")
             sid = r.json()["id"]

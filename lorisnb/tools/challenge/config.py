@@ -31,9 +31,10 @@ Example::
 from __future__ import annotations
 
 import datetime as dt
+import math
 import os
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -124,6 +125,32 @@ class Challenge:
     @property
     def scenes(self) -> tuple[str, ...]:
         return tuple(s for s in SCENES if any(s in p.scenes for p in self.phases))
+
+    def visible(self, sequences: Iterable[tuple[str, int]], now: float) -> frozenset[tuple[str, int]]:
+        """The ``sequences`` (scene, seq) whose scores may leave the server at ``now``: those of a
+        phase that shows its scores (live, or closed). A sequence in a shown and a hidden phase is
+        shown; one in no phase never is."""
+        shown = [p for p in self.phases if p.shows_scores(now)]
+        return frozenset((s, int(q)) for s, q in sequences if any(p.keeps(s, int(q)) for p in shown))
+
+    def views(self, sequences: Iterable[tuple[str, int]]) -> list[frozenset[tuple[str, int]]]:
+        """Every set of :meth:`visible` sequences the challenge goes through, in order: before any
+        ``after-close`` phase closes, then after each closes (a scoring draws a figure of each)."""
+        seqs = list(sequences)
+        times = [-math.inf] + sorted({p.closes for p in self.phases if p.leaderboard == "after-close"})
+        return list(dict.fromkeys(self.visible(seqs, t) for t in times))
+
+    def shown_by(self, scene: str, seq: int) -> Phase | None:
+        """The phase whose scores first show a sequence: a live phase holding it, else the
+        after-close phase holding it that closes first; None if no phase holds it (never shown)."""
+        holding = [p for p in self.phases if p.keeps(scene, seq)]
+        return min(holding, key=lambda p: -math.inf if p.leaderboard == "live" else p.closes, default=None)
+
+
+def sequences_of(durations: Any) -> list[tuple[str, int]]:
+    """The (scene, seq) of every ground-truth sequence of a durations table (its ``scene`` and
+    ``seq`` columns: :func:`lorisnb.io.datasets.paths.scene_durations`)."""
+    return [(str(s), int(q)) for s, q in zip(durations["scene"], durations["seq"], strict=True)]
 
 
 def _time(raw: Mapping[str, Any], key: str, path: Path, where: str, default: float | None = None) -> float:

@@ -1,9 +1,14 @@
 """Scoring: each submission in a process of its own, forked from a server that has lorisnb's
 evaluation already imported (``forkserver``), with a CPU-time and a memory limit
-(``resource.setrlimit``) and a wall-clock deadline. The process scores the uploaded files with
-:func:`lorisnb.tools.evaluation.runner.evaluate` (the pipeline of ``lorisnb evaluate``) against the
-hidden ground truth, draws the paper's timeline figure, and writes its outcome to a JSON file
-named for its claim; the server commits that outcome to the database (:func:`.store.finish`).
+(``resource.setrlimit``) and a wall-clock deadline. The process scores the uploaded files as
+``lorisnb evaluate`` scores them against the hidden ground truth: OpenLORIS result files with
+:func:`lorisnb.tools.evaluation.runner.evaluate`, TUM and EuRoC files each against its sequence's
+ground truth with :func:`lorisnb.tools.evaluation.runner.evaluate_pairs` (the upload's plan,
+:func:`.uploads.plan`). It scores every sequence it has output for and draws the paper's timeline
+figure once for each set of sequences the challenge shows as its phases close
+(:meth:`.config.Challenge.views`), and writes its outcome to a JSON file named for its claim; the
+server commits that outcome to the database (:func:`.store.finish`), and shows of it only what
+is visible (:mod:`.board`).
 
 :class:`Scorer` is the server's loop over the persisted queue (:mod:`.store`): it puts back what a
 killed server left half-scored, runs up to ``workers`` processes at a time and commits each
@@ -18,28 +23,40 @@ import math
 import multiprocessing
 import os
 import pickle
+import re
 import resource
+import shutil
 import signal
 import subprocess
 import sys
 import threading
 import time
 import warnings
-from dataclasses import dataclass
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from sqlalchemy import Engine
 
+from lorisnb.core.lifelong.aggregate import aggregate_scenes, spans_table
+from lorisnb.core.pipeline.model import FileErrors
 from lorisnb.core.spec.evalspec import EvalSpec
+from lorisnb.core.stats.trials import check_duplicates
+from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import LorisError, LorisWarning
-from lorisnb.io.datasets.paths import DataPaths
+from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans
+from lorisnb.io.writers import write_openloris
 from lorisnb.tools.challenge import store
-from lorisnb.tools.challenge.config import Challenge
-from lorisnb.tools.evaluation.runner import evaluate
+from lorisnb.tools.challenge.config import Challenge, sequences_of
+from lorisnb.tools.challenge.uploads import PLAN
+from lorisnb.tools.evaluation.jobs import GT_DROP
+from lorisnb.tools.evaluation.result import Evaluation
+from lorisnb.tools.evaluation.runner import evaluate, evaluate_pairs
 from lorisnb.tools.evaluation.status import skipped_only
 
-FILES = "files"  # a submission's folder: files/ (as uploaded), result-<claim>.json, timeline.png
+FILES = "files"  # a submission's folder: files/ (as uploaded), plan.json, result-<claim>.json, timeline-<k>.png
+GROUNDTRUTH = "groundtruth"  # the server folder's one-sequence ground truths (sequence_groundtruth)
 
 
 def _plain(value: Any) -> Any:
@@ -51,44 +68,144 @@ def _plain(value: Any) -> Any:
     return value if isinstance(value, (int, float, str, bool)) or value is None else str(value)
 
 
-def scrub(text: str, folder: Path, data: DataPaths) -> str:
-    """A message with the server's paths taken out: the upload's folder (its files by name) and
-    the hidden ground truth's folder (never named to a team)."""
-    text = text.replace(f"{folder}{os.sep}", "").replace(str(folder), "the upload")
-    return text.replace(str(data.root.resolve()), "<ground truth>").replace(str(data.root), "<ground truth>")
+def scrub(text: str, folder: Path, data: DataPaths, groundtruth: Path | None = None) -> str:
+    """A message with the server's paths taken out: the upload's folder (its files by name, also
+    as linked for scoring, :func:`_pair_folder`) and the hidden ground truth's folders (the data
+    root and ``groundtruth``, the server's one-sequence files: never named to a team)."""
+    pairs = re.escape(f"pairs{os.sep}") + r"\d+" + re.escape(os.sep)
+    text = re.sub(re.escape(f"{folder.parent}{os.sep}") + f"({pairs})?" + re.escape(f"{FILES}{os.sep}"), "", text)
+    text = text.replace(f"{folder}{os.sep}", "").replace(str(folder.parent), "the upload")
+    for root in [data.root.resolve(), data.root] + ([groundtruth.resolve(), groundtruth] if groundtruth else []):
+        text = text.replace(str(root), "<ground truth>")
+    return text
 
 
-def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figure: Path | None = None) -> dict[str, Any]:
-    """Score the result files in ``folder`` as ``lorisnb evaluate`` does: per-sequence rows (every
-    column of :meth:`Evaluation.sequence_rows`), each file that failed or was not scored with its
-    reason (paths scrubbed, :func:`scrub`), and the timeline figure written to ``figure``."""
+def sequence_groundtruth(data: DataPaths, scene: str, seq: int, folder: Path) -> Path:
+    """The ground truth of one sequence as an OpenLORIS file of its one ``seq:`` block, written
+    once into ``folder`` (the server's, never an upload's; named for the scene file's time and
+    size, so a changed ground truth is written anew): what a TUM or EuRoC file of that sequence is
+    scored against, as ``lorisnb evaluate FILE --format tum --gt THIS --gt-format openloris`` scores it."""
+    src = data.groundtruth(scene)
+    st = src.stat()
+    out = folder / f"gt_{scene}_1-seq{seq}-{st.st_mtime_ns}-{st.st_size}.txt"
+    if not out.is_file():
+        gt = load_groundtruth(scene, data, GT_DROP)
+        if seq not in gt.sequences:
+            raise LorisError(f"the ground truth of {scene} has no sequence {seq}; tell the organizers")
+        write_openloris(out, {seq: gt.sequences[seq]}, scene, frame=gt.frame, overwrite=True)  # atomic
+    return out
+
+
+def _pair_folder(sub: Path, k: int, name: str) -> Path:
+    """A folder named ``files`` holding only the upload's file ``name`` (a hard link): scored from
+    it, a plain file's rows have the algorithm ``files`` as an OpenLORIS file's on the server (so
+    ``scale = "auto"`` is the challenge's choice, never chosen by a file's name)."""
+    folder = sub / "pairs" / str(k) / FILES
+    folder.mkdir(parents=True, exist_ok=True)
+    dest = folder / name
+    if not dest.exists():
+        try:
+            os.link(sub / FILES / name, dest)
+        except OSError:
+            shutil.copyfile(sub / FILES / name, dest)
+    return folder
+
+
+def _attributed(f: FileErrors, text: str) -> list[tuple[str, int]]:
+    """The sequences a file's note is about: those of its sequences it names (``seq 2``), else all."""
+    seqs = [e.seq for e in f.sequences]
+    named = [q for q in map(int, re.findall(r"\bseq:? ?(\d+)", text)) if q in seqs]
+    return [(f.scene, q) for q in (named or seqs)]
+
+
+def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | None = None, *,
+                 plain: Mapping[str, Mapping[str, Any]] | None = None, groundtruth: Path | None = None,
+                 views: Sequence[Iterable[tuple[str, int]]] | None = None) -> dict[str, Any]:  # fmt: skip
+    """Score the result files in ``folder`` as ``lorisnb evaluate`` does: OpenLORIS result files
+    with :func:`~lorisnb.tools.evaluation.runner.evaluate`, and each file of ``plain`` (name ->
+    format, scene, seq: :func:`.uploads.plan`) with
+    :func:`~lorisnb.tools.evaluation.runner.evaluate_pairs` against its sequence's ground truth
+    (:func:`sequence_groundtruth`, in ``groundtruth``, default beside the upload's folder). The outcome: per-sequence rows (every
+    column of :meth:`Evaluation.sequence_rows`) of every sequence scored, each file that failed or
+    was not scored with its reason (paths scrubbed, :func:`scrub`), the notes with the sequences
+    each is about, and a timeline figure in ``figures`` of each set of sequences in ``views``
+    that the submission has output in (``timeline-<k>.png``; ``views`` None: one of all)."""
+    plain = dict(plain or {})
+    gt_folder = groundtruth if groundtruth is not None else folder.parent / GROUNDTRUTH
+    native = sorted(p for p in folder.iterdir() if p.is_file() and p.name not in plain)
+    evaluations: list[Evaluation] = []
+    problems: list[tuple[str, str, str]] = []  # status, file, error
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
-        ev = evaluate([folder], spec, data_root=data, jobs=1, progress=False)
+        if native:
+            evaluations.append(evaluate(native, spec, data_root=data, jobs=1, progress=False))
+        for k, (name, p) in enumerate(sorted(plain.items())):
+            try:
+                gt = sequence_groundtruth(data, str(p["scene"]), int(p["seq"]), gt_folder)
+                evaluations.append(evaluate_pairs([_pair_folder(folder.parent, k, name)], gt, spec, fmt=str(p["format"]),
+                                                  gt_fmt="openloris", scene=str(p["scene"]), jobs=1, progress=False))  # fmt: skip
+            except LorisError as exc:  # an option of the challenge's spec this format cannot take
+                problems.append(("failed", name, str(exc)))
+        errors = [f for ev in evaluations for f in ev.errors]
+        if len(evaluations) > 1:  # one sequence and trial in two files: an error, as evaluate() says
+            check_duplicates([(Path(f.path).name, (f.suite, f.algorithm, f.scene, f.trial),
+                               tuple(e.seq for e in f.sequences)) for f in errors])  # fmt: skip
+        ev = Evaluation(errors, [], None, [], data, spec=spec, kind="openloris")
         rows = ev.sequence_rows()
-    problems = [("failed", f) for f in ev.failures] + [("not scored", f) for f in ev.unscored]
-    problems += [("skipped", f) for f in skipped_only(ev)]
-    failures = [dict(file=Path(f.path).name, status=s, error=scrub(f.error, folder, data)) for s, f in problems]
-    notes = list(dict.fromkeys(scrub(str(w.message), folder, data) for w in caught
-                               if "could not be evaluated" not in str(w.message)))  # fmt: skip
+    for one in evaluations:
+        problems += [("failed", Path(f.path).name, f.error) for f in one.failures]
+        problems += [("not scored", Path(f.path).name, f.error) for f in one.unscored]
+        problems += [("skipped", Path(f.path).name, f.error) for f in skipped_only(one)]
+    failures = [dict(file=name, status=status, error=scrub(error, folder, data, gt_folder))
+                for status, name, error in problems]  # fmt: skip
+    about = {w: _attributed(f, w) for f in errors for w in f.warnings}
+    notes: dict[str, set[tuple[str, int]]] = {}
+    for w in caught:
+        text = str(w.message)
+        if "could not be evaluated" not in text:
+            notes.setdefault(scrub(text, folder, data, gt_folder), set()).update(about.get(text, []))
     out: dict[str, Any] = dict(
         rows=[{k: _plain(v) for k, v in r.items() if k != "spec"} | {"file": Path(str(r["file"])).name} for r in rows],
-        failures=failures, notes=notes, conventions=ev.describe(), figure=False,
+        failures=failures, notes=[dict(text=t, sequences=sorted(q)) for t, q in notes.items()],
+        conventions=ev.describe(), figures=[],
     )  # fmt: skip
-    if figure is not None and ev.errors:
-        try:
-            import matplotlib
-
-            matplotlib.use("Agg")
-            from lorisnb.tools.figures.plotting import plot_timeline
-
-            fig = plot_timeline(ev.errors, ev.durations(), ev.scenes(), spec.eps, spec.phi, spec.delta,
-                                title="this submission")  # fmt: skip
-            fig.savefig(figure, dpi=80)
-            out["figure"] = True
-        except (LorisError, ValueError) as exc:
-            out["notes"].append(f"no timeline figure: {scrub(str(exc), folder, data)}")
+    if figures is not None and errors:
+        _draw(out, ev, data, spec, figures, views, folder, gt_folder)
     return out
+
+
+def _draw(out: dict[str, Any], ev: Evaluation, data: DataPaths, spec: EvalSpec, folder: Path,
+          views: Sequence[Iterable[tuple[str, int]]] | None, upload: Path, groundtruth: Path) -> None:  # fmt: skip
+    """The timeline figure of each view (a set of sequences) the submission has output in, drawn
+    with those sequences alone: their errors, their ground-truth durations, the scene's CR over them."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from lorisnb.tools.figures.plotting import plot_timeline
+
+    scored = {(f.scene, e.seq) for f in ev.errors for e in f.sequences}
+    scenes = sorted({f.scene for f in ev.errors}, key=SCENES.index)
+    spans = scene_spans(scenes, data)
+    every = [(s, q) for s in scenes for q in spans[s]]
+    for k, view in enumerate([every] if views is None else views):
+        keep = {(s, int(q)) for s, q in view}
+        if not keep & scored:
+            continue
+        errors = [replace(f, sequences=[e for e in f.sequences if (f.scene, e.seq) in keep],
+                          groundtruth_spans={q: v for q, v in f.groundtruth_spans.items() if (f.scene, q) in keep})
+                  for f in ev.errors]  # fmt: skip
+        errors = [f for f in errors if f.sequences]
+        durations = spans_table({s: {q: v for q, v in spans[s].items() if (s, q) in keep} for s in scenes})
+        shown = Evaluation(errors, [], None, [], data, spec=spec, kind="openloris")
+        try:
+            table = aggregate_scenes(shown.sequences(), durations)
+            fig = plot_timeline(errors, durations, table, spec.eps, spec.phi, spec.delta, title="this submission")
+            name = f"timeline-{k}.png"
+            fig.savefig(folder / name, dpi=80)
+            out["figures"].append(dict(sequences=sorted(keep), file=name))
+        except (LorisError, ValueError) as exc:
+            note = f"no timeline figure: {scrub(str(exc), upload, data, groundtruth)}"
+            out["notes"].append(dict(text=note, sequences=sorted(keep & scored)))
 
 
 def _limit(cpu_seconds: int, memory_bytes: int) -> None:
@@ -102,19 +219,38 @@ def _write(path: Path, outcome: dict[str, Any]) -> None:
     os.replace(tmp, path)
 
 
-def score_in_child(folder: str, data: DataPaths, spec: EvalSpec, out: str, cpu_seconds: int, memory_bytes: int) -> None:
-    """The scoring process: limits set, then :func:`score_folder`, its outcome written to ``out``."""
-    _limit(cpu_seconds, memory_bytes)
-    sub = Path(folder)
+@dataclass(frozen=True)
+class Task:
+    """What a scoring process needs (picklable: a Dask worker gets it too): the submission's
+    folder, the hidden ground truth, the spec, where its outcome goes, its limits, the server's
+    folder of one-sequence ground truths and the sets of sequences to draw a figure of."""
+
+    folder: str
+    data: DataPaths
+    spec: EvalSpec
+    out: str
+    cpu_seconds: int
+    memory_bytes: int
+    groundtruth: str
+    views: tuple[tuple[tuple[str, int], ...], ...]
+
+
+def score_in_child(task: Task) -> None:
+    """The scoring process: limits set, then :func:`score_folder` (the upload's plan read from its
+    folder), its outcome written to ``task.out``."""
+    _limit(task.cpu_seconds, task.memory_bytes)
+    sub = Path(task.folder)
+    gt = Path(task.groundtruth)
     try:
-        outcome = score_folder(sub / FILES, data, spec, sub / "timeline.png")
+        plain = json.loads((sub / PLAN).read_text(encoding="utf-8")) if (sub / PLAN).is_file() else {}
+        outcome = score_folder(sub / FILES, task.data, task.spec, sub, plain=plain, groundtruth=gt, views=task.views)
     except MemoryError:
-        outcome = dict(error=f"scoring needed more than the challenge's memory limit of {memory_bytes / 1e6:g} MB")
+        outcome = dict(error=f"scoring needed more than the challenge's memory limit of {task.memory_bytes / 1e6:g} MB")
     except LorisError as exc:
-        outcome = dict(error=scrub(str(exc), sub / FILES, data))
+        outcome = dict(error=scrub(str(exc), sub / FILES, task.data, gt))
     except Exception as exc:  # any other error of the scorer: said by its type only (no server detail)
         outcome = dict(error=f"the scorer could not score this upload ({type(exc).__name__}); tell the organizers")
-    _write(Path(out), outcome)
+    _write(Path(task.out), outcome)
 
 
 def stopped(exitcode: int | None, cpu_seconds: int) -> str:
@@ -125,25 +261,23 @@ def stopped(exitcode: int | None, cpu_seconds: int) -> str:
     return f"the scorer stopped (exit status {exitcode}); tell the organizers"
 
 
-def score_on_worker(folder: str, data: DataPaths, spec: EvalSpec, out: str, cpu_seconds: int,
-                    memory_bytes: int) -> int:  # fmt: skip
+def score_on_worker(task: Task) -> int:
     """On a Dask worker (``[challenge] scheduler``): :func:`score_in_child` in a fresh Python
     process of its own, so that the limits bind that process and not the worker; its exit status
-    (negative: the signal that ended it). The upload's folder and the ground truth must be at the
-    same paths on the worker (a shared file system)."""
-    args = pickle.dumps((folder, data, spec, out, cpu_seconds, memory_bytes))
+    (negative: the signal that ended it). The upload's folder, the server's folder and the ground
+    truth must be at the same paths on the worker (a shared file system)."""
     cmd = [sys.executable, "-c", "from lorisnb.tools.challenge.scoring import child_main; child_main()"]
     try:
-        done = subprocess.run(cmd, input=args, capture_output=True, timeout=2 * cpu_seconds + 30)
+        done = subprocess.run(cmd, input=pickle.dumps(task), capture_output=True, timeout=2 * task.cpu_seconds + 30)
     except subprocess.TimeoutExpired:
         return -int(signal.SIGKILL)
     return int(done.returncode)
 
 
 def child_main() -> None:
-    """The process :func:`score_on_worker` starts: its arguments pickled on stdin (from the server
+    """The process :func:`score_on_worker` starts: its task pickled on stdin (from the server
     itself, never from an upload)."""
-    score_in_child(*pickle.loads(sys.stdin.buffer.read()))
+    score_in_child(pickle.loads(sys.stdin.buffer.read()))
 
 
 class _Remote:
@@ -195,6 +329,9 @@ class Scorer:
 
             self._client = connect_scheduler(challenge.scheduler)
         self.requeued = 0
+        # the sets of sequences shown as the phases close: each scoring draws a figure of each
+        seqs = sequences_of(scene_durations(challenge.scenes, challenge.data))
+        self.views = tuple(tuple(sorted(v)) for v in challenge.views(seqs))
 
     def start(self) -> None:
         self.requeued = store.requeue_unfinished(self.engine)  # what a killed server left half-scored
@@ -233,17 +370,13 @@ class Scorer:
     def _start(self, sid: str, claim: str) -> None:
         folder = self.challenge.folder / "uploads" / sid
         out = folder / f"result-{claim}.json"
-        memory = self.limits["score_memory_mb"] * 1_000_000
-        args = (str(folder), self.challenge.data, self.challenge.spec, str(out), self.limits["score_seconds"], memory)
+        task = Task(str(folder), self.challenge.data, self.challenge.spec, str(out), self.limits["score_seconds"],
+                    self.limits["score_memory_mb"] * 1_000_000, str(self.challenge.folder / GROUNDTRUTH), self.views)  # fmt: skip
         if self._client is not None:
-            future = self._client.submit(score_on_worker, *args, key=f"lorisnb-score-{sid}-{claim}", pure=False)
+            future = self._client.submit(score_on_worker, task, key=f"lorisnb-score-{sid}-{claim}", pure=False)
             self._running[sid] = _Running(_Remote(future), claim, time.monotonic(), out)
             return
-        p = self._context.Process(
-            target=score_in_child,
-            args=(str(folder), self.challenge.data, self.challenge.spec, str(out), self.limits["score_seconds"], memory),
-            name=f"lorisnb-score-{sid}", daemon=True,
-        )  # fmt: skip
+        p = self._context.Process(target=score_in_child, args=(task,), name=f"lorisnb-score-{sid}", daemon=True)
         p.start()
         self._running[sid] = _Running(p, claim, time.monotonic(), out)
 

@@ -1,13 +1,21 @@
-"""An upload, checked before anything is kept: OpenLORIS result files (``.txt``, text) or one
-``.zip`` of them. Refused, each with a message naming the file and what was expected: archive
-members with a path that leaves the folder (``../``, absolute, drive letters), links, encrypted
-members, archives nested in archives, zip bombs (declared or actual unpacked size over the limit,
-or a compression ratio no result file has), too many files, binary or empty files, two files of
-the same name. Nothing from an upload is ever executed: the files are only read by the scorer.
+"""An upload, checked before anything is kept: result files in a format lorisnb reads, or one
+``.zip`` of them. OpenLORIS result files (``.txt``) name their scene and sequences in their headers;
+TUM and EuRoC files (``.txt``, ``.csv``) name their sequence by their file name, as OpenLORIS names
+sequences (``cafe-1-2.txt``), and their format is recognised from their content
+(:mod:`lorisnb.io.readers.registry`) or given for the whole upload (:func:`upload_format`);
+:func:`plan` says how each is scored. KITTI pose files (no stamps: the correct rate is taken over
+time) and ROS bags are refused, saying what to send instead.
+
+Refused, each with a message naming the file and what was expected: archive members with a path
+that leaves the folder (``../``, absolute, drive letters), links, encrypted members, archives
+nested in archives, zip bombs (declared or actual unpacked size over the limit, or a compression
+ratio no result file has), too many files, binary or empty files, two files of the same name.
+Nothing from an upload is ever executed: the files are only read by the scorer.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
@@ -16,15 +24,38 @@ import zipfile
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 from lorisnb.errors import LorisError
+from lorisnb.io.readers.registry import FORMATS, recognise, sample
 
 #: A member more compressed than this is a bomb, not a result file (text of poses compresses ~3-5x).
 MAX_RATIO = 100
 #: Bytes read at a time.
 CHUNK = 1 << 16
 _SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9 _.,+=@()-]{0,199}$")
+#: The suffixes of result files taken (an archive's members too).
+SUFFIXES = (".txt", ".csv")
+#: What an upload may hold, in words (every refusal of a file's kind ends with it).
+TAKEN = ("result files in a format lorisnb reads: OpenLORIS result files (.txt), or TUM (.txt, .csv) or EuRoC "
+         "CSV (.csv) files named after their sequence as OpenLORIS names it (cafe-1-2.txt)")  # fmt: skip
+#: The upload's ``format`` field: ``auto`` (each file's own, recognised from its content) or the
+#: format every file of the upload is read in.
+UPLOAD_FORMATS = ("auto", "openloris", "tum", "euroc")
+#: Formats lorisnb reads that a challenge cannot score, and what to send instead.
+NOT_TAKEN = {
+    "kitti": "a KITTI pose file holds no stamps, and the correct rate (CR) is taken over time: write the poses "
+             "with their stamps as a TUM file named after its sequence (cafe-1-2.txt, lines 'stamp tx ty tz qx qy "
+             "qz qw') or as an OpenLORIS result file",
+    "bag": "the challenge takes no ROS bags (a bag holds topics and TF frames to choose from, and a recording): write "
+           "the estimate's poses as a TUM file named after its sequence (e.g. evo_traj bag FILE TOPIC --save_as_tum, "
+           "renamed cafe-1-2.txt) or as an OpenLORIS result file",
+}  # fmt: skip
+#: A plain trajectory file's name naming its sequence as OpenLORIS does: ``<scene>-1-<seq>``,
+#: ``-`` or ``_``, anything after a further separator (``cafe_1_2_orbslam2.txt``, ``cafe-1-2_trial2.csv``).
+#: A submission's plan (:func:`plan`), beside its ``files`` folder: read by the scorer.
+PLAN = "plan.json"
+SEQUENCE_NAME = re.compile(r"^(?P<scene>[A-Za-z]+)[-_]1[-_](?P<seq>[0-9]{1,3})(?:[-_.].*)?$")
 
 
 class UploadRefused(LorisError):
@@ -64,25 +95,88 @@ def safe_name(name: str, where: str) -> str:
 
 def _check_text(head: bytes, name: str) -> None:
     if not head.strip():
-        raise UploadRefused(f"{name}: empty; expected an OpenLORIS result file (header lines, then 'seq: N' blocks "
-                            "of 'timestamp x y z qx qy qz qw')")  # fmt: skip
+        raise UploadRefused(f"{name}: empty; expected poses: {TAKEN}")
     if b"\x00" in head:
-        raise UploadRefused(f"{name}: a binary file; expected an OpenLORIS result file (text)")
+        raise UploadRefused(f"{name}: a binary file; expected text: {TAKEN}")
     try:
         head.decode("utf-8")
     except UnicodeDecodeError as exc:
         if exc.start < len(head) - 4:  # not just a character cut at the end of the head
-            raise UploadRefused(
-                f"{name}: not UTF-8 text (byte {exc.start}); expected an OpenLORIS result file"
-            ) from None
+            raise UploadRefused(f"{name}: not UTF-8 text (byte {exc.start}); expected {TAKEN}") from None
 
 
 def _suffix(name: str, where: str, allow_zip: bool) -> str:
     suffix = Path(name).suffix.lower()
-    if suffix == ".txt" or (allow_zip and suffix == ".zip"):
+    if suffix in SUFFIXES or (allow_zip and suffix == ".zip"):
         return suffix
-    what = "OpenLORIS result files (.txt) or one .zip of them" if allow_zip else "OpenLORIS result files (.txt)"
+    if suffix in FORMATS["bag"].suffixes:
+        raise UploadRefused(f"{where}: {name!r}: a ROS bag; {NOT_TAKEN['bag']}", 415)
+    if suffix == ".zip":
+        raise UploadRefused(f"{where}: {name!r}: an archive inside the archive; expected {TAKEN}, in one .zip", 415)
+    what = f"{TAKEN}, or one .zip of them" if allow_zip else TAKEN
     raise UploadRefused(f"{where}: {name!r}: a {suffix or 'file without suffix'}; expected {what}", 415)
+
+
+def upload_format(value: object) -> str:
+    """The upload's ``format`` field, checked: ``auto`` (also when not given) or one of
+    :data:`UPLOAD_FORMATS`; a format the challenge cannot score is refused saying why."""
+    if value is None or (isinstance(value, str) and not value.strip()):
+        return "auto"
+    if not isinstance(value, str):
+        raise UploadRefused("format: a file was sent as the format; expected a format name (auto, tum, ...)")
+    fmt = value.strip().lower()
+    if fmt in UPLOAD_FORMATS:
+        return fmt
+    if fmt in NOT_TAKEN:
+        raise UploadRefused(f"format {fmt}: {NOT_TAKEN[fmt]}", 415)
+    raise UploadRefused(f"format {value[:40]!r}: expected auto (each file's format recognised from its content), "
+                        "openloris, tum or euroc")  # fmt: skip
+
+
+def sequence_of(name: str) -> tuple[str, int] | None:
+    """The (scene, sequence) a file's name names as OpenLORIS names sequences (``cafe-1-2.txt``:
+    cafe, 2); None if it names none."""
+    m = SEQUENCE_NAME.match(Path(name).stem)
+    return (m["scene"].lower(), int(m["seq"])) if m else None
+
+
+def plan(folder: Path, names: list[str], fmt: str, sequences: Iterable[tuple[str, int]]) -> dict[str, dict[str, Any]]:
+    """How each kept file is scored: OpenLORIS result files (recognised by their headers, or all
+    files with ``fmt`` openloris) as ``lorisnb evaluate`` scores them, not listed here; TUM and
+    EuRoC files listed, ``name -> {format, scene, seq}``, the sequence named by the file's name and
+    one of the challenge's ``sequences`` (scene, seq). Refused (:class:`UploadRefused`): KITTI
+    files and bags (:data:`NOT_TAKEN`), a file of no format lorisnb recognises (unless ``fmt``
+    names one), a file plainly of another format than ``fmt``, a TUM or EuRoC file whose name
+    names no sequence of the challenge."""
+    have = sorted(set(sequences))
+    listed = ", ".join(f"{s}-1-{q}" for s, q in have)
+    out: dict[str, dict[str, Any]] = {}
+    for name in names:
+        found = recognise(sample(folder / name))
+        if found and found[0] in NOT_TAKEN:
+            raise UploadRefused(f"{name}: {FORMATS[found[0]].looks()}; {NOT_TAKEN[found[0]]}", 415)
+        if fmt != "auto" and found and fmt not in found:
+            raise UploadRefused(f"{name}: {FORMATS[found[0]].looks()}, but the upload's format is {fmt}; send it "
+                                f"with the format auto (each file's own is recognised) or {found[0]}", 415)  # fmt: skip
+        kind = fmt if fmt != "auto" else found[0] if found else None
+        if kind is None:
+            raise UploadRefused(f"{name}: not recognised as any format lorisnb reads; expected {TAKEN}. A TUM or EuRoC "
+                                "file it does not recognise (its first lines are checked): give the upload's format "
+                                "(the form's format field, lorisnb submit --format) to have every line read", 415)  # fmt: skip
+        if kind == "openloris":
+            continue
+        seq = sequence_of(name)
+        title = FORMATS[kind].title
+        if seq is None:
+            example = f"{have[-1][0]}-1-{have[-1][1]}" if have else "cafe-1-2"
+            raise UploadRefused(f"{name}: a {title} names no sequence; expected its name to name it as OpenLORIS "
+                                f"names sequences, <scene>-1-<seq> (e.g. {example}{Path(name).suffix}), or an "
+                                "OpenLORIS result file (scene:, frame: and seq: N blocks)")  # fmt: skip
+        if seq not in have:
+            raise UploadRefused(f"{name}: names sequence {seq[0]}-1-{seq[1]}, which is not one of this challenge's; "
+                                f"expected one of {listed}")  # fmt: skip
+        out[name] = dict(format=kind, scene=seq[0], seq=seq[1])
+    return out
 
 
 def _copy(src: IO[bytes], dest: Path, name: str, budget: int) -> int:
@@ -156,7 +250,7 @@ def unpack(files: Iterable[tuple[str, IO[bytes]]], dest: Path, limits: Limits) -
     items = list(files)
     try:
         if not items:
-            raise UploadRefused("no file in the upload; expected OpenLORIS result files (.txt) or one .zip of them")
+            raise UploadRefused(f"no file in the upload; expected {TAKEN}, or one .zip of them")
         if len(items) > limits.files:
             raise UploadRefused(f"{len(items)} files; the challenge takes at most {limits.files}", 413)
         for sent, f in items:
@@ -169,13 +263,33 @@ def unpack(files: Iterable[tuple[str, IO[bytes]]], dest: Path, limits: Limits) -
             taken.add(name)
             used += _copy(f, dest / name, name, limits.unpacked_bytes - used)
         if not taken:
-            raise UploadRefused("the archive holds no file; expected OpenLORIS result files (.txt)")
-        fd = os.open(dest, os.O_RDONLY)
-        try:
-            os.fsync(fd)  # the folder's entries too: on disk before the database says accepted
-        finally:
-            os.close(fd)
+            raise UploadRefused(f"the archive holds no file; expected {TAKEN}")
+        _fsync_folder(dest)
     except BaseException:
         shutil.rmtree(dest, ignore_errors=True)
         raise
     return sorted(taken)
+
+
+def _fsync_folder(folder: Path) -> None:
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        os.fsync(fd)  # the folder's entries too: on disk before the database says accepted
+    finally:
+        os.close(fd)
+
+
+def keep_upload(files: Iterable[tuple[str, IO[bytes]]], folder: Path, limits: Limits, fmt: str,
+                sequences: Iterable[tuple[str, int]]) -> list[str]:  # fmt: skip
+    """:func:`unpack` the upload into ``folder/files`` and write its :func:`plan` (``folder/plan.json``,
+    when some file is not an OpenLORIS result file), both on disk before it returns; the names kept.
+    On a refusal the caller removes ``folder``."""
+    names = unpack(files, folder / "files", limits)
+    layout = plan(folder / "files", names, fmt, sequences)
+    if layout:
+        with open(folder / PLAN, "x", encoding="utf-8") as out:
+            json.dump(layout, out)
+            out.flush()
+            os.fsync(out.fileno())
+        _fsync_folder(folder)
+    return names
