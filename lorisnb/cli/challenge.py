@@ -100,8 +100,10 @@ def cmd_export(args: argparse.Namespace) -> int:
         base = dict(submission=s["id"], team=s["team"], phase=s["phase"], status=s["status"],
                     submitted=dt.datetime.fromtimestamp(s["created"], dt.UTC).isoformat(), error=s["error"] or "")  # fmt: skip
         result = json.loads(s["result"]) if s["result"] else {"rows": []}
+        base["failures"] = "; ".join(f"{f['file']} ({f['status']}): {f['error']}" for f in result.get("failures", []))
         rows += [base | {k: r.get(k) for k in PUBLIC_COLUMNS} for r in result["rows"]] or [base]
-    table = pd.DataFrame(rows, columns=["submission", "team", "phase", "status", "submitted", "error", *PUBLIC_COLUMNS])
+    table = pd.DataFrame(rows, columns=["submission", "team", "phase", "status", "submitted", "error", "failures",
+                                        *PUBLIC_COLUMNS])  # fmt: skip
     for column in ("seq", "poses", "matched"):  # counts stay whole numbers beside a submission without rows
         table[column] = table[column].astype("Int64")
     out = write_csv(table, args.csv, args.force)

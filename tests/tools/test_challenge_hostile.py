@@ -165,6 +165,16 @@ def test_malformed_requests(hostile):
     bad = b'--b\r\nContent-Disposition: form-data; name="files"; filename="a.txt"\r\n\r\nabc'  # never ends
     r = h["client"].post("/api/submissions", content=bad, headers=auth | {"Content-Type": "multipart/form-data"})
     assert r.status_code == 400 and "malformed upload" in r.json()["error"]
+    # a body cut off after a boundary (here before its only file's part ends, or after it) parses as a
+    # shorter form: its missing closing boundary says it is cut off
+    part = b'--b\r\nContent-Disposition: form-data; name="files"; filename="a.txt"\r\n\r\n' + RESULT
+    for cut in (b"--b\r\n", part + b"\r\n--b", part + b"\r\n--b\r\n"):
+        r = h["client"].post(
+            "/api/submissions", content=cut, headers=auth | {"Content-Type": "multipart/form-data; boundary=b"}
+        )
+        assert (
+            r.status_code == 400 and "malformed upload (the body ends before its closing boundary" in r.json()["error"]
+        )
     r = h["client"].post("/api/submissions", content=b"{}", headers=auth | {"Content-Type": "application/json"})
     assert r.status_code == 400 and "no file in the upload" in r.json()["error"]
     r = h["client"].post("/api/submissions", data={"files": "not a file"}, headers=auth)
@@ -188,6 +198,19 @@ def test_tokens_refused(hostile):
     page = h["client"].post("/submit", files=files, data={"token": "wrong"})  # the browser form
     assert page.status_code == 401 and 'id="error"' in page.text and "unknown token" in page.text
     nothing_kept(h)
+
+
+def test_admin_token_does_not_submit(hostile):
+    """The admin's token is refused for a submission (it would be ranked as a team), saying to add
+    a team; nothing is kept, and the admin page still opens with it."""
+    admin = store.add_team(hostile["engine"], "organizers", time.time() + 7000, admin=True)
+    r = post(hostile, [("files", ("a.txt", RESULT))], token=admin)
+    assert r.status_code == 403 and "is the admin token, which does not submit" in r.json()["error"]
+    assert "lorisnb challenge add-team class.toml NAME" in r.json()["error"]
+    page = hostile["client"].post("/submit", files=[("files", ("a.txt", RESULT))], data={"token": admin})
+    assert page.status_code == 403 and "does not submit" in page.text
+    nothing_kept(hostile)
+    assert hostile["client"].get("/api/admin", headers={"Authorization": f"Bearer {admin}"}).status_code == 200
 
 
 TUM = b"1560004885.5 1 2 3 0 0 0 1\n1560004885.7 1 2 3 0 0 0 1\n"

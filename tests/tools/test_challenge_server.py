@@ -238,6 +238,7 @@ def test_no_response_holds_a_groundtruth_coordinate(served, data):
     view = wait_scored(client, r.json()["id"])
     assert view["status"] == "scored" and view["failures"] and "nosuchframe" in view["failures"][0]["error"]
     assert str(data.root) not in view["failures"][0]["error"]
+    assert not view["failures"][0]["error"].startswith("bad.txt")  # the file is named once, by its row
     dev = boards(client)[0]  # dslam's latest submission is the one that counts: no output on cafe-1
     assert dev["without_output"] == ["dslam"]  # named, and ranked with every sequence a failed run
     assert [r["team"] for r in dev["rows"]] == ["orbs", "dslam"]
@@ -270,7 +271,8 @@ def test_zip_and_folder_submit(served, data, tmp_path):
 
 def test_export_keeps_counts_whole_beside_a_failed_submission(tmp_path, data):
     """A submission without rows (failed) is one row of the export with its counts empty, and the
-    counts of the others stay whole numbers (seq 1, not 1.0: a join on the sequence still works)."""
+    counts of the others stay whole numbers (seq 1, not 1.0: a join on the sequence still works);
+    each row says why the submission's files failed (``failures``)."""
     path = challenge_file(tmp_path, data)
     challenge = read_challenge(path)
     challenge.folder.mkdir(parents=True)
@@ -279,7 +281,9 @@ def test_export_keeps_counts_whole_beside_a_failed_submission(tmp_path, data):
     team = next(t for t in store.all_teams(engine) if t["name"] == "exporters")
     row = dict(file="a.txt", scene="cafe", seq=1, poses=68, matched=68, cr=0.5, cr_t=0.5, cs_r=1.0, ate_rmse=0.1,
                c_ate_rmse=0.1, aoe_rmse=3.0, reloc_time=0.0)  # fmt: skip
-    for sid, status, result in (("a" * 16, "scored", {"rows": [row]}), ("b" * 16, "failed", None)):
+    failed = [dict(file="c.txt", status="failed", error="line 3: 'x' has 1 fields"),
+              dict(file="d.txt", status="skipped", error="no ground truth of office")]  # fmt: skip
+    for sid, status, result in (("a" * 16, "scored", {"rows": [row], "failures": failed}), ("b" * 16, "failed", None)):
         store.add_submission(engine, sid, team["id"], "development", ["a.txt"], 10)
         claimed, claim = store.claim_next(engine)
         assert claimed == sid and store.finish(engine, sid, claim, status, result, "no" if result is None else None, 1)
@@ -288,6 +292,12 @@ def test_export_keeps_counts_whole_beside_a_failed_submission(tmp_path, data):
     rows = {r["submission"]: r for r in csv.DictReader(out.open())}
     assert (rows["a" * 16]["seq"], rows["a" * 16]["poses"], rows["a" * 16]["matched"]) == ("1", "68", "68")
     assert (rows["b" * 16]["seq"], rows["b" * 16]["status"], rows["b" * 16]["error"]) == ("", "failed", "no")
+    # the reasons its files failed, beside a scored submission's rows
+    assert (
+        rows["a" * 16]["failures"]
+        == "c.txt (failed): line 3: 'x' has 1 fields; d.txt (skipped): no ground truth of office"
+    )
+    assert rows["b" * 16]["failures"] == ""
 
 
 def test_submit_says_why_a_scored_submission_shows_no_score(monkeypatch, capsys):

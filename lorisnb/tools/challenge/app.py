@@ -8,16 +8,17 @@ multipart ``files`` and an optional ``format``), ``GET /api/submissions/{id}``, 
 ``GET /api/admin``, ``GET /api/health``. Scores leave the server only for the sequences visible
 now (:mod:`.board`); the admin's page and API alone hold the others, saying so.
 
-An upload is refused before it is read where its headers say so (size, token), and while it is
-read where it grows past the limit or comes too slowly (:class:`BodyLimit`); then checked,
-unpacked and planned (:mod:`.uploads`), written to disk and committed to the database before the
-response.
+An upload is refused before it is read where its headers say so (size, token; the admin's token
+does not submit), and while it is read where it grows past the limit, comes too slowly or ends
+before its closing boundary (:class:`BodyLimit`); then checked, unpacked and planned
+(:mod:`.uploads`), written to disk and committed to the database before the response.
 """
 
 from __future__ import annotations
 
 import asyncio
 import json
+import re
 import secrets
 import shutil
 import threading
@@ -42,6 +43,7 @@ from lorisnb.tools.challenge.config import Challenge, sequences_of
 from lorisnb.tools.challenge.uploads import Limits, UploadRefused, keep_upload, upload_format
 
 DAY = 24 * 3600.0
+MULTIPART = "lorisnb.multipart"  # the scope's key: a multipart body's closing boundary, and whether it came
 Clock = Callable[[], float]
 
 
@@ -78,18 +80,30 @@ class BodyLimit:
         loop = asyncio.get_running_loop()
         deadline = loop.time() + self.seconds
         received = 0
+        # a multipart body cut off after a boundary parses as a shorter form: its closing boundary tells
+        ctype = dict(scope["headers"]).get(b"content-type", b"")
+        multi = ctype[:10].lower() == b"multipart/"
+        found = re.search(rb'boundary="?([^";,\s]+)', ctype, re.IGNORECASE) if multi else None
+        multipart = scope[MULTIPART] = dict(closing=b"--" + found.group(1) + b"--" if found else None, closed=False)
+        tail = b""
 
         async def limited() -> dict[str, Any]:
-            nonlocal received
+            nonlocal received, tail
             try:
                 message = await asyncio.wait_for(receive(), max(deadline - loop.time(), 0.001))
             except TimeoutError:
                 raise UploadRefused(f"the upload took longer than the challenge's {self.seconds:g} s to arrive; "
                                     "send it again on a faster connection", 408) from None  # fmt: skip
             if message["type"] == "http.request":
-                received += len(message.get("body", b""))
+                body = message.get("body", b"")
+                received += len(body)
                 if received > self.max_bytes:
                     raise UploadRefused(f"upload over the challenge's limit of {self.max_bytes / 1e6:g} MB", 413)
+                closing = multipart["closing"]
+                if closing is not None and not multipart["closed"]:
+                    window = tail + body
+                    multipart["closed"] = closing in window
+                    tail = window[-(len(closing) - 1) :]
             return message
 
         await self.app(scope, limited, send)
@@ -142,6 +156,15 @@ class Server:
                           "organizers for a new one")  # fmt: skip
         if admin and not team["admin"]:
             raise Refused(403, f"{team['name']!r} is a team token; this page needs the admin token")
+        return team
+
+    def submitter(self, token: str | None) -> dict[str, Any]:
+        """The team of a submission's token; the admin's is refused (it would be ranked as a team)."""
+        team = self.team(token)
+        if team["admin"]:
+            raise Refused(403, f"{team['name']!r} is the admin token, which does not submit (it would be ranked "
+                          f"as a team); to try the server, add a team for yourself: lorisnb challenge add-team "
+                          f"{self.challenge.path.name} NAME, and submit with its token")  # fmt: skip
         return team
 
     def _compute(self, key: Any, now: float) -> None:
@@ -220,6 +243,11 @@ async def _form(request: Request) -> tuple[str | None, list[tuple[str, Any]], st
     except (MultiPartException, HTTPException) as exc:
         detail = getattr(exc, "detail", None) or getattr(exc, "message", None) or str(exc)
         raise Refused(400, f"a malformed upload ({detail}); expected multipart/form-data with files") from None
+    multipart = request.scope.get(MULTIPART) or {}
+    if multipart.get("closing") is not None and not multipart.get("closed"):
+        await form.close()
+        raise Refused(400, "a malformed upload (the body ends before its closing boundary: cut off on the way?); "
+                      "expected multipart/form-data with files, ending with its closing boundary: send it again")  # fmt: skip
     token = form.get("token")
     files = [(f.filename or "", f.file) for f in form.getlist("files") if isinstance(f, UploadFile)]
     if any(not isinstance(v, UploadFile) for v in form.getlist("files")):
@@ -318,10 +346,10 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
 
     async def receive(request: Request, token: str | None) -> str:
         if token is not None:  # the API's header: refused before the body is read
-            server.team(token)
+            server.submitter(token)
         field, files, fmt, form = await _form(request)
         try:
-            team = server.team(token if token is not None else field)
+            team = server.submitter(token if token is not None else field)
             return await server.accept(team, files, fmt)
         finally:
             await form.close()

@@ -80,6 +80,14 @@ def scrub(text: str, folder: Path, data: DataPaths, groundtruth: Path | None = N
     return text
 
 
+def _unnamed(error: str, name: str) -> str:
+    """A file's error without its own name in front (the page and ``lorisnb submit`` put it there)."""
+    for lead in (f"{name}: ", f"{name}, "):
+        if error.startswith(lead):
+            return error[len(lead) :]
+    return error
+
+
 def sequence_groundtruth(data: DataPaths, scene: str, seq: int, folder: Path) -> Path:
     """The ground truth of one sequence as an OpenLORIS file of its one ``seq:`` block, written
     once into ``folder`` (the server's, never an upload's; named for the scene file's time and
@@ -156,7 +164,7 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
         problems += [("failed", Path(f.path).name, f.error) for f in one.failures]
         problems += [("not scored", Path(f.path).name, f.error) for f in one.unscored]
         problems += [("skipped", Path(f.path).name, f.error) for f in skipped_only(one)]
-    failures = [dict(file=name, status=status, error=scrub(error, folder, data, gt_folder))
+    failures = [dict(file=name, status=status, error=_unnamed(scrub(error, folder, data, gt_folder), name))
                 for status, name, error in problems]  # fmt: skip
     about = {w: _attributed(f, w) for f in errors for w in f.warnings}
     notes: dict[str, set[tuple[str, int]]] = {}
