@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import io
 import json
+import shutil
 import socket
 import stat
+import subprocess
 import threading
 import time
 import zipfile
@@ -322,6 +324,23 @@ def test_bundled_class_challenge():
     assert final.keeps("cafe", 2) and final.leaderboard == "after-close" and dev.closes == final.opens
     assert c.spec.eps == "paper" and c.spec.phi == 30.0 and c.metric == "cr"
     assert not c.folder.exists()
+    # the folder the README's two commands make in a checkout (database, uploads, ground truths) is
+    # ignored by git: they leave nothing for git status to show
+    root = path.parents[2]
+    if shutil.which("git") and (root / ".git").exists():
+        for made in ("challenge.db", "challenge.db-wal", "uploads/0123456789abcdef/files/cafe-1-1.txt"):
+            check = subprocess.run(["git", "-C", str(root), "check-ignore", "-q", "--no-index", str(c.folder / made)])
+            assert check.returncode == 0, made
+
+
+def test_make_bench_section_points_to_the_load_run():
+    """The guide's ``make bench`` section names the challenge server's load run it prints, and
+    where its figures are."""
+    text = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "many-files.md").read_text()
+    section = text[text.index("## Speed and memory against the floors") :]
+    section = section[: section.index("\n## ", 4)] if "\n## " in section[4:] else section
+    assert "benchmarks/challenge_load.py" in section and "LORISNB_BENCH_SERVE=0" in section
+    assert "(challenge-server.md)" in section
 
 
 def test_slow_client_refused_and_server_serves_on(tmp_path, data):
