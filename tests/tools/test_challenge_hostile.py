@@ -270,6 +270,19 @@ def test_formats_taken(hostile):
     )
 
 
+def test_openloris_headers_without_a_space_recognised(hostile, data):
+    """VINS-Mono's published results write their headers without a space ('scene:cafe'), which the
+    OpenLORIS reader reads: the format registry recognises them too, so they are taken (the load
+    run of make bench sends them), not refused as of no format."""
+    from lorisnb.io.readers.registry import recognise, sample
+
+    files = cafe_files(data, "vins_mono_color_imu_with_loop")
+    assert files[0].read_text().startswith("scene:cafe\n") and recognise(sample(files[0])) == ["openloris"]
+    r = post(hostile, [("files", (p.name, p.read_bytes())) for p in files])
+    assert r.status_code == 201, r.text
+    assert not (hostile["challenge"].folder / "uploads" / r.json()["id"] / "plan.json").exists()
+
+
 def test_too_many_submissions(hostile, data):
     h = hostile
     files = [("files", (p.name, p.read_bytes())) for p in cafe_files(data, "ds-slam")]

@@ -48,7 +48,8 @@ def _is_bag(s: Sample) -> bool:
 
 
 def _is_openloris(s: Sample) -> bool:
-    return any(r and r[0].lower() in ("scene:", "frame:", "seq:") for r in s.rows)
+    # a header or seq line as the reader takes it: any spacing around the colon ('scene:cafe', VINS-Mono's)
+    return any(r and " ".join(r).partition(":")[0].strip().lower() in ("scene", "frame", "seq") for r in s.rows)
 
 
 def _is_euroc(s: Sample) -> bool:

@@ -160,9 +160,10 @@ def plan(folder: Path, names: list[str], fmt: str, sequences: Iterable[tuple[str
                                 f"with the format auto (each file's own is recognised) or {found[0]}", 415)  # fmt: skip
         kind = fmt if fmt != "auto" else found[0] if found else None
         if kind is None:
-            raise UploadRefused(f"{name}: not recognised as any format lorisnb reads; expected {TAKEN}. A TUM or EuRoC "
-                                "file it does not recognise (its first lines are checked): give the upload's format "
-                                "(the form's format field, lorisnb submit --format) to have every line read", 415)  # fmt: skip
+            raise UploadRefused(f"{name}: not recognised as any format lorisnb reads; expected {TAKEN}. A file of one "
+                                "of them it does not recognise (its first lines are checked): give the upload's format "
+                                "(openloris, tum or euroc: the form's format field, lorisnb submit --format) to have "
+                                "every line read", 415)  # fmt: skip
         if kind == "openloris":
             continue
         seq = sequence_of(name)
