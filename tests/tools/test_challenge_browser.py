@@ -1,7 +1,8 @@
 """The challenge server in a real browser (Debian's headless Chromium through selenium, the
 server on 127.0.0.1): a team opens the submit page, types its token, chooses its result files and
 submits; the submission page shows the status, then the score (it reloads itself, no script);
-the leaderboard then lists the team with that score. Every page is offline: no resource is loaded
+the leaderboard then lists the team with that score; its team page and the organizer's admin page
+open with their tokens. Every page is offline: no resource is loaded
 from anywhere but the server."""
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ def test_team_submits_in_the_page_and_sees_its_score(tmp_path, data):
     challenge.folder.mkdir(parents=True)
     engine = store.connect(challenge.database)
     token = store.add_team(engine, "browsers", time.time() + 7000)
+    admin = store.add_team(engine, "organizers", time.time() + 7000, admin=True)
     port = free_port()
     url = f"http://127.0.0.1:{port}"
     proc = start_server(path, port, tmp_path / "server.log")
@@ -72,6 +74,17 @@ def test_team_submits_in_the_page_and_sees_its_score(tmp_path, data):
         driver.find_element(By.ID, "token").send_keys(token)
         driver.find_element(By.ID, "open").click()
         assert "4 submission(s) left" in driver.find_element(By.TAG_NAME, "body").text
+        # the admin's page: every team, and the final's sequence scored but marked hidden from teams
+        driver.get(url + "/admin")
+        driver.find_element(By.ID, "token").send_keys(admin)
+        driver.find_element(By.ID, "open").click()
+        teams = driver.find_element(By.ID, "teams").text
+        assert "browsers" in teams and "organizers" in teams
+        scores = [c.text for c in driver.find_elements(By.CSS_SELECTOR, "td.scores")]
+        assert any("cafe 2: " in c and "(hidden from teams)" in c for c in scores), scores
+        assert driver.find_element(By.ID, "admin-only").is_displayed()
+        resources = driver.execute_script("return performance.getEntriesByType('resource').map(e => e.name)")
+        assert all(r.startswith(url) for r in resources)
     finally:
         driver.quit()
         kill(proc)
