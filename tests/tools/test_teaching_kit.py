@@ -257,6 +257,39 @@ def test_make_student_grade_book_and_slides_on_a_fresh_copy(open_tmp_path, teach
     assert offline.remote_references(offline.built_files(slides)) == []
 
 
+@pytest.mark.slow
+@pytest.mark.xdist_group("grading")  # one grader at a time (tests/tools/test_teaching_sandbox.py)
+def test_what_make_grade_writes_in_a_clone_is_ignored_by_git(open_tmp_path, teaching_python):
+    """`make student grade` in a clone (the default course folder, teaching/) writes the course's
+    secret, the students' grades, feedback and exports: git ignores every one (they showed as
+    untracked, so `git add -A` would have committed the secret and the grades)."""
+    copy = open_tmp_path / "lorisnb"
+    _copy_checkout(copy)
+    git = ["git", "-C", str(copy), "-c", "user.name=kit", "-c", "user.email=kit@example.org"]
+    for cmd in (["init", "-q"], ["add", "-A"], ["commit", "-qm", "a clone"]):
+        subprocess.run([*git, *cmd], check=True, capture_output=True)
+    for env_dir in (".venv", ".venv-teach"):  # links to the checkout's environments (not the clone's files)
+        (copy / env_dir).symlink_to(ROOT / env_dir, target_is_directory=True)
+    before = set(_tree(copy))
+    env = {k: v for k, v in os.environ.items() if k not in ("LORISNB_DATA", "PYTHONPATH", "VIRTUAL_ENV")}
+    r = subprocess.run(
+        ["make", "-C", str(copy), "-o", ".venv/.installed-stamp", "-o", ".venv-teach/.installed-stamp",
+         "student", "grade"],
+        env=env, capture_output=True, text=True, timeout=1800,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    written = sorted(p for p in set(_tree(copy)) - before if not p.startswith(".git/"))  # files and folders
+    made = {".grading-secret", "grades.csv", "grades-demo.csv", "gradebook.db", "graded/demo-correct", "exports",
+            "release", "submitted/demo-correct"}  # fmt: skip
+    assert {f"teaching/{p}" for p in made} <= set(written), written
+    ignored = subprocess.run([*git, "check-ignore", "--stdin"], input="\n".join(written), capture_output=True,
+                             text=True).stdout.splitlines()  # fmt: skip
+    assert sorted(set(written) - set(ignored)) == []
+    status = subprocess.run([*git, "status", "--porcelain", "--untracked-files=all"], capture_output=True,
+                            text=True, check=True).stdout.splitlines()  # fmt: skip
+    assert [line for line in status if line[3:] not in (".venv", ".venv-teach")] == []
+
+
 def test_sample_data_is_small_and_a_verbatim_subset_of_the_data(data):
     """The teaching data shipped in the package: every file under 512 KiB, about 1.8 MB in all,
     each a byte-for-byte copy of the file of the same path in the full data (teaching/make_sample_data.py)."""
