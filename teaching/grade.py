@@ -1,13 +1,15 @@
 """Grade a class in the sandbox and write the grades an LMS takes (`make grade`; teaching/README.md,
 "Grading").
 
-    python grade.py COURSE [--lab LAB] [--jobs 2] [--timeout 60] [--memory-mb 3072]
+    python grade.py COURSE [--lab LAB] [--jobs 2] [--timeout 60] [--budget 300] [--memory-mb 3072]
                     [--roster roster.csv] [--due 2026-12-01T23:59+01:00 --late-per-day 0.1 --late-max-days 5]
                     [--hide FOLDER ...]
 
 COURSE holds release/<lab>/ and submitted/<student>/<lab>/<lab>.ipynb; the labs' sources are
 teaching/source/ (``--source``). Writes COURSE/graded/, grades.csv, grades-demo.csv, exports/.
-Exit status 0 when every submission was graded, 1 otherwise (a message says why).
+Exit status 0 when every submission was graded, 1 otherwise (a message says why; a submission that
+could not be graded, such as a notebook that is not JSON, scores 0, is named, and the others are
+graded).
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from pathlib import Path
 from lorisnb.errors import ValidationError
 from lorisnb.tools.teaching.autograde import GradeSettings
 from lorisnb.tools.teaching.gradebook import LatePolicy, grade_class, read_roster, write_exports
-from lorisnb.tools.teaching.sandbox import Limits, can_isolate
+from lorisnb.tools.teaching.sandbox import BUDGET_CELLS, BUDGET_MIN_S, Limits, can_isolate
 
 HERE = Path(__file__).resolve().parent
 
@@ -42,6 +44,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--lab", action="append", help="grade this lab only (repeatable; default: every lab)")
     ap.add_argument("--jobs", type=_positive(int), default=2, help="submissions graded at once (default 2)")
     ap.add_argument("--timeout", type=_positive(float), default=60.0, help="seconds per cell (default 60)")
+    ap.add_argument("--budget", type=_positive(float), help="seconds a submission's code may take in all "
+                    f"(default {BUDGET_CELLS} x --timeout, at least {BUDGET_MIN_S:g})")  # fmt: skip
     ap.add_argument("--memory-mb", type=_positive(int), default=3072, help="address space per sandbox, MiB")
     ap.add_argument("--roster", type=Path, help="CSV with id,name,email[,sis_id,login_id,section]")
     ap.add_argument("--due", help="due date, ISO 8601 with a time zone (e.g. 2026-12-01T23:59+01:00)")
@@ -58,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
             policy = LatePolicy(datetime.fromisoformat(a.due), a.late_per_day or 0.0, a.late_max_days)
             late = {lab: policy for lab in (a.lab or [p.name for p in a.source.iterdir() if p.is_dir()])}
         roster = read_roster(a.roster) if a.roster else None
-        limits = Limits(cell_timeout_s=a.timeout, memory_bytes=a.memory_mb * 1024**2)
+        limits = Limits(cell_timeout_s=a.timeout, budget_s=a.budget, memory_bytes=a.memory_mb * 1024**2)
         if not can_isolate():
             print(
                 "warning: not root on Linux with unshare/setpriv: submissions run with time and memory limits "
@@ -83,8 +87,13 @@ def main(argv: list[str] | None = None) -> int:
     elif left_out.no_email:
         print(f"no e-mail on the roster, left out of the Moodle and Gradescope exports (they find students by "
               f"e-mail): {', '.join(left_out.no_email)}", file=sys.stderr)  # fmt: skip
-    print(f"{len(graded)} submission(s) graded: {a.course / 'grades.csv'}, {a.course / 'exports'}")
-    return 0
+    failed = [g.result for g in graded if g.result.error]
+    for res in failed:
+        print(f"not graded (0 points): {res.error}", file=sys.stderr)
+    print(f"{len(graded) - len(failed)} submission(s) graded: {a.course / 'grades.csv'}, {a.course / 'exports'}")
+    if failed:
+        print(f"{len(failed)} submission(s) could not be graded (named above): they score 0", file=sys.stderr)
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

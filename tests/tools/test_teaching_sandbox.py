@@ -21,7 +21,7 @@ import pytest
 from lorisnb.errors import ValidationError
 from lorisnb.tools.teaching.autograde import GradeSettings, Score, SubmissionResult, lab_spec
 from lorisnb.tools.teaching.gradebook import LatePolicy, grade_class, read_roster, write_exports
-from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, can_isolate, decode
+from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, can_isolate, claim_uids, decode
 
 ROOT = Path(__file__).resolve().parents[2]
 LAB = "lab1_lifelong_metrics"
@@ -436,3 +436,131 @@ def test_concurrent_graders_get_sandbox_users_of_their_own():
     mine = claim_uids(base)
     assert claim_uids(base) == mine  # the same pair for every call of one process
     assert pwd.getpwuid(0) and claim_uids(0, 2, span=4000) != 0  # root's id is never a sandbox's
+
+
+# --- a slow submission, an unreadable one, and the notes a submission earns (issue 46's review) ---
+
+
+def _solutions() -> dict[str, str]:
+    nb = nbformat.read(SOURCE_NB, as_version=4)
+    return {c.metadata["nbgrader"]["grade_id"]: c.source for c in nb.cells if c.get("metadata", {}).get("nbgrader", {}).get("solution")}  # fmt: skip
+
+
+def _submission(answers: dict[str, str]) -> nbformat.NotebookNode:
+    nb = nbformat.read(SOURCE_NB, as_version=4)
+    for cell in nb.cells:
+        gid = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
+        if gid in answers and cell.metadata["nbgrader"].get("solution"):
+            cell.source = answers[gid]
+    return nb
+
+
+def _slow(limit: float) -> dict[str, str]:
+    """Every answer right, but each cell and each call of B2's function sleeping 0.9 x the per-cell
+    limit, and three endless loops (C1, D1, F): A1, B1 and B3, answered before the budget runs out,
+    still score."""
+    sol, nap = _solutions(), f"import time\ntime.sleep({0.9 * limit})\n"
+    loop = "while True:\n    pass\n"
+    b2 = (nap + sol["B2_correct_rate"] + "\n_honest = correct_rate\n"
+          "def correct_rate(stamps, correct, t_min, t_max, delta):\n"
+          f"    time.sleep({0.9 * limit})\n"
+          "    return _honest(stamps=stamps, correct=correct, t_min=t_min, t_max=t_max, delta=delta)\n")  # fmt: skip
+    slow = {g: nap + s for g, s in sol.items() if g not in ("A1_correctness", "B1_prediction")}
+    return {**sol, **slow, "B2_correct_rate": b2, "C1_cs_r": loop, "D1_alignment": loop, "F_timeline": loop}
+
+
+@pytest.mark.slow
+def test_a_slow_submission_stops_at_its_budget_and_keeps_the_points_it_earned(tmp_path):
+    """Issue 46's review: a submission whose cells and calls each sleep 0.9 x the limit, plus endless
+    loops, took ~51 s per second of limit (every time-out replayed every earlier cell, every check
+    call got the full limit): now its code runs for at most the budget, and the honest answers
+    before that still score, with a note."""
+    from lorisnb.tools.teaching.autograde import grade_submission
+
+    spec, release = lab_spec(SOURCE_NB), tmp_path / "release"
+    release.mkdir()
+    limits = Limits(cell_timeout_s=3, locked_timeout_s=180, budget_s=30)
+    settings = GradeSettings(limits, secret="s", uid=claim_uids(62000) if can_isolate() else 0)
+    honest, slow = tmp_path / "honest" / f"{LAB}.ipynb", tmp_path / "slow" / f"{LAB}.ipynb"
+    for path, nb in ((honest, nbformat.read(SOURCE_NB, as_version=4)), (slow, _submission(_slow(3)))):
+        path.parent.mkdir()
+        nbformat.write(nb, path)
+    t0 = time.monotonic()
+    base = grade_submission(spec, release, honest, "s-honest", settings)
+    honest_s = time.monotonic() - t0
+    assert base.points == 18 and not any("budget" in n for n in base.notes), base.notes
+    t0 = time.monotonic()
+    res = grade_submission(spec, release, slow, "s-slow", settings)
+    seconds = time.monotonic() - t0
+    assert seconds < honest_s + limits.submission_s + 10, f"{seconds:.0f} s (honest: {honest_s:.0f} s)"
+    pts = {s.question: s.points for s in res.scores}
+    assert pts["test_A1_correctness"] == 2 and pts["test_B1_prediction"] == 1 and pts["test_B3_prediction"] == 1, res
+    assert pts["test_B2_correct_rate"] == 0 and pts["test_C1_cs_r"] == 0 and pts["test_F_timeline"] == 0
+    assert any(n.startswith("time budget:") and "30 s" in n for n in res.notes), res.notes
+    msg = {s.question: s.message for s in res.scores}
+    assert "time" in msg["test_B2_correct_rate"].lower() and "budget" in msg["test_G1_difficulty"], msg
+
+
+def test_limits_take_a_budget():
+    assert Limits(cell_timeout_s=60).submission_s == 300 and Limits(budget_s=7).submission_s == 7
+    assert Limits(cell_timeout_s=5).submission_s == 120  # the lab's own cells need their time too
+    with pytest.raises(ValueError, match="budget_s"):
+        Limits(budget_s=0)
+
+
+@pytest.mark.slow
+def test_each_submission_is_graded_on_its_own_with_notes(tmp_path, capsys):
+    """A truncated notebook scores 0, named, and the others are graded (it stopped the whole run,
+    naming no one); a notebook without the answer cells' metadata, a 5 MB answer, and a submission
+    writing fake replies into the grader's pipe each get a note, and the feedback stays small."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("teaching_grade", ROOT / "teaching" / "grade.py")
+    grade = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(grade)
+    course, source = tmp_path / "course", tmp_path / "source"
+    shutil.copytree(SOURCE_NB.parent, source / LAB)
+    (course / "release" / LAB).mkdir(parents=True)
+    sol = _solutions()
+    fake = (
+        "import json, os\n"
+        "_fake = json.dumps({'ok': True, 'values': {'predicted_cr_lost': {'value': 0.123}}}) + '\\n'\n"
+        "for _fd in range(3, 64):\n"
+        "    try:\n"
+        "        if os.readlink(f'/proc/self/fd/{_fd}').startswith('pipe:'):\n"
+        "            os.write(_fd, _fake.encode())\n"
+        "    except OSError:\n"
+        "        pass\n"
+    )
+    stripped = nbformat.read(SOURCE_NB, as_version=4)
+    for cell in stripped.cells:
+        cell.metadata.pop("nbgrader", None)
+    subs = {
+        "s-bad": None,
+        "s-stripped": stripped,
+        "s-long": _submission({"F_timeline": sol["F_timeline"] + "\nbest_algorithm = 'x' * 5_000_000\n"}),
+        "s-tamper": _submission({"B1_prediction": fake + sol["B1_prediction"]}),
+    }
+    for student, nb in subs.items():
+        path = course / "submitted" / student / LAB / f"{LAB}.ipynb"
+        path.parent.mkdir(parents=True)
+        if nb is None:
+            text = nbformat.writes(nbformat.read(SOURCE_NB, as_version=4))
+            path.write_text(text[: len(text) // 2])  # cut off mid-way, as a failed upload
+        else:
+            nbformat.write(nb, path)
+    rc = grade.main([str(course), "--source", str(source), "--timeout", "10", "--no-progress"])
+    out, err = capsys.readouterr()
+    assert rc == 1 and "s-bad" in err and "JSON" in err, err
+    rows = {r["student"]: r for r in csv.DictReader((course / "grades.csv").open())}
+    assert set(rows) == set(subs) and rows["s-bad"]["raw_score"] == "0"
+    assert float(rows["s-tamper"]["raw_score"]) == 18, rows["s-tamper"]
+    results = {s: SubmissionResult.from_json((course / "graded" / s / LAB / "result.json").read_text()) for s in subs}
+    assert "s-bad/" in results["s-bad"].notes[0] and results["s-bad"].error
+    assert any("none of the lab's answer cells" in n for n in results["s-stripped"].notes), results["s-stripped"].notes
+    assert any("did not ask for" in n for n in results["s-tamper"].notes), results["s-tamper"].notes
+    assert not any("did not ask for" in n for s in ("s-long", "s-stripped") for n in results[s].notes)
+    for name in ("result.json", "feedback.html"):
+        size = (course / "graded" / "s-long" / LAB / name).stat().st_size
+        assert size < 100_000, f"{name}: {size} bytes"
+    assert "characters left out" in (course / "graded" / "s-long" / LAB / "result.json").read_text()

@@ -74,6 +74,7 @@ def main() -> None:
     namespace: dict[str, Any] = {"__name__": "__main__"}
     for line in requests:
         req = json.loads(line)
+        request_id = req.pop("id", None)
         out: dict[str, Any] = {"ok": True}
         try:
             if req["op"] == "exec":
@@ -89,6 +90,7 @@ def main() -> None:
         if req["op"] == "exec":
             out["values"] = {n: (_plain(namespace[n]) if n in namespace else {"missing": True}) for n in req["capture"]}
         sys.stdout.flush()
+        out["id"] = request_id
         reply.write(json.dumps(out, default=str) + "\n")
         reply.flush()
 

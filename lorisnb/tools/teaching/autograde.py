@@ -32,7 +32,7 @@ import re
 import shutil
 import tempfile
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, NoReturn
@@ -147,6 +147,7 @@ class SubmissionResult:
     seconds: float
     notes: list[str] = field(default_factory=list)
     digest: str = ""
+    error: str = ""  # not graded (the notebook could not be read...): every question 0, and why
 
     @property
     def points(self) -> float:
@@ -181,24 +182,105 @@ def _parameters(cell_source: str, params: Mapping[str, Any]) -> str:
     return cell_source + "\n# injected by the grader\n" + "".join(f"{k} = {v!r}\n" for k, v in params.items())
 
 
-class RemoteFunction(SandboxedAnswer):
-    """A student's function, called in its sandbox (no lorisnb there); results come back as values."""
+class Budget:
+    """The wall-clock budget of one submission (``Limits.submission_s``): the seconds its own code
+    may take in all (answer cells, their replays after a time-out, its functions' sandboxes, the
+    checks' calls). The lab's own cells, run once, are not charged: they are the instructor's."""
 
-    def __init__(self, sandbox: Sandbox | None, name: str, error: str | None = None) -> None:
+    def __init__(self, seconds: float, reserve: float = 0.0) -> None:
+        self.seconds, self.used = float(seconds), 0.0
+        self.reserve = min(float(reserve), self.seconds / 3)  # kept for the checks' calls
+        self.spent_at = ""  # where it ran out
+        self._since: float | None = None  # the start of the charge running now
+
+    def left(self, run: bool = False) -> float:
+        """Seconds left: for the checks' calls, or (``run``) for running cells, the reserve kept."""
+        running = time.monotonic() - self._since if self._since is not None else 0.0
+        return self.seconds - self.used - running - (self.reserve if run else 0.0)
+
+    @contextlib.contextmanager
+    def charge(self) -> Any:
+        if self._since is not None:  # already charging (a replay's cells)
+            yield
+            return
+        self._since = time.monotonic()
+        try:
+            yield
+        finally:
+            self.used += time.monotonic() - self._since
+            self._since = None
+
+    def out(self, where: str, run: bool = True) -> bool:
+        """Whether it is spent (for running cells, ``run``: its reserve for the checks' calls
+        kept), and then, the first time, remember where."""
+        if self.left(run) > 0:
+            return False
+        self.spent_at = self.spent_at or where
+        return True
+
+    def note(self) -> str:
+        return (
+            f"time budget: grading runs a submission's code for at most {self.seconds:g} s in all (--budget), "
+            f"and this one's ran out at {self.spent_at}: what it had earned by then counts, and each question "
+            "whose answer or check did not run in time scores 0 (slow or endless cells and calls cost their time "
+            "limit, and again in the replay after each time-out)"
+        )
+
+
+class RemoteFunction(SandboxedAnswer):
+    """A student's function, called in its sandbox (no lorisnb there); results come back as values.
+    Its calls by the checks share one per-cell time limit (``call_budget_s``) and the submission's
+    budget."""
+
+    def __init__(
+        self,
+        sandbox: Sandbox | None,
+        name: str,
+        error: str | None = None,
+        budget: Budget | None = None,
+        call_budget_s: float | None = None,
+    ) -> None:
         self.sandbox, self.name, self.error = sandbox, name, error
+        self.budget = budget
+        self.calls_left = call_budget_s
         self.__name__ = name
 
     def __call__(self, **kwargs: Any) -> Any:
         if self.sandbox is None:
             _raise(self.error or f"NameError: {self.name} is not defined")
+        left = [t for t in (self.calls_left, self.budget.left() if self.budget else None) if t is not None]
+        timeout = min(left) if left else None
+        if timeout is not None and timeout <= 0:
+            self._stop(f"the check's calls of {self.name}")
+        t0 = time.monotonic()
         try:
-            reply = self.sandbox.call(self.name, kwargs)
+            with self.budget.charge() if self.budget else contextlib.nullcontext():
+                reply = self.sandbox.call(self.name, kwargs, timeout_s=timeout)
         except SandboxError as exc:
+            if self.budget is not None and self.budget.out(f"a check's call of {self.name}", run=False):
+                self._stop(f"a check's call of {self.name}")
+            if self.calls_left is not None and self.calls_left - (time.monotonic() - t0) <= 0:
+                self._stop(f"the check's calls of {self.name}")
             self.sandbox, self.error = None, f"TimeoutError: {exc}"
             _raise(self.error)
+        finally:
+            if self.calls_left is not None:
+                self.calls_left -= time.monotonic() - t0
         if not reply.get("ok"):
             _raise(str(reply.get("error", "RuntimeError: failed")))
         return decode(reply["result"])
+
+    def _stop(self, where: str) -> NoReturn:
+        if self.budget is not None and self.budget.out(where, run=False):
+            self.error = f"TimeoutError: the submission's time budget ({self.budget.seconds:g} s) ran out ({where})"
+        else:
+            limit = self.sandbox.limits.cell_timeout_s if self.sandbox else 0
+            self.error = (
+                f"TimeoutError: the checks' calls of {self.name} took more than {limit:g} s in all "
+                "(the time limit of a cell, shared by a function's calls)"
+            )
+        self.sandbox = None
+        _raise(self.error)
 
     def __repr__(self) -> str:
         return f"<your function {self.name}, run in the grading sandbox>"
@@ -275,45 +357,72 @@ def grade_submission(
     """Grade ``notebook`` (``student``'s copy of ``spec``'s lab); ``release_dir``: the files handed
     out with it (copied into the sandbox, the notebook excepted)."""
     t0 = time.monotonic()
-    nb = nbformat.read(notebook, as_version=4)
-    answers = student_answers(nb)
+    try:
+        nb = nbformat.read(notebook, as_version=4)
+        answers = student_answers(nb)
+    except Exception as exc:  # noqa: BLE001 (any way a returned file fails to be a notebook: this student's 0)
+        return unreadable(spec, student, notebook, exc, time.monotonic() - t0)
     py_path, checkout_dirs = _package_paths()
     hidden = [*settings.hidden, *checkout_dirs]
     _check_reachable(py_path, settings)
     notes: list[str] = []
+    expected = [str(_nbgrader(c)["grade_id"]) for c in spec.notebook.cells if _nbgrader(c).get("solution")]
+    missing = [g for g in expected if g not in answers]
+    if missing and len(missing) == len(expected):
+        notes.append(
+            f"{notebook.name} holds none of the lab's answer cells (the cells' nbgrader metadata was removed, or it "
+            "is another notebook): every question is graded as unanswered. Submit the notebook you were handed "
+            "out, answered in its own cells (copy your answers into a fresh copy if its cells were recreated)"
+        )
+    elif missing:
+        notes.append(f"{notebook.name} lacks the answer cells {', '.join(missing)} (their nbgrader metadata was "
+                     "removed, or the cells deleted): graded as unanswered")  # fmt: skip
     params = {"student_id": student}
+    n_functions = sum(1 for defs in spec.functions.values() if defs)
+    budget = Budget(settings.limits.submission_s, reserve=n_functions * settings.limits.cell_timeout_s)
+    boxes: list[Sandbox] = []
     with tempfile.TemporaryDirectory(prefix="lorisnb-grade-", dir=_reachable_tmp()) as tmp:
         root = Path(tmp)
         root.chmod(0o711)
         work = root / "work"
         shutil.copytree(release_dir, work, ignore=shutil.ignore_patterns("*.ipynb", ".*"))
         shutil.copyfile(notebook, work / notebook.name)
-        values, fn_errors = _run_student(spec, answers, params | {"output_dir": str(work / "out")}, work, py_path,
-                                         hidden, settings, notes)  # fmt: skip
-        isolation = "full" if settings.uid and _isolated() else "limits"
         functions: dict[str, RemoteFunction] = {}
-        boxes: list[Sandbox] = []
+
+        def alone(gid: str, failed: str | None) -> None:
+            """Step 2 for one formula answer, right after its cell ran in step 1 (its time is
+            charged then, so the points earned before a budget runs out are kept)."""
+            defs = spec.functions.get(gid, ())
+            if not defs:
+                return
+            if failed:
+                functions.update({d: RemoteFunction(None, d, failed) for d in defs})
+                return
+            fwork = root / f"fn-{gid}"
+            fwork.mkdir()
+            box = Sandbox(fwork, limits=settings.limits, hidden=hidden, uid=settings.uid + 1, no_lorisnb=True)
+            boxes.append(box)
+            prelude = "import math\nimport numpy as np\n"
+            try:
+                with budget.charge():
+                    reply = box.run(prelude + answers.get(gid, ""), name=f"<answer {gid}>", timeout_s=budget.left(True))
+            except SandboxError as exc:
+                err = _BUDGET_ERROR.format(budget.seconds) if budget.out(f"<answer {gid}>, run alone") else str(exc)
+                functions.update({d: RemoteFunction(None, d, f"TimeoutError: {err}") for d in defs})
+                return
+            err = None if reply.get("ok") else str(reply.get("error"))
+            if err:  # the cell failed on its own, with numpy only: say so, then its error
+                err = f"RuntimeError: the answer cell, run alone with numpy only (no lorisnb, as graded), failed: {err}"
+            functions.update({d: RemoteFunction(None if err else box, d, err, budget, settings.limits.cell_timeout_s)
+                              for d in defs})  # fmt: skip
+
         try:
-            for gid, defs in spec.functions.items():
-                if not defs:
-                    continue
-                fwork = root / f"fn-{gid}"
-                fwork.mkdir()
-                if gid in fn_errors:
-                    functions.update({d: RemoteFunction(None, d, fn_errors[gid]) for d in defs})
-                    continue
-                box = Sandbox(fwork, limits=settings.limits, hidden=hidden, uid=settings.uid + 1, no_lorisnb=True)
-                boxes.append(box)
-                prelude = "import math\nimport numpy as np\n"
-                try:
-                    reply = box.run(prelude + answers.get(gid, ""), name=f"<answer {gid}>")
-                except SandboxError as exc:
-                    functions.update({d: RemoteFunction(None, d, f"TimeoutError: {exc}") for d in defs})
-                    continue
-                err = None if reply.get("ok") else str(reply.get("error"))
-                if err:  # the cell failed on its own, with numpy only: say so, then its error
-                    err = f"RuntimeError: the answer cell, run alone with numpy only (no lorisnb, as graded), failed: {err}"
-                functions.update({d: RemoteFunction(None if err else box, d, err) for d in defs})
+            values = _run_student(spec, answers, params | {"output_dir": str(work / "out")}, work, py_path,
+                                  hidden, settings, notes, budget, boxes, alone)  # fmt: skip
+            isolation = "full" if settings.uid and _isolated() else "limits"
+            for defs in spec.functions.values():  # not reached: the budget ran out before
+                functions.update({d: RemoteFunction(None, d, f"TimeoutError: {_BUDGET_ERROR.format(budget.seconds)}")
+                                  for d in defs if d not in functions})  # fmt: skip
             scores = _run_checks(
                 spec,
                 values,
@@ -324,7 +433,38 @@ def grade_submission(
         finally:
             for box in boxes:
                 box.close()
+    if budget.spent_at:
+        notes.append(budget.note())
+    stray = sum(box.stray for box in boxes)
+    if stray:
+        notes.append(
+            f"the grader's reply pipe from the sandbox held {stray} line(s) it did not ask for: the submission's code "
+            "wrote into it (ignored; only the replies to the grader's own requests were read, and whatever they "
+            "hold is checked like any answer)"
+        )
+    notes = [shorten(n) for n in notes]
     return SubmissionResult(student, spec.name, scores, isolation, round(time.monotonic() - t0, 2), notes)
+
+
+_BUDGET_ERROR = "the submission's time budget ({:g} s) ran out before this answer was graded"
+MESSAGE_CHARS = 2000  # a check's message or a note, at most (a long answer echoed back is shortened)
+
+
+def shorten(text: str, limit: int = MESSAGE_CHARS) -> str:
+    """``text`` as is when short, else its beginning and end around the number of characters left out."""
+    if len(text) <= limit:
+        return text
+    keep = limit // 2
+    return f"{text[:keep]} [... {len(text) - 2 * keep} characters left out ...] {text[-keep:]}"
+
+
+def unreadable(spec: LabSpec, student: str, notebook: Path, exc: BaseException, seconds: float) -> SubmissionResult:
+    """The result of a submission that could not be graded: every question 0, the file and why."""
+    what = shorten(f"{type(exc).__name__}: {exc}", 500)
+    error = f"{notebook.parent.parent.name}/{notebook.parent.name}/{notebook.name} could not be graded: {what}"
+    scores = [Score(q.grade_id, 0.0, q.points, f"not graded: {what}") for q in spec.questions]
+    note = error + " (return the notebook as saved by Jupyter: File > Save, then submit it again)"
+    return SubmissionResult(student, spec.name, scores, "none", round(seconds, 2), [note], error=error)
 
 
 def _check_reachable(py_path: Path, settings: GradeSettings) -> None:
@@ -375,9 +515,16 @@ def _run_student(
     hidden: Sequence[Path],
     settings: GradeSettings,
     notes: list[str],
-) -> tuple[dict[str, dict[str, Any]], dict[str, str]]:
+    budget: Budget,
+    boxes: list[Sandbox],
+    alone: Callable[[str, str | None], None],
+) -> dict[str, dict[str, Any]]:
     """Step 1: the lab's cells with the student's answers, in the sandbox. Returns the values read
-    back after each answer cell, and the answer cells that hit a limit (their error)."""
+    back after each answer cell; ``alone(grade_id, error)`` runs after each answer cell (step 2 of a
+    formula answer; ``error``: the cell hit a limit). Every cell from the first answer cell on (the
+    lab's own after it too: the student's code could slow them), and every replay after a time-out,
+    is charged to ``budget``; once it is spent no more cells run. A replay gives each cell twice the
+    time it took (plus two seconds)."""
     cells: list[tuple[str, str | None, str]] = []  # (source, answer grade_id, name)
     for i, cell in enumerate(spec.notebook.cells):
         meta = _nbgrader(cell)
@@ -391,40 +538,70 @@ def _run_student(
         else:
             cells.append((cell.source, None, f"<cell {i}>"))
     values: dict[str, dict[str, Any]] = {}
-    errors: dict[str, str] = {}
     skipped: set[int] = set()
+    took: dict[int, float] = {}  # seconds each cell took on its first run
     box = Sandbox(work, limits=settings.limits, hidden=hidden, uid=settings.uid, python_path=[py_path])
+    boxes.append(box)
+
+    def unrun(k: int) -> None:  # the answer cells from k on get no value: the budget is spent
+        for _, gid, _ in cells[k:]:
+            if gid and gid not in values:
+                values[gid] = {n: {"error": _BUDGET_ERROR.format(budget.seconds)} for n in spec.values.get(gid, ())}
+
     try:
-        k = 0
+        k, charged = 0, False
         while k < len(cells):
             source, gid, cell_name = cells[k]
             capture: Sequence[str] = spec.values.get(gid, ()) if gid else ()
+            charged = charged or gid is not None
+            if charged and budget.out(cell_name):
+                unrun(k)
+                break
+            t0 = time.monotonic()
             try:
-                reply = box.run(source, capture, cell_name, locked=gid is None)
+                with budget.charge() if charged else contextlib.nullcontext():
+                    reply = box.run(source, capture, cell_name, locked=gid is None,
+                                    timeout_s=budget.left(True) if charged else None)  # fmt: skip
             except SandboxError as exc:
                 where = gid or cell_name
-                notes.append(f"{where}: {exc}")
+                spent = charged and budget.out(cell_name)
+                notes.append(f"{where}: {_BUDGET_ERROR.format(budget.seconds) if spent else exc}")
                 if gid:
-                    errors[gid] = f"TimeoutError: {exc}"
-                    values[gid] = {n: {"error": str(exc)} for n in capture}
+                    error = _BUDGET_ERROR.format(budget.seconds) if spent else str(exc)
+                    values[gid] = {n: {"error": error} for n in capture}
+                    alone(gid, f"TimeoutError: {error}")
+                if spent:
+                    unrun(k)
+                    break
                 skipped.add(k)
-                box.restart()  # replay what ran before, without the cell that hit the limit
-                for j in range(k):
-                    if j not in skipped:
+                with budget.charge():  # replay what ran before, without the cell that hit the limit
+                    box.restart()
+                    for j in range(k):
+                        if j in skipped:
+                            continue
+                        if budget.out(f"the replay after {where}"):
+                            break
                         try:
-                            box.run(cells[j][0], (), cells[j][2], locked=cells[j][1] is None)
+                            box.run(cells[j][0], (), cells[j][2], locked=cells[j][1] is None,
+                                    timeout_s=min(2 * took.get(j, 0.0) + 2.0, budget.left(True)))  # fmt: skip
                         except SandboxError:
                             skipped.add(j)
+                if budget.out(f"the replay after {where}"):
+                    unrun(k + 1)
+                    break
                 k += 1
                 continue
+            took[k] = time.monotonic() - t0
             if gid:
                 values[gid] = dict(reply.get("values", {}))
             if not reply.get("ok"):
                 notes.append(f"{gid or cell_name}: {reply.get('error')}")
+            if gid:
+                alone(gid, None)
             k += 1
     finally:
         box.close()
-    return values, errors
+    return values
 
 
 def _student_value(plain: Mapping[str, Any]) -> Any:
@@ -476,10 +653,10 @@ def _run_checks(
             try:
                 with contextlib.redirect_stdout(buf):
                     exec(compile(source, f"<test {q.grade_id}>", "exec"), ns)  # noqa: S102
-                scores.append(Score(q.grade_id, q.points, q.points, buf.getvalue().strip()))
+                scores.append(Score(q.grade_id, q.points, q.points, shorten(buf.getvalue().strip())))
             except Exception as exc:  # a failed check (AnswerError) or the answer's own error
                 text = str(exc) if isinstance(exc, AssertionError) else f"{type(exc).__name__}: {exc}"
-                scores.append(Score(q.grade_id, 0.0, q.points, (buf.getvalue() + text).strip()))
+                scores.append(Score(q.grade_id, 0.0, q.points, shorten((buf.getvalue() + text).strip())))
             finally:
                 ns.update(saved)
             plt.close("all")

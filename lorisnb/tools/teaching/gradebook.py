@@ -35,6 +35,7 @@ from lorisnb.tools.teaching.autograde import (
     digest,
     grade_submission,
     lab_spec,
+    unreadable,
 )
 from lorisnb.tools.teaching.sandbox import can_isolate, claim_uids
 
@@ -227,10 +228,14 @@ def grade_class(
 
     bar = tqdm(total=len(todo), desc="grading", unit="submission", disable=not progress or not todo)
     with bar, ProcessPoolExecutor(max_workers=max(1, jobs)) as pool:
-        futures = {pool.submit(_grade_one, args): key for args, key in todo}
+        futures = {pool.submit(_grade_one, args): (args, key) for args, key in todo}
         for fut in as_completed(futures):
-            res = fut.result()
-            res.digest = futures[fut]
+            args, key = futures[fut]
+            try:
+                res = fut.result()
+            except Exception as exc:  # noqa: BLE001 (this submission alone is not graded: 0, and why)
+                res = unreadable(args[0], args[3], args[2], exc, 0.0)
+            res.digest = "" if res.error else key  # not graded: tried again next time
             _write_result(course, res)
             done.append(res)
             bar.update()

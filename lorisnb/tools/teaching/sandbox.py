@@ -25,6 +25,7 @@ from __future__ import annotations
 import json
 import os
 import resource
+import secrets
 import select
 import shutil
 import signal
@@ -46,10 +47,14 @@ class Limits:
     """The sandbox's limits: seconds per answer cell or call (``cell_timeout_s``), seconds per
     instructor cell (``locked_timeout_s``: the lab's own cells, its imports and data; at least
     ``cell_timeout_s``), bytes of address space (``memory_bytes``, RLIMIT_AS), bytes per written file,
-    processes of its user, CPU seconds."""
+    processes of its user, CPU seconds. ``budget_s``: seconds of wall clock for a whole submission
+    (from its first answer cell on: the cells, their replays, its functions' sandboxes and the checks'
+    calls; default ``BUDGET_CELLS`` times ``cell_timeout_s``, at least ``BUDGET_MIN_S``): the grader
+    stops running its code when it is spent."""
 
     cell_timeout_s: float = 60.0
     locked_timeout_s: float = 120.0
+    budget_s: float | None = None
     memory_bytes: int = 3 * 1024**3
     file_bytes: int = 64 * 1024**2
     processes: int = 64
@@ -58,8 +63,20 @@ class Limits:
     def __post_init__(self) -> None:
         if not self.cell_timeout_s > 0:
             raise ValueError(f"cell_timeout_s must be > 0 seconds, got {self.cell_timeout_s!r}")
+        if self.budget_s is not None and not self.budget_s > 0:
+            raise ValueError(f"budget_s must be > 0 seconds, got {self.budget_s!r}")
         if self.memory_bytes < 256 * 1024**2:
             raise ValueError(f"memory_bytes must be at least 256 MiB, got {self.memory_bytes!r}")
+
+    @property
+    def submission_s(self) -> float:
+        """The wall-clock budget of one submission, in seconds."""
+        return self.budget_s if self.budget_s is not None else max(BUDGET_CELLS * self.cell_timeout_s, BUDGET_MIN_S)
+
+
+# a submission's default budget: 5 per-cell limits (5 min at the default 60 s), at least 2 minutes
+# (the lab's own cells after the first answer are charged too: about 10 to 20 s on a busy 2-core machine)
+BUDGET_CELLS, BUDGET_MIN_S = 5, 120.0
 
 
 class SandboxError(RuntimeError):
@@ -185,6 +202,7 @@ class Sandbox:
         self.isolation = "full" if can_isolate() else "limits"
         self._proc: subprocess.Popen[bytes] | None = None
         self._buffer = b""
+        self.stray = 0  # lines in the reply pipe that were no reply of the child's (tampering)
         self.start()
 
     # --- life cycle ------------------------------------------------------------------------------
@@ -287,52 +305,81 @@ class Sandbox:
     # --- requests --------------------------------------------------------------------------------
 
     def _ask(self, request: dict[str, Any], timeout_s: float) -> dict[str, Any]:
+        """Send a request and wait for its reply (the line carrying its id). Anything else that came
+        through the pipe (a line the child's code wrote into it, a reply left over) is ignored and
+        counted in :attr:`stray`."""
         proc = self._proc
         if proc is None or proc.poll() is not None or proc.stdin is None or proc.stdout is None:
             raise SandboxError("the sandbox is not running (it ended earlier)")
+        if timeout_s <= 0:
+            raise SandboxError("time limit: no time left for it")
+        fd = proc.stdout.fileno()
+        self._drain(fd)
+        request_id = secrets.token_hex(8)
         try:
-            proc.stdin.write((json.dumps(request) + "\n").encode())
+            proc.stdin.write((json.dumps({**request, "id": request_id}) + "\n").encode())
             proc.stdin.flush()
         except BrokenPipeError:
             self.close()
             raise SandboxError("the sandbox ended (memory limit, or the code ended its process)") from None
         deadline = time.monotonic() + timeout_s
-        fd = proc.stdout.fileno()
-        while b"\n" not in self._buffer:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                self.close()
-                raise SandboxError(f"time limit: the cell ran for more than {timeout_s:g} s and was stopped")
-            ready, _, _ = select.select([fd], [], [], left)
-            if ready:
-                chunk = os.read(fd, 1 << 16)
-                if not chunk:
+        while True:
+            while b"\n" not in self._buffer:
+                left = deadline - time.monotonic()
+                if left <= 0:
                     self.close()
-                    raise SandboxError("the sandbox ended (memory limit, or the code ended its process)")
-                self._buffer += chunk
-        line, self._buffer = self._buffer.split(b"\n", 1)
-        try:
-            reply = json.loads(line)
-        except ValueError:
-            self.close()
-            raise SandboxError("the sandbox's reply was garbled (the code wrote into the grader's pipe)") from None
-        if not isinstance(reply, dict):
-            raise SandboxError("the sandbox's reply was garbled (the code wrote into the grader's pipe)")
-        return reply
+                    raise SandboxError(f"time limit: the cell ran for more than {timeout_s:g} s and was stopped")
+                ready, _, _ = select.select([fd], [], [], left)
+                if ready:
+                    chunk = os.read(fd, 1 << 16)
+                    if not chunk:
+                        self.close()
+                        raise SandboxError("the sandbox ended (memory limit, or the code ended its process)")
+                    self._buffer += chunk
+            line, self._buffer = self._buffer.split(b"\n", 1)
+            try:
+                reply = json.loads(line)
+            except ValueError:
+                reply = None
+            if isinstance(reply, dict) and reply.get("id") == request_id:
+                reply.pop("id")
+                return reply
+            self.stray += 1  # not the reply to this request: written by the code into the pipe
+
+    def _drain(self, fd: int) -> None:
+        """Count what came through the pipe while no request was pending (the code wrote it, or a
+        reply came after one the code forged): nothing is waiting then."""
+        while select.select([fd], [], [], 0)[0]:
+            chunk = os.read(fd, 1 << 16)
+            if not chunk:
+                break
+            self._buffer += chunk
+        if self._buffer:
+            self.stray += max(1, self._buffer.count(b"\n"))
+            self._buffer = b""
 
     def run(
-        self, source: str, capture: Sequence[str] = (), name: str = "<cell>", locked: bool = False
+        self,
+        source: str,
+        capture: Sequence[str] = (),
+        name: str = "<cell>",
+        locked: bool = False,
+        timeout_s: float | None = None,
     ) -> dict[str, Any]:
-        """Run one cell (``locked``: the instructor's, with its own time limit); the reply: ``ok``,
-        ``error`` (the cell's exception), ``values`` (captured)."""
+        """Run one cell (``locked``: the instructor's, with its own time limit; ``timeout_s``: a
+        shorter limit, what is left of a budget); the reply: ``ok``, ``error`` (the cell's
+        exception), ``values`` (captured)."""
         lim = self.limits
         timeout = max(lim.cell_timeout_s, lim.locked_timeout_s) if locked else lim.cell_timeout_s
+        if timeout_s is not None:
+            timeout = min(timeout, timeout_s)
         return self._ask({"op": "exec", "source": source, "capture": list(capture), "name": name}, timeout)
 
-    def call(self, name: str, args: dict[str, Any]) -> dict[str, Any]:
+    def call(self, name: str, args: dict[str, Any], timeout_s: float | None = None) -> dict[str, Any]:
         """Call the function ``name`` the cells defined with these (numpy or plain) arguments."""
         encoded = {k: _encode(v) for k, v in args.items()}
-        return self._ask({"op": "call", "name": name, "args": encoded}, self.limits.cell_timeout_s)
+        timeout = self.limits.cell_timeout_s if timeout_s is None else min(self.limits.cell_timeout_s, timeout_s)
+        return self._ask({"op": "call", "name": name, "args": encoded}, timeout)
 
 
 def _encode(value: Any) -> Any:
