@@ -183,9 +183,10 @@ def _parameters(cell_source: str, params: Mapping[str, Any]) -> str:
 
 
 class Budget:
-    """The wall-clock budget of one submission (``Limits.submission_s``): the seconds its own code
-    may take in all (answer cells, their replays after a time-out, its functions' sandboxes, the
-    checks' calls). The lab's own cells, run once, are not charged: they are the instructor's."""
+    """The wall-clock budget of one submission (``Limits.submission_s``): the seconds its code may
+    take in all, from its first answer cell on (the cells, the lab's own after them, the replays
+    after a time-out, its functions' sandboxes, the checks' calls; a ``reserve`` is kept for the
+    calls). The lab's cells before the first answer are not charged: no student code ran yet."""
 
     def __init__(self, seconds: float, reserve: float = 0.0) -> None:
         self.seconds, self.used = float(seconds), 0.0
@@ -397,6 +398,10 @@ def grade_submission(
                 return
             if failed:
                 functions.update({d: RemoteFunction(None, d, failed) for d in defs})
+                return
+            if budget.out(f"<answer {gid}>, run alone"):
+                error = f"TimeoutError: {_BUDGET_ERROR.format(budget.seconds)}"
+                functions.update({d: RemoteFunction(None, d, error) for d in defs})
                 return
             fwork = root / f"fn-{gid}"
             fwork.mkdir()
