@@ -412,8 +412,8 @@ def grade_submission(
                 with budget.charge():
                     reply = box.run(prelude + answers.get(gid, ""), name=f"<answer {gid}>", timeout_s=budget.left(True))
             except SandboxError as exc:
-                err = _BUDGET_ERROR.format(budget.seconds) if budget.out(f"<answer {gid}>, run alone") else str(exc)
-                functions.update({d: RemoteFunction(None, d, f"TimeoutError: {err}") for d in defs})
+                why = _BUDGET_ERROR.format(budget.seconds) if budget.out(f"<answer {gid}>, run alone") else str(exc)
+                functions.update({d: RemoteFunction(None, d, f"TimeoutError: {why}") for d in defs})
                 return
             err = None if reply.get("ok") else str(reply.get("error"))
             if err:  # the cell failed on its own, with numpy only: say so, then its error
