@@ -412,6 +412,30 @@ def test_a_script_folder_on_sys_path_does_not_open_the_checkout(monkeypatch):
     assert not any(pkg.is_relative_to(h) or Path(sys.prefix).resolve().is_relative_to(h) for h in hidden)
 
 
+def test_the_git_database_of_a_course_kept_in_its_own_repository_is_hidden(tmp_path):
+    """A course (and its labs' sources) in a repository of its own, not the checkout lorisnb runs
+    from: the sandbox hid the course and source folders but not that repository's ``.git``, whose
+    history holds the solutions (``git show HEAD:source/...`` from a sandbox printed them). A
+    worktree's ``.git`` file leads to the main repository's database."""
+    from lorisnb.tools.teaching import autograde, gradebook
+
+    repo = tmp_path / "course-repo"
+    (repo / ".git").mkdir(parents=True)
+    (repo / "course").mkdir()
+    (repo / "labs" / "source").mkdir(parents=True)
+    assert autograde.git_databases([repo / "course", repo / "labs" / "source"]) == [(repo / ".git").resolve()]
+    tree = tmp_path / "tree"
+    (repo / ".git" / "worktrees" / "tree").mkdir(parents=True)
+    (tree / "source").mkdir(parents=True)
+    (tree / ".git").write_text("gitdir: ../course-repo/.git/worktrees/tree\n")  # relative, as git writes some
+    assert autograde.git_databases([tree / "source"]) == [(repo / ".git").resolve()]
+
+    hidden = gradebook.grading_settings(
+        repo / "course", repo / "labs" / "source", autograde.GradeSettings(), "s"
+    ).hidden
+    assert (repo / ".git").resolve() in hidden and repo / "course" in hidden
+
+
 def test_concurrent_graders_get_sandbox_users_of_their_own():
     """Each grading process holds its pair of sandbox user ids until it ends (a lock per id): two
     workers of one class, or two graders started side by side, never share one (the old rule, the

@@ -325,16 +325,33 @@ def _package_paths() -> tuple[Path, list[Path]]:
         for entry in root.iterdir():
             if entry.is_dir() and not entry.is_symlink() and not any(n.is_relative_to(entry.resolve()) for n in needed):
                 hide.append(entry.resolve())
-        git = root / ".git"
-        if git.is_file():  # a worktree: its git database is elsewhere
-            m = re.match(r"gitdir:\s*(.+)", git.read_text())
-            if m:
-                d = Path(m.group(1).strip()).resolve()
+        if (root / ".git").is_file():  # a worktree: its git database is elsewhere
+            hide += git_databases([root])
+    return pkg.parent, list(dict.fromkeys(hide))
+
+
+def git_databases(paths: Sequence[Path]) -> list[Path]:
+    """The git database of each repository holding one of ``paths`` (its ``.git`` folder; a
+    worktree's, whose ``.git`` file names it, the main repository's): its history holds every file
+    ever committed there, the labs' solutions too, so the sandbox hides it with the course and the
+    sources (a course kept in a repository of its own, not the checkout lorisnb runs from, left it
+    readable)."""
+    found: list[Path] = []
+    for path in paths:
+        for root in (Path(path).resolve(), *Path(path).resolve().parents):
+            git = root / ".git"
+            if git.is_dir():
+                found.append(git)
+                break
+            if git.is_file():
+                m = re.match(r"gitdir:\s*(.+)", git.read_text())
+                d = (root / m.group(1).strip()).resolve() if m else root
                 while d.name != ".git" and d != d.parent:
                     d = d.parent
                 if d.name == ".git":
-                    hide.append(d)
-    return pkg.parent, list(dict.fromkeys(hide))
+                    found.append(d)
+                break
+    return list(dict.fromkeys(found))
 
 
 @dataclass(frozen=True)

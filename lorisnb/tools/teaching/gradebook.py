@@ -33,6 +33,7 @@ from lorisnb.tools.teaching.autograde import (
     LabSpec,
     SubmissionResult,
     digest,
+    git_databases,
     grade_submission,
     lab_spec,
     unreadable,
@@ -186,6 +187,15 @@ def _secret(course: Path) -> str:
     return f.read_text().strip()
 
 
+def grading_settings(course: Path, source: Path, settings: GradeSettings, secret: str) -> GradeSettings:
+    """The settings every submission of ``course`` is graded with: ``settings`` with the course, the
+    labs' ``source`` and the git database of any repository holding either
+    (:func:`~lorisnb.tools.teaching.autograde.git_databases`) hidden from the sandbox, and the
+    course's ``secret``."""
+    hidden = (course, source, *git_databases([course, source]), *settings.hidden)
+    return GradeSettings(settings.limits, tuple(Path(h) for h in hidden), secret, settings.uid)
+
+
 def grade_class(
     course: Path,
     source: Path,
@@ -201,9 +211,7 @@ def grade_class(
     course, source = course.resolve(), source.resolve()
     labs = list(labs) if labs else sorted(p.name for p in source.iterdir() if (p / f"{p.name}.ipynb").is_file())
     secret = _secret(course)
-    settings = settings or GradeSettings()
-    hidden = (course, source, *settings.hidden)
-    settings = GradeSettings(settings.limits, tuple(Path(h) for h in hidden), secret, settings.uid)
+    settings = grading_settings(course, source, settings or GradeSettings(), secret)
     todo, done = [], []
     for lab in labs:
         src_nb = source / lab / f"{lab}.ipynb"
