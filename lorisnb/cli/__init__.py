@@ -99,6 +99,14 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="read --eps as fractions of each sequence's ground-truth extent or length",
     )
+    p.add_argument(
+        "--columns",
+        choices=["metrics", "all"],
+        default="metrics",
+        help="columns of the table written: 'metrics' (default, as lorisnb.sweep's: identity, thresholds and the "
+        "metrics that depend on them, plus the spec) or 'all' (every column of evaluate's table, its error "
+        "statistics and RPE repeated at each setting: about 8 times the file and 4 times the time)",
+    )
     p.set_defaults(func=_command(".commands", "cmd_sweep"))
 
     p = sub.add_parser("crosscheck", help="compare lorisnb with evo on one ground truth and one estimate")

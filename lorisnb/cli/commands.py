@@ -258,6 +258,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     refuse_unused(args, {"relative": "lorisnb evaluate (rpg's relative error has no threshold to sweep)",
                          "relative_lengths": "lorisnb evaluate --relative-lengths",
                          "kitti_plot": "lorisnb evaluate --conventions kitti"})  # fmt: skip
+    if args.columns == "metrics" and args.relation is None:  # no column of the lean table depends on the RPE
+        rpe = [f"--{k.replace('_', '-')}" for k in ("rpe_delta", "rpe_unit", "rpe_pairs", "rpe_all_pairs", "rpe_tolerance")
+               if getattr(args, k, None) is not None]  # fmt: skip
+        if rpe:
+            raise ValidationError(f"{rpe[0]}: the RPE is in the table of sweep --columns all (or of --relation); the "
+                                  "default --columns metrics holds the thresholds' metrics only")  # fmt: skip
     relative = f" (fractions of each sequence's {args.relative_to})" if args.relative_to is not None else " m"
     units = {"eps": relative, "phi": " deg", "delta": " s", "tau": " s"}
 
@@ -295,6 +301,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         path, rows = sweep_to_parquet(
             ev.errors, args.parquet or args.csv, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
             force=args.force, progress=not args.no_progress, on_part=summarize, relation=ev.spec.relation,
+            columns=args.columns,
             change_unit=ev.spec.change_unit, fmt="parquet" if args.parquet else "csv",
             **ev.spec.rpe_options(),
         )  # fmt: skip
@@ -308,7 +315,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         _report_problems(ev, notes)
         return ev.exit_status()
     table = sweep(
-        ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns="all",
+        ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns=args.columns,
         relation=ev.spec.relation, change_unit=ev.spec.change_unit, **ev.spec.rpe_options(),
     )  # fmt: skip
     table["spec"] = ev.spec.canonical(thresholds=False)

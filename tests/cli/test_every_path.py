@@ -237,7 +237,7 @@ def _one_draw(o: dict, data, tmp_path: Path, capsys) -> list[str]:
     pair = [str(folder / "fr2.txt"), "--gt", gt, "--scene", "fr2", "--jobs", "1", "--no-progress"]
     commands = {
         "evaluate": ["evaluate", *pair, *_cli(o_mode)],
-        "sweep": ["sweep", *pair, *_cli(o_mode)],
+        "sweep": ["sweep", *pair, *_cli(o_mode), "--columns", "all"],  # the RPE options apply to its RPE columns
         "manifest-cli": ["evaluate", str(tmp_path / "res"), "--manifest", str(toml), "--jobs", "1", "--no-progress"],
     }
     for name, argv in commands.items():

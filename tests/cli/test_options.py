@@ -73,7 +73,10 @@ READING = {"--gt", "--format", "--gt-format", "--manifest", "--topic", "--gt-top
 RUNNING = {"--jobs", "--scheduler", "--no-progress", "--csv", "--parquet", "--force", "--help", "--digits",
            "--kitti-plot"}  # fmt: skip
 OWN = {  # options of one command, with their cases
-    "sweep": {"--relative-to": (["--eps", "0.1", "--relative-to", "extent"], ["--eps", "0.1"])},
+    "sweep": {
+        "--relative-to": (["--eps", "0.1", "--relative-to", "extent"], ["--eps", "0.1"]),
+        "--columns": (["--columns", "all"], []),
+    },
     "compare": {
         "--metric": (["--metric", "cs_r"], []),
         "--level": (["--level", "0.5"], []),
@@ -253,9 +256,12 @@ def test_options_of_sweep_and_compare(command, kinds, tmp_path, capsys):
         with_it, contrast = CASES[option]
         a = _run([command, *base, *with_it], tmp_path / "a.csv", capsys)
         b = _run([command, *base, *contrast], tmp_path / "b.csv", capsys)
-        if command == "compare" and option == "--rpe-unit":  # no metric of compare's ranking depends on it
+        if option == "--rpe-unit":  # no metric of compare's ranking, nor of sweep's default columns, depends on it
             assert a[0] == 2 and option in a[2], a[2][-300:]
-            continue
+            if command == "compare":
+                continue
+            a = _run([command, *base, *with_it, "--columns", "all"], tmp_path / "a.csv", capsys)  # its RPE columns
+            b = _run([command, *base, *contrast, "--columns", "all"], tmp_path / "b.csv", capsys)
         assert a[0] in (0, 1) and a[3] is not None and not a[3].equals(b[3]), (command, option, a[2][-300:])
 
 

@@ -245,7 +245,7 @@ def test_compare_with_a_short_and_an_empty_algorithm(tum, tmp_path, capsys):
     assert "no two algorithms both have a value of c_ate_rmse there" in out.err + out.out
 
 
-@pytest.mark.parametrize("options", [[], ["--conventions", "tum"], ["--conventions", "evo", "--rpe-delta", "10"]])
+@pytest.mark.parametrize("options", [[], ["--conventions", "tum"], ["--conventions", "evo", "--rpe-delta", "10", "--columns", "all"]])
 def test_sweep_of_a_sequence_without_rpe_pair(tum, tmp_path, capsys, options):
     gt, _, five, _ = tum
     out = tmp_path / "sw.csv"

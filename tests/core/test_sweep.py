@@ -125,6 +125,8 @@ def test_sweep_cli_row_equals_evaluate_cli_row(icra20, tmp_path, capsys):
             [
                 "sweep",
                 f,
+                "--columns",
+                "all",
                 "--eps",
                 "0.3,1,inf",
                 "--phi",
@@ -148,4 +150,12 @@ def test_sweep_cli_row_equals_evaluate_cli_row(icra20, tmp_path, capsys):
     assert list(s.columns) == list(e.columns)
     sub = s[(s["eps"] == 0.3) & (s["phi"] == 10)]
     _same(e, sub, [c for c in e.columns if c != "file"])
+    # the default columns: the thresholds' metrics, the same values
+    args = ["sweep", f, "--eps", "0.3,1,inf", "--phi", "10,inf", "--csv", str(tmp_path / "lean.csv"), "--no-progress"]
+    assert main(args) == 0
+    lean = pd.read_csv(tmp_path / "lean.csv")
+    assert set(lean.columns) < set(e.columns) and {"cr", "cr_t", "cs_r", "c_ate_rmse", "spec"} <= set(lean.columns)
+    _same(e, lean[(lean["eps"] == 0.3) & (lean["phi"] == 10)], [c for c in lean.columns if c != "file"])
+    assert main([*args[:-3], "--rpe-delta", "2", *args[-3:]]) == 2  # no column of it depends on the RPE
+    assert "--rpe-delta: the RPE is in the table of sweep --columns all" in capsys.readouterr().err
     assert sub.set_index("seq").loc[2, "cr"] == pytest.approx(0.137731, abs=1e-6)

