@@ -96,7 +96,7 @@ def one_ahead(items: Iterator[T]) -> Iterator[T]:
     is scored while its last one is written (both mostly in numpy's and pyarrow's C code, without
     the GIL). Memory holds two parts; an error of ``items`` is raised where its item would be.
     Measured on the whole icra20 tree, 100 eps x 100 phi to CSV (2 shared cores): 54 s one after
-    the other, about 35 s overlapped (``make bench``'s sweep row)."""
+    the other, 42 s overlapped (``make bench``'s sweep row)."""
     done = object()
     with ThreadPoolExecutor(max_workers=1, thread_name_prefix="lorisnb-ahead") as pool:
         pending = pool.submit(next, items, done)
