@@ -33,7 +33,7 @@ MISTAKES = {
     "C1_cs_r": "def cs_r(t0, t_min, first_correct, tau):\n    return float(np.exp(-(t0 - t_min) / tau))\n",
     "E1_threshold": (  # phi left out of the scan: every pose with a small ATE counts, however it is turned
         "from lorisnb.core.lifelong.sweep import eps_at_cr\n"
-        "eps_for_cr = eps_at_cr(ev_orb.errors, 0.3, ev_orb.durations(), np.inf, delta)['eps'].iloc[0]\n"
+        "eps_for_cr = eps_at_cr(ev_orb.errors, target_cr, ev_orb.durations(), np.inf, delta)['eps'].iloc[0]\n"
     ),
     "D1_alignment": (
         "per_seq = ln.score(simulated_errors(gt, wrong_reloc, seqs=[1, 2], mode='per-seq'), eps, phi, delta, tau)\n"

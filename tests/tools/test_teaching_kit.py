@@ -121,6 +121,7 @@ def _run_part_f(answer: str) -> str:
     with contextlib.redirect_stdout(buf):
         exec(params, scope)  # noqa: S102 (the lab's own cells)
         scope["data"] = teach.lab_data(scope["data_root"])
+        scope["timeline_eps"] = 1.0  # one variant's (tests/tools/test_teaching_variants.py runs each)
         for source in (cells["locked_cell_38"].source, answer, cells["test_F_timeline"].source):
             exec(source, scope)  # noqa: S102
     return buf.getvalue()

@@ -18,6 +18,7 @@ import lorisnb as ln
 from lorisnb.core.simulate import Faults, simulated_errors
 from lorisnb.io.datasets.paths import sample_data
 from lorisnb.tools import teaching as teach
+from lorisnb.tools.teaching._prose import RELOC_DELAYS, TARGET_CRS, TIMELINE_EPS
 
 ROOT = Path(__file__).resolve().parents[2]
 SOURCE = ROOT / "teaching" / "source"
@@ -113,21 +114,29 @@ def test_question_c2_holds_for_any_thresholds(eps, phi):
     instructor's answer (CS-R = 0) is right and the explanation does not contradict itself."""
     lab = _source("lab1_lifelong_metrics")
     question = next(c.source for c in lab.cells if "wrong_reloc_question" in c.source)
-    scope = {"eps": eps, "phi": phi, "display": lambda *a: None, "Markdown": str, "teach": teach}
+    scope = {"eps": eps, "phi": phi, "reloc_delay": RELOC_DELAYS[0], "display": lambda *a: None, "Markdown": str}
+    scope["teach"] = teach
     exec(question, scope)  # noqa: S102 (the lab's own cell)
     offset, yaw = scope["reloc_offset_m"], scope["reloc_yaw_deg"]
     gt = ln.load_groundtruth("cafe", sample_data())
-    faults = {
-        1: Faults(position_noise_m=0.05, seed=0),
-        2: Faults(wrong_reloc_at_s=0.0, wrong_reloc_offset_m=(offset, 0.0, 0.0), wrong_reloc_yaw_deg=yaw),
-    }
-    fe = simulated_errors(gt, faults, seqs=[1, 2])
-    visit = ln.score(fe, eps, phi, 1.0, 60.0).set_index("seq").loc[2]
-    assert visit["cs_r"] == 0.0 and not visit["first_correct"]
-    text = teach.explain_wrong_reloc(visit, fe.sequences[1], eps, phi, 60.0)
-    assert f"first pose is wrong (ATE {offset:.2f} m > eps = {eps:g} m" in text
-    assert ("≤ phi" in text) == (yaw <= phi) and "CS-R = 0.000" in text
-    assert f"{offset:g} m off" in teach.wrong_reloc_question(offset, yaw, eps, phi)
+    for delay in (RELOC_DELAYS[0], RELOC_DELAYS[-1]):  # the students' variants
+        faults = {
+            1: Faults(position_noise_m=0.05, seed=0),
+            2: Faults(
+                init_delay_s=delay,
+                wrong_reloc_at_s=delay,
+                wrong_reloc_offset_m=(offset, 0.0, 0.0),
+                wrong_reloc_yaw_deg=yaw,
+            ),
+        }
+        fe = simulated_errors(gt, faults, seqs=[1, 2])
+        visit = ln.score(fe, eps, phi, 1.0, 60.0).set_index("seq").loc[2]
+        assert visit["cs_r"] == 0.0 and not visit["first_correct"]
+        text = teach.explain_wrong_reloc(visit, fe.sequences[1], eps, phi, 60.0)
+        assert f"first pose is wrong (ATE {offset:.2f} m > eps = {eps:g} m" in text
+        assert ("≤ phi" in text) == (yaw <= phi) and "CS-R = 0.000" in text
+        question = teach.wrong_reloc_question(offset, yaw, eps, phi, delay)
+        assert f"re-localizes after {delay:g} s, {offset:g} m off" in question
 
 
 def test_explanations_quote_their_numbers():
@@ -156,7 +165,7 @@ def test_readme_says_with_computed_numbers_why_e1s_delta_cap_cannot_show():
     exec(next(c.source for c in lab.cells if "parameters" in c.metadata.get("tags", [])), scope)  # noqa: S102
     phi, delta = scope["phi"], scope["delta"]
     check = next(c.source for c in lab.cells if "check_eps_at_cr(" in c.source)
-    target = float(re.search(r"durations\(\), ([0-9.]+), phi, delta\)", check).group(1))
+    assert "durations(), target_cr, phi, delta)" in check  # the student's variant: one of TARGET_CRS
     data = sample_data()
 
     def run(algorithm: str, **kw):
@@ -188,7 +197,7 @@ def test_readme_says_with_computed_numbers_why_e1s_delta_cap_cannot_show():
     assert k == n - 1 and aoe > phi  # the last pose of its sequence, wrong at every eps
     top = float(ev.scenes(eps=np.inf, phi=phi, delta=delta)["cr"].iloc[0])  # the highest CR any eps gives
     targets = np.round(np.arange(0.01, top, 0.01), 2)
-    assert target in targets
+    assert all(targets[0] <= t <= targets[-1] for t in TARGET_CRS)  # the variants' targets
     assert all(eps(errors, durations, t, phi, delta) == eps(errors, durations, t, phi, np.inf) for t in targets)
     assert both(errors, durations, np.floor(aoe * 10) / 10 - 0.1) == []  # just under the pose's AOE: never
     shown = [x for p in (round(aoe, 1), 70.0, 90.0, 180.0) for x in both(errors, durations, p)]
@@ -203,11 +212,15 @@ def test_readme_says_with_computed_numbers_why_e1s_delta_cap_cannot_show():
     assert ds_right - ds_no_cap > 0.01 and eps(ds_errors, ds_durations, 0.1, np.inf, delta) == ds_right
     stops = [e.stamps[-1] - e.gt_start for fe in ds_errors for e in fe.sequences if e.matched]
     # the answer's other numbers: E1's phi left out, F2's best algorithm by CR and CR-T
-    e1_right, e1_no_phi = eps(errors, durations, target, phi, delta), eps(errors, durations, target, np.inf, delta)
+    e1_right = {t: eps(errors, durations, t, phi, delta) for t in TARGET_CRS}
+    e1_missed = {t: e1_right[t] - eps(errors, durations, t, np.inf, delta) for t in TARGET_CRS}
     life = ln.evaluate(sorted((data.icra20 / "lifelong").glob("*/cafe*.txt")), data_root=data)
     scenes = life.scenes(eps=scope["eps"], phi=phi, delta=delta, tau=scope["tau"]).set_index("algorithm")
     best = scenes.loc["vins_mono_color_imu_with_loop"]
     assert scenes["cr"].idxmax() == scenes["cr_t"].idxmax() == best.name
+    timelines = [life.scenes(eps=e, phi=phi, delta=delta, tau=scope["tau"]).set_index("algorithm").loc[best.name]
+                 for e in TIMELINE_EPS]  # fmt: skip
+    crt_above = min(row["cr_t"] - row["cr"] for row in timelines)
     visits = life.sequences(eps=scope["eps"], phi=phi, delta=delta, tau=scope["tau"])
     for _, v in visits.groupby("seq"):  # "and for each visit", at the lab's thresholds
         assert v.set_index("algorithm")["cr"].idxmax() == v.set_index("algorithm")["cr_t"].idxmax()
@@ -219,9 +232,11 @@ def test_readme_says_with_computed_numbers_why_e1s_delta_cap_cannot_show():
         (ROOT / "teaching" / "README.md").read_text(), "**Does every typical mistake", "**I changed the lab"
     )
     for quoted in (
-        f"a scan that leaves phi out finds {e1_no_phi:.2f} m instead of {e1_right:.2f} m",
+        f"a scan that leaves phi out finds {min(e1_missed.values()):.3f} m to {max(e1_missed.values()):.3f} m less: "
+        f"{e1_right[0.3] - e1_missed[0.3]:.3f} m instead of {e1_right[0.3]:.3f} m at 0.3)",
         "the sample's scene alike at every eps from 0.3 to 3 m",
-        f"(VINS-Mono's CR is {best['cr']:.3f}, the figure's {100 * best['cr']:.1f} %, its CR-T {best['cr_t']:.3f};",
+        f"(at eps = {scope['eps']:g} m, VINS-Mono's CR is {best['cr']:.3f}, the figure's {100 * best['cr']:.1f} %, "
+        f"its CR-T {best['cr_t']:.3f}; at every eps of a student's timeline, its CR-T is {crt_above:.3f} or more above",
         f"only gap longer than delta ({delta:g} s) is the {gap:.1f} s after the last pose of cafe-{seq}",
         f"(ATE {ate:.2f} m, AOE {aoe:.1f} degrees, beyond phi = {phi:g})",
         f"at every target CR from 0.01 to {targets[-1]:.2f} (its CR at any eps is {top:.3f})",

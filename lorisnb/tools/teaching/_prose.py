@@ -31,21 +31,43 @@ def lab_data(data_root: str | os.PathLike[str] | DataPaths | None = None) -> Dat
     return find_data(data_root)
 
 
+#: What a student's variant draws from, uniformly and independently, question by question (lab 1).
+#: Each value was chosen so that, on the sample data at the lab's thresholds, the right answer passes,
+#: each typical mistake the question's check names fails with its hint, and two different values give
+#: answers further apart than the check's tolerance (``tests/tools/test_teaching_variants.py``).
+LOST_STARTS = tuple(float(s) for s in range(10, 21))  # B1: tracking lost from this second...
+LOST_LENGTHS = tuple(float(s) for s in range(15, 26))  # ...for this many seconds
+LATE_STARTS = tuple(float(s) for s in range(10, 31))  # B3: the estimate starts this late (seconds)
+RELOC_DELAYS = tuple(float(s) for s in range(3, 31, 3))  # C2, D1: visit 2 re-localizes (wrongly) this late
+TARGET_CRS = (0.27, 0.275, 0.29, 0.3, 0.305)  # E1: the scene CR whose smallest eps is asked
+TIMELINE_EPS = (0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1)  # F: the timeline's eps (metres)
+ATE_SEQS = (1, 2)  # G1: the sequence of cafe whose ATE is normalized
+
+
 @dataclass(frozen=True)
 class LabVariant:
-    """One student's data: the simulator's ``seed``, Part B's ``lost_window`` (seconds after the
-    start) and ``late_start`` (seconds), all drawn from the student id."""
+    """One student's data, all drawn from the student id: the simulator's ``seed``, Part B's
+    ``lost_window`` (seconds after the start) and ``late_start`` (seconds), the delay after which
+    visit 2 re-localizes wrongly in C2 and D1 (``reloc_delay``, seconds), E1's ``target_cr``, the
+    eps of Part F's timeline (``timeline_eps``, metres) and G1's sequence of cafe (``ate_seq``)."""
 
     student_id: str
     seed: int
     lost_window: tuple[float, float]
     late_start: float
+    reloc_delay: float
+    target_cr: float
+    timeline_eps: float
+    ate_seq: int
 
     def describe(self) -> str:
         who = f"student id `{self.student_id}`" if self.student_id else "no student id (set `student_id`)"
         return (
             f"Your data variant ({who}): simulator seed {self.seed}; in B1 tracking is lost from "
-            f"{self.lost_window[0]:g} s to {self.lost_window[1]:g} s; in B3 the estimate starts {self.late_start:g} s late."
+            f"{self.lost_window[0]:g} s to {self.lost_window[1]:g} s; in B3 the estimate starts {self.late_start:g} s "
+            f"late; in C2 and D1 visit 2 re-localizes after {self.reloc_delay:g} s; in E1 the target scene CR is "
+            f"{self.target_cr:g}; in F the timeline is drawn at eps = {self.timeline_eps:g} m; in G1 the sequence is "
+            f"cafe-{self.ate_seq}."
         )
 
 
@@ -60,8 +82,19 @@ def lab_variant(
     if seed is None:
         seed = int(hashlib.sha256(f"{lab}\0{sid}".encode()).hexdigest()[:8], 16) % 2**31
     rng = np.random.default_rng(int(seed))
-    start, length, late = (float(rng.integers(a, b + 1)) for a, b in ((10, 20), (15, 25), (10, 30)))
-    return LabVariant(sid, int(seed), (start, start + length), late)
+
+    def draw(values: tuple[Any, ...]) -> Any:
+        return values[int(rng.integers(len(values)))]
+
+    # drawn in this order (B1 and B3 first, as before the other questions varied: the same as then)
+    start, length, late = (
+        float(rng.integers(int(v[0]), int(v[-1]) + 1)) for v in (LOST_STARTS, LOST_LENGTHS, LATE_STARTS)
+    )
+    return LabVariant(
+        sid, int(seed), (start, start + length), late,
+        reloc_delay=draw(RELOC_DELAYS), target_cr=draw(TARGET_CRS), timeline_eps=draw(TIMELINE_EPS),
+        ate_seq=draw(ATE_SEQS),
+    )  # fmt: skip
 
 
 def explain_gap(cr: float, ate_rmse: float, gap: tuple[float, float], delta: float, duration: float) -> str:
@@ -76,11 +109,13 @@ def explain_gap(cr: float, ate_rmse: float, gap: tuple[float, float], delta: flo
     )
 
 
-def wrong_reloc_question(offset_m: float, yaw_deg: float, eps: float, phi: float) -> str:
-    """Question C2's text, with the scenario's numbers and where they stand against the thresholds."""
+def wrong_reloc_question(offset_m: float, yaw_deg: float, eps: float, phi: float, delay_s: float = 0.0) -> str:
+    """Question C2's text, with the scenario's numbers and where they stand against the thresholds
+    (``delay_s``: the seconds of visit 2 before its first pose, the student's variant)."""
+    when = f" after {delay_s:g} s" if delay_s else ""
     return (
         "**Question C2 (predict, then run).** A lifelong run of two visits of cafe: the first visit is fine; on "
-        f"the second the algorithm re-localizes {offset_m:g} m off ({offset_m / eps:g} times eps = {eps:g} m) and "
+        f"the second the algorithm re-localizes{when}, {offset_m:g} m off ({offset_m / eps:g} times eps = {eps:g} m) and "
         f"turned by {yaw_deg:g} degrees (phi = {phi:g} degrees), and stays there. The whole run is aligned once, "
         "on visit 1 (as the paper's lifelong evaluation does). Predict CS-R of visit 2."
     )
@@ -107,10 +142,12 @@ def explain_wrong_reloc(visit: Mapping[str, Any], errors: Any, eps: float, phi: 
     )
 
 
-def explain_ate_percent(ate_rmse: float, path_length: float, outdoor: Mapping[str, float], outdoor_path: float) -> str:
-    """Part G: indoor cafe-1 against ORDSLAM's published percentages (``outdoor``: difficulty -> %)."""
+def explain_ate_percent(
+    ate_rmse: float, path_length: float, outdoor: Mapping[str, float], outdoor_path: float, sequence: str = "cafe-1"
+) -> str:
+    """Part G: indoor ``sequence`` against ORDSLAM's published percentages (``outdoor``: difficulty -> %)."""
     return (
-        f"ORB-SLAM2 on indoor cafe-1: ATE RMSE {ate_rmse:.3f} m over {path_length:.1f} m travelled, i.e. "
+        f"ORB-SLAM2 on indoor {sequence}: ATE RMSE {ate_rmse:.3f} m over {path_length:.1f} m travelled, i.e. "
         f"{100 * ate_rmse / path_length:.2f} % of the distance; outdoors in ORDSLAM (published, on its mean "
         f"{outdoor_path:g} m path) "
         + ", ".join(f"{v:.2f} % ({k})" for k, v in outdoor.items())

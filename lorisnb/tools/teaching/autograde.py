@@ -42,7 +42,7 @@ import nbformat
 from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, decode
 
-GRADER_VERSION = "2"  # part of every result's digest: a new grader regrades everything
+GRADER_VERSION = "3"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student)
 
 
 @dataclass(frozen=True)
