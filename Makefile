@@ -30,9 +30,10 @@ evaluate: bytecode
 PYTEST_WORKERS ?= auto
 PYTEST = $(BIN)/python -m pytest -q -n $(PYTEST_WORKERS) --dist loadgroup
 
-# the newcomer's command (README): the fast tests and one run of each notebook, a few minutes
+# the newcomer's command (README): the fast tests but the thorough ones (each several seconds: peers run
+# side by side, many draws, whole processes) and one run of each notebook, a few minutes
 test: bytecode
-	$(PYTEST) -m "not slow and not browser"
+	$(PYTEST) -m "not slow and not browser and not thorough"
 	$(BIN)/python -m pytest -q -m "smoke and not browser"
 
 # everything but the browser: the fast tests on every core, then the slow ones (notebooks, reports, the

@@ -40,6 +40,7 @@ def _rc(argv: list[str | Path]) -> int:
         return int(exc.code or 0)
 
 
+@pytest.mark.thorough
 def test_history_tells_apart_nightly_tables_of_one_file_name(icra20, data, tmp_path, capsys):
     """A nightly job writes ``<date>/sequences.csv``: history named every run ``sequences.csv``,
     so the three runs became one column whose cells were arrays, the history CSV's ``run`` column
@@ -214,6 +215,7 @@ def test_an_unreadable_file_among_good_ones_is_said_once_on_the_command_line(icr
         assert "Evaluation.failures" not in cap.err and "6 file(s) evaluated, 1 failed" in cap.err
 
 
+@pytest.mark.thorough
 def test_diff_prints_with_digits_and_names_a_real_regression(icra20, data, tmp_path, capsys):
     """``diff --digits N`` was refused with two tables ("evaluate options apply to result
     folders": it computes nothing) and ignored with two folders (4 decimals always). A run that
@@ -246,6 +248,7 @@ def test_diff_prints_with_digits_and_names_a_real_regression(icra20, data, tmp_p
     assert "verdict: ok" in out and "improvement" in out
 
 
+@pytest.mark.thorough
 def test_history_says_when_a_run_lost_a_scene(icra20, data, tmp_path, capsys):
     """A nightly run that scored cafe but lost every home file (its job died half-way): history
     printed NaN in the table and "no value changed beyond its tolerance", where ``diff`` of the

@@ -114,6 +114,7 @@ def _options(draw, paths, out_dir, command):
 
 @settings(max_examples=120, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
 @given(data=st.data())
+@pytest.mark.thorough
 def test_cli_never_ends_in_a_traceback(inputs, monkeypatch, data, capsys):
     d, paths = inputs
     monkeypatch.chdir(d)  # a report without --out goes to ./results/run-*: here, not in the checkout

@@ -40,6 +40,7 @@ def _scene_rows(out: str, header_start: str) -> tuple[list[str], list[list[str]]
 
 
 @pytest.mark.parametrize("command", ["evaluate", "sweep", "sweep-parquet"])
+@pytest.mark.thorough
 def test_scene_rows_name_their_trial(trials, tmp_path, capsys, command):
     expected = ln.evaluate(trials, progress=False, eps=1.0).scenes()
     assert sorted(expected["trial"].unique()) == [1, 2]

@@ -3,6 +3,8 @@ definition (listed), 1 only for a disagreement no definition explains."""
 
 from __future__ import annotations
 
+import pytest
+
 import lorisnb.tools.peers.crosscheck_evo as cc
 from lorisnb.cli import main
 from lorisnb.tools.peers.crosscheck_evo import crosscheck_evo, explained
@@ -10,6 +12,7 @@ from lorisnb.tools.peers.crosscheck_evo import crosscheck_evo, explained
 GT, EST = "fr2_desk_groundtruth.txt", "fr2_desk_ORB.txt"
 
 
+@pytest.mark.thorough
 def test_differences_by_definition_are_listed_and_exit_0(data, capsys):
     g, e = str(data.tum / GT), str(data.tum / EST)
     table = crosscheck_evo(g, e, "tum")
@@ -22,6 +25,7 @@ def test_differences_by_definition_are_listed_and_exit_0(data, capsys):
     assert "explained by a stated definition (29;" in err and "ate_rmse" in err and "DISAGREE" not in err
 
 
+@pytest.mark.thorough
 def test_an_unexplained_disagreement_exits_1_and_is_named(data, capsys, monkeypatch):
     """evo's ATE RMSE moved by 1 mm under evo's own preset (where no definition differs): unexplained."""
     real = cc.evo_statistics

@@ -295,6 +295,7 @@ def _run_draws(seeds, data, tmp_path, capsys) -> None:
     assert not found, "\n".join(found)
 
 
+@pytest.mark.thorough
 def test_random_options_give_the_same_numbers_on_every_path(data, tmp_path, capsys):
     _run_draws(range(6), data, tmp_path, capsys)
 

@@ -48,6 +48,7 @@ def evo_numbers(ref, est, o: dict) -> dict[str, float]:
 
 
 @pytest.mark.parametrize("variant", VARIANTS)
+@pytest.mark.thorough
 def test_evo_on_kitti_files_to_1e9(tmp_path, capsys, variant):
     gt, est = kitti_pair("10")
     args, o = VARIANTS[variant]

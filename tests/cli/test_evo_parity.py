@@ -88,6 +88,7 @@ def fr2(data):
 
 @pytest.mark.parametrize("variant", VARIANTS)
 @pytest.mark.parametrize("name", ["fr2_desk", "fr1_xyz"])
+@pytest.mark.thorough
 def test_tum_pairs_equal_evo(data, tmp_path, name, variant):
     g, e = {"fr2_desk": ("fr2_desk_groundtruth.txt", "fr2_desk_ORB.txt"),
             "fr1_xyz": ("freiburg1_xyz-groundtruth.txt", "freiburg1_xyz-rgbdslam.txt")}[name]  # fmt: skip
@@ -98,6 +99,7 @@ def test_tum_pairs_equal_evo(data, tmp_path, name, variant):
 
 
 @pytest.mark.parametrize("variant", ["defaults", "sim3 m", "ref all m"])
+@pytest.mark.thorough
 def test_kitti_equals_evo(fr2, tmp_path, variant):
     gt, est = fr2
     n = min(len(gt), 700)
@@ -176,6 +178,7 @@ def _evo_bag(path: Path, topic: str):
 
 @pytest.mark.parametrize("ros", [1, 2])
 @pytest.mark.parametrize("variant", ["se3", "sim3 m"])
+@pytest.mark.thorough
 def test_ros1_bag_and_lone_mcap_equal_evo(fr2, tmp_path, ros, variant):
     gt, est = fr2
     if ros == 1:
@@ -192,6 +195,7 @@ def test_ros1_bag_and_lone_mcap_equal_evo(fr2, tmp_path, ros, variant):
     check(row, theirs, 1e-9)
 
 
+@pytest.mark.thorough
 def test_crosscheck_under_the_evo_preset_agrees_and_explains_reading(data, fr2, tmp_path, capsys):
     out = tmp_path / "cc.csv"
     g, e = data.tum / "fr2_desk_groundtruth.txt", data.tum / "fr2_desk_ORB.txt"
@@ -237,6 +241,7 @@ def test_relation_columns_equal_evo(data, tmp_path, relation, evo_relation):
      (["--rpe-metres", "0.5"], dict(align=False, scale=False, delta=0.5, unit="m", all_pairs=False)),
      (["--scale"], dict(align=True, scale=True, delta=1, unit="frames", all_pairs=False))],
 )  # fmt: skip
+@pytest.mark.thorough
 def test_crosscheck_conventions_takes_its_options_to_both_sides(data, tmp_path, capsys, args, variant):
     """``crosscheck --conventions evo`` with the RPE step, all pairs or scale: both columns hold
     evo's numbers for those options (they were dropped: both sides at 1 frame, consecutive)."""

@@ -32,6 +32,7 @@ def lengths_file(out: Path, kind: str) -> dict[float, float]:
 
 
 @pytest.mark.parametrize("seq", KITTI_SEQUENCES)
+@pytest.mark.thorough
 def test_evaluate_prints_and_writes_the_devkits_numbers(devkit, tmp_path, capsys, seq):
     gt, est = kitti_pair(seq)
     _, (t, r) = run_devkit(devkit, gt, est, tmp_path / "devkit")
@@ -53,6 +54,7 @@ def test_evaluate_prints_and_writes_the_devkits_numbers(devkit, tmp_path, capsys
     assert plot.stat().st_size > 10_000
 
 
+@pytest.mark.thorough
 def test_leaderboard_total_over_all_sequences(devkit, tmp_path):
     """The devkit's summary is over every segment of every sequence (its total_err): one devkit run
     on the sequences' files end to end would mix their poses, so its segments of each are pooled."""

@@ -242,6 +242,7 @@ def test_jobs_fan_out_every_input_kind(kinds, tmp_path, capsys, monkeypatch):
 
 
 @pytest.mark.parametrize("command", ["sweep", "compare"])
+@pytest.mark.thorough
 def test_options_of_sweep_and_compare(command, kinds, tmp_path, capsys):
     base = kinds["two"] + (["--eps", "0.03", "--phi", "3"] if command == "compare" else [])  # CR^inf: no alignment
     for option, (with_it, contrast) in OWN[command].items():
@@ -272,6 +273,7 @@ def test_crosscheck_refuses_options_of_other_formats(data, tmp_path, capsys):
         assert args[0] in capsys.readouterr().err, args
 
 
+@pytest.mark.thorough
 def test_crosscheck_scale_auto_follows_the_algorithm(data, tmp_path, capsys):
     """--scale auto is Sim(3) only for monocular algorithms (dso, svo), not a truth test of the word."""
     gt = str(data.root / TUM / "fr2_desk_groundtruth.txt")
@@ -317,6 +319,7 @@ CROSSCHECK = {
 }  # fmt: skip
 
 
+@pytest.mark.thorough
 def test_every_crosscheck_option_changes_the_table_or_is_refused(data, tmp_path, capsys):
     missing = _options("crosscheck") - set(CROSSCHECK) - RUNNING
     assert not missing, f"options of crosscheck without a case in tests/cli/test_options.py: {sorted(missing)}"

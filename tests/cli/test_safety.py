@@ -287,6 +287,7 @@ def test_crosscheck_refuses_unequal_kitti_files_without_stamps(tmp_path, capsys)
     assert rc == 0
 
 
+@pytest.mark.thorough
 def test_crosscheck_euroc_follows_evo(tmp_path, data, capsys):
     """--format euroc: ground truth as EuRoC CSV, estimate as TUM text (evo's convention); the
     numbers equal those of the same poses read as TUM."""

@@ -71,6 +71,7 @@ def _same(table: pd.DataFrame, durations: pd.DataFrame) -> pd.DataFrame:
     return got
 
 
+@pytest.mark.thorough
 def test_scene_aggregate_equals_pandas_on_the_bundled_results(icra20):
     ev = ln.evaluate(icra20, progress=False)
     for eps, phi in ((np.inf, np.inf), ("paper", 30.0), (0.05, 5.0)):

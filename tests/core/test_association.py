@@ -40,6 +40,7 @@ def stamp_sets(draw: st.DrawFn) -> tuple[np.ndarray, np.ndarray, float]:
 
 @PROPERTY
 @given(stamp_sets())
+@pytest.mark.thorough
 def test_same_pairs_as_tum_on_grids_with_ties(case):
     _same_as_tum(*case)
 

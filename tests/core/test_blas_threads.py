@@ -14,6 +14,7 @@ import pytest
 
 
 @pytest.mark.parametrize("name", ["market-1-3-odom.txt"])
+@pytest.mark.thorough
 def test_one_and_two_blas_threads_write_the_same_table(tmp_path, icra20, name):
     path = next((icra20 / "per-seq").rglob(name))
     tables = []

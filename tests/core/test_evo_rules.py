@@ -120,6 +120,7 @@ def _lorisnb_arrays(traj):
 
 @pytest.mark.parametrize("name", PAIRS)
 @pytest.mark.parametrize("relation", [r for r in RELATIONS if r != "point_distance_error_ratio"])  # evo_rpe's only
+@pytest.mark.thorough
 def test_ape_relations_equal_evo(evo_pairs, name, relation):
     r, e = _synced(evo_pairs, name)
     m = em.APE(EVO_RELATION[relation])
@@ -139,6 +140,7 @@ def test_ape_relations_equal_evo(evo_pairs, name, relation):
     [(1, "frames", False, False), (3, "frames", True, False), (0.5, "m", False, False), (0.5, "m", True, True),
      (0.2, "m", True, False), (10.0, "deg", False, True), (5.0, "deg", True, False), (0.1, "rad", False, False)],
 )  # fmt: skip
+@pytest.mark.thorough
 def test_rpe_pairs_and_relations_equal_evo(evo_pairs, name, delta, unit, all_pairs, from_ref):
     r, e = _synced(evo_pairs, name)
     if name == "fr2_desk" and unit in ("deg", "rad") and all_pairs:
@@ -250,6 +252,7 @@ def test_statistics_columns_of_the_sequence_table(evo_pairs):
     [(1, "frames", "estimate", False), (0.3, "m", "estimate", False), (0.3, "m", "reference", True),
      (5.0, "deg", "estimate", False), (2, "f", "reference", True)],
 )  # fmt: skip
+@pytest.mark.thorough
 def test_score_rpe_options_equal_evo_rpe(evo_pairs, delta, unit, pairs, all_pairs):
     from lorisnb.core import score
     from lorisnb.core.conventions.choices import Conventions

@@ -83,6 +83,7 @@ def test_the_command_line_refuses_them_the_same_way(data, capsys):
     ],
     ids=lambda o: ",".join(f"{k}={v}" for k, v in o.items()),
 )
+@pytest.mark.thorough
 def test_each_option_equals_evo(data, options):
     table = crosscheck_evo(data.tum / GT, data.tum / EST, make_spec("evo", **options))
     stats = table[~table["quantity"].str.contains(":")]

@@ -38,6 +38,7 @@ def matrices(path: Path) -> np.ndarray:
 
 
 @pytest.mark.parametrize("seq", SEQUENCES)
+@pytest.mark.thorough
 def test_single_precision_equals_devkit(devkit, kitti_files, tmp_path, seq):
     gt_file, est_file = kitti_files[seq]
     theirs, (t_mean, r_mean) = run_devkit(devkit, gt_file, est_file, tmp_path / "out")

@@ -49,6 +49,7 @@ def test_equals_the_devkits_recorded_numbers(pair):
     assert s["kitti_r_err"] == pytest.approx(np.degrees(DEVKIT["r_err"]) * 100, rel=1e-6)
 
 
+@pytest.mark.thorough
 def test_equals_the_devkit_run_live(pair, tmp_path):
     if not (peers_root() / "kitti_devkit").is_dir():
         pytest.skip(f"the KITTI devkit is not in {peers_root()} (see tests/peers.py); the recorded test checks it")

@@ -136,6 +136,7 @@ def test_python_api_without_rpe_pair(tum):
 # --- crosscheck: evo's exceptions become lorisnb's ------------------------------------------
 
 
+@pytest.mark.thorough
 def test_crosscheck_delta_without_pairs_gives_nan_rows(tum, tmp_path, capsys):
     """evo raises FilterException when a delta gives no pair: lorisnb's crosscheck says so in NaN
     rows (exit status 1: not everything asked was compared), never a traceback."""
@@ -188,6 +189,7 @@ def test_crosscheck_evo_conventions_without_rpe_pair(tum, tmp_path, capsys):
     assert len(ape) == 14 and ape["agrees"].all()
 
 
+@pytest.mark.thorough
 def test_evo_errors_become_lorisnb_errors(tum, tmp_path, capsys):
     """A file evo's reader refuses (commas) and poses evo cannot compute with (NaN rows): one line,
     exit status 1, naming the file or what evo was doing; the classic crosscheck shows lorisnb's
@@ -215,6 +217,7 @@ def test_evo_errors_become_lorisnb_errors(tum, tmp_path, capsys):
         assert "error: evo cannot evaluate this pair" in err and "Traceback" not in err
 
 
+@pytest.mark.thorough
 def test_crosscheck_gives_lorisnb_cr(tum, tmp_path):
     """CR, CR-T and CS-R rows hold lorisnb's values (those of evaluate on the same pair and
     options); evo's column is empty."""
@@ -245,7 +248,9 @@ def test_compare_with_a_short_and_an_empty_algorithm(tum, tmp_path, capsys):
     assert "no two algorithms both have a value of c_ate_rmse there" in out.err + out.out
 
 
-@pytest.mark.parametrize("options", [[], ["--conventions", "tum"], ["--conventions", "evo", "--rpe-delta", "10", "--columns", "all"]])
+@pytest.mark.parametrize(
+    "options", [[], ["--conventions", "tum"], ["--conventions", "evo", "--rpe-delta", "10", "--columns", "all"]]
+)
 def test_sweep_of_a_sequence_without_rpe_pair(tum, tmp_path, capsys, options):
     gt, _, five, _ = tum
     out = tmp_path / "sw.csv"

@@ -12,6 +12,7 @@ import tracemalloc
 import hypothesis.extra.numpy as hnp
 import hypothesis.strategies as st
 import numpy as np
+import pytest
 from hypothesis import given, settings
 
 from lorisnb.core.lifelong import scoring
@@ -61,6 +62,7 @@ def test_a_superset_of_poses_never_sums_to_less():
                  elements=st.one_of(st.floats(-1e6, 1e6), st.sampled_from([np.nan, np.inf, -np.inf, 0.0, 1.0]))),
     seed=st.integers(0, 2**32 - 1),
 )  # fmt: skip
+@pytest.mark.thorough
 def test_masked_medians_equal_numpys_nanmedian_to_the_bit(v, seed):
     """The grid's medians (sorted once, the middle ranks found from running counts) are numpy's
     ``nanmedian`` of each row's selected values to the last bit: ties, NaN (left out), infinities,

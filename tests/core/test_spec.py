@@ -87,6 +87,7 @@ def test_the_spec_is_recorded_with_every_table_and_reproduces_it(data, tmp_path)
     assert repr(ev.spec) == "EvalSpec.preset('tum', max_diff=0.01, align='sim3', rpe_delta=5.0, rpe_unit='f')"
 
 
+@pytest.mark.thorough
 def test_thresholds_mean_the_same_in_every_command(data, tmp_path, capsys):
     """evaluate and compare take the spec's thresholds: the same CR for the same files and options."""
     src = str(data.icra20 / "lifelong" / "maslam")

@@ -74,6 +74,7 @@ def matched(pair):
 
 
 @pytest.mark.parametrize("preset", list(PRESETS))
+@pytest.mark.thorough
 def test_two_kitti_files_without_times_pair_by_index_on_every_preset(matched, tmp_path, capsys, preset):
     g, e = matched
     gk, ek = write(tmp_path, "gt.kitti", _kitti(g)), write(tmp_path, "est.kitti", _kitti(e))
@@ -139,6 +140,7 @@ def test_kitti_index_pairs_refuse_filters_and_windows(matched, tmp_path, capsys,
 
 
 @pytest.mark.parametrize(("unit", "factor"), [("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9)])
+@pytest.mark.thorough
 def test_stamps_in_other_units_are_refused_in_one_file_or_both(pair, tmp_path, capsys, unit, factor):
     gt, est = pair
     g, e = write(tmp_path, "gt.txt", _tum(gt)), write(tmp_path, "est.txt", _tum(est))

@@ -15,6 +15,7 @@ def lifelong(icra20):
     return ln.evaluate(icra20 / "lifelong", scale="auto", scenes=["cafe", "home"], jobs=1)
 
 
+@pytest.mark.thorough
 def test_surfaces_equal_single_setting_scores(lifelong):
     ev = lifelong
     ate = np.concatenate([e.ate for f in ev.errors for e in f.sequences])

@@ -50,6 +50,7 @@ def grid(ev):
         (0.1, np.inf, 1.0, 10.0),
     ],
 )
+@pytest.mark.thorough
 def test_every_checked_grid_point_equals_direct_evaluation(ev, grid, point):
     e, p, d, t = point
     direct = score(ev.errors, e, p, d, t)

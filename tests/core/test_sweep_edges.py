@@ -52,6 +52,7 @@ def _points():
     yield from (("paper", 30.0, d, t) for d, t in itertools.product(DELTA, TAU))
 
 
+@pytest.mark.thorough
 def test_every_edge_of_the_grid_equals_a_single_evaluation(ev, grid):
     assert {f.mode for f in ev.errors} == {"lifelong", "per-seq"} and (
         grid["matched"] == 0

@@ -36,6 +36,7 @@ def monkeypatch_module():
 
 @pytest.mark.parametrize("scale", [False, True])
 @pytest.mark.parametrize("seed", [0, 7])
+@pytest.mark.thorough
 def test_scores_equal_tartanair_tools(evaluator, capsys, scale, seed):
     ev, folder = evaluator
     gt, est = folder / "pose_gt.txt", folder / "pose_est.txt"

@@ -45,6 +45,7 @@ def _same(a, b):
 
 
 @pytest.mark.parametrize("arrow", [True, False], ids=["pyarrow", "pandas"])
+@pytest.mark.thorough
 def test_fast_path_equals_exact_path_on_every_bundled_file(data, monkeypatch, arrow):
     """Every bundled file by the C parser (pyarrow's, or pandas' in a process that has imported
     pandas and has no pyarrow) gives the exact scanner's rows, lines and special lines."""

@@ -124,6 +124,7 @@ def test_from_ros_and_from_upper_agree():
     np.testing.assert_allclose(c.position, d.position)
 
 
+@pytest.mark.thorough
 def test_command_line(real, data, tmp_path, capsys):
     est, (co, cp) = real
     path = write_ov_eval_file(tmp_path / "e.txt", est, co, cp)

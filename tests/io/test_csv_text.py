@@ -29,6 +29,7 @@ def _table(n: int, seed: int) -> pd.DataFrame:
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.thorough
 def test_csv_text_is_pandas_to_csv_byte_for_byte(tmp_path, seed):
     df = _table(20_000, seed)
     for k, cols in enumerate(

@@ -169,6 +169,7 @@ def test_tum_and_ordslam_readers(tmp_path_factory, data):
 
 @FUZZ
 @given(data=mutated([b"1 0 0 0 0 1 0 0 0 0 1 0", b"1 0 0 1 0 1 0 0 0 0 1 0", b"0 -1 0 2 1 0 0 0 0 0 1 0"]))
+@pytest.mark.thorough
 def test_kitti_and_euroc_through_evo(tmp_path_factory, data):
     p = tmp_path_factory.mktemp("fz") / "kitti.txt"
     p.write_bytes(data)

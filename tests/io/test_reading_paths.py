@@ -107,6 +107,7 @@ def test_an_openloris_pipe_out_of_order_is_read_once(tmp_path):
 
 @pytest.mark.parametrize("parser", PARSERS)
 @pytest.mark.parametrize("token", ["1560000059_5", "1_000", "0_5"])
+@pytest.mark.thorough
 def test_a_number_with_an_underscore_is_refused_on_every_path(tmp_path, monkeypatch, parser, token):
     """Python's ``float`` reads ``1_000`` as 1000 (PEP 515), and so did the byte scanner every path
     falls back to: a stamp ``1560000059_5`` became 15600000595 (a pose sorted to the end, with
@@ -153,6 +154,7 @@ def test_a_euroc_nan_stamp_is_named_as_not_finite(tmp_path, monkeypatch, parser)
         ("empty", None, "empty file; expected a times file, one stamp in seconds per line"),
     ],
 )  # fmt: skip
+@pytest.mark.thorough
 def test_a_bad_kitti_times_file_is_named_with_its_line(tmp_path, monkeypatch, parser, case, line, reason):
     """A times file's NaN or out-of-order stamp was reported against the pose file, with no line
     ("the stamps given for this KITTI file are not strictly increasing"; "stamp 1501 given ...":

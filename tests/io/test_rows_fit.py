@@ -72,6 +72,7 @@ def _outcome(path, fmt: str):
 
 @pytest.mark.parametrize("parser", PARSERS)
 @pytest.mark.parametrize("fmt", ["tum", "euroc"])
+@pytest.mark.thorough
 def test_a_pieces_look_reads_as_check_rows_on_every_row(tmp_path, monkeypatch, parser, fmt):
     use_parser(monkeypatch, parser)
     real_fit, real_check = formats.rows_fit, formats.check_rows

@@ -91,6 +91,7 @@ def _same(a, b):
 
 @pytest.mark.parametrize("parser", ["pandas", "numpy", "pieces", "read_csv"])
 @pytest.mark.parametrize("name,text,plain", list(_variants()), ids=[v[0] for v in _variants()])
+@pytest.mark.thorough
 def test_tum_file_reads_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch, name, text, plain, parser):
     """Every one-call parser: the piece parser in one piece, numpy's, and pieces on threads, by
     pyarrow or by pandas' ``read_csv`` (see :func:`helpers.use_parser`)."""

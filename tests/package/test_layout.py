@@ -72,6 +72,7 @@ def _imports(path: Path):
             yield node, [a.name for a in node.names]
 
 
+@pytest.mark.thorough
 def test_no_private_names_imported_across_modules():
     for path in (ROOT / "lorisnb").rglob("*.py"):
         for node, names in _imports(path):
@@ -131,6 +132,7 @@ def test_every_sub_package_says_what_it_holds_and_may_import():
     [("lorisnb.core.scoring", "lorisnb.core.lifelong.scoring"), ("lorisnb.tools.report_index", "lorisnb.tools.report.index"),
      ("lorisnb.io.formats", "lorisnb.io.readers.plain")],
 )  # fmt: skip
+@pytest.mark.thorough
 def test_the_former_flat_names_still_import_with_a_warning(old, new):
     code = (
         "import warnings, importlib, sys\n"

@@ -21,6 +21,7 @@ def _imported(code: str) -> list[str]:
     return eval(out.strip().splitlines()[-1])  # noqa: S307 (our own list literal)
 
 
+@pytest.mark.thorough
 def test_import_and_public_names_are_lazy():
     assert _imported("import lorisnb") == []
     assert _imported("import lorisnb as ln; ln.Trajectory; ln.read_tum") == []
@@ -33,6 +34,7 @@ def test_help_imports_no_pandas():
     assert _imported(code) == []
 
 
+@pytest.mark.thorough
 def test_names_and_submodules_keep_their_meaning():
     """A name that is also a submodule's stays the name (``lorisnb.core.lifelong.sweep`` the function)."""
     code = (
@@ -44,6 +46,7 @@ def test_names_and_submodules_keep_their_meaning():
 
 
 @pytest.mark.skipif(importlib.util.find_spec("pyarrow") is None, reason="pyarrow is not installed")
+@pytest.mark.thorough
 def test_a_pair_evaluates_to_the_terminal_without_pandas(data, tmp_path):
     tum = data.tum
     args = [str(tum / "fr2_desk_ORB.txt"), "--gt", str(tum / "fr2_desk_groundtruth.txt"), "--no-progress"]
@@ -61,6 +64,7 @@ def test_a_pair_evaluates_to_the_terminal_without_pandas(data, tmp_path):
 
 
 @pytest.mark.skipif(importlib.util.find_spec("rfc3987_syntax") is None, reason="rfc3987_syntax is not installed")
+@pytest.mark.thorough
 def test_report_processes_import_papermill_without_the_iri_grammars():
     """jsonschema (imported by nbformat, papermill, nbconvert) imports rfc3987_syntax, about 2 s of
     grammar compilation, only to check 'iri' strings; lorisnb's command and a report's workers

@@ -96,6 +96,7 @@ def scored(tmp_path_factory, data):
     yield dict(views=views, challenge=challenge, sent=kept, tmp=tmp, boards=boards)
 
 
+@pytest.mark.thorough
 def test_plain_files_scored_as_lorisnb_evaluate_scores_them(scored, data, tmp_path):
     view = scored["views"]["plain"]
     assert view["status"] == "scored" and view["failures"] == [] and view["missing"] == [], view

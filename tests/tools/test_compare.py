@@ -39,6 +39,7 @@ def compare(capsys, *args) -> tuple[int, str, str]:
     return rc, out.out, out.err
 
 
+@pytest.mark.thorough
 def test_ranks_summary_bold_and_csv_agree(tmp_path, icra20, capsys):
     """Five reruns of odom, of a twin of odom (other seeds) and of ORB-SLAM2 on the five home
     sequences: the test separates ORB-SLAM2 from both, not the twins; the printed ranks, the
@@ -79,6 +80,7 @@ def test_ranks_summary_bold_and_csv_agree(tmp_path, icra20, capsys):
     assert tex.read_text().count(r"\textbf") == 2
 
 
+@pytest.mark.thorough
 def test_no_significant_pair_no_bold_and_equal_ranks(tmp_path, icra20, capsys):
     """One run each (the bundled results): ranks 1 and 1, '0 of 1 pairs', no bold, the smallest
     possible p-value stated (2/2^5 on five home sequences)."""
@@ -228,6 +230,7 @@ def test_tables_keep_suites_apart(tmp_path, icra20, capsys):
     assert rc == 0 and rows == ["odom (v1)", "odom (v2)"]
 
 
+@pytest.mark.thorough
 def test_power_with_one_algorithm_and_a_difference_a_rate_cannot_show(icra20, capsys):
     """``compare`` of one algorithm with ``--power`` crashed with a KeyError: the pairs not found
     different were picked from an empty table by an object-dtype column, which pandas took for

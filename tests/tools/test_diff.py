@@ -80,6 +80,7 @@ def run(capsys, *args) -> tuple[int, str, str]:
     return rc, out.out, out.err
 
 
+@pytest.mark.thorough
 def test_diff_flags_exactly_the_changed_sequences(versions, tmp_path, capsys):
     """Must show (issue 25): diff flags exactly the sequences changed, exits 1; identical runs exit 0."""
     a, b = versions
@@ -111,6 +112,7 @@ def test_diff_flags_exactly_the_changed_sequences(versions, tmp_path, capsys):
     assert same["verdict"] == "ok" and same["regressions"] == [] and same["counts"]["ok"] > 0
 
 
+@pytest.mark.thorough
 def test_diff_of_tables_and_a_missing_sequence(versions, tmp_path, capsys):
     a, b = versions
     ta, tb = tmp_path / "a.csv", tmp_path / "b.csv"
@@ -243,6 +245,7 @@ def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
     assert "first change" in out and (figs / "history_cr.png").is_file() and (figs / "history_cr.svg").is_file()
 
 
+@pytest.mark.thorough
 def test_diff_of_report_runs_counts_the_inputs_their_findings_did_not_score(versions, tmp_path, capsys):
     """A report run lists the inputs its own evaluation could not score in
     ``findings/input_errors.csv``: diff of such a run exits 1, as diff of its result folder does
@@ -264,6 +267,7 @@ def test_diff_of_report_runs_counts_the_inputs_their_findings_did_not_score(vers
     assert rc == 1 and "verdict: ok" in out and "1 input(s) of BASE and 1 of CAND" in err
 
 
+@pytest.mark.thorough
 def test_scene_values_of_diff_and_history_are_the_leaderboards(tmp_path, icra20, data, capsys):
     """Scene values counted only the sequences some row held: with home's sequences 3-5 lacking
     for every algorithm, diff and history gave home CR 0.0341 where evaluate, compare and the
@@ -346,6 +350,7 @@ def test_regression_core_on_trials():
             parse_tolerances(empty)
 
 
+@pytest.mark.thorough
 def test_diff_in_python(versions):
     """The same verdict through Python: two Evaluations' tables and lorisnb.tools.decisions.diff.diff_tables."""
     import lorisnb as ln
@@ -360,6 +365,7 @@ def test_diff_in_python(versions):
         diff_tables(a, b, {"cr": "x"})
 
 
+@pytest.mark.thorough
 def test_diff_with_an_empty_or_broken_side(versions, tmp_path, capsys):
     """An empty BASE said "verdict: ok" (every CAND sequence "new"), exit 0; an empty CAND folder,
     or one whose every file is broken (the usual CI failure), crashed with a KeyError (pandas

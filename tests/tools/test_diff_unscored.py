@@ -4,6 +4,7 @@ without an estimate (the numbers of both sides agree; only the inputs tell that 
 
 from __future__ import annotations
 
+import pytest
 from helpers import write
 
 import lorisnb as ln
@@ -51,6 +52,7 @@ def test_diff_of_inputs_not_scored_exits_1(tmp_path, data):
     assert exit_status(diff_tables(table, table), failed, failed) == 1
 
 
+@pytest.mark.thorough
 def test_the_command_line_diff_exits_1_on_inputs_not_scored(tmp_path, data, capsys):
     from lorisnb.cli import main
 

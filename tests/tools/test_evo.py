@@ -34,6 +34,7 @@ def _write_openloris(path, scene, stamps, pos, quat):
 
 
 @pytest.mark.parametrize("with_scale", [False, True], ids=["se3", "sim3"])
+@pytest.mark.thorough
 def test_stamps_on_groundtruth_stamps_equal_evo_ape(tmp_path, with_scale):
     gt = load_groundtruth("cafe").sequences[1]
     idx = np.arange(5, len(gt) - 5, 3)
@@ -71,6 +72,7 @@ def test_stamps_on_groundtruth_stamps_equal_evo_ape(tmp_path, with_scale):
 
 
 @pytest.mark.parametrize("name, nearest_tol", [("freiburg1_xyz", 1e-3), ("fr2_desk", 1e-3)])
+@pytest.mark.thorough
 def test_bundled_tum_sequences(data, name, nearest_tol):
     gt_name = {"freiburg1_xyz": "freiburg1_xyz-groundtruth.txt", "fr2_desk": "fr2_desk_groundtruth.txt"}[name]
     est_name = {"freiburg1_xyz": "freiburg1_xyz-rgbdslam.txt", "fr2_desk": "fr2_desk_ORB.txt"}[name]
@@ -131,6 +133,7 @@ def test_conversion_both_ways_and_result_table(data):
     with_scale=st.booleans(),
     noise=st.sampled_from([0.0, 0.01, 0.3]),
 )
+@pytest.mark.thorough
 def test_property_random_trajectories_agree_with_evo(n, seed, scale, with_scale, noise):
     rng = np.random.default_rng(seed)
     stamps = np.cumsum(rng.uniform(0.02, 0.2, n))

@@ -44,6 +44,7 @@ def _stats(table: pd.DataFrame) -> pd.DataFrame:
 
 @pytest.mark.parametrize(("name", "align"), [("dso_run", dict(align=True, correct_scale=True)),
                                              ("orb_run", dict(align=True))])  # fmt: skip
+@pytest.mark.thorough
 def test_align_auto_runs_evo_with_the_alignment_lorisnb_chose(data, tmp_path, name, align):
     """``--align auto`` is Sim(3) for a monocular algorithm (by name), else SE(3): evo's column was
     evo without any alignment (14 of 30 statistics 'disagreed', exit status 1)."""
@@ -58,6 +59,7 @@ def test_align_auto_runs_evo_with_the_alignment_lorisnb_chose(data, tmp_path, na
     assert main(["crosscheck", str(data.tum / GT), str(est), "--conventions", "evo", "--align", "auto"]) == 0
 
 
+@pytest.mark.thorough
 def test_a_preset_that_is_not_evos_says_where_the_definitions_differ(data, capsys):
     """``crosscheck --conventions vio``: evo has no posyaw; its column is its SE(3) alignment (it was
     evo unaligned, 0.0201 m against lorisnb's 0.0140 m, with nothing said), and every row says what

@@ -146,6 +146,7 @@ def _kitti(folder, name, traj):
     return folder / f"{name}.txt", folder / f"{name}_times.txt"
 
 
+@pytest.mark.thorough
 def test_every_input_kind_from_the_command_line_and_python(tum_pairs, tmp_path, capsys):
     gt, est = tum_pairs["fr2_desk"]
     sub = slice(0, 1500)

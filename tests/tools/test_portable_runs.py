@@ -95,6 +95,7 @@ def fake_notebook(name, out_dir, params, **kw):
     return NotebookRun(name)
 
 
+@pytest.mark.thorough
 def test_absolute_paths_only_when_asked_through_python(tmp_path, data, icra20, monkeypatch):
     import lorisnb.tools.report.build as report
 
@@ -192,6 +193,7 @@ def test_make_portable_replaces_each_spelling_at_path_ends_only(tmp_path):
     assert root_key(root / "q" / "r.txt", {"results": root, "data": tmp_path}) == "{results}/q/r.txt"
 
 
+@pytest.mark.thorough
 def test_a_run_against_a_baseline_names_the_baseline_folder_by_its_root(tmp_path, data, icra20, monkeypatch):
     import lorisnb.tools.report.build as report
 

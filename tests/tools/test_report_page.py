@@ -28,6 +28,7 @@ def per_seq(icra20):
     return ev, ev.sequences("paper", 30)
 
 
+@pytest.mark.thorough
 def test_leaderboard_on_the_bundled_results(per_seq):
     ev, table = per_seq
     f = findings(table, ev.durations())

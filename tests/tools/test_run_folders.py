@@ -61,6 +61,7 @@ def run(capsys, *args):
     return rc, out.out, out.err
 
 
+@pytest.mark.thorough
 def test_runs_over_other_folders_compare_and_differences_are_named(tmp_path, table, capsys):
     a = make_run(tmp_path / "a", table, spec(tmp_path / "resA"))
     b = make_run(tmp_path / "b", table, spec(tmp_path / "elsewhere" / "resB", alpha=0.01, seed=3, level=0.9))
@@ -77,6 +78,7 @@ def test_runs_over_other_folders_compare_and_differences_are_named(tmp_path, tab
     assert rc == 0 and "not comparable: c" in out and "spec eps" in out
 
 
+@pytest.mark.thorough
 def test_a_sequence_is_one_row_however_many_tables_hold_it(tmp_path, table, capsys):
     a = make_run(tmp_path / "a", table, spec(tmp_path))
     r = load_run(a)
@@ -116,6 +118,7 @@ RUN_JSON_DAMAGE = {
 
 
 @pytest.mark.parametrize("key", list(RUN_JSON_DAMAGE))
+@pytest.mark.thorough
 def test_damaged_run_json_is_refused_by_every_reader(tmp_path, table, capsys, key):
     good = make_run(tmp_path / "good", table, spec(tmp_path))
     bad = tmp_path / "bad"
@@ -226,6 +229,7 @@ def test_compare_and_diff_use_the_same_validators(results, capsys):
                                         or "seed=-1: expected a whole number >= 0" in err)  # fmt: skip
 
 
+@pytest.mark.thorough
 def test_report_results_are_the_leaderboards_input_whatever_notebooks_run(tmp_path, results, monkeypatch):
     """--results with a notebook that does not declare results_dir: the leaderboard, run.json's
     inputs and the overlap check are about the results folder, not the bundled icra20 results."""

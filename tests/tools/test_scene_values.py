@@ -40,6 +40,7 @@ def _printed_scene_row(out: str, algorithm: str, scene: str) -> dict[str, str]:
     raise AssertionError(f"no printed scene row for {algorithm} {scene}:\n{out}")
 
 
+@pytest.mark.thorough
 def test_every_path_gives_the_same_scene_cs_r_with_missing_sequences(partial, tmp_path, capsys):
     ev = ln.evaluate(partial, progress=False)
     table, durations = ev.sequences(eps="paper", phi=30), ev.durations()
@@ -86,6 +87,7 @@ def test_every_path_gives_the_same_scene_cs_r_with_missing_sequences(partial, tm
         np.testing.assert_allclose(values.loc[scenes.index], scenes[metric], rtol=1e-12)
 
 
+@pytest.mark.thorough
 def test_diff_scene_cs_r_is_evaluates(partial, tmp_path, icra20, capsys):
     """diff's scene CS-R of a candidate lacking sequences is the candidate's evaluate value."""
     base = tmp_path / "base"

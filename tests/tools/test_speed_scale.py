@@ -21,6 +21,7 @@ def _same(a: ln.Evaluation, b: ln.Evaluation) -> None:
             np.testing.assert_array_equal(ea.aoe, eb.aoe)
 
 
+@pytest.mark.thorough
 def test_local_processes_equal_one_process(icra20):
     src = icra20 / "per-seq"
     _same(ln.evaluate(src, jobs=1, scale="auto"), ln.evaluate(src, jobs=2, scale="auto"))
@@ -40,6 +41,7 @@ def test_durations_come_from_the_workers_and_equal_reading_the_ground_truth(icra
     pd.testing.assert_frame_equal(ev.durations(), expected)
 
 
+@pytest.mark.thorough
 def test_row_blocks_and_threads_give_the_same_numbers(icra20, monkeypatch):
     """Long per-pose computations run in row blocks, on threads (lorisnb.core.trajectory.blocks): every
     error, RPE included, is the same whatever the block size and thread count."""
@@ -133,6 +135,7 @@ def test_unreachable_scheduler_is_a_clear_error(icra20, capsys):
     assert "cannot reach the Dask scheduler" in capsys.readouterr().err
 
 
+@pytest.mark.thorough
 def test_parquet_dataset_has_the_csv_columns_and_values(icra20, tmp_path, capsys):
     pytest.importorskip("pyarrow")
     src = [str(icra20 / "per-seq" / "odom"), str(icra20 / "per-seq" / "dso")]
@@ -167,6 +170,7 @@ def test_parquet_force_never_replaces_a_foreign_dataset(icra20, tmp_path, capsys
     assert sorted(p.relative_to(foreign) for p in foreign.rglob("*")) == before
 
 
+@pytest.mark.thorough
 def test_a_sweep_too_large_for_memory_streams_to_parquet_with_the_same_rows(icra20, tmp_path, capsys):
     from lorisnb.core.lifelong.sweep import sweep, sweep_bytes, sweep_groups
     from lorisnb.tools.evaluation.streaming import sweep_to_parquet

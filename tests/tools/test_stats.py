@@ -75,6 +75,7 @@ def test_single_sequence_with_trials_bootstraps_the_trials():
     assert ci["unit"] == "trials" and ci["units"] == 8 and ci["low"] < ci["value"] < ci["high"]
 
 
+@pytest.mark.thorough
 def test_intervals_cover_the_true_value_at_about_the_nominal_rate():
     """Over 300 simulated benchmarks (fixed seeds), the 95 % interval covers the population mean."""
     rng = np.random.default_rng(12345)
@@ -87,6 +88,7 @@ def test_intervals_cover_the_true_value_at_about_the_nominal_rate():
     assert 0.88 <= hits / n <= 0.99, hits / n
 
 
+@pytest.mark.thorough
 def test_pairwise_detects_a_real_difference_and_not_a_null_one():
     rng = np.random.default_rng(7)
     detected = false_alarms = 0
@@ -122,6 +124,7 @@ def test_ranking_marks_ties():
     assert r.loc["a", "tied_with"] == "b" and r.loc["c", "tied_with"] == ""
 
 
+@pytest.mark.thorough
 def test_latex_and_markdown_tables(icra20):
     ev = ln.evaluate([icra20 / "per-seq" / a for a in ("orbslam2_rgbd", "dso", "odom")], scale="auto")
     ci = stats.confidence_intervals(ev.sequences(eps="paper", phi=30), ["cr", "c_ate_rmse"], n_resamples=300)
@@ -149,6 +152,7 @@ def test_latex_and_markdown_tables(icra20):
     assert interval(0.834, 0.791, 0.872) == "0.83 [0.79, 0.87]" and interval(np.nan, 0, 1) == "n/a"
 
 
+@pytest.mark.thorough
 def test_compare_command(tmp_path, icra20, capsys):
     tex, md, csv = tmp_path / "t.tex", tmp_path / "t.md", tmp_path / "ci.csv"
     args = ["compare", str(icra20 / "per-seq" / "orbslam2_rgbd"), str(icra20 / "per-seq" / "odom"), "--latex", str(tex)]

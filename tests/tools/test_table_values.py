@@ -39,6 +39,7 @@ def table(tmp_path_factory, icra20, data):
         ("matched", 2.5, "2.5 is not a count"),
     ],
 )
+@pytest.mark.thorough
 def test_a_value_no_evaluation_writes_is_refused_in_python_and_on_the_command_line(
     tmp_path, table, capsys, column, value, expected
 ):

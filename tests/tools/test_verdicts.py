@@ -45,6 +45,7 @@ def _run(capsys, *args):
     return rc, out.out, out.err
 
 
+@pytest.mark.thorough
 def test_a_missing_trial_is_a_regression_at_sequence_and_scene_level(trials, tmp_path, capsys):
     """Trial 3 of two sequences never written: both sequences and their scenes regress, the JSON
     counts them and names the trial, the JUnit cases fail (the mean over the other trials hid it)."""
@@ -146,6 +147,7 @@ def test_a_tiny_near_straight_piece_is_too_little_to_judge(icra20, data, monkeyp
     assert "unjudged" not in set(changes(base, cand)[0]["status"])
 
 
+@pytest.mark.thorough
 def test_improvements_and_trade_offs_are_named(trials, tmp_path, capsys):
     """ATE 45 % better and CR 0.3 lower on the same sequence (five trials a side): the text, the JSON, the JUnit
     properties and the Markdown name the improvement and the trade-off, not only the regression."""
@@ -175,6 +177,7 @@ def test_improvements_and_trade_offs_are_named(trials, tmp_path, capsys):
     assert md.startswith("## ❌ lorisnb diff: regression") and "### Improvements" in md and "### Trade-offs" in md
 
 
+@pytest.mark.thorough
 def test_markdown_annotations_and_badge_for_a_known_diff(trials, tmp_path, capsys):
     """What a lab's CI reads: a Markdown summary, GitHub Actions annotations (one ::error per
     regression, values escaped), an SVG badge; each says the verdict of the same diff."""
@@ -202,6 +205,7 @@ def test_markdown_annotations_and_badge_for_a_known_diff(trials, tmp_path, capsy
     assert rc == 2 and "exists" in err
 
 
+@pytest.mark.thorough
 def test_baseline_last_comparable_picks_the_newest_comparable_run(trials, tmp_path, capsys):
     """``diff --baseline last-comparable DIR CAND``: runs with other thresholds are passed over."""
     nightly = tmp_path / "nightly"
@@ -228,6 +232,7 @@ def test_baseline_last_comparable_picks_the_newest_comparable_run(trials, tmp_pa
     assert rc == 2 and "holds no run folder" in err
 
 
+@pytest.mark.thorough
 def test_compare_warns_on_pseudo_replicates_instead_of_claiming_significance(icra20, tmp_path, capsys):
     """Three copies of one run plus 1 cm of noise are not reruns: compare says what varies between
     the trials, warns, and claims no significance for their pairs."""
@@ -295,6 +300,7 @@ def test_the_calibration_harness_measures_what_it_says(data):
     assert rates.loc["real difference found", "nights"] > 0 and rates.loc["real difference found", "rate"] > 0.3
 
 
+@pytest.mark.thorough
 def test_the_guides_share_of_real_outputs_that_stop_early_is_the_measured_one(data):
     """docs/guide/regression-gating.md says why a trial stopped halfway is not flagged: real outputs
     stop early as often as it quotes (computed here from the real data, not typed)."""
@@ -310,6 +316,7 @@ def test_the_guides_share_of_real_outputs_that_stop_early_is_the_measured_one(da
         stopped_early(data.root, before=75)
 
 
+@pytest.mark.thorough
 def test_the_code_under_test_is_recorded_shown_and_followed(trials, tmp_path, capsys):
     """``report --label`` records the code under test in run.json (checked like every key), the front
     page shows it, history names it beside each run; a label with a newline is refused."""

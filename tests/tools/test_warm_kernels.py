@@ -94,6 +94,7 @@ def _kernels(cwd: Path, zygote) -> list[tuple[dict, object]]:
         warm_kernels.use(None)
 
 
+@pytest.mark.thorough
 def test_a_forked_kernel_is_the_kernel_jupyter_launches(tmp_path):
     from lorisnb.tools.report.notebooks import kernel_env
 
@@ -117,6 +118,7 @@ def test_a_forked_kernel_is_the_kernel_jupyter_launches(tmp_path):
     assert forked[0][0]["pid"] != forked[1][0]["pid"]
 
 
+@pytest.mark.thorough
 def test_interrupt_and_shutdown_of_a_forked_kernel(tmp_path):
     from lorisnb.tools.report.notebooks import kernel_env
 
@@ -165,6 +167,7 @@ MANAGER = textwrap.dedent(
 )
 
 
+@pytest.mark.thorough
 def test_a_forked_kernel_ends_with_the_process_managing_it(tmp_path):
     """A launched kernel's parent poller ends it when its manager dies; a forked one's watcher does."""
     from lorisnb.tools.report.notebooks import kernel_environ
@@ -192,6 +195,7 @@ def test_a_forked_kernel_ends_with_the_process_managing_it(tmp_path):
             manager.kill()
 
 
+@pytest.mark.thorough
 def test_the_zygote_ends_with_the_report(tmp_path):
     """Killed with the report (kill -9, no clean-up), the zygote ends by itself within seconds."""
     code = textwrap.dedent(
