@@ -180,6 +180,7 @@ def test_paper_eps_on_a_scene_without_one_is_refused_when_built(ev, data):
     assert ex.results()[0]["cr"].iloc[0] == pytest.approx(pair.scenes(0.05, 30.0, 1.0, 60.0)["cr"].iloc[0])
 
 
+@pytest.mark.thorough
 def test_a_slider_change_redraws_the_figure_in_place_as_drawn_anew(ev):
     """A slider change redraws the scene's figure in place (Timeline.draw: the axes, rows and
     legend kept); its PNG equals plot_timeline's figure made anew at the same thresholds, pixel

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import matplotlib
+import pytest
 
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
-import pytest  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
 import lorisnb as ln  # noqa: E402
@@ -54,6 +54,7 @@ def test_timeline_draws_every_segment_and_first_pose(ev):
     plt.close(fig)
 
 
+@pytest.mark.thorough
 def test_trajectories_and_sensitivity_figures(ev):
     f = next(e for e in ev.errors if e.scene == "home" and e.algorithm.startswith("vins"))
     fig = plotting.plot_trajectories(f, 3.0, 30.0)

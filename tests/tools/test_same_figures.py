@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from lorisnb.tools.evaluation.runner import evaluate
 from lorisnb.tools.figures.trials import plot_trials
 from lorisnb.tools.notebook.start import figure_png
 
 
+@pytest.mark.thorough
 def test_trial_figure_is_the_same_at_every_run_and_leaves_numpys_generator_alone(icra20):
     ev = evaluate([icra20 / "lifelong" / "maslam", icra20 / "lifelong" / "ds-slam"], jobs=1, progress=False)
     one = ev.sequences(eps=1.0)
@@ -25,6 +27,7 @@ def test_trial_figure_is_the_same_at_every_run_and_leaves_numpys_generator_alone
     assert figure_png(plot_trials(table, "cr"), dpi=60) == first
 
 
+@pytest.mark.thorough
 def test_heatmaps_measure_their_texts_with_one_renderer_and_look_the_same(icra20, monkeypatch):
     """A figure outside pyplot measures its texts with one kept renderer
     (:class:`lorisnb.tools.figures.plotting._MeasuredFigure`) instead of a new one per text: seaborn's

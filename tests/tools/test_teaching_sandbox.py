@@ -34,6 +34,7 @@ isolated = pytest.mark.skipif(not can_isolate(), reason="needs root on Linux wit
 
 
 @isolated
+@pytest.mark.thorough
 def test_sandbox_has_no_network_no_writes_outside_its_folder_and_limits(tmp_path):
     secret = tmp_path / "instructor"
     secret.mkdir()
@@ -436,6 +437,7 @@ def test_the_git_database_of_a_course_kept_in_its_own_repository_is_hidden(tmp_p
     assert (repo / ".git").resolve() in hidden and repo / "course" in hidden
 
 
+@pytest.mark.thorough
 def test_concurrent_graders_get_sandbox_users_of_their_own():
     """Each grading process holds its pair of sandbox user ids until it ends (a lock per id): two
     workers of one class, or two graders started side by side, never share one (the old rule, the

@@ -231,6 +231,7 @@ CASES = [(answer, value) for answer, (_, _, values) in QUESTIONS.items() for val
 
 
 @pytest.mark.parametrize(("answer", "value"), CASES, ids=[f"{a}-{v}" for a, v in CASES])
+@pytest.mark.thorough
 def test_each_variant_passes_the_answer_and_gives_each_mistake_its_hint(lab, answer, value):
     """At every value a student can draw, the instructor's answer passes and each typical mistake
     the check names fails with its hint (the old lab varied B1 only: E1's target, F's eps, G1's
@@ -288,6 +289,7 @@ def copy_scores(lab: _Lab) -> tuple[float, float, dict[str, dict]]:
     return worst, mean, rights
 
 
+@pytest.mark.thorough
 def test_readme_says_what_copied_numbers_score(lab):
     """The README's "Which answers differ between students" table and its count, computed."""
     worst, mean, rights = copy_scores(lab)
