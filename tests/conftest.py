@@ -20,6 +20,11 @@ matplotlib.use("Agg")
 
 from lorisnb.errors import DataNotFoundError, LorisWarning  # noqa: E402
 from lorisnb.io import find_data  # noqa: E402
+from lorisnb.tools.report.lean_imports import jsonschema_without_iri_grammars  # noqa: E402
+
+# as in lorisnb's own processes: jsonschema (nbformat's) without the 38 IRI grammars it compiles at
+# import, about 2 s of each test worker's collection for a format no test checks
+jsonschema_without_iri_grammars()
 
 # nothing of hypothesis in the checkout (.hypothesis/): the tests leave the tree as they found it
 _HYPOTHESIS_HOME = tempfile.mkdtemp(prefix="lorisnb-hypothesis-")
