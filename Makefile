@@ -42,8 +42,11 @@ test: bytecode
 
 # everything but the browser: the fast tests on every core, then the slow ones (notebooks, reports, the
 # installed wheel) one at a time: papermill kernels run side by side under pytest-xdist stalled now and
-# then with an idle kernel (cause not found; on 2026-11-28 one kernel at a time on one worker, beside the
-# other worker's tests, stalled too); CI
+# then with an idle kernel. On 2026-11-28 one kernel at a time on one xdist worker, beside the other
+# worker's tests, stalled twice in two runs, each time in a cell displaying an ipywidgets explorer
+# (threshold_sensitivity's ThresholdExplorer; an earlier stall: metrics_primer's FaultExplorer): the
+# kernel idle after the cell (py-spy), nbclient waiting for its execute_reply on the shell channel
+# (jupyter/nbclient#312, open: "when cell contains ipywidget, execute cell will sometimes block"); CI
 test-all: bytecode
 	$(PYTEST) -m "not slow and not browser"
 	$(PYTEST_ONCE) -m "slow and not browser"
