@@ -259,10 +259,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                          "relative_lengths": "lorisnb evaluate --relative-lengths",
                          "kitti_plot": "lorisnb evaluate --conventions kitti"})  # fmt: skip
     if args.columns == "metrics" and args.relation is None:  # no column of the lean table depends on the RPE
-        rpe = [f"--{k.replace('_', '-')}" for k in ("rpe_delta", "rpe_unit", "rpe_pairs", "rpe_all_pairs", "rpe_tolerance")
-               if getattr(args, k, None) is not None]  # fmt: skip
-        if rpe:
-            raise ValidationError(f"{rpe[0]}: the RPE is in the table of sweep --columns all (or of --relation); the "
+        given_rpe = [f"--{k.replace('_', '-')}" for k in ("rpe_delta", "rpe_unit", "rpe_pairs", "rpe_all_pairs",
+                     "rpe_tolerance") if getattr(args, k, None) is not None]  # fmt: skip
+        if given_rpe:
+            raise ValidationError(f"{given_rpe[0]}: the RPE is in the table of sweep --columns all (or of --relation); the "
                                   "default --columns metrics holds the thresholds' metrics only")  # fmt: skip
     relative = f" (fractions of each sequence's {args.relative_to})" if args.relative_to is not None else " m"
     units = {"eps": relative, "phi": " deg", "delta": " s", "tau": " s"}
@@ -276,6 +276,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                                     + unit for k, unit in units.items())  # fmt: skip
 
     ev, notes = _run_evaluation(args, ["csv"], folders=("parquet",), swept=swept)
+    # the spec's RPE where a column depends on it (refused above where given and of no use)
+    rpe = ev.spec.rpe_options() if args.columns == "all" or ev.spec.relation is not None else {}
     keep_label = args.relative_to is not None or any(isinstance(e, str) for e in args.eps)
     grid = f"{len(args.eps)} eps x {len(args.phi)} phi x {len(args.delta)} delta x {len(args.tau)} tau"
     cols = _with_trial(ev, ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau", "cr", "cr_t", "c_ate_rmse"])
@@ -301,9 +303,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         path, rows = sweep_to_parquet(
             ev.errors, args.parquet or args.csv, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to,
             force=args.force, progress=not args.no_progress, on_part=summarize, relation=ev.spec.relation,
-            columns=args.columns,
-            change_unit=ev.spec.change_unit, fmt="parquet" if args.parquet else "csv",
-            **ev.spec.rpe_options(),
+            columns=args.columns, change_unit=ev.spec.change_unit, fmt="parquet" if args.parquet else "csv", **rpe,
         )  # fmt: skip
         print(f"{rows} rows: {len(ev.errors)} file(s) x {grid}")
         if shown:
@@ -316,7 +316,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         return ev.exit_status()
     table = sweep(
         ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns=args.columns,
-        relation=ev.spec.relation, change_unit=ev.spec.change_unit, **ev.spec.rpe_options(),
+        relation=ev.spec.relation, change_unit=ev.spec.change_unit, **rpe,
     )  # fmt: skip
     table["spec"] = ev.spec.canonical(thresholds=False)
     print(f"{len(table)} rows: {len(ev.errors)} file(s) x {grid}")

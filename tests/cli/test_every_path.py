@@ -393,7 +393,9 @@ def test_a_table_reads_an_rpe_unit_as_the_spec_does(data):
     errors = ln.evaluate_pairs(est, gt, jobs=1).errors
     scored = ln.score(errors, rpe_delta=10, rpe_unit="d")  # the core's entry points refused 'd'
     assert scored["rpe_rot_rmse"].iloc[0] == spec["rpe_rot_rmse"].iloc[0]
-    assert len(ln.sweep(errors, [0.1, 1.0], rpe_delta=10, rpe_unit="d")) == 2
+    assert len(ln.sweep(errors, [0.1, 1.0], rpe_delta=10, rpe_unit="d", columns="all")) == 2
+    with pytest.raises(ValidationError, match="rpe_delta: the RPE is in the table of columns='all'"):
+        ln.sweep(errors, [0.1, 1.0], rpe_delta=10)  # the default columns: no RPE to apply it to
     assert table["spec"].iloc[0] == spec["spec"].iloc[0] and '"rpe_unit":"deg"' in spec["spec"].iloc[0]
 
 

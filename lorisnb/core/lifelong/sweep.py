@@ -186,6 +186,12 @@ def sweep(
                            rpe_tolerance=rpe_tolerance))  # fmt: skip
     rpe_d, rpe_u = rpe_setting(r["rpe_delta"], r["rpe_unit"])
     rpe_p, rpe_a, rpe_t = rpe_options(r["rpe_pairs"], r["rpe_all_pairs"], r["rpe_tolerance"])
+    given = dict(rpe_delta=rpe_delta, rpe_unit=rpe_unit, rpe_pairs=rpe_pairs, rpe_all_pairs=rpe_all_pairs,
+                 rpe_tolerance=rpe_tolerance)  # fmt: skip
+    unused = [k for k, v in given.items() if v is not OF_SPEC]
+    if columns == "metrics" and relation is None and unused:  # checked above, and still of no use: refused
+        raise ValidationError(f"{unused[0]}: the RPE is in the table of columns='all' (or of relation=); the "
+                              "default columns='metrics' holds the thresholds' metrics only")  # fmt: skip
     E, P, D, T = len(eps_l), len(phi_a), len(delta_a), len(tau_a)
     n_set = E * P * D * T
     check_sweep_size(files, (E, P, D, T), columns, max_bytes)

@@ -29,7 +29,7 @@ def sweep_to_parquet(
     tau: Any = (60.0,),
     *,
     relative_to: str | None = None,
-    columns: str = "all",
+    columns: str = "metrics",
     force: bool = False,
     progress: bool = False,
     max_bytes: float = MAX_SWEEP_BYTES,
@@ -39,7 +39,8 @@ def sweep_to_parquet(
     fmt: str = "parquet",
     **rpe: Any,
 ) -> tuple[Path, int]:
-    """The table of :func:`lorisnb.core.lifelong.sweep.sweep` (same columns, same values), written to a
+    """The table of :func:`lorisnb.core.lifelong.sweep.sweep` (same columns, same values: ``columns``
+    is its ``"metrics"`` by default, ``"all"`` for every column of ``score``), written to a
     Parquet dataset partitioned by algorithm, one group of files (suite, algorithm, scene, trial)
     at a time: memory holds one group's rows, never the whole table. Each group must fit in
     ``max_bytes`` (refused up front, with the size it would need, otherwise).
