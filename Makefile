@@ -28,10 +28,7 @@ evaluate: bytecode
 
 # the tests on every core (pytest-xdist). PYTEST_WORKERS=1 runs them in one process.
 PYTEST_WORKERS ?= auto
-# pytest keeps the test modules it rewrote (its assertions) in tests/**/__pycache__ (git ignores them):
-# with PYTHONDONTWRITEBYTECODE set (as on many CI machines) every worker rewrote all 260 modules at each
-# run (a collection of 31 s, 13 s with them kept, on 2 cores)
-PYTEST_ONCE = PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest -q
+PYTEST_ONCE = $(BIN)/python -m pytest -q
 PYTEST = $(PYTEST_ONCE) -n $(PYTEST_WORKERS) --dist loadgroup
 
 # the newcomer's command (README): the fast tests but the thorough ones (each several seconds: peers run

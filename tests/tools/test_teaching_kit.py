@@ -154,9 +154,14 @@ def _copy_checkout(dest: Path) -> None:
 
 
 def _tree(folder: Path) -> list[str]:
-    """Every path under ``folder``, not following links (the copy's .venv links to the checkout's)."""
+    """Every path under ``folder``, not following links (the copy's .venv links to the checkout's),
+    but Python's bytecode caches (``__pycache__``: git ignores them; written or not as the
+    environment's PYTHONDONTWRITEBYTECODE says)."""
     return sorted(
-        os.path.relpath(os.path.join(d, n), folder) for d, dirs, files in os.walk(folder) for n in dirs + files
+        os.path.relpath(os.path.join(d, n), folder)
+        for d, dirs, files in os.walk(folder)
+        for n in dirs + files
+        if "__pycache__" not in Path(d, n).relative_to(folder).parts
     )
 
 
