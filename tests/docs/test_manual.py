@@ -19,8 +19,12 @@ from lorisnb.cli import build_parser
 ROOT = Path(__file__).resolve().parents[2]
 SITE = Path(os.environ.get("LORISNB_DOCS", ROOT / "build" / "docs"))
 #: hosts that serve scripts, styles and fonts to pages (none may appear in a built page)
+#: A URL naming a CDN: ``//`` then a host with a dot (which base64 never holds: an embedded image's
+#: text may have "//" and, further on, "cdn"), then the CDN's name anywhere in the URL
 CDN = re.compile(
-    r"(?:https?:)?//[^\s\"'<>]*(?:cdn|jsdelivr|unpkg|googleapis|gstatic|bootstrapcdn|cloudflare)[^\s\"'<>]*", re.I
+    r"(?:https?:)?//(?=[A-Za-z0-9-]+\.[A-Za-z0-9])[^\s\"'<>]*"
+    r"(?:cdn|jsdelivr|unpkg|googleapis|gstatic|bootstrapcdn|cloudflare)[^\s\"'<>]*",
+    re.I,
 )
 
 
