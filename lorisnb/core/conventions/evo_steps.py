@@ -101,5 +101,5 @@ def projected(e: SequenceErrors, plane: str) -> SequenceErrors:
     pg, qg = project_to_plane(e.gt_positions, e.gt_quaternions, plane)
     return replace(
         e, est_positions=pe, est_quaternions=qe, gt_positions=pg, gt_quaternions=qg, ate=metrics.ate(pe, pg),
-        aoe=quat_angle_deg(quat_conj_multiply(qg, qe)), _rpe_cache={}, est_blocks=None, gt_blocks=None,
+        aoe=quat_angle_deg(quat_conj_multiply(qg, qe)), est_blocks=None, gt_blocks=None,
     )  # fmt: skip

@@ -313,14 +313,37 @@ def score_rows(
     for f in files:  # one iteration per file and sequence, never per pose
         for e in f.sequences:
             e_scene = sequence_eps(eps_v, f.scene, e)
-            grid = sequence_grid(
-                e, [e_scene], [phi_v], [delta_v], [tau_v], rpe_delta=rpe_d, rpe_unit=rpe_u, with_stats=stats,
-                rpe_pairs=rpe_p, rpe_all_pairs=rpe_a, rpe_tolerance=rpe_t,
-            )  # fmt: skip
             row = sequence_meta(f, e) | dict(eps=e_scene, phi=phi_v, delta=delta_v, tau=tau_v)
-            row.update({k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in grid.items()})
+            row.update(sequence_scores(e, e_scene, phi_v, delta_v, tau_v, (rpe_d, rpe_u, rpe_p, rpe_a, rpe_t), stats))
             rows.append(row)
     return rows
+
+
+#: Settings whose scores a sequence keeps (:func:`sequence_scores`), the latest ones.
+KEPT_SETTINGS = 4
+
+
+def sequence_scores(
+    e: SequenceErrors, eps: float, phi: float, delta: float, tau: float, rpe: tuple[Any, ...], stats: bool
+) -> dict[str, Any]:
+    """Every metric of one sequence at one validated setting (:func:`sequence_grid` on a one-point
+    grid, as Python numbers; ``rpe``: delta, unit, pairs, all pairs, tolerance), kept on the
+    sequence for the latest :data:`KEPT_SETTINGS` settings, as its RPE pairs are. An evaluation's
+    workers score its spec's setting where they computed the errors, so a table at that setting
+    (``lorisnb evaluate``'s, a report's) is read, not scored again, in the process that collects
+    the files. The errors are results: a changed copy (``dataclasses.replace``) keeps none of it."""
+    key = (float(eps), float(phi), float(delta), float(tau), *rpe, bool(stats))
+    kept = e._scores.get(key)
+    if kept is None:
+        grid = sequence_grid(
+            e, [eps], [phi], [delta], [tau], rpe_delta=rpe[0], rpe_unit=rpe[1], with_stats=stats, rpe_pairs=rpe[2],
+            rpe_all_pairs=rpe[3], rpe_tolerance=rpe[4],
+        )  # fmt: skip
+        kept = {k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in grid.items()}
+        while len(e._scores) >= KEPT_SETTINGS:
+            del e._scores[next(iter(e._scores))]
+        e._scores[key] = kept
+    return dict(kept)
 
 
 def score(

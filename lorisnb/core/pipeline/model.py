@@ -170,10 +170,13 @@ class SequenceErrors:
     scale: float = 1.0
     est_blocks: np.ndarray | None = field(default=None, repr=False)
     gt_blocks: np.ndarray | None = field(default=None, repr=False)
+    # What is computed from the errors once and kept (not init fields: ``dataclasses.replace``
+    # gives a new sequence of errors empty ones, never the old errors' RPE, lever or scores).
     _rpe_cache: dict[tuple[float, str, str, bool | None, float], tuple[np.ndarray, ...]] = field(
-        default_factory=dict, repr=False, compare=False
+        default_factory=dict, init=False, repr=False, compare=False
     )
-    _lever: float | None = field(default=None, repr=False, compare=False)
+    _lever: float | None = field(default=None, init=False, repr=False, compare=False)
+    _scores: dict[tuple[Any, ...], dict[str, Any]] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def unmatched(cls, seq: int, poses: int, gt_start: float, gt_end: float) -> SequenceErrors:

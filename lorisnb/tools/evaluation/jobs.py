@@ -7,6 +7,7 @@ root, caches of ground truth), runs the one pipeline
 
 from __future__ import annotations
 
+import contextlib
 import os
 import warnings
 from dataclasses import dataclass, replace
@@ -14,6 +15,7 @@ from functools import lru_cache, partial
 from pathlib import Path
 
 from lorisnb.core.lifelong.missing import with_missing
+from lorisnb.core.lifelong.scoring import score_rows
 from lorisnb.core.pipeline.model import FileErrors, ResultFile
 from lorisnb.core.pipeline.plausibility import no_rpe_pair
 from lorisnb.core.pipeline.sessions import compute_errors, evaluate_sessions, moved_groundtruth, window_spans
@@ -138,6 +140,10 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
             note = no_rpe_pair(f"{errors.file}, seq {seq.seq}", len(i), seq.stamps, o["rpe_delta"], o["rpe_unit"])
             if note is not None and note not in errors.warnings:
                 errors.warnings.append(note)
+        with contextlib.suppress(LorisError):  # the spec's setting scored here too (kept on each sequence:
+            # lorisnb.core.lifelong.scoring.sequence_scores), where the errors are, so that a table at it is read
+            # in the process collecting the files; a setting the scores refuse is refused there, as before
+            score_rows(errors, job.spec.eps, job.spec.phi, job.spec.delta, job.spec.tau, **o)
         return "ok", errors
     except DataNotFoundError as exc:
         return "skipped", Failure(job.path, str(exc), "not-public" if exc.scene in NOT_PUBLIC else "no-groundtruth")

@@ -1,0 +1,70 @@
+"""What a sequence's errors keep once computed (its RPE pairs, its rotation lever, its scores at a
+setting): the same numbers as computed afresh, never carried into a changed copy, and the scores
+at the spec's setting computed where the errors were (an evaluation's workers)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import lorisnb as ln
+from lorisnb.core.lifelong import scoring
+from lorisnb.core.lifelong.scoring import KEPT_SETTINGS, score
+
+
+def _fresh(errors):
+    """Copies of the errors that keep nothing (``replace`` with no change)."""
+    return [replace(f, sequences=[replace(e) for e in f.sequences]) for f in errors]
+
+
+@pytest.fixture(scope="module")
+def home(icra20):
+    return ln.evaluate(icra20 / "lifelong", algorithms=["maslam", "orbslam2_t265"], scenes=["home"], progress=False)
+
+
+def test_a_changed_copy_keeps_none_of_the_old_errors_results(home):
+    """``dataclasses.replace`` of a sequence's errors: its RPE, lever and scores are those of the
+    new values (they were the old errors' RPE and lever: one dict shared by both)."""
+    e = next(e for f in home.errors for e in f.sequences if e.matched > 100)
+    _, _, trans, _ = e.rpe()
+    lever = e.rotation_lever
+    assert trans.max() > 0.01 and lever > 0.1
+    same = replace(e, est_positions=e.gt_positions.copy(), est_quaternions=e.gt_quaternions.copy(),
+                   ate=np.zeros(e.matched), aoe=np.zeros(e.matched), gt_positions=2 * e.gt_positions)  # fmt: skip
+    _, _, trans2, rot2 = same.rpe()
+    assert np.abs(trans2 - trans).max() > 0.01  # the RPE of the new positions, not the kept one
+    assert same.rotation_lever == pytest.approx(2 * lever, rel=1e-12)
+    f = next(f for f in home.errors if e in f.sequences)
+    row = score([replace(f, sequences=[same])]).iloc[0]
+    assert row["ate_rmse"] == 0 and row["rpe_rot_rmse"] == pytest.approx(0, abs=1e-6)
+    assert score([f]).set_index("seq").loc[e.seq, "ate_rmse"] > 0.01  # the original keeps its own
+
+
+def test_tables_at_the_spec_setting_are_those_scored_afresh_and_were_scored_with_the_errors(home, monkeypatch):
+    """The evaluation scored the spec's setting where it computed the errors: its table is read
+    (no scoring after), and equals the scores of copies that keep nothing, to the last bit."""
+    table = home.sequences()
+    spec = home.spec
+    afresh = score(_fresh(home.errors), spec.eps, spec.phi, spec.delta, spec.tau)
+    pd.testing.assert_frame_equal(table.drop(columns="spec"), afresh, check_exact=True)
+
+    def no_scoring(*args, **kwargs):
+        raise AssertionError("scored again")
+
+    monkeypatch.setattr(scoring, "sequence_grid", no_scoring)
+    pd.testing.assert_frame_equal(home.sequences(), table, check_exact=True)
+    with pytest.raises(AssertionError, match="scored again"):  # another setting is scored
+        home.sequences(eps=0.123)
+
+
+def test_a_sequence_keeps_the_latest_settings_only_and_each_is_the_fresh_score(home):
+    f = home.errors[0]
+    first = score([f], 0.3, 10.0)
+    for eps in np.linspace(0.05, 1.0, 3 * KEPT_SETTINGS):
+        score([f], float(eps), 10.0)
+    assert all(len(e._scores) <= KEPT_SETTINGS for e in f.sequences)
+    pd.testing.assert_frame_equal(score([f], 0.3, 10.0), first, check_exact=True)
+    pd.testing.assert_frame_equal(score(_fresh([f]), 0.3, 10.0), first, check_exact=True)
