@@ -7,7 +7,13 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from lorisnb.core.alignment.association import associate
-from lorisnb.core.alignment.geometry import official_slerp, ros_quaternion_from_matrix, umeyama
+from lorisnb.core.alignment.geometry import (
+    PositionPairs,
+    degenerate_alignment,
+    official_slerp,
+    ros_quaternion_from_matrix,
+    umeyama,
+)
 from lorisnb.core.metrics import openloris as metrics
 from lorisnb.core.trajectory.poses import Trajectory
 
@@ -48,6 +54,30 @@ def test_umeyama_recovers_similarity():
     np.testing.assert_allclose(sim.rotation, rot.as_matrix(), atol=1e-12)
     np.testing.assert_allclose(sim.apply(src), dst, atol=1e-12)
     assert umeyama(src, dst, with_scale=False).scale == 1.0
+
+
+def test_position_pairs_share_one_fit_and_its_degeneracy_test_with_the_same_answers():
+    """The checks' shared positions (PositionPairs) give umeyama's fits and degenerate_alignment's
+    reasons bit for bit: general positions, a line, identical points, two points."""
+    rng = np.random.default_rng(7)
+    src = rng.normal(size=(40, 3))
+    dst = (
+        0.7 * Rotation.from_euler("zyx", [5, 50, -10], degrees=True).apply(src)
+        + [3, -1, 2]
+        + rng.normal(scale=0.01, size=(40, 3))
+    )
+    line = np.outer(np.linspace(0, 1, 10), [1.0, 2.0, 3.0])
+    cases = [(src, dst), (line, line + 1.0), (np.ones((5, 3)), dst[:5]), (src[:2], dst[:2])]
+    reasons = []
+    for a, b in cases:
+        pairs = PositionPairs.of(a, b)
+        reasons.append(pairs.degenerate())
+        assert reasons[-1] == degenerate_alignment(a, b)
+        for scale in (False, True):
+            mine, theirs = pairs.fit(scale), umeyama(a, b, scale)
+            assert np.array_equal(mine.rotation, theirs.rotation) and mine.scale == theirs.scale
+            assert np.array_equal(mine.translation, theirs.translation)
+    assert reasons[0] is None and "line" in reasons[1] and "identical" in reasons[2] and "fewer than 3" in reasons[3]
 
 
 def _gt():

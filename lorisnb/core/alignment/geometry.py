@@ -65,7 +65,35 @@ def degenerate_alignment(source: np.ndarray, target: np.ndarray) -> str | None:
     target = np.asarray(target, float)
     if len(source) == 0:
         return "no matched position"
-    return _degenerate(source, target, _centered(source, target)[4])
+    return PositionPairs.of(source, target).degenerate()
+
+
+@dataclass(frozen=True)
+class PositionPairs:
+    """Matched (N, 3) positions (N >= 1) with their means, the centred source and the
+    cross-covariance ``xt^T xs / N``: what a fit (:meth:`fit`, :func:`umeyama`) and the test of
+    whether one can be determined (:meth:`degenerate`) share, computed once for both (the
+    pipeline's plausibility checks ask both questions of the same poses)."""
+
+    source: np.ndarray
+    target: np.ndarray
+    mu_s: np.ndarray
+    mu_t: np.ndarray
+    xs: np.ndarray
+    cov: np.ndarray
+
+    @classmethod
+    def of(cls, source: np.ndarray, target: np.ndarray) -> PositionPairs:
+        mu_s, mu_t, xs, _, cov = _centered(source, target)
+        return cls(source, target, mu_s, mu_t, xs, cov)
+
+    def degenerate(self) -> str | None:
+        """:func:`degenerate_alignment` of these positions."""
+        return _degenerate(self.source, self.target, self.cov)
+
+    def fit(self, with_scale: bool = False) -> Sim3:
+        """:func:`umeyama` of these positions (not strict)."""
+        return _solve(self.mu_s, self.mu_t, self.xs, self.cov, with_scale)
 
 
 def rotation_lever(positions: np.ndarray) -> float:
@@ -142,6 +170,11 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False, st
             f"on the first pose's orientation {first}, or not at all (--align none)"
         )
     del xt
+    return _solve(mu_s, mu_t, xs, cov, with_scale)
+
+
+def _solve(mu_s: np.ndarray, mu_t: np.ndarray, xs: np.ndarray, cov: np.ndarray, with_scale: bool) -> Sim3:
+    """Umeyama's solution from the means, the centred source and the cross-covariance."""
     u, d, vt = np.linalg.svd(cov)
     s_mat = np.eye(3)
     if np.linalg.det(u) * np.linalg.det(vt) < 0.0:
@@ -149,7 +182,7 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False, st
     rot = u @ s_mat @ vt
     scale = 1.0
     if with_scale:
-        var_s = np.einsum("ij,ij->", xs, xs) / n
+        var_s = np.einsum("ij,ij->", xs, xs) / len(xs)
         scale = float(np.trace(np.diag(d) @ s_mat) / var_s) if var_s > 0 else 1.0
     trans = mu_t - scale * rot @ mu_s
     return Sim3(rot, trans, scale)

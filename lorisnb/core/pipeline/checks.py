@@ -11,6 +11,7 @@ import numpy as np
 
 from lorisnb.core.alignment.association import Association, associate
 from lorisnb.core.alignment.geometry import (
+    PositionPairs,
     Sim3,
     quat_angle_deg,
     quat_conj_multiply,
@@ -32,16 +33,26 @@ def spread(n: int, k: int) -> np.ndarray:
     return np.round(np.linspace(0, n - 1, min(n, k))).astype(int) if n else np.zeros(0, int)
 
 
-def scale_note(label: str, est_positions: np.ndarray, a: Association, fitted: Sim3, hint: str) -> str | None:
-    """The best Sim(3) scale of the matched positions is far from 1 and fixes most of the error of
-    the alignment used (``fitted``): a monocular trajectory? (on at most 3,000 evenly spread poses)."""
-    if len(a) <= 2:
+def spread_pairs(est_positions: np.ndarray, a: Association) -> PositionPairs | None:
+    """The matched positions the alignment checks look at (at most 3,000, evenly spread), with what
+    a fit and its degeneracy test share (:class:`~lorisnb.core.alignment.geometry.PositionPairs`),
+    for :func:`scale_note` and :func:`degenerate_note` of one sequence; None with nothing matched."""
+    if len(a) == 0:
         return None
     few = spread(len(a), 10 * PLAUSIBILITY_POSES)
-    p_est, p_gt = est_positions[a.est_index[few]], a.gt_positions[few]
-    sim = umeyama(p_est, p_gt, True)
+    return PositionPairs.of(est_positions[a.est_index[few]], a.gt_positions[few])
+
+
+def scale_note(label: str, pairs: PositionPairs | None, a: Association, fitted: Sim3, hint: str) -> str | None:
+    """The best Sim(3) scale of the matched positions is far from 1 and fixes most of the error of
+    the alignment used (``fitted``): a monocular trajectory? (on the spread poses of
+    :func:`spread_pairs`)."""
+    if len(a) <= 2 or pairs is None:
+        return None
+    sim = pairs.fit(with_scale=True)
     if plausibility.scale_in_range(sim.scale):
         return None
+    p_est, p_gt = pairs.source, pairs.target
     return plausibility.scale_far_from_one(
         label, sim.scale, float(metrics.rmse(metrics.ate(fitted.apply(p_est), p_gt))),
         float(metrics.rmse(metrics.ate(sim.apply(p_est), p_gt))), lambda: path_length(a.gt_positions), hint,
@@ -128,11 +139,10 @@ def other_spans(
     return spans
 
 
-def degenerate_note(label: str, est_positions: np.ndarray, a: Association) -> str | None:
+def degenerate_note(label: str, est_positions: np.ndarray, a: Association, pairs: PositionPairs | None) -> str | None:
     """:func:`lorisnb.core.pipeline.plausibility.degenerate_fit` of an alignment fitted on the matched
-    poses ``a``: judged on a few evenly spread poses first (a long sequence that is not degenerate
-    is found so at once), on all of them only when those few are."""
-    few = spread(len(a), 10 * PLAUSIBILITY_POSES)
-    if plausibility.degenerate_fit(label, est_positions[a.est_index[few]], a.gt_positions[few]) is None:
+    poses ``a``: judged on the spread poses of :func:`spread_pairs` first (a long sequence that is
+    not degenerate is found so at once), on all of them only when those few are."""
+    if pairs is not None and pairs.degenerate() is None:
         return None
     return plausibility.degenerate_fit(label, est_positions[a.est_index], a.gt_positions)

@@ -23,7 +23,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from lorisnb.core.alignment.association import Association, groundtruth_in_frame
-from lorisnb.core.alignment.geometry import Sim3
+from lorisnb.core.alignment.geometry import PositionPairs, Sim3
 from lorisnb.core.alignment.index_pairs import by_index, indexed
 from lorisnb.core.conventions import evo_steps
 from lorisnb.core.conventions.choices import fit_alignment
@@ -194,16 +194,24 @@ def evaluate_sessions(
             alignment = per_seq[seqs[0]]
             aligned_on = seqs[0] if len(assoc[seqs[0]]) else None
 
+    pairs: dict[int, PositionPairs | None] = {}  # each fitted sequence's spread positions, once for both checks
+
+    def spread_pairs(s: int) -> PositionPairs | None:
+        if s not in pairs:
+            pairs[s] = checks.spread_pairs(est[s].positions, assoc[s])
+        return pairs[s]
+
     if frames is not None:  # an OpenLORIS file is aligned as the official tool aligns it, degenerate or not: said
         fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s])]
-        found += [checks.degenerate_note(f"{name}, seq {s}", est[s].positions, assoc[s]) for s in fitted]
+        found += [checks.degenerate_note(f"{name}, seq {s}", est[s].positions, assoc[s], spread_pairs(s))
+                  for s in fitted]  # fmt: skip
     if checks_on and method == "se3":
         hint = "--scale, or --scale auto for dso/svo" if frames is not None else "--align sim3"
         if is_monocular(algorithm) and "align" not in spec.explicit:  # its scale is arbitrary: said once
             found.append(plausibility.monocular_without_scale(name, algorithm, hint))
         fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s]) > 2]
         for s in fitted:
-            found.append(checks.scale_note(f"{name}, seq {s}", est[s].positions, assoc[s], per_seq[s], hint))
+            found.append(checks.scale_note(f"{name}, seq {s}", spread_pairs(s), assoc[s], per_seq[s], hint))
 
     out: list[SequenceErrors] = []
     suspect: tuple[SequenceErrors, Association] | None = None
