@@ -12,7 +12,8 @@ import pytest
 
 import lorisnb as ln
 from lorisnb.core.lifelong import scoring
-from lorisnb.core.lifelong.scoring import KEPT_SETTINGS, score
+from lorisnb.core.lifelong.scoring import KEPT_SETTINGS, score, score_rows
+from lorisnb.core.pipeline.model import STAT_COLUMNS
 
 
 def _fresh(errors):
@@ -60,8 +61,21 @@ def test_tables_at_the_spec_setting_are_those_scored_afresh_and_were_scored_with
         home.sequences(eps=0.123)
 
 
+def test_scores_without_statistics_are_read_from_those_with_them(home, monkeypatch):
+    """``lorisnb evaluate`` prints the table without the statistics: read from the scores the
+    evaluation kept (with them), the same values and columns in the same order as scored afresh."""
+    spec = home.spec
+    setting = (spec.eps, spec.phi, spec.delta, spec.tau)
+    afresh_rows = score_rows(_fresh(home.errors), *setting, stats=False)
+    afresh = score(_fresh(home.errors), *setting, stats=False)
+    monkeypatch.setattr(scoring, "sequence_grid", lambda *a, **k: pytest.fail("scored again"))
+    rows = score_rows(home.errors, *setting, stats=False)
+    assert [list(r) for r in rows] == [list(r) for r in afresh_rows] and not set(STAT_COLUMNS) & set(rows[0])
+    pd.testing.assert_frame_equal(score(home.errors, *setting, stats=False), afresh, check_exact=True)
+
+
 def test_a_sequence_keeps_the_latest_settings_only_and_each_is_the_fresh_score(home):
-    f = home.errors[0]
+    f = _fresh(home.errors)[0]
     first = score([f], 0.3, 10.0)
     for eps in np.linspace(0.05, 1.0, 3 * KEPT_SETTINGS):
         score([f], float(eps), 10.0)

@@ -321,6 +321,7 @@ def score_rows(
 
 #: Settings whose scores a sequence keeps (:func:`sequence_scores`), the latest ones.
 KEPT_SETTINGS = 4
+_STATS = frozenset(STAT_COLUMNS)
 
 
 def sequence_scores(
@@ -328,12 +329,17 @@ def sequence_scores(
 ) -> dict[str, Any]:
     """Every metric of one sequence at one validated setting (:func:`sequence_grid` on a one-point
     grid, as Python numbers; ``rpe``: delta, unit, pairs, all pairs, tolerance), kept on the
-    sequence for the latest :data:`KEPT_SETTINGS` settings, as its RPE pairs are. An evaluation's
+    sequence for the latest :data:`KEPT_SETTINGS` settings, as its RPE pairs are (scores without
+    the statistics are those with them, less the statistics). An evaluation's
     workers score its spec's setting where they computed the errors, so a table at that setting
     (``lorisnb evaluate``'s, a report's) is read, not scored again, in the process that collects
     the files. The errors are results: a changed copy (``dataclasses.replace``) keeps none of it."""
     key = (float(eps), float(phi), float(delta), float(tau), *rpe, bool(stats))
     kept = e._scores.get(key)
+    if kept is None and not stats:  # the scores with the statistics hold those without, to the last bit (score)
+        full = e._scores.get((*key[:-1], True))
+        if full is not None:
+            return {k: v for k, v in full.items() if k not in _STATS}
     if kept is None:
         grid = sequence_grid(
             e, [eps], [phi], [delta], [tau], rpe_delta=rpe[0], rpe_unit=rpe[1], with_stats=stats, rpe_pairs=rpe[2],
