@@ -66,6 +66,38 @@ def with_trials(table: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
+def trial_spread(table: pd.DataFrame, by: Sequence[str] = ("algorithm",)) -> pd.DataFrame:
+    """What varies between trials, per group of ``by`` (columns of the table) with two or more
+    trials of a sequence: the median over its sequences of the standard deviation between trials
+    of CR (``cr_spread``) and of the log of ATE RMSE (``ate_spread``, about a relative spread), and
+    ``copies``: both below a quarter of what real reruns show
+    (:data:`~lorisnb.core.stats.tolerances.RERUN_SPREAD`). Such trials are copies of one run
+    (byte-identical, or near-identical), not reruns: one run's evidence, however many there are.
+    ``compare`` claims no significance for them, and ``diff``'s verdict counts them as one run."""
+    from lorisnb.core.stats.tolerances import RERUN_SPREAD
+
+    t = with_trials(table)
+    keys = ["suite", "algorithm", "scene", "seq"]
+    cols = ["cr_spread", "ate_spread", "copies"]
+    if t.empty:
+        return pd.DataFrame(columns=[*by, *cols])
+    cr = pd.to_numeric(t["cr"], errors="coerce") if "cr" in t else pd.Series(np.nan, t.index)
+    ate = pd.to_numeric(t["ate_rmse"], errors="coerce") if "ate_rmse" in t else pd.Series(np.nan, t.index)
+    per = pd.DataFrame({"cr": cr, "ate": np.log(ate.where(ate > 0)), "trial": t["trial"]}).groupby(
+        [t[k] for k in keys], sort=False, dropna=False
+    )
+    seqs = pd.DataFrame({"n": per["trial"].nunique(), "cr": per["cr"].std(), "ate": per["ate"].std()}).reset_index()
+    rows = []
+    for name, g in seqs.groupby(list(by), sort=True, dropna=False):
+        if g["n"].max() < 2:
+            continue
+        cr_s, ate_s = float(g["cr"].median()), float(g["ate"].median())
+        rows.append(dict(zip(by, name if isinstance(name, tuple) else (name,), strict=True), cr_spread=cr_s,
+                         ate_spread=ate_s, copies=bool(cr_s < RERUN_SPREAD["rate"] / 4
+                                                       and ate_s < RERUN_SPREAD["log"] / 4)))  # fmt: skip
+    return pd.DataFrame(rows, columns=[*by, *cols])
+
+
 def trial_summary(
     table: pd.DataFrame, metrics: Sequence[str] = ("cr", "cr_t", "cs_r", "c_ate_rmse"), level: str = "scene"
 ) -> pd.DataFrame:

@@ -34,10 +34,20 @@ trials of the diff) is at most ``alpha`` (so ``d > tol``); an improvement likewi
 direction (a separate family). An algorithm with both is a
 **trade-off** (:func:`verdict`).
 
+**Copies of one run are one run.** Trials of an algorithm whose CR and ATE vary between them (median
+over its sequences) by less than a quarter of what real reruns show (:func:`trial_copies`, the
+pseudo-replicates of ``compare``) are counted as one run, their mean; a trial that repeats every
+value of another trial of the sequence (or of the scene) counts once. Three copies a side are thus
+judged as a single run per side, no significance claimed; ``decided_by`` says so.
+
 **Coverage and failures** (no test needed; always a regression): a sequence the base has and the
-candidate lacks (``missing``), scores with nothing matched (``failed``), or lacks a trial the base
-has (``missing trial``: the trial counts as a failed run in every value, and is named). A
-candidate's new sequence is listed, not judged.
+candidate lacks (``missing``), scores with nothing matched (``failed``; unless its base matched
+fewer than :data:`MIN_MATCHED` poses, none of them correct: no tracking to lose, too little to
+judge), or holds fewer trials than the candidate's other sequences or than the base
+(``missing trial``: the trial counts as a failed run in every value, and is named). Trial numbers
+are labels, not pairings: the candidate's trials 4 to 6 against the base's 1 to 3 lack nothing, and
+trials the candidate holds beyond the base's are no failed runs of the base. A candidate's new
+sequence is listed, not judged.
 
 **Too little to judge** (``unjudged``, never a regression): a sequence whose base matched fewer
 than :data:`MIN_MATCHED` poses, or whose matched positions hold the alignment's rotation by a
@@ -54,7 +64,7 @@ is 0 when it is not (Eq. 4 as the official tool computes it), a yes/no outcome o
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,7 +73,7 @@ from scipy import special, stats
 
 from lorisnb.core.lifelong.coverage import FAILED_RUN, complete, expected_from
 from lorisnb.core.spec import validate
-from lorisnb.core.stats.inference import WEIGHTS, holm, scene_values, with_trials
+from lorisnb.core.stats.inference import WEIGHTS, holm, scene_values, trial_spread, with_trials
 from lorisnb.core.stats.tolerances import DEFAULT_TOLERANCES, MIN_LEVER, MIN_MATCHED, RERUN_SPREAD, SINGLE_RUN_BAND
 from lorisnb.errors import ValidationError
 
@@ -160,6 +170,7 @@ class _Comparison:
     sign: int
     tol: float
     floor: float
+    note: str = ""
 
     @property
     def d(self) -> float:
@@ -286,9 +297,12 @@ class _Comparisons:
         """A comparison decided by coverage alone (a sequence or trial missing, failed or new)."""
         self.rows[level].append(dict(label, metric=metric, base=base, cand=cand, status=status, decided_by=why))
 
-    def add(self, level: str, label: dict, metric: str, xb: np.ndarray, xc: np.ndarray, unjudged: str | None) -> None:
+    def add(self, level: str, label: dict, metric: str, xb: np.ndarray, xc: np.ndarray, unjudged: str | None,
+            independent: tuple[np.ndarray, np.ndarray] | None = None, note: str = "") -> None:  # fmt: skip
         """One metric of one sequence or scene: the values of its trials on each side (NaN where
-        undefined); tested later, with its family, unless decided here."""
+        undefined); tested later, with its family, unless decided here. ``independent``: the values
+        that are independent runs (copies of one run counted once, :func:`_Side.independent`), which
+        the test uses; ``note`` says why they are fewer."""
         tol = self.tols[metric]
         fb, fc = xb[np.isfinite(xb)], xc[np.isfinite(xc)]
         vb = float(fb.mean()) if fb.size else np.nan
@@ -308,13 +322,15 @@ class _Comparisons:
             row.update(status="unjudged", decided_by="too little to judge: undefined in the candidate (no pose to "
                        "take it over); its rates are judged")  # fmt: skip
             return
+        if independent is not None:
+            fb, fc = (x[np.isfinite(x)] for x in independent)
         gb, gc = _transform(metric, fb), _transform(metric, fc)
         gb, gc = gb[np.isfinite(gb)], gc[np.isfinite(gc)]
         if not gb.size or not gc.size:
             row.update(status="unjudged", decided_by="too little to judge: an error of 0 on one side")
             return
         floor = RERUN_SPREAD["log" if metric in LOG_METRICS else "rate"]
-        self.waiting.append(_Comparison(row, gb, gc, sign, tol.scaled(metric, vb), floor))
+        self.waiting.append(_Comparison(row, gb, gc, sign, tol.scaled(metric, vb), floor, note))
 
     def judge(self, alpha: float) -> tuple[pd.DataFrame, pd.DataFrame]:
         """Decide every waiting comparison as one family (see the module docstring) and return
@@ -336,6 +352,9 @@ class _Comparisons:
                 c.row.update(status="regression" if up else ("improvement" if down else "ok"),
                              decided_by=f"single run per side: no significance claimed; judged by the tolerance "
                              f"widened by the rerun band ({shown}: the largest change noise-only single runs show)")  # fmt: skip
+        for c in self.waiting:
+            if c.note:
+                c.row["decided_by"] += f"; {c.note}"
         seqs = pd.DataFrame(self.rows["sequence"], columns=SEQUENCE_COLUMNS)
         scenes = pd.DataFrame(self.rows["scene"], columns=SCENE_COLUMNS)
         parts = []
@@ -357,18 +376,21 @@ class _Comparisons:
 
 
 def _trial_sets(b: pd.DataFrame, c: pd.DataFrame) -> tuple[dict[tuple, list], dict[tuple, list]]:
-    """The trials expected of every sequence of each (suite, algorithm), for BASE and for CAND: the
-    trials of both runs, so that one a run lacks is a failed run of that sequence; but where one
-    run's trials are unnumbered (trial 0: a single run, as against a baseline of numbered trials),
-    each run is expected to have only its own (no number of one run means anything in the other)."""
+    """The trials expected of every sequence of each (suite, algorithm), for BASE and for CAND. A run
+    is expected to hold, for every sequence, each trial it holds for any of them (one a sequence
+    lacks is a failed run of it); CAND is also expected to hold as many trials as BASE (where it
+    holds fewer, the base's trial numbers it lacks are failed runs). Trial numbers are labels, not
+    pairings: CAND's trials 4 to 6 against BASE's 1 to 3 lack nothing, and trials CAND holds beyond
+    BASE's are no failed runs of BASE. Where one run's trials are unnumbered (trial 0: a single run,
+    as against a baseline of numbered trials), each run is expected to hold only its own."""
     tb = {k: set(g["trial"]) for k, g in b.groupby(["suite", "algorithm"], sort=False, observed=True)}
     tc = {k: set(g["trial"]) for k, g in c.groupby(["suite", "algorithm"], sort=False, observed=True)}
     eb, ec = {}, {}
     for k in dict.fromkeys([*tb, *tc]):
         x, y = tb.get(k, set()), tc.get(k, set())
-        shared = x == {0} or y == {0} or not x or not y
-        eb[k] = sorted(x if shared else x | y)
-        ec[k] = sorted(y if shared else x | y)
+        short = 0 if x == {0} or y == {0} or not x or not y else len(x) - len(y)
+        eb[k] = sorted(x)
+        ec[k] = sorted(y | set(sorted(x - y)[-short:] if short > 0 else []))
     return eb, ec
 
 
@@ -423,13 +445,32 @@ def _unjudged(metric: str, matched: tuple[float, float], correct: tuple[float, f
 class _Side:
     """One run's per-sequence table as arrays: the rows of each sequence, and its columns."""
 
-    def __init__(self, table: pd.DataFrame) -> None:
-        self.table = table
+    def __init__(self, table: pd.DataFrame, name: str, one_run: Mapping[tuple, str] | None = None) -> None:
+        self.table, self.name = table, name
         self.rows = {k: v for k, v in table.groupby(KEYS, sort=False, observed=True, dropna=False).indices.items()}
         self.cols = {c: pd.to_numeric(table[c], errors="coerce").to_numpy(float)
                      for c in (*METRICS, "matched", "c_matched", "first_correct", "rotation_lever")
                      if c in table.columns}  # fmt: skip
         self.trials = table["trial"].to_numpy()
+        #: (suite, algorithm) whose trials are near-identical copies of one run, with what varies
+        self.one_run = dict(one_run or {})
+        # a trial with output whose every value repeats another trial's of the sequence: a copy of it
+        judged = pd.DataFrame({c: self.cols[c] for c in (*METRICS, "matched") if c in self.cols})
+        keys = pd.DataFrame({k: table[k].to_numpy() for k in KEYS})
+        out = self.cols.get("matched", np.ones(len(table)))
+        self.copy = (pd.concat([keys, judged], axis=1).duplicated().to_numpy() & (out > 0)) if len(table) else None
+
+    def independent(self, key: tuple, rows: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, str]:
+        """The values of a sequence's trials that are independent runs, and why they are fewer:
+        copies of a trial (every value the same) counted once; all of them as one run (their mean)
+        where the algorithm's trials are near-identical copies (:func:`trial_copies`)."""
+        if key[:2] in self.one_run:
+            f = values[np.isfinite(values)]
+            return np.array([f.mean() if f.size else np.nan]), f"{self.name}'s trials {self.one_run[key[:2]]}"
+        if self.copy is None or not self.copy[rows].any():
+            return values, ""
+        n = int(self.copy[rows].sum())
+        return values[~self.copy[rows]], f"{n} of {self.name}'s trials repeat another's every value: counted once"
 
     def mean(self, key: tuple, column: str) -> float:
         v = self.cols.get(column)
@@ -470,11 +511,12 @@ def changes(
     tols = parse_tolerances() if tolerances is None else dict(tolerances)
     alpha = validate.probability("alpha", alpha)
     b, c = with_trials(base), with_trials(cand)
+    one_b, one_c = trial_copies(b), trial_copies(c)
     trials_b, trials_c = _trial_sets(b, c)
     b, lack_b = _padded(b, trials_b)
     c, lack_c = _padded(c, trials_c)
     comp = _Comparisons(tols)
-    sb, sc = _Side(b), _Side(c)
+    sb, sc = _Side(b, "BASE", one_b), _Side(c, "CAND", one_c)
     for key in list(sb.rows) + [k for k in sc.rows if k not in sb.rows]:
         label = dict(zip(KEYS, key, strict=True))
         rb, rc = sb.rows.get(key), sc.rows.get(key)
@@ -492,16 +534,25 @@ def changes(
                           f"coverage: trial {names} missing in the candidate (the base has it): a failed run")  # fmt: skip
         matched = (sb.mean(key, "matched"), sc.mean(key, "matched"))
         if "matched" in sc.cols and not (sc.cols["matched"][rc] > 0).any() and (sb.cols["matched"][rb] > 0).any():
-            comp.coverage("sequence", label, "sequence", "matched", "nothing matched", "failed",
-                          "coverage: no pose of the candidate matched the ground truth")  # fmt: skip
+            if matched[0] >= MIN_MATCHED or not ("cr" in sb.cols and (sb.cols["cr"][rb] <= 0).all()):
+                comp.coverage("sequence", label, "sequence", "matched", "nothing matched", "failed",
+                              "coverage: no pose of the candidate matched the ground truth")  # fmt: skip
+            else:  # a handful of poses, none of them correct: nothing the candidate could lose
+                comp.coverage("sequence", label, "sequence", f"matched {matched[0]:.0f}", "nothing matched",
+                              "unjudged", f"too little to judge: the base matched {matched[0]:.0f} poses (fewer than "
+                              f"{MIN_MATCHED}), none of them correct (CR 0): no tracking for the candidate to lose")  # fmt: skip
         correct = (sb.mean(key, "c_matched"), sc.mean(key, "c_matched"))
         lever = (sb.least(key, "rotation_lever"), sc.least(key, "rotation_lever"))
         for metric in METRICS:
             if metric in sb.cols and metric in sc.cols:
+                (ib, nb), (ic, nc) = (
+                    side.independent(key, r, side.cols[metric][r]) for side, r in ((sb, rb), (sc, rc))
+                )
                 comp.add("sequence", label, metric, sb.cols[metric][rb], sc.cols[metric][rc],
-                         _unjudged(metric, matched, correct, _flips(sb, sc, key, rb, rc), lever))  # fmt: skip
+                         _unjudged(metric, matched, correct, _flips(sb, sc, key, rb, rc), lever), (ib, ic),
+                         "; ".join(x for x in (nb, nc) if x))  # fmt: skip
     fragile = {k[:3] for k in sb.rows if k in sc.rows and _flips(sb, sc, k, sb.rows[k], sc.rows[k])}
-    _scenes(comp, b, c, expected, fragile)
+    _scenes(comp, b, c, expected, fragile, (one_b, one_c))
     _scene_coverage(comp)
     return comp.judge(alpha)
 
@@ -521,9 +572,10 @@ def _scene_coverage(comp: _Comparisons) -> None:
 
 
 def _scenes(comp: _Comparisons, b: pd.DataFrame, c: pd.DataFrame, expected: pd.DataFrame | None,
-            fragile: set[tuple] | None = None) -> None:  # fmt: skip
+            fragile: set[tuple] | None = None, one_run: tuple[Mapping, Mapping] = ({}, {})) -> None:  # fmt: skip
     """The scene values of each trial on both sides (over the base's sequences; a sequence or trial
-    a run lacks is a failed run), added to ``comp``."""
+    a run lacks is a failed run), added to ``comp``; copies of one run counted once
+    (:func:`_independent_trials`)."""
     expected = expected_from(b, *([] if expected is None else [expected]))
     scenes = list(dict.fromkeys(zip(b["suite"], b["algorithm"], b["scene"], strict=True)))
     kept = set(scenes)
@@ -548,10 +600,43 @@ def _scenes(comp: _Comparisons, b: pd.DataFrame, c: pd.DataFrame, expected: pd.D
         label = dict(suite=key[0], algorithm=key[1], scene=key[2], seq=None)
         matched = tuple(float(n["matched"].get(key, 0.0)) for n in counts)
         correct = tuple(float(n["c_matched"].get(key, 0.0)) for n in counts)
+        ib, nb = _independent_trials(gb[key], metrics, one_run[0].get(key[:2]), "BASE")
+        ic, nc = _independent_trials(gc[key], metrics, one_run[1].get(key[:2]), "CAND") if key in gc else ({}, "")
+        note = "; ".join(x for x in (nb, nc) if x)
         for metric in metrics:
             xc = gc[key][metric].to_numpy(float) if key in gc else np.full(1, np.nan)
             why = _unjudged(metric, (matched[0], matched[1]), (correct[0], correct[1]), key in (fragile or set()))
-            comp.add("scene", label, metric, gb[key][metric].to_numpy(float), xc, why)
+            comp.add("scene", label, metric, gb[key][metric].to_numpy(float), xc, why,
+                     (ib[metric], ic.get(metric, xc)), note)  # fmt: skip
+
+
+def _independent_trials(values: pd.DataFrame, metrics: Sequence[str], one_run: str | None, name: str
+                        ) -> tuple[dict[str, np.ndarray], str]:  # fmt: skip
+    """A scene's values of each trial (one row per trial) that are independent runs, per metric, and
+    why they are fewer: a trial whose scene values all repeat another's (and are not all 0: a
+    scene without output) is a copy of it, counted once; where the algorithm's trials are
+    near-identical copies (``one_run`` says what varies), all of them are one run (their mean)."""
+    x = values[list(metrics)].apply(pd.to_numeric, errors="coerce")
+    if one_run is not None:
+        return {m: np.array([np.nanmean(x[m]) if x[m].notna().any() else np.nan]) for m in metrics}, (
+            f"{name}'s trials {one_run}"
+        )
+    copy = x.duplicated().to_numpy() & x.fillna(0).ne(0).any(axis=1).to_numpy()
+    note = f"{int(copy.sum())} of {name}'s trials repeat another's every value: counted once" if copy.any() else ""
+    return {m: x[m].to_numpy(float)[~copy] for m in metrics}, note
+
+
+def trial_copies(table: pd.DataFrame) -> dict[tuple, str]:
+    """The (suite, algorithm) of a per-sequence table whose trials are near-identical copies of one
+    run, not reruns (:func:`lorisnb.core.stats.inference.trial_spread`: CR and ATE vary between its
+    trials by less than a quarter of what real reruns show), each with what varies, in words. The
+    verdict counts such trials as one run: copies are no independent evidence, so no significance
+    can be claimed from them."""
+    spread = trial_spread(table, by=("suite", "algorithm"))
+    return {(r.suite, r.algorithm): (f"are near-identical copies of one run (CR varies by {r.cr_spread:.2g}, ATE "
+                                     f"by {100 * r.ate_spread:.2g} % between them; real reruns {RERUN_SPREAD['rate']:g} "
+                                     f"and {100 * RERUN_SPREAD['log']:.0f} %): counted as one run")
+            for r in spread[spread["copies"].astype(bool)].itertuples()}  # fmt: skip
 
 
 def _counts(table: pd.DataFrame, by: list[str]) -> pd.DataFrame:

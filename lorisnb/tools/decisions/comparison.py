@@ -92,21 +92,10 @@ def trial_spread(table: pd.DataFrame) -> tuple[pd.DataFrame, set[str]]:
     """What varies between trials: per algorithm with trials, the median over its sequences of the
     standard deviation of CR between trials and of the log of ATE RMSE (about a relative spread),
     and the algorithms whose trials are **near-identical copies**: both spreads below a quarter of
-    real rerun spreads (:data:`~lorisnb.core.stats.tolerances.RERUN_SPREAD`)."""
-    t = stats.with_trials(table)
-    rows = []
-    for alg, g in t.groupby("algorithm", sort=True):
-        per = g.groupby(["suite", "scene", "seq"])
-        if per["trial"].nunique().max() < 2:
-            continue
-        cr = float(per["cr"].std().median()) if "cr" in g else np.nan
-        ate = np.log(g["ate_rmse"].where(g["ate_rmse"] > 0)) if "ate_rmse" in g else pd.Series(np.nan, g.index)
-        ate_s = float(ate.groupby([g["suite"], g["scene"], g["seq"]]).std().median())
-        rows.append(dict(algorithm=alg, cr_spread=cr, ate_spread=ate_s))
-    spread = pd.DataFrame(rows, columns=["algorithm", "cr_spread", "ate_spread"])
-    copies = {r.algorithm for r in spread.itertuples()
-              if r.cr_spread < RERUN_SPREAD["rate"] / 4 and r.ate_spread < RERUN_SPREAD["log"] / 4}  # fmt: skip
-    return spread, copies
+    real rerun spreads (:func:`lorisnb.core.stats.inference.trial_spread`, as ``diff``'s verdict)."""
+    spread = stats.trial_spread(table)
+    copies = set(spread.loc[spread["copies"].astype(bool), "algorithm"])
+    return spread.drop(columns=["copies"]).reset_index(drop=True), copies
 
 
 def decide(table: pd.DataFrame, full: pd.DataFrame, metric: str, alpha: float, seed: int, intervals: bool = True

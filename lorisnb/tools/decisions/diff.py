@@ -15,11 +15,11 @@ import pandas as pd
 
 from lorisnb.core.spec import validate
 from lorisnb.core.stats.inference import with_trials
-from lorisnb.core.stats.regression import Tolerance, changes, parse_tolerances, verdict
+from lorisnb.core.stats.regression import METRICS, Tolerance, changes, parse_tolerances, verdict
 from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_text
 from lorisnb.tools.decisions.comparison import check_table_duplicates
-from lorisnb.tools.decisions.runs import setting_differences
+from lorisnb.tools.decisions.runs import COUNTS, NUMBERS, out_of_domain, setting_differences
 from lorisnb.tools.evaluation.status import OK, UNSCORED
 
 if TYPE_CHECKING:
@@ -54,6 +54,7 @@ def keyed(table: pd.DataFrame, name: str | None = None) -> pd.DataFrame:
 def _keyed(table: pd.DataFrame) -> pd.DataFrame:
     t = with_trials(table)
     t["suite"] = t["suite"].fillna("").astype(str)
+    _check_numbers(t)
     if "table" not in t.columns and "eps_value" not in t.columns:
         check_table_duplicates(t)  # two files for one sequence: named, with what to do
     dup = t.duplicated(["suite", "algorithm", "scene", "seq", "trial"], keep=False)
@@ -65,6 +66,35 @@ def _keyed(table: pd.DataFrame) -> pd.DataFrame:
             "one setting, with one row per sequence and trial"
         )
     return t
+
+
+def _check_numbers(t: pd.DataFrame) -> None:
+    """The numbers the verdict reads, as a table read from a file is checked
+    (:func:`lorisnb.tools.decisions.runs.read_table`): a number where a number is expected, and every
+    judged metric in the domain an evaluation writes (a rate in [0, 1], never NaN; an RMSE finite and
+    >= 0, NaN only without a pose to take it over); else an error naming the row, the column and the
+    value (a table edited by hand, in Python as on the command line: NaN in CR would otherwise be
+    "too little to judge", never a regression). The columns are made numeric in place."""
+
+    def where(i: int) -> str:
+        r = t.iloc[i]
+        return f"row {i} ({r.get('algorithm')} {r.get('scene')}-{r.get('seq')}, trial {r.get('trial')})"
+
+    for c in (c for c in dict.fromkeys([*NUMBERS, *METRICS, *COUNTS]) if c in t.columns):
+        v = pd.to_numeric(t[c], errors="coerce")
+        text = t[c].astype(str).str.strip().str.lower()
+        bad = (v.isna() & t[c].notna() & ~text.isin(["nan", "", "none"])).to_numpy()
+        if bad.any():
+            i = int(bad.nonzero()[0][0])
+            raise ValidationError(f"{where(i)}: column {c}: {t[c].iloc[i]!r} is not a number; expected a "
+                                  "per-sequence table as lorisnb evaluate writes it")  # fmt: skip
+        t[c] = v.astype(float)
+    for c in (c for c in METRICS if c in t.columns):
+        bad, expected = out_of_domain(t, c)
+        if bad.any():
+            i = int(bad.nonzero()[0][0])
+            raise ValidationError(f"{where(i)}: column {c}: {t[c].iloc[i]:g} is not {expected}; expected a "
+                                  "per-sequence table as lorisnb evaluate writes it")  # fmt: skip
 
 
 def diff_tables(

@@ -1,0 +1,167 @@
+"""What counts as evidence in ``lorisnb diff``'s verdict (issue 44, checked on nights it never saw):
+copies of one run are one run, trial numbers are labels (not pairings between the runs), a base
+that matched a handful of poses, none correct, has no tracking to lose, and a table edited by hand
+is refused in Python as on the command line. Real data: the bundled icra20 results, evaluated, and
+trials made from them with a rerun-sized spread."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import lorisnb as ln
+from lorisnb.cli import main
+from lorisnb.core.stats.regression import changes
+from lorisnb.tools.decisions.diff import diff_tables
+
+ALG = "orbslam2_rgbd"
+
+
+@pytest.fixture(scope="module")
+def table(icra20):
+    """One real run: the odom and orbslam2_rgbd per-seq results at the paper's thresholds."""
+    return ln.evaluate([icra20 / "per-seq" / "odom", icra20 / "per-seq" / ALG], progress=False).sequences(
+        eps="paper", phi=30
+    )
+
+
+def _reruns(table: pd.DataFrame, trials, seed: int) -> pd.DataFrame:
+    """Trials of the run with the spread of real reruns (CR +-0.017, ATE +-19 %), seeded."""
+    rng = np.random.default_rng(seed)
+    parts = []
+    for k in trials:
+        t = table.assign(trial=k)
+        t["cr"] = np.clip(t["cr"] + rng.normal(0, 0.017, len(t)), 0, 1)
+        t["ate_rmse"] = t["ate_rmse"] * np.exp(rng.normal(0, 0.19, len(t)))
+        parts.append(t)
+    return pd.concat(parts, ignore_index=True)
+
+
+def _copies(table: pd.DataFrame, n: int = 3) -> pd.DataFrame:
+    return pd.concat([table.assign(trial=k) for k in range(1, n + 1)], ignore_index=True)
+
+
+def _target(table: pd.DataFrame) -> tuple[str, int]:
+    """The longest orbslam2_rgbd sequence tracked correctly most of the time."""
+    g = table[(table["algorithm"] == ALG) & (table["cr"] > 0.6)].sort_values("gt_duration", ascending=False)
+    return str(g["scene"].iloc[0]), int(g["seq"].iloc[0])
+
+
+def _lower_cr(t: pd.DataFrame, where: tuple[str, int], by: float) -> pd.DataFrame:
+    t = t.copy()
+    here = (t["algorithm"] == ALG) & (t["scene"] == where[0]) & (t["seq"] == where[1])
+    t.loc[here, "cr"] = t.loc[here, "cr"] - by
+    return t
+
+
+def _row(seqs: pd.DataFrame, where: tuple[str, int], metric: str) -> pd.Series:
+    r = seqs[(seqs["algorithm"] == ALG) & (seqs["scene"] == where[0]) & (seqs["seq"] == where[1])]
+    return r[r["metric"] == metric].iloc[0]
+
+
+def test_copies_of_one_run_are_one_run_not_significance(table):
+    """One run copied into three trials a side (byte-identical, or with a trace of noise) is one run's
+    evidence: a CR drop of 0.1 on one sequence, which a single run per side cannot tell from rerun
+    noise, is judged by the single-run rule and named as copies, not called significant by a t-test
+    on copies (it was, at p ~ 1e-30); real reruns with the same drop on every trial still regress."""
+    where = _target(table)
+    cand = _lower_cr(table, where, 0.1)
+    single = _row(changes(table, cand)[0], where, "cr")
+    assert single["status"] == "ok" and "single run per side" in single["decided_by"]
+    seqs, scenes = changes(_copies(table), _copies(cand))
+    row = _row(seqs, where, "cr")
+    assert row["status"] == "ok", row["decided_by"]
+    assert "single run per side" in row["decided_by"] and "near-identical copies of one run" in row["decided_by"]
+    assert "BASE's trials are" in row["decided_by"] and "CAND's trials are" in row["decided_by"]
+    assert not set(seqs["status"]) & {"regression", "missing", "failed"}
+    assert not set(scenes["status"]) & {"regression", "missing"}
+    rng = np.random.default_rng(0)  # near-identical: CR +-1e-4, ATE +-0.5 %
+    near = [_copies(t).assign(cr=lambda x: np.clip(x["cr"] + rng.normal(0, 1e-4, len(x)), 0, 1),
+                              ate_rmse=lambda x: x["ate_rmse"] * np.exp(rng.normal(0, 0.005, len(x))))
+            for t in (table, cand)]  # fmt: skip
+    row = _row(changes(*near)[0], where, "cr")
+    assert row["status"] == "ok" and "near-identical copies of one run" in row["decided_by"]
+    base, reruns = _reruns(table, range(1, 6), 1), _reruns(table, range(1, 6), 2)
+    row = _row(changes(base, _lower_cr(reruns, where, 0.3))[0], where, "cr")
+    assert row["status"] == "regression" and "copies" not in row["decided_by"]
+
+
+def test_a_trial_that_repeats_another_counts_once(table):
+    """Four reruns and a fifth trial that is a byte-identical copy of the fourth: 5 vs 4 independent
+    runs, and the verdict says so at the sequence and the scene level."""
+    base = _reruns(table, range(1, 6), 3)
+    cand = _reruns(table, range(1, 5), 4)
+    cand = pd.concat([cand, cand[cand["trial"] == 4].assign(trial=5)], ignore_index=True)
+    seqs, scenes = changes(base, cand)
+    judged = seqs[(seqs["status"] == "ok") & seqs["decided_by"].str.startswith("t-test")]
+    assert len(judged) and judged["decided_by"].str.contains("5 vs 4 trials").all()
+    assert judged["decided_by"].str.contains("1 of CAND's trials repeat another's every value: counted once").all()
+    scene = scenes[scenes["decided_by"].str.startswith("t-test")]
+    assert len(scene) and scene["decided_by"].str.contains("5 vs 4 trials").all()
+    assert not set(seqs["status"]) & {"regression", "missing", "failed"}
+
+
+def test_trial_numbers_are_labels_not_pairings(table):
+    """Three trials a side numbered 1-3 and 4-6 (or 0-2 and 1-3) lack nothing (every sequence was
+    missing trials 1, 2 and 3); a candidate with more trials than the base is not compared with a
+    base padded with failed runs (which hid a CR drop of 0.4); fewer trials than the base are still
+    missing trials."""
+    base = _reruns(table, (1, 2, 3), 5)
+    for numbers in ((4, 5, 6), (1, 2, 3)):
+        cand = _reruns(table, numbers, 6)
+        d = diff_tables(base, cand)
+        assert not d.regressed and d.verdict["counts"]["missing"] == 0, numbers
+    zero = _reruns(table, (0, 1, 2), 7)
+    assert not diff_tables(zero, _reruns(table, (1, 2, 3), 8)).regressed
+    where = _target(table)
+    more = _lower_cr(_reruns(table, range(1, 6), 9), where, 0.4)
+    seqs, _ = changes(base, more)
+    row = _row(seqs, where, "cr")
+    assert row["status"] == "regression" and row["base"] > 0.6, (row["base"], row["decided_by"])
+    assert not (seqs["metric"] == "trial").any()
+    fewer = changes(_reruns(table, range(1, 6), 10), _reruns(table, (1, 2, 3), 11))[0]
+    lost = fewer[fewer["metric"] == "trial"]
+    assert len(lost) == table.shape[0] and (lost["cand"] == "missing trial 4, 5").all()
+
+
+def test_a_base_with_a_handful_of_poses_none_correct_has_nothing_to_lose(table):
+    """A sequence whose base matched 30 poses, none correct (CR 0), and whose candidate matched
+    none is too little to judge, not a failed sequence; one whose base was correct for a while
+    still fails."""
+    where = _target(table)
+    here = (table["algorithm"] == ALG) & (table["scene"] == where[0]) & (table["seq"] == where[1])
+    nothing = table.copy()
+    cols = ["matched", "c_matched", "correct_time", "track_time", "cr", "cr_t", "cs_r", "rpe_pairs", "c_rpe_pairs"]
+    nothing.loc[here, cols] = 0
+    for c in ("ate_rmse", "aoe_rmse", "c_ate_rmse", "c_aoe_rmse", "rpe_trans_rmse", "rpe_rot_rmse"):
+        nothing.loc[here, c] = np.nan
+    handful = table.copy()
+    handful.loc[here, ["matched", "c_matched", "correct_time", "cr", "cs_r"]] = [30, 0, 0.0, 0.0, 0.0]
+    d = diff_tables(handful, nothing)
+    row = _row(d.sequences, where, "sequence")
+    assert row["status"] == "unjudged" and "none of them correct" in row["decided_by"], row["decided_by"]
+    assert not d.regressed
+    correct = handful.copy()
+    correct.loc[here, ["c_matched", "cr"]] = [10, 0.05]
+    assert _row(diff_tables(correct, nothing).sequences, where, "sequence")["status"] == "failed"
+    assert _row(diff_tables(table, nothing).sequences, where, "sequence")["status"] == "failed"
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "said"),
+    [("cr", np.nan, "column cr: nan is not a rate"), ("cr", "abc", "column cr: 'abc' is not a number"),
+     ("ate_rmse", np.inf, "column ate_rmse: inf is not an RMSE"), ("c_ate_rmse", -1, "column c_ate_rmse: -1 is not an RMSE")],
+)  # fmt: skip
+def test_a_table_edited_by_hand_is_refused_in_python_as_on_the_command_line(table, tmp_path, capsys, column, value,
+                                                                             said):  # fmt: skip
+    """NaN in CR was "too little to judge" in Python (never a regression) and text a raw ValueError;
+    both runs' numbers are now checked as ``lorisnb diff`` checks a table it reads, naming the row."""
+    cand = table.astype(object).copy()
+    cand.loc[cand.index[3], column] = value
+    with pytest.raises(ln.ValidationError, match=f"CAND: row 3 .*{said}"):
+        diff_tables(table, cand)
+    table.to_csv(tmp_path / "base.csv", index=False)
+    cand.to_csv(tmp_path / "cand.csv", index=False)
+    assert main(["diff", str(tmp_path / "base.csv"), str(tmp_path / "cand.csv"), "--no-progress"]) == 2
+    assert said.split(":")[0] in capsys.readouterr().err
