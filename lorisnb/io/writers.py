@@ -308,15 +308,20 @@ def replace_folder(built: str | os.PathLike[str], out: str | os.PathLike[str], m
     return out
 
 
-def remove_partial(tmp: Path, seconds: float = 10.0) -> None:
+def remove_partial(tmp: Path, seconds: float = 10.0, settle: float = 0.5) -> None:
     """Remove an unfinished output folder lorisnb made, again while a process being stopped (a
-    report's kernel) still writes in it, for up to ``seconds`` (a SIGTERM'd report once left its
-    ``.partial`` folder: rmtree met a file written after it listed the folder)."""
+    report's kernel) still writes in it, for up to ``seconds``: done once the folder has stayed
+    gone for ``settle`` seconds (a SIGTERM'd report once left its ``.partial`` folder: rmtree met
+    a file written after it listed the folder; and a writer not yet stopped made the folder again
+    right after it was gone, on a loaded machine). Only on a failed run's way out."""
     import time
 
     deadline = time.monotonic() + seconds
+    gone_since: float | None = None
     while True:
         shutil.rmtree(tmp, ignore_errors=True)
-        if not tmp.exists() or time.monotonic() > deadline:
+        now = time.monotonic()
+        gone_since = None if tmp.exists() else (now if gone_since is None else gone_since)
+        if (gone_since is not None and now - gone_since >= settle) or now > deadline:
             return
-        time.sleep(0.1)
+        time.sleep(0.05)

@@ -34,3 +34,25 @@ def test_a_partial_folder_goes_while_a_late_writer_still_writes(tmp_path):
     remove_partial(folder)
     writer.join()
     assert not folder.exists() and list(tmp_path.iterdir()) == [once]
+
+
+def test_a_writer_that_pauses_and_writes_again_does_not_leave_the_folder(tmp_path):
+    """A writer being stopped that is off the CPU for a moment (a loaded machine) and then writes
+    again (making its folder again): the folder is removed once it has stayed gone (CI failed once:
+    the folder was gone, removal stopped, and the writer made it again)."""
+    folder = tmp_path / ".run.partial-y"
+    (folder / "figures").mkdir(parents=True)
+    paused = threading.Event()
+
+    def pausing_writer() -> None:
+        paused.set()
+        time.sleep(0.2)  # off the CPU while the folder is removed
+        (folder / "figures").mkdir(parents=True, exist_ok=True)
+        (folder / "figures" / "late.png").write_bytes(b"x" * 100)
+
+    writer = threading.Thread(target=pausing_writer)
+    writer.start()
+    paused.wait()
+    remove_partial(folder)
+    writer.join()
+    assert not folder.exists() and list(tmp_path.iterdir()) == []
