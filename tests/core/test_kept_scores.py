@@ -45,33 +45,39 @@ def test_a_changed_copy_keeps_none_of_the_old_errors_results(home):
 
 
 def test_tables_at_the_spec_setting_are_those_scored_afresh_and_were_scored_with_the_errors(home, monkeypatch):
-    """The evaluation scored the spec's setting where it computed the errors: its table is read
-    (no scoring after), and equals the scores of copies that keep nothing, to the last bit."""
-    table = home.sequences()
+    """The evaluation scored the spec's setting without the statistics where it computed the
+    errors: that table (``lorisnb evaluate``'s printout) is read, and the one with every column
+    adds only the statistics; both equal the scores of copies that keep nothing, to the last bit,
+    columns in the same order."""
     spec = home.spec
-    afresh = score(_fresh(home.errors), spec.eps, spec.phi, spec.delta, spec.tau)
-    pd.testing.assert_frame_equal(table.drop(columns="spec"), afresh, check_exact=True)
+    setting = (spec.eps, spec.phi, spec.delta, spec.tau)
+    afresh_lean = score_rows(_fresh(home.errors), *setting, stats=False)
+    afresh = score(_fresh(home.errors), *setting)
+    afresh_rows = score_rows(_fresh(home.errors), *setting)
 
     def no_scoring(*args, **kwargs):
         raise AssertionError("scored again")
 
     monkeypatch.setattr(scoring, "sequence_grid", no_scoring)
-    pd.testing.assert_frame_equal(home.sequences(), table, check_exact=True)
+    lean = score_rows(home.errors, *setting, stats=False)
+    assert [list(r) for r in lean] == [list(r) for r in afresh_lean] and not set(STAT_COLUMNS) & set(lean[0])
+    assert pd.DataFrame(lean).equals(pd.DataFrame(afresh_lean))
+    table = home.sequences()  # the statistics computed alone, the rest read
+    pd.testing.assert_frame_equal(table.drop(columns="spec"), afresh, check_exact=True)
+    assert [list(r) for r in score_rows(home.errors, *setting)] == [list(r) for r in afresh_rows]
     with pytest.raises(AssertionError, match="scored again"):  # another setting is scored
         home.sequences(eps=0.123)
 
 
 def test_scores_without_statistics_are_read_from_those_with_them(home, monkeypatch):
-    """``lorisnb evaluate`` prints the table without the statistics: read from the scores the
-    evaluation kept (with them), the same values and columns in the same order as scored afresh."""
-    spec = home.spec
-    setting = (spec.eps, spec.phi, spec.delta, spec.tau)
-    afresh_rows = score_rows(_fresh(home.errors), *setting, stats=False)
+    """Scores with every column kept (a table computed first): those without the statistics are
+    read from them, the same values and columns in the same order as scored afresh."""
+    setting = (0.4, 15.0, 1.0, 60.0)
+    fresh = _fresh(home.errors)
     afresh = score(_fresh(home.errors), *setting, stats=False)
+    score(fresh, *setting)  # every column, kept
     monkeypatch.setattr(scoring, "sequence_grid", lambda *a, **k: pytest.fail("scored again"))
-    rows = score_rows(home.errors, *setting, stats=False)
-    assert [list(r) for r in rows] == [list(r) for r in afresh_rows] and not set(STAT_COLUMNS) & set(rows[0])
-    pd.testing.assert_frame_equal(score(home.errors, *setting, stats=False), afresh, check_exact=True)
+    pd.testing.assert_frame_equal(score(fresh, *setting, stats=False), afresh, check_exact=True)
 
 
 def test_a_sequence_keeps_the_latest_settings_only_and_each_is_the_fresh_score(home):

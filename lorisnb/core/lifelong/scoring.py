@@ -212,16 +212,7 @@ def sequence_grid(
     i, j, tr, rr = e.rpe(rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance)
     pairs_c = c[:, :, i] & c[:, :, j]  # (E, P, pairs): the pairs whose two poses are correct
     if with_stats:
-        named = {"ate": (e.ate, c), "aoe": (e.aoe, c), "rpe_trans": (tr, pairs_c), "rpe_rot": (rr, pairs_c)}
-        # the whole arrays' statistics side by side (a median each); the masked ones after, in order
-        whole = dict(
-            zip(named, each(*(partial(error_statistics, v) for v, _ in named.values()), rows=e.matched), strict=True)
-        )
-        for name, stats in whole.items():
-            out.update({f"{name}_{k}": bc(v) for k, v in stats.items() if k != "rmse"})
-        for name, (values, m) in named.items():
-            ms = masked_statistics(values, m, whole[name])
-            out.update({f"c_{name}_{k}": bc(v[:, :, None, None]) for k, v in ms.items()})
+        out.update(_statistics(e, c, tr, rr, pairs_c, bc))
     if len(i) == 0:
         out.update(dict.fromkeys(RPE_METRICS[:4], nan), rpe_pairs=zero, c_rpe_pairs=zero)
         return out
@@ -236,6 +227,26 @@ def sequence_grid(
         c_rpe_trans_rmse=bc(ctr[:, :, None, None]), c_rpe_rot_rmse=bc(crr[:, :, None, None]),
         rpe_pairs=bc(float(len(i))), c_rpe_pairs=bc(nb[:, :, None, None]),
     )  # fmt: skip
+    return out
+
+
+def _statistics(
+    e: SequenceErrors, c: np.ndarray, tr: np.ndarray, rr: np.ndarray, pairs_c: np.ndarray, bc: Any
+) -> dict[str, np.ndarray]:
+    """:data:`~lorisnb.core.pipeline.model.STAT_COLUMNS` of a sequence with matched poses, given
+    the correctness of its poses ``c`` (E, P, M), its RPE errors and the correctness of their
+    pairs (E, P, pairs), each shaped by ``bc`` (:func:`sequence_grid`'s)."""
+    out: dict[str, np.ndarray] = {}
+    named = {"ate": (e.ate, c), "aoe": (e.aoe, c), "rpe_trans": (tr, pairs_c), "rpe_rot": (rr, pairs_c)}
+    # the whole arrays' statistics side by side (a median each); the masked ones after, in order
+    whole = dict(
+        zip(named, each(*(partial(error_statistics, v) for v, _ in named.values()), rows=e.matched), strict=True)
+    )
+    for name, stats in whole.items():
+        out.update({f"{name}_{k}": bc(v) for k, v in stats.items() if k != "rmse"})
+    for name, (values, m) in named.items():
+        ms = masked_statistics(values, m, whole[name])
+        out.update({f"c_{name}_{k}": bc(v[:, :, None, None]) for k, v in ms.items()})
     return out
 
 
@@ -322,6 +333,7 @@ def score_rows(
 #: Settings whose scores a sequence keeps (:func:`sequence_scores`), the latest ones.
 KEPT_SETTINGS = 4
 _STATS = frozenset(STAT_COLUMNS)
+_RPE = frozenset(RPE_METRICS)
 
 
 def sequence_scores(
@@ -329,10 +341,13 @@ def sequence_scores(
 ) -> dict[str, Any]:
     """Every metric of one sequence at one validated setting (:func:`sequence_grid` on a one-point
     grid, as Python numbers; ``rpe``: delta, unit, pairs, all pairs, tolerance), kept on the
-    sequence for the latest :data:`KEPT_SETTINGS` settings, as its RPE pairs are (scores without
-    the statistics are those with them, less the statistics). An evaluation's
-    workers score its spec's setting where they computed the errors, so a table at that setting
-    (``lorisnb evaluate``'s, a report's) is read, not scored again, in the process that collects
+    sequence for the latest :data:`KEPT_SETTINGS` settings, as its RPE pairs are: scores without
+    the statistics are those with them less the statistics, and those with them are those without
+    plus the statistics, computed alone (each column is computed apart from the others: the same
+    values to the last bit). An evaluation's workers score its spec's setting without the
+    statistics where they computed the errors (about a quarter of the work of all the columns), so
+    ``lorisnb evaluate``'s printed table is read, and a table with every column
+    (``Evaluation.sequences``, a CSV) computes only the statistics, in the process that collects
     the files. The errors are results: a changed copy (``dataclasses.replace``) keeps none of it."""
     key = (float(eps), float(phi), float(delta), float(tau), *rpe, bool(stats))
     kept = e._scores.get(key)
@@ -340,12 +355,22 @@ def sequence_scores(
         full = e._scores.get((*key[:-1], True))
         if full is not None:
             return {k: v for k, v in full.items() if k not in _STATS}
-    if kept is None:
+    lean = e._scores.get((*key[:-1], False)) if kept is None and stats else None
+    if lean is not None and not e.matched:  # no pose matched: no statistic (sequence_grid's order: last)
+        kept = lean | {k: GRID_METRICS[k](np.nan) for k in STAT_COLUMNS}
+    elif lean is not None:  # those without the statistics are kept: only the statistics are computed
+        c = ((e.ate <= eps) & (e.aoe <= phi))[None, None, :]  # Eq. (1), as sequence_grid's (1, 1, M)
+        i, j, tr, rr = e.rpe(*rpe)
+        one = _statistics(e, c, tr, rr, c[:, :, i] & c[:, :, j], lambda a: np.reshape(a, (1, 1, 1, 1)))
+        stat = {k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in one.items()}
+        kept = {k: v for k, v in lean.items() if k not in _RPE} | stat | {k: v for k, v in lean.items() if k in _RPE}
+    elif kept is None:
         grid = sequence_grid(
             e, [eps], [phi], [delta], [tau], rpe_delta=rpe[0], rpe_unit=rpe[1], with_stats=stats, rpe_pairs=rpe[2],
             rpe_all_pairs=rpe[3], rpe_tolerance=rpe[4],
         )  # fmt: skip
         kept = {k: GRID_METRICS[k](v.reshape(-1)[0]) for k, v in grid.items()}
+    if key not in e._scores:
         while len(e._scores) >= KEPT_SETTINGS:
             del e._scores[next(iter(e._scores))]
         e._scores[key] = kept
