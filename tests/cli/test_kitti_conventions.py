@@ -72,6 +72,7 @@ def test_leaderboard_total_over_all_sequences(devkit, tmp_path):
     assert total.loc[0, "kitti_t_err"] == pytest.approx(100 * t, rel=1e-6)
 
 
+@pytest.mark.thorough  # the devkit compiled and run, as above (5 s of CPU); its recorded numbers: test_kitti_recorded.py
 def test_stamped_inputs_use_their_rotations(devkit, tmp_path):
     """A TUM pair (stamps, quaternions) under kitti: paired by nearest stamps, each pose's rotation
     from its quaternion; equal to the devkit on KITTI files holding those rotations in full."""

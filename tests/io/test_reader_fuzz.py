@@ -141,6 +141,7 @@ def cafe_gt():
 
 @FUZZ
 @given(data=mutated(_base_openloris()))
+@pytest.mark.thorough  # 200 draws, each read and evaluated (2 s of CPU); random bytes, below, in the fast loop
 def test_openloris_reader_and_evaluation(tmp_path_factory, cafe_gt, data):
     p = tmp_path_factory.mktemp("fz") / "fuzz.txt"
     p.write_bytes(data)
@@ -159,6 +160,7 @@ def test_openloris_reader_random_bytes(tmp_path_factory, data):
 
 @FUZZ
 @given(data=mutated(_base_tum()))
+@pytest.mark.thorough  # 200 draws through two readers (2.5 s of CPU)
 def test_tum_and_ordslam_readers(tmp_path_factory, data):
     p = tmp_path_factory.mktemp("fz") / "tum.txt"
     p.write_bytes(data)

@@ -40,6 +40,21 @@ def same(a: np.ndarray, b: np.ndarray) -> bool:
     return a.shape == b.shape and bool((a == b).all())
 
 
+def test_a_threshold_move_blitted_equals_a_full_savefig(ev):
+    """The fast loop's check of the test below (thorough): one slider move, redrawn from the first
+    changing artist, is the PNG a full savefig of the same figure gives, pixel for pixel."""
+    ex = ThresholdExplorer(ev.errors, ev.durations(), "paper", 30.0, 1.0, 60.0, scene="home")
+    _, fig = ex.results()
+    figure_png(fig)
+    blits = fig.canvas.blits
+    ex.phi = 2.0
+    _, fig = ex.results()
+    fast = pixels(figure_png(fig))
+    assert isinstance(fig.canvas, BlitCanvas) and fig.canvas.blits == blits + 1
+    assert same(fast, full_savefig(fig))
+
+
+@pytest.mark.thorough  # 8 moves, each PNG against a twin's full savefig (4 s of CPU)
 def test_slider_changes_blitted_equal_a_full_savefig_pixel_for_pixel(ev):
     """One explorer redrawn through threshold moves and a scene change (every PNG after the first of
     a scene blitted), each PNG compared with a full savefig of a twin explorer's figure at the same
@@ -63,6 +78,7 @@ def test_slider_changes_blitted_equal_a_full_savefig_pixel_for_pixel(ev):
     assert same(fast, full_savefig(fig))
 
 
+@pytest.mark.thorough  # 8 titles, each PNG against a twin's full savefig (4 s of CPU)
 def test_title_changes_that_move_the_layout_or_the_bounding_box(ev):
     """A title of two lines (laid out again: the axes move) and one wider than the axes (the tight
     bounding box grows): the background is drawn again, and the PNG is savefig's."""

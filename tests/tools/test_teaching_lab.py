@@ -153,6 +153,8 @@ def _between(text: str, start: str, end: str) -> str:
     return " ".join(text[text.index(start) : text.index(end, text.index(start))].split())
 
 
+@pytest.mark.thorough  # every target CR scanned for every sample algorithm (10 s of CPU); the README's other
+# computed numbers: test_teaching_variants.py, in the fast loop
 def test_readme_says_with_computed_numbers_why_e1s_delta_cap_cannot_show():
     """Issue 46 asks each typical mistake to fail on the lab's data. E1's "delta cap" (the eps a scan
     without the cap finds) cannot, on the sample data, without losing the mistake E1 was chosen for
