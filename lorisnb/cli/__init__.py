@@ -19,7 +19,7 @@ import sys
 import weakref
 from collections.abc import Callable
 from functools import partial
-from typing import Any
+from typing import Any, NoReturn
 
 from lorisnb.cli.challenge import expiry as challenge_expiry
 from lorisnb.cli.challenge import port as challenge_port
@@ -33,7 +33,7 @@ from lorisnb.cli.options import (
     arg_type,
     threshold_list_type,
 )
-from lorisnb.cli.text import clean
+from lorisnb.cli.text import clean, say
 from lorisnb.core.spec import validate
 from lorisnb.core.spec.evalspec import ALIGNMENTS, OV_ALIGNMENTS, PRESETS
 from lorisnb.core.trajectory.blocks import ordinary_pages
@@ -53,8 +53,16 @@ def _command(module: str, name: str) -> Callable[[argparse.Namespace], int]:
     return run
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse's parser (its sub-commands' too) whose usage errors, quoting the value given, escape
+    control characters as every other message line does (:func:`~lorisnb.cli.text.say`)."""
+
+    def error(self, message: str) -> NoReturn:
+        super().error(clean(message))
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="lorisnb", description="Lifelong SLAM evaluation (OpenLORIS-Scene metrics)")
+    parser = Parser(prog="lorisnb", description="Lifelong SLAM evaluation (OpenLORIS-Scene metrics)")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("evaluate", help="score result files: ATE, AOE, CR, CR-T, CS-R, C-ATE, RPE")
@@ -390,13 +398,13 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except LorisError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        say(f"error: {exc}")
         return 2
     except OSError as exc:  # writing an output failed once checked (a full disk, a file system that refuses)
         if isinstance(exc, BrokenPipeError):  # stdout closed by the reader: run() ends quietly
             raise
         where = f"{clean(exc.filename)}: " if exc.filename else "an output (the system named no file): "
-        print(f"error: {where}{exc.strerror or exc}", file=sys.stderr)
+        say(f"error: {where}{exc.strerror or exc}")
         return 2
     except KeyboardInterrupt as exc:
         terminated = isinstance(exc, Terminated)

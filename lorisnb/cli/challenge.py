@@ -11,6 +11,7 @@ import sys
 import time
 from typing import Any
 
+from lorisnb.cli.text import say
 from lorisnb.core.spec import validate
 from lorisnb.errors import ValidationError
 from lorisnb.tools._extras import require
@@ -123,15 +124,15 @@ def cmd_submit(args: argparse.Namespace) -> int:
         print(f"{r['scene']} {r['seq']}: CR {r['cr']:.3f}, C-ATE RMSE {r['c_ate_rmse'] or float('nan'):.3f} m "
               f"({r['file']})")  # fmt: skip
     for h in view.get("hidden_sequences", []):  # scored, shown once a phase closes: no value here
-        print(f"{h['scene']} {h['seq']}: scored, {h['shown']} ({', '.join(h['files'])})", file=sys.stderr)
+        say(f"{h['scene']} {h['seq']}: scored, {h['shown']} ({', '.join(h['files'])})")
     for m in view.get("missing", []):
-        print(f"error: {m['scene']} {m['seq']}: {m['error']}", file=sys.stderr)
+        say(f"error: {m['scene']} {m['seq']}: {m['error']}")
     for f in view.get("failures", []):
-        print(f"error: {f['file']}: {f['error']}", file=sys.stderr)
+        say(f"error: {f['file']}: {f['error']}")
     if view.get("error"):
-        print(f"error: {view['error']}", file=sys.stderr)
+        say(f"error: {view['error']}")
     if view.get("hidden"):  # scored, but its phase shows scores once it closes
-        print(f"{view['hidden']}", file=sys.stderr)
+        say(view["hidden"])
     if view["status"] in ("queued", "scoring"):
         return 0 if args.wait is None else 1
     return 0 if view["status"] == "scored" and not view.get("failures") and not view.get("missing") else 1

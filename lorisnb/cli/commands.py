@@ -14,7 +14,7 @@ import numpy as np
 
 from lorisnb.cli.options import param_value, spec_from_args, spec_given
 from lorisnb.cli.outputs import check_outputs, refuse_unused
-from lorisnb.cli.text import clean, format_table, frame_columns
+from lorisnb.cli.text import clean, format_table, frame_columns, say
 from lorisnb.errors import FailedInputsWarning, LorisError, LorisWarning, ValidationError
 
 if TYPE_CHECKING:
@@ -110,17 +110,17 @@ def _run_evaluation(
 
 def _report_problems(ev: Any, notes: list[str]) -> None:
     for n in notes:
-        print(f"warning: {n}", file=sys.stderr)
+        say(f"warning: {n}")
     for f in ev.failures:
-        print(f"error: {f.error}", file=sys.stderr)
+        say(f"error: {f.error}")
     for f in ev.unscored:  # in the table, scored as the paper scores it; the exit status says so
-        print(f"not scored: {f.error}", file=sys.stderr)
+        say(f"not scored: {f.error}")
     from lorisnb.tools.evaluation.status import skipped_only
 
     skipped = skipped_only(ev)
     if skipped:
         reasons = sorted({f.error.split(":")[0] for f in skipped})
-        print(f"skipped {len(skipped)} file(s): " + "; ".join(reasons), file=sys.stderr)
+        say(f"skipped {len(skipped)} file(s): " + "; ".join(reasons))
 
 
 def _fmt(df: pd.DataFrame, digits: int = 4) -> str:
@@ -191,7 +191,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
             view = _with_trial(ev, ["suite", "algorithm", "scene", "coverage", "cr", "cr_t", "c_ate_rmse", "cs_r"])
             print(format_table({c: scenes[c] for c in view}, args.digits))
         except LorisError as exc:
-            print(f"warning: no scene aggregate: {exc}", file=sys.stderr)
+            say(f"warning: no scene aggregate: {exc}")
     if table is not None and args.csv:
         out = write_csv(table, args.csv, args.force)
         print(f"\nwrote {len(table)} rows to {out}", file=sys.stderr)
@@ -430,11 +430,9 @@ def cmd_report(args: argparse.Namespace) -> int:
     for r in runs:
         status = r.status if r.status != "ok" or not r.input_errors else f"ok, {r.input_errors} input file(s) failed"
         line = f"{r.name:28s} {status:7s} {r.seconds:6.1f} s"
-        print(line + (f"  {r.error.splitlines()[0][:150]}" if r.error else ""))
+        print(line + (f"  {clean(r.error.splitlines()[0][:150])}" if r.error else ""))
     if wanted is not None and run_dir.resolve() != wanted:
-        print(
-            f"note: {args.out} appeared while this report ran (another run?); this run is in {run_dir}", file=sys.stderr
-        )
+        say(f"note: {args.out} appeared while this report ran (another run?); this run is in {run_dir}")
     failed_inputs = findings_input_errors(run_dir)
     if failed_inputs:
         print(f"leaderboard: {failed_inputs} input file(s) could not be evaluated (listed in index.html)")
@@ -464,12 +462,12 @@ def cmd_verify(args: argparse.Namespace) -> int:
               "are not noticed; only its inputs are checked", file=sys.stderr)  # fmt: skip
     if problems:
         added = sum(what == "added" for _, what in problems)
-        said = (
-            [f"{len(problems) - added} of {n} input file(s) changed or missing since the run"]
-            if added < len(problems)
-            else []
-        )
+        outside = sum(what == "outside" for _, what in problems)
+        changed = len(problems) - added - outside
+        said = [f"{changed} of {n} input file(s) changed or missing since the run"] if changed else []
         said += [f"{added} file(s) added to the folders it read"] if added else []
+        said += [f"{outside} file(s) or folder(s) lead (links) outside the run folder and the roots given here: not "
+                 "read; to check them, name the folder they lead to with --root NAME DIR"] if outside else []  # fmt: skip
         print("; ".join(said), file=sys.stderr)
         return 1
     print(f"all {n} input file(s) unchanged", file=sys.stderr)

@@ -6,12 +6,12 @@ read or paired, 2 for a usage or output error."""
 from __future__ import annotations
 
 import argparse
-import sys
 import warnings
 
 import pandas as pd
 
 from lorisnb.cli.outputs import check_outputs
+from lorisnb.cli.text import say
 from lorisnb.errors import EvaluationError, LorisWarning, ParseError
 
 
@@ -37,15 +37,15 @@ def cmd_consistency(args: argparse.Namespace) -> int:
             gt = read_trajectory(args.gt, args.gt_format, seq=args.seq, topic=args.gt_topic)
             result = ov_eval_errors(est, gt, cov, align=args.align, max_diff=args.max_diff)
     except (ParseError, EvaluationError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        say(f"error: {exc}")
         return 1
     finally:
         for n in dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, LorisWarning)):
-            print(f"warning: {n}", file=sys.stderr)
+            say(f"warning: {n}")
     for note in result.notes:
-        print(f"note: {note}", file=sys.stderr)
+        say(f"note: {note}")
     if cov is None:
-        print(f"note: {args.est} carries no covariances: errors without 3-sigma bounds, no NEES", file=sys.stderr)
+        say(f"note: {args.est} carries no covariances: errors without 3-sigma bounds, no NEES")
     print(f"ov_eval's metrics ({args.align} alignment, {len(result.poses)} of {len(est)} estimate poses matched "
           f"within {args.max_diff:g} s):")  # fmt: skip
     with pd.option_context("display.width", 200):

@@ -15,6 +15,7 @@ from pathlib import Path
 import pandas as pd
 
 from lorisnb.cli.outputs import check_outputs
+from lorisnb.cli.text import say
 from lorisnb.core.spec.evalspec import make_spec
 from lorisnb.core.trajectory.units import check_stamp_units
 from lorisnb.errors import EvaluationError, LorisWarning, ParseError, ValidationError
@@ -29,11 +30,11 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
             warnings.simplefilter("always", LorisWarning)
             table = _crosscheck_table(args)
     except (ParseError, EvaluationError) as exc:  # an input that cannot be read or compared: 1, as every command
-        print(f"error: {exc}", file=sys.stderr)
+        say(f"error: {exc}")
         return 1
     finally:
         for n in dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, LorisWarning)):
-            print(f"warning: {n}", file=sys.stderr)
+            say(f"warning: {n}")
     if isinstance(table, int):  # --conventions: printed and judged there
         return table
     from lorisnb.tools import require

@@ -13,7 +13,7 @@ import pandas as pd
 
 from lorisnb.cli.commands import fmt_table, report_problems, run_evaluation
 from lorisnb.cli.outputs import check_outputs, refuse_unused
-from lorisnb.cli.text import clean
+from lorisnb.cli.text import clean, say
 from lorisnb.errors import ValidationError
 
 #: diff's own options; every other option is an evaluate option (for result folders only).
@@ -108,11 +108,10 @@ def cmd_diff(args: argparse.Namespace) -> int:
     else:
         (base, _, base_failed), (cand, cand_failed, _) = (_side(p, args) for p in args.paths)
     for note in base.notes + cand.notes:
-        print(f"note: {note}", file=sys.stderr)
+        say(f"note: {note}")
     if base.table.empty:  # nothing to compare against: never a verdict of "ok"
-        print(f"error: BASE {args.paths[0]} holds no scored sequence" + (f" ({len(base_failed)} input(s) could not be "
-              "evaluated or were not scored)" if base_failed else "") + ": nothing was compared; give a run with results as BASE",
-              file=sys.stderr)  # fmt: skip
+        say(f"error: BASE {args.paths[0]} holds no scored sequence" + (f" ({len(base_failed)} input(s) could not be "
+            "evaluated or were not scored)" if base_failed else "") + ": nothing was compared; give a run with results as BASE")  # fmt: skip
         return 1
     problems = spec_differences(base, cand)
     if problems:
@@ -121,7 +120,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
             "runs made with the same spec (for a result folder: --eps, --phi, --delta, --tau as the table's)"
         )
     if base.version and cand.version and base.version != cand.version:
-        print(f"note: lorisnb {base.version} made BASE, {cand.version} CAND", file=sys.stderr)
+        say(f"note: lorisnb {base.version} made BASE, {cand.version} CAND")
     known = [r.expected for r in (base, cand) if r.expected is not None]  # every ground-truth sequence
     d = diff_tables(base.table, cand.table, tolerances, args.alpha, cand_failed,
                     names=(f"BASE {args.paths[0]}", f"CAND {args.paths[1]}"),
@@ -201,7 +200,7 @@ def cmd_history(args: argparse.Namespace) -> int:
     tolerances = parse_tolerances(args.tolerance)
     runs = load_runs(args.runs)
     for note in (n for r in runs for n in r.notes):
-        print(f"note: {note}", file=sys.stderr)
+        say(f"note: {note}")
     h, diffs = history_table(runs, args.metric, tolerances)
     how = sorted({r.created_from for r in runs})
     print(f"{len(runs)} run(s), oldest first, ordered by {' and '.join(how)}")

@@ -4,6 +4,7 @@ tables through :func:`format_table`."""
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -54,3 +55,10 @@ def clean(text: object) -> str:
     if s.isprintable():
         return s
     return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in s)
+
+
+def say(line: object) -> None:
+    """One message line on stderr (``error: ...``, ``warning: ...``, ``note: ...``), control characters
+    escaped (:func:`clean`): a message quoting a file name, a label or a value read from a file
+    (an escape sequence, a newline) stays one line, and the terminal interprets nothing in it."""
+    print(clean(line), file=sys.stderr)
