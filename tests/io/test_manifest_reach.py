@@ -80,3 +80,40 @@ def test_a_root_written_in_the_manifest_elsewhere_is_refused_one_from_the_enviro
     monkeypatch.setenv("LAB_ROOT", str(secret.parent))  # the user's own setting: trusted
     m = manifest(tmp_path / "shared" / "m", "notes.txt", root="${LAB_ROOT}")
     assert read_manifest(m).sessions[0].groundtruth == secret.resolve()
+
+
+def test_a_root_that_leaves_the_folder_its_variable_names_is_refused(tmp_path, secret, monkeypatch, capsys):
+    """``root = "${HOME}/../.."``: the variable is the user's, the way out of it is the manifest's."""
+    lab_root = tmp_path / "lab-data"
+    lab_root.mkdir()
+    monkeypatch.setenv("LAB_ROOT", str(lab_root))
+    up = "/".join([".."] * len(lab_root.parts)) + str(secret.parent)
+    for root in ("${LAB_ROOT}/" + up, "$LAB_ROOT/../private"):
+        m = manifest(tmp_path / "shared" / "m", "notes.txt", root=root)
+        with pytest.raises(
+            ParseError, match="lies outside the manifest's folder, the folders its environment variables"
+        ):
+            read_manifest(m)
+        res = tmp_path / "res" / "alg"
+        res.mkdir(parents=True, exist_ok=True)
+        (res / "desk.txt").write_text("1 0 0 0 0 0 0 1\n")
+        rc = main(["evaluate", str(res.parent), "--manifest", str(m), "--no-progress"])
+        err = capsys.readouterr().err
+        assert rc == 2 and "lies outside" in err and "secret-first-line" not in err
+    (lab_root / "V1").mkdir()
+    m = manifest(tmp_path / "shared" / "m", "gt.txt", root="${LAB_ROOT}/V1")  # inside the variable's folder: read
+    assert read_manifest(m).sessions[0].groundtruth == (lab_root / "V1" / "gt.txt").resolve()
+
+
+@pytest.mark.parametrize("key", ["groundtruth", "root", "name"])
+def test_a_nul_character_in_a_manifest_name_is_refused_naming_the_key(tmp_path, capsys, key):
+    folder = tmp_path / "m"
+    gt, root = ("gt\\u0000.txt", ".") if key == "groundtruth" else ("gt.txt", "a\\u0000" if key == "root" else ".")
+    m = manifest(folder, gt, root=root)
+    if key == "name":
+        m.write_text(m.read_text().replace('name = "desk"', 'name = "de\\u0000sk"'))
+    with pytest.raises(ParseError, match=f"{key} = .*: a NUL character"):
+        read_manifest(m)
+    rc = main(["evaluate", str(tmp_path), "--manifest", str(m), "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "a NUL character" in err and "Traceback" not in err

@@ -34,6 +34,7 @@ Example (every key but ``[[session]]`` optional)::
 from __future__ import annotations
 
 import os
+import re
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -221,8 +222,10 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         )
     root = (path.parent / Path(expanded).expanduser()).resolve()
     trusted = [path.parent.resolve(), *_data_root()]  # the manifest's folder and lorisnb's data root
-    if not outside and expanded == root_text:  # a root from an environment variable is the user's own
-        _confined(root, trusted, path, f"root = {root_text!r}")
+    if not outside:  # a folder an environment variable names is the user's own: the root may lie inside it
+        yours = [(path.parent / Path(os.environ[v]).expanduser()).resolve() for v in _variables(root_text)]
+        _confined(root, [*trusted, *yours], path, f"root = {root_text!r}",
+                  "the manifest's folder" + ", the folders its environment variables name" * bool(yours))  # fmt: skip
     allowed = [root, *trusted]
     gt_fmt = _fmt(raw.get("groundtruth_format", "tum"), "groundtruth_format", path)
     est_fmt = _fmt(raw.get("estimate_format", "tum"), "estimate_format", path)
@@ -300,6 +303,12 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     )  # fmt: skip
 
 
+def _variables(text: str) -> list[str]:
+    """The environment variables ``text`` names (``$NAME`` or ``${NAME}``) that are set."""
+    names = (m.group(1) or m.group(2) for m in re.finditer(r"\$(?:\{([^}]*)\}|(\w+))", text))
+    return [n for n in names if n in os.environ and os.environ[n].strip()]
+
+
 def _data_root() -> list[Path]:
     """lorisnb's data root (:func:`~lorisnb.io.datasets.paths.find_data`), where one is found."""
     from lorisnb.errors import DataNotFoundError
@@ -311,12 +320,14 @@ def _data_root() -> list[Path]:
         return []
 
 
-def _confined(file: Path, folders: list[Path], path: Path, where: str) -> None:
+def _confined(
+    file: Path, folders: list[Path], path: Path, where: str, named: str = "the manifest's folder, its root"
+) -> None:
     """Refuse a ``file`` (a ground truth, or the root) that lies (links resolved) outside
     ``folders``: a manifest received from someone else reads nothing elsewhere. Nothing is opened."""
     p = file.resolve()
     if not any(p == f or f in p.parents for f in folders):
-        raise ParseError(path, None, f"{where} lies outside the manifest's folder, its root and lorisnb's data root "
+        raise ParseError(path, None, f"{where} lies outside {named} and lorisnb's data root "
                          f"({', '.join(map(str, dict.fromkeys(folders)))}); expected a place inside them (pass "
                          "--manifest-outside, or outside=True, to read it anyway)")  # fmt: skip
 
@@ -326,6 +337,8 @@ def _text(table: dict[str, Any], key: str, path: Path, where: str = "") -> None:
     turned into the text of a list or a number."""
     if key in table and not isinstance(table[key], str):
         raise ParseError(path, None, f"{where}{key} = {table[key]!r}: expected a string (in quotes)")
+    if key in table and "\x00" in table[key]:  # no file system takes one: refused here, not a crash in a later call
+        raise ParseError(path, None, f"{where}{key} = {table[key]!r}: a NUL character (\\u0000); expected a name")
 
 
 def check_repeats(sessions: list[Session], path: Path) -> None:
