@@ -53,3 +53,40 @@ def test_a_full_disk_names_the_output_on_the_command_line(tmp_path, data, icra20
     rc = main(["evaluate", str(res.parent), "--data", str(data.root), "--csv", str(out), "--no-progress"])
     err = capsys.readouterr().err
     assert rc == 2 and f"error: {out}: No space left on device" in err and ".tmp-" not in err
+
+
+def test_a_figure_on_a_full_disk_names_its_file_in_python_and_on_the_command_line(tmp_path, data, icra20,
+                                                                                 monkeypatch, capsys):  # fmt: skip
+    """Figures are written as every output is (history --out, save_figure): the file named, nothing
+    half-written left."""
+    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
+
+    import lorisnb as ln
+    from lorisnb.tools.figures.plotting import save_figure
+
+    res = tmp_path / "res" / "orb"
+    res.mkdir(parents=True)
+    shutil.copy(icra20 / "per-seq" / "orbslam2_rgbd" / "cafe_1_1_orbslam2-original.txt", res)
+    table = ln.evaluate(res.parent, data_root=data, progress=False).sequences()
+    table.to_csv(tmp_path / "a.csv", index=False)
+    table.to_csv(tmp_path / "b.csv", index=False)
+    real = Figure.savefig
+
+    def full_after_a_byte(self, fname, *a, **k):
+        with open(fname, "wb") as f:
+            f.write(b"x")
+        full_disk()
+
+    monkeypatch.setattr(Figure, "savefig", full_after_a_byte)
+    with pytest.raises(OSError) as exc:
+        save_figure(plt.figure(), tmp_path / "figs", "f", formats=("png",))
+    assert exc.value.errno == errno.ENOSPC and exc.value.filename == str(tmp_path / "figs" / "f.png")
+    assert not (tmp_path / "figs").exists()  # nothing half-written, not even the folder made for it
+    rc = main(["history", str(tmp_path / "a.csv"), str(tmp_path / "b.csv"), "--out", str(tmp_path / "hist")])
+    err = capsys.readouterr().err
+    assert rc == 2 and f"error: {tmp_path / 'hist' / 'history_cr.png'}: No space left on device" in err
+    assert not (tmp_path / "hist").exists() and ".tmp-" not in err
+    monkeypatch.setattr(Figure, "savefig", real)
+    assert main(["history", str(tmp_path / "a.csv"), str(tmp_path / "b.csv"), "--out", str(tmp_path / "hist")]) == 0
+    assert len(list((tmp_path / "hist").glob("history_*.png"))) == 4

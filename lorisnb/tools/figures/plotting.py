@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from functools import partial
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
@@ -21,6 +22,7 @@ from lorisnb.core.lifelong.timeline import sequence_layout, timeline_rows, timel
 from lorisnb.core.metrics.openloris import correctness
 from lorisnb.core.pipeline.model import FileErrors, sequence_eps
 from lorisnb.core.spec.validate import eps_value, threshold
+from lorisnb.io.writers import write_atomically
 from lorisnb.tools.figures.blit import BlitCanvas
 
 #: Widest figure, inches (about 1,200 px in a notebook): wider ones would be shrunk to unreadable text.
@@ -294,15 +296,27 @@ def plot_trajectories(
     return fig
 
 
+def _save(fig: Figure, tmp: Path, fmt: str) -> None:
+    fig.savefig(tmp, dpi=150, bbox_inches="tight", format=fmt)
+
+
 def save_figure(fig, out_dir: str | Path, name: str, formats: Iterable[str] = ("png", "svg", "pdf")) -> list[Path]:
-    """Write a figure as ``name.png``, ``name.svg`` and ``name.pdf`` in ``out_dir``; returns the paths."""
+    """Write a figure as ``name.png``, ``name.svg`` and ``name.pdf`` in ``out_dir`` (each replaced
+    whole, :func:`~lorisnb.io.writers.write_atomically`: a failed write, a full disk, names its
+    file and leaves no part of it); returns the paths."""
     out_dir = Path(out_dir)
+    made = not out_dir.exists()
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
-    for fmt in formats:
-        p = out_dir / f"{name}.{fmt}"
-        fig.savefig(p, dpi=150, bbox_inches="tight")
-        paths.append(p)
+    try:
+        for fmt in formats:
+            p = out_dir / f"{name}.{fmt}"
+            write_atomically(p, partial(_save, fig, fmt=fmt), force=True)
+            paths.append(p)
+    except BaseException:
+        if made and not any(out_dir.iterdir()):  # the folder made for them, left empty: not left behind
+            out_dir.rmdir()
+        raise
     return paths
 
 
