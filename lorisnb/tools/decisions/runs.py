@@ -33,7 +33,7 @@ from lorisnb.core.stats.inference import with_trials
 from lorisnb.core.stats.regression import METRICS
 from lorisnb.errors import DataNotFoundError, ParseError, ValidationError
 from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV
-from lorisnb.tools.report.provenance import RUN_JSON, read_run_json
+from lorisnb.tools.report.provenance import RUN_JSON, read_run_json, run_file
 
 #: Columns a per-sequence table must have to be read as one.
 REQUIRED = ["algorithm", "scene", "seq", "cr", "eps", "phi", "delta", "tau"]
@@ -120,7 +120,7 @@ def is_report_run(path: Path) -> bool:
 
 
 def read_table(path: Path) -> pd.DataFrame:
-    """A per-sequence table from CSV or Parquet; its columns are checked."""
+    """A per-sequence table from CSV or Parquet; its columns are checked (:func:`check_values`)."""
     try:
         if path.is_file() and path.suffix.lower() == ".csv":
             df = pd.read_csv(path)
@@ -132,58 +132,111 @@ def read_table(path: Path) -> pd.DataFrame:
         raise MissingDependencyError("reading Parquet needs pyarrow: pip install 'lorisnb[parquet]'") from None
     except (ValueError, OSError) as exc:
         raise ParseError(path, None, f"not a readable CSV or Parquet table ({exc})") from None
-    missing = [c for c in REQUIRED if c not in df.columns]
+    missing = [c for c in dict.fromkeys([*REQUIRED, *NEEDED]) if c not in df.columns]
     if missing:
         raise ParseError(path, None, f"lacks column(s) {', '.join(missing)}; expected a per-sequence table as "
                          "written by lorisnb evaluate --csv / --parquet")  # fmt: skip
-    for c in ("algorithm", "scene", "suite", "file"):  # labels as evaluations make them (NFC): one algorithm
-        if c in df.columns:  # whether a table was written from an NFD folder name or not
-            df[c] = df[c].astype(str).where(df[c].notna(), "").map(validate.label)
-    for c in [*NUMBERS, *METRICS]:
-        if c in df.columns and not pd.api.types.is_numeric_dtype(df[c]):
-            values = pd.to_numeric(df[c].astype(str).str.strip().replace({"": None}), errors="coerce")
-            bad = values.isna() & df[c].notna() & (df[c].astype(str).str.strip().str.lower() != "nan")
-            if bad.any():
-                i = int(bad.to_numpy().nonzero()[0][0])
-                line = i + 2 if path.suffix.lower() == ".csv" else None  # the header is line 1
-                raise ParseError(path, line, f"column {c}: {df[c].iloc[i]!r} is not a number; expected a per-sequence "
-                                 "table as written by lorisnb evaluate --csv / --parquet")  # fmt: skip
-            df[c] = values
-    for c in (c for c in [*METRICS, *COUNTS] if c in df.columns):  # a number no evaluation gives: a damaged table
-        bad, expected = out_of_domain(df, c)
-        if bad.any():
-            i = int(bad.nonzero()[0][0])
-            line = i + 2 if path.suffix.lower() == ".csv" else None
-            raise ParseError(path, line, f"column {c}: {df[c].iloc[i]:g} is not {expected}; expected a per-sequence "
-                             "table as written by lorisnb evaluate --csv / --parquet")  # fmt: skip
-    return df
+    return check_values(df, path, "a per-sequence table as written by lorisnb evaluate --csv / --parquet")
 
 
+#: Columns the verdict reads besides :data:`REQUIRED`: the scene values' metrics and their weights
+#: (:data:`lorisnb.core.stats.inference.WEIGHTS`) and the matched poses. Every table lorisnb
+#: evaluate writes has them, under every preset; a table without one is refused, naming it.
+NEEDED = ["matched", *STATS_WEIGHTS, *(w for w in STATS_WEIGHTS.values() if w)]
 #: Counts of a per-sequence table, and the count each error metric is NaN with (no pose or pair to
 #: take it over): the only place an evaluation writes NaN in the columns diff and history judge.
 COUNTS = ("matched", "c_matched", "rpe_pairs", "c_rpe_pairs")
 NAN_WHEN_NONE = {"ate_rmse": "matched", "aoe_rmse": "matched", "c_ate_rmse": "c_matched", "c_aoe_rmse": "c_matched",
-                 "rpe_trans_rmse": "rpe_pairs", "rpe_rot_rmse": "rpe_pairs"}  # fmt: skip
+                 "rpe_trans_rmse": "rpe_pairs", "rpe_rot_rmse": "rpe_pairs", "rotation_lever": "matched"}  # fmt: skip
+#: A row's numbers (whole numbers >= 0): its sequence and trial, matched between runs.
+INDICES = {"seq": "a sequence number", "trial": "a trial number"}
+#: Durations the scene values are weighted by (seconds): finite and >= 0, never NaN (a sequence
+#: without a match has a ground-truth duration and tracks 0 s).
+SECONDS = ("gt_duration", "track_time")
+#: Labels a row is matched and grouped by: never empty (an algorithm or scene named by no one).
+LABELS = {"algorithm": "an algorithm name", "scene": "a scene name"}
+#: Yes-or-no columns: whether the first pose was correct (CS-R's tie rule), the official interpolation: True or False.
+FLAGS = ("first_correct", "official_interpolation")
+YES_NO = {"1": "true", "0": "false", "1.0": "true", "0.0": "false"}
+#: Every numeric column :func:`check_values` reads.
+NUMERIC = list(dict.fromkeys([*NUMBERS, *METRICS, *COUNTS, *NAN_WHEN_NONE, *INDICES, *SECONDS]))
+
+
+def check_values(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
+    """``df`` (read from ``path``) with every value diff and history read checked by one rule
+    (:func:`out_of_domain`), labels in NFC and numbers made numeric; else a
+    :class:`~lorisnb.errors.ParseError` naming the file, the line (CSV) or row, the column and
+    the value, ending with ``expected`` (what the file should be). Thresholds (``eps``, ``phi``,
+    ``delta``, ``tau``) are checked as the command line checks them."""
+    csv = path.suffix.lower() == ".csv"
+
+    def refuse(i: int, c: str, what: str) -> ParseError:
+        line = i + 2 if csv else None  # the header is line 1
+        return ParseError(path, line, f"column {c}: {what}; expected {expected}")
+
+    for c in ("algorithm", "scene", "suite", "file"):  # labels as evaluations make them (NFC): one algorithm
+        if c in df.columns:  # whether a table was written from an NFD folder name or not
+            df[c] = df[c].astype(str).where(df[c].notna(), "").map(validate.label)
+    for c, words in LABELS.items():
+        if c in df.columns:
+            empty = (df[c].str.strip() == "").to_numpy()
+            if empty.any():
+                raise refuse(int(empty.nonzero()[0][0]), c, f"an empty cell is not {words}")
+    for c in (c for c in NUMERIC if c in df.columns):
+        if not pd.api.types.is_numeric_dtype(df[c]) or pd.api.types.is_bool_dtype(df[c]):
+            text = df[c].astype(str).str.strip()
+            values = pd.to_numeric(text.replace({"": None}), errors="coerce")
+            words = text.str.lower()  # True and False are not the numbers 1 and 0 here
+            bad = (values.isna() & df[c].notna() & (words != "nan")) | words.isin(["true", "false"])
+            if bad.any():
+                i = int(bad.to_numpy().nonzero()[0][0])
+                raise refuse(i, c, f"{df[c].iloc[i]!r} is not a number")
+            df[c] = values
+    for c in (c for c in FLAGS if c in df.columns):
+        text = df[c].astype(str).str.strip().str.lower().replace(YES_NO)
+        bad = ~text.isin(["true", "false"]).to_numpy()
+        if bad.any():
+            i = int(bad.nonzero()[0][0])
+            raise refuse(i, c, f"{df[c].iloc[i]!r} is not True or False")
+        df[c] = (text == "true").to_numpy()
+    for c in (c for c in NUMERIC if c in df.columns):  # a number no evaluation gives: a damaged table
+        bad, words = out_of_domain(df, c)
+        if bad.any():
+            i = int(bad.nonzero()[0][0])
+            raise refuse(i, c, f"{df[c].iloc[i]:g} is not {words}")
+    for c in (c for c in validate.THRESHOLDS if c in df.columns):  # as --eps, --phi, --delta, --tau are checked
+        codes, values = pd.factorize(df[c], use_na_sentinel=False)
+        for k, value in enumerate(values):  # each distinct value once
+            try:
+                validate.threshold(c, value)
+            except ValidationError as exc:
+                raise refuse(int((codes == k).nonzero()[0][0]), c, str(exc)) from None
+    return df
 
 
 def out_of_domain(df: pd.DataFrame, c: str) -> tuple[Any, str]:
     """Which values of column ``c`` no evaluation writes (a boolean array), and what it writes in
     words; the one rule every number :func:`read_table` reads passes. A rate (CR, CR-T, CS-R) is in
-    [0, 1], never NaN (a sequence without a match has CR 0); a count is a whole number >= 0; an
-    RMSE is finite and >= 0, NaN only where its count (:data:`NAN_WHEN_NONE`) is 0 (or absent)."""
+    [0, 1], never NaN (a sequence without a match has CR 0); a count, a sequence or trial number
+    is a whole number >= 0; a duration finite and >= 0; an RMSE (and the rotation lever) finite and
+    >= 0, NaN only where its count (:data:`NAN_WHEN_NONE`) is 0 (or absent)."""
     import numpy as np
 
     v = df[c].to_numpy(float)
     nan = np.isnan(v)
     if c in RATES:
         return nan | (v < 0) | (v > 1), "a rate between 0 and 1 (NaN is none: a sequence without a match has 0)"
-    if c in COUNTS:
-        return nan | (v < 0) | ~np.isfinite(v) | (np.mod(np.where(nan, 0, v), 1) != 0), "a count (a whole number >= 0)"
+    if c in COUNTS or c in INDICES:
+        words = f"{INDICES.get(c, 'a count')} (a whole number >= 0)"
+        return nan | (v < 0) | ~np.isfinite(v) | (np.mod(np.where(nan, 0, v), 1) != 0), words
+    if c in SECONDS:
+        return nan | (v < 0) | ~np.isfinite(v), "a duration in seconds (finite, >= 0)"
     count = NAN_WHEN_NONE.get(c)
     may_be_nan = df[count].to_numpy(float) == 0 if count in df.columns else np.ones(len(v), bool)
     with np.errstate(invalid="ignore"):
         bad = (nan & ~may_be_nan) | (v < 0) | np.isinf(v)
-    return bad, f"an RMSE >= 0 (NaN only where {count or 'its count'} is 0)"
+    what = "a lever in metres" if c == "rotation_lever" else "an RMSE"
+    return bad, f"{what} >= 0 (NaN only where {count or 'its count'} is 0)"
 
 
 def _report_tables(folder: Path, notes: list[str]) -> pd.DataFrame:
@@ -198,11 +251,12 @@ def _report_tables(folder: Path, notes: list[str]) -> pd.DataFrame:
     for csv in csvs:
         if any(part.startswith(".") for part in csv.relative_to(folder).parts):
             continue
+        run_file(folder, csv)  # a link leading out of the run: refused, never read
         try:
             head = pd.read_csv(csv, nrows=0)
         except (ValueError, OSError):
             continue
-        if all(c in head.columns for c in REQUIRED):
+        if all(c in head.columns for c in [*REQUIRED, *NEEDED]):
             t = with_trials(read_table(csv))
             if t.duplicated(KEYS).any():
                 notes.append(f"{csv}: several rows per sequence (a sweep?); left out")
@@ -210,7 +264,7 @@ def _report_tables(folder: Path, notes: list[str]) -> pd.DataFrame:
             parts.append(t.assign(table=csv.relative_to(folder).as_posix()))
     if not parts:
         raise DataNotFoundError(f"{folder}: a report run (run.json) without a per-sequence CSV table "
-                                f"(columns {', '.join(REQUIRED)})")  # fmt: skip
+                                f"(columns {', '.join(dict.fromkeys([*REQUIRED, *NEEDED]))})")  # fmt: skip
     return pd.concat(parts, ignore_index=True).drop_duplicates(KEYS).reset_index(drop=True)
 
 
@@ -241,13 +295,14 @@ def _durations(run_dir: Path) -> pd.DataFrame | None:
     f = run_dir / DURATIONS
     if not f.is_file():
         return None
+    run_file(run_dir, f)
     try:
         t = pd.read_csv(f)
     except (ValueError, pd.errors.ParserError) as exc:
         raise ParseError(f, None, f"not a durations table ({exc}); expected the report's own") from None
     if not {"scene", "seq", "gt_duration"} <= set(t.columns):
         raise ParseError(f, None, "expected the columns scene, seq, gt_duration (the report's own table)")
-    return t.astype({"scene": str})
+    return check_values(t, f, "the report's own table of ground-truth sequences").astype({"scene": str})
 
 
 #: What a report run's ``findings/input_errors.csv`` says of an input that was not scored.
@@ -260,6 +315,7 @@ def unscored_inputs(run_dir: Path) -> dict[str, str]:
     f = run_dir / "findings" / INPUT_ERRORS_CSV
     if not f.is_file():
         return {}
+    run_file(run_dir, f)
     try:
         t = pd.read_csv(f, dtype=str, keep_default_na=False)
     except (ValueError, pd.errors.ParserError) as exc:

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from lorisnb.core.spec import validate
-from lorisnb.errors import DataNotFoundError, LorisError, OutputError, ValidationError
+from lorisnb.errors import DataNotFoundError, LorisError, OutputError, ParseError, ValidationError
 from lorisnb.io.datasets.paths import find_data
 from lorisnb.io.writers import name_output, overlap, remove_partial, write_csv
 from lorisnb.tools.decisions.history import earlier_runs
@@ -60,7 +60,15 @@ from lorisnb.tools.report.notebooks import (
     warm_kernels_for_report,
 )
 from lorisnb.tools.report.portable import make_portable, named_roots, root_key
-from lorisnb.tools.report.provenance import checksums, input_files, run_record, sha256, write_run_json
+from lorisnb.tools.report.provenance import (
+    checksums,
+    input_files,
+    links_out,
+    run_record,
+    sha256,
+    where_it_is,
+    write_run_json,
+)
 
 __all__ = [
     "DEFAULT_NOTEBOOKS", "findings_input_errors", "KERNEL_ARGS", "NOTEBOOK_NEEDS", "RUN_MARKER", "NotebookRun", "available_notebooks",
@@ -367,7 +375,9 @@ def run_report(
             if not absolute_paths and source is not None and "source" in spec["values"]:
                 spec["values"]["source"] = root_key(source, named)  # the leaderboard's input, by its root's name
             (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
-            inputs = checksums(input_files(roots), None if absolute_paths else named)
+            # each input where it is (a link too: its target may lie outside every root, on this machine only)
+            files = [where_it_is(f) for f in input_files(roots, resolve=False)]
+            inputs = checksums(files, None if absolute_paths else named)
             record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
                                 {r.name: r.status for r in runs}, roots, named, absolute=absolute_paths)  # fmt: skip
             if record.get("commit"):  # the commit alone does not say what ran if the checkout had changes
@@ -411,14 +421,39 @@ def render_run(run: str | os.PathLike[str]) -> list[Path]:
     folder = Path(run)
     if not (folder / RUN_MARKER).is_file() or not (folder / "index.html").is_file():
         raise LorisError(f"{folder}: not a run folder written by lorisnb report (no {RUN_MARKER} and index.html)")
+    out = links_out(folder)  # a page written through one lands elsewhere; a notebook read through one is not the run's
+    if out:
+        shown = ", ".join(str(p.relative_to(folder)) for p in out[:5]) + (f" and {len(out) - 5} more" * (len(out) > 5))
+        raise LorisError(f"{folder} will not be rendered again: it holds {len(out)} link(s) leading outside it "
+                         f"({shown}); a run folder lorisnb writes holds none. Nothing was read or written: replace "
+                         "each link by its file, if you trust it")  # fmt: skip
     why = _not_written(folder)
     if why:
         raise LorisError(f"{folder} will not be rendered again: {why}")
     css = f"../{NOTEBOOK_CSS}" if (folder / NOTEBOOK_CSS).is_file() else None
-    pages = [export_html(nb, css=css) for nb in sorted(folder.glob("*/*.ipynb")) if nb.parent.name == nb.stem]
+    notebooks = [nb for nb in sorted(folder.glob("*/*.ipynb")) if nb.parent.name == nb.stem]
+    for nb in notebooks:  # each read first: a damaged one refused, naming it, before any page is written
+        _readable_notebook(nb)
+    pages = [export_html(nb, css=css) for nb in notebooks]
     pages.append(single_file(folder / "index.html", folder / "report.html"))
     _write_marker(folder, _files(folder))
     return pages
+
+
+def _readable_notebook(nb: Path) -> None:
+    """A :class:`~lorisnb.errors.ParseError` naming ``nb`` if nbformat cannot read it as a notebook
+    (cut short in a copy, edited by hand): a page is rendered from it only if it reads."""
+    from lorisnb.tools._extras import require
+
+    nbformat = require("nbformat")
+    try:
+        nbformat.validate(nbformat.read(str(nb), as_version=4))
+    except OSError:
+        raise
+    except Exception as exc:  # nbformat's errors (not JSON, not a notebook, an invalid one) have no common base
+        reason = str(exc).strip().splitlines()[0][:200] if str(exc).strip() else type(exc).__name__
+        raise ParseError(nb, None, f"not a notebook nbformat can read ({reason}); expected the notebook the run "
+                         "executed: copy it again from the run's source. No page was rendered again") from None  # fmt: skip
 
 
 def findings_input_errors(run_dir: Path) -> int:

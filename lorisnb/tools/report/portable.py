@@ -60,8 +60,9 @@ def root_key(path: Path, roots: Mapping[str, Path]) -> str:
 
 
 def resolve_key(key: str, roots: Mapping[str, Path]) -> Path | None:
-    """The file a ``{name}/inside`` key stands for below ``roots[name]``; None if ``name`` is not
-    among ``roots``. A key that leaves its root (``{data}/../..``) is refused."""
+    """The file a ``{name}/inside`` key stands for below ``roots[name]`` (where it is: a link in it
+    is not followed, as :func:`root_key` writes it); None if ``name`` is not among ``roots``. A key
+    that leaves its root as written (``{data}/../..``, ``{data}//etc``) is refused."""
     named = split_key(key)
     if named is None:
         return Path(key)
@@ -69,7 +70,7 @@ def resolve_key(key: str, roots: Mapping[str, Path]) -> Path | None:
     if name not in roots:
         return None
     root = roots[name].resolve()
-    p = (root / inside).resolve() if inside else root
+    p = Path(os.path.normpath(root / inside)) if inside else root
     if p != root and root not in p.parents:
         raise ValidationError(f"run.json: the input {key!r} leaves its root {mark(name)}; a run lorisnb wrote "
                               "never does (an edited run.json?)")  # fmt: skip

@@ -143,6 +143,15 @@ def _is_text_or_null(v: Any) -> bool:
     return v is None or isinstance(v, str)
 
 
+def _is_path(v: Any) -> bool:
+    """A path as run.json writes one: text without a NUL byte (no file system takes one)."""
+    return isinstance(v, str) and "\x00" not in v
+
+
+def _is_path_map(v: Any) -> bool:
+    return _is_str_map(v) and all(map(_is_path, v))
+
+
 #: What each key of run.json must hold: (check, what is expected in words).
 SHAPES: dict[str, tuple[Any, str]] = {
     "command": (lambda v: isinstance(v, list) and all(isinstance(x, str) for x in v), "a list of strings"),
@@ -155,11 +164,11 @@ SHAPES: dict[str, tuple[Any, str]] = {
         ),
         'an object {"description": text, "values": {...}}',
     ),  # fmt: skip
-    "data_root": (_is_text_or_null, "a folder path or null"),
+    "data_root": (lambda v: v is None or _is_path(v), "a folder path or null"),
     "created": (_is_text_or_null, "an ISO 8601 time"),
-    "inputs": (_is_str_map, "an object path -> SHA-256"),
+    "inputs": (_is_path_map, "an object path -> SHA-256, each path without a NUL byte"),
     "notebooks": (_is_str_map, "an object notebook name -> status"),
-    "input_roots": (lambda v: isinstance(v, list) and all(isinstance(x, str) for x in v), "a list of paths"),
+    "input_roots": (lambda v: isinstance(v, list) and all(map(_is_path, v)), "a list of paths (without a NUL byte)"),
 }
 
 
@@ -170,6 +179,7 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
     f = p / RUN_JSON if p.is_dir() else p
     if not f.is_file():
         raise LorisError(f"{p}: no {RUN_JSON} here; expected a run folder written by lorisnb report")
+    run_file(f.parent, f)
     try:
         record = json.loads(f.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -181,14 +191,53 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
         raise ParseError(f, None, f"lacks key(s) {', '.join(missing)}; expected the run.json lorisnb report writes")
     for key, (ok, expected) in SHAPES.items():
         if key in record and not ok(record[key]):
-            shown = json.dumps(record[key], default=str)
+            value = record[key]
+            culprit = None  # in a map or list of paths of the right type: the entry that is not one
+            if key == "inputs" and isinstance(value, dict):
+                culprit = next(([k, v] for k, v in value.items() if not (_is_path(k) and isinstance(v, str))), None)
+            elif key == "input_roots" and isinstance(value, list):
+                culprit = next((x for x in value if not _is_path(x)), None)
+            shown = json.dumps(value if culprit is None else culprit, default=str)
             shown = shown if len(shown) <= 80 else shown[:77] + "..."
-            raise ParseError(f, None, f'"{key}" is {shown}; expected {expected}')
+            where = f'"{key}" holds' if culprit is not None else f'"{key}" is'
+            raise ParseError(f, None, f"{where} {shown}; expected {expected}")
     return record
 
 
 def _inside(p: Path, folders: Iterable[Path]) -> bool:
     return any(p == f or f in p.parents for f in folders)
+
+
+def where_it_is(path: Path) -> Path:
+    """``path`` absolute with its folders resolved, the file itself not: a link is named where it
+    is, as :func:`~lorisnb.tools.report.portable.root_key` writes it into run.json."""
+    return path.parent.resolve() / path.name
+
+
+def run_file(folder: str | os.PathLike[str], path: Path) -> Path:
+    """``path``, a file of the run folder ``folder``, if it lies inside it (links resolved); else a
+    :class:`~lorisnb.errors.ValidationError` naming it. Every file a command reads from a run folder
+    it received (run.json, its tables) passes here: a link in it that leads elsewhere is refused,
+    never read, and no message quotes what it leads to."""
+    inside = Path(folder).resolve()
+    if not _inside(path.resolve(), [inside]):
+        raise ValidationError(f"{path}: a link leading outside the run folder {folder}; a run folder lorisnb writes "
+                              "holds none (a received run?): nothing outside it is read. Replace the link by the "
+                              "file, if you trust it")  # fmt: skip
+    return path
+
+
+def links_out(folder: str | os.PathLike[str]) -> list[Path]:
+    """Every link below ``folder`` (a file's or a folder's, not followed) that leads outside it, or
+    nowhere: what :func:`run_file` refuses, listed before anything is read or written."""
+    inside = Path(folder).resolve()
+    out = []
+    for top, dirs, files in os.walk(folder):
+        for n in files + dirs:
+            p = Path(top) / n
+            if p.is_symlink() and not _inside(p.resolve(), [inside]):
+                out.append(p)
+    return sorted(out)
 
 
 def verify_run(
@@ -215,6 +264,8 @@ def verify_run(
     for name, p in given.items():
         if not p.exists():
             raise ValidationError(f"--{name if name in ('data', 'results') else 'root ' + name} {p}: no such folder")
+        if name in ("data", "results") and not p.is_dir():  # another root may be a file (--root groundtruth gt.txt)
+            raise ValidationError(f"--{name} {p}: a file; expected the folder of the run's {name} here")
     allowed = [folder.resolve(), *given.values()]
     given.setdefault("run", folder.resolve())
 
@@ -238,8 +289,14 @@ def verify_run(
         return p
 
     inputs = {key: place(key) for key in sorted(record["inputs"])}
-    listed = [place(r) for r in record.get("input_roots", [])]
     problems = []
+    listed = []
+    for r in record.get("input_roots", []):  # a folder it read: walked only where it lies inside those given
+        p = place(r)
+        if p.exists() and not _inside(p.resolve(), allowed):
+            problems.append((r, "outside"))
+        else:
+            listed.append(p)
     for key, p in inputs.items():
         if not p.is_file():
             problems.append((key, "missing"))
@@ -254,7 +311,8 @@ def verify_run(
         keyed = {}
         for p in input_files(listed, resolve=False):
             inside = _inside(p.resolve(), allowed)
-            key = _key(p.resolve() if inside else p.parent.resolve() / p.name, style)  # a link leading out: where it is
-            keyed[key] = inside
-        problems += [(key, "added" if keyed[key] else "outside") for key in sorted(set(keyed) - set(record["inputs"]))]
-    return problems
+            key = _key(where_it_is(p), style)  # a link where it is, as the report keys it
+            if key not in record["inputs"] and not (inside and _key(p.resolve(), style) in record["inputs"]):
+                keyed[key] = inside  # (an earlier lorisnb keyed a link by its target)
+        problems += [(key, "added" if keyed[key] else "outside") for key in sorted(keyed)]
+    return sorted(problems)

@@ -1,0 +1,206 @@
+"""A run folder received from someone else, or made from a results folder holding links: every
+input keyed where it is (a link to a file elsewhere writes no absolute path into run.json); verify
+lists a link leading outside the roots it was given as 'outside' (never reads it, never walks a
+folder it leads to); render, diff and history read and write nothing through a link in the run
+folder that leads outside it; run.json paths with a NUL byte are refused as a malformed run.json,
+naming it."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+from test_portable_runs import received as portable_run
+
+from lorisnb.cli import main
+from lorisnb.errors import LorisError, ParseError, ValidationError
+from lorisnb.tools.decisions.runs import load_run
+from lorisnb.tools.report.provenance import verify_run, write_run_json
+
+ORB = "cafe_1_1_orbslam2-original.txt"
+ODOM = "cafe-1-2-odom.txt"
+
+
+def fake_notebook(name, out_dir, params, **kw):
+    import nbformat
+
+    from lorisnb.tools.report.notebooks import NotebookRun
+
+    (out_dir / name).mkdir()
+    nbformat.write(nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell("a page")]),
+                   str(out_dir / name / f"{name}.ipynb"))  # fmt: skip
+    (out_dir / name / f"{name}.html").write_text("<p>page</p>")
+    return NotebookRun(name)
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory, data, icra20):
+    """A report run of a results folder whose odom file is a link to a file kept elsewhere."""
+    import lorisnb.tools.report.build as report
+
+    here = tmp_path_factory.mktemp("lab")
+    (here / "res" / "orb").mkdir(parents=True)
+    (here / "res" / "odom").mkdir()
+    (here / "kept").mkdir()
+    shutil.copy(icra20 / "per-seq" / "orbslam2_rgbd" / ORB, here / "res" / "orb" / ORB)
+    shutil.copy(icra20 / "per-seq" / "odom" / ODOM, here / "kept" / ODOM)
+    os.symlink(here / "kept" / ODOM, here / "res" / "odom" / ODOM)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(report, "run_notebook", fake_notebook)
+        out, _ = report.run_report(here / "runs" / "r1", {"data_root": str(data.root)}, ["compare_algorithms"],
+                                   progress=False, results=here / "res")  # fmt: skip
+    return here, out
+
+
+def run(capsys, *args):
+    rc = main([*map(str, args)])
+    out = capsys.readouterr()
+    return rc, out.out, out.err
+
+
+def test_a_linked_input_is_keyed_where_it_is_and_verified_only_where_its_folder_is_given(made, data, capsys):
+    here, out = made
+    text = (out / "run.json").read_text()
+    record = json.loads(text)
+    assert "{results}/odom/" + ODOM in record["inputs"] and "{results}/orb/" + ORB in record["inputs"]
+    assert str(here) not in text and str(here.resolve()) not in text  # no absolute path of this machine
+    roots = {"data": data.root, "results": here / "res"}
+    assert verify_run(out, roots) == [("{results}/odom/" + ODOM, "outside")]  # leads out: not read
+    assert verify_run(out, {**roots, "kept": here / "kept"}) == []
+    rc, stdout, err = run(capsys, "verify", out, "--data", data.root, "--results", here / "res")
+    assert rc == 1 and stdout.strip() == "outside: {results}/odom/" + ODOM and "--root NAME DIR" in err
+    rc, _, err = run(capsys, "verify", out, "--data", data.root, "--results", here / "res", "--root", "kept",
+                     here / "kept")  # fmt: skip
+    assert rc == 0 and "unchanged" in err
+
+
+def received(tmp_path, inputs_below_res, input_roots=("{results}",)):
+    """A run folder as received (run.json of a results folder ``res``), its results folder here,
+    with inputs and folders it read added to its run.json."""
+    folder, res = portable_run(tmp_path, {})
+    record = json.loads((folder / "run.json").read_text())
+    record["inputs"].update({"{results}/" + k: "0" * 64 for k in inputs_below_res})
+    record["input_roots"] = list(input_roots)
+    write_run_json(folder, record)
+    return folder, res
+
+
+def test_a_recorded_input_that_is_a_link_leading_out_here_is_listed_outside_not_refused(tmp_path, capsys):
+    secret = tmp_path / "private" / "b.txt"
+    secret.parent.mkdir()
+    secret.write_text("private words")
+    folder, res = received(tmp_path, ["orb/b.txt"])
+    os.symlink(secret, res / "orb" / "b.txt")  # the receiver keeps that result elsewhere
+    assert verify_run(folder, {"results": res}) == [("{results}/orb/b.txt", "outside")]
+    rc, out, err = run(capsys, "verify", folder, "--results", res)
+    assert rc == 1 and out == "outside: {results}/orb/b.txt\n" and "private" not in out + err
+    assert verify_run(folder, {"results": res, "mine": secret.parent}) == [("{results}/orb/b.txt", "changed")]
+
+
+def test_a_folder_it_read_that_leads_out_is_not_walked(tmp_path, capsys):
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "names-of-private-files.txt").write_text("x")
+    folder, res = received(tmp_path, [], input_roots=("{results}", "{results}/sub"))
+    os.symlink(elsewhere, res / "sub")
+    assert verify_run(folder, {"results": res}) == [("{results}/sub", "outside")]
+    rc, out, _ = run(capsys, "verify", folder, "--results", res)
+    assert rc == 1 and out == "outside: {results}/sub\n"  # its files are not listed
+
+
+@pytest.mark.parametrize("where", ["inputs", "input_roots", "data_root"])
+def test_a_path_with_a_nul_byte_in_run_json_is_a_malformed_run_json(tmp_path, capsys, where):
+    folder, res = received(tmp_path, [])
+    record = json.loads((folder / "run.json").read_text())
+    bad = "{results}/a\x00b"
+    if where == "inputs":
+        record["inputs"][bad] = "0" * 64
+    elif where == "input_roots":
+        record["input_roots"].append(bad)
+    else:
+        record["data_root"] = bad
+    (folder / "run.json").write_text(json.dumps(record))
+    with pytest.raises(ParseError, match=f'run.json: "{where}" (holds|is) .*a\\\\u0000b'):
+        verify_run(folder, {"results": res})
+    rc, out, err = run(capsys, "verify", folder, "--results", res)
+    assert rc == 2 and "run.json" in err and where in err and "Traceback" not in err
+    rc, _, err = run(capsys, "history", folder)
+    assert rc == 2 and "run.json" in err
+
+
+def copied(made, tmp_path) -> Path:
+    run_dir = tmp_path / "received"
+    shutil.copytree(made[1], run_dir, symlinks=True)
+    return run_dir
+
+
+def list_in_marker(run_dir: Path) -> None:
+    """What a sender who made the links would do: the run marker lists them, as render checks."""
+    from lorisnb.tools.report.build import RUN_MARKER, _files
+
+    marker = json.loads((run_dir / RUN_MARKER).read_text())
+    marker["files"] = _files(run_dir)
+    (run_dir / RUN_MARKER).write_text(json.dumps(marker))
+
+
+def test_render_writes_and_reads_nothing_through_a_link_leading_out(made, tmp_path, capsys):
+    from lorisnb.tools.report.build import render_run
+
+    run_dir = copied(made, tmp_path)
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    (run_dir / "report.html").unlink()
+    os.symlink(victim, run_dir / "report.html")
+    list_in_marker(run_dir)
+    with pytest.raises(LorisError, match=r"1 link\(s\) leading outside it \(report.html\)"):
+        render_run(run_dir)
+    rc, out, err = run(capsys, "render", run_dir)
+    assert rc == 2 and "leading outside" in err and out == ""
+    assert victim.read_text() == "precious"
+
+
+@pytest.mark.parametrize("which", ["findings/sequences.csv", "findings/durations.csv", "run.json"])
+def test_diff_and_history_read_no_file_of_a_run_through_a_link_leading_out(made, tmp_path, capsys, which):
+    run_dir = copied(made, tmp_path)
+    secret = tmp_path / "secret.csv"
+    secret.write_text(
+        "algorithm,scene,seq,cr,eps,phi,delta,tau,gt_duration\nx,cafe,1,TOPSECRET,inf,inf,1,60,TOPSECRET\n"
+    )
+    (run_dir / which).unlink()
+    os.symlink(secret, run_dir / which)
+    with pytest.raises(ValidationError, match="a link leading outside the run folder"):
+        load_run(run_dir)
+    for command in (["diff", made[1], run_dir], ["history", made[1], run_dir]):
+        rc, out, err = run(capsys, *command)
+        assert rc == 2 and "a link leading outside the run folder" in err and "TOPSECRET" not in out + err
+
+
+def test_a_results_or_data_root_given_as_a_file_is_refused(tmp_path, capsys):
+    folder, res = received(tmp_path, [])
+    a_file = res / "orb" / "a.txt"
+    with pytest.raises(ValidationError, match="--results .*a.txt: a file; expected the folder of the run's results"):
+        verify_run(folder, {"results": a_file})
+    rc, out, err = run(capsys, "verify", folder, "--results", a_file)
+    assert rc == 2 and out == "" and "a file; expected the folder" in err
+
+
+def test_render_refuses_a_damaged_notebook_naming_it_before_writing_any_page(made, tmp_path, capsys):
+    from lorisnb.tools.report.build import render_run
+
+    run_dir = copied(made, tmp_path)
+    page = run_dir / "compare_algorithms" / "compare_algorithms.html"
+    page.unlink()
+    assert page in render_run(run_dir)  # a page lost in a copy: rendered again
+    notebook = run_dir / "compare_algorithms" / "compare_algorithms.ipynb"
+    for damage in ('{"cells": "cut short', '{"cells": "x", "metadata": {}, "nbformat": 4, "nbformat_minor": 5}'):
+        notebook.write_text(damage)
+        list_in_marker(run_dir)
+        before = {p: p.read_bytes() for p in run_dir.rglob("*.html")}
+        with pytest.raises(ParseError, match="compare_algorithms.ipynb: not a notebook nbformat can read"):
+            render_run(run_dir)
+        rc, out, err = run(capsys, "render", run_dir)
+        assert rc == 2 and "compare_algorithms.ipynb: not a notebook" in err and "Traceback" not in err
+        assert {p: p.read_bytes() for p in run_dir.rglob("*.html")} == before  # no page written
