@@ -142,3 +142,17 @@ def test_a_report_runs_table_of_durations_passes_the_rule_too(tmp_path, table):
     durations.to_csv(run / "findings" / "durations.csv", index=False)
     with pytest.raises(ParseError, match="durations.csv, line 2: column gt_duration: nan is not a duration"):
         load_run(run)
+
+
+def test_the_line_named_is_the_files_line_when_a_name_holds_a_newline(tmp_path, table, capsys):
+    """A folder name with a newline is written as a quoted cell over two lines: the refused value's
+    line is counted in the file, not as row + 2."""
+    edited = table.assign(algorithm=["orb\nslam", "odom", "odom"], file=["orb\nslam/x.txt", "a.txt", "b.txt"])
+    edited.loc[2, "cr"] = np.nan
+    bad = tmp_path / "bad.csv"
+    edited.to_csv(bad, index=False)
+    assert bad.read_text().splitlines()[5].startswith("odom,b.txt")  # the header, 2 + 2 lines, then line 6
+    with pytest.raises(ParseError, match="line 6: column cr: nan"):
+        read_table(bad)
+    rc = main(["diff", str(bad), str(bad)])
+    assert rc == 2 and f"{bad}, line 6: column cr: nan" in capsys.readouterr().err

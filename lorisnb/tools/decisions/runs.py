@@ -171,8 +171,7 @@ def check_values(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
     csv = path.suffix.lower() == ".csv"
 
     def refuse(i: int, c: str, what: str) -> ParseError:
-        line = i + 2 if csv else None  # the header is line 1
-        return ParseError(path, line, f"column {c}: {what}; expected {expected}")
+        return ParseError(path, csv_line(path, i) if csv else None, f"column {c}: {what}; expected {expected}")
 
     for c in ("algorithm", "scene", "suite", "file"):  # labels as evaluations make them (NFC): one algorithm
         if c in df.columns:  # whether a table was written from an NFD folder name or not
@@ -212,6 +211,23 @@ def check_values(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
             except ValidationError as exc:
                 raise refuse(int((codes == k).nonzero()[0][0]), c, str(exc)) from None
     return df
+
+
+def csv_line(path: Path, row: int) -> int:
+    """The line of a CSV file where its data row ``row`` (0-based, as pandas reads it: the header and
+    blank lines left out) begins: a quoted cell may hold a newline (a folder name with one)."""
+    import csv
+
+    with open(path, newline="", encoding="utf-8", errors="replace") as f:
+        reader = csv.reader(f)
+        end, k = 0, -1  # the line the last record ended on; the record's number (the header is -1)
+        for record in reader:
+            if record:
+                if k == row:
+                    return end + 1
+                k += 1
+            end = reader.line_num
+    return row + 2
 
 
 def out_of_domain(df: pd.DataFrame, c: str) -> tuple[Any, str]:
