@@ -32,7 +32,8 @@ PYTEST_ONCE = $(BIN)/python -m pytest -q
 PYTEST = $(PYTEST_ONCE) -n $(PYTEST_WORKERS) --dist loadgroup
 
 # the newcomer's command (README): the fast tests but the thorough ones (each several seconds: peers run
-# side by side, many draws, whole processes) and one run of each notebook, a few minutes
+# side by side, many draws, whole processes) and one run of each notebook, a few minutes; the notebook
+# runs one at a time (as test-all's, below), their kernels forked warm as a report's (tests/notebooks)
 test: bytecode
 	$(PYTEST) -m "not slow and not browser and not thorough"
 	$(PYTEST_ONCE) -m "smoke and not browser"
