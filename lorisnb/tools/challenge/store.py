@@ -88,7 +88,11 @@ def hash_token(token: str) -> str:
 
 
 def new_token() -> str:
-    return secrets.token_urlsafe(32)
+    """32 random bytes, URL-safe, never starting with ``-``: a command line takes ``--token -abc...``
+    for two options ("expected one argument"), which one token in 64 was."""
+    while (token := secrets.token_urlsafe(32)).startswith("-"):
+        pass
+    return token
 
 
 def connect(url: str) -> Engine:
