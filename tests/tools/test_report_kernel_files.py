@@ -8,6 +8,7 @@ import asyncio
 import os
 import shutil
 import tempfile
+import time
 from pathlib import Path
 
 import pytest
@@ -30,8 +31,15 @@ def test_interrupted_report_leaves_no_kernel_files(tmp_path, monkeypatch, capsys
         km = report_notebooks.kernel_manager_class()(kernel_name="python3")
         managers.append(km)
         asyncio.run(km.start_kernel(extra_arguments=report_notebooks.KERNEL_ARGS))
-        asyncio.run(asyncio.sleep(1))  # the kernel binds its sockets
-        seen["files"] = sorted(str(p.relative_to(tmp)) for p in tmp.rglob("*"))
+        deadline = time.monotonic() + 60  # the kernel binds its sockets (seconds on a loaded machine: a fixed
+        while True:  # second was too short there, and sockets bound after the interrupt's clean-up stayed)
+            seen["files"] = sorted(str(p.relative_to(tmp)) for p in tmp.rglob("*"))
+            if (
+                sum("kernel-" in f and not f.endswith(".json") for f in seen["files"]) >= 5
+                or time.monotonic() > deadline
+            ):
+                break
+            time.sleep(0.1)
         raise KeyboardInterrupt  # Ctrl-C while the notebook runs: its kernel is not shut down
 
     monkeypatch.setattr(report, "run_notebook", run)
