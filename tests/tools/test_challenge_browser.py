@@ -72,13 +72,13 @@ def test_team_submits_in_the_page_and_sees_its_score(tmp_path, data):
         assert all(r.startswith(url) for r in resources)  # offline: nothing from a CDN
         driver.get(url + "/team")
         driver.find_element(By.ID, "token").send_keys(token)
-        driver.find_element(By.ID, "open").click()
-        assert "4 submission(s) left" in driver.find_element(By.TAG_NAME, "body").text
+        driver.find_element(By.ID, "open").click()  # a form: the team's page replaces this one
+        wait(lambda: "4 submission(s) left" in driver.find_element(By.TAG_NAME, "body").text, 30, "the team's page")
         # the admin's page: every team, and the final's sequence scored but marked hidden from teams
         driver.get(url + "/admin")
         driver.find_element(By.ID, "token").send_keys(admin)
         driver.find_element(By.ID, "open").click()
-        teams = driver.find_element(By.ID, "teams").text
+        teams = wait(lambda: driver.find_element(By.ID, "teams").text, 30, "the admin's page")
         assert "browsers" in teams and "organizers" in teams
         scores = [c.text for c in driver.find_elements(By.CSS_SELECTOR, "td.scores")]
         assert any("cafe 2: " in c and "(hidden from teams)" in c for c in scores), scores
