@@ -33,13 +33,15 @@ def _executor(args: argparse.Namespace) -> Any:
 
 def _run_evaluation(
     args: argparse.Namespace, files: list[str], folders: tuple[str, ...] = (),
-    swept: Callable[[Any], str] | None = None, side: str = "",
+    swept: Callable[[Any], str] | None = None, side: str = "", statistics: Callable[[Any], bool] | None = None,
 ) -> tuple[Any, list[str]]:  # fmt: skip
     """Every input kind through one spec (:func:`spec_from_args`) and one runner: OpenLORIS result
     files, ``--gt`` pairs or a ``--manifest``'s sessions. The output options ``files`` and
     ``folders`` are checked first against every input (:func:`~.outputs.check_outputs`: the
     estimates, the ground truth, times files, the manifest and its ground-truth files, the data
-    root). Prints the ``conventions:`` line (``side``: which run, for ``diff``'s two)."""
+    root). Prints the ``conventions:`` line (``side``: which run, for ``diff``'s two). ``statistics``:
+    whether the command's table shows the error statistics, given the spec (the workers then
+    compute them; :func:`~lorisnb.tools.evaluation.runner.evaluate`'s ``statistics``)."""
     from lorisnb.io.datasets.manifest import openloris_preset_refusal, read_manifest
     from lorisnb.tools.evaluation.runner import (
         evaluate,
@@ -83,7 +85,7 @@ def _run_evaluation(
         inputs += [str(manifest.path), *(str(s.groundtruth) for s in manifest.sessions)]
     check_outputs(args, inputs, files, folders)
     kw: dict[str, Any] = dict(trials_by=args.trials_by, progress=not args.no_progress, jobs=args.jobs,
-                              executor=_executor(args))  # fmt: skip
+                              executor=_executor(args), statistics=statistics is not None and statistics(spec))  # fmt: skip
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
         if args.gt:
@@ -140,12 +142,17 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from lorisnb.core.lifelong.aggregate import aggregate_columns, spans_columns
     from lorisnb.io.writers import write_csv, write_parquet
 
-    ev, notes = _run_evaluation(args, ["csv", "kitti_plot"], folders=("parquet",))
+    def whole_table(spec: Any) -> bool:  # a table with every column: written, or the preset's own columns
+        return bool(args.csv or args.parquet) or spec.relation is not None or spec.preset_name in ("kitti", "tartanair")
+
+    def statistics(spec: Any) -> bool:  # error statistics shown: scored with the errors, in the workers
+        return whole_table(spec) or spec.preset_name == "evo"
+
+    ev, notes = _run_evaluation(args, ["csv", "kitti_plot"], folders=("parquet",), statistics=statistics)
     kitti = ev.spec.preset_name == "kitti"
     if args.kitti_plot and not kitti:
         raise ValidationError("--kitti-plot: the KITTI metric's plot, only with --conventions kitti")
-    table = (ev.sequences() if args.csv or args.parquet or ev.spec.relation is not None or kitti
-             or ev.spec.preset_name == "tartanair" else None)  # fmt: skip
+    table = ev.sequences() if whole_table(ev.spec) else None
     # the rows printed: error statistics only where printed (evo's); without them a setting's scores
     # take about a quarter of the time (lorisnb.core.lifelong.scoring.score's ``stats``): the whole
     # icra20 tree's process 2.62 -> 2.34 s of CPU (medians of 6 runs side by side, 2 shared cores)

@@ -23,6 +23,14 @@ def _fresh(errors):
 
 @pytest.fixture(scope="module")
 def home(icra20):
+    """Scored without the statistics with the errors (as ``lorisnb evaluate`` prints its table)."""
+    return ln.evaluate(icra20 / "lifelong", algorithms=["maslam", "orbslam2_t265"], scenes=["home"], progress=False,
+                       statistics=False)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def home_all(icra20):
+    """Scored with every column with the errors (the default: a table of every column is read)."""
     return ln.evaluate(icra20 / "lifelong", algorithms=["maslam", "orbslam2_t265"], scenes=["home"], progress=False)
 
 
@@ -88,3 +96,24 @@ def test_a_sequence_keeps_the_latest_settings_only_and_each_is_the_fresh_score(h
     assert all(len(e._scores) <= KEPT_SETTINGS for e in f.sequences)
     pd.testing.assert_frame_equal(score([f], 0.3, 10.0), first, check_exact=True)
     pd.testing.assert_frame_equal(score(_fresh([f]), 0.3, 10.0), first, check_exact=True)
+
+
+def test_statistics_scored_with_the_errors_are_read_by_every_table(home_all, monkeypatch):
+    """``evaluate``'s default (``statistics=True``): the workers scored every column at the spec's
+    setting, so neither table computes anything (``score`` patched to fail in this process), and
+    both equal the scores of copies that keep nothing, to the last bit."""
+    spec = home_all.spec
+    setting = (spec.eps, spec.phi, spec.delta, spec.tau)
+    afresh = score(_fresh(home_all.errors), *setting)
+    afresh_lean = score(_fresh(home_all.errors), *setting, stats=False)
+    monkeypatch.setattr(scoring, "sequence_grid", lambda *a, **k: pytest.fail("scored again"))
+    monkeypatch.setattr(scoring, "_statistics", lambda *a, **k: pytest.fail("statistics computed again"))
+    pd.testing.assert_frame_equal(home_all.sequences().drop(columns="spec"), afresh, check_exact=True)
+    pd.testing.assert_frame_equal(score(home_all.errors, *setting, stats=False), afresh_lean, check_exact=True)
+
+
+@pytest.mark.parametrize("value", ["no", 1, None])
+def test_statistics_is_a_yes_no_value(icra20, value):
+    """``statistics`` is checked as every yes/no option is: a string or number is refused, naming it."""
+    with pytest.raises(ln.ValidationError, match="statistics"):
+        ln.evaluate(icra20 / "lifelong" / "maslam" / "home.txt", statistics=value)

@@ -69,6 +69,7 @@ class Job:
     source: PairSource | None = None  # pair
     manifest: Manifest | None = None  # manifest
     scene: str = ""  # manifest: the scene of this job
+    statistics: bool = True  # the spec's setting scored with the error statistics too (evaluate's ``statistics``)
 
 
 def _stamp(path: Path) -> tuple[float, int]:
@@ -140,10 +141,10 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
             note = no_rpe_pair(f"{errors.file}, seq {seq.seq}", len(i), seq.stamps, o["rpe_delta"], o["rpe_unit"])
             if note is not None and note not in errors.warnings:
                 errors.warnings.append(note)
-        with contextlib.suppress(LorisError):  # the spec's setting scored here too, without the statistics (kept
-            # on each sequence: lorisnb.core.lifelong.scoring.sequence_scores), where the errors are, so that a table
-            # at it is read in the process collecting the files; a setting the scores refuse is refused there
-            score_rows(errors, job.spec.eps, job.spec.phi, job.spec.delta, job.spec.tau, stats=False, **o)
+        with contextlib.suppress(LorisError):  # the spec's setting scored here too, with the statistics or without
+            # (kept on each sequence: lorisnb.core.lifelong.scoring.sequence_scores), where the errors are, so that a
+            # table at it is read in the process collecting the files; a setting the scores refuse is refused there
+            score_rows(errors, job.spec.eps, job.spec.phi, job.spec.delta, job.spec.tau, stats=job.statistics, **o)
         return "ok", errors
     except DataNotFoundError as exc:
         return "skipped", Failure(job.path, str(exc), "not-public" if exc.scene in NOT_PUBLIC else "no-groundtruth")

@@ -123,6 +123,7 @@ def evaluate(
     progress: bool = False,
     jobs: int | None = None,
     executor: Executor | None = None,
+    statistics: bool = True,
     conventions: EvalSpec | str | None = None,
     **options: Any,
 ) -> Evaluation:
@@ -148,6 +149,12 @@ def evaluate(
         executor: any ``concurrent.futures.Executor`` to run the files on instead, for example a
             Dask cluster's (``distributed.Client(address).get_executor()``). Results are the same
             and in the same order as one process gives.
+        statistics: where the error statistics of the spec's setting (the ``*_mean``,
+            ``*_median``, ... columns of :meth:`Evaluation.sequences`) are computed: True, with
+            each file's errors (in the workers, when in parallel: a table with every column is
+            then read); False, only when a table asks for them, in this process (the command
+            line's printed table shows none: the workers then score a quarter of the work). Every
+            table holds the same numbers either way.
     """
     the_spec = _spec(spec, conventions, options)
     notes = the_spec.refuse_inapplicable("openloris")
@@ -158,7 +165,7 @@ def evaluate(
     data = find_data(data_root)  # no data at all is an error for the whole call, not per file
     items, scene_set = _filtered(items, algorithms, scenes, trials_by)
     template = Job(kind="openloris", path=Path(), root=None, spec=the_spec, trials_by=trials_by, data=data,
-                   scenes=scene_set)  # fmt: skip
+                   scenes=scene_set, statistics=validate.flag("statistics", statistics))  # fmt: skip
     work = [replace(template, path=p, root=r) for p, r in items]
     roots = as_paths(paths)
     root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
@@ -256,6 +263,7 @@ def evaluate_pairs(
     progress: bool = False,
     jobs: int | None = None,
     executor: Executor | None = None,
+    statistics: bool = True,
     **options: Any,
 ) -> Evaluation:
     """Score estimate files against one ground truth with every metric of lorisnb.
@@ -273,7 +281,7 @@ def evaluate_pairs(
         topic, gt_topic, tf, gt_tf: what to read from bags (see :func:`lorisnb.io.readers.bags.read_bag`);
             ``topic`` may name several topics (or evo's TF ids) separated by commas: one row each, its
             ``algorithm`` the topic.
-        jobs, executor, progress, trials_by: as for :func:`evaluate`.
+        jobs, executor, progress, trials_by, statistics: as for :func:`evaluate`.
     """
     the_spec = _spec(spec, conventions, options)
     src = pair_source(groundtruth, fmt, gt_fmt, scene, est_times=est_times, gt_times=gt_times, topic=topic,
@@ -296,8 +304,9 @@ def evaluate_pairs(
     if len(topics) > 1 and not all(topics):
         raise ValidationError(f"topic {src.topic!r}: expected topics separated by commas, none empty")
     sources = [src] if len(topics) == 1 else [replace(src, topic=t, label_topic=True) for t in topics]
+    scored = validate.flag("statistics", statistics)
     work = [  # several topics of one bag: one row each, labelled with its topic
-        Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=one)
+        Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=one, statistics=scored)
         for p, r in items
         for one in sources
     ]
@@ -315,6 +324,7 @@ def evaluate_manifest(
     progress: bool = False,
     jobs: int | None = None,
     executor: Executor | None = None,
+    statistics: bool = True,
     data_root: DataRoot | DataPaths | None = None,
     **options: Any,
 ) -> Evaluation:
@@ -323,7 +333,8 @@ def evaluate_manifest(
     The manifest's spec (its ``[conventions]``, ``lifelong``, ``transform``, thresholds) is the
     default; a preset name (``spec``/``conventions``) replaces its conventions and keeps the rest, a
     spec object is used as it is, and ``lifelong`` and ``options`` go over either. The built-in
-    ``openloris`` manifest runs :func:`evaluate` (``data_root`` is its data)."""
+    ``openloris`` manifest runs :func:`evaluate` (``data_root`` is its data). ``trials_by``,
+    ``progress``, ``jobs``, ``executor`` and ``statistics`` are :func:`evaluate`'s."""
     m = manifest if isinstance(manifest, Manifest) else read_manifest(manifest)
     if lifelong is not None:
         options["lifelong"] = lifelong
@@ -333,7 +344,7 @@ def evaluate_manifest(
             raise ValidationError(openloris_preset_refusal("spec" if spec is not None else "conventions", given))
         refuse_over_manifest(make_spec(m.spec, **options), m, options, "openloris")
         return evaluate(results, m.spec, data_root=data_root, trials_by=trials_by, progress=progress, jobs=jobs,
-                        executor=executor, **options)  # fmt: skip
+                        executor=executor, statistics=statistics, **options)  # fmt: skip
     if data_root is not None:
         raise ValidationError("data_root: a manifest names its own ground-truth files (root and groundtruth)")
     if spec is not None and conventions is not None:
@@ -353,8 +364,18 @@ def evaluate_manifest(
             )
     folders = algorithm_folders(results, m)
     _check_trials([(f / "x", r) for f, r in folders], trials_by)
+    scored = validate.flag("statistics", statistics)
     work = [
-        Job(kind="manifest", path=folder, root=root, spec=the_spec, trials_by=trials_by, manifest=m, scene=scene)
+        Job(
+            kind="manifest",
+            path=folder,
+            root=root,
+            spec=the_spec,
+            trials_by=trials_by,
+            manifest=m,
+            scene=scene,
+            statistics=scored,
+        )
         for folder, root in folders
         for scene in m.scenes
     ]
