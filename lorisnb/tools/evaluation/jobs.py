@@ -25,7 +25,7 @@ from lorisnb.core.trajectory.units import check_stamp_units
 from lorisnb.errors import DataNotFoundError, LorisError, LorisWarning, ParseError, ValidationError
 from lorisnb.io.datasets.manifest import Manifest
 from lorisnb.io.datasets.paths import DataPaths, groundtruth_spans, load_groundtruth, read_groundtruth_file
-from lorisnb.io.readers.openloris import read_openloris
+from lorisnb.io.readers.openloris import declared_scene, read_openloris
 from lorisnb.io.readers.plain import read_trajectory
 from lorisnb.io.readers.registry import hint
 from lorisnb.tools.evaluation.inputs import labels, missing_note
@@ -180,6 +180,9 @@ def _openloris(job: Job, progress: bool) -> FileErrors | None:
     assert job.data is not None
     spec = job.spec
     algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
+    declared = declared_scene(job.path)
+    if declared is not None:  # a scene without ground truth here (office's is not public) is skipped unread
+        job.data.groundtruth(declared)  # the DataNotFoundError reading the file in full would end in
     result = _read_result(job, progress)  # the estimate's repeated poses: by the spec's rule
     if job.scenes is not None and result.scene not in job.scenes:
         return None
