@@ -93,6 +93,33 @@ def test_the_same_input_named_twice_is_counted_once(data, tmp_path, capsys):
     assert "named more than once" in _err(capsys)
 
 
+def test_a_linked_algorithm_folder_is_walked_and_a_loop_is_said(icra20, tmp_path, capsys):
+    """A results folder holding a link to an algorithm's folder kept elsewhere (a lab's habit): its
+    files are evaluated (they were left out without a word), labelled by the link's name; a link
+    back to a folder it lies in is said and not walked again; the report's inputs are those files."""
+    from lorisnb.tools.report.provenance import input_files
+
+    res, elsewhere = tmp_path / "res", tmp_path / "elsewhere" / "runs"
+    for folder, alg, name in ((res, "odom", "cafe-1-1-odom.txt"), (elsewhere, "orb", "cafe_1_1_orbslam2-original.txt")):
+        (folder / alg).mkdir(parents=True)
+        (folder / alg / name).write_bytes((icra20 / "per-seq" / ("odom" if alg == "odom" else "orbslam2_rgbd") / name)
+                                          .read_bytes())  # fmt: skip
+    (res / "orbslam2").symlink_to(elsewhere / "orb", target_is_directory=True)
+    ev = ln.evaluate(res, progress=False)
+    assert sorted(f.algorithm for f in ev.errors) == ["odom", "orbslam2"]
+    assert [p.name for p in input_files([res], resolve=False)] == [
+        "cafe-1-1-odom.txt",
+        "cafe_1_1_orbslam2-original.txt",
+    ]
+    (res / "odom" / "back").symlink_to(res, target_is_directory=True)
+    with pytest.warns(ln.LorisWarning, match=r"1 linked folder\(s\) lead back to a folder they are in, not walked again: "
+                      r".*odom/back -> .*res$"):  # fmt: skip
+        again = ln.evaluate(res, progress=False)
+    assert sorted(f.algorithm for f in again.errors) == ["odom", "orbslam2"]
+    assert main(["evaluate", str(res), "--no-progress"]) == 0
+    assert "lead back to a folder they are in" in _err(capsys)
+
+
 def test_the_ground_truth_is_never_scored_as_an_estimate_of_itself(data, tmp_path):
     d = tmp_path / "res"
     gt = write(d, "gt.txt", (data.tum / GT).read_bytes())

@@ -55,23 +55,53 @@ def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
     return out
 
 
+def walk(folder: Path, inside: Iterable[Path] | None = None) -> list[Path]:
+    """Every file and folder below ``folder``, linked folders followed as folders are (a lab links
+    an algorithm's runs from elsewhere into its results folder: they were left out, silently). A
+    link to a folder it lies in (a loop) is not walked again, with a LorisWarning naming it.
+    ``inside``: folders (resolved) a linked folder must lead into to be walked (a received run's
+    check reads nothing elsewhere); one leading elsewhere is listed, not walked."""
+    out: list[Path] = []
+    loops: list[str] = []
+    allowed = None if inside is None else [Path(f) for f in inside]
+    above: dict[str, frozenset[str]] = {str(folder): frozenset({os.path.realpath(folder)})}
+    for here, dirs, files in os.walk(folder, followlinks=True):
+        kept = []
+        for d in dirs:
+            path = os.path.join(here, d)
+            real = os.path.realpath(path)
+            out.append(Path(path))
+            if real in above[here]:
+                loops.append(f"{path} -> {real}")
+                continue
+            if allowed is not None and not any(Path(real) == f or f in Path(real).parents for f in allowed):
+                continue
+            above[path] = above[here] | {real}
+            kept.append(d)
+        dirs[:] = kept
+        out.extend(Path(here, f) for f in files)
+    if loops:
+        warnings.warn(f"{len(loops)} linked folder(s) lead back to a folder they are in, not walked again: "
+                      + "; ".join(loops[:5]), LorisWarning, stacklevel=3)  # fmt: skip
+    return out
+
+
 def result_files(
     paths: PathArg | Iterable[PathArg], suffixes: tuple[str, ...] = (".txt",)
 ) -> list[tuple[Path, Path | None]]:
-    """Expand files and folders into ``(file, root)`` pairs; a folder is walked for files ending in
-    ``suffixes`` below it (``root/<algorithm>/*.txt``, or deeper: ``root/<suite>/<algorithm>/*.txt``),
-    hidden files and folders left out. A ROS 2 bag (a folder holding ``metadata.yaml``) is one
+    """Expand files and folders into ``(file, root)`` pairs; a folder is walked (:func:`walk`: linked
+    folders followed) for files ending in ``suffixes`` below it (``root/<algorithm>/*.txt``, or
+    deeper: ``root/<suite>/<algorithm>/*.txt``), hidden files and folders left out. A ROS 2 bag (a folder holding ``metadata.yaml``) is one
     file when ``.bag`` is among the suffixes."""
     out: list[tuple[Path, Path | None]] = []
     bags = ".bag" in suffixes
     for p in as_paths(paths):
         if p.is_dir() and not (bags and (p / "metadata.yaml").is_file()):
             # a dangling link is an input that fails (saying so), never silently no input
-            found = [
-                f for f in p.rglob("*") if f.suffix in suffixes and (f.is_file() or f.is_symlink() and not f.exists())
-            ]
+            below = walk(p)
+            found = [f for f in below if f.suffix in suffixes and (f.is_file() or f.is_symlink() and not f.exists())]
             if bags:  # a bag folder is one input: not also its .db3 / .mcap files
-                folders = [m.parent for m in p.rglob("metadata.yaml")]
+                folders = [m.parent for m in below if m.name == "metadata.yaml"]
                 found = [f for f in found if not any(d in f.parents for d in folders)] + folders
             files = sorted(f for f in found if not any(is_hidden(Path(part)) for part in f.relative_to(p).parts))
             out.extend((f, p) for f in files)
@@ -128,7 +158,7 @@ def algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> list
         if holds_any(p, names):
             out.append((p, None))
             continue
-        subs = sorted(d for d in p.rglob("*") if d.is_dir() and holds_any(d, names))
+        subs = sorted(d for d in walk(p) if d.is_dir() and holds_any(d, names))
         out.extend((d, p) for d in subs)
         if not subs:
             raise ValidationError(f"{p}: no estimate named {', '.join(sorted(names))} in it or below it")

@@ -63,16 +63,19 @@ def git_commit(start: Path | None = None) -> str | None:
     return commit if out.returncode == 0 and len(commit) == 40 else None
 
 
-def input_files(roots: Iterable[Path], resolve: bool = True) -> list[Path]:
-    """Every regular file of ``roots`` (files, or folders walked recursively without following
-    links to folders), hidden files left out, sorted, each once; resolved (a link to a file: its
-    target) unless not ``resolve``."""
+def input_files(roots: Iterable[Path], resolve: bool = True, inside: Iterable[Path] | None = None) -> list[Path]:
+    """Every regular file of ``roots`` (files, or folders walked as an evaluation walks them:
+    :func:`~lorisnb.tools.evaluation.inputs.walk`, linked folders followed, only those leading
+    into ``inside`` when given), hidden files left out, sorted, each once; resolved (a link to a
+    file: its target) unless not ``resolve``."""
+    from lorisnb.tools.evaluation.inputs import walk
+
     found: dict[Path, None] = {}
     for root in roots:
         if root.is_file():
             found[root.resolve() if resolve else root] = None
         elif root.is_dir():
-            for p in sorted(root.rglob("*")):
+            for p in sorted(walk(root, inside)):
                 rel = p.relative_to(root).parts
                 if p.is_file() and not any(part.startswith(".") for part in rel):
                     found[p.resolve() if resolve else p] = None
@@ -309,7 +312,7 @@ def verify_run(
         named = any(split_key(k) for k in [*record["inputs"], *record["input_roots"]])
         style: Mapping[str, Path] | Path | None = given if named else None if "roots" in record else given.get("data")
         keyed = {}
-        for p in input_files(listed, resolve=False):
+        for p in input_files(listed, resolve=False, inside=allowed):  # a linked folder leading elsewhere: unwalked
             inside = _inside(p.resolve(), allowed)
             key = _key(where_it_is(p), style)  # a link where it is, as the report keys it
             if key not in record["inputs"] and not (inside and _key(p.resolve(), style) in record["inputs"]):
