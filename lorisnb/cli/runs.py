@@ -117,7 +117,9 @@ def cmd_diff(args: argparse.Namespace) -> int:
     if problems:
         raise ValidationError(
             "BASE and CAND are not comparable (different evaluation specs): " + "; ".join(problems) + ". Compare "
-            "runs made with the same spec (for a result folder: --eps, --phi, --delta, --tau as the table's)"
+            "runs made with the same spec: evaluate again with the options that set the keys named (for a result "
+            "folder: --eps, --phi, --delta, --tau as the table's; align: --scale or --align, lorisnb report aligns "
+            "monocular systems with --scale auto)"
         )
     if base.version and cand.version and base.version != cand.version:
         say(f"note: lorisnb {base.version} made BASE, {cand.version} CAND")

@@ -194,6 +194,20 @@ def test_diff_of_tables_and_a_missing_sequence(versions, tmp_path, capsys):
 
 
 @pytest.mark.slow
+def test_tables_of_other_specs_name_only_the_keys_that_differ(icra20, tmp_path, capsys):
+    """Two tables of one folder, one aligned as ``lorisnb report`` aligns monocular systems
+    (``--scale auto``): refused as not comparable, naming the one spec key that differs and the
+    option that sets it, not both specs whole."""
+    se3, auto = tmp_path / "se3.csv", tmp_path / "auto.csv"
+    for out, more in ((se3, []), (auto, ["--scale", "auto"])):
+        assert main(["evaluate", str(icra20 / "per-seq" / "dso"), "--csv", str(out), "--no-progress", *more]) == 0
+    capsys.readouterr()
+    rc, _, err = run(capsys, se3, auto)
+    assert rc == 2
+    assert f'cafe, corridor, home, market: spec align: "se3" in {se3} against "auto" in {auto}. Compare' in err
+    assert "--scale auto" in err and '"association"' not in err
+
+
 def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
     """Two report run folders (run.json + per-sequence CSV tables), then history over three runs."""
     a, b = versions

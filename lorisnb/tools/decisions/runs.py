@@ -395,9 +395,30 @@ def setting_differences(a: pd.DataFrame, b: pd.DataFrame, name_a: str = "BASE", 
         if xs != ys:  # only the columns whose values differ (all of them if only their combination does)
             keep = [i for i in range(len(cols)) if {r[i] for r in xs} != {r[i] for r in ys}] or list(range(len(cols)))
             xk, yk = (sorted({tuple(r[i] for i in keep) for r in rows}) for rows in (xs, ys))
-            text = f"{', '.join(cols[i] for i in keep)} = {_rows(xk)} in {name_a} against {_rows(yk)} in {name_b}"
+            keys = _spec_keys(xk, yk, name_a, name_b) if [cols[i] for i in keep] == ["spec"] else None
+            text = (
+                keys or f"{', '.join(cols[i] for i in keep)} = {_rows(xk)} in {name_a} against {_rows(yk)} in {name_b}"
+            )
             said.setdefault(text, []).append(scene)
     return [f"{', '.join(scenes)}: {text}" for text, scenes in said.items()]
+
+
+def _spec_keys(a: list[tuple], b: list[tuple], name_a: str, name_b: str) -> str | None:
+    """The keys that differ between one spec (a table's ``spec`` column, JSON) on each side, with
+    their values (``spec align: "se3" in A against "auto" in B``), instead of both specs whole;
+    None when a side holds several specs or one that is not a JSON object."""
+    if len(a) != 1 or len(b) != 1:
+        return None
+    try:
+        x, y = json.loads(str(a[0][0])), json.loads(str(b[0][0]))
+    except ValueError:
+        return None
+    if not isinstance(x, dict) or not isinstance(y, dict):
+        return None
+    missing = object()
+    keys = [k for k in sorted(set(x) | set(y)) if x.get(k, missing) != y.get(k, missing)]
+    return "; ".join(f"spec {k}: {_json(x.get(k, missing), missing)} in {name_a} against "
+                     f"{_json(y.get(k, missing), missing)} in {name_b}" for k in keys) or None  # fmt: skip
 
 
 def _json(value: Any, missing: object) -> str:
