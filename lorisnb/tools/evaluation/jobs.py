@@ -180,15 +180,16 @@ def _openloris(job: Job, progress: bool) -> FileErrors | None:
     assert job.data is not None
     spec = job.spec
     algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
-    declared = declared_scene(job.path)
-    if declared is not None:  # a scene without ground truth here (office's is not public) is skipped unread
-        job.data.groundtruth(declared)  # the DataNotFoundError reading the file in full would end in
+    declared = declared_scene(job.path)  # a scene without ground truth here (office's is not public): skipped
+    # unread, with the DataNotFoundError reading the file in full would end in
+    gt_path = job.data.groundtruth(declared) if declared is not None else None
     result = _read_result(job, progress)  # the estimate's repeated poses: by the spec's rule
     if job.scenes is not None and result.scene not in job.scenes:
         return None
-    gt = load_groundtruth(result.scene, job.data, GT_DROP)
-    moved = _moved(job.data, result.scene, GT_DROP, result.frame, spec.official_interpolation,
-                   _stamp(job.data.groundtruth(result.scene)))  # fmt: skip
+    if gt_path is None or declared != result.scene:  # the scene's ground truth (load_groundtruth's file)
+        gt_path = job.data.groundtruth(result.scene)
+    gt = read_groundtruth_file(gt_path, GT_DROP)
+    moved = _moved(job.data, result.scene, GT_DROP, result.frame, spec.official_interpolation, _stamp(gt_path))
     return compute_errors(
         result, gt, spec, algorithm=algorithm, file=rel, suite=suite, trial=trial, in_frame=moved,
         other_spans=partial(groundtruth_spans, job.data, GT_DROP), release=result.sequences.pop,
