@@ -10,6 +10,7 @@ import re
 import sys
 import warnings
 from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -55,34 +56,63 @@ def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
     return out
 
 
-def walk(folder: Path, inside: Iterable[Path] | None = None) -> list[Path]:
+@dataclass(frozen=True)
+class Found:
+    """A file or folder :func:`walk` found: where it is, where it really is (links resolved), what
+    it is (``folder``, ``file``, ``dangling``: a link to nothing, or ``other``) and whether it or a
+    folder it is in is hidden (:func:`is_hidden`)."""
+
+    path: Path
+    real: str
+    kind: str
+    hidden: bool
+
+
+def walk(folder: Path, inside: Iterable[Path] | None = None) -> list[Found]:
     """Every file and folder below ``folder``, linked folders followed as folders are (a lab links
     an algorithm's runs from elsewhere into its results folder: they were left out, silently). A
     link to a folder it lies in (a loop) is not walked again, with a LorisWarning naming it.
     ``inside``: folders (resolved) a linked folder must lead into to be walked (a received run's
-    check reads nothing elsewhere); one leading elsewhere is listed, not walked."""
-    out: list[Path] = []
+    check reads nothing elsewhere); one leading elsewhere is listed, not walked. One ``scandir``
+    per folder: an entry's real path is its folder's and its name unless it is a link."""
+    out: list[Found] = []
     loops: list[str] = []
     allowed = None if inside is None else [Path(f) for f in inside]
-    above: dict[str, frozenset[str]] = {str(folder): frozenset({os.path.realpath(folder)})}
-    for here, dirs, files in os.walk(folder, followlinks=True):
-        kept = []
-        for d in dirs:
-            path = os.path.join(here, d)
-            real = os.path.realpath(path)
-            out.append(Path(path))
-            if real in above[here]:
-                loops.append(f"{path} -> {real}")
+    top = os.path.realpath(folder)
+    stack = [(os.fspath(folder), top, frozenset({top}), False)]
+    while stack:
+        here, real_here, above, hidden_here = stack.pop()
+        try:
+            with os.scandir(here) as it:
+                entries = list(it)
+        except OSError:  # an unreadable folder is passed over, as os.walk and rglob do
+            continue
+        for e in entries:
+            link = e.is_symlink()
+            real = os.path.realpath(e.path) if link else os.path.join(real_here, e.name)
+            try:
+                kind = (
+                    "folder"
+                    if e.is_dir()
+                    else "file"
+                    if e.is_file()
+                    else "dangling"
+                    if link and not os.path.exists(e.path)
+                    else "other"
+                )
+            except OSError:
+                kind = "other"
+            hidden = hidden_here or is_hidden(Path(e.name))
+            out.append(Found(Path(e.path), real, kind, hidden))
+            if kind != "folder":
                 continue
-            if allowed is not None and not any(Path(real) == f or f in Path(real).parents for f in allowed):
-                continue
-            above[path] = above[here] | {real}
-            kept.append(d)
-        dirs[:] = kept
-        out.extend(Path(here, f) for f in files)
+            if real in above:
+                loops.append(f"{e.path} -> {real}")
+            elif not link or allowed is None or any(Path(real) == f or f in Path(real).parents for f in allowed):
+                stack.append((e.path, real, above | {real}, hidden))
     if loops:
         warnings.warn(f"{len(loops)} linked folder(s) lead back to a folder they are in, not walked again: "
-                      + "; ".join(loops[:5]), LorisWarning, stacklevel=3)  # fmt: skip
+                      + "; ".join(sorted(loops)[:5]), LorisWarning, stacklevel=3)  # fmt: skip
     return out
 
 
@@ -91,23 +121,24 @@ def result_files(
 ) -> list[tuple[Path, Path | None]]:
     """Expand files and folders into ``(file, root)`` pairs; a folder is walked (:func:`walk`: linked
     folders followed) for files ending in ``suffixes`` below it (``root/<algorithm>/*.txt``, or
-    deeper: ``root/<suite>/<algorithm>/*.txt``), hidden files and folders left out. A ROS 2 bag (a folder holding ``metadata.yaml``) is one
-    file when ``.bag`` is among the suffixes."""
+    deeper: ``root/<suite>/<algorithm>/*.txt``), hidden files and folders left out. A ROS 2 bag (a
+    folder holding ``metadata.yaml``) is one file when ``.bag`` is among the suffixes."""
     out: list[tuple[Path, Path | None]] = []
+    reals: dict[Path, Path] = {}
     bags = ".bag" in suffixes
     for p in as_paths(paths):
         if p.is_dir() and not (bags and (p / "metadata.yaml").is_file()):
+            below = [f for f in walk(p) if not f.hidden]
             # a dangling link is an input that fails (saying so), never silently no input
-            below = walk(p)
-            found = [f for f in below if f.suffix in suffixes and (f.is_file() or f.is_symlink() and not f.exists())]
+            found = {f.path: f.real for f in below if f.path.suffix in suffixes and f.kind in ("file", "dangling")}
             if bags:  # a bag folder is one input: not also its .db3 / .mcap files
-                folders = [m.parent for m in below if m.name == "metadata.yaml"]
-                found = [f for f in found if not any(d in f.parents for d in folders)] + folders
-            files = sorted(f for f in found if not any(is_hidden(Path(part)) for part in f.relative_to(p).parts))
-            out.extend((f, p) for f in files)
+                folders = {f.path.parent: os.path.dirname(f.real) for f in below if f.path.name == "metadata.yaml"}
+                found = {k: v for k, v in found.items() if not any(d in k.parents for d in folders)} | folders
+            reals.update((k, Path(v)) for k, v in found.items())
+            out.extend((f, p) for f in sorted(found))
         else:
             out.append((p, None))
-    return unique_files(out)
+    return unique_files(out, reals)
 
 
 def names(what: str, value: object) -> list[str]:
@@ -158,7 +189,7 @@ def algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> list
         if holds_any(p, names):
             out.append((p, None))
             continue
-        subs = sorted(d for d in walk(p) if d.is_dir() and holds_any(d, names))
+        subs = sorted(d.path for d in walk(p) if d.kind == "folder" and holds_any(d.path, names))
         out.extend((d, p) for d in subs)
         if not subs:
             raise ValidationError(f"{p}: no estimate named {', '.join(sorted(names))} in it or below it")
@@ -173,15 +204,19 @@ def real_path(path: Path) -> Path:
         return path.absolute()
 
 
-def unique_files(items: list[tuple[Path, Path | None]]) -> list[tuple[Path, Path | None]]:
+def unique_files(
+    items: list[tuple[Path, Path | None]], reals: dict[Path, Path] | None = None
+) -> list[tuple[Path, Path | None]]:
     """``(file, root)`` pairs with every file kept once (compared by real path, the first naming
-    kept), with a LorisWarning listing what was named more than once: an input is never scored
-    twice, nor called a duplicate (a second trial) of itself."""
+    kept; ``reals``: those already known, :func:`walk`'s), with a LorisWarning listing what was
+    named more than once: an input is never scored twice, nor called a duplicate (a second trial)
+    of itself."""
     seen: dict[Path, Path] = {}
     out: list[tuple[Path, Path | None]] = []
     again: list[str] = []
+    known = reals or {}
     for path, root in items:
-        key = real_path(path)
+        key = known.get(path) or real_path(path)
         if key in seen:
             again.append(str(path) if str(path) == str(seen[key]) else f"{path} (= {seen[key]})")
             continue

@@ -75,7 +75,7 @@ def input_files(roots: Iterable[Path], resolve: bool = True, inside: Iterable[Pa
         if root.is_file():
             found[root.resolve() if resolve else root] = None
         elif root.is_dir():
-            for p in sorted(walk(root, inside)):
+            for p in sorted(f.path for f in walk(root, inside)):
                 rel = p.relative_to(root).parts
                 if p.is_file() and not any(part.startswith(".") for part in rel):
                     found[p.resolve() if resolve else p] = None
