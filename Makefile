@@ -78,6 +78,7 @@ format: $(STAMP)
 	$(BIN)/ruff check --fix lorisnb tests benchmarks notebooks docs/*.py
 
 bench: bytecode
+	$(BIN)/python -m pip install -q 'polars>=1'  # a reading baseline (issue 47), for the bench only
 	$(BIN)/python benchmarks/bench.py
 
 # the regression gate's measured error rates: false alarms and power by trial count (docs/guide/regression-gating.md)

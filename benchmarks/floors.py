@@ -5,10 +5,11 @@ Each figure is a ratio of lorisnb's time (or memory) to a baseline's, both run i
 over the runs (this machine is shared; a ratio of two runs next to each other drifts less than
 either time). Baselines:
 
-- reading: the faster of two public readers run by run, pandas' fastest exact parse of the same
-  file, ``pd.read_csv(path, sep=" ", header=None, engine="c")``, and ``pyarrow.csv.read_csv``
-  with its threads, columns to numpy (``sep=","`` and the header line skipped for EuRoC), each
-  file in a new process where all run (:func:`bench_readers`);
+- reading: the fastest of the public readers run by run, pandas' fastest exact parse of the same
+  file, ``pd.read_csv(path, sep=" ", header=None, engine="c")``, ``pyarrow.csv.read_csv`` with its
+  threads, and ``polars.read_csv`` with its threads where polars is installed (``make bench``
+  installs it), columns to numpy (``sep=","`` and the header line skipped for EuRoC), each file in
+  a new process where all run (:func:`bench_readers`);
 - a small pair, ``--help``: ``evo_ape`` (evo's command line), whole processes, wall time and peak
   resident memory;
 - a large pair: a process that only parses both files with that pandas call;
@@ -140,7 +141,7 @@ def bench_readers(folder: Path) -> None:
 
     print(
         "\nreading, lorisnb / the fastest public reader of the same file (pandas.read_csv(sep=' ', header=None, "
-        "engine='c'), pyarrow.csv.read_csv with its threads), a new process each:"
+        "engine='c'), pyarrow.csv.read_csv and polars.read_csv with their threads), a new process each:"
     )
     for n, runs in ((10_000, 75), (1_000_000, 9)):
         traj = lifelong_groundtruth(n, 1)[1]
@@ -149,12 +150,13 @@ def bench_readers(folder: Path) -> None:
             write_plain(path, traj, fmt)
             cmd = [sys.executable, __file__, "read", fmt, str(path), str(runs)]
             out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
-            a, b, c = json.loads(next(ln for ln in out.splitlines() if ln.startswith(READ_LINE))[len(READ_LINE) :])
-            fastest = [min(x, y) for x, y in zip(b, c, strict=True)]  # run by run: the faster public reader
+            times = json.loads(next(ln for ln in out.splitlines() if ln.startswith(READ_LINE))[len(READ_LINE) :])
+            a, theirs = times.pop("lorisnb"), times
+            fastest = [min(run) for run in zip(*theirs.values(), strict=True)]  # run by run: the fastest public reader
             lo, med = ratios(a, fastest)
             print(
                 f"  {fmt} {n:>9,} poses ({path.stat().st_size / 1e6:.0f} MB): lorisnb {min(a):.4f} s, "
-                f"pandas {min(b):.4f} s, pyarrow {min(c):.4f} s"
+                + ", ".join(f"{name} {min(t):.4f} s" for name, t in theirs.items())
             )
             name = fmt.upper() if fmt != "euroc" else "EuRoC"
             row(f"read {name} {n:,} poses / fastest public reader", lo, med, "<= 1.1x", 1.1)
@@ -162,7 +164,8 @@ def bench_readers(folder: Path) -> None:
 
 
 def _read(fmt: str, path: Path, runs: int) -> None:
-    """One file of :func:`bench_readers`, in this process: the times of lorisnb, pandas and pyarrow, printed."""
+    """One file of :func:`bench_readers`, in this process: the times of lorisnb, pandas, pyarrow and
+    (where installed) polars, printed."""
     import warnings
 
     import pandas as pd
@@ -173,17 +176,22 @@ def _read(fmt: str, path: Path, runs: int) -> None:
     read = {"tum": read_tum, "kitti": read_kitti, "euroc": read_euroc}[fmt]
     sep, skip = (",", 1) if fmt == "euroc" else (" ", 0)
     arrow = (pc.ReadOptions(autogenerate_column_names=True, skip_rows=skip), pc.ParseOptions(delimiter=sep))
+    readers = {
+        "pandas": lambda: pd.read_csv(path, sep=sep, header=None, engine="c", skiprows=skip),
+        "pyarrow": lambda: [col.to_numpy() for col in pc.read_csv(path, *arrow).columns],
+    }
+    try:
+        import polars as pl
+    except ImportError:
+        pass
+    else:
+        readers["polars"] = lambda: [
+            c.to_numpy() for c in pl.read_csv(path, separator=sep, has_header=False, skip_rows=skip).get_columns()
+        ]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        b, c, a = in_turn(
-            [
-                lambda: pd.read_csv(path, sep=sep, header=None, engine="c", skiprows=skip),
-                lambda: [col.to_numpy() for col in pc.read_csv(path, *arrow).columns],
-                lambda: read(path),
-            ],
-            runs,
-        )
-    print(READ_LINE + json.dumps([a, b, c]))
+        times = in_turn([*readers.values(), lambda: read(path)], runs)
+    print(READ_LINE + json.dumps(dict(zip([*readers, "lorisnb"], times, strict=True))))
 
 
 def bench_small_pair_and_help(data) -> None:
