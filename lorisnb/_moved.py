@@ -8,7 +8,6 @@ exports the former module's public names itself and needs no entry here.
 from __future__ import annotations
 
 import importlib
-import importlib.abc
 import importlib.machinery
 import sys
 import warnings
@@ -101,14 +100,17 @@ MOVED: dict[str, str] = {
 }
 
 
-class _Alias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+class _Alias:
     """Finds a former module's name and loads it as the module at its new place (one module object
-    under both names, so that state and monkeypatching are shared)."""
+    under both names, so that state and monkeypatching are shared). A meta path finder and loader
+    by their methods (``find_spec``, ``create_module``, ``exec_module``): ``importlib.abc``, whose
+    base classes add nothing here, costs every ``import lorisnb`` 14 ms (it imports
+    ``importlib.resources``)."""
 
     def find_spec(self, fullname, path=None, target=None):  # noqa: ANN001
         if fullname not in MOVED:
             return None
-        return importlib.machinery.ModuleSpec(fullname, self)
+        return importlib.machinery.ModuleSpec(fullname, self)  # type: ignore[arg-type]  # a loader by its methods
 
     def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType:
         new = MOVED[spec.name]
