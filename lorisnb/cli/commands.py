@@ -31,6 +31,11 @@ def _executor(args: argparse.Namespace) -> Any:
     return client.get_executor()
 
 
+def every_column(spec: Any) -> bool:
+    """A command's table holds every column, the error statistics too (``_run_evaluation``'s ``statistics``)."""
+    return True
+
+
 def _run_evaluation(
     args: argparse.Namespace, files: list[str], folders: tuple[str, ...] = (),
     swept: Callable[[Any], str] | None = None, side: str = "", statistics: Callable[[Any], bool] | None = None,
@@ -357,7 +362,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                          "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
                          "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)",
                          "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)"})  # fmt: skip
-    ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"])
+    ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"], statistics=every_column)
     table = ev.sequences()
     if not table.empty:
         res = compare_table(table, ev.durations(), args.metric, level=args.level, alpha=args.alpha,
