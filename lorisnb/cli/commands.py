@@ -39,6 +39,7 @@ def every_column(spec: Any) -> bool:
 def _run_evaluation(
     args: argparse.Namespace, files: list[str], folders: tuple[str, ...] = (),
     swept: Callable[[Any], str] | None = None, side: str = "", statistics: Callable[[Any], bool] | None = None,
+    poses: Callable[[Any], bool] | None = None,
 ) -> tuple[Any, list[str]]:  # fmt: skip
     """Every input kind through one spec (:func:`spec_from_args`) and one runner: OpenLORIS result
     files, ``--gt`` pairs or a ``--manifest``'s sessions. The output options ``files`` and
@@ -46,7 +47,10 @@ def _run_evaluation(
     estimates, the ground truth, times files, the manifest and its ground-truth files, the data
     root). Prints the ``conventions:`` line (``side``: which run, for ``diff``'s two). ``statistics``:
     whether the command's table shows the error statistics, given the spec (the workers then
-    compute them; :func:`~lorisnb.tools.evaluation.runner.evaluate`'s ``statistics``)."""
+    compute them; :func:`~lorisnb.tools.evaluation.runner.evaluate`'s ``statistics``). ``poses``:
+    whether the command reads each pose's errors once the files are evaluated, given the spec (by
+    default it does; else only the scores at the spec's setting travel back from the workers:
+    ``evaluate``'s ``keep_poses``)."""
     from lorisnb.io.datasets.manifest import openloris_preset_refusal, read_manifest
     from lorisnb.tools.evaluation.runner import (
         evaluate,
@@ -90,7 +94,8 @@ def _run_evaluation(
         inputs += [str(manifest.path), *(str(s.groundtruth) for s in manifest.sessions)]
     check_outputs(args, inputs, files, folders)
     kw: dict[str, Any] = dict(trials_by=args.trials_by, progress=not args.no_progress, jobs=args.jobs,
-                              executor=_executor(args), statistics=statistics is not None and statistics(spec))  # fmt: skip
+                              executor=_executor(args), statistics=statistics is not None and statistics(spec),
+                              keep_poses=poses is None or poses(spec))  # fmt: skip
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
         if args.gt:
@@ -153,7 +158,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     def statistics(spec: Any) -> bool:  # error statistics shown: scored with the errors, in the workers
         return whole_table(spec) or spec.preset_name == "evo"
 
-    ev, notes = _run_evaluation(args, ["csv", "kitti_plot"], folders=("parquet",), statistics=statistics)
+    def poses(spec: Any) -> bool:  # each pose's errors read here: else only the table's scores leave the workers
+        from lorisnb.tools.evaluation.runner import poses_needed
+
+        return poses_needed(spec) is not None or bool(args.kitti_plot or getattr(args, "relative", False)
+                                                          or args.relative_lengths)  # fmt: skip
+
+    ev, notes = _run_evaluation(args, ["csv", "kitti_plot"], folders=("parquet",), statistics=statistics, poses=poses)
     kitti = ev.spec.preset_name == "kitti"
     if args.kitti_plot and not kitti:
         raise ValidationError("--kitti-plot: the KITTI metric's plot, only with --conventions kitti")

@@ -117,3 +117,68 @@ def test_statistics_is_a_yes_no_value(icra20, value):
     """``statistics`` is checked as every yes/no option is: a string or number is refused, naming it."""
     with pytest.raises(ln.ValidationError, match="statistics"):
         ln.evaluate(icra20 / "lifelong" / "maslam" / "home.txt", statistics=value)
+
+
+@pytest.fixture(scope="module")
+def home_scores(icra20):
+    """Only the scores at the spec's setting sent back, each pose's errors let go (``lorisnb evaluate``)."""
+    return ln.evaluate(icra20 / "lifelong", algorithms=["maslam", "orbslam2_t265"], scenes=["home"], progress=False,
+                       keep_poses=False, jobs=2)  # fmt: skip
+
+
+def test_tables_without_the_poses_are_those_with_them(home_scores, home_all):
+    """``keep_poses=False``: the tables at the spec's setting (every column, and the rows without
+    the statistics) equal those of an evaluation that kept each pose's errors, to the last bit;
+    the per-scene table too; the sequences kept no per-pose array (a twentieth of the bytes here)."""
+    import pickle
+
+    pd.testing.assert_frame_equal(home_scores.sequences(), home_all.sequences(), check_exact=True)
+    lean, lean_all = home_scores.sequence_rows(stats=False), home_all.sequence_rows(stats=False)
+    assert [list(r) for r in lean] == [list(r) for r in lean_all] and pd.DataFrame(lean).equals(pd.DataFrame(lean_all))
+    pd.testing.assert_frame_equal(home_scores.scenes(), home_all.scenes(), check_exact=True)
+    assert [e.matched for f in home_scores.errors for e in f.sequences] == [
+        e.matched for f in home_all.errors for e in f.sequences
+    ]
+    kept = sum(len(pickle.dumps(f)) for f in home_scores.errors)
+    whole = sum(len(pickle.dumps(f)) for f in home_all.errors)
+    assert kept < whole / 20
+    assert home_scores.exit_status() == home_all.exit_status() == 0
+
+
+def test_without_the_poses_anything_else_says_how_to_keep_them(home_scores):
+    """Another setting, a sweep, the poses or a sequence's arrays: an EvaluationError naming
+    ``keep_poses``, never a number computed from nothing."""
+    e = home_scores.errors[0].sequences[0]
+    for attempt in (
+        lambda: home_scores.sequences(eps=0.5),
+        lambda: home_scores.poses(),
+        lambda: ln.sweep(home_scores.errors, eps=[1, 2], phi=[10]),
+        lambda: e.ate,
+        lambda: e.rpe(2.0),
+    ):
+        with pytest.raises(ln.EvaluationError, match="keep_poses=True"):
+            attempt()
+    assert "let go" in repr(e)
+
+
+def test_keep_poses_is_checked_and_refused_where_a_table_needs_the_poses(icra20, data):
+    """``keep_poses`` is a yes/no value; False is refused for specs whose table is computed from the
+    poses after the files are evaluated (KITTI's, TartanAir's, evo's relation statistics)."""
+    one = icra20 / "lifelong" / "maslam" / "home.txt"
+    with pytest.raises(ln.ValidationError, match="keep_poses"):
+        ln.evaluate(one, keep_poses="no")
+    est, gt = data.root / "tum-rgbd" / "fr2_desk_ORB.txt", data.root / "tum-rgbd" / "fr2_desk_groundtruth.txt"
+    for spec, options in (("kitti", {}), ("tartanair", {}), ("evo", {"relation": "angle_deg"})):
+        with pytest.raises(ln.ValidationError, match=r"keep_poses=False: .* keep them \(keep_poses=True\)"):
+            ln.evaluate_pairs(est, gt, spec, keep_poses=False, **options)
+    assert len(ln.evaluate_pairs(est, gt, "tum", keep_poses=False).sequences()) == 1
+
+
+def test_without_statistics_and_poses_the_printed_rows_read_and_the_statistics_refused(icra20):
+    """``statistics=False, keep_poses=False``: the rows without the statistics (the command line's
+    printed table) are read; a table with them needs the poses and says so."""
+    ev = ln.evaluate(icra20 / "lifelong" / "maslam" / "home.txt", statistics=False, keep_poses=False)
+    ref = ln.evaluate(icra20 / "lifelong" / "maslam" / "home.txt", statistics=False)
+    assert pd.DataFrame(ev.sequence_rows(stats=False)).equals(pd.DataFrame(ref.sequence_rows(stats=False)))
+    with pytest.raises(ln.EvaluationError, match="keep_poses=True"):
+        ev.sequences()

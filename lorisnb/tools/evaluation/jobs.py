@@ -16,7 +16,7 @@ from pathlib import Path
 
 from lorisnb.core.lifelong.missing import with_missing
 from lorisnb.core.lifelong.scoring import score_rows
-from lorisnb.core.pipeline.model import FileErrors, ResultFile
+from lorisnb.core.pipeline.model import FileErrors, ResultFile, scores_only
 from lorisnb.core.pipeline.plausibility import no_rpe_pair
 from lorisnb.core.pipeline.sessions import compute_errors, evaluate_sessions, moved_groundtruth, window_spans
 from lorisnb.core.spec.evalspec import EvalSpec
@@ -70,6 +70,7 @@ class Job:
     manifest: Manifest | None = None  # manifest
     scene: str = ""  # manifest: the scene of this job
     statistics: bool = True  # the spec's setting scored with the error statistics too (evaluate's ``statistics``)
+    keep_poses: bool = True  # False: each pose's errors let go once that setting is scored (evaluate's ``keep_poses``)
 
 
 def _stamp(path: Path) -> tuple[float, int]:
@@ -141,10 +142,14 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
             note = no_rpe_pair(f"{errors.file}, seq {seq.seq}", len(i), seq.stamps, o["rpe_delta"], o["rpe_unit"])
             if note is not None and note not in errors.warnings:
                 errors.warnings.append(note)
+        scored = False
         with contextlib.suppress(LorisError):  # the spec's setting scored here too, with the statistics or without
             # (kept on each sequence: lorisnb.core.lifelong.scoring.sequence_scores), where the errors are, so that a
             # table at it is read in the process collecting the files; a setting the scores refuse is refused there
             score_rows(errors, job.spec.eps, job.spec.phi, job.spec.delta, job.spec.tau, stats=job.statistics, **o)
+            scored = True
+        if scored and not job.keep_poses:  # only that table is wanted: its scores travel, not each pose's errors
+            errors.sequences = [scores_only(e) for e in errors.sequences]
         return "ok", errors
     except DataNotFoundError as exc:
         return "skipped", Failure(job.path, str(exc), "not-public" if exc.scene in NOT_PUBLIC else "no-groundtruth")

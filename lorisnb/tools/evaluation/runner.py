@@ -80,6 +80,28 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
     return Evaluation(done, failed, root, skipped, data, spec=spec, kind=kind, notes=list(notes or []))
 
 
+def poses_needed(spec: EvalSpec) -> str | None:
+    """Why a table of ``spec`` needs each pose's errors in the process that collects the files (its
+    columns are computed there from them), or None: evo's ``relation`` statistics, the KITTI
+    devkit's and tartanair_tools' numbers."""
+    if spec.relation is not None:
+        return f"evo's relation {spec.relation!r} statistics"
+    if spec.preset_name in ("kitti", "tartanair"):
+        return f"the {spec.preset_name} preset's numbers"
+    return None
+
+
+def _keep_poses(spec: EvalSpec, keep_poses: Any) -> bool:
+    """``keep_poses`` checked (a yes/no value): False is refused where the spec's table needs the
+    poses (:func:`poses_needed`)."""
+    keep = validate.flag("keep_poses", keep_poses)
+    why = None if keep else poses_needed(spec)
+    if why is not None:
+        raise ValidationError(f"keep_poses=False: {why} are computed from each pose's errors after the files are "
+                              "evaluated; keep them (keep_poses=True)")  # fmt: skip
+    return keep
+
+
 def _check_trials(items: list[tuple[Path, Path | None]], trials_by: str | None) -> None:
     """A ``trials_by`` that matches none of the inputs' paths is an error (:func:`check_trials_by`)."""
     check_trials_by([labels(p, r, trials_by)[1] if r else "/".join(p.parts[-3:]) for p, r in items], trials_by)
@@ -124,6 +146,7 @@ def evaluate(
     jobs: int | None = None,
     executor: Executor | None = None,
     statistics: bool = True,
+    keep_poses: bool = True,
     conventions: EvalSpec | str | None = None,
     **options: Any,
 ) -> Evaluation:
@@ -155,6 +178,13 @@ def evaluate(
             then read); False, only when a table asks for them, in this process (the command
             line's printed table shows none: the workers then score a quarter of the work). Every
             table holds the same numbers either way.
+        keep_poses: False lets each pose's errors go once the spec's setting is scored, so that
+            only that setting's scores travel back from the workers (a hundredth of the bytes;
+            ``lorisnb evaluate`` does this when it only prints or writes its table). The tables at
+            the spec's setting then read as ever (with the error statistics where ``statistics``
+            is True, else :meth:`Evaluation.sequence_rows` without them); another setting, a sweep,
+            a figure or the poses raise an EvaluationError saying to keep them. Refused for specs
+            whose tables are computed from the poses (:func:`poses_needed`).
     """
     the_spec = _spec(spec, conventions, options)
     notes = the_spec.refuse_inapplicable("openloris")
@@ -164,8 +194,9 @@ def evaluate(
     _check_trials(items, trials_by)
     data = find_data(data_root)  # no data at all is an error for the whole call, not per file
     items, scene_set = _filtered(items, algorithms, scenes, trials_by)
+    scored = validate.flag("statistics", statistics)
     template = Job(kind="openloris", path=Path(), root=None, spec=the_spec, trials_by=trials_by, data=data,
-                   scenes=scene_set, statistics=validate.flag("statistics", statistics))  # fmt: skip
+                   scenes=scene_set, statistics=scored, keep_poses=_keep_poses(the_spec, keep_poses))  # fmt: skip
     work = [replace(template, path=p, root=r) for p, r in items]
     roots = as_paths(paths)
     root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
@@ -264,6 +295,7 @@ def evaluate_pairs(
     jobs: int | None = None,
     executor: Executor | None = None,
     statistics: bool = True,
+    keep_poses: bool = True,
     **options: Any,
 ) -> Evaluation:
     """Score estimate files against one ground truth with every metric of lorisnb.
@@ -281,7 +313,7 @@ def evaluate_pairs(
         topic, gt_topic, tf, gt_tf: what to read from bags (see :func:`lorisnb.io.readers.bags.read_bag`);
             ``topic`` may name several topics (or evo's TF ids) separated by commas: one row each, its
             ``algorithm`` the topic.
-        jobs, executor, progress, trials_by, statistics: as for :func:`evaluate`.
+        jobs, executor, progress, trials_by, statistics, keep_poses: as for :func:`evaluate`.
     """
     the_spec = _spec(spec, conventions, options)
     src = pair_source(groundtruth, fmt, gt_fmt, scene, est_times=est_times, gt_times=gt_times, topic=topic,
@@ -305,8 +337,10 @@ def evaluate_pairs(
         raise ValidationError(f"topic {src.topic!r}: expected topics separated by commas, none empty")
     sources = [src] if len(topics) == 1 else [replace(src, topic=t, label_topic=True) for t in topics]
     scored = validate.flag("statistics", statistics)
+    keep = _keep_poses(the_spec, keep_poses)
     work = [  # several topics of one bag: one row each, labelled with its topic
-        Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=one, statistics=scored)
+        Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=one, statistics=scored,
+            keep_poses=keep)
         for p, r in items
         for one in sources
     ]
@@ -325,6 +359,7 @@ def evaluate_manifest(
     jobs: int | None = None,
     executor: Executor | None = None,
     statistics: bool = True,
+    keep_poses: bool = True,
     data_root: DataRoot | DataPaths | None = None,
     **options: Any,
 ) -> Evaluation:
@@ -334,7 +369,7 @@ def evaluate_manifest(
     default; a preset name (``spec``/``conventions``) replaces its conventions and keeps the rest, a
     spec object is used as it is, and ``lifelong`` and ``options`` go over either. The built-in
     ``openloris`` manifest runs :func:`evaluate` (``data_root`` is its data). ``trials_by``,
-    ``progress``, ``jobs``, ``executor`` and ``statistics`` are :func:`evaluate`'s."""
+    ``progress``, ``jobs``, ``executor``, ``statistics`` and ``keep_poses`` are :func:`evaluate`'s."""
     m = manifest if isinstance(manifest, Manifest) else read_manifest(manifest)
     if lifelong is not None:
         options["lifelong"] = lifelong
@@ -344,7 +379,7 @@ def evaluate_manifest(
             raise ValidationError(openloris_preset_refusal("spec" if spec is not None else "conventions", given))
         refuse_over_manifest(make_spec(m.spec, **options), m, options, "openloris")
         return evaluate(results, m.spec, data_root=data_root, trials_by=trials_by, progress=progress, jobs=jobs,
-                        executor=executor, statistics=statistics, **options)  # fmt: skip
+                        executor=executor, statistics=statistics, keep_poses=keep_poses, **options)  # fmt: skip
     if data_root is not None:
         raise ValidationError("data_root: a manifest names its own ground-truth files (root and groundtruth)")
     if spec is not None and conventions is not None:
@@ -365,6 +400,7 @@ def evaluate_manifest(
     folders = algorithm_folders(results, m)
     _check_trials([(f / "x", r) for f, r in folders], trials_by)
     scored = validate.flag("statistics", statistics)
+    keep = _keep_poses(the_spec, keep_poses)
     work = [
         Job(
             kind="manifest",
@@ -375,6 +411,7 @@ def evaluate_manifest(
             manifest=m,
             scene=scene,
             statistics=scored,
+            keep_poses=keep,
         )
         for folder, root in folders
         for scene in m.scenes
