@@ -339,8 +339,16 @@ def evaluate_pairs(
     scored = validate.flag("statistics", statistics)
     keep = _keep_poses(the_spec, keep_poses)
     work = [  # several topics of one bag: one row each, labelled with its topic
-        Job(kind="pair", path=p, root=r, spec=the_spec, trials_by=trials_by, source=one, statistics=scored,
-            keep_poses=keep)
+        Job(
+            kind="pair",
+            path=p,
+            root=r,
+            spec=the_spec,
+            trials_by=trials_by,
+            source=one,
+            statistics=scored,
+            keep_poses=keep,
+        )
         for p, r in items
         for one in sources
     ]
