@@ -282,15 +282,15 @@ class ScoresOnly(SequenceErrors):
     sequence: 2 KB instead of 270 KB pickled). Its matched count, lever and sizes are kept; reading
     a per-pose field is an :class:`~lorisnb.errors.EvaluationError` saying how to keep them."""
 
-    stamps = _let_go("stamps")  # type: ignore[assignment]
-    ate = _let_go("ate")  # type: ignore[assignment]
-    aoe = _let_go("aoe")  # type: ignore[assignment]
-    est_positions = _let_go("est_positions")  # type: ignore[assignment]
-    gt_positions = _let_go("gt_positions")  # type: ignore[assignment]
-    est_quaternions = _let_go("est_quaternions")  # type: ignore[assignment]
-    gt_quaternions = _let_go("gt_quaternions")  # type: ignore[assignment]
-    est_blocks = _let_go("est_blocks")  # type: ignore[assignment]
-    gt_blocks = _let_go("gt_blocks")  # type: ignore[assignment]
+    stamps = _let_go("stamps")
+    ate = _let_go("ate")
+    aoe = _let_go("aoe")
+    est_positions = _let_go("est_positions")
+    gt_positions = _let_go("gt_positions")
+    est_quaternions = _let_go("est_quaternions")
+    gt_quaternions = _let_go("gt_quaternions")
+    est_blocks = _let_go("est_blocks")
+    gt_blocks = _let_go("gt_blocks")
 
     @property
     def matched(self) -> int:
