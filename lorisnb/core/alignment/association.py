@@ -142,7 +142,7 @@ def associate(
     ok = np.empty(len(t), bool)
 
     increasing = bool(np.all(t[1:] >= t[:-1]))  # as a Trajectory's stamps are
-    sparse = sparser_than(g, max_gap)
+    sparse: list[bool] = []  # sparser_than(g, max_gap), worked out only where an equal stamp needs it (a median)
 
     def bracket(lo: int, hi: int) -> None:  # the ground-truth interval of each stamp, and whether it matches
         tt = t[lo:hi]
@@ -151,8 +151,15 @@ def associate(
         k = np.clip(np.searchsorted(g[w0 : w1 + 1], tt, side="left") + (w0 - 1), 0, len(g) - 2)
         i[lo:hi] = k
         g1, g2 = np.take(g, k), np.take(g, k + 1)
-        exact = ((tt == g1) | (tt == g2)) & sparse  # the ground-truth pose itself: no interpolation, no bracket
-        ok[lo:hi] = (tt >= g[0]) & (tt <= g[-1]) & ((np.maximum(tt - g1, g2 - tt) < max_gap) | exact)
+        inside = (tt >= g[0]) & (tt <= g[-1])
+        near = np.maximum(tt - g1, g2 - tt) < max_gap
+        ok[lo:hi] = inside & near
+        exact = inside & ~near & ((tt == g1) | (tt == g2))  # the ground-truth pose itself: no interpolation, no
+        if exact.any():  # bracket, where the ground truth is sparser than it
+            if not sparse:
+                sparse.append(sparser_than(g, max_gap))
+            if sparse[0]:
+                ok[lo:hi] |= exact
 
     blockwise(bracket, len(t))
     idx = np.flatnonzero(ok)
