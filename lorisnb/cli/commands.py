@@ -36,6 +36,16 @@ def every_column(spec: Any) -> bool:
     return True
 
 
+def tables_only(spec: Any) -> bool:
+    """Whether a command that reads only the tables at the spec's setting (``compare``, ``diff`` and
+    ``history`` of a result folder) needs each pose's errors all the same (``_run_evaluation``'s
+    ``poses``): only where the spec's columns are computed from them
+    (:func:`~lorisnb.tools.evaluation.runner.poses_needed`)."""
+    from lorisnb.tools.evaluation.runner import poses_needed
+
+    return poses_needed(spec) is not None
+
+
 def _run_evaluation(
     args: argparse.Namespace, files: list[str], folders: tuple[str, ...] = (),
     swept: Callable[[Any], str] | None = None, side: str = "", statistics: Callable[[Any], bool] | None = None,
@@ -159,10 +169,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         return whole_table(spec) or spec.preset_name == "evo"
 
     def poses(spec: Any) -> bool:  # each pose's errors read here: else only the table's scores leave the workers
-        from lorisnb.tools.evaluation.runner import poses_needed
-
-        return poses_needed(spec) is not None or bool(args.kitti_plot or getattr(args, "relative", False)
-                                                          or args.relative_lengths)  # fmt: skip
+        return tables_only(spec) or bool(args.kitti_plot or getattr(args, "relative", False) or args.relative_lengths)
 
     ev, notes = _run_evaluation(args, ["csv", "kitti_plot"], folders=("parquet",), statistics=statistics, poses=poses)
     kitti = ev.spec.preset_name == "kitti"
@@ -373,7 +380,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
                          "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
                          "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)",
                          "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)"})  # fmt: skip
-    ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"], statistics=every_column)
+    ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"], statistics=every_column,
+                                poses=tables_only)  # fmt: skip
     table = ev.sequences()
     if not table.empty:
         res = compare_table(table, ev.durations(), args.metric, level=args.level, alpha=args.alpha,

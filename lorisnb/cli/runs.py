@@ -11,7 +11,7 @@ from typing import Any
 
 import pandas as pd
 
-from lorisnb.cli.commands import every_column, fmt_table, report_problems, run_evaluation
+from lorisnb.cli.commands import every_column, fmt_table, report_problems, run_evaluation, tables_only
 from lorisnb.cli.outputs import check_outputs, refuse_unused
 from lorisnb.cli.text import clean, say
 from lorisnb.errors import ValidationError
@@ -48,8 +48,12 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
     if not p.exists():
         raise ValidationError(f"{path}: no such result folder, run folder or table")
     ev, notes = run_evaluation(
-        argparse.Namespace(**{**vars(args), "paths": [path]}), [], side=f" of {path}", statistics=every_column
-    )  # outputs: checked first; every column scored in the workers (the table below)
+        argparse.Namespace(**{**vars(args), "paths": [path]}),
+        [],
+        side=f" of {path}",
+        statistics=every_column,
+        poses=tables_only,
+    )  # outputs: checked first; every column scored in the workers (the table below), only it sent back
     report_problems(ev, [f"{path}: {n}" for n in notes])
     failed = unevaluated(ev, p)  # not evaluated, or evaluated but not scored: as evaluate's exit status counts
     table = ev.sequences()  # at the spec's thresholds (the options', else the defaults)

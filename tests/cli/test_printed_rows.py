@@ -35,3 +35,42 @@ def test_evo_conventions_print_their_statistics(data, tmp_path, capsys):
     assert lean == full and "ate_median" in lean
     row = pd.read_csv(tmp_path / "t.csv").iloc[0]
     assert f"{row['ate_median']:.4f}" in lean and row["ate_median"] > 0
+
+
+def _kept_poses(monkeypatch, argv: list[str]) -> list[bool]:
+    """``keep_poses`` of each evaluation a command line runs (the real evaluation, recorded)."""
+    from lorisnb.tools.evaluation import runner
+
+    seen: list[bool] = []
+    real = runner.evaluate, runner.evaluate_pairs
+
+    def recording(fn):
+        def run(*args, **kwargs):
+            seen.append(kwargs.get("keep_poses", True))
+            return fn(*args, **kwargs)
+
+        return run
+
+    monkeypatch.setattr(runner, "evaluate", recording(real[0]))
+    monkeypatch.setattr(runner, "evaluate_pairs", recording(real[1]))
+    assert main([*argv, "--no-progress"]) in (0, 1)
+    return seen
+
+
+def test_commands_that_read_only_tables_have_only_the_scores_sent_back(icra20, data, tmp_path, monkeypatch, capsys):
+    """``evaluate`` printing or writing its table, ``compare`` and ``diff`` of result folders let the
+    workers send back only the scores (``keep_poses=False``); ``--relative``, KITTI's preset and
+    ``sweep`` (another setting per grid point) keep each pose's errors; the printed text is the
+    same either way."""
+    folder = str(icra20 / "lifelong" / "maslam")
+    g, e = str(data.tum / "fr2_desk_groundtruth.txt"), str(data.tum / "fr2_desk_ORB.txt")
+    assert _kept_poses(monkeypatch, ["evaluate", folder, "--csv", str(tmp_path / "t.csv")]) == [False]
+    assert _kept_poses(monkeypatch, ["compare", folder]) == [False]
+    assert _kept_poses(monkeypatch, ["diff", folder, folder]) == [False, False]
+    assert _kept_poses(monkeypatch, ["evaluate", e, "--gt", g, "--relative"]) == [True]
+    assert _kept_poses(monkeypatch, ["evaluate", e, "--gt", g, "--conventions", "kitti"]) == [True]
+    assert _kept_poses(monkeypatch, ["sweep", folder, "--eps", "1,2", "--phi", "10"]) == [True]
+    capsys.readouterr()
+    lean = _printed(capsys, [folder])
+    monkeypatch.setattr("lorisnb.cli.commands.tables_only", lambda spec: True)  # every pose kept: the same text
+    assert _printed(capsys, [folder]) == lean
