@@ -158,7 +158,7 @@ def test_without_the_poses_anything_else_says_how_to_keep_them(home_scores):
     ):
         with pytest.raises(ln.EvaluationError, match="keep_poses=True"):
             attempt()
-    assert "let go" in repr(e)
+    assert "let go" in repr(e) and "keep_poses=False" in repr(home_scores)
 
 
 def test_keep_poses_is_checked_and_refused_where_a_table_needs_the_poses(icra20, data):

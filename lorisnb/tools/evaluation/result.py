@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 from lorisnb.core.lifelong.aggregate import aggregate_scenes, spans_table
 from lorisnb.core.lifelong.scoring import pose_table, score_rows
 from lorisnb.core.metrics.relative import RPG_FRACTIONS
-from lorisnb.core.pipeline.model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, STAT_COLUMNS, Eps, FileErrors
+from lorisnb.core.pipeline.model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, STAT_COLUMNS, Eps, FileErrors, ScoresOnly
 from lorisnb.core.spec.evalspec import EvalSpec, make_spec
 from lorisnb.core.trajectory.blocks import threads
 from lorisnb.core.trajectory.frames import SCENES
@@ -247,4 +247,6 @@ class Evaluation:
         unscored = self.unscored
         parts += [f"{n} {w}" for n, w in ((len(self.failures), "failed"), (len(unscored), "unscored"),
                                           (len(skipped_only(self, unscored)), "skipped")) if n]  # fmt: skip
+        if any(isinstance(e, ScoresOnly) for f in self.errors for e in f.sequences):
+            parts.append("scores at its setting only, poses let go (keep_poses=False)")
         return f"<Evaluation: {', '.join(parts)}; {self.spec!r}>"
