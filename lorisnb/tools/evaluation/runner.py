@@ -91,15 +91,16 @@ def poses_needed(spec: EvalSpec) -> str | None:
     return None
 
 
-def _keep_poses(spec: EvalSpec, keep_poses: Any) -> bool:
-    """``keep_poses`` checked (a yes/no value): False is refused where the spec's table needs the
-    poses (:func:`poses_needed`)."""
-    keep = validate.flag("keep_poses", keep_poses)
+def _sent_back(spec: EvalSpec, statistics: Any, keep_poses: Any) -> tuple[bool, bool]:
+    """What the workers score and send back, the same for every input kind (a :class:`Job`'s
+    ``statistics`` and ``keep_poses``), checked as yes/no values: ``keep_poses=False`` is refused
+    where the spec's table needs the poses (:func:`poses_needed`)."""
+    scored, keep = validate.flag("statistics", statistics), validate.flag("keep_poses", keep_poses)
     why = None if keep else poses_needed(spec)
     if why is not None:
         raise ValidationError(f"keep_poses=False: {why} are computed from each pose's errors after the files are "
                               "evaluated; keep them (keep_poses=True)")  # fmt: skip
-    return keep
+    return scored, keep
 
 
 def _check_trials(items: list[tuple[Path, Path | None]], trials_by: str | None) -> None:
@@ -194,9 +195,9 @@ def evaluate(
     _check_trials(items, trials_by)
     data = find_data(data_root)  # no data at all is an error for the whole call, not per file
     items, scene_set = _filtered(items, algorithms, scenes, trials_by)
-    scored = validate.flag("statistics", statistics)
+    scored, keep = _sent_back(the_spec, statistics, keep_poses)
     template = Job(kind="openloris", path=Path(), root=None, spec=the_spec, trials_by=trials_by, data=data,
-                   scenes=scene_set, statistics=scored, keep_poses=_keep_poses(the_spec, keep_poses))  # fmt: skip
+                   scenes=scene_set, statistics=scored, keep_poses=keep)  # fmt: skip
     work = [replace(template, path=p, root=r) for p, r in items]
     roots = as_paths(paths)
     root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
@@ -336,8 +337,7 @@ def evaluate_pairs(
     if len(topics) > 1 and not all(topics):
         raise ValidationError(f"topic {src.topic!r}: expected topics separated by commas, none empty")
     sources = [src] if len(topics) == 1 else [replace(src, topic=t, label_topic=True) for t in topics]
-    scored = validate.flag("statistics", statistics)
-    keep = _keep_poses(the_spec, keep_poses)
+    scored, keep = _sent_back(the_spec, statistics, keep_poses)
     work = [  # several topics of one bag: one row each, labelled with its topic
         Job(
             kind="pair",
@@ -407,8 +407,7 @@ def evaluate_manifest(
             )
     folders = algorithm_folders(results, m)
     _check_trials([(f / "x", r) for f, r in folders], trials_by)
-    scored = validate.flag("statistics", statistics)
-    keep = _keep_poses(the_spec, keep_poses)
+    scored, keep = _sent_back(the_spec, statistics, keep_poses)
     work = [
         Job(
             kind="manifest",
