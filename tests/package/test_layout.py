@@ -4,6 +4,8 @@ names kept private, notebooks stored clean. Fast, and independent of ../shared/d
 from __future__ import annotations
 
 import ast
+import importlib
+import json
 import re
 import subprocess
 import sys
@@ -173,3 +175,89 @@ def test_tests_mirror_the_layout():
     assert len(names) == len(set(names)), sorted({n for n in names if names.count(n) > 1})
     for layer in ("core", "io", "tools", "cli"):
         assert (ROOT / "lorisnb" / layer).is_dir() and (ROOT / "tests" / layer).is_dir()
+
+
+#: What the kit gives its users to read and run: every import there of a former module path
+#: (lorisnb._moved.MOVED) shows each user a DeprecationWarning. Generated course folders are left out.
+SHOWN = ("notebooks", "teaching", "docs", "benchmarks")
+SHOWN_FILES = (".py", ".ipynb", ".md", ".rst", ".toml", ".txt")
+GENERATED = {"release", "submitted", "autograded", "feedback", "graded", "exports", "_build", "__pycache__"}
+#: ``from X import a, b`` (or ``(a,\n b)``): a name imported from X is the module X.a where X.a was moved
+FROM_IMPORT = re.compile(r"\bfrom\s+(lorisnb(?:\.\w+)*)\s+import\s+(\([^)]*\)|[^\n;`\"']*)")
+
+
+def _former(module: str, name: str) -> str | None:
+    """``from module import name`` imports the former module path ``module.name``: MOVED lists it and
+    ``module`` exports no ``name`` of its own (``from lorisnb.core import sweep`` is the function)."""
+    from lorisnb._moved import MOVED
+
+    old = f"{module}.{name}"
+    return old if old in MOVED and name not in getattr(importlib.import_module(module), "__all__", ()) else None
+
+
+def _former_names_in_text(text: str) -> set[str]:
+    """The former module paths a text imports (``from lorisnb.io import published``, on one line or in
+    parentheses, in code, a string or a page's prose) or names (``lorisnb.io.published``, as in
+    ``import lorisnb.io.published`` or ``importlib.import_module("lorisnb.io.published")``)."""
+    from lorisnb._moved import MOVED
+
+    named = re.compile(r"(?<![\w.])(" + "|".join(map(re.escape, sorted(MOVED, key=len, reverse=True))) + r")(?!\w)")
+    found = set(named.findall(text))
+    for module, names in FROM_IMPORT.findall(text):
+        names = names.strip("()") if names.startswith("(") else names.split("#")[0]
+        for piece in names.split(","):
+            words = [w for w in piece.split() if w not in ("...", ">>>")]
+            if words and (old := _former(module, words[0])):
+                found.add(old)
+    return found
+
+
+def _former_names_imported(path: Path) -> set[str]:
+    """The former module paths a Python file's import statements name (strings are not looked at: a
+    test of the deprecation path imports the former names in a subprocess's code or by
+    ``importlib.import_module``)."""
+    from lorisnb._moved import MOVED
+
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            modules = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            modules = [node.module]
+            found |= {old for a in node.names if (old := _former(node.module, a.name))}
+        else:
+            continue
+        for module in modules:
+            parts = module.split(".")
+            found |= {".".join(parts[:k]) for k in range(2, len(parts) + 1)} & MOVED.keys()
+    return found
+
+
+def test_no_notebook_doc_or_test_imports_a_former_module_path():
+    """The notebooks, the teaching kit's sources, the manual, the README and the benchmarks import
+    lorisnb's modules from where they live now, not by a former name that lorisnb._moved maps with a
+    DeprecationWarning (shown to everyone who runs them); lorisnb's and the tests' own import
+    statements too."""
+    assert _former_names_in_text("from lorisnb.io import published\n") == {"lorisnb.io.published"}
+    assert _former_names_in_text(">>> from lorisnb.core import (\n...     ranking as r,\n...     stats)") == {
+        "lorisnb.core.ranking"
+    }
+    assert _former_names_in_text("x = importlib.import_module('lorisnb.tools.plotting')") == {"lorisnb.tools.plotting"}
+    assert not _former_names_in_text("from lorisnb.io.datasets import published\nimport lorisnb.io.datasets.paths\n")
+    pages = [ROOT / "README.md", ROOT / "environment.md"]
+    for folder in SHOWN:
+        pages += [
+            p
+            for p in (ROOT / folder).rglob("*")
+            if p.suffix in SHOWN_FILES and not GENERATED & set(p.relative_to(ROOT).parts)
+        ]
+    assert sum(p.suffix == ".ipynb" for p in pages) >= 10 and sum(p.suffix == ".md" for p in pages) >= 20, pages
+    found = []
+    for page in pages:
+        text = page.read_text()
+        if page.suffix == ".ipynb":  # the cells' text, as the user sees it
+            text = "\n".join("".join(c["source"]) for c in json.loads(text)["cells"])
+        found += [f"{page.relative_to(ROOT)}: {old}" for old in sorted(_former_names_in_text(text))]
+    for path in [*(ROOT / "lorisnb").rglob("*.py"), *(ROOT / "tests").rglob("*.py")]:
+        found += [f"{path.relative_to(ROOT)}: {old}" for old in sorted(_former_names_imported(path))]
+    assert not found, "former module paths (lorisnb._moved.MOVED; import from the new place):\n" + "\n".join(found)

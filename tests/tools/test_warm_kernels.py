@@ -152,7 +152,7 @@ def test_interrupt_and_shutdown_of_a_forked_kernel(tmp_path):
 MANAGER = textwrap.dedent(
     """
     import asyncio, json, sys, time
-    from lorisnb.tools import warm_kernels
+    from lorisnb.tools.report import kernels as warm_kernels
     from lorisnb.tools.report.notebooks import KERNEL_ARGS, kernel_manager_class
     z = json.loads(sys.argv[1])
     warm_kernels.use(warm_kernels.Zygote(z["address"], tuple(z["interpreter"]), tuple(map(tuple, z["env"]))))
@@ -264,7 +264,7 @@ def test_a_preload_that_warns_or_fails_keeps_kernels_cold(tmp_path):
     code = textwrap.dedent(
         """
         import sys
-        from lorisnb.tools import warm_kernels as w
+        from lorisnb.tools.report import kernels as w
         w.PRELOAD = (sys.argv[1],)
         print(w._preload())
         """
