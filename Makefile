@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND ?= Agg
 
-.PHONY: report test test-all test-fast test-slow test-browser browser-deps lint format evaluate bench calibrate bytecode clean-venv student grade book slides docs
+.PHONY: report test test-all test-fast test-slow test-browser browser-deps peers-deps lint format evaluate bench calibrate bytecode clean-venv student grade book slides docs
 
 $(STAMP): pyproject.toml lorisnb/_version.py lorisnb/core/trajectory/_rotations.c
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -45,14 +45,14 @@ test: bytecode
 # (threshold_sensitivity's ThresholdExplorer; an earlier stall: metrics_primer's FaultExplorer): the
 # kernel idle after the cell (py-spy), nbclient waiting for its execute_reply on the shell channel
 # (jupyter/nbclient#312, open: "when cell contains ipywidget, execute cell will sometimes block"); CI
-test-all: bytecode
+test-all: bytecode peers-deps
 	$(PYTEST) -m "not slow and not browser"
 	$(PYTEST_ONCE) -m "slow and not browser"
 
 test-fast: bytecode
 	$(PYTEST) -m "not slow and not browser"
 
-test-slow: bytecode
+test-slow: bytecode peers-deps
 	$(PYTEST) -m "slow and not browser"
 
 # Debian's Chromium and its driver (apt, as root or with sudo), where missing
@@ -60,6 +60,20 @@ browser-deps:
 	@command -v chromium >/dev/null && command -v chromedriver >/dev/null || { \
 	  SUDO=$$(test "$$(id -u)" = 0 || echo sudo); \
 	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq chromium chromium-driver; }
+
+# what the slow tests build the C++ peers with (tests/peers.py: the KITTI devkit with g++; OpenVINS'
+# ov_eval with g++, Eigen and Boost.Filesystem's headers and library), from Debian's packages (apt, as
+# root or with sudo), where missing. Where the peers folder holds neither C++ peer, nothing is built:
+# nothing to install.
+PEERS_DIR ?= $(or $(LORISNB_PEERS),$(HOME)/.cache/lorisnb/peers)
+peers-deps:
+	@test -d "$(PEERS_DIR)/open_vins" || test -d "$(PEERS_DIR)/kitti_devkit" || { \
+	  echo "peers-deps: no C++ peer in $(PEERS_DIR) (tests/peers.py): nothing to install"; exit 0; }; \
+	command -v g++ >/dev/null \
+	  && { test -f /usr/include/eigen3/Eigen/Core || test -f /usr/local/include/eigen3/Eigen/Core; } \
+	  && test -f /usr/include/boost/filesystem.hpp && ls /usr/lib/*/libboost_filesystem.so >/dev/null 2>&1 || { \
+	  SUDO=$$(test "$$(id -u)" = 0 || echo sudo); \
+	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq g++ libeigen3-dev libboost-filesystem-dev; }
 
 # the notebooks in JupyterLab in headless Chromium (screenshots in results/browser/), a report and the
 # manual offline (built first where build/docs/ has none)
