@@ -73,7 +73,7 @@ def _run_evaluation(
     if args.gt and args.manifest:
         raise ValidationError("--gt and --manifest: give one (a manifest names the ground truth of each session)")
     if getattr(args, "manifest_outside", False) and not args.manifest:
-        raise ValidationError("--manifest-outside: applies to the ground-truth files of a --manifest; give one")
+        raise ValidationError("--manifest-outside: applies to the files a --manifest reads; give one")
     outside = bool(getattr(args, "manifest_outside", False))
     manifest = read_manifest(args.manifest, outside=outside) if args.manifest else None
     base = manifest.spec if manifest is not None else None  # its thresholds, mode and [conventions]

@@ -117,3 +117,59 @@ def test_a_nul_character_in_a_manifest_name_is_refused_naming_the_key(tmp_path, 
     rc = main(["evaluate", str(tmp_path), "--manifest", str(m), "--no-progress"])
     err = capsys.readouterr().err
     assert rc == 2 and "a NUL character" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("target", ["secret", "folder"])
+def test_an_estimate_linked_from_outside_the_results_folder_is_refused_unread(tmp_path, data, secret, capsys, target):
+    """A session's estimate that is a link (to a file, or in a linked algorithm folder) leading out of
+    the results folder given is refused, naming it, its content never quoted; --manifest-outside reads it."""
+    tum = data.root / "tum-rgbd"
+    m = manifest(tmp_path / "m", "fr2_desk_groundtruth.txt", root=str(tum))
+    res = tmp_path / "res"
+    res.mkdir()
+    if target == "secret":
+        (res / "alg").mkdir()
+        (res / "alg" / "desk.txt").symlink_to(secret)
+    else:  # an algorithm folder linked in from elsewhere
+        (tmp_path / "elsewhere").mkdir()
+        (tmp_path / "elsewhere" / "desk.txt").write_text(SECRET)
+        (res / "alg").symlink_to(tmp_path / "elsewhere", target_is_directory=True)
+    rc = main(["evaluate", str(res), "--manifest", str(m), "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 1 and "desk.txt: a link to" in err and "outside the results folder" in err
+    assert "secret-first-line" not in err
+    rc = main(["evaluate", str(res), "--manifest", str(m), "--manifest-outside", "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 1 and "outside the results folder" not in err and "secret-first-line" in err  # read, as asked
+
+
+def test_an_estimate_linked_inside_the_results_folder_is_read(tmp_path, data, capsys):
+    tum = data.root / "tum-rgbd"
+    m = manifest(tmp_path / "m", "fr2_desk_groundtruth.txt", root=str(tum))
+    res = tmp_path / "res"
+    (res / "alg").mkdir(parents=True)
+    shutil.copy(tum / "fr2_desk_ORB.txt", res / "orb.txt")
+    (res / "alg" / "desk.txt").symlink_to(res / "orb.txt")
+    rc = main(["evaluate", str(res), "--manifest", str(m), "--no-progress"])
+    assert rc == 0 and "1/1" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("file_form", ["NFC", "NFD"])
+def test_a_session_finds_its_estimate_whatever_the_unicode_form_of_its_file_name(tmp_path, data, file_form):
+    """A session ``café`` (typed: NFC) finds ``café.txt`` saved by a Mac (NFD), and the other way round."""
+    import unicodedata
+
+    import lorisnb as ln
+
+    tum = data.root / "tum-rgbd"
+    folder = tmp_path / "m"
+    folder.mkdir()
+    name = unicodedata.normalize("NFD" if file_form == "NFC" else "NFC", "café")
+    m = folder / "lab.toml"
+    m.write_text(f'root = "{tum}"\n[[session]]\nname = "{name}"\ngroundtruth = "fr2_desk_groundtruth.txt"\n')
+    res = tmp_path / "res" / "orb"
+    res.mkdir(parents=True)
+    shutil.copy(tum / "fr2_desk_ORB.txt", res / (unicodedata.normalize(file_form, "café") + ".txt"))
+    ev = ln.evaluate_manifest(m, res.parent, progress=False, jobs=1)
+    row = ev.sequences().iloc[0]
+    assert len(ev.sequences()) == 1 and row["matched"] > 0 and not ev.failures

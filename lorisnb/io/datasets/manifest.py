@@ -98,6 +98,7 @@ class Manifest:
     estimate_tf: str | None = None
     source: str = ""
     openloris: bool = False  # the built-in OpenLORIS evaluation (lorisnb.evaluate's own path)
+    outside: bool = False  # read with --manifest-outside: files (links) elsewhere are read too
 
     @property
     def conventions(self) -> EvalSpec:
@@ -194,7 +195,8 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     ``root`` or lorisnb's data root, and a ``root`` written in the manifest (not taken from an
     environment variable) inside the manifest's folder or the data root (links resolved:
     ``groundtruth = "../../etc/passwd"`` is refused before anything is read), unless ``outside``
-    (``--manifest-outside``)."""
+    (``--manifest-outside``), which the manifest keeps: its estimates that are links leading out of
+    the results folder are then read too (:func:`lorisnb.tools.evaluation.inputs.inside_results`)."""
     path = manifest_path(name_or_path)
     try:
         raw = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -300,7 +302,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         transform=transform, eps=spec.eps if "eps" in spec.explicit else None,
         phi=spec.phi if "phi" in spec.explicit else None, groundtruth_topic=raw.get("groundtruth_topic"),
         estimate_topic=raw.get("estimate_topic"), groundtruth_tf=raw.get("groundtruth_tf"),
-        estimate_tf=raw.get("estimate_tf"), source=str(raw.get("source", "")),
+        estimate_tf=raw.get("estimate_tf"), source=str(raw.get("source", "")), outside=bool(outside),
     )  # fmt: skip
 
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from lorisnb.core.spec import validate
 from lorisnb.core.stats.trials import split_trial
-from lorisnb.errors import LorisWarning, ValidationError
+from lorisnb.errors import LorisWarning, ParseError, ValidationError
 from lorisnb.io.datasets.manifest import Manifest
 
 PathArg = str | os.PathLike[str]
@@ -246,12 +246,47 @@ def near_names(folder: Path, name: str) -> list[str]:
 
 
 def holds_any(folder: Path, names: Iterable[str]) -> bool:
-    """Whether ``folder`` holds one of ``names``, or a file differing from one only in case."""
+    """Whether ``folder`` holds one of ``names``, or a file differing from one only in case or in
+    Unicode form (NFC and NFD spellings of ``café.txt``)."""
     try:
-        present = {p.name.lower() for p in folder.iterdir()}
+        present = {validate.label(p.name).lower() for p in folder.iterdir()}
     except OSError:
         return False
-    return any(n.lower() in present for n in names)
+    return any(validate.label(n).lower() in present for n in names)
+
+
+def named_entry(folder: Path, name: str) -> Path:
+    """The path ``name`` (a file name, or a relative path of names) gives in ``folder``: as
+    written where that exists, else each part matched to the entry of the same name in Unicode NFC
+    form (a session ``café`` whose file a Mac saved as ``cafe`` and a combining accent), else as
+    written (absent: the caller says so)."""
+    path = folder / name
+    if path.exists() or name.isascii():
+        return path
+    here = folder
+    for part in Path(name).parts:
+        if not (here / part).exists():
+            want = validate.label(part)
+            try:
+                same = sorted(p.name for p in here.iterdir() if validate.label(p.name) == want)
+            except OSError:
+                return path
+            if not same:
+                return path
+            part = same[0]
+        here = here / part
+    return here
+
+
+def inside_results(path: Path, results: Path) -> None:
+    """Refuse an estimate file that lies (links resolved) outside the results folder it was
+    found in: a received manifest or folder reads nothing elsewhere (``/etc/passwd`` linked in as
+    a session's estimate). Nothing is opened; the error quotes no content."""
+    real, top = real_path(path), real_path(results)
+    if real != top and top not in real.parents:
+        raise ParseError(path, None, f"a link to {real}, outside the results folder {results}; expected the "
+                         "estimate file inside it (copy the file in, or pass --manifest-outside, or "
+                         "outside=True, for a manifest you wrote yourself)")  # fmt: skip
 
 
 def missing_note(folder: Path, algorithm: str, absent: list[tuple[str, str]], taken: Iterable[str] = ()) -> str:

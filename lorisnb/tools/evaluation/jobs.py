@@ -28,7 +28,7 @@ from lorisnb.io.datasets.paths import DataPaths, groundtruth_spans, load_groundt
 from lorisnb.io.readers.openloris import declared_scene, read_openloris
 from lorisnb.io.readers.plain import read_trajectory
 from lorisnb.io.readers.registry import hint
-from lorisnb.tools.evaluation.inputs import labels, missing_note
+from lorisnb.tools.evaluation.inputs import inside_results, labels, missing_note, named_entry
 from lorisnb.tools.evaluation.pool import size_of
 from lorisnb.tools.evaluation.result import Failure
 from lorisnb.tools.evaluation.status import NOT_PUBLIC
@@ -299,11 +299,14 @@ def _manifest(job: Job) -> FileErrors:
                                     job.spec.repeated)  # fmt: skip
     ests: dict[int, Trajectory] = {}
     notes: list[str] = []
+    found = {s.seq: named_entry(job.path, s.estimate) for s in sessions}  # NFC or NFD, as the file system has it
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
         for s in sessions:
-            path = job.path / s.estimate
+            path = found[s.seq]
             if path.exists():
+                if not m.outside:
+                    inside_results(path, job.root or job.path)
                 ests[s.seq] = read_trajectory(path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf,
                                               repeated=job.spec.repeated, repair_stamps=job.spec.repair_stamps)  # fmt: skip
                 check_stamp_units(ests[s.seq], gts[s.seq], str(path))
@@ -313,7 +316,7 @@ def _manifest(job: Job) -> FileErrors:
     if ests:
         errors = evaluate_sessions(
             gts, ests, job.spec, path=job.path, algorithm=algorithm, scene=job.scene, suite=suite, trial=trial,
-            notes=notes, groundtruth_spans=spans, sources={s.seq: str(job.path / s.estimate) for s in sessions},
+            notes=notes, groundtruth_spans=spans, sources={k: str(p) for k, p in found.items()},
         )  # fmt: skip
     absent = [s for s in sessions if s.seq not in ests]
     if not absent:
