@@ -206,3 +206,138 @@ def test_a_run_against_a_baseline_names_the_baseline_folder_by_its_root(tmp_path
                                                                   str(here / "earlier")], **common)  # fmt: skip
     assert held_paths(out, [here, here / "earlier"]) == []
     assert "{baseline}" in (out / "run.json").read_text()
+
+
+def papermill_notebook(name, out_dir, params, **kw):
+    """A notebook as papermill writes one: its parameters cell (non-ASCII as ``\\xe9``), papermill's
+    ``input_path`` (where lorisnb is installed), a warning naming a file of lorisnb, and its HTML page
+    with the path cut into spans at the escape, as nbconvert's highlighter cuts it."""
+    import nbformat
+    from papermill.translators import PythonTranslator
+
+    from lorisnb.tools.report.build import notebook_dir
+    from lorisnb.tools.report.notebooks import NotebookRun
+
+    folder = out_dir / name
+    folder.mkdir()
+    literal = PythonTranslator.translate_str(str(params["results_dir"]))
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["papermill"] = {"input_path": str(notebook_dir() / f"{name}.ipynb")}
+    cell = nbformat.v4.new_code_cell(f"results_dir = {literal}")
+    import lorisnb
+
+    warning = f"{Path(lorisnb.__file__).parent / 'tools' / 'figures' / 'plotting.py'}:237: UserWarning: Glyph 27"
+    cell.outputs = [nbformat.v4.new_output("stream", name="stderr", text=warning)]
+    nb.cells = [cell]
+    nbformat.write(nb, folder / f"{name}.ipynb")
+    head, _, tail = literal.partition("\\x")
+    (folder / f"{name}.html").write_text(f'<span class="s2">{head}</span><span class="se">\\x{tail[:2]}</span>'
+                                         f'<span class="s2">{tail[2:]}</span>')  # fmt: skip
+    return NotebookRun(name)
+
+
+def test_a_run_names_no_path_spelled_by_papermill_cut_by_a_highlighter_or_of_lorisnb_itself(
+    tmp_path, data, icra20, monkeypatch
+):
+    """A results folder below ``café`` (papermill writes ``caf\\xe9``; the page's highlighter cuts it
+    there), papermill's ``input_path``, a warning's file of lorisnb: none of their absolute paths
+    remains in the run (the page is rendered again from its portable notebook)."""
+    import sys
+
+    import lorisnb
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "café lab", data, icra20)
+    monkeypatch.setattr(report, "run_notebook", papermill_notebook)
+    out, _ = report.run_report(here / "runs" / "p", {"data_root": str(here / "data")}, ["compare_algorithms"],
+                               progress=False, results=here / "res")  # fmt: skip
+    install = Path(lorisnb.__file__).resolve().parents[1]
+    assert held_paths(out, [here, install, Path(sys.prefix)]) == []
+    page = (out / "compare_algorithms" / "compare_algorithms.html").read_text()
+    assert "{results}" in page and "caf" not in page  # rendered again from the notebook, not a fragment left
+    nb = (out / "compare_algorithms" / "compare_algorithms.ipynb").read_text()
+    assert "{lorisnb}/lorisnb/tools/figures/plotting.py" in nb and '"input_path": "{lorisnb}/' in nb
+    for p in (x for x in out.rglob("*") if x.is_file()):
+        assert b"caf\\xe9" not in p.read_bytes() and b"caf\\\\xe9" not in p.read_bytes(), p
+
+
+def test_links_on_the_way_are_kept_in_run_json_and_the_run_verifies_where_it_was_made(
+    tmp_path, data, icra20, monkeypatch, capsys
+):
+    """An algorithm folder linked into the results folder, and a data root whose ``openloris-scene`` is a
+    link: run.json names their files where they were found ({results}/odom/..., {data}/openloris-scene/...),
+    no path of the machine (it named them by the absolute paths the links lead to, which verify then
+    refused on the machine that made the run). verify there lists what the links lead out to as
+    'outside', unread, until the folders they lead to are named with --root, as for any link."""
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    (here / "elsewhere").mkdir()
+    shutil.move(here / "res" / "odom", here / "elsewhere" / "odom")
+    (here / "res" / "odom").symlink_to(here / "elsewhere" / "odom", target_is_directory=True)
+    (here / "data2").mkdir()
+    (here / "data2" / "openloris-scene").symlink_to(here / "data" / "openloris-scene", target_is_directory=True)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    rc, _, err = run(capsys, "report", "--results", here / "res", "--data", here / "data2", "--out", here / "r",
+                     "--notebooks", "compare_algorithms", "--no-progress")  # fmt: skip
+    assert rc == 0, err
+    record = json.loads((here / "r" / "run.json").read_text())
+    assert "{results}/odom/" + ODOM in record["inputs"] and "{results}/orb/" + ORB in record["inputs"]
+    assert "{data}/openloris-scene/groundtruth/gt_cafe_1.txt" in record["inputs"]
+    assert all(k.startswith("{") for k in [*record["inputs"], *record["input_roots"]]), record["input_roots"]
+    assert held_paths(here / "r", [here]) == []
+    rc, out, err = run(capsys, "verify", here / "r", "--data", here / "data", "--results", here / "res")
+    assert rc == 1 and out.strip() == "outside: {results}/odom/" + ODOM and "--root NAME DIR" in err, out + err
+    mine = ["--root", "odom", here / "elsewhere", "--root", "scene", here / "data" / "openloris-scene"]
+    rc, out, err = run(capsys, "verify", here / "r", "--data", here / "data2", "--results", here / "res", *mine)
+    assert rc == 0 and "all 7 input file(s) unchanged" in err, out + err
+    (here / "elsewhere" / "odom" / ODOM).write_text("1 2 3\n")  # changed where the link leads: seen
+    (here / "data" / "openloris-scene" / "groundtruth" / "gt_new.txt").write_text("1\n")
+    rc, out, err = run(capsys, "verify", here / "r", "--data", here / "data2", "--results", here / "res", *mine)
+    lines = out.split("\n")
+    assert rc == 1 and "changed: {results}/odom/" + ODOM in lines, out
+    assert "added: {data}/openloris-scene/groundtruth/gt_new.txt" in lines, out
+
+
+def test_a_report_of_a_manifest_records_it_and_its_ground_truth_below_roots_of_their_own(tmp_path, data):
+    """-p manifest /abs/lab.toml: the manifest and its sessions' ground truth are inputs, named below
+    {manifest} and {sessions}, not by their absolute paths."""
+    from lorisnb.tools.report.notebooks import input_roots
+    from lorisnb.tools.report.portable import named_roots
+
+    folder = tmp_path / "m"
+    folder.mkdir()
+    shutil.copy(data.root / "tum-rgbd" / "fr2_desk_groundtruth.txt", folder / "gt.txt")
+    (folder / "lab.toml").write_text('[[session]]\nname = "desk"\ngroundtruth = "gt.txt"\n')
+    params = {"manifest": str(folder / "lab.toml"), "path": str(tmp_path / "est")}
+    (tmp_path / "est").mkdir()
+    roots = input_roots(["evaluate_my_results"], params, None, None)
+    assert folder / "lab.toml" in roots and folder / "gt.txt" in roots
+    named = named_roots(params, None, None, None)
+    keys = checksums(input_files(roots, resolve=False), named)
+    assert set(keys) == {"{manifest}/lab.toml", "{manifest}/gt.txt"}
+    assert named_roots({"manifest": "euroc-vicon-room1"}, None, None, None).get("manifest") is None
+
+
+def test_a_run_verifies_against_a_copy_that_spells_its_names_in_another_unicode_form(
+    tmp_path, data, icra20, monkeypatch, capsys
+):
+    """A results folder ``algé`` written in NFD (a Mac), copied by a tool that writes NFC: the same
+    files, not one missing and one added with names that look alike."""
+    import unicodedata
+
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    nfd, nfc = (unicodedata.normalize(f, "algé") for f in ("NFD", "NFC"))
+    shutil.move(here / "res" / "orb", here / "res" / nfd)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    rc, _, err = run(capsys, "report", "--results", here / "res", "--data", here / "data", "--out", here / "r",
+                     "--notebooks", "compare_algorithms", "--no-progress")  # fmt: skip
+    assert rc == 0, err
+    shutil.move(here / "res" / nfd, here / "res" / nfc)
+    rc, out, err = run(capsys, "verify", here / "r", "--data", here / "data", "--results", here / "res")
+    assert rc == 0 and "all 7 input file(s) unchanged" in err, out + err
+    (here / "res" / nfc / ORB).write_text("1 2 3\n")
+    rc, out, err = run(capsys, "verify", here / "r", "--data", here / "data", "--results", here / "res")
+    assert rc == 1 and out.strip() == f"changed: {{results}}/{nfd}/{ORB}", out

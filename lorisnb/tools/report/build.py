@@ -59,7 +59,7 @@ from lorisnb.tools.report.notebooks import (
     use_kernel_files,
     warm_kernels_for_report,
 )
-from lorisnb.tools.report.portable import make_portable, named_roots, root_key
+from lorisnb.tools.report.portable import install_roots, make_portable, named_roots, root_key, split_paths
 from lorisnb.tools.report.provenance import (
     checksums,
     input_files,
@@ -392,10 +392,21 @@ def run_report(
                                     failures=board.get("failures"), left_out=left_out,
                                     per_sequence=board.get("per_sequence"), wanted=run_dir.name,
                                     expected=board.get("expected"), since=since)  # fmt: skip
-                single_file(index, folder / "report.html")
                 if not absolute_paths:  # every path below a named root, whatever wrote it (a notebook's printout)
                     others = [("baseline", Path(baseline))] if baseline is not None else []
-                    make_portable(folder, [*named.items(), *others, ("run", folder), ("run", run_dir)])
+                    every = [*named.items(), *others, ("run", folder), ("run", run_dir), *install_roots()]
+                    make_portable(folder, every)
+                    rendered = [nb.with_suffix(".html") for nb in sorted(folder.glob("*/*.ipynb"))]
+                    split = [page for page in rendered if page.is_file() and split_paths(page, every)]
+                    if split:  # a path cut by the highlighter at an escape (caf\xe9): from the portable notebook
+                        from lorisnb.tools.report.html import export_html
+
+                        css = f"../{NOTEBOOK_CSS}" if (folder / NOTEBOOK_CSS).is_file() else None
+                        for page in split:
+                            export_html(page.with_suffix(".ipynb"), css=css)
+                single_file(index, folder / "report.html")  # the pages as they are now, into one file
+                if not absolute_paths:
+                    make_portable(folder, every)
                 _write_marker(folder, _files(folder))
 
             pages(tmp, run_dir.name)  # the name it is moved to (not the temporary one it is written under)

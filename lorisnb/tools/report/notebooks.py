@@ -28,6 +28,7 @@ from lorisnb.tools._extras import EXTRAS, require
 from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV
 from lorisnb.tools.report import kernels as warm_kernels
 from lorisnb.tools.report.html import export_html
+from lorisnb.tools.report.portable import manifest_files
 
 #: The notebook pages' shared style sheet in the run folder (written once by the report).
 NOTEBOOK_CSS = "notebook.css"
@@ -369,10 +370,12 @@ def input_roots(names: list[str], params: Mapping[str, Any], data: Any, source: 
     (TUM pairs, published tables, folders given as parameters)."""
     roots = [source] if source is not None else []
     roots += [Path(str(params[k])) for k in ("results_dir", "path", "groundtruth", "ordslam_dir") if params.get(k)]
+    roots += manifest_files(params.get("manifest"))  # the file and its ground truth
     if data is not None:
         roots += [data.root / "openloris-scene" / "groundtruth", data.root / "openloris-scene" / "extrinsics.json"]
         if source is None or any(n in names for n in BUNDLED_ONLY):
             roots += [data.root / "openloris-scene" / "icra20_results"]
         if any(Path(n).stem in ("evo_crosscheck", "indoor_vs_outdoor") for n in names):
             roots += [data.root / "tum-rgbd", data.root / "published"]
-    return list(dict.fromkeys(r.resolve() for r in roots))
+    # each where it is (a link on the way kept: {data}/openloris-scene/... where openloris-scene is a link), once
+    return list({r.resolve(): Path(os.path.abspath(r)) for r in roots}.values())

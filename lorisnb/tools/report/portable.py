@@ -21,7 +21,8 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from lorisnb.errors import OutputError, ValidationError
+from lorisnb.errors import LorisError, OutputError, ValidationError
+from lorisnb.io.datasets.manifest import BUILT_IN
 
 #: The notebook parameters naming an input file or folder besides the results and the data root.
 PATH_PARAMETERS = ("path", "groundtruth", "ordslam_dir")
@@ -45,18 +46,26 @@ def split_key(key: str) -> tuple[str, str] | None:
 
 
 def root_key(path: Path, roots: Mapping[str, Path]) -> str:
-    """``path`` as ``{name}/inside`` below the innermost of ``roots`` holding it (both resolved);
-    the absolute path if none holds it. A link is written where it is, not where it leads."""
-    p = path.parent.resolve() / path.name if path.is_symlink() else path.resolve()
-    best: tuple[int, str] | None = None
-    for name, root in roots.items():
-        r = root.resolve()
-        if p == r or r in p.parents:
-            depth = len(r.parts)
-            if best is None or depth > best[0]:
-                rel = p.relative_to(r).as_posix()
-                best = (depth, mark(name) + ("" if rel == "." else f"/{rel}"))
-    return best[1] if best else str(p)
+    """``path`` as ``{name}/inside`` below the innermost of ``roots`` holding it where it is (its
+    absolute path as found, links not followed: a file of a folder linked into the results folder is
+    ``{results}/linked/x.txt``, one of a data root whose ``openloris-scene`` is a link is
+    ``{data}/openloris-scene/...``), else where it really is (both resolved); the absolute path if
+    none holds it. A link is written where it is, not where it leads."""
+    real = path.parent.resolve() / path.name if path.is_symlink() else path.resolve()
+    for p, folders in (
+        (Path(os.path.abspath(path)), {k: Path(os.path.abspath(v)) for k, v in roots.items()}),
+        (real, {k: v.resolve() for k, v in roots.items()}),
+    ):
+        best: tuple[int, str] | None = None
+        for name, r in folders.items():
+            if p == r or r in p.parents:
+                depth = len(r.parts)
+                if best is None or depth > best[0]:
+                    rel = p.relative_to(r).as_posix()
+                    best = (depth, mark(name) + ("" if rel == "." else f"/{rel}"))
+        if best is not None:
+            return best[1]
+    return str(real)
 
 
 def resolve_key(key: str, roots: Mapping[str, Path]) -> Path | None:
@@ -79,12 +88,43 @@ def resolve_key(key: str, roots: Mapping[str, Path]) -> Path | None:
 
 def spellings(path: Path) -> list[str]:
     """The ways a folder's absolute path can be written: as given and resolved (a link on the
-    way), each also as HTML and JSON escape it."""
+    way), and as papermill writes it into a notebook's parameters (Python's ``unicode_escape``:
+    ``caf\\xe9``), each also as HTML and JSON escape it."""
     forms = {os.path.abspath(path), str(path.resolve())}
+    forms |= {f.encode("unicode_escape").decode("ascii") for f in forms}
     out = set()
     for f in forms:
         out |= {f, html.escape(f, quote=True), json.dumps(f)[1:-1], html.escape(json.dumps(f)[1:-1], quote=True)}
     return sorted((s for s in out if len(s) > 1), key=len, reverse=True)
+
+
+def install_roots() -> list[tuple[str, Path]]:
+    """Where this machine keeps the code a run's pages may name (a warning's file and line, papermill's
+    ``input_path`` of a bundled notebook): ``{lorisnb}``, the folder holding the lorisnb package
+    (a checkout, or site-packages), and ``{python}``, the interpreter's environment and base
+    installation. Replaced in a portable run like the named roots; no input lies below them."""
+    import sys
+
+    here = Path(__file__).resolve().parents[3]
+    found = [("lorisnb", here), ("python", Path(sys.prefix)), ("python", Path(sys.base_prefix))]
+    # a system-wide prefix names no one's folder: "/usr/bin/chromium" in a printout stays as it is
+    return [(k, p) for k, p in found if len(p.parts) >= 3 and p.as_posix() not in ("/usr/local", "/opt/local")]
+
+
+def text_of_html(data: bytes) -> bytes:
+    """An HTML page's text with its tags taken out: a path a syntax highlighter split over several
+    ``<span>`` elements (at an escape, ``\\xe9``) is whole again, for :func:`split_paths`."""
+    return re.sub(rb"<[^>]*>", b"", data)
+
+
+def split_paths(page: Path, roots: Iterable[tuple[str, Path]]) -> bool:
+    """Whether the HTML ``page`` still shows one of ``roots``' absolute paths once its tags are
+    taken out: a path :func:`make_portable` could not replace because markup splits it."""
+    roots = list(roots)
+    if not roots:
+        return False
+    pattern, _ = _pattern(roots)
+    return bool(pattern.search(text_of_html(page.read_bytes())))
 
 
 def named_roots(
@@ -101,9 +141,33 @@ def named_roots(
     for k in PATH_PARAMETERS:
         if params.get(k):
             named[k] = Path(str(params[k]))
+    files = manifest_files(params.get("manifest"))
+    if files:  # a manifest's folder, and the folder holding its sessions' ground truth
+        if str(params["manifest"]) not in BUILT_IN:
+            named["manifest"] = files[0].parent
+        truth = [f for f in files if f.suffix.lower() != ".toml"]
+        if truth:
+            named["sessions"] = Path(os.path.commonpath([os.path.abspath(f.parent) for f in truth]))
     if notebooks is not None:
         named["notebooks"] = Path(notebooks)
     return {k: Path(os.path.abspath(v)) for k, v in named.items()}
+
+
+def manifest_files(manifest: Any) -> list[Path]:
+    """A manifest given as a path (the ``manifest`` parameter), then the ground-truth files it names:
+    inputs of a report (for a built-in manifest's name, its ground truth only: the file inside
+    lorisnb is none of the user's). Nothing for no manifest, or one that cannot be read (the
+    notebook says why)."""
+    if not manifest:
+        return []
+    from lorisnb.io.datasets.manifest import read_manifest
+
+    try:
+        m = read_manifest(str(manifest))
+    except (LorisError, OSError):
+        return []
+    own = [] if str(manifest) in BUILT_IN else [Path(os.path.abspath(m.path))]
+    return own + [Path(os.path.abspath(s.groundtruth)) for s in m.sessions if s.groundtruth.exists()]
 
 
 def _pattern(roots: Iterable[tuple[str, Path]]) -> tuple[re.Pattern[bytes], dict[bytes, bytes]]:
@@ -112,8 +176,11 @@ def _pattern(roots: Iterable[tuple[str, Path]]) -> tuple[re.Pattern[bytes], dict
         for s in spellings(root):
             by_text.setdefault(s.encode(), mark(name).encode())
     alternatives = sorted(by_text, key=len, reverse=True)  # the longest (innermost) root first
-    # a root ends where a path part ends: "/a/res" is not replaced inside "/a/results"
-    pattern = re.compile(b"(?:" + b"|".join(map(re.escape, alternatives)) + rb")(?![^/\\\s\"'<>&,;:)\]}|`])")
+    # a root ends where a path part ends: "/a/res" is not replaced inside "/a/results"; and starts where a path
+    # starts, not after a letter or digit (inside base64 image data, "/data/" may occur by chance) unless that
+    # is an escaped newline or tab ("...\\n/home/me")
+    pattern = re.compile(rb"(?:(?<![A-Za-z0-9+])|(?<=\\[nrt]))(?:" + b"|".join(map(re.escape, alternatives))
+                         + rb")(?![^/\\\s\"'<>&,;:)\]}|`])")  # fmt: skip
     return pattern, by_text
 
 

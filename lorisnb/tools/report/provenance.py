@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from lorisnb._version import __version__
+from lorisnb.core.spec import validate
 from lorisnb.errors import LorisError, ParseError, ValidationError
 from lorisnb.tools.report.portable import mark, resolve_key, root_key, split_key
 
@@ -211,10 +212,21 @@ def _inside(p: Path, folders: Iterable[Path]) -> bool:
     return any(p == f or f in p.parents for f in folders)
 
 
+def _as_spelled_here(path: Path) -> Path:
+    """``path``, or where it does not exist, the file whose every part has the same name in Unicode
+    NFC form (``algé`` written in NFD by one machine, in NFC by another copy)."""
+    if path.exists() or str(path).isascii():
+        return path
+    from lorisnb.tools.evaluation.inputs import named_entry
+
+    return named_entry(Path(path.anchor), str(path.relative_to(path.anchor)))
+
+
 def where_it_is(path: Path) -> Path:
-    """``path`` absolute with its folders resolved, the file itself not: a link is named where it
-    is, as :func:`~lorisnb.tools.report.portable.root_key` writes it into run.json."""
-    return path.parent.resolve() / path.name
+    """``path`` absolute as it was found, no link on the way followed (a file of a folder linked into
+    the results folder is named there, not where the link leads), as
+    :func:`~lorisnb.tools.report.portable.root_key` writes it into run.json."""
+    return Path(os.path.abspath(path))
 
 
 def run_file(folder: str | os.PathLike[str], path: Path) -> Path:
@@ -270,6 +282,10 @@ def verify_run(
         if name in ("data", "results") and not p.is_dir():  # another root may be a file (--root groundtruth gt.txt)
             raise ValidationError(f"--{name} {p}: a file; expected the folder of the run's {name} here")
     allowed = [folder.resolve(), *given.values()]
+
+    def readable(p: Path) -> bool:  # where it really is: a link leading out of them is listed, never followed
+        return _inside(p.resolve(), allowed)
+
     given.setdefault("run", folder.resolve())
 
     def place(key: str) -> Path:
@@ -291,31 +307,34 @@ def verify_run(
                                   "if you trust it")  # fmt: skip
         return p
 
-    inputs = {key: place(key) for key in sorted(record["inputs"])}
+    inputs = {key: _as_spelled_here(place(key)) for key in sorted(record["inputs"])}
     problems = []
     listed = []
     for r in record.get("input_roots", []):  # a folder it read: walked only where it lies inside those given
         p = place(r)
-        if p.exists() and not _inside(p.resolve(), allowed):
+        if p.exists() and not readable(p):
             problems.append((r, "outside"))
         else:
             listed.append(p)
     for key, p in inputs.items():
         if not p.is_file():
             problems.append((key, "missing"))
-        elif not _inside(p.resolve(), allowed):
+        elif not readable(p):
             problems.append((key, "outside"))
         elif sha256(p) != record["inputs"][key]:
             problems.append((key, "changed"))
     if "input_roots" in record:
-        # keys as the run wrote them: below named roots, absolute (--absolute-paths) or below the data root (earlier runs)
+        # keys as the run wrote them: below named roots, absolute (--absolute-paths) or below the data root (earlier
+        # runs), compared in Unicode NFC (a folder copied by a Mac or rsync may spell algé otherwise)
         named = any(split_key(k) for k in [*record["inputs"], *record["input_roots"]])
         style: Mapping[str, Path] | Path | None = given if named else None if "roots" in record else given.get("data")
+        recorded = {validate.label(k) for k in record["inputs"]}
         keyed = {}
         for p in input_files(listed, resolve=False, inside=allowed):  # a linked folder leading elsewhere: unwalked
-            inside = _inside(p.resolve(), allowed)
-            key = _key(where_it_is(p), style)  # a link where it is, as the report keys it
-            if key not in record["inputs"] and not (inside and _key(p.resolve(), style) in record["inputs"]):
-                keyed[key] = inside  # (an earlier lorisnb keyed a link by its target)
+            inside = readable(p)
+            forms = [where_it_is(p), p.parent.resolve() / p.name] + ([p.resolve()] if inside else [])
+            keys = [validate.label(_key(f, style)) for f in forms]  # as the report keys it; as earlier ones did
+            if not recorded.intersection(keys):
+                keyed[_key(where_it_is(p), style)] = inside
         problems += [(key, "added" if keyed[key] else "outside") for key in sorted(keyed)]
     return sorted(problems)
