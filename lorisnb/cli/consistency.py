@@ -11,7 +11,7 @@ import warnings
 import pandas as pd
 
 from lorisnb.cli.outputs import check_outputs
-from lorisnb.cli.text import say
+from lorisnb.cli.text import clean, say
 from lorisnb.errors import EvaluationError, LorisWarning, ParseError
 
 
@@ -63,7 +63,7 @@ def cmd_consistency(args: argparse.Namespace) -> int:
         from lorisnb.io.writers import write_atomically
         from lorisnb.tools.figures.consistency import consistency_figure
 
-        fig = consistency_figure(result, title=f"{args.est}: per-axis errors ({args.align})")
+        fig = consistency_figure(result, title=f"{clean(args.est)}: per-axis errors ({args.align})")
         suffix = str(args.plot).lower().rsplit(".", 1)[-1]
         write_atomically(args.plot, lambda p: fig.savefig(p, dpi=120, format=suffix), args.force)
     return 0

@@ -10,6 +10,10 @@ from typing import Any
 
 import numpy as np
 
+from lorisnb.tools.decisions.escape import clean  # the one escaping rule, for every output (re-exported here)
+
+__all__ = ["MAX_ROWS", "clean", "format_table", "frame_columns", "say"]
+
 MAX_ROWS = 500  # more rows: the first and last half of these, with a line saying how many were left out
 
 
@@ -46,15 +50,6 @@ def _cell(value: Any, digits: int) -> str:
 def frame_columns(df: Any) -> dict[str, np.ndarray]:
     """A DataFrame's columns as numpy arrays (for :func:`format_table`)."""
     return {str(c): df[c].to_numpy() for c in df.columns}
-
-
-def clean(text: object) -> str:
-    """Text for one terminal line: control characters (a newline in a folder name, an escape
-    sequence) shown escaped, as ``\\n`` or ``\\x1b``, so that tables and lists keep their lines."""
-    s = str(text)
-    if s.isprintable():
-        return s
-    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in s)
 
 
 def say(line: object) -> None:

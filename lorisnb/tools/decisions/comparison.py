@@ -20,6 +20,7 @@ from lorisnb.core.stats.tolerances import RERUN_SPREAD
 from lorisnb.core.stats.trials import check_duplicates
 from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_csv
+from lorisnb.tools.decisions.escape import clean
 from lorisnb.tools.report.tables import interval, write_comparison
 
 
@@ -28,8 +29,8 @@ class Comparison:
     """``algorithms``: one row per suite, scene and algorithm (value, interval, coverage, rank,
     p-value and effect against the scene's top algorithm); ``pairs``: the pairwise test;
     ``significant``: its significant rows; ``ci``: intervals of every metric; ``coverage``;
-    ``power`` (with a power delta); ``header``, ``summary``: what the command prints; ``notes``:
-    warnings (missing sequences)."""
+    ``power`` (with a power delta); ``header``, ``summary``: what the command prints (names in them
+    escaped, :func:`~lorisnb.tools.decisions.escape.clean`); ``notes``: warnings (missing sequences)."""
 
     algorithms: pd.DataFrame
     pairs: pd.DataFrame
@@ -178,7 +179,7 @@ def compare_table(
     )
     if len(spread):
         header += "\nwhat varies between trials (median over sequences of the trials' spread): " + "; ".join(
-            f"{r.algorithm} CR {r.cr_spread:.2g}, ATE {100 * r.ate_spread:.2g} %" for r in spread.itertuples()
+            f"{clean(r.algorithm)} CR {r.cr_spread:.2g}, ATE {100 * r.ate_spread:.2g} %" for r in spread.itertuples()
         ) + f" (real reruns: CR {RERUN_SPREAD['rate']:g}, ATE {100 * RERUN_SPREAD['log']:.0f} %)"  # fmt: skip
     sig = pairs[pairs["significant"].astype(bool)]  # a mask also when empty (object dtype)
     summary = f"{len(sig)} of {len(pairs)} pairs differ significantly (the test behind the ranks and bold marks)"
@@ -191,11 +192,11 @@ def compare_table(
             + str(alpha)
             + " in "
             + "; ".join(
-                f"{scene} (no two algorithms both have a value of {metric} there: nothing to test)"
+                f"{clean(scene)} (no two algorithms both have a value of {metric} there: nothing to test)"
                 if not np.isfinite(r.min_p)
-                else f"{scene} (every pair's results are the same on every sequence: no test can separate them)"
+                else f"{clean(scene)} (every pair's results are the same on every sequence: no test can separate them)"
                 if r.min_p >= 1
-                else f"{scene} (smallest possible p {r.min_p:.4g}, x {len(pairs)} pair(s) by Holm)"
+                else f"{clean(scene)} (smallest possible p {r.min_p:.4g}, x {len(pairs)} pair(s) by Holm)"
                 for scene, r in blocked.iterrows()
             )
             + (": run more trials (--power DELTA says how many)" if (blocked["min_p"] < 1).any() else "")

@@ -19,6 +19,7 @@ from lorisnb.core.stats.regression import METRICS, Tolerance, changes, parse_tol
 from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_text
 from lorisnb.tools.decisions.comparison import check_table_duplicates
+from lorisnb.tools.decisions.escape import clean, code_span, markdown_cell, workflow_data, workflow_property
 from lorisnb.tools.decisions.runs import COUNTS, NUMBERS, out_of_domain, setting_differences
 from lorisnb.tools.evaluation.status import OK, UNSCORED
 
@@ -176,7 +177,9 @@ def write_json(d: Diff, out: str | os.PathLike[str], force: bool, extra: Mapping
 def write_junit(d: Diff, out: str | os.PathLike[str], force: bool) -> Path:
     """JUnit XML: one test case per sequence and per scene value compared (class
     ``suite.algorithm.scene``), failed when it regressed, with each metric's base and candidate;
-    improvements and comparisons too little to judge as the case's properties."""
+    improvements and comparisons too little to judge as the case's properties. Every name and
+    value in it escaped as the terminal shows them (:func:`~lorisnb.tools.decisions.escape.clean`):
+    a control character of a folder name, which XML 1.0 cannot hold, never reaches the file."""
     cases = []
     for level, t in (("sequence", d.sequences), ("scene", d.scenes)):
         if t.empty:
@@ -190,22 +193,28 @@ def write_junit(d: Diff, out: str | os.PathLike[str], force: bool) -> Path:
             notes = [f"{r.status}: {r.metric} {r.base} -> {r.cand}" for r in g.itertuples()
                      if r.status in ("improvement", "unjudged")]  # fmt: skip
             cases.append((".".join(x for x in (str(suite), str(alg), str(scene)) if x), name, bad, new, notes))
+
+    def element(parent: ET.Element, tag: str, text: str | None = None, **attrs: str) -> ET.Element:
+        el = ET.SubElement(parent, tag, {k: clean(v) for k, v in attrs.items()})
+        if text is not None:
+            el.text = "\n".join(clean(line) for line in text.split("\n"))  # its own lines kept, a name's escaped
+        return el
+
     root = ET.Element("testsuites", name="lorisnb diff")
-    suite_el = ET.SubElement(root, "testsuite", name="lorisnb diff", tests=str(len(cases)),
-                             failures=str(sum(len(c[2]) > 0 for c in cases)),
-                             skipped=str(sum(c[3] for c in cases)), errors="0")  # fmt: skip
+    suite_el = element(root, "testsuite", name="lorisnb diff", tests=str(len(cases)),
+                       failures=str(sum(len(c[2]) > 0 for c in cases)), skipped=str(sum(c[3] for c in cases)),
+                       errors="0")  # fmt: skip
     for cls, name, bad, new, notes in cases:
-        case = ET.SubElement(suite_el, "testcase", classname=cls, name=name)
+        case = element(suite_el, "testcase", classname=cls, name=name)
         if notes:  # improvements and what was too little to judge, named beside the verdict
-            props = ET.SubElement(case, "properties")
+            props = element(case, "properties")
             for k, note in enumerate(notes):
-                ET.SubElement(props, "property", name=f"note{k + 1}", value=note)
+                element(props, "property", name=f"note{k + 1}", value=note)
         if len(bad):
-            lines = [f"{r.metric}: {r.status}, base {r.base}, cand {r.cand}" for r in bad.itertuples()]
-            fail = ET.SubElement(case, "failure", message="; ".join(lines)[:500], type="regression")
-            fail.text = "\n".join(lines)
+            lines = [clean(f"{r.metric}: {r.status}, base {r.base}, cand {r.cand}") for r in bad.itertuples()]
+            element(case, "failure", "\n".join(lines), message="; ".join(lines)[:500], type="regression")
         elif new:
-            ET.SubElement(case, "skipped", message="new in the candidate: not in the base")
+            element(case, "skipped", message="new in the candidate: not in the base")
     ET.indent(root)
     text = '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
     return write_text(text, out, force)
@@ -219,39 +228,40 @@ def _value(v: object) -> str:
     return f"{v:.4g}" if isinstance(v, float) else str(v)
 
 
-def _md(text: object) -> str:
-    """A table cell: pipes and line breaks escaped, HTML special characters too."""
-    s = str(text).replace("\\", "\\\\").replace("|", "\\|").replace("\n", " ").replace("\r", " ")
-    return s.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
-
-
 def markdown(d: Diff, base: str, cand: str, label: str | None = None) -> str:
     """The verdict as Markdown, for a pull-request comment or a CI job summary: the verdict, the
-    counts, regressions, improvements, trade-offs and what was too little to judge."""
+    counts, regressions, improvements, trade-offs and what was too little to judge. Names and
+    values escaped (:func:`~lorisnb.tools.decisions.escape.markdown_cell`, and
+    :func:`~lorisnb.tools.decisions.escape.code_span` for the runs and the code's label): shown as the
+    terminal shows them, never a row, tag or link of their own making."""
+    md = markdown_cell
     v = d.verdict
     icon = "❌" if d.regressed else "✅"
     lines = [f"## {icon} lorisnb diff: {v['verdict']}", ""]
-    lines.append(f"`{_md(base)}` → `{_md(cand)}`" + (f" (code under test: `{_md(label)}`)" if label else ""))
+    lines.append(
+        f"{code_span(base)} → {code_span(cand)}" + (f" (code under test: {code_span(label)})" if label else "")
+    )
     lines.append("")
     counts = ", ".join(f"{n} {k}" for k, n in v["counts"].items() if n)
     lines.append(f"{v['sequences']} sequence(s); per metric and sequence: {counts or 'nothing compared'}.")
     if v.get("rule"):
-        lines.append(f"Rule: {_md(v['rule'])}")
+        lines.append(f"Rule: {md(v['rule'])}")
     for title, rows in (("Regressions", v["regressions"]), ("Improvements", v["improvements"])):
         if not rows:
             continue
         lines += ["", f"### {title} ({len(rows)})", "", "| algorithm | where | metric | base | cand | decided by |",
                   "|---|---|---|---|---|---|"]  # fmt: skip
         for r in rows[:200]:
-            lines.append(f"| {_md(r['algorithm'])} | {_md(_where(r))} | {_md(r['metric'])} | {_md(_value(r['base']))} | "
-                         f"{_md(_value(r['cand']))} | {_md(r['decided_by'] or '')} |")  # fmt: skip
+            cells = (r["algorithm"], _where(r), r["metric"], _value(r["base"]), _value(r["cand"]),
+                     r["decided_by"] or "")  # fmt: skip
+            lines.append("| " + " | ".join(map(md, cells)) + " |")
         if len(rows) > 200:
             lines.append(f"| … {len(rows) - 200} more (the JSON has all) | | | | | |")
     if v["tradeoffs"]:
         lines += ["", "### Trade-offs", ""]
         for t in v["tradeoffs"]:
             lines.append(
-                f"- **{_md(t['algorithm'])}**: worse {_md(', '.join(t['worse']))}; better {_md(', '.join(t['better']))}"
+                f"- **{md(t['algorithm'])}**: worse {md(', '.join(t['worse']))}; better {md(', '.join(t['better']))}"
             )
     if v["unjudged"]:
         lines += [
@@ -263,19 +273,14 @@ def markdown(d: Diff, base: str, cand: str, label: str | None = None) -> str:
 
 def github_annotations(d: Diff) -> list[str]:
     """GitHub Actions workflow commands: an ``::error`` per regression, a ``::notice`` per
-    improvement (values escaped as the runner expects)."""
-
-    def esc(s: str) -> str:
-        return s.replace("%", "%25").replace("\r", "%0D").replace("\n", "%0A")
-
-    def prop(s: str) -> str:
-        return esc(s).replace(":", "%3A").replace(",", "%2C")
-
+    improvement; names and values escaped as the terminal shows them, then as GitHub's runner
+    decodes them (:func:`~lorisnb.tools.decisions.escape.workflow_property` for the title,
+    :func:`~lorisnb.tools.decisions.escape.workflow_data` for the message)."""
     out = []
     for kind, rows in (("error", d.verdict["regressions"]), ("notice", d.verdict["improvements"])):
         for r in rows:
-            title = prop(f"lorisnb diff: {r['status']} {r['algorithm']} {_where(r)}")
-            message = esc(f"{r['metric']}: {_value(r['base'])} -> {_value(r['cand'])}")
+            title = workflow_property(f"lorisnb diff: {r['status']} {r['algorithm']} {_where(r)}")
+            message = workflow_data(f"{r['metric']}: {_value(r['base'])} -> {_value(r['cand'])}")
             out.append(f"::{kind} title={title}::{message}")
     return out
 

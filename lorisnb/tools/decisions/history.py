@@ -28,6 +28,7 @@ from lorisnb.core.stats.inference import WEIGHTS, scene_means
 from lorisnb.core.stats.regression import BAD, Tolerance, parse_tolerances
 from lorisnb.errors import ValidationError
 from lorisnb.tools.decisions.diff import Diff, diff_tables, keyed
+from lorisnb.tools.decisions.escape import clean
 from lorisnb.tools.decisions.runs import Run, load_run, spec_differences
 
 COLUMNS = ["run", "path", "created", "created_from", "lorisnb_version", "label", "comparable", "not_comparable",
@@ -198,7 +199,8 @@ def first_changes(history: pd.DataFrame) -> list[str]:
 def plot_history(history: pd.DataFrame, metric: str):
     """One panel per scene, one line per algorithm over the runs; runs not comparable with the one
     before are marked with a dashed line, changes by diff's rule against each run's baseline with a
-    ring."""
+    ring. Names (runs, algorithms, suites, scenes) shown as the terminal shows them (:func:`clean`):
+    a control character, which no font draws and XML 1.0 cannot hold, never reaches an SVG file."""
     from lorisnb.tools.figures.plotting import MAX_WIDTH_IN, subplots
 
     h = history[history["metric"] == metric]
@@ -212,14 +214,14 @@ def plot_history(history: pd.DataFrame, metric: str):
         for (suite, alg), g in s.groupby(["suite", "algorithm"], sort=False):
             xs = g["run"].map(x).to_numpy()
             line = ax.plot(
-                xs, g["value"].to_numpy(float), marker="o", ms=3, label=f"{alg}{f' ({suite})' if suite else ''}"
+                xs, g["value"].to_numpy(float), marker="o", ms=3, label=clean(f"{alg}{f' ({suite})' if suite else ''}")
             )
             ch = g[g["changed"].astype(bool)]
             ax.plot(ch["run"].map(x), ch["value"], "o", mfc="none", ms=9, color=line[0].get_color())
         for r in s.loc[~s["comparable"], "run"].unique():
             ax.axvline(x[r] - 0.5, color="0.4", ls="--", lw=1)
-        ax.set_title(scene)
-        ax.set_xticks(range(len(runs)), runs, rotation=45, ha="right", fontsize=7)
+        ax.set_title(clean(scene))
+        ax.set_xticks(range(len(runs)), [clean(r) for r in runs], rotation=45, ha="right", fontsize=7)
     axes[0][0].set_ylabel(metric)
     handles, labels = axes[0][0].get_legend_handles_labels()
     fig.suptitle(f"{metric} over runs (ring: changed by diff's rule; dashed: not comparable with the run before)",

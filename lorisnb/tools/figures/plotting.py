@@ -17,12 +17,14 @@ from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
+from matplotlib.text import Text
 
 from lorisnb.core.lifelong.timeline import sequence_layout, timeline_rows, timeline_table
 from lorisnb.core.metrics.openloris import correctness
 from lorisnb.core.pipeline.model import FileErrors, sequence_eps
 from lorisnb.core.spec.validate import eps_value, threshold
 from lorisnb.io.writers import write_atomically
+from lorisnb.tools.decisions.escape import clean
 from lorisnb.tools.figures.blit import BlitCanvas
 
 #: Widest figure, inches (about 1,200 px in a notebook): wider ones would be shrunk to unreadable text.
@@ -297,6 +299,9 @@ def plot_trajectories(
 
 
 def _save(fig: Figure, tmp: Path, fmt: str) -> None:
+    for t in fig.findobj(Text):  # a name's control character: drawn by no font, and XML 1.0 (SVG) cannot hold it
+        if not t.get_text().replace("\n", "").isprintable():
+            t.set_text("\n".join(map(clean, t.get_text().split("\n"))))
     fig.savefig(tmp, dpi=150, bbox_inches="tight", format=fmt)
 
 

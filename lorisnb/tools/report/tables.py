@@ -15,6 +15,7 @@ import pandas as pd
 from lorisnb.core.stats.inference import WEIGHTS
 from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_text
+from lorisnb.tools.decisions.escape import clean, markdown_cell
 
 #: Metrics where smaller is better; for the others larger is better.
 LOWER_IS_BETTER = {"c_ate_rmse", "ate_rmse", "aoe_rmse", "c_aoe_rmse", "rpe_trans_rmse", "rpe_rot_rmse"}
@@ -84,7 +85,9 @@ _LATEX_SPECIAL = {"&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#", "_": r"\_", "{
 
 
 def latex_escape(text: str) -> str:
-    return "".join(_LATEX_SPECIAL.get(ch, ch) for ch in str(text))
+    """Text for LaTeX: what is not printable shown escaped as the terminal shows it (:func:`clean`:
+    a control character stops LaTeX), then LaTeX's special characters."""
+    return "".join(_LATEX_SPECIAL.get(ch, ch) for ch in clean(text))
 
 
 def to_latex(text: pd.DataFrame, best: pd.DataFrame, caption: str = "", label: str = "") -> str:
@@ -109,9 +112,7 @@ def to_latex(text: pd.DataFrame, best: pd.DataFrame, caption: str = "", label: s
 def to_markdown(text: pd.DataFrame, best: pd.DataFrame) -> str:
     """A Markdown (pipe) table, one row per algorithm, the cells marked in ``best`` in bold."""
     cols = list(text.columns)
-
-    def esc(v: object) -> str:
-        return str(v).replace("|", r"\|")
+    esc = markdown_cell  # a name's pipe, newline or escape sequence: shown, never a row of its own
 
     lines = ["| algorithm | " + " | ".join(esc(c) for c in cols) + " |", "|---|" + "---|" * len(cols)]
     for alg, row in text.iterrows():
