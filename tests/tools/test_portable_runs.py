@@ -341,3 +341,27 @@ def test_a_run_verifies_against_a_copy_that_spells_its_names_in_another_unicode_
     (here / "res" / nfc / ORB).write_text("1 2 3\n")
     rc, out, err = run(capsys, "verify", here / "r", "--data", here / "data", "--results", here / "res")
     assert rc == 1 and out.strip() == f"changed: {{results}}/{nfd}/{ORB}", out
+
+
+def test_messages_name_what_the_user_gave_and_what_they_can_do(tmp_path, data, icra20, monkeypatch, capsys):
+    """--out below a file names --out (not the temporary folder lorisnb would have written into);
+    render of a run with an edited page says what render can do (it has no --out); verify without
+    --data says it does not read LORISNB_DATA."""
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    (here / "afile").write_text("x")
+    rc, _, err = run(capsys, "report", "--results", here / "res", "--data", here / "data", "--out",
+                     here / "afile" / "r", "--notebooks", "compare_algorithms", "--no-progress")  # fmt: skip
+    assert rc == 2 and f"--out {here / 'afile' / 'r'}: cannot write into" in err and ".partial" not in err, err
+    rc, _, err = run(capsys, "report", "--results", here / "res", "--data", here / "data", "--out", here / "r",
+                     "--notebooks", "compare_algorithms", "--no-progress")  # fmt: skip
+    assert rc == 0, err
+    page = here / "r" / "compare_algorithms" / "compare_algorithms.html"
+    page.write_text(page.read_text() + "<p>mine</p>")
+    rc, _, err = run(capsys, "render", here / "r")
+    assert rc == 2 and "compare_algorithms.html" in err and "render a copy of the run" in err and "--out" not in err
+    monkeypatch.setenv("LORISNB_DATA", str(here / "data"))
+    rc, _, err = run(capsys, "verify", here / "r", "--results", here / "res")
+    assert rc == 2 and "--data DIR" in err and "not from LORISNB_DATA" in err

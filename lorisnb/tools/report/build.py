@@ -137,9 +137,10 @@ def _write_marker(folder: Path, files: Mapping[str, str] | None = None) -> None:
     (folder / RUN_MARKER).write_text(json.dumps(record, indent=0))
 
 
-def _not_written(run_dir: Path) -> str | None:
-    """Why ``--force`` may not replace the run folder ``run_dir``: it holds a file its run did not
-    write (added or changed since, as its marker lists them), or its marker lists nothing; else None."""
+def _not_written(run_dir: Path, instead: str = "choose another --out") -> str | None:
+    """Why ``--force`` may not replace the run folder ``run_dir`` (or render may not write into it):
+    it holds a file its run did not write (added or changed since, as its marker lists them), or its
+    marker lists nothing; else None. ``instead``: what else the user can do, ending the message."""
     try:
         wrote = json.loads((run_dir / RUN_MARKER).read_text()).get("files")
     except (OSError, ValueError, AttributeError):
@@ -147,13 +148,13 @@ def _not_written(run_dir: Path) -> str | None:
     if not isinstance(wrote, dict):
         return (f"its {RUN_MARKER} marker does not list the files its run wrote (a run of an earlier lorisnb, "
                 "or a damaged marker), so files added to it cannot be told apart; move what you keep out of it "
-                "and remove it yourself, or choose another --out")  # fmt: skip
+                f"and remove it yourself, or {instead}")  # fmt: skip
     foreign = sorted(rel for rel, digest in _files(run_dir).items() if wrote.get(rel) != digest)
     if not foreign:
         return None
     shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more" if len(foreign) > 5 else "")
     return (f"it holds {len(foreign)} file(s) that its run did not write or that changed since ({shown}); nothing "
-            "was removed: move them out of it and run again, or choose another --out")  # fmt: skip
+            f"was removed: move them out of it and run again, or {instead}")  # fmt: skip
 
 
 def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_dir: Any, jobs: int,
@@ -344,8 +345,12 @@ def run_report(
                 refuse_unscorable_scenes(params.get("scenes"), data)
         if wants_board:  # the notebooks' spec (one from the parameters): refused now if it cannot apply
             leaderboard_spec(params)
-        run_dir.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
+        try:  # the run is written beside where it goes, then moved there whole
+            run_dir.parent.mkdir(parents=True, exist_ok=True)
+            tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
+        except OSError as exc:
+            raise OutputError(f"--out {run_dir}: cannot write into {run_dir.parent} ({exc.strerror or exc}); "
+                              "choose a folder you can write to") from None  # fmt: skip
         try:
             _write_marker(tmp)
             try:
@@ -438,7 +443,7 @@ def render_run(run: str | os.PathLike[str]) -> list[Path]:
         raise LorisError(f"{folder} will not be rendered again: it holds {len(out)} link(s) leading outside it "
                          f"({shown}); a run folder lorisnb writes holds none. Nothing was read or written: replace "
                          "each link by its file, if you trust it")  # fmt: skip
-    why = _not_written(folder)
+    why = _not_written(folder, "render a copy of the run without them")
     if why:
         raise LorisError(f"{folder} will not be rendered again: {why}")
     css = f"../{NOTEBOOK_CSS}" if (folder / NOTEBOOK_CSS).is_file() else None

@@ -299,8 +299,9 @@ def verify_run(
         if p is None:
             name = named[0] if named else ""
             option = f"--{name} DIR" if name in ("data", "results") else f"--root {name} DIR"
+            env = " (verify takes roots from its command line only, not from LORISNB_DATA)" if name == "data" else ""
             raise ValidationError(f"{key}: run.json reads it below the root {mark(name)}; say where that root is "
-                                  f"here with {option}")  # fmt: skip
+                                  f"here with {option}{env}")  # fmt: skip
         if not _inside(Path(os.path.abspath(p)), allowed):
             raise ValidationError(f"{key}: run.json names a file outside the run folder and the roots given here; "
                                   "verify reads only those: give a folder holding it with --data, --results or --root, "
