@@ -133,7 +133,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
                     expected=pd.concat(known, ignore_index=True) if known else None)  # fmt: skip
     bad = d.sequences[d.sequences["status"].isin(["regression", "missing", "failed"])]
     scene_bad = d.scenes[d.scenes["status"].isin(["regression", "missing", "failed"])]
-    print(f"BASE {args.paths[0]} ({base.kind}) against CAND {args.paths[1]} ({cand.kind}); tolerances: "
+    print(f"BASE {clean(args.paths[0])} ({base.kind}) against CAND {clean(args.paths[1])} ({cand.kind}); tolerances: "
           + ", ".join(f"{k} {v}" for k, v in tolerances.items()))  # fmt: skip
     counts = d.verdict["counts"]
     print(f"{d.verdict['sequences']} sequence(s); per metric and sequence: " + ", ".join(
@@ -159,7 +159,8 @@ def cmd_diff(args: argparse.Namespace) -> int:
             print(f"  ... {len(better) - 50} more (--json lists all)")
     for tr in d.verdict["tradeoffs"]:
         print(
-            f"trade-off: {clean(tr['algorithm'])} worse in {', '.join(tr['worse'])}; better in {', '.join(tr['better'])}"
+            f"trade-off: {clean(tr['algorithm'])} worse in {clean(', '.join(tr['worse']))}; better in "
+            f"{clean(', '.join(tr['better']))}"
         )
     if d.verdict["unjudged"]:
         print(f"{len(d.verdict['unjudged'])} comparison(s) too little to judge (fewer than 50 matched or correct "
@@ -214,7 +215,7 @@ def cmd_history(args: argparse.Namespace) -> int:
     first = h.drop_duplicates("run").set_index("run")
     for r, name in zip(runs, names, strict=True):
         base = first.loc[name, "baseline"] if name in first.index else ""
-        print(f"  {clean(name)}: {r.created.isoformat() if r.created else '?'}" + (f", lorisnb {r.version}" if r.version else "")
+        print(f"  {clean(name)}: {r.created.isoformat() if r.created else '?'}" + (f", lorisnb {clean(r.version)}" if r.version else "")
               + (f", code {clean(r.label)}" if r.label else "") + (f", against {clean(base)}" if base else ""))  # fmt: skip
     for m in args.metric:
         # dropna=False: a run whose values are all missing keeps its column

@@ -14,6 +14,7 @@ import pytest
 
 import lorisnb as ln
 from lorisnb.cli import main
+from lorisnb.errors import DataNotFoundError
 from lorisnb.tools.decisions.runs import load_run, spec_differences
 from lorisnb.tools.report.provenance import checksums, input_files, run_record, verify_run, write_run_json
 
@@ -97,10 +98,15 @@ def test_a_sequence_is_one_row_however_many_tables_hold_it(tmp_path, table, caps
     # exits 1 as diff does, the newest run having lost a sequence against its baseline
     assert rc == 1 and len(h) == 2 * 4
     # the report's own findings are the run: a notebook's table (other thresholds, simulated
-    # algorithms) adds nothing; a run without findings (an older lorisnb) is read from its notebooks'
+    # algorithms) adds nothing; a run whose run.json records the report's own evaluation but that
+    # lost its findings is refused naming them (the notebooks' tables hold other settings); a run
+    # that recorded none (no leaderboard evaluated) is read from its notebooks'
     (a / "findings" / "sequences.csv").write_text(table.iloc[:1].to_csv(index=False))
     assert len(load_run(a).table) == 1
     (a / "findings" / "sequences.csv").unlink()
+    with pytest.raises(DataNotFoundError, match="findings/sequences.csv: no such file; the run's run.json records"):
+        load_run(a)
+    write_run_json(a, {**json.loads((a / "run.json").read_text()), "spec": {"description": None, "values": {}}})
     assert len(load_run(a).table) == 3
 
 

@@ -11,8 +11,10 @@ A report run holds a sequence in several tables (the report's own ``findings/seq
 each notebook's, at the notebook's own settings, simulated algorithms too): the report's own table
 (:data:`FIRST_TABLE`) is the run, with the report's ``findings/durations.csv`` (every ground-truth
 sequence of its scenes: a sequence no row holds counts as failed in a scene value, as in the
-leaderboard). A run without findings (made by an older lorisnb) is read from its notebooks'
-tables, each sequence once, from the first table that holds it by path.
+leaderboard). A run whose run.json records no evaluation of the report's own (its spec has no
+``values``: no findings were written) is read from its notebooks' tables, each sequence once, from
+the first table that holds it by path; a run that records one but lost its findings (or whose
+``findings`` is a link leading out of it) is refused, naming them.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ import pandas as pd
 
 from lorisnb.core.metrics.openloris import RATES
 from lorisnb.core.spec import validate
+from lorisnb.core.spec.evalspec import ALIASES, PRESETS, SPEC_NAMES, make_spec
 from lorisnb.core.stats.inference import WEIGHTS as STATS_WEIGHTS
 from lorisnb.core.stats.inference import with_trials
 from lorisnb.core.stats.regression import METRICS
@@ -45,6 +48,9 @@ SPEC_COLUMNS = ["eps", "phi", "delta", "tau", "official_interpolation", "spec"]
 KEYS = ["suite", "algorithm", "scene", "seq", "trial"]
 #: The report's own per-sequence table, read first (evaluated at run.json's spec).
 FIRST_TABLE = "findings/sequences.csv"
+#: Keys of a recorded spec checked by the spec's rules (:func:`check_spec_values`): the fields of an
+#: evaluation spec (its spellings for the command line, such as ``scale``, left out).
+SPEC_FIELDS = SPEC_NAMES - set(ALIASES)
 #: Keys of run.json's ``spec.values`` that do not change a per-sequence number: the results folder
 #: (``source``), the leaderboard's test settings and its selection of rows.
 NOT_NUMBERS = frozenset({"source", "metric", "alpha", "level", "seed", "algorithms", "scenes"})
@@ -203,6 +209,15 @@ def check_values(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
         if bad.any():
             i = int(bad.nonzero()[0][0])
             raise refuse(i, c, f"{df[c].iloc[i]:g} is not {words}")
+    if "spec" in df.columns:  # each distinct spec once, by the spec's rules: a damaged one is no other spec
+        codes, specs = pd.factorize(df["spec"], use_na_sentinel=False)
+        for k, text in enumerate(specs):
+            try:
+                problem = spec_problem(json.loads(str(text)))
+            except ValueError:  # not the JSON of a spec: compared as text, and named where it differs
+                continue
+            if problem:
+                raise refuse(int((codes == k).nonzero()[0][0]), "spec", problem)
     for c in (c for c in validate.THRESHOLDS if c in df.columns):  # as --eps, --phi, --delta, --tau are checked
         codes, values = pd.factorize(df[c], use_na_sentinel=False)
         for k, value in enumerate(values):  # each distinct value once
@@ -255,14 +270,26 @@ def out_of_domain(df: pd.DataFrame, c: str) -> tuple[Any, str]:
     return bad, f"{what} >= 0 (NaN only where {count or 'its count'} is 0)"
 
 
-def _report_tables(folder: Path, notes: list[str]) -> pd.DataFrame:
+def _report_tables(folder: Path, notes: list[str], spec: Any = None) -> pd.DataFrame:
     """The report's own per-sequence table (:data:`FIRST_TABLE`), else every per-sequence CSV table
     of the run, stacked, one row per sequence and trial (from the first table that holds it, by
     path), with a ``table`` column (its path in the run); tables that are not per-sequence (scenes,
     pairs, ...) are left out, and so are tables with several rows per sequence and trial (sweeps),
-    with a note in ``notes``."""
+    with a note in ``notes``. A run whose run.json ``spec`` records the report's own evaluation (its
+    ``values``: every lorisnb report that evaluated wrote its findings with them) must hold that
+    table: without it (a run copied in part, its ``findings`` a link leading out of it), an error
+    naming what is missing, never the notebooks' tables at their own settings in its place."""
     parts = []
     own = folder / FIRST_TABLE  # the report's own evaluation: the notebooks' tables hold other settings
+    findings = own.parent
+    if findings.exists() or findings.is_symlink():
+        run_file(folder, findings)  # a link leading out of the run: refused, never read
+    recorded = isinstance(spec, dict) and isinstance(spec.get("values"), dict) and bool(spec["values"])
+    if recorded and not own.is_file():
+        what = f"{findings}: no such folder" if not findings.is_dir() else f"{own}: no such file"
+        raise DataNotFoundError(f"{what}; the run's run.json records the report's own evaluation, whose per-sequence "
+                                f"table is {FIRST_TABLE} (the notebooks' tables hold other settings): a run copied in "
+                                "part? Copy the whole run folder, or make the run again")  # fmt: skip
     csvs = [own] if own.is_file() else sorted(folder.rglob("*.csv"))
     for csv in csvs:
         if any(part.startswith(".") for part in csv.relative_to(folder).parts):
@@ -291,12 +318,13 @@ def load_run(path: str | os.PathLike[str]) -> Run:
         raise DataNotFoundError(f"{p}: no such file or folder")
     if is_report_run(p):
         meta = read_run_json(p)
-        created, source = _parse_time(meta.get("created")), "run.json"
+        created, source = _created(meta, p / RUN_JSON), "run.json"
+        check_spec_values(meta.get("spec"), p / RUN_JSON)
         if created is None:
             created, source = _mtime(p / RUN_JSON), "modification time of run.json"
         notes: list[str] = []
-        return Run(p, "report", _report_tables(p, notes), meta, created, source, notes, unscored_inputs(p),
-                   _durations(p))  # fmt: skip
+        table = _report_tables(p, notes, meta.get("spec"))
+        return Run(p, "report", table, meta, created, source, notes, unscored_inputs(p), _durations(p))
     if is_table(p):
         return Run(p, "table", read_table(p), {}, _mtime(p), "modification time")
     raise ValidationError(f"{p}: not a report run (no {RUN_JSON}) and not a CSV/Parquet table")
@@ -342,14 +370,47 @@ def unscored_inputs(run_dir: Path) -> dict[str, str]:
     return dict(zip(bad["file"], bad["error"], strict=True))
 
 
-def _parse_time(value: Any) -> datetime | None:
-    if not isinstance(value, str):
+def _created(meta: dict[str, Any], file: Path) -> datetime | None:
+    """run.json's ``created``: None where it is null (the run is then ordered by the file's time),
+    else an ISO 8601 time (UTC where it names no zone); any other text is a damaged run.json,
+    refused naming the file and the key as its other keys are."""
+    value = meta.get("created")
+    if value is None:
         return None
     try:
-        t = datetime.fromisoformat(value.replace("Z", "+00:00"))
+        t = datetime.fromisoformat(str(value).replace("Z", "+00:00"))
     except ValueError:
-        return None
+        raise ParseError(file, None, f'"created" is {json.dumps(value)}; expected an ISO 8601 time as lorisnb '
+                         "report writes it (2026-02-01T03:00:00+00:00) or null; a damaged or edited run.json?") from None  # fmt: skip
     return t if t.tzinfo else t.replace(tzinfo=timezone.utc)
+
+
+def check_spec_values(spec: Any, file: Path) -> None:
+    """run.json's ``spec`` (read from ``file``) checked by :func:`spec_problem`: a value no spec has
+    is a damaged run.json, refused with a :class:`~lorisnb.errors.ParseError` naming the file and
+    the key, never reported as two specs that differ."""
+    problem = spec_problem(spec)
+    if problem:
+        raise ParseError(file, None, f'"spec" values: {problem}; no run lorisnb makes has it (a damaged or edited '
+                         "run.json?): make the run again")  # fmt: skip
+
+
+def spec_problem(spec: Any) -> str | None:
+    """What is wrong with the values of a recorded evaluation spec (run.json's ``spec``, or its
+    ``values``, a table's ``spec`` cell) by the spec's own rules
+    (:func:`lorisnb.core.spec.evalspec.make_spec`: an eps of NaN or -1 is no spec's), naming the
+    key; None when nothing is. Keys this lorisnb does not know (a run of another version) are left
+    to the comparison, which names them."""
+    values = spec.get("values", spec) if isinstance(spec, dict) else None
+    if not isinstance(values, dict):
+        return None
+    preset = values.get("preset")
+    known = {k: v for k, v in values.items() if k in SPEC_FIELDS}
+    try:
+        make_spec(preset if isinstance(preset, str) and preset in PRESETS else None, **known)
+    except ValidationError as exc:
+        return str(exc)
+    return None
 
 
 def _mtime(p: Path) -> datetime:

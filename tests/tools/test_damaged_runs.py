@@ -1,0 +1,146 @@
+"""A run folder or table received damaged or edited is refused naming the file, the line or key and
+what was expected, by diff and history as by Python (runs.load_run, read_table): run.json's
+``created`` that is no time, a spec value no spec has (eps NaN or -1: it was reported as two specs
+that differ), a run whose ``findings`` folder is missing or a link leading out of it (the notebooks'
+tables were read in its place: "spec mode differs"); a table's spec cell no spec has."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+
+import pytest
+
+import lorisnb as ln
+from lorisnb.cli import main
+from lorisnb.errors import DataNotFoundError, ParseError, ValidationError
+from lorisnb.io.writers import write_csv
+from lorisnb.tools.decisions.runs import DURATIONS, FIRST_TABLE, load_run, read_table
+from lorisnb.tools.report.provenance import KEYS
+
+ODOM = ("cafe-1-1-odom.txt", "cafe-1-2-odom.txt", "home-1-1-odom.txt")
+
+
+@pytest.fixture(scope="module")
+def table(icra20):
+    return ln.evaluate([icra20 / "per-seq" / "odom" / f for f in ODOM], progress=False).sequences()
+
+
+def report_run(folder, table, **changes):
+    """A report run folder as lorisnb report writes it (findings and run.json), with ``changes`` to
+    run.json; ``spec`` values as evaluate recorded them."""
+    (folder / "findings").mkdir(parents=True)
+    write_csv(table, folder / FIRST_TABLE)
+    write_csv(table[["scene", "seq", "gt_duration"]], folder / DURATIONS)
+    values = {**json.loads(table["spec"].iloc[0]), "eps": "inf", "phi": "inf", "delta": 1.0, "tau": 60.0}
+    meta = {k: None for k in KEYS} | {"command": ["lorisnb", "report"], "lorisnb_version": "0.3.0",
+                                      "created": "2026-11-01T02:00:00+00:00", "inputs": {}, "notebooks": {},
+                                      "spec": {"description": "d", "values": {**values, "source": "{results}"}}}  # fmt: skip
+    for key, value in changes.items():
+        if key.startswith("spec_"):
+            meta["spec"]["values"][key[5:]] = value
+        else:
+            meta[key] = value
+    (folder / "run.json").write_text(json.dumps(meta))
+    return folder
+
+
+def refused_everywhere(capsys, good, bad, message):
+    """``message`` in the error of diff (either side) and history, exit status 2; and from Python."""
+    for command in (["diff", good, bad], ["diff", bad, good], ["history", good, bad]):
+        rc = main([*map(str, command), "--no-progress"] if command[0] == "diff" else [*map(str, command)])
+        err = capsys.readouterr().err
+        assert rc == 2 and message in err and "Traceback" not in err, err
+
+
+# -- run.json ------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        ({"created": "garbage"}, '"created" is "garbage"; expected an ISO 8601 time'),
+        ({"created": "2026-13-45"}, '"created" is "2026-13-45"; expected an ISO 8601 time'),
+        ({"created": 5}, '"created" is 5; expected an ISO 8601 time'),
+        ({"spec_eps": "nan"}, '"spec" values: eps=nan: expected'),
+        ({"spec_eps": -1}, '"spec" values: eps=-1: expected'),
+        ({"spec_delta": 0}, '"spec" values: delta=0: expected'),
+        ({"spec_align": "banana"}, '"spec" values: align=banana: expected one of'),
+    ],
+)
+def test_a_damaged_run_json_is_refused_naming_the_file_and_key(tmp_path, table, capsys, changes, message):
+    good = report_run(tmp_path / "good", table)
+    bad = report_run(tmp_path / "bad", table, **changes)
+    assert load_run(good).created.year == 2026
+    with pytest.raises(ParseError, match=re.escape(message)) as exc:
+        load_run(bad)
+    assert exc.value.path == str(bad / "run.json")
+    refused_everywhere(capsys, good, bad, f"{bad / 'run.json'}: {message}")
+
+
+def test_a_run_json_without_created_is_ordered_by_its_time(tmp_path, table):
+    run = load_run(report_run(tmp_path / "run", table, created=None))
+    assert run.created_from == "modification time of run.json"
+
+
+def test_a_received_version_is_escaped_by_history(tmp_path, table, capsys):
+    a = report_run(tmp_path / "a", table)
+    b = report_run(tmp_path / "b", table, lorisnb_version="0.3.0\x1b]0;T\x07", created="2026-11-02T02:00:00+00:00")
+    assert main(["history", str(a), str(b)]) == 0
+    out = capsys.readouterr().out
+    assert "b: 2026-11-02T02:00:00+00:00, lorisnb 0.3.0\\x1b]0;T\\x07" in out
+    assert "\x1b" not in out and "\x07" not in out
+
+
+# -- findings ------------------------------------------------------------------------------------
+
+
+def test_a_run_without_its_findings_names_them(tmp_path, table, capsys):
+    """The notebooks' tables (other settings) were read in the findings' place: "spec mode differs"."""
+    good = report_run(tmp_path / "good", table)
+    bad = report_run(tmp_path / "bad", table)
+    notebook = bad / "per_sequence_benchmark"
+    notebook.mkdir()
+    write_csv(table.assign(spec=table["spec"].str.replace('"mode":"auto"', '"mode":"per-seq"')), notebook / "s.csv")
+    (bad / FIRST_TABLE).unlink()
+    with pytest.raises(DataNotFoundError, match=f"{re.escape(str(bad / FIRST_TABLE))}: no such file"):
+        load_run(bad)
+    refused_everywhere(capsys, good, bad, f"{bad / FIRST_TABLE}: no such file")
+    for f in (bad / "findings").iterdir():
+        f.unlink()
+    (bad / "findings").rmdir()
+    refused_everywhere(capsys, good, bad, f"{bad / 'findings'}: no such folder")
+    elsewhere = tmp_path / "elsewhere"
+    report_run(elsewhere, table)
+    for target in (elsewhere / "findings", tmp_path / "nowhere"):  # a link leading out of the run, or nowhere
+        if (bad / "findings").is_symlink():
+            (bad / "findings").unlink()
+        os.symlink(target, bad / "findings")
+        with pytest.raises(ValidationError, match="findings: a link leading outside the run folder"):
+            load_run(bad)
+        refused_everywhere(capsys, good, bad, f"{bad / 'findings'}: a link leading outside the run folder")
+
+
+def test_a_run_that_evaluated_nothing_itself_is_read_from_its_notebooks(tmp_path, table):
+    """A run.json whose spec records no evaluation of the report's own (no findings written): its
+    notebooks' tables are the run, as before."""
+    run = tmp_path / "run"
+    (run / "nb").mkdir(parents=True)
+    write_csv(table, run / "nb" / "s.csv")
+    meta = {k: None for k in KEYS} | {"command": [], "spec": {"description": None, "values": {}}, "inputs": {},
+                                      "notebooks": {}}  # fmt: skip
+    (run / "run.json").write_text(json.dumps(meta))
+    assert len(load_run(run).table) == len(table)
+
+
+def test_a_tables_spec_cell_no_spec_has_is_refused_naming_the_line(tmp_path, table, capsys):
+    """A damaged ``spec`` cell was reported as two specs that differ (not comparable)."""
+    good, bad = write_csv(table, tmp_path / "good.csv"), tmp_path / "bad.csv"
+    edited = table.copy()
+    edited.loc[1, "spec"] = edited.loc[1, "spec"].replace('"align":"se3"', '"align":"banana"')
+    assert edited.loc[1, "spec"] != table.loc[1, "spec"]
+    write_csv(edited, bad)
+    with pytest.raises(ParseError, match="line 3: column spec: align=banana: expected one of"):
+        read_table(bad)
+    refused_everywhere(capsys, good, bad, f"{bad}, line 3: column spec: align=banana: expected one of")
