@@ -2,7 +2,9 @@
 what was expected, by diff and history as by Python (runs.load_run, read_table): run.json's
 ``created`` that is no time, a spec value no spec has (eps NaN or -1: it was reported as two specs
 that differ), a run whose ``findings`` folder is missing or a link leading out of it (the notebooks'
-tables were read in its place: "spec mode differs"); a table's spec cell no spec has."""
+tables were read in its place: "spec mode differs"); a CSV table whose shape pandas would have
+quietly repaired (a second column of one name, a short row, an extra field shifting every column),
+a yes-or-no cell of 1, a value rounded in the message, a line counted at a carriage return."""
 
 from __future__ import annotations
 
@@ -10,6 +12,8 @@ import json
 import os
 import re
 
+import numpy as np
+import pandas as pd
 import pytest
 
 import lorisnb as ln
@@ -144,3 +148,75 @@ def test_a_tables_spec_cell_no_spec_has_is_refused_naming_the_line(tmp_path, tab
     with pytest.raises(ParseError, match="line 3: column spec: align=banana: expected one of"):
         read_table(bad)
     refused_everywhere(capsys, good, bad, f"{bad}, line 3: column spec: align=banana: expected one of")
+
+
+# -- CSV tables ----------------------------------------------------------------------------------
+
+
+def edit_lines(path, edit):
+    text = path.read_text(encoding="utf-8").split("\n")
+    path.write_text("\n".join(edit(text)), encoding="utf-8")
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (lambda t: [t[0]] + [x + ",7" for x in t[1:] if x], "line 2: the row has {n1} field(s) against the header's {n}"),
+        (lambda t: [t[0], t[1], ",".join(t[2].split(",")[:10]), *t[3:]], "line 3: the row has 10 field(s) against the header's {n}"),
+        (lambda t: [t[0] + ",cr"] + [x + ",0.5" for x in t[1:] if x], "line 1: column 'cr' is named twice in the header (fields {cr} and {n1})"),
+        (lambda t: [t[0], t[1], t[2] + "\r,x", *t[3:]], "line 3: a carriage return outside a quoted cell"),
+    ],
+)  # fmt: skip
+def test_a_table_pandas_would_repair_is_refused_naming_the_line(tmp_path, table, capsys, edit, message):
+    good, bad = write_csv(table, tmp_path / "good.csv"), write_csv(table, tmp_path / "bad.csv")
+    edit_lines(bad, edit)
+    n = len(table.columns)
+    message = message.format(n=n, n1=n + 1, cr=list(table.columns).index("cr") + 1)
+    with pytest.raises(ParseError, match=re.escape(message)):
+        read_table(bad)
+    refused_everywhere(capsys, good, bad, f"{bad}, {message}")
+
+
+@pytest.mark.parametrize(
+    "column, value, message",
+    [
+        ("cs_r", 1.0000001, "1.0000001 is not a rate between 0 and 1"),  # not "1 is not a rate"
+        ("cr", -1e-12, "-1e-12 is not a rate"),
+        ("first_correct", 1, "'1' is not True or False (as lorisnb evaluate writes a yes or no)"),
+        ("first_correct", "1.0", "'1.0' is not True or False"),
+        ("official_interpolation", 0, "'0' is not True or False"),
+    ],
+)
+def test_a_cell_is_shown_as_written_and_judged_by_its_columns_type(tmp_path, table, capsys, column, value, message):
+    good, bad = write_csv(table, tmp_path / "good.csv"), tmp_path / "bad.csv"
+    edited = table.astype({column: object})
+    edited.loc[1, column] = value
+    edited[column] = edited[column].map(lambda v: v if isinstance(v, str) else repr(v))
+    write_csv(edited, bad)
+    with pytest.raises(ParseError, match=re.escape(f"line 3: column {column}: {message}")):
+        read_table(bad)
+    refused_everywhere(capsys, good, bad, f"{bad}, line 3: column {column}: {message}")
+
+
+def test_yes_or_no_cells_as_evaluate_and_parquet_write_them_are_read(tmp_path, table):
+    write_csv(table, tmp_path / "t.csv")
+    assert read_table(tmp_path / "t.csv")["first_correct"].tolist() == table["first_correct"].tolist()
+    t = table.assign(first_correct=[str(v).upper() for v in table["first_correct"]])  # any case, as pandas reads it
+    write_csv(t, tmp_path / "upper.csv")
+    assert read_table(tmp_path / "upper.csv")["first_correct"].tolist() == table["first_correct"].tolist()
+
+
+def test_the_line_named_is_the_files_after_carriage_returns_in_quoted_cells(tmp_path, table, capsys):
+    """A folder name with a carriage return is one quoted cell on one line (``grep -n``, editors): the
+    refused row's line was counted as if each carriage return began a line."""
+    names = ["cr\rOVER", "a\r\rb", "tab\talg"]
+    edited = table.assign(algorithm=names, file=[f"{n}/x.txt" for n in names])
+    edited.loc[2, "cr"] = np.nan
+    bad = write_csv(edited, tmp_path / "bad.csv")
+    lines = bad.read_bytes().split(b"\n")
+    assert lines[3].startswith(b"tab\talg,")  # the file's fourth line
+    with pytest.raises(ParseError, match="line 4: column cr: nan"):
+        read_table(bad)
+    assert main(["diff", str(bad), str(bad)]) == 2 and f"{bad}, line 4: column cr: nan" in capsys.readouterr().err
+    assert pd.read_csv(write_csv(edited.assign(cr=0.5), tmp_path / "ok.csv"))["algorithm"].tolist() == names
+    assert read_table(tmp_path / "ok.csv")["algorithm"].tolist() == names

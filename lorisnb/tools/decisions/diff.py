@@ -20,7 +20,7 @@ from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_text
 from lorisnb.tools.decisions.comparison import check_table_duplicates
 from lorisnb.tools.decisions.escape import clean, code_span, markdown_cell, workflow_data, workflow_property
-from lorisnb.tools.decisions.runs import COUNTS, NUMBERS, out_of_domain, setting_differences
+from lorisnb.tools.decisions.runs import COUNTS, NUMBERS, out_of_domain, setting_differences, shown
 from lorisnb.tools.evaluation.status import OK, UNSCORED
 
 if TYPE_CHECKING:
@@ -87,14 +87,14 @@ def _check_numbers(t: pd.DataFrame) -> None:
         bad = (v.isna() & t[c].notna() & ~text.isin(["nan", "", "none"])).to_numpy()
         if bad.any():
             i = int(bad.nonzero()[0][0])
-            raise ValidationError(f"{where(i)}: column {c}: {t[c].iloc[i]!r} is not a number; expected a "
+            raise ValidationError(f"{where(i)}: column {c}: {shown(t[c].iloc[i])} is not a number; expected a "
                                   "per-sequence table as lorisnb evaluate writes it")  # fmt: skip
         t[c] = v.astype(float)
     for c in (c for c in METRICS if c in t.columns):
         bad, expected = out_of_domain(t, c)
         if bad.any():
             i = int(bad.nonzero()[0][0])
-            raise ValidationError(f"{where(i)}: column {c}: {t[c].iloc[i]:g} is not {expected}; expected a "
+            raise ValidationError(f"{where(i)}: column {c}: {shown(t[c].iloc[i])} is not {expected}; expected a "
                                   "per-sequence table as lorisnb evaluate writes it")  # fmt: skip
 
 

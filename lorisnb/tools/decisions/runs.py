@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -125,24 +126,79 @@ def is_report_run(path: Path) -> bool:
     return path.is_dir() and (path / RUN_JSON).is_file()
 
 
+#: What a per-sequence table read back should be, ending every message that refuses one.
+PER_SEQUENCE = "a per-sequence table as written by lorisnb evaluate --csv / --parquet"
+
+
 def read_table(path: Path) -> pd.DataFrame:
-    """A per-sequence table from CSV or Parquet; its columns are checked (:func:`check_values`)."""
+    """A per-sequence table from CSV (:func:`read_csv`: its shape checked first) or Parquet; its
+    columns are checked (:func:`check_values`)."""
     try:
         if path.is_file() and path.suffix.lower() == ".csv":
-            df = pd.read_csv(path)
+            df = read_csv(path, PER_SEQUENCE)
         else:
             df = pd.read_parquet(path)
     except ImportError:
         from lorisnb.errors import MissingDependencyError
 
         raise MissingDependencyError("reading Parquet needs pyarrow: pip install 'lorisnb[parquet]'") from None
+    except ParseError:
+        raise
     except (ValueError, OSError) as exc:
         raise ParseError(path, None, f"not a readable CSV or Parquet table ({exc})") from None
     missing = [c for c in dict.fromkeys([*REQUIRED, *NEEDED]) if c not in df.columns]
     if missing:
-        raise ParseError(path, None, f"lacks column(s) {', '.join(missing)}; expected a per-sequence table as "
-                         "written by lorisnb evaluate --csv / --parquet")  # fmt: skip
-    return check_values(df, path, "a per-sequence table as written by lorisnb evaluate --csv / --parquet")
+        raise ParseError(path, None, f"lacks column(s) {', '.join(missing)}; expected {PER_SEQUENCE}")
+    return check_values(df, path, PER_SEQUENCE)
+
+
+def read_csv(path: Path, expected: str, **options: Any) -> pd.DataFrame:
+    """A CSV table lorisnb wrote, read back by pandas (``options``: :func:`pandas.read_csv`'s) once
+    its shape is checked (:func:`csv_records`): a header naming each column once, and every row
+    with as many fields as the header. Else a :class:`~lorisnb.errors.ParseError` naming the file,
+    the line and what is wrong, ending with ``expected``: pandas would silently rename a second
+    column of one name, fill a short row with NaN, and take an extra field in every row for the
+    row's name (every column shifted by one)."""
+    header: list[str] | None = None
+    for line, record in csv_records(path, expected):
+        if header is None:
+            header = record
+            seen: dict[str, int] = {}
+            for k, name in enumerate(record, 1):
+                if name in seen:
+                    raise ParseError(path, line, f"column {name!r} is named twice in the header (fields {seen[name]} "
+                                     f"and {k}); expected one column of each name, {expected}")  # fmt: skip
+                seen[name] = k
+        elif len(record) != len(header):
+            why = "cells left out?" if len(record) < len(header) else "an unquoted comma, or a cell without a column?"
+            raise ParseError(path, line, f"the row has {len(record)} field(s) against the header's {len(header)} "
+                             f"({why}); expected {expected}")  # fmt: skip
+    return pd.read_csv(path, **options)
+
+
+def csv_records(path: Path, expected: str = "a CSV table") -> Iterator[tuple[int, list[str]]]:
+    """The records of a CSV file (blank lines left out, as pandas leaves them out), each with the
+    line of the file it begins on. Lines end at a newline only, as editors and ``grep -n`` count
+    them: a carriage return inside a quoted cell (a folder name may hold one) ends none, and a
+    file written with CRLF reads as well. A carriage return outside a quoted cell (pandas would
+    end a row there) is refused, naming the line."""
+    import csv
+
+    with open(path, "rb") as f:
+        lines = (raw.decode("utf-8-sig" if k == 0 else "utf-8", "replace") for k, raw in enumerate(f))
+        reader = csv.reader(lines)
+        end = 0  # the line the last record ended on
+        while True:
+            try:
+                record = next(reader)
+            except StopIteration:
+                return
+            except csv.Error:
+                raise ParseError(path, reader.line_num, "a carriage return outside a quoted cell (lorisnb quotes "
+                                 f"a cell that holds one); expected {expected}") from None  # fmt: skip
+            if record:
+                yield end + 1, record
+            end = reader.line_num
 
 
 #: Columns the verdict reads besides :data:`REQUIRED`: the scene values' metrics and their weights
@@ -161,9 +217,10 @@ INDICES = {"seq": "a sequence number", "trial": "a trial number"}
 SECONDS = ("gt_duration", "track_time")
 #: Labels a row is matched and grouped by: never empty (an algorithm or scene named by no one).
 LABELS = {"algorithm": "an algorithm name", "scene": "a scene name"}
-#: Yes-or-no columns: whether the first pose was correct (CS-R's tie rule), the official interpolation: True or False.
+#: Yes-or-no columns: whether the first pose was correct (CS-R's tie rule), the official interpolation:
+#: ``True`` or ``False`` as evaluate writes them (any case, as pandas reads them; a Parquet table's booleans),
+#: never 1 or 0 (a number in a yes-or-no column is some other column's, or an edit).
 FLAGS = ("first_correct", "official_interpolation")
-YES_NO = {"1": "true", "0": "false", "1.0": "true", "0.0": "false"}
 #: Every numeric column :func:`check_values` reads.
 NUMERIC = list(dict.fromkeys([*NUMBERS, *METRICS, *COUNTS, *NAN_WHEN_NONE, *INDICES, *SECONDS]))
 
@@ -195,20 +252,20 @@ def check_values(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
             bad = (values.isna() & df[c].notna() & (words != "nan")) | words.isin(["true", "false"])
             if bad.any():
                 i = int(bad.to_numpy().nonzero()[0][0])
-                raise refuse(i, c, f"{df[c].iloc[i]!r} is not a number")
+                raise refuse(i, c, f"{shown(df[c].iloc[i])} is not a number")
             df[c] = values
     for c in (c for c in FLAGS if c in df.columns):
-        text = df[c].astype(str).str.strip().str.lower().replace(YES_NO)
+        text = df[c].astype(str).str.strip().str.lower()
         bad = ~text.isin(["true", "false"]).to_numpy()
         if bad.any():
             i = int(bad.nonzero()[0][0])
-            raise refuse(i, c, f"{df[c].iloc[i]!r} is not True or False")
+            raise refuse(i, c, f"{shown(df[c].iloc[i])} is not True or False (as lorisnb evaluate writes a yes or no)")
         df[c] = (text == "true").to_numpy()
     for c in (c for c in NUMERIC if c in df.columns):  # a number no evaluation gives: a damaged table
         bad, words = out_of_domain(df, c)
         if bad.any():
             i = int(bad.nonzero()[0][0])
-            raise refuse(i, c, f"{df[c].iloc[i]:g} is not {words}")
+            raise refuse(i, c, f"{shown(df[c].iloc[i])} is not {words}")
     if "spec" in df.columns:  # each distinct spec once, by the spec's rules: a damaged one is no other spec
         codes, specs = pd.factorize(df["spec"], use_na_sentinel=False)
         for k, text in enumerate(specs):
@@ -228,20 +285,25 @@ def check_values(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
     return df
 
 
+def shown(value: Any) -> str:
+    """A value as a message quotes it: text in quotes, a number with every digit Python writes
+    (``1.0000001`` is not shown as ``1``: it would read as a value in the domain), a whole float
+    without its ``.0``, numpy's scalars as Python's (never ``np.True_``)."""
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)):
+        value = value.item()
+    if isinstance(value, float):
+        text = repr(value)
+        return text[:-2] if text.endswith(".0") else text
+    return repr(value)
+
+
 def csv_line(path: Path, row: int) -> int:
     """The line of a CSV file where its data row ``row`` (0-based, as pandas reads it: the header and
-    blank lines left out) begins: a quoted cell may hold a newline (a folder name with one)."""
-    import csv
-
-    with open(path, newline="", encoding="utf-8", errors="replace") as f:
-        reader = csv.reader(f)
-        end, k = 0, -1  # the line the last record ended on; the record's number (the header is -1)
-        for record in reader:
-            if record:
-                if k == row:
-                    return end + 1
-                k += 1
-            end = reader.line_num
+    blank lines left out) begins (:func:`csv_records`): a quoted cell may hold a newline (a folder
+    name with one)."""
+    for k, (line, _) in enumerate(csv_records(path)):
+        if k == row + 1:
+            return line
     return row + 2
 
 
@@ -340,13 +402,16 @@ def _durations(run_dir: Path) -> pd.DataFrame | None:
     if not f.is_file():
         return None
     run_file(run_dir, f)
+    expected = "the report's own table of ground-truth sequences"
     try:
-        t = pd.read_csv(f)
+        t = read_csv(f, expected)
+    except ParseError:
+        raise
     except (ValueError, pd.errors.ParserError) as exc:
         raise ParseError(f, None, f"not a durations table ({exc}); expected the report's own") from None
     if not {"scene", "seq", "gt_duration"} <= set(t.columns):
         raise ParseError(f, None, "expected the columns scene, seq, gt_duration (the report's own table)")
-    return check_values(t, f, "the report's own table of ground-truth sequences").astype({"scene": str})
+    return check_values(t, f, expected).astype({"scene": str})
 
 
 #: What a report run's ``findings/input_errors.csv`` says of an input that was not scored.
@@ -361,7 +426,9 @@ def unscored_inputs(run_dir: Path) -> dict[str, str]:
         return {}
     run_file(run_dir, f)
     try:
-        t = pd.read_csv(f, dtype=str, keep_default_na=False)
+        t = read_csv(f, "the report's own table of input errors", dtype=str, keep_default_na=False)
+    except ParseError:
+        raise
     except (ValueError, pd.errors.ParserError) as exc:
         raise ParseError(f, None, f"not a table of input errors ({exc}); expected the report's own") from None
     if not {"file", "status", "error"} <= set(t.columns):
