@@ -16,7 +16,7 @@ import pandas as pd
 
 from lorisnb.cli.outputs import check_outputs
 from lorisnb.cli.text import say
-from lorisnb.core.spec.evalspec import make_spec
+from lorisnb.core.spec.evalspec import EvalSpec, make_spec
 from lorisnb.core.trajectory.units import check_stamp_units
 from lorisnb.errors import EvaluationError, LorisWarning, ParseError, ValidationError
 
@@ -165,6 +165,21 @@ def _conventions_options(args: argparse.Namespace) -> dict[str, object]:
     return options
 
 
+def _not_evos(args: argparse.Namespace, spec: EvalSpec) -> str:
+    """Why lorisnb's conventions here are not evo's: another preset, or options given with ``--conventions
+    evo`` that depart from it (each with what evo does instead, :func:`~lorisnb.tools.peers.crosscheck_evo.evo_lacks`)."""
+    from lorisnb.tools.peers.crosscheck_evo import evo_lacks
+
+    if spec.preset_name != "evo":
+        return (
+            f"the conventions of preset {spec.preset_name} are not evo's, see the notes; --conventions evo gives evo's"
+        )
+    given = [f"--{k.replace('_', '-')} {v}" for k, v in _conventions_options(args).items()]
+    lacks = "; ".join(evo_lacks(spec)) or "see the notes"
+    what = f"{' '.join(given)} {'departs' if len(given) == 1 else 'depart'}" if given else "the options given depart"
+    return f"{what} from evo's conventions ({lacks}); without them --conventions evo gives evo's"
+
+
 def _crosscheck_conventions(args: argparse.Namespace, gt_format: str, est_format: str) -> int:
     """``crosscheck --conventions P``: lorisnb under preset P against evo reading the files itself."""
     from lorisnb.io.writers import write_csv
@@ -176,18 +191,23 @@ def _crosscheck_conventions(args: argparse.Namespace, gt_format: str, est_format
                            gt_topic=args.gt_topic, tol=1e-5 if "kitti" in (gt_format, est_format) else 1e-9)  # fmt: skip
     with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
         print(table.to_string(index=False, float_format=lambda v: f"{v:.10g}"))
-    stats = ~table["quantity"].str.contains(":")
-    why = explained(table) & stats
-    compared = stats & table["evo"].notna()
-    unexplained = stats & ~table["agrees"] & ~why & ~table["note"].str.startswith(NO_RPE_PAIR)
-    print(f"\n{int(table.loc[compared, 'agrees'].sum())} of {int(compared.sum())} statistics agree with evo reading "
-          "the files itself; the reading rows say where the readings differ and why", file=sys.stderr)  # fmt: skip
+    stats = ~table["quantity"].str.contains(":")  # every statistic of the preset, each counted once below
+    agree = stats & table["agrees"]  # evo's value and lorisnb's, the same
+    why = explained(table) & stats  # differ, or evo has none, for a reason the note states
+    no_pair = stats & ~agree & ~why & table["note"].str.startswith(NO_RPE_PAIR)  # said by _no_pairs
+    unexplained = stats & ~agree & ~why & ~no_pair
+    total = int(stats.sum())
+    print(f"\n{int(agree.sum())} of {total} statistics agree with evo reading the files itself; the reading rows "
+          "say where the readings differ and why", file=sys.stderr)  # fmt: skip
     if why.any():
-        print(f"explained by a stated definition ({int(why.sum())}; these conventions are not evo's, see the notes; "
-              f"--conventions evo gives evo's): {', '.join(table.loc[why, 'quantity'])}", file=sys.stderr)  # fmt: skip
+        none = int((why & table["evo"].isna()).sum())
+        parts = [f"{int(why.sum()) - none} differ from evo's value", f"evo has no value for {none}"]
+        counts = ", ".join(x for x, n in zip(parts, (int(why.sum()) - none, none), strict=True) if n)
+        print(f"explained by a stated definition ({int(why.sum())} of {total}: {counts}; {_not_evos(args, spec)}): "
+              f"{', '.join(table.loc[why, 'quantity'])}", file=sys.stderr)  # fmt: skip
     if unexplained.any():
-        print(f"DISAGREE, unexplained ({int(unexplained.sum())}): {', '.join(table.loc[unexplained, 'quantity'])}",
-              file=sys.stderr)  # fmt: skip
+        print(f"DISAGREE, unexplained ({int(unexplained.sum())} of {total}): "
+              f"{', '.join(table.loc[unexplained, 'quantity'])}", file=sys.stderr)  # fmt: skip
     if args.csv:
         write_csv(table, args.csv, args.force)
     return 1 if _no_pairs(table) or unexplained.any() else 0

@@ -18,10 +18,14 @@ from lorisnb.io.writers import check_dataset_target, overlap
 INPUT_SUFFIXES = frozenset(x for f in FORMATS.values() for x in f.suffixes)
 
 
-def check_output(out: str | None, inputs: list[str], force: bool, folder: bool = False, option: str = "--csv") -> None:
+def check_output(
+    out: str | None, inputs: list[str], force: bool, folder: bool = False, option: str = "--csv",
+    force_does: str = "replace it",
+) -> None:  # fmt: skip
     """Refuse an output before any work: an input of the command, a file in an input folder with
     an input's suffix, a folder output that is, holds or lies in an input (:func:`overlap`), a
-    folder for a file, an existing file without --force, or a place that cannot be written."""
+    folder for a file, an existing file or folder without --force (the message says what --force
+    would do: ``force_does``, :data:`FORCE_DOES`), or a place that cannot be written."""
     if out is None:
         return
     if str(out).strip() == "":
@@ -42,7 +46,7 @@ def check_output(out: str | None, inputs: list[str], force: bool, folder: bool =
     if hit:
         raise OutputError(f"{option} {out} {hit[0]} the input {hit[1]} of this command; choose another output folder")
     if target.exists() and not force:
-        raise OutputError(f"{out} exists; choose another name or pass --force to replace it")
+        raise OutputError(f"{out} exists; choose another name or pass --force to {force_does}")
     parent = target.parent
     while not parent.exists():
         parent = parent.parent
@@ -65,6 +69,17 @@ def input_options(args: argparse.Namespace) -> list[str]:
     given = (getattr(args, k, None) for k in INPUT_OPTIONS)
     return [str(v) for v in given if isinstance(v, (str, os.PathLike)) and str(v).strip() and Path(v).exists()]
 
+
+#: What ``--force`` does to an existing output, by the option's argparse name, where it does not replace
+#: it: a folder of figures is written into (history --out), a Parquet dataset replaced whole only if
+#: lorisnb wrote it (:func:`~lorisnb.io.writers.check_dataset_target`).
+FORCE_DOES = {
+    "out": "write into it (files of the same names replaced, every other file kept)",
+    "parquet": "replace it (a Parquet dataset lorisnb wrote, whole)",
+}
+
+#: Folder options a command writes files into (never a file of that name, even with --force).
+WRITTEN_INTO = ("out",)
 
 #: The file name each output option needs (any case), by its argparse name.
 OUTPUT_SUFFIXES: dict[str, tuple[str, ...]] = {
@@ -101,7 +116,9 @@ def check_outputs(args: argparse.Namespace, inputs: list[str], files: list[str],
             raise OutputError(f"{seen[target]} and {opt(k)} both name {out}; give each output its own file or folder")
         seen[target] = opt(k)
     for k, out, folder in given:
-        check_output(out, inputs, args.force, folder=folder, option=opt(k))
+        if k in WRITTEN_INTO and Path(out).exists() and not Path(out).is_dir():
+            raise OutputError(f"{opt(k)} {out}: a file; expected a folder to write into; choose another name")
+        check_output(out, inputs, args.force, folder=folder, option=opt(k), force_does=FORCE_DOES.get(k, "replace it"))
         name = Path(out).name.lower()
         suffixes = OUTPUT_SUFFIXES.get(k)
         if not folder and suffixes and not name.endswith(suffixes):

@@ -3,6 +3,8 @@ definition (listed), 1 only for a disagreement no definition explains."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 import lorisnb.tools.peers.crosscheck_evo as cc
@@ -22,7 +24,14 @@ def test_differences_by_definition_are_listed_and_exit_0(data, capsys):
     assert why[table["quantity"] == "rpe_trans_rmse"].all()  # RPE in seconds: evo has no such unit
     assert main(["crosscheck", g, e, "--conventions", "tum"]) == 0
     err = capsys.readouterr().err
-    assert "explained by a stated definition (29;" in err and "ate_rmse" in err and "DISAGREE" not in err
+    assert (
+        "explained by a stated definition (29 of 29: 15 differ from evo's value, evo has no value for 14; the "
+        "conventions of preset tum are not evo's"
+        in err
+        and "ate_rmse" in err
+        and "DISAGREE" not in err
+    )
+    assert "0 of 29 statistics agree" in err  # one count for every line: 0 agree + 29 explained of the 29
 
 
 @pytest.mark.thorough
@@ -42,4 +51,20 @@ def test_an_unexplained_disagreement_exits_1_and_is_named(data, capsys, monkeypa
     assert not table.set_index("quantity").loc["ate_rmse", "agrees"]
     assert main(["crosscheck", g, e, "--conventions", "evo"]) == 1
     err = capsys.readouterr().err
-    assert "DISAGREE, unexplained (1): ate_rmse" in err and "29 of 30 statistics agree" in err
+    assert "DISAGREE, unexplained (1 of 30): ate_rmse" in err and "29 of 30 statistics agree" in err
+
+
+@pytest.mark.thorough
+def test_options_that_depart_from_evos_preset_are_named_and_counts_add_up(data, capsys):
+    """--conventions evo --align posyaw: the differences are explained by --align posyaw (evo has no
+    position-and-yaw alignment), not by 'these conventions are not evo's ... --conventions evo gives
+    evo's' (it was given); the statistics that agree and those explained add up to every statistic."""
+    g, e = str(data.tum / GT), str(data.tum / EST)
+    assert main(["crosscheck", g, e, "--conventions", "evo", "--align", "posyaw"]) == 0
+    err = capsys.readouterr().err
+    agree = re.search(r"(\d+) of (\d+) statistics agree", err)
+    why = re.search(r"explained by a stated definition \((\d+) of (\d+): (\d+) differ from evo's value; --align "
+                    r"posyaw departs from evo's conventions \(lorisnb aligns position and yaw", err)  # fmt: skip
+    assert agree and why, err
+    assert int(agree[1]) + int(why[1]) == int(agree[2]) == int(why[2]) and why[1] == why[3]
+    assert "are not evo's" not in err and "DISAGREE" not in err
