@@ -14,6 +14,7 @@ import pandas as pd
 from lorisnb.cli.commands import every_column, fmt_table, report_problems, run_evaluation, tables_only
 from lorisnb.cli.outputs import check_outputs, refuse_unused
 from lorisnb.cli.text import clean, say
+from lorisnb.core.stats.regression import regressed_phrase
 from lorisnb.errors import ValidationError
 
 #: diff's own options; every other option is an evaluate option (for result folders only).
@@ -166,8 +167,8 @@ def cmd_diff(args: argparse.Namespace) -> int:
         print(f"{len(d.verdict['unjudged'])} comparison(s) too little to judge (fewer than 50 matched or correct "
               "poses): listed in --json, never a regression")  # fmt: skip
     print(f"rule: {d.verdict['rule']}")
-    n = d.verdict["regressed_sequences"]
-    print(f"\nverdict: {d.verdict['verdict']}" + (f" ({n} sequence(s) regressed)" if d.regressed else ""))
+    what = regressed_phrase(d.verdict)
+    print(f"\nverdict: {d.verdict['verdict']}" + (f" ({what})" if what else ""))
     extra = dict(base=args.paths[0], cand=args.paths[1], tolerances={k: str(v) for k, v in tolerances.items()},
                  alpha=args.alpha, base_failed=base_failed, cand_failed=sorted(cand_failed))  # fmt: skip
     written = []
@@ -232,9 +233,9 @@ def cmd_history(args: argparse.Namespace) -> int:
     rc = 0
     if newest in diffs:
         d = diffs[newest]
-        n = d.verdict["regressed_sequences"]
+        what = regressed_phrase(d.verdict)
         print(f"\nnewest run {clean(names[newest])} against {clean(first.loc[names[newest], 'baseline'])}: {d.verdict['verdict']}"
-              + (f" ({n} sequence(s) regressed)" if d.regressed else ""))  # fmt: skip
+              + (f" ({what})" if what else ""))  # fmt: skip
         rc = 1 if d.regressed else 0
     elif runs:
         print(f"\nnewest run {clean(names[newest])}: no earlier run is comparable with it; nothing judged")

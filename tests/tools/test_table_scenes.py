@@ -73,3 +73,22 @@ def test_history_of_the_tables_writes_the_scene_cr_of_the_folders_evaluation(one
     written = h.loc[(h["scene"] == "cafe") & (h["metric"] == "cr"), "value"].to_numpy()
     folder = scene_cr(diff_tables(ev.sequences(), ev.sequences(), expected=ev.durations()))
     assert rc == 0 and len(written) == 2 and written == pytest.approx([folder, folder], abs=1e-12)
+
+
+def test_a_verdict_carried_by_scene_values_alone_says_so(one_of_two, tmp_path, capsys):
+    """A scene's CR falls while its sequence stays within its own (wider) rerun band: the verdict
+    line says no sequence regressed and how many scene values did, not '(0 sequence(s) regressed)'."""
+    from lorisnb.core.stats.regression import regressed_phrase
+
+    _, csv = one_of_two
+    assert regressed_phrase({"verdict": "ok", "regressed_sequences": 0, "scene_counts": {}}) == ""
+    v = {"verdict": "regression", "regressed_sequences": 0, "scene_counts": {"regression": 2}}
+    assert regressed_phrase(v) == "no sequence regressed; 2 scene value(s) did"
+    assert regressed_phrase({**v, "regressed_sequences": 3}) == "3 sequence(s) regressed"
+    t = pd.read_csv(csv)
+    worse = t.assign(cr=t["cr"] * 0.35, correct_time=t["correct_time"] * 0.35)
+    worse.to_csv(tmp_path / "worse.csv", index=False)
+    rc = main(["diff", str(csv), str(tmp_path / "worse.csv")])
+    out = capsys.readouterr().out
+    line = [x for x in out.splitlines() if x.startswith("verdict:")][0]
+    assert rc == 1 and line.startswith("verdict: regression (no sequence regressed; ") and line.endswith("did)"), out

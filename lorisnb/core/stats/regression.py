@@ -66,6 +66,7 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -715,6 +716,18 @@ def verdict(sequences: pd.DataFrame, scenes: pd.DataFrame) -> dict:
                 unjudged=unjudged, sequences=n_seq, counts=counts, scene_counts=scene_counts,
                 regressed_sequences=len({(r["suite"], r["algorithm"], r["scene"], r["seq"]) for r in regs
                                          if r["level"] == "sequence"}))  # fmt: skip
+
+
+def regressed_phrase(verdict: Mapping[str, Any]) -> str:
+    """What regressed, for the verdict's line: ``"3 sequence(s) regressed"``, or where only scene
+    values did (a scene's CR falls while each sequence stays within its wider rerun band),
+    ``"no sequence regressed; 2 scene value(s) did"``; "" for a verdict of ok."""
+    if verdict["verdict"] == "ok":
+        return ""
+    n = int(verdict["regressed_sequences"])
+    if n:
+        return f"{n} sequence(s) regressed"
+    return f"no sequence regressed; {int(verdict['scene_counts'].get('regression', 0))} scene value(s) did"
 
 
 def _what(r: dict) -> str:

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
+from lorisnb.core.stats.regression import regressed_phrase
 from lorisnb.tools.decisions.runs import NOT_SCORED
 from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV
 
@@ -401,7 +402,7 @@ def _since_html(since: Mapping[str, Any]) -> list[str]:
     parts = [
         "<h2 id='since-baseline'>Since the baseline</h2>",
         f"<p class='verdict {'ok' if ok else 'failed'}'>Against <code>{who}</code>: <b>{esc(v['verdict'])}</b>"
-        + ("" if ok else f" ({v['regressed_sequences']} sequence(s) regressed)")
+        + ("" if ok else f" ({esc(regressed_phrase(v))})")
         + ". "
         + esc(", ".join(f"{n} {k}" for k, n in v["counts"].items() if n))
         + ".</p>",
