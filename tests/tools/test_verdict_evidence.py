@@ -88,6 +88,34 @@ def test_copies_of_one_run_are_one_run_not_significance(table):
     assert row["status"] == "regression" and "copies" not in row["decided_by"]
 
 
+def test_one_runs_tracking_with_its_positions_changed_is_one_run_too(table):
+    """Three "trials" that are one run with its positions scaled (x1.0, x1.12, x0.9): ATE varies by half,
+    but CR, a share of time, is the same to the last digit wherever it is neither 0 nor 1, which reruns
+    never repeat. They are copies: the verdict judges them as one run a side (a t-test on them called a
+    CR-T drop of 0.065 significant), and compare claims no significance for them."""
+    from lorisnb.core.stats.inference import trial_spread
+    from lorisnb.tools.decisions.comparison import compare_table
+
+    def scaled(t: pd.DataFrame) -> pd.DataFrame:
+        return pd.concat([t.assign(trial=k, ate_rmse=t["ate_rmse"] * f, c_ate_rmse=t["c_ate_rmse"] * f)
+                          for k, f in enumerate((1.0, 1.12, 0.9), start=1)], ignore_index=True)  # fmt: skip
+
+    where = _target(table)
+    base, cand = scaled(table), scaled(_lower_cr(table, where, 0.1))
+    spread = trial_spread(base).set_index("algorithm")
+    assert spread.loc[ALG, "ate_spread"] > 0.05 and spread.loc[ALG, "cr_ties"] == 1.0 and spread.loc[ALG, "copies"]
+    row = _row(changes(base, cand)[0], where, "cr")
+    assert row["status"] == "ok" and "the same to the last digit" in row["decided_by"], row["decided_by"]
+    real = _reruns(table, range(1, 4), 3)  # reruns: CR varies, no ties
+    assert not trial_spread(real).set_index("algorithm").loc[ALG, "copies"]
+    mine = base[base["algorithm"] == ALG]
+    two = pd.concat([mine, mine.assign(algorithm="other", cr=mine["cr"] * 0.97)], ignore_index=True)
+    durations = table[["scene", "seq", "gt_duration"]].drop_duplicates()
+    res = compare_table(two, durations, "cr")
+    assert any("near-identical" in n and "last digit" in n for n in res.notes), res.notes
+    assert not res.pairs["significant"].any()
+
+
 def test_a_trial_that_repeats_another_counts_once(table):
     """Four reruns and a fifth trial that is a byte-identical copy of the fourth: 5 vs 4 independent
     runs, and the verdict says so at the sequence and the scene level."""

@@ -69,16 +69,20 @@ def with_trials(table: pd.DataFrame) -> pd.DataFrame:
 def trial_spread(table: pd.DataFrame, by: Sequence[str] = ("algorithm",)) -> pd.DataFrame:
     """What varies between trials, per group of ``by`` (columns of the table) with two or more
     trials of a sequence: the median over its sequences of the standard deviation between trials
-    of CR (``cr_spread``) and of the log of ATE RMSE (``ate_spread``, about a relative spread), and
-    ``copies``: both below a quarter of what real reruns show
-    (:data:`~lorisnb.core.stats.tolerances.RERUN_SPREAD`). Such trials are copies of one run
-    (byte-identical, or near-identical), not reruns: one run's evidence, however many there are.
-    ``compare`` claims no significance for them, and ``diff``'s verdict counts them as one run."""
+    of CR (``cr_spread``) and of the log of ATE RMSE (``ate_spread``, about a relative spread),
+    ``cr_ties``: the share of its sequences with a CR strictly between 0 and 1 whose trials all have
+    the very same CR, and ``copies``: both spreads below a quarter of what real reruns show
+    (:data:`~lorisnb.core.stats.tolerances.RERUN_SPREAD`), or the CR the same in every trial of most
+    such sequences. Such trials are copies of one run (byte-identical, near-identical, or one run's
+    tracking with its positions changed: CR is a continuous share of time that real reruns never
+    repeat to the last digit, unless it is 0 or 1), not reruns: one run's evidence, however many
+    there are. ``compare`` claims no significance for them, and ``diff``'s verdict counts them as
+    one run."""
     from lorisnb.core.stats.tolerances import RERUN_SPREAD
 
     t = with_trials(table)
     keys = ["suite", "algorithm", "scene", "seq"]
-    cols = ["cr_spread", "ate_spread", "copies"]
+    cols = ["cr_spread", "ate_spread", "cr_ties", "copies"]
     if t.empty:
         return pd.DataFrame(columns=[*by, *cols])
     cr = pd.to_numeric(t["cr"], errors="coerce") if "cr" in t else pd.Series(np.nan, t.index)
@@ -86,15 +90,20 @@ def trial_spread(table: pd.DataFrame, by: Sequence[str] = ("algorithm",)) -> pd.
     per = pd.DataFrame({"cr": cr, "ate": np.log(ate.where(ate > 0)), "trial": t["trial"]}).groupby(
         [t[k] for k in keys], sort=False, dropna=False
     )
-    seqs = pd.DataFrame({"n": per["trial"].nunique(), "cr": per["cr"].std(), "ate": per["ate"].std()}).reset_index()
+    seqs = pd.DataFrame({
+        "n": per["trial"].nunique(), "cr": per["cr"].std(), "ate": per["ate"].std(),
+        "inside": (per["cr"].min() > 0) & (per["cr"].max() < 1), "tied": per["cr"].max() == per["cr"].min(),
+    }).reset_index()  # fmt: skip
     rows = []
     for name, g in seqs.groupby(list(by), sort=True, dropna=False):
         if g["n"].max() < 2:
             continue
         cr_s, ate_s = float(g["cr"].median()), float(g["ate"].median())
+        inside = g[(g["n"] >= 2) & g["inside"]]
+        ties = float(inside["tied"].mean()) if len(inside) else np.nan
+        copies = (cr_s < RERUN_SPREAD["rate"] / 4 and ate_s < RERUN_SPREAD["log"] / 4) or bool(ties > 0.5)
         rows.append(dict(zip(by, name if isinstance(name, tuple) else (name,), strict=True), cr_spread=cr_s,
-                         ate_spread=ate_s, copies=bool(cr_s < RERUN_SPREAD["rate"] / 4
-                                                       and ate_s < RERUN_SPREAD["log"] / 4)))  # fmt: skip
+                         ate_spread=ate_s, cr_ties=ties, copies=bool(copies)))  # fmt: skip
     return pd.DataFrame(rows, columns=[*by, *cols])
 
 

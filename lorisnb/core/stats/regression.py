@@ -636,7 +636,10 @@ def trial_copies(table: pd.DataFrame) -> dict[tuple, str]:
     spread = trial_spread(table, by=("suite", "algorithm"))
     return {(r.suite, r.algorithm): (f"are near-identical copies of one run (CR varies by {r.cr_spread:.2g}, ATE "
                                      f"by {100 * r.ate_spread:.2g} % between them; real reruns {RERUN_SPREAD['rate']:g} "
-                                     f"and {100 * RERUN_SPREAD['log']:.0f} %): counted as one run")
+                                     f"and {100 * RERUN_SPREAD['log']:.0f} %"
+                                     + (f"; CR the same to the last digit in {100 * r.cr_ties:.0f} % of the sequences "
+                                        "where it is neither 0 nor 1, which reruns never repeat" if r.cr_ties > 0.5
+                                        else "") + "): counted as one run")
             for r in spread[spread["copies"].astype(bool)].itertuples()}  # fmt: skip
 
 

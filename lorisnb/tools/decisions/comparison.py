@@ -93,7 +93,8 @@ def trial_spread(table: pd.DataFrame) -> tuple[pd.DataFrame, set[str]]:
     """What varies between trials: per algorithm with trials, the median over its sequences of the
     standard deviation of CR between trials and of the log of ATE RMSE (about a relative spread),
     and the algorithms whose trials are **near-identical copies**: both spreads below a quarter of
-    real rerun spreads (:func:`lorisnb.core.stats.inference.trial_spread`, as ``diff``'s verdict)."""
+    real rerun spreads, or a CR strictly between 0 and 1 repeated to the last digit by every trial
+    of most sequences (:func:`lorisnb.core.stats.inference.trial_spread`, as ``diff``'s verdict)."""
     spread = stats.trial_spread(table)
     copies = set(spread.loc[spread["copies"].astype(bool), "algorithm"])
     return spread.drop(columns=["copies"]).reset_index(drop=True), copies
@@ -146,6 +147,8 @@ def compare_table(
     if copies:
         notes += [f"the trials of {', '.join(sorted(copies))} are near-identical: " + "; ".join(
             f"{r.algorithm}: CR varies by {r.cr_spread:.2g}, ATE by {100 * r.ate_spread:.2g} %"
+            + (f", CR the same to the last digit in {100 * r.cr_ties:.0f} % of the sequences where it is neither 0 "
+               "nor 1 (which reruns never repeat)" if r.cr_ties > 0.5 else "")
             for r in spread.itertuples() if r.algorithm in copies)
             + f" between trials (median over sequences), where real reruns of the icra20 systems vary by "
             f"{RERUN_SPREAD['rate']:g} and {100 * RERUN_SPREAD['log']:.0f} %: they look like copies of one run, "
