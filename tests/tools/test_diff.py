@@ -208,6 +208,22 @@ def test_tables_of_other_specs_name_only_the_keys_that_differ(icra20, tmp_path, 
     assert "--scale auto" in err and '"association"' not in err
 
 
+def test_a_table_that_lost_its_spec_column_is_not_comparable_with_one_that_has_it(icra20, tmp_path, capsys):
+    """A table scored with --scale whose spec column was dropped (by hand, or by another tool) against
+    one scored SE(3): refused naming the column, not judged ok (its ATE was half the base's)."""
+    import pandas as pd
+
+    se3, sim3 = tmp_path / "se3.csv", tmp_path / "sim3.csv"
+    for out, more in ((se3, []), (sim3, ["--scale", "on"])):
+        assert main(["evaluate", str(icra20 / "per-seq" / "dso"), "--csv", str(out), "--no-progress", *more]) == 0
+    pd.read_csv(sim3).drop(columns=["spec"]).to_csv(tmp_path / "nospec.csv", index=False)
+    capsys.readouterr()
+    rc, _, err = run(capsys, se3, tmp_path / "nospec.csv")
+    assert rc == 2 and f"spec recorded in {se3}, not in {tmp_path / 'nospec.csv'}" in err, err
+    rc, _, err = run(capsys, tmp_path / "nospec.csv", tmp_path / "nospec.csv")  # neither records it: as they are
+    assert rc == 0, err
+
+
 def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
     """Two report run folders (run.json + per-sequence CSV tables), then history over three runs."""
     a, b = versions

@@ -92,3 +92,21 @@ def test_a_verdict_carried_by_scene_values_alone_says_so(one_of_two, tmp_path, c
     out = capsys.readouterr().out
     line = [x for x in out.splitlines() if x.startswith("verdict:")][0]
     assert rc == 1 and line.startswith("verdict: regression (no sequence regressed; ") and line.endswith("did)"), out
+
+
+def test_history_says_when_two_runs_have_the_same_time(one_of_two, tmp_path, capsys):
+    """Tables copied by a CI download share one modification time: their order is the order given,
+    and the newest run's baseline (the exit status) hangs on it, so history says so."""
+    import os
+
+    _, csv = one_of_two
+    for name in ("a", "b"):
+        (tmp_path / name).mkdir()
+        shutil.copy(csv, tmp_path / name / "s.csv")
+        os.utime(tmp_path / name / "s.csv", (1767225600, 1767225600))
+    rc = main(["history", str(tmp_path / "a" / "s.csv"), str(tmp_path / "b" / "s.csv")])
+    err = capsys.readouterr().err
+    assert rc == 0 and f"{tmp_path / 'b' / 's.csv'} has the same time as {tmp_path / 'a' / 's.csv'}" in err, err
+    os.utime(tmp_path / "b" / "s.csv", (1767225700, 1767225700))
+    rc = main(["history", str(tmp_path / "a" / "s.csv"), str(tmp_path / "b" / "s.csv")])
+    assert rc == 0 and "same time" not in capsys.readouterr().err

@@ -41,7 +41,13 @@ def load_runs(paths: Iterable[str | os.PathLike[str]]) -> list[Run]:
     runs = [load_run(p) for p in paths]
     if len({r.path.resolve() for r in runs}) < len(runs):
         raise ValidationError("history: a run is given twice; give each run once")
-    return sorted(runs, key=lambda r: (r.created is None, r.created, r.name))
+    out = sorted(runs, key=lambda r: (r.created is None, r.created, r.name))
+    for before, run in zip(out, out[1:], strict=False):  # the newest run baseline and exit status hang on the order
+        if run.created is not None and run.created == before.created:
+            run.notes.append(f"{run.path} has the same time as {before.path} ({run.created.isoformat()}, "
+                             f"{run.created_from}): ordered after it as given; a copy or a download resets files' "
+                             "modification times, a report run's run.json keeps when it was made")  # fmt: skip
+    return out
 
 
 def run_labels(runs: Sequence[Run]) -> list[str]:

@@ -552,6 +552,10 @@ def setting_differences(a: pd.DataFrame, b: pd.DataFrame, name_a: str = "BASE", 
     sa, sb = table_settings(a), table_settings(b)
     both = sorted(set(sa["scene"]) & set(sb["scene"]))
     said: dict[str, list[str]] = {}  # what differs -> the scenes it differs in (said once for all of them)
+    for col in (c for c in SPEC_COLUMNS if (c in a.columns) != (c in b.columns)):  # recorded on one side only
+        has, lacks = (name_a, name_b) if col in a.columns else (name_b, name_a)
+        said.setdefault(f"{col} recorded in {has}, not in {lacks} (a table edited, or written by another lorisnb): "
+                        f"how {lacks} was scored cannot be checked", []).extend(both)  # fmt: skip
     for scene in both:
         x = sa[sa["scene"] == scene].drop(columns=["table"], errors="ignore").drop_duplicates()
         y = sb[sb["scene"] == scene].drop(columns=["table"], errors="ignore").drop_duplicates()
