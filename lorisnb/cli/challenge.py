@@ -62,6 +62,10 @@ def cmd_serve(args: argparse.Namespace) -> int:
     phases = "; ".join(p.name for p in challenge.phases)
     print(f"lorisnb serve: {challenge.title!r} on http://{args.host}:{args.port}/ (phases: {phases}); database "
           f"{challenge.database.split('@')[-1]}; uploads in {challenge.folder / 'uploads'}", file=sys.stderr)  # fmt: skip
+    if challenge.public_groundtruth:  # the bundled class challenge: said on start and on the leaderboard
+        say(f"lorisnb serve: note: {challenge.public_groundtruth}. For a graded challenge, set [challenge] "
+            "groundtruth to a data root kept on this server only (docs/guide/challenge-server.md, 'Ground truth "
+            "the teams cannot have')")  # fmt: skip
     uvicorn.run(app, host=args.host, port=args.port, log_level="warning", timeout_keep_alive=5,
                 limit_concurrency=args.max_connections)  # fmt: skip
     return 0

@@ -330,7 +330,7 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
     @app.get("/api/leaderboard")
     async def board_api() -> JSONResponse:
         boards = await run_in_threadpool(server.boards, 10.0)  # a script would rather wait than read an old one
-        return JSONResponse({"challenge": challenge.title, "phases": boards})
+        return JSONResponse({"challenge": challenge.title, "practice": challenge.public_groundtruth, "phases": boards})
 
     @app.get("/api/health")
     async def health() -> JSONResponse:

@@ -110,6 +110,19 @@ class Challenge:
     phases: tuple[Phase, ...] = field(default_factory=tuple)
     scheduler: str | None = None  # a Dask scheduler's address: scoring there instead of here
 
+    @property
+    def public_groundtruth(self) -> str | None:
+        """Why teams may hold this challenge's ground truth (None when nothing says so): it is the
+        sample data shipped in the lorisnb package (``lorisnb/sample_data``), which every
+        ``pip install lorisnb`` holds. Such a challenge is for practice: a team can upload the
+        ground truth itself (refused, :func:`.scoring.groundtruth_copies`) or a copy of it changed a
+        little (not told from a very good estimate)."""
+        parts = self.data.root.resolve().parts
+        if "sample_data" in parts and "lorisnb" in parts[: parts.index("sample_data")]:
+            return ("its ground truth is lorisnb's sample data (lorisnb/sample_data), which ships with lorisnb: every "
+                    "team that installed lorisnb has it, so this challenge is for practice, not for grading")  # fmt: skip
+        return None
+
     def phase_at(self, now: float) -> Phase | None:
         """The phase open at ``now`` (the first, if several overlap), None between phases."""
         if not self.opens <= now < self.closes:

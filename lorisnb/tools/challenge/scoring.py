@@ -37,6 +37,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from sqlalchemy import Engine
 
 from lorisnb.core.lifelong.aggregate import aggregate_scenes, spans_table
@@ -44,7 +45,7 @@ from lorisnb.core.pipeline.model import FileErrors
 from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.stats.trials import check_duplicates
 from lorisnb.core.trajectory.frames import SCENES
-from lorisnb.errors import LorisError, LorisWarning
+from lorisnb.errors import LorisError, LorisWarning, ValidationError
 from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans
 from lorisnb.io.writers import write_openloris
 from lorisnb.tools.challenge import store
@@ -54,6 +55,12 @@ from lorisnb.tools.evaluation.jobs import GT_DROP
 from lorisnb.tools.evaluation.result import Evaluation
 from lorisnb.tools.evaluation.runner import evaluate, evaluate_pairs
 from lorisnb.tools.evaluation.status import skipped_only
+
+#: A sequence whose matched poses all lie this close to the ground truth, after the alignment
+#: (positions: metres; orientations: degrees), is the ground truth copied, not an estimate: no
+#: tracker is within a tenth of a millimetre, or a thousandth of a degree, at every pose (the
+#: ground truth uploaded as it is gives 0 m and 6e-15 deg). A copy changed by more is not told.
+COPY_ATE_M, COPY_AOE_DEG, COPY_MIN_POSES = 1e-4, 1e-3, 10
 
 FILES = "files"  # a submission's folder: files/ (as uploaded), plan.json, result-<claim>.json, timeline-<k>.png
 GROUNDTRUTH = "groundtruth"  # the server folder's one-sequence ground truths (sequence_groundtruth)
@@ -126,6 +133,24 @@ def _attributed(f: FileErrors, text: str) -> list[tuple[str, int]]:
     return [(f.scene, q) for q in (named or seqs)]
 
 
+def groundtruth_copies(errors: Iterable[FileErrors]) -> list[str]:
+    """Each sequence of ``errors`` (at least :data:`COPY_MIN_POSES` matched) whose positions, or
+    orientations, equal the ground truth's at every matched pose (within :data:`COPY_ATE_M` and
+    :data:`COPY_AOE_DEG` after the alignment), said as ``FILE: cafe-1's positions ...``."""
+    out = []
+    for f in errors:
+        for e in f.sequences:
+            if e.matched < COPY_MIN_POSES:
+                continue
+            pos, rot = bool(np.all(e.ate <= COPY_ATE_M)), bool(np.all(e.aoe <= COPY_AOE_DEG))
+            if pos or rot:
+                what = "positions and orientations" if pos and rot else "positions" if pos else "orientations"
+                within = f"{COPY_ATE_M * 1000:g} mm" if pos else f"{COPY_AOE_DEG:g} deg"
+                out.append(f"{Path(f.path).name}: {f.scene}-{e.seq}'s {what} are the ground truth's (all "
+                           f"{e.matched} matched poses within {within} of it after the alignment)")  # fmt: skip
+    return out
+
+
 def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | None = None, *,
                  plain: Mapping[str, Mapping[str, Any]] | None = None, groundtruth: Path | None = None,
                  views: Sequence[Iterable[tuple[str, int]]] | None = None) -> dict[str, Any]:  # fmt: skip
@@ -158,6 +183,11 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
         if len(evaluations) > 1:  # one sequence and trial in two files: an error, as evaluate() says
             check_duplicates([(Path(f.path).name, (f.suite, f.algorithm, f.scene, f.trial),
                                tuple(e.seq for e in f.sequences)) for f in errors])  # fmt: skip
+        copies = groundtruth_copies(errors)
+        if copies:  # the whole submission: it is not ranked, and says why
+            listed = "; ".join(copies)
+            raise ValidationError(f"refused, not ranked: this upload holds the ground truth itself, not an estimate "
+                                  f"({listed}). Upload your system's output")  # fmt: skip
         ev = Evaluation(errors, [], None, [], data, spec=spec, kind="openloris")
         rows = ev.sequence_rows()
     for one in evaluations:
