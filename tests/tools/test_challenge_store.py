@@ -1,10 +1,12 @@
 """The challenge database's queue: claims are exclusive under concurrency, a result is committed
 once, a killed server's half-scored submissions go back to the queue, a claim that could not
-start is released; tokens are stored as their SHA-256 only."""
+start is released; tokens are stored as their SHA-256 only; a team name that looks like another
+(an adversarial pass: 'tеam1' with a Cyrillic е, and 'Team1', beside 'team1') is refused."""
 
 from __future__ import annotations
 
 import hashlib
+import re
 import threading
 import time
 
@@ -67,3 +69,54 @@ def test_a_token_never_starts_like_an_option(monkeypatch):
     draws = iter(["-GihqsCyIiG1YTqtjzpd3T_YlIkG75CBVrAVBF_nyzM", "--x", "zBPSIJWBgGOxa3CrUGrr7Z20cqn"])
     monkeypatch.setattr(store.secrets, "token_urlsafe", lambda n: next(draws))
     assert store.new_token() == "zBPSIJWBgGOxa3CrUGrr7Z20cqn"
+
+
+@pytest.mark.parametrize(
+    "name, words",
+    [
+        ("team1", "a team of that name exists"),
+        ("Team1", "looks like the existing team 'team1'"),  # case
+        ("TEAM 1", "looks like the existing team 'team1'"),  # case and a separator
+        ("team_1", "looks like the existing team 'team1'"),
+        ("ｔｅａｍ１", "looks like the existing team 'team1'"),  # full-width (NFKC)
+        ("ТЕАМ1", "looks like the existing team 'team1'"),  # every letter Cyrillic: one script, drawn alike
+        ("teaml", "looks like the existing team 'team1'"),  # l for 1
+        ("tеam1", "mixes Latin letters with letters of Cyrillic ('е' U+0435 CYRILLIC SMALL LETTER IE)"),
+        ("Ωmega", "mixes Latin letters with letters of Greek ('Ω' U+03A9"),  # the fewer named
+        ("team\u202e1", "U+202E RIGHT-TO-LEFT OVERRIDE"),
+        ("te\u200bam", "U+200B ZERO WIDTH SPACE"),
+        ("team\u3164", "U+3164 HANGUL FILLER"),
+        ("team\ufe0f2", "U+FE0F VARIATION SELECTOR-16"),
+        ("team\u00a02", "U+00A0 NO-BREAK SPACE"),
+    ],
+)
+def test_look_alike_and_hidden_team_names_refused(engine, name, words):
+    store.add_team(engine, "team1", time.time() + 60)
+    with pytest.raises(ValidationError, match=re.escape(words)):
+        store.add_team(engine, name, time.time() + 60)
+    assert [t["name"] for t in store.all_teams(engine)] == ["team1"]
+
+
+def test_team_names_of_one_language_and_distinct_looks_are_taken(engine):
+    taken = ["team1", "team2", "Łódź", "东京 チーム", "नमस्ते टीम", "العربية 2", "café", "équipe 3"]
+    for name in taken:
+        store.add_team(engine, name, time.time() + 60)
+    store.add_team(engine, "cafe\u0301s", time.time() + 60)  # stored as NFC ('cafés'), not like 'café'
+    assert [t["name"] for t in store.all_teams(engine)] == [*taken, "cafés"]
+    with pytest.raises(ValidationError, match="looks like the existing team 'café'"):
+        store.add_team(engine, "CAFE\u0301", time.time() + 60)  # NFD and capitals: the same name
+
+
+def test_add_team_command_refuses_a_look_alike(tmp_path, data, capsys):
+    from challenge_fixtures import challenge_file
+
+    from lorisnb.cli import main
+
+    path = challenge_file(tmp_path, data)
+    assert main(["challenge", "add-team", str(path), "team1"]) == 0
+    capsys.readouterr()
+    assert main(["challenge", "add-team", str(path), "tеam1"]) != 0
+    err = capsys.readouterr().err
+    assert "mixes Latin letters with letters of Cyrillic" in err and "write it in one script" in err
+    assert main(["challenge", "add-team", str(path), "Team1"]) != 0
+    assert "looks like the existing team 'team1'" in capsys.readouterr().err

@@ -16,7 +16,8 @@ import hashlib
 import json
 import secrets
 import time
-from collections.abc import Iterator
+import unicodedata
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -120,15 +121,111 @@ def transaction(engine: Engine) -> Iterator[Connection]:
         yield conn
 
 
-def add_team(engine: Engine, name: str, expires: float, admin: bool = False) -> str:
-    """Add a team (or the admin, ``admin``); returns its token, which is stored hashed only."""
-    name = name.strip()
-    if not name or len(name) > 80 or any(not (c.isalnum() or c in " -_.") for c in name):
+#: Characters that show nothing though Unicode counts them as letters or marks (Hangul fillers, the
+#: combining grapheme joiner); the others that show nothing or turn the text around (formats, such
+#: as U+200B and U+202E, and variation selectors) are found by their category and name.
+INVISIBLE_LETTERS = frozenset("\u115f\u1160\u3164\uffa0\u034f")
+#: Scripts that may share a name (Unicode's "highly restrictive" profile, UTS #39): one script, or
+#: Latin with Han, Hiragana and Katakana (Japanese), with Han and Bopomofo, or with Han and Hangul.
+SCRIPT_SETS = (
+    frozenset({"Latin", "Han", "Hiragana", "Katakana"}),
+    frozenset({"Latin", "Han", "Bopomofo"}),
+    frozenset({"Latin", "Han", "Hangul"}),
+)
+#: Letters of other scripts (and digits) drawn like Latin letters, with the Latin letter they look
+#: like (before case folding: Cyrillic and Greek capitals and small letters, 1 and I as l, 0 as O).
+LOOK_ALIKE = str.maketrans(
+    "АВЕЅІЈКМНОРСТХУҮҺӀаеѕіјорсхуүһӏԁԛԝьΑΒΕΖΗΙΚΜΝΟΡΤΥΧαεικνορτυχ10I|",
+    "ABESIJKMHOPCTXYYHIaesijopcxyyhldqwbABEZHIKMNOPTYXaeikvoptuxlOll",
+)
+SEPARATORS = " -_."
+
+
+def _script(ch: str) -> str | None:
+    """The script of a letter or digit, from its Unicode name (None: a separator or an ASCII digit,
+    which go with any script)."""
+    if ch in SEPARATORS or ch in "0123456789":
+        return None
+    first = unicodedata.name(ch, "UNKNOWN").split(" ")[0].split("-")[0]
+    return {"CJK": "Han", "IDEOGRAPHIC": "Han", "HANGUL": "Hangul", "HIRAGANA": "Hiragana", "KATAKANA": "Katakana",
+            "BOPOMOFO": "Bopomofo"}.get(first, first.capitalize())  # fmt: skip
+
+
+def name_key(name: str) -> str:
+    """What a team name looks like (names with the same key are refused as look-alikes): its NFKC
+    form (full-width, mathematical and other compatibility letters as the plain ones), each letter
+    drawn like a Latin one as that letter (:data:`LOOK_ALIKE`), case folded, without separators,
+    ``rn`` as ``m`` and ``vv`` as ``w``."""
+    folded = unicodedata.normalize("NFKC", unicodedata.normalize("NFKC", name).translate(LOOK_ALIKE).casefold())
+    key = "".join(c for c in folded.translate(LOOK_ALIKE) if c not in SEPARATORS)
+    return key.replace("rn", "m").replace("vv", "w")
+
+
+def _hidden(c: str) -> bool:
+    """Whether ``c`` shows nothing, turns the text around it, or is a space other than ' '."""
+    category = unicodedata.category(c)
+    return (category in ("Cf", "Cc", "Co", "Cs", "Cn", "Zl", "Zp") or (category == "Zs" and c != " ")
+            or c in INVISIBLE_LETTERS or unicodedata.name(c, "").startswith("VARIATION SELECTOR"))  # fmt: skip
+
+
+def _allowed(c: str) -> bool:
+    """A letter, a digit, a separator, or a mark of a script's own (a Devanagari vowel sign: a
+    combining accent on a Latin letter is composed by NFC, or refused)."""
+    if c.isalnum() or c in SEPARATORS:
+        return True
+    return unicodedata.category(c) in ("Mn", "Mc") and _script(c) not in (
+        None,
+        "Combining",
+        "Latin",
+        "Greek",
+        "Cyrillic",
+    )
+
+
+def check_team_name(name: str, others: Sequence[str] = ()) -> str:
+    """``name`` as it is stored (stripped, NFC), or a :class:`ValidationError` saying what to change:
+    1 to 80 letters, digits, spaces, ``-``, ``_`` or ``.``; no invisible or direction-changing
+    character, no space but ' '; letters of one script (or of a set that writes one language:
+    :data:`SCRIPT_SETS`); not looking like one of ``others`` (:func:`name_key`)."""
+    name = unicodedata.normalize("NFC", name.strip())
+    hidden = [c for c in name if _hidden(c)]
+    if hidden:
+        what = ", ".join(f"U+{ord(c):04X} {unicodedata.name(c, 'unnamed')}" for c in dict.fromkeys(hidden))
+        raise ValidationError(f"team name {name!r}: holds a character that is invisible, turns the text around it or "
+                              f"is a space other than ' ' ({what}); type the name with letters, digits, spaces, '-', "
+                              "'_' or '.' only")  # fmt: skip
+    if not name or len(name) > 80 or not all(map(_allowed, name)):
         raise ValidationError(f"team name {name!r}: expected 1 to 80 letters, digits, spaces, '-', '_' or '.'")
+    letters = [(c, _script(c)) for c in unicodedata.normalize("NFKC", name)]
+    scripts = {s for _, s in letters if s is not None}
+    if len(scripts) > 1 and not any(scripts <= allowed for allowed in SCRIPT_SETS):
+        counts = {s: sum(1 for _, t in letters if t == s) for s in scripts}
+        main = max(sorted(scripts), key=lambda s: counts[s])
+        odd = ", ".join(f"{c!r} U+{ord(c):04X} {unicodedata.name(c, '')}" for c in dict.fromkeys(
+            c for c, t in letters if t is not None and t != main))  # fmt: skip
+        raise ValidationError(f"team name {name!r}: mixes {main} letters with letters of "
+                              f"{', '.join(sorted(scripts - {main}))} ({odd}), which makes names that look alike but "
+                              "differ; write it in one script")  # fmt: skip
+    key = name_key(name)
+    for other in others:
+        if other == name:
+            raise ValidationError(f"team name {name!r}: a team of that name exists; choose another name")
+        if name_key(other) == key:
+            raise ValidationError(f"team name {name!r}: looks like the existing team {other!r} (names are compared as "
+                                  "they look: any case, width or script of a letter drawn alike, 1 and l, 0 and O, "
+                                  "and with spaces, '-', '_' and '.' left out); choose a name that looks different")  # fmt: skip
+    return name
+
+
+def add_team(engine: Engine, name: str, expires: float, admin: bool = False) -> str:
+    """Add a team (or the admin, ``admin``); returns its token, which is stored hashed only. The
+    name is checked by :func:`check_team_name` against every team's (one that looks like another
+    on the leaderboard is refused)."""
+    name = check_team_name(name)
     token = new_token()
     with transaction(engine) as conn:
-        if conn.execute(select(teams.c.id).where(teams.c.name == name)).first() is not None:
-            raise ValidationError(f"team name {name!r}: a team of that name exists; choose another name")
+        others = [str(n) for n in conn.execute(select(teams.c.name)).scalars()]
+        name = check_team_name(name, others)
         conn.execute(teams.insert().values(name=name, token_hash=hash_token(token), admin=admin, created=time.time(),
                                            expires=expires))  # fmt: skip
     return token
