@@ -151,25 +151,31 @@ def test_interrupt_and_shutdown_of_a_forked_kernel(tmp_path):
 
 MANAGER = textwrap.dedent(
     """
-    import asyncio, json, sys, time
+    import asyncio, json, os, sys, time
     from lorisnb.tools.report import kernels as warm_kernels
-    from lorisnb.tools.report.notebooks import KERNEL_ARGS, kernel_manager_class
+    from lorisnb.tools.report.notebooks import KERNEL_ARGS, kernel_files, kernel_manager_class
     z = json.loads(sys.argv[1])
     warm_kernels.use(warm_kernels.Zygote(z["address"], tuple(z["interpreter"]), tuple(map(tuple, z["env"]))))
-    async def main():
+    async def main(folder):
         km = kernel_manager_class()(kernel_name="python3")
         await km.start_kernel(extra_arguments=KERNEL_ARGS)
         assert isinstance(km.provisioner.process, warm_kernels.Forked)
-        print(km.provisioner.process.pid, flush=True)
+        kc = km.client()
+        kc.start_channels()
+        await kc.wait_for_ready(timeout=120)  # its sockets bound
+        print(json.dumps({"pid": km.provisioner.process.pid, "folder": folder, "files": os.listdir(folder)}), flush=True)
         time.sleep(600)
-    asyncio.run(main())
+    with kernel_files() as folder:  # as a report's kernels
+        asyncio.run(main(folder))
     """
 )
 
 
 @pytest.mark.thorough
 def test_a_forked_kernel_ends_with_the_process_managing_it(tmp_path):
-    """A launched kernel's parent poller ends it when its manager dies; a forked one's watcher does."""
+    """A launched kernel's parent poller ends it when its manager dies; a forked one's watcher does,
+    and first removes its connection file and sockets, and the report's kernel folder (kill -9 left
+    them in the temporary folder: nothing else would remove them)."""
     from lorisnb.tools.report.notebooks import kernel_environ
 
     with warm_kernels_for_report() as zygote:
@@ -178,7 +184,9 @@ def test_a_forked_kernel_ends_with_the_process_managing_it(tmp_path):
         manager = subprocess.Popen([sys.executable, "-c", MANAGER, arg], stdout=subprocess.PIPE, text=True,
                                    env=kernel_environ(os.environ), cwd=tmp_path)  # fmt: skip
         try:
-            pid = int(manager.stdout.readline())
+            started = json.loads(manager.stdout.readline())
+            pid, folder = started["pid"], started["folder"]
+            assert sum(f.endswith(".json") for f in started["files"]) == 1 and len(started["files"]) == 6, started
             os.kill(pid, 0)  # the kernel runs
             manager.send_signal(signal.SIGKILL)
             manager.wait()
@@ -191,6 +199,7 @@ def test_a_forked_kernel_ends_with_the_process_managing_it(tmp_path):
                 time.sleep(0.1)
             else:
                 pytest.fail(f"kernel {pid} outlived its manager")
+            assert not os.path.exists(folder), os.listdir(folder)
         finally:
             manager.kill()
 

@@ -20,8 +20,10 @@ kernels of one report share the zygote's string-hash seed.
 
 Jupyter's kernel manager drives a forked kernel as any local kernel (:func:`provisioner_class`:
 signals to its process group, liveness from a pidfd, the exit status from the zygote), and the
-kernel exits when the process managing it exits, as a launched kernel does. Forking needs Linux
-(``os.pidfd_open``, fd passing); elsewhere kernels are launched as usual.
+kernel exits when the process managing it exits, as a launched kernel does; a forked kernel first
+removes what that manager's clean-up would have (its connection file and ipc sockets, and the
+report's kernel folder once empty), so that a report killed outright leaves none in the temporary
+folder. Forking needs Linux (``os.pidfd_open``, fd passing); elsewhere kernels are launched as usual.
 
 Kept after measuring the plain route (issue 47): ``lorisnb report`` on the bundled data, 8
 notebooks, on 2 cores shared with other work (load about 14), took 96 s and 103 s of user CPU
@@ -58,6 +60,9 @@ PRELOAD = ("ipykernel.kernelapp", "numpy", "scipy.stats", "matplotlib", "matplot
 
 #: The module a kernel command must run (``python [flags] -m ipykernel_launcher ARGS``).
 LAUNCHER = "ipykernel_launcher"
+
+#: How the private folders of a report's kernel files are named (``lorisnb.tools.report.notebooks.kernel_files``).
+KERNEL_FOLDER_PREFIX = "lorisnb-k-"
 
 
 @dataclass(frozen=True)
@@ -363,13 +368,51 @@ def _serve(address: str, parent: int) -> dict[str, Any] | None:
     return None
 
 
-def _watch(manager: int) -> None:
-    """End this kernel when the process managing it ends (a launched kernel's parent poller)."""
+def _connection_file(args: Sequence[str]) -> str | None:
+    """The connection file a kernel's arguments name (``-f FILE``, as a kernelspec's argv gives it)."""
+    for i, a in enumerate(args):
+        if a in ("-f", "--f") and i + 1 < len(args):
+            return os.path.abspath(args[i + 1])
+        if a.startswith(("--f=", "--IPKernelApp.connection_file=")):
+            return os.path.abspath(a.partition("=")[2])
+    return None
+
+
+def _remove_kernel_files(connection_file: str | None) -> None:
+    """Remove what a kernel's manager removes when the kernel ends (``cleanup_resources``): the
+    connection file and, over ipc, the sockets it names; then the report's kernel folder
+    (:data:`KERNEL_FOLDER_PREFIX`) if nothing else is left in it. For a kernel whose manager is gone."""
+    if not connection_file:
+        return
+    try:
+        with open(connection_file) as f:
+            info = json.load(f)
+    except (OSError, ValueError):
+        info = {}
+    if isinstance(info, dict) and info.get("transport") == "ipc" and info.get("ip"):
+        for key in ("shell_port", "iopub_port", "stdin_port", "control_port", "hb_port"):
+            if info.get(key):
+                with contextlib.suppress(OSError):
+                    os.unlink(f"{info['ip']}-{info[key]}")
+    with contextlib.suppress(OSError):
+        os.unlink(connection_file)
+    folder = os.path.dirname(connection_file)
+    if os.path.basename(folder).startswith(KERNEL_FOLDER_PREFIX):
+        with contextlib.suppress(OSError):  # another kernel's files still there: not empty, kept
+            os.rmdir(folder)
+
+
+def _watch(manager: int, connection_file: str | None = None) -> None:
+    """End this kernel when the process managing it ends (a launched kernel's parent poller), first
+    removing the files its manager can no longer remove (a report killed with ``kill -9`` left its
+    kernels' sockets and connection files, which hold each kernel's key, in the temporary folder)."""
     try:
         fd = os.pidfd_open(manager)
     except OSError:
+        _remove_kernel_files(connection_file)
         os._exit(1)
     select.select([fd], [], [])
+    _remove_kernel_files(connection_file)
     os._exit(1)
 
 
@@ -396,7 +439,9 @@ def _become_kernel(request: Mapping[str, Any]) -> None:
     # watches for being orphaned; this thread watches the manager, as that poller would have
     manager = int(env.get("JPY_PARENT_PID", "0") or 0)
     if manager:
-        threading.Thread(target=_watch, args=(manager,), daemon=True, name="lorisnb-manager-watch").start()
+        watch = threading.Thread(target=_watch, args=(manager, _connection_file(args)), daemon=True,
+                                 name="lorisnb-manager-watch")  # fmt: skip
+        watch.start()
     from ipykernel.kernelapp import IPKernelApp
 
     IPKernelApp.launch_instance(argv=args)

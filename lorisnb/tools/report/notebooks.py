@@ -190,7 +190,8 @@ def _socket_dir() -> str:
     base = tempfile.gettempdir()
     if (
         os.name == "posix"
-        and len(os.path.join(base, "lorisnb-k-" + "x" * 8, "kernel-" + "x" * 8 + "-99")) > SOCKET_PATH_MAX
+        and len(os.path.join(base, warm_kernels.KERNEL_FOLDER_PREFIX + "x" * 8, "kernel-" + "x" * 8 + "-99"))
+        > SOCKET_PATH_MAX
     ):
         return "/tmp"
     return base
@@ -201,7 +202,7 @@ def kernel_files() -> Iterator[str]:
     """A private folder for a report's kernel connection files (they hold each kernel's key) and
     ipc sockets, used by this process and the workers given it (:func:`use_kernel_files`), and
     removed on leaving: a kernel whose run is interrupted (Ctrl-C, SIGTERM) cannot remove its own."""
-    folder = tempfile.mkdtemp(prefix="lorisnb-k-", dir=_socket_dir())
+    folder = tempfile.mkdtemp(prefix=warm_kernels.KERNEL_FOLDER_PREFIX, dir=_socket_dir())
     previous = _kernel_files
     use_kernel_files(folder)
     try:
@@ -286,7 +287,10 @@ def run_one(
     notebooks_dir: str | os.PathLike[str] | None = None,
 ) -> NotebookRun:
     """Execute one notebook with papermill into ``out_dir/<name>/`` and export its offline HTML
-    page; never raises for a failing notebook (the error is recorded), except on KeyboardInterrupt."""
+    page; never raises for a failing notebook (the error is recorded), except on KeyboardInterrupt.
+    Its kernel's connection file and ipc sockets go to the report's folder (:func:`kernel_files`);
+    called outside a report, to a private folder of their own, removed when it returns, not loose in
+    the temporary folder."""
     pm = require("papermill")
     kernel_env()
     src = notebook_path(name, notebooks_dir)
@@ -314,12 +318,13 @@ def run_one(
     t = time.perf_counter()
     target = nb_dir / f"{stem}.ipynb"
     try:
-        pm.execute_notebook(
-            str(src), str(target), parameters=params, kernel_name="python3", progress_bar=False,
-            execution_timeout=timeout, log_output=False, extra_arguments=KERNEL_ARGS,
-            resources={"metadata": {"path": str(nb_dir)}},  # the kernel's folder; cwd= would chdir this process
-            kernel_manager_class=kernel_manager_class(),
-        )  # fmt: skip
+        with kernel_files() if _kernel_files is None else contextlib.nullcontext():
+            pm.execute_notebook(
+                str(src), str(target), parameters=params, kernel_name="python3", progress_bar=False,
+                execution_timeout=timeout, log_output=False, extra_arguments=KERNEL_ARGS,
+                resources={"metadata": {"path": str(nb_dir)}},  # the kernel's folder; cwd= would chdir this process
+                kernel_manager_class=kernel_manager_class(),
+            )  # fmt: skip
     except KeyboardInterrupt:
         raise
     except Exception as exc:  # PapermillExecutionError and kernel failures alike
