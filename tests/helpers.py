@@ -3,7 +3,13 @@ needed), and the few lines that read a real result file with its ground truth.""
 
 from __future__ import annotations
 
+import contextlib
 import os
+import socket
+import stat
+import tempfile
+import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -254,3 +260,50 @@ def write_ov_eval_file(path: Path, traj, orientation, position) -> Path:
         lines.append(" ".join(repr(float(v)) for v in vals))
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+def temp_litter_patterns() -> tuple[str, ...]:
+    """What running notebooks can leave in the temporary folder: a kernel's ipc sockets made outside a
+    report's kernel folder (``lorisnb.tools.report.notebooks.kernel_files``) and a notebook's output
+    folder, made where it runs outside a checkout with no ``output_dir`` (``default_output_dir``)."""
+    from lorisnb.tools.report.build import DEFAULT_NOTEBOOKS
+
+    return ("lorisnb-kernel-*", *(f"lorisnb-{name}-*" for name in DEFAULT_NOTEBOOKS))
+
+
+def _listened_on(path: Path) -> bool:
+    """A socket that some process still listens on: a kernel running now (a test's beside this one,
+    under pytest-xdist), not one left behind (a connection to that is refused)."""
+    try:
+        if not stat.S_ISSOCK(path.lstat().st_mode):
+            return False
+    except OSError:
+        return False
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+        s.settimeout(2)
+        try:
+            s.connect(str(path))
+        except OSError:
+            return False
+    return True
+
+
+@contextlib.contextmanager
+def temp_dir_left_as_found(settle_s: float = 5.0) -> Iterator[None]:
+    """Fails when what runs inside leaves in the temporary folder (``tempfile.gettempdir()``) an entry
+    of :func:`temp_litter_patterns` that was not there before. Beside other test processes
+    (pytest-xdist) an entry is left only if it is still there ``settle_s`` later and no process
+    listens on it: another test's running kernel's sockets, or those its manager is removing, are not."""
+    tmp = Path(tempfile.gettempdir())
+    patterns = temp_litter_patterns()
+
+    def left(before: set[Path]) -> set[Path]:
+        return {p for pattern in patterns for p in tmp.glob(pattern)} - before
+
+    before = left(set())
+    yield
+    stale = {p for p in left(before) if not _listened_on(p)}
+    if stale:
+        time.sleep(settle_s)
+        stale = {p for p in stale & left(before) if not _listened_on(p)}
+    assert not stale, f"left in {tmp}: " + ", ".join(sorted(p.name for p in stale))

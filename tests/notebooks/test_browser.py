@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from browser import chromium, need_chromium, offline_pages, wait
+from helpers import temp_dir_left_as_found
 
 from lorisnb.core.trajectory.frames import PAPER_EPS
 from lorisnb.tools.report.build import DEFAULT_NOTEBOOKS, notebook_dir
@@ -43,11 +44,20 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+@pytest.fixture(scope="module", autouse=True)
+def _temp_dir():
+    with temp_dir_left_as_found():
+        yield
+
+
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory, data):
-    """A JupyterLab server on 127.0.0.1 over a copy of the notebooks; stopped at the end."""
+    """A JupyterLab server on 127.0.0.1 over a copy of the notebooks; stopped at the end. Its temporary
+    folder (TMPDIR: the server's, its kernels', the notebooks' output folders, which they make there
+    outside a checkout) is ``tmp/`` in the lab's folder, not the machine's."""
     need_chromium()
     root = tmp_path_factory.mktemp("lab")
+    (root / "tmp").mkdir()
     for p in notebook_dir().glob("*.ipynb"):
         shutil.copy(p, root / p.name)
     settings = root / ".settings" / "@jupyterlab" / "notebook-extension"
@@ -60,7 +70,7 @@ def lab(tmp_path_factory, data):
     )
     port = _free_port()
     env = dict(os.environ, LORISNB_DATA=str(data.root), JUPYTERLAB_SETTINGS_DIR=str(root / ".settings"),
-               MPLBACKEND="module://matplotlib_inline.backend_inline")  # fmt: skip
+               MPLBACKEND="module://matplotlib_inline.backend_inline", TMPDIR=str(root / "tmp"))  # fmt: skip
     env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
     log = open(root / "lab.log", "w")
     proc = subprocess.Popen(
@@ -317,6 +327,7 @@ def test_notebook_in_the_browser(lab, browser, name):
         expected, dropdown = EXPLORERS[name]
         _drive_explorer(browser, name, expected, dropdown)
     _shut_down_kernels(url)
+    assert list((root / "tmp").glob(f"lorisnb-{name}-*")), f"{name}'s outputs are not in the lab's temporary folder"
 
 
 def _shut_down_kernels(url: str) -> None:

@@ -12,11 +12,12 @@ import numpy as np
 import pandas as pd
 import papermill as pm
 import pytest
+from helpers import temp_dir_left_as_found
 from nbclient.exceptions import CellTimeoutError
 
 from lorisnb.tools.report import kernels as warm_kernels
 from lorisnb.tools.report.build import KERNEL_ARGS, kernel_env, notebook_dir
-from lorisnb.tools.report.notebooks import kernel_environ, kernel_manager_class
+from lorisnb.tools.report.notebooks import kernel_environ, kernel_files, kernel_manager_class
 
 NOTEBOOK_DIR = notebook_dir()
 # slow; and one notebook at a time among the test workers (pytest-xdist, --dist loadgroup): side by
@@ -26,7 +27,11 @@ pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("notebooks")]
 
 @pytest.fixture(scope="module", autouse=True)
 def _kernel():
+    """The kernels' environment, and their connection files and ipc sockets in one private folder
+    removed at the end, as a report's (``kernel_files``); the temporary folder is left as found."""
     kernel_env()
+    with temp_dir_left_as_found(), kernel_files():
+        yield
 
 
 #: pytest's own variable, naming the running test: the one variable of a kernel's environment that

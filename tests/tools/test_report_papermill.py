@@ -17,10 +17,18 @@ from lorisnb.errors import ValidationError
 from lorisnb.tools.notebook import start as notebook_module
 from lorisnb.tools.report import build as report
 from lorisnb.tools.report.build import KERNEL_ARGS, kernel_env, notebook_dir
-from lorisnb.tools.report.notebooks import kernel_manager_class
+from lorisnb.tools.report.notebooks import kernel_files, kernel_manager_class
 
 DECLARED = '# Parameters\neps = "paper"  # ATE threshold\nphi = 30.0  # degrees\nscenes = None  # scenes\nquick = False  # trim\n'
 SETUP = 'session = ln.setup("per_sequence_benchmark", data_root, output_dir, parameters=dict(eps=eps))'
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _kernel_files():
+    """The kernels' connection files and ipc sockets in one private folder removed at the end, as a
+    report's (``kernel_files``), not loose in the temporary folder."""
+    with kernel_files():
+        yield
 
 
 class _Shell:
