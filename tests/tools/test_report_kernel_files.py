@@ -49,6 +49,7 @@ def test_interrupted_report_leaves_no_kernel_files(tmp_path, monkeypatch, capsys
         for km in managers:
             if km.provisioner is not None and km.provisioner.process is not None:
                 km.provisioner.process.kill()
+            km.context.destroy(linger=0)
     assert rc == 130
     assert any(f.endswith(".json") for f in seen["files"]), seen  # the connection file was there ...
     assert sum("kernel-" in f and not f.endswith(".json") for f in seen["files"]) >= 5, seen  # ... sockets
