@@ -50,7 +50,7 @@ def test_sandbox_has_no_network_no_writes_outside_its_folder_and_limits(tmp_path
         r = box.run(f"open({str(outside)!r}, 'w').write('x')")
         assert not r["ok"] and "Read-only" in r["error"]
         r = box.run("import socket\nsocket.create_connection(('1.1.1.1', 80), timeout=2)")
-        assert not r["ok"] and "unreachable" in r["error"].lower()
+        assert not r["ok"] and "may not use socket" in r["error"]  # the guard of a no-lorisnb sandbox
         r = box.run("import lorisnb")
         assert not r["ok"] and "lorisnb" in r["error"]
         r = box.run("x = bytearray(8 * 1024**3)", ["x"])
@@ -62,6 +62,9 @@ def test_sandbox_has_no_network_no_writes_outside_its_folder_and_limits(tmp_path
             box.run("while True:\n    pass")
         assert time.monotonic() - t0 < 10
     assert (work / "mine.txt").read_text() == "ok" and not outside.exists()
+    with Sandbox(work, limits=Limits(cell_timeout_s=3)) as box:  # no guard (the lab's sandbox): no network either
+        r = box.run("import socket\nsocket.create_connection(('1.1.1.1', 80), timeout=2)")
+        assert not r["ok"] and "unreachable" in r["error"].lower()
     shutil.rmtree(work)
     assert (secret / "solutions.txt").read_text() == "the answers"
 
@@ -216,7 +219,9 @@ def test_adversarial_submissions_get_the_honest_score_and_change_nothing(tmp_pat
     msg = {s.question: s.message for s in cheater.scores}
     assert "not a plain value" in msg["test_B1_prediction"]
     assert "time limit" in msg["test_C1_cs_r"]
-    assert "no lorisnb" in msg["test_A1_correctness"] and "no lorisnb" in msg["test_B2_correct_rate"]
+    # lorisnb imported by a formula answer: refused by the sandbox's guard, its points with it
+    assert "tried to use lorisnb (import lorisnb" in msg["test_A1_correctness"]
+    assert "tried to use lorisnb (import lorisnb" in msg["test_B2_correct_rate"]
     assert by["s-cheater"].days_late == 1 and by["s-cheater"].score == pytest.approx(7 * 0.75)
     # nothing changed outside the submissions' output folders (graded/) and the grader's exports
     write_exports(course, graded)

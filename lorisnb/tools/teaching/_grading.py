@@ -18,6 +18,7 @@ import numpy as np
 
 from lorisnb.errors import AnswerError
 from lorisnb.tools.teaching._mistakes import MISTAKES
+from lorisnb.tools.teaching.sandbox import NotPlain
 
 #: (mistake name in MISTAKES, the function that makes it), in the order their hints are given
 Variants = Sequence[tuple[str, Callable[..., Any]]]
@@ -61,6 +62,8 @@ def number(what: str, value: Any) -> float:
     """``value`` as one finite-or-infinite number; anything else fails with what was given."""
     if value is Ellipsis:
         fail(f"{what}: no answer yet (replace the `...` and the NotImplementedError placeholder with your answer)")
+    if isinstance(value, NotPlain) and value.error is not None:  # the grader read no value: say why, whole
+        fail(f"{what}: no value: {value.error}")
     if isinstance(value, (bool, np.bool_)) or value is None:
         fail(f"{what}: expected a number, got {value!r}")
     try:
@@ -169,6 +172,8 @@ def check_function(
                 for n, v in case.items()}  # fmt: skip
         try:
             got, used = call_watched(fn, args)
+        except AnswerError:  # the grader refused the answer (its code used lorisnb): its message as is
+            raise
         except NotImplementedError:
             fail(f"{what}: not written yet (the NotImplementedError placeholder is still there)")
         except Exception as exc:  # the learner's code failed: say where and with what

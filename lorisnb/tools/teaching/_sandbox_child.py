@@ -8,11 +8,17 @@ started with; the student's own prints go to ``student-output.txt`` in the worki
   then reply with each captured name's value as a plain value (number, bool, string; anything else
   is reported by its type only, never converted, so an object cannot wait to see the reference);
 - ``{"op": "call", "name": ..., "args": {...}}``: call a function the cells defined and reply with
-  its result as plain values (numbers or booleans, scalars or arrays).
+  its result as plain values (numbers or booleans, scalars or arrays);
+- ``{"op": "set", "values": {...}}``: bind values in the notebook's namespace, running nothing (the
+  lab's numbers a prediction run alone is given, described by :func:`given`: numbers, strings,
+  arrays of numbers, tuples and lists of numbers).
 
-With ``--no-lorisnb`` lorisnb cannot be imported (formula answers are graded with numpy alone).
-Whatever the student's code does to this process can only change the replies about its own
-answers: the references it is compared with are computed by the grader, in another process.
+With ``--no-lorisnb`` (formula answers and predictions, graded with numpy alone) lorisnb cannot be
+used: :func:`install_guard` refuses it from any copy on the machine before the student's code runs,
+and reports each refusal, and what :func:`install_guard`'s scan finds after each request, to the
+grader as a line ``{"lorisnb": what}``. Whatever the student's code does to this process can only
+change the replies about its own answers: the references it is compared with are computed by the
+grader, in another process.
 """
 
 from __future__ import annotations
@@ -43,6 +49,20 @@ def _plain(value: Any) -> Any:
     return {"not_plain": f"{t.__module__}.{t.__qualname__}"}
 
 
+def given(value: Any) -> Any:
+    """A value a prediction may use, described as :func:`_plain` does (numbers, strings, numpy
+    arrays of numbers) or as a tuple or list of numbers and strings (``{"items": [...], "tuple": ...}``);
+    anything else (a function, a module, a table) as ``{"not_plain": type}``."""
+    t = type(value)
+    if t in (tuple, list) and len(value) <= 100_000:
+        items = [_plain(v) for v in value]
+        if all(set(i) == {"value"} for i in items):
+            return {"items": [i["value"] for i in items], "tuple": t is tuple}
+    if t in (bool, int, float, str) or t.__module__ == "numpy":
+        return _plain(value)
+    return {"not_plain": f"{t.__module__}.{t.__qualname__}"}
+
+
 def _decode(arg: Any) -> Any:
     import numpy as np
 
@@ -51,6 +71,253 @@ def _decode(arg: Any) -> Any:
     if isinstance(arg, dict) and "scalar" in arg:
         return np.dtype(arg["dtype"]).type(arg["scalar"])
     return arg
+
+
+def _given_value(plain: dict[str, Any]) -> Any:
+    """The value :func:`given` described."""
+    import numpy as np
+
+    if "items" in plain:
+        return tuple(plain["items"]) if plain["tuple"] else list(plain["items"])
+    if "array" in plain:
+        return np.array(plain["array"], dtype=plain["dtype"])
+    return plain["value"]
+
+
+# --- the guard of an answer graded with numpy only (--no-lorisnb) --------------------------------
+
+# What an answer graded with numpy only may not do, and why, in the words of the error it gets
+NO_LORISNB = (
+    "this answer is graded with numpy only (a formula, or a prediction): lorisnb's code may not be used, "
+    "from any copy of it on this machine ({what}); work it out yourself, with numpy"
+)
+NO_ESCAPE = (
+    "this answer (graded with numpy only) may not use {what}: the grader refuses it, as it could reach past "
+    "the guard that keeps lorisnb out; work it out with numpy"
+)
+# audit events refused to such an answer: other processes (they would run without the guard), C
+# calls and memory (ctypes could remove the guard), the garbage collector's view of every object (the
+# guard's own) and the network (lorisnb's source is downloadable)
+_REFUSED_EVENTS = (
+    "os.fork", "os.forkpty", "os.exec", "os.posix_spawn", "os.spawn", "os.system", "subprocess.Popen",
+    "ctypes.", "gc.get_objects", "gc.get_referrers", "gc.get_referents", "socket.",
+    "cpython.PyInterpreterState_New",
+)  # fmt: skip
+# extension modules whose functions start processes or interpreters without an audit event of their own
+_REFUSED_MODULES = ("_posixsubprocess", "_xxsubinterpreters", "_xxinterpchannels")
+_ARCHIVES = (".whl", ".zip", ".egg", ".tar", ".tar.gz", ".tgz", ".tar.bz2", ".tar.xz", ".dist-info")
+
+
+def install_guard(reply_fd: int) -> tuple[Any, Any]:
+    """Keep lorisnb out of an answer graded with numpy only (a formula, a prediction): an audit hook
+    (``sys.addaudithook``: Python code cannot remove it) refuses importing a module named ``lorisnb``
+    from anywhere, and opening, compiling or running a file in a folder named ``lorisnb`` (links
+    followed: any copy of the package, a checkout, another environment's, an unpacked wheel), and
+    what could reach past it (other processes, ctypes, the garbage collector's list of objects, the
+    network). Each refusal of lorisnb is written to the grader's pipe at once (``{"lorisnb": what}``),
+    before the answer's code can do anything about it. Returns ``report`` (writes a finding) and
+    ``scan`` (the after-the-fact check of the modules loaded and of the answer's functions; each
+    finding reported once).
+
+    The hook uses only functions captured here, never one the answer's code could replace (a
+    patched ``os.path`` or ``json`` would run inside it). What it cannot see: a copy of lorisnb's
+    code in a folder by another name, the text of its formulas typed in or read from such a copy,
+    and a deliberate corruption of the interpreter's memory (numpy can point an array anywhere)."""
+    import _posixsubprocess
+    import posix
+    import subprocess
+    import types
+
+    def no_process(*_args: Any, **_kwargs: Any) -> Any:
+        raise PermissionError(NO_ESCAPE.format(what="another process"))
+
+    # pandas and scipy import subprocess: it stays importable, but its unaudited way to start a
+    # process is gone (a new copy of _posixsubprocess is refused below)
+    subprocess._fork_exec = no_process  # type: ignore[attr-defined]
+    _posixsubprocess.fork_exec = no_process
+
+    _type, _issub, _str, _bytes, _int, _ord, _len = type, issubclass, str, bytes, int, ord, len
+    _str_add, _bytes_add, _decode, _split = str.__add__, bytes.__add__, bytes.decode, str.split
+    _starts, _join, _item = str.startswith, str.join, tuple.__getitem__
+    _write, _lstat, _readlink, _getcwd = posix.write, posix.lstat, posix.readlink, posix.getcwd
+    _code, _module, _function = types.CodeType, types.ModuleType, types.FunctionType
+    _list, _get, _modules = list, dict.get, sys.modules
+    _ImportError, _PermissionError, _RuntimeError = ImportError, PermissionError, RuntimeError
+    no_lorisnb, no_escape, events, modules, archives = (
+        NO_LORISNB,
+        NO_ESCAPE,
+        _REFUSED_EVENTS,
+        _REFUSED_MODULES,
+        _ARCHIVES,
+    )
+    seen: set[str] = set()
+
+    def part(component: str) -> bool:  # a component naming lorisnb's code: its package folder (any case), an
+        # lorisnb.egg-info, or a distribution's archive (lorisnb-0.3.0-py3-none-any.whl)
+        c = component.lower()
+        if c == "lorisnb" or c.startswith("lorisnb."):
+            return True
+        return c.startswith("lorisnb-") and c[8:9].isdigit() and c.endswith(archives)
+
+    def report(what: str) -> None:
+        out = []
+        for ch in what[:600]:
+            o = _ord(ch)
+            out.append(ch if 32 <= o < 127 and ch != '"' and ch != "\\" else "\\u%04x" % (o if o < 0x10000 else 0xFFFD))
+        try:
+            _write(reply_fd, _str.encode('\n{"lorisnb": "' + _join("", out) + '"}\n'))
+        except OSError:
+            pass
+
+    def text(x: Any) -> str | None:  # a path as an exact str (a str or bytes subclass copied), else None
+        t = _type(x)
+        if t is _str:
+            return x
+        if _issub(t, _str):
+            return _str_add("", x)
+        if t is _bytes or _issub(t, _bytes):
+            return _decode(_bytes_add(b"", x), "utf-8", "surrogateescape")
+        return None
+
+    def resolved(path: str) -> list[str]:  # the path's components with every link followed
+        if not _starts(path, "/"):
+            try:
+                path = _str_add(_str_add(_getcwd(), "/"), path)
+            except OSError:
+                pass
+        todo = _split(path, "/")
+        todo.reverse()
+        done: list[str] = []
+        hops = 0
+        while todo:
+            c = todo.pop()
+            if c == "" or c == ".":
+                continue
+            if c == "..":
+                if done:
+                    done.pop()
+                continue
+            here = _str_add("/", _join("/", [*done, c]))
+            try:
+                mode = _int(_item(_lstat(here), 0))
+            except (OSError, ValueError):
+                done.append(c)
+                continue
+            if mode & 0o170000 == 0o120000 and hops < 40:
+                hops += 1
+                try:
+                    target = _readlink(here)
+                except (OSError, ValueError):
+                    done.append(c)
+                    continue
+                if _starts(target, "/"):
+                    done = []
+                more = _split(target, "/")
+                more.reverse()
+                todo.extend(more)
+            else:
+                done.append(c)
+        return done
+
+    def in_lorisnb(x: Any) -> str | None:  # the path, when it lies in lorisnb's code (links followed)
+        path = text(x)
+        if path is None or path == "" or _starts(path, "<"):
+            return None
+        for c in _split(path, "/"):
+            if part(c):
+                return path
+        for c in resolved(path):
+            if part(c):
+                return path
+        return None
+
+    def code_in_lorisnb(code: Any) -> str | None:
+        todo, n = [code], 0
+        while todo and n < 10000:
+            c = todo.pop()
+            n += 1
+            if _type(c) is not _code:
+                continue
+            found = in_lorisnb(c.co_filename)
+            if found is not None:
+                return found
+            todo.extend(k for k in c.co_consts if _type(k) is _code)
+        return None
+
+    def refuse(exc: type[BaseException], what: str) -> None:
+        report(what)
+        raise exc(no_lorisnb.format(what=what))
+
+    def hook(event: str, args: tuple[Any, ...]) -> None:
+        if event == "import":
+            name = text(args[0]) or ""
+            parts = _split(name, ".")
+            if parts[0] == "lorisnb":
+                refuse(_ImportError, f"import {name}")
+            if parts[-1] in modules:
+                raise _ImportError(no_escape.format(what=f"the module {name}"))
+            found = in_lorisnb(args[1]) if _len(args) > 1 else None
+            if found is not None:
+                refuse(_ImportError, f"import {name} from {found}")
+        elif event == "open":
+            if _type(args[0]) is _int:
+                return
+            if text(args[0]) is None:
+                raise _PermissionError(no_escape.format(what="a path that is neither a str nor bytes"))
+            found = in_lorisnb(args[0])
+            if found is not None:
+                refuse(_PermissionError, f"open {found}")
+        elif event in ("os.chdir", "os.link", "os.symlink", "os.rename", "shutil.copyfile", "shutil.copytree"):
+            found = in_lorisnb(args[0]) if _len(args) else None
+            if found is not None:
+                refuse(_PermissionError, f"{event} {found}")
+        elif event == "compile":
+            found = in_lorisnb(args[1]) if _len(args) > 1 else None
+            if found is not None:
+                refuse(_RuntimeError, f"compile {found}")
+        elif event == "code.__new__":
+            found = in_lorisnb(args[1]) if _len(args) > 1 else None
+            if found is not None:
+                refuse(_RuntimeError, f"code of {found}")
+        elif event == "exec":
+            found = code_in_lorisnb(args[0]) if _len(args) else None
+            if found is not None:
+                refuse(_RuntimeError, f"run code of {found}")
+        elif _starts(event, events):
+            raise _PermissionError(no_escape.format(what=event))
+
+    def scan(namespace: dict[str, Any]) -> None:
+        """After a cell or a call: every module loaded whose name or file is lorisnb's, and every
+        function the answer defined whose code (or the code of the functions and modules it names)
+        comes from lorisnb's files. Best effort: the answer's code can delete what it loaded."""
+        found: list[str] = []
+        for name, mod in _list(_modules.items()):
+            if mod is None or _type(mod) is not _module:
+                continue
+            name = text(name) or ""
+            where = in_lorisnb(_get(mod.__dict__, "__file__"))
+            if _split(name, ".")[0] == "lorisnb" or where is not None:
+                found.append(f"the module {name} was loaded{f' from {where}' if where else ''}")
+        for name, value in _list(namespace.items()):
+            if _type(value) is not _function:
+                continue
+            named = [value] + [_get(value.__globals__, n) for n in value.__code__.co_names]
+            for f in named:
+                where = None
+                if _type(f) is _function:
+                    where = code_in_lorisnb(f.__code__)
+                elif _type(f) is _module:
+                    where = in_lorisnb(_get(f.__dict__, "__file__"))
+                if where is not None:
+                    found.append(f"{text(name)} runs code of {where}")
+                    break
+        for what in found:
+            if what not in seen:
+                seen.add(what)
+                report(what)
+
+    sys.addaudithook(hook)
+    return report, scan
 
 
 def main() -> None:
@@ -63,10 +330,14 @@ def main() -> None:
     os.dup2(log, 1)
     os.dup2(log, 2)
     sys.stdin = open(0, encoding="utf-8", closefd=False)  # noqa: SIM115 (the process's own stdin)
+    scan = None
     if no_lorisnb:
         for name in [m for m in sys.modules if m == "lorisnb" or m.startswith("lorisnb.")]:
             del sys.modules[name]
         sys.modules["lorisnb"] = None  # type: ignore[assignment]  # import lorisnb -> ImportError
+        import numpy  # noqa: F401  # imported before the guard (it loads ctypes, which the answer may not)
+
+        _report, scan = install_guard(reply.fileno())
     else:
         import matplotlib
 
@@ -79,6 +350,8 @@ def main() -> None:
         try:
             if req["op"] == "exec":
                 exec(compile(req["source"], req.get("name", "<cell>"), "exec"), namespace)  # noqa: S102
+            elif req["op"] == "set":
+                namespace.update({n: _given_value(v) for n, v in req["values"].items()})
             else:
                 fn = namespace.get(req["name"])
                 if not callable(fn):
@@ -89,6 +362,11 @@ def main() -> None:
             traceback.print_exc()
         if req["op"] == "exec":
             out["values"] = {n: (_plain(namespace[n]) if n in namespace else {"missing": True}) for n in req["capture"]}
+        if scan is not None:
+            try:
+                scan(namespace)
+            except Exception:  # noqa: BLE001 (the answer's objects can break a scan: it is best effort)
+                traceback.print_exc()
         sys.stdout.flush()
         out["id"] = request_id
         reply.write(json.dumps(out, default=str) + "\n")

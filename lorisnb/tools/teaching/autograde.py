@@ -10,11 +10,17 @@ explanations, checks) is the instructor's, whatever the student did to it. Then:
    variant). Right after each answer cell, the names its check reads are read back as plain values
    (numbers, strings, arrays), before any reference value after it exists.
 2. **Formula answers** (answer cells defining a function) run again alone, in a sandbox without
-   lorisnb (numpy only): a function that calls lorisnb, or copies its formula at run time, fails.
+   lorisnb (numpy only): a function that calls lorisnb, or copies its formula at run time, fails;
+   one that takes lorisnb's code from another copy on the machine is refused by the sandbox's guard
+   (:func:`._sandbox_child.install_guard`), and its points with it, with a note.
 3. **In the grader's own process**, the instructor's notebook runs with the same parameters; each
    test cell (with its hidden tests) runs there, with the student's values and sandboxed
    functions put in place of the answers' names, and the checks imported by the grader. Hidden
-   tests draw their cases from ``hidden_seed``, a seed the student never saw.
+   tests draw their cases from ``hidden_seed``, a seed the student never saw. **Predictions**
+   (answer cells tagged ``prediction``) are graded from a run of their own, alone, in a sandbox
+   without lorisnb, given only the numbers the lab's own cells had set before them (as this process
+   has them: no answer cell can change them): a prediction computed with the lab's functions
+   (``simulate_and_score``) or lorisnb is not a prediction, and scores 0, saying so.
 
 A test cell that raises scores 0, else its points (nbgrader's rule).
 """
@@ -39,10 +45,12 @@ from typing import Any, NoReturn
 
 import nbformat
 
+from lorisnb.errors import AnswerError
 from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, decode
 
-GRADER_VERSION = "3"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student)
+GRADER_VERSION = "4"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+# 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers)
 
 
 @dataclass(frozen=True)
@@ -64,10 +72,15 @@ class LabSpec:
     questions: tuple[Question, ...]
     functions: Mapping[str, tuple[str, ...]]  # answer grade_id -> the functions it defines
     values: Mapping[str, tuple[str, ...]]  # answer grade_id -> the names read back after it
+    # prediction answer grade_id -> the names the lab's own cells bound before it (what it may use)
+    predictions: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
     @property
     def max_points(self) -> float:
         return float(sum(q.points for q in self.questions))
+
+
+PREDICTION = "prediction"  # the tag of an answer cell that predicts: graded alone, from the lab's numbers
 
 
 def _nbgrader(cell: nbformat.NotebookNode) -> dict[str, Any]:
@@ -91,6 +104,15 @@ def _assigned(source: str) -> set[str]:
     return names
 
 
+def _imported(source: str) -> set[str]:
+    """Names a cell's top-level imports bind."""
+    names: set[str] = set()
+    for node in ast.parse(source).body:
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            names |= {(a.asname or a.name).split(".")[0] for a in node.names if a.name != "*"}
+    return names
+
+
 def _loaded(source: str) -> set[str]:
     return {n.id for n in ast.walk(ast.parse(source)) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
 
@@ -102,12 +124,16 @@ def lab_spec(source_nb: Path) -> LabSpec:
     questions, pending = [], []
     functions: dict[str, tuple[str, ...]] = {}
     values: dict[str, tuple[str, ...]] = {}
+    predictions: dict[str, tuple[str, ...]] = {}
+    lab_names: set[str] = set()  # bound by the lab's own cells so far
     for cell in nb.cells:
         meta = _nbgrader(cell)
         if cell.cell_type != "code":
             continue
         if meta.get("solution"):
             pending.append((meta["grade_id"], cell.source))
+            if PREDICTION in cell.get("metadata", {}).get("tags", []):
+                predictions[str(meta["grade_id"])] = tuple(sorted(lab_names))
         elif meta.get("grade"):
             read = _loaded(cell.source)
             names: list[str] = []
@@ -121,9 +147,11 @@ def lab_spec(source_nb: Path) -> LabSpec:
                 Question(meta["grade_id"], float(meta.get("points", 0)), tuple(g for g, _ in pending), tuple(names))
             )
             pending = []
+        else:
+            lab_names |= _assigned(cell.source) | _imported(cell.source)
     if not questions:
         raise ValueError(f"{source_nb}: no test cell (nbgrader 'grade' cell with points): nothing to grade")
-    return LabSpec(source_nb.stem, nb, tuple(questions), functions, values)
+    return LabSpec(source_nb.stem, nb, tuple(questions), functions, values, predictions)
 
 
 @dataclass
@@ -228,10 +256,23 @@ class Budget:
         )
 
 
+def lorisnb_used(name: str, findings: Sequence[str]) -> str:
+    """The message of an answer refused because its code used lorisnb (``findings``: what the
+    sandbox's guard refused or found)."""
+    what = "; ".join(dict.fromkeys(findings))
+    return (
+        f"{name}: refused (0 points): its code tried to use lorisnb ({what}). An answer graded with numpy "
+        "only (a formula, or a prediction) may not use lorisnb's code, from any copy of it on the machine "
+        "(another environment, a checkout, a wheel); write it yourself, with numpy"
+    )
+
+
 class RemoteFunction(SandboxedAnswer):
     """A student's function, called in its sandbox (no lorisnb there); results come back as values.
     Its calls by the checks share one per-cell time limit (``call_budget_s``) and the submission's
-    budget."""
+    budget. ``refused``: the function is not graded (its code used lorisnb): every call raises
+    :class:`~lorisnb.errors.AnswerError` with this message (so does a call during which the guard
+    refuses or finds lorisnb)."""
 
     def __init__(
         self,
@@ -240,13 +281,17 @@ class RemoteFunction(SandboxedAnswer):
         error: str | None = None,
         budget: Budget | None = None,
         call_budget_s: float | None = None,
+        refused: str | None = None,
     ) -> None:
         self.sandbox, self.name, self.error = sandbox, name, error
         self.budget = budget
         self.calls_left = call_budget_s
+        self.refused = refused
         self.__name__ = name
 
     def __call__(self, **kwargs: Any) -> Any:
+        if self.refused:
+            raise AnswerError(f"✗ {self.refused}")
         if self.sandbox is None:
             _raise(self.error or f"NameError: {self.name} is not defined")
         left = [t for t in (self.calls_left, self.budget.left() if self.budget else None) if t is not None]
@@ -254,6 +299,7 @@ class RemoteFunction(SandboxedAnswer):
         if timeout is not None and timeout <= 0:
             self._stop(f"the check's calls of {self.name}")
         t0 = time.monotonic()
+        box, seen = self.sandbox, len(self.sandbox.findings)
         try:
             with self.budget.charge() if self.budget else contextlib.nullcontext():
                 reply = self.sandbox.call(self.name, kwargs, timeout_s=timeout)
@@ -267,6 +313,13 @@ class RemoteFunction(SandboxedAnswer):
         finally:
             if self.calls_left is not None:
                 self.calls_left -= time.monotonic() - t0
+            if len(box.findings) > seen:  # lorisnb used during the call (refused or found after)
+                self.refused, self.sandbox = (
+                    lorisnb_used(f"{self.name}, called by the check", box.findings[seen:]),
+                    None,
+                )
+        if self.refused:
+            raise AnswerError(f"✗ {self.refused}")
         if not reply.get("ok"):
             _raise(str(reply.get("error", "RuntimeError: failed")))
         return decode(reply["result"])
@@ -424,13 +477,16 @@ def grade_submission(
             fwork.mkdir()
             box = Sandbox(fwork, limits=settings.limits, hidden=hidden, uid=settings.uid + 1, no_lorisnb=True)
             boxes.append(box)
-            prelude = "import math\nimport numpy as np\n"
             try:
                 with budget.charge():
-                    reply = box.run(prelude + answers.get(gid, ""), name=f"<answer {gid}>", timeout_s=budget.left(True))
+                    reply = box.run(PRELUDE + answers.get(gid, ""), name=f"<answer {gid}>", timeout_s=budget.left(True))
             except SandboxError as exc:
                 why = _BUDGET_ERROR.format(budget.seconds) if budget.out(f"<answer {gid}>, run alone") else str(exc)
                 functions.update({d: RemoteFunction(None, d, f"TimeoutError: {why}") for d in defs})
+                return
+            if box.findings:  # the guard refused lorisnb to it (or found it loaded): no points, whatever it returns
+                refused = lorisnb_used(f"the answer cell {gid}", box.findings)
+                functions.update({d: RemoteFunction(None, d, refused=refused) for d in defs})
                 return
             err = None if reply.get("ok") else str(reply.get("error"))
             if err:  # the cell failed on its own, with numpy only: say so, then its error
@@ -439,22 +495,34 @@ def grade_submission(
                               for d in defs})  # fmt: skip
 
         try:
+            took: dict[str, float] = {}  # seconds each answer cell took in the lab
             values = _run_student(spec, answers, params | {"output_dir": str(work / "out")}, work, py_path,
-                                  hidden, settings, notes, budget, boxes, alone)  # fmt: skip
+                                  hidden, settings, notes, budget, boxes, alone, took)  # fmt: skip
             isolation = "full" if settings.uid and _isolated() else "limits"
             for defs in spec.functions.values():  # not reached: the budget ran out before
                 functions.update({d: RemoteFunction(None, d, f"TimeoutError: {_BUDGET_ERROR.format(budget.seconds)}")
                                   for d in defs if d not in functions})  # fmt: skip
+
+            def predicted(gid: str, given: Mapping[str, Any]) -> dict[str, Any]:
+                """A prediction run alone (numpy, math and ``given``, the lab's numbers), its values;
+                one that did not run in the lab (a time limit, the budget) keeps that error."""
+                if gid not in answers or gid not in took or any("error" in v for v in values.get(gid, {}).values()):
+                    return dict(values.get(gid, {}))
+                return _predict(spec, gid, answers[gid], given, root, hidden, settings, budget, notes, took[gid],
+                                boxes)  # fmt: skip
+
             scores = _run_checks(
                 spec,
                 values,
                 functions,
                 params | {"hidden_seed": hidden_seed(settings.secret, student, spec.name)},
                 root,
+                predicted,
             )
         finally:
             for box in boxes:
                 box.close()
+    notes += list(dict.fromkeys(f.refused for f in functions.values() if f.refused))
     if budget.spent_at:
         notes.append(budget.note())
     stray = sum(box.stray for box in boxes)
@@ -469,6 +537,71 @@ def grade_submission(
 
 
 _BUDGET_ERROR = "the submission's time budget ({:g} s) ran out before this answer was graded"
+PRELUDE = "import math\nimport numpy as np\n"  # what an answer run alone has besides its own code
+
+
+def _predict(
+    spec: LabSpec,
+    gid: str,
+    source: str,
+    given: Mapping[str, Any],
+    root: Path,
+    hidden: Sequence[Path],
+    settings: GradeSettings,
+    budget: Budget,
+    notes: list[str],
+    took: float,
+    boxes: list[Sandbox],
+) -> dict[str, Any]:
+    """A prediction (``gid``'s answer cell, ``source``) run alone in a sandbox without lorisnb, with
+    numpy, math and the lab's numbers ``given`` (name -> :func:`._sandbox_child.given`'s form, as the
+    grader's own run of the lab has them at that cell); the values read back (each ``{"error": ...}``
+    when it fails, the reason in the note it adds). Its code gets twice the ``took`` seconds its cell
+    took in the lab, plus 2 s (at most ``--timeout``), charged to the budget but run even when that
+    is spent: the cell ran in time in the lab, and a question answered by then keeps its points."""
+    capture = spec.values.get(gid, ())
+
+    def failed(error: str, note: str | None = None) -> dict[str, Any]:
+        notes.append(note or f"{gid}: {error}")
+        return {n: {"error": error} for n in capture}
+
+    usable = {n: v for n, v in given.items() if "not_plain" not in v}
+    work = root / f"prediction-{gid}"
+    work.mkdir()
+    limit = min(2 * took + 2.0, settings.limits.cell_timeout_s)
+    box = Sandbox(work, limits=settings.limits, hidden=hidden, uid=settings.uid + 1, no_lorisnb=True)
+    boxes.append(box)  # its stray lines are counted with the others'
+    try:
+        with budget.charge():
+            box.bind(usable)  # the sandbox's start (no code of the answer runs yet): the cell's time limit
+            reply = box.run(PRELUDE + source, capture, name=f"<answer {gid}>", timeout_s=limit)
+    except SandboxError as exc:
+        return failed(
+            f"the prediction, run alone, did not finish within {limit:.3g} s (twice the time it took in the lab, "
+            f"plus 2 s): {exc}"
+        )
+    finally:
+        box.close()
+    if box.findings:
+        message = lorisnb_used(f"the prediction {gid}", box.findings)
+        return failed(message, message)
+    if not reply.get("ok"):
+        try:
+            read = _loaded(source)
+        except SyntaxError:
+            read = set()
+        numbers = ", ".join(sorted(n for n in usable if n in read)) or "none of them"
+        withheld = ", ".join(sorted(n for n in given if n in read and n not in usable))
+        if withheld:
+            numbers += f"; not the lab's functions and objects it reads: {withheld}"
+        return failed(
+            "a prediction is worked out from the lab's numbers, with numpy and math, not computed with the "
+            f"lab's functions or lorisnb; run so (alone: given the numbers the lab's cells had set, of which it "
+            f"reads {numbers}), the answer cell failed: {reply.get('error')}"
+        )
+    return dict(reply.get("values", {}))
+
+
 MESSAGE_CHARS = 2000  # a check's message or a note, at most (a long answer echoed back is shortened)
 
 
@@ -540,13 +673,15 @@ def _run_student(
     budget: Budget,
     boxes: list[Sandbox],
     alone: Callable[[str, str | None], None],
+    answered: dict[str, float] | None = None,
 ) -> dict[str, dict[str, Any]]:
     """Step 1: the lab's cells with the student's answers, in the sandbox. Returns the values read
     back after each answer cell; ``alone(grade_id, error)`` runs after each answer cell (step 2 of a
-    formula answer; ``error``: the cell hit a limit). Every cell from the first answer cell on (the
-    lab's own after it too: the student's code could slow them), and every replay after a time-out,
-    is charged to ``budget``; once it is spent no more cells run. A replay gives each cell twice the
-    time it took (plus two seconds)."""
+    formula answer; ``error``: the cell hit a limit); ``answered`` gets the seconds each answer cell
+    that ran took. Every cell from the first answer cell on (the lab's own after it too: the
+    student's code could slow them), and every replay after a time-out, is charged to ``budget``;
+    once it is spent no more cells run. A replay gives each cell twice the time it took (plus two
+    seconds)."""
     cells: list[tuple[str, str | None, str]] = []  # (source, answer grade_id, name)
     for i, cell in enumerate(spec.notebook.cells):
         meta = _nbgrader(cell)
@@ -616,6 +751,8 @@ def _run_student(
             took[k] = time.monotonic() - t0
             if gid:
                 values[gid] = dict(reply.get("values", {}))
+                if answered is not None:
+                    answered[gid] = took[k]
             if not reply.get("ok"):
                 notes.append(f"{gid or cell_name}: {reply.get('error')}")
             if gid:
@@ -628,7 +765,7 @@ def _run_student(
 
 def _student_value(plain: Mapping[str, Any]) -> Any:
     if "error" in plain:
-        return NotPlain(f"(no value: {plain['error']})")
+        return NotPlain("no value", error=str(plain["error"]))
     return decode(dict(plain))
 
 
@@ -638,9 +775,14 @@ def _run_checks(
     functions: Mapping[str, RemoteFunction],
     params: Mapping[str, Any],
     root: Path,
+    predicted: Callable[[str, Mapping[str, Any]], dict[str, Any]] | None = None,
 ) -> list[Score]:
-    """Step 3: the instructor's notebook in this process; each test cell with the student's answers."""
+    """Step 3: the instructor's notebook in this process; each test cell with the student's answers.
+    At a prediction's answer cell, ``predicted(grade_id, the lab's numbers then)`` gives the values
+    its check reads (instead of those of the student's run of the lab)."""
     import matplotlib
+
+    from lorisnb.tools.teaching._sandbox_child import given
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -649,6 +791,7 @@ def _run_checks(
     ns: dict[str, Any] = {"__name__": "__main__"}
     by_id = {q.grade_id: q for q in spec.questions}
     scores: list[Score] = []
+    values = dict(values)
     cwd = os.getcwd()
     os.chdir(root)
     try:
@@ -656,6 +799,10 @@ def _run_checks(
             meta = _nbgrader(cell)
             if cell.cell_type != "code":
                 continue
+            gid = str(meta.get("grade_id"))
+            if meta.get("solution") and gid in spec.predictions and predicted is not None:
+                lab = {n: given(ns[n]) for n in spec.predictions[gid] if n in ns}
+                values[gid] = predicted(gid, lab)
             source = cell.source
             if "parameters" in cell.get("metadata", {}).get("tags", []):
                 source = _parameters(source, {**params, "output_dir": str(out)})

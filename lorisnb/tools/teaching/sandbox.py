@@ -203,6 +203,7 @@ class Sandbox:
         self._proc: subprocess.Popen[bytes] | None = None
         self._buffer = b""
         self.stray = 0  # lines in the reply pipe that were no reply of the child's (tampering)
+        self.findings: list[str] = []  # what the guard of a no-lorisnb child refused or found (lorisnb used)
         self.start()
 
     # --- life cycle ------------------------------------------------------------------------------
@@ -337,26 +338,47 @@ class Sandbox:
                         raise SandboxError("the sandbox ended (memory limit, or the code ended its process)")
                     self._buffer += chunk
             line, self._buffer = self._buffer.split(b"\n", 1)
-            try:
-                reply = json.loads(line)
-            except ValueError:
-                reply = None
-            if isinstance(reply, dict) and reply.get("id") == request_id:
+            reply = self._line(line)
+            if reply is not None and reply.get("id") == request_id:
                 reply.pop("id")
                 return reply
-            self.stray += 1  # not the reply to this request: written by the code into the pipe
+            if reply is not None:
+                self.stray += 1  # not the reply to this request: written by the code into the pipe
+
+    def _line(self, line: bytes) -> dict[str, Any] | None:
+        """A line from the pipe: a finding of the guard (``{"lorisnb": what}``: kept in
+        :attr:`findings`; the code could write one too, which only tells on itself), an empty line
+        (the guard starts its own with one), else what it parses to (None for an empty line or a
+        finding; a line that is no JSON object is counted in :attr:`stray`)."""
+        if not line.strip():
+            return None
+        try:
+            parsed = json.loads(line)
+        except ValueError:
+            parsed = None
+        if isinstance(parsed, dict) and set(parsed) == {"lorisnb"} and self.no_lorisnb:
+            if len(self.findings) < 100:
+                self.findings.append(str(parsed["lorisnb"])[:600])
+            return None
+        if not isinstance(parsed, dict):
+            self.stray += 1
+            return None
+        return parsed
 
     def _drain(self, fd: int) -> None:
-        """Count what came through the pipe while no request was pending (the code wrote it, or a
-        reply came after one the code forged): nothing is waiting then."""
+        """Read what came through the pipe while no request was pending: the guard's findings are
+        kept; anything else counts as stray (the code wrote it, or a reply came after one the code
+        forged): nothing is waiting then."""
         while select.select([fd], [], [], 0)[0]:
             chunk = os.read(fd, 1 << 16)
             if not chunk:
                 break
             self._buffer += chunk
-        if self._buffer:
-            self.stray += max(1, self._buffer.count(b"\n"))
-            self._buffer = b""
+        lines = self._buffer.split(b"\n")
+        self._buffer = b""
+        for line in lines:
+            if self._line(line) is not None:
+                self.stray += 1
 
     def run(
         self,
@@ -374,6 +396,14 @@ class Sandbox:
         if timeout_s is not None:
             timeout = min(timeout, timeout_s)
         return self._ask({"op": "exec", "source": source, "capture": list(capture), "name": name}, timeout)
+
+    def bind(self, values: dict[str, Any], timeout_s: float | None = None) -> None:
+        """Bind ``values`` (name -> a value as :func:`._sandbox_child.given` describes it) in the
+        notebook's namespace, running nothing."""
+        timeout = self.limits.cell_timeout_s if timeout_s is None else min(self.limits.cell_timeout_s, timeout_s)
+        reply = self._ask({"op": "set", "values": values}, timeout)
+        if not reply.get("ok"):
+            raise SandboxError(f"the sandbox could not take the lab's values: {reply.get('error')}")
 
     def call(self, name: str, args: dict[str, Any], timeout_s: float | None = None) -> dict[str, Any]:
         """Call the function ``name`` the cells defined with these (numpy or plain) arguments."""
@@ -404,10 +434,14 @@ def decode(plain: dict[str, Any]) -> Any:
 
 class NotPlain:
     """An answer that was not a plain value (a number, a string, a numpy array of numbers): a
-    prediction is a value, decided before the reference exists; an object is never asked later."""
+    prediction is a value, decided before the reference exists; an object is never asked later.
+    ``error``: there is no value at all, and why (the cell failed, a time limit)."""
 
-    def __init__(self, type_name: str) -> None:
+    def __init__(self, type_name: str, error: str | None = None) -> None:
         self.type_name = type_name
+        self.error = error
 
     def __repr__(self) -> str:
+        if self.error is not None:
+            return f"<no value: {self.error}>"
         return f"<a {self.type_name} object, not a plain value>"
