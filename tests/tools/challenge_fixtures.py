@@ -78,3 +78,15 @@ NUMBER = re.compile(r"-?\d+\.\d+")
 def leaked(text: str, gt: set[str]) -> list[str]:
     """The numbers in ``text`` that are ground-truth coordinates."""
     return [n for n in NUMBER.findall(text) if repr(float(n)) in gt]
+
+
+def wait_scored(client, sid: str, seconds: float = 120) -> dict:
+    """A submission's view once the server has scored it (or failed it), within ``seconds``."""
+    end = time.monotonic() + seconds
+    view: dict = {}
+    while time.monotonic() < end:
+        view = client.get(f"/api/submissions/{sid}").json()
+        if view["status"] not in ("queued", "scoring"):
+            return view
+        time.sleep(0.2)
+    raise AssertionError(f"submission {sid} not scored within {seconds} s: {view}")

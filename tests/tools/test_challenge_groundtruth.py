@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from challenge_fixtures import cafe_files, challenge_file
+from challenge_fixtures import cafe_files, challenge_file, wait_scored
 
 pytest.importorskip("fastapi")
 from fastapi.testclient import TestClient  # noqa: E402
@@ -26,16 +26,6 @@ from lorisnb.tools.challenge.config import read_challenge  # noqa: E402
 from lorisnb.tools.challenge.scoring import COPY_ATE_M, groundtruth_copies  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def wait_done(client, sid: str, seconds: float = 120) -> dict:
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        view = client.get(f"/api/submissions/{sid}").json()
-        if view["status"] not in ("queued", "scoring"):
-            return view
-        time.sleep(0.2)
-    raise AssertionError(f"submission {sid} not scored within {seconds} s: {view}")
 
 
 def _tum_of_sequence(gt_file: Path, seq: int, yaw_deg: float = 0.0, shift_m: float = 0.0) -> bytes:
@@ -79,7 +69,7 @@ def test_the_ground_truth_uploaded_is_refused_and_not_ranked(tmp_path, data):
             r = client.post("/api/submissions", files=files, headers={"Authorization": f"Bearer {tokens[team]}"})
             assert r.status_code == 201, r.text
             sids[team] = r.json()["id"]
-        views = {team: wait_done(client, sid) for team, sid in sids.items()}
+        views = {team: wait_scored(client, sid) for team, sid in sids.items()}
         for team, words in (("copier", "gtcopy.txt: cafe-1's positions and orientations"),
                             ("positions", "cafe-1-1.txt: cafe-1's positions are the ground truth's")):  # fmt: skip
             view = views[team]

@@ -12,7 +12,7 @@ import time
 import zipfile
 
 import pytest
-from challenge_fixtures import cafe_files, challenge_file, groundtruth_numbers, leaked
+from challenge_fixtures import cafe_files, challenge_file, groundtruth_numbers, leaked, wait_scored
 
 pytest.importorskip("fastapi")
 from fastapi.testclient import TestClient  # noqa: E402
@@ -42,16 +42,6 @@ class Recording:
             return r
 
         return call
-
-
-def wait_scored(client, sid: str, seconds: float = 90) -> dict:
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        view = client.get(f"/api/submissions/{sid}").json()
-        if view["status"] not in ("queued", "scoring"):
-            return view
-        time.sleep(0.2)
-    raise AssertionError(f"submission {sid} not scored within {seconds} s: {view}")
 
 
 def boards(client) -> list[dict]:
