@@ -79,9 +79,9 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--manifest", default=None, metavar="NAME_OR_TOML",
                    help=f"a multi-session manifest (built in: {', '.join(BUILT_IN)}); the inputs are folders of estimates")  # fmt: skip
     g.add_argument("--manifest-outside", action="store_true",
-                   help="let the manifest name ground-truth files outside its own folder and its root, and read "
-                   "estimates that are links leading out of the results folder (refused by default: a manifest or "
-                   "folder received from someone else reads only there)")  # fmt: skip
+                   help="let the manifest name ground-truth files outside its own folder and its root (refused by "
+                   "default: a manifest received from someone else reads only there), and show the content of an "
+                   "estimate linked from outside the results folder in its errors")  # fmt: skip
     g.add_argument("--scene", default=None, help="scene label of a pair's rows (default: the ground truth's file name)")
     g.add_argument("--conventions", default=None, choices=list(PRESETS),
                    help="a preset of the evaluation spec (openloris: the official tool; tum: evaluate_ate.py; "

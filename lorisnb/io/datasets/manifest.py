@@ -195,8 +195,9 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     ``root`` or lorisnb's data root, and a ``root`` written in the manifest (not taken from an
     environment variable) inside the manifest's folder or the data root (links resolved:
     ``groundtruth = "../../etc/passwd"`` is refused before anything is read), unless ``outside``
-    (``--manifest-outside``), which the manifest keeps: its estimates that are links leading out of
-    the results folder are then read too (:func:`lorisnb.tools.evaluation.inputs.inside_results`)."""
+    (``--manifest-outside``), which the manifest keeps: an error about an estimate linked from
+    outside the results folder then quotes its content too
+    (:func:`lorisnb.tools.evaluation.inputs.outside_results`)."""
     path = manifest_path(name_or_path)
     try:
         raw = tomllib.loads(path.read_text(encoding="utf-8"))

@@ -278,15 +278,20 @@ def named_entry(folder: Path, name: str) -> Path:
     return here
 
 
-def inside_results(path: Path, results: Path) -> None:
-    """Refuse an estimate file that lies (links resolved) outside the results folder it was
-    found in: a received manifest or folder reads nothing elsewhere (``/etc/passwd`` linked in as
-    a session's estimate). Nothing is opened; the error quotes no content."""
+def outside_results(path: Path, results: Path) -> Path | None:
+    """Where an estimate file really is when that lies (links resolved) outside the results folder
+    it was found in (a link of the user's, or ``/etc/passwd`` linked into a received folder), else
+    None. Such a file is read, as any input the user's folder links to, but an error about it
+    quotes none of its content (:func:`unquoted`)."""
     real, top = real_path(path), real_path(results)
-    if real != top and top not in real.parents:
-        raise ParseError(path, None, f"a link to {real}, outside the results folder {results}; expected the "
-                         "estimate file inside it (copy the file in, or pass --manifest-outside, or "
-                         "outside=True, for a manifest you wrote yourself)")  # fmt: skip
+    return real if real != top and top not in real.parents else None
+
+
+def unquoted(exc: ParseError, real: Path) -> ParseError:
+    """``exc`` about a file that is a link to ``real``, outside the results folder, without the
+    text of the file it quoted: what line, not what it holds."""
+    return ParseError(exc.path, exc.line, f"not a trajectory file as expected (a link to {real}, outside the results "
+                      "folder: its content is not shown; pass --manifest-outside, or outside=True, to see it)")  # fmt: skip
 
 
 def missing_note(folder: Path, algorithm: str, absent: list[tuple[str, str]], taken: Iterable[str] = ()) -> str:

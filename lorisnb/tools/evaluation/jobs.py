@@ -28,7 +28,7 @@ from lorisnb.io.datasets.paths import DataPaths, groundtruth_spans, load_groundt
 from lorisnb.io.readers.openloris import declared_scene, read_openloris
 from lorisnb.io.readers.plain import read_trajectory
 from lorisnb.io.readers.registry import hint
-from lorisnb.tools.evaluation.inputs import inside_results, labels, missing_note, named_entry
+from lorisnb.tools.evaluation.inputs import labels, missing_note, named_entry, outside_results, unquoted
 from lorisnb.tools.evaluation.pool import size_of
 from lorisnb.tools.evaluation.result import Failure
 from lorisnb.tools.evaluation.status import NOT_PUBLIC
@@ -305,10 +305,14 @@ def _manifest(job: Job) -> FileErrors:
         for s in sessions:
             path = found[s.seq]
             if path.exists():
-                if not m.outside:
-                    inside_results(path, job.root or job.path)
-                ests[s.seq] = read_trajectory(path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf,
-                                              repeated=job.spec.repeated, repair_stamps=job.spec.repair_stamps)  # fmt: skip
+                elsewhere = None if m.outside else outside_results(path, job.root or job.path)
+                try:
+                    ests[s.seq] = read_trajectory(path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf,
+                                                  repeated=job.spec.repeated, repair_stamps=job.spec.repair_stamps)  # fmt: skip
+                except ParseError as exc:  # a link out of the results folder: read, never quoted
+                    if elsewhere is None:
+                        raise
+                    raise unquoted(exc, elsewhere) from None
                 check_stamp_units(ests[s.seq], gts[s.seq], str(path))
     notes += [str(w.message) for w in caught]
     spans = window_spans(gts, job.spec)
