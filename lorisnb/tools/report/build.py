@@ -237,6 +237,31 @@ def _worker_start(zygote: warm_kernels.Zygote | None, kernel_dir: str | None = N
     jsonschema_without_iri_grammars()
     warm_kernels.use(zygote)
     use_kernel_files(kernel_dir)
+    _end_with_parent(kernel_dir)
+
+
+def _end_with_parent(kernel_dir: str | None, every: float = 1.0) -> None:
+    """End this worker once the process that started it is gone (killed outright, ``kill -9``: it
+    could not stop its workers, which then finished their notebooks and waited on the pool's queue
+    for ever). A daemon thread compares the parent's pid every ``every`` seconds; an orphan is
+    adopted by another process, removes the report's kernel folder if it is empty (no kernel is
+    left to), and ends itself with SIGTERM as the report's own stop would (its kernels follow it,
+    removing their files, :mod:`lorisnb.tools.report.kernels`)."""
+    import signal
+    import threading
+    import time
+
+    parent = os.getppid()
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(every)
+        if kernel_dir is not None:
+            with contextlib.suppress(OSError):  # not empty: a kernel's files, which it removes as it ends
+                os.rmdir(kernel_dir)
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    threading.Thread(target=watch, name="lorisnb-report-parent", daemon=True).start()
 
 
 def _umask() -> int:
