@@ -65,17 +65,18 @@ def check_eps_at_cr(
         return float(table["eps"].iloc[0])
 
     want = at(phi, delta)
-    try:
-        v = float(answer)
+    try:  # one number, as check_value reads it (a one-value Series or array too); anything else is its to tell
+        a = np.asarray(answer, float) if answer is not Ellipsis else np.array([])
+        v = float(a.reshape(())) if a.size == 1 else None
     except (TypeError, ValueError):
-        v = np.nan
-    if np.isnan(v) and answer is not Ellipsis and np.isnan(at(np.radians(phi), delta)):
+        v = None
+    if v is not None and np.isnan(v) and np.isnan(at(np.radians(phi), delta)):
         raise AnswerError(  # eps_at_cr's NaN: no eps reaches the target, as with phi in radians
             f"✗ smallest eps for a scene CR of {target:g} (m): your answer is NaN, which eps_at_cr gives when no eps "
             f"reaches the target; lorisnb computes {want:.4g} with phi = {phi:g} degrees"
             f"\nHint (degrees radians): {MISTAKES['degrees_radians']}"
         )
-    if want + 0.01 < v <= want + 0.2:  # past the step: a grid too coarse to find the smallest eps
+    if v is not None and want + 0.01 < v <= want + 0.2:  # past the step: a grid too coarse to find the smallest eps
         raise AnswerError(
             f"✗ smallest eps for a scene CR of {target:g} (m): you answered {v:.4g}; lorisnb computes {want:.4g}"
             f"\nHint (coarse grid): {MISTAKES['coarse_grid']}"

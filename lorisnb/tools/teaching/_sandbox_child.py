@@ -5,8 +5,9 @@ It reads one JSON request a line from stdin and writes one JSON reply a line to 
 started with; the student's own prints go to ``student-output.txt`` in the working folder.
 
 - ``{"op": "exec", "source": ..., "capture": [names]}``: run one cell in the notebook's namespace,
-  then reply with each captured name's value as a plain value (number, bool, string; anything else
-  is reported by its type only, never converted, so an object cannot wait to see the reference);
+  then reply with each captured name's value as a plain value (number, bool, string, an array of
+  numbers, a list or tuple of numbers as their array; anything else is reported by its type only,
+  never converted, so an object cannot wait to see the reference);
 - ``{"op": "call", "name": ..., "args": {...}}``: call a function the cells defined and reply with
   its result as plain values (numbers or booleans, scalars or arrays);
 - ``{"op": "set", "values": {...}}``: bind values in the notebook's namespace, running nothing (the
@@ -34,13 +35,20 @@ def _plain(value: Any) -> Any:
     """A JSON-able description of an answer value (exact types only: no subclass, no proxy)."""
     import numpy as np
 
+    def number(v: Any) -> bool:  # a number of Python's or numpy's own (exact types)
+        return type(v) in (bool, int, float) or (
+            isinstance(v, np.generic) and type(v).__module__ == "numpy" and v.dtype.kind in "biuf"
+        )
+
     t = type(value)
     if value is Ellipsis:
         return {"missing": True}
     if t in (bool, int, float, str) or value is None:
         return {"value": value}
-    if isinstance(value, np.generic) and t.__module__ == "numpy" and value.dtype.kind in "biuf":
+    if isinstance(value, np.generic) and t.__module__ == "numpy" and value.dtype.kind in "biufU":  # numpy's str_ too
         return {"value": value.item()}
+    if t in (list, tuple) and all(number(v) for v in value):  # one boolean per pose, as a list: the numbers' array
+        value, t = np.array(value), np.ndarray
     pd = sys.modules.get("pandas")
     if pd is not None and t in (pd.Series, pd.DataFrame, pd.Index):  # pandas' own types (no subclass): their numbers
         value, t = value.to_numpy(), np.ndarray

@@ -49,8 +49,9 @@ from lorisnb.errors import AnswerError
 from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, decode
 
-GRADER_VERSION = "4"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
-# 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers)
+GRADER_VERSION = "5"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+# 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
+# 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series)
 
 
 @dataclass(frozen=True)
