@@ -87,6 +87,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
         exit_status,
         github_annotations,
         markdown,
+        same_values,
         write_json,
         write_junit,
     )
@@ -132,6 +133,9 @@ def cmd_diff(args: argparse.Namespace) -> int:
     d = diff_tables(base.table, cand.table, tolerances, args.alpha, cand_failed,
                     names=(f"BASE {args.paths[0]}", f"CAND {args.paths[1]}"),
                     expected=pd.concat(known, ignore_index=True) if known else None)  # fmt: skip
+    if args.paths[0] != args.paths[1] and same_values(base.table, cand.table):
+        say(f"note: BASE {args.paths[0]} holds every value of CAND {args.paths[1]}, to the last digit: the same run "
+            "kept twice (a copy of CAND among the earlier runs?) is no baseline; reruns of a system differ")  # fmt: skip
     bad = d.sequences[d.sequences["status"].isin(["regression", "missing", "failed"])]
     scene_bad = d.scenes[d.scenes["status"].isin(["regression", "missing", "failed"])]
     print(f"BASE {clean(args.paths[0])} ({base.kind}) against CAND {clean(args.paths[1])} ({cand.kind}); tolerances: "
@@ -199,10 +203,17 @@ def cmd_diff(args: argparse.Namespace) -> int:
 
 def cmd_history(args: argparse.Namespace) -> int:
     """``lorisnb history RUN...``: scene values over runs, each run against its last comparable run
-    by diff's rule; exit 1 when the newest run regressed against its baseline."""
+    by diff's rule; exit status :func:`lorisnb.tools.decisions.history.newest_verdict`."""
     from lorisnb.core.stats.regression import parse_tolerances
     from lorisnb.io.writers import write_csv
-    from lorisnb.tools.decisions.history import first_changes, history_table, load_runs, run_labels, write_figures
+    from lorisnb.tools.decisions.history import (
+        first_changes,
+        history_table,
+        load_runs,
+        newest_verdict,
+        run_labels,
+        write_figures,
+    )
 
     check_outputs(args, args.runs, ["csv"], folders=("out",))
     tolerances = parse_tolerances(args.tolerance)
@@ -229,16 +240,10 @@ def cmd_history(args: argparse.Namespace) -> int:
         print(f"\nnot comparable: {clean(r.Index)} with the run before it ({clean(r.not_comparable)}){then}")
     lines = first_changes(h)
     print("\n" + ("\n".join(clean(x) for x in lines) if lines else "no value changed by diff's rule"))
-    newest = len(runs) - 1
-    rc = 0
-    if newest in diffs:
-        d = diffs[newest]
-        what = regressed_phrase(d.verdict)
-        print(f"\nnewest run {clean(names[newest])} against {clean(first.loc[names[newest], 'baseline'])}: {d.verdict['verdict']}"
-              + (f" ({what})" if what else ""))  # fmt: skip
-        rc = 1 if d.regressed else 0
-    elif runs:
-        print(f"\nnewest run {clean(names[newest])}: no earlier run is comparable with it; nothing judged")
+    rc, verdict_lines = newest_verdict(runs, diffs, names)
+    print("\n" + "\n".join(clean(x) for x in verdict_lines if not x.startswith("error: ")))
+    for x in (x for x in verdict_lines if x.startswith("error: ")):
+        print(clean(x), file=sys.stderr)
     if args.csv:
         print(f"wrote {write_csv(h, args.csv, args.force)}", file=sys.stderr)
     if args.out:

@@ -91,7 +91,7 @@ def test_a_run_json_without_created_is_ordered_by_its_time(tmp_path, table):
 def test_a_received_version_is_escaped_by_history(tmp_path, table, capsys):
     a = report_run(tmp_path / "a", table)
     b = report_run(tmp_path / "b", table, lorisnb_version="0.3.0\x1b]0;T\x07", created="2026-11-02T02:00:00+00:00")
-    assert main(["history", str(a), str(b)]) == 0
+    assert main(["history", str(a), str(b)]) == 2  # another version: b has no baseline, nothing judged
     out = capsys.readouterr().out
     assert "b: 2026-11-02T02:00:00+00:00, lorisnb 0.3.0\\x1b]0;T\\x07" in out
     assert "\x1b" not in out and "\x07" not in out

@@ -149,8 +149,10 @@ def test_diff_of_tables_and_a_missing_sequence(versions, tmp_path, capsys):
     for k, f in enumerate((ta, tb, other)):
         os.utime(f, (1.7e9 + 100 * k, 1.7e9 + 100 * k))
     hist = tmp_path / "history.csv"
-    assert main(["history", str(other), str(tb), str(ta), "--metric", "cr", "--csv", str(hist)]) == 0
+    # the newest run (other.csv, other thresholds) has no baseline: nothing judged, exit 2 (it was 0)
+    assert main(["history", str(other), str(tb), str(ta), "--metric", "cr", "--csv", str(hist)]) == 2
     out = capsys.readouterr().out
+    assert "newest run other.csv: no earlier run is comparable with it" in out and "nothing judged (exit 2" in out
     assert "ordered by modification time" in out
     assert (
         "orbslam2_rgbd cafe cr: first change in b.csv against a.csv (0.4860 -> 0.0985, a sequence or trial lost)" in out
@@ -260,7 +262,7 @@ def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
     csv, figs = tmp_path / "history.csv", tmp_path / "figures"
     rc = main(["history", str(runs[2]), str(regt), str(runs[0]), str(runs[1]), "--csv", str(csv), "--out", str(figs)])
     out = capsys.readouterr().out
-    assert rc == 0 and "newest run run-3: no earlier run is comparable with it" in out
+    assert rc == 2 and "newest run run-3: no earlier run is comparable with it" in out  # nothing judged
     h = pd.read_csv(csv)
     assert list(h.drop_duplicates("run")["run"]) == ["run-0", "run-1", "run-2", "run-3"]  # by run.json's time
     assert (
@@ -337,7 +339,7 @@ def test_scene_values_of_diff_and_history_are_the_leaderboards(tmp_path, icra20,
         seq = d[d["level"] == "sequence"].drop_duplicates(["algorithm", "scene", "seq"])
         assert len(seq) == len(ev.sequences())  # the findings only, not the notebook's simulated rows
     hist = tmp_path / "history.csv"
-    assert main(["history", str(run), "--csv", str(hist)]) == 0
+    assert main(["history", str(run), "--csv", str(hist)]) == 2  # one run: its values, nothing judged
     h = pd.read_csv(hist)
     h = h[h["metric"] == "cr"].set_index(["algorithm", "scene"])["value"]
     assert set(h.index) == set(scenes.index)

@@ -141,6 +141,22 @@ def diff_tables(
     return Diff(seqs, scenes, verdict(seqs, scenes))
 
 
+def same_values(base: pd.DataFrame, cand: pd.DataFrame) -> bool:
+    """Whether two per-sequence tables hold the same sequences and trials with every judged value
+    (:data:`~lorisnb.core.stats.regression.METRICS`) equal: one run kept twice (a copy of tonight's
+    run among the earlier ones), or a system whose every rerun is alike. ``diff`` says so: its "ok"
+    then compared a run with itself."""
+    b, c = keyed(base), keyed(cand)
+    keys = ["suite", "algorithm", "scene", "seq", "trial"]
+    cols = [m for m in METRICS if m in b.columns and m in c.columns]
+    if len(b) != len(c) or not len(b):
+        return False
+    x, y = (t.sort_values(keys)[keys + cols].reset_index(drop=True) for t in (b, c))
+    return bool(x[keys].astype(str).equals(y[keys].astype(str))) and bool(
+        ((x[cols] == y[cols]) | (x[cols].isna() & y[cols].isna())).all().all()
+    )
+
+
 def unevaluated(ev: Evaluation, root: str | os.PathLike[str]) -> dict[str, str]:
     """The inputs of a result folder's evaluation that were not scored, as ``diff`` counts them for
     its exit status: the failures (a file that could not be read or evaluated) and the inputs read

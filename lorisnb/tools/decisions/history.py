@@ -17,6 +17,7 @@ its scene was lost. Scene values count missing sequences as failed runs
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
@@ -36,12 +37,20 @@ COLUMNS = ["run", "path", "created", "created_from", "lorisnb_version", "label",
            "first_change"]  # fmt: skip
 
 
+def natural(name: str) -> tuple:
+    """A name's sort key with its numbers compared as numbers: ``night-9`` before ``night-10`` (as
+    text, ``night-10`` sorts first), ``2026-02-01`` before ``2026-02-02`` as before."""
+    return tuple((0, int(x), "") if x.isdigit() else (1, 0, x) for x in re.split(r"(\d+)", name) if x)
+
+
 def load_runs(paths: Iterable[str | os.PathLike[str]]) -> list[Run]:
-    """The runs, oldest first (see the module docstring)."""
+    """The runs, oldest first (see the module docstring); runs of the same time in the order given
+    (they were sorted by name: ``night-10.csv`` before ``night-9.csv``, and the newest run, the one
+    the exit status judges, was then the older night)."""
     runs = [load_run(p) for p in paths]
     if len({r.path.resolve() for r in runs}) < len(runs):
         raise ValidationError("history: a run is given twice; give each run once")
-    out = sorted(runs, key=lambda r: (r.created is None, r.created, r.name))
+    out = sorted(runs, key=lambda r: (r.created is None, r.created or 0))  # stable: ties as given
     for before, run in zip(out, out[1:], strict=False):  # the newest run baseline and exit status hang on the order
         if run.created is not None and run.created == before.created:
             run.notes.append(f"{run.path} has the same time as {before.path} ({run.created.isoformat()}, "
@@ -84,8 +93,10 @@ def earlier_runs(folder: str | os.PathLike[str]) -> list[Run]:
     f = Path(folder)
     if not f.is_dir():
         raise ValidationError(f"{f}: not a folder of earlier runs (report run folders or per-sequence tables)")
-    # hidden names are left out: a report's unfinished run folder (.NAME.partial-*) is not an earlier run
-    found = sorted(p for p in f.iterdir() if not p.name.startswith(".") and (is_report_run(p) or is_table(p)))
+    # hidden names are left out: a report's unfinished run folder (.NAME.partial-*) is not an earlier run;
+    # runs of one time (a folder copied or downloaded) are ordered by name, numbers as numbers
+    found = sorted((p for p in f.iterdir() if not p.name.startswith(".") and (is_report_run(p) or is_table(p))),
+                   key=lambda p: natural(p.name))  # fmt: skip
     if not found:
         raise ValidationError(f"{f} holds no run folder (run.json) and no per-sequence table (.csv, .parquet); give "
                               "the folder the nightly runs are kept in")  # fmt: skip
@@ -93,16 +104,33 @@ def earlier_runs(folder: str | os.PathLike[str]) -> list[Run]:
 
 
 def last_comparable(folder: str | os.PathLike[str], cand: Run) -> tuple[Run, list[Run]]:
-    """The newest run in ``folder`` comparable with ``cand`` (:func:`comparability`: same spec,
-    lorisnb version and ground truth), and every run there comparable with it, oldest first; an
-    error naming the nearest runs and why when none is."""
+    """The newest run in ``folder`` made before ``cand`` and comparable with it (:func:`comparability`:
+    same spec, lorisnb version and ground truth), and every such run there, oldest first; an error
+    naming the nearest runs and why when none is. Runs made at ``cand``'s time or after it
+    (:func:`not_before`) are passed over with a note in ``cand.notes``: a copy of tonight's run
+    kept with the earlier ones was its own baseline, "ok" whatever it held."""
     runs = [r for r in earlier_runs(folder) if r.path.resolve() != Path(cand.path).resolve()]
+    later = [r for r in runs if not_before(r, cand)]
+    runs = [r for r in runs if r not in later]
     fits = [r for r in runs if not comparability(r, cand)]
+    if later:  # a copy of CAND kept with the earlier runs (its twin: "ok"), or a run made after it
+        cand.notes.append(f"{len(later)} run(s) in {folder} made at or after {cand.name} ({cand.created_from} "
+                          f"{cand.created.isoformat() if cand.created else '?'}) passed over: "
+                          + ", ".join(r.name for r in later[:5]) + (" ..." if len(later) > 5 else "")
+                          + "; a baseline is a run made before CAND (a copy of CAND kept there would pass it)")  # fmt: skip
     if not fits:
         why = "; ".join(f"{r.name}: {', '.join(comparability(r, cand))}" for r in runs[-3:])
-        raise ValidationError(f"none of the {len(runs)} run(s) in {folder} is comparable with {cand.name} ({why}); "
-                              "compare runs made with the same spec, lorisnb version and ground truth")  # fmt: skip
+        after = f"; {len(later)} made at or after it passed over" if later else ""
+        raise ValidationError(f"none of the {len(runs)} run(s) in {folder} made before {cand.name} is comparable "
+                              f"with it ({why or 'none left'}{after}); compare runs made with the same spec, lorisnb "
+                              "version and ground truth, made before CAND")  # fmt: skip
     return fits[-1], fits
+
+
+def not_before(run: Run, cand: Run) -> bool:
+    """Whether ``run`` was made at the time of ``cand`` or after it (both times known): it is no
+    baseline of ``cand`` (a copy of CAND, or a later night)."""
+    return run.created is not None and cand.created is not None and run.created >= cand.created
 
 
 def baselines(runs: Sequence[Run]) -> list[tuple[int | None, str]]:
@@ -142,7 +170,8 @@ def history_table(
     for k, ((base, before), run, table) in enumerate(zip(baselines(runs), runs, tables, strict=True)):
         status: dict[tuple, str] = {}
         if base is not None:
-            diffs[k] = diff_tables(tables[base], table, tols, alpha, names=(names[base], names[k]), expected=expected)
+            diffs[k] = diff_tables(tables[base], table, tols, alpha, run.unscored, names=(names[base], names[k]),
+                                   expected=expected)  # fmt: skip
             for r in diffs[k].scenes.itertuples():
                 key = (r.suite, r.algorithm, r.scene, r.metric)
                 status[key] = r.status if key not in status or r.status in BAD else status[key]
@@ -185,6 +214,45 @@ def history_table(
             if not out.at[i, "baseline"]:
                 seen = False  # a new series starts here
     return out, diffs
+
+
+def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequence[str] | None = None
+                   ) -> tuple[int, list[str]]:  # fmt: skip
+    """``history``'s exit status and what it says of the newest run: ``diff``'s exit status of the
+    newest run against its baseline (:func:`lorisnb.tools.decisions.diff.exit_status`: 1 when it
+    regressed, or when an input of either run was not scored, as ``findings/input_errors.csv``
+    lists them), 0 only when it was judged, every input of both scored and nothing regressed; 2
+    when the newest run has no baseline (no earlier run comparable with it: ``diff`` of runs that
+    are not comparable exits 2), nothing judged. It exited 0 on both: a night whose spec or
+    lorisnb version changed, or whose failed inputs its baseline had failed too, passed unjudged."""
+    from lorisnb.tools.decisions.diff import exit_status
+
+    if not runs:
+        return 2, ["no run given: nothing judged"]
+    names = list(names) if names is not None else run_labels(runs)
+    k = len(runs) - 1
+    run = runs[k]
+    if k not in diffs:
+        base, before = baselines(runs)[k]
+        why = f" ({before})" if before else ""
+        what = f"no earlier run is comparable with it: not with {names[k - 1]}{why}" if k else "the only run given"
+        return 2, [f"newest run {names[k]}: {what}; nothing judged (exit 2, as diff of runs that are not comparable). "
+                   "Compare it with a run made with the same spec, lorisnb version and ground truth; a new series "
+                   "starts here"]  # fmt: skip
+    base = baselines(runs)[k][0]
+    assert base is not None
+    d = diffs[k]
+    from lorisnb.core.stats.regression import regressed_phrase
+
+    what = regressed_phrase(d.verdict)
+    lines = [f"newest run {names[k]} against {names[base]}: {d.verdict['verdict']}" + (f" ({what})" if what else "")]
+    lost = [(names[base], runs[base].unscored), (names[k], run.unscored)]
+    for name, files in lost:
+        if files:
+            lines.append(f"error: {len(files)} input(s) of {name} could not be evaluated or were not scored "
+                         f"({', '.join(sorted(files)[:3])}{' ...' if len(files) > 3 else ''}): not every sequence "
+                         "was compared")  # fmt: skip
+    return exit_status(d, runs[base].unscored, run.unscored), lines
 
 
 def first_changes(history: pd.DataFrame) -> list[str]:

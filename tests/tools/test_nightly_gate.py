@@ -1,0 +1,139 @@
+"""The nightly gate as a CI job runs it for months (``history`` over a folder of nightly runs,
+``diff --baseline last-comparable``): the newest run is the one the exit status judges, so runs of
+one time (a download or copy resets modification times) keep the order given (they were sorted by
+name: ``night-10`` before ``night-9``, and a regression the night it landed read as an
+improvement, exit 0); a newest run with no comparable baseline (another spec, lorisnb version or
+ground truth, or the only run) is judged by nothing and exits 2, never 0; inputs a report run could
+not score fail ``history`` as they fail ``diff`` of the same two runs (exit 1); a copy of tonight's
+run kept with the earlier runs is never its own baseline."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import pytest
+
+import lorisnb as ln
+from lorisnb.cli import main
+from lorisnb.io.writers import write_csv
+from lorisnb.tools.decisions.diff import same_values
+from lorisnb.tools.decisions.history import history_table, last_comparable, load_runs, natural, newest_verdict
+from lorisnb.tools.decisions.runs import DURATIONS, FIRST_TABLE, load_run
+from lorisnb.tools.report.provenance import KEYS
+
+ODOM = ("cafe-1-1-odom.txt", "cafe-1-2-odom.txt", "home-1-1-odom.txt")
+LOST = "odom/home-1-1-odom.txt"
+
+
+@pytest.fixture(scope="module")
+def table(icra20):
+    t = ln.evaluate([icra20 / "per-seq" / "odom" / f for f in ODOM], progress=False).sequences()
+    return t.assign(file="odom/" + t["file"])  # as a results folder's evaluation names them
+
+
+def night(folder, table, created, unscored=()):
+    """A report run as lorisnb report writes it, made at ``created``, with ``unscored`` inputs in its
+    ``findings/input_errors.csv``."""
+    (folder / "findings").mkdir(parents=True)
+    write_csv(table, folder / FIRST_TABLE)
+    write_csv(table[["scene", "seq", "gt_duration"]], folder / DURATIONS)
+    if unscored:
+        rows = "".join(f"{f},failed,could not read\n" for f in unscored)
+        (folder / "findings" / "input_errors.csv").write_text("file,status,error\n" + rows)
+    values = {**json.loads(table["spec"].iloc[0]), "eps": "inf", "phi": "inf", "delta": 1.0, "tau": 60.0}
+    meta = {k: None for k in KEYS} | {"command": ["lorisnb", "report"], "lorisnb_version": "0.3.0", "created": created,
+                                      "inputs": {}, "notebooks": {},
+                                      "spec": {"description": "d", "values": {**values, "source": "{results}"}}}  # fmt: skip
+    (folder / "run.json").write_text(json.dumps(meta))
+    return folder
+
+
+def run(capsys, *args):
+    rc = main([*map(str, args)])
+    out = capsys.readouterr()
+    return rc, out.out, out.err
+
+
+def test_runs_of_one_time_keep_the_order_given(tmp_path, table, capsys):
+    nights = tmp_path / "nightly"
+    nights.mkdir()
+    write_csv(table, nights / "night-9.csv")
+    write_csv(table[table["scene"] != "home"], nights / "night-10.csv")  # tonight lost home-1
+    for f in nights.iterdir():
+        os.utime(f, (1.7e9, 1.7e9))  # a download: one modification time
+    given = [nights / "night-9.csv", nights / "night-10.csv"]
+    assert [r.name for r in load_runs(given)] == ["night-9.csv", "night-10.csv"]  # was night-10 first (by name)
+    rc, out, err = run(capsys, "history", *given, "--metric", "cr")
+    assert rc == 1 and "newest run night-10.csv against night-9.csv: regression" in out, out
+    assert "ordered after it as given" in err
+    # a folder has no order given: by name, numbers as numbers (night-9 before night-10)
+    assert sorted(["night-10.csv", "night-9.csv", "night-1.csv"], key=natural) == [
+        "night-1.csv", "night-9.csv", "night-10.csv"]  # fmt: skip
+    cand = tmp_path / "tonight.csv"
+    write_csv(table, cand)
+    rc, out, err = run(capsys, "diff", nights, cand, "--baseline", "last-comparable")
+    assert "baseline: " in err and "night-10.csv" in err  # the newest of the folder: night-10, not night-9
+
+
+def test_a_newest_run_without_baseline_is_never_a_pass(tmp_path, table, capsys):
+    a = night(tmp_path / "a", table, "2026-11-01T02:00:00+00:00")
+    b = night(tmp_path / "b", table, "2026-11-02T02:00:00+00:00")
+    meta = json.loads((b / "run.json").read_text())
+    meta["lorisnb_version"] = "0.4.0"  # tonight's lorisnb was upgraded: no earlier run is comparable
+    (b / "run.json").write_text(json.dumps(meta))
+    rc, out, _ = run(capsys, "history", a, b)
+    assert rc == 2 and "newest run b: no earlier run is comparable with it: not with a (lorisnb_version" in out
+    assert "nothing judged" in out
+    rc, out, _ = run(capsys, "history", a)
+    assert rc == 2 and "newest run a: the only run given; nothing judged" in out
+    runs = load_runs([a, b])
+    _, diffs = history_table(runs, ["cr"])
+    assert newest_verdict(runs, diffs)[0] == 2 and newest_verdict(runs[:1], {})[0] == 2
+    assert newest_verdict(load_runs([a, night(tmp_path / "c", table, "2026-11-03T02:00:00+00:00")]),
+                          history_table(load_runs([a, tmp_path / "c"]), ["cr"])[1])[0] == 0  # fmt: skip
+
+
+def test_inputs_not_scored_fail_history_as_they_fail_diff(tmp_path, table, capsys):
+    kept = table[table["scene"] != "home"]  # home-1 failed to read, both nights: no row on either side
+    a = night(tmp_path / "a", kept, "2026-11-01T02:00:00+00:00", [LOST])
+    b = night(tmp_path / "b", kept, "2026-11-02T02:00:00+00:00", [LOST])
+    rc, _, err = run(capsys, "diff", a, b)
+    assert rc == 1
+    rc, out, err = run(capsys, "history", a, b)  # was 0: "newest run b against a: ok", the failed input unsaid
+    assert rc == 1 and "newest run b against a: ok" in out
+    assert f"1 input(s) of b could not be evaluated or were not scored ({LOST})" in err
+    runs = load_runs([a, b])
+    rc, lines = newest_verdict(runs, history_table(runs, ["cr"])[1])
+    assert rc == 1 and any(LOST in x for x in lines)
+    # a sequence BASE scored and CAND could not: "failed", with the reason, as diff says it
+    c = night(tmp_path / "c", kept, "2026-11-03T02:00:00+00:00", [LOST])
+    h, diffs = history_table(load_runs([night(tmp_path / "d", table, "2026-10-31T02:00:00+00:00"), c]), ["cr"])
+    seqs = diffs[1].sequences
+    assert set(seqs.loc[seqs["scene"] == "home", "status"]) == {"failed"}
+
+
+def test_a_copy_of_tonight_kept_with_the_earlier_runs_is_not_its_baseline(tmp_path, table, capsys):
+    nights = tmp_path / "nightly"
+    nights.mkdir()
+    write_csv(table, nights / "2026-11-01.csv")
+    os.utime(nights / "2026-11-01.csv", (1.7e9, 1.7e9))
+    cand = tmp_path / "tonight.csv"
+    write_csv(table[table["scene"] != "home"], cand)  # tonight lost home-1
+    os.utime(cand, (1.7e9 + 100, 1.7e9 + 100))
+    copy = nights / "2026-11-02.csv"
+    copy.write_bytes(cand.read_bytes())  # archived before the gate ran (or a job run again): a newer copy
+    rc, out, err = run(capsys, "diff", nights, cand, "--baseline", "last-comparable")
+    assert rc == 1 and "2026-11-01.csv" in err and "passed over: 2026-11-02.csv" in err, err  # was 0 against itself
+    base, fits = last_comparable(nights, load_run(cand))
+    assert base.name == "2026-11-01.csv" and [r.name for r in fits] == ["2026-11-01.csv"]
+    os.utime(copy, (1.7e9 + 100, 1.7e9 + 100))  # a copy keeping its time: made at CAND's time, passed over too
+    rc, out, err = run(capsys, "diff", nights, cand, "--baseline", "last-comparable")
+    assert rc == 1 and "passed over: 2026-11-02.csv" in err
+    os.utime(copy, (1.7e9 + 50, 1.7e9 + 50))  # an earlier run with every value of CAND: compared, and said
+    rc, out, err = run(capsys, "diff", nights, cand, "--baseline", "last-comparable")
+    assert rc == 0 and "holds every value of CAND" in err
+    assert same_values(load_run(copy).table, load_run(cand).table)
+    assert not same_values(load_run(nights / "2026-11-01.csv").table, load_run(cand).table)
+    rc, _, err = run(capsys, "diff", cand, cand)  # a run against itself, given so: no note
+    assert rc == 0 and "holds every value" not in err
