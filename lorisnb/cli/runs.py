@@ -14,7 +14,6 @@ import pandas as pd
 from lorisnb.cli.commands import every_column, fmt_table, report_problems, run_evaluation, tables_only
 from lorisnb.cli.outputs import check_outputs, refuse_unused
 from lorisnb.cli.text import clean, say
-from lorisnb.core.stats.regression import regressed_phrase
 from lorisnb.errors import ValidationError
 
 #: diff's own options; every other option is an evaluate option (for result folders only).
@@ -88,6 +87,8 @@ def cmd_diff(args: argparse.Namespace) -> int:
         github_annotations,
         markdown,
         same_values,
+        verdict_phrase,
+        with_unscored,
         write_json,
         write_junit,
     )
@@ -171,10 +172,12 @@ def cmd_diff(args: argparse.Namespace) -> int:
         print(f"{len(d.verdict['unjudged'])} comparison(s) too little to judge (fewer than 50 matched or correct "
               "poses): listed in --json, never a regression")  # fmt: skip
     print(f"rule: {d.verdict['rule']}")
-    what = regressed_phrase(d.verdict)
+    d = with_unscored(d, base_failed, cand_failed)  # every output says what the exit status says
+    what = verdict_phrase(d)
     print(f"\nverdict: {d.verdict['verdict']}" + (f" ({what})" if what else ""))
     extra = dict(base=args.paths[0], cand=args.paths[1], tolerances={k: str(v) for k, v in tolerances.items()},
-                 alpha=args.alpha, base_failed=base_failed, cand_failed=sorted(cand_failed))  # fmt: skip
+                 alpha=args.alpha, base_failed=base_failed, cand_failed=sorted(cand_failed),
+                 exit_status=exit_status(d, base_failed, cand_failed))  # fmt: skip
     written = []
     if args.json:
         written.append(write_json(d, args.json, args.force, extra))

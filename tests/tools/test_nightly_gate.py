@@ -101,7 +101,7 @@ def test_inputs_not_scored_fail_history_as_they_fail_diff(tmp_path, table, capsy
     rc, _, err = run(capsys, "diff", a, b)
     assert rc == 1
     rc, out, err = run(capsys, "history", a, b)  # was 0: "newest run b against a: ok", the failed input unsaid
-    assert rc == 1 and "newest run b against a: ok" in out
+    assert rc == 1 and "newest run b against a: incomplete (2 input(s) not scored" in out
     assert f"1 input(s) of b could not be evaluated or were not scored ({LOST})" in err
     runs = load_runs([a, b])
     rc, lines = newest_verdict(runs, history_table(runs, ["cr"])[1])
@@ -137,3 +137,33 @@ def test_a_copy_of_tonight_kept_with_the_earlier_runs_is_not_its_baseline(tmp_pa
     assert not same_values(load_run(nights / "2026-11-01.csv").table, load_run(cand).table)
     rc, _, err = run(capsys, "diff", cand, cand)  # a run against itself, given so: no note
     assert rc == 0 and "holds every value" not in err
+
+
+def test_every_output_of_diff_says_what_its_exit_status_says(tmp_path, table, capsys):
+    """Inputs not scored and nothing regressed: diff exits 1, and its JSON, JUnit XML, Markdown,
+    annotations and badge said "ok" (a green badge, no failed test case)."""
+    import xml.etree.ElementTree as ET
+
+    from lorisnb.tools.decisions.diff import badge, diff_tables, github_annotations, markdown, with_unscored
+
+    kept = table[table["scene"] != "home"]
+    a = night(tmp_path / "a", kept, "2026-11-01T02:00:00+00:00", [LOST])
+    b = night(tmp_path / "b", kept, "2026-11-02T02:00:00+00:00", [LOST])
+    o = tmp_path / "out"
+    rc, out, err = run(capsys, "diff", a, b, "--json", o / "d.json", "--junit", o / "d.xml", "--markdown",
+                       o / "d.md", "--badge", o / "d.svg", "--annotations")  # fmt: skip
+    assert rc == 1 and "verdict: incomplete (2 input(s) not scored" in out
+    v = json.loads((o / "d.json").read_text())
+    assert v["verdict"] == "incomplete" and v["exit_status"] == 1 and v["unscored_inputs"]["cand"] == [LOST]
+    suite = ET.parse(o / "d.xml").getroot().find("testsuite")
+    assert suite.get("errors") == "2" and [e.get("type") for e in suite.iter("error")] == ["not scored"] * 2
+    assert (o / "d.md").read_text().startswith("## ⚠️ lorisnb diff: incomplete") and LOST in (o / "d.md").read_text()
+    assert ">incomplete (2 not scored)<" in (o / "d.svg").read_text() and "::error title=" in out
+    # the same in Python; nothing lost: as before
+    d = diff_tables(load_run(a).table, load_run(b).table)
+    assert d.verdict["verdict"] == "ok" and with_unscored(d, [], []) is d and ">ok<" in badge(d)
+    lost = with_unscored(d, [], [LOST])
+    assert lost.verdict["verdict"] == "incomplete" and not lost.regressed
+    assert any(LOST in x for x in github_annotations(lost)) and "⚠️" in markdown(lost, "a", "b")
+    rc, out, _ = run(capsys, "diff", a, a, "--json", o / "same.json")  # a run against itself: its inputs still lost
+    assert rc == 1 and json.loads((o / "same.json").read_text())["verdict"] == "incomplete"

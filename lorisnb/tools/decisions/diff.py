@@ -184,6 +184,41 @@ def exit_status(d: Diff, base_failed: Collection[str], cand_failed: Collection[s
     return UNSCORED if d.regressed or base_failed or cand_failed else OK
 
 
+#: The verdict of a diff with no regression where an input of either run was not scored: not "ok".
+INCOMPLETE = "incomplete"
+
+
+def with_unscored(d: Diff, base_failed: Collection[str], cand_failed: Collection[str]) -> Diff:
+    """``d`` with the inputs of either run that were not evaluated or not scored (:func:`unevaluated`,
+    a report run's ``findings/input_errors.csv``) in its verdict (``unscored_inputs``: ``base`` and
+    ``cand``, each sorted), and a verdict of ``"ok"`` made :data:`INCOMPLETE`: every output (the JSON,
+    JUnit's error cases, the Markdown, the annotations, the badge) then says what the exit status
+    says (1). They said "ok", a green badge and no failed test, while ``diff`` exited 1."""
+    if not base_failed and not cand_failed:
+        return d
+    v = dict(d.verdict, unscored_inputs=dict(base=sorted(base_failed), cand=sorted(cand_failed)))
+    if v["verdict"] == "ok":
+        v["verdict"] = INCOMPLETE
+    return Diff(d.sequences, d.scenes, v)
+
+
+def unscored_lines(d: Diff) -> list[tuple[str, str]]:
+    """(run, input) of every input the verdict records as not scored (:func:`with_unscored`)."""
+    u = d.verdict.get("unscored_inputs") or {}
+    return [(side.upper(), f) for side in ("base", "cand") for f in u.get(side, [])]
+
+
+def verdict_phrase(d: Diff) -> str:
+    """What the verdict's line adds in brackets: what regressed
+    (:func:`~lorisnb.core.stats.regression.regressed_phrase`), and the inputs not scored."""
+    from lorisnb.core.stats.regression import regressed_phrase
+
+    n = len(unscored_lines(d))
+    lost = f"{n} input(s) not scored: not every sequence was compared" if n else ""
+    what = regressed_phrase(d.verdict) if d.regressed else ""
+    return "; ".join(x for x in (what, lost) if x)
+
+
 def write_json(d: Diff, out: str | os.PathLike[str], force: bool, extra: Mapping[str, object]) -> Path:
     """The verdict as JSON: ``verdict``, ``regressions`` and what was compared (``extra``)."""
     body = {**d.verdict, **extra}
@@ -216,10 +251,15 @@ def write_junit(d: Diff, out: str | os.PathLike[str], force: bool) -> Path:
             el.text = "\n".join(clean(line) for line in text.split("\n"))  # its own lines kept, a name's escaped
         return el
 
+    lost = unscored_lines(d)  # an input not scored: an error case each (the exit status is 1)
     root = ET.Element("testsuites", name="lorisnb diff")
-    suite_el = element(root, "testsuite", name="lorisnb diff", tests=str(len(cases)),
+    suite_el = element(root, "testsuite", name="lorisnb diff", tests=str(len(cases) + len(lost)),
                        failures=str(sum(len(c[2]) > 0 for c in cases)), skipped=str(sum(c[3] for c in cases)),
-                       errors="0")  # fmt: skip
+                       errors=str(len(lost)))  # fmt: skip
+    for side, f in lost:
+        case = element(suite_el, "testcase", classname=f"inputs.{side}", name=f)
+        element(case, "error", f"{side} input {f} could not be evaluated or was not scored",
+                message=f"{side} input not scored: {f}"[:500], type="not scored")  # fmt: skip
     for cls, name, bad, new, notes in cases:
         case = element(suite_el, "testcase", classname=cls, name=name)
         if notes:  # improvements and what was too little to judge, named beside the verdict
@@ -252,7 +292,7 @@ def markdown(d: Diff, base: str, cand: str, label: str | None = None) -> str:
     terminal shows them, never a row, tag or link of their own making."""
     md = markdown_cell
     v = d.verdict
-    icon = "❌" if d.regressed else "✅"
+    icon = "❌" if d.regressed else "⚠️" if v["verdict"] == INCOMPLETE else "✅"
     lines = [f"## {icon} lorisnb diff: {v['verdict']}", ""]
     lines.append(
         f"{code_span(base)} → {code_span(cand)}" + (f" (code under test: {code_span(label)})" if label else "")
@@ -262,6 +302,10 @@ def markdown(d: Diff, base: str, cand: str, label: str | None = None) -> str:
     lines.append(f"{v['sequences']} sequence(s); per metric and sequence: {counts or 'nothing compared'}.")
     if v.get("rule"):
         lines.append(f"Rule: {md(v['rule'])}")
+    lost = unscored_lines(d)
+    if lost:
+        lines += ["", f"### Inputs not scored ({len(lost)}): not every sequence was compared", ""]
+        lines += [f"- {side}: {code_span(f)}" for side, f in lost[:200]]
     for title, rows in (("Regressions", v["regressions"]), ("Improvements", v["improvements"])):
         if not rows:
             continue
@@ -292,7 +336,9 @@ def github_annotations(d: Diff) -> list[str]:
     improvement; names and values escaped as the terminal shows them, then as GitHub's runner
     decodes them (:func:`~lorisnb.tools.decisions.escape.workflow_property` for the title,
     :func:`~lorisnb.tools.decisions.escape.workflow_data` for the message)."""
-    out = []
+    out = [f"::error title={workflow_property(f'lorisnb diff: {side} input not scored')}::"
+           f"{workflow_data(f'{f} could not be evaluated or was not scored: not every sequence was compared')}"
+           for side, f in unscored_lines(d)]  # fmt: skip
     for kind, rows in (("error", d.verdict["regressions"]), ("notice", d.verdict["improvements"])):
         for r in rows:
             title = workflow_property(f"lorisnb diff: {r['status']} {r['algorithm']} {_where(r)}")
@@ -308,6 +354,8 @@ def badge(d: Diff) -> str:
 
     n = d.verdict["regressed_sequences"] + len([r for r in d.verdict["regressions"] if r["seq"] is None])
     right, colour = ("ok", "#2e7d32") if not d.regressed else (f"regression ({n})", "#c62828")
+    if not d.regressed and d.verdict["verdict"] == INCOMPLETE:
+        right, colour = f"incomplete ({len(unscored_lines(d))} not scored)", "#e65100"
     left = "lorisnb diff"
     wl, wr = 6 * len(left) + 12, 6 * len(right) + 12
     return (f'<svg xmlns="http://www.w3.org/2000/svg" width="{wl + wr}" height="20" role="img" '

@@ -225,7 +225,7 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
     when the newest run has no baseline (no earlier run comparable with it: ``diff`` of runs that
     are not comparable exits 2), nothing judged. It exited 0 on both: a night whose spec or
     lorisnb version changed, or whose failed inputs its baseline had failed too, passed unjudged."""
-    from lorisnb.tools.decisions.diff import exit_status
+    from lorisnb.tools.decisions.diff import exit_status, verdict_phrase, with_unscored
 
     if not runs:
         return 2, ["no run given: nothing judged"]
@@ -241,10 +241,8 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
                    "starts here"]  # fmt: skip
     base = baselines(runs)[k][0]
     assert base is not None
-    d = diffs[k]
-    from lorisnb.core.stats.regression import regressed_phrase
-
-    what = regressed_phrase(d.verdict)
+    d = with_unscored(diffs[k], runs[base].unscored, run.unscored)
+    what = verdict_phrase(d)
     lines = [f"newest run {names[k]} against {names[base]}: {d.verdict['verdict']}" + (f" ({what})" if what else "")]
     lost = [(names[base], runs[base].unscored), (names[k], run.unscored)]
     for name, files in lost:
