@@ -62,6 +62,7 @@ def _run_evaluation(
     default it does; else only the scores at the spec's setting travel back from the workers:
     ``evaluate``'s ``keep_poses``)."""
     from lorisnb.io.datasets.manifest import openloris_preset_refusal, read_manifest
+    from lorisnb.tools.evaluation.result import said_notes
     from lorisnb.tools.evaluation.runner import (
         evaluate,
         evaluate_manifest,
@@ -120,7 +121,7 @@ def _run_evaluation(
             ev = evaluate(args.paths, spec, data_root=args.data, **kw)
     # FailedInputsWarning speaks to Python callers (Evaluation.failures); here each failure is an error: line
     said = [str(w.message) for w in caught if not issubclass(w.category, FailedInputsWarning)]
-    notes = list(dict.fromkeys(ev.notes + ev.warnings + said))
+    notes = list(dict.fromkeys(ev.notes + said_notes(ev.errors) + said))
     grid = swept(ev.spec) if swept is not None else None  # a sweep: its grid, not the spec's thresholds
     kitti_files = args.gt and "kitti" in (args.format, args.gt_format or args.format)
     projected = "; KITTI files: each rotation block projected to its nearest rotation" * bool(

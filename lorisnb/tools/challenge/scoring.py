@@ -52,7 +52,7 @@ from lorisnb.tools.challenge import store
 from lorisnb.tools.challenge.config import Challenge, sequences_of
 from lorisnb.tools.challenge.uploads import PLAN
 from lorisnb.tools.evaluation.jobs import GT_DROP
-from lorisnb.tools.evaluation.result import Evaluation
+from lorisnb.tools.evaluation.result import Evaluation, said_notes
 from lorisnb.tools.evaluation.runner import evaluate, evaluate_pairs
 from lorisnb.tools.evaluation.status import skipped_only
 
@@ -198,9 +198,9 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
                 for status, name, error in problems]  # fmt: skip
     about = {w: _attributed(f, w) for f in errors for w in f.warnings}
     notes: dict[str, set[tuple[str, int]]] = {}
-    for w in caught:
-        text = str(w.message)
-        if "could not be evaluated" not in text:
+    counted = set(said_notes(errors)) - set(about)  # a note many files share, counted: each is listed here
+    for text in dict.fromkeys([*(str(w.message) for w in caught), *about]):
+        if "could not be evaluated" not in text and text not in counted:
             notes.setdefault(scrub(text, folder, data, gt_folder), set()).update(about.get(text, []))
     out: dict[str, Any] = dict(
         rows=[{k: _plain(v) for k, v in r.items() if k != "spec"} | {"file": Path(str(r["file"])).name} for r in rows],

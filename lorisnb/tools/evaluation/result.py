@@ -12,6 +12,7 @@ from lorisnb.core.lifelong.aggregate import aggregate_scenes, spans_table
 from lorisnb.core.lifelong.scoring import pose_table, score_rows
 from lorisnb.core.metrics.relative import RPG_FRACTIONS
 from lorisnb.core.pipeline.model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, STAT_COLUMNS, Eps, FileErrors, ScoresOnly
+from lorisnb.core.pipeline.sessions import check_label
 from lorisnb.core.spec.evalspec import EvalSpec, make_spec
 from lorisnb.core.trajectory.blocks import threads
 from lorisnb.core.trajectory.frames import SCENES
@@ -26,6 +27,43 @@ if TYPE_CHECKING:
 def _same(given: Any, held: Any) -> bool:
     """``given`` is the value the spec holds, of the same type: nothing to check again."""
     return type(given) is type(held) and bool(given == held)
+
+
+#: A note that many inputs share but for the input it names is said in full for this many of
+#: them, then once more with how many others it is about and the first of them
+#: (:func:`said_notes`); every note is kept (``Evaluation.warnings``, ``FileErrors.warnings``).
+SAME_NOTE_IN_FULL = 3
+#: The inputs a shared note's last line names, at most.
+SAME_NOTE_NAMED = 10
+
+
+def said_notes(files: list[FileErrors]) -> list[str]:
+    """The notes of ``files`` as said to the user (issued as warnings, printed by the command
+    line): each once, in order, except that a note the same but for the input it names (a folder
+    of 5,000 short files, each with "no RPE pair over 1 s") is said in full for the first
+    :data:`SAME_NOTE_IN_FULL` inputs and then in one line with how many more inputs it is about,
+    naming the first :data:`SAME_NOTE_NAMED` of them, so that the table and the other notes are
+    not lost in thousands of lines."""
+    groups: dict[str, list[tuple[str, str]]] = {}
+    for f in files:
+        names = sorted({str(f.path), f.file, check_label(f.path, f.file, f.algorithm)} - {""}, key=len, reverse=True)
+        for w in f.warnings:
+            shape = w
+            for n in names:  # the longest spelling of the input first: a path holds its file label
+                shape = shape.replace(n, "\0")
+            groups.setdefault(shape, []).append((f.file, w))
+    out: list[str] = []
+    for said in groups.values():
+        notes = list(dict.fromkeys(w for _, w in said))
+        if len(notes) <= SAME_NOTE_IN_FULL + 1:
+            out += notes
+            continue
+        out += notes[:SAME_NOTE_IN_FULL]
+        rest = list(dict.fromkeys(label for label, w in said if w not in notes[:SAME_NOTE_IN_FULL]))
+        named = ", ".join(rest[:SAME_NOTE_NAMED]) + (", ..." if len(rest) > SAME_NOTE_NAMED else "")
+        out.append(f"the same note as above holds for {len(rest):,} more input(s): {named} "
+                   "(each note: Evaluation.warnings in Python)")  # fmt: skip
+    return out
 
 
 @dataclass

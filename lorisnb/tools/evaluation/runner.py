@@ -40,7 +40,7 @@ from lorisnb.tools.evaluation.inputs import (
 )
 from lorisnb.tools.evaluation.jobs import BIG_FILE_BYTES, Job, PairSource, run_job
 from lorisnb.tools.evaluation.pool import default_jobs, run_tasks, size_of
-from lorisnb.tools.evaluation.result import Evaluation, Failure
+from lorisnb.tools.evaluation.result import Evaluation, Failure, said_notes
 
 PathArg = str | os.PathLike[str]
 __all__ = ["BIG_FILE_BYTES", "Evaluation", "Failure", "evaluate", "evaluate_manifest", "evaluate_pairs"]
@@ -70,7 +70,7 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
             (failed if status == "failed" else skipped).append(value)
     check_duplicates([(str(f.path), (f.suite, f.algorithm, f.scene, f.trial), tuple(e.seq for e in f.sequences))
                       for f in done])  # fmt: skip
-    for w in dict.fromkeys(w for f in done for w in f.warnings):
+    for w in said_notes(done):  # a note many inputs share: said in full for a few, then counted
         warnings.warn(w, LorisWarning, stacklevel=3)
     if failed:  # tables without them would look complete: a notebook says so at the call
         more = f" (and {len(failed) - 1} more)" if len(failed) > 1 else ""
