@@ -26,22 +26,14 @@ def gt():
 
 
 @pytest.fixture(scope="module")
-def hidden(gt):
+def hidden():
     """The lab's hidden cases (its test cells' own faults and thresholds), on cafe-1 and cafe-2."""
-    a = simulated_errors(gt, Faults(position_noise_m=0.4, orientation_noise_deg=12.0, seed=7), seqs=[1])
-    b = simulated_errors(
-        gt,
-        {1: Faults(position_noise_m=0.3, lost=((5.0, 9.0),), rate_hz=2.0, seed=3),
-         2: Faults(init_delay_s=12.0, yaw_drift_deg_per_m=1.0)},
-        seqs=[1, 2],
-    )  # fmt: skip
-    c = simulated_errors(
-        gt, {1: Faults(init_delay_s=7.0), 2: Faults(wrong_reloc_at_s=0.0, init_delay_s=3.0)}, seqs=[1, 2]
-    )
+    from lorisnb.tools.teaching.errorrates import hidden_cases
+
     return dict(
-        correctness=teach.cases_from(a, 0.5, 15.0, 1.0, 60.0)["correctness"],
-        correct_rate=teach.cases_from(b, 0.5, 10.0, 0.3, 60.0)["correct_rate"],
-        cs_r=teach.cases_from(c, 1.0, 30.0, 1.0, 25.0)["cs_r"],
+        correctness=hidden_cases("A1_correctness"),
+        correct_rate=hidden_cases("B2_correct_rate"),
+        cs_r=hidden_cases("C1_cs_r"),
     )
 
 
