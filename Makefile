@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 export PATH := $(abspath $(BIN)):$(PATH)
 export MPLBACKEND ?= Agg
 
-.PHONY: report test test-all test-fast test-slow test-browser browser-deps peers-deps lint format evaluate bench calibrate bytecode clean-venv student grade book slides docs
+.PHONY: report test test-all test-fast test-slow test-browser browser-deps peers-deps lint format evaluate bench calibrate bytecode clean-venv student grade grading-rates book slides docs
 
 $(STAMP): pyproject.toml lorisnb/_version.py lorisnb/core/trajectory/_rotations.c
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -141,6 +141,9 @@ grade: student
 	$(TEACH_ENV) python teaching/grade.py "$(COURSE)" --source teaching/source --lab $(LAB) $(GRADE_ARGS)
 
 # the offline book of the primer and the labs (Jupyter Book 1 + sphinx-exercise) into $(BOOK_OUT)/
+grading-rates: $(TEACH_STAMP)  # how often lab 1's grade is wrong (docs/guide/teaching.md); RATES_ARGS=--quick: a minute
+	$(TEACH_ENV) python teaching/grading_error_rates.py $(RATES_ARGS)
+
 book: $(TEACH_STAMP)
 	$(TEACH_ENV) python teaching/book.py "$(BOOK_OUT)"
 
