@@ -115,7 +115,7 @@ def evaluate_sessions(
     found: list[str | None] = list(notes or [])
     if indexed([*estimates.values(), *(groundtruth[s] for s in seqs)]):  # KITTI files without times
         spec = by_index(spec)
-    name = check_label(path, file, algorithm)
+    name = check_label(path, file)
     method = spec.alignment_for(algorithm)
 
     def where(s: int) -> str:  # the input a sequence's error is about: its file (a manifest's session), or path, seq
@@ -254,13 +254,12 @@ def evaluate_sessions(
     )  # fmt: skip
 
 
-def check_label(path: str | Path, file: str | None, algorithm: str) -> str:
-    """How the checks' notes name an input: its ``file`` label (the table's ``file`` column: the path
-    below the results folder, ``algA/cafe1.txt``), else its file name, with the algorithm after it
-    where the label does not hold it: two algorithms' ``cafe1.txt`` are two inputs, and a note
-    naming only ``cafe1.txt`` left the user to guess which (the same text from both was one note)."""
-    label = file if file is not None else Path(path).name
-    return label if not algorithm or algorithm in label else f"{label} ({algorithm})"
+def check_label(path: str | Path, file: str | None) -> str:
+    """How the checks' notes name an input: its ``file`` label where it holds the folders below the
+    results folder (the table's ``file`` column, ``algA/cafe1.txt``), else the path as given (a file
+    given alone). Two algorithms' ``cafe1.txt`` are two inputs: a note naming only ``cafe1.txt``
+    left the user to guess which (and the same text from both was said once)."""
+    return file if file is not None and "/" in file else str(path)
 
 
 def window_spans(groundtruth: Mapping[K, Trajectory], spec: EvalSpec) -> dict[K, tuple[float, float]]:

@@ -46,7 +46,7 @@ def said_notes(files: list[FileErrors]) -> list[str]:
     not lost in thousands of lines."""
     groups: dict[str, list[tuple[str, str]]] = {}
     for f in files:
-        names = sorted({str(f.path), f.file, check_label(f.path, f.file, f.algorithm)} - {""}, key=len, reverse=True)
+        names = sorted({str(f.path), f.file, check_label(f.path, f.file)} - {""}, key=len, reverse=True)
         for w in f.warnings:
             shape = w
             for n in names:  # the longest spelling of the input first: a path holds its file label
