@@ -83,3 +83,16 @@ def test_a_note_many_inputs_share_is_counted(icra20, data, tmp_path, capsys, n):
     assert main(["evaluate", str(tmp_path / "res"), "--data", str(data.root), "--no-progress", "--jobs", "1"]) == 0
     err = capsys.readouterr().err.splitlines()
     assert [line for line in err if line.startswith("warning:")] == [f"warning: {w}" for w in issued]
+
+
+def test_a_challenge_note_names_the_uploaded_file_only(icra20, data, tmp_path):
+    """The challenge scores an upload's files given alone, from a folder of the server's: its note
+    names the file as the team uploaded it, never the server's folder or path."""
+    from lorisnb.core.spec.evalspec import make_spec
+    from lorisnb.tools.challenge.scoring import score_folder
+
+    _swapped(icra20, tmp_path / "submission", ["files"])
+    notes = score_folder(tmp_path / "submission" / "files", data, make_spec())["notes"]
+    said = [n for n in notes if SWAPPED in n["text"]]
+    assert [n["text"].split(", seq 1:")[0] for n in said] == ["cafe1.txt"] and said[0]["sequences"] == [("cafe", 1)]
+    assert str(tmp_path) not in str(notes) and "(files)" not in str(notes)
