@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from lorisnb.core.alignment.geometry import Sim3, quat_normalize, quat_to_matrix, umeyama
-from lorisnb.errors import ValidationError
+from lorisnb.errors import EvaluationError, ValidationError
 
 PLANES = ("xy", "xz", "yz")
 _NULL_AXIS = {"xy": 2, "xz": 1, "yz": 0}
@@ -28,7 +28,28 @@ def scale_alignment(est_positions: np.ndarray, gt_positions: np.ndarray, frames:
     if n < 2:
         raise ValidationError(f"a scale correction needs at least 2 matched poses, got {len(p_e)}; align='none' "
                               "scores them without it")  # fmt: skip
+    if (why := evo_rank_refusal(p_e[:n], p_g[:n])) is not None:
+        raise EvaluationError(
+            f"no scale correction can be determined: {why}; evo's -s fits a whole Umeyama Sim(3) for its scale "
+            "and refuses such positions ('Degenerate covariance rank, Umeyama alignment is not possible'); fit the "
+            "scale on more poses (--align-frames N, or all), or score without it (--align none)"
+        )
     return Sim3(np.eye(3), np.zeros(3), umeyama(p_e[:n], p_g[:n], with_scale=True).scale)
+
+
+def evo_rank_refusal(est_positions: np.ndarray, gt_positions: np.ndarray) -> str | None:
+    """Why evo's ``umeyama_alignment`` refuses these matched positions, or None: its cross-covariance
+    ``1/n sum (g_i - mean g)(e_i - mean e)^T`` has fewer than 2 singular values above machine epsilon
+    (absolute), as evo 1.38 tests it (2 poses, positions on one line, a point)."""
+    p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
+    n = len(p_e)
+    cov = (p_g - p_g.mean(axis=0)).T @ (p_e - p_e.mean(axis=0)) * (1.0 / n)
+    d = np.linalg.svd(cov, compute_uv=False)
+    rank = int(np.count_nonzero(d > np.finfo(float).eps))
+    if rank >= 2:
+        return None
+    return (f"the cross-covariance of the {n} matched positions has rank {rank} (evo needs 2: "
+            f"{'2 poses' if n == 2 else 'positions on one line or one point'})")  # fmt: skip
 
 
 def origin_alignment(
