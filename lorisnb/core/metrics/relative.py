@@ -17,6 +17,11 @@ computes it. The error is also split as rpg splits it (``rel_yaw``, ``rel_gravit
 rotation expressed in the world frame, ``R_w = R_est,j R_E R_est,j^T``, as z-y-x Euler angles
 (``euler_from_matrix(R_w, 'rzyx')``): ``yaw`` the absolute yaw, ``gravity`` the root of the
 squared pitch and roll (the part gravity makes observable to a visual-inertial system), degrees.
+rpg computes its relative errors on the estimate as read, not aligned (``Trajectory`` passes
+``p_es, q_es``), so ``R_est,j`` is the estimate's own orientation and its world frame the
+estimate's: :func:`relative_table` turns the aligned orientation back by the alignment's rotation
+(``world_rotation``) where the errors keep it (a file of one sequence, or a lifelong file's one
+alignment). Only the split depends on it (the length, translation and angle of the error do not).
 """
 
 from __future__ import annotations
@@ -84,11 +89,14 @@ def rpg_relative_errors(
     est_quaternions: np.ndarray,
     lengths: list[float] | None = None,
     scale: float = 1.0,
+    world_rotation: np.ndarray | None = None,
 ) -> pd.DataFrame:
     """rpg's relative errors of matched poses for each sub-trajectory length (metres; default
     :func:`rpg_lengths`), the estimate's relative translations multiplied by ``scale`` (the Sim(3)
     scale, as rpg does). One row per pair: ``length``, ``trans`` (m), ``trans_perc`` (% of the
-    length), ``rot`` (deg), ``rot_deg_per_m``."""
+    length), ``rot`` (deg), ``rot_deg_per_m``, ``yaw`` and ``gravity`` (deg). ``world_rotation``: the
+    (3, 3) rotation the estimate's orientations were turned by (an alignment's), undone for the
+    yaw / gravity split as rpg splits in the estimate's own frame (module docstring)."""
     import pandas as pd
 
     p_g, p_e = np.asarray(gt_positions, float), np.asarray(est_positions, float)
@@ -111,6 +119,8 @@ def rpg_relative_errors(
         trace = r_err.trace(axis1=1, axis2=2)
         rot = np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0)))
         r_j = quat_to_matrix(q_e[j])
+        if world_rotation is not None:  # the estimate's orientation as read: R_a^T R_j
+            r_j = np.einsum("ki,nkj->nij", np.asarray(world_rotation, float), r_j)
         yaw, gravity = _yaw_gravity(np.einsum("nij,njk,nlk->nil", r_j, r_err, r_j))
         trans = np.linalg.norm(err_t, axis=1)
         rows.append(
@@ -161,6 +171,14 @@ def rpg_absolute_table(errors: FileErrors | Iterable[FileErrors]) -> pd.DataFram
     cols = ["algorithm", "file", "trial", "seq", "matched", "trans_rmse", "rot_rmse", "scale_perc_rmse",
             "scale_perc_mean", "scale_perc_median"]  # fmt: skip
     return pd.DataFrame(rows, columns=cols)
+
+
+def _alignment_rotation(f: FileErrors) -> np.ndarray | None:
+    """The rotation of the alignment applied to every sequence of ``f`` (its one sequence's, or a
+    lifelong file's), None where each sequence had its own (not kept: the aligned frame is used)."""
+    if f.mode == "lifelong" or len(f.sequences) == 1:
+        return np.asarray(f.alignment.rotation, float)
+    return None
 
 
 def _yaw_gravity(r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -217,7 +235,7 @@ def relative_table(
                 use = rpg_lengths(e.gt_positions, fractions) if total is None else rpg_preset_lengths(total, fractions)
                 fraction_of = dict(zip(use, fractions, strict=True))
             rel = rpg_relative_errors(e.gt_positions, e.gt_quaternions, e.est_positions, e.est_quaternions,
-                                      [x for x in use if x > 0])  # fmt: skip
+                                      [x for x in use if x > 0], world_rotation=_alignment_rotation(f))  # fmt: skip
             for length, g in rel.groupby("length", sort=False):
                 rows.append(
                     dict(
