@@ -188,3 +188,72 @@ def test_bad_covariances_and_pairs_are_refused(data):
     zero = PoseCovariances(np.zeros((len(gt), 3, 3)), np.zeros((len(gt), 3, 3)))
     res = ov_eval_errors(gt, gt, zero, align="none")  # no covariance to invert: no NEES, said by the count
     assert res.summary.set_index("series").loc["nees_pos", "count"] == 0
+
+
+def _covariance_cases(data, out: Path) -> dict[str, Path]:
+    """fr1/xyz's estimate with covariances ov_eval and a symmetric-positive-definite check disagree on:
+    every 7th position block indefinite (its z variance negated), and rank-1 position blocks plus
+    1e-14 m^2 (near-singular: the NEES is rounding magnified by 1e14)."""
+    est = read_tum(data.tum / EST, warn=False)
+    co, cp = synthetic_covariances(est.stamps)
+    indefinite = cp.copy()
+    indefinite[::7, 2, 2] *= -1
+    u = np.random.default_rng(3).normal(size=(len(est), 3))
+    near = 1e-4 * np.einsum("ni,nj->nij", u, u) + 1e-14 * np.eye(3)
+    return {
+        "indefinite": write_ov_eval_file(out / "indefinite.txt", est, co, indefinite),
+        "near_singular": write_ov_eval_file(out / "near_singular.txt", est, co, near),
+    }
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", ["indefinite", "near_singular"])
+def test_covariances_that_are_not_positive_definite_give_ov_evals_nees(ov, data, tmp_path, case):
+    """ov_eval inverts each covariance with Eigen's cofactors and keeps every NEES that is not NaN
+    (negative for an indefinite block): lorisnb dropped the poses whose block was not positive
+    definite (673 of 786 poses) and solved near-singular ones another way (mean NEES 1.3e10 for
+    ov_eval's 7.8e9)."""
+    est = _covariance_cases(data, tmp_path)[case]
+    stats, rows = run_ov_eval(ov, est, data.tum / GT, "posyaw")
+    res = ours(est, data.tum / GT, "posyaw")
+    same_as_ov_eval(res, stats, rows)
+    assert res.summary.set_index("series").loc["nees_pos", "count"] == 786
+    if case == "indefinite":
+        assert res.poses["nees_pos"].min() < 0 and any(
+            "113 of 786" in n and "not positive definite" in n for n in res.notes
+        )
+
+
+def _half_turn(data, out: Path) -> Path:
+    """fr1/xyz's estimate turned by exactly pi about each body x axis: against a ground truth of 4
+    decimals (quaternions not quite unit), a few orientation errors fall a hair past a half turn."""
+    from scipy.spatial.transform import Rotation
+
+    est = read_tum(data.tum / EST, warn=False)
+    q = (Rotation.from_quat(est.quaternions) * Rotation.from_rotvec([np.pi, 0, 0])).as_quat()
+    return write_ov_eval_file(out / "half_turn.txt", Trajectory(est.stamps, est.positions, q),
+                              *synthetic_covariances(est.stamps))  # fmt: skip
+
+
+@pytest.mark.slow
+def test_a_half_turn_ov_eval_stops_on_is_said(ov, data, tmp_path):
+    """ov_core's log_so3 gives NaN there and ov_eval stops (an assertion); lorisnb's statistics of
+    those series are NaN too, and a note says which poses and why."""
+    import subprocess
+
+    est = _half_turn(data, tmp_path)
+    done = subprocess.run([str(ov), str(est), str(data.tum / GT), "none"], capture_output=True, text=True, timeout=300)
+    assert done.returncode != 0 and "isnan" in done.stderr
+    res = ours(est, data.tum / GT, "none")
+    assert np.isnan(res.summary.set_index("series").loc["ate_ori", "rmse"])
+    assert any("half turn" in n and "ate_ori" in n for n in res.notes)
+
+
+def test_not_positive_definite_covariances_are_said(data, tmp_path):
+    """Everywhere the data is: an indefinite block has a NEES (as ov_eval's) and a note; a zero one none."""
+    res = ours(_covariance_cases(data, tmp_path)["indefinite"], data.tum / GT, "posyaw")
+    s = res.summary.set_index("series")
+    assert s.loc["nees_pos", "count"] == 786 and res.poses["nees_pos"].min() < 0
+    assert [n for n in res.notes if "not positive definite" in n]
+    half = ours(_half_turn(data, tmp_path), data.tum / GT, "none")
+    assert [n for n in half.notes if "half turn" in n]

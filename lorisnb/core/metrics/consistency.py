@@ -21,9 +21,10 @@ Exactly as ``ov_eval``'s ``ResultTrajectory`` computes them (github.com/rpng/ope
   part): ``e^T P^-1 e`` with ``e`` the orientation error ``-log(R_gt^T R_est)`` (rad, about the
   estimate's body axes, the local error OpenVINS' covariance describes) and ``P`` the orientation
   block of the covariance (rad^2); for position ``e = p_gt - p_est`` (m, world axes) and the
-  position block (m^2). A pose whose covariance cannot be inverted (not positive definite) has no
-  NEES and is left out of the NEES statistics (``ov_eval`` skips the poses where its inverse gives
-  NaN).
+  position block (m^2), inverted as ``ov_eval`` inverts it (Eigen's cofactors). A pose whose
+  inverse gives NaN (a singular covariance, e.g. all zeros) has no NEES and is left out of the NEES
+  statistics, as ``ov_eval`` skips it; a covariance that is not positive definite but can be
+  inverted gives a NEES as in ``ov_eval`` (negative or meaningless), and a note says how many.
 - **Per-axis errors** with 3-sigma bounds: position ``p_gt - p_est`` per world axis (m, bound
   ``3 sqrt(P_ii)``); orientation twice the vector part of the JPL error quaternion
   ``q_gt (x) q_est^-1`` turned into world axes (deg, the covariance turned likewise); roll, pitch
@@ -299,14 +300,39 @@ def _rot_y(t: np.ndarray) -> np.ndarray:
     return m
 
 
-def _quadratic(e: np.ndarray, cov: np.ndarray) -> np.ndarray:
-    """``e^T cov^-1 e`` per pose; NaN where ``cov`` is not positive definite."""
-    out = np.full(len(e), np.nan)
-    eig = np.linalg.eigvalsh(cov)
-    ok = eig[:, 0] > 0
-    if ok.any():
-        out[ok] = np.einsum("ni,ni->n", e[ok], np.linalg.solve(cov[ok], e[ok][:, :, None])[:, :, 0])
+def _eigen_inverse(m: np.ndarray) -> np.ndarray:
+    """Eigen's ``inverse()`` of (N, 3, 3) matrices, as ``ov_eval`` inverts a covariance: the cofactors
+    of the first column, their dot product with it as the determinant, the adjugate times ``1 / det``
+    (inf or NaN for a singular matrix, a number for any other, positive definite or not)."""
+
+    def cof(i: int, j: int) -> np.ndarray:
+        i1, i2, j1, j2 = (i + 1) % 3, (i + 2) % 3, (j + 1) % 3, (j + 2) % 3
+        return m[:, i1, j1] * m[:, i2, j2] - m[:, i1, j2] * m[:, i2, j1]
+
+    c0 = [cof(0, 0), cof(1, 0), cof(2, 0)]
+    det = (c0[0] * m[:, 0, 0] + c0[1] * m[:, 1, 0]) + c0[2] * m[:, 2, 0]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        inv_det = 1.0 / det
+        out = np.empty_like(m)
+        for i in range(3):
+            for j in range(3):
+                out[:, i, j] = (c0[j] if i == 0 else cof(j, i)) * inv_det
     return out
+
+
+def _quadratic(e: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    """``e^T cov^-1 e`` per pose as ``ov_eval`` computes it (:func:`_eigen_inverse`, then the row
+    ``e^T cov^-1`` times ``e``): NaN where the inverse gives NaN (a singular covariance), and a number,
+    negative or meaningless as it may be, for a covariance that is not positive definite."""
+    inv = _eigen_inverse(cov)
+    with np.errstate(invalid="ignore", over="ignore"):
+        row = (e[:, 0, None] * inv[:, 0, :] + e[:, 1, None] * inv[:, 1, :]) + e[:, 2, None] * inv[:, 2, :]
+        return (row[:, 0] * e[:, 0] + row[:, 1] * e[:, 1]) + row[:, 2] * e[:, 2]
+
+
+def _not_positive_definite(cov: np.ndarray) -> np.ndarray:
+    """Which (N, 3, 3) covariances are not positive definite (a zero or negative eigenvalue)."""
+    return ~(np.linalg.eigvalsh(cov)[:, 0] > 0)
 
 
 def statistics(values: np.ndarray) -> dict[str, float]:
@@ -395,16 +421,35 @@ def ov_eval_errors(
         h[:, :, 2] = _rot_x(-rpy_e[:, 0]) @ _rot_y(-rpy_e[:, 1]) @ np.array([0.0, 0.0, 1.0])
         h_inv = np.linalg.inv(h)
         cov_rpy = h_inv @ cov_ori @ np.transpose(h_inv, (0, 2, 1))
-        for k, axis in enumerate("xyz"):
-            cols[f"pos_{axis}_3sigma"] = 3 * np.sqrt(cov_pos[:, k, k])
-        for k, axis in enumerate("xyz"):
-            cols[f"ori_{axis}_3sigma"] = 3 * deg * np.sqrt(cov_global[:, k, k])
-        for k, name in enumerate(("roll", "pitch", "yaw")):
-            cols[f"{name}_3sigma"] = 3 * deg * np.sqrt(cov_rpy[:, k, k])
+        with np.errstate(invalid="ignore"):  # a negative variance: NaN, as in ov_eval (said below)
+            for k, axis in enumerate("xyz"):
+                cols[f"pos_{axis}_3sigma"] = 3 * np.sqrt(cov_pos[:, k, k])
+            for k, axis in enumerate("xyz"):
+                cols[f"ori_{axis}_3sigma"] = 3 * deg * np.sqrt(cov_global[:, k, k])
+            for k, name in enumerate(("roll", "pitch", "yaw")):
+                cols[f"{name}_3sigma"] = 3 * deg * np.sqrt(cov_rpy[:, k, k])
         e_ori = -_log_so3(m_ga @ np.transpose(m_e, (0, 2, 1)))
         cols["nees_ori"] = _quadratic(e_ori, cov_ori)
         cols["nees_pos"] = _quadratic(err_pos, cov_pos)
+        for part, block in (("orientation", cov_ori), ("position", cov_pos)):
+            bad = _not_positive_definite(block)
+            if bad.any():
+                notes.append(
+                    f"{int(bad.sum())} of {len(bad)} matched poses have a {part} covariance that is not positive "
+                    f"definite (the first at {cols['t'][int(np.argmax(bad))]:.6f} s): their NEES is computed as "
+                    "ov_eval computes it (from Eigen's inverse; negative, huge or left out where that is NaN) and "
+                    "means nothing"
+                )
     poses = pd.DataFrame(cols)
+    lost = [name for name in SERIES if name in poses and not name.startswith("nees") and poses[name].isna().any()]
+    if lost:
+        k = int(poses[lost].isna().any(axis=1).sum())
+        notes.append(
+            f"{k} matched pose(s) have no {', '.join(lost)} (NaN, so the statistics of these series are NaN): the "
+            "orientation error is within rounding of a half turn, where ov_core's log_so3 of quaternions used as "
+            "written (not unit length) takes the square root of a negative number; ov_eval stops there (an "
+            "assertion in its Statistics)"
+        )
     rows = []
     nees_ok = poses[["nees_ori", "nees_pos"]].notna().all(axis=1) if covariances is not None else None
     for name, unit in SERIES.items():
