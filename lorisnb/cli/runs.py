@@ -210,6 +210,7 @@ def cmd_history(args: argparse.Namespace) -> int:
     from lorisnb.core.stats.regression import parse_tolerances
     from lorisnb.io.writers import write_csv
     from lorisnb.tools.decisions.history import (
+        drift,
         first_changes,
         history_table,
         load_runs,
@@ -243,7 +244,7 @@ def cmd_history(args: argparse.Namespace) -> int:
         print(f"\nnot comparable: {clean(r.Index)} with the run before it ({clean(r.not_comparable)}){then}")
     lines = first_changes(h)
     print("\n" + ("\n".join(clean(x) for x in lines) if lines else "no value changed by diff's rule"))
-    rc, verdict_lines = newest_verdict(runs, diffs, names)
+    rc, verdict_lines = newest_verdict(runs, diffs, names, drift(runs, tolerances))
     print("\n" + "\n".join(clean(x) for x in verdict_lines if not x.startswith("error: ")))
     for x in (x for x in verdict_lines if x.startswith("error: ")):
         print(clean(x), file=sys.stderr)

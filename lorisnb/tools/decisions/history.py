@@ -216,8 +216,46 @@ def history_table(
     return out, diffs
 
 
-def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequence[str] | None = None
-                   ) -> tuple[int, list[str]]:  # fmt: skip
+def drift(
+    runs: Sequence[Run], tolerances: Mapping[str, Tolerance] | None = None, alpha: float = 0.05
+) -> tuple[int, Diff] | None:
+    """The newest run against the **first run of its series** (the oldest run given that is
+    comparable with it), by ``diff``'s rule: a slow drift, each night within rerun noise of the
+    night before (never a change against its baseline), is a change against the series' start.
+    Judged at ``alpha / 2`` (Bonferroni: the second of the newest run's two judgements, so that a
+    noise-only night fails by it no more often than by its baseline's); where it rests on a single
+    run per side (a band, no significance), it is named and does not fail the night
+    (:func:`drift_gates`). None where that run is the newest run's baseline (nothing more to judge)
+    or there is none."""
+    k = len(runs) - 1
+    if k < 1:
+        return None
+    first = next((j for j in range(k) if not comparability(runs[j], runs[k])), None)
+    base = baselines(runs)[k][0]
+    if first is None or first == base:
+        return None
+    tols = parse_tolerances() if tolerances is None else dict(tolerances)
+    a, b = keyed(runs[first].table, str(runs[first].path)), keyed(runs[k].table, str(runs[k].path))
+    expected = expected_from(a, b, *(r.expected for r in (runs[first], runs[k]) if r.expected is not None))
+    names = run_labels(runs)
+    d = diff_tables(a, b, tols, alpha / 2, runs[k].unscored, names=(names[first], names[k]), expected=expected)
+    return first, d
+
+
+#: How a regression judged on a single run per side is decided (:mod:`lorisnb.core.stats.regression`).
+SINGLE_RUN = "single run per side"
+
+
+def drift_gates(d: Diff) -> list[dict]:
+    """The regressions of a drift (:func:`drift`) that fail the night: all but those judged on a
+    single run per side (a band, no significance claimed: gating on them too failed 5.9 % of
+    noise-only nights of single runs against 3.4 % without, measured in docs/guide/history.md),
+    which are named only. A sequence or trial lost since the series' start always fails."""
+    return [r for r in d.verdict["regressions"] if not str(r.get("decided_by") or "").startswith(SINGLE_RUN)]
+
+
+def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequence[str] | None = None,
+                   since_first: tuple[int, Diff] | None = None) -> tuple[int, list[str]]:  # fmt: skip
     """``history``'s exit status and what it says of the newest run: ``diff``'s exit status of the
     newest run against its baseline (:func:`lorisnb.tools.decisions.diff.exit_status`: 1 when it
     regressed, or when an input of either run was not scored, as ``findings/input_errors.csv``
@@ -225,6 +263,7 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
     when the newest run has no baseline (no earlier run comparable with it: ``diff`` of runs that
     are not comparable exits 2), nothing judged. It exited 0 on both: a night whose spec or
     lorisnb version changed, or whose failed inputs its baseline had failed too, passed unjudged."""
+    from lorisnb.core.stats.regression import regressed_phrase
     from lorisnb.tools.decisions.diff import exit_status, verdict_phrase, with_unscored
 
     if not runs:
@@ -244,13 +283,28 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
     d = with_unscored(diffs[k], runs[base].unscored, run.unscored)
     what = verdict_phrase(d)
     lines = [f"newest run {names[k]} against {names[base]}: {d.verdict['verdict']}" + (f" ({what})" if what else "")]
+    rc = exit_status(d, runs[base].unscored, run.unscored)
+    if since_first is not None:  # a drift: within noise night to night, a change since the series' start
+        j, f = since_first
+        gates = drift_gates(f)
+        worse = regressed_phrase(f.verdict) if f.regressed else ""
+        named = ", ".join(f"{r['algorithm']} {r['scene']}" + (f"-{r['seq']}" if r["seq"] is not None else " (scene)")
+                          + f" {r['metric']}" for r in f.verdict["regressions"][:5])  # fmt: skip
+        more = " ..." if len(f.verdict["regressions"]) > 5 else ""
+        said = f" ({worse}); a drift: {named}{more}" if f.regressed else ""
+        if f.regressed and not gates:
+            said += ("; judged on a single run per side (no significance claimed): named, not failing the night; "
+                     f"run 3 trials or more, or gate with lorisnb diff {names[j]} {names[k]}")  # fmt: skip
+        lines.append(f"newest run {names[k]} against {names[j]}, the first run of its series: "
+                     f"{'regression' if f.regressed else 'ok'}{said}")  # fmt: skip
+        rc = max(rc, 1 if gates else 0)
     lost = [(names[base], runs[base].unscored), (names[k], run.unscored)]
     for name, files in lost:
         if files:
             lines.append(f"error: {len(files)} input(s) of {name} could not be evaluated or were not scored "
                          f"({', '.join(sorted(files)[:3])}{' ...' if len(files) > 3 else ''}): not every sequence "
                          "was compared")  # fmt: skip
-    return exit_status(d, runs[base].unscored, run.unscored), lines
+    return rc, lines
 
 
 def first_changes(history: pd.DataFrame) -> list[str]:
