@@ -104,7 +104,10 @@ def test_several_metrics_after_one_option_are_followed(icra20, data, tmp_path, c
     table = tmp_path / "t.csv"
     assert _rc(["evaluate", results, "--data", data.root, "--no-progress", "--jobs", "1", "--csv", table]) == 0
     capsys.readouterr()
-    assert _rc(["history", table, "--metric", "cr", "cs_r"]) == 0
+    again = tmp_path / "t2.csv"  # a second night: with one run history judges nothing (exit 2)
+    again.write_bytes(table.read_bytes())
+    os.utime(again, (table.stat().st_mtime + 60,) * 2)
+    assert _rc(["history", table, again, "--metric", "cr", "cs_r"]) == 0
     out = capsys.readouterr().out
     assert "cr per scene:" in out and "cs_r per scene:" in out and "cr_t per scene:" not in out
 
