@@ -257,3 +257,23 @@ def test_not_positive_definite_covariances_are_said(data, tmp_path):
     assert [n for n in res.notes if "not positive definite" in n]
     half = ours(_half_turn(data, tmp_path), data.tum / GT, "none")
     assert [n for n in half.notes if "half turn" in n]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("scale", "warned"), [(1.0, False), (0.95, True), (1.1, False), (2.5, True)])
+def test_the_path_length_warning_is_ov_evals(ov, data, tmp_path, scale, warned):
+    """ov_eval warns when the two whole files' path lengths differ by more than 10 % (a scale
+    error, or different spans); lorisnb said nothing. Both now say it on the same files, and every
+    number still agrees."""
+    import subprocess
+
+    est = read_tum(data.tum / EST, warn=False)
+    scaled = Trajectory(est.stamps, est.positions * scale, est.quaternions)
+    path = write_ov_eval_file(tmp_path / "scaled.txt", scaled, *synthetic_covariances(est.stamps))
+    done = subprocess.run([str(ov), str(path), str(data.tum / GT), "posyaw"], capture_output=True, text=True,
+                          timeout=300)  # fmt: skip
+    res = ours(path, data.tum / GT, "posyaw")
+    theirs = "bad ratio" in done.stdout
+    assert theirs == any("times as long as the ground truth" in n for n in res.notes)
+    assert theirs == warned  # fr1/xyz's estimate is 0.945 times as long as its ground truth
+    same_as_ov_eval(res, *run_ov_eval(ov, path, data.tum / GT, "posyaw"))

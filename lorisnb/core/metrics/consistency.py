@@ -335,6 +335,22 @@ def _not_positive_definite(cov: np.ndarray) -> np.ndarray:
     return ~(np.linalg.eigvalsh(cov)[:, 0] > 0)
 
 
+def _length_ratio_note(est_positions: np.ndarray, gt_positions: np.ndarray) -> str | None:
+    """``ov_eval``'s warning on the two whole files (before association): the estimate's path length
+    over the ground truth's outside 0.9..1.1 ("Trajectory is a bad ratio of ... length")."""
+    lengths = [float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else 0.0
+               for p in (est_positions, gt_positions)]  # fmt: skip
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = lengths[0] / lengths[1] if lengths[1] > 0 else np.inf if lengths[0] > 0 else np.nan
+    if ratio > 1.1 or ratio < 0.9:  # NaN (neither moves): no note, as ov_eval's comparisons are false
+        return (
+            f"the estimate's path is {ratio:.2f} times as long as the ground truth's (estimate {lengths[0]:.2f} m, "
+            f"ground truth {lengths[1]:.2f} m, whole files; ov_eval warns outside 0.9..1.1): a scale error "
+            "(only sim3 absorbs it), or files that cover different spans"
+        )
+    return None
+
+
 def statistics(values: np.ndarray) -> dict[str, float]:
     """``ov_eval``'s ``Statistics::calculate`` of one series: RMSE, mean, median, standard
     deviation (n - 1 in the denominator), min, max, count (NaN where there are no values)."""
@@ -377,9 +393,9 @@ def ov_eval_errors(
             f"only {gi.size} estimate pose(s) are within {max_diff:g} s of a ground-truth stamp; ov_eval needs at "
             "least 3: do the two files share a clock (seconds)?"
         )
+    notes: list[str | None] = [_length_ratio_note(estimate.positions, groundtruth.positions)]
     p_e, q_e = estimate.positions[ei], estimate.quaternions[ei]
     p_g, q_g = groundtruth.positions[gi], groundtruth.quaternions[gi]
-    notes: list[str | None] = []
     to_gt = fit_alignment(p_e, p_g, align, notes=notes)
     to_est = fit_alignment(p_g, p_e, align, notes=notes)
     deg = 180.0 / np.pi
