@@ -126,7 +126,9 @@ def run_record(
         "commit": git_commit(),
         "spec": dict(spec),
         "data_root": str(data_root) if data_root is not None else None,
-        "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        # to the microsecond: a baseline is a run made before CAND (lorisnb.tools.decisions.history.not_before),
+        # and two runs of one second (a scripted report and its --baseline run) were one time, the baseline passed over
+        "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="microseconds"),
         "inputs": dict(inputs),
         "notebooks": dict(notebooks),
         "input_roots": [_key(r.resolve(), data_root) for r in roots],
