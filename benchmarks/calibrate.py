@@ -7,9 +7,11 @@ of the icra20 data, then the table of false-alarm rates and power by trial count
 alarms at most 5 % at every trial count; power at least 90 % with 3 or more trials for CR -0.05
 and ATE +50 % on one sequence. Then the same for ``lorisnb compare``: how often it calls one system
 run twice significantly different (target at most 5 %), and how many real differences of scene CR
-(0.05 or more) between two systems it finds.
+(0.05 or more) between two systems it finds. Last, ``lorisnb history``'s exit status on noise-only
+series of nightly runs (its newest run against its baseline and against the series' first run).
 
-    python benchmarks/calibrate.py [--pool 24] [--nights 200] [--power-nights 60] [--compare-nights 60] [--quick]
+    python benchmarks/calibrate.py [--pool 24] [--nights 200] [--power-nights 60] [--compare-nights 60]
+                                   [--history-series 2] [--history-nights 60] [--quick]
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from lorisnb.tools.decisions.calibration import (
     compare_rates,
     family_size,
     generator_pairs,
+    history_rates,
     make_pool,
     pair_spread,
     real_pairs,
@@ -47,10 +50,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--power-nights", type=int, default=60, help="nights per change, model and trial count")
     p.add_argument("--compare-nights", type=int, default=60, help="nights of compare per trial count (default 60)")
     p.add_argument("--trials", type=int, nargs="+", default=[1, 3, 5], help="trial counts (default 1 3 5)")
-    p.add_argument("--quick", action="store_true", help="a small run (pool 12, 40 nights, 12 per change, 10 compares)")
+    p.add_argument("--history-series", type=int, default=2, help="noise-only series of history per model (default 2)")
+    p.add_argument("--history-nights", type=int, default=60, help="runs in each series of history (default 60)")
+    p.add_argument("--quick", action="store_true",
+                   help="a small run (pool 12, 40 nights, 12 per change, 10 compares, one history series of 12)")  # fmt: skip
     args = p.parse_args(argv)
     if args.quick:
         args.pool, args.nights, args.power_nights, args.compare_nights = 12, 40, 12, 10
+        args.history_series, args.history_nights = 1, 12
     warnings.simplefilter("ignore", LorisWarning)
     start = time.perf_counter()
     real = real_pairs()
@@ -102,6 +109,7 @@ def main(argv: list[str] | None = None) -> int:
                   f"(smallest {100 * pw['rate'].min():.1f} %)")  # fmt: skip
     bound_table(pools["real"], args.trials)
     compare_table(pools["real"], args.trials, args.compare_nights)
+    history_rates_table(pools, [n for n in args.trials if n <= 3], args.history_series, args.history_nights)
     print(f"({time.perf_counter() - start:.0f} s)")
     return 0
 
@@ -144,6 +152,18 @@ def compare_table(pool: object, trials: list[int], nights: int) -> None:
     fa = rates[rates["check"] == "false claim"]
     print(f"compare's false claims at most 5 %: {'met' if (fa['rate'] <= 0.05).all() else 'NOT MET'} "
           f"(largest {100 * fa['rate'].max():.1f} %)")  # fmt: skip
+
+
+def history_rates_table(pools: dict, trials: list[int], series: int, nights: int) -> None:
+    """``lorisnb history``'s failed noise-only nights (:func:`history_rates`), per model and trial count."""
+    print(f"\nThe exit status of lorisnb history on noise-only series ({series} x {nights} nightly runs a model and "
+          "trial count; the newest run against its baseline and against the series' first run):")  # fmt: skip
+    for model, pool in pools.items():
+        rates = history_rates(pool, trials, series, nights, progress=lambda x: tqdm(x, desc="series", leave=False))
+        for r in rates.itertuples():
+            print(f"  {model:6s} {r.trials} trial(s): nights failed {100 * r.rate:5.1f}% [{100 * r.low:4.1f},"
+                  f"{100 * r.high:5.1f}] of {r.nights} (by a lost sequence alone: {r.lost}); drift named on "
+                  f"{r.drifts} night(s)")  # fmt: skip
 
 
 if __name__ == "__main__":

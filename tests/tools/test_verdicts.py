@@ -283,6 +283,7 @@ def test_the_calibration_harness_measures_what_it_says(data):
         calibrate,
         compare_rates,
         generator_pairs,
+        history_rates,
         make_pool,
         pair_spread,
         real_pairs,
@@ -302,6 +303,10 @@ def test_the_calibration_harness_measures_what_it_says(data):
     rates = compare_rates(pool, trials=(3,), nights=3).set_index("check")
     assert (rates.loc["false claim", "hits"], rates.loc["false claim", "nights"]) == (0, 3)
     assert rates.loc["real difference found", "nights"] > 0 and rates.loc["real difference found", "rate"] > 0.3
+    # history: every night after the first judged; noise never loses a sequence, so none fails by that alone
+    h = history_rates(pool, trials=(1, 3), series=1, nights=4).set_index("trials")
+    assert h["nights"].tolist() == [3, 3] and h["lost"].tolist() == [0, 0] and (h["hits"] <= h["nights"]).all()
+    assert h["rate"].tolist() == (h["hits"] / h["nights"]).tolist()
 
 
 @pytest.mark.thorough

@@ -44,7 +44,8 @@ from lorisnb.errors import ValidationError
 from lorisnb.io.datasets.paths import find_data, load_groundtruth
 from lorisnb.io.readers.openloris import read_openloris
 from lorisnb.tools.decisions.comparison import decide
-from lorisnb.tools.decisions.diff import diff_tables
+from lorisnb.tools.decisions.diff import diff_tables, keyed
+from lorisnb.tools.decisions.runs import Run
 
 #: Algorithms of ``icra20_results/per-seq`` the nights are made of (good, medium and poor trackers).
 ALGORITHMS = ("vins_mono_color_imu_with_loop", "orbslam2_rgbd", "infinitam_aligned_depth")
@@ -330,6 +331,59 @@ def single_run_bands(pool: Pool, nights: int = 100, seed: int = 2) -> pd.DataFra
     factor = float(np.quantile(ratio, 0.95))
     return pd.DataFrame([dict(level=k[0], metric=k[1], median=float(np.median([n[k] for n in nightly if k in n])),
                               p95=p95[k], band=factor * p95[k], factor=factor) for k in keys])  # fmt: skip
+
+
+def _series(pool: Pool, n: int, nights: int, rng: np.random.Generator) -> list[pd.DataFrame]:
+    """A noise-only series of nightly runs: ``n`` reruns of every sequence a night (trials 1..n, 0
+    for one), none shared with the night before."""
+    out, last = [], np.zeros(0, int)
+    for _ in range(nights):
+        free = np.setdiff1d(np.arange(len(pool.tables)), last)
+        last = rng.choice(free, size=n, replace=False)
+        out.append(pd.concat([pool.tables[k].assign(trial=t if n > 1 else 0) for t, k in enumerate(last, start=1)],
+                             ignore_index=True))  # fmt: skip
+    return out
+
+
+def history_rates(pool: Pool, trials: Sequence[int] = (1, 3), series: int = 2, nights: int = 60, seed: int = 6,
+                  progress: Callable[[Iterable], Iterable] = lambda x: x) -> pd.DataFrame:  # fmt: skip
+    """How often ``lorisnb history`` fails a noise-only night (exit 1): ``series`` series of
+    ``nights`` runs each (:func:`_series`), every night from the second judged as ``history`` judges
+    its newest run (:func:`~lorisnb.tools.decisions.history.newest_verdict`: against its baseline by
+    ``diff``'s rule, and against the first run of its series, :func:`~lorisnb.tools.decisions.history.drift`).
+    One row per trial count: ``nights`` judged, ``hits`` (exit 1) and ``rate`` with a 95 % Wilson
+    interval, ``lost`` (nights failed by a sequence lost since the first run alone) and ``drifts``
+    (nights whose drift was named, not gated)."""
+    from datetime import datetime, timedelta, timezone
+
+    from lorisnb.tools.decisions.history import drift, drift_gates, newest_verdict
+
+    tol = parse_tolerances()
+    rng = np.random.default_rng(seed)
+    start = datetime(2026, 1, 1, 2, tzinfo=timezone.utc)
+    rows = []
+    for n in trials:
+        if 2 * n > len(pool.tables):
+            continue
+        hits = lost = drifts = judged = 0
+        for _ in progress(range(series)):
+            runs = [Run(Path(f"night-{k}.csv"), "table", t, created=start + timedelta(days=k), created_from="test",
+                        expected=pool.expected) for k, t in enumerate(_series(pool, n, nights, rng))]  # fmt: skip
+            names = [r.name for r in runs]
+            for k in range(1, len(runs)):
+                d = diff_tables(keyed(runs[k - 1].table, names[k - 1]), keyed(runs[k].table, names[k]), tol,
+                                names=(names[k - 1], names[k]), expected=pool.expected)  # fmt: skip
+                since = drift(runs[: k + 1], tol)
+                rc, _ = newest_verdict(runs[: k + 1], {k: d}, names[: k + 1], since)
+                judged += 1
+                hits += rc == 1
+                gated = since is not None and bool(drift_gates(since[1]))
+                lost += rc == 1 and not d.regressed and gated
+                drifts += since is not None and since[1].regressed and not gated
+        lo, hi = wilson(hits, judged)
+        rows.append(dict(trials=n, series=series, nights=judged, hits=hits, rate=hits / max(judged, 1), low=lo,
+                         high=hi, lost=lost, drifts=drifts))  # fmt: skip
+    return pd.DataFrame(rows)
 
 
 def wilson(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
