@@ -34,12 +34,13 @@ def _swapped(icra20, folder, algorithms):
         (folder / a / "cafe1.txt").write_text("\n".join([*head, *moved]) + "\n")
 
 
-def _short(icra20, folder, n, poses=20):
-    """``n`` algorithms, each the real file's first ``poses`` poses: shorter than the RPE step."""
+def _short(icra20, folder, n):
+    """``n`` algorithms, each the real file's first 12 to 26 poses (each its own count and span in
+    its note): shorter than the RPE step."""
     head, lines = _header_and_poses(icra20)
     for k in range(n):
         (folder / f"config_{k:02d}").mkdir(parents=True)
-        (folder / f"config_{k:02d}" / "cafe1.txt").write_text("\n".join([*head, *lines[:poses]]) + "\n")
+        (folder / f"config_{k:02d}" / "cafe1.txt").write_text("\n".join([*head, *lines[: 12 + k % 15]]) + "\n")
 
 
 def test_a_note_names_the_input_as_the_table_does(icra20, data, tmp_path, capsys):
@@ -58,8 +59,9 @@ def test_a_note_names_the_input_as_the_table_does(icra20, data, tmp_path, capsys
 
 @pytest.mark.parametrize("n", [SAME_NOTE_IN_FULL + 1, SAME_NOTE_IN_FULL + SAME_NOTE_NAMED + 2])
 def test_a_note_many_inputs_share_is_counted(icra20, data, tmp_path, capsys, n):
-    """``n`` short files, each with no RPE pair: up to one more than SAME_NOTE_IN_FULL are said in
-    full; more, and the first SAME_NOTE_IN_FULL are said in full, then one line counts the rest
+    """``n`` short files of different lengths, each with no RPE pair (its own pose count and span in
+    its note): up to one more than SAME_NOTE_IN_FULL are said in full; more, and the first
+    SAME_NOTE_IN_FULL are said in full, then one line counts the rest
     and names the first SAME_NOTE_NAMED of them (the command line and Python's warnings alike);
     Evaluation.warnings keeps every one."""
     _short(icra20, tmp_path / "res", n)
@@ -77,7 +79,7 @@ def test_a_note_many_inputs_share_is_counted(icra20, data, tmp_path, capsys, n):
         assert full == every[:SAME_NOTE_IN_FULL]
         last = issued[issued.index(full[-1]) + 1]
         rest = [f"config_{k:02d}/cafe1.txt" for k in range(SAME_NOTE_IN_FULL, n)]
-        assert f"holds for {len(rest)} more input(s): " in last
+        assert f"(numbers aside) {len(rest)} more time(s), about {len(rest)} input(s): " in last
         assert all(r in last for r in rest[:SAME_NOTE_NAMED]) and rest[SAME_NOTE_NAMED] not in last
         assert last.count("config_") == SAME_NOTE_NAMED and ", ..." in last
     assert main(["evaluate", str(tmp_path / "res"), "--data", str(data.root), "--no-progress", "--jobs", "1"]) == 0

@@ -4,6 +4,7 @@ defaults of every table."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -35,12 +36,15 @@ def _same(given: Any, held: Any) -> bool:
 SAME_NOTE_IN_FULL = 3
 #: The inputs a shared note's last line names, at most.
 SAME_NOTE_NAMED = 10
+#: A number in a note (``19``, ``0.600``, ``1e-06``): notes that differ only in them are one kind.
+NUMBER = re.compile(r"\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
 
 
 def said_notes(files: list[FileErrors]) -> list[str]:
     """The notes of ``files`` as said to the user (issued as warnings, printed by the command
-    line): each once, in order, except that a note the same but for the input it names (a folder
-    of 5,000 short files, each with "no RPE pair over 1 s") is said in full for the first
+    line): each once, in order, except that a note the same but for the input it names and its
+    numbers (a folder of 5,000 short runs, each with "no RPE pair over 1 s (its N matched poses
+    span T s)") is said in full for the first
     :data:`SAME_NOTE_IN_FULL` inputs and then in one line with how many more inputs it is about,
     naming the first :data:`SAME_NOTE_NAMED` of them, so that the table and the other notes are
     not lost in thousands of lines."""
@@ -51,7 +55,7 @@ def said_notes(files: list[FileErrors]) -> list[str]:
             shape = w
             for n in names:  # the longest spelling of the input first: a path holds its file label
                 shape = shape.replace(n, "\0")
-            groups.setdefault(shape, []).append((f.file, w))
+            groups.setdefault(NUMBER.sub("#", shape), []).append((f.file, w))  # each file's own numbers aside
     out: list[str] = []
     for said in groups.values():
         notes = list(dict.fromkeys(w for _, w in said))
@@ -59,10 +63,11 @@ def said_notes(files: list[FileErrors]) -> list[str]:
             out += notes
             continue
         out += notes[:SAME_NOTE_IN_FULL]
-        rest = list(dict.fromkeys(label for label, w in said if w not in notes[:SAME_NOTE_IN_FULL]))
+        shown = set(notes[:SAME_NOTE_IN_FULL])
+        rest = list(dict.fromkeys(label for label, w in said if w not in shown))  # a file once, whatever its notes
         named = ", ".join(rest[:SAME_NOTE_NAMED]) + (", ..." if len(rest) > SAME_NOTE_NAMED else "")
-        out.append(f"the same note as above holds for {len(rest):,} more input(s): {named} "
-                   "(each note: Evaluation.warnings in Python)")  # fmt: skip
+        out.append(f"a note like the one above (numbers aside) {len(notes) - SAME_NOTE_IN_FULL:,} more time(s), about "
+                   f"{len(rest):,} input(s): {named} (each note: Evaluation.warnings in Python)")  # fmt: skip
     return out
 
 
