@@ -42,7 +42,8 @@ NUMBER = re.compile(r"\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
 
 def said_notes(files: list[FileErrors]) -> list[str]:
     """The notes of ``files`` as said to the user (issued as warnings, printed by the command
-    line): each once, in order, except that a note the same but for the input it names and its
+    line): each once, a note's kind in the order its first note came, except that a note the same
+    but for the input it names and its
     numbers (a folder of 5,000 short runs, each with "no RPE pair over 1 s (its N matched poses
     span T s)") is said in full for the first
     :data:`SAME_NOTE_IN_FULL` inputs and then in one line with how many more inputs it is about,
