@@ -5,7 +5,8 @@ Each figure is a ratio of lorisnb's time (or memory) to a baseline's, both run i
 over the runs (this machine is shared; a ratio of two runs next to each other drifts less than
 either time). Baselines:
 
-- reading: the fastest of the public readers run by run, pandas' fastest exact parse of the same
+- reading: the fastest public reader (the one of the smallest median time, its times run by run
+  against lorisnb's), of pandas' fastest exact parse of the same
   file, ``pd.read_csv(path, sep=" ", header=None, engine="c")``, ``pyarrow.csv.read_csv`` with its
   threads, and ``polars.read_csv`` with its threads where polars is installed (``make bench``
   installs it), columns to numpy (``sep=","`` and the header line skipped for EuRoC), each file in
@@ -56,13 +57,17 @@ def alternate(
 def in_turn(
     fns: list[Callable[[], object]], runs: int, clock: Callable[[], float] = time.perf_counter
 ) -> list[list[float]]:
-    """Times of each of ``fns``, run in turn ``runs`` times (one list per function)."""
+    """Times of each of ``fns``, run in turn ``runs`` times (one list per function), in a new
+    (seeded) order each turn: a reader right after one whose threads still spin or whose memory
+    fills the caches runs slower (lorisnb's 10,000-pose TUM read took 3.4-3.7 ms right after
+    polars' threads, 2.1-3.0 ms elsewhere), so that no function always follows the same one."""
     times: list[list[float]] = [[] for _ in fns]
+    order = np.random.default_rng(0)
     for _ in range(runs):
-        for fn, out in zip(fns, times, strict=True):
+        for k in order.permutation(len(fns)):
             t = clock()
-            fn()
-            out.append(clock() - t)
+            fns[k]()
+            times[k].append(clock() - t)
     return times
 
 
@@ -152,11 +157,15 @@ def bench_readers(folder: Path) -> None:
             out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
             times = json.loads(next(ln for ln in out.splitlines() if ln.startswith(READ_LINE))[len(READ_LINE) :])
             a, theirs = times.pop("lorisnb"), times
-            fastest = [min(run) for run in zip(*theirs.values(), strict=True)]  # run by run: the fastest public reader
-            lo, med = ratios(a, fastest)
+            # the fastest public reader is the one of the smallest median time, compared run by run (the
+            # least of the readers' times in each run is no one reader's time: it lies at or below each)
+            best = min(theirs, key=lambda name: statistics.median(theirs[name]))
+            lo, med = ratios(a, theirs[best])
             print(
-                f"  {fmt} {n:>9,} poses ({path.stat().st_size / 1e6:.0f} MB): lorisnb {min(a):.4f} s, "
-                + ", ".join(f"{name} {min(t):.4f} s" for name, t in theirs.items())
+                f"  {fmt} {n:>9,} poses ({path.stat().st_size / 1e6:.0f} MB), medians: lorisnb "
+                f"{statistics.median(a):.4f} s, "
+                + ", ".join(f"{name} {statistics.median(t):.4f} s" for name, t in theirs.items())
+                + f"; the fastest: {best}"
             )
             name = fmt.upper() if fmt != "euroc" else "EuRoC"
             row(f"read {name} {n:,} poses / fastest public reader", lo, med, "<= 1.1x", 1.1)

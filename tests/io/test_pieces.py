@@ -52,7 +52,7 @@ def test_a_piece_gives_the_numbers_of_float_or_none(monkeypatch, arrow):
         assert np.isnan(pieces.piece_columns(b"nan 1 -NaN\n", " ", 3)).tolist() == [[True], [False], [True]]
     assert np.signbit(got[1][-2]) and got[2][-2] == 1e-320
     for bad in (b"1 2 3\n4 5\n", b"1 2 3\n4 5 x\n", b"1 2 3 4\n", b"1 2 3\n\n4 5 6\n", b"nan(1) 2 3\n",
-                b"1 2 3\r4 5 6\n", b"1 2 3\n4 5 6\x1c\n"):  # fmt: skip
+                b"1 2 3\r4 5 6\n", b"1 2 3\n4 5 6\x1c\n", b"1 2 3\n4 5 6\n\n", b"\n1 2 3\n"):  # fmt: skip
         assert pieces.piece_columns(bad, " ", 3) is None, bad
     assert pieces.piece_columns(b"1,2.5,3\n", ",", 3) is not None
 

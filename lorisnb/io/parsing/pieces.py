@@ -116,7 +116,11 @@ def piece_columns(data: bytes, sep: str, ntok: int) -> list[np.ndarray] | None:
             columns = [c.to_numpy() for _, c in frame.items()]
     except parser_errors():
         return None
-    rows = newlines(data) + (not data.endswith(b"\n"))
+    if pyarrow_installed() and b"\r" not in data and columns:  # pyarrow ends a line at LF (or CR) only and
+        # refuses an empty one: its rows are the lines (counting the lines of a 1M-pose file took 16 ms)
+        rows = len(columns[0])
+    else:
+        rows = newlines(data) + (not data.endswith(b"\n"))
     if len(columns) == ntok and all(c.dtype == np.float64 and len(c) == rows for c in columns):
         return columns
     return None
