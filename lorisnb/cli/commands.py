@@ -231,7 +231,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if kitti:
         _print_kitti(ev, args)
     if getattr(args, "relative", False) or args.relative_lengths:
-        rel = ev.relative(lengths=args.relative_lengths)
+        with warnings.catch_warnings(record=True) as caught:  # said with the other notes, after the tables
+            warnings.simplefilter("always", LorisWarning)
+            rel = ev.relative(lengths=args.relative_lengths)
+        notes += [str(w.message) for w in caught if issubclass(w.category, LorisWarning)]
+        for w in caught:  # any other warning as Python shows it
+            if not issubclass(w.category, LorisWarning):
+                warnings.showwarning(w.message, w.category, w.filename, w.lineno)
         which = (f"{', '.join(f'{v:g}' for v in args.relative_lengths)} m" if args.relative_lengths
                  else "10..50 % of the length")  # fmt: skip
         print(f"\nrelative error (rpg_trajectory_evaluation: sub-trajectories of {which}; yaw and gravity: its "

@@ -60,3 +60,41 @@ def test_scale_error_equals_rpg(data, rpg_errors):
     assert row["trans_rmse"] == pytest.approx(np.sqrt(np.mean(trans**2)), rel=1e-9)
     assert row["rot_rmse"] == pytest.approx(np.sqrt(np.mean(rot**2)), rel=1e-6)
     assert ev.rpg_absolute().equals(rpg_absolute_table(ev.errors))
+
+
+def test_a_length_rpg_will_not_compute_is_said_not_dropped(data, rpg_errors, capsys, tmp_path):
+    """A sub-trajectory length with fewer than 2 sub-trajectories: rpg prints "Too few samples! Will
+    not compute." and gives nothing; lorisnb gives no row either, and says which input, sequence
+    and length (it dropped them silently), in Python and on the command line."""
+    import subprocess
+    import warnings
+
+    from lorisnb.core.metrics.relative import relative_table
+    from lorisnb.errors import LorisWarning
+
+    tum = data.tum
+    est, gt = tum / "freiburg1_xyz-rgbdslam.txt", tum / "freiburg1_xyz-groundtruth.txt"
+    ev = lorisnb.evaluate_pairs(est, gt, "rpg")
+    e = ev.errors[0].sequences[0]
+    total = float(distances(e.gt_positions)[-1])
+    lengths = [1.0, round(total * 3, 2), round(total * 5, 2)]  # the last two: no sub-trajectory
+    for length in lengths:
+        errs = rpg_errors.compute_relative_error(
+            e.est_positions, e.est_quaternions, e.gt_positions, e.gt_quaternions, np.eye(4), length, 0.2 * length,
+            distances(e.gt_positions),
+        )  # fmt: skip
+        said = capsys.readouterr().out
+        assert ("Too few samples" in said) == (length != 1.0) and (len(errs[1]) == 0) == (length != 1.0), said
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        table = relative_table(ev.errors, lengths=lengths)
+    assert table["length"].tolist() == [1.0]
+    notes = [str(w.message) for w in caught if issubclass(w.category, LorisWarning) and "Too few" in str(w.message)]
+    assert len(notes) == 1 and f"{est}, seq 1 at {lengths[1]:g}, {lengths[2]:g} m" in notes[0], notes
+    cli = [sys.executable, "-m", "lorisnb.cli", "evaluate", str(est), "--gt", str(gt), "--format", "tum",
+           "--conventions", "rpg", "--relative-lengths", ",".join(f"{v:g}" for v in lengths), "--no-progress"]  # fmt: skip
+    done = subprocess.run(cli, capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "warning: rpg's relative error is not computed" in done.stderr
+    assert f"{est}, seq 1 at {lengths[1]:g}, {lengths[2]:g} m" in done.stderr
+    assert "LorisWarning" not in done.stderr  # said as a note, not as Python's warning with its source line

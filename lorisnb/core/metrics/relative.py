@@ -27,6 +27,7 @@ alignment). Only the split depends on it (the length, translation and angle of t
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -34,9 +35,9 @@ import numpy as np
 
 from lorisnb.core.alignment.geometry import quat_conjugate, quat_multiply, quat_normalize, quat_rotate, quat_to_matrix
 from lorisnb.core.lifelong.scoring import as_files
-from lorisnb.core.pipeline.model import FileErrors
+from lorisnb.core.pipeline.model import FileErrors, check_label
 from lorisnb.core.spec import validate
-from lorisnb.errors import ValidationError
+from lorisnb.errors import LorisWarning, ValidationError
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -223,9 +224,12 @@ def relative_table(
     fractions = _positive_list("fractions", fractions, most=1.0)
     lengths = None if lengths is None else _positive_list("lengths", lengths)
     rows = []
+    missed: list[str] = []  # what rpg would not compute, said (rpg prints "Too few samples! Will not compute.")
     for f in as_files(errors):  # per file, sequence and length, never per pose
         for e in f.sequences:
             if e.matched < 2 or e.gt_quaternions is None or e.est_quaternions is None:
+                why = "no orientation" if e.matched >= 2 else f"{e.matched} matched pose(s)"
+                missed.append(f"{check_label(f.path, f.file)}, seq {e.seq} ({why})")
                 continue
             if lengths is not None:
                 use = [float(x) for x in lengths]
@@ -236,6 +240,10 @@ def relative_table(
                 fraction_of = dict(zip(use, fractions, strict=True))
             rel = rpg_relative_errors(e.gt_positions, e.gt_quaternions, e.est_positions, e.est_quaternions,
                                       [x for x in use if x > 0], world_rotation=_alignment_rotation(f))  # fmt: skip
+            done = set(rel["length"].tolist())
+            short = [x for x in dict.fromkeys(use) if x not in done]
+            if short:  # fewer than 2 sub-trajectories (or a length truncated to 0 cm of a path under 10 cm)
+                missed.append(f"{check_label(f.path, f.file)}, seq {e.seq} at {', '.join(f'{x:g}' for x in short)} m")
             for length, g in rel.groupby("length", sort=False):
                 rows.append(
                     dict(
@@ -255,6 +263,17 @@ def relative_table(
                         gravity_mean=g["gravity"].mean(),
                     )  # fmt: skip
                 )
+    if missed:
+        named = "; ".join(missed[:MISSED_NAMED]) + (
+            f"; and {len(missed) - MISSED_NAMED:,} more" if len(missed) > MISSED_NAMED else ""
+        )
+        warnings.warn(f"rpg's relative error is not computed (no row) where a sub-trajectory length has fewer than 2 "
+                      f"sub-trajectories, as rpg says 'Too few samples! Will not compute.': {named}",
+                      LorisWarning, stacklevel=2)  # fmt: skip
     cols = ["algorithm", "file", "suite", "scene", "trial", "seq", "fraction", "length", "samples", "trans_perc_mean",
             "trans_perc_rmse", "rot_deg_per_m_mean", "yaw_mean", "gravity_mean"]  # fmt: skip
     return pd.DataFrame(rows, columns=cols)
+
+
+#: Sequences (and their lengths) named in :func:`relative_table`'s note of lengths not computed.
+MISSED_NAMED = 10

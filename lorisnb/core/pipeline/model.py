@@ -408,3 +408,11 @@ def sequence_eps(eps: Eps, scene: str, e: SequenceErrors) -> float:
     if isinstance(eps, str) and eps.startswith("relative:"):
         return float(eps.split(":", 1)[1]) * sequence_size(e, "extent")
     return scene_eps(eps, scene)
+
+
+def check_label(path: str | Path, file: str | None) -> str:
+    """How the checks' notes name an input: its ``file`` label where it holds the folders below the
+    results folder (the table's ``file`` column, ``algA/cafe1.txt``), else the path as given (a file
+    given alone). Two algorithms' ``cafe1.txt`` are two inputs: a note naming only ``cafe1.txt``
+    left the user to guess which (and the same text from both was said once)."""
+    return file if file is not None and "/" in file else str(path)

@@ -28,7 +28,7 @@ from lorisnb.core.alignment.index_pairs import by_index, indexed
 from lorisnb.core.conventions import evo_steps
 from lorisnb.core.conventions.choices import fit_alignment
 from lorisnb.core.pipeline import checks, plausibility
-from lorisnb.core.pipeline.model import FileErrors, ResultFile, SequenceErrors, is_monocular
+from lorisnb.core.pipeline.model import FileErrors, ResultFile, SequenceErrors, check_label, is_monocular
 from lorisnb.core.pipeline.steps import (
     DEFAULT,
     apply_alignment,
@@ -252,14 +252,6 @@ def evaluate_sessions(
         trial=trial, groundtruth_spans={**(groundtruth_spans or {}), **durations},
         groundtruth_lengths=lengths, rpe=spec.rpe_options(),
     )  # fmt: skip
-
-
-def check_label(path: str | Path, file: str | None) -> str:
-    """How the checks' notes name an input: its ``file`` label where it holds the folders below the
-    results folder (the table's ``file`` column, ``algA/cafe1.txt``), else the path as given (a file
-    given alone). Two algorithms' ``cafe1.txt`` are two inputs: a note naming only ``cafe1.txt``
-    left the user to guess which (and the same text from both was said once)."""
-    return file if file is not None and "/" in file else str(path)
 
 
 def window_spans(groundtruth: Mapping[K, Trajectory], spec: EvalSpec) -> dict[K, tuple[float, float]]:

@@ -12,8 +12,15 @@ from typing import TYPE_CHECKING, Any
 from lorisnb.core.lifelong.aggregate import aggregate_scenes, spans_table
 from lorisnb.core.lifelong.scoring import pose_table, score_rows
 from lorisnb.core.metrics.relative import RPG_FRACTIONS
-from lorisnb.core.pipeline.model import EXTRA_COLUMNS, SEQUENCE_COLUMNS, STAT_COLUMNS, Eps, FileErrors, ScoresOnly
-from lorisnb.core.pipeline.sessions import check_label
+from lorisnb.core.pipeline.model import (
+    EXTRA_COLUMNS,
+    SEQUENCE_COLUMNS,
+    STAT_COLUMNS,
+    Eps,
+    FileErrors,
+    ScoresOnly,
+    check_label,
+)
 from lorisnb.core.spec.evalspec import EvalSpec, make_spec
 from lorisnb.core.trajectory.blocks import threads
 from lorisnb.core.trajectory.frames import SCENES
