@@ -107,3 +107,22 @@ def test_double_precision_equals_kitti_odom_eval(kitti_files, seq):
 
 def test_lengths_are_the_devkits():
     assert KITTI_LENGTHS == tuple(100.0 * k for k in range(1, 9))
+
+
+def test_a_mirrored_block_is_refused_where_the_devkit_scores_it(devkit, kitti_files, tmp_path):
+    """One rotation block of determinant -1 (an axis flipped by a conversion): the devkit composes it
+    as written and gives its errors; lorisnb refuses the file, naming its line (the docs say so)."""
+    import lorisnb
+    from lorisnb.errors import ParseError
+
+    gt_file, est_file = kitti_files["09"]
+    rows = np.loadtxt(est_file)
+    rows[5, [0, 4, 8]] *= -1  # the block's diagonal negated: determinant -1
+    mirrored = tmp_path / "09.txt"
+    np.savetxt(mirrored, rows, fmt="%.9g")
+    theirs, (t_mean, _) = run_devkit(devkit, gt_file, mirrored, tmp_path / "out")
+    assert len(theirs) > 400 and np.isfinite(t_mean)
+    with pytest.raises(ParseError, match=r"line 6: not a rotation"):
+        lorisnb.io.read_kitti(mirrored)
+    ev = lorisnb.evaluate_pairs(mirrored, gt_file, "kitti", fmt="kitti")
+    assert not ev.errors and len(ev.failures) == 1 and "line 6: not a rotation" in ev.failures[0].error
