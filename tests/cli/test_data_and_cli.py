@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pandas as pd
@@ -45,6 +47,12 @@ def test_find_data_order_and_error(tmp_path, monkeypatch, data):
         find_data(tmp_path / "nowhere")
     msg = str(exc.value)
     assert str(tmp_path / "nowhere") in msg and "LORISNB_DATA" in msg and "--data" in msg
+    # one line: the command line escapes a message's line breaks (it printed "It looked at:\n  - ...")
+    assert "\n" not in msg
+    done = subprocess.run([sys.executable, "-m", "lorisnb.cli", "evaluate", str(tmp_path), "--data",
+                           str(tmp_path / "nowhere"), "--no-progress"], capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "\\n" not in done.stderr, done.stderr
+    assert f"It looked at: {tmp_path / 'nowhere'} (argument): does not exist." in done.stderr
 
 
 def test_missing_groundtruth_names_the_file(tmp_path):

@@ -188,6 +188,8 @@ def masked_statistics(
         whole = whole if whole is not None else error_statistics(v)
         for k, a in out.items():
             a[full] = whole[k]
+        if full.all():  # one setting without thresholds (the default): nothing more to compute
+            return {k: a.reshape(shape) for k, a in out.items()}
         rows = rows[~full]
     part = {k: np.full(rows.shape[0], np.nan) for k in out}
     step = max(1, (1 << 22) // max(v.size, 1))

@@ -148,9 +148,9 @@ def find_data(data_root: DataRoot | DataPaths | None = None) -> DataPaths:
         if _looks_like_root(cand):
             return DataPaths(cand.resolve())
         state = "not a data root" if cand.is_dir() and str(cand) else "does not exist"
-        looked.append(f"  - {cand} ({how}): {state}")
-    raise DataNotFoundError(
-        "lorisnb could not find its data. It looked at:\n" + "\n".join(looked) + "\n"
+        looked.append(f"{cand} ({how}): {state}")
+    raise DataNotFoundError(  # one line: the command line shows a message's line breaks escaped, as "\n"
+        "lorisnb could not find its data. It looked at: " + "; ".join(looked) + ". "
         f"A data root holds openloris-scene/ (groundtruth/, icra20_results/), tum-rgbd/ or "
         f"published/. Pass data_root=... (command line: --data DIR) or set {ENV_VAR}=DIR."
     )

@@ -114,13 +114,16 @@ def run_tasks(
     *,
     desc: str,
     unit: str,
+    meanwhile: Callable[[], object] | None = None,
 ) -> list[R]:
     """``fn(item)`` for every item, in the order of ``items``: here one at a time (``fn`` then gets
     ``progress=`` too, for bars of its own, and long computations run on ``n_jobs`` threads,
     :mod:`lorisnb.core.trajectory.blocks`), in a local pool of ``n_jobs`` processes, or on
     ``executor``. ``fn`` must be a module-level function (it is pickled by name). ``sizes`` are
     the items' bytes, for scheduling. ``progress`` is a yes/no value (:func:`lorisnb.core.spec.validate.flag`:
-    ``progress="no"`` is refused, not truth-tested)."""
+    ``progress="no"`` is refused, not truth-tested). ``meanwhile``: work of this process called
+    once every task is sent to a pool (the workers started), before their results are awaited
+    (not called when the items are done here)."""
     progress = flag("progress", progress)
 
     def new_bar() -> Any:
@@ -150,6 +153,8 @@ def run_tasks(
         task = partial(apply_all, fn)
         futures = {pool.submit(task, [items[k] for k in batch]): batch for batch in batches(sizes, n_jobs)}
         bar = new_bar()  # after the workers are forked: the bar may start a monitor thread
+        if meanwhile is not None:
+            meanwhile()
         results: list[Any] = [None] * len(items)
         for fut in as_completed(futures):
             for k, result in zip(futures[fut], fut.result(), strict=True):
