@@ -161,11 +161,18 @@ def error_statistics(values: np.ndarray, mask: np.ndarray | None = None) -> dict
         v = v[np.asarray(mask, bool).reshape(-1)]
     if v.size == 0:
         return dict.fromkeys(STATISTICS, math.nan)
+    n = v.size
     with np.errstate(over="ignore", invalid="ignore"):  # a diverged pose (1e160 m): inf / NaN, no warning
+        # numpy's own sums and divisions, as np.mean, np.std (ddof 0) and np.sum compute them (the same
+        # numbers to the bit, tested), each sum once: the functions' dispatch was most of the time
         sq = np.power(v, 2)
+        sse = float(np.add.reduce(sq))
+        mean = float(np.add.reduce(v)) / n
+        dev = v - mean
+        np.multiply(dev, dev, out=dev)
         return dict(
-            rmse=math.sqrt(np.mean(sq)), mean=float(np.mean(v)), median=float(np.median(v)), std=float(np.std(v)),
-            min=float(np.min(v)), max=float(np.max(v)), sse=float(np.sum(sq)),
+            rmse=math.sqrt(sse / n), mean=mean, median=float(np.median(v)), std=math.sqrt(float(np.add.reduce(dev)) / n),
+            min=float(v.min()), max=float(v.max()), sse=sse,
         )  # fmt: skip
 
 
