@@ -165,6 +165,29 @@ def test_statistics_with_mask_and_empty():
     assert np.isnan(error_statistics(v, v > 100)["rmse"])
 
 
+def test_statistics_are_numpys_to_the_bit(evo_pairs):
+    """Each statistic is what evo's numpy calls give (np.mean, np.median, np.std, np.min, np.max,
+    np.sum of the squares), to the last bit: the real pairs' ATE and AOE, with a diverged pose, an
+    infinite one and a NaN among them, and one to eleven values."""
+    rng = np.random.default_rng(11)
+    series = []
+    for name in PAIRS:
+        r, e = _synced(evo_pairs, name)
+        pg, qg = _lorisnb_arrays(r)
+        pe, qe = _lorisnb_arrays(e)
+        series += [ape_relation(pg, qg, pe, qe, rel) for rel in ("trans_part", "angle_deg")]
+    series += [np.r_[series[0], 1e160], np.r_[series[1], np.inf], np.r_[series[0], np.nan]]
+    series += [np.abs(rng.normal(size=n)) * 10.0 ** rng.uniform(-4, 3) for n in range(1, 12)]
+    for v in series:
+        got = error_statistics(v)
+        with np.errstate(over="ignore", invalid="ignore"):
+            sq = np.power(v, 2)
+            want = dict(rmse=np.sqrt(np.mean(sq)), mean=np.mean(v), median=np.median(v), std=np.std(v), min=np.min(v),
+                        max=np.max(v), sse=np.sum(sq))  # fmt: skip
+        for k, x in want.items():
+            assert got[k] == float(x) or (np.isnan(got[k]) and np.isnan(x)), (len(v), k, got[k], x)
+
+
 def test_time_window_downsample_and_motion_filter_equal_evo(evo_pairs):
     ref, est, gt, es = evo_pairs["fr1_xyz"]
     t0 = ref.timestamps[0]

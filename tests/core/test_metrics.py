@@ -206,6 +206,13 @@ def test_quaternion_helpers_equal_scipy():
             quat_from_matrix(r.as_matrix()), Rotation.from_matrix(r.as_matrix()).as_quat(), atol=1e-15
         )
     assert quat_from_matrix(np.eye(3)).shape == (4,)
+    # one block (an alignment's, computed on Python floats) gives the vectorized numbers to the bit:
+    # every branch of Markley's method, half turns about each axis, NaN
+    blocks = np.concatenate([a.as_matrix(), turns.as_matrix(), np.diag([1.0, -1, -1])[None], np.diag([-1.0, 1, -1])[None],
+                             np.diag([-1.0, -1, 1])[None], np.full((1, 3, 3), np.nan)])  # fmt: skip
+    together = quat_from_matrix(blocks)
+    for block, q in zip(blocks, together, strict=True):
+        np.testing.assert_array_equal(quat_from_matrix(block), q)
     w = np.random.default_rng(3).uniform(0, 1, 500)
     ours = Rotation.from_quat(slerp(qa, -qb, w))  # signs must not matter
     theirs = Rotation.concatenate([Slerp([0.0, 1.0], Rotation.concatenate([a[k], b[k]]))(w[k]) for k in range(500)])
