@@ -251,6 +251,10 @@ def main() -> None:
     root = data.icra20
     with tempfile.TemporaryDirectory(prefix="lorisnb-bench-") as tmp:  # the real workload first (issue 47)
         workload.main(root, Path(tmp))
+    if os.environ.get("LORISNB_BENCH_MANY", "1") != "0":  # then many small real files (issues 47, 48)
+        import many_files
+
+        many_files.bench_row()
     files = [p for p, _ in result_files([root])]
     print(f"\nicra20_results: {len(files)} files")
 
