@@ -164,3 +164,31 @@ def test_median_above_is_the_median_compared():
             assert median_above(v, 45.0) is expected, v
             above += expected
     assert 100 < above < len(cases) - 100  # both answers are exercised
+
+
+@pytest.mark.parametrize("poses", [12, 20, 40])
+def test_a_short_run_whose_alignment_holds_no_rotation_is_said(icra20, tmp_path, poses):
+    """The first poses of a real run (a fraction of a second, millimetres apart): their alignment's
+    rotation is the positions' noise, so the AOE is large and means nothing. lorisnb says so with the
+    lever, instead of checking frames and quaternion orders it cannot tell apart; aligned on the first
+    pose (as the note suggests) the AOE is small and nothing is said; the whole run holds its rotation."""
+    from lorisnb.core.alignment.geometry import MIN_LEVER
+
+    lines = (icra20 / ORB_CAFE).read_text().splitlines(keepends=True)
+    head = next(i for i, line in enumerate(lines) if line[:1].isdigit())
+    f = tmp_path / "orb" / "cafe.txt"
+    f.parent.mkdir()
+    f.write_text("".join(lines[: head + poses]))
+    msgs = _warned(f)
+    said = [m for m in msgs if "hold the alignment's rotation by a lever of only" in m]
+    ev = ln.evaluate(f)
+    row = ev.sequences().iloc[0]
+    assert row["rotation_lever"] < MIN_LEVER and row["aoe_rmse"] > 45
+    assert (
+        len(said) == 1 and f"{f}, seq 1: its median AOE is " in said[0] and f"{row['rotation_lever']:.3g} m" in said[0]
+    )
+    assert not any("'qw qx qy qz'" in m or "best-fitting" in m or "orientations fit" in m for m in msgs), msgs
+    first = _warned(f, align_frames=1)
+    assert not any("lever of only" in m for m in first)
+    assert ln.evaluate(f, align_frames=1).sequences().iloc[0]["aoe_rmse"] < 5
+    assert not any("lever of only" in m for m in _warned(icra20 / ORB_CAFE))

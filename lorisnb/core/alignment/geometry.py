@@ -96,6 +96,15 @@ class PositionPairs:
         return _solve(self.mu_s, self.mu_t, self.xs, self.cov, with_scale)
 
 
+#: A lever (:func:`rotation_lever`, metres) below this and a sequence's alignment is too unstable to
+#: judge: 5 mm of position noise would turn a fit on its matched positions by more than 1 degree
+#: (0.005 / 0.29 rad), which moves AOE, ATE and what counts as correct. The real icra20 sequences
+#: have levers of 2.7 m and more; a 15-pose, near-straight 30 cm piece has a few millimetres.
+#: The regression gate (:mod:`lorisnb.core.stats.tolerances`) and the pipeline's orientation checks
+#: (:func:`lorisnb.core.pipeline.plausibility.rotation_not_held`) use it.
+MIN_LEVER = 0.29
+
+
 def rotation_lever(positions: np.ndarray) -> float:
     """How firmly (N, 3) matched positions hold the rotation of an alignment fitted on them, in
     metres: ``sqrt(N (l2 + l3))`` with ``l1 >= l2 >= l3`` the variances of the centred positions

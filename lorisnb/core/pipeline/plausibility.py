@@ -9,7 +9,7 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from lorisnb.core.alignment.geometry import degenerate_alignment
+from lorisnb.core.alignment.geometry import MIN_LEVER, degenerate_alignment
 from lorisnb.core.trajectory.poses import Trajectory
 
 #: A best-fit Sim(3) scale outside [1/SCALE_LIMIT, SCALE_LIMIT] that also cuts the ATE RMSE to
@@ -165,6 +165,20 @@ def quaternion_order(label: str, median_aoe: float, median_aoe_swapped: float) -
         f"{label}: the quaternions look like 'qw qx qy qz' instead of 'qx qy qz qw': read that way the median "
         f"AOE drops from {median_aoe:.1f} deg to {median_aoe_swapped:.1f} deg. Write each pose as "
         "'stamp x y z qx qy qz qw' (the real part last)."
+    )
+
+
+def rotation_not_held(label: str, median_aoe: float, lever: float, matched: int) -> str:
+    """A sequence's AOE is large (its median above :data:`SUSPECT_AOE`) but its matched positions
+    hold the alignment's rotation by a lever under :data:`~lorisnb.core.alignment.geometry.MIN_LEVER`
+    (a short or nearly straight run): the rotation, so the AOE, comes from the positions' noise, and
+    no sensor frame or quaternion order can be told apart (those checks are not run)."""
+    return (
+        f"{label}: its median AOE is {median_aoe:.1f} deg, but its {matched} matched positions hold the alignment's "
+        f"rotation by a lever of only {lever:.3g} m (under {MIN_LEVER:g} m, 5 mm of position noise turns the fit by "
+        "more than a degree): the AOE, and which poses count as correct under phi, come from the alignment more "
+        "than from the estimate, and its sensor frame and quaternion order cannot be checked. Evaluate a longer "
+        "run, or align on the first pose (--align-frames 1, align_frames=1)."
     )
 
 

@@ -23,7 +23,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from lorisnb.core.alignment.association import Association, groundtruth_in_frame
-from lorisnb.core.alignment.geometry import PositionPairs, Sim3
+from lorisnb.core.alignment.geometry import MIN_LEVER, PositionPairs, Sim3
 from lorisnb.core.alignment.index_pairs import by_index, indexed
 from lorisnb.core.conventions import evo_steps
 from lorisnb.core.conventions.choices import fit_alignment
@@ -201,10 +201,14 @@ def evaluate_sessions(
             pairs[s] = checks.spread_pairs(est[s].positions, assoc[s])
         return pairs[s]
 
+    degenerate: set[int] = set()  # the sequences whose fit is said to be degenerate (said once, not twice)
     if frames is not None:  # an OpenLORIS file is aligned as the official tool aligns it, degenerate or not: said
         fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s])]
-        found += [checks.degenerate_note(f"{name}, seq {s}", est[s].positions, assoc[s], spread_pairs(s))
-                  for s in fitted]  # fmt: skip
+        for s in fitted:
+            note = checks.degenerate_note(f"{name}, seq {s}", est[s].positions, assoc[s], spread_pairs(s))
+            if note is not None:
+                degenerate.add(s)
+                found.append(note)
     if checks_on and method == "se3":
         hint = "--scale, or --scale auto for dso/svo" if frames is not None else "--align sim3"
         if is_monocular(algorithm) and "align" not in spec.explicit:  # its scale is arbitrary: said once
@@ -231,7 +235,13 @@ def evaluate_sessions(
     if suspect is not None:
         e, a = suspect
         label = f"{name}, seq {e.seq}"
-        if frames is not None and frame in FRAMES:
+        # the sequence the rotation was fitted on, on all its matched positions (se3, sim3): its lever
+        on = next((x for x in out if x.seq == aligned_on), None) if lifelong else e
+        held = on.rotation_lever if on is not None and method in ("se3", "sim3") and spec.align_frames is None else None
+        if held is not None and held < MIN_LEVER:  # the rotation is the positions' noise: nothing to tell apart
+            if on.seq not in degenerate:  # (a degenerate fit is said already)
+                found.append(plausibility.rotation_not_held(label, float(np.median(e.aoe)), held, on.matched))
+        elif frames is not None and frame in FRAMES:
             sc, fr, gt_frame, raw_gt = frames
             found += checks.frame_notes(
                 label, est[e.seq], raw_gt[e.seq], sc, fr, gt_frame, method == "sim3", spec.max_gap,

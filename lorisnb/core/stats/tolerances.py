@@ -3,6 +3,8 @@ in a module of their own so that the command line's parser (its help text) does 
 
 from __future__ import annotations
 
+from lorisnb.core.alignment.geometry import MIN_LEVER as _LEVER
+
 #: How much worse each metric may get before it is a regression: an amount in the metric's unit, or
 #: a share of the base value (``10%``). A change is a regression when the data show it *beyond* this
 #: amount (the rule of :mod:`lorisnb.core.stats.regression`).
@@ -37,9 +39,5 @@ SINGLE_RUN_BAND: dict[str, dict[str, float]] = {
 #: too little to judge: an alignment on a handful of poses is unstable.
 MIN_MATCHED = 50
 
-#: A lever (:func:`lorisnb.core.alignment.geometry.rotation_lever`, metres) below this and a sequence's
-#: alignment is too unstable to judge: 5 mm of position noise would turn a fit on its matched
-#: positions by more than 1 degree (0.005 / 0.29 rad), which moves AOE, ATE and what counts as
-#: correct. The real icra20 sequences have levers of 2.7 m and more; a 15-pose, near-straight
-#: 30 cm piece has a few millimetres.
-MIN_LEVER = 0.29
+#: :data:`lorisnb.core.alignment.geometry.MIN_LEVER` (metres), kept here with the gate's other tolerances.
+MIN_LEVER = _LEVER

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from lorisnb.core.lifelong.missing import with_missing
 from lorisnb.core.lifelong.scoring import score_rows
-from lorisnb.core.pipeline.model import FileErrors, ResultFile, scores_only
+from lorisnb.core.pipeline.model import FileErrors, ResultFile, check_label, scores_only
 from lorisnb.core.pipeline.plausibility import no_rpe_pair
 from lorisnb.core.pipeline.sessions import compute_errors, evaluate_sessions, moved_groundtruth, window_spans
 from lorisnb.core.spec.evalspec import EvalSpec
@@ -139,7 +139,8 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
         o = job.spec.rpe_options()
         for seq in errors.sequences:  # the RPE pairs of the spec, here (in a worker, when in parallel)
             i = seq.rpe(o["rpe_delta"], o["rpe_unit"], o["rpe_pairs"], o["rpe_all_pairs"], o["rpe_tolerance"])[0]
-            note = no_rpe_pair(f"{errors.file}, seq {seq.seq}", len(i), seq.stamps, o["rpe_delta"], o["rpe_unit"])
+            label = f"{check_label(errors.path, errors.file)}, seq {seq.seq}"  # as the pipeline's notes name it
+            note = no_rpe_pair(label, len(i), seq.stamps, o["rpe_delta"], o["rpe_unit"])
             if note is not None and note not in errors.warnings:
                 errors.warnings.append(note)
         scored = False

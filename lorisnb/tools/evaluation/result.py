@@ -43,6 +43,8 @@ def _same(given: Any, held: Any) -> bool:
 SAME_NOTE_IN_FULL = 3
 #: The inputs a shared note's last line names, at most.
 SAME_NOTE_NAMED = 10
+#: Characters of a note quoted in the line that counts the rest of its kind (its first words).
+GIST_CHARS = 40
 #: A number in a note (``19``, ``0.600``, ``1e-06``): notes that differ only in them are one kind.
 NUMBER = re.compile(r"\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
 
@@ -74,8 +76,12 @@ def said_notes(files: list[FileErrors]) -> list[str]:
         shown = set(notes[:SAME_NOTE_IN_FULL])
         rest = list(dict.fromkeys(label for label, w in said if w not in shown))  # a file once, whatever its notes
         named = ", ".join(rest[:SAME_NOTE_NAMED]) + (", ..." if len(rest) > SAME_NOTE_NAMED else "")
-        out.append(f"a note like the one above (numbers aside) {len(notes) - SAME_NOTE_IN_FULL:,} more time(s), about "
-                   f"{len(rest):,} input(s): {named} (each note: Evaluation.warnings in Python)")  # fmt: skip
+        # which note: its first words after the input's name (two kinds' counting lines were the same text,
+        # and the command line, which says each text once, dropped the second)
+        gist = notes[SAME_NOTE_IN_FULL - 1].split(": ", 1)[-1]
+        gist = gist if len(gist) <= GIST_CHARS else gist[:GIST_CHARS].rsplit(" ", 1)[0] + " ..."
+        out.append(f"a note like the one above ('{gist}', numbers aside) {len(notes) - SAME_NOTE_IN_FULL:,} more "
+                   f"time(s), about {len(rest):,} input(s): {named} (each note: Evaluation.warnings in Python)")  # fmt: skip
     return out
 
 
