@@ -237,10 +237,11 @@ def evaluate_sessions(
         label = f"{name}, seq {e.seq}"
         # the sequence the rotation was fitted on, on all its matched positions (se3, sim3): its lever
         on = next((x for x in out if x.seq == aligned_on), None) if lifelong else e
-        held = on.rotation_lever if on is not None and method in ("se3", "sim3") and spec.align_frames is None else None
-        if held is not None and held < MIN_LEVER:  # the rotation is the positions' noise: nothing to tell apart
-            if on.seq not in degenerate:  # (a degenerate fit is said already)
-                found.append(plausibility.rotation_not_held(label, float(np.median(e.aoe)), held, on.matched))
+        fitted_on_all = on is not None and method in ("se3", "sim3") and spec.align_frames is None
+        if on is not None and fitted_on_all and on.rotation_lever < MIN_LEVER:  # the rotation is the positions'
+            if on.seq not in degenerate:  # noise: nothing to tell apart (a degenerate fit is said already)
+                found.append(plausibility.rotation_not_held(label, float(np.median(e.aoe)), on.rotation_lever,
+                                                            on.matched))  # fmt: skip
         elif frames is not None and frame in FRAMES:
             sc, fr, gt_frame, raw_gt = frames
             found += checks.frame_notes(
