@@ -37,8 +37,12 @@ from lorisnb.io.parsing.rows import Convert, Group, Part, copy_rows, group_colum
 #: Bytes of a piece at most (as pandas' own threaded read): numpy's work on a piece's rows runs in
 #: few operations on long arrays (on 256 KB pieces a million KITTI poses took twice as long).
 PIECE_BYTES = 4 << 20
-#: Files from this size are parsed in at least :data:`PARSE_THREADS` pieces side by side.
-SPLIT_MIN_BYTES = 128 << 10
+#: Files from this size are parsed in at least :data:`PARSE_THREADS` pieces side by side; smaller
+#: ones in one piece on the calling thread. Two pyarrow parses side by side on 2 cores each run
+#: slower than one alone, and handing pieces to threads costs about 0.1 ms: split in two, TUM files
+#: of 0.25-2 MB took 1.02-1.28x the time of one piece, 3 MB about the same, 4 MB 0.82x and 6 MB
+#: (KITTI) 0.59x (warm threads, in alternation, medians; 2026-11-29).
+SPLIT_MIN_BYTES = 3 << 20
 #: Pieces parsed ahead of the first not yet placed, per thread (memory holds about this many).
 AHEAD = 2
 
