@@ -14,7 +14,7 @@ import pytest
 
 from lorisnb.cli import main
 from lorisnb.errors import OutputError, ValidationError
-from lorisnb.tools.report.portable import held_paths, make_portable, root_key, spellings
+from lorisnb.tools.report.portable import held_paths, make_portable, root_key, spellings, unreplaced
 from lorisnb.tools.report.provenance import checksums, input_files, run_record, verify_run, write_run_json
 
 ORB = "cafe_1_1_orbslam2-original.txt"
@@ -187,6 +187,16 @@ def test_make_portable_replaces_each_spelling_at_path_ends_only(tmp_path):
     page.write_text(f"{root}/x {html.escape(str(root))}/y {json.dumps(str(root))} {root}2/z")
     assert make_portable(page.parent, [("results", root)]) == [page]
     assert page.read_text() == f'{{results}}/x {{results}}/y "{{results}}" {root}2/z'
+    # after a terminal colour code (a traceback's file line), raw or escaped in a notebook's JSON: replaced, the code kept
+    coloured = f"\x1b[32m{root}/a.py \x1b[1;31m{root}/b.py"
+    page.write_text(coloured + " " + json.dumps(coloured) + f" m{root}/c")
+    assert make_portable(page.parent, [("results", root)]) == [page]
+    kept = "\x1b[32m{results}/a.py \x1b[1;31m{results}/b.py"
+    assert page.read_text() == kept + " " + json.dumps(kept) + f" m{root}/c"
+    # what it leaves (after a letter: perhaps inside other data) is listed, for the report to say
+    assert unreplaced(page.parent, [("results", root)]) == [page]
+    page.write_text(kept + f" {root}2/z")
+    assert unreplaced(page.parent, [("results", root)]) == []
     (page.parent / "f.png").write_bytes(b"\x89PNG\r\n\x1a\n\xff" + str(root).encode())
     with pytest.raises(OutputError, match="f.png: a binary file"):
         make_portable(page.parent, [("results", root)])

@@ -18,13 +18,14 @@ import os
 import shutil
 import sys
 import tempfile
+import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
 from lorisnb.core.spec import validate
-from lorisnb.errors import DataNotFoundError, LorisError, OutputError, ParseError, ValidationError
+from lorisnb.errors import DataNotFoundError, LorisError, LorisWarning, OutputError, ParseError, ValidationError
 from lorisnb.io.datasets.paths import find_data
 from lorisnb.io.writers import name_output, overlap, remove_partial, write_csv
 from lorisnb.tools.decisions.history import earlier_runs
@@ -59,7 +60,14 @@ from lorisnb.tools.report.notebooks import (
     use_kernel_files,
     warm_kernels_for_report,
 )
-from lorisnb.tools.report.portable import install_roots, make_portable, named_roots, root_key, split_paths
+from lorisnb.tools.report.portable import (
+    install_roots,
+    make_portable,
+    named_roots,
+    root_key,
+    split_paths,
+    unreplaced,
+)
 from lorisnb.tools.report.provenance import (
     checksums,
     input_files,
@@ -437,6 +445,12 @@ def run_report(
                 single_file(index, folder / "report.html")  # the pages as they are now, into one file
                 if not absolute_paths:
                     make_portable(folder, every)
+                    left = unreplaced(folder, every)
+                    if left:
+                        shown = ", ".join(str(f.relative_to(folder)) for f in left[:5])
+                        warnings.warn(f"{len(left)} file(s) of the run still show an absolute path of this machine "
+                                      f"({shown}): look before you share it, and report it", LorisWarning,
+                                      stacklevel=2)  # fmt: skip
                 _write_marker(folder, _files(folder))
 
             pages(tmp, run_dir.name)  # the name it is moved to (not the temporary one it is written under)

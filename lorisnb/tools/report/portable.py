@@ -178,10 +178,17 @@ def _pattern(roots: Iterable[tuple[str, Path]]) -> tuple[re.Pattern[bytes], dict
     alternatives = sorted(by_text, key=len, reverse=True)  # the longest (innermost) root first
     # a root ends where a path part ends: "/a/res" is not replaced inside "/a/results"; and starts where a path
     # starts, not after a letter or digit (inside base64 image data, "/data/" may occur by chance) unless that
-    # is an escaped newline or tab ("...\\n/home/me")
-    pattern = re.compile(rb"(?:(?<![A-Za-z0-9+])|(?<=\\[nrt]))(?:" + b"|".join(map(re.escape, alternatives))
-                         + rb")(?![^/\\\s\"'<>&,;:)\]}|`])")  # fmt: skip
+    # is an escaped newline or tab ("...\\n/home/me") or ends a terminal colour code (a traceback's
+    # "\x1b[32m/home/me/...", "\\u001b[32m..." in a notebook's JSON), kept as it is (group "esc")
+    pattern = re.compile(rb"(?:(?<![A-Za-z0-9+])|(?<=\\[nrt])|(?P<esc>(?:\x1b|\\u001b|\\x1b|\\033)\[[0-9;]*m))(?P<path>"
+                         + b"|".join(map(re.escape, alternatives)) + rb")(?![^/\\\s\"'<>&,;:)\]}|`])")  # fmt: skip
     return pattern, by_text
+
+
+def _replace(pattern: re.Pattern[bytes], by_text: dict[bytes, bytes], data: bytes) -> bytes:
+    """``data`` with each of :func:`_pattern`'s matches replaced by its root's name (a colour code
+    before it kept)."""
+    return pattern.sub(lambda m: (m.group("esc") or b"") + by_text[m.group("path")], data)
 
 
 def make_portable(folder: Path, roots: Iterable[tuple[str, Path]]) -> list[Path]:
@@ -203,9 +210,23 @@ def make_portable(folder: Path, roots: Iterable[tuple[str, Path]]) -> list[Path]
         except UnicodeDecodeError:
             raise OutputError(f"{p}: a binary file holds an absolute path of the machine the run was made on, which "
                               "cannot be replaced by its root's name; report it, or pass --absolute-paths") from None  # fmt: skip
-        p.write_bytes(pattern.sub(lambda m: by_text[m.group(0)], data))
+        p.write_bytes(_replace(pattern, by_text, data))
         changed.append(p)
     return changed
+
+
+def unreplaced(folder: Path, roots: Iterable[tuple[str, Path]]) -> list[Path]:
+    """The files below ``folder`` that still show one of ``roots``' absolute paths where
+    :func:`make_portable` did not replace it: after any character (it replaces a path only where
+    a path starts), ending where a path part ends. Empty for a portable run; a file listed is a
+    place the replacement does not know (said, so that a run is not shared believing it clean)."""
+    roots = list(roots)
+    if not roots:
+        return []
+    texts = sorted({s.encode() for _, r in roots for s in spellings(r)}, key=len, reverse=True)
+    loose = re.compile(b"(?:" + b"|".join(map(re.escape, texts)) + rb")(?![^/\\\s\"'<>&,;:)\]}|`])")
+    return [p for p in sorted(x for x in folder.rglob("*") if x.is_file() and not x.is_symlink())
+            if loose.search(p.read_bytes())]  # fmt: skip
 
 
 def held_paths(folder: Path, roots: Iterable[Path]) -> list[tuple[Path, str]]:
