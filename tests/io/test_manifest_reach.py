@@ -82,6 +82,27 @@ def test_a_root_written_in_the_manifest_elsewhere_is_refused_one_from_the_enviro
     assert read_manifest(m).sessions[0].groundtruth == secret.resolve()
 
 
+@pytest.mark.parametrize("variable", ["HOME", "PWD", "TMPDIR"])
+def test_a_root_in_a_variable_that_names_no_dataset_is_confined_like_a_written_one(
+    tmp_path, secret, monkeypatch, capsys, variable
+):
+    """``root = "${HOME}"`` in a received manifest: the manifest chose the variable, and the user's
+    home is no dataset: read only inside the manifest's folder or the data root, the content unquoted."""
+    monkeypatch.setenv(variable, str(secret.parent))
+    m = manifest(tmp_path / "shared" / "m", secret.name, root="${" + variable + "}")
+    with pytest.raises(ParseError, match=r"root = .* lies outside the manifest's folder and lorisnb's data root"):
+        read_manifest(m)
+    res = tmp_path / "res" / "alg"
+    res.mkdir(parents=True, exist_ok=True)
+    (res / "desk.txt").write_text("1 0 0 0 0 0 0 1\n")
+    rc = main(["evaluate", str(res.parent), "--manifest", str(m), "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "lies outside" in err and "secret-first-line" not in err
+    monkeypatch.setenv("LAB_ROOT", str(secret.parent))  # a dataset folder's variable: the user's own
+    m = manifest(tmp_path / "shared" / "m", secret.name, root="${LAB_ROOT}")
+    assert read_manifest(m).sessions[0].groundtruth == secret.resolve()
+
+
 def test_a_root_that_leaves_the_folder_its_variable_names_is_refused(tmp_path, secret, monkeypatch, capsys):
     """``root = "${HOME}/../.."``: the variable is the user's, the way out of it is the manifest's."""
     lab_root = tmp_path / "lab-data"
@@ -91,7 +112,7 @@ def test_a_root_that_leaves_the_folder_its_variable_names_is_refused(tmp_path, s
     for root in ("${LAB_ROOT}/" + up, "$LAB_ROOT/../private"):
         m = manifest(tmp_path / "shared" / "m", "notes.txt", root=root)
         with pytest.raises(
-            ParseError, match="lies outside the manifest's folder, the folders its environment variables"
+            ParseError, match="lies outside the manifest's folder, the dataset folders its environment variables"
         ):
             read_manifest(m)
         res = tmp_path / "res" / "alg"

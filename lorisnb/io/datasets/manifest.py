@@ -229,7 +229,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     if not outside:  # a folder an environment variable names is the user's own: the root may lie inside it
         yours = [(path.parent / Path(os.environ[v]).expanduser()).resolve() for v in _variables(root_text)]
         _confined(root, [*trusted, *yours], path, f"root = {root_text!r}",
-                  "the manifest's folder" + ", the folders its environment variables name" * bool(yours))  # fmt: skip
+                  "the manifest's folder" + ", the dataset folders its environment variables name (*_ROOT)" * bool(yours))  # fmt: skip
     allowed = [root, *trusted]
     gt_fmt = _fmt(raw.get("groundtruth_format", "tum"), "groundtruth_format", path)
     est_fmt = _fmt(raw.get("estimate_format", "tum"), "estimate_format", path)
@@ -308,9 +308,16 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
 
 
 def _variables(text: str) -> list[str]:
-    """The environment variables ``text`` names (``$NAME`` or ``${NAME}``) that are set."""
+    """The environment variables ``text`` names (``$NAME`` or ``${NAME}``) that are set and name a
+    dataset's folder: ``*_ROOT`` (``EUROC_ROOT``, ``TUM_ROOT``, as the built-in manifests use) or
+    ``LORISNB_DATA``. A manifest received from someone else chooses its variables: ``${HOME}`` or
+    ``${PWD}`` name folders of the user's that are no dataset, so a root under them must lie inside
+    the manifest's folder or the data root like a root written out."""
     names = (m.group(1) or m.group(2) for m in re.finditer(r"\$(?:\{([^}]*)\}|(\w+))", text))
-    return [n for n in names if n in os.environ and os.environ[n].strip()]
+    return [
+        n for n in names
+        if (n.endswith("_ROOT") or n == "LORISNB_DATA") and n in os.environ and os.environ[n].strip()
+    ]  # fmt: skip
 
 
 def _data_root() -> list[Path]:
