@@ -194,3 +194,33 @@ def test_a_session_finds_its_estimate_whatever_the_unicode_form_of_its_file_name
     ev = ln.evaluate_manifest(m, res.parent, progress=False, jobs=1)
     row = ev.sequences().iloc[0]
     assert len(ev.sequences()) == 1 and row["matched"] > 0 and not ev.failures
+
+
+@pytest.mark.parametrize("kind", ["openloris", "tum"])
+@pytest.mark.parametrize("target", ["secret", "folder"])
+def test_a_file_linked_into_a_folder_evaluated_without_a_manifest_is_never_quoted(
+    tmp_path, data, secret, capsys, kind, target
+):
+    """The same rule without a manifest: a results folder walked (OpenLORIS files, or TUM estimates
+    against --gt) whose file, or algorithm folder, is a link leading out of it is read, but an
+    error names the line, never the content; a file given by name on the command line is the
+    user's own and is quoted as usual."""
+    name = "cafe_1_1.txt" if kind == "openloris" else "desk.txt"
+    res = tmp_path / "res"
+    res.mkdir()
+    if target == "secret":
+        (res / "alg").mkdir()
+        (res / "alg" / name).symlink_to(secret)
+    else:
+        (tmp_path / "elsewhere").mkdir()
+        (tmp_path / "elsewhere" / name).write_text(SECRET)
+        (res / "alg").symlink_to(tmp_path / "elsewhere", target_is_directory=True)
+    how = (["--data", str(data.root)] if kind == "openloris"
+           else ["--gt", str(data.root / "tum-rgbd" / "fr2_desk_groundtruth.txt"), "--format", "tum"])  # fmt: skip
+    rc = main(["evaluate", str(res), *how, "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 1 and f"{name}, line 1: not a trajectory file as expected (a link to" in err, err
+    assert "its content is not shown)" in err and "--manifest-outside" not in err and "secret-first-line" not in err
+    rc = main(["evaluate", str(res / "alg" / name), *how, "--no-progress"])  # named by the user: quoted
+    err = capsys.readouterr().err
+    assert rc != 0 and "secret-first-line" in err, err

@@ -375,3 +375,18 @@ def test_messages_name_what_the_user_gave_and_what_they_can_do(tmp_path, data, i
     monkeypatch.setenv("LORISNB_DATA", str(here / "data"))
     rc, _, err = run(capsys, "verify", here / "r", "--results", here / "res")
     assert rc == 2 and "--data DIR" in err and "not from LORISNB_DATA" in err
+
+
+def test_a_reports_input_errors_name_each_input_by_its_root_not_as_typed(tmp_path, monkeypatch, data):
+    """``findings/input_errors.csv`` named an input as typed (``res/alg/x.txt``, relative to where
+    the command ran): once the run is moved that names nothing. By its root's name, as run.json."""
+    import lorisnb as ln
+    from lorisnb.tools.report.build import _by_root
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "res" / "alg").mkdir(parents=True)
+    (tmp_path / "res" / "alg" / "cafe_1_1.txt").write_text("scene: cafe\nseq: 1\n1 2\n")
+    ev = ln.evaluate("res", data_root=data.root, jobs=1, progress=False)
+    table = _by_root(ev.failures_table(), {"results": tmp_path / "res", "data": data.root})
+    assert list(table["file"]) == ["{results}/alg/cafe_1_1.txt"]
+    assert table["error"][0].startswith("{results}/alg/cafe_1_1.txt, line 3: ")

@@ -287,11 +287,13 @@ def outside_results(path: Path, results: Path) -> Path | None:
     return real if real != top and top not in real.parents else None
 
 
-def unquoted(exc: ParseError, real: Path) -> ParseError:
+def unquoted(exc: ParseError, real: Path, manifest: bool = True) -> ParseError:
     """``exc`` about a file that is a link to ``real``, outside the results folder, without the
-    text of the file it quoted: what line, not what it holds."""
+    text of the file it quoted: what line, not what it holds (``manifest``: with the option that
+    shows it; a folder walked without a manifest has none: the user opens the file)."""
+    see = "; pass --manifest-outside, or outside=True, to see it" if manifest else ""
     return ParseError(exc.path, exc.line, f"not a trajectory file as expected (a link to {real}, outside the results "
-                      "folder: its content is not shown; pass --manifest-outside, or outside=True, to see it)")  # fmt: skip
+                      f"folder: its content is not shown{see})")  # fmt: skip
 
 
 def missing_note(folder: Path, algorithm: str, absent: list[tuple[str, str]], taken: Iterable[str] = ()) -> str:

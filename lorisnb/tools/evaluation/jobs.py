@@ -28,7 +28,7 @@ from lorisnb.io.datasets.paths import DataPaths, groundtruth_spans, load_groundt
 from lorisnb.io.readers.openloris import declared_scene, read_openloris
 from lorisnb.io.readers.plain import read_trajectory
 from lorisnb.io.readers.registry import hint
-from lorisnb.tools.evaluation.inputs import labels, missing_note, named_entry, outside_results, unquoted
+from lorisnb.tools.evaluation.inputs import labels, missing_note, named_entry, outside_results, real_path, unquoted
 from lorisnb.tools.evaluation.pool import size_of
 from lorisnb.tools.evaluation.result import Failure
 from lorisnb.tools.evaluation.status import NOT_PUBLIC
@@ -155,6 +155,11 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
     except DataNotFoundError as exc:
         return "skipped", Failure(job.path, str(exc), "not-public" if exc.scene in NOT_PUBLIC else "no-groundtruth")
     except LorisError as exc:  # said with the input it is about (an alignment's or an option's error names none)
+        if isinstance(exc, ParseError) and job.kind != "manifest" and job.root is not None:
+            # a file found in a folder, linked from outside it (/etc/passwd in a folder received): read, never quoted
+            elsewhere = outside_results(job.path, job.root)
+            if elsewhere is not None and exc.path is not None and real_path(Path(exc.path)) == elsewhere:
+                exc = unquoted(exc, elsewhere, manifest=False)
         said = str(exc)
         if str(job.path) not in said and job.path.name not in said:
             said = f"{job.path}: {said}"

@@ -165,6 +165,18 @@ def _not_written(run_dir: Path, instead: str = "choose another --out") -> str | 
             f"was removed: move them out of it and run again, or {instead}")  # fmt: skip
 
 
+def _by_root(failures: Any, named: Mapping[str, Path]) -> Any:
+    """The failures table (:meth:`Evaluation.failures_table`) with each input named by its root
+    (:func:`root_key`: ``{results}/alg/x.txt``), in its ``file`` column and where its error starts
+    with it."""
+    failures = failures.copy()
+    keyed = {f: root_key(Path(f), named) for f in failures["file"].unique()}
+    failures["error"] = [keyed[f] + e[len(f):] if isinstance(e, str) and e.startswith(f) else e
+                         for f, e in zip(failures["file"], failures["error"], strict=True)]  # fmt: skip
+    failures["file"] = failures["file"].map(keyed)
+    return failures
+
+
 def _run_all(names: list[str], tmp: Path, params: Mapping[str, Any], notebooks_dir: Any, jobs: int,
              progress: bool, zygote: warm_kernels.Zygote | None = None,
              meanwhile: Callable[[], None] = lambda: None) -> list[NotebookRun]:  # fmt: skip
@@ -391,6 +403,7 @@ def run_report(
             except (OSError, IndexError, LorisError):  # no nbconvert templates: each page keeps its own style
                 pass
             board: dict[str, Any] = {"spec": {"description": None, "values": {}}}
+            named = named_roots(params, data.root if data else None, given_source, nb_dir if notebooks_dir else None)
 
             def leaderboard() -> None:  # the report's own evaluation, while the notebooks run
                 if not (wants_board and source is not None and data is not None):
@@ -399,6 +412,9 @@ def run_report(
                 (tmp / "findings").mkdir()
                 per_sequence = ev.sequences()  # the spec of the parameters, as the notebooks' (leaderboard_spec)
                 failures = ev.failures_table()
+                if not absolute_paths:  # each input by its root's name, as run.json names it (not as typed: a
+                    # path relative to where the command ran means nothing once the run is moved)
+                    failures = _by_root(failures, named)
                 for table, name in ((per_sequence, "sequences.csv"), (findings.board, "leaderboard.csv"),
                                     (findings.pairs, "pairwise.csv"), (failures, INPUT_ERRORS_CSV),
                                     (ev.durations(), "durations.csv")):  # fmt: skip  # every sequence: diff, history
@@ -409,7 +425,6 @@ def run_report(
             n_jobs = jobs or min(len(names), os.cpu_count() or 1)
             runs = _run_all(names, tmp, params, notebooks_dir, n_jobs, progress, zygote, meanwhile=leaderboard)
             spec = board["spec"]
-            named = named_roots(params, data.root if data else None, given_source, nb_dir if notebooks_dir else None)
             if not absolute_paths and source is not None and "source" in spec["values"]:
                 spec["values"]["source"] = root_key(source, named)  # the leaderboard's input, by its root's name
             (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
