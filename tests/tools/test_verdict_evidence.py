@@ -118,7 +118,10 @@ def test_one_runs_tracking_with_its_positions_changed_is_one_run_too(table):
 
 def test_a_trial_that_repeats_another_counts_once(table):
     """Four reruns and a fifth trial that is a byte-identical copy of the fourth: 5 vs 4 independent
-    runs, and the verdict says so at the sequence and the scene level."""
+    runs, and the verdict says so at the sequence and the scene level. The copy is no run: against
+    a base of 5 reruns it is a missing trial (a crashed trial filled in with another's output
+    regresses as the crash would), named; where the base holds no more independent runs, or the
+    candidate holds enough besides the copy, nothing is missing."""
     base = _reruns(table, range(1, 6), 3)
     cand = _reruns(table, range(1, 5), 4)
     cand = pd.concat([cand, cand[cand["trial"] == 4].assign(trial=5)], ignore_index=True)
@@ -128,7 +131,20 @@ def test_a_trial_that_repeats_another_counts_once(table):
     assert judged["decided_by"].str.contains("1 of CAND's trials repeat another's every value: counted once").all()
     scene = scenes[scenes["decided_by"].str.startswith("t-test")]
     assert len(scene) and scene["decided_by"].str.contains("5 vs 4 trials").all()
-    assert not set(seqs["status"]) & {"regression", "missing", "failed"}
+    lost = seqs[seqs["metric"] == "trial"]
+    with_output = table["matched"].to_numpy() > 0  # a trial without output repeats nothing
+    assert len(lost) == with_output.sum() and (lost["status"] == "missing").all() and (lost["cand"] == "trial 5 a copy").all()
+    assert lost["decided_by"].str.contains("repeat another trial's every value").all()
+    assert diff_tables(base, cand).regressed
+    assert not set(seqs.loc[seqs["metric"] != "trial", "status"]) & {"regression", "missing", "failed"}
+    other = _reruns(table, range(1, 5), 5)  # both sides 4 runs and a copy
+    other = pd.concat([other, other[other["trial"] == 2].assign(trial=5)], ignore_index=True)
+    assert not (changes(cand, other)[0]["metric"] == "trial").any()
+    five = _reruns(table, range(1, 6), 6)  # 5 runs and a copy of its fourth: 5 independent besides the copy
+    six = pd.concat([five, five[five["trial"] == 4].assign(trial=6)], ignore_index=True)
+    seqs = changes(base, six)[0]
+    assert not (seqs["metric"] == "trial").any()
+    assert seqs["decided_by"].str.contains("1 of CAND's trials repeat another's every value").any()
 
 
 def test_trial_numbers_are_labels_not_pairings(table):

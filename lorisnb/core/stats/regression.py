@@ -44,7 +44,9 @@ judged as a single run per side, no significance claimed; ``decided_by`` says so
 candidate lacks (``missing``), scores with nothing matched (``failed``; unless its base matched
 fewer than :data:`MIN_MATCHED` poses, none of them correct: no tracking to lose, too little to
 judge), or holds fewer trials than the candidate's other sequences or than the base
-(``missing trial``: the trial counts as a failed run in every value, and is named). Trial numbers
+(``missing trial``: the trial counts as a failed run in every value, and is named), or holds
+fewer independent runs than the base because a trial is a copy of another (``trial 3 a copy``:
+a crashed trial filled in with another's output). Trial numbers
 are labels, not pairings: the candidate's trials 4 to 6 against the base's 1 to 3 lack nothing, and
 trials the candidate holds beyond the base's are no failed runs of the base. A candidate's new
 sequence is listed, not judged.
@@ -473,6 +475,30 @@ class _Side:
         n = int(self.copy[rows].sum())
         return values[~self.copy[rows]], f"{n} of {self.name}'s trials repeat another's every value: counted once"
 
+    def runs(self, key: tuple, rows: np.ndarray, lacking: Sequence[Any]) -> int:
+        """How many independent runs a sequence's trials are: the trials present, less the copies of
+        another trial (:meth:`independent`); one where the algorithm's trials are near-identical
+        copies of one run (:func:`trial_copies`)."""
+        present = len(rows) - len(lacking)
+        if key[:2] in self.one_run:
+            return min(present, 1)
+        return present - (int(self.copy[rows].sum()) if self.copy is not None else 0)
+
+    def copied_runs(self, key: tuple, rows: np.ndarray, lacking: Sequence[Any], other: int) -> tuple[str, str]:
+        """The trials of a sequence that are copies, named ("3", "2, 3"), and how, where this side
+        holds fewer independent runs (:meth:`runs`) than ``other`` (the other side's, less its
+        trials named missing already); empty otherwise."""
+        short = other - self.runs(key, rows, lacking)
+        if short <= 0 or self.copy is None:
+            return "", ""
+        present = ~np.isin(self.trials[rows], list(lacking))
+        if key[:2] in self.one_run:
+            trials, how = self.trials[rows][present][1:], f"{self.name}'s trials {self.one_run[key[:2]]}"
+        else:
+            trials, how = self.trials[rows][self.copy[rows] & present], "repeat another trial's every value"
+        names = ", ".join(str(t) for t in trials[-short:])
+        return (names, how) if names else ("", "")
+
     def mean(self, key: tuple, column: str) -> float:
         v = self.cols.get(column)
         return float(v[self.rows[key]].mean()) if v is not None else np.inf
@@ -533,6 +559,12 @@ def changes(
             names = ", ".join(str(k) for k in fresh)
             comp.coverage("sequence", label, "trial", "present", f"missing trial {names}", "missing",
                           f"coverage: trial {names} missing in the candidate (the base has it): a failed run")  # fmt: skip
+        copied, how = sc.copied_runs(key, rc, lack_c.get(key, []), sb.runs(key, rb, lack_b.get(key, [])) - len(fresh))
+        if copied:  # a run that crashed, its file filled in with another trial's: no run, so a missing one
+            comp.coverage("sequence", label, "trial", "present", f"trial {copied} a copy", "missing",
+                          f"coverage: CAND's trial {copied} is a copy, not a run ({how}), so CAND holds fewer "
+                          "independent runs than BASE (a crashed trial filled in with another's output?): a missing "
+                          "trial, a failed run")  # fmt: skip
         matched = (sb.mean(key, "matched"), sc.mean(key, "matched"))
         if "matched" in sc.cols and not (sc.cols["matched"][rc] > 0).any() and (sb.cols["matched"][rb] > 0).any():
             if matched[0] >= MIN_MATCHED or not ("cr" in sb.cols and (sb.cols["cr"][rb] <= 0).all()):

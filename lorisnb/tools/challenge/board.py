@@ -166,8 +166,9 @@ def leaderboard(challenge: Challenge, phase: Phase, subs: list[dict[str, Any]], 
     board = f.board.rename(columns={"algorithm": "team"})
     scenes = aggregate_scenes(table, wanted)[["scene", "algorithm", "cr", "c_ate_rmse"]].rename(
         columns={"algorithm": "team"}
-    )
-    board = board.merge(scenes, on=["scene", "team"], how="left")
+    )  # a team's trials: one row each here, one value on the board (their mean, as compare's value)
+    scenes = scenes.groupby(["scene", "team"], as_index=False, sort=False)[["cr", "c_ate_rmse"]].mean()
+    board = board.merge(scenes, on=["scene", "team"], how="left", validate="one_to_one")
     when = {s["team"]: s for s in latest}
     board["submission"] = [when[t]["id"] for t in board["team"]]
     board["submitted"] = [when[t]["created"] for t in board["team"]]
