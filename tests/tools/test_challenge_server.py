@@ -387,3 +387,26 @@ def test_hidden_sequence_leaves_the_server_only_after_the_final_closes(served, d
         png_after = client.get(f"/submissions/{sid}/timeline.png")
     assert all(any(f in b for b in api) for f in full)  # every value of cafe-2, in full
     assert png_after.status_code == 200 and png_after.content != png.content  # drawn with cafe-2
+
+
+@pytest.mark.thorough
+def test_a_team_with_trials_is_one_row_of_the_leaderboard(tmp_path, data):
+    """A team's files named as trials (``cafe_1_1_trial1.txt``...) stay trials for the tests, but the
+    board shows the team once per scene: three uploads of one file took positions 1 to 3 and
+    pushed every other team down."""
+    challenge = read_challenge(challenge_file(tmp_path, data))
+    app = create_app(challenge)
+    engine = app.state.server.engine
+    tokens = {name: store.add_team(engine, name, time.time() + 7000) for name in ("trials", "single")}
+    orb, ds = cafe_files(data, "orbslam2_rgbd")[0], cafe_files(data, "ds-slam")[0]
+    uploads = {"trials": [(f"cafe_1_1_trial{k}.txt", orb) for k in (1, 2, 3)], "single": [(ds.name, ds)]}
+    with TestClient(app) as client:
+        for team, files in uploads.items():
+            r = client.post("/api/submissions", files=[("files", (n, p.read_bytes())) for n, p in files],
+                            headers={"Authorization": f"Bearer {tokens[team]}"})  # fmt: skip
+            assert r.status_code == 201, r.text
+            assert wait_scored(client, r.json()["id"])["status"] == "scored"
+        dev = boards(client)[0]
+    assert [(r["team"], r["position"]) for r in dev["rows"]] == [("trials", 1), ("single", 2)]
+    first = dev["rows"][0]
+    assert first["cr"] == pytest.approx(first["value"], abs=1e-12)  # the mean of its trials, as the value
