@@ -101,8 +101,9 @@ def test_no_significant_pair_no_bold_and_equal_ranks(tmp_path, icra20, capsys):
 
 
 def test_exact_test_on_three_against_three_with_ties(tmp_path, icra20, capsys):
-    """3 vs 3 trials of one sequence, identical within each algorithm (ties): the exact test gives
-    p = 0.1, the smallest possible, and compare says no pair can reach 0.05."""
+    """3 vs 3 trials of one sequence, identical within each algorithm (ties): the exact test's
+    smallest possible p is 0.1, and compare says no pair can reach 0.05; the trials are copies of
+    one run, so no p-value is reported for the pair at all."""
     res = tmp_path / "results"
     for alg in HOME:
         for trial in (1, 2, 3):
@@ -112,7 +113,8 @@ def test_exact_test_on_three_against_three_with_ties(tmp_path, icra20, capsys):
     rc, out, err = compare(capsys, res, "--pairs-csv", pairs_csv, "--power", "0.05")
     p = pd.read_csv(pairs_csv).iloc[0]
     assert rc == 0 and p["exact"] and p["relabellings"] == 20
-    assert p["p"] == pytest.approx(0.1) and p["min_p"] == pytest.approx(0.1) and not p["significant"]
+    assert np.isnan(p["p"]) and p["test"] == "none: trials are copies of one run"
+    assert p["min_p"] == pytest.approx(0.1) and not p["significant"]
     assert p["difference_low"] == -np.inf and p["difference_high"] == np.inf  # no shift can be rejected either
     assert "no pair can reach alpha 0.05 in home (smallest possible p 0.1" in out
     assert p["needed"] >= runs_needed(0.05, paired=False) == 4  # 4 vs 4: 2/70 < 0.05

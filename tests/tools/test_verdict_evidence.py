@@ -114,6 +114,12 @@ def test_one_runs_tracking_with_its_positions_changed_is_one_run_too(table):
     res = compare_table(two, durations, "cr")
     assert any("near-identical" in n and "last digit" in n for n in res.notes), res.notes
     assert not res.pairs["significant"].any()
+    # and nothing else claims it: no p-value, an interval of the difference that holds 0, in the pairs and vs top
+    assert res.pairs["p_holm"].isna().all() and res.pairs["p"].isna().all()
+    assert (res.pairs["difference_low"] == -np.inf).all() and (res.pairs["difference_high"] == np.inf).all()
+    second = res.algorithms[res.algorithms["algorithm"] != res.algorithms["top"]]
+    assert len(second)
+    assert second["p_holm_vs_top"].isna().all() and second["vs top [test interval]"].str.endswith("[-inf, inf]").all()
 
 
 def test_a_trial_that_repeats_another_counts_once(table):

@@ -109,10 +109,16 @@ def decide(table: pd.DataFrame, full: pd.DataFrame, metric: str, alpha: float, s
     intervals (the decision is the same): what ``make calibrate`` measures."""
     pairs = stats.pairwise(full, metric, alpha=alpha, seed=seed, intervals=intervals)
     spread, copies = trial_spread(table)
-    if copies:  # pseudo-replicates: their test would claim a significance that reruns would not show
+    if copies:  # pseudo-replicates: their test would claim a significance that reruns would not show, so no
+        # test is reported for their pairs (no p-value; an interval of the difference that excludes nothing), and
+        # the CSV, the terminal's intervals and the ranks say the same
         mask = pairs["a"].isin(copies) | pairs["b"].isin(copies)
         pairs.loc[mask, "significant"] = False
         pairs.loc[mask, "better"] = ""
+        pairs.loc[mask, ["p", "p_holm", "p_a_better"]] = np.nan
+        pairs.loc[mask, "difference_low"] = -np.inf
+        pairs.loc[mask, "difference_high"] = np.inf
+        pairs.loc[mask, "test"] = "none: trials are copies of one run"
     return pairs, spread, copies
 
 
