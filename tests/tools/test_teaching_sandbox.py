@@ -601,3 +601,40 @@ def test_each_submission_is_graded_on_its_own_with_notes(tmp_path, capsys):
         size = (course / "graded" / "s-long" / LAB / name).stat().st_size
         assert size < 100_000, f"{name}: {size} bytes"
     assert "characters left out" in (course / "graded" / "s-long" / LAB / "result.json").read_text()
+
+
+@pytest.mark.slow
+def test_a_copied_cell_a_try_out_line_and_a_helper_of_an_earlier_cell_are_graded_as_the_notebook_ran(tmp_path):
+    """What an honest notebook does and its own checks accept: a copied answer cell (it keeps its
+    grade id) with the corrected function in the last copy, a try-out line reading the lab's
+    numbers (``eps``) below a formula, a formula calling a helper the student wrote in an earlier
+    answer cell. Each scored 0 (the first copy graded; the cell run alone failed on ``eps`` or the
+    helper): all are right, with a note where the grade reads the notebook otherwise than as run."""
+    from lorisnb.tools.teaching.autograde import grade_submission
+
+    spec, release = lab_spec(SOURCE_NB), tmp_path / "release"
+    release.mkdir()
+    settings = GradeSettings(Limits(cell_timeout_s=10, locked_timeout_s=180), secret="s",
+                             uid=claim_uids(63000) if can_isolate() else 0)  # fmt: skip
+    sol = _solutions()
+    nb = _submission({
+        "A1_correctness": sol["A1_correctness"].replace("<= phi", "<= np.radians(phi)"),  # the first attempt
+        "C1_cs_r": sol["C1_cs_r"] + "\nprint(cs_r(3.0, 0.0, True, tau))  # trying it out\n",
+    })  # fmt: skip
+    a1 = next(i for i, c in enumerate(nb.cells) if c.get("metadata", {}).get("nbgrader", {}).get("grade_id")
+              == "A1_correctness")  # fmt: skip
+    copy = nbformat.from_dict(dict(nb.cells[a1], id="copied-a1"))  # Jupyter gives a copy a cell id of its own
+    copy.source = sol["A1_correctness"] + "\n\ndef held_time(stamps, t_max, delta):\n" \
+        "    return np.minimum(np.diff(np.append(stamps, t_max)), delta)\n"  # fmt: skip
+    nb.cells.insert(a1 + 1, copy)  # the corrected copy, below the first attempt
+    b2 = next(c for c in nb.cells if c.get("metadata", {}).get("nbgrader", {}).get("grade_id") == "B2_correct_rate")
+    b2.source = ("def correct_rate(stamps, correct, t_min, t_max, delta):\n"
+                 "    return float(np.sum(held_time(stamps, t_max, delta) * np.asarray(correct)) / (t_max - t_min))\n")  # fmt: skip
+    path = tmp_path / "s" / f"{LAB}.ipynb"
+    path.parent.mkdir()
+    nbformat.write(nb, path)
+    res = grade_submission(spec, release, path, "s-honest", settings)
+    assert res.points == res.max_points == 18, [(s.question, s.message) for s in res.scores if s.points < s.max_points]
+    assert any(n.startswith("A1_correctness: 2 cells carry this answer's id") for n in res.notes), res.notes
+    assert any(n.startswith("C1_cs_r: a line outside its functions needs the lab's numbers (NameError: name 'tau'")
+               for n in res.notes), res.notes  # fmt: skip

@@ -197,13 +197,55 @@ class SubmissionResult:
 
 
 def student_answers(nb: nbformat.NotebookNode) -> dict[str, str]:
-    """grade_id -> source of each answer cell of a returned notebook (the first one of an id)."""
+    """grade_id -> source of each answer cell of a returned notebook. An answer cell copied in
+    Jupyter keeps its ``grade_id``: of several cells of one id the last is taken, the one whose
+    definitions the notebook ran last (its own checks used it; the first may be a stub or an
+    attempt the student corrected below) (:func:`repeated_answers` names them for a note)."""
     out: dict[str, str] = {}
     for cell in nb.cells:
         meta = _nbgrader(cell)
-        if cell.cell_type == "code" and meta.get("solution") and meta.get("grade_id") not in out:
+        if cell.cell_type == "code" and meta.get("solution") and meta.get("grade_id") is not None:
             out[str(meta["grade_id"])] = cell.source
     return out
+
+
+def repeated_answers(nb: nbformat.NotebookNode) -> dict[str, int]:
+    """grade_id -> how many answer cells of a returned notebook carry it, where more than one."""
+    seen: dict[str, int] = {}
+    for cell in nb.cells:
+        meta = _nbgrader(cell)
+        if cell.cell_type == "code" and meta.get("solution") and meta.get("grade_id") is not None:
+            seen[str(meta["grade_id"])] = seen.get(str(meta["grade_id"]), 0) + 1
+    return {g: n for g, n in seen.items() if n > 1}
+
+
+#: Top-level statements a formula answer keeps when it is graded on its definitions only.
+_DEFINITIONS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Import, ast.ImportFrom)
+
+
+def definitions_only(source: str, assignments: bool = False, lorisnb: bool = True) -> str | None:
+    """``source`` with every top-level statement other than a ``def``, a ``class`` or an import
+    (``assignments``: and an assignment; ``lorisnb=False``: and no import of lorisnb) blanked out,
+    line for line (an error names the line of the cell); None when it does not parse. A formula
+    answer's try-out lines (``print(correctness(ate, aoe, eps, phi))``, reading the lab's
+    numbers) are not its formula."""
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return None
+    keep = _DEFINITIONS + ((ast.Assign, ast.AnnAssign) if assignments else ())
+    lines = source.splitlines()
+    kept = [False] * len(lines)
+    for node in tree.body:
+        first = min([node.lineno, *(d.lineno for d in getattr(node, "decorator_list", []))])
+        last = node.end_lineno or node.lineno
+        names = [a.name for a in node.names] if isinstance(node, ast.Import) else [
+            getattr(node, "module", None) or ""] if isinstance(node, ast.ImportFrom) else []  # fmt: skip
+        ok = isinstance(node, keep) and (lorisnb or not any(n.split(".")[0] == "lorisnb" for n in names))
+        if ok:
+            for i in range(first - 1, last):
+                kept[i] = True
+    return "\n".join(line if k else "" for line, k in zip(lines, kept, strict=True))
 
 
 def _parameters(cell_source: str, params: Mapping[str, Any]) -> str:
@@ -432,12 +474,17 @@ def grade_submission(
     try:
         nb = nbformat.read(notebook, as_version=4)
         answers = student_answers(nb)
+        repeated = repeated_answers(nb)
     except Exception as exc:  # noqa: BLE001 (any way a returned file fails to be a notebook: this student's 0)
         return unreadable(spec, student, notebook, exc, time.monotonic() - t0)
     py_path, checkout_dirs = _package_paths()
     hidden = [*settings.hidden, *checkout_dirs]
     _check_reachable(py_path, settings)
-    notes: list[str] = []
+    notes: list[str] = [
+        f"{gid}: {n} cells carry this answer's id (a copied cell keeps it): the last one is graded, the one the "
+        "notebook ran last; delete the others"
+        for gid, n in repeated.items()
+    ]
     expected = [str(_nbgrader(c)["grade_id"]) for c in spec.notebook.cells if _nbgrader(c).get("solution")]
     missing = [g for g in expected if g not in answers]
     if missing and len(missing) == len(expected):
@@ -478,9 +525,33 @@ def grade_submission(
             fwork.mkdir()
             box = Sandbox(fwork, limits=settings.limits, hidden=hidden, uid=settings.uid + 1, no_lorisnb=True)
             boxes.append(box)
+            source = answers.get(gid, "")
             try:
                 with budget.charge():
-                    reply = box.run(PRELUDE + answers.get(gid, ""), name=f"<answer {gid}>", timeout_s=budget.left(True))
+                    box.run(PRELUDE, name="<numpy and math>", timeout_s=budget.left(True))
+                    # the functions the student's earlier answer cells define, which this one may call (as the
+                    # notebook did), before its own: its own definitions win
+                    before = expected[: expected.index(gid)] if gid in expected else []
+                    helpers = "\n".join(d for d in (definitions_only(answers[g], lorisnb=False) for g in before
+                                                    if g in answers) if d)  # fmt: skip
+                    if helpers.strip():
+                        box.run(
+                            helpers, name="<the functions of the earlier answer cells>", timeout_s=budget.left(True)
+                        )
+                    reply = box.run(source, name=f"<answer {gid}>", timeout_s=budget.left(True))
+                    if not reply.get("ok") and str(reply.get("error", "")).startswith("NameError"):
+                        # a try-out line reading the lab's numbers (eps, tau): the formula is the cell's definitions
+                        for assignments in (True, False):
+                            defs_only = definitions_only(source, assignments)
+                            if defs_only is None or defs_only == source:
+                                continue
+                            again = box.run(defs_only, name=f"<answer {gid}>", timeout_s=budget.left(True))
+                            if again.get("ok"):
+                                notes.append(f"{gid}: a line outside its functions needs the lab's numbers "
+                                             f"({reply.get('error')}); run alone, as formulas are graded, the cell "
+                                             "is graded on its functions (and imports) only")  # fmt: skip
+                                reply = again
+                                break
             except SandboxError as exc:
                 why = _BUDGET_ERROR.format(budget.seconds) if budget.out(f"<answer {gid}>, run alone") else str(exc)
                 functions.update({d: RemoteFunction(None, d, f"TimeoutError: {why}") for d in defs})
