@@ -445,6 +445,12 @@ def cmd_report(args: argparse.Namespace) -> int:
             raise ValidationError(f"-p {k} given twice ({params[k]!r}, then {param_value(v)!r}); the last would "
                                   "silently replace the first: give each parameter once")  # fmt: skip
         params[k] = param_value(v)
+    if (
+        args.data
+        and params.get("data_root") is not None
+        and Path(str(params["data_root"])).resolve() != Path(args.data).resolve()
+    ):  # one would silently win, as --results and -p results_dir
+        raise ValidationError("--data and -p data_root name two folders; give one")
     if args.data and "data_root" not in params:
         params["data_root"] = args.data
     protect = [str(find_data(params.get("data_root")).root)]
@@ -484,7 +490,11 @@ def cmd_verify(args: argparse.Namespace) -> int:
     from lorisnb.tools.report.provenance import read_run_json, verify_run
 
     record = read_run_json(args.run)
-    roots = {name: folder for name, folder in args.root or []}
+    roots: dict[str, str] = {}
+    for name, folder in args.root or []:  # a name twice: the last silently won
+        if name in roots and Path(roots[name]).resolve() != Path(folder).resolve():
+            raise ValidationError(f"--root {name} given twice ({roots[name]}, then {folder}); give each root once")
+        roots[name] = folder
     for name in ("data", "results"):
         folder = getattr(args, name)
         if folder is not None:

@@ -63,6 +63,10 @@ def test_a_report_parameter_given_twice_with_different_values_is_refused(tmp_pat
     assert main(["report", "--out", str(out), "--no-progress", "-p", "eps", "3", "-p", "eps", "5"]) == 2
     assert "-p eps given twice (3, then 5)" in capsys.readouterr().err
     assert not out.exists()  # refused before any notebook ran
+    # --data and -p data_root naming two folders: -p won, silently (as --results and -p results_dir, refused)
+    assert main(["report", "--out", str(out), "--no-progress", "--data", str(tmp_path), "-p", "data_root",
+                 str(tmp_path / "other")]) == 2  # fmt: skip
+    assert "--data and -p data_root name two folders" in capsys.readouterr().err and not out.exists()
 
 
 def test_every_value_of_every_command_refuses_to_be_empty(capsys):

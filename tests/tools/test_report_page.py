@@ -226,3 +226,7 @@ def test_a_run_folder_is_readable_and_records_its_provenance(tmp_path, monkeypat
     (tmp_path / "mine" / "orb" / "cafe.txt").write_text("scene: cafe\n")
     with pytest.raises(ValidationError, match="two folders"):
         report.run_report(tmp_path / "other", {"results_dir": str(run_dir)}, progress=False, results=tmp_path / "mine")
+    # output_dir is the report's to set (each notebook's folder of the run): given, it was recorded and ignored
+    with pytest.raises(ValidationError, match="-p output_dir: the report sets"):
+        report.run_report(tmp_path / "other", {"output_dir": str(tmp_path / "elsewhere")}, progress=False)
+    assert not (tmp_path / "other").exists() and not (tmp_path / "elsewhere").exists()

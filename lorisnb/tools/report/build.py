@@ -365,6 +365,9 @@ def run_report(
     with kernel_files(), warm_kernels_for_report() if len(names) > 1 else contextlib.nullcontext(None) as zygote:
         # the zygote starts now: it imports the kernels' modules while the notebooks are checked
         declared = declared_by(names, notebooks_dir)
+        if "output_dir" in (parameters or {}):  # each notebook writes into its own folder of the run: set here
+            raise ValidationError("-p output_dir: the report sets each notebook's output folder (its folder of the "
+                                  "run); choose where the run goes with --out (run_report's out)")  # fmt: skip
         params = check_parameters(dict(parameters or {}), declared, [Path(n).stem for n in names])
         given = params.get("results_dir")
         if results is not None and given is not None and Path(str(given)).resolve() != Path(results).resolve():
