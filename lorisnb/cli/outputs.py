@@ -22,8 +22,7 @@ def check_output(
     out: str | None, inputs: list[str], force: bool, folder: bool = False, option: str = "--csv",
     force_does: str = "replace it",
 ) -> None:  # fmt: skip
-    """Refuse an output before any work: an input of the command, a file in an input folder with
-    an input's suffix, a folder output that is, holds or lies in an input (:func:`overlap`), a
+    """Refuse an output before any work: an input of the command, a file in an input folder, a folder output that is, holds or lies in an input (:func:`overlap`), a
     folder for a file, an existing file or folder without --force (the message says what --force
     would do: ``force_does``, :data:`FORCE_DOES`), or a place that cannot be written."""
     if out is None:
@@ -35,11 +34,13 @@ def check_output(
         src = Path(i).resolve()
         if target == src:
             raise OutputError(f"{out} is an input of this command; choose another output file")
-        if src.is_dir() and src in target.parents and target.suffix.lower() in INPUT_SUFFIXES:
-            raise OutputError(
-                f"{out} lies in the input folder {i} and ends in {target.suffix}, so it is (or would be read as) a "
-                "result file; choose another name or place"
-            )
+        if src.is_dir() and src in target.parents and (not folder or target.suffix.lower() in INPUT_SUFFIXES):
+            # a file written among the inputs (a folder: overlap's, below): a later run reading the folder
+            # finds it there (a result file by its suffix; run.json, diff's mark of a run folder; anything else)
+            what = (f"ends in {target.suffix}, so it is (or would be read as) a result file"
+                    if target.suffix.lower() in INPUT_SUFFIXES else "a later run reading that folder would find it "
+                    "among the inputs (lorisnb writes nothing into a folder it reads)")  # fmt: skip
+            raise OutputError(f"{option} {out} lies in the input folder {i} and {what}; choose another name or place")
     if target.is_dir() and not folder:
         raise OutputError(f"{out} is a folder; expected a file name for {option}")
     hit = overlap(target, inputs) if folder else None

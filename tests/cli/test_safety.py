@@ -159,6 +159,12 @@ def test_csv_never_replaces_an_input(tmp_path, icra20, capsys):
     assert main(["evaluate", str(tmp_path), "--csv", str(tmp_path / "orb" / "new.txt"), "--no-progress"]) == 2
     assert "lies in the input folder" in capsys.readouterr().err
     assert src.read_bytes() == before and sorted(p.name for p in (tmp_path / "orb").iterdir()) == ["cafe.txt"]
+    # any output among the inputs, whatever its suffix: diff --json CAND/run.json made CAND a "run folder"
+    # whose run.json lacked every key, and the next diff of it failed
+    for option, name in (("--json", "run.json"), ("--markdown", "notes.md")):
+        rc = main(["diff", str(tmp_path), str(tmp_path), option, str(tmp_path / "orb" / name), "--no-progress"])
+        assert rc == 2 and "lies in the input folder" in capsys.readouterr().err
+    assert sorted(p.name for p in (tmp_path / "orb").iterdir()) == ["cafe.txt"]
 
 
 @pytest.mark.parametrize("target", ["gt", "gt_times", "est_times", "manifest_gt"])
