@@ -127,7 +127,7 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--relative", action="store_true",
                    help="also print rpg's relative error (10..50 %% of each sequence's length; %% and deg/m)")  # fmt: skip
     g.add_argument("--relative-lengths", default=None, metavar="M,M,...",
-                   type=arg_type(lambda t: [validate.positive("--relative-lengths", v, "metres") for v in t.split(",")]),
+                   type=arg_type(lambda t: list(validate.positive_list("--relative-lengths", t, "metres"))),
                    help="rpg's relative error at these sub-trajectory lengths, metres (rpg's preset_boxplot_distances; "
                    "implies --relative)")  # fmt: skip
     g.add_argument("--kitti-precision", default=None, choices=KITTI_PRECISIONS,

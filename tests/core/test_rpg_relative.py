@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from reference_tools import REFERENCE
 
@@ -54,3 +55,22 @@ def test_evaluation_relative_takes_preset_distances(data):
                            conventions="rpg")  # fmt: skip
     assert ev.relative()["length"].tolist() == [0.91, 1.83, 2.74, 3.66, 4.57]  # rpg's, from the whole ground truth
     assert ev.relative(lengths=[2.0])["length"].tolist() == [2.0]
+
+
+def test_a_length_given_twice_is_refused_in_python_and_on_the_command_line(data, capsys):
+    """``--relative-lengths 1,1`` printed one row of length 1 with twice the samples (2,073 x 2)."""
+    import lorisnb as ln
+    from lorisnb.cli import main
+    from lorisnb.errors import ValidationError
+
+    ev = ln.evaluate_pairs(data.tum / "freiburg1_xyz-rgbdslam.txt", data.tum / "freiburg1_xyz-groundtruth.txt",
+                           conventions="rpg")  # fmt: skip
+    for lengths in ([1.0, 1.0], (1, 1.0, 2), np.array([0.5, 0.5])):
+        with pytest.raises(ValidationError, match="are the same value; expected each value once"):
+            ev.relative(lengths=lengths)
+    with pytest.raises(ValidationError, match="are the same value"):
+        ev.relative(fractions=(0.1, 0.1))
+    with pytest.raises(SystemExit) as exc:  # refused as argparse refuses a bad value, before any work
+        main(["evaluate", str(data.tum / "freiburg1_xyz-rgbdslam.txt"), "--gt",
+              str(data.tum / "freiburg1_xyz-groundtruth.txt"), "--relative-lengths", "1,1", "--no-progress"])  # fmt: skip
+    assert exc.value.code == 2 and "--relative-lengths=1,1: 1 and 1 are the same value" in capsys.readouterr().err

@@ -197,13 +197,9 @@ def _yaw_gravity(r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _positive_list(name: str, values: Any, most: float = math.inf) -> tuple[float, ...]:
     """A non-empty list of positive numbers (at most ``most``): ``fractions=2`` or ``lengths=[-1]``
     gave an empty table, ``fractions=0.1`` a TypeError."""
-    items = list(values) if isinstance(values, (list, tuple, np.ndarray)) else None
-    if not items:
+    if isinstance(values, str):  # a list only (the command line splits its own text)
         raise ValidationError(f"{name}={values!r}: expected a non-empty list of positive numbers")
-    out = tuple(validate.positive(name, v, "") for v in items)
-    if any(v > most for v in out):
-        raise ValidationError(f"{name}={values!r}: each is a fraction of the path length, at most {most:g}")
-    return out
+    return validate.positive_list(name, values, "", most)
 
 
 def relative_table(

@@ -208,6 +208,32 @@ def positive(name: str, value: Any, unit: str, *, integer: bool = False) -> floa
     return float(v)
 
 
+def positive_list(name: str, values: Any, unit: str, most: float = math.inf) -> tuple[float, ...]:
+    """A non-empty list of distinct positive numbers, at most ``most`` each (lengths, fractions): a
+    list, tuple or array, or text split at commas as on the command line. The same value twice
+    (``1,1``) is refused: it gave its row twice the samples."""
+    if isinstance(values, str):
+        parts = values.split(",")
+        if not all(p.strip() for p in parts):
+            raise ValidationError(f"{name}={values}: an empty item between commas; expected {unit or 'numbers'} "
+                                  "separated by commas")  # fmt: skip
+        items: list[Any] = parts
+    elif isinstance(values, (list, tuple, np.ndarray)):
+        items = list(values)
+    else:
+        items = []
+    if not items:
+        raise ValidationError(f"{name}={_show(values)}: expected a non-empty list of positive numbers")
+    out = tuple(positive(name, v, unit) for v in items)
+    if any(v > most for v in out):
+        raise ValidationError(f"{name}={_show(values)}: each is a fraction of the path length, at most {most:g}")
+    for k, v in enumerate(out):
+        if v in out[:k]:
+            raise ValidationError(f"{name}={_show(values)}: {_show(items[out.index(v)])} and {_show(items[k])} are "
+                                  "the same value; expected each value once")  # fmt: skip
+    return out
+
+
 def decimals(name: str, value: Any) -> int:
     """How many decimals to print: a whole number from 0 to 17 (a float64 holds 17 significant
     digits; more print noise, never information)."""
