@@ -383,6 +383,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
                           ("--rpe-all-pairs", args.rpe_all_pairs), ("--rpe-tolerance", args.rpe_tolerance)) if v is not None]  # fmt: skip
     if rpe and not args.metric.startswith(("rpe", "c_rpe")):
         raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
+    for name, uses in (("delta", ("cr", "cr_t")), ("tau", ("cs_r",))):  # Eq. 2-3 (delta), Eq. 4 (tau)
+        if getattr(args, name, None) is not None and args.metric not in uses:
+            raise ValidationError(f"--{name}: changes no value of --metric {args.metric} (it changes "
+                                  f"{' and '.join(uses)}); leave it out, or compare {' or '.join(uses)}")  # fmt: skip
     refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate",
                          "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
                          "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)",

@@ -200,6 +200,10 @@ def test_options_compare_and_diff_cannot_apply_are_refused(tmp_path, icra20, cap
     assert main(["diff", str(odom), str(odom), "--relative"]) == 2
     assert main(["diff", str(odom), "--no-progress"]) == 2  # one run only
     capsys.readouterr()
+    # a threshold the metric does not depend on: ignored, though the header said "tau 5 s"
+    for option, metric in (("--tau", "cr"), ("--tau", "c_ate_rmse"), ("--delta", "cs_r"), ("--delta", "c_ate_rmse")):
+        rc, _, err = compare(capsys, odom, option, "5", "--metric", metric)
+        assert rc == 2 and f"{option}: changes no value of --metric {metric}" in err, err
 
 
 def test_difference_interval_inverts_the_test():
