@@ -468,6 +468,11 @@ def test_manifest_and_sweep_fractions_use_the_same_limits(data, tmp_path):
     with pytest.raises(ln.ValidationError, match="write 0.05"):
         ln.sweep(ev.errors, eps=[5], relative_to="extent")
     assert len(ln.sweep(ev.errors, eps=[0.05, np.inf], relative_to="extent")) == 2
+    # relative_to with no fraction to read (eps left at inf): it changed nothing and was accepted
+    with pytest.raises(ln.ValidationError, match="relative_to=extent: no eps value to read as a fraction"):
+        ln.sweep(ev.errors, relative_to="extent")
+    rc = main(["sweep", str(data.tum / EST), "--gt", str(data.tum / GT), "--relative-to", "length", "--no-progress"])
+    assert rc == 2
 
 
 # --- 9. the Dask scheduler, on loopback only ----------------------------------------------------

@@ -179,6 +179,10 @@ def sweep(
         raise ValidationError("eps: with relative_to, eps values are fractions (numbers), not 'paper' or a mapping")
     if relative_to is not None:
         eps_l = [fraction("eps", v) if np.isfinite(v) else v for v in eps_l]  # inf: every pose correct
+        if not any(np.isfinite(v) for v in eps_l):  # nothing is a fraction of anything: relative_to changes nothing
+            raise ValidationError(f"relative_to={relative_to}: no eps value to read as a fraction of each sequence's "
+                                  f"{relative_to} (eps is inf: every pose correct); give eps fractions (--eps 0.05,0.1) "
+                                  "or leave relative_to out")  # fmt: skip
     phi_a = np.array(grid_values("phi", phi))
     delta_a = np.array(grid_values("delta", delta))
     tau_a = np.array(grid_values("tau", tau))
