@@ -620,3 +620,13 @@ def test_a_missing_estimate_is_never_offered_another_sessions_file(data, tmp_pat
     ev = evaluate_manifest(m, tmp_path / "res")
     notes = [w for w in ev.warnings if "no estimate for 1 session" in w]
     assert notes and "s2.txt not found" in notes[0] and "found s1.txt" not in notes[0], notes
+
+
+def test_a_typo_of_a_threshold_names_every_setting_and_the_one_meant(data):
+    """``ev.sequences(epss=1)`` listed the RPE settings only, as if eps were not one."""
+    ev = evaluate_pairs(data.tum / EST, data.tum / GT)
+    with pytest.raises(ln.ValidationError, match=r"epss: not a setting of the scores \(did you mean 'eps'\?\); "
+                       "expected one of eps, phi, delta, tau, rpe_delta"):  # fmt: skip
+        ev.sequences(epss=1)
+    with pytest.raises(ln.ValidationError, match="did you mean 'rpe_delta'"):
+        ev.sequences(rpe_detla=2)

@@ -28,7 +28,7 @@ from lorisnb.core.pipeline.model import (
     sequence_eps,
 )
 from lorisnb.core.spec.evo import check_evo, check_evo_together
-from lorisnb.core.spec.validate import eps_value, flag, threshold
+from lorisnb.core.spec.validate import eps_value, flag, near_miss, threshold
 from lorisnb.core.trajectory.blocks import each
 from lorisnb.errors import ValidationError
 
@@ -295,8 +295,11 @@ def rpe_of(files: list[FileErrors], given: dict[str, Any]) -> dict[str, Any]:
     from the spec the errors were computed under (:attr:`FileErrors.rpe`; files of different
     settings need them given), else :data:`RPE_DEFAULTS`."""
     unknown = sorted(set(given) - set(RPE_DEFAULTS))
-    if unknown:
-        raise ValidationError(f"{unknown[0]}: not a setting of the scores; expected one of {', '.join(RPE_DEFAULTS)}")
+    if unknown:  # a typo of any setting the call takes: the thresholds too (ev.sequences(epss=1))
+        settings = ["eps", "phi", "delta", "tau", *RPE_DEFAULTS]
+        near = near_miss(unknown[0], settings)
+        raise ValidationError(f"{unknown[0]}: not a setting of the scores{f' ({near})' if near else ''}; expected "
+                              f"one of {', '.join(settings)}")  # fmt: skip
     given = {k: v for k, v in given.items() if v is not OF_SPEC}
     recorded = {tuple(sorted(f.rpe.items())) for f in files if f.rpe}
     if len(recorded) > 1:
