@@ -71,13 +71,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_command(".commands", "cmd_evaluate"))
 
     p = sub.add_parser("compare", help="compare algorithms over trials and sequences: intervals, tests, ranking")
-    add_evaluation_options(p)
+    add_evaluation_options(p, "compare")
     add_threshold_options(p)
     add_compare_options(p)
     p.set_defaults(func=_command(".commands", "cmd_compare"))
 
     p = sub.add_parser("diff", help="did CAND regress against BASE? two result folders, report runs or tables")
-    add_evaluation_options(p)
+    add_evaluation_options(p, "diff")
     add_threshold_options(p)
     add_diff_options(p)
     p.set_defaults(func=_command(".runs", "cmd_diff"))
@@ -139,7 +139,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--align", choices=ALIGNMENTS, default=None, help="with --conventions: the alignment")
     p.add_argument("--topic", default=None, help="bags: the estimate's topic (evo's /tf:parent.child too)")
     p.add_argument("--gt-topic", default=None, help="bags: the ground truth's topic")
-    add_scale_option(p, "Sim(3) for the RPE and association rows ('auto' for openloris: by algorithm)")
+    add_scale_option(p, "Sim(3) for the RPE and association rows; 'auto': Sim(3) only for a monocular algorithm (dso, "
+                     "svo) by its name (an OpenLORIS file's, or a pair's estimate file name; another pair: no scale)")  # fmt: skip
     p.add_argument("--times", default=None, help="KITTI: one times file (a stamp per line) for both files")
     p.add_argument("--gt-times", default=None, help="KITTI: the ground truth's times file")
     p.add_argument("--est-times", default=None, help="KITTI: the estimate's times file")
@@ -194,9 +195,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--digits",
-        type=arg_type(lambda t: int(validate.positive("--digits", t, "significant digits", integer=True))),
+        type=arg_type(lambda t: validate.significant("--digits", t)),
         default=6,
-        help="significant digits printed (default 6)",
+        help="significant digits printed, 1 to 17 (default 6)",
     )
     p.add_argument("--force", action="store_true", help="overwrite outputs")
     p.set_defaults(func=_command(".consistency", "cmd_consistency"))
@@ -242,7 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="write the absolute paths of the inputs, the data root and the results into the run (default: "
                    "each path below a named root, {data} or {results}, so the run folder can travel)")  # fmt: skip
     p.add_argument("--force", action="store_true", help="replace --out if it is an earlier lorisnb run folder")
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_command(".commands", "cmd_report"))
 
     p = sub.add_parser("serve", help="a challenge server: teams upload results, scored against hidden ground truth")

@@ -203,8 +203,18 @@ def add_rpe_options(p: argparse.ArgumentParser) -> None:
                    help="decimals of the printed tables (default 4; the CSV keeps every digit)")  # fmt: skip
 
 
-def add_evaluation_options(p: argparse.ArgumentParser) -> None:
-    """Options shared by ``evaluate`` and ``sweep`` (same names, same meaning)."""
+#: What ``--csv`` writes, by command (evaluate's table unless named here).
+CSV_HELP = {
+    "compare": "write the comparison table (one row per algorithm and scene: value, interval, rank, test against the "
+    "scene's top) to this CSV",
+    "diff": "write the changes (one row per sequence and per scene, each metric: base, cand, status, decided_by) to "
+    "this CSV",
+}
+
+
+def add_evaluation_options(p: argparse.ArgumentParser, command: str = "evaluate") -> None:
+    """Options shared by ``evaluate``, ``compare``, ``diff`` and ``sweep`` (same names, same
+    meaning; ``command`` names the one whose parser this is, for what its outputs hold)."""
     p.add_argument(
         "paths", nargs="+", metavar="FILE_OR_DIR",
         help="result files, or folders walked as <algorithm>/*.txt (with --gt: estimates; with --manifest: folders)",
@@ -259,7 +269,8 @@ def add_evaluation_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--trials-by", default=None, metavar="REGEX",
                    help="regular expression whose first group is the trial number in a file's path "
                    "(default: _trial3, -trial-3, trial3/, run_2/, stamped_traj_estimate3)")  # fmt: skip
-    p.add_argument("--csv", default=None, metavar="OUT", help="write the table (one row per sequence) to this CSV")
+    p.add_argument("--csv", default=None, metavar="OUT",
+                   help=CSV_HELP.get(command, "write the table (one row per sequence) to this CSV"))  # fmt: skip
     p.add_argument("--parquet", default=None, metavar="DIR",
                    help="write the table as a Parquet dataset partitioned by algorithm (needs lorisnb[parquet])")  # fmt: skip
     p.add_argument("--force", action="store_true", help="overwrite OUT if it exists")

@@ -153,6 +153,10 @@ def test_command_line(real, data, tmp_path, capsys):
     assert "carries no covariances" in err
     assert main(["consistency", str(path), str(data.tum / GT), "--seq", "2"]) == 2  # a TUM ground truth has no seq
     assert "--seq applies to an OpenLORIS ground truth" in capsys.readouterr().err
+    for digits in ("0", "100", "2.5"):  # 100 printed 50-digit numbers: a float64 holds 17
+        with pytest.raises(SystemExit):
+            main(["consistency", str(path), str(data.tum / GT), "--digits", digits])
+        assert "expected a whole number of significant digits from 1 to 17" in capsys.readouterr().err
 
 
 def test_command_line_on_an_openloris_ground_truth_takes_its_sequence(data, tmp_path, capsys):

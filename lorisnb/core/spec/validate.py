@@ -243,6 +243,14 @@ def decimals(name: str, value: Any) -> int:
     return int(v)
 
 
+def significant(name: str, value: Any) -> int:
+    """How many significant digits to print: a whole number from 1 to 17 (a float64 holds 17)."""
+    v = _number(name, value, {})
+    if not (1 <= v <= 17 and v == int(v)):  # NaN too
+        raise ValidationError(f"{name}={_show(value)}: expected a whole number of significant digits from 1 to 17")
+    return int(v)
+
+
 def probability(name: str, value: Any) -> float:
     """A probability strictly between 0 and 1 (a confidence level, a test's alpha)."""
     v = _number(name, value, {})
