@@ -264,6 +264,13 @@ def _print_kitti(ev: Any, args: argparse.Namespace) -> None:
     overall = lengths[lengths.seq == ""].drop(columns=["file", "seq"])
     print("\nper segment length (all sequences; the devkit plots lengths with at least 3 segments):")
     print(_fmt(overall, args.digits))
+    per_seq = lengths[lengths.seq != ""].groupby(["algorithm", "file", "trial", "seq"], sort=False)["segments"].sum()
+    short = [f"{file}, seq {seq}" for (_, file, _, seq), n in per_seq.items() if n == 0]
+    if short:  # NaN errors said, as a missing RPE pair is
+        shown = "; ".join(short[:5]) + (f" and {len(short) - 5} more" if len(short) > 5 else "")
+        say(f"note: {len(short)} sequence(s) hold no KITTI segment ({clean(shown)}): the devkit measures drift over "
+            "100 to 800 m of ground-truth path, and these travel less (or match too few poses); their kitti_t_err and "
+            "kitti_r_err are empty, and they add nothing to the totals")  # fmt: skip
     if args.kitti_plot:
         from lorisnb.io.writers import write_atomically
         from lorisnb.tools.figures.kitti import kitti_length_figure

@@ -130,3 +130,14 @@ def test_blocks_as_written_follow_their_poses():
     shifted = np.eye(4)
     shifted[:3, 3] = [0.1, 0.0, 0.0]
     assert np.array_equal(written_blocks(with_transform(t, shifted)), written)  # orientations unchanged
+
+
+def test_a_sequence_shorter_than_the_shortest_segment_is_said(data, capsys):
+    """fr2_desk travels about 18 m: no 100 m segment, so kitti_t_err and kitti_r_err are NaN with
+    0 segments, which the command printed without a word (a missing RPE pair gets one)."""
+    est, gt = data.tum / "fr2_desk_ORB.txt", data.tum / "fr2_desk_groundtruth.txt"
+    assert main(["evaluate", str(est), "--gt", str(gt), "--conventions", "kitti", "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    assert "note: 1 sequence(s) hold no KITTI segment (fr2_desk_ORB.txt, seq 1)" in err, err
+    row = lorisnb.evaluate_pairs(est, gt, conventions="kitti").kitti_totals().iloc[0]
+    assert row["kitti_segments"] == 0 and np.isnan(row["kitti_t_err"])
