@@ -9,7 +9,9 @@ COURSE holds release/<lab>/ and submitted/<student>/<lab>/<lab>.ipynb; the labs'
 teaching/source/ (``--source``). Writes COURSE/graded/, grades.csv, grades-demo.csv, exports/.
 Exit status 0 when every submission was graded, 1 otherwise (a message says why; a submission that
 could not be graded, such as a notebook that is not JSON, scores 0, is named, and the others are
-graded).
+graded). Warnings (the exit status stays 0) name the submissions whose time is unknown (a
+timestamp.txt that is no time; with --due, how many have none: counted as on time); grades.csv's
+notes column says the same per student.
 """
 
 from __future__ import annotations
@@ -87,6 +89,13 @@ def main(argv: list[str] | None = None) -> int:
     elif left_out.no_email:
         print(f"no e-mail on the roster, left out of the Moodle and Gradescope exports (they find students by "
               f"e-mail): {', '.join(left_out.no_email)}", file=sys.stderr)  # fmt: skip
+    for g in graded:
+        if g.time_error:
+            print(f"warning: {g.result.student}: {g.notes[0]}", file=sys.stderr)
+    no_time = [g.result.student for g in graded if g.no_time and not g.time_error]
+    if no_time:
+        print(f"warning: {len(no_time)} submission(s) have no timestamp.txt, so --due could not be applied to them: "
+              f"counted as on time ({', '.join(no_time)}; nbgrader collect writes it)", file=sys.stderr)  # fmt: skip
     failed = [g.result for g in graded if g.result.error]
     for res in failed:
         print(f"not graded (0 points): {res.error}", file=sys.stderr)

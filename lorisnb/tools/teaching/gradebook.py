@@ -12,19 +12,25 @@ writes, all in the course folder:
 
 Names and e-mails come from a roster CSV (``id,name,email``, optional ``sis_id``, ``login_id``,
 ``section``); a student missing from a given roster is graded but left out of the exports (and named).
+
+The gradebook's own notes (:attr:`Graded.notes`, the ``notes`` column of ``grades.csv``): a
+submission whose time is unknown (no ``timestamp.txt`` while a late policy is set, or one that
+cannot be read: that student is named, everyone else is graded and exported).
 """
 
 from __future__ import annotations
 
 import csv
+import functools
 import html
 import math
 import os
 import re
+import zoneinfo
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
-from datetime import datetime, timezone
+from dataclasses import dataclass, field
+from datetime import datetime, timedelta, timezone, tzinfo
 from pathlib import Path
 
 from lorisnb.errors import ValidationError
@@ -104,7 +110,9 @@ def read_roster(path: Path) -> dict[str, Student]:
 class LatePolicy:
     """Due date (aware datetime) and the penalty: ``per_day`` of the points per started day late
     (0.1: 10 %), nothing after ``max_days`` days (None: no limit). A submission without a time
-    (no nbgrader ``timestamp.txt``) counts as on time, and is named in the notes."""
+    (no nbgrader ``timestamp.txt``, or one that cannot be read) counts as on time, and is named in
+    the notes (:func:`grade_class`: the student's ``feedback.html`` and ``grades.csv``; ``make grade``
+    says how many)."""
 
     due: datetime
     per_day: float = 0.0
@@ -134,29 +142,147 @@ class LatePolicy:
         return max(0.0, 1.0 - self.per_day * days), days
 
 
-def submission_time(folder: Path) -> datetime | None:
-    """When a submission was made: nbgrader's ``timestamp.txt`` (``nbgrader collect``/``submit``)."""
-    f = folder / "timestamp.txt"
+TIME_EXPECTED = (
+    "a time as nbgrader writes it, e.g. 2026-12-01 23:59:00.000000 UTC, with a zone name (CET, CEST, "
+    "Europe/Berlin) or an offset (+0100, +01:00)"
+)
+_OFFSET = re.compile(r"(?:UTC|GMT)?([+-])(\d{1,2})(?::?(\d{2}))?")
+_NOT_ZONES = {"Factory", "localtime", "posixrules"}  # in the tz database's list, but no place's zone
+
+
+@functools.lru_cache(maxsize=1)
+def _zone_keys() -> tuple[str, ...]:
+    return tuple(sorted(zoneinfo.available_timezones() - _NOT_ZONES))
+
+
+def _zone(name: str, local: datetime, course: timedelta | None = None) -> tzinfo:
+    """The zone a timestamp names after its time, at that (local) time: UTC, an offset (``+0100``,
+    ``+01:00``, ``+01``, ``UTC+01:00``), an abbreviation (``CET``, ``CEST``, ``PDT``: the offset
+    every zone of the tz database that uses it at that time has) or a zone of the tz database
+    (``Europe/Berlin``). An abbreviation zones use with different offsets (``CST``: -0600 in
+    Chicago, +0800 in Shanghai) takes that of this machine's zone, if it is one of them (as nbgrader
+    reads it), else ``course`` (the due date's offset), if it is one of them; else, or when no zone
+    uses it then, it is refused."""
+    if name.upper() in ("UTC", "GMT", "UT", "Z"):
+        return timezone.utc
+    m = _OFFSET.fullmatch(name)
+    if m:
+        hours, minutes = int(m.group(2)), int(m.group(3) or 0)
+        if hours > 23 or minutes > 59:
+            raise ValueError(f"offset {name} is out of range")
+        return timezone((-1 if m.group(1) == "-" else 1) * timedelta(hours=hours, minutes=minutes))
+    if "/" not in name:
+        offsets: dict[timedelta, list[str]] = {}
+        for key in _zone_keys():
+            at = local.replace(tzinfo=zoneinfo.ZoneInfo(key))
+            if at.tzname() == name and (offset := at.utcoffset()) is not None:
+                offsets.setdefault(offset, []).append(key)
+        here = local.astimezone()  # this machine's zone
+        if len(offsets) > 1 and here.tzname() == name and here.utcoffset() in offsets:
+            offsets = {o: k for o, k in offsets.items() if o == here.utcoffset()}
+        elif len(offsets) > 1 and course in offsets:
+            offsets = {o: k for o, k in offsets.items() if o == course}
+        if len(offsets) == 1:
+            return timezone(next(iter(offsets)), name)
+        if offsets:
+            places = "; ".join(f"{datetime(2000, 1, 1, tzinfo=timezone(o)).strftime('%z')} in {', '.join(k[:2])}"
+                               for o, k in sorted(offsets.items()))  # fmt: skip
+            raise ValueError(f"the zone {name} means different offsets ({places}), and neither this machine's zone nor "
+                             "the due date's offset is one of them (--due in the course's zone tells; nbgrader's "
+                             "Exchange.timestamp_format with %z writes the offset)")  # fmt: skip
+    try:
+        return zoneinfo.ZoneInfo(name)
+    except (zoneinfo.ZoneInfoNotFoundError, ValueError, OSError):
+        raise ValueError(f"no zone of the tz database is called {name} or uses it on {local:%Y-%m-%d}") from None
+
+
+def _dateutil(text: str, course: timedelta | None = None) -> datetime:
+    """A date and time in another layout, as nbgrader reads it (dateutil: ``Exchange.timestamp_format``
+    may be any layout dateutil reads), its zone placed by :func:`_zone`; every part of the date and
+    time must be written (read with two other defaults, it must give the same)."""
+    try:
+        from dateutil import parser  # type: ignore[import-untyped]  # pandas' dependency, as nbgrader's
+    except ImportError:
+        raise ValueError("not an ISO 8601 date and time") from None
+    try:
+        local = parser.parse(text, ignoretz=True, default=datetime(2000, 1, 1))
+        other = parser.parse(text, ignoretz=True, default=datetime(2001, 2, 2, 1, 1))
+        if local != other:
+            raise ValueError("a part of the date or time is missing")
+
+        def zone(name: str | None, offset: int | None) -> tzinfo:
+            return _zone(name, local, course) if name else timezone(timedelta(seconds=offset or 0))
+
+        t = parser.parse(text, default=datetime(2000, 1, 1), tzinfos=zone)
+    except (parser.ParserError, OverflowError):
+        raise ValueError("not a date and time") from None
+    return t
+
+
+_STAMP = re.compile(r"(\d{4}-\d{2}-\d{2})(?:[T ](\d{2}:\d{2}(?::\d{2}(?:[.,]\d{1,6})?)?))?(?:\s*(\S+))?")
+
+
+def parse_time(text: str, course: timedelta | None = None) -> datetime:
+    """A submission's time as nbgrader writes it in ``timestamp.txt`` (``Exchange.timestamp_format``,
+    by default ``%Y-%m-%d %H:%M:%S.%f %Z`` in ``Exchange.timezone``): the date and time, then the
+    zone (:func:`_zone`: ``UTC``, ``CET``, ``Europe/Berlin``, ``+0100``...; an ISO 8601 time with
+    its offset too); without a zone it is UTC, as nbgrader reads it (``nbgrader.utils.parse_utc``,
+    whose split of date, time and zone this follows; unlike it, ``+0100`` is an hour, not 100 s,
+    and a zone it cannot place, such as ``CEST`` on a machine in another zone, is refused instead
+    of read as UTC). ``course``: the course's offset (the due date's), which an abbreviation
+    several offsets share (``CST``) may mean. Raises ValueError saying why."""
+    text = text.strip()
+    m = _STAMP.fullmatch(text)
+    if m is None:
+        t = _dateutil(text, course)
+    else:
+        t = datetime.fromisoformat(f"{m.group(1)} {m.group(2) or '00:00'}".replace(",", "."))
+        if m.group(3):
+            t = t.replace(tzinfo=_zone(m.group(3), t, course))
+    return t if t.tzinfo else t.replace(tzinfo=timezone.utc)
+
+
+def _read_time(f: Path, course: timedelta | None = None) -> datetime | None:
+    """The time in ``f`` (None: no such file); ValueError saying what it holds and what was expected."""
     if not f.is_file():
         return None
-    text = f.read_text().strip()
-    text = re.sub(r"\s*UTC$", "+00:00", text)
     try:
-        t = datetime.fromisoformat(text)
-    except ValueError:
-        raise ValidationError(f"{f}: {text!r} is not a time (expected e.g. 2026-12-01 23:59:00.000000 UTC)") from None
-    return t if t.tzinfo else t.replace(tzinfo=timezone.utc)
+        text = f.read_text(encoding="utf-8").strip()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"cannot be read ({type(exc).__name__}: {exc}); expected {TIME_EXPECTED}") from None
+    shown = text if len(text) <= 80 else text[:80] + "..."
+    try:
+        return parse_time(text, course)
+    except ValueError as exc:
+        raise ValueError(f"{shown!r} is not a time ({exc}); expected {TIME_EXPECTED}") from None
+
+
+def submission_time(folder: Path) -> datetime | None:
+    """When a submission was made: nbgrader's ``timestamp.txt`` (``nbgrader collect``/``submit``),
+    read by :func:`parse_time`; None without one; ValidationError naming the file when it is no
+    time (:func:`grade_class` then notes it for that student and grades the others)."""
+    f = folder / "timestamp.txt"
+    try:
+        return _read_time(f)
+    except ValueError as exc:
+        raise ValidationError(f"{f}: {exc}") from None
 
 
 @dataclass
 class Graded:
-    """A graded submission with what the gradebook adds: its time, lateness, final score."""
+    """A graded submission with what the gradebook adds: its time, lateness, final score, and its
+    notes: ``notes`` on its time (also in its ``feedback.html``), ``time_error`` (its
+    ``timestamp.txt`` is no time: why), ``no_time`` (a late policy was set and it has no time, or an
+    unreadable one: counted as on time)."""
 
     result: SubmissionResult
     submitted: datetime | None
     days_late: int
     factor: float
     lateness_s: float = 0.0
+    notes: list[str] = field(default_factory=list)
+    time_error: str = ""
+    no_time: bool = False
 
     @property
     def score(self) -> float:
@@ -251,11 +377,25 @@ def grade_class(
             bar.update()
     graded = []
     for res in sorted(done, key=lambda r: (r.lab, r.student)):
-        when = submission_time(course / "submitted" / res.student / res.lab)
+        stamp = f"submitted/{res.student}/{res.lab}/timestamp.txt"
         policy = (late or {}).get(res.lab)
+        on_time = ""
+        if policy:
+            on_time = (f"so the late policy (due {policy.due.isoformat()}) could not be applied: counted as on time, "
+                       "as a submission without a time is (check its time in the LMS or nbgrader's exchange)")  # fmt: skip
+        notes, error = [], ""
+        try:
+            when = _read_time(course / stamp, policy.due.utcoffset() if policy else None)
+        except ValueError as exc:
+            when, error = None, f"{stamp}: {exc}"
+            notes.append(f"{error}: the submission's time is unknown" + (f", {on_time}" if policy else ""))
+        if when is None and not error and policy:
+            notes.append(f"no {stamp} (nbgrader collect and submit write it; a notebook put in submitted/ by hand "
+                         f"has none): the submission's time is unknown, {on_time}")  # fmt: skip
         factor, days = policy.factor(when) if policy else (1.0, 0)
         lateness = max(0.0, (when - policy.due).total_seconds()) if policy and when else 0.0
-        graded.append(Graded(res, when, days, factor, lateness))
+        graded.append(Graded(res, when, days, factor, lateness, notes, error, when is None and policy is not None))
+        _write_feedback(course, res, notes)
     return graded
 
 
@@ -263,18 +403,29 @@ def _write_result(course: Path, res: SubmissionResult) -> None:
     folder = course / "graded" / res.student / res.lab
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "result.json").write_text(res.to_json())
+    _write_feedback(course, res, ())
+
+
+def _write_feedback(course: Path, res: SubmissionResult, extra: Sequence[str]) -> None:
+    """``feedback.html``: each question's points and messages, the grader's notes, then ``extra``
+    (the gradebook's notes on the submission's time); rewritten only when it changes."""
+    folder = course / "graded" / res.student / res.lab
+    folder.mkdir(parents=True, exist_ok=True)
     rows = "".join(
         f"<tr><td>{html.escape(s.question)}</td><td>{s.points:g} / {s.max_points:g}</td>"
         f"<td><pre>{html.escape(s.message)}</pre></td></tr>"
         for s in res.scores
     )
-    notes = "".join(f"<li>{html.escape(n)}</li>" for n in res.notes)
-    (folder / "feedback.html").write_text(
+    notes = "".join(f"<li>{html.escape(n)}</li>" for n in [*res.notes, *extra])
+    page = (
         f"<!doctype html><meta charset='utf-8'><title>{html.escape(res.lab)}: {html.escape(res.student)}</title>"
         f"<h1>{html.escape(res.lab)}: {res.points:g} / {res.max_points:g}</h1>"
         f"<table border=1><tr><th>question</th><th>points</th><th>what the checks said</th></tr>{rows}</table>"
         + (f"<h2>Notes</h2><ul>{notes}</ul>" if notes else "")
     )
+    f = folder / "feedback.html"
+    if not f.is_file() or f.read_text() != page:
+        f.write_text(page)
 
 
 def _n(x: float) -> str:
@@ -331,14 +482,15 @@ def _write_grades(path: Path, rows: Sequence[Graded], roster: Mapping[str, Stude
     with open(path, "w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
         w.writerow(["student", "name", "email", "lab", *questions, "raw_score", "submitted", "days_late",
-                    "late_factor", "score", "max_score", "isolation"])  # fmt: skip
+                    "late_factor", "score", "max_score", "isolation", "notes"])  # fmt: skip
         for g in rows:
             who = roster.get(g.result.student, Student(g.result.student))
             per = {s.question: s.points for s in g.result.scores}
             w.writerow([g.result.student, who.name, who.email, g.result.lab,
                         *[_n(per[q]) if q in per else "" for q in questions], _n(g.result.points),
                         g.submitted.isoformat() if g.submitted else "", g.days_late, _n(g.factor),
-                        _n(g.score), _n(g.result.max_points), g.result.isolation])  # fmt: skip
+                        _n(g.score), _n(g.result.max_points), g.result.isolation,
+                        " | ".join(g.notes)])  # fmt: skip
 
 
 def _canvas(path: Path, lab: str, rows: Sequence[Graded], people: Sequence[Student]) -> None:
