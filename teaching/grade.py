@@ -10,8 +10,9 @@ teaching/source/ (``--source``). Writes COURSE/graded/, grades.csv, grades-demo.
 Exit status 0 when every submission was graded, 1 otherwise (a message says why; a submission that
 could not be graded, such as a notebook that is not JSON, scores 0, is named, and the others are
 graded). Warnings (the exit status stays 0) name the submissions whose time is unknown (a
-timestamp.txt that is no time; with --due, how many have none: counted as on time); grades.csv's
-notes column says the same per student.
+timestamp.txt that is no time; with --due, how many have none: counted as on time) and the pairs
+whose answer cells are identical (possible copies: no points changed); grades.csv's notes column
+says the same per student.
 """
 
 from __future__ import annotations
@@ -96,6 +97,13 @@ def main(argv: list[str] | None = None) -> int:
     if no_time:
         print(f"warning: {len(no_time)} submission(s) have no timestamp.txt, so --due could not be applied to them: "
               f"counted as on time ({', '.join(no_time)}; nbgrader collect writes it)", file=sys.stderr)  # fmt: skip
+    pairs = sorted({(g.result.lab, *sorted((g.result.student, other)), ", ".join(gids))
+                    for g in graded for other, gids in g.identical.items()})  # fmt: skip
+    if pairs:
+        shown = "; ".join(f"{a} and {b} ({lab}: {gids})" for lab, a, b, gids in pairs[:10])
+        print(f"warning: {len(pairs)} pair(s) of submissions with identical answer cells, possible copies (no points "
+              f"changed: an instructor decides; grades.csv's notes column names them): {shown}"
+              + (f"; and {len(pairs) - 10} more" if len(pairs) > 10 else ""), file=sys.stderr)  # fmt: skip
     failed = [g.result for g in graded if g.result.error]
     for res in failed:
         print(f"not graded (0 points): {res.error}", file=sys.stderr)

@@ -2,7 +2,8 @@
 ``timestamp.txt`` in any zone it writes, a time that cannot be read flags one student (the others
 are graded and exported), and a submission without a time under a late policy is said, not silent.
 
-Also :func:`tiny_course`, a small lab graded in seconds by the real grader."""
+Also :func:`tiny_course`, a small lab graded in seconds by the real grader (the copy check of
+``test_teaching_sandbox.py`` uses it)."""
 
 from __future__ import annotations
 

@@ -638,3 +638,80 @@ def test_a_copied_cell_a_try_out_line_and_a_helper_of_an_earlier_cell_are_graded
     assert any(n.startswith("A1_correctness: 2 cells carry this answer's id") for n in res.notes), res.notes
     assert any(n.startswith("C1_cs_r: a line outside its functions needs the lab's numbers (NameError: name 'tau'")
                for n in res.notes), res.notes  # fmt: skip
+
+
+# --- copied notebooks: identical answer cells are flagged, no points changed ---------------------------
+
+
+def _as_submitted(source: str) -> str:
+    """An instructor's answer cell as a student returns it: the release's lines and the solution, no
+    nbgrader delimiters."""
+    return "\n".join(line for line in source.splitlines() if line.strip() not in ("### BEGIN SOLUTION", "### END SOLUTION"))  # fmt: skip
+
+
+def test_identical_answer_cells_flag_a_copy_not_the_stub_nor_short_answers_many_write_alike(tmp_path):
+    """A byte-for-byte copy of another student's notebook got full marks and no flag. On lab 1's
+    answer cells: a copy (trailing spaces added) is flagged on every answer with 40+ characters of
+    its own, naming both; the stubs handed out, the one-liners many write alike (B3's 1.0, A1's
+    comparison) and two identical answers only are not."""
+    from lorisnb.tools.teaching import gradebook
+
+    spec = lab_spec(SOURCE_NB)
+    stubs = gradebook.answer_stubs(spec, tmp_path)  # no release notebook here: nbgrader's stubs, derived
+    assert stubs["B3_prediction"] == ["predicted_cr_t_late = ...\n# YOUR CODE HERE\nraise NotImplementedError()"]
+    own = {gid: _as_submitted(src) for gid, src in _solutions().items()}
+    short = {
+        "A1_correctness": "def correctness(ate_m, aoe_deg, eps, phi):\n    return (ate_m <= eps) & (aoe_deg <= phi)\n",
+        "B1_prediction": "predicted_cr_lost = 1 - 19 / T\n",
+        "B3_prediction": "predicted_cr_t_late = 1.0\n",
+        "C2_prediction": "predicted_cs_r_wrong = 0.0\n",
+        "C1_cs_r": "def cs_r(t0, t_min, first_correct, tau):\n    return np.exp((t_min - t0) / tau)\n",
+    }
+    answers = {
+        "s-ann": own,
+        "s-ben": {gid: "\n".join(line + "   " for line in src.splitlines()) + "\n\n" for gid, src in own.items()},
+        "s-cat": {gid: s[0] for gid, s in stubs.items()},  # returned unanswered
+        "s-dan": {gid: s[0] for gid, s in stubs.items()},
+        "s-eve": short,
+        "s-fay": dict(short),
+        "s-gus": {"B2_correct_rate": own["B2_correct_rate"], "D1_alignment": own["D1_alignment"]},
+    }
+    found = gradebook.identical_answers(answers, stubs)
+    copied = ("A1_correctness", "B1_prediction", "B2_correct_rate", "C1_cs_r", "D1_alignment", "E1_threshold",
+              "F_timeline", "G1_difficulty")  # fmt: skip
+    assert found == {"s-ann": {"s-ben": copied}, "s-ben": {"s-ann": copied}}
+
+
+@pytest.mark.thorough
+def test_a_copied_notebook_is_flagged_on_both_students_and_keeps_its_points(tmp_path, capsys):
+    """`make grade` on a class where s-ben returned s-ann's notebook byte for byte: both keep their
+    points, both are noted (grades.csv), naming the other and the answer cells, and the command line
+    says so; students returning the stubs, or the same short answers, are not flagged; the student's
+    feedback page does not name the other student (an instructor decides, and tells)."""
+    from test_gradebook_times import TINY, grade_script, submit, tiny_course
+
+    grade = grade_script()
+    course, source = tiny_course(tmp_path)
+    ann = submit(course, "s-ann")
+    (course / "submitted" / "s-ben" / TINY).mkdir(parents=True)
+    shutil.copyfile(ann / f"{TINY}.ipynb", course / "submitted" / "s-ben" / TINY / f"{TINY}.ipynb")
+    submit(course, "s-cat", answers={})  # the release, unanswered
+    submit(course, "s-dan", answers={})
+    short = {"Q1_total": "total = 293", "Q2_mean": "mean = 5.0", "Q3_word": "word = 'ceilnoprs'",
+             "Q4_flag": "flag = True", "Q5_count": "count = 3"}  # fmt: skip
+    submit(course, "s-eve", answers=short)
+    submit(course, "s-fay", answers=short)
+    rc = grade.main([str(course), "--source", str(source), "--timeout", "30", "--no-progress"])
+    out, err = capsys.readouterr()
+    assert rc == 0, err
+    rows = {r["student"]: r for r in csv.DictReader((course / "grades.csv").open(encoding="utf-8"))}
+    assert {s: r["score"] for s, r in rows.items()} == {"s-ann": "5", "s-ben": "5", "s-cat": "0", "s-dan": "0",
+                                                        "s-eve": "5", "s-fay": "5"}  # fmt: skip
+    for student, other in (("s-ann", "s-ben"), ("s-ben", "s-ann")):
+        note = rows[student]["notes"]
+        assert note.startswith("possible copy:") and f"{other}'s Q1_total, Q2_mean, Q3_word" in note, note
+        assert "no points changed" in note
+        assert other not in (course / "graded" / student / TINY / "feedback.html").read_text()
+    assert all(rows[s]["notes"] == "" for s in ("s-cat", "s-dan", "s-eve", "s-fay")), rows
+    assert "1 pair(s) of submissions with identical answer cells" in err
+    assert "s-ann and s-ben (tiny_lab: Q1_total, Q2_mean, Q3_word)" in err

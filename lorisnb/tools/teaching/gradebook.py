@@ -15,7 +15,8 @@ Names and e-mails come from a roster CSV (``id,name,email``, optional ``sis_id``
 
 The gradebook's own notes (:attr:`Graded.notes`, the ``notes`` column of ``grades.csv``): a
 submission whose time is unknown (no ``timestamp.txt`` while a late policy is set, or one that
-cannot be read: that student is named, everyone else is graded and exported).
+cannot be read: that student is named, everyone else is graded and exported), and submissions
+whose answer cells are identical (:func:`identical_answers`: possible copies, no points changed).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from __future__ import annotations
 import csv
 import functools
 import html
+import itertools
 import math
 import os
 import re
@@ -33,6 +35,8 @@ from dataclasses import dataclass, field
 from datetime import datetime, timedelta, timezone, tzinfo
 from pathlib import Path
 
+import nbformat
+
 from lorisnb.errors import ValidationError
 from lorisnb.tools.teaching.autograde import (
     GradeSettings,
@@ -42,6 +46,7 @@ from lorisnb.tools.teaching.autograde import (
     git_databases,
     grade_submission,
     lab_spec,
+    student_answers,
     unreadable,
 )
 from lorisnb.tools.teaching.sandbox import can_isolate, claim_uids
@@ -273,7 +278,8 @@ class Graded:
     """A graded submission with what the gradebook adds: its time, lateness, final score, and its
     notes: ``notes`` on its time (also in its ``feedback.html``), ``time_error`` (its
     ``timestamp.txt`` is no time: why), ``no_time`` (a late policy was set and it has no time, or an
-    unreadable one: counted as on time)."""
+    unreadable one: counted as on time), ``identical`` (another student -> the answer cells both
+    submitted identical, :func:`identical_answers`; in ``grades.csv``, not in the feedback)."""
 
     result: SubmissionResult
     submitted: datetime | None
@@ -283,10 +289,110 @@ class Graded:
     notes: list[str] = field(default_factory=list)
     time_error: str = ""
     no_time: bool = False
+    identical: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
     @property
     def score(self) -> float:
         return round(self.result.points * self.factor, 4)
+
+    @property
+    def copy_notes(self) -> list[str]:
+        if not self.identical:
+            return []
+        whose = "; ".join(f"{other}'s {', '.join(gids)}" for other, gids in sorted(self.identical.items()))
+        return [
+            f"possible copy: answer cells identical to {whose} (each not the handed-out stub, with at least "
+            f"{COPY_MIN_CHARS} characters of its own; {COPY_MIN_ANSWERS} or more such cells flag a pair): no points "
+            "changed, an instructor decides"
+        ]
+
+
+# --- identical answers (possible copies) -----------------------------------------------------------
+
+COPY_MIN_ANSWERS = 3  # identical answer cells that flag a pair of submissions
+COPY_MIN_CHARS = 40  # characters other than spaces an answer needs in its own lines (not the stub's) to count
+CODE_STUB = "# YOUR CODE HERE\nraise NotImplementedError()"  # nbgrader's (and teaching/nbgrader_config.py's)
+_DELIMITERS = {"### BEGIN SOLUTION", "### END SOLUTION"}  # nbgrader's, in a cell copied from the instructor's
+_SOLUTION = re.compile(r"^([ \t]*)### BEGIN SOLUTION[ \t]*\n.*?^[ \t]*### END SOLUTION[ \t]*$", re.S | re.M)
+
+
+def _normal(source: str) -> str:
+    """An answer cell as compared: each line's trailing whitespace and the blank lines around it left out."""
+    return "\n".join(line.rstrip() for line in source.splitlines()).strip("\n")
+
+
+def answer_stubs(spec: LabSpec, release: Path) -> dict[str, list[str]]:
+    """answer grade_id -> the stubs a student was handed out: the release notebook's answer cell
+    (``release/<lab>/<lab>.ipynb``, when there) and the instructor's cell with its solution replaced
+    by nbgrader's :data:`CODE_STUB`, as ``nbgrader generate_assignment`` does."""
+    out: dict[str, list[str]] = {}
+    for cell in spec.notebook.cells:
+        meta = cell.get("metadata", {}).get("nbgrader", {})
+        if cell.cell_type == "code" and meta.get("solution") and meta.get("grade_id") is not None:
+            src = cell.source
+            stub = (_SOLUTION.sub(lambda m: "\n".join(m.group(1) + line for line in CODE_STUB.splitlines()), src)
+                    if _SOLUTION.search(src) else CODE_STUB)  # fmt: skip
+            out[str(meta["grade_id"])] = [stub]
+    handed_out = release / f"{spec.name}.ipynb"
+    if handed_out.is_file():
+        try:
+            for gid, src in student_answers(nbformat.read(handed_out, as_version=4)).items():
+                out.setdefault(gid, []).append(src)
+        except Exception:  # noqa: BLE001 (a release notebook that does not read: the derived stubs stay)
+            pass
+    return out
+
+
+def identical_answers(
+    answers: Mapping[str, Mapping[str, str]], stubs: Mapping[str, Sequence[str]]
+) -> dict[str, dict[str, tuple[str, ...]]]:
+    """Possible copies: student -> another student -> the answer cells (grade ids, in ``stubs``'
+    order) the two submitted identical, for pairs with at least :data:`COPY_MIN_ANSWERS` of them.
+    ``answers``: student -> grade_id -> the answer cell. Cells are compared after each line's
+    trailing whitespace is stripped; a cell counts only when it is not empty, not a stub handed out
+    (``stubs``: grade_id -> its stubs), and its own lines (not blank, not lines of a stub, not
+    nbgrader's solution delimiters) hold at least :data:`COPY_MIN_CHARS` characters other than
+    spaces: a one-line answer many would write alike (``predicted_cs_r_wrong = 0.0``,
+    ``return (ate_m <= eps) & (aoe_deg <= phi)``) never counts. A cheap check of exact copies: a
+    copy edited (renamed, reformatted, a comment added) is not found."""
+    order = {gid: k for k, gid in enumerate(stubs)}
+    same: dict[tuple[str, str], list[str]] = {}  # (grade_id, the answer) -> the students who gave it
+    for student, cells in answers.items():
+        for gid, source in cells.items():
+            text = _normal(source)
+            handed = stubs.get(gid, ())
+            if not text or text in {_normal(s) for s in handed}:
+                continue
+            stub_lines = {line.strip() for s in handed for line in s.splitlines()} | _DELIMITERS
+            own = sum(len("".join(line.split())) for line in text.splitlines() if line.strip() not in stub_lines)
+            if own >= COPY_MIN_CHARS:
+                same.setdefault((gid, text), []).append(student)
+    pairs: dict[tuple[str, str], list[str]] = {}
+    for (gid, _), who in same.items():
+        for a, b in itertools.combinations(sorted(who), 2):
+            pairs.setdefault((a, b), []).append(gid)
+    out: dict[str, dict[str, tuple[str, ...]]] = {}
+    for (a, b), gids in sorted(pairs.items()):
+        if len(gids) >= COPY_MIN_ANSWERS:
+            both = tuple(sorted(gids, key=lambda g: (order.get(g, len(order)), g)))
+            out.setdefault(a, {})[b] = both
+            out.setdefault(b, {})[a] = both
+    return out
+
+
+def _class_answers(course: Path, lab: str, results: Sequence[SubmissionResult]) -> dict[str, dict[str, str]]:
+    """student -> their answer cells, for the graded submissions of ``lab`` (not the demonstration
+    students, not a notebook that could not be read)."""
+    out: dict[str, dict[str, str]] = {}
+    for res in results:
+        if res.lab != lab or res.error or res.student.startswith(DEMO_PREFIX):
+            continue
+        try:
+            nb = nbformat.read(course / "submitted" / res.student / lab / f"{lab}.ipynb", as_version=4)
+            out[res.student] = student_answers(nb)
+        except Exception:  # noqa: BLE001 (changed since it was graded: compared next time)
+            continue
+    return out
 
 
 def _release_bytes(release: Path) -> bytes:
@@ -339,6 +445,7 @@ def grade_class(
     secret = _secret(course)
     settings = grading_settings(course, source, settings or GradeSettings(), secret)
     todo, done = [], []
+    stubs: dict[str, dict[str, list[str]]] = {}
     for lab in labs:
         src_nb = source / lab / f"{lab}.ipynb"
         if not src_nb.is_file():
@@ -347,6 +454,7 @@ def grade_class(
         release = course / "release" / lab
         if not release.is_dir():
             raise ValidationError(f"lab {lab!r}: no release folder {release} (run `make student` first)")
+        stubs[lab] = answer_stubs(spec, release)
         base = digest(src_nb.read_bytes(), _release_bytes(release), repr(settings.limits))
         for nb in sorted(course.glob(f"submitted/*/{lab}/{lab}.ipynb")):
             student = nb.parents[1].name
@@ -375,6 +483,7 @@ def grade_class(
             _write_result(course, res)
             done.append(res)
             bar.update()
+    identical = {lab: identical_answers(_class_answers(course, lab, done), stubs[lab]) for lab in labs}
     graded = []
     for res in sorted(done, key=lambda r: (r.lab, r.student)):
         stamp = f"submitted/{res.student}/{res.lab}/timestamp.txt"
@@ -394,7 +503,8 @@ def grade_class(
                          f"has none): the submission's time is unknown, {on_time}")  # fmt: skip
         factor, days = policy.factor(when) if policy else (1.0, 0)
         lateness = max(0.0, (when - policy.due).total_seconds()) if policy and when else 0.0
-        graded.append(Graded(res, when, days, factor, lateness, notes, error, when is None and policy is not None))
+        graded.append(Graded(res, when, days, factor, lateness, notes, error, when is None and policy is not None,
+                             identical[res.lab].get(res.student, {})))  # fmt: skip
         _write_feedback(course, res, notes)
     return graded
 
@@ -490,7 +600,7 @@ def _write_grades(path: Path, rows: Sequence[Graded], roster: Mapping[str, Stude
                         *[_n(per[q]) if q in per else "" for q in questions], _n(g.result.points),
                         g.submitted.isoformat() if g.submitted else "", g.days_late, _n(g.factor),
                         _n(g.score), _n(g.result.max_points), g.result.isolation,
-                        " | ".join(g.notes)])  # fmt: skip
+                        " | ".join([*g.notes, *g.copy_notes])])  # fmt: skip
 
 
 def _canvas(path: Path, lab: str, rows: Sequence[Graded], people: Sequence[Student]) -> None:
