@@ -139,7 +139,11 @@ def test_a_trial_that_repeats_another_counts_once(table):
     assert len(scene) and scene["decided_by"].str.contains("5 vs 4 trials").all()
     lost = seqs[seqs["metric"] == "trial"]
     with_output = table["matched"].to_numpy() > 0  # a trial without output repeats nothing
-    assert len(lost) == with_output.sum() and (lost["status"] == "missing").all() and (lost["cand"] == "trial 5 a copy").all()
+    assert (
+        len(lost) == with_output.sum()
+        and (lost["status"] == "missing").all()
+        and (lost["cand"] == "trial 5 a copy").all()
+    )
     assert lost["decided_by"].str.contains("repeat another trial's every value").all()
     assert diff_tables(base, cand).regressed
     assert not set(seqs.loc[seqs["metric"] != "trial", "status"]) & {"regression", "missing", "failed"}
