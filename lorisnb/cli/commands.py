@@ -15,7 +15,7 @@ import numpy as np
 from lorisnb.cli.options import param_value, spec_from_args, spec_given
 from lorisnb.cli.outputs import check_outputs, refuse_unused
 from lorisnb.cli.text import clean, format_table, frame_columns, say
-from lorisnb.errors import FailedInputsWarning, LorisError, LorisWarning, ValidationError
+from lorisnb.errors import EvaluationError, FailedInputsWarning, LorisError, LorisWarning, ValidationError
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -25,9 +25,15 @@ def _executor(args: argparse.Namespace) -> Any:
     """A Dask cluster's executor for ``--scheduler ADDRESS`` (None without it)."""
     if getattr(args, "scheduler", None) is None:
         return None
-    from lorisnb.tools.evaluation.pool import connect_scheduler
+    from lorisnb.tools.evaluation.pool import SCHEDULER_TIMEOUT, connect_scheduler
 
     client = connect_scheduler(args.scheduler)  # checked and probed: one line, never a hang
+    try:  # a scheduler with no worker runs nothing: the command waited for ever, silent
+        client.wait_for_workers(1, timeout=SCHEDULER_TIMEOUT)
+    except TimeoutError:
+        client.close()
+        raise EvaluationError(f"--scheduler {args.scheduler}: the scheduler has no worker (waited "
+                              f"{SCHEDULER_TIMEOUT:g} s); start one (dask worker {args.scheduler}) and run again") from None  # fmt: skip
     return client.get_executor()
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -118,6 +120,43 @@ def test_dask_cluster_equals_one_process(icra20, tmp_path, capsys):
             assert main(["evaluate", str(src), "--scheduler", cluster.scheduler_address, "--csv", str(out),
                          "--no-progress"]) == 0  # fmt: skip
     pd.testing.assert_frame_equal(pd.read_csv(out), pd.read_csv(_csv_of(serial, tmp_path)))
+
+
+@pytest.mark.slow
+def test_a_cluster_elsewhere_reads_the_files_named_here(data, tmp_path, monkeypatch, capsys):
+    """Relative paths were sent as typed, and each worker opened them in its own folder: a file of
+    that name there was scored instead (wrong numbers, exit 0), or none was found. A trailing "/"
+    of the address passed the check and failed in distributed; a scheduler without a worker hung."""
+    import shutil
+
+    distributed = pytest.importorskip("distributed")
+    here, there = tmp_path / "here", tmp_path / "there"
+    here.mkdir()
+    there.mkdir()
+    shutil.copy(data.tum / "fr2_desk_ORB.txt", here / "est.txt")
+    shutil.copy(data.tum / "fr2_desk_groundtruth.txt", here / "gt.txt")
+    shutil.copy(data.tum / "freiburg1_xyz-rgbdslam.txt", there / "est.txt")  # a decoy where the workers start
+    shutil.copy(data.tum / "freiburg1_xyz-groundtruth.txt", there / "gt.txt")
+    monkeypatch.chdir(there)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        monkeypatch.chdir(here)
+        local = ln.evaluate_pairs("est.txt", "gt.txt", jobs=1).sequences()
+        with distributed.Client(cluster) as client:
+            remote = ln.evaluate_pairs("est.txt", "gt.txt", executor=client.get_executor()).sequences()
+        pd.testing.assert_frame_equal(remote, local)
+        out = here / "dask.csv"
+        assert main(["evaluate", "est.txt", "--gt", "gt.txt", "--scheduler", cluster.scheduler_address + "/",
+                     "--csv", "dask.csv", "--no-progress"]) == 0  # fmt: skip
+        pd.testing.assert_frame_equal(
+            pd.read_csv(out), pd.read_csv(_csv_of(ln.evaluate_pairs("est.txt", "gt.txt"), tmp_path))
+        )
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as empty:
+        t0 = time.monotonic()
+        assert (
+            main(["evaluate", "est.txt", "--gt", "gt.txt", "--scheduler", empty.scheduler_address, "--no-progress"])
+            == 2
+        )
+        assert "the scheduler has no worker" in capsys.readouterr().err and time.monotonic() - t0 < 30
 
 
 def _csv_of(ev: ln.Evaluation, tmp_path) -> str:

@@ -13,6 +13,7 @@ import warnings
 from dataclasses import dataclass, replace
 from functools import lru_cache, partial
 from pathlib import Path
+from typing import Any
 
 from lorisnb.core.lifelong.missing import with_missing
 from lorisnb.core.lifelong.scoring import score_rows
@@ -71,6 +72,23 @@ class Job:
     scene: str = ""  # manifest: the scene of this job
     statistics: bool = True  # the spec's setting scored with the error statistics too (evaluate's ``statistics``)
     keep_poses: bool = True  # False: each pose's errors let go once that setting is scored (evaluate's ``keep_poses``)
+
+
+def absolute_paths(job: Job) -> Job:
+    """``job`` with every path it reads absolute (the input, its root, the data root, a pair's
+    ground truth and times files, a manifest's file): a worker elsewhere (a Dask cluster's) opens
+    a relative path in its own folder, which scored a file of that name there, or none."""
+
+    def a(p: Any) -> Any:
+        return None if p is None else Path(os.path.abspath(p))
+
+    source = job.source
+    if source is not None:
+        source = replace(source, groundtruth=a(source.groundtruth), est_times=a(source.est_times),
+                         gt_times=a(source.gt_times))  # fmt: skip
+    data = job.data if job.data is None else replace(job.data, root=a(job.data.root))
+    manifest = job.manifest if job.manifest is None else replace(job.manifest, path=a(job.manifest.path))
+    return replace(job, path=a(job.path), root=a(job.root), source=source, data=data, manifest=manifest)
 
 
 def _stamp(path: Path) -> tuple[float, int]:

@@ -255,8 +255,11 @@ def connect_scheduler(address: str, timeout: float | None = None) -> Any:
     timeout = SCHEDULER_TIMEOUT if timeout is None else float(timeout)
     distributed = require("distributed")
     probe_scheduler(address, timeout)
+    scheme, host, port = scheduler_address(address)
+    normal = f"{scheme}://{host}" if scheme == "inproc" else f"{scheme}://[{host}]:{port}" if ":" in host else (
+        f"{scheme}://{host}:{port}")  # fmt: skip  # the form checked (a trailing "/" failed in distributed)
     try:
-        return distributed.Client(address.strip(), timeout=timeout)
+        return distributed.Client(normal, timeout=timeout)
     except TypeError as exc:  # tls:// without a TLS configuration: distributed's own TypeError
         if scheduler_address(address)[0] != "tls":
             raise

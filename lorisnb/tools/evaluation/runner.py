@@ -40,7 +40,7 @@ from lorisnb.tools.evaluation.inputs import (
     scene_label,
     without_groundtruth,
 )
-from lorisnb.tools.evaluation.jobs import BIG_FILE_BYTES, Job, PairSource, run_job
+from lorisnb.tools.evaluation.jobs import BIG_FILE_BYTES, Job, PairSource, absolute_paths, run_job
 from lorisnb.tools.evaluation.pool import default_jobs, run_tasks, size_of
 from lorisnb.tools.evaluation.result import Evaluation, Failure, said_notes
 
@@ -74,7 +74,9 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
     skipped: list[Failure] = []
     sizes = [size_of(j.path) if j.path.is_file() else 1 for j in jobs]
     unit = "file" if kind != "manifest" else "session set"
-    for status, value in run_tasks(run_job, jobs, sizes, n, executor, progress, desc="evaluating", unit=unit,
+    # on an executor (a Dask cluster's workers) a relative path is opened in the worker's folder, not here
+    sent = jobs if executor is None else [absolute_paths(j) for j in jobs]
+    for status, value in run_tasks(run_job, sent, sizes, n, executor, progress, desc="evaluating", unit=unit,
                                    meanwhile=_table_library):  # fmt: skip
         if isinstance(value, FileErrors):
             done.append(value)
