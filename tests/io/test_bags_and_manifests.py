@@ -234,3 +234,24 @@ def test_a_bag_folder_in_a_walked_folder_is_one_input(tmp_path, storage):
     assert [f for f, _ in result_files([tmp_path / "runs"], (".txt", ".bag", ".db3", ".mcap"))] == [bag]
     got = ln.evaluate_pairs([tmp_path / "runs"], gt, "tum", fmt="bag", gt_fmt="tum").sequences()
     assert len(got) == 1 and int(got["matched"].iloc[0]) == 200
+
+
+@pytest.mark.parametrize("ros", [1, 2])
+def test_a_tf_chain_keeps_the_last_pose_of_a_repeated_stamp_as_a_pose_topic_does(tmp_path, ros):
+    """Every pose written twice at one stamp, the second 5 cm further along x: the pose topic keeps
+    the second at every stamp, the TF chain kept it too except at the last stamp (the span's end
+    took the first), so the two routes of the same poses scored differently."""
+    from types import SimpleNamespace
+
+    from helpers import write_bag
+
+    t, p, q, _, _ = _trajectories()
+    twice = SimpleNamespace(stamps=np.repeat(t, 2), positions=np.repeat(p, 2, axis=0) + np.tile([[0, 0, 0], [0.05, 0, 0]],
+                            (len(t), 1)), quaternions=np.repeat(q, 2, axis=0))  # fmt: skip
+    bag = write_bag(tmp_path / ("b.bag" if ros == 1 else "b"), twice, ros, tf=("world", "odom", "base"))
+    with pytest.warns(ln.LorisWarning, match="kept the last pose of each stamp"):
+        chain = read_bag(bag, tf="world:base")
+    with pytest.warns(ln.LorisWarning):
+        topic = read_bag(bag, topic="/pose")
+    np.testing.assert_allclose(chain.positions, p + [0.05, 0, 0], atol=1e-12)  # the last of each stamp, the end too
+    np.testing.assert_allclose(chain.positions, topic.positions, atol=1e-12)

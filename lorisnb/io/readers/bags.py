@@ -290,7 +290,14 @@ def _read_tf(reader, spath: str, chain: str) -> Trajectory:
     if stamps.size < raw_stamps.size:
         warnings.warn(
             f"{spath} TF link {base[0]}->{base[1]}: {raw_stamps.size - stamps.size} of {raw_stamps.size} transforms "
-            "repeat a stamp; kept one pose per stamp",
+            "repeat a stamp; kept the last pose of each stamp, as a pose topic's",
+            LorisWarning,
+            stacklevel=4,
+        )
+    back = int((np.diff(raw_stamps) < 0).sum())
+    if back:  # sorted, as a pose topic's stamps are, and said as they are
+        warnings.warn(
+            f"{spath} TF link {base[0]}->{base[1]}: stamps are not increasing ({back} times); sorted them",
             LorisWarning,
             stacklevel=4,
         )
@@ -330,11 +337,15 @@ def _chain(edges: dict, parent: str, child: str) -> list[tuple[tuple[str, str], 
 
 
 def _link_at(samples: list, stamps: np.ndarray, is_static: bool):
-    """A link's transform at ``stamps``: the last one if static, else interpolated inside its span."""
+    """A link's transform at ``stamps``: the last one if static, else interpolated inside its span
+    (of transforms of one stamp, the last received: the same pose at every stamp, the span's last
+    too)."""
     t = np.array([s for s, _ in samples])
     v = np.array([p for _, p in samples], float)
     order = np.argsort(t, kind="stable")
     t, v = t[order], v[order]
+    last = np.append(t[1:] != t[:-1], True)  # of a repeated stamp the last transform (in the order received)
+    t, v = t[last], v[last]
     v[:, 3:] /= np.linalg.norm(v[:, 3:], axis=1, keepdims=True)
     if is_static or len(t) == 1:
         return (
