@@ -144,3 +144,21 @@ def test_notebook_on_an_awkward_ordslam_folder(tmp_path):
     assert sorted(meas["sequence"]) == ["scenario5/08h/fill.txt", "scenario6/22-30/std.txt"]
     text = (tmp_path / "nb" / "indoor_vs_outdoor.ipynb").read_text()
     assert f"ORDSLAM (your folder, every scenario with an estimate): {meas['ate_pct_length'].median():.2f} %." in text
+
+
+def test_upper_case_names_are_read_and_hidden_folders_are_not(tmp_path):
+    """``S5_13-00_FILL.TXT`` and its estimate were passed over without a word (a case-sensitive
+    ``*.txt``), and the copy JupyterLab keeps in ``.ipynb_checkpoints`` was read as a sequence."""
+    p = _positions(100)
+    t = 1_600_000_000.0 + 0.2 * np.arange(100)
+    _write(tmp_path / "S5_13-00_FILL.TXT", t, p)
+    _write(tmp_path / "s6_20h_std.txt", t, p)
+    _write(tmp_path / ".ipynb_checkpoints" / "s6_20h_std-checkpoint.txt", t, p)
+    _write(tmp_path / "~s6_20h_std.txt", t, p)
+    _write(tmp_path / "estimates" / "orb" / "S5_13-00_FILL.TXT", t, _noisy(p))
+    _write(tmp_path / "estimates" / "orb" / ".ipynb_checkpoints" / "x-checkpoint.txt", t, _noisy(p))
+    folder = find_ordslam(tmp_path)
+    assert [g.name for g in folder.groundtruth] == ["S5_13-00_FILL.TXT", "s6_20h_std.txt"]
+    assert [e.name for e in folder.estimates["orb"]] == ["S5_13-00_FILL.TXT"]
+    table, problems = ordslam_difficulty(folder)
+    assert list(table["sequence"]) == ["S5_13-00_FILL.TXT"] and problems.empty

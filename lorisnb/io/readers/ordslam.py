@@ -255,6 +255,18 @@ class OrdslamFolder:
         return pairs, problems
 
 
+def _text_files(folder: Path) -> list[Path]:
+    """The ``.txt`` files below ``folder`` (any case: ``S5_13-00_FILL.TXT`` was passed over without
+    a word), hidden files and folders left out (``.ipynb_checkpoints``, which JupyterLab writes
+    beside a file it opens, ``.x.txt``, ``~x.txt``: they were read as sequences), sorted."""
+    out = []
+    for p in folder.rglob("*"):
+        hidden = any(part.startswith((".", "~")) for part in p.relative_to(folder).parts)
+        if not hidden and p.suffix.lower() == ".txt" and p.is_file():
+            out.append(p)
+    return sorted(out)
+
+
 def find_ordslam(root: str | os.PathLike | None) -> OrdslamFolder | None:
     """The ORDSLAM folder at ``root``, or None when ``root`` is None. Raises DataNotFoundError
     (naming the folder) when it is given but holds no trajectory file, ParseError when its
@@ -268,13 +280,13 @@ def find_ordslam(root: str | os.PathLike | None) -> OrdslamFolder | None:
             "and pass the folder holding its ground-truth .txt files"
         )
     est_dir = root / "estimates"
-    gt = sorted(p for p in root.rglob("*.txt") if est_dir not in p.parents)
+    gt = [p for p in _text_files(root) if est_dir not in p.parents]
     if not gt:
         raise DataNotFoundError(f"no ground-truth .txt file below {root}; expected one trajectory file per sequence")
     estimates: dict[str, list[Path]] = {}
     if est_dir.is_dir():
         for alg in sorted(d for d in est_dir.iterdir() if d.is_dir()):
-            estimates[alg.name] = sorted(alg.rglob("*.txt"))
+            estimates[alg.name] = _text_files(alg)
     cat = root / "catalog.csv"
     catalog = read_catalog(cat, [p.relative_to(root).as_posix() for p in gt]) if cat.is_file() else None
     return OrdslamFolder(root, gt, estimates, catalog)
