@@ -630,3 +630,15 @@ def test_a_typo_of_a_threshold_names_every_setting_and_the_one_meant(data):
         ev.sequences(epss=1)
     with pytest.raises(ln.ValidationError, match="did you mean 'rpe_delta'"):
         ev.sequences(rpe_detla=2)
+
+
+@pytest.mark.parametrize("name", ["algorithms", "scenes"])
+def test_an_empty_list_of_names_is_refused_not_read_as_nothing_or_everything(icra20, name, capsys):
+    """``algorithms=[]`` evaluated nothing and exited 0 (a quick notebook put its defaults in its
+    place); an empty list selects nothing, so it is refused, naming the parameter."""
+    from lorisnb.tools.notebook.params import check_values
+
+    with pytest.raises(ln.ValidationError, match=rf"{name}=\[\]: an empty list selects nothing"):
+        ln.evaluate(icra20 / "per-seq" / "odom", **{name: []})
+    with pytest.raises(ln.ValidationError, match=rf"{name}=\[\]"):
+        check_values({name: []}, ["per_sequence_benchmark"])

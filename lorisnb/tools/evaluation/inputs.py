@@ -147,6 +147,9 @@ def names(what: str, value: object) -> list[str]:
     if not isinstance(items, Iterable) or isinstance(items, bytes) or _is_frame(items):
         raise ValidationError(f"{what}={value!r}: expected a name or a list of names")
     names = list(items)
+    if not names:  # it selected nothing: empty tables, exit 0 (or a quick run's defaults in its place)
+        raise ValidationError(f"{what}=[]: an empty list selects nothing; expected at least one name (leave {what} "
+                              "out, or None, for every one)")  # fmt: skip
     bad = [n for n in names if not isinstance(n, str)]
     if bad:
         raise ValidationError(f"{what}: expected names (str), got {bad[0]!r}")
