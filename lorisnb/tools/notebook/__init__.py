@@ -11,14 +11,18 @@ from lorisnb._lazy import attach
 
 if TYPE_CHECKING:
     from lorisnb.tools.notebook.start import (
+        FIGURE_FORMATS,
         INPUT_ERRORS_CSV,
+        OUTPUTS_MARKER,
         RUN_MARKER,
         Outputs,
         Session,
         check_notebook_parameters,
+        check_output_dir,
         compact_png,
         default_output_dir,
         figure_png,
+        notebook_inputs,
         setup,
         show_figure,
         show_inputs,
@@ -28,14 +32,18 @@ if TYPE_CHECKING:
 __getattr__, __dir__ = attach(__name__)
 
 __all__ = [
+    "FIGURE_FORMATS",
     "INPUT_ERRORS_CSV",
+    "OUTPUTS_MARKER",
     "Outputs",
     "RUN_MARKER",
     "Session",
     "check_notebook_parameters",
+    "check_output_dir",
     "compact_png",
     "default_output_dir",
     "figure_png",
+    "notebook_inputs",
     "setup",
     "show_figure",
     "show_inputs",

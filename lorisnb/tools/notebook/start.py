@@ -4,24 +4,29 @@ lorisnb's warnings once; and :class:`Outputs`, where a notebook writes its table
 A notebook's default output folder is never beside the notebook in the source tree: it is
 ``results/notebooks/<name>/`` of the checkout (or of the current folder) when there is one,
 else a new temporary folder. ``lorisnb report`` passes ``output_dir="."`` (its run folder).
+An output folder is never one of the notebook's inputs, nor holds or lies in one
+(:func:`check_output_dir`), and a notebook replaces only the files it wrote there itself
+(:data:`OUTPUTS_MARKER` lists them).
 """
 
 from __future__ import annotations
 
+import contextlib
 import io
+import json
 import os
 import tempfile
 import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from lorisnb.errors import DataNotFoundError, LorisWarning
+from lorisnb.errors import DataNotFoundError, LorisWarning, OutputError, ValidationError
 from lorisnb.io.datasets.paths import DataPaths, DataRoot, find_data, sample_data
-from lorisnb.io.writers import write_csv
+from lorisnb.io.writers import overlap, write_atomically, write_csv, write_text
 
 if TYPE_CHECKING:
     from lorisnb.core.spec.evalspec import EvalSpec
@@ -32,6 +37,65 @@ INPUT_ERRORS_CSV = "input_errors.csv"
 #: hold it); a notebook whose output folder lies directly in such a folder is part of a report.
 RUN_MARKER = ".lorisnb-run"
 
+#: A file :class:`Outputs` writes into a notebook's output folder (JSON): every file a notebook wrote
+#: there, by its name in the folder, and which notebook wrote it. A notebook replaces a file of its
+#: output folder only where this marker lists it as that notebook's own: a notebook run again into
+#: its folder replaces its files, and any other file of the same name (the user's, another notebook's,
+#: one of a lorisnb that wrote no marker) is refused and left as it is.
+OUTPUTS_MARKER = ".lorisnb-notebook"
+
+#: The files :meth:`Outputs.figure` saves a figure as (outside a report's run folder).
+FIGURE_FORMATS = ("png", "svg", "pdf")
+
+
+def check_output_dir(output_dir: Any, inputs: Mapping[str, str | os.PathLike[str]] | None = None) -> Path:
+    """A notebook's ``output_dir`` as a path, checked before anything is made or written: a folder
+    name (not empty, not a file), and neither one of the notebook's ``inputs`` nor holding one nor
+    lying in one, as the command line refuses an output folder among its inputs
+    (:func:`lorisnb.io.writers.overlap`, :func:`lorisnb.cli.outputs.check_output`): the tables and
+    figures would be mixed with what the notebook reads, and read as inputs by a later run.
+    ``inputs``: each input as the error names it (``"the input path=DIR"``) -> its path."""
+    if not isinstance(output_dir, (str, os.PathLike)) or not str(output_dir).strip():
+        raise ValidationError(
+            f"output_dir={output_dir!r}: expected a folder name (None: the notebook's default folder)"
+        )
+    target = Path(output_dir)
+    for label, where in (inputs or {}).items():
+        hit = overlap(target, [where])
+        if hit:
+            raise OutputError(
+                f"output_dir={output_dir} {hit[0]} {label} of this notebook: its tables and figures would be "
+                "mixed with what it reads; choose an output_dir outside the notebook's inputs"
+            )
+    if target.exists() and not target.is_dir():
+        raise OutputError(f"output_dir={output_dir} is a file; expected a folder (the notebook writes its tables "
+                          "and figures into it): choose another output_dir")  # fmt: skip
+    return target
+
+
+def notebook_inputs(values: Mapping[str, Any], data: DataPaths) -> dict[str, Path]:
+    """What a notebook reads, for :func:`check_output_dir`: its path parameters given (``values``;
+    :data:`lorisnb.tools.notebook.params.PATHS`: results, estimates, ground truth, a manifest and the
+    ground truth it names) and the data root, each named as an error names it."""
+    from lorisnb.tools.notebook.params import PATHS
+    from lorisnb.tools.report.portable import manifest_files
+
+    found: dict[str, Path] = {}
+    for name in PATHS:
+        value = values.get(name)
+        if value is None or name == "data_root":  # the data root: as found, below
+            continue
+        if name == "manifest":  # the file (a built-in manifest's name is none of the user's) and its ground truth
+            found.update({f"the input {f} (of manifest={value})": f for f in manifest_files(value)})
+            continue
+        found[f"the input {name}={value}"] = Path(str(value)).expanduser()
+    found[f"the data root {data.root}"] = data.root
+    return found
+
+
+def _who(owner: str) -> str:
+    return f"the notebook {owner}" if owner else "lorisnb's Outputs without a notebook's name"
+
 
 class Outputs:
     """Where a notebook writes what it shows: tables as CSV, figures as PNG and SVG.
@@ -41,15 +105,31 @@ class Outputs:
     Inside a report's run folder (:data:`RUN_MARKER` in the parent folder) a figure is stored once:
     one PNG at 100 dpi (the size it is shown at) in 256 colours (:func:`compact_png`), which the
     notebook (and its HTML page) shows by reference instead of embedding.
+
+    The folder is checked first (:func:`check_output_dir`: a folder, none of the notebook's ``inputs``,
+    name -> path). Every file written is listed in the folder's :data:`OUTPUTS_MARKER` as ``notebook``'s
+    before it is written; a file of the same name that the marker does not list as ``notebook``'s is
+    never replaced (:class:`~lorisnb.errors.OutputError`, before any file of the call is written). A
+    notebook that writes a file itself asks :meth:`path` for its name.
     """
 
-    def __init__(self, output_dir: str | os.PathLike[str]):
-        self.dir = Path(output_dir)
+    def __init__(
+        self,
+        output_dir: str | os.PathLike[str],
+        *,
+        notebook: str | None = None,
+        inputs: Mapping[str, str | os.PathLike[str]] | None = None,
+    ):
+        self.dir = check_output_dir(output_dir, inputs)
+        self.notebook = notebook or ""
+        self.marker = self.dir / OUTPUTS_MARKER
+        self.written()  # a marker lorisnb did not write: refused before the folder is used
         self.dir.mkdir(parents=True, exist_ok=True)
         self.in_report = (self.dir.resolve().parent / RUN_MARKER).is_file()
 
     def table(self, df: pd.DataFrame, name: str, index: bool = False) -> pd.DataFrame:
-        write_csv(df.reset_index() if index else df, self.dir / f"{name}.csv", force=True)
+        with self._writing([f"{_stem(name)}.csv"]) as (path,):
+            write_csv(df.reset_index() if index else df, path, force=True)
         return df
 
     def figure(self, fig: Any, name: str) -> None:
@@ -57,16 +137,104 @@ class Outputs:
         from lorisnb.tools.figures.plotting import save_figure
 
         if self.in_report:  # one PNG at 100 dpi (the size it is shown at), 256 colours: about 20 kB
-            path = self.dir / f"{name}.png"
-            path.write_bytes(compact_png(figure_png(fig, dpi=100)))
-            show_figure(fig, url=path.name)
+            png = compact_png(figure_png(fig, dpi=100))
+            with self._writing([f"{_stem(name)}.png"]) as (path,):
+                write_atomically(path, lambda tmp: tmp.write_bytes(png), force=True)
+            show_figure(fig, url=path.relative_to(self.dir).as_posix())
             return
-        paths = save_figure(fig, self.dir, name)
+        with self._writing([f"{_stem(name)}.{f}" for f in FIGURE_FORMATS]) as paths:
+            save_figure(fig, self.dir, name, FIGURE_FORMATS)
         show_figure(fig, png=paths[0].read_bytes())  # the PNG just written: drawn once, not twice
 
     def input_errors(self, failures: pd.DataFrame) -> pd.DataFrame:
-        write_csv(failures, self.dir / INPUT_ERRORS_CSV, force=True)
+        with self._writing([INPUT_ERRORS_CSV]) as (path,):
+            write_csv(failures, path, force=True)
         return failures
+
+    def path(self, name: str) -> Path:
+        """The path of the file ``name`` (its name in the output folder, with its suffix) for a notebook
+        that writes a file itself, listed first as this notebook's (refused as :meth:`table` refuses a
+        file it did not write)."""
+        rel = self._name(name)
+        self._claim([rel])
+        return self.dir / rel
+
+    def written(self) -> dict[str, str]:
+        """The files of the folder its marker lists: name -> the notebook that wrote it ("": an
+        :class:`Outputs` given no notebook's name); empty without a marker."""
+        if not (self.marker.exists() or self.marker.is_symlink()):
+            return {}
+        try:
+            files = json.loads(self.marker.read_text(encoding="utf-8")).get("files")
+        except (OSError, UnicodeDecodeError, ValueError, AttributeError):
+            files = None
+        if not isinstance(files, dict) or not all(isinstance(k, str) and isinstance(v, str) for k, v in files.items()):
+            raise OutputError(
+                f"{self.marker}: not a list of the files a notebook wrote (lorisnb writes it as JSON, beside the "
+                f"tables and figures); nothing is written into {self.dir}: choose another output_dir, or move "
+                f"{OUTPUTS_MARKER} out of it"
+            )
+        return files
+
+    def _name(self, name: str) -> str:
+        """``name`` as the marker lists it: a path inside the output folder (POSIX), never the marker."""
+        p = Path(name) if isinstance(name, str) else None
+        if p is None or p.is_absolute() or ".." in p.parts or p.name in ("", ".") or p.name == OUTPUTS_MARKER:
+            raise ValidationError(f"{name!r}: expected a file name inside the output folder {self.dir}")
+        return p.as_posix()
+
+    def _claim(self, names: Sequence[str]) -> None:
+        """List ``names`` (:meth:`_name`) as this notebook's in the marker, after checking that each
+        is either absent or already this notebook's; one refused, none is listed."""
+        listed = self.written()
+        for rel in names:
+            p = self.dir / rel
+            owner = listed.get(rel)
+            if not (p.exists() or p.is_symlink()):
+                continue
+            if owner is None:
+                raise OutputError(
+                    f"{p} exists and this notebook did not write it (the folder's {OUTPUTS_MARKER} does not list "
+                    f"it); it is left as it is: choose another output_dir, or move {rel} out of {self.dir} and "
+                    "run again"
+                )
+            if owner != self.notebook:
+                raise OutputError(
+                    f"{p} was written by {_who(owner)}, not by {_who(self.notebook)}; it is left as it is: choose "
+                    f"another output_dir for this notebook (each notebook its own), or move {rel} out of {self.dir}"
+                )
+        new = {rel: self.notebook for rel in names if listed.get(rel) != self.notebook}
+        if new:
+            self._list({**listed, **new})
+
+    def _list(self, files: Mapping[str, str]) -> None:
+        from lorisnb._version import __version__
+
+        record = {"lorisnb": __version__, "files": dict(sorted(files.items()))}
+        write_text(json.dumps(record, indent=1) + "\n", self.marker, force=True)
+
+    @contextlib.contextmanager
+    def _writing(self, names: Sequence[str]) -> Iterator[list[Path]]:
+        """The paths of ``names``, claimed (:meth:`_claim`) before the block writes them; a name whose
+        file the block did not write (it failed) is no longer listed."""
+        rels = [self._name(n) for n in names]
+        self._claim(rels)
+        try:
+            yield [self.dir / r for r in rels]
+        except BaseException:
+            with contextlib.suppress(OSError, OutputError):
+                listed = self.written()
+                missing = [r for r in rels if not (self.dir / r).exists() and r in listed]
+                if missing:
+                    self._list({k: v for k, v in listed.items() if k not in missing})
+            raise
+
+
+def _stem(name: Any) -> str:
+    """A table's or figure's name (its file's name without the suffix): some text."""
+    if not isinstance(name, str) or not name.strip():
+        raise ValidationError(f"{name!r}: expected a file name (without its suffix) for the table or figure")
+    return name
 
 
 def figure_png(fig: Any, dpi: int = 150) -> bytes:
@@ -244,7 +412,10 @@ def setup(
     notebook given no ``data_root`` that finds no data runs on the small data shipped with lorisnb
     (:func:`lorisnb.io.datasets.paths.sample_data`) and says so. ``parameters``: the notebook's parameters,
     checked first with the command line's rules (:func:`lorisnb.tools.notebook.params.check_values`:
-    thresholds, grids, seed, yes/no values such as ``quick``, folders that must exist, ...)."""
+    thresholds, grids, seed, yes/no values such as ``quick``, folders that must exist, ...). The
+    output folder is then refused if it is, holds or lies in one of the notebook's inputs (its path
+    parameters, the data root: :func:`check_output_dir`), before it is made; the notebook writes
+    into it only files of its own (:class:`Outputs`)."""
     values = check_notebook_parameters(name, parameters)
     try:
         data = find_data(data_root)
@@ -260,7 +431,8 @@ def setup(
 
         if set(names("scenes", values["scenes"])) <= set(SCENES):  # any other name: refused naming the inputs' scenes
             refuse_unscorable_scenes(values["scenes"], data)
-    out = Outputs(output_dir if output_dir is not None else default_output_dir(name))
+    out = Outputs(output_dir if output_dir is not None else default_output_dir(name), notebook=name,
+                  inputs=notebook_inputs(values, data))  # fmt: skip
     warnings.filterwarnings("ignore", category=LorisWarning)
     shown = out.dir.resolve() if output_dir is None else out.dir  # as given (a report passes ".")
     print(f"data root: {data.root}\noutputs:   {shown}")
