@@ -392,17 +392,13 @@ def test_a_reports_input_errors_name_each_input_by_its_root_not_as_typed(tmp_pat
     assert table["error"][0].startswith("{results}/alg/cafe_1_1.txt, line 3: ")
 
 
-def test_verify_refuses_a_root_given_twice_or_one_the_run_has_not(tmp_path, capsys):
-    """``--root NAME DIR`` twice with two folders: the last won silently (exit 0 or 1 by the order); a
-    name the run has no root of (a typo) was ignored. Both are refused, as ``--data A --data B``."""
+def test_verify_refuses_a_root_given_twice_with_two_folders(tmp_path, capsys):
+    """``--root NAME DIR`` twice with two folders: the last won silently (exit 0 or 1 by the order);
+    refused, as ``--data A --data B``. (A name of one's own is a folder a link may lead into.)"""
     folder, res = received(tmp_path, {})
     other = tmp_path / "other"
     other.mkdir()
     rc, _, err = run(capsys, "verify", folder, "--root", "results", res, "--root", "results", other)
     assert rc == 2 and "--root results given twice" in err
-    rc, _, err = run(capsys, "verify", folder, "--results", res, "--root", "resutls", other)
-    assert rc == 2 and "--root resutls: the run has no root of that name; its roots: results" in err
-    with pytest.raises(ValidationError, match="the run has no root of that name"):
-        verify_run(folder, {"results": res, "nosuch": other})
     rc, _, err = run(capsys, "verify", folder, "--root", "results", res, "--root", "results", res)  # the same twice
     assert rc == 0, err

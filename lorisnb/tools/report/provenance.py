@@ -278,12 +278,6 @@ def verify_run(
     record = read_run_json(run)
     folder = Path(run) if Path(run).is_dir() else Path(run).parent
     given = {k: Path(v).resolve() for k, v in (roots or {}).items()}
-    known = record.get("roots")
-    if isinstance(known, dict):  # a root the run has not: a typo, or another run's (it was silently ignored)
-        unknown = sorted(set(given) - set(known) - {"data", "results"})
-        if unknown:
-            raise ValidationError(f"--root {unknown[0]}: the run has no root of that name; its roots: "
-                                  f"{', '.join(sorted(known)) or 'none'}")  # fmt: skip
     for name, p in given.items():
         if not p.exists():
             raise ValidationError(f"--{name if name in ('data', 'results') else 'root ' + name} {p}: no such folder")
