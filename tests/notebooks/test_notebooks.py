@@ -305,6 +305,11 @@ def test_metrics_primer(tmp_path, zygote):
     assert by[("one pose every 2 s", 1)].expected == pytest.approx(0.5)
     a, b = by[("A: drift, tracks all", 1)], by[("B: drift, lost after 15 s", 1)]
     assert b.ate_rmse < a.ate_rmse and b.cr < a.cr  # the paper's point
+    import nbformat
+
+    nb = nbformat.read(tmp_path / "metrics_primer.ipynb", as_version=4)
+    prose = "".join(o.get("data", {}).get("text/markdown", "") for c in nb.cells for o in c.get("outputs", []))
+    assert f"CR {a.cr:.3f} against B's {b.cr:.3f} (A was correct for" in prose
     assert cases["algorithm"].str.startswith("simulated:").all()
     real = pd.read_csv(out / "real_estimates.csv").set_index(["algorithm", "seq"])
     assert real.loc[("vins_mono_color_imu_with_loop", 1), "cr"] == pytest.approx(CAFE_VINS_LIFELONG_CR1, abs=1e-6)
@@ -354,6 +359,10 @@ def test_metrics_primer_prose_follows_the_parameters(tmp_path):
     cr_noise = cases.loc[cases["case"] == "noise 0.1 m", "cr"].iloc[0]
     assert cr_noise < 0.99 and f"CR = {cr_noise:.3f}, not 1" in text
     assert f"exp(-30 / 30) = {np.exp(-1):.3f}" in text and "CS-R = 0.000" in text
+    # section 8: at eps = 0.1 m the drifting tracker A is correct for less of the time than B, and the prose says so
+    a = cases.loc[cases["case"] == "A: drift, tracks all", "cr"].iloc[0]
+    b = cases.loc[cases["case"] == "B: drift, lost after 15 s", "cr"].iloc[0]
+    assert a < b and f"CR {a:.3f} against B's {b:.3f}, so here CR does not favour A either" in text
 
 
 def test_threshold_sensitivity_keeps_the_grids_given_with_quick(tmp_path):
