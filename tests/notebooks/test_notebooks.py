@@ -416,6 +416,8 @@ def test_every_number_on_the_bundled_pair(tmp_path, data, zygote):
     assert f"matched {wide.loc[('matched poses', ''), 'openloris']:.0f} poses" in prose
     assert f"it is {wide.loc[('ATE RMSE', 'm'), ['evo', 'kitti']].max():.4f} m" in prose
     assert "0 segments and no KITTI error" in prose  # a 20 m desk path: no 100 m segment
+    # the tartanair bar is tartanair_tools' own (aligned) ATE, not the preset's unaligned ATE RMSE row
+    assert f"the **TartanAir ATE** row, {wide.loc[('TartanAir ATE', 'm'), 'tartanair']:.4f} m" in prose
     assert (out / "every_number_ate.png").is_file()
 
 
