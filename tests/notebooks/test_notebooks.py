@@ -157,6 +157,21 @@ def test_lifelong_benchmark(tmp_path, zygote):
     assert (out / "timeline_lifelong.png").exists()
 
 
+def test_lifelong_benchmark_counts_sequences_without_output(tmp_path):
+    """ds-slam's lifelong home file holds one seq: block: its sequences 2-5 are failed runs in the CS-R
+    table (0, not NaN) and visits without output in the count, as in the scene CR."""
+    import nbformat
+
+    run("lifelong_benchmark", tmp_path, algorithms=["ds-slam"], scenes=["home"])
+    csr = pd.read_csv(tmp_path / "lifelong_benchmark" / "cs_r.csv", index_col=0)
+    assert list(csr.columns) == [f"home-{k}" for k in range(1, 6)]
+    assert (csr.loc["ds-slam", [f"home-{k}" for k in range(2, 6)]] == 0.0).all()
+    nb = nbformat.read(tmp_path / "lifelong_benchmark.ipynb", as_version=4)
+    text = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.outputs)
+    assert "ds-slam has no output for home sequence(s) 2, 3, 4, 5 (1 of 5)" in text
+    assert "give no output: home 4 of 4 (4 without output)" in text
+
+
 def test_lifelong_benchmark_with_other_thresholds(tmp_path):
     out = run("lifelong_benchmark", tmp_path, eps=0.3, phi=10.0, algorithms=["maslam"], scenes=["cafe"])
     seq = pd.read_csv(out / "sequences.csv").set_index("seq")
