@@ -230,6 +230,13 @@ def test_threshold_sensitivity(tmp_path, zygote):
     assert current.loc["vins_mono_color_imu_with_loop", "cr"] == pytest.approx(0.335952, abs=1e-6)  # home, eps 3
     needed = pd.read_csv(out / "eps_for_cr50.csv").set_index(["algorithm", "scene"])
     assert needed.loc[("vins_mono_color_imu_with_loop", "cafe"), "eps"] < 3.0
+    # what a larger delta can add to CR is at most the time in the gaps beyond delta (Eq. 2)
+    gaps = pd.read_csv(out / "output_gaps.csv").set_index(["algorithm", "scene"])
+    assert gaps.loc[("maslam", "cafe"), "median_period"] == pytest.approx(1 / 30, abs=0.005)  # camera rate
+    by_delta = pd.read_csv(out / "cr_vs_delta.csv").pivot_table(index=["algorithm", "scene"], columns="delta",
+                                                                  values="cr")  # fmt: skip
+    rise = by_delta[by_delta.columns.max()] - by_delta[1.0]
+    assert (rise <= gaps["gap_share"].reindex(rise.index) + 1e-12).all() and rise.loc[("maslam", "cafe")] > 0.01
     assert (out / "cr_heatmap_home.png").exists() and (out / "cs_r_vs_tau.png").exists()
 
 
