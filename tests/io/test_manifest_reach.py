@@ -82,6 +82,16 @@ def test_a_root_written_in_the_manifest_elsewhere_is_refused_one_from_the_enviro
     assert read_manifest(m).sessions[0].groundtruth == secret.resolve()
 
 
+def _refused_unquoted(tmp_path, m, capsys) -> None:
+    """``evaluate`` of a results folder with the manifest ``m``: refused (exit 2), the file outside unquoted."""
+    res = tmp_path / "res" / "alg"
+    res.mkdir(parents=True, exist_ok=True)
+    (res / "desk.txt").write_text("1 0 0 0 0 0 0 1\n")
+    rc = main(["evaluate", str(res.parent), "--manifest", str(m), "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "lies outside" in err and "secret-first-line" not in err
+
+
 @pytest.mark.parametrize("variable", ["HOME", "PWD", "TMPDIR"])
 def test_a_root_in_a_variable_that_names_no_dataset_is_confined_like_a_written_one(
     tmp_path, secret, monkeypatch, capsys, variable
@@ -92,12 +102,7 @@ def test_a_root_in_a_variable_that_names_no_dataset_is_confined_like_a_written_o
     m = manifest(tmp_path / "shared" / "m", secret.name, root="${" + variable + "}")
     with pytest.raises(ParseError, match=r"root = .* lies outside the manifest's folder and lorisnb's data root"):
         read_manifest(m)
-    res = tmp_path / "res" / "alg"
-    res.mkdir(parents=True, exist_ok=True)
-    (res / "desk.txt").write_text("1 0 0 0 0 0 0 1\n")
-    rc = main(["evaluate", str(res.parent), "--manifest", str(m), "--no-progress"])
-    err = capsys.readouterr().err
-    assert rc == 2 and "lies outside" in err and "secret-first-line" not in err
+    _refused_unquoted(tmp_path, m, capsys)
     monkeypatch.setenv("LAB_ROOT", str(secret.parent))  # a dataset folder's variable: the user's own
     m = manifest(tmp_path / "shared" / "m", secret.name, root="${LAB_ROOT}")
     assert read_manifest(m).sessions[0].groundtruth == secret.resolve()
@@ -115,12 +120,7 @@ def test_a_root_that_leaves_the_folder_its_variable_names_is_refused(tmp_path, s
             ParseError, match="lies outside the manifest's folder, the dataset folders its environment variables"
         ):
             read_manifest(m)
-        res = tmp_path / "res" / "alg"
-        res.mkdir(parents=True, exist_ok=True)
-        (res / "desk.txt").write_text("1 0 0 0 0 0 0 1\n")
-        rc = main(["evaluate", str(res.parent), "--manifest", str(m), "--no-progress"])
-        err = capsys.readouterr().err
-        assert rc == 2 and "lies outside" in err and "secret-first-line" not in err
+        _refused_unquoted(tmp_path, m, capsys)
     (lab_root / "V1").mkdir()
     m = manifest(tmp_path / "shared" / "m", "gt.txt", root="${LAB_ROOT}/V1")  # inside the variable's folder: read
     assert read_manifest(m).sessions[0].groundtruth == (lab_root / "V1" / "gt.txt").resolve()
