@@ -162,6 +162,27 @@ def test_setup_beside_the_inputs_writes_and_runs_again(tmp_path, data, small):
     }
 
 
+def test_the_default_folder_takes_an_earlier_runs_files_as_the_notebooks_own(tmp_path, data, small, monkeypatch):
+    """``results/notebooks/<name>`` is the notebook's own folder: files an earlier lorisnb wrote there
+    without a marker are its earlier run's, replaced (a run with the default folder was refused after
+    an upgrade); a folder the user names keeps the rule."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "notebooks").mkdir()  # a checkout's layout: results/notebooks/<name> is the default folder
+    folder = tmp_path / "results" / "notebooks" / "evaluate_my_results"
+    folder.mkdir(parents=True)
+    (folder / "sequences.csv").write_text("old,run\n1,2\n")  # an earlier run's, no marker
+    session = setup("evaluate_my_results", data.root, None, parameters=dict(path=str(small)))
+    assert session.out.dir.resolve() == folder.resolve()
+    session.out.table(TABLE, "sequences")
+    assert pd.read_csv(folder / "sequences.csv").equals(TABLE)
+    named = tmp_path / "mine"
+    named.mkdir()
+    (named / "sequences.csv").write_text(PRECIOUS)
+    with pytest.raises(OutputError, match="did not write it"):
+        setup("evaluate_my_results", data.root, named, parameters=dict(path=str(small))).out.table(TABLE, "sequences")
+    assert (named / "sequences.csv").read_text() == PRECIOUS
+
+
 # --- the notebook itself, run with papermill ---------------------------------------------------------
 
 

@@ -119,9 +119,13 @@ class Outputs:
         *,
         notebook: str | None = None,
         inputs: Mapping[str, str | os.PathLike[str]] | None = None,
+        own_folder: bool = False,
     ):
         self.dir = check_output_dir(output_dir, inputs)
         self.notebook = notebook or ""
+        #: the notebook's default folder (``results/notebooks/<name>``, named for it): a file there that the
+        #: marker does not list is an earlier run's of this notebook (a lorisnb before the marker), replaced
+        self.own_folder = own_folder
         self.marker = self.dir / OUTPUTS_MARKER
         self.written()  # a marker lorisnb did not write: refused before the folder is used
         self.dir.mkdir(parents=True, exist_ok=True)
@@ -192,6 +196,8 @@ class Outputs:
             owner = listed.get(rel)
             if not (p.exists() or p.is_symlink()):
                 continue
+            if owner is None and self.own_folder:
+                continue  # listed below as this notebook's
             if owner is None:
                 raise OutputError(
                     f"{p} exists and this notebook did not write it (the folder's {OUTPUTS_MARKER} does not list "
@@ -432,7 +438,7 @@ def setup(
         if set(names("scenes", values["scenes"])) <= set(SCENES):  # any other name: refused naming the inputs' scenes
             refuse_unscorable_scenes(values["scenes"], data)
     out = Outputs(output_dir if output_dir is not None else default_output_dir(name), notebook=name,
-                  inputs=notebook_inputs(values, data))  # fmt: skip
+                  inputs=notebook_inputs(values, data), own_folder=output_dir is None)  # fmt: skip
     warnings.filterwarnings("ignore", category=LorisWarning)
     shown = out.dir.resolve() if output_dir is None else out.dir  # as given (a report passes ".")
     print(f"data root: {data.root}\noutputs:   {shown}")
