@@ -144,7 +144,7 @@ def test_a_trial_that_repeats_another_counts_once(table):
         and (lost["status"] == "missing").all()
         and (lost["cand"] == "trial 5 a copy").all()
     )
-    assert lost["decided_by"].str.contains("repeat another trial's every value").all()
+    assert lost["decided_by"].str.contains("trial 5 repeats trial 4.s every value").all()
     assert diff_tables(base, cand).regressed
     assert not set(seqs.loc[seqs["metric"] != "trial", "status"]) & {"regression", "missing", "failed"}
     other = _reruns(table, range(1, 5), 5)  # both sides 4 runs and a copy

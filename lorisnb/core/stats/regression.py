@@ -494,8 +494,13 @@ class _Side:
         present = ~np.isin(self.trials[rows], list(lacking))
         if key[:2] in self.one_run:
             trials, how = self.trials[rows][present][1:], f"{self.name}'s trials {self.one_run[key[:2]]}"
-        else:
-            trials, how = self.trials[rows][self.copy[rows] & present], "repeat another trial's every value"
+        else:  # each copy with the trial it repeats (the first of its values: pandas' duplicated keeps it)
+            values = [tuple(np.nan_to_num(self.cols[c][r], nan=np.inf, posinf=np.inf) for c in (*METRICS, "matched")
+                            if c in self.cols) for r in rows]  # fmt: skip
+            picked = [i for i in np.flatnonzero(self.copy[rows] & present)][-short:]
+            trials = self.trials[rows][picked]
+            how = "; ".join(f"trial {self.trials[rows][i]} repeats trial {self.trials[rows][values.index(values[i])]}'s "
+                            "every value" for i in picked)  # fmt: skip
         names = ", ".join(str(t) for t in trials[-short:])
         return (names, how) if names else ("", "")
 
@@ -563,8 +568,8 @@ def changes(
         if copied:  # a run that crashed, its file filled in with another trial's: no run, so a missing one
             comp.coverage("sequence", label, "trial", "present", f"trial {copied} a copy", "missing",
                           f"coverage: CAND's trial {copied} is a copy, not a run ({how}), so CAND holds fewer "
-                          "independent runs than BASE (a crashed trial filled in with another's output?): a missing "
-                          "trial, a failed run")  # fmt: skip
+                          "independent runs than BASE (a crashed trial filled in with another's output?): counted "
+                          "once in the values, and as a missing trial")  # fmt: skip
         matched = (sb.mean(key, "matched"), sc.mean(key, "matched"))
         if "matched" in sc.cols and not (sc.cols["matched"][rc] > 0).any() and (sb.cols["matched"][rb] > 0).any():
             if matched[0] >= MIN_MATCHED or not ("cr" in sb.cols and (sb.cols["cr"][rb] <= 0).all()):
