@@ -119,6 +119,9 @@ def test_one_runs_tracking_with_its_positions_changed_is_one_run_too(table):
     assert (res.pairs["difference_low"] == -np.inf).all() and (res.pairs["difference_high"] == np.inf).all()
     second = res.algorithms[res.algorithms["algorithm"] != res.algorithms["top"]]
     assert len(second)
+    sized = compare_table(two, durations, "cr", power_delta=0.05)  # copies' zero spread sized nothing right
+    assert sized.power is not None and len(sized.power) == 0
+    assert any(n.startswith("--power: no number of runs for the pairs of") for n in sized.notes), sized.notes
     assert second["p_holm_vs_top"].isna().all() and second["vs top [test interval]"].str.endswith("[-inf, inf]").all()
 
 

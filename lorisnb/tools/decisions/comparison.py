@@ -100,6 +100,10 @@ def trial_spread(table: pd.DataFrame) -> tuple[pd.DataFrame, set[str]]:
     return spread.drop(columns=["copies"]).reset_index(drop=True), copies
 
 
+#: The ``test`` of a pair one of whose algorithms' trials are copies of one run: none is made.
+COPIES_TEST = "none: trials are copies of one run"
+
+
 def decide(table: pd.DataFrame, full: pd.DataFrame, metric: str, alpha: float, seed: int, intervals: bool = True
            ) -> tuple[pd.DataFrame, pd.DataFrame, set[str]]:  # fmt: skip
     """The decision of ``compare``: the pairwise test on ``full`` (the table with missing sequences
@@ -118,7 +122,7 @@ def decide(table: pd.DataFrame, full: pd.DataFrame, metric: str, alpha: float, s
         pairs.loc[mask, ["p", "p_holm", "p_a_better"]] = np.nan
         pairs.loc[mask, "difference_low"] = -np.inf
         pairs.loc[mask, "difference_high"] = np.inf
-        pairs.loc[mask, "test"] = "none: trials are copies of one run"
+        pairs.loc[mask, "test"] = COPIES_TEST
     return pairs, spread, copies
 
 
@@ -211,8 +215,12 @@ def compare_table(
             + (": run more trials (--power DELTA says how many)" if (blocked["min_p"] < 1).any() else "")
         )
     power = None
-    if power_delta is not None:
-        power = runs_for_power(full, pairs[~pairs["significant"].astype(bool)], power_delta, alpha)
+    if power_delta is not None:  # copies' spread is no rerun's: sized from it, a pair looked cheap to tell apart
+        copied = pairs["test"].eq(COPIES_TEST).to_numpy(bool)
+        power = runs_for_power(full, pairs[~pairs["significant"].astype(bool).to_numpy() & ~copied], power_delta, alpha)
+        if copied.any():
+            notes.append(f"--power: no number of runs for the pairs of {', '.join(sorted(copies))}: their trials are "
+                         "copies of one run, whose spread says nothing of a rerun's; run the system again per trial")  # fmt: skip
     return Comparison(algs, pairs, sig, ci, cover, power, header, summary, notes)
 
 
