@@ -468,7 +468,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         and Path(str(params["data_root"])).resolve() != Path(args.data).resolve()
     ):  # one would silently win, as --results and -p results_dir
         raise ValidationError("--data and -p data_root name two folders; give one")
-    if args.data and "data_root" not in params:
+    if args.data and params.get("data_root") is None:  # -p data_root null is the default: --data names it
         params["data_root"] = args.data
     protect = [str(find_data(params.get("data_root")).root)]
     protect += [str(v) for k, v in params.items() if k in ("results_dir", "path", "ordslam_dir") and v]

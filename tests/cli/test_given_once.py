@@ -67,6 +67,9 @@ def test_a_report_parameter_given_twice_with_different_values_is_refused(tmp_pat
     assert main(["report", "--out", str(out), "--no-progress", "--data", str(tmp_path), "-p", "data_root",
                  str(tmp_path / "other")]) == 2  # fmt: skip
     assert "--data and -p data_root name two folders" in capsys.readouterr().err and not out.exists()
+    # -p data_root null (the default) with --data: --data was dropped and the default root used; it is used
+    assert main(["report", "--out", str(out), "--no-progress", "--data", str(tmp_path), "-p", "data_root", "null"]) == 2
+    assert f"It looked at: {tmp_path} (argument): not a data root" in capsys.readouterr().err and not out.exists()
 
 
 def test_every_value_of_every_command_refuses_to_be_empty(capsys):

@@ -255,3 +255,18 @@ def test_a_drift_of_single_runs_is_named_not_gated(tmp_path, table, capsys):
     assert "newest run night-4.csv against night-3.csv: ok" in out
     assert "the first run of its series: regression" in out and "named, not failing the night" in out
     assert "lorisnb diff night-0.csv night-4.csv" in out and rc == 0
+
+
+def test_a_table_without_a_version_is_comparable_with_report_runs(tmp_path, table, capsys):
+    """``diff --baseline last-comparable nightly tonight.csv``: a table (``evaluate --csv``) says no
+    lorisnb version, and history counted 0.3.0 -> None as a difference, so no night was ever
+    comparable (exit 2), where diff of the same two judged them (exit 0)."""
+    folder = tmp_path / "nightly"
+    night(folder / "n1", table, "2026-11-01T02:00:00+00:00")
+    night(folder / "n2", table, "2026-11-02T02:00:00+00:00")
+    tonight = tmp_path / "tonight.csv"
+    write_csv(table, tonight)
+    rc, out, err = run(capsys, "diff", "--baseline", "last-comparable", folder, tonight)
+    assert rc == 0, err
+    rc, _, err = run(capsys, "history", folder / "n1", folder / "n2", tonight)
+    assert rc == 0, err

@@ -76,7 +76,8 @@ def run_labels(runs: Sequence[Run]) -> list[str]:
 def comparability(prev: Run, run: Run) -> list[str]:
     """Why ``run`` cannot be compared with ``prev`` (empty: it can)."""
     reasons = spec_differences(prev, run)
-    if prev.version != run.version and (prev.version or run.version):
+    if prev.version and run.version and prev.version != run.version:  # a table (evaluate --csv) says no version:
+        # not a difference, as diff of the two judges it (a report run against a results folder was never comparable)
         reasons.append(f"lorisnb_version {prev.version} -> {run.version}")
     ga, gb = prev.groundtruth_sums(), run.groundtruth_sums()
     changed = sorted(k for k in set(ga) & set(gb) if ga[k] != gb[k])
