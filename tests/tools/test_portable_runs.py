@@ -218,6 +218,33 @@ def test_a_run_against_a_baseline_names_the_baseline_folder_by_its_root(tmp_path
     assert "{baseline}" in (out / "run.json").read_text()
 
 
+@pytest.mark.thorough
+def test_a_run_with_no_comparable_baseline_is_written_and_says_so(tmp_path, data, icra20, monkeypatch):
+    """The first run after an upgrade or a spec change (no earlier run comparable with it) was thrown
+    away with exit 2 after its notebooks ran, every night (no run of the new kind was ever kept); it is
+    written, its front page saying that nothing was judged and a new series starts; the next is judged."""
+    import json
+
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    common = dict(progress=False, results=here / "res")
+    report.run_report(here / "nightly" / "r0", {"data_root": str(here / "data"), "eps": 1.0}, ["compare_algorithms"],
+                      **common)  # fmt: skip
+    params = {"data_root": str(here / "data"), "eps": 2.0}  # another spec: r0 is no baseline
+    out, _ = report.run_report(here / "nightly" / "r1", params, ["compare_algorithms"], baseline=here / "nightly",
+                               **common)  # fmt: skip
+    since = json.loads((out / "findings" / "since_baseline.json").read_text())
+    assert since["baseline"] is None and "is comparable with it" in since["no_baseline"]
+    assert (
+        "No baseline:" in (out / "index.html").read_text() and "a new series starts" in (out / "index.html").read_text()
+    )
+    out2, _ = report.run_report(here / "nightly" / "r2", params, ["compare_algorithms"], baseline=here / "nightly",
+                                **common)  # fmt: skip
+    assert json.loads((out2 / "findings" / "since_baseline.json").read_text())["baseline"] == "r1"
+
+
 def papermill_notebook(name, out_dir, params, **kw):
     """A notebook as papermill writes one: its parameters cell (non-ASCII as ``\\xe9``), papermill's
     ``input_path`` (where lorisnb is installed), a warning naming a file of lorisnb, and its HTML page

@@ -13,6 +13,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from lorisnb.errors import ValidationError
 from lorisnb.tools.decisions.diff import diff_tables
 from lorisnb.tools.decisions.history import comparability, earlier_runs, history_table, last_comparable, plot_history
 from lorisnb.tools.decisions.runs import load_run
@@ -29,7 +30,18 @@ def since_baseline(run_dir: Path, folder: str | os.PathLike[str], name: str | No
     this = load_run(run_dir)
     if name:
         this.path = run_dir.parent / name
-    base, fits = last_comparable(folder, this)
+    try:
+        base, fits = last_comparable(folder, this)
+    except ValidationError as exc:  # none comparable (a new lorisnb, spec or ground truth), or no run yet: this
+        # run is written all the same, saying so, and starts a new series (it was thrown away, every night)
+        if not Path(folder).is_dir():
+            raise
+        out: dict[str, Any] = dict(baseline=None, no_baseline=str(exc), verdict=None, passed_over=[],
+                                   failed_inputs=sorted(this.unscored), trend=None)  # fmt: skip
+        findings = run_dir / "findings"
+        findings.mkdir(exist_ok=True)
+        (findings / "since_baseline.json").write_text(json.dumps(out, indent=2, default=str) + "\n", encoding="utf-8")
+        return out
     passed = [dict(run=r.name, why="; ".join(comparability(r, this))) for r in earlier_runs(folder)
               if r.path.resolve() != Path(this.path).resolve() and comparability(r, this)]  # fmt: skip
     known = [r.expected for r in (base, this) if r.expected is not None]

@@ -394,7 +394,14 @@ def _notebooks(run_dir: Path, runs: Sequence["NotebookRun"], left_out: Mapping[s
 
 def _since_html(since: Mapping[str, Any]) -> list[str]:
     """The "Since the baseline" section: the verdict of diff against the baseline, what changed, and
-    the trend figure (a file of the run folder: opens offline)."""
+    the trend figure (a file of the run folder: opens offline); without a comparable earlier run,
+    why, and that a new series starts here."""
+    if since.get("baseline") is None:
+        return [
+            "<h2 id='since-baseline'>Since the baseline</h2>",
+            f"<p class='verdict failed'>No baseline: {esc(str(since.get('no_baseline', '')))}. Nothing was judged; "
+            "a new series starts with this run (the next run comparable with it is judged against it).</p>",
+        ]
     v = since["verdict"]
     ok = v["verdict"] == "ok"
     who = esc(str(since["baseline"])) + (f" (code <code>{esc(str(since['baseline_label']))}</code>)"
