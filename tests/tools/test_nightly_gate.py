@@ -270,3 +270,27 @@ def test_a_table_without_a_version_is_comparable_with_report_runs(tmp_path, tabl
     assert rc == 0, err
     rc, _, err = run(capsys, "history", folder / "n1", folder / "n2", tonight)
     assert rc == 0, err
+
+
+def test_a_file_in_the_nightly_folder_that_is_no_run_is_passed_over_and_named(tmp_path, table, capsys):
+    """``history --csv nightly/h.csv`` (or a damaged night) left in the folder the nightly runs are
+    kept in made every later ``diff --baseline last-comparable`` and ``report --baseline`` refuse
+    the folder (exit 2, every night after): it is passed over now, named with why."""
+    folder = tmp_path / "nightly"
+    night(folder / "n1", table, "2026-11-01T02:00:00+00:00")
+    night(folder / "n2", table, "2026-11-02T02:00:00+00:00")
+    rc, _, err = run(capsys, "history", folder / "n1", folder / "n2", "--csv", folder / "h.csv")
+    assert rc == 0 and (folder / "h.csv").is_file(), err
+    (folder / "broken.csv").write_text("algorithm,scene\nx\n")
+    tonight = tmp_path / "tonight.csv"
+    write_csv(table[table["scene"] != "home"], tonight)  # tonight lost home-1: judged against n2
+    rc, out, err = run(capsys, "diff", "--baseline", "last-comparable", folder, tonight)
+    assert rc == 1 and "baseline: " in err and "n2" in err, err
+    assert "h.csv passed over, not read as an earlier run" in err and "lacks column(s)" in err
+    assert "broken.csv passed over" in err and "line 2" in err
+    for p in folder.glob("n*"):  # nothing but such files: refused, naming them
+        import shutil
+
+        shutil.rmtree(p)
+    rc, _, err = run(capsys, "diff", "--baseline", "last-comparable", folder, tonight)
+    assert rc == 2 and "holds no run folder" in err and "h.csv" in err and "broken.csv" in err, err

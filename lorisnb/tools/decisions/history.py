@@ -27,7 +27,7 @@ import pandas as pd
 from lorisnb.core.lifelong.coverage import complete, expected_from
 from lorisnb.core.stats.inference import WEIGHTS, scene_means
 from lorisnb.core.stats.regression import BAD, Tolerance, parse_tolerances
-from lorisnb.errors import ValidationError
+from lorisnb.errors import LorisError, ValidationError
 from lorisnb.tools.decisions.diff import Diff, diff_tables, keyed
 from lorisnb.tools.decisions.escape import clean
 from lorisnb.tools.decisions.runs import Run, load_run, spec_differences
@@ -47,7 +47,11 @@ def load_runs(paths: Iterable[str | os.PathLike[str]]) -> list[Run]:
     """The runs, oldest first (see the module docstring); runs of the same time in the order given
     (they were sorted by name: ``night-10.csv`` before ``night-9.csv``, and the newest run, the one
     the exit status judges, was then the older night)."""
-    runs = [load_run(p) for p in paths]
+    return load_runs_sorted([load_run(p) for p in paths])
+
+
+def load_runs_sorted(runs: list[Run]) -> list[Run]:
+    """Runs already read (:func:`load_runs`), oldest first, those of one time in the order given."""
     if len({r.path.resolve() for r in runs}) < len(runs):
         raise ValidationError("history: a run is given twice; give each run once")
     out = sorted(runs, key=lambda r: (r.created is None, r.created or 0))  # stable: ties as given
@@ -86,9 +90,11 @@ def comparability(prev: Run, run: Run) -> list[str]:
     return reasons
 
 
-def earlier_runs(folder: str | os.PathLike[str]) -> list[Run]:
+def earlier_runs(folder: str | os.PathLike[str], unread: list[tuple[str, str]] | None = None) -> list[Run]:
     """The runs kept in ``folder`` (report run folders and per-sequence tables directly in it),
-    oldest first; an error naming the folder when it holds none."""
+    oldest first; an error naming the folder when it holds none. A file or folder there that cannot
+    be read as a run (another table, say ``history --csv nightly/h.csv``, or a damaged one) is passed
+    over, its name and why added to ``unread``: it made every later night's baseline refuse the folder."""
     from lorisnb.tools.decisions.runs import is_report_run, is_table
 
     f = Path(folder)
@@ -98,10 +104,20 @@ def earlier_runs(folder: str | os.PathLike[str]) -> list[Run]:
     # runs of one time (a folder copied or downloaded) are ordered by name, numbers as numbers
     found = sorted((p for p in f.iterdir() if not p.name.startswith(".") and (is_report_run(p) or is_table(p))),
                    key=lambda p: natural(p.name))  # fmt: skip
-    if not found:
-        raise ValidationError(f"{f} holds no run folder (run.json) and no per-sequence table (.csv, .parquet); give "
-                              "the folder the nightly runs are kept in")  # fmt: skip
-    return load_runs(found)
+    runs, passed = [], []
+    for p in found:
+        try:
+            runs.append(load_run(p))
+        except LorisError as exc:
+            passed.append((p.name, str(exc)))
+    if unread is not None:
+        unread.extend(passed)
+    if not runs:
+        shown = "; ".join(w for _, w in passed[:3])
+        why = f"; of its {len(passed)} file(s) none can be read as a run: {shown}" if passed else ""
+        raise ValidationError(f"{f} holds no run folder (run.json) and no per-sequence table (.csv, .parquet){why}; "
+                              "give the folder the nightly runs are kept in")  # fmt: skip
+    return load_runs_sorted(runs)
 
 
 def last_comparable(folder: str | os.PathLike[str], cand: Run) -> tuple[Run, list[Run]]:
@@ -110,7 +126,9 @@ def last_comparable(folder: str | os.PathLike[str], cand: Run) -> tuple[Run, lis
     naming the nearest runs and why when none is. Runs made at ``cand``'s time or after it
     (:func:`not_before`) are passed over with a note in ``cand.notes``: a copy of tonight's run
     kept with the earlier ones was its own baseline, "ok" whatever it held."""
-    runs = [r for r in earlier_runs(folder) if r.path.resolve() != Path(cand.path).resolve()]
+    unread: list[tuple[str, str]] = []
+    runs = [r for r in earlier_runs(folder, unread) if r.path.resolve() != Path(cand.path).resolve()]
+    cand.notes.extend(f"{folder}: {name} passed over, not read as an earlier run ({why})" for name, why in unread)
     later = [r for r in runs if not_before(r, cand)]
     runs = [r for r in runs if r not in later]
     fits = [r for r in runs if not comparability(r, cand)]

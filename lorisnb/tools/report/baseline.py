@@ -42,8 +42,10 @@ def since_baseline(run_dir: Path, folder: str | os.PathLike[str], name: str | No
         findings.mkdir(exist_ok=True)
         (findings / "since_baseline.json").write_text(json.dumps(out, indent=2, default=str) + "\n", encoding="utf-8")
         return out
-    passed = [dict(run=r.name, why="; ".join(comparability(r, this))) for r in earlier_runs(folder)
+    unread: list[tuple[str, str]] = []
+    passed = [dict(run=r.name, why="; ".join(comparability(r, this))) for r in earlier_runs(folder, unread)
               if r.path.resolve() != Path(this.path).resolve() and comparability(r, this)]  # fmt: skip
+    passed += [dict(run=name, why=f"not read as a run: {why}") for name, why in unread]
     known = [r.expected for r in (base, this) if r.expected is not None]
     import pandas as pd
 
