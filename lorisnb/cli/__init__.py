@@ -239,6 +239,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--baseline", default=None, metavar="DIR",
                    help="a folder of earlier runs: the front page shows this run against the newest comparable one "
                    "(verdict, what changed, a trend of the last comparable runs)")  # fmt: skip
+    p.add_argument("--gate", action="store_true",
+                   help="with --baseline: exit 1 when this run regressed since its baseline (diff's verdict), and 2 "
+                   "when no earlier run is comparable with it (nothing judged), as diff --baseline last-comparable")  # fmt: skip
     p.add_argument("--absolute-paths", action="store_true",
                    help="write the absolute paths of the inputs, the data root and the results into the run (default: "
                    "each path below a named root, {data} or {results}, so the run folder can travel)")  # fmt: skip

@@ -470,6 +470,8 @@ def cmd_report(args: argparse.Namespace) -> int:
         raise ValidationError("--data and -p data_root name two folders; give one")
     if args.data and params.get("data_root") is None:  # -p data_root null is the default: --data names it
         params["data_root"] = args.data
+    if args.gate and args.baseline is None:
+        raise ValidationError("--gate: judges this run against its baseline; give --baseline DIR too")
     protect = [str(find_data(params.get("data_root")).root)]
     protect += [str(v) for k, v in params.items() if k in ("results_dir", "path", "ordslam_dir") and v]
     wanted = Path(args.out).resolve() if args.out else None
@@ -498,7 +500,27 @@ def cmd_report(args: argparse.Namespace) -> int:
     if failed_inputs:
         print(f"leaderboard: {failed_inputs} input file(s) could not be evaluated (listed in index.html)")
     print(f"report: {run_dir / 'index.html'}")
-    return 1 if failed_inputs or any(r.status == "failed" or r.input_errors for r in runs) else 0
+    status = 1 if failed_inputs or any(r.status == "failed" or r.input_errors for r in runs) else 0
+    return max(status, _gate(run_dir)) if args.gate else status
+
+
+def _gate(run_dir: Path) -> int:
+    """``report --gate``: 1 when the run regressed since its baseline (``findings/since_baseline.json``),
+    2 when nothing was judged (no comparable earlier run), else 0; the verdict said on stderr."""
+    import json
+
+    from lorisnb.core.stats.regression import regressed_phrase
+
+    since = json.loads((run_dir / "findings" / "since_baseline.json").read_text(encoding="utf-8"))
+    if since.get("verdict") is None:
+        say(f"gate: nothing judged ({since.get('no_baseline')}); exit 2, as diff --baseline last-comparable")
+        return 2
+    v = since["verdict"]
+    if v["verdict"] == "regression":
+        say(f"gate: regression since the baseline {clean(str(since['baseline']))} ({regressed_phrase(v)})")
+        return 1
+    say(f"gate: {v['verdict']} since the baseline {clean(str(since['baseline']))}")
+    return 0
 
 
 def cmd_verify(args: argparse.Namespace) -> int:

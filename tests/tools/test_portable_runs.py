@@ -245,6 +245,32 @@ def test_a_run_with_no_comparable_baseline_is_written_and_says_so(tmp_path, data
     assert json.loads((out2 / "findings" / "since_baseline.json").read_text())["baseline"] == "r1"
 
 
+@pytest.mark.thorough
+def test_report_gate_exits_as_diff_judges_the_run_against_its_baseline(tmp_path, data, icra20, monkeypatch, capsys):
+    """``report --baseline DIR`` exits for its notebooks and inputs only (a front page showing a
+    regression exited 0); ``--gate`` makes its exit status diff's: 2 with nothing judged (a new
+    series), 0 unchanged, 1 when a sequence was lost since the baseline; refused without --baseline."""
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    night = ["report", "--results", here / "res", "--data", here / "data", "--notebooks", "compare_algorithms",
+             "--no-progress", "--baseline", here / "nightly", "--gate", "--out"]  # fmt: skip
+    rc, _, err = run(capsys, *night[:-4], "--out", here / "nightly" / "r1")  # the first night: no baseline yet
+    assert rc == 0, err
+    (here / "nightly" / "h.csv").write_text("run,metric\n")  # no run: passed over, named
+    rc, _, err = run(capsys, *night, here / "nightly" / "r2")
+    assert rc == 0 and "gate: ok since the baseline r1" in err, err
+    assert "h.csv" in (here / "nightly" / "r2" / "index.html").read_text()
+    rc, _, err = run(capsys, *night[:-1], "-p", "eps", "2", "--out", here / "nightly" / "r3")  # another spec
+    assert rc == 2 and "nothing judged" in err, err
+    (here / "res" / "odom" / ODOM).unlink()  # tonight odom lost its sequence
+    rc, _, err = run(capsys, *night, here / "nightly" / "r4")
+    assert rc == 1 and "gate: regression since the baseline r2" in err, err
+    rc, _, err = run(capsys, *night[:-4], "--gate", "--out", here / "nightly" / "r5")
+    assert rc == 2 and "--gate" in err and "give --baseline" in err and not (here / "nightly" / "r5").exists()
+
+
 def papermill_notebook(name, out_dir, params, **kw):
     """A notebook as papermill writes one: its parameters cell (non-ASCII as ``\\xe9``), papermill's
     ``input_path`` (where lorisnb is installed), a warning naming a file of lorisnb, and its HTML page

@@ -432,7 +432,7 @@ def _since_html(since: Mapping[str, Any]) -> list[str]:
     if since.get("new_algorithms"):
         parts.append("<p>New algorithms (not in the baseline): " + esc(", ".join(since["new_algorithms"])) + ".</p>")
     if since.get("passed_over"):
-        parts.append("<p>Earlier runs passed over, not comparable with this one (changed settings): " + esc("; ".join(
+        parts.append("<p>Earlier runs passed over, not comparable with this one (changed settings) or not read as a run: " + esc("; ".join(
             f"{p['run']}: {p['why']}" for p in since["passed_over"])) + ".</p>")  # fmt: skip
     if since.get("failed_inputs"):
         parts.append(
