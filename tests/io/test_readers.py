@@ -66,6 +66,37 @@ def test_windows_line_endings(tmp_path):
     assert f.frame == "d400_color" and len(f.sequences[1]) == 2
 
 
+def test_lone_carriage_returns_are_named_on_every_reader(tmp_path):
+    """Lines ending with CR alone (classic Mac OS; the official tool's Python reads them as line
+    ends) read as one long line here: 'no frame: header', 'has 23144 fields'. Named now, at the
+    first such line, unless a problem comes before it."""
+    body = HEAD + "seq: 1\n1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n"
+    lone = "carriage return \\(CR\\) without a line feed"
+    with pytest.raises(ParseError, match=rf"r.txt, line 1: a {lone}"):
+        read_openloris(write(tmp_path, "r.txt", body.replace("\n", "\r")))
+    with pytest.raises(ParseError, match=rf"line 4: a {lone}"):  # two lines joined by a CR
+        read_openloris(write(tmp_path, "r.txt", body.replace("1\n2 1", "1\r2 1")))
+    with pytest.raises(ParseError, match=rf"t.txt, line 1: a {lone}"):
+        read_tum(write(tmp_path, "t.txt", "1 0 0 0 0 0 0 1\r2 1 0 0 0 0 0 1\r"))
+    with pytest.raises(ParseError, match="line 1: 'x' is not a number"):  # a problem before it comes first
+        read_tum(write(tmp_path, "t.txt", "x 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\r3 1 0 0 0 0 0 1\n"))
+
+
+@pytest.mark.parametrize("key, first, then", [("frame", "d400_color", "base_link"), ("scene", "cafe", "home")])
+def test_a_second_header_of_another_value_is_refused(tmp_path, key, first, then):
+    """Two files joined into one (a lifelong file made by ``cat``): the official tool keeps the first
+    header and scored the later sequences in the wrong frame or scene (CR 0, AOE 119 degrees, no
+    word). The same value again is read (the real lifelong files repeat their headers)."""
+    again = HEAD + "seq: 1\n1 0 0 0 0 0 0 1\n" + HEAD + "seq: 2\n2 0 0 0 0 0 0 1\n"
+    assert sorted(read_openloris(write(tmp_path, "r.txt", again)).sequences) == [1, 2]
+    other = again.replace(f"{key}: {first}", f"{key}: {then}").replace(f"{key}: {then}", f"{key}: {first}", 1)
+    line, was = (5, 1) if key == "scene" else (6, 2)
+    with pytest.raises(
+        ParseError, match=rf"line {line}: '{key}: {then}' after '{key}: {first}' \(line {was}\); expected"
+    ):
+        read_openloris(write(tmp_path, "r.txt", other))
+
+
 @pytest.mark.parametrize(
     "body, line, match",
     [

@@ -104,7 +104,8 @@ def test_tum_file_reads_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch,
     _same(one, chunked)
     if name == "bad number":
         assert one[0] == N  # the line, counted from the file's first
-    expected = {"lone cr, a line of spaces": (300, "has 16 fields"), "lone cr, blank lines": (301, "has 16 fields"),
+    lone = "a carriage return (CR) without a line feed"  # named: it read as "has 16 fields"
+    expected = {"lone cr, a line of spaces": (300, lone), "lone cr, blank lines": (301, lone), "cr only": (1, lone),
                 "a byte float refuses": (51, "is not a number"), "bad number, then a short line": (101, "not a number")}  # fmt: skip
     if name in expected:  # the first problem in file order, on every path
         assert one[0] == expected[name][0] and expected[name][1] in one[1]

@@ -230,7 +230,35 @@ def _exact(
     bad_width: Callable[[str, int], str],
     numbers: str,
 ) -> Rows:
-    """The numpy byte-scanner path for one chunk (any whitespace, ``nan``, exact error lines)."""
+    """The numpy byte-scanner path for one chunk (any whitespace, ``nan``, exact error lines). A
+    carriage return without a line feed (CR is whitespace here, a line end to the official tool and
+    Python's universal newlines) is named where it is, unless a problem comes before it."""
+    lone = chunk.find(b"\r", 0, len(chunk) - 1)
+    while lone >= 0 and chunk[lone + 1 : lone + 2] == b"\n":  # CRLF: a line end
+        lone = chunk.find(b"\r", lone + 2, len(chunk) - 1)
+    if lone < 0:
+        return _scanned(chunk, line0, path, widths, specials_ok, bad_width, numbers)
+    cr_line = line0 + chunk.count(b"\n", 0, lone) + 1
+    cr = ParseError(path, cr_line, "a carriage return (CR) without a line feed: do the file's lines end with CR alone "
+                    "(classic Mac OS)? Expected lines ending with LF or CRLF; convert with tr '\\r' '\\n' < FILE > NEW")  # fmt: skip
+    try:
+        _scanned(chunk, line0, path, widths, specials_ok, bad_width, numbers)
+    except ParseError as exc:
+        if exc.line is not None and exc.line < cr_line:
+            raise
+    raise cr
+
+
+def _scanned(
+    chunk: bytes,
+    line0: int,
+    path: str,
+    widths: tuple[int, ...],
+    specials_ok: bool,
+    bad_width: Callable[[str, int], str],
+    numbers: str,
+) -> Rows:
+    """:func:`_exact` of a chunk without a lone carriage return."""
     lines = scan(chunk)
     comment = lines.first == ord("#")
     blank = lines.first < 0

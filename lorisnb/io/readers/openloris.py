@@ -197,6 +197,11 @@ def read_openloris(
         if key not in header:
             header[key] = value
             header_lines[key] = line
+        elif key in ("scene", "frame") and value.lower() != header[key].lower():  # two files joined into one:
+            # the official tool keeps the first and scores the later sequences in the wrong frame or scene
+            raise ParseError(spath, line, f"'{key}: {value}' after '{key}: {header[key]}' (line {header_lines[key]}); "
+                             f"expected one {key} for the whole file: write every sequence in one {key}, or give "
+                             "the sequences as separate files")  # fmt: skip
         if current is not None:
             seq_info[current][key] = value
 
