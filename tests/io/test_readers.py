@@ -225,3 +225,20 @@ def test_every_reader_notes_skipped_poses_once(tmp_path, fmt, bad, kinds):
     assert len(notes) == 1, notes
     assert re.search(rf"r\.\w+: {len(bad)} pose\(s\) with {kinds} values skipped \(first at line {first}\)", notes[0])
     np.testing.assert_array_equal(t.positions[:, 0], [1.0, 4.0, 5.0])
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-32"])
+def test_text_in_utf16_is_said_to_be_text(tmp_path, encoding):
+    """A Windows editor's "Unicode" (UTF-16, NUL bytes between the characters) read as 'binary data
+    (a NUL byte)', no hint that it is text in another encoding."""
+    p = tmp_path / "t.txt"
+    p.write_bytes("1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n".encode(encoding))
+    with pytest.raises(ParseError, match="t.txt, line 1: text in UTF-16 or UTF-32 .*save it as UTF-8"):
+        read_tum(p)
+    p.write_bytes((HEAD + "seq: 1\n1 0 0 0 0 0 0 1\n").encode(encoding))
+    with pytest.raises(ParseError, match="text in UTF-16 or UTF-32"):
+        read_openloris(p)
+    p.write_bytes(b"1 0 0 0 0 0 0 1\n\x00\x01\x02 binary")
+    with pytest.raises(ParseError, match="line 2: binary data"):
+        read_tum(p)
+

@@ -95,7 +95,9 @@ def check_duplicates(keys: list[tuple[str, tuple, tuple[int, ...]]]) -> None:
             if j == k:
                 continue
             suite, algorithm, scene, trial = label
-            held = f"{algorithm}{f' ({suite})' if suite else ''} {scene}-{s}{f' trial {trial}' if trial else ''}"
+            held = (
+                f"{algorithm}{f' ({suite})' if suite else ''} {scene}-{s}{f' trial {trial}' if trial else ''}".strip()
+            )
             if PurePosixPath(other) == PurePosixPath(path):
                 raise ValidationError(f"{path} is given twice (it holds {held}); give each file or folder once")
             raise ValidationError(

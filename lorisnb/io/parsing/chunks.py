@@ -28,7 +28,7 @@ from lorisnb.errors import ParseError
 from lorisnb.io.parsing.pieces import piece_columns, pyarrow_installed
 from lorisnb.io.parsing.ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, newlines, read_range
 from lorisnb.io.parsing.rows import Convert, Group, Rows, RowSink, line_dtype
-from lorisnb.io.parsing.scanner import BOM, SNIFF_BYTES, open_input, scan, stamp_fractions
+from lorisnb.io.parsing.scanner import BOM, SNIFF_BYTES, binary_reason, open_input, scan, stamp_fractions
 from lorisnb.io.parsing.whole import pandas_loaded, read_whole
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
@@ -65,7 +65,7 @@ def _chunks(path: str | os.PathLike, what: str, size: int) -> Generator[tuple[by
             first = False
             if nul >= 0:
                 line = line0 + rest.count(b"\n") + block.count(b"\n", 0, nul) + 1
-                raise ParseError(spath, line, f"binary data (a NUL byte); expected {what} (text)")
+                raise ParseError(spath, line, binary_reason(block, what))
             data = rest + block if rest else block
             if not block:
                 if data:

@@ -172,6 +172,16 @@ def regular_file(path: str | os.PathLike[str]) -> bool:
         return False
 
 
+def binary_reason(head: bytes, what: str) -> str:
+    """Why a file whose first bytes ``head`` hold a NUL byte is refused: text in UTF-16 or UTF-32
+    (a Windows editor's "Unicode"; its byte-order mark, or every other byte NUL) said as such."""
+    if head[:4] in (b"\xff\xfe\0\0", b"\0\0\xfe\xff") or head[:2] in (b"\xff\xfe", b"\xfe\xff") or (
+        len(head) >= 8 and (head[1::2].count(0) >= 0.9 * (len(head) // 2) or head[0::2].count(0) >= 0.9 * (len(head) // 2))
+    ):  # fmt: skip
+        return f"text in UTF-16 or UTF-32 (NUL bytes between the characters); expected {what} as UTF-8 or ASCII text: save it as UTF-8"
+    return f"binary data (a NUL byte); expected {what} (text)"
+
+
 def read_bytes(path: str | os.PathLike[str], what: str = "a trajectory file") -> bytes:
     """A text file's bytes, a UTF-8 byte-order mark removed. ParseError for a missing file, a
     folder, an unreadable file, an empty file, or binary content (NUL bytes in its first 64 KB,
@@ -181,9 +191,7 @@ def read_bytes(path: str | os.PathLike[str], what: str = "a trajectory file") ->
             head = fh.read(SNIFF_BYTES)
             nul = head.find(b"\0")
             if nul >= 0:
-                raise ParseError(
-                    path, head.count(b"\n", 0, nul) + 1, f"binary data (a NUL byte); expected {what} (text)"
-                )
+                raise ParseError(path, head.count(b"\n", 0, nul) + 1, binary_reason(head, what))
             raw = head + fh.read()
         except OSError as exc:
             raise ParseError(path, None, f"cannot be read ({exc.strerror})") from None
