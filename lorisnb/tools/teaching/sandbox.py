@@ -40,6 +40,23 @@ from typing import Any
 import numpy as np
 
 CHILD = Path(__file__).with_name("_sandbox_child.py")
+_CHILD_SOURCE: list[str] = []
+
+
+def _child_source() -> str:
+    """The child's code (read once, by the grader, from lorisnb's own folder)."""
+    if not _CHILD_SOURCE:
+        _CHILD_SOURCE.append(CHILD.read_text(encoding="utf-8"))
+    return _CHILD_SOURCE[0]
+
+
+def stat_is_link_or_plain(st: os.stat_result) -> bool:
+    """Whether an entry of a folder is a link (its own inode: changing its owner changes nothing
+    else), a folder, or a file with no other name (``st_nlink`` 1): a hard link to a file elsewhere
+    is neither."""
+    import stat as _stat
+
+    return _stat.S_ISLNK(st.st_mode) or _stat.S_ISDIR(st.st_mode) or st.st_nlink <= 1
 
 
 @dataclass(frozen=True)
@@ -202,6 +219,7 @@ class Sandbox:
         self.isolation = "full" if can_isolate() else "limits"
         self._proc: subprocess.Popen[bytes] | None = None
         self._buffer = b""
+        self._given = False  # the working folder was given to the sandbox's user (once, before its first start)
         self.stray = 0  # lines in the reply pipe that were no reply of the child's (tampering)
         self.findings: list[str] = []  # what the guard of a no-lorisnb child refused or found (lorisnb used)
         self.start()
@@ -210,9 +228,17 @@ class Sandbox:
 
     def _command(self) -> list[str]:
         # without lorisnb: no site (an editable install's path hook would find it), numpy's folder only
-        child = [sys.executable, *(["-S"] if self.no_lorisnb else []), "-B", str(self.work / CHILD.name)] + (
-            ["--no-lorisnb"] if self.no_lorisnb else []
-        )
+        # the child's code is given on its command line (``-c``), never as a file in the working folder: the
+        # student owns that folder, and a file the grader (root) wrote or read there by its name could be a
+        # link a student's cell put in its place (to any file of the machine, which root would overwrite)
+        child = [
+            sys.executable,
+            *(["-S"] if self.no_lorisnb else []),
+            "-B",
+            "-c",
+            _child_source(),
+            "lorisnb-sandbox",
+        ] + (["--no-lorisnb"] if self.no_lorisnb else [])
         if self.isolation != "full":
             return child
         hidden = [str(h) for h in self.hidden if not self.work.is_relative_to(h)]
@@ -239,17 +265,34 @@ class Sandbox:
                 continue  # counted per user: the grader's own user has other processes
             resource.setrlimit(which, (value, value))
 
+    def _give_folder(self) -> None:
+        """Give the working folder (as the grader made it: no student code ran in it yet) to the
+        sandbox's user, once, before its first start. Never again: from then on the student's code
+        owns what lies in it, and the grader (root) does nothing in it by name (a restart neither
+        copies, nor changes the owner of, anything there), since any name could be a link, a hard
+        link or a folder swapped for a link by then (a process of the student's still dying)."""
+        closed = [p for p in self.work.parents if not p.stat().st_mode & 0o001]
+        if closed:
+            raise OSError(f"the sandbox's folder {self.work} is under {closed[0]}, which its user cannot enter "
+                          "(mode without o+x): make the folder elsewhere (the grader uses $TMPDIR)")  # fmt: skip
+        fd = os.open(self.work, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+        try:
+            for top, dirs, files, top_fd in os.fwalk(".", dir_fd=fd, follow_symlinks=False):
+                del top
+                for name in [*dirs, *files]:
+                    st = os.stat(name, dir_fd=top_fd, follow_symlinks=False)
+                    if not stat_is_link_or_plain(st):
+                        continue  # a file with another name elsewhere (a hard link): not the folder's to give
+                    os.chown(name, self.uid, self.uid, dir_fd=top_fd, follow_symlinks=False)
+            os.fchown(fd, self.uid, self.uid)
+            os.fchmod(fd, 0o700)
+        finally:
+            os.close(fd)
+
     def start(self) -> None:
-        shutil.copyfile(CHILD, self.work / CHILD.name)  # lorisnb's folder may be hidden from the child
-        if self.isolation == "full":
-            closed = [p for p in self.work.parents if not p.stat().st_mode & 0o001]
-            if closed:
-                raise OSError(f"the sandbox's folder {self.work} is under {closed[0]}, which its user cannot enter "
-                              "(mode without o+x): make the folder elsewhere (the grader uses $TMPDIR)")  # fmt: skip
-            os.chown(self.work, self.uid, self.uid)
-            for p in self.work.rglob("*"):
-                os.chown(p, self.uid, self.uid, follow_symlinks=False)
-            self.work.chmod(0o700)
+        if self.isolation == "full" and not self._given:
+            self._give_folder()
+            self._given = True
         env = {
             "PATH": os.environ.get("PATH", "/usr/bin:/bin"),
             "HOME": str(self.work),
