@@ -81,3 +81,40 @@ def test_the_child_script_is_never_a_file_of_the_sandbox_folder():
         box.restart()
         assert not any(p.suffix == ".py" for p in tmp_path.iterdir())
     shutil.rmtree(base)
+
+
+def test_a_flood_of_the_reply_pipe_without_a_line_end_is_bounded_and_fails_the_cell(monkeypatch):
+    import resource
+    import shutil
+
+    from lorisnb.tools.teaching import sandbox as sb
+
+    monkeypatch.setattr(sb, "REPLY_BYTES", 4 * 1024**2)
+    base = _reachable_dir()
+    work = base / "work"
+    work.mkdir()
+    flood = (
+        "import os\n"
+        "chunk = b'x' * (1 << 20)\n"
+        "for fd in range(3, 12):\n"
+        "    try:\n"
+        "        os.fstat(fd)\n"
+        "    except OSError:\n"
+        "        continue\n"
+        "    try:\n"
+        "        for _ in range(400):\n"
+        "            os.write(fd, chunk)\n"
+        "    except OSError:\n"
+        "        pass\n"
+    )
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    try:
+        with Sandbox(work, limits=Limits(cell_timeout_s=20), uid=62300) as box:
+            with pytest.raises(SandboxError, match="MiB into the grader's reply pipe without a line end"):
+                box.run(flood)
+            box.restart()
+            r = box.run("x = 3", ["x"])
+            assert r["ok"] and r["values"]["x"]["value"] == 3
+    finally:
+        shutil.rmtree(base)
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss0 < 200 * 1024  # KiB: far below the 400 MB sent

@@ -10,7 +10,8 @@ course server), the child gets (``isolation == "full"``):
   (and a fresh 64 MB ``/dev/shm`` for multiprocessing's locks),
   and the folders named ``hidden`` (the course folder, the labs' sources, the checkout lorisnb runs
   from) are replaced by empty, unreadable folders;
-- its own PID namespace (it sees and signals no other process);
+- its own PID namespace (it sees and signals no other process) and IPC namespace (no System V or POSIX
+  message queue, semaphore or shared memory reaches another sandbox);
 - a user id of its own (``uid``, owning nothing else), no capabilities, ``no_new_privs``;
 - limits: address space (``memory_bytes``), file size, number of processes, CPU time.
 
@@ -94,6 +95,9 @@ class Limits:
 # a submission's default budget: 5 per-cell limits (5 min at the default 60 s), at least 2 minutes
 # (the lab's own cells after the first answer are charged too: about 10 to 20 s on a busy 2-core machine)
 BUDGET_CELLS, BUDGET_MIN_S = 5, 120.0
+
+
+REPLY_BYTES = 64 * 1024**2  # the most the grader buffers of the child's pipe without a line end
 
 
 class SandboxError(RuntimeError):
@@ -247,7 +251,7 @@ class Sandbox:
 
             hidden.append(str(Path(lorisnb.__file__).resolve().parent))
         return [
-            "unshare", "--mount", "--net", "--pid", "--fork", "--kill-child", "--",
+            "unshare", "--mount", "--net", "--pid", "--ipc", "--fork", "--kill-child", "--",
             "sh", "-c", _SETUP, "sh", str(self.work), str(self.uid), *hidden, "--", *child,
         ]  # fmt: skip
 
@@ -380,6 +384,7 @@ class Sandbox:
                         self.close()
                         raise SandboxError("the sandbox ended (memory limit, or the code ended its process)")
                     self._buffer += chunk
+                    self._bounded()
             line, self._buffer = self._buffer.split(b"\n", 1)
             reply = self._line(line)
             if reply is not None and reply.get("id") == request_id:
@@ -387,6 +392,18 @@ class Sandbox:
                 return reply
             if reply is not None:
                 self.stray += 1  # not the reply to this request: written by the code into the pipe
+
+    def _bounded(self) -> None:
+        """Stop a child whose pipe holds more than :data:`REPLY_BYTES` without a line end: no reply is
+        that long (a cell's code writing into the pipe would otherwise fill the grader's memory)."""
+        if len(self._buffer) > REPLY_BYTES and b"\n" not in self._buffer[-REPLY_BYTES:]:
+            self._buffer = b""
+            self.stray += 1
+            self.close()
+            raise SandboxError(
+                f"the code wrote more than {REPLY_BYTES // 1024**2} MiB into the grader's reply pipe without a line "
+                "end (no reply is that long): the sandbox was stopped and the cell counts as failed"
+            )
 
     def _line(self, line: bytes) -> dict[str, Any] | None:
         """A line from the pipe: a finding of the guard (``{"lorisnb": what}``: kept in
@@ -417,6 +434,7 @@ class Sandbox:
             if not chunk:
                 break
             self._buffer += chunk
+            self._bounded()
         lines = self._buffer.split(b"\n")
         self._buffer = b""
         for line in lines:
