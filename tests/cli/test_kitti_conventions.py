@@ -94,6 +94,18 @@ def test_stamped_inputs_use_their_rotations(devkit, tmp_path):
     assert row["matched"] == len(read_kitti(gt_file)) and row["kitti_matrices"] == "rotations"
     assert row["kitti_t_err"] == pytest.approx(100 * t_err, rel=1e-6)
     assert row["kitti_r_err"] == pytest.approx(np.degrees(r_err) * 100, rel=1e-6)
+    # a repeated stamp (every 50th, an earlier pose 3 cm off before it) is read as TUM's associate.py
+    # keeps it, the last pose: each was kept and paired with the next ground-truth stamp, one more
+    # devkit frame each (the estimate's); of the ground truth's the first was used
+    for tum, _ in files:
+        lines = tum.read_text().splitlines(keepends=True)
+        off = [f"{x.split()[0]} " + " ".join(f"{float(v) + 0.03:.17g}" for v in x.split()[1:4]) + " "
+               + " ".join(x.split()[4:]) + "\n" for x in lines]  # fmt: skip
+        tum.write_text("".join(o + x if k % 50 == 7 else x for k, (o, x) in enumerate(zip(off, lines, strict=True))))
+    dup = lorisnb.evaluate_pairs(files[1][0], files[0][0], "kitti").sequences().iloc[0]
+    assert dup["matched"] == row["matched"] and dup["kitti_segments"] == row["kitti_segments"]
+    assert dup["kitti_t_err"] == pytest.approx(100 * t_err, rel=1e-6)
+    assert dup["kitti_r_err"] == pytest.approx(np.degrees(r_err) * 100, rel=1e-6)
 
 
 def test_double_precision_on_request_and_refused_elsewhere(tmp_path):

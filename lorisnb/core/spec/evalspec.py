@@ -134,6 +134,17 @@ class EvalSpec:
 
         return "sim3" if is_monocular(algorithm) else "se3"
 
+    def repeated_for(self, fmt: str | None) -> str:
+        """The rule for repeated poses reading a file of format ``fmt``: :attr:`repeated`, except
+        under the ``kitti`` and ``tartanair`` presets (unless given) for a stamped file, whose poses
+        they pair by TUM's nearest rule: the last pose of a repeated stamp, as TUM's ``associate.py``
+        keeps it (every pose was kept and paired with the next ground-truth stamp, one more devkit
+        frame each, shifting the segments' starts; of a repeated ground-truth stamp the first was
+        used). KITTI files, paired by index, keep every row."""
+        if self.preset_name in ("kitti", "tartanair") and "repeated" not in self.explicit and fmt != "kitti":
+            return "drop"
+        return self.repeated
+
     def lifelong_for(self, sequences: int) -> bool:
         """Whether one alignment serves all sequences of an input with ``sequences`` of them."""
         return self.mode == "lifelong" or (self.mode == "auto" and sequences > 1)
@@ -160,6 +171,8 @@ class EvalSpec:
             "lifelong": "one alignment (first sequence) for all",
         }[self.mode]
         repeated = "repeated poses dropped" if self.repeated == "drop" else "repeated poses kept"
+        if self.repeated_for("tum") != self.repeated:
+            repeated += " in KITTI files, the last of a repeated stamp in stamped files (TUM associate.py's)"
         extra = ", stamps repaired" if self.repair_stamps else ""
         transform = ", estimate composed with T_est_gt" if self.transform is not None else ""
         thresholds = (

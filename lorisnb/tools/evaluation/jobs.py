@@ -235,8 +235,9 @@ def _pair(job: Job) -> FileErrors:
         algorithm = src.topic
     if "openloris" in (src.fmt, src.gt_fmt):  # every seq: block with its own number, as the native route
         return _openloris_pair(job, algorithm, rel, suite, trial)
-    rule = job.spec.repeated
-    gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, rule)
+    rule = job.spec.repeated_for(src.fmt)
+    gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf,
+                        job.spec.repeated_for(src.gt_fmt))  # fmt: skip
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
         est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf, repeated=rule,
