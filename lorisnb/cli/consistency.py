@@ -34,7 +34,8 @@ def cmd_consistency(args: argparse.Namespace) -> int:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", LorisWarning)
             est, cov = read_covariances(args.est, args.topic, required=False)
-            gt = read_trajectory(args.gt, args.gt_format, seq=args.seq, topic=args.gt_topic)
+            # every row in file order, as ov_eval reads it: of a repeated stamp its association takes the first
+            gt = read_trajectory(args.gt, args.gt_format, seq=args.seq, topic=args.gt_topic, repeated="keep")
             result = ov_eval_errors(est, gt, cov, align=args.align, max_diff=args.max_diff)
     except (ParseError, EvaluationError) as exc:
         say(f"error: {exc}")

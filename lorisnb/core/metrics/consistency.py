@@ -148,7 +148,7 @@ def associate_sequential(
     """``ov_eval``'s association (``AlignUtils::perform_association`` with offset 0): each estimate
     stamp in order takes the ground-truth stamp nearest to it (less than ``max_diff`` seconds
     away; ties: the earlier) among those after the one the previous match took. Returns the
-    matched ``(gt index, est index)`` arrays, in estimate order. Both stamp arrays increasing.
+    matched ``(gt index, est index)`` arrays, in estimate order. Both stamp arrays sorted (the ground truth may repeat a stamp).
 
     Vectorized: each estimate stamp's nearest ground-truth stamp, by ``searchsorted``. Only where
     two estimate stamps would share one (an estimate denser than the ground truth) does the rule's
@@ -164,17 +164,19 @@ def associate_sequential(
     ok = np.abs(g[nearest] - e) < max_diff
     ei = np.flatnonzero(ok)
     gi = nearest[ok]
-    if gi.size < 2 or np.all(gi[1:] > gi[:-1]):
+    if (gi.size < 2 or np.all(gi[1:] > gi[:-1])) and (g.size < 2 or np.all(g[1:] > g[:-1])):
         return gi, ei
     return _associate_in_order(g, e, max_diff)
 
 
 def _associate_in_order(g: np.ndarray, e: np.ndarray, max_diff: float) -> tuple[np.ndarray, np.ndarray]:
     """The rule of :func:`associate_sequential` one estimate stamp at a time (``ov_eval``'s scan),
-    for an estimate denser than its ground truth."""
+    for an estimate denser than its ground truth, or a ground truth with a repeated stamp (read in
+    file order, as ov_eval reads it): the scan stops at a row no nearer than the row before, so it
+    takes the first row of a repeated stamp, and stops there even where a later stamp is nearer."""
     out_g, out_e = [], []
     start = 0  # the first ground-truth stamp the next match may take
-    for i, t in enumerate(e):  # an estimate denser than its ground truth: rare, and what the rule is
+    for i, t in enumerate(e):  # rare (a denser estimate, a repeated stamp), and what the rule is
         j = max(start, int(np.searchsorted(g, t - max_diff, side="right")))  # ov_eval skips what is too early
         best, best_j = max_diff, -1
         while j < g.size and abs(g[j] - t) < best:
