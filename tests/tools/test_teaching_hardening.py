@@ -118,3 +118,137 @@ def test_a_flood_of_the_reply_pipe_without_a_line_end_is_bounded_and_fails_the_c
     finally:
         shutil.rmtree(base)
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss0 < 200 * 1024  # KiB: far below the 400 MB sent
+
+
+# --- answers written as in Jupyter are graded as the notebook ran them ---------------------------------
+
+ROOT = Path(__file__).resolve().parents[2]
+LAB = "lab1_lifelong_metrics"
+SOURCE_NB = ROOT / "teaching" / "source" / LAB / f"{LAB}.ipynb"
+
+
+def _solved(answers: dict[str, str]):
+    import nbformat
+
+    nb = nbformat.read(SOURCE_NB, as_version=4)
+    sol = {}
+    for cell in nb.cells:
+        meta = cell.get("metadata", {}).get("nbgrader", {})
+        if meta.get("solution"):
+            sol[meta["grade_id"]] = cell.source
+            if meta["grade_id"] in answers:
+                cell.source = answers[meta["grade_id"]](cell.source)
+    return nb, sol
+
+
+# the lab's sandbox opens its folder to others and leaves there the number simulate_and_score gives;
+# the prediction, run alone, reads it back from there (the tester's B1): 0 points, the hole closed
+B1_EXFIL = r"""import os
+try:
+    _fe, _t = simulate_and_score(Faults(lost=(lost_window,)))
+    predicted_cr_lost = float(_t.loc[1, "cr"])
+    os.chmod(".", 0o755)
+    with open("b1.txt", "w") as f:
+        f.write(repr(predicted_cr_lost))
+    os.chmod("b1.txt", 0o644)
+except NameError:
+    predicted_cr_lost = float(open("../work/b1.txt").read())
+"""
+
+JUPYTER_STYLE = {
+    "A1_correctness": lambda s: (
+        "def correctness(ate_m, aoe_deg, eps=eps, phi=phi):\n    return (ate_m <= eps) & (aoe_deg <= phi)\n"
+    ),
+    "C1_cs_r": lambda s: (
+        "def cs_r(t0, t_min, first_correct, tau=tau):\n"
+        "    return float(np.exp(-(t0 - t_min) / tau)) if first_correct else 0.0\n"
+    ),
+    "C2_prediction": lambda s: (
+        "# the first pose is wrong, so c(p0) = 0 in my cs_r from C1\n"
+        "predicted_cs_r_wrong = cs_r(reloc_delay, 0.0, False, tau)\n"
+    ),
+    "D1_alignment": lambda s: "%matplotlib inline\n" + s,
+    "E1_threshold": lambda s: "%%time\n" + s,
+    "G1_difficulty": lambda s: "!echo looking\nfiles = !ls\n%time x_ = 1 + 1\n" + s,
+    "B1_prediction": lambda s: B1_EXFIL,
+}
+
+
+@pytest.mark.slow
+def test_magics_defaults_from_the_lab_and_a_prediction_with_an_earlier_function_score_as_in_jupyter(tmp_path):
+    """The adversarial pass's s-magic, s-defaults and s-c2own: %%time, %matplotlib inline and shell
+    escapes (SyntaxError: 0), ``def f(..., eps=eps)`` (NameError run alone: 0) and C2 predicted with the
+    student's own cs_r from C1 (0, saying the lab's functions were used) all scored 0 though Jupyter
+    ran them and their checks passed. Its s-probe's B1 read, in its run alone, a number its lab run
+    computed with simulate_and_score and left in the lab's folder opened with chmod: 1 point."""
+    import nbformat
+
+    from lorisnb.tools.teaching.autograde import GradeSettings, grade_submission, lab_spec
+    from lorisnb.tools.teaching.sandbox import claim_uids
+
+    spec, release = lab_spec(SOURCE_NB), tmp_path / "release"
+    release.mkdir()
+    settings = GradeSettings(Limits(cell_timeout_s=30, locked_timeout_s=180), secret="s",
+                             uid=claim_uids(63000) if can_isolate() else 0)  # fmt: skip
+    nb, _ = _solved(JUPYTER_STYLE)
+    for cell in nb.cells:  # the id typed in the notebook, as the adversarial pass's s1234567 typed S1234567
+        if "parameters" in cell.get("metadata", {}).get("tags", []):
+            cell.source = cell.source.replace("student_id = None", 'student_id = " S-Jupyter"')
+    path = tmp_path / "s" / f"{LAB}.ipynb"
+    path.parent.mkdir()
+    nbformat.write(nb, path)
+    res = grade_submission(spec, release, path, "s-jupyter", settings)
+    lost = {s.question: s.message for s in res.scores if s.points < s.max_points}
+    if can_isolate():  # the lab's folder is hidden from the answers run alone (the limits only: not isolated)
+        assert set(lost) == {"test_B1_prediction"}, (lost, res.notes)
+        assert res.points == res.max_points - 1
+    else:
+        assert set(lost) <= {"test_B1_prediction"}, (lost, res.notes)
+    assert not any("SyntaxError" in n or "NameError" in n for n in res.notes), res.notes
+    assert any("student_id is ' S-Jupyter', its folder 's-jupyter': the same id" in n for n in res.notes), res.notes
+
+
+def test_a_student_id_typed_otherwise_than_its_folder_draws_the_same_variant_or_is_noted():
+    import nbformat
+
+    from lorisnb.tools.teaching import lab_variant
+    from lorisnb.tools.teaching.autograde import declared_id
+
+    assert lab_variant("S1234567").seed == lab_variant(" s1234567 ").seed == lab_variant("s 1234567").seed
+    assert lab_variant("s1234567").seed != lab_variant("s1234568").seed
+    nb = nbformat.read(SOURCE_NB, as_version=4)
+    assert declared_id(nb) is None
+    for cell in nb.cells:
+        if "parameters" in cell.get("metadata", {}).get("tags", []):
+            cell.source = cell.source.replace("student_id = None", 'student_id = "S1234567"')
+    assert declared_id(nb) == "S1234567"
+
+
+def test_as_python_transforms_magics_as_ipython_and_the_shell_stand_in_runs_them():
+    from lorisnb.tools.teaching.autograde import as_python, defined_with
+
+    assert as_python("x = 1\n") == "x = 1\n"
+    assert "run_cell_magic('time'" in as_python("%%time\nx = 1\n")
+    assert defined_with("def f(a, eps=eps, *, k: Kind = tau):\n    return a * other\n") == {"eps", "Kind", "tau"}
+    assert defined_with("from __future__ import annotations\ndef f(a: Kind, b=b0) -> R:\n    pass\n") == {"b0"}
+    assert defined_with("@deco(phi)\nclass A(Base, metaclass=M):\n    x = y\n") == {"deco", "phi", "Base", "M"}
+    base = _reachable_dir()
+    work = base / "work"
+    work.mkdir()
+    import shutil
+
+    try:
+        with Sandbox(work, limits=Limits(cell_timeout_s=10), uid=62300) as box:
+            r = box.run(as_python("%%time\nx = 2 + 3\n%matplotlib inline\n"), ["x"])
+            assert r["ok"] and r["values"]["x"]["value"] == 5, r
+            r = box.run(as_python("%%timeit\nlocal_only = 1\n"), ["local_only"])
+            assert r["ok"] and r["values"]["local_only"] == {"missing": True}, r
+            r = box.run(as_python("files = !echo hello\nn = len(files)\n"), ["n"])
+            assert r["ok"] and r["values"]["n"]["value"] == 1, r
+            r = box.run(as_python("%lsmagic_unknown_thing\n"))
+            assert not r["ok"] and "is not run by the grader" in r["error"]
+        with Sandbox(work, limits=Limits(cell_timeout_s=10), uid=62300, no_lorisnb=True) as box:
+            r = box.run(as_python("files = !cat /etc/hostname\n"))  # a shell escape is another process: refused
+            assert not r["ok"] and "may not use" in r["error"], r
+    finally:
+        shutil.rmtree(base)

@@ -71,16 +71,23 @@ class LabVariant:
         )
 
 
+def same_id(student_id: str) -> str:
+    """A student id as the data variant is drawn from it: without spaces, in lower case (an id typed
+    ``S1234567`` or ``s 1234567`` in the notebook draws the variant of the folder ``s1234567``)."""
+    return "".join(str(student_id).split()).casefold()
+
+
 def lab_variant(
     student_id: str | None = None, seed: int | None = None, lab: str = "lab1_lifelong_metrics"
 ) -> LabVariant:
     """The data variant of a student: drawn from a seed derived from ``student_id`` (else
     ``$JUPYTERHUB_USER``), so that the grader, who knows the id, draws the same data; answers
     differ between students while the checks and their hints apply to every variant. ``seed``:
-    given, it is used instead (the instructor's runs)."""
+    given, it is used instead (the instructor's runs). The id is taken as :func:`same_id` takes it
+    (case and spaces ignored: ``" S1234567 "`` is ``s1234567``, the folder the grader knows it by)."""
     sid = str(student_id if student_id is not None else os.environ.get("JUPYTERHUB_USER", ""))
     if seed is None:
-        seed = int(hashlib.sha256(f"{lab}\0{sid}".encode()).hexdigest()[:8], 16) % 2**31
+        seed = int(hashlib.sha256(f"{lab}\0{same_id(sid)}".encode()).hexdigest()[:8], 16) % 2**31
     rng = np.random.default_rng(int(seed))
 
     def draw(values: tuple[Any, ...]) -> Any:

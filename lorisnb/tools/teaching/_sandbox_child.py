@@ -328,6 +328,87 @@ def install_guard(reply_fd: int) -> tuple[Any, Any]:
     return report, scan
 
 
+class Shell:
+    """What ``get_ipython()`` returns to an answer cell here: the calls IPython's input transformer
+    makes of magics and shell escapes (the grader transforms each answer cell as IPython would,
+    :func:`lorisnb.tools.teaching.autograde.as_python`), run as Jupyter runs them where they change
+    what the cell computes: ``%time``/``%%time``, ``%timeit``/``%%timeit``, ``%%capture`` run their
+    code (``%%timeit``'s names stay its own, as in IPython); display settings (``%matplotlib``,
+    ``%config``, ``%precision``, ``%load_ext``, ``%autoreload``...) do nothing; ``!cmd``, ``%%bash`` and
+    ``x = !cmd`` run the command as ``os.system`` and ``subprocess`` would, in this sandbox (refused
+    where another process is, in an answer graded with numpy only). Another magic fails, naming it."""
+
+    QUIET = frozenset({
+        "matplotlib", "config", "precision", "load_ext", "reload_ext", "unload_ext", "autoreload", "aimport",
+        "pylab", "xmode", "colors", "pdb", "automagic", "autocall", "pprint", "doctest_mode", "who", "whos",
+        "who_ls", "lsmagic", "magic", "history", "notebook", "qtconsole", "env", "pinfo", "pinfo2",
+    })  # fmt: skip
+    RUN = frozenset({"time", "timeit", "capture", "prun"})
+    SHELL = frozenset({"bash", "sh", "script", "system", "sx"})
+
+    def __init__(self, namespace: dict[str, Any]) -> None:
+        self.user_ns = namespace
+
+    def _run(self, code: str, name: str, own: bool = False) -> Any:
+        ns = dict(self.user_ns) if own else self.user_ns
+        try:
+            return eval(compile(code, name, "eval"), ns)  # noqa: S307 (the student's own expression)
+        except SyntaxError:
+            exec(compile(code, name, "exec"), ns)  # noqa: S102 (the student's own cell)
+            return None
+
+    def _unknown(self, what: str) -> Any:
+        raise NotImplementedError(
+            f"the IPython magic {what} is not run by the grader (it runs %time, %timeit, %%capture, display "
+            "settings such as %matplotlib, and shell escapes): remove it, or write it in Python"
+        )
+
+    def run_line_magic(self, name: str, line: str, _stack_depth: int = 1) -> Any:
+        if name in self.RUN:
+            options = ("-n", "-r", "-o", "-q", "-p")
+            words = line.split()
+            while words and words[0].startswith(options):  # %timeit -n 10 -r 3 f(x)
+                words = words[2:] if words[0] in ("-n", "-r") else words[1:]
+            return self._run(" ".join(words), "<magic>", own=name == "timeit")
+        if name in self.QUIET:
+            return None
+        if name in self.SHELL:
+            return self.system(line)
+        if name == "pwd":
+            return os.getcwd()
+        if name == "cd":
+            os.chdir(line.strip() or ".")
+            return None
+        return self._unknown(f"%{name}")
+
+    def run_cell_magic(self, name: str, line: str, cell: str) -> Any:
+        if name in self.RUN:
+            self._run(cell, "<cell magic>", own=name == "timeit")
+            return None
+        if name in self.SHELL:
+            return self.system(cell)
+        if name == "writefile":
+            with open(line.split()[-1], "a" if "-a" in line.split() else "w", encoding="utf-8") as f:
+                f.write(cell)
+            return None
+        return self._unknown(f"%%{name}")
+
+    def system(self, cmd: str) -> None:
+        import subprocess
+
+        subprocess.run(cmd, shell=True, check=False)  # noqa: S602 (the student's own command, in the sandbox)
+
+    def getoutput(self, cmd: str, split: bool = True, _depth: int = 0) -> Any:
+        import subprocess
+
+        out = subprocess.run(cmd, shell=True, check=False, capture_output=True, text=True).stdout  # noqa: S602
+        return out.splitlines() if split else out
+
+    def magic(self, line: str) -> Any:
+        name, _, rest = line.lstrip("%").partition(" ")
+        return self.run_line_magic(name, rest)
+
+
 def main() -> None:
     no_lorisnb = "--no-lorisnb" in sys.argv
     reply = os.fdopen(os.dup(1), "w", encoding="utf-8")
@@ -354,6 +435,8 @@ def main() -> None:
 
         matplotlib.use("Agg")  # figures are drawn, never shown
     namespace: dict[str, Any] = {"__name__": "__main__"}
+    shell = Shell(namespace)
+    namespace["get_ipython"] = lambda: shell  # what IPython's transformed magics and shell escapes call
     for line in requests:
         req = json.loads(line)
         request_id = req.pop("id", None)

@@ -49,9 +49,11 @@ from lorisnb.errors import AnswerError
 from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, decode
 
-GRADER_VERSION = "5"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "6"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
-# 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series)
+# 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
+# 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
+# given to answers run alone; predictions get the functions of the earlier answer cells)
 
 
 @dataclass(frozen=True)
@@ -75,6 +77,8 @@ class LabSpec:
     values: Mapping[str, tuple[str, ...]]  # answer grade_id -> the names read back after it
     # prediction answer grade_id -> the names the lab's own cells bound before it (what it may use)
     predictions: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    # every answer grade_id -> the names the lab's own cells bound before it
+    lab_before: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
     @property
     def max_points(self) -> float:
@@ -126,6 +130,7 @@ def lab_spec(source_nb: Path) -> LabSpec:
     functions: dict[str, tuple[str, ...]] = {}
     values: dict[str, tuple[str, ...]] = {}
     predictions: dict[str, tuple[str, ...]] = {}
+    lab_before: dict[str, tuple[str, ...]] = {}
     lab_names: set[str] = set()  # bound by the lab's own cells so far
     for cell in nb.cells:
         meta = _nbgrader(cell)
@@ -133,6 +138,7 @@ def lab_spec(source_nb: Path) -> LabSpec:
             continue
         if meta.get("solution"):
             pending.append((meta["grade_id"], cell.source))
+            lab_before[str(meta["grade_id"])] = tuple(sorted(lab_names))
             if PREDICTION in cell.get("metadata", {}).get("tags", []):
                 predictions[str(meta["grade_id"])] = tuple(sorted(lab_names))
         elif meta.get("grade"):
@@ -152,7 +158,7 @@ def lab_spec(source_nb: Path) -> LabSpec:
             lab_names |= _assigned(cell.source) | _imported(cell.source)
     if not questions:
         raise ValueError(f"{source_nb}: no test cell (nbgrader 'grade' cell with points): nothing to grade")
-    return LabSpec(source_nb.stem, nb, tuple(questions), functions, values, predictions)
+    return LabSpec(source_nb.stem, nb, tuple(questions), functions, values, predictions, lab_before)
 
 
 @dataclass
@@ -219,6 +225,61 @@ def repeated_answers(nb: nbformat.NotebookNode) -> dict[str, int]:
     return {g: n for g, n in seen.items() if n > 1}
 
 
+def as_python(source: str) -> str:
+    """An answer cell as IPython runs it: its magics (``%%time``, ``%matplotlib inline``) and shell
+    escapes (``!ls``, ``x = !ls``) made the calls IPython makes of them
+    (``get_ipython().run_cell_magic('time', '', ...)``, IPython's own
+    ``TransformerManager().transform_cell``), which the sandbox's stand-in for IPython's shell runs
+    (:class:`._sandbox_child.Shell`); plain Python is unchanged. A shell escape runs as
+    ``os.system`` would, in the same sandbox, so it can do nothing plain Python cannot (and in an
+    answer graded with numpy only it is refused, as another process is)."""
+    runs = re.match(r"\s*%%(time|timeit|capture|prun)\b([^\n]*)\n(.*)", source, re.S)
+    if runs:  # IPython transforms the body of these before it runs it (%%time over a cell with %matplotlib)
+        name, line, body = runs.groups()
+        return f"get_ipython().run_cell_magic({name!r}, {line.strip()!r}, {as_python(body)!r})\n"
+    try:
+        from IPython.core.inputtransformer2 import TransformerManager
+    except ImportError:  # pragma: no cover (the notebooks extra installs IPython)
+        return source
+    try:
+        return str(TransformerManager().transform_cell(source))
+    except Exception:  # noqa: BLE001 (what IPython cannot transform runs as it is, and fails as Python)
+        return source
+
+
+def defined_with(source: str) -> set[str]:
+    """The names a cell's top-level functions and classes read when they are *defined* (their
+    default values, decorators, annotations unless ``from __future__ import annotations``, and a
+    class's bases and keywords): ``def correctness(ate_m, aoe_deg, eps=eps, phi=phi)`` needs the
+    lab's ``eps`` and ``phi`` before it is even called. Empty when it does not parse."""
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return set()
+    lazy = any(
+        isinstance(n, ast.ImportFrom) and n.module == "__future__" and any(a.name == "annotations" for a in n.names)
+        for n in tree.body
+    )
+    exprs: list[ast.AST] = []
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            a = node.args
+            exprs += [*node.decorator_list, *a.defaults, *(d for d in a.kw_defaults if d is not None)]
+            if not lazy:
+                exprs += [x.annotation for x in (*a.posonlyargs, *a.args, *a.kwonlyargs, a.vararg, a.kwarg)
+                          if x is not None and x.annotation is not None]  # fmt: skip
+                exprs += [node.returns] if node.returns is not None else []
+        elif isinstance(node, ast.ClassDef):
+            exprs += [*node.decorator_list, *node.bases, *(k.value for k in node.keywords)]
+    return {n.id for e in exprs for n in ast.walk(e) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+
+
+def plain_values(values: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
+    """The values read back (``_plain``'s form) that are numbers, strings or arrays of numbers, as
+    :meth:`.sandbox.Sandbox.bind` takes them."""
+    return {n: dict(v) for n, v in values.items() if set(v) == {"value"} or "array" in v}
+
+
 #: Top-level statements a formula answer keeps when it is graded on its definitions only.
 _DEFINITIONS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Import, ast.ImportFrom)
 
@@ -246,6 +307,32 @@ def definitions_only(source: str, assignments: bool = False, lorisnb: bool = Tru
             for i in range(first - 1, last):
                 kept[i] = True
     return "\n".join(line if k else "" for line, k in zip(lines, kept, strict=True))
+
+
+def declared_id(nb: nbformat.NotebookNode) -> str | None:
+    """The ``student_id`` a returned notebook's parameters cell sets to a string (the last such
+    assignment), else None."""
+    found = None
+    for cell in nb.cells:
+        if cell.cell_type != "code" or "parameters" not in cell.get("metadata", {}).get("tags", []):
+            continue
+        try:
+            tree = ast.parse(cell.source)
+        except SyntaxError:
+            continue
+        for node in tree.body:
+            if (isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "student_id"
+                                                     for t in node.targets)
+                    and isinstance(node.value, ast.Constant) and isinstance(node.value.value, str)):  # fmt: skip
+                found = node.value.value
+    return found
+
+
+def earlier_functions(answers: Mapping[str, str], before: Sequence[str]) -> str:
+    """The functions (and imports, lorisnb's left out) of the answer cells ``before`` (their
+    grade_ids, in the notebook's order): what an answer run alone may call, as it did in the notebook."""
+    parts = (definitions_only(answers[g], lorisnb=False) for g in before if g in answers)
+    return "\n".join(d for d in parts if d)
 
 
 def _parameters(cell_source: str, params: Mapping[str, Any]) -> str:
@@ -473,7 +560,7 @@ def grade_submission(
     t0 = time.monotonic()
     try:
         nb = nbformat.read(notebook, as_version=4)
-        answers = student_answers(nb)
+        answers = {g: as_python(a) for g, a in student_answers(nb).items()}  # magics as IPython runs them
         repeated = repeated_answers(nb)
     except Exception as exc:  # noqa: BLE001 (any way a returned file fails to be a notebook: this student's 0)
         return unreadable(spec, student, notebook, exc, time.monotonic() - t0)
@@ -496,6 +583,18 @@ def grade_submission(
     elif missing:
         notes.append(f"{notebook.name} lacks the answer cells {', '.join(missing)} (their nbgrader metadata was "
                      "removed, or the cells deleted): graded as unanswered")  # fmt: skip
+    typed = declared_id(nb)
+    if typed is not None and typed != student:
+        from lorisnb.tools.teaching._prose import same_id
+
+        if same_id(typed) == same_id(student):
+            notes.append(f"the notebook's student_id is {typed!r}, its folder {student!r}: the same id (case and "
+                         "spaces are ignored), so the same data variant; graded as that student")  # fmt: skip
+        else:
+            notes.append(f"the notebook's student_id is {typed!r}, but it was submitted as {student!r}: it is graded "
+                         f"with the data variant of {student!r} (the submission's folder), so the numbers the notebook "
+                         f"showed for {typed!r} may differ from those graded; set student_id to {student!r} (or leave "
+                         "it None on JupyterHub)")  # fmt: skip
     params = {"student_id": student}
     n_functions = sum(1 for defs in spec.functions.values() if defs)
     budget = Budget(settings.limits.submission_s, reserve=n_functions * settings.limits.cell_timeout_s)
@@ -506,7 +605,11 @@ def grade_submission(
         work = root / "work"
         shutil.copytree(release_dir, work, ignore=shutil.ignore_patterns("*.ipynb", ".*"))
         shutil.copyfile(notebook, work / notebook.name)
+        # the answers run alone (numpy only) do not see the lab's folder: the lab's code, which may use the
+        # lab's functions, could open it to others (chmod) and leave there what a prediction would read
+        apart = [*hidden, work]
         functions: dict[str, RemoteFunction] = {}
+        defined: dict[str, dict[str, Any]] = {}  # answer grade_id -> the lab's values its defs read when defined
 
         def alone(gid: str, failed: str | None) -> None:
             """Step 2 for one formula answer, right after its cell ran in step 1 (its time is
@@ -523,17 +626,20 @@ def grade_submission(
                 return
             fwork = root / f"fn-{gid}"
             fwork.mkdir()
-            box = Sandbox(fwork, limits=settings.limits, hidden=hidden, uid=settings.uid + 1, no_lorisnb=True)
+            box = Sandbox(fwork, limits=settings.limits, hidden=apart, uid=settings.uid + 1, no_lorisnb=True)
             boxes.append(box)
             source = answers.get(gid, "")
             try:
                 with budget.charge():
                     box.run(PRELUDE, name="<numpy and math>", timeout_s=budget.left(True))
+                    before = expected[: expected.index(gid)] if gid in expected else []
+                    # the lab's numbers its functions (and the earlier cells') read when defined (eps=eps)
+                    lab = {n: v for g in [*before, gid] for n, v in defined.get(g, {}).items()}
+                    if lab:
+                        box.bind(lab, timeout_s=budget.left(True))
                     # the functions the student's earlier answer cells define, which this one may call (as the
                     # notebook did), before its own: its own definitions win
-                    before = expected[: expected.index(gid)] if gid in expected else []
-                    helpers = "\n".join(d for d in (definitions_only(answers[g], lorisnb=False) for g in before
-                                                    if g in answers) if d)  # fmt: skip
+                    helpers = earlier_functions(answers, before)
                     if helpers.strip():
                         box.run(
                             helpers, name="<the functions of the earlier answer cells>", timeout_s=budget.left(True)
@@ -569,7 +675,7 @@ def grade_submission(
         try:
             took: dict[str, float] = {}  # seconds each answer cell took in the lab
             values = _run_student(spec, answers, params | {"output_dir": str(work / "out")}, work, py_path,
-                                  hidden, settings, notes, budget, boxes, alone, took)  # fmt: skip
+                                  hidden, settings, notes, budget, boxes, alone, took, defined)  # fmt: skip
             isolation = "full" if settings.uid and _isolated() else "limits"
             for defs in spec.functions.values():  # not reached: the budget ran out before
                 functions.update({d: RemoteFunction(None, d, f"TimeoutError: {_BUDGET_ERROR.format(budget.seconds)}")
@@ -580,8 +686,10 @@ def grade_submission(
                 one that did not run in the lab (a time limit, the budget) keeps that error."""
                 if gid not in answers or gid not in took or any("error" in v for v in values.get(gid, {}).values()):
                     return dict(values.get(gid, {}))
-                return _predict(spec, gid, answers[gid], given, root, hidden, settings, budget, notes, took[gid],
-                                boxes)  # fmt: skip
+                before = expected[: expected.index(gid)] if gid in expected else []
+                lab = {n: v for g in before for n, v in defined.get(g, {}).items()}
+                return _predict(spec, gid, answers[gid], {**lab, **given}, root, apart, settings, budget, notes,
+                                took[gid], boxes, earlier_functions(answers, before))  # fmt: skip
 
             scores = _run_checks(
                 spec,
@@ -624,6 +732,7 @@ def _predict(
     notes: list[str],
     took: float,
     boxes: list[Sandbox],
+    helpers: str = "",
 ) -> dict[str, Any]:
     """A prediction (``gid``'s answer cell, ``source``) run alone in a sandbox without lorisnb, with
     numpy, math and the lab's numbers ``given`` (name -> :func:`._sandbox_child.given`'s form, as the
@@ -637,7 +746,7 @@ def _predict(
         notes.append(note or f"{gid}: {error}")
         return {n: {"error": error} for n in capture}
 
-    usable = {n: v for n, v in given.items() if "not_plain" not in v}
+    usable = {n: v for n, v in given.items() if "not_plain" not in v and "missing" not in v}
     work = root / f"prediction-{gid}"
     work.mkdir()
     limit = min(2 * took + 2.0, settings.limits.cell_timeout_s)
@@ -646,7 +755,11 @@ def _predict(
     try:
         with budget.charge():
             box.bind(usable)  # the sandbox's start (no code of the answer runs yet): the cell's time limit
-            reply = box.run(PRELUDE + source, capture, name=f"<answer {gid}>", timeout_s=limit)
+            t0 = time.monotonic()
+            if helpers.strip():  # the functions of the earlier answer cells, which it may call (as the notebook did)
+                box.run(PRELUDE + helpers, name="<the functions of the earlier answer cells>", timeout_s=limit)
+            reply = box.run(PRELUDE + source, capture, name=f"<answer {gid}>",
+                            timeout_s=max(limit - (time.monotonic() - t0), 0.5))  # fmt: skip
     except SandboxError as exc:
         return failed(
             f"the prediction, run alone, did not finish within {limit:.3g} s (twice the time it took in the lab, "
@@ -666,12 +779,21 @@ def _predict(
         withheld = ", ".join(sorted(n for n in given if n in read and n not in usable))
         if withheld:
             numbers += f"; not the lab's functions and objects it reads: {withheld}"
+        own = ", ".join(sorted(_defined_functions(helpers) & read)) or "none"
         return failed(
-            "a prediction is worked out from the lab's numbers, with numpy and math, not computed with the "
-            f"lab's functions or lorisnb; run so (alone: given the numbers the lab's cells had set, of which it "
-            f"reads {numbers}), the answer cell failed: {reply.get('error')}"
+            "a prediction is worked out from the lab's numbers, with numpy, math and the functions of your earlier "
+            "answer cells, not computed with the lab's functions or lorisnb; run so (alone: given the numbers the "
+            f"lab's cells had set, of which it reads {numbers}; and your earlier answer cells' functions, of which it "
+            f"calls {own}), the answer cell failed: {reply.get('error')}"
         )
     return dict(reply.get("values", {}))
+
+
+def _defined_functions(source: str) -> set[str]:
+    try:
+        return {n.name for n in ast.parse(source).body if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))}
+    except SyntaxError:
+        return set()
 
 
 MESSAGE_CHARS = 2000  # a check's message or a note, at most (a long answer echoed back is shortened)
@@ -746,11 +868,13 @@ def _run_student(
     boxes: list[Sandbox],
     alone: Callable[[str, str | None], None],
     answered: dict[str, float] | None = None,
+    defined: dict[str, dict[str, Any]] | None = None,
 ) -> dict[str, dict[str, Any]]:
     """Step 1: the lab's cells with the student's answers, in the sandbox. Returns the values read
     back after each answer cell; ``alone(grade_id, error)`` runs after each answer cell (step 2 of a
     formula answer; ``error``: the cell hit a limit); ``answered`` gets the seconds each answer cell
-    that ran took. Every cell from the first answer cell on (the lab's own after it too: the
+    that ran took; ``defined`` the lab's names (plain values) each answer cell's functions read when
+    defined (:func:`defined_with`), as they were right after it. Every cell from the first answer cell on (the lab's own after it too: the
     student's code could slow them), and every replay after a time-out, is charged to ``budget``;
     once it is spent no more cells run. A replay gives each cell twice the time it took (plus two
     seconds)."""
@@ -782,6 +906,7 @@ def _run_student(
         while k < len(cells):
             source, gid, cell_name = cells[k]
             capture: Sequence[str] = spec.values.get(gid, ()) if gid else ()
+            extra = sorted((defined_with(source) & set(spec.lab_before.get(gid, ()))) - set(capture)) if gid else []
             charged = charged or gid is not None
             if charged and budget.out(cell_name):
                 unrun(k)
@@ -789,7 +914,7 @@ def _run_student(
             t0 = time.monotonic()
             try:
                 with budget.charge() if charged else contextlib.nullcontext():
-                    reply = box.run(source, capture, cell_name, locked=gid is None,
+                    reply = box.run(source, [*capture, *extra], cell_name, locked=gid is None,
                                     timeout_s=budget.left(True) if charged else None)  # fmt: skip
             except SandboxError as exc:
                 where = gid or cell_name
@@ -822,7 +947,10 @@ def _run_student(
                 continue
             took[k] = time.monotonic() - t0
             if gid:
-                values[gid] = dict(reply.get("values", {}))
+                got = dict(reply.get("values", {}))
+                values[gid] = {n: v for n, v in got.items() if n in capture}
+                if defined is not None:
+                    defined[gid] = plain_values({n: v for n, v in got.items() if n in extra})
                 if answered is not None:
                     answered[gid] = took[k]
             if not reply.get("ok"):
