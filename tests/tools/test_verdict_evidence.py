@@ -160,6 +160,28 @@ def test_a_trial_that_repeats_another_counts_once(table):
     assert seqs["decided_by"].str.contains("1 of CAND's trials repeat another's every value").any()
 
 
+def test_reruns_that_vary_little_are_no_missing_trials(table):
+    """Reruns of a system that tracks nearly all of a sequence with a steady ATE vary by less than a
+    quarter of the rerun spread now and then (a helper's noise-only nights: CR 0.0037, ATE 1.8 %):
+    taken for near-identical copies, three such CAND trials were one run against BASE's three, and
+    the night failed as "trial 2, 3 a copy", on noise alone. Only trials that repeat another's every
+    value are no run; near-identical ones still count as one run in the values."""
+    base = _reruns(table, (1, 2, 3), 11)
+    rng = np.random.default_rng(12)
+    parts = []
+    for k in (1, 2, 3):  # reruns with a small spread: every value different
+        t = table.assign(trial=k)
+        t["cr"] = np.clip(t["cr"] + rng.normal(0, 0.002, len(t)), 0, 1)
+        t["ate_rmse"] = t["ate_rmse"] * np.exp(rng.normal(0, 0.01, len(t)))
+        parts.append(t)
+    cand = pd.concat(parts, ignore_index=True)
+    seqs, _ = changes(base, cand)
+    assert not (seqs["metric"] == "trial").any()
+    assert seqs["decided_by"].str.contains("near-identical copies of one run").any()  # one run in the values
+    exact = _copies(table)  # byte-identical copies: still no runs, so missing trials against 3 reruns
+    assert (changes(base, exact)[0]["cand"] == "trial 2, 3 a copy").any()
+
+
 def test_trial_numbers_are_labels_not_pairings(table):
     """Three trials a side numbered 1-3 and 4-6 (or 0-2 and 1-3) lack nothing (every sequence was
     missing trials 1, 2 and 3); a candidate with more trials than the base is not compared with a
