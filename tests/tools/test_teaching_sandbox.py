@@ -659,7 +659,9 @@ def test_identical_answer_cells_flag_a_copy_not_the_stub_nor_short_answers_many_
     spec = lab_spec(SOURCE_NB)
     stubs = gradebook.answer_stubs(spec, tmp_path)  # no release notebook here: nbgrader's stubs, derived
     assert stubs["B3_prediction"] == ["predicted_cr_t_late = ...\n# YOUR CODE HERE\nraise NotImplementedError()"]
-    own = {gid: _as_submitted(src) for gid, src in _solutions().items()}
+    # a student's own working: the instructor's answer and a line of their own (the instructor's alone is what
+    # the exercise leads to, and is not counted)
+    own = {gid: _as_submitted(src) + "\n_worked = 'my own check'\n" for gid, src in _solutions().items()}
     short = {
         "A1_correctness": "def correctness(ate_m, aoe_deg, eps, phi):\n    return (ate_m <= eps) & (aoe_deg <= phi)\n",
         "B1_prediction": "predicted_cr_lost = 1 - 19 / T\n",
@@ -675,11 +677,25 @@ def test_identical_answer_cells_flag_a_copy_not_the_stub_nor_short_answers_many_
         "s-eve": short,
         "s-fay": dict(short),
         "s-gus": {"B2_correct_rate": own["B2_correct_rate"], "D1_alignment": own["D1_alignment"]},
+        # the instructor's answers, reformatted and commented (two who read the book): the exercise's formulation
+        "s-hal": {gid: "# mine\n" + _as_submitted(src).replace(" = ", "=") for gid, src in _solutions().items()},
+        "s-ian": {gid: _as_submitted(src) + "\n\n" for gid, src in _solutions().items()},
+        # long one-line answers the exercise dictates (the adversarial pass's alice and bob)
+        "s-jo": {
+            "A1_correctness": "def correctness(ate_m, aoe_deg, eps, phi):\n    return np.logical_and(ate_m <= eps, aoe_deg <= phi)\n",
+            "C1_cs_r": "def cs_r(t0, t_min, first_correct, tau):\n    return np.exp(-(t0 - t_min) / tau) * first_correct\n",
+            "G1_difficulty": 'ate_percent_cafe = 100 * orb_seq["ate_rmse"] / gt_seq.path_length\n',
+        },
     }
-    found = gradebook.identical_answers(answers, stubs)
-    copied = ("A1_correctness", "B1_prediction", "B2_correct_rate", "C1_cs_r", "D1_alignment", "E1_threshold",
-              "F_timeline", "G1_difficulty")  # fmt: skip
+    answers["s-kim"] = dict(answers["s-jo"], B3_prediction="predicted_cr_t_late = 1")
+    found = gradebook.identical_answers(answers, stubs, gradebook.canonical_answers(spec))
+    copied = ("A1_correctness", "B1_prediction", "B2_correct_rate", "B3_prediction", "C1_cs_r", "C2_prediction",
+              "D1_alignment", "E1_threshold", "F_timeline", "G1_difficulty")  # fmt: skip
     assert found == {"s-ann": {"s-ben": copied}, "s-ben": {"s-ann": copied}}
+    # an answer four students share is the exercise's, not a copy
+    common = {s: dict(own) for s in ("s-w", "s-x", "s-y", "s-z")}
+    assert gradebook.identical_answers(common, stubs, gradebook.canonical_answers(spec)) == {}
+    assert set(gradebook.identical_answers(dict(list(common.items())[:3]), stubs)) == {"s-w", "s-x", "s-y"}
 
 
 @pytest.mark.thorough
@@ -714,4 +730,4 @@ def test_a_copied_notebook_is_flagged_on_both_students_and_keeps_its_points(tmp_
         assert other not in (course / "graded" / student / TINY / "feedback.html").read_text()
     assert all(rows[s]["notes"] == "" for s in ("s-cat", "s-dan", "s-eve", "s-fay")), rows
     assert "1 pair(s) of submissions with identical answer cells" in err
-    assert "s-ann and s-ben (tiny_lab: Q1_total, Q2_mean, Q3_word)" in err
+    assert "s-ann and s-ben (tiny_lab: Q1_total, Q2_mean, Q3_word, Q4_flag, Q5_count)" in err

@@ -21,6 +21,7 @@ whose answer cells are identical (:func:`identical_answers`: possible copies, no
 
 from __future__ import annotations
 
+import ast
 import csv
 import functools
 import html
@@ -302,7 +303,8 @@ class Graded:
         whose = "; ".join(f"{other}'s {', '.join(gids)}" for other, gids in sorted(self.identical.items()))
         return [
             f"possible copy: answer cells identical to {whose} (each not the handed-out stub, with at least "
-            f"{COPY_MIN_CHARS} characters of its own; {COPY_MIN_ANSWERS} or more such cells flag a pair): no points "
+            f"{COPY_MIN_CHARS} characters and {COPY_MIN_LINES} lines of code of its own, not the instructor's answer, "
+            f"given by fewer than {COPY_COMMON} students; {COPY_MIN_ANSWERS} or more such cells flag a pair): no points "
             "changed, an instructor decides"
         ]
 
@@ -311,6 +313,8 @@ class Graded:
 
 COPY_MIN_ANSWERS = 3  # identical answer cells that flag a pair of submissions
 COPY_MIN_CHARS = 40  # characters other than spaces an answer needs in its own lines (not the stub's) to count
+COPY_MIN_LINES = 2  # lines of code of its own (not the stub's, not blank, not a comment) an answer needs to count
+COPY_COMMON = 4  # an answer this many students gave alike is what the exercise leads to: no sign of a copy
 CODE_STUB = "# YOUR CODE HERE\nraise NotImplementedError()"  # nbgrader's (and teaching/nbgrader_config.py's)
 _DELIMITERS = {"### BEGIN SOLUTION", "### END SOLUTION"}  # nbgrader's, in a cell copied from the instructor's
 _SOLUTION = re.compile(r"^([ \t]*)### BEGIN SOLUTION[ \t]*\n.*?^[ \t]*### END SOLUTION[ \t]*$", re.S | re.M)
@@ -343,8 +347,30 @@ def answer_stubs(spec: LabSpec, release: Path) -> dict[str, list[str]]:
     return out
 
 
+def canonical_answers(spec: LabSpec) -> dict[str, list[str]]:
+    """answer grade_id -> the instructor's answer, as a student would return it (nbgrader's solution
+    delimiters left out): the formulation the exercise leads to."""
+    out: dict[str, list[str]] = {}
+    for cell in spec.notebook.cells:
+        meta = cell.get("metadata", {}).get("nbgrader", {})
+        if cell.cell_type == "code" and meta.get("solution") and meta.get("grade_id") is not None:
+            text = "\n".join(line for line in cell.source.splitlines() if line.strip() not in _DELIMITERS)
+            out[str(meta["grade_id"])] = [text]
+    return out
+
+
+def _code_key(source: str) -> str | None:
+    """A cell's code without its layout and comments (its syntax tree), None when it does not parse."""
+    try:
+        return ast.dump(ast.parse(source))
+    except (SyntaxError, ValueError):
+        return None
+
+
 def identical_answers(
-    answers: Mapping[str, Mapping[str, str]], stubs: Mapping[str, Sequence[str]]
+    answers: Mapping[str, Mapping[str, str]],
+    stubs: Mapping[str, Sequence[str]],
+    canonical: Mapping[str, Sequence[str]] | None = None,
 ) -> dict[str, dict[str, tuple[str, ...]]]:
     """Possible copies: student -> another student -> the answer cells (grade ids, in ``stubs``'
     order) the two submitted identical, for pairs with at least :data:`COPY_MIN_ANSWERS` of them.
@@ -353,8 +379,13 @@ def identical_answers(
     (``stubs``: grade_id -> its stubs), and its own lines (not blank, not lines of a stub, not
     nbgrader's solution delimiters) hold at least :data:`COPY_MIN_CHARS` characters other than
     spaces: a one-line answer many would write alike (``predicted_cs_r_wrong = 0.0``,
-    ``return (ate_m <= eps) & (aoe_deg <= phi)``) never counts. A cheap check of exact copies: a
-    copy edited (renamed, reformatted, a comment added) is not found."""
+    ``return (ate_m <= eps) & (aoe_deg <= phi)``) never counts, nor does one of fewer than
+    :data:`COPY_MIN_LINES` lines of code of its own (``return np.logical_and(ate_m <= eps, aoe_deg <= phi)``
+    is long, and still what many write), one whose code (layout and comments aside) is the
+    instructor's answer (``canonical``: grade_id -> its formulations, :func:`canonical_answers`: the
+    exercise leads to it), or one :data:`COPY_COMMON` or more students gave alike. A cheap check of
+    exact copies: a copy edited (renamed, reformatted, a comment added) is not found."""
+    canon = {gid: {k for k in map(_code_key, texts) if k} for gid, texts in (canonical or {}).items()}
     order = {gid: k for k, gid in enumerate(stubs)}
     same: dict[tuple[str, str], list[str]] = {}  # (grade_id, the answer) -> the students who gave it
     for student, cells in answers.items():
@@ -364,11 +395,18 @@ def identical_answers(
             if not text or text in {_normal(s) for s in handed}:
                 continue
             stub_lines = {line.strip() for s in handed for line in s.splitlines()} | _DELIMITERS
-            own = sum(len("".join(line.split())) for line in text.splitlines() if line.strip() not in stub_lines)
-            if own >= COPY_MIN_CHARS:
-                same.setdefault((gid, text), []).append(student)
+            mine = [line.strip() for line in text.splitlines() if line.strip() not in stub_lines]
+            own = sum(len("".join(line.split())) for line in mine)
+            code = sum(1 for line in mine if line and not line.startswith("#"))
+            if own < COPY_MIN_CHARS or code < COPY_MIN_LINES:
+                continue
+            if canon.get(gid) and _code_key(text) in canon[gid]:
+                continue
+            same.setdefault((gid, text), []).append(student)
     pairs: dict[tuple[str, str], list[str]] = {}
     for (gid, _), who in same.items():
+        if len(who) >= COPY_COMMON:
+            continue
         for a, b in itertools.combinations(sorted(who), 2):
             pairs.setdefault((a, b), []).append(gid)
     out: dict[str, dict[str, tuple[str, ...]]] = {}
@@ -446,6 +484,7 @@ def grade_class(
     settings = grading_settings(course, source, settings or GradeSettings(), secret)
     todo, done = [], []
     stubs: dict[str, dict[str, list[str]]] = {}
+    canonical: dict[str, dict[str, list[str]]] = {}
     for lab in labs:
         src_nb = source / lab / f"{lab}.ipynb"
         if not src_nb.is_file():
@@ -455,6 +494,7 @@ def grade_class(
         if not release.is_dir():
             raise ValidationError(f"lab {lab!r}: no release folder {release} (run `make student` first)")
         stubs[lab] = answer_stubs(spec, release)
+        canonical[lab] = canonical_answers(spec)
         base = digest(src_nb.read_bytes(), _release_bytes(release), repr(settings.limits))
         for nb in sorted(course.glob(f"submitted/*/{lab}/{lab}.ipynb")):
             student = nb.parents[1].name
@@ -483,7 +523,7 @@ def grade_class(
             _write_result(course, res)
             done.append(res)
             bar.update()
-    identical = {lab: identical_answers(_class_answers(course, lab, done), stubs[lab]) for lab in labs}
+    identical = {lab: identical_answers(_class_answers(course, lab, done), stubs[lab], canonical[lab]) for lab in labs}
     graded = []
     for res in sorted(done, key=lambda r: (r.lab, r.student)):
         stamp = f"submitted/{res.student}/{res.lab}/timestamp.txt"
