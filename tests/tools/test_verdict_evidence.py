@@ -182,6 +182,32 @@ def test_reruns_that_vary_little_are_no_missing_trials(table):
     assert (changes(base, exact)[0]["cand"] == "trial 2, 3 a copy").any()
 
 
+def test_compare_counts_a_copied_trial_once(table):
+    """Two labels of one system, each with 4 trials of which 3 are byte-identical copies of one rerun
+    (a script filling in crashed trials): the spread of the fourth kept them from the near-copy rule,
+    and compare called pairs significant (a helper: 7 of 25 such nights) where the two reruns a side
+    they are show nothing. A copied trial counts once, as diff counts it, and the note says so."""
+    from lorisnb.tools.decisions.comparison import compare_table
+
+    mine = table[table["algorithm"] == ALG]
+    runs = _reruns(mine, range(1, 5), 21)
+    one, other = runs[runs["trial"] == 1], runs[runs["trial"] == 3]
+    a = pd.concat([one, one.assign(trial=2), one.assign(trial=4), other.assign(trial=3)], ignore_index=True)
+    runs = _reruns(mine, range(1, 5), 22)
+    one, other = runs[runs["trial"] == 2], runs[runs["trial"] == 4]
+    b = pd.concat([one.assign(trial=1), one, one.assign(trial=3), other], ignore_index=True)
+    two = pd.concat([a.assign(algorithm="A"), b.assign(algorithm="B")], ignore_index=True)
+    durations = table[["scene", "seq", "gt_duration"]].drop_duplicates()
+    res = compare_table(two, durations, "cr")
+    seqs = len(mine)
+    assert any(n.startswith("trials that repeat another trial's every value") and f"A: {2 * seqs} of {4 * seqs}" in n
+               for n in res.notes), res.notes  # fmt: skip
+    dedup = two.drop_duplicates(subset=["algorithm", "scene", "seq", "cr", "ate_rmse"])
+    alone = compare_table(dedup, durations, "cr")
+    assert res.pairs[["p", "p_holm", "significant"]].equals(alone.pairs[["p", "p_holm", "significant"]])
+    assert "2 trial(s) per sequence" in res.header
+
+
 def test_trial_numbers_are_labels_not_pairings(table):
     """Three trials a side numbered 1-3 and 4-6 (or 0-2 and 1-3) lack nothing (every sequence was
     missing trials 1, 2 and 3); a candidate with more trials than the base is not compared with a

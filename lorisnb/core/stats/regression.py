@@ -445,6 +445,19 @@ def _unjudged(metric: str, matched: tuple[float, float], correct: tuple[float, f
     return None
 
 
+def repeated_trials(table: pd.DataFrame) -> np.ndarray:
+    """Which rows of a per-sequence table (with ``suite`` and ``trial`` columns) are trials with
+    output whose every judged value (:data:`METRICS` and ``matched``) repeats an earlier trial's of
+    the same sequence: copies of it (a file copied into another trial's folder), no run. ``diff``
+    counts such a trial once and as a missing trial; ``compare`` counts it once."""
+    cols = {c: pd.to_numeric(table[c], errors="coerce").to_numpy(float) for c in (*METRICS, "matched")
+            if c in table.columns}  # fmt: skip
+    judged = pd.DataFrame(cols)
+    keys = pd.DataFrame({k: table[k].to_numpy() for k in KEYS})
+    out = cols.get("matched", np.ones(len(table)))
+    return pd.concat([keys, judged], axis=1).duplicated().to_numpy() & (out > 0)
+
+
 class _Side:
     """One run's per-sequence table as arrays: the rows of each sequence, and its columns."""
 
@@ -457,11 +470,7 @@ class _Side:
         self.trials = table["trial"].to_numpy()
         #: (suite, algorithm) whose trials are near-identical copies of one run, with what varies
         self.one_run = dict(one_run or {})
-        # a trial with output whose every value repeats another trial's of the sequence: a copy of it
-        judged = pd.DataFrame({c: self.cols[c] for c in (*METRICS, "matched") if c in self.cols})
-        keys = pd.DataFrame({k: table[k].to_numpy() for k in KEYS})
-        out = self.cols.get("matched", np.ones(len(table)))
-        self.copy = (pd.concat([keys, judged], axis=1).duplicated().to_numpy() & (out > 0)) if len(table) else None
+        self.copy = repeated_trials(table) if len(table) else None
 
     def independent(self, key: tuple, rows: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, str]:
         """The values of a sequence's trials that are independent runs, and why they are fewer:

@@ -100,6 +100,21 @@ def trial_spread(table: pd.DataFrame) -> tuple[pd.DataFrame, set[str]]:
     return spread.drop(columns=["copies"]).reset_index(drop=True), copies
 
 
+def _without_repeated_trials(table: pd.DataFrame, full: pd.DataFrame) -> tuple[pd.DataFrame, dict]:
+    """``full`` without the trials that repeat another trial's every value
+    (:func:`lorisnb.core.stats.regression.repeated_trials`, as ``diff`` counts them), and how many
+    each algorithm had of how many; an algorithm whose trials are all near-identical copies of one
+    run (:func:`trial_spread` of ``table``) keeps them: none of its pairs is tested."""
+    from lorisnb.core.stats.regression import repeated_trials
+
+    rep = repeated_trials(stats.with_trials(full)) & ~full["algorithm"].isin(trial_spread(table)[1]).to_numpy()
+    if not rep.any():
+        return full, {}
+    total = full["algorithm"].value_counts()
+    counted = {a: (int(n), int(total[a])) for a, n in full.loc[rep, "algorithm"].value_counts().sort_index().items()}
+    return full[~rep], counted
+
+
 #: The ``test`` of a pair one of whose algorithms' trials are copies of one run: none is made.
 COPIES_TEST = "none: trials are copies of one run"
 
@@ -152,6 +167,11 @@ def compare_table(
     check_table_duplicates(table)
     full, cover = complete(table, durations)
     notes = coverage_notes(cover)
+    full, counted_once = _without_repeated_trials(table, full)
+    if counted_once:
+        notes.append("trials that repeat another trial's every value (copies, not reruns), counted once: " + "; ".join(
+            f"{clean(a)}: {n} of {t}" for a, (n, t) in counted_once.items()) + " (a copied trial tested as a rerun made a "
+            "significance no rerun would show)")  # fmt: skip
     ci = stats.confidence_intervals(full, level=level, seed=seed)
     pairs, spread, copies = decide(table, full, metric, alpha, seed)
     if copies:
