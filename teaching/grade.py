@@ -40,6 +40,9 @@ def _positive(kind: type) -> object:
     return parse
 
 
+HONEST_CELL_S = 60.0  # below this --timeout, honest answer cells were stopped (E1's fine scan: 13 to 37 s measured)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("course", type=Path, nargs="?", default=HERE, help="the course folder (default: teaching/)")
@@ -66,6 +69,14 @@ def main(argv: list[str] | None = None) -> int:
             late = {lab: policy for lab in (a.lab or [p.name for p in a.source.iterdir() if p.is_dir()])}
         roster = read_roster(a.roster) if a.roster else None
         limits = Limits(cell_timeout_s=a.timeout, budget_s=a.budget, memory_bytes=a.memory_mb * 1024**2)
+        if a.timeout < HONEST_CELL_S:
+            print(
+                f"warning: --timeout {a.timeout:g} s is below {HONEST_CELL_S:g} s: honest answer cells have taken up to "
+                "37 s on a busy 2-core machine (E1's scan on a 2 mm grid, as its hint suggests), and a cell stopped "
+                "at its limit scores 0 (teaching/README.md, 'A slow submission is stopped at its budget'); lower "
+                "--budget instead to bound a class's time",
+                file=sys.stderr,
+            )
         if not can_isolate():
             print(
                 "warning: not root on Linux with unshare/setpriv: submissions run with time and memory limits "

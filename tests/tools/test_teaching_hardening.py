@@ -252,3 +252,19 @@ def test_as_python_transforms_magics_as_ipython_and_the_shell_stand_in_runs_them
             assert not r["ok"] and "may not use" in r["error"], r
     finally:
         shutil.rmtree(base)
+
+
+def test_a_timeout_below_an_honest_cells_time_is_warned(tmp_path, capsys):
+    """The README advised lowering --timeout since "an honest answer cell takes well under a second";
+    an honest E1 scan took 13 to 37 s and scored 0 at --timeout 5."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("grade_script", ROOT / "teaching" / "grade.py")
+    assert spec is not None and spec.loader is not None
+    grade = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(grade)
+    grade.main(
+        [str(tmp_path / "no-course"), "--source", str(tmp_path / "no-source"), "--timeout", "5", "--no-progress"]
+    )
+    assert "--timeout 5 s is below 60 s" in capsys.readouterr().err
+    assert "well under a second" not in (ROOT / "teaching" / "README.md").read_text()
