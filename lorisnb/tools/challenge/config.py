@@ -146,12 +146,18 @@ class Challenge:
         shown = [p for p in self.phases if p.shows_scores(now)]
         return frozenset((s, int(q)) for s, q in sequences if any(p.keeps(s, int(q)) for p in shown))
 
-    def views(self, sequences: Iterable[tuple[str, int]]) -> list[frozenset[tuple[str, int]]]:
+    def views(
+        self, sequences: Iterable[tuple[str, int]], phase: Phase | None = None
+    ) -> list[frozenset[tuple[str, int]]]:
         """Every set of :meth:`visible` sequences the challenge goes through, in order: before any
-        ``after-close`` phase closes, then after each closes (a scoring draws a figure of each)."""
+        ``after-close`` phase closes, then after each closes; of ``phase``, those while its scores
+        show. A submission of the phase is scored on each set alone, and its figure drawn of each
+        (:func:`.scoring.score_folder`): no number shown comes from ground truth not shown."""
         seqs = list(sequences)
         times = [-math.inf] + sorted({p.closes for p in self.phases if p.leaderboard == "after-close"})
-        return list(dict.fromkeys(self.visible(seqs, t) for t in times))
+        if phase is not None:
+            times = [t for t in times if phase.shows_scores(t)]
+        return [v for v in dict.fromkeys(self.visible(seqs, t) for t in times) if v]
 
     def shown_by(self, scene: str, seq: int) -> Phase | None:
         """The phase whose scores first show a sequence: a live phase holding it, else the

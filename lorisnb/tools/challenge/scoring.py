@@ -4,9 +4,10 @@ evaluation already imported (``forkserver``), with a CPU-time and a memory limit
 ``lorisnb evaluate`` scores them against the hidden ground truth: OpenLORIS result files with
 :func:`lorisnb.tools.evaluation.runner.evaluate`, TUM and EuRoC files each against its sequence's
 ground truth with :func:`lorisnb.tools.evaluation.runner.evaluate_pairs` (the upload's plan,
-:func:`.uploads.plan`). It scores every sequence it has output for and draws the paper's timeline
-figure once for each set of sequences the challenge shows as its phases close
-(:meth:`.config.Challenge.views`), and writes its outcome to a JSON file named for its claim; the
+:func:`.uploads.plan`). It scores each set of sequences the submission's phase shows as the phases
+close (:meth:`.config.Challenge.views`) on those sequences alone (the others stripped from the
+files first: no number shown comes from ground truth still hidden), draws the paper's timeline
+figure of each, and writes its outcome to a JSON file named for its claim; the
 server commits that outcome to the database (:func:`.store.finish`), and shows of it only what
 is visible (:mod:`.board`).
 
@@ -47,6 +48,7 @@ from lorisnb.core.stats.trials import check_duplicates
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import LorisError, LorisWarning, ValidationError
 from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans
+from lorisnb.io.readers.openloris import declared_scene
 from lorisnb.io.writers import write_openloris
 from lorisnb.tools.challenge import store
 from lorisnb.tools.challenge.config import Challenge, sequences_of
@@ -79,7 +81,7 @@ def scrub(text: str, folder: Path, data: DataPaths, groundtruth: Path | None = N
     """A message with the server's paths taken out: the upload's folder (its files by name, also
     as linked for scoring, :func:`_pair_folder`) and the hidden ground truth's folders (the data
     root and ``groundtruth``, the server's one-sequence files: never named to a team)."""
-    pairs = re.escape(f"pairs{os.sep}") + r"\d+" + re.escape(os.sep)
+    pairs = "(?:pairs|strip)" + re.escape(os.sep) + r"\d+" + re.escape(os.sep)
     text = re.sub(re.escape(f"{folder.parent}{os.sep}") + f"({pairs})?" + re.escape(f"{FILES}{os.sep}"), "", text)
     text = text.replace(f"{folder}{os.sep}", "").replace(str(folder.parent), "the upload")
     for root in [data.root.resolve(), data.root] + ([groundtruth.resolve(), groundtruth] if groundtruth else []):
@@ -151,6 +153,47 @@ def groundtruth_copies(errors: Iterable[FileErrors]) -> list[str]:
     return out
 
 
+class _Every:
+    """The view of every sequence (``score_folder`` without ``views``): nothing is left out."""
+
+    def __contains__(self, item: object) -> bool:
+        return True
+
+
+def seq_blocks(path: Path) -> list[int] | None:
+    """The numbers of a result file's ``seq: N`` lines in order, read as :func:`strip_sequences`
+    reads them; None where the file cannot be read or a ``seq:`` line holds no whole number."""
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    out = []
+    for line in data.split(b"\n"):
+        key, colon, value = line.partition(b":")
+        if colon and key.strip().lower() == b"seq":
+            try:
+                out.append(int(value.strip()))
+            except ValueError:
+                return None
+    return out
+
+
+def strip_sequences(src: Path, dest: Path, keep: Iterable[int]) -> None:
+    """Copy the OpenLORIS result file ``src`` to ``dest`` without the ``seq: N`` blocks whose N is
+    not in ``keep`` (the header, and the kept blocks, byte for byte): what a phase scores of it, so
+    that nothing of it, the lifelong alignment included, comes from a sequence the phase hides."""
+    kept = set(keep)
+    lines, current = [], None
+    for line in src.read_bytes().split(b"\n"):
+        key, colon, value = line.partition(b":")
+        if colon and key.strip().lower() == b"seq":
+            current = int(value.strip())
+        if current is None or current in kept:
+            lines.append(line)
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    dest.write_bytes(b"\n".join(lines))
+
+
 def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | None = None, *,
                  plain: Mapping[str, Mapping[str, Any]] | None = None, groundtruth: Path | None = None,
                  views: Sequence[Iterable[tuple[str, int]]] | None = None) -> dict[str, Any]:  # fmt: skip
@@ -158,31 +201,80 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
     with :func:`~lorisnb.tools.evaluation.runner.evaluate`, and each file of ``plain`` (name ->
     format, scene, seq: :func:`.uploads.plan`) with
     :func:`~lorisnb.tools.evaluation.runner.evaluate_pairs` against its sequence's ground truth
-    (:func:`sequence_groundtruth`, in ``groundtruth``, default beside the upload's folder). The outcome: per-sequence rows (every
-    column of :meth:`Evaluation.sequence_rows`) of every sequence scored, each file that failed or
-    was not scored with its reason (paths scrubbed, :func:`scrub`), the notes with the sequences
-    each is about, and a timeline figure in ``figures`` of each set of sequences in ``views``
-    that the submission has output in (``timeline-<k>.png``; ``views`` None: one of all)."""
+    (:func:`sequence_groundtruth`, in ``groundtruth``, default beside the upload's folder).
+
+    ``views`` are the sets of sequences the submission's scores are shown for, in the order they
+    are shown (:meth:`.config.Challenge.views` of its phase; None: one view of every sequence).
+    Each view is scored on its own sequences alone: an OpenLORIS file is stripped of the other
+    ``seq:`` blocks (:func:`strip_sequences`) before it is evaluated, so that no number of a
+    sequence comes from ground truth not shown with it (a lifelong file is aligned on its first
+    sequence: a hidden one would move the shown ones' errors). A sequence's row is the one of
+    the first view holding it; a sequence in no view is not scored (said, per file).
+
+    The outcome: per-sequence rows (every column of :meth:`Evaluation.sequence_rows`), each file
+    that failed or was not scored with its reason (paths scrubbed, :func:`scrub`), the notes with
+    the sequences each is about, and a timeline figure in ``figures`` of each view the submission
+    has output in (``timeline-<k>.png``), drawn from that view's scores."""
     plain = dict(plain or {})
     gt_folder = groundtruth if groundtruth is not None else folder.parent / GROUNDTRUTH
     native = sorted(p for p in folder.iterdir() if p.is_file() and p.name not in plain)
-    evaluations: list[Evaluation] = []
+    shapes: dict[str, tuple[str | None, list[int] | None]] = {}
+    for p in native:
+        blocks = seq_blocks(p)
+        shapes[p.name] = (declared_scene(p), blocks or None)  # no block, or unreadable: scored whole, it fails
+    every: list[Any] = [_Every()] if views is None else [frozenset((s, int(q)) for s, q in v) for v in views]
+    evaluated: dict[tuple[str, frozenset[int] | None], Evaluation | None] = {}
     problems: list[tuple[str, str, str]] = []  # status, file, error
+
+    def in_view(view: Any) -> list[FileErrors]:
+        """Every file's errors as scored on the sequences of ``view`` alone."""
+        out: list[FileErrors] = []
+        for p in native:
+            scene, blocks = shapes[p.name]
+            kept = None if scene is None or blocks is None else frozenset(q for q in blocks if (scene, q) in view)
+            if kept is not None and not kept:
+                continue
+            key = (p.name, None if kept is None or kept == frozenset(blocks or ()) else kept)
+            if key not in evaluated:
+                src = p
+                if key[1] is not None:
+                    src = folder.parent / "strip" / str(len(evaluated)) / FILES / p.name
+                    strip_sequences(p, src, key[1])
+                evaluated[key] = evaluate([src], spec, data_root=data, jobs=1, progress=False)
+            one = evaluated[key]
+            if one is not None:
+                out += [f for f in one.errors if all((f.scene, e.seq) in view for e in f.sequences)]
+        for k, (name, info) in enumerate(sorted(plain.items())):
+            if (str(info["scene"]), int(info["seq"])) not in view:
+                continue
+            if (name, None) not in evaluated:
+                try:
+                    gt = sequence_groundtruth(data, str(info["scene"]), int(info["seq"]), gt_folder)
+                    evaluated[(name, None)] = evaluate_pairs(
+                        [_pair_folder(folder.parent, k, name)], gt, spec, fmt=str(info["format"]), gt_fmt="openloris",
+                        scene=str(info["scene"]), jobs=1, progress=False)  # fmt: skip
+                except LorisError as exc:  # an option of the challenge's spec this format cannot take
+                    evaluated[(name, None)] = None
+                    problems.append(("failed", name, str(exc)))
+            one = evaluated[(name, None)]
+            if one is not None:
+                out += one.errors
+        return out
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
-        if native:
-            evaluations.append(evaluate(native, spec, data_root=data, jobs=1, progress=False))
-        for k, (name, p) in enumerate(sorted(plain.items())):
-            try:
-                gt = sequence_groundtruth(data, str(p["scene"]), int(p["seq"]), gt_folder)
-                evaluations.append(evaluate_pairs([_pair_folder(folder.parent, k, name)], gt, spec, fmt=str(p["format"]),
-                                                  gt_fmt="openloris", scene=str(p["scene"]), jobs=1, progress=False))  # fmt: skip
-            except LorisError as exc:  # an option of the challenge's spec this format cannot take
-                problems.append(("failed", name, str(exc)))
-        errors = [f for ev in evaluations for f in ev.errors]
-        if len(evaluations) > 1:  # one sequence and trial in two files: an error, as evaluate() says
-            check_duplicates([(Path(f.path).name, (f.suite, f.algorithm, f.scene, f.trial),
-                               tuple(e.seq for e in f.sequences)) for f in errors])  # fmt: skip
+        by_view = [(view, in_view(view)) for view in every]
+        taken: set[tuple[str, str, int]] = set()
+        errors: list[FileErrors] = []
+        for _view, found in by_view:  # a sequence's row: the first view's that holds it
+            for f in found:
+                name = Path(f.path).name
+                seqs = [e for e in f.sequences if (name, f.scene, e.seq) not in taken]
+                taken.update((name, f.scene, e.seq) for e in seqs)
+                if seqs or not f.sequences:
+                    errors.append(f if len(seqs) == len(f.sequences) else replace(f, sequences=seqs))
+        check_duplicates([(Path(f.path).name, (f.suite, f.algorithm, f.scene, f.trial),
+                           tuple(e.seq for e in f.sequences)) for f in errors])  # fmt: skip
         copies = groundtruth_copies(errors)
         if copies:  # the whole submission: it is not ranked, and says why
             listed = "; ".join(copies)
@@ -190,15 +282,27 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
                                   f"({listed}). Upload your system's output")  # fmt: skip
         ev = Evaluation(errors, [], None, [], data, spec=spec, kind="openloris")
         rows = ev.sequence_rows()
-    for one in evaluations:
+    for one in evaluated.values():
+        if one is None:
+            continue
         problems += [("failed", Path(f.path).name, f.error) for f in one.failures]
         problems += [("not scored", Path(f.path).name, f.error) for f in one.unscored]
         problems += [("skipped", Path(f.path).name, f.error) for f in skipped_only(one)]
+    for p in native:  # a file none of whose sequences is in a view: never evaluated
+        scene, blocks = shapes[p.name]
+        if not any(name == p.name for name, _ in evaluated) and scene is not None and blocks:
+            problems.append(("not scored", p.name, f"{scene} seq {', '.join(map(str, sorted(set(blocks))))}: in no "
+                             "phase this submission's scores are shown in; not scored"))  # fmt: skip
+    problems = list(dict.fromkeys(problems))
     failures = [dict(file=name, status=status, error=_unnamed(scrub(error, folder, data, gt_folder), name))
                 for status, name, error in problems]  # fmt: skip
-    about = {w: _attributed(f, w) for f in errors for w in f.warnings}
+    seen = [f for _, found in by_view for f in found]
+    about: dict[str, list[tuple[str, int]]] = {}
+    for f in seen:
+        for w in f.warnings:
+            about.setdefault(w, []).extend(_attributed(f, w))
     notes: dict[str, set[tuple[str, int]]] = {}
-    counted = set(said_notes(errors)) - set(about)  # a note many files share, counted: each is listed here
+    counted = set(said_notes(seen)) - set(about)  # a note many files share, counted: each is listed here
     for text in dict.fromkeys([*(str(w.message) for w in caught), *about]):
         if "could not be evaluated" not in text and text not in counted:
             notes.setdefault(scrub(text, folder, data, gt_folder), set()).update(about.get(text, []))
@@ -208,31 +312,29 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
         conventions=ev.describe(), figures=[],
     )  # fmt: skip
     if figures is not None and errors:
-        _draw(out, ev, data, spec, figures, views, folder, gt_folder)
+        _draw(out, by_view, views is None, data, spec, figures, folder, gt_folder)
     return out
 
 
-def _draw(out: dict[str, Any], ev: Evaluation, data: DataPaths, spec: EvalSpec, folder: Path,
-          views: Sequence[Iterable[tuple[str, int]]] | None, upload: Path, groundtruth: Path) -> None:  # fmt: skip
+def _draw(out: dict[str, Any], by_view: list[tuple[Any, list[FileErrors]]], whole: bool, data: DataPaths,
+          spec: EvalSpec, folder: Path, upload: Path, groundtruth: Path) -> None:  # fmt: skip
     """The timeline figure of each view (a set of sequences) the submission has output in, drawn
-    with those sequences alone: their errors, their ground-truth durations, the scene's CR over them."""
+    from that view's scores alone: their errors, their ground-truth durations, the scene's CR over
+    them (``whole``: one view of every sequence)."""
     import matplotlib
 
     matplotlib.use("Agg")
     from lorisnb.tools.figures.plotting import plot_timeline
 
-    scored = {(f.scene, e.seq) for f in ev.errors for e in f.sequences}
-    scenes = sorted({f.scene for f in ev.errors}, key=SCENES.index)
-    spans = scene_spans(scenes, data)
-    every = [(s, q) for s in scenes for q in spans[s]]
-    for k, view in enumerate([every] if views is None else views):
-        keep = {(s, int(q)) for s, q in view}
-        if not keep & scored:
+    for k, (view, found) in enumerate(by_view):
+        scored = {(f.scene, e.seq) for f in found for e in f.sequences}
+        if not scored:
             continue
-        errors = [replace(f, sequences=[e for e in f.sequences if (f.scene, e.seq) in keep],
-                          groundtruth_spans={q: v for q, v in f.groundtruth_spans.items() if (f.scene, q) in keep})
-                  for f in ev.errors]  # fmt: skip
-        errors = [f for f in errors if f.sequences]
+        scenes = sorted({f.scene for f in found}, key=SCENES.index)
+        spans = scene_spans(scenes, data)
+        keep = {(s, q) for s in scenes for q in spans[s]} if whole else set(view)
+        errors = [replace(f, groundtruth_spans={q: v for q, v in f.groundtruth_spans.items() if (f.scene, q) in keep})
+                  for f in found if f.sequences]  # fmt: skip
         durations = spans_table({s: {q: v for q, v in spans[s].items() if (s, q) in keep} for s in scenes})
         shown = Evaluation(errors, [], None, [], data, spec=spec, kind="openloris")
         try:
@@ -367,9 +469,10 @@ class Scorer:
 
             self._client = connect_scheduler(challenge.scheduler)
         self.requeued = 0
-        # the sets of sequences shown as the phases close: each scoring draws a figure of each
+        # the sets of sequences shown as the phases close: a submission is scored on each set its
+        # phase shows alone (nothing from hidden ground truth), with a figure of each
         seqs = sequences_of(scene_durations(challenge.scenes, challenge.data))
-        self.views = tuple(tuple(sorted(v)) for v in challenge.views(seqs))
+        self.views = {p.name: tuple(tuple(sorted(v)) for v in challenge.views(seqs, p)) for p in challenge.phases}
 
     def start(self) -> None:
         self.requeued = store.requeue_unfinished(self.engine)  # what a killed server left half-scored
@@ -408,8 +511,10 @@ class Scorer:
     def _start(self, sid: str, claim: str) -> None:
         folder = self.challenge.folder / "uploads" / sid
         out = folder / f"result-{claim}.json"
+        sub = store.submission(self.engine, sid)
+        views = self.views.get(sub["phase"] if sub is not None else "", ())
         task = Task(str(folder), self.challenge.data, self.challenge.spec, str(out), self.limits["score_seconds"],
-                    self.limits["score_memory_mb"] * 1_000_000, str(self.challenge.folder / GROUNDTRUTH), self.views)  # fmt: skip
+                    self.limits["score_memory_mb"] * 1_000_000, str(self.challenge.folder / GROUNDTRUTH), views)  # fmt: skip
         if self._client is not None:
             future = self._client.submit(score_on_worker, task, key=f"lorisnb-score-{sid}-{claim}", pure=False)
             self._running[sid] = _Running(_Remote(future), claim, time.monotonic(), out)

@@ -1,0 +1,87 @@
+"""A phase scores only the sequences it shows: a lifelong file holding a hidden sequence and a
+shown one gives the shown one the numbers it has alone (the hidden one's ground truth would move
+them through the alignment); the phases of a challenge file neither overlap nor leave its window."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+from challenge_fixtures import wait_scored
+
+pytest.importorskip("fastapi")
+from fastapi.testclient import TestClient  # noqa: E402
+
+from lorisnb.tools.challenge import store  # noqa: E402
+from lorisnb.tools.challenge.app import create_app  # noqa: E402
+from lorisnb.tools.challenge.config import read_challenge  # noqa: E402
+from lorisnb.tools.challenge.scoring import strip_sequences  # noqa: E402
+
+
+def iso(t: float) -> str:
+    return time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(t))
+
+
+def home_challenge(tmp_path: Path, data) -> Path:
+    """Phase dev ranks home-3 and home-4 (live, open now), phase final all of home (after-close)."""
+    now = time.time()
+    path = tmp_path / "home.toml"
+    path.write_text(f"""[challenge]
+groundtruth = "{data.root}"
+folder = "{tmp_path / "server"}"
+opens = {iso(now - 7200)}
+closes = {iso(now + 7200)}
+
+[[phase]]
+name = "dev"
+scenes = ["home"]
+sequences = {{ home = [3, 4] }}
+closes = {iso(now + 3600)}
+
+[[phase]]
+name = "final"
+scenes = ["home"]
+opens = {iso(now + 3600)}
+leaderboard = "after-close"
+""", encoding="utf-8")  # fmt: skip
+    return path
+
+
+def test_a_hidden_sequence_does_not_move_the_shown_ones(tmp_path, data):
+    """VINS-Mono's lifelong home file cut to seq 1 and 3 (A) and to seq 3 alone (B): while seq 1
+    is hidden, A's seq 3 has B's numbers (on the old scorer, aligned on seq 1: ATE 4.09 m against
+    0.466 m, AOE 68 deg against 3.2 deg), and so has A's row on the leaderboard."""
+    src = data.icra20 / "lifelong" / "vins_mono_color_imu_with_loop" / "home-1.txt"
+    files = {}
+    for name, keep in (("a", [1, 3]), ("b", [3])):
+        strip_sequences(src, tmp_path / f"{name}.txt", keep)
+        files[name] = (tmp_path / f"{name}.txt").read_bytes()
+    assert b"seq:1" in files["a"] and b"seq:1" not in files["b"]
+    challenge = read_challenge(home_challenge(tmp_path, data))
+    app = create_app(challenge)
+    engine = app.state.server.engine
+    tokens = {n: store.add_team(engine, n, time.time() + 7000) for n in files}
+    views = {}
+    with TestClient(app) as client:
+        for name, body in files.items():
+            r = client.post("/api/submissions", files=[("files", ("home-1.txt", body))],
+                            headers={"Authorization": f"Bearer {tokens[name]}"})  # fmt: skip
+            assert r.status_code == 201, r.text
+            views[name] = wait_scored(client, r.json()["id"])
+        board = next(p for p in client.get("/api/leaderboard").json()["phases"] if p["phase"] == "dev")
+        for _ in range(100):
+            if not board.get("updating"):
+                break
+            time.sleep(0.2)
+            board = next(p for p in client.get("/api/leaderboard").json()["phases"] if p["phase"] == "dev")
+    rows = {n: {r["seq"]: r for r in v["rows"]} for n, v in views.items()}
+    assert set(rows["a"]) == set(rows["b"]) == {3}  # seq 1 scored, not shown
+    for k in ("ate_rmse", "c_ate_rmse", "aoe_rmse", "cr", "cr_t", "cs_r", "matched"):
+        assert rows["a"][3][k] == rows["b"][3][k], k
+    assert rows["a"][3]["ate_rmse"] == pytest.approx(0.466, abs=1e-3)
+    values = {r["team"]: (r["value"], r["c_ate_rmse"]) for r in board["rows"]}
+    assert values["a"] == values["b"]
+    # seq 1 was scored too (shown once the final closes), from the whole file
+    result = store.submission(engine, views["a"]["id"])["result"]
+    assert '"seq": 1' in result
