@@ -74,9 +74,10 @@ def test_runs_of_one_time_keep_the_order_given(tmp_path, table, capsys):
         os.utime(f, (1.7e9, 1.7e9))  # a download: one modification time
     given = [nights / "night-9.csv", nights / "night-10.csv"]
     assert [r.name for r in load_runs(given)] == ["night-9.csv", "night-10.csv"]  # was night-10 first (by name)
-    rc, out, err = run(capsys, "history", *given, "--metric", "cr")
-    assert rc == 1 and "newest run night-10.csv against night-9.csv: regression" in out, out
-    assert "ordered after it as given" in err
+    for order in (given, given[::-1], sorted(given)):  # as given, reversed, a shell's night-*.csv (night-10 first)
+        rc, out, err = run(capsys, "history", *order, "--metric", "cr")
+        assert rc == 1 and "newest run night-10.csv against night-9.csv: regression" in out, out
+        assert "ordered after it by name, numbers as numbers" in err
     # a folder has no order given: by name, numbers as numbers (night-9 before night-10)
     assert sorted(["night-10.csv", "night-9.csv", "night-1.csv"], key=natural) == [
         "night-1.csv", "night-9.csv", "night-10.csv"]  # fmt: skip

@@ -44,22 +44,24 @@ def natural(name: str) -> tuple:
 
 
 def load_runs(paths: Iterable[str | os.PathLike[str]]) -> list[Run]:
-    """The runs, oldest first (see the module docstring); runs of the same time in the order given
-    (they were sorted by name: ``night-10.csv`` before ``night-9.csv``, and the newest run, the one
-    the exit status judges, was then the older night)."""
+    """The runs, oldest first (see the module docstring); runs of the same time by their paths,
+    numbers as numbers (:func:`natural`), as a folder's runs are ordered: ``night-9.csv`` before
+    ``night-10.csv`` however they are given (sorted as text, or in the order given, a shell's
+    ``night-*.csv`` made ``night-9`` the newest run, the one the exit status judges)."""
     return load_runs_sorted([load_run(p) for p in paths])
 
 
 def load_runs_sorted(runs: list[Run]) -> list[Run]:
-    """Runs already read (:func:`load_runs`), oldest first, those of one time in the order given."""
+    """Runs already read (:func:`load_runs`), oldest first, those of one time by path, numbers as numbers."""
     if len({r.path.resolve() for r in runs}) < len(runs):
         raise ValidationError("history: a run is given twice; give each run once")
-    out = sorted(runs, key=lambda r: (r.created is None, r.created or 0))  # stable: ties as given
+    out = sorted(runs, key=lambda r: (r.created is None, r.created or 0, natural(str(r.path))))
     for before, run in zip(out, out[1:], strict=False):  # the newest run baseline and exit status hang on the order
         if run.created is not None and run.created == before.created:
             run.notes.append(f"{run.path} has the same time as {before.path} ({run.created.isoformat()}, "
-                             f"{run.created_from}): ordered after it as given; a copy or a download resets files' "
-                             "modification times, a report run's run.json keeps when it was made")  # fmt: skip
+                             f"{run.created_from}): ordered after it by name, numbers as numbers; a copy or a "
+                             "download resets files' modification times, a report run's run.json keeps when it was "
+                             "made")  # fmt: skip
     return out
 
 
