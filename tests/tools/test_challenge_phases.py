@@ -13,6 +13,7 @@ from challenge_fixtures import wait_scored
 pytest.importorskip("fastapi")
 from fastapi.testclient import TestClient  # noqa: E402
 
+from lorisnb.errors import ParseError  # noqa: E402
 from lorisnb.tools.challenge import store  # noqa: E402
 from lorisnb.tools.challenge.app import create_app  # noqa: E402
 from lorisnb.tools.challenge.config import read_challenge  # noqa: E402
@@ -85,3 +86,35 @@ def test_a_hidden_sequence_does_not_move_the_shown_ones(tmp_path, data):
     # seq 1 was scored too (shown once the final closes), from the whole file
     result = store.submission(engine, views["a"]["id"])["result"]
     assert '"seq": 1' in result
+
+
+@pytest.mark.parametrize(
+    ("phases", "words"),
+    [
+        ('[[phase]]\nname = "dev"\nscenes = ["cafe"]\n\n[[phase]]\nname = "final"\nscenes = ["cafe"]\n'
+         "opens = {mid}\n", ["'dev'", "'final'", "overlap"]),
+        ('[[phase]]\nname = "late"\nscenes = ["cafe"]\nopens = {after}\ncloses = {after2}\n',
+         ["'late'", "opens", "after the challenge closes"]),
+        ('[[phase]]\nname = "early"\nscenes = ["cafe"]\nopens = {before}\ncloses = {mid}\n',
+         ["'early'", "opens", "before the challenge opens"]),
+        ('[[phase]]\nname = "long"\nscenes = ["cafe"]\ncloses = {after}\n',
+         ["'long'", "closes", "after the challenge closes"]),
+    ],
+)  # fmt: skip
+def test_phases_overlapping_or_outside_the_challenge_refused(tmp_path, data, phases, words):
+    now = time.time()
+    times = dict(mid=iso(now), before=iso(now - 9000), after=iso(now + 9000), after2=iso(now + 9900))
+    path = tmp_path / "c.toml"
+    path.write_text(f"""[challenge]
+groundtruth = "{data.root}"
+folder = "{tmp_path / "server"}"
+opens = {iso(now - 7200)}
+closes = {iso(now + 7200)}
+
+""" + phases.format(**times), encoding="utf-8")  # fmt: skip
+    with pytest.raises(ParseError) as info:
+        read_challenge(path)
+    text = str(info.value)
+    assert str(path) in text and "[[phase]]" in text
+    for w in words:
+        assert w in text, text

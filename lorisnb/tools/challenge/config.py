@@ -124,7 +124,7 @@ class Challenge:
         return None
 
     def phase_at(self, now: float) -> Phase | None:
-        """The phase open at ``now`` (the first, if several overlap), None between phases."""
+        """The phase open at ``now`` (phases do not overlap: :func:`read_challenge`), None between phases."""
         if not self.opens <= now < self.closes:
             return None
         return next((p for p in self.phases if p.is_open(now)), None)
@@ -260,6 +260,35 @@ def _check_sequences(phases: tuple[Phase, ...], data: DataPaths, path: Path) -> 
                                  f"{', '.join(map(str, have))}")  # fmt: skip
 
 
+def _stamp(t: float) -> str:
+    return dt.datetime.fromtimestamp(t, dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def _check_times(phases: tuple[Phase, ...], opens: float, closes: float, path: Path) -> None:
+    """Refuse a phase opening or closing outside the challenge's window (an upload then would go
+    to no phase, or its board would never show), and two phases open at once (an upload goes to
+    one of them only: the other's teams could not tell which), naming the phases and their times."""
+    window = f"the challenge runs from {_stamp(opens)} to {_stamp(closes)} ([challenge] opens, closes)"
+    for k, p in enumerate(phases, start=1):
+        where = f"[[phase]] {k} ({p.name!r}): "
+        if p.opens < opens:
+            raise ParseError(path, None, f"{where}opens = {_stamp(p.opens)}, before the challenge opens; {window}: "
+                             "expected a time within it")  # fmt: skip
+        if p.opens >= closes:
+            raise ParseError(path, None, f"{where}opens = {_stamp(p.opens)}, after the challenge closes; {window}: "
+                             "expected a time within it")  # fmt: skip
+        if p.closes > closes:
+            raise ParseError(path, None, f"{where}closes = {_stamp(p.closes)}, after the challenge closes; {window}: "
+                             "expected a time within it")  # fmt: skip
+    for i, p in enumerate(phases, start=1):
+        for j, q in enumerate(phases[i:], start=i + 1):
+            if p.opens < q.closes and q.opens < p.closes:
+                raise ParseError(path, None, f"[[phase]] {i} ({p.name!r}, {_stamp(p.opens)} to {_stamp(p.closes)}) and "
+                                 f"[[phase]] {j} ({q.name!r}, {_stamp(q.opens)} to {_stamp(q.closes)}) overlap; an "
+                                 "upload goes to one phase: expected one phase to close when or before the other "
+                                 "opens (a phase's opens and closes default to the challenge's)")  # fmt: skip
+
+
 def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
     """Read and check a challenge file (see the module docstring)."""
     from lorisnb.tools.report.leaderboard import leaderboard_spec
@@ -316,6 +345,7 @@ def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
     if len(set(names)) < len(names):
         raise ParseError(path, None, f"[[phase]]: two phases named {next(n for n in names if names.count(n) > 1)!r}; "
                          "expected distinct names")  # fmt: skip
+    _check_times(phases, opens, closes, path)
     scheduler = None
     if "scheduler" in top:
         from lorisnb.tools.evaluation.pool import scheduler_address
