@@ -136,6 +136,25 @@ def test_alpha_outside_0_1_is_refused(alpha):
         runs_needed(alpha, paired=True)
 
 
+def test_power_sizes_each_pair_at_holms_level():
+    """compare --power sized each pair at alpha itself, while Holm holds the smallest p-value of m
+    pairs to alpha / m: 6 algorithms x 2 trials of 3 sequences (15 pairs), the line above said no
+    pair could reach 0.05 and the power table said the 2 trials a side sufficed. Sized at alpha / m,
+    the design named reaches alpha after the correction: its smallest p passes alpha / m."""
+    rng = np.random.default_rng(5)
+    algs = {a: [list(0.5 + 0.02 * k + rng.normal(0, 0.01, 2)) for _ in range(3)] for k, a in enumerate("ABCDEF")}
+    t = _table(algs)
+    pairs = stats.pairwise(t)
+    m = len(pairs)
+    alone = power.runs_for_power(t, pairs, 0.3, alpha=0.05)
+    held = power.runs_for_power(t, pairs, 0.3, alpha=0.05, comparisons=m)
+    assert (alone["needed"] == 2).all() and (held["needed"] == runs_needed(0.05 / m, paired=False, strata=3)).all()
+    assert (held["needed"] > alone["needed"]).all()
+    assert runs_needed(0.05 / m, paired=False, strata=3) > 2  # 2 a side over 3 sequences: p >= (1/3)^3 > 0.05/15
+    with pytest.raises(ln.ValidationError, match="comparisons"):
+        power.runs_for_power(t, pairs, 0.3, comparisons=0)
+
+
 def test_identical_algorithms_are_never_separated():
     t = _table({"A": [[0.5], [0.6], [0.7], [0.8], [0.9], [0.95]], "B": [[0.5], [0.6], [0.7], [0.8], [0.9], [0.95]]})
     r = stats.pairwise(t).iloc[0]

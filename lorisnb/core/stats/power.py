@@ -27,15 +27,27 @@ def _within_sd(g: pd.DataFrame, metric: str) -> float:
 
 
 def runs_for_power(
-    table: pd.DataFrame, pairs: pd.DataFrame, delta: float, alpha: float = 0.05, power: float = 0.8
+    table: pd.DataFrame,
+    pairs: pd.DataFrame,
+    delta: float,
+    alpha: float = 0.05,
+    power: float = 0.8,
+    comparisons: int = 1,
 ) -> pd.DataFrame:
     """``pairs`` with the columns ``delta``, ``power``, ``unit`` ("sequences" or "trials per
-    sequence"), ``have`` (how many there are) and ``needed`` (-1: the spread is unknown)."""
+    sequence"), ``have`` (how many there are) and ``needed`` (-1: the spread is unknown).
+    ``comparisons``: the tests Holm's correction runs over (``compare``: every pair of every scene);
+    each pair is sized at ``alpha / comparisons``, the level Holm holds its smallest p-value to, so
+    the design it names can reach alpha after the correction (sized at ``alpha``, a pair was said
+    to need the 2 trials a side it had, where no p-value of 2 could pass 0.05 over 60 pairs)."""
     if not (np.isfinite(delta) and delta > 0):
         raise ValidationError(f"power delta={delta}: expected a positive difference in the metric's unit")
     if not 0 < power < 1:
         raise ValidationError(f"power={power}: expected a probability between 0 and 1")
     alpha = validate.probability("alpha", alpha)
+    if isinstance(comparisons, bool) or not isinstance(comparisons, (int, np.integer)) or comparisons < 1:
+        raise ValidationError(f"comparisons={comparisons!r}: expected a whole number of tests, 1 or more")
+    alpha = alpha / int(comparisons)
     t = with_trials(table)
     rows = []
     for r in pairs.itertuples():

@@ -237,7 +237,8 @@ def compare_table(
     power = None
     if power_delta is not None:  # copies' spread is no rerun's: sized from it, a pair looked cheap to tell apart
         copied = pairs["test"].eq(COPIES_TEST).to_numpy(bool)
-        power = runs_for_power(full, pairs[~pairs["significant"].astype(bool).to_numpy() & ~copied], power_delta, alpha)
+        power = runs_for_power(full, pairs[~pairs["significant"].astype(bool).to_numpy() & ~copied], power_delta, alpha,
+                               comparisons=max(len(pairs), 1))  # fmt: skip
         if copied.any():
             notes.append(f"--power: no number of runs for the pairs of {', '.join(sorted(copies))}: their trials are "
                          "copies of one run, whose spread says nothing of a rerun's; run the system again per trial")  # fmt: skip
