@@ -49,7 +49,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         require(module, "serve")
     import uvicorn
 
-    from lorisnb.tools.challenge.app import create_app
+    from lorisnb.tools.challenge.app import create_app, http_protocol
     from lorisnb.tools.challenge.config import read_challenge
 
     challenge = read_challenge(args.challenge)
@@ -67,7 +67,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
             "groundtruth to a data root kept on this server only (docs/guide/challenge-server.md, 'Ground truth "
             "the teams cannot have')")  # fmt: skip
     uvicorn.run(app, host=args.host, port=args.port, log_level="warning", timeout_keep_alive=5,
-                limit_concurrency=args.max_connections)  # fmt: skip
+                limit_concurrency=args.max_connections, http=http_protocol(challenge.limits["header_seconds"]))  # fmt: skip
     return 0
 
 

@@ -117,6 +117,53 @@ async def _refuse(send: Callable[[dict[str, Any]], Awaitable[None]], status: int
     await send({"type": "http.response.body", "body": body})
 
 
+def http_protocol(header_seconds: float) -> type[asyncio.Protocol]:
+    """uvicorn's HTTP/1.1 protocol (h11; its ``http`` option takes the class) that drops a client
+    whose request headers have not all come within ``header_seconds`` of its connection or of its
+    last response: uvicorn waits for them forever, and a few hundred connections that never finish
+    their headers (slowloris) held every slot (``--max-connections``), every other client answered
+    503. A connection is dropped only while no request of it is in the application (an upload
+    being read has its own deadline, ``upload_seconds``, :class:`BodyLimit`); one that sent part
+    of a request is answered 408 first."""
+    import h11
+    from uvicorn.protocols.http.h11_impl import H11Protocol
+
+    class HeaderDeadline(H11Protocol):
+        _deadline: asyncio.TimerHandle | None = None
+
+        def connection_made(self, transport: asyncio.Transport) -> None:  # type: ignore[override]
+            super().connection_made(transport)
+            self._arm()
+
+        def on_response_complete(self) -> None:
+            super().on_response_complete()
+            self._arm()
+
+        def connection_lost(self, exc: Exception | None) -> None:
+            if self._deadline is not None:
+                self._deadline.cancel()
+                self._deadline = None
+            super().connection_lost(exc)
+
+        def _arm(self) -> None:
+            if self._deadline is not None:
+                self._deadline.cancel()
+            self._deadline = None if self.transport.is_closing() else self.loop.call_later(header_seconds, self._due)
+
+        def _due(self) -> None:
+            self._deadline = None
+            if self.transport.is_closing() or (self.cycle is not None and not self.cycle.response_complete):
+                return  # a request in the application: its response re-arms the deadline
+            if self.conn.their_state is h11.IDLE and self.conn.trailing_data[0]:
+                body = f"the request's headers took longer than {header_seconds:g} s to arrive; send it again".encode()
+                self.transport.write(b"HTTP/1.1 408 Request Timeout\r\ncontent-type: text/plain; charset=utf-8\r\n"
+                                     b"connection: close\r\ncontent-length: " + str(len(body)).encode()
+                                     + b"\r\n\r\n" + body)  # fmt: skip
+            self.transport.close()
+
+    return HeaderDeadline
+
+
 class Refused(Exception):
     def __init__(self, status: int, message: str):
         super().__init__(message)

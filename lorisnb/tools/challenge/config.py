@@ -50,7 +50,8 @@ from lorisnb.io.datasets.paths import DataPaths, find_data
 CHALLENGE_KEYS = {"title", "groundtruth", "folder", "database", "metric", "opens", "closes", "scheduler"}
 #: The limits and their defaults: submissions per team in any 24 hours, the upload's size (MB),
 #: the files in it, their unpacked size (MB), a submission's scoring time (CPU seconds) and memory
-#: (MB), the scoring processes at a time, and the time a client may take to send its upload (s).
+#: (MB), the scoring processes at a time, the time a client may take to send its upload (s), and
+#: to send a request's headers (s: a connection is dropped past it, :func:`.app.http_protocol`).
 LIMITS: dict[str, int] = {
     "submissions_per_day": 5,
     "upload_mb": 20,
@@ -60,6 +61,7 @@ LIMITS: dict[str, int] = {
     "score_memory_mb": 3072,
     "workers": 1,
     "upload_seconds": 60,
+    "header_seconds": 10,
 }
 PHASE_KEYS = {"name", "scenes", "sequences", "opens", "closes", "leaderboard"}
 BOARDS = ("live", "after-close")
