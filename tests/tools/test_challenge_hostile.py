@@ -238,6 +238,9 @@ EUROC = b"#timestamp [ns],p_x,p_y,p_z,q_w,q_x,q_y,q_z\n1560004885500000000,1,2,3
         ("cafe-1-2.txt", TUM, "bag", 415, "format bag: the challenge takes no ROS bags"),
         ("cafe-1-2.txt", TUM, "xyz", 400, "format 'xyz': expected auto (each file's format recognised from its "
          "content), openloris, tum or euroc"),
+        ("x.txt", RESULT.replace(b"cafe", b"corridor"), None, 400, "x.txt: an OpenLORIS result file of corridor (its "
+         "scene: header), which is not one of this challenge's scenes; expected cafe"),
+        ("cafe-1-1.txt", RESULT.replace(b"cafe", b"Office_1"), "openloris", 400, "file of office (its scene: header)"),
     ],
 )  # fmt: skip
 def test_formats_refused(hostile, name, body, fmt, status, words):

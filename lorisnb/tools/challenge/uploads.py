@@ -26,7 +26,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
+from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import LorisError
+from lorisnb.io.readers.openloris import declared_scene
 from lorisnb.io.readers.registry import FORMATS, recognise, sample
 
 #: A member more compressed than this is a bomb, not a result file (text of poses compresses ~3-5x).
@@ -147,7 +149,8 @@ def plan(folder: Path, names: list[str], fmt: str, sequences: Iterable[tuple[str
     one of the challenge's ``sequences`` (scene, seq). Refused (:class:`UploadRefused`): KITTI
     files and bags (:data:`NOT_TAKEN`), a file of no format lorisnb recognises (unless ``fmt``
     names one), a file plainly of another format than ``fmt``, a TUM or EuRoC file whose name
-    names no sequence of the challenge."""
+    names no sequence of the challenge, an OpenLORIS file whose ``scene:`` header names a scene
+    not in the challenge (it would be scored as no output at all, and count as a submission)."""
     have = sorted(set(sequences))
     listed = ", ".join(f"{s}-1-{q}" for s, q in have)
     out: dict[str, dict[str, Any]] = {}
@@ -165,6 +168,11 @@ def plan(folder: Path, names: list[str], fmt: str, sequences: Iterable[tuple[str
                                 "(openloris, tum or euroc: the form's format field, lorisnb submit --format) to have "
                                 "every line read", 415)  # fmt: skip
         if kind == "openloris":
+            scene = declared_scene(folder / name)
+            scenes = sorted({s for s, _ in have}, key=SCENES.index)
+            if scene is not None and scene not in scenes:
+                raise UploadRefused(f"{name}: an OpenLORIS result file of {scene} (its scene: header), which is not "
+                                    f"one of this challenge's scenes; expected {' or '.join(scenes)}")  # fmt: skip
             continue
         seq = sequence_of(name)
         title = FORMATS[kind].title
