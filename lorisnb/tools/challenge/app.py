@@ -38,7 +38,7 @@ from starlette.formparsers import MultiPartException
 
 from lorisnb.io.datasets.paths import scene_durations
 from lorisnb.tools.challenge import store
-from lorisnb.tools.challenge.board import admin_scores, figure_file, leaderboard, submission_view, when
+from lorisnb.tools.challenge.board import admin_scores, figure_file, leaderboard, submission_view, team_text, when
 from lorisnb.tools.challenge.config import Challenge, sequences_of
 from lorisnb.tools.challenge.uploads import Limits, UploadRefused, keep_upload, upload_format
 
@@ -450,7 +450,8 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
         left = challenge.limits["submissions_per_day"] - store.submissions_since(
             engine, team["id"], server.clock() - DAY
         )
-        subs = listing(store.all_submissions(engine, team["id"], results=False))
+        subs = [s | {"error": team_text(s["error"], challenge) if s["error"] else s["error"]}
+                for s in listing(store.all_submissions(engine, team["id"], results=False))]  # fmt: skip
         return dict(team={k: team[k] for k in ("name", "expires", "admin")}, left=max(left, 0), subs=subs)
 
     @app.post("/team", response_class=HTMLResponse)

@@ -71,6 +71,32 @@ def _shown_notes(notes: list[Any], shown: frozenset[tuple[str, int]], all_shown:
     return out
 
 
+#: Sentences of a message that speak to whoever runs lorisnb (where the data root is, how to point
+#: lorisnb at another): a team cannot act on them, and they name what the private data root holds.
+SERVER_ADVICE = re.compile(r"--data\b|LORISNB_DATA|data[ _]root|Point lorisnb at", re.IGNORECASE)
+NO_GROUNDTRUTH = re.compile(r"ground truth of scene '?(\w+)'? not found")
+
+
+def team_text(text: str, challenge: Challenge) -> str:
+    """A scoring message as a team sees it: one about ground truth the server lacks says which
+    scenes the challenge ranks (not which the data root holds, nor how to point lorisnb at other
+    data); sentences of advice on running lorisnb with other data are left out. The organizer's
+    views (the admin page, the export) keep the full text."""
+    scenes = ", ".join(challenge.scenes)
+    found = NO_GROUNDTRUTH.search(text)
+    if found:
+        scene = found.group(1)
+        if scene in challenge.scenes:
+            return f"the server could not read the ground truth of {scene}; tell the organizers"
+        return f"{scene} is not one of this challenge's scenes; it ranks {scenes}: upload result files of those"
+    text = re.sub(r"\s*\(data root [^)]*\)", "", text)
+    parts = re.split(r"(?<=[.;])\s+", text)
+    kept = [p for p in parts if not SERVER_ADVICE.search(p)]
+    if len(kept) == len(parts):
+        return text
+    return " ".join(kept).rstrip(" ;.") or "the server could not score this file; tell the organizers"
+
+
 def _hidden_note(challenge: Challenge, scene: str, seq: int) -> str:
     phase = challenge.shown_by(scene, seq)
     if phase is None:
@@ -84,7 +110,8 @@ def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.Dat
     phase = challenge.phase(sub["phase"])
     view: dict[str, Any] = dict(
         id=sub["id"], team=sub["team"], phase=sub["phase"], status=sub["status"], submitted=sub["created"],
-        finished=sub["finished"], files=json.loads(sub["files"]), bytes=sub["bytes"], error=sub["error"],
+        finished=sub["finished"], files=json.loads(sub["files"]), bytes=sub["bytes"],
+        error=team_text(sub["error"], challenge) if sub["error"] else sub["error"],
         scores_shown=phase.shows_scores(now),
     )  # fmt: skip
     if sub["status"] != "scored" or not phase.shows_scores(now):
@@ -101,8 +128,12 @@ def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.Dat
                    shown=_hidden_note(challenge, s, q)) for s, q in sorted(scored - shown)]  # fmt: skip
     missing = [dict(scene=s, seq=int(q), error="no output for this sequence: it counts as a failed run")
                for s, q in zip(wanted["scene"], wanted["seq"], strict=True) if (s, int(q)) not in scored]  # fmt: skip
-    view.update(rows=rows, hidden_sequences=hidden, failures=result["failures"], missing=missing,
-                notes=_shown_notes(result["notes"], shown, not hidden), conventions=result["conventions"],
+    failures = [dict(f, error=team_text(str(f["error"]), challenge)) for f in result["failures"]]
+    if any(f["file"] for f in failures):  # "nothing was evaluated", named for no file: the files' rows say why
+        failures = [f for f in failures if f["file"]]
+    notes = [team_text(n, challenge) for n in _shown_notes(result["notes"], shown, not hidden)]
+    view.update(rows=rows, hidden_sequences=hidden, failures=failures, missing=missing,
+                notes=notes, conventions=result["conventions"],
                 figure=figure_file(result, challenge, durations, now) is not None)  # fmt: skip
     return view
 

@@ -286,7 +286,8 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
         if one is None:
             continue
         problems += [("failed", Path(f.path).name, f.error) for f in one.failures]
-        problems += [("not scored", Path(f.path).name, f.error) for f in one.unscored]
+        # "nothing was evaluated" of a file's own evaluation, named for no file: its file's row says why
+        problems += [("not scored", Path(f.path).name, f.error) for f in one.unscored if f.kind != "nothing"]
         problems += [("skipped", Path(f.path).name, f.error) for f in skipped_only(one)]
     for p in native:  # a file none of whose sequences is in a view: never evaluated
         scene, blocks = shapes[p.name]

@@ -1,0 +1,54 @@
+"""What the server tells a team when scoring fails: never advice on running lorisnb with other data
+(``--data``, ``LORISNB_DATA``) nor the scenes the private data root holds, and no row named for no
+file; the organizer's views keep the full text."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import pytest
+from challenge_fixtures import challenge_file
+
+from lorisnb.io.datasets.paths import scene_durations
+from lorisnb.tools.challenge.board import submission_view, team_text
+from lorisnb.tools.challenge.config import read_challenge
+from lorisnb.tools.challenge.scoring import score_folder
+
+pytest.importorskip("fastapi")
+
+
+def test_a_team_is_not_told_to_reconfigure_the_server(tmp_path, data):
+    """An OpenLORIS file of office (no ground truth on the server; refused at upload since, but
+    here scored directly): the failure said 'Point lorisnb at ... (--data DIR) or the LORISNB_DATA
+    environment variable', listed the data root's scenes, and came with a second row named ''."""
+    challenge = read_challenge(challenge_file(tmp_path, data))
+    files = tmp_path / "sub" / "files"
+    files.mkdir(parents=True)
+    src = data.icra20 / "per-seq" / "orbslam2_rgbd" / "office_1_1_orbslam2-original.txt"
+    (files / "x.txt").write_bytes(src.read_bytes())
+    result = score_folder(files, challenge.data, challenge.spec)
+    full = " ".join(f["error"] for f in result["failures"])
+    assert "LORISNB_DATA" in full  # the organizer's text (export) keeps it
+    sub = dict(id="s", team="t", phase="development", status="scored", created=time.time(), finished=time.time(),
+               files=json.dumps(["x.txt"]), bytes=1, result=json.dumps(result),
+               error="ground truth of scene 'office' not found: looked for <ground truth>/x (data root <ground truth>). "
+                     "this data root has the ground truth of corridor, home. Point lorisnb at a folder with --data DIR")  # fmt: skip
+    view = submission_view(sub, challenge, scene_durations(challenge.scenes, challenge.data), time.time())
+    shown = json.dumps(view)
+    for word in ("LORISNB_DATA", "--data", "data root", "corridor", "home", "market", "Point lorisnb"):
+        assert word not in shown, (word, shown)
+    assert [f["file"] for f in view["failures"]] == ["x.txt"]
+    assert view["failures"][0]["error"] == ("office is not one of this challenge's scenes; it ranks cafe: upload "
+                                            "result files of those")  # fmt: skip
+    assert view["error"].startswith("office is not one of this challenge's scenes")
+
+
+def test_advice_on_other_data_is_left_out(tmp_path, data):
+    challenge = read_challenge(challenge_file(tmp_path, data))
+    text = ("icra20_results folder not found: looked for <ground truth>/x (data root <ground truth>). Point lorisnb "
+            "at a folder laid out like ../shared/data with the data_root argument (--data DIR) or the LORISNB_DATA "
+            "environment variable.")  # fmt: skip
+    assert team_text(text, challenge) == "icra20_results folder not found: looked for <ground truth>/x"
+    assert team_text("seq 2: no pose matched.", challenge) == "seq 2: no pose matched."
+    assert team_text("ground truth of scene 'cafe' not found: ...", challenge).endswith("tell the organizers")
