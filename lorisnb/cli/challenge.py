@@ -17,6 +17,8 @@ from lorisnb.errors import ValidationError
 from lorisnb.tools._extras import require
 
 TOKEN_VAR = "LORISNB_TOKEN"
+#: An admin token's default life after the challenge closes (seconds): 90 days.
+ADMIN_AFTER_CLOSE = 90 * 86400.0
 
 
 def port(text: str) -> int:
@@ -77,13 +79,18 @@ def cmd_add_team(args: argparse.Namespace) -> int:
     from lorisnb.tools.challenge.config import read_challenge
 
     challenge = read_challenge(args.challenge)
-    expires = args.expires if args.expires is not None else challenge.closes
+    # a team's token works until the challenge closes; the admin's on after it (the final results
+    # appear at the close, and the admin page is where the organizer reads them)
+    default = challenge.closes + (ADMIN_AFTER_CLOSE if args.admin else 0.0)
+    expires = args.expires if args.expires is not None else default
     if expires <= time.time():
         raise ValidationError(f"--expires: {dt.datetime.fromtimestamp(expires, dt.UTC).isoformat()} is past; "
                               "expected a later time")  # fmt: skip
     token = store.add_team(_engine(challenge), args.name, expires, admin=args.admin)
     what = "admin" if args.admin else "team"
-    print(f"{what} {args.name!r} added; its token (shown once, stored hashed only):", file=sys.stderr)
+    until = dt.datetime.fromtimestamp(expires, dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+    print(f"{what} {args.name!r} added, its token valid until {until} (--expires sets another time); the token "
+          "(shown once, stored hashed only):", file=sys.stderr)  # fmt: skip
     print(token)
     return 0
 

@@ -120,3 +120,25 @@ def test_add_team_command_refuses_a_look_alike(tmp_path, data, capsys):
     assert "mixes Latin letters with letters of Cyrillic" in err and "write it in one script" in err
     assert main(["challenge", "add-team", str(path), "Team1"]) != 0
     assert "looks like the existing team 'team1'" in capsys.readouterr().err
+
+
+def test_the_admin_token_outlives_the_close(tmp_path, data, capsys):
+    """The admin's token expired at the challenge's close, when the final results appear on the
+    admin page: by default it now works 90 days after; a team's still stops at the close, and
+    --expires sets either."""
+    from challenge_fixtures import challenge_file
+
+    from lorisnb.cli import main
+    from lorisnb.tools.challenge.config import read_challenge
+
+    path = challenge_file(tmp_path, data)
+    closes = read_challenge(path).closes
+    assert main(["challenge", "add-team", str(path), "organizers", "--admin"]) == 0
+    assert main(["challenge", "add-team", str(path), "team1"]) == 0
+    assert main(["challenge", "add-team", str(path), "team2", "--expires", "2099-01-01T00:00:00Z"]) == 0
+    assert "valid until" in capsys.readouterr().err
+    engine = store.connect(read_challenge(path).database)
+    expires = {t["name"]: t["expires"] for t in store.all_teams(engine)}
+    assert expires["organizers"] == pytest.approx(closes + 90 * 86400)
+    assert expires["team1"] == pytest.approx(closes)
+    assert expires["team2"] > closes + 365 * 86400
