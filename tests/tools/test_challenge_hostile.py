@@ -455,3 +455,35 @@ def test_framework_refusals_in_the_server_s_words(hostile):
     r = client.post("/team", content=b"xx", headers={"Content-Type": "multipart/form-data"})
     assert r.status_code == 400 and 'id="error"' in r.text and "POST /team" in r.text
     assert client.get("/api/health").status_code == 200
+
+
+def _abort_under_a_limit(memory_bytes: int) -> None:
+    import faulthandler
+    import os
+
+    faulthandler.disable()  # pytest's: no traceback of the abort on the test's output
+    from lorisnb.tools.challenge.scoring import _limit
+
+    _limit(30, memory_bytes)
+    os.abort()  # as Arrow does when an allocation fails under RLIMIT_AS: no MemoryError
+
+
+def test_scoring_that_aborts_under_its_memory_limit_names_the_limit():
+    """Arrow aborts (SIGABRT, exit status -6) where an allocation fails under the memory limit;
+    that was told as 'the scorer stopped (exit status -6); tell the organizers'. A scorer ended by
+    SIGABRT, SIGSEGV or SIGBUS under the limit is told as the limit; SIGKILL names both limits."""
+    import multiprocessing
+    import signal
+
+    from lorisnb.tools.challenge.scoring import stopped
+
+    p = multiprocessing.get_context("fork").Process(target=_abort_under_a_limit, args=(700_000_000,))
+    p.start()
+    p.join(30)
+    assert p.exitcode == -signal.SIGABRT
+    said = stopped(p.exitcode, 120, 700)
+    assert said.startswith("scoring needed more than the challenge's memory limit of 700 MB") and "SIGABRT" in said
+    assert "memory limit of 700 MB" in stopped(-signal.SIGSEGV, 120, 700)
+    assert "120 CPU seconds or of 700 MB of memory" in stopped(-signal.SIGKILL, 120, 700)
+    assert stopped(-signal.SIGXCPU, 120, 700) == "scoring exceeded the challenge's limit of 120 CPU seconds"
+    assert "(exit status 3); tell the organizers" in stopped(3, 120, 700)

@@ -394,11 +394,25 @@ def score_in_child(task: Task) -> None:
     _write(Path(task.out), outcome)
 
 
-def stopped(exitcode: int | None, cpu_seconds: int) -> str:
+#: Signals a scoring process ends by when an allocation fails under its memory limit
+#: (RLIMIT_AS) in native code, which raises no MemoryError: Arrow and other C++ libraries abort
+#: (SIGABRT, from std::bad_alloc or their own check), others crash on the NULL they got (SIGSEGV, SIGBUS).
+MEMORY_SIGNALS = (signal.SIGABRT, signal.SIGSEGV, signal.SIGBUS)
+
+
+def stopped(exitcode: int | None, cpu_seconds: int, memory_mb: float | None = None) -> str:
     """Why a scoring process ended without an outcome: killed at its CPU-time limit (SIGXCPU at
-    the soft limit, SIGKILL at the hard one), or another exit status."""
-    if exitcode in (-signal.SIGXCPU, -signal.SIGKILL):
+    the soft limit, SIGKILL at the hard one, or by the system out of memory), out of memory under
+    its limit of ``memory_mb`` (:data:`MEMORY_SIGNALS`), or another exit status."""
+    memory = f"{memory_mb:g} MB" if memory_mb is not None else None
+    if exitcode == -signal.SIGXCPU or (exitcode == -signal.SIGKILL and memory is None):
         return f"scoring exceeded the challenge's limit of {cpu_seconds} CPU seconds"
+    if exitcode == -signal.SIGKILL:
+        return f"scoring exceeded the challenge's limit of {cpu_seconds} CPU seconds or of {memory} of memory (killed)"
+    if memory is not None and exitcode is not None and -exitcode in MEMORY_SIGNALS:
+        name = signal.Signals(-exitcode).name
+        return (f"scoring needed more than the challenge's memory limit of {memory} (the scorer ran out of memory "
+                f"and stopped, {name}); send smaller files, or fewer at once")  # fmt: skip
     return f"the scorer stopped (exit status {exitcode}); tell the organizers"
 
 
@@ -541,7 +555,8 @@ class Scorer:
             elif outcome is not None:
                 self._done(sid, r, "failed", None, str(outcome["error"]), took)
             else:
-                self._done(sid, r, "failed", None, stopped(r.process.exitcode, self.limits["score_seconds"]), took)
+                why = stopped(r.process.exitcode, self.limits["score_seconds"], float(self.limits["score_memory_mb"]))
+                self._done(sid, r, "failed", None, why, took)
 
     def _done(self, sid: str, r: _Running, status: str, result: Any, error: str | None, took: float) -> None:
         store.finish(self.engine, sid, r.claim, status, result, error, took)
