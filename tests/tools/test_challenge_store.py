@@ -142,3 +142,17 @@ def test_the_admin_token_outlives_the_close(tmp_path, data, capsys):
     assert expires["organizers"] == pytest.approx(closes + 90 * 86400)
     assert expires["team1"] == pytest.approx(closes)
     assert expires["team2"] > closes + 365 * 86400
+
+
+@pytest.mark.parametrize(
+    ("name", "others", "words"),
+    [
+        ("\u0251lpha", ["alpha"], "looks like the existing team 'alpha'"),  # U+0251 LATIN SMALL LETTER ALPHA
+        ("\u0299\u1d07\u1d1b\u1d00", ["beta"], "looks like the existing team 'beta'"),  # small capitals
+        ("team\u01c3", [], "U+01C3 LATIN LETTER RETROFLEX CLICK"),  # drawn like '!'
+    ],
+)
+def test_latin_look_alikes_refused(name, others, words):
+    """Latin letters drawn like other Latin letters or like punctuation passed: 'ɑlpha' beside 'alpha'."""
+    with pytest.raises(ValidationError, match=re.escape(words)):
+        store.check_team_name(name, others)

@@ -134,10 +134,15 @@ SCRIPT_SETS = (
 )
 #: Letters of other scripts (and digits) drawn like Latin letters, with the Latin letter they look
 #: like (before case folding: Cyrillic and Greek capitals and small letters, 1 and I as l, 0 as O).
+#: Latin letters of the IPA and small capitals drawn like plain ones are these too (ɑ U+0251 as a,
+#: ɡ as g, dotless ı and ȷ, small capital ɪ as i...).
 LOOK_ALIKE = str.maketrans(
-    "АВЕЅІЈКМНОРСТХУҮҺӀаеѕіјорсхуүһӏԁԛԝьΑΒΕΖΗΙΚΜΝΟΡΤΥΧαεικνορτυχ10I|",
-    "ABESIJKMHOPCTXYYHIaesijopcxyyhldqwbABEZHIKMNOPTYXaeikvoptuxlOll",
+    "АВЕЅІЈКМНОРСТХУҮҺӀаеѕіјорсхуүһӏԁԛԝьΑΒΕΖΗΙΚΜΝΟΡΤΥΧαεικνορτυχ10I|ɑɡɩıȷɪʟʀɴʏʙʜᴀᴄᴅᴇᴊᴋᴍᴏᴘᴛᴜᴠᴡᴢ",
+    "ABESIJKMHOPCTXYYHIaesijopcxyyhldqwbABEZHIKMNOPTYXaeikvoptuxlOllagiijilrnybhacdejkmoptuvwz",
 )
+#: Letters drawn like punctuation a name cannot hold (the click letters: ǀ like |, ǁ like ||, ǂ,
+#: ǃ U+01C3 like !): refused, as the punctuation is.
+PUNCTUATION_LETTERS = frozenset("\u01c0\u01c1\u01c2\u01c3")
 SEPARATORS = " -_."
 
 
@@ -171,6 +176,8 @@ def _hidden(c: str) -> bool:
 def _allowed(c: str) -> bool:
     """A letter, a digit, a separator, or a mark of a script's own (a Devanagari vowel sign: a
     combining accent on a Latin letter is composed by NFC, or refused)."""
+    if c in PUNCTUATION_LETTERS:
+        return False
     if c.isalnum() or c in SEPARATORS:
         return True
     return unicodedata.category(c) in ("Mn", "Mc") and _script(c) not in (
@@ -194,6 +201,11 @@ def check_team_name(name: str, others: Sequence[str] = ()) -> str:
         raise ValidationError(f"team name {name!r}: holds a character that is invisible, turns the text around it or "
                               f"is a space other than ' ' ({what}); type the name with letters, digits, spaces, '-', "
                               "'_' or '.' only")  # fmt: skip
+    clicks = [c for c in name if c in PUNCTUATION_LETTERS]
+    if clicks:
+        what = ", ".join(f"{c!r} U+{ord(c):04X} {unicodedata.name(c, '')}" for c in dict.fromkeys(clicks))
+        raise ValidationError(f"team name {name!r}: holds a letter drawn like punctuation ({what}); expected 1 to 80 "
+                              "letters, digits, spaces, '-', '_' or '.'")  # fmt: skip
     if not name or len(name) > 80 or not all(map(_allowed, name)):
         raise ValidationError(f"team name {name!r}: expected 1 to 80 letters, digits, spaces, '-', '_' or '.'")
     letters = [(c, _script(c)) for c in unicodedata.normalize("NFKC", name)]
