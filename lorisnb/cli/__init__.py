@@ -265,7 +265,7 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("name", metavar="NAME", help="the team's name on the leaderboard")
     q.add_argument("--admin", action="store_true", help="the admin's token (the admin page and API), not a team's")
     q.add_argument("--expires", type=arg_type(challenge_expiry), default=None, metavar="WHEN",
-                   help="when the token stops working, e.g. 2026-12-01T18:00:00Z (default: the challenge's close)")  # fmt: skip
+                   help="when the token stops working, e.g. 2026-12-01T18:00:00Z (default: the challenge's close for a team's token, 90 days after it for --admin)")  # fmt: skip
     q.set_defaults(func=_command(".challenge", "cmd_add_team"))
     q = csub.add_parser("export", help="every submission and its per-sequence scores as one CSV table")
     q.add_argument("challenge", metavar="CHALLENGE.toml")
