@@ -241,4 +241,3 @@ def test_text_in_utf16_is_said_to_be_text(tmp_path, encoding):
     p.write_bytes(b"1 0 0 0 0 0 0 1\n\x00\x01\x02 binary")
     with pytest.raises(ParseError, match="line 2: binary data"):
         read_tum(p)
-
