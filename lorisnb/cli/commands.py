@@ -500,8 +500,8 @@ def cmd_report(args: argparse.Namespace) -> int:
     if failed_inputs:
         print(f"leaderboard: {failed_inputs} input file(s) could not be evaluated (listed in index.html)")
     print(f"report: {run_dir / 'index.html'}")
-    status = 1 if failed_inputs or any(r.status == "failed" or r.input_errors for r in runs) else 0
-    return max(status, _gate(run_dir)) if args.gate else status
+    failed = 1 if failed_inputs or any(r.status == "failed" or r.input_errors for r in runs) else 0
+    return max(failed, _gate(run_dir)) if args.gate else failed
 
 
 def _gate(run_dir: Path) -> int:
