@@ -165,11 +165,17 @@ def _conventions_options(args: argparse.Namespace) -> dict[str, object]:
     return options
 
 
-def _not_evos(args: argparse.Namespace, spec: EvalSpec) -> str:
+def _not_evos(args: argparse.Namespace, spec: EvalSpec, order: str = "") -> str:
     """Why lorisnb's conventions here are not evo's: another preset, or options given with ``--conventions
-    evo`` that depart from it (each with what evo does instead, :func:`~lorisnb.tools.peers.crosscheck_evo.evo_lacks`)."""
+    evo`` that depart from it (each with what evo does instead, :func:`~lorisnb.tools.peers.crosscheck_evo.evo_lacks`),
+    or ``order``: unsorted stamps, sorted by lorisnb and kept in file order by evo
+    (:func:`~lorisnb.tools.peers.crosscheck_evo.evo_order`)."""
     from lorisnb.tools.peers.crosscheck_evo import evo_lacks
 
+    if spec.preset_name == "evo" and order and not evo_lacks(spec):  # options evo has too depart from nothing
+        return order
+    if order:
+        return f"{_not_evos(args, spec)}; {order}"
     if spec.preset_name != "evo":
         return (
             f"the conventions of preset {spec.preset_name} are not evo's, see the notes; --conventions evo gives evo's"
@@ -203,7 +209,8 @@ def _crosscheck_conventions(args: argparse.Namespace, gt_format: str, est_format
         none = int((why & table["evo"].isna()).sum())
         parts = [f"{int(why.sum()) - none} differ from evo's value", f"evo has no value for {none}"]
         counts = ", ".join(x for x, n in zip(parts, (int(why.sum()) - none, none), strict=True) if n)
-        print(f"explained by a stated definition ({int(why.sum())} of {total}: {counts}; {_not_evos(args, spec)}): "
+        reason = _not_evos(args, spec, table.attrs.get("order", ""))
+        print(f"explained by a stated definition ({int(why.sum())} of {total}: {counts}; {reason}): "
               f"{', '.join(table.loc[why, 'quantity'])}", file=sys.stderr)  # fmt: skip
     if unexplained.any():
         print(f"DISAGREE, unexplained ({int(unexplained.sum())} of {total}): "

@@ -68,3 +68,72 @@ def test_options_that_depart_from_evos_preset_are_named_and_counts_add_up(data, 
     assert agree and why, err
     assert int(agree[1]) + int(why[1]) == int(agree[2]) == int(why[2]) and why[1] == why[3]
     assert "are not evo's" not in err and "DISAGREE" not in err
+
+
+def _pair(tmp_path, unsorted: bool):
+    """A ground truth and a noisy estimate (TUM, 10 Hz); ``unsorted``: estimate rows 5-6, 20-21, ...
+    swapped, as a writer with two threads leaves them."""
+    import numpy as np
+
+    rng = np.random.default_rng(3)
+    t = 100.0 + 0.1 * np.arange(120)
+    xyz = np.c_[np.cos(t / 3), np.sin(t / 3), 0.01 * t]
+    q = np.c_[np.zeros((len(t), 2)), np.sin(t / 6), np.cos(t / 6)]
+    noisy = xyz + rng.normal(0, 0.01, xyz.shape)
+    rows = [f"{s:.6f} {' '.join(f'{v:.9f}' for v in (*p, *r))}" for s, p, r in zip(t, noisy, q, strict=True)]
+    if unsorted:
+        for i in range(5, len(rows) - 1, 15):
+            rows[i], rows[i + 1] = rows[i + 1], rows[i]
+    gt, est = tmp_path / "gt.tum", tmp_path / "est.tum"
+    gt.write_text(
+        "".join(f"{s:.6f} {' '.join(f'{v:.9f}' for v in (*p, *r))}\n" for s, p, r in zip(t, xyz, q, strict=True))
+    )
+    est.write_text("\n".join(rows) + "\n")
+    return str(gt), str(est)
+
+
+@pytest.mark.thorough
+def test_unsorted_stamps_explain_the_rpe_differences_and_nothing_else(tmp_path, capsys, monkeypatch):
+    """An estimate whose stamps go backwards: lorisnb sorts it, evo keeps the file's order, so their RPE
+    pairs differ (docs/guide/evo.md): the RPE rows are explained by that and the exit is 0 (it was
+    'DISAGREE, unexplained (11 of 30)', exit 1); ATE, which the order does not change, still exits 1
+    when it disagrees."""
+    pytest.importorskip("evo")
+    g, e = _pair(tmp_path, unsorted=True)
+    table = crosscheck_evo(g, e, "evo").set_index("quantity")
+    assert not table.loc["rpe_trans_rmse", "agrees"] and table.loc["ate_rmse", "agrees"]
+    assert table.loc["rpe_trans_rmse", "note"].startswith("definitions differ: stamps go backwards in " + e)
+    assert "definitions differ" not in table.loc["ate_rmse", "note"]
+    assert main(["crosscheck", g, e, "--conventions", "evo"]) == 0
+    err = capsys.readouterr().err
+    assert "DISAGREE" not in err and "explained by a stated definition" in err
+    assert "lorisnb sorts them, evo keeps the file's order, so the RPE pairs differ): rpe_trans_rmse" in err
+    real = cc.evo_statistics
+
+    def off(*a, **k):
+        out = real(*a, **k)
+        out["ate_rmse"] += 1e-3
+        return out
+
+    monkeypatch.setattr(cc, "evo_statistics", off)
+    assert main(["crosscheck", g, e, "--conventions", "evo"]) == 1
+    assert "DISAGREE, unexplained (1 of 30): ate_rmse" in capsys.readouterr().err
+
+
+@pytest.mark.thorough
+def test_an_rpe_disagreement_on_sorted_stamps_exits_1(tmp_path, capsys, monkeypatch):
+    """The same pair in order agrees with evo throughout; evo's RPE moved by a little is unexplained."""
+    pytest.importorskip("evo")
+    g, e = _pair(tmp_path, unsorted=False)
+    assert main(["crosscheck", g, e, "--conventions", "evo"]) == 0
+    assert "30 of 30 statistics agree" in capsys.readouterr().err
+    real = cc.evo_statistics
+
+    def off(*a, **k):
+        out = real(*a, **k)
+        out["rpe_trans_rmse"] += 1e-3
+        return out
+
+    monkeypatch.setattr(cc, "evo_statistics", off)
+    assert main(["crosscheck", g, e, "--conventions", "evo"]) == 1
+    assert "DISAGREE, unexplained (1 of 30): rpe_trans_rmse" in capsys.readouterr().err

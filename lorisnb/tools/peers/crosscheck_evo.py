@@ -14,6 +14,7 @@ import copy
 import os
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from lorisnb.core.metrics.relations import STATISTICS
@@ -46,6 +47,33 @@ def evo_lacks(spec: EvalSpec) -> list[str]:
     if spec.transform is not None:
         out.append("lorisnb moves the ground truth by the transform T_est_gt, evo reads it as it is")
     return out
+
+
+def evo_order(
+    ref, est, groundtruth: str | os.PathLike, estimate: str | os.PathLike, spec: EvalSpec
+) -> tuple[str, bool]:
+    """Where evo and lorisnb take poses in another order: a file whose stamps go backwards is sorted by
+    lorisnb (with a warning) and kept in the file's order by evo (docs/guide/evo.md). The phrase saying
+    so (empty when every stamp read by evo increases), and whether ATE, AOE and ``matched`` depend on
+    the order too: RPE always does (its pairs are consecutive poses, or poses a distance apart along the
+    path, in that order); the others only under options that take poses in order (``downsample``,
+    ``motion_filter``, ``align_frames``, align ``origin``: the first pose) or evo's interpolating sync
+    (its binary search needs sorted stamps)."""
+    back = []
+    for path, traj in ((groundtruth, ref), (estimate, est)):
+        stamps = getattr(traj, "timestamps", None)
+        n = int(np.sum(np.diff(stamps) < 0)) if stamps is not None and len(stamps) > 1 else 0
+        if n:
+            back.append(f"{os.fspath(path)} ({n} {'time' if n == 1 else 'times'})")
+    if not back:
+        return "", False
+    phrase = (f"stamps go backwards in {' and '.join(back)}: lorisnb sorts them, evo keeps the file's order, so "
+              "the RPE pairs differ")  # fmt: skip
+    rest = (spec.downsample is not None or spec.motion_filter is not None or spec.align_frames is not None
+            or spec.align == "origin" or spec.association == "evo-interpolate")  # fmt: skip
+    if rest:
+        phrase += "; with the options given, the poses ATE and AOE are over depend on the order too"
+    return phrase, rest
 
 
 def evo_statistics(ref, est, spec: EvalSpec, alignment: str | None = None) -> dict[str, Any]:
@@ -160,14 +188,20 @@ def crosscheck_evo(
     ):
         theirs = evo_statistics(ref, est, the_spec, how)
     lacks = evo_lacks(the_spec)
-    note = (f"{DEFINITIONS_DIFFER}: {'; '.join(lacks)}" if lacks else
-            f"lorisnb (preset {the_spec.preset_name}, align {shown}) against evo reading the files itself")  # fmt: skip
-    rows = [agreement_row("matched", shown, ours["matched"], theirs["matched"], ours["matched"], note)]
+    order, all_rows = evo_order(ref, est, groundtruth, estimate, the_spec)
+
+    def note_of(rpe: bool) -> str:
+        why = lacks + ([order] if order and (rpe or all_rows) else [])
+        return (f"{DEFINITIONS_DIFFER}: {'; '.join(why)}" if why else
+                f"lorisnb (preset {the_spec.preset_name}, align {shown}) against evo reading the files itself")  # fmt: skip
+
+    rows = [agreement_row("matched", shown, ours["matched"], theirs["matched"], ours["matched"], note_of(False))]
     if "rpe_pairs" in theirs:
         rows.append(agreement_row("rpe_pairs", shown, ours["rpe_pairs"], theirs["rpe_pairs"],
-                                  ours["rpe_pairs"], note))  # fmt: skip
+                                  ours["rpe_pairs"], note_of(True)))  # fmt: skip
     for m in ("ate", "aoe", "rpe_trans", "rpe_rot"):
         n = ours["rpe_pairs"] if m.startswith("rpe") else ours["matched"]  # what the statistics are over
+        note = note_of(m.startswith("rpe"))
         for k in STATISTICS:
             key = f"{m}_{k}"
             if key in theirs:
@@ -179,7 +213,9 @@ def crosscheck_evo(
             else:
                 rows.append(agreement_row(key, shown, ours[key], float("nan"), n,
                                           NO_SUCH_UNIT))  # fmt: skip
-    return pd.concat([*reading, pd.DataFrame(rows, columns=CROSSCHECK_COLUMNS)], ignore_index=True)
+    table = pd.concat([*reading, pd.DataFrame(rows, columns=CROSSCHECK_COLUMNS)], ignore_index=True)
+    table.attrs["order"] = order  # for the CLI's summary of what explains a difference
+    return table
 
 
 #: How a row's note states the definition that explains a difference from evo.
