@@ -236,6 +236,12 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(f"wrote {len(table)} rows to {write_parquet(table, args.parquet, force=args.force)}", file=sys.stderr)
     if kitti:
         _print_kitti(ev, args)
+    if ev.spec.preset_name == "tartanair" and table is not None:  # NaN numbers said, as the KITTI preset's
+        from lorisnb.core.metrics.tartanair import tartanair_gaps
+
+        for what, seqs, why in tartanair_gaps(table):
+            shown = "; ".join(seqs[:5]) + (f" and {len(seqs) - 5} more" if len(seqs) > 5 else "")
+            say(f"note: {len(seqs)} sequence(s) {what} ({clean(shown)}): {why}")
     if getattr(args, "relative", False) or args.relative_lengths:
         with warnings.catch_warnings(record=True) as caught:  # said with the other notes, after the tables
             warnings.simplefilter("always", LorisWarning)

@@ -50,7 +50,14 @@ def tartanair_ate(gt_positions: np.ndarray, est_positions: np.ndarray, scale: bo
         s_mat[2, 2] = -1
     rot = u @ s_mat @ vh
     rg = g_c @ rot.T
-    s = float(np.sum(g_c * g_c) / np.sum(e_c * rg)) if scale else 1.0
+    s = 1.0
+    if scale:  # a ground truth at one point has no scale (NaN, with no numpy warning; tartanair_tools
+        # divides rounding by rounding), nor has an estimate whose centred positions are across its own
+        den = float(np.sum(e_c * rg))
+        still = not len(g) or bool(np.all(g == g[0]))
+        s = float(np.sum(g_c * g_c)) / den if den != 0.0 and not still else float("nan")
+        if not np.isfinite(s):
+            return float("nan"), float("nan")
     err = rg - s * e_c
     return float(np.sqrt(np.sum(err * err) / len(err))), s
 
@@ -77,7 +84,8 @@ def tartanair_poses(gt: np.ndarray, est: np.ndarray, scale: bool = False) -> tup
         sg = np.sqrt(np.sum(np.diff(pg, axis=0) ** 2, axis=1))  # its pose2trans and speed, in its order
         se = np.sqrt(np.sum(np.diff(pe, axis=0) ** 2, axis=1))
         moving = sg > TARTANAIR_STILL
-        s = 1.0 / float(np.mean(se[moving] / sg[moving]))
+        ratio = float(np.mean(se[moving] / sg[moving])) if moving.any() else 0.0
+        s = 1.0 / ratio if ratio > 0.0 else float("nan")  # no scale: see tartanair_scores
         _borderline_steps(sg, se, moving, s, float(np.abs(pg).max(initial=1.0)))
         pe = pe * s
     return matrices(pg, qg), matrices(pe, qe), s
@@ -164,10 +172,48 @@ def tartanair_scores(
 ) -> dict[str, float]:  # fmt: skip
     """Every TartanAir number of paired poses: ``tartanair_ate`` (m), ``tartanair_ate_scale``,
     ``tartanair_scale`` (the scale rule's, for RPE and KITTI), ``tartanair_rpe_rot`` (rad),
-    ``tartanair_rpe_trans`` (m), ``tartanair_kitti_r`` (deg/m), ``tartanair_kitti_t`` (m/m)."""
+    ``tartanair_rpe_trans`` (m), ``tartanair_kitti_r`` (deg/m), ``tartanair_kitti_t`` (m/m).
+
+    NaN, without a warning (``lorisnb evaluate`` says which sequences, :func:`tartanair_gaps`), where a
+    number is undefined: with ``scale``, the ATE and its scale of a ground truth at one point (or of an
+    estimate giving a zero denominator), and the scale rule, with the RPE and KITTI scores, where no
+    ground-truth step exceeds 0.1 mm or the estimate does not move over those that do (tartanair_tools
+    divides rounding by rounding, or by zero, there); the KITTI score where no segment of 5..40 m fits."""
     ate, ate_s = tartanair_ate(gt_positions, est_positions, scale)
     g, e, s = tartanair_poses(matrices(gt_positions, gt_quaternions), matrices(est_positions, est_quaternions), scale)
     rot, trans = tartanair_rpe(g, e, seed)
     kr, kt = tartanair_kitti(g, e)
     return dict(tartanair_ate=ate, tartanair_ate_scale=ate_s, tartanair_scale=s, tartanair_rpe_rot=rot,
                 tartanair_rpe_trans=trans, tartanair_kitti_r=kr, tartanair_kitti_t=kt)  # fmt: skip
+
+
+def tartanair_gaps(table) -> list[tuple[str, list[str], str]]:
+    """What :func:`tartanair_scores` left NaN in a sequence table (``file``, ``seq``, ``matched`` and
+    :data:`TARTANAIR_COLUMNS`), as ``(what, ["file, seq N", ...], why)`` notes: sequences without a scale
+    (with ``tartanair_scale`` NaN) and sequences that hold no KITTI segment of 5..40 m. Sequences of
+    fewer than 2 matched poses are left out (they have no TartanAir number at all, said elsewhere)."""
+    if not len(table) or "tartanair_scale" not in table:
+        return []
+    scored = np.asarray(table["matched"], float) >= 2
+    no_scale = scored & np.isnan(np.asarray(table["tartanair_scale"], float))
+    no_kitti = scored & ~no_scale & np.isnan(np.asarray(table["tartanair_kitti_t"], float))
+    names = [f"{f}, seq {q}" for f, q in zip(table["file"], table["seq"], strict=True)]
+    out = []
+    if no_scale.any():
+        out.append((
+            "have no TartanAir scale",
+            [n for n, k in zip(names, no_scale, strict=True) if k],
+            "the scale rule of --tartanair-scale divides the estimate's steps by the ground truth's where the "
+            "ground truth moves more than 0.1 mm a step; their ground truth never does (or their estimate does not "
+            "move there), so tartanair_rpe_* and tartanair_kitti_* are empty, and tartanair_ate too where the "
+            "ground truth stays at one point (tartanair_tools divides rounding by rounding there, or by zero)",
+        ))  # fmt: skip
+    if no_kitti.any():
+        out.append((
+            "hold no TartanAir KITTI segment",
+            [n for n, k in zip(names, no_kitti, strict=True) if k],
+            "tartanair_tools' KITTI score measures drift over 5 to 40 m of "
+            "ground-truth path, and these travel less (or match too few poses); their tartanair_kitti_r and "
+            "tartanair_kitti_t are empty",
+        ))  # fmt: skip
+    return out
