@@ -269,13 +269,15 @@ def _print_kitti(ev: Any, args: argparse.Namespace) -> None:
     """The KITTI devkit's summary over all sequences of each algorithm (the leaderboard's numbers) and
     its per-length errors; the per-length plot with ``--kitti-plot``."""
     totals = ev.kitti_totals()
-    print(f"\nKITTI odometry (devkit, {ev.spec.kitti_precision} precision; every segment of all sequences: t_err %, "
-          "r_err deg/100 m):")  # fmt: skip
-    print(_fmt(totals, args.digits))
+    if len(totals):  # no table of nothing (every input refused: the errors say why)
+        print(f"\nKITTI odometry (devkit, {ev.spec.kitti_precision} precision; every segment of all sequences: "
+              "t_err %, r_err deg/100 m):")  # fmt: skip
+        print(_fmt(totals, args.digits))
     lengths = ev.kitti_lengths()
     overall = lengths[lengths.seq == ""].drop(columns=["file", "seq"])
-    print("\nper segment length (all sequences; the devkit plots lengths with at least 3 segments):")
-    print(_fmt(overall, args.digits))
+    if len(overall):
+        print("\nper segment length (all sequences; the devkit plots lengths with at least 3 segments):")
+        print(_fmt(overall, args.digits))
     per_seq = lengths[lengths.seq != ""].groupby(["algorithm", "file", "trial", "seq"], sort=False)["segments"].sum()
     short = [f"{file}, seq {seq}" for (_, file, _, seq), n in per_seq.items() if n == 0]
     if short:  # NaN errors said, as a missing RPE pair is
@@ -283,7 +285,9 @@ def _print_kitti(ev: Any, args: argparse.Namespace) -> None:
         say(f"note: {len(short)} sequence(s) hold no KITTI segment ({clean(shown)}): the devkit measures drift over "
             "100 to 800 m of ground-truth path, and these travel less (or match too few poses); their kitti_t_err and "
             "kitti_r_err are empty, and they add nothing to the totals")  # fmt: skip
-    if args.kitti_plot:
+    if args.kitti_plot and not len(overall):  # (the figure of no sequence was a traceback)
+        say(f"note: --kitti-plot: no sequence was evaluated, so no plot was written to {clean(str(args.kitti_plot))}")
+    elif args.kitti_plot:
         from lorisnb.io.writers import write_atomically
         from lorisnb.tools.figures.kitti import kitti_length_figure
 

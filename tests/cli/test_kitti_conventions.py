@@ -153,3 +153,19 @@ def test_a_sequence_shorter_than_the_shortest_segment_is_said(data, capsys):
     assert "note: 1 sequence(s) hold no KITTI segment (fr2_desk_ORB.txt, seq 1)" in err, err
     row = lorisnb.evaluate_pairs(est, gt, conventions="kitti").kitti_totals().iloc[0]
     assert row["kitti_segments"] == 0 and np.isnan(row["kitti_t_err"])
+
+
+def test_a_refused_input_prints_no_empty_kitti_tables(tmp_path, capsys):
+    """Every input refused (13 numbers a line): the error says why, and no empty 'KITTI odometry' or
+    'per segment length' table (header rows only) comes before it on stdout; --kitti-plot writes no
+    figure of nothing (it was an AttributeError traceback) and says so."""
+    gt = tmp_path / "gt.txt"
+    gt.write_text("".join(f"1 0 0 {i} 0 1 0 0 0 0 1 0\n" for i in range(5)))
+    est = tmp_path / "est.txt"
+    est.write_text("".join(f"{i} 1 0 0 {i} 0 1 0 0 0 0 1 0\n" for i in range(5)))
+    plot = tmp_path / "lengths.png"
+    assert main(["evaluate", str(est), "--gt", str(gt), "--format", "kitti", "--conventions", "kitti",
+                 "--no-progress", "--kitti-plot", str(plot)]) == 1  # fmt: skip
+    out, err = capsys.readouterr()
+    assert "KITTI odometry" not in out and "per segment length" not in out and "kitti_t_err" not in out
+    assert "has 13 fields" in err and "no plot was written" in err and not plot.exists()
