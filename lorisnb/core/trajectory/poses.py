@@ -63,7 +63,7 @@ def size(positions: np.ndarray, relative_to: str = "extent") -> float:
     return extent(positions) if relative_to == "extent" else path_length(positions)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Trajectory:
     """Stamped poses, sorted by strictly increasing stamp.
 
@@ -160,10 +160,15 @@ class Trajectory:
         """Orientations as a scipy ``Rotation`` (quaternions normalized)."""
         return rotations_of(self.quaternions)
 
-    def subset(self, mask_or_index: np.ndarray) -> "Trajectory":
-        """The poses selected by a boolean mask or an index array (checked again only if the
-        indices do not increase: then sorted as the constructor sorts)."""
-        sel = np.asarray(mask_or_index)
+    def subset(self, mask_or_index: Any) -> "Trajectory":
+        """The poses selected by a boolean mask of the trajectory's length, an array (or list) of
+        integer indices (negative ones count from the end, as in numpy), or a slice. The result
+        is always sorted by stamp: indices that do not increase (after negative ones are taken
+        from the end) are checked again and sorted as the constructor sorts, with its warning. An
+        empty selection gives an empty trajectory. Anything else (a mask of another length,
+        indices out of range, non-integer numbers, a single number) is a
+        :class:`~lorisnb.errors.ValidationError`. ``traj[a:b]`` is ``traj.subset(slice(a, b))``."""
+        sel = self._selection(mask_or_index)
         lines = None if self.lines is None else self.lines[sel]
         ordered = sel.dtype == bool or sel.size < 2 or bool((sel[1:] > sel[:-1]).all())
         return (Trajectory.from_checked if ordered else Trajectory)(
@@ -173,6 +178,75 @@ class Trajectory:
             lines,
             dict(self.meta),
         )
+
+    def _selection(self, value: Any) -> np.ndarray:
+        """``value`` of :meth:`subset` as a boolean mask of this length or an array of
+        non-negative integer indices below it."""
+        n = len(self)
+        if isinstance(value, slice):
+            return np.arange(n)[value]
+        if isinstance(value, (str, bytes)) or np.ndim(value) == 0:
+            raise ValidationError(
+                f"Trajectory.subset: got {type(value).__name__} {value!r:.40}; expected a boolean mask of "
+                f"{n} values, an array of integer indices or a slice (for one pose: subset([i]))"
+            )
+        try:
+            sel = np.asarray(value)
+        except (TypeError, ValueError):
+            raise ValidationError(
+                f"Trajectory.subset: got {type(value).__name__}; expected a boolean mask of {n} values, "
+                "an array of integer indices or a slice"
+            ) from None
+        if sel.ndim != 1:
+            raise ValidationError(
+                f"Trajectory.subset: an array of shape {sel.shape}; expected one dimension (a boolean mask of "
+                f"{n} values or integer indices)"
+            )
+        if sel.size == 0:
+            return np.zeros(0, dtype=np.intp)
+        if sel.dtype == bool:
+            if sel.size != n:
+                raise ValidationError(
+                    f"Trajectory.subset: a boolean mask of {sel.size} values for {n} poses; expected one value per pose"
+                )
+            return sel
+        if sel.dtype.kind not in "iu":
+            raise ValidationError(
+                f"Trajectory.subset: values of type {sel.dtype}; expected a boolean mask of {n} values or "
+                "integer indices"
+            )
+        lo, hi = int(sel.min()), int(sel.max())
+        if lo < -n or hi >= n:
+            bad = lo if lo < -n else hi
+            raise ValidationError(
+                f"Trajectory.subset: index {bad} is out of range for {n} poses; expected -{n} <= index < {n}"
+            )
+        return np.where(sel < 0, sel + n, sel) if lo < 0 else sel
+
+    def __getitem__(self, key: Any) -> "Trajectory":
+        """``traj[a:b]``, ``traj[mask]``, ``traj[[i, j]]``: :meth:`subset`. A single integer is
+        refused (a Trajectory has no pose type: ``traj[[i]]`` is the one-pose trajectory,
+        ``traj.stamps[i]`` its stamp)."""
+        if isinstance(key, (int, np.integer)) or isinstance(key, tuple):
+            raise ValidationError(
+                f"Trajectory[{key!r}]: a Trajectory is indexed by a slice, a boolean mask or a list of "
+                "indices (traj[[i]] for the one-pose trajectory; traj.stamps[i], traj.positions[i] for values)"
+            )
+        return self.subset(key)
+
+    def __eq__(self, other: object) -> bool:
+        """The same poses: equal stamps, positions, quaternions and line numbers (``meta`` is not
+        compared). A Trajectory is mutable through ``meta`` and so not hashable."""
+        if not isinstance(other, Trajectory):
+            return NotImplemented
+        if (self.lines is None) != (other.lines is None):
+            return False
+        pairs = [(self.stamps, other.stamps), (self.positions, other.positions), (self.quaternions, other.quaternions)]
+        if self.lines is not None and other.lines is not None:
+            pairs.append((self.lines, other.lines))
+        return all(np.array_equal(a, b) for a, b in pairs)
+
+    __hash__ = None  # type: ignore[assignment]
 
     @property
     def duration(self) -> float:
