@@ -381,10 +381,10 @@ def test_degenerate_alignments_are_refused_or_warned(pair, data, tmp_path):
         with pytest.raises(ln.EvaluationError, match=r"only 2 matched positions.*--align-frames"):
             fit_alignment(p_e, p_g, method, frames)
     line = np.outer(np.arange(10.0), [1.0, 2.0, 0.5])
-    with pytest.raises(ln.EvaluationError, match="lie on one line"):
+    with pytest.raises(ln.EvaluationError, match="determined: 10 matched positions on one line, so the rotation"):
         fit_alignment(line, line + 1, "se3")
     same = np.repeat(p_e[:1], 50, axis=0)
-    with pytest.raises(ln.EvaluationError, match="identical \\(zero spread\\)"):
+    with pytest.raises(ln.EvaluationError, match=r"determined: 50 matched estimate positions, all identical \(zero"):
         fit_alignment(same, p_g[:50], "sim3")
     vertical = np.column_stack([np.zeros(20), np.zeros(20), np.arange(20.0)])
     with pytest.raises(ln.EvaluationError, match="no horizontal spread"):
@@ -456,6 +456,23 @@ def test_values_outside_their_meaning_are_refused_everywhere(data, tmp_path, cap
         ev.sequences(**{name: value})
     with pytest.raises(ln.ValidationError, match=message):
         ln.sweep(ev.errors, **{name: [value]})
+
+
+def test_a_degenerate_fit_is_said_in_a_sentence():
+    """Each reason reads after 'the alignment was fitted on' ('fitted on the 10 matched positions lie on
+    one line', 'fitted on all 5 matched estimate positions are identical' were not sentences)."""
+    from lorisnb.core.pipeline.plausibility import degenerate_fit
+
+    line = np.outer(np.arange(10.0), [1.0, 2.0, 0.5])
+    said = degenerate_fit("seq 1", line, line + 1)
+    assert said is not None and said.startswith(
+        "seq 1: the alignment was fitted on 10 matched positions on one line, so"
+    )
+    same = np.zeros((5, 3))
+    said = degenerate_fit("seq 1", same, np.random.default_rng(0).normal(size=(5, 3)))
+    assert said is not None and said.startswith(
+        "seq 1: the alignment was fitted on 5 matched estimate positions, all identical (zero spread), so its rotation"
+    )
 
 
 def test_manifest_and_sweep_fractions_use_the_same_limits(data, tmp_path):
