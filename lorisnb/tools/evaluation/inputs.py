@@ -28,6 +28,18 @@ def is_hidden(path: Path) -> bool:
     return path.name.startswith((".", "~"))
 
 
+#: Names (without suffix, any case) of a dataset's or a project's documents, never results: a folder
+#: walked for results passes them over as it passes hidden files (the OpenLORIS-Scene folder holds
+#: ``LICENSE.txt``); named as an input, such a file is read as any other.
+DOCUMENT_NAMES = frozenset({"license", "licence", "copying", "readme", "notice", "changelog", "changes", "authors",
+                            "contributors", "citation", "todo"})  # fmt: skip
+
+
+def is_document(path: Path) -> bool:
+    """A document (``LICENSE.txt``, ``README.txt``, ...: :data:`DOCUMENT_NAMES`), not a result."""
+    return path.stem.strip().lower() in DOCUMENT_NAMES
+
+
 def as_paths(paths: PathArg | Iterable[PathArg]) -> list[Path]:
     """One path or several, as Paths: a str or Path, or any iterable of them (list, tuple,
     generator, set (sorted), numpy array of str, pandas Series or Index). An empty path or
@@ -121,14 +133,15 @@ def result_files(
 ) -> list[tuple[Path, Path | None]]:
     """Expand files and folders into ``(file, root)`` pairs; a folder is walked (:func:`walk`: linked
     folders followed) for files ending in ``suffixes`` below it (``root/<algorithm>/*.txt``, or
-    deeper: ``root/<suite>/<algorithm>/*.txt``), hidden files and folders left out. A ROS 2 bag (a
-    folder holding ``metadata.yaml``) is one file when ``.bag`` is among the suffixes."""
+    deeper: ``root/<suite>/<algorithm>/*.txt``), hidden files and folders and documents
+    (:func:`is_document`: ``LICENSE.txt``, ``README.txt``) left out. A ROS 2 bag (a folder holding
+    ``metadata.yaml``) is one file when ``.bag`` is among the suffixes."""
     out: list[tuple[Path, Path | None]] = []
     reals: dict[Path, Path] = {}
     bags = ".bag" in suffixes
     for p in as_paths(paths):
         if p.is_dir() and not (bags and (p / "metadata.yaml").is_file()):
-            below = [f for f in walk(p) if not f.hidden]
+            below = [f for f in walk(p) if not f.hidden and not (f.kind != "folder" and is_document(f.path))]
             # a dangling link is an input that fails (saying so), never silently no input
             found = {f.path: f.real for f in below if f.path.suffix in suffixes and f.kind in ("file", "dangling")}
             if bags:  # a bag folder is one input: not also its .db3 / .mcap files
@@ -210,20 +223,26 @@ def real_path(path: Path) -> Path:
 def unique_files(
     items: list[tuple[Path, Path | None]], reals: dict[Path, Path] | None = None
 ) -> list[tuple[Path, Path | None]]:
-    """``(file, root)`` pairs with every file kept once (compared by real path, the first naming
-    kept; ``reals``: those already known, :func:`walk`'s), with a LorisWarning listing what was
-    named more than once: an input is never scored twice, nor called a duplicate (a second trial)
-    of itself."""
-    seen: dict[Path, Path] = {}
+    """``(file, root)`` pairs with every file kept once (compared by real path, at the place of its
+    first naming; ``reals``: those already known, :func:`walk`'s), with a LorisWarning listing what
+    was named more than once: an input is never scored twice, nor called a duplicate (a second
+    trial) of itself. Its labels do not depend on the order of the namings: a folder's naming is
+    kept over the file's own (the labels a folder gives: suite, algorithm), and of two folders the
+    outer one's (more of the path in the labels), the naming of that file in it."""
+    seen: dict[Path, int] = {}
     out: list[tuple[Path, Path | None]] = []
     again: list[str] = []
     known = reals or {}
     for path, root in items:
         key = known.get(path) or real_path(path)
         if key in seen:
-            again.append(str(path) if str(path) == str(seen[key]) else f"{path} (= {seen[key]})")
+            i = seen[key]
+            first = out[i][0]
+            again.append(str(path) if str(path) == str(first) else f"{path} (= {first})")
+            if _naming_order(path, root) < _naming_order(*out[i]):
+                out[i] = (path, root)
             continue
-        seen[key] = path
+        seen[key] = len(out)
         out.append((path, root))
     if again:
         shown = "; ".join(again[:5]) + (f"; and {len(again) - 5} more" if len(again) > 5 else "")
@@ -233,6 +252,15 @@ def unique_files(
             stacklevel=3,
         )
     return out
+
+
+def _naming_order(path: Path, root: Path | None) -> tuple[int, int, str]:
+    """Which naming of a file :func:`unique_files` keeps, the least: a folder's before none, the
+    outer folder's (the longest path below it) first, then the smaller path (any order of the
+    inputs gives the same)."""
+    if root is None:
+        return (1, 0, str(path))
+    return (0, -len(path.relative_to(root).parts), str(path))
 
 
 def near_names(folder: Path, name: str) -> list[str]:
@@ -330,6 +358,28 @@ def without_groundtruth(items: list[tuple[Path, Path | None]], groundtruth: Path
         warnings.warn(f"{groundtruth}: the ground truth is among the estimates; left out", LorisWarning, stacklevel=3)
     if items and not kept:
         raise ValidationError(f"{groundtruth}: the only input is the ground truth itself; expected estimate files")
+    return kept
+
+
+def without_dataset_groundtruth(
+    items: list[tuple[Path, Path | None]], groundtruths: Iterable[Path]
+) -> list[tuple[Path, Path | None]]:
+    """``(file, root)`` pairs less the data root's ground-truth files (``groundtruth/gt_<scene>_1.txt``:
+    walking the dataset folder found them, and each scored as an estimate of itself, CR 1.0, under
+    an algorithm ``groundtruth``), as :func:`without_groundtruth` leaves out a pair's ground truth:
+    with a LorisWarning naming them; nothing left but ground truth is a ValidationError."""
+    gts = {real_path(g) for g in groundtruths}
+    if not gts:
+        return items
+    kept = [(p, r) for p, r in items if real_path(p) not in gts]
+    if len(kept) < len(items):
+        left = sorted(str(p) for p, _ in items if real_path(p) in gts)
+        warnings.warn(f"{len(left)} ground-truth file(s) of the data among the inputs, left out (a ground truth is not "
+                      f"an estimate): {'; '.join(left[:5])}{'; ...' if len(left) > 5 else ''}",
+                      LorisWarning, stacklevel=3)  # fmt: skip
+    if items and not kept:
+        raise ValidationError(f"{items[0][0]}: the inputs are only the data's ground truth; expected result files "
+                              "(icra20_results/, or your own)")  # fmt: skip
     return kept
 
 

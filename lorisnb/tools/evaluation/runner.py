@@ -38,6 +38,7 @@ from lorisnb.tools.evaluation.inputs import (
     names,
     result_files,
     scene_label,
+    without_dataset_groundtruth,
     without_groundtruth,
 )
 from lorisnb.tools.evaluation.jobs import BIG_FILE_BYTES, Job, PairSource, absolute_paths, run_job
@@ -208,6 +209,7 @@ def evaluate(
     items = result_files(paths)
     _check_trials(items, trials_by)
     data = find_data(data_root)  # no data at all is an error for the whole call, not per file
+    items = without_dataset_groundtruth(items, [data.groundtruth(s) for s in data.scenes_with_groundtruth()])
     items, scene_set = _filtered(items, algorithms, scenes, trials_by)
     scored, keep = _sent_back(the_spec, statistics, keep_poses)
     template = Job(kind="openloris", path=Path(), root=None, spec=the_spec, trials_by=trials_by, data=data,
