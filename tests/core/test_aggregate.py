@@ -14,7 +14,7 @@ from lorisnb.core.lifelong import aggregate
 from lorisnb.core.lifelong.sweep import sweep
 from lorisnb.core.pipeline.model import SCENE_COLUMNS
 from lorisnb.core.trajectory.frames import SCENES
-from lorisnb.errors import EvaluationError
+from lorisnb.errors import EvaluationError, ValidationError
 
 
 def _pandas_aggregate(sequences: pd.DataFrame, durations: pd.DataFrame) -> pd.DataFrame:
@@ -106,8 +106,8 @@ def test_awkward_tables_equal_pandas_and_duplicates_are_refused():
     )  # fmt: skip
     table.loc[table["matched"] == 0, ["c_matched", "correct_time", "cs_r"]] = 0  # a failed run, as scored
     spans = {
-        s: {k: (0.0, float(rng.uniform(10, 300))) for k in range(1, 6)} for s in ("market", "cafe", "garden", "attic")
-    }
+        s: {k: (0.0, float(rng.uniform(10, 300))) for k in range(n + 5)} for s in ("market", "cafe", "garden", "attic")
+    }  # every sequence of the table has its duration (and each scene more, without a row: not tracked)
     durations = aggregate.spans_table(spans)
     got = _same(table, durations)
     assert (got["cs_r_with_output"].isna() == (got["sequences_with_output"] == 0)).all()  # no output: no mean
@@ -119,3 +119,22 @@ def test_awkward_tables_equal_pandas_and_duplicates_are_refused():
     with pytest.raises(EvaluationError, match="no ground-truth durations for scene"):
         ln.aggregate_scenes(table, aggregate.spans_table({"cafe": spans["cafe"]}))
     assert ln.aggregate_scenes(table.iloc[:0], durations).columns.tolist() == SCENE_COLUMNS
+
+
+def test_durations_must_hold_each_sequence_of_the_table_once(icra20):
+    """Durations missing a sequence of the table gave the scene's CR over too short a time;
+    repeated rows over twice it: both refused naming the sequences. Tables of another kind (None,
+    the two swapped) are a ValidationError, not a KeyError."""
+    ev = ln.evaluate(icra20 / "per-seq" / "ds-slam", progress=False)
+    seq, durations = ev.sequences(eps=1, phi=10), ev.durations()
+    first = durations.iloc[0]
+    with pytest.raises(ValidationError, match=rf"no row for sequence\(s\) {first.scene}-{first.seq} of the table"):
+        ln.aggregate_scenes(seq, durations.iloc[1:])
+    with pytest.raises(ValidationError, match=r"repeated row\(s\) \(cafe-1, cafe-2"):
+        ln.aggregate_scenes(seq, pd.concat([durations, durations]))
+    with pytest.raises(ValidationError, match="durations: expected a DataFrame"):
+        ln.aggregate_scenes(seq, None)
+    with pytest.raises(ValidationError, match="in that order"):
+        ln.aggregate_scenes(durations, seq)
+    ok = ln.aggregate_scenes(seq, durations)
+    assert (ok["scene_sequences"] == ok["scene"].map(durations["scene"].value_counts())).all()

@@ -19,7 +19,7 @@ import numpy as np
 from lorisnb.core.pipeline.model import SCENE_COLUMNS, ResultFile
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.core.trajectory.poses import time_spans
-from lorisnb.errors import EvaluationError
+from lorisnb.errors import EvaluationError, ValidationError
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -82,6 +82,7 @@ def aggregate_scenes(sequences: pd.DataFrame, durations: pd.DataFrame) -> pd.Dat
     """
     import pandas as pd
 
+    _check_tables(sequences, durations)
     if sequences.empty:
         return pd.DataFrame(columns=SCENE_COLUMNS)
     columns: dict[str, Any] = {}
@@ -96,6 +97,52 @@ def aggregate_scenes(sequences: pd.DataFrame, durations: pd.DataFrame) -> pd.Dat
             columns[c] = Labels(np.asarray(codes, np.int64), np.asarray(uniques))
     out = aggregate_columns(columns, {c: durations[c].to_numpy() for c in ("scene", "seq", "gt_duration")})
     return pd.DataFrame(out)
+
+
+def _check_tables(sequences: Any, durations: Any) -> None:
+    """The two tables of :func:`aggregate_scenes` are DataFrames with the columns it reads (swapped,
+    None or another table: a ValidationError saying what to pass)."""
+    import pandas as pd
+
+    for name, table, need, made_by in (
+        ("sequences", sequences, [*KEYS, *USED], "Evaluation.sequences(), lorisnb.score or a sweep"),
+        ("durations", durations, ["scene", "seq", "gt_duration"], "Evaluation.durations() or durations_table"),
+    ):
+        if not isinstance(table, pd.DataFrame):
+            raise ValidationError(
+                f"aggregate_scenes {name}: expected a DataFrame ({made_by}), got {type(table).__name__}"
+            )
+        absent = [c for c in need if c not in table.columns]
+        if absent and not (name == "sequences" and table.empty and len(table.columns) == 0):
+            raise ValidationError(
+                f"aggregate_scenes {name}: no column {', '.join(absent[:4])}{', ...' if len(absent) > 4 else ''}; "
+                f"expected the table of {made_by} (aggregate_scenes(sequences, durations), in that order)"
+            )
+
+
+def _check_durations(labels: Mapping[str, Labels], gt_scene: np.ndarray, gt_seq: np.ndarray) -> None:
+    """Each (scene, sequence) once in the durations and every one of the table among them: a
+    sequence missing gave a scene's CR over too short a duration, a repeated row over twice it."""
+    pairs = list(zip(gt_scene.tolist(), np.asarray(gt_seq).tolist(), strict=True))
+    held = set(pairs)
+    if len(held) < len(pairs):
+        counts: dict[tuple[Any, Any], int] = {}
+        for pair in pairs:
+            counts[pair] = counts.get(pair, 0) + 1
+        again = sorted(f"{a}-{b}" for (a, b), k in counts.items() if k > 1)
+        raise ValidationError(
+            f"durations: {len(pairs) - len(held)} repeated row(s) ({', '.join(again[:5])}); expected one row per "
+            "scene and sequence (Evaluation.durations(), not several concatenated)"
+        )
+    scene, seq = labels["scene"], labels["seq"]
+    _, first = _groups([scene.codes, seq.codes])  # each (scene, sequence) of the table once
+    table = set(zip(_strings(scene.at(first)).tolist(), seq.at(first).tolist(), strict=True))
+    missing = sorted(f"{a}-{b}" for a, b in table - held if a in set(gt_scene.tolist()))
+    if missing:
+        raise ValidationError(
+            f"durations: no row for sequence(s) {', '.join(missing[:8])}{', ...' if len(missing) > 8 else ''} of the "
+            "table; expected the duration of every sequence of its scenes (Evaluation.durations())"
+        )
 
 
 KEYS = ["suite", "algorithm", "scene", "eps", "phi", "delta", "tau"]
@@ -147,6 +194,7 @@ def aggregate_columns(sequences: Mapping[str, Any], durations: Columns) -> dict[
     missing = sorted(set(scene_names.tolist()) - set(gt_scene.tolist()))
     if missing:
         raise EvaluationError(f"no ground-truth durations for scene(s) {', '.join(missing)}; pass their durations")
+    _check_durations(labels, gt_scene, durations["seq"])
     by = _setting_keys(labels, keys)
     _refuse_duplicates(labels, by)
     group, first = _groups([labels[k].codes for k in by])
