@@ -38,11 +38,11 @@ from lorisnb.core.pipeline.steps import (
     moved_groundtruth,
     with_transform,
 )
-from lorisnb.core.spec.evalspec import EvalSpec, make_spec
+from lorisnb.core.spec.evalspec import THRESHOLD_NAMES, EvalSpec, make_spec
 from lorisnb.core.spec.evo import EVO_ASSOCIATIONS
 from lorisnb.core.trajectory.frames import FRAMES
 from lorisnb.core.trajectory.poses import Trajectory, sessions, time_spans, written_blocks
-from lorisnb.errors import EvaluationError, LorisWarning, ParseError
+from lorisnb.errors import EvaluationError, LorisWarning, ParseError, ValidationError
 
 __all__ = [
     "DEFAULT", "FrameInfo", "Spans", "apply_alignment", "compute_errors", "errors_after_alignment", "evaluate_sessions",
@@ -289,6 +289,19 @@ def window_spans(groundtruth: Mapping[K, Trajectory], spec: EvalSpec) -> dict[K,
     return out
 
 
+def _refuse_thresholds(where: str, options: Mapping[str, Any]) -> None:
+    """Thresholds given to a function computing errors (which score nothing) are refused, saying
+    that :func:`lorisnb.score` (or ``evaluate``) takes them; the RPE options are the spec's and carry
+    through to the scores (``FileErrors.rpe``)."""
+    given = [k for k in THRESHOLD_NAMES if k in options]
+    if given:
+        shown = ", ".join(f"{k}={options[k]!r}" for k in given)
+        raise ValidationError(
+            f"{where}({shown}): thresholds are not used in computing errors; pass them to lorisnb.score(errors, "
+            f"{shown}) (or to lorisnb.evaluate, whose tables use them)"
+        )
+
+
 def compute_errors(
     result: ResultFile,
     groundtruth: ResultFile,
@@ -322,7 +335,12 @@ def compute_errors(
         other_spans: time spans of other ground-truth sequences, for the time-overlap check.
         in_frame: the ground truth already moved to the file's frame (the edge's cache), by sequence.
         release: see :func:`evaluate_sessions`.
+
+    The thresholds (``eps``, ``phi``, ``delta``, ``tau``) are not options here: errors are computed
+    once for every setting, and :func:`lorisnb.score` takes the setting (given here they were
+    ignored by it: a ValidationError says so).
     """
+    _refuse_thresholds("compute_errors", options)
     spec = make_spec(spec, **options)
     spec.refuse_inapplicable("openloris")
     if not isinstance(result, ResultFile) or not isinstance(groundtruth, ResultFile):
@@ -388,6 +406,8 @@ def sequence_errors(
     """Per-pose errors of one estimate against one ground truth in the same frame (TUM RGB-D,
     ORDSLAM, a simulated estimate), through :func:`evaluate_sessions` without plausibility checks:
     by default association within ``max_gap`` seconds and the estimate aligned on itself (SE(3), or
-    Sim(3) with ``scale=True``); ATE (m) and AOE (deg)."""
+    Sim(3) with ``scale=True``); ATE (m) and AOE (deg). Thresholds are :func:`lorisnb.score`'s, not
+    options here (as for :func:`compute_errors`)."""
+    _refuse_thresholds("sequence_errors", options)
     spec = make_spec(spec, **options)
     return evaluate_sessions({seq: gt}, {seq: est}, spec, checks_on=False).sequences[0]
