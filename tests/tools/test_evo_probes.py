@@ -42,11 +42,11 @@ def _stats(table: pd.DataFrame) -> pd.DataFrame:
     return table[~table["quantity"].str.contains(":")].set_index("quantity")
 
 
-@pytest.mark.parametrize(("name", "align"), [("dso_run", dict(align=True, correct_scale=True)),
+@pytest.mark.parametrize(("name", "align"), [("dso", dict(align=True, correct_scale=True)),
                                              ("orb_run", dict(align=True))])  # fmt: skip
 @pytest.mark.thorough
 def test_align_auto_runs_evo_with_the_alignment_lorisnb_chose(data, tmp_path, name, align):
-    """``--align auto`` is Sim(3) for a monocular algorithm (by name), else SE(3): evo's column was
+    """``--align auto`` is Sim(3) for a monocular algorithm (named dso or svo), else SE(3): evo's column was
     evo without any alignment (14 of 30 statistics 'disagreed', exit status 1)."""
     est = tmp_path / f"{name}.txt"
     shutil.copy(data.tum / EST, est)
