@@ -174,11 +174,22 @@ def test_keep_poses_is_checked_and_refused_where_a_table_needs_the_poses(icra20,
     assert len(ln.evaluate_pairs(est, gt, "tum", keep_poses=False).sequences()) == 1
 
 
-def test_without_statistics_and_poses_the_printed_rows_read_and_the_statistics_refused(icra20):
+def test_without_statistics_and_poses_the_tables_read_and_the_statistics_refused(icra20):
     """``statistics=False, keep_poses=False``: the rows without the statistics (the command line's
-    printed table) are read; a table with them needs the poses and says so."""
+    printed table) are read, and so are ``sequences()`` (without the statistics columns: it raised
+    an error saying the table at that setting could be read) and ``scenes()`` (which reads no
+    statistics); the statistics (``stats=True``) and another setting need the poses and say so."""
     ev = ln.evaluate(icra20 / "lifelong" / "maslam" / "home.txt", statistics=False, keep_poses=False)
     ref = ln.evaluate(icra20 / "lifelong" / "maslam" / "home.txt", statistics=False)
     assert pd.DataFrame(ev.sequence_rows(stats=False)).equals(pd.DataFrame(ref.sequence_rows(stats=False)))
+    full = ref.sequences()
+    lean = ev.sequences()
+    assert [c for c in full.columns if c not in lean.columns] == STAT_COLUMNS
+    pd.testing.assert_frame_equal(lean, full[lean.columns])
+    pd.testing.assert_frame_equal(ev.scenes(), ref.scenes())
+    with pytest.raises(ln.EvaluationError, match=r"statistics columns \(stats=True\) need each pose's errors"):
+        ev.sequences(stats=True)
     with pytest.raises(ln.EvaluationError, match="keep_poses=True"):
-        ev.sequences()
+        ev.sequences(eps=0.123)
+    with pytest.raises(ln.EvaluationError, match="keep_poses=True"):
+        ev.scenes(eps=0.123)

@@ -24,6 +24,7 @@ from lorisnb.core.pipeline.model import (
 from lorisnb.core.spec.evalspec import EvalSpec, make_spec
 from lorisnb.core.trajectory.blocks import threads
 from lorisnb.core.trajectory.frames import SCENES
+from lorisnb.errors import EvaluationError
 from lorisnb.io.datasets.paths import DataPaths, scene_spans
 from lorisnb.tools.evaluation.pool import default_jobs
 from lorisnb.tools.evaluation.status import exit_status, skipped_only, unscored
@@ -134,8 +135,9 @@ class Evaluation:
 
         s = self.spec
         kw = self._rpe(kw)
-        table = pd.DataFrame(self.sequence_rows(eps, phi, delta, tau, **kw), columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS
-                             + STAT_COLUMNS + ["spec"])  # fmt: skip
+        rows = self.sequence_rows(eps, phi, delta, tau, **kw)
+        stats = [] if rows and not any(c in rows[0] for c in STAT_COLUMNS) else STAT_COLUMNS  # let go: none kept
+        table = pd.DataFrame(rows, columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS + stats + ["spec"])
         if s.relation is not None and len(table):  # evo's -r: statistics of that pose relation
             from lorisnb.core.metrics.relation_table import relation_columns
 
@@ -192,19 +194,38 @@ class Evaluation:
         self, eps: Eps | None = None, phi: float | None = None, delta: float | None = None, tau: float | None = None,
         **kw: Any,
     ) -> list[dict[str, Any]]:  # fmt: skip
-        """:meth:`sequences` as rows (dicts), without pandas and without evo's ``relation`` columns."""
+        """:meth:`sequences` as rows (dicts), without pandas and without evo's ``relation`` columns.
+        Where the poses were let go (``evaluate(..., statistics=False, keep_poses=False)``), the rows
+        at the spec's setting are those without the statistics unless ``stats=True`` is asked for
+        (then an EvaluationError: the statistics need the poses)."""
         s = self.spec
         kw = self._rpe(kw)
+        setting = (s.eps if eps is None else eps, s.phi if phi is None else phi, s.delta if delta is None else delta,
+                   s.tau if tau is None else tau)  # fmt: skip
         with threads(default_jobs()):  # a long sequence's statistics side by side (lorisnb.core.trajectory.blocks)
-            rows = score_rows(
-                self.errors, s.eps if eps is None else eps, s.phi if phi is None else phi,
-                s.delta if delta is None else delta, s.tau if tau is None else tau, **kw,
-            )  # fmt: skip
+            try:
+                rows = score_rows(self.errors, *setting, **kw)
+            except EvaluationError:
+                if not self.poses_let_go() or ("stats" in kw and not kw["stats"]):
+                    raise
+                if "stats" not in kw:
+                    rows = score_rows(self.errors, *setting, **{**kw, "stats": False})  # at another setting: raises
+                else:
+                    raise EvaluationError(
+                        "the statistics columns (stats=True) need each pose's errors, let go by evaluate(..., "
+                        "statistics=False, keep_poses=False); sequences() at the spec's setting gives the table "
+                        "without them, evaluate(..., statistics=True, keep_poses=False) one with them"
+                    ) from None
         changed = {k: v for k, v in kw.items() if k in s.rpe_options() and v != getattr(s, k)}
         spec = (make_spec(s, **changed) if changed else s).canonical(thresholds=False)  # the RPE asked for
         for row in rows:
             row["spec"] = spec
         return rows
+
+    def poses_let_go(self) -> bool:
+        """Whether the per-pose errors were let go (``evaluate(..., keep_poses=False)``): only the
+        spec's setting can be scored."""
+        return any(isinstance(e, ScoresOnly) for f in self.errors for e in f.sequences)
 
     def _rpe(self, kw: dict[str, Any]) -> dict[str, Any]:
         """The RPE settings of a table: the spec's, with those given checked and normalized by the
@@ -225,7 +246,8 @@ class Evaluation:
     ) -> pd.DataFrame:
         """Per algorithm and scene, as in the paper's figures (see
         :func:`lorisnb.core.lifelong.aggregate.aggregate_scenes`)."""
-        return aggregate_scenes(self.sequences(eps, phi, delta, tau), self.durations())
+        # the scene values read no statistics: without them (the same numbers), as a lean evaluation keeps them
+        return aggregate_scenes(self.sequences(eps, phi, delta, tau, stats=False), self.durations())
 
     def relative(
         self, fractions: tuple[float, ...] = RPG_FRACTIONS, lengths: list[float] | None = None
