@@ -23,6 +23,7 @@ from lorisnb.core.lifelong.timeline import sequence_layout, timeline_rows, timel
 from lorisnb.core.metrics.openloris import correctness
 from lorisnb.core.pipeline.model import FileErrors, sequence_eps
 from lorisnb.core.spec.validate import eps_value, threshold
+from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_atomically
 from lorisnb.tools.decisions.escape import clean
 from lorisnb.tools.figures.blit import BlitCanvas
@@ -116,7 +117,64 @@ def plot_timeline(
     Several suites or trials of an algorithm are a row each (:func:`~lorisnb.core.lifelong.timeline.timeline_rows`).
     A figure to redraw at other thresholds: :class:`Timeline`.
     """
+    errors = _file_list("plot_timeline", errors)
     return Timeline(errors, durations, algorithms, labels, show_wrong).draw(scene_table, eps, phi, delta, title)
+
+
+def _file_list(where: str, errors: Any) -> list[FileErrors]:
+    """``errors`` as a list of FileErrors (an Evaluation's ``errors``), else a ValidationError."""
+    if isinstance(errors, FileErrors):
+        raise ValidationError(
+            f"{where}: errors is one FileErrors; expected a list of them (Evaluation.errors, or [errors] for one file)"
+        )
+    if isinstance(errors, (str, bytes, Mapping)) or not isinstance(errors, Iterable):
+        raise ValidationError(f"{where}: errors is a {type(errors).__name__}; expected a list of FileErrors "
+                              "(Evaluation.errors)")  # fmt: skip
+    out = list(errors)
+    bad = [type(f).__name__ for f in out if not isinstance(f, FileErrors)]
+    if bad:
+        raise ValidationError(f"{where}: errors holds a {bad[0]}; expected FileErrors (Evaluation.errors)")
+    return out
+
+
+def _same_thresholds(
+    scene_table: Any, errors: Sequence[FileErrors], algorithms: Iterable[str], eps: Any, phi: Any, delta: Any
+) -> None:
+    """A scene table at other thresholds than a timeline's (its ``eps``, ``phi`` and ``delta``
+    columns) is refused: its CR and C-ATE texts would be printed beside segments drawn at others."""
+    if not isinstance(scene_table, pd.DataFrame) or not {"algorithm", "scene"} <= set(scene_table.columns):
+        raise ValidationError(
+            f"plot_timeline scene_table: got {type(scene_table).__name__}; expected the scene table at the same "
+            "thresholds (Evaluation.scenes(eps=..., phi=..., delta=...) or aggregate_scenes)"
+        )
+    eps_v, phi_v, delta_v = eps_value(eps), threshold("phi", phi), threshold("delta", delta)
+    wanted = set(algorithms)
+    rows = scene_table[scene_table["algorithm"].isin(wanted)]
+    told = f"eps={eps!r}, phi={phi!r}, delta={delta!r}"
+    for name, value in (("phi", phi_v), ("delta", delta_v)):
+        if name in rows.columns:
+            other = sorted({float(v) for v in rows[name]} - {float(value)})
+            if other:
+                raise ValidationError(
+                    f"plot_timeline: the scene table is at {name}={other[0]:g}, the figure at {told}; pass the scene "
+                    f"table at the figure's thresholds (Evaluation.scenes({told}))"
+                )
+    if "eps" not in rows.columns:
+        return
+    expected: dict[tuple[str, str], set[float]] = {}
+    for f in errors:
+        for e in f.sequences:
+            expected.setdefault((f.algorithm, f.scene), set()).add(float(sequence_eps(eps_v, f.scene, e)))
+    for a, sc, got in zip(rows["algorithm"], rows["scene"], rows["eps"].astype(float), strict=True):
+        want = expected.get((a, sc))
+        if want is None or len(want) != 1 or np.isnan(got):  # sequences of several eps (relative): NaN in the table
+            continue
+        (w,) = want
+        if not (got == w or np.isclose(got, w, rtol=1e-12, atol=0.0)):
+            raise ValidationError(
+                f"plot_timeline: the scene table is at eps={got:g} m for {a} {sc}, the figure at {told} ({w:g} m); "
+                f"pass the scene table at the figure's thresholds (Evaluation.scenes({told}))"
+            )
 
 
 class Timeline:
@@ -185,7 +243,9 @@ class Timeline:
         delta: float = 1.0,
         title: str | None = None,
     ) -> Figure:
-        """The figure at these thresholds (``scene_table`` at the same ones), drawn in place."""
+        """The figure at these thresholds (``scene_table`` at the same ones: a table at others is a
+        ValidationError, its CR and C-ATE texts would not be the segments'), drawn in place."""
+        _same_thresholds(scene_table, self.errors, self.algorithms, eps, phi, delta)
         segments, firsts = timeline_table(self.errors, eps, phi, delta)
         ax, off, y_of, layout, row_y = self.ax, self.off, self.y_of, self.layout, self._row_y
         for artist in self._drawn:
@@ -273,6 +333,12 @@ def plot_trajectories(
 ):
     """Top view (x-y, metres) of each sequence: interpolated ground truth in grey, the aligned
     estimate as points coloured by correctness (blue correct, red wrong)."""
+    if not isinstance(errors, FileErrors):
+        many = not isinstance(errors, (str, bytes)) and isinstance(errors, Iterable)
+        raise ValidationError(
+            f"plot_trajectories: errors is a {type(errors).__name__}; expected one file's FileErrors"
+            + (" (one figure per file: plot_trajectories(ev.errors[0]), ...)" if many else " (Evaluation.errors[i])")
+        )
     eps, phi = eps_value(eps), threshold("phi", phi)  # validated as score's
     seqs = [e for e in errors.sequences if e.matched]
     n = max(1, len(seqs))
