@@ -62,7 +62,7 @@ FrameInfo = tuple[str, str, str, Mapping[int, Trajectory]]
 def evaluate_sessions(
     groundtruth: Mapping[int, Trajectory] | Trajectory,
     estimates: Mapping[int, Trajectory] | Trajectory,
-    spec: EvalSpec = DEFAULT,
+    spec: EvalSpec | str | None = DEFAULT,
     *,
     path: str | Path = "estimate",
     algorithm: str = "estimate",
@@ -87,7 +87,8 @@ def evaluate_sessions(
             sequence needs one); one Trajectory is sequence 1.
         estimates: sequence number -> estimate poses (the edge's objects; never changed here);
             one Trajectory is sequence 1.
-        spec: association, alignment, mode and the rest (:class:`~lorisnb.core.spec.evalspec.EvalSpec`).
+        spec: association, alignment, mode and the rest (:class:`~lorisnb.core.spec.evalspec.EvalSpec`,
+            or a preset name as :func:`session_errors` takes it; None: the default).
         path, algorithm, file, scene, suite, trial, frame: labels of the result.
         checks_on: run the plausibility checks (:mod:`lorisnb.core.pipeline.checks`; warnings only).
         other_spans: time spans of other ground-truth sequences, for the time-overlap check.
@@ -103,6 +104,12 @@ def evaluate_sessions(
 
     Every note is issued as a LorisWarning and kept in ``FileErrors.warnings``.
     """
+    if not isinstance(spec, EvalSpec):  # a preset name, as session_errors takes it
+        if spec is not None and not isinstance(spec, str):
+            raise ValidationError(
+                f"spec: got {type(spec).__name__}; expected an EvalSpec (lorisnb.make_spec) or a preset name ('tum', ...)"
+            )
+        spec = make_spec(spec)
     groundtruth, estimates = sessions("groundtruth", groundtruth), sessions("estimates", estimates)
     seqs = sorted(estimates)
     if not seqs:

@@ -68,6 +68,8 @@ def _show(value: Any) -> str:
 def _number(name: str, value: Any, words: Mapping[str, Any]) -> Any:
     if isinstance(value, (bool, np.bool_)) or value is None:  # numpy's True is no more a number than Python's
         raise ValidationError(f"{name}={_show(value)}: expected a number")
+    if isinstance(value, (bytes, bytearray, np.bytes_)):  # float(b"3") is 3.0: text of no known encoding
+        raise ValidationError(f"{name}={_show(value)} (bytes): expected a number (or text: decode it first)")
     if isinstance(value, str):
         text = value.strip().lower()
         if text in words:
@@ -104,7 +106,7 @@ def threshold(name: str, value: Any) -> float:
     if name in LIMITS and math.isfinite(v) and v > LIMITS[name][0]:
         top, why = LIMITS[name]
         raise ValidationError(f"{name}={_show(value)}: expected at most {top:g} {unit} (or 'inf'); {why}")
-    return float(v)
+    return float(v) + 0.0  # -0.0 is 0 (shown as 0.0 in every table)
 
 
 def eps_value(value: Any) -> float | str | dict[str, float]:
@@ -112,9 +114,17 @@ def eps_value(value: Any) -> float | str | dict[str, float]:
     scene), ``"relative:F"`` (F times each sequence's ground-truth extent, the diagonal of its
     bounding box), or a mapping scene -> metres."""
     if isinstance(value, Mapping):
-        unknown = [k for k in value if k not in SCENES]
-        if unknown:
-            raise ValidationError(f"eps: unknown scene(s) {unknown}; expected keys among {', '.join(SCENES)}")
+        if not value:
+            raise ValidationError("eps={}: an empty mapping; expected scene -> metres for every scene of the inputs")
+        bad = [k for k in value if not isinstance(k, str) or not k.strip()]
+        if bad:
+            raise ValidationError(f"eps: key {bad[0]!r}: expected scene names (str) -> metres")
+        cased = [k for k in value if k not in SCENES and k.strip().lower() in SCENES]
+        if cased:  # an OpenLORIS scene in another case: the inputs' is lower case
+            raise ValidationError(f"eps: scene {cased[0]!r}: OpenLORIS scene names are lower case "
+                                  f"({cased[0].strip().lower()!r})")  # fmt: skip
+        # any scene name of the inputs (a pair's, a manifest's: fr2_desk); one the inputs hold without
+        # a threshold is refused where the scores are computed (lorisnb.core.pipeline.model.scene_eps)
         return {str(k): threshold("eps", v) for k, v in value.items()}
     if isinstance(value, str) and value.strip().lower() == "paper":
         return "paper"
@@ -160,6 +170,9 @@ def threshold_list(name: str, values: Any) -> list[Any]:
     (``1,,2``, a trailing comma) is refused, not dropped; a 0-d numpy array is one value."""
     if isinstance(values, np.ndarray) and values.ndim == 0:
         values = values.item()
+    if isinstance(values, np.ndarray) and values.ndim > 1:  # its rows were taken as values (one named, wrongly)
+        raise ValidationError(f"{name}: an array of shape {values.shape}; expected a list of values (one dimension: "
+                              f"{name}=values.ravel() for each of them)")  # fmt: skip
     if isinstance(values, str):
         items: list[Any] = values.split(",")
         if any(p.strip() for p in items) and not all(p.strip() for p in items):  # all empty: below
