@@ -455,3 +455,115 @@ def test_verify_refuses_a_root_given_twice_with_two_folders(tmp_path, capsys):
     assert rc == 2 and "--root results given twice" in err
     rc, _, err = run(capsys, "verify", folder, "--root", "results", res, "--root", "results", res)  # the same twice
     assert rc == 0, err
+
+
+def quoting_notebook(name, out_dir, params, **kw):
+    """A notebook as papermill and nbconvert write one for a folder whose path holds quotes: the parameters
+    cell (``"`` as ``\\"``), its JSON in the .ipynb, the page's highlighted code (``&`` escaped, ``'`` and
+    ``"`` not: ``html.escape(quote=False)``), an output printing the path's ``repr``, JSON in the page."""
+    import html
+
+    import nbformat
+    from papermill.translators import PythonTranslator
+
+    from lorisnb.tools.report.notebooks import NotebookRun
+
+    folder = out_dir / name
+    folder.mkdir()
+    path = str(params["results_dir"])
+    literal = PythonTranslator.translate_str(path)
+    nb = nbformat.v4.new_notebook()
+    cell = nbformat.v4.new_code_cell(f"results_dir = {literal}")
+    cell.outputs = [nbformat.v4.new_output("stream", name="stdout", text=repr([path]))]
+    nb.cells = [cell]
+    nbformat.write(nb, folder / f"{name}.ipynb")
+    (folder / f"{name}.html").write_text(
+        f"<pre>results_dir = {html.escape(literal, quote=False)}</pre><pre>{html.escape(repr([path]), quote=False)}"
+        f"</pre><a title='{html.escape(path, quote=True)}'></a><script>{html.escape(json.dumps({'p': path}))}</script>"
+        f"<pre>{path.replace('&', '&#38;').replace(chr(39), '&#39;').replace(chr(34), '&#34;')}</pre>"
+    )
+    return NotebookRun(name)
+
+
+@pytest.mark.parametrize("odd", ["x&'", 'dq"x', "a<b>&c'd\"e\\f"])
+def test_a_folder_whose_path_holds_quotes_and_ampersands_leaves_no_spelling_of_it(
+    tmp_path, data, icra20, monkeypatch, odd
+):
+    """A folder ``/tmp/x&'/...``: nbconvert escapes ``&`` and leaves ``'``; papermill writes ``"`` as ``\\"``
+    (``\\\\\\"`` in the notebook's JSON). Every spelling a run's files give the path is replaced, and
+    unreplaced() lists a form no escaping it knows spells (so that the report warns)."""
+    import warnings
+
+    import lorisnb.tools.report.build as report
+    from lorisnb.tools.report.portable import _pattern
+
+    here = lab(tmp_path / odd, data, icra20)
+    monkeypatch.setattr(report, "run_notebook", quoting_notebook)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no "still show an absolute path" warning
+        out, _ = report.run_report(here / "runs" / "p", {"data_root": str(here / "data")}, ["compare_algorithms"],
+                                   progress=False, results=here / "res")  # fmt: skip
+    page = (out / "compare_algorithms" / "compare_algorithms.html").read_text()
+    assert page.count("{results}") == 5, page
+    assert held_paths(out, [here]) == [] and unreplaced(out, [("lab", here)]) == []
+    for p in (x for x in out.rglob("*") if x.is_file()):
+        assert str(tmp_path).encode() not in p.read_bytes(), p
+    # an escaping no spelling knows (a made-up one): still listed, the path's plain parts around it
+    strange = str(here).replace("&", "\\u0026").replace("'", "&apos;").replace('"', "&QUOT;").replace("<", "%3c")
+    (out / "odd.txt").write_text(f"see {strange}/res")
+    assert unreplaced(out, [("lab", here)]) == [out / "odd.txt"]
+    pattern, _ = _pattern([("lab", here)])
+    for s in spellings(here):  # each spelling listed is one make_portable replaces, whole
+        m = pattern.match(s.encode())
+        assert m and m.end() == len(s.encode()), s
+
+
+def failing_link_notebook(name, out_dir, params, **kw):
+    """A notebook that, as compare_algorithms does, writes its input errors: one about a file linked from
+    outside the results folder, naming where it leads (JSON in the notebook, HTML in the page, CSV)."""
+    import html
+
+    from lorisnb.tools.report.notebooks import NotebookRun
+
+    folder = out_dir / name
+    folder.mkdir()
+    target = (Path(str(params["results_dir"])) / "orb" / "cafe_1_2_bad.txt").resolve()
+    error = f"x.txt, line 3: not a trajectory file as expected (a link to {target}, outside the results folder: its content is not shown)"  # fmt: skip
+    (folder / f"{name}.ipynb").write_text(json.dumps({"cells": [{"outputs": [{"text": error}]}]}))
+    (folder / f"{name}.html").write_text(f"<pre>{html.escape(error)}</pre>")
+    (folder / "input_errors.csv").write_text(f'file,error\nx.txt,"{error}"\n')
+    return NotebookRun(name)
+
+
+def test_an_error_about_a_link_leading_out_of_the_results_folder_does_not_say_where_it_leads(
+    tmp_path, data, icra20, monkeypatch
+):
+    """A file linked into --results from elsewhere that fails to parse: its error said ``(a link to
+    /abs/elsewhere/bad.txt, outside the results folder ...)`` in index.html, report.html and the input
+    errors' tables of the portable run, and no warning. It says ``a link leading outside``; had any page
+    kept the path, the report would have warned."""
+    import warnings
+
+    import lorisnb.tools.report.build as report
+    import lorisnb.tools.report.portable as portable
+
+    here = lab(tmp_path / "lab", data, icra20)
+    (here / "elsewhere").mkdir()
+    bad = here / "elsewhere" / "bad.txt"
+    bad.write_text("seq: 1\n1.0 0 0 0 0 0 0 1\nGARBAGE\n")
+    (here / "res" / "orb" / "cafe_1_2_bad.txt").symlink_to(bad)
+    monkeypatch.setattr(report, "run_notebook", failing_link_notebook)
+    params = {"data_root": str(here / "data")}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out, _ = report.run_report(here / "runs" / "p", params, ["compare_algorithms"], progress=False,
+                                   results=here / "res")  # fmt: skip
+    errors = (out / "findings" / "input_errors.csv").read_text()
+    assert "{results}/orb/cafe_1_2_bad.txt" in errors and "(a link leading outside the results folder" in errors
+    for p in (x for x in out.rglob("*") if x.is_file()):
+        assert str(here).encode() not in p.read_bytes(), p
+    assert "a link leading outside" in (out / "index.html").read_text()
+    monkeypatch.setattr(portable, "hide_link_targets", lambda data: data)  # as before: the path left in the pages
+    with pytest.warns(UserWarning, match="still show an absolute path") as caught:
+        report.run_report(here / "runs" / "q", params, ["compare_algorithms"], progress=False, results=here / "res")
+    assert "index.html" in str(caught[0].message) and "input_errors.csv" in str(caught[0].message)

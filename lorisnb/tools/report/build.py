@@ -434,6 +434,10 @@ def run_report(
             # each input where it is (a link too: its target may lie outside every root, on this machine only)
             files = [where_it_is(f) for f in input_files(roots, resolve=False)]
             inputs = checksums(files, None if absolute_paths else named)
+            # where the links among them lead out of every root: a path of this machine only, that no page may show
+            real_roots = [r.resolve() for r in named.values()]
+            leads_out = sorted({r for r in (f.resolve() for f in files)
+                                if not any(r == q or q in r.parents for q in real_roots)})  # fmt: skip
             record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
                                 {r.name: r.status for r in runs}, roots, named, absolute=absolute_paths)  # fmt: skip
             if record.get("commit"):  # the commit alone does not say what ran if the checkout had changes
@@ -463,7 +467,7 @@ def run_report(
                 single_file(index, folder / "report.html")  # the pages as they are now, into one file
                 if not absolute_paths:
                     make_portable(folder, every)
-                    left = unreplaced(folder, every)
+                    left = unreplaced(folder, [*every, *(("outside", t) for t in leads_out)])
                     if left:
                         shown = ", ".join(str(f.relative_to(folder)) for f in left[:5])
                         warnings.warn(f"{len(left)} file(s) of the run still show an absolute path of this machine "

@@ -13,10 +13,12 @@ wrote it: lorisnb, a notebook's printout, papermill's parameters cell.
 
 from __future__ import annotations
 
+import functools
 import html
 import json
 import os
 import re
+import unicodedata
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -86,16 +88,136 @@ def resolve_key(key: str, roots: Mapping[str, Path]) -> Path | None:
     return p
 
 
-def spellings(path: Path) -> list[str]:
-    """The ways a folder's absolute path can be written: as given and resolved (a link on the
-    way), and as papermill writes it into a notebook's parameters (Python's ``unicode_escape``:
-    ``caf\\xe9``), each also as HTML and JSON escape it."""
-    forms = {os.path.abspath(path), str(path.resolve())}
-    forms |= {f.encode("unicode_escape").decode("ascii") for f in forms}
+#: Characters every escaping below writes as they are: a path made of them has one spelling.
+_PLAIN = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789/._-")
+
+
+def _python(c: str) -> set[str]:
+    """A character as Python source spells it inside a string literal: papermill's parameters cell
+    (``unicode_escape``, then ``"`` as ``\\"``), ``repr`` (a printout of a path in a list)."""
+    escaped = c.encode("unicode_escape").decode("ascii")
+    out = {escaped, repr(c)[1:-1], c.replace("\\", "\\\\")}
+    if c == '"':
+        out.add('\\"')
+    if c == "'":
+        out.add("\\'")
+    return out
+
+
+def _json(c: str) -> set[str]:
+    """A character inside a JSON string (a notebook, run.json), ASCII-only or not."""
+    return {json.dumps(c)[1:-1], json.dumps(c, ensure_ascii=False)[1:-1]}
+
+
+def _html(c: str) -> set[str]:
+    """A character in an HTML page: ``html.escape`` with ``quote=False`` (nbconvert's highlighter: ``'`` and
+    ``"`` as they are) and ``quote=True``, markupsafe's ``&#34;``/``&#39;`` (Jinja templates), a numeric
+    reference."""
+    out = {c, html.escape(c, quote=True), f"&#{ord(c)};", f"&#x{ord(c):x};"}
+    return out if c in "&<>\"'" or ord(c) > 127 else {c}
+
+
+def _url(c: str) -> set[str]:
+    """A character in a link's address (``file:///caf%C3%A9``)."""
+    from urllib.parse import quote
+
+    return {quote(c, safe="/")}
+
+
+_LAYERS = (_python, _json, _html, _url)
+
+
+def _through(layer: Any, forms: set[str]) -> set[str]:
+    """Each of ``forms`` once more escaped by ``layer``, character by character."""
+    import itertools
+
     out = set()
     for f in forms:
-        out |= {f, html.escape(f, quote=True), json.dumps(f)[1:-1], html.escape(json.dumps(f)[1:-1], quote=True)}
+        out |= {"".join(p) for p in itertools.product(*(sorted(layer(ch)) for ch in f))}
+    return out
+
+
+@functools.lru_cache(maxsize=4096)
+def _char_forms(c: str) -> tuple[str, ...]:
+    """Every spelling of the character ``c`` in the files a run holds: as it is (in NFC and NFD),
+    then escaped by any of Python, JSON, HTML and URL quoting, one inside another in any order
+    (a Python string in a notebook's JSON, JSON in an HTML page, a highlighted parameters cell).
+    Every escaping is a character's own, so a path's spellings are its characters' spellings
+    one after the other."""
+    import itertools
+
+    start = {c, unicodedata.normalize("NFC", c), unicodedata.normalize("NFD", c)}
+    found = set(start)
+    for n in range(1, len(_LAYERS) + 1):
+        for order in itertools.permutations(_LAYERS, n):
+            forms = set(start)
+            for layer in order:
+                forms = _through(layer, forms)
+            found |= forms
+    return tuple(sorted(found, key=lambda f: (-len(f), f)))
+
+
+def _bases(path: Path) -> list[str]:
+    """A folder's absolute path as given and resolved (a link on the way), each in NFC and NFD."""
+    given = {os.path.abspath(path), str(path.resolve())}
+    return sorted({unicodedata.normalize(f, g) for g in given for f in ("NFC", "NFD")} | given)
+
+
+def spellings(path: Path) -> list[str]:
+    """The ways a folder's absolute path is written in the files a run holds (:func:`_char_forms`):
+    as given and resolved, as papermill writes it into a notebook's parameters (``caf\\xe9``,
+    ``dq\\"x``), each also as HTML (with and without its quotes escaped), JSON and a link's
+    address escape it, one inside another (the notebook's JSON of a Python string). The same
+    escaping throughout a path; :func:`_path_regex` also matches mixtures."""
+    import itertools
+
+    encoders: list[list[Any]] = [
+        [lambda s: s.encode("unicode_escape").decode("ascii"),
+         lambda s: s.encode("unicode_escape").decode("ascii").replace('"', '\\"'), lambda s: repr(s)[1:-1]],
+        [lambda s: json.dumps(s)[1:-1], lambda s: json.dumps(s, ensure_ascii=False)[1:-1]],
+        [lambda s: html.escape(s, quote=False), lambda s: html.escape(s, quote=True),
+         lambda s: html.escape(s, quote=False).replace('"', "&#34;").replace("'", "&#39;")],
+    ]  # fmt: skip
+    out = set()
+    for base in _bases(path):
+        for n in range(len(encoders) + 1):
+            for order in itertools.permutations(encoders, n):
+                for chain in itertools.product(*order):
+                    s = base
+                    for enc in chain:
+                        s = enc(s)
+                    out.add(s)
     return sorted((s for s in out if len(s) > 1), key=len, reverse=True)
+
+
+def _path_regex(path: Path) -> bytes:
+    """A regular expression matching every spelling of ``path`` (:func:`_char_forms`, each
+    character escaped its own way), as bytes of UTF-8."""
+    branches: set[bytes] = set()
+    for base in _bases(path):
+        parts: list[bytes] = []
+        for c in base:
+            if c in _PLAIN:
+                parts.append(re.escape(c.encode()))
+            else:
+                parts.append(b"(?:" + b"|".join(re.escape(f.encode()) for f in _char_forms(c)) + b")")
+        branches.add(b"".join(parts))
+    ordered: list[bytes] = sorted(branches, key=len, reverse=True)
+    return b"|".join(ordered)
+
+
+def _loose_regex(path: Path) -> bytes | None:
+    """A regular expression matching ``path`` whatever spells the characters that some escaping
+    changes (any few characters in their place), the others as they are; None if too few are left
+    to tell the path from another (``/é``)."""
+    branches: set[bytes] = set()
+    for base in _bases(path):
+        runs = re.split(r"[^A-Za-z0-9/._-]+", base)
+        if sum(map(len, runs)) < 10 or len(runs) < 2:
+            continue  # a path escaping leaves alone is matched by its spellings already
+        branches.add(rb"[^\n\r]{1,24}?".join(re.escape(r.encode()) for r in runs))
+    ordered: list[bytes] = sorted(branches, key=len, reverse=True)
+    return b"|".join(ordered) if branches else None
 
 
 def install_roots() -> list[tuple[str, Path]]:
@@ -170,63 +292,95 @@ def manifest_files(manifest: Any) -> list[Path]:
     return own + [Path(os.path.abspath(s.groundtruth)) for s in m.sessions if s.groundtruth.exists()]
 
 
-def _pattern(roots: Iterable[tuple[str, Path]]) -> tuple[re.Pattern[bytes], dict[bytes, bytes]]:
-    by_text: dict[bytes, bytes] = {}
+_END = rb"(?![^/\\\s\"'<>&,;:)\]}|`])"  # a root ends where a path part ends: "/a/res" is not "/a/results"
+
+
+def _pattern(roots: Iterable[tuple[str, Path]]) -> tuple[re.Pattern[bytes], list[bytes]]:
+    """A pattern matching each root's spellings (:func:`_path_regex`) where a path starts, and the
+    names (:func:`mark`) its groups ``r0``, ``r1``... stand for."""
+    unique: dict[str, tuple[str, Path]] = {}
     for name, root in roots:
-        for s in spellings(root):
-            by_text.setdefault(s.encode(), mark(name).encode())
-    alternatives = sorted(by_text, key=len, reverse=True)  # the longest (innermost) root first
-    # a root ends where a path part ends: "/a/res" is not replaced inside "/a/results"; and starts where a path
-    # starts, not after a letter or digit (inside base64 image data, "/data/" may occur by chance) unless that
-    # is an escaped newline or tab ("...\\n/home/me") or ends a terminal colour code (a traceback's
-    # "\x1b[32m/home/me/...", "\\u001b[32m..." in a notebook's JSON), kept as it is (group "esc")
-    pattern = re.compile(rb"(?:(?<![A-Za-z0-9+])|(?<=\\[nrt])|(?P<esc>(?:\x1b|\\u001b|\\x1b|\\033)\[[0-9;]*m))(?P<path>"
-                         + b"|".join(map(re.escape, alternatives)) + rb")(?![^/\\\s\"'<>&,;:)\]}|`])")  # fmt: skip
-    return pattern, by_text
+        unique.setdefault(os.path.abspath(root), (name, root))
+    ordered = sorted(unique.values(), key=lambda r: len(os.path.abspath(r[1])), reverse=True)  # innermost first
+    names = [mark(name).encode() for name, _ in ordered]
+    branches = b"|".join(b"(?P<r%d>" % i + _path_regex(root) + b")" for i, (_, root) in enumerate(ordered))
+    # a root starts where a path starts, not after a letter or digit (inside base64 image data, "/data/" may
+    # occur by chance) unless that is an escaped newline or tab ("...\\n/home/me") or ends a terminal colour
+    # code (a traceback's "\x1b[32m/home/me/...", "\\u001b[32m..." in a notebook's JSON), kept as it is
+    pattern = re.compile(rb"(?:(?<![A-Za-z0-9+])|(?<=\\[nrt])|(?P<esc>(?:\x1b|\\u001b|\\x1b|\\033)\[[0-9;]*m))(?:"
+                         + branches + b")" + _END)  # fmt: skip
+    return pattern, names
 
 
-def _replace(pattern: re.Pattern[bytes], by_text: dict[bytes, bytes], data: bytes) -> bytes:
+def _replace(pattern: re.Pattern[bytes], names: list[bytes], data: bytes) -> bytes:
     """``data`` with each of :func:`_pattern`'s matches replaced by its root's name (a colour code
     before it kept)."""
-    return pattern.sub(lambda m: (m.group("esc") or b"") + by_text[m.group("path")], data)
+
+    def name(m: re.Match[bytes]) -> bytes:
+        which = next(int(k[1:]) for k, v in m.groupdict().items() if k[0] == "r" and v is not None)
+        return (m.group("esc") or b"") + names[which]
+
+    return pattern.sub(name, data)
 
 
 def make_portable(folder: Path, roots: Iterable[tuple[str, Path]]) -> list[Path]:
-    """Replace, in every file below ``folder``, each root's absolute path (:func:`spellings`) by
-    its name (:func:`mark`); returns the files changed. A file that holds one where it cannot be
-    replaced (a compressed or binary file, where the bytes' length or a checksum matters) is an
-    :class:`~lorisnb.errors.OutputError` naming it: the run would not be portable."""
+    """Replace, in every file below ``folder``, each root's absolute path (any of its spellings:
+    :func:`_char_forms`) by its name (:func:`mark`); returns the files changed. A file that holds
+    one where it cannot be replaced (a compressed or binary file, where the bytes' length or a
+    checksum matters) is an :class:`~lorisnb.errors.OutputError` naming it: the run would not be
+    portable. An error about a link leading outside the results folder says so without the path
+    it leads to (:func:`hide_link_targets`)."""
     roots = list(roots)
     if not roots:
         return []
-    pattern, by_text = _pattern(roots)
+    pattern, names = _pattern(roots)
     changed = []
     for p in sorted(x for x in folder.rglob("*") if x.is_file() and not x.is_symlink()):
         data = p.read_bytes()
-        if not pattern.search(data):
+        hidden = hide_link_targets(data)
+        if not pattern.search(hidden):
+            if hidden != data:
+                p.write_bytes(hidden)
+                changed.append(p)
             continue
         try:
             data.decode("utf-8")
         except UnicodeDecodeError:
             raise OutputError(f"{p}: a binary file holds an absolute path of the machine the run was made on, which "
                               "cannot be replaced by its root's name; report it, or pass --absolute-paths") from None  # fmt: skip
-        p.write_bytes(_replace(pattern, by_text, data))
+        p.write_bytes(_replace(pattern, names, hidden))
         changed.append(p)
     return changed
 
 
+#: How an error names the file a link leads to outside the results folder (lorisnb's evaluation).
+_LINK_TARGET = re.compile(rb"\(a link to [^\n\r]{1,4096}?, outside the results folder")
+
+
+def hide_link_targets(data: bytes) -> bytes:
+    """``data`` with each error's ``(a link to /where/it/leads, outside the results folder`` said as
+    ``(a link leading outside the results folder``: that path lies below no root of the run (its
+    name would say nothing elsewhere) and is the machine's own."""
+    if b"a link to " not in data:
+        return data
+    return _LINK_TARGET.sub(b"(a link leading outside the results folder", data)
+
+
 def unreplaced(folder: Path, roots: Iterable[tuple[str, Path]]) -> list[Path]:
     """The files below ``folder`` that still show one of ``roots``' absolute paths where
-    :func:`make_portable` did not replace it: after any character (it replaces a path only where
-    a path starts), ending where a path part ends. Empty for a portable run; a file listed is a
-    place the replacement does not know (said, so that a run is not shared believing it clean)."""
+    :func:`make_portable` did not replace it: any spelling (:func:`_path_regex`) after any
+    character (it replaces a path only where a path starts), and the path with its escaped
+    characters spelled any other way (:func:`_loose_regex`: an escaping it does not know), ending
+    where a path part ends. Empty for a portable run; a file listed is a place the replacement does
+    not know (said, so that a run is not shared believing it clean)."""
     roots = list(roots)
     if not roots:
         return []
-    texts = sorted({s.encode() for _, r in roots for s in spellings(r)}, key=len, reverse=True)
-    loose = re.compile(b"(?:" + b"|".join(map(re.escape, texts)) + rb")(?![^/\\\s\"'<>&,;:)\]}|`])")
+    exact = [_path_regex(r) for _, r in roots]
+    loose = [x for x in (_loose_regex(r) for _, r in roots) if x is not None]
+    found = re.compile(b"(?:" + b"|".join(exact + loose) + b")" + _END)
     return [p for p in sorted(x for x in folder.rglob("*") if x.is_file() and not x.is_symlink())
-            if loose.search(p.read_bytes())]  # fmt: skip
+            if found.search(p.read_bytes())]  # fmt: skip
 
 
 def held_paths(folder: Path, roots: Iterable[Path]) -> list[tuple[Path, str]]:
