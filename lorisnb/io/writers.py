@@ -8,15 +8,15 @@ import contextlib
 import os
 import shutil
 import tempfile
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from lorisnb.core.spec.validate import flag
 from lorisnb.core.trajectory.poses import Trajectory
-from lorisnb.errors import MissingDependencyError, OutputError
+from lorisnb.errors import MissingDependencyError, OutputError, ValidationError
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -33,10 +33,11 @@ def write_openloris(
     """Write trajectories as an OpenLORIS result file (a simulated one says ``simulated: true`` in
     its header). Written to a temporary name and moved into place; an existing file is kept unless
     ``overwrite``."""
+    _check_openloris(sequences, scene, frame, header)
     if Path(path).exists() and not flag("overwrite", overwrite):  # "no" is refused, never truth-tested
         raise OutputError(f"{path} exists; choose another name or pass overwrite=True to replace it")
     lines = [f"scene: {scene}", f"frame: {frame}"]
-    extra = dict(header or {})
+    extra = {str(k).strip(): str(v).strip() for k, v in (header or {}).items()}
     if any(t.meta.get("simulated") for t in sequences.values()):
         extra.setdefault("simulated", "true")
     lines += [f"{k}: {v}" for k, v in extra.items()]
@@ -45,6 +46,44 @@ def write_openloris(
         block = np.column_stack([t.stamps, t.positions, t.quaternions])
         lines += [" ".join(f"{v:.17g}" for v in row) for row in block]
     write_text("\n".join(lines) + "\n", path, force=True)
+
+
+#: Header keys :func:`write_openloris` writes itself (``seq`` starts a sequence block).
+OWN_KEYS = ("scene", "frame", "seq")
+
+
+def _check_openloris(sequences: Any, scene: Any, frame: Any, header: Any) -> None:
+    """What :func:`write_openloris` writes reads back as given: sequence numbers are integers
+    (``True`` was written as ``seq: True``), header keys and values one line each (a newline in
+    one wrote a line of its own: ``seq: 9`` added a sequence) and no key of the writer's own
+    (``scene``, ``frame``: arguments; ``seq``: a block)."""
+    if not isinstance(sequences, Mapping):
+        raise ValidationError(
+            f"sequences: expected a dict {{sequence number: Trajectory}}, got {type(sequences).__name__}"
+        )
+    for k, t in sequences.items():
+        if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)):
+            raise ValidationError(f"sequences: key {k!r}: expected a sequence number (an integer, as 'seq: N' reads)")
+        if not isinstance(t, Trajectory):
+            raise ValidationError(f"sequences[{k}]: expected a Trajectory, got {type(t).__name__}")
+    for name, value in (("scene", scene), ("frame", frame)):
+        if not isinstance(value, str) or not value.strip() or "\n" in value or "\r" in value:
+            raise ValidationError(f"{name}={value!r}: expected a name on one line")
+    if header is None:
+        return
+    if not isinstance(header, Mapping):
+        raise ValidationError(f"header: expected a dict of key -> value, got {type(header).__name__}")
+    for k, v in header.items():
+        key, text = str(k), str(v)
+        if not isinstance(k, str) or not key.strip() or ":" in key or any(c in key for c in "\r\n#"):
+            raise ValidationError(f"header key {k!r}: expected a word on one line (no ':' nor '#')")
+        if key.strip().lower() in OWN_KEYS:
+            raise ValidationError(
+                f"header key {k!r}: written by write_openloris itself; pass it as its argument"
+                + (" (scene=..., frame=...)" if key.strip().lower() != "seq" else " (the sequences' keys)")
+            )
+        if "\n" in text or "\r" in text:
+            raise ValidationError(f"header[{k!r}]={text!r}: a value on one line (it wrote a line of its own)")
 
 
 @contextlib.contextmanager
