@@ -13,6 +13,7 @@ import pytest
 import lorisnb as ln
 from lorisnb.core.lifelong import scoring
 from lorisnb.core.lifelong.scoring import KEPT_SETTINGS, score, score_rows
+from lorisnb.core.metrics.relative import RPG_FRACTIONS
 from lorisnb.core.pipeline.model import STAT_COLUMNS
 
 
@@ -193,3 +194,12 @@ def test_without_statistics_and_poses_the_tables_read_and_the_statistics_refused
         ev.sequences(eps=0.123)
     with pytest.raises(ln.EvaluationError, match="keep_poses=True"):
         ev.scenes(eps=0.123)
+
+
+def test_relative_refuses_fractions_and_lengths_together(data):
+    """Both given, the lengths were used and the fractions ignored without a word."""
+    ev = ln.evaluate_pairs(data.tum / "fr2_desk_ORB.txt", data.tum / "fr2_desk_groundtruth.txt", "rpg")
+    with pytest.raises(ln.ValidationError, match="fractions and lengths both given"):
+        ev.relative(fractions=(0.1, 0.2), lengths=[1])
+    assert ev.relative().equals(ev.relative(fractions=RPG_FRACTIONS))
+    assert len(ev.relative(lengths=[1])) > 0

@@ -24,7 +24,7 @@ from lorisnb.core.pipeline.model import (
 from lorisnb.core.spec.evalspec import EvalSpec, make_spec
 from lorisnb.core.trajectory.blocks import threads
 from lorisnb.core.trajectory.frames import SCENES
-from lorisnb.errors import EvaluationError
+from lorisnb.errors import EvaluationError, ValidationError
 from lorisnb.io.datasets.paths import DataPaths, scene_spans
 from lorisnb.tools.evaluation.pool import default_jobs
 from lorisnb.tools.evaluation.status import exit_status, skipped_only, unscored
@@ -249,13 +249,20 @@ class Evaluation:
         # the scene values read no statistics: without them (the same numbers), as a lean evaluation keeps them
         return aggregate_scenes(self.sequences(eps, phi, delta, tau, stats=False), self.durations())
 
-    def relative(
-        self, fractions: tuple[float, ...] = RPG_FRACTIONS, lengths: list[float] | None = None
-    ) -> pd.DataFrame:
+    def relative(self, fractions: tuple[float, ...] | None = None, lengths: list[float] | None = None) -> pd.DataFrame:
         """rpg_trajectory_evaluation's relative error per sequence and sub-trajectory length: fractions
-        of the whole ground truth's length, or rpg's preset ``lengths`` in metres (see
-        :func:`lorisnb.core.metrics.relative.relative_table`)."""
+        of the whole ground truth's length (default rpg's 0.1 to 0.5), or rpg's preset ``lengths`` in
+        metres (see :func:`lorisnb.core.metrics.relative.relative_table`); both at once is a
+        ValidationError (the lengths were used, the fractions ignored)."""
         from lorisnb.core.metrics.relative import relative_table
+
+        if fractions is not None and lengths is not None:
+            raise ValidationError(
+                "relative: fractions and lengths both given; expected one: fractions of the ground truth's length, "
+                "or lengths in metres"
+            )
+        if fractions is None:
+            fractions = RPG_FRACTIONS
 
         return relative_table(self.errors, fractions, lengths)
 
