@@ -567,3 +567,32 @@ def test_an_error_about_a_link_leading_out_of_the_results_folder_does_not_say_wh
     with pytest.warns(UserWarning, match="still show an absolute path") as caught:
         report.run_report(here / "runs" / "q", params, ["compare_algorithms"], progress=False, results=here / "res")
     assert "index.html" in str(caught[0].message) and "input_errors.csv" in str(caught[0].message)
+
+
+def test_results_given_as_a_link_holding_a_linked_algorithm_folder_records_it_where_it_is(
+    tmp_path, data, icra20, monkeypatch, capsys
+):
+    """``--results reslink`` (a link to ``res``) holding ``algC``, a folder linked from elsewhere: run.json
+    named algC's files by the absolute path the link leads to, and verify refused the run (exit 2) where it
+    was made. They are ``{results}/odom/...``, listed by verify as ``outside`` (exit 1), as for any link."""
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    (here / "elsewhere").mkdir()
+    shutil.move(here / "res" / "odom", here / "elsewhere" / "odom")
+    (here / "res" / "odom").symlink_to(here / "elsewhere" / "odom", target_is_directory=True)
+    (here / "reslink").symlink_to("res", target_is_directory=True)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    rc, _, err = run(capsys, "report", "--results", here / "reslink", "--data", here / "data", "--out", here / "r",
+                     "--notebooks", "compare_algorithms", "--no-progress")  # fmt: skip
+    assert rc == 0 and "still show an absolute path" not in err, err
+    record = json.loads((here / "r" / "run.json").read_text())
+    assert "{results}/odom/" + ODOM in record["inputs"] and "{results}/orb/" + ORB in record["inputs"]
+    assert all(k.startswith("{") for k in [*record["inputs"], *record["input_roots"]]), record
+    assert held_paths(here / "r", [here]) == []
+    for results in ("reslink", "res"):
+        rc, out, err = run(capsys, "verify", here / "r", "--data", here / "data", "--results", here / results)
+        assert rc == 1 and out.strip() == "outside: {results}/odom/" + ODOM, out + err
+    rc, out, err = run(capsys, "verify", here / "r", "--data", here / "data", "--results", here / "reslink",
+                       "--root", "odom", here / "elsewhere")  # fmt: skip
+    assert rc == 0 and "all 7 input file(s) unchanged" in err, out + err

@@ -52,14 +52,15 @@ def root_key(path: Path, roots: Mapping[str, Path]) -> str:
     absolute path as found, links not followed: a file of a folder linked into the results folder is
     ``{results}/linked/x.txt``, one of a data root whose ``openloris-scene`` is a link is
     ``{data}/openloris-scene/...``), else where it really is (both resolved); the absolute path if
-    none holds it. A link is written where it is, not where it leads."""
+    none holds it. A link is written where it is, not where it leads; a root given as a link
+    (``--results reslink``) holds what was found below it or below where it leads (``res/odom/x.txt``,
+    ``odom`` a link of its own, is ``{results}/odom/x.txt``, not the path ``odom`` leads to)."""
     real = path.parent.resolve() / path.name if path.is_symlink() else path.resolve()
-    for p, folders in (
-        (Path(os.path.abspath(path)), {k: Path(os.path.abspath(v)) for k, v in roots.items()}),
-        (real, {k: v.resolve() for k, v in roots.items()}),
-    ):
+    given = [(k, Path(os.path.abspath(v))) for k, v in roots.items()]
+    resolved = [(k, v.resolve()) for k, v in roots.items()]
+    for p, folders in ((Path(os.path.abspath(path)), given + resolved), (real, resolved)):
         best: tuple[int, str] | None = None
-        for name, r in folders.items():
+        for name, r in folders:
             if p == r or r in p.parents:
                 depth = len(r.parts)
                 if best is None or depth > best[0]:
