@@ -25,7 +25,7 @@ def _executor(args: argparse.Namespace) -> Any:
     """A Dask cluster's executor for ``--scheduler ADDRESS`` (None without it)."""
     if getattr(args, "scheduler", None) is None:
         return None
-    from lorisnb.tools.evaluation.pool import SCHEDULER_TIMEOUT, connect_scheduler
+    from lorisnb.tools.evaluation.pool import SCHEDULER_TIMEOUT, WatchedExecutor, connect_scheduler
 
     client = connect_scheduler(args.scheduler)  # checked and probed: one line, never a hang
     try:  # a scheduler with no worker runs nothing: the command waited for ever, silent
@@ -34,7 +34,8 @@ def _executor(args: argparse.Namespace) -> Any:
         client.close()
         raise EvaluationError(f"--scheduler {args.scheduler}: the scheduler has no worker (waited "
                               f"{SCHEDULER_TIMEOUT:g} s); start one (dask worker {args.scheduler}) and run again") from None  # fmt: skip
-    return client.get_executor()
+    return WatchedExecutor(client.get_executor(), lambda: len(client.scheduler_info().get("workers", {})),
+                           f"--scheduler {args.scheduler}")  # fmt: skip
 
 
 def every_column(spec: Any) -> bool:

@@ -150,6 +150,11 @@ def test_a_cluster_elsewhere_reads_the_files_named_here(data, tmp_path, monkeypa
         pd.testing.assert_frame_equal(
             pd.read_csv(out), pd.read_csv(_csv_of(ln.evaluate_pairs("est.txt", "gt.txt"), tmp_path))
         )
+        (here / "bad.txt").write_text("1 2 3\n")  # an error names the file as given here, not by its absolute path
+        assert main(["evaluate", "bad.txt", "--gt", "gt.txt", "--scheduler", cluster.scheduler_address,
+                     "--no-progress"]) == 1  # fmt: skip
+        err = capsys.readouterr().err
+        assert "error: bad.txt, line 1" in err and str(here) not in err, err
     with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as empty:
         t0 = time.monotonic()
         assert (
@@ -272,3 +277,27 @@ def test_lent_threads_belong_to_the_thread_that_lent_them():
     assert len(ran) > 1 and me not in ran and len(gave) > 1
     assert ran_there == gave_there == {other}
     assert where()[1:] == ({me}, {me})  # none lent any more
+
+
+def test_a_cluster_that_loses_every_worker_is_an_error_not_a_hang(monkeypatch):
+    """Every worker of the cluster killed mid-run: evaluate --scheduler waited for ever, its bar
+    frozen, nothing said. A cluster with no worker for SCHEDULER_TIMEOUT seconds is an error naming
+    it and the tasks left; one that keeps a worker is waited for."""
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    from lorisnb.tools.evaluation import pool
+
+    monkeypatch.setattr(pool, "SCHEDULER_TIMEOUT", 1.5)
+    release = threading.Event()
+    with ThreadPoolExecutor(2) as threads:
+        stuck = pool.WatchedExecutor(threads, lambda: 0, "--scheduler tcp://127.0.0.1:1")
+        t0 = time.monotonic()
+        with pytest.raises(ln.EvaluationError, match=r"tcp://127.0.0.1:1: the cluster has had no worker for 1.5 s, 2 "
+                           r"task\(s\) of 2 left waiting"):  # fmt: skip
+            pool.run_tasks(release.wait, [30.0, 30.0], [1, 1], 2, stuck, desc="x", unit="file")
+        assert time.monotonic() - t0 < 10
+        release.set()
+        alive = pool.WatchedExecutor(threads, lambda: 1, "--scheduler tcp://127.0.0.1:1")
+        assert pool.run_tasks(abs, [-1.0, -2.0], [1, 1], 2, alive, desc="x", unit="file") == [1.0, 2.0]
+

@@ -11,7 +11,7 @@ import re
 import socket
 import threading
 from collections.abc import Callable, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, as_completed, wait
 from functools import partial
 from multiprocessing import get_all_start_methods, get_context
 from pathlib import Path
@@ -99,6 +99,47 @@ def worth_processes(sizes: Sequence[int], n_jobs: int) -> bool:
     return sum(sizes) >= PARALLEL_MIN_BYTES
 
 
+class WatchedExecutor(Executor):
+    """An executor of a cluster (a Dask client's) with a count of its workers: :func:`run_tasks`
+    waiting on it gives up with an error when the cluster has had no worker for
+    :data:`SCHEDULER_TIMEOUT` seconds (every worker killed mid-run left the command waiting for
+    ever, its bar frozen, nothing said). ``where``: the scheduler, as the message names it."""
+
+    def __init__(self, executor: Executor, workers: Callable[[], int], where: str) -> None:
+        self.executor, self.workers, self.where = executor, workers, where
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future:
+        return self.executor.submit(fn, *args, **kwargs)
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        self.executor.shutdown(wait=wait, cancel_futures=cancel_futures)
+
+
+def _completed(futures: Any, executor: Executor | None) -> Any:
+    """``as_completed(futures)``, or, on a :class:`WatchedExecutor`, the same while its cluster keeps a
+    worker (polled each second once nothing completes); an EvaluationError once it has had none
+    for :data:`SCHEDULER_TIMEOUT` seconds."""
+    if not isinstance(executor, WatchedExecutor):
+        yield from as_completed(futures)
+        return
+    import time
+
+    pending, since = set(futures), None
+    while pending:
+        done, pending = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
+        yield from done
+        if done or executor.workers() > 0:
+            since = None
+            continue
+        since = time.monotonic() if since is None else since
+        if time.monotonic() - since >= SCHEDULER_TIMEOUT:
+            for f in pending:
+                f.cancel()
+            raise EvaluationError(f"{executor.where}: the cluster has had no worker for {SCHEDULER_TIMEOUT:g} s, "
+                                  f"{len(pending)} task(s) of {len(futures)} left waiting (its workers stopped?); "
+                                  "start a worker and run again")  # fmt: skip
+
+
 def apply_all(fn: Callable[[T], R], items: list[T]) -> list[R]:
     """``fn`` on each item: one task of a pool."""
     return [fn(item) for item in items]
@@ -156,7 +197,7 @@ def run_tasks(
         if meanwhile is not None:
             meanwhile()
         results: list[Any] = [None] * len(items)
-        for fut in as_completed(futures):
+        for fut in _completed(futures, executor):
             for k, result in zip(futures[fut], fut.result(), strict=True):
                 results[k] = result
             if bar is not None:

@@ -77,8 +77,15 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
     unit = "file" if kind != "manifest" else "session set"
     # on an executor (a Dask cluster's workers) a relative path is opened in the worker's folder, not here
     sent = jobs if executor is None else [absolute_paths(j) for j in jobs]
-    for status, value in run_tasks(run_job, sent, sizes, n, executor, progress, desc="evaluating", unit=unit,
-                                   meanwhile=_table_library):  # fmt: skip
+    results = run_tasks(run_job, sent, sizes, n, executor, progress, desc="evaluating", unit=unit,
+                        meanwhile=_table_library)  # fmt: skip
+    for job, went, (status, value) in zip(jobs, sent, results, strict=True):
+        if went is not job and str(went.path) != str(job.path):  # named as given, as a local run names it
+            was, given = str(went.path), str(job.path)
+            if isinstance(value, Failure):
+                value = replace(value, path=job.path, error=value.error.replace(was, given))
+            elif isinstance(value, FileErrors):
+                value.path, value.warnings = job.path, [w.replace(was, given) for w in value.warnings]
         if isinstance(value, FileErrors):
             done.append(value)
         elif isinstance(value, Failure):
