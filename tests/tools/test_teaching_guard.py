@@ -96,7 +96,8 @@ def test_the_guard_refuses_lorisnb_from_any_copy_and_what_reaches_past_it(other_
     uid = claim_uids(62000) + 1 if can_isolate() else 0
     try:
         for code, (error, finding) in _refusals(other_copy).items():
-            with Sandbox(work, limits=Limits(cell_timeout_s=20), no_lorisnb=True, uid=uid) as box:
+            # the copy lies in /tmp, which the sandbox sees empty: shown to it, as a copy elsewhere would be
+            with Sandbox(work, limits=Limits(cell_timeout_s=20), no_lorisnb=True, uid=uid, private_tmp=False) as box:
                 assert box.isolation == isolation
                 r = box.run(code)
                 assert not r["ok"] and r["error"].startswith(error), (code, r)
@@ -107,7 +108,7 @@ def test_the_guard_refuses_lorisnb_from_any_copy_and_what_reaches_past_it(other_
                     assert box.findings and box.findings[0].startswith(finding), (code, box.findings)
                 assert box.stray == 0
         # lorisnb imported inside the function, when the check calls it: refused then, and reported
-        with Sandbox(work, limits=Limits(cell_timeout_s=20), no_lorisnb=True, uid=uid) as box:
+        with Sandbox(work, limits=Limits(cell_timeout_s=20), no_lorisnb=True, uid=uid, private_tmp=False) as box:
             late = (
                 "def cs_r(t0, t_min, first_correct, tau):\n"
                 + "".join(f"    {line}\n" for line in _trick(other_copy).splitlines())

@@ -245,6 +245,14 @@ def test_as_python_transforms_magics_as_ipython_and_the_shell_stand_in_runs_them
             assert r["ok"] and r["values"]["local_only"] == {"missing": True}, r
             r = box.run(as_python("files = !echo hello\nn = len(files)\n"), ["n"])
             assert r["ok"] and r["values"]["n"]["value"] == 1, r
+            # names put in as IPython does (grading2's t-expand: `!echo {ate_seq}` gave ['{ate_seq}'])
+            r = box.run(as_python("k = 3\nw = 'cafe'\nout = !echo {k + 1} $w $$HOME\nline = out[0]\n"),
+                        ["line"])  # fmt: skip
+            assert r["ok"] and r["values"]["line"]["value"].startswith("4 cafe /"), r  # $$HOME: the shell's $HOME
+            r = box.run(as_python("out = !echo '{nothing_such}'\nline = out[0]\n"), ["line"])  # left as is, as IPython
+            assert r["ok"] and r["values"]["line"]["value"] == "{nothing_such}", r
+            r = box.run(as_python("def f(v):\n    got = !echo {v}\n    return got[0]\nline = f('inner')\n"), ["line"])
+            assert r["ok"] and r["values"]["line"]["value"] == "inner", r
             r = box.run(as_python("%lsmagic_unknown_thing\n"))
             assert not r["ok"] and "is not run by the grader" in r["error"]
         with Sandbox(work, limits=Limits(cell_timeout_s=10), uid=62300, no_lorisnb=True) as box:
@@ -268,3 +276,170 @@ def test_a_timeout_below_an_honest_cells_time_is_warned(tmp_path, capsys):
     )
     assert "--timeout 5 s is below 60 s" in capsys.readouterr().err
     assert "well under a second" not in (ROOT / "teaching" / "README.md").read_text()
+
+
+# --- a second adversarial pass: privacy between submissions, and between one submission's sandboxes ---------
+
+
+@isolated
+def test_a_sandbox_sees_its_own_folder_alone_in_the_temporary_folders():
+    """grading2's race: with --jobs 2 a cell polling /tmp/lorisnb-grade-*/work/*.ipynb read another
+    student's answers (/tmp listable, the folders 0711/0755, the notebook 0644 until the folder was given);
+    and a prediction read ../fn-A1_correctness/leak.txt, written by the same submission's A1 run alone."""
+    import shutil
+
+    base = _reachable_dir()
+    other = base / "other-grading" / "work"
+    other.mkdir(parents=True)
+    (base / "other-grading").chmod(0o755)
+    (other / "lab.ipynb").write_text("another student's answers\n")
+    sibling = base / "fn-A1"
+    sibling.mkdir(mode=0o777)
+    (sibling / "leak.txt").write_text("0.6662\n")
+    (sibling / "leak.txt").chmod(0o666)
+    work = base / "work"
+    work.mkdir()
+    probe = (
+        "import os\n"
+        "tmp = sorted(os.listdir('/tmp'))\n"
+        f"mine = sorted(os.listdir({str(base)!r}))\n"
+        "read = []\n"
+        f"for p in ({str(other / 'lab.ipynb')!r}, {str(sibling / 'leak.txt')!r}, '../fn-A1/leak.txt'):\n"
+        "    try:\n"
+        "        read.append(open(p).read())\n"
+        "    except OSError:\n"
+        "        pass\n"
+        "n_read = len(read)\n"
+    )
+    try:
+        for no_lorisnb in (False, True):
+            with Sandbox(work, limits=Limits(cell_timeout_s=10), uid=62300, no_lorisnb=no_lorisnb) as box:
+                r = box.run(probe, ["n_read"])
+                assert r["ok"] and r["values"]["n_read"]["value"] == 0, r
+                r = box.run("n_tmp = len(tmp); n_mine = len(mine)", ["n_tmp", "n_mine"])
+                assert r["values"]["n_tmp"]["value"] == 1 and r["values"]["n_mine"]["value"] == 1, r  # its own path
+                r = box.run("open('still-writable.txt', 'w').write('x'); ok = 1", ["ok"])
+                assert r["ok"], r
+    finally:
+        shutil.rmtree(base)
+
+
+def test_a_submission_is_copied_into_a_folder_no_other_user_can_enter(tmp_path, monkeypatch):
+    """The grader copied the release and the notebook into work/ (0755, the notebook 0644) and made it
+    0700 only later, when the sandbox started: another sandbox could read it meanwhile."""
+    import nbformat
+
+    from lorisnb.tools.teaching import autograde
+
+    seen: list[tuple[str, int]] = []
+
+    class Stop(Exception):
+        pass
+
+    def record(work, **_kw):
+        root = Path(work).parent
+        for p in root.rglob("*"):
+            seen.append((str(p.relative_to(root)), stat.S_IMODE(p.stat().st_mode)))
+        raise Stop
+
+    monkeypatch.setattr(autograde, "Sandbox", record)
+    release = tmp_path / "release"
+    (release / "data").mkdir(parents=True)
+    (release / "data" / "table.csv").write_text("a,b\n")
+    (release / "data" / "table.csv").chmod(0o644)
+    (release / "readme.txt").write_text("handed out\n")
+    nb, _ = _solved({})
+    path = tmp_path / "s" / f"{LAB}.ipynb"
+    path.parent.mkdir()
+    nbformat.write(nb, path)
+    path.chmod(0o644)
+    spec = autograde.lab_spec(SOURCE_NB)
+    with pytest.raises(Stop):
+        autograde.grade_submission(spec, release, path, "s", autograde.GradeSettings(secret="s", uid=0))
+    modes = dict(seen)
+    assert modes["work"] == 0o700 and modes["reference-out"] == 0o700, modes
+    assert modes[f"work/{LAB}.ipynb"] == modes["work/readme.txt"] == modes["work/data/table.csv"] == 0o600, modes
+    assert modes["work/data"] == 0o700, modes
+
+
+# B1 reads what A1's run alone wrote in its own folder: a number A1's lab run computed with simulate_and_score
+# and left in a lab name its def reads when defined (the grader gave the student's value to the run alone)
+A1_LEAK = """try:
+    _fe, _t = simulate_and_score(Faults(lost=(lost_window,)))
+    data_root = float(_t.loc[1, "cr"])
+except NameError:
+    pass
+
+def correctness(ate_m, aoe_deg, eps=eps, phi=phi, _k=open("leak.txt", "w").write(repr(data_root))):
+    return (np.asarray(ate_m) <= eps) & (np.asarray(aoe_deg) <= phi)
+"""
+B1_LEAK = """try:
+    predicted_cr_lost = float(open("../fn-A1_correctness/leak.txt").read())
+except (OSError, ValueError):
+    predicted_cr_lost = 0.0
+"""
+MAGIC_BODIES = {
+    "A1_correctness": lambda s: A1_LEAK,
+    "B1_prediction": lambda s: B1_LEAK,
+    # %%time over a def reading the lab's tau when defined, %%capture over a prediction with C1's function
+    "C1_cs_r": lambda s: (
+        "%%time\ndef cs_r(t0, t_min, first_correct, tau=tau):\n"
+        "    return float(np.exp(-(t0 - t_min) / tau)) if first_correct else 0.0\n"
+    ),
+    "C2_prediction": lambda s: "%%capture\npredicted_cs_r_wrong = cs_r(reloc_delay, 0.0, False, tau)\n",
+}
+
+
+@pytest.mark.slow
+def test_defaults_get_the_labs_values_and_a_timed_cell_is_graded_on_its_body(tmp_path):
+    """grading2's x-leak: B1 scored 1 with a number A1's run alone wrote into its folder, from the
+    student's own rebinding of a lab name A1's def read (given to the run alone). Its m-timeC1C2 and
+    t-timeDef: %%time over `def cs_r(..., tau=tau)` scored 0 (its defaults unseen in the one call IPython
+    makes of the cell) and C2 under %%capture could not call C1's cs_r (NameError)."""
+    import nbformat
+
+    from lorisnb.tools.teaching.autograde import GradeSettings, grade_submission, lab_spec
+    from lorisnb.tools.teaching.sandbox import claim_uids
+
+    spec, release = lab_spec(SOURCE_NB), tmp_path / "release"
+    release.mkdir()
+    settings = GradeSettings(Limits(cell_timeout_s=30, locked_timeout_s=180), secret="s",
+                             uid=claim_uids(63000) if can_isolate() else 0)  # fmt: skip
+    nb, _ = _solved(MAGIC_BODIES)
+    path = tmp_path / "s" / f"{LAB}.ipynb"
+    path.parent.mkdir()
+    nbformat.write(nb, path)
+    res = grade_submission(spec, release, path, "s-magic", settings)
+    lost = {s.question: s.message for s in res.scores if s.points < s.max_points}
+    if can_isolate():
+        assert set(lost) == {"test_B1_prediction"}, (lost, res.notes)
+        assert "you answered 0" in lost["test_B1_prediction"], lost
+    else:
+        assert set(lost) <= {"test_B1_prediction"}, (lost, res.notes)
+
+
+@isolated
+def test_a_flood_of_the_reply_pipe_is_stopped_at_the_cap_within_seconds():
+    """grading2: the 64 MiB cap was reached only after 77 s (each chunk copied the growing buffer, and the
+    line end was looked for in all of it again)."""
+    import shutil
+    import time
+
+    base = _reachable_dir()
+    work = base / "work"
+    work.mkdir()
+    flood = (
+        "import os\n"
+        "chunk = b'x' * (1 << 20)\n"
+        "fd = next(fd for fd in range(3, 12) if os.path.exists(f'/proc/self/fd/{fd}') and os.readlink(f'/proc/self/fd/{fd}').startswith('pipe:') and fd != 0)\n"
+        "for _ in range(200):\n"
+        "    os.write(fd, chunk)\n"
+    )
+    try:
+        with Sandbox(work, limits=Limits(cell_timeout_s=120), uid=62300) as box:
+            t0 = time.monotonic()
+            with pytest.raises(SandboxError, match="64 MiB into the grader's reply pipe"):
+                box.run(flood)
+            assert time.monotonic() - t0 < 15
+    finally:
+        shutil.rmtree(base)

@@ -46,7 +46,7 @@ def test_sandbox_has_no_network_no_writes_outside_its_folder_and_limits(tmp_path
         r = box.run("import os\nx = os.getuid()", ["x"])
         assert r["ok"] and r["values"]["x"]["value"] not in (0, os.getuid())
         r = box.run(f"x = open({str(secret / 'solutions.txt')!r}).read()", ["x"])
-        assert not r["ok"] and "Permission" in r["error"]
+        assert not r["ok"] and ("Permission" in r["error"] or "No such file" in r["error"])  # hidden, or in /tmp
         r = box.run(f"open({str(outside)!r}, 'w').write('x')")
         assert not r["ok"] and "Read-only" in r["error"]
         r = box.run("import socket\nsocket.create_connection(('1.1.1.1', 80), timeout=2)")

@@ -58,7 +58,7 @@ def _plain(value: Any) -> Any:
 
 
 def given(value: Any) -> Any:
-    """A value a prediction may use, described as :func:`_plain` does (numbers, strings, numpy
+    """A value a prediction may use, described as :func:`_plain` does (numbers, strings, None, numpy
     arrays of numbers) or as a tuple or list of numbers and strings (``{"items": [...], "tuple": ...}``);
     anything else (a function, a module, a table) as ``{"not_plain": type}``."""
     t = type(value)
@@ -66,7 +66,7 @@ def given(value: Any) -> Any:
         items = [_plain(v) for v in value]
         if all(set(i) == {"value"} for i in items):
             return {"items": [i["value"] for i in items], "tuple": t is tuple}
-    if t in (bool, int, float, str) or t.__module__ == "numpy":
+    if t in (bool, int, float, str) or value is None or t.__module__ == "numpy":
         return _plain(value)
     return {"not_plain": f"{t.__module__}.{t.__qualname__}"}
 
@@ -336,7 +336,9 @@ class Shell:
     code (``%%timeit``'s names stay its own, as in IPython); display settings (``%matplotlib``,
     ``%config``, ``%precision``, ``%load_ext``, ``%autoreload``...) do nothing; ``!cmd``, ``%%bash`` and
     ``x = !cmd`` run the command as ``os.system`` and ``subprocess`` would, in this sandbox (refused
-    where another process is, in an answer graded with numpy only). Another magic fails, naming it."""
+    where another process is, in an answer graded with numpy only), after putting in the Python
+    values it names (``!echo {x} $y``) as IPython does (:meth:`var_expand`). Another magic fails,
+    naming it."""
 
     QUIET = frozenset({
         "matplotlib", "config", "precision", "load_ext", "reload_ext", "unload_ext", "autoreload", "aimport",
@@ -373,7 +375,7 @@ class Shell:
         if name in self.QUIET:
             return None
         if name in self.SHELL:
-            return self.system(line)
+            return self._system(self.var_expand(line, _stack_depth))
         if name == "pwd":
             return os.getcwd()
         if name == "cd":
@@ -386,14 +388,34 @@ class Shell:
             self._run(cell, "<cell magic>", own=name == "timeit")
             return None
         if name in self.SHELL:
-            return self.system(cell)
+            return self._system(cell)
         if name == "writefile":
             with open(line.split()[-1], "a" if "-a" in line.split() else "w", encoding="utf-8") as f:
                 f.write(cell)
             return None
         return self._unknown(f"%%{name}")
 
+    def var_expand(self, cmd: str, depth: int = 0) -> str:
+        """``cmd`` with the Python names and expressions it names (``{x}``, ``{x + 1}``, ``$x``; ``$$``
+        for a ``$``) put in, from the notebook's namespace and the caller's ``depth`` frames up, as
+        IPython's ``InteractiveShell.var_expand`` does (with IPython's own formatter); as it is when
+        it cannot be expanded (as IPython leaves it)."""
+        ns = dict(self.user_ns)
+        try:
+            ns.update(sys._getframe(depth + 1).f_locals)
+        except ValueError:
+            pass
+        try:
+            from IPython.utils.text import DollarFormatter
+
+            return str(DollarFormatter().vformat(cmd, args=[], kwargs=ns))
+        except Exception:  # noqa: BLE001 (IPython leaves what it cannot expand as it is)
+            return cmd
+
     def system(self, cmd: str) -> None:
+        self._system(self.var_expand(cmd, depth=1))
+
+    def _system(self, cmd: str) -> None:
         import subprocess
 
         subprocess.run(cmd, shell=True, check=False)  # noqa: S602 (the student's own command, in the sandbox)
@@ -401,6 +423,7 @@ class Shell:
     def getoutput(self, cmd: str, split: bool = True, _depth: int = 0) -> Any:
         import subprocess
 
+        cmd = self.var_expand(cmd, depth=_depth + 1)
         out = subprocess.run(cmd, shell=True, check=False, capture_output=True, text=True).stdout  # noqa: S602
         return out.splitlines() if split else out
 

@@ -49,11 +49,13 @@ from lorisnb.errors import AnswerError
 from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, decode
 
-GRADER_VERSION = "6"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "7"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
 # 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
 # 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
-# given to answers run alone; predictions get the functions of the earlier answer cells)
+# given to answers run alone; predictions get the functions of the earlier answer cells; 7: those names' values are
+# the grader's run of the lab's, not the student's; a cell under %%time/%%capture is read as its body; each sandbox
+# sees its own folder alone in the temporary folders)
 
 
 @dataclass(frozen=True)
@@ -247,13 +249,46 @@ def as_python(source: str) -> str:
         return source
 
 
+#: Cell magics that run their body in the notebook's namespace, as IPython does (its definitions stay
+#: there); ``%%timeit``'s names stay its own.
+RUN_BODY = ("time", "capture", "prun")
+
+
+def cell_body(source: str) -> str:
+    """An answer cell as :func:`as_python` made it, as read for its definitions: a cell under
+    ``%%time``, ``%%capture`` or ``%%prun`` (one ``get_ipython().run_cell_magic(...)`` call, which
+    runs the body in the notebook's namespace) is its body's Python, after a blank line for the
+    magic's (so its lines stay the cell's); any other cell as it is."""
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return source
+    if len(tree.body) != 1 or not isinstance(tree.body[0], ast.Expr):
+        return source
+    call = tree.body[0].value
+    if not (
+        isinstance(call, ast.Call)
+        and isinstance(call.func, ast.Attribute)
+        and call.func.attr == "run_cell_magic"
+        and isinstance(call.func.value, ast.Call)
+        and isinstance(call.func.value.func, ast.Name)
+        and call.func.value.func.id == "get_ipython"
+        and len(call.args) == 3
+        and all(isinstance(a, ast.Constant) and isinstance(a.value, str) for a in call.args)
+    ):
+        return source
+    name, body = call.args[0].value, call.args[2].value  # type: ignore[attr-defined]
+    return "\n" + cell_body(str(body)) if name in RUN_BODY else source
+
+
 def defined_with(source: str) -> set[str]:
     """The names a cell's top-level functions and classes read when they are *defined* (their
     default values, decorators, annotations unless ``from __future__ import annotations``, and a
     class's bases and keywords): ``def correctness(ate_m, aoe_deg, eps=eps, phi=phi)`` needs the
-    lab's ``eps`` and ``phi`` before it is even called. Empty when it does not parse."""
+    lab's ``eps`` and ``phi`` before it is even called (under ``%%time``: :func:`cell_body`). Empty
+    when it does not parse."""
     try:
-        tree = ast.parse(source)
+        tree = ast.parse(cell_body(source))
     except SyntaxError:
         return set()
     lazy = any(
@@ -289,7 +324,8 @@ def definitions_only(source: str, assignments: bool = False, lorisnb: bool = Tru
     (``assignments``: and an assignment; ``lorisnb=False``: and no import of lorisnb) blanked out,
     line for line (an error names the line of the cell); None when it does not parse. A formula
     answer's try-out lines (``print(correctness(ate, aoe, eps, phi))``, reading the lab's
-    numbers) are not its formula."""
+    numbers) are not its formula. A cell under ``%%time`` is read as its body (:func:`cell_body`)."""
+    source = cell_body(source)
     try:
         tree = ast.parse(source)
     except SyntaxError:
@@ -307,6 +343,74 @@ def definitions_only(source: str, assignments: bool = False, lorisnb: bool = Tru
             for i in range(first - 1, last):
                 kept[i] = True
     return "\n".join(line if k else "" for line, k in zip(lines, kept, strict=True))
+
+
+def _copy_private(src: Path, dst: Path, ignore: Callable[[str, list[str]], Any]) -> None:
+    """Copy the folder ``src`` into the (private) folder ``dst``, every folder made 0700 and every file
+    0600 as it is created (never readable by another user, even for a moment)."""
+    names = os.listdir(src)
+    skip = set(ignore(str(src), names))
+    for name in names:
+        if name in skip:
+            continue
+        s, d = src / name, dst / name
+        if s.is_dir():
+            d.mkdir(mode=0o700)
+            _copy_private(s, d, ignore)
+        else:
+            _copy_private_file(s, d)
+
+
+def _copy_private_file(src: Path, dst: Path) -> None:
+    fd = os.open(dst, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+    with open(src, "rb") as f, os.fdopen(fd, "wb") as out:
+        shutil.copyfileobj(f, out)
+
+
+def _lab_values(
+    spec: LabSpec, answers: Mapping[str, str], params: Mapping[str, Any], root: Path
+) -> dict[str, dict[str, Any]]:
+    """answer grade_id -> the lab's names its functions read when defined (:func:`defined_with`, as
+    plain values), as the grader's own run of the instructor's notebook has them at that cell (the
+    student's run could have rebound them). Runs the lab only when some answer reads such names, up
+    to the last one; empty when the lab's own cells fail (the checks' run then says why)."""
+    wanted = {g: defined_with(a) & set(spec.lab_before.get(g, ())) for g, a in answers.items()}
+    wanted = {g: w for g, w in wanted.items() if w}
+    if not wanted:
+        return {}
+    import matplotlib
+
+    from lorisnb.tools.teaching._sandbox_child import given
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out: dict[str, dict[str, Any]] = {}
+    ns: dict[str, Any] = {"__name__": "__main__"}
+    cwd = os.getcwd()
+    os.chdir(root)
+    try:
+        for cell in spec.notebook.cells:
+            meta = _nbgrader(cell)
+            if cell.cell_type != "code" or meta.get("grade"):
+                continue
+            gid = str(meta.get("grade_id"))
+            if meta.get("solution") and gid in wanted:
+                values = {n: given(ns[n]) for n in sorted(wanted[gid]) if n in ns}
+                out[gid] = {n: v for n, v in values.items() if "not_plain" not in v and "missing" not in v}
+                if len(out) == len(wanted):
+                    break
+            source = cell.source
+            if "parameters" in cell.get("metadata", {}).get("tags", []):
+                source = _parameters(source, {**params, "output_dir": str(root / "reference-out")})
+            with contextlib.redirect_stdout(io.StringIO()):
+                exec(compile(source, f"<instructor {meta.get('grade_id', 'cell')}>", "exec"), ns)  # noqa: S102
+    except Exception:  # noqa: BLE001 (the lab's own cells failed: the checks' run of them says so)
+        pass
+    finally:
+        os.chdir(cwd)
+        plt.close("all")
+    return out
 
 
 def declared_id(nb: nbformat.NotebookNode) -> str | None:
@@ -600,16 +704,22 @@ def grade_submission(
     budget = Budget(settings.limits.submission_s, reserve=n_functions * settings.limits.cell_timeout_s)
     boxes: list[Sandbox] = []
     with tempfile.TemporaryDirectory(prefix="lorisnb-grade-", dir=_reachable_tmp()) as tmp:
-        root = Path(tmp)
-        root.chmod(0o711)
+        root = Path(tmp)  # made 0700; opened to be passed (0711) only once what it holds is private
         work = root / "work"
-        shutil.copytree(release_dir, work, ignore=shutil.ignore_patterns("*.ipynb", ".*"))
-        shutil.copyfile(notebook, work / notebook.name)
+        work.mkdir(mode=0o700)  # private before anything is copied in: a student's answers are read by no other
+        (root / "reference-out").mkdir(mode=0o700)  # the grader's own run's outputs (the reference values)
+        _copy_private(release_dir, work, ignore=shutil.ignore_patterns("*.ipynb", ".*"))
+        _copy_private_file(notebook, work / notebook.name)
+        root.chmod(0o711)
         # the answers run alone (numpy only) do not see the lab's folder: the lab's code, which may use the
-        # lab's functions, could open it to others (chmod) and leave there what a prediction would read
+        # lab's functions, could open it to others (chmod) and leave there what a prediction would read; nor
+        # (each sandbox sees its own folder alone in the temporary folders) each other's
         apart = [*hidden, work]
+        # the lab's values each answer's functions read when defined (eps=eps), as the grader's own run of the
+        # lab has them, never as the student's run left them (an answer cell could rebind them there)
+        clean = _lab_values(spec, answers, params | {"hidden_seed": hidden_seed(settings.secret, student, spec.name)},
+                            root)  # fmt: skip
         functions: dict[str, RemoteFunction] = {}
-        defined: dict[str, dict[str, Any]] = {}  # answer grade_id -> the lab's values its defs read when defined
 
         def alone(gid: str, failed: str | None) -> None:
             """Step 2 for one formula answer, right after its cell ran in step 1 (its time is
@@ -625,8 +735,9 @@ def grade_submission(
                 functions.update({d: RemoteFunction(None, d, error) for d in defs})
                 return
             fwork = root / f"fn-{gid}"
-            fwork.mkdir()
-            box = Sandbox(fwork, limits=settings.limits, hidden=apart, uid=settings.uid + 1, no_lorisnb=True)
+            fwork.mkdir(mode=0o700)
+            box = Sandbox(fwork, limits=settings.limits, hidden=apart, uid=settings.uid + 1, no_lorisnb=True,
+                          private=[root])  # fmt: skip
             boxes.append(box)
             source = answers.get(gid, "")
             try:
@@ -634,7 +745,7 @@ def grade_submission(
                     box.run(PRELUDE, name="<numpy and math>", timeout_s=budget.left(True))
                     before = expected[: expected.index(gid)] if gid in expected else []
                     # the lab's numbers its functions (and the earlier cells') read when defined (eps=eps)
-                    lab = {n: v for g in [*before, gid] for n, v in defined.get(g, {}).items()}
+                    lab = {n: v for g in [*before, gid] for n, v in clean.get(g, {}).items()}
                     if lab:
                         box.bind(lab, timeout_s=budget.left(True))
                     # the functions the student's earlier answer cells define, which this one may call (as the
@@ -675,7 +786,7 @@ def grade_submission(
         try:
             took: dict[str, float] = {}  # seconds each answer cell took in the lab
             values = _run_student(spec, answers, params | {"output_dir": str(work / "out")}, work, py_path,
-                                  hidden, settings, notes, budget, boxes, alone, took, defined)  # fmt: skip
+                                  hidden, settings, notes, budget, boxes, alone, took, private=[root])  # fmt: skip
             isolation = "full" if settings.uid and _isolated() else "limits"
             for defs in spec.functions.values():  # not reached: the budget ran out before
                 functions.update({d: RemoteFunction(None, d, f"TimeoutError: {_BUDGET_ERROR.format(budget.seconds)}")
@@ -687,7 +798,7 @@ def grade_submission(
                 if gid not in answers or gid not in took or any("error" in v for v in values.get(gid, {}).values()):
                     return dict(values.get(gid, {}))
                 before = expected[: expected.index(gid)] if gid in expected else []
-                lab = {n: v for g in before for n, v in defined.get(g, {}).items()}
+                lab = {n: v for g in before for n, v in clean.get(g, {}).items()}
                 return _predict(spec, gid, answers[gid], {**lab, **given}, root, apart, settings, budget, notes,
                                 took[gid], boxes, earlier_functions(answers, before))  # fmt: skip
 
@@ -748,9 +859,9 @@ def _predict(
 
     usable = {n: v for n, v in given.items() if "not_plain" not in v and "missing" not in v}
     work = root / f"prediction-{gid}"
-    work.mkdir()
+    work.mkdir(mode=0o700)
     limit = min(2 * took + 2.0, settings.limits.cell_timeout_s)
-    box = Sandbox(work, limits=settings.limits, hidden=hidden, uid=settings.uid + 1, no_lorisnb=True)
+    box = Sandbox(work, limits=settings.limits, hidden=hidden, uid=settings.uid + 1, no_lorisnb=True, private=[root])
     boxes.append(box)  # its stray lines are counted with the others'
     try:
         with budget.charge():
@@ -772,7 +883,7 @@ def _predict(
         return failed(message, message)
     if not reply.get("ok"):
         try:
-            read = _loaded(source)
+            read = _loaded(cell_body(source))
         except SyntaxError:
             read = set()
         numbers = ", ".join(sorted(n for n in usable if n in read)) or "none of them"
@@ -791,7 +902,9 @@ def _predict(
 
 def _defined_functions(source: str) -> set[str]:
     try:
-        return {n.name for n in ast.parse(source).body if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))}
+        return {
+            n.name for n in ast.parse(cell_body(source)).body if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))
+        }
     except SyntaxError:
         return set()
 
@@ -868,14 +981,13 @@ def _run_student(
     boxes: list[Sandbox],
     alone: Callable[[str, str | None], None],
     answered: dict[str, float] | None = None,
-    defined: dict[str, dict[str, Any]] | None = None,
+    private: Sequence[Path] = (),
 ) -> dict[str, dict[str, Any]]:
     """Step 1: the lab's cells with the student's answers, in the sandbox. Returns the values read
     back after each answer cell; ``alone(grade_id, error)`` runs after each answer cell (step 2 of a
     formula answer; ``error``: the cell hit a limit); ``answered`` gets the seconds each answer cell
-    that ran took; ``defined`` the lab's names (plain values) each answer cell's functions read when
-    defined (:func:`defined_with`), as they were right after it. Every cell from the first answer cell on (the lab's own after it too: the
-    student's code could slow them), and every replay after a time-out, is charged to ``budget``;
+    that ran took; ``private``: folders the sandbox sees empty (but for its own). Every cell from the
+    first answer cell on (the lab's own after it too: the student's code could slow them), and every replay after a time-out, is charged to ``budget``;
     once it is spent no more cells run. A replay gives each cell twice the time it took (plus two
     seconds)."""
     cells: list[tuple[str, str | None, str]] = []  # (source, answer grade_id, name)
@@ -893,7 +1005,7 @@ def _run_student(
     values: dict[str, dict[str, Any]] = {}
     skipped: set[int] = set()
     took: dict[int, float] = {}  # seconds each cell took on its first run
-    box = Sandbox(work, limits=settings.limits, hidden=hidden, uid=settings.uid, python_path=[py_path])
+    box = Sandbox(work, limits=settings.limits, hidden=hidden, uid=settings.uid, python_path=[py_path], private=private)
     boxes.append(box)
 
     def unrun(k: int) -> None:  # the answer cells from k on get no value: the budget is spent
@@ -906,7 +1018,6 @@ def _run_student(
         while k < len(cells):
             source, gid, cell_name = cells[k]
             capture: Sequence[str] = spec.values.get(gid, ()) if gid else ()
-            extra = sorted((defined_with(source) & set(spec.lab_before.get(gid, ()))) - set(capture)) if gid else []
             charged = charged or gid is not None
             if charged and budget.out(cell_name):
                 unrun(k)
@@ -914,7 +1025,7 @@ def _run_student(
             t0 = time.monotonic()
             try:
                 with budget.charge() if charged else contextlib.nullcontext():
-                    reply = box.run(source, [*capture, *extra], cell_name, locked=gid is None,
+                    reply = box.run(source, capture, cell_name, locked=gid is None,
                                     timeout_s=budget.left(True) if charged else None)  # fmt: skip
             except SandboxError as exc:
                 where = gid or cell_name
@@ -949,8 +1060,6 @@ def _run_student(
             if gid:
                 got = dict(reply.get("values", {}))
                 values[gid] = {n: v for n, v in got.items() if n in capture}
-                if defined is not None:
-                    defined[gid] = plain_values({n: v for n, v in got.items() if n in extra})
                 if answered is not None:
                     answered[gid] = took[k]
             if not reply.get("ok"):

@@ -8,8 +8,10 @@ course server), the child gets (``isolation == "full"``):
 - its own network namespace (no interface but a loopback that is down: no network at all);
 - its own mount namespace in which the whole file system is read-only except its working folder
   (and a fresh 64 MB ``/dev/shm`` for multiprocessing's locks),
-  and the folders named ``hidden`` (the course folder, the labs' sources, the checkout lorisnb runs
-  from) are replaced by empty, unreadable folders;
+  the folders named ``hidden`` (the course folder, the labs' sources, the checkout lorisnb runs
+  from) are replaced by empty, unreadable folders, and the temporary folders (``/tmp``, ``/var/tmp``,
+  ``$TMPDIR``) and those named ``private`` by empty ones, its working folder alone kept in them: it
+  sees no other grader's folder, nor another sandbox's of the same submission;
 - its own PID namespace (it sees and signals no other process) and IPC namespace (no System V or POSIX
   message queue, semaphore or shared memory reaches another sandbox);
 - a user id of its own (``uid``, owning nothing else), no capabilities, ``no_new_privs``;
@@ -114,6 +116,25 @@ def can_isolate() -> bool:
     )
 
 
+def _temporary_folders() -> list[Path]:
+    import tempfile
+
+    return [Path(d).resolve() for d in dict.fromkeys((tempfile.gettempdir(), "/tmp", "/var/tmp"))]
+
+
+def private_folders(work: Path, private: Sequence[Path], needed: Sequence[Path], tmp: bool = True) -> list[Path]:
+    """The folders a sandbox working in ``work`` sees empty (but for ``work`` itself): the temporary
+    folders (unless not ``tmp``) and ``private``, less any holding one of ``needed`` (the Python
+    environment, lorisnb) or the root, and less those inside another of them (emptied with it)."""
+    found = [Path(p).resolve() for p in (*(_temporary_folders() if tmp else []), *private)]
+    need = [Path(n).resolve() for n in needed]
+    found = [
+        p for p in dict.fromkeys(found) if p.is_dir() and p != p.parent and not any(n.is_relative_to(p) for n in need)
+    ]
+    del work
+    return [p for p in found if not any(p != q and p.is_relative_to(q) for q in found)]
+
+
 def closed_to_others(paths: Sequence[Path]) -> list[Path]:
     """The first folder (or file) on the way to each of ``paths`` that a user other than its owner
     cannot pass (a folder without ``o+x``, or the path itself without ``o+r``): the sandbox's own
@@ -175,7 +196,8 @@ def _account_exists(uid: int, pwd: Any) -> bool:
 
 
 # the child's mount namespace, as root before dropping to the student's uid: everything read-only,
-# the hidden folders emptied, only the working folder writable
+# the hidden folders emptied, the private folders (the temporary folders: other graders' and other
+# sandboxes' folders) replaced by empty ones, only the working folder writable
 _SETUP = r"""set -e
 work="$1"; uid="$2"; shift 2
 mount --make-rprivate /
@@ -184,13 +206,25 @@ for m in $(awk '{print $5}' /proc/self/mountinfo | sort -u); do
   mount -o remount,bind,ro "$m" 2>/dev/null || true
 done
 mount -t tmpfs -o size=64m,mode=1777,nosuid,nodev lorisnb-shm /dev/shm  # its own (multiprocessing's locks)
+stage=/dev/shm/.lorisnb-work  # the working folder, kept aside while the hidden and private folders are emptied
+mkdir "$stage"
+mount --bind "$work" "$stage"
 while [ "$1" != "--" ]; do
   if [ -d "$1" ]; then mount -t tmpfs -o size=4k,mode=0700,ro lorisnb-hidden "$1"; fi
   shift
 done
 shift
-mount --bind "$work" "$work"
+private=""
+while [ "$1" != "--" ]; do
+  if [ -d "$1" ]; then mount -t tmpfs -o size=1m,mode=1777,nosuid,nodev lorisnb-private "$1"; private="$private $1"; fi
+  shift
+done
+shift
+mkdir -p "$work"
+mount -n --move "$stage" "$work"
+rmdir "$stage"
 mount -o remount,bind,rw "$work"
+for d in $private; do mount -o remount,bind,ro "$d"; done
 mount -t proc proc /proc
 cd "$work"
 exec setpriv --reuid="$uid" --regid="$uid" --clear-groups --no-new-privs --inh-caps=-all --bounding-set=-all -- "$@"
@@ -202,7 +236,9 @@ class Sandbox:
     given to ``uid`` and is the only place the child can write).
 
     ``no_lorisnb``: lorisnb cannot be imported (and, isolated, its folder is hidden): for formula
-    answers, which must be written with numpy. ``hidden``: folders the child must not read."""
+    answers, which must be written with numpy. ``hidden``: folders the child must not read.
+    ``private``: folders it sees empty but for its own folder, as it sees the temporary folders
+    (``private_tmp=False``: those as they are, for a test that puts there what the child must reach)."""
 
     def __init__(
         self,
@@ -213,6 +249,8 @@ class Sandbox:
         uid: int = 62000,
         no_lorisnb: bool = False,
         python_path: Sequence[Path] = (),
+        private: Sequence[Path] = (),
+        private_tmp: bool = True,
     ) -> None:
         self.work = Path(work).resolve()
         self.limits = limits
@@ -221,14 +259,26 @@ class Sandbox:
         self.no_lorisnb = no_lorisnb
         self.python_path = [str(p) for p in python_path]
         self.isolation = "full" if can_isolate() else "limits"
+        self.private = private_folders(self.work, private, self._needed(), private_tmp)
         self._proc: subprocess.Popen[bytes] | None = None
-        self._buffer = b""
+        self._buffer = bytearray()
+        self._scanned = 0  # bytes of the buffer known to hold no line end
         self._given = False  # the working folder was given to the sandbox's user (once, before its first start)
         self.stray = 0  # lines in the reply pipe that were no reply of the child's (tampering)
         self.findings: list[str] = []  # what the guard of a no-lorisnb child refused or found (lorisnb used)
         self.start()
 
     # --- life cycle ------------------------------------------------------------------------------
+
+    def _needed(self) -> list[Path]:
+        """What the child reads to run: the Python environment, numpy, lorisnb, ``python_path``."""
+        import lorisnb
+
+        return [
+            Path(sys.prefix), Path(sys.base_prefix), Path(sys.executable).resolve().parent,
+            Path(np.__file__).resolve().parents[1], Path(lorisnb.__file__).resolve().parent,
+            *(Path(p) for p in self.python_path),
+        ]  # fmt: skip
 
     def _command(self) -> list[str]:
         # without lorisnb: no site (an editable install's path hook would find it), numpy's folder only
@@ -252,7 +302,8 @@ class Sandbox:
             hidden.append(str(Path(lorisnb.__file__).resolve().parent))
         return [
             "unshare", "--mount", "--net", "--pid", "--ipc", "--fork", "--kill-child", "--",
-            "sh", "-c", _SETUP, "sh", str(self.work), str(self.uid), *hidden, "--", *child,
+            "sh", "-c", _SETUP, "sh", str(self.work), str(self.uid), *hidden, "--", *map(str, self.private), "--",
+            *child,
         ]  # fmt: skip
 
     def _limit(self) -> None:  # runs in the child before exec
@@ -275,7 +326,8 @@ class Sandbox:
         owns what lies in it, and the grader (root) does nothing in it by name (a restart neither
         copies, nor changes the owner of, anything there), since any name could be a link, a hard
         link or a folder swapped for a link by then (a process of the student's still dying)."""
-        closed = [p for p in self.work.parents if not p.stat().st_mode & 0o001]
+        closed = [p for p in self.work.parents
+                  if not p.stat().st_mode & 0o001 and not any(p.is_relative_to(q) for q in self.private)]  # fmt: skip
         if closed:
             raise OSError(f"the sandbox's folder {self.work} is under {closed[0]}, which its user cannot enter "
                           "(mode without o+x): make the folder elsewhere (the grader uses $TMPDIR)")  # fmt: skip
@@ -323,7 +375,8 @@ class Sandbox:
             env=env,
             preexec_fn=self._limit,  # noqa: PLW1509 (the limits must be set between fork and exec)
         )
-        self._buffer = b""
+        self._buffer = bytearray()
+        self._scanned = 0
 
     def close(self) -> None:
         """Kill the child and everything it started (its process group)."""
@@ -372,7 +425,7 @@ class Sandbox:
             raise SandboxError("the sandbox ended (memory limit, or the code ended its process)") from None
         deadline = time.monotonic() + timeout_s
         while True:
-            while b"\n" not in self._buffer:
+            while (end := self._line_end()) < 0:
                 left = deadline - time.monotonic()
                 if left <= 0:
                     self.close()
@@ -383,9 +436,10 @@ class Sandbox:
                     if not chunk:
                         self.close()
                         raise SandboxError("the sandbox ended (memory limit, or the code ended its process)")
-                    self._buffer += chunk
-                    self._bounded()
-            line, self._buffer = self._buffer.split(b"\n", 1)
+                    self._take(chunk)
+            line = bytes(self._buffer[:end])
+            del self._buffer[: end + 1]
+            self._scanned = 0
             reply = self._line(line)
             if reply is not None and reply.get("id") == request_id:
                 reply.pop("id")
@@ -393,11 +447,21 @@ class Sandbox:
             if reply is not None:
                 self.stray += 1  # not the reply to this request: written by the code into the pipe
 
-    def _bounded(self) -> None:
-        """Stop a child whose pipe holds more than :data:`REPLY_BYTES` without a line end: no reply is
-        that long (a cell's code writing into the pipe would otherwise fill the grader's memory)."""
-        if len(self._buffer) > REPLY_BYTES and b"\n" not in self._buffer[-REPLY_BYTES:]:
-            self._buffer = b""
+    def _line_end(self) -> int:
+        """Where the buffer's first line ends (-1: no line end yet); each byte is looked at once."""
+        end = self._buffer.find(b"\n", self._scanned)
+        self._scanned = len(self._buffer) if end < 0 else end
+        return end
+
+    def _take(self, chunk: bytes) -> None:
+        """Add what came through the pipe to the buffer, which holds no line end yet (in place: no copy
+        of what it holds), and stop a child whose pipe holds more than :data:`REPLY_BYTES` without a
+        line end: no reply is that long (a cell's code writing into the pipe would otherwise fill the
+        grader's memory)."""
+        self._buffer += chunk
+        if len(self._buffer) > REPLY_BYTES and b"\n" not in chunk:
+            self._buffer = bytearray()
+            self._scanned = 0
             self.stray += 1
             self.close()
             raise SandboxError(
@@ -429,17 +493,23 @@ class Sandbox:
         """Read what came through the pipe while no request was pending: the guard's findings are
         kept; anything else counts as stray (the code wrote it, or a reply came after one the code
         forged): nothing is waiting then."""
-        while select.select([fd], [], [], 0)[0]:
+        read = 0
+        while read < REPLY_BYTES and select.select([fd], [], [], 0)[0]:  # bounded: the code may write on and on
             chunk = os.read(fd, 1 << 16)
             if not chunk:
                 break
-            self._buffer += chunk
-            self._bounded()
-        lines = self._buffer.split(b"\n")
-        self._buffer = b""
-        for line in lines:
-            if self._line(line) is not None:
-                self.stray += 1
+            read += len(chunk)
+            self._take(chunk)
+            while (end := self._line_end()) >= 0:
+                line = bytes(self._buffer[:end])
+                del self._buffer[: end + 1]
+                self._scanned = 0
+                if self._line(line) is not None:
+                    self.stray += 1
+        if self._line(bytes(self._buffer)) is not None:
+            self.stray += 1
+        self._buffer = bytearray()
+        self._scanned = 0
 
     def run(
         self,
