@@ -10,9 +10,11 @@ teaching/source/ (``--source``). Writes COURSE/graded/, grades.csv, grades-demo.
 Exit status 0 when every submission was graded, 1 otherwise (a message says why; a submission that
 could not be graded, such as a notebook that is not JSON, scores 0, is named, and the others are
 graded). Warnings (the exit status stays 0) name the submissions whose time is unknown (a
-timestamp.txt that is no time; with --due, how many have none: counted as on time) and the pairs
-whose answer cells are identical (possible copies: no points changed); grades.csv's notes column
-says the same per student.
+timestamp.txt that is no time; with --due, how many have none: counted as on time), the submissions
+whose folders name one id as the data variants take it (Alice and alice: the same numbers), and the
+pairs whose answer cells are identical (possible copies: no points changed); grades.csv's notes
+column says the same per student. The feedback pages are written where `nbgrader release_feedback`
+hands them out (feedback/<student>/<lab>/<lab>.html) too.
 """
 
 from __future__ import annotations
@@ -108,6 +110,14 @@ def main(argv: list[str] | None = None) -> int:
     if no_time:
         print(f"warning: {len(no_time)} submission(s) have no timestamp.txt, so --due could not be applied to them: "
               f"counted as on time ({', '.join(no_time)}; nbgrader collect writes it)", file=sys.stderr)  # fmt: skip
+    alike = sorted(
+        {(g.result.lab, tuple(sorted((g.result.student, *g.same_variant)))) for g in graded if g.same_variant}
+    )
+    for lab, students in alike:
+        print(f"warning: {lab}: the submissions {', '.join(repr(s) for s in students)} got the same data variant (their "
+              "folders name the same id once spaces and case are set aside, as the variant's seed is drawn): one "
+              "student under two folders, or ids to tell apart (rename a folder and regrade); grades.csv's notes "
+              "say so", file=sys.stderr)  # fmt: skip
     pairs = sorted({(g.result.lab, *sorted((g.result.student, other)), ", ".join(gids))
                     for g in graded for other, gids in g.identical.items()})  # fmt: skip
     if pairs:

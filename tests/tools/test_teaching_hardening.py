@@ -418,6 +418,41 @@ def test_defaults_get_the_labs_values_and_a_timed_cell_is_graded_on_its_body(tmp
         assert set(lost) <= {"test_B1_prediction"}, (lost, res.notes)
 
 
+def test_the_feedback_is_where_nbgrader_release_feedback_hands_it_out(tmp_path):
+    """grading2: `nbgrader release_feedback <lab>`, as the README said to run, handed out nothing: the
+    pages were only graded/<student>/<lab>/feedback.html, and nbgrader reads feedback/<student>/<lab>/."""
+    from lorisnb.tools.teaching import gradebook
+    from lorisnb.tools.teaching.autograde import Score, SubmissionResult
+
+    course = tmp_path / "course"
+    for student in ("s1", "by-hand"):
+        sub = course / "submitted" / student / LAB
+        sub.mkdir(parents=True)
+        if student == "s1":  # nbgrader collect writes both
+            (sub / "timestamp.txt").write_text("2026-11-29 16:57:15.354819 UTC")
+            (sub / "submission_secret.txt").write_text("ab" * 64)
+        res = SubmissionResult(student, LAB, [Score("test_A1", 2.0, 2.0, "✓ fine")], "full", 1.0)
+        gradebook._write_feedback(course, res, ())
+    folder = course / "feedback" / "s1" / LAB
+    assert "✓ fine" in (folder / f"{LAB}.html").read_text()
+    assert (folder / "submission_secret.txt").read_text() == "ab" * 64
+    assert (folder / "timestamp.txt").is_file()
+    assert not (course / "feedback" / "by-hand").exists()  # release_feedback would stop at a page without them
+    try:
+        from nbgrader.apps import NbGraderAPI  # noqa: F401
+        from nbgrader.coursedir import CourseDirectory
+        from nbgrader.exchange.default.release_feedback import ExchangeReleaseFeedback
+        from nbgrader.utils import notebook_hash
+    except ImportError:
+        return
+    exchange = tmp_path / "exchange"
+    exchange.mkdir()
+    coursedir = CourseDirectory(root=str(course), course_id="c", assignment_id=LAB)
+    ExchangeReleaseFeedback(coursedir=coursedir, root=str(exchange)).start()
+    released = exchange / "c" / "feedback" / f"{notebook_hash(secret='ab' * 64, notebook_id=LAB)}.html"
+    assert "✓ fine" in released.read_text()
+
+
 @isolated
 def test_a_flood_of_the_reply_pipe_is_stopped_at_the_cap_within_seconds():
     """grading2: the 64 MiB cap was reached only after 77 s (each chunk copied the growing buffer, and the
@@ -443,3 +478,41 @@ def test_a_flood_of_the_reply_pipe_is_stopped_at_the_cap_within_seconds():
             assert time.monotonic() - t0 < 15
     finally:
         shutil.rmtree(base)
+
+
+def test_folders_naming_one_id_as_the_variants_take_it_are_noted(tmp_path):
+    """grading2: Alice and alice, a Kelvin sign K and K, a ligature ﬁ and fi drew one data variant, silently."""
+    import csv
+
+    from lorisnb.tools.teaching import lab_variant
+    from lorisnb.tools.teaching.autograde import Score, SubmissionResult
+    from lorisnb.tools.teaching.gradebook import Graded, same_variants, write_exports
+
+    students = ["Alice", "alice", "\u212aelvin", "kelvin", "\ufb01sher", "fisher", "bob"]
+    assert (
+        lab_variant("Alice").seed == lab_variant("alice").seed
+        and lab_variant("\u212aelvin").seed == lab_variant("kelvin").seed
+    )
+    twins = same_variants(students)
+    assert twins == {
+        "Alice": ("alice",),
+        "alice": ("Alice",),
+        "\u212aelvin": ("kelvin",),
+        "kelvin": ("\u212aelvin",),
+        "\ufb01sher": ("fisher",),
+        "fisher": ("\ufb01sher",),
+    }
+    graded = [
+        Graded(
+            SubmissionResult(s, LAB, [Score("q", 1.0, 1.0, "")], "full", 1.0),
+            None,
+            0,
+            1.0,
+            same_variant=twins.get(s, ()),
+        )  # fmt: skip
+        for s in students
+    ]
+    write_exports(tmp_path, graded)
+    with open(tmp_path / "grades.csv", newline="", encoding="utf-8") as f:
+        notes = {row["student"]: row["notes"] for row in csv.DictReader(f)}
+    assert "same data variant as 'alice'" in notes["Alice"] and notes["bob"] == ""

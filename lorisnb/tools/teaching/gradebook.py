@@ -6,6 +6,9 @@
 writes, all in the course folder:
 
 - ``graded/<student>/<lab>/result.json`` and ``feedback.html`` (each question: points, the checks' messages);
+- ``feedback/<student>/<lab>/<lab>.html``: the same page where ``nbgrader release_feedback <lab>`` hands it out
+  from, with the submission's ``timestamp.txt`` and ``submission_secret.txt`` (for each submission collected
+  through nbgrader's exchange, which has them);
 - ``grades.csv``: one row per student and lab, every question's points, the late penalty, the score;
 - ``exports/<lab>-canvas.csv``, ``-moodle.csv``, ``-gradescope.csv``: the LMS' CSV layouts;
 - ``grades-demo.csv``: the demonstration students (``demo-*``), never in the LMS exports.
@@ -280,7 +283,10 @@ class Graded:
     notes: ``notes`` on its time (also in its ``feedback.html``), ``time_error`` (its
     ``timestamp.txt`` is no time: why), ``no_time`` (a late policy was set and it has no time, or an
     unreadable one: counted as on time), ``identical`` (another student -> the answer cells both
-    submitted identical, :func:`identical_answers`; in ``grades.csv``, not in the feedback)."""
+    submitted identical, :func:`identical_answers`; in ``grades.csv``, not in the feedback),
+    ``same_variant`` (the other submissions of the lab whose folder names the same id as the data
+    variants take it, case, spaces and Unicode's compatibility forms aside: Alice and alice, a Kelvin
+    sign K and K, a ﬁ ligature and fi; they got the same numbers; in ``grades.csv``, not in the feedback)."""
 
     result: SubmissionResult
     submitted: datetime | None
@@ -291,10 +297,22 @@ class Graded:
     time_error: str = ""
     no_time: bool = False
     identical: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    same_variant: tuple[str, ...] = ()
 
     @property
     def score(self) -> float:
         return round(self.result.points * self.factor, 4)
+
+    @property
+    def variant_notes(self) -> list[str]:
+        if not self.same_variant:
+            return []
+        return [
+            f"same data variant as {', '.join(repr(s) for s in self.same_variant)}: their folders name the same id once "
+            "spaces and case are set aside (Unicode's case folding: a Kelvin sign is K, a ligature ﬁ is fi), as the "
+            "variant's seed is drawn, so they got the same numbers: one student under two folders, or two students "
+            "whose ids must differ by more (rename a folder and regrade)"
+        ]
 
     @property
     def copy_notes(self) -> list[str]:
@@ -307,6 +325,17 @@ class Graded:
             f"given by fewer than {COPY_COMMON} students; {COPY_MIN_ANSWERS} or more such cells flag a pair): no points "
             "changed, an instructor decides"
         ]
+
+
+def same_variants(students: Sequence[str]) -> dict[str, tuple[str, ...]]:
+    """student -> the other students (submission folders) whose id draws the same data variant
+    (:func:`._prose.same_id`: spaces and case aside, Unicode's case folding), for those that have any."""
+    from lorisnb.tools.teaching._prose import same_id
+
+    by_id: dict[str, set[str]] = {}
+    for s in students:
+        by_id.setdefault(same_id(s), set()).add(s)
+    return {s: tuple(sorted(by_id[same_id(s)] - {s})) for s in students if len(by_id[same_id(s)]) > 1}
 
 
 # --- identical answers (possible copies) -----------------------------------------------------------
@@ -524,6 +553,7 @@ def grade_class(
             done.append(res)
             bar.update()
     identical = {lab: identical_answers(_class_answers(course, lab, done), stubs[lab], canonical[lab]) for lab in labs}
+    twins = {lab: same_variants([r.student for r in done if r.lab == lab]) for lab in labs}
     graded = []
     for res in sorted(done, key=lambda r: (r.lab, r.student)):
         stamp = f"submitted/{res.student}/{res.lab}/timestamp.txt"
@@ -544,7 +574,8 @@ def grade_class(
         factor, days = policy.factor(when) if policy else (1.0, 0)
         lateness = max(0.0, (when - policy.due).total_seconds()) if policy and when else 0.0
         graded.append(Graded(res, when, days, factor, lateness, notes, error, when is None and policy is not None,
-                             identical[res.lab].get(res.student, {})))  # fmt: skip
+                             identical[res.lab].get(res.student, {}),
+                             twins.get(res.lab, {}).get(res.student, ())))  # fmt: skip
         _write_feedback(course, res, notes)
     return graded
 
@@ -574,6 +605,36 @@ def _write_feedback(course: Path, res: SubmissionResult, extra: Sequence[str]) -
         + (f"<h2>Notes</h2><ul>{notes}</ul>" if notes else "")
     )
     f = folder / "feedback.html"
+    if not f.is_file() or f.read_text() != page:
+        f.write_text(page)
+    _release_copy(course, res, page)
+
+
+#: what nbgrader's ``release_feedback`` reads of each submission besides its page: copied from the submission
+RELEASE_FILES = ("timestamp.txt", "submission_secret.txt")
+
+
+def _release_copy(course: Path, res: SubmissionResult, page: str) -> None:
+    """The page where ``nbgrader release_feedback <lab>`` looks for it: nbgrader's feedback folder,
+    ``feedback/<student>/<lab>/<lab>.html`` (named after the notebook), with the submission's
+    ``timestamp.txt`` and ``submission_secret.txt`` (which name the page in nbgrader's exchange).
+    Only for a submission that came through the exchange (``nbgrader collect`` writes both files):
+    without them ``release_feedback`` would stop at that page, handing out nobody's."""
+    submitted = course / "submitted" / res.student / res.lab
+    texts = {}
+    for name in RELEASE_FILES:
+        try:
+            fd = os.open(submitted / name, os.O_RDONLY | os.O_NOFOLLOW)
+        except OSError:
+            return
+        with os.fdopen(fd, "rb") as fh:
+            texts[name] = fh.read(4096)
+    folder = course / "feedback" / res.student / res.lab
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in texts.items():
+        if not (folder / name).is_file() or (folder / name).read_bytes() != text:
+            (folder / name).write_bytes(text)
+    f = folder / f"{res.lab}.html"
     if not f.is_file() or f.read_text() != page:
         f.write_text(page)
 
@@ -640,7 +701,7 @@ def _write_grades(path: Path, rows: Sequence[Graded], roster: Mapping[str, Stude
                         *[_n(per[q]) if q in per else "" for q in questions], _n(g.result.points),
                         g.submitted.isoformat() if g.submitted else "", g.days_late, _n(g.factor),
                         _n(g.score), _n(g.result.max_points), g.result.isolation,
-                        " | ".join([*g.notes, *g.copy_notes])])  # fmt: skip
+                        " | ".join([*g.notes, *g.variant_notes, *g.copy_notes])])  # fmt: skip
 
 
 def _canvas(path: Path, lab: str, rows: Sequence[Graded], people: Sequence[Student]) -> None:
