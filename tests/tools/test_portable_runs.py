@@ -596,3 +596,44 @@ def test_results_given_as_a_link_holding_a_linked_algorithm_folder_records_it_wh
     rc, out, err = run(capsys, "verify", here / "r", "--data", here / "data", "--results", here / "reslink",
                        "--root", "odom", here / "elsewhere")  # fmt: skip
     assert rc == 0 and "all 7 input file(s) unchanged" in err, out + err
+
+
+@pytest.mark.parametrize("full_at", ["compare_algorithms.html", "report.html", ".lorisnb-run"])
+def test_render_on_a_full_disk_leaves_the_run_as_it_was_names_the_page_and_renders_once_freed(
+    tmp_path, data, icra20, monkeypatch, capsys, full_at
+):
+    """``lorisnb render`` on a full disk left report.html cut short, said "an output (the system named
+    no file)", and refused the run afterwards (its marker listed the pages as they were). Every page is
+    written whole or not at all, the error names it, and once space is freed render renders the run."""
+    import errno
+
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    monkeypatch.setattr(report, "run_notebook", papermill_notebook)
+    rc, _, err = run(capsys, "report", "--results", here / "res", "--data", here / "data", "--out", here / "r",
+                     "--notebooks", "compare_algorithms", "--no-progress")  # fmt: skip
+    assert rc == 0, err
+    r = here / "r"
+    before = {p: p.read_bytes() for p in r.rglob("*") if p.is_file()}
+    (r / "report.html").unlink()
+    real_write = Path.write_text
+
+    def full(self, text, *a, **kw):  # the disk fills while this file is written: half of it, then ENOSPC
+        if full_at in self.name:
+            real_write(self, text[: len(text) // 2], *a, **kw)
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real_write(self, text, *a, **kw)
+
+    monkeypatch.setattr(Path, "write_text", full)
+    rc, _, err = run(capsys, "render", r)
+    shown = {"compare_algorithms.html": "compare_algorithms.html", "report.html": "report.html"}.get(full_at, full_at)
+    assert rc == 2 and f"{shown}: No space left on device" in err and "the system named no file" not in err, err
+    after = {p: p.read_bytes() for p in r.rglob("*") if p.is_file()}
+    assert after == {p: b for p, b in before.items() if p.name != "report.html"}  # as it was: nothing cut, no temp
+    monkeypatch.setattr(Path, "write_text", real_write)
+    rc, out, err = run(capsys, "render", r)
+    assert rc == 0 and "report.html" in out, err
+    assert (r / "report.html").read_bytes() == before[r / "report.html"]
+    rc, _, err = run(capsys, "render", r)  # and again: the marker lists what render wrote
+    assert rc == 0, err

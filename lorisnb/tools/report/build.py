@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import datetime as _dt
+import functools
 import hashlib
 import json
 import os
@@ -27,7 +28,7 @@ from typing import Any
 from lorisnb.core.spec import validate
 from lorisnb.errors import DataNotFoundError, LorisError, LorisWarning, OutputError, ParseError, ValidationError
 from lorisnb.io.datasets.paths import find_data
-from lorisnb.io.writers import name_output, overlap, remove_partial, write_csv
+from lorisnb.io.writers import name_output, naming, overlap, remove_partial, write_csv, write_text
 from lorisnb.tools.decisions.history import earlier_runs
 from lorisnb.tools.evaluation.pool import start_context
 from lorisnb.tools.evaluation.runner import check_filters, result_files
@@ -136,13 +137,14 @@ def _files(folder: Path) -> dict[str, str]:
     return out
 
 
-def _write_marker(folder: Path, files: Mapping[str, str] | None = None) -> None:
+def _write_marker(folder: Path, files: Mapping[str, str] | None = None, out: Path | None = None) -> None:
     """The run marker: lorisnb's version, the pid and, once the run is complete, every file it wrote
-    (``files``: :func:`_files`), which is all ``--force`` may later remove."""
+    (``files``: :func:`_files`), which is all ``--force`` may later remove. Into ``out`` if given
+    (a temporary name moved into place later), written whole or not at all."""
     record: dict[str, Any] = {"lorisnb": versions()["lorisnb"], "pid": os.getpid()}
     if files is not None:
         record["files"] = dict(files)
-    (folder / RUN_MARKER).write_text(json.dumps(record, indent=0))
+    write_text(json.dumps(record, indent=0), out if out is not None else folder / RUN_MARKER, force=True)
 
 
 def _not_written(run_dir: Path, instead: str = "choose another --out") -> str | None:
@@ -511,10 +513,34 @@ def render_run(run: str | os.PathLike[str]) -> list[Path]:
     notebooks = [nb for nb in sorted(folder.glob("*/*.ipynb")) if nb.parent.name == nb.stem]
     for nb in notebooks:  # each read first: a damaged one refused, naming it, before any page is written
         _readable_notebook(nb)
-    pages = [export_html(nb, css=css) for nb in notebooks]
-    pages.append(single_file(folder / "index.html", folder / "report.html"))
-    _write_marker(folder, _files(folder))
-    return pages
+    # every page and the marker listing them first written beside their places, then all moved there: a full
+    # disk leaves the run as it was (no page cut short, none the marker does not list), renderable once freed
+    writes: list[tuple[Path, Callable[[Path], Path]]] = [
+        (nb.with_suffix(".html"), functools.partial(export_html, nb, css)) for nb in notebooks
+    ]
+    writes.append((folder / "report.html", functools.partial(single_file, folder / "index.html")))
+    staged: list[tuple[Path, Path]] = []
+    marker = folder / f".{RUN_MARKER}.tmp-{os.getpid()}"
+    try:
+        for page, write in writes:
+            tmp = page.with_name(f".{page.name}.tmp-{os.getpid()}")
+            staged.append((tmp, page))
+            with naming(page):
+                write(tmp)
+        files = _files(folder)
+        for tmp, page in staged:
+            files.pop(tmp.relative_to(folder).as_posix(), None)
+            files[page.relative_to(folder).as_posix()] = sha256(tmp)
+        with naming(folder / RUN_MARKER):
+            _write_marker(folder, files, out=marker)
+        for tmp, page in staged:
+            os.replace(tmp, page)
+        os.replace(marker, folder / RUN_MARKER)
+    finally:
+        for tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+        marker.unlink(missing_ok=True)
+    return [page for page, _ in writes]
 
 
 def _readable_notebook(nb: Path) -> None:

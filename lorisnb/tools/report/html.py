@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from lorisnb.io.writers import write_text
 from lorisnb.tools._extras import require
 
 #: The notebook template: nbconvert's ``lab`` template without remote scripts, code folded.
@@ -93,18 +94,17 @@ def write_notebook_css(out: Path) -> Path:
     return out
 
 
-def export_html(ipynb: Path, css: str | None = None) -> Path:
-    """The notebook ``ipynb`` as an offline HTML page beside it (same stem); raises on failure.
-    ``css``: a style sheet to link (a relative URL, see :func:`write_notebook_css`) instead of
-    inlining nbconvert's (about 280 kB per page)."""
+def export_html(ipynb: Path, css: str | None = None, out: Path | None = None) -> Path:
+    """The notebook ``ipynb`` as an offline HTML page beside it (same stem), or as ``out``; raises on
+    failure. ``css``: a style sheet to link (a relative URL, see :func:`write_notebook_css`) instead of
+    inlining nbconvert's (about 280 kB per page). Written whole or not at all
+    (:func:`~lorisnb.io.writers.write_text`: a full disk leaves the page as it was, and names it)."""
     nbformat = require("nbformat")
 
     nb = static_widgets(nbformat.read(str(ipynb), as_version=4))
     resources = {"metadata": {"name": ipynb.stem}, "lorisnb_css": css or ""}
     body, _ = _exporter().from_notebook_node(nb, resources=resources)
-    out = ipynb.with_suffix(".html")
-    out.write_text(body, encoding="utf-8")
-    return out
+    return write_text(body, out if out is not None else ipynb.with_suffix(".html"), force=True)
 
 
 @functools.lru_cache(maxsize=1)
@@ -153,5 +153,4 @@ def single_file(index: Path, out: Path) -> Path:
 
     text = _SRC.sub(inline, text)
     text = _HREF.sub(unlink, text)
-    out.write_text(text, encoding="utf-8")
-    return out
+    return write_text(text, out, force=True)
