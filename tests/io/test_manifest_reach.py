@@ -224,3 +224,21 @@ def test_a_file_linked_into_a_folder_evaluated_without_a_manifest_is_never_quote
     rc = main(["evaluate", str(res / "alg" / name), *how, "--no-progress"])  # named by the user: quoted
     err = capsys.readouterr().err
     assert rc != 0 and "secret-first-line" in err, err
+
+
+@pytest.mark.parametrize("which", ["built-in", "own"])
+def test_a_relative_root_variable_names_a_folder_of_the_current_directory(tmp_path, monkeypatch, which):
+    """``TUM_ROOT=tumroot lorisnb evaluate ... --manifest tum-fr1-office`` looked for the ground truth
+    in ``tumroot`` beside the manifest (inside the installed package for a built-in one): the folder
+    is the shell's ``./tumroot``, as a shell user means it."""
+    here = tmp_path / "cwd"
+    (here / "tumroot" / "sub").mkdir(parents=True)
+    monkeypatch.chdir(here)
+    if which == "built-in":
+        monkeypatch.setenv("TUM_ROOT", "tumroot")
+        m = read_manifest("tum-fr1-office")
+        assert all(s.groundtruth.parent == here / "tumroot" for s in m.sessions), m.sessions
+    else:
+        monkeypatch.setenv("MY_ROOT", "tumroot/")
+        m = read_manifest(manifest(tmp_path / "elsewhere", "gt.txt", root="${MY_ROOT}/sub"))
+        assert m.sessions[0].groundtruth == here / "tumroot" / "sub" / "gt.txt"

@@ -219,7 +219,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     if raw.get("openloris"):
         return _openloris_manifest(raw, path)
     root_text = str(raw.get("root", "."))
-    expanded = os.path.expandvars(root_text)
+    expanded = _expand(root_text)
     if "$" in expanded:
         raise ParseError(
             path, None, f"root = {root_text!r}: environment variable not set; set it to the dataset's folder"
@@ -227,7 +227,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     root = (path.parent / Path(expanded).expanduser()).resolve()
     trusted = [path.parent.resolve(), *_data_root()]  # the manifest's folder and lorisnb's data root
     if not outside:  # a folder an environment variable names is the user's own: the root may lie inside it
-        yours = [(path.parent / Path(os.environ[v]).expanduser()).resolve() for v in _variables(root_text)]
+        yours = [_folder(os.environ[v]).resolve() for v in _variables(root_text)]
         _confined(root, [*trusted, *yours], path, f"root = {root_text!r}",
                   "the manifest's folder" + ", the dataset folders its environment variables name (*_ROOT)" * bool(yours))  # fmt: skip
     allowed = [root, *trusted]
@@ -307,13 +307,35 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     )  # fmt: skip
 
 
+_VARIABLE = re.compile(r"\$(?:\{([^}]*)\}|(\w+))")
+
+
+def _folder(value: str) -> Path:
+    """A folder an environment variable names (``TUM_ROOT=tumroot``), relative to the current
+    directory as a shell user means it (not to the manifest's folder, inside lorisnb for a built-in
+    one), ``~`` expanded."""
+    return Path(os.path.abspath(os.path.expanduser(value)))
+
+
+def _expand(root_text: str) -> str:
+    """A manifest's ``root`` with its environment variables expanded; the one it starts with
+    (``${TUM_ROOT}/sub``) names a folder, taken from the current directory if relative
+    (:func:`_folder`). Variables further on are parts of a path, as written."""
+    m = _VARIABLE.match(root_text)
+    if m:
+        value = os.environ.get(m.group(1) or m.group(2) or "", "")
+        if value.strip():
+            return str(_folder(value)) + os.path.expandvars(root_text[m.end() :])
+    return os.path.expandvars(root_text)
+
+
 def _variables(text: str) -> list[str]:
     """The environment variables ``text`` names (``$NAME`` or ``${NAME}``) that are set and name a
     dataset's folder: ``*_ROOT`` (``EUROC_ROOT``, ``TUM_ROOT``, as the built-in manifests use) or
     ``LORISNB_DATA``. A manifest received from someone else chooses its variables: ``${HOME}`` or
     ``${PWD}`` name folders of the user's that are no dataset, so a root under them must lie inside
     the manifest's folder or the data root like a root written out."""
-    names = (m.group(1) or m.group(2) for m in re.finditer(r"\$(?:\{([^}]*)\}|(\w+))", text))
+    names = (m.group(1) or m.group(2) for m in _VARIABLE.finditer(text))
     return [
         n for n in names
         if (n.endswith("_ROOT") or n == "LORISNB_DATA") and n in os.environ and os.environ[n].strip()
