@@ -242,3 +242,27 @@ def test_a_relative_root_variable_names_a_folder_of_the_current_directory(tmp_pa
         monkeypatch.setenv("MY_ROOT", "tumroot/")
         m = read_manifest(manifest(tmp_path / "elsewhere", "gt.txt", root="${MY_ROOT}/sub"))
         assert m.sessions[0].groundtruth == here / "tumroot" / "sub" / "gt.txt"
+
+
+@pytest.mark.parametrize("disk, written", [("NFD", "NFC"), ("NFC", "NFD")])
+def test_a_manifests_ground_truth_and_root_are_found_in_another_unicode_form(
+    tmp_path, data, capsys, monkeypatch, disk, written
+):
+    """``groundtruth = "dése.txt"`` (NFC) with the file spelled NFD on disk (copied from a Mac): not
+    found, while estimates were; the files a manifest names are found as estimates are, in either form
+    (its root folder too)."""
+    import unicodedata
+
+    def form(f, s):
+        return unicodedata.normalize(f, s)
+
+    folder = tmp_path / "lab"
+    (folder / form(disk, "données")).mkdir(parents=True)
+    shutil.copy(data.root / "tum-rgbd" / "freiburg1_xyz-groundtruth.txt", folder / form(disk, "données") / form(disk, "dése.txt"))  # fmt: skip
+    m = manifest(folder, form(written, "dése.txt"), root=form(written, "données"))
+    found = read_manifest(m).sessions[0].groundtruth
+    assert found.is_file() and found.name == form(disk, "dése.txt")
+    (tmp_path / "res" / "alg").mkdir(parents=True)
+    shutil.copy(data.root / "tum-rgbd" / "freiburg1_xyz-rgbdslam.txt", tmp_path / "res" / "alg" / "desk.txt")
+    monkeypatch.chdir(tmp_path)
+    assert main(["evaluate", "res", "--manifest", str(m), "--no-progress"]) == 0, capsys.readouterr().err

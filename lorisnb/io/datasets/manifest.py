@@ -224,7 +224,9 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         raise ParseError(
             path, None, f"root = {root_text!r}: environment variable not set; set it to the dataset's folder"
         )
-    root = (path.parent / Path(expanded).expanduser()).resolve()
+    from lorisnb.io.datasets.paths import spelled_entry
+
+    root = spelled_entry(path.parent, Path(expanded).expanduser()).resolve()  # a name in another Unicode form too
     trusted = [path.parent.resolve(), *_data_root()]  # the manifest's folder and lorisnb's data root
     if not outside:  # a folder an environment variable names is the user's own: the root may lie inside it
         yours = [_folder(os.environ[v]).resolve() for v in _variables(root_text)]
@@ -249,8 +251,11 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
             if key in item and not item[key].strip():  # "" would name the root folder, or a file ".txt"
                 raise ParseError(path, None, f"[[session]] {k}: {key} = {item[key]!r}: expected a non-empty name")
         name = str(item.get("name", f"session{k}"))
-        if not outside:
+        if not outside:  # as written, before any folder on the way is listed; then the file found
             _confined(root / str(item["groundtruth"]), allowed, path, f"[[session]] {k}: groundtruth")
+        groundtruth = spelled_entry(root, str(item["groundtruth"]))  # as estimates are found: NFC or NFD on disk
+        if not outside:
+            _confined(groundtruth, allowed, path, f"[[session]] {k}: groundtruth")
         seq = item.get("seq", k)
         if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
             raise ParseError(path, None, f"session {name!r}: seq = {seq!r}; expected a whole number")
@@ -259,7 +264,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
                 seq=seq,
                 name=name,
                 scene=str(item.get("scene", scene)),
-                groundtruth=root / str(item["groundtruth"]),
+                groundtruth=groundtruth,
                 estimate=str(item.get("estimate", name + SUFFIX[est_fmt])),
                 groundtruth_format=_fmt(
                     item.get("groundtruth_format", gt_fmt), f"session {name!r}: groundtruth_format", path

@@ -35,6 +35,33 @@ from lorisnb.io.readers.openloris import read_openloris
 if TYPE_CHECKING:
     import pandas as pd
 
+
+def spelled_entry(folder: Path, name: str | os.PathLike[str]) -> Path:
+    """The path ``name`` (a file name, or a relative path of names) gives in ``folder``, as written
+    where that exists, else each part matched to the entry that is the same name in Unicode NFC form
+    (``dése.txt`` written in a manifest, saved by a Mac as ``de`` and a combining accent, or the
+    other way), else as written (absent: the caller says so). Estimates are found so
+    (:func:`lorisnb.tools.evaluation.inputs.named_entry`); this is for the files a manifest names."""
+    import unicodedata
+
+    path = Path(folder) / name
+    if path.exists() or str(name).isascii():
+        return path
+    here = Path(folder)
+    for part in Path(name).parts:
+        if not os.path.lexists(here / part):
+            want = unicodedata.normalize("NFC", part)
+            try:
+                same = sorted(e.name for e in here.iterdir() if unicodedata.normalize("NFC", e.name) == want)
+            except OSError:
+                return path
+            if not same:
+                return path
+            part = same[0]
+        here = here / part
+    return here
+
+
 ENV_VAR = "LORISNB_DATA"
 #: The small teaching data shipped inside the package (``teaching/make_sample_data.py`` writes it).
 SAMPLE_DATA = Path(__file__).resolve().parents[2] / "sample_data"
