@@ -637,3 +637,32 @@ def test_render_on_a_full_disk_leaves_the_run_as_it_was_names_the_page_and_rende
     assert (r / "report.html").read_bytes() == before[r / "report.html"]
     rc, _, err = run(capsys, "render", r)  # and again: the marker lists what render wrote
     assert rc == 0, err
+
+
+def test_a_relative_out_names_the_notebooks_output_path_by_the_runs_root(tmp_path, data, icra20, monkeypatch, capsys):
+    """``--out place/r1`` (relative): papermill's ``output_path`` kept the temporary build folder's name
+    (``place/.r1.partial-XXXX/...``); it is ``{run}/...`` as with an absolute --out."""
+    import lorisnb.tools.report.build as report
+
+    def with_output_path(name, out_dir, params, **kw):
+        import nbformat
+
+        from lorisnb.tools.report.notebooks import NotebookRun
+
+        (out_dir / name).mkdir()
+        nb = nbformat.v4.new_notebook()
+        nb.metadata["papermill"] = {"output_path": str(out_dir / name / f"{name}.ipynb")}
+        nbformat.write(nb, out_dir / name / f"{name}.ipynb")
+        (out_dir / name / f"{name}.html").write_text("<p>page</p>")
+        return NotebookRun(name)
+
+    here = lab(tmp_path / "lab", data, icra20)
+    monkeypatch.setattr(report, "run_notebook", with_output_path)
+    monkeypatch.chdir(here)
+    rc, _, err = run(capsys, "report", "--results", "res", "--data", "data", "--out", "place/r1", "--notebooks",
+                     "compare_algorithms", "--no-progress")  # fmt: skip
+    assert rc == 0, err
+    nb = json.loads((here / "place" / "r1" / "compare_algorithms" / "compare_algorithms.ipynb").read_text())
+    assert nb["metadata"]["papermill"]["output_path"] == "{run}/compare_algorithms/compare_algorithms.ipynb"
+    for p in (x for x in (here / "place").rglob("*") if x.is_file()):
+        assert b".partial-" not in p.read_bytes(), p

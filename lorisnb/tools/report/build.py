@@ -397,7 +397,8 @@ def run_report(
             leaderboard_spec(params)
         try:  # the run is written beside where it goes, then moved there whole
             run_dir.parent.mkdir(parents=True, exist_ok=True)
-            tmp = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent))
+            # absolute: a relative --out left papermill's output_path as "out/.r1.partial-XXXX/...", not {run}/...
+            tmp = Path(os.path.abspath(tempfile.mkdtemp(prefix=f".{run_dir.name}.partial-", dir=run_dir.parent)))
         except OSError as exc:
             raise OutputError(f"--out {run_dir}: cannot write into {run_dir.parent} ({exc.strerror or exc}); "
                               "choose a folder you can write to") from None  # fmt: skip
