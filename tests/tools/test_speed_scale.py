@@ -300,4 +300,3 @@ def test_a_cluster_that_loses_every_worker_is_an_error_not_a_hang(monkeypatch):
         release.set()
         alive = pool.WatchedExecutor(threads, lambda: 1, "--scheduler tcp://127.0.0.1:1")
         assert pool.run_tasks(abs, [-1.0, -2.0], [1, 1], 2, alive, desc="x", unit="file") == [1.0, 2.0]
-
