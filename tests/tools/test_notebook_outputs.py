@@ -170,17 +170,63 @@ def test_the_default_folder_takes_an_earlier_runs_files_as_the_notebooks_own(tmp
     (tmp_path / "notebooks").mkdir()  # a checkout's layout: results/notebooks/<name> is the default folder
     folder = tmp_path / "results" / "notebooks" / "evaluate_my_results"
     folder.mkdir(parents=True)
-    (folder / "sequences.csv").write_text("old,run\n1,2\n")  # an earlier run's, no marker
+    (folder / "sequences.csv").write_text("a,b\n1,2\n")  # an earlier run's (the table's columns), no marker
+    _figure().savefig(folder / "timeline.png")  # an earlier run's figure: matplotlib's
     session = setup("evaluate_my_results", data.root, None, parameters=dict(path=str(small)))
     assert session.out.dir.resolve() == folder.resolve()
     session.out.table(TABLE, "sequences")
     assert pd.read_csv(folder / "sequences.csv").equals(TABLE)
+    session.out.figure(_figure(), "timeline")  # after the first write made the marker: still this run's to adopt
     named = tmp_path / "mine"
     named.mkdir()
     (named / "sequences.csv").write_text(PRECIOUS)
     with pytest.raises(OutputError, match="did not write it"):
         setup("evaluate_my_results", data.root, named, parameters=dict(path=str(small))).out.table(TABLE, "sequences")
     assert (named / "sequences.csv").read_text() == PRECIOUS
+
+
+def _default_folder(tmp_path: Path, monkeypatch, name: str = "evaluate_my_results") -> Path:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "notebooks").mkdir()
+    folder = tmp_path / "results" / "notebooks" / name
+    folder.mkdir(parents=True)
+    return folder
+
+
+def test_the_default_folder_with_a_marker_replaces_only_the_files_it_lists(tmp_path, data, small, monkeypatch):
+    """The tester's repro: results/notebooks/<name> holds a marker listing scenes.csv and the user's own
+    sequences.csv beside it; the notebook must not replace sequences.csv (it did not write it)."""
+    folder = _default_folder(tmp_path, monkeypatch)
+    (folder / OUTPUTS_MARKER).write_text(
+        json.dumps({"lorisnb": "0.3.0", "files": {"scenes.csv": "evaluate_my_results"}})
+    )
+    (folder / "sequences.csv").write_text("a,b\n9,9\n")  # even with the table's own columns: the marker rules
+    _figure().savefig(folder / "timeline.png")
+    session = setup("evaluate_my_results", data.root, None, parameters=dict(path=str(small)))
+    with pytest.raises(OutputError, match=r"sequences.csv exists and this notebook did not write it .*does not list"):
+        session.out.table(TABLE, "sequences")
+    with pytest.raises(OutputError, match="timeline.png exists"):
+        session.out.figure(_figure(), "timeline")
+    assert (folder / "sequences.csv").read_text() == "a,b\n9,9\n"
+    session.out.table(TABLE, "scenes")  # listed: replaced
+    assert "sequences.csv" not in json.loads((folder / OUTPUTS_MARKER).read_text())["files"]
+
+
+@pytest.mark.parametrize("name, content", [("sequences.csv", PRECIOUS), ("timeline.png", PRECIOUS),
+                                           ("timeline.svg", "<svg></svg>\n"), ("cr_table.md", "| mine |\n")])  # fmt: skip
+def test_the_default_folder_without_a_marker_keeps_a_file_lorisnb_did_not_write(tmp_path, data, small, monkeypatch,
+                                                                                  name, content):  # fmt: skip
+    """Without a marker, a file is taken as an earlier run's only if it shows it is lorisnb's; the user's
+    table (other columns), an image not from matplotlib, a file written through out.path (no way to know)
+    are refused and kept."""
+    folder = _default_folder(tmp_path, monkeypatch)
+    (folder / name).write_text(content)
+    out = setup("evaluate_my_results", data.root, None, parameters=dict(path=str(small))).out
+    write = {".csv": lambda: out.table(TABLE, "sequences"), ".png": lambda: out.figure(_figure(), "timeline"),
+             ".svg": lambda: out.figure(_figure(), "timeline"), ".md": lambda: out.path("cr_table.md")}  # fmt: skip
+    with pytest.raises(OutputError, match=f"{name} exists and this notebook did not write it .*could have written"):
+        write[Path(name).suffix]()
+    assert (folder / name).read_text() == content
 
 
 # --- the notebook itself, run with papermill ---------------------------------------------------------

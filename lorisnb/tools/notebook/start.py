@@ -40,9 +40,34 @@ RUN_MARKER = ".lorisnb-run"
 #: A file :class:`Outputs` writes into a notebook's output folder (JSON): every file a notebook wrote
 #: there, by its name in the folder, and which notebook wrote it. A notebook replaces a file of its
 #: output folder only where this marker lists it as that notebook's own: a notebook run again into
-#: its folder replaces its files, and any other file of the same name (the user's, another notebook's,
-#: one of a lorisnb that wrote no marker) is refused and left as it is.
+#: its folder replaces its files, and any other file of the same name (the user's, another notebook's)
+#: is refused and left as it is. The one exception: the notebook's default folder before it holds a
+#: marker, where a file that shows it is lorisnb's (:func:`written_by_lorisnb`) is an earlier run's.
 OUTPUTS_MARKER = ".lorisnb-notebook"
+
+#: What the figures lorisnb saves (matplotlib) say of themselves near their start, by suffix.
+_FIGURE_SIGNS = {".png": b"Matplotlib version", ".svg": b"Matplotlib v", ".pdf": b"(Matplotlib"}
+
+
+def written_by_lorisnb(path: Path, header: str | None = None) -> bool:
+    """Whether the file ``path`` plausibly is one an earlier lorisnb notebook wrote under this name:
+    a figure that says matplotlib made it (PNG, SVG, PDF), or a CSV table whose first line is
+    ``header`` (the column names of the table about to replace it). Anything else, or a file that
+    cannot be read, is not: there is no way to know, so it is never replaced."""
+    suffix = path.suffix.lower()
+    try:
+        if path.is_symlink() or not path.is_file():
+            return False
+        with open(path, "rb") as f:
+            start = f.read(8192)
+    except OSError:
+        return False
+    if suffix in _FIGURE_SIGNS:
+        return _FIGURE_SIGNS[suffix] in start
+    if suffix == ".csv" and header is not None:
+        return start.split(b"\n", 1)[0].rstrip(b"\r") == header.encode()
+    return False
+
 
 #: The files :meth:`Outputs.figure` saves a figure as (outside a report's run folder).
 FIGURE_FORMATS = ("png", "svg", "pdf")
@@ -109,8 +134,10 @@ class Outputs:
     The folder is checked first (:func:`check_output_dir`: a folder, none of the notebook's ``inputs``,
     name -> path). Every file written is listed in the folder's :data:`OUTPUTS_MARKER` as ``notebook``'s
     before it is written; a file of the same name that the marker does not list as ``notebook``'s is
-    never replaced (:class:`~lorisnb.errors.OutputError`, before any file of the call is written). A
-    notebook that writes a file itself asks :meth:`path` for its name.
+    never replaced (:class:`~lorisnb.errors.OutputError`, before any file of the call is written), except,
+    in the notebook's default folder (``own_folder``) before it holds a marker, a file that shows it is
+    an earlier lorisnb run's (:func:`written_by_lorisnb`). A notebook that writes a file itself asks
+    :meth:`path` for its name.
     """
 
     def __init__(
@@ -123,17 +150,21 @@ class Outputs:
     ):
         self.dir = check_output_dir(output_dir, inputs)
         self.notebook = notebook or ""
-        #: the notebook's default folder (``results/notebooks/<name>``, named for it): a file there that the
-        #: marker does not list is an earlier run's of this notebook (a lorisnb before the marker), replaced
+        #: the notebook's default folder (``results/notebooks/<name>``, named for it)
         self.own_folder = own_folder
         self.marker = self.dir / OUTPUTS_MARKER
+        #: the default folder without a marker when this run began (a lorisnb before the marker wrote it): a
+        #: file there that shows it is lorisnb's (:func:`written_by_lorisnb`) is an earlier run's, replaced;
+        #: once a marker exists, only the files it lists are
+        self.adopting = own_folder and not (self.marker.exists() or self.marker.is_symlink())
         self.written()  # a marker lorisnb did not write: refused before the folder is used
         self.dir.mkdir(parents=True, exist_ok=True)
         self.in_report = (self.dir.resolve().parent / RUN_MARKER).is_file()
 
     def table(self, df: pd.DataFrame, name: str, index: bool = False) -> pd.DataFrame:
-        with self._writing([f"{_stem(name)}.csv"]) as (path,):
-            write_csv(df.reset_index() if index else df, path, force=True)
+        table = df.reset_index() if index else df
+        with self._writing([f"{_stem(name)}.csv"], header=_header(table)) as (path,):
+            write_csv(table, path, force=True)
         return df
 
     def figure(self, fig: Any, name: str) -> None:
@@ -151,7 +182,7 @@ class Outputs:
         show_figure(fig, png=paths[0].read_bytes())  # the PNG just written: drawn once, not twice
 
     def input_errors(self, failures: pd.DataFrame) -> pd.DataFrame:
-        with self._writing([INPUT_ERRORS_CSV]) as (path,):
+        with self._writing([INPUT_ERRORS_CSV], header=_header(failures)) as (path,):
             write_csv(failures, path, force=True)
         return failures
 
@@ -187,22 +218,28 @@ class Outputs:
             raise ValidationError(f"{name!r}: expected a file name inside the output folder {self.dir}")
         return p.as_posix()
 
-    def _claim(self, names: Sequence[str]) -> None:
+    def _claim(self, names: Sequence[str], header: str | None = None) -> None:
         """List ``names`` (:meth:`_name`) as this notebook's in the marker, after checking that each
-        is either absent or already this notebook's; one refused, none is listed."""
+        is either absent or already this notebook's (or, in the default folder before any marker, an
+        earlier lorisnb run's: :attr:`adopting`; ``header``: the first line of the CSV table about to be
+        written, which such a table's file starts with); one refused, none is listed."""
         listed = self.written()
         for rel in names:
             p = self.dir / rel
             owner = listed.get(rel)
             if not (p.exists() or p.is_symlink()):
                 continue
-            if owner is None and self.own_folder:
-                continue  # listed below as this notebook's
+            if owner is None and self.adopting and written_by_lorisnb(p, header):
+                continue  # an earlier run's of this notebook (no marker then): listed below as its own
             if owner is None:
+                why = (
+                    "it is not a table or figure an earlier lorisnb run could have written (no marker lists it)"
+                    if self.adopting
+                    else f"the folder's {OUTPUTS_MARKER} does not list it"
+                )
                 raise OutputError(
-                    f"{p} exists and this notebook did not write it (the folder's {OUTPUTS_MARKER} does not list "
-                    f"it); it is left as it is: choose another output_dir, or move {rel} out of {self.dir} and "
-                    "run again"
+                    f"{p} exists and this notebook did not write it ({why}); it is left as it is: choose another "
+                    f"output_dir, or move {rel} out of {self.dir} and run again"
                 )
             if owner != self.notebook:
                 raise OutputError(
@@ -220,11 +257,11 @@ class Outputs:
         write_text(json.dumps(record, indent=1) + "\n", self.marker, force=True)
 
     @contextlib.contextmanager
-    def _writing(self, names: Sequence[str]) -> Iterator[list[Path]]:
+    def _writing(self, names: Sequence[str], header: str | None = None) -> Iterator[list[Path]]:
         """The paths of ``names``, claimed (:meth:`_claim`) before the block writes them; a name whose
         file the block did not write (it failed) is no longer listed."""
         rels = [self._name(n) for n in names]
-        self._claim(rels)
+        self._claim(rels, header)
         try:
             yield [self.dir / r for r in rels]
         except BaseException:
@@ -234,6 +271,11 @@ class Outputs:
                 if missing:
                     self._list({k: v for k, v in listed.items() if k not in missing})
             raise
+
+
+def _header(df: pd.DataFrame) -> str:
+    """The first line of ``df`` written as CSV (:func:`~lorisnb.io.writers.write_csv`): its column names."""
+    return df.iloc[:0].to_csv(index=False, lineterminator="\n").rstrip("\n")
 
 
 def _stem(name: Any) -> str:
