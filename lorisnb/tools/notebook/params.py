@@ -18,13 +18,21 @@ from lorisnb.core.stats.inference import WEIGHTS
 from lorisnb.core.stats.trials import compile_trials_by
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.core.trajectory.poses import RELATIVE
-from lorisnb.errors import ValidationError
+from lorisnb.errors import DataNotFoundError, ValidationError
 from lorisnb.io.datasets.manifest import BUILT_IN
+from lorisnb.io.datasets.paths import DataPaths, find_data
 from lorisnb.io.readers.plain import TRAJECTORY_FORMATS
 from lorisnb.tools.evaluation.inputs import names
 from lorisnb.tools.notebook.grids import check_grid
 
-__all__ = ["check_parameters", "check_values", "evaluation_spec", "existing", "papermill_parameters"]
+__all__ = [
+    "check_parameters",
+    "check_values",
+    "evaluation_spec",
+    "existing",
+    "papermill_parameters",
+    "refuse_scenes_without_groundtruth",
+]
 
 
 #: Path parameters: that must exist (a folder: ``True``), passed on absolute (a built-in manifest
@@ -58,18 +66,21 @@ LISTS = ("algorithms", "scenes", "eps_grid", "phi_grid", "delta_grid", "tau_grid
 #: Parameters that only apply together with another one (the notebook ignores them without it).
 NEEDS = {"fmt": "groundtruth", "gt_fmt": "groundtruth", "ordslam_fps": "ordslam_dir",
          "ordslam_max_gap": "ordslam_dir"}  # fmt: skip
+#: Parameters naming one OpenLORIS scene whose ground truth a notebook loads (``metrics_primer``'s
+#: ``scene``, ``compare_algorithms``' ``sim_scene``): refused up front when the data root holds no
+#: ground truth for it (:func:`refuse_scenes_without_groundtruth`), as a ``scenes`` filter is.
+SCENE_PARAMETERS = ("scene", "sim_scene")
 #: Parameters of the leaderboard checked and normalized by the validators of ``compare`` and ``diff``.
 _VALUES: dict[str, Any] = {
     "metric": lambda v: validate.choice("metric", v, WEIGHTS),
     "alpha": lambda v: validate.probability("alpha", v),
     "level": lambda v: validate.probability("level", v),
     "seed": lambda v: validate.seed(v, "seed"),
-    "scene": lambda v: validate.choice("scene", v, SCENES),
     **{
         k: (lambda v, k=k: _plain(validate.eps_value(v) if k == "eps" else validate.threshold(k, v)))
         for k in ("eps", "phi", "delta", "tau")
     },  # '"1"' reaches the notebook as 1.0, "PAPER" as "paper"
-    "sim_scene": lambda v: validate.choice("sim_scene", v, SCENES),
+    **{k: (lambda v, k=k: validate.choice(k, v, SCENES)) for k in SCENE_PARAMETERS},
     "conventions": lambda v: validate.choice("conventions", v, tuple(PRESETS)),
     "fmt": lambda v: validate.choice("fmt", v, TRAJECTORY_FORMATS),
     "gt_fmt": lambda v: validate.choice("gt_fmt", v, TRAJECTORY_FORMATS),
@@ -167,10 +178,41 @@ def check_parameters(
         if parameters.get(name) is not None and parameters.get(partner) is None and name in declared:
             raise ValidationError(f"-p {name}: only applies with -p {partner} (the notebook ignores it otherwise)")
     check_values(parameters, notebooks)
+    if any(parameters.get(n) is not None for n in SCENE_PARAMETERS):  # a scene without ground truth: refused now
+        try:
+            data = find_data(parameters.get("data_root"))
+        except DataNotFoundError:
+            data = None  # no data root: each notebook says so in its first cell
+        if data is not None:
+            refuse_scenes_without_groundtruth(parameters, data)
     for name, value in parameters.items():
         if name in _VALUES and value is not None:
             out[name] = _VALUES[name](value)
     return out
+
+
+def refuse_scenes_without_groundtruth(values: Mapping[str, Any], data: DataPaths) -> None:
+    """Refuse, before any work, a parameter naming a scene the data root ``data`` holds no ground truth
+    for (OpenLORIS' office: none is public): one of :data:`SCENE_PARAMETERS` (the notebook would fail
+    minutes later loading it), or a ``scenes`` filter of OpenLORIS scenes none of which has any
+    (:func:`lorisnb.tools.report.leaderboard.refuse_unscorable_scenes`: nothing would be scored; a
+    filter naming anything else is checked against the inputs' scenes later). Called by
+    :func:`check_parameters` (``lorisnb report``, papermill's ``-p``) and by each notebook's
+    :func:`lorisnb.tools.notebook.start.setup`."""
+    from lorisnb.tools.report.leaderboard import refuse_unscorable_scenes
+
+    have = data.scenes_with_groundtruth()
+    for name in SCENE_PARAMETERS:
+        if values.get(name) is None:
+            continue
+        scene = validate.choice(name, values[name], SCENES)
+        if scene not in have:
+            raise ValidationError(
+                f"-p {name} {scene}: the data root {data.root} holds no ground truth for {scene} (it has "
+                f"{', '.join(have) or 'none'}), so the notebook could not load it; name a scene with ground truth"
+            )
+    if values.get("scenes") is not None and set(names("scenes", values["scenes"])) <= set(SCENES):
+        refuse_unscorable_scenes(values["scenes"], data)
 
 
 #: The first line of the cell papermill injects after a notebook's ``parameters`` cell (Python).

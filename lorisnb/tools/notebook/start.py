@@ -472,13 +472,9 @@ def setup(
             raise
         data = sample_data()
         print("no data root found: using the small sample data shipped with lorisnb (cafe scene only)")
-    if values.get("scenes") is not None:  # OpenLORIS scenes, none with ground truth (office): nothing to score
-        from lorisnb.core.trajectory.frames import SCENES
-        from lorisnb.tools.evaluation.inputs import names
-        from lorisnb.tools.report.leaderboard import refuse_unscorable_scenes
+    from lorisnb.tools.notebook.params import refuse_scenes_without_groundtruth
 
-        if set(names("scenes", values["scenes"])) <= set(SCENES):  # any other name: refused naming the inputs' scenes
-            refuse_unscorable_scenes(values["scenes"], data)
+    refuse_scenes_without_groundtruth(values, data)  # scene, sim_scene, scenes without ground truth (office)
     out = Outputs(output_dir if output_dir is not None else default_output_dir(name), notebook=name,
                   inputs=notebook_inputs(values, data), own_folder=output_dir is None)  # fmt: skip
     warnings.filterwarnings("ignore", category=LorisWarning)
