@@ -1,0 +1,47 @@
+"""What the notebooks' stored source must hold, read without running them (fast): the evaluation
+spec of a notebook that evaluates the user's results comes from its parameters (``session.spec()``,
+as the report's leaderboard builds its own), so ``lorisnb report -p scale off`` reaches it."""
+
+from __future__ import annotations
+
+import ast
+
+import nbformat
+import pytest
+
+from lorisnb.tools.report.build import notebook_dir
+from lorisnb.tools.report.notebooks import declared_parameters
+
+NOTEBOOKS = sorted(notebook_dir().glob("*.ipynb"))
+
+
+def _code(path) -> ast.Module:
+    nb = nbformat.read(path, as_version=4)
+    return ast.parse("\n".join(c.source for c in nb.cells if c.cell_type == "code" and not c.source.startswith("%")))
+
+
+def _evaluate_calls(tree: ast.Module) -> list[ast.Call]:
+    return [
+        node
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Attribute)
+        and node.func.attr in ("evaluate", "evaluate_pairs", "evaluate_manifest")
+    ]
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
+def test_a_notebook_of_the_users_results_evaluates_with_the_sessions_spec(path):
+    """A notebook that evaluates a ``results_dir`` declares the alignment (``scale``) and passes its
+    evaluation the spec of its parameters, never a fixed ``scale=...``: compare_algorithms evaluated at
+    ``scale="auto"`` while the report's leaderboard, given ``-p scale off``, was at SE(3)."""
+    declared = declared_parameters(path)
+    calls = _evaluate_calls(_code(path))
+    if "results_dir" not in declared or not calls:
+        pytest.skip("evaluates no results of the user's")
+    assert {"scale", "official_interpolation"} <= set(declared), "the spec options it honours, declared"
+    for call in calls:
+        fixed = [k.arg for k in call.keywords if k.arg in ("scale", "official_interpolation", "eps", "phi")]
+        assert not fixed, f"line {call.lineno}: {fixed} fixed in the call instead of the session's spec"
+        assert call.args[1:] and ast.unparse(call.args[1]) == "spec", f"line {call.lineno}: no spec passed"
+    assert "session.spec(" in ast.unparse(_code(path))
