@@ -404,7 +404,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from lorisnb.tools.decisions.comparison import compare_table, write_outputs
 
     rpe = [o for o, v in (("--rpe-delta", args.rpe_delta), ("--rpe-unit", args.rpe_unit), ("--rpe-pairs", args.rpe_pairs),
-                          ("--rpe-all-pairs", args.rpe_all_pairs), ("--rpe-tolerance", args.rpe_tolerance)) if v is not None]  # fmt: skip
+                          ("--rpe-all-pairs" if args.rpe_all_pairs else "--rpe-consecutive", args.rpe_all_pairs),
+                          ("--rpe-tolerance", args.rpe_tolerance)) if v is not None]  # fmt: skip
     if rpe and not args.metric.startswith(("rpe", "c_rpe")):
         raise ValidationError(f"{', '.join(rpe)}: the RPE step changes no value of --metric {args.metric}")
     for name, uses in (("delta", ("cr", "cr_t")), ("tau", ("cs_r",))):  # Eq. 2-3 (delta), Eq. 4 (tau)

@@ -238,7 +238,7 @@ def add_evaluation_options(p: argparse.ArgumentParser, command: str = "evaluate"
     p.add_argument(
         "--official-interpolation",
         action="store_true",
-        help="reproduce the official tool's orientation slips (AOE only)",
+        help="reproduce the official tool's orientation slips in the interpolated ground truth (AOE; and the RPE, which lorisnb computes from the same poses)",
     )
     p.add_argument(
         "--repair-stamps",

@@ -268,3 +268,10 @@ def test_identical_algorithms_are_said_to_be_identical_not_short_of_trials(tmp_p
     assert rc == 0
     assert "every pair's results are the same on every sequence: no test can separate them" in out + err
     assert "run more trials" not in out + err and "-0.000" not in out
+
+
+def test_an_rpe_option_for_a_metric_without_rpe_is_named_as_typed(icra20, capsys):
+    """``compare --rpe-consecutive`` (stored as rpe_all_pairs=False) was refused as '--rpe-all-pairs'."""
+    for typed in ("--rpe-consecutive", "--rpe-all-pairs"):
+        rc, _, err = compare(capsys, icra20 / "per-seq" / "odom", typed)
+        assert rc == 2 and f"{typed}: the RPE step changes no value of --metric cr" in err, err

@@ -381,6 +381,11 @@ def test_regression_core_on_trials():
     for empty in ("cr=0.1,,cs_r=0.1", "cr=0.1,"):
         with pytest.raises(ValidationError, match="an empty item between commas"):
             parse_tolerances(empty)
+    # a rate's tolerance of 1 or more (100 %) let nothing regress: diff cr=2 passed every night (exit 0)
+    for never in ("cr=2", "cr_t=1", "cs_r=100%", "cr=250%"):
+        with pytest.raises(ValidationError, match="is a rate between 0 and 1, so no drop would ever exceed it"):
+            parse_tolerances(never)
+    assert parse_tolerances("cr=0.99,ate_rmse=300%")["ate_rmse"].amount == 3.0  # an error may triple
 
 
 @pytest.mark.thorough

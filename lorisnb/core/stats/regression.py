@@ -155,7 +155,13 @@ def parse_tolerances(spec: str | Mapping[str, str | float] | None = None) -> dic
             raise ValidationError(
                 f"tolerance {name}={value}: expected a non-negative number in the metric's unit or a percentage (5%)"
             )
-        out[name] = Tolerance(amount / 100 if m and m.group(2) else amount, bool(m and m.group(2)))
+        relative = bool(m and m.group(2))
+        if name not in LOG_METRICS and (amount >= 100 if relative else amount >= 1):
+            raise ValidationError(
+                f"tolerance {name}={value}: {name} is a rate between 0 and 1, so no drop would ever exceed it (no "
+                "regression could be found); expected less than 1 (or 100%), e.g. cr=0.02"
+            )
+        out[name] = Tolerance(amount / 100 if relative else amount, relative)
     return out
 
 
