@@ -45,3 +45,39 @@ def test_a_notebook_of_the_users_results_evaluates_with_the_sessions_spec(path):
         assert not fixed, f"line {call.lineno}: {fixed} fixed in the call instead of the session's spec"
         assert call.args[1:] and ast.unparse(call.args[1]) == "spec", f"line {call.lineno}: no spec passed"
     assert "session.spec(" in ast.unparse(_code(path))
+
+
+def _labels_of(tree: ast.Module, column: str) -> list[str]:
+    """The labels given (``rename_axis(columns=...)``, ``title=``) to a table or figure of ``column``."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and column in {
+            n.value for n in ast.walk(node) if isinstance(n, ast.Constant) and isinstance(n.value, str)
+        }:
+            found += [
+                k.value.value
+                for k in node.keywords
+                if k.arg in ("columns", "title", "label") and isinstance(k.value, ast.Constant)
+            ]
+    return found
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.stem)
+def test_the_c_ate_rmse_is_never_labelled_ate_rmse(path):
+    """``c_ate_rmse`` is over correct poses only: a table of it titled "ATE RMSE (m)"
+    (per_sequence_benchmark's) says it is over all poses, which is false at any finite threshold."""
+    labels = _labels_of(_code(path), "c_ate_rmse")
+    assert all("C-ATE" in label for label in labels if "ATE" in label), labels
+    nb = nbformat.read(path, as_version=4)
+    for cell in nb.cells:
+        if cell.cell_type == "markdown" and "bottom right" in cell.source:  # the timeline's per-scene numbers
+            assert "C-ATE" in cell.source.split("bottom right", 1)[1][:40], cell.source
+
+
+def test_the_timeline_says_what_its_numbers_are():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from lorisnb.tools.figures.plotting import TIMELINE_XLABEL
+
+    assert "C-ATE RMSE" in TIMELINE_XLABEL and "correct poses" in TIMELINE_XLABEL

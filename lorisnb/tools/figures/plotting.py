@@ -93,6 +93,13 @@ def _pct(v: float) -> str:
     return "n/a" if v is None or not np.isfinite(v) else f"{100 * v:.1f}%"
 
 
+#: The timeline's axis label: it also says what the numbers beside each scene's rows are.
+TIMELINE_XLABEL = (
+    "time (each sequence to scale; black dots mark sequence starts)\n"
+    "per scene: CR top left, C-ATE RMSE (m, correct poses only) bottom right"
+)
+
+
 def plot_timeline(
     errors: Sequence[FileErrors],
     durations: pd.DataFrame,
@@ -309,7 +316,7 @@ class Timeline:
         if len(layout):
             ax.set_xlim(layout["offset"].min() - 5, (layout["offset"] + layout["duration"]).max() + 5)
         ax.set_xticks([])
-        ax.set_xlabel("time (each sequence to scale; black dots mark sequence starts)")
+        ax.set_xlabel(TIMELINE_XLABEL)
         sns.despine(ax=ax, left=True, bottom=True)
         handles = [
             Line2D([], [], color=CORRECT, lw=2.2, label="correct pose estimates"),
