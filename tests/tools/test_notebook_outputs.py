@@ -274,3 +274,19 @@ def test_evaluate_my_results_keeps_a_users_file_and_reruns_into_its_own_folder(t
     listed = json.loads((own / OUTPUTS_MARKER).read_text())["files"]
     assert {"sequences.csv", "scenes.csv", "relative.csv", "input_errors.csv", "timeline.png"} <= set(listed)
     assert set(listed) == {p.name for p in own.iterdir()} - {OUTPUTS_MARKER}
+
+
+def test_an_output_dir_under_home_is_expanded_as_the_input_paths_are(tmp_path, data, small, monkeypatch):
+    """``output_dir="~/x"`` made a folder literally named ``~`` in the current folder; it is the home
+    folder's x, as ``path="~/..."`` is, and is checked against the inputs there."""
+    home = tmp_path / "home"
+    home.mkdir()
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.chdir(tmp_path)
+    session = setup("evaluate_my_results", data.root, "~/x", parameters=dict(path=str(small)))
+    session.out.table(TABLE, "sequences")
+    assert session.out.dir == home / "x" and (home / "x" / "sequences.csv").is_file()
+    assert not (tmp_path / "~").exists()
+    shutil.copytree(small, home / "res")
+    with pytest.raises(OutputError, match="output_dir=~/res/out lies in the input path=~/res"):
+        setup("evaluate_my_results", data.root, "~/res/out", parameters=dict(path="~/res"))

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import ast
 import io
+import os
 import tokenize
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
@@ -32,6 +33,7 @@ __all__ = [
     "existing",
     "papermill_parameters",
     "refuse_scenes_without_groundtruth",
+    "user_path",
 ]
 
 
@@ -115,10 +117,16 @@ def _absolute(name: str, value: Any) -> str:
     return str(existing(name, value, folder=PATHS[name]).resolve())
 
 
+def user_path(value: str | os.PathLike[str]) -> Path:
+    """A path parameter as the shell means it: ``~`` (or ``~user``) at its start is that home folder,
+    for every path parameter alike (inputs and ``output_dir``), never a folder named ``~``."""
+    return Path(os.fspath(value)).expanduser()
+
+
 def existing(name: str, value: Any, folder: bool = False) -> Path:
     """A path parameter that must exist (a folder where ``folder``): a missing one would leave a
     notebook with nothing to evaluate and empty tables."""
-    p = Path(str(value)).expanduser()
+    p = user_path(str(value))
     if not (p.is_dir() if folder else p.exists()):
         what = "folder" if folder else "file or folder"
         raise ValidationError(f"{name}={value}: no such {what}; expected an existing {what}")

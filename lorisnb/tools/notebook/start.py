@@ -84,7 +84,9 @@ def check_output_dir(output_dir: Any, inputs: Mapping[str, str | os.PathLike[str
         raise ValidationError(
             f"output_dir={output_dir!r}: expected a folder name (None: the notebook's default folder)"
         )
-    target = Path(output_dir)
+    from lorisnb.tools.notebook.params import user_path
+
+    target = user_path(output_dir)  # "~/out" is the home folder's out, as for the input paths
     for label, where in (inputs or {}).items():
         hit = overlap(target, [where])
         if hit:
@@ -102,7 +104,7 @@ def notebook_inputs(values: Mapping[str, Any], data: DataPaths) -> dict[str, Pat
     """What a notebook reads, for :func:`check_output_dir`: its path parameters given (``values``;
     :data:`lorisnb.tools.notebook.params.PATHS`: results, estimates, ground truth, a manifest and the
     ground truth it names) and the data root, each named as an error names it."""
-    from lorisnb.tools.notebook.params import PATHS
+    from lorisnb.tools.notebook.params import PATHS, user_path
     from lorisnb.tools.report.portable import manifest_files
 
     found: dict[str, Path] = {}
@@ -113,7 +115,7 @@ def notebook_inputs(values: Mapping[str, Any], data: DataPaths) -> dict[str, Pat
         if name == "manifest":  # the file (a built-in manifest's name is none of the user's) and its ground truth
             found.update({f"the input {f} (of manifest={value})": f for f in manifest_files(value)})
             continue
-        found[f"the input {name}={value}"] = Path(str(value)).expanduser()
+        found[f"the input {name}={value}"] = user_path(str(value))
     found[f"the data root {data.root}"] = data.root
     return found
 
