@@ -31,6 +31,7 @@ from lorisnb.cli.options import (
     add_scale_option,
     add_threshold_options,
     arg_type,
+    hide_unused,
     threshold_list_type,
 )
 from lorisnb.cli.text import clean, say
@@ -74,12 +75,14 @@ def build_parser() -> argparse.ArgumentParser:
     add_evaluation_options(p, "compare")
     add_threshold_options(p)
     add_compare_options(p)
+    hide_unused(p, "compare")
     p.set_defaults(func=_command(".commands", "cmd_compare"))
 
     p = sub.add_parser("diff", help="did CAND regress against BASE? two result folders, report runs or tables")
     add_evaluation_options(p, "diff")
     add_threshold_options(p)
     add_diff_options(p)
+    hide_unused(p, "diff")
     p.set_defaults(func=_command(".runs", "cmd_diff"))
     p.set_defaults(defaults=vars(p.parse_args(["BASE", "CAND"])))
 
@@ -116,6 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
         "statistics and RPE repeated at each setting: for 100 eps x 100 phi over icra20, twice the file and 8 times "
         "the time)",
     )
+    hide_unused(p, "sweep")
     p.set_defaults(func=_command(".commands", "cmd_sweep"))
 
     p = sub.add_parser("crosscheck", help="compare lorisnb with evo on one ground truth and one estimate")

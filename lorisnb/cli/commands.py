@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from lorisnb.cli.options import param_value, spec_from_args, spec_given
+from lorisnb.cli.options import UNUSED, param_value, spec_from_args, spec_given
 from lorisnb.cli.outputs import check_outputs, refuse_unused
 from lorisnb.cli.text import clean, format_table, frame_columns, say
 from lorisnb.errors import EvaluationError, FailedInputsWarning, LorisError, LorisWarning, ValidationError
@@ -316,9 +316,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from lorisnb.core.lifelong.sweep import sweep, sweep_scenes
     from lorisnb.io.writers import write_csv, write_parquet
 
-    refuse_unused(args, {"relative": "lorisnb evaluate (rpg's relative error has no threshold to sweep)",
-                         "relative_lengths": "lorisnb evaluate --relative-lengths",
-                         "kitti_plot": "lorisnb evaluate --conventions kitti"})  # fmt: skip
+    refuse_unused(args, UNUSED["sweep"])
     if args.columns == "metrics" and args.relation is None:  # no column of the lean table depends on the RPE
         given_rpe = [f"--{k.replace('_', '-')}" for k in ("rpe_delta", "rpe_unit", "rpe_pairs", "rpe_all_pairs",
                      "rpe_tolerance") if getattr(args, k, None) is not None]  # fmt: skip
@@ -412,10 +410,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         if getattr(args, name, None) is not None and args.metric not in uses:
             raise ValidationError(f"--{name}: changes no value of --metric {args.metric} (it changes "
                                   f"{' and '.join(uses)}); leave it out, or compare {' or '.join(uses)}")  # fmt: skip
-    refuse_unused(args, {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate",
-                         "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
-                         "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)",
-                         "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)"})  # fmt: skip
+    refuse_unused(args, UNUSED["compare"])
     ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"], statistics=every_column,
                                 poses=tables_only)  # fmt: skip
     table = ev.sequences()

@@ -212,6 +212,33 @@ CSV_HELP = {
 }
 
 
+#: The options a command shares with ``evaluate`` but cannot apply, with what to use instead: refused
+#: when given (:func:`lorisnb.cli.outputs.refuse_unused`) and left out of the command's ``--help``
+#: (:func:`hide_unused`; ``compare --help`` offered a Parquet table it then refused).
+UNUSED: dict[str, dict[str, str]] = {
+    "sweep": {"relative": "lorisnb evaluate (rpg's relative error has no threshold to sweep)",
+              "relative_lengths": "lorisnb evaluate --relative-lengths",
+              "kitti_plot": "lorisnb evaluate --conventions kitti"},
+    "compare": {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate",
+                "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
+                "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)",
+                "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)"},
+    "diff": {"relative": "lorisnb evaluate (diff compares the RPE columns)",
+             "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
+             "relation": "lorisnb evaluate (diff compares CR, CR-T, CS-R, ATE, AOE and RPE, not evo's "
+             "pose-relation columns)",
+             "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)"},
+}  # fmt: skip
+
+
+def hide_unused(p: argparse.ArgumentParser, command: str) -> None:
+    """Leave the options ``command`` refuses (:data:`UNUSED`) out of its ``--help``; still parsed, so
+    that giving one is refused with what to use, not an unknown option."""
+    for action in p._actions:  # argparse has no public list of a parser's options
+        if action.dest in UNUSED[command]:
+            action.help = argparse.SUPPRESS
+
+
 def add_evaluation_options(p: argparse.ArgumentParser, command: str = "evaluate") -> None:
     """Options shared by ``evaluate``, ``compare``, ``diff`` and ``sweep`` (same names, same
     meaning; ``command`` names the one whose parser this is, for what its outputs hold)."""

@@ -12,6 +12,7 @@ from typing import Any
 import pandas as pd
 
 from lorisnb.cli.commands import every_column, fmt_table, report_problems, run_evaluation, tables_only
+from lorisnb.cli.options import UNUSED
 from lorisnb.cli.outputs import check_outputs, refuse_unused
 from lorisnb.cli.text import clean, say
 from lorisnb.errors import ValidationError
@@ -94,10 +95,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
     )
     from lorisnb.tools.decisions.runs import is_report_run, is_table, spec_differences
 
-    refuse_unused(args, {"relative": "lorisnb evaluate (diff compares the RPE columns)",
-                         "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
-                         "relation": "lorisnb evaluate (diff compares CR, CR-T, CS-R, ATE, AOE and RPE, not evo's "
-                         "pose-relation columns)"})  # fmt: skip
+    refuse_unused(args, UNUSED["diff"])
     if len(args.paths) != 2:
         raise ValidationError(f"diff takes two runs, BASE and CAND; got {len(args.paths)} path(s)")
     check_outputs(args, args.paths, ["json", "junit", "csv", "markdown", "badge"], folders=("parquet",))

@@ -123,3 +123,21 @@ def test_words_are_read_as_python_reads_them():
     assert make_spec("openloris", align="SE3").align == "se3"
     with pytest.raises(SystemExit):
         parser.parse_args(["evaluate", "x", "--align", "rotate"])
+
+
+def test_help_offers_no_option_its_command_refuses(capsys):
+    """``compare --help`` described ``--parquet DIR`` (and --relative, --relation, --kitti-plot),
+    which compare then refused; the options each command refuses are out of its help, and still
+    refused by name when given."""
+    from lorisnb.cli.options import UNUSED
+
+    for command, unused in UNUSED.items():
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        shown = capsys.readouterr().out
+        for dest in unused:
+            assert f"--{dest.replace('_', '-')} " not in shown, (command, dest)
+        flag = f"--{next(iter(unused)).replace('_', '-')}"
+        extra = ["OUT"] if next(iter(unused)) not in ("relative", "kitti_plot") else []
+        assert main([command, "a", "b", flag, *extra]) == 2
+        assert f"{flag}: not used by lorisnb {command}" in capsys.readouterr().err
