@@ -53,6 +53,9 @@ def test_find_data_order_and_error(tmp_path, monkeypatch, data):
                            str(tmp_path / "nowhere"), "--no-progress"], capture_output=True, text=True, timeout=60)  # fmt: skip
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and "\\n" not in done.stderr, done.stderr
     assert f"It looked at: {tmp_path / 'nowhere'} (argument): does not exist." in done.stderr
+    (tmp_path / "gt.txt").write_text("1 0 0 0 0 0 0 1\n")  # a file where a folder goes: said so (it "did not exist")
+    with pytest.raises(DataNotFoundError, match=r"gt.txt \(argument\): a file, not a folder\."):
+        find_data(tmp_path / "gt.txt")
 
 
 def test_missing_groundtruth_names_the_file(tmp_path):

@@ -256,3 +256,15 @@ def test_headline_numbers(data):
     lo, hi = h["published_ate_pct_range"]["ORDSLAM"]
     assert lo == pytest.approx(100 * 0.091 / 12) and hi == pytest.approx(100 * 0.132 / 12)
     assert 0 < h["tracked_share"]["TUM RGB-D"] <= 1
+
+
+def test_a_file_given_as_the_ordslam_folder_is_said_to_be_a_file(tmp_path):
+    """``-p ordslam_dir FILE``: said 'does not exist' (and 'no such folder') of a file that exists."""
+    from lorisnb.tools.notebook.params import existing
+
+    f = tmp_path / "s1.txt"
+    f.write_text("1 0 0 0 0 0 0 1\n")
+    with pytest.raises(ln.DataNotFoundError, match="s1.txt is a file, not a folder"):
+        find_ordslam(f)
+    with pytest.raises(ln.ValidationError, match="ordslam_dir=.*s1.txt: a file, not a folder; expected an existing"):
+        existing("ordslam_dir", f, folder=True)

@@ -154,6 +154,13 @@ class DataPaths:
         return [s for s in SCENES if (d / f"gt_{s}_1.txt").is_file()]
 
 
+def _state(where: Path) -> str:
+    """Why ``where`` is no data root: a folder without the data, a file, or nothing there."""
+    if where.is_dir():
+        return "not a data root"
+    return "a file, not a folder" if where.exists() else "does not exist"
+
+
 def find_data(data_root: DataRoot | DataPaths | None = None) -> DataPaths:
     """Locate the data root (see the module docstring for the search order)."""
     if isinstance(data_root, DataPaths):
@@ -166,7 +173,7 @@ def find_data(data_root: DataRoot | DataPaths | None = None) -> DataPaths:
     if data_root is None and env and not _looks_like_root(Path(env).expanduser()):
         where = Path(env).expanduser()
         raise DataNotFoundError(
-            f"{ENV_VAR}={env}: {'not a data root' if where.is_dir() else 'does not exist'}. A data root holds "
+            f"{ENV_VAR}={env}: {_state(where)}. A data root holds "
             "openloris-scene/ (groundtruth/, icra20_results/), tum-rgbd/ or published/. Set it to one, unset it to "
             "use a shared/data folder beside the current folder, or pass data_root=... (command line: --data DIR)."
         )
@@ -174,8 +181,7 @@ def find_data(data_root: DataRoot | DataPaths | None = None) -> DataPaths:
     for how, cand in _candidates(data_root):
         if _looks_like_root(cand):
             return DataPaths(cand.resolve())
-        state = "not a data root" if cand.is_dir() and str(cand) else "does not exist"
-        looked.append(f"{cand} ({how}): {state}")
+        looked.append(f"{cand} ({how}): {_state(cand) if str(cand) else 'does not exist'}")
     raise DataNotFoundError(  # one line: the command line shows a message's line breaks escaped, as "\n"
         "lorisnb could not find its data. It looked at: " + "; ".join(looked) + ". "
         f"A data root holds openloris-scene/ (groundtruth/, icra20_results/), tum-rgbd/ or "

@@ -276,8 +276,8 @@ def find_ordslam(root: str | os.PathLike | None) -> OrdslamFolder | None:
     root = Path(root).expanduser()
     if not root.is_dir():
         raise DataNotFoundError(
-            f"ORDSLAM folder {root} does not exist; download the dataset (svponomarev.github.io) "
-            "and pass the folder holding its ground-truth .txt files"
+            f"ORDSLAM folder {root} {'is a file, not a folder' if root.exists() else 'does not exist'}; download the "
+            "dataset (svponomarev.github.io) and pass the folder holding its ground-truth .txt files"
         )
     est_dir = root / "estimates"
     gt = [p for p in _text_files(root) if est_dir not in p.parents]

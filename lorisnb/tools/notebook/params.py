@@ -129,7 +129,8 @@ def existing(name: str, value: Any, folder: bool = False) -> Path:
     p = user_path(str(value))
     if not (p.is_dir() if folder else p.exists()):
         what = "folder" if folder else "file or folder"
-        raise ValidationError(f"{name}={value}: no such {what}; expected an existing {what}")
+        found = "a file, not a folder" if p.exists() else f"no such {what}"
+        raise ValidationError(f"{name}={value}: {found}; expected an existing {what}")
     return p
 
 
