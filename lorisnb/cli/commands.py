@@ -261,7 +261,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from lorisnb.tools.evaluation.status import skipped_only
 
     _report_problems(ev, notes)
-    print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(ev.unscored)} not scored, "
+    unscored = [f for f in ev.unscored if f.kind != "nothing"]  # "nothing was evaluated" is no input: said above
+    print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(unscored)} not scored, "
           f"{len(skipped_only(ev))} skipped", file=sys.stderr)  # fmt: skip
     return ev.exit_status()
 

@@ -157,3 +157,14 @@ def test_command_ends_quietly_when_its_output_is_cut(icra20):
     err = proc.stderr.decode()
     assert proc.returncode == 1, err
     assert "Traceback" not in err and "BrokenPipe" not in err
+
+
+def test_a_lone_file_of_a_scene_without_ground_truth_is_counted_once(tmp_path, icra20, capsys):
+    """A file whose scene has no public ground truth (office) alone: '0 not scored, 1 skipped', exit 1
+    (it read '1 not scored, 1 skipped': the line 'nothing was evaluated' counted as an input)."""
+    src = (icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt").read_text()
+    f = write(tmp_path, "office.txt", src.replace("scene: cafe", "scene: office"))
+    assert main(["evaluate", str(f), "--no-progress"]) == 1
+    err = capsys.readouterr().err
+    assert "nothing was evaluated: every input was skipped" in err
+    assert "0 file(s) evaluated, 0 failed, 0 not scored, 1 skipped" in err, err
