@@ -97,6 +97,9 @@ def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame | int:
     est_format = args.est_format or ("tum" if args.format == "euroc" else args.format)
     if args.conventions is not None:
         return _crosscheck_conventions(args, gt_format, est_format)
+    if args.gt == "auto" and args.format != "openloris":
+        raise ValidationError("GT 'auto' (the data root's ground truth of the estimate's scene) is for OpenLORIS "
+                              "result files: add --format openloris, or give the ground-truth file")  # fmt: skip
     if args.format == "openloris":
         gt_file = read_openloris(args.gt) if args.gt not in ("-", "auto") else None
         table = crosscheck_openloris(

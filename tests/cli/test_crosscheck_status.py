@@ -137,3 +137,19 @@ def test_an_rpe_disagreement_on_sorted_stamps_exits_1(tmp_path, capsys, monkeypa
     monkeypatch.setattr(cc, "evo_statistics", off)
     assert main(["crosscheck", g, e, "--conventions", "evo"]) == 1
     assert "DISAGREE, unexplained (1 of 30): rpe_trans_rmse" in capsys.readouterr().err
+
+
+def test_inputs_that_do_not_fit_are_usage_errors_that_say_why(data, icra20, capsys):
+    """An OpenLORIS result against another scene's ground truth said only "no estimate stamp lies
+    within 0.5 s" (exit 1); a --seq the files lack exited 1; GT 'auto' on a TUM pair looked for a
+    file named auto. Each is a usage error (exit 2) saying what to give."""
+    est = str(icra20 / "per-seq" / "ds-slam" / "cafe-1-2.txt")
+    home = str(data.root / "openloris-scene" / "groundtruth" / "gt_home_1.txt")
+    cafe = str(data.root / "openloris-scene" / "groundtruth" / "gt_cafe_1.txt")
+    assert main(["crosscheck", home, est, "--format", "openloris"]) == 2
+    assert "is of scene cafe (its scene: header), the ground truth" in capsys.readouterr().err
+    assert main(["crosscheck", cafe, est, "--format", "openloris", "--seq", "5"]) == 2
+    assert "sequence 5 is not in both the result ([2])" in capsys.readouterr().err
+    assert main(["crosscheck", "auto", est]) == 2
+    assert "add --format openloris" in capsys.readouterr().err
+    assert main(["crosscheck", cafe, est, "--format", "openloris"]) == 0  # the right one: compared

@@ -21,7 +21,7 @@ from lorisnb.core.pipeline.sessions import compute_errors, evaluate_sessions
 from lorisnb.core.spec import validate
 from lorisnb.core.spec.evalspec import EvalSpec, make_spec
 from lorisnb.core.trajectory.poses import Trajectory
-from lorisnb.errors import EvaluationError, LorisWarning
+from lorisnb.errors import EvaluationError, LorisWarning, ValidationError
 from lorisnb.io.datasets.paths import DataPaths, DataRoot, load_groundtruth
 from lorisnb.io.readers.openloris import read_openloris
 from lorisnb.tools._extras import require
@@ -321,12 +321,16 @@ def crosscheck_openloris(
     result_path = res.path
     scene, frame = res.scene, res.frame
     gt_file = groundtruth if groundtruth is not None else load_groundtruth(scene, data_root)
+    if groundtruth is not None and groundtruth.scene and groundtruth.scene != scene:  # else: "no stamp within 0.5 s"
+        raise ValidationError(f"{result_path} is of scene {scene} (its scene: header), the ground truth "
+                              f"{groundtruth.path} of scene {groundtruth.scene}; give the {scene} ground truth, or "
+                              "'auto' to take it from the data root")  # fmt: skip
     seqs = [s for s in res.sequences if len(res.sequences[s])]
     if not seqs:
         raise EvaluationError(f"{result_path}: no sequence has poses")
     s = seq if seq is not None else seqs[0]
     if s not in res.sequences or s not in gt_file.sequences:
-        raise EvaluationError(
+        raise (ValidationError if seq is not None else EvaluationError)(  # a --seq that is not there: a usage error
             f"{result_path}: sequence {s} is not in both the result ({sorted(res.sequences)}) "
             f"and the ground truth ({sorted(gt_file.sequences)})"
         )
