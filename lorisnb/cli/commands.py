@@ -499,7 +499,11 @@ def cmd_report(args: argparse.Namespace) -> int:
         absolute_paths=args.absolute_paths,
     )
     for r in runs:
-        status = r.status if r.status != "ok" or not r.input_errors else f"ok, {r.input_errors} input file(s) failed"
+        status = (
+            r.status
+            if r.status != "ok" or not r.input_errors
+            else f"ok, {r.input_errors} input file(s) failed or not scored"
+        )
         line = f"{r.name:28s} {status:7s} {r.seconds:6.1f} s"
         print(line + (f"  {clean(r.error.splitlines()[0][:150])}" if r.error else ""))
     if wanted is not None and run_dir.resolve() != wanted:

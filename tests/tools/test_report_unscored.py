@@ -100,7 +100,7 @@ def test_the_per_sequence_values_show_every_sequence_with_ground_truth(tmp_path,
 @pytest.mark.slow
 def test_compare_algorithms_reports_its_failed_inputs_as_the_other_notebooks(tmp_path, icra20, data):
     """compare_algorithms writes input_errors.csv through the session as the other notebooks do, so
-    the report counts its failed inputs ('ok, N input file(s) failed') instead of a plain 'ok'."""
+    the report counts its failed inputs ('ok, N input file(s) failed or not scored') instead of a plain 'ok'."""
     from lorisnb.tools.report.notebooks import run_one
 
     source = _results(tmp_path / "res", icra20)
