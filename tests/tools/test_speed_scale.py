@@ -228,6 +228,9 @@ def test_a_sweep_too_large_for_memory_streams_to_parquet_with_the_same_rows(icra
     small = (largest + whole) / 2  # the whole table would not fit, each group does
     with pytest.raises(ln.ValidationError, match=r"GiB .* --parquet DIR; Python: lorisnb.tools.sweep_to_parquet"):
         sweep(ev.errors, *grid, columns="all", max_bytes=small)
+    with pytest.raises(ln.ValidationError, match=r"streamed, each group of files \(one algorithm, scene and trial: "
+                       r".*\) must fit: use fewer thresholds$"):  # fmt: skip  # --parquet given: not advised again
+        sweep_to_parquet(ev.errors, tmp_path / "tiny", *grid, columns="all", max_bytes=largest / 2)
     path, rows = sweep_to_parquet(ev.errors, tmp_path / "big", *grid, columns="all", max_bytes=small)
     assert rows == len(full)
     back = pd.read_parquet(path)

@@ -80,10 +80,16 @@ def sweep_bytes(files: list[FileErrors], shape: tuple[int, int, int, int], colum
 
 
 def check_sweep_size(
-    files: list[FileErrors], shape: tuple[int, int, int, int], columns: str, max_bytes: float = MAX_SWEEP_BYTES
+    files: list[FileErrors],
+    shape: tuple[int, int, int, int],
+    columns: str,
+    max_bytes: float = MAX_SWEEP_BYTES,
+    streamed: bool = False,
 ) -> None:
     """Refuse a sweep that would need more than ``max_bytes`` (:func:`sweep_bytes`), saying how much
-    it would need and how to stream it instead."""
+    it would need and how to stream it instead; ``streamed``: ``files`` are one group of a sweep
+    already streamed one group at a time (:func:`lorisnb.tools.evaluation.streaming.sweep_to_dataset`),
+    which fewer files or streaming cannot help."""
     need = sweep_bytes(files, shape, columns)
     if need > max_bytes:
         E, P, D, T = shape
@@ -93,8 +99,14 @@ def check_sweep_size(
         raise ValidationError(
             f"this sweep would need about {need / 2**30:.1f} GiB ({n_seq * E * P * D * T:,} rows of {ncol} columns; "
             f"{E} eps x {P} phi x {D} delta x {T} tau over {n_seq} sequences, up to {longest:,} poses each), "
-            f"more than the {max_bytes / 2**30:.1f} GiB allowed (max_bytes); use fewer thresholds or files, "
-            "or stream the table to Parquet (command line: --parquet DIR; Python: lorisnb.tools.sweep_to_parquet)"
+            f"more than the {max_bytes / 2**30:.1f} GiB allowed (max_bytes); "
+            + (
+                f"streamed, each group of files (one algorithm, scene and trial: {files[0].algorithm} "
+                f"{files[0].scene}, trial {files[0].trial}) must fit: use fewer thresholds"
+                if streamed
+                else "use fewer thresholds or files, or stream the table to Parquet (command line: --parquet DIR; "
+                "Python: lorisnb.tools.sweep_to_parquet)"
+            )
         )
 
 

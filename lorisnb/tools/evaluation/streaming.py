@@ -60,7 +60,7 @@ def sweep_to_parquet(
     groups = sweep_groups(errors)
     shape = tuple(len(threshold_list(n, v)) for n, v in (("eps", eps), ("phi", phi), ("delta", delta), ("tau", tau)))
     for g in groups:  # every group checked before anything is written
-        check_sweep_size(g, shape, columns, max_bytes)  # type: ignore[arg-type]
+        check_sweep_size(g, shape, columns, max_bytes, streamed=True)  # type: ignore[arg-type]
     rows = 0
 
     def parts() -> Iterator[pd.DataFrame]:
