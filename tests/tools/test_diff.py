@@ -86,7 +86,10 @@ def test_diff_flags_exactly_the_changed_sequences(versions, tmp_path, capsys):
     a, b = versions
     js, junit = tmp_path / "verdict.json", tmp_path / "verdict.xml"
     rc, out, _ = run(capsys, a, b, "--json", js, "--junit", junit)
-    assert rc == 1 and "verdict: regression (4 sequence(s) regressed)" in out
+    assert (
+        rc == 1
+        and "verdict: regression (4 sequence(s) regressed: odom home-2 failed; orbslam2_rgbd cafe-1 failed)" in out
+    )
     verdict = json.loads(js.read_text())
     assert verdict["verdict"] == "regression"
     flagged = {(r["algorithm"], r["scene"], r["seq"]) for r in verdict["regressions"] if r["seq"] is not None}

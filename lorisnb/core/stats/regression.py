@@ -781,7 +781,14 @@ def regressed_phrase(verdict: Mapping[str, Any]) -> str:
         return ""
     n = int(verdict["regressed_sequences"])
     if n:
-        return f"{n} sequence(s) regressed"
+        lost = [r for r in verdict.get("regressions", []) if r.get("status") in ("missing", "failed")
+                and r.get("seq") is not None]  # fmt: skip
+        named = "; ".join(
+            f"{r['algorithm']} {r['scene']}-{r['seq']} "
+            + (str(r["cand"]) if r.get("metric") == "trial" else "missing" if r["status"] == "missing" else "failed")
+            for r in lost[:3]
+        ) + (f"; {len(lost) - 3} more" if len(lost) > 3 else "")  # fmt: skip
+        return f"{n} sequence(s) regressed" + (f": {named}" if lost else "")
     return f"no sequence regressed; {int(verdict['scene_counts'].get('regression', 0))} scene value(s) did"
 
 
