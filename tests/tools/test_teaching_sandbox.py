@@ -731,3 +731,20 @@ def test_a_copied_notebook_is_flagged_on_both_students_and_keeps_its_points(tmp_
     assert all(rows[s]["notes"] == "" for s in ("s-cat", "s-dan", "s-eve", "s-fay")), rows
     assert "1 pair(s) of submissions with identical answer cells" in err
     assert "s-ann and s-ben (tiny_lab: Q1_total, Q2_mean, Q3_word, Q4_flag, Q5_count)" in err
+
+
+def test_a_needed_path_through_a_link_in_a_temporary_folder_keeps_that_folder(tmp_path):
+    """A clone in /tmp whose .venv links to a checkout's: the interpreter is started by the path
+    through the link, which lay in a temporary folder the sandbox emptied; the child could not start
+    and every answer of the kit's demo scored 0 (a fresh clone's make grade: 0 / 18)."""
+    from lorisnb.tools.teaching.sandbox import private_folders
+
+    tmp, real = tmp_path / "tmp", tmp_path / "checkout" / ".venv" / "bin"
+    real.mkdir(parents=True)
+    (tmp / "clone").mkdir(parents=True)
+    (tmp / "clone" / ".venv").symlink_to(real.parent, target_is_directory=True)
+    work = tmp / "grade" / "work"
+    work.mkdir(parents=True)
+    python = tmp / "clone" / ".venv" / "bin" / "python"
+    assert private_folders(work, [tmp], [real], tmp=False) == [tmp.resolve()]  # only the resolved path: emptied
+    assert private_folders(work, [tmp], [python.parent], tmp=False) == []  # the path the child starts by: kept

@@ -127,7 +127,9 @@ def private_folders(work: Path, private: Sequence[Path], needed: Sequence[Path],
     folders (unless not ``tmp``) and ``private``, less any holding one of ``needed`` (the Python
     environment, lorisnb) or the root, and less those inside another of them (emptied with it)."""
     found = [Path(p).resolve() for p in (*(_temporary_folders() if tmp else []), *private)]
-    need = [Path(n).resolve() for n in needed]
+    # each needed path as written and as resolved: an interpreter reached through a link in a temporary
+    # folder (a clone's .venv linking to a checkout's) is started by the path through the link
+    need = [q for n in needed for q in (Path(os.path.abspath(n)), Path(n).resolve())]
     found = [
         p for p in dict.fromkeys(found) if p.is_dir() and p != p.parent and not any(n.is_relative_to(p) for n in need)
     ]
@@ -275,7 +277,7 @@ class Sandbox:
         import lorisnb
 
         return [
-            Path(sys.prefix), Path(sys.base_prefix), Path(sys.executable).resolve().parent,
+            Path(sys.prefix), Path(sys.base_prefix), Path(sys.executable).parent, Path(sys.executable).resolve().parent,
             Path(np.__file__).resolve().parents[1], Path(lorisnb.__file__).resolve().parent,
             *(Path(p) for p in self.python_path),
         ]  # fmt: skip
