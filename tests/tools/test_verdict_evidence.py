@@ -208,6 +208,27 @@ def test_compare_counts_a_copied_trial_once(table):
     assert "2 trial(s) per sequence" in res.header
 
 
+def test_a_single_run_regression_cannot_widen_its_own_band(table):
+    """One run a side: the rerun band was widened to 4x the 90th percentile of the diff's unsigned
+    changes, so a regression of more than a tenth of the comparisons hid itself (every orbslam2 ATE
+    x10: ok, exit 0), and an improvement of one system hid a regression of another (odom's ATE /10
+    beside one orbslam2 sequence x8). Noise moves values both ways; the band now widens by the
+    smaller of the two tails, which neither a regression nor an improvement alone can inflate."""
+    base, cand = _reruns(table, (1,), 31), _reruns(table, (1,), 32)
+    orb = cand["algorithm"] == ALG
+    every = cand.assign(ate_rmse=np.where(orb, cand["ate_rmse"] * 10, cand["ate_rmse"]))
+    d = diff_tables(base, every)
+    rows = d.sequences[(d.sequences["metric"] == "ate_rmse") & (d.sequences["algorithm"] == ALG)]
+    assert d.regressed and (rows["status"] == "regression").mean() > 0.8
+    where = _target(table)
+    one = orb & (cand["scene"] == where[0]) & (cand["seq"] == where[1])
+    beside = cand.assign(ate_rmse=np.where(one, cand["ate_rmse"] * 8, np.where(orb, cand["ate_rmse"],
+                                                                                cand["ate_rmse"] / 10)))  # fmt: skip
+    row = _row(diff_tables(base, beside).sequences, where, "ate_rmse")
+    assert row["status"] == "regression", row["decided_by"]
+    assert "the largest change noise-only single runs show" in row["decided_by"]  # not widened by odom's gain
+
+
 def test_trial_numbers_are_labels_not_pairings(table):
     """Three trials a side numbered 1-3 and 4-6 (or 0-2 and 1-3) lack nothing (every sequence was
     missing trials 1, 2 and 3); a candidate with more trials than the base is not compared with a
