@@ -229,6 +229,32 @@ def test_a_single_run_regression_cannot_widen_its_own_band(table):
     assert "the largest change noise-only single runs show" in row["decided_by"]  # not widened by odom's gain
 
 
+def test_a_copy_with_a_pose_edited_is_still_a_copy(table):
+    """A copied file with one digit of one pose changed moves its ATE by about 1e-6 and nothing
+    else: compared exactly, it passed as a rerun (compare called two labels of one system different
+    in 6 of 25 of a helper's draws). Values within SAME_VALUE relative are the same value; real
+    reruns (CR +-0.017, ATE +-19 %) never are."""
+    from lorisnb.core.stats.regression import SAME_VALUE, repeated_trials
+
+    runs = _reruns(table, range(1, 4), 41)
+    edited = runs[runs["trial"] == 1].assign(trial=4)
+    edited["ate_rmse"] = edited["ate_rmse"] * (1 + 1e-6)
+    edited["c_ate_rmse"] = edited["c_ate_rmse"] * (1 - 1e-6)
+    cand = pd.concat([runs, edited], ignore_index=True)
+    t = cand.assign(suite="")
+    copies = repeated_trials(t)
+    with_output = t["matched"].to_numpy() > 0
+    assert (copies == ((t["trial"] == 4).to_numpy() & with_output)).all()  # the edited copy only
+    assert not repeated_trials(_reruns(table, range(1, 6), 42).assign(suite="")).any()  # reruns never
+    far = edited.assign(ate_rmse=edited["ate_rmse"] * (1 + 10 * SAME_VALUE))
+    assert not repeated_trials(pd.concat([runs, far], ignore_index=True).assign(suite="")).any()
+    base = _reruns(table, range(1, 5), 43)  # four runs against three and an edited copy: a missing trial
+    lost = changes(base, cand)[0]
+    lost = lost[lost["metric"] == "trial"]
+    assert len(lost) and (lost["cand"] == "trial 4 a copy").all()
+    assert lost["decided_by"].str.contains("trial 4 repeats trial 1.s every value").all()
+
+
 def test_trial_numbers_are_labels_not_pairings(table):
     """Three trials a side numbered 1-3 and 4-6 (or 0-2 and 1-3) lack nothing (every sequence was
     missing trials 1, 2 and 3); a candidate with more trials than the base is not compared with a
