@@ -224,9 +224,9 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         raise ParseError(
             path, None, f"root = {root_text!r}: environment variable not set; set it to the dataset's folder"
         )
-    from lorisnb.io.datasets.paths import spelled_entry
+    from lorisnb.io.datasets.paths import named_entry
 
-    root = spelled_entry(path.parent, Path(expanded).expanduser()).resolve()  # a name in another Unicode form too
+    root = named_entry(path.parent, Path(expanded).expanduser()).resolve()  # a name in another Unicode form too
     trusted = [path.parent.resolve(), *_data_root()]  # the manifest's folder and lorisnb's data root
     if not outside:  # a folder an environment variable names is the user's own: the root may lie inside it
         yours = [_folder(os.environ[v]).resolve() for v in _variables(root_text)]
@@ -253,7 +253,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         name = str(item.get("name", f"session{k}"))
         if not outside:  # as written, before any folder on the way is listed; then the file found
             _confined(root / str(item["groundtruth"]), allowed, path, f"[[session]] {k}: groundtruth")
-        groundtruth = spelled_entry(root, str(item["groundtruth"]))  # as estimates are found: NFC or NFD on disk
+        groundtruth = named_entry(root, str(item["groundtruth"]))  # as estimates are found: NFC or NFD on disk
         if not outside:
             _confined(groundtruth, allowed, path, f"[[session]] {k}: groundtruth")
         seq = item.get("seq", k)

@@ -36,13 +36,14 @@ if TYPE_CHECKING:
     import pandas as pd
 
 
-def spelled_entry(folder: Path, name: str | os.PathLike[str]) -> Path:
+def named_entry(folder: Path, name: str | os.PathLike[str]) -> Path:
     """The path ``name`` (a file name, or a relative path of names) gives in ``folder``, as written
     where that exists, else each part matched to the entry that is the same name in Unicode NFC form
-    (``dése.txt`` written in a manifest, saved by a Mac as ``de`` and a combining accent, or the
-    other way), else as written (absent: the caller says so). Estimates are found so
-    (:func:`lorisnb.tools.evaluation.inputs.named_entry`); this is for the files a manifest names."""
-    import unicodedata
+    (:func:`lorisnb.core.spec.validate.label`: ``dése.txt`` written in a manifest, or a session
+    ``café``, whose file a Mac saved as ``de`` and a combining accent, or the other way), else as
+    written (absent: the caller says so). Every file a manifest names and every estimate of a
+    session is found so."""
+    from lorisnb.core.spec.validate import label
 
     path = Path(folder) / name
     if path.exists() or str(name).isascii():
@@ -50,9 +51,9 @@ def spelled_entry(folder: Path, name: str | os.PathLike[str]) -> Path:
     here = Path(folder)
     for part in Path(name).parts:
         if not os.path.lexists(here / part):
-            want = unicodedata.normalize("NFC", part)
+            want = label(part)
             try:
-                same = sorted(e.name for e in here.iterdir() if unicodedata.normalize("NFC", e.name) == want)
+                same = sorted(e.name for e in here.iterdir() if label(e.name) == want)
             except OSError:
                 return path
             if not same:

@@ -286,29 +286,6 @@ def holds_any(folder: Path, names: Iterable[str]) -> bool:
     return any(validate.label(n).lower() in present for n in names)
 
 
-def named_entry(folder: Path, name: str) -> Path:
-    """The path ``name`` (a file name, or a relative path of names) gives in ``folder``: as
-    written where that exists, else each part matched to the entry of the same name in Unicode NFC
-    form (a session ``café`` whose file a Mac saved as ``cafe`` and a combining accent), else as
-    written (absent: the caller says so)."""
-    path = folder / name
-    if path.exists() or name.isascii():
-        return path
-    here = folder
-    for part in Path(name).parts:
-        if not (here / part).exists():
-            want = validate.label(part)
-            try:
-                same = sorted(p.name for p in here.iterdir() if validate.label(p.name) == want)
-            except OSError:
-                return path
-            if not same:
-                return path
-            part = same[0]
-        here = here / part
-    return here
-
-
 def outside_results(path: Path, results: Path) -> Path | None:
     """Where an estimate file really is when that lies (links resolved) outside the results folder
     it was found in (a link of the user's, or ``/etc/passwd`` linked into a received folder), else

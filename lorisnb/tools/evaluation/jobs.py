@@ -25,11 +25,11 @@ from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.core.trajectory.units import check_stamp_units
 from lorisnb.errors import DataNotFoundError, LorisError, LorisWarning, ParseError, ValidationError
 from lorisnb.io.datasets.manifest import Manifest
-from lorisnb.io.datasets.paths import DataPaths, groundtruth_spans, load_groundtruth, read_groundtruth_file
+from lorisnb.io.datasets.paths import DataPaths, groundtruth_spans, load_groundtruth, named_entry, read_groundtruth_file
 from lorisnb.io.readers.openloris import declared_scene, read_openloris
 from lorisnb.io.readers.plain import read_trajectory
 from lorisnb.io.readers.registry import hint
-from lorisnb.tools.evaluation.inputs import labels, missing_note, named_entry, outside_results, real_path, unquoted
+from lorisnb.tools.evaluation.inputs import labels, missing_note, outside_results, real_path, unquoted
 from lorisnb.tools.evaluation.pool import size_of
 from lorisnb.tools.evaluation.result import Failure
 from lorisnb.tools.evaluation.status import NOT_PUBLIC

@@ -219,7 +219,7 @@ def _as_spelled_here(path: Path) -> Path:
     NFC form (``algé`` written in NFD by one machine, in NFC by another copy)."""
     if path.exists() or str(path).isascii():
         return path
-    from lorisnb.tools.evaluation.inputs import named_entry
+    from lorisnb.io.datasets.paths import named_entry
 
     return named_entry(Path(path.anchor), str(path.relative_to(path.anchor)))
 
