@@ -328,6 +328,11 @@ def install_guard(reply_fd: int) -> tuple[Any, Any]:
     return report, scan
 
 
+class MagicNotRun(Exception):
+    """An IPython magic the grader does not run (not NotImplementedError: that is the answer stub's,
+    and a cell raising it reads as "not written yet")."""
+
+
 class Shell:
     """What ``get_ipython()`` returns to an answer cell here: the calls IPython's input transformer
     makes of magics and shell escapes (the grader transforms each answer cell as IPython would,
@@ -360,7 +365,7 @@ class Shell:
             return None
 
     def _unknown(self, what: str) -> Any:
-        raise NotImplementedError(
+        raise MagicNotRun(
             f"the IPython magic {what} is not run by the grader (it runs %time, %timeit, %%capture, display "
             "settings such as %matplotlib, and shell escapes): remove it, or write it in Python"
         )
