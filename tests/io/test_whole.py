@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from helpers import use_parser, write
 
+from lorisnb.core.trajectory.poses import written_blocks
 from lorisnb.errors import ParseError
 from lorisnb.io import read_euroc, read_kitti, read_tum
 from lorisnb.io.parsing import pieces, whole
@@ -85,6 +86,10 @@ def _same(a, b):
         return
     for name in ("stamps", "positions", "quaternions", "lines"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    kept = written_blocks(a)  # a KITTI file's blocks as written, however they are held
+    assert (kept is None) == (written_blocks(b) is None)
+    if kept is not None:
+        np.testing.assert_array_equal(kept, written_blocks(b))
     assert a.positions.flags.c_contiguous and a.quaternions.flags.c_contiguous
     assert a.stamps.flags.writeable and a.positions.flags.writeable
 
@@ -146,6 +151,8 @@ def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkey
     assert [r[0] for r in ranged] == ([n, n] if on_pieces else [])  # KITTI's too, quaternions on the threads
     printed = np.loadtxt(kitti).reshape(n, 3, 4)
     np.testing.assert_allclose(one.quaternions, Rotation.from_matrix(printed[:, :, :3]).as_quat(), rtol=0, atol=5e-15)
+    np.testing.assert_array_equal(written_blocks(one), printed[:, :, :3])  # the numbers as printed, each
+    np.testing.assert_array_equal(written_blocks(one.subset(np.arange(1, n, 3))), printed[1::3, :, :3])
 
 
 @pytest.mark.parametrize("parser", ["pandas", "numpy", "pieces", "read_csv"])

@@ -219,8 +219,11 @@ def finish(
     its own), others copied. The rows must have passed :func:`check_rows` (nothing is checked
     again)."""
     keep_all = choice("repeated", repeated, REPEATED) == "keep"
-    if stamps.size > 1 and not (np.all(np.diff(stamps) >= 0) if keep_all else np.all(np.diff(stamps) > 0)):
-        back = np.flatnonzero(np.diff(stamps) < 0 if keep_all else np.diff(stamps) <= 0)
+    # stamps are finite (check_rows): a later stamp is greater exactly when their difference is positive
+    # (compared, not subtracted: a byte a pose where np.diff's differences took eight)
+    ahead = stamps[1:] >= stamps[:-1] if keep_all else stamps[1:] > stamps[:-1]
+    if not ahead.all():
+        back = np.flatnonzero(~ahead)
         i = back[0] + 1
         kind = "repeats" if stamps[i] == stamps[i - 1] else "goes backwards"
         rule = (
