@@ -361,6 +361,28 @@ def test_answers_are_read_back_as_plain_values_only():
     assert isinstance(decode(_plain(Sneaky(0.5))), NotPlain) and decode(_plain(np.float64(2.0))) == 2.0
 
 
+def test_a_captured_cell_binds_its_output_as_ipython_does(capsys):
+    """``%%capture cap`` in an answer cell runs the cell, shows nothing and binds ``cap`` (IPython's
+    ``CapturedIO``: ``cap.stdout``), as Jupyter does, also when the cell fails; a later cell that
+    reads ``cap.stdout`` is graded on it (it raised NameError: ``cap`` was never bound)."""
+    from lorisnb.tools.teaching._sandbox_child import Shell
+    from lorisnb.tools.teaching.autograde import as_python
+
+    ns: dict = {}
+    shell = Shell(ns)
+    ns["get_ipython"] = lambda: shell
+    exec(as_python("%%capture cap\nprint('CR 0.625')\nx = 3\n"), ns)  # noqa: S102 (the test's own cell)
+    assert ns["x"] == 3 and ns["cap"].stdout == "CR 0.625\n" and str(ns["cap"]) == "CR 0.625\n"
+    assert capsys.readouterr().out == ""  # kept, not shown
+    exec(as_python("%%capture --no-stderr out\nimport sys\nprint('kept')\nsys.stderr.write('shown')\n"), ns)  # noqa: S102
+    assert ns["out"].stdout == "kept\n" and capsys.readouterr().err == "shown"
+    with pytest.raises(ZeroDivisionError):
+        exec(as_python("%%capture failed\nprint('before')\n1 / 0\n"), ns)  # noqa: S102
+    assert ns["failed"].stdout == "before\n"
+    exec(as_python("%%capture\nprint('quiet')\ny = 4\n"), ns)  # noqa: S102 (no name: nothing bound)
+    assert ns["y"] == 4 and capsys.readouterr().out == ""
+
+
 @pytest.fixture
 def open_base():
     """A folder under /tmp that other users may enter (pytest's tmp_path is closed to them)."""

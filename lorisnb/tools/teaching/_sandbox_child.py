@@ -333,6 +333,32 @@ class MagicNotRun(Exception):
     and a cell raising it reads as "not written yet")."""
 
 
+def _captured(out: Any, err: Any) -> Any:
+    """What IPython's ``%%capture NAME`` binds: its ``CapturedIO`` of the texts kept (a stand-in with
+    the same ``stdout``, ``stderr``, ``outputs`` and ``show()`` where IPython is not installed)."""
+    try:
+        from IPython.utils.capture import CapturedIO
+    except ImportError:
+
+        class CapturedIO:  # type: ignore[no-redef]
+            def __init__(self, stdout: Any, stderr: Any, outputs: Any = None) -> None:
+                self._stdout, self._stderr, self.outputs = stdout, stderr, outputs or []
+
+            stdout = property(lambda self: self._stdout.getvalue() if self._stdout else "")
+            stderr = property(lambda self: self._stderr.getvalue() if self._stderr else "")
+
+            def __str__(self) -> str:
+                return self.stdout
+
+            def show(self) -> None:
+                sys.stdout.write(self.stdout)
+                sys.stderr.write(self.stderr)
+
+            __call__ = show
+
+    return CapturedIO(out, err, [])
+
+
 class Shell:
     """What ``get_ipython()`` returns to an answer cell here: the calls IPython's input transformer
     makes of magics and shell escapes (the grader transforms each answer cell as IPython would,
@@ -389,6 +415,8 @@ class Shell:
         return self._unknown(f"%{name}")
 
     def run_cell_magic(self, name: str, line: str, cell: str) -> Any:
+        if name == "capture":
+            return self._capture(line, cell)
         if name in self.RUN:
             self._run(cell, "<cell magic>", own=name == "timeit")
             return None
@@ -399,6 +427,28 @@ class Shell:
                 f.write(cell)
             return None
         return self._unknown(f"%%{name}")
+
+    def _capture(self, line: str, cell: str) -> None:
+        """``%%capture [--no-stdout] [--no-stderr] [--no-display] [NAME]``: the cell run with what it
+        prints kept, not shown, and bound to NAME as IPython binds it (its ``CapturedIO``: ``.stdout``,
+        ``.stderr``, ``.show()``), even when the cell fails, as IPython does."""
+        import contextlib
+        import io
+
+        words = line.split()
+        out = None if "--no-stdout" in words else io.StringIO()
+        err = None if "--no-stderr" in words else io.StringIO()
+        names = [w for w in words if not w.startswith("-")]
+        try:
+            with contextlib.ExitStack() as stack:
+                if out is not None:
+                    stack.enter_context(contextlib.redirect_stdout(out))
+                if err is not None:
+                    stack.enter_context(contextlib.redirect_stderr(err))
+                self._run(cell, "<cell magic>")
+        finally:
+            if names:
+                self.user_ns[names[0]] = _captured(out, err)
 
     def var_expand(self, cmd: str, depth: int = 0) -> str:
         """``cmd`` with the Python names and expressions it names (``{x}``, ``{x + 1}``, ``$x``; ``$$``

@@ -49,13 +49,13 @@ from lorisnb.errors import AnswerError
 from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, decode
 
-GRADER_VERSION = "7"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "8"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
 # 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
 # 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
 # given to answers run alone; predictions get the functions of the earlier answer cells; 7: those names' values are
 # the grader's run of the lab's, not the student's; a cell under %%time/%%capture is read as its body; each sandbox
-# sees its own folder alone in the temporary folders)
+# sees its own folder alone in the temporary folders; 8: %%capture NAME binds NAME, as IPython does)
 
 
 @dataclass(frozen=True)
