@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import sys
+import unicodedata
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -12,7 +13,7 @@ import numpy as np
 
 from lorisnb.tools.decisions.escape import clean  # the one escaping rule, for every output (re-exported here)
 
-__all__ = ["MAX_ROWS", "clean", "format_table", "frame_columns", "say"]
+__all__ = ["MAX_ROWS", "clean", "display_width", "format_table", "frame_columns", "say"]
 
 MAX_ROWS = 500  # more rows: the first and last half of these, with a line saying how many were left out
 
@@ -30,11 +31,28 @@ def format_table(columns: Mapping[str, Sequence[Any] | np.ndarray], digits: int 
     for name in names:
         values = columns[name]
         cells.append([clean(name)] + ["..." if i < 0 else _cell(values[i], digits) for i in rows])
-    widths = [max(map(len, col)) for col in cells]
-    lines = ["  ".join(col[k].rjust(w) for col, w in zip(cells, widths, strict=True)) for k in range(len(rows) + 1)]
+    shown = [[display_width(c) for c in col] for col in cells]
+    widths = [max(col) for col in shown]
+    lines = [
+        "  ".join(" " * (w - cw[k]) + col[k] for col, cw, w in zip(cells, shown, widths, strict=True))
+        for k in range(len(rows) + 1)
+    ]
     if n > max_rows:
         lines.append(f"[{n} rows, {n - 2 * (max_rows // 2)} not shown]")
     return "\n".join(lines)
+
+
+def display_width(text: str) -> int:
+    """Columns ``text`` takes in a terminal: two for a wide or full-width character (CJK, by the
+    Unicode East Asian Width property), none for a combining mark or a format character, one for
+    others (``len`` counted a Chinese algorithm name at half its width and shifted its row)."""
+    if text.isascii():
+        return len(text)
+    return sum(
+        0 if unicodedata.combining(c) or unicodedata.category(c) in ("Mn", "Me", "Cf")
+        else 2 if unicodedata.east_asian_width(c) in ("W", "F") else 1
+        for c in text
+    )  # fmt: skip
 
 
 def _cell(value: Any, digits: int) -> str:

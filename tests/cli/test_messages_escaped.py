@@ -82,3 +82,22 @@ def test_a_usage_error_quoting_the_value_given_is_escaped(capsys, args):
         main(args)
     err = capsys.readouterr().err
     assert exc.value.code == 2 and "\\x1b" in err and "\x1b" not in err
+
+
+def test_a_wide_name_keeps_the_tables_columns_aligned(tmp_path, data, icra20, capsys):
+    """An algorithm named in Chinese (two terminal columns a character) or with a combining accent
+    (none for the accent) lines up with the others: every row of the printed table is as wide
+    on the screen as its header."""
+    from lorisnb.cli.text import display_width
+
+    for name in ("视觉里程计", "orbslam2", "q\u0307-slam"):
+        (tmp_path / "res" / name).mkdir(parents=True)
+        shutil.copy(icra20 / "per-seq" / "orbslam2_rgbd" / ORB, tmp_path / "res" / name / ORB)
+    assert display_width("视觉") == 4 and display_width("e\u0301") == 1 and display_width("\u200bx") == 1
+    rc = main(["evaluate", str(tmp_path / "res"), "--data", str(data.root), "--no-progress"])
+    out = capsys.readouterr().out
+    assert rc == 0
+    head = next(k for k, line in enumerate(out.splitlines()) if "algorithm" in line)
+    table = out.splitlines()[head : head + 4]
+    assert any("视觉里程计" in line for line in table) and any("\u0307" in line for line in table)
+    assert len({display_width(line.rstrip()) for line in table}) == 1, table
