@@ -118,3 +118,76 @@ closes = {iso(now + 7200)}
     assert str(path) in text and "[[phase]]" in text
     for w in words:
         assert w in text, text
+
+
+VARIANTS = {  # a's bytes -> the same file as lorisnb's OpenLORIS reader reads it, written otherwise
+    "ascii": lambda a: a,
+    "bom": lambda a: b"\xef\xbb\xbf" + a,
+    "arabic-indic digit": lambda a: a.replace(b"seq:1\n", "seq:\u0661\n".encode(), 1),
+    "full-width digit": lambda a: a.replace(b"seq:1\n", "seq:\uff11\n".encode(), 1),
+    "no-break space": lambda a: a.replace(b"seq:1\n", "seq:\u00a01\n".encode(), 1),
+    "capitals and spaces": lambda a: a.replace(b"seq:1\n", b"  SEQ :  1 \n", 1),
+    "crlf": lambda a: a.replace(b"\n", b"\r\n"),
+    "scene in seq 1's block": lambda a: a.replace(b"scene:home\n", b"").replace(b"seq:1\n", b"seq:1\nscene:home\n", 1),
+}
+
+
+@pytest.mark.parametrize("variant", list(VARIANTS))
+def test_a_hidden_sequence_is_stripped_however_the_file_is_written(tmp_path, data, variant):
+    """The strip reads the file as the reader does: a UTF-8 BOM, a seq: line's number in other
+    Unicode digits (U+0661, a full-width 1) or after a no-break space made the old strip give up
+    and score the file whole, seq 3 aligned on hidden seq 1 (ATE 4.09 m instead of 0.466 m)."""
+    from lorisnb.tools.challenge.scoring import score_folder
+
+    src = data.icra20 / "lifelong" / "vins_mono_color_imu_with_loop" / "home-1.txt"
+    strip_sequences(src, tmp_path / "a.txt", [1, 3])
+    body = VARIANTS[variant]((tmp_path / "a.txt").read_bytes())
+    if variant != "ascii":
+        assert body != (tmp_path / "a.txt").read_bytes()
+    challenge = read_challenge(home_challenge(tmp_path, data))
+    files = tmp_path / "sub" / "files"
+    files.mkdir(parents=True)
+    (files / "home-1.txt").write_bytes(body)
+    result = score_folder(files, challenge.data, challenge.spec, views=[[("home", 3), ("home", 4)]])
+    assert result["failures"] == []
+    assert [(r["seq"], round(r["ate_rmse"], 3)) for r in result["rows"]] == [(3, 0.466)]
+
+
+@pytest.mark.parametrize(
+    ("edit", "words"),
+    [
+        (lambda a: a.replace(b"seq:1\n", b"seq:one\n", 1), ["'seq:one'", "integer"]),
+        (lambda a: a.replace(b"scene:home\n", b""), ["no 'scene: NAME' header"]),
+        (lambda a: a.replace(b"scene:home\n", b"scene:attic\n"), ["unknown scene"]),
+        (lambda a: a.replace(b"scene:home\n", b"scene:cafe\n", 1), ["'scene: home' after 'scene: cafe'"]),
+    ],
+)  # fmt: skip
+def test_a_file_the_strip_cannot_read_is_refused_not_scored_whole(tmp_path, data, edit, words):
+    """Where the reader refuses a file, the strip cannot tell its blocks: the file is failed with
+    the reader's reason, never evaluated whole (its hidden blocks with it)."""
+    from lorisnb.tools.challenge import scoring
+
+    src = data.icra20 / "lifelong" / "vins_mono_color_imu_with_loop" / "home-1.txt"
+    strip_sequences(src, tmp_path / "a.txt", [1, 3])
+    challenge = read_challenge(home_challenge(tmp_path, data))
+    files = tmp_path / "sub" / "files"
+    files.mkdir(parents=True)
+    (files / "home-1.txt").write_bytes(edit((tmp_path / "a.txt").read_bytes()))
+    seen = []
+    real = scoring.evaluate
+
+    def spy(paths, *args, **kwargs):
+        seen.extend(paths)
+        return real(paths, *args, **kwargs)
+
+    scoring.evaluate = spy
+    try:
+        result = scoring.score_folder(files, challenge.data, challenge.spec, views=[[("home", 3), ("home", 4)]])
+    finally:
+        scoring.evaluate = real
+    assert seen == [] and result["rows"] == []
+    [failure] = result["failures"]
+    assert failure["file"] == "home-1.txt" and failure["status"] == "failed"
+    for w in words:
+        assert w in failure["error"], failure
+    assert str(files) not in failure["error"]

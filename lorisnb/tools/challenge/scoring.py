@@ -42,13 +42,14 @@ import numpy as np
 from sqlalchemy import Engine
 
 from lorisnb.core.lifelong.aggregate import aggregate_scenes, spans_table
-from lorisnb.core.pipeline.model import FileErrors
+from lorisnb.core.pipeline.model import FileErrors, ResultFile
 from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.stats.trials import check_duplicates
 from lorisnb.core.trajectory.frames import SCENES
-from lorisnb.errors import LorisError, LorisWarning, ValidationError
+from lorisnb.errors import LorisError, LorisWarning, ParseError, ValidationError
 from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans
-from lorisnb.io.readers.openloris import declared_scene
+from lorisnb.io.parsing.chunks import read_rows
+from lorisnb.io.readers.openloris import POSE_FIELDS, _pose_groups
 from lorisnb.io.writers import write_openloris
 from lorisnb.tools.challenge import store
 from lorisnb.tools.challenge.config import Challenge, sequences_of
@@ -160,36 +161,102 @@ class _Every:
         return True
 
 
-def seq_blocks(path: Path) -> list[int] | None:
-    """The numbers of a result file's ``seq: N`` lines in order, read as :func:`strip_sequences`
-    reads them; None where the file cannot be read or a ``seq:`` line holds no whole number."""
-    try:
-        data = path.read_bytes()
-    except OSError:
-        return None
-    out = []
-    for line in data.split(b"\n"):
-        key, colon, value = line.partition(b":")
-        if colon and key.strip().lower() == b"seq":
+#: Header keys the reader takes from any line of a file (a ``scene:`` line after ``seq: 1`` names
+#: the whole file's scene): kept, in place, where the block holding them is stripped.
+FILE_KEYS = ("scene", "frame")
+
+
+@dataclass(frozen=True)
+class Blocks:
+    """An OpenLORIS result file's layout as :func:`~lorisnb.io.readers.openloris.read_openloris`
+    reads it (:func:`read_blocks`): its scene, each ``seq: N`` line (1-based line, N) in file
+    order, and the lines kept whatever is stripped (:data:`FILE_KEYS`)."""
+
+    scene: str
+    seqs: tuple[tuple[int, int], ...]
+    kept: frozenset[int]
+
+    @property
+    def numbers(self) -> list[int]:
+        return [q for _, q in self.seqs]
+
+
+def read_blocks(path: Path) -> Blocks:
+    """The :class:`Blocks` of the OpenLORIS result file ``path``, read by the reader's own line
+    reader (:func:`~lorisnb.io.parsing.chunks.read_rows` with the arguments
+    :func:`~lorisnb.io.readers.openloris.read_openloris` gives it: a UTF-8 BOM dropped, the same
+    lines taken for ``key: value`` lines) and its rules for those lines (a key in any case and
+    spacing, ``seq:`` read by Python's ``int`` as the reader reads it: any Unicode digits and
+    spaces), its scene by :attr:`ResultFile.scene`. A :class:`ParseError` where the reader refuses
+    the file (a malformed line, a ``seq:`` line without a whole number, no or an unknown scene):
+    such a file is never scored, whole or in part."""
+    rows = read_rows(
+        path,
+        (8, 9),
+        what="an OpenLORIS trajectory file ('scene:', 'frame:', 'seq: N' blocks of poses)",
+        numbers=f"numbers '{POSE_FIELDS}'",
+        bad_width=lambda text, n: (
+            f"{text[:80]!r} has {n} fields; expected 8 or 9 numbers "
+            f"'{POSE_FIELDS}', a 'key: value' line, a 'seq: N' line or a '#' comment"
+        ),
+        specials=True,
+        layout=_pose_groups,
+    )
+    spath = str(path)
+    header: dict[str, str] = {}
+    header_lines: dict[str, int] = {}
+    seqs: list[tuple[int, int]] = []
+    kept: set[int] = set()
+    for line, text in rows.specials:  # as read_openloris takes them
+        key, _, value = text.partition(":")
+        key, value = key.strip().lower(), value.strip()
+        if key == "seq":
             try:
-                out.append(int(value.strip()))
+                seqs.append((line, int(value)))
             except ValueError:
-                return None
-    return out
+                raise ParseError(spath, line, f"{text!r}: expected 'seq: N' with an integer N") from None
+            continue
+        if key == "reloc" and not seqs:
+            raise ParseError(spath, line, "'reloc:' line before any 'seq: N' line; expected it inside a block")
+        if not key:
+            raise ParseError(spath, line, f"{text!r}: expected 'key: value', 'seq: N' or a pose line")
+        if key in FILE_KEYS:
+            kept.add(line)
+        if key not in header:
+            header[key], header_lines[key] = value, line
+        elif key in FILE_KEYS and value.lower() != header[key].lower():  # two files joined into one
+            raise ParseError(spath, line, f"'{key}: {value}' after '{key}: {header[key]}' (line {header_lines[key]}); "
+                             f"expected one {key} for the whole file: write every sequence in one {key}, or give "
+                             "the sequences as separate files")  # fmt: skip
+    scene = ResultFile(path=path, header=header, header_lines=header_lines, sequences={}).scene
+    return Blocks(scene, tuple(seqs), frozenset(kept))
 
 
-def strip_sequences(src: Path, dest: Path, keep: Iterable[int]) -> None:
+def seq_blocks(path: Path) -> list[int] | None:
+    """The numbers of a result file's ``seq: N`` lines in order, as the reader reads them
+    (:func:`read_blocks`); None where the reader refuses the file."""
+    try:
+        return read_blocks(path).numbers
+    except (LorisError, OSError):
+        return None
+
+
+def strip_sequences(src: Path, dest: Path, keep: Iterable[int], blocks: Blocks | None = None) -> None:
     """Copy the OpenLORIS result file ``src`` to ``dest`` without the ``seq: N`` blocks whose N is
-    not in ``keep`` (the header, and the kept blocks, byte for byte): what a phase scores of it, so
-    that nothing of it, the lifelong alignment included, comes from a sequence the phase hides."""
+    not in ``keep``, as the reader finds them (``blocks``, default :func:`read_blocks`): each line
+    of such a block is left blank (the reader skips blank lines; the others keep their line
+    numbers), but for its ``scene:`` and ``frame:`` lines, which the reader takes for the whole
+    file; the header and the kept blocks byte for byte. What a phase scores of a file, so that
+    nothing of it, the lifelong alignment included, comes from a sequence the phase hides."""
+    found = blocks if blocks is not None else read_blocks(src)
     kept = set(keep)
-    lines, current = [], None
-    for line in src.read_bytes().split(b"\n"):
-        key, colon, value = line.partition(b":")
-        if colon and key.strip().lower() == b"seq":
-            current = int(value.strip())
-        if current is None or current in kept:
-            lines.append(line)
+    lines = src.read_bytes().split(b"\n")
+    starts = [line for line, _ in found.seqs] + [len(lines) + 1]
+    for (first, seq), end in zip(found.seqs, starts[1:], strict=True):
+        if seq not in kept:
+            for line in range(first, min(end, len(lines) + 1)):
+                if line not in found.kept:
+                    lines[line - 1] = b""
     dest.parent.mkdir(parents=True, exist_ok=True)
     dest.write_bytes(b"\n".join(lines))
 
@@ -218,28 +285,37 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
     plain = dict(plain or {})
     gt_folder = groundtruth if groundtruth is not None else folder.parent / GROUNDTRUTH
     native = sorted(p for p in folder.iterdir() if p.is_file() and p.name not in plain)
-    shapes: dict[str, tuple[str | None, list[int] | None]] = {}
-    for p in native:
-        blocks = seq_blocks(p)
-        shapes[p.name] = (declared_scene(p), blocks or None)  # no block, or unreadable: scored whole, it fails
     every: list[Any] = [_Every()] if views is None else [frozenset((s, int(q)) for s, q in v) for v in views]
     evaluated: dict[tuple[str, frozenset[int] | None], Evaluation | None] = {}
     problems: list[tuple[str, str, str]] = []  # status, file, error
+    shapes: dict[str, Blocks | None] = {}
+    for p in native:  # each file's blocks as the reader reads them: one it refuses is never scored, whole or in part
+        try:
+            shapes[p.name] = read_blocks(p)
+        except LorisError as exc:
+            shapes[p.name] = None
+            problems.append(("failed", p.name, str(exc)))
+        except OSError as exc:
+            shapes[p.name] = None
+            problems.append(("failed", p.name, f"cannot be read ({exc.strerror})"))
 
     def in_view(view: Any) -> list[FileErrors]:
         """Every file's errors as scored on the sequences of ``view`` alone."""
         out: list[FileErrors] = []
         for p in native:
-            scene, blocks = shapes[p.name]
-            kept = None if scene is None or blocks is None else frozenset(q for q in blocks if (scene, q) in view)
-            if kept is not None and not kept:
+            shape = shapes[p.name]
+            if shape is None:
                 continue
-            key = (p.name, None if kept is None or kept == frozenset(blocks or ()) else kept)
+            blocks = frozenset(shape.numbers)  # none: no pose either (a pose before any seq: is refused)
+            kept = frozenset(q for q in blocks if (shape.scene, q) in view)
+            if blocks and not kept:
+                continue
+            key = (p.name, None if kept == blocks else kept)
             if key not in evaluated:
                 src = p
                 if key[1] is not None:
                     src = folder.parent / "strip" / str(len(evaluated)) / FILES / p.name
-                    strip_sequences(p, src, key[1])
+                    strip_sequences(p, src, key[1], shape)
                 evaluated[key] = evaluate([src], spec, data_root=data, jobs=1, progress=False)
             one = evaluated[key]
             if one is not None:
@@ -290,10 +366,10 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
         problems += [("not scored", Path(f.path).name, f.error) for f in one.unscored if f.kind != "nothing"]
         problems += [("skipped", Path(f.path).name, f.error) for f in skipped_only(one)]
     for p in native:  # a file none of whose sequences is in a view: never evaluated
-        scene, blocks = shapes[p.name]
-        if not any(name == p.name for name, _ in evaluated) and scene is not None and blocks:
-            problems.append(("not scored", p.name, f"{scene} seq {', '.join(map(str, sorted(set(blocks))))}: in no "
-                             "phase this submission's scores are shown in; not scored"))  # fmt: skip
+        shape = shapes[p.name]
+        if not any(name == p.name for name, _ in evaluated) and shape is not None and shape.seqs:
+            problems.append(("not scored", p.name, f"{shape.scene} seq {', '.join(map(str, sorted(set(shape.numbers))))}: "
+                             "in no phase this submission's scores are shown in; not scored"))  # fmt: skip
     problems = list(dict.fromkeys(problems))
     failures = [dict(file=name, status=status, error=_unnamed(scrub(error, folder, data, gt_folder), name))
                 for status, name, error in problems]  # fmt: skip
