@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import hashlib
 import re
+import subprocess
+import sys
 import threading
 import time
 
@@ -156,3 +158,75 @@ def test_latin_look_alikes_refused(name, others, words):
     """Latin letters drawn like other Latin letters or like punctuation passed: 'ɑlpha' beside 'alpha'."""
     with pytest.raises(ValidationError, match=re.escape(words)):
         store.check_team_name(name, others)
+
+
+def _serve_on(path, port: int) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "lorisnb.cli", "serve", str(path), "--port", str(port)],
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+
+
+def _queue(engine) -> dict[str, tuple[str, str | None, int]]:
+    return {s["id"]: (s["status"], s["claim"], s["attempts"]) for s in store.all_submissions(engine)}
+
+
+def test_a_second_server_on_a_busy_port_touches_no_queue(tmp_path, data):
+    """``lorisnb serve`` started again beside a running server, on its port: uvicorn starts the
+    application (and its scorer) before it binds, fails to bind and stops. The scorer put the
+    running server's submission back in the queue, claimed it and left it ``scoring`` under a claim
+    no process held (forever, until a restart); now it waits for the queue's lock, which the
+    running server holds, and touches nothing."""
+    import fcntl
+    import os
+    import socket
+
+    pytest.importorskip("fastapi")
+    from challenge_fixtures import challenge_file
+
+    from lorisnb.tools.challenge.config import read_challenge
+    from lorisnb.tools.challenge.scoring import LOCK
+
+    path = challenge_file(tmp_path, data)
+    challenge = read_challenge(path)
+    challenge.folder.mkdir(parents=True)
+    engine = store.connect(challenge.database)
+    tid = store.team_of(engine, store.add_team(engine, "t", time.time() + 600))["id"]
+    for sid in ("s1", "s2"):
+        store.add_submission(engine, sid, tid, "development", ["a.txt"], 1)
+    store.claim_next(engine)  # the running server scores s1; s2 waits
+    before = _queue(engine)
+    fd = os.open(challenge.folder / LOCK, os.O_RDWR | os.O_CREAT)  # the running server's scorer
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    try:
+        with socket.socket() as busy:  # the running server's port
+            busy.bind(("127.0.0.1", 0))
+            busy.listen()
+            done = _serve_on(path, busy.getsockname()[1])
+        assert done.returncode != 0 and "address already in use" in done.stderr + done.stdout
+        assert _queue(engine) == before
+    finally:
+        os.close(fd)
+
+
+def test_a_failed_start_releases_what_it_claimed(tmp_path, data):
+    """No other server holds the queue, but the port is another program's: what the failed start
+    claimed goes back to the queue when it stops (its claims released), none is left ``scoring``."""
+    import socket
+
+    pytest.importorskip("fastapi")
+    from challenge_fixtures import challenge_file
+
+    from lorisnb.tools.challenge.config import read_challenge
+
+    path = challenge_file(tmp_path, data)
+    challenge = read_challenge(path)
+    challenge.folder.mkdir(parents=True)
+    engine = store.connect(challenge.database)
+    tid = store.team_of(engine, store.add_team(engine, "t", time.time() + 600))["id"]
+    for sid in ("s1", "s2"):
+        store.add_submission(engine, sid, tid, "development", ["a.txt"], 1)
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        done = _serve_on(path, busy.getsockname()[1])
+    assert done.returncode != 0
+    assert {sid: q[:2] for sid, q in _queue(engine).items()} == {"s1": ("queued", None), "s2": ("queued", None)}

@@ -19,6 +19,7 @@ outcome once. With ``[challenge] scheduler`` each scoring is a task of that Dask
 
 from __future__ import annotations
 
+import fcntl
 import json
 import math
 import multiprocessing
@@ -67,6 +68,7 @@ COPY_ATE_M, COPY_AOE_DEG, COPY_MIN_POSES = 1e-4, 1e-3, 10
 
 FILES = "files"  # a submission's folder: files/ (as uploaded), plan.json, result-<claim>.json, timeline-<k>.png
 GROUNDTRUTH = "groundtruth"  # the server folder's one-sequence ground truths (sequence_groundtruth)
+LOCK = "scorer.lock"  # in the server's folder: held by the one scorer of its queue (Scorer._take_queue)
 
 
 def _plain(value: Any) -> Any:
@@ -560,30 +562,68 @@ class Scorer:
 
             self._client = connect_scheduler(challenge.scheduler)
         self.requeued = 0
+        self._lock: int | None = None  # the queue's lock (_take_queue)
+        self._waiting = False
         # the sets of sequences shown as the phases close: a submission is scored on each set its
         # phase shows alone (nothing from hidden ground truth), with a figure of each
         seqs = sequences_of(scene_durations(challenge.scenes, challenge.data))
         self.views = {p.name: tuple(tuple(sorted(v)) for v in challenge.views(seqs, p)) for p in challenge.phases}
 
     def start(self) -> None:
-        self.requeued = store.requeue_unfinished(self.engine)  # what a killed server left half-scored
+        """Score the queue from now on, once this scorer holds the challenge's queue
+        (:meth:`_take_queue`): a second server of the challenge (one started on a port in use,
+        which stops before it serves) never touches what the running one scores."""
+        self._take_queue()
         self._thread = threading.Thread(target=self._loop, name="lorisnb-scorer", daemon=True)
         self._thread.start()
 
+    def _take_queue(self) -> bool:
+        """Whether this scorer holds the queue: an exclusive lock on ``folder/scorer.lock``
+        (``flock``: released by the system when the process ends, a kill included), taken
+        without waiting. Taken, the submissions a killed server left ``scoring`` go back to the
+        queue; held by another server, nothing is touched (said once), and it is tried again
+        each poll (scored here once that server stops)."""
+        if self._lock is not None:
+            return True
+        fd = os.open(self.challenge.folder / LOCK, os.O_RDWR | os.O_CREAT, 0o600)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            if not self._waiting:
+                self._waiting = True
+                print(f"lorisnb serve: scorer: another server scores this challenge's queue (it holds "
+                      f"{self.challenge.folder / LOCK}); this one scores once that one stops", flush=True)  # fmt: skip
+            return False
+        self._lock = fd
+        self.requeued = store.requeue_unfinished(self.engine)  # what a killed server left half-scored
+        return True
+
     def stop(self) -> None:
-        """Stop taking work; scorings under way are stopped and stay queued for the next start."""
+        """Stop taking work; scorings under way are stopped and put back in the queue (their
+        claims released), then the queue's lock."""
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=10)
-        for r in self._running.values():
+        for sid, r in self._running.items():
             r.process.kill()
             r.process.join(timeout=5)
+            try:
+                store.release(self.engine, sid, r.claim)
+            except Exception as exc:  # the database gone: the next start puts it back (requeue_unfinished)
+                print(f"lorisnb serve: scorer: {type(exc).__name__}: {exc}", flush=True)
         self._running.clear()
         if self._client is not None:
             self._client.close()
+        if self._lock is not None:
+            os.close(self._lock)  # the lock with it
+            self._lock = None
 
     def _loop(self) -> None:
         while not self._stop.is_set():
+            if not self._take_queue():
+                self._stop.wait(max(self.poll, 0.5))
+                continue
             try:
                 self._reap()
                 while len(self._running) < self.limits["workers"] and not self._stop.is_set():
