@@ -328,6 +328,56 @@ def test_challenge_file_refused(tmp_path, data):
         assert words in str(err.value) and str(path) in str(err.value)
 
 
+@pytest.mark.parametrize(
+    "old, new, words",
+    [
+        ("[challenge]\n", '[challenge]\ndatabase = "nonsense"\n', ["database = 'nonsense'", "not a database URL",
+                                                                   "expected an SQLAlchemy database URL"]),
+        ("[challenge]\n", '[challenge]\ndatabase = "sqlite:////nonexistent/dir/x.db"\n',
+         ["database = 'sqlite:////nonexistent/dir/x.db'", "the folder /nonexistent/dir does not exist",
+          "expected a database file in an existing folder"]),
+        ("[challenge]\n", '[challenge]\ndatabase = "nosuchdb://h/x"\n', ["SQLAlchemy has no database 'nosuchdb'"]),
+        ('folder = "{folder}"', 'folder = "{afile}"', ["folder = '", "is a file; expected a folder"]),
+        ('folder = "{folder}"', 'folder = "{afile}/sub"', ["lies under the file", "expected a folder"]),
+        ('groundtruth = "{root}"', 'groundtruth = "/nonexistent"', ["groundtruth = '/nonexistent'",
+                                                                    "expected groundtruth to name a data root"]),
+        ('groundtruth = "{root}"', 'groundtruth = "{root}/openloris-scene/groundtruth"',
+         ["expected groundtruth to name a data root", "is inside the data root {root}: name that"]),
+    ],
+)  # fmt: skip
+def test_challenge_keys_checked_at_start(tmp_path, data, capsys, old, new, words):
+    """A wrong database (no URL, an SQLite file in a folder that does not exist), a folder that is a
+    file, a groundtruth that is no data root: each refused when the file is read, naming the file,
+    the key and what is expected, by serve and add-team alike (a database was a traceback of
+    SQLAlchemy's, a folder one of mkdir's); no advice on --data or LORISNB_DATA, which serve has not."""
+    from lorisnb.cli import main
+
+    path = challenge_file(tmp_path, data)
+    (tmp_path / "afile").write_text("x")
+    names = dict(folder=tmp_path / "server", afile=tmp_path / "afile", root=data.root)
+    old, new = old.format(**names), new.format(**names)
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new, 1))
+    with pytest.raises(ParseError) as err:
+        read_challenge(path)
+    said = str(err.value)
+    for w in [str(path), *(w.format(**names) for w in words)]:
+        assert w in said, said
+    for w in ("--data", "LORISNB_DATA", "data_root=", "Traceback"):
+        assert w not in said, said
+    assert main(["challenge", "add-team", str(path), "a team"]) != 0
+    out = capsys.readouterr()
+    assert "Traceback" not in out.err and words[0].format(**names) in out.err
+
+
+def test_a_database_that_cannot_be_opened_is_said(tmp_path):
+    from lorisnb.errors import LorisError
+
+    with pytest.raises(LorisError, match=r"database sqlite:///.*: cannot be opened \(OperationalError"):
+        store.connect(f"sqlite:///{tmp_path / 'afile' / 'x.db'}" if (tmp_path / "afile").write_text("x") else "")
+
+
 def test_bundled_class_challenge():
     """The README's class challenge reads: the bundled cafe ground truth, cafe-1 in development
     (live), both sequences in the final (after it closes), the paper's thresholds; reading it

@@ -33,6 +33,7 @@ from __future__ import annotations
 import datetime as dt
 import math
 import os
+import re
 import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
@@ -291,6 +292,77 @@ def _check_times(phases: tuple[Phase, ...], opens: float, closes: float, path: P
                                  "opens (a phase's opens and closes default to the challenge's)")  # fmt: skip
 
 
+#: What ``groundtruth`` names, said where it names something else.
+GROUNDTRUTH_EXPECTED = ("expected groundtruth to name a data root: the folder holding openloris-scene/groundtruth/"
+                        "gt_<scene>_1.txt (absolute, or relative to the challenge file)")  # fmt: skip
+#: What ``database`` names, said where it names something else.
+DATABASE_EXPECTED = ("expected an SQLAlchemy database URL, e.g. sqlite:////srv/challenge/challenge.db (a file in an "
+                     "existing folder) or postgresql://USER@HOST/NAME; leave database out for challenge.db in the "
+                     "server's folder")  # fmt: skip
+
+
+def _groundtruth_advice(text: str, gt: Path) -> str:
+    """:func:`find_data`'s message about ``groundtruth``, said for the challenge file: its advice
+    on the command line (``--data``, ``LORISNB_DATA``, ``data_root=``), which ``lorisnb serve``
+    does not take, left out for the key's; a folder inside a data root named with the root."""
+    text = text.replace(" (argument)", "")
+    kept = [
+        t
+        for t in re.split(r"(?<=\.)\s+", text)
+        if not re.search(r"--data\b|LORISNB_DATA|data_root|^A data root holds", t)
+    ]
+    hint = ""
+    for root in (gt, *gt.parents):
+        if (root / "openloris-scene" / "groundtruth").is_dir() and root != gt:
+            hint = f" ({gt} is inside the data root {root}: name that)"
+            break
+    return " ".join(kept).rstrip(". ") + f"; {GROUNDTRUTH_EXPECTED}{hint}"
+
+
+def _check_folder(folder: Path, named: str, path: Path, where: str) -> None:
+    """Refuse a ``folder`` that is, or lies under, an existing file (it could not be created)."""
+    existing = next((p for p in (folder, *folder.parents) if p.exists()), None)
+    if existing is not None and not existing.is_dir():
+        what = "is a file" if existing == folder else f"lies under the file {existing}"
+        raise ParseError(path, None, f"{where}folder = {named!r}: {folder} {what}; expected a folder, new or existing "
+                         "(the server's own: its database, uploads)")  # fmt: skip
+
+
+def _check_database(url: str, folder: Path, path: Path, where: str) -> None:
+    """Refuse a ``database`` that is no SQLAlchemy URL, names a dialect or driver not installed,
+    or an SQLite file in a folder that does not exist (the server's ``folder`` is created)."""
+    try:
+        from sqlalchemy.engine import make_url
+        from sqlalchemy.exc import ArgumentError, NoSuchModuleError
+    except ImportError:  # serve and the challenge commands require it first
+        return
+    said = url.split("@")[-1] if "@" in url else url  # never a password
+    try:
+        parsed = make_url(url)
+    except (ArgumentError, ValueError):
+        raise ParseError(path, None, f"{where}database = {said!r}: not a database URL; {DATABASE_EXPECTED}") from None
+    try:
+        dialect = parsed.get_dialect()
+    except NoSuchModuleError:
+        raise ParseError(path, None, f"{where}database = {said!r}: SQLAlchemy has no database {parsed.drivername!r}; "
+                         f"{DATABASE_EXPECTED}") from None  # fmt: skip
+    try:
+        dialect.import_dbapi()
+    except ImportError as exc:
+        raise ParseError(path, None, f"{where}database = {said!r}: its driver is not installed ({exc}): install "
+                         f"it; {DATABASE_EXPECTED}") from None  # fmt: skip
+    name = parsed.database
+    if parsed.get_backend_name() != "sqlite" or not name or name == ":memory:" or name.startswith("file:"):
+        return
+    file = Path(name).expanduser().absolute()  # a relative one: to the folder the server starts in, as SQLite opens it
+    if file.is_dir():
+        raise ParseError(path, None, f"{where}database = {said!r}: {file} is a folder; {DATABASE_EXPECTED}")
+    if not file.parent.is_dir() and file.parent.resolve() != folder:
+        raise ParseError(path, None, f"{where}database = {said!r}: the folder {file.parent} does not exist; expected a "
+                         "database file in an existing folder (create it), or leave database out for challenge.db in the "
+                         "server's folder")  # fmt: skip
+
+
 def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
     """Read and check a challenge file (see the module docstring)."""
     from lorisnb.tools.report.leaderboard import leaderboard_spec
@@ -314,12 +386,17 @@ def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
     try:
         data = find_data(gt)
     except LorisError as exc:
-        raise ParseError(path, None, f"{where}groundtruth = {top['groundtruth']!r}: {exc}") from None
+        raise ParseError(
+            path, None, f"{where}groundtruth = {top['groundtruth']!r}: {_groundtruth_advice(str(exc), gt)}"
+        ) from None
     have = data.scenes_with_groundtruth()
-    folder = (path.parent / Path(_text(top, "folder", path, where, f"{path.stem}-data")).expanduser()).resolve()
+    named = _text(top, "folder", path, where, f"{path.stem}-data")
+    folder = (path.parent / Path(named).expanduser()).resolve()
     if folder == gt or gt in folder.parents:
         raise ParseError(path, None, f"{where}folder: inside the ground-truth folder; expected a folder of its own")
+    _check_folder(folder, named, path, where)
     database = _text(top, "database", path, where, f"sqlite:///{folder / 'challenge.db'}")
+    _check_database(database, folder, path, where)
     metric = _choice(f"{where}metric", top.get("metric", "cr"), tuple(WEIGHTS), path)
     opens = _time(top, "opens", path, where)
     closes = _time(top, "closes", path, where)

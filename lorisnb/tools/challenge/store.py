@@ -39,8 +39,9 @@ from sqlalchemy import (
     update,
 )
 from sqlalchemy.engine import Connection
+from sqlalchemy.exc import SQLAlchemyError
 
-from lorisnb.errors import ValidationError
+from lorisnb.errors import LorisError, ValidationError
 
 metadata = MetaData()
 
@@ -98,7 +99,18 @@ def new_token() -> str:
 
 def connect(url: str) -> Engine:
     """The engine of ``url``, its tables created; SQLite in WAL mode (readers never block the
-    writer, a backup can run while the server does) with a busy timeout."""
+    writer, a backup can run while the server does) with a busy timeout. A database that cannot be
+    opened is a :class:`LorisError` saying why (the challenge file's ``database``)."""
+    try:
+        return _connect(url)
+    except (SQLAlchemyError, ImportError, ValueError) as exc:
+        said = url.split("@")[-1]  # never a password
+        why = getattr(exc, "orig", None) or exc
+        raise LorisError(f"database {said}: cannot be opened ({type(why).__name__}: {why}); check the challenge "
+                         "file's [challenge] database (an SQLAlchemy URL; left out: challenge.db in its folder)") from None  # fmt: skip
+
+
+def _connect(url: str) -> Engine:
     sqlite = url.startswith("sqlite")
     engine = create_engine(url, connect_args={"timeout": 30, "check_same_thread": False} if sqlite else {})
     if sqlite:
