@@ -52,3 +52,40 @@ def test_advice_on_other_data_is_left_out(tmp_path, data):
     assert team_text(text, challenge) == "icra20_results folder not found: looked for <ground truth>/x"
     assert team_text("seq 2: no pose matched.", challenge) == "seq 2: no pose matched."
     assert team_text("ground truth of scene 'cafe' not found: ...", challenge).endswith("tell the organizers")
+
+
+@pytest.mark.parametrize(
+    ("text", "shown"),
+    [
+        ("cafe-1: its AOE comes from the alignment more than from the estimate. Evaluate a longer run, or align on "
+         "the first pose (--align-frames 1, align_frames=1).",
+         "cafe-1: its AOE comes from the alignment more than from the estimate. Evaluate a longer run"),
+        ("cafe-1: the alignment was fitted on 2 poses, so its rotation is arbitrary (the official tool aligns all the "
+         "same: the numbers may differ); check this sequence's output, or evaluate it with the conventions of pairs "
+         "(--align-frames 1, --align none).",
+         "cafe-1: the alignment was fitted on 2 poses, so its rotation is arbitrary (the official tool aligns all the "
+         "same: the numbers may differ); check this sequence's output"),
+        ("no SE(3) alignment can be determined: 2 poses, so the rotation about them is arbitrary; align on more poses "
+         "(--align-frames N with N >= 3 poses not on one line), on the first pose's orientation (--align-frames 1), "
+         "or not at all (--align none)",
+         "no SE(3) alignment can be determined: 2 poses, so the rotation about them is arbitrary"),
+        ("a.txt and b.txt both hold x cafe-1, with no trial number to tell them apart; name the trials "
+         "(cafe_trial1.txt, run_2/, ...) or give --trials-by REGEX (trials_by= in Python) whose group is the trial "
+         "number, or evaluate them separately",
+         "a.txt and b.txt both hold x cafe-1, with no trial number to tell them apart; name the trials "
+         "(cafe_trial1.txt, run_2/, ...), or evaluate them separately"),
+        ("x.txt: 3 stamps look like nanoseconds written without zero padding; as written they are out of order. Read "
+         "with repair_stamps=True (command line --repair-stamps) to fix them; off by default so that the official "
+         "tool's numbers stay reproducible",
+         "x.txt: 3 stamps look like nanoseconds written without zero padding; as written they are out of order"),
+        ("positions or orientations differ (by 2 deg); or not.", "positions or orientations differ (by 2 deg); or not."),
+    ],
+)  # fmt: skip
+def test_a_team_is_not_advised_options_it_cannot_pass(tmp_path, data, text, shown):
+    """A team uploads files: the spec's options are the organizers'. Advice to pass an option
+    (--align-frames, --align none, --trials-by, --repair-stamps, or their Python keywords) is left
+    out of what it sees, the rest of the message kept (its other alternatives too)."""
+    challenge = read_challenge(challenge_file(tmp_path, data))
+    said = team_text(text, challenge)
+    assert said == shown
+    assert "--" not in said and "=" not in said

@@ -77,11 +77,40 @@ SERVER_ADVICE = re.compile(r"--data\b|LORISNB_DATA|data[ _]root|Point lorisnb at
 NO_GROUNDTRUTH = re.compile(r"ground truth of scene '?(\w+)'? not found")
 
 
+#: A command-line option (``--align-frames``) or a Python keyword argument (``align_frames=1``,
+#: ``trials_by= in Python``) a message advises: a team passes neither (the challenge's spec is the
+#: organizers', and its files are scored by the server).
+OPTION = re.compile(r"(?<![\w-])--[A-Za-z][\w-]*|\b[a-z]+(?:_[a-z]+)+=")
+ALTERNATIVE = re.compile(r",? or ")
+
+
+def _without_options(part: str) -> str:
+    """A sentence of a message without its advice to pass options (:data:`OPTION`): of its
+    alternatives (``A, or B (--opt)``, split at ``or`` outside parentheses) those naming none; then
+    a parenthesis naming one left out; empty when all of it is such advice."""
+    if not OPTION.search(part):
+        return part
+    end = part[-1] if part[-1:] in ".;" else ""
+    body = part[: len(part) - len(end)]
+    pieces, seps, at = [], [""], 0
+    for m in ALTERNATIVE.finditer(body):
+        if body.count("(", 0, m.start()) == body.count(")", 0, m.start()):  # outside parentheses
+            pieces.append(body[at : m.start()])
+            seps.append(m.group())
+            at = m.end()
+    pieces.append(body[at:])
+    kept = [(sep, piece) for sep, piece in zip(seps, pieces, strict=True) if not OPTION.search(piece)]
+    out = "".join((sep if k else "") + piece for k, (sep, piece) in enumerate(kept))
+    out = re.sub(r"\s*\([^()]*\)", lambda m: "" if OPTION.search(m.group()) else m.group(), out).strip()
+    return "" if not out or OPTION.search(out) else out + end
+
+
 def team_text(text: str, challenge: Challenge) -> str:
     """A scoring message as a team sees it: one about ground truth the server lacks says which
     scenes the challenge ranks (not which the data root holds, nor how to point lorisnb at other
-    data); sentences of advice on running lorisnb with other data are left out. The organizer's
-    views (the admin page, the export) keep the full text."""
+    data); sentences of advice on running lorisnb with other data are left out, and so is advice
+    to pass an option (:func:`_without_options`: a team uploads files, it passes no option). The
+    organizer's views (the admin page, the export) keep the full text."""
     scenes = ", ".join(challenge.scenes)
     found = NO_GROUNDTRUTH.search(text)
     if found:
@@ -91,8 +120,16 @@ def team_text(text: str, challenge: Challenge) -> str:
         return f"{scene} is not one of this challenge's scenes; it ranks {scenes}: upload result files of those"
     text = re.sub(r"\s*\(data root [^)]*\)", "", text)
     parts = re.split(r"(?<=[.;])\s+", text)
-    kept = [p for p in parts if not SERVER_ADVICE.search(p)]
-    if len(kept) == len(parts):
+    kept: list[str] = []
+    dropped = False  # the part before was advice, left out: a clause after its ';' goes with it
+    for p in parts:
+        if dropped and p[:1].islower():
+            continue
+        q = "" if SERVER_ADVICE.search(p) else _without_options(p)
+        dropped = not q and p.endswith(";")
+        if q:
+            kept.append(q)
+    if kept == parts:
         return text
     return " ".join(kept).rstrip(" ;.") or "the server could not score this file; tell the organizers"
 
