@@ -137,11 +137,42 @@ def test_encrypted_and_broken_archives(hostile):
         ("run.mcap", b"\x89MCAP0\r\n", 415, "the challenge takes no ROS bags"),
         ("x.txt", b"\x89PNG\r\n\x1a\n\x00\x00", 400, "binary"),
         ("x.txt", "é".encode("latin-1") * 20, 400, "not UTF-8 text"),
+        # a small file's last byte: the allowance for a character cut at a chunk's end is not the file's end
+        ("x.txt", RESULT + "é".encode("latin-1"), 400, f"not UTF-8 text (byte {len(RESULT)})"),
+        ("x.txt", RESULT + "é".encode()[:1] + b"\n", 400, f"not UTF-8 text (byte {len(RESULT)})"),
+        # not UTF-8 past the first chunk
+        ("x.txt", RESULT + b"#" * 70_000 + b"\xff\n", 400, f"not UTF-8 text (byte {len(RESULT) + 70_000})"),
     ],
 )
 def test_file_refused(hostile, name, body, status, words):
     r = post(hostile, [("files", (name, body))])
     assert r.status_code == status and words in r.json()["error"], r.text
+    nothing_kept(hostile)
+
+
+def test_a_character_cut_by_a_chunk_is_taken(hostile):
+    """UTF-8 is checked across chunks: a character cut at a chunk's end is read with the next."""
+    from lorisnb.tools.challenge.uploads import CHUNK
+
+    pad = CHUNK - len(RESULT) - 3  # '# ' and the pad: é's two bytes either side of the chunk's end
+    body = RESULT + b"# " + b"a" * pad + "é".encode() + b"\n"
+    assert body[CHUNK - 1 : CHUNK + 1] == "é".encode()
+    r = post(hostile, [("files", ("x.txt", body))])
+    assert r.status_code == 201, r.text
+
+
+def test_a_form_with_no_file_chosen(hostile):
+    """A browser's form sent with no file chosen has a files part named '': it said 'a file name
+    with control characters'."""
+    body = (b'--XX\r\nContent-Disposition: form-data; name="token"\r\n\r\n' + hostile["token"].encode()
+            + b'\r\n--XX\r\nContent-Disposition: form-data; name="files"; filename=""\r\n'
+            b"Content-Type: application/octet-stream\r\n\r\n\r\n--XX--\r\n")  # fmt: skip
+    headers = {"Content-Type": "multipart/form-data; boundary=XX"}
+    r = hostile["client"].post("/submit", content=body, headers=headers)
+    assert r.status_code == 400 and "no file chosen" in r.text and "control characters" not in r.text
+    auth = {"Authorization": f"Bearer {hostile['token']}"}
+    r = hostile["client"].post("/api/submissions", content=body, headers=headers | auth)
+    assert r.status_code == 400 and r.json()["error"].startswith("no file chosen; choose the files to upload")
     nothing_kept(hostile)
 
 

@@ -410,3 +410,21 @@ def test_a_team_with_trials_is_one_row_of_the_leaderboard(tmp_path, data):
     assert [(r["team"], r["position"]) for r in dev["rows"]] == [("trials", 1), ("single", 2)]
     first = dev["rows"][0]
     assert first["cr"] == pytest.approx(first["value"], abs=1e-12)  # the mean of its trials, as the value
+
+
+def test_submit_leaves_hidden_files_and_folders_out(tmp_path):
+    """``lorisnb submit FOLDER`` zips the folder's files but those under a hidden folder (a
+    notebook's .ipynb_checkpoints/, .git/) or hidden themselves, as lorisnb's folder walks do."""
+    import io
+    import zipfile
+
+    from lorisnb.tools.challenge.client import _parts
+
+    folder = tmp_path / "results"
+    for rel in ("cafe-1-1.txt", "more/cafe-1-2.txt", ".ipynb_checkpoints/cafe-1-1-checkpoint.txt", ".git/config",
+                "more/.hidden.txt", "more/.cache/cafe-1-2.txt"):  # fmt: skip
+        (folder / rel).parent.mkdir(parents=True, exist_ok=True)
+        (folder / rel).write_text("x")
+    [(field, (name, body))] = _parts([str(folder)])
+    assert field == "files" and name == "results.zip"
+    assert sorted(zipfile.ZipFile(io.BytesIO(body)).namelist()) == ["cafe-1-1.txt", "more/cafe-1-2.txt"]

@@ -15,13 +15,16 @@ from lorisnb.tools._extras import require
 
 
 def _parts(paths: list[str]) -> list[tuple[str, tuple[str, bytes]]]:
-    """The multipart ``files`` of ``paths``: a folder as one zip of the files below it."""
+    """The multipart ``files`` of ``paths``: a folder as one zip of the files below it, but for
+    those under a hidden folder or hidden themselves (a name starting with ``.``)."""
     out: list[tuple[str, tuple[str, bytes]]] = []
     for given in paths:
         p = Path(given).expanduser()
         if p.is_dir():
             buf = io.BytesIO()
-            files = sorted(f for f in p.rglob("*") if f.is_file() and not f.name.startswith("."))
+            # hidden files and folders left out (.git/, .ipynb_checkpoints/), as lorisnb's folder walks do
+            files = sorted(f for f in p.rglob("*") if f.is_file()
+                           and not any(part.startswith(".") for part in f.relative_to(p).parts))  # fmt: skip
             if not files:
                 raise ValidationError(f"{given}: a folder without files; expected result files (.txt, .csv)")
             with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:

@@ -15,6 +15,7 @@ Nothing from an upload is ever executed: the files are only read by the scorer.
 
 from __future__ import annotations
 
+import codecs
 import json
 import os
 import re
@@ -76,8 +77,13 @@ class Limits:
 
 def safe_name(name: str, where: str) -> str:
     """The file name ``name`` (a member path of an archive or an uploaded file's name) as kept:
-    its last part; refused if any part climbs out, is absolute or hidden, or has odd characters."""
-    if not name or "\x00" in name or any(ord(c) < 32 for c in name):
+    its last part; refused if any part climbs out, is absolute or hidden, or has odd characters,
+    and an uploaded file without a name (a browser's form sent with no file chosen)."""
+    if not name:
+        if where == "upload":
+            raise UploadRefused(f"no file chosen; choose the files to upload: {TAKEN}, or one .zip of them")
+        raise UploadRefused(f"{where}: a member without a name; expected named result files")
+    if "\x00" in name or any(ord(c) < 32 for c in name):
         raise UploadRefused(f"{where}: {name!r}: a file name with control characters; expected a plain name")
     if "\\" in name or re.match(r"^[A-Za-z]:", name):
         raise UploadRefused(f"{where}: {name!r}: a Windows path; expected names with '/' and no drive letter")
@@ -96,15 +102,30 @@ def safe_name(name: str, where: str) -> str:
 
 
 def _check_text(head: bytes, name: str) -> None:
+    """Refuse a file whose first chunk is blank or holds a NUL byte (binary)."""
     if not head.strip():
         raise UploadRefused(f"{name}: empty; expected poses: {TAKEN}")
     if b"\x00" in head:
         raise UploadRefused(f"{name}: a binary file; expected text: {TAKEN}")
-    try:
-        head.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        if exc.start < len(head) - 4:  # not just a character cut at the end of the head
-            raise UploadRefused(f"{name}: not UTF-8 text (byte {exc.start}); expected {TAKEN}") from None
+
+
+class _Utf8:
+    """A file's bytes checked as UTF-8 chunk by chunk (a character cut at a chunk's end is
+    decoded with the next chunk's bytes; one cut at the file's end is refused)."""
+
+    def __init__(self, name: str):
+        self.name = name
+        self.decoder = codecs.getincrementaldecoder("utf-8")()
+        self.seen = 0  # bytes given before this chunk
+
+    def __call__(self, chunk: bytes, final: bool = False) -> None:
+        pending = len(self.decoder.getstate()[0])
+        try:
+            self.decoder.decode(chunk, final)
+        except UnicodeDecodeError as exc:
+            at = self.seen - pending + exc.start
+            raise UploadRefused(f"{self.name}: not UTF-8 text (byte {at}); expected {TAKEN}") from None
+        self.seen += len(chunk)
 
 
 def _suffix(name: str, where: str, allow_zip: bool) -> str:
@@ -194,12 +215,15 @@ def _copy(src: IO[bytes], dest: Path, name: str, budget: int) -> int:
     with open(dest, "xb") as out:
         head = src.read(CHUNK)
         _check_text(head, name)
+        utf8 = _Utf8(name)
         while head:
             n += len(head)
             if n > budget:
                 raise UploadRefused(f"{name}: unpacks to more than the challenge's limit of {budget_mb(budget)}", 413)
+            utf8(head)
             out.write(head)
             head = src.read(CHUNK)
+        utf8(b"", final=True)
         out.flush()
         os.fsync(out.fileno())
     return n
