@@ -111,6 +111,26 @@ def test_a_folder_it_read_that_leads_out_is_not_walked(tmp_path, capsys):
     assert rc == 1 and out == "outside: {results}/sub\n"  # its files are not listed
 
 
+def test_a_folder_link_added_since_the_run_that_leads_out_is_listed_outside(tmp_path, capsys):
+    """A folder of estimates linked into the results folder after the run, from outside the roots:
+    listed 'outside' (exit 1) as a file link is, never walked; with its folder named, its files are
+    'added'. A hidden one is passed over as hidden files are."""
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "names-of-private-files.txt").write_text("x")
+    folder, res = received(tmp_path, [])
+    assert verify_run(folder, {"results": res}) == []
+    os.symlink(elsewhere, res / ".hidden")
+    assert verify_run(folder, {"results": res}) == []
+    os.symlink(elsewhere, res / "alg2")
+    assert verify_run(folder, {"results": res}) == [("{results}/alg2", "outside")]
+    rc, out, err = run(capsys, "verify", folder, "--results", res)
+    assert rc == 1 and out == "outside: {results}/alg2\n" and "names-of-private" not in out + err
+    assert verify_run(folder, {"results": res, "ext": elsewhere}) == [
+        ("{results}/alg2/names-of-private-files.txt", "added")
+    ]
+
+
 @pytest.mark.parametrize("where", ["inputs", "input_roots", "data_root"])
 def test_a_path_with_a_nul_byte_in_run_json_is_a_malformed_run_json(tmp_path, capsys, where):
     folder, res = received(tmp_path, [])

@@ -69,18 +69,33 @@ def input_files(roots: Iterable[Path], resolve: bool = True, inside: Iterable[Pa
     :func:`~lorisnb.tools.evaluation.inputs.walk`, linked folders followed, only those leading
     into ``inside`` when given), hidden files left out, sorted, each once; resolved (a link to a
     file: its target) unless not ``resolve``."""
+    return _listing(roots, resolve, inside)[0]
+
+
+def _listing(
+    roots: Iterable[Path], resolve: bool = True, inside: Iterable[Path] | None = None
+) -> tuple[list[Path], list[Path]]:
+    """:func:`input_files`, and the linked folders of ``roots`` left unwalked because they lead
+    outside ``inside`` (as found, not resolved; hidden ones left out as hidden files are)."""
     from lorisnb.tools.evaluation.inputs import walk
 
+    allowed = None if inside is None else [Path(f) for f in inside]
     found: dict[Path, None] = {}
+    unwalked: dict[Path, None] = {}
     for root in roots:
         if root.is_file():
             found[root.resolve() if resolve else root] = None
         elif root.is_dir():
-            for p in sorted(f.path for f in walk(root, inside)):
-                rel = p.relative_to(root).parts
-                if p.is_file() and not any(part.startswith(".") for part in rel):
+            for f in sorted(walk(root, allowed), key=lambda f: f.path):
+                p = f.path
+                if any(part.startswith(".") for part in p.relative_to(root).parts):
+                    continue
+                if f.kind == "folder":
+                    if allowed is not None and p.is_symlink() and not _inside(Path(f.real), allowed):
+                        unwalked[p] = None
+                elif p.is_file():
                     found[p.resolve() if resolve else p] = None
-    return sorted(found)
+    return sorted(found), sorted(unwalked)
 
 
 def _key(path: Path, data_root: Path | Mapping[str, Path] | None) -> str:
@@ -332,12 +347,18 @@ def verify_run(
         named = any(split_key(k) for k in [*record["inputs"], *record["input_roots"]])
         style: Mapping[str, Path] | Path | None = given if named else None if "roots" in record else given.get("data")
         recorded = {validate.label(k) for k in record["inputs"]}
-        keyed = {}
-        for p in input_files(listed, resolve=False, inside=allowed):  # a linked folder leading elsewhere: unwalked
+        keyed: dict[str, bool] = {}
+        files, unwalked = _listing(listed, resolve=False, inside=allowed)  # a linked folder leading elsewhere:
+        for p in unwalked:  # listed, not walked (a folder of estimates linked in from elsewhere since the run)
+            key = _key(where_it_is(p), style)
+            below = (validate.label(key) + "/", validate.label(str(where_it_is(p))) + "/")
+            if not any(k.startswith(below) for k in recorded):  # its recorded inputs are listed 'outside' already
+                keyed[key] = False
+        for p in files:
             inside = readable(p)
             forms = [where_it_is(p), p.parent.resolve() / p.name] + ([p.resolve()] if inside else [])
             keys = [validate.label(_key(f, style)) for f in forms]  # as the report keys it; as earlier ones did
             if not recorded.intersection(keys):
                 keyed[_key(where_it_is(p), style)] = inside
         problems += [(key, "added" if keyed[key] else "outside") for key in sorted(keyed)]
-    return sorted(problems)
+    return sorted(set(problems))
