@@ -356,16 +356,37 @@ def test_the_code_under_test_is_recorded_shown_and_followed(trials, tmp_path, ca
 
 
 def test_a_single_run_against_a_baseline_of_numbered_trials(trials):
-    """A nightly single run (trial 0, unnumbered) against a baseline of five numbered trials: no
-    trial number of one run means anything in the other, so nothing is "missing"; the comparisons
-    use the baseline's trials (five against one) and a lost sequence still regresses."""
+    """A single run without trial tokens (trial 0) against a baseline of five numbered trials holds
+    one trial of five: trial numbers are labels, so it lacks four, named as a CAND of run_1/ would
+    be (it passed, exit 0, while the same files under run_1/ failed); the baseline's single run
+    against five trials lacks nothing; a lost sequence still regresses."""
     single = trials[trials["trial"] == 1].assign(trial=0)
-    seqs, _ = changes(trials, single)
+    for cand in (single, trials[trials["trial"] == 1]):
+        seqs, scenes = changes(trials, cand)
+        lost = seqs[seqs["metric"] == "trial"]
+        assert len(lost) == cand.shape[0] and (lost["cand"] == "missing trial 2, 3, 4, 5").all()
+        assert (lost["status"] == "missing").all() and (scenes["metric"] == "coverage").any()
+    seqs, _ = changes(single, trials)
     assert not (seqs["metric"] == "trial").any() and set(seqs["status"]) <= {"ok", "unjudged", "improvement"}
     judged = seqs[seqs["status"] == "ok"]
-    assert (judged["trials_base"] == 5).all() and (judged["trials_cand"] == 1).all()
-    assert judged["decided_by"].str.contains("5 vs 1 trials").all()
+    assert (judged["trials_base"] == 1).all() and (judged["trials_cand"] == 5).all()
     lost = single[~((single["algorithm"] == "odom") & (single["scene"] == "cafe") & (single["seq"] == 1))]
-    seqs, _ = changes(trials, lost)
+    seqs, _ = changes(single, lost)
     row = seqs[(seqs["algorithm"] == "odom") & (seqs["scene"] == "cafe") & (seqs["seq"] == 1)]
     assert row["status"].tolist() == ["missing"]
+
+
+def test_an_unnumbered_trial_among_numbered_ones_is_one_of_them(trials):
+    """A run numbering its trials but one sequence's (a single file without a trial token, trial 0):
+    that sequence holds one trial of five, missing four, named as the others'; the other sequences
+    lack nothing (they were each called "missing trial 0")."""
+    three = trials[trials["trial"] <= 3]
+    odd = (three["algorithm"] == "odom") & (three["scene"] == "home") & (three["seq"] == 3)
+    mixed = pd.concat([three[~odd], three[odd & (three["trial"] == 1)].assign(trial=0)], ignore_index=True)
+    seqs, scenes = changes(three, mixed)
+    lost = seqs[seqs["status"].isin(["missing", "failed"])]
+    assert lost[["algorithm", "scene", "seq", "cand"]].values.tolist() == [["odom", "home", 3, "missing trial 2, 3"]]
+    cover = scenes[scenes["metric"] == "coverage"]
+    assert cover["cand"].tolist() == ["home-3: missing trial 2, 3"]
+    ok = seqs[(seqs["scene"] != "home") & (seqs["metric"] == "cr")]
+    assert (ok["trials_cand"] == 3).all()

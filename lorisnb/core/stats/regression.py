@@ -49,7 +49,8 @@ judge), or holds fewer trials than the candidate's other sequences or than the b
 fewer independent runs than the base because a trial is a copy of another (``trial 3 a copy``:
 a crashed trial filled in with another's output). Trial numbers
 are labels, not pairings: the candidate's trials 4 to 6 against the base's 1 to 3 lack nothing, and
-trials the candidate holds beyond the base's are no failed runs of the base. A candidate's new
+trials the candidate holds beyond the base's are no failed runs of the base; an unnumbered run
+(trial 0) is one trial, so against the base's 1 to 3 it lacks 2 and 3. A candidate's new
 sequence is listed, not judged.
 
 **Too little to judge** (``unjudged``, never a regression): a sequence whose base matched fewer
@@ -400,20 +401,31 @@ class _Comparisons:
                      status="regression" if worse else ("improvement" if better else "ok"))  # fmt: skip
 
 
+def _labels(trials: set) -> set:
+    """A run's trial labels, less the unnumbered trial 0 where numbered ones exist: trial 0 is a run
+    without a trial token, one trial whatever the others' numbers (a sequence holding only it holds
+    one of the run's trials, :func:`_padded`)."""
+    numbered = trials - {0}
+    return numbered if numbered else set(trials)
+
+
 def _trial_sets(b: pd.DataFrame, c: pd.DataFrame) -> tuple[dict[tuple, list], dict[tuple, list]]:
     """The trials expected of every sequence of each (suite, algorithm), for BASE and for CAND. A run
     is expected to hold, for every sequence, each trial it holds for any of them (one a sequence
     lacks is a failed run of it); CAND is also expected to hold as many trials as BASE (where it
     holds fewer, the base's trial numbers it lacks are failed runs). Trial numbers are labels, not
     pairings: CAND's trials 4 to 6 against BASE's 1 to 3 lack nothing, and trials CAND holds beyond
-    BASE's are no failed runs of BASE. Where one run's trials are unnumbered (trial 0: a single run,
-    as against a baseline of numbered trials), each run is expected to hold only its own."""
-    tb = {k: set(g["trial"]) for k, g in b.groupby(["suite", "algorithm"], sort=False, observed=True)}
-    tc = {k: set(g["trial"]) for k, g in c.groupby(["suite", "algorithm"], sort=False, observed=True)}
+    BASE's are no failed runs of BASE. An unnumbered trial (trial 0: files without a trial token) is
+    one trial like any other: CAND's single unnumbered run against BASE's trials 1 to 3 lacks two of
+    them (named 2, 3, as a CAND of run_1/ would), BASE's single run against CAND's three lacks
+    nothing; where a run numbers some sequences' trials and not others', a sequence's trial 0 stands
+    for one of the numbered trials (:func:`_padded`)."""
+    tb = {k: _labels(set(g["trial"])) for k, g in b.groupby(["suite", "algorithm"], sort=False, observed=True)}
+    tc = {k: _labels(set(g["trial"])) for k, g in c.groupby(["suite", "algorithm"], sort=False, observed=True)}
     eb, ec = {}, {}
     for k in dict.fromkeys([*tb, *tc]):
         x, y = tb.get(k, set()), tc.get(k, set())
-        short = 0 if x == {0} or y == {0} or not x or not y else len(x) - len(y)
+        short = len(x) - len(y) if x and y else 0
         eb[k] = sorted(x)
         ec[k] = sorted(y | set(sorted(x - y)[-short:] if short > 0 else []))
     return eb, ec
@@ -421,12 +433,22 @@ def _trial_sets(b: pd.DataFrame, c: pd.DataFrame) -> tuple[dict[tuple, list], di
 
 def _padded(t: pd.DataFrame, trials: Mapping[tuple, list]) -> tuple[pd.DataFrame, dict[tuple, list]]:
     """The table with each sequence's missing trials added as failed runs (paper: missing output
-    scores 0), and which trials each sequence lacked."""
+    scores 0), and which trials each sequence lacked. A sequence's trial outside the expected ones
+    (an unnumbered trial 0 in a run that numbers its other sequences' trials) is one of them: it
+    takes the first label the sequence lacks, and only the rest are missing."""
     added, lacking = [], {}
-    trial_col = t["trial"].to_numpy()
+    t = t.copy()
+    trial_col = t["trial"].to_numpy().copy()
+    relabelled = False
     for key, rows in t.groupby(KEYS, sort=False, observed=True, dropna=False).indices.items():
+        expected = trials.get((key[0], key[1]), [])
         have = set(trial_col[rows])
-        absent = [k for k in trials.get((key[0], key[1]), []) if k not in have]
+        absent = [k for k in expected if k not in have]
+        extra = [i for i in rows if trial_col[i] not in expected]
+        for i, k in zip(extra, list(absent), strict=False):  # an unnumbered trial stands for a lacking one
+            trial_col[i] = k
+            absent.remove(k)
+            relabelled = True
         if not absent:
             continue
         lacking[key] = absent
@@ -436,9 +458,12 @@ def _padded(t: pd.DataFrame, trials: Mapping[tuple, list]) -> tuple[pd.DataFrame
                                              "delta", "tau", "frame", "mode") if c in t.columns}  # fmt: skip
             row.update({c: v for c, v in FAILED_RUN.items() if c in t.columns}, trial=k, file="")
             added.append(row)
+    if relabelled:
+        t["trial"] = trial_col
     if added:
-        extra = pd.DataFrame(added).reindex(columns=t.columns)
-        t = pd.concat([t, extra.astype({c: float for c in FAILED_RUN if c in extra.columns})], ignore_index=True)
+        extra_rows = pd.DataFrame(added).reindex(columns=t.columns)
+        t = pd.concat([t, extra_rows.astype({c: float for c in FAILED_RUN if c in extra_rows.columns})],
+                      ignore_index=True)  # fmt: skip
     return t, lacking
 
 
