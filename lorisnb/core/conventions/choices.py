@@ -174,6 +174,7 @@ def fit_alignment(
     strict: bool = True,
     notes: list[str | None] | None = None,
     origin_blocks: tuple[np.ndarray, np.ndarray] | None = None,
+    label: str | None = None,
 ) -> Sim3:
     """The alignment ``gt = s R est + t`` of matched poses by ``method`` (see the module
     docstring), fitted on the first ``frames`` matched poses (None: all). Positions in metres;
@@ -185,7 +186,9 @@ def fit_alignment(
     says so: :func:`lorisnb.core.pipeline.plausibility.degenerate_fit`). posyaw on an estimate tilted
     against the ground truth, or an alignment on all of fewer than :data:`FEW_POSES` poses, is
     warned about (appended to ``notes`` when given, else a LorisWarning). ``origin_blocks``: the first
-    matched estimate and ground-truth rotation blocks as written, for ``origin`` (evo composes them)."""
+    matched estimate and ground-truth rotation blocks as written, for ``origin`` (evo composes them).
+    ``label``: what the poses are (``FILE, seq N``), said first in every note, as the pipeline's
+    other warnings say it."""
     method = choice("align", method, ALIGNMENTS)
     p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
     if method == "none" or len(p_e) == 0:
@@ -202,6 +205,7 @@ def fit_alignment(
             "error (the ATE is small by construction); evaluate a longer estimate, or align on fewer poses "
             "(--align-frames N) and judge the rest",
             notes,
+            label,
         )
     if frames is None and method in ("se3", "sim3"):  # all matched poses: Horn/Umeyama, as the official tool
         return umeyama(p_e, p_g, method == "sim3", strict=strict)
@@ -212,6 +216,7 @@ def fit_alignment(
             f"alignment is fitted on all {len(p_e)} (rpg_trajectory_evaluation refuses a count above the matched "
             "poses); give --align-frames at most the matched count, or leave it out to align on all",
             notes,
+            label,
         )
     if n == 1 and method in ("se3", "posyaw"):
         if est_quaternions is None or gt_quaternions is None:
@@ -232,7 +237,7 @@ def fit_alignment(
                 "first pose's orientation (--align-frames 1), or not at all (--align none)"
             )
         rot = _rot_z(_best_yaw(c))
-        _say(_tilt_note(p_e[:n], p_g[:n], Sim3(rot, mu_g - rot @ mu_e, 1.0)), notes)
+        _say(_tilt_note(p_e[:n], p_g[:n], Sim3(rot, mu_g - rot @ mu_e, 1.0)), notes, label)
         return Sim3(rot, mu_g - rot @ mu_e, 1.0)
     return umeyama(p_e[:n], p_g[:n], method == "sim3", strict=True)
 
@@ -245,9 +250,11 @@ TILT_DEGREES = 10.0
 TILT_GAIN = 0.5
 
 
-def _say(note: str | None, notes: list[str | None] | None) -> None:
+def _say(note: str | None, notes: list[str | None] | None, label: str | None = None) -> None:
     if note is None:
         return
+    if label:
+        note = f"{label}: {note}"
     if notes is not None:
         notes.append(note)
     else:

@@ -172,7 +172,8 @@ def evaluate_sessions(
         origin = None if written is None or a.gt_blocks is None else (written[a.est_index[0]], a.gt_blocks[0])
         try:  # an OpenLORIS file (frames given) is aligned as the official tool aligns it
             return fit_alignment(a.est_rows(e.positions), a.gt_positions, method, spec.align_frames, q_e,
-                                 a.gt_quaternions, strict=frames is None, notes=found, origin_blocks=origin)  # fmt: skip
+                                 a.gt_quaternions, strict=frames is None, notes=found, origin_blocks=origin,
+                                 label=f"{name}, seq {s}")  # fmt: skip
         except EvaluationError as exc:  # named with the sequence (the session's file) it is about
             raise EvaluationError(f"{where(s)}: {exc}") from None
 
