@@ -68,6 +68,16 @@ def _evaluate(path: Path, data, **kw):
     return ev, [str(w.message) for w in caught if issubclass(w.category, LorisWarning)]
 
 
+def test_lever_warning_names_the_sequence_the_alignment_was_fitted_on(cases, data):
+    """The lifelong alignment is fitted on sequence 1 (3 poses: no lever); sequence 2's AOE is large:
+    the warning is about sequence 2's AOE and names sequence 1's 3 matched positions as such."""
+    _, said = _evaluate(cases["first_three"], data)
+    lever = [s for s in said if "hold the alignment's rotation by a lever" in s]
+    assert len(lever) == 1
+    assert ", seq 2: its median AOE" in lever[0]
+    assert "the alignment was fitted on seq 1, whose 3 matched positions" in lever[0]
+
+
 def test_few_poses_warning_names_file_and_sequence(cases, data):
     """The 'fitted on all of only N matched poses' warning names FILE, seq N as every other does."""
     _, said = _evaluate(cases["first_three"], data)

@@ -168,13 +168,16 @@ def quaternion_order(label: str, median_aoe: float, median_aoe_swapped: float) -
     )
 
 
-def rotation_not_held(label: str, median_aoe: float, lever: float, matched: int) -> str:
-    """A sequence's AOE is large (its median above :data:`SUSPECT_AOE`) but its matched positions
-    hold the alignment's rotation by a lever under :data:`~lorisnb.core.alignment.geometry.MIN_LEVER`
+def rotation_not_held(label: str, median_aoe: float, lever: float, matched: int, fitted_on: str | None = None) -> str:
+    """A sequence's AOE is large (its median above :data:`SUSPECT_AOE`) but the matched positions the
+    alignment was fitted on hold its rotation by a lever under :data:`~lorisnb.core.alignment.geometry.MIN_LEVER`
     (a short or nearly straight run): the rotation, so the AOE, comes from the positions' noise, and
-    no sensor frame or quaternion order can be told apart (those checks are not run)."""
+    no sensor frame or quaternion order can be told apart (those checks are not run). ``fitted_on``:
+    the sequence the alignment was fitted on (``seq 1``), when not the one of ``label`` (a lifelong
+    file's later sequence); ``lever`` and ``matched`` are that sequence's."""
+    whose = f"the alignment was fitted on {fitted_on}, whose" if fitted_on else "its"
     return (
-        f"{label}: its median AOE is {median_aoe:.1f} deg, but its {matched} matched positions hold the alignment's "
+        f"{label}: its median AOE is {median_aoe:.1f} deg, but {whose} {matched} matched positions hold the alignment's "
         f"rotation by a lever of only {lever:.3g} m (under {MIN_LEVER:g} m, 5 mm of position noise turns the fit by "
         "more than a degree): the AOE, and which poses count as correct under phi, come from the alignment more "
         "than from the estimate, and its sensor frame and quaternion order cannot be checked. Evaluate a longer "

@@ -248,8 +248,9 @@ def evaluate_sessions(
         fitted_on_all = on is not None and method in ("se3", "sim3") and spec.align_frames is None
         if on is not None and fitted_on_all and on.rotation_lever < MIN_LEVER:  # the rotation is the positions'
             if on.seq not in degenerate:  # noise: nothing to tell apart (a degenerate fit is said already)
+                fitted_on = f"seq {on.seq}" if on.seq != e.seq else None  # a later sequence: named the fitted one
                 found.append(plausibility.rotation_not_held(label, float(np.median(e.aoe)), on.rotation_lever,
-                                                            on.matched))  # fmt: skip
+                                                            on.matched, fitted_on))  # fmt: skip
         elif frames is not None and frame in FRAMES:
             sc, fr, gt_frame, raw_gt = frames
             found += checks.frame_notes(
