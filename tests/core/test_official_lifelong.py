@@ -83,3 +83,15 @@ def test_few_poses_warning_names_file_and_sequence(cases, data):
     _, said = _evaluate(cases["first_three"], data)
     few = [s for s in said if "alignment is fitted on all of only 3 matched poses" in s]
     assert len(few) == 1 and few[0].startswith(f"{cases['first_three']}, seq 1: the se3 alignment")
+
+
+def test_degenerate_warning_under_sim3_says_the_official_tool_stops(cases, data):
+    """One matched pose in the first sequence: under SE(3) the official tool aligns with its own
+    arbitrary rotation; under Sim(3) it stops (LinAlgError). The warning says which."""
+    _, sim3 = _evaluate(cases["home_first1"], data, scale=True)
+    _, se3 = _evaluate(cases["home_first1"], data, scale=False)
+    (a,) = [s for s in sim3 if "so its rotation is arbitrary" in s]
+    (b,) = [s for s in se3 if "so its rotation is arbitrary" in s]
+    assert "seq 1:" in a and "LinAlgError" in a and "aligns all the same" not in a
+    assert "--align-frames 1, --align none" not in a  # refused with Sim(3): a scale needs 2 poses
+    assert "aligns all the same, with its own arbitrary rotation" in b and "LinAlgError" not in b

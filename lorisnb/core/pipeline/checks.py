@@ -139,10 +139,13 @@ def other_spans(
     return spans
 
 
-def degenerate_note(label: str, est_positions: np.ndarray, a: Association, pairs: PositionPairs | None) -> str | None:
+def degenerate_note(
+    label: str, est_positions: np.ndarray, a: Association, pairs: PositionPairs | None, with_scale: bool = False
+) -> str | None:
     """:func:`lorisnb.core.pipeline.plausibility.degenerate_fit` of an alignment fitted on the matched
-    poses ``a``: judged on the spread poses of :func:`spread_pairs` first (a long sequence that is
-    not degenerate is found so at once), on all of them only when those few are."""
+    poses ``a`` (``with_scale``: a Sim(3) one): judged on the spread poses of :func:`spread_pairs`
+    first (a long sequence that is not degenerate is found so at once), on all of them only when
+    those few are."""
     if pairs is not None and pairs.degenerate() is None:
         return None
-    return plausibility.degenerate_fit(label, est_positions[a.est_index], a.gt_positions)
+    return plausibility.degenerate_fit(label, est_positions[a.est_index], a.gt_positions, with_scale)

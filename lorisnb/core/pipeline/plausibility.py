@@ -185,21 +185,38 @@ def rotation_not_held(label: str, median_aoe: float, lever: float, matched: int,
     )
 
 
-def degenerate_fit(label: str, est_positions: np.ndarray, gt_positions: np.ndarray) -> str | None:
+def degenerate_fit(
+    label: str, est_positions: np.ndarray, gt_positions: np.ndarray, with_scale: bool = False
+) -> str | None:
     """The alignment was fitted on matched positions that cannot determine a rotation (fewer than
     3, all identical, or all on one line: :func:`lorisnb.core.alignment.geometry.degenerate_alignment`), so
-    its rotation, and every error after it, is arbitrary. The official tool aligns all the same,
-    and lorisnb does too and says so; an arbitrary rotation is each tool's own rounding, so the
-    numbers after it need not be the official tool's (a lifelong file whose first sequence has 2
-    matched poses, with Sim(3): AOE 44.4 deg here, 32.0 deg there)."""
+    its rotation, and every error after it, is arbitrary. lorisnb aligns all the same and says so.
+    The official tool does too under SE(3), and under Sim(3) (``with_scale``: dso, svo, ``--scale``)
+    unless the estimate's positions have no spread at all: its ``umeyama_align`` divides by their
+    variance (a scale of NaN) and it stops with ``LinAlgError`` (lorisnb takes the scale 1). An
+    arbitrary rotation is each tool's own rounding, so the numbers after it need not be the official
+    tool's (a lifelong file whose first sequence has 2 matched poses, with Sim(3): AOE 44.4 deg here,
+    32.0 deg there)."""
     why = degenerate_alignment(est_positions, gt_positions)
     if why is None:
         return None
+    p = np.asarray(est_positions, float)
+    if with_scale and len(p) and not np.any(p - p.mean(axis=0)):  # the official variance is 0: 1/0 * 0 = NaN
+        official = (
+            "the official tool stops on it with Sim(3): its scale divides by the estimate's zero spread, a NaN "
+            "alignment, and it fails with LinAlgError; lorisnb takes the scale 1"
+        )
+        fix = "--align none, or without the scale: --scale off --align-frames 1"
+    else:
+        official = (
+            f"the official tool aligns all the same, with its own arbitrary rotation{' and scale' * with_scale}: "
+            "the numbers may differ from its numbers"
+        )
+        fix = "--align-frames 1, --align none" if not with_scale else "--align none, or --scale off --align-frames 1"
     return (
         f"{label}: the alignment was fitted on {why}, so its rotation is arbitrary and so are the errors "
-        "after it (the official tool aligns all the same, with its own arbitrary rotation: the numbers may differ "
-        "from its numbers); check this sequence's output, or evaluate it with the conventions of pairs "
-        "(--align-frames 1, --align none)."
+        f"after it ({official}); check this sequence's output, or evaluate it with the conventions of pairs "
+        f"({fix})."
     )
 
 

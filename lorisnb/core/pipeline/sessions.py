@@ -211,9 +211,10 @@ def evaluate_sessions(
 
     degenerate: set[int] = set()  # the sequences whose fit is said to be degenerate (said once, not twice)
     if frames is not None:  # an OpenLORIS file is aligned as the official tool aligns it, degenerate or not: said
-        fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s])]
+        fitted = ([] if aligned_on is None else [aligned_on]) if lifelong else [s for s in seqs if len(assoc[s])]
         for s in fitted:
-            note = checks.degenerate_note(f"{name}, seq {s}", est[s].positions, assoc[s], spread_pairs(s))
+            note = checks.degenerate_note(f"{name}, seq {s}", est[s].positions, assoc[s], spread_pairs(s),
+                                          method == "sim3")  # fmt: skip
             if note is not None:
                 degenerate.add(s)
                 found.append(note)
