@@ -147,7 +147,8 @@ def add_input_options(p: argparse.ArgumentParser) -> None:
 SPEC_OPTIONS = {
     "association": "association", "max_gap": "max_gap", "max_diff": "max_diff", "t_offset": "t_offset",
     "align": "align", "align_frames": "align_frames", "scale": "scale", "mode": "mode",
-    "official_interpolation": "official_interpolation", "repair_stamps": "repair_stamps",
+    "official_interpolation": "official_interpolation", "official_lifelong": "official_lifelong",
+    "repair_stamps": "repair_stamps",
     "keep_repeated": "keep_repeated", "eps": "eps", "phi": "phi", "delta": "delta", "tau": "tau",
     "rpe_delta": "rpe_delta", "rpe_unit": "rpe_unit", "rpe_pairs": "rpe_pairs", "rpe_all_pairs": "rpe_all_pairs",
     "rpe_tolerance": "rpe_tolerance", "t_start": "t_start", "t_end": "t_end", "project_to_plane": "project_to_plane",
@@ -159,7 +160,8 @@ SPEC_OPTIONS = {
 
 def spec_given(args: argparse.Namespace) -> dict[str, Any]:
     """The spec options given on the command line (name -> value); a sweep's lists are its grid."""
-    flags = ("official_interpolation", "repair_stamps", "keep_repeated")  # store_true: given when set
+    # store_true: given when set
+    flags = ("official_interpolation", "official_lifelong", "repair_stamps", "keep_repeated")
     return {
         name: getattr(args, dest)
         for dest, name in SPEC_OPTIONS.items()
@@ -266,6 +268,12 @@ def add_evaluation_options(p: argparse.ArgumentParser, command: str = "evaluate"
         "--official-interpolation",
         action="store_true",
         help="reproduce the official tool's orientation slips in the interpolated ground truth (AOE; and the RPE, which lorisnb computes from the same poses)",
+    )
+    p.add_argument(
+        "--official-lifelong",
+        action="store_true",
+        help="reproduce the official tool's lifelong alignment: none at all when a file's first sequence matches "
+        "nothing (lorisnb aligns on the first sequence with matches)",
     )
     p.add_argument(
         "--repair-stamps",

@@ -30,6 +30,7 @@ CASES: dict[str, tuple[list[str], list[str]]] = {
     "--per-seq": (["--per-seq"], ["--lifelong"]),
     "--lifelong": (["--lifelong"], ["--per-seq"]),
     "--official-interpolation": (["--official-interpolation"], []),
+    "--official-lifelong": (["--official-lifelong"], []),  # cafe_x1's first sequence is empty
     "--repair-stamps": (["--repair-stamps"], []),
     "--keep-repeated": (["--keep-repeated"], []),
     "--conventions": (["--conventions", "tum"], []),
@@ -114,6 +115,12 @@ def kinds(tmp_path_factory, data):
     stamp, *pose = text[k].split()  # (an output time, then) the pose
     stalled = f"{float(stamp) + 0.01:.9f} {' '.join(pose)}\n"  # the tracker repeats its pose (--keep-repeated)
     write(ol, "home_x1.txt", "".join(text[: k + 1] + [stalled] + text[k + 1 :]))
+    # a lifelong file whose first sequence is an empty block (--official-lifelong: then nothing is aligned)
+    cafe = (data.icra20 / "lifelong" / "maslam" / "cafe.txt").read_text().splitlines(keepends=True)
+    two = next(i for i, line in enumerate(cafe) if line.startswith("seq: 2"))
+    write(
+        ol, "cafe_x1.txt", "".join([*(line for line in cafe[:two] if not line[:1].isdigit()), *cafe[two : two + 400]])
+    )
     gt = ln.read_tum(data.root / TUM / "freiburg1_xyz-groundtruth.txt")
     est = ln.read_tum(data.root / TUM / "freiburg1_xyz-rgbdslam.txt")
     half = len(est) // 2
@@ -202,7 +209,10 @@ def test_every_option_changes_the_result_or_is_refused(kind, kinds, tmp_path, ca
     assert {o for o in effective if seen[o] != "changed"} == set(), seen
     if kind == "openloris":
         assert seen["--repair-stamps"] == seen["--per-seq"] == seen["--official-interpolation"] == "changed", seen
+        assert seen["--official-lifelong"] == "changed", seen
         assert seen["--scene"] == "refused"
+    else:  # the official tool reads OpenLORIS result files only
+        assert seen["--official-lifelong"] == "refused", seen
     if kind in ("pair", "bag"):
         assert seen["--scene"] == "changed" and seen["--repair-stamps"] == "refused", seen
     if kind == "manifest":

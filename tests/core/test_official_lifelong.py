@@ -17,17 +17,20 @@ pose stops the official tool (``umeyama_align`` divides by the estimate's zero s
 
 from __future__ import annotations
 
+import math
 import warnings
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
-from test_official_stress import _estimate, _file, _rot
+from test_official_stress import FIELDS, _estimate, _file, _rot
 
 import lorisnb as ln
-from lorisnb.errors import LorisWarning
+from lorisnb.errors import LorisWarning, ValidationError
 
 SEED = 20270301
+NAN = math.nan
 EPS, PHI = 3.0, 30.0
 
 
@@ -51,6 +54,21 @@ def _cases(data_root) -> dict[str, str]:
     }
 
 
+# the official tool's numbers (FIELDS' order) at EPS, PHI: case -> seq -> values
+# fmt: off
+REFERENCE = {
+    "first_nomatch": {
+        1: (0.0, NAN, NAN, NAN, NAN, 0.0, 0.0, 0.0, 0.0, 0.0, 761.0, 0.0),
+        2: (1803.0, 26.534653574459973, 40.002893913556534, NAN, NAN, 0.0, 0.0, 0.0, 0.0, 0.0, 1803.0, 89.9723539352417),
+    },
+    "first_empty": {
+        1: (0.0, NAN, NAN, NAN, NAN, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+        2: (1803.0, 26.534653574459973, 40.002893913556534, NAN, NAN, 0.0, 0.0, 0.0, 0.0, 0.0, 1803.0, 89.9723539352417),
+    },
+}
+# fmt: on
+
+
 @pytest.fixture(scope="module")
 def cases(data, tmp_path_factory) -> dict[str, Path]:
     folder = tmp_path_factory.mktemp("official_lifelong")
@@ -66,6 +84,79 @@ def _evaluate(path: Path, data, **kw):
         warnings.simplefilter("always", LorisWarning)
         ev = ln.evaluate(path, data_root=data.root, jobs=1, **kw)
     return ev, [str(w.message) for w in caught if issubclass(w.category, LorisWarning)]
+
+
+def _same(want: float, got: float) -> bool:
+    if math.isnan(want) or math.isnan(got):
+        return math.isnan(want) and math.isnan(got)
+    return got == pytest.approx(want, rel=1e-8, abs=1e-9)
+
+
+def _differences(table: pd.DataFrame, reference: dict[int, tuple]) -> list[str]:
+    assert sorted(table.index) == sorted(reference)
+    return [
+        f"seq {seq} {column}: official {want!r}, lorisnb {float(table.loc[seq, column])!r}"
+        for seq, values in reference.items()
+        for (_, column), want in zip(FIELDS, values, strict=True)
+        if not _same(want, float(table.loc[seq, column]))
+    ]
+
+
+@pytest.mark.parametrize("name", ["first_nomatch", "first_empty"])
+def test_official_lifelong_gives_the_official_numbers(cases, data, name):
+    """official_lifelong: no alignment at all, as the official tool, and every number is its."""
+    ev, said = _evaluate(cases[name], data, official_interpolation=True, official_lifelong=True)
+    table = ev.sequences(eps=EPS, phi=PHI).set_index("seq")
+    assert _differences(table, REFERENCE[name]) == []
+    assert ev.errors[0].aligned_on is None
+    assert any("no alignment is applied to any sequence, as the official tool does" in s for s in said)
+    assert "aligned on the first sequence, none if it matches nothing (the official tool's)" in ev.conventions
+
+
+@pytest.mark.parametrize("name", ["first_nomatch", "first_empty"])
+def test_default_aligns_on_the_first_sequence_with_matches_and_says_so(cases, data, name):
+    """lorisnb's default: aligned on sequence 2 (its ATE is the estimate's noise), with a warning
+    naming the official behaviour and the option that gives it; the conventions line says which
+    sequence a lifelong alignment is fitted on (not "their first")."""
+    ev, said = _evaluate(cases[name], data, official_interpolation=True)
+    row = ev.sequences(eps=EPS, phi=PHI).set_index("seq").loc[2]
+    official = REFERENCE[name][2]
+    assert ev.errors[0].aligned_on == 2 and row["ate_rmse"] < 0.1 < official[1] and row["cr"] > 0.99
+    assert any("computed on sequence 2" in s and "official_lifelong" in s for s in said)
+    assert "aligned on the first sequence with matches" in ev.conventions
+    assert "aligned on their first;" not in ev.conventions
+
+
+def test_command_line_official_lifelong(cases, data, tmp_path):
+    from lorisnb.cli import main
+
+    out = tmp_path / "o.csv"
+    args = ["evaluate", str(cases["first_nomatch"]), "--data", str(data.root), "--official-interpolation",
+            "--official-lifelong", "--eps", str(EPS), "--phi", str(PHI), "--no-progress", "--csv", str(out)]  # fmt: skip
+    assert main(args) == 0
+    assert _differences(pd.read_csv(out).set_index("seq"), REFERENCE["first_nomatch"]) == []
+
+
+@pytest.mark.parametrize("options", [{"mode": "per-seq"}, {"align": "none"}], ids=["per-seq", "align-none"])
+def test_official_lifelong_is_refused_where_it_cannot_apply(options):
+    spec = ln.make_spec(official_lifelong=True, **options)
+    with pytest.raises(ValidationError, match="official_lifelong: the official tool's alignment of a lifelong"):
+        spec.refuse_inapplicable("openloris")
+    assert ln.make_spec(official_lifelong=True).refuse_inapplicable("openloris") == []
+    for kind in ("pair", "manifest"):  # not inputs of the official tool
+        with pytest.raises(ValidationError, match=f"but a {kind} is not an input of the official tool"):
+            ln.make_spec(official_lifelong=True).refuse_inapplicable(kind)
+    with pytest.raises(ValidationError, match="expected True or False"):
+        ln.make_spec(official_lifelong="yes")
+    assert ln.EvalSpec.parse(ln.make_spec(official_lifelong=True).canonical()).official_lifelong
+
+
+def test_command_line_refuses_official_lifelong_per_seq(cases, data, capsys):
+    from lorisnb.cli import main
+
+    assert main(["evaluate", str(cases["first_nomatch"]), "--data", str(data.root), "--official-lifelong",
+                 "--per-seq", "--no-progress"]) != 0  # fmt: skip
+    assert "--official-lifelong: the official tool's alignment of a lifelong" in capsys.readouterr().err
 
 
 def test_lever_warning_names_the_sequence_the_alignment_was_fitted_on(cases, data):

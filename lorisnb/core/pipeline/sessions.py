@@ -181,14 +181,20 @@ def evaluate_sessions(
     alignment = Sim3.identity()
     if lifelong:
         with_matches = [s for s in seqs if len(assoc[s])]
-        if with_matches:
+        if with_matches and with_matches[0] != seqs[0] and spec.official_lifelong:
+            found.append(  # the official transform_world_frame returns before fitting: nothing is aligned
+                f"{path}: sequence {seqs[0]} has no pose matched to ground truth, so no alignment is applied to "
+                f"any sequence, as the official tool does (--official-lifelong, official_lifelong=True; without it, "
+                f"lorisnb aligns all on sequence {with_matches[0]})"
+            )
+        elif with_matches:
             aligned_on = with_matches[0]
             alignment = fit(aligned_on)
             if aligned_on != seqs[0]:
                 found.append(
                     f"{path}: sequence {seqs[0]} has no pose matched to ground truth, so the "
                     f"lifelong alignment was computed on sequence {aligned_on} (the official tool "
-                    f"would apply no alignment at all)"
+                    f"would apply no alignment at all, as --official-lifelong, official_lifelong=True, does)"
                 )
         elif any(len(est[s]) for s in seqs):
             found.append(
@@ -222,7 +228,7 @@ def evaluate_sessions(
         hint = "--scale, or --scale auto for dso/svo" if frames is not None else "--align sim3"
         if is_monocular(algorithm) and "align" not in spec.explicit:  # its scale is arbitrary: said once
             found.append(plausibility.monocular_without_scale(name, algorithm, hint))
-        fitted = [aligned_on] if lifelong and aligned_on is not None else [s for s in seqs if len(assoc[s]) > 2]
+        fitted = ([] if aligned_on is None else [aligned_on]) if lifelong else [s for s in seqs if len(assoc[s]) > 2]
         for s in fitted:
             found.append(checks.scale_note(f"{name}, seq {s}", spread_pairs(s), assoc[s], per_seq[s], hint))
 

@@ -29,6 +29,11 @@ Alignment (``align``; ``gt = s R est + t`` fitted on the matched positions):
     ``align_frames=N`` fits on the first N matched poses. ``mode``: ``per-seq`` aligns each sequence
     (session) on itself, ``lifelong`` fits one alignment on the first sequence with matches and
     applies it to all, ``auto`` is lifelong for inputs with several sequences.
+
+The official tool's slips, on request: ``official_interpolation`` (its orientation slips: its
+slerp, and with a scale the rotation it extracts) and ``official_lifelong`` (its lifelong
+alignment: when the first sequence matches nothing, ``transform_world_frame`` returns before
+fitting, so no sequence is aligned; lorisnb fits on the first sequence with matches).
 """
 
 from __future__ import annotations
@@ -79,6 +84,7 @@ class EvalSpec:
     align_frames: int | None = None
     mode: str = "auto"
     official_interpolation: bool = False
+    official_lifelong: bool = False
     repair_stamps: bool = False
     eps: Any = math.inf
     phi: float = math.inf
@@ -165,10 +171,15 @@ class EvalSpec:
         frames = "all matched poses" if self.align_frames is None else f"the first {self.align_frames} matched poses"
         offset = f", estimate stamps + {self.t_offset:g} s" if self.t_offset else ""
         align = "sim3 for monocular algorithms (dso, svo), else se3" if self.align == "auto" else self.align
+        first = (
+            "the first sequence, none if it matches nothing (the official tool's)"
+            if self.official_lifelong
+            else "the first sequence with matches"
+        )
         mode = {
-            "auto": "inputs with several sequences aligned on their first",
+            "auto": f"inputs with several sequences aligned on {first}",
             "per-seq": "each sequence aligned on itself",
-            "lifelong": "one alignment (first sequence) for all",
+            "lifelong": f"one alignment ({first}) for all",
         }[self.mode]
         repeated = "repeated poses dropped" if self.repeated == "drop" else "repeated poses kept"
         if self.repeated_for("tum") != self.repeated:
@@ -258,6 +269,18 @@ class EvalSpec:
             problems["t_offset"] = f"{name('t_offset')}: poses paired by index ({name('association')} index) use no stamps"  # fmt: skip
         if "official_interpolation" in given and self.official_interpolation and self.association != "interpolate":
             problems["official_interpolation"] = f"{name('official_interpolation')}: the official tool's slips are those of interpolation"  # fmt: skip
+        if "official_lifelong" in given and self.official_lifelong:
+            if kind != "openloris":
+                why = f"a {kind} is not an input of the official tool"
+            elif self.mode == "per-seq":
+                why = "per-seq aligns each sequence on itself"
+            elif self.align == "none":
+                why = f"{name('align')} none fits nothing"
+            else:
+                why = ""
+            if why:
+                problems["official_lifelong"] = (f"{name('official_lifelong')}: the official tool's alignment of a lifelong "
+                                                 f"OpenLORIS file (none when its first sequence matches nothing), but {why}")  # fmt: skip
         if "align_frames" in given and self.align == "none":
             problems["align_frames"] = f"{name('align_frames')}: nothing is fitted with {name('align')} none"
         if kind == "openloris" and "transform" in given and self.transform is not None:
@@ -344,7 +367,7 @@ def _checked(values: Mapping[str, Any], surface: str) -> dict[str, Any]:
             out[key] = None if v is None else int(validate.positive(label, v, validate.ALL_POSES, integer=True))
         elif key == "mode":
             out[key] = validate.choice(label, v, MODES)
-        elif key in ("official_interpolation", "repair_stamps"):
+        elif key in ("official_interpolation", "official_lifelong", "repair_stamps"):
             out[key] = validate.flag(label, v, _yes_no(surface))
         elif key == "eps":
             out[key] = validate.eps_value(v)

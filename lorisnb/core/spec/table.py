@@ -21,11 +21,16 @@ OPTIONS: dict[str, tuple[str, str, str]] = {
     "repeated": ("poses repeating the previous one or its stamp: drop (official) / keep (evo)", "", "all"),
     "align": ("se3 / sim3 / posyaw / none / auto (sim3 for dso, svo) / scale (only) / origin (first pose)", "", "all"),
     "align_frames": ("fit the alignment on the first N matched poses", "poses", "align != none"),
-    "mode": ("auto / per-seq / lifelong (one alignment, first sequence)", "", "all"),
+    "mode": ("auto / per-seq / lifelong (one alignment, first sequence with matches)", "", "all"),
     "official_interpolation": (
         "the official tool's orientation slips (AOE, and the RPE of the same poses)",
         "",
         "interpolate",
+    ),
+    "official_lifelong": (
+        "the official tool's lifelong alignment: none at all when the first sequence matches nothing",
+        "",
+        "OpenLORIS files, lifelong",
     ),
     "repair_stamps": ("read nanosecond stamps written without zero padding", "", "OpenLORIS files"),
     "eps": ("ATE threshold: metres / paper (1/3/5 m) / relative:F", "m", "all"),
