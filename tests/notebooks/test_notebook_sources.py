@@ -81,3 +81,14 @@ def test_the_timeline_says_what_its_numbers_are():
     from lorisnb.tools.figures.plotting import TIMELINE_XLABEL
 
     assert "C-ATE RMSE" in TIMELINE_XLABEL and "correct poses" in TIMELINE_XLABEL
+
+
+def test_compare_algorithms_scores_as_compare_does():
+    """compare_algorithms (a report's compare page) scored the evaluated sequences alone, so a sequence an
+    algorithm lacked dropped out of its scene value: its intervals, test and ranking of the results are
+    ``lorisnb compare``'s (:func:`lorisnb.tools.notebook.comparison.scene_comparison`), never the
+    statistics called on the per-sequence table directly."""
+    code = ast.unparse(_code(notebook_dir() / "compare_algorithms.ipynb"))
+    assert "scene_comparison(table, ev.durations()" in code
+    for call in ("confidence_intervals(table", "pairwise(table", "ranking(table"):
+        assert call not in code, call
