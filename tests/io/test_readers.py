@@ -241,3 +241,15 @@ def test_text_in_utf16_is_said_to_be_text(tmp_path, encoding):
     p.write_bytes(b"1 0 0 0 0 0 0 1\n\x00\x01\x02 binary")
     with pytest.raises(ParseError, match="line 2: binary data"):
         read_tum(p)
+
+
+def test_the_declared_scene_is_read_past_a_bom_as_the_reader_reads_it(tmp_path):
+    """A result file saved with a UTF-8 BOM (Windows Notepad) declares its scene to the look at its
+    header (the challenge server's upload check, the skip of scenes without ground truth) as it
+    does to the reader: the look had read the key as '\\ufeffscene' and found no scene."""
+    from lorisnb.io.readers.openloris import declared_scene, read_openloris
+
+    path = tmp_path / "r.txt"
+    path.write_bytes("\ufeffScene : Cafe\nseq: 1\n1.0 0 0 0 0 0 0 1\n".encode())
+    assert read_openloris(path, warn=False).scene == "cafe"
+    assert declared_scene(path) == "cafe"

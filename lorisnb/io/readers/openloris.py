@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +34,7 @@ from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.errors import LorisWarning, ParseError
 from lorisnb.io.parsing.chunks import read_rows, stamp_digits
 from lorisnb.io.parsing.ranges import GIVE_BACK_BYTES, give_back_memory
+from lorisnb.io.parsing.rows import Rows
 from lorisnb.io.parsing.scanner import check_rows, finish, nanosecond_pattern, regular_file
 
 POSE_FIELDS = "stamp [output_time] x y z qx qy qz qw"
@@ -79,7 +81,7 @@ def declared_scene(path: str | os.PathLike[str], max_lines: int = 200) -> str | 
     if not regular_file(path):  # a pipe: its lines are the reader's, not to be taken by a look
         return None
     try:
-        with open(path, encoding="utf-8", errors="replace") as f:
+        with open(path, encoding="utf-8-sig", errors="replace") as f:  # a BOM dropped, as the reader drops it
             for _, text in zip(range(max_lines), f, strict=False):
                 key, colon, value = text.partition(":")
                 key = key.strip().lower()
@@ -126,6 +128,93 @@ def _check_output_times(spath: str, stamps: np.ndarray, output: np.ndarray, line
     )  # fmt: skip
 
 
+def read_lines(path: str | os.PathLike, progress: Callable[[int], object] | None = None) -> Rows:
+    """The lines of an OpenLORIS file as :func:`read_openloris` reads them (a UTF-8 BOM dropped,
+    pose lines of 8 or 9 numbers, ``key: value`` and ``seq: N`` lines kept as text)."""
+    return read_rows(
+        path,
+        (8, 9),
+        what="an OpenLORIS trajectory file ('scene:', 'frame:', 'seq: N' blocks of poses)",
+        numbers=f"numbers '{POSE_FIELDS}'",
+        bad_width=lambda text, n: (
+            f"{text[:80]!r} has {n} fields; expected 8 or 9 numbers "
+            f"'{POSE_FIELDS}', a 'key: value' line, a 'seq: N' line or a '#' comment"
+        ),
+        specials=True,
+        progress=progress,
+        layout=_pose_groups,
+    )
+
+
+#: Header keys that hold for the whole file (a second line with another value is refused).
+FILE_KEYS = ("scene", "frame")
+
+
+@dataclass(frozen=True)
+class Headers:
+    """The ``key: value`` and ``seq: N`` lines of an OpenLORIS file as :func:`read_openloris` takes
+    them (:func:`parse_headers`).
+
+    Attributes:
+        header: each key's first value (keys lower-cased, values stripped).
+        header_lines: the 1-based line of each key's first value.
+        seq_at: each ``seq: N`` line, (1-based line, N), in file order.
+        seq_info: the keys given inside each sequence's block.
+        key_lines: every ``key: value`` line, (1-based line, key), in file order.
+        notes: what was noticed (a ``seq: N`` given again).
+    """
+
+    header: dict[str, str]
+    header_lines: dict[str, int]
+    seq_at: list[tuple[int, int]]
+    seq_info: dict[int, dict[str, str]]
+    key_lines: list[tuple[int, str]]
+    notes: list[str]
+
+
+def parse_headers(spath: str, specials: Sequence[tuple[int, str]]) -> Headers:
+    """The :class:`Headers` of an OpenLORIS file's text lines (``(line, text)``, as read by
+    :func:`read_lines`): keys in any case and spacing (``Scene : cafe``), ``seq:`` read by Python's
+    ``int`` (any Unicode digits and spaces); ParseError for a ``seq:`` line without a whole number,
+    a ``reloc:`` line before any sequence, a line with no key, or a second ``scene:``/``frame:``
+    with another value (two files joined into one: the official tool keeps the first and scores
+    the later sequences in the wrong frame or scene). The one reading of these lines: the reader
+    and the challenge server's strip of hidden sequences use it alike."""
+    heads = Headers({}, {}, [], {}, [], [])
+    current: int | None = None
+    for line, text in specials:  # header and seq lines only: a handful per file
+        key, _, value = text.partition(":")
+        key, value = key.strip().lower(), value.strip()  # keys in any case: 'Scene: cafe'
+        if key == "seq":
+            try:
+                current = int(value)
+            except ValueError:
+                raise ParseError(spath, line, f"{text!r}: expected 'seq: N' with an integer N") from None
+            if any(s == current for _, s in heads.seq_at):
+                heads.notes.append(
+                    f"{spath}: 'seq: {current}' appears again at line {line}; the poses of "
+                    f"its earlier block are discarded, as the official tool does"
+                )
+            heads.seq_at.append((line, current))
+            heads.seq_info[current] = {}
+            continue
+        if key == "reloc" and current is None:
+            raise ParseError(spath, line, "'reloc:' line before any 'seq: N' line; expected it inside a block")
+        if not key:
+            raise ParseError(spath, line, f"{text!r}: expected 'key: value', 'seq: N' or a pose line")
+        heads.key_lines.append((line, key))
+        if key not in heads.header:
+            heads.header[key] = value
+            heads.header_lines[key] = line
+        elif key in FILE_KEYS and value.lower() != heads.header[key].lower():
+            raise ParseError(spath, line, f"'{key}: {value}' after '{key}: {heads.header[key]}' "
+                             f"(line {heads.header_lines[key]}); expected one {key} for the whole file: write every "
+                             f"sequence in one {key}, or give the sequences as separate files")  # fmt: skip
+        if current is not None:
+            heads.seq_info[current][key] = value
+    return heads
+
+
 def read_openloris(
     path: str | os.PathLike,
     remove_repeated: bool = True,
@@ -154,56 +243,10 @@ def read_openloris(
     remove_repeated, warn = flag("remove_repeated", remove_repeated), flag("warn", warn)
     repair_stamps = flag("repair_stamps", repair_stamps)  # "no" is refused, never truth-tested
     spath = str(path)
-    rows = read_rows(
-        path,
-        (8, 9),
-        what="an OpenLORIS trajectory file ('scene:', 'frame:', 'seq: N' blocks of poses)",
-        numbers=f"numbers '{POSE_FIELDS}'",
-        bad_width=lambda text, n: (
-            f"{text[:80]!r} has {n} fields; expected 8 or 9 numbers "
-            f"'{POSE_FIELDS}', a 'key: value' line, a 'seq: N' line or a '#' comment"
-        ),
-        specials=True,
-        progress=progress,
-        layout=_pose_groups,
-    )
-
-    header: dict[str, str] = {}
-    header_lines: dict[str, int] = {}
-    seq_at: list[tuple[int, int]] = []  # (1-based line, seq)
-    seq_info: dict[int, dict[str, str]] = {}
-    notes: list[str] = []
-    current: int | None = None
-    for line, text in rows.specials:  # header and seq lines only: a handful per file
-        key, _, value = text.partition(":")
-        key, value = key.strip().lower(), value.strip()  # keys in any case: 'Scene: cafe'
-        if key == "seq":
-            try:
-                current = int(value)
-            except ValueError:
-                raise ParseError(spath, line, f"{text!r}: expected 'seq: N' with an integer N") from None
-            if any(s == current for _, s in seq_at):
-                notes.append(
-                    f"{spath}: 'seq: {current}' appears again at line {line}; the poses of "
-                    f"its earlier block are discarded, as the official tool does"
-                )
-            seq_at.append((line, current))
-            seq_info[current] = {}
-            continue
-        if key == "reloc" and current is None:
-            raise ParseError(spath, line, "'reloc:' line before any 'seq: N' line; expected it inside a block")
-        if not key:
-            raise ParseError(spath, line, f"{text!r}: expected 'key: value', 'seq: N' or a pose line")
-        if key not in header:
-            header[key] = value
-            header_lines[key] = line
-        elif key in ("scene", "frame") and value.lower() != header[key].lower():  # two files joined into one:
-            # the official tool keeps the first and scores the later sequences in the wrong frame or scene
-            raise ParseError(spath, line, f"'{key}: {value}' after '{key}: {header[key]}' (line {header_lines[key]}); "
-                             f"expected one {key} for the whole file: write every sequence in one {key}, or give "
-                             "the sequences as separate files")  # fmt: skip
-        if current is not None:
-            seq_info[current][key] = value
+    rows = read_lines(path, progress)
+    heads = parse_headers(spath, rows.specials)
+    header, header_lines, seq_at, seq_info = heads.header, heads.header_lines, heads.seq_at, heads.seq_info
+    notes = list(heads.notes)
 
     seq_line = np.array([s for s, _ in seq_at], dtype=np.int64)
     line_no = rows.lines

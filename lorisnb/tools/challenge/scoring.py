@@ -47,10 +47,9 @@ from lorisnb.core.pipeline.model import FileErrors, ResultFile
 from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.stats.trials import check_duplicates
 from lorisnb.core.trajectory.frames import SCENES
-from lorisnb.errors import LorisError, LorisWarning, ParseError, ValidationError
+from lorisnb.errors import LorisError, LorisWarning, ValidationError
 from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans
-from lorisnb.io.parsing.chunks import read_rows
-from lorisnb.io.readers.openloris import POSE_FIELDS, _pose_groups
+from lorisnb.io.readers.openloris import FILE_KEYS, parse_headers, read_lines
 from lorisnb.io.writers import write_openloris
 from lorisnb.tools.challenge import store
 from lorisnb.tools.challenge.config import Challenge, sequences_of
@@ -165,14 +164,11 @@ class _Every:
 
 #: Header keys the reader takes from any line of a file (a ``scene:`` line after ``seq: 1`` names
 #: the whole file's scene): kept, in place, where the block holding them is stripped.
-FILE_KEYS = ("scene", "frame")
-
-
 @dataclass(frozen=True)
 class Blocks:
     """An OpenLORIS result file's layout as :func:`~lorisnb.io.readers.openloris.read_openloris`
     reads it (:func:`read_blocks`): its scene, each ``seq: N`` line (1-based line, N) in file
-    order, and the lines kept whatever is stripped (:data:`FILE_KEYS`)."""
+    order, and the lines kept whatever is stripped (:data:`~lorisnb.io.readers.openloris.FILE_KEYS`)."""
 
     scene: str
     seqs: tuple[tuple[int, int], ...]
@@ -184,54 +180,17 @@ class Blocks:
 
 
 def read_blocks(path: Path) -> Blocks:
-    """The :class:`Blocks` of the OpenLORIS result file ``path``, read by the reader's own line
-    reader (:func:`~lorisnb.io.parsing.chunks.read_rows` with the arguments
-    :func:`~lorisnb.io.readers.openloris.read_openloris` gives it: a UTF-8 BOM dropped, the same
-    lines taken for ``key: value`` lines) and its rules for those lines (a key in any case and
-    spacing, ``seq:`` read by Python's ``int`` as the reader reads it: any Unicode digits and
-    spaces), its scene by :attr:`ResultFile.scene`. A :class:`ParseError` where the reader refuses
-    the file (a malformed line, a ``seq:`` line without a whole number, no or an unknown scene):
-    such a file is never scored, whole or in part."""
-    rows = read_rows(
-        path,
-        (8, 9),
-        what="an OpenLORIS trajectory file ('scene:', 'frame:', 'seq: N' blocks of poses)",
-        numbers=f"numbers '{POSE_FIELDS}'",
-        bad_width=lambda text, n: (
-            f"{text[:80]!r} has {n} fields; expected 8 or 9 numbers "
-            f"'{POSE_FIELDS}', a 'key: value' line, a 'seq: N' line or a '#' comment"
-        ),
-        specials=True,
-        layout=_pose_groups,
-    )
-    spath = str(path)
-    header: dict[str, str] = {}
-    header_lines: dict[str, int] = {}
-    seqs: list[tuple[int, int]] = []
-    kept: set[int] = set()
-    for line, text in rows.specials:  # as read_openloris takes them
-        key, _, value = text.partition(":")
-        key, value = key.strip().lower(), value.strip()
-        if key == "seq":
-            try:
-                seqs.append((line, int(value)))
-            except ValueError:
-                raise ParseError(spath, line, f"{text!r}: expected 'seq: N' with an integer N") from None
-            continue
-        if key == "reloc" and not seqs:
-            raise ParseError(spath, line, "'reloc:' line before any 'seq: N' line; expected it inside a block")
-        if not key:
-            raise ParseError(spath, line, f"{text!r}: expected 'key: value', 'seq: N' or a pose line")
-        if key in FILE_KEYS:
-            kept.add(line)
-        if key not in header:
-            header[key], header_lines[key] = value, line
-        elif key in FILE_KEYS and value.lower() != header[key].lower():  # two files joined into one
-            raise ParseError(spath, line, f"'{key}: {value}' after '{key}: {header[key]}' (line {header_lines[key]}); "
-                             f"expected one {key} for the whole file: write every sequence in one {key}, or give "
-                             "the sequences as separate files")  # fmt: skip
-    scene = ResultFile(path=path, header=header, header_lines=header_lines, sequences={}).scene
-    return Blocks(scene, tuple(seqs), frozenset(kept))
+    """The :class:`Blocks` of the OpenLORIS result file ``path``, read as the reader reads it: its
+    lines by :func:`~lorisnb.io.readers.openloris.read_lines` (a UTF-8 BOM dropped), their
+    ``key: value`` and ``seq: N`` lines by :func:`~lorisnb.io.readers.openloris.parse_headers` (a key
+    in any case and spacing, ``seq:`` read by Python's ``int``: any Unicode digits and spaces), its
+    scene by :attr:`ResultFile.scene`. A :class:`ParseError` where the reader refuses the file (a
+    malformed line, a ``seq:`` line without a whole number, no or an unknown scene): such a file is
+    never scored, whole or in part."""
+    heads = parse_headers(str(path), read_lines(path).specials)
+    scene = ResultFile(path=path, header=heads.header, header_lines=heads.header_lines, sequences={}).scene
+    kept = frozenset(line for line, key in heads.key_lines if key in FILE_KEYS)
+    return Blocks(scene, tuple(heads.seq_at), kept)
 
 
 def seq_blocks(path: Path) -> list[int] | None:
