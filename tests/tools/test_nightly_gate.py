@@ -238,6 +238,36 @@ def test_a_sequence_lost_and_left_lost_fails_every_night(tmp_path, table, capsys
     assert "against night-0.csv, the first run of its series: regression" in out and "odom home-1 sequence" in out
 
 
+def test_a_sequence_added_later_and_lost_fails_every_night(tmp_path, table, capsys):
+    """An algorithm added on night 1 and lost on night 3 failed night 3 only: night 4, whose baseline
+    had lost it too and whose series' first run never had it, exited 0. Any sequence an earlier run of
+    the series had is gated, named with the night it was last seen; the listing calls a value absent in
+    both nights no change (it read "nan -> no value", a change)."""
+    both = pd.concat([table, table.assign(algorithm="odom2")], ignore_index=True)
+    nights = []
+    for k, t in enumerate((table, both, both, table, table)):
+        f = tmp_path / f"night-{k}.csv"
+        write_csv(t, f)
+        os.utime(f, (1.7e9 + 100 * k, 1.7e9 + 100 * k))
+        nights.append(f)
+    rc, out, _ = run(capsys, "history", *nights[:4], "--metric", "cr")
+    assert rc == 1 and "newest run night-3.csv against night-2.csv: regression" in out
+    rc, out, _ = run(capsys, "history", *nights, "--metric", "cr")
+    assert rc == 1 and "newest run night-4.csv against night-3.csv: ok" in out
+    assert "3 sequence(s) an earlier run of its series had are lost" in out
+    assert "odom2 cafe-1 missing (last seen in night-2.csv)" in out and "odom2 home-1 missing" in out
+    assert "change in night-4.csv" not in out and "nan -> no value" not in out
+    assert "first change in night-3.csv against night-2.csv" in out
+    runs = load_runs(nights)
+    h, diffs = history_table(runs, ["cr"])
+    assert newest_verdict(runs, diffs)[0] == 1
+    back = tmp_path / "night-5.csv"  # back again: nothing lost
+    write_csv(both, back)
+    os.utime(back, (1.7e9 + 500, 1.7e9 + 500))
+    rc, out, _ = run(capsys, "history", *nights, back, "--metric", "cr")
+    assert rc == 0 and "are lost" not in out
+
+
 def test_a_drift_of_single_runs_is_named_not_gated(tmp_path, table, capsys):
     """With one run a side too a drift is named, with how to gate on it, and the night's exit
     status is the night's own."""

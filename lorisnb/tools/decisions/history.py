@@ -10,7 +10,9 @@ each break is named. Each run is compared with its **baseline**, the last earlie
 comparable with (not only the run just before it: a run with other thresholds in between hides
 nothing), by the one decision rule of ``lorisnb diff`` (:mod:`lorisnb.core.stats.regression`): a
 value **changed** when that rule calls it a regression or an improvement, or a sequence or trial of
-its scene was lost. Scene values count missing sequences as failed runs
+its scene was lost; a value absent in a run and in its baseline is no change. The newest run also
+fails for a sequence any earlier run of its series had and it lacks (:func:`lost_since`). Scene
+values count missing sequences as failed runs
 (:mod:`lorisnb.core.lifelong.coverage`).
 """
 
@@ -228,7 +230,10 @@ def history_table(
             base_value = by_run.get(out.at[i, "baseline"], np.nan)
             if np.isfinite(base_value) and np.isfinite(out.at[i, "value"]):
                 out.at[i, "change"] = out.at[i, "value"] - base_value
-            if out.at[i, "status"] in ("regression", "improvement", "missing"):
+            gone_both = (
+                out.at[i, "status"] == "missing" and not np.isfinite(out.at[i, "value"]) and not np.isfinite(base_value)
+            )  # absent in the run and in its baseline: still lost (the exit status says so), no change
+            if out.at[i, "status"] in ("regression", "improvement", "missing") and not gone_both:
                 out.at[i, "changed"] = True
                 out.at[i, "first_change"] = not seen
                 seen = True
@@ -276,6 +281,48 @@ def drift_gates(d: Diff) -> list[dict]:
     return [r for r in d.verdict["regressions"] if r.get("status") in LOST]
 
 
+def lost_since(runs: Sequence[Run], names: Sequence[str] | None = None,
+               judged: Iterable[tuple] = ()) -> list[tuple[tuple, str, str]]:  # fmt: skip
+    """The sequences an earlier run of the newest run's series had (any earlier run comparable with
+    it, since the sequence first appeared) that the newest run lacks, each as ((suite, algorithm,
+    scene, seq), what, the name of the last run that had it): ``missing`` (no row), or ``failed``
+    (nothing matched in any trial, where that run matched at least
+    :data:`~lorisnb.core.stats.tolerances.MIN_MATCHED` poses in a trial, as ``diff`` judges a
+    failed sequence). Sequences in ``judged`` (already failed by the night's other diffs) are left
+    out. Only the first run's sequences were gated (:func:`drift`): an algorithm added after the
+    first night and lost later failed only the night it was lost, then passed night after night."""
+    from lorisnb.core.stats.tolerances import MIN_MATCHED
+
+    k = len(runs) - 1
+    if k < 1:
+        return []
+    names = list(names) if names is not None else run_labels(runs)
+    keys = ["suite", "algorithm", "scene", "seq"]
+
+    def seen(run: Run) -> tuple[set[tuple], set[tuple], set[tuple]]:
+        t = keyed(run.table, str(run.path))
+        have = set(map(tuple, t[keys].itertuples(index=False)))
+        if "matched" not in t.columns:
+            return have, have, have
+        m = pd.to_numeric(t["matched"], errors="coerce").fillna(0)
+        out = set(map(tuple, t.loc[m > 0, keys].itertuples(index=False)))
+        tracked = set(map(tuple, t.loc[m >= MIN_MATCHED, keys].itertuples(index=False)))
+        return have, out, tracked
+
+    have_k, out_k, _ = seen(runs[k])
+    skip = set(judged)
+    last: dict[tuple, tuple[str, str]] = {}
+    for j in range(k):  # oldest first: the last run that had a sequence is the one kept
+        if comparability(runs[j], runs[k]):
+            continue
+        have, _, tracked = seen(runs[j])
+        for key in have - have_k:
+            last[key] = ("missing", names[j])
+        for key in (tracked & have_k) - out_k:
+            last[key] = ("failed", names[j])
+    return [(key, *last[key]) for key in sorted(last, key=lambda x: tuple(map(str, x))) if key not in skip]
+
+
 def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequence[str] | None = None,
                    since_first: tuple[int, Diff] | None = None) -> tuple[int, list[str]]:  # fmt: skip
     """``history``'s exit status and what it says of the newest run: ``diff``'s exit status of the
@@ -320,6 +367,19 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
         lines.append(f"newest run {names[k]} against {names[j]}, the first run of its series: "
                      f"{'regression' if f.regressed else 'ok'}{said}")  # fmt: skip
         rc = max(rc, 1 if gates else 0)
+    judged = {(r["suite"], r["algorithm"], r["scene"], r["seq"]) for r in d.verdict["regressions"]
+              if r.get("status") in LOST and r.get("seq") is not None}  # fmt: skip
+    if since_first is not None:
+        judged |= {(r["suite"], r["algorithm"], r["scene"], r["seq"]) for r in drift_gates(since_first[1])
+                   if r.get("seq") is not None}  # fmt: skip
+    gone = lost_since(runs, names, judged)
+    if gone:
+        shown = "; ".join(f"{alg}{f' ({suite})' if suite else ''} {scene}-{seq} {what} (last seen in {name})"
+                          for (suite, alg, scene, seq), what, name in gone[:5])  # fmt: skip
+        more = f"; {len(gone) - 5} more" if len(gone) > 5 else ""
+        lines.append(f"newest run {names[k]}: {len(gone)} sequence(s) an earlier run of its series had are lost: "
+                     f"{shown}{more}; a sequence lost and left lost fails every night until it is back")  # fmt: skip
+        rc = max(rc, 1)
     lost = [(names[base], runs[base].unscored), (names[k], run.unscored)]
     for name, files in lost:
         if files:
