@@ -129,6 +129,12 @@ def write_csv(df: pd.DataFrame, out: str | os.PathLike[str], force: bool = False
     return write_csv_parts([df], out, force)
 
 
+#: Rows of a part turned into CSV text at a time (:func:`write_csv_parts`): a sweep's part of 2 million
+#: rows built as one text passed 2 GB (pyarrow's ArrowCapacityError from 32-bit string offsets), and
+#: held it all in memory.
+CSV_BATCH_ROWS = 100_000
+
+
 def write_csv_parts(parts: Iterable[pd.DataFrame], out: str | os.PathLike[str], force: bool = False) -> Path:
     """Write tables with the same columns one after the other into one CSV file, holding one part
     at a time (a sweep larger than memory is streamed), through :func:`write_atomically`.
@@ -151,12 +157,13 @@ def write_csv_parts(parts: Iterable[pd.DataFrame], out: str | os.PathLike[str], 
                     f.write(df.iloc[:0].to_csv(index=False, lineterminator="\n").encode())
                 elif names != header:
                     raise OutputError(f"{out}: a part has columns {names}, the first had {header}")
-                if len(df):
-                    lines = _arrow_lines(df)
+                for start in range(0, len(df), CSV_BATCH_ROWS):  # a part of any size, in batches of rows
+                    batch = df.iloc[start : start + CSV_BATCH_ROWS]
+                    lines = _arrow_lines(batch)
                     f.write(
                         lines
                         if lines is not None
-                        else df.to_csv(index=False, header=False, lineterminator="\n").encode()
+                        else batch.to_csv(index=False, header=False, lineterminator="\n").encode()
                     )
 
     return write_atomically(out, write, force)
@@ -177,16 +184,18 @@ def _arrow_lines(df: pd.DataFrame) -> bytes | None:
         table = pa.Table.from_pandas(df, preserve_index=False)
     except (pa.ArrowInvalid, pa.ArrowTypeError, pa.ArrowNotImplementedError):
         return None
+    big = pa.large_string()  # 64-bit offsets from the start: a column's text of any size (32-bit ones end at 2 GB)
+    comma, empty, newline, point = (pa.scalar(v, big) for v in (",", "", "\n", ".0"))
     texts = []
     for column in table.columns:
         kind = column.type
         if pa.types.is_dictionary(kind):
             column, kind = column.cast(kind.value_type), kind.value_type
         if pa.types.is_boolean(kind):
-            text = pc.if_else(column, "True", "False")
+            text = pc.if_else(column, pa.scalar("True", big), pa.scalar("False", big))
         elif pa.types.is_float64(kind):  # (float32: pandas writes its own shortest text, below)
-            text = pc.cast(column, pa.string())  # 3.0 as "3": given its ".0" below, as pandas writes it
-            text = pc.if_else(pc.match_substring_regex(text, r"^-?[0-9]+$"), pc.binary_join_element_wise(text, ".0", ""),
+            text = pc.cast(column, big)  # 3.0 as "3": given its ".0" below, as pandas writes it
+            text = pc.if_else(pc.match_substring_regex(text, r"^-?[0-9]+$"), pc.binary_join_element_wise(text, point, empty),
                               text)  # fmt: skip
             # Python's repr writes magnitudes below 1e-4 or from 1e16 with an exponent, pyarrow from other
             # bounds: those values (few in real tables) written by repr, as pandas writes them all
@@ -196,18 +205,17 @@ def _arrow_lines(df: pd.DataFrame) -> bytes | None:
             if odd.any():
                 values = column.to_numpy(zero_copy_only=False)[odd]
                 text = pc.replace_with_mask(
-                    text.combine_chunks(), pa.array(odd), pa.array([repr(float(v)) for v in values])
+                    text.combine_chunks(), pa.array(odd), pa.array([repr(float(v)) for v in values], big)
                 )
         elif pa.types.is_integer(kind) or pa.types.is_string(kind) or pa.types.is_large_string(kind):
-            text = pc.cast(column, pa.string())
+            text = pc.cast(column, big)
             if not pa.types.is_integer(kind):  # quoted as pandas quotes (csv.QUOTE_MINIMAL)
-                quoted = pc.binary_join_element_wise('"', pc.replace_substring(text, '"', '""'), '"', "")
+                quote = pa.scalar('"', big)
+                quoted = pc.binary_join_element_wise(quote, pc.replace_substring(text, '"', '""'), quote, empty)
                 text = pc.if_else(pc.match_substring_regex(text, '[,"\r\n]'), quoted, text)
         else:
             return None  # dates, lists...: pandas writes them
         texts.append(text)
-    texts = [pc.cast(t, pa.large_string()) for t in texts]  # 64-bit offsets: a part of any size
-    comma, empty, newline = (pa.scalar(v, pa.large_string()) for v in (",", "", "\n"))
     lines = pc.binary_join_element_wise(*texts, comma, null_handling="replace", null_replacement="")
     # each line with its end; the array's own bytes are then the lines end to end
     lines = pc.binary_join_element_wise(lines, empty, newline)

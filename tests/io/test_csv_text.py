@@ -56,3 +56,27 @@ def test_parts_are_one_table_and_read_back_as_written(tmp_path):
     back = pd.read_csv(out, keep_default_na=False, na_values=[""])
     assert back["whole"].dtype == np.float64 and back["n"].dtype == np.int64 and back["ok"].dtype == bool
     np.testing.assert_array_equal(back["x"].to_numpy(), df["x"].to_numpy())
+
+
+def test_a_part_of_any_size_is_written_in_batches_of_rows(tmp_path, monkeypatch):
+    """``lorisnb sweep --csv`` over a lifelong file (2 million rows in one part) built the part's text
+    whole and passed pyarrow's 2 GB of 32-bit string offsets: ArrowCapacityError, a traceback. A part
+    is written in batches of :data:`~lorisnb.io.writers.CSV_BATCH_ROWS` rows (here 1,000, with a limit of
+    1,000 rows standing for the 2 GB), the same text as pandas'."""
+    pa = pytest.importorskip("pyarrow")
+    from lorisnb.io import writers
+
+    real, seen = writers._arrow_lines, []
+
+    def limited(df):
+        seen.append(len(df))
+        if len(df) > 1_000:  # what a text past 2 GB did
+            raise pa.lib.ArrowCapacityError("Result may exceed offset capacity for this type")
+        return real(df)
+
+    monkeypatch.setattr(writers, "_arrow_lines", limited)
+    monkeypatch.setattr(writers, "CSV_BATCH_ROWS", 1_000, raising=False)
+    df = _table(4_500, 4).drop(columns=["f32"])
+    out = write_csv_parts([df.iloc[:3_200], df.iloc[3_200:]], tmp_path / "big.csv")
+    assert out.read_bytes() == df.to_csv(index=False).encode()
+    assert max(seen) == 1_000 and sum(seen) == len(df)
