@@ -67,8 +67,10 @@ def test_layout_errors(tmp_path, segment):
     frames_file = _write(
         tmp_path / "f.txt", np.column_stack([np.arange(5), np.zeros((5, 3)), np.tile([0, 0, 0, 1], (5, 1))])
     )
-    with pytest.raises(ParseError, match="pass fps="):
+    with pytest.raises(ParseError, match="pass fps=") as caught:
         read_ordslam(frames_file)
+    # the notebook's and the report's spelling too: "pass fps=..." alone sent a notebook's user nowhere
+    assert "ordslam_fps" in str(caught.value) and "catalog.csv" in str(caught.value)
     with pytest.raises(ParseError, match=r"10 numbers per line; expected an ORDSLAM trajectory layout"):
         read_ordslam(_write(tmp_path / "g.txt", np.zeros((3, 10))))
     bad = _write(tmp_path / "h.txt", [[1, 0, 0, 0, 0, 0, 0, 1], [2, 0, 0, 0, 0, 0, 1]])

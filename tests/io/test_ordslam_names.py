@@ -50,6 +50,10 @@ def _fields(d):
         ("scenario6/20h/standard.txt", (6, "very difficult", "20:00", "standard")),
         ("scenario_2/8h30/std.txt", (2, "simple", "08:30", "standard")),
         ("sc4 16:30 Fill.txt", (4, "medium", "16:30", "fill")),
+        # four levels deep: only the last three parts were read, losing the scenario (NaN, "no scenario token")
+        ("scenario5/13-00/fill/groundtruth.txt", (5, "difficult", "13:00", "fill")),
+        ("scenario5/13h00/day/fill.txt", (5, "difficult", "13:00", "fill")),
+        ("ordslam/s6/outdoor/20h/run/standard.txt", (6, "very difficult", "20:00", "standard")),
     ],
 )
 def test_documented_name_patterns_are_read_without_warning(name, expected):
@@ -176,3 +180,16 @@ def test_bare_name_estimate_still_meets_a_unique_groundtruth(tmp_path, segment):
     table, problems = ordslam_difficulty(find_ordslam(tmp_path))
     assert problems.empty and list(table["sequence"]) == ["deep/s5_13-00_fill.txt"]
     assert table["ate_rmse_m"].iloc[0] == pytest.approx(0.0, abs=1e-9)  # a pure shift: Horn alignment removes it
+
+
+def test_a_folder_reads_every_level_below_its_root(tmp_path, segment):
+    """``scenario5/13-00/fill/groundtruth.txt`` in an ORDSLAM folder: scenario 5 (difficult), 13:00,
+    fill, without a warning; the folders above the dataset's own are not read (``s6`` here)."""
+    root = tmp_path / "s6" / "ord"
+    _tum(
+        root / "scenario5/13-00/fill/groundtruth.txt", segment.stamps, segment.positions, segment.rotations().as_quat()
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        seqs = find_ordslam(root).sequences()
+    assert _fields(seqs.iloc[0]) == (5, "difficult", "13:00", "fill")

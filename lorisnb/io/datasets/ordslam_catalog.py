@@ -1,8 +1,9 @@
 """ORDSLAM sequence descriptions: the scenario catalog, capture times, and what a file's path or
 the folder's ``catalog.csv`` says about a sequence (scenario, time of day, depth mode).
 
-File names are not documented by the dataset, so a name is read strictly, token by token (tokens
-are separated by ``/``, ``_``, spaces and dots; matching ignores case):
+File names are not documented by the dataset, so a path (below the dataset folder: every folder of
+it, however deep, and the file name) is read strictly, token by token (tokens are separated by ``/``,
+``_``, spaces and dots; matching ignores case):
 
 * scenario: ``s5``, ``sc5``, ``scen5``, ``scenario5`` (also ``scenario-5``, ``scenario_5``);
 * time of day: ``13-00``, ``13:00``, ``13h00``, ``13h`` (hours 0-23, minutes 00-59);
@@ -118,7 +119,9 @@ def _one(values: set, field: str, expected: str, problems: list[str]) -> object 
 
 
 def _from_name(p: PurePath) -> tuple[int | None, str | None, str | None]:
-    text = "/".join(p.with_suffix("").parts[-3:])
+    # every part of the path (below the dataset folder, as OrdslamFolder.describe gives it), token by
+    # token: scenario5/13-00/fill/groundtruth.txt kept only 13-00/fill/groundtruth and lost its scenario
+    text = "/".join(part for part in p.with_suffix("").parts if part != p.anchor)
     problems: list[str] = []
     sc = _one({int(m.group(1)) for m in _SCEN.finditer(text)}, "scenario", EXPECTED_SCENARIO, problems)
     time = _one({parse_time(m.group(0)) for m in _TIME.finditer(text)}, "time of day", EXPECTED_TIME, problems)

@@ -135,7 +135,9 @@ def read_ordslam(
             spath,
             int(rows[0]) + 1,
             f"the file uses the {found!r} layout (frame numbers or no "
-            "stamps); pass fps=... (frames per second) to turn frames into seconds",
+            "stamps); pass fps=... (frames per second) to turn frames into seconds (read_ordslam's and "
+            "find_ordslam's fps; ordslam_fps in the indoor_vs_outdoor notebook and lorisnb report -p ordslam_fps; "
+            "an fps column in catalog.csv for this file alone)",
         )
     line_no = rows + 1
     if found in ("index", "index-kitti"):
