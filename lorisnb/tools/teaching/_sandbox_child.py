@@ -24,6 +24,7 @@ grader, in another process.
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import sys
@@ -487,8 +488,127 @@ class Shell:
         return self.run_line_magic(name, rest)
 
 
+class Output:
+    """The student's prints (``sys.stdout`` and ``sys.stderr``): written to ``student-output.txt``
+    (the file descriptor ``fd``) up to ``cap`` bytes in all, the rest left out after one line saying
+    so, so that a cell printing more than the sandbox's file size limit neither ends the process
+    (``SIGXFSZ``) nor fails the cells after it (the instructor's too). ``truncated``: set once the
+    cap was reached."""
+
+    encoding = "utf-8"
+    errors = "backslashreplace"
+
+    def __init__(self, fd: int, cap: int) -> None:
+        self.fd, self.cap = fd, cap
+        try:
+            self.left = cap - os.fstat(fd).st_size  # a restarted sandbox appends to what the first wrote
+        except OSError:
+            self.left = cap
+        self.truncated = self.left <= 0
+        self.reported = self.truncated  # the grader is told once
+
+    def write(self, text: Any) -> int:
+        if not isinstance(text, str):
+            raise TypeError(f"write() argument must be str, not {type(text).__name__}")
+        self.write_bytes(text.encode("utf-8", "backslashreplace"))
+        return len(text)
+
+    def write_bytes(self, data: bytes) -> None:
+        if self.truncated:
+            return
+        keep = data[: max(self.left, 0)]
+        self._put(keep)
+        self.left -= len(keep)
+        if len(keep) < len(data):
+            self.truncated = True
+            mib = (self.cap + NOTE_BYTES) / 1024**2
+            self._put(f"\n[output truncated at {mib:g} MiB: the rest of what the cells printed is not kept]\n".encode())
+
+    def _put(self, data: bytes) -> None:
+        view = memoryview(data)
+        while view:
+            try:
+                n = os.write(self.fd, view)
+            except OSError:  # the file size limit (SIGXFSZ ignored), a full disk: the rest is lost
+                return
+            view = view[n:]
+
+    def flush(self) -> None:
+        pass
+
+    def fileno(self) -> int:
+        return self.fd
+
+    def isatty(self) -> bool:
+        return False
+
+    def writable(self) -> bool:
+        return True
+
+    def readable(self) -> bool:
+        return False
+
+    @property
+    def closed(self) -> bool:
+        return False
+
+    @property
+    def buffer(self) -> Any:  # what writes bytes to ``sys.stdout.buffer``
+        return _Bytes(self)
+
+
+class _Bytes:
+    def __init__(self, out: Output) -> None:
+        self.out = out
+
+    def write(self, data: Any) -> int:
+        data = bytes(data)
+        self.out.write_bytes(data)
+        return len(data)
+
+    def flush(self) -> None:
+        pass
+
+
+NOTE_BYTES = 4096  # kept under the file size limit for the line saying the output was truncated
+
+
+def display(*objs: Any, **_kwargs: Any) -> None:
+    """Jupyter's ``display`` (IPython puts it in every notebook's builtins): here, as IPython's own
+    does outside a notebook, the objects printed."""
+    print(*objs)
+
+
+class Unders:
+    """IPython's ``_``, ``__``, ``___``: the values of the last three cells that ended with an
+    expression (not None, not silenced by a trailing ``;``); never over a ``_`` the cells set."""
+
+    def __init__(self) -> None:
+        self.last: list[Any] = []
+
+    def run(self, source: str, name: str, namespace: dict[str, Any]) -> None:
+        """Run one cell as IPython runs it: its last statement, an expression, evaluated for ``_``."""
+        tree = ast.parse(source, name)
+        last = tree.body[-1] if tree.body else None
+        if not isinstance(last, ast.Expr) or source.rstrip().endswith(";"):
+            exec(compile(tree, name, "exec"), namespace)  # noqa: S102 (the cell's own code)
+            return
+        exec(compile(ast.Module(body=tree.body[:-1], type_ignores=[]), name, "exec"), namespace)  # noqa: S102
+        value = eval(compile(ast.Expression(body=last.value), name, "eval"), namespace)  # noqa: S307
+        if value is None:
+            return
+        if "_" in namespace and (not self.last or namespace["_"] is not self.last[0]):
+            return  # the cells' own _ (a loop variable): IPython leaves it
+        self.last = [value, *self.last[:2]]
+        namespace.update(zip(("_", "__", "___"), self.last, strict=False))
+
+
 def main() -> None:
     no_lorisnb = "--no-lorisnb" in sys.argv
+    cap = next((int(a.split("=", 1)[1]) for a in sys.argv if a.startswith("--output-bytes=")), 64 * 1024**2)
+    import signal
+
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # past the file size limit a write fails, never the process
     reply = os.fdopen(os.dup(1), "w", encoding="utf-8")
     requests = os.fdopen(os.dup(0), "r", encoding="utf-8")
     try:  # the student's prints; a name the student's code made a link (or anything but a file) is not followed
@@ -500,6 +620,8 @@ def main() -> None:
     os.dup2(log, 1)
     os.dup2(log, 2)
     sys.stdin = open(0, encoding="utf-8", closefd=False)  # noqa: SIM115 (the process's own stdin)
+    output = Output(1, max(cap - NOTE_BYTES, 0))
+    sys.stdout = sys.stderr = output
     scan = None
     if no_lorisnb:
         for name in [m for m in sys.modules if m == "lorisnb" or m.startswith("lorisnb.")]:
@@ -515,13 +637,15 @@ def main() -> None:
     namespace: dict[str, Any] = {"__name__": "__main__"}
     shell = Shell(namespace)
     namespace["get_ipython"] = lambda: shell  # what IPython's transformed magics and shell escapes call
+    namespace["display"] = display  # as Jupyter gives it
+    unders = Unders()
     for line in requests:
         req = json.loads(line)
         request_id = req.pop("id", None)
         out: dict[str, Any] = {"ok": True}
         try:
             if req["op"] == "exec":
-                exec(compile(req["source"], req.get("name", "<cell>"), "exec"), namespace)  # noqa: S102
+                unders.run(req["source"], req.get("name", "<cell>"), namespace)
             elif req["op"] == "set":
                 namespace.update({n: _given_value(v) for n, v in req["values"].items()})
             else:
@@ -540,6 +664,9 @@ def main() -> None:
             except Exception:  # noqa: BLE001 (the answer's objects can break a scan: it is best effort)
                 traceback.print_exc()
         sys.stdout.flush()
+        if output.truncated and not output.reported:
+            output.reported = True
+            out["output_truncated_mib"] = round(cap / 1024**2, 1)
         out["id"] = request_id
         reply.write(json.dumps(out, default=str) + "\n")
         reply.flush()

@@ -294,6 +294,7 @@ class Sandbox:
             "-c",
             _child_source(),
             "lorisnb-sandbox",
+            f"--output-bytes={self.limits.file_bytes}",  # the student's prints, kept up to the file size limit
         ] + (["--no-lorisnb"] if self.no_lorisnb else [])
         if self.isolation != "full":
             return child
