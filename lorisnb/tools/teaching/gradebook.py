@@ -38,6 +38,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta, timezone, tzinfo
 from pathlib import Path
+from typing import Any
 
 import nbformat
 
@@ -396,6 +397,21 @@ def _code_key(source: str) -> str | None:
         return None
 
 
+def _without(source: str, lines: set[str]) -> str:
+    """``source`` without the lines that are, stripped, one of ``lines`` (a stub's), as it is indented."""
+    return "\n".join(line for line in source.splitlines() if line.strip() not in lines)
+
+
+def _own_code(source: str, stub_lines: set[str]) -> tuple[str, ...]:
+    """The lines of code of an answer that are not a stub's (nor blank, nor comments), spaces left
+    out: what the detector counts as the answer's own, compared when its code does not parse alone
+    (a function's body without the stub's ``def`` line)."""
+    lines = (line.strip() for line in source.splitlines())
+    return tuple(
+        "".join(line.split()) for line in lines if line and line not in stub_lines and not line.startswith("#")
+    )
+
+
 def identical_answers(
     answers: Mapping[str, Mapping[str, str]],
     stubs: Mapping[str, Sequence[str]],
@@ -414,7 +430,19 @@ def identical_answers(
     instructor's answer (``canonical``: grade_id -> its formulations, :func:`canonical_answers`: the
     exercise leads to it), or one :data:`COPY_COMMON` or more students gave alike. A cheap check of
     exact copies: a copy edited (renamed, reformatted, a comment added) is not found."""
-    canon = {gid: {k for k in map(_code_key, texts) if k} for gid, texts in (canonical or {}).items()}
+
+    def stub_lines_of(gid: str) -> set[str]:
+        return {line.strip() for s in stubs.get(gid, ()) for line in s.splitlines()} | _DELIMITERS
+
+    # the instructor's answer as the detector reads an answer: whole, and without the stub's lines (the
+    # `x = ...` placeholders an honest student deletes), its code (layout and comments aside) and its own lines
+    canon: dict[str, set[Any]] = {}
+    for gid, texts in (canonical or {}).items():
+        keys: set[Any] = set()
+        for t in texts:
+            keys |= {k for k in (_code_key(t), _code_key(_without(t, stub_lines_of(gid)))) if k}
+            keys.add(_own_code(t, stub_lines_of(gid)))
+        canon[gid] = keys
     order = {gid: k for k, gid in enumerate(stubs)}
     same: dict[tuple[str, str], list[str]] = {}  # (grade_id, the answer) -> the students who gave it
     for student, cells in answers.items():
@@ -423,13 +451,17 @@ def identical_answers(
             handed = stubs.get(gid, ())
             if not text or text in {_normal(s) for s in handed}:
                 continue
-            stub_lines = {line.strip() for s in handed for line in s.splitlines()} | _DELIMITERS
+            stub_lines = stub_lines_of(gid)
             mine = [line.strip() for line in text.splitlines() if line.strip() not in stub_lines]
             own = sum(len("".join(line.split())) for line in mine)
             code = sum(1 for line in mine if line and not line.startswith("#"))
             if own < COPY_MIN_CHARS or code < COPY_MIN_LINES:
                 continue
-            if canon.get(gid) and _code_key(text) in canon[gid]:
+            if canon.get(gid) and (
+                _code_key(text) in canon[gid]
+                or _code_key(_without(text, stub_lines)) in canon[gid]
+                or _own_code(text, stub_lines) in canon[gid]
+            ):
                 continue
             same.setdefault((gid, text), []).append(student)
     pairs: dict[tuple[str, str], list[str]] = {}
