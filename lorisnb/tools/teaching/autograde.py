@@ -6,7 +6,8 @@ notebook (``source/<lab>/<lab>.ipynb``) and keeps only the student's **answer ce
 explanations, checks) is the instructor's, whatever the student did to it. Then:
 
 1. **In the sandbox** (:mod:`.sandbox`), in a folder holding only the release files: the lab's cells
-   run with the student's answers, the parameters set for this student (``student_id``: their data
+   run with the student's answers (every cell of an answer's id, in the order the notebook ran them,
+   and the code cells the student added, each after the lab's cell above it), the parameters set for this student (``student_id``: their data
    variant). Right after each answer cell, the names its check reads are read back as plain values
    (numbers, strings, arrays), before any reference value after it exists.
 2. **Formula answers** (answer cells defining a function) run again alone, in a sandbox without
@@ -49,13 +50,18 @@ from lorisnb.errors import AnswerError
 from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, decode
 
-GRADER_VERSION = "8"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "9"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
 # 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
 # 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
 # given to answers run alone; predictions get the functions of the earlier answer cells; 7: those names' values are
 # the grader's run of the lab's, not the student's; a cell under %%time/%%capture is read as its body; each sandbox
-# sees its own folder alone in the temporary folders; 8: %%capture NAME binds NAME, as IPython does)
+# sees its own folder alone in the temporary folders; 8: %%capture NAME binds NAME, as IPython does; 9: every cell of
+# an answer's id runs (a split cell's halves, copies), in the notebook's execution order; cells the student added run
+# in their place; a prediction's set-up (earlier cells' functions and imports, its own imports) is not timed as the
+# prediction, and a failing line after its value (display) is left out; display and _ as in Jupyter; a failing answer
+# cell's error is its message; prints past the file size limit are cut, not fatal; the copy check's exemption of the
+# instructor's answer reads it without its placeholders)
 
 
 @dataclass(frozen=True)
@@ -204,27 +210,66 @@ class SubmissionResult:
         return cls(**d)
 
 
-def student_answers(nb: nbformat.NotebookNode) -> dict[str, str]:
-    """grade_id -> source of each answer cell of a returned notebook. An answer cell copied in
-    Jupyter keeps its ``grade_id``: of several cells of one id the last is taken, the one whose
-    definitions the notebook ran last (its own checks used it; the first may be a stub or an
-    attempt the student corrected below) (:func:`repeated_answers` names them for a note)."""
-    out: dict[str, str] = {}
-    for cell in nb.cells:
+def answer_cells(nb: nbformat.NotebookNode) -> dict[str, list[str]]:
+    """grade_id -> the sources of a returned notebook's answer cells of that id, in the order the
+    notebook ran them: several when JupyterLab's "split cell" gave both halves the id, or a cell was
+    copied (a copy keeps it). Their ``execution_count`` order where each has one, else the
+    notebook's order (cells never run, split ones: run top to bottom)."""
+    found: dict[str, list[tuple[int, Any, str]]] = {}
+    for k, cell in enumerate(nb.cells):
         meta = _nbgrader(cell)
         if cell.cell_type == "code" and meta.get("solution") and meta.get("grade_id") is not None:
-            out[str(meta["grade_id"])] = cell.source
+            found.setdefault(str(meta["grade_id"]), []).append((k, cell.get("execution_count"), cell.source))
+    out: dict[str, list[str]] = {}
+    for gid, cells in found.items():
+        counted = all(isinstance(c, int) and not isinstance(c, bool) for _, c, _ in cells)
+        cells.sort(key=lambda t: (t[1], t[0]) if counted else (t[0],))
+        out[gid] = [src for _, _, src in cells]
     return out
+
+
+def student_answers(nb: nbformat.NotebookNode) -> dict[str, str]:
+    """grade_id -> the source of a returned notebook's answer cell: of several cells of one id
+    (:func:`answer_cells`), their sources one after the other, in the order the notebook ran them
+    (:func:`repeated_answers` names them for a note)."""
+    return {gid: "\n".join(srcs) for gid, srcs in answer_cells(nb).items()}
 
 
 def repeated_answers(nb: nbformat.NotebookNode) -> dict[str, int]:
     """grade_id -> how many answer cells of a returned notebook carry it, where more than one."""
-    seen: dict[str, int] = {}
+    return {g: len(srcs) for g, srcs in answer_cells(nb).items() if len(srcs) > 1}
+
+
+def added_cells(lab: nbformat.NotebookNode, nb: nbformat.NotebookNode) -> dict[int, list[str]]:
+    """The code cells a student added to a returned notebook (no nbgrader metadata, not the
+    parameters cell, not a cell of the lab's own without metadata): index of the instructor's cell
+    they follow (the nearest cell above them the lab has: by ``grade_id``, the parameters cell by its
+    tag; -1 at the top) -> their sources, in the notebook's order. nbgrader keeps them, and the
+    notebook ran them (an import, a helper a later answer calls): the grader runs them in their place."""
+    by_id: dict[str, int] = {}
+    plain: dict[str, int] = {}
+    params = -1
+    for i, cell in enumerate(lab.cells):
+        gid = _nbgrader(cell).get("grade_id")
+        if gid is not None:
+            by_id.setdefault(str(gid), i)
+        elif "parameters" in cell.get("metadata", {}).get("tags", []):
+            params = i
+        elif cell.cell_type == "code":
+            plain.setdefault(cell.source.strip(), i)
+    out: dict[int, list[str]] = {}
+    anchor = -1
     for cell in nb.cells:
-        meta = _nbgrader(cell)
-        if cell.cell_type == "code" and meta.get("solution") and meta.get("grade_id") is not None:
-            seen[str(meta["grade_id"])] = seen.get(str(meta["grade_id"]), 0) + 1
-    return {g: n for g, n in seen.items() if n > 1}
+        gid = _nbgrader(cell).get("grade_id")
+        if gid is not None:
+            anchor = by_id.get(str(gid), anchor)
+        elif "parameters" in cell.get("metadata", {}).get("tags", []):
+            anchor = params if params >= 0 else anchor
+        elif cell.cell_type == "code" and cell.source.strip() in plain:
+            anchor = plain[cell.source.strip()]
+        elif cell.cell_type == "code" and cell.source.strip():
+            out.setdefault(anchor, []).append(cell.source)
+    return out
 
 
 def as_python(source: str) -> str:
@@ -319,18 +364,22 @@ def plain_values(values: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
 _DEFINITIONS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Import, ast.ImportFrom)
 
 
-def definitions_only(source: str, assignments: bool = False, lorisnb: bool = True) -> str | None:
+def definitions_only(
+    source: str, assignments: bool = False, lorisnb: bool = True, keep: tuple[type[ast.stmt], ...] | None = None
+) -> str | None:
     """``source`` with every top-level statement other than a ``def``, a ``class`` or an import
     (``assignments``: and an assignment; ``lorisnb=False``: and no import of lorisnb) blanked out,
     line for line (an error names the line of the cell); None when it does not parse. A formula
     answer's try-out lines (``print(correctness(ate, aoe, eps, phi))``, reading the lab's
-    numbers) are not its formula. A cell under ``%%time`` is read as its body (:func:`cell_body`)."""
+    numbers) are not its formula. A cell under ``%%time`` is read as its body (:func:`cell_body`).
+    ``keep``: the kinds of statement kept, instead."""
     source = cell_body(source)
     try:
         tree = ast.parse(source)
     except SyntaxError:
         return None
-    keep = _DEFINITIONS + ((ast.Assign, ast.AnnAssign) if assignments else ())
+    if keep is None:
+        keep = _DEFINITIONS + ((ast.Assign, ast.AnnAssign) if assignments else ())
     lines = source.splitlines()
     kept = [False] * len(lines)
     for node in tree.body:
@@ -664,19 +713,33 @@ def grade_submission(
     t0 = time.monotonic()
     try:
         nb = nbformat.read(notebook, as_version=4)
-        answers = {g: as_python(a) for g, a in student_answers(nb).items()}  # magics as IPython runs them
+        # magics as IPython runs them; every cell of an answer's id, in the order the notebook ran them
+        parts = {g: [as_python(a) for a in srcs] for g, srcs in answer_cells(nb).items()}
+        answers = {g: "\n".join(srcs) for g, srcs in parts.items()}
         repeated = repeated_answers(nb)
+        added = {i: [as_python(a) for a in srcs] for i, srcs in added_cells(spec.notebook, nb).items()}
     except Exception as exc:  # noqa: BLE001 (any way a returned file fails to be a notebook: this student's 0)
         return unreadable(spec, student, notebook, exc, time.monotonic() - t0)
     py_path, checkout_dirs = _package_paths()
     hidden = [*settings.hidden, *checkout_dirs]
     _check_reachable(py_path, settings)
     notes: list[str] = [
-        f"{gid}: {n} cells carry this answer's id (a copied cell keeps it): the last one is graded, the one the "
-        "notebook ran last; delete the others"
+        f"{gid}: {n} cells carry this answer's id (a split or copied cell keeps it): all of them run, in the order "
+        "the notebook ran them (their execution counts, else top to bottom), so what the one run last set is graded; "
+        "delete the copies you abandoned"
         for gid, n in repeated.items()
     ]
     expected = [str(_nbgrader(c)["grade_id"]) for c in spec.notebook.cells if _nbgrader(c).get("solution")]
+    if not any(g in answers for g in expected):
+        added = {}  # none of its cells is the lab's (its metadata removed): nothing is in its place, nothing runs
+    if added:
+        n_added = sum(len(v) for v in added.values())
+        notes.append(f"{n_added} code cell(s) you added (no nbgrader metadata) ran in their place in the notebook, as "
+                     "Jupyter ran them, with your answer cells' rules (and their functions and imports, lorisnb's "
+                     "left out, before the answers graded alone)")  # fmt: skip
+    # the answer cells and the added cells (by a key of their own) in the order they run: what an answer run
+    # alone is given of the cells before it (their functions and imports)
+    order, code = _in_order(spec, answers, added)
     missing = [g for g in expected if g not in answers]
     if missing and len(missing) == len(expected):
         notes.append(
@@ -743,19 +806,21 @@ def grade_submission(
             try:
                 with budget.charge():
                     box.run(PRELUDE, name="<numpy and math>", timeout_s=budget.left(True))
-                    before = expected[: expected.index(gid)] if gid in expected else []
+                    before = order[: order.index(gid)] if gid in order else []
                     # the lab's numbers its functions (and the earlier cells') read when defined (eps=eps)
                     lab = {n: v for g in [*before, gid] for n, v in clean.get(g, {}).items()}
                     if lab:
                         box.bind(lab, timeout_s=budget.left(True))
                     # the functions the student's earlier answer cells define, which this one may call (as the
                     # notebook did), before its own: its own definitions win
-                    helpers = earlier_functions(answers, before)
+                    helpers = earlier_functions(code, before)
                     if helpers.strip():
                         box.run(
                             helpers, name="<the functions of the earlier answer cells>", timeout_s=budget.left(True)
                         )
-                    reply = box.run(source, name=f"<answer {gid}>", timeout_s=budget.left(True))
+                    # each of its cells (a split cell's halves, copies) as the notebook ran them
+                    for part in parts.get(gid) or [source]:
+                        reply = box.run(part, name=f"<answer {gid}>", timeout_s=budget.left(True))
                     if not reply.get("ok") and str(reply.get("error", "")).startswith("NameError"):
                         # a try-out line reading the lab's numbers (eps, tau): the formula is the cell's definitions
                         for assignments in (True, False):
@@ -785,8 +850,9 @@ def grade_submission(
 
         try:
             took: dict[str, float] = {}  # seconds each answer cell took in the lab
-            values = _run_student(spec, answers, params | {"output_dir": str(work / "out")}, work, py_path,
-                                  hidden, settings, notes, budget, boxes, alone, took, private=[root])  # fmt: skip
+            values = _run_student(spec, parts, params | {"output_dir": str(work / "out")}, work, py_path,
+                                  hidden, settings, notes, budget, boxes, alone, took, private=[root],
+                                  added=added)  # fmt: skip
             isolation = "full" if settings.uid and _isolated() else "limits"
             for defs in spec.functions.values():  # not reached: the budget ran out before
                 functions.update({d: RemoteFunction(None, d, f"TimeoutError: {_BUDGET_ERROR.format(budget.seconds)}")
@@ -797,10 +863,10 @@ def grade_submission(
                 one that did not run in the lab (a time limit, the budget) keeps that error."""
                 if gid not in answers or gid not in took or any("error" in v for v in values.get(gid, {}).values()):
                     return dict(values.get(gid, {}))
-                before = expected[: expected.index(gid)] if gid in expected else []
+                before = order[: order.index(gid)] if gid in order else []
                 lab = {n: v for g in before for n, v in clean.get(g, {}).items()}
                 return _predict(spec, gid, answers[gid], {**lab, **given}, root, apart, settings, budget, notes,
-                                took[gid], boxes, earlier_functions(answers, before))  # fmt: skip
+                                took[gid], boxes, earlier_functions(code, before))  # fmt: skip
 
             scores = _run_checks(
                 spec,
@@ -827,6 +893,26 @@ def grade_submission(
     return SubmissionResult(student, spec.name, scores, isolation, round(time.monotonic() - t0, 2), notes)
 
 
+def _added_key(index: int, k: int) -> str:
+    return f"<your added cell {k + 1} after cell {index}>"
+
+
+def _in_order(
+    spec: LabSpec, answers: Mapping[str, str], added: Mapping[int, Sequence[str]]
+) -> tuple[list[str], dict[str, str]]:
+    """The answer cells' grade_ids and the added cells' keys (:func:`_added_key`) in the order the
+    grader runs them, and key -> source for both."""
+    order: list[str] = []
+    code = dict(answers)
+    for i in range(-1, len(spec.notebook.cells)):
+        if i >= 0 and _nbgrader(spec.notebook.cells[i]).get("solution"):
+            order.append(str(_nbgrader(spec.notebook.cells[i])["grade_id"]))
+        for k, src in enumerate(added.get(i, ())):
+            order.append(_added_key(i, k))
+            code[_added_key(i, k)] = src
+    return order, code
+
+
 _BUDGET_ERROR = "the submission's time budget ({:g} s) ran out before this answer was graded"
 PRELUDE = "import math\nimport numpy as np\n"  # what an answer run alone has besides its own code
 
@@ -848,9 +934,14 @@ def _predict(
     """A prediction (``gid``'s answer cell, ``source``) run alone in a sandbox without lorisnb, with
     numpy, math and the lab's numbers ``given`` (name -> :func:`._sandbox_child.given`'s form, as the
     grader's own run of the lab has them at that cell); the values read back (each ``{"error": ...}``
-    when it fails, the reason in the note it adds). Its code gets twice the ``took`` seconds its cell
-    took in the lab, plus 2 s (at most ``--timeout``), charged to the budget but run even when that
-    is spent: the cell ran in time in the lab, and a question answered by then keeps its points."""
+    when it fails, the reason in the note it adds). First, under ``--timeout`` of their own, numpy and
+    math, the functions and imports of the earlier answer cells (``helpers``) and the cell's own
+    imports (a fresh process imports scipy, pandas or matplotlib in seconds, which the lab's process
+    had done before the cell ran); then the cell gets twice the ``took`` seconds it took in the lab,
+    plus 2 s (at most ``--timeout``). Both are charged to the budget but run even when that is spent:
+    the cell ran in time in the lab, and a question answered by then keeps its points. A cell that
+    fails (a ``display(Markdown(...))`` or ``print`` line reading the lab's objects) is run again on
+    its imports, definitions and assignments only, as a formula's try-out lines are left out."""
     capture = spec.values.get(gid, ())
 
     def failed(error: str, note: str | None = None) -> dict[str, Any]:
@@ -861,26 +952,46 @@ def _predict(
     work = root / f"prediction-{gid}"
     work.mkdir(mode=0o700)
     limit = min(2 * took + 2.0, settings.limits.cell_timeout_s)
+    setup = settings.limits.cell_timeout_s
     box = Sandbox(work, limits=settings.limits, hidden=hidden, uid=settings.uid + 1, no_lorisnb=True, private=[root])
     boxes.append(box)  # its stray lines are counted with the others'
+    own_imports = definitions_only(source, keep=(ast.Import, ast.ImportFrom), lorisnb=False) or ""
+    stage = "setup"
     try:
         with budget.charge():
-            box.bind(usable)  # the sandbox's start (no code of the answer runs yet): the cell's time limit
-            t0 = time.monotonic()
-            if helpers.strip():  # the functions of the earlier answer cells, which it may call (as the notebook did)
-                box.run(PRELUDE + helpers, name="<the functions of the earlier answer cells>", timeout_s=limit)
-            reply = box.run(PRELUDE + source, capture, name=f"<answer {gid}>",
-                            timeout_s=max(limit - (time.monotonic() - t0), 0.5))  # fmt: skip
+            box.bind(usable)  # the sandbox's start (no code of the answer runs yet)
+            # what the lab's process had imported and defined before the cell ran: not the cell's time
+            box.run(PRELUDE + helpers + "\n" + own_imports, name="<the functions and imports of your answer cells>",
+                    timeout_s=setup)  # fmt: skip
+            stage = "cell"
+            reply = box.run(PRELUDE + source, capture, name=f"<answer {gid}>", timeout_s=limit)
+            retried = None
+            if not reply.get("ok") and not box.findings:
+                # a line after the value failing alone (display(Markdown(...)), a print of the lab's objects)
+                trimmed = definitions_only(source, assignments=True)
+                if trimmed is not None and trimmed.strip() and trimmed != cell_body(source):
+                    again = box.run(PRELUDE + trimmed, capture, name=f"<answer {gid}>", timeout_s=limit)
+                    got = again.get("values", {})
+                    if again.get("ok") and not any(v.get("missing") for v in got.values()):
+                        retried, reply = reply, again
     except SandboxError as exc:
+        if stage == "setup":
+            return failed(
+                "numpy, math, the functions and imports of your earlier answer cells and this cell's imports, run "
+                f"before the prediction (alone), did not finish within {setup:g} s (--timeout): {exc}"
+            )
         return failed(
             f"the prediction, run alone, did not finish within {limit:.3g} s (twice the time it took in the lab, "
-            f"plus 2 s): {exc}"
+            f"plus 2 s, its imports and your earlier cells' functions run before it and not counted): {exc}"
         )
     finally:
         box.close()
     if box.findings:
         message = lorisnb_used(f"the prediction {gid}", box.findings)
         return failed(message, message)
+    if retried is not None:
+        notes.append(f"{gid}: a line besides its assignments failed when run alone ({retried.get('error')}); the "
+                     "prediction is graded on its imports, functions and assignments only")  # fmt: skip
     if not reply.get("ok"):
         try:
             read = _loaded(cell_body(source))
@@ -970,7 +1081,7 @@ def _isolated() -> bool:
 
 def _run_student(
     spec: LabSpec,
-    answers: Mapping[str, str],
+    answers: Mapping[str, Sequence[str]],
     params: Mapping[str, Any],
     work: Path,
     py_path: Path,
@@ -982,50 +1093,64 @@ def _run_student(
     alone: Callable[[str, str | None], None],
     answered: dict[str, float] | None = None,
     private: Sequence[Path] = (),
+    added: Mapping[int, Sequence[str]] = {},  # noqa: B006 (read only)
 ) -> dict[str, dict[str, Any]]:
     """Step 1: the lab's cells with the student's answers, in the sandbox. Returns the values read
     back after each answer cell; ``alone(grade_id, error)`` runs after each answer cell (step 2 of a
     formula answer; ``error``: the cell hit a limit); ``answered`` gets the seconds each answer cell
-    that ran took; ``private``: folders the sandbox sees empty (but for its own). Every cell from the
+    that ran took; ``private``: folders the sandbox sees empty (but for its own). ``answers``: grade_id
+    -> its cells, run one after the other (the values read back after the last); ``added``: the cells
+    the student added (:func:`added_cells`), run after the lab's cell they follow, as answer cells
+    are (unlocked, charged). Every cell from the
     first answer cell on (the lab's own after it too: the student's code could slow them), and every replay after a time-out, is charged to ``budget``;
     once it is spent no more cells run. A replay gives each cell twice the time it took (plus two
     seconds)."""
-    cells: list[tuple[str, str | None, str]] = []  # (source, answer grade_id, name)
+    # (source, answer grade_id, name, the student's code, the answer's last cell)
+    cells: list[tuple[str, str | None, str, bool, bool]] = []
+    cells += [(src, None, _added_key(-1, j), True, False) for j, src in enumerate(added.get(-1, ()))]
     for i, cell in enumerate(spec.notebook.cells):
         meta = _nbgrader(cell)
         if cell.cell_type != "code" or meta.get("grade"):
-            continue  # the checks run in the grader's process
-        if "parameters" in cell.get("metadata", {}).get("tags", []):
-            cells.append((_parameters(cell.source, params), None, "parameters"))
+            pass  # the checks run in the grader's process
+        elif "parameters" in cell.get("metadata", {}).get("tags", []):
+            cells.append((_parameters(cell.source, params), None, "parameters", False, False))
         elif meta.get("solution"):
             answer_id = str(meta["grade_id"])
-            cells.append((answers.get(answer_id, ""), answer_id, f"<answer {answer_id}>"))
+            srcs = list(answers.get(answer_id, ())) or [""]
+            cells += [(src, answer_id, f"<answer {answer_id}>", True, j == len(srcs) - 1) for j, src in enumerate(srcs)]
         else:
-            cells.append((cell.source, None, f"<cell {i}>"))
+            cells.append((cell.source, None, f"<cell {i}>", False, False))
+        cells += [(src, None, _added_key(i, j), True, False) for j, src in enumerate(added.get(i, ()))]
     values: dict[str, dict[str, Any]] = {}
+    errors: dict[str, str] = {}  # answer grade_id -> the first error of its cells
+    stopped: set[str] = set()  # answers whose cell hit a limit: their other cells do not run
     skipped: set[int] = set()
     took: dict[int, float] = {}  # seconds each cell took on its first run
     box = Sandbox(work, limits=settings.limits, hidden=hidden, uid=settings.uid, python_path=[py_path], private=private)
     boxes.append(box)
 
     def unrun(k: int) -> None:  # the answer cells from k on get no value: the budget is spent
-        for _, gid, _ in cells[k:]:
+        for _, gid, _, _, _ in cells[k:]:
             if gid and gid not in values:
                 values[gid] = {n: {"error": _BUDGET_ERROR.format(budget.seconds)} for n in spec.values.get(gid, ())}
 
     try:
         k, charged = 0, False
         while k < len(cells):
-            source, gid, cell_name = cells[k]
-            capture: Sequence[str] = spec.values.get(gid, ()) if gid else ()
-            charged = charged or gid is not None
+            source, gid, cell_name, student, final = cells[k]
+            if gid in stopped:
+                skipped.add(k)
+                k += 1
+                continue
+            capture: Sequence[str] = spec.values.get(gid, ()) if gid and final else ()
+            charged = charged or student
             if charged and budget.out(cell_name):
                 unrun(k)
                 break
             t0 = time.monotonic()
             try:
                 with budget.charge() if charged else contextlib.nullcontext():
-                    reply = box.run(source, capture, cell_name, locked=gid is None,
+                    reply = box.run(source, capture, cell_name, locked=not student,
                                     timeout_s=budget.left(True) if charged else None)  # fmt: skip
             except SandboxError as exc:
                 where = gid or cell_name
@@ -1033,7 +1158,8 @@ def _run_student(
                 notes.append(f"{where}: {_BUDGET_ERROR.format(budget.seconds) if spent else exc}")
                 if gid:
                     error = _BUDGET_ERROR.format(budget.seconds) if spent else str(exc)
-                    values[gid] = {n: {"error": error} for n in capture}
+                    values[gid] = {n: {"error": error} for n in spec.values.get(gid, ())}
+                    stopped.add(gid)
                     alone(gid, f"TimeoutError: {error}")
                 if spent:
                     unrun(k)
@@ -1047,7 +1173,7 @@ def _run_student(
                         if budget.out(f"the replay after {where}"):
                             break
                         try:
-                            box.run(cells[j][0], (), cells[j][2], locked=cells[j][1] is None,
+                            box.run(cells[j][0], (), cells[j][2], locked=not cells[j][3],
                                     timeout_s=min(2 * took.get(j, 0.0) + 2.0, budget.left(True)))  # fmt: skip
                         except SandboxError:
                             skipped.add(j)
@@ -1057,14 +1183,23 @@ def _run_student(
                 k += 1
                 continue
             took[k] = time.monotonic() - t0
-            if gid:
-                got = dict(reply.get("values", {}))
-                values[gid] = {n: v for n, v in got.items() if n in capture}
-                if answered is not None:
-                    answered[gid] = took[k]
+            if reply.get("output_truncated_mib"):
+                notes.append(f"{gid or cell_name}: what the cells printed was cut at {reply['output_truncated_mib']:g} "
+                             "MiB (the sandbox's file size limit): the rest is left out; the cells ran on")  # fmt: skip
+            if gid and answered is not None:
+                answered[gid] = answered.get(gid, 0.0) + took[k]
             if not reply.get("ok"):
                 notes.append(f"{gid or cell_name}: {reply.get('error')}")
-            if gid:
+                if gid:
+                    errors.setdefault(gid, str(reply.get("error")))
+            if gid and final:
+                got = dict(reply.get("values", {}))
+                values[gid] = {n: v for n, v in got.items() if n in capture}
+                failed = errors.get(gid, "")
+                if failed and not failed.startswith("NotImplementedError") and gid not in spec.predictions:
+                    # no value because the cell failed: say so, not "no answer yet" (a prediction's own run says why)
+                    values[gid] = {n: {"error": f"your answer cell failed: {failed}"} if v.get("missing") else v
+                                   for n, v in values[gid].items()}  # fmt: skip
                 alone(gid, None)
             k += 1
     finally:
