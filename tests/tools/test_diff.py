@@ -229,6 +229,46 @@ def test_a_table_that_lost_its_spec_column_is_not_comparable_with_one_that_has_i
     assert rc == 0, err
 
 
+def test_a_spec_key_one_table_lacks_is_its_default(icra20, tmp_path, capsys):
+    """A table written before a spec key existed (its spec JSON lacks the key) against a run whose
+    spec holds that key at its default: comparable (every archived run was "not comparable", exit
+    2, once a key was added), for every key the spec has, defaults taken from the spec itself; a
+    value other than the default against the missing key is still refused, naming the key."""
+    from lorisnb.core.spec.evalspec import EvalSpec
+    from lorisnb.tools.decisions.runs import setting_differences, unset_defaults
+
+    new = tmp_path / "new.csv"
+    assert main(["evaluate", str(icra20 / "per-seq" / "dso"), "--csv", str(new), "--no-progress"]) == 0
+    capsys.readouterr()
+    table = pd.read_csv(new)
+    spec = json.loads(table["spec"].iloc[0])
+    for key in EvalSpec().to_dict():  # every current key (and a future one as it is added)
+        if key not in spec:
+            continue
+        old = table.assign(spec=json.dumps({k: v for k, v in spec.items() if k != key}))
+        assert setting_differences(old, table) == [] and setting_differences(table, old) == [], key
+    old = tmp_path / "old.csv"
+    table.assign(spec=json.dumps({k: v for k, v in spec.items() if k != "repair_stamps"})).to_csv(old, index=False)
+    rc, out, err = run(capsys, old, new)
+    assert rc == 0 and "verdict: ok" in out, err
+    other = tmp_path / "other.csv"
+    table.assign(spec=json.dumps({**spec, "repair_stamps": True})).to_csv(other, index=False)
+    rc, _, err = run(capsys, old, other)
+    assert rc == 2 and f"spec repair_stamps: (not set) in {old} against true in {other}" in err, err
+    assert '"association"' not in err
+    # run.json specs likewise (history, diff --baseline last-comparable of report runs)
+    a, b = {"preset": "tum", "association": "nearest"}, {"preset": "tum"}
+    assert unset_defaults(a, b) == (b, b)  # the preset's default: tum associates the nearest stamps
+    assert unset_defaults({"preset": "openloris", "association": "nearest"}, {"preset": "openloris"})[0] != {
+        "preset": "openloris"
+    }
+    # a setting column a table lacks is its default too; one that is not the default is named
+    assert setting_differences(table.drop(columns=["official_interpolation"]), table) == []
+    official = table.assign(official_interpolation=True, spec=json.dumps({**spec, "official_interpolation": True}))
+    said = setting_differences(table, official)
+    assert said == ["cafe, corridor, home, market: spec official_interpolation: false in BASE against true in CAND"]
+
+
 def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
     """Two report run folders (run.json + per-sequence CSV tables), then history over three runs."""
     a, b = versions

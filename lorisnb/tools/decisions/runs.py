@@ -20,10 +20,12 @@ the first table that holds it by path; a run that records one but lost its findi
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +34,7 @@ import pandas as pd
 
 from lorisnb.core.metrics.openloris import RATES
 from lorisnb.core.spec import validate
-from lorisnb.core.spec.evalspec import ALIASES, PRESETS, SPEC_NAMES, make_spec
+from lorisnb.core.spec.evalspec import ALIASES, PRESETS, SPEC_NAMES, EvalSpec, make_spec
 from lorisnb.core.stats.inference import WEIGHTS as STATS_WEIGHTS
 from lorisnb.core.stats.inference import with_trials
 from lorisnb.core.stats.regression import METRICS
@@ -534,10 +536,11 @@ def spec_values(spec: Any) -> dict[str, Any]:
 def spec_differences(a: Run, b: Run) -> list[str]:
     """What makes two runs not comparable: a key of their run.json specs that changes the numbers
     differs (:func:`spec_values`; each such key named, with both values whole), or the thresholds
-    recorded in their tables differ for a scene both have. Empty when they agree."""
+    recorded in their tables differ for a scene both have. Empty when they agree. A key one side
+    lacks is no difference where the other side holds its default (:func:`unset_defaults`)."""
     out = []
     if a.spec is not None and b.spec is not None:
-        va, vb = spec_values(a.spec), spec_values(b.spec)
+        va, vb = unset_defaults(spec_values(a.spec), spec_values(b.spec))
         missing = object()
         for k in sorted(set(va) | set(vb)):
             x, y = va.get(k, missing), vb.get(k, missing)
@@ -546,29 +549,105 @@ def spec_differences(a: Run, b: Run) -> list[str]:
     return out + setting_differences(a.table, b.table, str(a.path), str(b.path))
 
 
+@lru_cache(maxsize=None)
+def _defaults(preset: str | None) -> dict[str, Any]:
+    """Every key of an evaluation spec with its default, as run records write it
+    (:meth:`~lorisnb.core.spec.evalspec.EvalSpec.to_dict`): the named preset's, else the spec's own."""
+    spec = PRESETS.get(preset) if isinstance(preset, str) else None
+    return (spec if spec is not None else EvalSpec()).to_dict()
+
+
+def _plain_value(v: Any) -> Any:
+    if isinstance(v, float) and math.isinf(v):
+        return "inf"
+    if isinstance(v, tuple):
+        return [_plain_value(x) for x in v]
+    return v
+
+
+def is_default(key: str, value: Any, preset: Any = None) -> bool:
+    """Whether ``value`` is ``key``'s default in the evaluation spec (of ``preset`` where it names
+    one; :class:`~lorisnb.core.spec.evalspec.EvalSpec`'s otherwise): False for a key no spec has."""
+    d = _defaults(preset if isinstance(preset, str) else None)
+    return key in d and _plain_value(value) == _plain_value(d[key])
+
+
+def unset_defaults(x: dict[str, Any], y: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Two recorded specs without the keys one of them lacks where the other holds that key's
+    default (:func:`is_default`, under the preset of the side that lacks it): a run recorded before a
+    key existed was made at its default, so a new key made every archived run "not comparable"
+    (exit 2) with one whose spec holds it at its default. A value other than the default against a
+    key not set still differs."""
+    px, py = x.get("preset"), y.get("preset")
+    return (
+        {k: v for k, v in x.items() if k in y or not is_default(k, v, py)},
+        {k: v for k, v in y.items() if k in x or not is_default(k, v, px)},
+    )
+
+
+def _same_spec_text(x: str, y: str) -> tuple[str, str]:
+    """Two tables' ``spec`` cells (JSON) with the keys one lacks at their default left out of the
+    other (:func:`unset_defaults`), each written back the same way; as they are where either is no
+    JSON object."""
+    try:
+        a, b = json.loads(x), json.loads(y)
+    except ValueError:
+        return x, y
+    if not isinstance(a, dict) or not isinstance(b, dict):
+        return x, y
+    a, b = unset_defaults(a, b)
+    return json.dumps(a, sort_keys=True), json.dumps(b, sort_keys=True)
+
+
 def setting_differences(a: pd.DataFrame, b: pd.DataFrame, name_a: str = "BASE", name_b: str = "CAND") -> list[str]:
     """What makes two per-sequence tables not comparable: the settings (:data:`SPEC_COLUMNS`)
-    differ for a scene both have; each difference said once, with the scenes it is found in."""
+    differ for a scene both have; each difference said once, with the scenes it is found in. A key
+    of the ``spec`` (JSON) one table lacks, or a setting column it lacks, is no difference where the
+    other table holds that key's default (:func:`unset_defaults`); where the spec differs, only the
+    keys that differ are named, with both values."""
     sa, sb = table_settings(a), table_settings(b)
     both = sorted(set(sa["scene"]) & set(sb["scene"]))
     said: dict[str, list[str]] = {}  # what differs -> the scenes it differs in (said once for all of them)
     for col in (c for c in SPEC_COLUMNS if (c in a.columns) != (c in b.columns)):  # recorded on one side only
         has, lacks = (name_a, name_b) if col in a.columns else (name_b, name_a)
+        held = sa if col in a.columns else sb
+        values = set(held.loc[held["scene"].isin(both), col])
+        if col != "spec" and all(v == str(_defaults(None).get(col, object())) for v in values):
+            continue  # written before the column existed: at its default, as the other table
         said.setdefault(f"{col} recorded in {has}, not in {lacks} (a table edited, or written by another lorisnb): "
                         f"how {lacks} was scored cannot be checked", []).extend(both)  # fmt: skip
     for scene in both:
         x = sa[sa["scene"] == scene].drop(columns=["table"], errors="ignore").drop_duplicates()
         y = sb[sb["scene"] == scene].drop(columns=["table"], errors="ignore").drop_duplicates()
+        if "spec" in x.columns and "spec" in y.columns and x["spec"].nunique() == 1 and y["spec"].nunique() == 1:
+            sx, sy = _same_spec_text(x["spec"].iloc[0], y["spec"].iloc[0])
+            x, y = x.assign(spec=sx), y.assign(spec=sy)
         cols = [c for c in x.columns if c in y.columns and c != "scene"]
         xs = sorted(map(tuple, x[cols].to_numpy().tolist()))
         ys = sorted(map(tuple, y[cols].to_numpy().tolist()))
         if xs != ys:  # only the columns whose values differ (all of them if only their combination does)
             keep = [i for i in range(len(cols)) if {r[i] for r in xs} != {r[i] for r in ys}] or list(range(len(cols)))
             xk, yk = (sorted({tuple(r[i] for i in keep) for r in rows}) for rows in (xs, ys))
-            keys = _spec_keys(xk, yk, name_a, name_b) if [cols[i] for i in keep] == ["spec"] else None
-            text = (
-                keys or f"{', '.join(cols[i] for i in keep)} = {_rows(xk)} in {name_a} against {_rows(yk)} in {name_b}"
-            )
+            text = f"{', '.join(cols[i] for i in keep)} = {_rows(xk)} in {name_a} against {_rows(yk)} in {name_b}"
+            if "spec" in [cols[i] for i in keep]:  # the spec's keys that differ, not both specs whole
+                si = cols.index("spec")
+                keys = _spec_keys(sorted({(r[si],) for r in xs}), sorted({(r[si],) for r in ys}), name_a, name_b)
+                rest = [i for i in keep if cols[i] != "spec" and f"spec {cols[i]}:" not in (keys or "")]
+                if keys and len(keep) > 1 and not rest:
+                    text = keys  # a setting column the spec holds too (official_interpolation): said once
+                elif keys:
+                    xr, yr = (sorted({tuple(r[i] for i in rest) for r in rows}) for rows in (xs, ys))
+                    text = "; ".join(
+                        [keys]
+                        + (
+                            [
+                                f"{', '.join(cols[i] for i in rest)} = {_rows(xr)} in {name_a} against "
+                                f"{_rows(yr)} in {name_b}"
+                            ]
+                            if xr != yr
+                            else []
+                        )  # fmt: skip
+                    )
             said.setdefault(text, []).append(scene)
     return [f"{', '.join(scenes)}: {text}" for text, scenes in said.items()]
 
