@@ -70,6 +70,40 @@ def test_options_that_depart_from_evos_preset_are_named_and_counts_add_up(data, 
     assert "are not evo's" not in err and "DISAGREE" not in err
 
 
+@pytest.mark.thorough
+@pytest.mark.parametrize("preset", ["tum", "kitti", "vio"])
+def test_a_wrong_number_is_not_explained_by_definitions_that_cannot_make_it(data, capsys, monkeypatch, preset):
+    """lorisnb's ATE RMSE three times too large (a bug simulated in its table) under a preset whose
+    definitions differ from evo's: every row's note starts 'definitions differ', and that alone made
+    every row explained (exit 0). Now evo, computing on lorisnb's own pairs under those definitions,
+    gives the true number: ATE RMSE is unexplained (exit 1), every other difference still explained."""
+    import lorisnb.tools.evaluation.runner as runner
+
+    real = runner.evaluate_pairs
+
+    class Wrong:
+        def __init__(self, ev):
+            self.ev = ev
+
+        def __getattr__(self, k):
+            return getattr(self.ev, k)
+
+        def sequences(self, *a, **k):
+            t = self.ev.sequences(*a, **k).copy()
+            t["ate_rmse"] = t["ate_rmse"] * 3
+            return t
+
+    g, e = str(data.tum / GT), str(data.tum / EST)
+    assert main(["crosscheck", g, e, "--conventions", preset]) == 0  # the true numbers: every difference explained
+    assert "DISAGREE" not in capsys.readouterr().err
+    monkeypatch.setattr(runner, "evaluate_pairs", lambda *a, **k: Wrong(real(*a, **k)))
+    table = crosscheck_evo(g, e, preset).set_index("quantity")
+    assert table.loc["ate_rmse", "note"].startswith("definitions differ")
+    assert "NOT explained: evo on lorisnb's pairs gives" in table.loc["ate_rmse", "note"]
+    assert main(["crosscheck", g, e, "--conventions", preset]) == 1
+    assert re.search(r"DISAGREE, unexplained \(1 of \d+\): ate_rmse\n", capsys.readouterr().err)
+
+
 def _pair(tmp_path, unsorted: bool):
     """A ground truth and a noisy estimate (TUM, 10 Hz); ``unsorted``: estimate rows 5-6, 20-21, ...
     swapped, as a writer with two threads leaves them."""
