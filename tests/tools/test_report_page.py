@@ -224,8 +224,10 @@ def test_a_run_folder_is_readable_and_records_its_provenance(tmp_path, monkeypat
     assert not (tmp_path / "other").exists()
     (tmp_path / "mine" / "orb").mkdir(parents=True)
     (tmp_path / "mine" / "orb" / "cafe.txt").write_text("scene: cafe\n")
+    shutil.copytree(tmp_path / "mine", tmp_path / "theirs")  # -p results_dir without result files is refused first
     with pytest.raises(ValidationError, match="two folders"):
-        report.run_report(tmp_path / "other", {"results_dir": str(run_dir)}, progress=False, results=tmp_path / "mine")
+        report.run_report(tmp_path / "other", {"results_dir": str(tmp_path / "theirs")}, progress=False,
+                          results=tmp_path / "mine")  # fmt: skip
     # output_dir is the report's to set (each notebook's folder of the run): given, it was recorded and ignored
     with pytest.raises(ValidationError, match="-p output_dir: the report sets"):
         report.run_report(tmp_path / "other", {"output_dir": str(tmp_path / "elsewhere")}, progress=False)

@@ -23,7 +23,7 @@ from lorisnb.errors import DataNotFoundError, ValidationError
 from lorisnb.io.datasets.manifest import BUILT_IN
 from lorisnb.io.datasets.paths import DataPaths, find_data
 from lorisnb.io.readers.plain import TRAJECTORY_FORMATS
-from lorisnb.tools.evaluation.inputs import names
+from lorisnb.tools.evaluation.inputs import names, result_files
 from lorisnb.tools.notebook.grids import check_grid
 
 __all__ = [
@@ -114,7 +114,11 @@ def _absolute(name: str, value: Any) -> str:
     """A path parameter checked (:func:`existing`) and made absolute; a built-in manifest's name as given."""
     if name == "manifest" and isinstance(value, str) and value in BUILT_IN:
         return value
-    return str(existing(name, value, folder=PATHS[name]).resolve())
+    path = existing(name, value, folder=PATHS[name])
+    if name == "results_dir" and not result_files([path]):  # as lorisnb report --results refuses it
+        raise ValidationError(f"results_dir={value}: no result files in it; expected a folder of <algorithm>/*.txt "
+                              "result files (an empty folder gave empty tables and exit status 0)")  # fmt: skip
+    return str(path.resolve())
 
 
 def user_path(value: str | os.PathLike[str]) -> Path:
@@ -134,6 +138,17 @@ def existing(name: str, value: Any, folder: bool = False) -> Path:
     return p
 
 
+#: notebook -> (parameter, the parameter it needs, what to say): a ground truth without the estimate to
+#: score against it (``evaluate_my_results`` scored its bundled example, ignoring it), and for
+#: ``every_number`` an estimate without its ground truth too; checked by :func:`check_values`, so
+#: papermill's ``-p``, a parameter cell edited in Jupyter and ``lorisnb report`` are refused alike.
+PAIRED: dict[str, list[tuple[str, str, str]]] = {
+    "evaluate_my_results": [("groundtruth", "path", "give both path (the estimate file or folder) and groundtruth "
+                                                    "(a pair), or leave groundtruth out")],
+    "every_number": [(a, b, "give both path and groundtruth (a pair), or neither (the bundled pair)")
+                     for a, b in (("path", "groundtruth"), ("groundtruth", "path"))],
+}  # fmt: skip
+
 #: Notebooks whose ``eps`` is one scene's threshold in metres (their prose quotes it so): a relative
 #: eps (a fraction of each sequence's size) cannot apply to them.
 EPS_IN_METRES = ("metrics_primer",)
@@ -149,6 +164,10 @@ def check_values(values: Mapping[str, Any], notebooks: Iterable[str] = ()) -> No
     if metres and isinstance(eps, str) and validate.eps_value(eps) != "paper":  # relative:F
         raise ValidationError(f"eps={eps!r}: {', '.join(metres)} quotes eps in metres of its scene; give metres or "
                               "paper (a relative eps is for the other notebooks: leave this one out with --notebooks)")  # fmt: skip
+    for notebook in notebooks:
+        for name, partner, advice in PAIRED.get(notebook, []):
+            if values.get(name) is not None and values.get(partner) is None:
+                raise ValidationError(f"{notebook}: {name}={values[name]} without {partner}; {advice}")
     for name, value in values.items():
         if value is None:
             continue
