@@ -518,20 +518,26 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 def _gate(run_dir: Path) -> int:
     """``report --gate``: 1 when the run regressed since its baseline (``findings/since_baseline.json``),
-    2 when nothing was judged (no comparable earlier run), else 0; the verdict said on stderr."""
+    2 when nothing was judged (no comparable earlier run), else 0; the verdict said on stderr. The
+    run's files name its own folder ``{run}`` (a portable run, :mod:`lorisnb.tools.report.portable`):
+    said here with the folder's path (the gate printed the literal ``{run}`` for the candidate)."""
     import json
 
     from lorisnb.core.stats.regression import regressed_phrase
+    from lorisnb.tools.report.portable import mark
+
+    def shown(text: object) -> str:
+        return clean(str(text).replace(mark("run"), str(run_dir)))
 
     since = json.loads((run_dir / "findings" / "since_baseline.json").read_text(encoding="utf-8"))
     if since.get("verdict") is None:
-        say(f"gate: nothing judged ({since.get('no_baseline')}); exit 2, as diff --baseline last-comparable")
+        say(f"gate: nothing judged ({shown(since.get('no_baseline'))}); exit 2, as diff --baseline last-comparable")
         return 2
     v = since["verdict"]
     if v["verdict"] == "regression":
-        say(f"gate: regression since the baseline {clean(str(since['baseline']))} ({regressed_phrase(v)})")
+        say(f"gate: regression since the baseline {shown(since['baseline'])} ({shown(regressed_phrase(v))})")
         return 1
-    say(f"gate: {v['verdict']} since the baseline {clean(str(since['baseline']))}")
+    say(f"gate: {v['verdict']} since the baseline {shown(since['baseline'])}")
     return 0
 
 

@@ -264,6 +264,8 @@ def test_report_gate_exits_as_diff_judges_the_run_against_its_baseline(tmp_path,
     assert "h.csv" in (here / "nightly" / "r2" / "index.html").read_text()
     rc, _, err = run(capsys, *night[:-1], "-p", "eps", "2", "--out", here / "nightly" / "r3")  # another spec
     assert rc == 2 and "nothing judged" in err, err
+    # the run's own folder by its path, not the literal {run} of its portable files
+    assert "{run}" not in err and f"in {here / 'nightly' / 'r3'}" in err, err
     (here / "res" / "odom" / ODOM).unlink()  # tonight odom lost its sequence
     rc, _, err = run(capsys, *night, here / "nightly" / "r4")
     assert rc == 1 and "gate: regression since the baseline r2" in err, err
