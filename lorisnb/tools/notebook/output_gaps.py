@@ -5,12 +5,13 @@ which a larger ``delta`` credits to the pose before each gap (threshold_sensitiv
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from lorisnb.core.lifelong.scoring import as_files
-from lorisnb.core.lifelong.sweep import scene_totals
+from lorisnb.core.lifelong.sweep import scene_totals, sweep, sweep_scenes
 from lorisnb.core.metrics import openloris as metrics
 from lorisnb.core.pipeline.model import FileErrors
 from lorisnb.core.spec.validate import threshold
@@ -44,3 +45,54 @@ def output_gaps(errors: FileErrors | Iterable[FileErrors], durations: pd.DataFra
                          gap_time=float(beyond.sum()), gap_share=float(beyond.sum()) / total[scene]))  # fmt: skip
     columns = ["suite", "algorithm", "scene", "trial", "delta", "median_period", "gaps", "gap_time", "gap_share"]
     return pd.DataFrame(rows, columns=columns)
+
+
+def delta_gain(
+    errors: FileErrors | Iterable[FileErrors], durations: pd.DataFrame, eps: Any, phi: Any, delta: float, tau: float,
+    delta_grid: Iterable[float],
+) -> tuple[pd.DataFrame, pd.DataFrame, str]:  # fmt: skip
+    """threshold_sensitivity's table and sentences below CR against delta: per algorithm and scene the
+    output period and the gaps beyond ``delta`` (:func:`output_gaps`), CR at ``delta`` and at the
+    largest delta of ``delta_grid`` and this run's (``delta_max``), and what the gain between them is.
+    Returns (the gaps table, that table of rates sorted by the rise, the text). A grid that ends at
+    ``delta`` or below has no larger delta to compare with, and says so (it swept ``[delta, delta]``,
+    refused as a value twice: a ValidationError before the text)."""
+    delta = threshold("delta", delta)
+    delta_max = max(max(float(d) for d in delta_grid), delta)
+    settings = [delta] if delta_max == delta else [delta, delta_max]
+    ends = sweep_scenes(sweep(errors, [eps], [phi], settings, [tau]), durations)
+    keys = ["algorithm", "scene"]
+    cr_at = ends.pivot_table(index=keys, columns="delta", values="cr", aggfunc="mean")  # several trials: their mean
+    gaps = output_gaps(errors, durations, delta)
+    rates = gaps.groupby(keys)[["median_period", "gaps", "gap_share"]].mean()  # several trials: their mean
+    rates = rates.assign(cr_at_delta=cr_at[delta], cr_at_max=cr_at[delta_max]).reset_index()
+    rates = rates.assign(rise=rates["cr_at_max"] - rates["cr_at_delta"]).sort_values("rise", ascending=False)
+    fast = rates[rates["median_period"] < delta]  # the output period is over at this delta
+    climbing = fast[fast["rise"] > 0.005]
+    if delta_max > delta and len(climbing):
+        top = climbing.iloc[0]
+        text = (
+            f"In these results {len(climbing)} of the {len(fast)} algorithm-scene pairs whose normal output period is "
+            f"under delta = {delta:g} s still gain CR between delta = {delta:g} s and {delta_max:g} s: that gain is "
+            f"time in gaps. The largest is {top['algorithm']} in {top['scene']}: a pose every "
+            f"{top['median_period']:.3f} s (median, about {1 / top['median_period']:.0f} Hz), yet CR "
+            f"{top['cr_at_delta']:.3f} at {delta:g} s and {top['cr_at_max']:.3f} at {delta_max:g} s. "
+            f"{top['gap_share']:.1%} of the scene's time lies in its gaps longer than {delta:g} s, past their first "
+            f"{delta:g} s: a larger delta credits up to delta seconds of each gap to the pose before it, if that "
+            "pose is correct."
+        )
+    elif delta_max > delta:
+        text = (
+            f"In these results no algorithm whose normal output period is under delta = {delta:g} s gains CR between "
+            f"delta = {delta:g} s and {delta_max:g} s: their correct poses leave no gap longer than {delta:g} s."
+        )
+    else:
+        text = f"The grid ends at this run's delta ({delta:g} s): no larger delta to compare with."
+    slow = rates[~(rates["median_period"] < delta)]
+    if len(slow):
+        text += (
+            f" Output sparser than delta = {delta:g} s (median period at least delta, or fewer than 2 poses): "
+            + ", ".join(f"{r.algorithm} in {r.scene}" for r in slow.itertuples())
+            + "."
+        )
+    return gaps, rates, text

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-__all__ = ["rpe_words", "simulated_verdict", "tracking_and_accuracy"]
+__all__ = ["rank_reference_words", "rpe_words", "simulated_verdict", "threshold_words", "tracking_and_accuracy"]
 
 
 def rpe_words(spec: Any) -> str:
@@ -32,15 +32,28 @@ def _label(row: Mapping[str, Any], rows: pd.DataFrame) -> str:
     return f"`{name}`"
 
 
-def tracking_and_accuracy(scene_table: pd.DataFrame) -> str:
+def _infinite(value: Any) -> bool:
+    try:
+        return bool(np.isinf(float(value)))
+    except (TypeError, ValueError):
+        return False  # "paper", "relative:0.05": finite thresholds
+
+
+def tracking_and_accuracy(scene_table: pd.DataFrame, eps: Any = float("inf"), phi: Any = float("inf")) -> str:
     """Per scene of ``scene_table`` (``ev.scenes()``: ``cr``, ``c_ate_rmse``), which algorithm tracked
     longest and which was most and least accurate, each with both numbers: the examples for the
-    notebook's "tracking time and accuracy pull in opposite directions", from these inputs."""
-    lines = []
+    notebook's "tracking time and accuracy pull in opposite directions", from these inputs. At
+    infinite ``eps`` and ``phi`` CR is the time with output ("tracked longest"); at finite ones it is
+    the correct rate, and is called so. Scenes with fewer than two algorithms to compare are named,
+    not silently left out."""
+    tracked = "tracked longest" if _infinite(eps) and _infinite(phi) else "had the highest correct rate"
+    lines, alone = [], []
     for scene, rows in scene_table.groupby("scene", sort=False):
         rows = rows[np.isfinite(pd.to_numeric(rows["cr"], errors="coerce"))]
         scored = rows[np.isfinite(pd.to_numeric(rows["c_ate_rmse"], errors="coerce"))]
         if len(scored) < 2:
+            names = ", ".join(f"`{a}`" for a in dict.fromkeys(map(str, scored["algorithm"])))
+            alone.append(f"{scene} ({names + ' alone' if names else 'none'})")
             continue
 
         def said(r: Any, rows: pd.DataFrame = rows) -> str:
@@ -49,15 +62,20 @@ def tracking_and_accuracy(scene_table: pd.DataFrame) -> str:
         longest = rows.loc[rows["cr"].idxmax()]
         best, worst = scored.loc[scored["c_ate_rmse"].idxmin()], scored.loc[scored["c_ate_rmse"].idxmax()]
         if longest["algorithm"] == best["algorithm"] and longest.get("trial") == best.get("trial"):
-            text = f"{said(longest)} tracked longest and was also the most accurate"
+            text = f"{said(longest)} {tracked} and was also the most accurate"
         else:
-            text = f"{said(longest)} tracked longest; the most accurate was {said(best)}"
+            text = f"{said(longest)} {tracked}; the most accurate was {said(best)}"
         if worst.name not in (longest.name, best.name):
             text += f"; the least accurate was {said(worst)}"
         lines.append(f"* {scene}: {text}.")
+    left = (
+        f"\n\nNot compared, with fewer than two algorithms that have both a CR and a C-ATE RMSE: {'; '.join(alone)}."
+        if alone
+        else ""
+    )
     if not lines:
-        return "On these inputs no scene has two algorithms with both a CR and a C-ATE RMSE to compare."
-    return "On these inputs:\n\n" + "\n".join(lines)
+        return "On these inputs no scene has two algorithms with both a CR and a C-ATE RMSE to compare." + left
+    return "On these inputs:\n\n" + "\n".join(lines) + left
 
 
 def simulated_verdict(pairs: pd.DataFrame, steady: str, drifting: str, twin: str, trials: int, alpha: float) -> str:
@@ -94,3 +112,44 @@ def simulated_verdict(pairs: pd.DataFrame, steady: str, drifting: str, twin: str
     else:
         twins = f"`{steady}` and `{twin}` share a rank: the data cannot tell them apart, which is the truth here"
     return f"In the simulated section, {drift}; {twins}."
+
+
+def threshold_words(eps: Any, phi: Any) -> str:
+    """The eps and phi of a run in words: "the paper's eps (1, 3 or 5 m by scene) and phi (30 deg)" only
+    when they are the paper's, else the values used ("eps = 0.5 m and phi = 20 deg")."""
+    from lorisnb.core.trajectory.frames import PAPER_PHI
+
+    if isinstance(eps, str) and eps.strip().lower() == "paper":
+        e = "the paper's eps (1, 3 or 5 m by scene)"
+    elif isinstance(eps, str) and eps.strip().lower().startswith("relative:"):
+        e = f"eps = {float(eps.split(':', 1)[1]):g} of each sequence's extent"
+    else:
+        e = f"eps = {float(eps):g} m"
+    p = f"phi = {float(phi):g} deg"
+    if float(phi) == PAPER_PHI:
+        p += " (the paper's)"
+    return f"{e} and {p}"
+
+
+def rank_reference_words(stability: pd.DataFrame, scenes: Any = ()) -> str:
+    """What each scene's ranking in ``stability`` (:func:`lorisnb.core.lifelong.sweep.rank_stability`)
+    is compared with: the paper's eps where the grid holds it, else the grid value nearest it (named),
+    and the ``scenes`` of the sweep left out because they have fewer than two algorithms to rank."""
+    from lorisnb.core.trajectory.frames import PAPER_EPS
+
+    parts = []
+    for scene, rows in stability.groupby("scene", sort=False):
+        ref = float(rows["reference_eps"].iloc[0])
+        paper = PAPER_EPS.get(str(scene))
+        if paper is not None and np.isclose(ref, paper):
+            parts.append(f"{scene}: the paper's eps, {ref:g} m")
+        elif paper is not None:
+            parts.append(f"{scene}: {ref:g} m, the grid value nearest the paper's {paper:g} m (not in the grid)")
+        else:
+            parts.append(f"{scene}: {ref:g} m")
+    text = "The reference ranking of each scene is the ranking at " + "; ".join(parts) + "." if parts else ""
+    ranked = set(map(str, stability["scene"])) if len(stability) else set()
+    left = [str(s) for s in dict.fromkeys(scenes) if str(s) not in ranked]
+    if left:
+        text += (" " if text else "") + (f"Left out, with fewer than two algorithms to rank: {', '.join(left)}.")
+    return text or "No scene has two algorithms to rank."
