@@ -43,8 +43,9 @@ judged as a single run per side, no significance claimed; ``decided_by`` says so
 
 **Coverage and failures** (no test needed; always a regression): a sequence the base has and the
 candidate lacks (``missing``), scores with nothing matched (``failed``; unless its base matched
-fewer than :data:`MIN_MATCHED` poses, none of them correct: no tracking to lose, too little to
-judge), or holds fewer trials than the candidate's other sequences or than the base
+fewer than :data:`MIN_MATCHED` poses in every trial: too little to judge, as every comparison of so
+few poses; at eps = inf every matched pose is correct, so the old exemption, "none of them
+correct", never applied there), or holds fewer trials than the candidate's other sequences or than the base
 (``missing trial``: the trial counts as a failed run in every value, and is named), or holds
 fewer independent runs than the base because a trial is a copy of another (``trial 3 a copy``:
 a crashed trial filled in with another's output). Trial numbers
@@ -653,13 +654,15 @@ def changes(
                           "once in the values, and as a missing trial")  # fmt: skip
         matched = (sb.mean(key, "matched"), sc.mean(key, "matched"))
         if "matched" in sc.cols and not (sc.cols["matched"][rc] > 0).any() and (sb.cols["matched"][rb] > 0).any():
-            if matched[0] >= MIN_MATCHED or not ("cr" in sb.cols and (sb.cols["cr"][rb] <= 0).all()):
+            most = float(np.nanmax(sb.cols["matched"][rb]))
+            if most >= MIN_MATCHED:
                 comp.coverage("sequence", label, "sequence", "matched", "nothing matched", "failed",
                               "coverage: no pose of the candidate matched the ground truth")  # fmt: skip
-            else:  # a handful of poses, none of them correct: nothing the candidate could lose
-                comp.coverage("sequence", label, "sequence", f"matched {matched[0]:.0f}", "nothing matched",
-                              "unjudged", f"too little to judge: the base matched {matched[0]:.0f} poses (fewer than "
-                              f"{MIN_MATCHED}), none of them correct (CR 0): no tracking for the candidate to lose")  # fmt: skip
+            else:  # a handful of poses: as every other comparison of so few, too little to judge
+                comp.coverage("sequence", label, "sequence", f"matched {most:.0f}", "nothing matched",
+                              "unjudged", f"too little to judge: the base matched at most {most:.0f} poses in a "
+                              f"trial (fewer than {MIN_MATCHED}), its CR {sb.mean(key, 'cr'):.3g}: a tracking of "
+                              "a few seconds that reruns start or not")  # fmt: skip
         correct = (sb.mean(key, "c_matched"), sc.mean(key, "c_matched"))
         lever = (sb.least(key, "rotation_lever"), sc.least(key, "rotation_lever"))
         for metric in METRICS:
