@@ -448,8 +448,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
                 )
             )
         if res.power is not None and len(res.power):
-            print(f"\nruns needed to detect a difference of {args.power} in {args.metric} (power 0.8, alpha "
-                  f"{args.alpha}) where no difference was found:")  # fmt: skip
+            m = max(len(res.pairs), 1)  # each pair sized at Holm's level for the smallest of the m p-values
+            print(f"\nruns needed to detect a difference of {args.power} in {args.metric} (power 0.8, each pair at "
+                  f"alpha {args.alpha:g} / {m} pairs = {args.alpha / m:.3g}, the level Holm's correction holds the "
+                  "smallest p-value to) where no difference was found:")  # fmt: skip
             print(_fmt(res.power[["scene", "a", "b", "unit", "have", "needed"]], args.digits))
         elif res.power is not None:
             print(f"\n--power {args.power}: every pair of algorithms differs, or no scene has two: nothing to size")

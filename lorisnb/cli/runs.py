@@ -68,12 +68,11 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
 def _last_comparable(folder: Path, cand: Any) -> Any:
     """The newest run in ``folder`` comparable with ``cand`` (:func:`lorisnb.tools.decisions.history.last_comparable`),
     named on stderr."""
-    from lorisnb.tools.decisions.history import last_comparable
+    from lorisnb.tools.decisions.history import checked, last_comparable
 
     base, runs = last_comparable(folder, cand)
-    print(
-        f"baseline: {clean(base.path)} (the newest of {len(runs)} earlier run(s) comparable with CAND)", file=sys.stderr
-    )
+    print(f"baseline: {clean(base.path)} (the newest of {len(runs)} earlier run(s) comparable with CAND: "
+          f"{checked(base, cand)})", file=sys.stderr)  # fmt: skip
     return base
 
 
@@ -208,6 +207,7 @@ def cmd_history(args: argparse.Namespace) -> int:
     from lorisnb.core.stats.regression import parse_tolerances
     from lorisnb.io.writers import write_csv
     from lorisnb.tools.decisions.history import (
+        date_order_warnings,
         drift,
         first_changes,
         history_table,
@@ -222,6 +222,8 @@ def cmd_history(args: argparse.Namespace) -> int:
     runs = load_runs(args.runs)
     for note in (n for r in runs for n in r.notes):
         say(f"note: {note}")
+    for warning in date_order_warnings(runs):
+        say(f"warning: {warning}")
     h, diffs = history_table(runs, args.metric, tolerances)
     how = sorted({r.created_from for r in runs})
     print(f"{len(runs)} run(s), oldest first, ordered by {' and '.join(how)}")

@@ -95,6 +95,7 @@ def test_no_significant_pair_no_bold_and_equal_ranks(tmp_path, icra20, capsys):
     assert algs.loc[algs["scene"] == "home", "min_p_vs_top"].dropna().eq(0.0625).all()
     unbounded = algs.dropna(subset=["p_vs_top"])  # no design here can reach 0.05: the test's interval is unbounded
     assert np.isinf(unbounded["difference_low_vs_top"]).all() and np.isinf(unbounded["difference_high_vs_top"]).all()
+    assert "(power 0.8, each pair at alpha 0.05 / 4 pairs = 0.0125," in out  # the level each pair is sized at
     assert "runs needed to detect a difference of 0.1" in out and re.search(
         r"home\s+odom\s+orbslam2_rgbd\s+sequences\s+5\s+\d+", out
     )

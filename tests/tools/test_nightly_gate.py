@@ -299,8 +299,33 @@ def test_a_table_without_a_version_is_comparable_with_report_runs(tmp_path, tabl
     write_csv(table, tonight)
     rc, out, err = run(capsys, "diff", "--baseline", "last-comparable", folder, tonight)
     assert rc == 0, err
+    # what was checked, not "same spec, lorisnb version and ground truth": a table records neither
+    assert "checked: the spec and thresholds their tables record; not checked: lorisnb version and ground-truth" in err
     rc, _, err = run(capsys, "history", folder / "n1", folder / "n2", tonight)
     assert rc == 0, err
+
+
+def test_tables_ordered_by_modification_time_against_the_dates_in_their_names(tmp_path, table, capsys):
+    """Bare tables named with ISO dates whose modification times say another order (a copy or a
+    download): history orders them by time as before, and warns naming the contradiction and the
+    run taken as the newest (it said nothing, and judged 2026-01-01 as the newest night)."""
+    nights = []
+    for k in range(3):
+        f = tmp_path / f"2026-01-0{k + 1}.csv"
+        write_csv(table, f)
+        os.utime(f, (1.7e9 - 100 * k, 1.7e9 - 100 * k))  # the later the date, the older the file
+        nights.append(f)
+    rc, out, err = run(capsys, "history", *nights, "--metric", "cr")
+    assert "warning: runs ordered by modification time contradict the dates in their names" in err, err
+    assert (
+        "2026-01-03.csv (named 2026-01-03) is ordered before 2026-01-02.csv (named 2026-01-02) (2 such"
+        in err.replace("\n", " ")
+    )
+    assert "so 2026-01-01.csv is taken as the newest run" in err.replace("\n", " ")
+    for k, f in enumerate(nights):
+        os.utime(f, (1.7e9 + 100 * k, 1.7e9 + 100 * k))
+    rc, out, err = run(capsys, "history", *nights, "--metric", "cr")
+    assert "contradict" not in err, err
 
 
 def test_a_file_in_the_nightly_folder_that_is_no_run_is_passed_over_and_named(tmp_path, table, capsys):

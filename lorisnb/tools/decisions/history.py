@@ -67,6 +67,29 @@ def load_runs_sorted(runs: list[Run]) -> list[Run]:
     return out
 
 
+#: A date in a run's name (``2026-01-05.csv``, ``nightly-2026-01-05``): ISO 8601, year first.
+_ISO_DATE = re.compile(r"(?<!\d)(\d{4}-\d{2}-\d{2})(?:[T_ ]?(\d{2}[:-]?\d{2}(?:[:-]?\d{2})?))?(?!\d)")
+
+
+def date_order_warnings(runs: Sequence[Run]) -> list[str]:
+    """Where runs ordered by their files' modification time (:func:`load_runs`, oldest first) are
+    named with ISO dates in another order: one line naming the first such pair and how many there
+    are. A copy or a download resets modification times, so the newest run, and the exit status,
+    may not be the one the names say."""
+    dated = [(r, m.group(0)) for r in runs if r.created_from == "modification time"
+             for m in [_ISO_DATE.search(r.path.name)] if m]  # fmt: skip
+    wrong = [(a, b) for a, b in zip(dated, dated[1:], strict=False) if a[1] > b[1]]
+    if not wrong:
+        return []
+    (ra, da), (rb, db) = wrong[0]
+    more = f" ({len(wrong)} such pair(s))" if len(wrong) > 1 else ""
+    newest = dated[-1][0].path.name
+    return [f"runs ordered by modification time contradict the dates in their names: {ra.path.name} (named "
+            f"{da}) is ordered before {rb.path.name} (named {db}){more}, so {newest} is taken as the newest run; a "
+            "copy or a download resets modification times: set them (touch -d) or keep report runs, whose "
+            "run.json records when each was made"]  # fmt: skip
+
+
 def run_labels(runs: Sequence[Run]) -> list[str]:
     """A name per run, unique: its file or folder name, or, where two runs share it (nightly
     ``2026-02-01/sequences.csv`` and ``2026-02-02/sequences.csv``), as many of the last parts of
@@ -122,6 +145,22 @@ def earlier_runs(folder: str | os.PathLike[str], unread: list[tuple[str, str]] |
         raise ValidationError(f"{f} holds no run folder (run.json) and no per-sequence table (.csv, .parquet){why}; "
                               "give the folder the nightly runs are kept in")  # fmt: skip
     return load_runs_sorted(runs)
+
+
+def checked(a: Run, b: Run) -> str:
+    """What :func:`comparability` could check of two runs, in words: the spec (a report run's
+    run.json, else the settings its table records), lorisnb's version and the ground truth's
+    checksums where both runs record them, and what neither records (a table holds no version and no
+    checksum: "same spec, lorisnb version and ground truth" claimed what was never checked)."""
+    done = ["spec" if a.spec is not None and b.spec is not None else "the spec and thresholds their tables record"]
+    unchecked = []
+    for what, ok in (("lorisnb version", bool(a.version and b.version)),
+                     ("ground-truth checksums", bool(a.groundtruth_sums() and b.groundtruth_sums()))):  # fmt: skip
+        (done if ok else unchecked).append(what)
+    text = "checked: " + ", ".join(done)
+    if unchecked:
+        text += f"; not checked: {' and '.join(unchecked)} (not recorded by both: a table holds neither)"
+    return text
 
 
 def last_comparable(folder: str | os.PathLike[str], cand: Run) -> tuple[Run, list[Run]]:
