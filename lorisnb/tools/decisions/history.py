@@ -153,7 +153,7 @@ def checked(a: Run, b: Run) -> str:
     checksums where both runs record them, and what neither records (a table holds no version and no
     checksum: "same spec, lorisnb version and ground truth" claimed what was never checked)."""
     done = ["spec" if a.spec is not None and b.spec is not None else "the spec and thresholds their tables record"]
-    unchecked = []
+    unchecked: list[str] = []
     for what, ok in (("lorisnb version", bool(a.version and b.version)),
                      ("ground-truth checksums", bool(a.groundtruth_sums() and b.groundtruth_sums()))):  # fmt: skip
         (done if ok else unchecked).append(what)
