@@ -668,3 +668,52 @@ def test_a_relative_out_names_the_notebooks_output_path_by_the_runs_root(tmp_pat
     assert nb["metadata"]["papermill"]["output_path"] == "{run}/compare_algorithms/compare_algorithms.ipynb"
     for p in (x for x in (here / "place").rglob("*") if x.is_file()):
         assert b".partial-" not in p.read_bytes(), p
+
+
+@pytest.mark.parametrize(
+    "full_at",
+    ["parameters.json", "run.json", "index.html", "report.html", "compare_algorithms/compare_algorithms.ipynb",
+     "findings/sequences.csv", "findings/leaderboard.csv"],
+)  # fmt: skip
+def test_report_on_a_full_disk_names_the_file_it_could_not_write(tmp_path, data, icra20, monkeypatch, capsys, full_at):
+    """``lorisnb report`` on a full disk said ``error: r: No space left on device`` (the run folder:
+    write() names no file, and a file of the temporary folder was renamed to the run folder). Every
+    write of the report names its file, where it goes in the run folder, as render names its page."""
+    import errno
+
+    import lorisnb.io.writers as writers
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    name = Path(full_at).name
+
+    def enospc():
+        return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))  # as write() raises it: no file named
+
+    real_text, real_bytes = Path.write_text, Path.write_bytes
+
+    def full_text(self, text, *a, **kw):
+        if name in self.name and not name.endswith(".ipynb"):  # (the notebook, as it ran: its entry says so)
+            raise enospc()
+        return real_text(self, text, *a, **kw)
+
+    def full_bytes(self, data, *a, **kw):
+        if name in self.name:
+            raise enospc()
+        return real_bytes(self, data, *a, **kw)
+
+    def full_open(file, *a, **kw):
+        if name in os.fspath(file):
+            raise enospc()
+        return open(file, *a, **kw)
+
+    monkeypatch.setattr(Path, "write_text", full_text)
+    monkeypatch.setattr(Path, "write_bytes", full_bytes)
+    monkeypatch.setattr(writers, "open", full_open, raising=False)
+    rc, _, err = run(capsys, "report", "--results", here / "res", "--data", here / "data", "--out", here / "r",
+                     "--notebooks", "compare_algorithms", "--no-progress")  # fmt: skip
+    expected = str(here / "r" / Path(full_at))
+    assert rc == 2 and f"error: {expected}: No space left on device" in err, err
+    assert ".partial-" not in err and not (here / "r").exists()
+    assert not [p for p in here.iterdir() if ".partial-" in p.name]  # nothing left behind

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from lorisnb.errors import ValidationError
+from lorisnb.io.writers import naming
 from lorisnb.tools.decisions.diff import diff_tables
 from lorisnb.tools.decisions.history import comparability, earlier_runs, history_table, last_comparable, plot_history
 from lorisnb.tools.decisions.runs import load_run
@@ -40,7 +41,10 @@ def since_baseline(run_dir: Path, folder: str | os.PathLike[str], name: str | No
                                    failed_inputs=sorted(this.unscored), trend=None)  # fmt: skip
         findings = run_dir / "findings"
         findings.mkdir(exist_ok=True)
-        (findings / "since_baseline.json").write_text(json.dumps(out, indent=2, default=str) + "\n", encoding="utf-8")
+        with naming(findings / "since_baseline.json"):  # a full disk names the file
+            (findings / "since_baseline.json").write_text(
+                json.dumps(out, indent=2, default=str) + "\n", encoding="utf-8"
+            )
         return out
     unread: list[tuple[str, str]] = []
     passed = [dict(run=r.name, why="; ".join(comparability(r, this))) for r in earlier_runs(folder, unread)
@@ -60,10 +64,12 @@ def since_baseline(run_dir: Path, folder: str | os.PathLike[str], name: str | No
     fig = plot_history(h, "cr")
     findings = run_dir / "findings"
     findings.mkdir(exist_ok=True)
-    fig.savefig(findings / "trend_cr.svg", format="svg", metadata={"Date": None})
+    with naming(findings / "trend_cr.svg"):
+        fig.savefig(findings / "trend_cr.svg", format="svg", metadata={"Date": None})
     import matplotlib.pyplot as plt
 
     plt.close(fig)
     out["trend"] = "findings/trend_cr.svg"
-    (findings / "since_baseline.json").write_text(json.dumps(out, indent=2, default=str) + "\n", encoding="utf-8")
+    with naming(findings / "since_baseline.json"):
+        (findings / "since_baseline.json").write_text(json.dumps(out, indent=2, default=str) + "\n", encoding="utf-8")
     return out

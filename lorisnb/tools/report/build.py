@@ -433,7 +433,8 @@ def run_report(
             spec = board["spec"]
             if not absolute_paths and source is not None and "source" in spec["values"]:
                 spec["values"]["source"] = root_key(source, named)  # the leaderboard's input, by its root's name
-            (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
+            with naming(tmp / "parameters.json"):  # (the file in the run folder: _in_run_folder)
+                (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
             # each input where it is (a link too: its target may lie outside every root, on this machine only)
             files = [where_it_is(f) for f in input_files(roots, resolve=False)]
             inputs = checksums(files, None if absolute_paths else named)
@@ -483,7 +484,8 @@ def run_report(
             final = _move_into_place(tmp, run_dir, force)
         except BaseException as exc:
             remove_partial(tmp)
-            name_output(exc, run_dir)  # a full disk names the run folder, not its temporary name
+            _in_run_folder(exc, tmp, run_dir)  # a full disk names the file in the run folder, not its temporary name
+            name_output(exc, run_dir)  # or the run folder, where no file was named
             raise
         if final.name != run_dir.name:  # another run took the name meanwhile: this one's pages say where it is
             pages(final, final.name)
@@ -565,6 +567,17 @@ def findings_input_errors(run_dir: Path) -> int:
     from lorisnb.tools.decisions.runs import unscored_inputs
 
     return len(unscored_inputs(run_dir))
+
+
+def _in_run_folder(exc: BaseException, tmp: Path, run_dir: Path) -> None:
+    """An :class:`OSError` naming a file of the run's temporary folder ``tmp`` names it where it goes,
+    below ``run_dir`` (``out/run/run.json``, not ``out/.run.partial-x1y2/run.json`` nor ``out/run``)."""
+    if isinstance(exc, OSError) and exc.filename is not None:
+        try:
+            rel = Path(os.path.abspath(os.fsdecode(exc.filename))).relative_to(tmp)
+        except ValueError:
+            return
+        exc.filename = str(run_dir / rel) if rel.parts else str(run_dir)
 
 
 def _move_into_place(tmp: Path, run_dir: Path, force: bool) -> Path:

@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from lorisnb.io.writers import write_text
+from lorisnb.io.writers import naming, write_text
 from lorisnb.tools._extras import require
 
 #: The notebook template: nbconvert's ``lab`` template without remote scripts, code folded.
@@ -90,7 +90,8 @@ def write_notebook_css(out: Path) -> Path:
     page of a run links (:func:`export_html` with ``css``) instead of carrying its own copy."""
     static = Path(_template_dirs()[0]) / "lab" / "static"
     text = "\n".join((static / name).read_text(encoding="utf-8") for name in ("index.css", "theme-light.css"))
-    out.write_text(text + _EXTRA_CSS, encoding="utf-8")
+    with naming(out):  # a full disk names the file
+        out.write_text(text + _EXTRA_CSS, encoding="utf-8")
     return out
 
 

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 import pandas as pd
 
 from lorisnb.core.stats.regression import regressed_phrase
+from lorisnb.io.writers import naming
 from lorisnb.tools.decisions.runs import NOT_SCORED
 from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV
 
@@ -299,7 +300,8 @@ def write_index(
     parts.append("<h2>Versions</h2>" + _table(pd.DataFrame(list(versions().items()), columns=["package", "version"])))
     parts.append("</body></html>")
     index = run_dir / "index.html"
-    index.write_text("\n".join(parts), encoding="utf-8")
+    with naming(index):  # a full disk names the page
+        index.write_text("\n".join(parts), encoding="utf-8")
     return index
 
 

@@ -25,6 +25,7 @@ from typing import Any
 
 from lorisnb.errors import LorisError, OutputError, ValidationError
 from lorisnb.io.datasets.manifest import BUILT_IN
+from lorisnb.io.writers import naming
 
 #: The notebook parameters naming an input file or folder besides the results and the data root.
 PATH_PARAMETERS = ("path", "groundtruth", "ordslam_dir")
@@ -341,7 +342,8 @@ def make_portable(folder: Path, roots: Iterable[tuple[str, Path]]) -> list[Path]
         hidden = hide_link_targets(data)
         if not pattern.search(hidden):
             if hidden != data:
-                p.write_bytes(hidden)
+                with naming(p):  # a full disk names the file
+                    p.write_bytes(hidden)
                 changed.append(p)
             continue
         try:
@@ -349,7 +351,8 @@ def make_portable(folder: Path, roots: Iterable[tuple[str, Path]]) -> list[Path]
         except UnicodeDecodeError:
             raise OutputError(f"{p}: a binary file holds an absolute path of the machine the run was made on, which "
                               "cannot be replaced by its root's name; report it, or pass --absolute-paths") from None  # fmt: skip
-        p.write_bytes(_replace(pattern, names, hidden))
+        with naming(p):
+            p.write_bytes(_replace(pattern, names, hidden))
         changed.append(p)
     return changed
 

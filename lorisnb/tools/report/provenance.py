@@ -34,6 +34,7 @@ from typing import Any
 from lorisnb._version import __version__
 from lorisnb.core.spec import validate
 from lorisnb.errors import LorisError, ParseError, ValidationError
+from lorisnb.io.writers import naming
 from lorisnb.tools.report.portable import mark, resolve_key, root_key, split_key
 
 RUN_JSON = "run.json"
@@ -152,7 +153,8 @@ def run_record(
 
 def write_run_json(run_dir: Path, record: Mapping[str, Any]) -> Path:
     out = run_dir / RUN_JSON
-    out.write_text(json.dumps(record, indent=2, default=str) + "\n", encoding="utf-8")
+    with naming(out):  # a full disk names the file
+        out.write_text(json.dumps(record, indent=2, default=str) + "\n", encoding="utf-8")
     return out
 
 
