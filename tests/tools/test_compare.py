@@ -278,7 +278,7 @@ def test_an_rpe_option_for_a_metric_without_rpe_is_named_as_typed(icra20, capsys
         assert rc == 2 and f"{typed}: the RPE step changes no value of --metric cr" in err, err
 
 
-def tester_trials(icra20, root, algorithms=("orbslam2_rgbd", "vins_mono_color_imu_with_loop"), seed=1) -> None:
+def _tester_trials(icra20, root, algorithms=("orbslam2_rgbd", "vins_mono_color_imu_with_loop"), seed=1) -> None:
     """The tester's ``tri/`` folder (mktrials.py): the first four home sequences of each algorithm (of
     five), three trials each with noise on the positions, so each algorithm lacks home-1-5."""
     rng = np.random.default_rng(seed)
@@ -306,7 +306,7 @@ def test_the_notebooks_scene_values_are_compares(tmp_path, icra20, capsys):
     from lorisnb.tools.notebook.comparison import scene_comparison
 
     res = tmp_path / "tri"
-    tester_trials(icra20, res)
+    _tester_trials(icra20, res)
     csv, pairs_csv = tmp_path / "c.csv", tmp_path / "p.csv"
     rc, out, err = compare(capsys, res, "--eps", 0.1, "--phi", 30, "--csv", csv, "--pairs-csv", pairs_csv)
     assert rc == 0 and "4/5" in out and "no output for home sequence(s) 5" in err
