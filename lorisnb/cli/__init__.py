@@ -34,7 +34,7 @@ from lorisnb.cli.options import (
     hide_unused,
     threshold_list_type,
 )
-from lorisnb.cli.text import clean, say
+from lorisnb.cli.text import clean, say, warning_lines
 from lorisnb.core.spec import validate
 from lorisnb.core.spec.evalspec import ALIGNMENTS, OV_ALIGNMENTS, PRESETS
 from lorisnb.core.trajectory.blocks import ordinary_pages
@@ -403,8 +403,10 @@ def main(argv: list[str] | None = None) -> int:
         pandas_without_pyarrow()
     jsonschema_without_iri_grammars()
     previous = _terminate_as_interrupt()
+    roots = {"results": getattr(args, "results", None), "data": getattr(args, "data", None)}
     try:
-        return int(args.func(args) or 0)
+        with warning_lines({k: v for k, v in roots.items() if isinstance(v, str)}):  # every warning: one line
+            return int(args.func(args) or 0)
     except LorisError as exc:
         say(f"error: {exc}")
         return 2

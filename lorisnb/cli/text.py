@@ -4,16 +4,21 @@ tables through :func:`format_table`."""
 from __future__ import annotations
 
 import math
+import os
+import re
 import sys
 import unicodedata
-from collections.abc import Mapping, Sequence
+import warnings
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from lorisnb.tools.decisions.escape import clean  # the one escaping rule, for every output (re-exported here)
 
-__all__ = ["MAX_ROWS", "clean", "display_width", "format_table", "frame_columns", "say"]
+__all__ = ["MAX_ROWS", "clean", "display_width", "format_table", "frame_columns", "say", "warning_lines"]
 
 MAX_ROWS = 500  # more rows: the first and last half of these, with a line saying how many were left out
 
@@ -75,3 +80,38 @@ def say(line: object) -> None:
     escaped (:func:`clean`): a message quoting a file name, a label or a value read from a file
     (an escape sequence, a newline) stays one line, and the terminal interprets nothing in it."""
     print(clean(line), file=sys.stderr)
+
+
+def _named(text: str, roots: Mapping[str, str | os.PathLike[str] | None]) -> str:
+    """``text`` with each root's absolute path (as given made absolute, and links resolved) written by its
+    name, ``{results}``, ``{data}`` (as run.json and the run's pages name them)."""
+    forms: dict[str, str] = {}
+    for name, folder in roots.items():
+        if folder:
+            for form in (os.path.abspath(folder), str(Path(folder).resolve())):
+                if len(form) > 1:  # (not "/")
+                    forms.setdefault(form.rstrip(os.sep), "{" + name + "}")
+    for form in sorted(forms, key=len, reverse=True):  # a root inside another: the longer first
+        whole = r"(?<![^\s'\"(=:,;])" + re.escape(form) + r"(?=[/\\\s;,:)'\"]|$)"  # a whole path, not part of one
+        text = re.sub(whole, lambda _m, n=forms[form]: n, text)
+    return text
+
+
+@contextmanager
+def warning_lines(roots: Mapping[str, str | os.PathLike[str] | None] | None = None) -> Iterator[None]:
+    """Every warning issued while a command runs, a LorisWarning or another library's, printed as one
+    ``warning: ...`` line (:func:`say`: control characters escaped), never Python's two lines with a
+    source line of lorisnb; ``roots``: folders (name -> path) whose paths the line names ``{name}``."""
+    from lorisnb.errors import LorisWarning
+
+    show = warnings.showwarning
+
+    def one_line(message: Warning | str, category: type[Warning], *_: Any, **__: Any) -> None:
+        text = str(message) if issubclass(category, LorisWarning) else f"{category.__name__}: {message}"
+        say(f"warning: {_named(text, roots or {})}")
+
+    warnings.showwarning = one_line
+    try:
+        yield
+    finally:
+        warnings.showwarning = show
