@@ -93,7 +93,7 @@ def _named(text: str, roots: Mapping[str, str | os.PathLike[str] | None]) -> str
                     forms.setdefault(form.rstrip(os.sep), "{" + name + "}")
     for form in sorted(forms, key=len, reverse=True):  # a root inside another: the longer first
         whole = r"(?<![^\s'\"(=:,;])" + re.escape(form) + r"(?=[/\\\s;,:)'\"]|$)"  # a whole path, not part of one
-        text = re.sub(whole, lambda _m, n=forms[form]: n, text)
+        text = re.sub(whole, forms[form].replace("\\", "\\\\"), text)
     return text
 
 
