@@ -8,12 +8,13 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import warnings
 from pathlib import Path
 
 import pytest
 
 from lorisnb.cli import main
-from lorisnb.errors import OutputError, ValidationError
+from lorisnb.errors import LorisWarning, OutputError, ValidationError
 from lorisnb.tools.report.portable import held_paths, make_portable, root_key, spellings, unreplaced
 from lorisnb.tools.report.provenance import checksums, input_files, run_record, verify_run, write_run_json
 
@@ -717,3 +718,39 @@ def test_report_on_a_full_disk_names_the_file_it_could_not_write(tmp_path, data,
     assert rc == 2 and f"error: {expected}: No space left on device" in err, err
     assert ".partial-" not in err and not (here / "r").exists()
     assert not [p for p in here.iterdir() if ".partial-" in p.name]  # nothing left behind
+
+
+@pytest.mark.parametrize("printed", ["parent", "quote_plus", "quote"])
+def test_a_page_showing_the_folder_above_a_root_or_a_root_url_quoted_is_warned_about(
+    tmp_path, data, icra20, monkeypatch, capsys, printed
+):
+    """A notebook printing ``os.path.dirname(results_dir)`` (the author's folder above the root) or
+    ``urllib.parse.quote_plus(results_dir)`` left the author's path in the run with no warning."""
+    from urllib.parse import quote, quote_plus
+
+    import lorisnb.tools.report.build as report
+    from lorisnb.tools.report.notebooks import NotebookRun
+
+    here = lab(tmp_path / "lab", data, icra20)
+    show = {"parent": os.path.dirname, "quote_plus": quote_plus, "quote": lambda s: quote(s, safe="")}[printed]
+
+    def leaks(name, out_dir, params, **kw):
+        (out_dir / name).mkdir()
+        text = show(str(params["results_dir"]))
+        (out_dir / name / f"{name}.ipynb").write_text(json.dumps({"cells": [{"outputs": [{"text": text}]}]}))
+        (out_dir / name / f"{name}.html").write_text(f"<pre>{text}</pre>")
+        return NotebookRun(name)
+
+    monkeypatch.setattr(report, "run_notebook", leaks)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        out, _ = report.run_report(here / "r", {"data_root": str(here / "data")}, ["compare_algorithms"],
+                                   progress=False, results=here / "res")  # fmt: skip
+    said = [str(w.message) for w in caught if "still show an absolute path" in str(w.message)]
+    assert said and "compare_algorithms/compare_algorithms.html" in said[0], [str(w.message) for w in caught]
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)  # the roots themselves: replaced, nothing said
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        report.run_report(here / "r2", {"data_root": str(here / "data")}, ["compare_algorithms"], progress=False,
+                          results=here / "res")  # fmt: skip
+    assert not [w for w in caught if "still show an absolute path" in str(w.message)]

@@ -62,6 +62,7 @@ from lorisnb.tools.report.notebooks import (
     warm_kernels_for_report,
 )
 from lorisnb.tools.report.portable import (
+    author_folders,
     install_roots,
     make_portable,
     named_roots,
@@ -471,7 +472,11 @@ def run_report(
                 single_file(index, folder / "report.html")  # the pages as they are now, into one file
                 if not absolute_paths:
                     make_portable(folder, every)
-                    left = unreplaced(folder, [*every, *(("outside", t) for t in leads_out)])
+                    left = unreplaced(
+                        folder,
+                        [*every, *(("outside", t) for t in leads_out)],
+                        also=author_folders([*named.items(), *others, ("run", run_dir)]),  # the folders holding them
+                    )
                     if left:
                         shown = ", ".join(str(f.relative_to(folder)) for f in left[:5])
                         warnings.warn(f"{len(left)} file(s) of the run still show an absolute path of this machine "

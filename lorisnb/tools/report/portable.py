@@ -370,19 +370,51 @@ def hide_link_targets(data: bytes) -> bytes:
     return _LINK_TARGET.sub(b"(a link leading outside the results folder", data)
 
 
-def unreplaced(folder: Path, roots: Iterable[tuple[str, Path]]) -> list[Path]:
+#: Folders too generic to tell whose a run is: a root's parent among them is not looked for.
+GENERIC_FOLDERS = frozenset({"/usr/local", "/opt/local", "/var/tmp", "/private/tmp", "/private/var"})
+
+
+def author_folders(roots: Iterable[tuple[str, Path]]) -> list[Path]:
+    """The folders holding ``roots`` (as given and links resolved), up to but not including the
+    short generic ones (``/``, ``/tmp``, ``/home``, ``/Users``: fewer than three parts, and
+    :data:`GENERIC_FOLDERS`): a notebook printing ``os.path.dirname(results_dir)`` shows the
+    author's folder (``/home/me/lab``), which names no root and is not replaced."""
+    out: dict[str, Path] = {}
+    for _, root in roots:
+        for base in {Path(os.path.abspath(root)), Path(root).resolve()}:
+            for p in base.parents:
+                if len(p.parts) >= 3 and p.as_posix() not in GENERIC_FOLDERS:
+                    out.setdefault(str(p), p)
+    return sorted(out.values())
+
+
+def _quoted_regex(path: Path) -> bytes:
+    """A folder's absolute path as URL quoting writes it whole, ``/`` quoted too
+    (``urllib.parse.quote_plus``, ``quote(..., safe="")``: ``%2Fhome%2Fme``), any case of hex."""
+    from urllib.parse import quote, quote_plus
+
+    forms = {f(b) for b in _bases(path) for f in (quote_plus, lambda x: quote(x, safe=""))}
+    return b"|".join(re.sub(rb"%([0-9A-F]{2})", lambda m: b"%(?i:" + m[1] + b")", re.escape(f.encode()))
+                     for f in sorted(forms, key=len, reverse=True))  # fmt: skip
+
+
+def unreplaced(folder: Path, roots: Iterable[tuple[str, Path]], also: Iterable[Path] = ()) -> list[Path]:
     """The files below ``folder`` that still show one of ``roots``' absolute paths where
     :func:`make_portable` did not replace it: any spelling (:func:`_path_regex`) after any
     character (it replaces a path only where a path starts), and the path with its escaped
-    characters spelled any other way (:func:`_loose_regex`: an escaping it does not know), ending
-    where a path part ends. Empty for a portable run; a file listed is a place the replacement does
-    not know (said, so that a run is not shared believing it clean)."""
+    characters spelled any other way (:func:`_loose_regex`: an escaping it does not know), or URL
+    quoted whole (:func:`_quoted_regex`), ending where a path part ends; ``also``: other folders
+    of the author's looked for the same way, but for the loose spellings (the folders holding
+    the roots, :func:`author_folders`). Empty for a portable run; a file listed is a place the
+    replacement does not know (said, so that a run is not shared believing it clean)."""
     roots = list(roots)
     if not roots:
         return []
-    exact = [_path_regex(r) for _, r in roots]
+    others = list(also)
+    exact = [_path_regex(r) for r in [*(r for _, r in roots), *others]]
+    quoted = [_quoted_regex(r) for r in [*(r for _, r in roots), *others]]
     loose = [x for x in (_loose_regex(r) for _, r in roots) if x is not None]
-    found = re.compile(b"(?:" + b"|".join(exact + loose) + b")" + _END)
+    found = re.compile(b"(?:" + b"|".join(exact + quoted + loose) + b")" + _END)
     return [p for p in sorted(x for x in folder.rglob("*") if x.is_file() and not x.is_symlink())
             if found.search(p.read_bytes())]  # fmt: skip
 
