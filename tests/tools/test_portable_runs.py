@@ -754,3 +754,26 @@ def test_a_page_showing_the_folder_above_a_root_or_a_root_url_quoted_is_warned_a
         report.run_report(here / "r2", {"data_root": str(here / "data")}, ["compare_algorithms"], progress=False,
                           results=here / "res")  # fmt: skip
     assert not [w for w in caught if "still show an absolute path" in str(w.message)]
+
+
+def test_control_and_bidi_characters_of_a_name_are_shown_escaped_on_the_pages_and_kept_in_the_tables(
+    tmp_path, data, icra20, monkeypatch
+):
+    """An algorithm folder named with ESC, a right-to-left override and a CR: index.html and
+    report.html held them raw (a cell shown reversed, text hidden). The pages show them escaped as
+    the terminal does (``\\x1b``, ``\\u202e``, ``\\r``); the findings tables (data) keep the name as it is."""
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    odd = "o\x1b[31mr\u202eb\rx"
+    (here / "res" / "orb").rename(here / "res" / odd)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    out, _ = report.run_report(here / "r", {"data_root": str(here / "data")}, ["compare_algorithms"],
+                               progress=False, results=here / "res")  # fmt: skip
+    for page in ("index.html", "report.html"):
+        text = (out / page).read_text(encoding="utf-8")
+        assert "\x1b" not in text and "\u202e" not in text and "\r" not in text, page
+        assert "o\\x1b[31mr\\u202eb\\rx" in text, page
+    import pandas as pd
+
+    assert odd in set(pd.read_csv(out / "findings" / "sequences.csv")["algorithm"])

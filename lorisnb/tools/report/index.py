@@ -17,6 +17,7 @@ import pandas as pd
 
 from lorisnb.core.stats.regression import regressed_phrase
 from lorisnb.io.writers import naming
+from lorisnb.tools.decisions.escape import clean
 from lorisnb.tools.decisions.runs import NOT_SCORED
 from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV
 
@@ -24,7 +25,17 @@ if TYPE_CHECKING:
     from lorisnb.tools.report.leaderboard import Findings
     from lorisnb.tools.report.notebooks import NotebookRun
 
-esc = html.escape
+
+def esc(text: object) -> str:
+    """Text shown on the page: control and format characters (ESC, CR, a right-to-left override
+    U+202E from a folder's name) escaped visibly as the terminal shows them (``\\x1b``, ``\\r``,
+    ``\\u202e``: :func:`~lorisnb.tools.decisions.escape.clean`), newlines and tabs kept (a
+    traceback in ``<pre>``), then HTML's ``&<>"'``. A link's address takes :func:`attr` instead."""
+    return html.escape("\n".join("\t".join(map(clean, line.split("\t"))) for line in str(text).split("\n")))
+
+
+#: A link's address (``href``, ``src``): HTML's characters escaped, the file's name as it is.
+attr = html.escape
 
 #: The "why" sections, in page order: (anchor, title, what they are evidence of).
 SECTIONS = (
@@ -271,7 +282,7 @@ def write_index(
         for p, nb, text in items:
             rel = p.relative_to(run_dir).as_posix()
             parts.append(
-                f"<figure id='fig-{esc(nb)}-{esc(p.stem)}'><a href='{esc(rel)}'><img src='{esc(rel)}' loading='lazy' "
+                f"<figure id='fig-{esc(nb)}-{esc(p.stem)}'><a href='{attr(rel)}'><img src='{attr(rel)}' loading='lazy' "
                 f"alt='{esc(text)}'></a><figcaption><b>{esc(p.stem)}</b> ({esc(nb)}): {esc(text)}</figcaption></figure>"
             )
     parts.append("<h3 id='per-sequence'>Per-sequence values</h3>")
@@ -295,7 +306,7 @@ def write_index(
     parts.append("<h2>Tables (CSV)</h2><ul>")
     for p in sorted(run_dir.glob("*/*.csv")):
         rel = p.relative_to(run_dir).as_posix()
-        parts.append(f"<li><a href='{esc(rel)}'>{esc(rel)}</a></li>")
+        parts.append(f"<li><a href='{attr(rel)}'>{esc(rel)}</a></li>")
     parts.append("</ul><h2>Parameters</h2><pre>" + esc(json.dumps(dict(parameters), indent=2, default=str)) + "</pre>")
     parts.append("<h2>Versions</h2>" + _table(pd.DataFrame(list(versions().items()), columns=["package", "version"])))
     parts.append("</body></html>")
@@ -379,7 +390,7 @@ def _notebooks(run_dir: Path, runs: Sequence["NotebookRun"], left_out: Mapping[s
     for r in runs:
         d = run_dir / r.name
         links = " ".join(
-            f"<a href='{esc(p.relative_to(run_dir).as_posix())}'>{esc(p.suffix[1:])}</a>"
+            f"<a href='{attr(p.relative_to(run_dir).as_posix())}'>{esc(p.suffix[1:])}</a>"
             for p in (d / f"{r.name}.html", d / f"{r.name}.ipynb")
             if p.exists()
         )
@@ -441,7 +452,7 @@ def _since_html(since: Mapping[str, Any]) -> list[str]:
             f"<p class='failed'>Inputs this run could not score: {esc(', '.join(since['failed_inputs']))}.</p>"
         )
     if since.get("trend"):
-        parts.append(f"<figure><img src='{esc(since['trend'])}' alt='CR per scene over the last comparable runs'>"
+        parts.append(f"<figure><img src='{attr(since['trend'])}' alt='CR per scene over the last comparable runs'>"
                      "<figcaption>CR per scene over the last comparable runs (ring: changed by diff's rule).</figcaption>"
                      "</figure>")  # fmt: skip
     return parts
