@@ -150,7 +150,86 @@ def test_an_answer_cell_that_fails_says_its_error_not_no_answer_yet(tmp_path):
     lost = {s.question: s.message for s in res.scores if s.points < s.max_points}
     assert set(lost) == {"test_C_val"}, (lost, res.notes)
     assert "your answer cell failed: NameError" in lost["test_C_val"], lost
-    assert any("B_pred: a line besides its assignments failed" in n for n in res.notes), res.notes
+    assert any("B_pred: a line failed when the prediction ran alone" in n for n in res.notes), res.notes
+
+
+def _predict_alone(tmp_path: Path, source: str) -> tuple[dict, list[str]]:
+    """The tiny lab's prediction B_pred graded alone (numpy, math and the lab's T), as ``_predict`` does."""
+    from lorisnb.tools.teaching.autograde import Budget, GradeSettings, _predict, lab_spec
+    from lorisnb.tools.teaching.sandbox import claim_uids
+
+    lab = tmp_path / "tiny.ipynb"
+    nbformat.write(_tiny_lab(), lab)
+    tmp_path.chmod(0o711)
+    settings = GradeSettings(Limits(cell_timeout_s=20), uid=claim_uids(63100) if can_isolate() else 0)
+    notes: list[str] = []
+    boxes: list[Sandbox] = []
+    got = _predict(lab_spec(lab), "B_pred", source, {"T": {"value": 10.0}}, tmp_path, [], settings, Budget(60), notes,
+                   1.0, boxes)  # fmt: skip
+    return got, notes
+
+
+@pytest.mark.parametrize(
+    ("source", "value"),
+    [  # the notebook's value: the += and the if after the first assignment count, the display after them does not
+        ("pred = T\npred -= T / 2\nif T > 0:\n    pred += 0.0\ndisplay(Markdown(f'{pred}'))", 5.0),
+        ("pred = 5.0\npred += 0.5\ndisplay(Markdown(f'{pred}'))", 5.5),  # wrong in the notebook: wrong here
+        ("pred = 1.0\nfor _d in [T / 2]:\n    pred = _d\nprint(lab_table)\npred = 7.0", 5.0),
+    ],
+)
+def test_a_prediction_failing_alone_is_graded_on_what_it_computed_up_to_the_failing_line(tmp_path, source, value):
+    """grading2's haug: a prediction failing alone (a display line) was graded on its imports, definitions
+    and plain assignments only: the +=, if and for were dropped, so an honest ``x = ...; x += ...`` scored 0
+    and a wrong ``x = 0.0; x += 0.5`` scored as 0.0."""
+    got, notes = _predict_alone(tmp_path, source)
+    assert got["pred"] == {"value": value}, (got, notes)
+    assert any("B_pred: a line failed when the prediction ran alone (NameError" in n for n in notes), notes
+
+
+def test_a_prediction_failing_before_its_value_is_bound_scores_0_with_its_error(tmp_path):
+    (tmp_path / "a").mkdir()
+    got, _ = _predict_alone(tmp_path / "a", "print(lab_table)\npred = T / 2")
+    assert "NameError: name 'lab_table' is not defined" in got["pred"]["error"], got
+    (tmp_path / "b").mkdir()
+    got, _ = _predict_alone(tmp_path / "b", "pred = ...\nundefined()")
+    assert "NameError: name 'undefined' is not defined" in got["pred"]["error"], got  # the stub's ... is no value
+
+
+def test_an_added_cells_def_reads_the_labs_values_as_an_answer_cells_does(tmp_path):
+    """grading2's hdefault: ``def within(a, b, e=eps, p=phi)`` in a cell the student added failed (NameError
+    at def) in a formula answer's run alone: the lab's def-time values were given for answer cells only."""
+    from lorisnb.tools.teaching.autograde import _added_key, _in_order, _lab_values, lab_spec
+
+    lab = tmp_path / "tiny.ipynb"
+    nbformat.write(_tiny_lab(), lab)
+    spec = lab_spec(lab)
+    answers = {"A_fn": "def double(x, n=k):\n    return _scale(x)", "C_val": "val = k * T"}
+    added = {2: ["def _scale(x, f=k - 1, t=T):\n    return f * x"], 5: ["def _later(x=pred):\n    return x"]}
+    order, code, at = _in_order(spec, answers, added)
+    assert order == [_added_key(2, 0), "A_fn", "B_pred", _added_key(5, 0), "C_val"]
+    clean = _lab_values(spec, code, {"student_id": "s"}, tmp_path, at)
+    assert clean[_added_key(2, 0)] == {"k": {"value": 3}, "T": {"value": 10.0}}
+    assert clean["A_fn"] == {"k": {"value": 3}}
+    assert _added_key(5, 0) not in clean  # an answer's value (the instructor's pred) is never given
+
+
+def test_split_halves_run_last_top_first_are_replayed_top_to_bottom_when_counts_fail(tmp_path):
+    """grading2's hsplit_rerun and hdefault: a split cell whose top half was run again last counts bottom
+    first (a count is only a cell's last run): replayed so it failed (NameError); and an added cell's
+    helper reading the lab's numbers when defined failed the formula's run alone."""
+    nb = _answered(
+        {"A_fn": [("def double(x):\n    return _scale(x)", 3)],
+         "B_pred": [("half = T / 2", 9), ("pred = half", 8)],
+         "C_val": [("kk2 = k", 12), ("val = kk2 * T", 11)]},
+        added={"setup": ["def _scale(x, f=k - 1):\n    return f * x"]},
+    )  # fmt: skip
+    res = _grade(tmp_path, nb, "s-rerun")
+    lost = {s.question: s.message for s in res.scores if s.points < s.max_points}
+    assert lost == {}, (lost, res.notes)
+    assert any(n.startswith("C_val: its cells failed in the order of their execution counts (NameError") and
+               "top to bottom" in n for n in res.notes), res.notes  # fmt: skip
+    assert not any("delete the copies" in n or "extra ones" in n for n in res.notes), res.notes
+    assert not any(n.startswith("C_val: NameError") for n in res.notes), res.notes
 
 
 def _box(tmp_path: Path, **limits) -> Sandbox:
