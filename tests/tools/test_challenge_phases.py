@@ -4,6 +4,7 @@ them through the alignment); the phases of a challenge file neither overlap nor 
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 
@@ -153,6 +154,14 @@ def test_a_hidden_sequence_is_stripped_however_the_file_is_written(tmp_path, dat
     assert [(r["seq"], round(r["ate_rmse"], 3)) for r in result["rows"]] == [(3, 0.466)]
 
 
+def _first_pose_of_seq1(body: bytes, change) -> bytes:
+    """``body`` with the first pose of its (hidden) seq 1 block changed by ``change`` (of its fields)."""
+    lines = body.split(b"\n")
+    at = next(k for k in range(lines.index(b"seq:1"), len(lines)) if lines[k][:1].isdigit())
+    lines[at] = b" ".join(change(lines[at].split()))
+    return b"\n".join(lines)
+
+
 @pytest.mark.parametrize(
     ("edit", "words"),
     [
@@ -160,6 +169,8 @@ def test_a_hidden_sequence_is_stripped_however_the_file_is_written(tmp_path, dat
         (lambda a: a.replace(b"scene:home\n", b""), ["no 'scene: NAME' header"]),
         (lambda a: a.replace(b"scene:home\n", b"scene:attic\n"), ["unknown scene"]),
         (lambda a: a.replace(b"scene:home\n", b"scene:cafe\n", 1), ["'scene: home' after 'scene: cafe'"]),
+        (lambda a: _first_pose_of_seq1(a, lambda t: t[:4] + [b"0", b"0", b"0", b"0"]), ["quaternion"]),
+        (lambda a: _first_pose_of_seq1(a, lambda t: t + [b"-1", b"nan"]), ["line"]),
     ],
 )  # fmt: skip
 def test_a_file_the_strip_cannot_read_is_refused_not_scored_whole(tmp_path, data, edit, words):
@@ -191,3 +202,63 @@ def test_a_file_the_strip_cannot_read_is_refused_not_scored_whole(tmp_path, data
     for w in words:
         assert w in failure["error"], failure
     assert str(files) not in failure["error"]
+
+
+def _home(tmp_path: Path, data, blocks: dict[int, list[bytes]]) -> Path:
+    """VINS-Mono's lifelong home file with the given poses in each seq: block, as home-1.txt of a folder."""
+    src = (data.icra20 / "lifelong" / "vins_mono_color_imu_with_loop" / "home-1.txt").read_bytes()
+    head = src.split(b"seq:")[0]
+    files = tmp_path / "sub" / "files"
+    files.mkdir(parents=True, exist_ok=True)
+    body = head + b"".join(b"seq:%d\n" % q + b"\n".join(ps) + b"\n" for q, ps in blocks.items())
+    (files / "home-1.txt").write_bytes(body)
+    return files
+
+
+def _poses(data, seq: int) -> list[bytes]:
+    src = (data.icra20 / "lifelong" / "vins_mono_color_imu_with_loop" / "home-1.txt").read_bytes()
+    block = src.split(b"seq:%d\n" % seq)[1].split(b"seq:")[0]
+    return [line for line in block.split(b"\n") if line[:1].isdigit()]
+
+
+def _swap(line: bytes) -> bytes:
+    t = line.split()
+    return b" ".join(t[:4] + [t[7], t[4], t[5], t[6]])
+
+
+def test_a_team_sees_only_what_the_shown_set_said(tmp_path, data):
+    """Seq 1 hidden (phase final), seq 3 shown: the note of seq 3's quaternion order computed with
+    seq 1's alignment ('drops from 106.6 deg', the file scored whole for the later set) named only
+    seq 3 and was shown beside the one of seq 3 alone; a spread of seq 1's poses must not change
+    what a team reads. A TUM file of hidden seq 1 whose stamps miss its ground truth told that
+    sequence's span; a seq 3 moved into market-1's time told market-1's span."""
+    from lorisnb.io.datasets.paths import scene_durations
+    from lorisnb.tools.challenge.board import submission_view
+    from lorisnb.tools.challenge.scoring import score_folder
+
+    challenge = read_challenge(home_challenge(tmp_path, data))
+    durations = scene_durations(challenge.scenes, challenge.data)
+    views = [[("home", 3), ("home", 4)], [("home", q) for q in range(1, 6)]]
+    p1 = _poses(data, 1)
+    swapped = [_swap(line) for line in _poses(data, 3)]
+
+    def seen(blocks: dict[int, list[bytes]], name: str, plain=None) -> dict:
+        files = _home(tmp_path / name, data, blocks)
+        for fname, body in (plain or {}).items():
+            (files / fname).write_bytes(body)
+        plan = {f: dict(format="tum", scene="home", seq=1) for f in plain or {}}
+        result = score_folder(files, challenge.data, challenge.spec, views=views, plain=plan)
+        sub = dict(id="s", team="t", phase="dev", status="scored", created=time.time(), finished=time.time(),
+                   files="[]", bytes=1, result=json.dumps(result), error=None)  # fmt: skip
+        return submission_view(sub, challenge, durations, time.time())
+
+    alone = seen({3: swapped}, "alone")
+    with1 = seen({1: p1[:: len(p1) // 10][:10], 3: swapped}, "with1")
+    assert alone["notes"] and with1["notes"] == alone["notes"]
+    tum = b"".join(b"%.6f 0 0 0 0 0 0 1\n" % (1000.0 + k) for k in range(50))
+    shifted = [
+        b"%.6f " % (float(line.split()[0]) + 2803600.0) + b" ".join(line.split()[1:]) for line in _poses(data, 3)
+    ]
+    view = seen({3: shifted}, "market", plain={"seq1.tum": tum})
+    told = json.dumps(view)
+    assert "market" not in told and "seq1.tum" not in told, told

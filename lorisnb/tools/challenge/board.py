@@ -165,10 +165,16 @@ def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.Dat
                    shown=_hidden_note(challenge, s, q)) for s, q in sorted(scored - shown)]  # fmt: skip
     missing = [dict(scene=s, seq=int(q), error="no output for this sequence: it counts as a failed run")
                for s, q in zip(wanted["scene"], wanted["seq"], strict=True) if (s, int(q)) not in scored]  # fmt: skip
-    failures = [dict(f, error=team_text(str(f["error"]), challenge)) for f in result["failures"]]
+    # a failure or a note is shown when every sequence of the scoring that said it is visible
+    # (its numbers, spans included, may come from any of them: a hidden one's stays hidden)
+    # (a failure about a scene outside the challenge holds none of its ground truth: shown)
+    told = challenge.visible(set(sequences_of(durations)) | scored, now)
+    unseen = set(sequences_of(durations)) - told
+    failures = [{k: v for k, v in f.items() if k != "sequences"} | dict(error=team_text(str(f["error"]), challenge))
+                for f in result["failures"] if not {(s, int(q)) for s, q in f.get("sequences", [])} & unseen]  # fmt: skip
     if any(f["file"] for f in failures):  # "nothing was evaluated", named for no file: the files' rows say why
         failures = [f for f in failures if f["file"]]
-    notes = [team_text(n, challenge) for n in _shown_notes(result["notes"], shown, not hidden)]
+    notes = list(dict.fromkeys(team_text(n, challenge) for n in _shown_notes(result["notes"], told, not hidden)))
     view.update(rows=rows, hidden_sequences=hidden, failures=failures, missing=missing,
                 notes=notes, conventions=result["conventions"],
                 figure=figure_file(result, challenge, durations, now) is not None)  # fmt: skip

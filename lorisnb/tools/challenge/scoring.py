@@ -34,7 +34,8 @@ import sys
 import threading
 import time
 import warnings
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -48,12 +49,13 @@ from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.stats.trials import check_duplicates
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import LorisError, LorisWarning, ValidationError
-from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans
-from lorisnb.io.readers.openloris import FILE_KEYS, parse_headers, read_lines
+from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans, time_spans
+from lorisnb.io.readers.openloris import FILE_KEYS, parse_headers, read_lines, read_openloris
 from lorisnb.io.writers import write_openloris
 from lorisnb.tools.challenge import store
 from lorisnb.tools.challenge.config import Challenge, sequences_of
 from lorisnb.tools.challenge.uploads import PLAN
+from lorisnb.tools.evaluation import jobs as evaluation_jobs
 from lorisnb.tools.evaluation.jobs import GT_DROP
 from lorisnb.tools.evaluation.result import Evaluation, said_notes
 from lorisnb.tools.evaluation.runner import evaluate, evaluate_pairs
@@ -222,6 +224,31 @@ def strip_sequences(src: Path, dest: Path, keep: Iterable[int], blocks: Blocks |
     dest.write_bytes(b"\n".join(lines))
 
 
+@contextmanager
+def spans_of(data: DataPaths, scope: Iterable[tuple[str, int]]) -> Iterator[None]:
+    """While evaluating (in this process), the time-overlap check's other ground-truth spans
+    (``They fall in the span of market-1 (...)``) are those of ``scope`` alone: the sequences the
+    evaluation scores, never one hidden nor of a scene outside the challenge."""
+    keep = set(scope)
+
+    def spans(data_root: Any = None, remove_repeated: bool = True) -> dict[str, tuple[float, float]]:
+        out: dict[str, tuple[float, float]] = {}
+        for scene in sorted({s for s, _ in keep}):
+            try:
+                gt = load_groundtruth(scene, data, remove_repeated)
+            except LorisError:
+                continue
+            out.update({f"{scene}-{q}": v for q, v in time_spans(gt.sequences).items() if (scene, q) in keep})
+        return out
+
+    saved = evaluation_jobs.groundtruth_spans
+    evaluation_jobs.groundtruth_spans = spans
+    try:
+        yield
+    finally:
+        evaluation_jobs.groundtruth_spans = saved
+
+
 def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | None = None, *,
                  plain: Mapping[str, Mapping[str, Any]] | None = None, groundtruth: Path | None = None,
                  views: Sequence[Iterable[tuple[str, int]]] | None = None) -> dict[str, Any]:  # fmt: skip
@@ -248,17 +275,32 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
     native = sorted(p for p in folder.iterdir() if p.is_file() and p.name not in plain)
     every: list[Any] = [_Every()] if views is None else [frozenset((s, int(q)) for s, q in v) for v in views]
     evaluated: dict[tuple[str, frozenset[int] | None], Evaluation | None] = {}
-    problems: list[tuple[str, str, str]] = []  # status, file, error
+    # what each evaluation scored (its numbers come from those sequences' ground truth alone) and
+    # the notes it raised: a note or a failure is shown with every sequence of its evaluation
+    scope: dict[tuple[str, frozenset[int] | None], frozenset[tuple[str, int]]] = {}
+    raised: dict[tuple[str, frozenset[int] | None], list[str]] = {}
+    problems: list[tuple[str, str, str, frozenset[tuple[str, int]]]] = []  # status, file, error, about
     shapes: dict[str, Blocks | None] = {}
-    for p in native:  # each file's blocks as the reader reads them: one it refuses is never scored, whole or in part
+    for p in native:  # each file read whole by the reader first: one it refuses is never scored, whole or in part
         try:
+            read_openloris(p, remove_repeated=spec.repeated == "drop", warn=False, repair_stamps=spec.repair_stamps)
             shapes[p.name] = read_blocks(p)
         except LorisError as exc:
             shapes[p.name] = None
-            problems.append(("failed", p.name, str(exc)))
+            problems.append(("failed", p.name, str(exc), frozenset()))
         except OSError as exc:
             shapes[p.name] = None
-            problems.append(("failed", p.name, f"cannot be read ({exc.strerror})"))
+            problems.append(("failed", p.name, f"cannot be read ({exc.strerror})", frozenset()))
+
+    def run(key: tuple[str, frozenset[int] | None], seqs: frozenset[tuple[str, int]], go: Any) -> None:
+        """One evaluation of ``seqs`` (its notes kept with them; other spans told: theirs alone)."""
+        scope[key] = seqs
+        with warnings.catch_warnings(record=True) as mine, spans_of(data, seqs):
+            warnings.simplefilter("always", LorisWarning)
+            try:
+                evaluated[key] = go()
+            finally:
+                raised[key] = [str(w.message) for w in mine]
 
     def in_view(view: Any) -> list[FileErrors]:
         """Every file's errors as scored on the sequences of ``view`` alone."""
@@ -277,7 +319,8 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
                 if key[1] is not None:
                     src = folder.parent / "strip" / str(len(evaluated)) / FILES / p.name
                     strip_sequences(p, src, key[1], shape)
-                evaluated[key] = evaluate([src], spec, data_root=data, jobs=1, progress=False)
+                seqs = frozenset((shape.scene, q) for q in kept)
+                run(key, seqs, lambda src=src: evaluate([src], spec, data_root=data, jobs=1, progress=False))
             one = evaluated[key]
             if one is not None:
                 out += [f for f in one.errors if all((f.scene, e.seq) in view for e in f.sequences)]
@@ -285,14 +328,16 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
             if (str(info["scene"]), int(info["seq"])) not in view:
                 continue
             if (name, None) not in evaluated:
+                seq = frozenset({(str(info["scene"]), int(info["seq"]))})
                 try:
                     gt = sequence_groundtruth(data, str(info["scene"]), int(info["seq"]), gt_folder)
-                    evaluated[(name, None)] = evaluate_pairs(
+                    run((name, None), seq, lambda k=k, name=name, info=info, gt=gt: evaluate_pairs(
                         [_pair_folder(folder.parent, k, name)], gt, spec, fmt=str(info["format"]), gt_fmt="openloris",
-                        scene=str(info["scene"]), jobs=1, progress=False)  # fmt: skip
+                        scene=str(info["scene"]), jobs=1, progress=False))  # fmt: skip
                 except LorisError as exc:  # an option of the challenge's spec this format cannot take
                     evaluated[(name, None)] = None
-                    problems.append(("failed", name, str(exc)))
+                    scope[(name, None)] = seq
+                    problems.append(("failed", name, str(exc), seq))
             one = evaluated[(name, None)]
             if one is not None:
                 out += one.errors
@@ -319,35 +364,46 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
                                   f"({listed}). Upload your system's output")  # fmt: skip
         ev = Evaluation(errors, [], None, [], data, spec=spec, kind="openloris")
         rows = ev.sequence_rows()
-    for one in evaluated.values():
+    everything = frozenset().union(*scope.values())  # a note of no one evaluation: shown once all is
+    for key, one in evaluated.items():
         if one is None:
             continue
-        problems += [("failed", Path(f.path).name, f.error) for f in one.failures]
+        within = scope[key]
+        problems += [("failed", Path(f.path).name, f.error, within) for f in one.failures]
         # "nothing was evaluated" of a file's own evaluation, named for no file: its file's row says why
-        problems += [("not scored", Path(f.path).name, f.error) for f in one.unscored if f.kind != "nothing"]
-        problems += [("skipped", Path(f.path).name, f.error) for f in skipped_only(one)]
+        problems += [("not scored", Path(f.path).name, f.error, within) for f in one.unscored if f.kind != "nothing"]
+        problems += [("skipped", Path(f.path).name, f.error, within) for f in skipped_only(one)]
     for p in native:  # a file none of whose sequences is in a view: never evaluated
         shape = shapes[p.name]
         if not any(name == p.name for name, _ in evaluated) and shape is not None and shape.seqs:
             problems.append(("not scored", p.name, f"{shape.scene} seq {', '.join(map(str, sorted(set(shape.numbers))))}: "
-                             "in no phase this submission's scores are shown in; not scored"))  # fmt: skip
+                             "in no phase this submission's scores are shown in; not scored", frozenset()))  # fmt: skip
     problems = list(dict.fromkeys(problems))
-    failures = [dict(file=name, status=status, error=_unnamed(scrub(error, folder, data, gt_folder), name))
-                for status, name, error in problems]  # fmt: skip
-    seen = [f for _, found in by_view for f in found]
-    about: dict[str, list[tuple[str, int]]] = {}
-    for f in seen:
-        for w in f.warnings:
-            about.setdefault(w, []).extend(_attributed(f, w))
-    notes: dict[str, set[tuple[str, int]]] = {}
-    counted = set(said_notes(seen)) - set(about)  # a note many files share, counted: each is listed here
-    for text in dict.fromkeys([*(str(w.message) for w in caught), *about]):
-        if "could not be evaluated" not in text and text not in counted:
-            notes.setdefault(scrub(text, folder, data, gt_folder), set()).update(about.get(text, []))
+    failures = [dict(file=name, status=status, error=_unnamed(scrub(error, folder, data, gt_folder), name),
+                     sequences=sorted(about)) for status, name, error, about in problems]  # fmt: skip
+    # each note with the sequences it is about (a file's, or the seq N it names) and every
+    # sequence of the evaluation that raised it: a number in it may come from any of them
+    notes: dict[str, set[frozenset[tuple[str, int]]]] = {}
+    for key, one in evaluated.items():
+        if one is None:
+            continue
+        texts: dict[str, set[tuple[str, int]]] = {t: set() for t in raised.get(key, [])}
+        for f in one.errors:
+            for w in f.warnings:
+                texts.setdefault(w, set()).update(_attributed(f, w))
+        counted = set(said_notes(one.errors)) - {w for f in one.errors for w in f.warnings}
+        for text, named in texts.items():
+            if "could not be evaluated" not in text and text not in counted:
+                notes.setdefault(text, set()).add(frozenset(named | scope[key]))
+    inside = {t for ts in raised.values() for t in ts}
+    for text in dict.fromkeys(str(w.message) for w in caught):
+        if text not in inside and "could not be evaluated" not in text:
+            notes.setdefault(text, set()).add(everything)
     out: dict[str, Any] = dict(
         rows=[{k: _plain(v) for k, v in r.items() if k != "spec"} | {"file": Path(str(r["file"])).name} for r in rows],
-        failures=failures, notes=[dict(text=t, sequences=sorted(q)) for t, q in notes.items()],
-        conventions=ev.describe(), figures=[],
+        failures=failures, conventions=ev.describe(), figures=[],
+        notes=[dict(text=scrub(t, folder, data, gt_folder), sequences=sorted(q)) for t, qs in notes.items()
+               for q in sorted(qs, key=len)],
     )  # fmt: skip
     if figures is not None and errors:
         _draw(out, by_view, views is None, data, spec, figures, folder, gt_folder)
