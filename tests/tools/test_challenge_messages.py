@@ -89,3 +89,13 @@ def test_a_team_is_not_advised_options_it_cannot_pass(tmp_path, data, text, show
     said = team_text(text, challenge)
     assert said == shown
     assert "--" not in said and "=" not in said
+
+
+def test_a_parenthesis_of_option_advice_leaves_its_sentence(tmp_path, data):
+    """A sentence holding option advice in a parenthesis only was dropped whole, and a scored
+    file's only note became 'the server could not score this file'."""
+    challenge = read_challenge(challenge_file(tmp_path, data))
+    text = "home-1.txt, seq 3: the first pose is 2.1 s after the ground truth starts (see --align-frames)."
+    assert team_text(text, challenge) == "home-1.txt, seq 3: the first pose is 2.1 s after the ground truth starts"
+    two = "seq 2: few poses matched (pass align_frames=1 in Python); widen the bracket, or drop it (--max-gap 0)."
+    assert team_text(two, challenge) == "seq 2: few poses matched; widen the bracket"

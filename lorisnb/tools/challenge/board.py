@@ -86,8 +86,9 @@ ALTERNATIVE = re.compile(r",? or ")
 
 def _without_options(part: str) -> str:
     """A sentence of a message without its advice to pass options (:data:`OPTION`): of its
-    alternatives (``A, or B (--opt)``, split at ``or`` outside parentheses) those naming none; then
-    a parenthesis naming one left out; empty when all of it is such advice."""
+    alternatives (``A, or B (--opt)``, split at ``or`` outside parentheses) those naming none (a
+    sentence of one alternative is kept); then a parenthesis naming one left out; empty when what
+    is left still names one (all of it is such advice)."""
     if not OPTION.search(part):
         return part
     end = part[-1] if part[-1:] in ".;" else ""
@@ -100,6 +101,8 @@ def _without_options(part: str) -> str:
             at = m.end()
     pieces.append(body[at:])
     kept = [(sep, piece) for sep, piece in zip(seps, pieces, strict=True) if not OPTION.search(piece)]
+    if len(pieces) == 1:  # no alternatives: the sentence stays, without its parenthesis of options (below)
+        kept = [("", body)]
     out = "".join((sep if k else "") + piece for k, (sep, piece) in enumerate(kept))
     out = re.sub(r"\s*\([^()]*\)", lambda m: "" if OPTION.search(m.group()) else m.group(), out).strip()
     return "" if not out or OPTION.search(out) else out + end
