@@ -568,3 +568,25 @@ def test_scoring_that_aborts_under_its_memory_limit_names_the_limit():
     assert "120 CPU seconds or of 700 MB of memory" in stopped(-signal.SIGKILL, 120, 700)
     assert stopped(-signal.SIGXCPU, 120, 700) == "scoring exceeded the challenge's limit of 120 CPU seconds"
     assert "(exit status 3); tell the organizers" in stopped(3, 120, 700)
+
+
+@pytest.mark.parametrize(
+    "url", ["sqlite://", "sqlite:///", "sqlite:///:memory:", "sqlite:///file:x?mode=memory&uri=true"]
+)
+def test_an_in_memory_database_is_refused(tmp_path, url):
+    """An in-memory SQLite URL passed the start check and lost add-team's token (serve: 'no such table')."""
+    path = tmp_path / "c.toml"
+    path.write_text(f'[challenge]\ngroundtruth = "{SAMPLE_DATA}"\ndatabase = "{url}"\nopens = 2026-01-01T00:00:00Z\ncloses = 2030-12-31T23:59:59Z\n'
+                    '[[phase]]\nname = "dev"\nscenes = ["cafe"]\n', encoding="utf-8")  # fmt: skip
+    with pytest.raises(ParseError, match="in-memory"):
+        read_challenge(path)
+
+
+def test_a_relative_sqlite_path_is_the_challenge_files(tmp_path, monkeypatch):
+    """sqlite:///rel.db was opened relative to the current folder: add-team and serve started in
+    two folders used two databases."""
+    path = tmp_path / "c.toml"
+    path.write_text(f'[challenge]\ngroundtruth = "{SAMPLE_DATA}"\ndatabase = "sqlite:///rel.db"\nopens = 2026-01-01T00:00:00Z\ncloses = 2030-12-31T23:59:59Z\n'
+                    '[[phase]]\nname = "dev"\nscenes = ["cafe"]\n', encoding="utf-8")  # fmt: skip
+    monkeypatch.chdir(tmp_path.parent)
+    assert read_challenge(path).database == f"sqlite:///{tmp_path / 'rel.db'}"

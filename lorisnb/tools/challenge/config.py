@@ -328,14 +328,16 @@ def _check_folder(folder: Path, named: str, path: Path, where: str) -> None:
                          "(the server's own: its database, uploads)")  # fmt: skip
 
 
-def _check_database(url: str, folder: Path, path: Path, where: str) -> None:
+def _check_database(url: str, folder: Path, path: Path, where: str) -> str:
     """Refuse a ``database`` that is no SQLAlchemy URL, names a dialect or driver not installed,
-    or an SQLite file in a folder that does not exist (the server's ``folder`` is created)."""
+    or an SQLite file in a folder that does not exist (the server's ``folder`` is created), or an
+    in-memory SQLite database; the URL, a relative SQLite file made absolute from the challenge
+    file's folder (as ``folder`` and ``groundtruth``: add-team and serve, started anywhere, use one)."""
     try:
         from sqlalchemy.engine import make_url
         from sqlalchemy.exc import ArgumentError, NoSuchModuleError
     except ImportError:  # serve and the challenge commands require it first
-        return
+        return url
     said = url.split("@")[-1] if "@" in url else url  # never a password
     try:
         parsed = make_url(url)
@@ -352,15 +354,23 @@ def _check_database(url: str, folder: Path, path: Path, where: str) -> None:
         raise ParseError(path, None, f"{where}database = {said!r}: its driver is not installed ({exc}): install "
                          f"it; {DATABASE_EXPECTED}") from None  # fmt: skip
     name = parsed.database
-    if parsed.get_backend_name() != "sqlite" or not name or name == ":memory:" or name.startswith("file:"):
-        return
-    file = Path(name).expanduser().absolute()  # a relative one: to the folder the server starts in, as SQLite opens it
+    if parsed.get_backend_name() != "sqlite":
+        return url
+    memory = not name or name == ":memory:" or "mode=memory" in name or parsed.query.get("mode") == "memory"
+    if memory:  # each connection its own empty database: a team added is gone, serve finds no table
+        raise ParseError(path, None, f"{where}database = {said!r}: an in-memory SQLite database, lost when each "
+                         f"connection closes (add-team's tokens, every submission); {DATABASE_EXPECTED}")  # fmt: skip
+    if name is None or name.startswith("file:"):
+        return url
+    file = path.parent / Path(name).expanduser()  # a relative one: to the challenge file, as folder and groundtruth
+    file = file.absolute()
     if file.is_dir():
         raise ParseError(path, None, f"{where}database = {said!r}: {file} is a folder; {DATABASE_EXPECTED}")
     if not file.parent.is_dir() and file.parent.resolve() != folder:
         raise ParseError(path, None, f"{where}database = {said!r}: the folder {file.parent} does not exist; expected a "
                          "database file in an existing folder (create it), or leave database out for challenge.db in the "
                          "server's folder")  # fmt: skip
+    return parsed.set(database=str(file)).render_as_string(hide_password=False)
 
 
 def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
@@ -396,7 +406,7 @@ def read_challenge(path_like: str | os.PathLike[str]) -> Challenge:
         raise ParseError(path, None, f"{where}folder: inside the ground-truth folder; expected a folder of its own")
     _check_folder(folder, named, path, where)
     database = _text(top, "database", path, where, f"sqlite:///{folder / 'challenge.db'}")
-    _check_database(database, folder, path, where)
+    database = _check_database(database, folder, path, where)
     metric = _choice(f"{where}metric", top.get("metric", "cr"), tuple(WEIGHTS), path)
     opens = _time(top, "opens", path, where)
     closes = _time(top, "closes", path, where)
