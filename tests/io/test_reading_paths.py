@@ -182,3 +182,16 @@ def test_a_bad_kitti_times_file_is_named_with_its_line(tmp_path, monkeypatch, pa
     if case == "repeat":  # repeated stamps are kept with repeated="keep"; a stamp going back is not
         got = read_kitti(poses, stamps=times, repeated="keep")
         assert got.stamps[1500] == got.stamps[1499] == 149.9 and len(got.stamps) == ROWS
+
+
+def test_the_spans_told_are_those_the_data_shows(data):
+    """The time-overlap check's other spans are the sequences the data shows (a challenge phase's:
+    ``DataPaths.shown``), never a hidden sequence nor another scene's; without ``shown`` every one."""
+    from dataclasses import replace
+
+    from lorisnb.io.datasets.paths import find_data, groundtruth_spans
+
+    every = groundtruth_spans(data.root)
+    assert {"cafe-1", "home-1", "market-1"} <= set(every)
+    shown = replace(find_data(data.root), shown=frozenset({("home", 3), ("home", 4)}))
+    assert groundtruth_spans(shown) == {k: every[k] for k in ("home-3", "home-4")}

@@ -95,9 +95,16 @@ def _looks_like_root(p: Path) -> bool:
 
 @dataclass(frozen=True)
 class DataPaths:
-    """Paths below one data root. Each accessor raises DataNotFoundError naming the missing path."""
+    """Paths below one data root. Each accessor raises DataNotFoundError naming the missing path.
+
+    Attributes:
+        root: the data root.
+        shown: the ground-truth sequences this data shows, ``(scene, seq)`` (None: every one), as
+            far as telling them goes: the time-overlap check (:func:`groundtruth_spans`) names no
+            other (a challenge phase's hidden sequences, scenes it does not rank)."""
 
     root: Path
+    shown: frozenset[tuple[str, int]] | None = None
 
     def _need(self, p: Path, what: str, why: str = "") -> Path:
         if not p.exists():
@@ -238,16 +245,21 @@ def read_groundtruth_file(path: str | os.PathLike, remove_repeated: bool = True)
 def groundtruth_spans(
     data_root: DataRoot | DataPaths | None = None, remove_repeated: bool = True
 ) -> dict[str, tuple[float, float]]:
-    """Time span (first, last stamp, seconds) of every ground-truth sequence in the data, by
-    ``<scene>-<seq>``: what the time-overlap plausibility check compares against."""
+    """Time span (first, last stamp, seconds) of every ground-truth sequence the data shows
+    (:attr:`DataPaths.shown`), by ``<scene>-<seq>``: what the time-overlap plausibility check
+    compares against."""
     data = find_data(data_root)
+    shown = data.shown
     spans: dict[str, tuple[float, float]] = {}
     for scene in data.scenes_with_groundtruth():
+        if shown is not None and not any(s == scene for s, _ in shown):
+            continue
         try:
             gt = load_groundtruth(scene, data, remove_repeated)
         except LorisError:
             continue
-        spans.update({f"{scene}-{k}": span for k, span in time_spans(gt.sequences).items()})
+        spans.update({f"{scene}-{k}": span for k, span in time_spans(gt.sequences).items()
+                      if shown is None or (scene, k) in shown})  # fmt: skip
     return spans
 
 

@@ -34,8 +34,7 @@ import sys
 import threading
 import time
 import warnings
-from collections.abc import Iterable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -49,13 +48,12 @@ from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.stats.trials import check_duplicates
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import LorisError, LorisWarning, ValidationError
-from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans, time_spans
+from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans
 from lorisnb.io.readers.openloris import FILE_KEYS, parse_headers, read_lines, read_openloris
 from lorisnb.io.writers import write_openloris
 from lorisnb.tools.challenge import store
 from lorisnb.tools.challenge.config import Challenge, sequences_of
 from lorisnb.tools.challenge.uploads import PLAN
-from lorisnb.tools.evaluation import jobs as evaluation_jobs
 from lorisnb.tools.evaluation.jobs import GT_DROP
 from lorisnb.tools.evaluation.result import Evaluation, said_notes
 from lorisnb.tools.evaluation.runner import evaluate, evaluate_pairs
@@ -224,31 +222,6 @@ def strip_sequences(src: Path, dest: Path, keep: Iterable[int], blocks: Blocks |
     dest.write_bytes(b"\n".join(lines))
 
 
-@contextmanager
-def spans_of(data: DataPaths, scope: Iterable[tuple[str, int]]) -> Iterator[None]:
-    """While evaluating (in this process), the time-overlap check's other ground-truth spans
-    (``They fall in the span of market-1 (...)``) are those of ``scope`` alone: the sequences the
-    evaluation scores, never one hidden nor of a scene outside the challenge."""
-    keep = set(scope)
-
-    def spans(data_root: Any = None, remove_repeated: bool = True) -> dict[str, tuple[float, float]]:
-        out: dict[str, tuple[float, float]] = {}
-        for scene in sorted({s for s, _ in keep}):
-            try:
-                gt = load_groundtruth(scene, data, remove_repeated)
-            except LorisError:
-                continue
-            out.update({f"{scene}-{q}": v for q, v in time_spans(gt.sequences).items() if (scene, q) in keep})
-        return out
-
-    saved = evaluation_jobs.groundtruth_spans
-    evaluation_jobs.groundtruth_spans = spans
-    try:
-        yield
-    finally:
-        evaluation_jobs.groundtruth_spans = saved
-
-
 def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | None = None, *,
                  plain: Mapping[str, Mapping[str, Any]] | None = None, groundtruth: Path | None = None,
                  views: Sequence[Iterable[tuple[str, int]]] | None = None) -> dict[str, Any]:  # fmt: skip
@@ -295,7 +268,7 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
     def run(key: tuple[str, frozenset[int] | None], seqs: frozenset[tuple[str, int]], go: Any) -> None:
         """One evaluation of ``seqs`` (its notes kept with them; other spans told: theirs alone)."""
         scope[key] = seqs
-        with warnings.catch_warnings(record=True) as mine, spans_of(data, seqs):
+        with warnings.catch_warnings(record=True) as mine:
             warnings.simplefilter("always", LorisWarning)
             try:
                 evaluated[key] = go()
@@ -320,7 +293,12 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
                     src = folder.parent / "strip" / str(len(evaluated)) / FILES / p.name
                     strip_sequences(p, src, key[1], shape)
                 seqs = frozenset((shape.scene, q) for q in kept)
-                run(key, seqs, lambda src=src: evaluate([src], spec, data_root=data, jobs=1, progress=False))
+                shown = replace(data, shown=seqs)  # the time-overlap check names these spans alone
+                run(
+                    key,
+                    seqs,
+                    lambda src=src, shown=shown: evaluate([src], spec, data_root=shown, jobs=1, progress=False),
+                )
             one = evaluated[key]
             if one is not None:
                 out += [f for f in one.errors if all((f.scene, e.seq) in view for e in f.sequences)]
