@@ -11,6 +11,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import pytest
 
@@ -230,3 +231,40 @@ def test_a_failed_start_releases_what_it_claimed(tmp_path, data):
         done = _serve_on(path, busy.getsockname()[1])
     assert done.returncode != 0
     assert {sid: q[:2] for sid, q in _queue(engine).items()} == {"s1": ("queued", None), "s2": ("queued", None)}
+
+
+def test_two_challenge_folders_on_one_database_have_one_scorer(tmp_path, data):
+    """Two challenge files of other folders naming one SQLite database: the second server's scorer
+    claimed the first's submissions (whose files are in the first's folder) and failed them, each
+    a team's daily submission spent; now the database's lock (beside its file) holds the queue for
+    the first, and the second touches nothing until that one stops."""
+    from dataclasses import replace
+
+    pytest.importorskip("fastapi")
+    from challenge_fixtures import challenge_file
+    from sqlalchemy.engine import make_url
+
+    from lorisnb.tools.challenge.config import read_challenge
+    from lorisnb.tools.challenge.scoring import Scorer
+
+    a = read_challenge(challenge_file(tmp_path, data))
+    b = replace(a, folder=tmp_path / "other-folder")
+    for c in (a, b):
+        c.folder.mkdir(parents=True)
+    engine = store.connect(a.database)
+    tid = store.team_of(engine, store.add_team(engine, "t", time.time() + 600))["id"]
+    store.add_submission(engine, "s1", tid, "development", ["a.txt"], 1)
+    store.claim_next(engine)  # a killed server's half-scored submission
+    first, second = Scorer(a, engine), Scorer(b, engine)
+    try:
+        assert Path(f"{make_url(a.database).database}.scorer.lock") in first.lock_paths()
+        assert first._take_queue() and first.requeued == 1
+        store.claim_next(engine)  # the first scores it
+        before = _queue(engine)
+        assert not second._take_queue()  # its own folder's lock is free; the database's is not
+        assert _queue(engine) == before
+        first.stop()
+        assert second._take_queue()  # scored there once the first stops
+    finally:
+        first.stop()
+        second.stop()

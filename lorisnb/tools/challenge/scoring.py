@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 from sqlalchemy import Engine
+from sqlalchemy.engine import make_url
 
 from lorisnb.core.lifelong.aggregate import aggregate_scenes, spans_table
 from lorisnb.core.pipeline.model import FileErrors, ResultFile
@@ -555,7 +556,7 @@ class Scorer:
 
             self._client = connect_scheduler(challenge.scheduler)
         self.requeued = 0
-        self._lock: int | None = None  # the queue's lock (_take_queue)
+        self._lock: list[int] | None = None  # the queue's locks (_take_queue)
         self._waiting = False
         # the sets of sequences shown as the phases close: a submission is scored on each set its
         # phase shows alone (nothing from hidden ground truth), with a figure of each
@@ -571,26 +572,41 @@ class Scorer:
         self._thread.start()
 
     def _take_queue(self) -> bool:
-        """Whether this scorer holds the queue: an exclusive lock on ``folder/scorer.lock``
-        (``flock``: released by the system when the process ends, a kill included), taken
-        without waiting. Taken, the submissions a killed server left ``scoring`` go back to the
-        queue; held by another server, nothing is touched (said once), and it is tried again
-        each poll (scored here once that server stops)."""
+        """Whether this scorer holds the queue: exclusive locks on ``folder/scorer.lock`` and, for
+        an SQLite database, on ``DATABASE.scorer.lock`` beside its file (two challenge files of
+        other folders on one database: the other server claimed this one's submissions and failed
+        them), each an ``flock`` released by the system when the process ends, a kill included,
+        taken without waiting. Taken, the submissions a killed server left ``scoring`` go back to
+        the queue; held by another server, nothing is touched (said once), and they are tried
+        again each poll (scored here once that server stops)."""
         if self._lock is not None:
             return True
-        fd = os.open(self.challenge.folder / LOCK, os.O_RDWR | os.O_CREAT, 0o600)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            os.close(fd)
-            if not self._waiting:
-                self._waiting = True
-                print(f"lorisnb serve: scorer: another server scores this challenge's queue (it holds "
-                      f"{self.challenge.folder / LOCK}); this one scores once that one stops", flush=True)  # fmt: skip
-            return False
-        self._lock = fd
+        held: list[int] = []
+        for path in self.lock_paths():
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o600)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                os.close(fd)
+                for other in held:
+                    os.close(other)
+                if not self._waiting:
+                    self._waiting = True
+                    print(f"lorisnb serve: scorer: another server scores this challenge's queue (it holds "
+                          f"{path}); this one scores once that one stops", flush=True)  # fmt: skip
+                return False
+            held.append(fd)
+        self._lock = held
         self.requeued = store.requeue_unfinished(self.engine)  # what a killed server left half-scored
         return True
+
+    def lock_paths(self) -> list[Path]:
+        """The files whose locks hold the queue (:meth:`_take_queue`), in the order they are taken."""
+        paths = [self.challenge.folder / LOCK]
+        url = make_url(self.challenge.database)
+        if url.get_backend_name() == "sqlite" and url.database:
+            paths.append(Path(f"{url.database}.{LOCK}"))
+        return paths
 
     def stop(self) -> None:
         """Stop taking work; scorings under way are stopped and put back in the queue (their
@@ -609,7 +625,8 @@ class Scorer:
         if self._client is not None:
             self._client.close()
         if self._lock is not None:
-            os.close(self._lock)  # the lock with it
+            for fd in self._lock:
+                os.close(fd)  # the lock with it
             self._lock = None
 
     def _loop(self) -> None:
