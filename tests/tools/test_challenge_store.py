@@ -170,6 +170,24 @@ def _queue(engine) -> dict[str, tuple[str, str | None, int]]:
     return {s["id"]: (s["status"], s["claim"], s["attempts"]) for s in store.all_submissions(engine)}
 
 
+def _queued_challenge(tmp_path, data, submissions):
+    """A challenge file over the real ground truth, its folder and database, and one team's
+    ``submissions`` queued in phase development: the file's path, the challenge, the engine."""
+    pytest.importorskip("fastapi")
+    from challenge_fixtures import challenge_file
+
+    from lorisnb.tools.challenge.config import read_challenge
+
+    path = challenge_file(tmp_path, data)
+    challenge = read_challenge(path)
+    challenge.folder.mkdir(parents=True)
+    engine = store.connect(challenge.database)
+    tid = store.team_of(engine, store.add_team(engine, "t", time.time() + 600))["id"]
+    for sid in submissions:
+        store.add_submission(engine, sid, tid, "development", ["a.txt"], 1)
+    return path, challenge, engine
+
+
 def test_a_second_server_on_a_busy_port_touches_no_queue(tmp_path, data):
     """``lorisnb serve`` started again beside a running server, on its port: uvicorn starts the
     application (and its scorer) before it binds, fails to bind and stops. The scorer put the
@@ -180,19 +198,9 @@ def test_a_second_server_on_a_busy_port_touches_no_queue(tmp_path, data):
     import os
     import socket
 
-    pytest.importorskip("fastapi")
-    from challenge_fixtures import challenge_file
-
-    from lorisnb.tools.challenge.config import read_challenge
     from lorisnb.tools.challenge.scoring import LOCK
 
-    path = challenge_file(tmp_path, data)
-    challenge = read_challenge(path)
-    challenge.folder.mkdir(parents=True)
-    engine = store.connect(challenge.database)
-    tid = store.team_of(engine, store.add_team(engine, "t", time.time() + 600))["id"]
-    for sid in ("s1", "s2"):
-        store.add_submission(engine, sid, tid, "development", ["a.txt"], 1)
+    path, challenge, engine = _queued_challenge(tmp_path, data, ("s1", "s2"))
     store.claim_next(engine)  # the running server scores s1; s2 waits
     before = _queue(engine)
     fd = os.open(challenge.folder / LOCK, os.O_RDWR | os.O_CREAT)  # the running server's scorer
@@ -213,18 +221,7 @@ def test_a_failed_start_releases_what_it_claimed(tmp_path, data):
     claimed goes back to the queue when it stops (its claims released), none is left ``scoring``."""
     import socket
 
-    pytest.importorskip("fastapi")
-    from challenge_fixtures import challenge_file
-
-    from lorisnb.tools.challenge.config import read_challenge
-
-    path = challenge_file(tmp_path, data)
-    challenge = read_challenge(path)
-    challenge.folder.mkdir(parents=True)
-    engine = store.connect(challenge.database)
-    tid = store.team_of(engine, store.add_team(engine, "t", time.time() + 600))["id"]
-    for sid in ("s1", "s2"):
-        store.add_submission(engine, sid, tid, "development", ["a.txt"], 1)
+    path, _, engine = _queued_challenge(tmp_path, data, ("s1", "s2"))
     with socket.socket() as busy:
         busy.bind(("127.0.0.1", 0))
         busy.listen()
@@ -240,20 +237,13 @@ def test_two_challenge_folders_on_one_database_have_one_scorer(tmp_path, data):
     the first, and the second touches nothing until that one stops."""
     from dataclasses import replace
 
-    pytest.importorskip("fastapi")
-    from challenge_fixtures import challenge_file
     from sqlalchemy.engine import make_url
 
-    from lorisnb.tools.challenge.config import read_challenge
     from lorisnb.tools.challenge.scoring import Scorer
 
-    a = read_challenge(challenge_file(tmp_path, data))
+    _, a, engine = _queued_challenge(tmp_path, data, ("s1",))
     b = replace(a, folder=tmp_path / "other-folder")
-    for c in (a, b):
-        c.folder.mkdir(parents=True)
-    engine = store.connect(a.database)
-    tid = store.team_of(engine, store.add_team(engine, "t", time.time() + 600))["id"]
-    store.add_submission(engine, "s1", tid, "development", ["a.txt"], 1)
+    b.folder.mkdir(parents=True)
     store.claim_next(engine)  # a killed server's half-scored submission
     first, second = Scorer(a, engine), Scorer(b, engine)
     try:
