@@ -217,19 +217,31 @@ CSV_HELP = {
 #: The options a command shares with ``evaluate`` but cannot apply, with what to use instead: refused
 #: when given (:func:`lorisnb.cli.outputs.refuse_unused`) and left out of the command's ``--help``
 #: (:func:`hide_unused`; ``compare --help`` offered a Parquet table it then refused).
+#: The KITTI and TartanAir preset options change only their own columns (``kitti_*``, ``tartanair_*``):
+#: evaluate's table holds them; sweep's table, compare's metrics and diff's do not (the numbers stayed
+#: the same and only the ``spec`` text changed).
+PRESET_COLUMNS = {"kitti_precision": "lorisnb evaluate --conventions kitti (its kitti_t_err and kitti_r_err "
+                                     "columns; {command} has no KITTI column)",
+                  "tartanair_scale": "lorisnb evaluate --conventions tartanair (its tartanair_* columns; "
+                                     "{command} has no TartanAir column)",
+                  "tartanair_seed": "lorisnb evaluate --conventions tartanair (its tartanair_* columns; "
+                                    "{command} has no TartanAir column)"}  # fmt: skip
 UNUSED: dict[str, dict[str, str]] = {
     "sweep": {"relative": "lorisnb evaluate (rpg's relative error has no threshold to sweep)",
               "relative_lengths": "lorisnb evaluate --relative-lengths",
-              "kitti_plot": "lorisnb evaluate --conventions kitti"},
+              "kitti_plot": "lorisnb evaluate --conventions kitti",
+              **{k: v.format(command="sweep's table") for k, v in PRESET_COLUMNS.items()}},
     "compare": {"parquet": "--csv, --pairs-csv, --latex or --markdown", "relative": "lorisnb evaluate",
                 "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
                 "relation": "lorisnb evaluate or sweep (evo's pose relation changes no value of --metric)",
-                "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)"},
+                "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)",
+                **{k: v.format(command="--metric") for k, v in PRESET_COLUMNS.items()}},
     "diff": {"relative": "lorisnb evaluate (diff compares the RPE columns)",
              "kitti_plot": "lorisnb evaluate --conventions kitti", "relative_lengths": "lorisnb evaluate",
              "relation": "lorisnb evaluate (diff compares CR, CR-T, CS-R, ATE, AOE and RPE, not evo's "
              "pose-relation columns)",
-             "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)"},
+             "change_unit": "lorisnb evaluate or sweep (the unit of evo's pose-relation columns)",
+             **{k: v.format(command="diff (CR, CR-T, CS-R, ATE, AOE, RPE)") for k, v in PRESET_COLUMNS.items()}},
 }  # fmt: skip
 
 

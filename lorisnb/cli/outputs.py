@@ -138,7 +138,10 @@ def check_outputs(args: argparse.Namespace, inputs: list[str], files: list[str],
 
 def refuse_unused(args: argparse.Namespace, unused: dict[str, str]) -> None:
     """Options a command shares with ``evaluate`` but cannot apply: refused, naming what to use."""
-    given = [(k, use) for k, use in unused.items() if getattr(args, k, None)]
+    # given: any value but the option's absent one (None, or False of a flag): --tartanair-seed 0 too
+    given = [
+        (k, use) for k, use in unused.items() if getattr(args, k, None) is not None and getattr(args, k) is not False
+    ]
     if given:
         k, use = given[0]
         raise ValidationError(f"--{k.replace('_', '-')}: not used by lorisnb {args.command}; use {use}")
