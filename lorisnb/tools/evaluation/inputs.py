@@ -173,21 +173,24 @@ def labels(path: Path, root: Path | None, trials_by: str | None = None) -> tuple
     """(algorithm, file relative to the root, suite, trial) for a result file; a trial token in
     the path (:func:`lorisnb.core.stats.trials.split_trial`) is not part of the algorithm or suite."""
     if root is None:  # a file given alone: its algorithm is its folder, or the folder above a trial folder
-        base, trial = split_trial("/".join(path.parts[-3:]), trials_by)
+        # (of the absolute path: ``cafe1.txt`` typed inside ``dso/`` is dso's, as ``dso/cafe1.txt`` is)
+        base, trial = split_trial("/".join(absolute(path).parts[-3:]), trials_by)
         parts = base.split("/")
-        return validate.label(parts[-2] if len(parts) >= 2 else path.parent.name), validate.label(path.name), "", trial
+        return validate.label(parts[-2] if len(parts) >= 2 else ""), validate.label(path.name), "", trial
     rel = path.relative_to(root).as_posix()
     base, trial = split_trial(rel, trials_by)
     parts = base.split("/")
-    algorithm = parts[-2] if len(parts) >= 2 else root.name
+    algorithm = parts[-2] if len(parts) >= 2 else absolute(root).name  # ``.`` typed inside ``dso/``: dso
     return validate.label(algorithm), validate.label(rel), validate.label("/".join(parts[:-2])), trial
 
 
 def scene_label(gt_path: Path) -> str:
     """A scene name from a ground-truth path: ``fr2_desk_groundtruth.txt`` -> ``fr2_desk``;
-    EuRoC's ``V1_01_easy/mav0/state_groundtruth_estimate0/data.csv`` -> ``V1_01_easy``."""
+    EuRoC's ``V1_01_easy/mav0/state_groundtruth_estimate0/data.csv`` -> ``V1_01_easy``. The folders
+    are those of the absolute path: ``groundtruth.txt`` typed inside ``fr2_desk/`` is ``fr2_desk``,
+    as ``fr2_desk/groundtruth.txt`` is, whatever the current directory."""
     generic = {"data", "groundtruth", "gt", "mav0", "state_groundtruth_estimate0", "poses", "metadata"}
-    for part in [gt_path.stem, *[p.name for p in gt_path.parents]]:
+    for part in [gt_path.stem, *[p.name for p in absolute(gt_path).parents]]:
         name = re.sub(r"[-_.]?(groundtruth|ground_truth|gt)$", "", part, flags=re.IGNORECASE)
         if name and name.lower() not in generic:
             return name
@@ -210,6 +213,12 @@ def algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> list
         if not subs:
             raise ValidationError(f"{p}: no estimate named {', '.join(sorted(names))} in it or below it")
     return unique_files(out)  # a folder named twice is scored once
+
+
+def absolute(path: Path) -> Path:
+    """``path`` made absolute without resolving links (``..`` taken away as the shell means it):
+    where labels read folder names from, so that they never depend on the current directory."""
+    return Path(os.path.abspath(path))
 
 
 def real_path(path: Path) -> Path:

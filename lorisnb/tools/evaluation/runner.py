@@ -32,6 +32,7 @@ from lorisnb.io.readers.options import check_reading
 from lorisnb.io.readers.plain import TRAJECTORY_FORMATS
 from lorisnb.io.readers.registry import FORMATS
 from lorisnb.tools.evaluation.inputs import (
+    absolute,
     algorithm_folders,
     as_paths,
     labels,
@@ -127,7 +128,8 @@ def _sent_back(spec: EvalSpec, statistics: Any, keep_poses: Any) -> tuple[bool, 
 
 def _check_trials(items: list[tuple[Path, Path | None]], trials_by: str | None) -> None:
     """A ``trials_by`` that matches none of the inputs' paths is an error (:func:`check_trials_by`)."""
-    check_trials_by([labels(p, r, trials_by)[1] if r else "/".join(p.parts[-3:]) for p, r in items], trials_by)
+    check_trials_by([labels(p, r, trials_by)[1] if r else "/".join(absolute(p).parts[-3:]) for p, r in items],
+                    trials_by)  # fmt: skip
 
 
 def _filtered(
