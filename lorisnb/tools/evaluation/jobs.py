@@ -15,6 +15,8 @@ from functools import lru_cache, partial
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from lorisnb.core.lifelong.missing import with_missing
 from lorisnb.core.lifelong.scoring import score_rows
 from lorisnb.core.pipeline.model import FileErrors, ResultFile, check_label, scores_only
@@ -107,29 +109,86 @@ CACHED_BYTES = 32 << 20
 GT_DROP = True
 
 
+def backwards(gt: Trajectory) -> tuple[int, str] | None:
+    """Where a ground truth read from a text file has a stamp earlier than the one on the line
+    before it, (line, reason), else None: a reader sorts such stamps (an estimate's, with a note),
+    but the ground truth is the reference (its span is the time CR and CS-R divide by), and one
+    corrupted stamp (written in nanoseconds, an hour early, 0) sorted into it changes every
+    number. Found from the line numbers the sorted poses keep (increasing unless a stamp went
+    back); repeated stamps are not backwards (the spec's ``repeated`` rule takes them)."""
+    lines = gt.lines
+    if lines is None or len(lines) < 2 or bool((lines[1:] > lines[:-1]).all()):
+        return None
+    order = np.argsort(lines, kind="stable")
+    stamps, at = gt.stamps[order], lines[order]
+    back = np.flatnonzero(stamps[1:] < stamps[:-1])
+    if not back.size:  # pragma: no cover - line order broken only by a stamp going back
+        return None
+    k = int(back[0]) + 1
+    return int(at[k]), (
+        f"the ground truth's stamp {stamps[k]:.9f} goes back from {stamps[k - 1]:.9f} (line {int(at[k - 1])}; "
+        f"{back.size} stamp(s) in all go back); a ground truth is the reference of every number and is not sorted: one "
+        "of the two stamps is wrong (another unit, a clock jump, a stamp 0): fix or remove its line"
+    )
+
+
+def refuse_backwards(path: str | os.PathLike[str], gt: Trajectory, label: str = "") -> None:
+    """A ParseError naming the line where ``gt`` (read from ``path``) goes back in time
+    (:func:`backwards`); ``label`` names the sequence of a file of several."""
+    found = backwards(gt)
+    if found is not None:
+        raise ParseError(path, found[0], label + found[1])
+
+
 @lru_cache(maxsize=64)
 def _read_groundtruth(
     path: Path, fmt: str, stamp: tuple[float, int], times: Path | None, topic: str | None, tf: str | None,
     repeated: str = "drop",
-) -> Trajectory:  # fmt: skip
-    """A ground-truth trajectory, read once per process (until the file changes), arrays read-only."""
-    gt = read_trajectory(path, fmt, stamps=times, topic=topic, tf=tf, repeated=repeated)
+) -> tuple[Trajectory, tuple[str, ...], tuple[int, str] | None]:  # fmt: skip
+    """A ground-truth trajectory, read once per process (until the file changes), arrays read-only,
+    with the reader's notes (its LorisWarnings: poses skipped, stamps repeated) and where its stamps
+    go back (:func:`backwards`; not for a bag: its messages are in the order they were received)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        gt = read_trajectory(path, fmt, stamps=times, topic=topic, tf=tf, repeated=repeated)
+    for w in caught:  # another library's warning goes on as it came
+        if not issubclass(w.category, LorisWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     for a in (gt.stamps, gt.positions, gt.quaternions, gt.lines):
         if a is not None:
             a.setflags(write=False)
-    return gt
+    notes = tuple(dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, LorisWarning)))
+    return gt, notes, None if fmt == "bag" else backwards(gt)
 
 
 def groundtruth_of(path: Path, fmt: str, times: Path | None = None, topic: str | None = None,
-                   tf: str | None = None, repeated: str = "drop") -> Trajectory:  # fmt: skip
+                   tf: str | None = None, repeated: str = "drop", notes: list[str] | None = None) -> Trajectory:  # fmt: skip
     """The ground truth of a pair or a manifest session (cached; read-only arrays); ``repeated``:
-    the rule for poses of a repeated stamp (see :func:`lorisnb.io.readers.plain.read_trajectory`)."""
+    the rule for poses of a repeated stamp (see :func:`lorisnb.io.readers.plain.read_trajectory`).
+    The reader's notes (NaN poses skipped, repeated stamps, each naming the file and line) are
+    added to ``notes`` on every call, as an estimate's are: the input's warnings say them. A text
+    file whose stamps go back is refused (:func:`refuse_backwards`)."""
     stamp = _stamp(path) if path.is_file() else (0.0, 0)
     read = _read_groundtruth if stamp[1] < CACHED_BYTES else _read_groundtruth.__wrapped__  # a large one: not kept
-    gt = read(path, fmt, stamp, times, topic, tf, "drop" if fmt == "openloris" else repeated)
+    gt, said, back = read(path, fmt, stamp, times, topic, tf, "drop" if fmt == "openloris" else repeated)
+    if back is not None:
+        raise ParseError(str(path), *back)
+    if notes is not None:
+        notes.extend(n for n in said if n not in notes)
     if len(gt) < 2:  # nothing to match an estimate to, or one instant: every later message would mislead
         raise ParseError(str(path), None, f"the ground truth has {'no pose' if not len(gt) else 'one pose'} (comments, "
                          "blank lines and skipped poses aside); expected at least two poses spanning the estimate's time")  # fmt: skip
+    return gt
+
+
+def openloris_groundtruth(path: Path, notes: list[str]) -> ResultFile:
+    """An OpenLORIS ground-truth file (every ``seq:`` block; cached, read-only arrays), as
+    :func:`groundtruth_of` gives a plain one: its reader's notes added to ``notes``, a block whose
+    stamps go back refused (:func:`refuse_backwards`)."""
+    gt = read_groundtruth_file(path, GT_DROP)
+    for k, t in gt.sequences.items():
+        refuse_backwards(path, t, f"seq {k}: " if len(gt.sequences) > 1 else "")
+    notes.extend(n for n in gt.warnings if n not in notes)
     return gt
 
 
@@ -217,7 +276,9 @@ def _openloris(job: Job, progress: bool) -> FileErrors | None:
         return None
     if gt_path is None or declared != result.scene:  # the scene's ground truth (load_groundtruth's file)
         gt_path = job.data.groundtruth(result.scene)
-    gt = read_groundtruth_file(gt_path, GT_DROP)
+    said: list[str] = []
+    gt = openloris_groundtruth(gt_path, said)
+    result.warnings[:0] = [n for n in said if n not in result.warnings]  # the ground truth's notes first
     moved = _moved(job.data, result.scene, GT_DROP, result.frame, spec.official_interpolation, _stamp(gt_path))
     return compute_errors(
         result, gt, spec, algorithm=algorithm, file=rel, suite=suite, trial=trial, in_frame=moved,
@@ -236,8 +297,9 @@ def _pair(job: Job) -> FileErrors:
     if "openloris" in (src.fmt, src.gt_fmt):  # every seq: block with its own number, as the native route
         return _openloris_pair(job, algorithm, rel, suite, trial)
     rule = job.spec.repeated_for(src.fmt)
+    notes: list[str] = []  # the ground truth's first, then the estimate's
     gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf,
-                        job.spec.repeated_for(src.gt_fmt))  # fmt: skip
+                        job.spec.repeated_for(src.gt_fmt), notes)  # fmt: skip
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
         est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf, repeated=rule,
@@ -248,7 +310,8 @@ def _pair(job: Job) -> FileErrors:
     del gt  # held by gts alone: let go once matched
     return evaluate_sessions(
         gts, {1: est}, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite,
-        trial=trial, notes=[str(w.message) for w in caught], groundtruth_spans=span, release_groundtruth=gts.pop,
+        trial=trial, notes=notes + [str(w.message) for w in caught], groundtruth_spans=span,
+        release_groundtruth=gts.pop,
     )  # fmt: skip
 
 
@@ -262,9 +325,11 @@ def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) 
     other side only where one trajectory and one frame make the pairing certain, else refused."""
     src = job.source
     assert src is not None
+    gt_notes: list[str] = []
     if src.fmt == src.gt_fmt == "openloris":
         result = _read_result(job)
-        gt_file = read_groundtruth_file(src.groundtruth, GT_DROP)
+        gt_file = openloris_groundtruth(src.groundtruth, gt_notes)
+        result.warnings[:0] = [n for n in gt_notes if n not in result.warnings]  # the ground truth's notes first
         return compute_errors(result, gt_file, job.spec, algorithm=algorithm, file=rel, suite=suite, trial=trial,
                               release=result.sequences.pop)  # fmt: skip
     if src.fmt == "openloris":  # against a plain trajectory: one block, in the ground truth's frame
@@ -283,11 +348,13 @@ def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) 
                 f"with the robot's extrinsics), or {NATIVE}; a ground truth already in {result.frame}: write the "
                 f"estimate in {src.gt_fmt} too"
             )
-        est, notes = {seqs[0]: result.sequences[seqs[0]]}, list(result.warnings)
-        gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, job.spec.repeated)
+        est = {seqs[0]: result.sequences[seqs[0]]}
+        gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, job.spec.repeated,
+                            gt_notes)  # fmt: skip
+        notes = gt_notes + [n for n in result.warnings if n not in gt_notes]
         gts = {seqs[0]: gt}
     else:  # a plain estimate against an OpenLORIS ground truth: one block
-        gt_file = read_groundtruth_file(src.groundtruth, GT_DROP)
+        gt_file = openloris_groundtruth(src.groundtruth, gt_notes)
         seqs = sorted(gt_file.sequences)
         if len(seqs) != 1:
             raise ValidationError(
@@ -301,7 +368,7 @@ def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) 
             warnings.simplefilter("always", LorisWarning)
             est = {seqs[0]: read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf,
                                             repeated=job.spec.repeated)}  # fmt: skip
-        notes = [str(w.message) for w in caught]
+        notes = gt_notes + [str(w.message) for w in caught]
     check_stamp_units(est[seqs[0]], gts[seqs[0]], str(job.path))
     return evaluate_sessions(
         gts, est, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite, trial=trial,
@@ -315,15 +382,15 @@ def _manifest(job: Job) -> FileErrors:
     algorithm, _, suite, trial = labels(job.path / "x", job.root, job.trials_by)
     sessions = [s for s in m.sessions if s.scene == job.scene]
     gts: dict[int, Trajectory] = {}
+    notes: list[str] = []  # the ground truths' first, then the estimates'
     for s in sessions:  # a handful of sessions
         if not s.groundtruth.exists():
             raise ParseError(
                 s.groundtruth, None, f"ground truth of session {s.name!r} not found ({m.path}: root and groundtruth)"
             )
         gts[s.seq] = groundtruth_of(s.groundtruth, s.groundtruth_format, None, m.groundtruth_topic, m.groundtruth_tf,
-                                    job.spec.repeated)  # fmt: skip
+                                    job.spec.repeated, notes)  # fmt: skip
     ests: dict[int, Trajectory] = {}
-    notes: list[str] = []
     found = {s.seq: named_entry(job.path, s.estimate) for s in sessions}  # NFC or NFD, as the file system has it
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
@@ -358,6 +425,8 @@ def _manifest(job: Job) -> FileErrors:
         trial=trial, lifelong=job.spec.lifelong_for(len(sessions)), note=note,
     )  # fmt: skip
     out.groundtruth_spans = spans
+    if errors is None:  # no estimate at all: the ground truths' notes still said
+        out.warnings[:0] = [n for n in notes if n not in out.warnings]
     out.sequences = [  # a missing session's duration is its ground truth's time as the spec evaluates it
         replace(e, gt_start=spans[e.seq][0], gt_end=spans[e.seq][1]) if e.matched == 0 and e.seq in spans else e
         for e in out.sequences
