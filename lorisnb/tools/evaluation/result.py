@@ -298,7 +298,9 @@ class Evaluation:
 
     @property
     def warnings(self) -> list[str]:
-        return [w for f in self.errors for w in f.warnings]
+        """Every note: the spec's on the options (:attr:`notes`: ``lifelong`` on a pair, ...), then
+        each input's (``FileErrors.warnings``: its reader's and its ground truth's, the checks')."""
+        return [*self.notes, *(w for f in self.errors for w in f.warnings)]
 
     @property
     def unscored(self) -> list[Failure]:

@@ -93,7 +93,9 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
             (failed if status == "failed" else skipped).append(value)
     check_duplicates([(str(f.path), (f.suite, f.algorithm, f.scene, f.trial), tuple(e.seq for e in f.sequences))
                       for f in done])  # fmt: skip
-    for w in said_notes(done):  # a note many inputs share: said in full for a few, then counted
+    # the spec's notes on the options (EvalSpec.refuse_inapplicable: harmless here), then the inputs'; a note many
+    # inputs share: said in full for a few, then counted
+    for w in [*dict.fromkeys(notes or []), *said_notes(done)]:
         warnings.warn(w, LorisWarning, stacklevel=3)
     if failed:  # tables without them would look complete: a notebook says so at the call
         more = f" (and {len(failed) - 1} more)" if len(failed) > 1 else ""
