@@ -56,6 +56,7 @@ from lorisnb.tools.report.notebooks import (
     kernel_files,
     notebook_dir,
     notebook_path,
+    refuse_inapplicable_specs,
     run_one,
     select_notebooks,
     use_kernel_files,
@@ -372,6 +373,7 @@ def run_report(
             raise ValidationError("-p output_dir: the report sets each notebook's output folder (its folder of the "
                                   "run); choose where the run goes with --out (run_report's out)")  # fmt: skip
         params = check_parameters(dict(parameters or {}), declared, [Path(n).stem for n in names])
+        refuse_inapplicable_specs(names, notebooks_dir, params)  # as each notebook would, minutes later
         given = params.get("results_dir")
         if results is not None and given is not None and Path(str(given)).resolve() != Path(results).resolve():
             raise ValidationError("--results and -p results_dir name two folders; give one")

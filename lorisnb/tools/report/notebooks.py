@@ -384,3 +384,42 @@ def input_roots(names: list[str], params: Mapping[str, Any], data: Any, source: 
             roots += [data.root / "tum-rgbd", data.root / "published"]
     # each where it is (a link on the way kept: {data}/openloris-scene/... where openloris-scene is a link), once
     return list({r.resolve(): Path(os.path.abspath(r)) for r in roots}.values())
+
+
+def refuse_inapplicable_specs(
+    names: Iterable[str], notebooks_dir: str | os.PathLike[str] | None, parameters: Mapping[str, Any]
+) -> None:
+    """Refuse, before the run folder exists, parameters a selected notebook would refuse once it
+    runs: each notebook's evaluation spec is built from the parameters it declares as the notebook
+    builds it (:func:`lorisnb.tools.notebook.params.evaluation_spec`, its ``session.spec()``) and
+    checked against the inputs it scores (:meth:`~lorisnb.core.spec.evalspec.EvalSpec.refuse_inapplicable`:
+    a pair with ``groundtruth``, as :func:`~lorisnb.tools.evaluation.runner.pair_kind` of its ``fmt``; the
+    sessions of a ``manifest``; else OpenLORIS result files). ``-p conventions tum -p
+    official_interpolation true`` ran ``evaluate_my_results``, which then failed, leaving a run
+    folder and exit status 1, where the report's own check promises a usage error and nothing run."""
+    from lorisnb.core.spec.evalspec import SPEC_NAMES
+    from lorisnb.io.datasets.manifest import read_manifest
+    from lorisnb.tools.evaluation.runner import pair_kind
+    from lorisnb.tools.notebook.params import evaluation_spec
+
+    for name in names:
+        path = notebook_path(name, notebooks_dir)
+        if notebook_problem(path) is not None:  # a failed entry of its own (run_one says why)
+            continue
+        declared = declared_parameters(path)
+        values = {k: v for k, v in parameters.items() if k in declared and v is not None}
+        if not any(k in SPEC_NAMES or k == "conventions" for k in values):
+            continue  # nothing of the spec given to this notebook: its own defaults, which it can take
+        if values.get("groundtruth") is not None:
+            fmt = values.get("fmt", shown_default(declared.get("fmt", {}).get("default", "tum")))
+            kind, what = pair_kind(str(fmt)), "the pair path, groundtruth"
+        elif values.get("manifest") is not None:
+            openloris = read_manifest(values["manifest"]).openloris
+            kind, what = ("openloris" if openloris else "manifest"), f"the sessions of manifest {values['manifest']}"
+        else:
+            kind, what = "openloris", "OpenLORIS result files"
+        try:
+            evaluation_spec(values).refuse_inapplicable(kind, surface="notebook")
+        except ValidationError as exc:
+            raise ValidationError(f"{path.stem} (scoring {what}) would refuse its parameters: {exc}; change or "
+                                  f"leave out the parameter named, or leave {path.stem} out with --notebooks") from None  # fmt: skip
