@@ -309,7 +309,8 @@ def unquoted(exc: ParseError, real: Path, manifest: bool = True) -> ParseError:
     text of the file it quoted: what line, not what it holds (``manifest``: with the option that
     shows it; a folder walked without a manifest has none: the user opens the file)."""
     see = "; pass --manifest-outside, or outside=True, to see it" if manifest else ""
-    return ParseError(exc.path, exc.line, f"not a trajectory file as expected (a link to {real}, outside the results "
+    how = "a link to" if os.path.islink(exc.path) else "in a linked folder, at"  # (the file itself, or a folder above)
+    return ParseError(exc.path, exc.line, f"not a trajectory file as expected ({how} {real}, outside the results "
                       f"folder: its content is not shown{see})")  # fmt: skip
 
 

@@ -234,8 +234,13 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
     except LorisError as exc:  # said with the input it is about (an alignment's or an option's error names none)
         if isinstance(exc, ParseError) and job.kind != "manifest" and job.root is not None:
             # a file found in a folder, linked from outside it (/etc/passwd in a folder received): read, never quoted
-            elsewhere = outside_results(job.path, job.root)
-            if elsewhere is not None and exc.path is not None and real_path(Path(exc.path)) == elsewhere:
+            elsewhere = outside_results(job.path, job.root)  # (a link to nothing: its message quotes no content)
+            if (
+                elsewhere is not None
+                and elsewhere.exists()
+                and exc.path is not None
+                and real_path(Path(exc.path)) == elsewhere
+            ):
                 exc = unquoted(exc, elsewhere, manifest=False)
         said = str(exc)
         if str(job.path) not in said and job.path.name not in said:

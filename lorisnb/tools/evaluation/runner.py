@@ -427,6 +427,12 @@ def evaluate_manifest(
     if m.estimate_format == "kitti" and all(s.groundtruth_format == "kitti" for s in m.sessions):
         the_spec = by_index(the_spec)  # a manifest gives KITTI files no times: pose i with pose i
     compile_trials_by(trials_by)
+    for s in m.sessions:  # an estimate lies in each algorithm's folder: a path leaving it reads one file for all
+        name = os.path.normpath(s.estimate)
+        if os.path.isabs(s.estimate) or name == os.pardir or name.startswith(os.pardir + os.sep):
+            raise ParseError(m.path, None, f"[[session]] {s.name}: estimate = {s.estimate!r} lies outside the algorithm's "
+                             f"folder; expected the name of a file in it (estimate = 'NAME{SUFFIX[m.estimate_format]}', "
+                             "or a path below it), each algorithm's own")  # fmt: skip
     for s in m.sessions:  # a missing ground truth is an error of the whole call
         if not s.groundtruth.exists():
             raise ParseError(
