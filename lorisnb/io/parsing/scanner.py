@@ -172,12 +172,29 @@ def regular_file(path: str | os.PathLike[str]) -> bool:
         return False
 
 
+def _wide_text(head: bytes) -> bool:
+    """Whether bytes holding a NUL are text in UTF-16 or UTF-32: a byte-order mark of either, or
+    bytes that read in one of them (from any offset, ``head`` may start inside a file) as ASCII
+    text, 9 characters of 10 printable or line ends and no NUL among them. Zeros (``head -c 1M
+    /dev/zero``), or ASCII text with a stray NUL, are not: they read as NULs or as CJK signs."""
+    if head[:4] in (b"\xff\xfe\0\0", b"\0\0\xfe\xff") or head[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        return True
+    for encoding, unit in (("utf-16-le", 2), ("utf-16-be", 2), ("utf-32-le", 4), ("utf-32-be", 4)):
+        for offset in range(unit):
+            body = head[offset : offset + (len(head) - offset) // unit * unit]
+            if len(body) < 4 * unit:
+                continue
+            text = body.decode(encoding, errors="replace")
+            ascii_text = sum(c in "\t\n\r" or " " <= c <= "~" for c in text)
+            if "\0" not in text and ascii_text >= 0.9 * len(text):
+                return True
+    return False
+
+
 def binary_reason(head: bytes, what: str) -> str:
     """Why a file whose first bytes ``head`` hold a NUL byte is refused: text in UTF-16 or UTF-32
-    (a Windows editor's "Unicode"; its byte-order mark, or every other byte NUL) said as such."""
-    if head[:4] in (b"\xff\xfe\0\0", b"\0\0\xfe\xff") or head[:2] in (b"\xff\xfe", b"\xfe\xff") or (
-        len(head) >= 8 and (head[1::2].count(0) >= 0.9 * (len(head) // 2) or head[0::2].count(0) >= 0.9 * (len(head) // 2))
-    ):  # fmt: skip
+    (a Windows editor's "Unicode": :func:`_wide_text`) said as such, anything else as binary data."""
+    if _wide_text(head):
         return f"text in UTF-16 or UTF-32 (NUL bytes between the characters); expected {what} as UTF-8 or ASCII text: save it as UTF-8"
     return f"binary data (a NUL byte); expected {what} (text)"
 
