@@ -5,7 +5,9 @@ every statistic of ATE, AOE and RPE is compared; the reading rows of
 :func:`lorisnb.tools.peers.crosscheck_reading.crosscheck_reading` say where the readings differ and why.
 Alignment ``auto`` is the alignment lorisnb chose for the estimate's algorithm, on both sides; what
 evo has no equivalent for (lorisnb's own associations, dropped repeated poses, ``posyaw``, a
-``transform``) is run the nearest evo way and said in every row's note (:func:`evo_lacks`).
+``transform``) is run the nearest evo way and said in every row's note (:func:`evo_lacks`); where
+that nearest way cannot be computed (evo's SE(3) for posyaw on a straight line), the statistics it
+leaves without evo's value are judged on lorisnb's pairs as the others are (:func:`evo_on_pairs`).
 """
 
 from __future__ import annotations
@@ -81,12 +83,17 @@ def evo_statistics(ref, est, spec: EvalSpec, alignment: str | None = None) -> di
     projection, APE and RPE; evo's CLI order): ``matched``, ``rpe_pairs`` and ``{ate, aoe, rpe_trans,
     rpe_rot}_{statistic}``; ``rpe_refused``: evo's reason when its RPE finds no pair (evo_rpe raises).
     ``alignment``: the one to run (default ``spec.align``; ``auto`` must be resolved first, and
-    ``posyaw``, which evo has not, runs as ``se3``)."""
+    ``posyaw``, which evo has not, runs as ``se3``). Where evo raises (a degenerate alignment, no
+    pair in its sync, a NaN pose), ``failed`` maps the step that failed (``sync``: every value;
+    ``ape``: ATE and AOE; ``rpe``) to evo's reason, and the values of that step are missing; an RPE
+    step evo cannot align but which has no pair at its delta either is ``rpe_refused``."""
     em, filters = require("evo.core.metrics"), require("evo.core.filters")
     sync = require("evo.core.sync")
     main_ape, main_rpe = require("evo.main_ape"), require("evo.main_rpe")
     from evo.core.trajectory import Plane, PoseTrajectory3D
 
+    evo = require("evo")
+    fails = (evo.EvoException, np.linalg.LinAlgError)  # evo's own, and numpy's inside evo's math
     ref, est = copy.deepcopy(ref), copy.deepcopy(est)
     if spec.downsample is not None:
         ref.downsample(spec.downsample)
@@ -100,8 +107,11 @@ def evo_statistics(ref, est, spec: EvalSpec, alignment: str | None = None) -> di
         method = (
             sync.SyncMethod.interpolation if spec.association == "evo-interpolate" else sync.SyncMethod.nearest_time
         )
-        ref, est = sync.associate_trajectories(ref, est, max_diff=spec.max_diff, offset_2=spec.t_offset,
-                                               sync_method=method)  # fmt: skip
+        try:
+            ref, est = sync.associate_trajectories(ref, est, max_diff=spec.max_diff, offset_2=spec.t_offset,
+                                                   sync_method=method)  # fmt: skip
+        except fails as exc:  # no pair in evo's sync: nothing of evo's to compare
+            return {"failed": {"sync": str(exc)}}
     how = {"posyaw": "se3"}.get(alignment or spec.align, alignment or spec.align)
     if how == "auto":
         raise ValidationError("align 'auto': resolve it for the algorithm first (EvalSpec.alignment_for)")
@@ -111,24 +121,48 @@ def evo_statistics(ref, est, spec: EvalSpec, alignment: str | None = None) -> di
         project_to_plane=Plane(spec.project_to_plane) if spec.project_to_plane else None,
     )  # fmt: skip
     out: dict[str, Any] = {"matched": ref.num_poses}
+    failed: dict[str, str] = {}
     c = copy.deepcopy
-    for name, rel in (("ate", em.PoseRelation.translation_part), ("aoe", em.PoseRelation.rotation_angle_deg)):
-        out.update({f"{name}_{k}": v for k, v in main_ape.ape(c(ref), c(est), rel, **align).stats.items()})
+    try:
+        for name, rel in (("ate", em.PoseRelation.translation_part), ("aoe", em.PoseRelation.rotation_angle_deg)):
+            out.update({f"{name}_{k}": v for k, v in main_ape.ape(c(ref), c(est), rel, **align).stats.items()})
+    except fails as exc:  # evo's alignment (or its APE) cannot be computed here
+        out = {k: v for k, v in out.items() if not k.startswith(("ate", "aoe"))}
+        failed["ape"] = str(exc)
     unit = _EVO_UNITS.get(spec.rpe_unit)
     if unit is not None:
+
+        def rpe(rel: Any, **aligned: Any) -> Any:
+            return main_rpe.rpe(
+                c(ref), c(est), rel, delta=spec.rpe_delta, delta_unit=em.Unit[unit],
+                rel_delta_tol=spec.rpe_tolerance, all_pairs=bool(spec.rpe_all_pairs),
+                pairs_from_reference=spec.rpe_pairs == "reference", **aligned,
+            )  # fmt: skip
+
         for name, rel in (("rpe_trans", em.PoseRelation.translation_part),
                           ("rpe_rot", em.PoseRelation.rotation_angle_deg)):  # fmt: skip
             try:
-                r = main_rpe.rpe(
-                    c(ref), c(est), rel, delta=spec.rpe_delta, delta_unit=em.Unit[unit],
-                    rel_delta_tol=spec.rpe_tolerance, all_pairs=bool(spec.rpe_all_pairs),
-                    pairs_from_reference=spec.rpe_pairs == "reference", **align,
-                )  # fmt: skip
+                r = rpe(rel, **align)
             except filters.FilterException as exc:  # evo_rpe raises where lorisnb gives NaN with a warning
                 out["rpe_refused"] = str(exc)
                 break
+            except fails as exc:  # evo aligns before it pairs: is there a pair at all? (no pair: refused, as above)
+                out = {k: v for k, v in out.items() if not k.startswith("rpe_")}
+                try:
+                    paired = rpe(rel)  # its pairs, which no alignment changes
+                except filters.FilterException as no_pair:
+                    out["rpe_refused"] = str(no_pair)
+                    break
+                except fails:
+                    paired = None
+                failed["rpe"] = str(exc)
+                if paired is not None:
+                    out["rpe_pairs"] = len(paired.np_arrays["error_array"])
+                break
             out.update({f"{name}_{k}": v for k, v in r.stats.items()})
             out["rpe_pairs"] = len(r.np_arrays["error_array"])
+    if failed:
+        out["failed"] = failed
     return out
 
 
@@ -232,11 +266,16 @@ def crosscheck_evo(
     how = the_spec.alignment_for(str(ours["algorithm"]))  # auto: what lorisnb chose for this algorithm
     shown = how if how == the_spec.align else f"{how} ({the_spec.align})"
     ref, est = evo_read(groundtruth, gt_fmt, gt_topic), evo_read(estimate, fmt, topic)
-    with evo_errors(
-        "cannot evaluate this pair", "check the poses of both files (lorisnb skips NaN poses, evo does not)"
-    ):
-        theirs = evo_statistics(ref, est, the_spec, how)
+    theirs = evo_statistics(ref, est, the_spec, how)
+    failed: dict[str, str] = theirs.pop("failed", {})
     lacks = evo_lacks(the_spec)
+    nan_poses = non_finite_poses(ref, est, groundtruth, estimate)
+    if failed and (nan_poses or not lacks):  # not a definition evo lacks: evo cannot evaluate what lorisnb did
+        raise EvaluationError(
+            f"evo cannot evaluate this pair: {next(iter(failed.values()))}; "
+            + (f"{nan_poses}: lorisnb skips NaN poses, evo does not; remove them to compare with evo" if nan_poses
+               else "check the poses of both files (evo's alignment needs 3 matched poses not on one line)")
+        )  # fmt: skip
     order, all_rows = evo_order(ref, est, groundtruth, estimate, the_spec)
     sequences = [s for f in ev.errors for s in f.sequences]
     with evo_errors("cannot evaluate lorisnb's pairs", "check the poses of both files"):
@@ -247,11 +286,15 @@ def crosscheck_evo(
         return (f"{DEFINITIONS_DIFFER}: {'; '.join(why)}" if why else
                 f"lorisnb (preset {the_spec.preset_name}, align {shown}) against evo reading the files itself")  # fmt: skip
 
-    def judged(row: dict[str, Any]) -> dict[str, Any]:
+    def judged(row: dict[str, Any], step: str | None = None) -> dict[str, Any]:
         """A row that differs from evo's own value by the definitions its note states: said whether evo,
-        on lorisnb's pairs under those definitions (:func:`evo_on_pairs`), gives lorisnb's number."""
+        on lorisnb's pairs under those definitions (:func:`evo_on_pairs`), gives lorisnb's number. A row
+        whose evo ``step`` failed (evo's substitute for a stated definition cannot be computed here) has
+        no evo value; it is judged alike, and its note gives evo's reason."""
         key = row["quantity"]
-        if row["agrees"] or not str(row["note"]).startswith(DEFINITIONS_DIFFER) or not np.isfinite(row["evo"]):
+        if step is not None:
+            row["note"] += f"; evo's own value cannot be computed under its substitute ({failed[step]})"
+        elif row["agrees"] or not str(row["note"]).startswith(DEFINITIONS_DIFFER) or not np.isfinite(row["evo"]):
             return row
         if key == "matched":  # what the association and the dropped poses decide: both stated
             size = any(w in row["note"] for w in ("association", "repeated"))
@@ -266,18 +309,26 @@ def crosscheck_evo(
                         f"{float(bridged[key]):.10g}")  # fmt: skip
         return row
 
-    rows = [judged(agreement_row("matched", shown, ours["matched"], theirs["matched"], ours["matched"],
-                                 note_of(False)))]  # fmt: skip
-    if "rpe_pairs" in theirs:
-        rows.append(judged(agreement_row("rpe_pairs", shown, ours["rpe_pairs"], theirs["rpe_pairs"],
-                                         ours["rpe_pairs"], note_of(True))))  # fmt: skip
+    def step_of(key: str) -> str | None:
+        """The evo step whose failure left ``key`` without evo's value (None: it did not fail)."""
+        if key.startswith("rpe") and _EVO_UNITS.get(the_spec.rpe_unit) is None:
+            return None  # a unit evo has not: said as such, whatever evo's sync did
+        step = "sync" if "sync" in failed else "rpe" if key.startswith("rpe") else "ape"
+        return step if step in failed and key not in theirs else None
+
+    rows = [judged(agreement_row("matched", shown, ours["matched"], theirs.get("matched", np.nan), ours["matched"],
+                                 note_of(False)), step_of("matched"))]  # fmt: skip
+    if "rpe_pairs" in theirs or step_of("rpe_pairs"):
+        rows.append(judged(agreement_row("rpe_pairs", shown, ours["rpe_pairs"], theirs.get("rpe_pairs", np.nan),
+                                         ours["rpe_pairs"], note_of(True)), step_of("rpe_pairs")))  # fmt: skip
     for m in ("ate", "aoe", "rpe_trans", "rpe_rot"):
         n = ours["rpe_pairs"] if m.startswith("rpe") else ours["matched"]  # what the statistics are over
         note = note_of(m.startswith("rpe"))
         for k in STATISTICS:
             key = f"{m}_{k}"
-            if key in theirs:
-                rows.append(judged(agreement_row(key, shown, ours[key], theirs[key], n, note, tol)))
+            if key in theirs or step_of(key):
+                rows.append(judged(agreement_row(key, shown, ours[key], theirs.get(key, np.nan), n, note, tol),
+                                   step_of(key)))  # fmt: skip
             elif "rpe_refused" in theirs and m.startswith("rpe"):
                 rows.append(agreement_row(key, shown, ours[key], float("nan"), 0,
                                           f"{NO_RPE_PAIR}: evo_rpe raises ({theirs['rpe_refused']}); lorisnb gives NaN "
@@ -308,6 +359,18 @@ def explained(table: pd.DataFrame) -> pd.Series:
     note = table["note"].astype(str)
     stated = note.str.startswith(DEFINITIONS_DIFFER) & note.str.contains(f"; {SAME_ON_PAIRS}", regex=False)
     return ~table["agrees"].astype(bool) & (stated | (note == NO_SUCH_UNIT))
+
+
+def non_finite_poses(ref: Any, est: Any, groundtruth: str | os.PathLike, estimate: str | os.PathLike) -> str:
+    """Which of the two trajectories evo read hold poses with NaN or infinite values, with how many
+    (``FILE (N poses)``, joined by ``and``; empty when none): lorisnb skips them, evo computes with them."""
+    found = []
+    for path, traj in ((groundtruth, ref), (estimate, est)):
+        values = np.hstack([np.asarray(traj.positions_xyz, float), np.asarray(traj.orientations_quat_wxyz, float)])
+        n = int(np.count_nonzero(~np.isfinite(values).all(axis=1)))
+        if n:
+            found.append(f"{os.fspath(path)} ({n} {'pose' if n == 1 else 'poses'})")
+    return " and ".join(found)
 
 
 def ev_error(ev) -> Exception:
