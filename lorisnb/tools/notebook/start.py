@@ -342,9 +342,12 @@ def show_inputs(ev: Any, out: Outputs) -> None:
     """What a notebook shows about its inputs: the files that failed or were skipped (written to
     ``input_errors.csv`` for the report, shown only when there are any) and the warnings about
     the inputs, one row per file with the count and the first message (all of them in
-    ``ev.warnings``)."""
+    ``ev.warnings``), after the spec's notes on the options (``ev.notes``: ``lifelong`` on a pair),
+    which no file carries."""
     from IPython.display import display
 
+    for note in getattr(ev, "notes", []):  # (setup silences LorisWarnings: this is where a notebook says them)
+        print(f"note: {note}")
     failures = out.input_errors(ev.failures_table())
     if len(failures):
         display(failures)
