@@ -14,7 +14,7 @@ import numpy as np
 
 from lorisnb.cli.options import UNUSED, param_value, spec_from_args, spec_given
 from lorisnb.cli.outputs import check_outputs, refuse_unused
-from lorisnb.cli.text import clean, format_table, frame_columns, say
+from lorisnb.cli.text import clean, format_advice, format_table, frame_columns, say
 from lorisnb.errors import EvaluationError, FailedInputsWarning, LorisError, LorisWarning, ValidationError
 
 if TYPE_CHECKING:
@@ -138,11 +138,17 @@ def _run_evaluation(
     return ev, notes
 
 
+#: How a manifest chooses the format of its estimates and of its ground truth (:func:`format_advice`).
+MANIFEST_FORMATS = ("estimate_format = '{fmt}' in the manifest", "groundtruth_format = '{fmt}' in the manifest")
+
+
 def _report_problems(ev: Any, notes: list[str]) -> None:
     for n in notes:
         say(f"warning: {n}")
-    for f in ev.failures:
-        say(f"error: {f.error}")
+    for f in ev.failures:  # a manifest names its files' formats (the readers' advice names the options of pairs)
+        say(
+            f"error: {format_advice(f.error, MANIFEST_FORMATS[0], MANIFEST_FORMATS[1]) if ev.kind == 'manifest' else f.error}"
+        )
     for f in ev.unscored:  # in the table, scored as the paper scores it; the exit status says so
         say(f"not scored: {f.error}")
     from lorisnb.tools.evaluation.status import skipped_only

@@ -11,7 +11,7 @@ import warnings
 import pandas as pd
 
 from lorisnb.cli.outputs import check_outputs
-from lorisnb.cli.text import clean, say
+from lorisnb.cli.text import clean, format_advice, say
 from lorisnb.errors import EvaluationError, LorisWarning, ParseError
 
 
@@ -37,8 +37,8 @@ def cmd_consistency(args: argparse.Namespace) -> int:
             # every row in file order, as ov_eval reads it: of a repeated stamp its association takes the first
             gt = read_trajectory(args.gt, args.gt_format, seq=args.seq, topic=args.gt_topic, repeated="keep")
             result = ov_eval_errors(est, gt, cov, align=args.align, max_diff=args.max_diff)
-    except (ParseError, EvaluationError) as exc:
-        say(f"error: {exc}")
+    except (ParseError, EvaluationError) as exc:  # advice in this command's options (an estimate's format is read)
+        say(f"error: {format_advice(str(exc), None, '--gt-format {fmt}', [args.gt])}")
         return 1
     finally:
         for n in dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, LorisWarning)):

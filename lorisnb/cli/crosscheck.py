@@ -15,7 +15,7 @@ from pathlib import Path
 import pandas as pd
 
 from lorisnb.cli.outputs import check_outputs
-from lorisnb.cli.text import say
+from lorisnb.cli.text import format_advice, say
 from lorisnb.core.spec.evalspec import EvalSpec, make_spec
 from lorisnb.core.trajectory.units import check_stamp_units
 from lorisnb.errors import EvaluationError, LorisWarning, ParseError, ValidationError
@@ -30,7 +30,7 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
             warnings.simplefilter("always", LorisWarning)
             table = _crosscheck_table(args)
     except (ParseError, EvaluationError) as exc:  # an input that cannot be read or compared: 1, as every command
-        say(f"error: {exc}")
+        say(f"error: {format_advice(str(exc), '--est-format {fmt}', '--format {fmt}', [args.gt])}")  # its options
         return 1
     finally:
         for n in dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, LorisWarning)):

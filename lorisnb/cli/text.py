@@ -115,3 +115,40 @@ def warning_lines(roots: Mapping[str, str | os.PathLike[str] | None] | None = No
         yield
     finally:
         warnings.showwarning = show
+
+
+#: The readers' advice on a file plainly in another format (:meth:`lorisnb.io.readers.registry.Format.hint`):
+#: it names the options of ``evaluate``, ``sweep``, ``compare`` and ``diff`` on pairs.
+_FORMAT_ADVICE = re.compile(
+    r"read it with --format (?P<fmt>[\w-]+) \(--gt-format (?P=fmt) for the ground truth; (?P<py>fmt=[^()]*? in Python)\)"
+)
+
+
+def format_advice(message: str, est: str | None, gt: str | None, gt_files: Sequence[str] = ()) -> str:
+    """``message`` with the readers' advice on a file in another format said in the words of the
+    command that prints it: ``est`` and ``gt`` are how it chooses the format of an estimate and of a
+    ground truth (an option, ``--est-format``, or a manifest's key; ``{fmt}`` stands for the format;
+    None: it has no such choice). The file is a ground truth when it is one of ``gt_files`` (as
+    given or resolved), an estimate when ``gt_files`` are given and it is none of them, else both
+    ways are said. ``consistency --gt-format openloris`` advised ``--format tum``, which it has not."""
+
+    def said(m: re.Match[str]) -> str:
+        fmt, py = m.group("fmt"), m.group("py")
+        before = message[: m.start()]
+        names = {str(g) for g in gt_files} | {str(Path(g).resolve()) for g in gt_files}
+        is_gt = any(re.search(rf"(^|\s){re.escape(g)}(: |, line \d+: )", before) for g in names) if names else None
+        if is_gt is None:  # which file it is: not told; both ways, the estimate's first
+            ways = [w for w in (est and est.format(fmt=fmt), gt and f"{gt.format(fmt=fmt)} for the ground truth") if w]
+            if not ways:
+                return f"convert it ({py})"
+            return (
+                f"read it with {ways[0]}" + "".join(f" ({w}; {py})" for w in ways[1:]) + f" ({py})" * (len(ways) == 1)
+            )
+        way = gt if is_gt else est
+        if way is None:  # no choice of this file's format here
+            return (
+                f"convert it: this command reads {'a ground truth' if is_gt else 'an estimate'} only as it says ({py})"
+            )
+        return f"read it with {way.format(fmt=fmt)} ({py})"
+
+    return _FORMAT_ADVICE.sub(said, message)
