@@ -146,9 +146,7 @@ def format_advice(message: str, est: str | None, gt: str | None, gt_files: Seque
             )
         way = gt if is_gt else est
         if way is None:  # no choice of this file's format here
-            return (
-                f"convert it: this command reads {'a ground truth' if is_gt else 'an estimate'} only as it says ({py})"
-            )
+            return f"convert it: this command has no option for the format of {'a ground truth' if is_gt else 'an estimate'} ({py})"
         return f"read it with {way.format(fmt=fmt)} ({py})"
 
     return _FORMAT_ADVICE.sub(said, message)
