@@ -44,7 +44,7 @@ import numpy as np
 
 from lorisnb.core.alignment.geometry import Sim3
 from lorisnb.core.spec import validate
-from lorisnb.core.spec.evalspec import EvalSpec, make_spec
+from lorisnb.core.spec.evalspec import PRESETS, EvalSpec, make_spec
 from lorisnb.errors import ParseError, ValidationError
 from lorisnb.io.readers.options import check_reading
 from lorisnb.io.readers.plain import TRAJECTORY_FORMATS
@@ -298,8 +298,10 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
             options[key] = raw[key]
     if "lifelong" not in options and "mode" not in options:  # per session unless the manifest says otherwise
         options["lifelong"] = False
-    try:
-        spec = make_spec(table.get("preset"), surface="manifest", **options, transform=transform)
+    try:  # the preset named by its key (make_spec names it conventions=, the command line's word)
+        preset = table.get("preset")
+        preset = None if preset is None else validate.choice("[conventions] preset", preset, tuple(PRESETS))
+        spec = make_spec(preset, surface="manifest", **options, transform=transform)
     except ValidationError as exc:
         raise ParseError(path, None, str(exc)) from None
     return Manifest(
