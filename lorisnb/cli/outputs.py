@@ -29,6 +29,9 @@ def check_output(
         return
     if str(out).strip() == "":
         raise OutputError(f"{option}: an empty path; expected a {'folder' if folder else 'file'} name")
+    if not folder and str(out).endswith(("/", os.sep)):  # pathlib drops the slash: outs/new.csv/ wrote a file
+        raise OutputError(f"{option} {out}: ends in a slash, which names a folder; {option} writes a file: give its "
+                          f"name without the slash ({str(out).rstrip('/' + os.sep) or out})")  # fmt: skip
     target = Path(out).resolve()
     for i in inputs:
         src = Path(i).resolve()
