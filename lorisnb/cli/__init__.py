@@ -148,7 +148,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--times", default=None, help="KITTI: one times file (a stamp per line) for both files")
     p.add_argument("--gt-times", default=None, help="KITTI: the ground truth's times file")
     p.add_argument("--est-times", default=None, help="KITTI: the estimate's times file")
-    p.add_argument("--seq", type=int, default=None, help="openloris: the sequence (default: the first with poses)")
+    p.add_argument("--seq", type=arg_type(lambda t: int(validate.positive("--seq", t, "", integer=True))), default=None,
+                   help="openloris: the sequence (default: the first with poses)")  # fmt: skip
     p.add_argument(
         "--rpe-frames",
         type=arg_type(lambda t: int(validate.positive("--rpe-frames", t, "frames", integer=True))),

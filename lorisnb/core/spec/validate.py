@@ -74,6 +74,9 @@ def _number(name: str, value: Any, words: Mapping[str, Any]) -> Any:
         text = value.strip().lower()
         if text in words:
             return words[text]
+        if "_" in text:  # float("1_0") is 10; the file readers refuse 1_000: one number syntax for user values
+            raise ValidationError(f"{name}={_show(value)} is not a number: write it without underscores (1000, not "
+                                  "1_000), as trajectory files are read")  # fmt: skip
         try:
             return float(text)
         except ValueError:
