@@ -337,13 +337,24 @@ def crosscheck_openloris(
     scale, deltas = validate.scale_value(scale), check_rpe_deltas(rpe_deltas)  # ('no' was truth-tested: Sim(3))
     with_scale = is_monocular(result_path.parent.name) if scale == "auto" else bool(scale)
     gt = groundtruth_in_frame(gt_file.sequences[s], scene, frame)
-    table = crosscheck(gt, res.sequences[s], scale=with_scale, rpe_deltas=deltas)
+    # lorisnb evaluate's own record of the file in lifelong mode: which sequences match, which one it fitted
+    lifelong = compute_errors(res, gt_file, mode="lifelong", scale=with_scale) if len(res.sequences) > 1 else None
+    try:
+        table = crosscheck(gt, res.sequences[s], scale=with_scale, rpe_deltas=deltas)
+    except EvaluationError as exc:  # named with the file and the sequence, and where to look instead
+        others = [e.seq for e in (lifelong.sequences if lifelong is not None else []) if e.matched and e.seq != s]
+        where = (f"; sequence {others[0]} of the file matches the ground truth: cross-check it with --seq "
+                 f"{others[0]} (seq={others[0]} in Python)" if len(others) == 1 else
+                 f"; sequences {', '.join(map(str, others))} of the file match the ground truth: cross-check one "
+                 "with --seq N (seq=N in Python)" if others else "")  # fmt: skip
+        raise EvaluationError(f"{result_path}, seq {s}: {exc}{where}") from None
     extra = []
     alignment = "sim3" if with_scale else "se3"
     ref_rows = table[(table["quantity"] == "ate_rmse") & (table["alignment"] == alignment)].iloc[0]
     self_aligned = ref_rows["lorisnb"]
-    if len(res.sequences) > 1:
-        ll = score(compute_errors(res, gt_file, mode="lifelong", scale=with_scale)).set_index("seq").loc[s]
+    if lifelong is not None and lifelong.aligned_on not in (None, s):  # fitted on another sequence: a difference
+        ll = score(lifelong).set_index("seq").loc[s]
+        first = "the first sequence with matches" if lifelong.aligned_on != min(res.sequences) else "the first sequence"
         extra.append(
             agreement_row(
                 "ate_rmse",
@@ -351,9 +362,8 @@ def crosscheck_openloris(
                 ll["ate_rmse"],
                 self_aligned,
                 ll["matched"],
-                f"definitions differ: lorisnb lifelong mode aligns on sequence "
-                f"{min(k for k in res.sequences if len(res.sequences[k]))} and applies it to "
-                f"sequence {s}; evo aligns sequence {s} on itself (evo column)",
+                f"definitions differ: lorisnb lifelong mode aligns on sequence {lifelong.aligned_on} ({first}) and "
+                f"applies it to sequence {s}; evo aligns sequence {s} on itself (evo column)",
             )
         )
     kept = read_openloris(result_path, remove_repeated=False)
