@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
+from lorisnb.core.stats.trials import names_a_trial, split_trial
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import LorisError
 from lorisnb.io.readers.openloris import declared_scene
@@ -99,6 +100,32 @@ def safe_name(name: str, where: str) -> str:
         raise UploadRefused(f"{where}: {base!r}: expected a name of letters, digits, '-', '_' and '.', not starting "
                             "with '.'")  # fmt: skip
     return base
+
+
+#: The largest trial number a file's name may carry (``cafe-1-1_trial3.txt``, ``run_3/``): the
+#: tables scores are kept in hold it in 64 bits (a run named for its epoch time in nanoseconds fits).
+MAX_TRIAL = 2**63 - 1
+
+
+def kept_name(path: str, where: str) -> str:
+    """The name an uploaded file (``path``: as sent, or an archive member's path) is kept and scored
+    under: its last part (:func:`safe_name`), its suffix in lower case (the scorer's folder walk reads
+    ``.txt`` and ``.csv`` as written: ``CAFE-1-1.TXT`` kept as ``CAFE-1-1.txt``), and a trial its
+    folders name (``run_2/a.txt``, ``trial3/cafe-1-1.txt``; :func:`~lorisnb.core.stats.trials.split_trial`)
+    in its name (``a_trial2.txt``), where its name names none: ``lorisnb evaluate`` reads such folders
+    as trials 1, 2, ..., and so is the upload scored. A trial number over :data:`MAX_TRIAL` is refused."""
+    base = safe_name(path, where)
+    stem, suffix = (base[: -len(Path(base).suffix)], Path(base).suffix) if Path(base).suffix else (base, "")
+    name = stem + suffix.lower()
+    parts = [p for p in path.split("/") if p not in ("", ".")]
+    if not names_a_trial(base) and len(parts) > 1 and names_a_trial("/".join(parts)):
+        _, trial = split_trial("/".join(parts))
+        name = safe_name(f"{stem}_trial{trial}{suffix.lower()}", where)
+    _, trial = split_trial(name)
+    if trial > MAX_TRIAL:
+        raise UploadRefused(f"{where}: {path!r}: trial number {trial}, too large; expected a trial number of at most "
+                            f"{MAX_TRIAL} (cafe-1-2_trial2.txt, run_2/)")  # fmt: skip
+    return name
 
 
 def _check_text(head: bytes, name: str) -> None:
@@ -256,8 +283,8 @@ def _unzip(src: IO[bytes], label: str, dest: Path, limits: Limits, taken: set[st
                 raise UploadRefused(f"{where}: not a regular file; expected regular files")
             if m.flag_bits & 0x1:
                 raise UploadRefused(f"{where}: encrypted; expected an archive without a password")
-            name = safe_name(m.filename, label)
-            _suffix(name, where, allow_zip=False)
+            _suffix(safe_name(m.filename, label), where, allow_zip=False)
+            name = kept_name(m.filename, where)
             if m.compress_size and m.file_size / m.compress_size > MAX_RATIO:
                 raise UploadRefused(f"{where}: compressed {m.file_size / m.compress_size:.0f} times (a zip bomb?); "
                                     f"result files compress at most {MAX_RATIO} times", 413)  # fmt: skip
@@ -291,6 +318,7 @@ def unpack(files: Iterable[tuple[str, IO[bytes]]], dest: Path, limits: Limits) -
             if _suffix(name, "upload", allow_zip=True) == ".zip":
                 used += _unzip(f, name, dest, limits, taken, limits.unpacked_bytes - used)
                 continue
+            name = kept_name(sent, "upload")
             if name in taken:
                 raise UploadRefused(f"upload: a second file named {name!r}; expected distinct file names")
             taken.add(name)
