@@ -348,10 +348,15 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
         if one is None:
             continue
         within = scope[key]
-        problems += [("failed", Path(f.path).name, f.error, within) for f in one.failures]
-        # "nothing was evaluated" of a file's own evaluation, named for no file: its file's row says why
-        problems += [("not scored", Path(f.path).name, f.error, within) for f in one.unscored if f.kind != "nothing"]
-        problems += [("skipped", Path(f.path).name, f.error, within) for f in skipped_only(one)]
+        said = [("failed", Path(f.path).name, f.error, within) for f in one.failures]
+        said += [("not scored", Path(f.path).name, f.error, within) for f in one.unscored if f.kind != "nothing"]
+        said += [("skipped", Path(f.path).name, f.error, within) for f in skipped_only(one)]
+        if not said and not any(f.sequences for f in one.errors):  # each evaluation is of one file, key[0]:
+            # nothing of it scored and no reason named for it ("nothing was evaluated", said for no
+            # file) is a failure of that file, never a silent empty scoring
+            why = next((f.error for f in one.unscored if f.kind == "nothing"), "nothing of it was scored")
+            said.append(("failed", key[0], why, within))
+        problems += said
     for p in native:  # a file none of whose sequences is in a view: never evaluated
         shape = shapes[p.name]
         if not any(name == p.name for name, _ in evaluated) and shape is not None and shape.seqs:
@@ -416,7 +421,7 @@ def _draw(out: dict[str, Any], by_view: list[tuple[Any, list[FileErrors]]], whol
             name = f"timeline-{k}.png"
             fig.savefig(folder / name, dpi=80)
             out["figures"].append(dict(sequences=sorted(keep), file=name))
-        except (LorisError, ValueError) as exc:
+        except (LorisError, ValueError, ArithmeticError) as exc:  # the figure: a note, the scores stand
             note = f"no timeline figure: {scrub(str(exc), upload, data, groundtruth)}"
             out["notes"].append(dict(text=note, sequences=sorted(keep & scored)))
 
