@@ -79,6 +79,33 @@ def test_advice_on_other_data_is_left_out(tmp_path, data):
          "tool's numbers stay reproducible",
          "x.txt: 3 stamps look like nanoseconds written without zero padding; as written they are out of order"),
         ("positions or orientations differ (by 2 deg); or not.", "positions or orientations differ (by 2 deg); or not."),
+        # option advice inside a parenthesis of ';' clauses: only that clause goes, the parenthesis balanced
+        ("cafe-1-1.txt: stamps in different units: the estimate's stamps look like nanoseconds (median stamp "
+         "1.56e+18; a EuRoC CSV read as TUM text? --format euroc; or divide the stamps by 1e9), but the ground "
+         "truth's stamps are seconds. Nothing was compared.",
+         "cafe-1-1.txt: stamps in different units: the estimate's stamps look like nanoseconds (median stamp "
+         "1.56e+18; divide the stamps by 1e9), but the ground truth's stamps are seconds. Nothing was compared"),
+        ("x: stamps in different units: the estimate's stamps are pose indices 0, 1, 2, ... (a KITTI file read "
+         "without its times: give --est-times FILE), but the ground truth's stamps are seconds; give both files "
+         "their times (--est-times and --gt-times), or neither to pair two KITTI files by index. Nothing was compared.",
+         "x: stamps in different units: the estimate's stamps are pose indices 0, 1, 2, ..., but the ground truth's "
+         "stamps are seconds. Nothing was compared"),
+        ("x: the stamps of both files look like nanoseconds (estimate: median stamp 1e+18; ground truth: median "
+         "stamp 1e+18), but lorisnb's times are seconds: EuRoC CSV files read as TUM text? (--format euroc / "
+         "--gt-format euroc); else divide the stamps of both by 1e9. Nothing was compared.",
+         "x: the stamps of both files look like nanoseconds (estimate: median stamp 1e+18; ground truth: median "
+         "stamp 1e+18), but lorisnb's times are seconds: EuRoC CSV files read as TUM text? else divide the stamps "
+         "of both by 1e9. Nothing was compared"),
+        ("x.txt: looks like a EuRoC CSV (--gt-format euroc for the ground truth; fmt='euroc' or lorisnb.read_euroc "
+         "in Python)", "x.txt: looks like a EuRoC CSV"),
+        ("seq 2: too few pairs; give a smaller delta (--rpe-frames / --rpe-metres; rpe_deltas= in Python)",
+         "seq 2: too few pairs; give a smaller delta"),
+        ("the step is the RPE delta (--rpe-delta with --rpe-unit; rpe_delta= and rpe_unit= in Python)",
+         "the step is the RPE delta"),
+        ("gt: is a folder; expected the ground truth as a TUM file (a folder is a ground truth only as a ROS 2 bag, "
+         "--gt-format bag)", "gt: is a folder; expected the ground truth as a TUM file"),
+        ("x: no stamps (--est-times, --gt-times or --times; stamps= in Python). Give the file of the poses' stamps "
+         "there", "x: no stamps. Give the file of the poses' stamps there"),
     ],
 )  # fmt: skip
 def test_a_team_is_not_advised_options_it_cannot_pass(tmp_path, data, text, shown):
@@ -99,3 +126,24 @@ def test_a_parenthesis_of_option_advice_leaves_its_sentence(tmp_path, data):
     assert team_text(text, challenge) == "home-1.txt, seq 3: the first pose is 2.1 s after the ground truth starts"
     two = "seq 2: few poses matched (pass align_frames=1 in Python); widen the bracket, or drop it (--max-gap 0)."
     assert team_text(two, challenge) == "seq 2: few poses matched; widen the bracket"
+
+
+@pytest.mark.parametrize(("scale", "unit"), [(1e9, "nanoseconds"), (None, "nanoseconds")])
+def test_a_stamp_unit_failure_reads_whole(tmp_path, data, scale, unit):
+    """A TUM file of cafe-1 with its stamps in nanoseconds (or 1e300): the team read "...look like
+    nanoseconds (median stamp 1.56e+18; Nothing was compared", cut at the ';' inside the parenthesis."""
+    challenge = read_challenge(challenge_file(tmp_path, data, final_closed=True))
+    rows = [line.split() for line in (data.icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt").read_text().splitlines()
+            if line[:1].isdigit()]  # fmt: skip
+    stamp = (lambda s: str(int(float(s) * scale))) if scale else (lambda s: "1e300")
+    sub = tmp_path / "sub"
+    (sub / "files").mkdir(parents=True)
+    (sub / "files" / "cafe-1-1.txt").write_text("".join(" ".join([stamp(r[0]), *r[1:]]) + "\n" for r in rows))
+    plain = {"cafe-1-1.txt": dict(format="tum", scene="cafe", seq=1)}
+    result = score_folder(sub / "files", challenge.data, challenge.spec, plain=plain, groundtruth=tmp_path / "gt")
+    [failure] = result["failures"]
+    assert "--format euroc" in failure["error"]  # the organizer's text keeps the option
+    said = team_text(failure["error"], challenge)
+    median = "1.56e+18" if scale else "1e+300"
+    assert said == (f"stamps in different units: the estimate's stamps look like {unit} (median stamp {median}; "
+                    "divide the stamps by 1e9), but the ground truth's stamps are seconds. Nothing was compared")  # fmt: skip

@@ -80,8 +80,39 @@ NO_GROUNDTRUTH = re.compile(r"ground truth of scene '?(\w+)'? not found")
 #: A command-line option (``--align-frames``) or a Python keyword argument (``align_frames=1``,
 #: ``trials_by= in Python``) a message advises: a team passes neither (the challenge's spec is the
 #: organizers', and its files are scored by the server).
-OPTION = re.compile(r"(?<![\w-])--[A-Za-z][\w-]*|\b[a-z]+(?:_[a-z]+)+=")
+OPTION = re.compile(r"(?<![\w-])--[A-Za-z][\w-]*|\b[a-z]+(?:_[a-z]+)+=|\bin Python\b")
 ALTERNATIVE = re.compile(r",? or ")
+
+
+def _outside(text: str, at: int) -> bool:
+    """Whether position ``at`` of ``text`` is outside every parenthesis."""
+    return text.count("(", 0, at) <= text.count(")", 0, at)
+
+
+def _split_outside(text: str, pattern: str) -> list[str]:
+    """``text`` split where ``pattern`` matches outside parentheses (a clause of a parenthesis
+    stays in it: ``(median 1e18; divide by 1e9)`` is one piece)."""
+    out, at = [], 0
+    for m in re.finditer(pattern, text):
+        if _outside(text, m.start()):
+            out.append(text[at : m.start()])
+            at = m.end()
+    return out + [text[at:]]
+
+
+def _paren_without_options(m: re.Match[str]) -> str:
+    """A parenthesis of a message without its clauses (``;``-separated) that advise an option; a
+    clause after one left out loses its leading ``or``/``else``; none left: the parenthesis goes."""
+    clauses = m.group(2).split(";")
+    kept, dropped = [], False
+    for c in clauses:
+        if OPTION.search(c):
+            dropped = True
+            continue
+        c = c.strip()
+        kept.append(re.sub(r"^(?:or|else)\s+", "", c) if dropped else c)
+        dropped = False
+    return f"{m.group(1)}({'; '.join(kept)})" if kept and any(kept) else ""
 
 
 def _without_options(part: str) -> str:
@@ -95,16 +126,18 @@ def _without_options(part: str) -> str:
     body = part[: len(part) - len(end)]
     pieces, seps, at = [], [""], 0
     for m in ALTERNATIVE.finditer(body):
-        if body.count("(", 0, m.start()) == body.count(")", 0, m.start()):  # outside parentheses
+        if _outside(body, m.start()):
             pieces.append(body[at : m.start()])
             seps.append(m.group())
             at = m.end()
     pieces.append(body[at:])
-    kept = [(sep, piece) for sep, piece in zip(seps, pieces, strict=True) if not OPTION.search(piece)]
+    kept = [(sep, piece) for k, (sep, piece) in enumerate(zip(seps, pieces, strict=True)) if not OPTION.search(piece)
+            and not (k and piece.startswith("neither ") and OPTION.search(pieces[k - 1]))]  # fmt: skip
     if len(pieces) == 1:  # no alternatives: the sentence stays, without its parenthesis of options (below)
         kept = [("", body)]
     out = "".join((sep if k else "") + piece for k, (sep, piece) in enumerate(kept))
-    out = re.sub(r"\s*\([^()]*\)", lambda m: "" if OPTION.search(m.group()) else m.group(), out).strip()
+    out = re.sub(r"(\s*)\(([^()]*)\)", lambda m: _paren_without_options(m) if OPTION.search(m.group()) else m.group(),
+                 out).strip()  # fmt: skip
     return "" if not out or OPTION.search(out) else out + end
 
 
@@ -122,19 +155,26 @@ def team_text(text: str, challenge: Challenge) -> str:
             return f"the server could not read the ground truth of {scene}; tell the organizers"
         return f"{scene} is not one of this challenge's scenes; it ranks {scenes}: upload result files of those"
     text = re.sub(r"\s*\(data root [^)]*\)", "", text)
-    parts = re.split(r"(?<=[.;])\s+", text)
+    parts = [
+        p for p in _split_outside(text, r"(?<=[.;])(?<!\.\.\.)\s+") if p
+    ]  # a parenthesis's ';' is not a clause's end
     kept: list[str] = []
     dropped = False  # the part before was advice, left out: a clause after its ';' goes with it
+    gap = False  # a part left out since the last one kept
     for p in parts:
         if dropped and p[:1].islower():
             continue
         q = "" if SERVER_ADVICE.search(p) else _without_options(p)
         dropped = not q and p.endswith(";")
         if q:
+            if gap and kept and kept[-1].endswith(";") and q[:1].isupper():  # "...; [advice.] Nothing was"
+                kept[-1] = kept[-1][:-1] + "."
             kept.append(q)
+        gap = not q
     if kept == parts:
         return text
-    return " ".join(kept).rstrip(" ;.") or "the server could not score this file; tell the organizers"
+    out = re.sub(r"([?!]);", r"\1", " ".join(kept))  # "text? (--opt); else" without its parenthesis
+    return out.rstrip(" ;.") or "the server could not score this file; tell the organizers"
 
 
 def _hidden_note(challenge: Challenge, scene: str, seq: int) -> str:
