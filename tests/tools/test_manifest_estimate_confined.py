@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 import lorisnb as ln
+from lorisnb.cli import main
 from lorisnb.errors import ParseError
 
 
@@ -59,3 +60,19 @@ def test_a_dangling_link_says_the_same_inside_and_outside(tmp_path, data, icra20
     errors = sorted(f.error for f in ev.failures)
     assert len(errors) == 2 and all("which does not exist; expected" in e for e in errors)
     assert not any("not a trajectory file" in e for e in errors)
+
+
+@pytest.mark.parametrize("kind", ["missing", "folder"])
+def test_a_manifest_ground_truth_that_is_no_file_stops_the_call_before_any_work(tmp_path, data, est, kind, capsys):
+    """A session's ground truth that is missing and one that is a folder are the same error, of the
+    whole call, before anything is scored (a folder failed the whole algorithm, exit 1, while a missing
+    file stopped the call, exit 2); the command line exits 2 for both."""
+    gt = tmp_path / "gt.txt"
+    if kind == "folder":
+        gt.mkdir()
+    m = _manifest(tmp_path, gt)
+    what = "is a folder" if kind == "folder" else "not found"
+    with pytest.raises(ParseError, match=rf"ground truth of session 'desk' {what}; expected a trajectory file"):
+        ln.evaluate_manifest(m, tmp_path / "results")
+    assert main(["evaluate", str(tmp_path / "results"), "--manifest", str(m), "--no-progress"]) == 2
+    assert f"ground truth of session 'desk' {what}" in capsys.readouterr().err

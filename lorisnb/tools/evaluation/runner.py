@@ -433,11 +433,13 @@ def evaluate_manifest(
             raise ParseError(m.path, None, f"[[session]] {s.name}: estimate = {s.estimate!r} lies outside the algorithm's "
                              f"folder; expected the name of a file in it (estimate = 'NAME{SUFFIX[m.estimate_format]}', "
                              "or a path below it), each algorithm's own")  # fmt: skip
-    for s in m.sessions:  # a missing ground truth is an error of the whole call
-        if not s.groundtruth.exists():
+    for s in m.sessions:  # a missing ground truth (or a folder) is an error of the whole call, before any work
+        if not s.groundtruth.exists() or s.groundtruth.is_dir():
+            what = "is a folder" if s.groundtruth.exists() else "not found"
             raise ParseError(
-                s.groundtruth, None, f"ground truth of session {s.name!r} not found ({m.path}: root and groundtruth)"
-            )
+                s.groundtruth, None, f"ground truth of session {s.name!r} {what}; expected a trajectory file "
+                f"({m.path}: root and groundtruth)"
+            )  # fmt: skip
     folders = algorithm_folders(results, m)
     _check_trials([(f / "x", r) for f, r in folders], trials_by)
     scored, keep = _sent_back(the_spec, statistics, keep_poses)
