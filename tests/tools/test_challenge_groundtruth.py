@@ -131,3 +131,28 @@ def test_a_challenge_on_lorisnb_s_sample_data_says_it_is_for_practice(tmp_path, 
     assert "note: its ground truth is lorisnb's sample data" in err and "Ground truth the teams cannot have" in err
     # the bundled class challenge is that challenge
     assert read_challenge(ROOT / "teaching" / "challenge" / "class.toml").public_groundtruth is not None
+
+
+def test_a_copy_of_a_hidden_sequence_is_refused_without_its_numbers(tmp_path, data):
+    """A development upload (cafe-1 shown; cafe-2 hidden until the final closes) holding cafe-2's
+    ground truth was refused saying "gt2.txt: cafe-2's positions ... (all 3605 matched poses ...)":
+    a number of a hidden sequence's ground truth. Said now as the file, a copy, and nothing more;
+    a copy of a shown sequence keeps its detail."""
+    from lorisnb.errors import ValidationError
+    from lorisnb.tools.challenge.scoring import score_folder
+
+    challenge = read_challenge(challenge_file(tmp_path, data))
+    gt = (data.root / "openloris-scene" / "groundtruth" / "gt_cafe_1.txt").read_text()
+    files = tmp_path / "sub" / "files"
+    files.mkdir(parents=True)
+    (files / "a.txt").write_bytes(cafe_files(data, "odom")[0].read_bytes())
+    (files / "gt2.txt").write_text("scene: cafe\nframe: base_link\n" + gt[gt.index("seq: 2") :])
+    views = [[("cafe", 1)], [("cafe", 1), ("cafe", 2)]]  # the development phase's: cafe-2 once the final closes
+    with pytest.raises(ValidationError) as hidden:
+        score_folder(files, challenge.data, challenge.spec, views=views)
+    assert str(hidden.value) == ("refused, not ranked: this upload holds the ground truth itself, not an estimate "
+                                 "(gt2.txt: a copy of the ground truth). Upload your system's output")  # fmt: skip
+    with pytest.raises(ValidationError) as shown:  # every sequence shown: the detail, its count of poses
+        score_folder(files, challenge.data, challenge.spec, views=[[("cafe", 1), ("cafe", 2)]])
+    assert re.search(r"gt2\.txt: cafe-2's positions and orientations are the ground truth's \(all \d+ matched poses",
+                     str(shown.value))  # fmt: skip

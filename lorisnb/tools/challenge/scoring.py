@@ -138,17 +138,21 @@ def _attributed(f: FileErrors, text: str) -> list[tuple[str, int]]:
     return [(f.scene, q) for q in (named or seqs)]
 
 
-def groundtruth_copies(errors: Iterable[FileErrors]) -> list[str]:
+def groundtruth_copies(errors: Iterable[FileErrors], shown: Any = None) -> list[str]:
     """Each sequence of ``errors`` (at least :data:`COPY_MIN_POSES` matched) whose positions, or
     orientations, equal the ground truth's at every matched pose (within :data:`COPY_ATE_M` and
-    :data:`COPY_AOE_DEG` after the alignment), said as ``FILE: cafe-1's positions ...``."""
+    :data:`COPY_AOE_DEG` after the alignment), said as ``FILE: cafe-1's positions ...``; one not
+    in ``shown`` (the sequences whose scores teams see from the start; default all), said as
+    ``FILE: a copy of the ground truth`` alone: nothing of a hidden sequence's ground truth is told."""
     out = []
     for f in errors:
         for e in f.sequences:
             if e.matched < COPY_MIN_POSES:
                 continue
             pos, rot = bool(np.all(e.ate <= COPY_ATE_M)), bool(np.all(e.aoe <= COPY_AOE_DEG))
-            if pos or rot:
+            if (pos or rot) and shown is not None and (f.scene, e.seq) not in shown:
+                out.append(f"{Path(f.path).name}: a copy of the ground truth")
+            elif pos or rot:
                 what = "positions and orientations" if pos and rot else "positions" if pos else "orientations"
                 within = f"{COPY_ATE_M * 1000:g} mm" if pos else f"{COPY_AOE_DEG:g} deg"
                 out.append(f"{Path(f.path).name}: {f.scene}-{e.seq}'s {what} are the ground truth's (all "
@@ -336,7 +340,7 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
                     errors.append(f if len(seqs) == len(f.sequences) else replace(f, sequences=seqs))
         check_duplicates([(Path(f.path).name, (f.suite, f.algorithm, f.scene, f.trial),
                            tuple(e.seq for e in f.sequences)) for f in errors])  # fmt: skip
-        copies = groundtruth_copies(errors)
+        copies = list(dict.fromkeys(groundtruth_copies(errors, None if views is None else (every[:1] or [()])[0])))
         if copies:  # the whole submission: it is not ranked, and says why
             listed = "; ".join(copies)
             raise ValidationError(f"refused, not ranked: this upload holds the ground truth itself, not an estimate "
