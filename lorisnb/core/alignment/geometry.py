@@ -143,11 +143,13 @@ def _degenerate(source: np.ndarray, target: np.ndarray, cov: np.ndarray) -> str 
     """:func:`degenerate_alignment` given the cross-covariance of the positions: a noun phrase, said as
     'the alignment was fitted on {why}' and 'no alignment can be determined: {why}'."""
     n = len(source)
+    if n == 1:  # (one position is no spread of positions: said as the count it is)
+        return "only 1 matched position (fewer than 3)"
     for side, p in (("estimate", source), ("ground-truth", target)):
         hi = np.array([p[:, k].max() for k in range(3)])  # per column: several times as fast as axis=0
         lo = np.array([p[:, k].min() for k in range(3)])
         if (hi - lo).max() <= 1e-12 * max(1.0, float(max(np.abs(hi).max(), np.abs(lo).max()))):
-            return f"{n} matched {side} positions, all identical (zero spread)"
+            return f"{n} matched {side} positions, {'both' if n == 2 else 'all'} identical (zero spread)"
     d = np.linalg.svd(cov, compute_uv=False)
     if n < 3 or d[1] <= max(DEGENERATE_RATIO * d[0], np.finfo(float).eps):
         return f"{n} matched positions on one line" if n >= 3 else f"only {n} matched positions (fewer than 3)"

@@ -5,7 +5,7 @@ for every input kind: each looks at a few poses and returns a message of
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -140,12 +140,17 @@ def other_spans(
 
 
 def degenerate_note(
-    label: str, est_positions: np.ndarray, a: Association, pairs: PositionPairs | None, with_scale: bool = False
+    label: str,
+    est_positions: np.ndarray,
+    a: Association,
+    pairs: PositionPairs | None,
+    with_scale: bool = False,
+    applied_to: Sequence[int] = (),
 ) -> str | None:
     """:func:`lorisnb.core.pipeline.plausibility.degenerate_fit` of an alignment fitted on the matched
-    poses ``a`` (``with_scale``: a Sim(3) one): judged on the spread poses of :func:`spread_pairs`
-    first (a long sequence that is not degenerate is found so at once), on all of them only when
-    those few are."""
+    poses ``a`` (``with_scale``: a Sim(3) one; ``applied_to``: the other sequences it aligns): judged
+    on the spread poses of :func:`spread_pairs` first (a long sequence that is not degenerate is found
+    so at once), on all of them only when those few are."""
     if pairs is not None and pairs.degenerate() is None:
         return None
-    return plausibility.degenerate_fit(label, est_positions[a.est_index], a.gt_positions, with_scale)
+    return plausibility.degenerate_fit(label, est_positions[a.est_index], a.gt_positions, with_scale, applied_to)

@@ -5,7 +5,7 @@ wrong, the numbers behind it, and the likely cause. :func:`lorisnb.core.pipeline
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -186,7 +186,11 @@ def rotation_not_held(label: str, median_aoe: float, lever: float, matched: int,
 
 
 def degenerate_fit(
-    label: str, est_positions: np.ndarray, gt_positions: np.ndarray, with_scale: bool = False
+    label: str,
+    est_positions: np.ndarray,
+    gt_positions: np.ndarray,
+    with_scale: bool = False,
+    applied_to: Sequence[int] = (),
 ) -> str | None:
     """The alignment was fitted on matched positions that cannot determine a rotation (fewer than
     3, all identical, or all on one line: :func:`lorisnb.core.alignment.geometry.degenerate_alignment`), so
@@ -196,7 +200,8 @@ def degenerate_fit(
     variance (a scale of NaN) and it stops with ``LinAlgError`` (lorisnb takes the scale 1). An
     arbitrary rotation is each tool's own rounding, so the numbers after it need not be the official
     tool's (a lifelong file whose first sequence has 2 matched poses, with Sim(3): AOE 44.4 deg here,
-    32.0 deg there)."""
+    32.0 deg there). ``applied_to``: the other sequences whose errors come after this alignment (a
+    lifelong file's later sequences with matches), named with it."""
     why = degenerate_alignment(est_positions, gt_positions)
     if why is None:
         return None
@@ -213,10 +218,15 @@ def degenerate_fit(
             "the numbers may differ from its numbers"
         )
         fix = "--align-frames 1, --align none" if not with_scale else "--align none, or --scale off --align-frames 1"
+    where = ""
+    if applied_to:
+        later = [str(k) for k in applied_to]
+        named = f"seq {later[0]}" if len(later) == 1 else f"seqs {', '.join(later[:-1])} and {later[-1]}"
+        where = f", in this sequence and in {named}, which the lifelong alignment is applied to"
     return (
         f"{label}: the alignment was fitted on {why}, so its rotation is arbitrary and so are the errors "
-        f"after it ({official}); check this sequence's output, or evaluate it with the conventions of pairs "
-        f"({fix})."
+        f"after it{where} ({official}); check this sequence's output, or evaluate it with the conventions of "
+        f"pairs ({fix})."
     )
 
 

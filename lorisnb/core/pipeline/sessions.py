@@ -218,9 +218,10 @@ def evaluate_sessions(
     degenerate: set[int] = set()  # the sequences whose fit is said to be degenerate (said once, not twice)
     if frames is not None:  # an OpenLORIS file is aligned as the official tool aligns it, degenerate or not: said
         fitted = ([] if aligned_on is None else [aligned_on]) if lifelong else [s for s in seqs if len(assoc[s])]
-        for s in fitted:
+        for s in fitted:  # in lifelong mode, the later sequences' errors come after that fit too: named
+            applied = [k for k in seqs if k != s and len(assoc[k])] if lifelong else []
             note = checks.degenerate_note(f"{name}, seq {s}", est[s].positions, assoc[s], spread_pairs(s),
-                                          method == "sim3")  # fmt: skip
+                                          method == "sim3", applied)  # fmt: skip
             if note is not None:
                 degenerate.add(s)
                 found.append(note)
