@@ -262,3 +262,62 @@ def test_a_team_sees_only_what_the_shown_set_said(tmp_path, data):
     view = seen({3: shifted}, "market", plain={"seq1.tum": tum})
     told = json.dumps(view)
     assert "market" not in told and "seq1.tum" not in told, told
+
+
+def test_a_live_phase_shows_nothing_before_it_opens(tmp_path, data):
+    """Week 1 ranks cafe-1, week 2 (live too) cafe-2 from its opening on: a week-1 submission of
+    both showed cafe-2's values, and week 2's board, while week 2 had not opened (a phase's scores
+    showed whenever it was live). Now cafe-2 is named, without a value, until week 2 opens; then
+    its row is the one cafe-2 has alone (odometry: 2 sequences, cafe-2's CR 0.9996)."""
+    now = time.time()
+
+    class Clock:
+        t = now
+
+        def __call__(self) -> float:
+            return self.t
+
+    path = tmp_path / "weeks.toml"
+    path.write_text(f"""[challenge]
+groundtruth = "{data.root}"
+folder = "{tmp_path / "server"}"
+opens = {iso(now - 7200)}
+closes = {iso(now + 7200)}
+
+[[phase]]
+name = "week1"
+scenes = ["cafe"]
+sequences = {{ cafe = [1] }}
+closes = {iso(now + 3600)}
+
+[[phase]]
+name = "week2"
+scenes = ["cafe"]
+sequences = {{ cafe = [2] }}
+opens = {iso(now + 3600)}
+""", encoding="utf-8")  # fmt: skip
+    clock = Clock()
+    app = create_app(read_challenge(path), clock=clock)
+    token = store.add_team(app.state.server.engine, "a", now + 7000)
+    odom = [data.icra20 / "per-seq" / "odom" / f"cafe-1-{q}-odom.txt" for q in (1, 2)]
+    with TestClient(app) as client:
+        r = client.post("/api/submissions", files=[("files", (p.name, p.read_bytes())) for p in odom],
+                        headers={"Authorization": f"Bearer {token}"})  # fmt: skip
+        assert r.status_code == 201, r.text
+        before = wait_scored(client, r.json()["id"])
+        board = {p["phase"]: p for p in client.get("/api/leaderboard").json()["phases"]}
+        page = client.get(f"/submissions/{before['id']}").text
+        clock.t = now + 3700  # week 2 open
+        after = client.get(f"/api/submissions/{before['id']}").json()
+        board_after = {p["phase"]: p for p in client.get("/api/leaderboard").json()["phases"]}
+    assert [r["seq"] for r in before["rows"]] == [1]
+    assert [(h["scene"], h["seq"]) for h in before["hidden_sequences"]] == [("cafe", 2)]
+    assert before["hidden_sequences"][0]["shown"].startswith("shown once phase 'week2' opens (")
+    assert "0.9996" not in page and "cafe-1-2-odom.txt" not in json.dumps(before["rows"])
+    assert board["week2"]["rows"] == [] and board["week2"]["hidden"].startswith(
+        "the leaderboard of phase 'week2' is shown once it opens ("
+    )
+    assert [r["seq"] for r in after["rows"]] == [1, 2] and after["hidden_sequences"] == []
+    assert round(after["rows"][1]["cr"], 4) == 0.9996
+    assert board_after["week2"]["hidden"] is None  # open: shown (no submission of its own yet)
+    assert [(r["team"], r["scene"]) for r in board_after["week1"]["rows"]] == [("a", "cafe")]

@@ -181,7 +181,12 @@ def _hidden_note(challenge: Challenge, scene: str, seq: int) -> str:
     phase = challenge.shown_by(scene, seq)
     if phase is None:
         return "in no phase of this challenge: never shown"
-    return f"shown once phase {phase.name!r} closes ({when(phase.closes)})"
+    return f"shown once phase {phase.name!r} {_shows_when(phase)}"
+
+
+def _shows_when(phase: Phase) -> str:
+    """When a phase's scores start to show, in words (:attr:`.config.Phase.shows_from`)."""
+    return f"{'opens' if phase.leaderboard == 'live' else 'closes'} ({when(phase.shows_from)})"
 
 
 def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.DataFrame, now: float) -> dict[str, Any]:
@@ -196,7 +201,7 @@ def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.Dat
     )  # fmt: skip
     if sub["status"] != "scored" or not phase.shows_scores(now):
         if sub["status"] == "scored":
-            view["hidden"] = f"scores of phase {phase.name!r} are shown once it closes"
+            view["hidden"] = f"scores of phase {phase.name!r} are shown once it {_shows_when(phase)}"
         return view
     result = json.loads(sub["result"])
     scored = _scored(result)
@@ -267,7 +272,7 @@ def leaderboard(challenge: Challenge, phase: Phase, subs: list[dict[str, Any]], 
                                metric_name=METRICS.get(challenge.metric, (challenge.metric, True))[0],
                                rows=[], sentences=[], test="", hidden=None, without_output=[])  # fmt: skip
     if not phase.shows_scores(now):
-        out["hidden"] = f"the leaderboard of phase {phase.name!r} is shown once it closes"
+        out["hidden"] = f"the leaderboard of phase {phase.name!r} is shown once it {_shows_when(phase)}"
         return out
     latest = latest_scored(subs, phase.name)
     wanted = phase_sequences(phase, durations)

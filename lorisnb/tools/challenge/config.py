@@ -85,8 +85,16 @@ class Phase:
         return self.opens <= now < self.closes
 
     def shows_scores(self, now: float) -> bool:
-        """Scores, tables and figures of this phase may be shown (live, or closed)."""
-        return self.leaderboard == "live" or now >= self.closes
+        """Scores, tables and figures of this phase may be shown: once it has opened (a phase not yet
+        open shows nothing of its sequences: an organizer reveals a sequence a week by a phase of
+        its own), while it runs if ``live``, and once it has closed."""
+        return now >= self.opens and (self.leaderboard == "live" or now >= self.closes)
+
+    @property
+    def shows_from(self) -> float:
+        """When this phase's scores are first shown (:meth:`shows_scores`): its opening if ``live``,
+        else its close."""
+        return self.opens if self.leaderboard == "live" else self.closes
 
     def keeps(self, scene: str, seq: int) -> bool:
         if scene not in self.scenes:
@@ -144,29 +152,30 @@ class Challenge:
 
     def visible(self, sequences: Iterable[tuple[str, int]], now: float) -> frozenset[tuple[str, int]]:
         """The ``sequences`` (scene, seq) whose scores may leave the server at ``now``: those of a
-        phase that shows its scores (live, or closed). A sequence in a shown and a hidden phase is
-        shown; one in no phase never is."""
+        phase that shows its scores (opened and live, or closed). A sequence in a shown and a hidden
+        phase is shown; one in no phase never is."""
         shown = [p for p in self.phases if p.shows_scores(now)]
         return frozenset((s, int(q)) for s, q in sequences if any(p.keeps(s, int(q)) for p in shown))
 
     def views(
         self, sequences: Iterable[tuple[str, int]], phase: Phase | None = None
     ) -> list[frozenset[tuple[str, int]]]:
-        """Every set of :meth:`visible` sequences the challenge goes through, in order: before any
-        ``after-close`` phase closes, then after each closes; of ``phase``, those while its scores
-        show. A submission of the phase is scored on each set alone, and its figure drawn of each
-        (:func:`.scoring.score_folder`): no number shown comes from ground truth not shown."""
+        """Every set of :meth:`visible` sequences the challenge goes through, in order: as each
+        phase's scores start to show (a ``live`` phase's opening, an ``after-close`` phase's close);
+        of ``phase``, those while its scores show. A submission of the phase is scored on each set
+        alone, and its figure drawn of each (:func:`.scoring.score_folder`): no number shown comes
+        from ground truth not shown."""
         seqs = list(sequences)
-        times = [-math.inf] + sorted({p.closes for p in self.phases if p.leaderboard == "after-close"})
+        times = [-math.inf] + sorted({p.shows_from for p in self.phases})
         if phase is not None:
             times = [t for t in times if phase.shows_scores(t)]
         return [v for v in dict.fromkeys(self.visible(seqs, t) for t in times) if v]
 
     def shown_by(self, scene: str, seq: int) -> Phase | None:
-        """The phase whose scores first show a sequence: a live phase holding it, else the
-        after-close phase holding it that closes first; None if no phase holds it (never shown)."""
+        """The phase whose scores first show a sequence (:attr:`Phase.shows_from`: a live phase's
+        opening, an after-close phase's close); None if no phase holds it (never shown)."""
         holding = [p for p in self.phases if p.keeps(scene, seq)]
-        return min(holding, key=lambda p: -math.inf if p.leaderboard == "live" else p.closes, default=None)
+        return min(holding, key=lambda p: p.shows_from, default=None)
 
 
 def sequences_of(durations: Any) -> list[tuple[str, int]]:
