@@ -238,7 +238,9 @@ def figure_file(result: dict[str, Any], challenge: Challenge, durations: pd.Data
     if figures is None:
         return "timeline.png" if result.get("figure") and _scored(result) <= visible else None
     for f in figures:
-        if {(s, int(q)) for s, q in f["sequences"]} == visible and re.fullmatch(r"timeline-\d+\.png", f["file"]):
+        if {(s, int(q)) for s, q in f["sequences"]} == visible and re.fullmatch(
+            r"(?:claims/\w+/)?timeline-\d+\.png", f["file"]
+        ):
             return str(f["file"])
     return None
 

@@ -7,7 +7,9 @@ ground truth with :func:`lorisnb.tools.evaluation.runner.evaluate_pairs` (the up
 :func:`.uploads.plan`). It scores each set of sequences the submission's phase shows as the phases
 close (:meth:`.config.Challenge.views`) on those sequences alone (the others stripped from the
 files first: no number shown comes from ground truth still hidden), draws the paper's timeline
-figure of each, and writes its outcome to a JSON file named for its claim; the
+figure of each into a folder of its claim's (``claims/<claim>``), and writes its outcome to a JSON
+file named for its claim (two scorings of one submission never write one file; each ends with its
+server, :func:`die_with_parent`); the
 server commits that outcome to the database (:func:`.store.finish`), and shows of it only what
 is visible (:mod:`.board`).
 
@@ -66,7 +68,8 @@ from lorisnb.tools.evaluation.status import skipped_only
 #: ground truth uploaded as it is gives 0 m and 6e-15 deg). A copy changed by more is not told.
 COPY_ATE_M, COPY_AOE_DEG, COPY_MIN_POSES = 1e-4, 1e-3, 10
 
-FILES = "files"  # a submission's folder: files/ (as uploaded), plan.json, result-<claim>.json, timeline-<k>.png
+FILES = "files"  # a submission's folder: files/ (as uploaded), plan.json, result-<claim>.json, claims/<claim>/
+CLAIMS = "claims"  # a submission's folder: each scoring's own work (pairs/, strip/, timeline-<k>.png) under its claim
 GROUNDTRUTH = "groundtruth"  # the server folder's one-sequence ground truths (sequence_groundtruth)
 LOCK = "scorer.lock"  # in the server's folder: held by the one scorer of its queue (Scorer._take_queue)
 
@@ -84,7 +87,8 @@ def scrub(text: str, folder: Path, data: DataPaths, groundtruth: Path | None = N
     """A message with the server's paths taken out: the upload's folder (its files by name, also
     as linked for scoring, :func:`_pair_folder`) and the hidden ground truth's folders (the data
     root and ``groundtruth``, the server's one-sequence files: never named to a team)."""
-    pairs = "(?:pairs|strip)" + re.escape(os.sep) + r"\d+" + re.escape(os.sep)
+    sep = re.escape(os.sep)
+    pairs = f"(?:{CLAIMS}{sep}\\w+{sep})?(?:pairs|strip){sep}\\d+{sep}"
     text = re.sub(re.escape(f"{folder.parent}{os.sep}") + f"({pairs})?" + re.escape(f"{FILES}{os.sep}"), "", text)
     text = text.replace(f"{folder}{os.sep}", "").replace(str(folder.parent), "the upload")
     for root in [data.root.resolve(), data.root] + ([groundtruth.resolve(), groundtruth] if groundtruth else []):
@@ -116,18 +120,18 @@ def sequence_groundtruth(data: DataPaths, scene: str, seq: int, folder: Path) ->
     return out
 
 
-def _pair_folder(sub: Path, k: int, name: str) -> Path:
-    """A folder named ``files`` holding only the upload's file ``name`` (a hard link): scored from
-    it, a plain file's rows have the algorithm ``files`` as an OpenLORIS file's on the server (so
-    ``scale = "auto"`` is the challenge's choice, never chosen by a file's name)."""
-    folder = sub / "pairs" / str(k) / FILES
+def _pair_folder(files: Path, work: Path, k: int, name: str) -> Path:
+    """A folder named ``files`` in ``work`` holding only the upload's file ``name`` (of ``files``; a
+    hard link): scored from it, a plain file's rows have the algorithm ``files`` as an OpenLORIS
+    file's on the server (so ``scale = "auto"`` is the challenge's choice, never chosen by a file's name)."""
+    folder = work / "pairs" / str(k) / FILES
     folder.mkdir(parents=True, exist_ok=True)
     dest = folder / name
     if not dest.exists():
         try:
-            os.link(sub / FILES / name, dest)
+            os.link(files / name, dest)
         except OSError:
-            shutil.copyfile(sub / FILES / name, dest)
+            shutil.copyfile(files / name, dest)
     return folder
 
 
@@ -229,7 +233,8 @@ def strip_sequences(src: Path, dest: Path, keep: Iterable[int], blocks: Blocks |
 
 def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | None = None, *,
                  plain: Mapping[str, Mapping[str, Any]] | None = None, groundtruth: Path | None = None,
-                 views: Sequence[Iterable[tuple[str, int]]] | None = None) -> dict[str, Any]:  # fmt: skip
+                 views: Sequence[Iterable[tuple[str, int]]] | None = None, work: Path | None = None,
+                 ) -> dict[str, Any]:  # fmt: skip
     """Score the result files in ``folder`` as ``lorisnb evaluate`` does: OpenLORIS result files
     with :func:`~lorisnb.tools.evaluation.runner.evaluate`, and each file of ``plain`` (name ->
     format, scene, seq: :func:`.uploads.plan`) with
@@ -247,8 +252,13 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
     The outcome: per-sequence rows (every column of :meth:`Evaluation.sequence_rows`), each file
     that failed or was not scored with its reason (paths scrubbed, :func:`scrub`), the notes with
     the sequences each is about, and a timeline figure in ``figures`` of each view the submission
-    has output in (``timeline-<k>.png``), drawn from that view's scores."""
+    has output in (``timeline-<k>.png``), drawn from that view's scores.
+
+    ``work`` is the scoring's own folder (default beside ``folder``): the files it writes to score
+    (the stripped copies, a plain file's folder) go there, so that two scorings of one upload
+    never write one file (:class:`Scorer` gives each claim its own, ``claims/<claim>``)."""
     plain = dict(plain or {})
+    work = work if work is not None else folder.parent
     gt_folder = groundtruth if groundtruth is not None else folder.parent / GROUNDTRUTH
     native = sorted(p for p in folder.iterdir() if p.is_file() and p.name not in plain)
     every: list[Any] = [_Every()] if views is None else [frozenset((s, int(q)) for s, q in v) for v in views]
@@ -295,7 +305,7 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
             if key not in evaluated:
                 src = p
                 if key[1] is not None:
-                    src = folder.parent / "strip" / str(len(evaluated)) / FILES / p.name
+                    src = work / "strip" / str(len(evaluated)) / FILES / p.name
                     strip_sequences(p, src, key[1], shape)
                 seqs = frozenset((shape.scene, q) for q in kept)
                 shown = replace(data, shown=seqs)  # the time-overlap check names these spans alone
@@ -315,7 +325,7 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
                 try:
                     gt = sequence_groundtruth(data, str(info["scene"]), int(info["seq"]), gt_folder)
                     run((name, None), seq, lambda k=k, name=name, info=info, gt=gt: evaluate_pairs(
-                        [_pair_folder(folder.parent, k, name)], gt, spec, fmt=str(info["format"]), gt_fmt="openloris",
+                        [_pair_folder(folder, work, k, name)], gt, spec, fmt=str(info["format"]), gt_fmt="openloris",
                         scene=str(info["scene"]), jobs=1, progress=False))  # fmt: skip
                 except LorisError as exc:  # an option of the challenge's spec this format cannot take
                     evaluated[(name, None)] = None
@@ -424,7 +434,9 @@ def _draw(out: dict[str, Any], by_view: list[tuple[Any, list[FileErrors]]], whol
             fig = plot_timeline(errors, durations, table, spec.eps, spec.phi, spec.delta, title="this submission")
             name = f"timeline-{k}.png"
             fig.savefig(folder / name, dpi=80)
-            out["figures"].append(dict(sequences=sorted(keep), file=name))
+            # named from the submission's folder (claims/<claim>/timeline-0.png: a scoring's own)
+            rel = (folder / name).relative_to(upload.parent) if folder.is_relative_to(upload.parent) else Path(name)
+            out["figures"].append(dict(sequences=sorted(keep), file=rel.as_posix()))
         except (LorisError, ValueError, ArithmeticError) as exc:  # the figure: a note, the scores stand
             note = f"no timeline figure: {scrub(str(exc), upload, data, groundtruth)}"
             out["notes"].append(dict(text=note, sequences=sorted(keep & scored)))
@@ -445,7 +457,8 @@ def _write(path: Path, outcome: dict[str, Any]) -> None:
 class Task:
     """What a scoring process needs (picklable: a Dask worker gets it too): the submission's
     folder, the hidden ground truth, the spec, where its outcome goes, its limits, the server's
-    folder of one-sequence ground truths and the sets of sequences to draw a figure of."""
+    folder of one-sequence ground truths, the sets of sequences to draw a figure of and the
+    scoring's own folder (its claim's: ``claims/<claim>``; empty: the submission's folder)."""
 
     folder: str
     data: DataPaths
@@ -455,17 +468,48 @@ class Task:
     memory_bytes: int
     groundtruth: str
     views: tuple[tuple[tuple[str, int], ...], ...]
+    work: str = ""
+
+
+def die_with_parent() -> None:
+    """End this process as soon as the process that started it ends, killed (SIGKILL) included: a
+    scoring forked from the fork server watches its server by
+    :func:`multiprocessing.parent_process` (the end of a pipe the server alone holds, closed by the
+    system when it dies); one started by :func:`score_on_worker` watches for the Dask worker that
+    started it (its parent process changes when that one ends). Without this, a scorer outlived
+    a killed server and scored on beside the restarted server's scorer of the same submission."""
+    parent = multiprocessing.parent_process()
+    if parent is not None:
+
+        def watch() -> None:
+            parent.join()
+            os._exit(1)
+
+    else:
+        first = os.getppid()
+
+        def watch() -> None:
+            while os.getppid() == first:
+                time.sleep(0.5)
+            os._exit(1)
+
+    threading.Thread(target=watch, name="lorisnb-score-parent", daemon=True).start()
 
 
 def score_in_child(task: Task) -> None:
-    """The scoring process: limits set, then :func:`score_folder` (the upload's plan read from its
-    folder), its outcome written to ``task.out``."""
+    """The scoring process: ended with the server (:func:`die_with_parent`), limits set, then
+    :func:`score_folder` (the upload's plan read from its folder; its work and figures in
+    ``task.work``), its outcome written to ``task.out``."""
+    die_with_parent()  # before the limits: the watching thread's stack is not charged to the scoring
     _limit(task.cpu_seconds, task.memory_bytes)
     sub = Path(task.folder)
     gt = Path(task.groundtruth)
+    work = Path(task.work) if task.work else sub
     try:
+        work.mkdir(parents=True, exist_ok=True)
         plain = json.loads((sub / PLAN).read_text(encoding="utf-8")) if (sub / PLAN).is_file() else {}
-        outcome = score_folder(sub / FILES, task.data, task.spec, sub, plain=plain, groundtruth=gt, views=task.views)
+        outcome = score_folder(sub / FILES, task.data, task.spec, work, plain=plain, groundtruth=gt, views=task.views,
+                               work=work)  # fmt: skip
     except MemoryError:
         outcome = dict(error=f"scoring needed more than the challenge's memory limit of {task.memory_bytes / 1e6:g} MB")
     except LorisError as exc:
@@ -664,7 +708,8 @@ class Scorer:
         sub = store.submission(self.engine, sid)
         views = self.views.get(sub["phase"] if sub is not None else "", ())
         task = Task(str(folder), self.challenge.data, self.challenge.spec, str(out), self.limits["score_seconds"],
-                    self.limits["score_memory_mb"] * 1_000_000, str(self.challenge.folder / GROUNDTRUTH), views)  # fmt: skip
+                    self.limits["score_memory_mb"] * 1_000_000, str(self.challenge.folder / GROUNDTRUTH), views,
+                    str(folder / CLAIMS / claim))  # fmt: skip
         if self._client is not None:
             future = self._client.submit(score_on_worker, task, key=f"lorisnb-score-{sid}-{claim}", pure=False)
             self._running[sid] = _Running(_Remote(future), claim, time.monotonic(), out)
