@@ -7,8 +7,8 @@ Exactly as ``ov_eval``'s ``ResultTrajectory`` computes them (github.com/rpng/ope
 
 - **Association** (``AlignUtils::perform_association``, offset 0, ``max_diff`` 0.02 s): each
   estimate pose, in order, takes the ground-truth pose nearest in time less than ``max_diff`` away
-  among those after the one the previous match took (:func:`associate_sequential`); a matched pose
-  is stamped with its ground truth's stamp.
+  among those after the one the previous match took (:func:`associate_sequential`, with ov_eval's
+  comparisons of each difference as computed); a matched pose is stamped with its ground truth's stamp.
 - **Alignment** (``align``: ``posyaw`` (ov_eval's default: translation and yaw), ``se3``, ``sim3``,
   ``none``; :func:`lorisnb.core.conventions.choices.fit_alignment`), fitted on all matched positions
   both ways: the estimate onto the ground truth for the ATE, the ground truth onto the estimate
@@ -145,48 +145,100 @@ class Consistency:
 def associate_sequential(
     gt_stamps: np.ndarray, est_stamps: np.ndarray, max_diff: float = OV_MAX_DIFF
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``ov_eval``'s association (``AlignUtils::perform_association`` with offset 0): each estimate
-    stamp in order takes the ground-truth stamp nearest to it (less than ``max_diff`` seconds
-    away; ties: the earlier) among those after the one the previous match took. Returns the
-    matched ``(gt index, est index)`` arrays, in estimate order. Both stamp arrays sorted (the ground truth may repeat a stamp).
+    """``ov_eval``'s association (``AlignUtils::perform_association`` with offset 0), with its
+    floating-point comparisons: a pointer into the ground truth, which only moves forward, skips the
+    rows with ``g < t`` and ``|g - t| > max_diff`` (each difference as computed, never ``t - max_diff``
+    against ``g``), then takes rows while ``|g - t|`` is below ``max_diff`` and below the last one
+    taken, and stops at the first that is not (so ties go to the earlier row, a repeated stamp to its
+    first row, and a row exactly ``max_diff`` before ``t`` stops the scan without a match). The
+    estimate pose is paired with the last row taken; the pointer stays after it. Returns the matched
+    ``(gt index, est index)`` arrays, in estimate order.
 
-    Vectorized: each estimate stamp's nearest ground-truth stamp, by ``searchsorted``. Only where
-    two estimate stamps would share one (an estimate denser than the ground truth) does the rule's
-    "after the previous match" matter; those runs are resolved one stamp at a time."""
+    Vectorized: each estimate stamp's scan started where nothing before it would stop it (the first
+    row it does not skip, found by bisection on ov_eval's own test); its result follows from the
+    nearest rows around ``t``. Only where the previous match left the pointer beyond that row (an
+    estimate denser than the ground truth), or where differences may round (stamps within
+    ``2 max_diff`` of 0) or the ground truth is not in order, is ov_eval's scan run as written, on
+    those poses alone, until its pointer is again where the vectorized scan has it."""
     g = np.asarray(gt_stamps, float)
     e = np.asarray(est_stamps, float)
-    if g.size == 0 or e.size == 0:
+    md = float(max_diff)
+    n = g.size
+    if n == 0 or e.size == 0:
         return np.zeros(0, int), np.zeros(0, int)
-    right = np.clip(np.searchsorted(g, e, side="left"), 0, g.size - 1)
-    left = np.clip(right - 1, 0, g.size - 1)
-    d_left, d_right = np.abs(g[left] - e), np.abs(g[right] - e)
-    nearest = np.where(d_left <= d_right, left, right)  # ties: the earlier stamp, as the scan stops there
-    ok = np.abs(g[nearest] - e) < max_diff
-    ei = np.flatnonzero(ok)
-    gi = nearest[ok]
-    if (gi.size < 2 or np.all(gi[1:] > gi[:-1])) and (g.size < 2 or np.all(g[1:] > g[:-1])):
-        return gi, ei
-    return _associate_in_order(g, e, max_diff)
+    if not np.all(g[1:] >= g[:-1]):  # not in order (NaN too): ov_eval's scan as written
+        gi, ei = _ov_scan(g, e, md, np.zeros(1, np.intp), np.zeros(e.size, np.intp))
+        return gi[gi >= 0], ei[gi >= 0]
+    right = np.searchsorted(g, e, side="left")  # the first row with g >= t: never skipped
+    lo, hi = np.zeros(e.size, np.intp), right.copy()
+    while True:  # bisection: the rows ov_eval skips (g < t and |g - t| > max_diff) are a prefix
+        active = lo < hi
+        if not active.any():
+            break
+        mid = (lo + hi) // 2
+        skip = np.abs(g.take(mid, mode="clip") - e) > md
+        lo = np.where(active & skip, mid + 1, lo)
+        hi = np.where(active & ~skip, mid, hi)
+    first = lo  # where the scan of each stamp starts when the previous match does not hold it back
+    d_first = np.abs(g.take(first, mode="clip") - e)
+    matched = (first < n) & (d_first < md)  # below max_diff (<=) and below the best so far (max_diff)
+    # the scan takes rows while |g - t| decreases: up to the row before t, or the one after if nearer
+    # (not if as near: the earlier), or the first of a repeated stamp before t
+    d_before = np.abs(g.take(right - 1, mode="clip") - e)
+    d_after = np.where(right < n, np.abs(g.take(right, mode="clip") - e), np.inf)
+    end = np.where(d_after < d_before, right, right - 1)
+    repeat = np.where(np.append(g[1:] == g[:-1], False), np.arange(n), n)
+    repeat = np.minimum.accumulate(repeat[::-1])[::-1]  # the first repeated row at or after each row
+    best = np.where(first >= right, first, np.minimum(end, repeat.take(first, mode="clip")))
+    after = np.where(matched, best + 1, first)  # the pointer after each stamp
+    before = np.concatenate([[0], after[:-1]])
+    exact = np.abs(e) >= 2 * md  # then every difference below max_diff is exact (Sterbenz), no two equal
+    redo = np.flatnonzero((before > first) | ~exact)
+    if redo.size:
+        gi, ei = _ov_scan(g, e, md, redo, before, first, after)
+        best[ei], matched[ei] = gi, gi >= 0
+    ei = np.flatnonzero(matched)
+    return best[ei], ei
 
 
-def _associate_in_order(g: np.ndarray, e: np.ndarray, max_diff: float) -> tuple[np.ndarray, np.ndarray]:
-    """The rule of :func:`associate_sequential` one estimate stamp at a time (``ov_eval``'s scan),
-    for an estimate denser than its ground truth, or a ground truth with a repeated stamp (read in
-    file order, as ov_eval reads it): the scan stops at a row no nearer than the row before, so it
-    takes the first row of a repeated stamp, and stops there even where a later stamp is nearer."""
+def _ov_scan(
+    g: np.ndarray,
+    e: np.ndarray,
+    md: float,
+    starts: np.ndarray,
+    pointer: np.ndarray,
+    first: np.ndarray | None = None,
+    sync: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """ov_eval's scan as written (``perform_association``), from each estimate index of ``starts``
+    (increasing) with the pointer ``pointer[start]``, one pose at a time until the pointer after a
+    pose equals ``sync`` there (None: to the end); ``first``: where each stamp's scan may begin (the
+    rows before it are skipped anyway). Returns the scanned poses' ``(gt index or -1, est index)``."""
+    gl, n = g.tolist(), g.size
     out_g, out_e = [], []
-    start = 0  # the first ground-truth stamp the next match may take
-    for i, t in enumerate(e):  # rare (a denser estimate, a repeated stamp), and what the rule is
-        j = max(start, int(np.searchsorted(g, t - max_diff, side="right")))  # ov_eval skips what is too early
-        best, best_j = max_diff, -1
-        while j < g.size and abs(g[j] - t) < best:
-            best, best_j = abs(g[j] - t), j
-            j += 1
-        if best_j >= 0:
+    done = -1
+    for s in starts.tolist():  # poses whose pointer depends on the previous match, and no others
+        if s <= done:
+            continue
+        p = int(pointer[s])
+        for i in range(s, e.size):
+            t = float(e[i])
+            if first is not None:
+                p = max(p, int(first[i]))
+            while p < n and gl[p] < t and abs(gl[p] - t) > md:
+                p += 1
+            best, best_j = md, -1
+            while p < n and abs(gl[p] - t) <= md:
+                if abs(gl[p] - t) >= best:
+                    break
+                best, best_j = abs(gl[p] - t), p
+                p += 1
             out_g.append(best_j)
             out_e.append(i)
-            start = best_j + 1
-    return np.array(out_g, int), np.array(out_e, int)
+            done = i
+            if sync is not None and p == int(sync[i]):
+                break
+    return np.array(out_g, np.intp), np.array(out_e, np.intp)
 
 
 def _jpl_matrix(q: np.ndarray) -> np.ndarray:
