@@ -50,6 +50,8 @@ def test_leaderboard_on_the_bundled_results(per_seq):
         assert text.startswith(f"In {scene}") and "cannot tell it apart" in text and "smallest possible p" in text
     assert "Output missing on some sequences: dso (1/2)" in f.sentences[("", "cafe")]
     assert "alpha 0.05" in f.test and "Holm" in f.test
+    # the pairs' own correction: one Holm family over every pair of every scene (it said "within each scene")
+    assert "within each scene" not in f.test and f"Holm over {len(f.pairs)} pair(s) of 4 scene(s)" in f.test
     for _, g in f.board.groupby(["suite", "scene"]):  # best value first within the rank
         assert g["value"].is_monotonic_decreasing
 

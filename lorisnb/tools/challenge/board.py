@@ -286,7 +286,7 @@ def leaderboard(challenge: Challenge, phase: Phase, subs: list[dict[str, Any]], 
         return out
     rows += _failed_teams(out["without_output"], rows, wanted)
     table = pd.DataFrame(rows)
-    f = findings(table, wanted, challenge.metric)
+    f = findings(table, wanted, challenge.metric, who="teams")
     board = f.board.rename(columns={"algorithm": "team"})
     scenes = aggregate_scenes(table, wanted)[["scene", "algorithm", "cr", "c_ate_rmse"]].rename(
         columns={"algorithm": "team"}
@@ -307,19 +307,8 @@ def leaderboard(challenge: Challenge, phase: Phase, subs: list[dict[str, Any]], 
     board = board.sort_values(["scene", "position"], key=lambda c: c.map(order) if c.name == "scene" else c)
     out["rows"] = [{k: _plain(r[k]) for k in BOARD_COLUMNS} for _, r in board.iterrows()]
     out["sentences"] = [f.sentences[k] for k in f.sentences]
-    out["test"] = test_words(f.pairs)
+    out["test"] = f.test
     return out
-
-
-def test_words(pairs: pd.DataFrame) -> str:
-    """How the ranks were tested, in the words the tests report of themselves (the ``test`` and
-    ``correction`` of each pair, :func:`lorisnb.core.stats.inference.pairwise`: one Holm family of
-    every pair of teams of every scene of the phase); without a pair (one team), that none was tested."""
-    if pairs.empty or not {"test", "correction"} <= set(pairs.columns):
-        return "rank = 1 + the number of teams significantly better (one team per scene: no pair to test)"
-    tests = "; ".join(dict.fromkeys(pairs["test"].dropna().astype(str)))
-    corrections = "; ".join(dict.fromkeys(pairs["correction"].dropna().astype(str)))
-    return f"rank = 1 + the number of teams significantly better by {tests}, {corrections}"
 
 
 def _failed_teams(teams: list[str], rows: list[dict[str, Any]], wanted: pd.DataFrame) -> list[dict[str, Any]]:

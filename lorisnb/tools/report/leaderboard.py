@@ -58,16 +58,16 @@ def most_trials(table: pd.DataFrame) -> pd.DataFrame:
     return trials.rename("trials").reset_index()
 
 
-def _test_words(pairs: pd.DataFrame, alpha: float) -> str:
-    tests = sorted(set(pairs["test"].dropna().astype(str))) if "test" in pairs.columns else []
-    corrections = sorted(set(pairs["correction"].dropna().astype(str))) if "correction" in pairs.columns else []
-    named = (
-        "; ".join(tests)
-        if tests
-        else "lorisnb.core.stats.inference.pairwise (sequences paired; trials where there are 3 or more)"
-    )
-    how = corrections[0].split(" over ")[0] if corrections else "Holm"
-    return f"rank = 1 + the number of algorithms significantly better by {named}, {how}-corrected within each scene, alpha {alpha:g}"
+def test_words(pairs: pd.DataFrame, alpha: float, who: str = "algorithms") -> str:
+    """How the ranks were tested, in the words the tests report of themselves: the ``test`` and
+    ``correction`` of each pair (:func:`lorisnb.core.stats.inference.pairwise`: one Holm family of
+    every pair of every scene); ``who``: what is ranked (the challenge's board says teams)."""
+    if pairs.empty or not {"test", "correction"} <= set(pairs.columns):
+        return f"rank = 1 + the number of {who} significantly better (one per scene: no pair to test)"
+    tests = "; ".join(dict.fromkeys(pairs["test"].dropna().astype(str)))
+    corrections = "; ".join(dict.fromkeys(pairs["correction"].dropna().astype(str)))
+    how = corrections or f"Holm over every pair of every scene, alpha {alpha:g}"
+    return f"rank = 1 + the number of {who} significantly better by {tests}, {how}"
 
 
 def findings(
@@ -77,13 +77,14 @@ def findings(
     alpha: float = 0.05,
     level: float = 0.95,
     seed: int = 0,
+    who: str = "algorithms",
 ) -> Findings:
     """The leaderboard of ``table`` (a per-sequence table of :meth:`Evaluation.sequences`, with
     trials), its pairwise tests and the sentences (see the module docstring): the values, ranks and
     tests of ``lorisnb compare`` (:func:`lorisnb.tools.decisions.comparison.compare_table`; a sequence without
-    output counts as a failed run)."""
+    output counts as a failed run). ``who``: what the ranks rank, in :attr:`Findings.test`'s words."""
     if table.empty:
-        return Findings(pd.DataFrame(columns=BOARD_COLUMNS), pd.DataFrame(), {}, "")
+        return Findings(pd.DataFrame(columns=BOARD_COLUMNS), pd.DataFrame(), {}, test_words(pd.DataFrame(), alpha, who))
     res = compare_table(table, durations, metric, level=level, alpha=alpha, seed=seed)  # what compare ranks on
     pairs = res.pairs
     board = res.algorithms.drop(columns=["coverage"]).rename(
@@ -104,7 +105,7 @@ def findings(
         (suite, scene): sentence(g, pairs[(pairs["suite"] == suite) & (pairs["scene"] == scene)], alpha)
         for (suite, scene), g in board.groupby(["suite", "scene"], sort=False)
     }
-    return Findings(board, pairs, sentences, _test_words(pairs, alpha))
+    return Findings(board, pairs, sentences, test_words(pairs, alpha, who))
 
 
 def _value(r: pd.Series) -> str:
