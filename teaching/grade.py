@@ -11,7 +11,8 @@ Exit status 0 when every submission was graded, 1 otherwise (a message says why;
 could not be graded, such as a notebook that is not JSON, scores 0, is named, and the others are
 graded). Warnings (the exit status stays 0) name the submissions whose time is unknown (a
 timestamp.txt that is no time; with --due, how many have none: counted as on time), the submissions
-whose folders name one id as the data variants take it (Alice and alice: the same numbers), and the
+whose folders name one id as the data variants take it (Alice and alice: the same numbers), the
+submissions holding the instructor's nbgrader markers (the source notebook, with its solutions), and the
 pairs whose answer cells are identical (possible copies: no points changed); grades.csv's notes
 column says the same per student. The feedback pages are written where `nbgrader release_feedback`
 hands them out (feedback/<student>/<lab>/<lab>.html) too.
@@ -110,6 +111,12 @@ def main(argv: list[str] | None = None) -> int:
     if no_time:
         print(f"warning: {len(no_time)} submission(s) have no timestamp.txt, so --due could not be applied to them: "
               f"counted as on time ({', '.join(no_time)}; nbgrader collect writes it)", file=sys.stderr)  # fmt: skip
+    leaked = [g.result.student for g in graded if g.result.instructor_markers]
+    if leaked:
+        print(f"warning: {len(leaked)} submission(s) hold the instructor's nbgrader markers (### BEGIN SOLUTION, ### BEGIN "
+              f"HIDDEN TESTS): the instructor's source notebook, or cells copied from it, so the lab's solutions "
+              f"leaked; graded as any submission, an instructor decides ({', '.join(leaked)}; grades.csv's notes say "
+              "which cells)", file=sys.stderr)  # fmt: skip
     alike = sorted(
         {(g.result.lab, tuple(sorted((g.result.student, *g.same_variant)))) for g in graded if g.same_variant}
     )

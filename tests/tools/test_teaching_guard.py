@@ -186,7 +186,8 @@ def test_lorisnb_from_another_copy_and_computed_predictions_score_0_with_notes(t
     assert base.isolation == isolation and base.points == base.max_points == 18, [
         (s.question, s.message) for s in base.scores if s.points < s.max_points
     ]
-    assert not base.notes, base.notes
+    # the instructor's notebook returned as is: its markers are noted (the solutions leaked), nothing else
+    assert [n for n in base.notes if "instructor's markers" not in n] == [], base.notes
     res = grade_submission(spec, release, cheat, "s-cheat", settings)
     pts = {s.question: s.points for s in res.scores}
     msg = {s.question: s.message for s in res.scores}

@@ -31,12 +31,14 @@ from __future__ import annotations
 import ast
 import builtins
 import contextlib
+import errno
 import hashlib
 import io
 import json
 import os
 import re
 import shutil
+import stat
 import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -46,11 +48,11 @@ from typing import Any, NoReturn
 
 import nbformat
 
-from lorisnb.errors import AnswerError
+from lorisnb.errors import AnswerError, ValidationError
 from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, decode
 
-GRADER_VERSION = "10"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "11"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
 # 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
 # 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
@@ -63,7 +65,11 @@ GRADER_VERSION = "10"  # part of every result's digest: a new grader regrades ev
 # cell's error is its message; prints past the file size limit are cut, not fatal; the copy check's exemption of the
 # instructor's answer reads it without its placeholders; 10: a prediction failing alone after its value is graded
 # on what it computed up to the failing line (+=, if, for kept); an id's cells that fail in execution-count order
-# run top to bottom; the lab's def-time values are given to added cells' defs too)
+# run top to bottom; the lab's def-time values are given to added cells' defs too; 11: a formula run alone gets the
+# functions of the cells added below it up to its check; values set in cells added right below an answer are read
+# there, and a name left unset without a placeholder is no "no answer yet"; no file of a submission is read through
+# a link or quoted; the instructor's markers noted; an unused top-level import of lorisnb left out of a formula or
+# prediction run alone (one used is refused, as before); a NameError alone says what the formula has; float32 named)
 
 
 @dataclass(frozen=True)
@@ -193,6 +199,8 @@ class SubmissionResult:
     notes: list[str] = field(default_factory=list)
     digest: str = ""
     error: str = ""  # not graded (the notebook could not be read...): every question 0, and why
+    # the cells holding nbgrader's instructor markers (:data:`SOURCE_MARKERS`): the lab's solutions leaked
+    instructor_markers: list[str] = field(default_factory=list)
 
     @property
     def points(self) -> float:
@@ -418,6 +426,75 @@ def _copy_private_file(src: Path, dst: Path) -> None:
     fd = os.open(dst, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
     with open(src, "rb") as f, os.fdopen(fd, "wb") as out:
         shutil.copyfileobj(f, out)
+
+
+def _write_private(dst: Path, data: bytes) -> None:
+    """Write ``data`` to the new file ``dst``, 0600 as it is created (a link there is not followed)."""
+    fd = os.open(dst, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+    with os.fdopen(fd, "wb") as out:
+        out.write(data)
+
+
+def read_submitted(path: Path, below: Path | None = None, limit: int | None = None) -> bytes:
+    """The bytes of a file a student submitted, read without following a symbolic link: the file
+    and, with ``below`` (a folder above it: the course's ``submitted/``), every folder between
+    ``below`` and it are opened with ``O_NOFOLLOW``, so a link anywhere there is refused (the grader,
+    often root, would read what it points to: the instructor's notebook, the course's secret,
+    ``/etc/shadow``); only a regular file is read (a FIFO would block the grader). ``limit``: at most
+    so many bytes (a larger file is refused). Raises :class:`~lorisnb.errors.ValidationError` naming
+    the file and why, never quoting what it holds; OSError (FileNotFoundError...) as ``open`` does."""
+    path = Path(path)
+    base = Path(below) if below is not None else path.parent
+    parts = path.relative_to(base).parts if below is not None else (path.name,)
+
+    def refused(why: str) -> NoReturn:
+        raise ValidationError(f"{path}: {why}: refused (the grader reads no file of a submission through a link, and "
+                              "only regular files; submit the file itself)")  # fmt: skip
+
+    fd = os.open(base, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        for k, part in enumerate(parts):
+            last = k == len(parts) - 1
+            flags = os.O_RDONLY | os.O_NOFOLLOW | (os.O_NONBLOCK | os.O_NOCTTY if last else os.O_DIRECTORY)
+            try:
+                nfd = os.open(part, flags, dir_fd=fd)
+            except OSError as exc:
+                where = "it" if last else f"the folder {base.joinpath(*parts[: k + 1])}"
+                if exc.errno == errno.ELOOP or (
+                    exc.errno == errno.ENOTDIR and os.path.islink(base.joinpath(*parts[: k + 1]))
+                ):
+                    refused(f"{where} is a symbolic link")
+                if exc.errno == errno.ENOTDIR:
+                    refused(f"{where} is not a folder")
+                raise
+            os.close(fd)
+            fd = nfd
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            refused("not a regular file")
+        with os.fdopen(os.dup(fd), "rb") as f:
+            data = f.read() if limit is None else f.read(limit + 1)
+    finally:
+        os.close(fd)
+    if limit is not None and len(data) > limit:
+        refused(f"larger than {limit} bytes")
+    return data
+
+
+#: nbgrader's markers of an instructor's notebook, which ``nbgrader generate_assignment`` removes from the
+#: notebook handed out (with the solutions and hidden tests between them)
+SOURCE_MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION", "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS")
+
+
+def instructor_markers(nb: nbformat.NotebookNode) -> list[str]:
+    """The cells of a returned notebook that hold one of nbgrader's instructor markers
+    (:data:`SOURCE_MARKERS`, alone on a line): ``<grade_id or cell N>: <marker>``, once per cell."""
+    found = []
+    for k, cell in enumerate(nb.cells):
+        lines = {line.strip() for line in str(cell.get("source", "")).splitlines()}
+        hit = next((m for m in SOURCE_MARKERS if m in lines), None)
+        if hit:
+            found.append(f"{_nbgrader(cell).get('grade_id') or f'cell {k + 1}'}: {hit}")
+    return found
 
 
 def _lab_names_before(spec: LabSpec, at: int) -> set[str]:
@@ -711,12 +788,15 @@ def git_databases(paths: Sequence[Path]) -> list[Path]:
 @dataclass(frozen=True)
 class GradeSettings:
     """How to grade: the sandbox's limits, folders to hide besides the course and the checkouts,
-    the course's secret (hidden tests' seed), and the sandbox user id."""
+    the course's secret (hidden tests' seed), the sandbox user id, and the folder of the
+    submissions (``submitted``: no folder between it and a notebook may be a link,
+    :func:`read_submitted`)."""
 
     limits: Limits = Limits()
     hidden: tuple[Path, ...] = ()
     secret: str = ""
     uid: int = 62000
+    submitted: Path | None = None
 
 
 def grade_submission(
@@ -730,7 +810,9 @@ def grade_submission(
     out with it (copied into the sandbox, the notebook excepted)."""
     t0 = time.monotonic()
     try:
-        nb = nbformat.read(notebook, as_version=4)
+        data = read_submitted(notebook, settings.submitted)  # a link refused: never what it points to
+        nb = nbformat.reads(data.decode("utf-8"), as_version=4)
+        markers = instructor_markers(nb)
         # magics as IPython runs them; every cell of an answer's id, in the order the notebook ran them
         parts = {g: [as_python(a) for a in srcs] for g, srcs in answer_cells(nb).items()}
         answers = {g: "\n".join(srcs) for g, srcs in parts.items()}
@@ -740,7 +822,7 @@ def grade_submission(
         repeated = repeated_answers(nb)
         added = {i: [as_python(a) for a in srcs] for i, srcs in added_cells(spec.notebook, nb).items()}
     except Exception as exc:  # noqa: BLE001 (any way a returned file fails to be a notebook: this student's 0)
-        return unreadable(spec, student, notebook, exc, time.monotonic() - t0)
+        return unreadable(spec, student, notebook, exc, time.monotonic() - t0, why=not_a_notebook(exc))
     py_path, checkout_dirs = _package_paths()
     hidden = [*settings.hidden, *checkout_dirs]
     _check_reachable(py_path, settings)
@@ -801,7 +883,7 @@ def grade_submission(
         work.mkdir(mode=0o700)  # private before anything is copied in: a student's answers are read by no other
         (root / "reference-out").mkdir(mode=0o700)  # the grader's own run's outputs (the reference values)
         _copy_private(release_dir, work, ignore=shutil.ignore_patterns("*.ipynb", ".*"))
-        _copy_private_file(notebook, work / notebook.name)
+        _write_private(work / notebook.name, data)  # the bytes graded, read once
         root.chmod(0o711)
         # the answers run alone (numpy only) do not see the lab's folder: the lab's code, which may use the
         # lab's functions, could open it to others (chmod) and leave there what a prediction would read; nor
@@ -919,8 +1001,41 @@ def grade_submission(
             "wrote into it (ignored; only the replies to the grader's own requests were read, and whatever they "
             "hold is checked like any answer)"
         )
+    if markers:
+        notes.append(leaked_note(markers))
     notes = [shorten(n) for n in notes]
-    return SubmissionResult(student, spec.name, scores, isolation, round(time.monotonic() - t0, 2), notes)
+    return SubmissionResult(student, spec.name, scores, isolation, round(time.monotonic() - t0, 2), notes,
+                            instructor_markers=markers)  # fmt: skip
+
+
+def leaked_note(markers: Sequence[str]) -> str:
+    """The note of a submission holding nbgrader's instructor markers (:func:`instructor_markers`)."""
+    shown = "; ".join(markers[:6]) + (f"; and {len(markers) - 6} more" if len(markers) > 6 else "")
+    return (
+        f"instructor's markers in this notebook ({shown}): nbgrader removes them, with the solutions and hidden "
+        "tests between them, from the notebook handed out, so this is the instructor's source notebook or cells "
+        "copied from it: the lab's solutions leaked. Graded as any submission (no points changed): an instructor "
+        "decides (teaching/README.md, 'Grading')"
+    )
+
+
+def not_a_notebook(exc: BaseException) -> str:
+    """Why a returned file is no notebook, in words that quote nothing of it (an error of nbformat or
+    json quotes the file's first bytes: a file the grader should never have read would be shown in
+    the feedback): the link or FIFO refused (:func:`read_submitted`), not UTF-8, not JSON, JSON but
+    not a notebook."""
+    if isinstance(exc, ValidationError):
+        return str(exc)
+    name = type(exc).__name__
+    if isinstance(exc, UnicodeDecodeError):
+        what = "not UTF-8 text, so not a notebook"
+    elif name == "NotJSONError" or isinstance(exc, json.JSONDecodeError):
+        what = "not JSON, so not a notebook as Jupyter saves it"
+    elif isinstance(exc, OSError):
+        what = f"it cannot be read ({os.strerror(exc.errno) if exc.errno else 'an error of the system'})"
+    else:
+        what = "JSON, but not a notebook nbformat reads (its cells or metadata are not as Jupyter writes them)"
+    return f"{name}: {what}; the grader quotes no part of a submission's file (open it to see what it holds)"
 
 
 def _added_key(index: int, k: int) -> str:
@@ -1067,9 +1182,12 @@ def shorten(text: str, limit: int = MESSAGE_CHARS) -> str:
     return f"{text[:keep]} [... {len(text) - 2 * keep} characters left out ...] {text[-keep:]}"
 
 
-def unreadable(spec: LabSpec, student: str, notebook: Path, exc: BaseException, seconds: float) -> SubmissionResult:
-    """The result of a submission that could not be graded: every question 0, the file and why."""
-    what = shorten(f"{type(exc).__name__}: {exc}", 500)
+def unreadable(
+    spec: LabSpec, student: str, notebook: Path, exc: BaseException, seconds: float, why: str | None = None
+) -> SubmissionResult:
+    """The result of a submission that could not be graded: every question 0, the file and why
+    (``why``, else the exception's type and message)."""
+    what = shorten(why or f"{type(exc).__name__}: {exc}", 500)
     error = f"{notebook.parent.parent.name}/{notebook.parent.name}/{notebook.name} could not be graded: {what}"
     scores = [Score(q.grade_id, 0.0, q.points, f"not graded: {what}") for q in spec.questions]
     note = error + " (return the notebook as saved by Jupyter: File > Save, then submit it again)"

@@ -44,6 +44,7 @@ import nbformat
 
 from lorisnb.errors import ValidationError
 from lorisnb.tools.teaching.autograde import (
+    SOURCE_MARKERS,
     GradeSettings,
     LabSpec,
     SubmissionResult,
@@ -51,6 +52,9 @@ from lorisnb.tools.teaching.autograde import (
     git_databases,
     grade_submission,
     lab_spec,
+    leaked_note,
+    not_a_notebook,
+    read_submitted,
     student_answers,
     unreadable,
 )
@@ -160,6 +164,15 @@ _OFFSET = re.compile(r"(?:UTC|GMT)?([+-])(\d{1,2})(?::?(\d{2}))?")
 _NOT_ZONES = {"Factory", "localtime", "posixrules"}  # in the tz database's list, but no place's zone
 
 
+class NotATime(ValueError):
+    """A text that is no time (:func:`parse_time`): its message may quote the text; ``reason`` says
+    why in words that quote nothing of it (what a submission's feedback shows)."""
+
+    def __init__(self, message: str, reason: str) -> None:
+        super().__init__(message)
+        self.reason = reason
+
+
 @functools.lru_cache(maxsize=1)
 def _zone_keys() -> tuple[str, ...]:
     return tuple(sorted(zoneinfo.available_timezones() - _NOT_ZONES))
@@ -179,7 +192,7 @@ def _zone(name: str, local: datetime, course: timedelta | None = None) -> tzinfo
     if m:
         hours, minutes = int(m.group(2)), int(m.group(3) or 0)
         if hours > 23 or minutes > 59:
-            raise ValueError(f"offset {name} is out of range")
+            raise NotATime(f"offset {name} is out of range", "its offset is out of range")
         return timezone((-1 if m.group(1) == "-" else 1) * timedelta(hours=hours, minutes=minutes))
     if "/" not in name:
         offsets: dict[timedelta, list[str]] = {}
@@ -197,13 +210,18 @@ def _zone(name: str, local: datetime, course: timedelta | None = None) -> tzinfo
         if offsets:
             places = "; ".join(f"{datetime(2000, 1, 1, tzinfo=timezone(o)).strftime('%z')} in {', '.join(k[:2])}"
                                for o, k in sorted(offsets.items()))  # fmt: skip
-            raise ValueError(f"the zone {name} means different offsets ({places}), and neither this machine's zone nor "
-                             "the due date's offset is one of them (--due in the course's zone tells; nbgrader's "
-                             "Exchange.timestamp_format with %z writes the offset)")  # fmt: skip
+            why = (
+                "means different offsets, and neither this machine's zone nor the due date's offset is one of them "
+                "(--due in the course's zone tells; nbgrader's Exchange.timestamp_format with %z writes the offset)"
+            )
+            raise NotATime(f"the zone {name} {why} ({places})", f"its zone abbreviation {why}")
     try:
         return zoneinfo.ZoneInfo(name)
     except (zoneinfo.ZoneInfoNotFoundError, ValueError, OSError):
-        raise ValueError(f"no zone of the tz database is called {name} or uses it on {local:%Y-%m-%d}") from None
+        raise NotATime(
+            f"no zone of the tz database is called {name} or uses it on {local:%Y-%m-%d}",
+            "its zone is no zone of the tz database, nor an abbreviation one uses on that date",
+        ) from None
 
 
 def _dateutil(text: str, course: timedelta | None = None) -> datetime:
@@ -213,19 +231,19 @@ def _dateutil(text: str, course: timedelta | None = None) -> datetime:
     try:
         from dateutil import parser  # type: ignore[import-untyped]  # pandas' dependency, as nbgrader's
     except ImportError:
-        raise ValueError("not an ISO 8601 date and time") from None
+        raise NotATime("not an ISO 8601 date and time", "not an ISO 8601 date and time") from None
     try:
         local = parser.parse(text, ignoretz=True, default=datetime(2000, 1, 1))
         other = parser.parse(text, ignoretz=True, default=datetime(2001, 2, 2, 1, 1))
         if local != other:
-            raise ValueError("a part of the date or time is missing")
+            raise NotATime("a part of the date or time is missing", "a part of the date or time is missing")
 
         def zone(name: str | None, offset: int | None) -> tzinfo:
             return _zone(name, local, course) if name else timezone(timedelta(seconds=offset or 0))
 
         t = parser.parse(text, default=datetime(2000, 1, 1), tzinfos=zone)
     except (parser.ParserError, OverflowError):
-        raise ValueError("not a date and time") from None
+        raise NotATime("not a date and time", "not a date and time") from None
     return t
 
 
@@ -252,19 +270,31 @@ def parse_time(text: str, course: timedelta | None = None) -> datetime:
     return t if t.tzinfo else t.replace(tzinfo=timezone.utc)
 
 
-def _read_time(f: Path, course: timedelta | None = None) -> datetime | None:
-    """The time in ``f`` (None: no such file); ValueError saying what it holds and what was expected."""
-    if not f.is_file():
+#: a ``timestamp.txt`` longer than this is no time nbgrader writes (and is not read further)
+STAMP_MAX_BYTES = 256
+
+
+def _read_time(f: Path, course: timedelta | None = None, below: Path | None = None) -> datetime | None:
+    """The time in ``f`` (None: no such file), read by :func:`.autograde.read_submitted` (a link
+    refused; ``below``: the folder of the submissions, every folder under it checked too); ValueError
+    saying what was expected, quoting nothing of what it holds (the file is a student's: what a
+    link, or a copy, put there would be shown in the feedback, ``grades.csv`` and the terminal)."""
+    try:
+        data = read_submitted(f, below, limit=STAMP_MAX_BYTES)
+    except FileNotFoundError:
         return None
+    except ValidationError as exc:
+        reason = str(exc).removeprefix(f"{f}: ")
+        raise ValueError(f"not read: {reason}") from None
+    except OSError as exc:
+        raise ValueError(f"cannot be read ({os.strerror(exc.errno) if exc.errno else type(exc).__name__}); "
+                         f"expected {TIME_EXPECTED}") from None  # fmt: skip
     try:
-        text = f.read_text(encoding="utf-8").strip()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ValueError(f"cannot be read ({type(exc).__name__}: {exc}); expected {TIME_EXPECTED}") from None
-    shown = text if len(text) <= 80 else text[:80] + "..."
-    try:
-        return parse_time(text, course)
-    except ValueError as exc:
-        raise ValueError(f"{shown!r} is not a time ({exc}); expected {TIME_EXPECTED}") from None
+        return parse_time(data.decode("utf-8"), course)
+    except (UnicodeDecodeError, ValueError) as exc:
+        why = exc.reason if isinstance(exc, NotATime) else "not a date and time"
+        raise ValueError(f"is not a time: {why} (what it holds is not quoted: no file of a submission is shown); "
+                         f"expected {TIME_EXPECTED}") from None  # fmt: skip
 
 
 def submission_time(folder: Path) -> datetime | None:
@@ -273,7 +303,7 @@ def submission_time(folder: Path) -> datetime | None:
     time (:func:`grade_class` then notes it for that student and grades the others)."""
     f = folder / "timestamp.txt"
     try:
-        return _read_time(f)
+        return _read_time(f, below=folder)
     except ValueError as exc:
         raise ValidationError(f"{f}: {exc}") from None
 
@@ -316,6 +346,11 @@ class Graded:
         ]
 
     @property
+    def leak_notes(self) -> list[str]:
+        """The submission holds nbgrader's instructor markers (the lab's solutions leaked): its note."""
+        return [leaked_note(self.result.instructor_markers)] if self.result.instructor_markers else []
+
+    @property
     def copy_notes(self) -> list[str]:
         if not self.identical:
             return []
@@ -346,7 +381,7 @@ COPY_MIN_CHARS = 40  # characters other than spaces an answer needs in its own l
 COPY_MIN_LINES = 2  # lines of code of its own (not the stub's, not blank, not a comment) an answer needs to count
 COPY_COMMON = 4  # an answer this many students gave alike is what the exercise leads to: no sign of a copy
 CODE_STUB = "# YOUR CODE HERE\nraise NotImplementedError()"  # nbgrader's (and teaching/nbgrader_config.py's)
-_DELIMITERS = {"### BEGIN SOLUTION", "### END SOLUTION"}  # nbgrader's, in a cell copied from the instructor's
+_DELIMITERS = set(SOURCE_MARKERS[:2])  # nbgrader's solution delimiters, in a cell copied from the instructor's
 _SOLUTION = re.compile(r"^([ \t]*)### BEGIN SOLUTION[ \t]*\n.*?^[ \t]*### END SOLUTION[ \t]*$", re.S | re.M)
 
 
@@ -487,7 +522,8 @@ def _class_answers(course: Path, lab: str, results: Sequence[SubmissionResult]) 
         if res.lab != lab or res.error or res.student.startswith(DEMO_PREFIX):
             continue
         try:
-            nb = nbformat.read(course / "submitted" / res.student / lab / f"{lab}.ipynb", as_version=4)
+            path = course / "submitted" / res.student / lab / f"{lab}.ipynb"
+            nb = nbformat.reads(read_submitted(path, course / "submitted").decode("utf-8"), as_version=4)
             out[res.student] = student_answers(nb)
         except Exception:  # noqa: BLE001 (changed since it was graded: compared next time)
             continue
@@ -503,9 +539,8 @@ def _grade_one(args: tuple[LabSpec, Path, Path, str, GradeSettings]) -> Submissi
     spec, release, notebook, student, settings = args
     # a pair of users per worker, held until it ends: concurrent sandboxes cannot read each other
     uid = claim_uids(settings.uid, 2) if settings.uid and can_isolate() else settings.uid
-    return grade_submission(
-        spec, release, notebook, student, GradeSettings(settings.limits, settings.hidden, settings.secret, uid)
-    )
+    return grade_submission(spec, release, notebook, student,
+                            GradeSettings(settings.limits, settings.hidden, settings.secret, uid, settings.submitted))  # fmt: skip
 
 
 def _secret(course: Path) -> str:
@@ -524,7 +559,7 @@ def grading_settings(course: Path, source: Path, settings: GradeSettings, secret
     (:func:`~lorisnb.tools.teaching.autograde.git_databases`) hidden from the sandbox, and the
     course's ``secret``."""
     hidden = (course, source, *git_databases([course, source]), *settings.hidden)
-    return GradeSettings(settings.limits, tuple(Path(h) for h in hidden), secret, settings.uid)
+    return GradeSettings(settings.limits, tuple(Path(h) for h in hidden), secret, settings.uid, course / "submitted")
 
 
 def grade_class(
@@ -559,7 +594,13 @@ def grade_class(
         base = digest(src_nb.read_bytes(), _release_bytes(release), repr(settings.limits))
         for nb in sorted(course.glob(f"submitted/*/{lab}/{lab}.ipynb")):
             student = nb.parents[1].name
-            key = digest(base, nb.read_bytes(), student)
+            try:  # a link (the notebook, or a folder above it) refused: never what it points to
+                key = digest(base, read_submitted(nb, course / "submitted"), student)
+            except (ValidationError, OSError) as exc:  # a link, a FIFO: this student's 0, and why
+                res = unreadable(spec, student, nb, exc, 0.0, why=not_a_notebook(exc))
+                _write_result(course, res)
+                done.append(res)
+                continue
             out = course / "graded" / student / lab / "result.json"
             if out.is_file():
                 old = SubmissionResult.from_json(out.read_text())
@@ -596,7 +637,7 @@ def grade_class(
                        "as a submission without a time is (check its time in the LMS or nbgrader's exchange)")  # fmt: skip
         notes, error = [], ""
         try:
-            when = _read_time(course / stamp, policy.due.utcoffset() if policy else None)
+            when = _read_time(course / stamp, policy.due.utcoffset() if policy else None, course / "submitted")
         except ValueError as exc:
             when, error = None, f"{stamp}: {exc}"
             notes.append(f"{error}: the submission's time is unknown" + (f", {on_time}" if policy else ""))
@@ -655,12 +696,10 @@ def _release_copy(course: Path, res: SubmissionResult, page: str) -> None:
     submitted = course / "submitted" / res.student / res.lab
     texts = {}
     for name in RELEASE_FILES:
-        try:
-            fd = os.open(submitted / name, os.O_RDONLY | os.O_NOFOLLOW)
-        except OSError:
+        try:  # a link (or a folder above it) refused, as every file of a submission
+            texts[name] = read_submitted(submitted / name, course / "submitted", limit=4096)
+        except (ValidationError, OSError):
             return
-        with os.fdopen(fd, "rb") as fh:
-            texts[name] = fh.read(4096)
     folder = course / "feedback" / res.student / res.lab
     folder.mkdir(parents=True, exist_ok=True)
     for name, text in texts.items():
@@ -733,7 +772,7 @@ def _write_grades(path: Path, rows: Sequence[Graded], roster: Mapping[str, Stude
                         *[_n(per[q]) if q in per else "" for q in questions], _n(g.result.points),
                         g.submitted.isoformat() if g.submitted else "", g.days_late, _n(g.factor),
                         _n(g.score), _n(g.result.max_points), g.result.isolation,
-                        " | ".join([*g.notes, *g.variant_notes, *g.copy_notes])])  # fmt: skip
+                        " | ".join([*g.notes, *g.leak_notes, *g.variant_notes, *g.copy_notes])])  # fmt: skip
 
 
 def _canvas(path: Path, lab: str, rows: Sequence[Graded], people: Sequence[Student]) -> None:
