@@ -230,8 +230,26 @@ def check_function(
         mine, theirs = distinct(got, float(want))
         detail = f"on case {k + 1} ({describe(cases[k])}) you return {mine}; lorisnb gives {theirs}"
         if abs(got - float(want)) <= 1e-4 * max(1.0, abs(float(want))):  # the 6-digit forms would be equal
-            detail += f" (they differ by {abs(got - float(want)):.2g}, more than the tolerance {tol:g}: rounded?)"
+            detail += f" (they differ by {abs(got - float(want)):.2g}, more than the tolerance {tol:g}: {_why_close(got, float(want))})"
     fail(f"{what}: {detail}", mistakes)
+
+
+#: float32 keeps 24 bits: a result computed in it is off by a few of its units in the last place, relative
+FLOAT32_REL = 64 * 2.0**-24
+
+
+def _why_close(got: float, want: float) -> str:
+    """Why a number this close to lorisnb's is still refused: rounded to some decimals, or computed in
+    float32 (about 7 significant digits: a difference of a few float32 units of ``want``)."""
+    places = next((d for d in range(10) if abs(got - round(want, d)) <= 1e-12 * max(1.0, abs(want))), None)
+    if places is not None:
+        return f"rounded to {places} decimal(s)? return the number unrounded"
+    if abs(got - want) <= FLOAT32_REL * abs(want):
+        return (
+            "computed in float32? float32 keeps about 7 significant digits, and the formula checks compare to "
+            f"{1e-9:g}: compute in float64 (numpy's default; leave out np.float32 and .astype(np.float32))"
+        )
+    return "rounded?"
 
 
 def distinct(a: float, b: float) -> tuple[str, str]:

@@ -660,11 +660,13 @@ class RemoteFunction(SandboxedAnswer):
         budget: Budget | None = None,
         call_budget_s: float | None = None,
         refused: str | None = None,
+        hint: Callable[[str], str] | None = None,
     ) -> None:
         self.sandbox, self.name, self.error = sandbox, name, error
         self.budget = budget
         self.calls_left = call_budget_s
         self.refused = refused
+        self.hint = hint  # what a call's error is told with (:func:`_with_hint`: what a formula has alone)
         self.__name__ = name
 
     def __call__(self, **kwargs: Any) -> Any:
@@ -699,7 +701,8 @@ class RemoteFunction(SandboxedAnswer):
         if self.refused:
             raise AnswerError(f"✗ {self.refused}")
         if not reply.get("ok"):
-            _raise(str(reply.get("error", "RuntimeError: failed")))
+            error = str(reply.get("error", "RuntimeError: failed"))
+            _raise(self.hint(error) if self.hint is not None else error)
         return decode(reply["result"])
 
     def _stop(self, where: str) -> NoReturn:
@@ -892,8 +895,16 @@ def grade_submission(
         # the lab's values each answer's functions read when defined (eps=eps), as the grader's own run of the
         # lab has them, never as the student's run left them (an answer cell could rebind them there)
         # (one path for the answer cells and the cells the student added: a helper's def eps=eps alike)
-        clean = _lab_values(spec, code, params | {"hidden_seed": hidden_seed(settings.secret, student, spec.name)},
-                            root, at)  # fmt: skip
+        # a formula's check calls its functions once the notebook has run the cells below it up to the check: the
+        # functions of those the student added (a helper defined below, as `_held` under B2) are given to its run
+        # alone, after its own cells, their defs given the lab's values as the lab had them at the answer (no value
+        # the lab's cells between the answer and its check set: none of them is given)
+        below = {g: _up_to_check(spec, order, at, g) for g in order if spec.functions.get(g)}
+        below_code = {_below_key(k, g): code[k] for g, ks in below.items() for k in ks}
+        below_at = {_below_key(k, g): at[g] for g, ks in below.items() for k in ks}
+        clean = _lab_values(spec, {**code, **below_code},
+                            params | {"hidden_seed": hidden_seed(settings.secret, student, spec.name)},
+                            root, {**at, **below_at})  # fmt: skip
         functions: dict[str, RemoteFunction] = {}
 
         def alone(gid: str, failed: str | None) -> None:
@@ -915,12 +926,14 @@ def grade_submission(
                           private=[root])  # fmt: skip
             boxes.append(box)
             source = answers.get(gid, "")
+            after = below.get(gid, [])
             try:
                 with budget.charge():
                     box.run(PRELUDE, name="<numpy and math>", timeout_s=budget.left(True))
                     before = order[: order.index(gid)] if gid in order else []
                     # the lab's numbers its functions (and the earlier cells') read when defined (eps=eps)
                     lab = {n: v for g in [*before, gid] for n, v in clean.get(g, {}).items()}
+                    lab |= {n: v for k in after for n, v in clean.get(_below_key(k, gid), {}).items()}
                     if lab:
                         box.bind(lab, timeout_s=budget.left(True))
                     # the functions the student's earlier answer cells define, which this one may call (as the
@@ -930,13 +943,21 @@ def grade_submission(
                         box.run(
                             helpers, name="<the functions of the earlier answer cells>", timeout_s=budget.left(True)
                         )
-                    # each of its cells (a split cell's halves, copies) as the notebook ran them
+                    # each of its cells (a split cell's halves, copies) as the notebook ran them, an unused top-level
+                    # import of lorisnb left out (as in the other cells: it costs nothing; one it uses meets the guard)
+                    dropped = False
                     for part in parts.get(gid) or [source]:
-                        reply = box.run(part, name=f"<answer {gid}>", timeout_s=budget.left(True))
+                        run = without_lorisnb(part)
+                        dropped = dropped or run != part
+                        reply = box.run(run, name=f"<answer {gid}>", timeout_s=budget.left(True))
+                    if dropped:
+                        notes.append(f"{gid}: its unused import of lorisnb is left out when the formula runs alone "
+                                     "(graded with numpy only, as the imports of your other cells are): it costs "
+                                     "nothing; a formula that uses lorisnb is refused")  # fmt: skip
                     if not reply.get("ok") and str(reply.get("error", "")).startswith("NameError"):
                         # a try-out line reading the lab's numbers (eps, tau): the formula is the cell's definitions
                         for assignments in (True, False):
-                            defs_only = definitions_only(source, assignments)
+                            defs_only = definitions_only(source, assignments, lorisnb=False)
                             if defs_only is None or defs_only == source:
                                 continue
                             again = box.run(defs_only, name=f"<answer {gid}>", timeout_s=budget.left(True))
@@ -946,6 +967,15 @@ def grade_submission(
                                              "is graded on its functions (and imports) only")  # fmt: skip
                                 reply = again
                                 break
+                    # the functions of the cells the student added below it, up to its check (the notebook ran them
+                    # before the check called its functions)
+                    helpers_below = earlier_functions(code, after)
+                    if helpers_below.strip():
+                        got = box.run(helpers_below, name=f"<the functions of the cells you added below {gid}>",
+                                      timeout_s=budget.left(True))  # fmt: skip
+                        if not got.get("ok"):
+                            notes.append(f"{gid}: the functions of the cells you added below it (up to its check), "
+                                         f"given to it run alone, failed: {_with_hint(spec, str(got.get('error')))}")  # fmt: skip
             except SandboxError as exc:
                 why = _BUDGET_ERROR.format(budget.seconds) if budget.out(f"<answer {gid}>, run alone") else str(exc)
                 functions.update({d: RemoteFunction(None, d, f"TimeoutError: {why}") for d in defs})
@@ -956,9 +986,10 @@ def grade_submission(
                 return
             err = None if reply.get("ok") else str(reply.get("error"))
             if err:  # the cell failed on its own, with numpy only: say so, then its error
-                err = f"RuntimeError: the answer cell, run alone with numpy only (no lorisnb, as graded), failed: {err}"
-            functions.update({d: RemoteFunction(None if err else box, d, err, budget, settings.limits.cell_timeout_s)
-                              for d in defs})  # fmt: skip
+                err = ("RuntimeError: the answer cell, run alone with numpy only (no lorisnb, as graded), failed: "
+                       + _with_hint(spec, err))  # fmt: skip
+            functions.update({d: RemoteFunction(None if err else box, d, err, budget, settings.limits.cell_timeout_s,
+                                                hint=lambda e: _with_hint(spec, e)) for d in defs})  # fmt: skip
 
         try:
             took: dict[str, float] = {}  # seconds each answer cell took in the lab
@@ -977,8 +1008,12 @@ def grade_submission(
                     return dict(values.get(gid, {}))
                 before = order[: order.index(gid)] if gid in order else []
                 lab = {n: v for g in before for n, v in clean.get(g, {}).items()}
-                return _predict(spec, gid, answers[gid], {**lab, **given}, root, apart, settings, budget, notes,
-                                took[gid], boxes, earlier_functions(code, before))  # fmt: skip
+                # with the cells the student added right below it (before the lab's next cell, which computes
+                # what it is checked against): the notebook's check saw the value they left
+                srcs = [answers[gid], *(added.get(at[gid], ()) if gid in at else ())]
+                got = _predict(spec, gid, "\n".join(srcs), {**lab, **given}, root, apart, settings, budget, notes,
+                               took[gid], boxes, earlier_functions(code, before))  # fmt: skip
+                return unset(got, srcs)
 
             scores = _run_checks(
                 spec,
@@ -1062,6 +1097,105 @@ def _in_order(
     return order, code, at
 
 
+def _up_to_check(spec: LabSpec, order: Sequence[str], at: Mapping[str, int], gid: str) -> list[str]:
+    """The keys (:func:`_in_order`: answer grade_ids, added cells) that run after ``gid``'s cell and
+    before the test cell that checks it: what the notebook had run when the check called its functions."""
+    checks = {q.grade_id: q for q in spec.questions}
+    check = next((i for i, cell in enumerate(spec.notebook.cells) if _nbgrader(cell).get("grade")
+                  and gid in getattr(checks.get(str(_nbgrader(cell).get("grade_id"))), "answers", ())), None)  # fmt: skip
+    if check is None or gid not in order:
+        return []
+    return [k for k in order[order.index(gid) + 1 :] if at[k] <= check]
+
+
+def _below_key(key: str, gid: str) -> str:
+    """The key of ``key``'s cell as given to ``gid``'s run alone (its defs' lab values taken at ``gid``)."""
+    return f"{key}, below {gid}"
+
+
+def without_lorisnb(source: str) -> str:
+    """``source`` with its *unused* top-level imports of lorisnb blanked out, line for line: what an
+    answer graded with numpy only runs. An ``import lorisnb as ln`` whose names the cell never reads
+    costs nothing (the other cells' imports of lorisnb are left out too, :func:`earlier_functions`);
+    one the cell reads (``ln.score``, even in a function) stays, and the guard refuses it, and the
+    points with it, as any other way to lorisnb. ``source`` itself when it has none (or does not parse)."""
+    body = cell_body(source)
+    try:
+        tree = ast.parse(body)
+    except SyntaxError:
+        return source
+    read = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and not isinstance(n.ctx, ast.Store)}
+    lines = body.splitlines()
+    found = False
+    for node in tree.body:
+        if not isinstance(node, (ast.Import, ast.ImportFrom)) or (isinstance(node, ast.ImportFrom) and node.level):
+            continue
+        modules = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or ""]
+        bound = {(a.asname or a.name).split(".")[0] for a in node.names}
+        if any(m.split(".")[0] == "lorisnb" for m in modules) and not bound & read:
+            found = True
+            for i in range(node.lineno - 1, node.end_lineno or node.lineno):
+                lines[i] = ""
+    return "\n".join(lines) + "\n" if found else source
+
+
+def _lab_imports(spec: LabSpec) -> dict[str, str]:
+    """name -> the import statement of the lab's own cells that binds it (``pd`` -> ``import pandas as pd``)."""
+    out: dict[str, str] = {}
+    for cell in spec.notebook.cells:
+        meta = _nbgrader(cell)
+        if cell.cell_type != "code" or meta.get("solution") or meta.get("grade"):
+            continue
+        try:
+            tree = ast.parse(cell.source)
+        except SyntaxError:
+            continue
+        for node in tree.body:
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                for a in node.names:
+                    one = (ast.Import(names=[a]) if isinstance(node, ast.Import)
+                           else ast.ImportFrom(module=node.module, names=[a], level=node.level))  # fmt: skip
+                    out.setdefault((a.asname or a.name).split(".")[0], ast.unparse(one))
+    return out
+
+
+#: what an answer graded alone (a formula) has, in the words of its errors
+ALONE = (
+    "a formula is graded alone, in a sandbox with numpy (np) and math only besides your answer cell: with the "
+    "functions and imports of your other cells (up to its check) and the lab's values its defs read when defined "
+    "(eps=eps), never the lab's imports and variables"
+)
+
+
+def _with_hint(spec: LabSpec, error: str) -> str:
+    """``error`` of a formula run alone; a NameError (``name 'pd' is not defined``) says what the
+    formula has there, and what to do (:func:`_name_tip`)."""
+    tip = _name_tip(spec, error)
+    return error if tip is None else f"{error} ({ALONE}; {tip})"
+
+
+def _name_tip(spec: LabSpec, error: str, imports_only: bool = False) -> str | None:
+    """What to do about a NameError of an answer run alone: the lab's import to put in the cell, the
+    lab's variable to take as an argument (not with ``imports_only``: a prediction's message says
+    which numbers it is given); None for another error."""
+    m = re.search(r"NameError: name '([^']+)' is not defined", error)
+    if m is None:
+        return None
+    name = m.group(1)
+    imports = _lab_imports(spec)
+    if name in imports and "lorisnb" in imports[name]:
+        tip = f"the lab's `{imports[name]}` is not there: lorisnb may not be used by a formula, write it with numpy"
+    elif name in imports:
+        tip = f"the lab's `{imports[name]}` is not run there: put `{imports[name]}` in your answer cell"
+    elif imports_only:
+        return None
+    elif name in _lab_names_before(spec, len(spec.notebook.cells)):
+        tip = f"the lab's `{name}` is not there: take it as an argument (or a default read when defined, {name}={name})"
+    else:
+        tip = f"define or import `{name}` in your answer cell"
+    return tip
+
+
 _BUDGET_ERROR = "the submission's time budget ({:g} s) ran out before this answer was graded"
 PRELUDE = "import math\nimport numpy as np\n"  # what an answer run alone has besides its own code
 
@@ -1115,7 +1249,8 @@ def _predict(
             box.run(PRELUDE + helpers + "\n" + own_imports, name="<the functions and imports of your answer cells>",
                     timeout_s=setup)  # fmt: skip
             stage = "cell"
-            reply = box.run(PRELUDE + source, capture, name=f"<answer {gid}>", timeout_s=limit)
+            # an unused top-level import of lorisnb left out, as a formula's (it costs nothing)
+            reply = box.run(PRELUDE + without_lorisnb(source), capture, name=f"<answer {gid}>", timeout_s=limit)
             # a line after the value failing alone (display(Markdown(...)), a print of the lab's objects): the
             # value is what the cell had computed when it failed, every statement before the failing one having
             # run in order (+=, if, for, with: none left out), as the notebook computed it; never a re-run of a
@@ -1158,6 +1293,7 @@ def _predict(
             "answer cells, not computed with the lab's functions or lorisnb; run so (alone: given the numbers the "
             f"lab's cells had set, of which it reads {numbers}; and your earlier answer cells' functions, of which it "
             f"calls {own}), the answer cell failed: {reply.get('error')}"
+            + (f" ({tip})" if (tip := _name_tip(spec, str(reply.get("error")), imports_only=True)) else "")
         )
     return dict(reply.get("values", {}))
 
@@ -1267,6 +1403,9 @@ def _run_student(
     seconds)."""
     # (source, answer grade_id, name, the student's code, the answer's last cell, in the fallback order)
     cells: list[tuple[str, str | None, str, bool, bool, bool]] = []
+    # the cells the student added right below an answer cell (before the lab's next cell) -> its grade_id: the
+    # notebook's check saw the answer's values after them (an answer computed in a cell inserted below)
+    follows: dict[int, str] = {}
     cells += [(src, None, _added_key(-1, j), True, False, False) for j, src in enumerate(added.get(-1, ()))]
     for i, cell in enumerate(spec.notebook.cells):
         meta = _nbgrader(cell)
@@ -1283,6 +1422,8 @@ def _run_student(
             cells += [(src, answer_id, name, True, j == len(alt) - 1, True) for j, src in enumerate(alt)]
         else:
             cells.append((cell.source, None, f"<cell {i}>", False, False, False))
+        if meta.get("solution") and cell.cell_type == "code":
+            follows.update({len(cells) + j: str(meta["grade_id"]) for j in range(len(added.get(i, ())))})
         cells += [(src, None, _added_key(i, j), True, False, False) for j, src in enumerate(added.get(i, ()))]
     values: dict[str, dict[str, Any]] = {}
     errors: dict[str, str] = {}  # answer grade_id -> the first error of its cells
@@ -1291,6 +1432,7 @@ def _run_student(
     pending: dict[str, list[str]] = {}  # the notes of an answer's failing cells, until its order is settled
     skipped: set[int] = set()
     took: dict[int, float] = {}  # seconds each cell took on its first run
+    set_below: dict[str, list[str]] = {}  # answer grade_id -> the names the cells added below it set
     box = Sandbox(work, limits=settings.limits, hidden=hidden, uid=settings.uid, python_path=[py_path], private=private)
     boxes.append(box)
 
@@ -1308,6 +1450,9 @@ def _run_student(
                 k += 1
                 continue
             capture: Sequence[str] = spec.values.get(gid, ()) if gid and final else ()
+            below = follows.get(k) if k + 1 not in follows or follows[k + 1] != follows.get(k) else None
+            if below is not None:  # the last cell added below an answer: its values read again after it
+                capture = spec.values.get(below, ())
             charged = charged or student
             if charged and budget.out(cell_name):
                 unrun(k)
@@ -1354,6 +1499,13 @@ def _run_student(
                              "MiB (the sandbox's file size limit): the rest is left out; the cells ran on")  # fmt: skip
             if gid and answered is not None:
                 answered[gid] = answered.get(gid, 0.0) + took[k]
+            if k in follows and answered is not None and follows[k] in answered:  # a prediction's time includes them
+                answered[follows[k]] += took[k]
+            if below is not None and below in values:  # set (or changed) below the answer: what the check saw
+                later = {n: v for n, v in reply.get("values", {}).items() if n in capture and not v.get("missing")}
+                if later:
+                    values[below] = {**values[below], **later}
+                    set_below[below] = sorted(later)
             if not reply.get("ok"):
                 if gid and gid in fallback:  # said once its order is settled
                     pending.setdefault(gid, []).append(f"{gid}: {reply.get('error')}")
@@ -1393,7 +1545,35 @@ def _run_student(
             k += 1
     finally:
         box.close()
+    for gid, names in set_below.items():
+        if gid not in spec.predictions:
+            notes.append(f"{gid}: {', '.join(names)} set in the cell(s) you added right below the answer cell, before "
+                         "the lab's next cell: read there, as the notebook's check saw it")  # fmt: skip
+    for gid, own in answers.items():  # a name left unset with no placeholder there: not "no answer yet"
+        if gid in values and gid not in spec.predictions:
+            values[gid] = unset(
+                values[gid], [*own, *(src for k, (src, *_) in enumerate(cells) if follows.get(k) == gid)]
+            )
     return values
+
+
+def unset(values: Mapping[str, Mapping[str, Any]], sources: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """An answer's values read back, each name its cells (``sources``: the answer's and those added
+    right below it) left unset *without* nbgrader's placeholder there (``name = ...`` or ``raise
+    NotImplementedError``) told so, instead of "no answer yet": the cell defines a helper and the
+    value is computed further down, past the lab's next cell, where the grader reads nothing."""
+    text = "\n".join(sources)
+    stub = "NotImplementedError" in text
+    out: dict[str, dict[str, Any]] = {}
+    for n, v in values.items():
+        placeholder = stub or re.search(rf"(?m)^\s*{re.escape(n)}\s*=\s*\.\.\.\s*(#.*)?$", text) is not None
+        if v.get("missing") and not placeholder:
+            v = {"error": f"`{n}` is not set by your answer cell, nor by a cell you added right below it (it ran "
+                          f"without error): the check reads `{n}`; set it in the answer cell (a cell further down, "
+                          "past the lab's next cell, is not read: the lab's cells after an answer compute what it is "
+                          "checked against)"}  # fmt: skip
+        out[n] = dict(v)
+    return out
 
 
 def _student_value(plain: Mapping[str, Any]) -> Any:

@@ -54,7 +54,15 @@ from lorisnb.core.simulate import Faults, simulated_errors
 from lorisnb.io.datasets.paths import load_groundtruth, sample_data
 from lorisnb.tools.teaching._checks import CORRECTNESS_CASES, CR_CASES, CSR_CASES, cases_from
 from lorisnb.tools.teaching._sandbox_child import given
-from lorisnb.tools.teaching.autograde import PRELUDE, GradeSettings, LabSpec, RemoteFunction, hidden_seed, lab_spec
+from lorisnb.tools.teaching.autograde import (
+    PRELUDE,
+    GradeSettings,
+    LabSpec,
+    RemoteFunction,
+    hidden_seed,
+    lab_spec,
+    without_lorisnb,
+)
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, can_isolate, claim_uids, decode
 
 LAB = "lab1_lifelong_metrics"
@@ -772,7 +780,8 @@ def student_values(spec: LabSpec, run: GraderRun, answers: Sequence[Answer], wor
                 usable = {n: v for n, v in lab.items() if "not_plain" not in v}
                 for k in by_cell[cell]:
                     box.bind(usable)
-                    values[k] = _capture(box, PRELUDE + answers[k].source, spec.values[cell], f"<answer {cell}>")
+                    values[k] = _capture(box, PRELUDE + without_lorisnb(answers[k].source), spec.values[cell],
+                                         f"<answer {cell}>")  # fmt: skip
     # the others: in the lab's sandbox, each right after its cell
     rest = {c for c in by_cell if c not in spec.predictions}
     if not rest:
@@ -822,7 +831,7 @@ def grade_formulas(spec: LabSpec, runs: Sequence[GraderRun], answers: Sequence[A
         folder = work / f"fn-{k}"
         folder.mkdir()
         with Sandbox(folder, limits=limits, uid=uid + 1, no_lorisnb=True) as box:
-            reply = box.run(PRELUDE + a.source, name=f"<answer {a.cell}>")
+            reply = box.run(PRELUDE + without_lorisnb(a.source), name=f"<answer {a.cell}>")  # as grade_submission
             (fname,) = spec.functions[a.cell]
             error = None if reply.get("ok") else (
                 f"RuntimeError: the answer cell, run alone with numpy only (no lorisnb, as graded), failed: "
