@@ -520,8 +520,21 @@ def cmd_report(args: argparse.Namespace) -> int:
     if failed_inputs:
         print(f"leaderboard: {failed_inputs} input file(s) could not be evaluated (listed in index.html)")
     print(f"report: {run_dir / 'index.html'}")
+    if args.baseline is not None:  # the baseline chosen by time against the dates the runs' names hold
+        _baseline_warnings(run_dir)
     failed = 1 if failed_inputs or any(r.status == "failed" or r.input_errors for r in runs) else 0
     return max(failed, _gate(run_dir)) if args.gate else failed
+
+
+def _baseline_warnings(run_dir: Path) -> None:
+    """``report --baseline``'s warnings on the baseline chosen (``findings/since_baseline.json``'s
+    ``warnings``: :func:`lorisnb.tools.decisions.history.last_comparable`), as ``diff`` says them."""
+    import json
+
+    f = run_dir / "findings" / "since_baseline.json"
+    if f.is_file():
+        for w in json.loads(f.read_text(encoding="utf-8")).get("warnings") or []:
+            say(f"warning: {clean(w)}")
 
 
 def _gate(run_dir: Path) -> int:

@@ -113,6 +113,8 @@ def cmd_diff(args: argparse.Namespace) -> int:
         (base, _, base_failed), (cand, cand_failed, _) = (_side(p, args) for p in args.paths)
     for note in base.notes + cand.notes:
         say(f"note: {note}")
+    for warning in cand.warnings:  # the baseline chosen by time against the dates the runs' names hold
+        say(f"warning: {warning}")
     if base.table.empty:  # nothing to compare against: never a verdict of "ok"
         say(f"error: BASE {args.paths[0]} holds no scored sequence" + (f" ({len(base_failed)} input(s) could not be "
             "evaluated or were not scored)" if base_failed else "") + ": nothing was compared; give a run with results as BASE")  # fmt: skip
@@ -219,9 +221,12 @@ def cmd_history(args: argparse.Namespace) -> int:
 
     check_outputs(args, args.runs, ["csv"], folders=("out",))
     tolerances = parse_tolerances(args.tolerance)
-    runs = load_runs(args.runs)
+    passed: list[str] = []  # a damaged or foreign older run: passed over, named; a damaged newest one: exit 2
+    runs = load_runs(args.runs, passed)
     for note in (n for r in runs for n in r.notes):
         say(f"note: {note}")
+    for warning in passed:
+        say(f"warning: {warning}")
     for warning in date_order_warnings(runs):
         say(f"warning: {warning}")
     h, diffs = history_table(runs, args.metric, tolerances)

@@ -21,7 +21,9 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Iterable, Mapping, Sequence
+from datetime import date, datetime, time
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -45,19 +47,112 @@ def natural(name: str) -> tuple:
     return tuple((0, int(x), "") if x.isdigit() else (1, 0, x) for x in re.split(r"(\d+)", name) if x)
 
 
-def load_runs(paths: Iterable[str | os.PathLike[str]]) -> list[Run]:
+def load_runs(paths: Iterable[str | os.PathLike[str]], passed: list[str] | None = None) -> list[Run]:
     """The runs, oldest first (see the module docstring); runs of the same time by their paths,
     numbers as numbers (:func:`natural`), as a folder's runs are ordered: ``night-9.csv`` before
     ``night-10.csv`` however they are given (sorted as text, or in the order given, a shell's
-    ``night-*.csv`` made ``night-9`` the newest run, the one the exit status judges)."""
-    return load_runs_sorted([load_run(p) for p in paths])
+    ``night-*.csv`` made ``night-9`` the newest run, the one the exit status judges).
+
+    A path that cannot be read as a run (:func:`read_runs`) is an error, unless ``passed`` is given:
+    then one that is no run at all (a table without per-sequence rows, such as ``history --csv``'s
+    own output left in the folder, or a file of another kind), or a damaged run older than the
+    newest run read, is passed over, said in ``passed``; a damaged run that would be the newest (the
+    night the exit status judges) is still the error. ``history nightly/*`` exited 2 for a damaged
+    older night, hiding the newest night's regression, and for its own ``--csv`` kept in the folder."""
+    runs, unread = read_runs(paths)
+    if unread and passed is None:
+        raise unread[0].error
+    ordered = load_runs_sorted(runs) if runs else []
+    newest = _order_key(ordered[-1]) if ordered else None
+    damaged = [u for u in unread if not u.foreign]
+    later = [u for u in damaged if newest is None or u.when is None or (False, u.when, natural(str(u.path))) > newest]
+    if later or (unread and not ordered):
+        raise max(later or damaged or unread, key=lambda u: (u.when is None, u.when or 0, natural(str(u.path)))).error
+    for u in unread if passed is not None else []:  # none where passed is None (raised above)
+        what = (
+            "no run (not a per-sequence table or a report run)" if u.foreign else "a damaged run older than the newest"
+        )
+        passed.append(f"{u.path} passed over, {what}: {u.why}; {ordered[-1].path} is judged as the newest run")
+    return ordered
+
+
+class Unread(NamedTuple):
+    """A path :func:`read_runs` could not read as a run: the error, its message, when the path was
+    made (run.json's ``created`` where it holds one, else the modification time; None where the path
+    does not exist) and whether it is **foreign**, no run at all (:func:`foreign`), not a damaged one."""
+
+    path: Path
+    why: str
+    error: LorisError
+    when: datetime | None
+    foreign: bool
+
+
+def read_runs(paths: Iterable[str | os.PathLike[str]]) -> tuple[list[Run], list[Unread]]:
+    """Each path read as a run (:func:`lorisnb.tools.decisions.runs.load_run`), in the order given,
+    and those that could not be (:class:`Unread`): the one reading of ``history``'s runs and of the
+    folder ``diff`` / ``report --baseline last-comparable`` choose a baseline from."""
+    runs, unread = [], []
+    for p in map(Path, paths):
+        try:
+            runs.append(load_run(p))
+        except LorisError as exc:
+            unread.append(Unread(p, str(exc), exc, _made(p), foreign(p)))
+    return runs, unread
+
+
+def foreign(path: Path) -> str | None:
+    """Why ``path`` is no run at all (None where it may be one, damaged or not): neither a report run
+    nor a table (:func:`~lorisnb.tools.decisions.runs.is_table`), or a table without the columns of
+    per-sequence rows (``algorithm``, ``scene``, ``seq``: ``history --csv``'s own table, a scene or
+    pairs table)."""
+    from lorisnb.tools.decisions.runs import csv_records, is_report_run, is_table
+
+    if not path.exists() or is_report_run(path):
+        return None
+    if not is_table(path):
+        return "not a report run and not a CSV/Parquet table"
+    try:
+        if path.is_file() and path.suffix.lower() == ".csv":
+            header = next((r for _, r in csv_records(path)), [])
+        elif path.is_file():
+            import pyarrow.parquet as pq
+
+            header = list(pq.read_schema(path).names)
+        else:
+            return None
+    except (LorisError, ImportError, OSError, ValueError):
+        return None
+    lacks = [c for c in ("algorithm", "scene", "seq") if c not in header]
+    return f"a table without per-sequence rows (no column {', '.join(lacks)})" if lacks else None
+
+
+def _made(path: Path) -> datetime | None:
+    """When a path that could not be read as a run was made, as :func:`load_run` would order it."""
+    from lorisnb.tools.decisions.runs import _created, _mtime, is_report_run
+    from lorisnb.tools.report.provenance import RUN_JSON, read_run_json
+
+    if not path.exists():
+        return None
+    if is_report_run(path):
+        try:
+            created = _created(read_run_json(path), path / RUN_JSON)
+        except LorisError:
+            created = None
+        return created or _mtime(path / RUN_JSON)
+    return _mtime(path)
+
+
+def _order_key(r: Run) -> tuple:
+    """A run's place, oldest first: its time, then its path, numbers as numbers."""
+    return (r.created is None, r.created or 0, natural(str(r.path)))
 
 
 def load_runs_sorted(runs: list[Run]) -> list[Run]:
     """Runs already read (:func:`load_runs`), oldest first, those of one time by path, numbers as numbers."""
     if len({r.path.resolve() for r in runs}) < len(runs):
         raise ValidationError("history: a run is given twice; give each run once")
-    out = sorted(runs, key=lambda r: (r.created is None, r.created or 0, natural(str(r.path))))
+    out = sorted(runs, key=_order_key)
     for before, run in zip(out, out[1:], strict=False):  # the newest run baseline and exit status hang on the order
         if run.created is not None and run.created == before.created:
             run.notes.append(f"{run.path} has the same time as {before.path} ({run.created.isoformat()}, "
@@ -67,27 +162,91 @@ def load_runs_sorted(runs: list[Run]) -> list[Run]:
     return out
 
 
-#: A date in a run's name (``2026-01-05.csv``, ``nightly-2026-01-05``): ISO 8601, year first.
-_ISO_DATE = re.compile(r"(?<!\d)(\d{4}-\d{2}-\d{2})(?:[T_ ]?(\d{2}[:-]?\d{2}(?:[:-]?\d{2})?))?(?!\d)")
+#: A date in a part of a run's name (``2026-01-05.csv``, ``nightly-2026-01-05``, ``2026-02-01/sequences.csv``,
+#: ``20260105.csv``, ``2026-01-05T03:00``): ISO 8601, year first, in its extended form (with its time, if
+#: any) or its basic one (8 digits that form a date, with a time ``T0300`` if any). Day-first or
+#: month-first forms (``05-01-2026``) are ambiguous, and left out.
+_NAME_DATES = (
+    re.compile(r"(?<!\d)(\d{4})-(\d{2})-(\d{2})(?:[T_ ](\d{2})[:-]?(\d{2})(?:[:-]?(\d{2}))?)?(?!\d)"),
+    re.compile(r"(?<!\d)(\d{4})(\d{2})(\d{2})(?:[T_](\d{2})(\d{2})(\d{2})?)?(?!\d)"),
+)
 
 
-def date_order_warnings(runs: Sequence[Run]) -> list[str]:
-    """Where runs ordered by their files' modification time (:func:`load_runs`, oldest first) are
-    named with ISO dates in another order: one line naming the first such pair and how many there
-    are. A copy or a download resets modification times, so the newest run, and the exit status,
-    may not be the one the names say."""
-    dated = [(r, m.group(0)) for r in runs if r.created_from == "modification time"
-             for m in [_ISO_DATE.search(r.path.name)] if m]  # fmt: skip
-    wrong = [(a, b) for a, b in zip(dated, dated[1:], strict=False) if a[1] > b[1]]
+#: A date named in a run's path (:func:`name_dates`): the day, and the time of day where one is named.
+NameDate = tuple[date, time | None]
+
+
+def _part_dates(part: str) -> list[NameDate]:
+    out = []
+    for form in _NAME_DATES:
+        for m in form.finditer(part):
+            y, mo, d, hh, mm, ss = m.groups()
+            if not 1900 <= int(y) <= 2199:
+                continue
+            try:
+                day = date(int(y), int(mo), int(d))
+            except ValueError:  # 8 digits that form no date: an id, not a date
+                continue
+            try:
+                at = None if hh is None else time(int(hh), int(mm), int(ss or 0))
+            except ValueError:
+                at = None  # no time of day: the date alone
+            out.append((day, at))
+    return out
+
+
+def name_dates(runs: Sequence[Run]) -> list[NameDate | None]:
+    """The date in each run's name: every part of its path below the folder all the runs share
+    (``2026-02-01`` of ``nightly/2026-02-01/sequences.csv``), ISO 8601 (:data:`_NAME_DATES`); None
+    where the name holds none, or two different days (ambiguous). A time of day is kept where
+    exactly one is named."""
+    if not runs:
+        return []
+    resolved = [r.path.resolve() for r in runs]
+    common = Path(os.path.commonpath([str(p.parent) for p in resolved]))
+    out: list[NameDate | None] = []
+    for p in resolved:
+        found = [d for part in p.relative_to(common).parts for d in _part_dates(part)]
+        days = {d for d, _ in found}
+        times = {t for _, t in found if t is not None}
+        out.append((days.pop(), times.pop() if len(times) == 1 else None) if len(days) == 1 else None)
+    return out
+
+
+def _later(a: NameDate, b: NameDate) -> bool:
+    """Whether the name date ``a`` is later than ``b``: by the day, and by the time where both name one."""
+    if a[0] != b[0] or a[1] is None or b[1] is None:
+        return a[0] > b[0]
+    return a[1] > b[1]
+
+
+def _shown(d: NameDate) -> str:
+    return d[0].isoformat() + (f"T{d[1].isoformat()}" if d[1] is not None else "")
+
+
+def date_order_warnings(runs: Sequence[Run], taken: Run | None = None, role: str = "the newest run") -> list[str]:
+    """Where runs ordered by their files' modification time (as :func:`load_runs` orders them,
+    whatever order they are given in) are named with dates in another order (:func:`name_dates`:
+    any part of the path below the runs' common folder, ISO 8601 extended or basic): one line naming
+    the first such pair, how many there are, and the run taken as ``role`` (``taken``: the newest
+    run). A copy or a download resets modification times, so the newest run, the baseline ``diff
+    --baseline last-comparable`` chooses, and the exit status, may not be the ones the names say.
+    Runs whose run.json records when they were made are ordered by that, and not checked."""
+    ordered = sorted(runs, key=_order_key)
+    labels = dict(zip(map(id, ordered), run_labels(ordered), strict=True))
+    dated = [(r, d) for r, d in zip(ordered, name_dates(ordered), strict=True)
+             if d is not None and r.created_from.startswith("modification time")]  # fmt: skip
+    wrong = [(a, b) for a, b in zip(dated, dated[1:], strict=False) if _later(a[1], b[1])]
     if not wrong:
         return []
     (ra, da), (rb, db) = wrong[0]
     more = f" ({len(wrong)} such pair(s))" if len(wrong) > 1 else ""
-    newest = dated[-1][0].path.name
-    return [f"runs ordered by modification time contradict the dates in their names: {ra.path.name} (named "
-            f"{da}) is ordered before {rb.path.name} (named {db}){more}, so {newest} is taken as the newest run; a "
-            "copy or a download resets modification times: set them (touch -d) or keep report runs, whose "
-            "run.json records when each was made"]  # fmt: skip
+    chosen = taken if taken is not None else ordered[-1]
+    name = labels.get(id(chosen), chosen.name)
+    return [f"runs ordered by modification time contradict the dates in their names: {labels[id(ra)]} (named "
+            f"{_shown(da)}) is ordered before {labels[id(rb)]} (named {_shown(db)}){more}, so {name} is taken as "
+            f"{role}; a copy or a download resets modification times: set them (touch -d) or keep report runs, "
+            "whose run.json records when each was made"]  # fmt: skip
 
 
 def run_labels(runs: Sequence[Run]) -> list[str]:
@@ -131,12 +290,8 @@ def earlier_runs(folder: str | os.PathLike[str], unread: list[tuple[str, str]] |
     # runs of one time (a folder copied or downloaded) are ordered by name, numbers as numbers
     found = sorted((p for p in f.iterdir() if not p.name.startswith(".") and (is_report_run(p) or is_table(p))),
                    key=lambda p: natural(p.name))  # fmt: skip
-    runs, passed = [], []
-    for p in found:
-        try:
-            runs.append(load_run(p))
-        except LorisError as exc:
-            passed.append((p.name, str(exc)))
+    runs, missed = read_runs(found)  # as history reads its runs
+    passed = [(u.path.name, u.why) for u in missed]
     if unread is not None:
         unread.extend(passed)
     if not runs:
@@ -168,13 +323,17 @@ def last_comparable(folder: str | os.PathLike[str], cand: Run) -> tuple[Run, lis
     same spec, lorisnb version and ground truth), and every such run there, oldest first; an error
     naming the nearest runs and why when none is. Runs made at ``cand``'s time or after it
     (:func:`not_before`) are passed over with a note in ``cand.notes``: a copy of tonight's run
-    kept with the earlier ones was its own baseline, "ok" whatever it held."""
+    kept with the earlier ones was its own baseline, "ok" whatever it held. Where the runs' names
+    hold dates in another order than their modification times, ``cand.warnings`` says so
+    (:func:`date_order_warnings`, as ``history`` warns): the baseline was chosen by time."""
     unread: list[tuple[str, str]] = []
     runs = [r for r in earlier_runs(folder, unread) if r.path.resolve() != Path(cand.path).resolve()]
     cand.notes.extend(f"{folder}: {name} passed over, not read as an earlier run ({why})" for name, why in unread)
     later = [r for r in runs if not_before(r, cand)]
     runs = [r for r in runs if r not in later]
     fits = [r for r in runs if not comparability(r, cand)]
+    if fits:  # the baseline is chosen by time, as history orders its runs: a contradiction of the names said
+        cand.warnings.extend(date_order_warnings([*runs, *later, cand], fits[-1], "the baseline"))
     if later:  # a copy of CAND kept with the earlier runs (its twin: "ok"), or a run made after it
         cand.notes.append(f"{len(later)} run(s) in {folder} made at or after {cand.name} ({cand.created_from} "
                           f"{cand.created.isoformat() if cand.created else '?'}) passed over: "

@@ -78,6 +78,9 @@ class Run:
     #: every ground-truth sequence of the scenes evaluated (``scene``, ``seq``, ``gt_duration``), when
     #: known: a scene value counts the sequences no row holds as failed, as ``compare`` does
     expected: pd.DataFrame | None = None
+    #: what may make a decision about the run wrong (the baseline chosen for it by time where the
+    #: names of the runs say another order), said as warnings
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def name(self) -> str:

@@ -58,7 +58,7 @@ def since_baseline(run_dir: Path, folder: str | os.PathLike[str], name: str | No
     new_algs = sorted(set(this.table["algorithm"]) - set(base.table["algorithm"]))
     out = dict(baseline=base.name, baseline_label=base.label, baseline_created=base.created.isoformat()
                if base.created else None, verdict=d.verdict, new_algorithms=new_algs, passed_over=passed,
-               failed_inputs=sorted(this.unscored), trend=None)  # fmt: skip
+               failed_inputs=sorted(this.unscored), trend=None, warnings=this.warnings)  # fmt: skip
     runs = [*fits[-(trend - 1) :], this]
     h, _ = history_table(runs, ["cr"])
     fig = plot_history(h, "cr")
