@@ -143,7 +143,9 @@ def result_files(
         if p.is_dir() and not (bags and (p / "metadata.yaml").is_file()):
             below = [f for f in walk(p) if not f.hidden and not (f.kind != "folder" and is_document(f.path))]
             # a dangling link is an input that fails (saying so), never silently no input
-            found = {f.path: f.real for f in below if f.path.suffix.lower() in suffixes and f.kind in ("file", "dangling")}
+            found = {
+                f.path: f.real for f in below if f.path.suffix.lower() in suffixes and f.kind in ("file", "dangling")
+            }
             if bags:  # a bag folder is one input: not also its .db3 / .mcap files
                 folders = {f.path.parent: os.path.dirname(f.real) for f in below if f.path.name == "metadata.yaml"}
                 found = {k: v for k, v in found.items() if not any(d in k.parents for d in folders)} | folders
