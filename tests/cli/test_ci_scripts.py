@@ -237,7 +237,7 @@ def test_diff_prints_with_digits_and_names_a_real_regression(icra20, data, tmp_p
         ["orb", "home", "4", "cr", "0.53", "0.27", "0.26", "0.02", "regression"],
         ["orb", "home", "4", "cr_t", "0.53", "0.27", "0.26", "0.02", "regression"],
     ]
-    assert "verdict: regression (1 sequence(s) regressed)" in out
+    assert "verdict: regression (1 sequence(s) regressed: orb home-4 cr, cr_t)" in out  # named, not only counted
     # two result folders are single runs: the halved sequence is no regression there (a single run can
     # tell only a sequence that stopped tracking from rerun noise), but the digits are the same
     assert _rc(["diff", good, worse, "--data", data.root, "--no-progress", "--jobs", "1", "--digits", "6"]) == 0

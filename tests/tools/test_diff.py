@@ -88,7 +88,9 @@ def test_diff_flags_exactly_the_changed_sequences(versions, tmp_path, capsys):
     rc, out, _ = run(capsys, a, b, "--json", js, "--junit", junit)
     assert (
         rc == 1
-        and "verdict: regression (4 sequence(s) regressed: odom home-2 failed; orbslam2_rgbd cafe-1 failed)" in out
+        and "verdict: regression (4 sequence(s) regressed: odom home-2 failed; orbslam2_rgbd cafe-1 failed; "
+        "odom corridor-3 ate_rmse, c_ate_rmse, rpe_trans_rmse; and 1 more)"
+        in out  # the regressed ones named too
     )
     verdict = json.loads(js.read_text())
     assert verdict["verdict"] == "regression"

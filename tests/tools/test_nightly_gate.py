@@ -216,8 +216,11 @@ def test_a_slow_drift_is_named_against_the_first_run_of_its_series(tmp_path, tab
     assert first == 0 and since.regressed and drift_gates(since) == []
     rc, out, _ = run(capsys, "history", *nights, "--metric", "cr")
     assert rc == 0 and "newest run night-7.csv against night-6.csv: ok" in out
-    assert "against night-0.csv, the first run of its series: regression" in out and "a drift: odom cafe-1 cr" in out
-    assert "named, not failing the night" in out and "lorisnb diff night-0.csv night-7.csv" in out
+    assert (
+        "against night-0.csv, the first run of its series: regression (1 sequence(s) regressed: odom cafe-1 cr" in out
+    )
+    assert "a drift of values, which does not fail the night by itself (the night passes: exit 0)" in out
+    assert "lorisnb diff night-0.csv night-7.csv" in out
     assert run(capsys, "diff", nights[0], nights[-1])[0] == 1  # the gate it names fails
     assert drift(runs[:2]) is None  # the first run is the baseline: nothing more
     rc, out, _ = run(capsys, "history", *nights[5:], "--metric", "cr")  # a series started later
@@ -284,7 +287,7 @@ def test_a_drift_of_single_runs_is_named_not_gated(tmp_path, table, capsys):
         nights.append(f)
     rc, out, _ = run(capsys, "history", *nights, "--metric", "cr")
     assert "newest run night-4.csv against night-3.csv: ok" in out
-    assert "the first run of its series: regression" in out and "named, not failing the night" in out
+    assert "the first run of its series: regression" in out and "does not fail the night by itself" in out
     assert "lorisnb diff night-0.csv night-4.csv" in out and rc == 0
 
 
@@ -350,3 +353,27 @@ def test_a_file_in_the_nightly_folder_that_is_no_run_is_passed_over_and_named(tm
         shutil.rmtree(p)
     rc, _, err = run(capsys, "diff", "--baseline", "last-comparable", folder, tonight)
     assert rc == 2 and "holds no run folder" in err and "h.csv" in err and "broken.csv" in err, err
+
+
+def test_a_drift_line_says_what_the_night_exits_with(tmp_path, table, capsys):
+    """A drift named on a night that fails on its own verdict (a regression against its baseline):
+    the drift's line said "named, not failing the night" while the night exited 1; it says the
+    drift does not fail the night by itself and that the night exits 1 for its other findings, and
+    both verdict lines name the sequence that regressed by the test (they named lost ones only)."""
+    rng = np.random.default_rng(0)
+    nights = []
+    for k, drop in enumerate([0.0, 0.03, 0.06, 0.09, 0.5]):  # tonight cafe-1 falls by 0.41 more
+        f = tmp_path / f"night-{k}.csv"
+        write_csv(_trials(table, rng, drop), f)
+        os.utime(f, (1.7e9 + 100 * k, 1.7e9 + 100 * k))
+        nights.append(f)
+    rc, out, _ = run(capsys, "history", *nights, "--metric", "cr")
+    assert (
+        rc == 1
+        and "newest run night-4.csv against night-3.csv: regression (1 sequence(s) regressed: odom cafe-1 cr" in out
+    )
+    line = next(x for x in out.splitlines() if "the first run of its series" in x)
+    assert line.startswith("newest run night-4.csv against night-0.csv, the first run of its series: regression "
+                           "(1 sequence(s) regressed: odom cafe-1 cr"), line  # fmt: skip
+    assert "does not fail the night by itself (the night exits 1 for its other findings here)" in line, line
+    assert "not failing the night" not in out

@@ -842,23 +842,49 @@ def verdict(sequences: pd.DataFrame, scenes: pd.DataFrame) -> dict:
                                          if r["level"] == "sequence"}))  # fmt: skip
 
 
+#: How many regressed sequences (or scene values) the verdict's line names before "and N more".
+NAMED = 3
+
+
 def regressed_phrase(verdict: Mapping[str, Any]) -> str:
-    """What regressed, for the verdict's line: ``"3 sequence(s) regressed"``, or where only scene
-    values did (a scene's CR falls while each sequence stays within its wider rerun band),
-    ``"no sequence regressed; 2 scene value(s) did"``; "" for a verdict of ok."""
+    """What regressed, for the verdict's line: ``"2 sequence(s) regressed: odom home-2 failed;
+    orb cafe-1 cr, cr_t"``, each sequence named with its metrics (lost or failed ones first, as
+    ``missing``, ``failed`` or the trial lost), the first :data:`NAMED` and ``"and N more"``; where
+    only scene values did (a scene's CR falls while each sequence stays within its wider rerun band),
+    ``"no sequence regressed; 2 scene value(s) did: orb home (scene) cr; ..."``; "" for a verdict of
+    ok. (The line named lost sequences only: a sequence that regressed by the t-test, the usual
+    nightly regression, was a count.)"""
     if verdict["verdict"] == "ok":
         return ""
+    regs = list(verdict.get("regressions", []))
     n = int(verdict["regressed_sequences"])
+    seqs = [r for r in regs if r.get("seq") is not None]
+    if n and seqs:
+        return f"{n} sequence(s) regressed: {_named(seqs)}"
     if n:
-        lost = [r for r in verdict.get("regressions", []) if r.get("status") in ("missing", "failed")
-                and r.get("seq") is not None]  # fmt: skip
-        named = "; ".join(
-            f"{r['algorithm']} {r['scene']}-{r['seq']} "
-            + (str(r["cand"]) if r.get("metric") == "trial" else "missing" if r["status"] == "missing" else "failed")
-            for r in lost[:3]
-        ) + (f"; {len(lost) - 3} more" if len(lost) > 3 else "")  # fmt: skip
-        return f"{n} sequence(s) regressed" + (f": {named}" if lost else "")
-    return f"no sequence regressed; {int(verdict['scene_counts'].get('regression', 0))} scene value(s) did"
+        return f"{n} sequence(s) regressed"
+    scenes = [r for r in regs if r.get("seq") is None]
+    k = int(verdict["scene_counts"].get("regression", 0))
+    return f"no sequence regressed; {k} scene value(s) did" + (f": {_named(scenes)}" if scenes else "")
+
+
+def _named(regs: Sequence[Mapping[str, Any]]) -> str:
+    """The first :data:`NAMED` of the regressed sequences (or scene values) of ``regs``, each with
+    what regressed in it (its metrics; ``missing``, ``failed`` or the trial lost first), then
+    ``and N more``."""
+    lost = ("missing", "failed")
+    what: dict[tuple, list[str]] = {}
+    for r in sorted(regs, key=lambda r: r.get("status") not in lost):  # lost ones first, stable
+        key = (r.get("suite") or "", r["algorithm"], r["scene"], r.get("seq"))
+        word = (
+            (str(r["cand"]) if r.get("metric") == "trial" else r["status"]) if r.get("status") in lost else r["metric"]
+        )
+        if word not in what.setdefault(key, []):
+            what[key].append(word)
+    shown = [f"{alg}{f' ({suite})' if suite else ''} {scene}" + (f"-{seq}" if seq is not None else " (scene)")
+             + f" {', '.join(words)}" for (suite, alg, scene, seq), words in list(what.items())[:NAMED]]  # fmt: skip
+    more = len(what) - len(shown)
+    return "; ".join(shown) + (f"; and {more} more" if more > 0 else "")
 
 
 def _what(r: dict) -> str:

@@ -551,19 +551,15 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
     what = verdict_phrase(d)
     lines = [f"newest run {names[k]} against {names[base]}: {d.verdict['verdict']}" + (f" ({what})" if what else "")]
     rc = exit_status(d, runs[base].unscored, run.unscored)
+    drift_line = None
     if since_first is not None:  # a drift: within noise night to night, a change since the series' start
         j, f = since_first
         gates = drift_gates(f)
-        worse = regressed_phrase(f.verdict) if f.regressed else ""
-        named = ", ".join(f"{r['algorithm']} {r['scene']}" + (f"-{r['seq']}" if r["seq"] is not None else " (scene)")
-                          + f" {r['metric']}" for r in f.verdict["regressions"][:5])  # fmt: skip
-        more = " ..." if len(f.verdict["regressions"]) > 5 else ""
-        said = f" ({worse}); a drift: {named}{more}" if f.regressed else ""
-        if f.regressed and not gates:
-            said += (f"; named, not failing the night (a drift of values; gate on it with lorisnb diff {names[j]} "
-                     f"{names[k]})")  # fmt: skip
+        said = f" ({regressed_phrase(f.verdict)})" if f.regressed else ""
         lines.append(f"newest run {names[k]} against {names[j]}, the first run of its series: "
                      f"{'regression' if f.regressed else 'ok'}{said}")  # fmt: skip
+        if f.regressed and not gates:  # its words once the night's exit status is known (below)
+            drift_line = (len(lines) - 1, names[j])
         rc = max(rc, 1 if gates else 0)
     judged = {(r["suite"], r["algorithm"], r["scene"], r["seq"]) for r in d.verdict["regressions"]
               if r.get("status") in LOST and r.get("seq") is not None}  # fmt: skip
@@ -578,6 +574,11 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
         lines.append(f"newest run {names[k]}: {len(gone)} sequence(s) an earlier run of its series had are lost: "
                      f"{shown}{more}; a sequence lost and left lost fails every night until it is back")  # fmt: skip
         rc = max(rc, 1)
+    if drift_line is not None:  # a drift of values is named, never gated: what fails the night is said as it is
+        i, first = drift_line
+        lines[i] += ("; a drift of values, which does not fail the night by itself" + (
+            f" (the night exits {rc} for its other findings here)" if rc else " (the night passes: exit 0)")
+            + f"; gate on it with lorisnb diff {first} {names[k]}")  # fmt: skip
     lost = [(names[base], runs[base].unscored), (names[k], run.unscored)]
     for name, files in lost:
         if files:
