@@ -78,6 +78,9 @@ class Association:
         gt_blocks: (M, 3, 3) the matched ground-truth poses' rotation blocks as their file wrote
             them (:func:`lorisnb.core.trajectory.poses.written_blocks`), where a convention
             composes the matrices as written and they are known; else None.
+        gt_read_quaternions: (M, 4) the matched ground-truth poses' quaternions as read (not
+            normalized), where the spec computes its numbers from the poses as read
+            (``EvalSpec.poses_as_read``) and the poses are the file's (``nearest``); else None.
     """
 
     est_index: np.ndarray
@@ -87,6 +90,7 @@ class Association:
     gt_start: float
     gt_end: float
     gt_blocks: np.ndarray | None = field(default=None, repr=False)
+    gt_read_quaternions: np.ndarray | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return len(self.stamps)

@@ -71,7 +71,9 @@ def tartanair_poses(gt: np.ndarray, est: np.ndarray, scale: bool = False) -> tup
     matrix (``Rotation.from_quat``). The round trip moves a rotation by a few ulps only, but its RPE
     takes the arccos of pairs whose error is the identity (i = j: 1 pair in n for n below 100), where an
     ulp of the trace is 1e-8 rad: without it the mean rotation error differed from tartanair_tools' by up
-    to 4e-7 relative on 3..10 poses."""
+    to 4e-7 relative on 3..10 poses. Give the poses as read (quaternions not normalized: scipy normalizes
+    them as tartanair_tools' scipy does), or the last bits, and with them the scale rule's borderline
+    steps, may differ from its."""
     from scipy.spatial.transform import Rotation
 
     def shifted(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -91,22 +93,43 @@ def tartanair_poses(gt: np.ndarray, est: np.ndarray, scale: bool = False) -> tup
     return matrices(pg, qg), matrices(pe, qe), s
 
 
+#: Up to this many borderline steps, the warning of :func:`_borderline_steps` names the range of scales
+#: their choices give (2^k of them); beyond, it says how many steps the scale depends on.
+BORDERLINE_SPAN = 12
+
+
 def _borderline_steps(sg: np.ndarray, se: np.ndarray, moving: np.ndarray, s: float, size: float) -> None:
     """Warn where the scale rule's 0.1 mm threshold decides by rounding: ground-truth steps of 0.1 mm to
-    within a few ulps (positions written with 4 decimals move by exactly 0.1 mm), which tartanair_tools
-    keeps or drops by the last bit of its own arithmetic (lorisnb's reader normalizes quaternions, so its
-    last bits are not tartanair_tools'); a step kept with a long estimate step moves the scale by percents."""
-    near = np.abs(sg - TARTANAIR_STILL) <= 64 * np.finfo(float).eps * max(1.0, size)
-    if not near.any():
+    within a few ulps (positions written with 4 decimals move by exactly 0.1 mm), which a computation
+    keeps or drops by the last bits of its input and arithmetic. lorisnb's are tartanair_tools' on the
+    same poses as read (:attr:`lorisnb.core.spec.evalspec.EvalSpec.poses_as_read`); poses written or
+    computed otherwise may flip each of these steps, and a step kept with a long estimate step moves the
+    scale by percents: the warning names the range of scales the 2^k choices give (up to
+    :data:`BORDERLINE_SPAN` steps; beyond, their number alone)."""
+    near = np.flatnonzero(np.abs(sg - TARTANAIR_STILL) <= 64 * np.finfo(float).eps * max(1.0, size))
+    if not near.size:
         return
-    other = moving ^ near
-    alt = 1.0 / float(np.mean(se[other] / sg[other])) if other.any() else float("nan")
-    if alt == s:
-        return
+    fixed = moving.copy()
+    fixed[near] = False
+    total, count = float(np.sum(se[fixed] / sg[fixed])), int(fixed.sum())
+    k = near.size
+    span = ""
+    if k <= BORDERLINE_SPAN:
+        ratios = se[near] / sg[near]
+        choose = (np.arange(2**k)[:, None] >> np.arange(k)) & 1  # every subset of the borderline steps kept
+        n = count + choose.sum(axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            scales = 1.0 / ((total + choose @ ratios) / n)
+        scales = scales[(n > 0) & np.isfinite(scales) & (scales > 0)]
+        if not scales.size or (scales.min() == s and scales.max() == s):
+            return
+        span = f"; kept or dropped, they give a scale from {scales.min():.9g} to {scales.max():.9g} ({2**k} choices)"
+    kept = int(moving[near].sum())
     warnings.warn(
-        f"TartanAir's scale rule drops ground-truth steps of at most 0.1 mm; {int(near.sum())} step(s) are 0.1 mm "
-        f"to within rounding, which tartanair_tools keeps or drops by the last bits of its arithmetic: its scale is "
-        f"{s:.9g} or {alt:.9g} (lorisnb: {s:.9g}), and its RPE and KITTI scores with it",
+        f"TartanAir's scale rule drops ground-truth steps of at most 0.1 mm; {k} step(s) are 0.1 mm to within "
+        f"rounding, and the last bits of the poses and of the arithmetic decide whether each is kept: lorisnb keeps "
+        f"{kept} of them (as tartanair_tools does on the same poses as read), for a scale of {s:.9g}{span}; poses "
+        "written or computed otherwise may give another, and other RPE and KITTI scores with it",
         LorisWarning,
         stacklevel=4,
     )

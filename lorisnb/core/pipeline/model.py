@@ -153,6 +153,9 @@ class SequenceErrors:
             them (the estimate's turned by the alignment's rotation), where the spec composes the
             matrices as written (``EvalSpec.as_written``) and both files are KITTI files; else None
             (the orientations are then the quaternions').
+        read_poses: (M, 14) the matched poses as read: ground-truth position and quaternion, then the
+            estimate's, quaternions not normalized and the estimate not aligned, where the spec computes
+            its numbers from them (``EvalSpec.poses_as_read``: tartanair_tools'); else None.
     """
 
     seq: int
@@ -169,6 +172,7 @@ class SequenceErrors:
     scale: float = 1.0
     est_blocks: np.ndarray | None = field(default=None, repr=False)
     gt_blocks: np.ndarray | None = field(default=None, repr=False)
+    read_poses: np.ndarray | None = field(default=None, repr=False)
     # What is computed from the errors once and kept (not init fields: ``dataclasses.replace``
     # gives a new sequence of errors empty ones, never the old errors' RPE, lever or scores).
     _rpe_cache: dict[tuple[float, str, str, bool | None, float], tuple[np.ndarray, ...]] = field(
@@ -259,7 +263,7 @@ class SequenceErrors:
 
 #: The per-pose fields of :class:`SequenceErrors` that :class:`ScoresOnly` lets go.
 POSE_FIELDS = ("stamps", "ate", "aoe", "est_positions", "gt_positions", "est_quaternions", "gt_quaternions",
-               "est_blocks", "gt_blocks")  # fmt: skip
+               "est_blocks", "gt_blocks", "read_poses")  # fmt: skip
 
 
 def _let_go(name: str) -> property:
@@ -290,6 +294,7 @@ class ScoresOnly(SequenceErrors):
     gt_quaternions = _let_go("gt_quaternions")
     est_blocks = _let_go("est_blocks")
     gt_blocks = _let_go("gt_blocks")
+    read_poses = _let_go("read_poses")
 
     @property
     def matched(self) -> int:

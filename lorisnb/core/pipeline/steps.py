@@ -4,6 +4,8 @@ transform, matching in time by the spec's association, an alignment applied, per
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from lorisnb.core.alignment.association import Association, associate, groundtruth_in_frame
@@ -66,6 +68,10 @@ def errors_after_alignment(
 
     blockwise(rows, m)
     est_blocks = written_blocks(est) if a.gt_blocks is not None else None
+    read = None  # the matched poses as read, for the numbers of a spec that reads them so (tartanair_tools')
+    if a.gt_read_quaternions is not None:
+        k = a.est_index
+        read = np.hstack([a.gt_positions, a.gt_read_quaternions, est.positions[k], est.quaternions[k]])
     if (
         est_blocks is not None and a.gt_blocks is not None
     ):  # as written, turned by the alignment's rotation (as evo and the devkit compose them)
@@ -74,7 +80,7 @@ def errors_after_alignment(
     return SequenceErrors(
         seq=seq, poses=len(est), stamps=a.stamps, ate=ate, aoe=aoe, est_positions=pos, gt_positions=a.gt_positions,
         est_quaternions=q, gt_quaternions=gt_q, gt_start=a.gt_start, gt_end=a.gt_end, scale=sim.scale,
-        est_blocks=est_blocks, gt_blocks=a.gt_blocks if est_blocks is not None else None,
+        est_blocks=est_blocks, gt_blocks=a.gt_blocks if est_blocks is not None else None, read_poses=read,
     )  # fmt: skip
 
 
@@ -83,7 +89,8 @@ def match(gt: Trajectory, est: Trajectory, spec: EvalSpec = DEFAULT, label: str 
     ``t_offset`` first); for ``nearest`` the ground-truth poses are taken as they are; ``index``
     pairs pose i with pose i (an error naming ``label`` for files of different lengths)."""
     if spec.association == "index":
-        return match_by_index(gt, est, label, spec.as_written)
+        a = match_by_index(gt, est, label, spec.as_written)
+        return replace(a, gt_read_quaternions=gt.quaternions) if spec.poses_as_read and len(a) else a
     stamps = est.stamps + spec.t_offset if spec.t_offset else est.stamps
     if spec.association == "interpolate":
         return associate(gt, stamps, spec.max_gap, spec.official_interpolation)
@@ -94,7 +101,8 @@ def match(gt: Trajectory, est: Trajectory, spec: EvalSpec = DEFAULT, label: str 
         return Association(ej, np.zeros(0), np.zeros((0, 3)), None, g_start, g_end)
     blocks = written_blocks(gt) if spec.as_written else None
     return Association(ej, stamps[ej], gt.positions[gi], quat_normalize(gt.quaternions[gi]), g_start, g_end,
-                       None if blocks is None else blocks[gi])  # fmt: skip
+                       None if blocks is None else blocks[gi],
+                       gt.quaternions[gi] if spec.poses_as_read else None)  # fmt: skip
 
 
 def with_transform(est: Trajectory, transform: Sim3 | np.ndarray | tuple | None) -> Trajectory:

@@ -58,6 +58,8 @@ REPEATED = ("drop", "keep")
 KITTI_PRECISIONS = ("single", "double")
 #: Presets that compose KITTI files' matrices as written (:attr:`EvalSpec.as_written`).
 AS_WRITTEN = ("kitti", "evo")
+#: Presets whose own numbers are computed from the matched poses as read (:attr:`EvalSpec.poses_as_read`).
+AS_READ = ("tartanair",)
 MODES = ("auto", "per-seq", "lifelong")
 #: An alignment without its scale (``scale`` off): what each scaled one becomes; the others stay.
 UNSCALED = {"sim3": "se3", "auto": "se3", "scale": "none"}
@@ -130,6 +132,14 @@ class EvalSpec:
         """Whether this convention composes KITTI files' pose matrices as written (the devkit's:
         the ``kitti`` preset), not the rotations nearest to their 7-digit blocks."""
         return self.preset_name in AS_WRITTEN
+
+    @property
+    def poses_as_read(self) -> bool:
+        """Whether this convention's own numbers (the ``tartanair`` preset's ``tartanair_*`` columns)
+        are computed from the matched poses as the files wrote them: quaternions not normalized and
+        the estimate not aligned (tartanair_tools reads its two files with ``np.loadtxt`` and aligns
+        by its own rules), whatever ``align`` does to lorisnb's own columns."""
+        return self.preset_name in AS_READ
 
     # -- what it says ------------------------------------------------------------------------
     def alignment_for(self, algorithm: str) -> str:
@@ -204,7 +214,8 @@ class EvalSpec:
             return (
                 f"; TartanAir (tartanair_tools): ATE with Horn's rotation{' and its scale' if self.tartanair_scale else ''}, "
                 f"RPE over its 10000 random pairs (seed {self.tartanair_seed}), KITTI score over 5..40 m"
-                f"{', the estimate scaled by its rule' if self.tartanair_scale else ''}"
+                f"{', the estimate scaled by its rule' if self.tartanair_scale else ''}, of the matched poses as read"
+                f"{' (the alignment is for lorisnb' + chr(39) + 's own columns)' if self.align != 'none' else ''}"
             )
         if self.preset_name == "kitti":
             return (
