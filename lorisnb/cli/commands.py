@@ -460,7 +460,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                   "smallest p-value to) where no difference was found:")  # fmt: skip
             print(_fmt(res.power[["scene", "a", "b", "unit", "have", "needed"]], args.digits))
         elif res.power is not None:
-            print(f"\n--power {args.power}: every pair of algorithms differs, or no scene has two: nothing to size")
+            print(f"\n{res.power_note}")
         for path in write_outputs(res, args.metric, args.csv, args.pairs_csv, args.latex, args.markdown, args.force,
                                   args.alpha):  # fmt: skip
             print(f"wrote {path}", file=sys.stderr)

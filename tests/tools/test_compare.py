@@ -117,10 +117,19 @@ def test_exact_test_on_three_against_three_with_ties(tmp_path, icra20, capsys):
     assert np.isnan(p["p"]) and p["test"] == "none: trials are copies of one run"
     assert p["min_p"] == pytest.approx(0.1) and not p["significant"]
     assert p["difference_low"] == -np.inf and p["difference_high"] == np.inf  # no shift can be rejected either
-    assert "no pair can reach alpha 0.05 in home (smallest possible p 0.1" in out
+    # copies: no test is made, so no count of trials helps (it said "smallest possible p 0.1 ... run more trials
+    # (--power DELTA says how many)", and --power then sized nothing)
+    assert "no pair can reach alpha 0.05 in home (the trials are copies of one run: no pair is tested" in out, out
+    assert "--power DELTA says how many" not in out
     assert runs_needed(0.05, paired=False) == 4  # 4 vs 4: 2/70 < 0.05
     assert np.isnan(p["needed"]) and "--power: no number of runs for the pairs of" in err  # copies: none sized
     assert "has no output for home sequence(s) 1, 3, 4, 5" in err  # only seq 2 given: coverage stated
+    # stdout says why no pair was sized (it said "every pair of algorithms differs, or no scene has two"), and
+    # the header counts the copies as the one run they are (it said "3 trial(s) per sequence")
+    assert ("--power 0.05: no pair sized: 1 of 1 pair(s) not sized: the trials of odom, orbslam2_rgbd are copies "
+            "of one run") in out, out  # fmt: skip
+    assert "every pair of algorithms differs" not in out and "3 trial(s) per sequence" not in out
+    assert "(odom, orbslam2_rgbd: 3 file(s) per sequence, 1 distinct run (the trials are copies of one run" in out
 
 
 def test_permutation_test_matches_scipy():
@@ -246,7 +255,7 @@ def test_power_with_one_algorithm_and_a_difference_a_rate_cannot_show(icra20, ca
     odom = icra20 / "per-seq" / "odom"
     rc, out, err = compare(capsys, odom, "--power", "0.1")
     assert rc == 0 and "Traceback" not in err
-    assert "--power 0.1: every pair of algorithms differs, or no scene has two: nothing to size" in out
+    assert "--power 0.1: no pair sized: no scene has two algorithms with a value to compare" in out
     rc, out, err = compare(capsys, odom, "--power", "2")
     assert rc == 2 and "power delta=2: cr is a rate between 0 and 1" in err
     from lorisnb.tools.decisions.comparison import compare_table

@@ -29,8 +29,9 @@ class Comparison:
     """``algorithms``: one row per suite, scene and algorithm (value, interval, coverage, rank,
     p-value and effect against the scene's top algorithm); ``pairs``: the pairwise test;
     ``significant``: its significant rows; ``ci``: intervals of every metric; ``coverage``;
-    ``power`` (with a power delta); ``header``, ``summary``: what the command prints (names in them
-    escaped, :func:`~lorisnb.tools.decisions.escape.clean`); ``notes``: warnings (missing sequences)."""
+    ``power`` (with a power delta) and ``power_note``, why it sizes no pair; ``header``,
+    ``summary``: what the command prints (names in them escaped,
+    :func:`~lorisnb.tools.decisions.escape.clean`); ``notes``: warnings (missing sequences)."""
 
     algorithms: pd.DataFrame
     pairs: pd.DataFrame
@@ -41,6 +42,8 @@ class Comparison:
     header: str
     summary: str
     notes: list[str]
+    #: why ``power`` sizes no pair, where it sizes none ("" otherwise, or without a power delta)
+    power_note: str = ""
 
 
 def check_table_duplicates(table: pd.DataFrame) -> None:
@@ -199,9 +202,7 @@ def compare_table(
         )
     ]
     algs = algs.rename(columns={"sequences": "sequences_with_output", "expected": "scene_sequences"})
-    per_seq = stats.with_trials(full).groupby(["algorithm", "scene", "seq"])["trial"].nunique()
-    lo, hi = int(per_seq.min()), int(per_seq.max())
-    trials = f"{lo} trial(s) per sequence" if lo == hi else f"{lo} to {hi} trials per sequence"
+    trials = _trials_said(full, copies)
     units = ", ".join(sorted(set(ci["unit"])))
     header = (
         f"{metric} per algorithm and scene, {level:.0%} bootstrap intervals over {units} ({trials}); "
@@ -217,7 +218,11 @@ def compare_table(
     sig = pairs[pairs["significant"].astype(bool)]  # a mask also when empty (object dtype)
     summary = f"{len(sig)} of {len(pairs)} pairs differ significantly (the test behind the ranks and bold marks)"
     summary += ":" if len(sig) else "."
-    blocked = pairs.groupby("scene").agg(reachable=("reachable", "any"), min_p=("min_p", "min"))
+    blocked = (
+        pairs.assign(copied=pairs["test"].eq(COPIES_TEST))
+        .groupby("scene")
+        .agg(reachable=("reachable", "any"), min_p=("min_p", "min"), copied=("copied", "all"))
+    )
     blocked = blocked[~blocked["reachable"].astype(bool)]
     if len(blocked):
         summary += (
@@ -229,20 +234,52 @@ def compare_table(
                 if not np.isfinite(r.min_p)
                 else f"{clean(scene)} (every pair's results are the same on every sequence: no test can separate them)"
                 if r.min_p >= 1
+                else f"{clean(scene)} (the trials are copies of one run: no pair is tested; run the system again per "
+                "trial)"
+                if r.copied
                 else f"{clean(scene)} (smallest possible p {r.min_p:.4g}, x {len(pairs)} pair(s) by Holm)"
                 for scene, r in blocked.iterrows()
             )
-            + (": run more trials (--power DELTA says how many)" if (blocked["min_p"] < 1).any() else "")
+            + (
+                ": run more trials (--power DELTA says how many)"
+                if ((blocked["min_p"] < 1) & ~blocked["copied"].astype(bool)).any()
+                else ""
+            )  # fmt: skip
         )
-    power = None
+    power, power_note = None, ""
     if power_delta is not None:  # copies' spread is no rerun's: sized from it, a pair looked cheap to tell apart
         copied = pairs["test"].eq(COPIES_TEST).to_numpy(bool)
-        power = runs_for_power(full, pairs[~pairs["significant"].astype(bool).to_numpy() & ~copied], power_delta, alpha,
+        differ = pairs["significant"].astype(bool).to_numpy()
+        power = runs_for_power(full, pairs[~differ & ~copied], power_delta, alpha,
                                comparisons=max(len(pairs), 1))  # fmt: skip
+        said = "copies of one run, whose spread says nothing of a rerun's; run the system again per trial"
         if copied.any():
             notes.append(f"--power: no number of runs for the pairs of {', '.join(sorted(copies))}: their trials are "
-                         "copies of one run, whose spread says nothing of a rerun's; run the system again per trial")  # fmt: skip
-    return Comparison(algs, pairs, sig, ci, cover, power, header, summary, notes)
+                         f"{said}")  # fmt: skip
+        why = ([f"{int(differ.sum())} of {len(pairs)} pair(s) differ already"] if differ.any() else []) + (
+            [f"{int(copied.sum())} of {len(pairs)} pair(s) not sized: the trials of {', '.join(sorted(copies))} are "
+             f"{said}"] if copied.any() else [])  # fmt: skip
+        power_note = (f"--power {power_delta:g}: no pair sized: " + ("; ".join(why) if why else
+                      "no scene has two algorithms with a value to compare")) if power.empty else ""  # fmt: skip
+    return Comparison(algs, pairs, sig, ci, cover, power, header, summary, notes, power_note)
+
+
+def _trials_said(full: pd.DataFrame, copies: set[str]) -> str:
+    """How many runs a sequence has, for the header: trials per sequence, and, for the algorithms
+    whose trials are copies of one run (:func:`trial_spread`), their files and the one distinct run
+    they are counted as (``4 trial(s) per sequence`` was said of four copies of one run)."""
+    per_seq = stats.with_trials(full).groupby(["algorithm", "scene", "seq"])["trial"].nunique()
+    copied = per_seq.index.get_level_values("algorithm").isin(sorted(copies))
+
+    def span(n: pd.Series, what: str) -> str:
+        lo, hi = int(n.min()), int(n.max())
+        return f"{lo} {what}" if lo == hi else f"{lo} to {hi} {what}"
+
+    said = [span(per_seq[~copied], "trial(s) per sequence")] if (~copied).any() else []
+    if copied.any():
+        said.append(f"{', '.join(clean(a) for a in sorted(copies))}: {span(per_seq[copied], 'file(s)')} per sequence, "
+                    "1 distinct run (the trials are copies of one run, counted as one)")  # fmt: skip
+    return "; ".join(said)
 
 
 def write_outputs(
