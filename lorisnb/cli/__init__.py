@@ -76,6 +76,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_threshold_options(p)
     add_compare_options(p)
     hide_unused(p, "compare")
+    p.usage = "%(prog)s FILE_OR_DIR... [options]"  # argparse (3.11) cannot draw a usage line with its RPE group hidden
     p.set_defaults(func=_command(".commands", "cmd_compare"))
 
     p = sub.add_parser("diff", help="did CAND regress against BASE? two result folders, report runs or tables")

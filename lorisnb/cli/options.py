@@ -245,11 +245,19 @@ UNUSED: dict[str, dict[str, str]] = {
 }  # fmt: skip
 
 
+#: Options a command refuses by its own check (naming the option as typed), for every value of its
+#: other options: ``compare``'s metrics hold no RPE, so its RPE step options are refused
+#: (``cmd_compare``); left out of its ``--help`` as :data:`UNUSED` is.
+REFUSED: dict[str, tuple[str, ...]] = {
+    "compare": ("rpe_delta", "rpe_unit", "rpe_pairs", "rpe_all_pairs", "rpe_tolerance"),
+}
+
+
 def hide_unused(p: argparse.ArgumentParser, command: str) -> None:
-    """Leave the options ``command`` refuses (:data:`UNUSED`) out of its ``--help``; still parsed, so
-    that giving one is refused with what to use, not an unknown option."""
+    """Leave the options ``command`` refuses (:data:`UNUSED`, :data:`REFUSED`) out of its ``--help``;
+    still parsed, so that giving one is refused with what to use, not an unknown option."""
     for action in p._actions:  # argparse has no public list of a parser's options
-        if action.dest in UNUSED[command]:
+        if action.dest in UNUSED[command] or action.dest in REFUSED.get(command, ()):
             action.help = argparse.SUPPRESS
 
 
