@@ -193,7 +193,12 @@ class EvalSpec:
         }[self.mode]
         repeated = "repeated poses dropped" if self.repeated == "drop" else "repeated poses kept"
         if self.repeated_for("tum") != self.repeated:
-            repeated += " in KITTI files, the last of a repeated stamp in stamped files (TUM associate.py's)"
+            repeated += (
+                " in KITTI and OpenLORIS files (of an OpenLORIS file's repeated stamp, its last pose), the last of a "
+                "repeated stamp in other stamped files (TUM associate.py's)"
+            )
+        if self.repeated == "keep" and self.preset_name == "openloris":  # the official tool's -k: the estimate's
+            repeated += " (an OpenLORIS ground truth's dropped, as the official tool reads it with or without -k)"
         extra = ", stamps repaired" if self.repair_stamps else ""
         transform = ", estimate composed with T_est_gt" if self.transform is not None else ""
         thresholds = (

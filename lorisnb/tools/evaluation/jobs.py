@@ -103,10 +103,26 @@ def _stamp(path: Path) -> tuple[float, int]:
 CACHED_BYTES = 32 << 20
 
 
-#: An OpenLORIS ground truth (official format) loses its repeated poses whatever the spec's rule,
-#: which is the estimate's: the official tool reads it so with or without ``-k`` (its
-#: ``--keep-repeated``), and :func:`groundtruth_of` reads one given as a pair's so.
+#: An OpenLORIS ground truth (official format) loses its repeated poses under the ``openloris``
+#: preset whatever the spec's rule, which is then the estimate's: the official tool reads it so with
+#: or without ``-k`` (its ``--keep-repeated``). Under another preset it follows the spec's rule, as
+#: the estimate does (:func:`gt_drops_repeated`).
 GT_DROP = True
+
+
+def gt_drops_repeated(spec: EvalSpec) -> bool:
+    """Whether an OpenLORIS ground truth (official format) loses its repeated poses (a pose identical
+    to the one before): :data:`GT_DROP` under the ``openloris`` preset (the official tool's reading,
+    ``--keep-repeated`` being the estimate's alone, as its ``-k``), else the spec's rule, as an
+    estimate in that format follows it (what the ``conventions:`` line says:
+    :meth:`~lorisnb.core.spec.evalspec.EvalSpec.describe`)."""
+    return GT_DROP if spec.preset_name == "openloris" else spec.repeated == "drop"
+
+
+def _gt_rule(spec: EvalSpec, fmt: str, rule: str) -> str:
+    """The repeated rule reading a ground truth of format ``fmt``: an OpenLORIS file's by
+    :func:`gt_drops_repeated`, any other's ``rule``."""
+    return ("drop" if gt_drops_repeated(spec) else "keep") if fmt == "openloris" else rule
 
 
 def backwards(gt: Trajectory) -> tuple[int, str] | None:
@@ -170,7 +186,7 @@ def groundtruth_of(path: Path, fmt: str, times: Path | None = None, topic: str |
     file whose stamps go back is refused (:func:`refuse_backwards`)."""
     stamp = _stamp(path) if path.is_file() else (0.0, 0)
     read = _read_groundtruth if stamp[1] < CACHED_BYTES else _read_groundtruth.__wrapped__  # a large one: not kept
-    gt, said, back = read(path, fmt, stamp, times, topic, tf, "drop" if fmt == "openloris" else repeated)
+    gt, said, back = read(path, fmt, stamp, times, topic, tf, repeated)
     if back is not None:
         raise ParseError(str(path), *back)
     if notes is not None:
@@ -181,11 +197,11 @@ def groundtruth_of(path: Path, fmt: str, times: Path | None = None, topic: str |
     return gt
 
 
-def openloris_groundtruth(path: Path, notes: list[str]) -> ResultFile:
+def openloris_groundtruth(path: Path, notes: list[str], spec: EvalSpec) -> ResultFile:
     """An OpenLORIS ground-truth file (every ``seq:`` block; cached, read-only arrays), as
     :func:`groundtruth_of` gives a plain one: its reader's notes added to ``notes``, a block whose
-    stamps go back refused (:func:`refuse_backwards`)."""
-    gt = read_groundtruth_file(path, GT_DROP)
+    stamps go back refused (:func:`refuse_backwards`); its repeated poses by :func:`gt_drops_repeated`."""
+    gt = read_groundtruth_file(path, gt_drops_repeated(spec))
     for k, t in gt.sequences.items():
         refuse_backwards(path, t, f"seq {k}: " if len(gt.sequences) > 1 else "")
     notes.extend(n for n in gt.warnings if n not in notes)
@@ -282,12 +298,13 @@ def _openloris(job: Job, progress: bool) -> FileErrors | None:
     if gt_path is None or declared != result.scene:  # the scene's ground truth (load_groundtruth's file)
         gt_path = job.data.groundtruth(result.scene)
     said: list[str] = []
-    gt = openloris_groundtruth(gt_path, said)
+    gt = openloris_groundtruth(gt_path, said, spec)
     result.warnings[:0] = [n for n in said if n not in result.warnings]  # the ground truth's notes first
-    moved = _moved(job.data, result.scene, GT_DROP, result.frame, spec.official_interpolation, _stamp(gt_path))
+    drop = gt_drops_repeated(spec)
+    moved = _moved(job.data, result.scene, drop, result.frame, spec.official_interpolation, _stamp(gt_path))
     return compute_errors(
         result, gt, spec, algorithm=algorithm, file=rel, suite=suite, trial=trial, in_frame=moved,
-        other_spans=partial(groundtruth_spans, job.data, GT_DROP), release=result.sequences.pop,
+        other_spans=partial(groundtruth_spans, job.data, drop), release=result.sequences.pop,
     )  # fmt: skip
 
 
@@ -304,7 +321,7 @@ def _pair(job: Job) -> FileErrors:
     rule = job.spec.repeated_for(src.fmt)
     notes: list[str] = []  # the ground truth's first, then the estimate's
     gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf,
-                        job.spec.repeated_for(src.gt_fmt), notes)  # fmt: skip
+                        _gt_rule(job.spec, src.gt_fmt, job.spec.repeated_for(src.gt_fmt)), notes)  # fmt: skip
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
         est = read_trajectory(job.path, src.fmt, stamps=src.est_times, topic=src.topic, tf=src.tf, repeated=rule,
@@ -333,7 +350,7 @@ def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) 
     gt_notes: list[str] = []
     if src.fmt == src.gt_fmt == "openloris":
         result = _read_result(job)
-        gt_file = openloris_groundtruth(src.groundtruth, gt_notes)
+        gt_file = openloris_groundtruth(src.groundtruth, gt_notes, job.spec)
         result.warnings[:0] = [n for n in gt_notes if n not in result.warnings]  # the ground truth's notes first
         return compute_errors(result, gt_file, job.spec, algorithm=algorithm, file=rel, suite=suite, trial=trial,
                               release=result.sequences.pop)  # fmt: skip
@@ -354,12 +371,12 @@ def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) 
                 f"estimate in {src.gt_fmt} too"
             )
         est = {seqs[0]: result.sequences[seqs[0]]}
-        gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf, job.spec.repeated,
-                            gt_notes)  # fmt: skip
+        gt = groundtruth_of(src.groundtruth, src.gt_fmt, src.gt_times, src.gt_topic, src.gt_tf,
+                            _gt_rule(job.spec, src.gt_fmt, job.spec.repeated), gt_notes)  # fmt: skip
         notes = gt_notes + [n for n in result.warnings if n not in gt_notes]
         gts = {seqs[0]: gt}
     else:  # a plain estimate against an OpenLORIS ground truth: one block
-        gt_file = openloris_groundtruth(src.groundtruth, gt_notes)
+        gt_file = openloris_groundtruth(src.groundtruth, gt_notes, job.spec)
         seqs = sorted(gt_file.sequences)
         if len(seqs) != 1:
             raise ValidationError(
@@ -394,7 +411,7 @@ def _manifest(job: Job) -> FileErrors:
                 s.groundtruth, None, f"ground truth of session {s.name!r} not found ({m.path}: root and groundtruth)"
             )
         gts[s.seq] = groundtruth_of(s.groundtruth, s.groundtruth_format, None, m.groundtruth_topic, m.groundtruth_tf,
-                                    job.spec.repeated, notes)  # fmt: skip
+                                    _gt_rule(job.spec, s.groundtruth_format, job.spec.repeated), notes)  # fmt: skip
     ests: dict[int, Trajectory] = {}
     found = {s.seq: named_entry(job.path, s.estimate) for s in sessions}  # NFC or NFD, as the file system has it
     with warnings.catch_warnings(record=True) as caught:
