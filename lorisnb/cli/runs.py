@@ -173,7 +173,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
     print(f"rule: {d.verdict['rule']}")
     d = with_unscored(d, base_failed, cand_failed)  # every output says what the exit status says
     what = verdict_phrase(d)
-    print(f"\nverdict: {d.verdict['verdict']}" + (f" ({what})" if what else ""))
+    print(f"\nverdict: {d.verdict['verdict']}" + (f" ({clean(what)})" if what else ""))  # names the sequences
     extra = dict(base=args.paths[0], cand=args.paths[1], tolerances={k: str(v) for k, v in tolerances.items()},
                  alpha=args.alpha, base_failed=base_failed, cand_failed=sorted(cand_failed),
                  exit_status=exit_status(d, base_failed, cand_failed))  # fmt: skip
