@@ -20,6 +20,8 @@ from lorisnb.errors import EvaluationError, FailedInputsWarning, LorisError, Lor
 if TYPE_CHECKING:
     import pandas as pd
 
+    from lorisnb.tools.evaluation.result import Evaluation
+
 
 def _executor(args: argparse.Namespace) -> Any:
     """A Dask cluster's executor for ``--scheduler ADDRESS`` (None without it)."""
@@ -317,6 +319,13 @@ def _rows_as_columns(rows: list[dict[str, Any]]) -> dict[str, np.ndarray]:
     return out
 
 
+def _sequences_of(ev: Evaluation) -> str:
+    """What a sweep's rows are per threshold setting: one per sequence (a file of several ``seq:``
+    blocks has several), so the header's factors multiply to its row count."""
+    n = sum(len(f.sequences) for f in ev.errors)
+    return f"{n} sequence(s) of {len(ev.errors)} file(s)"
+
+
 def cmd_sweep(args: argparse.Namespace) -> int:
     import pandas as pd
 
@@ -371,7 +380,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             force=args.force, progress=not args.no_progress, on_part=summarize, relation=ev.spec.relation,
             columns=args.columns, change_unit=ev.spec.change_unit, fmt="parquet" if args.parquet else "csv", **rpe,
         )  # fmt: skip
-        print(f"{rows} rows: {len(ev.errors)} file(s) x {grid}")
+        print(f"{rows} rows: {_sequences_of(ev)} x {grid}")
         if shown:
             print(_fmt(pd.concat(shown).head(60), args.digits))
             if scene_rows > 60:
@@ -385,7 +394,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         relation=ev.spec.relation, change_unit=ev.spec.change_unit, **rpe,
     )  # fmt: skip
     table["spec"] = ev.spec.canonical(thresholds=False)
-    print(f"{len(table)} rows: {len(ev.errors)} file(s) x {grid}")
+    print(f"{len(table)} rows: {_sequences_of(ev)} x {grid}")
     if not table.empty:
         scenes = sweep_scenes(table, ev.durations())
         view = scenes[cols]
