@@ -68,24 +68,28 @@ def load_runs(paths: Iterable[str | os.PathLike[str]], passed: list[str] | None 
     later = [u for u in damaged if newest is None or u.when is None or (False, u.when, natural(str(u.path))) > newest]
     if later or (unread and not ordered):
         raise max(later or damaged or unread, key=lambda u: (u.when is None, u.when or 0, natural(str(u.path)))).error
-    for u in unread if passed is not None else []:  # none where passed is None (raised above)
-        what = (
-            "no run (not a per-sequence table or a report run)" if u.foreign else "a damaged run older than the newest"
-        )
-        passed.append(f"{u.path} passed over, {what}: {u.why}; {ordered[-1].path} is judged as the newest run")
+    if passed is not None:  # else nothing is unread (raised above)
+        for u in unread:
+            what = (
+                "no run (not a per-sequence table or a report run)"
+                if u.foreign
+                else "a damaged run older than the newest"
+            )
+            passed.append(f"{u.path} passed over, {what}: {u.why}; {ordered[-1].path} is judged as the newest run")
     return ordered
 
 
 class Unread(NamedTuple):
     """A path :func:`read_runs` could not read as a run: the error, its message, when the path was
     made (run.json's ``created`` where it holds one, else the modification time; None where the path
-    does not exist) and whether it is **foreign**, no run at all (:func:`foreign`), not a damaged one."""
+    does not exist) and, where it is **foreign**, no run at all rather than a damaged one, why
+    (:func:`foreign`; None for a damaged run)."""
 
     path: Path
     why: str
     error: LorisError
     when: datetime | None
-    foreign: bool
+    foreign: str | None
 
 
 def read_runs(paths: Iterable[str | os.PathLike[str]]) -> tuple[list[Run], list[Unread]]:
