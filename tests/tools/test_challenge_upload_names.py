@@ -69,18 +69,24 @@ def test_an_upper_case_suffix_is_scored(tmp_path, data, challenge):
 
 
 def test_a_file_of_nothing_scored_is_a_failure_naming_it(tmp_path, data, challenge):
-    """A file the scorer's walk does not read (kept with .TXT by a server of before) was dropped
-    with "nothing was evaluated", named for no file: the submission scored with no row, no failure."""
-    sub = tmp_path / "uploads" / "old"
-    (sub / "files").mkdir(parents=True)
-    (sub / "files" / "CAFE-1-1.TXT").write_bytes(_poses(data.icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt"))
-    (sub / PLAN).write_text(json.dumps({"CAFE-1-1.TXT": dict(format="tum", scene="cafe", seq=1)}))
-    out = _score(challenge, sub)
-    assert out["rows"] == []
-    assert [(f["file"], f["status"], f["sequences"]) for f in out["failures"]] == [
-        ("CAFE-1-1.TXT", "failed", [("cafe", 1)])
-    ]
-    assert "nothing was evaluated" in out["failures"][0]["error"]
+    """A file the scorer's walk does not read was dropped with "nothing was evaluated", named for no
+    file: the submission scored with no row, no failure. (A file kept with .TXT by a server of
+    before is read now: the walk takes a suffix in any case.)"""
+    poses = _poses(data.icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt")
+    for name, scored in (("cafe-1-1.dat", False), ("CAFE-1-1.TXT", True)):
+        sub = tmp_path / "uploads" / name
+        (sub / "files").mkdir(parents=True)
+        (sub / "files" / name).write_bytes(poses)
+        (sub / PLAN).write_text(json.dumps({name: dict(format="tum", scene="cafe", seq=1)}))
+        out = _score(challenge, sub)
+        if scored:
+            assert out["failures"] == [] and [(r["scene"], r["seq"], r["matched"]) for r in out["rows"]] == [
+                ("cafe", 1, 1139)
+            ]
+            continue
+        assert out["rows"] == []
+        assert [(f["file"], f["status"], f["sequences"]) for f in out["failures"]] == [(name, "failed", [("cafe", 1)])]
+        assert "nothing was evaluated" in out["failures"][0]["error"]
 
 
 def test_trial_folders_are_trials(tmp_path, data, challenge):

@@ -133,18 +133,18 @@ def foreign(path: Path) -> str | None:
 
 def _made(path: Path) -> datetime | None:
     """When a path that could not be read as a run was made, as :func:`load_run` would order it."""
-    from lorisnb.tools.decisions.runs import _created, _mtime, is_report_run
+    from lorisnb.tools.decisions.runs import created_of, is_report_run, modified
     from lorisnb.tools.report.provenance import RUN_JSON, read_run_json
 
     if not path.exists():
         return None
     if is_report_run(path):
         try:
-            created = _created(read_run_json(path), path / RUN_JSON)
+            created = created_of(read_run_json(path), path / RUN_JSON)
         except LorisError:
             created = None
-        return created or _mtime(path / RUN_JSON)
-    return _mtime(path)
+        return created or modified(path / RUN_JSON)
+    return modified(path)
 
 
 def _order_key(r: Run) -> tuple:

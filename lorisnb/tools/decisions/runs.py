@@ -386,16 +386,16 @@ def load_run(path: str | os.PathLike[str]) -> Run:
         raise DataNotFoundError(f"{p}: no such file or folder")
     if is_report_run(p):
         meta = read_run_json(p)
-        created, source = _created(meta, p / RUN_JSON), "run.json"
+        created, source = created_of(meta, p / RUN_JSON), "run.json"
         check_spec_values(meta.get("spec"), p / RUN_JSON)
         if created is None:
-            created, source = _mtime(p / RUN_JSON), "modification time of run.json"
+            created, source = modified(p / RUN_JSON), "modification time of run.json"
         notes: list[str] = []
         table = _report_tables(p, notes, meta.get("spec"))
         return Run(p, "report", table, meta, created, source, notes, unscored_inputs(p), _durations(p))
     if is_table(p):
         table, notes = read_table(p), []
-        return Run(p, "table", table, {}, _mtime(p), "modification time", notes,
+        return Run(p, "table", table, {}, modified(p), "modification time", notes,
                    expected=table_expected(table, p, notes))  # fmt: skip
     raise ValidationError(f"{p}: not a report run (no {RUN_JSON}) and not a CSV/Parquet table")
 
@@ -480,7 +480,7 @@ def unscored_inputs(run_dir: Path) -> dict[str, str]:
     return dict(zip(bad["file"], bad["error"], strict=True))
 
 
-def _created(meta: dict[str, Any], file: Path) -> datetime | None:
+def created_of(meta: dict[str, Any], file: Path) -> datetime | None:
     """run.json's ``created``: None where it is null (the run is then ordered by the file's time),
     else an ISO 8601 time (UTC where it names no zone); any other text is a damaged run.json,
     refused naming the file and the key as its other keys are."""
@@ -523,7 +523,7 @@ def spec_problem(spec: Any) -> str | None:
     return None
 
 
-def _mtime(p: Path) -> datetime:
+def modified(p: Path) -> datetime:
     return datetime.fromtimestamp(p.stat().st_mtime, tz=timezone.utc)
 
 
