@@ -176,7 +176,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("est", help="estimate: ov_eval's text layout (stamp, pose, 12 covariance numbers a line), a TUM file "
                    "(no covariances: no NEES or bounds) or a ROS bag (PoseWithCovarianceStamped or Odometry)")  # fmt: skip
-    p.add_argument("gt", help="ground truth (--gt-format)")
+    p.add_argument(
+        "gt", help="ground truth (--gt-format; tum: 8 numbers a line, or ov_eval's 20, its covariances left)"
+    )
     p.add_argument("--gt-format", choices=FORMAT_NAMES, default="tum", help="format of GT (default tum)")
     p.add_argument("--topic", default=None, help="bags: the estimate's topic")
     p.add_argument("--gt-topic", default=None, help="bags (--gt-format bag): the ground truth's topic")

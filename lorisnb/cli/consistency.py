@@ -17,7 +17,7 @@ from lorisnb.errors import EvaluationError, LorisWarning, ParseError
 
 def cmd_consistency(args: argparse.Namespace) -> int:
     from lorisnb.core.metrics.consistency import ov_eval_errors
-    from lorisnb.io.readers.covariance import read_covariances
+    from lorisnb.io.readers.covariance import read_covariances, read_ov_groundtruth
     from lorisnb.io.readers.plain import read_trajectory
     from lorisnb.io.writers import write_csv
 
@@ -35,7 +35,11 @@ def cmd_consistency(args: argparse.Namespace) -> int:
             warnings.simplefilter("always", LorisWarning)
             est, cov = read_covariances(args.est, args.topic, required=False)
             # every row in file order, as ov_eval reads it: of a repeated stamp its association takes the first
-            gt = read_trajectory(args.gt, args.gt_format, seq=args.seq, topic=args.gt_topic, repeated="keep")
+            gt = (
+                read_ov_groundtruth(args.gt)
+                if args.gt_format == "tum"  # TUM's 8 numbers or ov_eval's 20
+                else read_trajectory(args.gt, args.gt_format, seq=args.seq, topic=args.gt_topic, repeated="keep")
+            )
             result = ov_eval_errors(est, gt, cov, align=args.align, max_diff=args.max_diff)
     except (ParseError, EvaluationError) as exc:  # advice in this command's options (an estimate's format is read)
         say(f"error: {format_advice(str(exc), None, '--gt-format {fmt}', [args.gt])}")

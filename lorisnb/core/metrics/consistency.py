@@ -384,9 +384,18 @@ def _quadratic(e: np.ndarray, cov: np.ndarray) -> np.ndarray:
         return (row[:, 0] * e[:, 0] + row[:, 1] * e[:, 1]) + row[:, 2] * e[:, 2]
 
 
-def _not_positive_definite(cov: np.ndarray) -> np.ndarray:
-    """Which (N, 3, 3) covariances are not positive definite (a zero or negative eigenvalue)."""
-    return ~(np.linalg.eigvalsh(cov)[:, 0] > 0)
+#: A covariance whose smallest eigenvalue is below this share of its largest is singular to rounding:
+#: its inverse, and the NEES with it, is rounding divided by rounding (a rank-2 block gives 1e-16 and
+#: a NEES of 1e9 and more).
+NEAR_SINGULAR = 1e-12
+
+
+def _bad_covariances(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which (N, 3, 3) covariances are not positive definite (a zero or negative eigenvalue), and
+    which are positive definite but singular to rounding (:data:`NEAR_SINGULAR`)."""
+    ev = np.linalg.eigvalsh(cov)
+    not_pd = ~(ev[:, 0] > 0)
+    return not_pd, ~not_pd & (ev[:, 0] < NEAR_SINGULAR * ev[:, -1])
 
 
 def _length_ratio_note(est_positions: np.ndarray, gt_positions: np.ndarray) -> str | None:
@@ -502,13 +511,23 @@ def ov_eval_errors(
         cols["nees_ori"] = _quadratic(e_ori, cov_ori)
         cols["nees_pos"] = _quadratic(err_pos, cov_pos)
         for part, block in (("orientation", cov_ori), ("position", cov_pos)):
-            bad = _not_positive_definite(block)
-            if bad.any():
+            a = "an" if part == "orientation" else "a"
+            not_pd, near = _bad_covariances(block)
+            if not_pd.any():
                 notes.append(
-                    f"{int(bad.sum())} of {len(bad)} matched poses have a {part} covariance that is not positive "
-                    f"definite (the first at {cols['t'][int(np.argmax(bad))]:.6f} s): their NEES is computed as "
-                    "ov_eval computes it (from Eigen's inverse; negative, huge or left out where that is NaN) and "
-                    "means nothing"
+                    f"{int(not_pd.sum())} of {len(not_pd)} matched poses have {a} {part} covariance that is not "
+                    f"positive definite (the first at {cols['t'][int(np.argmax(not_pd))]:.6f} s): their NEES is "
+                    "computed as ov_eval computes it (from Eigen's inverse; negative, huge or left out where that is "
+                    "NaN) and means nothing"
+                )
+            if near.any():
+                k = int(np.argmax(near))
+                notes.append(
+                    f"{int(near.sum())} of {len(near)} matched poses have {a} {part} covariance that is singular to "
+                    f"rounding (smallest eigenvalue below {NEAR_SINGULAR:g} of the largest; the first at "
+                    f"{cols['t'][k]:.6f} s, NEES {cols[f'nees_{part[:3]}'][k]:.3g}): their NEES is computed as "
+                    "ov_eval computes it (from Eigen's inverse) but is rounding divided by rounding, and the NEES "
+                    "statistics with it; a covariance that is flat along one axis (rank 2)?"
                 )
     poses = pd.DataFrame(cols)
     lost = [name for name in SERIES if name in poses and not name.startswith("nees") and poses[name].isna().any()]

@@ -33,10 +33,11 @@ from lorisnb.io.readers.bags import COVARIANCE_TYPES
 LAYOUT = "stamp tx ty tz qx qy qz qw Pr11 Pr12 Pr13 Pr22 Pr23 Pr33 Pt11 Pt12 Pt13 Pt22 Pt23 Pt33"
 
 
-def _checked(spath: str, stamps: np.ndarray, values: np.ndarray, line_no: np.ndarray, what: str
-             ) -> tuple[Trajectory, PoseCovariances]:  # fmt: skip
+def _checked(spath: str, stamps: np.ndarray, values: np.ndarray, line_no: np.ndarray, what: str,
+             repeated: str = "drop") -> tuple[Trajectory, PoseCovariances]:  # fmt: skip
     """Poses (N, 7) and covariances (N, 12 upper triangles) as read: checked, NaN poses skipped,
-    sorted; the covariances of the poses kept, in their order; a non-finite covariance refused."""
+    sorted (``repeated``: the rule for a repeated stamp's poses, as the scanner's ``finish``); the
+    covariances of the poses kept, in their order; a non-finite covariance refused."""
     notes: list[str] = []
     cov = values[:, 7:]
     bad = ~np.isfinite(cov).all(axis=1)
@@ -45,16 +46,17 @@ def _checked(spath: str, stamps: np.ndarray, values: np.ndarray, line_no: np.nda
         raise ParseError(spath, int(line_no[i]), f"the covariance of this {what} is not finite; expected numbers")
     keep = check_rows(spath, stamps, values[:, :3], values[:, 3:7], line_no, notes)
     stamps, values, line_no = stamps[keep], values[keep], line_no[keep]
-    traj = finish(spath, stamps, values[:, :3].copy(), values[:, 3:7].copy(), line_no, "", notes)
+    traj = finish(spath, stamps, values[:, :3].copy(), values[:, 3:7].copy(), line_no, "", notes, repeated)
     rows = np.searchsorted(line_no, np.asarray(traj.lines))  # line numbers increase in file order
     for note in notes:
         warnings.warn(note, LorisWarning, stacklevel=3)
     return traj, PoseCovariances.from_upper(values[rows, 7:])
 
 
-def read_covariance_text(path: str | os.PathLike) -> tuple[Trajectory, PoseCovariances]:
+def read_covariance_text(path: str | os.PathLike, repeated: str = "drop") -> tuple[Trajectory, PoseCovariances]:
     """A trajectory and its pose covariances from a text file in ``ov_eval``'s layout
-    (:data:`LAYOUT`, see the module docstring)."""
+    (:data:`LAYOUT`, see the module docstring); ``repeated``: the poses of a repeated stamp, ``drop``
+    all but the last or ``keep`` them all in file order."""
     spath = str(path)
     rows = read_rows(
         path,
@@ -77,7 +79,7 @@ def read_covariance_text(path: str | os.PathLike) -> tuple[Trajectory, PoseCovar
     if values.shape[0] == 0:
         raise ParseError(spath, None, f"no pose in this file; expected lines of 20 numbers '{LAYOUT}'")
     line_no = np.asarray(rows.lines)
-    return _checked(spath, values[:, 0].copy(), _pose_cov(values[:, 1:8], values[:, 8:20]), line_no, "line")
+    return _checked(spath, values[:, 0].copy(), _pose_cov(values[:, 1:8], values[:, 8:20]), line_no, "line", repeated)
 
 
 def _pose_cov(pose: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -140,3 +142,15 @@ def read_covariances(
     if not required and _text_fields(path) == 8:
         return read_tum(path), None
     return read_covariance_text(path)
+
+
+def read_ov_groundtruth(path: str | os.PathLike) -> Trajectory:
+    """A ground truth in a text file as ``ov_eval`` reads one: TUM's 8 numbers a line or its own
+    layout of 20 (:data:`LAYOUT`; the covariances read and left, as ov_eval's metrics use the
+    estimate's alone), every row kept in file order (of a repeated stamp, its association takes the
+    first)."""
+    from lorisnb.io.readers.plain import read_trajectory
+
+    if Path(path).is_file() and _text_fields(path) == 20:
+        return read_covariance_text(path, repeated="keep")[0]
+    return read_trajectory(path, "tum", repeated="keep")
