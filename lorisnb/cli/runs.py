@@ -5,6 +5,7 @@ be evaluated), 2 a usage error (bad option, runs that are not comparable)."""
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -62,7 +63,30 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
         # each row's eps in metres follows the extent the estimate matched, so it differs wherever
         # CAND tracked more or less than BASE; both sides were scored with this one fraction
         table = table.assign(eps=ev.spec.eps)
-    return Run(p, "results", table, expected=ev.durations()), failed, sorted(failed)
+    newest = _newest_input(ev, p)
+    made = "modification time of its newest result file"
+    return Run(p, "results", table, expected=ev.durations(), created=newest, created_from=made), failed, sorted(failed)
+
+
+def _newest_input(ev: Any, folder: Path) -> Any:
+    """When a result folder's content last changed: the newest modification time of the files it
+    evaluated and of the folders holding them, up to ``folder`` (a file removed changes its folder's
+    time), or None when none can be read. A run made at that time or after it evaluated this content:
+    ``--baseline last-comparable`` passes it over, as a copy of CAND
+    (:func:`lorisnb.tools.decisions.history.not_before`); the nightly recipe writes tonight's report
+    run before its diff, and that run was taken as the baseline of its own results."""
+    from lorisnb.tools.decisions.runs import modified
+
+    folder = Path(os.path.abspath(folder))
+    paths = {Path(os.path.abspath(f.path)) for f in [*ev.errors, *ev.failures]}
+    folders = {d for p in paths for d in p.parents if d == folder or folder in d.parents}
+    times = []
+    for path in [*paths, *folders, folder]:
+        try:
+            times.append(modified(path))
+        except OSError:  # a link to nothing, a file gone since
+            continue
+    return max(times, default=None)
 
 
 def _last_comparable(folder: Path, cand: Any) -> Any:
