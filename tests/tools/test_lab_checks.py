@@ -284,7 +284,10 @@ def test_a_rounded_answer_is_not_told_two_equal_numbers():
         return round(_right_cr(stamps, correct, t_min, t_max, delta), 6)
 
     msg = _fails(teach.check_correct_rate, rounded)
-    assert "you return 0.366667; lorisnb gives 0.366666667 (they differ by 3.3e-07" in msg and "rounded to 6 decimal(s)?" in msg
+    assert (
+        "you return 0.366667; lorisnb gives 0.366666667 (they differ by 3.3e-07" in msg
+        and "rounded to 6 decimal(s)?" in msg
+    )
 
 
 def test_lorisnbs_own_function_given_as_the_answer_is_refused(hidden):
