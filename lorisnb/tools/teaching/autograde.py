@@ -52,7 +52,7 @@ from lorisnb.errors import AnswerError, ValidationError
 from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, decode
 
-GRADER_VERSION = "11"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "12"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
 # 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
 # 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
@@ -69,7 +69,8 @@ GRADER_VERSION = "11"  # part of every result's digest: a new grader regrades ev
 # functions of the cells added below it up to its check; values set in cells added right below an answer are read
 # there, and a name left unset without a placeholder is no "no answer yet"; no file of a submission is read through
 # a link or quoted; the instructor's markers noted; an unused top-level import of lorisnb left out of a formula or
-# prediction run alone (one used is refused, as before); a NameError alone says what the formula has; float32 named)
+# prediction run alone (one used is refused, as before); a NameError alone says what the formula has; float32 named;
+# 12: an answer whose cell is missing (deleted, metadata removed) is unanswered, never graded from the lab's run)
 
 
 @dataclass(frozen=True)
@@ -913,6 +914,9 @@ def grade_submission(
             defs = spec.functions.get(gid, ())
             if not defs:
                 return
+            if gid not in answers:  # its cell deleted or its metadata removed: unanswered, whatever defines it
+                functions.update({d: RemoteFunction(None, d, absent(gid)) for d in defs})
+                return
             if failed:
                 functions.update({d: RemoteFunction(None, d, failed) for d in defs})
                 return
@@ -996,6 +1000,8 @@ def grade_submission(
             values = _run_student(spec, parts, params | {"output_dir": str(work / "out")}, work, py_path,
                                   hidden, settings, notes, budget, boxes, alone, took, private=[root],
                                   added=added, fallback=top_down, reorder=reorder)  # fmt: skip
+            for gid in missing:  # never what the lab's run read where its cell was (an added cell set it)
+                values[gid] = {n: {"error": absent(gid)} for n in spec.values.get(gid, ())}
             isolation = "full" if settings.uid and _isolated() else "limits"
             for defs in spec.functions.values():  # not reached: the budget ran out before
                 functions.update({d: RemoteFunction(None, d, f"TimeoutError: {_BUDGET_ERROR.format(budget.seconds)}")
@@ -1004,7 +1010,9 @@ def grade_submission(
             def predicted(gid: str, given: Mapping[str, Any]) -> dict[str, Any]:
                 """A prediction run alone (numpy, math and ``given``, the lab's numbers), its values;
                 one that did not run in the lab (a time limit, the budget) keeps that error."""
-                if gid not in answers or gid not in took or any("error" in v for v in values.get(gid, {}).values()):
+                if gid not in answers:  # no answer cell: unanswered (never the lab's run's value there)
+                    return {n: {"error": absent(gid)} for n in spec.values.get(gid, ())}
+                if gid not in took or any("error" in v for v in values.get(gid, {}).values()):
                     return dict(values.get(gid, {}))
                 before = order[: order.index(gid)] if gid in order else []
                 lab = {n: v for g in before for n, v in clean.get(g, {}).items()}
@@ -1041,6 +1049,15 @@ def grade_submission(
     notes = [shorten(n) for n in notes]
     return SubmissionResult(student, spec.name, scores, isolation, round(time.monotonic() - t0, 2), notes,
                             instructor_markers=markers)  # fmt: skip
+
+
+def absent(gid: str) -> str:
+    """The error of an answer whose cell the returned notebook lacks (deleted, or its nbgrader
+    metadata removed): unanswered, whatever the other cells compute or define."""
+    return (
+        f"RuntimeError: the notebook has no answer cell {gid} (the cell was deleted, or its nbgrader metadata "
+        "removed): unanswered, whatever other cells compute or define; answer in the lab's own answer cell"
+    )
 
 
 def leaked_note(markers: Sequence[str]) -> str:
@@ -1546,7 +1563,7 @@ def _run_student(
     finally:
         box.close()
     for gid, names in set_below.items():
-        if gid not in spec.predictions:
+        if gid not in spec.predictions and gid in answers:
             notes.append(f"{gid}: {', '.join(names)} set in the cell(s) you added right below the answer cell, before "
                          "the lab's next cell: read there, as the notebook's check saw it")  # fmt: skip
     for gid, own in answers.items():  # a name left unset with no placeholder there: not "no answer yet"
