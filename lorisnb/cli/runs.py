@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
@@ -65,7 +66,13 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
         table = table.assign(eps=ev.spec.eps)
     newest = _newest_input(ev, p)
     made = "modification time of its newest result file"
-    return Run(p, "results", table, expected=ev.durations(), created=newest, created_from=made), failed, sorted(failed)
+    now = datetime.now(timezone.utc)
+    ahead = [] if newest is None or newest <= now else [
+        f"{path}: its newest file's time {newest.isoformat()} is in the future (now {now.isoformat()}; another machine's "
+        "clock?), so CAND's time is unknown: an earlier run holding every value of it is taken as its copy"]  # fmt: skip
+    run = Run(p, "results", table, expected=ev.durations(), created=None if ahead else newest, created_from=made,
+              warnings=ahead)  # fmt: skip
+    return run, failed, sorted(failed)
 
 
 def _newest_input(ev: Any, folder: Path) -> Any:

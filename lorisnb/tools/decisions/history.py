@@ -109,7 +109,7 @@ def foreign(path: Path) -> str | None:
     """Why ``path`` is no run at all (None where it may be one, damaged or not): neither a report run
     nor a table (:func:`~lorisnb.tools.decisions.runs.is_table`), or a table without the columns of
     per-sequence rows (``algorithm``, ``scene``, ``seq``: ``history --csv``'s own table, a scene or
-    pairs table)."""
+    pairs table). An empty table (no header: a failed ``--csv``, a shell redirect) may be a run, damaged."""
     from lorisnb.tools.decisions.runs import csv_records, is_report_run, is_table
 
     if not path.exists() or is_report_run(path):
@@ -126,6 +126,10 @@ def foreign(path: Path) -> str | None:
         else:
             return None
     except (LorisError, ImportError, OSError, ValueError):
+        return None
+    if not [
+        c for c in header if str(c).strip()
+    ]:  # empty (a failed --csv, a redirect): a damaged run, not another table
         return None
     lacks = [c for c in ("algorithm", "scene", "seq") if c not in header]
     return f"a table without per-sequence rows (no column {', '.join(lacks)})" if lacks else None
@@ -345,10 +349,24 @@ def last_comparable(folder: str | os.PathLike[str], cand: Run) -> tuple[Run, lis
                           + "; a baseline is a run made before CAND (a copy of CAND kept there would pass it)")  # fmt: skip
     if not fits:
         why = "; ".join(f"{r.name}: {', '.join(comparability(r, cand))}" for r in runs[-3:])
+        if not runs and later:  # every run passed over by CAND's time: say the time and where it came from
+            when = cand.created.isoformat() if cand.created else "?"
+            raise ValidationError(f"every run in {folder} ({len(later)}) was made at or after {cand.name} ({cand.created_from} "
+                                  f"{when}), so none is its baseline; if CAND's files kept older times (tar -x, cp -p, "
+                                  "rsync -a), give them the time they were made (touch them) or give BASE itself")  # fmt: skip
         after = f"; {len(later)} made at or after it passed over" if later else ""
         raise ValidationError(f"none of the {len(runs)} run(s) in {folder} made before {cand.name} is comparable "
                               f"with it ({why or 'none left'}{after}); compare runs made with the same spec, lorisnb "
                               "version and ground truth, made before CAND")  # fmt: skip
+    from lorisnb.tools.decisions.diff import same_values
+
+    copies = []  # CAND's time unknown (its files' times in the future): a run holding every value of it is its copy
+    while cand.created is None and len(fits) > 1 and same_values(fits[-1].table, cand.table):
+        copies.append(fits.pop())
+    if copies:
+        cand.notes.append(f"{', '.join(r.name for r in copies)} in {folder} passed over: holds every value of "
+                          f"{cand.name} to the last digit, and CAND's time is unknown, so it is taken as CAND's "
+                          "copy; the newest earlier run that differs is the baseline")  # fmt: skip
     return fits[-1], fits
 
 
