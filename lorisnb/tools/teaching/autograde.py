@@ -39,6 +39,7 @@ import os
 import re
 import shutil
 import stat
+import symtable
 import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -377,34 +378,145 @@ def plain_values(values: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
 _DEFINITIONS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Import, ast.ImportFrom)
 
 
-def definitions_only(
-    source: str, assignments: bool = False, lorisnb: bool = True, keep: tuple[type[ast.stmt], ...] | None = None
-) -> str | None:
-    """``source`` with every top-level statement other than a ``def``, a ``class`` or an import
-    (``assignments``: and an assignment; ``lorisnb=False``: and no import of lorisnb) blanked out,
-    line for line (an error names the line of the cell); None when it does not parse. A formula
-    answer's try-out lines (``print(correctness(ate, aoe, eps, phi))``, reading the lab's
-    numbers) are not its formula. A cell under ``%%time`` is read as its body (:func:`cell_body`).
-    ``keep``: the kinds of statement kept, instead."""
-    source = cell_body(source)
+def _rebuild(source: str, pick: Callable[[ast.stmt], ast.stmt | str | None]) -> str | None:
+    """``source`` rebuilt from its top-level statements, each one's line kept (an error names the
+    cell's line): ``pick(statement)`` gives it back to keep it as written, a text to put in its place
+    (one line), None to leave it out. Statements, not lines: ``import lorisnb as ln; STRICT = False``
+    is two. None when it does not parse."""
+    text = source.replace("\r\n", "\n").replace("\r", "\n")
     try:
-        tree = ast.parse(source)
+        tree = ast.parse(text)
     except SyntaxError:
         return None
+    lines = text.split("\n")
+    raw = [line.encode() for line in lines]  # the AST's columns count UTF-8 bytes
+    out = [""] * len(lines)
+    for node in tree.body:
+        got = pick(node)
+        if got is None:
+            continue
+        decorators = getattr(node, "decorator_list", [])
+        first = min([node.lineno, *(d.lineno for d in decorators)])
+        if isinstance(got, str):
+            piece = got
+        else:  # as written, from its first decorator (a decorated def starts its line) to its end
+            col = 0 if decorators else node.col_offset
+            last, end = node.end_lineno or node.lineno, node.end_col_offset or 0
+            if last == first:
+                piece = raw[first - 1][col:end].decode()
+            else:
+                piece = b"\n".join([raw[first - 1][col:], *raw[first : last - 1], raw[last - 1][:end]]).decode()
+        for k, part in enumerate(piece.split("\n")):
+            at = first - 1 + k
+            out[at] = f"{out[at]}; {part}" if k == 0 and out[at].strip() else part
+    return "\n".join(out)
+
+
+def _lorisnb_alias(node: ast.Import | ast.ImportFrom, alias: ast.alias) -> bool:
+    module = alias.name if isinstance(node, ast.Import) else ("" if node.level else node.module or "")
+    return module.split(".")[0] == "lorisnb"
+
+
+def _without_aliases(node: ast.Import | ast.ImportFrom, drop: Callable[[ast.alias], bool]) -> ast.stmt | str | None:
+    """The import ``node`` without the names ``drop`` picks (:func:`_rebuild`'s ``pick``): as it is,
+    rewritten with its other names (``import lorisnb as ln, pandas as pd`` -> ``import pandas as pd``),
+    or None."""
+    rest = [a for a in node.names if not drop(a)]
+    if len(rest) == len(node.names):
+        return node
+    if not rest:
+        return None
+    one = ast.Import(names=rest) if isinstance(node, ast.Import) else ast.ImportFrom(node.module, rest, node.level)
+    return ast.unparse(one)
+
+
+def _global_reads(source: str) -> set[str]:
+    """The module's names ``source`` reads: at its top level, or in its functions, lambdas, classes
+    and comprehensions where the name is the module's (a function's own local ``ln`` is not)."""
+    top = symtable.symtable(source, "<cell>", "exec")
+    read = {s.get_name() for s in top.get_symbols() if s.is_referenced()}
+    tables = list(top.get_children())
+    while tables:
+        t = tables.pop()
+        tables += t.get_children()
+        read |= {s.get_name() for s in t.get_symbols() if s.is_referenced() and s.is_global()}
+    return read
+
+
+#: What a kept assignment's value may be made of (:func:`safe_value`) besides constants and names.
+_SAFE_NODES = (ast.Constant, ast.Tuple, ast.List, ast.Set, ast.Dict, ast.UnaryOp, ast.BinOp, ast.BoolOp,
+               ast.Compare, ast.unaryop, ast.operator, ast.boolop, ast.cmpop, ast.Load, ast.keyword)  # fmt: skip
+
+
+def safe_value(expr: ast.expr, known: set[str]) -> bool:
+    """Whether a helper's top-level value can be given to an answer run alone: constants and their
+    arithmetic, tuples and lists of them, names of what the cells define or import (``known``: a
+    function, an import, a constant kept before), an attribute of those (``np.inf``), a lambda whose
+    defaults are such values. Never a call, nor a name of the lab's (its variables may hold what the
+    answer is checked against)."""
+    if isinstance(expr, ast.Lambda):
+        a = expr.args
+        return all(safe_value(d, known) for d in [*a.defaults, *(d for d in a.kw_defaults if d is not None)])
+    if isinstance(expr, ast.Name):
+        return expr.id in known
+    if isinstance(expr, ast.Attribute):
+        return safe_value(expr.value, known)
+    if isinstance(expr, ast.Starred):
+        return safe_value(expr.value, known)
+    if not isinstance(expr, _SAFE_NODES):
+        return False
+    return all(safe_value(c, known) if isinstance(c, ast.expr) else isinstance(c, _SAFE_NODES)
+               for c in ast.iter_child_nodes(expr))  # fmt: skip
+
+
+def _targets(node: ast.stmt) -> list[str] | None:
+    """The names an assignment binds when its targets are plain names (``A = 1``, ``A, B = 1, 2``), else None."""
+    targets = node.targets if isinstance(node, ast.Assign) else [node.target]  # type: ignore[attr-defined]
+    names: list[str] = []
+    for t in targets:
+        elts = t.elts if isinstance(t, (ast.Tuple, ast.List)) else [t]
+        if not all(isinstance(e, ast.Name) for e in elts):
+            return None
+        names += [e.id for e in elts]  # type: ignore[attr-defined]
+    return names
+
+
+def definitions_only(
+    source: str,
+    assignments: bool = False,
+    lorisnb: bool = True,
+    keep: tuple[type[ast.stmt], ...] | None = None,
+    known: set[str] | None = None,
+) -> str | None:
+    """``source`` with every top-level statement other than a ``def``, a ``class`` or an import
+    (``assignments``: and an assignment; ``lorisnb=False``: and no import of lorisnb, the import's
+    other names kept) left out, each statement on its line (an error names the line of the cell);
+    None when it does not parse. A formula answer's try-out lines (``print(correctness(ate, aoe,
+    eps, phi))``, reading the lab's numbers) are not its formula. A cell under ``%%time`` is read as
+    its body (:func:`cell_body`). ``keep``: the kinds of statement kept, instead. ``known`` (names
+    defined before, updated with this cell's): assignments of a value :func:`safe_value` accepts are
+    kept too (a helper cell's ``GAP_FLOOR = 0.0``, ``_held = lambda ...``, ``_decay = _decay_impl``)."""
     if keep is None:
         keep = _DEFINITIONS + ((ast.Assign, ast.AnnAssign) if assignments else ())
-    lines = source.splitlines()
-    kept = [False] * len(lines)
-    for node in tree.body:
-        first = min([node.lineno, *(d.lineno for d in getattr(node, "decorator_list", []))])
-        last = node.end_lineno or node.lineno
-        names = [a.name for a in node.names] if isinstance(node, ast.Import) else [
-            getattr(node, "module", None) or ""] if isinstance(node, ast.ImportFrom) else []  # fmt: skip
-        ok = isinstance(node, keep) and (lorisnb or not any(n.split(".")[0] == "lorisnb" for n in names))
-        if ok:
-            for i in range(first - 1, last):
-                kept[i] = True
-    return "\n".join(line if k else "" for line, k in zip(lines, kept, strict=True))
+
+    def pick(node: ast.stmt) -> ast.stmt | str | None:
+        if isinstance(node, (ast.Import, ast.ImportFrom)) and isinstance(node, keep):
+            got = node if lorisnb else _without_aliases(node, lambda a: _lorisnb_alias(node, a))
+            if got is not None and known is not None:
+                known.update((a.asname or a.name).split(".")[0] for a in node.names if not _lorisnb_alias(node, a))
+            return got
+        if isinstance(node, keep):
+            if known is not None and isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                known.add(node.name)
+            return node
+        if known is not None and isinstance(node, (ast.Assign, ast.AnnAssign)) and node.value is not None:
+            names = _targets(node)
+            if names is not None and safe_value(node.value, known):
+                known.update(names)
+                return node
+        return None
+
+    return _rebuild(cell_body(source), pick)
 
 
 def _copy_private(src: Path, dst: Path, ignore: Callable[[str, list[str]], Any]) -> None:
@@ -578,10 +690,30 @@ def declared_id(nb: nbformat.NotebookNode) -> str | None:
 
 
 def earlier_functions(answers: Mapping[str, str], before: Sequence[str]) -> str:
-    """The functions (and imports, lorisnb's left out) of the answer cells ``before`` (their
-    grade_ids, in the notebook's order): what an answer run alone may call, as it did in the notebook."""
-    parts = (definitions_only(answers[g], lorisnb=False) for g in before if g in answers)
+    """The functions (and imports, lorisnb's left out, and assignments of constants, lambdas and
+    names of those: :func:`safe_value`) of the cells ``before`` (answer grade_ids, added cells' keys,
+    in the notebook's order): what an answer run alone may call, as it did in the notebook."""
+    known = {"np", "math"}  # numpy and math are there (PRELUDE); then what each cell defines, in order
+    parts = [definitions_only(answers[g], lorisnb=False, known=known) for g in before if g in answers]
     return "\n".join(d for d in parts if d)
+
+
+def unkept_values(code: Mapping[str, str], order: Sequence[str]) -> dict[str, str]:
+    """Name -> the cell (its grade_id, or an added cell's key) that assigns it at its top level, where
+    that assignment is not given to the answers run alone (:func:`earlier_functions`: not a
+    :func:`safe_value`): what a NameError of such a name is told."""
+    known = {"np", "math"}
+    out: dict[str, str] = {}
+    for key in order:
+        source = code.get(key, "")
+        kept = definitions_only(source, lorisnb=False, known=known)
+        try:
+            lost = _assigned(cell_body(source)) - _assigned(kept or "") - known
+        except SyntaxError:
+            continue
+        where = key.strip("<>") if key.startswith("<") else f"your answer cell {key}"
+        out.update({n: where for n in lost})
+    return out
 
 
 def _parameters(cell_source: str, params: Mapping[str, Any]) -> str:
@@ -907,6 +1039,7 @@ def grade_submission(
                             params | {"hidden_seed": hidden_seed(settings.secret, student, spec.name)},
                             root, {**at, **below_at})  # fmt: skip
         functions: dict[str, RemoteFunction] = {}
+        unkept = unkept_values(code, order)  # a NameError of one of these says why it is not there
 
         def alone(gid: str, failed: str | None) -> None:
             """Step 2 for one formula answer, right after its cell ran in step 1 (its time is
@@ -979,7 +1112,7 @@ def grade_submission(
                                       timeout_s=budget.left(True))  # fmt: skip
                         if not got.get("ok"):
                             notes.append(f"{gid}: the functions of the cells you added below it (up to its check), "
-                                         f"given to it run alone, failed: {_with_hint(spec, str(got.get('error')))}")  # fmt: skip
+                                         f"given to it run alone, failed: {_with_hint(spec, str(got.get('error')), unkept)}")  # fmt: skip
             except SandboxError as exc:
                 why = _BUDGET_ERROR.format(budget.seconds) if budget.out(f"<answer {gid}>, run alone") else str(exc)
                 functions.update({d: RemoteFunction(None, d, f"TimeoutError: {why}") for d in defs})
@@ -991,9 +1124,9 @@ def grade_submission(
             err = None if reply.get("ok") else str(reply.get("error"))
             if err:  # the cell failed on its own, with numpy only: say so, then its error
                 err = ("RuntimeError: the answer cell, run alone with numpy only (no lorisnb, as graded), failed: "
-                       + _with_hint(spec, err))  # fmt: skip
+                       + _with_hint(spec, err, unkept))  # fmt: skip
             functions.update({d: RemoteFunction(None if err else box, d, err, budget, settings.limits.cell_timeout_s,
-                                                hint=lambda e: _with_hint(spec, e)) for d in defs})  # fmt: skip
+                                                hint=lambda e: _with_hint(spec, e, unkept)) for d in defs})  # fmt: skip
 
         try:
             took: dict[str, float] = {}  # seconds each answer cell took in the lab
@@ -1131,29 +1264,31 @@ def _below_key(key: str, gid: str) -> str:
 
 
 def without_lorisnb(source: str) -> str:
-    """``source`` with its *unused* top-level imports of lorisnb blanked out, line for line: what an
-    answer graded with numpy only runs. An ``import lorisnb as ln`` whose names the cell never reads
-    costs nothing (the other cells' imports of lorisnb are left out too, :func:`earlier_functions`);
-    one the cell reads (``ln.score``, even in a function) stays, and the guard refuses it, and the
-    points with it, as any other way to lorisnb. ``source`` itself when it has none (or does not parse)."""
+    """``source`` with its *unused* top-level imports of lorisnb left out (each name of an import
+    alone: ``import lorisnb as ln, math`` keeps ``import math``; ``import lorisnb as ln; STRICT =
+    False`` keeps ``STRICT = False``): what an answer graded with numpy only runs. An ``import lorisnb
+    as ln`` whose name the cell never reads as the module's costs nothing (the other cells' imports of
+    lorisnb are left out too, :func:`earlier_functions`; a function's own local ``ln`` is not a read
+    of it); one the cell reads (``ln.score``, even in a function) stays, and the guard refuses it, and
+    the points with it, as any other way to lorisnb. ``source`` itself when it has none (or does not parse)."""
     body = cell_body(source)
     try:
-        tree = ast.parse(body)
+        read = _global_reads(body.replace("\r\n", "\n").replace("\r", "\n"))
     except SyntaxError:
         return source
-    read = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and not isinstance(n.ctx, ast.Store)}
-    lines = body.splitlines()
     found = False
-    for node in tree.body:
-        if not isinstance(node, (ast.Import, ast.ImportFrom)) or (isinstance(node, ast.ImportFrom) and node.level):
-            continue
-        modules = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or ""]
-        bound = {(a.asname or a.name).split(".")[0] for a in node.names}
-        if any(m.split(".")[0] == "lorisnb" for m in modules) and not bound & read:
-            found = True
-            for i in range(node.lineno - 1, node.end_lineno or node.lineno):
-                lines[i] = ""
-    return "\n".join(lines) + "\n" if found else source
+
+    def pick(node: ast.stmt) -> ast.stmt | str | None:
+        nonlocal found
+        if not isinstance(node, (ast.Import, ast.ImportFrom)):
+            return node
+        got = _without_aliases(node, lambda a: _lorisnb_alias(node, a) and a.name != "*"
+                               and (a.asname or a.name).split(".")[0] not in read)  # fmt: skip
+        found = found or got is not node
+        return got
+
+    rebuilt = _rebuild(body, pick)
+    return rebuilt + "\n" if found and rebuilt is not None else source
 
 
 def _lab_imports(spec: LabSpec) -> dict[str, str]:
@@ -1184,14 +1319,16 @@ ALONE = (
 )
 
 
-def _with_hint(spec: LabSpec, error: str) -> str:
+def _with_hint(spec: LabSpec, error: str, unkept: Mapping[str, str] | None = None) -> str:
     """``error`` of a formula run alone; a NameError (``name 'pd' is not defined``) says what the
     formula has there, and what to do (:func:`_name_tip`)."""
-    tip = _name_tip(spec, error)
+    tip = _name_tip(spec, error, unkept=unkept)
     return error if tip is None else f"{error} ({ALONE}; {tip})"
 
 
-def _name_tip(spec: LabSpec, error: str, imports_only: bool = False) -> str | None:
+def _name_tip(
+    spec: LabSpec, error: str, imports_only: bool = False, unkept: Mapping[str, str] | None = None
+) -> str | None:
     """What to do about a NameError of an answer run alone: the lab's import to put in the cell, the
     lab's variable to take as an argument (not with ``imports_only``: a prediction's message says
     which numbers it is given); None for another error."""
@@ -1204,6 +1341,11 @@ def _name_tip(spec: LabSpec, error: str, imports_only: bool = False) -> str | No
         tip = f"the lab's `{imports[name]}` is not there: lorisnb may not be used by a formula, write it with numpy"
     elif name in imports:
         tip = f"the lab's `{imports[name]}` is not run there: put `{imports[name]}` in your answer cell"
+    elif unkept and name in unkept:  # the student did define it: say why it is not there
+        tip = (f"`{name}` is assigned in {unkept[name]}, but that value is not given to a formula run alone: only "
+               "functions, imports, and values made of constants, lambdas and your functions' names are (never a "
+               "call's result or a value read from the lab's variables, which may hold what the answer is checked "
+               f"against); define `{name}` with `def`, or as such a value")  # fmt: skip
     elif imports_only:
         return None
     elif name in _lab_names_before(spec, len(spec.notebook.cells)):
