@@ -475,9 +475,10 @@ def _targets(node: ast.stmt) -> list[str] | None:
     names: list[str] = []
     for t in targets:
         elts = t.elts if isinstance(t, (ast.Tuple, ast.List)) else [t]
-        if not all(isinstance(e, ast.Name) for e in elts):
+        plain = [e for e in elts if isinstance(e, ast.Name)]
+        if len(plain) != len(elts):
             return None
-        names += [e.id for e in elts]  # type: ignore[attr-defined]
+        names += [e.id for e in plain]
     return names
 
 
