@@ -38,7 +38,7 @@ from starlette.formparsers import MultiPartException
 
 from lorisnb.io.datasets.paths import scene_durations
 from lorisnb.tools.challenge import store
-from lorisnb.tools.challenge.board import admin_scores, figure_file, leaderboard, submission_view, team_text, when
+from lorisnb.tools.challenge.board import admin_scores, figure_file, leaderboard, submission_view, team_error, when
 from lorisnb.tools.challenge.config import Challenge, sequences_of
 from lorisnb.tools.challenge.uploads import Limits, UploadRefused, keep_upload, upload_format
 
@@ -273,7 +273,7 @@ class Server:
             lim = Limits(limits["files"], limits["unpacked_mb"] * 1_000_000)
             try:
                 names = await run_in_threadpool(keep_upload, files, folder, lim, fmt, sequences_of(self.durations))
-            except UploadRefused:
+            except BaseException:  # refused, or the server failed: nothing of the upload is left
                 shutil.rmtree(folder, ignore_errors=True)
                 raise
             size = sum((folder / "files" / n).stat().st_size for n in names)
@@ -450,7 +450,8 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
         left = challenge.limits["submissions_per_day"] - store.submissions_since(
             engine, team["id"], server.clock() - DAY
         )
-        subs = [s | {"error": team_text(s["error"], challenge) if s["error"] else s["error"]}
+        now = server.clock()
+        subs = [s | {"error": team_error(s, challenge, now)}
                 for s in listing(store.all_submissions(engine, team["id"], results=False))]  # fmt: skip
         return dict(team={k: team[k] for k in ("name", "expires", "admin")}, left=max(left, 0), subs=subs)
 

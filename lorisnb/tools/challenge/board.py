@@ -24,6 +24,7 @@ from __future__ import annotations
 import datetime as dt
 import json
 import re
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -177,6 +178,31 @@ def team_text(text: str, challenge: Challenge) -> str:
     return out.rstrip(" ;.") or "the server could not score this file; tell the organizers"
 
 
+#: A copy's detail in the scorer's words (:func:`.scoring.groundtruth_copies`): the sequence it
+#: names and its count of poses.
+COPY_SAID = re.compile(r"(?P<scene>[a-z]+)-(?P<seq>\d+)'s (?:positions and orientations|positions|orientations) are "
+                       r"the ground truth's \(all \d+ matched poses within [^()]* of it after the alignment\)")  # fmt: skip
+
+
+def copies_as_shown(text: str, shown: Callable[[str, int], bool]) -> str:
+    """``text`` with each copy of the ground truth it names (:func:`.scoring.groundtruth_copies`) of a
+    sequence not ``shown`` said as ``a copy of the ground truth`` alone: no sequence, no count of
+    its poses (nothing of a hidden sequence's ground truth is told)."""
+    return COPY_SAID.sub(lambda m: m[0] if shown(m["scene"], int(m["seq"])) else "a copy of the ground truth", text)
+
+
+def team_error(sub: dict[str, Any], challenge: Challenge, now: float) -> str | None:
+    """A submission's error as its team sees it at ``now`` (:func:`team_text`): a copy of the ground
+    truth it holds is named by its sequence only while that sequence is shown to the team
+    (:meth:`.config.Challenge.shown`: its phase's scores shown, the sequence visible), else said
+    as a copy alone; decided each time it is shown, so it never tells more than the team sees then."""
+    if not sub["error"]:
+        return sub["error"]
+    phase = challenge.phase(sub["phase"])
+    text = copies_as_shown(str(sub["error"]), lambda scene, seq: bool(challenge.shown(phase, [(scene, seq)], now)))
+    return team_text(text, challenge)
+
+
 def _hidden_note(challenge: Challenge, scene: str, seq: int) -> str:
     phase = challenge.shown_by(scene, seq)
     if phase is None:
@@ -196,7 +222,7 @@ def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.Dat
     view: dict[str, Any] = dict(
         id=sub["id"], team=sub["team"], phase=sub["phase"], status=sub["status"], submitted=sub["created"],
         finished=sub["finished"], files=json.loads(sub["files"]), bytes=sub["bytes"],
-        error=team_text(sub["error"], challenge) if sub["error"] else sub["error"],
+        error=team_error(sub, challenge, now),
         scores_shown=phase.shows_scores(now),
     )  # fmt: skip
     if sub["status"] != "scored" or not phase.shows_scores(now):
@@ -205,7 +231,7 @@ def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.Dat
         return view
     result = json.loads(sub["result"])
     scored = _scored(result)
-    shown = challenge.visible(scored, now)
+    shown = challenge.shown(phase, scored, now)
     wanted = phase_sequences(phase, durations)
     rows = [{k: r.get(k) for k in PUBLIC_COLUMNS} | {"ranked": phase.keeps(r["scene"], int(r["seq"]))}
             for r in result["rows"] if (r["scene"], int(r["seq"])) in shown]  # fmt: skip
@@ -252,7 +278,7 @@ def admin_scores(sub: dict[str, Any], challenge: Challenge, now: float) -> list[
         return []
     phase = challenge.phase(sub["phase"])
     result = json.loads(sub["result"])
-    shown = challenge.visible(_scored(result), now) if phase.shows_scores(now) else frozenset()
+    shown = challenge.shown(phase, _scored(result), now)
     return [dict(scene=r["scene"], seq=int(r["seq"]), file=r.get("file"), cr=r.get("cr"), c_ate_rmse=r.get("c_ate_rmse"),
                  shown=(r["scene"], int(r["seq"])) in shown) for r in result["rows"]]  # fmt: skip
 

@@ -157,6 +157,13 @@ class Challenge:
         shown = [p for p in self.phases if p.shows_scores(now)]
         return frozenset((s, int(q)) for s, q in sequences if any(p.keeps(s, int(q)) for p in shown))
 
+    def shown(self, phase: Phase, sequences: Iterable[tuple[str, int]], now: float) -> frozenset[tuple[str, int]]:
+        """The ``sequences`` of a submission of ``phase`` shown to its team at ``now``: none while the
+        phase's scores are hidden (:meth:`Phase.shows_scores`), else the :meth:`visible` ones. The one
+        test of what a team is told of its submission now: its rows, and whether a copy of the ground
+        truth it uploaded is named by its sequence (:func:`.board.team_error`)."""
+        return self.visible(sequences, now) if phase.shows_scores(now) else frozenset()
+
     def views(
         self, sequences: Iterable[tuple[str, int]], phase: Phase | None = None
     ) -> list[frozenset[tuple[str, int]]]:

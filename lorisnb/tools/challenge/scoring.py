@@ -142,26 +142,47 @@ def _attributed(f: FileErrors, text: str) -> list[tuple[str, int]]:
     return [(f.scene, q) for q in (named or seqs)]
 
 
-def groundtruth_copies(errors: Iterable[FileErrors], shown: Any = None) -> list[str]:
+def groundtruth_copies(errors: Iterable[FileErrors]) -> list[str]:
     """Each sequence of ``errors`` (at least :data:`COPY_MIN_POSES` matched) whose positions, or
     orientations, equal the ground truth's at every matched pose (within :data:`COPY_ATE_M` and
-    :data:`COPY_AOE_DEG` after the alignment), said as ``FILE: cafe-1's positions ...``; one not
-    in ``shown`` (the sequences whose scores teams see from the start; default all), said as
-    ``FILE: a copy of the ground truth`` alone: nothing of a hidden sequence's ground truth is told."""
+    :data:`COPY_AOE_DEG` after the alignment), said as ``FILE: cafe-1's positions ...`` (the
+    organizer's words: a team is told it as :func:`.board.copies_as_shown` says, at the time it reads it)."""
     out = []
     for f in errors:
         for e in f.sequences:
             if e.matched < COPY_MIN_POSES:
                 continue
             pos, rot = bool(np.all(e.ate <= COPY_ATE_M)), bool(np.all(e.aoe <= COPY_AOE_DEG))
-            if (pos or rot) and shown is not None and (f.scene, e.seq) not in shown:
-                out.append(f"{Path(f.path).name}: a copy of the ground truth")
-            elif pos or rot:
+            if pos or rot:
                 what = "positions and orientations" if pos and rot else "positions" if pos else "orientations"
                 within = f"{COPY_ATE_M * 1000:g} mm" if pos else f"{COPY_AOE_DEG:g} deg"
                 out.append(f"{Path(f.path).name}: {f.scene}-{e.seq}'s {what} are the ground truth's (all "
                            f"{e.matched} matched poses within {within} of it after the alignment)")  # fmt: skip
     return out
+
+
+def _one_file_each(errors: list[FileErrors]) -> None:
+    """Two files of an upload holding one sequence and trial are refused
+    (:func:`~lorisnb.core.stats.trials.check_duplicates`), in the server's words: the files as
+    uploaded and their sequence (every file of an upload is the team's one algorithm: not named),
+    and the names the server reads trials from (``cafe-1-1_trial1.txt``: a TUM or EuRoC file's
+    name names its sequence too; folders ``run_1/`` of a .zip)."""
+    keys = [(Path(f.path).name, ("", "", f.scene, f.trial), tuple(e.seq for e in f.sequences)) for f in errors]
+    try:
+        check_duplicates(keys)
+    except ValidationError:
+        seen: dict[tuple[str, int, int], str] = {}
+        for name, (_, _, scene, trial), seqs in keys:
+            for q in seqs:
+                other = seen.setdefault((scene, trial, q), name)
+                if other != name:
+                    held = f"{scene}-{q}{f' trial {trial}' if trial else ''}"
+                    raise ValidationError(
+                        f"{other} and {name} both hold {held}, with no trial number to tell them apart; name each "
+                        f"file for its trial ({scene}-1-{q}_trial1.txt, {scene}-1-{q}_trial2.txt, ...; or put them "
+                        f"in folders run_1/, run_2/, ... of one .zip), or upload them in separate submissions"
+                    ) from None
+        raise
 
 
 class _Every:
@@ -348,9 +369,8 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
                 taken.update((name, f.scene, e.seq) for e in seqs)
                 if seqs or not f.sequences:
                     errors.append(f if len(seqs) == len(f.sequences) else replace(f, sequences=seqs))
-        check_duplicates([(Path(f.path).name, (f.suite, f.algorithm, f.scene, f.trial),
-                           tuple(e.seq for e in f.sequences)) for f in errors])  # fmt: skip
-        copies = list(dict.fromkeys(groundtruth_copies(errors, None if views is None else (every[:1] or [()])[0])))
+        _one_file_each(errors)
+        copies = list(dict.fromkeys(groundtruth_copies(errors)))
         if copies:  # the whole submission: it is not ranked, and says why
             listed = "; ".join(copies)
             raise ValidationError(f"refused, not ranked: this upload holds the ground truth itself, not an estimate "

@@ -118,13 +118,17 @@ def kept_name(path: str, where: str) -> str:
     stem, suffix = (base[: -len(Path(base).suffix)], Path(base).suffix) if Path(base).suffix else (base, "")
     name = stem + suffix.lower()
     parts = [p for p in path.split("/") if p not in ("", ".")]
-    if not names_a_trial(base) and len(parts) > 1 and names_a_trial("/".join(parts)):
-        _, trial = split_trial("/".join(parts))
-        name = safe_name(f"{stem}_trial{trial}{suffix.lower()}", where)
-    _, trial = split_trial(name)
+    try:  # the file name's trial, else its folders'
+        trial = split_trial("/".join(parts) if not names_a_trial(base) else base)[1]
+        digits = str(trial) if trial > MAX_TRIAL else ""
+    except LorisError:  # a number too long to read as one (over 4300 digits): too large too
+        trial, digits = MAX_TRIAL + 1, max(re.findall(r"[0-9]+", path), key=len, default="")
     if trial > MAX_TRIAL:
-        raise UploadRefused(f"{where}: {path!r}: trial number {trial}, too large; expected a trial number of at most "
+        number = digits if len(digits) <= 40 else f"{digits[:20]}... ({len(digits)} digits)"
+        raise UploadRefused(f"{where}: {path!r}: trial number {number}, too large; expected a trial number of at most "
                             f"{MAX_TRIAL} (cafe-1-2_trial2.txt, run_2/)")  # fmt: skip
+    if trial and not names_a_trial(base):  # a trial its folders name: in its name
+        name = safe_name(f"{stem}_trial{trial}{suffix.lower()}", where)
     return name
 
 
@@ -260,7 +264,7 @@ def budget_mb(n: int) -> str:
     return f"{n / 1e6:g} MB"
 
 
-def _unzip(src: IO[bytes], label: str, dest: Path, limits: Limits, taken: set[str], budget: int) -> int:
+def _unzip(src: IO[bytes], label: str, dest: Path, limits: Limits, taken: dict[str, str], budget: int) -> int:
     try:
         archive = zipfile.ZipFile(src)
     except (zipfile.BadZipFile, OSError, EOFError, ValueError) as exc:
@@ -288,9 +292,7 @@ def _unzip(src: IO[bytes], label: str, dest: Path, limits: Limits, taken: set[st
             if m.compress_size and m.file_size / m.compress_size > MAX_RATIO:
                 raise UploadRefused(f"{where}: compressed {m.file_size / m.compress_size:.0f} times (a zip bomb?); "
                                     f"result files compress at most {MAX_RATIO} times", 413)  # fmt: skip
-            if name in taken:
-                raise UploadRefused(f"{where}: a second file named {name!r}; expected distinct file names")
-            taken.add(name)
+            _take(taken, name, m.filename, label)
             try:
                 with archive.open(m) as f:
                     used += _copy(f, dest / name, f"{label}: {m.filename}", budget - used)
@@ -300,12 +302,35 @@ def _unzip(src: IO[bytes], label: str, dest: Path, limits: Limits, taken: set[st
         return used
 
 
+def _take(taken: dict[str, str], name: str, path: str, where: str) -> None:
+    """Keep ``path`` (as sent) under ``name`` (:func:`kept_name`); refused if a file before it is
+    kept under that name, naming both as sent and why each is kept under that name."""
+    if name not in taken:
+        taken[name] = path
+        return
+    first = taken[name]
+    why = [f"{p!r} is kept as {name!r} ({_renamed(p, name)})" for p in dict.fromkeys((first, path))
+           if Path(p).name != name]  # fmt: skip
+    raise UploadRefused(f"{where}: {first!r} and {path!r}: a second file named {name!r}"
+                        f"{': ' + '; '.join(why) if why else ''}; expected distinct file names")  # fmt: skip
+
+
+def _renamed(path: str, name: str) -> str:
+    """Why ``path`` is kept as ``name`` (:func:`kept_name`), in words."""
+    said = []
+    if Path(path).suffix != Path(name).suffix:
+        said.append("its suffix in lower case")
+    if not names_a_trial(Path(path).name) and names_a_trial(name):
+        said.append(f"trial {split_trial(name)[1]}, which its folder names, in its name")
+    return " and ".join(said) or "its last part"
+
+
 def unpack(files: Iterable[tuple[str, IO[bytes]]], dest: Path, limits: Limits) -> list[str]:
     """Check and write the uploaded ``files`` ((name as sent, readable binary file) each) into the
     new folder ``dest``; the names kept. On any refusal ``dest`` is removed and
     :class:`UploadRefused` says why."""
     dest.mkdir(parents=True)
-    taken: set[str] = set()
+    taken: dict[str, str] = {}  # name kept -> the path it was sent as
     used = 0
     items = list(files)
     try:
@@ -319,9 +344,7 @@ def unpack(files: Iterable[tuple[str, IO[bytes]]], dest: Path, limits: Limits) -
                 used += _unzip(f, name, dest, limits, taken, limits.unpacked_bytes - used)
                 continue
             name = kept_name(sent, "upload")
-            if name in taken:
-                raise UploadRefused(f"upload: a second file named {name!r}; expected distinct file names")
-            taken.add(name)
+            _take(taken, name, sent, "upload")
             used += _copy(f, dest / name, name, limits.unpacked_bytes - used)
         if not taken:
             raise UploadRefused(f"the archive holds no file; expected {TAKEN}")
@@ -344,9 +367,16 @@ def keep_upload(files: Iterable[tuple[str, IO[bytes]]], folder: Path, limits: Li
                 sequences: Iterable[tuple[str, int]]) -> list[str]:  # fmt: skip
     """:func:`unpack` the upload into ``folder/files`` and write its :func:`plan` (``folder/plan.json``,
     when some file is not an OpenLORIS result file), both on disk before it returns; the names kept.
-    On a refusal the caller removes ``folder``."""
-    names = unpack(files, folder / "files", limits)
-    layout = plan(folder / "files", names, fmt, sequences)
+    Any :class:`~lorisnb.errors.LorisError` of reading the upload is an :class:`UploadRefused` (400,
+    its message, the server's paths taken out). On a refusal the caller removes ``folder``."""
+    try:
+        names = unpack(files, folder / "files", limits)
+        layout = plan(folder / "files", names, fmt, sequences)
+    except UploadRefused:
+        raise
+    except LorisError as exc:  # any other refusal of reading the upload: the team's words, no server path
+        text = str(exc).replace(f"{folder / 'files'}{os.sep}", "").replace(str(folder), "the upload")
+        raise UploadRefused(text) from None
     if layout:
         with open(folder / PLAN, "x", encoding="utf-8") as out:
             json.dump(layout, out)
