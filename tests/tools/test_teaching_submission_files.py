@@ -98,3 +98,24 @@ def test_links_are_refused_nothing_of_a_file_is_quoted_and_the_source_notebook_i
     written = [p for p in written if p.name != "timestamp.txt"]  # fstamp2's own file, copied where nbgrader reads it
     for text in [out, err, *(p.read_text(errors="replace") for p in written)]:
         assert secret not in text and "not-a-real-hash" not in text
+
+
+@pytest.mark.thorough
+def test_a_lab_folder_without_its_notebook_gets_a_row_and_a_reason(tmp_path, capsys):
+    """A student's lab folder holding a zip of the notebook (or nothing) had no row in grades.csv and
+    no word on the terminal: it is now a 0 saying what was found (names only, nothing read)."""
+    grade = grade_script()
+    course, source = tiny_course(tmp_path)
+    submit(course, "honest")
+    (course / "submitted" / "fzip" / TINY).mkdir(parents=True)
+    (course / "submitted" / "fzip" / TINY / f"{TINY}.zip").write_bytes(b"PK\x03\x04" + SHADOW.encode())
+    (course / "submitted" / "fempty" / TINY).mkdir(parents=True)
+    rc = grade.main([str(course), "--source", str(source), "--timeout", "30", "--no-progress"])
+    out, err = capsys.readouterr()
+    assert rc == 1
+    rows = {r["student"]: r for r in csv.DictReader((course / "grades.csv").open(encoding="utf-8"))}
+    assert {s: r["score"] for s, r in rows.items()} == {"honest": "5", "fzip": "0", "fempty": "0"}
+    page = (course / "graded" / "fzip" / TINY / "feedback.html").read_text()
+    assert f"no notebook named {TINY}.ipynb in fzip/{TINY}/ (found: {TINY}.zip)" in page, page
+    assert "(found: nothing)" in (course / "graded" / "fempty" / TINY / "feedback.html").read_text()
+    assert "fzip" in out + err and "not-a-real-hash" not in out + err + page

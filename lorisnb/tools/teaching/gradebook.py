@@ -592,6 +592,10 @@ def grade_class(
         stubs[lab] = answer_stubs(spec, release)
         canonical[lab] = canonical_answers(spec)
         base = digest(src_nb.read_bytes(), _release_bytes(release), repr(settings.limits))
+        for folder, why in _without_notebook(course / "submitted", lab):  # 0 with why: never no row at all
+            res = unreadable(spec, folder.parent.name, folder / f"{lab}.ipynb", FileNotFoundError(), 0.0, why=why)
+            _write_result(course, res)
+            done.append(res)
         for nb in sorted(course.glob(f"submitted/*/{lab}/{lab}.ipynb")):
             student = nb.parents[1].name
             try:  # a link (the notebook, or a folder above it) refused: never what it points to
@@ -651,6 +655,25 @@ def grade_class(
                              twins.get(res.lab, {}).get(res.student, ())))  # fmt: skip
         _write_feedback(course, res, notes)
     return graded
+
+
+def _without_notebook(submitted: Path, lab: str) -> list[tuple[Path, str]]:
+    """Each student's folder of ``lab`` (``submitted/<student>/<lab>/``) that holds no ``<lab>.ipynb``
+    (a zip of it, another name), with why: such a student had no row in grades.csv and no word. Only
+    the names of the folder's files are said, never read; a linked folder's are not even listed."""
+    out = []
+    for student in sorted(submitted.iterdir()) if submitted.is_dir() else []:
+        folder = student / lab
+        if (folder / f"{lab}.ipynb").exists() or (folder / f"{lab}.ipynb").is_symlink() or not os.path.lexists(folder):
+            continue
+        if student.is_symlink() or folder.is_symlink() or not folder.is_dir():
+            out.append((folder, f"{student.name}/{lab} is a link or not a folder: refused, nothing in it read"))
+            continue
+        names = sorted(os.listdir(folder))
+        found = ", ".join(names[:5]) + (f" and {len(names) - 5} more" if len(names) > 5 else "") if names else "nothing"
+        out.append((folder, f"no notebook named {lab}.ipynb in {student.name}/{lab}/ (found: {found}); return the "
+                            "notebook itself, named as released, not a zip or a copy under another name"))  # fmt: skip
+    return out
 
 
 def _write_result(course: Path, res: SubmissionResult) -> None:
