@@ -37,3 +37,7 @@ def test_report_baseline_warns_of_dates_in_names_against_times(tmp_path, data, i
     ) in err
     since = json.loads((tmp_path / "tonight" / "findings" / "since_baseline.json").read_text())
     assert since["baseline"] == "2026-01-04" and "contradict the dates" in since["warnings"][0]
+    page = (tmp_path / "tonight" / "index.html").read_text()
+    assert (
+        "Warning: runs ordered by modification time contradict the dates in their names" in page
+    )  # the front page too

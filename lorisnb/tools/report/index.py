@@ -428,6 +428,8 @@ def _since_html(since: Mapping[str, Any]) -> list[str]:
         + ".</p>",
         f"<p class='why'>{esc(v.get('rule', ''))}</p>",
     ]
+    for warning in since.get("warnings", []):  # the baseline chosen by time against the dates in the runs' names
+        parts.append(f"<p class='verdict failed'>Warning: {esc(str(warning))}</p>")
     for title, rows in (("Regressions", v["regressions"]), ("Improvements", v["improvements"])):
         if not rows:
             continue
