@@ -1350,7 +1350,8 @@ def _name_tip(
     elif imports_only:
         return None
     elif name in _lab_names_before(spec, len(spec.notebook.cells)):
-        tip = f"the lab's `{name}` is not there: take it as an argument (or a default read when defined, {name}={name})"
+        tip = (f"the lab's `{name}` is not there: take it as an argument (or a default read when defined, {name}={name}, "
+               "where it holds a plain value: a number, a string, a tuple of them; a table or a trajectory is not given)")  # fmt: skip
     else:
         tip = f"define or import `{name}` in your answer cell"
     return tip
