@@ -182,6 +182,16 @@ class SequenceErrors:
     _scores: dict[tuple[Any, ...], dict[str, Any]] = field(default_factory=dict, init=False, repr=False, compare=False)
     _sizes: dict[str, float] = field(default_factory=dict, init=False, repr=False, compare=False)
 
+    def __post_init__(self) -> None:
+        # read-only: what is computed from them is kept (scores per setting, RPE, lever), so an array
+        # edited in place gave old scores at a setting asked before and new ones at any other (give
+        # new errors with ``dataclasses.replace``, which starts with nothing kept)
+        for name in ("stamps", "ate", "aoe", "est_positions", "gt_positions", "est_quaternions", "gt_quaternions",
+                     "est_blocks", "gt_blocks", "read_poses"):  # fmt: skip
+            a = getattr(self, name)
+            if isinstance(a, np.ndarray):
+                a.flags.writeable = False
+
     @classmethod
     def unmatched(cls, seq: int, poses: int, gt_start: float, gt_end: float) -> SequenceErrors:
         """A sequence none of whose poses matched the ground truth in time."""
