@@ -91,6 +91,15 @@ _VALUES: dict[str, Any] = {
 }
 
 
+def _is_number(text: str) -> bool:
+    """Whether ``text`` reads as a number (``"30"``, ``" 1e-3"``, ``"inf"``)."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _plain(checked: Any) -> Any:
     """A checked threshold as the notebook gets it: a number as a float, anything else normalized as
     the check spells it (``PAPER`` is ``paper``, `` relative:0.05`` is ``relative:0.05``), never as
@@ -154,14 +163,27 @@ PAIRED: dict[str, list[tuple[str, str, str]]] = {
 EPS_IN_METRES = ("metrics_primer",)
 
 
-def check_values(values: Mapping[str, Any], notebooks: Iterable[str] = ()) -> None:
+#: Parameters a notebook uses as numbers: given as text (papermill's ``-r``), a notebook run directly
+#: would format or compare the text (``f"{phi:g}"`` failed in a later cell); the report converts them.
+NUMBERS = ("eps", "phi", "delta", "tau", "seed", "alpha", "level", "sim_eps", "sim_trials", "eps_fraction",
+           "rpe_metres", "ordslam_fps", "ordslam_max_gap")  # fmt: skip
+
+
+def check_values(values: Mapping[str, Any], notebooks: Iterable[str] = (), text_numbers: bool = True) -> None:
     """Check notebook parameter values with the command line's rules (None: the notebook's default),
     and those the ``notebooks`` named cannot take. Every notebook calls it through
     :func:`lorisnb.tools.notebook.start.setup` (``parameters=``), and the report through
-    :func:`check_parameters`, before anything runs."""
+    :func:`check_parameters`, before anything runs. ``text_numbers=False`` (the report, which
+    converts them): a number written as text (``"30"``) is not refused."""
+    for name in NUMBERS if text_numbers else ():
+        value = values.get(name)
+        if isinstance(value, str) and _is_number(value):
+            raise ValidationError(f"{name}={value!r}: a number written as text (papermill's -r passes text); give a "
+                                  f"number: papermill -p {name} {value.strip()}, or lorisnb report -p {name} "
+                                  f"{value.strip()}")  # fmt: skip
     eps = values.get("eps")
     metres = [n for n in notebooks if n in EPS_IN_METRES]
-    if metres and isinstance(eps, str) and validate.eps_value(eps) != "paper":  # relative:F
+    if metres and isinstance(eps, str) and str(validate.eps_value(eps)).startswith("relative:"):  # relative:F
         raise ValidationError(f"eps={eps!r}: {', '.join(metres)} quotes eps in metres of its scene; give metres or "
                               "paper (a relative eps is for the other notebooks: leave this one out with --notebooks)")  # fmt: skip
     for notebook in notebooks:
@@ -205,7 +227,7 @@ def check_parameters(
     for name, partner in NEEDS.items():  # given, it would be ignored without its partner: refused
         if parameters.get(name) is not None and parameters.get(partner) is None and name in declared:
             raise ValidationError(f"-p {name}: only applies with -p {partner} (the notebook ignores it otherwise)")
-    check_values(parameters, notebooks)
+    check_values(parameters, notebooks, text_numbers=False)
     if any(parameters.get(n) is not None for n in SCENE_PARAMETERS):  # a scene without ground truth: refused now
         try:
             data = find_data(parameters.get("data_root"))
