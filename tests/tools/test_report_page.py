@@ -234,3 +234,20 @@ def test_a_run_folder_is_readable_and_records_its_provenance(tmp_path, monkeypat
     with pytest.raises(ValidationError, match="-p output_dir: the report sets"):
         report.run_report(tmp_path / "other", {"output_dir": str(tmp_path / "elsewhere")}, progress=False)
     assert not (tmp_path / "other").exists() and not (tmp_path / "elsewhere").exists()
+
+
+def test_the_rank_sentence_says_pairs_of_copied_trials_were_not_tested(tmp_path, icra20, data):
+    """Trials that are byte copies of one run: no pair is tested, and the sentence said so by pasting
+    the pair's test name ('significantly better by none: trials are copies of one run, Holm ...')."""
+    import shutil
+    import warnings
+
+    for alg in ("odom", "orbslam2_rgbd"):
+        for run in ("run_1", "run_2"):
+            shutil.copytree(icra20 / "per-seq" / alg, tmp_path / "res" / alg / run)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ev = ln.evaluate(tmp_path / "res", data_root=data)
+    f = findings(ev.sequences(), ev.durations())
+    assert "by none:" not in f.test and "by no test," in f.test, f.test
+    assert "pair(s) not tested: the trials of one of their algorithms are copies of one run" in f.test

@@ -23,7 +23,7 @@ from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.stats import inference as stats
 from lorisnb.errors import LorisWarning, ValidationError
 from lorisnb.io.datasets.paths import DataPaths
-from lorisnb.tools.decisions.comparison import compare_table
+from lorisnb.tools.decisions.comparison import COPIES_TEST, compare_table
 
 #: Names of the metrics in sentences, with whether higher is better.
 METRICS: dict[str, tuple[str, bool]] = {
@@ -64,10 +64,14 @@ def test_words(pairs: pd.DataFrame, alpha: float, who: str = "algorithms") -> st
     every pair of every scene); ``who``: what is ranked (the challenge's board says teams)."""
     if pairs.empty or not {"test", "correction"} <= set(pairs.columns):
         return f"rank = 1 + the number of {who} significantly better (one per scene: no pair to test)"
-    tests = "; ".join(dict.fromkeys(pairs["test"].dropna().astype(str)))
+    named = list(dict.fromkeys(pairs["test"].dropna().astype(str)))
+    tests = "; ".join(t for t in named if t != COPIES_TEST) or "no test"
     corrections = "; ".join(dict.fromkeys(pairs["correction"].dropna().astype(str)))
     how = corrections or f"Holm over every pair of every scene, alpha {alpha:g}"
-    return f"rank = 1 + the number of {who} significantly better by {tests}, {how}"
+    untested = int((pairs["test"] == COPIES_TEST).sum())
+    copies = (f"; {untested} pair(s) not tested: the trials of one of their {who} are copies of one run, counted as "
+              "one" if untested else "")  # fmt: skip
+    return f"rank = 1 + the number of {who} significantly better by {tests}, {how}{copies}"
 
 
 def findings(
