@@ -251,3 +251,28 @@ def test_the_rank_sentence_says_pairs_of_copied_trials_were_not_tested(tmp_path,
     f = findings(ev.sequences(), ev.durations())
     assert "by none:" not in f.test and "by no test," in f.test, f.test
     assert "pair(s) not tested: the trials of one of their algorithms are copies of one run" in f.test
+
+
+def test_a_sequence_missing_a_trial_is_marked_in_the_per_sequence_table(tmp_path, icra20, data):
+    """The front page's per-sequence table is the mean over a sequence's trials, while the leaderboard
+    counts a missing trial as a failed run: a sequence with fewer trials than its algorithm's others
+    says so ('1 of 2 trials'), or its values did not add up to the leaderboard's."""
+    import shutil
+    import warnings
+
+    from lorisnb.tools.report.index import _per_sequence
+
+    src = icra20 / "per-seq" / "odom"
+    shutil.copytree(src, tmp_path / "res" / "odom" / "run_1")
+    (tmp_path / "res" / "odom" / "run_2").mkdir()
+    first = sorted(src.glob("cafe*"))[0]
+    shutil.copy(first, tmp_path / "res" / "odom" / "run_2" / first.name)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ev = ln.evaluate(tmp_path / "res", data_root=data)
+    table = ev.sequences()
+    cafe = table[table["scene"] == "cafe"]
+    text = _per_sequence(cafe, "cr", [1, 2], None, "", "cafe")
+    assert "trials" not in text.loc["odom", "seq 1"]
+    seq2 = cafe[cafe["seq"] == 2]["cr"].mean()
+    assert text.loc["odom", "seq 2"] == f"{seq2:.3f} (1 of 2 trials)", text

@@ -289,8 +289,9 @@ def write_index(
     if per_sequence is not None and len(per_sequence):
         metric = spec.get("values", {}).get("metric", "cr")
         parts.append(f"<p class='why'>The {esc(metric)} of every sequence with ground truth (the mean over its trials) behind "
-                     "the leaderboards ('no output': the algorithm has no result for it, counted as a failed run; "
-                     "blank: not defined); all columns in <a href='findings/sequences.csv'>findings/sequences.csv</a>.</p>")  # fmt: skip
+                     "the leaderboards ('no output': the algorithm has no result for it, counted as a failed run; 'k of n "
+                     "trials': n - k of its trials are missing, each counted as a failed run on the leaderboard, not "
+                     "in this mean; blank: not defined); all columns in <a href='findings/sequences.csv'>findings/sequences.csv</a>.</p>")  # fmt: skip
         for (suite, scene), g in per_sequence.groupby(["suite", "scene"], sort=False):
             pivot = _per_sequence(g, metric, (expected or {}).get(scene, ()), findings, suite, scene)
             parts.append(
@@ -342,6 +343,17 @@ def _per_sequence(g: pd.DataFrame, metric: str, expected: Any, findings: "Findin
     seqs = sorted(set(values.columns) | {int(s) for s in expected})
     values, rows = values.reindex(index=algorithms, columns=seqs), rows.reindex(index=algorithms, columns=seqs)
     text = values.map(_fmt).where(rows.fillna(0).to_numpy() > 0, "no output")
+    most = rows.max(axis=1)  # an algorithm's trials: a sequence with fewer lacks some (a failed run each, as ranked)
+    short = (rows.fillna(0).to_numpy() > 0) & (rows.to_numpy() < most.to_numpy()[:, None])
+    counts = rows.fillna(0).astype(int).astype(str)
+    marks = (
+        " ("
+        + counts
+        + " of "
+        + pd.DataFrame({c: most.fillna(0).astype(int).astype(str) for c in rows.columns})
+        + " trials)"
+    )
+    text = text.where(~short, text + marks)
     text.columns = [f"seq {c}" for c in seqs]
     return text
 
