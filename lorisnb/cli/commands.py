@@ -572,8 +572,8 @@ def _gate(run_dir: Path) -> int:
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
-    """Re-check a run's inputs against run.json: exit 1 if any changed, is missing, or appeared in a
-    folder the run read."""
+    """Re-check a run's inputs against run.json, and its own files against its marker: exit 1 if
+    any changed, is missing, or appeared in a folder the run read or in the run."""
     from lorisnb.tools.report.provenance import read_run_json, verify_run
 
     record = read_run_json(args.run)
@@ -591,10 +591,21 @@ def cmd_verify(args: argparse.Namespace) -> int:
     problems = verify_run(args.run, roots)
     for path, what in problems:
         print(f"{what}: {clean(path)}")
+    from lorisnb.tools.report.build import not_as_written
+
+    edited = not_as_written(Path(args.run))  # the run's own files against its marker, as render checks them
+    for rel in edited or []:
+        print(f"edited: {clean(Path(args.run) / rel)}")
+    if edited is None:
+        print("note: the run's marker lists no files (a run of an earlier lorisnb): its own files are not checked",
+              file=sys.stderr)  # fmt: skip
     n = len(record["inputs"])
     if "input_roots" not in record:
         print("note: run.json has no input_roots (a run of an earlier lorisnb): files added to the folders it read "
               "are not noticed; only its inputs are checked", file=sys.stderr)  # fmt: skip
+    if edited:
+        print(f"{len(edited)} file(s) of the run itself added or changed since it was written (its pages, tables or "
+              "figures are not what its run wrote)", file=sys.stderr)  # fmt: skip
     if problems:
         added = sum(what == "added" for _, what in problems)
         outside = sum(what == "outside" for _, what in problems)
@@ -606,7 +617,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
         print("; ".join(said), file=sys.stderr)
         return 1
     print(f"all {n} input file(s) unchanged", file=sys.stderr)
-    return 0
+    return 1 if edited else 0
 
 
 def cmd_render(args: argparse.Namespace) -> int:

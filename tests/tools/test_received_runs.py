@@ -224,3 +224,21 @@ def test_render_refuses_a_damaged_notebook_naming_it_before_writing_any_page(mad
         rc, out, err = run(capsys, "render", run_dir)
         assert rc == 2 and "compare_algorithms.ipynb: not a notebook" in err and "Traceback" not in err
         assert {p: p.read_bytes() for p in run_dir.rglob("*.html")} == before  # no page written
+
+
+def test_verify_names_the_run_own_files_edited_since(made, data, tmp_path, capsys):
+    """verify checked the inputs only: a run whose leaderboard was edited (a CR raised), a figure
+    replaced or a table added said 'all input file(s) unchanged', exit 0, while render refused it.
+    The run's own files are checked against its marker too."""
+    here, out = made
+    copy = tmp_path / "run"
+    shutil.copytree(out, copy, symlinks=True)
+    roots = ["--data", data.root, "--results", here / "res", "--root", "kept", here / "kept"]
+    rc, stdout, err = run(capsys, "verify", copy, *roots)
+    assert rc == 0 and "edited" not in stdout, stdout + err
+    board = copy / "findings" / "leaderboard.csv"
+    board.write_text(board.read_text().replace("0.", "0.9", 1))
+    (copy / "findings" / "extra.csv").write_text("a\n1\n")
+    rc, stdout, err = run(capsys, "verify", copy, *roots)
+    assert rc == 1 and stdout.split() == ["edited:", str(copy / "findings" / "extra.csv"), "edited:", str(board)]
+    assert "2 file(s) of the run itself added or changed" in err

@@ -149,19 +149,28 @@ def _write_marker(folder: Path, files: Mapping[str, str] | None = None, out: Pat
     write_text(json.dumps(record, indent=0), out if out is not None else folder / RUN_MARKER, force=True)
 
 
-def _not_written(run_dir: Path, instead: str = "choose another --out") -> str | None:
-    """Why ``--force`` may not replace the run folder ``run_dir`` (or render may not write into it):
-    it holds a file its run did not write (added or changed since, as its marker lists them), or its
-    marker lists nothing; else None. ``instead``: what else the user can do, ending the message."""
+def not_as_written(run_dir: Path) -> list[str] | None:
+    """The files of a run folder (relative paths) that its run did not write or that changed since,
+    as its marker lists them with their checksums; None where the marker lists nothing (a run of an
+    earlier lorisnb, or a damaged marker)."""
     try:
         wrote = json.loads((run_dir / RUN_MARKER).read_text()).get("files")
     except (OSError, ValueError, AttributeError):
         wrote = None
     if not isinstance(wrote, dict):
+        return None
+    return sorted(rel for rel, digest in _files(run_dir).items() if wrote.get(rel) != digest)
+
+
+def _not_written(run_dir: Path, instead: str = "choose another --out") -> str | None:
+    """Why ``--force`` may not replace the run folder ``run_dir`` (or render may not write into it):
+    it holds a file its run did not write (added or changed since, as its marker lists them), or its
+    marker lists nothing; else None. ``instead``: what else the user can do, ending the message."""
+    foreign = not_as_written(run_dir)
+    if foreign is None:
         return (f"its {RUN_MARKER} marker does not list the files its run wrote (a run of an earlier lorisnb, "
                 "or a damaged marker), so files added to it cannot be told apart; move what you keep out of it "
                 f"and remove it yourself, or {instead}")  # fmt: skip
-    foreign = sorted(rel for rel, digest in _files(run_dir).items() if wrote.get(rel) != digest)
     if not foreign:
         return None
     shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more" if len(foreign) > 5 else "")
