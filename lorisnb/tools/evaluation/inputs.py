@@ -9,9 +9,10 @@ import os
 import re
 import sys
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -151,9 +152,27 @@ def result_files(
                 found = {k: v for k, v in found.items() if not any(d in k.parents for d in folders)} | folders
             reals.update((k, Path(v)) for k, v in found.items())
             out.extend((f, p) for f in sorted(found))
+            _say_empty_algorithms(p, below, found)
         else:
             out.append((p, None))
     return unique_files(out, reals)
+
+
+def _say_empty_algorithms(root: Path, below: list[Found], found: Mapping[Path, Any]) -> None:
+    """Warn of a folder beside the algorithms' folders that holds no result file (an algorithm that
+    failed on every sequence, or whose files have another suffix): it was left out of every table
+    without a word. Folders inside an algorithm's (its logs) are not algorithms."""
+    algorithms = {f.parent for f in found}
+    parents = {a.parent for a in algorithms if a != root}
+    holding = {d for f in found for d in f.parents}
+    empty = sorted(f.path for f in below if f.kind == "folder" and f.path.parent in parents
+                   and f.path not in algorithms and f.path not in holding)  # fmt: skip
+    if empty:
+        shown = ", ".join(str(e.relative_to(root)) for e in empty[:5]) + (
+            f" and {len(empty) - 5} more" * (len(empty) > 5)
+        )
+        warnings.warn(f"{root}: {len(empty)} folder(s) beside the algorithms' hold no result file, so they are in no "
+                      f"table: {shown}", LorisWarning, stacklevel=4)  # fmt: skip
 
 
 def names(what: str, value: object) -> list[str]:
