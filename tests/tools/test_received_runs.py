@@ -242,3 +242,24 @@ def test_verify_names_the_run_own_files_edited_since(made, data, tmp_path, capsy
     rc, stdout, err = run(capsys, "verify", copy, *roots)
     assert rc == 1 and stdout.split() == ["edited:", str(copy / "findings" / "extra.csv"), "edited:", str(board)]
     assert "2 file(s) of the run itself added or changed" in err
+
+
+def test_render_warns_of_a_figure_lost_in_a_copy(made, tmp_path, capsys):
+    """A run copied without one of its figures rendered report.html (the one file to send) with a
+    broken image and exit 0, without a word."""
+    import warnings
+
+    from lorisnb.errors import LorisWarning
+    from lorisnb.tools.report.html import single_file
+
+    _, out = made
+    copy = tmp_path / "run"
+    shutil.copytree(out, copy, symlinks=True)
+    page = copy / "index.html"
+    page.write_text(page.read_text().replace("</body>", "<img src='gone/figure.png'></body>"))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        single_file(page, tmp_path / "single.html")
+    said = [str(w.message) for w in caught if issubclass(w.category, LorisWarning)]
+    assert said == [f"{page}: 1 figure(s) it shows are not in the run folder (lost in a copy?), so not in the single "
+                    "file made of it: gone/figure.png"], said  # fmt: skip

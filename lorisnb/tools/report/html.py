@@ -11,9 +11,11 @@ import functools
 import mimetypes
 import re
 import sys
+import warnings
 from pathlib import Path
 from typing import Any
 
+from lorisnb.errors import LorisWarning
 from lorisnb.io.writers import naming, write_text
 from lorisnb.tools._extras import require
 
@@ -135,12 +137,15 @@ def single_file(index: Path, out: Path) -> Path:
     other file is needed to read it."""
     root = index.parent
     text = index.read_text(encoding="utf-8")
+    lost: list[str] = []
 
     def inline(m: re.Match[str]) -> str:
         src = m.group(3)
         path = root / src
         inside = root.resolve() in path.resolve().parents  # nothing outside the run folder is read into it
         if src.startswith(("data:", "http:", "https:")) or not inside or not path.is_file():
+            if inside and not src.startswith(("data:", "http:", "https:")) and not path.exists():
+                lost.append(src)
             return m.group(0)
         kind = mimetypes.guess_type(path.name)[0] or "application/octet-stream"
         data = base64.b64encode(path.read_bytes()).decode("ascii")
@@ -154,4 +159,8 @@ def single_file(index: Path, out: Path) -> Path:
 
     text = _SRC.sub(inline, text)
     text = _HREF.sub(unlink, text)
+    if lost:  # the one file to send would show a broken image without a word
+        shown = ", ".join(lost[:5]) + (f" and {len(lost) - 5} more" if len(lost) > 5 else "")
+        warnings.warn(f"{index}: {len(lost)} figure(s) it shows are not in the run folder (lost in a copy?), so "
+                      f"not in the single file made of it: {shown}", LorisWarning, stacklevel=2)  # fmt: skip
     return write_text(text, out, force=True)
