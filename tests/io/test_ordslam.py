@@ -14,7 +14,7 @@ from scipy.spatial.transform import Rotation
 import lorisnb as ln
 from lorisnb.core import sequence_errors
 from lorisnb.core.metrics.difficulty import difficulty_measures, trajectory_stats
-from lorisnb.errors import ParseError
+from lorisnb.errors import ParseError, ValidationError
 from lorisnb.io import load_groundtruth
 from lorisnb.io.datasets.published import ordslam_table3, ordslam_table4_tum, published_ate
 from lorisnb.io.readers.ordslam import SCENARIOS, describe_sequence, find_ordslam, light_period, read_ordslam, scenario
@@ -87,8 +87,16 @@ def test_layout_errors(tmp_path, segment):
 def test_catalog_lookups():
     assert scenario(5).difficulty == "difficult" and scenario(6).difficulty == "very difficult"
     assert scenario(4, numbering="paper") == SCENARIOS[5]  # the paper's 'difficult' is the page's scenario 5
-    with pytest.raises(KeyError, match="no ORDSLAM scenario 6 in the paper numbering"):
+    with pytest.raises(ValidationError, match="no ORDSLAM scenario 6 in the paper numbering"):
         scenario(6, numbering="paper")
+    assert scenario(3, numbering="Paper") == SCENARIOS[4]  # any case, as other words (it read the page's 3)
+    with pytest.raises(ValidationError, match="numbering='papers': expected 'page'"):
+        scenario(3, numbering="papers")
+    assert [light_period(t) for t in ("13h", "13-00", "20h30", float("nan"), np.float32("nan"), None)] == [
+        "day", "day", "night", "unknown", "unknown", "unknown"]  # fmt: skip
+    for bad in ("24:00", 25, "noon", -1):  # 24:00 and 25 were 'night'; '13h' a ValueError
+        with pytest.raises(ValidationError, match="time="):
+            light_period(bad)
     assert [light_period(t) for t in ("08:30", "13:00", "17:00", "20:00", "22:30", 7)] == [
         "day",
         "day",

@@ -67,7 +67,9 @@ def difficulty_measures(
             :func:`lorisnb.core.pipeline.sessions.sequence_errors`).
         gt: the sequence's full ground truth (for its length and extent).
         eps_fraction: eps as a fraction of the whole ground truth's size for ``cr_scaled``
-            (:func:`lorisnb.core.trajectory.poses.size`, the one rule of relative thresholds).
+            (:func:`lorisnb.core.trajectory.poses.size`; ``eps="relative:F"`` takes the size of the
+            ground truth the estimate matched instead: the two differ where a run tracked part of
+            its sequence).
         relative_to: that size: ``extent`` (bounding-box diagonal) or ``length`` (distance travelled).
         rpe_metres: distance along the ground truth over which the RPE is taken, metres.
     """

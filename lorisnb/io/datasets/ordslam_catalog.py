@@ -33,7 +33,7 @@ from pathlib import Path, PurePath
 import numpy as np
 import pandas as pd
 
-from lorisnb.errors import LorisWarning, ParseError
+from lorisnb.errors import LorisWarning, ParseError, ValidationError
 
 
 @dataclass(frozen=True)
@@ -64,23 +64,38 @@ EXPECTED_DEPTH = "a depth mode fill, filled, standard or std"
 
 def scenario(number: int, numbering: str = "page") -> Scenario:
     """The scenario with this number, in the dataset page's numbering (1-6) or the paper's (1-5)."""
-    n = PAPER_TO_PAGE.get(number) if numbering == "paper" else number
-    if n not in SCENARIOS:
-        valid = sorted(PAPER_TO_PAGE) if numbering == "paper" else sorted(SCENARIOS)
-        raise KeyError(f"no ORDSLAM scenario {number} in the {numbering} numbering; expected one of {valid}")
+    how = str(numbering).strip().lower() if isinstance(numbering, str) else numbering
+    if how not in ("page", "paper"):
+        raise ValidationError(f"numbering={numbering!r}: expected 'page' (the dataset page's 1-6) or 'paper' (the "
+                              "paper's 1-5)")  # fmt: skip
+    n = PAPER_TO_PAGE.get(number) if how == "paper" else number
+    if isinstance(number, bool) or n not in SCENARIOS:
+        valid = sorted(PAPER_TO_PAGE) if how == "paper" else sorted(SCENARIOS)
+        raise ValidationError(f"no ORDSLAM scenario {number!r} in the {how} numbering; expected one of {valid}")
     return SCENARIOS[n]
 
 
 def light_period(time: str | float | None) -> str:
-    """Illumination class of a capture time (``"13:00"`` or hours as a number): ``day`` (07-17 h),
-    ``dusk`` (17-20 h, low sun) or ``night`` (20 h and later, before 07 h)."""
-    if time is None or (isinstance(time, float) and np.isnan(time)):
+    """Illumination class of a capture time (a time token as :func:`parse_time` reads it:
+    ``"13:00"``, ``"13-00"``, ``"13h"``; or hours as a number, 0 to 24): ``day`` (07-17 h), ``dusk``
+    (17-20 h, low sun) or ``night`` (20 h and later, before 07 h); ``unknown`` for None or NaN."""
+    if time is None:
         return "unknown"
     if isinstance(time, str):
-        h, _, m = time.partition(":")
-        hours = int(h) + (int(m) / 60 if m else 0)
+        text = parse_time(time)
+        if text is None:
+            raise ValidationError(f"time={time!r}: {EXPECTED_TIME}")
+        h, _, m = text.partition(":")
+        hours = int(h) + int(m) / 60
     else:
-        hours = float(time)
+        try:
+            hours = float(time)
+        except (TypeError, ValueError):
+            raise ValidationError(f"time={time!r}: {EXPECTED_TIME}, or hours as a number") from None
+        if np.isnan(hours):
+            return "unknown"
+        if not 0 <= hours < 24 or isinstance(time, bool):
+            raise ValidationError(f"time={time!r}: hours from 0 to 24 (not 24), or {EXPECTED_TIME}")
     if 7 <= hours < 17:
         return "day"
     if 17 <= hours < 20:
