@@ -263,3 +263,22 @@ def test_render_warns_of_a_figure_lost_in_a_copy(made, tmp_path, capsys):
     said = [str(w.message) for w in caught if issubclass(w.category, LorisWarning)]
     assert said == [f"{page}: 1 figure(s) it shows are not in the run folder (lost in a copy?), so not in the single "
                     "file made of it: gone/figure.png"], said  # fmt: skip
+
+
+def test_render_advice_can_be_followed(made, tmp_path, capsys):
+    """render's refusals advised what could not work: an edited index.html was to be 'moved out' (then
+    the folder was no run at all), and a run whose marker lists no files (an earlier lorisnb) was to be
+    'rendered from a copy' (which holds the same marker)."""
+    _, out = made
+    edited = tmp_path / "edited"
+    shutil.copytree(out, edited, symlinks=True)
+    (edited / "index.html").write_text((edited / "index.html").read_text() + "<p>mine</p>")
+    rc, _, err = run(capsys, "render", edited)
+    assert rc == 2 and "index.html is what render reads: put back the run's own" in err, err
+    old = tmp_path / "old"
+    shutil.copytree(out, old, symlinks=True)
+    marker = json.loads((old / ".lorisnb-run").read_text())
+    marker.pop("files")
+    (old / ".lorisnb-run").write_text(json.dumps(marker))
+    rc, _, err = run(capsys, "render", old)
+    assert rc == 2 and "make the run again with lorisnb report" in err and "render a copy" not in err, err

@@ -162,18 +162,29 @@ def not_as_written(run_dir: Path) -> list[str] | None:
     return sorted(rel for rel, digest in _files(run_dir).items() if wrote.get(rel) != digest)
 
 
-def _not_written(run_dir: Path, instead: str = "choose another --out") -> str | None:
+def _not_written(run_dir: Path, instead: str = "choose another --out", render: bool = False) -> str | None:
     """Why ``--force`` may not replace the run folder ``run_dir`` (or render may not write into it):
     it holds a file its run did not write (added or changed since, as its marker lists them), or its
-    marker lists nothing; else None. ``instead``: what else the user can do, ending the message."""
+    marker lists nothing; else None. ``instead``: what else the user can do, ending the message.
+    ``render``: the advice is render's (its pages are made from index.html and the notebooks, which
+    cannot be moved out; a run whose marker lists nothing cannot be rendered, only made again)."""
     foreign = not_as_written(run_dir)
     if foreign is None:
+        if render:
+            return (f"its {RUN_MARKER} marker does not list the files its run wrote (a run of an earlier lorisnb, or "
+                    "a damaged marker), so its pages cannot be told from files added since; make the run again with "
+                    "lorisnb report (its numbers are in its findings/ tables meanwhile)")  # fmt: skip
         return (f"its {RUN_MARKER} marker does not list the files its run wrote (a run of an earlier lorisnb, "
                 "or a damaged marker), so files added to it cannot be told apart; move what you keep out of it "
                 f"and remove it yourself, or {instead}")  # fmt: skip
     if not foreign:
         return None
     shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more" if len(foreign) > 5 else "")
+    read = [f for f in foreign if f == "index.html" or f.endswith(".ipynb")]
+    if render and read:  # what render reads: moved out, the run is no run; put back as the run wrote it
+        return (f"it holds {len(foreign)} file(s) that its run did not write or that changed since ({shown}); "
+                f"{', '.join(read[:3])} {'is' if len(read) == 1 else 'are'} what render reads: put back the run's own "
+                "(from where the run was copied) and move any other out, then render again")  # fmt: skip
     return (f"it holds {len(foreign)} file(s) that its run did not write or that changed since ({shown}); nothing "
             f"was removed: move them out of it and run again, or {instead}")  # fmt: skip
 
@@ -525,7 +536,7 @@ def render_run(run: str | os.PathLike[str]) -> list[Path]:
         raise LorisError(f"{folder} will not be rendered again: it holds {len(out)} link(s) leading outside it "
                          f"({shown}); a run folder lorisnb writes holds none. Nothing was read or written: replace "
                          "each link by its file, if you trust it")  # fmt: skip
-    why = _not_written(folder, "render a copy of the run without them")
+    why = _not_written(folder, "render a copy of the run without them", render=True)
     if why:
         raise LorisError(f"{folder} will not be rendered again: {why}")
     css = f"../{NOTEBOOK_CSS}" if (folder / NOTEBOOK_CSS).is_file() else None
