@@ -92,7 +92,10 @@ _VALUES: dict[str, Any] = {
 
 
 def _is_number(text: str) -> bool:
-    """Whether ``text`` reads as a number (``"30"``, ``" 1e-3"``, ``"inf"``)."""
+    """Whether ``text`` reads as a number (``"30"``, ``" 1e-3"``, ``"inf"``; not ``"1_0"``, which
+    Python's float takes and lorisnb refuses as no number)."""
+    if "_" in text:
+        return False
     try:
         float(text)
     except ValueError:
