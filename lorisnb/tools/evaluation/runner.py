@@ -65,6 +65,19 @@ def _table_library() -> None:
             importlib.import_module(name)
 
 
+def _as_given(job: Job, went: Job) -> list[tuple[str, str]]:
+    """(absolute, as given) of each path of ``job`` that was sent to a worker elsewhere made
+    absolute (:func:`~lorisnb.tools.evaluation.jobs.absolute_paths`), longest first: the input, a
+    pair's ground truth and its times files."""
+    if went is job:
+        return []
+    pairs = [(went.path, job.path)]
+    if job.source is not None and went.source is not None:
+        pairs += [(getattr(went.source, k), getattr(job.source, k)) for k in ("groundtruth", "est_times", "gt_times")]
+    out = {str(w): str(g) for w, g in pairs if w is not None and g is not None and str(w) != str(g)}
+    return sorted(out.items(), key=lambda kv: -len(kv[0]))
+
+
 def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, executor: Executor | None,
          progress: bool, root: Path | None = None, data: Any = None, notes: list[str] | None = None) -> Evaluation:  # fmt: skip
     """Run the jobs here, in a local pool or on ``executor``; results in the order of the jobs."""
@@ -81,12 +94,18 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
     results = run_tasks(run_job, sent, sizes, n, executor, progress, desc="evaluating", unit=unit,
                         meanwhile=_table_library)  # fmt: skip
     for job, went, (status, value) in zip(jobs, sent, results, strict=True):
-        if went is not job and str(went.path) != str(job.path):  # named as given, as a local run names it
-            was, given = str(went.path), str(job.path)
+        renamed = _as_given(job, went)
+        if renamed:  # named as given, as a local run names them (the input, its ground truth, times files)
+
+            def given(text: str, renamed: list[tuple[str, str]] = renamed) -> str:
+                for was, typed in renamed:
+                    text = text.replace(was, typed)
+                return text
+
             if isinstance(value, Failure):
-                value = replace(value, path=job.path, error=value.error.replace(was, given))
+                value = replace(value, path=job.path, error=given(value.error))
             elif isinstance(value, FileErrors):
-                value.path, value.warnings = job.path, [w.replace(was, given) for w in value.warnings]
+                value.path, value.warnings = job.path, [given(w) for w in value.warnings]
         if isinstance(value, FileErrors):
             done.append(value)
         elif isinstance(value, Failure):
