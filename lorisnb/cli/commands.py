@@ -574,7 +574,7 @@ def _gate(run_dir: Path) -> int:
 def cmd_verify(args: argparse.Namespace) -> int:
     """Re-check a run's inputs against run.json, and its own files against its marker: exit 1 if
     any changed, is missing, or appeared in a folder the run read or in the run."""
-    from lorisnb.tools.report.provenance import read_run_json, verify_run
+    from lorisnb.tools.report.provenance import read_run_json, unchecked_baseline, verify_run
 
     record = read_run_json(args.run)
     roots: dict[str, str] = {}
@@ -600,6 +600,12 @@ def cmd_verify(args: argparse.Namespace) -> int:
         print("note: the run's marker lists no files (a run of an earlier lorisnb): its own files are not checked",
               file=sys.stderr)  # fmt: skip
     n = len(record["inputs"])
+    skipped = unchecked_baseline(record, roots)
+    if skipped:
+        print(f"note: {skipped} file(s) of the earlier run this run's verdict was made against (report --baseline) "
+              "are not checked: give its folder of earlier runs with --root baseline DIR", file=sys.stderr)  # fmt: skip
+    else:
+        n += len(record.get("baseline_inputs") or {})
     if "input_roots" not in record:
         print("note: run.json has no input_roots (a run of an earlier lorisnb): files added to the folders it read "
               "are not noticed; only its inputs are checked", file=sys.stderr)  # fmt: skip

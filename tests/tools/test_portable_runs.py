@@ -777,3 +777,46 @@ def test_control_and_bidi_characters_of_a_name_are_shown_escaped_on_the_pages_an
     import pandas as pd
 
     assert odd in set(pd.read_csv(out / "findings" / "sequences.csv")["algorithm"])
+
+
+@pytest.mark.thorough
+def test_verify_tells_a_baseline_changed_since_the_verdict(tmp_path, data, icra20, monkeypatch, capsys):
+    """A run made against a baseline records the files its verdict read (the earlier run's run.json
+    and tables) below ``{baseline}``; ``verify --root baseline DIR`` tells one edited since (the
+    verdict may no longer hold), and without that root verify says they are not checked."""
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    night = ["report", "--results", here / "res", "--data", here / "data", "--notebooks", "compare_algorithms",
+             "--no-progress", "--baseline", here / "nightly", "--out"]  # fmt: skip
+    assert run(capsys, *night[:-3], "--out", here / "nightly" / "r1")[0] == 0  # the first night: no baseline yet
+    rc, _, err = run(capsys, *night, here / "nightly" / "r2")
+    assert rc == 0, err
+    record = json.loads((here / "nightly" / "r2" / "run.json").read_text())
+    base = record["baseline_inputs"]
+    assert record["roots"]["baseline"] is None and record["roots"]["results"] is None
+    assert {"{baseline}/r1/run.json", "{baseline}/r1/findings/sequences.csv"} <= set(base), base
+    from lorisnb.tools.report.provenance import sha256
+
+    assert base["{baseline}/r1/findings/sequences.csv"] == sha256(
+        here / "nightly" / "r1" / "findings" / "sequences.csv"
+    )
+    roots = ["--data", here / "data", "--results", here / "res"]
+    rc, _, err = run(capsys, "verify", here / "nightly" / "r2", *roots)
+    n = len(record["inputs"])
+    assert rc == 0 and f"{len(base)} file(s) of the earlier run" in err and "--root baseline DIR" in err, err
+    assert f"all {n} input file(s) unchanged" in err
+    rc, _, err = run(capsys, "verify", here / "nightly" / "r2", *roots, "--root", "baseline", here / "nightly")
+    assert rc == 0 and f"all {n + len(base)} input file(s) unchanged" in err, err
+    table = here / "nightly" / "r1" / "findings" / "sequences.csv"
+    table.write_text(table.read_text().replace("orb", "orb2", 1))  # the baseline edited since the verdict
+    rc, out, err = run(capsys, "verify", here / "nightly" / "r2", *roots, "--root", "baseline", here / "nightly")
+    assert rc == 1 and "changed: {baseline}/r1/findings/sequences.csv" in out, out + err
+    moved = tmp_path / "elsewhere"  # the folder of runs moved: verified there, the baseline found by its root
+    shutil.move(here / "nightly", moved)
+    rc, out, err = run(capsys, "verify", moved / "r2", *roots, "--root", "baseline", moved)
+    assert rc == 1 and "changed: {baseline}/r1/findings/sequences.csv" in out and str(here) not in out + err
+    (moved / "r1" / "run.json").unlink()
+    rc, out, _ = run(capsys, "verify", moved / "r2", *roots, "--root", "baseline", moved)
+    assert rc == 1 and "missing: {baseline}/r1/run.json" in out

@@ -112,6 +112,19 @@ class Run:
         """The spec columns per scene (one row per distinct setting)."""
         return table_settings(self.table)
 
+    def sources(self) -> list[Path]:
+        """The files a decision about the run reads: a report run's ``run.json``, its per-sequence
+        tables (the ``table`` column), its table of ground-truth sequences and of inputs not
+        scored, where it has them; a table's file, or every file of a Parquet dataset folder. A
+        report run made against this one records them with their SHA-256 (``baseline_inputs`` of
+        its run.json), so that ``verify`` tells a baseline changed since."""
+        p = self.path
+        if self.kind != "report":
+            return [p] if p.is_file() else sorted(f for f in p.rglob("*") if f.is_file())
+        tables = sorted({str(t) for t in self.table["table"]}) if "table" in self.table.columns else []
+        names = dict.fromkeys([RUN_JSON, *tables, DURATIONS, f"findings/{INPUT_ERRORS_CSV}"])
+        return [p / n for n in names if (p / n).is_file()]
+
 
 def table_settings(table: pd.DataFrame) -> pd.DataFrame:
     """A per-sequence table's spec columns (:data:`SPEC_COLUMNS`) per scene, one row per distinct

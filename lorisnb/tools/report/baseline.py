@@ -17,10 +17,25 @@ from lorisnb.errors import ValidationError
 from lorisnb.io.writers import naming
 from lorisnb.tools.decisions.diff import diff_tables
 from lorisnb.tools.decisions.history import comparability, earlier_runs, history_table, last_comparable, plot_history
-from lorisnb.tools.decisions.runs import load_run
+from lorisnb.tools.decisions.runs import Run, load_run
+from lorisnb.tools.report.provenance import sha256
 
 #: How many comparable runs (this one included) the trend figure shows.
 TREND_RUNS = 10
+
+
+def baseline_files(base: Run, folder: str | os.PathLike[str]) -> dict[str, str]:
+    """The files the verdict against the baseline ``base`` read (:meth:`Run.sources`), each by its
+    path below the folder of earlier runs ``folder`` (``/``-separated) -> SHA-256: the report's
+    run.json records them below its ``{baseline}`` root, so that ``verify --root baseline DIR``
+    tells a baseline edited, replaced or removed since the verdict."""
+    top = os.path.abspath(folder)
+    out = {}
+    for f in base.sources():
+        rel = os.path.relpath(os.path.abspath(f), top)
+        if rel != os.pardir and not rel.startswith(os.pardir + os.sep):  # below the folder (always, as listed)
+            out[Path(rel).as_posix()] = sha256(f)
+    return out
 
 
 def since_baseline(run_dir: Path, folder: str | os.PathLike[str], name: str | None = None, trend: int = TREND_RUNS
@@ -58,7 +73,8 @@ def since_baseline(run_dir: Path, folder: str | os.PathLike[str], name: str | No
     new_algs = sorted(set(this.table["algorithm"]) - set(base.table["algorithm"]))
     out = dict(baseline=base.name, baseline_label=base.label, baseline_created=base.created.isoformat()
                if base.created else None, verdict=d.verdict, new_algorithms=new_algs, passed_over=passed,
-               failed_inputs=sorted(this.unscored), trend=None, warnings=this.warnings)  # fmt: skip
+               failed_inputs=sorted(this.unscored), trend=None, warnings=this.warnings,
+               baseline_files=baseline_files(base, folder))  # fmt: skip
     runs = [*fits[-(trend - 1) :], this]
     h, _ = history_table(runs, ["cr"])
     fig = plot_history(h, "cr")

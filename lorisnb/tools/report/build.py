@@ -78,6 +78,7 @@ from lorisnb.tools.report.provenance import (
     run_record,
     sha256,
     where_it_is,
+    with_baseline,
     write_run_json,
 )
 
@@ -473,6 +474,9 @@ def run_report(
                 record["label"] = label
             write_run_json(tmp, record)
             since = since_baseline(tmp, baseline, name=run_dir.name) if baseline is not None else None
+            if baseline is not None and since is not None and since.get("baseline_files"):  # what the verdict read
+                record = with_baseline(record, Path(baseline), since["baseline_files"], absolute_paths)
+                write_run_json(tmp, record)
 
             def pages(folder: Path, name: str) -> None:  # the pages name the run's folder; the marker lists all
                 index = write_index(folder, runs, params, name=name, findings=board.get("findings"), spec=spec, label=label,

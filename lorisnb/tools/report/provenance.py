@@ -12,7 +12,9 @@ conventions, the metric and test settings of the leaderboard), ``data_root``, ``
 (name -> status), ``input_roots`` (the files and folders whose listing gave ``inputs``, so that
 :func:`verify_run` notices a file added to them; absent in runs of lorisnb 0.x before it),
 ``roots`` (root name -> its absolute path, or null where the run is portable: see
-:mod:`lorisnb.tools.report.portable`; absent in runs before named roots).
+:mod:`lorisnb.tools.report.portable`; absent in runs before named roots), ``baseline_inputs``
+(a run made against a baseline: the files of the earlier run its verdict read, path -> sha256,
+below ``{baseline}``; :func:`with_baseline`).
 
 In a portable run (the default) the paths of ``inputs``, ``input_roots`` and ``data_root`` are
 written ``{name}/inside`` below a named root (``{data}``, ``{results}``...), and :func:`verify_run`
@@ -151,6 +153,19 @@ def run_record(
     }
 
 
+def with_baseline(record: Mapping[str, Any], folder: Path, files: Mapping[str, str], absolute: bool) -> dict[str, Any]:
+    """``record`` (the content of ``run.json``) of a run made against a baseline (``report
+    --baseline DIR``) with ``baseline_inputs``: the files of the earlier run its verdict read
+    (``files``: path below the folder of earlier runs ``folder`` -> SHA-256,
+    :func:`lorisnb.tools.report.baseline.baseline_files`) below the named root ``{baseline}``
+    (absolute paths with ``absolute``), that root added to ``roots``. :func:`verify_run` checks
+    them where its caller says where that root is."""
+    keys = {(os.path.join(os.path.abspath(folder), rel) if absolute else f"{mark('baseline')}/{rel}"): h
+            for rel, h in files.items()}  # fmt: skip
+    roots = {**(record.get("roots") or {}), "baseline": str(folder.resolve()) if absolute else None}
+    return {**record, "baseline_inputs": keys, "roots": roots}
+
+
 def write_run_json(run_dir: Path, record: Mapping[str, Any]) -> Path:
     out = run_dir / RUN_JSON
     with naming(out):  # a full disk names the file
@@ -192,6 +207,7 @@ SHAPES: dict[str, tuple[Any, str]] = {
     "inputs": (_is_path_map, "an object path -> SHA-256, each path without a NUL byte"),
     "notebooks": (_is_str_map, "an object notebook name -> status"),
     "input_roots": (lambda v: isinstance(v, list) and all(map(_is_path, v)), "a list of paths (without a NUL byte)"),
+    "baseline_inputs": (_is_path_map, "an object path -> SHA-256, each path without a NUL byte"),
 }
 
 
@@ -216,7 +232,7 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
         if key in record and not ok(record[key]):
             value = record[key]
             culprit = None  # in a map or list of paths of the right type: the entry that is not one
-            if key == "inputs" and isinstance(value, dict):
+            if key in ("inputs", "baseline_inputs") and isinstance(value, dict):
                 culprit = next(([k, v] for k, v in value.items() if not (_is_path(k) and isinstance(v, str))), None)
             elif key == "input_roots" and isinstance(value, list):
                 culprit = next((x for x in value if not _is_path(x)), None)
@@ -225,6 +241,12 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
             where = f'"{key}" holds' if culprit is not None else f'"{key}" is'
             raise ParseError(f, None, f"{where} {shown}; expected {expected}")
     return record
+
+
+def unchecked_baseline(record: Mapping[str, Any], roots: Mapping[str, Any]) -> int:
+    """How many files of the run's baseline (``baseline_inputs``) :func:`verify_run` leaves
+    unchecked with ``roots``: all of them unless ``roots`` names the ``baseline`` folder."""
+    return 0 if "baseline" in roots else len(record.get("baseline_inputs") or {})
 
 
 def _inside(p: Path, folders: Iterable[Path]) -> bool:
@@ -289,6 +311,10 @@ def verify_run(
             earlier lorisnb) below ``roots["data"]``; an absolute key only if it lies inside one
             of ``roots`` or the run folder (a run made with ``--absolute-paths``).
 
+    The files of the earlier run a run's verdict was made against (``baseline_inputs``, ``report
+    --baseline``) are checked where ``roots`` names the ``baseline`` folder, else not (the caller
+    says so: :func:`unchecked_baseline`).
+
     Nothing outside the run folder and ``roots`` is read, whatever run.json says: a root it names
     elsewhere is a :class:`~lorisnb.errors.ValidationError` before any file is read, and a file
     found through a link that leads outside is listed as 'outside', unread."""
@@ -336,12 +362,16 @@ def verify_run(
             problems.append((r, "outside"))
         else:
             listed.append(p)
+    sums = dict(record["inputs"])
+    if "baseline" in given:  # the earlier run a verdict was made against: checked where the caller names its folder
+        sums.update(record.get("baseline_inputs") or {})
+        inputs.update({key: _as_spelled_here(place(key)) for key in sorted(record.get("baseline_inputs") or {})})
     for key, p in inputs.items():
         if not p.is_file():
             problems.append((key, "missing"))
         elif not readable(p):
             problems.append((key, "outside"))
-        elif sha256(p) != record["inputs"][key]:
+        elif sha256(p) != sums[key]:
             problems.append((key, "changed"))
     if "input_roots" in record:
         # keys as the run wrote them: below named roots, absolute (--absolute-paths) or below the data root (earlier
