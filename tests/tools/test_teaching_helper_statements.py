@@ -82,3 +82,29 @@ def test_honest_helpers_and_imports_score_in_the_lab(tmp_path):
     assert set(lost) == {"test_C1_cs_r"}, (lost, res.notes)
     assert "`_decay` is assigned in your added cell 1 after cell" in lost["test_C1_cs_r"], lost
     assert "define or import `_decay`" not in lost["test_C1_cs_r"]
+
+
+@pytest.mark.slow
+def test_a_helper_cell_that_uses_lorisnb_when_defined_is_named_not_the_answers_given_it(tmp_path):
+    """A helper cell whose def-time default imports lorisnb (``m=__import__('lorisnb')``) was run with
+    the other helpers as one block, and each answer given it was told "its code tried to use
+    lorisnb": a prediction that reads only the lab's numbers among them. The refusal names that cell."""
+    from lorisnb.tools.teaching.autograde import grade_submission, lab_spec
+
+    nb, _ = _solved({})
+    at = next(i for i, c in enumerate(nb.cells) if c.metadata.get("nbgrader", {}).get("grade_id") == "A1_correctness")
+    nb.cells.insert(at + 1, nbformat.v4.new_code_cell("def _unit(x, m=__import__('lorisnb')):\n    return x\n"))
+    release = tmp_path / "release"
+    release.mkdir()
+    path = tmp_path / "s" / f"{LAB}.ipynb"
+    path.parent.mkdir()
+    nbformat.write(nb, path)
+    res = grade_submission(lab_spec(SOURCE_NB), release, path, "s-default", _settings())
+    lost = {s.question: s.message for s in res.scores if s.points < s.max_points}
+    assert {"test_A1_correctness", "test_B1_prediction", "test_B2_correct_rate"} <= set(lost), (lost, res.notes)
+    for q, message in lost.items():
+        assert "refused (0 points): your added cell 1 after cell" in message, (q, message)
+        assert "its code tried to use lorisnb" not in message, (q, message)
+    assert (
+        "the prediction B1_prediction: refused (0 points): your added cell 1 after cell" in lost["test_B1_prediction"]
+    )

@@ -53,7 +53,7 @@ from lorisnb.errors import AnswerError, ValidationError
 from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, decode
 
-GRADER_VERSION = "12"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "13"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
 # 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
 # 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
@@ -71,7 +71,9 @@ GRADER_VERSION = "12"  # part of every result's digest: a new grader regrades ev
 # there, and a name left unset without a placeholder is no "no answer yet"; no file of a submission is read through
 # a link or quoted; the instructor's markers noted; an unused top-level import of lorisnb left out of a formula or
 # prediction run alone (one used is refused, as before); a NameError alone says what the formula has; float32 named;
-# 12: an answer whose cell is missing (deleted, metadata removed) is unanswered, never graded from the lab's run)
+# 12: an answer whose cell is missing (deleted, metadata removed) is unanswered, never graded from the lab's run;
+# 13: the earlier cells' functions given to an answer run alone run cell by cell, and a refusal names the cell that
+# used lorisnb)
 
 
 @dataclass(frozen=True)
@@ -690,13 +692,42 @@ def declared_id(nb: nbformat.NotebookNode) -> str | None:
     return found
 
 
-def earlier_functions(answers: Mapping[str, str], before: Sequence[str]) -> str:
+def earlier_cells(answers: Mapping[str, str], before: Sequence[str]) -> list[tuple[str, str]]:
     """The functions (and imports, lorisnb's left out, and assignments of constants, lambdas and
-    names of those: :func:`safe_value`) of the cells ``before`` (answer grade_ids, added cells' keys,
-    in the notebook's order): what an answer run alone may call, as it did in the notebook."""
+    names of those: :func:`safe_value`) of each of the cells ``before`` (answer grade_ids, added
+    cells' keys, in the notebook's order) that has any, as (key, code): what an answer run alone
+    may call, as it did in the notebook (:func:`run_cells` runs them)."""
     known = {"np", "math"}  # numpy and math are there (PRELUDE); then what each cell defines, in order
-    parts = [definitions_only(answers[g], lorisnb=False, known=known) for g in before if g in answers]
-    return "\n".join(d for d in parts if d)
+    parts = [(g, definitions_only(answers[g], lorisnb=False, known=known)) for g in before if g in answers]
+    return [(g, d) for g, d in parts if d]
+
+
+def earlier_functions(answers: Mapping[str, str], before: Sequence[str]) -> str:
+    """:func:`earlier_cells`' code, joined."""
+    return "\n".join(d for _, d in earlier_cells(answers, before))
+
+
+def cell_name(key: str) -> str:
+    """How a message names a cell: ``your answer cell A1``, or an added cell by its key's words."""
+    return key.strip("<>") if key.startswith("<") else f"your answer cell {key}"
+
+
+def run_cells(
+    box: Sandbox, cells: Sequence[tuple[str, str]], timeout: Callable[[], float]
+) -> tuple[str | None, list[tuple[str, str]]]:
+    """Each of :func:`earlier_cells`' ``cells`` run in ``box``, one after another as the notebook ran
+    them: the first cell during whose run the guard refused or found lorisnb (None if none did),
+    so that a refusal names the cell whose code used it (a def-time default ``m=__import__('lorisnb')``
+    in a helper's cell, not the answer given that helper), and the cells that failed (key, error)."""
+    culprit, failed = None, []
+    for key, code in cells:
+        seen = len(box.findings)
+        reply = box.run(code, name=f"<the functions of {cell_name(key)}>", timeout_s=timeout())
+        if culprit is None and len(box.findings) > seen:
+            culprit = key
+        if not reply.get("ok"):
+            failed.append((key, str(reply.get("error"))))
+    return culprit, failed
 
 
 def unkept_values(code: Mapping[str, str], order: Sequence[str]) -> dict[str, str]:
@@ -712,8 +743,7 @@ def unkept_values(code: Mapping[str, str], order: Sequence[str]) -> dict[str, st
             lost = _assigned(cell_body(source)) - _assigned(kept or "") - known
         except SyntaxError:
             continue
-        where = key.strip("<>") if key.startswith("<") else f"your answer cell {key}"
-        out.update({n: where for n in lost})
+        out.update({n: cell_name(key) for n in lost})
     return out
 
 
@@ -768,14 +798,22 @@ class Budget:
         )
 
 
-def lorisnb_used(name: str, findings: Sequence[str]) -> str:
+def lorisnb_used(name: str, findings: Sequence[str], by: str | None = None) -> str:
     """The message of an answer refused because its code used lorisnb (``findings``: what the
-    sandbox's guard refused or found)."""
+    sandbox's guard refused or found), or, with ``by``, the code of the earlier cell ``by`` whose
+    functions and values it is given (:func:`run_cells`)."""
     what = "; ".join(dict.fromkeys(findings))
+    who = (
+        "its code tried to use lorisnb"
+        if by is None
+        else f"{cell_name(by)}, whose functions and values it is given (the notebook ran that cell before it), "
+        "tried to use lorisnb when run (a default value or constant computed with lorisnb?)"
+    )
     return (
-        f"{name}: refused (0 points): its code tried to use lorisnb ({what}). An answer graded with numpy "
+        f"{name}: refused (0 points): {who} ({what}). An answer graded with numpy "
         "only (a formula, or a prediction) may not use lorisnb's code, from any copy of it on the machine "
         "(another environment, a checkout, a wheel); write it yourself, with numpy"
+        + ("" if by is None else f", in {cell_name(by)}")
     )
 
 
@@ -1076,11 +1114,7 @@ def grade_submission(
                         box.bind(lab, timeout_s=budget.left(True))
                     # the functions the student's earlier answer cells define, which this one may call (as the
                     # notebook did), before its own: its own definitions win
-                    helpers = earlier_functions(code, before)
-                    if helpers.strip():
-                        box.run(
-                            helpers, name="<the functions of the earlier answer cells>", timeout_s=budget.left(True)
-                        )
+                    culprit, _ = run_cells(box, earlier_cells(code, before), lambda: budget.left(True))
                     # each of its cells (a split cell's halves, copies) as the notebook ran them, an unused top-level
                     # import of lorisnb left out (as in the other cells: it costs nothing; one it uses meets the guard)
                     dropped = False
@@ -1107,19 +1141,18 @@ def grade_submission(
                                 break
                     # the functions of the cells the student added below it, up to its check (the notebook ran them
                     # before the check called its functions)
-                    helpers_below = earlier_functions(code, after)
-                    if helpers_below.strip():
-                        got = box.run(helpers_below, name=f"<the functions of the cells you added below {gid}>",
-                                      timeout_s=budget.left(True))  # fmt: skip
-                        if not got.get("ok"):
-                            notes.append(f"{gid}: the functions of the cells you added below it (up to its check), "
-                                         f"given to it run alone, failed: {_with_hint(spec, str(got.get('error')), unkept)}")  # fmt: skip
+                    seen = len(box.findings)
+                    below_culprit, below_failed = run_cells(box, earlier_cells(code, after), lambda: budget.left(True))
+                    culprit = culprit or (below_culprit if len(box.findings) > seen else None)
+                    if below_failed:
+                        notes.append(f"{gid}: the functions of the cells you added below it (up to its check), "
+                                     f"given to it run alone, failed: {_with_hint(spec, below_failed[0][1], unkept)}")  # fmt: skip
             except SandboxError as exc:
                 why = _BUDGET_ERROR.format(budget.seconds) if budget.out(f"<answer {gid}>, run alone") else str(exc)
                 functions.update({d: RemoteFunction(None, d, f"TimeoutError: {why}") for d in defs})
                 return
             if box.findings:  # the guard refused lorisnb to it (or found it loaded): no points, whatever it returns
-                refused = lorisnb_used(f"the answer cell {gid}", box.findings)
+                refused = lorisnb_used(f"the answer cell {gid}", box.findings, by=culprit)
                 functions.update({d: RemoteFunction(None, d, refused=refused) for d in defs})
                 return
             err = None if reply.get("ok") else str(reply.get("error"))
@@ -1154,7 +1187,7 @@ def grade_submission(
                 # what it is checked against): the notebook's check saw the value they left
                 srcs = [answers[gid], *(added.get(at[gid], ()) if gid in at else ())]
                 got = _predict(spec, gid, "\n".join(srcs), {**lab, **given}, root, apart, settings, budget, notes,
-                               took[gid], boxes, earlier_functions(code, before))  # fmt: skip
+                               took[gid], boxes, earlier_cells(code, before))  # fmt: skip
                 return unset(got, srcs)
 
             scores = _run_checks(
@@ -1373,7 +1406,7 @@ def _predict(
     notes: list[str],
     took: float,
     boxes: list[Sandbox],
-    helpers: str = "",
+    helpers: Sequence[tuple[str, str]] = (),
 ) -> dict[str, Any]:
     """A prediction (``gid``'s answer cell, ``source``) run alone in a sandbox without lorisnb, with
     numpy, math and the lab's numbers ``given`` (name -> :func:`._sandbox_child.given`'s form, as the
@@ -1403,12 +1436,17 @@ def _predict(
     boxes.append(box)  # its stray lines are counted with the others'
     own_imports = definitions_only(source, keep=(ast.Import, ast.ImportFrom), lorisnb=False) or ""
     stage = "setup"
+    culprit = None
     try:
         with budget.charge():
             box.bind(usable)  # the sandbox's start (no code of the answer runs yet)
-            # what the lab's process had imported and defined before the cell ran: not the cell's time
-            box.run(PRELUDE + helpers + "\n" + own_imports, name="<the functions and imports of your answer cells>",
-                    timeout_s=setup)  # fmt: skip
+            # what the lab's process had imported and defined before the cell ran: not the cell's time (numpy and
+            # math, each earlier cell's functions as the notebook ran them, then the cell's own imports)
+            deadline = time.monotonic() + setup
+            box.run(PRELUDE, name="<numpy and math>", timeout_s=setup)
+            culprit, _ = run_cells(box, helpers, lambda: max(deadline - time.monotonic(), 0.1))
+            box.run(own_imports, name=f"<the imports of your answer cell {gid}>",
+                    timeout_s=max(deadline - time.monotonic(), 0.1))  # fmt: skip
             stage = "cell"
             # an unused top-level import of lorisnb left out, as a formula's (it costs nothing)
             reply = box.run(PRELUDE + without_lorisnb(source), capture, name=f"<answer {gid}>", timeout_s=limit)
@@ -1432,7 +1470,7 @@ def _predict(
     finally:
         box.close()
     if box.findings:
-        message = lorisnb_used(f"the prediction {gid}", box.findings)
+        message = lorisnb_used(f"the prediction {gid}", box.findings, by=culprit)
         return failed(message, message)
     if partial:
         notes.append(f"{gid}: a line failed when the prediction ran alone ({reply.get('error')}), after its value was "
@@ -1448,7 +1486,7 @@ def _predict(
         withheld = ", ".join(sorted(n for n in given if n in read and n not in usable))
         if withheld:
             numbers += f"; not the lab's functions and objects it reads: {withheld}"
-        own = ", ".join(sorted(_defined_functions(helpers) & read)) or "none"
+        own = ", ".join(sorted(_defined_functions("\n".join(d for _, d in helpers)) & read)) or "none"
         return failed(
             "a prediction is worked out from the lab's numbers, with numpy, math and the functions of your earlier "
             "answer cells, not computed with the lab's functions or lorisnb; run so (alone: given the numbers the "
