@@ -417,7 +417,7 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # writing an output failed once checked (a full disk, a file system that refuses)
         if isinstance(exc, BrokenPipeError):  # stdout closed by the reader: run() ends quietly
             raise
-        where = f"{clean(exc.filename)}: " if exc.filename else "an output (the system named no file): "
+        where = f"{exc.filename}: " if exc.filename else "an output (the system named no file): "
         say(f"error: {where}{exc.strerror or exc}")
         return 2
     except KeyboardInterrupt as exc:

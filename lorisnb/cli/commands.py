@@ -250,7 +250,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
         for what, seqs, why in tartanair_gaps(table):
             shown = "; ".join(seqs[:5]) + (f" and {len(seqs) - 5} more" if len(seqs) > 5 else "")
-            say(f"note: {len(seqs)} sequence(s) {what} ({clean(shown)}): {why}")
+            say(f"note: {len(seqs)} sequence(s) {what} ({shown}): {why}")  # (say escapes the line)
     if getattr(args, "relative", False) or args.relative_lengths:
         with warnings.catch_warnings(record=True) as caught:  # said with the other notes, after the tables
             warnings.simplefilter("always", LorisWarning)
@@ -292,11 +292,11 @@ def _print_kitti(ev: Any, args: argparse.Namespace) -> None:
     short = [f"{file}, seq {seq}" for (_, file, _, seq), n in per_seq.items() if n == 0]
     if short:  # NaN errors said, as a missing RPE pair is
         shown = "; ".join(short[:5]) + (f" and {len(short) - 5} more" if len(short) > 5 else "")
-        say(f"note: {len(short)} sequence(s) hold no KITTI segment ({clean(shown)}): the devkit measures drift over "
+        say(f"note: {len(short)} sequence(s) hold no KITTI segment ({shown}): the devkit measures drift over "
             "100 to 800 m of ground-truth path, and these travel less (or match too few poses); their kitti_t_err and "
             "kitti_r_err are empty, and they add nothing to the totals")  # fmt: skip
     if args.kitti_plot and not len(overall):  # (the figure of no sequence was a traceback)
-        say(f"note: --kitti-plot: no sequence was evaluated, so no plot was written to {clean(str(args.kitti_plot))}")
+        say(f"note: --kitti-plot: no sequence was evaluated, so no plot was written to {args.kitti_plot}")
     elif args.kitti_plot:
         from lorisnb.io.writers import write_atomically
         from lorisnb.tools.figures.kitti import kitti_length_figure
@@ -543,7 +543,7 @@ def _baseline_warnings(run_dir: Path) -> None:
     f = run_dir / "findings" / "since_baseline.json"
     if f.is_file():
         for w in json.loads(f.read_text(encoding="utf-8")).get("warnings") or []:
-            say(f"warning: {clean(w)}")
+            say(f"warning: {w}")
 
 
 def _gate(run_dir: Path) -> int:
@@ -556,8 +556,8 @@ def _gate(run_dir: Path) -> int:
     from lorisnb.core.stats.regression import regressed_phrase
     from lorisnb.tools.report.portable import mark
 
-    def shown(text: object) -> str:
-        return clean(str(text).replace(mark("run"), str(run_dir)))
+    def shown(text: object) -> str:  # (said by say, which escapes the line once)
+        return str(text).replace(mark("run"), str(run_dir))
 
     since = json.loads((run_dir / "findings" / "since_baseline.json").read_text(encoding="utf-8"))
     if since.get("verdict") is None:

@@ -173,7 +173,7 @@ def compare_table(
     full, counted_once = _without_repeated_trials(table, full)
     if counted_once:
         notes.append("trials that repeat another trial's every value (copies, not reruns), counted once: " + "; ".join(
-            f"{clean(a)}: {n} of {t}" for a, (n, t) in counted_once.items()) + " (a copied trial tested as a rerun made a "
+            f"{a}: {n} of {t}" for a, (n, t) in counted_once.items()) + " (a copied trial tested as a rerun made a "
             "significance no rerun would show)")  # fmt: skip
     ci = stats.confidence_intervals(full, level=level, seed=seed)
     pairs, spread, copies = decide(table, full, metric, alpha, seed)

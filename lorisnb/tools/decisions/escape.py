@@ -2,10 +2,13 @@
 harmless for each output that shows it, by one rule: :func:`clean`. A character that is not
 printable (a control character: ESC of an escape sequence, a newline, a carriage return, a tab;
 a bidirectional override such as U+202E; a lone surrogate of a name that is not UTF-8) is shown
-escaped as Python writes it (``\\x1b``, ``\\n``, ``\\t``, ``\\u202e``): a name reads the same in
-the terminal, in Markdown, in GitHub's annotations and in JUnit XML, two names stay apart, and
-nothing in them acts (moves the cursor, reverses a line, ends a row, a command or an XML file's
-well-formedness: XML 1.0 allows no C0 control but tab, newline and carriage return).
+escaped as Python writes it (``\\x1b``, ``\\n``, ``\\t``, ``\\u202e``), and so is a backslash
+(``\\\\``, as Python's ``repr`` and ``ls -b`` show it: a folder literally named ``orb\\x1b`` and
+one named ``orb`` + ESC never print the same): a name reads the same in the terminal, in Markdown,
+in GitHub's annotations, in JUnit XML and in figures, two different names never print the same
+(the rule is one-to-one), and nothing in them acts (moves the cursor, reverses a line, ends a row,
+a command or an XML file's well-formedness: XML 1.0 allows no C0 control but tab, newline and
+carriage return).
 
 Each format then escapes its own syntax: :func:`markdown_cell` and :func:`code_span` (Markdown),
 :func:`workflow_data` and :func:`workflow_property` (GitHub's workflow commands, as its runner
@@ -17,13 +20,15 @@ from __future__ import annotations
 
 
 def clean(text: object) -> str:
-    """Text for one terminal line (or one XML attribute, one cell): characters that are not
-    printable shown escaped, as ``\\n``, ``\\x1b`` or ``\\u202e``, so that tables and lists keep
-    their lines and the terminal interprets nothing in them."""
+    """Text for one terminal line (or one XML attribute, one cell, one figure label): characters
+    that are not printable shown escaped, as ``\\n``, ``\\x1b`` or ``\\u202e``, and a backslash as
+    ``\\\\``, so that tables and lists keep their lines, the terminal interprets nothing in them
+    and two different texts never show the same. Applied once to a name: its result is shown, never
+    escaped again (a backslash it wrote would be doubled)."""
     s = str(text)
-    if s.isprintable():
+    if s.isprintable() and "\\" not in s:
         return s
-    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in s)
+    return "".join(c if c.isprintable() and c != "\\" else c.encode("unicode_escape").decode("ascii") for c in s)
 
 
 #: Characters Markdown gives a meaning inside a line (a table's cell border, code, emphasis, a link,
