@@ -34,7 +34,7 @@ from lorisnb.cli.options import (
     hide_unused,
     threshold_list_type,
 )
-from lorisnb.cli.text import clean, say, warning_lines
+from lorisnb.cli.text import message_line, say, warning_lines
 from lorisnb.core.spec import validate
 from lorisnb.core.spec.evalspec import ALIGNMENTS, OV_ALIGNMENTS, PRESETS
 from lorisnb.core.trajectory.blocks import ordinary_pages
@@ -59,7 +59,7 @@ class Parser(argparse.ArgumentParser):
     control characters as every other message line does (:func:`~lorisnb.cli.text.say`)."""
 
     def error(self, message: str) -> NoReturn:
-        super().error(clean(message))
+        super().error(message_line(message))
 
 
 def build_parser() -> argparse.ArgumentParser:

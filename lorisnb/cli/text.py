@@ -16,9 +16,18 @@ from typing import Any
 
 import numpy as np
 
-from lorisnb.tools.decisions.escape import clean  # the one escaping rule, for every output (re-exported here)
+from lorisnb.tools.decisions.escape import clean, message_line  # the escaping rules (clean re-exported here)
 
-__all__ = ["MAX_ROWS", "clean", "display_width", "format_table", "frame_columns", "say", "warning_lines"]
+__all__ = [
+    "MAX_ROWS",
+    "clean",
+    "display_width",
+    "format_table",
+    "frame_columns",
+    "message_line",
+    "say",
+    "warning_lines",
+]
 
 MAX_ROWS = 500  # more rows: the first and last half of these, with a line saying how many were left out
 
@@ -77,9 +86,10 @@ def frame_columns(df: Any) -> dict[str, np.ndarray]:
 
 def say(line: object) -> None:
     """One message line on stderr (``error: ...``, ``warning: ...``, ``note: ...``), control characters
-    escaped (:func:`clean`): a message quoting a file name, a label or a value read from a file
-    (an escape sequence, a newline) stays one line, and the terminal interprets nothing in it."""
-    print(clean(line), file=sys.stderr)
+    escaped (:func:`~lorisnb.tools.decisions.escape.message_line`: as :func:`clean`, but a backslash
+    shown as itself): a message quoting a file name, a label or a value read from a file (an escape
+    sequence, a newline) stays one line, and the terminal interprets nothing in it."""
+    print(message_line(line), file=sys.stderr)
 
 
 def _named(text: str, roots: Mapping[str, str | os.PathLike[str] | None]) -> str:

@@ -28,7 +28,22 @@ def clean(text: object) -> str:
     s = str(text)
     if s.isprintable() and "\\" not in s:
         return s
-    return "".join(c if c.isprintable() and c != "\\" else c.encode("unicode_escape").decode("ascii") for c in s)
+    return "".join(c if c.isprintable() and c != "\\" else _escaped(c) for c in s)
+
+
+def message_line(text: object) -> str:
+    """Text for one message line (``error: ...``, ``warning: ...``, ``note: ...``): as :func:`clean`,
+    except that a backslash shows as itself. A message quotes values as Python writes them
+    (``'a\\tb'``: already escaped) and the user's own text as typed (``--trials-by 'seed(\\d+)'``,
+    an example to copy), which a second escape would garble; its control characters are escaped
+    all the same, so it stays one line and the terminal acts on nothing in it. Names are told apart
+    where they are listed (tables, verdict lines, :func:`clean`)."""
+    s = str(text)
+    return s if s.isprintable() else "".join(c if c.isprintable() else _escaped(c) for c in s)
+
+
+def _escaped(c: str) -> str:
+    return c.encode("unicode_escape").decode("ascii")
 
 
 #: Characters Markdown gives a meaning inside a line (a table's cell border, code, emphasis, a link,
