@@ -197,7 +197,9 @@ def test_diff_of_tables_and_a_missing_sequence(versions, tmp_path, capsys):
     twice = pd.read_csv(ta)  # one sequence's row twice: which table says so
     pd.concat([twice, twice.iloc[[3]]]).to_csv(tmp_path / "twice.csv", index=False)
     rc, _, err = run(capsys, ta, tmp_path / "twice.csv")
-    assert rc == 2 and f"error: CAND {tmp_path / 'twice.csv'}: " in err and "has several rows" in err
+    assert (
+        rc == 2 and f"error: {tmp_path / 'twice.csv'}, line 32: " in err and "has several rows (lines 5 and 32)" in err
+    )
 
 
 @pytest.mark.slow

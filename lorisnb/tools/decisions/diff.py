@@ -20,7 +20,7 @@ from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_text
 from lorisnb.tools.decisions.comparison import check_table_duplicates
 from lorisnb.tools.decisions.escape import clean, code_span, markdown_cell, workflow_data, workflow_property
-from lorisnb.tools.decisions.runs import COUNTS, NUMBERS, out_of_domain, setting_differences, shown
+from lorisnb.tools.decisions.runs import COUNTS, NUMBERS, out_of_domain, repeated_key, setting_differences, shown
 from lorisnb.tools.evaluation.status import OK, UNSCORED
 
 if TYPE_CHECKING:
@@ -58,14 +58,13 @@ def _keyed(table: pd.DataFrame) -> pd.DataFrame:
     _check_numbers(t)
     if "table" not in t.columns and "eps_value" not in t.columns:
         check_table_duplicates(t)  # two files for one sequence: named, with what to do
-    dup = t.duplicated(["suite", "algorithm", "scene", "seq", "trial"], keep=False)
-    if dup.any():
-        r = t[dup].iloc[0]
-        raise ValidationError(
-            f"{r['algorithm']} {r['scene']}-{r['seq']} (trial {r['trial']}) has several rows"
-            f"{' in ' + str(r['table']) if 'table' in t.columns else ''}: a sweep or duplicate files; diff tables of "
-            "one setting, with one row per sequence and trial"
-        )
+    found = repeated_key(t)  # a table read from a file was refused when read, naming its lines (load_run)
+    if found is not None:
+        rows, what, _ = found
+        where = f" in {t['table'].iloc[rows[0]]}" if "table" in t.columns else ""
+        raise ValidationError(f"{what} has several rows{where} (rows {', '.join(map(str, rows))}, counted from 0): a "
+                              "sweep or duplicate files; diff tables of one setting, with one row per sequence and "
+                              "trial")  # fmt: skip
     return t
 
 

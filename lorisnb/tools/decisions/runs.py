@@ -150,8 +150,19 @@ PER_SEQUENCE = "a per-sequence table as written by lorisnb evaluate --csv / --pa
 
 
 def read_table(path: Path) -> pd.DataFrame:
-    """A per-sequence table from CSV (:func:`read_csv`: its shape checked first) or Parquet; its
-    columns are checked (:func:`check_values`)."""
+    """A per-sequence table from CSV (:func:`read_csv`: its shape checked first) or Parquet, checked
+    as a run is judged: its columns and values (:func:`check_values`) and one row per sequence and
+    trial (:func:`check_keys`). Every check a table must pass to be judged is made here, when the
+    run is read: a table failing one is a damaged run, passed over by ``history``, ``diff
+    --baseline last-comparable`` and ``report --baseline`` where it is older than the run judged (a
+    row repeated was found only when two runs were compared, so the damaged night was taken as a
+    baseline, exit 2, the newest night's regression never judged)."""
+    return check_keys(_table_rows(path), path, PER_SEQUENCE)
+
+
+def _table_rows(path: Path) -> pd.DataFrame:
+    """A per-sequence table as :func:`read_table` reads it, its rows not yet checked to hold each
+    sequence and trial once (a notebook's sweep holds several: :func:`_report_tables` leaves it out)."""
     try:
         if path.is_file() and path.suffix.lower() == ".csv":
             df = read_csv(path, PER_SEQUENCE)
@@ -304,6 +315,59 @@ def check_values(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
     return df
 
 
+def repeated_key(table: pd.DataFrame) -> tuple[list[int], str, list[str]] | None:
+    """The first sequence and trial a per-sequence table holds in several rows: their positions
+    (0-based, in the table's order), the sequence in words (``vins home-1 (trial 0)``, with the
+    result files the rows came from where they differ) and those files (empty where the rows name
+    one or none); None when each is held once (:data:`KEYS`)."""
+    t = with_trials(table)
+    t = t.assign(suite=t["suite"].fillna("").astype(str))
+    dup = t.duplicated(KEYS, keep=False).to_numpy()
+    if not dup.any():
+        return None
+    first = t.iloc[int(dup.nonzero()[0][0])]
+    same = np.ones(len(t), bool)
+    for k in KEYS:
+        same &= (t[k] == first[k]).to_numpy()
+    rows = [int(i) for i in same.nonzero()[0]]
+
+    def whole(x: Any) -> Any:
+        return int(x) if isinstance(x, (int, float, np.integer, np.floating)) and float(x).is_integer() else x
+
+    suite = f" ({first['suite']})" if first["suite"] else ""
+    what = f"{first['algorithm']}{suite} {first['scene']}-{whole(first['seq'])} (trial {whole(first['trial'])})"
+    files = list(dict.fromkeys(str(t["file"].iloc[i]) for i in rows)) if "file" in t.columns else []
+    if len(files) < 2:
+        return rows, what, []
+    return rows, f"{what} (from the result files {_and(files)})", files
+
+
+def _and(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} and {items[-1]}"
+
+
+def check_keys(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
+    """``df`` (read from ``path``) when it holds each sequence and trial once (:func:`repeated_key`);
+    else a :class:`~lorisnb.errors.ParseError` naming the file and the lines (CSV) or rows (Parquet)
+    of the repeated rows, ending with ``expected``. A table judged one row per sequence and trial
+    cannot tell which of two rows is the run's."""
+    found = repeated_key(df)
+    if found is None:
+        return df
+    rows, what, files = found
+    csv = path.is_file() and path.suffix.lower() == ".csv"
+    if csv:
+        starts = [line for line, _ in csv_records(path)][1:]  # each data row's first line (the header left out)
+        lines = [starts[i] if i < len(starts) else i + 2 for i in rows]
+        where, at = f"lines {_and([str(x) for x in lines])}", lines[1]
+    else:
+        where, at = f"rows {_and([str(i + 1) for i in rows])} of the table (counted from 1)", None
+    why = ("two result files of one sequence and trial: evaluate them again with their trials named (cafe_trial1.txt, "
+           "or --trials-by REGEX)" if files else "a sweep of several settings, tables "
+           "stacked, or a row copied by an edit? Keep one row per sequence and trial")  # fmt: skip
+    raise ParseError(path, at, f"{what} has several rows ({where}); {why}; expected {expected}")
+
+
 def shown(value: Any) -> str:
     """A value as a message quotes it: text in quotes, a number with every digit Python writes
     (``1.0000001`` is not shown as ``1``: it would read as a value in the domain), a whole float
@@ -340,7 +404,9 @@ def out_of_domain(df: pd.DataFrame, c: str) -> tuple[Any, str]:
         return nan | (v < 0) | (v > 1), "a rate between 0 and 1 (NaN is none: a sequence without a match has 0)"
     if c in COUNTS or c in INDICES:
         words = f"{INDICES.get(c, 'a count')} (a whole number >= 0)"
-        return nan | (v < 0) | ~np.isfinite(v) | (np.mod(np.where(nan, 0, v), 1) != 0), words
+        finite = np.isfinite(v)  # inf, -inf (1e400 as read) are no whole number: never taken modulo 1 (a
+        # RuntimeWarning of numpy's was printed before the error)
+        return ~finite | (v < 0) | (np.mod(np.where(finite, v, 0), 1) != 0), words
     if c in SECONDS:
         return nan | (v < 0) | ~np.isfinite(v), "a duration in seconds (finite, >= 0)"
     count = NAN_WHEN_NONE.get(c)
@@ -371,8 +437,11 @@ def _report_tables(folder: Path, notes: list[str], spec: Any = None) -> pd.DataF
         raise DataNotFoundError(f"{what}; the run's run.json records the report's own evaluation, whose per-sequence "
                                 f"table is {FIRST_TABLE} (the notebooks' tables hold other settings): a run copied in "
                                 "part? Copy the whole run folder, or make the run again")  # fmt: skip
-    csvs = [own] if own.is_file() else sorted(folder.rglob("*.csv"))
-    for csv in csvs:
+    if own.is_file():  # the run's table: read as a bare table is, refused as one is (a row repeated, a column
+        # lacking: named with the file and lines, never "a report run without a per-sequence table")
+        run_file(folder, own)
+        parts.append(with_trials(read_table(own)).assign(table=FIRST_TABLE))
+    for csv in [] if own.is_file() else sorted(folder.rglob("*.csv")):
         if any(part.startswith(".") for part in csv.relative_to(folder).parts):
             continue
         run_file(folder, csv)  # a link leading out of the run: refused, never read
@@ -381,7 +450,7 @@ def _report_tables(folder: Path, notes: list[str], spec: Any = None) -> pd.DataF
         except (ValueError, OSError):
             continue
         if all(c in head.columns for c in [*REQUIRED, *NEEDED]):
-            t = with_trials(read_table(csv))
+            t = with_trials(_table_rows(csv))
             if t.duplicated(KEYS).any():
                 notes.append(f"{csv}: several rows per sequence (a sweep?); left out")
                 continue
