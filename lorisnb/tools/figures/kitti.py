@@ -8,6 +8,7 @@ from __future__ import annotations
 import pandas as pd
 from matplotlib.figure import Figure
 
+from lorisnb.tools.decisions.escape import clean
 from lorisnb.tools.figures.plotting import subplots
 
 
@@ -21,7 +22,9 @@ def kitti_length_figure(lengths: pd.DataFrame, totals_only: bool = True) -> Figu
     if totals_only:
         table = table[table.seq == ""]
     for (algorithm, trial, file, seq), g in table.groupby(["algorithm", "trial", "file", "seq"], sort=False):
-        label = str(algorithm) + (f" trial {trial}" if trial else "") + (f" {file} seq {seq}" if seq else " (all)")
+        label = (
+            clean(algorithm) + (f" trial {trial}" if trial else "") + (f" {clean(file)} seq {seq}" if seq else " (all)")
+        )
         ax_t.plot(g.length, g.t_err, "s-", label=label, ms=4)
         ax_r.plot(g.length, g.r_err, "s-", label=label, ms=4)
     ax_t.set(xlabel="Path Length [m]", ylabel="Translation Error [%]")

@@ -1,5 +1,14 @@
 """Figures (matplotlib/seaborn): the paper's timeline (Fig. 2 / Fig. 3), trajectories coloured by
 correctness, and helpers to save figures. Every function returns the Figure; none calls show().
+
+Every name a figure draws (an algorithm, scene, suite, file or dataset, in a title, a label, a legend
+or a tick label) is shown as the terminal shows it (:func:`~lorisnb.tools.decisions.escape.clean`:
+``orb\\x1b`` for ``orb`` + ESC, ``\\\\`` for a backslash): a control character is drawn by no font
+and an SVG (XML 1.0) cannot hold it. The figure functions escape the names they draw
+(:func:`shown_names` for the columns seaborn draws from); the tables they are given and return keep
+the names whole. Whatever text is still not printable when a figure is rendered (a title the caller
+gave) is escaped then (:func:`escape_unprintable`, by :func:`save_figure` and the notebooks'
+:func:`~lorisnb.tools.notebook.start.figure_png`).
 """
 
 from __future__ import annotations
@@ -87,6 +96,35 @@ def same_jitter(seed: int = 0) -> Iterator[None]:
 
 CORRECT = "#1f5fbf"
 WRONG = "#d62728"
+
+
+def shown_names(table: pd.DataFrame, columns: Iterable[str | None]) -> pd.DataFrame:
+    """A copy of ``table`` whose ``columns`` (the ones a figure draws as names: a hue, a panel, a tick
+    label; None and absent ones passed over) hold each text as the terminal shows it
+    (:func:`~lorisnb.tools.decisions.escape.clean`, one-to-one: two names stay two), for seaborn to
+    draw from; the caller's table is not changed."""
+    cols = [c for c in dict.fromkeys(columns) if c is not None and c in table.columns]
+    if not cols:
+        return table
+    return table.assign(**{c: table[c].map(lambda v: clean(v) if isinstance(v, str) else v) for c in cols})
+
+
+def escape_unprintable(fig: Figure) -> None:
+    """Every text of ``fig`` that holds a character that is not printable (a control character, a
+    bidirectional override) shown escaped (:func:`~lorisnb.tools.decisions.escape.clean`), line by
+    line (a title's own line breaks kept): drawn by no font, and an SVG (XML 1.0) cannot hold it. A
+    text already printable is left as it is (the names the figure functions drew are escaped once,
+    where they drew them)."""
+    for t in fig.findobj(Text):
+        shown = printable(t.get_text())
+        if shown != t.get_text():
+            t.set_text(shown)
+
+
+def printable(text: str) -> str:
+    """A caller's text (a title), as :func:`escape_unprintable` draws it: as it is where every
+    character is printable, else line by line as the terminal shows it (its own line breaks kept)."""
+    return text if text.replace("\n", "").isprintable() else "\n".join(map(clean, text.split("\n")))
 
 
 def _pct(v: float) -> str:
@@ -226,7 +264,7 @@ class Timeline:
             x0, x1 = d["offset"].min(), (d["offset"] + d["duration"]).max()
             ax.plot([x0, x1], [top, top], "-k", lw=1)
             ax.plot(d["offset"], np.full(len(d), top), "ok", ms=3)
-            ax.text((x0 + x1) / 2, top + 0.25, scene, ha="center", va="bottom", fontsize=9)
+            ax.text((x0 + x1) / 2, top + 0.25, clean(scene), ha="center", va="bottom", fontsize=9)
             ax.axvline(x0, color="0.7", lw=0.6)
             ax.axvline(x1, color="0.7", lw=0.6)
         self._drawn: list[Any] = []  # the artists that the thresholds change
@@ -298,7 +336,7 @@ class Timeline:
         if self._laid_out is None:
             self._finish()
         if title or self._laid_out is not None:
-            ax.set_title(title or "", fontsize=10, pad=18)
+            ax.set_title(printable(title or ""), fontsize=10, pad=18)
         # the title's height (its lines) is what moves the layout: a title narrower than the axes
         # and their row names (as these figures' are) leaves it where it was
         laid_out = (bool(title), (title or "").count("\n"))
@@ -311,7 +349,8 @@ class Timeline:
         """The axis, its row names and the legend: after the first thresholds' artists, as
         :func:`plot_timeline` always made them."""
         ax, layout, rows, labels = self.ax, self.layout, self.rows, self.labels
-        ax.set_yticks(list(self.y_of.values()), [labels.get(a, a) + name[len(a) :] for (a, _, _), name in rows.items()])
+        names = [clean(labels.get(a, a) + name[len(a) :]) for (a, _, _), name in rows.items()]  # suite, trial too
+        ax.set_yticks(list(self.y_of.values()), names)
         ax.set_ylim(0.4, len(rows) + 1.5)
         if len(layout):
             ax.set_xlim(layout["offset"].min() - 5, (layout["offset"] + layout["duration"]).max() + 5)
@@ -358,7 +397,7 @@ def plot_trajectories(
         ax.plot(e.gt_positions[:, 0], e.gt_positions[:, 1], "-", color="0.6", lw=1.2, label="ground truth")
         ax.scatter(e.est_positions[c, 0], e.est_positions[c, 1], s=3, color=CORRECT, label="estimate, correct")
         ax.scatter(e.est_positions[~c, 0], e.est_positions[~c, 1], s=3, color=WRONG, label="estimate, wrong")
-        ax.set_title(f"{errors.scene}-{e.seq}: {c.mean():.0%} of {e.matched} poses correct", fontsize=9)
+        ax.set_title(f"{clean(errors.scene)}-{e.seq}: {c.mean():.0%} of {e.matched} poses correct", fontsize=9)
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
         ax.set_aspect("equal", adjustable="datalim")
@@ -366,15 +405,13 @@ def plot_trajectories(
         ax.axis("off")
     if seqs:
         axes.flat[0].legend(fontsize=7, loc="best", markerscale=3)
-    fig.suptitle(f"{errors.algorithm}: {errors.file} ({errors.mode}, top view)", fontsize=10)
+    fig.suptitle(f"{clean(errors.algorithm)}: {clean(errors.file)} ({errors.mode}, top view)", fontsize=10)
     fig.tight_layout()
     return fig
 
 
 def _save(fig: Figure, tmp: Path, fmt: str) -> None:
-    for t in fig.findobj(Text):  # a name's control character: drawn by no font, and XML 1.0 (SVG) cannot hold it
-        if not t.get_text().replace("\n", "").isprintable():
-            t.set_text("\n".join(map(clean, t.get_text().split("\n"))))
+    escape_unprintable(fig)
     fig.savefig(tmp, dpi=150, bbox_inches="tight", format=fmt)
 
 
@@ -433,6 +470,9 @@ def plot_metric_vs_threshold(
     per scene) as a dashed line. ``scenes`` is a scene aggregate of a sweep."""
     _theme("whitegrid")
     data = scenes.replace([np.inf], np.nan).dropna(subset=[x]) if log else scenes
+    data = shown_names(data, [hue, col])  # the legend's and the panels' names, as the terminal shows them
+    if isinstance(marks, Mapping):  # by panel, as the panels are named
+        marks = {clean(k) if isinstance(k, str) else k: v for k, v in marks.items()}
     g = sns.relplot(
         data=data,
         x=x,
@@ -484,7 +524,7 @@ def plot_cr_heatmaps(
             xticklabels=[f"{v:.2g}" for v in wide.columns],
             yticklabels=[f"{v:.0f}" for v in wide.index],
         )
-        ax.set_title(alg, fontsize=9)
+        ax.set_title(clean(alg), fontsize=9)
         ax.set_xlabel("eps (m)")
         ax.set_ylabel("phi (deg)")
         if mark is not None:
@@ -494,7 +534,7 @@ def plot_cr_heatmaps(
     for ax in list(axes.flat)[len(algs) :]:
         ax.axis("off")
     fig.suptitle(
-        f"{scene}: {metric.upper()} over ATE threshold eps and AOE threshold phi (red box: the paper's setting)",
+        f"{clean(scene)}: {metric.upper()} over ATE threshold eps and AOE threshold phi (red box: the paper's setting)",
         fontsize=10,
     )
     fig.tight_layout()
@@ -505,7 +545,7 @@ def plot_rank_stability(stability: pd.DataFrame):
     """Kendall's tau between the ranking at each eps and at the reference (paper) eps, per scene."""
     _theme("whitegrid")
     fig, ax = subplots(figsize=(6.5, 3.6))
-    d = stability[np.isfinite(stability["eps"].astype(float))]
+    d = shown_names(stability[np.isfinite(stability["eps"].astype(float))], ["scene"])
     if d.empty:  # one algorithm per scene: no ranking to compare
         ax.text(0.5, 0.5, "a ranking needs two or more algorithms in a scene", ha="center", va="center")
         ax.set_axis_off()
@@ -537,7 +577,7 @@ def plot_crosscheck_scatter(per_pose: Mapping[str, pd.DataFrame]):
             ax.set_xlabel(f"evo APE ({unit})")
             ax.set_ylabel(f"lorisnb {'ATE' if r == 0 else 'AOE'} ({unit})")
             diff = np.max(np.abs(df[ours] - df[theirs])) if len(df) else np.nan
-            ax.set_title(f"{name}\nmax |difference| {diff:.1e} {unit}", fontsize=9)
+            ax.set_title(f"{clean(name)}\nmax |difference| {diff:.1e} {unit}", fontsize=9)
     fig.tight_layout()
     return fig
 
@@ -547,10 +587,10 @@ def plot_normalized_accuracy(measures: pd.DataFrame, published: pd.DataFrame):
     dataset, coloured by scene or sequence), published values as black diamonds on their own rows."""
     _theme("whitegrid")
     fig, ax = subplots(figsize=(8, 3.8))
-    pts = measures.dropna(subset=["ate_pct_length"])
+    pts = shown_names(measures.dropna(subset=["ate_pct_length"]), ["dataset", "group"])
     with same_jitter():
         sns.stripplot(data=pts, y="dataset", x="ate_pct_length", hue="group", dodge=False, alpha=0.6, ax=ax, size=4)
-    rows = [f"{d} (published)" for d in published["dataset"]]
+    rows = [f"{clean(d)} (published)" for d in published["dataset"]]
     ax.scatter(published["ate_pct_length"], rows, marker="D", color="black", label="published values")
     ax.set_xscale("log")
     ax.set_xlabel("ATE RMSE, % of the distance travelled (log scale)")

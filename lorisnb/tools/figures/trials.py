@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from lorisnb.core.metrics.openloris import RATES
 from lorisnb.core.stats.inference import scene_values, with_trials
-from lorisnb.tools.figures.plotting import MAX_WIDTH_IN, same_jitter, subplots
+from lorisnb.tools.figures.plotting import MAX_WIDTH_IN, same_jitter, shown_names, subplots
 from lorisnb.tools.report.tables import LABELS
 
 
@@ -20,6 +20,7 @@ def plot_trials(table: pd.DataFrame, metric: str = "cr", scenes: Sequence[str] |
     values = scene_values(with_trials(table), [metric], by=["suite", "algorithm", "scene", "trial"])
     if scenes is not None:
         values = values[values["scene"].isin(list(scenes))]
+    values = shown_names(values, ["algorithm", "scene"])  # tick labels and titles as the terminal shows them
     panels = list(dict.fromkeys(values["scene"]))
     algs = sorted(values["algorithm"].unique())
     fig, axes = subplots(1, max(1, len(panels)), figsize=(min(3.2 * max(1, len(panels)), MAX_WIDTH_IN), 0.35 * len(algs) + 1.6),

@@ -26,6 +26,8 @@ if TYPE_CHECKING:
         setup,
         show_figure,
         show_inputs,
+        show_tables_escaped,
+        shown_table,
         warnings_table,
     )
 
@@ -47,5 +49,7 @@ __all__ = [
     "setup",
     "show_figure",
     "show_inputs",
+    "show_tables_escaped",
+    "shown_table",
     "warnings_table",
 ]

@@ -15,6 +15,7 @@ from lorisnb.core.lifelong.sweep import scene_totals, sweep, sweep_scenes
 from lorisnb.core.metrics import openloris as metrics
 from lorisnb.core.pipeline.model import FileErrors
 from lorisnb.core.spec.validate import threshold
+from lorisnb.tools.decisions.escape import code_span, markdown_cell
 
 
 def output_gaps(errors: FileErrors | Iterable[FileErrors], durations: pd.DataFrame, delta: float = 1.0) -> pd.DataFrame:
@@ -74,7 +75,7 @@ def delta_gain(
         text = (
             f"In these results {len(climbing)} of the {len(fast)} algorithm-scene pairs whose normal output period is "
             f"under delta = {delta:g} s still gain CR between delta = {delta:g} s and {delta_max:g} s: that gain is "
-            f"time in gaps. The largest is {top['algorithm']} in {top['scene']}: a pose every "
+            f"time in gaps. The largest is {code_span(top['algorithm'])} in {markdown_cell(top['scene'])}: a pose every "
             f"{top['median_period']:.3f} s (median, about {1 / top['median_period']:.0f} Hz), yet CR "
             f"{top['cr_at_delta']:.3f} at {delta:g} s and {top['cr_at_max']:.3f} at {delta_max:g} s. "
             f"{top['gap_share']:.1%} of the scene's time lies in its gaps longer than {delta:g} s, past their first "
@@ -92,7 +93,7 @@ def delta_gain(
     if len(slow):
         text += (
             f" Output sparser than delta = {delta:g} s (median period at least delta, or fewer than 2 poses): "
-            + ", ".join(f"{r.algorithm} in {r.scene}" for r in slow.itertuples())
+            + ", ".join(f"{code_span(r.algorithm)} in {markdown_cell(r.scene)}" for r in slow.itertuples())
             + "."
         )
     return gaps, rates, text

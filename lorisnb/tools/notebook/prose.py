@@ -1,6 +1,8 @@
 """Sentences of the notebooks' prose that depend on the run: computed from its tables and spec and
 shown by a code cell, so that they are true on the user's results and at any parameters (a typed
-sentence is true only of the bundled data at the defaults)."""
+sentence is true only of the bundled data at the defaults). They are Markdown: an algorithm's name
+is a code span (:func:`~lorisnb.tools.decisions.escape.code_span`), a scene's name Markdown text
+(:func:`~lorisnb.tools.decisions.escape.markdown_cell`), each shown as the terminal shows it."""
 
 from __future__ import annotations
 
@@ -9,6 +11,8 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+
+from lorisnb.tools.decisions.escape import code_span, markdown_cell
 
 __all__ = ["rank_reference_words", "rpe_words", "simulated_verdict", "threshold_words", "tracking_and_accuracy"]
 
@@ -29,7 +33,7 @@ def _label(row: Mapping[str, Any], rows: pd.DataFrame) -> str:
     name = str(row["algorithm"])
     if "trial" in rows.columns and (rows["algorithm"] == row["algorithm"]).sum() > 1 and pd.notna(row.get("trial")):
         name += f" (trial {row['trial']})"
-    return f"`{name}`"
+    return code_span(name)
 
 
 def _infinite(value: Any) -> bool:
@@ -52,8 +56,8 @@ def tracking_and_accuracy(scene_table: pd.DataFrame, eps: Any = float("inf"), ph
         rows = rows[np.isfinite(pd.to_numeric(rows["cr"], errors="coerce"))]
         scored = rows[np.isfinite(pd.to_numeric(rows["c_ate_rmse"], errors="coerce"))]
         if len(scored) < 2:
-            names = ", ".join(f"`{a}`" for a in dict.fromkeys(map(str, scored["algorithm"])))
-            alone.append(f"{scene} ({names + ' alone' if names else 'none'})")
+            names = ", ".join(code_span(a) for a in dict.fromkeys(map(str, scored["algorithm"])))
+            alone.append(f"{markdown_cell(scene)} ({names + ' alone' if names else 'none'})")
             continue
 
         def said(r: Any, rows: pd.DataFrame = rows) -> str:
@@ -67,7 +71,7 @@ def tracking_and_accuracy(scene_table: pd.DataFrame, eps: Any = float("inf"), ph
             text = f"{said(longest)} {tracked}; the most accurate was {said(best)}"
         if worst.name not in (longest.name, best.name):
             text += f"; the least accurate was {said(worst)}"
-        lines.append(f"* {scene}: {text}.")
+        lines.append(f"* {markdown_cell(scene)}: {text}.")
     left = (
         f"\n\nNot compared, with fewer than two algorithms that have both a CR and a C-ATE RMSE: {'; '.join(alone)}."
         if alone
@@ -87,30 +91,31 @@ def simulated_verdict(pairs: pd.DataFrame, steady: str, drifting: str, twin: str
         hit = pairs[((pairs["a"] == a) & (pairs["b"] == b)) | ((pairs["a"] == b) & (pairs["b"] == a))]
         return None if hit.empty else bool(hit["significant"].any())
 
+    drift_name, steady_name, twin_name = (code_span(n) for n in (drifting, steady, twin))
     against = {other: significant(drifting, other) for other in (steady, twin)}
     separated = [o for o, s in against.items() if s]
     if len(separated) == 2:
-        drift = f"`{drifting}` is separated from both others (a real difference)"
+        drift = f"{drift_name} is separated from both others (a real difference)"
     elif separated:
         drift = (
-            f"`{drifting}` is separated from `{separated[0]}` only, although it differs from both: "
+            f"{drift_name} is separated from {code_span(separated[0])} only, although it differs from both: "
             f"with {trials} trial(s) at these thresholds the test misses a real difference"
         )
     else:
         drift = (
-            f"`{drifting}` is separated from neither of the others, although it drifts more: "
+            f"{drift_name} is separated from neither of the others, although it drifts more: "
             f"with {trials} trial(s) at these thresholds (a large eps counts every pose correct) the test cannot see it"
         )
     same = significant(steady, twin)
     if same:
         twins = (
-            f"`{steady}` and `{twin}` are separated although they are the same algorithm with other seeds: "
+            f"{steady_name} and {twin_name} are separated although they are the same algorithm with other seeds: "
             f"a false positive, which the test allows with probability up to alpha = {alpha:g}"
         )
     elif same is None:
-        twins = f"`{steady}` and `{twin}` were not compared"
+        twins = f"{steady_name} and {twin_name} were not compared"
     else:
-        twins = f"`{steady}` and `{twin}` share a rank: the data cannot tell them apart, which is the truth here"
+        twins = f"{steady_name} and {twin_name} share a rank: the data cannot tell them apart, which is the truth here"
     return f"In the simulated section, {drift}; {twins}."
 
 
@@ -142,14 +147,18 @@ def rank_reference_words(stability: pd.DataFrame, scenes: Any = ()) -> str:
         ref = float(rows["reference_eps"].iloc[0])
         paper = PAPER_EPS.get(str(scene))
         if paper is not None and np.isclose(ref, paper):
-            parts.append(f"{scene}: the paper's eps, {ref:g} m")
+            parts.append(f"{markdown_cell(scene)}: the paper's eps, {ref:g} m")
         elif paper is not None:
-            parts.append(f"{scene}: {ref:g} m, the grid value nearest the paper's {paper:g} m (not in the grid)")
+            parts.append(
+                f"{markdown_cell(scene)}: {ref:g} m, the grid value nearest the paper's {paper:g} m (not in the grid)"
+            )
         else:
-            parts.append(f"{scene}: {ref:g} m")
+            parts.append(f"{markdown_cell(scene)}: {ref:g} m")
     text = "The reference ranking of each scene is the ranking at " + "; ".join(parts) + "." if parts else ""
     ranked = set(map(str, stability["scene"])) if len(stability) else set()
     left = [str(s) for s in dict.fromkeys(scenes) if str(s) not in ranked]
     if left:
-        text += (" " if text else "") + (f"Left out, with fewer than two algorithms to rank: {', '.join(left)}.")
+        text += (" " if text else "") + (
+            f"Left out, with fewer than two algorithms to rank: {', '.join(map(markdown_cell, left))}."
+        )
     return text or "No scene has two algorithms to rank."

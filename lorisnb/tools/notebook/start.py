@@ -27,6 +27,7 @@ import pandas as pd
 from lorisnb.errors import DataNotFoundError, LorisWarning, OutputError, ValidationError
 from lorisnb.io.datasets.paths import DataPaths, DataRoot, find_data, sample_data
 from lorisnb.io.writers import overlap, write_atomically, write_csv, write_text
+from lorisnb.tools.decisions.escape import clean
 
 if TYPE_CHECKING:
     from lorisnb.core.spec.evalspec import EvalSpec
@@ -295,7 +296,9 @@ def figure_png(fig: Any, dpi: int = 150) -> bytes:
     figure (the explorers') is redrawn only from what its thresholds change on
     (:class:`~lorisnb.tools.figures.blit.BlitCanvas`): the same pixels as a full savefig."""
     from lorisnb.tools.figures.blit import FAST_PNG, BlitCanvas
+    from lorisnb.tools.figures.plotting import escape_unprintable
 
+    escape_unprintable(fig)  # a text not printable (a caller's title): escaped, as save_figure escapes it
     if isinstance(fig.canvas, BlitCanvas):
         return fig.canvas.png(dpi, FAST_PNG)
     buf = io.BytesIO()
@@ -336,6 +339,67 @@ def show_figure(fig: Any, dpi: int = 150, png: bytes | None = None, url: str | N
         display(Image(url=url, embed=False, width=width))
         return
     display(Image(data=png if png is not None else figure_png(fig, dpi), format="png", width=width))
+
+
+def _shown(value: Any) -> Any:
+    return clean(value) if isinstance(value, str) else value
+
+
+def _shown_index(index: pd.Index) -> pd.Index:
+    if isinstance(index, pd.MultiIndex):
+        return index.set_levels([_shown_index(level) for level in index.levels]).set_names(
+            [_shown(n) for n in index.names]
+        )
+    texts = pd.api.types.is_object_dtype(index.dtype) or pd.api.types.is_string_dtype(index.dtype)
+    return (index.map(_shown) if texts else index).rename(_shown(index.name))
+
+
+def shown_table(table: Any) -> Any:
+    """A copy of a DataFrame (or Series) as a notebook shows it: every text in its cells, column
+    names and index labels as the terminal shows it (:func:`~lorisnb.tools.decisions.escape.clean`:
+    ``orb\\x1b`` for ``orb`` + ESC, ``\\\\`` for a backslash; one-to-one, so two names stay two);
+    numbers untouched. The table given (the one the Python API returns and the CSV holds) keeps its
+    names whole. Anything else is returned as it is."""
+    if isinstance(table, pd.Series):
+        return shown_table(table.to_frame()).iloc[:, 0].rename(_shown(table.name))
+    if not isinstance(table, pd.DataFrame):
+        return table
+    out = table.copy()
+    for i in range(table.shape[1]):
+        column = table.iloc[:, i]
+        if isinstance(column.dtype, pd.CategoricalDtype):
+            out.isetitem(i, column.cat.rename_categories(_shown_index(column.cat.categories)))
+        elif pd.api.types.is_object_dtype(column.dtype) or pd.api.types.is_string_dtype(column.dtype):
+            out.isetitem(i, column.map(_shown))
+    out.columns = _shown_index(table.columns)
+    out.index = _shown_index(table.index)
+    return out
+
+
+def show_tables_escaped() -> None:
+    """In an IPython kernel, every DataFrame and Series shown from now on (a cell's last value,
+    ``display(df)``) is shown as :func:`shown_table` makes it, as HTML and as text: a name's control
+    character never reaches the notebook, its HTML page or a terminal. The one place notebooks'
+    tables are escaped; :func:`setup` calls it (and the threshold explorers, which may run without).
+    Outside IPython, nothing changes."""
+    try:
+        from IPython import get_ipython
+    except ImportError:
+        return
+    shell = get_ipython()
+    if shell is None:
+        return
+    formatters = shell.display_formatter.formatters
+
+    def as_html(table: pd.DataFrame) -> str | None:
+        return shown_table(table)._repr_html_()
+
+    def as_text(table: Any, printer: Any, cycle: bool) -> None:
+        printer.text(repr(shown_table(table)))
+
+    formatters["text/html"].for_type(pd.DataFrame, as_html)
+    for kind in (pd.DataFrame, pd.Series):
+        formatters["text/plain"].for_type(kind, as_text)
 
 
 def show_inputs(ev: Any, out: Outputs) -> None:
@@ -483,6 +547,7 @@ def setup(
     out = Outputs(output_dir if output_dir is not None else default_output_dir(name), notebook=name,
                   inputs=notebook_inputs(values, data), own_folder=output_dir is None)  # fmt: skip
     warnings.filterwarnings("ignore", category=LorisWarning)
+    show_tables_escaped()  # every table the notebook shows: its names as the terminal shows them
     shown = out.dir.resolve() if output_dir is None else out.dir  # as given (a report passes ".")
     print(f"data root: {data.root}\noutputs:   {shown}")
     return Session(data, out, name, dict(parameters or {}))

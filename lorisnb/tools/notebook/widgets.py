@@ -24,8 +24,9 @@ from lorisnb.core.spec.validate import present
 from lorisnb.core.spec.validate import seed as check_seed
 from lorisnb.core.trajectory.frames import PAPER_EPS, PAPER_PHI
 from lorisnb.errors import ValidationError
+from lorisnb.tools.decisions.escape import clean
 from lorisnb.tools.figures.plotting import Timeline, plot_timeline
-from lorisnb.tools.notebook.start import show_figure
+from lorisnb.tools.notebook.start import show_figure, show_tables_escaped
 
 STYLE = {"description_width": "110px"}
 OFF = -1.0  # the "off" position of the wrong re-localization slider
@@ -89,6 +90,7 @@ def _render(out: Any, results: Callable[[], tuple[pd.DataFrame, Figure]]) -> Non
     backend redraw can race with it (fast drags never show a blank or half-drawn figure)."""
     from IPython.display import display
 
+    show_tables_escaped()  # the table's names as the terminal shows them, also without setup()
     with out:  # in a kernel, an error shows in the output area, not only in the kernel's log
         table, fig = results()
         out.clear_output(wait=True)
@@ -184,7 +186,7 @@ class ThresholdExplorer:
             self.eps,
             self.phi,
             self.delta,
-            title=f"{self.scene}: eps {_eps_text(self.eps)}, phi {self.phi:g} deg, delta {self.delta:g} s, tau {self.tau:g} s",
+            title=f"{clean(self.scene)}: eps {_eps_text(self.eps)}, phi {self.phi:g} deg, delta {self.delta:g} s, tau {self.tau:g} s",
         )
         cols = ["algorithm", *keys, "cr", "cr_t", "cs_r", "c_ate_rmse", "c_matched", "matched"]
         return table[cols].sort_values("cr", ascending=False).reset_index(drop=True), fig
