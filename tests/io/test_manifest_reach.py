@@ -158,7 +158,7 @@ def test_an_estimate_linked_from_outside_the_results_folder_is_never_quoted(tmp_
         (res / "alg").symlink_to(tmp_path / "elsewhere", target_is_directory=True)
     rc = main(["evaluate", str(res), "--manifest", str(m), "--no-progress"])
     err = capsys.readouterr().err
-    how = "(a link to" if target == "secret" else "(in a linked folder, at"  # the file itself, or its folder
+    how = "(a link leading" if target == "secret" else "(in the folder alg, a link leading"  # the file, or its folder
     assert rc == 1 and f"desk.txt, line 1: not a trajectory file as expected {how}" in err, err
     assert "outside the results folder: its content is not shown" in err and "secret-first-line" not in err
     rc = main(["evaluate", str(res), "--manifest", str(m), "--manifest-outside", "--no-progress"])
@@ -220,7 +220,7 @@ def test_a_file_linked_into_a_folder_evaluated_without_a_manifest_is_never_quote
            else ["--gt", str(data.root / "tum-rgbd" / "fr2_desk_groundtruth.txt"), "--format", "tum"])  # fmt: skip
     rc = main(["evaluate", str(res), *how, "--no-progress"])
     err = capsys.readouterr().err
-    linked = "(a link to" if target == "secret" else "(in a linked folder, at"  # the file itself, or its folder
+    linked = "(a link leading" if target == "secret" else "(in the folder alg, a link leading"  # file, folder
     assert rc == 1 and f"{name}, line 1: not a trajectory file as expected {linked}" in err, err
     assert "its content is not shown)" in err and "--manifest-outside" not in err and "secret-first-line" not in err
     rc = main(["evaluate", str(res / "alg" / name), *how, "--no-progress"])  # named by the user: quoted

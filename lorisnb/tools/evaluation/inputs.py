@@ -93,6 +93,7 @@ def walk(folder: Path, inside: Iterable[Path] | None = None) -> list[Found]:
     allowed = None if inside is None else [Path(f) for f in inside]
     top = os.path.realpath(folder)
     stack = [(os.fspath(folder), top, frozenset({top}), False)]
+    seen_as = {top: os.fspath(folder)}  # a folder walked (real path) -> as found, for the loops' warning
     while stack:
         here, real_here, above, hidden_here = stack.pop()
         try:
@@ -119,9 +120,10 @@ def walk(folder: Path, inside: Iterable[Path] | None = None) -> list[Found]:
             out.append(Found(Path(e.path), real, kind, hidden))
             if kind != "folder":
                 continue
-            if real in above:
-                loops.append(f"{e.path} -> {real}")
+            if real in above:  # named as found below the folder walked, not where it lies (a link above)
+                loops.append(f"{e.path} -> {seen_as.get(real, real)}")
             elif not link or allowed is None or any(Path(real) == f or f in Path(real).parents for f in allowed):
+                seen_as.setdefault(real, e.path)
                 stack.append((e.path, real, above | {real}, hidden))
     if loops:
         warnings.warn(f"{len(loops)} linked folder(s) lead back to a folder they are in, not walked again: "
@@ -326,13 +328,27 @@ def outside_results(path: Path, results: Path) -> Path | None:
 
 
 def unquoted(exc: ParseError, real: Path, manifest: bool = True) -> ParseError:
-    """``exc`` about a file that is a link to ``real``, outside the results folder, without the
+    """``exc`` about a file found through a link leading outside the results folder (the file
+    itself, or a folder above it; ``real``: where it lies, :func:`outside_results`), without the
     text of the file it quoted: what line, not what it holds (``manifest``: with the option that
-    shows it; a folder walked without a manifest has none: the user opens the file)."""
+    shows it; a folder walked without a manifest has none: the user opens the file). It names the
+    file as found below the results folder, and the linked folder on its path by its name, never
+    where the link leads (``real`` is a folder of this machine's, not the user's results: a run
+    shared keeps it out)."""
     see = "; pass --manifest-outside, or outside=True, to see it" if manifest else ""
-    how = "a link to" if os.path.islink(exc.path) else "in a linked folder, at"  # (the file itself, or a folder above)
-    return ParseError(exc.path, exc.line, f"not a trajectory file as expected ({how} {real}, outside the results "
-                      f"folder: its content is not shown{see})")  # fmt: skip
+    link = _link_on_the_way(Path(os.fspath(exc.path))) if exc.path is not None else None
+    how = (
+        "a link leading outside the results folder"
+        if link is None or link == Path(os.fspath(exc.path))
+        else f"in the folder {link.name}, a link leading outside the results folder"
+    )  # its name: the path holds it
+    return ParseError(exc.path, exc.line, f"not a trajectory file as expected ({how}: its content is not shown{see})")
+
+
+def _link_on_the_way(path: Path) -> Path | None:
+    """The nearest of ``path`` and the folders above it (as written, not resolved) that is a link:
+    the one an input was found through; None if none is."""
+    return next((p for p in (path, *path.parents) if os.path.islink(p)), None)
 
 
 def missing_note(folder: Path, algorithm: str, absent: list[tuple[str, str]], taken: Iterable[str] = ()) -> str:
