@@ -77,7 +77,8 @@ def test_a_root_written_in_the_manifest_elsewhere_is_refused_one_from_the_enviro
     m = manifest(tmp_path / "shared" / "m", "notes.txt", root=str(secret.parent))
     with pytest.raises(ParseError, match="root = .* lies outside the manifest's folder"):
         read_manifest(m)
-    monkeypatch.setenv("LAB_ROOT", str(secret.parent))  # the user's own setting: trusted
+    monkeypatch.setenv("LAB_ROOT", str(secret.parent))  # the user's own setting, named as a dataset's: trusted
+    monkeypatch.setenv("LORISNB_DATASET_VARIABLES", "LAB_ROOT")
     m = manifest(tmp_path / "shared" / "m", "notes.txt", root="${LAB_ROOT}")
     assert read_manifest(m).sessions[0].groundtruth == secret.resolve()
 
@@ -104,6 +105,7 @@ def test_a_root_in_a_variable_that_names_no_dataset_is_confined_like_a_written_o
         read_manifest(m)
     _refused_unquoted(tmp_path, m, capsys)
     monkeypatch.setenv("LAB_ROOT", str(secret.parent))  # a dataset folder's variable: the user's own
+    monkeypatch.setenv("LORISNB_DATASET_VARIABLES", "LAB_ROOT")
     m = manifest(tmp_path / "shared" / "m", secret.name, root="${LAB_ROOT}")
     assert read_manifest(m).sessions[0].groundtruth == secret.resolve()
 
@@ -113,6 +115,7 @@ def test_a_root_that_leaves_the_folder_its_variable_names_is_refused(tmp_path, s
     lab_root = tmp_path / "lab-data"
     lab_root.mkdir()
     monkeypatch.setenv("LAB_ROOT", str(lab_root))
+    monkeypatch.setenv("LORISNB_DATASET_VARIABLES", "LAB_ROOT")
     up = "/".join([".."] * len(lab_root.parts)) + str(secret.parent)
     for root in ("${LAB_ROOT}/" + up, "$LAB_ROOT/../private"):
         m = manifest(tmp_path / "shared" / "m", "notes.txt", root=root)
@@ -242,6 +245,7 @@ def test_a_relative_root_variable_names_a_folder_of_the_current_directory(tmp_pa
         assert all(s.groundtruth.parent == here / "tumroot" for s in m.sessions), m.sessions
     else:
         monkeypatch.setenv("MY_ROOT", "tumroot/")
+        monkeypatch.setenv("LORISNB_DATASET_VARIABLES", "MY_ROOT")  # named a dataset's folder by the user
         m = read_manifest(manifest(tmp_path / "elsewhere", "gt.txt", root="${MY_ROOT}/sub"))
         assert m.sessions[0].groundtruth == here / "tumroot" / "sub" / "gt.txt"
 

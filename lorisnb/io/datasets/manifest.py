@@ -51,6 +51,11 @@ from lorisnb.io.readers.plain import TRAJECTORY_FORMATS
 from lorisnb.io.readers.registry import suffixes
 
 BUILT_IN = ("openloris", "euroc-vicon-room1", "euroc-vicon-room2", "tum-fr1-office")
+#: The environment variables naming a dataset's folder that lorisnb knows (its built-in manifests'
+#: ``root``, its data root): a manifest's ``root`` may lie anywhere inside the folder one names.
+DATASET_VARIABLES = ("EUROC_ROOT", "TUM_ROOT", "LORISNB_DATA")
+#: The environment variable listing more of them, the user's own (``KITTI_ROOT MYLAB_ROOT``).
+ALLOW_VARIABLES = "LORISNB_DATASET_VARIABLES"
 SUFFIX = {name: suffixes(name)[0] for name in TRAJECTORY_FORMATS}  # an estimate file's default suffix
 TOP_KEYS = {"name", "scene", "root", "lifelong", "groundtruth_format", "estimate_format", "eps", "phi", "source",
             "conventions", "transform", "session", "groundtruth_topic", "estimate_topic", "groundtruth_tf",
@@ -228,10 +233,13 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
 
     root = named_entry(path.parent, Path(expanded).expanduser()).resolve()  # a name in another Unicode form too
     trusted = [path.parent.resolve(), *_data_root()]  # the manifest's folder and lorisnb's data root
-    if not outside:  # a folder an environment variable names is the user's own: the root may lie inside it
+    if not outside:  # a folder a dataset's variable names is the user's own: the root may lie inside it
         yours = [_folder(os.environ[v]).resolve() for v in _variables(root_text)]
-        _confined(root, [*trusted, *yours], path, f"root = {root_text!r}",
-                  "the manifest's folder" + ", the dataset folders its environment variables name (*_ROOT)" * bool(yours))  # fmt: skip
+        others = [v for v in _variables(root_text, known=False) if v not in _variables(root_text)]
+        allow = (f" ({', '.join(others)} is not a dataset folder's variable lorisnb knows: {', '.join(DATASET_VARIABLES)}"
+                 f"; if it names your dataset's folder, allow it: {ALLOW_VARIABLES}={others[0]})") if others else ""  # fmt: skip
+        _confined(root, [*trusted, *yours], path, f"root = {root_text!r}{allow}",
+                  "the manifest's folder" + ", the dataset folders its environment variables name" * bool(yours))  # fmt: skip
     allowed = [root, *trusted]
     gt_fmt = _fmt(raw.get("groundtruth_format", "tum"), "groundtruth_format", path)
     est_fmt = _fmt(raw.get("estimate_format", "tum"), "estimate_format", path)
@@ -336,17 +344,32 @@ def _expand(root_text: str) -> str:
     return os.path.expandvars(root_text)
 
 
-def _variables(text: str) -> list[str]:
-    """The environment variables ``text`` names (``$NAME`` or ``${NAME}``) that are set and name a
-    dataset's folder: ``*_ROOT`` (``EUROC_ROOT``, ``TUM_ROOT``, as the built-in manifests use) or
-    ``LORISNB_DATA``. A manifest received from someone else chooses its variables: ``${HOME}`` or
-    ``${PWD}`` name folders of the user's that are no dataset, so a root under them must lie inside
-    the manifest's folder or the data root like a root written out."""
+def _variables(text: str, known: bool = True) -> list[str]:
+    """The environment variables ``text`` names (``$NAME`` or ``${NAME}``) that are set, and (``known``)
+    name a dataset's folder: :data:`DATASET_VARIABLES` (``EUROC_ROOT``, ``TUM_ROOT``, as the built-in
+    manifests use, and ``LORISNB_DATA``) and those the user lists in ``LORISNB_DATASET_VARIABLES``
+    (:func:`dataset_variables`). A manifest received from someone else chooses its variables:
+    ``${HOME}``, ``${PWD}`` or ``${PYENV_ROOT}`` name folders of the user's that are no dataset, so a
+    root under them must lie inside the manifest's folder or the data root like a root written out."""
     names = (m.group(1) or m.group(2) for m in _VARIABLE.finditer(text))
+    allowed = dataset_variables() if known else None
     return [
-        n for n in names
-        if (n.endswith("_ROOT") or n == "LORISNB_DATA") and n in os.environ and os.environ[n].strip()
+        n for n in dict.fromkeys(names)
+        if (allowed is None or n in allowed) and n in os.environ and os.environ[n].strip()
     ]  # fmt: skip
+
+
+def dataset_variables() -> tuple[str, ...]:
+    """The environment variables whose folder a manifest's ``root`` may lie anywhere inside:
+    :data:`DATASET_VARIABLES` and the names ``LORISNB_DATASET_VARIABLES`` lists (separated by spaces,
+    commas or colons: ``KITTI_ROOT,MYLAB_ROOT``), each checked to be a variable's name."""
+    given = os.environ.get(ALLOW_VARIABLES, "")
+    extra = [n for n in re.split(r"[\s,:]+", given) if n]
+    for n in extra:
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", n):
+            raise ValidationError(f"{ALLOW_VARIABLES}={given!r}: {n!r} is not an environment variable's name; "
+                                  "expected names such as KITTI_ROOT, separated by spaces or commas")  # fmt: skip
+    return tuple(dict.fromkeys([*DATASET_VARIABLES, *extra]))
 
 
 def _data_root() -> list[Path]:
