@@ -387,9 +387,10 @@ def show_tables_escaped() -> None:
     except ImportError:
         return
     shell = get_ipython()
-    if shell is None:
+    formatter = getattr(shell, "display_formatter", None)  # none outside IPython, or in a shell without one
+    if formatter is None:
         return
-    formatters = shell.display_formatter.formatters
+    formatters = formatter.formatters
 
     def as_html(table: pd.DataFrame) -> str | None:
         return shown_table(table)._repr_html_()
