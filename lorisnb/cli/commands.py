@@ -574,9 +574,10 @@ def _gate(run_dir: Path) -> int:
 def cmd_verify(args: argparse.Namespace) -> int:
     """Re-check a run's inputs against run.json, and its own files against its marker: exit 1 if
     any changed, is missing, or appeared in a folder the run read or in the run."""
-    from lorisnb.tools.report.provenance import read_run_json, unchecked_baseline, verify_run
+    from lorisnb.tools.report.provenance import read_run_json, run_folder, unchecked_baseline, verify_run
 
     record = read_run_json(args.run)
+    run_dir = run_folder(args.run)  # RUN may be its run.json
     roots: dict[str, str] = {}
     for name, folder in args.root or []:  # a name twice: the last silently won
         if name in roots and Path(roots[name]).resolve() != Path(folder).resolve():
@@ -589,13 +590,13 @@ def cmd_verify(args: argparse.Namespace) -> int:
                 raise ValidationError(f"--{name} {folder} and --root {name} {roots[name]} name two folders; give one")
             roots[name] = folder
     problems = verify_run(args.run, roots)
-    for path, what in problems:
-        print(f"{what}: {clean(path)}")
     from lorisnb.tools.report.build import not_as_written
 
-    edited = not_as_written(Path(args.run))  # the run's own files against its marker, as render checks them
+    edited = not_as_written(run_dir)  # the run's own files against its marker, as render checks them
+    for path, what in problems:
+        print(f"{what}: {clean(path)}")
     for rel in edited or []:
-        print(f"edited: {clean(Path(args.run) / rel)}")
+        print(f"edited: {clean(run_dir / rel)}")
     if edited is None:
         print("note: the run's marker lists no files (a run of an earlier lorisnb): its own files are not checked",
               file=sys.stderr)  # fmt: skip

@@ -75,6 +75,8 @@ from lorisnb.tools.report.provenance import (
     checksums,
     input_files,
     links_out,
+    read_run_file,
+    run_file,
     run_record,
     sha256,
     where_it_is,
@@ -126,7 +128,9 @@ def _protected(run_dir: Path, extra: list[Path]) -> str | None:
 
 def _files(folder: Path) -> dict[str, str]:
     """Every file, link and empty folder below ``folder`` (its path inside, POSIX) -> its SHA-256
-    (a link's: of its target's name; an empty folder's: "folder"); the run marker aside."""
+    (a link's: of its target's name; an empty folder's: "folder"); the run marker aside. A FIFO or
+    a device in it (a received run: tar keeps them) is a :class:`~lorisnb.errors.ValidationError`
+    naming it, never opened (:func:`~lorisnb.tools.report.provenance.run_file`)."""
     out: dict[str, str] = {}
     for top, dirs, files in os.walk(folder):
         here = Path(top)
@@ -134,7 +138,8 @@ def _files(folder: Path) -> dict[str, str]:
             p = here / n
             rel = p.relative_to(folder).as_posix()
             if rel != RUN_MARKER:
-                out[rel] = hashlib.sha256(os.readlink(p).encode()).hexdigest() if p.is_symlink() else sha256(p)
+                out[rel] = (hashlib.sha256(os.readlink(p).encode()).hexdigest() if p.is_symlink()
+                            else sha256(run_file(folder, p)))  # fmt: skip
         if not dirs and not files and here != folder:
             out[here.relative_to(folder).as_posix() + "/"] = "folder"
     return out
@@ -153,9 +158,14 @@ def _write_marker(folder: Path, files: Mapping[str, str] | None = None, out: Pat
 def not_as_written(run_dir: Path) -> list[str] | None:
     """The files of a run folder (relative paths) that its run did not write or that changed since,
     as its marker lists them with their checksums; None where the marker lists nothing (a run of an
-    earlier lorisnb, or a damaged marker)."""
+    earlier lorisnb, or a damaged marker). A marker, or a file of the run, that is a link leading out
+    of it, a FIFO or a device is a :class:`~lorisnb.errors.ValidationError` naming it, unread
+    (:func:`~lorisnb.tools.report.provenance.read_run_file`)."""
+    marker = run_dir / RUN_MARKER
     try:
-        wrote = json.loads((run_dir / RUN_MARKER).read_text()).get("files")
+        wrote = json.loads(read_run_file(run_dir, marker)).get("files")
+    except LorisError:
+        raise
     except (OSError, ValueError, AttributeError):
         wrote = None
     if not isinstance(wrote, dict):
@@ -532,6 +542,9 @@ def render_run(run: str | os.PathLike[str]) -> list[Path]:
     from lorisnb.tools.report.html import export_html
 
     folder = Path(run)
+    for f in (RUN_MARKER, "index.html"):  # a link leading out, a FIFO or a device: refused, never opened
+        if os.path.lexists(folder / f):
+            run_file(folder, folder / f)
     if not (folder / RUN_MARKER).is_file() or not (folder / "index.html").is_file():
         raise LorisError(f"{folder}: not a run folder written by lorisnb report (no {RUN_MARKER} and index.html)")
     out = links_out(folder)  # a page written through one lands elsewhere; a notebook read through one is not the run's
@@ -583,8 +596,9 @@ def _readable_notebook(nb: Path) -> None:
     from lorisnb.tools._extras import require
 
     nbformat = require("nbformat")
+    text = read_run_file(nb.parent.parent, nb)  # a FIFO or a device: refused, never opened
     try:
-        nbformat.validate(nbformat.read(str(nb), as_version=4))
+        nbformat.validate(nbformat.reads(text.decode("utf-8"), as_version=4))
     except OSError:
         raise
     except Exception as exc:  # nbformat's errors (not JSON, not a notebook, an invalid one) have no common base

@@ -28,6 +28,7 @@ import datetime as _dt
 import hashlib
 import json
 import os
+import stat
 import subprocess
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -44,12 +45,46 @@ KEYS = ("command", "lorisnb_version", "commit", "spec", "data_root", "created", 
 
 
 def sha256(path: Path, chunk: int = 1 << 20) -> str:
-    """The SHA-256 of a file's bytes, hex."""
+    """The SHA-256 of a regular file's bytes, hex; a FIFO or a device (bytes without end, or never
+    any) is a :class:`~lorisnb.errors.ValidationError` naming it, never waited on
+    (:func:`open_regular`)."""
     h = hashlib.sha256()
-    with open(path, "rb") as f:
+    with open_regular(path) as f:
         while block := f.read(chunk):
             h.update(block)
     return h.hexdigest()
+
+
+#: Why a run folder's FIFO, device or socket is not read (the end of :func:`run_file`'s message).
+NOT_REGULAR = ("not a regular file (a FIFO, a device): a run folder lorisnb writes holds none (a received run?); it "
+               "was not read. Remove it, or copy the run again from where it came")  # fmt: skip
+
+
+def open_regular(path: Path) -> Any:
+    """``path`` opened for reading in binary, if it is a regular file: checked before it is opened
+    (a FIFO waits for a writer when opened, a device has no end) and again on what was opened (it
+    may have been replaced meanwhile), opened without waiting; else a
+    :class:`~lorisnb.errors.ValidationError` naming it."""
+    if not stat.S_ISREG(os.stat(path).st_mode):
+        raise ValidationError(f"{path}: {NOT_REGULAR}")
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise ValidationError(f"{path}: {NOT_REGULAR}")
+        if hasattr(os, "set_blocking"):
+            os.set_blocking(fd, True)
+        return os.fdopen(fd, "rb")
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+def read_run_file(folder: str | os.PathLike[str], path: Path) -> bytes:
+    """The bytes of ``path``, a file of the run folder ``folder``, read once :func:`run_file` has
+    found it inside the folder and a regular file (:func:`open_regular`)."""
+    with open_regular(run_file(folder, path)) as f:
+        data: bytes = f.read()
+    return data
 
 
 def git_commit(start: Path | None = None) -> str | None:
@@ -216,11 +251,10 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
     :class:`~lorisnb.errors.ParseError` naming the file and what was expected if it is not one."""
     p = Path(run)
     f = p / RUN_JSON if p.is_dir() else p
-    if not f.is_file():
+    if not os.path.lexists(f) or os.path.isdir(f):
         raise LorisError(f"{p}: no {RUN_JSON} here; expected a run folder written by lorisnb report")
-    run_file(f.parent, f)
     try:
-        record = json.loads(f.read_text(encoding="utf-8"))
+        record = json.loads(read_run_file(f.parent, f).decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ParseError(f, None, f"not valid JSON ({exc}); expected the run.json lorisnb report writes") from None
     if not isinstance(record, dict):
@@ -270,16 +304,31 @@ def where_it_is(path: Path) -> Path:
     return Path(os.path.abspath(path))
 
 
+def run_folder(run: str | os.PathLike[str]) -> Path:
+    """The run folder of ``run``: a run folder, or its run.json (the folder holding it)."""
+    p = Path(run)
+    return p if p.is_dir() else p.parent
+
+
 def run_file(folder: str | os.PathLike[str], path: Path) -> Path:
-    """``path``, a file of the run folder ``folder``, if it lies inside it (links resolved); else a
-    :class:`~lorisnb.errors.ValidationError` naming it. Every file a command reads from a run folder
-    it received (run.json, its tables) passes here: a link in it that leads elsewhere is refused,
-    never read, and no message quotes what it leads to."""
+    """``path``, a file (or folder) of the run folder ``folder``, if it lies inside it (links
+    resolved) and is a regular file or a folder; else a :class:`~lorisnb.errors.ValidationError`
+    naming it. Every file a command reads from a run folder it received (run.json, its marker,
+    pages, notebooks, tables) passes here: a link in it that leads elsewhere is refused, never
+    read, and no message quotes what it leads to; a FIFO or a device (which a reader would wait on
+    for ever, or read without end) is refused without being opened. A path that does not exist
+    passes (the caller says what is missing)."""
     inside = Path(folder).resolve()
     if not _inside(path.resolve(), [inside]):
         raise ValidationError(f"{path}: a link leading outside the run folder {folder}; a run folder lorisnb writes "
                               "holds none (a received run?): nothing outside it is read. Replace the link by the "
                               "file, if you trust it")  # fmt: skip
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return path
+    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        raise ValidationError(f"{path}: {NOT_REGULAR}")
     return path
 
 
@@ -319,7 +368,7 @@ def verify_run(
     elsewhere is a :class:`~lorisnb.errors.ValidationError` before any file is read, and a file
     found through a link that leads outside is listed as 'outside', unread."""
     record = read_run_json(run)
-    folder = Path(run) if Path(run).is_dir() else Path(run).parent
+    folder = run_folder(run)
     given = {k: Path(v).resolve() for k, v in (roots or {}).items()}
     for name, p in given.items():
         if not p.exists():
