@@ -29,10 +29,13 @@ from lorisnb.tools.notebook.grids import check_grid
 __all__ = [
     "check_parameters",
     "check_values",
+    "default_eps",
     "evaluation_spec",
     "existing",
     "papermill_parameters",
     "refuse_scenes_without_groundtruth",
+    "refuse_simulated_off",
+    "simulated_on",
     "user_path",
 ]
 
@@ -72,6 +75,10 @@ NEEDS = {"fmt": "groundtruth", "gt_fmt": "groundtruth", "ordslam_fps": "ordslam_
 #: ``scene``, ``compare_algorithms``' ``sim_scene``): refused up front when the data root holds no
 #: ground truth for it (:func:`refuse_scenes_without_groundtruth`), as a ``scenes`` filter is.
 SCENE_PARAMETERS = ("scene", "sim_scene")
+#: Parameters of ``compare_algorithms``' simulated section, which runs only when it is on
+#: (:func:`simulated_on`): their defaults are not checked against the data otherwise, and a value
+#: given for one while it is off is refused (it would be ignored).
+SIMULATED = ("sim_scene", "sim_trials", "sim_eps")
 #: Parameters of the leaderboard checked and normalized by the validators of ``compare`` and ``diff``.
 _VALUES: dict[str, Any] = {
     "metric": lambda v: validate.choice("metric", v, WEIGHTS),
@@ -231,6 +238,7 @@ def check_parameters(
         if parameters.get(name) is not None and parameters.get(partner) is None and name in declared:
             raise ValidationError(f"-p {name}: only applies with -p {partner} (the notebook ignores it otherwise)")
     check_values(parameters, notebooks, text_numbers=False)
+    refuse_simulated_off(parameters)
     if any(parameters.get(n) is not None for n in SCENE_PARAMETERS):  # a scene without ground truth: refused now
         try:
             data = find_data(parameters.get("data_root"))
@@ -242,6 +250,41 @@ def check_parameters(
         if name in _VALUES and value is not None:
             out[name] = _VALUES[name](value)
     return out
+
+
+def simulated_on(values: Mapping[str, Any]) -> bool:
+    """Whether ``compare_algorithms``' simulated section runs: ``simulated`` as given, else (None, its
+    default) only without ``results_dir`` (on the bundled data, not on your own results)."""
+    given = values.get("simulated")
+    return values.get("results_dir") is None if given is None else validate.flag("simulated", given)
+
+
+def refuse_simulated_off(values: Mapping[str, Any]) -> None:
+    """Refuse a value given for a parameter of the simulated section (:data:`SIMULATED`) while the
+    section is off (``results_dir`` given, or ``simulated`` false): the notebook would ignore it. For
+    the names given only (``-p``, papermill's injected ones), never for the notebook's defaults."""
+    if simulated_on(values):
+        return
+    for name in SIMULATED:
+        if values.get(name) is not None:
+            why = "simulated is false" if values.get("simulated") is not None else "results_dir is given"
+            raise ValidationError(f"-p {name}: only applies to the simulated section of compare_algorithms, which is "
+                                  f"off ({why}); give -p simulated true to run it, or leave -p {name} out")  # fmt: skip
+
+
+def default_eps(eps: Any, groundtruth: Any = None, manifest: Any = None, fmt: str | None = "tum") -> Any:
+    """``evaluate_my_results``' eps: as given (``"paper"`` on a TUM pair is still refused, naming the
+    scene); None, its default, is what applies to the inputs: the paper's 1/3/5 m (``"paper"``) for
+    OpenLORIS result files (no ``groundtruth`` nor ``manifest``, an OpenLORIS pair, the ``openloris``
+    manifest), else None: the spec's, as ``lorisnb evaluate`` takes it (a manifest's eps, else the
+    conventions': inf)."""
+    if eps is not None:
+        return eps
+    if manifest is not None:
+        from lorisnb.io.datasets.manifest import read_manifest
+
+        return "paper" if read_manifest(manifest).openloris else None
+    return "paper" if groundtruth is None or fmt == "openloris" else None
 
 
 def refuse_scenes_without_groundtruth(values: Mapping[str, Any], data: DataPaths) -> None:
@@ -256,8 +299,8 @@ def refuse_scenes_without_groundtruth(values: Mapping[str, Any], data: DataPaths
 
     have = data.scenes_with_groundtruth()
     for name in SCENE_PARAMETERS:
-        if values.get(name) is None:
-            continue
+        if values.get(name) is None or (name in SIMULATED and not simulated_on(values)):
+            continue  # (a section that does not run loads no scene: its default is not refused)
         scene = validate.choice(name, values[name], SCENES)
         if scene not in have:
             raise ValidationError(
