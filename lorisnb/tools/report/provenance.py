@@ -243,6 +243,10 @@ SHAPES: dict[str, tuple[Any, str]] = {
     "notebooks": (_is_str_map, "an object notebook name -> status"),
     "input_roots": (lambda v: isinstance(v, list) and all(map(_is_path, v)), "a list of paths (without a NUL byte)"),
     "baseline_inputs": (_is_path_map, "an object path -> SHA-256, each path without a NUL byte"),
+    "roots": (
+        lambda v: isinstance(v, dict) and all(x is None or _is_path(x) for x in v.values()),
+        "an object root name -> its absolute folder (a run made with --absolute-paths) or null",
+    ),
 }
 
 
@@ -357,8 +361,10 @@ def verify_run(
         run: the run folder (or its run.json).
         roots: where the run's named roots are here (name -> folder: ``data``, ``results``...).
             ``{name}/inside`` keys are read below them; a key relative to no root (a run of an
-            earlier lorisnb) below ``roots["data"]``; an absolute key only if it lies inside one
-            of ``roots`` or the run folder (a run made with ``--absolute-paths``).
+            earlier lorisnb) below ``roots["data"]``; an absolute key (a run made with
+            ``--absolute-paths``) below the folder run.json's ``roots`` records for a root named
+            here is read below that root here (the run was moved), else only if it lies inside
+            one of ``roots`` or the run folder.
 
     The files of the earlier run a run's verdict was made against (``baseline_inputs``, ``report
     --baseline``) are checked where ``roots`` names the ``baseline`` folder, else not (the caller
@@ -381,6 +387,26 @@ def verify_run(
         return _inside(p.resolve(), allowed)
 
     given.setdefault("run", folder.resolve())
+    # a run made with --absolute-paths: each root's folder on the machine it was made on, innermost first
+    recorded = sorted(((k, Path(os.path.normpath(v))) for k, v in (record.get("roots") or {}).items()
+                       if v is not None and os.path.isabs(v)), key=lambda r: -len(r[1].parts))  # fmt: skip
+
+    def moved(key: str) -> tuple[str, Path, Path | None] | None:
+        """(root name, its recorded folder, the file below that root here or None where the root is
+        not given) for an absolute key below a root run.json records; None below none of them."""
+        p = Path(os.path.normpath(key))
+        for name, was in recorded:
+            if p == was or was in p.parents:
+                return name, was, (given[name] / p.relative_to(was) if name in given else None)
+        return None
+
+    def as_recorded(p: Path) -> Path:
+        """A file found here below a root given here, as the run keyed it: below that root's
+        recorded folder (a moved --absolute-paths run), else as it is."""
+        for name, was in recorded:
+            if name in given and (p == given[name] or given[name] in p.parents):
+                return was / p.relative_to(given[name])
+        return p
 
     def place(key: str) -> Path:
         named = split_key(key)
@@ -389,6 +415,9 @@ def verify_run(
                 raise ValidationError(f"{key}: run.json reads it below the run's data root; give the data root here "
                                       "with --data DIR")  # fmt: skip
             return resolve_key(f"{mark('data')}/{key}", given) or Path(key)
+        below = moved(key) if named is None else None
+        if below is not None and below[2] is not None:  # a moved --absolute-paths run: below that root here
+            return below[2]
         p = resolve_key(key, given)
         if p is None:
             name = named[0] if named else ""
@@ -397,6 +426,19 @@ def verify_run(
             raise ValidationError(f"{key}: run.json reads it below the root {mark(name)}; say where that root is "
                                   f"here with {option}{env}")  # fmt: skip
         if not _inside(Path(os.path.abspath(p)), allowed):
+            if below is not None:  # below a root the run records by its folder there: say where that root is here
+                name = below[0]
+                option = f"--{name} DIR" if name in ("data", "results") else f"--root {name} DIR"
+                raise ValidationError(f"{key}: run.json names a file outside the run folder and the roots given here, "
+                                      "by an absolute path of the machine the run was made on (a run made with "
+                                      f"--absolute-paths), below its root {mark(name)} ({below[1]}); say where that "
+                                      f"root is here with {option}")  # fmt: skip
+            if named is None:
+                raise ValidationError(f"{key}: run.json names a file outside the run folder and the roots given here, "
+                                      "by an absolute path of the machine the run was made on, below none of the roots "
+                                      "it records (an edited run.json?); verify reads only those. If that file is at "
+                                      "that path here, give the folder holding it with --root NAME DIR; else verify "
+                                      "cannot check it here: make the run again without --absolute-paths")  # fmt: skip
             raise ValidationError(f"{key}: run.json names a file outside the run folder and the roots given here; "
                                   "verify reads only those: give a folder holding it with --data, --results or --root, "
                                   "if you trust it")  # fmt: skip
@@ -427,19 +469,23 @@ def verify_run(
         # runs), compared in Unicode NFC (a folder copied by a Mac or rsync may spell algé otherwise)
         named = any(split_key(k) for k in [*record["inputs"], *record["input_roots"]])
         style: Mapping[str, Path] | Path | None = given if named else None if "roots" in record else given.get("data")
-        recorded = {validate.label(k) for k in record["inputs"]}
+
+        def key_of(f: Path) -> str:  # absolute keys: a file below a root given here, as keyed where the run was made
+            return _key(as_recorded(f), None) if style is None else _key(f, style)
+
+        recorded_keys = {validate.label(k) for k in record["inputs"]}
         keyed: dict[str, bool] = {}
         files, unwalked = _listing(listed, resolve=False, inside=allowed)  # a linked folder leading elsewhere:
         for p in unwalked:  # listed, not walked (a folder of estimates linked in from elsewhere since the run)
-            key = _key(where_it_is(p), style)
+            key = key_of(where_it_is(p))
             below = (validate.label(key) + "/", validate.label(str(where_it_is(p))) + "/")
-            if not any(k.startswith(below) for k in recorded):  # its recorded inputs are listed 'outside' already
+            if not any(k.startswith(below) for k in recorded_keys):  # its recorded inputs are listed 'outside' already
                 keyed[key] = False
         for p in files:
             inside = readable(p)
             forms = [where_it_is(p), p.parent.resolve() / p.name] + ([p.resolve()] if inside else [])
-            keys = [validate.label(_key(f, style)) for f in forms]  # as the report keys it; as earlier ones did
-            if not recorded.intersection(keys):
-                keyed[_key(where_it_is(p), style)] = inside
+            keys = [validate.label(key_of(f)) for f in forms]  # as the report keys it; as earlier ones did
+            if not recorded_keys.intersection(keys):
+                keyed[key_of(where_it_is(p))] = inside
         problems += [(key, "added" if keyed[key] else "outside") for key in sorted(keyed)]
     return sorted(set(problems))
