@@ -58,7 +58,7 @@ def tables_only(spec: Any) -> bool:
 def _run_evaluation(
     args: argparse.Namespace, files: list[str], folders: tuple[str, ...] = (),
     swept: Callable[[Any], str] | None = None, side: str = "", statistics: Callable[[Any], bool] | None = None,
-    poses: Callable[[Any], bool] | None = None,
+    poses: Callable[[Any], bool] | None = None, refuse: Callable[[Any], None] | None = None,
 ) -> tuple[Any, list[str]]:  # fmt: skip
     """Every input kind through one spec (:func:`spec_from_args`) and one runner: OpenLORIS result
     files, ``--gt`` pairs or a ``--manifest``'s sessions. The output options ``files`` and
@@ -69,7 +69,8 @@ def _run_evaluation(
     compute them; :func:`~lorisnb.tools.evaluation.runner.evaluate`'s ``statistics``). ``poses``:
     whether the command reads each pose's errors once the files are evaluated, given the spec (by
     default it does; else only the scores at the spec's setting travel back from the workers:
-    ``evaluate``'s ``keep_poses``)."""
+    ``evaluate``'s ``keep_poses``). ``refuse``: the command's own refusals of its options under the
+    spec, made with the spec's (before any input is read: exit 2 means nothing was read)."""
     from lorisnb.io.datasets.manifest import openloris_preset_refusal, read_manifest
     from lorisnb.tools.evaluation.result import said_notes
     from lorisnb.tools.evaluation.runner import (
@@ -109,6 +110,8 @@ def _run_evaluation(
     if base is not None:  # refused options the manifest set are said to be its own
         refuse_over_manifest(spec, read_manifest(args.manifest, outside=outside), spec_given(args), kind, surface="cli")
     spec.refuse_inapplicable(kind, surface="cli")
+    if refuse is not None:
+        refuse(spec)
     inputs = list(args.paths)  # the options' inputs too (check_outputs), and a manifest's ground truth
     if manifest is not None:
         inputs += [str(manifest.path), *(str(s.groundtruth) for s in manifest.sessions)]
@@ -187,10 +190,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     def poses(spec: Any) -> bool:  # each pose's errors read here: else only the table's scores leave the workers
         return tables_only(spec) or bool(args.kitti_plot or getattr(args, "relative", False) or args.relative_lengths)
 
-    ev, notes = _run_evaluation(args, ["csv", "kitti_plot"], folders=("parquet",), statistics=statistics, poses=poses)
+    def refuse(spec: Any) -> None:  # before any input is read
+        if args.kitti_plot and spec.preset_name != "kitti":
+            raise ValidationError("--kitti-plot: the KITTI metric's plot, only with --conventions kitti")
+
+    ev, notes = _run_evaluation(args, ["csv", "kitti_plot"], folders=("parquet",), statistics=statistics, poses=poses,
+                                refuse=refuse)  # fmt: skip
     kitti = ev.spec.preset_name == "kitti"
-    if args.kitti_plot and not kitti:
-        raise ValidationError("--kitti-plot: the KITTI metric's plot, only with --conventions kitti")
     table = ev.sequences() if whole_table(ev.spec) else None
     # the rows printed: error statistics only where printed (evo's); without them a setting's scores
     # take about a quarter of the time (lorisnb.core.lifelong.scoring.score's ``stats``): the whole
