@@ -32,7 +32,7 @@ from lorisnb.io.writers import name_output, naming, overlap, remove_partial, wri
 from lorisnb.tools.decisions.history import earlier_runs
 from lorisnb.tools.evaluation.pool import start_context
 from lorisnb.tools.evaluation.runner import check_filters, result_files
-from lorisnb.tools.notebook.params import check_parameters
+from lorisnb.tools.notebook.params import check_parameters, refuse_simulated_off
 from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV, RUN_MARKER
 from lorisnb.tools.report import kernels as warm_kernels
 from lorisnb.tools.report.baseline import since_baseline
@@ -410,6 +410,7 @@ def run_report(
             raise ValidationError("--results and -p results_dir name two folders; give one")
         if results is not None and "results_dir" in declared:
             params["results_dir"] = str(Path(results).resolve())
+            refuse_simulated_off(params)  # a simulated section's value given with --results: refused now
         try:
             data = find_data(params.get("data_root"))
         except DataNotFoundError:
