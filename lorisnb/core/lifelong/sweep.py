@@ -88,8 +88,8 @@ def check_sweep_size(
 ) -> None:
     """Refuse a sweep that would need more than ``max_bytes`` (:func:`sweep_bytes`), saying how much
     it would need and how to stream it instead; ``streamed``: ``files`` are one group of a sweep
-    already streamed one group at a time (:func:`lorisnb.tools.evaluation.streaming.sweep_to_dataset`),
-    which fewer files or streaming cannot help."""
+    already streamed one group at a time (:func:`lorisnb.tools.evaluation.streaming.sweep_to_parquet`,
+    :func:`~lorisnb.tools.evaluation.streaming.sweep_to_csv`), which fewer files or streaming cannot help."""
     need = sweep_bytes(files, shape, columns)
     if need > max_bytes:
         E, P, D, T = shape

@@ -1,6 +1,6 @@
 """Timeline data of the paper's Fig. 2 and Fig. 3: when each algorithm tracked correctly, when it
 was wrong, and where it (re-)localized. Pure functions returning arrays and DataFrames; the
-drawing is in :mod:`lorisnb.plotting`.
+drawing is in :mod:`lorisnb.tools.figures.plotting`.
 
 A pose at t_k stands for ``[t_k, min(t_{k+1}, t_k + delta)]`` (its validity window, Eq. 2);
 consecutive windows that touch and agree in correctness merge into one segment.
