@@ -2,7 +2,9 @@
 aligns poses (:mod:`.choices`), and evo's own rules for matching in time (:mod:`.evo_sync`), its
 steps inside the pipeline (:mod:`.evo_steps`) and its remaining options (:mod:`.evo_options`).
 
-May import: the other core sub-packages but :mod:`lorisnb.core.stats` (enforced).
+May import: :mod:`lorisnb.core.alignment`, :mod:`lorisnb.core.metrics`, :mod:`lorisnb.core.pipeline`,
+:mod:`lorisnb.core.spec`, :mod:`lorisnb.core.trajectory` and :mod:`lorisnb.errors`; never
+:mod:`lorisnb.core.stats` (enforced).
 """
 
 from typing import TYPE_CHECKING

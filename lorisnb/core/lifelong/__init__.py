@@ -3,5 +3,7 @@
 (:mod:`.missing`, :mod:`.coverage`), the timelines of Fig. 2/3 (:mod:`.timeline`), threshold
 sweeps (:mod:`.sweep`) and CR surfaces (:mod:`.surfaces`).
 
-May import: the other core sub-packages but :mod:`lorisnb.core.stats` (enforced).
+May import: :mod:`lorisnb.core.alignment`, :mod:`lorisnb.core.metrics`, :mod:`lorisnb.core.pipeline`,
+:mod:`lorisnb.core.spec`, :mod:`lorisnb.core.trajectory` and :mod:`lorisnb.errors`; never
+:mod:`lorisnb.core.stats` (enforced).
 """

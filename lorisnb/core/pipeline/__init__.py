@@ -2,7 +2,9 @@
 steps (:mod:`.steps`), with plausibility checks (:mod:`.checks`, :mod:`.plausibility`) and the
 data model every layer shares (:mod:`.model`).
 
-May import: the other core sub-packages but :mod:`lorisnb.core.stats` (enforced).
+May import: :mod:`lorisnb.core.alignment`, :mod:`lorisnb.core.conventions`, :mod:`lorisnb.core.metrics`,
+:mod:`lorisnb.core.spec`, :mod:`lorisnb.core.trajectory` and :mod:`lorisnb.errors`; never
+:mod:`lorisnb.core.stats` (enforced).
 """
 
 from typing import TYPE_CHECKING

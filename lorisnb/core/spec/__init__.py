@@ -2,8 +2,10 @@
 (:mod:`.evalspec`), its evo options (:mod:`.evo`), its documentation table (:mod:`.table`), and the
 validation of every user value (:mod:`.validate`).
 
-May import: the other core sub-packages but :mod:`lorisnb.core.stats` (enforced); the spec's
-values name the choices the conventions and metrics define.
+May import: :mod:`lorisnb.core.alignment`, :mod:`lorisnb.core.conventions`, :mod:`lorisnb.core.metrics`,
+:mod:`lorisnb.core.pipeline`, :mod:`lorisnb.core.trajectory` and :mod:`lorisnb.errors`; never
+:mod:`lorisnb.core.stats` (enforced). The spec's values name the choices the conventions and metrics
+define.
 """
 
 from typing import TYPE_CHECKING

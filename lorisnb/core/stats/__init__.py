@@ -1,10 +1,12 @@
 """Statistics and decisions: repeated trials (:mod:`.trials`), intervals and pairwise tests
 (:mod:`.inference`), the exact permutation test (:mod:`.permutation`), power (:mod:`.power`),
-rankings (:mod:`.ranking`), and the regression verdict of ``lorisnb diff``
-(:mod:`.regression`, :mod:`.tolerances`).
+rankings (:mod:`.ranking`), the regression verdict of ``lorisnb diff`` (:mod:`.regression`,
+:mod:`.tolerances`) and the reruns of a SLAM system made from one real output that measure the
+verdict's error rates (:mod:`.reruns`).
 
-May import: every other core sub-package; none of them imports it (enforced): decisions sit
-above the numbers they decide on.
+May import: :mod:`lorisnb.core.alignment`, :mod:`lorisnb.core.lifelong`, :mod:`lorisnb.core.simulate`,
+:mod:`lorisnb.core.spec`, :mod:`lorisnb.core.trajectory` and :mod:`lorisnb.errors`; no other core
+sub-package imports it (enforced): decisions sit above the numbers they decide on.
 """
 
 from typing import TYPE_CHECKING

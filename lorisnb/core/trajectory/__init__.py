@@ -3,8 +3,8 @@ units (:mod:`.units`), the scenes' sensor frames and extrinsics (:mod:`.frames`)
 matrices to quaternions (:mod:`.rotations`, with its optional compiled kernel) and row blocks
 for long per-pose computations (:mod:`.blocks`).
 
-May import: numpy, scipy, :mod:`lorisnb.errors` and the quaternion algebra of
-:mod:`lorisnb.core.alignment.geometry`; no metric, pipeline, scoring or statistics (enforced).
+May import: the quaternion algebra of :mod:`lorisnb.core.alignment.geometry` and :mod:`lorisnb.errors`
+(and of other packages numpy and scipy); no metric, pipeline, scoring or statistics (enforced).
 """
 
 from typing import TYPE_CHECKING

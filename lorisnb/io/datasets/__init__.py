@@ -2,5 +2,5 @@
 manifests (:mod:`.manifest`), the ORDSLAM scenario catalog (:mod:`.ordslam_catalog`) and the
 papers' published numbers (:mod:`.published`).
 
-May import: :mod:`lorisnb.io.parsing`, :mod:`lorisnb.io.readers`, :mod:`lorisnb.core` and :mod:`lorisnb.errors`.
+May import: :mod:`lorisnb.io.readers`, :mod:`lorisnb.core` and :mod:`lorisnb.errors`.
 """

@@ -4,6 +4,6 @@ ROS bags (:mod:`.bags`), trajectories with pose covariances (:mod:`.covariance`)
 (:mod:`.times`), evo result zips (:mod:`.evo_results`), and which reading options apply to which
 format (:mod:`.options`).
 
-May import: :mod:`lorisnb.io.parsing`, :mod:`lorisnb.io.datasets`, :mod:`lorisnb.core` and
-:mod:`lorisnb.errors`.
+May import: :mod:`lorisnb.io.parsing`, the ORDSLAM catalog :mod:`lorisnb.io.datasets.ordslam_catalog`,
+:mod:`lorisnb.core` and :mod:`lorisnb.errors`.
 """

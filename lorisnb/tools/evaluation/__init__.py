@@ -3,7 +3,8 @@ returns (:mod:`.result`), the inputs (:mod:`.inputs`), one job per input (:mod:`
 local cores or a Dask cluster (:mod:`.pool`), the exit status (:mod:`.status`) and sweeps
 streamed to Parquet (:mod:`.streaming`).
 
-May import: :mod:`lorisnb.io`, :mod:`lorisnb.core` and :mod:`lorisnb.errors`.
+May import: :mod:`lorisnb.io`, :mod:`lorisnb.core`, :mod:`lorisnb.errors` and the optional-dependency
+check :mod:`lorisnb.tools._extras` (for Dask's ``distributed``); no other tools sub-package.
 """
 
 from typing import TYPE_CHECKING

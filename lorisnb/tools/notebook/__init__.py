@@ -1,8 +1,14 @@
 """What the notebooks use: the one set-up call (:mod:`.start`), their parameters checked like any
 option (:mod:`.params`), the threshold explorer's widgets (:mod:`.widgets`), the grids ``quick``
-trims (:mod:`.grids`) and the indoor / outdoor tables (:mod:`.indoor_outdoor`).
+trims (:mod:`.grids`), the indoor / outdoor tables (:mod:`.indoor_outdoor`), the numbers of the
+``compare_algorithms`` notebook (:mod:`.comparison`), what makes CR grow with ``delta``
+(:mod:`.output_gaps`) and the sentences of their prose that depend on the run (:mod:`.prose`).
 
-May import: the other tools sub-packages, :mod:`lorisnb.io`, :mod:`lorisnb.core`.
+May import: :mod:`lorisnb.tools.evaluation`, :mod:`lorisnb.tools.decisions`, :mod:`lorisnb.tools.figures`,
+the leaderboard (:mod:`lorisnb.tools.report.leaderboard`) and a report's portable paths
+(:mod:`lorisnb.tools.report.portable`), :mod:`lorisnb.io`, :mod:`lorisnb.core`, :mod:`lorisnb.errors` and
+lorisnb's version (:mod:`lorisnb._version`); the report and the decisions import this package too
+(docs/architecture.md, "Sub-packages that import each other").
 """
 
 from typing import TYPE_CHECKING

@@ -3,5 +3,6 @@
 :mod:`.crosscheck_evo`, :mod:`.crosscheck_reading`), and one pair under every peer's preset side by
 side (:mod:`.every_number`).
 
-May import: :mod:`lorisnb.tools.evaluation`, :mod:`lorisnb.io`, :mod:`lorisnb.core`; evo only when called.
+May import: :mod:`lorisnb.tools.evaluation`, the optional-dependency check :mod:`lorisnb.tools._extras`,
+:mod:`lorisnb.io`, :mod:`lorisnb.core` and :mod:`lorisnb.errors`; evo only when called.
 """

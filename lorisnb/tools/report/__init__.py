@@ -1,9 +1,13 @@
 """Batch reports: the run (:mod:`.build`), its notebooks (:mod:`.notebooks`) and their kernels
 (:mod:`.kernels`, :mod:`.lean_imports`), the front page (:mod:`.index`), the leaderboard
-(:mod:`.leaderboard`), offline HTML (:mod:`.html`), provenance (:mod:`.provenance`) and
-paper-ready tables (:mod:`.tables`).
+(:mod:`.leaderboard`), the run against its baseline (:mod:`.baseline`), offline HTML (:mod:`.html`),
+provenance (:mod:`.provenance`), paths relative to named roots (:mod:`.portable`) and paper-ready
+tables (:mod:`.tables`).
 
-May import: the other tools sub-packages, :mod:`lorisnb.io`, :mod:`lorisnb.core`.
+May import: :mod:`lorisnb.tools.evaluation`, :mod:`lorisnb.tools.decisions`, :mod:`lorisnb.tools.notebook`,
+the optional-dependency check :mod:`lorisnb.tools._extras`, :mod:`lorisnb.io`, :mod:`lorisnb.core`,
+:mod:`lorisnb.errors` and lorisnb's version (:mod:`lorisnb._version`); the decisions, the notebooks and
+the figures import this package too (docs/architecture.md, "Sub-packages that import each other").
 """
 
 from typing import TYPE_CHECKING

@@ -10,9 +10,17 @@ the typical mistake when the answer is what that mistake gives (:data:`MISTAKES`
 - :mod:`._labs`: lab answers whose reference lorisnb computes from the lab's inputs (so that the
   student version's test cells hold no solution);
 - :mod:`._prose`: the labs' data (:func:`lab_data`: the same for students and the grader) and the
-  explanations shown after a check, computed from the lab's parameters.
+  explanations shown after a check, computed from the lab's parameters;
+- :mod:`._grading`: how a formula check grades a learner's function, and :mod:`._mistakes`: the
+  typical mistakes and their hints (the one registry of them);
+- :mod:`.autograde`: one returned lab notebook graded so that the grade holds, :mod:`.gradebook`: a
+  class graded and its grades written for an LMS, :mod:`.sandbox`: a student's code run in a sandbox
+  (its child process: :mod:`._sandbox_child`, which imports nothing of lorisnb), and
+  :mod:`.errorrates`: how often lab 1's grader is wrong.
 
-May import: :mod:`lorisnb.io`, :mod:`lorisnb.core` and :mod:`lorisnb.errors` (never the report or the command line).
+May import: the data root's lookup (:mod:`lorisnb.io.datasets.paths`), :mod:`lorisnb.core`,
+:mod:`lorisnb.errors` and :mod:`lorisnb` itself (only for the folder it is installed in, which a
+sandbox is given or kept from); never the report or the command line.
 """
 
 import sys
