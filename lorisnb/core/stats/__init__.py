@@ -5,8 +5,8 @@ rankings (:mod:`.ranking`), the regression verdict of ``lorisnb diff`` (:mod:`.r
 verdict's error rates (:mod:`.reruns`).
 
 May import: :mod:`lorisnb.core.alignment`, :mod:`lorisnb.core.lifelong`, :mod:`lorisnb.core.simulate`,
-:mod:`lorisnb.core.spec`, :mod:`lorisnb.core.trajectory` and :mod:`lorisnb.errors`; no other core
-sub-package imports it (enforced): decisions sit above the numbers they decide on.
+:mod:`lorisnb.core.spec`, :mod:`lorisnb.core.trajectory` and :mod:`lorisnb.errors`; none of them imports
+it (enforced): decisions sit above the numbers they decide on.
 """
 
 from typing import TYPE_CHECKING
