@@ -136,10 +136,10 @@ def test_a_trial_that_repeats_another_counts_once(table):
     cand = pd.concat([cand, cand[cand["trial"] == 4].assign(trial=5)], ignore_index=True)
     seqs, scenes = changes(base, cand)
     judged = seqs[(seqs["status"] == "ok") & seqs["decided_by"].str.startswith("t-test")]
-    assert len(judged) and judged["decided_by"].str.contains("5 vs 4 trials").all()
+    assert len(judged) and judged["decided_by"].str.contains("5 vs 5 trials, tested on 5 vs 4 values").all()
     assert judged["decided_by"].str.contains("1 of CAND's trials repeat another's every value: counted once").all()
     scene = scenes[scenes["decided_by"].str.startswith("t-test")]
-    assert len(scene) and scene["decided_by"].str.contains("5 vs 4 trials").all()
+    assert len(scene) and scene["decided_by"].str.contains("5 vs 5 trials, tested on 5 vs 4 values").all()
     lost = seqs[seqs["metric"] == "trial"]
     with_output = table["matched"].to_numpy() > 0  # a trial without output repeats nothing
     assert (

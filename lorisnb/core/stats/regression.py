@@ -39,7 +39,10 @@ direction (a separate family). An algorithm with both is a
 over its sequences) by less than a quarter of what real reruns show (:func:`trial_copies`, the
 pseudo-replicates of ``compare``) are counted as one run, their mean; a trial that repeats every
 value of another trial of the sequence (or of the scene) counts once. Three copies a side are thus
-judged as a single run per side, no significance claimed; ``decided_by`` says so.
+judged as a single run per side, no significance claimed; ``decided_by`` says so. The copies are
+the trials with output: a failed run (no pose matched, or a missing trial) counts as a run of its
+own. ``decided_by`` counts trials as ``trials_base`` and ``trials_cand`` do (every trial, failed ones
+too), then how many values the test took where fewer, and why.
 
 **Coverage and failures** (no test needed; always a regression): a sequence the base has and the
 candidate lacks (``missing``), scores with nothing matched (``failed``; unless its base matched
@@ -47,6 +50,9 @@ fewer than :data:`MIN_MATCHED` poses in every trial: too little to judge, as eve
 few poses; at eps = inf every matched pose is correct, so the old exemption, "none of them
 correct", never applied there), or holds fewer trials than the candidate's other sequences or than the base
 (``missing trial``: the trial counts as a failed run in every value, and is named), or holds
+more trials with no pose matched (a file written without a pose, :func:`_failed_trials`) and
+missing than the base holds failed runs there, most of its trials (``trial 2, 3 no pose matched``),
+or holds
 fewer independent runs than the base because a trial is a copy of another (``trial 3 a copy``:
 a crashed trial filled in with another's output). Trial numbers
 are labels, not pairings: the candidate's trials 4 to 6 against the base's 1 to 3 lack nothing, and
@@ -77,6 +83,7 @@ import numpy as np
 import pandas as pd
 from scipy import special, stats
 
+from lorisnb.core.lifelong.aggregate import has_output
 from lorisnb.core.lifelong.coverage import FAILED_RUN, complete, expected_from
 from lorisnb.core.spec import validate
 from lorisnb.core.stats.inference import WEIGHTS, holm, scene_values, trial_spread, with_trials
@@ -188,6 +195,14 @@ class _Comparison:
     def d(self) -> float:
         return self.sign * (float(self.base.mean()) - float(self.cand.mean()))
 
+    @property
+    def counted(self) -> str:
+        """The trials of each side (the row's ``trials_base`` and ``trials_cand``: every trial, a
+        failed one too) and, where the test took fewer values (a failed run without an error to
+        take, copies of one run counted once), how many: one count in every column and sentence."""
+        nb, nc, tb, tc = len(self.base), len(self.cand), self.row["trials_base"], self.row["trials_cand"]
+        return f"{tb} vs {tc} trials" + (f", tested on {nb} vs {nc} values" if (nb, nc) != (tb, tc) else "")
+
 
 def _trigamma_inverse(x: float) -> float:
     """y with trigamma(y) = x (x > 0), by Newton's method as in limma's ``trigammaInverse``."""
@@ -263,9 +278,7 @@ def _family_p(comps: list[_Comparison], levels: list[str]) -> tuple[np.ndarray, 
         p_w[idx] = stats.t.sf((d - tol) / se, dof)
         p_b[idx] = stats.t.sf((-d - tol) / se, dof)
         for k, i in enumerate(idx):
-            how[i] = (
-                f"{int(nb[k])} vs {int(nc[k])} trials, spread pooled over {len(cs)} comparisons (prior df {min(d0, 999):.3g})"
-            )
+            how[i] = f"{cs[k].counted}, spread pooled over {len(cs)} comparisons (prior df {min(d0, 999):.3g})"
     return p_w, p_b, how
 
 
@@ -348,6 +361,9 @@ class _Comparisons:
             return
         if independent is not None:
             fb, fc = (x[np.isfinite(x)] for x in independent)
+        lacking = [f"{k} of {name}'s trials have no {metric} (no pose to take it over)" for name, x in
+                   (("BASE", xb), ("CAND", xc)) if (k := int((~np.isfinite(_transform(metric, x))).sum()))]  # fmt: skip
+        note = "; ".join(x for x in (note, *lacking) if x)
         gb, gc = _transform(metric, fb), _transform(metric, fc)
         gb, gc = gb[np.isfinite(gb)], gc[np.isfinite(gc)]
         if not gb.size or not gc.size:
@@ -376,8 +392,10 @@ class _Comparisons:
                 what = ("the largest change noise-only single runs show" if band <= SINGLE_RUN_BAND[level][c.row["metric"]]
                         else "this diff's own noise, the smaller of its changes for the worse and for the better, "
                         "wider than the largest change noise-only single runs show")  # fmt: skip
+                runs = "single run per side" + ("" if (c.row["trials_base"], c.row["trials_cand"]) == (1, 1)
+                                                else f" ({c.counted})")  # fmt: skip
                 c.row.update(status="regression" if up else ("improvement" if down else "ok"),
-                             decided_by=f"single run per side: no significance claimed; judged by the tolerance "
+                             decided_by=f"{runs}: no significance claimed; judged by the tolerance "
                              f"widened by the rerun band ({shown}: {what})")  # fmt: skip
         for c in self.waiting:
             if c.note:
@@ -551,13 +569,32 @@ class _Side:
         """The values of a sequence's trials that are independent runs, and why they are fewer:
         copies of a trial (every value the same) counted once; all of them as one run (their mean)
         where the algorithm's trials are near-identical copies (:func:`trial_copies`)."""
-        if key[:2] in self.one_run:
-            f = values[np.isfinite(values)]
-            return np.array([f.mean() if f.size else np.nan]), f"{self.name}'s trials {self.one_run[key[:2]]}"
+        if key[:2] in self.one_run:  # the copies are its trials with output; a failed run is a run of its own
+            failed = ~self.output(rows)
+            f = values[~failed & np.isfinite(values)]
+            one = np.array([f.mean() if f.size else np.nan])
+            if not failed.any():
+                return one, f"{self.name}'s trials {self.one_run[key[:2]]}"
+            return np.concatenate([one, values[failed]]), (
+                f"{self.name}'s {int((~failed).sum())} trial(s) with output {self.one_run[key[:2]]}; its "
+                f"{int(failed.sum())} failed run(s) (no pose matched) count each"
+            )
         if self.copy is None or not self.copy[rows].any():
             return values, ""
         n = int(self.copy[rows].sum())
         return values[~self.copy[rows]], f"{n} of {self.name}'s trials repeat another's every value: counted once"
+
+    def output(self, rows: np.ndarray) -> np.ndarray:
+        """Which of the rows have output (:func:`~lorisnb.core.lifelong.aggregate.has_output`; all
+        of them in a table without ``matched``)."""
+        m = self.cols.get("matched")
+        return has_output(m[rows]) if m is not None else np.ones(len(rows), bool)
+
+    def without_output(self, rows: np.ndarray, lacking: Sequence[Any]) -> list:
+        """The trials of a sequence present in the run (not added for a missing trial) that matched no
+        pose: failed runs (:func:`_failed_trials`)."""
+        present = ~np.isin(self.trials[rows], list(lacking))
+        return [t.item() if hasattr(t, "item") else t for t in self.trials[rows][present & ~self.output(rows)]]
 
     def runs(self, key: tuple, rows: np.ndarray, lacking: Sequence[Any]) -> int:
         """How many runs a sequence's trials are for the missing-trial rule: the trials present, less
@@ -608,6 +645,42 @@ def _flips(sb: _Side, sc: _Side, key: tuple, rb: np.ndarray, rc: np.ndarray) -> 
     x = np.concatenate([vb[rb], vc[rc]])
     x = x[np.isfinite(x)]
     return bool(x.size and (x > 0).any() and (x <= 0).any())
+
+
+def _failed_trials(comp: _Comparisons, label: dict, sb: _Side, sc: _Side, key: tuple, rows: tuple[np.ndarray, np.ndarray],
+                   lacking: tuple[Sequence[Any], Sequence[Any]], fresh: int) -> None:  # fmt: skip
+    """The failed-trial rule: a trial present in the candidate with no pose matched to the ground
+    truth (:func:`~lorisnb.core.lifelong.aggregate.has_output`: a run that crashed after writing
+    its header, or whose poses all fall outside the ground truth) is a failed run, as a trial never
+    written is. Where the candidate holds more failed runs of a sequence (trials without output and
+    trials missing) than the base does, and they are most of its trials (2 of 3, 3 of 5), a
+    regression (``failed``) naming its trials without output; the trials it lacks and the base has
+    (``fresh``) are named missing already. One failed run more than the base's, of three or five, is
+    no evidence: reruns of a system that never initialise are the heavy tail of rerun noise (the
+    calibration's heavy model: about 1 % of reruns of a sequence produce no pose; counting every
+    excess failed run failed 85 % of its noise-only nights with 3 trials, 92.5 % with 5, against
+    5 % and 0 % without it, as with the majority rule; the rule alone fired on none of 200 such
+    nights). Not where the base matched fewer than :data:`MIN_MATCHED` poses in every trial (a
+    tracking of a few seconds that reruns start or not: too little to judge, as the whole
+    sequence's failure). A t-test of the
+    values missed it: a CAND with 2 of 3 trials failed (CR 0.87 -> 0.28) passed on their spread."""
+    (rb, rc), (lack_b, lack_c) = rows, lacking
+    if "matched" not in sb.cols or "matched" not in sc.cols:
+        return
+    most = sb.cols["matched"][rb]
+    if not np.isfinite(most).any() or float(np.nanmax(most)) < MIN_MATCHED:
+        return
+    zb, zc = sb.without_output(rb, lack_b), sc.without_output(rc, lack_c)
+    failed_b, failed_c = len(lack_b) + len(zb), len(lack_c) - fresh + len(zc)
+    if failed_c <= failed_b or 2 * (len(lack_c) + len(zc)) <= len(rc):
+        return  # as many as BASE's, or half of CAND's trials or fewer: within rerun noise (see below)
+    names = ", ".join(str(t) for t in zc)
+    base = (f"none of its {len(rb)} trial(s)" if not failed_b else
+            f"{failed_b} of its {len(rb)} trial(s) ({', '.join(str(t) for t in [*lack_b, *zb])})")  # fmt: skip
+    comp.coverage("sequence", label, "trial", "matched", f"trial {names} no pose matched", "failed",
+                  f"coverage: CAND's trial {names} matched no pose of the ground truth (a run that produced nothing "
+                  f"for the sequence: a failed run, as a missing trial); BASE failed in {base}, CAND in "
+                  f"{failed_c + fresh} of its {len(rc)}: more failed runs than the base")  # fmt: skip
 
 
 def changes(
@@ -663,6 +736,8 @@ def changes(
                               "unjudged", f"too little to judge: the base matched at most {most:.0f} poses in a "
                               f"trial (fewer than {MIN_MATCHED}), its CR {sb.mean(key, 'cr'):.3g}: a tracking of "
                               "a few seconds that reruns start or not")  # fmt: skip
+        else:
+            _failed_trials(comp, label, sb, sc, key, (rb, rc), (lack_b.get(key, []), lack_c.get(key, [])), len(fresh))
         correct = (sb.mean(key, "c_matched"), sc.mean(key, "c_matched"))
         lever = (sb.least(key, "rotation_lever"), sc.least(key, "rotation_lever"))
         for metric in METRICS:
@@ -714,6 +789,7 @@ def _scenes(comp: _Comparisons, b: pd.DataFrame, c: pd.DataFrame, expected: pd.D
     fb, fc = complete(b, expected)[0], complete(c, expected)[0]
     vb, vc = scene_values(fb, metrics, by), scene_values(fc, metrics, by)
     counts = [_counts(f, by[:3]) for f in (fb, fc)]
+    failed = [_trials_with_a_failed_run(f) for f in (fb, fc)]
     gb = {k: g for k, g in vb.groupby(by[:3], sort=False)}
     gc = {k: g for k, g in vc.groupby(by[:3], sort=False)}
     for key in scenes:
@@ -722,8 +798,9 @@ def _scenes(comp: _Comparisons, b: pd.DataFrame, c: pd.DataFrame, expected: pd.D
         label = dict(suite=key[0], algorithm=key[1], scene=key[2], seq=None)
         matched = tuple(float(n["matched"].get(key, 0.0)) for n in counts)
         correct = tuple(float(n["c_matched"].get(key, 0.0)) for n in counts)
-        ib, nb = _independent_trials(gb[key], metrics, one_run[0].get(key[:2]), "BASE")
-        ic, nc = _independent_trials(gc[key], metrics, one_run[1].get(key[:2]), "CAND") if key in gc else ({}, "")
+        ib, nb = _independent_trials(gb[key], metrics, one_run[0].get(key[:2]), "BASE", failed[0].get(key, set()))
+        ic, nc = (_independent_trials(gc[key], metrics, one_run[1].get(key[:2]), "CAND", failed[1].get(key, set()))
+                  if key in gc else ({}, ""))  # fmt: skip
         note = "; ".join(x for x in (nb, nc) if x)
         for metric in metrics:
             xc = gc[key][metric].to_numpy(float) if key in gc else np.full(1, np.nan)
@@ -732,16 +809,38 @@ def _scenes(comp: _Comparisons, b: pd.DataFrame, c: pd.DataFrame, expected: pd.D
                      (ib[metric], ic.get(metric, xc)), note)  # fmt: skip
 
 
-def _independent_trials(values: pd.DataFrame, metrics: Sequence[str], one_run: str | None, name: str
-                        ) -> tuple[dict[str, np.ndarray], str]:  # fmt: skip
+def _trials_with_a_failed_run(full: pd.DataFrame) -> dict[tuple, set]:
+    """Per (suite, algorithm, scene) of a run's completed table, its trials holding a failed run of
+    a sequence (no pose matched: missing, or written without output) that another of its trials
+    tracked: such a trial's scene values are no copy of the others' (:func:`_independent_trials`)."""
+    if "matched" not in full.columns or full.empty:
+        return {}
+    out: dict[tuple, set] = {}
+    ok = has_output(pd.to_numeric(full["matched"], errors="coerce").to_numpy(float))
+    trial = full["trial"].to_numpy()
+    for key, rows in full.groupby(KEYS, sort=False, observed=True, dropna=False).indices.items():
+        if ok[rows].any() and not ok[rows].all():
+            out.setdefault(tuple(key[:3]), set()).update(trial[rows][~ok[rows]].tolist())
+    return out
+
+
+def _independent_trials(values: pd.DataFrame, metrics: Sequence[str], one_run: str | None, name: str,
+                        failed: set | frozenset = frozenset()) -> tuple[dict[str, np.ndarray], str]:  # fmt: skip
     """A scene's values of each trial (one row per trial) that are independent runs, per metric, and
     why they are fewer: a trial whose scene values all repeat another's (and are not all 0: a
     scene without output) is a copy of it, counted once; where the algorithm's trials are
-    near-identical copies (``one_run`` says what varies), all of them are one run (their mean)."""
+    near-identical copies (``one_run`` says what varies), all of them are one run (their mean),
+    but for the trials holding a failed run (``failed``: a sequence without output that another
+    trial tracked), each a run of its own."""
     x = values[list(metrics)].apply(pd.to_numeric, errors="coerce")
     if one_run is not None:
-        return {m: np.array([np.nanmean(x[m]) if x[m].notna().any() else np.nan]) for m in metrics}, (
-            f"{name}'s trials {one_run}"
+        bad = values["trial"].isin(list(failed)).to_numpy() if failed else np.zeros(len(x), bool)
+        one = {m: np.array([np.nanmean(x[m][~bad]) if x[m][~bad].notna().any() else np.nan]) for m in metrics}
+        if not bad.any():
+            return one, f"{name}'s trials {one_run}"
+        return {m: np.concatenate([one[m], x[m].to_numpy(float)[bad]]) for m in metrics}, (
+            f"{name}'s {int((~bad).sum())} trial(s) without a failed run {one_run}; its {int(bad.sum())} trial(s) "
+            "holding a failed run (a sequence with no pose matched) count each"
         )
     copy = x.duplicated().to_numpy() & x.fillna(0).ne(0).any(axis=1).to_numpy()
     note = f"{int(copy.sum())} of {name}'s trials repeat another's every value: counted once" if copy.any() else ""
