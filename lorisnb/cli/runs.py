@@ -17,6 +17,7 @@ from lorisnb.cli.commands import every_column, fmt_table, report_problems, run_e
 from lorisnb.cli.options import UNUSED
 from lorisnb.cli.outputs import check_outputs, refuse_unused
 from lorisnb.cli.text import clean, say
+from lorisnb.core.spec import validate
 from lorisnb.errors import ValidationError
 
 #: diff's own options; every other option is an evaluate option (for result folders only).
@@ -73,6 +74,28 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
     run = Run(p, "results", table, expected=ev.durations(), created=None if ahead else newest, created_from=made,
               warnings=ahead)  # fmt: skip
     return run, failed, sorted(failed)
+
+
+def _refuse_no_common_algorithm(base: Any, cand: Any, paths: list[str]) -> None:
+    """A ValidationError when BASE and CAND both hold sequences but no algorithm in common: every
+    sequence of BASE would be called missing and every one of CAND new (two identical result
+    folders holding their files directly, each file's algorithm named after its folder, ``base``
+    and ``cand``, were judged a regression)."""
+    algs = [sorted({str(a) for a in r.table["algorithm"]}) for r in (base, cand)]
+    if not (algs[0] and algs[1]) or set(algs[0]) & set(algs[1]):
+        return
+    shown = [", ".join(a_[:5]) + (f" and {len(a_) - 5} more" if len(a_) > 5 else "") for a_ in algs]
+    folders = [validate.label(Path(os.path.abspath(p)).name) for p in paths]  # as labels name them (NFC)
+    flat = [Path(p).is_dir() and a == [f] for p, a, f in zip(paths, algs, folders, strict=True)]
+    why = (
+        "result files directly in a folder you gave are one algorithm named after that folder ("
+        + ", ".join(f"{f}/" for f, fl in zip(folders, flat, strict=True) if fl)
+        + "): put them in a folder named for the algorithm on each side (BASE/orb/*.txt, CAND/orb/*.txt)"
+        if any(flat)
+        else "an algorithm renamed? Compare different algorithms with lorisnb compare"
+    )
+    raise ValidationError(f"BASE and CAND share no algorithm (BASE: {shown[0]}; CAND: {shown[1]}), so nothing of "
+                          f"CAND can be judged against BASE; {why}")  # fmt: skip
 
 
 def _newest_input(ev: Any, folder: Path) -> Any:
@@ -160,6 +183,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
         )
     if base.version and cand.version and base.version != cand.version:
         say(f"note: lorisnb {base.version} made BASE, {cand.version} CAND")
+    _refuse_no_common_algorithm(base, cand, args.paths)
     known = [r.expected for r in (base, cand) if r.expected is not None]  # every ground-truth sequence
     d = diff_tables(base.table, cand.table, tolerances, args.alpha, cand_failed,
                     names=(f"BASE {args.paths[0]}", f"CAND {args.paths[1]}"),
