@@ -110,9 +110,9 @@ def foreign(path: Path) -> str | None:
     nor a table (:func:`~lorisnb.tools.decisions.runs.is_table`), or a table without the columns of
     per-sequence rows (``algorithm``, ``scene``, ``seq``: ``history --csv``'s own table, a scene or
     pairs table). An empty table (no header: a failed ``--csv``, a shell redirect) may be a run, damaged."""
-    from lorisnb.tools.decisions.runs import csv_records, is_report_run, is_table
+    from lorisnb.tools.decisions.runs import csv_records, holds_run_json, is_table
 
-    if not path.exists() or is_report_run(path):
+    if not path.exists() or holds_run_json(path):  # a report run, damaged or not
         return None
     if not is_table(path):
         return "not a report run and not a CSV/Parquet table"
@@ -137,12 +137,12 @@ def foreign(path: Path) -> str | None:
 
 def _made(path: Path) -> datetime | None:
     """When a path that could not be read as a run was made, as :func:`load_run` would order it."""
-    from lorisnb.tools.decisions.runs import created_of, is_report_run, modified
+    from lorisnb.tools.decisions.runs import created_of, holds_run_json, modified
     from lorisnb.tools.report.provenance import RUN_JSON, read_run_json
 
     if not path.exists():
         return None
-    if is_report_run(path):
+    if holds_run_json(path):
         try:
             created = created_of(read_run_json(path), path / RUN_JSON)
         except LorisError:
@@ -294,10 +294,16 @@ def earlier_runs(folder: str | os.PathLike[str], unread: list[tuple[str, str]] |
     f = Path(folder)
     if not f.is_dir():
         raise ValidationError(f"{f}: not a folder of earlier runs (report run folders or per-sequence tables)")
+
     # hidden names are left out: a report's unfinished run folder (.NAME.partial-*) is not an earlier run;
     # runs of one time (a folder copied or downloaded) are ordered by name, numbers as numbers
-    found = sorted((p for p in f.iterdir() if not p.name.startswith(".") and (is_report_run(p) or is_table(p))),
-                   key=lambda p: natural(p.name))  # fmt: skip
+    def listed(p: Path) -> bool:  # a run, or a damaged one (run.json a FIFO): read_runs passes it over, saying why
+        try:
+            return is_report_run(p) or is_table(p)
+        except ValidationError:
+            return True
+
+    found = sorted((p for p in f.iterdir() if not p.name.startswith(".") and listed(p)), key=lambda p: natural(p.name))
     runs, missed = read_runs(found)  # as history reads its runs
     passed = [(u.path.name, u.why) for u in missed]
     if unread is not None:

@@ -141,8 +141,22 @@ def is_table(path: Path) -> bool:
     return path.is_dir() and (any(path.glob("algorithm=*")) or any(path.glob("*.parquet")))
 
 
+def holds_run_json(path: Path) -> bool:
+    """A folder with a ``run.json`` entry, whatever it is (a damaged received run's may be a FIFO):
+    a report run, readable or not (:func:`is_report_run` refuses the damaged one)."""
+    return path.is_dir() and os.path.lexists(path / RUN_JSON)
+
+
 def is_report_run(path: Path) -> bool:
-    return path.is_dir() and (path / RUN_JSON).is_file()
+    """A folder holding ``run.json``. One whose ``run.json`` is no regular file (a FIFO, a device:
+    a received run's) or a link leading out of it is refused (:func:`run_file`), never taken for a
+    result folder."""
+    if not path.is_dir():
+        return False
+    marker = path / RUN_JSON
+    if os.path.lexists(marker):
+        run_file(path, marker)
+    return marker.is_file()
 
 
 #: What a per-sequence table read back should be, ending every message that refuses one.
@@ -431,6 +445,8 @@ def _report_tables(folder: Path, notes: list[str], spec: Any = None) -> pd.DataF
     findings = own.parent
     if findings.exists() or findings.is_symlink():
         run_file(folder, findings)  # a link leading out of the run: refused, never read
+    if os.path.lexists(own):
+        run_file(folder, own)  # a FIFO or a device in its place: refused, not called missing
     recorded = isinstance(spec, dict) and isinstance(spec.get("values"), dict) and bool(spec["values"])
     if recorded and not own.is_file():
         what = f"{findings}: no such folder" if not findings.is_dir() else f"{own}: no such file"
