@@ -35,12 +35,16 @@ def _first_sequence_cut(icra20, tmp_path, keep: int):
 
 @pytest.mark.parametrize(
     ("keep", "why", "ate2"),
-    [(1, "only 1 matched position (fewer than 3)", 7.1481), (2, "only 2 matched positions (fewer than 3)", 5.4682)],
+    [(1, "only 1 matched position (fewer than 3)", 7.1481), (2, "only 2 matched positions (fewer than 3)", None)],
 )
 def test_the_degenerate_fit_names_every_sequence_it_aligns(icra20, data, tmp_path, keep, why, ate2):
     path = _first_sequence_cut(icra20, tmp_path, keep)
     ev = ln.evaluate(path, data_root=data.root, jobs=1)
-    assert ev.sequences().set_index("seq").loc[2, "ate_rmse"] == pytest.approx(ate2, abs=1e-4)
+    got = ev.sequences().set_index("seq").loc[2, "ate_rmse"]
+    if ate2 is not None:
+        assert got == pytest.approx(ate2, abs=1e-4)
+    else:  # the rotation about the line through 2 points is LAPACK's choice, which differs from one CPU
+        assert np.isfinite(got) and got > 1.0  # to another (seq 2's ATE 5.4682 m on one, 7.2590 m on another)
     said = [w for w in ev.warnings if "alignment was fitted on" in w]
     assert len(said) == 1, ev.warnings
     assert (

@@ -81,14 +81,19 @@ def test_the_scale_rule_on_borderline_steps_is_tartanair_tools(evaluator, paired
     want = theirs(evaluator, capsys, paired, True, 1)
     row, err = ours(paired, tmp_path, "--tartanair-scale", "--tartanair-seed", "1")
     assert row["matched"] == 2223
-    assert want["tartanair_scale"] == pytest.approx(0.781451368, rel=1e-9)
-    assert row["tartanair_scale"] == pytest.approx(want["tartanair_scale"], rel=1e-12)  # lorisnb: 0.778885678
+    # which borderline steps are kept is decided by the last bits of the arithmetic, which differ
+    # from one CPU to another (tartanair_tools kept neither on one machine, scale 0.781451368, and
+    # one of them on another, 0.778885678): lorisnb keeps what tartanair_tools keeps on the same one
+    assert row["tartanair_scale"] == pytest.approx(want["tartanair_scale"], rel=1e-12)
     for col in COLUMNS:
         assert row[col] == pytest.approx(want[col], rel=1e-12), col
     said = " ".join(next(line for line in err.splitlines() if "0.1 mm to within rounding" in line).split())
-    assert "2 step(s) are 0.1 mm to within rounding" in said and "lorisnb keeps 0 of them" in said
+    kept = int(said.split("lorisnb keeps ")[1].split(" of them")[0])
+    assert "2 step(s) are 0.1 mm to within rounding" in said and kept in (0, 1, 2)
+    assert f"for a scale of {want['tartanair_scale']:.9f}" in said
     lo, hi = (float(v) for v in said.split("a scale from ")[1].split(" (")[0].split(" to "))
     assert (lo, hi) == (pytest.approx(0.774615934, rel=1e-9), pytest.approx(0.781451368, rel=1e-9))
+    assert lo <= want["tartanair_scale"] <= hi
     assert "(4 choices)" in said and "its scale is" not in said
 
 
