@@ -185,21 +185,36 @@ def widget_controls(box) -> dict:
 
 
 #: The routes of a plain file (:func:`use_parser`).
-PARSERS = ["numpy", "pandas", "pieces", "read_csv", "chunks"]
+PARSERS = ["numpy", "pandas", "blocks", "pieces", "read_csv", "chunks"]
 
 
 def use_parser(monkeypatch, parser: str) -> list:
     """Read plain files by ``parser``: numpy's reader (a small file while pandas is not imported),
-    the piece parser in one piece, pyarrow's CSV reader on pieces of about 4 KB on 3 threads
+    the piece parser in one piece (``pandas``; ``blocks``: that piece parsed by pyarrow in blocks of
+    about 4 KB on its threads, as a process not started by ``multiprocessing`` does, in blocks of
+    its size over the cores), pyarrow's CSV reader on pieces of about 4 KB on 3 threads
     (``pieces``), the same pieces each read by pandas' ``read_csv`` (``read_csv``: a machine
     without pyarrow), or the chunked reader (``chunks``). Returns the list of what the piece reads
-    returned (None: not plain after all)."""
+    returned (None: not plain after all; ``blocks``: the count of blocks of each threaded parse)."""
     from lorisnb.io.parsing import pieces, whole
 
+    read = []
+    monkeypatch.setattr(pieces, "arrow_threads", lambda: parser == "blocks")
+    if parser == "blocks":  # ``read``: how many blocks each threaded parse gave
+        monkeypatch.setattr(pieces, "arrow_block_bytes", lambda size: 4096)
+        batches = pieces.piece_batches
+
+        def spy(*a, **k):
+            got = batches(*a, **k)
+            if k.get("threads") and got is not None:
+                read.append(len(got))
+            return got
+
+        monkeypatch.setattr(pieces, "piece_batches", spy)
+        monkeypatch.setattr("lorisnb.io.parsing.chunks.piece_batches", spy)
     monkeypatch.setattr(whole, "pandas_loaded", lambda: parser != "numpy")
     if parser == "numpy":  # numpy's reader is for a machine without pyarrow
         monkeypatch.setattr(whole, "pyarrow_installed", lambda: False)
-    read = []
     if parser in ("pieces", "read_csv"):
         monkeypatch.setattr(pieces, "PIECE_BYTES", 4096)
         monkeypatch.setattr(pieces, "PARSE_THREADS", 3)

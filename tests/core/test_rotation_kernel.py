@@ -82,7 +82,7 @@ def test_kernel_gives_the_numpy_codes_bits(name):
 
 
 @needs_kernel
-@pytest.mark.parametrize("parser", ["pieces", "chunks"])
+@pytest.mark.parametrize("parser", ["pieces", "blocks", "chunks"])
 @pytest.mark.thorough
 def test_real_trajectories_read_as_kitti_the_same_with_and_without_the_kernel(data, tmp_path, monkeypatch, parser):
     """The TUM RGB-D ground truth and estimates, printed as KITTI blocks to 6 and 9 significant

@@ -57,17 +57,23 @@ def test_a_piece_gives_the_numbers_of_float_or_none(monkeypatch, arrow):
     assert pieces.piece_columns(b"1,2.5,3\n", ",", 3) is not None
 
 
-@pytest.mark.parametrize("parser", ["pieces", "read_csv"])
+@pytest.mark.parametrize("parser", ["pieces", "read_csv", "blocks"])
 def test_the_real_tum_files_read_in_pieces_as_in_chunks(data, monkeypatch, parser):
-    """Every TUM file of the real data (788 to about 20,000 poses), in pieces of 4 KB on 3 threads,
-    gives the trajectory of the chunked reader (the byte scanner, the reference of every route)."""
+    """Every TUM file of the real data (788 to about 20,000 poses), in pieces of 4 KB on 3 threads
+    (or in one piece parsed in blocks of 4 KB on pyarrow's threads), gives the trajectory of the
+    chunked reader (the byte scanner, the reference of every route)."""
+    if parser == "blocks" and not pieces.pyarrow_installed():
+        pytest.skip("pyarrow is not installed")
     files = sorted(Path(data.tum).glob("*.txt"))
     assert len(files) == 4
     for path in files:
         read = use_parser(monkeypatch, parser)
         got = read_tum(path, warn=False)
         rows = sum(1 for line in path.read_text().splitlines() if line.strip() and not line.startswith("#"))
-        assert len(read) == 1 and read[0] is not None and read[0][0] == rows  # every row, read in pieces
+        if parser == "blocks":  # one parse, in as many blocks as 4 KB of lines make
+            assert len(read) == 1 and read[0] >= path.stat().st_size // 4096 - 1
+        else:
+            assert len(read) == 1 and read[0] is not None and read[0][0] == rows  # every row, read in pieces
         monkeypatch.setattr(whole, "WHOLE_MAX_BYTES", 0)
         ref = read_tum(path, warn=False)
         monkeypatch.undo()
@@ -78,6 +84,32 @@ def test_the_real_tum_files_read_in_pieces_as_in_chunks(data, monkeypatch, parse
 
 def _read_in_child(path: str, out) -> None:
     out.put(len(read_tum(path, warn=False)))
+
+
+def _threads_in_child(out) -> None:
+    out.put(pieces.arrow_threads())
+
+
+@pytest.mark.parametrize("method", ["fork", "spawn"])
+def test_pyarrow_threads_parse_only_outside_a_pool_of_processes(method):
+    """A process that ``multiprocessing`` started (a pool's worker, beside the others using the
+    cores) parses on its calling thread; one that it did not (a script, the command line, a Jupyter
+    kernel) on pyarrow's threads, where pyarrow has more than one."""
+    if not pieces.pyarrow_installed():
+        pytest.skip("pyarrow is not installed")
+    if method not in multiprocessing.get_all_start_methods():
+        pytest.skip(f"no {method} on this system")
+    import pyarrow as pa
+
+    assert pieces.arrow_threads() == (pa.cpu_count() > 1)  # pytest's process: not started by multiprocessing
+    ctx = multiprocessing.get_context(method)
+    out = ctx.Queue()
+    child = ctx.Process(target=_threads_in_child, args=(out,))
+    child.start()
+    try:
+        assert out.get(timeout=60) is False
+    finally:
+        child.join(60)
 
 
 def test_a_forked_child_reads_in_pieces(tmp_path, monkeypatch):

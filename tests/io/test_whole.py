@@ -94,7 +94,7 @@ def _same(a, b):
     assert a.stamps.flags.writeable and a.positions.flags.writeable
 
 
-@pytest.mark.parametrize("parser", ["pandas", "numpy", "pieces", "read_csv"])
+@pytest.mark.parametrize("parser", ["pandas", "blocks", "numpy", "pieces", "read_csv"])
 @pytest.mark.parametrize("name,text,plain", list(_variants()), ids=[v[0] for v in _variants()])
 @pytest.mark.thorough
 def test_tum_file_reads_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch, name, text, plain, parser):
@@ -104,7 +104,7 @@ def test_tum_file_reads_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch,
     path = tmp_path / "traj.txt"
     path.write_bytes(text.encode())
     (one, chunked), taken = _read_both(monkeypatch, lambda p: read_tum(p, warn=False), path)
-    reads_nan = parser == "numpy" or (parser in ("pandas", "pieces") and pieces.pyarrow_installed())
+    reads_nan = parser == "numpy" or (parser in ("pandas", "blocks", "pieces") and pieces.pyarrow_installed())
     assert taken == (plain or (reads_nan and name == "nan pose"))  # numpy and pyarrow read nan; pandas refuses it
     _same(one, chunked)
     if name == "bad number":
@@ -118,9 +118,11 @@ def test_tum_file_reads_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch,
         assert one.lines[0] == 3 and one.lines[-1] == N + 2
     if parser in ("pieces", "read_csv") and plain:  # read on pieces, not by another path
         assert len(ranged) == 1 and ranged[0] is not None and ranged[0][0] == N
+    if parser == "blocks" and plain and pieces.pyarrow_installed():  # the one piece in blocks on pyarrow's threads
+        assert ranged and ranged[0] > 1
 
 
-@pytest.mark.parametrize("parser", ["pandas", "numpy", "pieces", "read_csv"])
+@pytest.mark.parametrize("parser", ["pandas", "blocks", "numpy", "pieces", "read_csv"])
 def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkeypatch, parser, rotation_route):
     ranged = use_parser(monkeypatch, parser)
     rng = np.random.default_rng(3)
@@ -139,6 +141,9 @@ def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkey
     np.testing.assert_array_equal(one.stamps, stamps / 1e9)
     np.testing.assert_array_equal(one.quaternions, q[:, [1, 2, 3, 0]])
     on_pieces = parser in ("pieces", "read_csv")
+    if parser == "blocks" and pieces.pyarrow_installed():  # in one call and in chunks: in blocks on pyarrow's threads
+        assert len(ranged) == 2 and min(ranged) > 1
+        ranged.clear()
     assert [r[0] for r in ranged] == ([n] if on_pieces else [])  # EuRoC's one call was on pieces
 
     from scipy.spatial.transform import Rotation
@@ -148,6 +153,9 @@ def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkey
     (one, chunked), taken = _read_both(monkeypatch, read_kitti, kitti)
     assert taken
     _same(one, chunked)
+    if parser == "blocks" and pieces.pyarrow_installed():  # KITTI's too, quaternions block by block
+        assert len(ranged) == 2 and min(ranged) > 1
+        ranged.clear()
     assert [r[0] for r in ranged] == ([n, n] if on_pieces else [])  # KITTI's too, quaternions on the threads
     printed = np.loadtxt(kitti).reshape(n, 3, 4)
     np.testing.assert_allclose(one.quaternions, Rotation.from_matrix(printed[:, :, :3]).as_quat(), rtol=0, atol=5e-15)
@@ -155,7 +163,7 @@ def test_euroc_and_kitti_read_the_same_in_one_call_or_in_chunks(tmp_path, monkey
     np.testing.assert_array_equal(written_blocks(one.subset(np.arange(1, n, 3))), printed[1::3, :, :3])
 
 
-@pytest.mark.parametrize("parser", ["pandas", "numpy", "pieces", "read_csv"])
+@pytest.mark.parametrize("parser", ["pandas", "blocks", "numpy", "pieces", "read_csv"])
 def test_kitti_block_not_a_rotation_named_by_its_line_on_every_path(tmp_path, monkeypatch, parser, rotation_route):
     """The quaternions of a KITTI file are computed on each piece as it is read: a block that is
     no rotation, in a late piece, is still named by its line in the file."""
@@ -165,7 +173,9 @@ def test_kitti_block_not_a_rotation_named_by_its_line_on_every_path(tmp_path, mo
     path = write(tmp_path, "poses.txt", "# KITTI\n" + "\n".join(rows) + "\n")
     (one, chunked), taken = _read_both(monkeypatch, read_kitti, path)
     assert taken and one == chunked and one[0] == 2347 and "not a rotation" in one[1]
-    assert len(ranged) == (1 if parser in ("pieces", "read_csv") else 0)
+    blocks = parser == "blocks" and pieces.pyarrow_installed()  # the block after the first, too
+    assert len(ranged) == (1 if parser in ("pieces", "read_csv") else 2 if blocks else 0)
+    assert not blocks or min(ranged) > 1
 
 
 @pytest.mark.parametrize("parser", ["pieces", "read_csv"])

@@ -25,9 +25,9 @@ from collections.abc import Callable, Generator, Sequence
 import numpy as np
 
 from lorisnb.errors import ParseError
-from lorisnb.io.parsing.pieces import piece_columns, pyarrow_installed
+from lorisnb.io.parsing.pieces import piece_batches, pyarrow_installed
 from lorisnb.io.parsing.ranges import LINE_LIMIT, give_back_memory, in_order, line_ranges, newlines, read_range
-from lorisnb.io.parsing.rows import Convert, Group, Rows, RowSink, line_dtype
+from lorisnb.io.parsing.rows import Convert, Group, Rows, RowSink, copy_rows, line_dtype
 from lorisnb.io.parsing.scanner import BOM, SNIFF_BYTES, binary_reason, open_input, scan, stamp_fractions
 from lorisnb.io.parsing.whole import pandas_loaded, read_whole
 
@@ -126,16 +126,21 @@ def _kept_lines(chunk: bytes, skip: np.ndarray) -> bytes:
 
 
 def _read_arrow(chunk: bytes, ntok: int, skip: np.ndarray, runs: bool) -> np.ndarray:
-    """:func:`_read_c` by pyarrow's CSV reader (:func:`~lorisnb.io.parsing.pieces.piece_columns`):
+    """:func:`_read_c` by pyarrow's CSV reader (:func:`~lorisnb.io.parsing.pieces.piece_batches`):
     the kept lines' fields one space apart (runs of spaces, and spaces a line starts with, made one
     first with ``runs``); ValueError where they are not plain numbers."""
     body = _kept_lines(chunk, skip)
     if runs:
         body = re.sub(rb"(?m)^ +", b"", re.sub(rb"  +", b" ", body))
-    columns = piece_columns(body, " ", ntok)
-    if columns is None:
+    batches = piece_batches(body, " ", ntok, threads=True)
+    if batches is None:
         raise ValueError("not plain numbers one space apart")
-    return np.column_stack(columns)
+    out = np.empty((sum(len(cols[0]) for cols in batches), ntok))
+    at = 0
+    for cols in batches:
+        copy_rows(cols, out[at : at + len(cols[0])])
+        at += len(cols[0])
+    return out
 
 
 def _read_c(chunk: bytes, ntok: int, skip: np.ndarray, sep: str, runs: bool = False) -> np.ndarray:

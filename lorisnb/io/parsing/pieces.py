@@ -16,6 +16,12 @@ cores, both in one process, in alternation, medians): lorisnb's whole read (piec
 KITTI's rotations, the pose checks) took 0.90x, 0.78x and 1.02x (TUM, KITTI, EuRoC; 5 runs) and
 0.91x, 0.88x and 0.74x (3 runs, a busier machine) of ``pyarrow.csv.read_csv`` with its own threads
 and the columns to numpy, which does none of that work.
+
+A file under :data:`SPLIT_MIN_BYTES` is one piece, parsed from the calling thread: by pyarrow in
+blocks on its own threads (one block a core) where the process may use them (:func:`arrow_threads`:
+not a pool's worker), each block's rows grouped (converted) and copied into place as the pieces'
+are. pyarrow's threads also convert a block's columns side by side, which two pieces on lorisnb's
+threads, each parsed on one, do not: a 10,000-pose file took 0.52-0.56x the time (:func:`piece_batches`).
 """
 
 from __future__ import annotations
@@ -38,13 +44,17 @@ from lorisnb.io.parsing.rows import Convert, Group, Part, copy_rows, group_colum
 #: few operations on long arrays (on 256 KB pieces a million KITTI poses took twice as long).
 PIECE_BYTES = 4 << 20
 #: Files from this size are parsed in at least :data:`PARSE_THREADS` pieces side by side; smaller
-#: ones in one piece on the calling thread. Two pyarrow parses side by side on 2 cores each run
-#: slower than one alone, and handing pieces to threads costs about 0.1 ms: split in two, TUM files
-#: of 0.25-2 MB took 1.02-1.28x the time of one piece, 3 MB about the same, 4 MB 0.82x and 6 MB
-#: (KITTI) 0.59x (warm threads, in alternation, medians; 2026-11-29).
+#: ones in one piece (in blocks on pyarrow's threads: :func:`piece_batches`). Two pyarrow parses
+#: side by side on 2 cores each run slower than one alone, and handing pieces to threads costs
+#: about 0.1 ms: split in two, TUM files of 0.25-2 MB took 1.02-1.28x the time of one piece, 3 MB
+#: about the same, 4 MB 0.82x and 6 MB (KITTI) 0.59x (warm threads, in alternation, medians;
+#: 2026-11-29; each piece parsed on one thread).
 SPLIT_MIN_BYTES = 3 << 20
 #: Pieces parsed ahead of the first not yet placed, per thread (memory holds about this many).
 AHEAD = 2
+#: Bytes of a block of pyarrow's threaded parse at least (:func:`piece_batches`): a 100 KB file
+#: took 0.49 ms in 64 KB blocks, 0.62 ms in 32 KB or 128 KB ones.
+ARROW_BLOCK_MIN = 64 << 10
 
 
 def c_options(sep: str) -> dict:
@@ -88,20 +98,26 @@ def _arrow_options(sep: str, ntok: int) -> tuple[Any, Any]:
     )  # fmt: skip
 
 
-def _floats(column: Any) -> np.ndarray:
-    """A float64 pyarrow column without nulls as a numpy array (read-only, no copy for a column of
-    one block), from its data buffer (``ChunkedArray.to_numpy`` imports pandas: 0.6 s)."""
-    parts = [np.frombuffer(a.buffers()[1], np.float64, len(a), a.offset * 8) for a in column.chunks if len(a)]
-    return parts[0] if len(parts) == 1 else np.concatenate(parts) if parts else np.zeros(0)
+def _floats(array: Any) -> np.ndarray:
+    """A float64 pyarrow array without nulls as a numpy array (read-only, no copy), from its data
+    buffer (``ChunkedArray.to_numpy`` imports pandas: 0.6 s)."""
+    return np.frombuffer(array.buffers()[1], np.float64, len(array), array.offset * 8)
 
 
-def piece_columns(data: bytes, sep: str, ntok: int) -> list[np.ndarray] | None:
-    """The ``ntok`` float64 columns of ``data``'s lines (whole lines), one row per line, or None
-    when they are not plain numbers: by ``pyarrow.csv.read_csv`` where pyarrow is installed (with
-    no GIL held: pieces on threads are parsed side by side), else ``pandas.read_csv`` (C engine).
-    Both round as Python's ``float`` does. A token ``float`` refuses is refused here too: pyarrow's
-    ``nan(...)`` (C's form) is not plain, nor a line pyarrow ends at a lone CR (the row count
-    differs from the line count)."""
+def piece_batches(data: bytes, sep: str, ntok: int, threads: bool = False) -> list[list[np.ndarray]] | None:
+    """The ``ntok`` float64 columns of ``data``'s lines (whole lines), one row per line, as one or
+    more batches of consecutive rows (each a list of columns), or None when they are not plain
+    numbers: by ``pyarrow.csv.read_csv`` where pyarrow is installed (with no GIL held: pieces on
+    threads are parsed side by side), else ``pandas.read_csv`` (C engine). Both round as Python's
+    ``float`` does. A token ``float`` refuses is refused here too: pyarrow's ``nan(...)`` (C's
+    form) is not plain, nor a line pyarrow ends at a lone CR (the row count differs from the line
+    count).
+
+    ``threads``: pyarrow parses the text in blocks on its own threads (:func:`arrow_threads` says
+    whether this process may), a batch each; else in one block on the calling thread. A 10,000-pose
+    file took 0.52-0.56x the time in two blocks on 2 cores, 0.66-0.72x in one (its columns were
+    converted side by side), and a 100 KB icra20 file 0.56-0.58x (TUM, KITTI and EuRoC files, 200
+    runs each, warm, in alternation, medians; 2026-11-30)."""
     try:
         if pyarrow_installed():
             if b"(" in data:
@@ -109,25 +125,54 @@ def piece_columns(data: bytes, sep: str, ntok: int) -> list[np.ndarray] | None:
             import pyarrow as pa
             import pyarrow.csv as pc
 
-            names = [str(k) for k in range(ntok)]  # one block (one array per column), on this thread
-            read = pc.ReadOptions(column_names=names, use_threads=False, block_size=max(len(data) + 1, 1 << 16))
+            names = [str(k) for k in range(ntok)]
+            if threads and arrow_threads():
+                read = pc.ReadOptions(column_names=names, use_threads=True, block_size=arrow_block_bytes(len(data)))
+            else:  # one block (one array per column), on this thread
+                read = pc.ReadOptions(column_names=names, use_threads=False, block_size=max(len(data) + 1, 1 << 16))
             table = pc.read_csv(pa.py_buffer(data), read, *_arrow_options(sep, ntok))
-            columns = [_floats(c) for c in table.columns]
+            batches = [[_floats(a) for a in batch.columns] for batch in table.to_batches() if batch.num_rows]
+            rows = table.num_rows
         else:
             import pandas as pd
 
             frame = pd.read_csv(io.BytesIO(data), **c_options(sep))
-            columns = [c.to_numpy() for _, c in frame.items()]
+            batches = [[c.to_numpy() for _, c in frame.items()]]
+            rows = len(frame)
     except parser_errors():
         return None
-    if pyarrow_installed() and b"\r" not in data and columns:  # pyarrow ends a line at LF (or CR) only and
-        # refuses an empty one: its rows are the lines (counting the lines of a 1M-pose file took 16 ms)
-        rows = len(columns[0])
-    else:
-        rows = newlines(data) + (not data.endswith(b"\n"))
-    if len(columns) == ntok and all(c.dtype == np.float64 and len(c) == rows for c in columns):
-        return columns
+    if not pyarrow_installed() or b"\r" in data:  # pyarrow ends a line at LF (or CR) only and refuses an
+        # empty one: without a CR its rows are the lines (counting the lines of a 1M-pose file took 16 ms)
+        if rows != newlines(data) + (not data.endswith(b"\n")):
+            return None
+    if rows and all(len(cols) == ntok and all(c.dtype == np.float64 for c in cols) for cols in batches):
+        return batches
     return None
+
+
+def piece_columns(data: bytes, sep: str, ntok: int) -> list[np.ndarray] | None:
+    """:func:`piece_batches` in one block: the ``ntok`` columns of all of ``data``'s lines."""
+    batches = piece_batches(data, sep, ntok)
+    return None if batches is None else batches[0]
+
+
+def arrow_block_bytes(size: int) -> int:
+    """Bytes of a block of pyarrow's threaded parse of ``size`` bytes: a block for each of its
+    threads, :data:`ARROW_BLOCK_MIN` at least (a line straddling blocks is pyarrow's to join)."""
+    import pyarrow as pa
+
+    return max(-(-size // pa.cpu_count()) + 1, ARROW_BLOCK_MIN)
+
+
+def arrow_threads() -> bool:
+    """Whether pyarrow may parse on its threads in this process: not in a process that
+    ``multiprocessing`` started (a pool's worker, beside others using the cores) and not where
+    pyarrow has one thread."""
+    import multiprocessing
+
+    import pyarrow as pa
+
+    return multiprocessing.parent_process() is None and pa.cpu_count() > 1
 
 
 _pool: ThreadPoolExecutor | None = None
@@ -201,17 +246,37 @@ def _one_piece(
     fd: int, lo: int, hi: int, sep: str, ntok: int, groups: tuple[Group, ...], convert: Convert | None,
     row_major: bool,
 ) -> tuple[int, list[Part]] | None:  # fmt: skip
-    """:func:`piece_rows` of a file read in one piece, on the calling thread."""
+    """:func:`piece_rows` of a file read in one piece, parsed from the calling thread (in blocks
+    on pyarrow's threads: :func:`piece_batches`), each block's rows grouped (converted) and copied
+    into place."""
     data = _read(fd, lo, hi)
-    columns = None if data is None else piece_columns(data, sep, ntok)
-    if columns is None:
+    batches = None if data is None else piece_batches(data, sep, ntok, threads=True)
+    if batches is None:
         return None
     del data
-    parts: Sequence[Part] = [group_columns(columns, g) for g in groups]
-    if convert is not None:
-        return len(columns[0]), list(convert(*parts))
-    keep = not row_major and all(isinstance(g, slice) for g in groups)
-    return len(columns[0]), [p if keep else rows_of(p) if isinstance(p, list) else p for p in parts]
+    if len(batches) == 1:
+        columns = batches[0]
+        parts: Sequence[Part] = [group_columns(columns, g) for g in groups]
+        if convert is not None:
+            return len(columns[0]), list(convert(*parts))
+        keep = not row_major and all(isinstance(g, slice) for g in groups)
+        return len(columns[0]), [p if keep else rows_of(p) if isinstance(p, list) else p for p in parts]
+    n = sum(len(cols[0]) for cols in batches)
+    outs: list[np.ndarray] = []
+    at = 0
+    for cols in batches:
+        parts = [group_columns(cols, g) for g in groups]
+        if convert is not None:
+            parts = convert(*parts)
+        outs = outs or _arrays(parts, n)
+        m = len(cols[0])
+        for part, out in zip(parts, outs, strict=True):
+            if isinstance(part, list):
+                copy_rows(part, out[at : at + m])
+            else:
+                out[at : at + m] = part
+        at += m
+    return n, list(outs)
 
 
 def _on_threads(
