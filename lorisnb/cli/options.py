@@ -51,7 +51,9 @@ def threshold_list_type(name: str) -> Callable[[str], Any]:
 
 def add_scale_option(p: argparse.ArgumentParser, help: str) -> None:
     """``--scale [auto|on|off|...]``: the words of :func:`lorisnb.core.spec.validate.scale_value`."""
-    p.add_argument("--scale", nargs="?", const=True, default=None, type=arg_type(validate.scale_value), help=help)
+    # a word, not a number: a fixed factor (TUM evaluate_ate.py's --scale 1.7) is not one of them
+    p.add_argument("--scale", nargs="?", const=True, default=None, type=arg_type(validate.scale_value),
+                   metavar="{auto,on,off}", help=help)  # fmt: skip
 
 
 def add_threshold_options(p: argparse.ArgumentParser) -> None:
