@@ -655,6 +655,11 @@ def main() -> None:
                 out["result"] = _plain(fn(**{k: _decode(v) for k, v in req["args"].items()}))
         except BaseException as exc:  # the student's code failed (or called exit()): its error is the reply
             out = {"ok": False, "error": f"{type(exc).__name__}: {exc}"[:2000]}
+            if req["op"] == "exec":  # the cell's line that raised (its outermost frame in the cell's own code)
+                frames = traceback.walk_tb(exc.__traceback__)
+                at = next((n for f, n in frames if f.f_code.co_filename == req.get("name", "<cell>")), None)
+                if at is not None:
+                    out["line"] = at
             traceback.print_exc()
         if req["op"] == "exec":
             out["values"] = {n: (_plain(namespace[n]) if n in namespace else {"missing": True}) for n in req["capture"]}

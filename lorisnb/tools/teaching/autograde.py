@@ -51,9 +51,9 @@ import nbformat
 
 from lorisnb.errors import AnswerError, ValidationError
 from lorisnb.tools.teaching._grading import SandboxedAnswer
-from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, decode
+from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, SandboxTimeout, decode, error_of
 
-GRADER_VERSION = "13"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "14"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
 # 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
 # 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
@@ -73,7 +73,10 @@ GRADER_VERSION = "13"  # part of every result's digest: a new grader regrades ev
 # prediction run alone (one used is refused, as before); a NameError alone says what the formula has; float32 named;
 # 12: an answer whose cell is missing (deleted, metadata removed) is unanswered, never graded from the lab's run;
 # 13: the earlier cells' functions given to an answer run alone run cell by cell, and a refusal names the cell that
-# used lorisnb)
+# used lorisnb; 14: a formula whose cell fails alone after binding its functions (a try-out line's TypeError) is
+# graded on its definitions, as a NameError's was; an unanswered prediction is "no answer yet"; only the values the
+# cells added below an answer changed are read and named there; a sandbox that ended is no time-out; every reply
+# value is checked, whatever wrote it)
 
 
 @dataclass(frozen=True)
@@ -860,7 +863,7 @@ class RemoteFunction(SandboxedAnswer):
                 self._stop(f"a check's call of {self.name}")
             if self.calls_left is not None and self.calls_left - (time.monotonic() - t0) <= 0:
                 self._stop(f"the check's calls of {self.name}")
-            self.sandbox, self.error = None, f"TimeoutError: {exc}"
+            self.sandbox, self.error = None, error_of(exc)
             _raise(self.error)
         finally:
             if self.calls_left is not None:
@@ -986,7 +989,7 @@ def grade_submission(
     t0 = time.monotonic()
     try:
         data = read_submitted(notebook, settings.submitted)  # a link refused: never what it points to
-        nb = nbformat.reads(data.decode("utf-8"), as_version=4)
+        nb, read_notes = read_notebook(data)
         markers = instructor_markers(nb)
         # magics as IPython runs them; every cell of an answer's id, in the order the notebook ran them
         parts = {g: [as_python(a) for a in srcs] for g, srcs in answer_cells(nb).items()}
@@ -1001,7 +1004,7 @@ def grade_submission(
     py_path, checkout_dirs = _package_paths()
     hidden = [*settings.hidden, *checkout_dirs]
     _check_reachable(py_path, settings)
-    notes: list[str] = [
+    notes: list[str] = [*read_notes] + [
         f"{gid}: {n} cells carry this answer's id (a split or copied cell keeps it): all of them run, in the order "
         "the notebook last ran them (their execution counts; top to bottom where a cell has none, or where that "
         "order fails), so what the one run last set is graded; "
@@ -1115,6 +1118,10 @@ def grade_submission(
                     # the functions the student's earlier answer cells define, which this one may call (as the
                     # notebook did), before its own: its own definitions win
                     culprit, _ = run_cells(box, earlier_cells(code, before), lambda: budget.left(True))
+                    # what its functions' names held before its cells ran (an earlier cell's function, or nothing):
+                    # a cell that fails after rebinding every one of them had defined them, as in Jupyter
+                    box.run(f"{_BEFORE} = {{n: globals().get(n) for n in {list(defs)!r}}}",
+                            name=f"<before answer {gid}>", timeout_s=budget.left(True))  # fmt: skip
                     # each of its cells (a split cell's halves, copies) as the notebook ran them, an unused top-level
                     # import of lorisnb left out (as in the other cells: it costs nothing; one it uses meets the guard)
                     dropped = False
@@ -1126,17 +1133,19 @@ def grade_submission(
                         notes.append(f"{gid}: its unused import of lorisnb is left out when the formula runs alone "
                                      "(graded with numpy only, as the imports of your other cells are): it costs "
                                      "nothing; a formula that uses lorisnb is refused")  # fmt: skip
-                    if not reply.get("ok") and str(reply.get("error", "")).startswith("NameError"):
-                        # a try-out line reading the lab's numbers (eps, tau): the formula is the cell's definitions
+                    error = "" if reply.get("ok") else str(reply.get("error", ""))
+                    # a try-out line: reading the lab's numbers (eps, tau: a NameError alone), or failing after the
+                    # cell had defined its functions (a call missing an argument), as in Jupyter, where the check
+                    # then calls the functions the cell defined: the formula is the cell's definitions
+                    tryout = error and not error.startswith("NameError") and _defined_before_failing(box, gid, defs)
+                    if error.startswith("NameError") or tryout:
                         for assignments in (True, False):
                             defs_only = definitions_only(source, assignments, lorisnb=False)
                             if defs_only is None or defs_only == source:
                                 continue
                             again = box.run(defs_only, name=f"<answer {gid}>", timeout_s=budget.left(True))
                             if again.get("ok"):
-                                notes.append(f"{gid}: a line outside its functions needs the lab's numbers "
-                                             f"({reply.get('error')}); run alone, as formulas are graded, the cell "
-                                             "is graded on its functions (and imports) only")  # fmt: skip
+                                notes.append(_tryout_note(gid, defs, error, run, reply.get("line"), bool(tryout)))
                                 reply = again
                                 break
                     # the functions of the cells the student added below it, up to its check (the notebook ran them
@@ -1148,8 +1157,9 @@ def grade_submission(
                         notes.append(f"{gid}: the functions of the cells you added below it (up to its check), "
                                      f"given to it run alone, failed: {_with_hint(spec, below_failed[0][1], unkept)}")  # fmt: skip
             except SandboxError as exc:
-                why = _BUDGET_ERROR.format(budget.seconds) if budget.out(f"<answer {gid}>, run alone") else str(exc)
-                functions.update({d: RemoteFunction(None, d, f"TimeoutError: {why}") for d in defs})
+                spent = budget.out(f"<answer {gid}>, run alone")
+                why = f"TimeoutError: {_BUDGET_ERROR.format(budget.seconds)}" if spent else error_of(exc)
+                functions.update({d: RemoteFunction(None, d, why) for d in defs})
                 return
             if box.findings:  # the guard refused lorisnb to it (or found it loaded): no points, whatever it returns
                 refused = lorisnb_used(f"the answer cell {gid}", box.findings, by=culprit)
@@ -1238,6 +1248,44 @@ def leaked_note(markers: Sequence[str]) -> str:
     )
 
 
+class ByteOrderMark(ValueError):
+    """A returned file that is JSON after a UTF-8 byte-order mark (which Jupyter does not open)."""
+
+
+def read_notebook(data: bytes) -> tuple[nbformat.NotebookNode, list[str]]:
+    """A returned notebook's bytes read as nbformat reads them (version 4), and the notes of what
+    nbformat mended: cells sharing an id (it gives them new ones; its warnings are not printed, one
+    per cell, to the grader's terminal). Raises (:func:`not_a_notebook` says why in words): not
+    UTF-8, :class:`ByteOrderMark` (JSON after a byte-order mark), not JSON, or JSON that is no
+    notebook, a cell whose source or metadata is not as Jupyter writes them included (a number as a
+    cell's source)."""
+    import warnings
+
+    text = data.decode("utf-8")
+    if text.startswith("\ufeff"):
+        try:
+            json.loads(text[1:])
+        except ValueError:
+            pass  # not JSON either: said so
+        else:
+            raise ByteOrderMark("JSON after a UTF-8 byte-order mark")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        nb = nbformat.reads(text, as_version=4)
+    for cell in nb.get("cells", []):
+        if not isinstance(cell, dict) or not isinstance(cell.get("source"), str):
+            raise TypeError("a cell's source is not text")
+        if not isinstance(cell.get("metadata", {}), dict) or not isinstance(cell.get("cell_type"), str):
+            raise TypeError("a cell's metadata or type is not as Jupyter writes them")
+    notes = []
+    duplicated = sum(1 for w in caught if type(w.message).__name__ == "DuplicateCellId")
+    if duplicated:
+        notes.append(f"{duplicated} cell(s) of the notebook repeated another cell's id (cells copied outside Jupyter, "
+                     "or an edited file): nbformat gave them new ids, as Jupyter does when it opens the notebook; "
+                     "nothing else changed, and the cells are graded by their nbgrader metadata")  # fmt: skip
+    return nb, notes
+
+
 def not_a_notebook(exc: BaseException) -> str:
     """Why a returned file is no notebook, in words that quote nothing of it (an error of nbformat or
     json quotes the file's first bytes: a file the grader should never have read would be shown in
@@ -1248,6 +1296,9 @@ def not_a_notebook(exc: BaseException) -> str:
     name = type(exc).__name__
     if isinstance(exc, UnicodeDecodeError):
         what = "not UTF-8 text, so not a notebook"
+    elif isinstance(exc, ByteOrderMark):
+        what = ("JSON with a byte-order mark (the bytes EF BB BF before it), which Jupyter does not open either: "
+                "save it without one (an editor's 'UTF-8', not 'UTF-8 with BOM'), or as Jupyter saves it")  # fmt: skip
     elif name == "NotJSONError" or isinstance(exc, json.JSONDecodeError):
         what = "not JSON, so not a notebook as Jupyter saves it"
     elif isinstance(exc, OSError):
@@ -1351,6 +1402,40 @@ ALONE = (
     "functions and imports of your other cells (up to its check) and the lab's values its defs read when defined "
     "(eps=eps), never the lab's imports and variables"
 )
+
+
+_BEFORE = "_lorisnb_grader_defs_before"  # what a formula's names held before its cells ran (in its sandbox)
+
+
+def _defined_before_failing(box: Sandbox, gid: str, defs: Sequence[str]) -> bool:
+    """Whether the answer cell that just failed in ``box`` had bound every one of its functions
+    ``defs`` (each name holds another object than before its cells ran): the error came after the
+    definitions, as a try-out line's does, and in Jupyter the check would call them."""
+    probe = (f"{_BEFORE}_ok = isinstance(globals().get({_BEFORE!r}), dict) and all("
+             f"n in globals() and globals()[n] is not {_BEFORE}.get(n) for n in {list(defs)!r})")  # fmt: skip
+    try:
+        reply = box.run(probe, (f"{_BEFORE}_ok",), name=f"<after answer {gid}>")
+        box.run(f"globals().pop({_BEFORE!r}, None); globals().pop({_BEFORE + '_ok'!r}, None)", name="<cleanup>")
+    except SandboxError:
+        return False
+    return bool(reply.get("ok")) and reply.get("values", {}).get(f"{_BEFORE}_ok") == {"value": True}
+
+
+def _tryout_note(gid: str, defs: Sequence[str], error: str, source: str, line: Any, after: bool) -> str:
+    """The note of a formula graded on its definitions because a line outside them failed alone
+    (``error``; ``line``: the cell's line that raised it, when the sandbox could tell)."""
+    if not after:
+        return (f"{gid}: a line outside its functions needs the lab's numbers ({error}); run alone, as formulas are "
+                "graded, the cell is graded on its functions (and imports) only")  # fmt: skip
+    lines = source.split("\n")
+    where = "a line after its functions"
+    magic = cell_body(source) != source  # a %%time cell: its lines are the magic's call's, not the cell's
+    if isinstance(line, int) and 0 < line <= len(lines) and lines[line - 1].strip() and not magic:
+        where = f"line {line} of the cell (`{shorten(lines[line - 1].strip(), 80)}`)"
+    return (f"{gid}: {where} raised {error}, after the cell had defined {', '.join(f'`{d}`' for d in defs)}: "
+            "graded on its functions (and imports), which is what the check calls (in Jupyter they were defined "
+            "before that line failed); tidy that try-out line (fix the call, or remove it) so the cell runs "
+            "without an error")  # fmt: skip
 
 
 def _with_hint(spec: LabSpec, error: str, unkept: Mapping[str, str] | None = None) -> str:
@@ -1461,8 +1546,11 @@ def _predict(
         if stage == "setup":
             return failed(
                 "numpy, math, the functions and imports of your earlier answer cells and this cell's imports, run "
-                f"before the prediction (alone), did not finish within {setup:g} s (--timeout): {exc}"
+                "before the prediction (alone), did not finish"
+                + (f" within {setup:g} s (--timeout): {exc}" if isinstance(exc, SandboxTimeout) else f": {exc}")
             )
+        if not isinstance(exc, SandboxTimeout):
+            return failed(f"the prediction, run alone, did not finish: {exc}")
         return failed(
             f"the prediction, run alone, did not finish within {limit:.3g} s (twice the time it took in the lab, "
             f"plus 2 s, its imports and your earlier cells' functions run before it and not counted): {exc}"
@@ -1477,6 +1565,8 @@ def _predict(
                      "set: graded on the value the cell had computed up to that line (every line before it ran, in "
                      "order, as in the notebook)")  # fmt: skip
         return dict(got)
+    if unanswered(reply, capture):  # left as handed out (`pred = ...`, nbgrader's stub): "no answer yet"
+        return {n: {"missing": True} for n in capture}
     if not reply.get("ok"):
         try:
             read = _loaded(cell_body(source))
@@ -1495,6 +1585,18 @@ def _predict(
             + (f" ({tip})" if (tip := _name_tip(spec, str(reply.get("error")), imports_only=True)) else "")
         )
     return dict(reply.get("values", {}))
+
+
+def unanswered(reply: Mapping[str, Any], capture: Sequence[str]) -> bool:
+    """Whether a cell's run (``reply``) is that of an answer cell left as handed out: it failed on
+    nbgrader's stub (``raise NotImplementedError()``) with every name it is graded on unset or
+    still ``...``; "no answer yet", as a value question says, never an error of the answer."""
+    values = reply.get("values", {})
+    return (
+        not reply.get("ok")
+        and str(reply.get("error", "")).startswith("NotImplementedError")
+        and all(values.get(n, {"missing": True}).get("missing") for n in capture)
+    )
 
 
 def _defined_functions(source: str) -> set[str]:
@@ -1670,7 +1772,7 @@ def _run_student(
                     error = _BUDGET_ERROR.format(budget.seconds) if spent else str(exc)
                     values[gid] = {n: {"error": error} for n in spec.values.get(gid, ())}
                     stopped.add(gid)
-                    alone(gid, f"TimeoutError: {error}")
+                    alone(gid, f"TimeoutError: {error}" if spent else error_of(exc))
                 if spent:
                     unrun(k)
                     break
@@ -1701,7 +1803,9 @@ def _run_student(
             if k in follows and answered is not None and follows[k] in answered:  # a prediction's time includes them
                 answered[follows[k]] += took[k]
             if below is not None and below in values:  # set (or changed) below the answer: what the check saw
-                later = {n: v for n, v in reply.get("values", {}).items() if n in capture and not v.get("missing")}
+                before = values[below]
+                later = {n: v for n, v in reply.get("values", {}).items()
+                         if n in capture and not v.get("missing") and not _same(v, before.get(n))}  # fmt: skip
                 if later:
                     values[below] = {**values[below], **later}
                     set_below[below] = sorted(later)
@@ -1754,6 +1858,12 @@ def _run_student(
                 values[gid], [*own, *(src for k, (src, *_) in enumerate(cells) if follows.get(k) == gid)]
             )
     return values
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Whether two values read back (``_plain``'s form) are the same (NaN as NaN): a cell added below
+    an answer that left a value as the answer cell set it did not set it."""
+    return json.dumps(a, sort_keys=True, default=str) == json.dumps(b, sort_keys=True, default=str)
 
 
 def unset(values: Mapping[str, Mapping[str, Any]], sources: Sequence[str]) -> dict[str, dict[str, Any]]:

@@ -54,6 +54,7 @@ from lorisnb.tools.teaching.autograde import (
     lab_spec,
     leaked_note,
     not_a_notebook,
+    read_notebook,
     read_submitted,
     student_answers,
     unreadable,
@@ -523,7 +524,7 @@ def _class_answers(course: Path, lab: str, results: Sequence[SubmissionResult]) 
             continue
         try:
             path = course / "submitted" / res.student / lab / f"{lab}.ipynb"
-            nb = nbformat.reads(read_submitted(path, course / "submitted").decode("utf-8"), as_version=4)
+            nb, _ = read_notebook(read_submitted(path, course / "submitted"))
             out[res.student] = student_answers(nb)
         except Exception:  # noqa: BLE001 (changed since it was graded: compared next time)
             continue

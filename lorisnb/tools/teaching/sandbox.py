@@ -106,6 +106,17 @@ class SandboxError(RuntimeError):
     """The child died or broke the protocol (a time-out, the memory limit, ``os._exit``...)."""
 
 
+class SandboxTimeout(SandboxError):
+    """The child was stopped at its time limit (or no time was left to run it)."""
+
+
+def error_of(exc: SandboxError) -> str:
+    """The error an answer gets when its sandbox stopped: ``TimeoutError: ...`` for a time limit
+    (:class:`SandboxTimeout`), else ``RuntimeError: ...`` (the sandbox ended: its code ended its
+    process, the memory limit...): never a time-out that was none."""
+    return f"{'TimeoutError' if isinstance(exc, SandboxTimeout) else 'RuntimeError'}: {exc}"
+
+
 def can_isolate() -> bool:
     """Whether :class:`Sandbox` can isolate (root on Linux, with unshare and setpriv)."""
     return (
@@ -416,7 +427,7 @@ class Sandbox:
         if proc is None or proc.poll() is not None or proc.stdin is None or proc.stdout is None:
             raise SandboxError("the sandbox is not running (it ended earlier)")
         if timeout_s <= 0:
-            raise SandboxError("time limit: no time left for it")
+            raise SandboxTimeout("time limit: no time left for it")
         fd = proc.stdout.fileno()
         self._drain(fd)
         request_id = secrets.token_hex(8)
@@ -424,31 +435,53 @@ class Sandbox:
             proc.stdin.write((json.dumps({**request, "id": request_id}) + "\n").encode())
             proc.stdin.flush()
         except BrokenPipeError:
-            self.close()
-            raise SandboxError("the sandbox ended (memory limit, or the code ended its process)") from None
+            raise SandboxError(self._ended()) from None
         deadline = time.monotonic() + timeout_s
         while True:
             while (end := self._line_end()) < 0:
                 left = deadline - time.monotonic()
                 if left <= 0:
                     self.close()
-                    raise SandboxError(f"time limit: the cell ran for more than {timeout_s:g} s and was stopped")
+                    raise SandboxTimeout(f"time limit: the cell ran for more than {timeout_s:g} s and was stopped")
                 ready, _, _ = select.select([fd], [], [], left)
                 if ready:
                     chunk = os.read(fd, 1 << 16)
                     if not chunk:
-                        self.close()
-                        raise SandboxError("the sandbox ended (memory limit, or the code ended its process)")
+                        raise SandboxError(self._ended())
                     self._take(chunk)
             line = bytes(self._buffer[:end])
             del self._buffer[: end + 1]
             self._scanned = 0
             reply = self._line(line)
             if reply is not None and reply.get("id") == request_id:
-                reply.pop("id")
-                return reply
+                return checked_reply(reply)
             if reply is not None:
                 self.stray += 1  # not the reply to this request: written by the code into the pipe
+
+    def _ended(self) -> str:
+        """Close the child, which ended on its own (its pipe closed), and say how: its exit status
+        (``os._exit``, ``sys.exit`` past the cell, a signal: SIGKILL is the memory limit or a kill)."""
+        proc = self._proc
+        code = None
+        if proc is not None:
+            try:
+                code = proc.wait(timeout=2)
+            except subprocess.TimeoutExpired:
+                code = None
+        self.close()
+        if code is None:
+            return "the sandbox ended (its process closed the grader's pipe: the code ended it, or the memory limit)"
+        if code >= 0:
+            return (f"the sandbox ended: the code ended its process (exit status {code}: os._exit, or the like); "
+                    "an answer's code must not end the process it runs in")  # fmt: skip
+        try:
+            name = signal.Signals(-code).name
+        except ValueError:
+            name = f"signal {-code}"
+        why = {"SIGKILL": "the memory limit, or the code killed it", "SIGXCPU": "the CPU time limit",
+               "SIGSEGV": "a crash in compiled code, or the memory limit", "SIGABRT": "an abort (often out of memory)",
+               "SIGXFSZ": "the file size limit"}.get(name, "the code, or a limit")  # fmt: skip
+        return f"the sandbox ended: its process was stopped by {name} ({why})"
 
     def _line_end(self) -> int:
         """Where the buffer's first line ends (-1: no line end yet); each byte is looked at once."""
@@ -544,6 +577,58 @@ class Sandbox:
         encoded = {k: _encode(v) for k, v in args.items()}
         timeout = self.limits.cell_timeout_s if timeout_s is None else min(self.limits.cell_timeout_s, timeout_s)
         return self._ask({"op": "call", "name": name, "args": encoded}, timeout)
+
+
+#: what a reply's value is told as when it is none of :func:`._sandbox_child._plain`'s forms
+_UNRECOGNISED = {"not_plain": "a reply the grader does not recognise (not a value the sandbox describes)"}
+
+
+def checked_plain(plain: Any) -> dict[str, Any]:
+    """A value of a reply as :func:`._sandbox_child._plain` describes it, checked: ``{"missing":
+    True}``, ``{"value": a bool, int, float, str or None}``, ``{"array": numbers, "dtype": a numeric
+    dtype}`` (it must make that array), ``{"not_plain": a type's name}``; anything else (the
+    student's code can write a reply of its own into the pipe) is ``{"not_plain": ...}``, never
+    passed on to the checks."""
+    if not isinstance(plain, dict):
+        return dict(_UNRECOGNISED)
+    keys = set(plain)
+    if keys == {"missing"} and plain["missing"] is True:
+        return {"missing": True}
+    if keys == {"value"} and (plain["value"] is None or type(plain["value"]) in (bool, int, float, str)):
+        return {"value": plain["value"]}
+    if keys == {"not_plain"} and isinstance(plain["not_plain"], str):
+        return {"not_plain": plain["not_plain"][:200]}
+    if keys == {"array", "dtype"} and isinstance(plain["array"], list) and isinstance(plain["dtype"], str):
+        try:
+            dtype = np.dtype(plain["dtype"])
+            if dtype.kind not in "biuf":
+                return dict(_UNRECOGNISED)
+            np.array(plain["array"], dtype=dtype)
+        except (TypeError, ValueError, OverflowError):
+            return dict(_UNRECOGNISED)
+        return {"array": plain["array"], "dtype": plain["dtype"]}
+    return dict(_UNRECOGNISED)
+
+
+def checked_reply(reply: dict[str, Any]) -> dict[str, Any]:
+    """A reply to the grader (its ``id`` matched) with every part checked, whatever wrote it (the
+    child, or the student's code writing into the pipe): ``ok`` a bool, ``error`` a text, ``line`` a
+    positive int, ``values`` names to :func:`checked_plain` values, ``result`` one such value,
+    ``output_truncated_mib`` a number; anything else left out."""
+    out: dict[str, Any] = {"ok": reply.get("ok") is True}
+    if "error" in reply or not out["ok"]:
+        out["error"] = str(reply.get("error", "RuntimeError: failed"))[:2000]
+    line = reply.get("line")
+    if type(line) is int and line > 0:
+        out["line"] = line
+    if isinstance(reply.get("values"), dict):
+        out["values"] = {str(n): checked_plain(v) for n, v in reply["values"].items()}
+    if "result" in reply:
+        out["result"] = checked_plain(reply["result"])
+    mib = reply.get("output_truncated_mib")
+    if type(mib) in (int, float):
+        out["output_truncated_mib"] = mib
+    return out
 
 
 def _encode(value: Any) -> Any:
