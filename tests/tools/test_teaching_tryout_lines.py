@@ -133,6 +133,11 @@ def test_a_sandbox_that_ended_is_not_a_timeout_and_forged_replies_are_filtered(t
             assert reply["values"] == {"x": {"not_plain": reply["result"]["not_plain"]}}
         reply = box.call("f", {"x": 1.0, "forged": json.dumps({"array": [1, 2], "dtype": "<f8"})})
         assert reply["result"] == {"array": [1, 2], "dtype": "<f8"}  # a well-formed value passes, as any answer's
+        # the sandbox's own replies pass whole: a 0-d array (its tolist() is one number), a numpy bool, a string
+        assert box.run("import numpy as np\ndef h():\n    return np.array(2.5)\nb = np.bool_(True)\ns = 'x'")["ok"]
+        assert box.call("h", {})["result"] == {"array": 2.5, "dtype": "<f8"}
+        assert box.run("", ("b", "s", "nothing"))["values"] == {"b": {"value": True}, "s": {"value": "x"},
+                                                                  "nothing": {"missing": True}}  # fmt: skip
 
 
 def test_a_failing_cells_line_is_in_its_reply(tmp_path):

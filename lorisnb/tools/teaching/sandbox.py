@@ -585,8 +585,8 @@ _UNRECOGNISED = {"not_plain": "a reply the grader does not recognise (not a valu
 
 def checked_plain(plain: Any) -> dict[str, Any]:
     """A value of a reply as :func:`._sandbox_child._plain` describes it, checked: ``{"missing":
-    True}``, ``{"value": a bool, int, float, str or None}``, ``{"array": numbers, "dtype": a numeric
-    dtype}`` (it must make that array), ``{"not_plain": a type's name}``; anything else (the
+    True}``, ``{"value": a bool, int, float, str or None}``, ``{"array": numbers (nested lists, or one
+    number: a 0-d array), "dtype": a numeric dtype}`` (it must make that array), ``{"not_plain": a type's name}``; anything else (the
     student's code can write a reply of its own into the pipe) is ``{"not_plain": ...}``, never
     passed on to the checks."""
     if not isinstance(plain, dict):
@@ -598,7 +598,12 @@ def checked_plain(plain: Any) -> dict[str, Any]:
         return {"value": plain["value"]}
     if keys == {"not_plain"} and isinstance(plain["not_plain"], str):
         return {"not_plain": plain["not_plain"][:200]}
-    if keys == {"array", "dtype"} and isinstance(plain["array"], list) and isinstance(plain["dtype"], str):
+    # a 0-d array's ``tolist()`` is its one number
+    if (
+        keys == {"array", "dtype"}
+        and type(plain["array"]) in (list, int, float, bool)
+        and isinstance(plain["dtype"], str)
+    ):
         try:
             dtype = np.dtype(plain["dtype"])
             if dtype.kind not in "biuf":
