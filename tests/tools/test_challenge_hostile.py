@@ -72,7 +72,11 @@ RESULT = b"scene: cafe\nframe: base_link\n\nseq: 1\n1560004885.5 1 2 3 0 0 0 1\n
         ({"/etc/evil.txt": RESULT}, 400, "absolute path"),
         ({"a\\..\\evil.txt": RESULT}, 400, "Windows path"),
         ({"C:evil.txt": RESULT}, 400, "Windows path"),
-        ({".hidden.txt": RESULT}, 400, "not starting with '.'"),
+        (
+            {".hidden.txt": RESULT},
+            400,
+            "character 1 is '.' (a hidden file: leave it out of the upload), which cannot start a name",
+        ),
         ({"x.pdf": RESULT}, 415, "expected result files in a format lorisnb reads: OpenLORIS result files (.txt)"),
         ({"inner.zip": zipped({"a.txt": RESULT})}, 415, "an archive inside the archive"),
         ({"run.bag": b"#ROSBAG V2.0\n"}, 415, "a ROS bag; the challenge takes no ROS bags"),

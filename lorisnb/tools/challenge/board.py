@@ -8,7 +8,13 @@ algorithm, on the phase's sequences, a sequence without output counting as a fai
 ``rank`` is 1 + the number of teams significantly better (teams the data cannot separate share a
 rank). The order within a rank, the paper's (Sec. IV: robustness first, then accuracy of the
 correct poses): the metric's scene value, then the C-ATE RMSE (lower first; the CR, higher first,
-when the metric is C-ATE itself), then the earlier submission.
+when the metric is C-ATE itself), then the earlier submission; the two values compared to
+:data:`ORDER_DIGITS` significant digits, so that results equal but for the last bits of their
+floating-point means (one run, and the same run uploaded as 8 trials) are ordered by their
+submission. A row's CR and C-ATE RMSE are means over its trials computed exactly
+(:func:`exact_mean`: 8 copies of one value average to that value), and the column of the metric
+itself is the row's ``value`` (one number, not a second computation of it). The sentence under
+a scene's table is worded from that ordered table: the team it names first is the table's first.
 
 Hidden stays hidden: a submission is scored on every sequence it has output for, but its page, its
 JSON and its figure show only the sequences whose scores are visible now
@@ -23,7 +29,9 @@ from __future__ import annotations
 
 import datetime as dt
 import json
+import math
 import re
+import statistics
 from collections.abc import Callable
 from typing import Any
 
@@ -33,13 +41,17 @@ import pandas as pd
 from lorisnb.core.lifelong.aggregate import aggregate_scenes
 from lorisnb.core.lifelong.coverage import COPIED, FAILED_RUN
 from lorisnb.tools.challenge.config import Challenge, Phase, sequences_of
-from lorisnb.tools.report.leaderboard import METRICS, findings
+from lorisnb.tools.report.leaderboard import METRICS, findings, sentence
 
 #: The per-sequence columns a team sees: rates and errors of its own estimate, nothing of the ground truth.
 PUBLIC_COLUMNS = ["file", "scene", "seq", "poses", "matched", "cr", "cr_t", "cs_r", "ate_rmse", "c_ate_rmse",
                   "aoe_rmse", "reloc_time"]  # fmt: skip
 BOARD_COLUMNS = ["scene", "position", "rank", "team", "value", "low", "high", "coverage", "tied_with", "c_ate_rmse",
                  "cr", "submission", "submitted"]  # fmt: skip
+#: The significant digits the order within a rank compares the metric's value and the C-ATE RMSE
+#: (or the CR) to: two values that agree to these are equal there, and the earlier submission goes
+#: first (a mean's last bits depend on how many trials were summed, not on the result).
+ORDER_DIGITS = 12
 
 
 def phase_sequences(phase: Phase, durations: pd.DataFrame) -> pd.DataFrame:
@@ -316,25 +328,59 @@ def leaderboard(challenge: Challenge, phase: Phase, subs: list[dict[str, Any]], 
     board = f.board.rename(columns={"algorithm": "team"})
     scenes = aggregate_scenes(table, wanted)[["scene", "algorithm", "cr", "c_ate_rmse"]].rename(
         columns={"algorithm": "team"}
-    )  # a team's trials: one row each here, one value on the board (their mean, as compare's value)
-    scenes = scenes.groupby(["scene", "team"], as_index=False, sort=False)[["cr", "c_ate_rmse"]].mean()
+    )  # a team's trials: one row each here, one value on the board (their exact mean, as compare's value)
+    scenes = scenes.groupby(["scene", "team"], as_index=False, sort=False)[["cr", "c_ate_rmse"]].agg(exact_mean)
     board = board.merge(scenes, on=["scene", "team"], how="left", validate="one_to_one")
+    if challenge.metric in ("cr", "c_ate_rmse"):  # the metric's column is the value ranked on: one number
+        board[challenge.metric] = board["value"]
     when = {s["team"]: s for s in latest}
     board["submission"] = [when[t]["id"] for t in board["team"]]
     board["submitted"] = [when[t]["created"] for t in board["team"]]
     higher = METRICS.get(challenge.metric, ("", True))[1]
     second, second_higher = ("cr", True) if challenge.metric == "c_ate_rmse" else ("c_ate_rmse", False)
-    missing = np.inf if not higher else -np.inf
-    board["_v"] = board["value"].fillna(missing) * (-1 if higher else 1)
-    board["_s"] = board[second].fillna(-np.inf if second_higher else np.inf) * (-1 if second_higher else 1)
-    board = board.sort_values(["scene", "rank", "_v", "_s", "submitted"]).drop(columns=["_v", "_s"])
+    board["_v"] = [order_key(v, higher) for v in board["value"]]
+    board["_s"] = [order_key(v, second_higher) for v in board[second]]
+    board = board.sort_values(["scene", "rank", "_v", "_s", "submitted"], kind="stable").drop(columns=["_v", "_s"])
     board["position"] = board.groupby("scene").cumcount() + 1
     order = {s: i for i, s in enumerate(phase.scenes)}
     board = board.sort_values(["scene", "position"], key=lambda c: c.map(order) if c.name == "scene" else c)
     out["rows"] = [{k: _plain(r[k]) for k in BOARD_COLUMNS} for _, r in board.iterrows()]
-    out["sentences"] = [f.sentences[k] for k in f.sentences]
+    out["sentences"] = [_sentence(board, f.pairs, suite, scene) for suite, scene in f.sentences]
     out["test"] = f.test
     return out
+
+
+def exact_mean(values: Any) -> float:
+    """The mean of the finite ``values`` (NaN left out, as pandas' mean leaves it out), their sum
+    taken exactly and rounded once (:func:`statistics.mean`): copies of one value average to that
+    value, whatever their count (pandas' mean of 8 copies of 0.4725435807036217 is
+    0.4725435807036216, numpy's of 3 is 0.47254358070362174); NaN without a value; an infinite
+    value makes it infinite (or NaN), as a plain mean does."""
+    kept = [float(v) for v in values if not math.isnan(float(v))]
+    if not kept:
+        return math.nan
+    if not all(math.isfinite(v) for v in kept):
+        return float(np.mean(kept))
+    return float(statistics.mean(kept))
+
+
+def order_key(value: Any, higher: bool) -> float:
+    """A value as the order within a rank compares it (the smaller key first): rounded to
+    :data:`ORDER_DIGITS` significant digits, negated where higher is better; a missing value last."""
+    v = float(value) if value is not None else math.nan
+    if math.isnan(v):
+        return math.inf
+    rounded = float(f"{v:.{ORDER_DIGITS}g}")  # an infinity stays one
+    return -rounded if higher else rounded
+
+
+def _sentence(board: pd.DataFrame, pairs: pd.DataFrame, suite: str, scene: str) -> str:
+    """The sentence under a scene's table (:func:`lorisnb.tools.report.leaderboard.sentence`),
+    worded from the board as ordered and shown (the team it names first is the table's first)."""
+    rows = board[board["scene"] == scene].rename(columns={"team": "algorithm"}).reset_index(drop=True)
+    if {"suite", "scene"} <= set(pairs.columns):
+        pairs = pairs[(pairs["suite"] == suite) & (pairs["scene"] == scene)]
+    return sentence(rows, pairs)
 
 
 def _failed_teams(teams: list[str], rows: list[dict[str, Any]], wanted: pd.DataFrame) -> list[dict[str, Any]]:

@@ -21,6 +21,8 @@ import os
 import re
 import shutil
 import stat
+import string
+import unicodedata
 import zipfile
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -37,7 +39,13 @@ from lorisnb.io.readers.registry import FORMATS, recognise, sample
 MAX_RATIO = 100
 #: Bytes read at a time.
 CHUNK = 1 << 16
-_SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9 _.,+=@()-]{0,199}$")
+#: What a file name kept from an upload is made of (:func:`safe_name`, :func:`name_fault`): its
+#: first character one of :data:`NAME_FIRST`, the others of :data:`NAME_REST`, at most
+#: :data:`NAME_MAX` characters. The check and the message that states it (:data:`NAME_RULE`) are
+#: both made from these.
+NAME_FIRST = string.ascii_letters + string.digits
+NAME_REST = NAME_FIRST + " _.,+=@()-"
+NAME_MAX = 200
 #: The suffixes of result files taken (an archive's members too).
 SUFFIXES = (".txt", ".csv")
 #: What an upload may hold, in words (every refusal of a file's kind ends with it).
@@ -96,10 +104,55 @@ def safe_name(name: str, where: str) -> str:
     if not parts:
         raise UploadRefused(f"{where}: {name!r}: no file name")
     base = parts[-1]
-    if not _SAFE_NAME.match(base):
-        raise UploadRefused(f"{where}: {base!r}: expected a name of letters, digits, '-', '_' and '.', not starting "
-                            "with '.'")  # fmt: skip
+    fault = name_fault(base)
+    if fault:
+        fixed = _name_fixed(base)
+        hidden = base.startswith(".")  # .DS_Store and the like: left out, not renamed
+        rename = f"; rename it {fixed!r}" if fixed and not hidden and not name_fault(fixed) else ""
+        raise UploadRefused(f"{where}: {base!r}: {fault}; expected {NAME_RULE}{rename}")
     return base
+
+
+#: The names :func:`safe_name` takes, in words (from :data:`NAME_FIRST`, :data:`NAME_REST` and
+#: :data:`NAME_MAX`, the definition it checks).
+NAME_RULE = (
+    f"a name of 1 to {NAME_MAX} characters: an ASCII letter or digit (A-Z, a-z, 0-9) first, then ASCII letters, "
+    "digits, spaces and " + ", ".join(f"'{c}'" for c in NAME_REST if c not in NAME_FIRST and c != " ")
+)
+
+
+def _said(c: str) -> str:
+    """A character as a message names it: a space in words, another by itself (quoted), with its
+    code point where it is not plain ASCII."""
+    if c == " ":
+        return "a space"
+    if c.isascii() and c.isprintable():
+        return repr(c)
+    name = unicodedata.name(c, "")
+    return f"{c!r} (U+{ord(c):04X}{', ' + name if name and not c.isprintable() else ''})"
+
+
+def name_fault(base: str) -> str | None:
+    """What makes ``base`` a name :func:`safe_name` refuses, naming the first character at fault
+    and its position (1 for the first); None for a name it takes."""
+    if not base:
+        return "no file name"
+    if base[0] not in NAME_FIRST:
+        what = " (a hidden file: leave it out of the upload)" if base[0] == "." else ""
+        return f"character 1 is {_said(base[0])}{what}, which cannot start a name"
+    for k, c in enumerate(base[1:], start=2):
+        if c not in NAME_REST:
+            return f"character {k} is {_said(c)}, which a name cannot hold"
+    if len(base) > NAME_MAX:
+        return f"{len(base)} characters long"
+    return None
+
+
+def _name_fixed(base: str) -> str:
+    """``base`` as it could be renamed: without the characters before its first letter or digit,
+    each other character a name cannot hold as '_'."""
+    start = next((k for k, c in enumerate(base) if c in NAME_FIRST), len(base))
+    return "".join(c if c in NAME_REST else "_" for c in base[start:])
 
 
 #: The largest trial number a file's name may carry (``cafe-1-1_trial3.txt``, ``run_3/``): the
