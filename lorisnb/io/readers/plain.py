@@ -42,10 +42,12 @@ TRAJECTORY_FORMATS = FORMAT_NAMES
 ROTATION_TOLERANCE = 1e-3  # KITTI/EuRoC rotation blocks: |R R^T - I| and |det R - 1| below this
 
 
-def _warn(notes: list[str], warn: bool) -> None:
+def _warn(notes: list[str], warn: bool, stacklevel: int = 4) -> None:
+    """Issue a reader's notes, attributed to the code that called the public reader (``stacklevel``
+    counts this function, the reader's body and its public wrapper)."""
     if warn:
         for note in notes:
-            warnings.warn(note, LorisWarning, stacklevel=3)
+            warnings.warn(note, LorisWarning, stacklevel=stacklevel)
 
 
 def _data_rows(lines: Lines) -> np.ndarray:
@@ -66,6 +68,24 @@ def _check_width(lines: Lines, rows: np.ndarray, spath: str, ok: np.ndarray, exp
         raise ParseError(spath, int(i) + 1, _width_message(lines.text(i), int(lines.ntok[i]), expected, fmt))
 
 
+def refuse_other_format(path: str | os.PathLike, fmt: str, read: Callable[[], object] | None = None) -> None:
+    """A ParseError when the file at ``path`` is plainly in another format than ``fmt`` (its first
+    lines recognised by :mod:`lorisnb.io.readers.registry`), saying which and the option that reads
+    it: every reader of a format checks this, so a EuRoC CSV given to :func:`read_tum` (whose 8
+    comma-separated numbers it would take as seconds and ``x y z w``) is refused as
+    :func:`read_trajectory` refuses it. ``read``: the reader of ``fmt`` over the file, without its
+    warnings; where it refuses the file too, its own error (naming the line, with the same hint) is
+    raised. A pipe, a path that is not there or a file of no known layout is left to the reader."""
+    if not isinstance(path, (str, os.PathLike)):
+        return  # the reader says what it expected
+    found = recognise(sample(path))
+    if found and fmt not in found:
+        if read is not None:
+            read()
+        want = FORMATS[fmt]
+        raise ParseError(path, None, f"expected the {want.name} format ({want.columns}); {FORMATS[found[0]].hint()}")
+
+
 def read_tum(
     path: str | os.PathLike,
     warn: bool = True,
@@ -78,7 +98,20 @@ def read_tum(
     Non-finite poses are skipped and unsorted or repeated stamps sorted (keeping the last, or with
     ``repeated="keep"`` every pose of a repeated stamp, as evo does), with a warning. Raises ParseError for a malformed line or a zero-norm quaternion. The file is read
     in chunks (:func:`lorisnb.io.parsing.chunks.read_rows`); ``progress`` is called with each chunk's bytes.
+    A file plainly in another format (a EuRoC CSV, ...) is refused with a ParseError naming it
+    (:func:`refuse_other_format`).
     """
+    refuse_other_format(path, "tum", lambda: _read_tum(path, False, None, repeated))
+    return _read_tum(path, warn, progress, repeated)
+
+
+def _read_tum(
+    path: str | os.PathLike,
+    warn: bool = True,
+    progress: Callable[[int], object] | None = None,
+    repeated: str = "drop",
+) -> Trajectory:
+    """:func:`read_tum` of a file whose format is already checked."""
     spath = str(path)
     expected = "8 numbers 'stamp tx ty tz qx qy qz qw' (TUM format) or a '#' comment"
     rows = read_rows(
@@ -120,7 +153,7 @@ def _poses(
     if keep is not None and not keep.all():
         stamps, positions, quaternions, line_no = stamps[keep], positions[keep], quaternions[keep], line_no[keep]
     traj = finish(spath, stamps, positions, quaternions, line_no, "", notes, repeated)
-    _warn(notes, warn)
+    _warn(notes, warn, 5)  # _poses, _read_tum, read_tum
     return traj
 
 
@@ -174,7 +207,16 @@ def read_kitti(
     KITTI files carry no stamps: pass ``stamps`` (an array, or a times file with one stamp per
     line as KITTI's ``times.txt``); without them the pose index is used as the stamp (and
     ``meta["stamps"] == "index"``). Given stamps must increase (``repeated="keep"``: or repeat).
+    A file plainly in another format is refused with a ParseError naming it (:func:`refuse_other_format`).
     """
+    refuse_other_format(path, "kitti", lambda: _read_kitti(path, stamps, repeated))
+    return _read_kitti(path, stamps, repeated)
+
+
+def _read_kitti(
+    path: str | os.PathLike, stamps: np.ndarray | str | os.PathLike | None = None, repeated: str = "drop"
+) -> Trajectory:
+    """:func:`read_kitti` of a file whose format is already checked."""
     keep_all = choice("repeated", repeated, REPEATED) == "keep"
     spath = str(path)
     rows = read_rows(
@@ -263,7 +305,15 @@ def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop
     ``stamp_ns, p_x, p_y, p_z, q_w, q_x, q_y, q_z[, ...]`` after a ``#timestamp,...`` header;
     stamps become seconds (nanoseconds / 1e9, as evo), quaternions ``xyzw``. Further columns
     (velocities, biases) are ignored. ``repeated``: as :func:`read_tum`. Read in chunks as
-    :func:`read_tum` (the rows straight into the arrays kept)."""
+    :func:`read_tum` (the rows straight into the arrays kept). A file plainly in another format (a
+    TUM file whose stamps happen to be whole numbers, ...) is refused with a ParseError naming it
+    (:func:`refuse_other_format`)."""
+    refuse_other_format(path, "euroc", lambda: _read_euroc(path, False, repeated))
+    return _read_euroc(path, warn, repeated)
+
+
+def _read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop") -> Trajectory:
+    """:func:`read_euroc` of a file whose format is already checked."""
     spath = str(path)
     if not regular_file(path):  # a pipe is read once: by the byte scanner, not after a look at its head
         return _read_euroc_whole(path, warn, repeated)
@@ -329,7 +379,7 @@ def _read_euroc_whole(path: str | os.PathLike, warn: bool, repeated: str = "drop
     line_no = rows + 1
     keep = check_rows(spath, values[:, 0], poses[:, :3], poses[:, 3:], line_no, notes)
     traj = finish(spath, values[keep, 0] / 1e9, poses[keep, :3], poses[keep, 3:], line_no[keep], "", notes, repeated)
-    _warn(notes, warn)
+    _warn(notes, warn, 5)  # the whole-file reader, _read_euroc, read_euroc
     return traj
 
 
@@ -373,10 +423,7 @@ def read_trajectory(
             raise ValidationError(f"{name}: only for {' and '.join(fmts)} files, not {fmt} files")
     if seq is not None and (isinstance(seq, (bool, np.bool_)) or not isinstance(seq, (int, np.integer)) or seq < 0):
         raise ValidationError(f"seq={seq!r}: expected the whole number of a 'seq: N' block")
-    found = recognise(sample(path))
-    if found and fmt not in found:  # plainly another format: say which option reads it
-        want = FORMATS[fmt]
-        raise ParseError(path, None, f"expected the {want.name} format ({want.columns}); {FORMATS[found[0]].hint()}")
+    refuse_other_format(path, fmt)  # plainly another format: say which option reads it
     return _read(path, fmt, seq, stamps, topic, tf, repeated, repair_stamps)
 
 
@@ -394,12 +441,12 @@ def _read(
         from lorisnb.io.readers.bags import read_bag
 
         return read_bag(path, topic=topic, tf=tf, repeated=repeated)
-    if fmt == "tum":
-        return read_tum(path, repeated=repeated)
+    if fmt == "tum":  # the format checked by read_trajectory: the file's head is looked at once
+        return _read_tum(path, repeated=repeated)
     if fmt == "kitti":
-        return read_kitti(path, stamps, repeated=repeated)
+        return _read_kitti(path, stamps, repeated=repeated)
     if fmt == "euroc":
-        return read_euroc(path, repeated=repeated)
+        return _read_euroc(path, repeated=repeated)
     if fmt == "openloris":
         f = read_openloris(path, remove_repeated=choice("repeated", repeated, ("drop", "keep")) == "drop",
                            repair_stamps=repair_stamps)  # fmt: skip

@@ -1,0 +1,97 @@
+"""Each public reader refuses a file plainly in another format, naming it and the option that reads
+it, as ``read_trajectory`` and the evaluations do: ``read_tum`` once read a EuRoC CSV without a word
+(its nanosecond stamps taken as seconds, its ``w x y z`` as ``x y z w``), ``read_euroc`` a TUM file
+whose stamps are whole numbers (seconds taken as nanoseconds)."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import lorisnb as ln
+from lorisnb.errors import ParseError
+
+
+def _rows(path: Path, n: int = 400) -> list[list[str]]:
+    rows = [line.split() for line in path.read_text().splitlines() if line.strip() and not line.startswith("#")]
+    return rows[:n]
+
+
+@pytest.fixture(scope="module")
+def files(data, tmp_path_factory) -> dict[str, Path]:
+    """fr2_desk's ground truth in each format (the same poses), and a TUM file of whole-second stamps."""
+    src = data.tum / "fr2_desk_groundtruth.txt"
+    rows = _rows(src)
+    out = tmp_path_factory.mktemp("formats")
+    tum = out / "gt.txt"
+    tum.write_text("".join(" ".join(r) + "\n" for r in rows))
+    euroc = out / "gt.csv"
+    with open(euroc, "w") as f:
+        f.write("#timestamp [ns],p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z []\n")
+        for r in rows:
+            whole, _, frac = r[0].partition(".")
+            f.write(",".join([whole + (frac + "0" * 9)[:9], *r[1:4], r[7], *r[4:7]]) + "\n")
+    kitti = out / "gt_kitti.txt"
+    from scipy.spatial.transform import Rotation
+
+    a = np.array(rows, float)
+    m = np.concatenate([Rotation.from_quat(a[:, 4:8]).as_matrix(), a[:, 1:4, None]], axis=2).reshape(-1, 12)
+    np.savetxt(kitti, m, fmt="%.12e")
+    whole = out / "whole_seconds.txt"  # stamps 0, 1, 2, ...: TUM, 8 numbers, whole
+    whole.write_text("".join(" ".join([str(k), *r[1:]]) + "\n" for k, r in enumerate(rows)))
+    return dict(tum=tum, euroc=euroc, kitti=kitti, whole=whole)
+
+
+def test_each_format_read_by_its_own_reader(files):
+    tum, euroc = ln.read_tum(files["tum"]), ln.read_euroc(files["euroc"])
+    assert len(tum.stamps) == len(euroc.stamps) == 400
+    assert 1.3e9 < tum.stamps[0] < 1.4e9 and np.allclose(euroc.stamps, tum.stamps, rtol=0, atol=1e-6)
+    assert np.array_equal(euroc.positions, tum.positions)
+    assert np.allclose(euroc.quaternions, tum.quaternions, atol=1e-12)
+    kitti = ln.read_kitti(files["kitti"])
+    assert np.allclose(kitti.positions, tum.positions, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("reader", "given", "looks", "option"),
+    [
+        ("read_tum", "euroc", "a EuRoC CSV file", "fmt='euroc'"),
+        ("read_tum", "kitti", "a KITTI pose file", "fmt='kitti'"),
+        ("read_kitti", "tum", "a TUM trajectory file", "fmt='tum'"),
+        ("read_kitti", "euroc", "a EuRoC CSV file", "fmt='euroc'"),
+        ("read_euroc", "tum", "a TUM trajectory file", "fmt='tum'"),
+        ("read_euroc", "whole", "a TUM trajectory file", "fmt='tum'"),
+        ("read_euroc", "kitti", "a KITTI pose file", "fmt='kitti'"),
+    ],
+)
+def test_a_reader_refuses_another_formats_file_naming_it(files, reader, given, looks, option):
+    with pytest.raises(ParseError) as exc:
+        getattr(ln, reader)(files[given])
+    text = str(exc.value)
+    assert str(files[given]) in text and f"this looks like {looks}" in text and option in text
+    fmt = reader.removeprefix("read_")
+    with pytest.raises(ParseError) as same:
+        ln.read_trajectory(files[given], fmt)
+    if "line" not in text:  # read without an error of the reader's own (a line of the wrong width, ...): refused
+        assert str(same.value) == text  # by the one check read_trajectory makes, with its message
+
+
+def test_files_another_reader_would_take_are_refused_without_a_word_first(files):
+    """The files a reader read without an error (a EuRoC CSV as TUM, whole-second TUM stamps as
+    nanoseconds): refused as read_trajectory refuses them, with no warning of the reading before."""
+    for reader, given, want in ((ln.read_tum, "euroc", "euroc"), (ln.read_euroc, "whole", "tum")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with pytest.raises(ParseError, match=rf"expected the .* format .*read it with --format {want}\b"):
+                reader(files[given])
+
+
+def test_the_other_readers_errors_keep_their_line(files):
+    """Where a reader refuses the file itself its own error is kept: the line and its width."""
+    with pytest.raises(ParseError, match=r"line 1: .* has 12 fields; .*this looks like a KITTI pose file"):
+        ln.read_tum(files["kitti"])
+    with pytest.raises(ParseError, match=r"line 1: stamp \d+\.\d+ has a fraction.*this looks like a TUM"):
+        ln.read_euroc(files["tum"])
