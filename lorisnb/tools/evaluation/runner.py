@@ -121,7 +121,32 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
         warnings.warn(f"{len(failed)} of {len(jobs)} inputs could not be evaluated and are in no table; "
                       f"Evaluation.failures lists them with the reason, exit_status() is 1: "
                       f"{failed[0].error}{more}", FailedInputsWarning, stacklevel=3)  # fmt: skip
-    return Evaluation(done, failed, root, skipped, data, spec=spec, kind=kind, notes=list(notes or []))
+    ev = Evaluation(done, failed, root, skipped, data, spec=spec, kind=kind, notes=list(notes or []))
+    if not done and not failed:  # empty tables would look like a result: said at the call, as the command line says it
+        warnings.warn(_nothing_evaluated(ev, kind), FailedInputsWarning, stacklevel=3)
+    return ev
+
+
+#: What each input kind evaluates, for the message of a call that found nothing to evaluate.
+EXPECTED = {
+    "openloris": "OpenLORIS result files, or folders of them (<algorithm>/*.txt below the folder)",
+    "pair": "estimate files in the format given, or folders of them",
+    "manifest": "the manifest's sessions' estimates",
+}
+
+
+def _nothing_evaluated(ev: Evaluation, kind: str) -> str:
+    """The warning of a call that evaluated nothing: the reason the exit status gives
+    (:func:`lorisnb.tools.evaluation.status.unscored`, as ``lorisnb evaluate`` prints it), where
+    it looked, what it expected, and why each input was skipped."""
+    reason = next(f.error for f in ev.unscored if f.kind == "nothing")
+    where = f" in {ev.root}" if ev.root is not None else ""
+    if ev.skipped:  # each with the reason (its scene's ground truth is not in the data)
+        more = f" (and {len(ev.skipped) - 1} more: Evaluation.skipped lists them)" if len(ev.skipped) > 1 else ""
+        return (f"{reason}{where}: {ev.skipped[0].error.splitlines()[0]}{more}; the tables are empty and "
+                "exit_status() is 1")  # fmt: skip
+    return (f"{reason}{where}; the tables are empty and exit_status() is 1 (Evaluation.unscored says so); expected "
+            f"{EXPECTED.get(kind, 'input files')}")  # fmt: skip
 
 
 def poses_needed(spec: EvalSpec) -> str | None:
