@@ -4,8 +4,10 @@ official ``evaluate_all.py``. Pure: the ground-truth durations are an argument
 
 One implementation on numpy columns (:func:`aggregate_columns`, which the command line prints
 without importing pandas) behind the DataFrame one (:func:`aggregate_scenes`). Sums and means are
-compensated (Kahan) in row order within each group, as pandas' ``groupby`` sums them, so both give
-the numbers pandas gave to the last bit.
+compensated (Kahan) within each group as pandas' ``groupby`` sums them, in the order of the rows'
+sequence numbers (then file names: :func:`_within`), not the table's row order: the same inputs give
+the same numbers to the last bit whatever order they were given or evaluated in (``jobs``), and the
+numbers pandas gave on a table in that order.
 """
 
 from __future__ import annotations
@@ -207,7 +209,7 @@ def aggregate_columns(sequences: Mapping[str, Any], durations: Columns) -> dict[
         np.maximum.at(hi, group, eps)
         out["eps"] = np.where(lo == hi, np.asarray(out["eps"], float), np.nan)
     out["sequences"] = np.bincount(group, minlength=m).astype(np.int64)
-    rows = _Sorted(group, m)
+    rows = _Sorted(group, m, _within(labels))
     matched, c_matched = np.asarray(sequences["matched"]), np.asarray(sequences["c_matched"])
     out["sequences_with_output"] = np.bincount(group, weights=has_output(matched), minlength=m).astype(np.int64)
     for name in ("matched", "c_matched", "correct_time", "track_time"):
@@ -281,11 +283,36 @@ def _groups(codes: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     return rank[inverse.reshape(-1)], first[order]
 
 
-class _Sorted:
-    """Rows sorted by group (stably) and each row's place within its group, shared by the sums."""
+def _within(labels: Mapping[str, Labels]) -> list[np.ndarray]:
+    """The order of the rows within a group that the sums follow: by sequence number, then by file
+    name, so a scene's sums do not depend on the order of the table's rows (the order the inputs
+    were given in, or their jobs finished in: they moved the last bit of a weighted mean); a group
+    holds each sequence once (:func:`_refuse_duplicates`), so the order is complete. The bundled
+    results given sorted, as a folder is listed, give the numbers their row order gave."""
+    return [_rank(labels["seq"].uniques)[labels["seq"].codes],
+            _rank(labels["file"].uniques, text=True)[labels["file"].codes]]  # fmt: skip
 
-    def __init__(self, group: np.ndarray, m: int) -> None:
-        self.m, self.order = m, np.argsort(group, kind="stable")
+
+def _rank(values: np.ndarray, text: bool = False) -> np.ndarray:
+    """The rank of each distinct value in sorted order: numbers by value (NaN last), else as text."""
+    v = np.asarray(values)
+    if not text and v.dtype.kind not in "biuf":
+        try:
+            v = np.asarray(v.tolist(), float)  # numbers held as objects (a pandas column's uniques)
+        except (TypeError, ValueError):
+            text = True
+    if text:
+        v = np.array(_strings(v).tolist(), dtype=str)
+    return np.unique(v, return_inverse=True)[1].reshape(-1).astype(np.int64)
+
+
+class _Sorted:
+    """Rows sorted by group and each row's place within its group, shared by the sums: within a
+    group in the order of the ``within`` keys (the first most significant), else in row order."""
+
+    def __init__(self, group: np.ndarray, m: int, within: list[np.ndarray] | None = None) -> None:
+        keys = [*(within or [])[::-1], group]  # lexsort: the last key most significant; stable
+        self.m, self.order = m, np.lexsort(keys) if within else np.argsort(group, kind="stable")
         self.group = group[self.order]
         self.rank = np.arange(group.size) - np.searchsorted(self.group, np.arange(m))[self.group]
 
