@@ -580,7 +580,7 @@ class Sandbox:
 
 
 #: what a reply's value is told as when it is none of :func:`._sandbox_child._plain`'s forms
-_UNRECOGNISED = {"not_plain": "a reply the grader does not recognise (not a value the sandbox describes)"}
+_UNRECOGNISED = {"not_plain": "unrecognised-reply"}  # told "<a unrecognised-reply object, not a plain value>"
 
 
 def checked_plain(plain: Any) -> dict[str, Any]:
