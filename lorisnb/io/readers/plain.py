@@ -181,20 +181,68 @@ def _pose_blocks(flat: Part) -> tuple[list[np.ndarray], np.ndarray, np.ndarray, 
     return [cols[3], cols[7], cols[11]], q, bad, [cols[4 * i + j] for i in range(3) for j in range(3)]
 
 
+#: Decimals a KITTI rotation block may be written with and still stand for a rotation when it is
+#: off by more than :data:`ROTATION_TOLERANCE` (:func:`rounded_rotations`): with 3 its nearest
+#: rotation stays within :data:`~lorisnb.core.trajectory.poses.WRITTEN_TOLERANCE` of it (by which a
+#: pose turned since reading is told from its block as written); 2 leave each entry 0.005 of play.
+ROUNDED_DECIMALS = (3, 6)
+
+
+def rounded_rotations(blocks: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which of the (k, 9) rotation blocks (row-major, as written) are rotations rounded to the
+    decimals written, and those decimals: each block's numbers are whole multiples of ``10**-d``
+    (``d`` the fewest decimals they fit, from 3 to 6: ``%.3f`` writes 3), and the rotation nearest to
+    it (``q``, ``xyzw``) is within 1.75 half-units of ``10**-d`` of each entry. Rounding a rotation
+    to ``d`` decimals leaves its nearest rotation within 1.68 half-units of every entry (200,000
+    random rotations at each of 1 to 4 decimals; and its Frobenius distance below 3 half-units, as
+    it must be), while a block scaled by ``1 + 10**-d`` (one half-unit more than rounding can give:
+    an entry of ``1.01`` in a 2-decimal block) is 2 half-units off. Such files (3 decimals:
+    ``np.savetxt(fmt='%.3f')``) are off by up to about 1.4e-3, past :data:`ROTATION_TOLERANCE`;
+    the KITTI devkit, kitti-odom-eval and evo compose them as written."""
+    from lorisnb.core.alignment.geometry import quat_to_matrix
+
+    b = np.asarray(blocks, float).reshape(-1, 9)
+    decimals = np.zeros(len(b), int)
+    for d in range(ROUNDED_DECIMALS[1], ROUNDED_DECIMALS[0] - 1, -1):  # the fewest decimals that fit, last
+        scaled = b * 10.0**d
+        fits = (np.abs(scaled - np.rint(scaled)) <= 1e-6).all(axis=1)
+        decimals[fits] = d
+    half = 0.5 * 10.0 ** -decimals.astype(float)
+    nearest = quat_to_matrix(np.asarray(q, float)).reshape(-1, 9)
+    ok = (decimals > 0) & (np.abs(nearest - b).max(axis=1) <= 1.75 * half) & (np.linalg.det(b.reshape(-1, 3, 3)) > 0)
+    return ok, decimals
+
+
 def _from_matrices(spath: str, stamps: np.ndarray, poses: list[np.ndarray], line_no: np.ndarray) -> Trajectory:
     """The trajectory of :func:`_pose_blocks`' ``poses``, or a ParseError naming the first line
     refused. The rotation blocks as written are kept beside the quaternions of their nearest
     rotations (:func:`lorisnb.core.trajectory.poses.keep_written_blocks`), for the conventions
     that compose the matrices as written (the KITTI devkit's)."""
     positions, q, bad, written = poses
-    if bad.any():
-        k = int(np.flatnonzero(bad)[0])
-        raise ParseError(
-            spath,
-            int(line_no[k]),
-            "not a rotation (non-finite values, or a rotation block that is not orthonormal with determinant 1); "
-            "expected a pose",
-        )
+    if bad.any():  # a block rounded to the few decimals written is a rotation all the same
+        rows = np.flatnonzero(bad)
+        blocks = np.asarray(written)[rows]
+        ok, decimals = rounded_rotations(blocks, q[rows])
+        if not ok.all():
+            k = int(rows[np.argmin(ok)])
+            b = np.asarray(written)[k].reshape(3, 3)
+            off = max(float(np.abs(b @ b.T - np.eye(3)).max()), abs(float(np.linalg.det(b)) - 1))
+            said = (f": off by {off:.2g}, more than rounding to the decimals written explains (3 at least: "
+                    "write 6 or more)") if b.any() else ""  # fmt: skip
+            raise ParseError(
+                spath,
+                int(line_no[k]),
+                "not a rotation (non-finite values, or a rotation block that is not orthonormal with determinant "
+                f"1{said}); expected a pose",
+            )
+        _warn(
+            [f"{spath}: {len(rows)} rotation block(s) written with {int(decimals.max())} decimals are rotations only "
+             f"to within that rounding (first at line {int(line_no[rows[0]])}, off by more than "
+             f"{ROTATION_TOLERANCE:g}): their nearest rotations are used, the blocks as written under the KITTI "
+             "devkit's conventions; write 6 or more decimals to keep the rotations as computed"],
+            True,
+            5,  # _warn, _from_matrices, _read_kitti, read_kitti
+        )  # fmt: skip
     traj = Trajectory.from_checked(np.asarray(stamps, float), positions, q, line_no, {"source": spath})
     return keep_written_blocks(traj, written)
 
