@@ -50,7 +50,7 @@ from lorisnb.core.pipeline.model import FileErrors, ResultFile
 from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.stats.trials import check_duplicates
 from lorisnb.core.trajectory.frames import SCENES
-from lorisnb.errors import LorisError, LorisWarning, ValidationError
+from lorisnb.errors import FailedInputsWarning, LorisError, LorisWarning, ValidationError
 from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans
 from lorisnb.io.readers.openloris import FILE_KEYS, parse_headers, read_lines, read_openloris
 from lorisnb.io.writers import write_openloris
@@ -309,7 +309,8 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
             try:
                 evaluated[key] = go()
             finally:
-                raised[key] = [str(w.message) for w in mine]
+                # a FailedInputsWarning speaks to Python callers: each failure is told as one here
+                raised[key] = [str(w.message) for w in mine if not issubclass(w.category, FailedInputsWarning)]
 
     def in_view(view: Any) -> list[FileErrors]:
         """Every file's errors as scored on the sequences of ``view`` alone."""
@@ -414,7 +415,7 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
             if "could not be evaluated" not in text and text not in counted:
                 notes.setdefault(text, set()).add(frozenset(named | scope[key]))
     inside = {t for ts in raised.values() for t in ts}
-    for text in dict.fromkeys(str(w.message) for w in caught):
+    for text in dict.fromkeys(str(w.message) for w in caught if not issubclass(w.category, FailedInputsWarning)):
         if text not in inside and "could not be evaluated" not in text:
             notes.setdefault(text, set()).add(everything)
     out: dict[str, Any] = dict(
