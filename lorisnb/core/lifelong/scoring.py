@@ -28,7 +28,7 @@ from lorisnb.core.pipeline.model import (
     sequence_eps,
 )
 from lorisnb.core.spec.evo import check_evo, check_evo_together
-from lorisnb.core.spec.validate import eps_value, flag, near_miss, threshold
+from lorisnb.core.spec.validate import eps_value, flag, known_keys, threshold
 from lorisnb.core.trajectory.blocks import each
 from lorisnb.errors import ValidationError
 
@@ -280,8 +280,8 @@ RPE_DEFAULTS: dict[str, Any] = dict(
 
 
 class _OfSpec:
-    """The default of an RPE setting of :func:`score` and :func:`~lorisnb.core.lifelong.sweep.sweep`: the
-    errors' own spec's (:attr:`~lorisnb.core.pipeline.model.FileErrors.rpe`)."""
+    """The default of a threshold or RPE setting of :func:`score`, :func:`~lorisnb.core.lifelong.sweep.sweep`
+    and the other tables of errors: the errors' own spec's (:func:`thresholds_of`, :func:`rpe_of`)."""
 
     def __repr__(self) -> str:
         return "<the errors' spec>"
@@ -289,39 +289,84 @@ class _OfSpec:
 
 OF_SPEC: Any = _OfSpec()
 
+#: The thresholds of :func:`score` and their defaults where the errors record none (errors from
+#: :func:`~lorisnb.core.pipeline.sessions.compute_errors`): every pose correct, the paper's 1 s and 60 s.
+THRESHOLD_DEFAULTS: dict[str, Any] = dict(eps=np.inf, phi=np.inf, delta=1.0, tau=60.0)
+
+#: Every setting :func:`score` and :func:`score_rows` take, in the order their messages list them.
+SETTINGS = (*THRESHOLD_DEFAULTS, *RPE_DEFAULTS, "stats")
+
+
+def recorded_thresholds(f: FileErrors) -> dict[str, Any]:
+    """The thresholds of the spec ``f`` was evaluated under (``eps``, ``phi``, ``delta``, ``tau``), as
+    the evaluation that holds it records them (:class:`~lorisnb.tools.evaluation.result.Evaluation`:
+    the defaults of its tables); empty when not known."""
+    return dict(getattr(f, "thresholds", None) or {})
+
+
+def _of_spec(
+    files: list[FileErrors], given: dict[str, Any], defaults: dict[str, Any], record: Any, what: str
+) -> dict[str, Any]:
+    """The settings to score ``files`` with: those ``given`` (not :data:`OF_SPEC`), the rest those
+    each file records (``record(f)``; files recording different values need them given), else
+    ``defaults``."""
+    given = {k: v for k, v in given.items() if v is not OF_SPEC}
+    if set(defaults) <= set(given):  # all given: nothing read from the files
+        return dict(given)
+    seen: list[dict[str, Any]] = []
+    for f in files:  # once per file; one record in practice (values compared by ==: a scene mapping too)
+        r = {k: v for k, v in record(f).items() if k in defaults}
+        if r and r not in seen:
+            seen.append(r)
+    differ = sorted(k for k in defaults if k not in given and any(r.get(k) != seen[0].get(k) for r in seen[1:]))
+    if differ:
+        raise ValidationError(f"{', '.join(differ)}: the errors were computed under different {what}; give "
+                              f"{'it' if len(differ) == 1 else 'them'} to score all the files alike")  # fmt: skip
+    return defaults | (seen[0] if seen else {}) | given
+
+
+def thresholds_of(files: list[FileErrors], given: dict[str, Any]) -> dict[str, Any]:
+    """The thresholds to score ``files`` at: those ``given`` (not :data:`OF_SPEC`), the rest those of
+    the spec the errors were evaluated under (:func:`recorded_thresholds`: ``ln.evaluate(path,
+    eps=0.3).errors`` are scored at 0.3 m, as that evaluation's tables are; files of different
+    thresholds need them given), else :data:`THRESHOLD_DEFAULTS`. Not validated here."""
+    return _of_spec(files, given, THRESHOLD_DEFAULTS, recorded_thresholds, "thresholds")
+
 
 def rpe_of(files: list[FileErrors], given: dict[str, Any]) -> dict[str, Any]:
     """The RPE settings to score ``files`` with: those ``given`` (not :data:`OF_SPEC`), the rest
     from the spec the errors were computed under (:attr:`FileErrors.rpe`; files of different
-    settings need them given), else :data:`RPE_DEFAULTS`."""
-    unknown = sorted(set(given) - set(RPE_DEFAULTS))
-    if unknown:  # a typo of any setting the call takes: the thresholds too (ev.sequences(epss=1))
-        settings = ["eps", "phi", "delta", "tau", *RPE_DEFAULTS]
-        near = near_miss(unknown[0], settings)
-        raise ValidationError(f"{unknown[0]}: not a setting of the scores{f' ({near})' if near else ''}; expected "
-                              f"one of {', '.join(settings)}")  # fmt: skip
-    given = {k: v for k, v in given.items() if v is not OF_SPEC}
-    recorded = {tuple(sorted(f.rpe.items())) for f in files if f.rpe}
-    if len(recorded) > 1:
-        differ = sorted({k for r in recorded for k, v in r if any(dict(o).get(k) != v for o in recorded)} - set(given))
-        if differ:
-            raise ValidationError(f"{', '.join(differ)}: the errors were computed under different RPE settings; "
-                                  "give them to score all the files alike")  # fmt: skip
-    return RPE_DEFAULTS | (dict(next(iter(recorded))) if recorded else {}) | given
+    settings need them given), else :data:`RPE_DEFAULTS`. A key of ``given`` that names no
+    setting (a typo of any setting the call takes, the thresholds' too: ``ev.sequences(epss=1)``)
+    is refused by :func:`~lorisnb.core.spec.validate.known_keys`."""
+    known_keys(given, SETTINGS, "a setting of the scores")
+    return _of_spec(files, given, RPE_DEFAULTS, lambda f: f.rpe, "RPE settings")
+
+
+def refuse_unknown(other: dict[str, Any], entry: Any, what: str) -> None:
+    """Refuse keywords ``entry`` (a function taking ``**other``) does not take, as
+    :func:`~lorisnb.core.spec.validate.known_keys` refuses them everywhere: naming its parameters."""
+    if other:
+        import inspect
+
+        named = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+        params = inspect.signature(entry).parameters.values()
+        known_keys(other, [p.name for p in params if p.kind in named and p.name != "errors"], what)
 
 
 def score_rows(
-    errors: FileErrors | Iterable[FileErrors], eps: Eps = np.inf, phi: float = np.inf, delta: float = 1.0,
-    tau: float = 60.0, stats: bool = True, **rpe: Any,
+    errors: FileErrors | Iterable[FileErrors], eps: Eps = OF_SPEC, phi: float = OF_SPEC, delta: float = OF_SPEC,
+    tau: float = OF_SPEC, stats: bool = True, **rpe: Any,
 ) -> list[dict[str, Any]]:  # fmt: skip
     """One row per sequence (a dict of :func:`score`'s columns): every metric of the paper at one
     threshold setting, without pandas (the command line prints these rows as they are). The
-    arguments are :func:`score`'s (the RPE settings by name)."""
+    arguments are :func:`score`'s (the RPE settings by name; another keyword is refused)."""
     stats = flag("stats", stats)
     files = as_files(errors)
     r = rpe_of(files, rpe)
-    eps_v = eps_value(eps)
-    phi_v, delta_v, tau_v = threshold("phi", phi), threshold("delta", delta), threshold("tau", tau)
+    t = thresholds_of(files, dict(eps=eps, phi=phi, delta=delta, tau=tau))
+    eps_v = eps_value(t["eps"])
+    phi_v, delta_v, tau_v = threshold("phi", t["phi"]), threshold("delta", t["delta"]), threshold("tau", t["tau"])
     rpe_d, rpe_u = rpe_setting(r["rpe_delta"], r["rpe_unit"])
     rpe_p, rpe_a, rpe_t = rpe_options(r["rpe_pairs"], r["rpe_all_pairs"], r["rpe_tolerance"])
     rows = []
@@ -383,18 +428,24 @@ def sequence_scores(
 
 def score(
     errors: FileErrors | Iterable[FileErrors],
-    eps: Eps = np.inf,
-    phi: float = np.inf,
-    delta: float = 1.0,
-    tau: float = 60.0,
+    eps: Eps = OF_SPEC,
+    phi: float = OF_SPEC,
+    delta: float = OF_SPEC,
+    tau: float = OF_SPEC,
     rpe_delta: float = OF_SPEC,
     rpe_unit: str = OF_SPEC,
     rpe_pairs: str = OF_SPEC,
     rpe_all_pairs: bool | None = OF_SPEC,
     rpe_tolerance: float = OF_SPEC,
     stats: bool = True,
+    **other: Any,
 ) -> pd.DataFrame:
     """One row per sequence: every metric of the paper at one threshold setting.
+
+    Each threshold not given is that of the spec the errors were evaluated under
+    (:func:`thresholds_of`: ``ln.score(ln.evaluate(path, eps=0.3).errors)`` is at 0.3 m, as that
+    evaluation's ``sequences()``), else (errors from ``compute_errors``) the default below.
+    A keyword that names no setting (``epsilon=``) is refused (ValidationError), naming them.
 
     Args:
         eps: ATE threshold, metres (number, ``"paper"`` or scene -> metres). Default infinity.
@@ -418,18 +469,23 @@ def score(
 
     rows = score_rows(
         errors, eps, phi, delta, tau, rpe_delta=rpe_delta, rpe_unit=rpe_unit, rpe_pairs=rpe_pairs,
-        rpe_all_pairs=rpe_all_pairs, rpe_tolerance=rpe_tolerance, stats=stats,
+        rpe_all_pairs=rpe_all_pairs, rpe_tolerance=rpe_tolerance, stats=stats, **other,
     )  # fmt: skip
     return pd.DataFrame(rows, columns=SEQUENCE_COLUMNS + EXTRA_COLUMNS + (STAT_COLUMNS if stats else []))
 
 
-def pose_table(errors: FileErrors | Iterable[FileErrors], eps: Eps = np.inf, phi: float = np.inf) -> pd.DataFrame:
+def pose_table(
+    errors: FileErrors | Iterable[FileErrors], eps: Eps = OF_SPEC, phi: float = OF_SPEC, **other: Any
+) -> pd.DataFrame:
     """One row per matched pose: algorithm, file, suite, scene, seq, stamp (s), t_rel (s from the
-    ground truth's start), ate (m), aoe (deg), correct (Eq. 1)."""
+    ground truth's start), ate (m), aoe (deg), correct (Eq. 1); ``eps`` and ``phi`` not given are
+    the errors' spec's, as :func:`score`'s."""
     import pandas as pd
 
+    refuse_unknown(other, pose_table, "a setting of the pose table")
     files = as_files(errors)
-    eps_v, phi_v = eps_value(eps), threshold("phi", phi)
+    t = thresholds_of(files, dict(eps=eps, phi=phi))
+    eps_v, phi_v = eps_value(t["eps"]), threshold("phi", t["phi"])
     parts = []
     for f in files:
         for e in f.sequences:

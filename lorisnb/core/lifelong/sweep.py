@@ -20,11 +20,13 @@ from lorisnb.core.lifelong.scoring import (
     GRID_METRICS,
     OF_SPEC,
     as_files,
+    refuse_unknown,
     rpe_of,
     rpe_options,
     rpe_setting,
     sequence_grid,
     sequence_meta,
+    thresholds_of,
 )
 from lorisnb.core.metrics import openloris as metrics
 from lorisnb.core.metrics.relation_table import RELATION_COLUMNS, repeated_relation_columns
@@ -148,10 +150,10 @@ def _eps_values(eps: list[Any], scene: str, e: SequenceErrors, relative_to: str 
 
 def sweep(
     errors: FileErrors | Iterable[FileErrors],
-    eps: Any = (np.inf,),
-    phi: Any = (np.inf,),
-    delta: Any = (1.0,),
-    tau: Any = (60.0,),
+    eps: Any = OF_SPEC,
+    phi: Any = OF_SPEC,
+    delta: Any = OF_SPEC,
+    tau: Any = OF_SPEC,
     relative_to: str | None = None,
     rpe_delta: float = OF_SPEC,
     rpe_unit: str = OF_SPEC,
@@ -162,6 +164,7 @@ def sweep(
     rpe_tolerance: float = OF_SPEC,
     relation: str | None = None,
     change_unit: str | None = None,
+    **other: Any,
 ) -> pd.DataFrame:
     """One row per sequence and per combination of thresholds. With ``columns="all"`` the columns
     are those of :func:`lorisnb.core.lifelong.scoring.score` (a row equals ``score`` at that setting, RPE
@@ -174,6 +177,9 @@ def sweep(
             value as given, ``eps`` the metres used.
         phi: AOE thresholds, degrees. delta: validity windows, seconds. tau: re-localization
             time factors, seconds. Each a value or a list (validated like the command line's).
+            Each not given is the one value of the spec the errors were evaluated under, as
+            :func:`~lorisnb.core.lifelong.scoring.score`'s (:func:`~lorisnb.core.lifelong.scoring.thresholds_of`;
+            eps infinity with ``relative_to``); a keyword that names no setting is refused.
         max_bytes: refuse (with the size it would need) a sweep whose table or working arrays
             would take more memory than this.
         rpe_delta, rpe_unit, rpe_pairs, rpe_all_pairs, rpe_tolerance: as :func:`~lorisnb.core.lifelong.scoring.score`'s
@@ -181,9 +187,14 @@ def sweep(
         relation: evo's pose relation (``evaluate --relation``): its ``ape_*``/``rpe_*`` columns last,
             in ``change_unit`` (evo's ``--change_unit``; None: the relation's own).
     """
+    refuse_unknown(other, sweep, "a setting of the sweep")
     files = as_files(errors)
     if relative_to is not None:
         relative_to = choice("relative_to", relative_to, RELATIVE)
+        eps = (np.inf,) if eps is OF_SPEC else eps  # the spec's metres are no fraction: every pose correct
+    t = thresholds_of(files, dict(eps=eps, phi=phi, delta=delta, tau=tau))
+    eps, phi, delta, tau = ((t[k],) if v is OF_SPEC else v for k, v in (("eps", eps), ("phi", phi), ("delta", delta),
+                                                                        ("tau", tau)))  # fmt: skip
     columns = choice("columns", columns, ("all", "metrics"))
     max_bytes = validate.positive("max_bytes", max_bytes, "bytes")
     eps_l = grid_values("eps", eps)
@@ -289,8 +300,9 @@ def _target_cr(target: Any) -> float:
 
 
 def eps_at_cr(
-    errors: Iterable[FileErrors], target: float, durations: pd.DataFrame, phi: float = np.inf, delta: float = 1.0
-) -> pd.DataFrame:
+    errors: Iterable[FileErrors], target: float, durations: pd.DataFrame, phi: float = OF_SPEC,
+    delta: float = OF_SPEC, **other: Any,
+) -> pd.DataFrame:  # fmt: skip
     """The smallest eps (metres) at which each algorithm reaches scene CR >= ``target`` (a rate
     above 0, at most 1), exactly, per suite, algorithm, scene and trial (each trial is one run,
     scored alone, as :func:`sweep_scenes` does).
@@ -299,11 +311,14 @@ def eps_at_cr(
     poses of a scene by ATE and accumulating the time they hold gives the answer without a grid.
     NaN where even eps = infinity does not reach the target (not enough tracking time; ``max_cr``
     says how much there is, 0 for a run without a matched pose).
-    ``durations``: the ground-truth durations (``Evaluation.durations()``).
+    ``durations``: the ground-truth durations (``Evaluation.durations()``). ``phi`` and ``delta``
+    not given are the errors' spec's, as :func:`~lorisnb.core.lifelong.scoring.score`'s.
     """
+    refuse_unknown(other, eps_at_cr, "a setting of eps_at_cr")
     files = as_files(errors)
     target = _target_cr(target)
-    phi, delta = threshold("phi", phi), threshold("delta", delta)
+    t = thresholds_of(files, dict(phi=phi, delta=delta))
+    phi, delta = threshold("phi", t["phi"]), threshold("delta", t["delta"])
     total = scene_totals(durations, (f.scene for f in files))
     parts: dict[tuple[str, str, str, int], list[tuple[np.ndarray, np.ndarray]]] = {}
     for f in files:

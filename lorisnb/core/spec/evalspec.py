@@ -436,13 +436,7 @@ def make_spec(preset: str | EvalSpec | None = None, *, surface: str = "python", 
     name = _namer(surface)
     given = dict(options)  # None is a value like any other: refused where it means nothing
     known = {f.name for f in fields(EvalSpec)} - {"explicit", "preset_name"}
-    unknown = sorted(set(given) - known - set(ALIASES))
-    if unknown:
-        hint = validate.near_miss(unknown[0], known | set(ALIASES))
-        raise ValidationError(
-            f"{name(unknown[0])}: not an option of the evaluation spec{f' ({hint})' if hint else ''}; expected one "
-            f"of {', '.join(sorted(known | set(ALIASES)))}"
-        )
+    validate.known_keys(given, sorted(known | set(ALIASES)), "an option of the evaluation spec", name)
     changes = {k: v for k, v in given.items() if k in known}
     if "scale" in given:  # on: sim3; auto: sim3 for monocular algorithms; off: the alignment without its scale
         s = validate.scale_value(given["scale"])

@@ -9,10 +9,10 @@ naming the value, what was given and what is expected.
 from __future__ import annotations
 
 import math
+import sys
 import unicodedata
-from collections.abc import Iterable, Mapping
-from numbers import Real
-from typing import Any
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -78,17 +78,46 @@ def _number(name: str, value: Any, words: Mapping[str, Any]) -> Any:
             raise ValidationError(f"{name}={_show(value)} is not a number: write it without underscores (1000, not "
                                   "1_000), as trajectory files are read")  # fmt: skip
         try:
-            return float(text)
+            v = float(text)
         except ValueError:
             extra = "".join(f", '{w}'" for w in words if w not in ("inf", "+inf", "infinity"))
             extra = (", 'inf'" if "inf" in words else "") + extra  # only where infinity is allowed
             raise ValidationError(f"{name}={_show(value)} is not a number; expected a number{extra}") from None
-    if isinstance(value, Real):
-        return float(value)
-    try:  # numpy 0-d arrays and the like
-        return float(value)
+        if math.isinf(v) and text.lstrip("+-") not in ("inf", "infinity"):  # "1e400": finite as written
+            _overflow(name, value, words)
+        return v
+    try:  # numbers of any kind, numpy 0-d arrays and the like
+        v = float(value)
+    except OverflowError:  # an int or Fraction past float's range (10**400)
+        _overflow(name, value, words)
     except (TypeError, ValueError):
         raise ValidationError(f"{name}={_show(value)} ({type(value).__name__}): expected a number") from None
+    if math.isinf(v) and not _infinite(value):  # a Decimal or long double past float's range: infinity as a float
+        _overflow(name, value, words)
+    return v
+
+
+def _infinite(value: Any) -> bool:
+    """Whether a number is itself infinite (not a finite one that is infinity as a float)."""
+    try:
+        return bool(value == math.inf or value == -math.inf)
+    except (TypeError, ValueError):
+        return False
+
+
+def _overflow(name: str, value: Any, words: Mapping[str, Any]) -> NoReturn:
+    """Refuse a finite number too large for a float (``"1e400"``, ``10**400``): as a float it is
+    infinity, which means "no threshold" where it is allowed, so infinity is spelled ``inf``."""
+    inf = "write 'inf' for no threshold, else " if "inf" in words else ""
+    try:
+        shown = _show(value)
+    except ValueError:  # an int of more digits than Python prints (sys.get_int_max_str_digits)
+        shown = f"<{type(value).__name__}>"
+    shown = shown if len(shown) <= 40 else shown[:30] + "..."  # 10**400: its 401 digits say nothing more
+    raise ValidationError(
+        f"{name}={shown}: too large to be a number (beyond +-{sys.float_info.max:.3g} it would be read as "
+        f"infinity); {inf}expected a number"
+    )
 
 
 _INF = {"inf": math.inf, "+inf": math.inf, "infinity": math.inf}
@@ -188,7 +217,7 @@ def threshold_list(name: str, values: Any) -> list[Any]:
     if not items:
         raise ValidationError(f"{name}: an empty list; expected at least one value")
     out: list[Any] = [eps_value(v) for v in items] if name == "eps" else [threshold(name, v) for v in items]
-    for k, v in enumerate(out):  # the same setting twice (60 and 60.0, inf and 1e400): rows twice, refused
+    for k, v in enumerate(out):  # the same setting twice (60 and 60.0, inf and Infinity): rows twice, refused
         if v in out[:k]:
             raise ValidationError(f"{name}={_show(values)}: {_show(items[out.index(v)])} and {_show(items[k])} are the "
                                   "same value; expected each value once")  # fmt: skip
@@ -329,6 +358,19 @@ def near_miss(name: str, known: Iterable[str]) -> str:
     same_case = [h for h in have if h.lower() == name.strip().lower()]
     near = same_case or difflib.get_close_matches(name, have, n=1, cutoff=0.75)
     return f"did you mean {near[0]!r}?" + (" (names are case-sensitive)" if same_case else "") if near else ""
+
+
+def known_keys(given: Iterable[str], known: Iterable[str], what: str, shown: Callable[[str], str] = str) -> None:
+    """Refuse a keyword that names none of the ``known`` settings (a typo: ``epsilon`` for ``eps``),
+    as every surface does (the spec's options, the scores' settings, the tables' thresholds): the
+    first unknown one, ``not`` ``what``, with a near miss (:func:`near_miss`) and every known one,
+    in their order. ``shown``: how the surface names a key (``--max-diff`` on the command line)."""
+    have = list(dict.fromkeys(known))
+    unknown = sorted(set(given) - set(have))
+    if unknown:
+        hint = near_miss(unknown[0], have)
+        raise ValidationError(f"{shown(unknown[0])}: not {what}{f' ({hint})' if hint else ''}; expected one of "
+                              f"{', '.join(have)}")  # fmt: skip
 
 
 def flag(label: str, value: Any, expected: str = "True or False") -> bool:

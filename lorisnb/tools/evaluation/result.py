@@ -21,7 +21,8 @@ from lorisnb.core.pipeline.model import (
     ScoresOnly,
     check_label,
 )
-from lorisnb.core.spec.evalspec import EvalSpec, make_spec
+from lorisnb.core.spec.evalspec import THRESHOLD_NAMES, EvalSpec, make_spec
+from lorisnb.core.spec.validate import known_keys
 from lorisnb.core.trajectory.blocks import threads
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import EvaluationError, ValidationError
@@ -109,6 +110,16 @@ class Evaluation:
     spec: EvalSpec = field(default_factory=EvalSpec)
     kind: str = "openloris"  # openloris, pair or manifest
     notes: list[str] = field(default_factory=list)  # one-line notes on the options (harmless ones)
+
+    def __post_init__(self) -> None:
+        """Each file's errors record the spec's thresholds, the defaults of this evaluation's tables,
+        as they record its RPE settings (``FileErrors.rpe``): ``ln.score(ev.errors)`` and
+        ``ln.sweep(ev.errors)`` score them at the setting ``ev.sequences()`` does
+        (:func:`lorisnb.core.lifelong.scoring.thresholds_of`)."""
+        thresholds = self.thresholds
+        for f in self.errors:
+            if isinstance(f, FileErrors):  # read by lorisnb.core.lifelong.scoring.recorded_thresholds
+                vars(f)["thresholds"] = dict(thresholds)
 
     @property
     def conventions(self) -> str:
@@ -242,15 +253,20 @@ class Evaluation:
         checked = make_spec(self.spec, **given).rpe_options() if given else have
         return {**kw, **checked}
 
-    def poses(self, eps: Eps | None = None, phi: float | None = None) -> pd.DataFrame:
-        """Per-pose table (see :func:`lorisnb.core.lifelong.scoring.pose_table`)."""
+    def poses(self, eps: Eps | None = None, phi: float | None = None, **kw: Any) -> pd.DataFrame:
+        """Per-pose table (see :func:`lorisnb.core.lifelong.scoring.pose_table`); a keyword other than
+        the thresholds is refused, naming them."""
+        known_keys(kw, ("eps", "phi"), "a setting of the pose table")
         return pose_table(self.errors, self.spec.eps if eps is None else eps, self.spec.phi if phi is None else phi)
 
     def scenes(
-        self, eps: Eps | None = None, phi: float | None = None, delta: float | None = None, tau: float | None = None
-    ) -> pd.DataFrame:
+        self, eps: Eps | None = None, phi: float | None = None, delta: float | None = None, tau: float | None = None,
+        **kw: Any,
+    ) -> pd.DataFrame:  # fmt: skip
         """Per algorithm and scene, as in the paper's figures (see
-        :func:`lorisnb.core.lifelong.aggregate.aggregate_scenes`)."""
+        :func:`lorisnb.core.lifelong.aggregate.aggregate_scenes`); a keyword other than the
+        thresholds is refused, naming them (the scene values read no RPE)."""
+        known_keys(kw, THRESHOLD_NAMES, "a setting of the scene table")
         # the scene values read no statistics: without them (the same numbers), as a lean evaluation keeps them
         return aggregate_scenes(self.sequences(eps, phi, delta, tau, stats=False), self.durations())
 
