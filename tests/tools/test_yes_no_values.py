@@ -91,7 +91,7 @@ def test_quick_keeps_a_count_given():
 
 @pytest.mark.parametrize(
     ("name", "values", "said"),
-    [("eps", "1,1", "1 and 1"), ("eps", "inf,1e400", "inf and 1e400"), ("tau", [60, 60.0], "60 and 60.0"),
+    [("eps", "1,1", "1 and 1"), ("eps", "inf,Infinity", "inf and Infinity"), ("tau", [60, 60.0], "60 and 60.0"),
      ("delta", "0.5,1,0.50", "0.5 and 0.50"), ("eps", ["paper", 1, "paper"], "paper and paper")],
 )  # fmt: skip
 def test_a_value_twice_in_a_list_is_refused_everywhere(icra20, capsys, name, values, said):

@@ -359,6 +359,10 @@ class FileErrors:
     #: what :func:`lorisnb.core.lifelong.scoring.score` and :func:`lorisnb.core.lifelong.sweep.sweep` use unless
     #: given (empty when not known: lorisnb's own rule over 1 s)
     rpe: dict[str, Any] = field(default_factory=dict)
+    #: the thresholds (``eps``, ``phi``, ``delta``, ``tau``) of the spec the errors were evaluated
+    #: under, as the evaluation that holds them records them: what ``score`` and ``sweep`` use
+    #: unless given (:func:`lorisnb.core.lifelong.scoring.thresholds_of`; empty when not known)
+    thresholds: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:  # the one place a row's labels are made: compared and grouped as NFC
         self.algorithm, self.file, self.suite, self.scene = map(label, (self.algorithm, self.file, self.suite,

@@ -119,7 +119,7 @@ class Evaluation:
         thresholds = self.thresholds
         for f in self.errors:
             if isinstance(f, FileErrors):  # read by lorisnb.core.lifelong.scoring.recorded_thresholds
-                vars(f)["thresholds"] = dict(thresholds)
+                f.thresholds = dict(thresholds)
 
     @property
     def conventions(self) -> str:
