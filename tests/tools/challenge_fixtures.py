@@ -3,8 +3,10 @@ real icra20 result files of the cafe scene."""
 
 from __future__ import annotations
 
+import io
 import re
 import time
+import zipfile
 from pathlib import Path
 
 CAFE = {  # algorithm -> its per-sequence result files of cafe-1 and cafe-2 (icra20_results/per-seq)
@@ -90,3 +92,12 @@ def wait_scored(client, sid: str, seconds: float = 120) -> dict:
             return view
         time.sleep(0.2)
     raise AssertionError(f"submission {sid} not scored within {seconds} s: {view}")
+
+
+def zipped(members: dict[str, bytes]) -> bytes:
+    """A zip (deflated) of ``members``, name -> bytes, as a team uploads it."""
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
+        for name, body in members.items():
+            z.writestr(name, body)
+    return buf.getvalue()

@@ -13,13 +13,11 @@ is refused naming that character and its position, and listing every character a
 
 from __future__ import annotations
 
-import io
 import re
 import time
-import zipfile
 
 import pytest
-from challenge_fixtures import challenge_file, wait_scored
+from challenge_fixtures import challenge_file, wait_scored, zipped
 
 pytest.importorskip("fastapi")
 from fastapi.testclient import TestClient  # noqa: E402
@@ -31,14 +29,6 @@ from lorisnb.tools.challenge.config import read_challenge  # noqa: E402
 from lorisnb.tools.challenge.uploads import NAME_FIRST, NAME_MAX, NAME_REST  # noqa: E402
 
 ORB = ("orbslam2_rgbd", "cafe_1_1_orbslam2-original.txt")
-
-
-def _zip(members: dict[str, bytes]) -> bytes:
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
-        for name, body in members.items():
-            z.writestr(name, body)
-    return buf.getvalue()
 
 
 def _board(client) -> dict:
@@ -74,7 +64,7 @@ def _copies(body: bytes, n: int) -> list:
     """The upload of ``body`` (cafe-1-1) as it is (``n`` 1), or as ``n`` trials in one .zip."""
     if n == 1:
         return [("files", (ORB[1], body))]
-    return [("files", ("t.zip", _zip({f"cafe-1-1_trial{k}.txt": body for k in range(1, n + 1)})))]
+    return [("files", ("t.zip", zipped({f"cafe-1-1_trial{k}.txt": body for k in range(1, n + 1)})))]
 
 
 def _ranked(client, tokens: dict, body: bytes, uploads: dict[str, int]) -> dict:
@@ -138,7 +128,7 @@ def test_values_equal_to_12_digits_are_ordered_by_submission_and_the_sentence_fo
 def test_a_name_starting_with_a_space_is_refused_naming_the_space_and_what_a_name_may_hold(server, data):
     client, tokens = server
     body = (data.icra20 / "per-seq" / "ds-slam" / " home-1-1.txt").read_bytes()
-    r = _post(client, tokens["spaced"], [("files", ("ds.zip", _zip({" home-1-1.txt": body})))])
+    r = _post(client, tokens["spaced"], [("files", ("ds.zip", zipped({" home-1-1.txt": body})))])
     assert r["status"] == 400, r
     said = r["body"]["detail"] if isinstance(r["body"].get("detail"), str) else str(r["body"])
     assert "' home-1-1.txt'" in said
