@@ -14,6 +14,7 @@ import os
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 from lorisnb.io.parsing.scanner import regular_file
@@ -35,12 +36,19 @@ class Sample:
     commas: bool
     folder: bool = False
 
+    @cached_property
+    def numbers(self) -> tuple[list[float] | None, ...]:
+        """Each row's values, or None for a row with a token that is not a plain number (worked out
+        once for all the recognisers)."""
+        return tuple(_numbers(r) for r in self.rows)
 
-_NUMBER = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_ROW_OF_NUMBERS = re.compile(rf"(?:{_NUMBER} )*{_NUMBER}")  # tokens joined by one space (one match a row)
 
 
 def _numbers(row: tuple[str, ...]) -> list[float] | None:
-    return [float(t) for t in row] if row and all(_NUMBER.match(t) for t in row) else None
+    return [float(t) for t in row] if _ROW_OF_NUMBERS.fullmatch(" ".join(row)) else None
 
 
 def _is_bag(s: Sample) -> bool:
@@ -54,7 +62,7 @@ def _is_openloris(s: Sample) -> bool:
 
 def _is_euroc(s: Sample) -> bool:
     header = any(c.lstrip("#").strip().lower().startswith("timestamp") for c in s.comments[:3])
-    rows = [r for r in s.rows if _numbers(r) is not None]
+    rows = [r for r, v in zip(s.rows, s.numbers, strict=True) if v is not None]
     if not rows or not all(len(r) >= 8 for r in rows):
         return False
     ns = all(re.fullmatch(r"\d{16,}", r[0]) for r in rows)  # integer nanoseconds since 1970 (> 1e15)
@@ -62,14 +70,14 @@ def _is_euroc(s: Sample) -> bool:
 
 
 def _is_kitti(s: Sample) -> bool:
-    rows = [_numbers(r) for r in s.rows]
+    rows = s.numbers
     if not rows or any(v is None or len(v) != 12 for v in rows):
         return False
     return all(abs(sum(x * x for x in v[0:3]) - 1) < 1e-2 for v in rows if v is not None)  # rotation rows
 
 
 def _is_tum(s: Sample) -> bool:
-    rows = [_numbers(r) for r in s.rows]
+    rows = s.numbers
     if not rows or any(v is None or len(v) != 8 for v in rows):
         return False
     return all(abs(sum(x * x for x in v[4:8]) - 1) < 1e-2 for v in rows if v is not None) and not _is_euroc(s)
@@ -140,18 +148,36 @@ def sample(path: str | os.PathLike[str]) -> Sample | None:
         if not regular_file(p):  # a pipe: its bytes are the reader's (a peek would take them)
             return None
         with open(p, "rb") as f:
-            head = f.read(SAMPLE_BYTES)
+            head = f.read(_FIRST_LOOK)
+            first = _sample(head, len(head) == _FIRST_LOOK)
+            if len(head) < _FIRST_LOOK or len(first.rows) >= SAMPLE_LINES:
+                return first
+            head += f.read(SAMPLE_BYTES - _FIRST_LOOK)  # too few lines there: the whole sample
     except OSError:
         return None
     return sample_bytes(head)
 
 
 def sample_bytes(head: bytes) -> Sample:
-    """A :class:`Sample` of a file's first bytes."""
+    """A :class:`Sample` of a file's first bytes (at most :data:`SAMPLE_BYTES` are looked at)."""
+    if len(head) > _FIRST_LOOK:  # most files give their lines in the first 4 KB: look there first
+        first = _sample(head[:_FIRST_LOOK], True)
+        if len(first.rows) >= SAMPLE_LINES:
+            return first
+    return _sample(head[:SAMPLE_BYTES], len(head) >= SAMPLE_BYTES)
+
+
+#: Bytes :func:`sample_bytes` looks at first (all of the sample when they hold too few lines).
+_FIRST_LOOK = 4096
+
+
+def _sample(head: bytes, cut: bool) -> Sample:
+    """The :class:`Sample` of the beginning of a file (``cut``: its last line may be cut short, and
+    is left out): its comment lines, first data lines in tokens and whether commas separate them."""
     if b"\0" in head[:512]:
         return Sample(head, (), (), False)
     text = head.decode("utf-8", "replace").lstrip("\ufeff")
-    lines = text.splitlines()[:-1] if len(head) == SAMPLE_BYTES else text.splitlines()  # the last may be cut
+    lines = text.splitlines()[:-1] if cut else text.splitlines()
     comments, rows, commas = [], [], False
     for line in lines:
         stripped = line.strip()
@@ -161,7 +187,7 @@ def sample_bytes(head: bytes) -> Sample:
             comments.append(stripped)
             continue
         commas = commas or "," in stripped
-        rows.append(tuple(t for t in re.split(r"[\s,]+", stripped) if t))
+        rows.append(tuple(stripped.replace(",", " ").split()))  # at whitespace (as re's \s) and commas
         if len(rows) >= SAMPLE_LINES:
             break
     if rows and _numbers(rows[0]) is None and len(rows) > 1 and _numbers(rows[1]) is not None and "," in lines[0]:
