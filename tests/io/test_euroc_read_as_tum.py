@@ -95,3 +95,55 @@ def test_the_other_readers_errors_keep_their_line(files):
         ln.read_tum(files["kitti"])
     with pytest.raises(ParseError, match=r"line 1: stamp \d+\.\d+ has a fraction.*this looks like a TUM"):
         ln.read_euroc(files["tum"])
+
+
+@pytest.mark.parametrize(
+    "header",
+    [
+        "# timestamp tx ty tz qx qy qz qw",
+        "#timestamp,tx,ty,tz,qx,qy,qz,qw",
+        "# timestamp",
+        "# timestamp(s) x y z qx qy qz qw",
+        "",
+    ],
+)
+def test_comma_separated_tum_under_a_timestamp_header_is_tum(files, tmp_path, header):
+    """A TUM file written with commas under a ``# timestamp ...`` header (seconds, ``qx qy qz qw``)
+    is TUM: read_tum read it as EuRoC's and refused it, read_euroc took its seconds as nanoseconds."""
+    rows = _rows(files["tum"])
+    path = tmp_path / "commas.csv"
+    path.write_text((header + "\n" if header else "") + "".join(",".join(r) + "\n" for r in rows))
+    got, want = ln.read_tum(path), ln.read_tum(files["tum"])
+    assert np.array_equal(got.stamps, want.stamps) and np.array_equal(got.quaternions, want.quaternions)
+    assert np.array_equal(ln.read_trajectory(path, "tum").positions, want.positions)
+    with pytest.raises(ParseError, match=r"this looks like a TUM trajectory file.*--format tum"):
+        ln.read_euroc(path)
+
+
+@pytest.mark.parametrize(
+    ("header", "stamps"),
+    [
+        ("#timestamp [ns],p_x,p_y,p_z,q_w,q_x,q_y,q_z", "ns"),
+        ("timestamp_ns,p_x,p_y,p_z,q_w,q_x,q_y,q_z", "ns"),
+        ("#timestamp,x,y,z,qw,qx,qy,qz", "seconds in ns"),  # whole seconds as nanoseconds: 10 digits
+        ("#timestamp", "seconds in ns"),
+    ],
+)
+def test_euroc_headers_say_euroc(files, tmp_path, header, stamps):
+    """EuRoC's layout (integer nanoseconds, ``w x y z``) under each header it comes with is EuRoC,
+    also where its stamps are too short to be nanoseconds since 1970 on their own."""
+    rows = _rows(files["tum"])
+    path = tmp_path / "euroc.csv"
+    stamp = (
+        (lambda k, r: str(k * 1_000_000_000))
+        if stamps == "seconds in ns"
+        else (lambda k, r: r[0].replace(".", "") + "000")
+    )
+    path.write_text(
+        header + "\n" + "".join(",".join([stamp(k, r), *r[1:4], r[7], *r[4:7]]) + "\n" for k, r in enumerate(rows))
+    )
+    got, want = ln.read_euroc(path), ln.read_tum(files["tum"])
+    assert np.array_equal(got.positions, want.positions) and np.allclose(got.quaternions, want.quaternions, atol=1e-12)
+    assert np.array_equal(ln.read_trajectory(path, "euroc").positions, want.positions)
+    with pytest.raises(ParseError, match=r"this looks like a EuRoC CSV file.*--format euroc"):
+        ln.read_tum(path)

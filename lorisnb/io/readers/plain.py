@@ -80,10 +80,16 @@ def refuse_other_format(path: str | os.PathLike, fmt: str, read: Callable[[], ob
         return  # the reader says what it expected
     found = recognise(sample(path))
     if found and fmt not in found:
+        other = FORMATS[found[0]].hint()
         if read is not None:
-            read()
+            try:
+                read()
+            except ParseError as e:  # its own error, on the line; with the hint where it did not give it
+                if other in e.reason:
+                    raise
+                raise ParseError(e.path, e.line, f"{e.reason}; {other}") from None
         want = FORMATS[fmt]
-        raise ParseError(path, None, f"expected the {want.name} format ({want.columns}); {FORMATS[found[0]].hint()}")
+        raise ParseError(path, None, f"expected the {want.name} format ({want.columns}); {other}")
 
 
 def read_tum(

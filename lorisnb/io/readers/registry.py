@@ -60,13 +60,38 @@ def _is_openloris(s: Sample) -> bool:
     return any(r and " ".join(r).partition(":")[0].strip().lower() in ("scene", "frame", "seq") for r in s.rows)
 
 
+_NANOSECONDS = re.compile(r"\d{16,}")
+
+
+def _header_says(s: Sample) -> str | None:
+    """What a ``timestamp ...`` header among the first comment lines says of the layout: ``"euroc"``
+    when it gives the stamps in nanoseconds (``[ns]``, ``timestamp_ns``) or names the quaternion's w
+    component first (``q_w``, ``q_RS_w``, ``qw`` as the fifth column), ``"tum"`` when it names x first
+    (``qx``: TUM's ``tx ty tz qx qy qz qw``), ``"timestamp"`` for a header saying neither, else None."""
+    for c in s.comments[:3]:
+        text = c.lstrip("#").strip().lower()
+        if not text.startswith("timestamp"):
+            continue
+        if "[ns]" in text or re.match(r"timestamp_?ns\b", text):
+            return "euroc"
+        names = re.sub(r"\[[^\]]*\]", " ", text).replace(",", " ").split()  # units in brackets dropped
+        fifth = names[4] if len(names) > 4 else ""
+        return "euroc" if re.fullmatch(r"q\w*w", fifth) else "tum" if re.fullmatch(r"q\w*x", fifth) else "timestamp"
+    return None
+
+
 def _is_euroc(s: Sample) -> bool:
-    header = any(c.lstrip("#").strip().lower().startswith("timestamp") for c in s.comments[:3])
+    """Comma-separated rows of at least 8 numbers whose stamps are integer nanoseconds since 1970
+    (16 digits or more), or under a header saying EuRoC's layout (:func:`_header_says`), or under a
+    bare ``timestamp`` header with integer stamps (a comma-separated TUM file's are seconds with a
+    fraction: ``1.0``, ``1305031102.175304``)."""
     rows = [r for r, v in zip(s.rows, s.numbers, strict=True) if v is not None]
-    if not rows or not all(len(r) >= 8 for r in rows):
+    if not s.commas or not rows or not all(len(r) >= 8 for r in rows):
         return False
-    ns = all(re.fullmatch(r"\d{16,}", r[0]) for r in rows)  # integer nanoseconds since 1970 (> 1e15)
-    return s.commas and (header or ns)
+    if all(_NANOSECONDS.fullmatch(r[0]) for r in rows):
+        return True
+    header = _header_says(s)
+    return header == "euroc" or (header == "timestamp" and all(r[0].isdigit() for r in rows))
 
 
 def _is_kitti(s: Sample) -> bool:
