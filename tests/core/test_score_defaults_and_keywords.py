@@ -131,3 +131,18 @@ def test_infinity_spelled_inf_is_still_no_threshold():
     assert validate.threshold_list("eps", "1,inf") == [1.0, math.inf]
     with pytest.raises(ValidationError, match=r"too large to be a number"):
         validate.threshold_list("eps", "1,1e400")
+
+
+def test_streamed_sweeps_use_the_errors_thresholds(market, tmp_path):
+    """sweep_to_csv and sweep_to_parquet take the thresholds not given from the errors' spec, as
+    sweep does (they scored at inf/inf/1/60 whatever the evaluation's spec)."""
+    from lorisnb.tools import sweep_to_csv, sweep_to_parquet
+
+    table = market.sequences()[COLUMNS]
+    path, rows = sweep_to_csv(market.errors, tmp_path / "sweep.csv")
+    assert rows == 1
+    pd.testing.assert_frame_equal(pd.read_csv(path)[COLUMNS], table, check_dtype=False)
+    path, rows = sweep_to_parquet(market.errors, tmp_path / "sweep", phi=[5.0, 10.0])
+    streamed = pd.read_parquet(path).sort_values("phi")
+    assert streamed[["eps", "delta", "tau"]].drop_duplicates().to_numpy().tolist() == [[1.0, 0.5, 10.0]]
+    assert streamed["cr"].tolist()[1] == pytest.approx(table.cr[0], rel=1e-12)

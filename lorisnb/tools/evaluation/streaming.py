@@ -8,10 +8,9 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any, TypeVar
 
-import numpy as np
 import pandas as pd
 
-from lorisnb.core.lifelong.scoring import OF_SPEC
+from lorisnb.core.lifelong.scoring import OF_SPEC, thresholds_of
 from lorisnb.core.lifelong.sweep import MAX_SWEEP_BYTES, check_sweep_size, sweep, sweep_groups
 from lorisnb.core.pipeline.model import FileErrors
 from lorisnb.core.spec.validate import choice, flag, threshold_list
@@ -23,10 +22,10 @@ T = TypeVar("T")
 def sweep_to_parquet(
     errors: FileErrors | Iterable[FileErrors],
     out: str | os.PathLike[str],
-    eps: Any = (np.inf,),
-    phi: Any = (np.inf,),
-    delta: Any = (1.0,),
-    tau: Any = (60.0,),
+    eps: Any = OF_SPEC,
+    phi: Any = OF_SPEC,
+    delta: Any = OF_SPEC,
+    tau: Any = OF_SPEC,
     *,
     relative_to: str | None = None,
     columns: str = "metrics",
@@ -46,6 +45,8 @@ def sweep_to_parquet(
     ``max_bytes`` (refused up front, with the size it would need, otherwise).
 
     Args:
+        eps, phi, delta, tau: as :func:`~lorisnb.core.lifelong.sweep.sweep`'s: each not given is the
+            one value of the spec the errors were evaluated under (the same for every group).
         rpe: ``rpe_pairs``, ``rpe_all_pairs``, ``rpe_tolerance`` (see :func:`lorisnb.core.lifelong.sweep.sweep`).
         on_part: called with each group's table before it is written (for example to keep its
             scene aggregate); a DataFrame it returns is written instead of the table.
@@ -58,7 +59,18 @@ def sweep_to_parquet(
     progress = flag("progress", progress)
     fmt = choice("fmt", fmt, ("parquet", "csv"))
     groups = sweep_groups(errors)
-    shape = tuple(len(threshold_list(n, v)) for n, v in (("eps", eps), ("phi", phi), ("delta", delta), ("tau", tau)))
+    given = dict(eps=eps, phi=phi, delta=delta, tau=tau)
+    if relative_to is not None and eps is OF_SPEC:
+        given.pop("eps")  # the spec's metres are no fraction: sweep's own rule (every pose correct)
+    spec = thresholds_of([f for g in groups for f in g], given)  # one setting for all groups, checked together
+    eps, phi, delta, tau = (
+        (spec[k],) if k in given and v is OF_SPEC else v
+        for k, v in (("eps", eps), ("phi", phi), ("delta", delta), ("tau", tau))
+    )
+    shape = tuple(
+        1 if v is OF_SPEC else len(threshold_list(n, v))
+        for n, v in (("eps", eps), ("phi", phi), ("delta", delta), ("tau", tau))
+    )
     for g in groups:  # every group checked before anything is written
         check_sweep_size(g, shape, columns, max_bytes, streamed=True)  # type: ignore[arg-type]
     rows = 0
