@@ -147,3 +147,15 @@ def test_euroc_headers_say_euroc(files, tmp_path, header, stamps):
     assert np.array_equal(ln.read_trajectory(path, "euroc").positions, want.positions)
     with pytest.raises(ParseError, match=r"this looks like a EuRoC CSV file.*--format euroc"):
         ln.read_tum(path)
+
+
+@pytest.mark.parametrize(("given", "looks", "option"), [("tum", "a TUM trajectory file", "--format tum"),
+                                                        ("euroc", "a EuRoC CSV file", "--format euroc"),
+                                                        ("kitti", "a KITTI pose file", "--format kitti")])  # fmt: skip
+def test_read_openloris_of_another_format_names_it(files, given, looks, option):
+    """read_openloris of a TUM, EuRoC or KITTI file: its own error on the line, and what the file is
+    (it said only 'pose line before any seq: N line')."""
+    with pytest.raises(ParseError, match=r"line \d+: .*") as exc:
+        ln.read_openloris(files[given])
+    text = str(exc.value)
+    assert text.count(f"this looks like {looks}") == 1 and option in text

@@ -36,6 +36,7 @@ from lorisnb.io.parsing.chunks import read_rows, stamp_digits
 from lorisnb.io.parsing.ranges import GIVE_BACK_BYTES, give_back_memory
 from lorisnb.io.parsing.rows import Rows
 from lorisnb.io.parsing.scanner import check_rows, finish, nanosecond_pattern, regular_file
+from lorisnb.io.readers.registry import with_hint
 
 POSE_FIELDS = "stamp [output_time] x y z qx qy qz qw"
 
@@ -242,6 +243,20 @@ def read_openloris(
     """
     remove_repeated, warn = flag("remove_repeated", remove_repeated), flag("warn", warn)
     repair_stamps = flag("repair_stamps", repair_stamps)  # "no" is refused, never truth-tested
+    try:
+        return _read_openloris(path, remove_repeated, warn, repair_stamps, progress)
+    except ParseError as e:  # a file of another format: its error says which, and the option that reads it
+        raise with_hint(e, path, "openloris") from e.__cause__
+
+
+def _read_openloris(
+    path: str | os.PathLike,
+    remove_repeated: bool,
+    warn: bool,
+    repair_stamps: bool,
+    progress: Callable[[int], object] | None,
+) -> ResultFile:
+    """:func:`read_openloris` of checked options."""
     spath = str(path)
     rows = read_lines(path, progress)
     heads = parse_headers(spath, rows.specials)

@@ -34,7 +34,7 @@ from lorisnb.io.parsing.scanner import (
     scan,
 )
 from lorisnb.io.readers.openloris import read_openloris
-from lorisnb.io.readers.registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample
+from lorisnb.io.readers.registry import FORMAT_NAMES, FORMATS, hint, line_hint, recognise, sample, with_hint
 from lorisnb.io.readers.times import check_times, read_times, times_lines  # noqa: F401 (read_times: still lorisnb.io.readers.plain.read_times)
 
 #: Formats :func:`read_trajectory` reads (the names of :data:`lorisnb.io.readers.registry.FORMATS`).
@@ -80,16 +80,13 @@ def refuse_other_format(path: str | os.PathLike, fmt: str, read: Callable[[], ob
         return  # the reader says what it expected
     found = recognise(sample(path))
     if found and fmt not in found:
-        other = FORMATS[found[0]].hint()
         if read is not None:
             try:
                 read()
             except ParseError as e:  # its own error, on the line; with the hint where it did not give it
-                if other in e.reason:
-                    raise
-                raise ParseError(e.path, e.line, f"{e.reason}; {other}") from None
+                raise with_hint(e, path, fmt) from e.__cause__
         want = FORMATS[fmt]
-        raise ParseError(path, None, f"expected the {want.name} format ({want.columns}); {other}")
+        raise ParseError(path, None, f"expected the {want.name} format ({want.columns}); {FORMATS[found[0]].hint()}")
 
 
 def read_tum(

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
+from lorisnb.errors import ParseError
 from lorisnb.io.parsing.scanner import regular_file
 
 #: Bytes of a file's beginning that :func:`sample` looks at.
@@ -237,6 +238,19 @@ def hint(path: str | os.PathLike[str], fmt: str) -> str:
 def line_hint(text: str, fmt: str) -> str:
     """The same as :func:`hint` for one offending line of a file (the readers' width errors)."""
     return hint_of_sample(sample_bytes(text.encode("utf-8", "replace")), fmt)
+
+
+def with_hint(e: ParseError, path: object, fmt: str) -> ParseError:
+    """A reader of ``fmt``'s error ``e`` on the file at ``path``, with the hint of the format the
+    file is plainly in (:func:`hint_of_sample`) where it is another and ``e`` does not give it yet;
+    else ``e`` itself. A pipe or a path that cannot be read gives no hint."""
+    if not isinstance(path, (str, os.PathLike)):
+        return e
+    s = sample(path)
+    extra = "" if s is None else hint_of_sample(s, fmt)
+    if not extra or extra.removeprefix("; ") in e.reason:
+        return e
+    return ParseError(e.path, e.line, e.reason + extra)
 
 
 def hint_of_sample(s: Sample, fmt: str) -> str:
