@@ -138,6 +138,28 @@ def test_quaternions_written_w_first(icra20, tmp_path):
     assert not any("'qw qx qy qz'" in m for m in _warned(icra20 / ORB_CAFE))
 
 
+def test_quaternions_written_w_last_read_as_euroc(data, tmp_path):
+    """The reverse: a EuRoC file (nanosecond stamps, commas) whose quaternions were written
+    'qx qy qz qw' is read 'qw qx qy qz', its AOE near 165 deg and its ATE right: lorisnb says so
+    (only the other direction was checked), naming the order that fits."""
+    t = ln.read_tum(data.tum / "freiburg1_xyz-rgbdslam.txt")
+    rows = [f"{round(s * 1e9)}," + ",".join(repr(float(x)) for x in (*p, *q))
+            for s, p, q in zip(t.stamps, t.positions, t.quaternions, strict=True)]  # fmt: skip
+    f = tmp_path / "xyzw.csv"
+    f.write_text("\n".join(rows) + "\n")
+    gt = data.tum / "freiburg1_xyz-groundtruth.txt"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        ev = ln.evaluate_pairs(f, gt, fmt="euroc", gt_fmt="tum")
+    msgs = [str(w.message) for w in caught]
+    assert any("look like 'qx qy qz qw' instead of 'qw qx qy qz'" in m and "real part first" in m for m in msgs), msgs
+    assert ev.sequences()["aoe_rmse"].iloc[0] > 150
+    with warnings.catch_warnings(record=True) as caught:  # the same poses read right: nothing said
+        warnings.simplefilter("always", LorisWarning)
+        ln.evaluate_pairs(data.tum / "freiburg1_xyz-rgbdslam.txt", gt, fmt="tum", gt_fmt="tum")
+    assert not any("instead of" in str(w.message) for w in caught)
+
+
 def test_median_above_is_the_median_compared():
     """The orientation checks' trigger skips the median's partition when fewer than half of the
     AOEs exceed the limit: it says what ``np.median(v) > limit`` says on every array (odd and

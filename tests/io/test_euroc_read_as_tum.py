@@ -159,3 +159,51 @@ def test_read_openloris_of_another_format_names_it(files, given, looks, option):
         ln.read_openloris(files[given])
     text = str(exc.value)
     assert text.count(f"this looks like {looks}") == 1 and option in text
+
+
+HEADERS = [  # (header lines, stamps, quaternion order written, the format it is)
+    (
+        ["# timestamp tx ty tz qx qy qz qw"],
+        "ns",
+        "xyzw",
+        "tum",
+    ),  # TUM's header over ns stamps: TUM (its unit said later)
+    (["#timestamp_ns,tx,ty,tz,qx,qy,qz,qw"], "ns", "xyzw", "tum"),
+    (["# timestamp [ns] tx ty tz qx qy qz qw"], "ns", "xyzw", "tum"),
+    ([], "ns float", "wxyz", "euroc"),  # numpy.savetxt's '%.18e': 1.305031098665900032e+18
+    (["#time,x,y,z,qw,qx,qy,qz"], "relative ns", "wxyz", "euroc"),
+    (["#stamp[ns],x,y,z,qw,qx,qy,qz"], "relative ns", "wxyz", "euroc"),
+    (["# a", "# b", "# c", "#timestamp [ns],p_x,p_y,p_z,q_w,q_x,q_y,q_z"], "relative ns", "wxyz", "euroc"),
+    (["timestamp_ns,px,py,pz,qw,qx,qy,qz"], "relative ns", "wxyz", "euroc"),
+]
+
+
+@pytest.mark.parametrize(("header", "stamps", "order", "fmt"), HEADERS)
+def test_a_header_naming_the_quaternion_order_decides(files, tmp_path, header, stamps, order, fmt):
+    """Which format a comma-separated file is: the quaternion order its header names decides (a
+    TUM header over nanosecond stamps was taken for EuRoC, its x y z w then read as w x y z: AOE
+    165 deg, no warning); without one, stamps of 1e15 or more in any notation, or a header saying ns
+    (also after other comment lines, or without '#'), say EuRoC."""
+    from lorisnb.io.readers import registry
+
+    rows = _rows(files["tum"])
+    t0 = float(rows[0][0])
+
+    def stamp(r: list[str]) -> str:
+        s = float(r[0])
+        if stamps == "ns float":
+            return f"{s * 1e9:.18e}"
+        return str(round((s - t0) * 1e9)) if stamps == "relative ns" else r[0].replace(".", "") + "000"
+
+    def pose(r: list[str]) -> list[str]:
+        return [*r[1:4], *r[4:8]] if order == "xyzw" else [*r[1:4], r[7], *r[4:7]]
+
+    path = tmp_path / "poses.csv"
+    path.write_text("".join(h + "\n" for h in header) + "".join(",".join([stamp(r), *pose(r)]) + "\n" for r in rows))
+    assert registry.recognise(registry.sample(path)) == [fmt]
+    want = ln.read_tum(files["tum"])
+    got = ln.read_tum(path) if fmt == "tum" else ln.read_euroc(path)
+    assert np.allclose(got.quaternions, want.quaternions, atol=1e-12) and np.array_equal(got.positions, want.positions)
+    other = ln.read_euroc if fmt == "tum" else ln.read_tum
+    with pytest.raises(ParseError, match=rf"--format {fmt}\b"):
+        other(path)

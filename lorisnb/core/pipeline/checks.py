@@ -100,14 +100,18 @@ def median_aoe_by_frame(
     return by_frame, float(np.median(quat_angle_deg(quat_conj_multiply(q_gt_fr[k], q_swapped))))
 
 
-def median_aoe_swapped(est: Trajectory, a: Association, alignment: Sim3, max_poses: int = PLAUSIBILITY_POSES) -> float:
-    """Median AOE (deg) of matched poses with each estimate quaternion read ``qw qx qy qz``, after
-    the alignment used (at most ``max_poses`` evenly spread poses; NaN where nothing matched)."""
+def median_aoe_swapped(
+    est: Trajectory, a: Association, alignment: Sim3, max_poses: int = PLAUSIBILITY_POSES, shift: int = -1
+) -> float:
+    """Median AOE (deg) of matched poses with each estimate quaternion's components moved by ``shift``
+    places, after the alignment used (at most ``max_poses`` evenly spread poses; NaN where nothing
+    matched). ``shift=-1``: a file's ``qw qx qy qz`` read as ``qx qy qz qw`` (TUM's order), read
+    right; ``shift=1``: a file's ``qx qy qz qw`` read as ``qw qx qy qz`` (EuRoC's order), read right."""
     if len(a) < 3 or a.gt_quaternions is None:
         return np.nan
     few = spread(len(a), max_poses)
     q_rot = quat_from_matrix(alignment.rotation)
-    q_swapped = quat_multiply(q_rot, quat_normalize(np.roll(est.quaternions[a.est_index[few]], -1, axis=1)))
+    q_swapped = quat_multiply(q_rot, quat_normalize(np.roll(est.quaternions[a.est_index[few]], shift, axis=1)))
     return float(np.median(quat_angle_deg(quat_conj_multiply(a.gt_quaternions[few], q_swapped))))
 
 

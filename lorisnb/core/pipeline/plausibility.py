@@ -152,19 +152,24 @@ def median_above(values: np.ndarray, limit: float) -> bool:
     return bool(np.median(v) > limit)
 
 
-def quaternion_order(label: str, median_aoe: float, median_aoe_swapped: float) -> str | None:
-    """The orientations fit far better when each quaternion is read ``w x y z`` instead of
-    ``x y z w`` (median AOE in degrees either way): the file was probably written in the other
-    order (Eigen's coefficients, ROS messages and TUM files use ``x y z w`` last-w; many tools
-    print ``w x y z``)."""
+def quaternion_order(label: str, median_aoe: float, median_aoe_swapped: float, w_first: bool = False) -> str | None:
+    """The orientations fit far better when each quaternion is read in the other order (median AOE
+    in degrees either way): the file was probably written in it (Eigen's coefficients, ROS messages
+    and TUM files use ``x y z w`` last-w; EuRoC and many tools print ``w x y z``). ``w_first``: the
+    file was read ``w x y z`` (EuRoC's order) and fits ``x y z w``; else the reverse."""
     if not (np.isfinite(median_aoe) and np.isfinite(median_aoe_swapped)):
         return None
     if median_aoe < SUSPECT_AOE or median_aoe_swapped > 10.0:
         return None
+    read, fits = ("'qw qx qy qz'", "'qx qy qz qw'") if w_first else ("'qx qy qz qw'", "'qw qx qy qz'")
+    write = (
+        "'timestamp_ns,x,y,z,qw,qx,qy,qz' (the real part first)"
+        if w_first
+        else "'stamp x y z qx qy qz qw' (the real part last)"
+    )
     return (
-        f"{label}: the quaternions look like 'qw qx qy qz' instead of 'qx qy qz qw': read that way the median "
-        f"AOE drops from {median_aoe:.1f} deg to {median_aoe_swapped:.1f} deg. Write each pose as "
-        "'stamp x y z qx qy qz qw' (the real part last)."
+        f"{label}: the quaternions look like {fits} instead of {read}: read that way the median "
+        f"AOE drops from {median_aoe:.1f} deg to {median_aoe_swapped:.1f} deg. Write each pose as {write}."
     )
 
 

@@ -266,8 +266,11 @@ def evaluate_sessions(
                 float(np.median(e.aoe)),
             )  # fmt: skip
         else:
-            swapped = checks.median_aoe_swapped(est[e.seq], a, per_seq[e.seq])
-            found.append(plausibility.quaternion_order(label, float(np.median(e.aoe)), swapped))
+            median = float(np.median(e.aoe))
+            if median >= plausibility.SUSPECT_AOE:  # read in the other order: w last (TUM's) or w first (EuRoC's)
+                last, first = (checks.median_aoe_swapped(est[e.seq], a, per_seq[e.seq], shift=k) for k in (-1, 1))
+                w_first = bool(first < last)
+                found.append(plausibility.quaternion_order(label, median, first if w_first else last, w_first))
         if release is not None:
             release(e.seq)
     kept = [n for n in dict.fromkeys(found) if n]

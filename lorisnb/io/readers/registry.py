@@ -28,8 +28,9 @@ SAMPLE_LINES = 20
 
 @dataclass(frozen=True)
 class Sample:
-    """The beginning of a file: its first bytes, its ``#`` comment lines and its first data lines
-    split into tokens (at spaces, tabs and commas), and whether commas separate the values."""
+    """The beginning of a file: its first bytes, its ``#`` comment lines before the first data line
+    (and a CSV header line without ``#``), its first data lines split into tokens (at spaces, tabs
+    and commas), and whether commas separate the values."""
 
     head: bytes
     comments: tuple[str, ...]
@@ -61,38 +62,55 @@ def _is_openloris(s: Sample) -> bool:
     return any(r and " ".join(r).partition(":")[0].strip().lower() in ("scene", "frame", "seq") for r in s.rows)
 
 
-_NANOSECONDS = re.compile(r"\d{16,}")
+#: Names a header gives the stamp column alone (``#timestamp``): the stamps' unit unsaid.
+_STAMP_NAMES = ("timestamp", "time", "stamp", "t")
+#: The smallest stamp that can only be nanoseconds since 1970 (as seconds: 31 million years).
+_NANOSECONDS_SINCE_1970 = 1e15
 
 
-def _header_says(s: Sample) -> str | None:
-    """What a ``timestamp ...`` header among the first comment lines says of the layout: ``"euroc"``
-    when it gives the stamps in nanoseconds (``[ns]``, ``timestamp_ns``) or names the quaternion's w
-    component first (``q_w``, ``q_RS_w``, ``qw`` as the fifth column), ``"tum"`` when it names x first
-    (``qx``: TUM's ``tx ty tz qx qy qz qw``), ``"timestamp"`` for a header saying neither, else None."""
-    for c in s.comments[:3]:
+@dataclass(frozen=True)
+class _Header:
+    """What the column header nearest a file's first data line says (:func:`_header`): the order of
+    the quaternion named in the fifth to eighth columns (``"wxyz"``: ``q_w``, ``q_RS_w``, ``qw``
+    fifth; ``"xyzw"``: ``qx`` fifth, TUM's ``tx ty tz qx qy qz qw``), whether the stamps are said to
+    be nanoseconds (``[ns]``, ``(ns)``, ``timestamp_ns``), and whether it names the stamp column alone."""
+
+    order: str | None = None
+    nanoseconds: bool = False
+    bare: bool = False
+
+
+def _header(s: Sample) -> _Header:
+    """:class:`_Header` of the last comment line before the first data line (or the CSV header line
+    without ``#``) that names columns: one stamp name alone, or at least 8 names with a quaternion
+    component fifth. Units in brackets (``p_x [m]``, ``timestamp(s)``) are not names."""
+    for c in reversed(s.comments):
         text = c.lstrip("#").strip().lower()
-        if not text.startswith("timestamp"):
-            continue
-        if "[ns]" in text or re.match(r"timestamp_?ns\b", text):
-            return "euroc"
-        names = re.sub(r"\[[^\]]*\]", " ", text).replace(",", " ").split()  # units in brackets dropped
-        fifth = names[4] if len(names) > 4 else ""
-        return "euroc" if re.fullmatch(r"q\w*w", fifth) else "tum" if re.fullmatch(r"q\w*x", fifth) else "timestamp"
-    return None
+        names = re.sub(r"\[[^\]]*\]|\([^)]*\)", " ", text).replace(",", " ").split()
+        ns = bool(re.search(r"\[ns\]|\(ns\)|[a-z]_ns\b", text))
+        if len(names) >= 8 and re.fullmatch(r"q\w*[wx]", names[4]):
+            return _Header("wxyz" if names[4].endswith("w") else "xyzw", ns)
+        if len(names) == 1 and names[0] in _STAMP_NAMES + tuple(f"{n}_ns" for n in _STAMP_NAMES):
+            return _Header(None, ns, bare=True)
+    return _Header()
 
 
 def _is_euroc(s: Sample) -> bool:
-    """Comma-separated rows of at least 8 numbers whose stamps are integer nanoseconds since 1970
-    (16 digits or more), or under a header saying EuRoC's layout (:func:`_header_says`), or under a
-    bare ``timestamp`` header with integer stamps (a comma-separated TUM file's are seconds with a
-    fraction: ``1.0``, ``1305031102.175304``)."""
-    rows = [r for r, v in zip(s.rows, s.numbers, strict=True) if v is not None]
-    if not s.commas or not rows or not all(len(r) >= 8 for r in rows):
+    """Comma-separated rows of at least 8 numbers whose quaternion a header names ``w`` first; or,
+    where no header names the order, stamps that are nanoseconds since 1970 (1e15 or more, in any
+    notation: ``1403636579763555584``, ``1.4036e+18``) or said to be nanoseconds by the header, or
+    integers under a header naming the stamp column alone (a comma-separated TUM file's stamps are
+    seconds with a fraction: ``1.0``, ``1305031102.175304``). A header naming ``qx`` fifth (TUM's)
+    is never EuRoC's, whatever the stamps."""
+    rows = [(r, v) for r, v in zip(s.rows, s.numbers, strict=True) if v is not None]
+    if not s.commas or not rows or not all(len(r) >= 8 for r, _ in rows):
         return False
-    if all(_NANOSECONDS.fullmatch(r[0]) for r in rows):
+    header = _header(s)
+    if header.order is not None:
+        return header.order == "wxyz"
+    if header.nanoseconds or all(v[0] >= _NANOSECONDS_SINCE_1970 for _, v in rows):
         return True
-    header = _header_says(s)
-    return header == "euroc" or (header == "timestamp" and all(r[0].isdigit() for r in rows))
+    return header.bare and all(r[0].isdigit() for r, _ in rows)
 
 
 def _is_kitti(s: Sample) -> bool:
@@ -204,20 +222,23 @@ def _sample(head: bytes, cut: bool) -> Sample:
         return Sample(head, (), (), False)
     text = head.decode("utf-8", "replace").lstrip("\ufeff")
     lines = text.splitlines()[:-1] if cut else text.splitlines()
-    comments, rows, commas = [], [], False
+    comments, rows, commas, first = [], [], False, ""
     for line in lines:
         stripped = line.strip()
         if not stripped:
             continue
         if stripped.startswith("#"):
-            comments.append(stripped)
+            if not rows:  # a comment before the data: perhaps its header
+                comments.append(stripped)
             continue
+        first = first or stripped
         commas = commas or "," in stripped
         rows.append(tuple(stripped.replace(",", " ").split()))  # at whitespace (as re's \s) and commas
         if len(rows) >= SAMPLE_LINES:
             break
-    if rows and _numbers(rows[0]) is None and len(rows) > 1 and _numbers(rows[1]) is not None and "," in lines[0]:
-        rows = rows[1:]  # a CSV header line without '#'
+    if rows and _numbers(rows[0]) is None and len(rows) > 1 and _numbers(rows[1]) is not None and "," in first:
+        comments.append(first)  # a CSV header line without '#': the header, as a comment's
+        rows = rows[1:]
     return Sample(head, tuple(comments), tuple(rows), commas)
 
 
