@@ -222,7 +222,9 @@ def _sample(head: bytes, cut: bool) -> Sample:
         return Sample(head, (), (), False)
     text = head.decode("utf-8", "replace").lstrip("\ufeff")
     lines = text.splitlines()[:-1] if cut else text.splitlines()
-    comments, rows, commas, first = [], [], False, ""
+    comments: list[str] = []
+    rows: list[tuple[str, ...]] = []
+    commas, first = False, ""
     for line in lines:
         stripped = line.strip()
         if not stripped:

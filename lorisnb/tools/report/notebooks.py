@@ -212,18 +212,63 @@ def kernel_files() -> Iterator[str]:
         shutil.rmtree(folder, ignore_errors=True)
 
 
+#: Seconds a wait for a kernel's message looks at its socket again (:func:`waking_client_class`).
+MESSAGE_LOOK_SECONDS = 1.0
+
+
+def waking_client_class() -> Any:
+    """Jupyter's asynchronous kernel client whose waits for a message look at the socket again every
+    :data:`MESSAGE_LOOK_SECONDS` (a wait of ``timeout`` seconds is cut into such waits, the same
+    timeout in all). A message already on the socket was once left unseen until the wait's timeout:
+    under load, threshold_sensitivity's widget cell took 240.0 s, the whole ``execution_timeout`` given
+    to papermill, in 2 of 7 runs, although the kernel had sent its reply and gone idle within 0.7 s
+    (the reply's own time stamp), and was then read as if nothing had happened (jupyter/nbclient#312;
+    with ``lorisnb report``'s 1,800 s a notebook stalled half an hour). Uses only the public
+    ``*_channel_class`` traits and ``get_msg``."""
+    from queue import Empty
+
+    from jupyter_client.asynchronous import AsyncKernelClient
+    from jupyter_client.channels import AsyncZMQSocketChannel
+    from traitlets import Type
+
+    class WakingChannel(AsyncZMQSocketChannel):
+        async def get_msg(self, timeout: float | None = None) -> dict[str, Any]:  # type: ignore[override]
+            deadline = None if timeout is None else time.monotonic() + timeout
+            while True:
+                left = MESSAGE_LOOK_SECONDS if deadline is None else max(0.0, deadline - time.monotonic())
+                try:
+                    return await super().get_msg(timeout=min(MESSAGE_LOOK_SECONDS, left))
+                except Empty:
+                    if deadline is not None and time.monotonic() >= deadline:
+                        raise
+
+    class WakingKernelClient(AsyncKernelClient):
+        shell_channel_class = Type(WakingChannel)
+        iopub_channel_class = Type(WakingChannel)
+        stdin_channel_class = Type(WakingChannel)
+        control_channel_class = Type(WakingChannel)
+
+    return WakingKernelClient
+
+
 def kernel_manager_class() -> Any:
     """Jupyter's kernel manager with the kernel's sockets on ipc files of a unique name (POSIX):
     kernels started side by side by several processes never race for the same free TCP port (a
     kernel that loses dies "before replying to kernel_info"). During a report, its kernels are
-    forked warm (:mod:`lorisnb.tools.report.kernels`)."""
+    forked warm (:mod:`lorisnb.tools.report.kernels`). Its clients never leave a message unseen
+    past a second (:func:`waking_client_class`)."""
     from jupyter_client.manager import AsyncKernelManager
-
-    if os.name != "posix":
-        return AsyncKernelManager
     from traitlets import default
 
-    class IpcKernelManager(AsyncKernelManager):
+    class WakingKernelManager(AsyncKernelManager):
+        @default("client_factory")
+        def _client_factory_default(self) -> Any:
+            return waking_client_class()
+
+    if os.name != "posix":
+        return WakingKernelManager
+
+    class IpcKernelManager(WakingKernelManager):
         @default("transport")
         def _transport_default(self) -> str:
             return "ipc"
