@@ -174,8 +174,10 @@ def stage_notebook(source: Path, dest: Path, output_dir: Path) -> None:
 
 
 #: Seconds a cell may take in the manual's build (the longest notebook takes about 35 s in all): a
-#: cell past it is taken for a stalled kernel client (an idle kernel, the client still waiting: seen
-#: now and then under load, cause not found) and the notebook is run once more in a fresh kernel.
+#: cell past it is taken for a stalled kernel and the notebook is run once more in a fresh kernel. (The
+#: stall seen now and then under load, an idle kernel whose reply the client left unseen until the
+#: timeout, is gone: the client of :func:`~lorisnb.tools.report.notebooks.waking_client_class` looks
+#: at its sockets every second.)
 CELL_TIMEOUT_S = 180
 
 
