@@ -253,3 +253,17 @@ def test_the_declared_scene_is_read_past_a_bom_as_the_reader_reads_it(tmp_path):
     path.write_bytes("\ufeffScene : Cafe\nseq: 1\n1.0 0 0 0 0 0 0 1\n".encode())
     assert read_openloris(path, warn=False).scene == "cafe"
     assert declared_scene(path) == "cafe"
+
+
+@pytest.mark.parametrize("sep", [",", " "])
+def test_a_line_of_column_names_without_hash_says_to_comment_it(tmp_path, sep):
+    """A header line without '#' ('timestamp,tx,...'): the error says to make it a comment, as the
+    TUM format wants; a bad number on a data line is not taken for a header."""
+    p = tmp_path / "h.txt"
+    p.write_text(sep.join("timestamp tx ty tz qx qy qz qw".split()) + "\n1.0 0 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n")
+    with pytest.raises(ParseError, match=r"line 1: 'timestamp' is not a number; .*start it with '#', a comment"):
+        read_tum(p)
+    p.write_text("1.0 0 0 0 0 0 0 1\n2.0 1 x 0 0 0 0 1\n")
+    with pytest.raises(ParseError, match=r"line 2: 'x' is not a number") as exc:
+        read_tum(p)
+    assert "'#'" not in str(exc.value)

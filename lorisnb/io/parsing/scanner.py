@@ -67,8 +67,22 @@ class Lines:
                     float(tok)
                 except ValueError:
                     shown = tok.decode("utf-8", "replace")
-                    raise ParseError(path, int(i) + 1, f"{shown!r} is not a number; expected {expected}") from None
+                    header = ""
+                    if i == rows[0] and not any(_number(t) for t in self.raw[self.starts[i] : self.ends[i]].split()):
+                        header = " (a line of column names? start it with '#', a comment)"
+                    raise ParseError(
+                        path, int(i) + 1, f"{shown!r} is not a number; expected {expected}{header}"
+                    ) from None
         raise ParseError(path, None, f"could not read the numbers; expected {expected}")
+
+
+def _number(token: bytes) -> bool:
+    """Whether ``token`` reads as a number (:meth:`Lines.numbers`' rule: no ``_``)."""
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return b"_" not in token
 
 
 def scan(raw: bytes, separators: bytes = b"") -> Lines:
