@@ -142,7 +142,16 @@ def received(tmp_path, record_changes, roots=("res",)):
     folder = tmp_path / "run"
     folder.mkdir()
     write_run_json(folder, record)
+    as_written(folder)
     return folder, res
+
+
+def as_written(folder: Path) -> None:
+    """The run marker lorisnb writes beside run.json, listing the folder's files as they are now: a
+    run.json of named roots without it is a damaged run (its marker removed), which verify names."""
+    from lorisnb.tools.report.build import _files, _write_marker
+
+    _write_marker(folder, _files(folder))
 
 
 @pytest.mark.parametrize(

@@ -13,6 +13,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from test_portable_runs import as_written
 from test_portable_runs import received as portable_run
 
 from lorisnb.cli import main
@@ -85,6 +86,7 @@ def received(tmp_path, inputs_below_res, input_roots=("{results}",)):
     record["inputs"].update({"{results}/" + k: "0" * 64 for k in inputs_below_res})
     record["input_roots"] = list(input_roots)
     write_run_json(folder, record)
+    as_written(folder)
     return folder, res
 
 

@@ -11,6 +11,7 @@ The finished folder is readable like any other output (the umask's permissions, 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import datetime as _dt
 import functools
 import hashlib
@@ -126,6 +127,43 @@ def _protected(run_dir: Path, extra: list[Path]) -> str | None:
     return _not_written(run_dir)
 
 
+def _meets_inputs(run_dir: Path, inputs: Iterable[Path], read: Iterable[Path] = ()) -> tuple[str, str] | None:
+    """How the run folder ``run_dir`` meets the files and folders the report reads (``("lies in",
+    input)``...: :func:`~lorisnb.io.writers.overlap`), compared where each really is (links resolved)
+    and as written (``--out res/linked/run``, ``linked`` a link leading elsewhere, lies in ``res`` as
+    the report reads it), and in a folder it reads through a link below the folders it walks, ``read``
+    (``("lies in", "res/linked (a linked folder...)")``, ``--out`` given where ``linked`` leads); None
+    when it meets none."""
+    inputs = list(inputs)
+    hit = overlap(run_dir, inputs)
+    if hit:
+        return hit
+    given = Path(os.path.abspath(run_dir))
+    for i in inputs:
+        src = Path(os.path.abspath(i))
+        if given == src:
+            return "is", str(i)
+        if given in src.parents:
+            return "holds", str(i)
+        if src in given.parents:
+            return "lies in", str(i)
+    from lorisnb.tools.evaluation.inputs import walk
+
+    target = run_dir.resolve()
+    for i in read:
+        if not Path(i).is_dir():
+            continue
+        with warnings.catch_warnings():  # a loop among the links: said by the evaluation, once
+            warnings.simplefilter("ignore", LorisWarning)
+            found = walk(Path(i))
+        for f in found:
+            if f.kind == "folder" and f.path.is_symlink():
+                real = Path(f.real)
+                if target == real or real in target.parents:
+                    return "lies in", f"{f.path} (a linked folder: the report reads the folder it leads to)"
+    return None
+
+
 def _files(folder: Path) -> dict[str, str]:
     """Every file, link and empty folder below ``folder`` (its path inside, POSIX) -> its SHA-256
     (a link's: of its target's name; an empty folder's: "folder"); the run marker aside. A FIFO or
@@ -155,12 +193,42 @@ def _write_marker(folder: Path, files: Mapping[str, str] | None = None, out: Pat
     write_text(json.dumps(record, indent=0), out if out is not None else folder / RUN_MARKER, force=True)
 
 
-def not_as_written(run_dir: Path) -> list[str] | None:
-    """The files of a run folder (relative paths) that its run did not write or that changed since,
-    as its marker lists them with their checksums; None where the marker lists nothing (a run of an
-    earlier lorisnb, or a damaged marker). A marker, or a file of the run, that is a link leading out
-    of it, a FIFO or a device is a :class:`~lorisnb.errors.ValidationError` naming it, unread
-    (:func:`~lorisnb.tools.report.provenance.read_run_file`)."""
+@dataclasses.dataclass(frozen=True)
+class _AsWritten:
+    """A run folder against its marker (:func:`_against_marker`): ``foreign``, the files its run did
+    not write or that changed since; ``missing``, those it wrote that are gone; ``marker``, what is
+    wrong with the marker itself ("missing", "damaged": it lists no files where the run's lorisnb
+    always lists them), or None."""
+
+    foreign: list[str]
+    missing: list[str]
+    marker: str | None = None
+
+    def all(self) -> list[str]:
+        """Every file of the run not as written, the marker too where it is missing or damaged."""
+        return sorted({*self.foreign, *self.missing, *([RUN_MARKER] if self.marker else [])})
+
+
+def _lists_its_files(run_dir: Path) -> bool:
+    """Whether the run's run.json says the lorisnb that wrote it always writes the run's marker, listing
+    the run's files: it has ``roots`` (named roots came after the marker's list of files, both of
+    lorisnb 0.3.0: a marker has been written beside every run.json, its list of files since 2026-11-26,
+    ``roots`` since 2026-11-28)."""
+    from lorisnb.tools.report.provenance import RUN_JSON
+
+    try:
+        record = json.loads(read_run_file(run_dir, run_dir / RUN_JSON))
+    except (OSError, ValueError, LorisError):
+        return False
+    return isinstance(record, dict) and "roots" in record
+
+
+def _against_marker(run_dir: Path) -> _AsWritten | None:
+    """The run folder ``run_dir`` against its marker (:class:`_AsWritten`); None where the marker
+    lists nothing and the run may be one of an earlier lorisnb (no run.json saying otherwise:
+    :func:`_lists_its_files`). A marker missing, or listing nothing, beside a run.json of a lorisnb
+    that always writes one listing the run's files is damage (a marker removed hid every hand edit),
+    not an earlier run."""
     marker = run_dir / RUN_MARKER
     try:
         wrote = json.loads(read_run_file(run_dir, marker)).get("files")
@@ -168,9 +236,36 @@ def not_as_written(run_dir: Path) -> list[str] | None:
         raise
     except (OSError, ValueError, AttributeError):
         wrote = None
-    if not isinstance(wrote, dict):
-        return None
-    return sorted(rel for rel, digest in _files(run_dir).items() if wrote.get(rel) != digest)
+    if isinstance(wrote, dict):
+        here = _files(run_dir)
+        foreign = sorted(rel for rel, digest in here.items() if wrote.get(rel) != digest)
+        missing = sorted(rel for rel in wrote if rel not in here and rel != RUN_MARKER)
+        return _AsWritten(foreign, missing)
+    if _lists_its_files(run_dir):
+        return _AsWritten([], [], "damaged" if os.path.lexists(marker) else "missing")
+    return None
+
+
+def not_as_written(run_dir: Path) -> list[str] | None:
+    """The files of a run folder (relative paths) that its run did not write, that changed since, or
+    that it wrote and are gone, as its marker lists them with their checksums; the marker itself
+    (:data:`RUN_MARKER`) where it is missing or lists nothing beside a run.json of a lorisnb that
+    always writes it listing the run's files (damage, not an earlier run: :func:`_lists_its_files`).
+    None where the marker lists nothing and the run may be one of an earlier lorisnb. A marker, or a file of the run, that is a link
+    leading out of it, a FIFO or a device is a :class:`~lorisnb.errors.ValidationError` naming it,
+    unread (:func:`~lorisnb.tools.report.provenance.read_run_file`)."""
+    found = _against_marker(run_dir)
+    return None if found is None else found.all()
+
+
+def missing_run_files(run_dir: Path) -> list[str]:
+    """The files of a run folder its marker lists that are gone (relative paths), and the marker
+    where it is gone and the run's lorisnb always writes it (:func:`not_as_written`): what verify
+    should say is missing, where :func:`not_as_written` says only "not as written"."""
+    found = _against_marker(run_dir)
+    if found is None:
+        return []
+    return sorted({*found.missing, *([RUN_MARKER] if found.marker == "missing" else [])})
 
 
 def _not_written(run_dir: Path, instead: str = "choose another --out", render: bool = False) -> str | None:
@@ -178,9 +273,11 @@ def _not_written(run_dir: Path, instead: str = "choose another --out", render: b
     it holds a file its run did not write (added or changed since, as its marker lists them), or its
     marker lists nothing; else None. ``instead``: what else the user can do, ending the message.
     ``render``: the advice is render's (its pages are made from index.html and the notebooks, which
-    cannot be moved out; a run whose marker lists nothing cannot be rendered, only made again)."""
-    foreign = not_as_written(run_dir)
-    if foreign is None:
+    cannot be moved out; a run whose marker lists nothing cannot be rendered, only made again; a
+    run missing a file it wrote other than a page render writes again is not rendered either: the
+    marker render writes would no longer list it, and verify would not see it is gone)."""
+    found = _against_marker(run_dir)
+    if found is None or found.marker is not None:
         if render:
             return (f"its {RUN_MARKER} marker does not list the files its run wrote (a run of an earlier lorisnb, or "
                     "a damaged marker), so its pages cannot be told from files added since; make the run again with "
@@ -188,6 +285,16 @@ def _not_written(run_dir: Path, instead: str = "choose another --out", render: b
         return (f"its {RUN_MARKER} marker does not list the files its run wrote (a run of an earlier lorisnb, "
                 "or a damaged marker), so files added to it cannot be told apart; move what you keep out of it "
                 f"and remove it yourself, or {instead}")  # fmt: skip
+    foreign = found.foreign
+    if render and not foreign:
+        pages = {"report.html", *(f"{nb.parent.name}/{nb.stem}.html" for nb in run_dir.glob("*/*.ipynb")
+                                  if nb.parent.name == nb.stem)}  # fmt: skip
+        gone = [f for f in found.missing if f not in pages]
+        if gone:
+            shown = ", ".join(gone[:5]) + (f" and {len(gone) - 5} more" if len(gone) > 5 else "")
+            return (f"{len(gone)} file(s) its run wrote are gone ({shown}); render writes only its pages again, and "
+                    "the run would then be without them unnoticed: put them back (from where the run was copied), "
+                    "then render again")  # fmt: skip
     if not foreign:
         return None
     shown = ", ".join(foreign[:5]) + (f" and {len(foreign) - 5} more" if len(foreign) > 5 else "")
@@ -421,7 +528,7 @@ def run_report(
         given_source = results if results is not None else params.get("results_dir")  # the leaderboard's input
         source = Path(str(given_source)) if given_source else (data.icra20 if data else None)
         roots = input_roots(names, params, data, source if wants_board else None)
-        hit = overlap(run_dir, [*roots, nb_dir, *([data.root.resolve()] if data is not None else [])])  # the data root
+        hit = _meets_inputs(run_dir, [*roots, nb_dir, *([data.root] if data is not None else [])], roots)  # data root
         if hit:  # the run would be read as an input by the next report on the same folder, and by verify
             raise OutputError(f"--out {run_dir} {hit[0]} the input {hit[1]} of this report; choose another folder")
         if source is not None:  # a filter naming nothing there is refused now, not by each notebook later
@@ -466,8 +573,9 @@ def run_report(
             n_jobs = jobs or min(len(names), os.cpu_count() or 1)
             runs = _run_all(names, tmp, params, notebooks_dir, n_jobs, progress, zygote, meanwhile=leaderboard)
             spec = board["spec"]
-            if not absolute_paths and source is not None and "source" in spec["values"]:
-                spec["values"]["source"] = root_key(source, named)  # the leaderboard's input, by its root's name
+            if source is not None and "source" in spec["values"]:  # the leaderboard's input, by its root's name, or
+                # where it is (--absolute-paths: as run.json's roots, not relative to where the command ran)
+                spec["values"]["source"] = str(source.resolve()) if absolute_paths else root_key(source, named)
             with naming(tmp / "parameters.json"):  # (the file in the run folder: _in_run_folder)
                 (tmp / "parameters.json").write_text(json.dumps(params, indent=2, default=str))
             # each input where it is (a link too: its target may lie outside every root, on this machine only)
@@ -493,7 +601,7 @@ def run_report(
                 index = write_index(folder, runs, params, name=name, findings=board.get("findings"), spec=spec, label=label,
                                     failures=board.get("failures"), left_out=left_out,
                                     per_sequence=board.get("per_sequence"), wanted=run_dir.name,
-                                    expected=board.get("expected"), since=since)  # fmt: skip
+                                    expected=board.get("expected"), since=since, roots=named)  # fmt: skip
                 if not absolute_paths:  # every path below a named root, whatever wrote it (a notebook's printout)
                     others = [("baseline", Path(baseline))] if baseline is not None else []
                     every = [*named.items(), *others, ("run", folder), ("run", run_dir), *install_roots()]
@@ -546,8 +654,16 @@ def render_run(run: str | os.PathLike[str]) -> list[Path]:
     for f in (RUN_MARKER, "index.html"):  # a link leading out, a FIFO or a device: refused, never opened
         if os.path.lexists(folder / f):
             run_file(folder, folder / f)
-    if not (folder / RUN_MARKER).is_file() or not (folder / "index.html").is_file():
-        raise LorisError(f"{folder}: not a run folder written by lorisnb report (no {RUN_MARKER} and index.html)")
+    absent = [f for f in (RUN_MARKER, "index.html") if not (folder / f).is_file()]
+    if len(absent) == 2 or (absent and not (folder / "run.json").is_file()):
+        raise LorisError(f"{folder}: not a run folder written by lorisnb report (no {' and no '.join(absent)} in it)")
+    if absent == [RUN_MARKER]:  # beside its run.json: every lorisnb writing one writes the marker
+        raise LorisError(f"{folder} will not be rendered again: its {RUN_MARKER} marker is gone (every run lorisnb "
+                         "writes has one), so its pages cannot be told from files changed or added since; copy the "
+                         "run again from where it came, or make it again with lorisnb report")  # fmt: skip
+    if absent:
+        raise LorisError(f"{folder} will not be rendered again: its index.html is gone, from which render makes "
+                         "report.html; put back the run's own (from where the run was copied), then render again")  # fmt: skip
     out = links_out(folder)  # a page written through one lands elsewhere; a notebook read through one is not the run's
     if out:
         shown = ", ".join(str(p.relative_to(folder)) for p in out[:5]) + (f" and {len(out) - 5} more" * (len(out) > 5))

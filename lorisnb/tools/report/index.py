@@ -9,7 +9,8 @@ import datetime as _dt
 import html
 import json
 import platform
-from collections.abc import Mapping, Sequence
+import re
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -27,10 +28,18 @@ if TYPE_CHECKING:
 
 
 def esc(text: object) -> str:
-    """Text shown on the page: control and format characters (ESC, CR, a right-to-left override
-    U+202E from a folder's name) escaped visibly as the terminal shows them (``\\x1b``, ``\\r``,
-    ``\\u202e``: :func:`~lorisnb.tools.decisions.escape.clean`), newlines and tabs kept (a
-    traceback in ``<pre>``), then HTML's ``&<>"'``. A link's address takes :func:`attr` instead."""
+    """Text shown on the page in a line (a name in a table cell, a heading, a sentence): every
+    control and format character (a newline, a tab, ESC, CR, a right-to-left override U+202E from a
+    folder's name) and a backslash escaped visibly as the terminal shows them (``\\n``, ``\\t``,
+    ``\\x1b``, ``\\u202e``: :func:`~lorisnb.tools.decisions.escape.clean`), so that ``new\\nline``
+    never shows as ``new line``; then HTML's ``&<>"'``. A block in ``<pre>`` (a traceback) takes
+    :func:`esc_block`, a link's address :func:`attr`."""
+    return html.escape(clean(text))
+
+
+def esc_block(text: object) -> str:
+    """Text shown in ``<pre>`` (a traceback, the parameters): as :func:`esc`, its newlines and tabs
+    kept."""
     return html.escape("\n".join("\t".join(map(clean, line.split("\t"))) for line in str(text).split("\n")))
 
 
@@ -229,12 +238,15 @@ def write_index(
     expected: Mapping[str, Any] | None = None,
     label: str | None = None,
     since: Mapping[str, Any] | None = None,
+    roots: Mapping[str, Path] | None = None,
 ) -> Path:
     """``index.html`` (see the module docstring). ``label``: the code under test, shown in the header;
     ``since``: this run against its baseline (:func:`lorisnb.tools.report.baseline.since_baseline`). ``name``: the run folder's name (``run_dir``'s by
     default); ``wanted``: the name asked for, when another run took it and this one is ``name``;
     ``expected``: scene -> its sequences with ground truth (each one gets a column of the
-    per-sequence values, with or without output)."""
+    per-sequence values, with or without output); ``roots``: the report's named roots (name -> folder,
+    :func:`lorisnb.tools.report.portable.named_roots`), where a failure's file keyed ``{results}/...``
+    is, to tell it is the file a notebook names by its path (listed and counted once)."""
     spec = spec or {}
     name = name or run_dir.name
     moved = (f" (<code>{esc(wanted)}</code> appeared while this report ran, another run's: this run is "
@@ -252,7 +264,9 @@ def write_index(
         f"checksums) in <a href='run.json'>run.json</a>; one file for e-mail: <a href='report.html'>report.html</a>.</p>",
     ]
     if since:
-        parts += _since_html(since)
+        # the run itself, as the baseline's messages name it (its folder where it goes): "this run", not its path
+        this = {str(run_dir.parent / n) for n in (name, wanted) if n}
+        parts += _since_html(since, this)
     figures = _figures(run_dir, runs)
     if findings is not None and not len(findings.board):
         parts.append("<h2 id='findings'>What was found</h2><p class='failed'>No leaderboard: no result file could be "
@@ -302,13 +316,15 @@ def write_index(
             parts.append(_table(pivot.reset_index(), "values"))
     else:
         parts.append("<p>None in this report.</p>")
-    parts += _failures(run_dir, runs, failures)
+    parts += _failures(run_dir, runs, failures, roots)
     parts += _notebooks(run_dir, runs, left_out or {})
     parts.append("<h2>Tables (CSV)</h2><ul>")
     for p in sorted(run_dir.glob("*/*.csv")):
         rel = p.relative_to(run_dir).as_posix()
         parts.append(f"<li><a href='{attr(rel)}'>{esc(rel)}</a></li>")
-    parts.append("</ul><h2>Parameters</h2><pre>" + esc(json.dumps(dict(parameters), indent=2, default=str)) + "</pre>")
+    parts.append(
+        "</ul><h2>Parameters</h2><pre>" + esc_block(json.dumps(dict(parameters), indent=2, default=str)) + "</pre>"
+    )
     parts.append("<h2>Versions</h2>" + _table(pd.DataFrame(list(versions().items()), columns=["package", "version"])))
     parts.append("</body></html>")
     index = run_dir / "index.html"
@@ -358,11 +374,34 @@ def _per_sequence(g: pd.DataFrame, metric: str, expected: Any, findings: "Findin
     return text
 
 
-def _failures(run_dir: Path, runs: Sequence["NotebookRun"], failures: pd.DataFrame | None) -> list[str]:
+def _same_file(file: str, roots: Mapping[str, Path] | None) -> str:
+    """What tells one input file from another however it is written: where it really is (a key
+    ``{results}/alg/x.txt`` below its root in ``roots``, a path as typed or absolute, links
+    resolved); the text as it is where it is neither."""
+    import os
+
+    from lorisnb.tools.report.portable import split_key
+
+    named = split_key(file)
+    if named is not None:
+        if not roots or named[0] not in roots:
+            return file
+        where = roots[named[0]] / named[1] if named[1] else roots[named[0]]
+    else:
+        where = Path(file)
+    try:
+        return os.path.realpath(where)
+    except (OSError, ValueError):
+        return file
+
+
+def _failures(run_dir: Path, runs: Sequence["NotebookRun"], failures: pd.DataFrame | None,
+              roots: Mapping[str, Path] | None = None) -> list[str]:  # fmt: skip
     """Every input file the report's own evaluation or a notebook did not score (failed, or not
     scored: :data:`lorisnb.tools.decisions.runs.NOT_SCORED`, as the terminal counts them), each once with its
-    path, status and reason; then the files skipped on purpose (a scene without ground truth, ...),
-    each with its path and reason too."""
+    path, status and reason (once too where the report keys it below its root, ``{results}/...``,
+    and a notebook names it by its path: :func:`_same_file`); then the files skipped on purpose (a
+    scene without ground truth, ...), each with its path and reason too."""
     rows = [] if failures is None else [("report", r) for r in failures.itertuples()]
     for r in runs:
         f = run_dir / r.name / INPUT_ERRORS_CSV
@@ -372,7 +411,7 @@ def _failures(run_dir: Path, runs: Sequence["NotebookRun"], failures: pd.DataFra
     skipped: dict[str, tuple[str, Any]] = {}
     for n, row in rows:
         status = str(getattr(row, "status", "failed"))
-        (unscored if status in NOT_SCORED else skipped).setdefault(str(row.file), (n, row))
+        (unscored if status in NOT_SCORED else skipped).setdefault(_same_file(str(row.file), roots), (n, row))
     for file in unscored:
         skipped.pop(file, None)
     parts = [f"<h3 id='failures'>Failures: input files that could not be evaluated or scored ({len(unscored)})</h3>"]
@@ -382,8 +421,8 @@ def _failures(run_dir: Path, runs: Sequence["NotebookRun"], failures: pd.DataFra
         if cls == "skipped":
             parts.append(f"<p>Skipped on purpose ({len(skipped)} file(s), not counted as failures):</p>")
         parts.append("<table><tr><th>found by</th><th>file</th><th>status</th><th>reason</th></tr>")
-        for file, (n, row) in rows_.items():
-            parts.append(f"<tr><td>{esc(n)}</td><td>{esc(file)}</td><td>{esc(str(getattr(row, 'status', 'failed')))}"
+        for n, row in rows_.values():
+            parts.append(f"<tr><td>{esc(n)}</td><td>{esc(str(row.file))}</td><td>{esc(str(getattr(row, 'status', 'failed')))}"
                          f"</td><td class='{cls}'>{esc(str(row.error))}</td></tr>")  # fmt: skip
         parts.append("</table>")
     if not unscored:
@@ -409,7 +448,7 @@ def _notebooks(run_dir: Path, runs: Sequence["NotebookRun"], left_out: Mapping[s
         parts.append(
             f"<tr id='nb-{esc(r.name)}'><td>{esc(r.name)}</td><td class='{r.status}'>{r.status}</td>"
             f"<td>{r.seconds:.1f}</td><td>{esc(', '.join(f'{k} {v}' for k, v in r.thresholds.items()))}</td>"
-            f"<td>{links}</td><td><pre>{esc(r.error)}</pre></td></tr>"
+            f"<td>{links}</td><td><pre>{esc_block(r.error)}</pre></td></tr>"
         )
     parts.append("</table>")
     if left_out:
@@ -417,14 +456,24 @@ def _notebooks(run_dir: Path, runs: Sequence["NotebookRun"], left_out: Mapping[s
     return parts
 
 
-def _since_html(since: Mapping[str, Any]) -> list[str]:
+def _since_html(since: Mapping[str, Any], this: Iterable[str] = ()) -> list[str]:
     """The "Since the baseline" section: the verdict of diff against the baseline, what changed, and
     the trend figure (a file of the run folder: opens offline); without a comparable earlier run,
-    why, and that a new series starts here."""
+    why, and that a new series starts here. ``this``: the run's own folder as the messages of
+    :func:`~lorisnb.tools.report.baseline.since_baseline` name it, said "this run" (a portable run
+    showed the literal ``{run}`` its path was replaced by)."""
+    this = sorted(this, key=len, reverse=True)
+
+    def said(text: object) -> str:  # the path whole, not the start of another's (night3 of night3-2)
+        out = str(text)
+        for path in this:
+            out = re.sub(re.escape(path) + r"(?![\w/-])", "this run", out)
+        return out
+
     if since.get("baseline") is None:
         return [
             "<h2 id='since-baseline'>Since the baseline</h2>",
-            f"<p class='verdict failed'>No baseline: {esc(str(since.get('no_baseline', '')))}. Nothing was judged; "
+            f"<p class='verdict failed'>No baseline: {esc(said(since.get('no_baseline', '')))}. Nothing was judged; "
             "a new series starts with this run (the next run comparable with it is judged against it).</p>",
         ]
     v = since["verdict"]
@@ -441,7 +490,7 @@ def _since_html(since: Mapping[str, Any]) -> list[str]:
         f"<p class='why'>{esc(v.get('rule', ''))}</p>",
     ]
     for warning in since.get("warnings", []):  # the baseline chosen by time against the dates in the runs' names
-        parts.append(f"<p class='verdict failed'>Warning: {esc(str(warning))}</p>")
+        parts.append(f"<p class='verdict failed'>Warning: {esc(said(warning))}</p>")
     for title, rows in (("Regressions", v["regressions"]), ("Improvements", v["improvements"])):
         if not rows:
             continue
@@ -460,7 +509,7 @@ def _since_html(since: Mapping[str, Any]) -> list[str]:
         parts.append("<p>New algorithms (not in the baseline): " + esc(", ".join(since["new_algorithms"])) + ".</p>")
     if since.get("passed_over"):
         parts.append("<p>Earlier runs passed over, not comparable with this one (changed settings) or not read as a run: " + esc("; ".join(
-            f"{p['run']}: {p['why']}" for p in since["passed_over"])) + ".</p>")  # fmt: skip
+            f"{p['run']}: {said(p['why'])}" for p in since["passed_over"])) + ".</p>")  # fmt: skip
     if since.get("failed_inputs"):
         parts.append(
             f"<p class='failed'>Inputs this run could not score: {esc(', '.join(since['failed_inputs']))}.</p>"

@@ -32,7 +32,9 @@ PATH_PARAMETERS = ("path", "groundtruth", "ordslam_dir")
 
 #: The name of a root as written into a run: ``{data}``, ``{results}``.
 MARK = "{{{}}}"
-_NAMED = re.compile(r"^\{([A-Za-z_][A-Za-z0-9_]*)\}(?:/(.*))?$")
+#: A key below a root, matched whole (:meth:`re.Pattern.fullmatch`, any character inside, a newline too:
+#: ``{results}/new\nline/x.txt`` is one, and ``{results}/alg/x.txt\n`` is not ``{results}/alg/x.txt``).
+_NAMED = re.compile(r"\{([A-Za-z_][A-Za-z0-9_]*)\}(?:/(.*))?", re.DOTALL)
 
 
 def mark(name: str) -> str:
@@ -44,7 +46,7 @@ def split_key(key: str) -> tuple[str, str] | None:
     """``("results", "orb/x.txt")`` for the key ``{results}/orb/x.txt``; None for a key that
     names no root (an absolute path, or a path relative to the data root as runs before named
     roots wrote it)."""
-    m = _NAMED.match(key)
+    m = _NAMED.fullmatch(key)
     return (m.group(1), m.group(2) or "") if m else None
 
 
