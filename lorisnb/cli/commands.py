@@ -596,13 +596,14 @@ def cmd_verify(args: argparse.Namespace) -> int:
                 raise ValidationError(f"--{name} {folder} and --root {name} {roots[name]} name two folders; give one")
             roots[name] = folder
     problems = verify_run(args.run, roots)
-    from lorisnb.tools.report.build import not_as_written
+    from lorisnb.tools.report.build import missing_run_files, not_as_written
 
     edited = not_as_written(run_dir)  # the run's own files against its marker, as render checks them
+    gone = set(missing_run_files(run_dir))
     for path, what in problems:
         print(f"{what}: {clean(path)}")
     for rel in edited or []:
-        print(f"edited: {clean(run_dir / rel)}")
+        print(f"{'missing' if rel in gone else 'edited'}: {clean(run_dir / rel)}")
     if edited is None:
         print("note: the run's marker lists no files (a run of an earlier lorisnb): its own files are not checked",
               file=sys.stderr)  # fmt: skip
@@ -617,8 +618,8 @@ def cmd_verify(args: argparse.Namespace) -> int:
         print("note: run.json has no input_roots (a run of an earlier lorisnb): files added to the folders it read "
               "are not noticed; only its inputs are checked", file=sys.stderr)  # fmt: skip
     if edited:
-        print(f"{len(edited)} file(s) of the run itself added or changed since it was written (its pages, tables or "
-              "figures are not what its run wrote)", file=sys.stderr)  # fmt: skip
+        print(f"{len(edited)} file(s) of the run itself added, changed or removed since it was written (its pages, "
+              "tables or figures are not what its run wrote)", file=sys.stderr)  # fmt: skip
     if problems:
         added = sum(what == "added" for _, what in problems)
         outside = sum(what == "outside" for _, what in problems)

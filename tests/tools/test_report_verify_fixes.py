@@ -132,7 +132,8 @@ def test_verify_names_the_files_of_the_run_that_are_gone(made, data, tmp_path, c
         (run_dir / rel).unlink()
     rc, stdout, err = run(capsys, *verify_args(made, data, run_dir))
     assert rc == 1, stdout + err
-    assert all(str(run_dir / rel) in stdout for rel in gone)
+    assert all(f"missing: {run_dir / rel}" in stdout for rel in gone) and "edited:" not in stdout
+    assert "added, changed or removed" in err
     from lorisnb.tools.report.build import missing_run_files, not_as_written
 
     assert not_as_written(run_dir) == sorted(gone) and missing_run_files(run_dir) == sorted(gone)
@@ -160,7 +161,7 @@ def test_a_marker_removed_is_damage_not_an_earlier_run(made, data, tmp_path, cap
     (run_dir / RUN_MARKER).unlink()
     assert not_as_written(run_dir) == [RUN_MARKER]
     rc, stdout, err = run(capsys, *verify_args(made, data, run_dir))
-    assert rc == 1 and str(run_dir / RUN_MARKER) in stdout and "earlier lorisnb" not in err, stdout + err
+    assert rc == 1 and f"missing: {run_dir / RUN_MARKER}" in stdout and "earlier lorisnb" not in err, stdout + err
     rc, _, err = run(capsys, "render", run_dir)
     assert rc == 2 and f"{RUN_MARKER} marker is gone" in err and "no index.html" not in err
 

@@ -67,7 +67,7 @@ NOT_TAKEN = {
 #: ``-`` or ``_``, anything after a further separator (``cafe_1_2_orbslam2.txt``, ``cafe-1-2_trial2.csv``).
 #: A submission's plan (:func:`plan`), beside its ``files`` folder: read by the scorer.
 PLAN = "plan.json"
-SEQUENCE_NAME = re.compile(r"^(?P<scene>[A-Za-z]+)[-_]1[-_](?P<seq>[0-9]{1,3})(?:[-_.].*)?$")
+SEQUENCE_NAME = re.compile(r"(?P<scene>[A-Za-z]+)[-_]1[-_](?P<seq>[0-9]{1,3})(?:[-_.].*)?", re.DOTALL)  # fullmatch
 
 
 class UploadRefused(LorisError):
@@ -243,7 +243,7 @@ def upload_format(value: object) -> str:
 def sequence_of(name: str) -> tuple[str, int] | None:
     """The (scene, sequence) a file's name names as OpenLORIS names sequences (``cafe-1-2.txt``:
     cafe, 2); None if it names none."""
-    m = SEQUENCE_NAME.match(Path(name).stem)
+    m = SEQUENCE_NAME.fullmatch(Path(name).stem)
     return (m["scene"].lower(), int(m["seq"])) if m else None
 
 

@@ -214,7 +214,7 @@ def run_tasks(
 SCHEDULER_TIMEOUT = 10.0
 #: Schemes :func:`connect_scheduler` accepts (``host:port`` alone means ``tcp://``).
 SCHEDULER_SCHEMES = ("tcp", "tls", "inproc")
-_HOST_PORT = re.compile(r"^(?P<host>\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):(?P<port>[0-9]{1,5})$")
+_HOST_PORT = re.compile(r"(?P<host>\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):(?P<port>[0-9]{1,5})")  # fullmatch
 
 
 def scheduler_address(address: object) -> tuple[str, str, int]:
@@ -235,7 +235,7 @@ def scheduler_address(address: object) -> tuple[str, str, int]:
         if not rest:
             raise ValidationError(f"--scheduler {text}: {expected}")
         return scheme, rest, 0
-    m = _HOST_PORT.match(rest.rstrip("/"))
+    m = _HOST_PORT.fullmatch(rest.rstrip("/"))
     if m is None or not 0 < int(m["port"]) < 65536:
         raise ValidationError(f"--scheduler {text}: not a HOST:PORT address; {expected}")
     return scheme, m["host"].strip("[]"), int(m["port"])
