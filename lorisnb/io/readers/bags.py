@@ -22,9 +22,10 @@ from typing import Any
 import numpy as np
 
 from lorisnb.core.alignment.geometry import quat_multiply, quat_rotate, slerp
+from lorisnb.core.spec.validate import choice
 from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.errors import LorisWarning, MissingDependencyError, ParseError
-from lorisnb.io.parsing.scanner import check_rows, finish
+from lorisnb.io.parsing.scanner import REPEATED, check_rows, finish
 from lorisnb.io.readers.options import check_reading
 
 POSE_TYPES = {
@@ -175,9 +176,9 @@ def read_bag_topics(
 
 def _read_one(reader, spath: str, topic: str | None, tf: str | None, repeated: str) -> Trajectory:
     if tf is not None:
-        return _read_tf(reader, spath, tf_chain(tf) or tf)
+        return _read_tf(reader, spath, tf_chain(tf) or tf, repeated)
     if topic is not None and tf_chain(topic) is not None:
-        return _read_tf(reader, spath, str(tf_chain(topic)))
+        return _read_tf(reader, spath, str(tf_chain(topic)), repeated)
     return _read_topic(reader, spath, topic, repeated)
 
 
@@ -258,7 +259,13 @@ def _unset_stamps(spath: str, topic: str, stamps: np.ndarray) -> None:
         )
 
 
-def _read_tf(reader, spath: str, chain: str) -> Trajectory:
+def _read_tf(reader, spath: str, chain: str, repeated: str = "drop") -> Trajectory:
+    """The poses of ``child`` in ``parent`` along a TF chain: one a transform of its moving link
+    with the most transforms (the base link), the other links interpolated at its stamps. Of a
+    stamp the base link repeats, as a pose topic's (:func:`lorisnb.io.parsing.scanner.finish`):
+    the last transform received (``repeated="drop"``) or every one, in the order received
+    (``"keep"``, evo's)."""
+    keep_all = choice("repeated", repeated, REPEATED) == "keep"
     parent, sep, child = chain.partition(":")
     if not sep or not parent or not child:
         raise ParseError(spath, None, f"--tf {chain!r}: expected 'parent:child' frame names")
@@ -286,11 +293,19 @@ def _read_tf(reader, spath: str, chain: str) -> Trajectory:
     base = max(moving, key=lambda e: len(edges[e]))
     raw_stamps = np.array([s for s, _ in edges[base]])
     _unset_stamps(spath, f"the TF link {base[0]}->{base[1]}", raw_stamps)
-    stamps = np.unique(raw_stamps)
-    if stamps.size < raw_stamps.size:
+    order = np.argsort(raw_stamps, kind="stable")
+    if not keep_all:
+        order = order[np.append(raw_stamps[order][1:] != raw_stamps[order][:-1], True)]  # each stamp's last
+    stamps = raw_stamps[order]
+    repeats = raw_stamps.size - np.unique(raw_stamps).size
+    if repeats:
+        rule = (
+            "kept every transform of a repeated stamp in the order received (repeated='keep'), as a pose topic's"
+            if keep_all
+            else "kept the last pose of each stamp, as a pose topic's"
+        )
         warnings.warn(
-            f"{spath} TF link {base[0]}->{base[1]}: {raw_stamps.size - stamps.size} of {raw_stamps.size} transforms "
-            "repeat a stamp; kept the last pose of each stamp, as a pose topic's",
+            f"{spath} TF link {base[0]}->{base[1]}: {repeats} of {raw_stamps.size} transforms repeat a stamp; {rule}",
             LorisWarning,
             stacklevel=4,
         )
@@ -305,15 +320,25 @@ def _read_tf(reader, spath: str, chain: str) -> Trajectory:
     quat = np.tile([0.0, 0.0, 0.0, 1.0], (stamps.size, 1))
     keep = np.ones(stamps.size, bool)
     for edge, forward in path:  # a few links
-        s, p, q, inside = _link_at(edges[edge], stamps, edge in static)
-        keep &= inside
+        if edge == base:  # the base link's own transforms, each at its stamp (none interpolated)
+            v = np.array([edges[base][k][1] for k in order], float).reshape(-1, 7)
+            p, q = v[:, :3], v[:, 3:] / np.linalg.norm(v[:, 3:], axis=1, keepdims=True)
+        else:
+            _, p, q, inside = _link_at(edges[edge], stamps, edge in static)
+            keep &= inside
         if not forward:  # the inverse transform
             q = q * np.array([-1.0, -1.0, -1.0, 1.0])
             p = -quat_rotate(q, p)
         pos = pos + quat_rotate(quat, p)
         quat = quat_multiply(quat, q)
-    traj = Trajectory(stamps[keep], pos[keep], quat[keep], np.arange(1, keep.sum() + 1))
+    where, notes = f"{spath} TF {parent}:{child}", []
+    stamps, pos, quat = stamps[keep], pos[keep], quat[keep]
+    line_no = np.arange(1, stamps.size + 1)  # the pose's number in the chain stands for the line
+    fine = check_rows(where, stamps, pos, quat, line_no, notes)  # sorted above, repeats kept or not as asked
+    traj = finish(where, stamps[fine], pos[fine], quat[fine], line_no[fine], "", notes, repeated)
     traj.meta.update(source=spath, tf=f"{parent}:{child}")
+    for note in notes:
+        warnings.warn(note.replace(" at line ", " at pose "), LorisWarning, stacklevel=4)
     return traj
 
 

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from lorisnb.core.trajectory.poses import Trajectory
-from lorisnb.errors import ParseError
+from lorisnb.errors import MissingDependencyError, ParseError
 from lorisnb.io.readers.bags import read_bag
 from lorisnb.io.readers.plain import read_euroc, read_kitti, read_tum
 from lorisnb.tools._extras import require
@@ -55,6 +55,12 @@ def _evo_read(path: str | os.PathLike, fmt: str, topic: str | None):
     reader.open()
     try:
         return fi.read_bag_trajectory(reader, topic)
+    except ImportError as exc:  # evo's TF reading imports ROS's tf2_py, which pip does not install
+        raise MissingDependencyError(
+            f"{path}: evo reads the TF chain {topic} only with ROS's {exc.name or 'tf2_py'} (a ROS install, not "
+            "pip), which is not here: crosscheck a pose topic of the bag (--topic /pose), or evaluate the chain "
+            "with lorisnb evaluate --tf parent:child, which reads TF itself"
+        ) from None
     finally:
         reader.close()
 
