@@ -11,7 +11,7 @@ run twice significantly different (target at most 5 %), and how many real differ
 series of nightly runs (its newest run against its baseline and against the series' first run).
 
     python benchmarks/calibrate.py [--pool 24] [--nights 200] [--power-nights 60] [--compare-nights 60]
-                                   [--history-series 2] [--history-nights 30] [--quick]
+                                   [--single-nights 40] [--history-series 2] [--history-nights 30] [--quick]
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ from lorisnb.tools.decisions.calibration import (
     pair_spread,
     real_pairs,
     single_run_bands,
+    single_run_rates,
     stopped_early,
 )
 
@@ -50,6 +51,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--power-nights", type=int, default=60, help="nights per change, model and trial count")
     p.add_argument("--compare-nights", type=int, default=60, help="nights of compare per trial count (default 60)")
     p.add_argument("--trials", type=int, nargs="+", default=[1, 3, 5], help="trial counts (default 1 3 5)")
+    p.add_argument("--single-nights", type=int, default=40,
+                   help="nights of one run a side with whole-system changes, per model (default 40)")  # fmt: skip
     p.add_argument("--history-series", type=int, default=2, help="noise-only series of history per model (default 2)")
     p.add_argument("--history-nights", type=int, default=30,
                    help="runs in each series of history (default 30; docs/guide/history.md quotes 60, about 20 minutes)")  # fmt: skip
@@ -59,6 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.quick:
         args.pool, args.nights, args.power_nights, args.compare_nights = 12, 40, 12, 10
         args.history_series, args.history_nights = 1, 12
+        args.single_nights = 12
     warnings.simplefilter("ignore", LorisWarning)
     start = time.perf_counter()
     real = real_pairs()
@@ -108,11 +112,24 @@ def main(argv: list[str] | None = None) -> int:
         if len(pw):
             print(f"power for {c} with 3+ trials at least 90 %: {'met' if (pw['rate'] >= 0.9).all() else 'NOT MET'} "
                   f"(smallest {100 * pw['rate'].min():.1f} %)")  # fmt: skip
+    single_run_table(pools, args.single_nights)
     bound_table(pools["real"], args.trials)
     compare_table(pools["real"], args.trials, args.compare_nights)
     history_rates_table(pools, [n for n in args.trials if n <= 3], args.history_series, args.history_nights)
     print(f"({time.perf_counter() - start:.0f} s)")
     return 0
+
+
+def single_run_table(pools: dict, nights: int) -> None:
+    """One run per side against whole systems changed (:func:`single_run_rates`): one system worse
+    on every sequence, alone and beside another one better, and the same nights without a change."""
+    print("\nOne run a side, whole systems changed (the system made worse named among the regressions):")
+    for model, pool in pools.items():
+        rates = single_run_rates(pool, nights, progress=lambda x: tqdm(x, desc="single runs", leave=False))
+        for r in rates.itertuples():
+            print(
+                f"  {model:6s} {r.check:38s} {100 * r.rate:5.1f}% [{100 * r.low:4.1f},{100 * r.high:5.1f}] of {r.nights}"
+            )
 
 
 def bound_table(pool: object, trials: list[int]) -> None:

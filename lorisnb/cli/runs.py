@@ -132,7 +132,7 @@ def _last_comparable(folder: Path, cand: Any) -> Any:
 
 def cmd_diff(args: argparse.Namespace) -> int:
     """``lorisnb diff BASE CAND`` (see the exit-status table of docs/guide/regression-gating.md)."""
-    from lorisnb.core.stats.regression import parse_tolerances
+    from lorisnb.core.stats.regression import parse_tolerances, unjudged_reasons
     from lorisnb.io.writers import write_csv, write_parquet, write_text
     from lorisnb.tools.decisions.diff import (
         badge,
@@ -170,8 +170,12 @@ def cmd_diff(args: argparse.Namespace) -> int:
     for warning in cand.warnings:  # the baseline chosen by time against the dates the runs' names hold
         say(f"warning: {warning}")
     if base.table.empty:  # nothing to compare against: never a verdict of "ok"
-        say(f"error: BASE {args.paths[0]} holds no scored sequence" + (f" ({len(base_failed)} input(s) could not be "
-            "evaluated or were not scored)" if base_failed else "") + ": nothing was compared; give a run with results as BASE")  # fmt: skip
+        if not base_failed:  # a table or run of no rows: an error about the run, as a damaged one (exit 2)
+            raise ValidationError(f"BASE {args.paths[0]} holds no scored sequence (no row at all): nothing can be "
+                                  "compared; give a run with results as BASE")  # fmt: skip
+        # its inputs could not be evaluated or were not scored: exit 1, as any input that was not
+        say(f"error: BASE {args.paths[0]} holds no scored sequence ({len(base_failed)} input(s) could not be "
+            "evaluated or were not scored): nothing was compared; give a run with results as BASE")  # fmt: skip
         return 1
     problems = spec_differences(base, cand)
     if problems:
@@ -222,9 +226,13 @@ def cmd_diff(args: argparse.Namespace) -> int:
             f"trade-off: {clean(tr['algorithm'])} worse in {clean(', '.join(tr['worse']))}; better in "
             f"{clean(', '.join(tr['better']))}"
         )
-    if d.verdict["unjudged"]:
-        print(f"{len(d.verdict['unjudged'])} comparison(s) too little to judge (fewer than 50 matched or correct "
-              "poses): listed in --json, never a regression")  # fmt: skip
+    if d.verdict["unjudged"]:  # each reason with its count (a lever too short is no count of poses)
+        reasons = unjudged_reasons(d.verdict["unjudged"])
+        print(
+            f"{len(d.verdict['unjudged'])} comparison(s) too little to judge ("
+            + "; ".join(f"{n} {why}" for why, n in reasons.items())
+            + "): listed in --json, never a regression"
+        )
     print(f"rule: {d.verdict['rule']}")
     d = with_unscored(d, base_failed, cand_failed)  # every output says what the exit status says
     what = verdict_phrase(d)

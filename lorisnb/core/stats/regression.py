@@ -26,9 +26,9 @@ whether the change is *beyond the tolerance*: ``z = (d - tol) / se``, one-sided.
   of freedom gives p. Tied trial values (all CR 1.0) are tested like any others, never p = 1.
 - **One run per side**: no significance can be claimed. The change must go beyond the tolerance
   plus a rerun band, :data:`~lorisnb.core.stats.tolerances.SINGLE_RUN_BAND` (the largest change
-  noise-only single-run diffs of reruns show, measured by ``make calibrate``), widened where this
-  diff's own changes are larger, by the smaller of their two tails (:func:`_single_bands`); the
-  output says so.
+  noise-only single-run diffs of reruns show, measured by ``make calibrate``), widened where the
+  changes of the comparison's own system (suite and algorithm) are larger, by the smaller of their
+  two tails (:func:`_single_bands`; another system's changes never widen it); the output says so.
 
 A comparison with trials is a regression when its Holm-adjusted p (over every comparison with
 trials of the diff) is at most ``alpha`` (so ``d > tol``); an improvement likewise in the other
@@ -282,32 +282,52 @@ def _family_p(comps: list[_Comparison], levels: list[str]) -> tuple[np.ndarray, 
     return p_w, p_b, how
 
 
-#: How far a single-run band widens with this diff's own changes: this many times the smaller of
-#: the 90th percentiles of its changes for the worse and for the better (:func:`_single_bands`).
-#: 5 x 1.28 sigma (the 90th percentile of one signed tail of normal noise) is about the 4 x 1.64
-#: sigma of the 90th percentile of unsigned changes that it replaces.
+#: How far a single-run band widens with a system's own changes: this many times the smaller of the
+#: 90th percentiles of its changes for the worse and for the better (:func:`_single_bands`). 5 x 1.28
+#: sigma (the 90th percentile of one signed tail of normal noise) is about the 4 x 1.64 sigma of the
+#: 90th percentile of unsigned changes that it replaced.
 WIDEN = 5.0
+#: The fewest changes of one system, metric and level whose tails widen its band (:func:`_single_bands`).
+MIN_WIDEN = 10
+
+
+def _widened(ds: np.ndarray) -> float:
+    """:data:`WIDEN` times the smaller of the 90th percentiles of ``ds`` for the worse and for the
+    better (0 where fewer than :data:`MIN_WIDEN` are finite)."""
+    ds = ds[np.isfinite(ds)]
+    if ds.size < MIN_WIDEN:
+        return 0.0
+    return WIDEN * max(0.0, min(float(np.quantile(ds, 0.9)), float(np.quantile(-ds, 0.9))))
 
 
 def _single_bands(comps: list[_Comparison], levels: list[str]) -> list[float]:
     """The band a change of a single run per side must exceed beyond its tolerance (on the judged
     scale): :data:`~lorisnb.core.stats.tolerances.SINGLE_RUN_BAND` of its level and metric, widened
-    where this diff's own changes of that metric and level are larger (a noisier system than the
-    calibration's) to :data:`WIDEN` times the smaller of the 90th percentiles of its changes for the
-    worse and for the better. Rerun noise moves values both ways alike; a regression moves them one
-    way, so it widens only its own tail, and an improvement only the other. Widened by the unsigned
-    changes, a regression of more than a tenth of the comparisons hid itself (every orbslam2 ATE x10
-    passed, exit 0), and an improvement of one system hid a regression of another."""
-    groups: dict[tuple[str, str], list[int]] = {}
+    where the changes of **its own system** (suite and algorithm) are larger, a noisier system than
+    the calibration's: to :data:`WIDEN` times the smaller of the 90th percentiles of that system's
+    changes of the metric for the worse and for the better, at the sequence level (at least
+    :data:`MIN_WIDEN` of them), and the scene band by the same factor over its calibrated band (a
+    system holds a handful of scenes), or by the scenes' own tails where it holds
+    :data:`MIN_WIDEN` of them. Rerun noise moves values both ways alike; a regression moves them
+    one way, so it widens only its own tail, and an improvement only the other. Estimated over all
+    the diff's systems together, the tails were set by real changes: one system better and another
+    worse (orbslam2's ATE x10 and infinitam's halved, orbslam2's CR -0.3 and infinitam's +0.3) each
+    filled a tail, and the band swallowed both (exit 0). Another system's changes now never widen a
+    system's band; a system that got better on some sequences and worse on others by more than a
+    tenth of them each is judged as a noisy one (no regression claimed within its changes)."""
+    groups: dict[tuple, list[int]] = {}
     for i, (c, level) in enumerate(zip(comps, levels, strict=True)):
-        groups.setdefault((c.row["metric"], level), []).append(i)
+        groups.setdefault((c.row["suite"], c.row["algorithm"], c.row["metric"], level), []).append(i)
+    factor: dict[tuple, float] = {}  # per system and metric: its sequence band's widening
+    for (suite, alg, metric, level), idx in groups.items():
+        if level == "sequence":
+            base = SINGLE_RUN_BAND[level][metric]
+            wide = _widened(np.asarray([comps[i].d for i in idx], float))
+            factor[(suite, alg, metric)] = max(1.0, wide / base) if base > 0 else 1.0
     bands = [0.0] * len(comps)
-    for (metric, level), idx in groups.items():
-        band = SINGLE_RUN_BAND[level][metric]
-        ds = np.asarray([comps[i].d for i in idx], float)
-        ds = ds[np.isfinite(ds)]
-        if ds.size >= 10:
-            band = max(band, WIDEN * max(0.0, min(float(np.quantile(ds, 0.9)), float(np.quantile(-ds, 0.9)))))
+    for (suite, alg, metric, level), idx in groups.items():
+        base = SINGLE_RUN_BAND[level][metric]
+        band = max(base * factor.get((suite, alg, metric), 1.0), _widened(np.asarray([comps[i].d for i in idx], float)))
         for i in idx:
             bands[i] = band
     return bands
@@ -390,8 +410,8 @@ class _Comparisons:
                 shown = f"{band:.3g}" if c.floor == RERUN_SPREAD["rate"] else f"x{np.exp(band):.3g}"
                 up, down = c.d - c.tol > band, -c.d - c.tol > band
                 what = ("the largest change noise-only single runs show" if band <= SINGLE_RUN_BAND[level][c.row["metric"]]
-                        else "this diff's own noise, the smaller of its changes for the worse and for the better, "
-                        "wider than the largest change noise-only single runs show")  # fmt: skip
+                        else f"{c.row['algorithm']}'s own noise in this diff, the smaller of its changes for the "
+                        "worse and for the better, wider than the largest change noise-only single runs show")  # fmt: skip
                 runs = "single run per side" + ("" if (c.row["trials_base"], c.row["trials_cand"]) == (1, 1)
                                                 else f" ({c.counted})")  # fmt: skip
                 c.row.update(status="regression" if up else ("improvement" if down else "ok"),
@@ -939,6 +959,29 @@ def verdict(sequences: pd.DataFrame, scenes: pd.DataFrame) -> dict:
                 unjudged=unjudged, sequences=n_seq, counts=counts, scene_counts=scene_counts,
                 regressed_sequences=len({(r["suite"], r["algorithm"], r["scene"], r["seq"]) for r in regs
                                          if r["level"] == "sequence"}))  # fmt: skip
+
+
+def unjudged_reasons(unjudged: Sequence[Mapping[str, Any]]) -> dict[str, int]:
+    """Why the comparisons of a verdict's ``unjudged`` were too little to judge, each reason (in
+    words, as the summary line of ``lorisnb diff`` gives it) with its count, the most frequent first.
+    The line said "fewer than 50 matched or correct poses" of them all, also of those held back by a
+    rotation lever under :data:`~lorisnb.core.stats.tolerances.MIN_LEVER`."""
+    rules = (
+        ("lever of", f"a rotation lever under {MIN_LEVER:g} m"),
+        ("correct poses on one side", f"fewer than {MIN_MATCHED} correct poses"),
+        ("matched", f"fewer than {MIN_MATCHED} matched poses"),
+        ("whether the first pose is correct", "CS-R: the trials disagree on whether the first pose is correct"),
+        ("undefined in the candidate", "undefined in the candidate (no pose to take it over)"),
+        ("an error of 0", "an error of 0 on one side"),
+    )
+    out: dict[str, int] = {}
+    for r in unjudged:
+        text = str(r.get("decided_by") or "")
+        why = next((name for key, name in rules if key in text), None)
+        if why is None:  # a reason of its own: its words, up to the first note
+            why = text.removeprefix("too little to judge: ").split(";")[0].strip() or "no reason given"
+        out[why] = out.get(why, 0) + 1
+    return dict(sorted(out.items(), key=lambda kv: -kv[1]))
 
 
 #: How many regressed sequences (or scene values) the verdict's line names before "and N more".

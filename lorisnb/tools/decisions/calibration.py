@@ -460,3 +460,51 @@ def stopped_early(data_root: str | None = None, before: float = 0.75) -> pd.Data
         rows.append(dict(mode=mode, runs=len(e), before=before, stopped=int(np.sum(e < before)),
                          share=float(np.mean(e < before)) if len(e) else np.nan))  # fmt: skip
     return pd.DataFrame(rows)
+
+
+#: System-wide changes of one run per side (:func:`single_run_rates`): every sequence of a system
+#: changed at once, alone or with another system changed the other way (one better, one worse), as
+#: (name, {algorithm: (columns, how)}): ``how`` a factor for the errors, an amount added for rates.
+SYSTEM_CHANGES: tuple[tuple[str, dict[str, tuple[tuple[str, ...], str, float]]], ...] = (
+    ("orbslam2 ATE x10", {"orbslam2_rgbd": (("ate_rmse", "c_ate_rmse"), "x", 10.0)}),
+    ("orbslam2 ATE x10, infinitam ATE /2", {"orbslam2_rgbd": (("ate_rmse", "c_ate_rmse"), "x", 10.0),
+                                            "infinitam_aligned_depth": (("ate_rmse", "c_ate_rmse"), "x", 0.5)}),
+    ("orbslam2 CR -0.3", {"orbslam2_rgbd": (("cr", "cr_t"), "+", -0.3)}),
+    ("orbslam2 CR -0.3, infinitam CR +0.3", {"orbslam2_rgbd": (("cr", "cr_t"), "+", -0.3),
+                                             "infinitam_aligned_depth": (("cr", "cr_t"), "+", 0.3)}),
+)  # fmt: skip
+
+
+def _system_changed(t: pd.DataFrame, change: Mapping[str, tuple[tuple[str, ...], str, float]]) -> pd.DataFrame:
+    t = t.copy()
+    for alg, (cols, how, amount) in change.items():
+        here = t["algorithm"] == alg
+        for c in cols:
+            x = t.loc[here, c].astype(float)
+            t.loc[here, c] = x * amount if how == "x" else (x + amount).clip(0.0, 1.0)
+    return t
+
+
+def single_run_rates(pool: Pool, nights: int = 100, seed: int = 7,
+                     progress: Callable[[Iterable], Iterable] = lambda x: x) -> pd.DataFrame:  # fmt: skip
+    """The verdict of one run per side on whole-system changes (:data:`SYSTEM_CHANGES`, a CAND
+    table changed after scoring) and on the same nights without a change: one row per check with
+    ``nights``, ``hits`` (a false alarm: any regression; a change: a regression of the system made
+    worse) and ``rate`` with a 95 % Wilson interval. A system better on every sequence beside
+    another worse on every sequence set the single-run band from this diff's own changes and hid
+    both (:func:`lorisnb.core.stats.regression._single_bands`)."""
+    tol = parse_tolerances()
+    rng = np.random.default_rng(seed)
+    hits: dict[str, list[int]] = {"false alarm": []}
+    for _ in progress(range(nights)):
+        b, c = _night(pool, 1, rng)
+        hits["false alarm"].append(int(diff_tables(b, c, tol, expected=pool.expected).regressed))
+        for name, change in SYSTEM_CHANGES:
+            worse = [a for a, (_, how, amount) in change.items() if (how == "x") == (amount > 1)]
+            v = diff_tables(b, _system_changed(c, change), tol, expected=pool.expected).verdict
+            hits.setdefault(name, []).append(int(any(r["algorithm"] in worse for r in v["regressions"])))
+    rows = []
+    for what, h in hits.items():
+        lo, hi = wilson(sum(h), len(h))
+        rows.append(dict(check=what, nights=len(h), hits=sum(h), rate=sum(h) / len(h), low=lo, high=hi))
+    return pd.DataFrame(rows)
