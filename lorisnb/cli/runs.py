@@ -132,7 +132,7 @@ def _last_comparable(folder: Path, cand: Any) -> Any:
 
 def cmd_diff(args: argparse.Namespace) -> int:
     """``lorisnb diff BASE CAND`` (see the exit-status table of docs/guide/regression-gating.md)."""
-    from lorisnb.core.stats.regression import parse_tolerances, unjudged_reasons
+    from lorisnb.core.stats.regression import parse_tolerances, unjudged_line
     from lorisnb.io.writers import write_csv, write_parquet, write_text
     from lorisnb.tools.decisions.diff import (
         badge,
@@ -227,12 +227,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
             f"{clean(', '.join(tr['better']))}"
         )
     if d.verdict["unjudged"]:  # each reason with its count (a lever too short is no count of poses)
-        reasons = unjudged_reasons(d.verdict["unjudged"])
-        print(
-            f"{len(d.verdict['unjudged'])} comparison(s) too little to judge ("
-            + "; ".join(f"{n} {why}" for why, n in reasons.items())
-            + "): listed in --json, never a regression"
-        )
+        print(f"{unjudged_line(d.verdict['unjudged'])}: listed in --json, never a regression")
     print(f"rule: {d.verdict['rule']}")
     d = with_unscored(d, base_failed, cand_failed)  # every output says what the exit status says
     what = verdict_phrase(d)

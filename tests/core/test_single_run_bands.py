@@ -129,6 +129,11 @@ def test_diff_prints_each_reason_and_an_empty_base_is_an_error_about_the_run(bas
     line = next(x for x in out.splitlines() if "too little to judge" in x)
     assert re.search(rf"\d+ a rotation lever under {MIN_LEVER:g} m; \d+ fewer than {MIN_MATCHED} matched poses", line)
     assert "matched or correct" not in line
+    md = tmp_path / "summary.md"  # the Markdown summary gives the same line (it said "few matched poses")
+    assert main(["diff", str(a), str(b), "--markdown", str(md)]) == 0
+    capsys.readouterr()
+    said = line.split(": listed in")[0]
+    assert f"{said}; the JSON lists them." in md.read_text() and "(few matched poses)" not in md.read_text()
     empty = tmp_path / "empty.csv"
     base.iloc[:0].to_csv(empty, index=False)
     assert main(["diff", str(empty), str(b)]) == 2

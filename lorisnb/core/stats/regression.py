@@ -984,6 +984,16 @@ def unjudged_reasons(unjudged: Sequence[Mapping[str, Any]]) -> dict[str, int]:
     return dict(sorted(out.items(), key=lambda kv: -kv[1]))
 
 
+def unjudged_line(unjudged: Sequence[Mapping[str, Any]]) -> str:
+    """``"55 comparison(s) too little to judge (27 a rotation lever under 0.29 m; 18 fewer than 50
+    matched poses; ...)"``: the one summary of a verdict's ``unjudged`` (:func:`unjudged_reasons`), as
+    the terminal and the Markdown summary of ``lorisnb diff`` give it."""
+    reasons = unjudged_reasons(unjudged)
+    return (
+        f"{len(unjudged)} comparison(s) too little to judge (" + "; ".join(f"{n} {w}" for w, n in reasons.items()) + ")"
+    )
+
+
 #: How many regressed sequences (or scene values) the verdict's line names before "and N more".
 NAMED = 3
 

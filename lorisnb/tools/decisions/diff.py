@@ -15,7 +15,7 @@ import pandas as pd
 
 from lorisnb.core.spec import validate
 from lorisnb.core.stats.inference import with_trials
-from lorisnb.core.stats.regression import METRICS, Tolerance, changes, parse_tolerances, verdict
+from lorisnb.core.stats.regression import METRICS, Tolerance, changes, parse_tolerances, unjudged_line, verdict
 from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_text
 from lorisnb.tools.decisions.comparison import check_table_duplicates
@@ -325,7 +325,7 @@ def markdown(d: Diff, base: str, cand: str, label: str | None = None) -> str:
     if v["unjudged"]:
         lines += [
             "",
-            f"{len(v['unjudged'])} comparison(s) too little to judge (few matched poses); the JSON lists them.",
+            f"{unjudged_line(v['unjudged'])}; the JSON lists them.",
         ]
     return "\n".join(lines) + "\n"
 
