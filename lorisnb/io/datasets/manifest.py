@@ -125,6 +125,23 @@ class Manifest:
         )
 
 
+def groundtruth_refusal(session: Session) -> str | None:
+    """Why a session's ground truth cannot be read, or None: ``not found``, or a folder that is no
+    trajectory (a folder is one only as a ROS 2 bag, holding ``metadata.yaml``, read with
+    ``groundtruth_format = "bag"``, as ``--gt`` and a manifest's estimates take it)."""
+    gt = session.groundtruth
+    if not gt.exists():
+        return "not found; expected a trajectory file"
+    if not gt.is_dir():
+        return None
+    if session.groundtruth_format == "bag":
+        if (gt / "metadata.yaml").is_file():
+            return None
+        return "is a folder without metadata.yaml, not a ROS 2 bag; expected a bag file or a ROS 2 bag's folder"
+    return (f"is a folder; expected a trajectory file (a folder is a ground truth only as a ROS 2 bag, "
+            f"groundtruth_format = 'bag'; this one is {session.groundtruth_format})")  # fmt: skip
+
+
 def manifest_path(name_or_path: str | os.PathLike[str]) -> Path:
     """A built-in manifest's file (by name) or the given path."""
     if isinstance(name_or_path, str) and name_or_path in BUILT_IN:
@@ -205,7 +222,8 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     (:func:`lorisnb.tools.evaluation.inputs.outside_results`)."""
     path = manifest_path(name_or_path)
     try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        raw = tomllib.loads(text)
     except FileNotFoundError:
         given = Path(str(name_or_path)).name.removesuffix(".toml")
         same = [b for b in BUILT_IN if b == given.lower().replace("_", "-")]  # a built-in's file name, or its case
@@ -273,7 +291,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
                 name=name,
                 scene=str(item.get("scene", scene)),
                 groundtruth=groundtruth,
-                estimate=str(item.get("estimate", name + SUFFIX[est_fmt])),
+                estimate=estimate_name(str(item.get("estimate", name + SUFFIX[est_fmt]))),
                 groundtruth_format=_fmt(
                     item.get("groundtruth_format", gt_fmt), f"session {name!r}: groundtruth_format", path
                 ),
@@ -282,7 +300,9 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     seqs = [s.seq for s in sessions]
     if len(set(seqs)) != len(seqs):
         raise ParseError(path, None, f"session numbers repeat ({seqs}); expected each session once")
-    check_repeats(sessions, path)
+    check_repeats(
+        sessions, path, text, [str(i.get("estimate", s.estimate)) for i, s in zip(items, sessions, strict=True)]
+    )
     table = raw.get("conventions", {})
     if not isinstance(table, dict):
         raise ParseError(path, None, "conventions: expected a [conventions] table of spec options")
@@ -312,6 +332,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         spec = make_spec(preset, surface="manifest", **options, transform=transform)
     except ValidationError as exc:
         raise ParseError(path, None, str(exc)) from None
+    _refuse_own(spec, preset, table, raw, est_fmt, list(dict.fromkeys(s.scene for s in sessions)), path, text)
     return Manifest(
         path=path, name=str(raw.get("name", path.stem)), sessions=sessions, lifelong=spec.mode == "lifelong",
         groundtruth_format=gt_fmt, estimate_format=est_fmt, spec=spec,
@@ -404,23 +425,128 @@ def _text(table: dict[str, Any], key: str, path: Path, where: str = "") -> None:
         raise ParseError(path, None, f"{where}{key} = {table[key]!r}: a NUL character (\\u0000); expected a name")
 
 
-def check_repeats(sessions: list[Session], path: Path) -> None:
-    """A session listed twice (the same name or estimate file in two ``[[session]]`` tables) is an
-    error: it would be scored twice."""
-    for what, key in (
-        ("name", lambda s: s.name),
-        ("estimate file", lambda s: s.estimate),
+def estimate_name(text: str) -> str:
+    """A session's estimate path as written, less its ``.`` parts and doubled slashes (``./x.txt`` is
+    ``x.txt``, ``sub//x.txt`` is ``sub/x.txt``): the name every message and lookup uses. A trailing
+    slash (a folder: a ROS 2 bag's), ``..`` and an absolute path are kept (refused where the
+    estimates are looked for)."""
+    parts = [p for p in text.split("/") if p not in ("", ".")]
+    if not parts:
+        return text
+    return ("/" if text.startswith("/") else "") + "/".join(parts) + ("/" if text.endswith("/") else "")
+
+
+def estimate_key(estimate: str) -> str:
+    """What two sessions' estimates are compared by: the same file whatever its spelling, Unicode NFC
+    of each name (``café`` written in NFD is ``café``), without ``.`` parts or a trailing slash."""
+    return validate.label(estimate_name(estimate).rstrip("/") or estimate)
+
+
+def check_repeats(
+    sessions: list[Session], path: Path, text: str | None = None, written: list[str] | None = None
+) -> None:
+    """A session listed twice (the same name, or the same estimate file, in two ``[[session]]``
+    tables) is an error naming both: it would be scored twice. Names are compared in Unicode NFC (a
+    name typed ``café`` and one pasted from a Mac, ``cafe`` and a combining accent, are one, as the
+    file lookup finds either), estimates by the file they name (:func:`estimate_key`: ``./x.txt`` is
+    ``x.txt``). ``text``: the manifest's, for the line of the second session's key; ``written``:
+    each session's estimate as the manifest spells it, for the message."""
+    spelled = written or [s.estimate for s in sessions]
+    for what, written_as, key, raw in (
+        ("name", "name", lambda k, s: validate.label(s.name), lambda k, s: s.name),
+        ("estimate file", "estimate", lambda k, s: estimate_key(s.estimate), lambda k, s: spelled[k - 1]),
     ):  # (a ground-truth file may serve several sessions: one long recording, runs in its time windows)
-        first: dict[object, Session] = {}
-        for s in sessions:
-            k = key(s)
-            if k in first:
+        first: dict[object, tuple[int, Session]] = {}
+        for k, s in enumerate(sessions, start=1):
+            got = key(k, s)
+            if got in first:
+                j, t = first[got]
+                a, b = raw(j, t), raw(k, s)
+                if a == b:
+                    same = repr(a)
+                elif what == "name" and validate.label(a) == validate.label(b):
+                    same = f"{ascii(a)} and {ascii(b)}, one name in two Unicode forms (NFC and NFD)"
+                else:
+                    same = f"{a!r} and {b!r}, two spellings of one file"
+                seqs = f" (sessions {t.seq} and {s.seq})" if (t.seq, s.seq) != (j, k) else ""
                 raise ParseError(
-                    path, None,
-                    f"sessions {first[k].seq} ({first[k].name!r}) and {s.seq} ({s.name!r}) have the same {what} "
-                    f"({k}): a session listed twice? Each session must be listed once, with its own files",
+                    path, _line(text, "session", written_as, k) or _line(text, "session", "name", k),
+                    f"[[session]] {j} ({t.name!r}) and [[session]] {k} ({s.name!r}){seqs} have the same {what}, {same}: "
+                    "a session listed twice? Each session must be listed once, with its own files (it would be "
+                    "scored twice)",
                 )  # fmt: skip
-            first[k] = s
+            first[got] = (k, s)
+
+
+_HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z0-9_.\- \"']+?)\s*\]\]?\s*(#.*)?$")
+
+
+def _line(text: str | None, table: str | None, key: str, nth: int = 1) -> int | None:
+    """The line (1-based) of ``key`` in ``table`` of a manifest's ``text`` (None: the top level;
+    ``session`` with ``nth``: the nth ``[[session]]``), for messages: tomllib gives no line for a
+    value. Best effort: None where it is not written as ``key = ...`` on a line of its own."""
+    if not text:
+        return None
+    want = re.compile(rf"^\s*(?:{re.escape(key)}|\"{re.escape(key)}\"|'{re.escape(key)}')\s*=")
+    here: str | None = None
+    count = 0
+    for n, line in enumerate(text.splitlines(), start=1):
+        m = _HEADER.match(line)
+        if m:
+            here = m.group(2).strip().strip("\"'")
+            if m.group(1) == "[[" and here == table:
+                count += 1
+            continue
+        if here == table and (table != "session" or count == nth) and want.match(line):
+            return n
+    return None
+
+
+def _refuse_own(
+    spec: EvalSpec,
+    preset: str | None,
+    table: dict[str, Any],
+    raw: dict[str, Any],
+    est_fmt: str,
+    scenes: list[str],
+    path: Path,
+    text: str,
+) -> None:
+    """Refuse, when the manifest is read, a value of its own that applies to none of its evaluations,
+    whatever a call gives over it (a preset given over the manifest replaces its ``[conventions]``):
+    ``kitti_precision`` and ``tartanair_*`` without the preset they belong to, ``official_lifelong``
+    (a manifest is not an input of the official tool), ``repair_stamps`` with estimates that are not
+    OpenLORIS result files, ``eps = 'paper'`` with a scene that is not OpenLORIS'. The ParseError names
+    the file, the line, the table and the key."""
+    from lorisnb.core.pipeline.model import scene_eps
+
+    def refuse(key: str, where: str | None, why: str) -> None:
+        shown = f"[{where}] {key}" if where else key
+        value = table.get(key, raw.get(key))
+        shown_value = str(value).lower() if isinstance(value, bool) else repr(value)  # as TOML writes it
+        raise ParseError(path, _line(text, where, key), f"{shown} = {shown_value}: {why}")
+
+    for key in ("kitti_precision", "tartanair_scale", "tartanair_seed", "official_lifelong"):
+        if key not in table:
+            continue
+        try:  # the rule of the spec, on this option alone
+            make_spec(preset, surface="manifest", **{key: table[key]}).refuse_inapplicable(
+                "manifest", surface="manifest"
+            )
+        except ValidationError as exc:  # "kitti_precision: only for ... (--conventions kitti)", as a manifest says it
+            why = re.sub(r"\(--conventions (\w+)\)", r"([conventions] preset = '\1')", str(exc).split(": ", 1)[-1])
+            refuse(key, "conventions", why)
+    if "repair_stamps" in table and spec.repair_stamps and est_fmt != "openloris":
+        refuse("repair_stamps", "conventions", "only OpenLORIS result files are read with this rule (command line "
+               f"--repair-stamps); the manifest's estimates are {est_fmt} files (estimate_format = {est_fmt!r})")  # fmt: skip
+    if "eps" in spec.explicit and isinstance(spec.eps, str) and spec.eps.strip().lower() == "paper":
+        for scene in scenes:
+            try:
+                scene_eps(spec.eps, scene)
+            except ValidationError:
+                refuse("eps", "conventions" if "eps" in table else None, f"the paper's 1/3/5 m are for the OpenLORIS "
+                       f"scenes; scene {scene!r} is not one: give eps in metres or as 'relative:F' (a fraction of the "
+                       "ground truth's extent)")  # fmt: skip
 
 
 def check_keys(table: dict[str, Any], allowed: set[str], path: Path, where: str = "") -> None:

@@ -234,7 +234,10 @@ def scene_label(gt_path: Path) -> str:
 
 def algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> list[tuple[Path, Path | None]]:
     """Folders holding estimate files of the manifest's sessions: each given folder if it holds
-    one itself, else its sub-folders that do."""
+    one itself, else its sub-folders that do (an estimate may be a path below the folder,
+    ``sub/x.txt``: a folder on that path is not an algorithm's). Two sessions whose estimates are
+    one file in a folder (``x.txt`` and ``X.txt`` on a file system that ignores case, a link to the
+    other) are a ParseError naming both: the file would be scored twice."""
     names = {s.estimate for s in m.sessions}
     out: list[tuple[Path, Path | None]] = []
     for p in as_paths(results):
@@ -244,10 +247,46 @@ def algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> list
             out.append((p, None))
             continue
         subs = sorted(d.path for d in walk(p) if d.kind == "folder" and holds_any(d.path, names))
+        subs = [d for d in subs if not any(_on_estimate_path(a, d, names) for a in subs if a != d)]
         out.extend((d, p) for d in subs)
         if not subs:
             raise ValidationError(f"{p}: no estimate named {', '.join(sorted(names))} in it or below it")
-    return unique_files(out)  # a folder named twice is scored once
+    out = unique_files(out)  # a folder named twice is scored once
+    for folder, _ in out:
+        _one_file_each(folder, m)
+    return out
+
+
+def _parts(name: str) -> list[str]:
+    """An estimate's path as compared: its names (no ``.`` or empty parts), NFC, lower case."""
+    return [validate.label(x).lower() for x in name.split("/") if x not in ("", ".")]
+
+
+def _on_estimate_path(folder: Path, sub: Path, names: Iterable[str]) -> bool:
+    """Whether ``sub`` is a folder on the way to one of ``folder``'s estimates (``sub/x.txt``)."""
+    if folder not in sub.parents:
+        return False
+    rel = _parts(sub.relative_to(folder).as_posix())
+    return any(_parts(n)[: len(rel)] == rel and len(_parts(n)) > len(rel) for n in names)
+
+
+def _one_file_each(folder: Path, m: Manifest) -> None:
+    """Refuse two sessions whose estimates in ``folder`` are one file (by device and inode)."""
+    from lorisnb.io.datasets.paths import named_entry
+
+    first: dict[tuple[int, int], Any] = {}
+    for s in m.sessions:
+        found = named_entry(folder, s.estimate)
+        key = _file_id(found)
+        if key is None:
+            continue
+        if key in first:
+            t, was = first[key]
+            raise ParseError(m.path, None, f"sessions {t.seq} ({t.name!r}, estimate = {t.estimate!r}) and {s.seq} "
+                             f"({s.name!r}, estimate = {s.estimate!r}) name one file in {folder} ({was.name}, "
+                             f"{found.name}): a session listed twice? Each session must be listed once, with its own "
+                             "estimate file (it would be scored twice)")  # fmt: skip
+        first[key] = (s, found)
 
 
 def absolute(path: Path) -> Path:
@@ -321,13 +360,31 @@ def near_names(folder: Path, name: str) -> list[str]:
 
 
 def holds_any(folder: Path, names: Iterable[str]) -> bool:
-    """Whether ``folder`` holds one of ``names``, or a file differing from one only in case or in
-    Unicode form (NFC and NFD spellings of ``café.txt``)."""
-    try:
-        present = {validate.label(p.name).lower() for p in folder.iterdir()}
-    except OSError:
-        return False
-    return any(validate.label(n).lower() in present for n in names)
+    """Whether ``folder`` holds one of ``names`` (a file's name, or a relative path below the folder:
+    ``sub/x.txt``), or a file differing from one only in case or in Unicode form (NFC and NFD
+    spellings of ``café.txt``), in any of its names."""
+    listed: dict[Path, dict[str, list[str]]] = {}
+
+    def entries(here: Path) -> dict[str, list[str]]:  # compared name -> the names as on disk
+        if here not in listed:
+            got: dict[str, list[str]] = {}
+            try:
+                for e in here.iterdir():
+                    got.setdefault(validate.label(e.name).lower(), []).append(e.name)
+            except OSError:
+                pass
+            listed[here] = got
+        return listed[here]
+
+    def below(here: Path, parts: list[str]) -> bool:
+        if not parts:
+            return True
+        if parts[0] == "..":
+            return below(here / "..", parts[1:])
+        last = len(parts) == 1
+        return any(last or (here / e).is_dir() and below(here / e, parts[1:]) for e in entries(here).get(parts[0], []))
+
+    return any(below(Path(folder), parts) for n in names if (parts := _parts(n)))
 
 
 def outside_results(path: Path, results: Path) -> Path | None:
