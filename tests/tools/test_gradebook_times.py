@@ -38,7 +38,7 @@ STUB = "# YOUR CODE HERE\nraise NotImplementedError()"  # teaching/nbgrader_conf
 
 def _lab(solutions: bool) -> nbformat.NotebookNode:
     """The tiny lab as nbgrader lays it out: the instructor's (``solutions``) or the release."""
-    params = new_code_cell("student_id = ''")
+    params = new_code_cell("student_id = None  # as the lab hands it out: the grader passes the folder's")
     params.metadata["tags"] = ["parameters"]
     cells = [params]
     for gid, (keep, solution, check) in TINY_ANSWERS.items():
@@ -270,3 +270,21 @@ def test_with_a_due_date_a_submission_without_a_time_is_counted_on_time_and_said
     assert "could not be applied" in (course / "graded" / "s-none" / TINY / "feedback.html").read_text()
     assert rows["s-late"]["notes"] == rows["s-ontime"]["notes"] == ""
     assert "warning: 1 submission(s) have no timestamp.txt, so --due could not be applied to them" in err, err
+
+
+def test_grades_csv_notes_hold_the_graders_own_notes(tmp_path):
+    """The grader's notes of a submission (a sandbox ended on purpose, a cell id carried twice, an
+    output cut) reached only its feedback.html; grades.csv's notes column, the instructor's view,
+    now holds them before the gradebook's own."""
+    import csv
+
+    from lorisnb.tools.teaching.autograde import Score, SubmissionResult
+    from lorisnb.tools.teaching.gradebook import Graded, _write_grades
+
+    result = SubmissionResult("s1", "lab", [Score("q1", 1.0, 2.0, "")], "limits only", 1.0,
+                              notes=["G1_difficulty: the sandbox ended (os._exit)"])  # fmt: skip
+    graded = Graded(result, None, 0, 1.0, notes=["no timestamp.txt"])
+    _write_grades(tmp_path / "grades.csv", [graded], {})
+    with open(tmp_path / "grades.csv", newline="", encoding="utf-8") as f:
+        row = next(csv.DictReader(f))
+    assert row["notes"] == "G1_difficulty: the sandbox ended (os._exit) | no timestamp.txt"

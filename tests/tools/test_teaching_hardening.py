@@ -517,3 +517,24 @@ def test_folders_naming_one_id_as_the_variants_take_it_are_noted(tmp_path):
     with open(tmp_path / "grades.csv", newline="", encoding="utf-8") as f:
         notes = {row["student"]: row["notes"] for row in csv.DictReader(f)}
     assert "same data variant as 'alice'" in notes["Alice"] and notes["bob"] == ""
+
+
+def test_a_seed_set_in_the_parameters_cell_is_noted():
+    """A student who set ``seed`` saw another data variant's numbers (a ✓ in the notebook) and got 0
+    for a value read from them, without a word: the grader draws the variant from the folder. Now a
+    note says so; the seed the folder draws itself, or None, says nothing."""
+    import nbformat
+
+    from lorisnb.tools.teaching import lab_variant
+    from lorisnb.tools.teaching.autograde import declared, parameter_notes
+
+    nb = nbformat.read(SOURCE_NB, as_version=4)
+    assert declared(nb, "seed") is None and parameter_notes(nb, "s0004") == []
+    cell = next(c for c in nb.cells if "parameters" in c.get("metadata", {}).get("tags", []))
+    assert "seed = None" in cell.source
+    source = cell.source
+    cell.source = source.replace("seed = None", "seed = 12345")
+    notes = parameter_notes(nb, "s0004")
+    assert len(notes) == 1 and "seed = 12345" in notes[0] and "leave seed None" in notes[0]
+    cell.source = source.replace("seed = None", f"seed = {lab_variant('s0004').seed}")
+    assert parameter_notes(nb, "s0004") == []

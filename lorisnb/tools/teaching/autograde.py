@@ -51,9 +51,10 @@ import nbformat
 
 from lorisnb.errors import AnswerError, ValidationError
 from lorisnb.tools.teaching._grading import SandboxedAnswer
+from lorisnb.tools.teaching._prose import lab_variant, same_id
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, SandboxTimeout, decode, error_of
 
-GRADER_VERSION = "14"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "15"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
 # 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
 # 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
@@ -76,7 +77,8 @@ GRADER_VERSION = "14"  # part of every result's digest: a new grader regrades ev
 # used lorisnb; 14: a formula whose cell fails alone after binding its functions (a try-out line's TypeError) is
 # graded on its definitions, as a NameError's was; an unanswered prediction is "no answer yet"; only the values the
 # cells added below an answer changed are read and named there; a sandbox that ended is no time-out; every reply
-# value is checked, whatever wrote it)
+# value is checked, whatever wrote it; 15: a seed set in the parameters cell is noted, as a student_id of another
+# student is: the variant graded is the folder's)
 
 
 @dataclass(frozen=True)
@@ -676,9 +678,34 @@ def _lab_values(
     return out
 
 
-def declared_id(nb: nbformat.NotebookNode) -> str | None:
-    """The ``student_id`` a returned notebook's parameters cell sets to a string (the last such
-    assignment), else None."""
+def parameter_notes(nb: nbformat.NotebookNode, student: str) -> list[str]:
+    """What a returned notebook's parameters cell sets that draws another data variant than the one
+    graded (its ``student_id`` other than its folder's, its ``seed`` set), each with what to do: the
+    grader draws the variant from the submission's folder, so numbers the notebook showed (a curve
+    read by eye, a value typed in) may differ from those graded."""
+    found: list[str] = []
+    typed = declared_id(nb)
+    if typed is not None and typed != student:
+        if same_id(typed) == same_id(student):
+            found.append(f"the notebook's student_id is {typed!r}, its folder {student!r}: the same id (case and "
+                         "spaces are ignored), so the same data variant; graded as that student")  # fmt: skip
+        else:
+            found.append(f"the notebook's student_id is {typed!r}, but it was submitted as {student!r}: it is graded "
+                         f"with the data variant of {student!r} (the submission's folder), so the numbers the notebook "
+                         f"showed for {typed!r} may differ from those graded; set student_id to {student!r} (or leave "
+                         "it None on JupyterHub)")  # fmt: skip
+    seed = declared(nb, "seed")
+    if seed is not None and seed != lab_variant(student).seed:
+        found.append(f"the notebook's parameters cell sets seed = {seed!r}, which draws another data variant than "
+                     f"the one graded: the grader draws {student!r}'s from the submission's folder, so numbers the "
+                     "notebook showed (a curve or timeline read by eye) may differ from those graded; leave seed None "
+                     "(it is the instructor's, to try other variants)")  # fmt: skip
+    return found
+
+
+def declared(nb: nbformat.NotebookNode, name: str) -> object:
+    """The constant a returned notebook's parameters cell assigns to ``name`` (the last such
+    assignment; a negative number too), else None."""
     found = None
     for cell in nb.cells:
         if cell.cell_type != "code" or "parameters" not in cell.get("metadata", {}).get("tags", []):
@@ -688,11 +715,19 @@ def declared_id(nb: nbformat.NotebookNode) -> str | None:
         except SyntaxError:
             continue
         for node in tree.body:
-            if (isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "student_id"
-                                                     for t in node.targets)
-                    and isinstance(node.value, ast.Constant) and isinstance(node.value.value, str)):  # fmt: skip
-                found = node.value.value
+            if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == name for t in node.targets):
+                try:
+                    found = ast.literal_eval(node.value)
+                except ValueError:  # not a constant: the lab computes it
+                    continue
     return found
+
+
+def declared_id(nb: nbformat.NotebookNode) -> str | None:
+    """The ``student_id`` a returned notebook's parameters cell sets to a string (the last such
+    assignment), else None."""
+    typed = declared(nb, "student_id")
+    return typed if isinstance(typed, str) else None
 
 
 def earlier_cells(answers: Mapping[str, str], before: Sequence[str]) -> list[tuple[str, str]]:
@@ -1039,18 +1074,7 @@ def grade_submission(
     elif missing:
         notes.append(f"{notebook.name} lacks the answer cells {', '.join(missing)} (their nbgrader metadata was "
                      "removed, or the cells deleted): graded as unanswered")  # fmt: skip
-    typed = declared_id(nb)
-    if typed is not None and typed != student:
-        from lorisnb.tools.teaching._prose import same_id
-
-        if same_id(typed) == same_id(student):
-            notes.append(f"the notebook's student_id is {typed!r}, its folder {student!r}: the same id (case and "
-                         "spaces are ignored), so the same data variant; graded as that student")  # fmt: skip
-        else:
-            notes.append(f"the notebook's student_id is {typed!r}, but it was submitted as {student!r}: it is graded "
-                         f"with the data variant of {student!r} (the submission's folder), so the numbers the notebook "
-                         f"showed for {typed!r} may differ from those graded; set student_id to {student!r} (or leave "
-                         "it None on JupyterHub)")  # fmt: skip
+    notes += parameter_notes(nb, student)
     params = {"student_id": student}
     n_functions = sum(1 for defs in spec.functions.values() if defs)
     budget = Budget(settings.limits.submission_s, reserve=n_functions * settings.limits.cell_timeout_s)

@@ -796,7 +796,7 @@ def _write_grades(path: Path, rows: Sequence[Graded], roster: Mapping[str, Stude
                         *[_n(per[q]) if q in per else "" for q in questions], _n(g.result.points),
                         g.submitted.isoformat() if g.submitted else "", g.days_late, _n(g.factor),
                         _n(g.score), _n(g.result.max_points), g.result.isolation,
-                        " | ".join([*g.notes, *g.leak_notes, *g.variant_notes, *g.copy_notes])])  # fmt: skip
+                        " | ".join([*g.result.notes, *g.notes, *g.leak_notes, *g.variant_notes, *g.copy_notes])])  # fmt: skip
 
 
 def _canvas(path: Path, lab: str, rows: Sequence[Graded], people: Sequence[Student]) -> None:
