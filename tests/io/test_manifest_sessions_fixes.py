@@ -121,10 +121,6 @@ def test_a_ros2_bag_folder_is_a_sessions_ground_truth_with_the_bag_format(tmp_pa
     m.write_text(head + '[[session]]\nname = "xyz"\ngroundtruth = "gt/xyz_gt_ros2"\n')
     s = read_manifest(m).sessions[0]
     assert manifest.groundtruth_refusal(s) is None
-    from lorisnb.tools.evaluation import runner
-
-    if not hasattr(runner, "groundtruth_refusal"):  # its check before any work is runner.py's to call
-        pytest.xfail("lorisnb.tools.evaluation.runner does not call manifest.groundtruth_refusal yet")
     res = _results(tmp_path, data, ["xyz.txt"])
     got = ln.evaluate_manifest(m, res).sequences()
     tum = ln.evaluate_pairs([res / "algA" / "xyz.txt"], xyz).sequences()

@@ -25,7 +25,7 @@ from lorisnb.core.spec import validate
 from lorisnb.core.spec.evalspec import EvalSpec, make_spec, preset_over
 from lorisnb.core.stats.trials import check_duplicates, check_trials_by, compile_trials_by
 from lorisnb.errors import FailedInputsWarning, LorisWarning, ParseError, ValidationError
-from lorisnb.io.datasets.manifest import SUFFIX, Manifest, openloris_preset_refusal, read_manifest
+from lorisnb.io.datasets.manifest import SUFFIX, Manifest, groundtruth_refusal, openloris_preset_refusal, read_manifest
 from lorisnb.io.datasets.paths import DataPaths, DataRoot, find_data
 from lorisnb.io.readers.openloris import declared_scene
 from lorisnb.io.readers.options import check_reading
@@ -477,13 +477,12 @@ def evaluate_manifest(
             raise ParseError(m.path, None, f"[[session]] {s.name}: estimate = {s.estimate!r} lies outside the algorithm's "
                              f"folder; expected the name of a file in it (estimate = 'NAME{SUFFIX[m.estimate_format]}', "
                              "or a path below it), each algorithm's own")  # fmt: skip
-    for s in m.sessions:  # a missing ground truth (or a folder) is an error of the whole call, before any work
-        if not s.groundtruth.exists() or s.groundtruth.is_dir():
-            what = "is a folder" if s.groundtruth.exists() else "not found"
+    for s in m.sessions:  # a missing ground truth (or a folder not a ROS 2 bag's) is an error of the whole call
+        why = groundtruth_refusal(s)
+        if why is not None:
             raise ParseError(
-                s.groundtruth, None, f"ground truth of session {s.name!r} {what}; expected a trajectory file "
-                f"({m.path}: root and groundtruth)"
-            )  # fmt: skip
+                s.groundtruth, None, f"ground truth of session {s.name!r} {why} ({m.path}: root and groundtruth)"
+            )
     folders = algorithm_folders(results, m)
     _check_trials([(f / "x", r) for f, r in folders], trials_by)
     scored, keep = _sent_back(the_spec, statistics, keep_poses)
