@@ -243,7 +243,7 @@ def test_verify_names_the_run_own_files_edited_since(made, data, tmp_path, capsy
     (copy / "findings" / "extra.csv").write_text("a\n1\n")
     rc, stdout, err = run(capsys, "verify", copy, *roots)
     assert rc == 1 and stdout.split() == ["edited:", str(copy / "findings" / "extra.csv"), "edited:", str(board)]
-    assert "2 file(s) of the run itself added or changed" in err
+    assert "2 file(s) of the run itself added, changed or removed" in err
 
 
 def test_render_warns_of_a_figure_lost_in_a_copy(made, tmp_path, capsys):

@@ -796,7 +796,19 @@ def _write_grades(path: Path, rows: Sequence[Graded], roster: Mapping[str, Stude
                         *[_n(per[q]) if q in per else "" for q in questions], _n(g.result.points),
                         g.submitted.isoformat() if g.submitted else "", g.days_late, _n(g.factor),
                         _n(g.score), _n(g.result.max_points), g.result.isolation,
-                        " | ".join([*g.result.notes, *g.notes, *g.leak_notes, *g.variant_notes, *g.copy_notes])])  # fmt: skip
+                        " | ".join([*grader_notes(g.result), *g.notes, *g.leak_notes, *g.variant_notes,
+                                    *g.copy_notes])])  # fmt: skip
+
+
+#: A grader's note of an answer left as the handed-out stub (``raise NotImplementedError()``): its 0 says it.
+_STUB_NOTE = re.compile(r"[^:\s]+: NotImplementedError:\s*")
+
+
+def grader_notes(result: SubmissionResult) -> list[str]:
+    """The grader's notes of a submission for the instructor's ``grades.csv`` (a sandbox ended, an
+    answer's id carried by two cells, an output cut, a parameter drawing another variant): all of
+    its feedback's but those of answers left as the stub, which their 0 points say."""
+    return [n for n in result.notes if not _STUB_NOTE.fullmatch(n)]
 
 
 def _canvas(path: Path, lab: str, rows: Sequence[Graded], people: Sequence[Student]) -> None:
