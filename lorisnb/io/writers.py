@@ -251,13 +251,17 @@ def _plain(df: pd.DataFrame) -> pd.DataFrame:
     return df.astype({c: df[c].cat.categories.dtype for c in cats}) if cats else df
 
 
-def overlap(target: str | os.PathLike[str], inputs: Iterable[str | os.PathLike[str]]) -> tuple[str, str] | None:
+def overlap(
+    target: str | os.PathLike[str], inputs: Iterable[str | os.PathLike[str]], resolve: bool = True
+) -> tuple[str, str] | None:
     """How an output folder ``target`` meets the inputs: ``("is", input)``, ``("holds", input)``
     (the input lies inside it) or ``("lies in", input)`` (it lies inside an input folder, where a
-    later run reading that folder would read it); None when it meets none."""
-    t = Path(target).resolve()
+    later run reading that folder would read it); None when it meets none. ``resolve``: compared
+    where each really is (links resolved), else as written (made absolute only)."""
+    where = (lambda p: Path(p).resolve()) if resolve else (lambda p: Path(os.path.abspath(p)))
+    t = where(target)
     for i in inputs:
-        src = Path(i).resolve()
+        src = where(i)
         if t == src:
             return "is", str(i)
         if t in src.parents:

@@ -135,18 +135,9 @@ def _meets_inputs(run_dir: Path, inputs: Iterable[Path], read: Iterable[Path] = 
     (``("lies in", "res/linked (a linked folder...)")``, ``--out`` given where ``linked`` leads); None
     when it meets none."""
     inputs = list(inputs)
-    hit = overlap(run_dir, inputs)
+    hit = overlap(run_dir, inputs) or overlap(run_dir, inputs, resolve=False)  # where each is, and as written
     if hit:
         return hit
-    given = Path(os.path.abspath(run_dir))
-    for i in inputs:
-        src = Path(os.path.abspath(i))
-        if given == src:
-            return "is", str(i)
-        if given in src.parents:
-            return "holds", str(i)
-        if src in given.parents:
-            return "lies in", str(i)
     from lorisnb.tools.evaluation.inputs import walk
 
     target = run_dir.resolve()
