@@ -8,10 +8,9 @@ from __future__ import annotations
 
 import io
 import json
-import zipfile
 
 import pytest
-from challenge_fixtures import challenge_file
+from challenge_fixtures import challenge_file, zipped
 
 from lorisnb.tools.challenge.config import read_challenge, sequences_of
 from lorisnb.tools.challenge.scoring import score_folder
@@ -20,14 +19,6 @@ from lorisnb.tools.evaluation.runner import evaluate
 
 pytest.importorskip("fastapi")
 LIMITS = Limits(20, 50_000_000)
-
-
-def _zip(members: dict[str, bytes]) -> bytes:
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
-        for name, body in members.items():
-            z.writestr(name, body)
-    return buf.getvalue()
 
 
 def _poses(path) -> bytes:
@@ -57,7 +48,7 @@ def test_an_upper_case_suffix_is_scored(tmp_path, data, challenge):
     tum = _poses(data.icra20 / "per-seq" / "odom" / "cafe-1-1-odom.txt")
     csv = b"\n".join(b",".join(line.split()) for line in tum.split(b"\n"))
     rows = {}
-    for k, files in enumerate([[("CAFE-1-1.TXT", tum)], [("cafe-1-1.CSV", csv)], [("r.zip", _zip({"cafe-1-1.Txt": tum}))],
+    for k, files in enumerate([[("CAFE-1-1.TXT", tum)], [("cafe-1-1.CSV", csv)], [("r.zip", zipped({"cafe-1-1.Txt": tum}))],
                                [("cafe-1-1.txt", tum)]]):  # fmt: skip
         sub = tmp_path / "uploads" / str(k)
         names = _keep(challenge, sub, files)
@@ -95,7 +86,9 @@ def test_trial_folders_are_trials(tmp_path, data, challenge):
     per_seq = data.icra20 / "per-seq"
     one, two = (per_seq / "ds-slam" / "cafe-1-1.txt"), (per_seq / "vins_mono_color_imu_with_loop" / "cafe-1-1.txt")
     sub = tmp_path / "uploads" / "trials"
-    names = _keep(challenge, sub, [("t.zip", _zip({"run_1/a.txt": one.read_bytes(), "run_2/b.txt": two.read_bytes()}))])
+    names = _keep(
+        challenge, sub, [("t.zip", zipped({"run_1/a.txt": one.read_bytes(), "run_2/b.txt": two.read_bytes()}))]
+    )
     assert names == ["a_trial1.txt", "b_trial2.txt"]
     out = _score(challenge, sub)
     assert out["failures"] == [], out["failures"]
@@ -117,7 +110,7 @@ def test_a_trial_number_past_64_bits_is_refused_at_upload(tmp_path, data, challe
     for k, name in enumerate(["cafe-1-1_trial99999999999999999999.txt", "run_99999999999999999999/cafe-1-1.txt"]):
         with pytest.raises(UploadRefused, match=r"trial number 99999999999999999999, too large; expected a trial "
                            r"number of at most 9223372036854775807"):  # fmt: skip
-            _keep(challenge, tmp_path / "uploads" / str(k), [("r.zip", _zip({name: tum}))])
+            _keep(challenge, tmp_path / "uploads" / str(k), [("r.zip", zipped({name: tum}))])
         assert not (tmp_path / "uploads" / str(k) / "files").exists()
     sub = tmp_path / "uploads" / "fits"  # the largest taken is scored as a trial
     assert _keep(challenge, sub, [(f"cafe-1-1_trial{2**63 - 1}.txt", tum)]) == [f"cafe-1-1_trial{2**63 - 1}.txt"]
