@@ -5,6 +5,7 @@ them through the alignment); the phases of a challenge file neither overlap nor 
 from __future__ import annotations
 
 import json
+import re
 import time
 from pathlib import Path
 
@@ -261,7 +262,11 @@ def test_a_team_sees_only_what_the_shown_set_said(tmp_path, data):
     ]
     view = seen({3: shifted}, "market", plain={"seq1.tum": tum})
     told = json.dumps(view)
-    assert "market" not in told and "seq1.tum" not in told, told
+    assert "market" not in told, told
+    # the file of hidden seq 1 is listed (it was left out of every view), its reason without a value
+    [hidden] = [f for f in view["failures"] if f["file"] == "seq1.tum"]
+    assert hidden["hidden"] and hidden["error"].startswith("home 1: ") and "shown once phase 'final'" in hidden["error"]
+    assert not re.search(r"\d+\.\d+", hidden["error"].split("; the reason in full")[0]), hidden
 
 
 def test_a_live_phase_shows_nothing_before_it_opens(tmp_path, data):

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import math
 import re
 import secrets
 import shutil
@@ -38,7 +39,16 @@ from starlette.formparsers import MultiPartException
 
 from lorisnb.io.datasets.paths import scene_durations
 from lorisnb.tools.challenge import store
-from lorisnb.tools.challenge.board import admin_scores, figure_file, leaderboard, submission_view, team_error, when
+from lorisnb.tools.challenge.board import (
+    admin_scores,
+    failure_lines,
+    failures_said,
+    figure_file,
+    leaderboard,
+    submission_view,
+    team_error,
+    when,
+)
 from lorisnb.tools.challenge.config import Challenge, sequences_of
 from lorisnb.tools.challenge.uploads import Limits, UploadRefused, keep_upload, upload_format
 
@@ -165,10 +175,11 @@ def http_protocol(header_seconds: float) -> type[asyncio.Protocol]:
 
 
 class Refused(Exception):
-    def __init__(self, status: int, message: str):
+    def __init__(self, status: int, message: str, headers: dict[str, str] | None = None):
         super().__init__(message)
         self.status = status
         self.message = message
+        self.headers = headers or {}
 
 
 class Server:
@@ -193,7 +204,8 @@ class Server:
 
     def team(self, token: str | None, admin: bool = False) -> dict[str, Any]:
         if not token:
-            raise Refused(401, "no token: send your team's token (the form's token field, or the header "
+            whose = "the admin token" if admin else "your team's token"
+            raise Refused(401, f"no token: send {whose} (the form's token field, or the header "
                           "'Authorization: Bearer TOKEN')")  # fmt: skip
         team = store.team_of(self.engine, token)
         if team is None:
@@ -264,15 +276,22 @@ class Server:
         limits = self.challenge.limits
         lock = self.team_locks.setdefault(team["id"], asyncio.Lock())
         async with lock:  # two uploads of one team at once are counted one after the other
-            made = store.submissions_since(self.engine, team["id"], now - DAY)
-            if made >= limits["submissions_per_day"]:
-                raise Refused(429, f"team {team['name']!r} made {made} submissions in the last 24 hours, the "
-                              "challenge's limit; try again later")  # fmt: skip
+            made = store.submission_times_since(self.engine, team["id"], now - DAY)
+            if len(made) >= limits["submissions_per_day"]:
+                # the limit resets when the oldest submission counted over it leaves the 24 hours
+                resets = made[len(made) - limits["submissions_per_day"]] + DAY
+                wait = max(math.ceil(resets - now), 1)
+                raise Refused(429, f"team {team['name']!r} made {len(made)} submissions in the last 24 hours, the "
+                              f"challenge's limit of {limits['submissions_per_day']}; the next one is taken from "
+                              f"{when(resets + 60)} (in {_duration(wait)})",
+                              {"Retry-After": str(wait)})  # fmt: skip
             sid = secrets.token_hex(8)
             folder = self.challenge.folder / "uploads" / sid
             lim = Limits(limits["files"], limits["unpacked_mb"] * 1_000_000)
+            # the sequences a file may name: those of the challenge's phases (one of no phase is never scored)
+            seqs = [q for q in sequences_of(self.durations) if any(p.keeps(*q) for p in self.challenge.phases)]
             try:
-                names = await run_in_threadpool(keep_upload, files, folder, lim, fmt, sequences_of(self.durations))
+                names = await run_in_threadpool(keep_upload, files, folder, lim, fmt, seqs, self.challenge.spec)
             except BaseException:  # refused, or the server failed: nothing of the upload is left
                 shutil.rmtree(folder, ignore_errors=True)
                 raise
@@ -296,7 +315,7 @@ async def _form(request: Request) -> tuple[str | None, list[tuple[str, Any]], st
         raise Refused(400, "a malformed upload (the body ends before its closing boundary: cut off on the way?); "
                       "expected multipart/form-data with files, ending with its closing boundary: send it again")  # fmt: skip
     token = form.get("token")
-    files = [(f.filename or "", f.file) for f in form.getlist("files") if isinstance(f, UploadFile)]
+    files = [(_sent_name(f), f.file) for f in form.getlist("files") if isinstance(f, UploadFile)]
     if any(not isinstance(v, UploadFile) for v in form.getlist("files")):
         await form.close()
         raise Refused(400, "'files' holds text, not files; expected files sent as multipart/form-data")
@@ -306,6 +325,29 @@ async def _form(request: Request) -> tuple[str | None, list[tuple[str, Any]], st
         await form.close()
         raise
     return token if isinstance(token, str) else None, files, fmt, form
+
+
+#: A part's ``filename="..."`` as sent (a quoted string: ``\\`` and ``\"`` escaped).
+FILENAME = re.compile(r'(?:^|;)\s*filename\s*=\s*"((?:[^"\\]|\\.)*)"', re.IGNORECASE)
+
+
+def _sent_name(f: UploadFile) -> str:
+    """An uploaded file's name as its part sent it: the multipart parser keeps only the last part
+    of a Windows path (``C:\\x\\..\\cafe-1-1.txt`` as ``cafe-1-1.txt``, for an old browser), which
+    :func:`.uploads.safe_name` refuses as it refuses an archive member's: one rule for both."""
+    name = f.filename or ""
+    found = FILENAME.search(f.headers.get("content-disposition", ""))
+    if found is None:
+        return name
+    raw = found.group(1).replace("\\\\", "\\").replace('\\"', '"')
+    return raw if raw != name and raw.endswith(name) else name
+
+
+def _duration(seconds: float) -> str:
+    """A wait in words: hours and minutes, or minutes, or seconds."""
+    if seconds >= 3600:
+        return f"{int(seconds // 3600)} h {int(seconds % 3600 // 60)} min"
+    return f"{math.ceil(seconds / 60)} min" if seconds >= 60 else f"{int(seconds)} s"
 
 
 def _bearer(request: Request) -> str | None:
@@ -345,10 +387,13 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
     @app.exception_handler(Refused)
     async def _refused(request: Request, exc: Refused) -> Response:
         if request.url.path.startswith("/api/"):
-            return api_error(exc.status, exc.message)
-        return server.page("token.html" if exc.status in (401, 403) and request.url.path in ("/team", "/admin")
-                           else "error.html", "Refused", exc.status, error=exc.message,
-                           action=request.url.path, label="Token")  # fmt: skip
+            response: Response = api_error(exc.status, exc.message)
+        else:
+            response = server.page("token.html" if exc.status in (401, 403) and request.url.path in ("/team", "/admin")
+                                   else "error.html", "Refused", exc.status, error=exc.message,
+                                   action=request.url.path, label="Token")  # fmt: skip
+        response.headers.update(exc.headers)
+        return response
 
     @app.exception_handler(UploadRefused)
     async def _upload_refused(request: Request, exc: UploadRefused) -> Response:
@@ -407,7 +452,9 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
             sid = await receive(request, None)
         except (Refused, UploadRefused) as exc:
             status, message = (exc.status, exc.message) if isinstance(exc, Refused) else (exc.status, str(exc))
-            return submit_page(status, message)
+            page = submit_page(status, message)
+            page.headers.update(exc.headers if isinstance(exc, Refused) else {})
+            return page
         return RedirectResponse(f"/submissions/{sid}", status_code=303)
 
     @app.post("/api/submissions")
@@ -451,8 +498,13 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
             engine, team["id"], server.clock() - DAY
         )
         now = server.clock()
-        subs = [s | {"error": team_error(s, challenge, now)}
-                for s in listing(store.all_submissions(engine, team["id"], results=False))]  # fmt: skip
+        subs = []
+        for s in store.all_submissions(engine, team["id"]):
+            result = json.loads(s["result"]) if s["result"] else {}
+            # a scored submission's failures listed (a failed one's error says each file's reason)
+            said = failures_said(s, result, challenge, server.durations, now) if s["status"] == "scored" else []
+            subs += [t | {"error": team_error(s, challenge, now, server.durations), "failures": failure_lines(said)}
+                     for t in listing([s])]  # fmt: skip
         return dict(team={k: team[k] for k in ("name", "expires", "admin")}, left=max(left, 0), subs=subs)
 
     @app.post("/team", response_class=HTMLResponse)
@@ -477,8 +529,10 @@ def create_app(challenge: Challenge, engine: Engine | None = None, *, score: boo
         subs = store.all_submissions(engine)
         now = server.clock()
         scores = {s["id"]: admin_scores(s, challenge, now) for s in subs}
+        failed = {s["id"]: failure_lines(json.loads(s["result"])["failures"]) if s["status"] == "scored" else []
+                  for s in subs}  # fmt: skip
         return dict(queue=store.queue_counts(engine), teams=store.all_teams(engine),
-                    subs=[s | {"scores": scores[s["id"]]} for s in listing(subs)],
+                    subs=[s | {"scores": scores[s["id"]], "failures": failed[s["id"]]} for s in listing(subs)],
                     note="scores with shown false are hidden from teams until a phase holding their sequence "
                     "closes: only the admin's view holds them")  # fmt: skip
 

@@ -203,13 +203,45 @@ def copies_as_shown(text: str, shown: Callable[[str, int], bool]) -> str:
     return COPY_SAID.sub(lambda m: m[0] if shown(m["scene"], int(m["seq"])) else "a copy of the ground truth", text)
 
 
-def team_error(sub: dict[str, Any], challenge: Challenge, now: float) -> str | None:
+#: The error of a submission of which nothing was scored (each file failed or was not scored):
+#: ``failed``, its result kept (its failures), never ``scored`` with no error (:func:`nothing_scored`).
+NOTHING_SCORED = "nothing of this upload was scored"
+
+
+def scored_nothing(result: dict[str, Any]) -> bool:
+    """Whether a scoring's outcome scored nothing: a file failed or was not scored, and no sequence
+    has a matched pose (a file whose stamps miss its ground truth has a row of CR 0 and 0 matched,
+    and its reason: no score of the team's output, never ranked as one)."""
+    return bool(result.get("failures")) and not any((r.get("matched") or 0) > 0 for r in result.get("rows", []))
+
+
+def nothing_scored(result: dict[str, Any]) -> str:
+    """The organizer's words for a scoring that scored nothing: each file with its reason."""
+    said = "; ".join(f"{f['file'] or 'the upload'}: {f['status']}: {f['error']}" for f in result.get("failures", []))
+    return f"{NOTHING_SCORED}{': ' + said if said else ''}"
+
+
+def _result(sub: dict[str, Any]) -> dict[str, Any] | None:
+    raw = sub.get("result")
+    return json.loads(raw) if raw else None
+
+
+def team_error(sub: dict[str, Any], challenge: Challenge, now: float,
+               durations: pd.DataFrame | None = None) -> str | None:  # fmt: skip
     """A submission's error as its team sees it at ``now`` (:func:`team_text`): a copy of the ground
     truth it holds is named by its sequence only while that sequence is shown to the team
     (:meth:`.config.Challenge.shown`: its phase's scores shown, the sequence visible), else said
-    as a copy alone; decided each time it is shown, so it never tells more than the team sees then."""
+    as a copy alone; decided each time it is shown, so it never tells more than the team sees then.
+    A submission of which nothing was scored says each file's reason as its team is told it
+    (:func:`failures_said`: a sequence not shown yet without values; needs ``durations`` and the
+    submission's ``result``)."""
     if not sub["error"]:
         return sub["error"]
+    result = _result(sub)
+    if result is not None and sub["status"] == "failed" and "rows" in result and durations is not None:
+        said = "; ".join(f"{f['file'] or 'the upload'}: {f['status']}: {f['error']}"
+                         for f in failures_said(sub, result, challenge, durations, now))  # fmt: skip
+        return f"{NOTHING_SCORED}{': ' + said if said else ''}"
     phase = challenge.phase(sub["phase"])
     text = copies_as_shown(str(sub["error"]), lambda scene, seq: bool(challenge.shown(phase, [(scene, seq)], now)))
     return team_text(text, challenge)
@@ -227,6 +259,75 @@ def _shows_when(phase: Phase) -> str:
     return f"{'opens' if phase.leaderboard == 'live' else 'closes'} ({when(phase.shows_from)})"
 
 
+#: Numbers a reason of a sequence not shown yet may not hold (a stamp, a span, an error: values of
+#: hidden ground truth); small whole numbers (a sequence's, a count of files) are words.
+VALUE = re.compile(r"\d+\.\d+|\d{3,}")
+
+
+def _without_values(text: str) -> str | None:
+    """A failure's reason told without a value of hidden ground truth: its first sentence without
+    its parentheses holding numbers; None when a value is left even so."""
+    first = re.sub(r"^seq:? ?\d+: ", "", _split_outside(text, r"(?<=[.;])\s+")[0].rstrip(" .;"))  # named before it
+    first = re.sub(r"\s*\([^()]*\d[^()]*\)", "", first)
+    return None if VALUE.search(first) or "(" in first else first
+
+
+def failures_said(sub: dict[str, Any], result: dict[str, Any], challenge: Challenge, durations: pd.DataFrame,
+                  now: float) -> list[dict[str, Any]]:  # fmt: skip
+    """A submission's failures as its team is told them at ``now``: each file with its status and
+    reason (:func:`team_text`), the reason in full where every sequence of the scoring that said
+    it is shown (:meth:`.config.Challenge.shown`; a reason of reading a file names none: always
+    told), else said with its sequences not shown yet and when they are, without a value
+    (:func:`_without_values`: ``cafe-1-2.txt (not scored): cafe 2: no estimate stamp falls inside
+    the ground truth's time span; the reason in full is shown once phase 'final' closes ...``)."""
+    phase = challenge.phase(sub["phase"])
+    every = set(sequences_of(durations))
+    unseen = every - challenge.shown(phase, every, now)
+    out = []
+    for f in result.get("failures", []):
+        about = sorted({(s, int(q)) for s, q in f.get("sequences", [])} & unseen)
+        said = {k: v for k, v in f.items() if k != "sequences"}
+        if not about:
+            out.append(said | dict(error=team_text(str(f["error"]), challenge)))
+            continue
+        named = "; ".join(f"{s} {', '.join(str(q) for q in sorted(q for t, q in about if t == s))}"
+                          for s in dict.fromkeys(s for s, _ in about))  # fmt: skip
+        later = (f"shown once phase {phase.name!r} {_shows_when(phase)}" if not phase.shows_scores(now)
+                 else _hidden_note(challenge, *about[0]))  # fmt: skip
+        reason = _without_values(team_text(str(f["error"]), challenge))
+        told = f"{reason}; the reason in full is {later}" if reason else f"its reason is {later}"
+        out.append(said | dict(error=f"{named}: {told}", hidden=True))
+    if any(f["file"] for f in out):  # "nothing was evaluated", named for no file: the files' rows say why
+        out = [f for f in out if f["file"]]
+    return out
+
+
+def failure_lines(failures: list[dict[str, Any]]) -> list[str]:
+    """Failures as the listings (the team's, the admin's) show them: ``FILE (status): reason``."""
+    return [f"{f['file'] or 'the upload'} ({f['status']}): {f['error']}" for f in failures]
+
+
+def missing_trials(rows: list[dict[str, Any]], wanted: pd.DataFrame) -> list[dict[str, Any]]:
+    """Each sequence of the phase (``wanted``) with output in some of a submission's trials but not
+    in another (``run_1/`` with home-1-2, ``run_2/`` without): that trial counts it as a failed run
+    (CR 0) in its mean, said with the trial and the sequence."""
+    by_seq: dict[tuple[str, int], set[int]] = {}
+    for r in rows:
+        by_seq.setdefault((r["scene"], int(r["seq"])), set()).add(int(r.get("trial") or 0))
+    trials = set().union(*by_seq.values()) if by_seq else set()
+    if len(trials) < 2:
+        return []
+    out = []
+    for s, q in zip(wanted["scene"], wanted["seq"], strict=True):
+        have = by_seq.get((s, int(q)), set())
+        for t in sorted(trials - have) if have else []:
+            others = f"trial {min(have)} has" if len(have) == 1 else f"trials {', '.join(map(str, sorted(have)))} have"
+            out.append(dict(scene=s, seq=int(q), trial=t,
+                            error=f"trial {t} has no output for {s}-1-{int(q)} ({others} one): it counts as a failed "
+                            f"run (CR 0) in trial {t}"))  # fmt: skip
+    return out
+
+
 def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.DataFrame, now: float) -> dict[str, Any]:
     """A submission as its page and the API show it (see the module docstring): the rows of the
     sequences visible now; ``hidden`` lists the others scored (scene, seq, file, when shown), no value."""
@@ -234,9 +335,12 @@ def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.Dat
     view: dict[str, Any] = dict(
         id=sub["id"], team=sub["team"], phase=sub["phase"], status=sub["status"], submitted=sub["created"],
         finished=sub["finished"], files=json.loads(sub["files"]), bytes=sub["bytes"],
-        error=team_error(sub, challenge, now),
+        error=team_error(sub, challenge, now, durations),
         scores_shown=phase.shows_scores(now),
     )  # fmt: skip
+    kept = _result(sub)
+    if kept is not None and "failures" in kept:  # what failed, told as the team may see it now
+        view["failures"] = failures_said(sub, kept, challenge, durations, now)
     if sub["status"] != "scored" or not phase.shows_scores(now):
         if sub["status"] == "scored":
             view["hidden"] = f"scores of phase {phase.name!r} are shown once it {_shows_when(phase)}"
@@ -251,15 +355,13 @@ def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.Dat
                    shown=_hidden_note(challenge, s, q)) for s, q in sorted(scored - shown)]  # fmt: skip
     missing = [dict(scene=s, seq=int(q), error="no output for this sequence: it counts as a failed run")
                for s, q in zip(wanted["scene"], wanted["seq"], strict=True) if (s, int(q)) not in scored]  # fmt: skip
+    missing += missing_trials([r for r in result["rows"] if (r["scene"], int(r["seq"])) in shown], wanted)
     # a failure or a note is shown when every sequence of the scoring that said it is visible
-    # (its numbers, spans included, may come from any of them: a hidden one's stays hidden)
+    # (its numbers, spans included, may come from any of them: a hidden one's stays hidden,
+    # its failure told without values, :func:`failures_said`)
     # (a failure about a scene outside the challenge holds none of its ground truth: shown)
     told = challenge.visible(set(sequences_of(durations)) | scored, now)
-    unseen = set(sequences_of(durations)) - told
-    failures = [{k: v for k, v in f.items() if k != "sequences"} | dict(error=team_text(str(f["error"]), challenge))
-                for f in result["failures"] if not {(s, int(q)) for s, q in f.get("sequences", [])} & unseen]  # fmt: skip
-    if any(f["file"] for f in failures):  # "nothing was evaluated", named for no file: the files' rows say why
-        failures = [f for f in failures if f["file"]]
+    failures = view["failures"]
     notes = list(dict.fromkeys(team_text(n, challenge) for n in _shown_notes(result["notes"], told, not hidden)))
     view.update(rows=rows, hidden_sequences=hidden, failures=failures, missing=missing,
                 notes=notes, conventions=result["conventions"],
@@ -296,7 +398,9 @@ def admin_scores(sub: dict[str, Any], challenge: Challenge, now: float) -> list[
 
 
 def latest_scored(subs: list[dict[str, Any]], phase: str) -> list[dict[str, Any]]:
-    """Each team's latest scored submission of the phase."""
+    """Each team's latest scored submission of the phase: one that scored something (a submission
+    of which nothing was scored is ``failed``, :func:`nothing_scored`, and leaves the team's
+    standing as it was)."""
     latest: dict[int, dict[str, Any]] = {}
     for s in sorted(subs, key=lambda s: s["created"]):
         if s["phase"] == phase and s["status"] == "scored":

@@ -48,13 +48,14 @@ from sqlalchemy.engine import make_url
 from lorisnb.core.lifelong.aggregate import aggregate_scenes, spans_table
 from lorisnb.core.pipeline.model import FileErrors, ResultFile
 from lorisnb.core.spec.evalspec import EvalSpec
-from lorisnb.core.stats.trials import check_duplicates
+from lorisnb.core.stats.trials import check_duplicates, names_a_trial
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import FailedInputsWarning, LorisError, LorisWarning, ValidationError
 from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans
 from lorisnb.io.readers.openloris import FILE_KEYS, parse_headers, read_lines, read_openloris
 from lorisnb.io.writers import write_openloris
 from lorisnb.tools.challenge import store
+from lorisnb.tools.challenge.board import nothing_scored, scored_nothing
 from lorisnb.tools.challenge.config import Challenge, sequences_of
 from lorisnb.tools.challenge.uploads import PLAN
 from lorisnb.tools.evaluation.jobs import GT_DROP
@@ -176,13 +177,46 @@ def _one_file_each(errors: list[FileErrors]) -> None:
             for q in seqs:
                 other = seen.setdefault((scene, trial, q), name)
                 if other != name:
-                    held = f"{scene}-{q}{f' trial {trial}' if trial else ''}"
+                    numbered = [n for n in (other, name) if names_a_trial(n)]
+                    if len(numbered) == 2:  # home-1-2_trial0.txt and home-1-2_trial00.txt
+                        why = f"both hold {scene}-{q} trial {trial}: they carry the same trial number"
+                    elif numbered:  # home-1-2.txt and home-1-2_trial0.txt
+                        unnamed = other if numbered[0] == name else name
+                        why = (f"both hold {scene}-{q} trial {trial}: {unnamed} names no trial, which is read as "
+                               f"trial 0, and {numbered[0]} carries trial {trial}")  # fmt: skip
+                    else:
+                        held = f"{scene}-{q}{f' trial {trial}' if trial else ''}"
+                        why = f"both hold {held}, with no trial number to tell them apart"
                     raise ValidationError(
-                        f"{other} and {name} both hold {held}, with no trial number to tell them apart; name each "
-                        f"file for its trial ({scene}-1-{q}_trial1.txt, {scene}-1-{q}_trial2.txt, ...; or put them "
-                        f"in folders run_1/, run_2/, ... of one .zip), or upload them in separate submissions"
+                        f"{other} and {name} {why}; name each file for its trial ({scene}-1-{q}_trial1.txt, "
+                        f"{scene}-1-{q}_trial2.txt, ...; or put them in folders run_1/, run_2/, ... of one .zip), "
+                        f"or upload them in separate submissions"
                     ) from None
         raise
+
+
+#: A note said where numpy warned while scoring a file (an overflow, an invalid value): its own words
+#: ('overflow encountered in reduce') name nothing a team can act on.
+NOT_COMPUTED = ("a computation on its values overflowed or had no value (numbers too large for floating point, "
+                "or not numbers): its errors may be infinite or missing; check its values and their units "
+                "(metres, seconds)")  # fmt: skip
+#: The OpenLORIS file's advice on its ``seq:`` number (:func:`lorisnb.core.pipeline.plausibility.time_overlap`),
+#: and what a TUM or EuRoC file, whose name names its sequence, is told instead.
+SEQ_ADVICE = (("is the scene or the seq: number wrong?", "is the sequence its name names ({seq}) the wrong one?"),
+              ("check the seq: number", "check that its name names its sequence (it names {seq})"))  # fmt: skip
+
+
+def plain_advice(text: str, name: str, plain: Mapping[str, Mapping[str, Any]]) -> str:
+    """A message about the file ``name`` in words of its format: a TUM or EuRoC file (one of
+    ``plain``) has no ``seq:`` line, its name names its sequence: advice to check the ``seq:``
+    number is said of its name."""
+    info = plain.get(name)
+    if info is None:
+        return text
+    seq = f"{info['scene']}-1-{info['seq']}"
+    for old, new in SEQ_ADVICE:
+        text = text.replace(old, new.format(seq=seq))
+    return text
 
 
 class _Every:
@@ -309,8 +343,12 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
             try:
                 evaluated[key] = go()
             finally:
-                # a FailedInputsWarning speaks to Python callers: each failure is told as one here
-                raised[key] = [str(w.message) for w in mine if not issubclass(w.category, FailedInputsWarning)]
+                # a FailedInputsWarning speaks to Python callers: each failure is told as one here; a
+                # warning not lorisnb's (numpy's 'overflow encountered in reduce') is said in its words
+                raised[key] = [str(w.message) for w in mine if issubclass(w.category, LorisWarning)
+                               and not issubclass(w.category, FailedInputsWarning)]  # fmt: skip
+                if any(not issubclass(w.category, LorisWarning) for w in mine):
+                    raised[key].append(f"{key[0]}: {NOT_COMPUTED}")
 
     def in_view(view: Any) -> list[FileErrors]:
         """Every file's errors as scored on the sequences of ``view`` alone."""
@@ -398,8 +436,9 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
             problems.append(("not scored", p.name, f"{shape.scene} seq {', '.join(map(str, sorted(set(shape.numbers))))}: "
                              "in no phase this submission's scores are shown in; not scored", frozenset()))  # fmt: skip
     problems = list(dict.fromkeys(problems))
-    failures = [dict(file=name, status=status, error=_unnamed(scrub(error, folder, data, gt_folder), name),
-                     sequences=sorted(about)) for status, name, error, about in problems]  # fmt: skip
+    failures = [dict(file=name, status=status, sequences=sorted(about),
+                     error=_unnamed(scrub(plain_advice(error, name, plain), folder, data, gt_folder), name))
+                for status, name, error, about in problems]  # fmt: skip
     # each note with the sequences it is about (a file's, or the seq N it names) and every
     # sequence of the evaluation that raised it: a number in it may come from any of them
     notes: dict[str, set[frozenset[tuple[str, int]]]] = {}
@@ -413,9 +452,10 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
         counted = set(said_notes(one.errors)) - {w for f in one.errors for w in f.warnings}
         for text, named in texts.items():
             if "could not be evaluated" not in text and text not in counted:
-                notes.setdefault(text, set()).add(frozenset(named | scope[key]))
+                notes.setdefault(plain_advice(text, key[0], plain), set()).add(frozenset(named | scope[key]))
     inside = {t for ts in raised.values() for t in ts}
-    for text in dict.fromkeys(str(w.message) for w in caught if not issubclass(w.category, FailedInputsWarning)):
+    for text in dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, LorisWarning)
+                              and not issubclass(w.category, FailedInputsWarning)):  # fmt: skip
         if text not in inside and "could not be evaluated" not in text:
             notes.setdefault(text, set()).add(everything)
     out: dict[str, Any] = dict(
@@ -751,8 +791,10 @@ class Scorer:
                 continue
             r.process.join()
             outcome = json.loads(r.out.read_text(encoding="utf-8")) if r.out.is_file() else None
-            if outcome is not None and "rows" in outcome:
+            if outcome is not None and "rows" in outcome and not scored_nothing(outcome):
                 self._done(sid, r, "scored", outcome, None, took)
+            elif outcome is not None and "rows" in outcome:  # nothing scored: failed, each file's reason kept
+                self._done(sid, r, "failed", outcome, nothing_scored(outcome), took)
             elif outcome is not None:
                 self._done(sid, r, "failed", None, str(outcome["error"]), took)
             else:

@@ -274,6 +274,18 @@ def submissions_since(engine: Engine, team_id: int, since: float) -> int:
         return int(conn.execute(q).scalar_one())
 
 
+def submission_times_since(engine: Engine, team_id: int, since: float) -> list[float]:
+    """When each of a team's submissions since ``since`` was made, oldest first (the daily limit's
+    count, and when it resets)."""
+    with engine.connect() as conn:
+        q = (
+            select(submissions.c.created)
+            .where((submissions.c.team_id == team_id) & (submissions.c.created >= since))
+            .order_by(submissions.c.created)
+        )
+        return [float(t) for t in conn.execute(q).scalars()]
+
+
 def add_submission(engine: Engine, sid: str, team_id: int, phase: str, files: list[str], size: int) -> None:
     with transaction(engine) as conn:
         conn.execute(submissions.insert().values(id=sid, team_id=team_id, phase=phase, created=time.time(),

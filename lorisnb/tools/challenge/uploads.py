@@ -23,12 +23,14 @@ import shutil
 import stat
 import string
 import unicodedata
+import warnings
 import zipfile
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
+from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.stats.trials import names_a_trial, split_trial
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import LorisError
@@ -149,10 +151,12 @@ def name_fault(base: str) -> str | None:
 
 
 def _name_fixed(base: str) -> str:
-    """``base`` as it could be renamed: without the characters before its first letter or digit,
-    each other character a name cannot hold as '_'."""
-    start = next((k for k, c in enumerate(base) if c in NAME_FIRST), len(base))
-    return "".join(c if c in NAME_REST else "_" for c in base[start:])
+    """``base`` as it could be renamed: each letter without its accents (Unicode NFKD, the
+    combining marks dropped: ``café-1-1.txt`` as ``cafe-1-1.txt``, the name of its sequence), without
+    the characters before its first letter or digit, each other character a name cannot hold as '_'."""
+    plain = "".join(c for c in unicodedata.normalize("NFKD", base) if not unicodedata.combining(c))
+    start = next((k for k, c in enumerate(plain) if c in NAME_FIRST), len(plain))
+    return "".join(c if c in NAME_REST else "_" for c in plain[start:])
 
 
 #: The largest trial number a file's name may carry (``cafe-1-1_trial3.txt``, ``run_3/``): the
@@ -293,6 +297,60 @@ def plan(folder: Path, names: list[str], fmt: str, sequences: Iterable[tuple[str
     return out
 
 
+#: The largest position coordinate (metres) and stamp (seconds) an uploaded file may hold: no
+#: trajectory reaches 1e12 m, and stamps in nanoseconds are about 1.6e18 (said by the scorer: divide
+#: them by 1e9); beyond, the scorer's sums of squares overflow (1e308 gave numpy's 'overflow
+#: encountered' as notes, and errors of inf).
+MAX_COORDINATE = 1e12
+MAX_STAMP = 1e30
+
+
+def read_upload(folder: Path, names: list[str], layout: Mapping[str, Mapping[str, Any]],
+                spec: EvalSpec | None = None) -> None:  # fmt: skip
+    """Read every kept file whole with the reader the scorer reads it with (``layout``: the
+    :func:`plan`; a file not in it is an OpenLORIS result file, read as
+    :func:`.scoring.score_folder` reads it, its ``seq:`` blocks too), under the rules of ``spec``
+    (default: lorisnb's), so that a file the scorer would refuse is refused at upload, naming the
+    file and the line (:class:`~lorisnb.errors.LorisError`, the reader's words). A position
+    coordinate over :data:`MAX_COORDINATE` m or a stamp over :data:`MAX_STAMP` s is refused too,
+    naming the pose by its stamp."""
+    from lorisnb.io.readers.openloris import read_openloris
+    from lorisnb.io.readers.plain import read_trajectory
+    from lorisnb.tools.challenge.scoring import read_blocks
+
+    drop = spec is None or spec.repeated == "drop"
+    repair = bool(spec is not None and spec.repair_stamps)
+    for name in names:
+        path = folder / name
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # notes are the scorer's to say; only refusals here
+            if name in layout:
+                kind = str(layout[name]["format"])
+                rule = spec.repeated_for(kind) if spec is not None else "drop"
+                trajectories = [read_trajectory(path, kind, repeated=rule)]
+            else:
+                trajectories = list(read_openloris(path, remove_repeated=drop, warn=False,
+                                                   repair_stamps=repair).sequences.values())  # fmt: skip
+                read_blocks(path)
+        for t in trajectories:
+            _check_values(name, t.stamps, t.positions)
+
+
+def _check_values(name: str, stamps: Any, positions: Any) -> None:
+    """Refuse poses whose position or stamp is too large to compute with (:data:`MAX_COORDINATE`,
+    :data:`MAX_STAMP`), naming the first by its stamp."""
+    import numpy as np
+
+    over = np.flatnonzero((np.abs(positions) > MAX_COORDINATE).any(axis=1) | (np.abs(stamps) > MAX_STAMP))
+    if over.size:
+        k = int(over[0])
+        big = float(np.abs(positions[k]).max())
+        what = (f"a position coordinate of {big:.3g} m, over {MAX_COORDINATE:g} m" if big > MAX_COORDINATE
+                else f"a stamp over {MAX_STAMP:g} s")  # fmt: skip
+        raise UploadRefused(f"{name}: the pose at stamp {float(stamps[k]):.6g} ({over.size} pose(s) in all) has {what}: "
+                            "too large to compute errors with; expected positions in metres and stamps in seconds")  # fmt: skip
+
+
 def _copy(src: IO[bytes], dest: Path, name: str, budget: int) -> int:
     """Copy ``src`` to ``dest`` reading at most ``budget`` bytes (refused beyond); bytes copied."""
     n = 0
@@ -317,7 +375,8 @@ def budget_mb(n: int) -> str:
     return f"{n / 1e6:g} MB"
 
 
-def _unzip(src: IO[bytes], label: str, dest: Path, limits: Limits, taken: dict[str, str], budget: int) -> int:
+def _unzip(src: IO[bytes], label: str, dest: Path, limits: Limits, taken: dict[str, tuple[str, str]],
+           budget: int) -> int:  # fmt: skip
     try:
         archive = zipfile.ZipFile(src)
     except (zipfile.BadZipFile, OSError, EOFError, ValueError) as exc:
@@ -355,17 +414,23 @@ def _unzip(src: IO[bytes], label: str, dest: Path, limits: Limits, taken: dict[s
         return used
 
 
-def _take(taken: dict[str, str], name: str, path: str, where: str) -> None:
-    """Keep ``path`` (as sent) under ``name`` (:func:`kept_name`); refused if a file before it is
-    kept under that name, naming both as sent and why each is kept under that name."""
+def _take(taken: dict[str, tuple[str, str]], name: str, path: str, where: str) -> None:
+    """Keep ``path`` (as sent, in ``where``: ``upload`` or its archive) under ``name``
+    (:func:`kept_name`); refused if a file before it is kept under that name, naming both as sent
+    (each with its own archive, when they came in two) and why each is kept under that name."""
     if name not in taken:
-        taken[name] = path
+        taken[name] = (path, where)
         return
-    first = taken[name]
+    first, first_where = taken[name]
     why = [f"{p!r} is kept as {name!r} ({_renamed(p, name)})" for p in dict.fromkeys((first, path))
            if Path(p).name != name]  # fmt: skip
-    raise UploadRefused(f"{where}: {first!r} and {path!r}: a second file named {name!r}"
-                        f"{': ' + '; '.join(why) if why else ''}; expected distinct file names")  # fmt: skip
+    both = (
+        f"{where}: {first!r} and {path!r}"
+        if first_where == where
+        else f"{first_where}: {first!r} and {where}: {path!r}"
+    )
+    raise UploadRefused(f"{both}: a second file named {name!r}{': ' + '; '.join(why) if why else ''}; expected "
+                        "distinct file names")  # fmt: skip
 
 
 def _renamed(path: str, name: str) -> str:
@@ -383,7 +448,7 @@ def unpack(files: Iterable[tuple[str, IO[bytes]]], dest: Path, limits: Limits) -
     new folder ``dest``; the names kept. On any refusal ``dest`` is removed and
     :class:`UploadRefused` says why."""
     dest.mkdir(parents=True)
-    taken: dict[str, str] = {}  # name kept -> the path it was sent as
+    taken: dict[str, tuple[str, str]] = {}  # name kept -> the path it was sent as, and where (upload, its .zip)
     used = 0
     items = list(files)
     try:
@@ -417,14 +482,17 @@ def _fsync_folder(folder: Path) -> None:
 
 
 def keep_upload(files: Iterable[tuple[str, IO[bytes]]], folder: Path, limits: Limits, fmt: str,
-                sequences: Iterable[tuple[str, int]]) -> list[str]:  # fmt: skip
-    """:func:`unpack` the upload into ``folder/files`` and write its :func:`plan` (``folder/plan.json``,
-    when some file is not an OpenLORIS result file), both on disk before it returns; the names kept.
+                sequences: Iterable[tuple[str, int]], spec: EvalSpec | None = None) -> list[str]:  # fmt: skip
+    """:func:`unpack` the upload into ``folder/files``, write its :func:`plan` (``folder/plan.json``,
+    when some file is not an OpenLORIS result file), both on disk before it returns, and read every
+    file whole as the scorer reads it with ``spec`` (:func:`read_upload`); the names kept.
     Any :class:`~lorisnb.errors.LorisError` of reading the upload is an :class:`UploadRefused` (400,
-    its message, the server's paths taken out). On a refusal the caller removes ``folder``."""
+    its message naming the file and line, the server's paths taken out). On a refusal the caller
+    removes ``folder``."""
     try:
         names = unpack(files, folder / "files", limits)
         layout = plan(folder / "files", names, fmt, sequences)
+        read_upload(folder / "files", names, layout, spec)
     except UploadRefused:
         raise
     except LorisError as exc:  # any other refusal of reading the upload: the team's words, no server path
