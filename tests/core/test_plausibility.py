@@ -214,3 +214,20 @@ def test_a_short_run_whose_alignment_holds_no_rotation_is_said(icra20, tmp_path,
     assert not any("lever of only" in m for m in first)
     assert ln.evaluate(f, align_frames=1).sequences().iloc[0]["aoe_rmse"] < 5
     assert not any("lever of only" in m for m in _warned(icra20 / ORB_CAFE))
+
+
+def test_advice_on_the_sequence_fits_a_pair(data, tmp_path):
+    """A TUM pair whose estimate is an hour off its ground truth: the advice names what picks a
+    pair's sequence (the ground truth given), where it said 'check the seq: number', a line a TUM
+    file does not have; an OpenLORIS file's advice still names its seq: line."""
+    gt = data.tum / "fr2_desk_groundtruth.txt"
+    lines = [ln_ for ln_ in (data.tum / "fr2_desk_ORB.txt").read_text().splitlines() if ln_[:1].isdigit()]
+    est = tmp_path / "est.txt"
+    est.write_text("".join(f"{float(ln_.split()[0]) + 3600.0!r} {' '.join(ln_.split()[1:])}\n" for ln_ in lines))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LorisWarning)
+        ev = ln.evaluate_pairs(est, gt, "tum")
+    told = [str(w.message) for w in caught if "no estimate stamp falls inside" in str(w.message)]
+    told += [m for m in [*ev.warnings, *(str(f) for f in ev.failures)] if "no estimate stamp falls" in m]
+    assert told, (ev.warnings, ev.failures)
+    assert all("seq: number" not in m and "a pair's ground truth" in m for m in told), told

@@ -26,6 +26,13 @@ def _span(t0: float, t1: float) -> str:
     return f"{t0:.3f}..{t1:.3f} s"
 
 
+#: :func:`time_overlap`'s advice on which sequence the estimate is, in words for every input kind (an
+#: OpenLORIS file names it by its ``seq:`` lines, a pair by the ground truth given with it; the
+#: challenge says it of a file's name: :data:`lorisnb.tools.challenge.scoring.SEQ_ADVICE`).
+SEQ_QUESTION = "is the scene or the sequence wrong (an OpenLORIS file's seq: line, a pair's ground truth)?"
+SEQ_CHECK = "check which sequence it is (an OpenLORIS file's seq: line, a pair's ground truth)"
+
+
 def time_overlap(
     label: str,
     est_stamps: np.ndarray,
@@ -55,7 +62,7 @@ def time_overlap(
                 )
     for name, (a, b) in (other_spans or {}).items():
         if ((t >= a) & (t <= b)).mean() > 0.5:
-            return msg + f" They fall in the span of {name} ({_span(a, b)}): is the scene or the seq: number wrong?"
+            return msg + f" They fall in the span of {name} ({_span(a, b)}): {SEQ_QUESTION}"
     offset = t[0] - gt_start
     hours = offset / 3600.0
     zone = (
@@ -65,7 +72,7 @@ def time_overlap(
     )
     return msg + (
         f" The estimate starts {offset:+.3f} s from the ground truth: a clock offset (recording time vs "
-        f"bag time?) or the wrong sequence; shift the stamps or check the seq: number.{zone}"
+        f"bag time?) or the wrong sequence; shift the stamps or {SEQ_CHECK}.{zone}"
     )
 
 

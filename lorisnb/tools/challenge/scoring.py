@@ -47,6 +47,7 @@ from sqlalchemy.engine import make_url
 
 from lorisnb.core.lifelong.aggregate import aggregate_scenes, spans_table
 from lorisnb.core.pipeline.model import FileErrors, ResultFile
+from lorisnb.core.pipeline.plausibility import SEQ_CHECK, SEQ_QUESTION
 from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.stats.trials import check_duplicates, names_a_trial
 from lorisnb.core.trajectory.frames import SCENES
@@ -200,10 +201,10 @@ def _one_file_each(errors: list[FileErrors]) -> None:
 NOT_COMPUTED = ("a computation on its values overflowed or had no value (numbers too large for floating point, "
                 "or not numbers): its errors may be infinite or missing; check its values and their units "
                 "(metres, seconds)")  # fmt: skip
-#: The OpenLORIS file's advice on its ``seq:`` number (:func:`lorisnb.core.pipeline.plausibility.time_overlap`),
+#: The advice on which sequence a file is (:func:`lorisnb.core.pipeline.plausibility.time_overlap`),
 #: and what a TUM or EuRoC file, whose name names its sequence, is told instead.
-SEQ_ADVICE = (("is the scene or the seq: number wrong?", "is the sequence its name names ({seq}) the wrong one?"),
-              ("check the seq: number", "check that its name names its sequence (it names {seq})"))  # fmt: skip
+SEQ_ADVICE = ((SEQ_QUESTION, "is the sequence its name names ({seq}) the wrong one?"),
+              (SEQ_CHECK, "check that its name names its sequence (it names {seq})"))  # fmt: skip
 
 
 def plain_advice(text: str, name: str, plain: Mapping[str, Mapping[str, Any]]) -> str:
