@@ -73,8 +73,15 @@ class LabVariant:
 
 def same_id(student_id: str) -> str:
     """A student id as the data variant is drawn from it: without spaces, in lower case (an id typed
-    ``S1234567`` or ``s 1234567`` in the notebook draws the variant of the folder ``s1234567``)."""
-    return "".join(str(student_id).split()).casefold()
+    ``S1234567`` or ``s 1234567`` in the notebook draws the variant of the folder ``s1234567``), in
+    one Unicode form (NFKC, case folded, NFKC again: Unicode's identifier caseless match), so an id
+    that looks the same is the same: ``zoë`` typed as one character or as ``e`` and a combining
+    diaeresis, full-width ``ｓ０００１`` and ``s0001``. An ASCII id is only stripped and lower-cased
+    (its variant as before)."""
+    import unicodedata
+
+    text = unicodedata.normalize("NFKC", str(student_id))
+    return unicodedata.normalize("NFKC", "".join(text.split()).casefold())
 
 
 def lab_variant(

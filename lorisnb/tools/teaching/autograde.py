@@ -54,7 +54,7 @@ from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching._prose import lab_variant, same_id
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, SandboxTimeout, decode, error_of
 
-GRADER_VERSION = "15"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "16"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
 # 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
 # 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
@@ -78,7 +78,9 @@ GRADER_VERSION = "15"  # part of every result's digest: a new grader regrades ev
 # graded on its definitions, as a NameError's was; an unanswered prediction is "no answer yet"; only the values the
 # cells added below an answer changed are read and named there; a sandbox that ended is no time-out; every reply
 # value is checked, whatever wrote it; 15: a seed set in the parameters cell is noted, as a student_id of another
-# student is: the variant graded is the folder's)
+# student is: the variant graded is the folder's; 16: only the names the grader asked for are read from a reply and a
+# check's references are never rebound by an answer's values; an answer whose code wrote into the grader's reply channel
+# (a line beside its reply, a second reply, names not asked for) scores 0 with a note; ids alike in Unicode (NFKC) are one)
 
 
 @dataclass(frozen=True)
@@ -889,7 +891,7 @@ class RemoteFunction(SandboxedAnswer):
         if timeout is not None and timeout <= 0:
             self._stop(f"the check's calls of {self.name}")
         t0 = time.monotonic()
-        box, seen = self.sandbox, len(self.sandbox.findings)
+        box, seen, told = self.sandbox, len(self.sandbox.findings), len(self.sandbox.tampered)
         try:
             with self.budget.charge() if self.budget else contextlib.nullcontext():
                 reply = self.sandbox.call(self.name, kwargs, timeout_s=timeout)
@@ -908,6 +910,8 @@ class RemoteFunction(SandboxedAnswer):
                     lorisnb_used(f"{self.name}, called by the check", box.findings[seen:]),
                     None,
                 )
+            elif len(box.tampered) > told:  # its code wrote into the grader's pipe during the call
+                self.refused, self.sandbox = tampered(f"{self.name}, called by the check", box.tampered[told:]), None
         if self.refused:
             raise AnswerError(f"✗ {self.refused}")
         if not reply.get("ok"):
@@ -929,6 +933,17 @@ class RemoteFunction(SandboxedAnswer):
 
     def __repr__(self) -> str:
         return f"<your function {self.name}, run in the grading sandbox>"
+
+
+def tampered(what: str, told: Sequence[str]) -> str:
+    """The error of an answer during whose run the student's code wrote into the grader's reply
+    channel (:attr:`.sandbox.Sandbox.tampered`: a line beside the reply, a second reply, names the
+    grader did not ask for): not trusted, whatever its values, so 0 points and a note."""
+    return (
+        f"RuntimeError: {what}: the notebook's code wrote into the grader's reply channel from the sandbox "
+        f"({'; '.join(told[:3])}): the values read back cannot be trusted and the answer scores 0 (the instructor "
+        "is told); an answer's code must not touch the grader's requests or replies"
+    )
 
 
 def _raise(error: str) -> NoReturn:
@@ -1189,6 +1204,10 @@ def grade_submission(
                 refused = lorisnb_used(f"the answer cell {gid}", box.findings, by=culprit)
                 functions.update({d: RemoteFunction(None, d, refused=refused) for d in defs})
                 return
+            if box.tampered:  # its code wrote into the grader's pipe: not graded, whatever it returns
+                functions.update({d: RemoteFunction(None, d, refused=tampered(f"the answer cell {gid}", box.tampered))
+                                  for d in defs})  # fmt: skip
+                return
             err = None if reply.get("ok") else str(reply.get("error"))
             if err:  # the cell failed on its own, with numpy only: say so, then its error
                 err = ("RuntimeError: the answer cell, run alone with numpy only (no lorisnb, as graded), failed: "
@@ -1239,12 +1258,14 @@ def grade_submission(
     if budget.spent_at:
         notes.append(budget.note())
     stray = sum(box.stray for box in boxes)
-    if stray:
+    told = [t for box in boxes for t in box.tampered]
+    if stray or told:
         notes.append(
-            f"the grader's reply pipe from the sandbox held {stray} line(s) it did not ask for: the submission's code "
-            "wrote into it (ignored; only the replies to the grader's own requests were read, and whatever they "
-            "hold is checked like any answer)"
-        )
+            f"the submission's code wrote into the grader's reply channel from the sandbox ({stray} line(s) the "
+            "grader did not ask for" + (f"; {len(told)} of its requests tampered with: {'; '.join(told[:3])}" if told
+                                        else "") + "): an answer during whose run it did so scores 0 (its own note "
+            "says so); the replies of the other answers were read as the sandbox wrote them"
+        )  # fmt: skip
     if markers:
         notes.append(leaked_note(markers))
     notes = [shorten(n) for n in notes]
@@ -1584,11 +1605,14 @@ def _predict(
     if box.findings:
         message = lorisnb_used(f"the prediction {gid}", box.findings, by=culprit)
         return failed(message, message)
+    if box.tampered:  # the prediction's code wrote into the grader's pipe: not trusted, whatever it holds
+        message = tampered(f"the prediction {gid}", box.tampered)
+        return failed(message, f"{gid}: {message}")
     if partial:
         notes.append(f"{gid}: a line failed when the prediction ran alone ({reply.get('error')}), after its value was "
                      "set: graded on the value the cell had computed up to that line (every line before it ran, in "
                      "order, as in the notebook)")  # fmt: skip
-        return dict(got)
+        return {n: v for n, v in got.items() if n in capture}
     if unanswered(reply, capture):  # left as handed out (`pred = ...`, nbgrader's stub): "no answer yet"
         return {n: {"missing": True} for n in capture}
     if not reply.get("ok"):
@@ -1608,7 +1632,7 @@ def _predict(
             f"calls {own}), the answer cell failed: {reply.get('error')}"
             + (f" ({tip})" if (tip := _name_tip(spec, str(reply.get("error")), imports_only=True)) else "")
         )
-    return dict(reply.get("values", {}))
+    return {n: v for n, v in reply.get("values", {}).items() if n in capture}  # the names asked for, no other
 
 
 def unanswered(reply: Mapping[str, Any], capture: Sequence[str]) -> bool:
@@ -1758,6 +1782,7 @@ def _run_student(
     skipped: set[int] = set()
     took: dict[int, float] = {}  # seconds each cell took on its first run
     set_below: dict[str, list[str]] = {}  # answer grade_id -> the names the cells added below it set
+    told: dict[str, list[str]] = {}  # answer grade_id -> how its cells (or those added below it) wrote into the pipe
     box = Sandbox(work, limits=settings.limits, hidden=hidden, uid=settings.uid, python_path=[py_path], private=private)
     boxes.append(box)
 
@@ -1783,6 +1808,7 @@ def _run_student(
                 unrun(k)
                 break
             t0 = time.monotonic()
+            seen = len(box.tampered)
             try:
                 with budget.charge() if charged else contextlib.nullcontext():
                     reply = box.run(source, capture, cell_name, locked=not student,
@@ -1808,17 +1834,24 @@ def _run_student(
                             continue
                         if budget.out(f"the replay after {where}"):
                             break
+                        replayed = len(box.tampered)
                         try:
                             box.run(cells[j][0], (), cells[j][2], locked=not cells[j][3],
                                     timeout_s=min(2 * took.get(j, 0.0) + 2.0, budget.left(True)))  # fmt: skip
                         except SandboxError:
                             skipped.add(j)
+                        owner = cells[j][1] or follows.get(j)
+                        if owner and cells[j][3] and len(box.tampered) > replayed:
+                            told.setdefault(owner, []).extend(box.tampered[replayed:])
                 if budget.out(f"the replay after {where}"):
                     unrun(k + 1)
                     break
                 k += 1
                 continue
             took[k] = time.monotonic() - t0
+            owner = gid or follows.get(k)
+            if owner and student and len(box.tampered) > seen:  # the answer's code wrote into the grader's pipe
+                told.setdefault(owner, []).extend(box.tampered[seen:])
             if reply.get("output_truncated_mib"):
                 notes.append(f"{gid or cell_name}: what the cells printed was cut at {reply['output_truncated_mib']:g} "
                              "MiB (the sandbox's file size limit): the rest is left out; the cells ran on")  # fmt: skip
@@ -1868,7 +1901,7 @@ def _run_student(
                     # no value because the cell failed: say so, not "no answer yet" (a prediction's own run says why)
                     values[gid] = {n: {"error": f"your answer cell failed: {failed}"} if v.get("missing") else v
                                    for n, v in values[gid].items()}  # fmt: skip
-                alone(gid, None)
+                alone(gid, tampered(f"your answer cell {gid}", told[gid]) if gid in told else None)
             k += 1
     finally:
         box.close()
@@ -1881,6 +1914,10 @@ def _run_student(
             values[gid] = unset(
                 values[gid], [*own, *(src for k, (src, *_) in enumerate(cells) if follows.get(k) == gid)]
             )
+    for gid, how in told.items():  # its code wrote into the grader's pipe: not trusted, whatever it holds
+        error = tampered(f"your answer cell {gid}", how)
+        values[gid] = {n: {"error": error} for n in spec.values.get(gid, ())}
+        notes.append(f"{gid}: {error}")
     return values
 
 
@@ -1960,7 +1997,9 @@ def _run_checks(
             student: dict[str, Any] = {}
             for gid in q.answers:
                 student.update({n: f for n, f in functions.items() if n in spec.functions.get(gid, ())})
-                student.update({n: _student_value(v) for n, v in values.get(gid, {}).items()})
+                # the answer's own names and no other: a reply can never rebind the check's reference
+                own = spec.values.get(gid, ())
+                student.update({n: _student_value(v) for n, v in values.get(gid, {}).items() if n in own})
                 student.update({n: Ellipsis for n in spec.values.get(gid, ()) if n not in student})
             saved = {n: ns.get(n) for n in student}
             ns.update(student)

@@ -100,6 +100,7 @@ BUDGET_CELLS, BUDGET_MIN_S = 5, 120.0
 
 
 REPLY_BYTES = 64 * 1024**2  # the most the grader buffers of the child's pipe without a line end
+SYNC_S = 5.0  # at least this long for the child to answer the grader's sync after a reply (it runs no code then)
 
 
 class SandboxError(RuntimeError):
@@ -278,6 +279,9 @@ class Sandbox:
         self._scanned = 0  # bytes of the buffer known to hold no line end
         self._given = False  # the working folder was given to the sandbox's user (once, before its first start)
         self.stray = 0  # lines in the reply pipe that were no reply of the child's (tampering)
+        # the requests during which the code wrote into the reply pipe (a line beyond the one reply, a second
+        # reply to the request) or whose reply held other names than those asked for: one text each
+        self.tampered: list[str] = []
         self.findings: list[str] = []  # what the guard of a no-lorisnb child refused or found (lorisnb used)
         self.start()
 
@@ -419,10 +423,13 @@ class Sandbox:
 
     # --- requests --------------------------------------------------------------------------------
 
-    def _ask(self, request: dict[str, Any], timeout_s: float) -> dict[str, Any]:
-        """Send a request and wait for its reply (the line carrying its id). Anything else that came
-        through the pipe (a line the child's code wrote into it, a reply left over) is ignored and
-        counted in :attr:`stray`."""
+    def _ask(self, request: dict[str, Any], timeout_s: float, name: str = "<request>") -> dict[str, Any]:
+        """Send a request and wait for its reply (the first line carrying its id), then for the reply to
+        a second request of the grader's own (``sync``, whose id no code has seen yet): the child writes
+        its one reply to a request after the request's code ran, and nothing until it reads the next, so
+        every other line up to the sync's reply (a line the child's code wrote into the pipe, a second
+        reply to the request, which the code forged with its id) is the code writing into the grader's
+        channel: counted in :attr:`stray` and the request named in :attr:`tampered` (``name``)."""
         proc = self._proc
         if proc is None or proc.poll() is not None or proc.stdin is None or proc.stdout is None:
             raise SandboxError("the sandbox is not running (it ended earlier)")
@@ -430,33 +437,60 @@ class Sandbox:
             raise SandboxTimeout("time limit: no time left for it")
         fd = proc.stdout.fileno()
         self._drain(fd)
+        stray, replies = self.stray, 0
         request_id = secrets.token_hex(8)
+        self._send({**request, "id": request_id})
+        deadline = time.monotonic() + timeout_s
+        while True:
+            line = self._next(fd, deadline, timeout_s)
+            if line is not None and line.get("id") == request_id:
+                reply, replies = line, 1
+                break
+            if line is not None:
+                self.stray += 1  # not the reply to this request: written by the code into the pipe
+        sync_id = secrets.token_hex(8)
+        self._send({"op": "sync", "id": sync_id})
+        sync_deadline = max(deadline, time.monotonic() + SYNC_S)
+        while True:
+            line = self._next(fd, sync_deadline, max(sync_deadline - time.monotonic(), 0.0))
+            if line is not None and line.get("id") == sync_id:
+                break
+            if line is not None:
+                replies += line.get("id") == request_id
+                self.stray += 1
+        if self.stray > stray or replies > 1:
+            self.tampered.append(
+                f"{name}: {replies} replies to one request" if replies > 1
+                else f"{name}: {self.stray - stray} line(s) beside its reply"
+            )  # fmt: skip
+        return checked_reply(reply)
+
+    def _send(self, request: dict[str, Any]) -> None:
+        proc = self._proc
+        assert proc is not None and proc.stdin is not None
         try:
-            proc.stdin.write((json.dumps({**request, "id": request_id}) + "\n").encode())
+            proc.stdin.write((json.dumps(request) + "\n").encode())
             proc.stdin.flush()
         except BrokenPipeError:
             raise SandboxError(self._ended()) from None
-        deadline = time.monotonic() + timeout_s
-        while True:
-            while (end := self._line_end()) < 0:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    self.close()
-                    raise SandboxTimeout(f"time limit: the cell ran for more than {timeout_s:g} s and was stopped")
-                ready, _, _ = select.select([fd], [], [], left)
-                if ready:
-                    chunk = os.read(fd, 1 << 16)
-                    if not chunk:
-                        raise SandboxError(self._ended())
-                    self._take(chunk)
-            line = bytes(self._buffer[:end])
-            del self._buffer[: end + 1]
-            self._scanned = 0
-            reply = self._line(line)
-            if reply is not None and reply.get("id") == request_id:
-                return checked_reply(reply)
-            if reply is not None:
-                self.stray += 1  # not the reply to this request: written by the code into the pipe
+
+    def _next(self, fd: int, deadline: float, timeout_s: float) -> dict[str, Any] | None:
+        """The next line from the pipe as :meth:`_line` reads it (None: a line that is no reply)."""
+        while (end := self._line_end()) < 0:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                self.close()
+                raise SandboxTimeout(f"time limit: the cell ran for more than {timeout_s:g} s and was stopped")
+            ready, _, _ = select.select([fd], [], [], left)
+            if ready:
+                chunk = os.read(fd, 1 << 16)
+                if not chunk:
+                    raise SandboxError(self._ended())
+                self._take(chunk)
+        line = bytes(self._buffer[:end])
+        del self._buffer[: end + 1]
+        self._scanned = 0
+        return self._line(line)
 
     def _ended(self) -> str:
         """Close the child, which ended on its own (its pipe closed), and say how: its exit status
@@ -562,13 +596,26 @@ class Sandbox:
         timeout = max(lim.cell_timeout_s, lim.locked_timeout_s) if locked else lim.cell_timeout_s
         if timeout_s is not None:
             timeout = min(timeout, timeout_s)
-        return self._ask({"op": "exec", "source": source, "capture": list(capture), "name": name}, timeout)
+        reply = self._ask({"op": "exec", "source": source, "capture": list(capture), "name": name}, timeout, name)
+        # the names asked for, and only them: a reply holding others (the cell's code added names to the request
+        # it was run by, or forged the reply) is the code tampering with the grader's channel
+        got = reply.get("values")
+        asked = list(dict.fromkeys(capture))
+        if not isinstance(got, dict) or set(got) != set(asked):
+            extra = sorted(set(got or ()) - set(asked))
+            self.tampered.append(
+                f"{name}: its reply held names the grader did not ask for ({', '.join(extra[:5])})" if extra
+                else f"{name}: its reply lacked names the grader asked for"
+            )  # fmt: skip
+            got = got if isinstance(got, dict) else {}
+        reply["values"] = {n: got.get(n, {"missing": True}) for n in asked}
+        return reply
 
     def bind(self, values: dict[str, Any], timeout_s: float | None = None) -> None:
         """Bind ``values`` (name -> a value as :func:`._sandbox_child.given` describes it) in the
         notebook's namespace, running nothing."""
         timeout = self.limits.cell_timeout_s if timeout_s is None else min(self.limits.cell_timeout_s, timeout_s)
-        reply = self._ask({"op": "set", "values": values}, timeout)
+        reply = self._ask({"op": "set", "values": values}, timeout, "<the lab's values>")
         if not reply.get("ok"):
             raise SandboxError(f"the sandbox could not take the lab's values: {reply.get('error')}")
 
@@ -576,7 +623,7 @@ class Sandbox:
         """Call the function ``name`` the cells defined with these (numpy or plain) arguments."""
         encoded = {k: _encode(v) for k, v in args.items()}
         timeout = self.limits.cell_timeout_s if timeout_s is None else min(self.limits.cell_timeout_s, timeout_s)
-        return self._ask({"op": "call", "name": name, "args": encoded}, timeout)
+        return self._ask({"op": "call", "name": name, "args": encoded}, timeout, f"<a call of {name}>")
 
 
 #: what a reply's value is told as when it is none of :func:`._sandbox_child._plain`'s forms
