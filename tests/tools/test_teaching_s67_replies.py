@@ -108,11 +108,15 @@ def test_a_reply_holds_only_the_names_asked_for_and_a_forged_second_reply_is_tol
         assert reply["values"] == {"a": {"value": 0.5}}  # the names asked for, whichever reply was read
         assert box.tampered[1:] == ["<answer Y>: 2 replies to one request", "<answer Y>: its reply held names the "
                                     "grader did not ask for (ref)"]  # fmt: skip
-        assert box.stray == 1
+        assert box.stray == 0  # the second reply is no stray line: it is told as a second reply
+        # a line that is no reply (another id, no id) is not read as one: counted as stray, nothing else told
+        junk = _FRAME + "_f.f_locals['reply'].write(json.dumps({'ok': True, 'id': 'x'}) + '\\n{}\\n')\n"
+        reply = box.run("a = 2.0\n" + junk, ("a",), name="<answer W>")
+        assert reply["values"] == {"a": {"value": 2.0}} and box.stray == 2 and len(box.tampered) == 3
         # an honest cell after them: nothing told, the sandbox's own replies as they were
         reply = box.run("c = [1.0, 2.0]", ("c", "nothing"), name="<answer Z>")
         assert reply["values"] == {"c": {"array": [1.0, 2.0], "dtype": "<f8"}, "nothing": {"missing": True}}
-        assert len(box.tampered) == 3 and box.stray == 1
+        assert len(box.tampered) == 3 and box.stray == 2
 
 
 def test_the_checks_read_the_answers_own_names_never_a_reference_from_a_reply(tmp_path):
@@ -162,8 +166,9 @@ def test_answers_whose_code_writes_into_the_grader_channel_score_0_with_a_true_n
     b, c = _score(res, "test_B_pred"), _score(res, "test_C_val")
     assert b.points == 0.0 and "2 replies to one request" in b.message, b.message
     assert c.points == 0.0 and "did not ask for (val_ref)" in c.message, c.message
-    note = next(n for n in res.notes if n.startswith("the submission's code wrote into the grader's reply channel"))
-    assert "an answer during whose run it did so scores 0" in note and "ignored" not in note
+    note = next(n for n in res.notes if n.startswith("the submission's code wrote replies of its own into the grader"))
+    assert "2 replies to one request" in note and "each answer during whose run it did so scores 0" in note
+    assert not any("ignored; only the replies to the grader's own requests were read" in n for n in res.notes)
     assert _score(res, "test_A_fn").points == 1.0
 
     # a formula whose cell writes into the channel is not graded either, whatever its functions return

@@ -936,8 +936,8 @@ class RemoteFunction(SandboxedAnswer):
 
 
 def tampered(what: str, told: Sequence[str]) -> str:
-    """The error of an answer during whose run the student's code wrote into the grader's reply
-    channel (:attr:`.sandbox.Sandbox.tampered`: a line beside the reply, a second reply, names the
+    """The error of an answer during whose run the student's code wrote a reply of its own into the
+    grader's reply channel (:attr:`.sandbox.Sandbox.tampered`: a second reply to a request, names the
     grader did not ask for): not trusted, whatever its values, so 0 points and a note."""
     return (
         f"RuntimeError: {what}: the notebook's code wrote into the grader's reply channel from the sandbox "
@@ -1259,13 +1259,18 @@ def grade_submission(
         notes.append(budget.note())
     stray = sum(box.stray for box in boxes)
     told = [t for box in boxes for t in box.tampered]
-    if stray or told:
+    if told:
         notes.append(
-            f"the submission's code wrote into the grader's reply channel from the sandbox ({stray} line(s) the "
-            "grader did not ask for" + (f"; {len(told)} of its requests tampered with: {'; '.join(told[:3])}" if told
-                                        else "") + "): an answer during whose run it did so scores 0 (its own note "
-            "says so); the replies of the other answers were read as the sandbox wrote them"
-        )  # fmt: skip
+            f"the submission's code wrote replies of its own into the grader's reply channel from the sandbox "
+            f"({'; '.join(told[:3])}{'; ...' if len(told) > 3 else ''}): each answer during whose run it did so "
+            "scores 0 (its own note says so)"
+        )
+    if stray:
+        notes.append(
+            f"the grader's reply pipe from the sandbox held {stray} line(s) it did not ask for, no reply to any of its "
+            "requests: the submission's code wrote them (they were not read as replies; the values graded are those "
+            "the sandbox replied)"
+        )
     if markers:
         notes.append(leaked_note(markers))
     notes = [shorten(n) for n in notes]

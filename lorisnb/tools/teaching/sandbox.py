@@ -279,8 +279,8 @@ class Sandbox:
         self._scanned = 0  # bytes of the buffer known to hold no line end
         self._given = False  # the working folder was given to the sandbox's user (once, before its first start)
         self.stray = 0  # lines in the reply pipe that were no reply of the child's (tampering)
-        # the requests during which the code wrote into the reply pipe (a line beyond the one reply, a second
-        # reply to the request) or whose reply held other names than those asked for: one text each
+        # the requests whose reply the code could have written: a second reply to the request (forged with its
+        # id), a reply holding other names than those asked for; one text each (a line that is no reply: stray)
         self.tampered: list[str] = []
         self.findings: list[str] = []  # what the guard of a no-lorisnb child refused or found (lorisnb used)
         self.start()
@@ -427,9 +427,10 @@ class Sandbox:
         """Send a request and wait for its reply (the first line carrying its id), then for the reply to
         a second request of the grader's own (``sync``, whose id no code has seen yet): the child writes
         its one reply to a request after the request's code ran, and nothing until it reads the next, so
-        every other line up to the sync's reply (a line the child's code wrote into the pipe, a second
-        reply to the request, which the code forged with its id) is the code writing into the grader's
-        channel: counted in :attr:`stray` and the request named in :attr:`tampered` (``name``)."""
+        every other line up to the sync's reply is the code writing into the grader's channel: a second
+        reply to the request (the code forged one with its id: the first is returned, so either may be
+        the code's) names the request in :attr:`tampered` (``name``); a line that is no reply to it is
+        not read as one, only counted in :attr:`stray`."""
         proc = self._proc
         if proc is None or proc.poll() is not None or proc.stdin is None or proc.stdout is None:
             raise SandboxError("the sandbox is not running (it ended earlier)")
@@ -437,7 +438,7 @@ class Sandbox:
             raise SandboxTimeout("time limit: no time left for it")
         fd = proc.stdout.fileno()
         self._drain(fd)
-        stray, replies = self.stray, 0
+        replies = 0
         request_id = secrets.token_hex(8)
         self._send({**request, "id": request_id})
         deadline = time.monotonic() + timeout_s
@@ -455,14 +456,12 @@ class Sandbox:
             line = self._next(fd, sync_deadline, max(sync_deadline - time.monotonic(), 0.0))
             if line is not None and line.get("id") == sync_id:
                 break
-            if line is not None:
-                replies += line.get("id") == request_id
+            if line is not None and line.get("id") == request_id:
+                replies += 1
+            elif line is not None:
                 self.stray += 1
-        if self.stray > stray or replies > 1:
-            self.tampered.append(
-                f"{name}: {replies} replies to one request" if replies > 1
-                else f"{name}: {self.stray - stray} line(s) beside its reply"
-            )  # fmt: skip
+        if replies > 1:
+            self.tampered.append(f"{name}: {replies} replies to one request")
         return checked_reply(reply)
 
     def _send(self, request: dict[str, Any]) -> None:
