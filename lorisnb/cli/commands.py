@@ -78,6 +78,7 @@ def _run_evaluation(
         evaluate_manifest,
         evaluate_pairs,
         pair_kind,
+        pair_source,
         refuse_over_manifest,
     )
 
@@ -110,11 +111,18 @@ def _run_evaluation(
     if base is not None:  # refused options the manifest set are said to be its own
         refuse_over_manifest(spec, read_manifest(args.manifest, outside=outside), spec_given(args), kind, surface="cli")
     spec.refuse_inapplicable(kind, surface="cli")
+    if kind == "pair":  # an eps that gives no threshold for the input's scenes: refused before any file is read
+        spec.refuse_scenes(
+            [pair_source(args.gt, args.format or "tum", args.gt_format, args.scene).scene], surface="cli"
+        )
+    elif kind == "manifest" and manifest is not None:
+        spec.refuse_scenes(manifest.scenes, surface="cli")
     if refuse is not None:
         refuse(spec)
     inputs = list(args.paths)  # the options' inputs too (check_outputs), and a manifest's ground truth
     if manifest is not None:
         inputs += [str(manifest.path), *(str(s.groundtruth) for s in manifest.sessions)]
+        args.manifest_groundtruth = [str(s.groundtruth) for s in manifest.sessions]  # for the errors' advice
     check_outputs(args, inputs, files, folders)
     kw: dict[str, Any] = dict(trials_by=args.trials_by, progress=not args.no_progress, jobs=args.jobs,
                               executor=_executor(args), statistics=statistics is not None and statistics(spec),
@@ -147,12 +155,14 @@ def _run_evaluation(
 MANIFEST_FORMATS = ("estimate_format = '{fmt}' in the manifest", "groundtruth_format = '{fmt}' in the manifest")
 
 
-def _report_problems(ev: Any, notes: list[str]) -> None:
+def _report_problems(ev: Any, notes: list[str], args: argparse.Namespace | None = None) -> None:
     for n in notes:
         say(f"warning: {n}")
+    # a manifest's ground-truth files: the advice on one of them names groundtruth_format, never estimate_format
+    gt_files = list(getattr(args, "manifest_groundtruth", None) or [])
     for f in ev.failures:  # a manifest names its files' formats (the readers' advice names the options of pairs)
         say(
-            f"error: {format_advice(f.error, MANIFEST_FORMATS[0], MANIFEST_FORMATS[1]) if ev.kind == 'manifest' else f.error}"
+            f"error: {format_advice(f.error, MANIFEST_FORMATS[0], MANIFEST_FORMATS[1], gt_files) if ev.kind == 'manifest' else f.error}"
         )
     for f in ev.unscored:  # in the table, scored as the paper scores it; the exit status says so
         say(f"not scored: {f.error}")
@@ -274,7 +284,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(_fmt(ev.rpg_absolute().drop(columns=["trial"]), args.digits))
     from lorisnb.tools.evaluation.status import skipped_only
 
-    _report_problems(ev, notes)
+    _report_problems(ev, notes, args)
     unscored = [f for f in ev.unscored if f.kind != "nothing"]  # "nothing was evaluated" is no input: said above
     print(f"{len(ev.errors)} file(s) evaluated, {len(ev.failures)} failed, {len(unscored)} not scored, "
           f"{len(skipped_only(ev))} skipped", file=sys.stderr)  # fmt: skip
@@ -345,6 +355,15 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         if given_rpe:
             raise ValidationError(f"{given_rpe[0]}: the RPE is in the table of sweep --columns all (or of --relation); the "
                                   "default --columns metrics holds the thresholds' metrics only")  # fmt: skip
+    if args.relative_to is not None:  # refused before any file is read, as sweep() would refuse after
+        if args.eps is None:
+            raise ValidationError(f"--relative-to {args.relative_to}: no --eps to read as fractions of each sequence's "
+                                  f"{args.relative_to} (the spec's eps is in metres); give --eps fractions "
+                                  "(--eps 0.05,0.1) or leave --relative-to out")  # fmt: skip
+        words = [v for v in args.eps if isinstance(v, (str, dict))]
+        if words:
+            raise ValidationError(f"--eps {words[0]} with --relative-to {args.relative_to}: with --relative-to, --eps "
+                                  "values are fractions (numbers), not 'paper' or 'relative:F'")  # fmt: skip
     relative = f" (fractions of each sequence's {args.relative_to})" if args.relative_to is not None else " m"
     units = {"eps": relative, "phi": " deg", "delta": " s", "tau": " s"}
 
@@ -393,7 +412,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                 where = "Parquet dataset" if args.parquet else "CSV"
                 print(f"... {scene_rows - 60} more scene rows (in the {where}, aggregate with sweep_scenes)")
         print(f"wrote {rows} rows to {path}", file=sys.stderr)
-        _report_problems(ev, notes)
+        _report_problems(ev, notes, args)
         return ev.exit_status()
     table = sweep(
         ev.errors, args.eps, args.phi, args.delta, args.tau, relative_to=args.relative_to, columns=args.columns,
@@ -412,7 +431,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         print(f"wrote {len(table)} rows to {write_csv(written, args.csv, args.force)}", file=sys.stderr)
     if args.parquet:
         print(f"wrote {len(table)} rows to {write_parquet(written, args.parquet, force=args.force)}", file=sys.stderr)
-    _report_problems(ev, notes)
+    _report_problems(ev, notes, args)
     return ev.exit_status()
 
 
@@ -479,7 +498,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         for path in write_outputs(res, args.metric, args.csv, args.pairs_csv, args.latex, args.markdown, args.force,
                                   args.alpha):  # fmt: skip
             print(f"wrote {path}", file=sys.stderr)
-    _report_problems(ev, notes)
+    _report_problems(ev, notes, args)
     return ev.exit_status()
 
 
@@ -489,10 +508,11 @@ def cmd_report(args: argparse.Namespace) -> int:
 
     params: dict[str, Any] = {}
     for k, v in args.parameter or []:  # a name given twice: refused, as a repeated option is (cli.given_once)
-        if k in params and params[k] != param_value(v):
-            raise ValidationError(f"-p {k} given twice ({params[k]!r}, then {param_value(v)!r}); the last would "
+        value = param_value(v, f"-p {k}")
+        if k in params and params[k] != value:
+            raise ValidationError(f"-p {k} given twice ({params[k]!r}, then {value!r}); the last would "
                                   "silently replace the first: give each parameter once")  # fmt: skip
-        params[k] = param_value(v)
+        params[k] = value
     if (
         args.data
         and params.get("data_root") is not None

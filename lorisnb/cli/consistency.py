@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import warnings
+from pathlib import Path
 
 import pandas as pd
 
@@ -26,6 +27,12 @@ def cmd_consistency(args: argparse.Namespace) -> int:
 
     if args.gt_topic is not None and args.gt_format != "bag":
         raise ValidationError(f"--gt-topic applies to a ground truth in a bag (--gt-format bag), not {args.gt_format}")
+    given = Path(args.est)  # the reader's rule (read_covariances), in this command's words, before anything is read
+    if args.topic is not None and not (
+        given.suffix in (".bag", ".db3", ".mcap") or (given / "metadata.yaml").is_file()
+    ):
+        raise ValidationError(f"--topic {args.topic}: {args.est} is a text file, which has no topics; --topic applies "
+                              "to an estimate in a ROS bag")  # fmt: skip
     if args.seq is not None and args.gt_format != "openloris":
         raise ValidationError(
             f"--seq applies to an OpenLORIS ground truth (--gt-format openloris), not {args.gt_format}"

@@ -52,8 +52,16 @@ def threshold_list_type(name: str) -> Callable[[str], Any]:
 def add_scale_option(p: argparse.ArgumentParser, help: str) -> None:
     """``--scale [auto|on|off|...]``: the words of :func:`lorisnb.core.spec.validate.scale_value`."""
     # a word, not a number: a fixed factor (TUM evaluate_ate.py's --scale 1.7) is not one of them
-    p.add_argument("--scale", nargs="?", const=True, default=None, type=arg_type(validate.scale_value),
+    p.add_argument("--scale", nargs="?", const="on", default=None, type=arg_type(scale_word),
                    metavar="{auto,on,off}", help=help)  # fmt: skip
+
+
+def scale_word(text: str) -> str:
+    """A ``--scale`` value checked (:func:`lorisnb.core.spec.validate.scale_value`) and kept as the
+    command line's word, ``on``, ``off`` or ``auto`` (``yes`` is ``on``), which every surface takes:
+    messages say it as typed, not as Python's True or False."""
+    value = validate.scale_value(text)
+    return value if isinstance(value, str) else ("on" if value else "off")
 
 
 def add_threshold_options(p: argparse.ArgumentParser) -> None:
@@ -334,13 +342,23 @@ def add_evaluation_options(p: argparse.ArgumentParser, command: str = "evaluate"
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-def param_value(text: str) -> Any:
-    """A -p value: JSON when it parses (numbers, true/false, null, lists), else the string."""
+def param_value(text: str, name: str = "-p value") -> Any:
+    """A -p value: JSON when it parses (numbers, true/false, null, lists), else the string. Its
+    numbers go through the number check of every surface (:mod:`lorisnb.core.spec.validate`): a
+    literal too large for a float (``1e400``) is refused, not read as infinity; JSON's ``NaN`` and
+    ``Infinity`` stay text, checked where the parameter is (as ``eps='NaN'`` in Python)."""
     low = text.strip().lower()
     if low in ("inf", "+inf", "infinity"):
         return float("inf")
+
+    def number(literal: str) -> Any:  # one number check for -p as for every surface: 1e400 is no number
+        value = validate.finite(name, literal, "")
+        return int(literal) if literal.lstrip("-").isdigit() else value
+
     try:
-        return json.loads(text)
+        return json.loads(text, parse_float=number, parse_int=number, parse_constant=str)
+    except ValidationError:
+        raise
     except ValueError:
         return text
 

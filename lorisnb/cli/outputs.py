@@ -96,6 +96,7 @@ OUTPUT_SUFFIXES: dict[str, tuple[str, ...]] = {
     "kitti_plot": (".png",),
     "summary_csv": (".csv",),
     "plot": (".png", ".svg", ".pdf"),
+    "badge": (".svg",),  # diff's badge is SVG text: a --badge b.png held SVG
 }
 
 

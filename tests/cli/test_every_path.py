@@ -206,7 +206,7 @@ def _message(text: str) -> str:
     import re
 
     text = text.strip().splitlines()[-1] if text.strip() else ""
-    text = re.sub(r"^(lorisnb \w+: )?(error: )?(argument [^:]+: )?(\S+\.toml: )?", "", text)
+    text = re.sub(r"^(lorisnb \w+: )?(error: )?(argument [^:]+: )?(\S+\.toml(, line \d+)?: )?", "", text)
     text = re.sub(r" \([\w, ]+: set by the manifest \S+\)$", "", text)  # where a manifest's option came from
     text = re.sub(r"--([a-z-]+)", lambda m: m.group(1).replace("-", "_"), text)
     return text.replace("per_seq/lifelong", "mode").replace("keep_repeated", "repeated")

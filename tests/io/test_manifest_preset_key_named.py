@@ -21,7 +21,9 @@ def _manifest(tmp_path, data, preset: str):
 
 
 def test_a_bad_preset_names_its_key(tmp_path, data):
-    with pytest.raises(ParseError, match=r"m.toml: \[conventions\] preset=tumm: expected one of openloris, tum"):
+    with pytest.raises(
+        ParseError, match=r"m.toml, line 2: \[conventions\] preset=tumm: expected one of openloris, tum"
+    ):
         read_manifest(_manifest(tmp_path, data, "tumm"))
 
 

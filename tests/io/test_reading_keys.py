@@ -48,7 +48,10 @@ def test_an_unknown_key_in_any_table_is_refused_with_its_nearest_known_key(
     with pytest.raises(ParseError) as info:
         ln.read_manifest(m)
     msg = str(info.value)
-    assert f"{m}: {where}{': ' if where else ''}unknown key {key!r}" in msg
+    line = next(
+        n for n, text in enumerate(m.read_text().splitlines(), 1) if text.startswith(key)
+    )  # where it is written
+    assert f"{m}, line {line}: {where}{': ' if where else ''}unknown key {key!r}" in msg
     assert (f"did you mean {near!r}" in msg) if near else "did you mean" not in msg
     # the command line says the same, exit status 2, nothing scored
     out = tmp_path / "out.csv"

@@ -27,7 +27,7 @@ from lorisnb.core.pipeline.model import (
     SequenceErrors,
     sequence_eps,
 )
-from lorisnb.core.spec.evo import check_evo, check_evo_together
+from lorisnb.core.spec.evo import check_evo, check_evo_together, tolerance_refusal
 from lorisnb.core.spec.validate import eps_value, flag, known_keys, threshold
 from lorisnb.core.trajectory.blocks import each
 from lorisnb.errors import ValidationError
@@ -261,15 +261,21 @@ def rpe_setting(rpe_delta: Any, rpe_unit: Any) -> tuple[float, str]:
     return delta, unit
 
 
-def rpe_options(rpe_pairs: Any, rpe_all_pairs: Any, rpe_tolerance: Any) -> tuple[str, bool | None, float]:
+def rpe_options(
+    rpe_pairs: Any, rpe_all_pairs: Any, rpe_tolerance: Any, rpe_unit: str | None = None
+) -> tuple[str, bool | None, float]:
     """Validated RPE pair options, by the spec's own rules: along ``reference`` or ``estimate``;
     all pairs True / False (evo's rules) or None (lorisnb's); a positive relative tolerance, other
-    than the default only with evo's all pairs (:func:`lorisnb.core.spec.evo.evo_refusals`)."""
+    than the default only where the pairs use it (:func:`lorisnb.core.spec.evo.tolerance_refusal`,
+    the rule of :func:`lorisnb.core.spec.evo.evo_refusals`: evo's all pairs in m, deg or rad; ``rpe_unit``
+    None: a unit not told, so evo's all pairs asked for)."""
     pairs = check_evo("rpe_pairs", rpe_pairs, "rpe_pairs")
     all_pairs = check_evo("rpe_all_pairs", rpe_all_pairs, "rpe_all_pairs")
     tol = float(check_evo("rpe_tolerance", rpe_tolerance, "rpe_tolerance"))
-    if tol != RPE_DEFAULTS["rpe_tolerance"] and all_pairs is not True:
-        raise ValidationError("rpe_tolerance: only for evo's all pairs (rpe_all_pairs)")
+    unit = "m" if rpe_unit is None else check_evo("rpe_unit", rpe_unit, "rpe_unit")
+    why = tolerance_refusal(unit, all_pairs)
+    if tol != RPE_DEFAULTS["rpe_tolerance"] and why:
+        raise ValidationError(why)
     return pairs, all_pairs, tol
 
 
@@ -368,7 +374,7 @@ def score_rows(
     eps_v = eps_value(t["eps"])
     phi_v, delta_v, tau_v = threshold("phi", t["phi"]), threshold("delta", t["delta"]), threshold("tau", t["tau"])
     rpe_d, rpe_u = rpe_setting(r["rpe_delta"], r["rpe_unit"])
-    rpe_p, rpe_a, rpe_t = rpe_options(r["rpe_pairs"], r["rpe_all_pairs"], r["rpe_tolerance"])
+    rpe_p, rpe_a, rpe_t = rpe_options(r["rpe_pairs"], r["rpe_all_pairs"], r["rpe_tolerance"], rpe_u)
     rows = []
     for f in files:  # one iteration per file and sequence, never per pose
         for e in f.sequences:

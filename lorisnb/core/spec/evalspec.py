@@ -319,6 +319,31 @@ class EvalSpec:
             raise ValidationError("; ".join(problems.values()) + (f" ({', '.join(theirs)}: set by {set_by[1]})" * bool(theirs)))  # fmt: skip
         return notes
 
+    def refuse_scenes(self, scenes: Iterable[str], *, surface: str = "python") -> None:
+        """Refuse, before anything is read, an ``eps`` that gives no threshold for one of the input's
+        ``scenes`` (a pair's scene, a manifest's): ``'paper'`` (1/3/5 m for the OpenLORIS scenes) or a
+        mapping without that scene. Every table of the evaluation would refuse it
+        (:func:`lorisnb.core.pipeline.model.scene_eps`), after every file was read."""
+        from lorisnb.core.pipeline.model import scene_eps
+
+        if not isinstance(self.eps, (str, Mapping)) or str(self.eps).startswith("relative:"):
+            return  # metres, or a fraction of each sequence's extent: a threshold for every scene
+        name = _namer(surface)
+        shown = {"cli": f"--eps {self.eps}", "manifest": f"eps = {self.eps!r}"}.get(surface, f"eps={self.eps!r}")
+        for scene in dict.fromkeys(scenes):
+            try:
+                scene_eps(self.eps, scene)
+            except ValidationError:
+                if isinstance(self.eps, str):  # 'paper'
+                    raise ValidationError(
+                        f"{shown}: the paper's 1/3/5 m are for the OpenLORIS scenes; scene {scene!r} is not one: "
+                        f"give {name('eps')} in metres or as 'relative:F' (a fraction of the ground truth's extent)"
+                    ) from None
+                raise ValidationError(
+                    f"{shown} gives no threshold for scene {scene!r}, which the inputs hold: add {scene!r} to the "
+                    "mapping, or give one eps for every scene"
+                ) from None
+
     def __repr__(self) -> str:
         changed = [
             f"{f.name}={getattr(self, f.name)!r}"

@@ -43,7 +43,11 @@ EVO_PRESET: dict[str, Any] = dict(
 EVO_OPTIONS: dict[str, tuple[str, str, str]] = {
     "rpe_pairs": ("RPE pairs measured along the reference or the (aligned) estimate", "", "rpe_unit m, deg, rad"),
     "rpe_all_pairs": ("RPE: evo's all pairs (true), consecutive pairs (false), lorisnb's own (none)", "", "all"),
-    "rpe_tolerance": ("evo's --delta_tol: all pairs within delta +- this fraction", "", "rpe_all_pairs true"),
+    "rpe_tolerance": (
+        "evo's --delta_tol: all pairs within delta +- this fraction",
+        "",
+        "all pairs: rpe_unit m with rpe_all_pairs true, deg, rad",
+    ),
     "t_start": ("ground-truth poses before this stamp left out (evo's --t_start)", "s", "all"),
     "t_end": ("ground-truth poses after this stamp left out (evo's --t_end)", "s", "all"),
     "project_to_plane": ("errors of the poses projected to xy / xz / yz (after alignment)", "", "all"),
@@ -111,8 +115,34 @@ def check_evo_together(values: dict[str, Any], label: Any) -> None:
     unit = values.get("rpe_unit", "s")
     if unit in ("f", "frames") and float(values.get("rpe_delta", 1.0)) % 1:
         raise ValidationError(f"{label('rpe_delta')}: expected a whole number of frames with rpe_unit {unit}")
-    if unit in ("deg", "rad") and float(values.get("rpe_delta", 1.0)) > (180.0 if unit == "deg" else math.pi):
-        raise ValidationError(f"{label('rpe_delta')}: an angle in [0, 180] deg or [0, pi] rad")
+    delta = float(values.get("rpe_delta", 1.0))
+    if unit in ("deg", "rad") and delta > (180.0 if unit == "deg" else math.pi):
+        most = "[0, 180] deg" if unit == "deg" else f"[0, pi] rad (pi = {math.pi:.6g})"
+        hint = f"; for {delta:g} degrees give {label('rpe_unit')} deg" if unit == "rad" and delta <= 180 else ""
+        raise ValidationError(
+            f"{label('rpe_delta')} {delta:g} with {label('rpe_unit')} {unit}: expected an angle in {most}{hint}"
+        )
+
+
+def tolerance_used(unit: str, all_pairs: bool | None) -> bool:
+    """Whether the RPE pairs depend on ``rpe_tolerance`` (evo's ``--delta_tol``): evo's all pairs in
+    metres, degrees or radians (:func:`lorisnb.core.metrics.pairs.rpe_indices`: ``rpe_all_pairs`` true,
+    or left as lorisnb's own rule, which takes evo's all pairs for ``deg`` and ``rad``). Frames and
+    seconds pair ``(i, i + delta)`` and the pose nearest ``t + delta``: no tolerance."""
+    unit = {"f": "frames", "d": "deg", "r": "rad"}.get(unit, unit)
+    return unit in ("m", "deg", "rad") and (all_pairs is True or (all_pairs is None and unit in ("deg", "rad")))
+
+
+def tolerance_refusal(unit: str, all_pairs: bool | None, name: Any = str) -> str | None:
+    """Why ``rpe_tolerance`` cannot apply with this RPE unit and rule, or None (:func:`tolerance_used`):
+    the one rule of the spec (:func:`evo_refusals`) and of the tables (``score``, ``sweep``)."""
+    if tolerance_used(unit, all_pairs):
+        return None
+    if all_pairs is True:
+        return (f"{name('rpe_tolerance')}: only for evo's all pairs in m, deg or rad; all pairs in {unit} are "
+                f"every (i, i + delta) and use no tolerance")  # fmt: skip
+    return (f"{name('rpe_tolerance')}: only for evo's all pairs ({name('rpe_all_pairs')} with {name('rpe_unit')} m; "
+            f"{name('rpe_unit')} deg and rad take them unless {name('rpe_all_pairs')} is false)")  # fmt: skip
 
 
 def describe_evo(spec: Any) -> str:
@@ -149,8 +179,9 @@ def association_words(spec: Any) -> str:
 def evo_refusals(spec: Any, given: frozenset[str], name: Any) -> dict[str, str]:
     """Evo options the user set that cannot apply with the rest of ``spec``: option -> why."""
     out = {}
-    if "rpe_tolerance" in given and spec.rpe_all_pairs is not True:
-        out["rpe_tolerance"] = f"{name('rpe_tolerance')}: only for evo's all pairs ({name('rpe_all_pairs')})"
+    why = tolerance_refusal(spec.rpe_unit, spec.rpe_all_pairs, name)
+    if "rpe_tolerance" in given and why:
+        out["rpe_tolerance"] = why
     if "rpe_pairs" in given and spec.rpe_unit in ("s", "f", "frames"):
         out["rpe_pairs"] = (f"{name('rpe_pairs')}: pairs in {spec.rpe_unit} are the same along either trajectory; "
                             f"it applies to {name('rpe_unit')} m, deg or rad")  # fmt: skip

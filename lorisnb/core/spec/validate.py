@@ -249,7 +249,8 @@ def positive(name: str, value: Any, unit: str, *, integer: bool = False) -> floa
     v = _number(name, value, {})
     if math.isnan(v) or v <= 0 or math.isinf(v) or (integer and v != int(v)):
         kind = "a positive whole number" if integer else "a positive number"
-        raise ValidationError(f"{name}={_show(value)}: expected {kind}" + (f" of {unit}" if unit else ""))
+        finite = ", not infinity" if math.isinf(v) else ""  # inf is positive, but no value here
+        raise ValidationError(f"{name}={_show(value)}: expected {kind}" + (f" of {unit}" if unit else "") + finite)
     return float(v)
 
 
@@ -277,6 +278,21 @@ def positive_list(name: str, values: Any, unit: str, most: float = math.inf) -> 
             raise ValidationError(f"{name}={_show(values)}: {_show(items[out.index(v)])} and {_show(items[k])} are "
                                   "the same value; expected each value once")  # fmt: skip
     return out
+
+
+def seq_number(name: str, value: Any) -> int:
+    """A sequence's number (a manifest session's ``seq``, ``--seq``, ``seq=``): a positive whole
+    number, as OpenLORIS numbers its ``seq:`` blocks from 1; bools and fractions refused."""
+    if isinstance(value, (bool, np.bool_)) or value is None:
+        raise ValidationError(
+            f"{name}={_show(value)}: expected a positive whole number (sequences are numbered from 1)"
+        )
+    v = _number(name, value, {})
+    if not (math.isfinite(v) and v >= 1 and v == int(v)):
+        raise ValidationError(
+            f"{name}={_show(value)}: expected a positive whole number (sequences are numbered from 1)"
+        )
+    return int(v)
 
 
 def decimals(name: str, value: Any) -> int:

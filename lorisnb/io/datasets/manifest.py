@@ -153,10 +153,13 @@ def manifest_path(name_or_path: str | os.PathLike[str]) -> Path:
     return Path(name_or_path)
 
 
-def _fmt(value: Any, key: str, path: Path) -> str:
-    if value not in TRAJECTORY_FORMATS:
-        raise ParseError(path, None, f"{key} = {value!r}: expected one of {', '.join(TRAJECTORY_FORMATS)}")
-    return str(value)
+def _fmt(value: Any, key: str, path: Path, line: int | None = None) -> str:
+    """A format name, in any case as ``--format``, ``evaluate_pairs(..., fmt)`` and ``read_trajectory``
+    take it (:func:`lorisnb.core.spec.validate.choice`: ``"TUM"`` is ``tum``)."""
+    try:
+        return validate.choice(key, value, TRAJECTORY_FORMATS)
+    except ValidationError:
+        raise ParseError(path, line, f"{key} = {value!r}: expected one of {', '.join(TRAJECTORY_FORMATS)}") from None
 
 
 #: What a manifest of the built-in OpenLORIS evaluation may hold: its scenes, ground truth, frames
@@ -234,9 +237,9 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         raise ParseError(path, None, f"cannot be read ({exc})") from None
     except tomllib.TOMLDecodeError as exc:
         raise ParseError(path, getattr(exc, "lineno", None), f"not valid TOML ({exc})") from None
-    check_keys(raw, TOP_KEYS, path)
+    check_keys(raw, TOP_KEYS, path, line=lambda k: _line(text, None, k))
     for key in ("name", "scene", "root", "source", *READING_KEYS.values()):  # text, never str() of a list or a number
-        _text(raw, key, path)
+        _text(raw, key, path, line=_line(text, None, key))
     if "openloris" in raw and not isinstance(raw["openloris"], bool):  # "false" is not truth-tested
         raise ParseError(path, None, f"openloris = {raw['openloris']!r}: expected true or false")
     if raw.get("openloris"):
@@ -259,8 +262,10 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         _confined(root, [*trusted, *yours], path, f"root = {root_text!r}{allow}",
                   "the manifest's folder" + ", the dataset folders its environment variables name" * bool(yours))  # fmt: skip
     allowed = [root, *trusted]
-    gt_fmt = _fmt(raw.get("groundtruth_format", "tum"), "groundtruth_format", path)
-    est_fmt = _fmt(raw.get("estimate_format", "tum"), "estimate_format", path)
+    gt_fmt = _fmt(
+        raw.get("groundtruth_format", "tum"), "groundtruth_format", path, _line(text, None, "groundtruth_format")
+    )
+    est_fmt = _fmt(raw.get("estimate_format", "tum"), "estimate_format", path, _line(text, None, "estimate_format"))
     scene = str(raw.get("scene", path.stem))
     items = raw.get("session")
     if not isinstance(items, list) or not items:
@@ -271,9 +276,9 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     for k, item in enumerate(items, start=1):
         if not isinstance(item, dict) or "groundtruth" not in item:
             raise ParseError(path, None, f"session {k}: expected a table with at least 'groundtruth = \"file\"'")
-        check_keys(item, SESSION_KEYS, path, f"[[session]] {k}: ")
+        check_keys(item, SESSION_KEYS, path, f"[[session]] {k}: ", lambda key, k=k: _line(text, "session", key, k))
         for key in ("name", "scene", "groundtruth", "estimate"):
-            _text(item, key, path, f"[[session]] {k}: ")
+            _text(item, key, path, f"[[session]] {k}: ", _line(text, "session", key, k))
             if key in item and not item[key].strip():  # "" would name the root folder, or a file ".txt"
                 raise ParseError(path, None, f"[[session]] {k}: {key} = {item[key]!r}: expected a non-empty name")
         name = str(item.get("name", f"session{k}"))
@@ -283,8 +288,16 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         if not outside:
             _confined(groundtruth, allowed, path, f"[[session]] {k}: groundtruth")
         seq = item.get("seq", k)
-        if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
-            raise ParseError(path, None, f"session {name!r}: seq = {seq!r}; expected a whole number")
+        if "seq" in item:  # the rule of every surface (--seq, seq=): a positive whole number
+            try:
+                if not isinstance(seq, int):  # 2.0 or "2" in TOML is not the whole number 2
+                    raise ValidationError(f"seq={_toml(seq)}: expected a positive whole number (sequences are "
+                                          "numbered from 1)")  # fmt: skip
+                seq = validate.seq_number("seq", seq)
+            except ValidationError as exc:
+                why = str(exc).split(": ", 1)[-1]
+                raise ParseError(path, _line(text, "session", "seq", k), f"[[session]] {k} ({name!r}): seq = "
+                                 f"{_toml(item['seq'])}: {why}") from None  # fmt: skip
         sessions.append(
             Session(
                 seq=seq,
@@ -293,7 +306,10 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
                 groundtruth=groundtruth,
                 estimate=estimate_name(str(item.get("estimate", name + SUFFIX[est_fmt]))),
                 groundtruth_format=_fmt(
-                    item.get("groundtruth_format", gt_fmt), f"session {name!r}: groundtruth_format", path
+                    item.get("groundtruth_format", gt_fmt),
+                    f"[[session]] {k} ({name!r}): groundtruth_format",
+                    path,
+                    _line(text, "session", "groundtruth_format", k) if "groundtruth_format" in item else None,
                 ),
             )  # fmt: skip
         )
@@ -306,7 +322,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     table = raw.get("conventions", {})
     if not isinstance(table, dict):
         raise ParseError(path, None, "conventions: expected a [conventions] table of spec options")
-    transform = _transform(raw.get("transform"), path)
+    transform = _transform(raw.get("transform"), path, text)
     reading = {k: raw.get(key) for k, key in READING_KEYS.items()}
     try:  # the command line's rule: topics and TF chains only for bags, a topic or a chain, not both
         for gt_format in dict.fromkeys(s.groundtruth_format for s in sessions):
@@ -321,7 +337,9 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
                          "is not an option of the evaluation spec") + "; expected spec options (align, association, ...)")  # fmt: skip
     for key in ("eps", "phi", "lifelong"):  # top-level keys; in [conventions] too, but not in both
         if key in raw and key in options:
-            raise ParseError(path, None, f"{key} is given at the top and in [conventions]; give it once")
+            raise ParseError(path, _line(text, "conventions", key), f"{key} is given at the top and in [conventions]; "
+                             "give it once")  # fmt: skip
+
         if key in raw:
             options[key] = raw[key]
     if "lifelong" not in options and "mode" not in options:  # per session unless the manifest says otherwise
@@ -329,10 +347,11 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     try:  # the preset named by its key (make_spec names it conventions=, the command line's word)
         preset = table.get("preset")
         preset = None if preset is None else validate.choice("[conventions] preset", preset, tuple(PRESETS))
-        spec = make_spec(preset, surface="manifest", **options, transform=transform)
     except ValidationError as exc:
-        raise ParseError(path, None, str(exc)) from None
+        raise ParseError(path, _line(text, "conventions", "preset"), str(exc)) from None
+    spec = _manifest_spec(preset, options, transform, table, path, text)
     _refuse_own(spec, preset, table, raw, est_fmt, list(dict.fromkeys(s.scene for s in sessions)), path, text)
+    _refuse_together(spec, options, table, path, text)
     return Manifest(
         path=path, name=str(raw.get("name", path.stem)), sessions=sessions, lifelong=spec.mode == "lifelong",
         groundtruth_format=gt_fmt, estimate_format=est_fmt, spec=spec,
@@ -416,13 +435,18 @@ def _confined(
                          "--manifest-outside, or outside=True, to read it anyway)")  # fmt: skip
 
 
-def _text(table: dict[str, Any], key: str, path: Path, where: str = "") -> None:
+def _toml(value: Any) -> str:
+    """A manifest's value as TOML writes it (``true``, not Python's ``True``)."""
+    return str(value).lower() if isinstance(value, bool) else repr(value)
+
+
+def _text(table: dict[str, Any], key: str, path: Path, where: str = "", line: int | None = None) -> None:
     """A key whose value must be text (a name, a file, a topic): anything else is refused, never
-    turned into the text of a list or a number."""
+    turned into the text of a list or a number. ``line``: where the key is written."""
     if key in table and not isinstance(table[key], str):
-        raise ParseError(path, None, f"{where}{key} = {table[key]!r}: expected a string (in quotes)")
+        raise ParseError(path, line, f"{where}{key} = {_toml(table[key])}: expected a string (in quotes)")
     if key in table and "\x00" in table[key]:  # no file system takes one: refused here, not a crash in a later call
-        raise ParseError(path, None, f"{where}{key} = {table[key]!r}: a NUL character (\\u0000); expected a name")
+        raise ParseError(path, line, f"{where}{key} = {table[key]!r}: a NUL character (\\u0000); expected a name")
 
 
 def estimate_name(text: str) -> str:
@@ -502,6 +526,40 @@ def _line(text: str | None, table: str | None, key: str, nth: int = 1) -> int | 
     return None
 
 
+def _manifest_spec(
+    preset: str | None, options: dict[str, Any], transform: Sim3 | None, table: dict[str, Any], path: Path, text: str
+) -> EvalSpec:
+    """The manifest's spec by :func:`make_spec`, a value refused with the message of every surface
+    and the line of its key (``[conventions]`` or the top level): each value on its own first (its
+    value check), then together."""
+    for key, value in options.items():  # each value's own check, with its line
+        try:
+            make_spec(preset, surface="manifest", **{key: value})
+        except ValidationError as exc:
+            raise ParseError(path, _key_line(key, table, text), str(exc)) from None
+    try:
+        return make_spec(preset, surface="manifest", **options, transform=transform)
+    except ValidationError as exc:  # a rule between values: the line of the first one named
+        named = [k for k in options if str(exc).startswith(k)]
+        raise ParseError(path, _key_line(named[0], table, text) if named else None, str(exc)) from None
+
+
+def _key_line(key: str, table: dict[str, Any], text: str) -> int | None:
+    """The line of a spec option of a manifest: in ``[conventions]``, else at the top level."""
+    return _line(text, "conventions" if key in table else None, key)
+
+
+def _refuse_together(spec: EvalSpec, options: dict[str, Any], table: dict[str, Any], path: Path, text: str) -> None:
+    """Options of the manifest that cannot apply with its other values (``max_gap`` beside
+    ``association = "nearest"``), refused when it is read, with the line of the first one, in the
+    words of every surface (:meth:`~lorisnb.core.spec.evalspec.EvalSpec.refuse_inapplicable`)."""
+    try:
+        spec.refuse_inapplicable("manifest", surface="manifest")
+    except ValidationError as exc:
+        first = str(exc).split(": ", 1)[0]
+        raise ParseError(path, _key_line(first, table, text) if first in options else None, str(exc)) from None
+
+
 def _refuse_own(
     spec: EvalSpec,
     preset: str | None,
@@ -549,38 +607,46 @@ def _refuse_own(
                        "ground truth's extent)")  # fmt: skip
 
 
-def check_keys(table: dict[str, Any], allowed: set[str], path: Path, where: str = "") -> None:
+def check_keys(table: dict[str, Any], allowed: set[str], path: Path, where: str = "", line: Any = None) -> None:
     """Refuse a key of a manifest's table that lorisnb does not know (a typo would be ignored):
-    ParseError naming the file, the table (``where``, e.g. ``"[transform]: "``; none at the top
-    level), the key, the nearest known key and all of them."""
+    ParseError naming the file, the line (``line``: key -> its line, where known), the table
+    (``where``, e.g. ``"[transform]: "``; none at the top level), the key, the nearest known key
+    and all of them."""
     for key in sorted(set(table) - allowed):
         hint = validate.near_miss(key, allowed)
         raise ParseError(
             path,
-            None,
+            None if line is None else line(key),
             f"{where}unknown key {key!r}{f' ({hint})' if hint else ''}; expected {', '.join(sorted(allowed))}",
         )
 
 
-def _transform(raw: Any, path: Path) -> Sim3 | None:
+def _transform(raw: Any, path: Path, text: str | None = None) -> Sim3 | None:
+    """The ``[transform]`` table as T_est_gt; a bad value refused naming its line and key."""
     if raw is None:
         return None
     if not isinstance(raw, dict):
-        raise ParseError(path, None, "transform: expected a [transform] table (translation, quaternion)")
-    check_keys(raw, TRANSFORM_KEYS, path, "[transform]: ")
-    try:
-        given = [raw.get("translation", [0.0, 0.0, 0.0]), raw.get("quaternion", [0.0, 0.0, 0.0, 1.0])]
-        if any(not isinstance(v, list) or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v)
-               for v in given):  # fmt: skip
-            raise TypeError  # true is not 1 m
-        t = np.asarray(given[0], float).reshape(3)
-        q = np.asarray(given[1], float).reshape(4)
-    except (AttributeError, ValueError, TypeError):
-        raise ParseError(
-            path, None, "[transform]: expected translation = [x, y, z] and quaternion = [x, y, z, w]"
-        ) from None
-    if not np.isfinite(t).all() or not np.isfinite(q).all() or np.linalg.norm(q) < 1e-9:
-        raise ParseError(path, None, "[transform]: expected finite values and a non-zero quaternion x y z w")
+        raise ParseError(path, _line(text, None, "transform"), "transform: expected a [transform] table (translation, "
+                         "quaternion)")  # fmt: skip
+    check_keys(raw, TRANSFORM_KEYS, path, "[transform]: ", lambda k: _line(text, "transform", k))
+    expected = {"translation": "[x, y, z] (metres)", "quaternion": "[x, y, z, w]"}
+    values = {"translation": [0.0, 0.0, 0.0], "quaternion": [0.0, 0.0, 0.0, 1.0]}
+    for key, size in (("translation", 3), ("quaternion", 4)):
+        v = raw.get(key, values[key])
+        if (
+            not isinstance(v, list)
+            or len(v) != size
+            or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v)  # true is not 1 m
+            or not np.isfinite(np.asarray(v, float)).all()
+            or (key == "quaternion" and np.linalg.norm(np.asarray(v, float)) < 1e-9)
+        ):
+            zero = ", not all zero" if key == "quaternion" else ""
+            raise ParseError(path, _line(text, "transform", key), "[transform]: expected translation = [x, y, z] and "
+                             f"quaternion = [x, y, z, w]; {key} = {_toml(v)} is not {size} finite numbers "
+                             f"{expected[key]}{zero}")  # fmt: skip
+        values[key] = v
+    t = np.asarray(values["translation"], float)
+    q = np.asarray(values["quaternion"], float)
     from scipy.spatial.transform import Rotation
 
     return Sim3(Rotation.from_quat(q).as_matrix(), t, 1.0)

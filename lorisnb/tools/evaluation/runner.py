@@ -391,6 +391,8 @@ def evaluate_pairs(
     src = pair_source(groundtruth, fmt, gt_fmt, scene, est_times=est_times, gt_times=gt_times, topic=topic,
                       gt_topic=gt_topic, tf=tf, gt_tf=gt_tf)  # fmt: skip
     notes = the_spec.refuse_inapplicable(pair_kind(src.fmt))
+    if pair_kind(src.fmt) == "pair":  # eps='paper' for a scene not OpenLORIS': refused before any file is read
+        the_spec.refuse_scenes([src.scene])
     _refuse_reading(the_spec, src.fmt, "pair")
     if src.fmt == src.gt_fmt == "kitti" and src.est_times is None and src.gt_times is None:
         the_spec = by_index(the_spec)  # stamps are pose indices: pose i with pose i, on every preset
@@ -467,6 +469,7 @@ def evaluate_manifest(
     base = m.spec if given is None else preset_over(m.spec, given)
     the_spec = make_spec(base, **options)
     notes = refuse_over_manifest(the_spec, m, options)
+    the_spec.refuse_scenes(m.scenes)  # eps='paper' for scenes not OpenLORIS': refused before any file is read
     _refuse_reading(the_spec, m.estimate_format, "manifest")
     if m.estimate_format == "kitti" and all(s.groundtruth_format == "kitti" for s in m.sessions):
         the_spec = by_index(the_spec)  # a manifest gives KITTI files no times: pose i with pose i

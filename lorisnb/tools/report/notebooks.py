@@ -80,11 +80,14 @@ def notebook_dir(notebooks_dir: str | os.PathLike[str] | None = None) -> Path:
 
 
 def notebook_path(name: str, notebooks_dir: str | os.PathLike[str] | None = None) -> Path:
-    """A notebook by name (``per_sequence_benchmark``) or path (``my.ipynb``)."""
+    """A notebook by name (``per_sequence_benchmark``, or ``per_sequence_benchmark.ipynb``: a file name
+    of the notebooks' folder, where none of that name is here) or path (``my.ipynb``)."""
     p = Path(name)
     nb_dir = notebook_dir(notebooks_dir)
     if p.suffix != ".ipynb":
         p = nb_dir / f"{name}.ipynb"
+    elif not p.is_file() and p.name == name and (nb_dir / name).is_file():  # the folder's file, by its name
+        p = nb_dir / name
     if not p.is_file():
         raise LorisError(
             f"notebook {name!r} not found (looked for {p}); the notebooks are: "
@@ -404,9 +407,16 @@ def declared_by(names: Iterable[str], notebooks_dir: str | os.PathLike[str] | No
 def select_notebooks(
     notebooks: Iterable[str] | None, notebooks_dir: Any, results: Any
 ) -> tuple[list[str], dict[str, str]]:
-    """The notebooks to run, and those left out with the reason."""
+    """The notebooks to run, and those left out with the reason. A name given with the suffix of the
+    notebooks' folder's file (``evaluate_my_results.ipynb``, no such file here) is that notebook's name."""
     if notebooks:
-        return list(notebooks), {}
+        nb_dir = notebook_dir(notebooks_dir)
+        return [
+            n.removesuffix(".ipynb")
+            if n.endswith(".ipynb") and Path(n).name == n and not Path(n).is_file() and (nb_dir / n).is_file()
+            else n
+            for n in notebooks
+        ], {}
     names = available_notebooks(notebooks_dir)
     if results is None:
         return names, {}
@@ -444,6 +454,7 @@ def refuse_inapplicable_specs(
     folder and exit status 1, where the report's own check promises a usage error and nothing run."""
     from lorisnb.core.spec.evalspec import SPEC_NAMES
     from lorisnb.io.datasets.manifest import read_manifest
+    from lorisnb.tools.evaluation.inputs import scene_label
     from lorisnb.tools.evaluation.runner import pair_kind
     from lorisnb.tools.notebook.params import evaluation_spec
 
@@ -455,16 +466,23 @@ def refuse_inapplicable_specs(
         values = {k: v for k, v in parameters.items() if k in declared and v is not None}
         if not any(k in SPEC_NAMES or k == "conventions" for k in values):
             continue  # nothing of the spec given to this notebook: its own defaults, which it can take
+        scenes: list[str] = []  # the input's scenes, where known before it is read: eps must give each a threshold
         if values.get("groundtruth") is not None:
             fmt = values.get("fmt", shown_default(declared.get("fmt", {}).get("default", "tum")))
             kind, what = pair_kind(str(fmt)), "the pair path, groundtruth"
+            if kind == "pair":
+                scene = values.get("scene")
+                scenes = [str(scene) if scene else scene_label(Path(str(values["groundtruth"])))]
         elif values.get("manifest") is not None:
-            openloris = read_manifest(values["manifest"]).openloris
-            kind, what = ("openloris" if openloris else "manifest"), f"the sessions of manifest {values['manifest']}"
+            m = read_manifest(values["manifest"])
+            kind, what = ("openloris" if m.openloris else "manifest"), f"the sessions of manifest {values['manifest']}"
+            scenes = [] if m.openloris else m.scenes
         else:
             kind, what = "openloris", "OpenLORIS result files"
         try:
-            evaluation_spec(values).refuse_inapplicable(kind, surface="notebook")
+            spec = evaluation_spec(values)
+            spec.refuse_inapplicable(kind, surface="notebook")
+            spec.refuse_scenes(scenes, surface="notebook")
         except ValidationError as exc:
             raise ValidationError(f"{path.stem} (scoring {what}) would refuse its parameters: {exc}; change or "
                                   f"leave out the parameter named, or leave {path.stem} out with --notebooks") from None  # fmt: skip
