@@ -63,3 +63,15 @@ def test_the_pairs_are_evos_all_pairs_within_the_tolerance(tum, tol):
     want = filters.filter_pairs_by_angle(poses, 5.0, tol=5.0 * tol, degrees=True, all_pairs=True)
     assert len(want) > 0
     assert sorted(zip(i.tolist(), j.tolist(), strict=True)) == sorted(map(tuple, want))
+
+
+def test_a_sweep_takes_the_tolerance_by_the_same_rule(tum):
+    """The sweep's RPE options were checked without their unit (evo's all pairs asked for): a
+    tolerance with deg was refused there while the spec and the tables took it."""
+    est, gt = tum
+    errors = ln.evaluate_pairs(est, gt, "tum", rpe_unit="deg", rpe_delta=5).errors
+    wide = ln.sweep(errors, eps=[0.05], phi=[5.0], columns="all", rpe_unit="deg", rpe_delta=5, rpe_tolerance=0.5)
+    narrow = ln.sweep(errors, eps=[0.05], phi=[5.0], columns="all", rpe_unit="deg", rpe_delta=5, rpe_tolerance=0.01)
+    assert wide["rpe_pairs"].iloc[0] != narrow["rpe_pairs"].iloc[0]
+    with pytest.raises(ln.ValidationError, match="rpe_tolerance: only for evo's all pairs"):
+        ln.sweep(errors, eps=[0.05], phi=[5.0], columns="all", rpe_unit="frames", rpe_delta=5, rpe_tolerance=0.5)

@@ -212,7 +212,7 @@ def sweep(
     r = rpe_of(files, dict(rpe_delta=rpe_delta, rpe_unit=rpe_unit, rpe_pairs=rpe_pairs, rpe_all_pairs=rpe_all_pairs,
                            rpe_tolerance=rpe_tolerance))  # fmt: skip
     rpe_d, rpe_u = rpe_setting(r["rpe_delta"], r["rpe_unit"])
-    rpe_p, rpe_a, rpe_t = rpe_options(r["rpe_pairs"], r["rpe_all_pairs"], r["rpe_tolerance"])
+    rpe_p, rpe_a, rpe_t = rpe_options(r["rpe_pairs"], r["rpe_all_pairs"], r["rpe_tolerance"], rpe_u)
     given = dict(rpe_delta=rpe_delta, rpe_unit=rpe_unit, rpe_pairs=rpe_pairs, rpe_all_pairs=rpe_all_pairs,
                  rpe_tolerance=rpe_tolerance)  # fmt: skip
     unused = [k for k, v in given.items() if v is not OF_SPEC]
