@@ -149,7 +149,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--times", default=None, help="KITTI: one times file (a stamp per line) for both files")
     p.add_argument("--gt-times", default=None, help="KITTI: the ground truth's times file")
     p.add_argument("--est-times", default=None, help="KITTI: the estimate's times file")
-    p.add_argument("--seq", type=arg_type(lambda t: int(validate.positive("--seq", t, "", integer=True))), default=None,
+    p.add_argument("--seq", type=arg_type(lambda t: validate.seq_number("--seq", t)), default=None,
                    help="openloris: the sequence (default: the first with poses)")  # fmt: skip
     p.add_argument(
         "--rpe-frames",
@@ -184,7 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gt-topic", default=None, help="bags (--gt-format bag): the ground truth's topic")
     p.add_argument(
         "--seq",
-        type=arg_type(lambda t: int(validate.positive("--seq", t, "", integer=True))),
+        type=arg_type(lambda t: validate.seq_number("--seq", t)),
         default=None,
         help="an OpenLORIS ground truth (--gt-format openloris) of several sequences: the estimate's",
     )

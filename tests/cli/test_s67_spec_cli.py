@@ -131,3 +131,14 @@ def test_a_sessions_format_advice_names_groundtruth_format(tum, tmp_path, capsys
     assert main(["evaluate", str(tmp_path / "res"), "--manifest", str(m), "--manifest-outside", "--no-progress"]) == 1
     err = capsys.readouterr().err
     assert "read it with groundtruth_format = 'tum' in the manifest" in err and "estimate_format = 'tum'" not in err
+
+
+@pytest.mark.parametrize("command", [["consistency", "a.txt", "b.txt"], ["crosscheck", "a.txt", "b.txt"]])
+def test_seq_is_checked_by_the_one_rule_of_every_surface(command, capsys):
+    """--seq took its own check ('expected a positive whole number') beside the manifest's and
+    Python's seq rule (validate.seq_number): one rule, one message."""
+    with pytest.raises(SystemExit) as exit_:
+        main([*command, "--seq", "0"])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert "--seq=0: expected a positive whole number (sequences are numbered from 1)" in err, err
