@@ -12,6 +12,10 @@ series of nightly runs (its newest run against its baseline and against the seri
 
     python benchmarks/calibrate.py [--pool 24] [--nights 200] [--power-nights 60] [--compare-nights 60]
                                    [--single-nights 40] [--history-series 2] [--history-nights 30] [--quick]
+                                   [--designs 1v1 3v3 1v3 3v1 1v5 2v5 3v5] [--models real] [--diff-only]
+
+``--designs`` measures the verdict at unequal trial counts (BASE's v CAND's; a CAND of fewer runs holds
+them as near-identical copies, see ``calibration._night``); ``--diff-only`` prints the verdict's table alone.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from lorisnb.core.stats.regression import parse_tolerances
 from lorisnb.core.stats.tolerances import RERUN_SPREAD, SINGLE_RUN_BAND
 from lorisnb.errors import LorisWarning
 from lorisnb.tools.decisions.calibration import (
+    DESIGNS,
     MODELS,
     REAL_DIFFERENCE,
     calibrate,
@@ -51,6 +56,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--power-nights", type=int, default=60, help="nights per change, model and trial count")
     p.add_argument("--compare-nights", type=int, default=60, help="nights of compare per trial count (default 60)")
     p.add_argument("--trials", type=int, nargs="+", default=[1, 3, 5], help="trial counts (default 1 3 5)")
+    p.add_argument("--designs", nargs="+", default=None,
+                   help="designs BASEvCAND instead of --trials, e.g. 1v3 3v1 (default: --trials a side, then "
+                   + " ".join(f"{b}v{c}" for b, c in DESIGNS if b != c) + ")")  # fmt: skip
+    p.add_argument("--models", nargs="+", default=list(MODELS), choices=list(MODELS), help="noise models (default all)")
+    p.add_argument("--diff-only", action="store_true", help="the verdict's table of lorisnb diff only")
     p.add_argument("--single-nights", type=int, default=40,
                    help="nights of one run a side with whole-system changes, per model (default 40)")  # fmt: skip
     p.add_argument("--history-series", type=int, default=2, help="noise-only series of history per model (default 2)")
@@ -65,43 +75,53 @@ def main(argv: list[str] | None = None) -> int:
         args.single_nights = 12
     warnings.simplefilter("ignore", LorisWarning)
     start = time.perf_counter()
-    real = real_pairs()
-    early = stopped_early()
     pools = {}
     for name, noise in MODELS.items():
+        if name not in args.models:
+            continue
         pools[name] = make_pool(noise, args.pool, progress=lambda x, n=name: tqdm(x, desc=f"reruns ({n})"))
-    print("\nHow two runs of one system on one recording differ (median, 90th percentile; |dCR| and |log ATE ratio|):")
-    rows = [("real pairs (icra20 per-seq vs lifelong)", pair_spread(real["cr_a"], real["cr_b"], real["ate_rmse_a"],
-                                                                    real["ate_rmse_b"]))]  # fmt: skip
-    rows += [(f"generator, model {name}", generator_pairs(pool)) for name, pool in pools.items()]
-    print(f"  {'':44s} {'CR med':>7s} {'CR p90':>7s} {'CR>0.3':>7s} {'ATE med':>8s} {'ATE p90':>8s}")
-    for label, s in rows:
-        print(f"  {label:44s} {s['cr_median']:7.4f} {s['cr_p90']:7.4f} {s['cr_over_0_3']:7.2f} "
-              f"{s['ate_median']:8.3f} {s['ate_p90']:8.3f}")  # fmt: skip
-    print("\nReal outputs that stop before 75 % of their recording (a trial stopped halfway looks like these):")
-    for r in early.itertuples():
-        print(f"  {r.mode:9s} {r.stopped} of {r.runs} runs ({100 * r.share:.0f} %)")
-    bands = single_run_bands(pools["real"], nights=min(args.nights, 100))
-    print("\nThe largest change of a noise-only single-run night (model real; CR units, or log ratio for errors):")
-    print("  what sizes lorisnb.core.stats.tolerances.SINGLE_RUN_BAND: the 95th percentiles times one factor "
-          f"({bands['factor'].iloc[0]:.2f}) so that 95 % of the nights stay within every band")  # fmt: skip
-    for r in bands.itertuples():
-        have = SINGLE_RUN_BAND[r.level].get(r.metric, float("nan"))
-        print(f"  {r.level:8s} {r.metric:15s} median {r.median:6.3f}  95th percentile {r.p95:6.3f}  band {r.band:6.3f}"
-              f"  in use {have:.2f}")  # fmt: skip
-    table = calibrate(pools, trials=args.trials, nights=args.nights, power_nights=args.power_nights,
+    if not args.diff_only:  # the noise models against real reruns, and the single-run bands
+        real = real_pairs()
+        early = stopped_early()
+        print(
+            "\nHow two runs of one system on one recording differ (median, 90th percentile; |dCR| and |log ATE ratio|):"
+        )
+        rows = [("real pairs (icra20 per-seq vs lifelong)", pair_spread(real["cr_a"], real["cr_b"], real["ate_rmse_a"],
+                                                                        real["ate_rmse_b"]))]  # fmt: skip
+        rows += [(f"generator, model {name}", generator_pairs(pool)) for name, pool in pools.items()]
+        print(f"  {'':44s} {'CR med':>7s} {'CR p90':>7s} {'CR>0.3':>7s} {'ATE med':>8s} {'ATE p90':>8s}")
+        for label, s in rows:
+            print(f"  {label:44s} {s['cr_median']:7.4f} {s['cr_p90']:7.4f} {s['cr_over_0_3']:7.2f} "
+                  f"{s['ate_median']:8.3f} {s['ate_p90']:8.3f}")  # fmt: skip
+        print("\nReal outputs that stop before 75 % of their recording (a trial stopped halfway looks like these):")
+        for r in early.itertuples():
+            print(f"  {r.mode:9s} {r.stopped} of {r.runs} runs ({100 * r.share:.0f} %)")
+        bands = single_run_bands(pools["real"], nights=min(args.nights, 100))
+        print("\nThe largest change of a noise-only single-run night (model real; CR units, or log ratio for errors):")
+        print("  what sizes lorisnb.core.stats.tolerances.SINGLE_RUN_BAND: the 95th percentiles times one factor "
+              f"({bands['factor'].iloc[0]:.2f}) so that 95 % of the nights stay within every band")  # fmt: skip
+        for r in bands.itertuples():
+            have = SINGLE_RUN_BAND[r.level].get(r.metric, float("nan"))
+            print(f"  {r.level:8s} {r.metric:15s} median {r.median:6.3f}  95th percentile {r.p95:6.3f}  band {r.band:6.3f}"
+                  f"  in use {have:.2f}")  # fmt: skip
+    if args.designs is not None:
+        designs = [_design(d) for d in args.designs]
+    else:
+        designs = [(n, n) for n in args.trials] + [d for d in DESIGNS if d[0] != d[1]]
+    table = calibrate(pools, nights=args.nights, power_nights=args.power_nights, designs=designs,
                       progress=lambda x: tqdm(x, desc="nights", leave=False))  # fmt: skip
-    print("\nThe verdict of lorisnb diff (default tolerances, alpha 0.05), share of nights [95 % interval]:")
+    print("\nThe verdict of lorisnb diff (default tolerances, alpha 0.05), share of nights [95 % interval];"
+          "\n  design: BASE's trials v CAND's (a CAND of fewer runs holds them as near-identical copies):")  # fmt: skip
     checks = list(dict.fromkeys(table["check"]))
-    print(f"  {'model':6s} {'trials':>6s} " + " ".join(f"{c:>22s}" for c in checks))
-    for (model, n), g in table.groupby(["model", "trials"], sort=False):
+    print(f"  {'model':6s} {'design':>6s} " + " ".join(f"{c:>22s}" for c in checks))
+    for (model, n), g in table.groupby(["model", "design"], sort=False):
         cells = []
         for c in checks:
             r = g[g["check"] == c]
             cells.append(f"{'-':>22s}" if r.empty else
                          f"{100 * r['rate'].iloc[0]:5.1f}% [{100 * r['low'].iloc[0]:4.1f},{100 * r['high'].iloc[0]:5.1f}] "
                          f"n{int(r['nights'].iloc[0]):<3d}")  # fmt: skip
-        print(f"  {model:6s} {n:6d} " + " ".join(cells))
+        print(f"  {model:6s} {n:>6s} " + " ".join(cells))
     fa = table[table["check"] == "false alarm"]
     print(
         f"\nfalse alarms at most 5 % everywhere: {'met' if (fa['rate'] <= 0.05).all() else 'NOT MET'} "
@@ -112,12 +132,23 @@ def main(argv: list[str] | None = None) -> int:
         if len(pw):
             print(f"power for {c} with 3+ trials at least 90 %: {'met' if (pw['rate'] >= 0.9).all() else 'NOT MET'} "
                   f"(smallest {100 * pw['rate'].min():.1f} %)")  # fmt: skip
+    if args.diff_only:
+        print(f"({time.perf_counter() - start:.0f} s)")
+        return 0
     single_run_table(pools, args.single_nights)
-    bound_table(pools["real"], args.trials)
-    compare_table(pools["real"], args.trials, args.compare_nights)
+    bound_table(pools["real"] if "real" in pools else next(iter(pools.values())), args.trials)
+    compare_table(pools["real"] if "real" in pools else next(iter(pools.values())), args.trials, args.compare_nights)
     history_rates_table(pools, [n for n in args.trials if n <= 3], args.history_series, args.history_nights)
     print(f"({time.perf_counter() - start:.0f} s)")
     return 0
+
+
+def _design(text: str) -> tuple[int, int]:
+    """``"1v3"`` -> (1, 3)."""
+    b, sep, c = text.lower().partition("v")
+    if not sep or not b.isdigit() or not c.isdigit() or int(b) < 1 or int(c) < 1:
+        raise SystemExit(f"--designs {text}: expected BASEvCAND trial counts, e.g. 1v3")
+    return int(b), int(c)
 
 
 def single_run_table(pools: dict, nights: int) -> None:

@@ -18,13 +18,16 @@ as relative changes, because their rerun spread grows with their size.
 the metric's tolerance (:data:`~lorisnb.core.stats.tolerances.DEFAULT_TOLERANCES`). The test asks
 whether the change is *beyond the tolerance*: ``z = (d - tol) / se``, one-sided.
 
-- **With trials** (at least three values over both sides): ``se`` from the trials' own spread,
+- **With trials** (at least two independent values on each side): ``se`` from the trials' own spread,
   moderated *upwards* across the diff's comparisons of the same metric and level (the
   empirical-Bayes variance of Smyth 2004, limma's ``squeezeVar``, taken only where it is larger than
   the comparison's own: a sequence whose reruns flip keeps its large spread), never below a quarter
   of :data:`~lorisnb.core.stats.tolerances.RERUN_SPREAD`; a t distribution with the pooled degrees
   of freedom gives p. Tied trial values (all CR 1.0) are tested like any others, never p = 1.
-- **One run per side**: no significance can be claimed. The change must go beyond the tolerance
+- **One run on a side** (one independent value of BASE or of CAND, whatever the other holds: a
+  single value has no spread, and the other side's alone, tied perhaps, decided a t-test; 1 BASE run
+  against 3 CAND trials failed 10 of 80 noise-only nights so, ``make calibrate`` measures every
+  design): no significance can be claimed. The change must go beyond the tolerance
   plus a rerun band, :data:`~lorisnb.core.stats.tolerances.SINGLE_RUN_BAND` (the largest change
   noise-only single-run diffs of reruns show, measured by ``make calibrate``), widened where the
   changes of the comparison's own system (suite and algorithm) are larger, by the smaller of their
@@ -395,8 +398,11 @@ class _Comparisons:
     def judge(self, alpha: float) -> tuple[pd.DataFrame, pd.DataFrame]:
         """Decide every waiting comparison as one family (see the module docstring) and return
         the two tables."""
-        trials = [c for c in self.waiting if len(c.base) + len(c.cand) >= 3]
-        single = [c for c in self.waiting if len(c.base) + len(c.cand) < 3]
+        # a side of one value has no spread of its own: the other side's alone (tied, perhaps: a
+        # sequence whose reruns flip between two values) decided the test, and 1 BASE run against 3
+        # CAND trials failed 12.5 % of noise-only nights; such a comparison is judged as single runs
+        trials = [c for c in self.waiting if min(len(c.base), len(c.cand)) >= 2]
+        single = [c for c in self.waiting if min(len(c.base), len(c.cand)) < 2]
         levels = ["scene" if c.row["seq"] is None else "sequence" for c in single]
         if trials:
             levels_t = ["scene" if c.row["seq"] is None else "sequence" for c in trials]
@@ -412,8 +418,8 @@ class _Comparisons:
                 what = ("the largest change noise-only single runs show" if band <= SINGLE_RUN_BAND[level][c.row["metric"]]
                         else f"{c.row['algorithm']}'s own noise in this diff, the smaller of its changes for the "
                         "worse and for the better, wider than the largest change noise-only single runs show")  # fmt: skip
-                runs = "single run per side" + ("" if (c.row["trials_base"], c.row["trials_cand"]) == (1, 1)
-                                                else f" ({c.counted})")  # fmt: skip
+                runs = ("single run per side" if (len(c.base), len(c.cand)) == (1, 1) else "a single run on one side") + (
+                    "" if (c.row["trials_base"], c.row["trials_cand"]) == (1, 1) else f" ({c.counted})")  # fmt: skip
                 c.row.update(status="regression" if up else ("improvement" if down else "ok"),
                              decided_by=f"{runs}: no significance claimed; judged by the tolerance "
                              f"widened by the rerun band ({shown}: {what})")  # fmt: skip
@@ -427,7 +433,7 @@ class _Comparisons:
             parts.append(f"{len(trials)} comparison(s) with trials by t-tests of the change beyond the tolerance, "
                          f"spreads pooled per metric, Holm over all of them (family-wise alpha {alpha:g})")  # fmt: skip
         if single:
-            parts.append(f"{len(single)} comparison(s) of one run per side by the tolerance widened by the rerun "
+            parts.append(f"{len(single)} comparison(s) of one run per side (or on one side) by the tolerance widened by the rerun "
                          "band (no significance claimed)")  # fmt: skip
         parts.append("a missing or failed sequence or trial always regresses; too little to judge never does")
         seqs.attrs["rule"] = scenes.attrs["rule"] = "; ".join(parts)
@@ -561,13 +567,25 @@ def repeated_of(table: pd.DataFrame) -> np.ndarray:
     for idx in groups.values():  # a handful of trials a sequence: every pair of them at once
         if len(idx) < 2:
             continue
-        v = values[idx]
-        with np.errstate(invalid="ignore"):
-            same = np.isclose(v[:, None, :], v[None, :, :], rtol=SAME_VALUE, atol=0.0, equal_nan=True).all(axis=2)
-        same &= np.tri(len(idx), k=-1, dtype=bool)  # an earlier trial only
-        first = np.where(same.any(axis=1), same.argmax(axis=1), -1)
+        first = same_values(values[idx])
         of[idx] = np.where((first >= 0) & out[idx], idx[np.maximum(first, 0)], -1)
     return of
+
+
+def same_values(rows: np.ndarray, others: np.ndarray | None = None) -> np.ndarray:
+    """The one rule of copies (:data:`SAME_VALUE`), for a sequence's trials and a scene's alike: for
+    each row of ``rows`` (trials x values), the position of the earlier row whose every value it
+    repeats within :data:`SAME_VALUE` relative (NaN as NaN), else -1; with ``others`` (the other
+    side's trials), the position of the first row of ``others`` it repeats instead."""
+    rows = np.asarray(rows, float)
+    ref = rows if others is None else np.asarray(others, float)
+    if not len(rows) or not len(ref):
+        return np.full(len(rows), -1)
+    with np.errstate(invalid="ignore"):
+        same = np.isclose(rows[:, None, :], ref[None, :, :], rtol=SAME_VALUE, atol=0.0, equal_nan=True).all(axis=2)
+    if others is None:
+        same &= np.tri(len(rows), k=-1, dtype=bool)  # an earlier trial only
+    return np.where(same.any(axis=1), same.argmax(axis=1), -1)
 
 
 class _Side:
@@ -584,6 +602,65 @@ class _Side:
         self.one_run = dict(one_run or {})
         self.copy_of = repeated_of(table) if len(table) else None  # the row each copy repeats, else -1
         self.copy = self.copy_of >= 0 if self.copy_of is not None else None
+        #: rows repeating a trial of the other side (:meth:`repeats_of`), with that side's trial
+        self.from_other: dict[int, Any] = {}
+        self.other = ""
+
+    def repeats_of(self, other: _Side) -> None:
+        """Mark this side's trials that repeat every value of a trial of ``other`` (the same
+        sequence; the rule of copies within a side, :func:`same_values`) as copies: a CAND padded with
+        BASE's own trial files holds no run in them (its regression hid behind them: "ok"). Where
+        every trial with output of a sequence repeats the other side's, the sequence is unchanged
+        (one run kept on both sides, which ``diff`` names), no padding: left as it is."""
+        if self.copy is None or other.copy is None:
+            return
+        cols = [c for c in (*METRICS, "matched") if c in self.cols and c in other.cols]
+        mine = np.column_stack([self.cols[c] for c in cols]) if cols else np.zeros((len(self.table), 0))
+        theirs = np.column_stack([other.cols[c] for c in cols]) if cols else np.zeros((len(other.table), 0))
+        self.other = other.name
+        judged = np.array([c in METRICS for c in cols], bool)  # a copy repeats three values or more, not a CR alone
+        for key, rows in self.rows.items():
+            orows = other.rows.get(key)
+            if orows is None or not cols:
+                continue
+            src = same_values(mine[rows], theirs[orows])
+            if (src >= 0).any():  # the other side's trial of the same number kept is that trial unchanged, no padding
+                src = np.where(other.trials[orows[np.maximum(src, 0)]] != self.trials[rows], src, -1)
+            out = self.output(rows) & (np.isfinite(mine[rows][:, judged]).sum(axis=1) >= 3)
+            cross = (src >= 0) & out & ~self.copy[rows]
+            if not cross.any() or not (out & ~self.copy[rows] & ~cross).any():
+                continue
+            for i in np.flatnonzero(cross):
+                self.from_other[int(rows[i])] = other.trials[orows[src[i]]]
+            self.copy[rows[cross]] = True
+
+    def borrowed_scenes(self) -> dict[tuple, dict[Any, Any]]:
+        """Per (suite, algorithm, scene), the trials that repeat the other side's in every sequence
+        of the scene where they have output (:meth:`repeats_of`), each with the other side's trial:
+        their scene values are the other side's, no run of this side."""
+        per: dict[tuple, dict[Any, list]] = {}
+        for key, rows in self.rows.items():
+            for r, ok in zip(rows, self.output(rows), strict=True):
+                if ok:
+                    per.setdefault(tuple(key[:3]), {}).setdefault(self.trials[r], []).append(
+                        self.from_other.get(int(r))
+                    )
+        out: dict[tuple, dict[Any, Any]] = {}
+        for scene, trials in per.items():
+            for trial, src in trials.items():
+                if all(x is not None for x in src) and len(set(map(str, src))) == 1:
+                    out.setdefault(scene, {})[trial] = src[0]
+        return out
+
+    def _repeats(self, row: int) -> str:
+        """What a copy's row repeats, in words: "trial 2 repeats trial 1's every value", or for a
+        trial of the other side's "CAND trial 5 repeats BASE trial 1's every value"."""
+        if row in self.from_other:
+            return (
+                f"{self.name} trial {self.trials[row]} repeats {self.other} trial {self.from_other[row]}'s every value"
+            )
+        assert self.copy_of is not None
+        return f"trial {self.trials[row]} repeats trial {self.trials[self.copy_of[row]]}'s every value"
 
     def independent(self, key: tuple, rows: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, str]:
         """The values of a sequence's trials that are independent runs, and why they are fewer:
@@ -601,8 +678,11 @@ class _Side:
             )
         if self.copy is None or not self.copy[rows].any():
             return values, ""
-        n = int(self.copy[rows].sum())
-        return values[~self.copy[rows]], f"{n} of {self.name}'s trials repeat another's every value: counted once"
+        cross = np.array([int(r) in self.from_other for r in rows], bool)
+        n = int((self.copy[rows] & ~cross).sum())
+        notes = [f"{n} of {self.name}'s trials repeat another's every value: counted once"] if n else []
+        notes += [f"{self._repeats(int(r))}: not counted" for r in rows[cross]]
+        return values[~self.copy[rows]], "; ".join(notes)
 
     def output(self, rows: np.ndarray) -> np.ndarray:
         """Which of the rows have output (:func:`~lorisnb.core.lifelong.aggregate.has_output`; all
@@ -638,8 +718,7 @@ class _Side:
         assert self.copy_of is not None
         picked = [i for i in np.flatnonzero(self.copy[rows] & present)][-short:]  # each with the trial it repeats
         trials = self.trials[rows][picked]
-        how = "; ".join(f"trial {self.trials[rows][i]} repeats trial {self.trials[self.copy_of[rows[i]]]}'s "
-                        "every value" for i in picked)  # fmt: skip
+        how = "; ".join(self._repeats(int(rows[i])) for i in picked)
         names = ", ".join(str(t) for t in trials[-short:])
         return (names, how) if names else ("", "")
 
@@ -724,6 +803,7 @@ def changes(
     c, lack_c = _padded(c, trials_c)
     comp = _Comparisons(tols)
     sb, sc = _Side(b, "BASE", one_b), _Side(c, "CAND", one_c)
+    sc.repeats_of(sb)  # CAND's trials that are BASE's own files: no runs of CAND
     for key in list(sb.rows) + [k for k in sc.rows if k not in sb.rows]:
         label = dict(zip(KEYS, key, strict=True))
         rb, rc = sb.rows.get(key), sc.rows.get(key)
@@ -769,7 +849,7 @@ def changes(
                          _unjudged(metric, matched, correct, _flips(sb, sc, key, rb, rc), lever), (ib, ic),
                          "; ".join(x for x in (nb, nc) if x))  # fmt: skip
     fragile = {k[:3] for k in sb.rows if k in sc.rows and _flips(sb, sc, k, sb.rows[k], sc.rows[k])}
-    _scenes(comp, b, c, expected, fragile, (one_b, one_c))
+    _scenes(comp, b, c, expected, fragile, (one_b, one_c), sc.borrowed_scenes())
     _scene_coverage(comp)
     return comp.judge(alpha)
 
@@ -789,7 +869,8 @@ def _scene_coverage(comp: _Comparisons) -> None:
 
 
 def _scenes(comp: _Comparisons, b: pd.DataFrame, c: pd.DataFrame, expected: pd.DataFrame | None,
-            fragile: set[tuple] | None = None, one_run: tuple[Mapping, Mapping] = ({}, {})) -> None:  # fmt: skip
+            fragile: set[tuple] | None = None, one_run: tuple[Mapping, Mapping] = ({}, {}),
+            borrowed: Mapping[tuple, Mapping[Any, Any]] | None = None) -> None:  # fmt: skip
     """The scene values of each trial on both sides (over the base's sequences; a sequence or trial
     a run lacks is a failed run), added to ``comp``; copies of one run counted once
     (:func:`_independent_trials`)."""
@@ -819,7 +900,8 @@ def _scenes(comp: _Comparisons, b: pd.DataFrame, c: pd.DataFrame, expected: pd.D
         matched = tuple(float(n["matched"].get(key, 0.0)) for n in counts)
         correct = tuple(float(n["c_matched"].get(key, 0.0)) for n in counts)
         ib, nb = _independent_trials(gb[key], metrics, one_run[0].get(key[:2]), "BASE", failed[0].get(key, set()))
-        ic, nc = (_independent_trials(gc[key], metrics, one_run[1].get(key[:2]), "CAND", failed[1].get(key, set()))
+        ic, nc = (_independent_trials(gc[key], metrics, one_run[1].get(key[:2]), "CAND", failed[1].get(key, set()),
+                                      (borrowed or {}).get(key))
                   if key in gc else ({}, ""))  # fmt: skip
         note = "; ".join(x for x in (nb, nc) if x)
         for metric in metrics:
@@ -845,10 +927,14 @@ def _trials_with_a_failed_run(full: pd.DataFrame) -> dict[tuple, set]:
 
 
 def _independent_trials(values: pd.DataFrame, metrics: Sequence[str], one_run: str | None, name: str,
-                        failed: set | frozenset = frozenset()) -> tuple[dict[str, np.ndarray], str]:  # fmt: skip
+                        failed: set | frozenset = frozenset(), borrowed: Mapping[Any, Any] | None = None,
+                        other: str = "BASE") -> tuple[dict[str, np.ndarray], str]:  # fmt: skip
     """A scene's values of each trial (one row per trial) that are independent runs, per metric, and
     why they are fewer: a trial whose scene values all repeat another's (and are not all 0: a
-    scene without output) is a copy of it, counted once; where the algorithm's trials are
+    scene without output) is a copy of it, counted once (within :data:`SAME_VALUE` relative, the
+    rule of a sequence's copies, :func:`same_values`); a trial of ``borrowed`` (trial -> the trial
+    of the other side, named ``other``, it repeats in every sequence of the scene,
+    :meth:`_Side.repeats_of`) is no run of this side, not counted; where the algorithm's trials are
     near-identical copies (``one_run`` says what varies), all of them are one run (their mean),
     but for the trials holding a failed run (``failed``: a sequence without output that another
     trial tracked), each a run of its own."""
@@ -862,9 +948,22 @@ def _independent_trials(values: pd.DataFrame, metrics: Sequence[str], one_run: s
             f"{name}'s {int((~bad).sum())} trial(s) without a failed run {one_run}; its {int(bad.sum())} trial(s) "
             "holding a failed run (a sequence with no pose matched) count each"
         )
-    copy = x.duplicated().to_numpy() & x.fillna(0).ne(0).any(axis=1).to_numpy()
-    note = f"{int(copy.sum())} of {name}'s trials repeat another's every value: counted once" if copy.any() else ""
-    return {m: x[m].to_numpy(float)[~copy] for m in metrics}, note
+    has = x.fillna(0).ne(0).any(axis=1).to_numpy()
+    copy = (same_values(x.to_numpy(float)) >= 0) & has  # the rule of a sequence's copies (:func:`repeated_of`)
+    notes = [f"{int(copy.sum())} of {name}'s trials repeat another's every value: counted once"] if copy.any() else []
+    if borrowed:  # a trial that is the other side's in every sequence of the scene: no run of this side
+        trial = values["trial"].to_numpy()
+        cross = np.isin(trial, list(borrowed)) & ~copy
+        notes += [f"{name} trial {trial[i]} repeats {other} trial {borrowed[trial[i]]}'s every value: not counted"
+                  for i in np.flatnonzero(cross)]  # fmt: skip
+        copy = copy | cross
+    return {m: x[m].to_numpy(float)[~copy] for m in metrics}, "; ".join(notes)
+
+
+#: The fewest sequences with a CR strictly between 0 and 1 whose ties make an algorithm's trials
+#: copies of one run (:func:`trial_copies`): one tied sequence (a synthetic drop of every trial's CR
+#: by 0.4 where every other CR is 1.0) is no pattern of copies.
+MIN_TIED = 3
 
 
 def trial_copies(table: pd.DataFrame) -> dict[tuple, str]:
@@ -874,6 +973,14 @@ def trial_copies(table: pd.DataFrame) -> dict[tuple, str]:
     verdict counts such trials as one run: copies are no independent evidence, so no significance
     can be claimed from them."""
     spread = trial_spread(table, by=("suite", "algorithm"))
+    if len(spread):  # copies by ties alone (CR repeated to the last digit) take three such sequences, not one
+        t = with_trials(table)
+        cr = pd.to_numeric(t["cr"], errors="coerce") if "cr" in t else pd.Series(np.nan, t.index)
+        g = cr.groupby([t[k] for k in KEYS], sort=False, dropna=False)
+        inside = ((g.min() > 0) & (g.max() < 1) & (g.count() >= 2)).groupby(level=[0, 1], sort=False).sum()
+        by_spread = (spread["cr_spread"] < RERUN_SPREAD["rate"] / 4) & (spread["ate_spread"] < RERUN_SPREAD["log"] / 4)
+        few = [inside.get((r.suite, r.algorithm), 0) < MIN_TIED for r in spread.itertuples()]
+        spread = spread.assign(copies=spread["copies"].astype(bool) & (by_spread | ~np.array(few, bool)))
     return {(r.suite, r.algorithm): (f"are near-identical copies of one run (CR varies by {r.cr_spread:.2g}, ATE "
                                      f"by {100 * r.ate_spread:.2g} % between them; real reruns {RERUN_SPREAD['rate']:g} "
                                      f"and {100 * RERUN_SPREAD['log']:.0f} %"

@@ -170,29 +170,51 @@ def _finite(v: float | None) -> float | None:
     return v if v is not None and np.isfinite(v) and v > 0 else None
 
 
-def _night(pool: Pool, n: int, rng: np.random.Generator, change: str | None = None, target: tuple | None = None
-           ) -> tuple[pd.DataFrame, pd.DataFrame]:  # fmt: skip
-    """BASE and CAND of one night: ``n`` distinct reruns each (trials 1..n), CAND's target changed."""
-    picks = rng.choice(len(pool.tables), size=2 * n, replace=False)
+def _night(pool: Pool, n: int, rng: np.random.Generator, change: str | None = None, target: tuple | None = None,
+           cand: int | None = None) -> tuple[pd.DataFrame, pd.DataFrame]:  # fmt: skip
+    """BASE and CAND of one night: ``n`` distinct reruns for BASE (trials 1..n; one unnumbered trial
+    when ``n`` is 1), ``cand`` (default ``n``) for CAND, CAND's target changed. A CAND of fewer
+    reruns than BASE holds them as BASE's count of trials, the last rerun repeated as near-identical
+    copies (values moved by 0.1 % relative, below what reruns vary, above the 1e-4 of an exact
+    copy): CAND's trials counted as fewer runs (:func:`~lorisnb.core.stats.regression.trial_copies`),
+    where fewer trials would be a missing trial, a regression by rule."""
+    m = n if cand is None else cand
+    picks = rng.choice(len(pool.tables), size=n + m, replace=False)
 
-    def side(ks: np.ndarray, changed: bool) -> pd.DataFrame:
+    def side(ks: np.ndarray, changed: bool, count: int) -> pd.DataFrame:
+        numbered = count > 1
         parts = []
-        for trial, k in enumerate(ks, start=1):
-            t = pool.tables[k].assign(trial=trial if n > 1 else 0)
+        for trial in range(1, count + 1):
+            k = ks[min(trial, len(ks)) - 1]
+            t = pool.tables[k].assign(trial=trial if numbered else 0)
             if changed and target is not None:
                 alg, name, scene, seq = target
                 here = (t["algorithm"] == alg) & (t["scene"] == scene) & (t["seq"] == seq)
                 if change is not None and (change, target) in pool.changed:
-                    new = pool.changed[(change, target)][k].assign(trial=trial if n > 1 else 0)
+                    new = pool.changed[(change, target)][k].assign(trial=trial if numbered else 0)
                     t = pd.concat([t[~here], new], ignore_index=True)
-                elif change == "missing trial" and trial == max(1, n // 2 + 1):
+                elif change == "missing trial" and trial == max(1, count // 2 + 1):
                     t = t[~here]
-                elif change == "truncated trial" and trial == max(1, n // 2 + 1):
+                elif change == "truncated trial" and trial == max(1, count // 2 + 1):
                     t = _truncated(t, here)
+            if trial > len(ks):  # a near-identical copy of the side's last rerun
+                t = _near_copy(t, rng)
             parts.append(t)
         return pd.concat(parts, ignore_index=True)
 
-    return side(picks[:n], False), side(picks[n:], True)
+    return side(picks[:n], False, n), side(picks[n:], True, max(m, n))
+
+
+def _near_copy(t: pd.DataFrame, rng: np.random.Generator) -> pd.DataFrame:
+    """A rerun's table with its judged values moved by about 0.1 % relative (rates kept in [0, 1])."""
+    t = t.copy()
+    for c in ("cr", "cr_t", "cs_r", "ate_rmse", "aoe_rmse", "c_ate_rmse", "c_aoe_rmse", "rpe_trans_rmse",
+              "rpe_rot_rmse"):  # fmt: skip
+        if c in t.columns:
+            x = pd.to_numeric(t[c], errors="coerce").to_numpy(float)
+            x = x * (1 + 1e-3 * rng.standard_normal(len(x)))
+            t[c] = np.clip(x, 0, 1) if c in ("cr", "cr_t", "cs_r") else x
+    return t
 
 
 def _truncated(t: pd.DataFrame, here: pd.Series) -> pd.DataFrame:
@@ -212,18 +234,27 @@ def _names(verdict: Mapping, target: tuple) -> bool:
     )
 
 
+#: The designs (BASE's trials, CAND's trials) ``make calibrate`` measures beside equal counts: a
+#: single BASE run against CAND's trials and the reverse (CAND's trials near-identical copies of one
+#: run), and unequal counts of reruns.
+DESIGNS = ((1, 1), (3, 3), (1, 3), (3, 1), (1, 5), (2, 5), (3, 5))
+
+
 def calibrate(pools: Mapping[str, Pool], trials: Sequence[int] = (1, 3, 5), nights: int = 200,
-              power_nights: int = 60, seed: int = 1,
-              progress: Callable[[Iterable], Iterable] = lambda x: x) -> pd.DataFrame:  # fmt: skip
-    """One row per noise model, trial count and check: ``nights``, ``hits`` and ``rate`` (false
-    alarms: any regression on a noise-only night; power: the change named), with a 95 % Wilson
-    interval."""
+              power_nights: int = 60, seed: int = 1, progress: Callable[[Iterable], Iterable] = lambda x: x,
+              designs: Sequence[tuple[int, int]] | None = None) -> pd.DataFrame:  # fmt: skip
+    """One row per noise model, design and check: ``nights``, ``hits`` and ``rate`` (false alarms:
+    any regression on a noise-only night; power: the change named), with a 95 % Wilson interval.
+    The designs are ``designs`` ((BASE's trials, CAND's trials), :func:`_night`), else each of
+    ``trials`` a side; a row's ``base`` and ``cand`` are its counts, ``design`` says them ("1v3")
+    and ``trials`` is the smaller."""
     tol = parse_tolerances()
     rng = np.random.default_rng(seed)
     rows = []
+    pairs = list(designs) if designs is not None else [(n, n) for n in trials]
     for model, pool in pools.items():
-        for n in trials:
-            if 2 * n > len(pool.tables):
+        for nb, nc in pairs:
+            if nb + max(nb, nc) > len(pool.tables) or nb + nc > len(pool.tables):
                 continue
             jobs: list[tuple[str, tuple | None, int]] = [("false alarm", None, nights)]
             for change, tlist in pool.targets.items():
@@ -231,14 +262,14 @@ def calibrate(pools: Mapping[str, Pool], trials: Sequence[int] = (1, 3, 5), nigh
             hits: dict[str, list[int]] = {}
             for what, target, count in progress(jobs):
                 for _ in range(count):
-                    b, c = _night(pool, n, rng, None if target is None else what, target)
+                    b, c = _night(pool, nb, rng, None if target is None else what, target, cand=nc)
                     d = diff_tables(b, c, tol, expected=pool.expected)
                     hit = d.regressed if target is None else _names(d.verdict, target)
                     hits.setdefault(what, []).append(int(hit))
             for what, h in hits.items():
                 lo, hi = wilson(sum(h), len(h))
-                rows.append(dict(model=model, trials=n, check=what, nights=len(h), hits=sum(h), rate=sum(h) / len(h),
-                                 low=lo, high=hi))  # fmt: skip
+                rows.append(dict(model=model, design=f"{nb}v{nc}", base=nb, cand=nc, trials=min(nb, nc), check=what,
+                                 nights=len(h), hits=sum(h), rate=sum(h) / len(h), low=lo, high=hi))  # fmt: skip
     return pd.DataFrame(rows)
 
 
