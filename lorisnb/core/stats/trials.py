@@ -10,6 +10,7 @@ only trial). The token is removed from the path to tell which files belong toget
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
 from pathlib import PurePosixPath
 
 from lorisnb.errors import ValidationError
@@ -105,3 +106,35 @@ def check_duplicates(keys: list[tuple[str, tuple, tuple[int, ...]]]) -> None:
                 "(cafe_trial1.txt, run_2/, ...) or give --trials-by REGEX (trials_by= in Python) whose group is "
                 "the trial number, or evaluate them separately"
             )
+
+
+def trial_folders(relpaths: Iterable[str], trials_by: str | re.Pattern[str] | None = None) -> list[str]:
+    """Notes naming the folders whose names hold a trial token beside other text (``slam_run1/``,
+    ``slam_run2/``) and so were read as trials of one name (``slam``): the convention that makes
+    ``orbslam2_run1/`` a trial also merges two systems' outputs kept as ``slam_run1/`` (one) and
+    ``slam_run2/`` (another) into one algorithm's trials, silently. A folder that is the token alone
+    (``run_2/``, ``trial3/``) says what it is and is not named. One note per merged name, with how to
+    number the trials otherwise."""
+    pattern = compile_trials_by(trials_by) if isinstance(trials_by, str) else trials_by
+    merged: dict[str, dict[str, int]] = {}
+    for rel in dict.fromkeys(str(p) for p in relpaths):
+        parts = list(PurePosixPath(rel).parts)
+        if len(parts) < 2:
+            continue
+        base, trial = split_trial(rel, pattern)
+        kept = base.split("/")
+        if len(kept) != len(parts):  # a folder that was the token alone (run_2/): dropped, says what it is
+            continue
+        for k, part in enumerate(parts[:-1]):  # the folders; the one whose token was read
+            if kept[k] != part:
+                merged.setdefault("/".join(kept[: k + 1]), {})[part] = trial
+                break
+    notes = []
+    for name, folders in merged.items():
+        shown = ", ".join(f"{f}/" for f in sorted(folders, key=lambda f: folders[f]))
+        numbers = ", ".join(str(t) for t in sorted(folders.values()))
+        notes.append(f"the folder(s) {shown} were read as trial(s) {numbers} of one name, {name} (a trial token, run "
+                     "or trial and a number, in their names): if they hold different systems' outputs, rename them "
+                     "(slam_a/, slam_b/), or give --trials-by REGEX (trials_by= in Python) for the token that numbers "
+                     "the trials")  # fmt: skip
+    return notes

@@ -490,12 +490,25 @@ def load_run(path: str | os.PathLike[str]) -> Run:
             created, source = modified(p / RUN_JSON), "modification time of run.json"
         notes: list[str] = []
         table = _report_tables(p, notes, meta.get("spec"))
+        notes += _trial_folder_notes(p, table)
         return Run(p, "report", table, meta, created, source, notes, unscored_inputs(p), _durations(p))
     if is_table(p):
         table, notes = read_table(p), []
+        notes += _trial_folder_notes(p, table)
         return Run(p, "table", table, {}, modified(p), "modification time", notes,
                    expected=table_expected(table, p, notes))  # fmt: skip
     raise ValidationError(f"{p}: not a report run (no {RUN_JSON}) and not a CSV/Parquet table")
+
+
+def _trial_folder_notes(path: Path, table: pd.DataFrame) -> list[str]:
+    """Which folders of the run's result files were read as trials of one name
+    (:func:`lorisnb.core.stats.trials.trial_folders`: ``slam_run1/`` and ``slam_run2/`` as trials 1
+    and 2 of ``slam``), each note led by the run's path."""
+    from lorisnb.core.stats.trials import trial_folders
+
+    if "file" not in table.columns or not len(table):
+        return []
+    return [f"{path}: {n}" for n in trial_folders(table["file"].dropna().astype(str))]
 
 
 #: A report run's table of every ground-truth sequence of the scenes its findings evaluated.

@@ -1,0 +1,52 @@
+"""Folders whose names hold a trial token beside other text (``slam_run1/``, ``slam_run2/``) are read
+as trials of one name (``slam``): the convention stays (``orbslam2_run1/`` is a trial), and it is
+said, with how to number the trials otherwise (issue s67). A folder that is the token alone
+(``run_2/``) says what it is and is not named."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import lorisnb as ln
+from lorisnb.cli import main
+from lorisnb.core.stats.trials import trial_folders
+from lorisnb.tools.decisions.runs import load_run
+
+
+def test_folders_read_as_trials_of_one_name_are_named():
+    notes = trial_folders(["slam_run1/cafe1-1.txt", "slam_run2/cafe1-1.txt", "run_1/x.txt", "orb/cafe_trial2.txt",
+                           "algs/orbslam2_run1/a.txt", "algs/orbslam2_run2/a.txt"])  # fmt: skip
+    assert len(notes) == 2
+    assert notes[0].startswith("the folder(s) slam_run1/, slam_run2/ were read as trial(s) 1, 2 of one name, slam")
+    assert "--trials-by REGEX" in notes[0]
+    assert notes[1].startswith("the folder(s) orbslam2_run1/, orbslam2_run2/ were read as trial(s) 1, 2 of one "
+                               "name, algs/orbslam2")  # fmt: skip
+    assert trial_folders(["run_1/a.txt", "run_2/a.txt", "orb/cafe-trial-3.txt", "cafe1-1.txt"]) == []
+    assert trial_folders(["slam_run1/a.txt", "slam_run2/a.txt"], r"^x(\d+)") == []  # the user's pattern numbers
+
+
+@pytest.fixture(scope="module")
+def merged(icra20, tmp_path_factory) -> Path:
+    """Two real systems' outputs kept as slam_run1/ (orbslam2_rgbd) and slam_run2/ (vins), as the
+    evaluation reads them: one algorithm, slam, trials 1 and 2, in a table."""
+    root = tmp_path_factory.mktemp("names")
+    for k, alg in ((1, "orbslam2_rgbd"), (2, "vins_mono_color_imu_with_loop")):
+        (root / f"slam_run{k}").symlink_to(icra20 / "per-seq" / alg, target_is_directory=True)
+    table = ln.evaluate(root, progress=False).sequences()
+    assert set(table["algorithm"]) == {"slam"} and set(table["trial"]) == {1, 2}  # the convention, kept
+    out = root.parent / "merged.csv"
+    table.to_csv(out, index=False)
+    return out
+
+
+def test_a_run_read_as_trials_of_one_name_says_so_in_python_and_on_the_command_line(merged, capsys):
+    run = load_run(merged)
+    assert any("slam_run1/, slam_run2/ were read as trial(s) 1, 2 of one name, slam" in n for n in run.notes)
+    main(["diff", str(merged), str(merged), "--no-progress"])
+    out = capsys.readouterr()
+    said = out.out + out.err
+    assert "note: " in said and "slam_run1/, slam_run2/ were read as trial(s) 1, 2 of one name, slam" in said
+    assert pd.read_csv(merged)["file"].str.startswith("slam_run").all()
