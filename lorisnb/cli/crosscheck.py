@@ -111,12 +111,23 @@ def _crosscheck_table(args: argparse.Namespace) -> pd.DataFrame | int:
             rpe_deltas=deltas,
         )
     else:
-        gt_times, est_times = args.gt_times or args.times, args.est_times or args.times
-        by_index = "kitti" in (gt_format, est_format) and (gt_times is None or est_times is None)
-        if by_index and (gt_format != est_format or gt_times is not None or est_times is not None):
+        from lorisnb.io.readers.options import check_reading
+
+        # a times file for a side read as KITTI only (evaluate's rule, one function): --gt-times on a
+        # stamped ground truth was dropped, and a KITTI estimate against one was told to give both
+        check_reading({"gt_times": args.gt_times, "est_times": args.est_times}, est_format, gt_format,
+                      name=lambda key: "--" + key.replace("_", "-"))  # fmt: skip
+        gt_times = args.gt_times or (args.times if gt_format == "kitti" else None)
+        est_times = args.est_times or (args.times if est_format == "kitti" else None)
+        unstamped = [(side, flag) for side, fm, t, flag in (("ground truth", gt_format, gt_times, "--gt-times"),
+                                                            ("estimate", est_format, est_times, "--est-times"))
+                     if fm == "kitti" and t is None]  # fmt: skip
+        by_index = len(unstamped) == 2
+        if len(unstamped) == 1:
+            side, flag = unstamped[0]
             raise ValidationError(
-                "--gt-times and --est-times: a KITTI file has no stamps; give stamps for both files (or for "
-                "neither, to pair two KITTI files of equal length by index)"
+                f"the {side} is a KITTI file, which has no stamps: give its times file ({flag} or --times), or "
+                "pair two KITTI files of equal length by index (no times file for either)"
             )
         gt = read_trajectory(args.gt, gt_format, stamps=gt_times if gt_format == "kitti" else None,
                              topic=args.gt_topic if gt_format == "bag" else None)  # fmt: skip

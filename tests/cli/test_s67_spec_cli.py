@@ -142,3 +142,31 @@ def test_seq_is_checked_by_the_one_rule_of_every_surface(command, capsys):
     assert exit_.value.code == 2
     err = capsys.readouterr().err
     assert "--seq=0: expected a positive whole number (sequences are numbered from 1)" in err, err
+
+
+def test_crosscheck_takes_times_files_by_evaluates_rule(tum, tmp_path, capsys):
+    """A KITTI estimate against a TUM ground truth: its times file alone pairs them (it was refused
+    with 'give stamps for both files', impossible for a TUM ground truth), and --gt-times on the TUM
+    ground truth is refused (it was dropped: exit 0 with a times file of 788 lines beside 3,000 poses)."""
+    est, gt = tum
+    rows = [ln_.split() for ln_ in est.read_text().splitlines() if ln_[:1].isdigit()]
+    kitti, stamps = tmp_path / "est.kitti", tmp_path / "times.txt"
+    import numpy as np
+
+    from lorisnb.core.alignment.geometry import quat_to_matrix
+
+    q = np.array([[float(v) for v in r[4:8]] for r in rows])
+    m = quat_to_matrix(q)
+    p = np.array([[float(v) for v in r[1:4]] for r in rows])
+    kitti.write_text("".join(" ".join(repr(float(x)) for x in np.hstack([m[k], p[k][:, None]]).ravel()) + "\n"
+                             for k in range(len(rows))))  # fmt: skip
+    stamps.write_text("".join(r[0] + "\n" for r in rows))
+    base = ["crosscheck", str(gt), str(kitti), "--est-format", "kitti"]
+    assert main([*base, "--est-times", str(stamps)]) == 0
+    capsys.readouterr()
+    assert main([*base, "--est-times", str(stamps), "--gt-times", str(stamps)]) == 2
+    assert "--gt-times: only for kitti files; the ground truth is read as tum" in capsys.readouterr().err
+    assert main(base) == 2
+    assert "the estimate is a KITTI file, which has no stamps: give its times file (--est-times" in (
+        capsys.readouterr().err
+    )

@@ -22,8 +22,8 @@ def check_reading(
         gt = key.startswith("gt_")
         has, needs = (gt_fmt if gt else fmt), NEEDS[key]
         if value is not None and has != needs:
-            side = "the ground truth" if gt else "the estimates"
-            raise ValidationError(f"{name(key)}: only for {needs} files; {side} are read as {has}")
+            side = "the ground truth is" if gt else "the estimates are"
+            raise ValidationError(f"{name(key)}: only for {needs} files; {side} read as {has}")
     for pre in ("", "gt_"):
         if values.get(pre + "topic") is not None and values.get(pre + "tf") is not None:
             raise ValidationError(
