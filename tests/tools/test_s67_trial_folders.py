@@ -50,3 +50,25 @@ def test_a_run_read_as_trials_of_one_name_says_so_in_python_and_on_the_command_l
     said = out.out + out.err
     assert "note: " in said and "slam_run1/, slam_run2/ were read as trial(s) 1, 2 of one name, slam" in said
     assert pd.read_csv(merged)["file"].str.startswith("slam_run").all()
+
+
+def test_an_evaluation_says_which_folders_it_read_as_trials(icra20, tmp_path, capsys):
+    """lorisnb evaluate and ln.evaluate of slam_run1/ and slam_run2/ (two systems' outputs) say they
+    were read as trials 1 and 2 of slam (the evaluation merged them unsaid)."""
+    for k, alg in ((1, "orbslam2_rgbd"), (2, "vins_mono_color_imu_with_loop")):
+        (tmp_path / f"slam_run{k}").mkdir()
+        src = icra20 / "per-seq" / alg
+        name = sorted(p.name for p in src.glob("cafe*1*1*.txt") if p.is_file())[0]
+        (tmp_path / f"slam_run{k}" / name).write_bytes((src / name).read_bytes())
+    said = "slam_run1/, slam_run2/ were read as trial(s) 1, 2 of one name, slam"
+    with pytest.warns(ln.LorisWarning, match="slam_run1/, slam_run2/ were read as trial"):
+        ev = ln.evaluate(tmp_path, progress=False)
+    assert any(said in n for n in ev.notes)
+    assert main(["evaluate", str(tmp_path), "--no-progress"]) == 0
+    assert said in capsys.readouterr().err
+    plain = tmp_path.parent / f"{tmp_path.name}_plain"
+    for k in (1, 2):  # folders that are the token alone say what they are: no note
+        (plain / "slam" / f"run_{k}").mkdir(parents=True)
+        for f in (tmp_path / f"slam_run{k}").iterdir():
+            (plain / "slam" / f"run_{k}" / f.name).write_bytes(f.read_bytes())
+    assert not any("were read as trial" in n for n in ln.evaluate(plain, progress=False).notes)

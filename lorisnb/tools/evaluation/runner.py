@@ -23,7 +23,7 @@ from lorisnb.core.alignment.index_pairs import by_index
 from lorisnb.core.pipeline.model import FileErrors
 from lorisnb.core.spec import validate
 from lorisnb.core.spec.evalspec import EvalSpec, make_spec, preset_over
-from lorisnb.core.stats.trials import check_duplicates, check_trials_by, compile_trials_by
+from lorisnb.core.stats.trials import check_duplicates, check_trials_by, compile_trials_by, trial_folders
 from lorisnb.errors import FailedInputsWarning, LorisWarning, ParseError, ValidationError
 from lorisnb.io.datasets.manifest import SUFFIX, Manifest, groundtruth_refusal, openloris_preset_refusal, read_manifest
 from lorisnb.io.datasets.paths import DataPaths, DataRoot, find_data
@@ -263,6 +263,8 @@ def evaluate(
     paths = as_paths(paths)  # once: a generator is read once
     items = result_files(paths)
     _check_trials(items, trials_by)
+    # folders read as trials of one name by a token beside other text (slam_run1/, slam_run2/): said
+    notes += trial_folders([labels(p, r, trials_by)[1] for p, r in items if r is not None], trials_by)
     data = find_data(data_root)  # no data at all is an error for the whole call, not per file
     items = without_dataset_groundtruth(items, [data.groundtruth(s) for s in data.scenes_with_groundtruth()])
     items, scene_set = _filtered(items, algorithms, scenes, trials_by)
