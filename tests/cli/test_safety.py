@@ -286,7 +286,9 @@ def test_crosscheck_refuses_unequal_kitti_files_without_stamps(tmp_path, capsys)
     gt_t = write(tmp_path, "gt_times.txt", "\n".join(str(0.1 * k) for k in range(5)) + "\n")
     est_t = write(tmp_path, "est_times.txt", "0.1\n0.2\n0.3\n")
     assert main(["crosscheck", str(gt), str(est), "--format", "kitti", "--gt-times", str(gt_t)]) == 2
-    assert "the estimate is a KITTI file, which has no stamps: give its times file (--est-times" in capsys.readouterr().err
+    assert (
+        "the estimate is a KITTI file, which has no stamps: give its times file (--est-times" in capsys.readouterr().err
+    )
     rc = main(
         ["crosscheck", str(gt), str(est), "--format", "kitti", "--gt-times", str(gt_t), "--est-times", str(est_t)]
     )
