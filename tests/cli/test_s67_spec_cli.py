@@ -170,3 +170,20 @@ def test_crosscheck_takes_times_files_by_evaluates_rule(tum, tmp_path, capsys):
     assert "the estimate is a KITTI file, which has no stamps: give its times file (--est-times" in (
         capsys.readouterr().err
     )
+
+
+def test_lifelong_on_files_of_one_sequence_is_noted_as_on_a_pair(icra20, capsys):
+    """--lifelong (or --per-seq) on OpenLORIS files that each hold one sequence changes nothing, as
+    on a pair, which is told so; such files were told nothing. A file of several sequences among them:
+    no note (the mode applies to it)."""
+    one = icra20 / "per-seq" / "orbslam2_rgbd" / "cafe_1_1_orbslam2-original.txt"
+    several = icra20 / "lifelong" / "ds-slam" / "cafe-1.txt"
+    said = "every input has one sequence, so per-seq and lifelong agree"
+    for mode in ("--lifelong", "--per-seq"):
+        assert main(["evaluate", str(one), mode, "--no-progress"]) == 0
+        assert said in capsys.readouterr().err
+    assert main(["evaluate", str(one), str(several), "--lifelong", "--no-progress"]) == 0
+    assert said not in capsys.readouterr().err
+    with pytest.warns(ln.LorisWarning, match=said):
+        ev = ln.evaluate(one, lifelong=True)
+    assert any(said in n for n in ev.notes)

@@ -112,6 +112,9 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
             (failed if status == "failed" else skipped).append(value)
     check_duplicates([(str(f.path), (f.suite, f.algorithm, f.scene, f.trial), tuple(e.seq for e in f.sequences))
                       for f in done])  # fmt: skip
+    if kind == "openloris" and "mode" in spec.explicit and spec.mode != "auto" and done:
+        if all(len(f.sequences) <= 1 for f in done):  # as a pair is told (EvalSpec.refuse_inapplicable)
+            notes = [*(notes or []), f"mode {spec.mode}: every input has one sequence, so per-seq and lifelong agree"]
     # the spec's notes on the options (EvalSpec.refuse_inapplicable: harmless here), then the inputs'; a note many
     # inputs share: said in full for a few, then counted
     for w in [*dict.fromkeys(notes or []), *said_notes(done)]:
