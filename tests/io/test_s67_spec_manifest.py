@@ -131,3 +131,27 @@ def test_eps_paper_over_a_custom_manifest_is_refused_before_anything_is_read(tmp
         ln.evaluate_manifest(m, tmp_path / "res", eps="paper")
     code = main(["evaluate", str(tmp_path / "res"), "--manifest", str(m), "--eps", "paper", "--no-progress"])
     assert code == 2
+
+
+def test_a_preset_over_a_manifest_says_which_of_its_conventions_it_replaced(data, tmp_path, capsys):
+    """--conventions over a manifest replaces its [conventions] (its thresholds, transform and mode
+    stay): the values it set that are then not used were dropped unsaid (max_gap = 0.3 under the
+    openloris preset vanished). They are named in a note, on the command line and in Python; a preset
+    that keeps them (tum's nearest within 0.02 s, se3) says nothing."""
+    gt = data.tum / "freiburg1_xyz-groundtruth.txt"
+    est = data.tum / "freiburg1_xyz-rgbdslam.txt"
+    if not gt.is_file() or not est.is_file():
+        pytest.skip("no tum-rgbd data")
+    write(tmp_path, "gt.txt", gt.read_text())
+    write(tmp_path, "res/algA/a.txt", est.read_text())
+    m = write(tmp_path, "m.toml", BASE)
+    said = "its [conventions] association = 'nearest' (now 'interpolate') not used: the conventions given over it"
+    assert main(["evaluate", str(tmp_path / "res"), "--manifest", str(m), "--conventions", "openloris",
+                 "--no-progress"]) == 0  # fmt: skip
+    assert said in capsys.readouterr().err
+    with pytest.warns(ln.LorisWarning, match=re.escape(said)):
+        ev = ln.evaluate_manifest(m, tmp_path / "res", conventions="openloris")
+    assert any(said in n for n in ev.notes)
+    assert main(["evaluate", str(tmp_path / "res"), "--manifest", str(m), "--conventions", "tum", "--no-progress"]) == 0
+    assert "not used: the conventions given over it" not in capsys.readouterr().err
+    assert not any("not used" in n for n in ln.evaluate_manifest(m, tmp_path / "res").notes)

@@ -296,6 +296,22 @@ def refuse_over_manifest(
     return spec.refuse_inapplicable(kind, surface=surface, set_by=(theirs, f"the manifest {manifest.path}"))
 
 
+def replaced_by_preset(manifest: Manifest, spec: EvalSpec, given: Iterable[str]) -> list[str]:
+    """A note naming the manifest's ``[conventions]`` values that ``spec`` does not use: a preset given
+    over the manifest (``--conventions``, ``conventions=``, a spec object) replaces its conventions
+    (:func:`~lorisnb.core.spec.evalspec.preset_over`; its thresholds, body transform and mode stay),
+    and they were dropped unsaid. Values the call's own options (``given``) set are the user's."""
+    kept = {"eps", "phi", "transform", "mode"} | {ALIAS_OF.get(k, k) for k in given}
+    lost = [k for k in sorted(manifest.spec.explicit - kept) if getattr(spec, k) != getattr(manifest.spec, k)]
+    if not lost:
+        return []
+    said = ", ".join(f"{k} = {getattr(manifest.spec, k)!r} (now {getattr(spec, k)!r})" for k in lost)
+    preset = spec.preset_name or "openloris"
+    return [f"the manifest {manifest.path}: its [conventions] {said} not used: the conventions given over it (preset "
+            f"{preset}) replace the manifest's (its thresholds, transform and mode stay); leave the preset out to use "
+            "them, or give them as options"]  # fmt: skip
+
+
 def _format(name: str, value: Any) -> str:
     return validate.choice(name, value, TRAJECTORY_FORMATS)
 
@@ -473,7 +489,7 @@ def evaluate_manifest(
     given = spec if spec is not None else conventions
     base = m.spec if given is None else preset_over(m.spec, given)
     the_spec = make_spec(base, **options)
-    notes = refuse_over_manifest(the_spec, m, options)
+    notes = refuse_over_manifest(the_spec, m, options) + replaced_by_preset(m, the_spec, options)
     the_spec.refuse_scenes(m.scenes)  # eps='paper' for scenes not OpenLORIS': refused before any file is read
     _refuse_reading(the_spec, m.estimate_format, "manifest")
     if m.estimate_format == "kitti" and all(s.groundtruth_format == "kitti" for s in m.sessions):
