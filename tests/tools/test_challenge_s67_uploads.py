@@ -230,3 +230,37 @@ def test_a_file_read_at_upload_is_read_with_the_challenge_s_spec(tmp_path, data)
         keep_upload([("x.txt", io.BytesIO(body))], tmp_path / "sub", Limits(5, 10**7), "auto", [("cafe", 1)],
                     challenge.spec)  # fmt: skip
     assert str(tmp_path) not in str(refused.value)
+
+
+def test_uploads_are_read_one_at_a_time(icra20, tmp_path, monkeypatch):
+    """Reading an upload whole happens in the server's process, outside the scorer's memory limit:
+    many teams' large files arriving together are read one after the other, never all at once."""
+    import threading
+    import time
+
+    import lorisnb.io.readers.openloris as openloris
+    from lorisnb.tools.challenge.uploads import read_upload
+
+    src = icra20 / "per-seq" / "orbslam2_rgbd" / "cafe_1_1_orbslam2-original.txt"
+    (tmp_path / "cafe-1-1.txt").write_bytes(src.read_bytes())
+    real, now, most = openloris.read_openloris, [0], [0]
+    lock = threading.Lock()
+
+    def counted(*args, **kw):
+        with lock:
+            now[0] += 1
+            most[0] = max(most[0], now[0])
+        time.sleep(0.05)
+        try:
+            return real(*args, **kw)
+        finally:
+            with lock:
+                now[0] -= 1
+
+    monkeypatch.setattr(openloris, "read_openloris", counted)
+    threads = [threading.Thread(target=read_upload, args=(tmp_path, ["cafe-1-1.txt"], {})) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert most[0] == 1

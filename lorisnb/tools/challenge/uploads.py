@@ -22,6 +22,7 @@ import re
 import shutil
 import stat
 import string
+import threading
 import unicodedata
 import warnings
 import zipfile
@@ -314,12 +315,24 @@ def read_upload(folder: Path, names: list[str], layout: Mapping[str, Mapping[str
     file and the line (:class:`~lorisnb.errors.LorisError`, the reader's words). A position
     coordinate over :data:`MAX_COORDINATE` m or a stamp over :data:`MAX_STAMP` s is refused too,
     naming the pose by its stamp."""
+    drop = spec is None or spec.repeated == "drop"
+    repair = bool(spec is not None and spec.repair_stamps)
+    with READING:  # one upload read at a time: its memory is the server's, not a limited scorer's
+        _read_each(folder, names, layout, spec, drop, repair)
+
+
+#: Uploads read at once by :func:`read_upload` (in the server's process, outside the scorer's memory
+#: limit): one, so that many teams' large files at the same moment hold one file's arrays, not all.
+READING = threading.BoundedSemaphore(1)
+
+
+def _read_each(folder: Path, names: list[str], layout: Mapping[str, Mapping[str, Any]], spec: EvalSpec | None,
+               drop: bool, repair: bool) -> None:  # fmt: skip
+    """:func:`read_upload`'s reading of each file."""
     from lorisnb.io.readers.openloris import read_openloris
     from lorisnb.io.readers.plain import read_trajectory
     from lorisnb.tools.challenge.scoring import read_blocks
 
-    drop = spec is None or spec.repeated == "drop"
-    repair = bool(spec is not None and spec.repair_stamps)
     for name in names:
         path = folder / name
         with warnings.catch_warnings():
