@@ -60,7 +60,8 @@ fewer independent runs than the base because a trial is a copy of another (``tri
 a crashed trial filled in with another's output). Trial numbers
 are labels, not pairings: the candidate's trials 4 to 6 against the base's 1 to 3 lack nothing, and
 trials the candidate holds beyond the base's are no failed runs of the base; an unnumbered run
-(trial 0) is one trial, so against the base's 1 to 3 it lacks 2 and 3. A candidate's new
+(trial 0) is one trial, so against the base's 1 to 3 it lacks 2 and 3; trials numbered from 0
+(``run_0/``: a sequence holds trial 0 beside others) count trial 0 as one of them. A candidate's new
 sequence is listed, not judged.
 
 **Too little to judge** (``unjudged``, never a regression): a sequence whose base matched fewer
@@ -446,12 +447,22 @@ class _Comparisons:
                      status="regression" if worse else ("improvement" if better else "ok"))  # fmt: skip
 
 
-def _labels(trials: set) -> set:
-    """A run's trial labels, less the unnumbered trial 0 where numbered ones exist: trial 0 is a run
-    without a trial token, one trial whatever the others' numbers (a sequence holding only it holds
-    one of the run's trials, :func:`_padded`)."""
-    numbered = trials - {0}
-    return numbered if numbered else set(trials)
+def _labels(t: pd.DataFrame) -> dict[tuple, set]:
+    """Each (suite, algorithm)'s trial labels in one run's table. Trial 0 is ambiguous in a table: a
+    file without a trial token (the unnumbered run) or a real label (``trial0/``, ``run_0/``, which
+    the default tokens read). It is a label of its own where some sequence holds trial 0 together
+    with another trial (trials numbered from 0, or an unnumbered file beside numbered ones: a run of
+    its own either way). Else, where numbered trials exist, it is the unnumbered stand-in: a sequence holding only it holds one of the run's trials (:func:`_padded`),
+    whatever the others' numbers. Trial 0 was dropped wherever numbered trials existed: a 0-based run
+    whose trial 2 was lost everywhere had its trial 0 relabelled as trial 2, and nothing was missing."""
+    out = {}
+    for k, g in t.groupby(["suite", "algorithm"], sort=False, observed=True):
+        trials = set(g["trial"])
+        numbered = trials - {0}
+        per_seq = g.groupby(KEYS[2:], sort=False, observed=True, dropna=False)["trial"]
+        zero_based = bool(numbered) and bool(per_seq.agg(lambda x: (x == 0).any() and (x != 0).any()).any())
+        out[k] = trials if zero_based or not numbered else numbered
+    return out
 
 
 def _trial_sets(b: pd.DataFrame, c: pd.DataFrame) -> tuple[dict[tuple, list], dict[tuple, list]]:
@@ -464,9 +475,10 @@ def _trial_sets(b: pd.DataFrame, c: pd.DataFrame) -> tuple[dict[tuple, list], di
     one trial like any other: CAND's single unnumbered run against BASE's trials 1 to 3 lacks two of
     them (named 2, 3, as a CAND of run_1/ would), BASE's single run against CAND's three lacks
     nothing; where a run numbers some sequences' trials and not others', a sequence's trial 0 stands
-    for one of the numbered trials (:func:`_padded`)."""
-    tb = {k: _labels(set(g["trial"])) for k, g in b.groupby(["suite", "algorithm"], sort=False, observed=True)}
-    tc = {k: _labels(set(g["trial"])) for k, g in c.groupby(["suite", "algorithm"], sort=False, observed=True)}
+    for one of the numbered trials (:func:`_padded`); where a sequence holds trial 0 beside another,
+    0 is a label like any other (trials numbered from 0, :func:`_labels`). Each side is read from its
+    own table: BASE's 0-based trials 0 to 2 against CAND's 1 and 2 lack trial 0."""
+    tb, tc = _labels(b), _labels(c)
     eb, ec = {}, {}
     for k in dict.fromkeys([*tb, *tc]):
         x, y = tb.get(k, set()), tc.get(k, set())
