@@ -82,7 +82,7 @@ def test_a_sim_scene_given_is_checked_when_the_section_runs_and_refused_when_it_
                                                                                           "simulated": True})  # fmt: skip
 
 
-def test_evaluate_my_results_on_a_tum_pair_scores_at_the_eps_that_applies(tmp_path, data):
+def test_evaluate_my_results_on_a_tum_pair_scores_at_the_eps_that_applies(tmp_path, data, capsys):
     tum = data.root / "tum-rgbd"
     pair = ["-p", "path", str(tum / "fr2_desk_ORB.txt"), "-p", "groundtruth", str(tum / "fr2_desk_groundtruth.txt")]
     out = tmp_path / "r2"
@@ -93,14 +93,13 @@ def test_evaluate_my_results_on_a_tum_pair_scores_at_the_eps_that_applies(tmp_pa
     row = pd.read_csv(out / "evaluate_my_results" / "sequences.csv").iloc[0]
     assert row["eps"] == float("inf") and row["phi"] == 30.0 and row["matched"] == 2333  # lorisnb evaluate's
     assert row["cr"] == pytest.approx(0.8346408402127511, abs=1e-9)
-    out = tmp_path / "r3"  # an explicit paper eps on a TUM pair: refused, saying what to give
-    main(["report", "--out", str(out), "--no-progress", "--notebooks", "evaluate_my_results", *pair, "-p", "eps",
-          "paper"])  # fmt: skip
-    assert json.loads((out / "run.json").read_text())["notebooks"] == {"evaluate_my_results": "failed"}
-    page = (out / "evaluate_my_results" / "evaluate_my_results.html").read_text()
-    assert "eps=&#x27;paper&#x27; is the paper&#x27;s 1/3/5 m for the OpenLORIS scenes" in page or (
-        "eps='paper' is the paper's 1/3/5 m for the OpenLORIS scenes" in page
-    )
+    out = tmp_path / "r3"  # an explicit paper eps on a TUM pair: refused before any notebook runs (exit 2,
+    # no run folder), saying what to give, as evaluate and Python refuse it
+    rc = main(["report", "--out", str(out), "--no-progress", "--notebooks", "evaluate_my_results", *pair, "-p", "eps",
+               "paper"])  # fmt: skip
+    assert rc == 2 and not out.exists()
+    err = capsys.readouterr().err
+    assert "eps='paper': the paper's 1/3/5 m are for the OpenLORIS scenes; scene 'fr2_desk' is not one" in err, err
 
 
 def test_evaluate_my_results_default_eps_is_the_papers_for_openloris_inputs_only(data, monkeypatch):

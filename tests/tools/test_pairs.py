@@ -286,7 +286,7 @@ def test_clear_errors_for_bad_pairs_bags_and_manifests(tum_pairs, tmp_path, caps
     with pytest.raises(ln.ParseError, match=r"no TF chain from 'map' to 'base'; frames in /tf and /tf_static: none"):
         ln.read_trajectory(bag, "bag", tf="map:base")
     bad = write(tmp_path, "bad.toml", "name = 'x'\ncolour = 'red'\n[[session]]\ngroundtruth = 'a.txt'\n")
-    with pytest.raises(ln.ParseError, match=r"bad.toml: unknown key 'colour'"):
+    with pytest.raises(ln.ParseError, match=r"bad.toml, line 2: unknown key 'colour'"):
         evaluate_manifest(bad, tmp_path)
     nogt = write(tmp_path, "nogt.toml", "[[session]]\nname = 'a'\ngroundtruth = 'missing.txt'\n")
     with pytest.raises(ln.ParseError, match=r"missing.txt: ground truth of session 'a' not found"):

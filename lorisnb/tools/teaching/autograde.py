@@ -937,7 +937,7 @@ class RemoteFunction(SandboxedAnswer):
 
 def tampered(what: str, told: Sequence[str]) -> str:
     """The error of an answer during whose run the student's code wrote a reply of its own into the
-    grader's reply channel (:attr:`.sandbox.Sandbox.tampered`: a second reply to a request, names the
+    grader's reply channel (``Sandbox.tampered``: a second reply to a request, names the
     grader did not ask for): not trusted, whatever its values, so 0 points and a note."""
     return (
         f"RuntimeError: {what}: the notebook's code wrote into the grader's reply channel from the sandbox "

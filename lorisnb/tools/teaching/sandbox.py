@@ -429,7 +429,7 @@ class Sandbox:
         its one reply to a request after the request's code ran, and nothing until it reads the next, so
         every other line up to the sync's reply is the code writing into the grader's channel: a second
         reply to the request (the code forged one with its id: the first is returned, so either may be
-        the code's) names the request in :attr:`tampered` (``name``); a line that is no reply to it is
+        the code's) names the request in ``self.tampered`` (``name``); a line that is no reply to it is
         not read as one, only counted in :attr:`stray`."""
         proc = self._proc
         if proc is None or proc.poll() is not None or proc.stdin is None or proc.stdout is None:
