@@ -156,6 +156,20 @@ def same_values(base: pd.DataFrame, cand: pd.DataFrame) -> bool:
     )
 
 
+def same_run_note(base: pd.DataFrame, cand: pd.DataFrame, base_name: str, cand_name: str) -> str | None:
+    """The note ``diff`` and ``history`` give when BASE holds every value of CAND
+    (:func:`same_values`): the same run kept twice is no baseline ("ok" compared a run with itself: a
+    copy of CAND kept among the earlier runs, or a CI job that re-uploaded the previous night's
+    table after its own run crashed). None where the values differ. The exit status is the
+    comparison's own (a run equal to its baseline is "ok", exit 0): the note says why that says
+    nothing."""
+    if not same_values(base, cand):
+        return None
+    return (f"{base_name} holds every value of {cand_name}, to the last digit: the same run kept twice (a copy of "
+            f"{cand_name} among the earlier runs, or the earlier run's table uploaded again as {cand_name} after "
+            "its own run failed?) is no baseline; reruns of a system differ")  # fmt: skip
+
+
 def unevaluated(ev: Evaluation, root: str | os.PathLike[str]) -> dict[str, str]:
     """The inputs of a result folder's evaluation that were not scored, as ``diff`` counts them for
     its exit status: the failures (a file that could not be read or evaluated) and the inputs read

@@ -557,9 +557,12 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
     lists them), 0 only when it was judged, every input of both scored and nothing regressed; 2
     when the newest run has no baseline (no earlier run comparable with it: ``diff`` of runs that
     are not comparable exits 2), nothing judged. It exited 0 on both: a night whose spec or
-    lorisnb version changed, or whose failed inputs its baseline had failed too, passed unjudged."""
+    lorisnb version changed, or whose failed inputs its baseline had failed too, passed unjudged.
+    A newest run holding every value of its baseline (or of its series' first run) is noted as
+    ``diff`` notes it (:func:`~lorisnb.tools.decisions.diff.same_run_note`: a night that re-uploaded
+    the previous night's table passed with no word); the exit status stays the comparison's."""
     from lorisnb.core.stats.regression import regressed_phrase
-    from lorisnb.tools.decisions.diff import exit_status, verdict_phrase, with_unscored
+    from lorisnb.tools.decisions.diff import exit_status, same_run_note, verdict_phrase, with_unscored
 
     if not runs:
         return 2, ["no run given: nothing judged"]
@@ -579,6 +582,9 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
     what = verdict_phrase(d)
     lines = [f"newest run {names[k]} against {names[base]}: {d.verdict['verdict']}" + (f" ({what})" if what else "")]
     rc = exit_status(d, runs[base].unscored, run.unscored)
+    same = same_run_note(runs[base].table, run.table, names[base], names[k])
+    if same:  # "ok" against itself: said, as diff says it (exit status diff's: the comparison's own)
+        lines.append(f"note: {same}")
     drift_line = None
     if since_first is not None:  # a drift: within noise night to night, a change since the series' start
         j, f = since_first
@@ -588,6 +594,9 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
                      f"{'regression' if f.regressed else 'ok'}{said}")  # fmt: skip
         if f.regressed and not gates:  # its words once the night's exit status is known (below)
             drift_line = (len(lines) - 1, names[j])
+        same = same_run_note(runs[j].table, run.table, names[j], names[k])
+        if same:
+            lines.append(f"note: {same}")
         rc = max(rc, 1 if gates else 0)
     judged = {(r["suite"], r["algorithm"], r["scene"], r["seq"]) for r in d.verdict["regressions"]
               if r.get("status") in LOST and r.get("seq") is not None}  # fmt: skip
