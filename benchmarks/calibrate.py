@@ -13,9 +13,12 @@ series of nightly runs (its newest run against its baseline and against the seri
     python benchmarks/calibrate.py [--pool 24] [--nights 200] [--power-nights 60] [--compare-nights 60]
                                    [--single-nights 40] [--history-series 2] [--history-nights 30] [--quick]
                                    [--designs 1v1 3v3 1v3 3v1 1v5 2v5 3v5] [--models real] [--diff-only]
+                                   [--history-only]
 
 ``--designs`` measures the verdict at unequal trial counts (BASE's v CAND's; a CAND of fewer runs holds
-them as near-identical copies, see ``calibration._night``); ``--diff-only`` prints the verdict's table alone.
+them as near-identical copies, see ``calibration._night``); ``--diff-only`` prints the verdict's table alone,
+``--history-only`` history's table alone (the rates docs/guide/history.md quotes: ``--models real --history-only
+--pool 24 --history-series 2 --history-nights 60``).
 """
 
 from __future__ import annotations
@@ -61,6 +64,8 @@ def main(argv: list[str] | None = None) -> int:
                    + " ".join(f"{b}v{c}" for b, c in DESIGNS if b != c) + ")")  # fmt: skip
     p.add_argument("--models", nargs="+", default=list(MODELS), choices=list(MODELS), help="noise models (default all)")
     p.add_argument("--diff-only", action="store_true", help="the verdict's table of lorisnb diff only")
+    p.add_argument("--history-only", action="store_true",
+                   help="the table of lorisnb history's noise-only nights only (model real; needs --models real)")  # fmt: skip
     p.add_argument("--single-nights", type=int, default=40,
                    help="nights of one run a side with whole-system changes, per model (default 40)")  # fmt: skip
     p.add_argument("--history-series", type=int, default=2, help="noise-only series of history per model (default 2)")
@@ -80,6 +85,12 @@ def main(argv: list[str] | None = None) -> int:
         if name not in args.models:
             continue
         pools[name] = make_pool(noise, args.pool, progress=lambda x, n=name: tqdm(x, desc=f"reruns ({n})"))
+    if args.history_only:
+        if "real" not in pools:
+            p.error("--history-only measures the real noise model: give --models real (or leave --models out)")
+        history_rates_table(pools, [n for n in args.trials if n <= 3], args.history_series, args.history_nights)
+        print(f"({time.perf_counter() - start:.0f} s)")
+        return 0
     if not args.diff_only:  # the noise models against real reruns, and the single-run bands
         real = real_pairs()
         early = stopped_early()
@@ -205,14 +216,16 @@ def compare_table(pool: object, trials: list[int], nights: int) -> None:
 
 def history_rates_table(pools: dict, trials: list[int], series: int, nights: int) -> None:
     """``lorisnb history``'s failed noise-only nights (:func:`history_rates`), per model and trial count."""
+    pool = pools["real"]  # each night judges the whole series before it: the real model only
     print(f"\nThe exit status of lorisnb history on noise-only series ({series} x {nights} nightly runs a trial count, "
-          "real noise model; the newest run against its baseline and against the series' first run):")  # fmt: skip
-    for model, pool in [("real", pools["real"])]:  # each night judges the whole series before it: the real model only
-        rates = history_rates(pool, trials, series, nights, progress=lambda x: tqdm(x, desc="series", leave=False))
+          f"real noise model, a pool of {len(pool.tables)} reruns; the newest run against its baseline and against "
+          "the series' first run):")  # fmt: skip
+    for n in trials:  # one trial count at a time: each printed as it is measured
+        rates = history_rates(pool, (n,), series, nights, progress=lambda x: tqdm(x, desc="series", leave=False))
         for r in rates.itertuples():
-            print(f"  {model:6s} {r.trials} trial(s): nights failed {100 * r.rate:5.1f}% [{100 * r.low:4.1f},"
-                  f"{100 * r.high:5.1f}] of {r.nights} (by a lost sequence alone: {r.lost}); drift named on "
-                  f"{r.drifts} night(s)")  # fmt: skip
+            print(f"  real   {r.trials} trial(s): nights failed {100 * r.rate:5.1f}% [{100 * r.low:4.1f},"
+                  f"{100 * r.high:5.1f}] ({r.hits} of {r.nights}; by a lost sequence alone: {r.lost}); drift named on "
+                  f"{r.drifts} night(s)", flush=True)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -366,11 +366,20 @@ def single_run_bands(pool: Pool, nights: int = 100, seed: int = 2) -> pd.DataFra
 
 def _series(pool: Pool, n: int, nights: int, rng: np.random.Generator) -> list[pd.DataFrame]:
     """A noise-only series of nightly runs: ``n`` reruns of every sequence a night (trials 1..n, 0
-    for one), none shared with the night before."""
-    out, last = [], np.zeros(0, int)
+    for one), none shared with a night it is judged against: the night before (its baseline) and
+    the series' first night (``history``'s drift check). A real night reruns the system; a rerun of
+    the pool drawn again is a file copied from that night, which the cross-side copy rule rightly
+    counts as no run, a missing trial (it failed 2 of 11 noise-only nights of a 24-rerun pool when
+    only the night before was avoided). Needs a pool of at least ``3 n`` reruns."""
+    if 3 * n > len(pool.tables) and nights > 2:
+        raise ValidationError(f"a history series of {n} trial(s) a night draws from {len(pool.tables)} rerun(s): "
+                              f"expected a pool of at least {3 * n} (a night shares no rerun with the first night "
+                              "nor the night before); give a larger pool or fewer trials")  # fmt: skip
+    out, first, last = [], np.zeros(0, int), np.zeros(0, int)
     for _ in range(nights):
-        free = np.setdiff1d(np.arange(len(pool.tables)), last)
+        free = np.setdiff1d(np.arange(len(pool.tables)), np.concatenate([first, last]))
         last = rng.choice(free, size=n, replace=False)
+        first = last if not first.size else first
         out.append(pd.concat([pool.tables[k].assign(trial=t if n > 1 else 0) for t, k in enumerate(last, start=1)],
                              ignore_index=True))  # fmt: skip
     return out
@@ -394,7 +403,7 @@ def history_rates(pool: Pool, trials: Sequence[int] = (1, 3), series: int = 2, n
     start = datetime(2026, 1, 1, 2, tzinfo=timezone.utc)
     rows = []
     for n in trials:
-        if 2 * n > len(pool.tables):
+        if 3 * n > len(pool.tables):  # a night shares no rerun with the first night nor the night before
             continue
         hits = lost = drifts = judged = 0
         for _ in progress(range(series)):
