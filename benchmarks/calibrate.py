@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="nights of one run a side with whole-system changes, per model (default 40)")  # fmt: skip
     p.add_argument("--history-series", type=int, default=2, help="noise-only series of history per model (default 2)")
     p.add_argument("--history-nights", type=int, default=30,
-                   help="runs in each series of history (default 30; docs/guide/history.md quotes 60, about 20 minutes)")  # fmt: skip
+                   help="runs in each series of history (default 30; docs/guide/history.md quotes 4 series of 20 with 3 trials, about 9 minutes)")  # fmt: skip
     p.add_argument("--quick", action="store_true",
                    help="a small run (pool 12, 40 nights, 12 per change, 10 compares, one history series of 12)")  # fmt: skip
     args = p.parse_args(argv)
