@@ -289,7 +289,9 @@ def test_the_calibration_harness_measures_what_it_says(data):
         real_pairs,
     )
 
-    pool = make_pool(RerunNoise(), 6, algorithms=("vins_mono_color_imu_with_loop", "orbslam2_rgbd"), data_root=data)
+    pool = make_pool(
+        RerunNoise(), 9, algorithms=("vins_mono_color_imu_with_loop", "orbslam2_rgbd"), data_root=data
+    )  # history: 3 trials a night, none shared with the first or the last night
     real = real_pairs(data)
     r = pair_spread(real["cr_a"], real["cr_b"], real["ate_rmse_a"], real["ate_rmse_b"])
     g = generator_pairs(pool)

@@ -614,7 +614,7 @@ class _Side:
         self.one_run = dict(one_run or {})
         self.copy_of = repeated_of(table) if len(table) else None  # the row each copy repeats, else -1
         self.copy = self.copy_of >= 0 if self.copy_of is not None else None
-        #: rows repeating a trial of the other side (:meth:`repeats_of`), with that side's trial
+        #: rows repeating a trial of the other side (``repeats_of``), with that side's trial
         self.from_other: dict[int, Any] = {}
         self.other = ""
 
@@ -648,7 +648,7 @@ class _Side:
 
     def borrowed_scenes(self) -> dict[tuple, dict[Any, Any]]:
         """Per (suite, algorithm, scene), the trials that repeat the other side's in every sequence
-        of the scene where they have output (:meth:`repeats_of`), each with the other side's trial:
+        of the scene where they have output (``repeats_of``), each with the other side's trial:
         their scene values are the other side's, no run of this side."""
         per: dict[tuple, dict[Any, list]] = {}
         for key, rows in self.rows.items():
