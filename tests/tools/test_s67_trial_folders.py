@@ -72,3 +72,20 @@ def test_an_evaluation_says_which_folders_it_read_as_trials(icra20, tmp_path, ca
         for f in (tmp_path / f"slam_run{k}").iterdir():
             (plain / "slam" / f"run_{k}" / f.name).write_bytes(f.read_bytes())
     assert not any("were read as trial" in n for n in ln.evaluate(plain, progress=False).notes)
+
+
+def test_a_manifest_evaluation_says_which_folders_it_read_as_trials(data, tmp_path):
+    """A manifest's algorithm folders slam_run1/ and slam_run2/ are trials 1 and 2 of slam, as a
+    folder of result files is: said in the evaluation's notes, as ln.evaluate says it."""
+    gt, est = data.tum / "freiburg1_xyz-groundtruth.txt", data.tum / "freiburg1_xyz-rgbdslam.txt"
+    if not gt.is_file() or not est.is_file():
+        pytest.skip("no tum-rgbd data")
+    (tmp_path / "gt.txt").write_bytes(gt.read_bytes())
+    for k in (1, 2):
+        (tmp_path / "res" / f"slam_run{k}").mkdir(parents=True)
+        (tmp_path / "res" / f"slam_run{k}" / "a.txt").write_bytes(est.read_bytes())
+    (tmp_path / "m.toml").write_text('name = "t"\nscene = "s"\ngroundtruth_format = "tum"\nestimate_format = "tum"\n'
+                                     '[[session]]\nname = "a"\ngroundtruth = "gt.txt"\n')  # fmt: skip
+    with pytest.warns(ln.LorisWarning, match="slam_run1/, slam_run2/ were read as trial"):
+        ev = ln.evaluate_manifest(tmp_path / "m.toml", tmp_path / "res")
+    assert any("slam_run1/, slam_run2/ were read as trial(s) 1, 2 of one name, slam" in n for n in ev.notes)

@@ -509,6 +509,8 @@ def evaluate_manifest(
             )
     folders = algorithm_folders(results, m)
     _check_trials([(f / "x", r) for f, r in folders], trials_by)
+    # algorithm folders read as trials of one name (slam_run1/, slam_run2/): said, as evaluate says it
+    notes += trial_folders([labels(f / "x", r, trials_by)[1] for f, r in folders if r is not None], trials_by)
     scored, keep = _sent_back(the_spec, statistics, keep_poses)
     work = [
         Job(
