@@ -322,3 +322,25 @@ def temp_dir_left_as_found(settle_s: float = 5.0) -> Iterator[None]:
         time.sleep(settle_s)
         stale = {p for p in stale & left(before) if not _listened_on(p)}
     assert not stale, f"left in {tmp}: " + ", ".join(sorted(p.name for p in stale))
+
+
+def rerun_trials(table, trials, seed: int):
+    """Trials of the run ``table`` (a sequences table) with the spread of real reruns (CR +-0.017,
+    ATE +-19 %), seeded: one copy of the table per trial number of ``trials``."""
+    import pandas as pd
+
+    rng = np.random.default_rng(seed)
+    parts = []
+    for k in trials:
+        t = table.assign(trial=k)
+        t["cr"] = np.clip(t["cr"] + rng.normal(0, 0.017, len(t)), 0, 1)
+        t["ate_rmse"] = t["ate_rmse"] * np.exp(rng.normal(0, 0.19, len(t)))
+        parts.append(t)
+    return pd.concat(parts, ignore_index=True)
+
+
+def longest_tracked(table, algorithm: str) -> tuple[str, int]:
+    """(scene, seq) of ``algorithm``'s longest sequence in ``table`` tracked correctly most of the
+    time (CR above 0.6)."""
+    g = table[(table["algorithm"] == algorithm) & (table["cr"] > 0.6)].sort_values("gt_duration", ascending=False)
+    return str(g["scene"].iloc[0]), int(g["seq"].iloc[0])

@@ -17,7 +17,6 @@ import warnings
 import pandas as pd
 import pytest
 
-import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.errors import ParseError
 from lorisnb.io.writers import write_csv
@@ -26,13 +25,10 @@ from lorisnb.tools.decisions.runs import DURATIONS, FIRST_TABLE, load_run, read_
 from lorisnb.tools.report.baseline import since_baseline
 from lorisnb.tools.report.provenance import KEYS
 
-ODOM = ("cafe-1-1-odom.txt", "cafe-1-2-odom.txt", "home-1-1-odom.txt")
-
 
 @pytest.fixture(scope="module")
-def table(icra20):
-    t = ln.evaluate([icra20 / "per-seq" / "odom" / f for f in ODOM], progress=False).sequences()
-    return t.assign(file="odom/" + t["file"])
+def table(odom_sequences):
+    return odom_sequences.copy()  # three odom files, as a results folder's evaluation names them
 
 
 def repeated(table):

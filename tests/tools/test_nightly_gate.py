@@ -16,7 +16,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.io.writers import write_csv
 from lorisnb.tools.decisions.diff import same_values
@@ -32,14 +31,12 @@ from lorisnb.tools.decisions.history import (
 from lorisnb.tools.decisions.runs import DURATIONS, FIRST_TABLE, load_run
 from lorisnb.tools.report.provenance import KEYS
 
-ODOM = ("cafe-1-1-odom.txt", "cafe-1-2-odom.txt", "home-1-1-odom.txt")
 LOST = "odom/home-1-1-odom.txt"
 
 
 @pytest.fixture(scope="module")
-def table(icra20):
-    t = ln.evaluate([icra20 / "per-seq" / "odom" / f for f in ODOM], progress=False).sequences()
-    return t.assign(file="odom/" + t["file"])  # as a results folder's evaluation names them
+def table(odom_sequences):
+    return odom_sequences.copy()  # three odom files, as a results folder's evaluation names them
 
 
 def night(folder, table, created, unscored=()):

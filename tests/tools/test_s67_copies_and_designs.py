@@ -8,11 +8,10 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
 import pandas as pd
 import pytest
+from helpers import longest_tracked, rerun_trials
 
-import lorisnb as ln
 from lorisnb.cli import main
 from lorisnb.core.stats.regression import changes
 from lorisnb.tools.decisions.diff import diff_tables
@@ -21,28 +20,8 @@ ALG = "orbslam2_rgbd"
 
 
 @pytest.fixture(scope="module")
-def table(icra20):
-    """One real run: the odom and orbslam2_rgbd per-seq results at the paper's thresholds."""
-    return ln.evaluate([icra20 / "per-seq" / "odom", icra20 / "per-seq" / ALG], progress=False).sequences(
-        eps="paper", phi=30
-    )
-
-
-def _reruns(table: pd.DataFrame, trials, seed: int) -> pd.DataFrame:
-    """Trials of the run with the spread of real reruns (CR +-0.017, ATE +-19 %), seeded."""
-    rng = np.random.default_rng(seed)
-    parts = []
-    for k in trials:
-        t = table.assign(trial=k)
-        t["cr"] = np.clip(t["cr"] + rng.normal(0, 0.017, len(t)), 0, 1)
-        t["ate_rmse"] = t["ate_rmse"] * np.exp(rng.normal(0, 0.19, len(t)))
-        parts.append(t)
-    return pd.concat(parts, ignore_index=True)
-
-
-def _target(table: pd.DataFrame) -> tuple[str, int]:
-    g = table[(table["algorithm"] == ALG) & (table["cr"] > 0.6)].sort_values("gt_duration", ascending=False)
-    return str(g["scene"].iloc[0]), int(g["seq"].iloc[0])
+def table(paper_sequences):
+    return paper_sequences.copy()
 
 
 def _here(t: pd.DataFrame, where: tuple[str, int]) -> pd.Series:
@@ -68,9 +47,9 @@ def test_one_base_run_against_tied_cand_trials_claims_no_significance(table, tmp
     of 0 alone and called it a regression (p_adj 0.002). A side of one value is judged as single
     runs are, by the rerun band: no significance claimed; so is 3 BASE trials against CAND's three
     near-identical copies of one run (tested on 3 vs 1 values)."""
-    where = _target(table)
+    where = longest_tracked(table, ALG)
     base = table.assign(trial=0)
-    cand = _reruns(table, (1, 2, 3), 5)
+    cand = rerun_trials(table, (1, 2, 3), 5)
     cand.loc[_here(cand, where), "cr"] = float(table.loc[_here(table, where), "cr"].iloc[0]) - 0.4  # tied
     seqs = changes(base, cand)[0]
     row = _row(seqs, where, "cr")
@@ -82,11 +61,11 @@ def test_one_base_run_against_tied_cand_trials_claims_no_significance(table, tmp
     # three reruns against three near-identical copies of one run: 3 vs 1 values, no t-test either
     copies = pd.concat([cand[cand["trial"] == 1].assign(trial=k, cr=lambda t, k=k: t["cr"] * (1 + 1e-4 * k))
                         for k in (1, 2, 3)], ignore_index=True)  # fmt: skip
-    seqs = changes(_reruns(table, (1, 2, 3), 6), copies)[0]
+    seqs = changes(rerun_trials(table, (1, 2, 3), 6), copies)[0]
     row = _row(seqs, where, "cr")
     assert "tested on 3 vs 1 values" in row["decided_by"] and row["decided_by"].startswith("a single run on one side")
     # two values a side or more: the t-test, as before
-    two = changes(_reruns(table, (1, 2), 7), _reruns(table, (1, 2, 3), 8))[0]
+    two = changes(rerun_trials(table, (1, 2), 7), rerun_trials(table, (1, 2, 3), 8))[0]
     assert _row(two, where, "cr")["decided_by"].startswith("t-test of the change beyond the tolerance (2 vs 3 trials")
 
 
@@ -96,9 +75,9 @@ def test_a_cand_padded_with_base_trial_files_is_named_and_fails(table, tmp_path,
     said ok. Each such trial is named ("CAND trial 5 repeats BASE trial 1's every value"), not
     counted as a CAND run, and CAND then holds fewer independent runs than BASE: a missing trial,
     as a copy within CAND is, at the command line too (exit 1)."""
-    where = _target(table)
-    base = _reruns(table, (1, 2, 3), 11)
-    four = _reruns(table, (4,), 12)
+    where = longest_tracked(table, ALG)
+    base = rerun_trials(table, (1, 2, 3), 11)
+    four = rerun_trials(table, (4,), 12)
     four.loc[_here(four, where), "cr"] -= 0.3
     cand = pd.concat([four, base[base["trial"] == 1].assign(trial=5), base[base["trial"] == 2].assign(trial=6)],
                      ignore_index=True)  # fmt: skip
@@ -127,12 +106,12 @@ def test_a_scene_counts_copies_by_the_rule_of_sequences(table):
     """BASE's trial 2 a copy of its trial 1 with every value moved by 1e-6 relative (a file
     rewritten with fewer digits): the sequences counted it once (1e-4 relative), the scene values
     twice (exact equality): "2 vs 3 values" beside "3 vs 3 trials". One rule at both levels now."""
-    one = _reruns(table, (1,), 21)
+    one = rerun_trials(table, (1,), 21)
     moved = one.assign(trial=2)
     for c in ("cr", "cr_t", "ate_rmse", "aoe_rmse", "c_ate_rmse", "c_aoe_rmse", "rpe_trans_rmse", "rpe_rot_rmse"):
         moved[c] = moved[c] * (1 + 1e-6)
-    base = pd.concat([one, moved, _reruns(table, (3,), 22)], ignore_index=True)
-    seqs, scenes = changes(base, _reruns(table, (1, 2, 3), 23))
+    base = pd.concat([one, moved, rerun_trials(table, (3,), 22)], ignore_index=True)
+    seqs, scenes = changes(base, rerun_trials(table, (1, 2, 3), 23))
     tested = scenes[scenes["decided_by"].str.startswith("t-test") & (scenes["algorithm"] == ALG)]  # odom: CR 0
     assert len(tested) and tested["decided_by"].str.contains("3 vs 3 trials, tested on 2 vs 3 values").all()
     assert tested["decided_by"].str.contains("1 of BASE's trials repeat another's every value: counted once").all()

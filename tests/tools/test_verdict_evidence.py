@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from helpers import longest_tracked, rerun_trials
 
 import lorisnb as ln
 from lorisnb.cli import main
@@ -19,33 +20,12 @@ ALG = "orbslam2_rgbd"
 
 
 @pytest.fixture(scope="module")
-def table(icra20):
-    """One real run: the odom and orbslam2_rgbd per-seq results at the paper's thresholds."""
-    return ln.evaluate([icra20 / "per-seq" / "odom", icra20 / "per-seq" / ALG], progress=False).sequences(
-        eps="paper", phi=30
-    )
-
-
-def _reruns(table: pd.DataFrame, trials, seed: int) -> pd.DataFrame:
-    """Trials of the run with the spread of real reruns (CR +-0.017, ATE +-19 %), seeded."""
-    rng = np.random.default_rng(seed)
-    parts = []
-    for k in trials:
-        t = table.assign(trial=k)
-        t["cr"] = np.clip(t["cr"] + rng.normal(0, 0.017, len(t)), 0, 1)
-        t["ate_rmse"] = t["ate_rmse"] * np.exp(rng.normal(0, 0.19, len(t)))
-        parts.append(t)
-    return pd.concat(parts, ignore_index=True)
+def table(paper_sequences):
+    return paper_sequences.copy()
 
 
 def _copies(table: pd.DataFrame, n: int = 3) -> pd.DataFrame:
     return pd.concat([table.assign(trial=k) for k in range(1, n + 1)], ignore_index=True)
-
-
-def _target(table: pd.DataFrame) -> tuple[str, int]:
-    """The longest orbslam2_rgbd sequence tracked correctly most of the time."""
-    g = table[(table["algorithm"] == ALG) & (table["cr"] > 0.6)].sort_values("gt_duration", ascending=False)
-    return str(g["scene"].iloc[0]), int(g["seq"].iloc[0])
 
 
 def _lower_cr(t: pd.DataFrame, where: tuple[str, int], by: float) -> pd.DataFrame:
@@ -66,7 +46,7 @@ def test_copies_of_one_run_are_one_run_not_significance(table):
     noise, is judged by the single-run rule and named as copies, not called significant by a t-test
     on copies (it was: Holm-adjusted p 1e-4 over 302 tests); real reruns with the same drop on every
     trial still regress."""
-    where = _target(table)
+    where = longest_tracked(table, ALG)
     cand = _lower_cr(table, where, 0.1)
     single = _row(changes(table, cand)[0], where, "cr")
     assert single["status"] == "ok" and "single run per side" in single["decided_by"]
@@ -83,7 +63,7 @@ def test_copies_of_one_run_are_one_run_not_significance(table):
             for t in (table, cand)]  # fmt: skip
     row = _row(changes(*near)[0], where, "cr")
     assert row["status"] == "ok" and "near-identical copies of one run" in row["decided_by"]
-    base, reruns = _reruns(table, range(1, 6), 1), _reruns(table, range(1, 6), 2)
+    base, reruns = rerun_trials(table, range(1, 6), 1), rerun_trials(table, range(1, 6), 2)
     row = _row(changes(base, _lower_cr(reruns, where, 0.3))[0], where, "cr")
     assert row["status"] == "regression" and "copies" not in row["decided_by"]
 
@@ -100,13 +80,13 @@ def test_one_runs_tracking_with_its_positions_changed_is_one_run_too(table):
         return pd.concat([t.assign(trial=k, ate_rmse=t["ate_rmse"] * f, c_ate_rmse=t["c_ate_rmse"] * f)
                           for k, f in enumerate((1.0, 1.12, 0.9), start=1)], ignore_index=True)  # fmt: skip
 
-    where = _target(table)
+    where = longest_tracked(table, ALG)
     base, cand = scaled(table), scaled(_lower_cr(table, where, 0.1))
     spread = trial_spread(base).set_index("algorithm")
     assert spread.loc[ALG, "ate_spread"] > 0.05 and spread.loc[ALG, "cr_ties"] == 1.0 and spread.loc[ALG, "copies"]
     row = _row(changes(base, cand)[0], where, "cr")
     assert row["status"] == "ok" and "the same to the last digit" in row["decided_by"], row["decided_by"]
-    real = _reruns(table, range(1, 4), 3)  # reruns: CR varies, no ties
+    real = rerun_trials(table, range(1, 4), 3)  # reruns: CR varies, no ties
     assert not trial_spread(real).set_index("algorithm").loc[ALG, "copies"]
     mine = base[base["algorithm"] == ALG]
     two = pd.concat([mine, mine.assign(algorithm="other", cr=mine["cr"] * 0.97)], ignore_index=True)
@@ -131,8 +111,8 @@ def test_a_trial_that_repeats_another_counts_once(table):
     a base of 5 reruns it is a missing trial (a crashed trial filled in with another's output
     regresses as the crash would), named; where the base holds no more independent runs, or the
     candidate holds enough besides the copy, nothing is missing."""
-    base = _reruns(table, range(1, 6), 3)
-    cand = _reruns(table, range(1, 5), 4)
+    base = rerun_trials(table, range(1, 6), 3)
+    cand = rerun_trials(table, range(1, 5), 4)
     cand = pd.concat([cand, cand[cand["trial"] == 4].assign(trial=5)], ignore_index=True)
     seqs, scenes = changes(base, cand)
     judged = seqs[(seqs["status"] == "ok") & seqs["decided_by"].str.startswith("t-test")]
@@ -150,10 +130,10 @@ def test_a_trial_that_repeats_another_counts_once(table):
     assert lost["decided_by"].str.contains("trial 5 repeats trial 4.s every value").all()
     assert diff_tables(base, cand).regressed
     assert not set(seqs.loc[seqs["metric"] != "trial", "status"]) & {"regression", "missing", "failed"}
-    other = _reruns(table, range(1, 5), 5)  # both sides 4 runs and a copy
+    other = rerun_trials(table, range(1, 5), 5)  # both sides 4 runs and a copy
     other = pd.concat([other, other[other["trial"] == 2].assign(trial=5)], ignore_index=True)
     assert not (changes(cand, other)[0]["metric"] == "trial").any()
-    five = _reruns(table, range(1, 6), 6)  # 5 runs and a copy of its fourth: 5 independent besides the copy
+    five = rerun_trials(table, range(1, 6), 6)  # 5 runs and a copy of its fourth: 5 independent besides the copy
     six = pd.concat([five, five[five["trial"] == 4].assign(trial=6)], ignore_index=True)
     seqs = changes(base, six)[0]
     assert not (seqs["metric"] == "trial").any()
@@ -166,7 +146,7 @@ def test_reruns_that_vary_little_are_no_missing_trials(table):
     taken for near-identical copies, three such CAND trials were one run against BASE's three, and
     the night failed as "trial 2, 3 a copy", on noise alone. Only trials that repeat another's every
     value are no run; near-identical ones still count as one run in the values."""
-    base = _reruns(table, (1, 2, 3), 11)
+    base = rerun_trials(table, (1, 2, 3), 11)
     rng = np.random.default_rng(12)
     parts = []
     for k in (1, 2, 3):  # reruns with a small spread: every value different
@@ -190,10 +170,10 @@ def test_compare_counts_a_copied_trial_once(table):
     from lorisnb.tools.decisions.comparison import compare_table
 
     mine = table[table["algorithm"] == ALG]
-    runs = _reruns(mine, range(1, 5), 21)
+    runs = rerun_trials(mine, range(1, 5), 21)
     one, other = runs[runs["trial"] == 1], runs[runs["trial"] == 3]
     a = pd.concat([one, one.assign(trial=2), one.assign(trial=4), other.assign(trial=3)], ignore_index=True)
-    runs = _reruns(mine, range(1, 5), 22)
+    runs = rerun_trials(mine, range(1, 5), 22)
     one, other = runs[runs["trial"] == 2], runs[runs["trial"] == 4]
     b = pd.concat([one.assign(trial=1), one, one.assign(trial=3), other], ignore_index=True)
     two = pd.concat([a.assign(algorithm="A"), b.assign(algorithm="B")], ignore_index=True)
@@ -214,13 +194,13 @@ def test_a_single_run_regression_cannot_widen_its_own_band(table):
     x10: ok, exit 0), and an improvement of one system hid a regression of another (odom's ATE /10
     beside one orbslam2 sequence x8). Noise moves values both ways; the band now widens by the
     smaller of the two tails, which neither a regression nor an improvement alone can inflate."""
-    base, cand = _reruns(table, (1,), 31), _reruns(table, (1,), 32)
+    base, cand = rerun_trials(table, (1,), 31), rerun_trials(table, (1,), 32)
     orb = cand["algorithm"] == ALG
     every = cand.assign(ate_rmse=np.where(orb, cand["ate_rmse"] * 10, cand["ate_rmse"]))
     d = diff_tables(base, every)
     rows = d.sequences[(d.sequences["metric"] == "ate_rmse") & (d.sequences["algorithm"] == ALG)]
     assert d.regressed and (rows["status"] == "regression").mean() > 0.8
-    where = _target(table)
+    where = longest_tracked(table, ALG)
     one = orb & (cand["scene"] == where[0]) & (cand["seq"] == where[1])
     beside = cand.assign(ate_rmse=np.where(one, cand["ate_rmse"] * 8, np.where(orb, cand["ate_rmse"],
                                                                                 cand["ate_rmse"] / 10)))  # fmt: skip
@@ -236,7 +216,7 @@ def test_a_copy_with_a_pose_edited_is_still_a_copy(table):
     reruns (CR +-0.017, ATE +-19 %) never are."""
     from lorisnb.core.stats.regression import SAME_VALUE, repeated_trials
 
-    runs = _reruns(table, range(1, 4), 41)
+    runs = rerun_trials(table, range(1, 4), 41)
     edited = runs[runs["trial"] == 1].assign(trial=4)
     edited["ate_rmse"] = edited["ate_rmse"] * (1 + 1e-6)
     edited["c_ate_rmse"] = edited["c_ate_rmse"] * (1 - 1e-6)
@@ -245,10 +225,10 @@ def test_a_copy_with_a_pose_edited_is_still_a_copy(table):
     copies = repeated_trials(t)
     with_output = t["matched"].to_numpy() > 0
     assert (copies == ((t["trial"] == 4).to_numpy() & with_output)).all()  # the edited copy only
-    assert not repeated_trials(_reruns(table, range(1, 6), 42).assign(suite="")).any()  # reruns never
+    assert not repeated_trials(rerun_trials(table, range(1, 6), 42).assign(suite="")).any()  # reruns never
     far = edited.assign(ate_rmse=edited["ate_rmse"] * (1 + 10 * SAME_VALUE))
     assert not repeated_trials(pd.concat([runs, far], ignore_index=True).assign(suite="")).any()
-    base = _reruns(table, range(1, 5), 43)  # four runs against three and an edited copy: a missing trial
+    base = rerun_trials(table, range(1, 5), 43)  # four runs against three and an edited copy: a missing trial
     lost = changes(base, cand)[0]
     lost = lost[lost["metric"] == "trial"]
     assert len(lost) and (lost["cand"] == "trial 4 a copy").all()
@@ -260,20 +240,20 @@ def test_trial_numbers_are_labels_not_pairings(table):
     missing trials 1, 2 and 3); a candidate with more trials than the base is not compared with a
     base padded with failed runs (which hid a CR drop of 0.4); fewer trials than the base are still
     missing trials."""
-    base = _reruns(table, (1, 2, 3), 5)
+    base = rerun_trials(table, (1, 2, 3), 5)
     for numbers in ((4, 5, 6), (1, 2, 3)):
-        cand = _reruns(table, numbers, 6)
+        cand = rerun_trials(table, numbers, 6)
         d = diff_tables(base, cand)
         assert not d.regressed and d.verdict["counts"]["missing"] == 0, numbers
-    zero = _reruns(table, (0, 1, 2), 7)
-    assert not diff_tables(zero, _reruns(table, (1, 2, 3), 8)).regressed
-    where = _target(table)
-    more = _lower_cr(_reruns(table, range(1, 6), 9), where, 0.4)
+    zero = rerun_trials(table, (0, 1, 2), 7)
+    assert not diff_tables(zero, rerun_trials(table, (1, 2, 3), 8)).regressed
+    where = longest_tracked(table, ALG)
+    more = _lower_cr(rerun_trials(table, range(1, 6), 9), where, 0.4)
     seqs, _ = changes(base, more)
     row = _row(seqs, where, "cr")
     assert row["status"] == "regression" and row["base"] > 0.6, (row["base"], row["decided_by"])
     assert not (seqs["metric"] == "trial").any()
-    fewer = changes(_reruns(table, range(1, 6), 10), _reruns(table, (1, 2, 3), 11))[0]
+    fewer = changes(rerun_trials(table, range(1, 6), 10), rerun_trials(table, (1, 2, 3), 11))[0]
     lost = fewer[fewer["metric"] == "trial"]
     assert len(lost) == table.shape[0] and (lost["cand"] == "missing trial 4, 5").all()
 
@@ -284,7 +264,7 @@ def test_a_base_with_a_handful_of_poses_none_correct_has_nothing_to_lose(table):
     every matched pose is correct, and a system that tracked 15 poses of home-2 (CR 0.028) and
     failed to initialise in the candidate failed the night. One whose base matched 50 poses or more
     in a trial still fails."""
-    where = _target(table)
+    where = longest_tracked(table, ALG)
     here = (table["algorithm"] == ALG) & (table["scene"] == where[0]) & (table["seq"] == where[1])
     nothing = table.copy()
     cols = ["matched", "c_matched", "correct_time", "track_time", "cr", "cr_t", "cs_r", "rpe_pairs", "c_rpe_pairs"]
