@@ -42,7 +42,7 @@ import stat
 import symtable
 import tempfile
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, NoReturn
@@ -54,7 +54,7 @@ from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching._prose import lab_variant, same_id
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, SandboxTimeout, decode, error_of
 
-GRADER_VERSION = "16"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "17"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
 # 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
 # 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
@@ -80,7 +80,9 @@ GRADER_VERSION = "16"  # part of every result's digest: a new grader regrades ev
 # value is checked, whatever wrote it; 15: a seed set in the parameters cell is noted, as a student_id of another
 # student is: the variant graded is the folder's; 16: only the names the grader asked for are read from a reply and a
 # check's references are never rebound by an answer's values; an answer whose code wrote into the grader's reply channel
-# (a line beside its reply, a second reply, names not asked for) scores 0 with a note; ids alike in Unicode (NFKC) are one)
+# (a line beside its reply, a second reply, names not asked for) scores 0 with a note; ids alike in Unicode (NFKC) are one;
+# 17: a reply to a request found after its first was read (the code forged it and answered the grader's sync itself)
+# scores 0 for the request's answer, wherever it is found; C1's hidden cases are drawn from the grader's seed)
 
 
 @dataclass(frozen=True)
@@ -891,7 +893,12 @@ class RemoteFunction(SandboxedAnswer):
         if timeout is not None and timeout <= 0:
             self._stop(f"the check's calls of {self.name}")
         t0 = time.monotonic()
-        box, seen, told = self.sandbox, len(self.sandbox.findings), len(self.sandbox.tampered)
+        box, seen, told, late = (
+            self.sandbox,
+            len(self.sandbox.findings),
+            len(self.sandbox.tampered),
+            len(self.sandbox.late),
+        )
         try:
             with self.budget.charge() if self.budget else contextlib.nullcontext():
                 reply = self.sandbox.call(self.name, kwargs, timeout_s=timeout)
@@ -910,8 +917,9 @@ class RemoteFunction(SandboxedAnswer):
                     lorisnb_used(f"{self.name}, called by the check", box.findings[seen:]),
                     None,
                 )
-            elif len(box.tampered) > told:  # its code wrote into the grader's pipe during the call
-                self.refused, self.sandbox = tampered(f"{self.name}, called by the check", box.tampered[told:]), None
+            elif len(box.tampered) > told or len(box.late) > late:  # its code wrote into the grader's pipe
+                how = [*box.tampered[told:], *(h for _, h in box.late[late:])]
+                self.refused, self.sandbox = tampered(f"{self.name}, called by the check", how), None
         if self.refused:
             raise AnswerError(f"✗ {self.refused}")
         if not reply.get("ok"):
@@ -933,6 +941,30 @@ class RemoteFunction(SandboxedAnswer):
 
     def __repr__(self) -> str:
         return f"<your function {self.name}, run in the grading sandbox>"
+
+
+def settled(functions: Iterable[Any]) -> str | None:
+    """After a check: what the sandboxes of ``functions`` (the answer's, as the check called them)
+    wrote since the reply to their last call, read (:meth:`.sandbox.Sandbox.settle`). A reply to a
+    call whose reply was read already (the code forged that reply and answered the grader's check
+    of the channel itself: the child's own reply came after them, past the check's last call)
+    refuses every function of that sandbox, as a reply found during a call does; returns the
+    refusal (the check then scores 0), or None."""
+    boxes: dict[int, tuple[Sandbox, list[RemoteFunction]]] = {}
+    for f in functions:
+        if isinstance(f, RemoteFunction) and f.sandbox is not None and not f.refused:
+            boxes.setdefault(id(f.sandbox), (f.sandbox, []))[1].append(f)
+    refused = None
+    for box, owned in boxes.values():
+        late = len(box.late)
+        with contextlib.suppress(SandboxError):
+            box.settle()
+        if len(box.late) > late:
+            how = [h for _, h in box.late[late:]]
+            for f in owned:
+                f.refused, f.sandbox = tampered(f"{f.name}, called by the check", how), None
+            refused = refused or owned[0].refused
+    return refused
 
 
 def tampered(what: str, told: Sequence[str]) -> str:
@@ -1204,8 +1236,9 @@ def grade_submission(
                 refused = lorisnb_used(f"the answer cell {gid}", box.findings, by=culprit)
                 functions.update({d: RemoteFunction(None, d, refused=refused) for d in defs})
                 return
-            if box.tampered:  # its code wrote into the grader's pipe: not graded, whatever it returns
-                functions.update({d: RemoteFunction(None, d, refused=tampered(f"the answer cell {gid}", box.tampered))
+            if box.tampered or box.late:  # its code wrote into the grader's pipe: not graded, whatever it returns
+                told = [*box.tampered, *(how for _, how in box.late)]
+                functions.update({d: RemoteFunction(None, d, refused=tampered(f"the answer cell {gid}", told))
                                   for d in defs})  # fmt: skip
                 return
             err = None if reply.get("ok") else str(reply.get("error"))
@@ -1258,7 +1291,7 @@ def grade_submission(
     if budget.spent_at:
         notes.append(budget.note())
     stray = sum(box.stray for box in boxes)
-    told = [t for box in boxes for t in box.tampered]
+    told = [t for box in boxes for t in (*box.tampered, *(how for _, how in box.late))]
     if told:
         notes.append(
             f"the submission's code wrote replies of its own into the grader's reply channel from the sandbox "
@@ -1268,8 +1301,7 @@ def grade_submission(
     if stray:
         notes.append(
             f"the grader's reply pipe from the sandbox held {stray} line(s) it did not ask for, no reply to any of its "
-            "requests: the submission's code wrote them (they were not read as replies; the values graded are those "
-            "the sandbox replied)"
+            "requests: the submission's code wrote them (they were not read as replies)"
         )
     if markers:
         notes.append(leaked_note(markers))
@@ -1610,8 +1642,8 @@ def _predict(
     if box.findings:
         message = lorisnb_used(f"the prediction {gid}", box.findings, by=culprit)
         return failed(message, message)
-    if box.tampered:  # the prediction's code wrote into the grader's pipe: not trusted, whatever it holds
-        message = tampered(f"the prediction {gid}", box.tampered)
+    if box.tampered or box.late:  # the prediction's code wrote into the grader's pipe: not trusted, whatever it holds
+        message = tampered(f"the prediction {gid}", [*box.tampered, *(how for _, how in box.late)])
         return failed(message, f"{gid}: {message}")
     if partial:
         notes.append(f"{gid}: a line failed when the prediction ran alone ({reply.get('error')}), after its value was "
@@ -1910,6 +1942,16 @@ def _run_student(
             k += 1
     finally:
         box.close()
+    # a reply found after the grader had read one to its request (the code forged it and answered the grader's
+    # check itself): the answer whose cell the request ran, whenever it was found
+    owners = {name: cells[k][1] or follows.get(k) for k, (_, _, name, student, _, _) in enumerate(cells) if student}
+    for name, found in box.late:
+        owner = owners.get(name)
+        if owner:
+            told.setdefault(owner, []).append(found)
+        else:
+            notes.append(f"{found}: the request ran the lab's own code or a cell of no answer; no answer is marked, "
+                         "but its code wrote into the grader's reply channel")  # fmt: skip
     for gid, names in set_below.items():
         if gid not in spec.predictions and gid in answers:
             notes.append(f"{gid}: {', '.join(names)} set in the cell(s) you added right below the answer cell, before "
@@ -2012,6 +2054,8 @@ def _run_checks(
             try:
                 with contextlib.redirect_stdout(buf):
                     exec(compile(source, f"<test {q.grade_id}>", "exec"), ns)  # noqa: S102
+                if refused := settled(student.values()):  # a call's reply forged, found after the check's last call
+                    raise AnswerError(f"✗ {refused}")
                 scores.append(Score(q.grade_id, q.points, q.points, shorten(buf.getvalue().strip())))
             except Exception as exc:  # a failed check (AnswerError) or the answer's own error
                 text = str(exc) if isinstance(exc, AssertionError) else f"{type(exc).__name__}: {exc}"

@@ -25,6 +25,7 @@ group; the sandbox can then be restarted (:meth:`Sandbox.restart`).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import resource
@@ -282,6 +283,10 @@ class Sandbox:
         # the requests whose reply the code could have written: a second reply to the request (forged with its
         # id), a reply holding other names than those asked for; one text each (a line that is no reply: stray)
         self.tampered: list[str] = []
+        # a reply to a request whose reply was read already, found later (the code forged the reply and answered
+        # the grader's sync itself: the child's own reply comes after them): (the request's name, what was found)
+        self.late: list[tuple[str, str]] = []
+        self._answered: dict[str, str] = {}  # id -> name of every request whose reply was read
         self.findings: list[str] = []  # what the guard of a no-lorisnb child refused or found (lorisnb used)
         self.start()
 
@@ -396,8 +401,14 @@ class Sandbox:
         self._buffer = bytearray()
         self._scanned = 0
 
-    def close(self) -> None:
-        """Kill the child and everything it started (its process group)."""
+    def close(self, settle: bool = True) -> None:
+        """Kill the child and everything it started (its process group); ``settle``: once what it
+        wrote up to the grader's last request is read (:meth:`settle`: a reply to a request answered
+        earlier is found even when it came after the grader's last request), unless the child is
+        stopped for a limit or an error (it may be running code then, and answers nothing)."""
+        if settle and self._proc is not None and self._proc.poll() is None and self._answered:
+            with contextlib.suppress(SandboxError, OSError, ValueError):
+                self.settle()
         proc, self._proc = self._proc, None
         if proc is None:
             return
@@ -412,14 +423,14 @@ class Sandbox:
                 f.close()
 
     def restart(self) -> None:
-        self.close()
+        self.close(settle=False)
         self.start()
 
     def __enter__(self) -> Sandbox:
         return self
 
-    def __exit__(self, *_exc: object) -> None:
-        self.close()
+    def __exit__(self, exc_type: object, *_exc: object) -> None:
+        self.close(settle=exc_type is None)
 
     # --- requests --------------------------------------------------------------------------------
 
@@ -430,7 +441,10 @@ class Sandbox:
         every other line up to the sync's reply is the code writing into the grader's channel: a second
         reply to the request (the code forged one with its id: the first is returned, so either may be
         the code's) names the request in ``self.tampered`` (``name``); a line that is no reply to it is
-        not read as one, only counted in :attr:`stray`."""
+        not read as one, only counted in :attr:`stray`. Code that forged a reply and also answered the
+        sync itself (it read the sync from the request pipe) is found later: the child's own reply to
+        the request comes after them, and a reply to a request answered earlier, read at any later
+        request or at :meth:`settle`, is put in :attr:`late` under that request's name."""
         proc = self._proc
         if proc is None or proc.poll() is not None or proc.stdin is None or proc.stdout is None:
             raise SandboxError("the sandbox is not running (it ended earlier)")
@@ -448,7 +462,7 @@ class Sandbox:
                 reply, replies = line, 1
                 break
             if line is not None:
-                self.stray += 1  # not the reply to this request: written by the code into the pipe
+                self._unasked(line)  # not the reply to this request: written by the code into the pipe
         sync_id = secrets.token_hex(8)
         self._send({"op": "sync", "id": sync_id})
         sync_deadline = max(deadline, time.monotonic() + SYNC_S)
@@ -459,10 +473,42 @@ class Sandbox:
             if line is not None and line.get("id") == request_id:
                 replies += 1
             elif line is not None:
-                self.stray += 1
+                self._unasked(line)
+        self._answered[request_id] = name
         if replies > 1:
             self.tampered.append(f"{name}: {replies} replies to one request")
         return checked_reply(reply)
+
+    def _unasked(self, line: dict[str, Any]) -> None:
+        """A line that is no reply to the request pending: a reply to one answered earlier (the
+        code forged that reply and answered the grader's sync itself, so the child's own reply came
+        later) goes in :attr:`late` under that request's name; any other is counted in :attr:`stray`."""
+        earlier = self._answered.get(str(line.get("id")))
+        if earlier is None:
+            self.stray += 1
+            return
+        self.late.append((earlier, f"{earlier}: a second reply to one request, written after the grader had read "
+                                   "a first one and its own check of the channel had been answered (the code "
+                                   "answered it)"))  # fmt: skip
+
+    def settle(self, timeout_s: float = SYNC_S) -> None:
+        """Read everything the child wrote up to now: a sync request of the grader's and every line
+        before its answer (a reply to a request answered earlier goes in :attr:`late`): the child
+        answers the sync once the code that ran for the last request has returned."""
+        proc = self._proc
+        if proc is None or proc.poll() is not None or proc.stdout is None:
+            return
+        fd = proc.stdout.fileno()
+        self._drain(fd)
+        sync_id = secrets.token_hex(8)
+        self._send({"op": "sync", "id": sync_id})
+        deadline = time.monotonic() + timeout_s
+        while True:
+            line = self._next(fd, deadline, timeout_s)
+            if line is not None and line.get("id") == sync_id:
+                return
+            if line is not None:
+                self._unasked(line)
 
     def _send(self, request: dict[str, Any]) -> None:
         proc = self._proc
@@ -478,7 +524,7 @@ class Sandbox:
         while (end := self._line_end()) < 0:
             left = deadline - time.monotonic()
             if left <= 0:
-                self.close()
+                self.close(settle=False)
                 raise SandboxTimeout(f"time limit: the cell ran for more than {timeout_s:g} s and was stopped")
             ready, _, _ = select.select([fd], [], [], left)
             if ready:
@@ -501,7 +547,7 @@ class Sandbox:
                 code = proc.wait(timeout=2)
             except subprocess.TimeoutExpired:
                 code = None
-        self.close()
+        self.close(settle=False)
         if code is None:
             return "the sandbox ended (its process closed the grader's pipe: the code ended it, or the memory limit)"
         if code >= 0:
@@ -532,7 +578,7 @@ class Sandbox:
             self._buffer = bytearray()
             self._scanned = 0
             self.stray += 1
-            self.close()
+            self.close(settle=False)
             raise SandboxError(
                 f"the code wrote more than {REPLY_BYTES // 1024**2} MiB into the grader's reply pipe without a line "
                 "end (no reply is that long): the sandbox was stopped and the cell counts as failed"
@@ -573,10 +619,10 @@ class Sandbox:
                 line = bytes(self._buffer[:end])
                 del self._buffer[: end + 1]
                 self._scanned = 0
-                if self._line(line) is not None:
-                    self.stray += 1
-        if self._line(bytes(self._buffer)) is not None:
-            self.stray += 1
+                if (parsed := self._line(line)) is not None:
+                    self._unasked(parsed)
+        if (parsed := self._line(bytes(self._buffer))) is not None:
+            self._unasked(parsed)
         self._buffer = bytearray()
         self._scanned = 0
 
