@@ -54,12 +54,59 @@ def _command(module: str, name: str) -> Callable[[argparse.Namespace], int]:
     return run
 
 
+#: evo_ape / evo_rpe options -> lorisnb's (the table of docs/guide/evo.md), for the hint an
+#: unrecognized one gets. An option spelled with underscores where lorisnb has it with dashes
+#: (``--max_diff``) is hinted without being listed here.
+EVO_OPTIONS: dict[str, str] = {
+    "--t_max_diff": "--max-diff", "--t_offset": "--t-offset",
+    "--sync_method": "--association evo-nearest (nearest_time) or evo-interpolate (interpolation)",
+    "-a": "--align se3", "--align": "--align se3", "-as": "--align sim3", "-s": "--align scale",
+    "--correct_scale": "--align scale (--align sim3 for evo's -as)",
+    "--n_to_align": "--align-frames", "--align_origin": "--align-origin",
+    "--t_start": "--t-start", "--t_end": "--t-end", "--project_to_plane": "--project-to-plane",
+    "--motion_filter": "--motion-filter", "-d": "--rpe-delta", "-u": "--rpe-unit",
+    "--delta_unit": "--rpe-unit", "--all_pairs": "--rpe-all-pairs", "--delta_tol": "--rpe-tolerance",
+    "--pairs_from_reference": "--rpe-pairs reference", "-r": "--relation", "--pose_relation": "--relation",
+    "--change_unit": "--change-unit",
+    "--save_results": "the output options (--csv, --json); evo's zips: lorisnb.tools.peers.evo_import",
+}  # fmt: skip
+_UNRECOGNIZED = "unrecognized arguments: "
+
+
+def _option_strings(parser: argparse.ArgumentParser) -> set[str]:
+    """Every option string of ``parser`` and of its sub-commands."""
+    out = set(parser._option_string_actions)
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                out |= _option_strings(sub)
+    return out
+
+
+def evo_hints(message: str, known: set[str]) -> str:
+    """For argparse's ``unrecognized arguments: ...``: the lorisnb option each evo spelling
+    (:data:`EVO_OPTIONS`) or underscored spelling (``--max_diff``: ``--max-diff``) among them is,
+    as ``; evo's --t_max_diff is lorisnb's --max-diff``; else ``""``."""
+    if not message.startswith(_UNRECOGNIZED):
+        return ""
+    hints = []
+    for token in message.removeprefix(_UNRECOGNIZED).split():
+        option = token.split("=", 1)[0]
+        if option in EVO_OPTIONS:
+            hints.append(f"evo's {option} is lorisnb's {EVO_OPTIONS[option]}")
+        elif option.startswith("--") and "_" in option and option.replace("_", "-") in known:
+            hints.append(f"{option} is spelled {option.replace('_', '-')} (lorisnb's options use dashes)")
+    evo = any(h.startswith("evo's") for h in hints)
+    return "; " + "; ".join(hints) + (" (docs/guide/evo.md: evo's options in lorisnb)" if evo else "") if hints else ""
+
+
 class Parser(argparse.ArgumentParser):
     """argparse's parser (its sub-commands' too) whose usage errors, quoting the value given, escape
-    control characters as every other message line does (:func:`~lorisnb.cli.text.say`)."""
+    control characters as every other message line does (:func:`~lorisnb.cli.text.say`), and name
+    lorisnb's option for an evo spelling it does not know (:func:`evo_hints`)."""
 
     def error(self, message: str) -> NoReturn:
-        super().error(message_line(message))
+        super().error(message_line(message + evo_hints(message, _option_strings(self))))
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -108,9 +108,9 @@ def coverage_notes(cover: pd.DataFrame) -> list[str]:
     for r in cover.itertuples():
         who = f"{r.algorithm}{f' ({r.suite})' if r.suite else ''}"
         if r.coverage < 1:
-            notes.append(f"{who} has no output for {r.scene} sequence(s) {r.missing_seqs} ({r.sequences} of "
-                         f"{r.expected}); they count as failed runs (CR 0, their duration counted), as evaluate "
-                         "counts them")  # fmt: skip
+            notes.append(f"{who} has no output for {r.scene} sequence(s) {r.missing_seqs} (output for {r.sequences} "
+                         f"of its {r.expected} sequences); they count as failed runs (CR 0, their duration counted), "
+                         "as evaluate counts them")  # fmt: skip
         if getattr(r, "missing_trials", ""):
             notes.append(f"{who} lacks trials of {r.scene} (sequence: trials) {r.missing_trials}; each counts as a "
                          "failed run of that trial")  # fmt: skip

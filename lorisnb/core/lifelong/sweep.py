@@ -295,7 +295,9 @@ def _target_cr(target: Any) -> float:
     except ValidationError:
         v = np.nan
     if not 0 < v <= 1:
-        raise ValidationError(f"target={target!r}: expected a correct rate above 0 and at most 1 (0.5 for 50 %)")
+        order = " (the target comes second: eps_at_cr(errors, target, durations))" if hasattr(target, "shape") else ""
+        raise ValidationError(f"target={validate.shown(target)}: expected a correct rate above 0 and at most 1 (0.5 "
+                              f"for 50 %){order}")  # fmt: skip
     return v
 
 

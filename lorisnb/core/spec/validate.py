@@ -60,9 +60,31 @@ ALL_POSES = "poses (leave it out to fit on all matched poses: evo's -1)"
 MAX_FRACTION = 1.0
 
 
-def _show(value: Any) -> str:
-    """A value as the user typed it (strings without quotes, so command-line values read naturally)."""
-    return value if isinstance(value, str) else repr(value)
+#: Longest value a message prints as it is: a longer one (a table passed where a number was asked
+#: for) is named by its type and shape, or cut, never printed in full.
+SHOWN_MAX = 60
+
+
+def shown(value: Any) -> str:
+    """A value as a message shows it: as the user typed it (strings without quotes, so command-line
+    values read naturally); a table or array by its type and shape (``<DataFrame of 12 rows x 9
+    columns>``), never its contents; any other long value cut to :data:`SHOWN_MAX` characters."""
+    if isinstance(value, str):
+        return value if len(value) <= 4 * SHOWN_MAX else value[: 4 * SHOWN_MAX - 3] + "..."
+    shape = getattr(value, "shape", None)
+    if isinstance(shape, tuple) and len(shape) >= 1 and not isinstance(value, (int, float)):
+        kind = type(value).__name__
+        if len(shape) == 2:
+            return f"<{kind} of {shape[0]} rows x {shape[1]} columns>"
+        return f"<{kind} of {shape[0]} values>" if len(shape) == 1 else f"<{kind} of shape {shape}>"
+    try:
+        text = repr(value)
+    except ValueError:  # an int of more digits than Python prints (sys.get_int_max_str_digits)
+        return f"<{type(value).__name__}>"
+    return text if len(text) <= SHOWN_MAX else text[: SHOWN_MAX - 3] + "..."
+
+
+_show = shown
 
 
 def _number(name: str, value: Any, words: Mapping[str, Any]) -> Any:

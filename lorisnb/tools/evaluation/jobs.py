@@ -278,8 +278,9 @@ def _read_result(job: Job, progress: bool = False) -> ResultFile:
         more = hint(job.path, "openloris")
         if not more:
             raise
+        reason = exc.reason.replace(more, "")  # the reader's copy of the hint (with_hint): said once, complete
         more += "" if job.kind == "pair" else ", and give its ground truth with --gt FILE (evaluate_pairs in Python)"
-        raise ParseError(exc.path, exc.line, f"{exc.reason}{more}") from None
+        raise ParseError(exc.path, exc.line, f"{reason}{more}") from None
     finally:
         if bar is not None:
             bar.close()

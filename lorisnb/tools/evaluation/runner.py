@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+import inspect
 import os
 import warnings
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import Executor
-from dataclasses import replace
+from dataclasses import fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +49,29 @@ from lorisnb.tools.evaluation.result import Evaluation, Failure, said_notes
 
 PathArg = str | os.PathLike[str]
 __all__ = ["BIG_FILE_BYTES", "Evaluation", "Failure", "evaluate", "evaluate_manifest", "evaluate_pairs"]
+
+
+def _refuse_unknown(function: Callable[..., Any], options: Mapping[str, Any]) -> None:
+    """Refuse a keyword that is neither one of ``function``'s own (``data_root``, ``algorithms``,
+    ``trials_by``, ...) nor an option of the evaluation spec (``options`` go to the spec), naming both
+    lists and the nearest of either (``data`` -> ``data_root``, ``trials`` -> ``trials_by``)."""
+    from lorisnb.core.spec.evalspec import ALIASES
+
+    spec_keys = sorted(({f.name for f in fields(EvalSpec)} - {"explicit", "preset_name"}) | set(ALIASES))
+    unknown = sorted(set(options) - set(spec_keys))
+    if not unknown:
+        return
+    own = [n for n, p in inspect.signature(function).parameters.items() if p.kind is p.KEYWORD_ONLY]
+    name = unknown[0]
+    near = validate.near_miss(name, [*own, *spec_keys])
+    if not near:  # a keyword short of its own: data -> data_root, algorithm -> algorithms, trials -> trials_by
+        start = [
+            k for k in [*own, *spec_keys] if len(name) > 2 and (k.startswith(name) or name.startswith(k.rstrip("s")))
+        ]
+        near = f"did you mean {start[0]!r}?" if len(start) == 1 else ""
+    raise ValidationError(f"{name}: not a keyword of {function.__name__}{f' ({near})' if near else ''}; its own "
+                          f"keywords are {', '.join(own)}, and the options of the evaluation spec "
+                          f"{', '.join(spec_keys)}")  # fmt: skip
 
 
 def _spec(spec: EvalSpec | str | None, conventions: EvalSpec | str | None, options: dict[str, Any]) -> EvalSpec:
@@ -260,6 +284,7 @@ def evaluate(
             a figure or the poses raise an EvaluationError saying to keep them. Refused for specs
             whose tables are computed from the poses (:func:`poses_needed`).
     """
+    _refuse_unknown(evaluate, options)
     the_spec = _spec(spec, conventions, options)
     notes = the_spec.refuse_inapplicable("openloris")
     compile_trials_by(trials_by)
@@ -408,6 +433,7 @@ def evaluate_pairs(
             ``algorithm`` the topic.
         jobs, executor, progress, trials_by, statistics, keep_poses: as for :func:`evaluate`.
     """
+    _refuse_unknown(evaluate_pairs, options)
     the_spec = _spec(spec, conventions, options)
     src = pair_source(groundtruth, fmt, gt_fmt, scene, est_times=est_times, gt_times=gt_times, topic=topic,
                       gt_topic=gt_topic, tf=tf, gt_tf=gt_tf)  # fmt: skip
@@ -472,6 +498,7 @@ def evaluate_manifest(
     spec object is used as it is, and ``lifelong`` and ``options`` go over either. The built-in
     ``openloris`` manifest runs :func:`evaluate` (``data_root`` is its data). ``trials_by``,
     ``progress``, ``jobs``, ``executor``, ``statistics`` and ``keep_poses`` are :func:`evaluate`'s."""
+    _refuse_unknown(evaluate_manifest, options)
     m = manifest if isinstance(manifest, Manifest) else read_manifest(manifest)
     if lifelong is not None:
         options["lifelong"] = lifelong

@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import ast
 import io
+import math
 import os
+import sys
 import tokenize
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
@@ -71,6 +73,14 @@ LISTS = ("algorithms", "scenes", "eps_grid", "phi_grid", "delta_grid", "tau_grid
 #: Parameters that only apply together with another one (the notebook ignores them without it).
 NEEDS = {"fmt": "groundtruth", "gt_fmt": "groundtruth", "ordslam_fps": "ordslam_dir",
          "ordslam_max_gap": "ordslam_dir"}  # fmt: skip
+#: Parameters that exclude each other, with the command line's options for the same inputs and why
+#: (``lorisnb evaluate`` refuses ``--gt`` with ``--manifest``): the notebook would use one and ignore
+#: the other. Checked by :func:`check_values` for every notebook, so papermill's ``-p``, a parameter
+#: cell edited in Jupyter and ``lorisnb report`` are refused alike.
+EXCLUSIVE: list[tuple[str, str, str]] = [
+    ("groundtruth", "manifest", "--gt and --manifest on the command line; a manifest names the ground truth "
+                                "of each session"),
+]  # fmt: skip
 #: Parameters naming one OpenLORIS scene whose ground truth a notebook loads (``metrics_primer``'s
 #: ``scene``, ``compare_algorithms``' ``sim_scene``): refused up front when the data root holds no
 #: ground truth for it (:func:`refuse_scenes_without_groundtruth`), as a ``scenes`` filter is.
@@ -179,23 +189,51 @@ NUMBERS = ("eps", "phi", "delta", "tau", "seed", "alpha", "level", "sim_eps", "s
            "rpe_metres", "ordslam_fps", "ordslam_max_gap")  # fmt: skip
 
 
-def check_values(values: Mapping[str, Any], notebooks: Iterable[str] = (), text_numbers: bool = True) -> None:
+#: Parameters whose infinity means "no threshold" (:func:`lorisnb.core.spec.validate.threshold`):
+#: papermill's ``-p eps 1e400`` reaches the notebook as ``float('inf')``, as ``-p eps inf`` does, so
+#: under papermill an infinite one is refused (:func:`refuse_papermill_infinity`).
+INFINITE_MEANS_NONE = ("eps", "phi", "delta", "tau", "sim_eps")
+#: ``check_parameters``' ``by`` when the report calls it (not a notebook's first cell).
+REPORT = "the selected notebooks"
+
+
+def _no_threshold(name: str) -> str:
+    """What to give for no ``name`` threshold where infinity cannot be told from a number too large."""
+    return f"for no threshold, a number beyond any error (papermill -p {name} 1e9) or lorisnb report -p {name} inf"
+
+
+def check_values(
+    values: Mapping[str, Any], notebooks: Iterable[str] = (), text_numbers: bool = True, where: str = "notebook"
+) -> None:
     """Check notebook parameter values with the command line's rules (None: the notebook's default),
     and those the ``notebooks`` named cannot take. Every notebook calls it through
     :func:`lorisnb.tools.notebook.start.setup` (``parameters=``), and the report through
     :func:`check_parameters`, before anything runs. ``text_numbers=False`` (the report, which
-    converts them): a number written as text (``"30"``) is not refused."""
+    converts them): a number written as text (``"30"``) is not refused. ``where``: ``"report"``
+    (``lorisnb report``'s check: its advice names the report's options) or ``"notebook"``."""
     for name in NUMBERS if text_numbers else ():
         value = values.get(name)
         if isinstance(value, str) and _is_number(value):
+            if math.isinf(float(value)):  # "1e400" (too large) and "inf" alike: papermill -p reads both as inf
+                if value.strip().lower().lstrip("+-") not in ("inf", "infinity"):
+                    continue  # too large to be a number: refused below with the command line's message
+                raise ValidationError(f"{name}={value!r}: the word inf as text (papermill's -r passes text), which a "
+                                      f"notebook cannot use as a number; papermill -p {name} inf is refused too (it "
+                                      "reads it as it reads 1e400, too large to be a number: infinity); give a "
+                                      f"number, or, {_no_threshold(name)}")  # fmt: skip
             raise ValidationError(f"{name}={value!r}: a number written as text (papermill's -r passes text); give a "
                                   f"number: papermill -p {name} {value.strip()}, or lorisnb report -p {name} "
                                   f"{value.strip()}")  # fmt: skip
     eps = values.get("eps")
     metres = [n for n in notebooks if n in EPS_IN_METRES]
     if metres and isinstance(eps, str) and str(validate.eps_value(eps)).startswith("relative:"):  # relative:F
+        other = ("leave this one out with --notebooks" if where == "report"
+                 else "run those with it, and this one with metres")  # fmt: skip
         raise ValidationError(f"eps={eps!r}: {', '.join(metres)} quotes eps in metres of its scene; give metres or "
-                              "paper (a relative eps is for the other notebooks: leave this one out with --notebooks)")  # fmt: skip
+                              f"paper (a relative eps is for the other notebooks: {other})")  # fmt: skip
+    for a, b, why in EXCLUSIVE:
+        if values.get(a) is not None and values.get(b) is not None:
+            raise ValidationError(f"{a}={values[a]} and {b}={values[b]}: give one ({why})")
     for notebook in notebooks:
         for name, partner, advice in PAIRED.get(notebook, []):
             if values.get(name) is not None and values.get(partner) is None:
@@ -216,7 +254,7 @@ def check_parameters(
     parameters: Mapping[str, Any],
     declared: Mapping[str, Mapping[str, Any]],
     notebooks: Iterable[str] = (),
-    by: str = "the selected notebooks",
+    by: str = REPORT,
 ) -> dict[str, Any]:
     """Refuse a parameter no selected notebook declares (listing the declared names) and values
     that the command line would refuse (``-p eps -1``, ``-p alpha 2``) or the selected ``notebooks``
@@ -226,7 +264,7 @@ def check_parameters(
     if unknown:
         raise ValidationError(
             f"parameter(s) {', '.join(unknown)} not declared by {by}; "
-            f"{'they declare' if by == 'the selected notebooks' else 'it declares'}: " + ", ".join(sorted(declared))
+            f"{'they declare' if by == REPORT else 'it declares'}: " + ", ".join(sorted(declared))
         )
     out = dict(parameters)
     for name, value in parameters.items():  # null reaches the notebook as None, not as its default
@@ -237,7 +275,9 @@ def check_parameters(
     for name, partner in NEEDS.items():  # given, it would be ignored without its partner: refused
         if parameters.get(name) is not None and parameters.get(partner) is None and name in declared:
             raise ValidationError(f"-p {name}: only applies with -p {partner} (the notebook ignores it otherwise)")
-    check_values(parameters, notebooks, text_numbers=False)
+    if by != REPORT:  # a notebook's first cell: papermill's -p names
+        refuse_papermill_infinity(parameters)
+    check_values(parameters, notebooks, text_numbers=False, where="report" if by == REPORT else "notebook")
     refuse_simulated_off(parameters)
     if any(parameters.get(n) is not None for n in SCENE_PARAMETERS):  # a scene without ground truth: refused now
         try:
@@ -250,6 +290,29 @@ def check_parameters(
         if name in _VALUES and value is not None:
             out[name] = _VALUES[name](value)
     return out
+
+
+def _in_report() -> bool:
+    """Whether this kernel runs a notebook of ``lorisnb report`` (its folder of a run folder), which
+    checked and passed on the parameters itself (``-p eps inf`` as infinity)."""
+    from lorisnb.tools.notebook.start import RUN_MARKER
+
+    return (Path.cwd().resolve().parent / RUN_MARKER).is_file()
+
+
+def refuse_papermill_infinity(injected: Mapping[str, Any]) -> None:
+    """Refuse an infinite threshold papermill passed (:data:`INFINITE_MEANS_NONE`): papermill's ``-p
+    eps 1e400`` (too large to be a number, refused by the command line and the report) reaches the
+    notebook as ``float('inf')``, as ``-p eps inf`` does, and the notebook cannot tell them apart.
+    ``injected``: the names papermill gave, as the kernel holds them; not in a report's run (the
+    report refused 1e400 and passes its ``inf`` on as infinity)."""
+    infinite = [n for n in INFINITE_MEANS_NONE if isinstance(injected.get(n), float) and math.isinf(injected[n])]
+    if infinite and not _in_report():
+        name = infinite[0]
+        raise ValidationError(f"{name}=inf: papermill turned the number given with -p {name} into infinity (it reads "
+                              f"1e400, too large to be a number, as it reads inf), so it is refused as lorisnb "
+                              f"evaluate --{name} 1e400 is; give a number (at most {sys.float_info.max:.3g}), or, "
+                              f"{_no_threshold(name)}")  # fmt: skip
 
 
 def simulated_on(values: Mapping[str, Any]) -> bool:

@@ -399,4 +399,13 @@ def crosscheck_openloris(
         )
     )
     out = pd.concat([table, pd.DataFrame(extra, columns=CROSSCHECK_COLUMNS)], ignore_index=True)
+    out.attrs["compared"] = compared_line(s, result_path, seqs)  # the header line naming what was compared
     return out
+
+
+def compared_line(seq: int, path: str | os.PathLike[str], with_poses: Sequence[int]) -> str:
+    """The line saying which sequence of an OpenLORIS result file a cross-check compared (one: the
+    first with poses unless ``--seq`` chose), and how to compare another."""
+    others = [n for n in with_poses if n != seq]
+    more = f" ({len(with_poses)} with poses: --seq N, seq=N in Python, for another)" if others else ""
+    return f"sequence {seq} of {os.path.basename(path)}{more}"

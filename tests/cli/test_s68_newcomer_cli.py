@@ -1,0 +1,49 @@
+"""evo's option spellings on the command line get lorisnb's option named (one table, EVO_OPTIONS),
+and a TUM file given without --gt gets the format hint once, with the --gt step."""
+
+from __future__ import annotations
+
+import pytest
+
+from lorisnb.cli import main
+
+
+@pytest.fixture(scope="module")
+def tum(data):
+    root = data.root / "tum-rgbd"
+    if not (root / "fr2_desk_ORB.txt").is_file():
+        pytest.skip(f"no TUM pair in {root}")
+    return root
+
+
+@pytest.mark.parametrize(
+    "given, named",
+    [
+        (["--t_max_diff", "0.05"], "evo's --t_max_diff is lorisnb's --max-diff"),
+        (["--max_diff", "0.05"], "--max_diff is spelled --max-diff"),
+        (["--align_origin"], "evo's --align_origin is lorisnb's --align-origin"),
+        (["--n_to_align", "5"], "evo's --n_to_align is lorisnb's --align-frames"),
+        (["-as"], "evo's -as is lorisnb's --align sim3"),
+    ],
+)
+def test_evo_spelling_names_lorisnbs_option(tum, capsys, given, named):
+    with pytest.raises(SystemExit) as e:
+        main(["evaluate", str(tum / "fr2_desk_ORB.txt"), "--gt", str(tum / "fr2_desk_groundtruth.txt"), *given])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert "unrecognized arguments" in err and named in err, err
+
+
+def test_unknown_option_not_evo_gets_no_hint(tum, capsys):
+    with pytest.raises(SystemExit):
+        main(["evaluate", str(tum / "fr2_desk_ORB.txt"), "--frobnicate"])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.endswith("unrecognized arguments: --frobnicate"), err
+
+
+def test_tum_without_gt_hint_once(tum, capsys):
+    rc = main(["evaluate", str(tum / "fr2_desk_ORB.txt"), "--no-progress"])
+    err = capsys.readouterr().err
+    line = next(x for x in err.splitlines() if x.startswith("error:"))
+    assert rc != 0 and line.count("this looks like a TUM trajectory file") == 1, line
+    assert line.endswith("and give its ground truth with --gt FILE (evaluate_pairs in Python)"), line
