@@ -41,6 +41,8 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
 
     evo_version = require("evo").__version__
 
+    if table.attrs.get("compared"):  # an OpenLORIS file holds sequences: which one was compared
+        print(f"compared: {table.attrs['compared']}")
     with pd.option_context("display.max_rows", 200, "display.width", 220, "display.max_colwidth", 110):
         print(table.to_string(index=False, float_format=lambda v: f"{v:.6g}"))
     must = table["note"].str.startswith("identical pairs")

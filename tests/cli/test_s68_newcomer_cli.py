@@ -47,3 +47,16 @@ def test_tum_without_gt_hint_once(tum, capsys):
     line = next(x for x in err.splitlines() if x.startswith("error:"))
     assert rc != 0 and line.count("this looks like a TUM trajectory file") == 1, line
     assert line.endswith("and give its ground truth with --gt FILE (evaluate_pairs in Python)"), line
+
+
+def test_crosscheck_of_an_openloris_file_prints_the_sequence_it_compared(data, icra20, capsys):
+    """``crosscheck GT EST --format openloris`` compares one sequence of a file that holds several:
+    the output said none (a user could not tell sequence 2 was left out); it names it first."""
+    gt = data.root / "openloris-scene" / "groundtruth" / "gt_cafe_1.txt"
+    if not gt.is_file():
+        pytest.skip("the cafe-1 ground truth is not in this data folder")
+    for extra, seq in (([], 1), (["--seq", "2"], 2)):
+        rc = main(["crosscheck", str(gt), str(icra20 / "lifelong" / "ds-slam" / "cafe-1.txt"), "--format", "openloris",
+                   *extra])  # fmt: skip
+        out = capsys.readouterr().out
+        assert rc in (0, 1) and out.splitlines()[0].startswith(f"compared: sequence {seq} of cafe-1.txt ("), out[:300]

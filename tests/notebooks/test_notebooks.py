@@ -168,7 +168,7 @@ def test_lifelong_benchmark_counts_sequences_without_output(tmp_path):
     assert (csr.loc["ds-slam", [f"home-{k}" for k in range(2, 6)]] == 0.0).all()
     nb = nbformat.read(tmp_path / "lifelong_benchmark.ipynb", as_version=4)
     text = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.outputs)
-    assert "ds-slam has no output for home sequence(s) 2, 3, 4, 5 (1 of 5)" in text
+    assert "ds-slam has no output for home sequence(s) 2, 3, 4, 5 (output for 1 of its 5 sequences)" in text
     assert "give no output: home 4 of 4 (4 without output)" in text
 
 
