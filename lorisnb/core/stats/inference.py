@@ -28,6 +28,7 @@ below 0.1. The ranking (:mod:`lorisnb.core.stats.ranking`), the summary of
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Iterable, Sequence
 from itertools import combinations
@@ -303,6 +304,14 @@ def _cliffs_delta(a: list[np.ndarray], b: list[np.ndarray]) -> float:
     return float(np.mean(d)) if d else np.nan
 
 
+#: A sampled permutation test draws at least this many relabellings per Holm level it may have to
+#: reach (pairs / alpha): its p-value's floor, 1 / (draws + 1), is then a twentieth of alpha / pairs.
+RESAMPLES_PER_LEVEL = 20
+#: Relabellings a sampled test draws at most (as many as an exact one enumerates at most): beyond
+#: about 500 pairs at alpha 0.05 the floor says so (``min_p``, ``reachable``).
+MAX_RESAMPLES = 200_000
+
+
 def pairwise(
     table: pd.DataFrame,
     metric: str = "cr",
@@ -315,12 +324,14 @@ def pairwise(
     """Every pair of algorithms in each scene, on the sequences both have: one stratified
     permutation test (:func:`lorisnb.core.stats.permutation.permutation_test`: trials relabelled within
     each sequence; with one trial each, the paired test over sequences), exact when the
-    relabellings are few.
+    relabellings are few, else sampled: at least ``n_resamples`` relabellings and
+    :data:`RESAMPLES_PER_LEVEL` x pairs / alpha (at most :data:`MAX_RESAMPLES`), the same for every
+    pair (the number depends on the design only).
 
     Columns: the scene values (``value_a``, ``value_b``: weighted means over the common sequences
     of each sequence's mean over trials), ``difference`` (A - B, the test statistic, in the
     metric's unit), ``cliffs_delta`` (effect size, -1..1), ``p`` (two-sided), ``min_p`` (the
-    smallest p the design can give), ``exact``, ``p_holm`` (Holm over every pair of every scene),
+    smallest p the test can give: the design's, or a sampled test's 1 / (draws + 1) where larger), ``exact``, ``p_holm`` (Holm over every pair of every scene),
     ``significant`` (p_holm <= alpha), ``better`` (the significantly better algorithm, or ""),
     ``reachable`` (whether min_p, Holm-corrected as if it were the comparison's smallest p, can
     reach alpha), ``difference_low``, ``difference_high`` (with ``intervals``: the interval of the
@@ -337,15 +348,20 @@ def pairwise(
     rng = np.random.default_rng(seed)
     rows: list[dict] = []
     tested: list[tuple] = []
-    for (suite, scene), g in t.groupby(["suite", "scene"], sort=False, observed=True):
-        per = _sequence_trials(g, metric)
+    scenes_trials = [(key, _sequence_trials(g, metric))
+                     for key, g in t.groupby(["suite", "scene"], sort=False, observed=True)]  # fmt: skip
+    # a sampled test's p cannot go below 1 / (resamples + 1): enough of them that Holm's smallest level over the
+    # family (alpha / pairs) is within reach (2,000 for any family held p_holm above 0.05 past 100 pairs)
+    family = sum(len(per) * (len(per) - 1) // 2 for _, per in scenes_trials)
+    resamples = min(max(n_resamples, 2000, math.ceil(RESAMPLES_PER_LEVEL * family / alpha)), MAX_RESAMPLES)
+    for (suite, scene), per in scenes_trials:
         scene_rows, samples = [], []
         for a, b in combinations(sorted(per), 2):
             (va, wa), (vb, wb) = per[a], per[b]
             common = sorted(set(va) & set(vb), key=str)
             xa, xb = [va[s] for s in common], [vb[s] for s in common]
             w = np.array([(wa[s] + wb[s]) / 2 for s in common])
-            res = permutation_test(xa, xb, w, n_resamples=max(n_resamples, 2000), rng=rng)
+            res = permutation_test(xa, xb, w, n_resamples=resamples, rng=rng)
             samples.append((xa, xb, w))
             ma = np.array([x.mean() for x in xa])
             mb = np.array([x.mean() for x in xb])
@@ -364,7 +380,8 @@ def pairwise(
                      value_a=mean_a, value_b=mean_b, difference=res.statistic, cliffs_delta=_cliffs_delta(xa, xb),
                      test=("paired permutation over sequences" if trials <= 1 else
                            "permutation of trials within sequences"),
-                     relabellings=res.relabellings, exact=res.exact, p=res.pvalue, min_p=res.min_p,
+                     relabellings=res.relabellings, exact=res.exact, p=res.pvalue,
+                     min_p=res.min_p if res.exact else max(res.min_p, 1 / (resamples + 1)),
                      p_a_better=p_better)
             )  # fmt: skip
         rows += scene_rows

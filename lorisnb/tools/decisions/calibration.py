@@ -31,7 +31,6 @@ import numpy as np
 import pandas as pd
 
 from lorisnb.core.lifelong.aggregate import durations_table
-from lorisnb.core.lifelong.coverage import complete
 from lorisnb.core.lifelong.scoring import score
 from lorisnb.core.pipeline.model import ResultFile
 from lorisnb.core.pipeline.sessions import compute_errors
@@ -43,7 +42,7 @@ from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.errors import ValidationError
 from lorisnb.io.datasets.paths import find_data, load_groundtruth
 from lorisnb.io.readers.openloris import read_openloris
-from lorisnb.tools.decisions.comparison import decide
+from lorisnb.tools.decisions.comparison import decide, prepared_table
 from lorisnb.tools.decisions.diff import diff_tables, keyed
 from lorisnb.tools.decisions.runs import Run
 
@@ -303,7 +302,7 @@ def compare_rates(pool: Pool, trials: Sequence[int] = (1, 3, 5), nights: int = 1
             a, b = _night(pool, n, rng)
             table = pd.concat([a.assign(algorithm=a["algorithm"] + " (1)"), b.assign(algorithm=b["algorithm"] + " (2)")],
                               ignore_index=True)  # fmt: skip
-            full, _ = complete(table, pool.expected)
+            full, _, _ = prepared_table(table, pool.expected, "cr")  # as compare_table prepares it
             pairs, _, _ = decide(table, full, "cr", alpha, int(rng.integers(2**31)), intervals=False)
             system_a, system_b = pairs["a"].str[:-4], pairs["b"].str[:-4]
             same = (system_a == system_b).to_numpy()

@@ -103,19 +103,71 @@ def trial_spread(table: pd.DataFrame) -> tuple[pd.DataFrame, set[str]]:
     return spread.drop(columns=["copies"]).reset_index(drop=True), copies
 
 
-def _without_repeated_trials(table: pd.DataFrame, full: pd.DataFrame) -> tuple[pd.DataFrame, dict]:
-    """``full`` without the trials that repeat another trial's every value
-    (:func:`lorisnb.core.stats.regression.repeated_trials`, as ``diff`` counts them), and how many
-    each algorithm had of how many; an algorithm whose trials are all near-identical copies of one
-    run (:func:`trial_spread` of ``table``) keeps them: none of its pairs is tested."""
-    from lorisnb.core.stats.regression import repeated_trials
+def _tested_values(full: pd.DataFrame, metric: str) -> tuple[np.ndarray, np.ndarray]:
+    """The tested metric's values of ``full`` (the log for C-ATE, whose spread is relative) and
+    which of them can tell a copy: a rate strictly between 0 and 1 (reruns tie at 0 and 1: a
+    sequence never tracked, or tracked throughout), an error above 0."""
+    v = pd.to_numeric(full[metric], errors="coerce").to_numpy(float)
+    if metric in RATES:
+        return v, (v > 0) & (v < 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.log(v), np.isfinite(v) & (v > 0)
 
-    rep = repeated_trials(stats.with_trials(full)) & ~full["algorithm"].isin(trial_spread(table)[1]).to_numpy()
+
+def _without_repeated_trials(table: pd.DataFrame, full: pd.DataFrame, metric: str = "cr") -> tuple[pd.DataFrame, dict]:
+    """``full`` without the rows of a trial that repeat another trial's row of the same sequence:
+    every value (:func:`lorisnb.core.stats.regression.repeated_trials`, as ``diff`` counts them), or
+    the tested ``metric`` where it can tell a copy (:func:`_tested_values`), each within 1e-4
+    relative (:func:`~lorisnb.core.stats.regression.same_values`): the test sees only the tested
+    metric, and a copy whose errors were scaled by 0.2 % (a trace of noise: CR unchanged) beside one
+    real rerun made two labels of one system differ in 18 of 30 nights of a helper's. Returns the
+    table and, per algorithm, (rows dropped, rows); an algorithm whose trials are all near-identical
+    copies of one run (:func:`trial_spread` of ``table``) keeps them: none of its pairs is tested."""
+    from lorisnb.core.stats.regression import KEYS, repeated_trials, same_values
+
+    t = stats.with_trials(full)
+    rep = repeated_trials(t)
+    values, telling = _tested_values(t, metric)
+    for idx in t.groupby(KEYS, sort=False, observed=True, dropna=False).indices.values():
+        idx = idx[telling[idx]]  # a handful of trials a sequence
+        if len(idx) > 1:
+            rep[idx] |= same_values(values[idx][:, None]) >= 0
+    rep &= ~full["algorithm"].isin(trial_spread(table)[1]).to_numpy()
     if not rep.any():
         return full, {}
     total = full["algorithm"].value_counts()
     counted = {a: (int(n), int(total[a])) for a, n in full.loc[rep, "algorithm"].value_counts().sort_index().items()}
     return full[~rep], counted
+
+
+def prepared_table(table: pd.DataFrame, durations: pd.DataFrame, metric: str = "cr") -> tuple[pd.DataFrame, list, dict]:
+    """What ``compare`` tests, from a per-sequence table and the scenes' durations: every expected
+    sequence (missing ones as failed runs, :func:`~lorisnb.core.lifelong.coverage.complete`), the
+    trials that repeat another's counted once (:func:`_without_repeated_trials`); with the coverage
+    and the counts of repeated rows. ``compare_table`` and ``make calibrate`` both use it."""
+    full, cover = complete(table, durations)
+    full, counted = _without_repeated_trials(table, full, metric)
+    return full, cover, counted
+
+
+def metric_copies(full: pd.DataFrame, metric: str) -> dict[str, float]:
+    """The algorithms whose distinct trials (``full`` without repeated rows) vary in the tested
+    ``metric`` by less than a quarter of what real reruns show (:data:`RERUN_SPREAD`: CR 0.017, the
+    log of an error 0.19), median over the sequences with two or more trials and a value that can
+    tell a copy (:func:`_tested_values`), with that spread. The test sees only that metric: a
+    realistic ATE spread beside a CR no rerun repeats (four copies of one run, positions scaled, one
+    pose dropped from one: CR spread 0.0002) licensed a CR test at p 0.0005."""
+    t = stats.with_trials(full)
+    values, telling = _tested_values(t, metric)
+    t = t.assign(_v=values)[telling]
+    if t.empty:
+        return {}
+    per = t.groupby(["suite", "algorithm", "scene", "seq"], sort=False, observed=True)["_v"]
+    seqs = pd.DataFrame({"n": per.size(), "sd": per.std()}).reset_index()
+    seqs = seqs[seqs["n"] >= 2]
+    quarter = RERUN_SPREAD["rate" if metric in RATES else "log"] / 4
+    spread = seqs.groupby("algorithm", sort=True)["sd"].median()
+    return {str(a): float(v) for a, v in spread.items() if v < quarter}
 
 
 #: The ``test`` of a pair one of whose algorithms' trials are copies of one run: none is made.
@@ -131,6 +183,7 @@ def decide(table: pd.DataFrame, full: pd.DataFrame, metric: str, alpha: float, s
     intervals (the decision is the same): what ``make calibrate`` measures."""
     pairs = stats.pairwise(full, metric, alpha=alpha, seed=seed, intervals=intervals)
     spread, copies = trial_spread(table)
+    copies |= set(metric_copies(full, metric))
     if copies:  # pseudo-replicates: their test would claim a significance that reruns would not show, so no
         # test is reported for their pairs (no p-value; an interval of the difference that excludes nothing), and
         # the CSV, the terminal's intervals and the ranks say the same
@@ -141,6 +194,10 @@ def decide(table: pd.DataFrame, full: pd.DataFrame, metric: str, alpha: float, s
         pairs.loc[mask, "difference_low"] = -np.inf
         pairs.loc[mask, "difference_high"] = np.inf
         pairs.loc[mask, "test"] = COPIES_TEST
+        # no test was made: nothing it could reach (the design's floor and relabellings were of a test of copies)
+        pairs["exact"] = pairs["exact"].astype(object)
+        pairs.loc[mask, "reachable"] = False
+        pairs.loc[mask, ["min_p", "relabellings", "exact"]] = np.nan
     return pairs, spread, copies
 
 
@@ -168,21 +225,26 @@ def compare_table(
             raise ValidationError(f"power delta={power_delta:g}: {metric} is a rate between 0 and 1, so a difference "
                                   "above 1 cannot happen; expected a difference in (0, 1]")  # fmt: skip
     check_table_duplicates(table)
-    full, cover = complete(table, durations)
+    full, cover, counted_once = prepared_table(table, durations, metric)
     notes = coverage_notes(cover)
-    full, counted_once = _without_repeated_trials(table, full)
     if counted_once:
-        notes.append("trials that repeat another trial's every value (copies, not reruns), counted once: " + "; ".join(
+        notes.append(f"trials that repeat another trial's every value, or its {metric} (copies, not reruns), counted "
+                     "once, rows of each sequence: " + "; ".join(
             f"{a}: {n} of {t}" for a, (n, t) in counted_once.items()) + " (a copied trial tested as a rerun made a "
             "significance no rerun would show)")  # fmt: skip
     ci = stats.confidence_intervals(full, level=level, seed=seed)
     pairs, spread, copies = decide(table, full, metric, alpha, seed)
     if copies:
+        tested = metric_copies(full, metric)
+        unit = "the log of " if metric not in RATES else ""
+        why_copies = {r.algorithm: f"{r.algorithm}: CR varies by {r.cr_spread:.2g}, ATE by {100 * r.ate_spread:.2g} %"
+                + (f", CR the same to the last digit in {100 * r.cr_ties:.0f} % of the sequences where it is neither 0 "
+                   "nor 1 (which reruns never repeat)" if r.cr_ties > 0.5 else "")
+                for r in spread.itertuples()}  # fmt: skip
+        why_copies.update({a: f"{a}: {unit}{metric}, the metric tested, varies by {v:.2g} between its distinct trials"
+                     for a, v in tested.items() if a not in trial_spread(table)[1]})  # fmt: skip
         notes += [f"the trials of {', '.join(sorted(copies))} are near-identical: " + "; ".join(
-            f"{r.algorithm}: CR varies by {r.cr_spread:.2g}, ATE by {100 * r.ate_spread:.2g} %"
-            + (f", CR the same to the last digit in {100 * r.cr_ties:.0f} % of the sequences where it is neither 0 "
-               "nor 1 (which reruns never repeat)" if r.cr_ties > 0.5 else "")
-            for r in spread.itertuples() if r.algorithm in copies)
+            why_copies[a] for a in sorted(copies) if a in why_copies)
             + f" between trials (median over sequences), where real reruns of the icra20 systems vary by "
             f"{RERUN_SPREAD['rate']:g} and {100 * RERUN_SPREAD['log']:.0f} %: they look like copies of one run, "
             "not reruns, so no significance is claimed for their pairs; run the system again for each trial"]  # fmt: skip
@@ -221,7 +283,12 @@ def compare_table(
     blocked = (
         pairs.assign(copied=pairs["test"].eq(COPIES_TEST))
         .groupby("scene")
-        .agg(reachable=("reachable", "any"), min_p=("min_p", "min"), copied=("copied", "all"))
+        .agg(
+            reachable=("reachable", "any"),
+            min_p=("min_p", "min"),
+            copied=("copied", "all"),
+            common=("sequences", "max"),
+        )
     )
     blocked = blocked[~blocked["reachable"].astype(bool)]
     if len(blocked):
@@ -231,12 +298,13 @@ def compare_table(
             + " in "
             + "; ".join(
                 f"{clean(scene)} (no two algorithms both have a value of {metric} there: nothing to test)"
+                if not r.common
+                else f"{clean(scene)} (the trials are copies of one run: no pair is tested; run the system again per trial)"
+                if r.copied
+                else f"{clean(scene)} (no two algorithms both have a value of {metric} there: nothing to test)"
                 if not np.isfinite(r.min_p)
                 else f"{clean(scene)} (every pair's results are the same on every sequence: no test can separate them)"
                 if r.min_p >= 1
-                else f"{clean(scene)} (the trials are copies of one run: no pair is tested; run the system again per "
-                "trial)"
-                if r.copied
                 else f"{clean(scene)} (smallest possible p {r.min_p:.4g}, x {len(pairs)} pair(s) by Holm)"
                 for scene, r in blocked.iterrows()
             )
