@@ -99,3 +99,21 @@ def test_a_sampled_test_draws_enough_for_holm_over_many_pairs_and_says_its_floor
     assert set(pairs.loc[pairs["significant"], "better"]) == {f"alg{a:02d}" for a in range(1, 15)}
     assert int(pairs["significant"].sum()) == 14
     assert (pairs.loc[pairs["significant"], "p_holm"] < 0.01).all()
+
+
+def test_the_header_says_what_the_intervals_resample_of_the_metric_compared(run):
+    """The header joined the units of every metric's intervals (``sequences x trials, trials``: a
+    scene with one sequence holding C-ATE); it names the compared metric's unit and the scenes
+    whose unit differs."""
+    seqs, durations = run
+    rng = np.random.default_rng(5)
+    reruns = [rerun_trials(seqs, (1,), seed).drop(columns="trial") for seed in range(4)]
+    reruns = [r.assign(c_ate_rmse=r["c_ate_rmse"] * np.exp(rng.normal(0, 0.19, len(r)))) for r in reruns]
+    table = pd.concat([_labelled(reruns[:2], "a"), _labelled(reruns[2:], "b")], ignore_index=True)
+    home = (table["scene"] == "home") & (table["seq"] != table.loc[table["scene"] == "home", "seq"].min())
+    table.loc[home, ["c_ate_rmse", "c_aoe_rmse"]] = np.nan  # home: one sequence with a correct pose
+    table.loc[home, "c_matched"] = 0
+    cr = compare_table(table, durations).header
+    assert "bootstrap intervals over sequences x trials (" in cr and ", trials" not in cr.split("(")[0]
+    ate = compare_table(table, durations, metric="c_ate_rmse").header
+    assert "bootstrap intervals over sequences x trials (trials in home) (" in ate, ate[:200]

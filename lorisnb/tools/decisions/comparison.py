@@ -265,7 +265,7 @@ def compare_table(
     ]
     algs = algs.rename(columns={"sequences": "sequences_with_output", "expected": "scene_sequences"})
     trials = _trials_said(full, copies)
-    units = ", ".join(sorted(set(ci["unit"])))
+    units = _units_said(ci[ci["metric"] == metric])
     header = (
         f"{metric} per algorithm and scene, {level:.0%} bootstrap intervals over {units} ({trials}); "
         f"missing sequences count as failed runs; rank = 1 + algorithms significantly better by a permutation "
@@ -330,6 +330,19 @@ def compare_table(
         power_note = (f"--power {power_delta:g}: no pair sized: " + ("; ".join(why) if why else
                       "no scene has two algorithms with a value to compare")) if power.empty else ""  # fmt: skip
     return Comparison(algs, pairs, sig, ci, cover, power, header, summary, notes, power_note)
+
+
+def _units_said(ci: pd.DataFrame) -> str:
+    """What the bootstrap intervals resample, for the header: the unit most scenes have, then the
+    scenes whose unit differs (one sequence with output: its trials alone); ``sequences x trials,
+    trials`` was said where one scene had a single sequence."""
+    per = ci.drop_duplicates(["suite", "scene"])
+    if per.empty:
+        return "sequences"
+    common = per["unit"].value_counts().index[0]
+    other = per[per["unit"] != common]
+    return common + "".join(f" ({u} in {', '.join(clean(s) for s in g['scene'])})"
+                            for u, g in other.groupby("unit", sort=True))  # fmt: skip
 
 
 def _trials_said(full: pd.DataFrame, copies: set[str]) -> str:
