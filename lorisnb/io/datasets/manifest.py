@@ -29,6 +29,8 @@ Example (every key but ``[[session]]`` optional)::
     groundtruth = "V1_01_easy/mav0/state_groundtruth_estimate0/data.csv"
     # estimate = "V1_01_easy.txt"   # default: the session name with the estimate format's suffix
     # groundtruth_format = "euroc"  # default: the manifest's groundtruth_format
+    # estimate_times = "00/times.txt"     # KITTI estimates' stamps, one per pose (--est-times)
+    # groundtruth_times = "00/times.txt"  # a KITTI ground truth's (--gt-times); both inside the root
 """
 
 from __future__ import annotations
@@ -60,7 +62,11 @@ SUFFIX = {name: suffixes(name)[0] for name in TRAJECTORY_FORMATS}  # an estimate
 TOP_KEYS = {"name", "scene", "root", "lifelong", "groundtruth_format", "estimate_format", "eps", "phi", "source",
             "conventions", "transform", "session", "groundtruth_topic", "estimate_topic", "groundtruth_tf",
             "estimate_tf", "openloris"}  # fmt: skip
-SESSION_KEYS = {"name", "seq", "scene", "groundtruth", "estimate", "groundtruth_format"}
+SESSION_KEYS = {"name", "seq", "scene", "groundtruth", "estimate", "groundtruth_format", "estimate_times",
+                "groundtruth_times"}  # fmt: skip
+#: A session's times files (KITTI's times.txt, one stamp per pose) by the reading option they are
+#: (:data:`lorisnb.io.readers.options.NEEDS`: the command line's --est-times / --gt-times).
+TIMES_KEYS = {"est_times": "estimate_times", "gt_times": "groundtruth_times"}
 TRANSFORM_KEYS = {"translation", "quaternion"}
 READING_KEYS = {
     "topic": "estimate_topic",
@@ -81,6 +87,8 @@ class Session:
     groundtruth: Path
     estimate: str
     groundtruth_format: str = "tum"
+    estimate_times: Path | None = None  # KITTI estimates' times file (the command line's --est-times)
+    groundtruth_times: Path | None = None  # a KITTI ground truth's times file (--gt-times)
 
 
 @dataclass(frozen=True)
@@ -277,7 +285,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         if not isinstance(item, dict) or "groundtruth" not in item:
             raise ParseError(path, None, f"session {k}: expected a table with at least 'groundtruth = \"file\"'")
         check_keys(item, SESSION_KEYS, path, f"[[session]] {k}: ", lambda key, k=k: _line(text, "session", key, k))
-        for key in ("name", "scene", "groundtruth", "estimate"):
+        for key in ("name", "scene", "groundtruth", "estimate", *TIMES_KEYS.values()):
             _text(item, key, path, f"[[session]] {k}: ", _line(text, "session", key, k))
             if key in item and not item[key].strip():  # "" would name the root folder, or a file ".txt"
                 raise ParseError(path, None, f"[[session]] {k}: {key} = {item[key]!r}: expected a non-empty name")
@@ -287,6 +295,16 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         groundtruth = named_entry(root, str(item["groundtruth"]))  # as estimates are found: NFC or NFD on disk
         if not outside:
             _confined(groundtruth, allowed, path, f"[[session]] {k}: groundtruth")
+        times: dict[str, Path | None] = {}
+        for key in TIMES_KEYS.values():  # a times file: found and confined as the ground truth is
+            if key not in item:
+                times[key] = None
+                continue
+            if not outside:
+                _confined(root / str(item[key]), allowed, path, f"[[session]] {k}: {key}")
+            times[key] = found = named_entry(root, str(item[key]))
+            if not outside:
+                _confined(found, allowed, path, f"[[session]] {k}: {key}")
         seq = item.get("seq", k)
         if "seq" in item:  # the rule of every surface (--seq, seq=): a positive whole number
             try:
@@ -311,8 +329,16 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
                     path,
                     _line(text, "session", "groundtruth_format", k) if "groundtruth_format" in item else None,
                 ),
+                estimate_times=times["estimate_times"],
+                groundtruth_times=times["groundtruth_times"],
             )  # fmt: skip
         )
+        try:  # the command line's rule (--est-times, --gt-times): times files only for KITTI files
+            check_reading({o: item.get(key) for o, key in TIMES_KEYS.items()}, est_fmt,
+                          sessions[-1].groundtruth_format, name=lambda o: TIMES_KEYS[o])  # fmt: skip
+        except ValidationError as exc:
+            first = str(exc).split(":", 1)[0]
+            raise ParseError(path, _line(text, "session", first, k), f"[[session]] {k} ({name!r}): {exc}") from None
     seqs = [s.seq for s in sessions]
     if len(set(seqs)) != len(seqs):
         raise ParseError(path, None, f"session numbers repeat ({seqs}); expected each session once")

@@ -25,8 +25,8 @@ from lorisnb.core.pipeline.sessions import compute_errors, evaluate_sessions, mo
 from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.core.trajectory.units import check_stamp_units
-from lorisnb.errors import DataNotFoundError, LorisError, LorisWarning, ParseError, ValidationError
-from lorisnb.io.datasets.manifest import Manifest
+from lorisnb.errors import DataNotFoundError, EvaluationError, LorisError, LorisWarning, ParseError, ValidationError
+from lorisnb.io.datasets.manifest import Manifest, Session
 from lorisnb.io.datasets.paths import DataPaths, groundtruth_spans, load_groundtruth, named_entry, read_groundtruth_file
 from lorisnb.io.readers.openloris import declared_scene, read_openloris
 from lorisnb.io.readers.plain import read_trajectory
@@ -215,9 +215,11 @@ def _moved(data: DataPaths, scene: str, drop_repeated: bool, frame: str, officia
     return moved_groundtruth(load_groundtruth(scene, data, drop_repeated), scene, frame, official)
 
 
-def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure | None]:
-    """Evaluate one input: ``("ok", FileErrors)``, ``("failed" | "skipped", Failure)`` or
-    ``("filtered", None)`` when its scene is not wanted. Never raises for bad input."""
+def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure | PartialErrors | None]:
+    """Evaluate one input: ``("ok", FileErrors)``, ``("failed" | "skipped", Failure)``,
+    ``("filtered", None)`` when its scene is not wanted, or ``("partial", PartialErrors)``: a
+    manifest job some of whose sessions failed alone. Never raises for bad input."""
+    partial: list[Failure] = []
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", LorisWarning)  # kept in FileErrors.warnings
@@ -226,7 +228,13 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
             elif job.kind == "pair":
                 errors = _pair(job)
             else:
-                errors = _manifest(job)
+                got = _manifest(job)
+                if isinstance(got, PartialErrors):
+                    if got.errors is None:  # every session failed, each alone
+                        return "partial", got
+                    partial = got.failures
+                    got = got.errors
+                errors = got
         if errors is None:
             return "filtered", None
         o = job.spec.rpe_options()
@@ -244,7 +252,7 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
             scored = True
         if scored and not job.keep_poses:  # only that table is wanted: its scores travel, not each pose's errors
             errors.sequences = [scores_only(e) for e in errors.sequences]
-        return "ok", errors
+        return ("partial", PartialErrors(errors, partial)) if partial else ("ok", errors)
     except DataNotFoundError as exc:
         return "skipped", Failure(job.path, str(exc), "not-public" if exc.scene in NOT_PUBLIC else "no-groundtruth")
     except LorisError as exc:  # said with the input it is about (an alignment's or an option's error names none)
@@ -399,10 +407,9 @@ def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) 
     )  # fmt: skip
 
 
-def _manifest(job: Job) -> FileErrors:
+def _manifest(job: Job) -> FileErrors | PartialErrors:
     m = job.manifest
     assert m is not None
-    algorithm, _, suite, trial = labels(job.path / "x", job.root, job.trials_by)
     sessions = [s for s in m.sessions if s.scene == job.scene]
     gts: dict[int, Trajectory] = {}
     notes: list[str] = []  # the ground truths' first, then the estimates'
@@ -411,25 +418,79 @@ def _manifest(job: Job) -> FileErrors:
             raise ParseError(
                 s.groundtruth, None, f"ground truth of session {s.name!r} not found ({m.path}: root and groundtruth)"
             )
-        gts[s.seq] = groundtruth_of(s.groundtruth, s.groundtruth_format, None, m.groundtruth_topic, m.groundtruth_tf,
-                                    _gt_rule(job.spec, s.groundtruth_format, job.spec.repeated), notes)  # fmt: skip
+        gts[s.seq] = groundtruth_of(s.groundtruth, s.groundtruth_format, s.groundtruth_times, m.groundtruth_topic,
+                                    m.groundtruth_tf, _gt_rule(job.spec, s.groundtruth_format, job.spec.repeated),
+                                    notes)  # fmt: skip
     ests: dict[int, Trajectory] = {}
     found = {s.seq: named_entry(job.path, s.estimate) for s in sessions}  # NFC or NFD, as the file system has it
+    failed: list[Failure] = []  # sessions whose estimate cannot be read: each fails alone, the others are scored
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LorisWarning)
         for s in sessions:
             path = found[s.seq]
             if path.exists():
-                elsewhere = None if m.outside else outside_results(path, job.root or job.path)
                 try:
-                    ests[s.seq] = read_trajectory(path, m.estimate_format, topic=m.estimate_topic, tf=m.estimate_tf,
-                                                  repeated=job.spec.repeated, repair_stamps=job.spec.repair_stamps)  # fmt: skip
-                except ParseError as exc:  # a link out of the results folder: read, never quoted
-                    if elsewhere is None:
-                        raise
-                    raise unquoted(exc, elsewhere) from None
-                check_stamp_units(ests[s.seq], gts[s.seq], str(path))
+                    ests[s.seq] = _session_estimate(job, s, path, gts[s.seq])
+                except DataNotFoundError:
+                    raise
+                except LorisError as exc:
+                    said = str(exc)
+                    if str(path) not in said and path.name not in said:
+                        said = f"{path}: {said}"
+                    failed.append(Failure(path, said, type(exc).__name__))
     notes += [str(w.message) for w in caught]
+    bad = {s.seq for s in sessions if found[s.seq] in {f.path for f in failed}}
+    out = _manifest_rows(job, sessions, gts, ests, found, notes, bad)
+    if not failed:
+        assert out is not None
+        return out
+    return PartialErrors(out, failed)
+
+
+@dataclass(frozen=True)
+class PartialErrors:
+    """A manifest job some of whose sessions failed (an estimate that cannot be read): the errors of
+    the others (None when every session failed) and a Failure for each failed session."""
+
+    errors: FileErrors | None
+    failures: list[Failure]
+
+
+def _session_estimate(job: Job, s: Session, path: Path, gt: Trajectory) -> Trajectory:
+    """One manifest session's estimate, read (its times file with it) and its stamps' unit checked
+    against its ground truth's; an error names the manifest's keys, not the command line's options."""
+    m = job.manifest
+    assert m is not None
+    elsewhere = None if m.outside else outside_results(path, job.root or job.path)
+    try:
+        est = read_trajectory(path, m.estimate_format, stamps=s.estimate_times, topic=m.estimate_topic,
+                              tf=m.estimate_tf, repeated=job.spec.repeated, repair_stamps=job.spec.repair_stamps)  # fmt: skip
+    except ParseError as exc:  # a link out of the results folder: read, never quoted
+        if elsewhere is None:
+            raise
+        raise unquoted(exc, elsewhere) from None
+    try:
+        check_stamp_units(est, gt, str(path))
+    except EvaluationError as exc:  # the manifest's spelling of the times options
+        where = f"in its [[session]] table of {m.path}"
+        said = (str(exc).replace("give --est-times FILE", f"give estimate_times = 'FILE' {where}")
+                .replace("give --gt-times FILE", f"give groundtruth_times = 'FILE' {where}")
+                .replace("(--est-times and --gt-times)", f"(estimate_times and groundtruth_times {where})"))  # fmt: skip
+        raise EvaluationError(said) from None
+    return est
+
+
+def _manifest_rows(
+    job: Job, sessions: list[Session], gts: dict[int, Trajectory], ests: dict[int, Trajectory],
+    found: dict[int, Path], notes: list[str], failed: set[int],
+) -> FileErrors | None:  # fmt: skip
+    """The rows of a manifest job: the sessions with an estimate scored, each other one without its
+    file scored as missing output, as the paper scores it; one whose file failed (``failed``, by its
+    number) has no row (its Failure says it; the scene's CR and coverage still count its time).
+    None: every session failed."""
+    m = job.manifest
+    assert m is not None
+    algorithm, _, suite, trial = labels(job.path / "x", job.root, job.trials_by)
     spans = window_spans(gts, job.spec)
     errors = None
     if ests:
@@ -437,9 +498,8 @@ def _manifest(job: Job) -> FileErrors:
             gts, ests, job.spec, path=job.path, algorithm=algorithm, scene=job.scene, suite=suite, trial=trial,
             notes=notes, groundtruth_spans=spans, sources={k: str(p) for k, p in found.items()},
         )  # fmt: skip
-    absent = [s for s in sessions if s.seq not in ests]
+    absent = [s for s in sessions if s.seq not in ests and s.seq not in failed]
     if not absent:
-        assert errors is not None
         return errors
     # a declared session without its estimate: a row scored as the paper scores missing output, never dropped
     note = missing_note(job.path, algorithm, [(s.name, s.estimate) for s in absent], [s.estimate for s in sessions])

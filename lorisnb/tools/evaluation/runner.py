@@ -43,7 +43,7 @@ from lorisnb.tools.evaluation.inputs import (
     without_dataset_groundtruth,
     without_groundtruth,
 )
-from lorisnb.tools.evaluation.jobs import BIG_FILE_BYTES, Job, PairSource, absolute_paths, run_job
+from lorisnb.tools.evaluation.jobs import BIG_FILE_BYTES, Job, PairSource, PartialErrors, absolute_paths, run_job
 from lorisnb.tools.evaluation.pool import default_jobs, run_tasks, size_of
 from lorisnb.tools.evaluation.result import Evaluation, Failure, said_notes
 
@@ -110,6 +110,7 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
         raise ValidationError(f"executor: expected a concurrent.futures.Executor, got {type(executor).__name__}")
     done: list[FileErrors] = []
     failed: list[Failure] = []
+    in_table = 0  # failed manifest sessions beside their algorithm's other sessions, which are scored
     skipped: list[Failure] = []
     sizes = [size_of(j.path) if j.path.is_file() else 1 for j in jobs]
     unit = "file" if kind != "manifest" else "session set"
@@ -130,7 +131,16 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
                 value = replace(value, path=job.path, error=given(value.error))
             elif isinstance(value, FileErrors):
                 value.path, value.warnings = job.path, [given(w) for w in value.warnings]
-        if isinstance(value, FileErrors):
+            elif isinstance(value, PartialErrors):  # a manifest's sessions: each failure names its own file
+                if value.errors is not None:
+                    value.errors.path, value.errors.warnings = job.path, [given(w) for w in value.errors.warnings]
+                value = PartialErrors(value.errors, [replace(f, error=given(f.error)) for f in value.failures])
+        if isinstance(value, PartialErrors):  # some sessions failed alone: the others are scored
+            if value.errors is not None:
+                done.append(value.errors)
+                in_table += len(value.failures)
+            failed += value.failures
+        elif isinstance(value, FileErrors):
             done.append(value)
         elif isinstance(value, Failure):
             (failed if status == "failed" else skipped).append(value)
@@ -143,7 +153,12 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
     # inputs share: said in full for a few, then counted
     for w in [*dict.fromkeys(notes or []), *said_notes(done)]:
         warnings.warn(w, LorisWarning, stacklevel=3)
-    if failed:  # tables without them would look complete: a notebook says so at the call
+    if failed and in_table:  # a manifest's sessions that failed alone
+        more = f" (and {len(failed) - 1} more)" if len(failed) > 1 else ""
+        warnings.warn(f"{len(failed)} input(s) could not be evaluated and are in no table ({in_table} of them sessions "
+                      "whose algorithm's other sessions are scored); Evaluation.failures lists them with the reason, "
+                      f"exit_status() is 1: {failed[0].error}{more}", FailedInputsWarning, stacklevel=3)  # fmt: skip
+    elif failed:  # tables without them would look complete: a notebook says so at the call
         more = f" (and {len(failed) - 1} more)" if len(failed) > 1 else ""
         warnings.warn(f"{len(failed)} of {len(jobs)} inputs could not be evaluated and are in no table; "
                       f"Evaluation.failures lists them with the reason, exit_status() is 1: "
@@ -519,8 +534,10 @@ def evaluate_manifest(
     notes = refuse_over_manifest(the_spec, m, options) + replaced_by_preset(m, the_spec, options)
     the_spec.refuse_scenes(m.scenes)  # eps='paper' for scenes not OpenLORIS': refused before any file is read
     _refuse_reading(the_spec, m.estimate_format, "manifest")
-    if m.estimate_format == "kitti" and all(s.groundtruth_format == "kitti" for s in m.sessions):
-        the_spec = by_index(the_spec)  # a manifest gives KITTI files no times: pose i with pose i
+    if m.estimate_format == "kitti" and all(
+        s.groundtruth_format == "kitti" and s.estimate_times is None and s.groundtruth_times is None for s in m.sessions
+    ):
+        the_spec = by_index(the_spec)  # KITTI files without times (estimate_times, groundtruth_times): pose i with i
     compile_trials_by(trials_by)
     for s in m.sessions:  # an estimate lies in each algorithm's folder: a path leaving it reads one file for all
         name = os.path.normpath(s.estimate)
@@ -534,6 +551,10 @@ def evaluate_manifest(
             raise ParseError(
                 s.groundtruth, None, f"ground truth of session {s.name!r} {why} ({m.path}: root and groundtruth)"
             )
+        for key, times in (("estimate_times", s.estimate_times), ("groundtruth_times", s.groundtruth_times)):
+            if times is not None and not times.is_file():
+                raise ParseError(times, None, f"{key} of session {s.name!r} not found; expected a times file, one stamp "
+                                 f"in seconds per line ({m.path}: root and {key})")  # fmt: skip
     folders = algorithm_folders(results, m)
     _check_trials([(f / "x", r) for f, r in folders], trials_by)
     # algorithm folders read as trials of one name (slam_run1/, slam_run2/): said, as evaluate says it
