@@ -93,3 +93,22 @@ def test_a_session_that_cannot_be_read_fails_alone(tmp_path, xyz):
     (errors,) = ev.errors  # algX is in the table, with its good session
     assert [(s.seq, s.matched) for s in errors.sequences] == [(1, len(lines))]
     assert ev.exit_status() == 1
+
+
+@pytest.mark.parametrize(
+    ("where", "key", "value", "line"),
+    [(None, "eps", '"0.05"', 1), ("conventions", "tau", '"60"', 3), ("conventions", "rpe_delta", '" 1"', 3)],
+)
+def test_a_number_in_quotes_is_refused(tmp_path, where, key, value, line):
+    (tmp_path / "gt.txt").write_text("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n")
+    body = f"{key} = {value}\n" if where is None else ""
+    body += '[conventions]\npreset = "evo"\n' + (f"{key} = {value}\n" if where else "")
+    (tmp_path / "m.toml").write_text(body + '[[session]]\nname = "a"\ngroundtruth = "gt.txt"\n')
+    with pytest.raises(ParseError, match=rf"line {line}: .*{key} = .*: a number in quotes is text; write it without"):
+        read_manifest(tmp_path / "m.toml")
+
+
+def test_documented_words_stay_accepted(tmp_path):
+    (tmp_path / "gt.txt").write_text("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n")
+    (tmp_path / "m.toml").write_text('eps = "relative:0.1"\n[[session]]\nname = "a"\ngroundtruth = "gt.txt"\n')
+    assert read_manifest(tmp_path / "m.toml").spec.eps == "relative:0.1"

@@ -375,6 +375,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         preset = None if preset is None else validate.choice("[conventions] preset", preset, tuple(PRESETS))
     except ValidationError as exc:
         raise ParseError(path, _line(text, "conventions", "preset"), str(exc)) from None
+    _refuse_quoted_numbers(options, table, path, text)
     spec = _manifest_spec(preset, options, transform, table, path, text)
     _refuse_own(spec, preset, table, raw, est_fmt, list(dict.fromkeys(s.scene for s in sessions)), path, text)
     _refuse_together(spec, options, table, path, text)
@@ -568,6 +569,22 @@ def _manifest_spec(
     except ValidationError as exc:  # a rule between values: the line of the first one named
         named = [k for k in options if str(exc).startswith(k)]
         raise ParseError(path, _key_line(named[0], table, text) if named else None, str(exc)) from None
+
+
+def _refuse_quoted_numbers(options: dict[str, Any], table: dict[str, Any], path: Path, text: str) -> None:
+    """A number written in quotes (``eps = "0.05"``, ``tau = "60"``) is text, not a number, as
+    ``lifelong = "no"`` is no boolean: refused for every option, saying to write it without quotes.
+    Words an option documents (``eps = "paper"``, ``"relative:0.1"``) are no numbers and pass."""
+    for key, value in options.items():
+        if not isinstance(value, str):
+            continue
+        try:
+            float(value.strip())
+        except ValueError:
+            continue
+        where = "[conventions] " if key in table else ""
+        raise ParseError(path, _key_line(key, table, text), f"{where}{key} = {value!r}: a number in quotes is text; "
+                         f"write it without quotes ({key} = {value.strip()}), as TOML writes numbers")  # fmt: skip
 
 
 def _key_line(key: str, table: dict[str, Any], text: str) -> int | None:
