@@ -117,3 +117,26 @@ def test_the_header_says_what_the_intervals_resample_of_the_metric_compared(run)
     assert "bootstrap intervals over sequences x trials (" in cr and ", trials" not in cr.split("(")[0]
     ate = compare_table(table, durations, metric="c_ate_rmse").header
     assert "bootstrap intervals over sequences x trials (trials in home) (" in ate, ate[:200]
+
+
+@pytest.mark.parametrize(
+    ("edit", "said"),
+    [
+        (lambda t: t.assign(cr=t["cr"].where(t.index != 0, 1.7)), "column cr: 1.7 is not a rate between 0 and 1"),
+        (lambda t: t.assign(cr=t["cr"].where(t.index != 0, np.nan)), "column cr: nan is not a rate"),
+        (
+            lambda t: t.assign(cr=t["cr"].astype(object).where(t.index != 0, "high")),
+            "column cr: 'high' is not a number",
+        ),
+        (lambda t: t.assign(trial=[1.5] + [1] * (len(t) - 1)), "column trial: 1.5 is not a trial number"),
+    ],
+)
+def test_a_table_edited_by_hand_is_refused_by_compare_as_by_diff(run, edit, said):
+    """``compare_table`` took a CR of 1.7 (the scene value moved 0.741 -> 0.841 with no word), NaN,
+    text and a trial 1.5; it refuses them naming the row, as ``diff`` does (one check)."""
+    from lorisnb.errors import ValidationError
+
+    seqs, durations = run
+    with pytest.raises(ValidationError, match="row 0 .*" + said.replace("(", r"\(")):
+        compare_table(edit(seqs.copy()), durations)
+    assert not compare_table(seqs.copy(), durations).algorithms.empty  # the table as evaluate made it

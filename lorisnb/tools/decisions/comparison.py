@@ -219,6 +219,10 @@ def compare_table(
     metric = validate.choice("metric", metric, tuple(stats.WEIGHTS))  # CR as the command line reads it
     if table.empty:
         raise ValidationError("table: no sequence to compare (nothing was scored)")
+    from lorisnb.tools.decisions.diff import check_numbers  # diff builds on this module
+
+    table = table.copy()
+    check_numbers(table)  # a table edited by hand is refused, naming the row, as diff refuses it
     if power_delta is not None:  # a difference the metric can show: a rate moves by 1 at most
         power_delta = validate.positive("power delta", power_delta, "the metric's unit")
         if metric in RATES and power_delta > 1:

@@ -20,7 +20,16 @@ from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_text
 from lorisnb.tools.decisions.comparison import check_table_duplicates
 from lorisnb.tools.decisions.escape import clean, code_span, markdown_cell, workflow_data, workflow_property
-from lorisnb.tools.decisions.runs import COUNTS, NUMBERS, out_of_domain, repeated_key, setting_differences, shown
+from lorisnb.tools.decisions.runs import (
+    COUNTS,
+    INDICES,
+    NUMBERS,
+    SECONDS,
+    out_of_domain,
+    repeated_key,
+    setting_differences,
+    shown,
+)
 from lorisnb.tools.evaluation.status import OK, UNSCORED
 
 if TYPE_CHECKING:
@@ -55,7 +64,7 @@ def keyed(table: pd.DataFrame, name: str | None = None) -> pd.DataFrame:
 def _keyed(table: pd.DataFrame) -> pd.DataFrame:
     t = with_trials(table)
     t["suite"] = t["suite"].fillna("").astype(str)
-    _check_numbers(t)
+    check_numbers(t)
     if "table" not in t.columns and "eps_value" not in t.columns:
         check_table_duplicates(t)  # two files for one sequence: named, with what to do
     found = repeated_key(t)  # a table read from a file was refused when read, naming its lines (load_run)
@@ -68,19 +77,23 @@ def _keyed(table: pd.DataFrame) -> pd.DataFrame:
     return t
 
 
-def _check_numbers(t: pd.DataFrame) -> None:
+def check_numbers(t: pd.DataFrame) -> None:
     """The numbers the verdict reads, as a table read from a file is checked
     (:func:`lorisnb.tools.decisions.runs.read_table`): a number where a number is expected, and every
     judged metric in the domain an evaluation writes (a rate in [0, 1], never NaN; an RMSE finite and
     >= 0, NaN only without a pose to take it over); else an error naming the row, the column and the
     value (a table edited by hand, in Python as on the command line: NaN in CR would otherwise be
-    "too little to judge", never a regression). The columns are made numeric in place."""
+    "too little to judge", never a regression; ``compare`` took a CR of 1.7 and moved a scene's value by
+    0.1 with no word). The columns are made numeric in place."""
+
+    def whole(v: object) -> object:  # a number read as a float (1.0) said as written (1)
+        return int(v) if isinstance(v, float) and v.is_integer() else v
 
     def where(i: int) -> str:
         r = t.iloc[i]
-        return f"row {i} ({r.get('algorithm')} {r.get('scene')}-{r.get('seq')}, trial {r.get('trial')})"
+        return f"row {i} ({r.get('algorithm')} {r.get('scene')}-{whole(r.get('seq'))}, trial {whole(r.get('trial'))})"
 
-    for c in (c for c in dict.fromkeys([*NUMBERS, *METRICS, *COUNTS]) if c in t.columns):
+    for c in (c for c in dict.fromkeys([*NUMBERS, *METRICS, *COUNTS, *INDICES, *SECONDS]) if c in t.columns):
         v = pd.to_numeric(t[c], errors="coerce")
         text = t[c].astype(str).str.strip().str.lower()
         bad = (v.isna() & t[c].notna() & ~text.isin(["nan", "", "none"])).to_numpy()
@@ -89,12 +102,14 @@ def _check_numbers(t: pd.DataFrame) -> None:
             raise ValidationError(f"{where(i)}: column {c}: {shown(t[c].iloc[i])} is not a number; expected a "
                                   "per-sequence table as lorisnb evaluate writes it")  # fmt: skip
         t[c] = v.astype(float)
-    for c in (c for c in METRICS if c in t.columns):
+    for c in (c for c in dict.fromkeys([*METRICS, *INDICES, *SECONDS]) if c in t.columns):
         bad, expected = out_of_domain(t, c)
         if bad.any():
             i = int(bad.nonzero()[0][0])
             raise ValidationError(f"{where(i)}: column {c}: {shown(t[c].iloc[i])} is not {expected}; expected a "
                                   "per-sequence table as lorisnb evaluate writes it")  # fmt: skip
+    for c in (c for c in INDICES if c in t.columns):  # whole numbers, checked: kept so (a label says 2, not 2.0)
+        t[c] = t[c].astype("int64")
 
 
 def diff_tables(
