@@ -68,6 +68,8 @@ def test_a_sequence_lacking_some_trials_has_output_and_its_missing_trials_are_na
         (s, t) for s in (1, 3, 4, 5) for t in (1, 2, 3) if (s, t) not in {(3, 1)}
     ]
     notes = coverage_notes(cover)
-    assert any("orb has no output for home sequence(s) 1, 4, 5 (output for 2 of its 5 sequences)" in n for n in notes), notes
+    assert any(
+        "orb has no output for home sequence(s) 1, 4, 5 (output for 2 of its 5 sequences)" in n for n in notes
+    ), notes
     assert any("orb lacks trials of home (sequence: trials) 3: 2, 3" in n for n in notes), notes
     assert cover[cover["algorithm"] == "vins"].iloc[0]["missing_trials"] == ""
