@@ -78,3 +78,16 @@ def test_answers_that_forge_a_reply_and_the_grader_sync_score_0_with_a_true_note
         assert "wrote into the grader's reply channel" in s.message
     assert not any("the values graded are those the sandbox replied" in n for n in res.notes)
     assert any(n.startswith("the submission's code wrote replies of its own") for n in res.notes)
+
+
+def test_code_that_forges_and_ends_the_sandbox_before_its_own_reply_is_found(tmp_path):
+    """The s68 re-test: a prediction that forged its reply, answered the sync and ended the
+    process (``os._exit``) before the child's own reply scored 1/1 with no note (its sandbox was
+    closed without a look). The loop never ends by itself, so a process that ended after the
+    reply was read puts that request in ``late``."""
+    with Sandbox(tmp_path, limits=Limits(cell_timeout_s=20), uid=0, no_lorisnb=True) as box:
+        box.run("a = 1.0", ("a",), name="<answer X>")
+        forged = FORGE_AND_SYNC.format(body="'values': {'p': {'value': 1.0}}") + "import os\nos._exit(0)\n"
+        box.run("p = 0.2\n" + forged, ("p",), name="<answer P>")
+    assert [name for name, _ in box.late] == ["<answer P>"], box.late
+    assert "ended on its own after its reply was read" in box.late[0][1]

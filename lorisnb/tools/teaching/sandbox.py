@@ -406,7 +406,7 @@ class Sandbox:
         wrote up to the grader's last request is read (:meth:`settle`: a reply to a request answered
         earlier is found even when it came after the grader's last request), unless the child is
         stopped for a limit or an error (it may be running code then, and answers nothing)."""
-        if settle and self._proc is not None and self._proc.poll() is None and self._answered:
+        if settle and self._proc is not None and self._answered:
             with contextlib.suppress(SandboxError, OSError, ValueError):
                 self.settle()
         proc, self._proc = self._proc, None
@@ -494,21 +494,46 @@ class Sandbox:
     def settle(self, timeout_s: float = SYNC_S) -> None:
         """Read everything the child wrote up to now: a sync request of the grader's and every line
         before its answer (a reply to a request answered earlier goes in :attr:`late`): the child
-        answers the sync once the code that ran for the last request has returned."""
+        answers the sync once the code that ran for the last request has returned. A child whose
+        process ended on its own after the last reply was read (the loop never ends by itself: the
+        code ended it, as code that forged its reply and left before the child's own could follow
+        does) puts that request in :attr:`late` too. Detection is best effort: code in the child can
+        also keep the child's own reply from being written, and is then not found; what it can
+        report is only what it computed itself."""
         proc = self._proc
-        if proc is None or proc.poll() is not None or proc.stdout is None:
+        if proc is None or proc.stdout is None:
+            return
+        if proc.poll() is not None:
+            self._ended_after_reply()
             return
         fd = proc.stdout.fileno()
-        self._drain(fd)
-        sync_id = secrets.token_hex(8)
-        self._send({"op": "sync", "id": sync_id})
-        deadline = time.monotonic() + timeout_s
-        while True:
-            line = self._next(fd, deadline, timeout_s)
-            if line is not None and line.get("id") == sync_id:
-                return
-            if line is not None:
-                self._unasked(line)
+        try:
+            self._drain(fd)
+            sync_id = secrets.token_hex(8)
+            self._send({"op": "sync", "id": sync_id})
+            deadline = time.monotonic() + timeout_s
+            while True:
+                line = self._next(fd, deadline, timeout_s)
+                if line is not None and line.get("id") == sync_id:
+                    return
+                if line is not None:
+                    self._unasked(line)
+        except SandboxTimeout:
+            raise
+        except SandboxError:
+            self._ended_after_reply()
+            raise
+
+    def _ended_after_reply(self) -> None:
+        """The child's process ended with no request pending: the last request answered goes in
+        :attr:`late` (once)."""
+        if not self._answered:
+            return
+        name = list(self._answered.values())[-1]
+        found = (f"{name}: the sandbox's process ended on its own after its reply was read (the code ended it, "
+                 "as code that forged its reply and left before the child's own reply does)")  # fmt: skip
+        if (name, found) not in self.late:
+            self.late.append((name, found))
 
     def _send(self, request: dict[str, Any]) -> None:
         proc = self._proc
