@@ -36,18 +36,25 @@ def indexed(trajectories: Iterable[Trajectory]) -> bool:
     return bool(trajs) and all(t.meta.get("stamps") == "index" for t in trajs)
 
 
-def by_index(spec: EvalSpec) -> EvalSpec:
+#: How each surface gives KITTI files their times (:func:`by_index`'s ``surface``).
+TIMES_BY_SURFACE = {"manifest": "estimate_times and groundtruth_times in each [[session]] table"}
+
+
+def by_index(spec: EvalSpec, surface: str = "cli") -> EvalSpec:
     """The spec for inputs whose stamps are pose indices: ``association="index"``, the rest kept.
-    A ValidationError when the user set an option of matching in time (it cannot apply)."""
+    A ValidationError when the user set an option of matching in time (it cannot apply), naming
+    the options and the times files as the caller's ``surface`` spells them (``cli``: ``max_diff
+    (--max-diff)``, ``--est-times``; ``manifest``: its keys ``estimate_times``, ``groundtruth_times``)."""
     if spec.association == "index":
         return spec
     given = [n for n in TIME_OPTIONS if n in spec.explicit]
     if given:
-        names = ", ".join(f"{n} (--{n.replace('_', '-')})" for n in given)
+        names = ", ".join(n if surface == "manifest" else f"{n} (--{n.replace('_', '-')})" for n in given)
+        times = TIMES_BY_SURFACE.get(surface, "--est-times and --gt-times")
         raise ValidationError(
             f"{names}: the stamps of both files are pose indices (KITTI files read without times), so poses are "
-            "paired by index (pose i with pose i) and no matching in time applies; give both files their times "
-            "(--est-times and --gt-times) to match them in time, filter or cut them"
+            f"paired by index (pose i with pose i) and no matching in time applies; give both files their times "
+            f"({times}) to match them in time, filter or cut them"
         )
     return replace(spec, association="index")
 

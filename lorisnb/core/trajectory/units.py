@@ -19,6 +19,8 @@ the other file, in seconds: poses a few seconds apart there are sparse, not mill
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from lorisnb.core.trajectory.poses import Trajectory
@@ -89,33 +91,40 @@ def stamp_unit(traj: Trajectory) -> str:
     return diagnose(traj)[0]
 
 
-def _cause(unit: str, why: str, role: str, option: str) -> str:
+#: How the command line names the options that fix a stamp unit (a manifest names its keys instead).
+CLI_NAMES = {"est_times": "--est-times FILE", "gt_times": "--gt-times FILE", "format": "--format euroc",
+             "gt_format": "--gt-format euroc", "both_times": "--est-times and --gt-times"}  # fmt: skip
+
+
+def _cause(unit: str, why: str, role: str, option: str, euroc: str = "") -> str:
+    """Why one file's stamps are not seconds; ``option``: how the caller gives its times file
+    (``--est-times FILE``), ``euroc``: how it reads the file as EuRoC (``--format euroc``)."""
     if unit == "index":
-        return (
-            f"the {role}'s stamps are pose indices 0, 1, 2, ... (a KITTI file read without its times: "
-            f"give {option} FILE)"
-        )
+        return f"the {role}'s stamps are pose indices 0, 1, 2, ... (a KITTI file read without its times: give {option})"
     if unit == "too fine":
         return (
             f"the {role}'s stamps look read in too small a unit ({why}, faster than 5 kHz: EuRoC CSV stamps "
             "written in milliseconds or microseconds instead of nanoseconds?)"
         )
     if unit in DIVISOR:
-        euroc = ""
+        hint = ""
         if unit == "nanoseconds":
-            euroc = (
-                f"a EuRoC CSV read as TUM text? {'--gt-format' if role == 'ground truth' else '--format'} euroc; or "
-            )
-        return f"the {role}'s stamps look like {unit} ({why}; {euroc}divide the stamps by {DIVISOR[unit]})"
+            fallback = "--gt-format euroc" if role == "ground truth" else "--format euroc"
+            hint = f"a EuRoC CSV read as TUM text? {euroc or fallback}; or "
+        return f"the {role}'s stamps look like {unit} ({why}; {hint}divide the stamps by {DIVISOR[unit]})"
     return f"the {role}'s stamps are seconds"
 
 
-def check_stamp_units(est: Trajectory, gt: Trajectory, label: str = "estimate") -> None:
+def check_stamp_units(
+    est: Trajectory, gt: Trajectory, label: str = "estimate", names: Mapping[str, str] | None = None
+) -> None:
     """Raise EvaluationError unless the estimate's and the ground truth's stamps are both seconds or
     both pose indices (:func:`diagnose`; two KITTI files without times are paired by index). Every
     time option of lorisnb (max gap, max diff, delta, tau, the RPE step) is in seconds, so stamps in
     other units match nothing or give numbers that mean nothing; the message names the likely cause
-    and the option that fixes it."""
+    and the option that fixes it. ``names``: how the caller's surface gives those options (keys of
+    :data:`CLI_NAMES`, the command line's spellings by default; a manifest's keys for its sessions)."""
+    said = {**CLI_NAMES, **(names or {})}
     (ue, we), (ug, wg) = diagnose(est), diagnose(gt)
     if ue == ug and ue in ("seconds", "index"):
         return
@@ -124,7 +133,7 @@ def check_stamp_units(est: Trajectory, gt: Trajectory, label: str = "estimate") 
     if ue == ug:  # both in the same unit, not seconds
         fix = f"divide the stamps of both by {DIVISOR[ue]}" if ue in DIVISOR else ""
         if ue == "nanoseconds":
-            fix = f"EuRoC CSV files read as TUM text? (--format euroc / --gt-format euroc); else {fix}"
+            fix = f"EuRoC CSV files read as TUM text? ({said['format']} / {said['gt_format']}); else {fix}"
         elif ue == "too fine":
             fix = "EuRoC CSV stamps written in milliseconds or microseconds instead of nanoseconds? write them as nanoseconds"
         unit = "a unit read too small" if ue == "too fine" else ue
@@ -132,9 +141,8 @@ def check_stamp_units(est: Trajectory, gt: Trajectory, label: str = "estimate") 
             f"{label}: the stamps of both files look like {unit} (estimate: {we}; ground truth: {wg}), but "
             f"lorisnb's times (max gap, max diff, delta, tau, the RPE step) are seconds: {fix}. Nothing was compared."
         )
-    both = f"{_cause(ue, we, 'estimate', '--est-times')}, but {_cause(ug, wg, 'ground truth', '--gt-times')}"
+    both = (f"{_cause(ue, we, 'estimate', said['est_times'], said['format'])}, but "
+            f"{_cause(ug, wg, 'ground truth', said['gt_times'], said['gt_format'])}")  # fmt: skip
     if "index" in (ue, ug):
-        both += (
-            "; give both files their times (--est-times and --gt-times), or neither to pair two KITTI files by index"
-        )
+        both += f"; give both files their times ({said['both_times']}), or neither to pair two KITTI files by index"
     raise EvaluationError(f"{label}: stamps in different units: {both}. Nothing was compared.")

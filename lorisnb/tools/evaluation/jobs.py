@@ -25,7 +25,7 @@ from lorisnb.core.pipeline.sessions import compute_errors, evaluate_sessions, mo
 from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.core.trajectory.units import check_stamp_units
-from lorisnb.errors import DataNotFoundError, EvaluationError, LorisError, LorisWarning, ParseError, ValidationError
+from lorisnb.errors import DataNotFoundError, LorisError, LorisWarning, ParseError, ValidationError
 from lorisnb.io.datasets.manifest import Manifest, Session
 from lorisnb.io.datasets.paths import DataPaths, groundtruth_spans, load_groundtruth, named_entry, read_groundtruth_file
 from lorisnb.io.readers.openloris import declared_scene, read_openloris
@@ -469,14 +469,12 @@ def _session_estimate(job: Job, s: Session, path: Path, gt: Trajectory) -> Traje
         if elsewhere is None:
             raise
         raise unquoted(exc, elsewhere) from None
-    try:
-        check_stamp_units(est, gt, str(path))
-    except EvaluationError as exc:  # the manifest's spelling of the times options
-        where = f"in its [[session]] table of {m.path}"
-        said = (str(exc).replace("give --est-times FILE", f"give estimate_times = 'FILE' {where}")
-                .replace("give --gt-times FILE", f"give groundtruth_times = 'FILE' {where}")
-                .replace("(--est-times and --gt-times)", f"(estimate_times and groundtruth_times {where})"))  # fmt: skip
-        raise EvaluationError(said) from None
+    where = f"in its [[session]] table of {m.path}"
+    check_stamp_units(est, gt, str(path), names={  # the manifest's keys, not the command line's options
+        "est_times": f"estimate_times = 'FILE' {where}", "gt_times": f"groundtruth_times = 'FILE' {where}",
+        "both_times": f"estimate_times and groundtruth_times {where}", "format": f"estimate_format = 'euroc' in {m.path}",
+        "gt_format": f"groundtruth_format = 'euroc' in {m.path}",
+    })  # fmt: skip
     return est
 
 
