@@ -36,36 +36,47 @@ def _labelled(parts: list[pd.DataFrame], label: str) -> pd.DataFrame:
     return pd.concat([p.assign(trial=k + 1, algorithm=label) for k, p in enumerate(parts)], ignore_index=True)
 
 
-def test_copies_of_a_rerun_beside_a_real_one_count_once_for_the_metric_tested(run):
-    """Each label: two reruns and two copies of the second whose errors moved by 0.2 % and 0.3 %
-    (CR the same): the copies' rows are counted once, so the test sees two trials a sequence, not
-    four (every value differs beyond 1e-4, the CR does not)."""
+def _near(t: pd.DataFrame, seed: int) -> pd.DataFrame:
+    """A copy of a run passed through a script adding a trace of noise: errors moved by 0.1-0.5 %,
+    rates strictly between 0 and 1 by up to 1e-3 (a few poses flipping at the threshold)."""
+    rng = np.random.default_rng(seed)
+    out = _scaled(t, float(rng.uniform(1.001, 1.005)))
+    for c in ("cr", "cr_t", "cs_r"):
+        inside = (out[c] > 0) & (out[c] < 1)
+        out[c] = np.where(inside, np.clip(out[c] + rng.uniform(-1e-3, 1e-3, len(out)), 0, 1), out[c])
+    return out
+
+
+def test_copies_of_a_rerun_beside_a_real_one_count_once(run):
+    """Each label: two reruns and two copies of the second passed through a trace of noise (errors
+    0.1-0.5 %, CR up to 1e-3): the copies' rows are counted once, so the test sees two trials a
+    sequence, not four (every value differs beyond 1e-4, none beyond a trace of noise; 14 of 20 of a
+    helper's nights called one system different from itself so). Real reruns count in full."""
     seqs, durations = run
     reruns = [rerun_trials(seqs, (1,), seed).drop(columns="trial") for seed in range(4)]
-    x = _labelled([reruns[0], reruns[1], _scaled(reruns[1], 1.002), _scaled(reruns[1], 1.003)], "sys (1)")
-    y = _labelled([reruns[2], reruns[3], _scaled(reruns[3], 1.002), _scaled(reruns[3], 1.003)], "sys (2)")
+    x = _labelled([reruns[0], reruns[1], _near(reruns[1], 1), _near(reruns[1], 2)], "sys (1)")
+    y = _labelled([reruns[2], reruns[3], _near(reruns[3], 3), _near(reruns[3], 4)], "sys (2)")
     table = pd.concat([x, y], ignore_index=True)
     full, _, counted = prepared_table(table, durations, "cr")
-    inside = ((table["cr"] > 0) & (table["cr"] < 1)).groupby(table["algorithm"]).sum()
-    assert counted == {a: (int(inside[a] / 4 * 2), len(x)) for a in ("sys (1)", "sys (2)")}
-    tells = full[(full["cr"] > 0) & (full["cr"] < 1)]  # at 0 or 1 reruns tie: no copy is told there
-    assert (tells.groupby(["algorithm", "scene", "seq"]).size() == 2).all()
+    tracked = full[full["matched"] > 0]
+    assert (tracked.groupby(["algorithm", "scene", "seq"])["trial"].nunique() == 2).all()
+    with_output = int((seqs["matched"] > 0).sum())
+    assert counted == {a: (2 * with_output, len(x)) for a in ("sys (1)", "sys (2)")}
     res = compare_table(table, durations)
-    assert (res.pairs["trials_a"] >= 2).all()  # the test's trials: those left
-    assert any("or its cr (copies, not reruns), counted once" in n for n in res.notes)
-    # the every-value rule alone would have kept them: their errors differ by 0.2 %, beyond 1e-4
-    every = prepared_table(table.assign(cr=table["cr"] + 1e-3 * table["trial"]), durations, "cr")[2]
-    assert every == {}
+    assert any("within 1e-4 or a trace of noise (copies, not reruns), counted once" in n for n in res.notes)
+    honest = pd.concat([_labelled(reruns, "sys (1)"), _labelled([rerun_trials(seqs, (1,), 10 + k).drop(
+        columns="trial") for k in range(4)], "sys (2)")], ignore_index=True)  # fmt: skip
+    assert prepared_table(honest, durations, "cr")[2] == {}  # reruns: no row counted once
 
 
-def test_copies_with_a_realistic_ate_spread_and_a_cr_no_rerun_repeats_are_not_tested(run):
-    """Four copies of one run per label, positions scaled by 1.0-1.3 (ATE spread about 11 %, a
-    rerun's) and one pose dropped from the second (its CR 0.1 % lower): CR varies 90 times less than
-    reruns do, so the trials are copies for the CR test: no p-value, nothing reachable, and the
-    summary says why."""
-    seqs, durations = run
-    one = seqs.copy()
-    parts = [_scaled(one, f) for f in (1.0, 1.1, 1.2, 1.3)]
+def test_copies_with_a_realistic_ate_spread_and_a_cr_no_rerun_repeats_are_not_tested(icra20):
+    """At the paper's thresholds, four copies of one run per label, positions scaled by 1.0-1.3
+    (ATE spread about 11 %, a rerun's) and one pose dropped from the second (its CR 0.1 % lower):
+    CR varies 90 times less than reruns do, so the trials are copies for the CR test: no p-value,
+    nothing reachable, and the summary says why."""
+    ev = ln.evaluate([icra20 / "per-seq" / "orbslam2_rgbd"], progress=False)
+    seqs, durations = ev.sequences(eps="paper", phi=30), ev.durations()
+    parts = [_scaled(seqs, f) for f in (1.0, 1.1, 1.2, 1.3)]
     parts[1] = parts[1].assign(cr=parts[1]["cr"] * 0.999)
     table = pd.concat([_labelled(parts, "a"), _labelled([p.assign(cr=np.clip(p["cr"] * 0.9, 0, 1)) for p in parts],
                                                       "b")], ignore_index=True)  # fmt: skip
@@ -73,14 +84,31 @@ def test_copies_with_a_realistic_ate_spread_and_a_cr_no_rerun_repeats_are_not_te
     assert (res.pairs["test"] == COPIES_TEST).all()
     assert not res.pairs["reachable"].any() and res.pairs["min_p"].isna().all() and res.pairs["p"].isna().all()
     assert res.pairs["relabellings"].isna().all() and not res.pairs["significant"].any()
+    assert res.pairs["interval_level"].isna().all()
     assert "the trials are copies of one run: no pair is tested" in res.summary
     assert "no two algorithms both have a value" not in res.summary
-    note = next(n for n in res.notes if n.startswith("the trials of a, b are near-identical"))
-    assert "cr, the metric tested, varies by" in note
+    assert any(n.startswith("the trials of a, b are near-identical") for n in res.notes)
     # real reruns of the same run (CR spread 0.017) are tested
     reruns = [rerun_trials(seqs, (1,), seed).drop(columns="trial") for seed in range(8)]
     real = pd.concat([_labelled(reruns[:4], "a"), _labelled(reruns[4:], "b")], ignore_index=True)
     assert not (compare_table(real, durations).pairs["test"] == COPIES_TEST).any()
+
+
+def test_honest_reruns_of_a_system_that_never_loses_track_are_no_copies_at_eps_inf(run):
+    """At eps = phi = inf CR is the share of time with output: a system that never loses track
+    repeats it exactly from run to run while its ATE varies (11-14 % in a helper's reruns). Such
+    reruns were called copies of one run and a real difference (CR 0.95 against 0.27) went untested;
+    they are tested."""
+    seqs, durations = run
+    rng = np.random.default_rng(3)
+    good = [seqs.assign(ate_rmse=seqs["ate_rmse"] * np.exp(rng.normal(0, 0.12, len(seqs))),
+                        c_ate_rmse=seqs["c_ate_rmse"] * np.exp(rng.normal(0, 0.12, len(seqs)))) for _ in range(4)]  # fmt: skip
+    bad = [g.assign(cr=g["cr"] * 0.3, cr_t=g["cr_t"] * 0.3) for g in good]
+    table = pd.concat([_labelled(good, "good"), _labelled(bad, "bad")], ignore_index=True)
+    res = compare_table(table, durations)
+    assert not (res.pairs["test"] == COPIES_TEST).any() and not any("near-identical" in n for n in res.notes)
+    tested = res.pairs[res.pairs["reachable"].astype(bool)]
+    assert len(tested) and (tested["significant"] & (tested["better"] == "good")).all()
 
 
 def test_a_sampled_test_draws_enough_for_holm_over_many_pairs_and_says_its_floor():

@@ -67,12 +67,25 @@ def with_trials(table: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
+def thresholded(table: pd.DataFrame) -> np.ndarray:
+    """Which rows' rates were scored at a finite threshold (``eps`` or ``phi``; rows without those
+    columns count as such): at eps = phi = inf a pose is correct whenever it is matched, so CR is the
+    share of time with output, which a system that never loses track repeats exactly from run to run
+    (honest reruns of one, its ATE varying 11-14 %, were called copies of one run)."""
+    finite = np.zeros(len(table), bool)
+    for c in ("eps", "phi"):
+        if c not in table.columns:
+            return np.ones(len(table), bool)
+        finite |= np.isfinite(pd.to_numeric(table[c], errors="coerce").to_numpy(float))
+    return finite
+
+
 def trial_spread(table: pd.DataFrame, by: Sequence[str] = ("algorithm",)) -> pd.DataFrame:
     """What varies between trials, per group of ``by`` (columns of the table) with two or more
     trials of a sequence: the median over its sequences of the standard deviation between trials
     of CR (``cr_spread``) and of the log of ATE RMSE (``ate_spread``, about a relative spread),
-    ``cr_ties``: the share of its sequences with a CR strictly between 0 and 1 whose trials all have
-    the very same CR, and ``copies``: both spreads below a quarter of what real reruns show
+    ``cr_ties``: the share of its sequences with a CR strictly between 0 and 1, scored at a finite
+    threshold (:func:`thresholded`), whose trials all have the very same CR, and ``copies``: both spreads below a quarter of what real reruns show
     (:data:`~lorisnb.core.stats.tolerances.RERUN_SPREAD`), or the CR the same in every trial of most
     such sequences. Such trials are copies of one run (byte-identical, near-identical, or one run's
     tracking with its positions changed: CR is a continuous share of time that real reruns never
@@ -88,12 +101,13 @@ def trial_spread(table: pd.DataFrame, by: Sequence[str] = ("algorithm",)) -> pd.
         return pd.DataFrame(columns=[*by, *cols])
     cr = pd.to_numeric(t["cr"], errors="coerce") if "cr" in t else pd.Series(np.nan, t.index)
     ate = pd.to_numeric(t["ate_rmse"], errors="coerce") if "ate_rmse" in t else pd.Series(np.nan, t.index)
-    per = pd.DataFrame({"cr": cr, "ate": np.log(ate.where(ate > 0)), "trial": t["trial"]}).groupby(
-        [t[k] for k in keys], sort=False, dropna=False
-    )
+    per = pd.DataFrame(
+        {"cr": cr, "ate": np.log(ate.where(ate > 0)), "trial": t["trial"], "thresholded": thresholded(t)}
+    ).groupby([t[k] for k in keys], sort=False, dropna=False)
     seqs = pd.DataFrame({
         "n": per["trial"].nunique(), "cr": per["cr"].std(), "ate": per["ate"].std(),
-        "inside": (per["cr"].min() > 0) & (per["cr"].max() < 1), "tied": per["cr"].max() == per["cr"].min(),
+        "inside": (per["cr"].min() > 0) & (per["cr"].max() < 1) & per["thresholded"].all(),
+        "tied": per["cr"].max() == per["cr"].min(),
     }).reset_index()  # fmt: skip
     rows = []
     for name, g in seqs.groupby(list(by), sort=True, dropna=False):

@@ -103,35 +103,81 @@ def trial_spread(table: pd.DataFrame) -> tuple[pd.DataFrame, set[str]]:
     return spread.drop(columns=["copies"]).reset_index(drop=True), copies
 
 
+#: Two trials' rows of a sequence whose every judged value is within a trace of noise of each other
+#: (:func:`near_copies`): rates within this much (a handful of poses of a sequence flipping at the
+#: threshold: one pose at 30 Hz in 100 s moves CR by 3e-4) ...
+NEAR_RATE = 1e-3
+#: ... and errors within this relative difference; real reruns differ by a median 0.017 in CR and
+#: 18 % in ATE (:data:`~lorisnb.core.stats.tolerances.RERUN_SPREAD`), so two reruns rarely agree
+#: within both on every value of a sequence.
+NEAR_ERROR = 0.01
+
+
+def near_copies(table: pd.DataFrame) -> np.ndarray:
+    """Which rows of a per-sequence table repeat an earlier trial's row of the same sequence within a
+    trace of noise: the same number of matched poses (noise added to a copy's positions keeps its
+    stamps; a rerun's dropouts and start differ), and every judged value
+    (:data:`~lorisnb.core.stats.regression.METRICS`) of a row with output, rates within
+    :data:`NEAR_RATE`, errors within :data:`NEAR_ERROR` relative (NaN as NaN). (Without the matched
+    poses, an odometry's reruns, whose ATE varies little, were taken for copies now and then.) Copies of a rerun whose errors moved by 0.2 % and CR by up to 1e-3 (a script adding noise)
+    beside one real rerun made two labels of one system differ in 14 of 20 of a helper's nights;
+    the every-value rule within 1e-4 (:func:`~lorisnb.core.stats.regression.repeated_trials`) let them pass."""
+    from lorisnb.core.stats.regression import KEYS, METRICS
+
+    t = stats.with_trials(table)
+    rates = [c for c in METRICS if c in t.columns and c in RATES]
+    errors = [c for c in METRICS if c in t.columns and c not in RATES]
+    r = np.column_stack([pd.to_numeric(t[c], errors="coerce").to_numpy(float) for c in rates]) if rates else None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        e = (np.column_stack([np.log(pd.to_numeric(t[c], errors="coerce").to_numpy(float)) for c in errors])
+             if errors else None)  # fmt: skip
+    matched = pd.to_numeric(t["matched"], errors="coerce").to_numpy(float) if "matched" in t else None
+    out = matched > 0 if matched is not None else np.ones(len(t), bool)
+    near = np.zeros(len(t), bool)
+    for idx in t.groupby(KEYS, sort=False, observed=True, dropna=False).indices.values():
+        idx = idx[out[idx]]  # a handful of trials a sequence: every pair of them at once
+        if len(idx) < 2:
+            continue
+        same = np.tri(len(idx), k=-1, dtype=bool)  # an earlier row only
+        if matched is not None:  # the same poses matched: noise added to a copy keeps them, a rerun's differ
+            same &= matched[idx][:, None] == matched[idx][None, :]
+        for values, tol in ((r, NEAR_RATE), (e, NEAR_ERROR)):
+            if values is not None:
+                v = values[idx]
+                with np.errstate(invalid="ignore"):
+                    close = (np.abs(v[:, None, :] - v[None, :, :]) <= tol) | (
+                        np.isnan(v[:, None, :]) & np.isnan(v[None, :, :])
+                    )
+                    close |= v[:, None, :] == v[None, :, :]  # the same infinite value
+                same &= close.all(axis=2)
+        near[idx] = same.any(axis=1)
+    return near
+
+
 def _tested_values(full: pd.DataFrame, metric: str) -> tuple[np.ndarray, np.ndarray]:
     """The tested metric's values of ``full`` (the log for C-ATE, whose spread is relative) and
-    which of them can tell a copy: a rate strictly between 0 and 1 (reruns tie at 0 and 1: a
-    sequence never tracked, or tracked throughout), an error above 0."""
+    which of them can tell a copy by their spread: a rate strictly between 0 and 1 scored at a
+    finite threshold (reruns tie at 0 and 1, and at eps = phi = inf CR is the share of time with
+    output, which a system that never loses track repeats: :func:`~lorisnb.core.stats.inference.thresholded`),
+    an error above 0."""
     v = pd.to_numeric(full[metric], errors="coerce").to_numpy(float)
     if metric in RATES:
-        return v, (v > 0) & (v < 1)
+        return v, (v > 0) & (v < 1) & stats.thresholded(full)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.log(v), np.isfinite(v) & (v > 0)
 
 
 def _without_repeated_trials(table: pd.DataFrame, full: pd.DataFrame, metric: str = "cr") -> tuple[pd.DataFrame, dict]:
-    """``full`` without the rows of a trial that repeat another trial's row of the same sequence:
-    every value (:func:`lorisnb.core.stats.regression.repeated_trials`, as ``diff`` counts them), or
-    the tested ``metric`` where it can tell a copy (:func:`_tested_values`), each within 1e-4
-    relative (:func:`~lorisnb.core.stats.regression.same_values`): the test sees only the tested
-    metric, and a copy whose errors were scaled by 0.2 % (a trace of noise: CR unchanged) beside one
-    real rerun made two labels of one system differ in 18 of 30 nights of a helper's. Returns the
-    table and, per algorithm, (rows dropped, rows); an algorithm whose trials are all near-identical
-    copies of one run (:func:`trial_spread` of ``table``) keeps them: none of its pairs is tested."""
-    from lorisnb.core.stats.regression import KEYS, repeated_trials, same_values
+    """``full`` without the rows of a trial that repeat another trial's row of the same sequence,
+    every value within 1e-4 (:func:`lorisnb.core.stats.regression.repeated_trials`, as ``diff``
+    counts them) or within a trace of noise (:func:`near_copies`). Returns the table and, per
+    algorithm, (rows dropped, rows); an algorithm whose trials are all near-identical copies of one
+    run (:func:`trial_spread` of ``table``) keeps them: none of its pairs is tested. ``metric`` is
+    the one tested (the rule is the same for every metric)."""
+    from lorisnb.core.stats.regression import repeated_trials
 
     t = stats.with_trials(full)
-    rep = repeated_trials(t)
-    values, telling = _tested_values(t, metric)
-    for idx in t.groupby(KEYS, sort=False, observed=True, dropna=False).indices.values():
-        idx = idx[telling[idx]]  # a handful of trials a sequence
-        if len(idx) > 1:
-            rep[idx] |= same_values(values[idx][:, None]) >= 0
+    rep = repeated_trials(t) | near_copies(t)
     rep &= ~full["algorithm"].isin(trial_spread(table)[1]).to_numpy()
     if not rep.any():
         return full, {}
@@ -197,7 +243,7 @@ def decide(table: pd.DataFrame, full: pd.DataFrame, metric: str, alpha: float, s
         # no test was made: nothing it could reach (the design's floor and relabellings were of a test of copies)
         pairs["exact"] = pairs["exact"].astype(object)
         pairs.loc[mask, "reachable"] = False
-        pairs.loc[mask, ["min_p", "relabellings", "exact"]] = np.nan
+        pairs.loc[mask, ["min_p", "relabellings", "exact", "interval_level"]] = np.nan
     return pairs, spread, copies
 
 
@@ -232,8 +278,8 @@ def compare_table(
     full, cover, counted_once = prepared_table(table, durations, metric)
     notes = coverage_notes(cover)
     if counted_once:
-        notes.append(f"trials that repeat another trial's every value, or its {metric} (copies, not reruns), counted "
-                     "once, rows of each sequence: " + "; ".join(
+        notes.append("trials that repeat another trial's every value, within 1e-4 or a trace of noise (copies, not "
+                     "reruns), counted once, rows of each sequence: " + "; ".join(
             f"{a}: {n} of {t}" for a, (n, t) in counted_once.items()) + " (a copied trial tested as a rerun made a "
             "significance no rerun would show)")  # fmt: skip
     ci = stats.confidence_intervals(full, level=level, seed=seed)
