@@ -187,6 +187,9 @@ def evo_refusals(spec: Any, given: frozenset[str], name: Any) -> dict[str, str]:
                             f"it applies to {name('rpe_unit')} m, deg or rad")  # fmt: skip
     if "change_unit" in given and spec.change_unit is not None:
         why = unit_refusal(spec.relation, spec.change_unit)
+        if spec.relation is None:  # the relation option as the caller's surface spells it (not --relation)
+            why = (f"evo's --change_unit changes the unit of the pose relation's columns: give a relation too "
+                   f"({name('relation')}: {', '.join(RELATIONS)})")  # fmt: skip
         if why is not None:
             out["change_unit"] = f"{name('change_unit')} {spec.change_unit}: {why}"
     if "align_frames" in given and spec.align == "origin":

@@ -353,8 +353,8 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
     try:  # the command line's rule: topics and TF chains only for bags, a topic or a chain, not both
         for gt_format in dict.fromkeys(s.groundtruth_format for s in sessions):
             check_reading(reading, est_fmt, gt_format, name=lambda k: READING_KEYS[k])
-    except ValidationError as exc:
-        raise ParseError(path, None, str(exc)) from None
+    except ValidationError as exc:  # the line of the key it names (estimate_topic = ... with TUM estimates)
+        raise ParseError(path, _named_line(str(exc), list(READING_KEYS.values()), {}, text), str(exc)) from None
     options = {k: v for k, v in table.items() if k != "preset"}
     elsewhere = {"transform": "the [transform] table", "surface": None}
     for key in sorted(set(options) & set(elsewhere)):
@@ -567,8 +567,7 @@ def _manifest_spec(
     try:
         return make_spec(preset, surface="manifest", **options, transform=transform)
     except ValidationError as exc:  # a rule between values: the line of the first one named
-        named = [k for k in options if str(exc).startswith(k)]
-        raise ParseError(path, _key_line(named[0], table, text) if named else None, str(exc)) from None
+        raise ParseError(path, _named_line(str(exc), list(options), table, text), str(exc)) from None
 
 
 def _refuse_quoted_numbers(options: dict[str, Any], table: dict[str, Any], path: Path, text: str) -> None:
@@ -592,6 +591,19 @@ def _key_line(key: str, table: dict[str, Any], text: str) -> int | None:
     return _line(text, "conventions" if key in table else None, key)
 
 
+def _named_line(message: str, keys: list[str], table: dict[str, Any], text: str) -> int | None:
+    """The line of the key a refusal is about: the one its message starts with (``change_unit mm:
+    ...``, ``[conventions] max_gap = 1: ...``, ``estimate_topic: ...``), the longest that fits
+    (``rpe_delta``, not ``delta``), in ``[conventions]`` (``table``) or at the top level. The one
+    rule of every refusal of the spec's options and reading keys, each message as every surface
+    gives it; None when it names none of ``keys``."""
+    said = message.removeprefix("[conventions] ")
+    for key in sorted(keys, key=len, reverse=True):
+        if said.startswith(key) and said[len(key) : len(key) + 1] in ("", " ", "=", ":", ",", "("):
+            return _key_line(key, table, text)
+    return None
+
+
 def _refuse_together(spec: EvalSpec, options: dict[str, Any], table: dict[str, Any], path: Path, text: str) -> None:
     """Options of the manifest that cannot apply with its other values (``max_gap`` beside
     ``association = "nearest"``), refused when it is read, with the line of the first one, in the
@@ -599,8 +611,7 @@ def _refuse_together(spec: EvalSpec, options: dict[str, Any], table: dict[str, A
     try:
         spec.refuse_inapplicable("manifest", surface="manifest")
     except ValidationError as exc:
-        first = str(exc).split(": ", 1)[0]
-        raise ParseError(path, _key_line(first, table, text) if first in options else None, str(exc)) from None
+        raise ParseError(path, _named_line(str(exc), list(options), table, text), str(exc)) from None
 
 
 def _refuse_own(
