@@ -2,10 +2,11 @@
 right answers written in many ways and of wrong ones (the typical mistakes, slips, perturbed and
 copied numbers), graded at many students' data variants by the grader's own code and sandboxes
 (:mod:`lorisnb.tools.teaching.errorrates`), then a few generated submissions graded whole by
-`make grade`'s route. Prints the table of false fails and false passes per question, with 95 %
+`make grade`'s route, and forged submissions (answers whose code writes the grader's replies itself,
+one submission per technique). Prints the table of false fails and false passes per question, with 95 %
 Wilson intervals, and every grading error found. Writes nothing in the checkout.
 
-    python teaching/grading_error_rates.py [--students 12] [--submissions 4] [--jobs 2] [--quick]
+    python teaching/grading_error_rates.py [--students 12] [--submissions 4] [--jobs 2] [--quick] [--no-forgeries]
 """
 
 from __future__ import annotations
@@ -19,7 +20,17 @@ from pathlib import Path
 from tqdm import tqdm
 
 from lorisnb.errors import LorisWarning
-from lorisnb.tools.teaching.errorrates import LAB, errors_found, grade_route, measure, rates, route_summary, table
+from lorisnb.tools.teaching.errorrates import (
+    LAB,
+    errors_found,
+    forgery_route,
+    forgery_summary,
+    grade_route,
+    measure,
+    rates,
+    route_summary,
+    table,
+)
 
 HERE = Path(__file__).resolve().parent
 
@@ -29,7 +40,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--students", type=int, default=12, help="student ids whose variants are graded (default 12)")
     ap.add_argument("--submissions", type=int, default=4, help="generated submissions graded by make grade's route")
     ap.add_argument("--jobs", type=int, default=2, help="submissions graded at once (default 2)")
-    ap.add_argument("--quick", action="store_true", help="2 students, no submission (about a minute)")
+    ap.add_argument("--quick", action="store_true", help="2 students, no submission, no forgery (about a minute)")
+    ap.add_argument(
+        "--no-forgeries",
+        action="store_true",
+        help="leave out the forged submissions (one per technique, graded whole: about 2 minutes)",
+    )
     a = ap.parse_args(argv)
     if a.quick:
         a.students, a.submissions = 2, 0
@@ -49,6 +65,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  {line}")
     if measured.route:
         print("\n" + route_summary(measured.route))
+    if not (a.quick or a.no_forgeries):
+        print("\n" + forgery_summary(forgery_route(source, jobs=a.jobs, progress=True)))
     return 0
 
 

@@ -255,3 +255,31 @@ def test_e1_answered_with_a_one_value_series_is_read_as_its_number():
     with pytest.raises(AnswerError) as exc:
         teach.check_eps_at_cr(np.array([0.1, 0.2]), ev.errors, ev.durations(), 0.3, 30.0, 1.0)
     assert "expected one number" in str(exc.value) and "Hint" not in str(exc.value)
+
+
+# --- forgeries ------------------------------------------------------------------------------------
+
+
+def test_forged_answers_write_the_solutions_replies_over_wrong_values():
+    """The forged cells hold wrong values (their own names) and carry the solution aside: a
+    prediction, a formula (its function returns a wrong number) and a value answer."""
+    for cell in er.FORGED_CELLS:
+        src = er.forged_source(SPEC, cell, "sync")
+        compile(src, cell, "exec")
+        assert "_lx_forge(" in src and "exec(" in src
+        for name in SPEC.values.get(cell, ()):
+            assert f"{name} = -0.123" in src
+        for name in SPEC.functions.get(cell, ()):
+            assert f"def {name}(*args, **kwargs)" in src and "return 0.123" in src
+
+
+@pytest.mark.slow
+def test_forged_submissions_graded_whole_score_nothing_where_the_grader_can_see_it():
+    """Two forged submissions graded by make grade's route (replies forged with the solution's
+    values: a second reply; a reply and the grader's sync answered): each forged answer scores 0
+    and its grade says the code wrote into the grader's channel; the summary counts them."""
+    with temp_dir_left_as_found():
+        forged = er.forgery_route(SOURCE, jobs=2, progress=False, techniques=("reply", "sync"))
+    assert len(forged) == 2 * len(er.FORGED_CELLS)
+    assert all(f.found for f in forged), [f for f in forged if not f.found]
+    assert "findable forged answers that scored: 0 of 6 (6 told as forgeries)" in er.forgery_summary(forged)

@@ -1089,3 +1089,138 @@ def route_summary(route: Sequence[RouteGrade]) -> str:
         "agree with the measurement"
     )
     return text + ("" if not wrong else ": disagree: " + "; ".join(wrong))
+
+
+# --- forgeries: answers whose code writes the grader's replies itself ---------------------------------------------
+
+#: The code a forged answer cell starts with: it walks up from the cell (or from the answer's function, called by a
+#: check) to the sandbox child's loop and writes a reply of its own to the request being run, carrying the values
+#: of the instructor's solution (which the cell computed aside), then, by ``how``: nothing more (``reply``), also
+#: reads the grader's sync request and answers it (``sync``), then ends the process (``exit``) or keeps the child's
+#: own reply from being written (``hide``).
+FORGE_HELPER = """import sys as _lx_sys, json as _lx_json
+def _lx_forge(payload, how):
+    f = _lx_sys._getframe()
+    while f is not None and "request_id" not in f.f_locals:
+        f = f.f_back
+    if f is None:
+        return
+    L, plain, rep = f.f_locals, f.f_globals["_plain"], f.f_locals["reply"]
+    ns = payload.get("ns")
+    body = ({"values": {n: plain(ns[n]) if n in ns else {"missing": True} for n in L["req"].get("capture", [])}}
+            if ns is not None else {"result": plain(payload["result"])})
+    rep.write(_lx_json.dumps({"ok": True, "id": L["request_id"], **body}, default=str) + "\\n")
+    rep.flush()
+    if how == "reply":
+        return
+    sync = _lx_json.loads(L["requests"].readline())
+    rep.write(_lx_json.dumps({"ok": True, "id": sync["id"]}) + "\\n")
+    rep.flush()
+    if how == "exit":
+        import os
+        os._exit(0)
+    if how == "hide":
+        def _lx_write(s, _r=rep):
+            del _r.write
+            return len(s)
+        rep.write = _lx_write
+"""
+
+#: How each forgery writes into the grader's channel (see :data:`FORGE_HELPER`), and whether the grader is meant
+#: to find it: ``hide`` keeps the sandbox's own reply from being written, which no check can see from outside the
+#: process (best effort, docs/guide/teaching.md; what it reports is only what the answer's code computed).
+FORGERIES = {"reply": True, "sync": True, "exit": True, "hide": False}
+#: The answers forged in each forged submission: a prediction, a formula and a value answer of lab 1.
+FORGED_CELLS = ("B1_prediction", "C1_cs_r", "D1_alignment")
+
+
+@dataclass(frozen=True)
+class ForgeryGrade:
+    """One forged answer graded by ``make grade``'s route: its points, whether the grade's message
+    or the submission's notes say the code wrote into the grader's channel (``told``), and whether
+    the grader is meant to find that technique (``findable``)."""
+
+    technique: str
+    question: str
+    points: float
+    max_points: float
+    told: bool
+    findable: bool
+
+    @property
+    def found(self) -> bool:
+        """Scored 0, told why: the forgery was found."""
+        return self.points == 0 and self.told
+
+
+def forged_source(spec: LabSpec, cell: str, how: str) -> str:
+    """An answer cell for ``cell`` whose own values are wrong but whose replies to the grader carry
+    the instructor's solution's (computed aside, in a namespace of its own), written by ``how``."""
+    solution = next(a.source for a in instructor_solutions(spec) if a.cell == cell)
+    aside = f"_lx_ns = dict(globals())\nexec({solution!r}, _lx_ns)\n"
+    defs = spec.functions.get(cell, ())
+    if defs:  # a formula: each call by a check forges its reply, the function returns a wrong number
+        wrappers = "".join(
+            f"def {d}(*args, **kwargs):\n    _lx_forge({{'result': _lx_ns[{d!r}](*args, **kwargs)}}, {how!r})\n"
+            "    return 0.123\n"
+            for d in defs
+        )
+        return FORGE_HELPER + aside + wrappers
+    wrong = "".join(f"{n} = -0.123\n" for n in spec.values.get(cell, ()))
+    return FORGE_HELPER + aside + wrong + f"_lx_forge({{'ns': _lx_ns}}, {how!r})\n"
+
+
+def forgery_route(source: Path, jobs: int = 2, limits: Limits | None = None, progress: bool = True,
+                  techniques: Sequence[str] = tuple(FORGERIES)) -> list[ForgeryGrade]:  # fmt: skip
+    """Grade one submission per forgery technique of ``techniques`` (:data:`FORGERIES`) with
+    :func:`.gradebook.grade_class` in a temporary course: the instructor's solution everywhere but
+    :data:`FORGED_CELLS`, whose values are wrong and whose replies forge the solution's. A forged
+    answer is found when it scores 0 with a note saying the code wrote into the grader's channel."""
+    from lorisnb.tools.teaching.gradebook import grade_class
+
+    spec = lab_spec(source / LAB / f"{LAB}.ipynb")
+    solutions = {a.cell: a.source for a in instructor_solutions(spec)}
+    with tempfile.TemporaryDirectory(prefix="lorisnb-errorrates-forged-") as tmp:
+        course = Path(tmp)
+        (course / "release" / LAB).mkdir(parents=True)
+        (course / ".grading-secret").write_text(SECRET)
+        for how in techniques:
+            nb = nbformat.read(source / LAB / f"{LAB}.ipynb", as_version=4)
+            for cell in nb.cells:
+                gid = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
+                if cell.cell_type == "code" and gid in solutions:
+                    cell.source = forged_source(spec, gid, how) if gid in FORGED_CELLS else solutions[gid]
+            dest = course / "submitted" / f"forged-{how}" / LAB / f"{LAB}.ipynb"
+            dest.parent.mkdir(parents=True)
+            nbformat.write(nb, dest)
+        graded = grade_class(course, source, [LAB], settings=GradeSettings(limits or Limits()), jobs=jobs,
+                             progress=progress)  # fmt: skip
+    out = []
+    for g in graded:
+        how = g.result.student.removeprefix("forged-")
+        notes = " ".join(g.result.notes)
+        for s in g.result.scores:
+            q = next(q for q in spec.questions if q.grade_id == s.question)
+            if q.answers[0] in FORGED_CELLS:
+                told = "grader's reply channel" in s.message or f"{q.answers[0]}: RuntimeError" in notes
+                out.append(ForgeryGrade(how, s.question, s.points, s.max_points, told, FORGERIES[how]))
+    return sorted(out, key=lambda f: (list(FORGERIES).index(f.technique), f.question))
+
+
+def forgery_summary(forged: Sequence[ForgeryGrade]) -> str:
+    """The forgeries' table: per technique, each forged question's points and what the grade said."""
+    lines = ["forged answers (wrong values, replies forged with the solution's), graded by make grade's route:"]
+    for how in dict.fromkeys(f.technique for f in forged):
+        cells = ", ".join(
+            f"{f.question.removeprefix('test_')} {f.points:g}/{f.max_points:g} "
+            + ("found" if f.found else "scored 0, another cause told" if f.points == 0 else "scored")
+            for f in forged if f.technique == how
+        )  # fmt: skip
+        meant = "findable" if FORGERIES[how] else "not findable: it hides the sandbox's own reply (best effort)"
+        lines.append(f"  {how} ({meant}): {cells}")
+    findable = [f for f in forged if f.findable]
+    others = [f for f in forged if not f.findable]
+    lines.append(f"findable forged answers that scored: {sum(f.points > 0 for f in findable)} of {len(findable)} "
+                 f"({sum(f.found for f in findable)} told as forgeries); not findable ones that scored: "
+                 f"{sum(f.points > 0 for f in others)} of {len(others)} (with values their own code computed)")  # fmt: skip
+    return "\n".join(lines)
