@@ -600,12 +600,28 @@ def _gate(run_dir: Path) -> int:
 def cmd_verify(args: argparse.Namespace) -> int:
     """Re-check a run's inputs against run.json, and its own files against its marker: exit 1 if
     any changed, is missing, or appeared in a folder the run read or in the run."""
-    from lorisnb.tools.report.provenance import read_run_json, run_folder, unchecked_baseline, verify_run
+    from lorisnb.tools.report.provenance import (
+        NOT_A_FILE,
+        read_run_json,
+        root_name_problem,
+        roots_used,
+        run_folder,
+        unchecked_baseline,
+        verify_run,
+    )
 
     record = read_run_json(args.run)
     run_dir = run_folder(args.run)  # RUN may be its run.json
     roots: dict[str, str] = {}
+    used = roots_used(record)
     for name, folder in args.root or []:  # a name twice: the last silently won
+        problem = root_name_problem(name)
+        if problem:
+            raise ValidationError(f"--root {name!r} {folder}: {problem}")
+        if name not in used:  # read all the same: a folder a link of the run's folders leads into
+            names = ", ".join(f"{{{n}}}" for n in sorted(used)) or "none"
+            print(f"note: --root {clean(name)}: the run names no root {{{clean(name)}}} (its roots: {names}); its "
+                  "folder is read only where a link in the run's folders leads into it", file=sys.stderr)  # fmt: skip
         if name in roots and Path(roots[name]).resolve() != Path(folder).resolve():
             raise ValidationError(f"--root {name} given twice ({roots[name]}, then {folder}); give each root once")
         roots[name] = folder
@@ -643,9 +659,12 @@ def cmd_verify(args: argparse.Namespace) -> int:
     if problems:
         added = sum(what == "added" for _, what in problems)
         outside = sum(what == "outside" for _, what in problems)
-        changed = len(problems) - added - outside
+        odd = sum(what == NOT_A_FILE for _, what in problems)
+        changed = len(problems) - added - outside - odd
         said = [f"{changed} of {n} input file(s) changed or missing since the run"] if changed else []
         said += [f"{added} file(s) added to the folders it read"] if added else []
+        said += [f"{odd} file(s) in the folders it read are not regular files (a FIFO, a device): not read; a "
+                 "folder of inputs holds none"] if odd else []  # fmt: skip
         said += [f"{outside} file(s) or folder(s) lead (links) outside the run folder and the roots given here: not "
                  "read; to check them, name the folder they lead to with --root NAME DIR"] if outside else []  # fmt: skip
         print("; ".join(said), file=sys.stderr)

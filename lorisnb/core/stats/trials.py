@@ -10,9 +10,11 @@ only trial). The token is removed from the path to tell which files belong toget
 from __future__ import annotations
 
 import re
+import unicodedata
 from collections.abc import Iterable
 from pathlib import PurePosixPath
 
+from lorisnb.core.spec import validate
 from lorisnb.errors import ValidationError
 
 #: Trial tokens recognized by default, in a file name or as a folder of their own.
@@ -101,11 +103,38 @@ def check_duplicates(keys: list[tuple[str, tuple, tuple[int, ...]]]) -> None:
             )
             if PurePosixPath(other) == PurePosixPath(path):
                 raise ValidationError(f"{path} is given twice (it holds {held}); give each file or folder once")
+            first, second = told_apart(str(other), str(path))
             raise ValidationError(
-                f"{other} and {path} both hold {held}, with no trial number to tell them apart; name the trials "
+                f"{first} and {second} both hold {held}, with no trial number to tell them apart; name the trials "
                 "(cafe_trial1.txt, run_2/, ...) or give --trials-by REGEX (trials_by= in Python) whose group is "
                 "the trial number, or evaluate them separately"
             )
+
+
+def told_apart(a: str, b: str) -> tuple[str, str]:
+    """Two names shown side by side, as they are; where they differ only by their Unicode spelling
+    (one NFC, the other NFD: ``algé`` typed and ``algé`` from a Mac's folder, the same in
+    :func:`~lorisnb.core.spec.validate.label`, and printed alike), the part that differs escaped as
+    Python writes it (``alg\\xe9`` and ``alge\\u0301``) and the spellings named, so that the
+    message shows two names, not one twice."""
+    if a == b or validate.label(a) != validate.label(b):
+        return a, b
+    i = 0
+    while i < min(len(a), len(b)) and a[i] == b[i]:
+        i += 1
+    while i > 0 and any(i < len(s) and unicodedata.combining(s[i]) for s in (a, b)):  # from the letter marked
+        i -= 1
+    j = 0
+    while j < min(len(a), len(b)) - i and a[-1 - j] == b[-1 - j]:
+        j += 1
+    while j > 0 and any(unicodedata.combining(s[len(s) - j]) for s in (a, b)):  # a mark kept with its letter
+        j -= 1
+
+    def shown(s: str) -> str:
+        form = next((f for f in ("NFC", "NFD") if unicodedata.is_normalized(f, s[i : len(s) - j])), "mixed")
+        return f"{s[:i]}{ascii(s[i : len(s) - j])[1:-1]}{s[len(s) - j :]} ({form})"
+
+    return shown(a), shown(b)
 
 
 def trial_folders(relpaths: Iterable[str], trials_by: str | re.Pattern[str] | None = None) -> list[str]:

@@ -315,7 +315,8 @@ def check_values(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
         for k, text in enumerate(specs):
             try:
                 problem = spec_problem(json.loads(str(text)))
-            except ValueError:  # not the JSON of a spec: compared as text, and named where it differs
+            except (ValueError, RecursionError):  # not the JSON of a spec (or nested too deeply to be read): compared
+                # as text, and named where it differs
                 continue
             if problem:
                 raise refuse(int((codes == k).nonzero()[0][0]), "spec", problem)
@@ -705,7 +706,7 @@ def _same_spec_text(x: str, y: str) -> tuple[str, str]:
     JSON object."""
     try:
         a, b = json.loads(x), json.loads(y)
-    except ValueError:
+    except (ValueError, RecursionError):
         return x, y
     if not isinstance(a, dict) or not isinstance(b, dict):
         return x, y
@@ -774,7 +775,7 @@ def _spec_keys(a: list[tuple], b: list[tuple], name_a: str, name_b: str) -> str 
         return None
     try:
         x, y = json.loads(str(a[0][0])), json.loads(str(b[0][0]))
-    except ValueError:
+    except (ValueError, RecursionError):
         return None
     if not isinstance(x, dict) or not isinstance(y, dict):
         return None

@@ -23,7 +23,7 @@ import tempfile
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Any
 
 from lorisnb.core.spec import validate
@@ -205,10 +205,10 @@ def _lists_its_files(run_dir: Path) -> bool:
     the run's files: it has ``roots`` (named roots came after the marker's list of files, both of
     lorisnb 0.3.0: a marker has been written beside every run.json, its list of files since 2026-11-26,
     ``roots`` since 2026-11-28)."""
-    from lorisnb.tools.report.provenance import RUN_JSON
+    from lorisnb.tools.report.provenance import RUN_JSON, load_json
 
     try:
-        record = json.loads(read_run_file(run_dir, run_dir / RUN_JSON))
+        record = load_json(read_run_file(run_dir, run_dir / RUN_JSON), run_dir / RUN_JSON, "run.json")
     except (OSError, ValueError, LorisError):
         return False
     return isinstance(record, dict) and "roots" in record
@@ -220,14 +220,28 @@ def _against_marker(run_dir: Path) -> _AsWritten | None:
     :func:`_lists_its_files`). A marker missing, or listing nothing, beside a run.json of a lorisnb
     that always writes one listing the run's files is damage (a marker removed hid every hand edit),
     not an earlier run."""
+    from lorisnb.tools.report.provenance import load_json
+
     marker = run_dir / RUN_MARKER
     try:
-        wrote = json.loads(read_run_file(run_dir, marker)).get("files")
+        raw = read_run_file(run_dir, marker)
     except LorisError:
         raise
-    except (OSError, ValueError, AttributeError):
+    except OSError:
         wrote = None
+    else:
+        try:  # not JSON, nested too deeply, a key given twice: a damaged marker
+            wrote = load_json(raw, marker, "the marker lorisnb writes").get("files")
+        except (ValueError, AttributeError):
+            wrote = None
     if isinstance(wrote, dict):
+        for rel in wrote:  # a file of the run, by its path inside it: one elsewhere is no file of the run
+            parts = PurePosixPath(rel).parts
+            if not rel or PurePosixPath(rel).is_absolute() or ".." in parts or "\x00" in rel:
+                raise ValidationError(f"{marker}: lists {rel!r}, which is no file inside the run folder; a "
+                                      "marker lorisnb writes lists only the run's own files (an edited marker?). "
+                                      "Nothing outside the run was read: copy the run again from where it came, or "
+                                      "make it again with lorisnb report")  # fmt: skip
         here = _files(run_dir)
         foreign = sorted(rel for rel, digest in here.items() if wrote.get(rel) != digest)
         missing = sorted(rel for rel in wrote if rel not in here and rel != RUN_MARKER)
@@ -606,6 +620,9 @@ def run_report(
                         for page in split:
                             export_html(page.with_suffix(".ipynb"), css=css)
                 single_file(index, folder / "report.html")  # the pages as they are now, into one file
+                if absolute_paths:  # papermill's output_path: the notebook where the run is, not where it was written
+                    for nb in sorted(folder.glob("*/*.ipynb")):
+                        _record_output_path(nb, run_dir.parent / name / nb.relative_to(folder))
                 if not absolute_paths:
                     make_portable(folder, every)
                     left = unreplaced(
@@ -661,6 +678,10 @@ def render_run(run: str | os.PathLike[str]) -> list[Path]:
         raise LorisError(f"{folder} will not be rendered again: it holds {len(out)} link(s) leading outside it "
                          f"({shown}); a run folder lorisnb writes holds none. Nothing was read or written: replace "
                          "each link by its file, if you trust it")  # fmt: skip
+    if (folder / "run.json").is_file():  # a damaged one (not JSON, a key twice, a value no run writes) is refused,
+        from lorisnb.tools.report.provenance import read_run_json  # never rendered from
+
+        read_run_json(folder)
     why = _not_written(folder, "render a copy of the run without them", render=True)
     if why:
         raise LorisError(f"{folder} will not be rendered again: {why}")
@@ -696,6 +717,26 @@ def render_run(run: str | os.PathLike[str]) -> list[Path]:
             tmp.unlink(missing_ok=True)
         marker.unlink(missing_ok=True)
     return [page for page, _ in writes]
+
+
+def _record_output_path(nb: Path, final: Path) -> None:
+    """The notebook ``nb`` (executed by papermill into the run's temporary folder) with papermill's
+    ``output_path`` metadata naming ``final``, where it is once the run is in place (a run made with
+    ``--absolute-paths`` recorded the temporary ``.run.partial-XXXX`` folder, gone once it is moved).
+    Written back as nbformat writes a notebook; one that is not JSON, or has no such metadata, is left
+    as it is."""
+    try:
+        text = nb.read_text(encoding="utf-8")
+        notebook = json.loads(text)
+        papermill = notebook["metadata"]["papermill"]
+    except (OSError, ValueError, RecursionError, KeyError, TypeError):
+        return
+    if not isinstance(papermill, dict) or papermill.get("output_path") in (None, str(final)):
+        return
+    papermill["output_path"] = str(final)
+    with naming(nb):
+        end = "\n" if text.endswith("\n") else ""
+        nb.write_text(json.dumps(notebook, sort_keys=True, indent=1, ensure_ascii=False) + end, encoding="utf-8")
 
 
 def _readable_notebook(nb: Path) -> None:

@@ -114,6 +114,8 @@ def notebook_problem(path: Path) -> str | None:
         raw = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         return f"{path.name} is not a readable notebook (invalid JSON: {exc})"
+    except RecursionError:
+        return f"{path.name} is not a readable notebook (invalid JSON: nested too deeply to be read)"
     if not isinstance(raw, dict) or not isinstance(raw.get("cells"), list):
         return f"{path.name} is not a notebook (no list of cells)"
     if not (raw.get("metadata") or {}).get("kernelspec"):

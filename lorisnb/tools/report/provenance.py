@@ -28,6 +28,7 @@ import datetime as _dt
 import hashlib
 import json
 import os
+import re
 import stat
 import subprocess
 from collections.abc import Iterable, Mapping
@@ -54,6 +55,10 @@ def sha256(path: Path, chunk: int = 1 << 20) -> str:
             h.update(block)
     return h.hexdigest()
 
+
+#: What :func:`verify_run` says of an input, or of an entry of a folder the run read, that is neither a
+#: file nor a folder (a FIFO, a device: never opened, whatever its name).
+NOT_A_FILE = "not a regular file"
 
 #: Why a run folder's FIFO, device or socket is not read (the end of :func:`run_file`'s message).
 NOT_REGULAR = ("not a regular file (a FIFO, a device): a run folder lorisnb writes holds none (a received run?); it "
@@ -112,14 +117,16 @@ def input_files(roots: Iterable[Path], resolve: bool = True, inside: Iterable[Pa
 
 def _listing(
     roots: Iterable[Path], resolve: bool = True, inside: Iterable[Path] | None = None
-) -> tuple[list[Path], list[Path]]:
-    """:func:`input_files`, and the linked folders of ``roots`` left unwalked because they lead
-    outside ``inside`` (as found, not resolved; hidden ones left out as hidden files are)."""
+) -> tuple[list[Path], list[Path], list[Path]]:
+    """:func:`input_files`, the linked folders of ``roots`` left unwalked because they lead
+    outside ``inside`` (as found, not resolved; hidden ones left out as hidden files are), and the
+    entries that are neither a file nor a folder (a FIFO, a device, a socket: never opened; as found)."""
     from lorisnb.tools.evaluation.inputs import walk
 
     allowed = None if inside is None else [Path(f) for f in inside]
     found: dict[Path, None] = {}
     unwalked: dict[Path, None] = {}
+    odd: dict[Path, None] = {}
     for root in roots:
         if root.is_file():
             found[root.resolve() if resolve else root] = None
@@ -133,7 +140,9 @@ def _listing(
                         unwalked[p] = None
                 elif p.is_file():
                     found[p.resolve() if resolve else p] = None
-    return sorted(found), sorted(unwalked)
+                elif f.kind == "other":
+                    odd[p] = None
+    return sorted(found), sorted(unwalked), sorted(odd)
 
 
 def _key(path: Path, data_root: Path | Mapping[str, Path] | None) -> str:
@@ -208,6 +217,37 @@ def write_run_json(run_dir: Path, record: Mapping[str, Any]) -> Path:
     return out
 
 
+class _DuplicateKey(ValueError):
+    """A JSON object naming one key twice (:func:`load_json`)."""
+
+
+def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in pairs:
+        if k in out:
+            raise _DuplicateKey(k)
+        out[k] = v
+    return out
+
+
+def load_json(data: bytes | str, f: str | os.PathLike[str], expected: str) -> Any:
+    """The JSON value of ``data``, the bytes of the file ``f`` of a run (run.json, its marker) as a
+    received run may hold them: anything that is not the JSON lorisnb writes (not UTF-8, not JSON,
+    nested too deeply for Python's parser, an object naming a key twice, where readers would
+    disagree on which is meant) is a :class:`~lorisnb.errors.ParseError` ``f: not valid JSON
+    (...); expected`` ``expected``."""
+    try:
+        text = data.decode("utf-8") if isinstance(data, bytes) else data
+        return json.loads(text, object_pairs_hook=_no_duplicates)
+    except _DuplicateKey as exc:
+        why = f"the key {json.dumps(str(exc.args[0]))[:80]} given twice in one object"
+    except RecursionError:
+        why = "nested too deeply to be read"
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        why = str(exc)
+    raise ParseError(f, None, f"not valid JSON ({why}); expected {expected}")
+
+
 def _is_str_map(v: Any) -> bool:
     return isinstance(v, dict) and all(isinstance(x, str) for x in v.values())
 
@@ -223,6 +263,32 @@ def _is_path(v: Any) -> bool:
 
 def _is_path_map(v: Any) -> bool:
     return _is_str_map(v) and all(map(_is_path, v))
+
+
+_SHA256 = re.compile(r"[0-9a-f]{64}")
+
+
+def _is_digest(v: Any) -> bool:
+    """A SHA-256 as :func:`sha256` writes it: 64 hexadecimal digits, lower case."""
+    return isinstance(v, str) and _SHA256.fullmatch(v) is not None
+
+
+def check_digests(record: Mapping[str, Any], f: str | os.PathLike[str]) -> None:
+    """A :class:`~lorisnb.errors.ParseError` naming run.json (``f``) if a checksum of its ``inputs`` or
+    ``baseline_inputs`` is no SHA-256 as lorisnb writes one: a damaged run.json, whose input would
+    otherwise be reported "changed" (checked where checksums are compared with files: :func:`verify_run`;
+    diff and history compare them with each other only)."""
+    for key in ("inputs", "baseline_inputs"):
+        bad = next(([k, v] for k, v in (record.get(key) or {}).items() if not _is_digest(v)), None)
+        if bad is not None:
+            shown = json.dumps(bad, default=str)
+            shown = shown if len(shown) <= 80 else shown[:77] + "..."
+            raise ParseError(f, None, f'"{key}" holds {shown}; expected an object path -> SHA-256 (64 hexadecimal '
+                             "digits, as lorisnb writes it): a damaged run.json, not a changed input")  # fmt: skip
+
+
+def _is_absolute_path(v: Any) -> bool:
+    return _is_path(v) and os.path.isabs(v)
 
 
 #: What each key of run.json must hold: (check, what is expected in words).
@@ -243,9 +309,11 @@ SHAPES: dict[str, tuple[Any, str]] = {
     "notebooks": (_is_str_map, "an object notebook name -> status"),
     "input_roots": (lambda v: isinstance(v, list) and all(map(_is_path, v)), "a list of paths (without a NUL byte)"),
     "baseline_inputs": (_is_path_map, "an object path -> SHA-256, each path without a NUL byte"),
+    "dirty": (lambda v: v is None or isinstance(v, bool), "true, false or null (whether the checkout had changes)"),
     "roots": (
-        lambda v: isinstance(v, dict) and all(x is None or _is_path(x) for x in v.values()),
-        "an object root name -> its absolute folder (a run made with --absolute-paths) or null",
+        lambda v: isinstance(v, dict) and all(x is None or _is_absolute_path(x) for x in v.values()),
+        "an object root name -> null, or its folder on the machine the run was made on (a run made with "
+        "--absolute-paths): expected an absolute folder",
     ),
 }
 
@@ -257,10 +325,7 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
     f = p / RUN_JSON if p.is_dir() else p
     if not os.path.lexists(f) or os.path.isdir(f):
         raise LorisError(f"{p}: no {RUN_JSON} here; expected a run folder written by lorisnb report")
-    try:
-        record = json.loads(read_run_file(f.parent, f).decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ParseError(f, None, f"not valid JSON ({exc}); expected the run.json lorisnb report writes") from None
+    record = load_json(read_run_file(f.parent, f), f, "the run.json lorisnb report writes")
     if not isinstance(record, dict):
         raise ParseError(f, None, f"a JSON {type(record).__name__}; expected an object with the keys {', '.join(KEYS)}")
     missing = [k for k in KEYS if k not in record]
@@ -272,6 +337,8 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
             culprit = None  # in a map or list of paths of the right type: the entry that is not one
             if key in ("inputs", "baseline_inputs") and isinstance(value, dict):
                 culprit = next(([k, v] for k, v in value.items() if not (_is_path(k) and isinstance(v, str))), None)
+            elif key == "roots" and isinstance(value, dict):
+                culprit = next(([k, v] for k, v in value.items() if not (v is None or _is_absolute_path(v))), None)
             elif key == "input_roots" and isinstance(value, list):
                 culprit = next((x for x in value if not _is_path(x)), None)
             shown = json.dumps(value if culprit is None else culprit, default=str)
@@ -279,6 +346,32 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
             where = f'"{key}" holds' if culprit is not None else f'"{key}" is'
             raise ParseError(f, None, f"{where} {shown}; expected {expected}")
     return record
+
+
+#: A root's name as a run writes it (``{data}``, ``{groundtruth}``): letters, digits and ``_``.
+ROOT_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def root_name_problem(name: str) -> str | None:
+    """Why ``name`` cannot name a root given to :func:`verify_run` (``verify --root NAME DIR``), or
+    None: not a root's name as a run writes it, or ``run`` (the run folder itself, which verify
+    finds)."""
+    if name == "run":
+        return ("{run} is the run folder itself, which verify finds (RUN); give the root's name as run.json "
+                "writes it, without braces (data, results, groundtruth, baseline...)")  # fmt: skip
+    if not ROOT_NAME.fullmatch(name):
+        return ("not a root's name (letters, digits and _, not starting with a digit); give it as run.json writes "
+                "it, without braces (data, results, groundtruth, baseline...)")  # fmt: skip
+    return None
+
+
+def roots_used(record: Mapping[str, Any]) -> set[str]:
+    """The names of the roots a run's ``run.json`` (``record``) reads anything below, or records."""
+    keys = [*(record.get("inputs") or {}), *(record.get("input_roots") or []), *(record.get("baseline_inputs") or {})]
+    if isinstance(record.get("data_root"), str):
+        keys.append(record["data_root"])
+    named = {n[0] for n in map(split_key, keys) if n is not None}
+    return (named | set(record.get("roots") or {})) - {"run"}
 
 
 def unchecked_baseline(record: Mapping[str, Any], roots: Mapping[str, Any]) -> int:
@@ -352,8 +445,9 @@ def links_out(folder: str | os.PathLike[str]) -> list[Path]:
 def verify_run(
     run: str | os.PathLike[str], roots: Mapping[str, str | os.PathLike[str]] | None = None
 ) -> list[tuple[str, str]]:
-    """Re-check every input of a run: a list of (path, 'changed', 'missing', 'added' or
-    'outside'); empty if all inputs still have their recorded SHA-256 and the folders the report
+    """Re-check every input of a run: a list of (path, 'changed', 'missing', 'added', 'outside'
+    or :data:`NOT_A_FILE`: a FIFO or a device in place of an input or in a folder it read, not
+    opened); empty if all inputs still have their recorded SHA-256 and the folders the report
     read (``input_roots``, listed as the report listed them, :func:`input_files`) hold no other
     file.
 
@@ -375,6 +469,7 @@ def verify_run(
     found through a link that leads outside is listed as 'outside', unread."""
     record = read_run_json(run)
     folder = run_folder(run)
+    check_digests(record, folder / RUN_JSON if Path(run).is_dir() else Path(run))
     given = {k: Path(v).resolve() for k, v in (roots or {}).items()}
     for name, p in given.items():
         if not p.exists():
@@ -458,7 +553,9 @@ def verify_run(
         sums.update(record.get("baseline_inputs") or {})
         inputs.update({key: _as_spelled_here(place(key)) for key in sorted(record.get("baseline_inputs") or {})})
     for key, p in inputs.items():
-        if not p.is_file():
+        if os.path.exists(p) and not p.is_file():  # a FIFO or a device where the input was: there, never opened
+            problems.append((key, NOT_A_FILE))
+        elif not p.is_file():
             problems.append((key, "missing"))
         elif not readable(p):
             problems.append((key, "outside"))
@@ -473,19 +570,39 @@ def verify_run(
         def key_of(f: Path) -> str:  # absolute keys: a file below a root given here, as keyed where the run was made
             return _key(as_recorded(f), None) if style is None else _key(f, style)
 
-        recorded_keys = {validate.label(k) for k in record["inputs"]}
+        # each file found is matched to a recorded input by its key as written; a key recorded in another Unicode
+        # spelling (NFD there, NFC here) stands for the one file of that name here only where its own spelling
+        # is not here: two files whose names differ only so are two files, and the one not recorded is added
+        exact = set(record["inputs"])
+        recorded_keys = {validate.label(k) for k in exact}
+        respelled: dict[str, list[str]] = {}
+        for k in exact:
+            respelled.setdefault(validate.label(k), []).append(k)
         keyed: dict[str, bool] = {}
-        files, unwalked = _listing(listed, resolve=False, inside=allowed)  # a linked folder leading elsewhere:
+        files, unwalked, odd = _listing(listed, resolve=False, inside=allowed)  # a linked folder leading elsewhere:
         for p in unwalked:  # listed, not walked (a folder of estimates linked in from elsewhere since the run)
             key = key_of(where_it_is(p))
             below = (validate.label(key) + "/", validate.label(str(where_it_is(p))) + "/")
             if not any(k.startswith(below) for k in recorded_keys):  # its recorded inputs are listed 'outside' already
                 keyed[key] = False
+        matched: set[str] = set()
+        unmatched: list[tuple[Path, bool, list[str]]] = []
         for p in files:
             inside = readable(p)
             forms = [where_it_is(p), p.parent.resolve() / p.name] + ([p.resolve()] if inside else [])
-            keys = [validate.label(key_of(f)) for f in forms]  # as the report keys it; as earlier ones did
-            if not recorded_keys.intersection(keys):
+            keys = [key_of(f) for f in forms]  # as the report keys it; as earlier ones did
+            hit = exact.intersection(keys)
+            if hit:
+                matched |= hit
+            else:
+                unmatched.append((p, inside, keys))
+        for p, inside, keys in unmatched:  # in another spelling: the recorded key whose own spelling is not here
+            free = [k for label in dict.fromkeys(map(validate.label, keys)) for k in respelled.get(label, [])
+                    if k not in matched]  # fmt: skip
+            if free:
+                matched.add(free[0])
+            else:
                 keyed[key_of(where_it_is(p))] = inside
         problems += [(key, "added" if keyed[key] else "outside") for key in sorted(keyed)]
+        problems += [(key_of(where_it_is(p)), NOT_A_FILE) for p in odd]
     return sorted(set(problems))
