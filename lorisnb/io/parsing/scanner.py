@@ -271,6 +271,15 @@ def finish(
         if not keep_all:
             order = order[np.concatenate((s[1:] != s[:-1], [True]))]
         stamps, positions, quaternions, lines = stamps[order], positions[order], quaternions[order], lines[order]
+    elif keep_all and stamps.size > 1:  # in order, but poses of one stamp kept: said as when they are dropped
+        same = np.flatnonzero(stamps[1:] == stamps[:-1])
+        if same.size:
+            i = same[0] + 1
+            notes.append(
+                f"{path}{label}: timestamps are not increasing ({same.size} times; first at line {lines[i]}: "
+                f"{stamps[i]:.9f} repeats after {stamps[i - 1]:.9f}); kept every pose of a repeated stamp in file "
+                "order (repeated='keep')"
+            )
     small = lines.size == 0 or int(lines.max()) < 2**31  # line numbers in 4 bytes: 40 MB less per 10M poses
     return Trajectory.from_checked(  # rows checked by check_rows, sorted above
         np.ascontiguousarray(stamps, float),
