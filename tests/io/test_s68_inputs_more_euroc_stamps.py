@@ -113,11 +113,3 @@ def test_a_large_file_read_in_chunks_is_exact(tmp_path, monkeypatch):
     monkeypatch.setattr(chunks, "CHUNK_BYTES", 1 << 16)
     t = read_euroc(f)
     np.testing.assert_array_equal(t.stamps, [float(f"{v // 10**9}.{v % 10**9:09d}") for v in ns.tolist()])
-
-
-def test_each_convention_says_how_it_reads_euroc_stamps():
-    from lorisnb.core.spec.evalspec import PRESETS
-
-    assert {name: spec.euroc_stamps for name, spec in PRESETS.items()} == {
-        name: "evo" if name == "evo" else "exact" for name in PRESETS
-    }

@@ -141,13 +141,6 @@ class EvalSpec:
         by its own rules), whatever ``align`` does to lorisnb's own columns."""
         return self.preset_name in AS_READ
 
-    @property
-    def euroc_stamps(self) -> str:
-        """How EuRoC files' nanoseconds become seconds under this convention (the readers'
-        ``euroc_stamps``): ``evo`` under the ``evo`` preset (evo's one float division by 1e9), else
-        ``exact`` (the stamp's digits read exactly: the seconds a TUM file of the same decimals gives)."""
-        return "evo" if self.preset_name == "evo" else "exact"
-
     # -- what it says ------------------------------------------------------------------------
     def alignment_for(self, algorithm: str) -> str:
         """The alignment used for an algorithm (``auto``: ``sim3`` for monocular ones)."""
