@@ -351,35 +351,23 @@ def _euroc_head(path: str | os.PathLike) -> tuple[int, int]:
     return skip, 8
 
 
-def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop", stamps: str = "exact") -> Trajectory:
+def read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop") -> Trajectory:
     """Read a EuRoC ground-truth CSV (``state_groundtruth_estimate0/data.csv``): rows
     ``stamp_ns, p_x, p_y, p_z, q_w, q_x, q_y, q_z[, ...]`` after a ``#timestamp,...`` header;
-    stamps become seconds, quaternions ``xyzw``. Further columns (velocities, biases) are ignored.
-    ``repeated``: as :func:`read_tum`. Read in chunks as :func:`read_tum` (the rows straight into the
-    arrays kept). A file plainly in another format (a TUM file whose stamps happen to be whole
-    numbers, ...) is refused with a ParseError naming it (:func:`refuse_other_format`).
-
-    ``stamps``: how nanoseconds become seconds. ``exact`` (lorisnb's): the integer text of each
-    stamp read exactly (1.4e18 ns is past float64's whole numbers) and made the float nearest to
-    its seconds, the number a TUM file writing the same decimals gives (:func:`euroc_seconds`);
-    ``evo``: evo's reading, the stamp read as a float and divided by 1e9 (``np.divide(mat[:, 0],
-    1e9)``), one float step away from it for about a quarter of real stamps."""
-    refuse_other_format(path, "euroc", lambda: _read_euroc(path, False, repeated, stamps))
-    return _read_euroc(path, warn, repeated, stamps)
+    stamps become seconds (nanoseconds / 1e9, as evo), quaternions ``xyzw``. Further columns
+    (velocities, biases) are ignored. ``repeated``: as :func:`read_tum`. Read in chunks as
+    :func:`read_tum` (the rows straight into the arrays kept). A file plainly in another format (a
+    TUM file whose stamps happen to be whole numbers, ...) is refused with a ParseError naming it
+    (:func:`refuse_other_format`)."""
+    refuse_other_format(path, "euroc", lambda: _read_euroc(path, False, repeated))
+    return _read_euroc(path, warn, repeated)
 
 
-#: How a EuRoC file's nanoseconds become seconds (:func:`read_euroc`'s ``stamps``).
-EUROC_STAMPS = ("exact", "evo")
-
-
-def _read_euroc(
-    path: str | os.PathLike, warn: bool = True, repeated: str = "drop", stamps: str = "exact"
-) -> Trajectory:
+def _read_euroc(path: str | os.PathLike, warn: bool = True, repeated: str = "drop") -> Trajectory:
     """:func:`read_euroc` of a file whose format is already checked."""
     spath = str(path)
-    exact = choice("stamps", stamps, EUROC_STAMPS) == "exact"
     if not regular_file(path):  # a pipe is read once: by the byte scanner, not after a look at its head
-        return _read_euroc_whole(path, warn, repeated, stamps)
+        return _read_euroc_whole(path, warn, repeated)
     skip, width = _euroc_head(path)
     try:
         rows = read_rows(
@@ -394,27 +382,23 @@ def _read_euroc(
             convert=rows_fit,
         )
     except ParseError:
-        return _read_euroc_whole(path, warn, repeated, stamps)  # the first problem of the whole file, as it always was
+        return _read_euroc_whole(path, warn, repeated)  # the first problem of the whole file, as it always was reported
     first, positions, quaternions, unsure = _fit_groups(rows, _euroc_groups(width))  # quaternions read as x y z w
     notes: list[str] = []
     line_no = rows.lines
-    ns = first[:, 0]
-    if (ns != np.round(ns)).any():  # not whole nanoseconds: reported as the whole-file reader does
-        return _read_euroc_whole(path, warn, repeated, stamps)
-    keep = check_rows(spath, ns, positions, quaternions, line_no, notes) if unsure.any() else None
+    stamps = first[:, 0]
+    if (stamps != np.round(stamps)).any():  # not whole nanoseconds: reported as the whole-file reader does
+        return _read_euroc_whole(path, warn, repeated)
+    keep = check_rows(spath, stamps, positions, quaternions, line_no, notes) if unsure.any() else None
     if keep is not None and not keep.all():
-        ns, positions, quaternions, line_no = ns[keep], positions[keep], quaternions[keep], line_no[keep]
-    exact = exact and bool(ns.size) and float(np.abs(ns).max()) > 2.0**53  # below, ns / 1e9 is rounded once: exact
-    seconds = _file_seconds(path, line_no) if exact else None
-    if seconds is None:  # evo's reading (or stamps not written as plain whole numbers: as evo reads them)
-        ns /= 1e9
-        seconds = ns
-    traj = finish(spath, seconds, positions, quaternions, line_no, "", notes, repeated)
+        stamps, positions, quaternions, line_no = stamps[keep], positions[keep], quaternions[keep], line_no[keep]
+    stamps /= 1e9
+    traj = finish(spath, stamps, positions, quaternions, line_no, "", notes, repeated)
     _warn(notes, warn)
     return traj
 
 
-def _read_euroc_whole(path: str | os.PathLike, warn: bool, repeated: str = "drop", stamps: str = "exact") -> Trajectory:
+def _read_euroc_whole(path: str | os.PathLike, warn: bool, repeated: str = "drop") -> Trajectory:
     """:func:`read_euroc` by the byte scanner over the whole file: widths checked on every row
     before any number is read (a file with several problems reports the same first one)."""
     spath = str(path)
@@ -445,112 +429,9 @@ def _read_euroc_whole(path: str | os.PathLike, warn: bool, repeated: str = "drop
     notes: list[str] = []
     line_no = rows + 1
     keep = check_rows(spath, values[:, 0], poses[:, :3], poses[:, 3:], line_no, notes)
-    seconds = None
-    if choice("stamps", stamps, EUROC_STAMPS) == "exact":
-        seconds = euroc_seconds(lines.buf, lines.first_pos[rows[keep]])
-    if seconds is None:  # evo's reading (or stamps not written as plain whole numbers: as evo reads them)
-        seconds = values[keep, 0] / 1e9
-    traj = finish(spath, seconds, poses[keep, :3], poses[keep, 3:], line_no[keep], "", notes, repeated)
+    traj = finish(spath, values[keep, 0] / 1e9, poses[keep, :3], poses[keep, 3:], line_no[keep], "", notes, repeated)
     _warn(notes, warn, 5)  # the whole-file reader, _read_euroc, read_euroc
     return traj
-
-
-_DIGITS = 19  # a EuRoC stamp's digits at most (1.4e18 ns: 19; 2**64 has 20)
-_SEPARATORS = np.zeros(256, dtype=bool)
-_SEPARATORS[[9, 10, 11, 12, 13, 32, 44]] = True  # whitespace and the comma
-
-
-def euroc_seconds(buf: np.ndarray, starts: np.ndarray) -> np.ndarray | None:
-    """Seconds of the EuRoC stamps (whole nanoseconds) whose text starts at byte offsets ``starts``
-    of ``buf`` (uint8), read exactly from their digits, vectorized: the float nearest to the stamp's
-    seconds, as ``float("1305031102.175304")`` reads a TUM file's decimals. A stamp within float64's
-    whole numbers (2**53 ns, 104 days) is divided by 1e9 (one rounding); a larger one is its whole
-    seconds plus its fraction (``ns // 10**9 + (ns % 10**9) / 1e9``, its last 9 digits: the sum
-    rounds as the decimal does, the fraction's own rounding being far smaller than the seconds'
-    float step). None when a stamp is not a plain whole number of at most 19 digits (``1.4e18``,
-    ``+5``): read as evo does."""
-    width = _DIGITS + 2  # a sign, 19 digits, the separator after them
-    padded = np.concatenate((buf, np.full(width, 10, np.uint8)))  # the last line's stamp ends in the padding
-    windows = np.lib.stride_tricks.sliding_window_view(padded, width)
-    out = np.empty(starts.size)
-    for lo in range(0, starts.size, _BLOCK):  # blocks that stay in the cache (4x faster than all at once)
-        got = _stamp_block(windows[starts[lo : lo + _BLOCK]])
-        if got is None:
-            return None
-        out[lo : lo + _BLOCK] = got
-    return out
-
-
-_BLOCK = 1 << 16
-
-
-def _stamp_block(text: np.ndarray) -> np.ndarray | None:
-    """:func:`euroc_seconds` of stamps given as rows of bytes (``text``: (n, 21) uint8 from each
-    stamp's first byte)."""
-    n = len(text)
-    sign = text[:, 0] == ord("-")
-    if sign.any():
-        text = np.where(sign[:, None], np.roll(text, -1, axis=1), text)  # the digits after the sign
-    digit = (text >= 48) & (text <= 57)
-    ndig = np.argmin(digit, axis=1)  # the first byte that is no digit
-    if (digit.all(axis=1) | (ndig == 0) | (ndig > _DIGITS)).any():
-        return None
-    if not _SEPARATORS[text[np.arange(n), ndig]].all():  # '.', 'e', a letter: not a plain whole number
-        return None
-    if (ndig != ndig[0]).any():  # stamps of several lengths: each right-aligned, zeros before it
-        cols = np.arange(_DIGITS, dtype=np.int64)[None, :] - (_DIGITS - ndig)[:, None]
-        text = np.where(cols >= 0, np.take_along_axis(text, np.maximum(cols, 0), axis=1), 48)
-    else:
-        text = np.concatenate((np.full((n, _DIGITS - int(ndig[0])), 48, np.uint8), text[:, : ndig[0]]), axis=1)
-    values = text.astype(np.int64) - 48  # (n, 19) digits, right-aligned
-    whole = values[:, :-9] @ 10 ** np.arange(_DIGITS - 10, -1, -1, dtype=np.int64)  # whole seconds (< 1e10)
-    part = values[:, -9:] @ 10 ** np.arange(8, -1, -1, dtype=np.int64)  # nanoseconds of the second
-    small = (whole < _WHOLE_53) | ((whole == _WHOLE_53) & (part <= _PART_53))  # ns <= 2**53: exact as a float
-    seconds = np.where(
-        small,
-        (whole.astype(np.float64) * 1e9 + part.astype(np.float64)) / 1e9,
-        whole.astype(np.float64) + part.astype(np.float64) / 1e9,
-    )
-    return np.where(sign, -seconds, seconds)
-
-
-_WHOLE_53, _PART_53 = divmod(1 << 53, 10**9)
-
-
-def _file_seconds(path: str | os.PathLike, line_no: np.ndarray) -> np.ndarray | None:
-    """:func:`euroc_seconds` of the first token of the file's 1-based lines ``line_no`` (increasing),
-    the file streamed again in chunks of whole lines (its BOM dropped, as when it was read), each
-    chunk's stamps read on a thread as it comes."""
-    from lorisnb.io.parsing.chunks import CHUNK_BYTES, _chunks
-    from lorisnb.io.parsing.ranges import in_order
-
-    lines = np.asarray(line_no, np.int64)
-    out = np.empty(lines.size)
-    tasks = (((_chunk_seconds, chunk, line0, nlines, lines), len(chunk))
-             for chunk, line0, nlines, _ in _chunks(path, "a trajectory file", CHUNK_BYTES))  # fmt: skip
-    for lo, got in in_order(tasks, None):
-        if got is None:
-            return None
-        out[lo : lo + got.size] = got
-    return out
-
-
-def _chunk_seconds(chunk: bytes, line0: int, nlines: int, lines: np.ndarray) -> tuple[int, np.ndarray | None]:
-    """The seconds of the stamps of ``lines`` (1-based, of the file) that lie in ``chunk`` (its
-    lines from ``line0`` + 1), and where the first of them is in ``lines``."""
-    lo, hi = (int(k) for k in np.searchsorted(lines, [line0 + 1, line0 + nlines + 1]))
-    if hi == lo:
-        return lo, np.zeros(0)
-    buf = np.frombuffer(chunk, np.uint8)
-    starts = np.concatenate(([0], np.flatnonzero(buf == 10) + 1))[lines[lo:hi] - line0 - 1]
-    blank = _SEPARATORS.copy()
-    blank[44] = False  # spaces before the stamp (rarely more than a few), not a comma
-    for _ in range(LINE_LIMIT):
-        ws = blank[buf[np.minimum(starts, buf.size - 1)]] & (starts < buf.size - 1)
-        if not ws.any():
-            break
-        starts = starts + ws
-    return lo, euroc_seconds(buf, starts)
 
 
 def _euroc_groups(ntok: int) -> tuple[slice, slice, list[int]]:
@@ -568,7 +449,6 @@ def read_trajectory(
     tf: str | None = None,
     repeated: str = "drop",
     repair_stamps: bool = False,
-    euroc_stamps: str = "exact",
 ) -> Trajectory:
     """Read one trajectory in any supported format.
 
@@ -582,8 +462,6 @@ def read_trajectory(
             previous one is dropped) and ``keep`` keeps such poses.
         repair_stamps: OpenLORIS files only: read nanoseconds written without zero padding as such
             (see :func:`lorisnb.io.read_openloris`); refused for other formats.
-        euroc_stamps: EuRoC files only: ``exact`` (their nanoseconds read exactly, the seconds a TUM
-            file of the same decimals gives) or ``evo`` (evo's nanoseconds / 1e9); see :func:`read_euroc`.
     """
     if not isinstance(path, (str, os.PathLike)):
         raise ValidationError(f"path={path!r}: expected the path of a trajectory file (str or pathlib.Path)")
@@ -596,9 +474,8 @@ def read_trajectory(
             raise ValidationError(f"{name}: only for {' and '.join(fmts)} files, not {fmt} files")
     if seq is not None and (isinstance(seq, (bool, np.bool_)) or not isinstance(seq, (int, np.integer)) or seq < 0):
         raise ValidationError(f"seq={seq!r}: expected the whole number of a 'seq: N' block")
-    choice("euroc_stamps", euroc_stamps, EUROC_STAMPS)
     refuse_other_format(path, fmt)  # plainly another format: say which option reads it
-    return _read(path, fmt, seq, stamps, topic, tf, repeated, repair_stamps, euroc_stamps)
+    return _read(path, fmt, seq, stamps, topic, tf, repeated, repair_stamps)
 
 
 def _read(
@@ -610,7 +487,6 @@ def _read(
     tf: str | None,
     repeated: str,
     repair_stamps: bool = False,
-    euroc_stamps: str = "exact",
 ) -> Trajectory:
     if fmt == "bag":
         from lorisnb.io.readers.bags import read_bag
@@ -621,7 +497,7 @@ def _read(
     if fmt == "kitti":
         return _read_kitti(path, stamps, repeated=repeated)
     if fmt == "euroc":
-        return _read_euroc(path, repeated=repeated, stamps=euroc_stamps)
+        return _read_euroc(path, repeated=repeated)
     if fmt == "openloris":
         f = read_openloris(path, remove_repeated=choice("repeated", repeated, ("drop", "keep")) == "drop",
                            repair_stamps=repair_stamps)  # fmt: skip
