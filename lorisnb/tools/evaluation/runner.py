@@ -537,7 +537,9 @@ def evaluate_manifest(
     if m.estimate_format == "kitti" and all(
         s.groundtruth_format == "kitti" and s.estimate_times is None and s.groundtruth_times is None for s in m.sessions
     ):
-        the_spec = by_index(the_spec)  # KITTI files without times (estimate_times, groundtruth_times): pose i with i
+        the_spec = by_index(
+            the_spec, surface="manifest"
+        )  # KITTI files without times (estimate_times, groundtruth_times): pose i with i
     compile_trials_by(trials_by)
     for s in m.sessions:  # an estimate lies in each algorithm's folder: a path leaving it reads one file for all
         name = os.path.normpath(s.estimate)
