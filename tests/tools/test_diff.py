@@ -284,7 +284,7 @@ def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
                      "--csv", str(folder / "per_sequence_benchmark" / "sequences.csv")]) == 0  # fmt: skip
         meta = dict(command=["lorisnb", "report"], lorisnb_version=version, commit="abc", spec={"eps": "paper", "phi": 30},
                     data_root="/data", created=f"2026-11-0{k + 1}T02:00:00+00:00",
-                    inputs={"/data/openloris-scene/groundtruth/gt_home_1.txt": "e3b0"}, notebooks={})  # fmt: skip
+                    inputs={"/data/openloris-scene/groundtruth/gt_home_1.txt": "e3b0" * 16}, notebooks={})  # fmt: skip
         (folder / "run.json").write_text(json.dumps(meta))
         runs.append(folder)
     capsys.readouterr()
@@ -304,7 +304,9 @@ def test_diff_of_report_runs_and_history(versions, tmp_path, capsys):
     regt = tmp_path / "run-3"  # the ground truth changed under the same version
     shutil.copytree(runs[2], regt)
     meta = json.loads((runs[2] / "run.json").read_text())
-    meta.update(created="2026-11-04T02:00:00+00:00", inputs={"/data/openloris-scene/groundtruth/gt_home_1.txt": "ff"})
+    meta.update(
+        created="2026-11-04T02:00:00+00:00", inputs={"/data/openloris-scene/groundtruth/gt_home_1.txt": "ff" * 32}
+    )
     (regt / "run.json").write_text(json.dumps(meta))
     csv, figs = tmp_path / "history.csv", tmp_path / "figures"
     rc = main(["history", str(runs[2]), str(regt), str(runs[0]), str(runs[1]), "--csv", str(csv), "--out", str(figs)])

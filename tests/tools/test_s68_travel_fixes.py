@@ -203,3 +203,16 @@ def test_a_spec_cell_nested_too_deeply_is_compared_as_text_not_a_traceback():
     assert runs.check_values(pd.DataFrame({"spec": [deep]}), Path("x.csv"), "a table")["spec"].tolist() == [deep]
     assert runs._spec_keys([(deep,)], [("{}",)], "A", "B") is None
     assert runs._same_spec_text(deep, "{}") == (deep, "{}")
+
+
+def test_a_notebook_marker_nested_past_the_stack_is_refused_not_a_traceback(tmp_path):
+    """The notebooks' output marker read with json.loads: '[' * 100000 raised RecursionError; it is
+    a marker that is not lorisnb's, refused with what to do, as any unreadable marker."""
+    from lorisnb.errors import OutputError
+    from lorisnb.tools.notebook.start import OUTPUTS_MARKER, Outputs
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / OUTPUTS_MARKER).write_text("[" * 100000 + "]" * 100000)
+    with pytest.raises(OutputError, match="not a list of the files a notebook wrote"):
+        Outputs(out, notebook="x").written()

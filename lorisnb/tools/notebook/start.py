@@ -204,7 +204,7 @@ class Outputs:
             return {}
         try:
             files = json.loads(self.marker.read_text(encoding="utf-8")).get("files")
-        except (OSError, UnicodeDecodeError, ValueError, AttributeError):
+        except (OSError, UnicodeDecodeError, ValueError, AttributeError, RecursionError):  # nested past the stack
             files = None
         if not isinstance(files, dict) or not all(isinstance(k, str) and isinstance(v, str) for k, v in files.items()):
             raise OutputError(

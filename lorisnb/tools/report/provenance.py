@@ -276,8 +276,8 @@ def _is_digest(v: Any) -> bool:
 def check_digests(record: Mapping[str, Any], f: str | os.PathLike[str]) -> None:
     """A :class:`~lorisnb.errors.ParseError` naming run.json (``f``) if a checksum of its ``inputs`` or
     ``baseline_inputs`` is no SHA-256 as lorisnb writes one: a damaged run.json, whose input would
-    otherwise be reported "changed" (checked where checksums are compared with files: :func:`verify_run`;
-    diff and history compare them with each other only)."""
+    otherwise be reported "changed" (:func:`read_run_json` checks it for every command that reads a
+    run: verify compares checksums with files, diff and history with each other)."""
     for key in ("inputs", "baseline_inputs"):
         bad = next(([k, v] for k, v in (record.get(key) or {}).items() if not _is_digest(v)), None)
         if bad is not None:
@@ -345,6 +345,7 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
             shown = shown if len(shown) <= 80 else shown[:77] + "..."
             where = f'"{key}" holds' if culprit is not None else f'"{key}" is'
             raise ParseError(f, None, f"{where} {shown}; expected {expected}")
+    check_digests(record, f)  # every reader: a checksum that is no SHA-256 is a damaged run.json
     return record
 
 
