@@ -56,6 +56,24 @@ def icra20(data) -> Path:
     return data.icra20
 
 
+@pytest.fixture(scope="session")
+def tum_folder(data) -> Path:
+    """The TUM RGB-D folder of the real data (the fr2_desk pair, the fr1_xyz ground truth)."""
+    root = data.root / "tum-rgbd"
+    if not (root / "fr2_desk_ORB.txt").is_file():
+        pytest.skip(f"no TUM pair in {root}")
+    return root
+
+
+@pytest.fixture(scope="session")
+def fr1_xyz_groundtruth(data) -> Path:
+    """The fr1_xyz ground truth of the real data (TUM format)."""
+    path = data.root / "tum-rgbd" / "freiburg1_xyz-groundtruth.txt"
+    if not path.is_file():
+        pytest.skip(f"{path} is not in the data")
+    return path
+
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

@@ -9,11 +9,8 @@ from lorisnb.cli import main
 
 
 @pytest.fixture(scope="module")
-def tum(data):
-    root = data.root / "tum-rgbd"
-    if not (root / "fr2_desk_ORB.txt").is_file():
-        pytest.skip(f"no TUM pair in {root}")
-    return root
+def tum(tum_folder):
+    return tum_folder
 
 
 @pytest.mark.parametrize(

@@ -20,11 +20,8 @@ from lorisnb.tools.evaluation.runner import evaluate_manifest
 
 
 @pytest.fixture(scope="module")
-def xyz(data) -> Path:
-    path = data.root / "tum-rgbd" / "freiburg1_xyz-groundtruth.txt"
-    if not path.is_file():
-        pytest.skip(f"{path} is not in the data")
-    return path
+def xyz(fr1_xyz_groundtruth) -> Path:
+    return fr1_xyz_groundtruth
 
 
 def test_a_session_in_nanoseconds_names_estimate_format(tmp_path, xyz):

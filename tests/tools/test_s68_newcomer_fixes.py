@@ -19,11 +19,8 @@ from lorisnb.tools.notebook.params import check_parameters, check_values
 
 
 @pytest.fixture(scope="module")
-def tum(data):
-    root = data.root / "tum-rgbd"
-    if not (root / "fr2_desk_ORB.txt").is_file():
-        pytest.skip(f"no TUM pair in {root}")
-    return root
+def tum(tum_folder):
+    return tum_folder
 
 
 def test_groundtruth_and_manifest_refused_as_the_command_line_refuses_gt_and_manifest(tum):
