@@ -57,7 +57,7 @@ def test_copies_of_a_rerun_beside_a_real_one_count_once(run):
     x = _labelled([reruns[0], reruns[1], _near(reruns[1], 1), _near(reruns[1], 2)], "sys (1)")
     y = _labelled([reruns[2], reruns[3], _near(reruns[3], 3), _near(reruns[3], 4)], "sys (2)")
     table = pd.concat([x, y], ignore_index=True)
-    full, _, counted = prepared_table(table, durations, "cr")
+    full, _, counted = prepared_table(table, durations)
     tracked = full[full["matched"] > 0]
     assert (tracked.groupby(["algorithm", "scene", "seq"])["trial"].nunique() == 2).all()
     with_output = int((seqs["matched"] > 0).sum())
@@ -66,7 +66,7 @@ def test_copies_of_a_rerun_beside_a_real_one_count_once(run):
     assert any("within 1e-4 or a trace of noise (copies, not reruns), counted once" in n for n in res.notes)
     honest = pd.concat([_labelled(reruns, "sys (1)"), _labelled([rerun_trials(seqs, (1,), 10 + k).drop(
         columns="trial") for k in range(4)], "sys (2)")], ignore_index=True)  # fmt: skip
-    assert prepared_table(honest, durations, "cr")[2] == {}  # reruns: no row counted once
+    assert prepared_table(honest, durations)[2] == {}  # reruns: no row counted once
 
 
 def test_copies_with_a_realistic_ate_spread_and_a_cr_no_rerun_repeats_are_not_tested(icra20):

@@ -302,7 +302,7 @@ def compare_rates(pool: Pool, trials: Sequence[int] = (1, 3, 5), nights: int = 1
             a, b = _night(pool, n, rng)
             table = pd.concat([a.assign(algorithm=a["algorithm"] + " (1)"), b.assign(algorithm=b["algorithm"] + " (2)")],
                               ignore_index=True)  # fmt: skip
-            full, _, _ = prepared_table(table, pool.expected, "cr")  # as compare_table prepares it
+            full, _, _ = prepared_table(table, pool.expected)  # as compare_table prepares it
             pairs, _, _ = decide(table, full, "cr", alpha, int(rng.integers(2**31)), intervals=False)
             system_a, system_b = pairs["a"].str[:-4], pairs["b"].str[:-4]
             same = (system_a == system_b).to_numpy()

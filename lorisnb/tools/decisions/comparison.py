@@ -118,10 +118,11 @@ def near_copies(table: pd.DataFrame) -> np.ndarray:
     trace of noise: the same number of matched poses (noise added to a copy's positions keeps its
     stamps; a rerun's dropouts and start differ), and every judged value
     (:data:`~lorisnb.core.stats.regression.METRICS`) of a row with output, rates within
-    :data:`NEAR_RATE`, errors within :data:`NEAR_ERROR` relative (NaN as NaN). (Without the matched
-    poses, an odometry's reruns, whose ATE varies little, were taken for copies now and then.) Copies of a rerun whose errors moved by 0.2 % and CR by up to 1e-3 (a script adding noise)
-    beside one real rerun made two labels of one system differ in 14 of 20 of a helper's nights;
-    the every-value rule within 1e-4 (:func:`~lorisnb.core.stats.regression.repeated_trials`) let them pass."""
+    :data:`NEAR_RATE`, errors within :data:`NEAR_ERROR` relative (NaN as NaN). Copies of a rerun
+    whose errors moved by 0.2 % and CR by up to 1e-3 (a script adding noise) beside one real rerun
+    made two labels of one system differ in 14 of 20 of a helper's nights; the every-value rule
+    within 1e-4 (:func:`~lorisnb.core.stats.regression.repeated_trials`) let them pass. (Without the
+    matched poses, an odometry's reruns, whose ATE varies little, were taken for copies now and then.)"""
     from lorisnb.core.stats.regression import KEYS, METRICS
 
     t = stats.with_trials(table)
@@ -167,13 +168,12 @@ def _tested_values(full: pd.DataFrame, metric: str) -> tuple[np.ndarray, np.ndar
         return np.log(v), np.isfinite(v) & (v > 0)
 
 
-def _without_repeated_trials(table: pd.DataFrame, full: pd.DataFrame, metric: str = "cr") -> tuple[pd.DataFrame, dict]:
+def _without_repeated_trials(table: pd.DataFrame, full: pd.DataFrame) -> tuple[pd.DataFrame, dict]:
     """``full`` without the rows of a trial that repeat another trial's row of the same sequence,
     every value within 1e-4 (:func:`lorisnb.core.stats.regression.repeated_trials`, as ``diff``
     counts them) or within a trace of noise (:func:`near_copies`). Returns the table and, per
     algorithm, (rows dropped, rows); an algorithm whose trials are all near-identical copies of one
-    run (:func:`trial_spread` of ``table``) keeps them: none of its pairs is tested. ``metric`` is
-    the one tested (the rule is the same for every metric)."""
+    run (:func:`trial_spread` of ``table``) keeps them: none of its pairs is tested."""
     from lorisnb.core.stats.regression import repeated_trials
 
     t = stats.with_trials(full)
@@ -186,13 +186,16 @@ def _without_repeated_trials(table: pd.DataFrame, full: pd.DataFrame, metric: st
     return full[~rep], counted
 
 
-def prepared_table(table: pd.DataFrame, durations: pd.DataFrame, metric: str = "cr") -> tuple[pd.DataFrame, list, dict]:
+def prepared_table(
+    table: pd.DataFrame, durations: pd.DataFrame
+) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, tuple[int, int]]]:
     """What ``compare`` tests, from a per-sequence table and the scenes' durations: every expected
     sequence (missing ones as failed runs, :func:`~lorisnb.core.lifelong.coverage.complete`), the
-    trials that repeat another's counted once (:func:`_without_repeated_trials`); with the coverage
-    and the counts of repeated rows. ``compare_table`` and ``make calibrate`` both use it."""
+    trials that repeat another's counted once (:func:`_without_repeated_trials`, whatever
+    metric is tested); with the coverage and the counts of repeated rows. ``compare_table`` and ``make
+    calibrate`` both use it."""
     full, cover = complete(table, durations)
-    full, counted = _without_repeated_trials(table, full, metric)
+    full, counted = _without_repeated_trials(table, full)
     return full, cover, counted
 
 
@@ -275,7 +278,7 @@ def compare_table(
             raise ValidationError(f"power delta={power_delta:g}: {metric} is a rate between 0 and 1, so a difference "
                                   "above 1 cannot happen; expected a difference in (0, 1]")  # fmt: skip
     check_table_duplicates(table)
-    full, cover, counted_once = prepared_table(table, durations, metric)
+    full, cover, counted_once = prepared_table(table, durations)
     notes = coverage_notes(cover)
     if counted_once:
         notes.append("trials that repeat another trial's every value, within 1e-4 or a trace of noise (copies, not "
