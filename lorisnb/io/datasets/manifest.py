@@ -575,7 +575,7 @@ def _refuse_quoted_numbers(options: dict[str, Any], table: dict[str, Any], path:
     ``lifelong = "no"`` is no boolean: refused for every option, saying to write it without quotes.
     Words an option documents (``eps = "paper"``, ``"relative:0.1"``) are no numbers and pass."""
     for key, value in options.items():
-        if not isinstance(value, str):
+        if not isinstance(value, str) or "_" in value:  # 1_0: the number check says to write it without underscores
             continue
         try:
             float(value.strip())

@@ -444,7 +444,7 @@ class Sandbox:
         not read as one, only counted in :attr:`stray`. Code that forged a reply and also answered the
         sync itself (it read the sync from the request pipe) is found later: the child's own reply to
         the request comes after them, and a reply to a request answered earlier, read at any later
-        request or at :meth:`settle`, is put in :attr:`late` under that request's name."""
+        request or at :meth:`settle`, is put in ``late`` under that request's name."""
         proc = self._proc
         if proc is None or proc.poll() is not None or proc.stdin is None or proc.stdout is None:
             raise SandboxError("the sandbox is not running (it ended earlier)")
@@ -482,7 +482,7 @@ class Sandbox:
     def _unasked(self, line: dict[str, Any]) -> None:
         """A line that is no reply to the request pending: a reply to one answered earlier (the
         code forged that reply and answered the grader's sync itself, so the child's own reply came
-        later) goes in :attr:`late` under that request's name; any other is counted in :attr:`stray`."""
+        later) goes in ``late`` under that request's name; any other is counted in :attr:`stray`."""
         earlier = self._answered.get(str(line.get("id")))
         if earlier is None:
             self.stray += 1
@@ -493,11 +493,11 @@ class Sandbox:
 
     def settle(self, timeout_s: float = SYNC_S) -> None:
         """Read everything the child wrote up to now: a sync request of the grader's and every line
-        before its answer (a reply to a request answered earlier goes in :attr:`late`): the child
+        before its answer (a reply to a request answered earlier goes in ``late``): the child
         answers the sync once the code that ran for the last request has returned. A child whose
         process ended on its own after the last reply was read (the loop never ends by itself: the
         code ended it, as code that forged its reply and left before the child's own could follow
-        does) puts that request in :attr:`late` too. Detection is best effort: code in the child can
+        does) puts that request in ``late`` too. Detection is best effort: code in the child can
         also keep the child's own reply from being written, and is then not found; what it can
         report is only what it computed itself."""
         proc = self._proc
@@ -526,7 +526,7 @@ class Sandbox:
 
     def _ended_after_reply(self) -> None:
         """The child's process ended with no request pending: the last request answered goes in
-        :attr:`late` (once)."""
+        ``late`` (once)."""
         if not self._answered:
             return
         name = list(self._answered.values())[-1]
