@@ -74,3 +74,29 @@ def test_commands_that_read_only_tables_have_only_the_scores_sent_back(icra20, d
     lean = _printed(capsys, [folder])
     monkeypatch.setattr("lorisnb.cli.commands.tables_only", lambda spec: True)  # every pose kept: the same text
     assert _printed(capsys, [folder]) == lean
+
+
+def test_printing_the_table_imports_no_pandas(icra20):
+    """``lorisnb evaluate`` printing its table (no ``--csv``) reads the lean rows: pandas is not
+    imported in its process (beside the workers it took a core from them), while a table written
+    with ``--csv`` imports it. Real icra20 files, in a fresh interpreter, in parallel (forked workers)."""
+    import subprocess
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    folder = icra20 / "lifelong" / "maslam"
+    probe = (
+        "import sys, os; from lorisnb.cli import main; "
+        "sys.stdout = open(os.devnull, 'w'); sys.stderr = open(os.devnull, 'w'); "
+        f"rc = main(['evaluate', {str(folder)!r}, '--scale', 'auto', '--no-progress', '--jobs', '2', *sys.argv[1:]]); "
+        "sys.__stdout__.write(f\"{rc} {'pandas' in sys.modules}\")"
+    )
+
+    def run(*more: str) -> str:
+        return subprocess.run([sys.executable, "-c", probe, *more], capture_output=True, text=True, check=True,
+                              timeout=300).stdout  # fmt: skip
+
+    assert run() == "0 False"
+    with tempfile.TemporaryDirectory() as tmp:
+        assert run("--csv", str(Path(tmp) / "t.csv")) == "0 True"

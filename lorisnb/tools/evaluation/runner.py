@@ -83,7 +83,11 @@ def _spec(spec: EvalSpec | str | None, conventions: EvalSpec | str | None, optio
 def _table_library() -> None:
     """pandas (and pyarrow's compute functions, which write a CSV table) imported while the workers
     evaluate: the tables are built from their results with them (imported after them, pandas was
-    0.3 s of a 5,000-file run's 13 s, with one core idle, and pyarrow.compute 0.06-0.09 s)."""
+    0.3 s of a 5,000-file run's 13 s, with one core idle, and pyarrow.compute 0.06-0.09 s). Not
+    when the workers send back neither poses nor statistics (:func:`_sent_back`): the caller then
+    reads :meth:`Evaluation.sequence_rows`, which needs no pandas (``lorisnb evaluate`` printing
+    its table): importing it beside the workers took a core from them, and the whole icra20 tree's
+    process took 1.85-2.18 s with it, 1.53-1.76 s without (4 runs each, 2 shared cores, 2026-11-30)."""
     for name in ("pandas", "pyarrow.compute"):
         with contextlib.suppress(ImportError):  # the table says what is missing
             importlib.import_module(name)
@@ -116,8 +120,9 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
     unit = "file" if kind != "manifest" else "session set"
     # on an executor (a Dask cluster's workers) a relative path is opened in the worker's folder, not here
     sent = jobs if executor is None else [absolute_paths(j) for j in jobs]
+    tables = any(j.statistics or j.keep_poses for j in jobs)  # a DataFrame will be built from the results
     results = run_tasks(run_job, sent, sizes, n, executor, progress, desc="evaluating", unit=unit,
-                        meanwhile=_table_library)  # fmt: skip
+                        meanwhile=_table_library if tables else None)  # fmt: skip
     for job, went, (status, value) in zip(jobs, sent, results, strict=True):
         renamed = _as_given(job, went)
         if renamed:  # named as given, as a local run names them (the input, its ground truth, times files)
