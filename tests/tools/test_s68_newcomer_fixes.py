@@ -53,6 +53,8 @@ def test_text_advice_never_a_number_papermill_makes_infinite():
     with pytest.raises(ValidationError) as e:
         check_values({"eps": "1e400"}, ["metrics_primer"])
     assert "too large to be a number" in str(e.value) and "papermill -p eps 1e400" not in str(e.value)
+    # the notebook refuses inf in either spelling: its advice is the notebook's, not the command line's
+    assert "write 'inf'" not in str(e.value) and "(papermill -p eps 1e9)" in str(e.value)
     with pytest.raises(ValidationError) as e:
         check_values({"phi": "inf"}, ["metrics_primer"])
     assert "give a number: papermill -p phi inf" not in str(e.value)  # papermill turns inf into infinity: refused

@@ -215,8 +215,12 @@ def check_values(
         value = values.get(name)
         if isinstance(value, str) and _is_number(value):
             if math.isinf(float(value)):  # "1e400" (too large) and "inf" alike: papermill -p reads both as inf
-                if value.strip().lower().lstrip("+-") not in ("inf", "infinity"):
-                    continue  # too large to be a number: refused below with the command line's message
+                if value.strip().lower().lstrip("+-") not in ("inf", "infinity"):  # too large to be a number: the
+                    # command line's message would say "write 'inf'", which a notebook refuses in either spelling
+                    raise ValidationError(f"{name}={value!r}: too large to be a number (beyond "
+                                          f"+-{sys.float_info.max:.3g} it would be read as infinity), and written as "
+                                          "text (papermill's -r passes text); give a number, or, "
+                                          f"{_no_threshold(name)}")  # fmt: skip
                 raise ValidationError(f"{name}={value!r}: the word inf as text (papermill's -r passes text), which a "
                                       f"notebook cannot use as a number; papermill -p {name} inf is refused too (it "
                                       "reads it as it reads 1e400, too large to be a number: infinity); give a "
