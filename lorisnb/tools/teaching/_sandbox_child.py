@@ -605,6 +605,20 @@ class Unders:
         namespace.update(zip(("_", "__", "___"), self.last, strict=False))
 
 
+def notebook_module() -> Any:
+    """The module the cells run in, registered as ``sys.modules["__main__"]`` as IPython registers
+    its user namespace: a function or class a cell defines is found by name in ``__main__``, so it
+    pickles as in Jupyter (``multiprocessing.Pool().map(f, data)``, ``ProcessPoolExecutor``, with the
+    fork start method; a spawned or forkserver worker cannot see the notebook's cells, in Jupyter
+    either). The child's own code stays in the module it was started as (``-c``), out of the cells'
+    ``__main__``; nothing of the grader's is in either (its references are in another process)."""
+    import types
+
+    module = types.ModuleType("__main__")
+    sys.modules["__main__"] = module
+    return module
+
+
 def main() -> None:
     no_lorisnb = "--no-lorisnb" in sys.argv
     cap = next((int(a.split("=", 1)[1]) for a in sys.argv if a.startswith("--output-bytes=")), 64 * 1024**2)
@@ -636,7 +650,7 @@ def main() -> None:
         import matplotlib
 
         matplotlib.use("Agg")  # figures are drawn, never shown
-    namespace: dict[str, Any] = {"__name__": "__main__"}
+    namespace = notebook_module().__dict__
     shell = Shell(namespace)
     namespace["get_ipython"] = lambda: shell  # what IPython's transformed magics and shell escapes call
     namespace["display"] = display  # as Jupyter gives it
