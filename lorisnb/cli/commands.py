@@ -492,7 +492,14 @@ def cmd_compare(args: argparse.Namespace) -> int:
             print(f"\nruns needed to detect a difference of {args.power} in {args.metric} (power 0.8, each pair at "
                   f"alpha {args.alpha:g} / {m} pairs = {args.alpha / m:.3g}, the level Holm's correction holds the "
                   "smallest p-value to) where no difference was found:")  # fmt: skip
-            print(_fmt(res.power[["scene", "a", "b", "unit", "have", "needed"]], args.digits))
+            sized = res.power[["scene", "a", "b", "unit", "have", "needed"]]
+            unknown = res.power["needed"].lt(0)  # -1 in Python: the spread is unknown, no number of runs
+            if unknown.any():  # printed as -1, read as "minus one run"
+                sized = sized.astype({"needed": object})
+                sized.loc[unknown, "needed"] = "unknown"
+            print(_fmt(sized, args.digits))
+            for r in res.power[unknown].itertuples():
+                print(f"needed unknown for {r.scene} {r.a} vs {r.b}: {r.needed_note}")
         elif res.power is not None:
             print(f"\n{res.power_note}")
         for path in write_outputs(res, args.metric, args.csv, args.pairs_csv, args.latex, args.markdown, args.force,

@@ -26,6 +26,29 @@ def _within_sd(g: pd.DataFrame, metric: str) -> float:
     return float(np.sqrt(sum(((x - x.mean()) ** 2).sum() for x in parts if len(x) > 1) / dof))
 
 
+def _paired_unknown(values: int, common: int, metric: str) -> str:
+    """Why one trial per sequence gives no spread of the differences (``values``: the sequences
+    where both algorithms have a value of ``metric``, of the ``common`` ones both were run on)."""
+    if values < 2:
+        return (f"the spread is unknown, as {values} of {common} sequence(s) have a value of {metric} for both "
+                f"algorithms{' (a failed or missing run has none)' if values < common else ''} and the spread of "
+                "the differences needs two; evaluate more sequences")  # fmt: skip
+    return f"the spread is unknown, as the differences of {metric} are not finite numbers"
+
+
+def _trials_unknown(within: dict[str, float], common: int, metric: str) -> str:
+    """Why trials give no spread: an algorithm with no sequence of two trials with a value of
+    ``metric`` (``within``: each algorithm's pooled spread, NaN then)."""
+    if common == 0:
+        return "the spread is unknown, as no sequence has results of both algorithms"
+    single = [a for a, s in within.items() if not np.isfinite(s)]
+    if single:
+        return (f"the spread is unknown, as {' and '.join(single)} {'has' if len(single) == 1 else 'have'} one trial "
+                f"(with a value of {metric}) per sequence, which says nothing of how reruns vary; run "
+                f"{'it' if len(single) == 1 else 'them'} at least twice per sequence")  # fmt: skip
+    return f"the spread is unknown, as the values of {metric} or the sequences' weights are not finite numbers"
+
+
 def runs_for_power(
     table: pd.DataFrame,
     pairs: pd.DataFrame,
@@ -35,7 +58,10 @@ def runs_for_power(
     comparisons: int = 1,
 ) -> pd.DataFrame:
     """``pairs`` with the columns ``delta``, ``power``, ``unit`` ("sequences" or "trials per
-    sequence"), ``have`` (how many there are) and ``needed`` (-1: the spread is unknown).
+    sequence"), ``have`` (how many there are), ``needed`` (-1: the spread is unknown, so no number
+    of runs can be named) and ``needed_note`` ("" where ``needed`` is a number, else why the spread
+    is unknown and what would give one: fewer than two sequences where both algorithms have a value
+    of the metric, an algorithm with one trial per sequence, ...; the command line prints it).
     ``comparisons``: the tests Holm's correction runs over (``compare``: every pair of every scene);
     each pair is sized at ``alpha / comparisons``, the level Holm holds its smallest p-value to, so
     the design it names can reach alpha after the correction (sized at ``alpha``, a pair was said
@@ -61,8 +87,9 @@ def runs_for_power(
             mb = gb.groupby("seq")[metric].mean().reindex(common)
             d = (ma - mb).dropna().to_numpy(float)
             sd = float(np.std(d, ddof=1)) if len(d) > 1 else np.nan
-            rows.append(dict(unit="sequences", have=len(common),
-                             needed=units_for_power(sd, delta, alpha, power, groups=1)))  # fmt: skip
+            needed = units_for_power(sd, delta, alpha, power, groups=1)
+            why = "" if needed >= 0 else _paired_unknown(len(d), len(common), metric)
+            rows.append(dict(unit="sequences", have=len(common), needed=needed, needed_note=why))
         else:
             w = (np.ones(len(common)) if w_col is None else
                  g[g["seq"].isin(common)].groupby("seq")[w_col].mean().reindex(common).to_numpy(float))  # fmt: skip
@@ -71,9 +98,11 @@ def runs_for_power(
             sd = float(np.sqrt(np.sum(w**2) * (sa**2 + sb**2) / 2)) if len(w) else np.nan
             both = g[g["algorithm"].isin([r.a, r.b]) & g["seq"].isin(common)]
             moving = int((both.groupby("seq")[metric].agg(np.ptp) > 0).sum())  # all-equal sequences cannot help
-            rows.append(dict(unit="trials per sequence", have=min(r.trials_a, r.trials_b),
-                             needed=units_for_power(sd, delta, alpha, power, groups=2, strata=max(moving, 1))))  # fmt: skip
-    extra = pd.DataFrame(rows, columns=["unit", "have", "needed"], index=pairs.index)
+            needed = units_for_power(sd, delta, alpha, power, groups=2, strata=max(moving, 1))
+            why = "" if needed >= 0 else _trials_unknown({r.a: sa, r.b: sb}, len(common), metric)
+            rows.append(dict(unit="trials per sequence", have=min(r.trials_a, r.trials_b), needed=needed,
+                             needed_note=why))  # fmt: skip
+    extra = pd.DataFrame(rows, columns=["unit", "have", "needed", "needed_note"], index=pairs.index)
     return pairs.assign(delta=delta, power=power).join(extra)
 
 

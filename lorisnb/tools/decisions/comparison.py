@@ -416,6 +416,21 @@ def _trials_said(full: pd.DataFrame, copies: set[str]) -> str:
     return "; ".join(said)
 
 
+def _with_power(pairs: pd.DataFrame, power: pd.DataFrame) -> pd.DataFrame:
+    """The pairs CSV's rows with ``--power``'s columns: ``needed`` a whole number where the pair is
+    sized, empty where it is not, and ``needed_note`` saying why not (the spread is unknown: -1 in
+    Python, which read as "minus one run"; the pair differs already; its trials are copies)."""
+    out = pairs.join(power[["unit", "have", "needed", "needed_note"]])
+    out["needed"] = out["needed"].where(out["needed"].ge(0)).astype("Int64")
+    unsized = out["needed_note"].isna()
+    out.loc[unsized & out["significant"].astype(bool), "needed_note"] = "differs already"
+    out.loc[unsized & out["test"].eq(COPIES_TEST), "needed_note"] = (
+        "not sized: the trials are copies of one run, whose spread says nothing of a rerun's"
+    )
+    out["needed_note"] = out["needed_note"].fillna("")
+    return out
+
+
 def write_outputs(
     res: Comparison,
     metric: str,
@@ -434,7 +449,7 @@ def write_outputs(
             write_csv(res.algorithms.drop(columns=["value [CI]", "covered", "vs top [test interval]"]), csv, force)
         )
     if pairs_csv:
-        pairs = res.pairs if res.power is None else res.pairs.join(res.power[["unit", "have", "needed"]])
+        pairs = res.pairs if res.power is None else _with_power(res.pairs, res.power)
         written.append(write_csv(pairs, pairs_csv, force))
     rank = res.algorithms[["suite", "scene", "metric", "algorithm", "rank"]]
     for out in (latex, markdown):
