@@ -71,6 +71,7 @@ def _run_evaluation(
     default it does; else only the scores at the spec's setting travel back from the workers:
     ``evaluate``'s ``keep_poses``). ``refuse``: the command's own refusals of its options under the
     spec, made with the spec's (before any input is read: exit 2 means nothing was read)."""
+    from lorisnb.core.spec.exclusive import EXCLUSIVE_INPUTS, option_refusal
     from lorisnb.io.datasets.manifest import openloris_preset_refusal, read_manifest
     from lorisnb.tools.evaluation.result import said_notes
     from lorisnb.tools.evaluation.runner import (
@@ -82,8 +83,9 @@ def _run_evaluation(
         refuse_over_manifest,
     )
 
-    if args.gt and args.manifest:
-        raise ValidationError("--gt and --manifest: give one (a manifest names the ground truth of each session)")
+    for pair in EXCLUSIVE_INPUTS:  # the registry the notebooks and the report read too
+        if all(getattr(args, o.lstrip("-").replace("-", "_"), None) for o in pair.options):
+            raise ValidationError(option_refusal(pair))
     if getattr(args, "manifest_outside", False) and not args.manifest:
         raise ValidationError("--manifest-outside: applies to the files a --manifest reads; give one")
     outside = bool(getattr(args, "manifest_outside", False))

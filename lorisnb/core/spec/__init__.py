@@ -1,6 +1,7 @@
 """The evaluation spec: every choice that decides a number, in one frozen validated value
-(:mod:`.evalspec`), its evo options (:mod:`.evo`), its documentation table (:mod:`.table`), and the
-validation of every user value (:mod:`.validate`).
+(:mod:`.evalspec`), its evo options (:mod:`.evo`), its documentation table (:mod:`.table`), the
+validation of every user value (:mod:`.validate`), and the inputs that exclude each other
+(:mod:`.exclusive`: one registry for the command line, the notebooks and the report).
 
 May import: :mod:`lorisnb.core.alignment`, :mod:`lorisnb.core.conventions`, :mod:`lorisnb.core.metrics`,
 :mod:`lorisnb.core.pipeline`, :mod:`lorisnb.core.trajectory` and :mod:`lorisnb.errors`; never

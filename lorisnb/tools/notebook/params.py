@@ -17,6 +17,7 @@ from typing import Any
 
 from lorisnb.core.spec import validate
 from lorisnb.core.spec.evalspec import PRESETS, SPEC_NAMES, EvalSpec, make_spec
+from lorisnb.core.spec.exclusive import EXCLUSIVE_INPUTS
 from lorisnb.core.stats.inference import WEIGHTS
 from lorisnb.core.stats.trials import compile_trials_by
 from lorisnb.core.trajectory.frames import SCENES
@@ -76,11 +77,11 @@ NEEDS = {"fmt": "groundtruth", "gt_fmt": "groundtruth", "ordslam_fps": "ordslam_
 #: Parameters that exclude each other, with the command line's options for the same inputs and why
 #: (``lorisnb evaluate`` refuses ``--gt`` with ``--manifest``): the notebook would use one and ignore
 #: the other. Checked by :func:`check_values` for every notebook, so papermill's ``-p``, a parameter
-#: cell edited in Jupyter and ``lorisnb report`` are refused alike.
+#: cell edited in Jupyter and ``lorisnb report`` are refused alike. Read from the one registry the
+#: command line reads too (:data:`lorisnb.core.spec.exclusive.EXCLUSIVE_INPUTS`): add a pair there.
 EXCLUSIVE: list[tuple[str, str, str]] = [
-    ("groundtruth", "manifest", "--gt and --manifest on the command line; a manifest names the ground truth "
-                                "of each session"),
-]  # fmt: skip
+    (*e.names, f"{e.options[0]} and {e.options[1]} on the command line; {e.why}") for e in EXCLUSIVE_INPUTS
+]
 #: Parameters naming one OpenLORIS scene whose ground truth a notebook loads (``metrics_primer``'s
 #: ``scene``, ``compare_algorithms``' ``sim_scene``): refused up front when the data root holds no
 #: ground truth for it (:func:`refuse_scenes_without_groundtruth`), as a ``scenes`` filter is.
