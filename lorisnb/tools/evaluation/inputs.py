@@ -5,6 +5,7 @@ scene) read from their names."""
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 import sys
@@ -116,7 +117,7 @@ def walk(folder: Path, inside: Iterable[Path] | None = None) -> list[Found]:
                 )
             except OSError:
                 kind = "other"
-            hidden = hidden_here or is_hidden(Path(e.name))
+            hidden = hidden_here or e.name.startswith((".", "~"))  # is_hidden on the name (no Path: 5,000 files)
             out.append(Found(Path(e.path), real, kind, hidden))
             if kind != "folder":
                 continue
@@ -206,7 +207,15 @@ def names(what: str, value: object) -> list[str]:
 
 def labels(path: Path, root: Path | None, trials_by: str | None = None) -> tuple[str, str, str, int]:
     """(algorithm, file relative to the root, suite, trial) for a result file; a trial token in
-    the path (:func:`lorisnb.core.stats.trials.split_trial`) is not part of the algorithm or suite."""
+    the path (:func:`lorisnb.core.stats.trials.split_trial`) is not part of the algorithm or suite.
+    Computed once per file and process (a run asks three times: its trial checks, then the file's
+    task, which a forked worker finds computed; 5,000 files took 0.9 s of pathlib work before)."""
+    return _labels(path, root, trials_by, os.getcwd() if root is None else "")
+
+
+@functools.lru_cache(maxsize=1 << 16)
+def _labels(path: Path, root: Path | None, trials_by: str | None, cwd: str) -> tuple[str, str, str, int]:
+    """:func:`labels`; ``cwd``: the folder a file given alone is made absolute from (its key)."""
     if root is None:  # a file given alone: its algorithm is its folder, or the folder above a trial folder
         # (of the absolute path: ``cafe1.txt`` typed inside ``dso/`` is dso's, as ``dso/cafe1.txt`` is)
         base, trial = split_trial("/".join(absolute(path).parts[-3:]), trials_by)
