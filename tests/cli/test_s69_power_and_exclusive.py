@@ -40,6 +40,9 @@ def test_power_says_why_no_runs_are_named_for_one_sequence_with_values(tmp_path,
     table = out.split("runs needed to detect a difference of 0.05 in c_ate_rmse")[1]
     assert re.search(r"home\s+odom\s+orb\s+sequences\s+5\s+unknown\n", table), table
     assert not re.search(r"\s-1\b", table), table  # "-1 runs needed"
+    # why no pair can be significant: one sequence with values (they differ), not results the same everywhere
+    assert ("no pair can reach alpha 0.05 in home (only 1 sequence where two algorithms both have a value of "
+            "c_ate_rmse: a test needs two or more)") in out and "the same on every sequence" not in out  # fmt: skip
     assert ("needed unknown for home odom vs orb: the spread is unknown, as 1 of 5 sequence(s) have a value of "
             "c_ate_rmse for both algorithms (a failed or missing run has none) and the spread of the differences "
             "needs two; evaluate more sequences") in table  # fmt: skip

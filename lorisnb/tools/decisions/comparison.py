@@ -356,6 +356,9 @@ def compare_table(
                 if r.copied
                 else f"{clean(scene)} (no two algorithms both have a value of {metric} there: nothing to test)"
                 if not np.isfinite(r.min_p)
+                else f"{clean(scene)} (only 1 sequence where two algorithms both have a value of {metric}: a test "
+                "needs two or more)"
+                if r.min_p >= 1 and r.common == 1
                 else f"{clean(scene)} (every pair's results are the same on every sequence: no test can separate them)"
                 if r.min_p >= 1
                 else f"{clean(scene)} (smallest possible p {r.min_p:.4g}, x {len(pairs)} pair(s) by Holm)"
