@@ -180,6 +180,30 @@ def quaternion_order(label: str, median_aoe: float, median_aoe_swapped: float, w
     )
 
 
+def orientations_permuted(label: str, median_aoe: float, median_aoe_moved: float, written: str) -> str | None:
+    """The orientations fit far better with each quaternion's components moved one place, but in the
+    direction no order mistake of the file's format explains (``written``: the order it writes,
+    ``"xyzw"`` or ``"wxyz"``, or ``""``: none, its rotations are matrices or named fields): the estimate's axes are probably another frame's than the ground
+    truth's (a cyclic permutation of the axes, such as a NED ground truth, TartanAir's, against a
+    camera-frame estimate, can look like such a move), which an alignment without rotation keeps.
+    Not a quaternion-order note: its remedy (rewrite the file in the other order) would be wrong."""
+    if not (np.isfinite(median_aoe) and np.isfinite(median_aoe_moved)):
+        return None
+    if median_aoe < SUSPECT_AOE or median_aoe_moved > 10.0:
+        return None
+    order = {
+        "xyzw": "its format writes 'qx qy qz qw', as it was read",
+        "wxyz": "its format writes 'qw qx qy qz', as it was read",
+    }.get(written, "its format writes no quaternion")
+    return (
+        f"{label}: its median AOE is {median_aoe:.1f} deg, and {median_aoe_moved:.1f} deg with each quaternion's "
+        f"components moved one place, which no quaternion order explains ({order}): the estimate's orientations are probably in another frame than the ground truth's (axes permuted, "
+        "e.g. a ground truth in NED, TartanAir's, against a camera-frame estimate: x right, y down, z forward), "
+        "which an alignment without rotation keeps. Give both in one frame (a manifest's [transform], transform= in "
+        "Python), or align them (--align se3)."
+    )
+
+
 def rotation_not_held(label: str, median_aoe: float, lever: float, matched: int, fitted_on: str | None = None) -> str:
     """A sequence's AOE is large (its median above :data:`SUSPECT_AOE`) but the matched positions the
     alignment was fitted on hold its rotation by a lever under :data:`~lorisnb.core.alignment.geometry.MIN_LEVER`

@@ -79,6 +79,7 @@ def evaluate_sessions(
     notes: list[str] | None = None,
     groundtruth_spans: dict[int, tuple[float, float]] | None = None,
     sources: Mapping[int, str] | None = None,
+    quaternions: str | None = None,
 ) -> FileErrors:
     """Per-pose errors of estimate sequences against their ground truth: the one pipeline.
 
@@ -101,6 +102,10 @@ def evaluate_sessions(
         notes: what the reader noticed, kept first in ``FileErrors.warnings``.
         sources: sequence number -> the file it was read from (a manifest's sessions), named in the
             errors about that sequence (default ``path``, with the sequence number if several).
+        quaternions: the order the estimate's file wrote its quaternions in, by its format
+            (:attr:`lorisnb.io.readers.registry.Format.quaternions`): ``"xyzw"`` or ``"wxyz"``, the
+            one order mistake its orientation check names; ``""`` none (matrices, named fields: no
+            order to mistake); None unknown (either mistake named, whichever fits).
 
     Every note is issued as a LorisWarning and kept in ``FileErrors.warnings``.
     """
@@ -268,9 +273,18 @@ def evaluate_sessions(
         else:
             median = float(np.median(e.aoe))
             if median >= plausibility.SUSPECT_AOE:  # read in the other order: w last (TUM's) or w first (EuRoC's)
-                last, first = (checks.median_aoe_swapped(est[e.seq], a, per_seq[e.seq], shift=k) for k in (-1, 1))
-                w_first = bool(first < last)
-                found.append(plausibility.quaternion_order(label, median, first if w_first else last, w_first))
+                swapped = {k: checks.median_aoe_swapped(est[e.seq], a, per_seq[e.seq], shift=k) for k in (-1, 1)}
+                # shift -1: a file read 'qx qy qz qw' that wrote 'qw qx qy qz'; +1: read w first, written w last;
+                # the mistakes its format allows (quaternions unknown: either; matrices, named fields: none)
+                mistakes = (-1, 1) if quaternions is None else {"xyzw": (-1,), "wxyz": (1,)}.get(quaternions, ())
+                note = None
+                if mistakes:
+                    k = min(mistakes, key=lambda m: swapped[m])
+                    note = plausibility.quaternion_order(label, median, swapped[k], k == 1)
+                if note is None and len(mistakes) < 2:  # a move no order of its format explains fits
+                    k = min((m for m in (-1, 1) if m not in mistakes), key=lambda m: swapped[m])
+                    note = plausibility.orientations_permuted(label, median, swapped[k], quaternions or "")
+                found.append(note)
         if release is not None:
             release(e.seq)
     kept = [n for n in dict.fromkeys(found) if n]

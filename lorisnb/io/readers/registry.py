@@ -131,7 +131,11 @@ def _is_tum(s: Sample) -> bool:
 class Format:
     """One trajectory format: ``name`` (the ``--format`` value), ``suffixes`` of its files,
     ``title`` and ``columns`` (its layout, in words), ``reader`` (the :mod:`lorisnb.io` function),
-    and ``recognise`` (whether a :class:`Sample` is plainly of this format)."""
+    ``recognise`` (whether a :class:`Sample` is plainly of this format), and ``quaternions``: the
+    order its files write a quaternion in (``"xyzw"``, ``"wxyz"``), ``""`` where no order can be
+    mistaken (KITTI's matrices, a bag's named fields), None where a file's header decides (EuRoC's
+    ``q_w`` or ``q_x`` first). The pipeline's orientation check names an order mistake only where
+    the format allows one (:func:`lorisnb.core.pipeline.sessions.evaluate_sessions`' ``quaternions``)."""
 
     name: str
     title: str
@@ -139,6 +143,7 @@ class Format:
     columns: str
     reader: str
     recognise: Callable[[Sample], bool]
+    quaternions: str | None = "xyzw"
 
     def looks(self) -> str:
         """``"this looks like a KITTI pose file (12 numbers ...)"``."""
@@ -158,14 +163,14 @@ FORMATS: dict[str, Format] = {
     f.name: f
     for f in (
         Format("bag", "ROS bag", (".bag", ".db3", ".mcap"), "ROS 1 .bag or ROS 2 bag (a pose topic or TF chain)",
-               "read_bag", _is_bag),
+               "read_bag", _is_bag, ""),
         Format("openloris", "OpenLORIS file", (".txt",),
                "'scene:' and 'frame:' headers, 'seq: N' blocks of 'stamp x y z qx qy qz qw'", "read_openloris",
                _is_openloris),
         Format("euroc", "EuRoC CSV file", (".csv",), "'timestamp_ns,p_x,p_y,p_z,q_w,q_x,q_y,q_z,...'",
-               "read_euroc", _is_euroc),
+               "read_euroc", _is_euroc, None),
         Format("kitti", "KITTI pose file", (".txt",), "12 numbers per line, a 3x4 pose matrix row-major",
-               "read_kitti", _is_kitti),
+               "read_kitti", _is_kitti, ""),
         Format("tum", "TUM trajectory file", (".txt", ".csv"), "'stamp tx ty tz qx qy qz qw', seconds",
                "read_tum", _is_tum),
     )

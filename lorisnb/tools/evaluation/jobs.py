@@ -30,7 +30,7 @@ from lorisnb.io.datasets.manifest import Manifest, Session
 from lorisnb.io.datasets.paths import DataPaths, groundtruth_spans, load_groundtruth, named_entry, read_groundtruth_file
 from lorisnb.io.readers.openloris import declared_scene, read_openloris
 from lorisnb.io.readers.plain import read_trajectory
-from lorisnb.io.readers.registry import hint
+from lorisnb.io.readers.registry import FORMATS, hint
 from lorisnb.tools.evaluation.inputs import labels, missing_note, outside_results, real_path, unquoted
 from lorisnb.tools.evaluation.pool import size_of
 from lorisnb.tools.evaluation.result import Failure
@@ -342,7 +342,7 @@ def _pair(job: Job) -> FileErrors:
     return evaluate_sessions(
         gts, {1: est}, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite,
         trial=trial, notes=notes + [str(w.message) for w in caught], groundtruth_spans=span,
-        release_groundtruth=gts.pop,
+        release_groundtruth=gts.pop, quaternions=FORMATS[src.fmt].quaternions,
     )  # fmt: skip
 
 
@@ -404,6 +404,7 @@ def _openloris_pair(job: Job, algorithm: str, rel: str, suite: str, trial: int) 
     return evaluate_sessions(
         gts, est, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite, trial=trial,
         notes=notes, groundtruth_spans=window_spans(gts, job.spec), release_groundtruth=gts.pop,
+        quaternions=FORMATS[src.fmt].quaternions,
     )  # fmt: skip
 
 
@@ -495,6 +496,7 @@ def _manifest_rows(
         errors = evaluate_sessions(
             gts, ests, job.spec, path=job.path, algorithm=algorithm, scene=job.scene, suite=suite, trial=trial,
             notes=notes, groundtruth_spans=spans, sources={k: str(p) for k, p in found.items()},
+            quaternions=FORMATS[m.estimate_format].quaternions,
         )  # fmt: skip
     absent = [s for s in sessions if s.seq not in ests and s.seq not in failed]
     if not absent:
