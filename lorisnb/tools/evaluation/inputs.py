@@ -210,12 +210,13 @@ def labels(path: Path, root: Path | None, trials_by: str | None = None) -> tuple
     the path (:func:`lorisnb.core.stats.trials.split_trial`) is not part of the algorithm or suite.
     Computed once per file and process (a run asks three times: its trial checks, then the file's
     task, which a forked worker finds computed; 5,000 files took 0.9 s of pathlib work before)."""
-    return _labels(path, root, trials_by, os.getcwd() if root is None else "")
+    return _labels(path, root, trials_by, os.getcwd())
 
 
 @functools.lru_cache(maxsize=1 << 16)
 def _labels(path: Path, root: Path | None, trials_by: str | None, cwd: str) -> tuple[str, str, str, int]:
-    """:func:`labels`; ``cwd``: the folder a file given alone is made absolute from (its key)."""
+    """:func:`labels`; ``cwd``: the folder relative paths are made absolute from, part of the key (a
+    file given alone, or the root ``.``, is named by the folders of its absolute path)."""
     if root is None:  # a file given alone: its algorithm is its folder, or the folder above a trial folder
         # (of the absolute path: ``cafe1.txt`` typed inside ``dso/`` is dso's, as ``dso/cafe1.txt`` is)
         base, trial = split_trial("/".join(absolute(path).parts[-3:]), trials_by)
