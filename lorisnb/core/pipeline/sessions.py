@@ -404,6 +404,7 @@ def compute_errors(
         file=file, scene=scene, suite=suite, trial=trial, frame=frame, checks_on=checks,
         other_spans=other_spans, frames=frames, release=release, notes=list(result.warnings),
         groundtruth_spans=window_spans(groundtruth.sequences, spec),
+        quaternions="xyzw",  # OpenLORIS files write 'qx qy qz qw' (the format registry's openloris entry)
     )  # fmt: skip
 
 
