@@ -15,8 +15,10 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from lorisnb.core.spec import validate
-from lorisnb.core.spec.evalspec import PRESETS, SPEC_NAMES, EvalSpec, make_spec
+from lorisnb.core.spec.evalspec import ALIASES, PRESETS, SPEC_NAMES, EvalSpec, make_spec
 from lorisnb.core.spec.exclusive import EXCLUSIVE_INPUTS
 from lorisnb.core.stats.inference import WEIGHTS
 from lorisnb.core.stats.trials import compile_trials_by
@@ -30,6 +32,7 @@ from lorisnb.tools.evaluation.inputs import names, result_files
 from lorisnb.tools.notebook.grids import check_grid
 
 __all__ = [
+    "canonical",
     "check_parameters",
     "check_values",
     "default_eps",
@@ -264,7 +267,8 @@ def check_parameters(
     """Refuse a parameter no selected notebook declares (listing the declared names) and values
     that the command line would refuse (``-p eps -1``, ``-p alpha 2``) or the selected ``notebooks``
     cannot take (:func:`check_values`), before anything runs.
-    Returns the parameters, the leaderboard's settings normalized (``-p metric CR`` is ``cr``)."""
+    Returns the parameters, each in its one form (:func:`canonical`: ``-p metric CR`` is ``cr``,
+    ``-p scale on`` and ``-p scale Yes`` are True), as every notebook receives them."""
     unknown = sorted(set(parameters) - set(declared) - {"output_dir"})
     if unknown:
         raise ValidationError(
@@ -292,9 +296,67 @@ def check_parameters(
         if data is not None:
             refuse_scenes_without_groundtruth(parameters, data)
     for name, value in parameters.items():
-        if name in _VALUES and value is not None:
-            out[name] = _VALUES[name](value)
+        out[name] = canonical(name, value)
     return out
+
+
+def _listed(value: Any) -> Any:
+    """A checked value as papermill and JSON carry it: tuples as lists, numpy's scalars as Python's."""
+    if isinstance(value, (tuple, list)):
+        return [_listed(v) for v in value]
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _spec_option(name: str, value: Any) -> Any:
+    """An option of the evaluation spec in its one form: ``scale`` as True, False or ``"auto"``
+    (``"on"``, ``"Yes"``, ``true`` and ``1`` are all True), the yes/no spellings as booleans, every
+    field of the spec as the spec holds it once checked (``rpe_unit M`` is ``m``, ``rpe_delta 1`` is
+    1.0, a transform a list of lists)."""
+    if name == "scale":
+        return validate.scale_value(value)
+    if name in ALIASES:  # lifelong, keep_repeated, remove_repeated: yes/no
+        return validate.flag(name, value)
+    return _listed(getattr(make_spec(None, surface="notebook", **{name: value}), name))
+
+
+#: How each checked parameter that is neither a spec option nor in :data:`_VALUES` is written in
+#: its one form (see :func:`canonical`).
+_CANONICAL: dict[str, Any] = {
+    **{g: (lambda v, g=g: [_plain(x) for x in check_grid(g, v)]) for g in
+       ("eps_grid", "phi_grid", "delta_grid", "tau_grid", "relative_grid")},
+    "trials_by": lambda v: (compile_trials_by(str(v)), str(v))[1],
+    "quick": lambda v: validate.flag("quick", v),
+    "simulated": lambda v: validate.flag("simulated", v),
+    "all_files": lambda v: validate.flag("all_files", v),
+    "algorithms": lambda v: names("algorithms", v),
+    "scenes": lambda v: names("scenes", v),
+    "eps_fraction": lambda v: validate.fraction("eps_fraction", v),
+    "rpe_metres": lambda v: validate.positive("rpe_metres", v, "metres"),
+    "ordslam_fps": lambda v: validate.positive("ordslam_fps", v, "frames per second"),
+    "ordslam_max_gap": lambda v: validate.positive("ordslam_max_gap", v, "seconds"),
+    "sim_eps": lambda v: _plain(validate.threshold("eps", v)),
+    "sim_trials": lambda v: int(validate.positive("sim_trials", v, "trials", integer=True)),
+}  # fmt: skip
+
+
+def canonical(name: str, value: Any) -> Any:
+    """A parameter's value (checked) in its one canonical form, as ``lorisnb report`` passes it to
+    every notebook and records it (``parameters.json``, ``run.json``'s spec): two equivalent
+    spellings give the same value, so runs made with them compare equal. ``scale`` ``"on"``,
+    ``"Yes"``, ``"TRUE"``, ``true`` and ``1`` are all True; words in their case (``PAPER`` is
+    ``paper``, ``Cafe`` ``cafe``); numbers as floats where the parameter is a number (1, 1.0 and
+    ``"1"`` are 1.0) and as ints where it is a count (``seed``, ``sim_trials``); one name or number
+    for a list is a list of one; paths absolute. None (the notebook's default) and a parameter no
+    rule knows stay as given."""
+    if value is None:
+        return None
+    if name in _VALUES:
+        return _listed(_VALUES[name](value))
+    if name in SPEC_NAMES:
+        return _spec_option(name, value)
+    if name in _CANONICAL:
+        return _listed(_CANONICAL[name](value))
+    return value
 
 
 def _in_report() -> bool:

@@ -14,7 +14,14 @@ import pandas as pd
 
 from lorisnb.tools.decisions.escape import code_span, markdown_cell
 
-__all__ = ["rank_reference_words", "rpe_words", "simulated_verdict", "threshold_words", "tracking_and_accuracy"]
+__all__ = [
+    "every_number_words",
+    "rank_reference_words",
+    "rpe_words",
+    "simulated_verdict",
+    "threshold_words",
+    "tracking_and_accuracy",
+]
 
 
 def rpe_words(spec: Any) -> str:
@@ -162,3 +169,96 @@ def rank_reference_words(stability: pd.DataFrame, scenes: Any = ()) -> str:
             f"Left out, with fewer than two algorithms to rank: {', '.join(map(markdown_cell, left))}."
         )
     return text or "No scene has two algorithms to rank."
+
+
+def _than(value: float, low: float, high: float, rel: float = 0.02) -> str:
+    """``value`` against the range ``low`` .. ``high``: "smaller", "larger" or "about the same"
+    (within ``rel`` of the range)."""
+    if value < low * (1 - rel):
+        return "smaller"
+    if value > high * (1 + rel):
+        return "larger"
+    return "about the same"
+
+
+def every_number_words(wide: pd.DataFrame, truth: Any, estimate: Any) -> str:
+    """``every_number``'s "why they differ, on this pair" (``wide``: :func:`lorisnb.tools.peers.every_number.side_by_side`
+    of the pair; ``truth`` and ``estimate``: the pair's trajectories, as read), every comparison
+    computed: which tolerance is tighter (from the presets), how the unaligned ATE stands against
+    the aligned ones, the length of one frame of this estimate against 1 s and whether evo's
+    one-frame RPE is smaller or larger than the RPE over 1 s, and what the path's length says of
+    KITTI's segments. Typed, "a smaller number for a shorter step" was said of an estimate with one
+    pose every 2 s, whose RPE over one frame was larger, and "a desk-sized scene" of any path under
+    100 m."""
+    from lorisnb.core.spec.evalspec import PRESETS
+
+    ate = wide.loc[("ATE RMSE", "m")]
+    matched = wide.loc[("matched poses", "")]
+    aligned, unaligned = ate[["openloris", "tum", "rpg"]], ate[["evo", "kitti"]]
+    rpe = wide.loc[("RPE translation RMSE", "m")]
+    rpe_1s, rpe_frame = rpe[["openloris", "tum", "rpg"]], float(rpe["evo"])
+    tum_tol, evo_tol = float(PRESETS["tum"].max_diff), float(PRESETS["evo"].max_diff)
+    tol = "tighter" if evo_tol < tum_tol else "looser" if evo_tol > tum_tol else "equal"
+    lines = [
+        f"* **Matching in time.** Interpolating the ground truth (`openloris`) matched {matched['openloris']:.0f} poses; "
+        f"the nearest stamp within TUM's tolerance of {tum_tol:g} s (`tum`, `rpg`) {matched['tum']:.0f}; within evo's "
+        f"{tol} one of {evo_tol:g} s {matched['evo']:.0f}. Each tool averages over its own set of poses."
+    ]
+    ratio = float(unaligned.max() / aligned.max())
+    if ratio > 1.05:
+        against = f"{ratio:.1f} times the largest aligned value"
+    elif ratio < 0.95:
+        against = f"smaller than the largest aligned value ({ratio:.2f} times it)"
+    else:
+        against = "about the largest aligned value"
+    lines.append(
+        f"* **Alignment.** With an alignment the ATE RMSE is {aligned.min():.4f} to {aligned.max():.4f} m "
+        f"(`rpg`'s Sim(3) also fits a scale: {ate['rpg']:.4f} m against `tum`'s SE(3) {ate['tum']:.4f} m). "
+        f"Without one (evo's and the devkit's default) it is {unaligned.max():.4f} m, {against}: the estimate is "
+        "compared in its own frame. Before quoting an evo number, check whether it was run with `-a` (align) or `-as`."
+    )
+    stamps = np.asarray(estimate.stamps, dtype=float)
+    step = float(np.median(np.diff(stamps))) if len(stamps) > 1 else float("nan")
+    length = "shorter" if step < 0.95 else "longer" if step > 1.05 else "about as long"  # (NaN: neither)
+    number = _than(rpe_frame, float(rpe_1s.min()), float(rpe_1s.max()))
+    said = {"smaller": "a smaller number", "larger": "a larger number", "about the same": "about the same number"}[
+        number
+    ]
+    if (length, number) in (("shorter", "smaller"), ("longer", "larger")):
+        why = f"{said} for a {length} step, not a {'better' if number == 'smaller' else 'worse'} run"
+    elif np.isnan(step):
+        why = "over a step this estimate cannot say"
+    elif length == "about as long":
+        why = f"{said}, over a step about as long as 1 s"
+    else:
+        why = f"{said} although the step is {length}: over another step the RPE measures another drift"
+    if np.isnan(step):
+        step_words = "this estimate has one pose"
+    else:
+        than = "about as long as 1 s" if length == "about as long" else f"{length} than 1 s"
+        step_words = f"here {step:.3g} s, the median time between this estimate's poses, {than}"
+    lines.append(
+        f"* **Relative error.** The RPE over 1 s (`openloris`, `tum`, `rpg`) is {rpe_1s.min():.4f} to "
+        f"{rpe_1s.max():.4f} m; evo's default step of one frame ({step_words}) gives {rpe_frame:.4f} m, {why}; "
+        f"tartanair_tools draws random pairs ({wide.loc[('TartanAir RPE translation', 'm'), 'tartanair']:.4f} m)."
+    )
+    segments = wide.loc[("KITTI segments", ""), "kitti"]
+    path = float(truth.path_length)
+    if segments == 0:
+        short = (
+            f"a path of {path:.1f} m, shorter than the devkit's shortest segment (100 m)"
+            if path < 100
+            else f"a path of {path:.1f} m on which no segment of 100 to 800 m starts at one of the devkit's frames"
+        )
+        lines.append(
+            f"* **KITTI's metric needs long paths.** The devkit averages over segments of 100 to 800 m; this ground "
+            f"truth travels {path:.1f} m, so it has {segments:.0f} segments and no KITTI error (NaN): the metric of "
+            f"driving datasets says nothing about {short}."
+        )
+    else:
+        lines.append(
+            f"* **KITTI's metric** averages {segments:.0f} segments of 100 to 800 m: translational error "
+            f"{wide.loc[('KITTI translational error', '%'), 'kitti']:.3f} % and rotational error "
+            f"{wide.loc[('KITTI rotational error', 'deg/100 m'), 'kitti']:.3f} deg/100 m."
+        )
+    return "\n".join(lines)

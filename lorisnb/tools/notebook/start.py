@@ -221,18 +221,38 @@ class Outputs:
             raise ValidationError(f"{name!r}: expected a file name inside the output folder {self.dir}")
         return p.as_posix()
 
+    def expect(self, tables: Sequence[str] = (), figures: Sequence[str] = (), files: Sequence[str] = ()) -> None:
+        """Refuse now, before anything is written, a file this notebook will write (``tables`` and
+        ``figures`` by the names :meth:`table` and :meth:`figure` take, ``files`` by their names) that
+        its write would refuse (the user's file, another notebook's): called by :func:`setup` with
+        :data:`NOTEBOOK_OUTPUTS`, so a refusal never comes partway through, after the first tables were
+        written. Nothing is listed in the marker; a CSV file in the default folder before any marker is
+        left to its write, which alone knows the table's first line (:func:`written_by_lorisnb`)."""
+        kinds = ("png",) if self.in_report else FIGURE_FORMATS
+        names = [f"{_stem(t)}.csv" for t in tables] + [f"{_stem(f)}.{k}" for f in figures for k in kinds]
+        self._check([self._name(n) for n in [*names, *files]], self.written(), ahead=True)
+
     def _claim(self, names: Sequence[str], header: str | None = None) -> None:
         """List ``names`` (:meth:`_name`) as this notebook's in the marker, after checking that each
         is either absent or already this notebook's (or, in the default folder before any marker, an
         earlier lorisnb run's: :attr:`adopting`; ``header``: the first line of the CSV table about to be
         written, which such a table's file starts with); one refused, none is listed."""
         listed = self.written()
+        self._check(names, listed, header)
+        new = {rel: self.notebook for rel in names if listed.get(rel) != self.notebook}
+        if new:
+            self._list({**listed, **new})
+
+    def _check(self, names: Sequence[str], listed: Mapping[str, str], header: str | None = None,
+               ahead: bool = False) -> None:  # fmt: skip
+        """Refuse the first of ``names`` this notebook may not write (:meth:`_claim`); ``ahead``
+        (:meth:`expect`): a CSV file that may be an earlier run's is not refused yet."""
         for rel in names:
             p = self.dir / rel
             owner = listed.get(rel)
             if not (p.exists() or p.is_symlink()):
                 continue
-            if owner is None and self.adopting and written_by_lorisnb(p, header):
+            if owner is None and self.adopting and (written_by_lorisnb(p, header) or (ahead and p.suffix == ".csv")):
                 continue  # an earlier run's of this notebook (no marker then): listed below as its own
             if owner is None:
                 why = (
@@ -249,9 +269,6 @@ class Outputs:
                     f"{p} was written by {_who(owner)}, not by {_who(self.notebook)}; it is left as it is: choose "
                     f"another output_dir for this notebook (each notebook its own), or move {rel} out of {self.dir}"
                 )
-        new = {rel: self.notebook for rel in names if listed.get(rel) != self.notebook}
-        if new:
-            self._list({**listed, **new})
 
     def _list(self, files: Mapping[str, str]) -> None:
         from lorisnb._version import __version__
@@ -486,6 +503,44 @@ class Session:
         display(make())
 
 
+def _simulated(values: Mapping[str, Any]) -> bool:
+    from lorisnb.tools.notebook.params import simulated_on
+
+    return simulated_on(values)
+
+
+#: notebook -> (its parameters -> the tables, figures and files it writes on any inputs at those
+#: parameters), each checked by :meth:`Outputs.expect` in its first cell (:func:`setup`): a file of the
+#: user's under one of these names was refused only when the cell writing it ran, after the first
+#: tables and the marker were written. Names that depend on the data (a figure per scene, per
+#: estimate) or are written only on some inputs are checked when written. The notebooks' sources are
+#: checked against this table by tests/tools/test_s70_report_params.py.
+NOTEBOOK_OUTPUTS: dict[str, Callable[[Mapping[str, Any]], dict[str, list[str]]]] = {
+    "every_number": lambda v: {"tables": ["every_number"], "figures": ["every_number_ate"]},
+    "per_sequence_benchmark": lambda v: {"tables": ["sequences", "scenes"], "figures": ["timeline_per_sequence"]},
+    "lifelong_benchmark": lambda v: {"tables": ["sequences", "scenes", "cs_r"], "figures": ["timeline_lifelong"]},
+    "evaluate_my_results": lambda v: {"tables": ["sequences", "scenes", "relative"]},
+    "evo_crosscheck": lambda v: {"tables": ["crosscheck_tum", "crosscheck_openloris"],
+                                 "figures": ["crosscheck_per_pose"]},
+    "metrics_primer": lambda v: {"tables": ["real_estimates", "primer_cases"],
+                                 "figures": ["primer_timeline", "primer_lifelong"]},
+    "threshold_sensitivity": lambda v: {
+        "tables": ["cr_vs_eps", "cr_eps_phi", "cr_vs_delta", "output_gaps", "cs_r_vs_tau", "rank_stability",
+                   "rank_swaps", "eps_for_cr50", "cr_vs_relative_eps", "explorer_current"],
+        "figures": ["cr_vs_eps", "cr_vs_delta", "cs_r_vs_tau", "rank_stability", "cr_vs_relative_eps",
+                    "explorer_current"]},
+    "compare_algorithms": lambda v: {
+        "tables": ["sequences", "coverage", "intervals", "pairwise", "ranking", "robust_first", "robust_region",
+                   *(["simulated_sequences", "simulated_trial_summary", "simulated_pairwise", "simulated_ranking"]
+                     if _simulated(v) else [])],
+        "figures": ["simulated_trials"] if _simulated(v) else [],
+        "files": [f"{str(v.get('metric') or 'cr').strip().lower()}_table.{k}" for k in ("tex", "md")]},
+    "indoor_vs_outdoor": lambda v: {
+        "tables": ["trajectory_stats", "difficulty_per_sequence", "difficulty_computed", "ate_pct_side_by_side"],
+        "figures": ["ate_pct_length"]},
+}  # fmt: skip
+
+
 def check_notebook_parameters(name: str, parameters: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Check a notebook's parameters with the command line's rules
     (:func:`lorisnb.tools.notebook.params.check_values`): ``parameters``, and in a kernel every
@@ -547,6 +602,8 @@ def setup(
     refuse_scenes_without_groundtruth(values, data)  # scene, sim_scene, scenes without ground truth (office)
     out = Outputs(output_dir if output_dir is not None else default_output_dir(name), notebook=name,
                   inputs=notebook_inputs(values, data), own_folder=output_dir is None)  # fmt: skip
+    if name in NOTEBOOK_OUTPUTS:  # every file it will write, checked before the first is written
+        out.expect(**NOTEBOOK_OUTPUTS[name](values))
     warnings.filterwarnings("ignore", category=LorisWarning)
     show_tables_escaped()  # every table the notebook shows: its names as the terminal shows them
     shown = out.dir.resolve() if output_dir is None else out.dir  # as given (a report passes ".")

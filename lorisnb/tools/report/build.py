@@ -33,7 +33,7 @@ from lorisnb.io.writers import name_output, naming, overlap, remove_partial, wri
 from lorisnb.tools.decisions.history import earlier_runs
 from lorisnb.tools.evaluation.pool import start_context
 from lorisnb.tools.evaluation.runner import check_filters, result_files
-from lorisnb.tools.notebook.params import check_parameters, refuse_simulated_off
+from lorisnb.tools.notebook.params import check_parameters, refuse_simulated_off, user_path
 from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV, RUN_MARKER
 from lorisnb.tools.report import kernels as warm_kernels
 from lorisnb.tools.report.baseline import since_baseline
@@ -487,6 +487,10 @@ def run_report(
     KeyboardInterrupt propagates.
     """
     label = None if label is None else validate.code_label(label)
+    given = (parameters or {}).get("results_dir")  # two folders: refused before any file is read (-p
+    # results_dir /tmp was scanned for result files, all of it, before this was said)
+    if results is not None and given is not None and user_path(str(given)).resolve() != Path(results).resolve():
+        raise ValidationError("--results and -p results_dir name two folders; give one")
     if baseline is not None:
         earlier_runs(baseline)  # a folder without earlier runs: refused before anything runs
         if results is None:
@@ -517,9 +521,6 @@ def run_report(
                                   "run); choose where the run goes with --out (run_report's out)")  # fmt: skip
         params = check_parameters(dict(parameters or {}), declared, [Path(n).stem for n in names])
         refuse_inapplicable_specs(names, notebooks_dir, params)  # as each notebook would, minutes later
-        given = params.get("results_dir")
-        if results is not None and given is not None and Path(str(given)).resolve() != Path(results).resolve():
-            raise ValidationError("--results and -p results_dir name two folders; give one")
         if results is not None and "results_dir" in declared:
             params["results_dir"] = str(Path(results).resolve())
             refuse_simulated_off(params)  # a simulated section's value given with --results: refused now

@@ -224,7 +224,7 @@ def report_findings(
     """Evaluate ``source`` once (a results folder, trials allowed) with the spec of the report's
     parameters (:func:`leaderboard_spec`) and build its :class:`Findings` at the leaderboard's
     settings (:data:`SETTINGS`, overridden by ``parameters``). Returns (findings, the evaluation,
-    the settings used, with ``scale`` as given: run.json's values)."""
+    the settings used, ``scale`` in its one form (True, False or ``"auto"``): run.json's values)."""
     from lorisnb.tools.evaluation.runner import evaluate
 
     values: dict[str, Any] = {k: v if parameters.get(k) is None else parameters[k] for k, v in SETTINGS.items()}
