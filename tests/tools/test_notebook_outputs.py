@@ -202,12 +202,16 @@ def test_the_default_folder_with_a_marker_replaces_only_the_files_it_lists(tmp_p
     )
     (folder / "sequences.csv").write_text("a,b\n9,9\n")  # even with the table's own columns: the marker rules
     _figure().savefig(folder / "timeline.png")
-    session = setup("evaluate_my_results", data.root, None, parameters=dict(path=str(small)))
+    marker = (folder / OUTPUTS_MARKER).read_text()
+    # refused in the notebook's first cell (setup checks every file it always writes), before anything is written
     with pytest.raises(OutputError, match=r"sequences.csv exists and this notebook did not write it .*does not list"):
-        session.out.table(TABLE, "sequences")
+        setup("evaluate_my_results", data.root, None, parameters=dict(path=str(small)))
+    assert (folder / "sequences.csv").read_text() == "a,b\n9,9\n"
+    assert (folder / OUTPUTS_MARKER).read_text() == marker
+    (folder / "sequences.csv").unlink()  # the user moves it away: a figure written on some inputs only is
+    session = setup("evaluate_my_results", data.root, None, parameters=dict(path=str(small)))  # checked as written
     with pytest.raises(OutputError, match="timeline.png exists"):
         session.out.figure(_figure(), "timeline")
-    assert (folder / "sequences.csv").read_text() == "a,b\n9,9\n"
     session.out.table(TABLE, "scenes")  # listed: replaced
     assert "sequences.csv" not in json.loads((folder / OUTPUTS_MARKER).read_text())["files"]
 
