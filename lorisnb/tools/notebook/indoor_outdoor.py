@@ -17,6 +17,7 @@ from lorisnb.core.pipeline.sessions import sequence_errors
 from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.errors import LorisError, LorisWarning
 from lorisnb.io.datasets.paths import DataPaths, load_groundtruth
+from lorisnb.io.datasets.published import ORDSLAM_MEAN_LENGTH_M
 from lorisnb.io.readers.ordslam import OrdslamFolder, read_ordslam
 from lorisnb.io.readers.plain import read_tum
 from lorisnb.tools.evaluation.result import Evaluation
@@ -179,6 +180,38 @@ def unmatched_reason(label: str, gt: Trajectory, est: Trajectory, max_gap: float
         f"{label}: no estimate pose matched a ground-truth pose within max_gap={max_gap:g} s; the ground truth's "
         f"poses are {spacing:.3g} s apart (median): raise max_gap (ordslam_max_gap) above that spacing"
     )
+
+
+def length_contrast(stats: pd.DataFrame, scenes: Iterable[str] = ("market", "corridor")) -> str:
+    """The sentence on path lengths the notebook's reading rests on, computed: the median ground-truth
+    path length (metres) of OpenLORIS' ``scenes`` against ORDSLAM's (the sequences of ``stats`` where
+    it holds any, else the paper's 12 m mean of its difficult scenarios), and how many times as
+    long, longer or shorter as the numbers say."""
+    med = stats.groupby(["dataset", "group"], sort=False)["length_m"].median()
+    loris = {g: float(med[("OpenLORIS-Scene", g)]) for g in scenes if ("OpenLORIS-Scene", g) in med.index}
+    if not loris:
+        return "No OpenLORIS sequence of " + " or ".join(scenes) + " here: no path length to compare."
+    ords = stats.loc[stats["dataset"] == "ORDSLAM", "length_m"]
+    if len(ords):
+        other, source = (
+            float(ords.median()),
+            f"ORDSLAM {float(ords.median()):.0f} m (median of your folder's {len(ords)} sequences)",
+        )
+    else:
+        other, source = (
+            ORDSLAM_MEAN_LENGTH_M,
+            f"ORDSLAM {ORDSLAM_MEAN_LENGTH_M:.0f} m (the paper's mean of its difficult scenarios)",
+        )
+    ratios = [v / other for v in loris.values()]
+    lo, hi = min(ratios), max(ratios)
+    if lo > 1:
+        how = f"{lo:.1f} to {hi:.1f} times as long" if hi - lo >= 0.05 else f"{lo:.1f} times as long"
+    elif hi < 1:
+        how = f"shorter ({lo:.2f} to {hi:.2f} of its length)"
+    else:
+        how = f"from {lo:.2f} to {hi:.2f} times its length"
+    shown = " and ".join(f"{g} {v:.0f} m" for g, v in loris.items())
+    return f"Median path length: OpenLORIS {shown}; {source}: the OpenLORIS paths are {how}."
 
 
 def headline(measures: pd.DataFrame, published_ate: pd.DataFrame) -> dict[str, dict]:
