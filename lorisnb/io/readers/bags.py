@@ -188,6 +188,22 @@ def _pose_topics(reader) -> dict[str, str]:
 
 #: How to choose, on either side of a pair (the ground truth's options are --gt-topic, --gt-tf).
 CHOOSE = "--topic or --tf parent:child; --gt-topic or --gt-tf for the ground truth"
+#: How the messages name the TF option where a bag's choice is wrong (:func:`manifest_terms` renames it).
+TF_OPTION = "--tf parent:child"
+
+
+def manifest_terms(reason: str, topic_key: str, tf_key: str, manifest: str) -> str:
+    """A bag reader's message (``reason``) said on a manifest's route: the command-line options it
+    names (:data:`CHOOSE`, ``--tf``), which a manifest's sessions do not take, replaced by the
+    manifest's keys (``estimate_topic`` and ``estimate_tf``, or ``groundtruth_topic`` and
+    ``groundtruth_tf``) in ``manifest``, the file to write them in."""
+    tf = f"{tf_key} = 'parent:child' in {manifest}"
+    return (
+        reason.replace(CHOOSE, f"{topic_key} = '/topic' or {tf}")
+        .replace(TF_OPTION, tf)
+        .replace("(TF: use --tf)", f"(TF: use {tf})")
+        .replace("--tf '", f"{tf_key} = '")
+    )
 
 
 def _listing(reader, topics: dict[str, str]) -> str:
@@ -195,7 +211,7 @@ def _listing(reader, topics: dict[str, str]) -> str:
     if topics:
         return "pose topics in this bag: " + ", ".join(f"{t} ({m.split('/')[-1]})" for t, m in sorted(topics.items()))
     every = sorted({(c.topic, c.msgtype) for c in reader.connections})
-    tf = " (read a TF chain with --tf parent:child)" if any(t in TF_TOPICS for t, _ in every) else ""
+    tf = f" (read a TF chain with {TF_OPTION})" if any(t in TF_TOPICS for t, _ in every) else ""
     return "no pose topic in this bag; its topics: " + (", ".join(f"{t} ({m})" for t, m in every) or "none") + tf
 
 
@@ -319,12 +335,17 @@ def _read_tf(reader, spath: str, chain: str, repeated: str = "drop") -> Trajecto
     pos = np.zeros((stamps.size, 3))
     quat = np.tile([0.0, 0.0, 0.0, 1.0], (stamps.size, 1))
     keep = np.ones(stamps.size, bool)
+    outside: list[str] = []  # the links that left some of the base link's stamps without a transform
     for edge, forward in path:  # a few links
         if edge == base:  # the base link's own transforms, each at its stamp (none interpolated)
             v = np.array([edges[base][k][1] for k in order], float).reshape(-1, 7)
             p, q = v[:, :3], v[:, 3:] / np.linalg.norm(v[:, 3:], axis=1, keepdims=True)
         else:
             _, p, q, inside = _link_at(edges[edge], stamps, edge in static)
+            if not inside.all():
+                span = [s for s, _ in edges[edge]]
+                outside.append(f"{edge[0]}->{edge[1]} ({int((~inside).sum()):,} poses; its transforms span "
+                               f"{min(span):.3f}..{max(span):.3f} s)")  # fmt: skip
             keep &= inside
         if not forward:  # the inverse transform
             q = q * np.array([-1.0, -1.0, -1.0, 1.0])
@@ -333,6 +354,17 @@ def _read_tf(reader, spath: str, chain: str, repeated: str = "drop") -> Trajecto
         quat = quat_multiply(quat, q)
     where = f"{spath} TF {parent}:{child}"
     notes: list[str] = []
+    if outside:  # not extrapolated (tf2 and evo refuse to): said, as a reader says the poses it skips
+        said = (
+            f"{where}: {int((~keep).sum()):,} of {stamps.size:,} poses of the chain dropped: no transform of "
+            f"{'the link' if len(outside) == 1 else 'the links'} {' and '.join(outside)} brackets their time (the "
+            f"chain's stamps are its link {base[0]}->{base[1]}'s, {stamps[0]:.3f}..{stamps[-1]:.3f} s); a link is "
+            "interpolated between its transforms, never extrapolated, as tf2 and evo read it: record that link over "
+            "the whole run to keep them"
+        )
+        if not keep.any():
+            raise ParseError(spath, None, said.replace(f"{where}: ", f"TF {parent}:{child}: ", 1))
+        notes.append(said)
     stamps, pos, quat = stamps[keep], pos[keep], quat[keep]
     line_no = np.arange(1, stamps.size + 1)  # the pose's number in the chain stands for the line
     fine = check_rows(where, stamps, pos, quat, line_no, notes)  # sorted above, repeats kept or not as asked

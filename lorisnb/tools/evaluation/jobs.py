@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import warnings
 from dataclasses import dataclass, replace
 from functools import lru_cache, partial
@@ -28,6 +29,7 @@ from lorisnb.core.trajectory.units import check_stamp_units
 from lorisnb.errors import DataNotFoundError, LorisError, LorisWarning, ParseError, ValidationError
 from lorisnb.io.datasets.manifest import Manifest, Session
 from lorisnb.io.datasets.paths import DataPaths, groundtruth_spans, load_groundtruth, named_entry, read_groundtruth_file
+from lorisnb.io.readers.bags import manifest_terms
 from lorisnb.io.readers.openloris import declared_scene, read_openloris
 from lorisnb.io.readers.plain import read_trajectory
 from lorisnb.io.readers.registry import FORMATS, hint
@@ -55,7 +57,7 @@ class PairSource:
     gt_topic: str | None = None
     tf: str | None = None
     gt_tf: str | None = None
-    label_topic: bool = False  # one of several topics of the bag: the rows' algorithm is the topic
+    label_topic: bool = False  # one of several topics of the bag: the rows' algorithm is '<algorithm>:<topic>'
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -244,6 +246,8 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
             note = no_rpe_pair(label, len(i), seq.stamps, o["rpe_delta"], o["rpe_unit"])
             if note is not None and note not in errors.warnings:
                 errors.warnings.append(note)
+        if job.kind == "manifest":  # each session's notes name its estimate file, not the algorithm's folder
+            errors.warnings = by_session(job, errors)
         scored = False
         with contextlib.suppress(LorisError):  # the spec's setting scored here too, with the statistics or without
             # (kept on each sequence: lorisnb.core.lifelong.scoring.sequence_scores), where the errors are, so that a
@@ -270,6 +274,29 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
         if str(job.path) not in said and job.path.name not in said:
             said = f"{job.path}: {said}"
         return "failed", Failure(job.path, said, type(exc).__name__)
+
+
+def session_labels(job: Job) -> dict[int, str]:
+    """How the notes of a manifest job name each of its sessions (by number): the session's
+    estimate file, as found in the algorithm's folder given (``res/orb/fr1_xyz.txt``), with the
+    session's name and number, ``res/orb/fr1_xyz.txt (session 'fr1_xyz', seq 2)``."""
+    m = job.manifest
+    assert m is not None
+    return {
+        s.seq: f"{named_entry(job.path, s.estimate)} (session {s.name!r}, seq {s.seq})"
+        for s in m.sessions
+        if s.scene == job.scene
+    }
+
+
+def by_session(job: Job, errors: FileErrors) -> list[str]:
+    """The warnings of a manifest job's ``errors`` with each ``<folder>, seq N`` the pipeline's checks
+    name a sequence by (:func:`lorisnb.core.pipeline.model.check_label`: the algorithm's folder, the
+    input of the job) said as session N's own estimate file (:func:`session_labels`): a note on one
+    session named only the folder, leaving the user to find which file of it was meant."""
+    named = session_labels(job)
+    folder = re.compile(re.escape(check_label(errors.path, errors.file)) + r", seq (\d+)(?!\d)")
+    return [folder.sub(lambda k: named.get(int(k.group(1)), k.group(0)), w) for w in errors.warnings]
 
 
 def _read_result(job: Job, progress: bool = False) -> ResultFile:
@@ -323,8 +350,8 @@ def _pair(job: Job) -> FileErrors:
     algorithm, rel, suite, trial = labels(job.path, job.root, job.trials_by)
     if job.root is None:  # a file given alone: its name says which estimate it is
         algorithm = job.path.stem
-    if src.label_topic and src.topic:
-        algorithm = src.topic
+    if src.label_topic and src.topic:  # one of several topics: told apart from the others and from other algorithms'
+        algorithm = f"{algorithm}:{src.topic}"  # bags, as evo_ape names each by its topic (orb:/odom, orb:/pose)
     if "openloris" in (src.fmt, src.gt_fmt):  # every seq: block with its own number, as the native route
         return _openloris_pair(job, algorithm, rel, suite, trial)
     rule = job.spec.repeated_for(src.fmt)
@@ -419,9 +446,15 @@ def _manifest(job: Job) -> FileErrors | PartialErrors:
             raise ParseError(
                 s.groundtruth, None, f"ground truth of session {s.name!r} not found ({m.path}: root and groundtruth)"
             )
-        gts[s.seq] = groundtruth_of(s.groundtruth, s.groundtruth_format, s.groundtruth_times, m.groundtruth_topic,
-                                    m.groundtruth_tf, _gt_rule(job.spec, s.groundtruth_format, job.spec.repeated),
-                                    notes)  # fmt: skip
+        try:
+            gts[s.seq] = groundtruth_of(s.groundtruth, s.groundtruth_format, s.groundtruth_times, m.groundtruth_topic,
+                                        m.groundtruth_tf, _gt_rule(job.spec, s.groundtruth_format, job.spec.repeated),
+                                        notes)  # fmt: skip
+        except ParseError as exc:  # a bag's choice: the manifest's keys, not the command line's options
+            if s.groundtruth_format != "bag":
+                raise
+            raise ParseError(exc.path, exc.line, manifest_terms(exc.reason, "groundtruth_topic", "groundtruth_tf",
+                                                                str(m.path))) from None  # fmt: skip
     ests: dict[int, Trajectory] = {}
     found = {s.seq: named_entry(job.path, s.estimate) for s in sessions}  # NFC or NFD, as the file system has it
     failed: list[Failure] = []  # sessions whose estimate cannot be read: each fails alone, the others are scored
@@ -467,8 +500,12 @@ def _session_estimate(job: Job, s: Session, path: Path, gt: Trajectory) -> Traje
         est = read_trajectory(path, m.estimate_format, stamps=s.estimate_times, topic=m.estimate_topic,
                               tf=m.estimate_tf, repeated=job.spec.repeated, repair_stamps=job.spec.repair_stamps)  # fmt: skip
     except ParseError as exc:  # a link out of the results folder: read, never quoted
+        if m.estimate_format == "bag":  # a bag's choice: the manifest's keys, not the command line's options
+            exc = ParseError(
+                exc.path, exc.line, manifest_terms(exc.reason, "estimate_topic", "estimate_tf", str(m.path))
+            )
         if elsewhere is None:
-            raise
+            raise exc from None
         raise unquoted(exc, elsewhere) from None
     where = f"in its [[session]] table of {m.path}"
     check_stamp_units(est, gt, str(path), names={  # the manifest's keys, not the command line's options

@@ -449,8 +449,10 @@ def evaluate_pairs(
         scene: the scene label of the rows (default: the ground-truth file's name).
         est_times, gt_times: times files for KITTI poses (one stamp per line).
         topic, gt_topic, tf, gt_tf: what to read from bags (see :func:`lorisnb.io.readers.bags.read_bag`);
-            ``topic`` may name several topics (or evo's TF ids) separated by commas: one row each, its
-            ``algorithm`` the topic.
+            ``topic`` may name several topics (or evo's TF ids) separated by commas: each bag's topics
+            are evaluated alone, a row each, whose ``algorithm`` is the bag's algorithm label (its folder's
+            name, or a bag given alone its name without the suffix) and the topic, ``'<algorithm>:<topic>'`` (``orb:/odom``,
+            ``orb:/tf:map.base_link``), so that two algorithms' bags are told apart as well as the topics.
         jobs, executor, progress, trials_by, statistics, keep_poses: as for :func:`evaluate`.
     """
     _refuse_unknown(evaluate_pairs, options)
@@ -478,7 +480,7 @@ def evaluate_pairs(
         raise ValidationError(f"topic {src.topic!r}: expected topics separated by commas, none empty")
     sources = [src] if len(topics) == 1 else [replace(src, topic=t, label_topic=True) for t in topics]
     scored, keep = _sent_back(the_spec, statistics, keep_poses)
-    work = [  # several topics of one bag: one row each, labelled with its topic
+    work = [  # several topics of one bag: one row each, labelled '<algorithm>:<topic>' (PairSource.label_topic)
         Job(
             kind="pair",
             path=p,
