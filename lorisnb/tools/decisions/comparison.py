@@ -44,6 +44,15 @@ class Comparison:
     notes: list[str]
     #: why ``power`` sizes no pair, where it sizes none ("" otherwise, or without a power delta)
     power_note: str = ""
+    #: the trials some algorithm lacks (a whole trial, or a trial of a sequence), each counted as a
+    #: failed run: ``"B mix trial 3"``; ``compare`` exits 1 when any (:attr:`exit_status`)
+    lacking: tuple[str, ...] = ()
+
+    @property
+    def exit_status(self) -> int:
+        """1 when a trial is missing (counted as a failed run, :attr:`lacking`), else 0: a crashed
+        trial changes the scores, as a missing sequence of a declared session does."""
+        return 1 if self.lacking else 0
 
 
 def check_table_duplicates(table: pd.DataFrame) -> None:
@@ -190,11 +199,12 @@ def prepared_table(
     table: pd.DataFrame, durations: pd.DataFrame
 ) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, tuple[int, int]]]:
     """What ``compare`` tests, from a per-sequence table and the scenes' durations: every expected
-    sequence (missing ones as failed runs, :func:`~lorisnb.core.lifelong.coverage.complete`), the
+    sequence and trial (missing ones as failed runs, :func:`~lorisnb.core.lifelong.coverage.complete`
+    with ``peers``: an algorithm with fewer trials than another of its scene lacks some), the
     trials that repeat another's counted once (:func:`_without_repeated_trials`, whatever
     metric is tested); with the coverage and the counts of repeated rows. ``compare_table`` and ``make
     calibrate`` both use it."""
-    full, cover = complete(table, durations)
+    full, cover = complete(table, durations, peers=True)  # the trials of the comparison's algorithms expected
     full, counted = _without_repeated_trials(table, full)
     return full, cover, counted
 
@@ -333,42 +343,13 @@ def compare_table(
     sig = pairs[pairs["significant"].astype(bool)]  # a mask also when empty (object dtype)
     summary = f"{len(sig)} of {len(pairs)} pairs differ significantly (the test behind the ranks and bold marks)"
     summary += ":" if len(sig) else "."
-    blocked = (
-        pairs.assign(copied=pairs["test"].eq(COPIES_TEST))
-        .groupby("scene")
-        .agg(
-            reachable=("reachable", "any"),
-            min_p=("min_p", "min"),
-            copied=("copied", "all"),
-            common=("sequences", "max"),
-        )
-    )
-    blocked = blocked[~blocked["reachable"].astype(bool)]
-    if len(blocked):
+    unreached = [(clean(scene), *_unreachable(g, full, metric, alpha, len(pairs)))
+            for scene, g in pairs.groupby("scene", sort=False) if not g["reachable"].astype(bool).any()]  # fmt: skip
+    if unreached:
         summary += (
-            "\nno pair can reach alpha "
-            + str(alpha)
-            + " in "
-            + "; ".join(
-                f"{clean(scene)} (no two algorithms both have a value of {metric} there: nothing to test)"
-                if not r.common
-                else f"{clean(scene)} (the trials are copies of one run: no pair is tested; run the system again per trial)"
-                if r.copied
-                else f"{clean(scene)} (no two algorithms both have a value of {metric} there: nothing to test)"
-                if not np.isfinite(r.min_p)
-                else f"{clean(scene)} (only 1 sequence where two algorithms both have a value of {metric}: a test "
-                "needs two or more)"
-                if r.min_p >= 1 and r.common == 1
-                else f"{clean(scene)} (every pair's results are the same on every sequence: no test can separate them)"
-                if r.min_p >= 1
-                else f"{clean(scene)} (smallest possible p {r.min_p:.4g}, x {len(pairs)} pair(s) by Holm)"
-                for scene, r in blocked.iterrows()
-            )
-            + (
-                ": run more trials (--power DELTA says how many)"
-                if ((blocked["min_p"] < 1) & ~blocked["copied"].astype(bool)).any()
-                else ""
-            )  # fmt: skip
+            f"\nno pair can reach alpha {alpha} in "
+            + "; ".join(f"{scene} ({why})" for scene, why, _ in unreached)
+            + (": run more trials (--power DELTA says how many)" if any(more for *_, more in unreached) else "")
         )
     power, power_note = None, ""
     if power_delta is not None:  # copies' spread is no rerun's: sized from it, a pair looked cheap to tell apart
@@ -385,7 +366,51 @@ def compare_table(
              f"{said}"] if copied.any() else [])  # fmt: skip
         power_note = (f"--power {power_delta:g}: no pair sized: " + ("; ".join(why) if why else
                       "no scene has two algorithms with a value to compare")) if power.empty else ""  # fmt: skip
-    return Comparison(algs, pairs, sig, ci, cover, power, header, summary, notes, power_note)
+    lacking = tuple(f"{r.algorithm}{f' ({r.suite})' if r.suite else ''} {r.scene} trial(s) "
+                    + ", ".join(dict.fromkeys(x for x in [*str(r.lost_trials).split(", "),
+                                              *(t for q in str(r.missing_trials).split("; ") if ": " in q
+                                                for t in q.split(": ", 1)[1].split(", "))] if x))
+                    for r in cover.itertuples() if r.lost_trials or r.missing_trials)  # fmt: skip
+    return Comparison(algs, pairs, sig, ci, cover, power, header, summary, notes, power_note, lacking)
+
+
+def _unreachable(g: pd.DataFrame, full: pd.DataFrame, metric: str, alpha: float, m: int) -> tuple[str, bool]:
+    """Why no pair of a scene (its rows of the pairs, ``g``) can reach ``alpha``, from the facts of
+    the pair closest to it (the smallest ``min_p``): how many sequences both algorithms have a value
+    of ``metric`` on, how many of them differ (a sequence whose every trial of both has the same
+    value, a tie, cannot move the permutation test), the smallest p the test can give with that and
+    Holm's ``m`` pairs; and whether more runs could help (some sequence differs, the trials are no
+    copies). "Every pair's results are the same" was said where one of two sequences tied and the
+    other differed (the smallest p was 1: one differing sequence of one run each)."""
+    nothing = f"no two algorithms both have a value of {metric} there: nothing to test", False
+    if not (g["sequences"] > 0).any():
+        return nothing
+    if g["test"].eq(COPIES_TEST).all():
+        return "the trials are copies of one run: no pair is tested; run the system again per trial", False
+    g = g[~g["test"].eq(COPIES_TEST)]
+    if not np.isfinite(g["min_p"]).any():
+        return nothing
+    best = g.assign(_p=g["min_p"].fillna(np.inf)).sort_values(["_p", "sequences"], ascending=[True, False]).iloc[0]
+    scene = full[(full["scene"].astype(str) == str(best["scene"])) & (full["suite"] == best["suite"])]
+    per = stats._sequence_trials(stats.with_trials(scene), metric)
+    (va, wa), (vb, wb) = per.get(str(best["a"]), ({}, {})), per.get(str(best["b"]), ({}, {}))
+    common = [q for q in va if q in vb and np.isfinite((wa[q] + wb[q]) / 2) and (wa[q] + wb[q]) > 0]
+    differ = sum(bool(np.ptp(np.concatenate([va[q], vb[q]])) > 0) for q in common)
+    n, min_p, pair = len(common), float(best["min_p"]), f"{clean(best['a'])} vs {clean(best['b'])}"
+    runs = f"{int(best['trials_a'])} vs {int(best['trials_b'])} trial(s) a sequence"
+    if differ == 0:
+        return (
+            "every pair's results are the same on every sequence: no test can separate them"
+            + (f" ({n} sequence(s) where two algorithms both have a value of {metric})" if n > 1 else "")
+        ), False
+    if n == 1 and min_p >= 1:
+        return f"only 1 sequence where two algorithms both have a value of {metric}: a test needs two or more", False
+    ties = f", {n - differ} of them the same for both (a tie cannot move the test)" if differ < n else ""
+    holm = f" x {m} pair(s) by Holm = {min(1.0, min_p * m):.4g}" if m > 1 else ""
+    return (
+        f"smallest possible p {min_p:.4g}{holm}, above alpha {alpha}: {pair} differ on {differ} of the {n} "
+        f"sequence(s) where both have a value of {metric}{ties}, with {runs}"
+    ), True
 
 
 def _units_said(ci: pd.DataFrame) -> str:
