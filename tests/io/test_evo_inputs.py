@@ -211,11 +211,11 @@ def test_several_topics_of_one_bag_in_one_run(tmp_path):
     import pandas as pd
 
     both = pd.read_csv(out).set_index("algorithm")
-    assert sorted(both.index) == ["/est", "/gt"] and (both["file"] == "run.bag").all()
-    assert both.loc["/gt", "ate_max"] == 0.0 and both.loc["/est", "ate_max"] > 0.0
+    assert sorted(both.index) == ["run:/est", "run:/gt"] and (both["file"] == "run.bag").all()
+    assert both.loc["run:/gt", "ate_max"] == 0.0 and both.loc["run:/est", "ate_max"] > 0.0
     single = tmp_path / "s.csv"
     assert main([*args, "--topic", "/est", "--csv", str(single), "--no-progress"]) == 0
-    assert pd.read_csv(single).iloc[0]["ate_rmse"] == both.loc["/est", "ate_rmse"]
+    assert pd.read_csv(single).iloc[0]["ate_rmse"] == both.loc["run:/est", "ate_rmse"]
 
 
 def test_point_stamped_topic_as_evo_reads_it(tmp_path):

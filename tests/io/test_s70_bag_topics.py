@@ -257,3 +257,20 @@ def test_a_manifest_bag_without_a_topic_is_told_the_manifests_keys(bags, xyz, tm
     m = _manifest(tmp_path, head + 'estimate_tf = "map"\ngroundtruth_topic = "/pose"\n' + session)
     error = _quiet(ln.evaluate_manifest, m, tmp_path / "res").failures[0].error
     assert "estimate_tf = 'map': expected 'parent:child' frame names" in error and "--tf" not in error, error
+
+
+def test_several_topics_of_a_monocular_algorithms_bag_are_aligned_as_it_is(xyz, tmp_path):
+    """``dso:/pose`` is dso's row: scale="auto" aligns it with Sim(3), as ``dso`` alone (one topic) is;
+    the exact name decided before, so a second topic turned the alignment to SE(3)."""
+    t, v = _rows(xyz[0])
+    bag = _two_topic_bag(tmp_path / "res" / "dso" / "run.bag", t, v)
+    both = _quiet(ln.evaluate_pairs, tmp_path / "res", xyz[1], fmt="bag", gt_fmt="tum", topic="/pose,/odom",
+                  scale="auto").sequences().set_index("algorithm")  # fmt: skip
+    one = _quiet(ln.evaluate_pairs, tmp_path / "res", xyz[1], fmt="bag", gt_fmt="tum", topic="/pose",
+                 scale="auto").sequences().set_index("algorithm")  # fmt: skip
+    sim3 = _quiet(ln.evaluate_pairs, bag, xyz[1], fmt="bag", gt_fmt="tum", topic="/pose", align="sim3").sequences()
+    se3 = _quiet(ln.evaluate_pairs, bag, xyz[1], fmt="bag", gt_fmt="tum", topic="/pose", align="se3").sequences()
+    assert float(sim3["ate_rmse"].iloc[0]) != float(se3["ate_rmse"].iloc[0])  # the two alignments differ here
+    assert float(one.loc["dso", "ate_rmse"]) == float(sim3["ate_rmse"].iloc[0])
+    for label in ("dso:/pose", "dso:/odom"):
+        assert float(both.loc[label, "ate_rmse"]) == pytest.approx(float(sim3["ate_rmse"].iloc[0]), rel=1e-12)

@@ -391,8 +391,9 @@ def is_monocular(algorithm: str) -> bool:
     ``stereo_dso``, ``vi-dso``, ``svo_stereo``) is not: stereo and visual-inertial variants have a
     metric scale, and a free one would improve their ATE and CR over the official tool's (the
     evaluation says where a scale far from 1 fits better, :func:`lorisnb.core.pipeline.checks.scale_note`).
+    A row of one of several topics of a bag, ``<algorithm>:<topic>`` (``dso:/pose``), is its algorithm's.
     """
-    return algorithm in MONOCULAR
+    return algorithm.partition(":/")[0] in MONOCULAR
 
 
 def scene_eps(eps: Eps, scene: str) -> float:
