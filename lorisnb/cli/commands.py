@@ -457,10 +457,12 @@ def cmd_compare(args: argparse.Namespace) -> int:
     ev, notes = _run_evaluation(args, ["csv", "pairs_csv", "latex", "markdown"], statistics=every_column,
                                 poses=tables_only)  # fmt: skip
     table = ev.sequences()
+    lacking = 0  # a trial or sequence an algorithm lacks, counted a failed run (Comparison.exit_status)
     if not table.empty:
         res = compare_table(table, ev.durations(), args.metric, level=args.level, alpha=args.alpha,
                             seed=args.seed, power_delta=args.power)  # fmt: skip
         notes += res.notes
+        lacking = res.exit_status
         sp = ev.spec
         print(f"thresholds: eps {sp.eps}, phi {sp.phi:g} deg, delta {sp.delta:g} s, tau {sp.tau:g} s")
         print(res.header)
@@ -508,7 +510,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                   args.alpha):  # fmt: skip
             print(f"wrote {path}", file=sys.stderr)
     _report_problems(ev, notes, args)
-    return ev.exit_status()
+    return max(ev.exit_status(), lacking)
 
 
 def cmd_report(args: argparse.Namespace) -> int:

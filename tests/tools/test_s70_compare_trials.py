@@ -118,3 +118,29 @@ def test_identical_results_are_still_said_to_be_identical(runs):
         res.summary
     )
     assert "run more trials" not in res.summary
+
+
+def test_the_command_line_exits_1_for_a_trial_an_algorithm_lacks(icra20, tmp_path, capsys):
+    """``lorisnb compare`` on folders of trials: an algorithm whose trial 3 folder is empty (a crashed
+    run) is scored with that trial failed, said, and the command exits 1 (it exited 0)."""
+    import shutil
+
+    from lorisnb.cli import main
+
+    homes = sorted((icra20 / "per-seq" / "odom").glob("home*.txt"))
+    assert homes
+    for alg in ("odom", "orbslam2_rgbd"):
+        for k in (1, 2, 3):
+            folder = tmp_path / "res" / alg / f"trial{k}"
+            folder.mkdir(parents=True)
+            if alg == "orbslam2_rgbd" and k == 3:
+                continue  # the crashed run: its folder, no file
+            for f in sorted((icra20 / "per-seq" / alg).glob("home*.txt")):
+                shutil.copy(f, folder / f.name)
+    rc = main(["compare", str(tmp_path / "res"), "--no-progress", "--jobs", "1"])
+    err = capsys.readouterr().err
+    assert rc == 1, err
+    assert "orbslam2_rgbd has no output at all of trial(s) 3 in home" in err
+    for f in sorted((icra20 / "per-seq" / "orbslam2_rgbd").glob("home*.txt")):  # the trial rerun: complete
+        shutil.copy(f, tmp_path / "res" / "orbslam2_rgbd" / "trial3" / f.name)
+    assert main(["compare", str(tmp_path / "res"), "--no-progress", "--jobs", "1"]) == 0, capsys.readouterr().err
