@@ -104,11 +104,38 @@ def check_duplicates(keys: list[tuple[str, tuple, tuple[int, ...]]]) -> None:
             if PurePosixPath(other) == PurePosixPath(path):
                 raise ValidationError(f"{path} is given twice (it holds {held}); give each file or folder once")
             first, second = told_apart(str(other), str(path))
+            # the default tokens that read this number (a --trials-by's are not known here: None then)
+            tokens = [t[0] if t is not None and t[1] == trial else None for t in map(_token, (str(other), str(path)))]
+            if trial or None not in tokens:  # both carry a trial token, of one number (trial1/ and trial01/)
+                a, b = tokens
+                spelled = f" ({a} and {b} are one number)" if a is not None and b is not None and a != b else ""
+                raise ValidationError(
+                    f"{first} and {second} both hold {held}: both name trial {trial}{spelled}; renumber one of them "
+                    "so that each trial has its own number, or evaluate them separately"
+                )
+            if tokens != [None, None]:  # x.txt and x_trial0.txt
+                unnamed, named = (first, second) if tokens[0] is None else (second, first)
+                raise ValidationError(
+                    f"{first} and {second} both hold {held}: {unnamed} names no trial, which is read as trial 0, and "
+                    f"{named} names trial 0; number the trials from 1 (cafe_trial1.txt, run_2/, ...), or evaluate "
+                    "them separately"
+                )
             raise ValidationError(
                 f"{first} and {second} both hold {held}, with no trial number to tell them apart; name the trials "
                 "(cafe_trial1.txt, run_2/, ...) or give --trials-by REGEX (trials_by= in Python) whose group is "
                 "the trial number, or evaluate them separately"
             )
+
+
+def _token(relpath: str) -> tuple[str, int] | None:
+    """The default trial token in a path as written and its number (``trial01``: 1, ``run_2``: 2),
+    the file's name first; None if it holds none."""
+    for part in reversed(PurePosixPath(relpath).parts):
+        for pat in TRIAL_PATTERNS:
+            m = pat.search(part)
+            if m is not None:
+                return m.group(0).lstrip("_-./"), int(m.group("trial"))
+    return None
 
 
 def told_apart(a: str, b: str) -> tuple[str, str]:

@@ -339,9 +339,7 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
         except ValidationError as exc:
             first = str(exc).split(":", 1)[0]
             raise ParseError(path, _line(text, "session", first, k), f"[[session]] {k} ({name!r}): {exc}") from None
-    seqs = [s.seq for s in sessions]
-    if len(set(seqs)) != len(seqs):
-        raise ParseError(path, None, f"session numbers repeat ({seqs}); expected each session once")
+    _refuse_repeated_seq(sessions, items, path, text)
     check_repeats(
         sessions, path, text, [str(i.get("estimate", s.estimate)) for i, s in zip(items, sessions, strict=True)]
     )
@@ -527,6 +525,36 @@ def check_repeats(
                     "scored twice)",
                 )  # fmt: skip
             first[got] = (k, s)
+
+
+def _refuse_repeated_seq(sessions: list[Session], items: list[Any], path: Path, text: str | None) -> None:
+    """Two sessions with one number are a ParseError naming both, where each number comes from: its
+    ``seq`` (and line) or, with none written, its position (``seq = 2`` on the first session beside a
+    second session without ``seq``: both are 2, the second by its place)."""
+    first: dict[int, int] = {}
+    for k, s in enumerate(sessions, start=1):
+        if s.seq not in first:
+            first[s.seq] = k
+            continue
+        j = first[s.seq]
+
+        def said(n: int) -> str:
+            t = sessions[n - 1]
+            if "seq" in items[n - 1]:
+                line = _line(text, "session", "seq", n)
+                return f"[[session]] {n} ({t.name!r}): seq = {t.seq}{f' on line {line}' if line else ''}"
+            return f"[[session]] {n} ({t.name!r}): no seq, so {t.seq} by its position (the {_ordinal(n)} session)"
+
+        line = _line(text, "session", "seq", k) or _line(text, "session", "seq", j)
+        raise ParseError(path, line, f"two sessions are numbered {s.seq}: {said(j)}; {said(k)}. Expected each number "
+                         "once: give every session its own seq, or write seq on none (they are numbered 1, 2, ... "
+                         "in order)")  # fmt: skip
+
+
+def _ordinal(n: int) -> str:
+    """1st, 2nd, 3rd, 4th, 11th, 21st, ..."""
+    tail = "th" if 10 <= n % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(n % 10, "th")
+    return f"{n}{tail}"
 
 
 _HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z0-9_.\- \"']+?)\s*\]\]?\s*(#.*)?$")

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from lorisnb.core.spec import validate
-from lorisnb.core.stats.trials import split_trial
+from lorisnb.core.stats.trials import names_a_trial, split_trial
 from lorisnb.errors import LorisWarning, ParseError, ValidationError
 from lorisnb.io.datasets.manifest import Manifest
 
@@ -155,16 +155,19 @@ def result_files(
                 found = {k: v for k, v in found.items() if not any(d in k.parents for d in folders)} | folders
             reals.update((k, Path(v)) for k, v in found.items())
             out.extend((f, p) for f in sorted(found))
-            _say_empty_algorithms(p, below, found)
+            _say_empty_algorithms(p, below, found, suffixes)
         else:
             out.append((p, None))
     return unique_files(out, reals)
 
 
-def _say_empty_algorithms(root: Path, below: list[Found], found: Mapping[Path, Any]) -> None:
+def _say_empty_algorithms(
+    root: Path, below: list[Found], found: Mapping[Path, Any], suffixes: tuple[str, ...] = (".txt",)
+) -> None:
     """Warn of a folder beside the algorithms' folders that holds no result file (an algorithm that
-    failed on every sequence, or whose files have another suffix): it was left out of every table
-    without a word. Folders inside an algorithm's (its logs) are not algorithms."""
+    failed on every sequence, or whose files have another suffix than the format asked: said, with
+    what the folders hold): it was left out of every table without a word. Folders inside an
+    algorithm's (its logs) are not algorithms."""
     # on path strings, as walk found them (pathlib's objects and hashes cost 0.2 s on 5,000 files)
     top = os.fspath(root)
     algorithms = {os.path.dirname(os.fspath(f)) for f in found}
@@ -183,11 +186,34 @@ def _say_empty_algorithms(root: Path, below: list[Found], found: Mapping[Path, A
                 break
     empty = sorted(c for c in candidates if os.fspath(c) not in holding)
     if empty:
-        shown = ", ".join(str(e.relative_to(root)) for e in empty[:5]) + (
-            f" and {len(empty) - 5} more" * (len(empty) > 5)
-        )
-        warnings.warn(f"{root}: {len(empty)} folder(s) beside the algorithms' hold no result file, so they are in no "
-                      f"table: {shown}", LorisWarning, stacklevel=4)  # fmt: skip
+        asked = " or ".join(", ".join(suffixes).rsplit(", ", 1))
+        warnings.warn(f"{root}: {len(empty)} folder(s) beside the algorithms' hold no result file (no {asked} file, "
+                      f"the format read; {held(empty, below)}), so they are in no table: {_shown(root, empty)}",
+                      LorisWarning, stacklevel=4)  # fmt: skip
+
+
+def _shown(root: Path, folders: list[Path]) -> str:
+    """Up to five folders, relative to ``root``, and how many more."""
+    return ", ".join(str(e.relative_to(root)) for e in folders[:5]) + (
+        f" and {len(folders) - 5} more" * (len(folders) > 5)
+    )
+
+
+def held(folders: Iterable[Path], below: list[Found]) -> str:
+    """What ``folders`` hold (``below``: :func:`walk`'s entries), by suffix: ``they hold 1 .txt
+    file``, ``they hold 2 .log files and 1 file without a suffix``, ``they hold no file``."""
+    inside = tuple(os.fspath(f) + os.sep for f in folders)
+    counts: dict[str, int] = {}
+    for f in below:
+        if f.kind != "folder" and not f.hidden and os.fspath(f.path).startswith(inside):
+            key = f.path.suffix.lower()
+            counts[key] = counts.get(key, 0) + 1
+    if not counts:
+        return "they hold no file"
+    parts = [f"{n} {k or 'file'}{' file' if k else ''}{'s' * (n > 1)}" + (" without a suffix" if not k else "")
+             for k, n in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))]  # fmt: skip
+    shown = parts[:3] + ([f"{sum(sorted(counts.values(), reverse=True)[3:])} more"] if len(parts) > 3 else [])
+    return "they hold " + " and ".join(", ".join(shown).rsplit(", ", 1))
 
 
 def names(what: str, value: object) -> list[str]:
@@ -245,9 +271,13 @@ def scene_label(gt_path: Path) -> str:
 def algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> list[tuple[Path, Path | None]]:
     """Folders holding estimate files of the manifest's sessions: each given folder if it holds
     one itself, else its sub-folders that do (an estimate may be a path below the folder,
-    ``sub/x.txt``: a folder on that path is not an algorithm's). Two sessions whose estimates are
-    one file in a folder (``x.txt`` and ``X.txt`` on a file system that ignores case, a link to the
-    other) are a ParseError naming both: the file would be scored twice."""
+    ``sub/x.txt``: a folder on that path is not an algorithm's). A folder beside those that holds
+    none is decided as :func:`result_files` decides it: one holding a close name of an estimate
+    (``fr2-desk.txt`` for ``fr2_desk.txt``) is the algorithm it looks like, its sessions scored as
+    missing output with the name it holds said (:func:`missing_note`); one holding none is named in
+    a LorisWarning (it is in no table). Two sessions whose estimates are one file in a folder
+    (``x.txt`` and ``X.txt`` on a file system that ignores case, a link to the other) are a
+    ParseError naming both: the file would be scored twice."""
     names = {s.estimate for s in m.sessions}
     out: list[tuple[Path, Path | None]] = []
     for p in as_paths(results):
@@ -256,15 +286,72 @@ def algorithm_folders(results: PathArg | Iterable[PathArg], m: Manifest) -> list
         if holds_any(p, names):
             out.append((p, None))
             continue
-        subs = sorted(d.path for d in walk(p) if d.kind == "folder" and holds_any(d.path, names))
+        below = walk(p)
+        subs = sorted(d.path for d in below if d.kind == "folder" and holds_any(d.path, names))
         subs = [d for d in subs if not any(_on_estimate_path(a, d, names) for a in subs if a != d)]
-        out.extend((d, p) for d in subs)
         if not subs:
-            raise ValidationError(f"{p}: no estimate named {', '.join(sorted(names))} in it or below it")
+            near = _near_misses([p, *(d.path for d in below if d.kind == "folder" and not d.hidden)], names)
+            hint = f" (found {'; '.join(near[:3])}: a close name; rename it, or set estimate in {m.path.name})"
+            raise ValidationError(f"{p}: no estimate named {', '.join(sorted(names))} in it or below it"
+                                  + hint * bool(near))  # fmt: skip
+        out.extend((d, p) for d in subs + _beside(p, below, subs, names, m))
     out = unique_files(out)  # a folder named twice is scored once
     for folder, _ in out:
         _one_file_each(folder, m)
     return out
+
+
+def _beside(root: Path, below: list[Found], subs: list[Path], names: set[str], m: Manifest) -> list[Path]:
+    """The folders beside the algorithms' ``subs`` that hold no estimate but a close name of one
+    (kept: the algorithm they look like, its sessions scored missing with the name said); those
+    holding none are named in a LorisWarning, as :func:`result_files` names them."""
+    top, algorithms = os.fspath(root), {os.fspath(d) for d in subs}
+    parents = {os.path.dirname(a) for a in algorithms if a != top}
+    holding = {os.fspath(a) for d in subs for a in (d, *d.parents) if a != root and root in a.parents}
+    candidates = sorted(
+        f.path for f in below
+        if f.kind == "folder" and not f.hidden and (s := os.fspath(f.path)) not in holding
+        and os.path.dirname(s) in parents and not any(_on_estimate_path(a, f.path, names, itself=True) for a in subs)
+    )  # fmt: skip
+    kept = [c for c in candidates if _near_misses([c], names)]
+    empty = [c for c in candidates if c not in kept]
+    if empty:
+        warnings.warn(f"{root}: {len(empty)} folder(s) beside the algorithms' hold no result file (no estimate named "
+                      f"{', '.join(sorted(names))} as {m.path.name} names them, nor a close name; "
+                      f"{held(empty, below)}), so they are in no table: {_shown(root, empty)}",
+                      LorisWarning, stacklevel=4)  # fmt: skip
+    return kept
+
+
+def _near_misses(folders: Iterable[Path], names: Iterable[str]) -> list[str]:
+    """``folder/file`` for each file in ``folders`` with a close name of an estimate's
+    (:func:`near_names`: ``fr2-desk.txt``, ``fr2_desk.TXT`` for ``fr2_desk.txt``)."""
+    out = []
+    for folder in folders:
+        for n in sorted(names):
+            where, _, name = n.rpartition("/")
+            out += [f"{folder / where / x}" for x in near_names(folder / where, name)]
+    return list(dict.fromkeys(out))
+
+
+def check_manifest_trials(folders: list[tuple[Path, Path | None]], m: Manifest, trials_by: str | None) -> None:
+    """A ``trials_by`` that matches none of the algorithm folders' paths (:func:`algorithm_folders`;
+    a manifest's estimates are named by it, so their trials are numbered by their folders) is a
+    ValidationError naming the estimate files found, as they are on disk."""
+    if trials_by is None or not folders:
+        return
+    rels = [labels(f / "x", r, trials_by)[1] if r else "/".join(absolute(f / "x").parts[-3:]) for f, r in folders]
+    if any(names_a_trial(p, trials_by) for p in rels):
+        return
+    from lorisnb.io.datasets.paths import named_entry
+
+    files = [str(e) for f, _ in folders for s in m.sessions if os.path.lexists(e := named_entry(f, s.estimate))]
+    shown = ", ".join(files[:3]) + (f" and {len(files) - 3} more" if len(files) > 3 else "")
+    raise ValidationError(
+        f"trials_by={trials_by}: matches none of the folder names of the {len(folders)} algorithm folder(s) and "
+        f"{len(files)} estimate file(s) ({shown}); the estimates are named by {m.path.name}, so a trial is numbered "
+        "by a folder's name: expected an expression that finds the trial number in one of them, e.g. 'run(\\d+)'"
+    )
 
 
 def _parts(name: str) -> list[str]:
@@ -272,12 +359,13 @@ def _parts(name: str) -> list[str]:
     return [validate.label(x).lower() for x in name.split("/") if x not in ("", ".")]
 
 
-def _on_estimate_path(folder: Path, sub: Path, names: Iterable[str]) -> bool:
-    """Whether ``sub`` is a folder on the way to one of ``folder``'s estimates (``sub/x.txt``)."""
+def _on_estimate_path(folder: Path, sub: Path, names: Iterable[str], itself: bool = False) -> bool:
+    """Whether ``sub`` is a folder on the way to one of ``folder``'s estimates (``sub/x.txt``), or
+    (``itself``) the estimate (a ROS 2 bag's folder)."""
     if folder not in sub.parents:
         return False
     rel = _parts(sub.relative_to(folder).as_posix())
-    return any(_parts(n)[: len(rel)] == rel and len(_parts(n)) > len(rel) for n in names)
+    return any(_parts(n)[: len(rel)] == rel and len(_parts(n)) > len(rel) - itself for n in names)
 
 
 def _one_file_each(folder: Path, m: Manifest) -> None:
