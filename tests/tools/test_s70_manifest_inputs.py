@@ -171,7 +171,7 @@ def test_two_trial_folders_of_one_number_are_said_to_name_one_trial(case, capsys
                                                                           "or evaluate them separately")  # fmt: skip
 
 
-def test_a_trials_by_matching_no_folder_names_the_estimate_files(case):
+def test_a_trials_by_matching_no_folder_names_the_estimate_files(case, capsys):
     m, res, _ = case
     for d in ("seed1", "seed2"):
         shutil.copytree(res / "orb", res / "algo" / d)
@@ -184,3 +184,6 @@ def test_a_trials_by_matching_no_folder_names_the_estimate_files(case):
     msg = str(exc.value)
     assert f"{res / 'algo' / 'seed1' / 'fr2_desk.txt'}" in msg and "/x" not in msg.replace(str(res), "")
     assert "2 algorithm folder(s) and 4 estimate file(s)" in msg
+    rc, _, err = run(capsys, "evaluate", res, "--manifest", m, "--trials-by", r"zzz(\d+)", "--no-progress")
+    assert rc == 2 and "2 algorithm folder(s) and 4 estimate file(s)" in err  # the command's route names them too
+    assert "seed1/x" not in err and "seed1/fr2_desk.txt" in err

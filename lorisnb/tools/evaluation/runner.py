@@ -36,6 +36,7 @@ from lorisnb.tools.evaluation.inputs import (
     absolute,
     algorithm_folders,
     as_paths,
+    check_manifest_trials,
     labels,
     names,
     result_files,
@@ -565,7 +566,7 @@ def evaluate_manifest(
                 raise ParseError(times, None, f"{key} of session {s.name!r} not found; expected a times file, one stamp "
                                  f"in seconds per line ({m.path}: root and {key})")  # fmt: skip
     folders = algorithm_folders(results, m)
-    _check_trials([(f / "x", r) for f, r in folders], trials_by)
+    check_manifest_trials(folders, m, trials_by)  # names the estimate files found, not placeholders
     # algorithm folders read as trials of one name (slam_run1/, slam_run2/): said, as evaluate says it
     notes += trial_folders([labels(f / "x", r, trials_by)[1] for f, r in folders if r is not None], trials_by)
     scored, keep = _sent_back(the_spec, statistics, keep_poses)
