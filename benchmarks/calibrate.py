@@ -38,6 +38,8 @@ from lorisnb.tools.decisions.calibration import (
     DESIGNS,
     MODELS,
     REAL_DIFFERENCE,
+    THRESHOLDS,
+    UNBOUNDED,
     calibrate,
     compare_rates,
     family_size,
@@ -64,6 +66,8 @@ def main(argv: list[str] | None = None) -> int:
                    + " ".join(f"{b}v{c}" for b, c in DESIGNS if b != c) + ")")  # fmt: skip
     p.add_argument("--models", nargs="+", default=list(MODELS), choices=list(MODELS), help="noise models (default all)")
     p.add_argument("--diff-only", action="store_true", help="the verdict's table of lorisnb diff only")
+    p.add_argument("--compare-only", action="store_true",
+                   help="the table of lorisnb compare's error rates only (model real; needs --models real)")  # fmt: skip
     p.add_argument("--history-only", action="store_true",
                    help="the table of lorisnb history's noise-only nights only (model real; needs --models real)")  # fmt: skip
     p.add_argument("--single-nights", type=int, default=40,
@@ -71,6 +75,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--history-series", type=int, default=2, help="noise-only series of history per model (default 2)")
     p.add_argument("--history-nights", type=int, default=30,
                    help="runs in each series of history (default 30; docs/guide/history.md quotes 4 series of 20 with 3 trials, about 9 minutes)")  # fmt: skip
+    p.add_argument("--thresholds", choices=["paper", "none"], default="paper",
+                   help="the thresholds the nights are scored at: the paper's (eps per scene, phi 30 deg; default) "
+                   "or none (eps = phi = inf, the default of evaluate, diff and compare)")  # fmt: skip
     p.add_argument("--quick", action="store_true",
                    help="a small run (pool 12, 40 nights, 12 per change, 10 compares, one history series of 12)")  # fmt: skip
     args = p.parse_args(argv)
@@ -84,7 +91,18 @@ def main(argv: list[str] | None = None) -> int:
     for name, noise in MODELS.items():
         if name not in args.models:
             continue
-        pools[name] = make_pool(noise, args.pool, progress=lambda x, n=name: tqdm(x, desc=f"reruns ({n})"))
+        pools[name] = make_pool(noise, args.pool, progress=lambda x, n=name: tqdm(x, desc=f"reruns ({n})"),
+                                thresholds=THRESHOLDS if args.thresholds == "paper" else UNBOUNDED)  # fmt: skip
+    print(
+        f"nights scored at {'the paper' if args.thresholds == 'paper' else 'no'} thresholds: "
+        + ", ".join(f"{k} {v}" for k, v in (THRESHOLDS if args.thresholds == "paper" else UNBOUNDED).items())
+    )
+    if args.compare_only:
+        if "real" not in pools:
+            p.error("--compare-only measures the real noise model: give --models real (or leave --models out)")
+        compare_table(pools["real"], args.trials, args.compare_nights)
+        print(f"({time.perf_counter() - start:.0f} s)")
+        return 0
     if args.history_only:
         if "real" not in pools:
             p.error("--history-only measures the real noise model: give --models real (or leave --models out)")

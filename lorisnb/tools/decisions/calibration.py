@@ -60,8 +60,13 @@ MODELS: dict[str, RerunNoise] = {
 CR_DROPS = (0.05, 0.15, 0.3)
 ATE_FACTORS = (1.5, 2.0, 3.0)
 CHANGES = (*(f"cr -{x:g}" for x in CR_DROPS), *(f"ate x{x:g}" for x in ATE_FACTORS), "missing trial", "truncated trial")
-#: The paper's thresholds (eps per scene, phi 30 degrees), at which the nights are scored.
+#: The paper's thresholds (eps per scene, phi 30 degrees), at which the nights are scored unless
+#: :func:`make_pool` is given others (``diff``'s and ``compare``'s default, eps = phi = inf:
+#: :data:`UNBOUNDED`).
 THRESHOLDS: dict[str, Any] = {"eps": "paper", "phi": 30.0}
+#: No thresholds (eps = phi = inf, every matched pose correct: CR is the share of time with output),
+#: the default of ``lorisnb evaluate``, ``diff`` and ``compare``.
+UNBOUNDED: dict[str, Any] = {"eps": float("inf"), "phi": float("inf")}
 
 
 @dataclass
@@ -83,9 +88,9 @@ def _files(root: Path, algorithms: Sequence[str]) -> list[tuple[str, ResultFile]
     return out
 
 
-def _table(alg: str, rf: ResultFile, gt: ResultFile, trial: int) -> pd.DataFrame:
+def _table(alg: str, rf: ResultFile, gt: ResultFile, trial: int, thresholds: Mapping[str, Any]) -> pd.DataFrame:
     fe = compute_errors(rf, gt, algorithm=alg, file=rf.path.name, trial=trial, checks=False)
-    return score([fe], **THRESHOLDS)
+    return score([fe], **thresholds)
 
 
 def _cr_change(traj: Trajectory, gt_span: tuple[float, float], drop: float) -> Trajectory:
@@ -122,14 +127,16 @@ def _targets(base: pd.DataFrame) -> dict[str, list[tuple]]:
 
 
 def make_pool(noise: RerunNoise, size: int, algorithms: Sequence[str] = ALGORITHMS, data_root: str | None = None,
-              seed: int = 0, progress: Callable[[Iterable], Iterable] = lambda x: x) -> Pool:  # fmt: skip
+              seed: int = 0, progress: Callable[[Iterable], Iterable] = lambda x: x,
+              thresholds: Mapping[str, Any] | None = None) -> Pool:  # fmt: skip
     """``size`` reruns of every sequence of ``algorithms`` (and of each change's targets) under
-    ``noise``, each scored."""
+    ``noise``, each scored at ``thresholds`` (eps, phi; default :data:`THRESHOLDS`, the paper's)."""
+    at = dict(THRESHOLDS if thresholds is None else thresholds)
     data = find_data(data_root)
     have = set(data.scenes_with_groundtruth())
     files = [(a, rf) for a, rf in _files(data.icra20, algorithms) if rf.scene in have]  # office: no public ground truth
     gts = {s: load_groundtruth(s, data) for s in sorted({rf.scene for _, rf in files})}
-    base = pd.concat([_table(a, rf, gts[rf.scene], 0) for a, rf in files], ignore_index=True)
+    base = pd.concat([_table(a, rf, gts[rf.scene], 0, at) for a, rf in files], ignore_index=True)
     targets = _targets(base)
     by_file = {(a, rf.path.name): rf for a, rf in files}
     changed_files: dict[tuple[str, tuple], ResultFile] = {}
@@ -158,10 +165,10 @@ def make_pool(noise: RerunNoise, size: int, algorithms: Sequence[str] = ALGORITH
         seeds = rng.integers(2**31, size=len(files) + len(changed_files))
         parts = []
         for (alg, rf), s in zip(files, seeds, strict=False):
-            parts.append(_table(alg, again(alg, rf, int(s)), gts[rf.scene], k + 1))
+            parts.append(_table(alg, again(alg, rf, int(s)), gts[rf.scene], k + 1, at))
         tables.append(pd.concat(parts, ignore_index=True))
         for (key, rf), s in zip(changed_files.items(), seeds[len(files) :], strict=True):
-            changed[key].append(_table(key[1][0], again(key[1][0], rf, int(s)), gts[key[1][2]], k + 1))
+            changed[key].append(_table(key[1][0], again(key[1][0], rf, int(s)), gts[key[1][2]], k + 1, at))
     return Pool(tables, changed, durations_table(gts), targets)
 
 
