@@ -88,15 +88,14 @@ def main(argv: list[str] | None = None) -> int:
     warnings.simplefilter("ignore", LorisWarning)
     start = time.perf_counter()
     pools = {}
+    at = THRESHOLDS if args.thresholds == "paper" else UNBOUNDED
     for name, noise in MODELS.items():
         if name not in args.models:
             continue
         pools[name] = make_pool(noise, args.pool, progress=lambda x, n=name: tqdm(x, desc=f"reruns ({n})"),
-                                thresholds=THRESHOLDS if args.thresholds == "paper" else UNBOUNDED)  # fmt: skip
-    print(
-        f"nights scored at {'the paper' if args.thresholds == 'paper' else 'no'} thresholds: "
-        + ", ".join(f"{k} {v}" for k, v in (THRESHOLDS if args.thresholds == "paper" else UNBOUNDED).items())
-    )
+                                thresholds=at)  # fmt: skip
+    print(f"nights scored at {'the paper' if at is THRESHOLDS else 'no'} thresholds: "
+          + ", ".join(f"{k} {v}" for k, v in at.items()))  # fmt: skip
     if args.compare_only:
         if "real" not in pools:
             p.error("--compare-only measures the real noise model: give --models real (or leave --models out)")
