@@ -353,6 +353,13 @@ def read_manifest(name_or_path: str | os.PathLike[str], outside: bool = False) -
             check_reading(reading, est_fmt, gt_format, name=lambda k: READING_KEYS[k])
     except ValidationError as exc:  # the line of the key it names (estimate_topic = ... with TUM estimates)
         raise ParseError(path, _named_line(str(exc), list(READING_KEYS.values()), {}, text), str(exc)) from None
+    for key in ("estimate_topic", "groundtruth_topic"):  # the command line's --topic A,B is a row per topic
+        value = raw.get(key)
+        if isinstance(value, str) and "," in value:
+            raise ParseError(path, _named_line(key, [key], {}, text),
+                             f"{key} = {value!r}: a manifest reads one topic per session; expected one topic "
+                             f"(e.g. {key} = {value.split(',')[0].strip()!r}): one manifest per topic, or evaluate "
+                             "the bags against their ground truth with --topic A,B (a row per topic)")  # fmt: skip
     options = {k: v for k, v in table.items() if k != "preset"}
     elsewhere = {"transform": "the [transform] table", "surface": None}
     for key in sorted(set(options) & set(elsewhere)):
