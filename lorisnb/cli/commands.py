@@ -86,6 +86,7 @@ def _run_evaluation(
     for pair in EXCLUSIVE_INPUTS:  # the registry the notebooks and the report read too
         if all(getattr(args, o.lstrip("-").replace("-", "_"), None) for o in pair.options):
             raise ValidationError(option_refusal(pair))
+    refuse_tables(args.paths, getattr(args, "command", None) or "this command")
     if getattr(args, "manifest_outside", False) and not args.manifest:
         raise ValidationError("--manifest-outside: applies to the files a --manifest reads; give one")
     outside = bool(getattr(args, "manifest_outside", False))
@@ -151,6 +152,41 @@ def _run_evaluation(
     )  # evo and kitti compose them as written (said in the spec's words)
     print(f"conventions{side}: {ev.describe(grid)}{projected}", file=sys.stderr)
     return ev, notes
+
+
+def lorisnb_table(path: str) -> bool:
+    """Whether ``path`` is a per-sequence table lorisnb wrote (``evaluate --csv`` / ``--parquet``, a
+    report's ``findings/sequences.csv``): a Parquet file, or a CSV file whose header names every
+    column such a table must have (:data:`lorisnb.tools.decisions.runs.REQUIRED`). No estimate's
+    header does (a EuRoC CSV's is ``#timestamp,p_RS_R_x...``)."""
+    import csv
+
+    from lorisnb.tools.decisions.runs import REQUIRED
+
+    p = Path(path)
+    if not p.is_file():
+        return False
+    if p.suffix.lower() == ".parquet":
+        return True
+    try:
+        with open(p, encoding="utf-8-sig", errors="replace", newline="") as f:
+            header = next(csv.reader([f.readline()]), [])
+    except OSError:
+        return False
+    return set(REQUIRED) <= {h.strip() for h in header}
+
+
+def refuse_tables(paths: list[str], command: str) -> None:
+    """A :class:`~lorisnb.errors.ValidationError` (exit 2, nothing read) when an input is a table
+    lorisnb wrote (:func:`lorisnb_table`): ``evaluate``, ``sweep`` and ``compare`` read result files
+    or folders, and such a table was read as a result file and failed on its header line ("has 1
+    fields; expected 8 or 9 numbers"), exit 1."""
+    tables = [p for p in paths if lorisnb_table(p)]
+    if tables:
+        raise ValidationError(f"{', '.join(tables)}: a per-sequence table lorisnb wrote (evaluate --csv / --parquet), "
+                              f"not a result file: lorisnb {command} reads result files or folders of them "
+                              "(<algorithm>/*.txt); tables are compared with lorisnb diff BASE CAND, or over runs "
+                              "with lorisnb history RUN...")  # fmt: skip
 
 
 #: How a manifest chooses the format of its estimates and of its ground truth (:func:`format_advice`).

@@ -140,6 +140,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
         exit_status,
         github_annotations,
         markdown,
+        rename_notes,
         same_run_note,
         verdict_phrase,
         with_unscored,
@@ -195,6 +196,8 @@ def cmd_diff(args: argparse.Namespace) -> int:
     same = same_run_note(base.table, cand.table, f"BASE {args.paths[0]}", f"CAND {args.paths[1]}")
     if args.paths[0] != args.paths[1] and same:  # history says it with the same function
         say(f"note: {same}")
+    for note in rename_notes(d, f"BASE {args.paths[0]}", f"CAND {args.paths[1]}"):
+        say(f"note: {note}")
     bad = d.sequences[d.sequences["status"].isin(["regression", "missing", "failed"])]
     scene_bad = d.scenes[d.scenes["status"].isin(["regression", "missing", "failed"])]
     print(f"BASE {clean(args.paths[0])} ({base.kind}) against CAND {clean(args.paths[1])} ({cand.kind}); tolerances: "

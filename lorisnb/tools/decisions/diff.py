@@ -25,6 +25,7 @@ from lorisnb.tools.decisions.runs import (
     INDICES,
     NUMBERS,
     SECONDS,
+    mixed_setting,
     out_of_domain,
     repeated_key,
     setting_differences,
@@ -138,6 +139,13 @@ def diff_tables(
         if not isinstance(value, pd.DataFrame):
             raise ValidationError(f"{name}: expected a per-sequence table (a DataFrame), got {type(value).__name__}")
     alpha = validate.probability("alpha", alpha)
+    for name, value in zip(names, (base, cand), strict=True):  # as a table read from a file is refused
+        mixed = mixed_setting(value)
+        if mixed is not None:
+            same, other, what = mixed
+            raise ValidationError(f"{name} holds two settings for {what} (rows {_some(same)} against rows "
+                                  f"{_some(other)}, counted from 0): its scene value would average rows scored two "
+                                  "ways; score every row with one spec and one set of thresholds")  # fmt: skip
     differ = setting_differences(base, cand, *names)  # the CLI says it for runs; Python callers too
     if differ:
         raise ValidationError(f"{names[0]} and {names[1]} are not comparable (scored with different settings): "
@@ -153,6 +161,10 @@ def diff_tables(
             if f in cand_failures:
                 seqs.loc[i, ["status", "cand"]] = ["failed", f"failed: {cand_failures[f]}"]
     return Diff(seqs, scenes, verdict(seqs, scenes))
+
+
+def _some(rows: list[int]) -> str:
+    return ", ".join(map(str, rows[:5])) + (f" and {len(rows) - 5} more" if len(rows) > 5 else "")
 
 
 def same_values(base: pd.DataFrame, cand: pd.DataFrame) -> bool:
@@ -183,6 +195,52 @@ def same_run_note(base: pd.DataFrame, cand: pd.DataFrame, base_name: str, cand_n
     return (f"{base_name} holds every value of {cand_name}, to the last digit: the same run kept twice (a copy of "
             f"{cand_name} among the earlier runs, or the earlier run's table uploaded again as {cand_name} after "
             "its own run failed?) is no baseline; reruns of a system differ")  # fmt: skip
+
+
+def renamed(d: Diff) -> list[tuple[str, str, str, int]]:
+    """The algorithms CAND seems to have renamed: (suite, the name BASE had, the new name, how many
+    sequences). An algorithm of BASE every sequence of which is missing in CAND, and an algorithm
+    new in CAND (none of its sequences in BASE) of the same suite holding exactly the same
+    sequences (scene and number; its trials are not counted: a crashed trial is judged apart). Only
+    an exact match of the sequences: a new algorithm that holds one sequence more or less is
+    another algorithm, or a rename that also lost a sequence, and is not named."""
+    s = d.sequences
+    if s.empty:
+        return []
+    whole = s[s["metric"] == "sequence"]
+    names = s.groupby(["suite", "algorithm"], sort=False)["status"]
+    lost_algs = [k for k, g in names if set(g) == {"missing"}]
+    new_algs = [k for k, g in names if set(g) == {"new"}]
+    if not lost_algs or not new_algs:
+        return []
+
+    def held(key: tuple) -> frozenset:
+        g = whole[(whole["suite"] == key[0]) & (whole["algorithm"] == key[1])]
+        return frozenset(zip(g["scene"].astype(str), g["seq"].astype(int), strict=True))
+
+    new_seqs = {k: held(k) for k in new_algs}
+    out = []
+    for key in lost_algs:
+        seqs = held(key)
+        out += [(str(key[0]), str(key[1]), str(n[1]), len(seqs)) for n, ns in new_seqs.items()
+                if n[0] == key[0] and seqs and ns == seqs]  # fmt: skip
+    return out
+
+
+def rename_notes(d: Diff, base_name: str, cand_name: str, series: bool = False) -> list[str]:
+    """What ``diff`` (and ``history``, with ``series``) says of each likely rename (:func:`renamed`):
+    the verdict is kept (a sequence missing is missing), the note says why every later night will
+    fail the same way and what to do."""
+    out = []
+    for suite, old, new, n in renamed(d):
+        of = f" ({suite})" if suite else ""
+        then = (f"or keep the new name and start a new series from {cand_name} (give history {cand_name} and the "
+                "runs after it)" if series else f"or keep the new name and compare with a baseline made with it "
+                f"(--baseline a run holding {new})")  # fmt: skip
+        out.append(f"{new}{of} in {cand_name} holds exactly the {n} sequence(s) {old} had in {base_name}, and {old} is "
+                   f"missing from {cand_name}: renamed? The verdict counts {old}'s sequences missing, and every "
+                   f"run after it will too: rename it back ({old}/ in the results), {then}")  # fmt: skip
+    return out
 
 
 def unevaluated(ev: Evaluation, root: str | os.PathLike[str]) -> dict[str, str]:

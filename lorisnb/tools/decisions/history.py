@@ -616,6 +616,7 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
         lines[i] += ("; a drift of values, which does not fail the night by itself" + (
             f" (the night exits {rc} for its other findings here)" if rc else " (the night passes: exit 0)")
             + f"; gate on it with lorisnb diff {first} {names[k]}")  # fmt: skip
+    lines += [f"note: {x}" for x in renames_said(runs, diffs, names, since_first)]
     lost = [(names[base], runs[base].unscored), (names[k], run.unscored)]
     for name, files in lost:
         if files:
@@ -623,6 +624,31 @@ def newest_verdict(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequen
                          f"({', '.join(sorted(files)[:3])}{' ...' if len(files) > 3 else ''}): not every sequence "
                          "was compared")  # fmt: skip
     return rc, lines
+
+
+def renames_said(runs: Sequence[Run], diffs: Mapping[int, Diff], names: Sequence[str] | None = None,
+                 since_first: tuple[int, Diff] | None = None) -> list[str]:  # fmt: skip
+    """The likely renames of an algorithm (:func:`lorisnb.tools.decisions.diff.renamed`) among the
+    runs' diffs against their baselines and the newest run's against its series' first run, each
+    said once, at the run that renamed it (:func:`~lorisnb.tools.decisions.diff.rename_notes`, with
+    where a new series would start): every night after a rename fails on the lost name."""
+    from lorisnb.tools.decisions.diff import rename_notes, renamed
+
+    names = list(names) if names is not None else run_labels(runs)
+    found = baselines(runs)
+    pairs = [(found[k][0], k, diffs[k]) for k in sorted(diffs)]
+    if since_first is not None:
+        pairs.append((since_first[0], len(runs) - 1, since_first[1]))
+    out, said = [], set()
+    for base, k, d in pairs:
+        if base is None:
+            continue
+        for (suite, old, new, _), note in zip(renamed(d), rename_notes(d, names[base], names[k], series=True),
+                                              strict=True):  # fmt: skip
+            if (suite, old, new) not in said:  # oldest pair first: said at the run that renamed it
+                said.add((suite, old, new))
+                out.append(note)
+    return out
 
 
 def first_changes(history: pd.DataFrame) -> list[str]:

@@ -171,7 +171,7 @@ def read_table(path: Path) -> pd.DataFrame:
     --baseline last-comparable`` and ``report --baseline`` where it is older than the run judged (a
     row repeated was found only when two runs were compared, so the damaged night was taken as a
     baseline, exit 2, the newest night's regression never judged)."""
-    return check_keys(_table_rows(path), path, PER_SEQUENCE)
+    return check_settings(check_keys(_table_rows(path), path, PER_SEQUENCE), path, PER_SEQUENCE)
 
 
 def _table_rows(path: Path) -> pd.DataFrame:
@@ -383,6 +383,86 @@ def check_keys(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
     raise ParseError(path, at, f"{what} has several rows ({where}); {why}; expected {expected}")
 
 
+#: A row's group whose rows must be scored with one setting (:func:`mixed_setting`): the rows an
+#: algorithm's scene value averages.
+SETTING_GROUP = ["suite", "algorithm", "scene"]
+
+
+def mixed_setting(table: pd.DataFrame) -> tuple[list[int], list[int], str] | None:
+    """The first algorithm and scene whose rows were scored with two settings (:data:`SPEC_COLUMNS`:
+    two specs, or two values of ``phi``, ``delta``, ``tau`` or ``official_interpolation``; ``eps``
+    given on some rows, infinite on others): the positions (0-based) of the rows holding its first
+    setting and of those holding the others, and what differs in words, naming each key (``spec
+    align: "se3" against "sim3"``); None when every algorithm's scene holds one. A scene value
+    averages its rows: an se3 row among sim3 rows, or a trial at eps 3 m among eps inf, was
+    averaged in without a word. ``eps`` in metres differs per sequence under a relative eps (``--eps
+    relative:F``, its fraction of each sequence's extent), so only eps given against eps infinite
+    is told; algorithms of one scene may be scored apart (a monocular one with Sim(3))."""
+    cols = [c for c in SPEC_COLUMNS if c in table.columns and c != "eps"]
+    if not len(table) or (not cols and "eps" not in table.columns):
+        return None
+    t = with_trials(table)
+    frame = pd.DataFrame({k: t[k].fillna("").astype(str).to_numpy() for k in SETTING_GROUP})
+    if "eps" in table.columns:  # given (a number, per sequence under a relative eps) or not (inf)
+        eps = pd.to_numeric(t["eps"], errors="coerce").to_numpy(float)
+        frame["eps"] = np.where(np.isinf(eps), "inf", "given")
+    for c in cols:
+        frame[c] = t[c].astype(str).to_numpy()
+    setting = [c for c in frame.columns if c not in SETTING_GROUP]
+    distinct = frame.drop_duplicates(SETTING_GROUP + setting)
+    several = distinct.duplicated(SETTING_GROUP, keep=False).to_numpy()
+    if not several.any():
+        return None
+    first = distinct[several].iloc[0]
+    group = np.ones(len(frame), bool)
+    for k in SETTING_GROUP:
+        group &= (frame[k] == first[k]).to_numpy()
+    same = group.copy()
+    for c in setting:
+        same &= (frame[c] == first[c]).to_numpy()
+    other = group & ~same
+    words = []
+    for c in setting:
+        x, y = sorted(set(frame.loc[same, c])), sorted(set(frame.loc[other, c]))
+        if x == y:
+            continue
+        if c == "eps":  # the values in metres, as the table holds them
+            x, y = (sorted({shown(float(v)) for v in eps[rows]}, key=float) for rows in (same, other))
+            x, y = (v[:3] + ["..."] if len(v) > 3 else v for v in (x, y))
+        if c == "spec":
+            words.append(_spec_keys([(v,) for v in x], [(v,) for v in y])
+                         or f"spec = {_rows([(v,) for v in x])} against {_rows([(v,) for v in y])}")  # fmt: skip
+        else:
+            words.append(f"{c} = {'/'.join(x)} against {'/'.join(y)}")
+    suite = f" ({first['suite']})" if first["suite"] else ""
+    what = f"{first['algorithm']}{suite} {first['scene']}: " + "; ".join(words)
+    return [int(i) for i in same.nonzero()[0]], [int(i) for i in other.nonzero()[0]], what
+
+
+def check_settings(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
+    """``df`` (read from ``path``) when each algorithm's scene was scored with one setting
+    (:func:`mixed_setting`); else a :class:`~lorisnb.errors.ParseError` naming the file, the lines
+    (CSV) or rows (Parquet) of each setting and the keys that differ: its scene value would average
+    rows scored two ways, and no comparison with another run could tell."""
+    found = mixed_setting(df)
+    if found is None:
+        return df
+    same, other, what = found
+    csv = path.is_file() and path.suffix.lower() == ".csv"
+    starts = [line for line, _ in csv_records(path)][1:] if csv else []
+
+    def where(rows: list[int]) -> str:
+        shown_rows = [str(starts[i] if i < len(starts) else i + 2) if csv else str(i + 1) for i in rows[:5]]
+        more = f" and {len(rows) - 5} more" if len(rows) > 5 else ""
+        return f"{'line' if csv else 'row'}{'s' if len(rows) > 1 else ''} {', '.join(shown_rows)}{more}"
+
+    at = (starts[other[0]] if other[0] < len(starts) else other[0] + 2) if csv else None
+    raise ParseError(path, at, f"the table holds two settings for {what} (the first at {where(same)}, the other at "
+                     f"{where(other)}{'' if csv else ' of the table, counted from 1'}): its scene value would average "
+                     "rows scored two ways; score every row with one spec and one set of thresholds (evaluate the "
+                     f"results again with one set of options), or keep the rows apart in two tables; expected {expected}")  # fmt: skip
+
+
 def shown(value: Any) -> str:
     """A value as a message quotes it: text in quotes, a number with every digit Python writes
     (``1.0000001`` is not shown as ``1``: it would read as a value in the domain), a whole float
@@ -471,6 +551,10 @@ def _report_tables(folder: Path, notes: list[str], spec: Any = None) -> pd.DataF
             if t.duplicated(KEYS).any():
                 notes.append(f"{csv}: several rows per sequence (a sweep?); left out")
                 continue
+            mixed = mixed_setting(t)
+            if mixed is not None:  # rows of one algorithm's scene scored two ways
+                notes.append(f"{csv}: holds two settings for {mixed[2]}; left out")
+                continue
             parts.append(t.assign(table=csv.relative_to(folder).as_posix()))
     if not parts:
         raise DataNotFoundError(f"{folder}: a report run (run.json) without a per-sequence CSV table "
@@ -524,23 +608,48 @@ def table_expected(table: pd.DataFrame, path: Path, notes: list[str] | None = No
     folder). Used only where the table's own ground-truth durations are those of the data root (a
     pair's scene named ``cafe`` is not OpenLORIS' cafe); otherwise None, with a note in ``notes``."""
     from lorisnb.core.trajectory.frames import SCENES
-    from lorisnb.io.datasets.paths import scene_durations
+    from lorisnb.io.datasets.paths import find_data, scene_durations
 
     if not len(table) or "gt_duration" not in table.columns:
         return None
     scenes = sorted({str(x) for x in table["scene"]})
     if not set(scenes) <= set(SCENES):
         return None
-    try:
-        expected = scene_durations(scenes)
-    except (DataNotFoundError, OSError, ValueError):
+
+    def note(text: str) -> None:
         if notes is not None:
-            notes.append(f"{path}: scene values count only the sequences the table holds (the OpenLORIS ground "
-                         "truth that lists the others was not found: set LORISNB_DATA, or compare the result "
-                         "folders)")  # fmt: skip
+            notes.append(f"{path}: {text}")
+
+    try:
+        root = find_data()
+    except DataNotFoundError:
+        note("scene values count only the sequences the table holds: no data root was found to list the others "
+             "(the OpenLORIS ground truth); set LORISNB_DATA to one, or compare the result folders")  # fmt: skip
+        return None
+    have, lacking = [], []
+    for scene in scenes:
+        try:
+            root.groundtruth(scene)
+            have.append(scene)
+        except DataNotFoundError:
+            lacking.append(scene)
+    if lacking:  # why, by the facts: office's is not public; another scene's is not in this data root
+        office = ["office"] if "office" in lacking else []
+        others = [x for x in lacking if x != "office"]
+        why = (["the office ground truth (motion capture) is not public"] if office else []) + (
+            [f"the data root {root.root} has no ground truth of {', '.join(others)}"] if others else [])  # fmt: skip
+        note(f"scene values of {', '.join(lacking)} count only the sequences the table holds ({'; '.join(why)})")
+    if not have:
+        return None
+    try:
+        expected = scene_durations(have, root)
+    except (DataNotFoundError, OSError, ValueError) as exc:
+        note(f"scene values count only the sequences the table holds: the ground truth of {', '.join(have)} in "
+             f"{root.root} could not be read ({exc})")  # fmt: skip
         return None
     known = expected.set_index(["scene", "seq"])["gt_duration"]
     rows = table.assign(scene=table["scene"].astype(str), seq=table["seq"].astype("int64"))
+    rows = rows[rows["scene"].isin(have).to_numpy()]
     mine = rows.drop_duplicates(["scene", "seq"]).set_index(["scene", "seq"])["gt_duration"].astype(float)
     here = known.reindex(mine.index)
     if here.isna().any() or not np.allclose(here.to_numpy(), mine.to_numpy(), rtol=0, atol=1e-6):
@@ -641,11 +750,30 @@ def modified(p: Path) -> datetime:
 
 def spec_values(spec: Any) -> dict[str, Any]:
     """What of a run.json ``spec`` changes the numbers: its ``values`` (the whole spec when it has
-    none), without :data:`NOT_NUMBERS`; the ``description`` is these values in words."""
+    none), without :data:`NOT_NUMBERS`; the ``description`` is these values in words. Each value in
+    its one form (:func:`recorded_value`): a run made before report parameters were recorded so
+    (``-p scale on`` kept as ``"on"``) compares with one that records ``true``."""
     values = spec.get("values", spec) if isinstance(spec, dict) else {"spec": spec}
     if not isinstance(values, dict):
         values = {"values": values}
-    return {k: v for k, v in values.items() if k not in NOT_NUMBERS and (values is not spec or k != "description")}
+    return {k: recorded_value(k, v) for k, v in values.items()
+            if k not in NOT_NUMBERS and (values is not spec or k != "description")}  # fmt: skip
+
+
+def recorded_value(key: str, value: Any) -> Any:
+    """A value of run.json's ``spec`` in the one form ``lorisnb report`` now records it
+    (:func:`lorisnb.tools.notebook.params.canonical`: ``scale`` ``"on"``, ``"Yes"`` and ``true`` are
+    True, ``rpe_unit`` ``"M"`` is ``"m"``, a threshold ``"1"`` is 1.0, ...), for every key a report's
+    parameters can carry; a path (a folder of the machine that made the run) and a value no rule
+    takes (a run of another version) as recorded, so that the comparison names it."""
+    from lorisnb.tools.notebook.params import PATHS, canonical
+
+    if key in PATHS or value is None:
+        return value
+    try:
+        return canonical(key, value)
+    except (ValidationError, DataNotFoundError, ValueError, TypeError, OverflowError):
+        return value
 
 
 def spec_differences(a: Run, b: Run) -> list[str]:
@@ -767,22 +895,30 @@ def setting_differences(a: pd.DataFrame, b: pd.DataFrame, name_a: str = "BASE", 
     return [f"{', '.join(scenes)}: {text}" for text, scenes in said.items()]
 
 
-def _spec_keys(a: list[tuple], b: list[tuple], name_a: str, name_b: str) -> str | None:
-    """The keys that differ between one spec (a table's ``spec`` column, JSON) on each side, with
-    their values (``spec align: "se3" in A against "auto" in B``), instead of both specs whole;
-    None when a side holds several specs or one that is not a JSON object."""
-    if len(a) != 1 or len(b) != 1:
-        return None
+def _spec_keys(a: list[tuple], b: list[tuple], name_a: str = "", name_b: str = "") -> str | None:
+    """The keys that differ between the specs (a table's ``spec`` column, JSON) of each side, with
+    their values (``spec align: "se3" in A against "auto" in B``; a side holding several specs gives
+    each value it holds, ``"se3"/"sim3"``), instead of the specs whole; None when a spec is no JSON
+    object or no key's values differ."""
     try:
-        x, y = json.loads(str(a[0][0])), json.loads(str(b[0][0]))
+        xs, ys = ([json.loads(str(r[0])) for r in side] for side in (a, b))
     except (ValueError, RecursionError):
         return None
-    if not isinstance(x, dict) or not isinstance(y, dict):
+    if not xs or not ys or not all(isinstance(v, dict) for v in [*xs, *ys]):
         return None
     missing = object()
-    keys = [k for k in sorted(set(x) | set(y)) if x.get(k, missing) != y.get(k, missing)]
-    return "; ".join(f"spec {k}: {_json(x.get(k, missing), missing)} in {name_a} against "
-                     f"{_json(y.get(k, missing), missing)} in {name_b}" for k in keys) or None  # fmt: skip
+
+    def held(specs: list[dict], k: str) -> str:
+        texts = dict.fromkeys(_json(s.get(k, missing), missing) for s in specs)
+        return "/".join(sorted(texts))
+
+    def named(name: str) -> str:
+        return f" in {name}" if name else ""
+
+    keys = sorted({k for s in [*xs, *ys] for k in s})
+    said = [f"spec {k}: {held(xs, k)}{named(name_a)} against {held(ys, k)}{named(name_b)}" for k in keys
+            if held(xs, k) != held(ys, k)]  # fmt: skip
+    return "; ".join(said) or None
 
 
 def _json(value: Any, missing: object) -> str:
