@@ -88,9 +88,11 @@ def _files(root: Path, algorithms: Sequence[str]) -> list[tuple[str, ResultFile]
     return out
 
 
-def _table(alg: str, rf: ResultFile, gt: ResultFile, trial: int, thresholds: Mapping[str, Any]) -> pd.DataFrame:
+def _table(alg: str, rf: ResultFile, gt: ResultFile, trial: int,
+           thresholds: Mapping[str, Any] | None = None) -> pd.DataFrame:  # fmt: skip
+    """One rerun's rows scored at ``thresholds`` (default :data:`THRESHOLDS`, the paper's)."""
     fe = compute_errors(rf, gt, algorithm=alg, file=rf.path.name, trial=trial, checks=False)
-    return score([fe], **thresholds)
+    return score([fe], **(THRESHOLDS if thresholds is None else thresholds))
 
 
 def _cr_change(traj: Trajectory, gt_span: tuple[float, float], drop: float) -> Trajectory:

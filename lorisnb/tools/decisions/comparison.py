@@ -45,7 +45,7 @@ class Comparison:
     #: why ``power`` sizes no pair, where it sizes none ("" otherwise, or without a power delta)
     power_note: str = ""
     #: the trials some algorithm lacks (a whole trial, or a trial of a sequence), each counted as a
-    #: failed run: ``"B mix trial 3"``; ``compare`` exits 1 when any (:attr:`exit_status`)
+    #: failed run: ``"B mix trial 3"``; ``compare`` exits 1 when any (:attr:`~lorisnb.tools.decisions.comparison.Comparison.exit_status`)
     lacking: tuple[str, ...] = ()
 
     @property
