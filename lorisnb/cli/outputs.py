@@ -11,7 +11,7 @@ from pathlib import Path
 
 from lorisnb.errors import OutputError, ValidationError
 from lorisnb.io.readers.registry import FORMATS
-from lorisnb.io.writers import check_dataset_target, overlap
+from lorisnb.io.writers import check_dataset_target, overlap, refuse_not_a_file
 
 #: Suffixes of the files a folder of inputs is walked for (every format's, :mod:`lorisnb.io.readers.registry`):
 #: an output among the inputs with one of them would be read as an input by the next run.
@@ -46,6 +46,8 @@ def check_output(
             raise OutputError(f"{option} {out} lies in the input folder {i} and {what}; choose another name or place")
     if target.is_dir() and not folder:
         raise OutputError(f"{out} is a folder; expected a file name for {option}")
+    if not folder:  # a device, a pipe, a socket: never replaced (--csv /dev/null --force replaced the system's)
+        refuse_not_a_file(out)
     hit = overlap(target, inputs) if folder else None
     if hit:
         raise OutputError(f"{option} {out} {hit[0]} the input {hit[1]} of this command; choose another output folder")

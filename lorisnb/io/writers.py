@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import stat
 import tempfile
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
@@ -107,10 +108,39 @@ def name_output(exc: BaseException, out: str | os.PathLike[str]) -> None:
             exc.filename = str(out)
 
 
+#: What an existing output name may be for ``--force`` to replace it: a regular file, or a link
+#: (the link is replaced, never what it points to). Anything else is never replaced (:func:`not_a_file`).
+_KINDS = {stat.S_IFCHR: "a character device", stat.S_IFBLK: "a block device", stat.S_IFIFO: "a named pipe",
+          stat.S_IFSOCK: "a socket", stat.S_IFDIR: "a folder"}  # fmt: skip
+
+
+def not_a_file(out: str | os.PathLike[str]) -> str | None:
+    """What ``out`` is where it is neither a regular file nor a link nor absent (``a character
+    device``, ``a named pipe``, ``a folder``...): an output never replaces it, ``--force`` or not.
+    ``--csv /dev/null --force`` (as root) replaced the system's ``/dev/null`` with a regular file,
+    and every later ``> /dev/null`` wrote into it."""
+    try:
+        mode = os.lstat(out).st_mode
+    except OSError:
+        return None
+    return None if stat.S_ISREG(mode) or stat.S_ISLNK(mode) else _KINDS.get(stat.S_IFMT(mode), "not a regular file")
+
+
+def refuse_not_a_file(out: str | os.PathLike[str]) -> None:
+    """An :class:`OutputError` where the output ``out`` exists as something else than a file
+    (:func:`not_a_file`), which no ``--force`` replaces."""
+    kind = not_a_file(out)
+    if kind is not None:
+        raise OutputError(f"{out} is {kind}, not a file: lorisnb writes its outputs as files and never replaces "
+                          f"{kind}, --force or not; choose another name")  # fmt: skip
+
+
 def write_atomically(out: str | os.PathLike[str], write: Callable[[Path], object], force: bool = False) -> Path:
     """Call ``write(tmp)`` on a temporary name beside ``out``, then move it into place; refuse to
-    replace an existing file unless ``force``; never leave the temporary file behind."""
+    replace an existing file unless ``force``, and anything that is not a file (a device, a pipe, a
+    folder: :func:`not_a_file`) always; never leave the temporary file behind."""
     out = Path(out)
+    refuse_not_a_file(out)
     if out.exists() and not force:
         raise OutputError(f"{out} exists; choose another name or pass --force to replace it")
     out.parent.mkdir(parents=True, exist_ok=True)
