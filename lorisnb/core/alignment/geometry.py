@@ -10,7 +10,7 @@ tests check every function here against ``scipy.spatial.transform``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import partial
+from functools import cached_property, partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -87,13 +87,18 @@ class PositionPairs:
         mu_s, mu_t, xs, _, cov = _centered(source, target)
         return cls(source, target, mu_s, mu_t, xs, cov)
 
+    @cached_property
+    def svd(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``np.linalg.svd`` of the cross-covariance, once for :meth:`degenerate` and :meth:`fit`."""
+        return np.linalg.svd(self.cov)
+
     def degenerate(self) -> str | None:
         """:func:`degenerate_alignment` of these positions."""
-        return _degenerate(self.source, self.target, self.cov)
+        return _degenerate(self.source, self.target, self.cov, self.svd[1])
 
     def fit(self, with_scale: bool = False) -> Sim3:
         """:func:`umeyama` of these positions (not strict)."""
-        return _solve(self.mu_s, self.mu_t, self.xs, self.cov, with_scale)
+        return _solve(self.mu_s, self.mu_t, self.xs, self.cov, with_scale, self.svd)
 
 
 #: A lever (:func:`rotation_lever`, metres) below this and a sequence's alignment is too unstable to
@@ -139,9 +144,12 @@ def _center(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return mu, points - mu
 
 
-def _degenerate(source: np.ndarray, target: np.ndarray, cov: np.ndarray) -> str | None:
-    """:func:`degenerate_alignment` given the cross-covariance of the positions: a noun phrase, said as
-    'the alignment was fitted on {why}' and 'no alignment can be determined: {why}'."""
+def _degenerate(
+    source: np.ndarray, target: np.ndarray, cov: np.ndarray, singular: np.ndarray | None = None
+) -> str | None:
+    """:func:`degenerate_alignment` given the cross-covariance of the positions (and its singular
+    values, where a fit computed them): a noun phrase, said as 'the alignment was fitted on {why}'
+    and 'no alignment can be determined: {why}'."""
     n = len(source)
     if n == 1:  # (one position is no spread of positions: said as the count it is)
         return "only 1 matched position (fewer than 3)"
@@ -150,7 +158,7 @@ def _degenerate(source: np.ndarray, target: np.ndarray, cov: np.ndarray) -> str 
         lo = np.array([p[:, k].min() for k in range(3)])
         if (hi - lo).max() <= 1e-12 * max(1.0, float(max(np.abs(hi).max(), np.abs(lo).max()))):
             return f"{n} matched {side} positions, {'both' if n == 2 else 'all'} identical (zero spread)"
-    d = np.linalg.svd(cov, compute_uv=False)
+    d = np.linalg.svd(cov, compute_uv=False) if singular is None else singular
     if n < 3 or d[1] <= max(DEGENERATE_RATIO * d[0], np.finfo(float).eps):
         return f"{n} matched positions on one line" if n >= 3 else f"only {n} matched positions (fewer than 3)"
     return None
@@ -188,9 +196,17 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False, st
     return _solve(mu_s, mu_t, xs, cov, with_scale)
 
 
-def _solve(mu_s: np.ndarray, mu_t: np.ndarray, xs: np.ndarray, cov: np.ndarray, with_scale: bool) -> Sim3:
-    """Umeyama's solution from the means, the centred source and the cross-covariance."""
-    u, d, vt = np.linalg.svd(cov)
+def _solve(
+    mu_s: np.ndarray,
+    mu_t: np.ndarray,
+    xs: np.ndarray,
+    cov: np.ndarray,
+    with_scale: bool,
+    svd: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+) -> Sim3:
+    """Umeyama's solution from the means, the centred source and the cross-covariance (and its
+    ``np.linalg.svd``, where it was computed)."""
+    u, d, vt = np.linalg.svd(cov) if svd is None else svd
     s_mat = np.eye(3)
     if np.linalg.det(u) * np.linalg.det(vt) < 0.0:
         s_mat[2, 2] = -1.0
