@@ -101,7 +101,8 @@ def evaluate_sessions(
             alignment and the errors are computed).
         notes: what the reader noticed, kept first in ``FileErrors.warnings``.
         sources: sequence number -> the file it was read from (a manifest's sessions), named in the
-            errors about that sequence (default ``path``, with the sequence number if several).
+            errors and notes about that sequence (default ``path``, with the sequence number if
+            several; a note: the ``file`` label or ``path``, with the sequence number).
         quaternions: the order the estimate's file wrote its quaternions in, by its format
             (:attr:`lorisnb.io.readers.registry.Format.quaternions`): ``"xyzw"`` or ``"wxyz"``, the
             one order mistake its orientation check names; ``""`` none (matrices, named fields: no
@@ -133,6 +134,9 @@ def evaluate_sessions(
     def where(s: int) -> str:  # the input a sequence's error is about: its file (a manifest's session), or path, seq
         return (sources or {}).get(s) or (f"{path}, seq {s}" if len(seqs) > 1 else str(path))
 
+    def said(s: int) -> str:  # how a note names a sequence: its own source (a manifest's session), or input, seq
+        return (sources or {}).get(s) or f"{name}, seq {s}"
+
     lifelong = spec.lifelong_for(len(seqs))
     est = {s: with_transform(estimates[s], spec.transform) for s in seqs}
     assoc: dict[int, Association] = {}
@@ -146,7 +150,7 @@ def evaluate_sessions(
         if s in durations and (assoc[s].gt_start, assoc[s].gt_end) != durations[s]:  # thinned: its time stays
             assoc[s] = replace(assoc[s], gt_start=durations[s][0], gt_end=durations[s][1])
         if checks_on:
-            label = f"{name}, seq {s}"
+            label = said(s)
             raw = frames[3][s] if frames is not None else groundtruth[s]
             if spec.association == "interpolate":
                 found.append(plausibility.groundtruth_gaps(label, raw, spec.max_gap))
@@ -178,7 +182,7 @@ def evaluate_sessions(
         try:  # an OpenLORIS file (frames given) is aligned as the official tool aligns it
             return fit_alignment(a.est_rows(e.positions), a.gt_positions, method, spec.align_frames, q_e,
                                  a.gt_quaternions, strict=frames is None, notes=found, origin_blocks=origin,
-                                 label=f"{name}, seq {s}")  # fmt: skip
+                                 label=said(s))  # fmt: skip
         except EvaluationError as exc:  # named with the sequence (the session's file) it is about
             raise EvaluationError(f"{where(s)}: {exc}") from None
 
@@ -225,7 +229,7 @@ def evaluate_sessions(
         fitted = ([] if aligned_on is None else [aligned_on]) if lifelong else [s for s in seqs if len(assoc[s])]
         for s in fitted:  # in lifelong mode, the later sequences' errors come after that fit too: named
             applied = [k for k in seqs if k != s and len(assoc[k])] if lifelong else []
-            note = checks.degenerate_note(f"{name}, seq {s}", est[s].positions, assoc[s], spread_pairs(s),
+            note = checks.degenerate_note(said(s), est[s].positions, assoc[s], spread_pairs(s),
                                           method == "sim3", applied)  # fmt: skip
             if note is not None:
                 degenerate.add(s)
@@ -236,7 +240,7 @@ def evaluate_sessions(
             found.append(plausibility.monocular_without_scale(name, algorithm, hint))
         fitted = ([] if aligned_on is None else [aligned_on]) if lifelong else [s for s in seqs if len(assoc[s]) > 2]
         for s in fitted:
-            found.append(checks.scale_note(f"{name}, seq {s}", spread_pairs(s), assoc[s], per_seq[s], hint))
+            found.append(checks.scale_note(said(s), spread_pairs(s), assoc[s], per_seq[s], hint))
 
     out: list[SequenceErrors] = []
     suspect: tuple[SequenceErrors, Association] | None = None
@@ -255,7 +259,7 @@ def evaluate_sessions(
             del est[s]
     if suspect is not None:
         e, a = suspect
-        label = f"{name}, seq {e.seq}"
+        label = said(e.seq)
         # the sequence the rotation was fitted on, on all its matched positions (se3, sim3): its lever
         on = next((x for x in out if x.seq == aligned_on), None) if lifelong else e
         fitted_on_all = on is not None and method in ("se3", "sim3") and spec.align_frames is None

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import re
 import warnings
 from dataclasses import dataclass, replace
 from functools import lru_cache, partial
@@ -240,14 +239,14 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
         if errors is None:
             return "filtered", None
         o = job.spec.rpe_options()
+        named = session_labels(job) if job.kind == "manifest" else {}
         for seq in errors.sequences:  # the RPE pairs of the spec, here (in a worker, when in parallel)
             i = seq.rpe(o["rpe_delta"], o["rpe_unit"], o["rpe_pairs"], o["rpe_all_pairs"], o["rpe_tolerance"])[0]
-            label = f"{check_label(errors.path, errors.file)}, seq {seq.seq}"  # as the pipeline's notes name it
+            # named as the pipeline's notes name the sequence (a manifest's session: its own estimate file)
+            label = named.get(seq.seq) or f"{check_label(errors.path, errors.file)}, seq {seq.seq}"
             note = no_rpe_pair(label, len(i), seq.stamps, o["rpe_delta"], o["rpe_unit"])
             if note is not None and note not in errors.warnings:
                 errors.warnings.append(note)
-        if job.kind == "manifest":  # each session's notes name its estimate file, not the algorithm's folder
-            errors.warnings = by_session(job, errors)
         scored = False
         with contextlib.suppress(LorisError):  # the spec's setting scored here too, with the statistics or without
             # (kept on each sequence: lorisnb.core.lifelong.scoring.sequence_scores), where the errors are, so that a
@@ -277,7 +276,9 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
 
 
 def session_labels(job: Job) -> dict[int, str]:
-    """How the notes of a manifest job name each of its sessions (by number): the session's
+    """How the notes and errors of a manifest job name each of its sessions (by number, the
+    pipeline's ``sources``): a note on one session named only the algorithm's folder, leaving the
+    user to find which file of it was meant. The session's
     estimate file, as found in the algorithm's folder given (``res/orb/fr1_xyz.txt``), with the
     session's name and number, ``res/orb/fr1_xyz.txt (session 'fr1_xyz', seq 2)``."""
     m = job.manifest
@@ -287,16 +288,6 @@ def session_labels(job: Job) -> dict[int, str]:
         for s in m.sessions
         if s.scene == job.scene
     }
-
-
-def by_session(job: Job, errors: FileErrors) -> list[str]:
-    """The warnings of a manifest job's ``errors`` with each ``<folder>, seq N`` the pipeline's checks
-    name a sequence by (:func:`lorisnb.core.pipeline.model.check_label`: the algorithm's folder, the
-    input of the job) said as session N's own estimate file (:func:`session_labels`): a note on one
-    session named only the folder, leaving the user to find which file of it was meant."""
-    named = session_labels(job)
-    folder = re.compile(re.escape(check_label(errors.path, errors.file)) + r", seq (\d+)(?!\d)")
-    return [folder.sub(lambda k: named.get(int(k.group(1)), k.group(0)), w) for w in errors.warnings]
 
 
 def _read_result(job: Job, progress: bool = False) -> ResultFile:
@@ -474,7 +465,7 @@ def _manifest(job: Job) -> FileErrors | PartialErrors:
                     failed.append(Failure(path, said, type(exc).__name__))
     notes += [str(w.message) for w in caught]
     bad = {s.seq for s in sessions if found[s.seq] in {f.path for f in failed}}
-    out = _manifest_rows(job, sessions, gts, ests, found, notes, bad)
+    out = _manifest_rows(job, sessions, gts, ests, notes, bad)
     if not failed:
         assert out is not None
         return out
@@ -518,7 +509,7 @@ def _session_estimate(job: Job, s: Session, path: Path, gt: Trajectory) -> Traje
 
 def _manifest_rows(
     job: Job, sessions: list[Session], gts: dict[int, Trajectory], ests: dict[int, Trajectory],
-    found: dict[int, Path], notes: list[str], failed: set[int],
+    notes: list[str], failed: set[int],
 ) -> FileErrors | None:  # fmt: skip
     """The rows of a manifest job: the sessions with an estimate scored, each other one without its
     file scored as missing output, as the paper scores it; one whose file failed (``failed``, by its
@@ -532,7 +523,7 @@ def _manifest_rows(
     if ests:
         errors = evaluate_sessions(
             gts, ests, job.spec, path=job.path, algorithm=algorithm, scene=job.scene, suite=suite, trial=trial,
-            notes=notes, groundtruth_spans=spans, sources={k: str(p) for k, p in found.items()},
+            notes=notes, groundtruth_spans=spans, sources=session_labels(job),
             quaternions=FORMATS[m.estimate_format].quaternions,
         )  # fmt: skip
     absent = [s for s in sessions if s.seq not in ests and s.seq not in failed]
