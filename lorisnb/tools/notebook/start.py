@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import pandas as pd
 
 from lorisnb.errors import DataNotFoundError, LorisWarning, OutputError, ValidationError
-from lorisnb.io.datasets.paths import DataPaths, DataRoot, find_data, sample_data
+from lorisnb.io.datasets.paths import ENV_VAR, DataPaths, DataRoot, find_data, sample_data
 from lorisnb.io.writers import overlap, write_atomically, write_csv, write_text
 from lorisnb.tools.decisions.escape import clean
 
@@ -581,9 +581,12 @@ def setup(
     """The first call of every notebook: find the data (``data_root``, else ``$LORISNB_DATA``, else
     ``../shared/data``), create the output folder (``output_dir``, else :func:`default_output_dir`),
     and keep lorisnb's warnings about input files out of the cell output as Python warnings (they are
-    summarized per file by :func:`show_inputs`). With ``sample=True`` (the primer and the labs), a
-    notebook given no ``data_root`` that finds no data runs on the small data shipped with lorisnb
-    (:func:`lorisnb.io.datasets.paths.sample_data`) and says so. ``parameters``: the notebook's parameters,
+    summarized per file by :func:`show_inputs`). With ``sample=True`` (the primer), a notebook given
+    neither ``data_root`` nor ``$LORISNB_DATA`` that finds no ``shared/data`` folder runs on the small
+    data shipped with lorisnb (:func:`lorisnb.io.datasets.paths.sample_data`) and says so; a
+    ``data_root`` or ``$LORISNB_DATA`` that names no data root is refused with
+    :func:`~lorisnb.io.datasets.paths.find_data`'s error, never passed over for the sample (the labs
+    choose their data with :func:`lorisnb.tools.teaching.lab_data`). ``parameters``: the notebook's parameters,
     checked first with the command line's rules (:func:`lorisnb.tools.notebook.params.check_values`:
     thresholds, grids, seed, yes/no values such as ``quick``, folders that must exist, ...). The
     output folder is then refused if it is, holds or lies in one of the notebook's inputs (its path
@@ -593,10 +596,11 @@ def setup(
     try:
         data = find_data(data_root)
     except DataNotFoundError:
-        if not sample or data_root is not None:
+        if not sample or data_root is not None or os.environ.get(ENV_VAR):  # a root the user named: refused, as given
             raise
         data = sample_data()
-        print("no data root found: using the small sample data shipped with lorisnb (cafe scene only)")
+        print(f"no data_root given, {ENV_VAR} not set and no shared/data folder found: using the small sample data "
+              f"shipped with lorisnb (cafe scene only); set {ENV_VAR}=DIR or the data_root parameter for other data")  # fmt: skip
     from lorisnb.tools.notebook.params import refuse_scenes_without_groundtruth
 
     refuse_scenes_without_groundtruth(values, data)  # scene, sim_scene, scenes without ground truth (office)
