@@ -59,8 +59,9 @@ def _transform(T, v):
     )
 
 
-def _two_topic_bag(path: Path, stamps: np.ndarray, poses: np.ndarray) -> Path:
-    """A ROS 1 bag with the poses both as ``/pose`` (PoseStamped) and ``/odom`` (Odometry)."""
+def _two_topic_bag(path: Path, stamps: np.ndarray, poses: np.ndarray, odom_shift: float = 0.0) -> Path:
+    """A ROS 1 bag with the poses both as ``/pose`` (PoseStamped) and ``/odom`` (Odometry; its
+    stamps ``odom_shift`` seconds later)."""
     from rosbags.rosbag1 import Writer
 
     ts = _types()
@@ -78,7 +79,8 @@ def _two_topic_bag(path: Path, stamps: np.ndarray, poses: np.ndarray) -> Path:
             m = T["geometry_msgs/msg/PoseStamped"](header=_header(T, t), pose=_pose(T, v))
             w.write(cp, ns, ts.serialize_ros1(m, "geometry_msgs/msg/PoseStamped"))
             cov = T["geometry_msgs/msg/PoseWithCovariance"](pose=_pose(T, v), covariance=np.zeros(36))
-            o = T["nav_msgs/msg/Odometry"](header=_header(T, t), child_frame_id="base", pose=cov, twist=twist)
+            o = T["nav_msgs/msg/Odometry"](header=_header(T, t + odom_shift), child_frame_id="base", pose=cov,
+                                           twist=twist)  # fmt: skip
             w.write(co, ns, ts.serialize_ros1(o, "nav_msgs/msg/Odometry"))
     return path
 
@@ -162,6 +164,22 @@ def _tf_bag(path: Path, stamps: np.ndarray, poses: np.ndarray, slow: list[float]
             q = q_off.inv() * Rotation.from_quat(v[3:])
             send(t, "odom", "base_link", [*q_off.inv().apply(v[:3] - off), *q.as_quat()])
     return path
+
+
+def test_the_notes_on_one_of_several_topics_name_the_topic(xyz, tmp_path, capsys):
+    """A note about one topic of a bag read on several names the topic: the same bag's notes
+    were said once for every topic, leaving the user to guess which topic was meant."""
+    t, v = _rows(xyz[0])
+    bag = _two_topic_bag(tmp_path / "orb.bag", t, v, odom_shift=5000.0)  # /odom: another recording's time
+    ev = _quiet(ln.evaluate_pairs, bag, xyz[1], fmt="bag", gt_fmt="tum", topic="/pose,/odom")
+    said = [w for w in ev.warnings if "no estimate stamp" in w]
+    assert len(said) == 1 and said[0].startswith(f"{bag} (topic /odom), seq 1: "), said
+    rows = ev.sequences().set_index("algorithm")
+    assert rows.loc["orb:/pose", "matched"] > 700 and rows.loc["orb:/odom", "matched"] == 0
+    rc = main(["evaluate", str(bag), "--gt", str(xyz[1]), "--format", "bag", "--gt-format", "tum",
+               "--topic", "/pose,/odom", "--no-progress"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc == 1 and f"warning: {bag} (topic /odom), seq 1: no estimate stamp" in err, err
 
 
 def test_a_tf_chain_says_the_poses_a_slower_link_drops(xyz, tmp_path, capsys):

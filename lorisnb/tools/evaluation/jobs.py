@@ -239,7 +239,7 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
         if errors is None:
             return "filtered", None
         o = job.spec.rpe_options()
-        named = session_labels(job) if job.kind == "manifest" else {}
+        named = sequence_sources(job)
         for seq in errors.sequences:  # the RPE pairs of the spec, here (in a worker, when in parallel)
             i = seq.rpe(o["rpe_delta"], o["rpe_unit"], o["rpe_pairs"], o["rpe_all_pairs"], o["rpe_tolerance"])[0]
             # named as the pipeline's notes name the sequence (a manifest's session: its own estimate file)
@@ -273,6 +273,21 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
         if str(job.path) not in said and job.path.name not in said:
             said = f"{job.path}: {said}"
         return "failed", Failure(job.path, said, type(exc).__name__)
+
+
+def sequence_sources(job: Job) -> dict[int, str]:
+    """How the notes and errors of a job name each of its sequences where the input's name alone does
+    not say which it is (the pipeline's ``sources``): a manifest's sessions (:func:`session_labels`),
+    and one of several topics of a bag, ``bags/run.bag (topic /odom), seq 1`` (the rows' algorithm is
+    ``<algorithm>:<topic>``; a note naming the bag alone was said once for every topic). Empty: the
+    input's name (and the sequence number) says it."""
+    if job.kind == "manifest":
+        return session_labels(job)
+    src = job.source
+    if job.kind == "pair" and src is not None and src.label_topic and src.topic:
+        _, rel, _, _ = labels(job.path, job.root, job.trials_by)
+        return {1: f"{check_label(job.path, rel)} (topic {src.topic}), seq 1"}
+    return {}
 
 
 def session_labels(job: Job) -> dict[int, str]:
@@ -360,7 +375,7 @@ def _pair(job: Job) -> FileErrors:
     return evaluate_sessions(
         gts, {1: est}, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite,
         trial=trial, notes=notes + [str(w.message) for w in caught], groundtruth_spans=span,
-        release_groundtruth=gts.pop, quaternions=FORMATS[src.fmt].quaternions,
+        release_groundtruth=gts.pop, quaternions=FORMATS[src.fmt].quaternions, sources=sequence_sources(job) or None,
     )  # fmt: skip
 
 
