@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import copy
 import os
+import warnings
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -22,7 +24,7 @@ import pandas as pd
 from lorisnb.core.metrics.relations import STATISTICS
 from lorisnb.core.spec import validate
 from lorisnb.core.spec.evalspec import EvalSpec, make_spec
-from lorisnb.errors import EvaluationError, ValidationError
+from lorisnb.errors import EvaluationError, LorisError, LorisWarning, ValidationError
 from lorisnb.io.readers.plain import TRAJECTORY_FORMATS
 from lorisnb.tools._extras import require
 from lorisnb.tools.peers.crosscheck_reading import crosscheck_reading, evo_read
@@ -32,23 +34,99 @@ from lorisnb.tools.peers.evo_bridge import CROSSCHECK_COLUMNS, NO_RPE_PAIR, agre
 _EVO_UNITS = {"f": "frames", "frames": "frames", "m": "meters", "deg": "degrees", "rad": "radians"}
 
 
-def evo_lacks(spec: EvalSpec) -> list[str]:
+def evo_lacks(spec: EvalSpec, pairs_identical: bool = False) -> list[str]:
     """What of ``spec`` evo has no equivalent for, and what evo does instead (one phrase each; empty
-    for the ``evo`` preset and its options)."""
+    for the ``evo`` preset and its options). ``pairs_identical``: lorisnb and evo formed the same
+    pose pairs (:func:`identical_pairs`), so the association and the repeated rule, which decide only
+    which poses pair, explain nothing and are left out."""
     out = []
-    if spec.association == "nearest":
+    if pairs_identical:
+        pass
+    elif spec.association == "nearest":
         out.append(f"lorisnb pairs stamps by TUM's greedy one-to-one rule within {spec.max_diff:g} s (association "
                    "nearest), evo each pose of the shorter trajectory with its nearest stamp (evo-nearest)")  # fmt: skip
     elif spec.association == "interpolate":
         out.append(f"lorisnb interpolates the ground truth at each estimate stamp within {spec.max_gap:g} s "
                    f"(association interpolate), evo pairs nearest stamps within {spec.max_diff:g} s")  # fmt: skip
-    if spec.repeated == "drop":
+    if spec.repeated == "drop" and not pairs_identical:
         out.append("lorisnb drops poses repeating the previous one or its stamp (repeated drop), evo keeps all")
     if spec.align == "posyaw":
         out.append("lorisnb aligns position and yaw (posyaw), which evo has not: evo's column is its SE(3) alignment")
     if spec.transform is not None:
         out.append("lorisnb moves the ground truth by the transform T_est_gt, evo reads it as it is")
     return out
+
+
+@dataclass(frozen=True)
+class EvoPairs:
+    """Pose pairs, one a row, as a side formed them: the ground truth's positions (interpolated where
+    the association interpolates), the estimate's positions, and the estimate's stamps (None where
+    evo read no stamps: KITTI files, paired by index)."""
+
+    gt_positions: np.ndarray
+    est_positions: np.ndarray
+    est_stamps: np.ndarray | None
+
+
+def lorisnb_pairs(
+    groundtruth: str | os.PathLike,
+    estimate: str | os.PathLike,
+    spec: EvalSpec,
+    fmt: str,
+    gt_fmt: str,
+    topic: str | None = None,
+    gt_topic: str | None = None,
+) -> tuple[EvoPairs, bool] | None:
+    """The pose pairs lorisnb's pipeline forms for the two files under ``spec`` (read by its readers,
+    by the spec's repeated rule; pose i with pose i for KITTI files without times, as ``lorisnb
+    evaluate`` pairs them; the spec's transform, downsampling, motion filter and time window, then
+    its association), and whether they were paired by index. None where they cannot be formed."""
+    from lorisnb.core.alignment.index_pairs import by_index, indexed
+    from lorisnb.core.conventions import evo_steps
+    from lorisnb.core.pipeline.steps import match, with_transform
+    from lorisnb.core.spec.evo import EVO_ASSOCIATIONS
+    from lorisnb.io.readers.plain import read_trajectory
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", LorisWarning)  # evaluate said them already
+            gt = read_trajectory(groundtruth, gt_fmt, topic=gt_topic, repeated=spec.repeated_for(gt_fmt))
+            est = read_trajectory(estimate, fmt, topic=topic, repeated=spec.repeated_for(fmt))
+        if indexed([gt, est]):  # KITTI files without times: pose i with pose i, on every preset
+            spec = by_index(spec)
+        gt, est = evo_steps.prepare(gt, with_transform(est, spec.transform), spec)
+        if spec.association in EVO_ASSOCIATIONS:
+            a, est = evo_steps.evo_match(gt, est, spec)
+        else:
+            a = match(gt, est, spec)
+    except LorisError:  # what evaluate refused (it said why): no pairs to compare
+        return None
+    k = a.est_index
+    return EvoPairs(np.asarray(a.gt_positions, float), est.positions[k], est.stamps[k]), spec.association == "index"
+
+
+def identical_pairs(ours: EvoPairs | None, theirs: EvoPairs | None, transformed: bool = False) -> bool:
+    """Whether lorisnb and evo paired the same poses: as many pairs, and (in the order of the
+    estimate's stamps, or by index where evo read no stamps) the same ground-truth positions (to
+    1e-9 m), estimate stamps (to 1 us) and estimate positions (unless ``transformed``: lorisnb moved
+    the estimate by a transform evo does not apply). Decided from the pairs formed, whatever the
+    options that formed them (lorisnb's association, a KITTI file's index)."""
+    if ours is None or theirs is None or len(ours.gt_positions) != len(theirs.gt_positions):
+        return False
+    a, b = ours, theirs
+    if b.est_stamps is not None:
+        if a.est_stamps is None:
+            return False
+        i, j = np.argsort(a.est_stamps, kind="stable"), np.argsort(b.est_stamps, kind="stable")
+        if not np.allclose(a.est_stamps[i], b.est_stamps[j], rtol=0.0, atol=1e-6):
+            return False
+        a = EvoPairs(a.gt_positions[i], a.est_positions[i], None)
+        b = EvoPairs(b.gt_positions[j], b.est_positions[j], None)
+
+    def same(x: np.ndarray, y: np.ndarray) -> bool:
+        return x.shape == y.shape and bool(np.allclose(x, y, rtol=1e-12, atol=1e-9))
+
+    return same(a.gt_positions, b.gt_positions) and (transformed or same(a.est_positions, b.est_positions))
 
 
 def evo_order(
@@ -81,7 +159,8 @@ def evo_order(
 def evo_statistics(ref, est, spec: EvalSpec, alignment: str | None = None) -> dict[str, Any]:
     """What evo computes for trajectories it read itself, under ``spec`` (its sync, alignment,
     projection, APE and RPE; evo's CLI order): ``matched``, ``rpe_pairs`` and ``{ate, aoe, rpe_trans,
-    rpe_rot}_{statistic}``; ``rpe_refused``: evo's reason when its RPE finds no pair (evo_rpe raises).
+    rpe_rot}_{statistic}``; ``pairs``: the poses evo paired (:class:`EvoPairs`); ``rpe_refused``:
+    evo's reason when its RPE finds no pair (evo_rpe raises).
     ``alignment``: the one to run (default ``spec.align``; ``auto`` must be resolved first, and
     ``posyaw``, which evo has not, runs as ``se3``). Where evo raises (a degenerate alignment, no
     pair in its sync, a NaN pose), ``failed`` maps the step that failed (``sync``: every value;
@@ -112,6 +191,11 @@ def evo_statistics(ref, est, spec: EvalSpec, alignment: str | None = None) -> di
                                                    sync_method=method)  # fmt: skip
         except fails as exc:  # no pair in evo's sync: nothing of evo's to compare
             return {"failed": {"sync": str(exc)}}
+    stamped = getattr(est, "timestamps", None) if isinstance(est, PoseTrajectory3D) else None
+    pairs = EvoPairs(
+        np.array(ref.positions_xyz, float), np.array(est.positions_xyz, float),
+        None if stamped is None else np.array(stamped, float),
+    )  # fmt: skip
     how = {"posyaw": "se3"}.get(alignment or spec.align, alignment or spec.align)
     if how == "auto":
         raise ValidationError("align 'auto': resolve it for the algorithm first (EvalSpec.alignment_for)")
@@ -120,7 +204,7 @@ def evo_statistics(ref, est, spec: EvalSpec, alignment: str | None = None) -> di
         align_origin=how == "origin", n_to_align=spec.align_frames or -1,
         project_to_plane=Plane(spec.project_to_plane) if spec.project_to_plane else None,
     )  # fmt: skip
-    out: dict[str, Any] = {"matched": ref.num_poses}
+    out: dict[str, Any] = {"matched": ref.num_poses, "pairs": pairs}
     failed: dict[str, str] = {}
     c = copy.deepcopy
     try:
@@ -268,7 +352,19 @@ def crosscheck_evo(
     ref, est = evo_read(groundtruth, gt_fmt, gt_topic), evo_read(estimate, fmt, topic)
     theirs = evo_statistics(ref, est, the_spec, how)
     failed: dict[str, str] = theirs.pop("failed", {})
+    formed = lorisnb_pairs(groundtruth, estimate, the_spec, fmt, gt_fmt, topic, gt_topic)
+    identical = formed is not None and identical_pairs(formed[0], theirs.pop("pairs", None),
+                                                       the_spec.transform is not None)  # fmt: skip
+    theirs.pop("pairs", None)
     lacks = evo_lacks(the_spec)
+    pairs_note = ""
+    identical = identical and evo_lacks(the_spec, True) != lacks  # (evo's own association: nothing to say)
+    if identical and formed is not None:  # the association and the repeated rule changed nothing: judged by value
+        n_formed = len(formed[0].gt_positions)
+        sync = "interpolating sync" if the_spec.association == "evo-interpolate" else "nearest-stamp sync"
+        pairs_note = "identical pairs (" + ("by index" if formed[1] else
+                                            f"association {the_spec.association} and evo's {sync} pair the same "
+                                            f"{n_formed} poses") + ")"  # fmt: skip
     nan_poses = non_finite_poses(ref, est, groundtruth, estimate)
     if failed and (nan_poses or not lacks):  # not a definition evo lacks: evo cannot evaluate what lorisnb did
         raise EvaluationError(
@@ -282,8 +378,10 @@ def crosscheck_evo(
         bridged = evo_on_pairs(sequences[0], the_spec, how) if len(sequences) == 1 else {}
 
     def note_of(rpe: bool) -> str:
-        why = lacks + ([order] if order and (rpe or all_rows) else [])
-        return (f"{DEFINITIONS_DIFFER}: {'; '.join(why)}" if why else
+        why = evo_lacks(the_spec, identical) + ([order] if order and (rpe or all_rows) else [])
+        on = f"; {pairs_note}" if pairs_note else ""
+        return (f"{DEFINITIONS_DIFFER}: {'; '.join(why)}{on}" if why else
+                (f"{pairs_note}: " if pairs_note else "") +
                 f"lorisnb (preset {the_spec.preset_name}, align {shown}) against evo reading the files itself")  # fmt: skip
 
     def judged(row: dict[str, Any], step: str | None = None) -> dict[str, Any]:

@@ -84,11 +84,44 @@ def _rotations_deg(q_ours: np.ndarray, evo_traj) -> np.ndarray:
     return np.degrees((Rotation.from_quat(q_ours).inv() * theirs).magnitude())
 
 
+#: The rotation block's entries in a KITTI row of 12 numbers (row-major 3x4 ``[R | t]``).
+_BLOCK = (0, 1, 2, 4, 5, 6, 8, 9, 10)
+
+
+def written_digits(path: str | os.PathLike) -> int | None:
+    """The most significant digits a KITTI file writes a rotation block's entry with (``9.999999e-01``,
+    ``0.1234567``: 7; leading zeros and the exponent not counted), or None where no entry is written
+    with a fractional digit. The most of any entry: writers that drop trailing zeros write fewer."""
+    best = 0
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for line in f:
+            tokens = line.split()
+            if len(tokens) != 12:
+                continue
+            for k in _BLOCK:
+                mantissa = tokens[k].lower().split("e")[0].lstrip("+-")
+                if "." not in mantissa:
+                    continue
+                digits = mantissa.replace(".", "").lstrip("0")
+                best = max(best, len(digits) if digits.isdigit() else 0)
+    return best or None
+
+
+def rounding_tolerance_deg(digits: int) -> float:
+    """The largest angle (degrees) between two readings of one rotation block written with ``digits``
+    significant digits, each reading turning the rounded block into a rotation its own way: each entry
+    (at most 1 in size) is within h = 0.5e-(digits-1) of the true one, so the block within 3h
+    (Frobenius), and each reading's rotation within 3h rad of the true rotation: 6h rad apart at most
+    (7 digits: 1.7e-4 deg)."""
+    return float(np.degrees(6 * 0.5 * 10.0 ** (1 - digits)))
+
+
 def crosscheck_reading(path: str | os.PathLike, fmt: str = "tum", topic: str | None = None) -> pd.DataFrame:
     """One file read by lorisnb and by evo (see the module docstring): rows ``poses`` (lorisnb's
     default against evo), ``poses (repeated kept)``, ``stamps``, ``positions`` (metres) and
     ``orientations`` (degrees) as the largest difference between lorisnb keeping repeated stamps
-    and evo, and for KITTI ``rotation block`` (evo uses the printed 3x3 block as it is)."""
+    and evo, and for KITTI ``rotation block`` (evo uses the printed 3x3 block as it is); a KITTI
+    file's ``orientations`` agree within the rounding of its written digits (:func:`rounding_tolerance_deg`)."""
     ours = _lorisnb_read(path, fmt, "drop", topic)
     kept = _lorisnb_read(path, fmt, "keep", topic)
     try:
@@ -116,8 +149,18 @@ def crosscheck_reading(path: str | os.PathLike, fmt: str = "tum", topic: str | N
     d = float(np.max(np.abs(kept.positions - theirs.positions_xyz))) if n_evo else 0.0
     rows.append(agreement_row("positions", "none", d, 0.0, n_evo, "largest difference, metres"))
     ang = _rotations_deg(kept.quaternions, theirs) if n_evo else np.zeros(0)
-    rows.append(agreement_row("orientations", "none", float(ang.max(initial=0.0)), 0.0, n_evo,
-                              "largest angle between the two readings' rotations, degrees"))  # fmt: skip
+    digits = written_digits(path) if fmt == "kitti" else None
+    if digits is None:
+        rows.append(agreement_row("orientations", "none", float(ang.max(initial=0.0)), 0.0, n_evo,
+                                  "largest angle between the two readings' rotations, degrees"))  # fmt: skip
+    else:  # the blocks are rounded: each reading makes its rotation of the rounded block its own way
+        tol = rounding_tolerance_deg(digits)
+        rows.append(agreement_row(
+            "orientations", "none", float(ang.max(initial=0.0)), 0.0, n_evo,
+            f"largest angle between the two readings' rotations, degrees; agrees within {tol:.2g} deg, the "
+            f"rounding of the rotation blocks' {digits} written significant digits",
+            tol=tol,
+        ))  # fmt: skip
     if fmt == "kitti" and n_evo:
         mats = np.array(theirs.poses_se3)[:, :3, :3]
         ortho = float(np.abs(np.einsum("nij,nkj->nik", mats, mats) - np.eye(3)).max())
