@@ -13,11 +13,15 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import datetime as _dt
+import errno
 import functools
 import hashlib
 import json
 import os
+import re
 import shutil
+import socket
+import stat
 import sys
 import tempfile
 import warnings
@@ -30,6 +34,7 @@ from lorisnb.core.spec import validate
 from lorisnb.errors import DataNotFoundError, LorisError, LorisWarning, OutputError, ParseError, ValidationError
 from lorisnb.io.datasets.paths import find_data
 from lorisnb.io.writers import name_output, naming, overlap, remove_partial, write_csv, write_text
+from lorisnb.tools.decisions.escape import clean
 from lorisnb.tools.decisions.history import earlier_runs
 from lorisnb.tools.evaluation.pool import start_context
 from lorisnb.tools.evaluation.runner import check_filters, result_files
@@ -214,12 +219,13 @@ def _lists_its_files(run_dir: Path) -> bool:
     return isinstance(record, dict) and "roots" in record
 
 
-def _against_marker(run_dir: Path) -> _AsWritten | None:
+def _against_marker(run_dir: Path, ignore: Iterable[str] = ()) -> _AsWritten | None:
     """The run folder ``run_dir`` against its marker (:class:`_AsWritten`); None where the marker
     lists nothing and the run may be one of an earlier lorisnb (no run.json saying otherwise:
     :func:`_lists_its_files`). A marker missing, or listing nothing, beside a run.json of a lorisnb
     that always writes one listing the run's files is damage (a marker removed hid every hand edit),
-    not an earlier run."""
+    not an earlier run. ``ignore``: files of the folder (paths inside it) that are none of the run's
+    and not counted as added (render's own lock, :data:`RENDER_LOCK`, while it holds it)."""
     from lorisnb.tools.report.provenance import load_json
 
     marker = run_dir / RUN_MARKER
@@ -243,6 +249,8 @@ def _against_marker(run_dir: Path) -> _AsWritten | None:
                                       "Nothing outside the run was read: copy the run again from where it came, or "
                                       "make it again with lorisnb report")  # fmt: skip
         here = _files(run_dir)
+        for rel in ignore:
+            here.pop(rel, None)
         foreign = sorted(rel for rel, digest in here.items() if wrote.get(rel) != digest)
         missing = sorted(rel for rel in wrote if rel not in here and rel != RUN_MARKER)
         return _AsWritten(foreign, missing)
@@ -273,15 +281,17 @@ def missing_run_files(run_dir: Path) -> list[str]:
     return sorted({*found.missing, *([RUN_MARKER] if found.marker == "missing" else [])})
 
 
-def _not_written(run_dir: Path, instead: str = "choose another --out", render: bool = False) -> str | None:
+def _not_written(run_dir: Path, instead: str = "choose another --out", render: bool = False,
+                 ignore: Iterable[str] = ()) -> str | None:  # fmt: skip
     """Why ``--force`` may not replace the run folder ``run_dir`` (or render may not write into it):
     it holds a file its run did not write (added or changed since, as its marker lists them), or its
     marker lists nothing; else None. ``instead``: what else the user can do, ending the message.
     ``render``: the advice is render's (its pages are made from index.html and the notebooks, which
     cannot be moved out; a run whose marker lists nothing cannot be rendered, only made again; a
     run missing a file it wrote other than a page render writes again is not rendered either: the
-    marker render writes would no longer list it, and verify would not see it is gone)."""
-    found = _against_marker(run_dir)
+    marker render writes would no longer list it, and verify would not see it is gone). ``ignore``:
+    as :func:`_against_marker`'s."""
+    found = _against_marker(run_dir, ignore)
     if found is None or found.marker is not None:
         if render:
             return (f"its {RUN_MARKER} marker does not list the files its run wrote (a run of an earlier lorisnb, or "
@@ -651,13 +661,29 @@ def run_report(
         return final, runs
 
 
+#: The lock a render holds on its run folder while it writes (created by that render, with its pid
+#: and host, and removed by it alone): a second render of the run is refused, the first's staged pages
+#: untouched (:func:`render_run`).
+RENDER_LOCK = ".lorisnb-render.lock"
+
+#: What says the run folder's name on ``index.html`` (:func:`~lorisnb.tools.report.index.write_index`):
+#: its name, and where another run took the name asked for, which one that was.
+_RUN_FOLDER = re.compile(r"Run folder <code>([^<]*)</code>( \(<code>[^<]*</code> appeared while this report ran, "
+                         r"another run's: this run is <code>[^<]*</code>\))?, written ")  # fmt: skip
+
+
 def render_run(run: str | os.PathLike[str]) -> list[Path]:
     """Render a run folder's pages again from its own files (wherever it was copied to): each
     notebook's HTML page from the notebook executed into it, then ``report.html`` from
-    ``index.html``; returns the pages written. Reads nothing outside the run folder. Only a run
+    ``index.html``, which names the run folder as it is named now (a run renamed or copied under
+    another name); returns the pages written. Reads nothing outside the run folder. Only a run
     folder lorisnb wrote is rendered, and only if its pages are as its run wrote them (an edited
-    page is kept, and the run refused, naming it)."""
+    page is kept, and the run refused, naming it). One render at a time writes into a run
+    (:data:`RENDER_LOCK`): another is refused, saying so. The pages and the marker listing them are
+    all written beside their places, then moved there; a move that fails puts back the pages
+    already replaced, so a run is rendered whole or left as it was."""
     from lorisnb.tools.report.html import export_html
+    from lorisnb.tools.report.index import esc
 
     folder = Path(run)
     for f in (RUN_MARKER, "index.html"):  # a link leading out, a FIFO or a device: refused, never opened
@@ -679,45 +705,186 @@ def render_run(run: str | os.PathLike[str]) -> list[Path]:
         raise LorisError(f"{folder} will not be rendered again: it holds {len(out)} link(s) leading outside it "
                          f"({shown}); a run folder lorisnb writes holds none. Nothing was read or written: replace "
                          "each link by its file, if you trust it")  # fmt: skip
-    if (folder / "run.json").is_file():  # a damaged one (not JSON, a key twice, a value no run writes) is refused,
-        from lorisnb.tools.report.provenance import read_run_json  # never rendered from
-
-        read_run_json(folder)
-    why = _not_written(folder, "render a copy of the run without them", render=True)
-    if why:
-        raise LorisError(f"{folder} will not be rendered again: {why}")
-    css = f"../{NOTEBOOK_CSS}" if (folder / NOTEBOOK_CSS).is_file() else None
     notebooks = [nb for nb in sorted(folder.glob("*/*.ipynb")) if nb.parent.name == nb.stem]
-    for nb in notebooks:  # each read first: a damaged one refused, naming it, before any page is written
-        _readable_notebook(nb)
-    # every page and the marker listing them first written beside their places, then all moved there: a full
-    # disk leaves the run as it was (no page cut short, none the marker does not list), renderable once freed
-    writes: list[tuple[Path, Callable[[Path], Path]]] = [
-        (nb.with_suffix(".html"), functools.partial(export_html, nb, css)) for nb in notebooks
-    ]
-    writes.append((folder / "report.html", functools.partial(single_file, folder / "index.html")))
-    staged: list[tuple[Path, Path]] = []
-    marker = folder / f".{RUN_MARKER}.tmp-{os.getpid()}"
-    try:
-        for page, write in writes:
-            tmp = page.with_name(f".{page.name}.tmp-{os.getpid()}")
-            staged.append((tmp, page))
-            with naming(page):
-                write(tmp)
-        files = _files(folder)
-        for tmp, page in staged:
-            files.pop(tmp.relative_to(folder).as_posix(), None)
-            files[page.relative_to(folder).as_posix()] = sha256(tmp)
-        with naming(folder / RUN_MARKER):
-            _write_marker(folder, files, out=marker)
-        for tmp, page in staged:
-            os.replace(tmp, page)
-        os.replace(marker, folder / RUN_MARKER)
-    finally:
-        for tmp, _ in staged:
-            tmp.unlink(missing_ok=True)
-        marker.unlink(missing_ok=True)
+    _writable_run(folder, [folder, *(nb.parent for nb in notebooks)])
+    with _render_lock(folder):
+        if (folder / "run.json").is_file():  # a damaged one (not JSON, a key twice, a value no run writes) is
+            from lorisnb.tools.report.provenance import read_run_json  # refused, never rendered from
+
+            read_run_json(folder)
+        why = _not_written(folder, "render a copy of the run without them", render=True, ignore=[RENDER_LOCK])
+        if why:
+            raise LorisError(f"{folder} will not be rendered again: {why}")
+        for nb in notebooks:  # each read first: a damaged one refused, naming it, before any page is written
+            _readable_notebook(nb)
+        css = f"../{NOTEBOOK_CSS}" if (folder / NOTEBOOK_CSS).is_file() else None
+        pid = os.getpid()
+        writes: list[tuple[Path, Callable[[Path], Any]]] = [
+            (nb.with_suffix(".html"), functools.partial(export_html, nb, css)) for nb in notebooks
+        ]
+        index = folder / "index.html"
+        text = index.read_text(encoding="utf-8")
+        named = _RUN_FOLDER.search(text)  # the run's name as the page states it: its folder's now (a note that
+        now = esc(os.path.basename(os.path.abspath(folder)))  # another run took the name asked for: moot once renamed)
+        if named and named.group(1) != now:
+            text = text[: named.start()] + f"Run folder <code>{now}</code>, written " + text[named.end() :]
+            writes.append((index, functools.partial(_write_page, text)))
+            index = index.with_name(f".{index.name}.tmp-{pid}")  # report.html from the page as it will be
+        writes.append((folder / "report.html", functools.partial(single_file, index)))
+        for page, _ in writes:  # every place a page goes, before any is written: one that is no file is kept
+            _replaceable(folder, page)
+        _replaceable(folder, folder / RUN_MARKER)
+        # every page and the marker listing them first written beside their places, then all moved there: a full
+        # disk leaves the run as it was (no page cut short, none the marker does not list), renderable once freed
+        staged: list[tuple[Path, Path]] = []
+        marker = folder / f".{RUN_MARKER}.tmp-{pid}"
+        try:
+            for page, write in writes:
+                tmp = page.with_name(f".{page.name}.tmp-{pid}")
+                staged.append((tmp, page))
+                with naming(page):
+                    write(tmp)
+            files = _files(folder)
+            files.pop(RENDER_LOCK, None)
+            for tmp, page in staged:
+                files.pop(tmp.relative_to(folder).as_posix(), None)
+                files[page.relative_to(folder).as_posix()] = sha256(tmp)
+            with naming(folder / RUN_MARKER):
+                _write_marker(folder, files, out=marker)
+            _move_all([*staged, (marker, folder / RUN_MARKER)], folder)
+        finally:
+            for tmp, _ in staged:
+                tmp.unlink(missing_ok=True)
+            marker.unlink(missing_ok=True)
     return [page for page, _ in writes]
+
+
+def _write_page(text: str, out: Path) -> None:
+    """``text`` into ``out`` (a page render writes: ``index.html`` naming the run as it is named now)."""
+    out.write_text(text, encoding="utf-8")
+
+
+def _writable_run(folder: Path, places: Iterable[Path]) -> None:
+    """An :class:`~lorisnb.errors.OutputError` if render cannot write into one of ``places`` (the run
+    folder, a notebook's folder): on a read-only disk, or not yours to write. Said before anything is
+    written, with what to do (render a copy in a writable place)."""
+    for place in places:
+        if not os.access(place, os.W_OK | os.X_OK):
+            raise OutputError(_unwritable(folder, place, "not writable"))
+
+
+def _unwritable(folder: Path, place: Path, why: str) -> str:
+    where = "" if place == folder else f" ({place}: {why})"
+    shown = f"the run folder is {why}" if place == folder else "the run folder cannot be written"
+    return (f"{folder} will not be rendered again: {shown}{where}, and render writes the run's pages into it. "
+            f"Nothing was written: render a copy of it in a writable place (cp -r {folder} COPY && lorisnb render "
+            "COPY)")  # fmt: skip
+
+
+def _replaceable(folder: Path, page: Path) -> None:
+    """An :class:`~lorisnb.errors.OutputError` naming ``page`` if it is there but is no regular file (a
+    folder, a link, a FIFO): render replaces only a page the run wrote, and says so before writing any."""
+    try:
+        mode = os.lstat(page).st_mode
+    except FileNotFoundError:
+        return
+    if stat.S_ISREG(mode):
+        return
+    what = ("a folder" if stat.S_ISDIR(mode) else "a link" if stat.S_ISLNK(mode)
+            else "not a regular file (a FIFO, a device)")  # fmt: skip
+    raise OutputError(f"{page}: {what}, where render writes the run's {page.name}; {folder} will not be rendered "
+                      "again, nothing was written: move it out of the run, then render again")  # fmt: skip
+
+
+def _move_all(moves: list[tuple[Path, Path]], folder: Path) -> None:
+    """Each staged file (``tmp``) moved to its place, the file there kept aside until every move is done:
+    if one fails, the pages already replaced are put back (the run as it was) and the error names the
+    place, not the staged file. Where a page cannot be put back, the error says where it was kept."""
+    pid = os.getpid()
+    done: list[tuple[Path, Path | None, list[bool]]] = []  # (place, its file kept aside or None, [moved there])
+    try:
+        for tmp, place in moves:
+            with naming(place):
+                old = place.with_name(f".{place.name}.old-{pid}") if os.path.lexists(place) else None
+                if old is not None:
+                    os.replace(place, old)
+                done.append((place, old, [False]))
+                os.replace(tmp, place)
+                done[-1][2][0] = True
+    except BaseException as exc:
+        kept = []
+        for place, old, moved in reversed(done):
+            try:
+                if old is not None:
+                    os.replace(old, place)
+                elif moved[0]:
+                    place.unlink()
+            except OSError:
+                kept.append(f"{old} (the run's {place.relative_to(folder)})" if old else str(place))
+        if kept:
+            why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc) or type(exc).__name__
+            raise OutputError(f"{folder} is rendered in part: moving its pages into place failed ({why}) and these "
+                              f"could not be put back: {', '.join(kept)}; move each back to its place (a new page: "
+                              "remove it), then render again") from exc  # fmt: skip
+        raise
+    for _, old, _ in done:
+        if old is not None:
+            old.unlink(missing_ok=True)
+
+
+@contextlib.contextmanager
+def _render_lock(folder: Path) -> Iterator[None]:
+    """Hold :data:`RENDER_LOCK` in ``folder`` while rendering it: created here (never over another's),
+    removed at the end only if it is still the file created here. One there already is another
+    render's: refused, saying whether it is at work (its pid alive on this host) or stopped (its lock
+    left; said, not removed, as it may be another host's)."""
+    lock = folder / RENDER_LOCK
+    host = socket.gethostname()
+    try:
+        fd = os.open(lock, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+    except FileExistsError:
+        raise OutputError(_locked(folder, lock, host)) from None
+    except OSError as exc:
+        if exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
+            raise OutputError(_unwritable(folder, folder, exc.strerror or "not writable")) from None
+        raise
+    try:
+        mine = os.fstat(fd)
+        try:
+            os.write(fd, json.dumps({"pid": os.getpid(), "host": host}).encode())
+        finally:
+            os.close(fd)
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            now = os.lstat(lock)
+            if (now.st_dev, now.st_ino) == (mine.st_dev, mine.st_ino):
+                lock.unlink()
+
+
+def _locked(folder: Path, lock: Path, host: str) -> str:
+    """What render says of a run whose lock (``lock``) another render holds or left."""
+    try:
+        held = json.loads(lock.read_bytes()[:4096]) if lock.is_file() and not lock.is_symlink() else None
+        pid, where = (int(held["pid"]), str(held["host"])) if isinstance(held, dict) else (0, "")
+    except (OSError, ValueError, KeyError, TypeError):
+        pid, where = 0, ""
+    if pid > 0 and where == host:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return (f"{folder} will not be rendered now: a render (pid {pid}) that is no longer running left its lock "
+                    f"{lock} (it was stopped before it could remove it). If no render is at work on the run, remove "
+                    "the lock and any file of that render it still holds (named .NAME.tmp-"
+                    f"{pid}), then render again")  # fmt: skip
+        except OSError:
+            pass  # another user's process: alive
+        return (f"{folder} will not be rendered now: another render (pid {pid}) is at work on it; nothing was "
+                "touched: wait for it to end, then render again")  # fmt: skip
+    who = f"a render on {clean(where)} (pid {pid})" if pid > 0 and where else "another render"
+    return (f"{folder} will not be rendered now: {who} holds its lock {lock}; nothing was touched: wait for it to "
+            "end, then render again. If no render is at work on the run (one was stopped), remove the lock, then "
+            "render again")  # fmt: skip
 
 
 def _record_output_path(nb: Path, final: Path) -> None:
