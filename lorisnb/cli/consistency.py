@@ -15,9 +15,13 @@ from lorisnb.cli.outputs import check_outputs
 from lorisnb.cli.text import clean, format_advice, say
 from lorisnb.errors import EvaluationError, LorisWarning, ParseError
 
+#: How the note on an estimate's repeated stamps ends: ov_eval's rule differs from the one pose a stamp kept.
+OV_EVAL_REPEATED = "ov_eval keeps every row (docs/guide/consistency.md)"
+
 
 def cmd_consistency(args: argparse.Namespace) -> int:
     from lorisnb.core.metrics.consistency import ov_eval_errors
+    from lorisnb.io.parsing.scanner import repeated_peer_clause
     from lorisnb.io.readers.covariance import read_covariances, read_ov_groundtruth
     from lorisnb.io.readers.plain import read_trajectory
     from lorisnb.io.writers import write_csv
@@ -40,7 +44,9 @@ def cmd_consistency(args: argparse.Namespace) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", LorisWarning)
-            est, cov = read_covariances(args.est, args.topic, required=False)
+            # of a repeated stamp one pose is kept, where ov_eval keeps every row: the note says so, not a peer's rule
+            with repeated_peer_clause(f"; {OV_EVAL_REPEATED}"):
+                est, cov = read_covariances(args.est, args.topic, required=False)
             # every row in file order, as ov_eval reads it: of a repeated stamp its association takes the first
             gt = (
                 read_ov_groundtruth(args.gt)

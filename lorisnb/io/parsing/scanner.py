@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import os
 import stat
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, BinaryIO
 
@@ -23,6 +26,26 @@ if TYPE_CHECKING:
 
 #: Rules for poses of a repeated stamp: keep the last (the official tool's), or every one (evo's).
 REPEATED = ("drop", "keep")
+
+#: Who else keeps the last pose of a repeated stamp, as the note of ``repeated="drop"`` ends: the
+#: OpenLORIS tool and TUM's associate.py (a dict keyed by stamp), whose rule the kitti and tartanair
+#: conventions follow too. A command whose peer reads repeated stamps otherwise says so instead
+#: (:func:`repeated_peer_clause`).
+DROP_PEERS = ", as the OpenLORIS tool and TUM's associate.py do"
+_drop_peers: ContextVar[str] = ContextVar("drop_peers", default=DROP_PEERS)
+
+
+@contextmanager
+def repeated_peer_clause(clause: str) -> Iterator[None]:
+    """Within the block, the note on a repeated stamp's dropped poses ends with ``clause`` (its
+    separator included, e.g. ``"; ov_eval keeps every row"``) in place of :data:`DROP_PEERS`: the
+    command that reads the file names its own peer's rule (the readers know no command)."""
+    token = _drop_peers.set(clause)
+    try:
+        yield
+    finally:
+        _drop_peers.reset(token)
+
 
 WHITESPACE = np.zeros(256, dtype=bool)
 WHITESPACE[[9, 10, 11, 12, 13, 32]] = True
@@ -260,11 +283,13 @@ def finish(
         rule = (
             "kept every pose of a repeated stamp in file order (repeated='keep')"
             if keep_all
-            else "kept the last pose of each repeated stamp, as the official tool does"
+            else f"kept the last pose of each repeated stamp{_drop_peers.get()}"
         )
+        # sorted only if a stamp goes backwards (with "keep" every one here does; with "drop" some may only repeat)
+        sorted_ = "sorted them and " if keep_all or (stamps[back + 1] < stamps[back]).any() else ""
         notes.append(
             f"{path}{label}: timestamps are not increasing ({len(back)} times; first at line "
-            f"{lines[i]}: {stamps[i]:.9f} {kind} after {stamps[i - 1]:.9f}); sorted them and {rule}"
+            f"{lines[i]}: {stamps[i]:.9f} {kind} after {stamps[i - 1]:.9f}); {sorted_}{rule}"
         )
         order = np.argsort(stamps, kind="stable")
         s = stamps[order]
