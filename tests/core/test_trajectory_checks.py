@@ -42,6 +42,18 @@ def test_shuffled_rows_are_sorted_with_a_warning_and_score_as_read(fr1):
     assert sorted_rows["matched"] == 788 and 0.88 < sorted_rows["cr"] < 0.89
 
 
+def test_only_repeated_stamps_are_not_said_to_be_sorted(fr1):
+    """Rows in order with one stamp repeated: the last pose of it kept, and nothing said sorted."""
+    _, est = fr1
+    s, p, q = est.stamps.copy(), est.positions, est.quaternions
+    s[101] = s[100]
+    with pytest.warns(LorisWarning, match="stamps are not increasing") as said:
+        t = ln.Trajectory(s, p, q)
+    text = str(said[0].message)
+    assert " repeats after " in text and "sorted them" not in text
+    assert len(t) == len(est) - 1 and np.array_equal(t.positions[100], p[101])
+
+
 def test_unsorted_groundtruth_is_sorted_not_reported_as_gaps(fr1):
     gt, est = fr1
     with pytest.warns(LorisWarning, match="not increasing"):

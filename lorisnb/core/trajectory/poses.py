@@ -377,9 +377,10 @@ def checked_arrays(
         back = np.flatnonzero(s[1:] <= s[:-1])
         i = int(back[0]) + 1
         kind = "repeats" if s[i] == s[i - 1] else "goes backwards"
+        sorted_ = "sorted them and " if (s[1:] < s[:-1]).any() else ""  # only repeats: nothing was sorted
         warnings.warn(
             f"Trajectory: stamps are not increasing ({back.size} times; first at index {i}: {s[i]:.9f} {kind} "
-            f"after {s[i - 1]:.9f}); sorted them and kept the last pose of each repeated stamp, as the file "
+            f"after {s[i - 1]:.9f}); {sorted_}kept the last pose of each repeated stamp, as the file "
             "readers do. Pass the poses sorted by stamp to avoid this",
             LorisWarning,
             stacklevel=4,
