@@ -34,13 +34,19 @@ import pandas as pd
 
 from lorisnb.core.metrics.openloris import RATES
 from lorisnb.core.spec import validate
-from lorisnb.core.spec.evalspec import ALIASES, PRESETS, SPEC_NAMES, EvalSpec, make_spec
+from lorisnb.core.spec.evalspec import PRESETS, EvalSpec
 from lorisnb.core.stats.inference import WEIGHTS as STATS_WEIGHTS
 from lorisnb.core.stats.inference import with_trials
 from lorisnb.core.stats.regression import METRICS
 from lorisnb.errors import DataNotFoundError, ParseError, ValidationError
 from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV
-from lorisnb.tools.report.provenance import RUN_JSON, read_run_json, run_file
+from lorisnb.tools.report.provenance import (  # created_of: history reads it from here
+    RUN_JSON,
+    created_of,
+    read_run_json,
+    run_file,
+    spec_problem,
+)
 
 #: Columns a per-sequence table must have to be read as one.
 REQUIRED = ["algorithm", "scene", "seq", "cr", "eps", "phi", "delta", "tau"]
@@ -52,9 +58,6 @@ SPEC_COLUMNS = ["eps", "phi", "delta", "tau", "official_interpolation", "spec"]
 KEYS = ["suite", "algorithm", "scene", "seq", "trial"]
 #: The report's own per-sequence table, read first (evaluated at run.json's spec).
 FIRST_TABLE = "findings/sequences.csv"
-#: Keys of a recorded spec checked by the spec's rules (:func:`check_spec_values`): the fields of an
-#: evaluation spec (its spellings for the command line, such as ``scale``, left out).
-SPEC_FIELDS = SPEC_NAMES - set(ALIASES)
 #: Keys of run.json's ``spec.values`` that do not change a per-sequence number: the results folder
 #: (``source``), the leaderboard's test settings and its selection of rows.
 NOT_NUMBERS = frozenset({"source", "metric", "alpha", "level", "seed", "algorithms", "scenes"})
@@ -568,9 +571,8 @@ def load_run(path: str | os.PathLike[str]) -> Run:
     if not p.exists():
         raise DataNotFoundError(f"{p}: no such file or folder")
     if is_report_run(p):
-        meta = read_run_json(p)
+        meta = read_run_json(p)  # its spec values and time checked there, as for verify and render
         created, source = created_of(meta, p / RUN_JSON), "run.json"
-        check_spec_values(meta.get("spec"), p / RUN_JSON)
         if created is None:
             created, source = modified(p / RUN_JSON), "modification time of run.json"
         notes: list[str] = []
@@ -699,49 +701,6 @@ def unscored_inputs(run_dir: Path) -> dict[str, str]:
         raise ParseError(f, None, "expected the columns file, status, error (the report's own table)")
     bad = t[t["status"].isin(NOT_SCORED).to_numpy()]
     return dict(zip(bad["file"], bad["error"], strict=True))
-
-
-def created_of(meta: dict[str, Any], file: Path) -> datetime | None:
-    """run.json's ``created``: None where it is null (the run is then ordered by the file's time),
-    else an ISO 8601 time (UTC where it names no zone); any other text is a damaged run.json,
-    refused naming the file and the key as its other keys are."""
-    value = meta.get("created")
-    if value is None:
-        return None
-    try:
-        t = datetime.fromisoformat(str(value).replace("Z", "+00:00"))
-    except ValueError:
-        raise ParseError(file, None, f'"created" is {json.dumps(value)}; expected an ISO 8601 time as lorisnb '
-                         "report writes it (2026-02-01T03:00:00+00:00) or null; a damaged or edited run.json?") from None  # fmt: skip
-    return t if t.tzinfo else t.replace(tzinfo=timezone.utc)
-
-
-def check_spec_values(spec: Any, file: Path) -> None:
-    """run.json's ``spec`` (read from ``file``) checked by :func:`spec_problem`: a value no spec has
-    is a damaged run.json, refused with a :class:`~lorisnb.errors.ParseError` naming the file and
-    the key, never reported as two specs that differ."""
-    problem = spec_problem(spec)
-    if problem:
-        raise ParseError(file, None, f'"spec" values: {problem}; no run lorisnb makes has it (a damaged or edited '
-                         "run.json?): make the run again")  # fmt: skip
-
-
-def spec_problem(spec: Any) -> str | None:
-    """What is wrong with the values of a recorded evaluation spec (run.json's ``spec``, or its
-    ``values``, a table's ``spec`` cell) by the spec's own rules
-    (:func:`lorisnb.core.spec.evalspec.make_spec`: an eps of NaN or -1 is no spec's), naming the
-    key; None when nothing is. Keys this lorisnb does not know (a run of another version) are left
-    to the comparison, which names them."""
-    values = spec.get("values", spec) if isinstance(spec, dict) else None
-    if not isinstance(values, dict):
-        return None
-    preset = values.get("preset")
-    known = {k: v for k, v in values.items() if k in SPEC_FIELDS}
-    try:
-        make_spec(preset if isinstance(preset, str) and preset in PRESETS else None, **known)
-    except ValidationError as exc:
-        return str(exc)
-    return None
 
 
 def modified(p: Path) -> datetime:

@@ -92,6 +92,68 @@ def resolve_key(key: str, roots: Mapping[str, Path]) -> Path | None:
     return p
 
 
+#: ``lorisnb report``'s options naming a root (``--data DIR``, ``--results DIR``, ``--notebooks-dir DIR``,
+#: ``--baseline DIR``), and the parameters that do (``-p NAME VALUE``): recorded by the root's name
+#: (:func:`command_by_root`).
+ROOT_OPTIONS = ("--data", "--results", "--notebooks-dir", "--baseline")
+ROOT_PARAMETERS = ("data_root", "results_dir", "notebooks_dir", "manifest", *PATH_PARAMETERS)
+#: Options that are also the beginning of a root's option, not an abbreviation of it (argparse takes
+#: an option by any unambiguous beginning: ``--res`` is ``--results``, ``--notebooks`` is itself).
+_NOT_ROOT_OPTIONS = ("--notebooks",)
+_PARAMETER_OPTIONS = ("-p", "--parameter")
+
+
+def _is_option(token: str, options: Iterable[str]) -> bool:
+    """Whether ``token`` is one of ``options``, spelled whole or by a beginning of it as argparse
+    takes one (``--res`` for ``--results``; ``--notebooks`` is an option of its own)."""
+    return token in options or (
+        token.startswith("--")
+        and len(token) > 2
+        and token not in _NOT_ROOT_OPTIONS
+        and any(o.startswith(token) for o in options if o.startswith("--"))
+    )
+
+
+def command_by_root(command: Iterable[str], roots: Mapping[str, Path]) -> list[str]:
+    """``command`` (a report's argv, as run.json records it) with the value of each option naming a
+    root (:data:`ROOT_OPTIONS`: ``--data DIR``, ``--data=DIR``, ``--res DIR``, and ``-p NAME VALUE``
+    for :data:`ROOT_PARAMETERS`) written by the name of the root it is, or lies below
+    (:func:`root_key`: ``--data {data}``), however it was typed: relative to where the command
+    ran (``--data ../data``), through a link (``--results reslink``), or absolute. A relative path
+    means nothing once the run is moved, and an absolute one is this machine's. A value below no
+    root, and every other argument, is kept as typed."""
+
+    def by_root(value: str) -> str:
+        if not value or split_key(value) is not None:
+            return value
+        try:  # where it is, else where it leads (--data datalink: the data root is recorded resolved)
+            key = root_key(Path(value), roots)
+            if split_key(key) is None:
+                key = root_key(Path(value).resolve(), roots)
+        except (OSError, ValueError, RuntimeError):  # no path (a NUL byte), a loop of links
+            return value
+        return key if split_key(key) is not None else value
+
+    out = list(command)
+    i = 1
+    while i < len(out):
+        token = out[i]
+        if token == "--":
+            break
+        option, eq, value = token.partition("=")
+        if token.startswith("--") and eq and _is_option(option, ROOT_OPTIONS):
+            out[i] = f"{option}={by_root(value)}"
+        elif _is_option(token, ROOT_OPTIONS) and i + 1 < len(out):
+            out[i + 1] = by_root(out[i + 1])
+            i += 1
+        elif _is_option(token, _PARAMETER_OPTIONS) and i + 2 < len(out):
+            if out[i + 1] in ROOT_PARAMETERS:
+                out[i + 2] = by_root(out[i + 2])
+            i += 2
+        i += 1
+    return out
+
+
 #: Characters every escaping below writes as they are: a path made of them has one spelling.
 _PLAIN = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789/._-")
 

@@ -31,6 +31,7 @@ import os
 import re
 import stat
 import subprocess
+import sys
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -39,7 +40,7 @@ from lorisnb._version import __version__
 from lorisnb.core.spec import validate
 from lorisnb.errors import LorisError, ParseError, ValidationError
 from lorisnb.io.writers import naming
-from lorisnb.tools.report.portable import mark, resolve_key, root_key, split_key
+from lorisnb.tools.report.portable import command_by_root, mark, resolve_key, root_key, split_key
 
 RUN_JSON = "run.json"
 KEYS = ("command", "lorisnb_version", "commit", "spec", "data_root", "created", "inputs", "notebooks")
@@ -175,8 +176,11 @@ def run_record(
     """The content of ``run.json`` (see the module docstring); ``roots``: the files and folders
     whose listing gave the inputs (:func:`input_files`); ``named``: the named roots (name ->
     folder) the keys of ``inputs`` were written below, recorded by name only unless ``absolute``
-    (then every path is absolute)."""
+    (then every path is absolute), and so is each root ``command`` names (``--data ../data``:
+    ``--data {data}``, :func:`~lorisnb.tools.report.portable.command_by_root`)."""
     if named is not None:
+        if not absolute:  # each root by its name, however it was typed (--data ../data, --results reslink)
+            command = command_by_root(command, named)
         record = run_record(command, spec, data_root, inputs, notebooks, (), None)
         record["data_root"] = (str(data_root) if absolute else mark("data")) if data_root is not None else None
         record["input_roots"] = [str(r.resolve()) if absolute else root_key(r, named) for r in roots]
@@ -207,7 +211,10 @@ def with_baseline(record: Mapping[str, Any], folder: Path, files: Mapping[str, s
     keys = {(os.path.join(os.path.abspath(folder), rel) if absolute else f"{mark('baseline')}/{rel}"): h
             for rel, h in files.items()}  # fmt: skip
     roots = {**(record.get("roots") or {}), "baseline": str(folder.resolve()) if absolute else None}
-    return {**record, "baseline_inputs": keys, "roots": roots}
+    command = record.get("command")
+    if not absolute and isinstance(command, list):  # --baseline DIR by its root's name, however it was typed
+        command = command_by_root(command, {"baseline": Path(os.path.abspath(folder))})
+    return {**record, "command": command, "baseline_inputs": keys, "roots": roots}
 
 
 def write_run_json(run_dir: Path, record: Mapping[str, Any]) -> Path:
@@ -219,6 +226,20 @@ def write_run_json(run_dir: Path, record: Mapping[str, Any]) -> Path:
 
 class _DuplicateKey(ValueError):
     """A JSON object naming one key twice (:func:`load_json`)."""
+
+
+class _HugeNumber(ValueError):
+    """A JSON integer of more digits than Python converts (:func:`load_json`)."""
+
+
+def _int(text: str) -> int:
+    """A JSON integer, or :class:`_HugeNumber` where it has more digits than Python converts
+    (:func:`sys.get_int_max_str_digits`, 4,300 by default), which ``int`` would refuse with a
+    ValueError asking to raise that limit."""
+    limit = sys.get_int_max_str_digits() if hasattr(sys, "get_int_max_str_digits") else 0
+    if limit and len(text.lstrip("-")) > limit:
+        raise _HugeNumber(len(text.lstrip("-")))
+    return int(text)
 
 
 def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
@@ -234,16 +255,23 @@ def load_json(data: bytes | str, f: str | os.PathLike[str], expected: str) -> An
     """The JSON value of ``data``, the bytes of the file ``f`` of a run (run.json, its marker) as a
     received run may hold them: anything that is not the JSON lorisnb writes (not UTF-8, not JSON,
     nested too deeply for Python's parser, an object naming a key twice, where readers would
-    disagree on which is meant) is a :class:`~lorisnb.errors.ParseError` ``f: not valid JSON
-    (...); expected`` ``expected``."""
+    disagree on which is meant, an integer of more digits than Python reads) is a
+    :class:`~lorisnb.errors.ParseError` ``f: not valid JSON (...); expected`` ``expected``. Every
+    error Python's parser raises on hostile bytes is one of those: a ValueError (not UTF-8, not
+    JSON, an integer too long), a RecursionError (nesting), a MemoryError (a file too large for
+    this machine); a float too large is read as infinity, which the checks of each key refuse."""
     try:
         text = data.decode("utf-8") if isinstance(data, bytes) else data
-        return json.loads(text, object_pairs_hook=_no_duplicates)
+        return json.loads(text, object_pairs_hook=_no_duplicates, parse_int=_int)
     except _DuplicateKey as exc:
         why = f"the key {json.dumps(str(exc.args[0]))[:80]} given twice in one object"
+    except _HugeNumber as exc:
+        why = f"an integer of {exc.args[0]} digits, more than can be read; no file lorisnb writes holds one"
     except RecursionError:
         why = "nested too deeply to be read"
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+    except MemoryError:
+        why = "too large to be read into memory"
+    except ValueError as exc:  # not UTF-8 (UnicodeDecodeError), not JSON (JSONDecodeError), any other value refused
         why = str(exc)
     raise ParseError(f, None, f"not valid JSON ({why}); expected {expected}")
 
@@ -261,8 +289,14 @@ def _is_path(v: Any) -> bool:
     return isinstance(v, str) and "\x00" not in v
 
 
+def _is_file_path(v: Any) -> bool:
+    """A file's path as run.json writes one: a path (:func:`_is_path`), not empty, not ending in a
+    separator (a folder's)."""
+    return _is_path(v) and v != "" and not v.endswith(("/", os.sep))
+
+
 def _is_path_map(v: Any) -> bool:
-    return _is_str_map(v) and all(map(_is_path, v))
+    return _is_str_map(v) and all(map(_is_file_path, v))
 
 
 _SHA256 = re.compile(r"[0-9a-f]{64}")
@@ -305,10 +339,16 @@ SHAPES: dict[str, tuple[Any, str]] = {
     ),  # fmt: skip
     "data_root": (lambda v: v is None or _is_path(v), "a folder path or null"),
     "created": (_is_text_or_null, "an ISO 8601 time"),
-    "inputs": (_is_path_map, "an object path -> SHA-256, each path without a NUL byte"),
+    "inputs": (
+        _is_path_map,
+        "an object path -> SHA-256, each the path of a file (not empty, not ending in /, without a NUL byte)",
+    ),
     "notebooks": (_is_str_map, "an object notebook name -> status"),
     "input_roots": (lambda v: isinstance(v, list) and all(map(_is_path, v)), "a list of paths (without a NUL byte)"),
-    "baseline_inputs": (_is_path_map, "an object path -> SHA-256, each path without a NUL byte"),
+    "baseline_inputs": (
+        _is_path_map,
+        "an object path -> SHA-256, each the path of a file (not empty, not ending in /, without a NUL byte)",
+    ),
     "dirty": (lambda v: v is None or isinstance(v, bool), "true, false or null (whether the checkout had changes)"),
     "roots": (
         lambda v: isinstance(v, dict) and all(x is None or _is_absolute_path(x) for x in v.values()),
@@ -336,7 +376,9 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
             value = record[key]
             culprit = None  # in a map or list of paths of the right type: the entry that is not one
             if key in ("inputs", "baseline_inputs") and isinstance(value, dict):
-                culprit = next(([k, v] for k, v in value.items() if not (_is_path(k) and isinstance(v, str))), None)
+                culprit = next(
+                    ([k, v] for k, v in value.items() if not (_is_file_path(k) and isinstance(v, str))), None
+                )
             elif key == "roots" and isinstance(value, dict):
                 culprit = next(([k, v] for k, v in value.items() if not (v is None or _is_absolute_path(v))), None)
             elif key == "input_roots" and isinstance(value, list):
@@ -346,7 +388,57 @@ def read_run_json(run: str | os.PathLike[str]) -> dict[str, Any]:
             where = f'"{key}" holds' if culprit is not None else f'"{key}" is'
             raise ParseError(f, None, f"{where} {shown}; expected {expected}")
     check_digests(record, f)  # every reader: a checksum that is no SHA-256 is a damaged run.json
+    created_of(record, f)  # a time that is none, a spec value no spec has: refused by every reader alike
+    check_spec_values(record.get("spec"), f)
     return record
+
+
+def created_of(meta: Mapping[str, Any], file: str | os.PathLike[str]) -> _dt.datetime | None:
+    """run.json's ``created``: None where it is null (the run is then ordered by the file's time),
+    else an ISO 8601 time (UTC where it names no zone); any other text is a damaged run.json,
+    refused naming the file and the key as its other keys are (:func:`read_run_json`)."""
+    value = meta.get("created")
+    if value is None:
+        return None
+    try:
+        t = _dt.datetime.fromisoformat(str(value).replace("Z", "+00:00"))
+    except ValueError:
+        shown = json.dumps(value)
+        shown = shown if len(shown) <= 80 else shown[:77] + "..."
+        raise ParseError(file, None, f'"created" is {shown}; expected an ISO 8601 time as lorisnb report writes it '
+                         "(2026-02-01T03:00:00+00:00) or null; a damaged or edited run.json?") from None  # fmt: skip
+    return t if t.tzinfo else t.replace(tzinfo=_dt.timezone.utc)
+
+
+def check_spec_values(spec: Any, file: str | os.PathLike[str]) -> None:
+    """run.json's ``spec`` (read from ``file``) checked by :func:`spec_problem`: a value no spec has
+    is a damaged run.json, refused with a :class:`~lorisnb.errors.ParseError` naming the file and
+    the key, never reported as two specs that differ (:func:`read_run_json`)."""
+    problem = spec_problem(spec)
+    if problem:
+        raise ParseError(file, None, f'"spec" values: {problem}; no run lorisnb makes has it (a damaged or edited '
+                         "run.json?): make the run again")  # fmt: skip
+
+
+def spec_problem(spec: Any) -> str | None:
+    """What is wrong with the values of a recorded evaluation spec (run.json's ``spec``, or its
+    ``values``, a table's ``spec`` cell) by the spec's own rules
+    (:func:`lorisnb.core.spec.evalspec.make_spec`: an eps of NaN or -1 is no spec's), naming the
+    key; None when nothing is. Keys this lorisnb does not know (a run of another version) are left
+    to the comparison, which names them; so are those of the spec's command-line spellings
+    (``scale``: :data:`~lorisnb.core.spec.evalspec.ALIASES`)."""
+    from lorisnb.core.spec.evalspec import ALIASES, PRESETS, SPEC_NAMES, make_spec
+
+    values = spec.get("values", spec) if isinstance(spec, dict) else None
+    if not isinstance(values, dict):
+        return None
+    preset = values.get("preset")
+    known = {k: v for k, v in values.items() if k in SPEC_NAMES and k not in ALIASES}
+    try:
+        make_spec(preset if isinstance(preset, str) and preset in PRESETS else None, **known)
+    except ValidationError as exc:
+        return str(exc)
+    return None
 
 
 #: A root's name as a run writes it (``{data}``, ``{groundtruth}``): letters, digits and ``_``.
@@ -443,6 +535,27 @@ def links_out(folder: str | os.PathLike[str]) -> list[Path]:
     return sorted(out)
 
 
+def refuse_links_out(folder: str | os.PathLike[str]) -> None:
+    """A :class:`~lorisnb.errors.ValidationError` naming the links of the run folder ``folder`` that
+    lead outside it or nowhere (:func:`links_out`; its marker and ``index.html`` first, by
+    :func:`run_file`, as render checks them), if it holds any: a received run whose pages,
+    tables or notebooks are links to files elsewhere (``index.html`` -> another file,
+    ``findings/leaderboard.csv`` -> ``/etc/passwd``) is no run lorisnb wrote, whatever its marker
+    says; nothing is read through them."""
+    from lorisnb.tools.notebook.start import RUN_MARKER
+
+    for name in (RUN_MARKER, "index.html"):  # the files render reads first: refused as render refuses them
+        if os.path.lexists(Path(folder) / name):
+            run_file(folder, Path(folder) / name)
+    out = links_out(folder)
+    if out:
+        shown = ", ".join(str(p.relative_to(folder)) for p in out[:5]) + (f" and {len(out) - 5} more" * (len(out) > 5))
+        raise ValidationError(f"{folder}: holds {len(out)} link(s) leading outside it ({shown}); a run folder lorisnb "
+                              "writes holds none (a received run?), so it is not checked: nothing was read through "
+                              "them. Replace each link by its file, if you trust it, or copy the run again from where "
+                              "it came")  # fmt: skip
+
+
 def verify_run(
     run: str | os.PathLike[str], roots: Mapping[str, str | os.PathLike[str]] | None = None
 ) -> list[tuple[str, str]]:
@@ -467,10 +580,15 @@ def verify_run(
 
     Nothing outside the run folder and ``roots`` is read, whatever run.json says: a root it names
     elsewhere is a :class:`~lorisnb.errors.ValidationError` before any file is read, and a file
-    found through a link that leads outside is listed as 'outside', unread."""
-    record = read_run_json(run)
+    found through a link that leads outside is listed as 'outside', unread. A run folder holding a
+    link that leads outside it (or nowhere: :func:`links_out`) is refused before anything is read,
+    as render refuses it: a run folder lorisnb writes holds none, and its marker cannot tell a file
+    from a link to another file of the same name."""
     folder = run_folder(run)
-    check_digests(record, folder / RUN_JSON if Path(run).is_dir() else Path(run))
+    refuse_links_out(folder)
+    record = read_run_json(run)
+    run_json = folder / RUN_JSON if Path(run).is_dir() else Path(run)
+    check_digests(record, run_json)
     given = {k: Path(v).resolve() for k, v in (roots or {}).items()}
     for name, p in given.items():
         if not p.exists():
@@ -504,7 +622,8 @@ def verify_run(
                 return was / p.relative_to(given[name])
         return p
 
-    def place(key: str) -> Path:
+    def place(key: str, what: str = "a file") -> Path:
+        """Where the input ``key`` (``what`` it is: a file, or a folder or file the run listed) is here."""
         named = split_key(key)
         if named is None and not Path(key).is_absolute():  # an earlier run's key, below its data root
             if "data" not in given:
@@ -525,17 +644,17 @@ def verify_run(
             if below is not None:  # below a root the run records by its folder there: say where that root is here
                 name = below[0]
                 option = f"--{name} DIR" if name in ("data", "results") else f"--root {name} DIR"
-                raise ValidationError(f"{key}: run.json names a file outside the run folder and the roots given here, "
+                raise ValidationError(f"{key}: run.json names {what} outside the run folder and the roots given here, "
                                       "by an absolute path of the machine the run was made on (a run made with "
                                       f"--absolute-paths), below its root {mark(name)} ({below[1]}); say where that "
                                       f"root is here with {option}")  # fmt: skip
             if named is None:
-                raise ValidationError(f"{key}: run.json names a file outside the run folder and the roots given here, "
+                raise ValidationError(f"{key}: run.json names {what} outside the run folder and the roots given here, "
                                       "by an absolute path of the machine the run was made on, below none of the roots "
-                                      "it records (an edited run.json?); verify reads only those. If that file is at "
-                                      "that path here, give the folder holding it with --root NAME DIR; else verify "
+                                      "it records (an edited run.json?); verify reads only those. If it is at that "
+                                      "path here, give the folder holding it with --root NAME DIR; else verify "
                                       "cannot check it here: make the run again without --absolute-paths")  # fmt: skip
-            raise ValidationError(f"{key}: run.json names a file outside the run folder and the roots given here; "
+            raise ValidationError(f"{key}: run.json names {what} outside the run folder and the roots given here; "
                                   "verify reads only those: give a folder holding it with --data, --results or --root, "
                                   "if you trust it")  # fmt: skip
         return p
@@ -544,7 +663,7 @@ def verify_run(
     problems = []
     listed = []
     for r in record.get("input_roots", []):  # a folder it read: walked only where it lies inside those given
-        p = place(r)
+        p = place(r, "a folder (or file) the run listed")
         if p.exists() and not readable(p):
             problems.append((r, "outside"))
         else:
@@ -554,6 +673,10 @@ def verify_run(
         sums.update(record.get("baseline_inputs") or {})
         inputs.update({key: _as_spelled_here(place(key)) for key in sorted(record.get("baseline_inputs") or {})})
     for key, p in inputs.items():
+        if p.is_dir() and readable(p):  # run.json lists files only: a damaged one, not an input changed
+            raise ParseError(run_json, None, f"the input {json.dumps(key)} is a folder here ({p}); expected the path of "
+                             "a file: run.json lists each file a run read, with its SHA-256 (a damaged or edited "
+                             "run.json?). Copy the run again from where it came")  # fmt: skip
         if os.path.exists(p) and not p.is_file():  # a FIFO or a device where the input was: there, never opened
             problems.append((key, NOT_A_FILE))
         elif not p.is_file():
