@@ -187,14 +187,15 @@ def test_the_command_records_each_root_by_its_name_however_it_was_typed(tmp_path
     monkeypatch.chdir(lab / "work")
     out = make_run(Path("runs/r1"), "../datalink", "../reslink")
     record = json.loads((lab / "work" / out / "run.json").read_text())
-    assert record["command"] == ["lorisnb", "report", "--results", "{results}", "--data", "{data}", "--out", "runs/r1"]
+    # the run folder, wherever it was asked for, is the run: {run} (runs/r1 meant nothing once moved)
+    assert record["command"] == ["lorisnb", "report", "--results", "{results}", "--data", "{data}", "--out", "{run}"]
     assert "../" not in (lab / "work" / out / "run.json").read_text()
     assert verify_run(lab / "work" / out, {"data": data.root, "results": lab / "realres"}) == []
     named = {"data": Path(os.path.abspath("../datalink")).resolve(), "results": Path(os.path.abspath("../reslink"))}
     typed = ["lorisnb", "report", "--res=../reslink", "--dat", "../datalink/", "--notebooks", "../reslink",
              "-p", "groundtruth", "../datalink/openloris-scene", "-p", "algorithms", "../reslink", "--jobs", "1",
-             "--", "--data", "../datalink"]  # fmt: skip
+             "--ou=/home/alice/r2", "--", "--data", "../datalink"]  # fmt: skip
     assert command_by_root(typed, named) == [
         "lorisnb", "report", "--res={results}", "--dat", "{data}", "--notebooks", "../reslink",
         "-p", "groundtruth", "{data}/openloris-scene", "-p", "algorithms", "../reslink", "--jobs", "1",
-        "--", "--data", "../datalink"]  # fmt: skip
+        "--ou={run}", "--", "--data", "../datalink"]  # fmt: skip

@@ -101,6 +101,9 @@ ROOT_PARAMETERS = ("data_root", "results_dir", "notebooks_dir", "manifest", *PAT
 #: an option by any unambiguous beginning: ``--res`` is ``--results``, ``--notebooks`` is itself).
 _NOT_ROOT_OPTIONS = ("--notebooks",)
 _PARAMETER_OPTIONS = ("-p", "--parameter")
+#: The option naming the run folder itself: recorded as ``{run}`` (the run is that folder, wherever it
+#: was asked for, ``--out runs/r1``, and wherever it is moved).
+RUN_OPTIONS = ("--out",)
 
 
 def _is_option(token: str, options: Iterable[str]) -> bool:
@@ -121,7 +124,8 @@ def command_by_root(command: Iterable[str], roots: Mapping[str, Path]) -> list[s
     (:func:`root_key`: ``--data {data}``), however it was typed: relative to where the command
     ran (``--data ../data``), through a link (``--results reslink``), or absolute. A relative path
     means nothing once the run is moved, and an absolute one is this machine's. A value below no
-    root, and every other argument, is kept as typed."""
+    root, and every other argument, is kept as typed, but the run folder (:data:`RUN_OPTIONS`,
+    ``--out runs/r1``), which is written ``{run}``."""
 
     def by_root(value: str) -> str:
         if not value or split_key(value) is not None:
@@ -143,8 +147,13 @@ def command_by_root(command: Iterable[str], roots: Mapping[str, Path]) -> list[s
         option, eq, value = token.partition("=")
         if token.startswith("--") and eq and _is_option(option, ROOT_OPTIONS):
             out[i] = f"{option}={by_root(value)}"
+        elif token.startswith("--") and eq and _is_option(option, RUN_OPTIONS):
+            out[i] = f"{option}={mark('run')}"
         elif _is_option(token, ROOT_OPTIONS) and i + 1 < len(out):
             out[i + 1] = by_root(out[i + 1])
+            i += 1
+        elif _is_option(token, RUN_OPTIONS) and i + 1 < len(out):
+            out[i + 1] = mark("run")
             i += 1
         elif _is_option(token, _PARAMETER_OPTIONS) and i + 2 < len(out):
             if out[i + 1] in ROOT_PARAMETERS:
