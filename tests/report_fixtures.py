@@ -32,3 +32,32 @@ def trial_results(root: Path, icra20: Path) -> Path:
                 p.parent.mkdir(parents=True, exist_ok=True)
                 p.write_text(truncated(text, keep))
     return root
+
+
+def fake_notebook(name, out_dir, params, **kw):
+    """A notebook run standing for papermill's in a report (fast): a one-cell notebook and its page
+    in the notebook's folder (``report.run_notebook``'s place in the tests)."""
+    import nbformat
+
+    from lorisnb.tools.report.notebooks import NotebookRun
+
+    (out_dir / name).mkdir()
+    nbformat.write(nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell("a page")]),
+                   str(out_dir / name / f"{name}.ipynb"))  # fmt: skip
+    (out_dir / name / f"{name}.html").write_text("<p>page</p>")
+    return NotebookRun(name)
+
+
+def fake_papermill_notebook(name, out_dir, params, **kw):
+    """:func:`fake_notebook` as papermill leaves it: where it was executed (its ``output_path``, an
+    absolute path of this machine) in its metadata."""
+    import nbformat
+
+    from lorisnb.tools.report.notebooks import NotebookRun
+
+    (out_dir / name).mkdir()
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell("a page")])
+    nb.metadata["papermill"] = {"output_path": str(out_dir / name / f"{name}.ipynb"), "input_path": "x.ipynb"}
+    nbformat.write(nb, str(out_dir / name / f"{name}.ipynb"))
+    (out_dir / name / f"{name}.html").write_text("<p>page</p>")
+    return NotebookRun(name)

@@ -13,6 +13,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from report_fixtures import fake_notebook
 from test_portable_runs import as_written
 from test_portable_runs import received as portable_run
 
@@ -23,18 +24,6 @@ from lorisnb.tools.report.provenance import verify_run, write_run_json
 
 ORB = "cafe_1_1_orbslam2-original.txt"
 ODOM = "cafe-1-2-odom.txt"
-
-
-def fake_notebook(name, out_dir, params, **kw):
-    import nbformat
-
-    from lorisnb.tools.report.notebooks import NotebookRun
-
-    (out_dir / name).mkdir()
-    nbformat.write(nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell("a page")]),
-                   str(out_dir / name / f"{name}.ipynb"))  # fmt: skip
-    (out_dir / name / f"{name}.html").write_text("<p>page</p>")
-    return NotebookRun(name)
 
 
 @pytest.fixture(scope="module")

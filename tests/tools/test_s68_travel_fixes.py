@@ -16,6 +16,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from report_fixtures import fake_papermill_notebook as fake_notebook
 
 from lorisnb.cli import main
 from lorisnb.errors import ValidationError
@@ -27,20 +28,6 @@ ORB = "cafe_1_1_orbslam2-original.txt"
 ODOM = "cafe-1-1-odom.txt"
 NFD = "alge\u0301"  # as a Mac writes the folder algé
 NFC = "alg\u00e9"
-
-
-def fake_notebook(name, out_dir, params, **kw):
-    """A notebook as papermill leaves it: its output_path, where it was executed, in its metadata."""
-    import nbformat
-
-    from lorisnb.tools.report.notebooks import NotebookRun
-
-    (out_dir / name).mkdir()
-    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell("a page")])
-    nb.metadata["papermill"] = {"output_path": str(out_dir / name / f"{name}.ipynb"), "input_path": "x.ipynb"}
-    nbformat.write(nb, str(out_dir / name / f"{name}.ipynb"))
-    (out_dir / name / f"{name}.html").write_text("<p>page</p>")
-    return NotebookRun(name)
 
 
 def make_run(here: Path, data, icra20, **kw) -> Path:

@@ -13,6 +13,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from report_fixtures import fake_papermill_notebook as fake_notebook
 
 from lorisnb.cli import main
 from lorisnb.errors import ParseError, ValidationError
@@ -21,20 +22,6 @@ from lorisnb.tools.report.provenance import load_json, read_run_json, verify_run
 
 ORB = "cafe_1_1_orbslam2-original.txt"
 SECRET = "TOPSECRET-CANARY"
-
-
-def fake_notebook(name, out_dir, params, **kw):
-    """A notebook as papermill leaves it, without running one."""
-    import nbformat
-
-    from lorisnb.tools.report.notebooks import NotebookRun
-
-    (out_dir / name).mkdir()
-    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell("a page")])
-    nb.metadata["papermill"] = {"output_path": str(out_dir / name / f"{name}.ipynb"), "input_path": "x.ipynb"}
-    nbformat.write(nb, str(out_dir / name / f"{name}.ipynb"))
-    (out_dir / name / f"{name}.html").write_text("<p>page</p>")
-    return NotebookRun(name)
 
 
 def make_run(out: Path, data_root: str | Path, results: str | Path) -> Path:

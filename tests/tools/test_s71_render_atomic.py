@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from report_fixtures import fake_notebook
 
 import lorisnb.tools.report.build as report
 from lorisnb.cli import main
@@ -31,18 +32,6 @@ from lorisnb.tools.report.build import RENDER_LOCK, RUN_MARKER, _files, not_as_w
 ORB = "cafe_1_1_orbslam2-original.txt"
 ODOM = "cafe-1-2-odom.txt"
 NB = "compare_algorithms"
-
-
-def fake_notebook(name, out_dir, params, **kw):
-    import nbformat
-
-    from lorisnb.tools.report.notebooks import NotebookRun
-
-    (out_dir / name).mkdir()
-    nbformat.write(nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell("a page")]),
-                   str(out_dir / name / f"{name}.ipynb"))  # fmt: skip
-    (out_dir / name / f"{name}.html").write_text("<p>page</p>")
-    return NotebookRun(name)
 
 
 @pytest.fixture(scope="module")
