@@ -410,10 +410,7 @@ def test_a_session_that_cannot_be_aligned_is_named_as_its_pair_is(data, tmp_path
                     f'[[session]]\nname = "desk"\ngroundtruth = "{data.tum / FR2[1]}"\n')  # fmt: skip
     manifest = ln.evaluate_manifest(toml, tmp_path / "res", jobs=1, align_frames=2)  # too few poses to fit SE(3)
     pair = ln.evaluate_pairs(est, gt, jobs=1, align_frames=2)
-    # was '.../res/alg: no SE(3)...': the session's own file, and its name and number, as its notes name it
-    assert [f.error for f in manifest.failures] == [
-        f.error.replace(f"{est}: ", f"{est} (session 'xyz', seq 1): ", 1) for f in pair.failures
-    ]
+    assert [f.error for f in manifest.failures] == [f.error for f in pair.failures]  # was '.../res/alg: no SE(3)...'
     assert pair.failures[0].error.startswith(f"{est}: no SE(3) alignment can be determined: only 2 matched")
 
 

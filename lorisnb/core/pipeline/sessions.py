@@ -80,6 +80,7 @@ def evaluate_sessions(
     groundtruth_spans: dict[int, tuple[float, float]] | None = None,
     sources: Mapping[int, str] | None = None,
     quaternions: str | None = None,
+    labels: Mapping[int, str] | None = None,
 ) -> FileErrors:
     """Per-pose errors of estimate sequences against their ground truth: the one pipeline.
 
@@ -101,8 +102,11 @@ def evaluate_sessions(
             alignment and the errors are computed).
         notes: what the reader noticed, kept first in ``FileErrors.warnings``.
         sources: sequence number -> the file it was read from (a manifest's sessions), named in the
-            errors and notes about that sequence (default ``path``, with the sequence number if
-            several; a note: the ``file`` label or ``path``, with the sequence number).
+            errors about that sequence (default ``path``, with the sequence number if several), as
+            the same file's errors are named on every route.
+        labels: sequence number -> how the notes about that sequence name it, where the input's
+            name does not say which it is (a manifest's session: its file, name and number; one
+            topic of a bag); default the ``file`` label or ``path``, with the sequence number.
         quaternions: the order the estimate's file wrote its quaternions in, by its format
             (:attr:`lorisnb.io.readers.registry.Format.quaternions`): ``"xyzw"`` or ``"wxyz"``, the
             one order mistake its orientation check names; ``""`` none (matrices, named fields: no
@@ -134,8 +138,8 @@ def evaluate_sessions(
     def where(s: int) -> str:  # the input a sequence's error is about: its file (a manifest's session), or path, seq
         return (sources or {}).get(s) or (f"{path}, seq {s}" if len(seqs) > 1 else str(path))
 
-    def said(s: int) -> str:  # how a note names a sequence: its own source (a manifest's session), or input, seq
-        return (sources or {}).get(s) or f"{name}, seq {s}"
+    def said(s: int) -> str:  # how a note names a sequence: its own label (a manifest's session), or input, seq
+        return (labels or {}).get(s) or f"{name}, seq {s}"
 
     lifelong = spec.lifelong_for(len(seqs))
     est = {s: with_transform(estimates[s], spec.transform) for s in seqs}

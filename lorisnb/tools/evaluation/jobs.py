@@ -239,7 +239,7 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
         if errors is None:
             return "filtered", None
         o = job.spec.rpe_options()
-        named = sequence_sources(job)
+        named = sequence_labels(job)
         for seq in errors.sequences:  # the RPE pairs of the spec, here (in a worker, when in parallel)
             i = seq.rpe(o["rpe_delta"], o["rpe_unit"], o["rpe_pairs"], o["rpe_all_pairs"], o["rpe_tolerance"])[0]
             # named as the pipeline's notes name the sequence (a manifest's session: its own estimate file)
@@ -275,9 +275,9 @@ def run_job(job: Job, progress: bool = False) -> tuple[str, FileErrors | Failure
         return "failed", Failure(job.path, said, type(exc).__name__)
 
 
-def sequence_sources(job: Job) -> dict[int, str]:
-    """How the notes and errors of a job name each of its sequences where the input's name alone does
-    not say which it is (the pipeline's ``sources``): a manifest's sessions (:func:`session_labels`),
+def sequence_labels(job: Job) -> dict[int, str]:
+    """How the notes of a job name each of its sequences where the input's name alone does not say
+    which it is (the pipeline's ``labels``): a manifest's sessions (:func:`session_labels`),
     and one of several topics of a bag, ``bags/run.bag (topic /odom), seq 1`` (the rows' algorithm is
     ``<algorithm>:<topic>``; a note naming the bag alone was said once for every topic). Empty: the
     input's name (and the sequence number) says it."""
@@ -291,11 +291,11 @@ def sequence_sources(job: Job) -> dict[int, str]:
 
 
 def session_labels(job: Job) -> dict[int, str]:
-    """How the notes and errors of a manifest job name each of its sessions (by number, the
-    pipeline's ``sources``): a note on one session named only the algorithm's folder, leaving the
-    user to find which file of it was meant. The session's
-    estimate file, as found in the algorithm's folder given (``res/orb/fr1_xyz.txt``), with the
-    session's name and number, ``res/orb/fr1_xyz.txt (session 'fr1_xyz', seq 2)``."""
+    """How the notes of a manifest job name each of its sessions (by number, the pipeline's
+    ``labels``; its errors name the file, as every route names that file's): the session's estimate
+    file, as found in the algorithm's folder given (``res/orb/fr1_xyz.txt``), with the session's
+    name and number, ``res/orb/fr1_xyz.txt (session 'fr1_xyz', seq 2)``. A note naming only the
+    algorithm's folder left the user to find which file of it was meant."""
     m = job.manifest
     assert m is not None
     return {
@@ -375,7 +375,7 @@ def _pair(job: Job) -> FileErrors:
     return evaluate_sessions(
         gts, {1: est}, job.spec, path=job.path, algorithm=algorithm, file=rel, scene=src.scene, suite=suite,
         trial=trial, notes=notes + [str(w.message) for w in caught], groundtruth_spans=span,
-        release_groundtruth=gts.pop, quaternions=FORMATS[src.fmt].quaternions, sources=sequence_sources(job) or None,
+        release_groundtruth=gts.pop, quaternions=FORMATS[src.fmt].quaternions, labels=sequence_labels(job) or None,
     )  # fmt: skip
 
 
@@ -538,7 +538,8 @@ def _manifest_rows(
     if ests:
         errors = evaluate_sessions(
             gts, ests, job.spec, path=job.path, algorithm=algorithm, scene=job.scene, suite=suite, trial=trial,
-            notes=notes, groundtruth_spans=spans, sources=session_labels(job),
+            notes=notes, groundtruth_spans=spans, sources={s.seq: named_entry(job.path, s.estimate) for s in sessions},
+            labels=session_labels(job),
             quaternions=FORMATS[m.estimate_format].quaternions,
         )  # fmt: skip
     absent = [s for s in sessions if s.seq not in ests and s.seq not in failed]
