@@ -538,7 +538,7 @@ def _manifest_rows(
     if ests:
         errors = evaluate_sessions(
             gts, ests, job.spec, path=job.path, algorithm=algorithm, scene=job.scene, suite=suite, trial=trial,
-            notes=notes, groundtruth_spans=spans, sources={s.seq: named_entry(job.path, s.estimate) for s in sessions},
+            notes=notes, groundtruth_spans=spans, sources={s.seq: str(named_entry(job.path, s.estimate)) for s in sessions},
             labels=session_labels(job),
             quaternions=FORMATS[m.estimate_format].quaternions,
         )  # fmt: skip
