@@ -353,9 +353,8 @@ def crosscheck_evo(
     theirs = evo_statistics(ref, est, the_spec, how)
     failed: dict[str, str] = theirs.pop("failed", {})
     formed = lorisnb_pairs(groundtruth, estimate, the_spec, fmt, gt_fmt, topic, gt_topic)
-    identical = formed is not None and identical_pairs(formed[0], theirs.pop("pairs", None),
-                                                       the_spec.transform is not None)  # fmt: skip
-    theirs.pop("pairs", None)
+    evo_pairs = theirs.pop("pairs", None)  # (not a statistic: compared here, not shown)
+    identical = formed is not None and identical_pairs(formed[0], evo_pairs, the_spec.transform is not None)
     lacks = evo_lacks(the_spec)
     pairs_note = ""
     identical = identical and evo_lacks(the_spec, True) != lacks  # (evo's own association: nothing to say)
