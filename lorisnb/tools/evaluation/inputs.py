@@ -132,15 +132,36 @@ def walk(folder: Path, inside: Iterable[Path] | None = None) -> list[Found]:
     return out
 
 
+@dataclass(frozen=True)
+class Inputs:
+    """What the paths given hold (:func:`find_inputs`): the result files as ``(file, root)`` pairs,
+    and the trial folders that hold none (a trial whose run wrote nothing)."""
+
+    files: list[tuple[Path, Path | None]]
+    #: (folder, why it is a failed input) of each trial folder that holds no result file
+    empty_trials: list[tuple[Path, str]]
+
+
 def result_files(
     paths: PathArg | Iterable[PathArg], suffixes: tuple[str, ...] = (".txt",)
 ) -> list[tuple[Path, Path | None]]:
+    """Expand files and folders into ``(file, root)`` pairs (:func:`find_inputs`' files)."""
+    return find_inputs(paths, suffixes).files
+
+
+def find_inputs(
+    paths: PathArg | Iterable[PathArg], suffixes: tuple[str, ...] = (".txt",), trials_by: str | None = None
+) -> Inputs:
     """Expand files and folders into ``(file, root)`` pairs; a folder is walked (:func:`walk`: linked
     folders followed) for files ending in ``suffixes`` below it (``root/<algorithm>/*.txt``, or
     deeper: ``root/<suite>/<algorithm>/*.txt``), hidden files and folders and documents
     (:func:`is_document`: ``LICENSE.txt``, ``README.txt``) left out. A ROS 2 bag (a folder holding
-    ``metadata.yaml``) is one file when ``.bag`` is among the suffixes."""
+    ``metadata.yaml``) is one file when ``.bag`` is among the suffixes. Where the files below a
+    folder carry trial numbers (``trials_by``, or the default tokens), a folder named as a trial
+    that holds none of them (``trial3/``, ``dso/run_2/``) is returned as an empty trial
+    (:func:`empty_trial_folders`)."""
     out: list[tuple[Path, Path | None]] = []
+    empty: list[tuple[Path, str]] = []
     reals: dict[Path, Path] = {}
     bags = ".bag" in suffixes
     for p in as_paths(paths):
@@ -155,28 +176,23 @@ def result_files(
                 found = {k: v for k, v in found.items() if not any(d in k.parents for d in folders)} | folders
             reals.update((k, Path(v)) for k, v in found.items())
             out.extend((f, p) for f in sorted(found))
-            _say_empty_algorithms(p, below, found, suffixes)
+            trials = empty_trial_folders(p, below, found, trials_by)
+            asked = " or ".join(", ".join(suffixes).rsplit(", ", 1))
+            empty += [(d, f"{d}: a trial folder that holds no result file (no {asked} file, the format read; "
+                       f"{held([d], below).replace('they hold', 'it holds', 1)}): the trial's run wrote nothing, or its "
+                       "files were not copied; counted as a failed input (the tables hold the other trials only)")
+                      for d in trials]  # fmt: skip
+            _say_empty_algorithms(p, below, found, suffixes, set(trials))
         else:
             out.append((p, None))
-    return unique_files(out, reals)
+    return Inputs(unique_files(out, reals), empty)
 
 
-def _say_empty_algorithms(
-    root: Path, below: list[Found], found: Mapping[Path, Any], suffixes: tuple[str, ...] = (".txt",)
-) -> None:
-    """Warn of a folder beside the algorithms' folders that holds no result file (an algorithm that
-    failed on every sequence, or whose files have another suffix than the format asked: said, with
-    what the folders hold): it was left out of every table without a word. Folders inside an
-    algorithm's (its logs) are not algorithms."""
-    # on path strings, as walk found them (pathlib's objects and hashes cost 0.2 s on 5,000 files)
+def _holding(root: Path, found: Iterable[Path]) -> set[str]:
+    """Every folder below ``root`` that holds one of the ``found`` files, at any depth (as path
+    strings, as :func:`walk` found them)."""
     top = os.fspath(root)
-    algorithms = {os.path.dirname(os.fspath(f)) for f in found}
-    parents = {os.path.dirname(a) for a in algorithms if a != top}
-    candidates = [f.path for f in below if f.kind == "folder" and (s := os.fspath(f.path)) not in algorithms
-                  and os.path.dirname(s) in parents]  # fmt: skip
-    if not candidates:
-        return
-    holding: set[str] = set()  # every folder below the root that holds a result file, at any depth
+    holding: set[str] = set()
     for f in found:
         d = os.path.dirname(os.fspath(f))
         while d and d != top and d not in holding:  # (its folders above are in it already)
@@ -184,6 +200,49 @@ def _say_empty_algorithms(
             d, above = os.path.dirname(d), d
             if d == above:  # the file system's root
                 break
+    return holding
+
+
+def empty_trial_folders(
+    root: Path, below: list[Found], found: Mapping[Path, Any], trials_by: str | None = None
+) -> list[Path]:
+    """The folders below ``root`` named as a trial (``trial3/``, ``run_2/``: a trial token of
+    :mod:`lorisnb.core.stats.trials`, or the ``trials_by`` expression) that hold no result file at
+    any depth, at the depth where other trial folders below ``root`` do hold result files: a trial
+    whose run wrote nothing (a crash, a copy cut short). Every algorithm may lack it, so no table
+    could tell it is missing; the evaluation counts each as a failed input. A folder named so
+    beside files that carry their trial in their own name (``dso/run_1/`` of logs beside
+    ``dso/cafe_trial1.txt``) is not a trial folder."""
+    named = [f.path for f in below if f.kind == "folder" and not f.hidden and names_a_trial(f.path.name, trials_by)]
+    if not named:  # (a regular expression per folder, never per file, unless a folder is named as a trial)
+        return []
+    holding = _holding(root, found)
+    depth = len(root.parts)
+    used = {len(d.parts) - depth for d in named if os.fspath(d) in holding}  # where trial folders hold results
+    return sorted(d for d in named if os.fspath(d) not in holding and len(d.parts) - depth in used)
+
+
+def _say_empty_algorithms(
+    root: Path,
+    below: list[Found],
+    found: Mapping[Path, Any],
+    suffixes: tuple[str, ...] = (".txt",),
+    trials: set[Path] = frozenset(),  # type: ignore[assignment]
+) -> None:
+    """Warn of a folder beside the algorithms' folders that holds no result file (an algorithm that
+    failed on every sequence, or whose files have another suffix than the format asked: said, with
+    what the folders hold): it was left out of every table without a word. Folders inside an
+    algorithm's (its logs) are not algorithms; empty ``trials`` (:func:`empty_trial_folders`) are
+    failed inputs, said as such."""
+    # on path strings, as walk found them (pathlib's objects and hashes cost 0.2 s on 5,000 files)
+    top = os.fspath(root)
+    algorithms = {os.path.dirname(os.fspath(f)) for f in found}
+    parents = {os.path.dirname(a) for a in algorithms if a != top}
+    candidates = [f.path for f in below if f.kind == "folder" and (s := os.fspath(f.path)) not in algorithms
+                  and os.path.dirname(s) in parents and f.path not in trials]  # fmt: skip
+    if not candidates:
+        return
+    holding = _holding(root, found)  # every folder below the root that holds a result file, at any depth
     empty = sorted(c for c in candidates if os.fspath(c) not in holding)
     if empty:
         asked = " or ".join(", ".join(suffixes).rsplit(", ", 1))

@@ -37,6 +37,7 @@ from lorisnb.tools.evaluation.inputs import (
     algorithm_folders,
     as_paths,
     check_manifest_trials,
+    find_inputs,
     labels,
     names,
     result_files,
@@ -108,8 +109,11 @@ def _as_given(job: Job, went: Job) -> list[tuple[str, str]]:
 
 
 def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, executor: Executor | None,
-         progress: bool, root: Path | None = None, data: Any = None, notes: list[str] | None = None) -> Evaluation:  # fmt: skip
-    """Run the jobs here, in a local pool or on ``executor``; results in the order of the jobs."""
+         progress: bool, root: Path | None = None, data: Any = None, notes: list[str] | None = None,
+         empty: list[tuple[Path, str]] = ()) -> Evaluation:  # type: ignore[assignment]  # fmt: skip
+    """Run the jobs here, in a local pool or on ``executor``; results in the order of the jobs.
+    ``empty``: trial folders that hold no result file (:func:`~lorisnb.tools.evaluation.inputs.find_inputs`),
+    each a failed input (kind ``empty-trial``)."""
     n = default_jobs() if n_jobs is None else int(validate.positive("jobs", n_jobs, "processes", integer=True))
     if executor is not None and not isinstance(executor, Executor):
         raise ValidationError(f"executor: expected a concurrent.futures.Executor, got {type(executor).__name__}")
@@ -152,6 +156,7 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
             (failed if status == "failed" else skipped).append(value)
     check_duplicates([(str(f.path), (f.suite, f.algorithm, f.scene, f.trial), tuple(e.seq for e in f.sequences))
                       for f in done])  # fmt: skip
+    failed += [Failure(folder, why, "empty-trial") for folder, why in empty]
     if kind == "openloris" and "mode" in spec.explicit and spec.mode != "auto" and done:
         if all(len(f.sequences) <= 1 for f in done):  # as a pair is told (EvalSpec.refuse_inapplicable)
             notes = [*(notes or []), f"mode {spec.mode}: every input has one sequence, so per-seq and lifelong agree"]
@@ -166,7 +171,7 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
                       f"exit_status() is 1: {failed[0].error}{more}", FailedInputsWarning, stacklevel=3)  # fmt: skip
     elif failed:  # tables without them would look complete: a notebook says so at the call
         more = f" (and {len(failed) - 1} more)" if len(failed) > 1 else ""
-        warnings.warn(f"{len(failed)} of {len(jobs)} inputs could not be evaluated and are in no table; "
+        warnings.warn(f"{len(failed)} of {len(jobs) + len(empty)} inputs could not be evaluated and are in no table; "
                       f"Evaluation.failures lists them with the reason, exit_status() is 1: "
                       f"{failed[0].error}{more}", FailedInputsWarning, stacklevel=3)  # fmt: skip
     ev = Evaluation(done, failed, root, skipped, data, spec=spec, kind=kind, notes=list(notes or []))
@@ -310,7 +315,8 @@ def evaluate(
     notes = the_spec.refuse_inapplicable("openloris")
     compile_trials_by(trials_by)
     paths = as_paths(paths)  # once: a generator is read once
-    items = result_files(paths)
+    found = find_inputs(paths, trials_by=trials_by)
+    items = found.files
     _check_trials(items, trials_by)
     # folders read as trials of one name by a token beside other text (slam_run1/, slam_run2/): said
     notes += trial_folders([labels(p, r, trials_by)[1] for p, r in items if r is not None], trials_by)
@@ -324,7 +330,7 @@ def evaluate(
     roots = as_paths(paths)
     root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
     return _run(work, the_spec, "openloris", n_jobs=jobs, executor=executor, progress=progress, root=root, data=data,
-                notes=notes)  # fmt: skip
+                notes=notes, empty=found.empty_trials)  # fmt: skip
 
 
 #: The spec field each alias of :func:`lorisnb.core.spec.evalspec.make_spec` sets.
@@ -472,7 +478,8 @@ def evaluate_pairs(
     if src.groundtruth.is_dir() and src.gt_fmt != "bag":  # refused once, before any estimate is read
         raise ParseError(src.groundtruth, None, f"is a folder; expected the ground truth as a {FORMATS[src.gt_fmt].title} "
                          "(a folder is a ground truth only as a ROS 2 bag, --gt-format bag)")  # fmt: skip
-    items = result_files(estimates, _pair_suffixes(src.fmt))
+    found = find_inputs(estimates, _pair_suffixes(src.fmt), trials_by)
+    items = found.files
     if "bag" not in (src.fmt, src.gt_fmt):  # (one bag may hold both, on other topics)
         items = without_groundtruth(items, src.groundtruth)
     _check_trials(items, trials_by)
@@ -495,7 +502,9 @@ def evaluate_pairs(
         for p, r in items
         for one in sources
     ]
-    return _run(work, the_spec, "pair", n_jobs=jobs, executor=executor, progress=progress, notes=notes)
+    return _run(
+        work, the_spec, "pair", n_jobs=jobs, executor=executor, progress=progress, notes=notes, empty=found.empty_trials
+    )
 
 
 def evaluate_manifest(

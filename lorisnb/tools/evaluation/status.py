@@ -1,8 +1,8 @@
 """What an evaluation did not score, and the exit status every command returns from it:
 
 * 0: every input was read and matched the ground truth;
-* 1: an input failed (it could not be read or evaluated), matched no ground-truth stamp at all, or
-  a declared session had no estimate; each still appears (in the table, scored as the paper
+* 1: an input failed (it could not be read or evaluated, or a trial folder held no result file),
+  matched no ground-truth stamp at all, or a declared session had no estimate; each still appears (in the table, scored as the paper
   scores it, or among the failures) with a one-line reason;
 * 2: a usage error (a bad option, a bad output, a manifest or ground truth that cannot be read).
 
