@@ -498,7 +498,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     lacking = 0  # a trial or sequence an algorithm lacks, counted a failed run (Comparison.exit_status)
     if not table.empty:
         res = compare_table(table, ev.durations(), args.metric, level=args.level, alpha=args.alpha,
-                            seed=args.seed, power_delta=args.power)  # fmt: skip
+                            seed=args.seed, power_delta=args.power,
+                            lost=[t for f in ev.failures for t in f.trials])  # fmt: skip
         notes += res.notes
         lacking = res.exit_status
         sp = ev.spec

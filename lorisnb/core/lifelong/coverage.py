@@ -12,6 +12,8 @@ there are none.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
 import pandas as pd
 
@@ -25,7 +27,9 @@ FAILED_RUN = {"poses": 0, "matched": 0, "c_matched": 0, "correct_time": 0.0, "tr
 COPIED = ("frame", "eps", "phi", "delta", "tau", "mode", "scale", "official_interpolation", "eps_value")
 
 
-def complete(table: pd.DataFrame, expected: pd.DataFrame, peers: bool = False) -> tuple[pd.DataFrame, pd.DataFrame]:
+def complete(
+    table: pd.DataFrame, expected: pd.DataFrame, peers: bool = False, lost: Iterable[tuple[str, str, int]] = ()
+) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Add the missing sequences of every algorithm (and trial) as failed runs.
 
     Args:
@@ -37,6 +41,9 @@ def complete(table: pd.DataFrame, expected: pd.DataFrame, peers: bool = False) -
         peers: also expect, of an algorithm with numbered trials, as many trials as the other
             algorithms of its suite have in the scene (``compare``: the algorithms of one
             comparison); a diff or a history compares an algorithm with itself only.
+        lost: (suite, algorithm, trial) of runs known to have left no output (an empty trial
+            folder: :attr:`lorisnb.tools.evaluation.result.Failure.trials`), expected as that
+            algorithm's trials too, so each is a failed run of every sequence.
 
     An algorithm is expected to cover, in each scene that any algorithm of its suite has, every
     sequence of ``expected``, with each of its trials, those of every scene of its suite (trial 0
@@ -73,6 +80,9 @@ def complete(table: pd.DataFrame, expected: pd.DataFrame, peers: bool = False) -
     for suite, g in t.groupby("suite", sort=False, observed=True):
         scenes = [s for s in dict.fromkeys(g["scene"].astype(str)) if s in by_scene]
         own = {alg: set(m["trial"]) for alg, m in g.groupby("algorithm", sort=False, observed=True)}
+        for s, alg, trial in lost:
+            if s == suite and alg in own:
+                own[alg].add(trial)
         for alg in dict.fromkeys(g["algorithm"]):
             mine = g[g["algorithm"] == alg]
             for scene in scenes:
@@ -138,7 +148,9 @@ def expected_trials(alg: object, own: dict, scene: pd.DataFrame, peers: bool) ->
     extra = order[: len(others[most]) - len(mine)]
     top = max(_trial_key(x) for x in mine | labels)
     extra += [top + 1 + k for k in range(len(others[most]) - len(mine) - len(extra))]
-    return sorted(mine | set(extra), key=_trial_key), f"as {most} has in this scene"
+    here = set(scene.loc[scene["algorithm"] == most, "trial"])  # its trials here, or also elsewhere in its suite
+    where = "in this scene" if len(here) >= len(others[most]) else "in the scenes of its suite"
+    return sorted(mine | set(extra), key=_trial_key), f"as {most} has {where}"
 
 
 def _trial_key(x: object) -> float:

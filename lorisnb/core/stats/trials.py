@@ -48,6 +48,7 @@ def split_trial(relpath: str, trials_by: str | re.Pattern[str] | None = None) ->
     (``/``-separated); trial 0 when the path names none."""
     pattern = compile_trials_by(trials_by) if isinstance(trials_by, str) else trials_by
     parts = list(PurePosixPath(relpath).parts)
+    found: list[tuple[int, str]] = []  # (trial, the token) of each name that carries one
     for k in range(len(parts) - 1, -1, -1):  # the file name first, then its folders
         for pat in [pattern] if pattern is not None else TRIAL_PATTERNS:
             m = pat.search(parts[k])
@@ -58,13 +59,20 @@ def split_trial(relpath: str, trials_by: str | re.Pattern[str] | None = None) ->
                 trial = int(number)
             except (TypeError, ValueError):
                 raise ValidationError(f"trials_by: matched {m.group(0)!r} in {relpath}, not a whole number") from None
+            found.append((trial, m.group(0).strip("_-./")))
             cut = re.sub(r"[_\-]+(?=\.|$)", "", parts[k][: m.start()] + parts[k][m.end() :]).strip("_-")
             if k == len(parts) - 1 and (not cut or cut.startswith(".")):
                 cut = "estimate" + cut  # the whole name was the trial token
             rest = cut if k == len(parts) - 1 or cut not in (".", "") else ""
-            kept = parts[:k] + ([rest] if rest else []) + parts[k + 1 :]
-            return "/".join(kept), trial
-    return relpath, 0
+            parts = parts[:k] + ([rest] if rest else []) + parts[k + 1 :]
+            break  # one token a name; a folder's and the file's own both say the trial (trial2/cafe_trial2.txt)
+    if not found:
+        return relpath, 0
+    if len({t for t, _ in found}) > 1:
+        said = " and ".join(f"{token!r} (trial {t})" for t, token in reversed(found))
+        raise ValidationError(f"{relpath}: names two trials, {said}; name each file's trial once, or the same in its "
+                              "folder and its file name")  # fmt: skip
+    return "/".join(parts), found[0][0]
 
 
 def names_a_trial(relpath: str, trials_by: str | re.Pattern[str] | None = None) -> bool:
@@ -119,6 +127,14 @@ def check_duplicates(keys: list[tuple[str, tuple, tuple[int, ...]]]) -> None:
                     f"{first} and {second} both hold {held}: {unnamed} names no trial, which is read as trial 0, and "
                     f"{named} names trial 0; number the trials from 1 (cafe_trial1.txt, run_2/, ...), or evaluate "
                     "them separately"
+                )
+            above = [_token(str(x)) for x in (other, path)]  # trial tokens in the folders given (trial1/ as input)
+            if None not in above and above[0] != above[1]:
+                raise ValidationError(
+                    f"{first} and {second} both hold {held}: their trial numbers ({above[0][0]}, {above[1][0]}) are "  # type: ignore[index]
+                    "in the names of the folders given, which are read from the folders below them only; give the "
+                    "folder that holds the trial folders instead, so that their names number the "
+                    "trials, or evaluate them separately"
                 )
             raise ValidationError(
                 f"{first} and {second} both hold {held}, with no trial number to tell them apart; name the trials "

@@ -4,6 +4,7 @@ test for the pairs, the ranking and the bold marks from that test, and the table
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -196,15 +197,18 @@ def _without_repeated_trials(table: pd.DataFrame, full: pd.DataFrame) -> tuple[p
 
 
 def prepared_table(
-    table: pd.DataFrame, durations: pd.DataFrame
+    table: pd.DataFrame, durations: pd.DataFrame, lost: Iterable[tuple[str, str, int]] = ()
 ) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, tuple[int, int]]]:
     """What ``compare`` tests, from a per-sequence table and the scenes' durations: every expected
     sequence and trial (missing ones as failed runs, :func:`~lorisnb.core.lifelong.coverage.complete`
     with ``peers``: an algorithm with fewer trials than another of its scene lacks some), the
     trials that repeat another's counted once (:func:`_without_repeated_trials`, whatever
-    metric is tested); with the coverage and the counts of repeated rows. ``compare_table`` and ``make
-    calibrate`` both use it."""
-    full, cover = complete(table, durations, peers=True)  # the trials of the comparison's algorithms expected
+    metric is tested); with the coverage and the counts of repeated rows. ``lost``: runs known to
+    have left no output (:func:`~lorisnb.core.lifelong.coverage.complete`). ``compare_table`` and
+    ``make calibrate`` both use it."""
+    full, cover = complete(
+        table, durations, peers=True, lost=lost
+    )  # the trials of the comparison's algorithms expected
     full, counted = _without_repeated_trials(table, full)
     return full, cover, counted
 
@@ -268,9 +272,12 @@ def compare_table(
     alpha: float = 0.05,
     seed: int = 0,
     power_delta: float | None = None,
+    lost: Iterable[tuple[str, str, int]] = (),
 ) -> Comparison:
     """Everything ``compare`` shows, from a per-sequence table and the ground-truth durations of its
-    scenes (the sequences every algorithm is expected to have)."""
+    scenes (the sequences every algorithm is expected to have). ``lost``: (suite, algorithm, trial)
+    of runs that left no output, each a failed run of every sequence: the ``trials`` of the
+    evaluation's failures (an empty trial folder), ``[t for f in ev.failures for t in f.trials]``."""
     for name, value in (("table", table), ("durations", durations)):
         if not isinstance(value, pd.DataFrame):
             raise ValidationError(f"{name}: expected a DataFrame (Evaluation.sequences() / .durations()), got "
@@ -288,7 +295,7 @@ def compare_table(
             raise ValidationError(f"power delta={power_delta:g}: {metric} is a rate between 0 and 1, so a difference "
                                   "above 1 cannot happen; expected a difference in (0, 1]")  # fmt: skip
     check_table_duplicates(table)
-    full, cover, counted_once = prepared_table(table, durations)
+    full, cover, counted_once = prepared_table(table, durations, lost)
     notes = coverage_notes(cover)
     if counted_once:
         notes.append("trials that repeat another trial's every value, within 1e-4 or a trace of noise (copies, not "

@@ -138,8 +138,38 @@ class Inputs:
     and the trial folders that hold none (a trial whose run wrote nothing)."""
 
     files: list[tuple[Path, Path | None]]
-    #: (folder, why it is a failed input) of each trial folder that holds no result file
-    empty_trials: list[tuple[Path, str]]
+    #: each trial folder that holds no result file (:class:`EmptyTrial`)
+    empty_trials: list[EmptyTrial]
+
+    def lost_runs(self, trials_by: str | None = None) -> list[tuple[Path, str, tuple[tuple[str, str, int], ...]]]:
+        """(folder, why it is a failed input, the (suite, algorithm, trial) runs it leaves without
+        output) of each empty trial folder: its trial of every algorithm whose files lie below the
+        same place of the tree in the other trials (``trial3/``: every algorithm's; ``orb/run_3/``:
+        orb's)."""
+        out = []
+        for e in self.empty_trials:
+            runs: dict[tuple[str, str], None] = {}
+            for p, r in self.files:
+                if r != e.root:
+                    continue
+                algorithm, rel, suite, _ = labels(p, r, trials_by)
+                if not e.below or split_trial(rel, trials_by)[0].startswith(e.below + "/"):
+                    runs[(suite, algorithm)] = None
+            out.append((e.folder, e.why, tuple((s, a, e.trial) for s, a in runs)))
+        return out
+
+
+@dataclass(frozen=True)
+class EmptyTrial:
+    """A trial folder that holds no result file (:func:`empty_trial_folders`): the folder, why it is
+    a failed input, the folder walked (``root``), where it lies without its trial token
+    (``below``: ``""`` for ``root/trial3``, ``"orb"`` for ``root/orb/run_3``) and its trial."""
+
+    folder: Path
+    why: str
+    root: Path
+    below: str
+    trial: int
 
 
 def result_files(
@@ -161,7 +191,7 @@ def find_inputs(
     that holds none of them (``trial3/``, ``dso/run_2/``) is returned as an empty trial
     (:func:`empty_trial_folders`)."""
     out: list[tuple[Path, Path | None]] = []
-    empty: list[tuple[Path, str]] = []
+    empty: list[EmptyTrial] = []
     reals: dict[Path, Path] = {}
     bags = ".bag" in suffixes
     for p in as_paths(paths):
@@ -178,14 +208,22 @@ def find_inputs(
             out.extend((f, p) for f in sorted(found))
             trials = empty_trial_folders(p, below, found, trials_by)
             asked = " or ".join(", ".join(suffixes).rsplit(", ", 1))
-            empty += [(d, f"{d}: a trial folder that holds no result file (no {asked} file, the format read; "
+            empty += [EmptyTrial(d, f"{d}: a trial folder that holds no result file (no {asked} file, the format read; "
                        f"{held([d], below).replace('they hold', 'it holds', 1)}): the trial's run wrote nothing, or its "
-                       "files were not copied; counted as a failed input (the tables hold the other trials only)")
+                       "files were not copied; counted as a failed input (the tables hold the other trials only)",
+                                 p, *_folder_trial(d.relative_to(p).as_posix(), trials_by))
                       for d in trials]  # fmt: skip
             _say_empty_algorithms(p, below, found, suffixes, set(trials))
         else:
             out.append((p, None))
     return Inputs(unique_files(out, reals), empty)
+
+
+def _folder_trial(relpath: str, trials_by: str | None) -> tuple[str, int]:
+    """(the folder's path without its trial token, the trial) of a trial folder's relative path
+    (:func:`~lorisnb.core.stats.trials.split_trial` reads the last name as a file's)."""
+    base, trial = split_trial(relpath + "/_", trials_by)
+    return base.removesuffix("_").removesuffix("/"), trial
 
 
 def _holding(root: Path, found: Iterable[Path]) -> set[str]:
@@ -468,7 +506,8 @@ def unique_files(
     was named more than once: an input is never scored twice, nor called a duplicate (a second
     trial) of itself. Its labels do not depend on the order of the namings: a folder's naming is
     kept over the file's own (the labels a folder gives: suite, algorithm), and of two folders the
-    outer one's (more of the path in the labels), the naming of that file in it."""
+    outer one's (more of the path in the labels), the naming of that file in it. A file linked into
+    several trial folders of one tree is a trial in each (copies of one run, which ``compare`` tells)."""
     seen: dict[Path, int] = {}
     out: list[tuple[Path, Path | None]] = []
     again: list[str] = []
@@ -478,6 +517,9 @@ def unique_files(
         if key in seen:
             i = seen[key]
             first = out[i][0]
+            if root is not None and root == out[i][1] and _trial_of(path, root) != _trial_of(first, root):
+                out.append((path, root))  # one file linked into two trial folders of a tree: a trial each (a copy
+                continue  # of the other, which compare tells), never a trial without output
             again.append(str(path) if str(path) == str(first) else f"{path} (= {first})")
             if _naming_order(path, root) < _naming_order(*out[i]):
                 out[i] = (path, root)
@@ -492,6 +534,15 @@ def unique_files(
             stacklevel=3,
         )
     return out
+
+
+def _trial_of(path: Path, root: Path) -> int | None:
+    """The trial a file's path below ``root`` names by the default tokens (None: a path that
+    names two)."""
+    try:
+        return split_trial(path.relative_to(root).as_posix())[1]
+    except ValidationError:
+        return None
 
 
 def _naming_order(path: Path, root: Path | None) -> tuple[int, int, str]:

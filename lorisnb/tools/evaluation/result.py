@@ -94,6 +94,9 @@ class Failure:
     path: Path
     error: str
     kind: str
+    #: (suite, algorithm, trial) of each run this failure leaves without output: an empty trial
+    #: folder's (kind ``empty-trial``), which ``compare`` expects as failed runs of every sequence
+    trials: tuple[tuple[str, str, int], ...] = ()
 
 
 @dataclass

@@ -110,7 +110,7 @@ def _as_given(job: Job, went: Job) -> list[tuple[str, str]]:
 
 def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, executor: Executor | None,
          progress: bool, root: Path | None = None, data: Any = None, notes: list[str] | None = None,
-         empty: list[tuple[Path, str]] = ()) -> Evaluation:  # type: ignore[assignment]  # fmt: skip
+         empty: list[tuple[Path, str, tuple[tuple[str, str, int], ...]]] = ()) -> Evaluation:  # type: ignore[assignment]  # fmt: skip
     """Run the jobs here, in a local pool or on ``executor``; results in the order of the jobs.
     ``empty``: trial folders that hold no result file (:func:`~lorisnb.tools.evaluation.inputs.find_inputs`),
     each a failed input (kind ``empty-trial``)."""
@@ -156,7 +156,7 @@ def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, exec
             (failed if status == "failed" else skipped).append(value)
     check_duplicates([(str(f.path), (f.suite, f.algorithm, f.scene, f.trial), tuple(e.seq for e in f.sequences))
                       for f in done])  # fmt: skip
-    failed += [Failure(folder, why, "empty-trial") for folder, why in empty]
+    failed += [Failure(folder, why, "empty-trial", runs) for folder, why, runs in empty]
     if kind == "openloris" and "mode" in spec.explicit and spec.mode != "auto" and done:
         if all(len(f.sequences) <= 1 for f in done):  # as a pair is told (EvalSpec.refuse_inapplicable)
             notes = [*(notes or []), f"mode {spec.mode}: every input has one sequence, so per-seq and lifelong agree"]
@@ -330,7 +330,7 @@ def evaluate(
     roots = as_paths(paths)
     root = roots[0] if len(roots) == 1 and roots[0].is_dir() else None
     return _run(work, the_spec, "openloris", n_jobs=jobs, executor=executor, progress=progress, root=root, data=data,
-                notes=notes, empty=found.empty_trials)  # fmt: skip
+                notes=notes, empty=found.lost_runs(trials_by))  # fmt: skip
 
 
 #: The spec field each alias of :func:`lorisnb.core.spec.evalspec.make_spec` sets.
@@ -503,7 +503,14 @@ def evaluate_pairs(
         for one in sources
     ]
     return _run(
-        work, the_spec, "pair", n_jobs=jobs, executor=executor, progress=progress, notes=notes, empty=found.empty_trials
+        work,
+        the_spec,
+        "pair",
+        n_jobs=jobs,
+        executor=executor,
+        progress=progress,
+        notes=notes,
+        empty=found.lost_runs(trials_by),
     )
 
 
