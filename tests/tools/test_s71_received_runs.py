@@ -186,3 +186,17 @@ def test_the_command_records_each_root_by_its_name_however_it_was_typed(tmp_path
         "lorisnb", "report", "--res={results}", "--dat", "{data}", "--notebooks", "../reslink",
         "-p", "groundtruth", "{data}/openloris-scene", "-p", "algorithms", "../reslink", "--jobs", "1",
         "--ou={run}", "--", "--data", "../datalink"]  # fmt: skip
+
+
+def test_a_folder_the_run_read_that_is_gone_is_missing(made, tmp_path, capsys, data):
+    """An ``input_roots`` entry whose folder is not here verified as unchanged (nothing below it was
+    listed, so nothing was said); it is missing, exit 1."""
+    here, run_dir = made
+    mine = copy(run_dir, tmp_path / "r")
+    record = json.loads((mine / "run.json").read_text())
+    record["input_roots"] = [*record["input_roots"], "{results}/gone"]
+    with_run_json(mine, json.dumps(record))
+    rc, out, err = run(capsys, "verify", mine, "--results", here / "res", "--data", data.root)
+    assert rc == 1 and "missing: {results}/gone" in out, (out, err)
+    rc, out, err = run(capsys, "verify", run_dir, "--results", here / "res", "--data", data.root)
+    assert rc == 0 and "missing" not in out, (out, err)

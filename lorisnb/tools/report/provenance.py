@@ -664,7 +664,9 @@ def verify_run(
     listed = []
     for r in record.get("input_roots", []):  # a folder it read: walked only where it lies inside those given
         p = place(r, "a folder (or file) the run listed")
-        if p.exists() and not readable(p):
+        if not os.path.lexists(p):  # a folder the run read is gone: nothing below it was seen, so none is said
+            problems.append((r, "missing"))
+        elif p.exists() and not readable(p):
             problems.append((r, "outside"))
         else:
             listed.append(p)
