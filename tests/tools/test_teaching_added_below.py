@@ -164,8 +164,29 @@ def test_a_float32_result_is_told_as_float32_and_a_rounded_one_as_rounded():
         held = np.minimum(np.diff(np.append(np.asarray(stamps, float), t_max)), delta)
         return round(float(np.sum(held * np.asarray(correct)) / (t_max - t_min)), 6)
 
-    with pytest.raises(AnswerError, match=r"you return 0\.365000025; lorisnb gives 0\.365 .*computed in float32\?"):
-        check_correct_rate(f32)
+    def all_f32(stamps, correct, t_min, t_max, delta):  # float32 arithmetic throughout
+        held = np.minimum(np.diff(np.append(np.asarray(stamps, np.float32), np.float32(t_max))), np.float32(delta))
+        return np.sum(held * np.asarray(correct, np.float32)) / np.float32(t_max - t_min)
+
+    for fn in (f32, all_f32):
+        with pytest.raises(
+            AnswerError, match=r"you return 0\.3650000\d+; lorisnb gives 0\.365 .*computed in float32\?"
+        ):
+            check_correct_rate(fn)
     with pytest.raises(AnswerError, match=r"rounded to 6 decimal\(s\)\?") as err:
         check_correct_rate(rounded)
     assert "float32" not in str(err.value)
+
+
+@pytest.mark.parametrize("offset", [1e-7, -2e-7, 3e-8])
+def test_a_small_offset_is_told_close_not_float32(offset):
+    """adversarial teaching pass: cs_r + 1e-7 (3.8e-6 relative at most) was told "computed in
+    float32? ... leave out np.float32", which it never used."""
+    from lorisnb.tools.teaching import check_cs_r
+
+    def shifted(t0, t_min, first_correct, tau):
+        return float(np.exp(-(t0 - t_min) / tau)) * first_correct + offset
+
+    with pytest.raises(AnswerError) as err:
+        check_cs_r(shifted)
+    assert "float32" not in str(err.value) and "close, but not the formula's value" in str(err.value)

@@ -3,8 +3,9 @@
 Each ``check_*`` function compares a learner's answer (a function they wrote, or a number they
 predicted or read off) with lorisnb's own numbers. A right answer prints a line starting with ``✓``
 and returns True; a wrong one raises :class:`~lorisnb.errors.AnswerError` (an ``AssertionError``, so
-nbgrader and pytest count a failed test) saying what is wrong, with the numbers, and a hint naming
-the typical mistake when the answer is what that mistake gives (:data:`MISTAKES`).
+nbgrader and pytest count a failed test) saying what is wrong (too high or too low, and by roughly
+how much, never the reference number a learner could type in), and a hint naming the typical
+mistake when the answer is what that mistake gives (:data:`MISTAKES`).
 
 - :mod:`._checks`: the formulas (Eq. 1-4) and plain numbers and choices;
 - :mod:`._labs`: lab answers whose reference lorisnb computes from the lab's inputs (so that the

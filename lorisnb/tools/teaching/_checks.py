@@ -14,7 +14,7 @@ import numpy as np
 
 from lorisnb.core.metrics import openloris as metrics
 from lorisnb.core.pipeline.model import FileErrors
-from lorisnb.tools.teaching._grading import Variants
+from lorisnb.tools.teaching._grading import Variants, how_far
 from lorisnb.tools.teaching._grading import check_function as _check_function
 from lorisnb.tools.teaching._grading import fail as _fail
 from lorisnb.tools.teaching._grading import number as _number
@@ -152,7 +152,7 @@ def check_correct_rate(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]
         ("delta_cap", lambda stamps, correct, t_min, t_max, delta: _cr_t(stamps, correct, t_min, t_max, np.inf)),
         *_rate_variants(tracking=False),
     ]
-    return _check_function("correct_rate", fn, cases, _cr, variants)
+    return _check_function("correct_rate", fn, cases, _cr, variants, reveal=cases is CR_CASES)
 
 
 def check_correct_rate_tracking(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]] = CR_CASES) -> bool:
@@ -163,7 +163,7 @@ def check_correct_rate_tracking(fn: Callable[..., Any], cases: Sequence[Mapping[
         ("delta_cap", lambda stamps, correct, t_min, t_max, delta: _cr(stamps, correct, t_min, t_max, np.inf)),
         *_rate_variants(tracking=True),
     ]
-    return _check_function("correct_rate_tracking", fn, cases, _cr_t, variants)
+    return _check_function("correct_rate_tracking", fn, cases, _cr_t, variants, reveal=cases is CR_CASES)
 
 
 # --- Eq. (4): re-localization score --------------------------------------------------------------
@@ -198,7 +198,7 @@ def check_cs_r(fn: Callable[..., Any], cases: Sequence[Mapping[str, Any]] = CSR_
         ("first_pose", lambda t0, t_min, first_correct, tau: float(np.exp(-np.float64(tau) / (t0 - t_min)))),
         ("fraction", lambda t0, t_min, first_correct, tau: 100.0 * _csr(t0, t_min, first_correct, tau)),
     ]
-    return _check_function("cs_r", fn, cases, _csr, variants)
+    return _check_function("cs_r", fn, cases, _csr, variants, reveal=cases is CSR_CASES)
 
 
 # --- numbers: predictions and read-off answers ---------------------------------------------------
@@ -215,9 +215,12 @@ def check_value(
     fraction: bool = False,
 ) -> bool:
     """A number the learner predicted or read off: right when within ``tol`` (absolute) of
-    ``expected``; else the message gives both, and a hint when the answer is within ``tol`` of
-    the value a typical mistake gives (``mistakes``: name in :data:`MISTAKES` -> that value).
-    ``fraction``: the answer is a rate in [0, 1] (CR, CR-T, CS-R); one given in percent gets a hint."""
+    ``expected``; else the message says whether the answer is too high or too low and by roughly
+    how much (:func:`how_far`), never ``expected`` itself (typed in, it would score without any
+    work), and gives a hint when the answer is within ``tol`` of the value a typical mistake gives
+    (``mistakes``: name in :data:`MISTAKES` -> that value). A right answer's line gives the
+    number ``source`` computed. ``fraction``: the answer is a rate in [0, 1] (CR, CR-T, CS-R); one
+    given in percent gets a hint."""
     unknown = [m for m in (mistakes or {}) if m not in MISTAKES]
     if unknown:
         raise ValueError(f"unknown mistake(s) {unknown}; known: {', '.join(MISTAKES)}")
@@ -227,7 +230,7 @@ def check_value(
     hit = next((m for m, x in (mistakes or {}).items() if abs(v - x) <= tol and abs(x - expected) > tol), None)
     if hit is None and fraction and abs(v / 100.0 - expected) <= tol and v > 1:
         hit = "fraction"  # a rate given in percent
-    _fail(f"{what}: you answered {v:.4g}; {source} computes {expected:.4g} (tolerance {tol:g})", hit)
+    _fail(f"{what}: you answered {v:.4g}, {how_far(v, expected, tol)} (tolerance {tol:g})", hit)
     return False  # not reached
 
 

@@ -48,6 +48,20 @@ def ok(message: str) -> bool:
     return True
 
 
+def how_far(got: float, want: float, tol: float) -> str:
+    """Whether ``got`` is too high or too low for ``want`` and the decade of the difference (``just
+    outside the tolerance`` within 3 ``tol``), never ``want`` itself: a check a learner sees while
+    working, or in feedback before submitting again, must not hand them the number to type in."""
+    d = abs(got - want)
+    side = "too high" if got > want else "too low"
+    if not math.isfinite(d):
+        return f"{side} (it is not finite)"
+    if d <= 3 * tol:
+        return f"{side}, just outside the tolerance"
+    k = math.floor(math.log10(d))
+    return f"{side}, by between {10.0**k:g} and {10.0 ** (k + 1):g}"
+
+
 def same(a: Any, b: Any, tol: float) -> bool:
     a, b = np.asarray(a, float), np.asarray(b, float)
     return a.shape == b.shape and bool(np.all((np.isclose(a, b, rtol=tol, atol=tol)) | (np.isnan(a) & np.isnan(b))))
@@ -158,9 +172,13 @@ def check_function(
     variants: Variants,
     boolean: bool = False,
     tol: float = 1e-9,
+    reveal: bool = False,
 ) -> bool:
     """Call ``fn(**case)`` on each case; compare with ``reference(**case)``; name the mistakes whose
-    ``variant(**case)`` the answers match on every case."""
+    ``variant(**case)`` the answers match on every case. ``reveal``: a wrong number's message gives
+    lorisnb's value on the case (the hand-made public cases, whose values anyone can compute with
+    lorisnb); else it says too high or too low and by roughly how much (:func:`how_far`): the
+    hidden tests' values, in the grader's feedback, would let a resubmission return them case by case."""
     if not callable(fn):
         fail(f"{what}: expected the function you wrote, got {type(fn).__name__} {_short(fn)}")
     if len(cases) == 0:  # e.g. the default cases emptied by the notebook: nothing would be checked
@@ -208,7 +226,8 @@ def check_function(
             fail(f"{what} returned None on case {k + 1}: did you forget `return`?")
         else:
             if _is_nan(got):
-                fail(f"{what} returned NaN on case {k + 1} ({describe(case)}); lorisnb gives {float(want):.6g}", "nan")
+                gives = f"; lorisnb gives {float(want):.6g}" if reveal else ""
+                fail(f"{what} returned NaN on case {k + 1} ({describe(case)}){gives}", "nan")
             got = number(f"{what} on case {k + 1}", got)
         answers.append(got)
         if wrong is None and not same(got, want, tol):
@@ -227,10 +246,21 @@ def check_function(
             f"Eq. (1) says {bool(want[i])}"
         )
     else:
-        mine, theirs = distinct(got, float(want))
-        detail = f"on case {k + 1} ({describe(cases[k])}) you return {mine}; lorisnb gives {theirs}"
-        if abs(got - float(want)) <= 1e-4 * max(1.0, abs(float(want))):  # the 6-digit forms would be equal
-            detail += f" (they differ by {abs(got - float(want)):.2g}, more than the tolerance {tol:g}: {_why_close(got, float(want))})"
+        w = float(want)
+        close = abs(got - w) <= 1e-4 * max(1.0, abs(w))  # the 6-digit forms would be equal
+        why = _why_close(got, w, _on_float32(reference, cases[k]) if close else [])
+        if reveal:
+            mine, theirs = distinct(got, w)
+            detail = f"on case {k + 1} ({describe(cases[k])}) you return {mine}; lorisnb gives {theirs}"
+            if close:
+                detail += f" (they differ by {abs(got - w):.2g}, more than the tolerance {tol:g}: {why})"
+        else:
+            detail = f"on case {k + 1} ({describe(cases[k])}) you return {got:.6g}, "
+            if close:
+                detail += (f"{'too high' if got > w else 'too low'} but close: within 1e-4 of lorisnb's value, not "
+                           f"within the tolerance {tol:g} ({why})")  # fmt: skip
+            else:
+                detail += how_far(got, w, tol)
     fail(f"{what}: {detail}", mistakes)
 
 
@@ -238,18 +268,46 @@ def check_function(
 FLOAT32_REL = 64 * 2.0**-24
 
 
-def _why_close(got: float, want: float) -> str:
+def _on_float32(reference: Callable[..., Any], case: Mapping[str, Any]) -> list[float]:
+    """lorisnb's value on ``case`` with its float arrays rounded to float32, then with its float numbers
+    too: what a formula that casts its inputs to float32 (and computes on in float64) returns."""
+    out = []
+    for numbers in (False, True):
+        c = {
+            n: np.asarray(v, np.float32)
+            if isinstance(v, np.ndarray) and v.dtype.kind == "f"
+            else np.float32(v)
+            if numbers and isinstance(v, (float, np.floating))
+            else v
+            for n, v in case.items()
+        }
+        try:
+            with np.errstate(all="ignore"):
+                out.append(float(reference(**c)))
+        except (ArithmeticError, ValueError, TypeError, IndexError):
+            continue
+    return out
+
+
+def _why_close(got: float, want: float, on_float32: Sequence[float] = ()) -> str:
     """Why a number this close to lorisnb's is still refused: rounded to some decimals, or computed in
-    float32 (about 7 significant digits: a difference of a few float32 units of ``want``)."""
+    float32: a float32 number within a few float32 units of ``want`` (float32 arithmetic), or lorisnb's
+    value on the case's inputs rounded to float32 (``on_float32``, :func:`_on_float32`); else only that
+    it is close (an offset of 1e-7 is no float32, whatever its size)."""
     places = next((d for d in range(10) if abs(got - round(want, d)) <= 1e-12 * max(1.0, abs(want))), None)
     if places is not None:
         return f"rounded to {places} decimal(s)? return the number unrounded"
-    if abs(got - want) <= FLOAT32_REL * abs(want):
+    in_float32 = float(np.float32(got)) == got and abs(got - want) <= FLOAT32_REL * abs(want)
+    of_float32 = any(v != want and abs(got - v) <= 1e-12 * max(1.0, abs(v)) for v in on_float32)
+    if in_float32 or of_float32:
         return (
             "computed in float32? float32 keeps about 7 significant digits, and the formula checks compare to "
             f"{1e-9:g}: compute in float64 (numpy's default; leave out np.float32 and .astype(np.float32))"
         )
-    return "rounded?"
+    return (
+        "close, but not the formula's value: look for a small term that differs (a constant added or rounded, "
+        "a bound one pose off)"
+    )
 
 
 def distinct(a: float, b: float) -> tuple[str, str]:

@@ -16,6 +16,7 @@ from lorisnb.core.simulate import Faults, simulated_errors
 from lorisnb.core.trajectory.poses import Trajectory
 from lorisnb.errors import AnswerError
 from lorisnb.tools.teaching._checks import check_choice, check_value
+from lorisnb.tools.teaching._grading import how_far
 from lorisnb.tools.teaching._mistakes import MISTAKES
 
 
@@ -73,12 +74,13 @@ def check_eps_at_cr(
     if v is not None and np.isnan(v) and np.isnan(at(np.radians(phi), delta)):
         raise AnswerError(  # eps_at_cr's NaN: no eps reaches the target, as with phi in radians
             f"✗ smallest eps for a scene CR of {target:g} (m): your answer is NaN, which eps_at_cr gives when no eps "
-            f"reaches the target; lorisnb computes {want:.4g} with phi = {phi:g} degrees"
+            f"reaches the target; with phi = {phi:g} degrees an eps does reach it"
             f"\nHint (degrees radians): {MISTAKES['degrees_radians']}"
         )
     if v is not None and want + 0.01 < v <= want + 0.2:  # past the step: a grid too coarse to find the smallest eps
         raise AnswerError(
-            f"✗ smallest eps for a scene CR of {target:g} (m): you answered {v:.4g}; lorisnb computes {want:.4g}"
+            f"✗ smallest eps for a scene CR of {target:g} (m): you answered {v:.4g}, {how_far(v, want, 0.01)} "
+            "(tolerance 0.01)"
             f"\nHint (coarse grid): {MISTAKES['coarse_grid']}"
         )
     return check_value(f"smallest eps for a scene CR of {target:g} (m)", answer, want, tol=0.01,

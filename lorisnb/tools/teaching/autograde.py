@@ -54,7 +54,7 @@ from lorisnb.tools.teaching._grading import SandboxedAnswer
 from lorisnb.tools.teaching._prose import lab_variant, same_id
 from lorisnb.tools.teaching.sandbox import Limits, NotPlain, Sandbox, SandboxError, SandboxTimeout, decode, error_of
 
-GRADER_VERSION = "18"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
+GRADER_VERSION = "19"  # part of every result's digest: a new grader regrades everything (3: D1-G1 vary per student;
 # 4: the guard keeps lorisnb out of formula answers, predictions are graded alone from the lab's numbers;
 # 5: lists and tuples of numbers, and numpy's strings, read back as values; E1 reads a one-value Series;
 # 6: IPython's magics and shell escapes run as in Jupyter; the lab's names a def reads when defined (eps=eps)
@@ -83,7 +83,9 @@ GRADER_VERSION = "18"  # part of every result's digest: a new grader regrades ev
 # (a line beside its reply, a second reply, names not asked for) scores 0 with a note; ids alike in Unicode (NFKC) are one;
 # 17: a reply to a request found after its first was read (the code forged it and answered the grader's sync itself)
 # scores 0 for the request's answer, wherever it is found; C1's hidden cases are drawn from the grader's seed;
-# 18: the cells run in a module registered as __main__, as in Jupyter: a cell's function pickles by name (a fork pool))
+# 18: the cells run in a module registered as __main__, as in Jupyter: a cell's function pickles by name (a fork pool);
+# 19: a wrong number is told too high or too low, never lorisnb's number (nor a hidden case's value): feedback written
+# by 18 gave it; a temporary folder holding the Python environment is emptied, the environment bound back read-only)
 
 
 @dataclass(frozen=True)
