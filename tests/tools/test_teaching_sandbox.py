@@ -755,11 +755,13 @@ def test_a_copied_notebook_is_flagged_on_both_students_and_keeps_its_points(tmp_
     assert "s-ann and s-ben (tiny_lab: Q1_total, Q2_mean, Q3_word, Q4_flag, Q5_count)" in err
 
 
-def test_a_needed_path_through_a_link_in_a_temporary_folder_keeps_that_folder(tmp_path):
+def test_a_needed_path_through_a_link_in_a_temporary_folder_is_kept_in_that_folder(tmp_path):
     """A clone in /tmp whose .venv links to a checkout's: the interpreter is started by the path
     through the link, which lay in a temporary folder the sandbox emptied; the child could not start
-    and every answer of the kit's demo scored 0 (a fresh clone's make grade: 0 / 18)."""
-    from lorisnb.tools.teaching.sandbox import private_folders
+    and every answer of the kit's demo scored 0 (a fresh clone's make grade: 0 / 18). The folder is
+    emptied all the same, the path through the link bound back in it (until the adversarial teaching
+    pass the whole folder was left open: tests/tools/test_teaching_sandbox_tmp_env.py)."""
+    from lorisnb.tools.teaching.sandbox import kept_paths, private_folders
 
     tmp, real = tmp_path / "tmp", tmp_path / "checkout" / ".venv" / "bin"
     real.mkdir(parents=True)
@@ -769,4 +771,5 @@ def test_a_needed_path_through_a_link_in_a_temporary_folder_keeps_that_folder(tm
     work.mkdir(parents=True)
     python = tmp / "clone" / ".venv" / "bin" / "python"
     assert private_folders(work, [tmp], [real], tmp=False) == [tmp.resolve()]  # only the resolved path: emptied
-    assert private_folders(work, [tmp], [python.parent], tmp=False) == []  # the path the child starts by: kept
+    assert private_folders(work, [tmp], [python.parent], tmp=False) == [tmp.resolve()]
+    assert kept_paths([tmp.resolve()], [python.parent]) == [python.parent]  # the path the child starts by: kept

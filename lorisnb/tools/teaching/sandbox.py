@@ -10,7 +10,8 @@ course server), the child gets (``isolation == "full"``):
   (and a fresh 64 MB ``/dev/shm`` for multiprocessing's locks),
   the folders named ``hidden`` (the course folder, the labs' sources, the checkout lorisnb runs
   from) are replaced by empty, unreadable folders, and the temporary folders (``/tmp``, ``/var/tmp``,
-  ``$TMPDIR``) and those named ``private`` by empty ones, its working folder alone kept in them: it
+  ``$TMPDIR``) and those named ``private`` by empty ones, its working folder alone kept in them (and,
+  read-only, what it needs to run that lies there: a Python environment in ``/tmp/x/venv``): it
   sees no other grader's folder, nor another sandbox's of the same submission;
 - its own PID namespace (it sees and signals no other process) and IPC namespace (no System V or POSIX
   message queue, semaphore or shared memory reaches another sandbox);
@@ -135,19 +136,50 @@ def _temporary_folders() -> list[Path]:
     return [Path(d).resolve() for d in dict.fromkeys((tempfile.gettempdir(), "/tmp", "/var/tmp"))]
 
 
-def private_folders(work: Path, private: Sequence[Path], needed: Sequence[Path], tmp: bool = True) -> list[Path]:
-    """The folders a sandbox working in ``work`` sees empty (but for ``work`` itself): the temporary
-    folders (unless not ``tmp``) and ``private``, less any holding one of ``needed`` (the Python
-    environment, lorisnb) or the root, and less those inside another of them (emptied with it)."""
-    found = [Path(p).resolve() for p in (*(_temporary_folders() if tmp else []), *private)]
+def _as_needed(needed: Sequence[Path]) -> list[Path]:
     # each needed path as written and as resolved: an interpreter reached through a link in a temporary
     # folder (a clone's .venv linking to a checkout's) is started by the path through the link
-    need = [q for n in needed for q in (Path(os.path.abspath(n)), Path(n).resolve())]
-    found = [
-        p for p in dict.fromkeys(found) if p.is_dir() and p != p.parent and not any(n.is_relative_to(p) for n in need)
-    ]
+    return list(dict.fromkeys(q for n in needed for q in (Path(os.path.abspath(n)), Path(n).resolve())))
+
+
+_WARNED: set[Path] = set()
+
+
+def private_folders(work: Path, private: Sequence[Path], needed: Sequence[Path], tmp: bool = True) -> list[Path]:
+    """The folders a sandbox working in ``work`` sees empty (but for ``work`` itself and the paths of
+    ``needed`` inside them, :func:`kept_paths`): the temporary folders (unless not ``tmp``) and
+    ``private``, less the root and less those inside another of them (emptied with it). A folder that
+    is one of ``needed`` (the Python environment, lorisnb), or lies inside one, cannot be emptied: it
+    is left as it is, and a warning on stderr names it and what to do."""
+    found = [Path(p).resolve() for p in (*(_temporary_folders() if tmp else []), *private)]
+    need = _as_needed(needed)
+    out = []
+    for p in dict.fromkeys(found):
+        if not p.is_dir() or p == p.parent:
+            continue
+        inside = next((n for n in need if p.is_relative_to(n)), None)
+        if inside is not None:
+            if p not in _WARNED:
+                _WARNED.add(p)
+                print(
+                    f"warning: the grading sandbox cannot hide {p} from a submission's code: it is, or lies in, "
+                    f"{inside}, which the sandbox needs to run (the Python environment, lorisnb); a submission "
+                    f"can list and read what {p} holds. Install the environment elsewhere, or set TMPDIR to a "
+                    "folder outside it",
+                    file=sys.stderr,
+                )
+            continue
+        out.append(p)
     del work
-    return [p for p in found if not any(p != q and p.is_relative_to(q) for q in found)]
+    return [p for p in out if not any(p != q and p.is_relative_to(q) for q in out)]
+
+
+def kept_paths(private: Sequence[Path], needed: Sequence[Path]) -> list[Path]:
+    """The folders of ``needed`` (as written and as resolved) that lie inside one of ``private``, the
+    outermost ones: a sandbox sees them, read-only, in the emptied folder (a Python environment in
+    ``/tmp/x/venv`` is bound back there, and nothing else of ``/tmp`` shows)."""
+    found = [n for n in _as_needed(needed) if n.is_dir() and any(n != p and n.is_relative_to(p) for p in private)]
+    return [n for n in found if not any(n != q and n.is_relative_to(q) for q in found)]
 
 
 def closed_to_others(paths: Sequence[Path]) -> list[Path]:
@@ -211,8 +243,10 @@ def _account_exists(uid: int, pwd: Any) -> bool:
 
 
 # the child's mount namespace, as root before dropping to the student's uid: everything read-only,
-# the hidden folders emptied, the private folders (the temporary folders: other graders' and other
-# sandboxes' folders) replaced by empty ones, only the working folder writable
+# the private folders (the temporary folders: other graders' and other sandboxes' folders) replaced by
+# empty ones, in which the kept paths (what the child needs to run that lies there: a Python
+# environment in /tmp) are bound back read-only, then the hidden folders emptied (also inside a kept
+# path), only the working folder writable
 _SETUP = r"""set -e
 work="$1"; uid="$2"; shift 2
 mount --make-rprivate /
@@ -224,14 +258,33 @@ mount -t tmpfs -o size=64m,mode=1777,nosuid,nodev lorisnb-shm /dev/shm  # its ow
 stage=/dev/shm/.lorisnb-work  # the working folder, kept aside while the hidden and private folders are emptied
 mkdir "$stage"
 mount --bind "$work" "$stage"
+kept=0  # the kept paths, kept aside the same way (each one's path in a file beside it: no arrays in sh)
 while [ "$1" != "--" ]; do
-  if [ -d "$1" ]; then mount -t tmpfs -o size=4k,mode=0700,ro lorisnb-hidden "$1"; fi
+  kept=$((kept + 1))
+  mkdir "/dev/shm/.lorisnb-keep-$kept"
+  mount --bind "$1" "/dev/shm/.lorisnb-keep-$kept"
+  printf '%s' "$1" > "/dev/shm/.lorisnb-keep-$kept.path"
   shift
 done
 shift
 private=""
 while [ "$1" != "--" ]; do
   if [ -d "$1" ]; then mount -t tmpfs -o size=1m,mode=1777,nosuid,nodev lorisnb-private "$1"; private="$private $1"; fi
+  shift
+done
+shift
+i=0
+while [ "$i" -lt "$kept" ]; do
+  i=$((i + 1))
+  dest=$(cat "/dev/shm/.lorisnb-keep-$i.path")
+  mkdir -p "$dest"
+  mount -n --move "/dev/shm/.lorisnb-keep-$i" "$dest"
+  mount -o remount,bind,ro "$dest"
+  rmdir "/dev/shm/.lorisnb-keep-$i"
+  rm "/dev/shm/.lorisnb-keep-$i.path"
+done
+while [ "$1" != "--" ]; do
+  if [ -d "$1" ]; then mount -t tmpfs -o size=4k,mode=0700,ro lorisnb-hidden "$1"; fi
   shift
 done
 shift
@@ -275,6 +328,7 @@ class Sandbox:
         self.python_path = [str(p) for p in python_path]
         self.isolation = "full" if can_isolate() else "limits"
         self.private = private_folders(self.work, private, self._needed(), private_tmp)
+        self.kept = kept_paths(self.private, self._needed())  # bound back, read-only, in the emptied folders
         self._proc: subprocess.Popen[bytes] | None = None
         self._buffer = bytearray()
         self._scanned = 0  # bytes of the buffer known to hold no line end
@@ -325,7 +379,8 @@ class Sandbox:
             hidden.append(str(Path(lorisnb.__file__).resolve().parent))
         return [
             "unshare", "--mount", "--net", "--pid", "--ipc", "--fork", "--kill-child", "--",
-            "sh", "-c", _SETUP, "sh", str(self.work), str(self.uid), *hidden, "--", *map(str, self.private), "--",
+            "sh", "-c", _SETUP, "sh", str(self.work), str(self.uid), *map(str, self.kept), "--",
+            *map(str, self.private), "--", *hidden, "--",
             *child,
         ]  # fmt: skip
 
