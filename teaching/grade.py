@@ -9,7 +9,9 @@ COURSE holds release/<lab>/ and submitted/<student>/<lab>/<lab>.ipynb; the labs'
 teaching/source/ (``--source``). Writes COURSE/graded/, grades.csv, grades-demo.csv, exports/.
 Exit status 0 when every submission was graded, 1 otherwise (a message says why; a submission that
 could not be graded, such as a notebook that is not JSON, scores 0, is named, and the others are
-graded). Warnings (the exit status stays 0) name the submissions whose time is unknown (a
+graded), 2 when an option is refused before anything is graded (a --due without a time zone, a
+--late-per-day outside [0, 1], a --late-max-days below 0, a --lab with no source notebook or no
+release folder, a --roster that cannot be read or is malformed, a --source or COURSE that is no folder). Warnings (the exit status stays 0) name the submissions whose time is unknown (a
 timestamp.txt that is no time; with --due, how many have none: counted as on time), the submissions
 whose folders name one id as the data variants take it (Alice and alice: the same numbers), the
 submissions holding the instructor's nbgrader markers (the source notebook, with its solutions), and the
@@ -27,7 +29,7 @@ from pathlib import Path
 
 from lorisnb.errors import ValidationError
 from lorisnb.tools.teaching.autograde import GradeSettings
-from lorisnb.tools.teaching.gradebook import LatePolicy, grade_class, read_roster, write_exports
+from lorisnb.tools.teaching.gradebook import LatePolicy, Student, grade_class, read_roster, write_exports
 from lorisnb.tools.teaching.sandbox import BUDGET_CELLS, BUDGET_MIN_S, Limits, can_isolate
 
 HERE = Path(__file__).resolve().parent
@@ -41,6 +43,45 @@ def _positive(kind: type) -> object:
         return value
 
     return parse
+
+
+def _options(a: argparse.Namespace) -> tuple[dict[str, LatePolicy] | None, dict[str, Student] | None, Limits]:
+    """The late policy per lab, the roster and the limits the options give; a refused option raises
+    (ValidationError, ValueError or OSError) with a message naming it."""
+    for what, folder in (("COURSE", a.course), ("--source", a.source)):
+        if not folder.is_dir():
+            raise ValidationError(f"{what} {folder} is not a folder")
+    labs = a.lab or sorted(p.name for p in a.source.iterdir() if (p / f"{p.name}.ipynb").is_file())
+    for lab in a.lab or []:
+        if not (a.source / lab / f"{lab}.ipynb").is_file():
+            known = sorted(p.name for p in a.source.iterdir() if (p / f"{p.name}.ipynb").is_file())
+            raise ValidationError(f"--lab {lab}: no {a.source / lab / f'{lab}.ipynb'} (the labs: {', '.join(known)})")
+    for lab in labs:
+        if not (a.course / "release" / lab).is_dir():
+            raise ValidationError(
+                f"lab {lab!r}: no release folder {a.course / 'release' / lab} (run `make student` first)"
+            )
+    late = None
+    if a.due is not None:
+        try:
+            due = datetime.fromisoformat(a.due)
+        except ValueError:
+            raise ValidationError(
+                f"--due {a.due!r} is not an ISO 8601 date and time (write e.g. 2026-12-01T23:59+01:00)"
+            ) from None
+        try:
+            policy = LatePolicy(due, a.late_per_day or 0.0, a.late_max_days)
+        except ValidationError as exc:
+            raise ValidationError(f"--due/--late-per-day/--late-max-days: {exc}") from None
+        late = {lab: policy for lab in labs}
+    roster = None
+    if a.roster:
+        try:
+            roster = read_roster(a.roster)
+        except OSError as exc:
+            raise ValidationError(f"--roster {a.roster}: {exc.strerror or exc}") from None
+    limits = Limits(cell_timeout_s=a.timeout, budget_s=a.budget, memory_bytes=a.memory_mb * 1024**2)
+    return late, roster, limits
 
 
 HONEST_CELL_S = 60.0  # below this --timeout, honest answer cells were stopped (E1's fine scan: 13 to 37 s measured)
@@ -65,21 +106,20 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     if (a.late_per_day is not None or a.late_max_days is not None) and a.due is None:
         ap.error("--late-per-day and --late-max-days need --due")
+    if a.timeout < HONEST_CELL_S:
+        print(
+            f"warning: --timeout {a.timeout:g} s is below {HONEST_CELL_S:g} s: honest answer cells have taken up to "
+            "37 s on a busy 2-core machine (E1's scan on a 2 mm grid, as its hint suggests), and a cell stopped "
+            "at its limit scores 0 (teaching/README.md, 'A slow submission is stopped at its budget'); lower "
+            "--budget instead to bound a class's time",
+            file=sys.stderr,
+        )
+    try:  # the options, all refused (exit 2) before anything is graded
+        late, roster, limits = _options(a)
+    except (ValidationError, ValueError, OSError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     try:
-        late = None
-        if a.due is not None:
-            policy = LatePolicy(datetime.fromisoformat(a.due), a.late_per_day or 0.0, a.late_max_days)
-            late = {lab: policy for lab in (a.lab or [p.name for p in a.source.iterdir() if p.is_dir()])}
-        roster = read_roster(a.roster) if a.roster else None
-        limits = Limits(cell_timeout_s=a.timeout, budget_s=a.budget, memory_bytes=a.memory_mb * 1024**2)
-        if a.timeout < HONEST_CELL_S:
-            print(
-                f"warning: --timeout {a.timeout:g} s is below {HONEST_CELL_S:g} s: honest answer cells have taken up to "
-                "37 s on a busy 2-core machine (E1's scan on a 2 mm grid, as its hint suggests), and a cell stopped "
-                "at its limit scores 0 (teaching/README.md, 'A slow submission is stopped at its budget'); lower "
-                "--budget instead to bound a class's time",
-                file=sys.stderr,
-            )
         if not can_isolate():
             print(
                 "warning: not root on Linux with unshare/setpriv: submissions run with time and memory limits "

@@ -576,7 +576,8 @@ def grade_class(
     """Grade every submission of ``course`` (``submitted/<student>/<lab>/<lab>.ipynb``) against
     ``source/<lab>/<lab>.ipynb`` and ``course/release/<lab>/``; regrade only what changed."""
     course, source = course.resolve(), source.resolve()
-    labs = list(labs) if labs else sorted(p.name for p in source.iterdir() if (p / f"{p.name}.ipynb").is_file())
+    all_labs = sorted(p.name for p in source.iterdir() if (p / f"{p.name}.ipynb").is_file())
+    labs = list(labs) if labs else all_labs
     secret = _secret(course)
     settings = grading_settings(course, source, settings or GradeSettings(), secret)
     todo, done = [], []
@@ -593,7 +594,7 @@ def grade_class(
         stubs[lab] = answer_stubs(spec, release)
         canonical[lab] = canonical_answers(spec)
         base = digest(src_nb.read_bytes(), _release_bytes(release), repr(settings.limits))
-        for folder, why in _without_notebook(course / "submitted", lab):  # 0 with why: never no row at all
+        for folder, why in _without_notebook(course / "submitted", lab, all_labs):  # 0 with why: never no row at all
             res = unreadable(spec, folder.parent.name, folder / f"{lab}.ipynb", FileNotFoundError(), 0.0, why=why)
             _write_result(course, res)
             done.append(res)
@@ -658,14 +659,24 @@ def grade_class(
     return graded
 
 
-def _without_notebook(submitted: Path, lab: str) -> list[tuple[Path, str]]:
+def _without_notebook(submitted: Path, lab: str, labs: Sequence[str] = ()) -> list[tuple[Path, str]]:
     """Each student's folder of ``lab`` (``submitted/<student>/<lab>/``) that holds no ``<lab>.ipynb``
-    (a zip of it, another name), with why: such a student had no row in grades.csv and no word. Only
-    the names of the folder's files are said, never read; a linked folder's are not even listed."""
+    (a zip of it, another name), and each student's folder without a ``<lab>/`` folder that holds the
+    lab's file (``<lab>.ipynb``, ``<lab>.zip``...) itself, or notebooks and no folder of any of
+    ``labs`` (the course's), with why: such a student had no row in grades.csv and no word. Only the
+    names of the folder's files are said, never read; a linked folder's are not even listed."""
     out = []
     for student in sorted(submitted.iterdir()) if submitted.is_dir() else []:
         folder = student / lab
-        if (folder / f"{lab}.ipynb").exists() or (folder / f"{lab}.ipynb").is_symlink() or not os.path.lexists(folder):
+        if not os.path.lexists(folder):  # no <lab>/: the notebook put in the student's folder itself?
+            if student.is_dir() and not student.is_symlink():
+                misplaced = _misplaced(student, lab, labs)
+                if misplaced:
+                    out.append((folder, f"{misplaced} is not where the grader looks: return it as "
+                                        f"submitted/{student.name}/{lab}/{lab}.ipynb (a folder per lab, as nbgrader "
+                                        "collects it), named as released"))  # fmt: skip
+            continue
+        if (folder / f"{lab}.ipynb").exists() or (folder / f"{lab}.ipynb").is_symlink():
             continue
         if student.is_symlink() or folder.is_symlink() or not folder.is_dir():
             out.append((folder, f"{student.name}/{lab} is a link or not a folder: refused, nothing in it read"))
@@ -675,6 +686,20 @@ def _without_notebook(submitted: Path, lab: str) -> list[tuple[Path, str]]:
         out.append((folder, f"no notebook named {lab}.ipynb in {student.name}/{lab}/ (found: {found}); return the "
                             "notebook itself, named as released, not a zip or a copy under another name"))  # fmt: skip
     return out
+
+
+def _misplaced(student: Path, lab: str, labs: Sequence[str]) -> str:
+    """The files of ``student``'s folder (which has no ``<lab>/``) that look like ``lab``'s
+    submission, as ``<student>/<name>`` (the first three): those named after the lab, else, when the
+    folder holds no folder of any lab of ``labs``, its notebooks; "" when none."""
+    names = sorted(os.listdir(student))
+    found = [n for n in names if n.lower().startswith(lab.lower())]
+    if not found and not any(os.path.isdir(student / n) for n in names if n in labs):
+        found = [n for n in names if n.lower().endswith(".ipynb")]
+    shown = ", ".join(f"{student.name}/{n}" for n in found[:3]) + (
+        f" and {len(found) - 3} more" if len(found) > 3 else ""
+    )
+    return shown
 
 
 def _write_result(course: Path, res: SubmissionResult) -> None:
