@@ -13,6 +13,7 @@ from typing import Any
 
 import pandas as pd
 
+from lorisnb._version import __version__
 from lorisnb.cli.commands import every_column, fmt_table, report_problems, run_evaluation, tables_only
 from lorisnb.cli.options import UNUSED
 from lorisnb.cli.outputs import check_outputs, refuse_unused
@@ -71,9 +72,40 @@ def _side(path: str, args: argparse.Namespace) -> tuple[Any, dict[str, str], lis
     ahead = [] if newest is None or newest <= now else [
         f"{path}: its newest file's time {newest.isoformat()} is in the future (now {now.isoformat()}; another machine's "
         "clock?), so CAND's time is unknown: an earlier run holding every value of it is taken as its copy"]  # fmt: skip
-    run = Run(p, "results", table, expected=ev.durations(), created=None if ahead else newest, created_from=made,
-              warnings=ahead)  # fmt: skip
+    meta = {"lorisnb_version": __version__, "inputs": _groundtruth_sums(args, table)}  # as a report run records them
+    run = Run(p, "results", table, meta=meta, expected=ev.durations(), created=None if ahead else newest,
+              created_from=made, warnings=ahead)  # fmt: skip
     return run, failed, sorted(failed)
+
+
+def _groundtruth_sums(args: argparse.Namespace, table: pd.DataFrame) -> dict[str, str]:
+    """The SHA-256 of the ground-truth files a result folder was scored against, by path, as a report
+    run's run.json records them (``inputs``; :meth:`~lorisnb.tools.decisions.runs.Run.groundtruth_sums`
+    reads their names): the data root's ``gt_<scene>_1.txt`` of each OpenLORIS scene of the table, or
+    the ``--gt`` file of a pair. None for a manifest's sessions (each names its own): then not checked,
+    and :func:`lorisnb.tools.decisions.history.checked` says so."""
+    from lorisnb.errors import LorisError
+    from lorisnb.io.datasets.paths import find_data
+    from lorisnb.tools.report.provenance import sha256
+
+    files: list[Path] = []
+    if getattr(args, "manifest", None):
+        return {}
+    if getattr(args, "gt", None):
+        files = [Path(args.gt)]
+    elif len(table):
+        try:
+            root = find_data(getattr(args, "data", None))
+            files = [root.groundtruth(s) for s in sorted({str(x) for x in table["scene"]})]
+        except LorisError:  # a scene without ground truth there was not scored against one
+            files = []
+    out = {}
+    for f in files:
+        try:
+            out[os.path.abspath(f)] = sha256(f)
+        except (OSError, LorisError):
+            continue
+    return out
 
 
 def _refuse_no_common_algorithm(base: Any, cand: Any, paths: list[str]) -> None:
@@ -130,9 +162,40 @@ def _last_comparable(folder: Path, cand: Any) -> Any:
     return base
 
 
+def refuse_not_comparable(base: Any, cand: Any) -> None:
+    """A ValidationError (exit 2) when BASE and CAND are not comparable by the one rule ``history``
+    and ``--baseline last-comparable`` apply (:func:`lorisnb.tools.decisions.history.comparability`:
+    the spec and thresholds, lorisnb's version, the ground truth's checksums, where both runs record
+    them). ``diff`` noted a version change and judged, exit 0, where ``history`` of the same two runs
+    exits 2."""
+    from lorisnb.tools.decisions.history import comparability
+    from lorisnb.tools.decisions.runs import spec_differences
+
+    problems = comparability(base, cand)
+    if not problems:
+        return
+    specs = spec_differences(base, cand)
+    if len(problems) == len(specs):
+        what, same = "different evaluation specs", "spec"
+    else:
+        what = "different evaluation specs, lorisnb versions or ground truth" if specs else (
+            "made by another lorisnb version or against another ground truth")  # fmt: skip
+        same = "spec, lorisnb version and ground truth"
+    todo = []
+    if specs:
+        todo.append("evaluate again with the options that set the keys named (for a result folder: --eps, --phi, "
+                    "--delta, --tau as the table's; align: --scale or --align, lorisnb report aligns monocular "
+                    "systems with --scale auto)")  # fmt: skip
+    if len(problems) > len(specs):
+        todo.append("make BASE with the lorisnb version and ground truth CAND was made with (a new series starts "
+                    "where either changes: compare CAND with a run made since)")  # fmt: skip
+    raise ValidationError(f"BASE and CAND are not comparable ({what}): " + "; ".join(problems) + f". Compare runs "
+                          f"made with the same {same}: " + "; ".join(todo))  # fmt: skip
+
+
 def cmd_diff(args: argparse.Namespace) -> int:
     """``lorisnb diff BASE CAND`` (see the exit-status table of docs/guide/regression-gating.md)."""
-    from lorisnb.core.stats.regression import parse_tolerances, unjudged_line
+    from lorisnb.core.stats.regression import unjudged_line
     from lorisnb.io.writers import write_csv, write_parquet, write_text
     from lorisnb.tools.decisions.diff import (
         badge,
@@ -142,18 +205,20 @@ def cmd_diff(args: argparse.Namespace) -> int:
         markdown,
         rename_notes,
         same_run_note,
+        tolerances_of,
         verdict_phrase,
+        wide_tolerances,
         with_unscored,
         write_json,
         write_junit,
     )
-    from lorisnb.tools.decisions.runs import is_report_run, is_table, spec_differences
+    from lorisnb.tools.decisions.runs import is_report_run, is_table
 
     refuse_unused(args, UNUSED["diff"])
     if len(args.paths) != 2:
         raise ValidationError(f"diff takes two runs, BASE and CAND; got {len(args.paths)} path(s)")
     check_outputs(args, args.paths, ["json", "junit", "csv", "markdown", "badge"], folders=("parquet",))
-    tolerances = parse_tolerances(args.tolerance)
+    tolerances = tolerances_of(args.tolerance)
     tables = [is_report_run(Path(p)) or is_table(Path(p)) for p in args.paths]
     given = _given_evaluate_options(args, args.defaults)
     if all(tables) and given:
@@ -178,16 +243,9 @@ def cmd_diff(args: argparse.Namespace) -> int:
         say(f"error: BASE {args.paths[0]} holds no scored sequence ({len(base_failed)} input(s) could not be "
             "evaluated or were not scored): nothing was compared; give a run with results as BASE")  # fmt: skip
         return 1
-    problems = spec_differences(base, cand)
-    if problems:
-        raise ValidationError(
-            "BASE and CAND are not comparable (different evaluation specs): " + "; ".join(problems) + ". Compare "
-            "runs made with the same spec: evaluate again with the options that set the keys named (for a result "
-            "folder: --eps, --phi, --delta, --tau as the table's; align: --scale or --align, lorisnb report aligns "
-            "monocular systems with --scale auto)"
-        )
-    if base.version and cand.version and base.version != cand.version:
-        say(f"note: lorisnb {base.version} made BASE, {cand.version} CAND")
+    refuse_not_comparable(base, cand)
+    for line in wide_tolerances(tolerances, base.table):  # an error's tolerance that hides its regressions
+        say(f"warning: {line}")
     _refuse_no_common_algorithm(base, cand, args.paths)
     known = [r.expected for r in (base, cand) if r.expected is not None]  # every ground-truth sequence
     d = diff_tables(base.table, cand.table, tolerances, args.alpha, cand_failed,
@@ -267,8 +325,8 @@ def cmd_diff(args: argparse.Namespace) -> int:
 def cmd_history(args: argparse.Namespace) -> int:
     """``lorisnb history RUN...``: scene values over runs, each run against its last comparable run
     by diff's rule; exit status :func:`lorisnb.tools.decisions.history.newest_verdict`."""
-    from lorisnb.core.stats.regression import parse_tolerances
     from lorisnb.io.writers import write_csv
+    from lorisnb.tools.decisions.diff import tolerances_of, wide_tolerances
     from lorisnb.tools.decisions.history import (
         date_order_warnings,
         drift,
@@ -281,12 +339,14 @@ def cmd_history(args: argparse.Namespace) -> int:
     )
 
     check_outputs(args, args.runs, ["csv"], folders=("out",))
-    tolerances = parse_tolerances(args.tolerance)
+    tolerances = tolerances_of(args.tolerance)
     passed: list[str] = []  # a damaged or foreign older run: passed over, named; a damaged newest one: exit 2
     runs = load_runs(args.runs, passed)
     for note in (n for r in runs for n in r.notes):
         say(f"note: {note}")
     for warning in passed:
+        say(f"warning: {warning}")
+    for warning in wide_tolerances(tolerances, pd.concat([r.table for r in runs], ignore_index=True)):
         say(f"warning: {warning}")
     for warning in date_order_warnings(runs):
         say(f"warning: {warning}")

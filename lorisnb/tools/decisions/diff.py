@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
 import pandas as pd
 
 from lorisnb.core.spec import validate
@@ -113,6 +114,63 @@ def check_numbers(t: pd.DataFrame) -> None:
         t[c] = t[c].astype("int64")
 
 
+def tolerances_of(spec: str | Mapping[str, str | float] | None = None) -> dict[str, Tolerance]:
+    """``--tolerance`` as ``diff`` and ``history`` read it: :func:`~lorisnb.core.stats.regression.parse_tolerances`
+    with the metrics named in any case (``CR=0.1`` is ``cr=0.1``, as ``history --metric CR`` and every
+    word of the command line: docs/guide/errors.md); ``CR`` was refused, "not a compared metric"."""
+    if isinstance(spec, str):
+        parts = []
+        for part in spec.split(","):
+            name, sep, value = part.partition("=")
+            parts.append(f"{name.strip().lower()}{sep}{value}" if sep and name.strip().lower() in METRICS else part)
+        spec = ",".join(parts)
+    elif isinstance(spec, Mapping):
+        lowered: dict[str, str | float] = {}
+        for name, amount in spec.items():
+            key = name.strip().lower() if isinstance(name, str) and name.strip().lower() in METRICS else name
+            if key in lowered:
+                raise ValidationError(f"tolerance {key}: given twice (as {key} in any case); expected each metric once")
+            lowered[key] = amount
+        spec = lowered
+    return parse_tolerances(spec)
+
+
+#: An error metric's tolerance letting it grow by this factor or more before it counts as worse
+#: (:func:`wide_tolerances`): ``ate_rmse=100%``, or an amount as large as BASE's median value.
+WIDE_FACTOR = 2.0
+
+
+def wide_tolerances(tols: Mapping[str, Tolerance], base: pd.DataFrame | None = None) -> list[str]:
+    """Warnings for the error metrics (ATE, AOE, RPE: judged as ratios, on a log scale) whose
+    tolerance lets the error grow :data:`WIDE_FACTOR`-fold or more before any test, on top of the
+    rerun noise the test allows: a percentage of 100 % or more, or an amount in the metric's unit at
+    least BASE's median value of it (``ate_rmse=10`` is 10 m, against OpenLORIS' ATEs of centimetres
+    to a few metres; known only with ``base``). A rate's tolerance of 1 or more is refused
+    (no drop of a rate in [0, 1] exceeds it); an error has no upper bound, so no tolerance makes a
+    regression impossible, but such a one hides nearly every real one: ``ate_rmse=1000%`` and
+    ``ate_rmse=10`` were taken without a word."""
+    from lorisnb.core.stats.regression import LOG_METRICS
+
+    out = []
+    for m, tol in tols.items():
+        if m not in LOG_METRICS:
+            continue
+        if tol.relative:
+            factor, at = 1 + tol.amount, ""
+        else:
+            values = pd.to_numeric(base[m], errors="coerce") if base is not None and m in base.columns else None
+            values = values[(values > 0) & np.isfinite(values)] if values is not None else None
+            if values is None or not len(values):
+                continue
+            median = float(values.median())
+            factor, at = 1 + tol.amount / median, f" at BASE's median {m} ({median:.4g})"
+        if factor >= WIDE_FACTOR:
+            out.append(f"tolerance {m}={tol}: lets {m} grow {factor:.3g}-fold{at} before it counts as worse, on top "
+                       f"of the rerun noise the test allows, so a regression of {m} will hardly ever be found; "
+                       f"an error's tolerance is best a percentage of BASE's value (default {m}=10%)")  # fmt: skip
+    return out
+
+
 def diff_tables(
     base: pd.DataFrame,
     cand: pd.DataFrame,
@@ -134,7 +192,7 @@ def diff_tables(
     if isinstance(tolerances, Mapping) and all(isinstance(v, Tolerance) for v in tolerances.values()):
         tols = {k: v for k, v in tolerances.items() if isinstance(v, Tolerance)}
     else:
-        tols = parse_tolerances(tolerances)  # type: ignore[arg-type]
+        tols = tolerances_of(tolerances)  # type: ignore[arg-type]
     for name, value in zip(names, (base, cand), strict=True):
         if not isinstance(value, pd.DataFrame):
             raise ValidationError(f"{name}: expected a per-sequence table (a DataFrame), got {type(value).__name__}")

@@ -34,7 +34,7 @@ from lorisnb.core.stats.regression import BAD, Tolerance, parse_tolerances
 from lorisnb.errors import LorisError, ValidationError
 from lorisnb.tools.decisions.diff import Diff, diff_tables, keyed
 from lorisnb.tools.decisions.escape import clean
-from lorisnb.tools.decisions.runs import Run, load_run, spec_differences
+from lorisnb.tools.decisions.runs import Run, held_results, load_run, spec_differences
 
 COLUMNS = ["run", "path", "created", "created_from", "lorisnb_version", "label", "comparable", "not_comparable",
            "baseline", "suite", "algorithm", "scene", "metric", "value", "status", "change", "changed",
@@ -64,10 +64,21 @@ def load_runs(paths: Iterable[str | os.PathLike[str]], passed: list[str] | None 
         raise unread[0].error
     ordered = load_runs_sorted(runs) if runs else []
     newest = _order_key(ordered[-1]) if ordered else None
+    results = [u for u in unread if u.results]
+    if results:  # tonight's results, given as a folder: never passed over (history judged the night before it)
+        raise results[0].error
     damaged = [u for u in unread if not u.foreign]
     later = [u for u in damaged if newest is None or u.when is None or (False, u.when, natural(str(u.path))) > newest]
     if later or (unread and not ordered):
         raise max(later or damaged or unread, key=lambda u: (u.when is None, u.when or 0, natural(str(u.path)))).error
+    newer = [u for u in unread if u.foreign and newest is not None and u.when is not None
+             and (False, u.when, natural(str(u.path))) > newest and _may_be_a_night(u.path)]  # fmt: skip
+    if newer:  # the newest path given is no run: its night cannot be judged, and the night before it is not it
+        u = newer[-1]
+        raise ValidationError(f"{u.path}: {u.foreign}; it is newer than the newest run read ({ordered[-1].path}), so it "
+                              "may be the night to judge in a form history does not read: nothing judged. Give "
+                              "history the runs (report run folders, per-sequence tables of lorisnb evaluate --csv), "
+                              "the newest last made")  # fmt: skip
     if passed is not None:  # else nothing is unread (raised above)
         for u in unread:
             what = (
@@ -90,6 +101,9 @@ class Unread(NamedTuple):
     error: LorisError
     when: datetime | None
     foreign: str | None
+    #: what it holds that lorisnb evaluates, where it is a result folder or file
+    #: (:func:`~lorisnb.tools.decisions.runs.held_results`): refused, never passed over
+    results: str | None = None
 
 
 def read_runs(paths: Iterable[str | os.PathLike[str]]) -> tuple[list[Run], list[Unread]]:
@@ -101,8 +115,34 @@ def read_runs(paths: Iterable[str | os.PathLike[str]]) -> tuple[list[Run], list[
         try:
             runs.append(load_run(p))
         except LorisError as exc:
-            unread.append(Unread(p, str(exc), exc, _made(p), foreign(p)))
+            why = foreign(p)
+            held = held_results(p) if why == NOT_A_RUN else None
+            unread.append(Unread(p, str(exc), exc, _made(p), why, held))
     return runs, unread
+
+
+#: Why a path that is neither a report run nor a table is no run (:func:`foreign`).
+NOT_A_RUN = "not a report run and not a CSV/Parquet table"
+
+
+def _may_be_a_night(path: Path) -> bool:
+    """Whether a path that is no run (:func:`foreign`) may be a night kept in a form ``history`` does
+    not read, so that, newer than every run read, it is not passed over: a folder, or a table
+    without per-sequence rows; not ``history``'s own outputs (its ``--csv`` table, its ``--out``
+    folder of figures), which a second ``history`` the same night finds newer than the night, nor a
+    file of another kind (a verdict's JSON, Markdown or XML kept beside the runs)."""
+    from lorisnb.tools.decisions.runs import csv_records
+
+    if path.is_dir():
+        names = [f.name for f in path.iterdir()]
+        return not (names and all(re.fullmatch(r"history_\w+\.(png|svg)", n) for n in names))
+    if path.suffix.lower() == ".csv":
+        try:
+            header = next((r for _, r in csv_records(path)), [])
+        except (LorisError, OSError):
+            return True
+        return not set(COLUMNS) <= set(header)
+    return path.suffix.lower() == ".parquet"
 
 
 def foreign(path: Path) -> str | None:
@@ -115,7 +155,7 @@ def foreign(path: Path) -> str | None:
     if not path.exists() or holds_run_json(path):  # a report run, damaged or not
         return None
     if not is_table(path):
-        return "not a report run and not a CSV/Parquet table"
+        return NOT_A_RUN
     try:
         if path.is_file() and path.suffix.lower() == ".csv":
             header = next((r for _, r in csv_records(path)), [])
@@ -272,10 +312,16 @@ def run_labels(runs: Sequence[Run]) -> list[str]:
 
 
 def comparability(prev: Run, run: Run) -> list[str]:
-    """Why ``run`` cannot be compared with ``prev`` (empty: it can)."""
+    """Why ``run`` cannot be compared with ``prev`` (empty: it can): the one rule of ``diff``,
+    ``history``, ``diff --baseline last-comparable`` and ``report --baseline``. Their specs or
+    thresholds differ (:func:`~lorisnb.tools.decisions.runs.spec_differences`), lorisnb's version
+    differs, or a ground-truth file both record has another checksum; what a run does not record (a
+    table holds no version and no checksum) is no difference (:func:`checked` names it). A result
+    folder ``diff`` scores records the running lorisnb's version and the checksums of the ground
+    truth it was scored against. ``diff`` of two runs of different versions noted the change and
+    judged (exit 0) where ``history`` of the same two runs exited 2."""
     reasons = spec_differences(prev, run)
-    if prev.version and run.version and prev.version != run.version:  # a table (evaluate --csv) says no version:
-        # not a difference, as diff of the two judges it (a report run against a results folder was never comparable)
+    if prev.version and run.version and prev.version != run.version:
         reasons.append(f"lorisnb_version {prev.version} -> {run.version}")
     ga, gb = prev.groundtruth_sums(), run.groundtruth_sums()
     changed = sorted(k for k in set(ga) & set(gb) if ga[k] != gb[k])
@@ -319,17 +365,39 @@ def earlier_runs(folder: str | os.PathLike[str], unread: list[tuple[str, str]] |
 def checked(a: Run, b: Run) -> str:
     """What :func:`comparability` could check of two runs, in words: the spec (a report run's
     run.json, else the settings its table records), lorisnb's version and the ground truth's
-    checksums where both runs record them, and what neither records (a table holds no version and no
-    checksum: "same spec, lorisnb version and ground truth" claimed what was never checked)."""
+    checksums where both runs record them, and what was not checked, with which run lacks it and
+    why (:func:`unrecorded`): "same spec, lorisnb version and ground truth" claimed what was never
+    checked, and a result folder scored now was said to be a table."""
     done = ["spec" if a.spec is not None and b.spec is not None else "the spec and thresholds their tables record"]
     unchecked: list[str] = []
-    for what, ok in (("lorisnb version", bool(a.version and b.version)),
-                     ("ground-truth checksums", bool(a.groundtruth_sums() and b.groundtruth_sums()))):  # fmt: skip
-        (done if ok else unchecked).append(what)
+    lacking: dict[str, list[str]] = {}  # run -> why it records what was not checked
+    for what, has in (("lorisnb version", lambda r: bool(r.version)),
+                      ("ground-truth checksums", lambda r: bool(r.groundtruth_sums()))):  # fmt: skip
+        if has(a) and has(b):
+            done.append(what)
+            continue
+        unchecked.append(what)
+        for r in (a, b):
+            if not has(r):
+                lacking.setdefault(clean(r.name), []).append(unrecorded(r, what))
     text = "checked: " + ", ".join(done)
     if unchecked:
-        text += f"; not checked: {' and '.join(unchecked)} (not recorded by both: a table holds neither)"
+        why = "; ".join(f"{name}: {', '.join(dict.fromkeys(w))}" for name, w in lacking.items())
+        text += f"; not checked: {' and '.join(unchecked)} (not recorded by {why})"
     return text
+
+
+def unrecorded(run: Run, what: str) -> str:
+    """Why ``run`` records no ``what`` (``lorisnb version`` or ``ground-truth checksums``), by its kind."""
+    if run.kind == "table":
+        return "a table records no lorisnb version and no ground-truth checksum"
+    if run.kind == "results":  # scored now: the version is the running lorisnb's, the ground truth's read where known
+        return (
+            "a result folder scored by a manifest, whose sessions name their own ground-truth files"
+            if (what != "lorisnb version")
+            else "a result folder scored now"
+        )
+    return "its run.json records none"
 
 
 def last_comparable(folder: str | os.PathLike[str], cand: Run) -> tuple[Run, list[Run]]:

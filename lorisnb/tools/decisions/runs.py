@@ -278,10 +278,12 @@ def check_values(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
     :class:`~lorisnb.errors.ParseError` naming the file, the line (CSV) or row, the column and
     the value, ending with ``expected`` (what the file should be). Thresholds (``eps``, ``phi``,
     ``delta``, ``tau``) are checked as the command line checks them."""
-    csv = path.suffix.lower() == ".csv"
+    place = row_place(path)
 
     def refuse(i: int, c: str, what: str) -> ParseError:
-        return ParseError(path, csv_line(path, i) if csv else None, f"column {c}: {what}; expected {expected}")
+        line = place(i)[0]
+        at = "" if line is not None else f"{rows_said(path, [i])}: "  # a Parquet table's row, and its file
+        return ParseError(path, line, f"{at}column {c}: {what}; expected {expected}")
 
     for c in ("algorithm", "scene", "suite", "file"):  # labels as evaluations make them (NFC): one algorithm
         if c in df.columns:  # whether a table was written from an NFD folder name or not
@@ -316,11 +318,7 @@ def check_values(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
     if "spec" in df.columns:  # each distinct spec once, by the spec's rules: a damaged one is no other spec
         codes, specs = pd.factorize(df["spec"], use_na_sentinel=False)
         for k, text in enumerate(specs):
-            try:
-                problem = spec_problem(json.loads(str(text)))
-            except (ValueError, RecursionError):  # not the JSON of a spec (or nested too deeply to be read): compared
-                # as text, and named where it differs
-                continue
+            problem = spec_cell_problem(text)
             if problem:
                 raise refuse(int((codes == k).nonzero()[0][0]), "spec", problem)
     for c in (c for c in validate.THRESHOLDS if c in df.columns):  # as --eps, --phi, --delta, --tau are checked
@@ -331,6 +329,71 @@ def check_values(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
             except ValidationError as exc:
                 raise refuse(int((codes == k).nonzero()[0][0]), c, str(exc)) from None
     return df
+
+
+def spec_cell_problem(text: Any) -> str | None:
+    """What is wrong with a table's ``spec`` cell (None: nothing): not the JSON of an object, as
+    ``lorisnb evaluate`` writes every spec (an edit, a cell cut short), or values no spec holds
+    (:func:`~lorisnb.tools.report.provenance.spec_problem`). The cell is quoted by its beginning
+    only (:func:`spec_excerpt`), never whole. A cell that was no JSON was compared as text: two tables
+    holding the same damaged cell were judged "ok" (exit 0), and one that differed was named with
+    the other's whole JSON."""
+    try:
+        value = json.loads(str(text))
+    except (ValueError, RecursionError):  # RecursionError: nested too deeply to be read
+        return f"{spec_excerpt(text)} is not the JSON of an evaluation spec (an object, as lorisnb evaluate writes it)"
+    if not isinstance(value, dict):
+        return f"{spec_excerpt(text)} is not an evaluation spec (a JSON object, as lorisnb evaluate writes it)"
+    return spec_problem(value)
+
+
+def spec_excerpt(text: Any, width: int = 30) -> str:
+    """A ``spec`` cell as a message quotes it: its first ``width`` characters, quoted (a spec's whole
+    JSON is hundreds of characters; the keys that differ are named where specs are compared)."""
+    t = str(text)
+    return shown(t) if len(t) <= width else f"{shown(t[:width])}... ({len(t)} characters)"
+
+
+def row_place(path: Path) -> Any:
+    """A function giving, for a row of the table read from ``path`` (0-based, as read), the line it
+    begins on (a CSV file's, else None), the file of a Parquet dataset folder holding it (its rows
+    are its files' in order; None for a file) and its row there, counted from 1
+    (:func:`rows_said` words them). A damaged value of a Parquet table was named without its row."""
+    if path.is_file() and path.suffix.lower() == ".csv":
+        return lambda i: (csv_line(path, i), None, i + 1)
+    if path.is_file():
+        return lambda i: (None, None, i + 1)
+    parts: list[tuple[str, int]] = []
+    try:
+        import pyarrow.dataset as ds
+
+        for fr in ds.dataset(path, format="parquet", partitioning="hive").get_fragments():
+            parts.append((Path(fr.path).relative_to(path).as_posix(), fr.count_rows()))
+    except (ImportError, OSError, ValueError):
+        parts = []
+
+    def place(i: int) -> tuple[None, str | None, int]:
+        k = i
+        for name, n in parts:
+            if k < n:
+                return None, name, k + 1
+            k -= n
+        return None, None, i + 1
+
+    return place
+
+
+def rows_said(path: Path, rows: list[int], more: str = "") -> str:
+    """Rows of a Parquet table (0-based, as read) in words: ``row 5 of the table (counted from 1)``,
+    ``rows 2 and 4 of algorithm=orb/part-0.parquet (counted from 1)`` in a dataset folder (each
+    file's rows after its name); ``more`` ends the list (``and 3 more``)."""
+    place = row_place(path)
+    by_file: dict[str | None, list[str]] = {}
+    for i in rows:
+        _, part, k = place(i)
+        by_file.setdefault(part, []).append(str(k))
+    said = [f"row{'s' if len(ks) > 1 else ''} {_and(ks)} of {part or 'the table'}" for part, ks in by_file.items()]
+    return f"{_and(said)}{more} (counted from 1)"
 
 
 def repeated_key(table: pd.DataFrame) -> tuple[list[int], str, list[str]] | None:
@@ -379,7 +442,7 @@ def check_keys(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
         lines = [starts[i] if i < len(starts) else i + 2 for i in rows]
         where, at = f"lines {_and([str(x) for x in lines])}", lines[1]
     else:
-        where, at = f"rows {_and([str(i + 1) for i in rows])} of the table (counted from 1)", None
+        where, at = rows_said(path, rows), None
     why = ("two result files of one sequence and trial: evaluate them again with their trials named (cafe_trial1.txt, "
            "or --trials-by REGEX)" if files else "a sweep of several settings, tables "
            "stacked, or a row copied by an edit? Keep one row per sequence and trial")  # fmt: skip
@@ -434,7 +497,8 @@ def mixed_setting(table: pd.DataFrame) -> tuple[list[int], list[int], str] | Non
             x, y = (v[:3] + ["..."] if len(v) > 3 else v for v in (x, y))
         if c == "spec":
             words.append(_spec_keys([(v,) for v in x], [(v,) for v in y])
-                         or f"spec = {_rows([(v,) for v in x])} against {_rows([(v,) for v in y])}")  # fmt: skip
+                         or f"spec = {_rows([(spec_excerpt(v),) for v in x])} against "
+                         f"{_rows([(spec_excerpt(v),) for v in y])}")  # fmt: skip
         else:
             words.append(f"{c} = {'/'.join(x)} against {'/'.join(y)}")
     suite = f" ({first['suite']})" if first["suite"] else ""
@@ -455,13 +519,15 @@ def check_settings(df: pd.DataFrame, path: Path, expected: str) -> pd.DataFrame:
     starts = [line for line, _ in csv_records(path)][1:] if csv else []
 
     def where(rows: list[int]) -> str:
-        shown_rows = [str(starts[i] if i < len(starts) else i + 2) if csv else str(i + 1) for i in rows[:5]]
         more = f" and {len(rows) - 5} more" if len(rows) > 5 else ""
-        return f"{'line' if csv else 'row'}{'s' if len(rows) > 1 else ''} {', '.join(shown_rows)}{more}"
+        if not csv:  # a Parquet file's rows (and a dataset's files)
+            return rows_said(path, rows[:5], more)
+        shown_rows = [str(starts[i] if i < len(starts) else i + 2) for i in rows[:5]]
+        return f"line{'s' if len(rows) > 1 else ''} {', '.join(shown_rows)}{more}"
 
     at = (starts[other[0]] if other[0] < len(starts) else other[0] + 2) if csv else None
     raise ParseError(path, at, f"the table holds two settings for {what} (the first at {where(same)}, the other at "
-                     f"{where(other)}{'' if csv else ' of the table, counted from 1'}): its scene value would average "
+                     f"{where(other)}): its scene value would average "
                      "rows scored two ways; score every row with one spec and one set of thresholds (evaluate the "
                      f"results again with one set of options), or keep the rows apart in two tables; expected {expected}")  # fmt: skip
 
@@ -584,7 +650,40 @@ def load_run(path: str | os.PathLike[str]) -> Run:
         notes += _trial_folder_notes(p, table)
         return Run(p, "table", table, {}, modified(p), "modification time", notes,
                    expected=table_expected(table, p, notes))  # fmt: skip
+    held = held_results(p)
+    if held:  # a result folder: what history reads instead, and how to make it of these files
+        raise ValidationError(f"{p}: {held}, not a run: history and --baseline read runs, report run folders "
+                              f"({RUN_JSON}) and per-sequence tables; make one of it (lorisnb evaluate {p} --csv "
+                              f"RUN.csv, or lorisnb report --results {p} --out RUN), or judge it with lorisnb diff "
+                              "BASE_RUN " + f"{p} (diff evaluates a result folder given as CAND)")  # fmt: skip
     raise ValidationError(f"{p}: not a report run (no {RUN_JSON}) and not a CSV/Parquet table")
+
+
+def held_results(path: Path) -> str | None:
+    """What ``path`` holds that lorisnb evaluates, in words (``a result folder (42 result files, such as
+    orb/cafe-1.txt)``, ``a result file``), where it is neither a report run nor a table but holds
+    a file of pose estimates in a format lorisnb recognises (:func:`lorisnb.io.readers.registry.recognise`;
+    the first 50 files are looked at); None otherwise. ``history`` passed such a folder over as "no
+    run" and judged the night before it (exit 0): tonight's results, never judged."""
+    import warnings
+
+    from lorisnb.errors import LorisError
+    from lorisnb.io.readers.registry import FORMATS, recognise, sample
+    from lorisnb.tools.evaluation.inputs import find_inputs
+
+    suffixes = tuple(dict.fromkeys(x for f in FORMATS.values() for x in f.suffixes))
+    try:
+        with warnings.catch_warnings():  # what a folder lacks is said when it is evaluated, not here
+            warnings.simplefilter("ignore")
+            files = [f for f, _ in find_inputs([path], suffixes).files]
+    except (LorisError, OSError, ValueError):
+        return None
+    for f in files[:50]:
+        if recognise(sample(f)):
+            if not path.is_dir():
+                return "a result file"
+            return f"a result folder ({len(files)} result file(s), such as {f.relative_to(path).as_posix()})"
+    return None
 
 
 def _trial_folder_notes(path: Path, table: pd.DataFrame) -> list[str]:
@@ -610,7 +709,7 @@ def table_expected(table: pd.DataFrame, path: Path, notes: list[str] | None = No
     folder). Used only where the table's own ground-truth durations are those of the data root (a
     pair's scene named ``cafe`` is not OpenLORIS' cafe); otherwise None, with a note in ``notes``."""
     from lorisnb.core.trajectory.frames import SCENES
-    from lorisnb.io.datasets.paths import find_data, scene_durations
+    from lorisnb.io.datasets.paths import ENV_VAR, find_data, scene_durations
 
     if not len(table) or "gt_duration" not in table.columns:
         return None
@@ -625,8 +724,16 @@ def table_expected(table: pd.DataFrame, path: Path, notes: list[str] | None = No
     try:
         root = find_data()
     except DataNotFoundError:
-        note("scene values count only the sequences the table holds: no data root was found to list the others "
-             "(the OpenLORIS ground truth); set LORISNB_DATA to one, or compare the result folders")  # fmt: skip
+        env = os.environ.get(ENV_VAR)
+        if env:  # set, to a folder that is no data root: said (it read "set LORISNB_DATA to one" as if unset)
+            where = Path(env).expanduser()
+            state = "is not a data root" if where.is_dir() else "is a file" if where.exists() else "does not exist"
+            note(f"scene values count only the sequences the table holds: {ENV_VAR} is set to {env}, which {state}, "
+                 f"so no data root lists the others (the OpenLORIS ground truth); set {ENV_VAR} to the data root "
+                 "(the folder holding openloris-scene/), or compare the result folders")  # fmt: skip
+        else:
+            note("scene values count only the sequences the table holds: no data root was found to list the others "
+                 f"(the OpenLORIS ground truth); set {ENV_VAR} to one, or compare the result folders")  # fmt: skip
         return None
     have, lacking = [], []
     for scene in scenes:
@@ -829,7 +936,8 @@ def setting_differences(a: pd.DataFrame, b: pd.DataFrame, name_a: str = "BASE", 
         ys = sorted(map(tuple, y[cols].to_numpy().tolist()))
         if xs != ys:  # only the columns whose values differ (all of them if only their combination does)
             keep = [i for i in range(len(cols)) if {r[i] for r in xs} != {r[i] for r in ys}] or list(range(len(cols)))
-            xk, yk = (sorted({tuple(r[i] for i in keep) for r in rows}) for rows in (xs, ys))
+            xk, yk = (sorted({tuple(spec_excerpt(r[i]) if cols[i] == "spec" else r[i] for i in keep) for r in rows})
+                      for rows in (xs, ys))  # a spec that is no JSON object: its beginning, never whole  # fmt: skip
             text = f"{', '.join(cols[i] for i in keep)} = {_rows(xk)} in {name_a} against {_rows(yk)} in {name_b}"
             if "spec" in [cols[i] for i in keep]:  # the spec's keys that differ, not both specs whole
                 si = cols.index("spec")
