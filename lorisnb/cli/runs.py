@@ -195,7 +195,7 @@ def refuse_not_comparable(base: Any, cand: Any) -> None:
 
 def cmd_diff(args: argparse.Namespace) -> int:
     """``lorisnb diff BASE CAND`` (see the exit-status table of docs/guide/regression-gating.md)."""
-    from lorisnb.core.stats.regression import unjudged_line
+    from lorisnb.core.stats.regression import parse_tolerances, unjudged_line
     from lorisnb.io.writers import write_csv, write_parquet, write_text
     from lorisnb.tools.decisions.diff import (
         badge,
@@ -205,7 +205,6 @@ def cmd_diff(args: argparse.Namespace) -> int:
         markdown,
         rename_notes,
         same_run_note,
-        tolerances_of,
         verdict_phrase,
         wide_tolerances,
         with_unscored,
@@ -218,7 +217,7 @@ def cmd_diff(args: argparse.Namespace) -> int:
     if len(args.paths) != 2:
         raise ValidationError(f"diff takes two runs, BASE and CAND; got {len(args.paths)} path(s)")
     check_outputs(args, args.paths, ["json", "junit", "csv", "markdown", "badge"], folders=("parquet",))
-    tolerances = tolerances_of(args.tolerance)
+    tolerances = parse_tolerances(args.tolerance)
     tables = [is_report_run(Path(p)) or is_table(Path(p)) for p in args.paths]
     given = _given_evaluate_options(args, args.defaults)
     if all(tables) and given:
@@ -325,8 +324,9 @@ def cmd_diff(args: argparse.Namespace) -> int:
 def cmd_history(args: argparse.Namespace) -> int:
     """``lorisnb history RUN...``: scene values over runs, each run against its last comparable run
     by diff's rule; exit status :func:`lorisnb.tools.decisions.history.newest_verdict`."""
+    from lorisnb.core.stats.regression import parse_tolerances
     from lorisnb.io.writers import write_csv
-    from lorisnb.tools.decisions.diff import tolerances_of, wide_tolerances
+    from lorisnb.tools.decisions.diff import wide_tolerances
     from lorisnb.tools.decisions.history import (
         date_order_warnings,
         drift,
@@ -339,7 +339,7 @@ def cmd_history(args: argparse.Namespace) -> int:
     )
 
     check_outputs(args, args.runs, ["csv"], folders=("out",))
-    tolerances = tolerances_of(args.tolerance)
+    tolerances = parse_tolerances(args.tolerance)
     passed: list[str] = []  # a damaged or foreign older run: passed over, named; a damaged newest one: exit 2
     runs = load_runs(args.runs, passed)
     for note in (n for r in runs for n in r.notes):

@@ -54,7 +54,7 @@ def test_a_refused_key_of_a_received_run_json_is_escaped(tmp_path, capsys, key):
     assert not any(x.startswith("error: all is well") for x in lines)  # no line of its own making
 
 
-def test_a_received_run_jsons_version_is_escaped_in_diffs_note(tmp_path, data, icra20, capsys):
+def test_a_received_run_jsons_version_is_escaped_in_diffs_refusal(tmp_path, data, icra20, capsys):
     import lorisnb as ln
     from lorisnb.tools.decisions.runs import FIRST_TABLE
 
@@ -71,7 +71,8 @@ def test_a_received_run_jsons_version_is_escaped_in_diffs_note(tmp_path, data, i
         (run / "run.json").write_text(json.dumps(meta))
     rc = main(["diff", str(tmp_path / "a"), str(tmp_path / "b")])
     err = capsys.readouterr().err
-    assert rc == 0 and "note: lorisnb 0.3.0 made BASE, 9\\x1b[2J CAND" in err and "\x1b" not in err
+    # runs of two versions are not comparable (exit 2, as history says): the version is named, escaped
+    assert rc == 2 and "lorisnb_version 0.3.0 -> 9\\x1b[2J" in err and "\x1b" not in err
 
 
 @pytest.mark.parametrize(

@@ -94,14 +94,14 @@ def test_the_note_says_where_lorisnb_data_points(tmp_path, table, capsys, monkey
 
 
 def test_tolerance_metric_names_in_any_case(tmp_path, table, capsys):
-    from lorisnb.tools.decisions.diff import tolerances_of
+    from lorisnb.core.stats.regression import parse_tolerances
 
-    assert tolerances_of("CR=0.1,Ate_RMSE=5%") == tolerances_of("cr=0.1,ate_rmse=5%")
-    assert tolerances_of({"CR": 0.1})["cr"].amount == 0.1
+    assert parse_tolerances("CR=0.1,Ate_RMSE=5%") == parse_tolerances("cr=0.1,ate_rmse=5%")
+    assert parse_tolerances({"CR": 0.1})["cr"].amount == 0.1
     with pytest.raises(ValidationError, match="given twice"):
-        tolerances_of("cr=0.1,CR=0.2")
+        parse_tolerances("cr=0.1,CR=0.2")
     with pytest.raises(ValidationError, match="no regression could be found"):
-        tolerances_of("CR=2")
+        parse_tolerances("CR=2")
     write_csv(table, tmp_path / "a.csv")
     rc, out, err = run(capsys, "diff", tmp_path / "a.csv", tmp_path / "a.csv", "--tolerance", "CR=0.1")
     assert rc == 0 and "cr 0.1" in out, err  # refused: "not a compared metric"
@@ -110,14 +110,15 @@ def test_tolerance_metric_names_in_any_case(tmp_path, table, capsys):
 
 
 def test_an_error_tolerance_that_lets_it_double_is_warned(tmp_path, table, capsys):
-    from lorisnb.tools.decisions.diff import tolerances_of, wide_tolerances
+    from lorisnb.core.stats.regression import parse_tolerances
+    from lorisnb.tools.decisions.diff import wide_tolerances
 
     median = float(table["ate_rmse"].median())
-    assert wide_tolerances(tolerances_of()) == []  # the defaults
-    said = wide_tolerances(tolerances_of("ate_rmse=1000%"))
+    assert wide_tolerances(parse_tolerances()) == []  # the defaults
+    said = wide_tolerances(parse_tolerances("ate_rmse=1000%"))
     assert len(said) == 1 and "lets ate_rmse grow 11-fold" in said[0]
-    assert wide_tolerances(tolerances_of(f"ate_rmse={median / 2}"), table) == []
-    said = wide_tolerances(tolerances_of(f"ate_rmse={median * 3}"), table)
+    assert wide_tolerances(parse_tolerances(f"ate_rmse={median / 2}"), table) == []
+    said = wide_tolerances(parse_tolerances(f"ate_rmse={median * 3}"), table)
     assert len(said) == 1 and "grow 4-fold at BASE's median ate_rmse" in said[0]
     write_csv(table, tmp_path / "a.csv")
     rc, _, err = run(capsys, "diff", tmp_path / "a.csv", tmp_path / "a.csv", "--tolerance", "ate_rmse=10")

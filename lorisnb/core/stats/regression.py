@@ -136,7 +136,14 @@ class Tolerance:
 
 def parse_tolerances(spec: str | Mapping[str, str | float] | None = None) -> dict[str, Tolerance]:
     """The defaults, updated by ``spec``: ``"cr=0.02,ate_rmse=0.05"`` or a mapping; a value is a
-    non-negative number in the metric's unit or a percentage of the base value (``"5%"``)."""
+    non-negative number in the metric's unit or a percentage of the base value (``"5%"``). Metrics
+    are named in any case (``CR=0.1`` is ``cr=0.1``, as ``history --metric CR`` and every word of the
+    command line: docs/guide/errors.md); ``CR`` was refused, "not a compared metric"."""
+
+    def metric(name: object) -> object:
+        key = name.strip().lower() if isinstance(name, str) else name
+        return key if key in METRICS else name
+
     items: dict[str, str | float] = dict(DEFAULT_TOLERANCES)
     if isinstance(spec, str):
         parts = [p.strip() for p in spec.split(",")]
@@ -147,14 +154,21 @@ def parse_tolerances(spec: str | Mapping[str, str | float] | None = None) -> dic
             name, sep, text = part.partition("=")
             if not sep:
                 raise ValidationError(f"tolerance {part!r}: expected METRIC=VALUE, e.g. cr=0.02 or ate_rmse=5%")
-            if name.strip() in given:  # the last would silently replace the first
-                raise ValidationError(f"tolerance {spec!r}: {name.strip()} given twice; expected each metric once")
-            given.add(name.strip())
-            items[name.strip()] = text.strip()
+            key = str(metric(name.strip()))
+            if key in given:  # the last would silently replace the first
+                raise ValidationError(f"tolerance {spec!r}: {key} given twice; expected each metric once (in any case)")
+            given.add(key)
+            items[key] = text.strip()
     elif spec is not None:
         if not isinstance(spec, Mapping):
             raise ValidationError(f"tolerance: expected 'metric=value,...' or a mapping, got {type(spec).__name__}")
-        items.update(spec)
+        lowered: dict[object, str | float] = {}
+        for name, amount in spec.items():
+            mkey = metric(name)
+            if mkey in lowered:
+                raise ValidationError(f"tolerance {mkey}: given twice; expected each metric once (in any case)")
+            lowered[mkey] = amount
+        items.update(lowered)  # type: ignore[arg-type]
     out = {}
     for name, value in items.items():
         if name not in METRICS:

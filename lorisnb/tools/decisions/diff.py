@@ -114,27 +114,6 @@ def check_numbers(t: pd.DataFrame) -> None:
         t[c] = t[c].astype("int64")
 
 
-def tolerances_of(spec: str | Mapping[str, str | float] | None = None) -> dict[str, Tolerance]:
-    """``--tolerance`` as ``diff`` and ``history`` read it: :func:`~lorisnb.core.stats.regression.parse_tolerances`
-    with the metrics named in any case (``CR=0.1`` is ``cr=0.1``, as ``history --metric CR`` and every
-    word of the command line: docs/guide/errors.md); ``CR`` was refused, "not a compared metric"."""
-    if isinstance(spec, str):
-        parts = []
-        for part in spec.split(","):
-            name, sep, value = part.partition("=")
-            parts.append(f"{name.strip().lower()}{sep}{value}" if sep and name.strip().lower() in METRICS else part)
-        spec = ",".join(parts)
-    elif isinstance(spec, Mapping):
-        lowered: dict[str, str | float] = {}
-        for name, amount in spec.items():
-            key = name.strip().lower() if isinstance(name, str) and name.strip().lower() in METRICS else name
-            if key in lowered:
-                raise ValidationError(f"tolerance {key}: given twice (as {key} in any case); expected each metric once")
-            lowered[key] = amount
-        spec = lowered
-    return parse_tolerances(spec)
-
-
 #: An error metric's tolerance letting it grow by this factor or more before it counts as worse
 #: (:func:`wide_tolerances`): ``ate_rmse=100%``, or an amount as large as BASE's median value.
 WIDE_FACTOR = 2.0
@@ -192,7 +171,7 @@ def diff_tables(
     if isinstance(tolerances, Mapping) and all(isinstance(v, Tolerance) for v in tolerances.values()):
         tols = {k: v for k, v in tolerances.items() if isinstance(v, Tolerance)}
     else:
-        tols = tolerances_of(tolerances)  # type: ignore[arg-type]
+        tols = parse_tolerances(tolerances)  # type: ignore[arg-type]
     for name, value in zip(names, (base, cand), strict=True):
         if not isinstance(value, pd.DataFrame):
             raise ValidationError(f"{name}: expected a per-sequence table (a DataFrame), got {type(value).__name__}")
