@@ -123,17 +123,37 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+#: ``lorisnb submit``'s exit status when the submission was not taken for now and the same upload
+#: may be sent again later (the server unreachable, too many submissions today, a busy server):
+#: EX_TEMPFAIL of sysexits.h. 2 is a refused input (fix the upload), 1 a submission that failed.
+TEMPFAIL = 75
+
+
+def _c_ate(value: Any) -> str:
+    """A row's C-ATE RMSE as ``lorisnb submit`` prints it: the number (0 too), or why it has none."""
+    if value is None or (isinstance(value, float) and value != value):
+        return "no correct pose"
+    return f"{float(value):.3f} m"
+
+
 def cmd_submit(args: argparse.Namespace) -> int:
-    from lorisnb.tools.challenge.client import submit
+    from lorisnb.tools.challenge.client import NotFollowed, TryAgain, submit
 
     token = args.token or os.environ.get(TOKEN_VAR)
     if not token:
         raise ValidationError(f"no token: give --token TOKEN or set {TOKEN_VAR} (your team's token)")
-    view = submit(args.url, args.files, token, wait=args.wait, fmt=args.format)
+    try:
+        view = submit(args.url, args.files, token, wait=args.wait, fmt=args.format)
+    except TryAgain as exc:  # nothing submitted: the same command may be run again (later)
+        say(f"error: {exc}")
+        return TEMPFAIL
+    except NotFollowed as exc:  # submitted: its page says how it scores
+        say(f"error: {exc}")
+        return 1
     print(f"submission {view['id']}: {view['status']} ({view['url']})", file=sys.stderr)
     for r in view.get("rows", []):
-        print(f"{r['scene']} {r['seq']}: CR {r['cr']:.3f}, C-ATE RMSE {r['c_ate_rmse'] or float('nan'):.3f} m "
-              f"({r['file']})")  # fmt: skip
+        cr = "no value" if r["cr"] is None else f"{r['cr']:.3f}"
+        print(f"{r['scene']} {r['seq']}: CR {cr}, C-ATE RMSE {_c_ate(r['c_ate_rmse'])} ({r['file']})")
     for h in view.get("hidden_sequences", []):  # scored, shown once a phase closes: no value here
         say(f"{h['scene']} {h['seq']}: scored, {h['shown']} ({', '.join(h['files'])})")
     for m in view.get("missing", []):

@@ -330,7 +330,9 @@ def missing_trials(rows: list[dict[str, Any]], wanted: pd.DataFrame) -> list[dic
 
 def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.DataFrame, now: float) -> dict[str, Any]:
     """A submission as its page and the API show it (see the module docstring): the rows of the
-    sequences visible now; ``hidden`` lists the others scored (scene, seq, file, when shown), no value."""
+    sequences visible now; ``hidden_sequences`` lists the others a file scored (scene, seq, the files,
+    when shown), no value; a file of one of them that failed (its row without a matched pose, its
+    failure about that sequence) is listed under ``failures`` alone, never as scored."""
     phase = challenge.phase(sub["phase"])
     view: dict[str, Any] = dict(
         id=sub["id"], team=sub["team"], phase=sub["phase"], status=sub["status"], submitted=sub["created"],
@@ -351,8 +353,12 @@ def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.Dat
     wanted = phase_sequences(phase, durations)
     rows = [{k: r.get(k) for k in PUBLIC_COLUMNS} | {"ranked": phase.keeps(r["scene"], int(r["seq"]))}
             for r in result["rows"] if (r["scene"], int(r["seq"])) in shown]  # fmt: skip
-    hidden = [dict(scene=s, seq=q, files=sorted({r["file"] for r in result["rows"] if (r["scene"], int(r["seq"])) == (s, q)}),
-                   shown=_hidden_note(challenge, s, q)) for s, q in sorted(scored - shown)]  # fmt: skip
+    # a sequence not shown yet is named with the files of it that scored; one whose file failed
+    # (its row of no matched pose, that file's failure about it) is a failure only (failures_said)
+    failed = {(f.get("file"), s, int(q)) for f in result.get("failures", []) for s, q in f.get("sequences", [])}
+    hidden = [dict(scene=s, seq=q, files=files, shown=_hidden_note(challenge, s, q)) for s, q in sorted(scored - shown)
+              if (files := sorted({r["file"] for r in result["rows"] if (r["scene"], int(r["seq"])) == (s, q)
+                                   and ((r.get("matched") or 0) > 0 or (r["file"], s, q) not in failed)}))]  # fmt: skip
     missing = [dict(scene=s, seq=int(q), error="no output for this sequence: it counts as a failed run")
                for s, q in zip(wanted["scene"], wanted["seq"], strict=True) if (s, int(q)) not in scored]  # fmt: skip
     missing += missing_trials([r for r in result["rows"] if (r["scene"], int(r["seq"])) in shown], wanted)
@@ -362,7 +368,7 @@ def submission_view(sub: dict[str, Any], challenge: Challenge, durations: pd.Dat
     # (a failure about a scene outside the challenge holds none of its ground truth: shown)
     told = challenge.visible(set(sequences_of(durations)) | scored, now)
     failures = view["failures"]
-    notes = list(dict.fromkeys(team_text(n, challenge) for n in _shown_notes(result["notes"], told, not hidden)))
+    notes = list(dict.fromkeys(team_text(n, challenge) for n in _shown_notes(result["notes"], told, scored <= shown)))
     view.update(rows=rows, hidden_sequences=hidden, failures=failures, missing=missing,
                 notes=notes, conventions=result["conventions"],
                 figure=figure_file(result, challenge, durations, now) is not None)  # fmt: skip

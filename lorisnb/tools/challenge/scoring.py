@@ -51,9 +51,10 @@ from lorisnb.core.pipeline.plausibility import SEQ_CHECK, SEQ_QUESTION
 from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.stats.trials import check_duplicates, names_a_trial
 from lorisnb.core.trajectory.frames import SCENES
-from lorisnb.errors import FailedInputsWarning, LorisError, LorisWarning, ValidationError
+from lorisnb.errors import FailedInputsWarning, LorisError, LorisWarning, ParseError, ValidationError
 from lorisnb.io.datasets.paths import DataPaths, load_groundtruth, scene_durations, scene_spans
-from lorisnb.io.readers.openloris import FILE_KEYS, parse_headers, read_lines, read_openloris
+from lorisnb.io.readers import openloris as openloris_reader
+from lorisnb.io.readers.openloris import FILE_KEYS, parse_headers, read_lines
 from lorisnb.io.writers import write_openloris
 from lorisnb.tools.challenge import store
 from lorisnb.tools.challenge.board import nothing_scored, scored_nothing
@@ -258,6 +259,26 @@ def read_blocks(path: Path) -> Blocks:
     return Blocks(scene, tuple(heads.seq_at), kept)
 
 
+def read_result(path: Path, spec: EvalSpec | None = None) -> tuple[ResultFile, Blocks]:
+    """The OpenLORIS result file ``path`` read whole as the scorer reads it, under the rules of
+    ``spec`` (default: lorisnb's): every line by
+    :func:`~lorisnb.io.readers.openloris.read_openloris`, the header values the evaluation takes
+    from it (its ``scene:`` and ``frame:``, :attr:`ResultFile.scene` and :attr:`ResultFile.frame`:
+    none, or one the reader does not know, is refused), at least one ``seq: N`` block, and its
+    :class:`Blocks` (:func:`read_blocks`). The one reading of an uploaded file: the upload's check
+    (:func:`.uploads.read_upload`) and :func:`score_folder` both call it, so a file the scorer would
+    refuse is refused when it is uploaded, in the same words. A :class:`ParseError` names the line."""
+    drop = spec is None or spec.repeated == "drop"
+    repair = bool(spec is not None and spec.repair_stamps)
+    # called through its module: one reader, whoever stands in for it (a test counting its readings)
+    result = openloris_reader.read_openloris(path, remove_repeated=drop, warn=False, repair_stamps=repair)
+    blocks = read_blocks(path)
+    _ = result.frame  # the scene is read by read_blocks; the frame is the evaluation's next question
+    if not result.sequences:  # compute_errors' refusal, in its words: said at upload, not at scoring
+        raise ParseError(path, None, "no 'seq: N' block; expected at least one sequence")
+    return result, blocks
+
+
 def seq_blocks(path: Path) -> list[int] | None:
     """The numbers of a result file's ``seq: N`` lines in order, as the reader reads them
     (:func:`read_blocks`); None where the reader refuses the file."""
@@ -327,8 +348,7 @@ def score_folder(folder: Path, data: DataPaths, spec: EvalSpec, figures: Path | 
     shapes: dict[str, Blocks | None] = {}
     for p in native:  # each file read whole by the reader first: one it refuses is never scored, whole or in part
         try:
-            read_openloris(p, remove_repeated=spec.repeated == "drop", warn=False, repair_stamps=spec.repair_stamps)
-            shapes[p.name] = read_blocks(p)
+            shapes[p.name] = read_result(p, spec)[1]
         except LorisError as exc:
             shapes[p.name] = None
             problems.append(("failed", p.name, str(exc), frozenset()))

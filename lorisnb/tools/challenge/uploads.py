@@ -99,8 +99,10 @@ def safe_name(name: str, where: str) -> str:
         raise UploadRefused(f"{where}: {name!r}: a file name with control characters; expected a plain name")
     if "\\" in name or re.match(r"^[A-Za-z]:", name):
         raise UploadRefused(f"{where}: {name!r}: a Windows path; expected names with '/' and no drive letter")
-    if name.startswith("/"):
-        raise UploadRefused(f"{where}: {name!r}: an absolute path; expected a path inside the archive")
+    if name.startswith("/"):  # what is expected, for the case at hand: an uploaded file's name, or a member's path
+        inside = ("the file's name (cafe-1-1.txt), or a path relative to the upload (run_1/cafe-1-1.txt)"
+                  if where == "upload" else "a path inside the archive")  # fmt: skip
+        raise UploadRefused(f"{where}: {name!r}: an absolute path; expected {inside}")
     parts = [p for p in name.split("/") if p not in ("", ".")]
     if ".." in parts:
         raise UploadRefused(f"{where}: {name!r}: a path that climbs out of the folder ('..'); refused")
@@ -252,6 +254,20 @@ def sequence_of(name: str) -> tuple[str, int] | None:
     return (m["scene"].lower(), int(m["seq"])) if m else None
 
 
+def not_ours(where: str, scene: str, seq: int, have: Iterable[tuple[str, int]]) -> UploadRefused | None:
+    """The refusal of a file (``where``: its name, and the line naming the sequence) that names the
+    sequence ``scene``-1-``seq``, when it is not one of the challenge's sequences ``have`` (scene,
+    seq); None when it is. One rule and one message for every format: a TUM or EuRoC file's name,
+    an OpenLORIS file's ``scene:`` and ``seq: N`` lines (such a sequence has no ground truth to score
+    it against, or none a phase shows: it would fail at scoring, and count as a submission)."""
+    listed = sorted(set(have))
+    if (scene, seq) in listed:
+        return None
+    said = ", ".join(f"{s}-1-{q}" for s, q in listed)
+    return UploadRefused(f"{where}: names sequence {scene}-1-{seq}, which is not one of this challenge's; expected "
+                         f"one of {said}")  # fmt: skip
+
+
 def plan(folder: Path, names: list[str], fmt: str, sequences: Iterable[tuple[str, int]]) -> dict[str, dict[str, Any]]:
     """How each kept file is scored: OpenLORIS result files (recognised by their headers, or all
     files with ``fmt`` openloris) as ``lorisnb evaluate`` scores them, not listed here; TUM and
@@ -262,7 +278,6 @@ def plan(folder: Path, names: list[str], fmt: str, sequences: Iterable[tuple[str
     names no sequence of the challenge, an OpenLORIS file whose ``scene:`` header names a scene
     not in the challenge (it would be scored as no output at all, and count as a submission)."""
     have = sorted(set(sequences))
-    listed = ", ".join(f"{s}-1-{q}" for s, q in have)
     out: dict[str, dict[str, Any]] = {}
     for name in names:
         found = recognise(sample(folder / name))
@@ -277,12 +292,10 @@ def plan(folder: Path, names: list[str], fmt: str, sequences: Iterable[tuple[str
                                 "of them it does not recognise (its first lines are checked): give the upload's format "
                                 "(openloris, tum or euroc: the form's format field, lorisnb submit --format) to have "
                                 "every line read", 415)  # fmt: skip
-        if kind == "openloris":
+        if kind == "openloris":  # its scene: at a look now (read whole, its seq: lines too, by read_upload)
             scene = declared_scene(folder / name)
-            scenes = sorted({s for s, _ in have}, key=SCENES.index)
-            if scene is not None and scene not in scenes:
-                raise UploadRefused(f"{name}: an OpenLORIS result file of {scene} (its scene: header), which is not "
-                                    f"one of this challenge's scenes; expected {' or '.join(scenes)}")  # fmt: skip
+            if scene is not None:
+                _check_scene(name, scene, have)
             continue
         seq = sequence_of(name)
         title = FORMATS[kind].title
@@ -291,9 +304,9 @@ def plan(folder: Path, names: list[str], fmt: str, sequences: Iterable[tuple[str
             raise UploadRefused(f"{name}: a {title} names no sequence; expected its name to name it as OpenLORIS "
                                 f"names sequences, <scene>-1-<seq> (e.g. {example}{Path(name).suffix}), or an "
                                 "OpenLORIS result file (scene:, frame: and seq: N blocks)")  # fmt: skip
-        if seq not in have:
-            raise UploadRefused(f"{name}: names sequence {seq[0]}-1-{seq[1]}, which is not one of this challenge's; "
-                                f"expected one of {listed}")  # fmt: skip
+        refused = not_ours(name, seq[0], seq[1], have)
+        if refused is not None:
+            raise refused
         out[name] = dict(format=kind, scene=seq[0], seq=seq[1])
     return out
 
@@ -307,18 +320,20 @@ MAX_STAMP = 1e30
 
 
 def read_upload(folder: Path, names: list[str], layout: Mapping[str, Mapping[str, Any]],
-                spec: EvalSpec | None = None) -> None:  # fmt: skip
+                spec: EvalSpec | None = None, sequences: Iterable[tuple[str, int]] | None = None) -> None:  # fmt: skip
     """Read every kept file whole with the reader the scorer reads it with (``layout``: the
-    :func:`plan`; a file not in it is an OpenLORIS result file, read as
-    :func:`.scoring.score_folder` reads it, its ``seq:`` blocks too), under the rules of ``spec``
+    :func:`plan`; a file not in it is an OpenLORIS result file, read by
+    :func:`.scoring.read_result`, the one reading :func:`.scoring.score_folder` reads it by: every
+    line, its ``scene:`` and ``frame:`` values, its ``seq:`` blocks), under the rules of ``spec``
     (default: lorisnb's), so that a file the scorer would refuse is refused at upload, naming the
-    file and the line (:class:`~lorisnb.errors.LorisError`, the reader's words). A position
-    coordinate over :data:`MAX_COORDINATE` m or a stamp over :data:`MAX_STAMP` s is refused too,
-    naming the pose by its stamp."""
-    drop = spec is None or spec.repeated == "drop"
-    repair = bool(spec is not None and spec.repair_stamps)
+    file and the line (:class:`~lorisnb.errors.LorisError`, the reader's words). An OpenLORIS
+    file's ``seq: N`` naming a sequence not of the challenge's ``sequences`` (scene, seq; None: not
+    checked) is refused as a TUM file named for it is (:func:`not_ours`), naming its line. A
+    position coordinate over :data:`MAX_COORDINATE` m or a stamp over :data:`MAX_STAMP` s is
+    refused too, naming the pose by its stamp."""
+    have = None if sequences is None else sorted(set(sequences))
     with READING:  # one upload read at a time: its memory is the server's, not a limited scorer's
-        _read_each(folder, names, layout, spec, drop, repair)
+        _read_each(folder, names, layout, spec, have)
 
 
 #: Uploads read at once by :func:`read_upload` (in the server's process, outside the scorer's memory
@@ -327,11 +342,10 @@ READING = threading.BoundedSemaphore(1)
 
 
 def _read_each(folder: Path, names: list[str], layout: Mapping[str, Mapping[str, Any]], spec: EvalSpec | None,
-               drop: bool, repair: bool) -> None:  # fmt: skip
+               have: list[tuple[str, int]] | None) -> None:  # fmt: skip
     """:func:`read_upload`'s reading of each file."""
-    from lorisnb.io.readers.openloris import read_openloris
     from lorisnb.io.readers.plain import read_trajectory
-    from lorisnb.tools.challenge.scoring import read_blocks
+    from lorisnb.tools.challenge.scoring import read_result
 
     for name in names:
         path = folder / name
@@ -342,11 +356,31 @@ def _read_each(folder: Path, names: list[str], layout: Mapping[str, Mapping[str,
                 rule = spec.repeated_for(kind) if spec is not None else "drop"
                 trajectories = [read_trajectory(path, kind, repeated=rule)]
             else:
-                trajectories = list(read_openloris(path, remove_repeated=drop, warn=False,
-                                                   repair_stamps=repair).sequences.values())  # fmt: skip
-                read_blocks(path)
+                result, blocks = read_result(path, spec)
+                if have is not None:
+                    _check_blocks(name, blocks, have)
+                trajectories = list(result.sequences.values())
         for t in trajectories:
             _check_values(name, t.stamps, t.positions)
+
+
+def _check_scene(name: str, scene: str, have: Iterable[tuple[str, int]]) -> None:
+    """Refuse an OpenLORIS file whose ``scene:`` header names ``scene``, not one of the scenes of the
+    challenge's sequences ``have`` (it would be scored as no output at all, and count as a submission)."""
+    scenes = sorted({s for s, _ in have}, key=SCENES.index)
+    if scene not in scenes:
+        raise UploadRefused(f"{name}: an OpenLORIS result file of {scene} (its scene: header), which is not "
+                            f"one of this challenge's scenes; expected {' or '.join(scenes)}")  # fmt: skip
+
+
+def _check_blocks(name: str, blocks: Any, have: list[tuple[str, int]]) -> None:
+    """Refuse an OpenLORIS file (its :class:`.scoring.Blocks`) of a scene not in the challenge, or
+    with a ``seq: N`` line naming a sequence not of the challenge's ``have``, naming its line."""
+    _check_scene(name, blocks.scene, have)
+    for line, seq in blocks.seqs:
+        refused = not_ours(f"{name}, line {line}: 'seq: {seq}'", blocks.scene, seq, have)
+        if refused is not None:
+            raise refused
 
 
 def _check_values(name: str, stamps: Any, positions: Any) -> None:
@@ -502,10 +536,11 @@ def keep_upload(files: Iterable[tuple[str, IO[bytes]]], folder: Path, limits: Li
     Any :class:`~lorisnb.errors.LorisError` of reading the upload is an :class:`UploadRefused` (400,
     its message naming the file and line, the server's paths taken out). On a refusal the caller
     removes ``folder``."""
+    sequences = list(sequences)  # the plan's check and the reading's
     try:
         names = unpack(files, folder / "files", limits)
         layout = plan(folder / "files", names, fmt, sequences)
-        read_upload(folder / "files", names, layout, spec)
+        read_upload(folder / "files", names, layout, spec, sequences)
     except UploadRefused:
         raise
     except LorisError as exc:  # any other refusal of reading the upload: the team's words, no server path
