@@ -220,15 +220,19 @@ def test_final_scores_hidden_until_it_closes(served, data):
 
 def test_no_response_holds_a_groundtruth_coordinate(served, data):
     """Every response of this module so far (pages, API, errors), and a failed file's message
-    (a file of the wrong scene's frame), holds none of the 10^4 ground-truth coordinates of cafe."""
+    (a file none of whose stamps is in its sequence's ground truth: a misspelt frame is refused at
+    upload now), holds none of the 10^4 ground-truth coordinates of cafe."""
     client = served["client"]
-    bad = b"scene: cafe\nframe: nosuchframe\n\nseq: 1\n1560004885.5 1 2 3 0 0 0 1\n"
+    bad = b"scene: cafe\nframe: base_link\n\nseq: 1\n" + b"".join(b"%d 1 2 3 0 0 0 1\n" % (1000 + k) for k in range(20))
     r = client.post("/api/submissions", files=[("files", ("bad.txt", bad))],
                     headers={"Authorization": f"Bearer {served['tokens']['dslam']}"})  # fmt: skip
     view = wait_scored(client, r.json()["id"])
     # nothing of it scored: failed with each file's reason (it was 'scored' with no error, and ranked CR 0)
-    assert view["status"] == "failed" and view["failures"] and "nosuchframe" in view["failures"][0]["error"]
-    assert view["error"].startswith("nothing of this upload was scored: bad.txt: ") and "nosuchframe" in view["error"]
+    assert view["status"] == "failed" and view["failures"] and "no estimate stamp" in view["failures"][0]["error"]
+    assert (
+        view["error"].startswith("nothing of this upload was scored: bad.txt: ")
+        and "no estimate stamp" in view["error"]
+    )
     assert str(data.root) not in view["failures"][0]["error"] and str(data.root) not in view["error"]
     assert not view["failures"][0]["error"].startswith("bad.txt")  # the file is named once, by its row
     dev = boards(client)[0]  # dslam's latest submission that scored something counts: not this one
