@@ -344,3 +344,14 @@ def longest_tracked(table, algorithm: str) -> tuple[str, int]:
     time (CR above 0.6)."""
     g = table[(table["algorithm"] == algorithm) & (table["cr"] > 0.6)].sort_values("gt_duration", ascending=False)
     return str(g["scene"].iloc[0]), int(g["seq"].iloc[0])
+
+
+def run_cli(capsys, *args, joined: bool = False) -> tuple[int, str, str]:
+    """``lorisnb ARGS`` in this process (:func:`lorisnb.cli.main`, each argument ``str()``-ed): its
+    exit status, stdout and stderr; ``joined``: stderr with its lines and runs of spaces joined (a
+    message the terminal's width wrapped reads as one line)."""
+    from lorisnb.cli import main
+
+    rc = main([*map(str, args)])
+    out = capsys.readouterr()
+    return rc, out.out, " ".join(out.err.split()) if joined else out.err

@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import shutil
 
-from lorisnb.cli import main
+from helpers import run_cli as run
 
 ORB = "cafe_1_1_orbslam2-original.txt"
 ODOM = "cafe-1-1-odom.txt"
@@ -22,12 +22,6 @@ def fake_notebook(name, out_dir, params, **kw):
     (out_dir / name / f"{name}.ipynb").write_text(json.dumps({"cells": [], "metadata": {}, "nbformat": 4}))
     (out_dir / name / f"{name}.html").write_text(f"<pre>{params.get('results_dir')}</pre>")
     return NotebookRun(name)
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 def test_a_moved_absolute_paths_run_verifies_below_the_folders_given_for_its_recorded_roots(

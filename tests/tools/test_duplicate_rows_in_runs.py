@@ -13,17 +13,20 @@ from __future__ import annotations
 import json
 import os
 import warnings
+from functools import partial
 
 import pandas as pd
 import pytest
+from helpers import run_cli
 
-from lorisnb.cli import main
 from lorisnb.errors import ParseError
 from lorisnb.io.writers import write_csv
 from lorisnb.tools.decisions.history import last_comparable, load_runs
 from lorisnb.tools.decisions.runs import DURATIONS, FIRST_TABLE, load_run, read_table
 from lorisnb.tools.report.baseline import since_baseline
 from lorisnb.tools.report.provenance import KEYS
+
+run = partial(run_cli, joined=True)
 
 
 @pytest.fixture(scope="module")
@@ -51,12 +54,6 @@ def nights(folder, *tables):
         os.utime(f, (1.7e9 + 1000 * k, 1.7e9 + 1000 * k))
         paths.append(f)
     return paths
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, " ".join(out.err.split())
 
 
 REPEATED = "odom cafe-2 (trial 0) has several rows (lines 3 and 5)"

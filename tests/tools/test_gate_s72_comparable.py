@@ -9,14 +9,17 @@ from __future__ import annotations
 
 import json
 import shutil
+from functools import partial
 
 import pytest
+from helpers import run_cli
 
 import lorisnb
-from lorisnb.cli import main
 from lorisnb.io.writers import write_csv
 from lorisnb.tools.decisions.runs import DURATIONS, FIRST_TABLE
 from lorisnb.tools.report.provenance import KEYS, sha256
+
+run = partial(run_cli, joined=True)
 
 ODOM = ("cafe-1-1-odom.txt", "cafe-1-2-odom.txt", "home-1-1-odom.txt")  # as conftest.ODOM
 
@@ -37,12 +40,6 @@ def night(folder, table, created, version=lorisnb.__version__, inputs=None):
                                       "spec": {"description": "d", "values": {**values, "source": "{results}"}}}  # fmt: skip
     (folder / "run.json").write_text(json.dumps(meta))
     return folder
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, " ".join(out.err.split())
 
 
 def test_diff_refuses_runs_of_two_lorisnb_versions_as_history_does(tmp_path, table, capsys):

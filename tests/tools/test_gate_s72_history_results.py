@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import os
 import shutil
+from functools import partial
 
 import pytest
+from helpers import run_cli
 
-from lorisnb.cli import main
 from lorisnb.errors import ValidationError
 from lorisnb.io.writers import write_csv
 from lorisnb.tools.decisions.history import load_runs
+
+run = partial(run_cli, joined=True)
 
 ODOM = ("cafe-1-1-odom.txt", "cafe-1-2-odom.txt", "home-1-1-odom.txt")  # as conftest.ODOM
 
@@ -41,12 +44,6 @@ def results(folder, icra20, files=ODOM):
     for f in files:
         shutil.copy(icra20 / "per-seq" / "odom" / f, folder / "odom" / f)
     return folder
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, " ".join(out.err.split())
 
 
 def test_a_result_folder_given_to_history_is_refused_not_passed_over(tmp_path, table, icra20, capsys):

@@ -6,25 +6,23 @@ Tolerances: metric names in any case, and an error's tolerance that lets it doub
 
 from __future__ import annotations
 
+from functools import partial
+
 import pandas as pd
 import pytest
+from helpers import run_cli
 
-from lorisnb.cli import main
 from lorisnb.errors import ParseError, ValidationError
 from lorisnb.io.writers import write_csv
 from lorisnb.tools.decisions.diff import diff_tables
 from lorisnb.tools.decisions.runs import load_run, setting_differences
 
+run = partial(run_cli, joined=True)
+
 
 @pytest.fixture(scope="module")
 def table(odom_sequences):
     return odom_sequences.copy()
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, " ".join(out.err.split())
 
 
 @pytest.mark.parametrize("cell", ['{"bogus', "[1, 2]", "nan"])

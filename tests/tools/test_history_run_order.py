@@ -9,25 +9,22 @@ from __future__ import annotations
 
 import os
 from datetime import date, time
+from functools import partial
 
 import pytest
+from helpers import run_cli
 
 import lorisnb as ln
-from lorisnb.cli import main
 from lorisnb.io.writers import write_csv
 from lorisnb.tools.decisions.history import load_runs, name_dates
 from lorisnb.tools.decisions.runs import load_run
+
+run = partial(run_cli, joined=True)
 
 
 @pytest.fixture(scope="module")
 def table(odom_sequences):
     return odom_sequences.copy()  # three odom files, as a results folder's evaluation names them
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, " ".join(out.err.split())
 
 
 def nights(folder, table, names, newest_first=True):

@@ -15,8 +15,8 @@ import os
 import numpy as np
 import pandas as pd
 import pytest
+from helpers import run_cli as run
 
-from lorisnb.cli import main
 from lorisnb.io.writers import write_csv
 from lorisnb.tools.decisions.diff import same_values
 from lorisnb.tools.decisions.history import (
@@ -54,12 +54,6 @@ def night(folder, table, created, unscored=()):
                                       "spec": {"description": "d", "values": {**values, "source": "{results}"}}}  # fmt: skip
     (folder / "run.json").write_text(json.dumps(meta))
     return folder
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 def test_runs_of_one_time_keep_the_order_given(tmp_path, table, capsys):

@@ -12,8 +12,8 @@ import warnings
 from pathlib import Path
 
 import pytest
+from helpers import run_cli as run
 
-from lorisnb.cli import main
 from lorisnb.errors import LorisWarning, OutputError, ValidationError
 from lorisnb.tools.report.portable import held_paths, make_portable, root_key, spellings, unreplaced
 from lorisnb.tools.report.provenance import checksums, input_files, run_record, verify_run, write_run_json
@@ -30,12 +30,6 @@ def lab(where: Path, data, icra20) -> Path:
         shutil.copy(icra20 / "per-seq" / src / name, where / "res" / alg / name)
     shutil.copytree(data.root / "openloris-scene", where / "data" / "openloris-scene")
     return where
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 @pytest.mark.slow

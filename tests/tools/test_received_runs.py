@@ -13,11 +13,11 @@ import shutil
 from pathlib import Path
 
 import pytest
+from helpers import run_cli as run
 from report_fixtures import fake_notebook
 from test_portable_runs import as_written
 from test_portable_runs import received as portable_run
 
-from lorisnb.cli import main
 from lorisnb.errors import LorisError, ParseError, ValidationError
 from lorisnb.tools.decisions.runs import load_run
 from lorisnb.tools.report.provenance import verify_run, write_run_json
@@ -43,12 +43,6 @@ def made(tmp_path_factory, data, icra20):
         out, _ = report.run_report(here / "runs" / "r1", {"data_root": str(data.root)}, ["compare_algorithms"],
                                    progress=False, results=here / "res")  # fmt: skip
     return here, out
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 def test_a_linked_input_is_keyed_where_it_is_and_verified_only_where_its_folder_is_given(made, data, capsys):

@@ -15,8 +15,8 @@ import shutil
 from pathlib import Path
 
 import pytest
+from helpers import run_cli as run
 
-from lorisnb.cli import main
 from lorisnb.errors import LorisError, OutputError
 from lorisnb.tools.report.portable import split_key
 from lorisnb.tools.report.provenance import verify_run
@@ -73,12 +73,6 @@ def made(tmp_path_factory, data, icra20):
         out, _ = report.run_report(here / "runs" / "r1", {"data_root": str(data.root)}, ["per_sequence_benchmark"],
                                    progress=False, results=res)  # fmt: skip
     return here, out
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 def copied(made, tmp_path) -> Path:

@@ -11,6 +11,7 @@ import shutil
 
 import pandas as pd
 import pytest
+from helpers import run_cli as run
 
 import lorisnb as ln
 from lorisnb.cli import main
@@ -54,12 +55,6 @@ def make_run(folder, table, spec_, roots=(), data_root=None, **meta):
     record = run_record(["lorisnb", "report"], spec_, data_root, inputs, {"per_sequence_benchmark": "ok"}, roots)
     write_run_json(folder, {**record, **meta})
     return folder
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 @pytest.mark.thorough

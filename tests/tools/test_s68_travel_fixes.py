@@ -16,9 +16,9 @@ import shutil
 from pathlib import Path
 
 import pytest
+from helpers import run_cli as run
 from report_fixtures import fake_papermill_notebook as fake_notebook
 
-from lorisnb.cli import main
 from lorisnb.errors import ValidationError
 from lorisnb.tools.report.provenance import verify_run
 
@@ -48,12 +48,6 @@ def made(tmp_path_factory, data, icra20):
     """A portable report run of a results folder holding an algorithm folder named in NFD."""
     here = tmp_path_factory.mktemp("lab")
     return here, make_run(here, data, icra20)
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 def copy(src: Path, dst: Path) -> Path:

@@ -13,8 +13,8 @@ import warnings
 from pathlib import Path
 
 import pytest
+from helpers import run_cli as run
 
-from lorisnb.cli import main
 from lorisnb.core.stats.trials import check_duplicates
 from lorisnb.errors import LorisWarning, ParseError, ValidationError
 from lorisnb.io.datasets.manifest import read_manifest
@@ -48,12 +48,6 @@ def case(tmp_path, tum_folder) -> tuple[Path, Path, Path]:
     shutil.copyfile(tum_folder / "fr2_desk_ORB.txt", orb / "fr2_desk.txt")
     shutil.copyfile(tum_folder / "freiburg1_xyz-rgbdslam.txt", orb / "fr1_xyz.txt")
     return tmp_path / "m.toml", tmp_path / "res", tum_folder
-
-
-def run(capsys, *args) -> tuple[int, str, str]:
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 def _quiet_manifest(m: Path, res: Path):

@@ -13,9 +13,9 @@ import shutil
 from pathlib import Path
 
 import pytest
+from helpers import run_cli as run
 from report_fixtures import fake_papermill_notebook as fake_notebook
 
-from lorisnb.cli import main
 from lorisnb.errors import ParseError, ValidationError
 from lorisnb.tools.report.portable import command_by_root
 from lorisnb.tools.report.provenance import load_json, read_run_json, verify_run
@@ -41,12 +41,6 @@ def made(tmp_path_factory, data, icra20):
     (here / "res" / "orb").mkdir(parents=True)
     shutil.copy(icra20 / "per-seq" / "orbslam2_rgbd" / ORB, here / "res" / "orb" / ORB)
     return here, make_run(here / "runs" / "r1", data.root, here / "res")
-
-
-def run(capsys, *args):
-    rc = main([*map(str, args)])
-    out = capsys.readouterr()
-    return rc, out.out, out.err
 
 
 def copy(src: Path, dst: Path) -> Path:
