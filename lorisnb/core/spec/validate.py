@@ -218,32 +218,67 @@ def relative_fraction(name: str, fraction: float, shown: Any) -> float:
     return fraction
 
 
-def threshold_list(name: str, values: Any) -> list[Any]:
+def threshold_list(name: str, values: Any, label: str | None = None) -> list[Any]:
     """A non-empty list of thresholds (for sweeps): one value or an iterable of them; ``eps``
     values may be ``"paper"``. A string is split at commas, as on the command line; an empty item
-    (``1,,2``, a trailing comma) is refused, not dropped; a 0-d numpy array is one value."""
+    (``1,,2``, a trailing comma) is refused, not dropped; a 0-d numpy array is one value. Each item
+    is checked by the rule of the one threshold ``name`` (:func:`eps_value`, :func:`threshold`).
+    ``label``: what the errors call the list when it is not ``name`` itself (a notebook's
+    ``eps_grid``): ``eps_grid=-1: expected ...``, ``eps_grid: an empty list``."""
+    return value_list(name, values, eps_value if name == "eps" else (lambda v: threshold(name, v)), label)
+
+
+def value_list(name: str, values: Any, check: Callable[[Any], Any], label: str | None = None) -> list[Any]:
+    """A non-empty list of values, each checked by ``check`` (which names its value ``name=...``),
+    as :func:`threshold_list` reads one; the same value twice is refused. ``label`` (default
+    ``name``): the list's name in the errors, each item's error then naming ``label`` and the item."""
+    called = name if label is None else label
     if isinstance(values, np.ndarray) and values.ndim == 0:
         values = values.item()
     if isinstance(values, np.ndarray) and values.ndim > 1:  # its rows were taken as values (one named, wrongly)
-        raise ValidationError(f"{name}: an array of shape {values.shape}; expected a list of values (one dimension: "
-                              f"{name}=values.ravel() for each of them)")  # fmt: skip
+        raise ValidationError(f"{called}: an array of shape {values.shape}; expected a list of values (one dimension: "
+                              f"{called}=values.ravel() for each of them)")  # fmt: skip
     if isinstance(values, str):
         items: list[Any] = values.split(",")
         if any(p.strip() for p in items) and not all(p.strip() for p in items):  # all empty: below
-            raise ValidationError(f"{name}={values}: an empty item between commas; expected values separated by commas")
+            raise ValidationError(f"{called}={values}: an empty item between commas; expected values separated by "
+                                  "commas")  # fmt: skip
         items = [p for p in items if p.strip()]
     elif isinstance(values, Iterable) and not isinstance(values, Mapping):
         items = list(values)
     else:
         items = [values]
     if not items:
-        raise ValidationError(f"{name}: an empty list; expected at least one value")
-    out: list[Any] = [eps_value(v) for v in items] if name == "eps" else [threshold(name, v) for v in items]
+        raise ValidationError(f"{called}: an empty list; expected at least one value")
+    out: list[Any] = []
+    for item in items:
+        try:
+            out.append(check(item))
+        except ValidationError as exc:
+            if label is None or label == name:
+                raise
+            raise ValidationError(element_error(label, name, item, exc)) from None
     for k, v in enumerate(out):  # the same setting twice (60 and 60.0, inf and Infinity): rows twice, refused
         if v in out[:k]:
-            raise ValidationError(f"{name}={_show(values)}: {_show(items[out.index(v)])} and {_show(items[k])} are the "
-                                  "same value; expected each value once")  # fmt: skip
+            raise ValidationError(f"{called}={_show(values)}: {_show(items[out.index(v)])} and {_show(items[k])} are "
+                                  "the same value; expected each value once")  # fmt: skip
     return out
+
+
+def element_error(label: str, name: str, item: Any, exc: ValidationError) -> str:
+    """The error of one item of the list ``label`` as the check of the one value ``name`` said it
+    (``eps=-1: expected ...``), naming the list with the item instead: ``eps_grid=-1: expected ...``
+    (as ``relative_grid=5: ...`` and the command line's ``-p eps_grid=1e400: ...`` name it)."""
+    text = str(exc)
+    shown_item = _show(item.strip() if isinstance(item, str) else item)
+    for given in (f"{name}={_show(item)}", f"{name}={shown_item}", f"{name}={item}"):
+        if text.startswith(given):
+            return f"{label}={shown_item}{text[len(given) :]}"
+    if text.startswith(f"{name}:"):  # eps: key 1: ..., eps: scene 'Cafe': ...
+        return f"{label}={shown_item}:{text[len(name) + 1 :]}"
+    if text.startswith(f"{name}=") and not isinstance(item, Mapping):  # an item shown shortened (10**400)
+        return f"{label}={text[len(name) + 1 :]}"
+    return f"{label}={shown_item}: {text}"
 
 
 def scale_value(value: Any) -> bool | str:

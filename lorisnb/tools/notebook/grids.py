@@ -31,10 +31,14 @@ GRIDS: dict[str, dict[str, tuple[list[float], list[float]]]] = {
 
 
 def check_grid(name: str, values: Any) -> list[Any]:
+    """A grid parameter (``eps_grid``, ``phi_grid``, ``delta_grid``, ``tau_grid``, ``relative_grid``)
+    checked: a non-empty list (text split at commas), each element by the rule of its one value
+    (``eps_grid``'s as the parameter ``eps``, scene mappings and ``paper`` included;
+    ``relative_grid``'s as a fraction of the ground truth's size), each once. An error names the
+    grid with the element (``eps_grid=-1: ...``), not the one value."""
     if name == "relative_grid":
-        items = validate.threshold_list("eps", values)  # numbers, a non-empty list
-        return [validate.fraction(name, v) for v in items]
-    return validate.threshold_list(name.removesuffix("_grid"), values)
+        return validate.value_list(name, values, lambda v: validate.fraction(name, v))
+    return validate.threshold_list(name.removesuffix("_grid"), values, label=name)
 
 
 def notebook_grids(notebook: str, quick: Any, **given: Any) -> dict[str, list[Any]]:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import ast
 import io
+import json
 import math
 import os
 import sys
@@ -36,9 +37,12 @@ __all__ = [
     "check_parameters",
     "check_values",
     "default_eps",
+    "eps_values",
     "evaluation_spec",
     "existing",
     "papermill_parameters",
+    "refuse_eps_gaps",
+    "refuse_eps_without_scenes",
     "refuse_scenes_without_groundtruth",
     "refuse_simulated_off",
     "simulated_on",
@@ -50,15 +54,16 @@ __all__ = [
 #: by its name).
 PATHS = {"results_dir": True, "data_root": True, "ordslam_dir": True, "path": False, "groundtruth": False,
          "manifest": False}  # fmt: skip
+#: The grid parameters of the notebooks that sweep (:data:`lorisnb.tools.notebook.grids.GRIDS`): each
+#: element is checked by the rule of its one value (:func:`lorisnb.tools.notebook.grids.check_grid`).
+GRID_NAMES = ("eps_grid", "phi_grid", "delta_grid", "tau_grid", "relative_grid")
+#: The grids of thresholds whose infinity means "no threshold" (a fraction is never infinite).
+THRESHOLD_GRIDS = ("eps_grid", "phi_grid", "delta_grid", "tau_grid")
 #: Notebook parameters checked with the same rules as the command line and the Python API.
 _CHECKS: dict[str, Any] = {
     **{name: (lambda v, name=name: make_spec(None, surface="notebook", **{name: v})) for name in SPEC_NAMES},
-    "eps_grid": lambda v: validate.threshold_list("eps", v),
-    "phi_grid": lambda v: validate.threshold_list("phi", v),
-    "delta_grid": lambda v: validate.threshold_list("delta", v),
-    "tau_grid": lambda v: validate.threshold_list("tau", v),
+    **{g: (lambda v, g=g: check_grid(g, v)) for g in GRID_NAMES},  # errors name the grid and its element
     "trials_by": lambda v: compile_trials_by(str(v)),
-    "relative_grid": lambda v: check_grid("relative_grid", v),
     "seed": validate.seed,
     "quick": lambda v: validate.flag("quick", v),
     "simulated": lambda v: validate.flag("simulated", v),
@@ -72,6 +77,8 @@ _CHECKS: dict[str, Any] = {
     "sim_eps": lambda v: validate.threshold("eps", v),
     "sim_trials": lambda v: validate.positive("sim_trials", v, "trials", integer=True),
 }
+#: Parameters that take a list of names (text with a comma in it is one name: refused with the list's form).
+NAMES = ("algorithms", "scenes")
 #: Parameters that take a list (one name or number stands for a list of one).
 LISTS = ("algorithms", "scenes", "eps_grid", "phi_grid", "delta_grid", "tau_grid", "relative_grid")
 #: Parameters that only apply together with another one (the notebook ignores them without it).
@@ -195,10 +202,17 @@ NUMBERS = ("eps", "phi", "delta", "tau", "seed", "alpha", "level", "sim_eps", "s
 
 #: Parameters whose infinity means "no threshold" (:func:`lorisnb.core.spec.validate.threshold`):
 #: papermill's ``-p eps 1e400`` reaches the notebook as ``float('inf')``, as ``-p eps inf`` does, so
-#: under papermill an infinite one is refused (:func:`refuse_papermill_infinity`).
+#: under papermill an infinite one is refused (:func:`refuse_papermill_infinity`), as is an infinite
+#: element of a grid (:data:`THRESHOLD_GRIDS`) given as a number.
 INFINITE_MEANS_NONE = ("eps", "phi", "delta", "tau", "sim_eps")
 #: ``check_parameters``' ``by`` when the report calls it (not a notebook's first cell).
 REPORT = "the selected notebooks"
+
+
+def _as_text(name: str) -> str:
+    """How a number reaches a notebook as text under papermill (said where one is refused as text)."""
+    return (f"(papermill's -r passes text, and so does -y for a quoted value or one YAML reads as no number: "
+            f"-y '{name}: inf', -y '{name}: 1e400')")  # fmt: skip
 
 
 def _no_threshold(name: str) -> str:
@@ -223,13 +237,13 @@ def check_values(
                     # command line's message would say "write 'inf'", which a notebook refuses in either spelling
                     raise ValidationError(f"{name}={value!r}: too large to be a number (beyond "
                                           f"+-{sys.float_info.max:.3g} it would be read as infinity), and written as "
-                                          "text (papermill's -r passes text); give a number, or, "
-                                          f"{_no_threshold(name)}")  # fmt: skip
-                raise ValidationError(f"{name}={value!r}: the word inf as text (papermill's -r passes text), which a "
-                                      f"notebook cannot use as a number; papermill -p {name} inf is refused too (it "
-                                      "reads it as it reads 1e400, too large to be a number: infinity); give a "
-                                      f"number, or, {_no_threshold(name)}")  # fmt: skip
-            raise ValidationError(f"{name}={value!r}: a number written as text (papermill's -r passes text); give a "
+                                          f"text {_as_text(name)}; give a number, or, {_no_threshold(name)}")  # fmt: skip
+                raise ValidationError(f"{name}={value!r}: the word inf as text {_as_text(name)}, which a notebook cannot "
+                                      f"use as a number; as a number (papermill -p {name} inf, -y '{name}: .inf') it "
+                                      f"is refused too: papermill reads -p {name} 1e400, too large to be a number, as "
+                                      f"it reads inf (and YAML 1.0e400 as .inf); give a number, or, "
+                                      f"{_no_threshold(name)}")  # fmt: skip
+            raise ValidationError(f"{name}={value!r}: a number written as text {_as_text(name)}; give a "
                                   f"number: papermill -p {name} {value.strip()}, or lorisnb report -p {name} "
                                   f"{value.strip()}")  # fmt: skip
     eps = values.get("eps")
@@ -252,6 +266,13 @@ def check_values(
         if name in LISTS and isinstance(value, str) and value.lstrip().startswith(("[", "(")):
             raise ValidationError(f"{name}={value!r}: a list written as text (papermill's -p passes text); give a list: "
                                   f"papermill -y '{name}: [a, b]', or lorisnb report -p {name} '[\"a\", \"b\"]'")  # fmt: skip
+        if name in NAMES and isinstance(value, str) and "," in value:
+            parts = [p.strip() for p in value.split(",")]
+            example = ", ".join(p or "a" for p in parts)
+            raise ValidationError(f"{name}={value!r}: one name with a comma in it, not a list (text is one name: "
+                                  f"papermill's -p and -r pass text); give a list: papermill -y '{name}: [{example}]', "
+                                  f"or lorisnb report -p {name} '{json.dumps(parts)}' (a name that holds a comma: in "
+                                  "a list of its own)")  # fmt: skip
         if name in _CHECKS:
             _CHECKS[name](value)
         if name in _VALUES:  # checked as the report normalizes them (-p scene Cafe is cafe)
@@ -322,8 +343,7 @@ def _spec_option(name: str, value: Any) -> Any:
 #: How each checked parameter that is neither a spec option nor in :data:`_VALUES` is written in
 #: its one form (see :func:`canonical`).
 _CANONICAL: dict[str, Any] = {
-    **{g: (lambda v, g=g: [_plain(x) for x in check_grid(g, v)]) for g in
-       ("eps_grid", "phi_grid", "delta_grid", "tau_grid", "relative_grid")},
+    **{g: (lambda v, g=g: [_plain(x) for x in check_grid(g, v)]) for g in GRID_NAMES},
     "trials_by": lambda v: (compile_trials_by(str(v)), str(v))[1],
     "quick": lambda v: validate.flag("quick", v),
     "simulated": lambda v: validate.flag("simulated", v),
@@ -368,18 +388,34 @@ def _in_report() -> bool:
 
 
 def refuse_papermill_infinity(injected: Mapping[str, Any]) -> None:
-    """Refuse an infinite threshold papermill passed (:data:`INFINITE_MEANS_NONE`): papermill's ``-p
-    eps 1e400`` (too large to be a number, refused by the command line and the report) reaches the
-    notebook as ``float('inf')``, as ``-p eps inf`` does, and the notebook cannot tell them apart.
-    ``injected``: the names papermill gave, as the kernel holds them; not in a report's run (the
-    report refused 1e400 and passes its ``inf`` on as infinity)."""
-    infinite = [n for n in INFINITE_MEANS_NONE if isinstance(injected.get(n), float) and math.isinf(injected[n])]
-    if infinite and not _in_report():
-        name = infinite[0]
-        raise ValidationError(f"{name}=inf: papermill turned the number given with -p {name} into infinity (it reads "
-                              f"1e400, too large to be a number, as it reads inf), so it is refused as lorisnb "
-                              f"evaluate --{name} 1e400 is; give a number (at most {sys.float_info.max:.3g}), or, "
-                              f"{_no_threshold(name)}")  # fmt: skip
+    """Refuse an infinite threshold papermill passed, one (:data:`INFINITE_MEANS_NONE`) or an element of
+    a grid (:data:`THRESHOLD_GRIDS`) alike: papermill's ``-p eps 1e400`` (too large to be a number, refused by
+    the command line and the report) reaches the notebook as ``float('inf')``, as ``-p eps inf`` does,
+    and YAML's ``-y 'eps: 1.0e400'`` as ``-y 'eps: .inf'`` does: the notebook cannot tell them apart.
+    Infinity written as a word in text stays possible where the parameter takes text: a grid's
+    ``-p eps_grid 1,inf`` (or ``-r eps_grid inf``). ``injected``: the names papermill gave, as the
+    kernel holds them; not in a report's run (the report refused 1e400 and passes its ``inf`` on as
+    infinity)."""
+    if _in_report():
+        return
+    for name in INFINITE_MEANS_NONE:
+        value = injected.get(name)
+        if isinstance(value, float) and math.isinf(value):
+            raise ValidationError(f"{name}=inf: papermill turned the number given with -p {name} into infinity, or "
+                                  f"YAML the one given with -y (papermill reads -p {name} 1e400, too large to be a "
+                                  f"number, as it reads -p {name} inf, and YAML reads -y '{name}: 1.0e400' as "
+                                  f"-y '{name}: .inf'), so it is refused as lorisnb evaluate --{name} 1e400 is; give "
+                                  f"a number (at most {sys.float_info.max:.3g}), or, {_no_threshold(name)}")  # fmt: skip
+    for grid in THRESHOLD_GRIDS:
+        value = injected.get(grid)
+        items = value if isinstance(value, (list, tuple)) else [value]
+        if any(isinstance(v, float) and math.isinf(v) for v in items):
+            given = "an element of the list" if isinstance(value, (list, tuple)) else "the number"
+            raise ValidationError(f"{grid}=inf: papermill turned {given} given with -p {grid} or -y into "
+                                  f"infinity (it reads 1e400, too large to be a number, as it reads inf, and YAML "
+                                  f"1.0e400 as .inf), so it is refused as lorisnb sweep --{grid.removesuffix('_grid')} 1,1e400 "
+                                  f"is; give numbers, or, for no threshold, the word inf in the grid's text: papermill "
+                                  f"-p {grid} 1,inf (-r {grid} inf for inf alone), or lorisnb report -p {grid} 1,inf")  # fmt: skip
 
 
 def simulated_on(values: Mapping[str, Any]) -> bool:
@@ -439,6 +475,101 @@ def refuse_scenes_without_groundtruth(values: Mapping[str, Any], data: DataPaths
             )
     if values.get("scenes") is not None and set(names("scenes", values["scenes"])) <= set(SCENES):
         refuse_unscorable_scenes(values["scenes"], data)
+
+
+#: notebook -> the folder of the bundled icra20 results it evaluates (OpenLORIS result files) where
+#: ``results_dir`` is not given; its scenes are those an eps mapping must give a threshold for.
+OPENLORIS_INPUTS = {"per_sequence_benchmark": "per-seq", "compare_algorithms": "per-seq",
+                    "lifelong_benchmark": "lifelong", "threshold_sensitivity": "lifelong"}  # fmt: skip
+#: ``evaluate_my_results``' bundled example (its ``path`` when none is given), below the icra20 results.
+EXAMPLE = ("lifelong", "vins_mono_color_imu_with_loop", "home-1.txt")
+
+
+def eps_values(values: Mapping[str, Any]) -> list[tuple[str, Any]]:
+    """Every ATE threshold of the parameters, each as an error names it and checked: ``eps`` and each
+    element of ``eps_grid`` (the same rule for both, :func:`lorisnb.core.spec.validate.eps_value`)."""
+    out: list[tuple[str, Any]] = []
+    if values.get("eps") is not None:
+        out.append(("eps", validate.eps_value(values["eps"])))
+    if values.get("eps_grid") is not None:
+        out += [("eps_grid", e) for e in check_grid("eps_grid", values["eps_grid"])]
+    return out
+
+
+def input_scenes(source: Any, data: DataPaths, algorithms: Any = None, scenes: Any = None,
+                 trials_by: str | None = None) -> list[str]:  # fmt: skip
+    """The scenes the OpenLORIS result files of ``source`` are scored on: those their ``scene:``
+    headers name, of the files the ``algorithms`` and ``scenes`` filters keep, that ``data`` holds
+    ground truth for (a file of another scene is skipped, never scored)."""
+    from lorisnb.io.readers.openloris import declared_scene
+    from lorisnb.tools.evaluation.inputs import labels
+
+    files = result_files([source])
+    if algorithms is not None:
+        keep = set(names("algorithms", algorithms))
+        files = [(f, root) for f, root in files if labels(f, root, trials_by)[0] in keep]
+    found = {s for s in (declared_scene(f) for f, _ in files) if s is not None}
+    if scenes is not None:
+        found &= set(names("scenes", scenes))
+    have = set(data.scenes_with_groundtruth())
+    return sorted(found & have, key=lambda s: (SCENES.index(s) if s in SCENES else len(SCENES), s))
+
+
+def notebook_scenes(notebook: str, values: Mapping[str, Any], data: DataPaths) -> list[str] | None:
+    """The OpenLORIS scenes ``notebook`` scores at its eps with these parameters (``values``, the
+    notebook's defaults among them where it matters: ``quick``, ``scene``): its results (``results_dir``,
+    else the bundled ones, trimmed by ``quick`` as :func:`lorisnb.tools.notebook.grids.quick_inputs`
+    trims them) filtered by ``algorithms`` and ``scenes``; ``metrics_primer``'s ``scene``;
+    ``evaluate_my_results``' result files (``path``, else its bundled example). None where the scenes
+    are not known before the inputs are read (a pair, a manifest: their scenes are checked where they
+    are read, :meth:`lorisnb.core.spec.evalspec.EvalSpec.refuse_scenes`)."""
+    from lorisnb.tools.notebook.grids import quick_inputs
+
+    if notebook in EPS_IN_METRES:
+        scene = values.get("scene")
+        return None if scene is None else [validate.choice("scene", scene, SCENES)]
+    if notebook == "evaluate_my_results":
+        if values.get("groundtruth") is not None or values.get("manifest") is not None:
+            return None
+        source = user_path(str(values["path"])) if values.get("path") is not None else data.icra20.joinpath(*EXAMPLE)
+        return input_scenes(source, data)
+    if notebook not in OPENLORIS_INPUTS:
+        return None
+    results_dir = values.get("results_dir")
+    source = user_path(str(results_dir)) if results_dir is not None else data.icra20 / OPENLORIS_INPUTS[notebook]
+    scenes, algorithms = quick_inputs(notebook, values.get("quick") or False, results_dir, values.get("scenes"),
+                                      values.get("algorithms"))  # fmt: skip
+    return input_scenes(source, data, algorithms, scenes, values.get("trials_by"))
+
+
+def refuse_eps_gaps(thresholds: Iterable[tuple[str, Any]], scenes: Sequence[str], who: str) -> None:
+    """Refuse an eps mapping (scene -> metres) among ``thresholds`` (:func:`eps_values`: the one
+    eps and each element of a grid alike) that gives no threshold for one of ``scenes``, the scenes
+    ``who`` scores: every table at it would refuse it, after every file was read."""
+    for label, eps in thresholds:
+        if not isinstance(eps, Mapping):
+            continue
+        missing = [s for s in scenes if s not in eps]
+        if missing:
+            shown = f"{label}={dict(eps)!r}" + ("" if label == "eps" else " (an element of the grid)")
+            raise ValidationError(
+                f"{shown} gives no threshold for scene {missing[0]!r}, which {who} scores ({', '.join(scenes)}): "
+                f"add {', '.join(map(repr, missing))} to the mapping, or give one eps for every scene"
+            )
+
+
+def refuse_eps_without_scenes(values: Mapping[str, Any], data: DataPaths, notebook: str) -> None:
+    """Refuse, before any file is read, an eps mapping, as ``eps`` or as an element of ``eps_grid``,
+    that gives no threshold for a scene ``notebook`` scores (:func:`notebook_scenes`): the notebook
+    failed minutes later, after its evaluation (a grid's element only in the cell that sweeps it).
+    Called by each notebook's :func:`lorisnb.tools.notebook.start.setup` and by ``lorisnb report``
+    for each notebook it runs, before any runs."""
+    thresholds = [(label, eps) for label, eps in eps_values(values) if isinstance(eps, Mapping)]
+    if not thresholds:
+        return  # no mapping: nothing read
+    scenes = notebook_scenes(notebook, values, data)
+    if scenes:
+        refuse_eps_gaps(thresholds, scenes, notebook)
 
 
 #: The first line of the cell papermill injects after a notebook's ``parameters`` cell (Python).

@@ -601,9 +601,10 @@ def setup(
         data = sample_data()
         print(f"no data_root given, {ENV_VAR} not set and no shared/data folder found: using the small sample data "
               f"shipped with lorisnb (cafe scene only); set {ENV_VAR}=DIR or the data_root parameter for other data")  # fmt: skip
-    from lorisnb.tools.notebook.params import refuse_scenes_without_groundtruth
+    from lorisnb.tools.notebook.params import refuse_eps_without_scenes, refuse_scenes_without_groundtruth
 
     refuse_scenes_without_groundtruth(values, data)  # scene, sim_scene, scenes without ground truth (office)
+    refuse_eps_without_scenes(values, data, name)  # an eps mapping (eps, eps_grid) missing a scene it scores
     out = Outputs(output_dir if output_dir is not None else default_output_dir(name), notebook=name,
                   inputs=notebook_inputs(values, data), own_folder=output_dir is None)  # fmt: skip
     if name in NOTEBOOK_OUTPUTS:  # every file it will write, checked before the first is written

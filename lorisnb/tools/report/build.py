@@ -38,7 +38,14 @@ from lorisnb.tools.decisions.escape import clean
 from lorisnb.tools.decisions.history import earlier_runs
 from lorisnb.tools.evaluation.pool import start_context
 from lorisnb.tools.evaluation.runner import check_filters, result_files
-from lorisnb.tools.notebook.params import check_parameters, refuse_simulated_off, user_path
+from lorisnb.tools.notebook.params import (
+    check_parameters,
+    eps_values,
+    input_scenes,
+    refuse_eps_gaps,
+    refuse_simulated_off,
+    user_path,
+)
 from lorisnb.tools.notebook.start import INPUT_ERRORS_CSV, RUN_MARKER
 from lorisnb.tools.report import kernels as warm_kernels
 from lorisnb.tools.report.baseline import since_baseline
@@ -62,6 +69,7 @@ from lorisnb.tools.report.notebooks import (
     kernel_files,
     notebook_dir,
     notebook_path,
+    refuse_eps_scenes,
     refuse_inapplicable_specs,
     run_one,
     select_notebooks,
@@ -553,6 +561,12 @@ def run_report(
                 refuse_unscorable_scenes(params.get("scenes"), data)
         if wants_board:  # the notebooks' spec (one from the parameters): refused now if it cannot apply
             leaderboard_spec(params)
+        if data is not None:  # an eps mapping (eps, an eps_grid element) missing a scene scored: refused now
+            refuse_eps_scenes(names, notebooks_dir, params, data)
+            if wants_board and source is not None and isinstance(params.get("eps"), Mapping):
+                scored = input_scenes(source, data, params.get("algorithms"), params.get("scenes"),
+                                      params.get("trials_by"))  # fmt: skip
+                refuse_eps_gaps(eps_values({"eps": params["eps"]}), scored, "the report's leaderboard")
         try:  # the run is written beside where it goes, then moved there whole
             run_dir.parent.mkdir(parents=True, exist_ok=True)
             # absolute: a relative --out left papermill's output_path as "out/.r1.partial-XXXX/...", not {run}/...

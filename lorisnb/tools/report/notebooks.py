@@ -4,6 +4,7 @@ notebook executed with papermill into its own folder of the run, with its offlin
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import importlib.util
 import json
@@ -441,6 +442,40 @@ def input_roots(names: list[str], params: Mapping[str, Any], data: Any, source: 
             roots += [data.root / "tum-rgbd", data.root / "published"]
     # each where it is (a link on the way kept: {data}/openloris-scene/... where openloris-scene is a link), once
     return list({r.resolve(): Path(os.path.abspath(r)) for r in roots}.values())
+
+
+def declared_values(declared: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
+    """A notebook's declared defaults as values (name -> value) where they are Python literals
+    (``"cafe"``, ``False``, ``None``, ``[...]``); None for any other (``float("inf")``)."""
+    out: dict[str, Any] = {}
+    for name, about in declared.items():
+        try:
+            out[name] = ast.literal_eval(str(about.get("default")))
+        except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+            out[name] = None
+    return out
+
+
+def refuse_eps_scenes(
+    names: Iterable[str], notebooks_dir: str | os.PathLike[str] | None, parameters: Mapping[str, Any], data: Any
+) -> None:
+    """Refuse, before anything runs, an eps mapping (scene -> metres), given as ``eps`` or as an element
+    of ``eps_grid``, that gives no threshold for a scene a selected notebook scores, with the notebook's
+    own check (:func:`lorisnb.tools.notebook.params.refuse_eps_without_scenes`: its defaults, then the
+    parameters it declares): ``-p eps_grid '[{"cafe": 1}]'`` ran ``compare_algorithms``, which failed
+    after its evaluation, leaving a run folder and exit status 1."""
+    from lorisnb.tools.notebook.params import eps_values, refuse_eps_without_scenes
+
+    if data is None or not any(isinstance(eps, Mapping) for _, eps in eps_values(parameters)):
+        return
+    for name in names:
+        path = notebook_path(name, notebooks_dir)
+        if notebook_problem(path) is not None:  # a failed entry of its own (run_one says why)
+            continue
+        declared = declared_parameters(path)
+        values = {**declared_values(declared), **{k: v for k, v in parameters.items() if k in declared}}
+        if any(isinstance(eps, Mapping) for _, eps in eps_values(values)):
+            refuse_eps_without_scenes(values, data, path.stem)
 
 
 def refuse_inapplicable_specs(
