@@ -37,7 +37,7 @@ def test_quick_is_a_flag_and_never_drops_a_given_grid():
     assert mine["delta_grid"] == GRIDS["threshold_sensitivity"]["delta_grid"][1]  # not given: the quick default
     full = notebook_grids("compare_algorithms", False)
     assert full == {k: v[0] for k, v in GRIDS["compare_algorithms"].items()}
-    with pytest.raises(ValidationError, match="eps=-1"):
+    with pytest.raises(ValidationError, match="eps_grid=-1"):
         notebook_grids("threshold_sensitivity", True, eps_grid=[-1, 2])
     with pytest.raises(ValidationError, match=r"relative_grid=5(\.0)?: a fraction .* at most 1"):
         notebook_grids("threshold_sensitivity", True, relative_grid=[0.1, 5])
