@@ -56,7 +56,7 @@ def _exit_before_teardown() -> None:
     134 after every table was written: 1 of 40 and 1 of 300 runs of an evaluation on a loaded
     machine, pyarrow 26; apache/arrow#34314). Registered when this module is imported, before the
     exit functions of what the command imports, so it runs after them (the last registered runs
-    first); of the modules imported above only :mod:`logging` registers one, called here."""
+    first); of the modules imported above only ``logging`` registers one, called here."""
     if _STATUS:
         if "logging" in sys.modules:
             sys.modules["logging"].shutdown()  # its handlers flushed and closed, as at any exit
