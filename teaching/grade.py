@@ -29,7 +29,14 @@ from pathlib import Path
 
 from lorisnb.errors import ValidationError
 from lorisnb.tools.teaching.autograde import GradeSettings
-from lorisnb.tools.teaching.gradebook import LatePolicy, Student, grade_class, read_roster, write_exports
+from lorisnb.tools.teaching.gradebook import (
+    LatePolicy,
+    Student,
+    grade_class,
+    read_roster,
+    stray_files,
+    write_exports,
+)
 from lorisnb.tools.teaching.sandbox import BUDGET_CELLS, BUDGET_MIN_S, Limits, can_isolate
 
 HERE = Path(__file__).resolve().parent
@@ -175,10 +182,15 @@ def main(argv: list[str] | None = None) -> int:
     failed = [g.result for g in graded if g.result.error]
     for res in failed:
         print(f"not graded (0 points): {res.error}", file=sys.stderr)
+    stray = stray_files(a.course / "submitted")
+    for f in stray:
+        print(f"not graded: {f}: a file straight in submitted/, in no student's folder; nbgrader collects "
+              "submitted/<student>/<lab>/<lab>.ipynb: move it into its student's folder and grade again",
+              file=sys.stderr)  # fmt: skip
     print(f"{len(graded) - len(failed)} submission(s) graded: {a.course / 'grades.csv'}, {a.course / 'exports'}")
     if failed:
         print(f"{len(failed)} submission(s) could not be graded (named above): they score 0", file=sys.stderr)
-    return 1 if failed else 0
+    return 1 if failed or stray else 0
 
 
 if __name__ == "__main__":

@@ -74,3 +74,20 @@ def test_a_notebook_outside_its_lab_folder_is_named_and_scores_0(tmp_path, capsy
         page = (course / "graded" / student / TINY / "feedback.html").read_text()
         assert f"{student}/{name}" in page and f"submitted/{student}/{TINY}/{TINY}.ipynb" in page, page
         assert student in err
+
+
+def test_a_notebook_straight_in_submitted_is_named_and_exits_1(tmp_path, capsys):
+    """A notebook put in ``submitted/`` itself, in no student's folder, has no student to be graded
+    for: it was passed over without a word, exit 0; it is named now, exit 1."""
+    import shutil
+
+    grade = grade_script()
+    course, source = tiny_course(tmp_path)
+    (course / "submitted").mkdir(exist_ok=True)
+    stray = course / "submitted" / f"{TINY}.ipynb"
+    shutil.copy(course / "release" / TINY / f"{TINY}.ipynb", stray)
+    (course / "submitted" / ".DS_Store").write_text("x")  # hidden: not a submission
+    rc = grade.main([str(course), "--source", str(source), "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 1 and f"not graded: {stray}: a file straight in submitted/, in no student's folder" in err, err
+    assert ".DS_Store" not in err

@@ -688,6 +688,15 @@ def _without_notebook(submitted: Path, lab: str, labs: Sequence[str] = ()) -> li
     return out
 
 
+def stray_files(submitted: Path) -> list[Path]:
+    """The files put straight in ``submitted/``, in no student's folder (``submitted/lab1.ipynb``):
+    no student to grade them for, so no row; the grader names them (they were passed over without
+    a word). Hidden files are left out."""
+    if not submitted.is_dir():
+        return []
+    return sorted(p for p in submitted.iterdir() if not p.name.startswith(".") and not p.is_dir())
+
+
 def _misplaced(student: Path, lab: str, labs: Sequence[str]) -> str:
     """The files of ``student``'s folder (which has no ``<lab>/``) that look like ``lab``'s
     submission, as ``<student>/<name>`` (the first three): those named after the lab, else, when the
