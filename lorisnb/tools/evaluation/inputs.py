@@ -10,7 +10,7 @@ import os
 import re
 import sys
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -265,7 +265,7 @@ def _say_empty_algorithms(
     below: list[Found],
     found: Mapping[Path, Any],
     suffixes: tuple[str, ...] = (".txt",),
-    trials: set[Path] = frozenset(),  # type: ignore[assignment]
+    trials: Collection[Path] = (),
 ) -> None:
     """Warn of a folder beside the algorithms' folders that holds no result file (an algorithm that
     failed on every sequence, or whose files have another suffix than the format asked: said, with

@@ -14,7 +14,7 @@ import importlib
 import inspect
 import os
 import warnings
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import Executor
 from dataclasses import fields, replace
 from pathlib import Path
@@ -110,7 +110,7 @@ def _as_given(job: Job, went: Job) -> list[tuple[str, str]]:
 
 def _run(jobs: list[Job], spec: EvalSpec, kind: str, *, n_jobs: int | None, executor: Executor | None,
          progress: bool, root: Path | None = None, data: Any = None, notes: list[str] | None = None,
-         empty: list[tuple[Path, str, tuple[tuple[str, str, int], ...]]] = ()) -> Evaluation:  # type: ignore[assignment]  # fmt: skip
+         empty: Sequence[tuple[Path, str, tuple[tuple[str, str, int], ...]]] = ()) -> Evaluation:  # fmt: skip
     """Run the jobs here, in a local pool or on ``executor``; results in the order of the jobs.
     ``empty``: trial folders that hold no result file (:func:`~lorisnb.tools.evaluation.inputs.find_inputs`),
     each a failed input (kind ``empty-trial``)."""
