@@ -184,7 +184,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"not graded (0 points): {res.error}", file=sys.stderr)
     stray = stray_files(a.course / "submitted")
     for f in stray:
-        print(f"not graded: {f}: a file straight in submitted/, in no student's folder; nbgrader collects "
+        print(f"not graded: {f}: a notebook straight in submitted/, in no student's folder; nbgrader collects "
               "submitted/<student>/<lab>/<lab>.ipynb: move it into its student's folder and grade again",
               file=sys.stderr)  # fmt: skip
     print(f"{len(graded) - len(failed)} submission(s) graded: {a.course / 'grades.csv'}, {a.course / 'exports'}")

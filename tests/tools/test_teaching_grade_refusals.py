@@ -87,7 +87,8 @@ def test_a_notebook_straight_in_submitted_is_named_and_exits_1(tmp_path, capsys)
     stray = course / "submitted" / f"{TINY}.ipynb"
     shutil.copy(course / "release" / TINY / f"{TINY}.ipynb", stray)
     (course / "submitted" / ".DS_Store").write_text("x")  # hidden: not a submission
+    (course / "submitted" / "README.md").write_text("x")  # the course's (teaching/submitted/ holds one)
     rc = grade.main([str(course), "--source", str(source), "--no-progress"])
     err = capsys.readouterr().err
-    assert rc == 1 and f"not graded: {stray}: a file straight in submitted/, in no student's folder" in err, err
-    assert ".DS_Store" not in err
+    assert rc == 1 and f"not graded: {stray}: a notebook straight in submitted/, in no student's folder" in err, err
+    assert ".DS_Store" not in err and "README.md" not in err

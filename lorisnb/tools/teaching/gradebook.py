@@ -689,12 +689,13 @@ def _without_notebook(submitted: Path, lab: str, labs: Sequence[str] = ()) -> li
 
 
 def stray_files(submitted: Path) -> list[Path]:
-    """The files put straight in ``submitted/``, in no student's folder (``submitted/lab1.ipynb``):
+    """The notebooks put straight in ``submitted/``, in no student's folder (``submitted/lab1.ipynb``):
     no student to grade them for, so no row; the grader names them (they were passed over without
-    a word). Hidden files are left out."""
+    a word). Other files there (the course's ``README.md``) and hidden ones are left alone."""
     if not submitted.is_dir():
         return []
-    return sorted(p for p in submitted.iterdir() if not p.name.startswith(".") and not p.is_dir())
+    return sorted(p for p in submitted.iterdir()
+                  if not p.name.startswith(".") and p.suffix.lower() == ".ipynb" and not p.is_dir())  # fmt: skip
 
 
 def _misplaced(student: Path, lab: str, labs: Sequence[str]) -> str:
