@@ -355,3 +355,18 @@ def run_cli(capsys, *args, joined: bool = False) -> tuple[int, str, str]:
     rc = main([*map(str, args)])
     out = capsys.readouterr()
     return rc, out.out, " ".join(out.err.split()) if joined else out.err
+
+
+def table_nights(folder: Path, *tables) -> list[Path]:
+    """Tables ``1.csv``, ``2.csv``... in ``folder`` (lorisnb's CSV writer), each made 1000 s after the
+    one before: a history's nights."""
+    from lorisnb.io.writers import write_csv
+
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for k, t in enumerate(tables, 1):
+        f = folder / f"{k}.csv"
+        write_csv(t, f)
+        os.utime(f, (1.7e9 + 1000 * k, 1.7e9 + 1000 * k))
+        paths.append(f)
+    return paths

@@ -18,6 +18,7 @@ from functools import partial
 import pandas as pd
 import pytest
 from helpers import run_cli
+from helpers import table_nights as nights
 
 from lorisnb.errors import ParseError
 from lorisnb.io.writers import write_csv
@@ -42,18 +43,6 @@ def repeated(table):
 
 def lost_home(table):
     return table[table["scene"] != "home"]
-
-
-def nights(folder, *tables):
-    """Tables ``1.csv``, ``2.csv``... in ``folder``, each made 1000 s after the one before."""
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for k, t in enumerate(tables, 1):
-        f = folder / f"{k}.csv"
-        write_csv(t, f)
-        os.utime(f, (1.7e9 + 1000 * k, 1.7e9 + 1000 * k))
-        paths.append(f)
-    return paths
 
 
 REPEATED = "odom cafe-2 (trial 0) has several rows (lines 3 and 5)"

@@ -12,9 +12,9 @@ from functools import partial
 
 import pytest
 from helpers import run_cli
+from helpers import table_nights as nights
 
 from lorisnb.errors import ValidationError
-from lorisnb.io.writers import write_csv
 from lorisnb.tools.decisions.history import load_runs
 
 run = partial(run_cli, joined=True)
@@ -25,18 +25,6 @@ ODOM = ("cafe-1-1-odom.txt", "cafe-1-2-odom.txt", "home-1-1-odom.txt")  # as con
 @pytest.fixture(scope="module")
 def table(odom_sequences):
     return odom_sequences.copy()
-
-
-def nights(folder, *tables):
-    """Tables ``1.csv``, ``2.csv``... in ``folder``, each made 1000 s after the one before."""
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for k, t in enumerate(tables, 1):
-        f = folder / f"{k}.csv"
-        write_csv(t, f)
-        os.utime(f, (1.7e9 + 1000 * k, 1.7e9 + 1000 * k))
-        paths.append(f)
-    return paths
 
 
 def results(folder, icra20, files=ODOM):
