@@ -36,3 +36,20 @@ def test_a_real_trajectory_with_a_stray_nul_is_binary(data, tmp_path):
     p.write_bytes(b"".join(lines[:5]) + b"\0" + b"".join(lines[5:]))
     with pytest.raises(ParseError, match=r"nul.txt, line 6: binary data \(a NUL byte\)"):
         read_tum(p)
+
+
+def test_wide_text_after_a_long_text_part_is_told_from_its_first_nul(data, tmp_path):
+    """Past the first chunks (a NUL found 9 MB into the file), the bytes around that NUL tell wide
+    text from binary data, and the line named is that NUL's."""
+    text = (data.root / TUM / "fr2_desk_ORB.txt").read_bytes()
+    lines = text.splitlines(keepends=True)
+    head = b"".join(lines) * (9 * 2**20 // len(text) + 1)
+    n = head.count(b"\n")
+    wide = tmp_path / "wide_late.txt"
+    wide.write_bytes(head + b"".join(lines[:50]).decode().encode("utf-16-le"))
+    with pytest.raises(ParseError, match=rf"wide_late.txt, line {n + 1}: text in UTF-16 or UTF-32"):
+        read_tum(wide)
+    binary = tmp_path / "binary_late.txt"
+    binary.write_bytes(head + bytes(range(256)) * 64)
+    with pytest.raises(ParseError, match=rf"binary_late.txt, line {n + 1}: binary data \(a NUL byte\)"):
+        read_tum(binary)

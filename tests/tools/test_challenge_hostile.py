@@ -140,6 +140,13 @@ def test_encrypted_and_broken_archives(hostile):
         ("notes.docx", RESULT, 415, "TUM (.txt, .csv) or EuRoC CSV (.csv) files named after their sequence"),
         ("run.mcap", b"\x89MCAP0\r\n", 415, "the challenge takes no ROS bags"),
         ("x.txt", b"\x89PNG\r\n\x1a\n\x00\x00", 400, "binary"),
+        (
+            "x.txt",
+            RESULT.decode().encode("utf-16"),
+            400,
+            "text in UTF-16 or UTF-32 (NUL bytes between the characters); save",
+        ),
+        ("x.txt", RESULT.decode().encode("utf-32-le"), 400, "text in UTF-16 or UTF-32"),
         ("x.txt", "é".encode("latin-1") * 20, 400, "not UTF-8 text"),
         # a small file's last byte: the allowance for a character cut at a chunk's end is not the file's end
         ("x.txt", RESULT + "é".encode("latin-1"), 400, f"not UTF-8 text (byte {len(RESULT)})"),

@@ -13,7 +13,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from lorisnb.errors import ParseError
-from lorisnb.io.parsing.scanner import SNIFF_BYTES
+from lorisnb.io.parsing.scanner import SNIFF_BYTES, binary_reason
 
 T = TypeVar("T")
 
@@ -61,7 +61,7 @@ def read_range(
     nl = newlines(data)
     nul = data.find(b"\0")
     if nul >= 0:
-        return ParseError(path, data.count(b"\n", 0, nul) + 1, f"binary data (a NUL byte); expected {what} (text)"), nl
+        return ParseError(path, data.count(b"\n", 0, nul) + 1, binary_reason(data, what)), nl
     if overlong:
         return ParseError(path, nl + 1, f"a line longer than {LINE_LIMIT} bytes; expected {what} (text)"), nl
     if not data.endswith(b"\n"):

@@ -35,6 +35,7 @@ from lorisnb.core.spec.evalspec import EvalSpec
 from lorisnb.core.stats.trials import names_a_trial, split_trial
 from lorisnb.core.trajectory.frames import SCENES
 from lorisnb.errors import LorisError
+from lorisnb.io.parsing.scanner import wide_text
 from lorisnb.io.readers.openloris import declared_scene
 from lorisnb.io.readers.registry import FORMATS, recognise, sample
 
@@ -193,9 +194,13 @@ def kept_name(path: str, where: str) -> str:
 
 
 def _check_text(head: bytes, name: str) -> None:
-    """Refuse a file whose first chunk is blank or holds a NUL byte (binary)."""
+    """Refuse a file whose first chunk is blank or holds a NUL byte: text in UTF-16 or UTF-32 (the
+    readers' rule, :func:`~lorisnb.io.parsing.scanner.wide_text`), else binary."""
     if not head.strip():
         raise UploadRefused(f"{name}: empty; expected poses: {TAKEN}")
+    if b"\x00" in head and wide_text(head):
+        raise UploadRefused(f"{name}: text in UTF-16 or UTF-32 (NUL bytes between the characters); save it as "
+                            "UTF-8 and upload it again")  # fmt: skip
     if b"\x00" in head:
         raise UploadRefused(f"{name}: a binary file; expected text: {TAKEN}")
 
