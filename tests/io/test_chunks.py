@@ -223,3 +223,46 @@ def test_a_large_file_without_poses_reads_as_empty_sequences(tmp_path, monkeypat
     monkeypatch.setattr(chunks, "CHUNK_BYTES", 4096)
     path = write(tmp_path, "cafe.txt", "scene: cafe\nseq: 1\n" + "# a comment, no pose\n" * 20_000)
     assert {k: len(t) for k, t in read_openloris(path, warn=False).sequences.items()} == {1: 0}
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        b" 1  2   3\n  4 5\n",
+        b"1 2\n\n   \n 7 8 \n",
+        b"   ",
+        b"\n \n",
+        b"1\t  2\r\n  3  4\r\n",
+        b"",
+    ],
+)
+def test_single_spaced_equals_collapsing_runs_then_stripping_line_starts(text):
+    """The numpy mask that makes a chunk's spacing single gives the text the two regular
+    expressions it replaced give (runs of spaces made one, then the spaces a line starts with dropped)."""
+    import re
+
+    from lorisnb.io.parsing.chunks import single_spaced
+
+    assert single_spaced(text) == re.sub(rb"(?m)^ +", b"", re.sub(rb"  +", b" ", text))
+
+
+def test_right_aligned_lifelong_file_reads_the_numbers_float_reads(tmp_path, monkeypatch):
+    """A right-aligned file (each field padded by runs of spaces, a space before each line) of
+    many chunks, read on threads by the C parser: every number equals ``float`` of its token."""
+    from lorisnb.io.parsing import chunks
+
+    rng = np.random.default_rng(3)
+    n = 20_000
+    stamps = 1_560_000_000 + np.arange(n) * 0.0625
+    pos = rng.normal(0, 20, (n, 3))
+    quat = rng.normal(size=(n, 4))
+    quat /= np.linalg.norm(quat, axis=1, keepdims=True)
+    lines = [f" {t:20.9f} {x:9.4f} {y:9.4f} {z:9.4f} {a:10.7f} {b:10.7f} {c:10.7f} {d:10.7f}\n"
+             for t, (x, y, z), (a, b, c, d) in zip(stamps, pos, quat, strict=True)]  # fmt: skip
+    path = write(tmp_path, "market.txt", "scene: market\nframe: base_link\nseq: 1\n" + "".join(lines))
+    monkeypatch.setattr(chunks, "CHUNK_BYTES", 64 << 10)
+    seq = read_openloris(path, warn=False).sequences[1]
+    expected = np.array([[float(tok) for tok in line.split()] for line in lines])
+    np.testing.assert_array_equal(seq.stamps, expected[:, 0])
+    np.testing.assert_array_equal(seq.positions, expected[:, 1:4])
+    np.testing.assert_array_equal(seq.quaternions, expected[:, 4:8])

@@ -18,7 +18,6 @@ from __future__ import annotations
 import csv
 import io
 import os
-import re
 import stat
 from collections.abc import Callable, Generator, Sequence
 
@@ -125,13 +124,25 @@ def _kept_lines(chunk: bytes, skip: np.ndarray) -> bytes:
     return b"".join(chunk[starts[a] : nl[b] + 1] for a, b in zip(firsts.tolist(), lasts.tolist(), strict=True))
 
 
+def single_spaced(text: bytes) -> bytes:
+    """``text`` with each run of spaces made one space and the spaces a line starts with removed
+    (a space is dropped where the byte before it is a space or a line feed, or it starts the
+    text), by one numpy mask: ``re.sub`` did the same in about 12x the time (0.20 s an 8 MB chunk of
+    a right-aligned lifelong file, holding the GIL: a 10M-pose file took 21 s to read, 3.3 s
+    before pyarrow's reader replaced pandas' whitespace split)."""
+    buf = np.frombuffer(text, np.uint8)
+    drop = buf == 32
+    drop[1:] &= drop[:-1] | (buf[:-1] == 10)
+    return buf[~drop].tobytes()
+
+
 def _read_arrow(chunk: bytes, ntok: int, skip: np.ndarray, runs: bool) -> np.ndarray:
     """:func:`_read_c` by pyarrow's CSV reader (:func:`~lorisnb.io.parsing.pieces.piece_batches`):
     the kept lines' fields one space apart (runs of spaces, and spaces a line starts with, made one
     first with ``runs``); ValueError where they are not plain numbers."""
     body = _kept_lines(chunk, skip)
     if runs:
-        body = re.sub(rb"(?m)^ +", b"", re.sub(rb"  +", b" ", body))
+        body = single_spaced(body)
     batches = piece_batches(body, " ", ntok, threads=True)
     if batches is None:
         raise ValueError("not plain numbers one space apart")
