@@ -119,7 +119,7 @@ def _evo_ape() -> str:
 
 
 EVO_APE = _evo_ape()
-NO_PYARROW = "import sys; sys.modules['pyarrow'] = None\n"  # as lorisnb's command line imports pandas
+NO_PYARROW = "import sys; sys.modules['pyarrow'] = None\n"  # pandas' own parser, pyarrow not loaded
 
 
 def parse_only(*paths: Path) -> list[str]:
@@ -238,23 +238,32 @@ def bench_growth(folder: Path) -> None:
     process that only parses both files, and peak memory per pose above the start-up's (the
     parse-only process's too, above a process importing pandas); evo_ape
     up to 100k poses."""
+    from lorisnb.io.parsing.pieces import pyarrow_installed
     from lorisnb.io.parsing.whole import NUMPY_MAX_BYTES
 
     sizes = [10_000, 100_000, 1_000_000] + ([10_000_000] if os.environ.get("LORISNB_BENCH_HUGE", "1") != "0" else [])
     imports = "import lorisnb.cli, lorisnb.tools.evaluation.runner"
-    bases = {  # the start-up of a process importing what the run imports: pandas only for files numpy does not read
-        with_pandas: min(
-            process([sys.executable, "-c", NO_PYARROW + ("import pandas\n" if with_pandas else "") + imports])[1]
-            for _ in range(3)
-        )  # fmt: skip
-        for with_pandas in (False, True)
+    # the start-up of a process importing what the run imports: pyarrow's CSV reader, its threads started by a
+    # first parse, where installed (every file is parsed by it); else pandas for files numpy does not read
+    arrow = (
+        "import pyarrow as pa, pyarrow.csv as pc\n"
+        "pc.read_csv(pa.py_buffer(b'1 2\\n'), pc.ReadOptions(column_names=['a', 'b']), pc.ParseOptions(delimiter=' '))\n"
+    )
+    if pyarrow_installed():
+        starts = dict.fromkeys((False, True), arrow)
+    else:
+        starts = {large: NO_PYARROW + ("import pandas\n" if large else "") for large in (False, True)}
+    bases = {
+        large: min(process([sys.executable, "-c", code + imports])[1] for _ in range(3))
+        for large, code in starts.items()
     }
     pandas_only = min(process([sys.executable, "-c", NO_PYARROW + "import pandas"])[1] for _ in range(3))
-    print(
-        f"\ngrowth: lorisnb evaluate EST --gt GT (TUM, n poses each), whole processes; start-up "
-        f"{bases[False] / 2**20:.0f} MiB ({bases[True] / 2**20:.0f} MiB with pandas, which files over "
-        f"{NUMPY_MAX_BYTES >> 20} MB need)"
-    )
+    if pyarrow_installed():
+        start = f"{bases[False] / 2**20:.0f} MiB (pyarrow's reader imported and started, as the run does)"
+    else:
+        start = (f"{bases[False] / 2**20:.0f} MiB ({bases[True] / 2**20:.0f} MiB with pandas, which files over "
+                 f"{NUMPY_MAX_BYTES >> 20} MB need)")  # fmt: skip
+    print(f"\ngrowth: lorisnb evaluate EST --gt GT (TUM, n poses each), whole processes; start-up {start}")
     table = []
     for n in sizes:
         gt, est = pair_files(folder, n)
