@@ -266,3 +266,20 @@ def test_right_aligned_lifelong_file_reads_the_numbers_float_reads(tmp_path, mon
     np.testing.assert_array_equal(seq.stamps, expected[:, 0])
     np.testing.assert_array_equal(seq.positions, expected[:, 1:4])
     np.testing.assert_array_equal(seq.quaternions, expected[:, 4:8])
+
+
+@pytest.mark.parametrize("later", ["tabs", "spaces", "tab-run", "leading-tab"])
+def test_tab_separated_lines_take_the_c_parser_and_read_as_the_exact_scanner(tmp_path, later):
+    """Lines with one tab between fields (a TSV file) are parsed by the C parser, chunk by chunk
+    (they were all read by the exact scanner: a million poses in 5.9 s against 0.5 s with spaces);
+    a chunk whose lines are spaced otherwise further on reads as the exact scanner reads it."""
+    rng = np.random.default_rng(7)
+    rows = ["\t".join(f"{v:.9f}" for v in (1_560_000_000 + k * 0.05, *rng.normal(size=7))) for k in range(6000)]
+    other = {"tabs": rows[4000], "spaces": rows[4000].replace("\t", " "), "tab-run": rows[4000].replace("\t", "\t\t", 1),
+             "leading-tab": "\t" + rows[4000]}[later]  # fmt: skip
+    rows[4000] = other
+    path = write(tmp_path, "t.txt", "# stamp\ttx\tty\ttz\tqx\tqy\tqz\tqw\n" + "\n".join(rows) + "\n")
+    fast = _read(path, fast_min_bytes=0, chunk_bytes=64 << 10)
+    _same(fast, _read(path, fast_min_bytes=1 << 40, chunk_bytes=64 << 10))
+    assert fast.parsed_in_c >= (len(rows) if later == "tabs" else len(rows) - 1000)
+    np.testing.assert_array_equal(fast.columns[1], [float(r.split()[1]) for r in rows])
