@@ -125,14 +125,19 @@ def _kept_lines(chunk: bytes, skip: np.ndarray) -> bytes:
 
 
 def single_spaced(text: bytes) -> bytes:
-    """``text`` with each run of spaces made one space and the spaces a line starts with removed
-    (a space is dropped where the byte before it is a space or a line feed, or it starts the
-    text), by one numpy mask: ``re.sub`` did the same in about 12x the time (0.20 s an 8 MB chunk of
-    a right-aligned lifelong file, holding the GIL: a 10M-pose file took 21 s to read, 3.3 s
-    before pyarrow's reader replaced pandas' whitespace split)."""
+    """``text`` with each run of spaces made one space and the spaces a line starts or ends with
+    removed (a space is dropped where the byte before it is a space or a line feed, or it starts
+    the text; then one left before a line end, CR LF or LF, or at the end), by numpy masks:
+    ``re.sub`` made the runs one in about 12x the time (0.20 s an 8 MB chunk of a right-aligned
+    lifelong file, holding the GIL: a 10M-pose file took 21 s to read, 3.3 s before pyarrow's
+    reader replaced pandas' whitespace split), and lines ending in a space went to the exact
+    scanner (a million TUM poses 5.5 s, 0.55 s without the spaces)."""
     buf = np.frombuffer(text, np.uint8)
     drop = buf == 32
     drop[1:] &= drop[:-1] | (buf[:-1] == 10)
+    buf = buf[~drop]
+    drop = buf == 32  # at most one space before a line end now
+    drop[:-1] &= (buf[1:] == 10) | (buf[1:] == 13)
     return buf[~drop].tobytes()
 
 
@@ -206,8 +211,8 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
                 return None
             # spaces only (any number): the C parser's one-character split, skipping repeated spaces, is
             # faster than its whitespace split; tabs or trailing spaces further on raise, then read as below
-            single = b"\t" not in line and not line.endswith(b" ")
-            runs = b"  " in line or line.startswith(b" ")
+            single = b"\t" not in line
+            runs = b"  " in line or line.startswith(b" ") or line.endswith(b" ")
             tries = [(" ", runs)] + ([(" ", True)] if not runs else []) if single else []
             if b"\t" in line and b" " not in line and b"\t\t" not in line and line[:1] != b"\t" and line[-1:] != b"\t":
                 # one tab between fields (a TSV file): the C parser on tabs (the exact scanner read a
