@@ -143,11 +143,12 @@ def single_spaced(text: bytes) -> bytes:
 
 def _read_arrow(chunk: bytes, ntok: int, skip: np.ndarray, runs: bool, sep: str = " ") -> np.ndarray:
     """:func:`_read_c` by pyarrow's CSV reader (:func:`~lorisnb.io.parsing.pieces.piece_batches`):
-    the kept lines' fields one ``sep`` apart (with ``runs``, runs of spaces, and spaces a line
-    starts with, made one first); ValueError where they are not plain numbers."""
+    the kept lines' fields one ``sep`` apart (with ``runs``, tabs made spaces and runs of spaces
+    made one, those a line starts or ends with dropped, first: :func:`single_spaced`); ValueError
+    where they are not plain numbers."""
     body = _kept_lines(chunk, skip)
     if runs:
-        body = single_spaced(body)
+        body = single_spaced(body.replace(b"\t", b" ") if b"\t" in body else body)
     batches = piece_batches(body, sep, ntok, threads=True)
     if batches is None:
         raise ValueError("not plain numbers one space apart")
@@ -191,7 +192,9 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
     skip = np.zeros(0, np.int64)
     specials: list[tuple[int, str]] = []
     first_row = 0
-    structured = b"#" in chunk or b":" in chunk or chunk[:1] in (b"\n", b"\r")
+    # comments, key: value lines, blank lines (pyarrow refuses an empty line: found first, not after a failed parse,
+    # which sent every chunk with a blank line to the exact scanner, 17x the time)
+    structured = b"#" in chunk or b":" in chunk or chunk[:1] in (b"\n", b"\r") or b"\n\n" in chunk or b"\n\r\n" in chunk
     for attempt in range(2):  # plain numbers first; blank lines are found if the row count says so
         if structured:
             layout = _layout(chunk, line0, nlines, specials_ok)
@@ -211,13 +214,15 @@ def _fast(chunk: bytes, line0: int, nlines: int, width: int, specials_ok: bool) 
                 return None
             # spaces only (any number): the C parser's one-character split, skipping repeated spaces, is
             # faster than its whitespace split; tabs or trailing spaces further on raise, then read as below
-            single = b"\t" not in line
             runs = b"  " in line or line.startswith(b" ") or line.endswith(b" ")
-            tries = [(" ", runs)] + ([(" ", True)] if not runs else []) if single else []
-            if b"\t" in line and b" " not in line and b"\t\t" not in line and line[:1] != b"\t" and line[-1:] != b"\t":
+            if b"\t" not in line:
+                tries = [(" ", runs)] + ([(" ", True)] if not runs else [])
+            elif b" " not in line and b"\t\t" not in line and line[:1] != b"\t" and line[-1:] != b"\t":
                 # one tab between fields (a TSV file): the C parser on tabs (the exact scanner read a
                 # million such poses in 5.9 s, 12x the time of the same file with spaces)
-                tries = [("\t", False)]
+                tries = [("\t", False), (" ", True)]
+            else:  # tabs and spaces: made single spaces first (see _read_arrow)
+                tries = [(" ", True)]
             if pandas_loaded() or not pyarrow_installed():
                 tries.append((r"\s+", False))  # other spacing further on (pandas' whitespace split)
             if not tries:
