@@ -823,3 +823,27 @@ def test_verify_tells_a_baseline_changed_since_the_verdict(tmp_path, data, icra2
     (moved / "r1" / "run.json").unlink()
     rc, out, _ = run(capsys, "verify", moved / "r2", *roots, "--root", "baseline", moved)
     assert rc == 1 and "missing: {baseline}/r1/run.json" in out
+
+
+@pytest.mark.thorough
+def test_a_run_made_from_a_notebook_records_the_python_call_not_the_kernels_paths(tmp_path, data, icra20, monkeypatch):
+    """``run_report`` called in a Jupyter kernel (no ``command`` given): run.json records ``python``
+    and the launcher's name, not ``sys.argv``, which holds this machine's paths (the kernel's
+    connection file): every run made from a notebook warned that it shows an absolute path."""
+    import sys
+
+    import lorisnb.tools.report.build as report
+
+    here = lab(tmp_path / "lab", data, icra20)
+    runtime = tmp_path / "home" / ".local" / "share" / "jupyter" / "runtime"
+    argv = [str(tmp_path / "venv" / "ipykernel_launcher.py"), "-f", str(runtime / "kernel-1a2b.json")]
+    monkeypatch.setattr(sys, "argv", argv)
+    monkeypatch.setattr(report, "run_notebook", fake_notebook)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", LorisWarning)
+        out, _ = report.run_report(here / "runs" / "k", {"data_root": str(here / "data")}, ["compare_algorithms"],
+                                   progress=False, results=here / "res")  # fmt: skip
+    assert json.loads((out / "run.json").read_text())["command"] == ["python", "ipykernel_launcher.py"]
+    assert held_paths(out, [tmp_path]) == []
+    monkeypatch.setattr(sys, "argv", ["-c"])
+    assert report.python_call() == ["python"]

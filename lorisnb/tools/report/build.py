@@ -455,6 +455,16 @@ def _umask() -> int:
     return mask
 
 
+def python_call() -> list[str]:
+    """How a run made from Python is recorded in ``run.json``'s ``command``: ``python`` and the
+    name of the script that called :func:`run_report` (a Jupyter kernel's launcher, in a notebook),
+    without its folder or arguments. ``sys.argv`` itself was recorded, and it holds this machine's
+    paths (a kernel's connection file, ``/home/me/.local/share/jupyter/runtime/kernel-....json``):
+    every run made from a notebook warned that it shows an absolute path."""
+    script = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] not in ("", "-c", "-m") else ""
+    return ["python", script] if script else ["python"]
+
+
 def run_report(
     out: str | os.PathLike[str] | None = None,
     parameters: Mapping[str, Any] | None = None,
@@ -487,7 +497,8 @@ def run_report(
             input and the notebooks' ``results_dir``; notebooks about the bundled data only are
             left out unless named.
         jobs: notebooks run at a time (default: the cores, at most the number of notebooks).
-        command: the command line recorded in ``run.json`` (default ``sys.argv``).
+        command: the command line recorded in ``run.json`` (default: the Python call,
+            :func:`python_call`).
         label: the code under test (its commit, tag or any name, e.g. ``$GITHUB_SHA``), recorded in
             ``run.json`` and shown on the front page and in ``history``.
         baseline: a folder of earlier runs: the front page gains "Since the baseline", this run
@@ -615,7 +626,7 @@ def run_report(
             real_roots = [r.resolve() for r in named.values()]
             leads_out = sorted({r for r in (f.resolve() for f in files)
                                 if not any(r == q or q in r.parents for q in real_roots)})  # fmt: skip
-            record = run_record(command if command is not None else sys.argv, spec, data.root if data else None, inputs,
+            record = run_record(command if command is not None else python_call(), spec, data.root if data else None, inputs,
                                 {r.name: r.status for r in runs}, roots, named, absolute=absolute_paths)  # fmt: skip
             if record.get("commit"):  # the commit alone does not say what ran if the checkout had changes
                 record["dirty"] = git_dirty()
