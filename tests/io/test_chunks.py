@@ -302,10 +302,19 @@ LAYOUTS = {
 }
 
 
+@pytest.mark.parametrize("arrow", [True, False], ids=["pyarrow", "pandas"])
 @pytest.mark.parametrize("layout", LAYOUTS)
-def test_common_layouts_take_the_c_parser_and_read_as_the_exact_scanner(tmp_path, layout):
-    """Every chunk of a file laid out as writers lay them out is parsed by the C parser (its
-    spacing made single first where needed): the exact scanner's rows and lines."""
+def test_common_layouts_take_the_c_parser_and_read_as_the_exact_scanner(tmp_path, monkeypatch, layout, arrow):
+    """Every chunk of a file laid out as writers lay them out is parsed by the C parser, pyarrow's
+    (its spacing made single first where needed) or pandas' (in a process without pyarrow): the
+    exact scanner's rows and lines."""
+    from lorisnb.io.parsing import chunks, pieces
+
+    if arrow and not pieces.pyarrow_installed():
+        pytest.skip("pyarrow is not installed")
+    monkeypatch.setattr(chunks, "pandas_loaded", lambda: not arrow)
+    monkeypatch.setattr(chunks, "pyarrow_installed", lambda: arrow)
+    monkeypatch.setattr(pieces, "pyarrow_installed", lambda: arrow)
     rng = np.random.default_rng(8)
     rows = [" ".join(f"{v:.9f}" for v in (1_560_000_000 + k * 0.05, *rng.normal(size=7))) for k in range(6000)]
     path = write(
