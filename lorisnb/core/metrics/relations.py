@@ -171,9 +171,22 @@ def error_statistics(values: np.ndarray, mask: np.ndarray | None = None) -> dict
         dev = v - mean
         np.multiply(dev, dev, out=dev)
         return dict(
-            rmse=math.sqrt(sse / n), mean=mean, median=float(np.median(v)), std=math.sqrt(float(np.add.reduce(dev)) / n),
+            rmse=math.sqrt(sse / n), mean=mean, median=median_of(v), std=math.sqrt(float(np.add.reduce(dev)) / n),
             min=float(v.min()), max=float(v.max()), sse=sse,
         )  # fmt: skip
+
+
+def median_of(v: np.ndarray) -> float:
+    """``float(np.median(v))`` of a non-empty float array (M,), to the bit (a NaN in it: NaN; the mean
+    of the two middle values for an even M, summed onto 0.0 as ``np.mean`` sums), by the same
+    ``np.partition`` call: np.median's dispatch was 60 % of its 28 us on an icra20 sequence, four
+    medians a sequence."""
+    n = v.size
+    h = n // 2
+    part = np.partition(v, [h - 1, h, -1] if n % 2 == 0 else [h, -1])  # np.median's own kth (-1: a NaN last)
+    if math.isnan(part[-1]):
+        return math.nan
+    return 0.0 + float(part[h]) if n % 2 else (0.0 + float(part[h - 1]) + float(part[h])) / 2
 
 
 def masked_statistics(
