@@ -164,7 +164,13 @@ def _degenerate(
     return None
 
 
-def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False, strict: bool = False) -> Sim3:
+def umeyama(
+    source: np.ndarray,
+    target: np.ndarray,
+    with_scale: bool = False,
+    strict: bool = False,
+    pairs: PositionPairs | None = None,
+) -> Sim3:
     """Least-squares Sim(3)/SE(3) with ``target ~ s R source + t`` (Umeyama 1991; Horn's method
     without scale).
 
@@ -175,6 +181,9 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False, st
         strict: raise EvaluationError where no rotation can be determined
             (:func:`degenerate_alignment`); without it such input gets the SVD's arbitrary
             answer, as the official OpenLORIS tool computes it.
+        pairs: these same positions' :class:`PositionPairs`, where the caller made them for its
+            checks too (the pipeline's): their means, centring and SVD are used, not computed again
+            (the same numbers: computed by the same calls).
     """
     source = np.asarray(source, float)
     target = np.asarray(target, float)
@@ -183,7 +192,12 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False, st
     n = len(source)
     if n == 0:
         raise ValueError("umeyama needs at least one point pair")
-    mu_s, mu_t, xs, xt, cov = _centered(source, target)
+    if pairs is not None and pairs.source.shape != source.shape:
+        raise ValueError(f"umeyama: pairs of {pairs.source.shape} positions given for {source.shape}")
+    if pairs is None:
+        mu_s, mu_t, xs, _, cov = _centered(source, target)
+    else:
+        mu_s, mu_t, xs, cov = pairs.mu_s, pairs.mu_t, pairs.xs, pairs.cov
     if strict and (why := _degenerate(source, target, cov)) is not None:
         # a Sim(3) fit on one pose is refused (a scale needs 2 poses): its first-pose remedy drops the scale
         first = "without scale (--align se3 --align-frames 1)" if with_scale else "(--align-frames 1)"
@@ -192,8 +206,7 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False, st
             "about them is arbitrary; align on more poses (--align-frames N with N >= 3 poses not on one line), "
             f"on the first pose's orientation {first}, or not at all (--align none)"
         )
-    del xt
-    return _solve(mu_s, mu_t, xs, cov, with_scale)
+    return _solve(mu_s, mu_t, xs, cov, with_scale, None if pairs is None else pairs.svd)
 
 
 def _solve(

@@ -25,7 +25,7 @@ import warnings
 
 import numpy as np
 
-from lorisnb.core.alignment.geometry import Sim3, degenerate_alignment, quat_to_matrix, umeyama
+from lorisnb.core.alignment.geometry import PositionPairs, Sim3, degenerate_alignment, quat_to_matrix, umeyama
 from lorisnb.core.conventions.evo_options import origin_alignment, scale_alignment
 from lorisnb.core.spec.evalspec import ASSOCIATIONS, MAX_DIFF, Conventions
 from lorisnb.core.spec.validate import choice
@@ -175,6 +175,7 @@ def fit_alignment(
     notes: list[str | None] | None = None,
     origin_blocks: tuple[np.ndarray, np.ndarray] | None = None,
     label: str | None = None,
+    pairs: PositionPairs | None = None,
 ) -> Sim3:
     """The alignment ``gt = s R est + t`` of matched poses by ``method`` (see the module
     docstring), fitted on the first ``frames`` matched poses (None: all). Positions in metres;
@@ -188,7 +189,8 @@ def fit_alignment(
     warned about (appended to ``notes`` when given, else a LorisWarning). ``origin_blocks``: the first
     matched estimate and ground-truth rotation blocks as written, for ``origin`` (evo composes them).
     ``label``: what the poses are (``FILE, seq N``), said first in every note, as the pipeline's
-    other warnings say it."""
+    other warnings say it. ``pairs``: the positions' :class:`~lorisnb.core.alignment.geometry.PositionPairs`
+    where the caller made them for its checks (the pipeline's), for :func:`umeyama` (se3, sim3 on all poses)."""
     method = choice("align", method, ALIGNMENTS)
     p_e, p_g = np.asarray(est_positions, float), np.asarray(gt_positions, float)
     if method == "none" or len(p_e) == 0:
@@ -208,7 +210,7 @@ def fit_alignment(
             label,
         )
     if frames is None and method in ("se3", "sim3"):  # all matched poses: Horn/Umeyama, as the official tool
-        return umeyama(p_e, p_g, method == "sim3", strict=strict)
+        return umeyama(p_e, p_g, method == "sim3", strict=strict, pairs=pairs)
     n = len(p_e) if frames is None else min(int(frames), len(p_e))
     if frames is not None and int(frames) > len(p_e):  # evo slices silently, rpg asserts: said, not dropped
         _say(

@@ -33,12 +33,21 @@ def spread(n: int, k: int) -> np.ndarray:
     return np.round(np.linspace(0, n - 1, min(n, k))).astype(int) if n else np.zeros(0, int)
 
 
+def spreads_all(matched: int) -> bool:
+    """Whether :func:`spread_pairs` of ``matched`` poses holds every one of them (in order): then
+    they are the positions a fit on all matched poses is computed on, and the fit takes them
+    (:func:`~lorisnb.core.alignment.geometry.umeyama`'s ``pairs``)."""
+    return 0 < matched <= 10 * PLAUSIBILITY_POSES
+
+
 def spread_pairs(est_positions: np.ndarray, a: Association) -> PositionPairs | None:
     """The matched positions the alignment checks look at (at most 3,000, evenly spread), with what
     a fit and its degeneracy test share (:class:`~lorisnb.core.alignment.geometry.PositionPairs`),
     for :func:`scale_note` and :func:`degenerate_note` of one sequence; None with nothing matched."""
     if len(a) == 0:
         return None
+    if spreads_all(len(a)):  # every matched pose: the fit's own arrays (a.est_rows: a view where consecutive)
+        return PositionPairs.of(a.est_rows(est_positions), a.gt_positions)
     few = spread(len(a), 10 * PLAUSIBILITY_POSES)
     return PositionPairs.of(est_positions[a.est_index[few]], a.gt_positions[few])
 

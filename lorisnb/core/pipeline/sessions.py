@@ -178,15 +178,27 @@ def evaluate_sessions(
         for s in seqs:
             release_groundtruth(s)
 
+    pairs: dict[
+        int, PositionPairs | None
+    ] = {}  # each fitted sequence's spread positions, once for the fit and both checks
+
+    def spread_pairs(s: int) -> PositionPairs | None:
+        if s not in pairs:
+            pairs[s] = checks.spread_pairs(est[s].positions, assoc[s])
+        return pairs[s]
+
     def fit(s: int) -> Sim3:
         a, e = assoc[s], est[s]
         q_e = a.est_rows(e.quaternions) if spec.align_frames == 1 or method == "origin" else None
         written = written_blocks(e) if method == "origin" and a.gt_blocks is not None and len(a) else None
         origin = None if written is None or a.gt_blocks is None else (written[a.est_index[0]], a.gt_blocks[0])
+        # the checks' positions are these same ones where they spread over all matched poses: centred once for both
+        every = method in ("se3", "sim3") and spec.align_frames is None and checks.spreads_all(len(a))
+        shared = spread_pairs(s) if every else None
         try:  # an OpenLORIS file (frames given) is aligned as the official tool aligns it
             return fit_alignment(a.est_rows(e.positions), a.gt_positions, method, spec.align_frames, q_e,
                                  a.gt_quaternions, strict=frames is None, notes=found, origin_blocks=origin,
-                                 label=said(s))  # fmt: skip
+                                 label=said(s), pairs=shared)  # fmt: skip
         except EvaluationError as exc:  # named with the sequence (the session's file) it is about
             raise EvaluationError(f"{where(s)}: {exc}") from None
 
@@ -220,13 +232,6 @@ def evaluate_sessions(
         if len(seqs) == 1:
             alignment = per_seq[seqs[0]]
             aligned_on = seqs[0] if len(assoc[seqs[0]]) else None
-
-    pairs: dict[int, PositionPairs | None] = {}  # each fitted sequence's spread positions, once for both checks
-
-    def spread_pairs(s: int) -> PositionPairs | None:
-        if s not in pairs:
-            pairs[s] = checks.spread_pairs(est[s].positions, assoc[s])
-        return pairs[s]
 
     degenerate: set[int] = set()  # the sequences whose fit is said to be degenerate (said once, not twice)
     if frames is not None:  # an OpenLORIS file is aligned as the official tool aligns it, degenerate or not: said
