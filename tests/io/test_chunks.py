@@ -324,3 +324,30 @@ def test_common_layouts_take_the_c_parser_and_read_as_the_exact_scanner(tmp_path
     _same(fast, _read(path, fast_min_bytes=1 << 40, chunk_bytes=64 << 10))
     assert fast.parsed_in_c == len(rows)
     np.testing.assert_array_equal(fast.columns[7], [float(r.split()[7]) for r in rows])
+
+
+#: Where a file's special lines (comments, ``key: value`` lines, blank lines) lie: the C parser's
+#: layout scans only the lines up to the last of them where no blank line follows (a result file's
+#: header); each placement reads as the exact scanner reads it, in chunks of every size.
+PLACEMENTS = {
+    "header": lambda rows: "scene: cafe\nframe: d400_color\nseq: 1\n" + "".join(r + "\n" for r in rows),
+    "comment-in-the-middle": lambda rows: "".join(r + "\n" + ("# halfway\n" if k == 700 else "") for k, r in enumerate(rows)),
+    "seq-at-the-end": lambda rows: "seq: 1\n" + "".join(r + "\n" for r in rows) + "seq: 2\n" + rows[0] + "\n",
+    "blank-after-the-header": lambda rows: "seq: 1\n" + "".join(r + "\n" + ("\n" if k == 900 else "") for k, r in enumerate(rows)),
+    "blank-right-after-it": lambda rows: "seq: 1\n\n" + "".join(r + "\n" for r in rows),
+    "crlf": lambda rows: "scene: cafe\r\nseq: 1\r\n" + "".join(r + "\r\n" for r in rows),
+    "crlf-blank-after": lambda rows: "seq: 1\r\n" + "".join(r + ("\r\n\r\n" if k == 50 else "\r\n") for k, r in enumerate(rows)),
+    "only-specials-then-rows": lambda rows: "".join(f"# comment {k}\n" for k in range(400)) + "".join(r + "\n" for r in rows),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("chunk_bytes", [4 << 10, 1 << 20])
+@pytest.mark.parametrize("placement", PLACEMENTS)
+def test_special_lines_anywhere_read_as_the_exact_scanner(tmp_path, placement, chunk_bytes):
+    rng = np.random.default_rng(9)
+    rows = [" ".join(f"{v:.9f}" for v in (1_560_000_000 + k * 0.05, *rng.normal(size=7))) for k in range(1500)]
+    path = write(tmp_path, "t.txt", PLACEMENTS[placement](rows))
+    fast = _read(path, fast_min_bytes=0, chunk_bytes=chunk_bytes)
+    _same(fast, _read(path, fast_min_bytes=1 << 40, chunk_bytes=chunk_bytes))
+    assert len(fast.lines) >= len(rows)
+    assert fast.parsed_in_c == len(fast.lines)  # every chunk by the C parser
