@@ -32,9 +32,15 @@ from lorisnb.io.parsing.whole import pandas_loaded, read_whole
 
 CHUNK_BYTES = 8 << 20  # bytes of whole lines per chunk
 FAST_MIN_BYTES = 32 << 10
-#: With pyarrow, chunks from this size take its reader (a call costs about 0.1 ms): the bundled
-#: icra20 tree's 63 files under 32 KB were read in 0.078 s of CPU this way, 0.099 s by the scanner.
-ARROW_MIN_BYTES = 2 << 10
+#: With pyarrow, chunks from this size take its reader (a call costs 0.12-0.15 ms, and the lines it
+#: must skip are found first), smaller ones the numpy scanner: on 2026-12-01 the bundled icra20
+#: files under 8 KB were read in 0.43-0.59 ms of CPU each by the scanner, 0.63-0.68 ms by pyarrow
+#: (in a pool's worker; 0.55-0.82 and 0.93-1.07 ms in a process whose pyarrow uses threads), those
+#: of 8-16 KB in 0.62-0.63 against 0.78-0.90 ms, those of 16-32 KB about the same either way and
+#: those of 32-64 KB in 1.4-1.8 ms by pyarrow, 1.9-2.7 ms by the scanner (3 runs each). A folder of
+#: 3,000 files of 4.7 KB (50 poses) was evaluated in 6.9 s, 7.5 s with 2 KB here (until then), and
+#: its workers took 10.9 s of CPU, 11.5 s with 2 KB (medians of 6 alternating runs).
+ARROW_MIN_BYTES = 16 << 10
 #: Without pandas imported (and without pyarrow installed), chunks below this are read by the numpy
 #: scanner (importing pandas for them would cost more than it saves: a small OpenLORIS file is
 #: evaluated without pandas).
