@@ -10,6 +10,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from lorisnb.core.alignment.geometry import MIN_LEVER, degenerate_alignment
+from lorisnb.core.metrics.relations import median_of
 from lorisnb.core.trajectory.poses import Trajectory
 
 #: A best-fit Sim(3) scale outside [1/SCALE_LIMIT, SCALE_LIMIT] that also cuts the ATE RMSE to
@@ -153,10 +154,10 @@ def frame_mismatch(label: str, declared: str, median_aoe: Mapping[str, float]) -
 def median_above(values: np.ndarray, limit: float) -> bool:
     """``np.median(values) > limit``, without the median's partition when fewer than half of the
     values exceed ``limit`` (the median then cannot: the upper middle value would not)."""
-    v = np.asarray(values)
-    if np.count_nonzero(v > limit) < len(v) // 2:
+    v = np.asarray(values, float)
+    if not v.size or np.count_nonzero(v > limit) < len(v) // 2:  # (no value: np.median's NaN is not above)
         return False
-    return bool(np.median(v) > limit)
+    return median_of(v) > limit
 
 
 def quaternion_order(label: str, median_aoe: float, median_aoe_swapped: float, w_first: bool = False) -> str | None:

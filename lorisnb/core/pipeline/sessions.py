@@ -27,6 +27,7 @@ from lorisnb.core.alignment.geometry import MIN_LEVER, PositionPairs, Sim3
 from lorisnb.core.alignment.index_pairs import by_index, indexed
 from lorisnb.core.conventions import evo_steps
 from lorisnb.core.conventions.choices import fit_alignment
+from lorisnb.core.metrics.relations import median_of
 from lorisnb.core.pipeline import checks, plausibility
 from lorisnb.core.pipeline.model import FileErrors, ResultFile, SequenceErrors, check_label, is_monocular
 from lorisnb.core.pipeline.steps import (
@@ -275,16 +276,16 @@ def evaluate_sessions(
         if on is not None and fitted_on_all and on.rotation_lever < MIN_LEVER:  # the rotation is the positions'
             if on.seq not in degenerate:  # noise: nothing to tell apart (a degenerate fit is said already)
                 fitted_on = f"seq {on.seq}" if on.seq != e.seq else None  # a later sequence: named the fitted one
-                found.append(plausibility.rotation_not_held(label, float(np.median(e.aoe)), on.rotation_lever,
+                found.append(plausibility.rotation_not_held(label, median_of(e.aoe), on.rotation_lever,
                                                             on.matched, fitted_on))  # fmt: skip
         elif frames is not None and frame in FRAMES:
             sc, fr, gt_frame, raw_gt = frames
             found += checks.frame_notes(
                 label, est[e.seq], raw_gt[e.seq], sc, fr, gt_frame, method == "sim3", spec.max_gap,
-                float(np.median(e.aoe)),
+                median_of(e.aoe),
             )  # fmt: skip
         else:
-            median = float(np.median(e.aoe))
+            median = median_of(e.aoe)
             if median >= plausibility.SUSPECT_AOE:  # read in the other order: w last (TUM's) or w first (EuRoC's)
                 swapped = {k: checks.median_aoe_swapped(est[e.seq], a, per_seq[e.seq], shift=k) for k in (-1, 1)}
                 # shift -1: a file read 'qx qy qz qw' that wrote 'qw qx qy qz'; +1: read w first, written w last;
